@@ -1,0 +1,64 @@
+"""athenakin: kinematics of ATHENA, a hybrid parallel robot for pancreas surgery.
+
+The conventions (frames, component orders, units) are those of
+``docs/conventions.md``; equation numbers refer to the paper "Kinematics of
+ATHENA, a Robot for Pancreas Surgery".
+
+Subpackages: :mod:`athenakin.study` (Study parameters, dual quaternions),
+:mod:`athenakin.parallel` (the parallel module), :mod:`athenakin.chain` (the
+serial UPS chain), :mod:`athenakin.robot` (whole robot), :mod:`athenakin.testing`.
+"""
+
+from . import chain, parallel, robot, study
+from .design import Design
+from .errors import (
+    DegenerateChainError,
+    InvalidInputError,
+    KinematicsError,
+    NotOnStudyQuadricError,
+    OutOfWorkspaceError,
+    Reason,
+    SingularConfigurationError,
+    StrokeLimitError,
+)
+from .robot import (
+    FKSolution,
+    InstrumentIK,
+    PassiveJoints,
+    angles_from_direction,
+    default_rcm_frame,
+    direction_from_angles,
+    forward_kinematics,
+    inverse_kinematics,
+    q_from_instrument,
+    q_from_tool_tip,
+)
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "__version__",
+    "chain",
+    "parallel",
+    "robot",
+    "study",
+    "Design",
+    "DegenerateChainError",
+    "FKSolution",
+    "InstrumentIK",
+    "InvalidInputError",
+    "KinematicsError",
+    "NotOnStudyQuadricError",
+    "OutOfWorkspaceError",
+    "PassiveJoints",
+    "Reason",
+    "SingularConfigurationError",
+    "StrokeLimitError",
+    "angles_from_direction",
+    "default_rcm_frame",
+    "direction_from_angles",
+    "forward_kinematics",
+    "inverse_kinematics",
+    "q_from_instrument",
+    "q_from_tool_tip",
+]

@@ -1,0 +1,126 @@
+"""Validation and coercion of arguments at the public boundary (private).
+
+Every public function passes its array arguments through :func:`check_array`
+so that a wrong type, a wrong trailing shape or a non-finite value is reported
+with the argument's name, what was expected and what was received.
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import InvalidInputError
+
+#: Tolerance on ``|R^T R - I|`` and ``|det R - 1|`` for a matrix to count as a rotation.
+ROTATION_TOL = 1e-9
+
+
+def check_array(
+    x: ArrayLike,
+    name: str,
+    tail: tuple[int, ...],
+    *,
+    allow_nonfinite: bool = False,
+) -> NDArray[np.float64]:
+    """Coerce ``x`` to a float64 array whose trailing axes are ``tail``.
+
+    Parameters
+    ----------
+    x : array-like
+        The argument.
+    name : str
+        Its name, used in error messages.
+    tail : tuple of int
+        Required trailing shape, e.g. ``(3,)`` or ``(4, 4)``; leading axes are free.
+    allow_nonfinite : bool
+        Keep NaN / inf values (the caller flags them per item) instead of raising.
+
+    Returns
+    -------
+    ndarray
+        ``np.asarray(x, dtype=float)`` (no copy when already float64).
+
+    Raises
+    ------
+    TypeError
+        If ``x`` is not numeric (strings, objects, complex).
+    InvalidInputError
+        If the trailing shape differs or (unless allowed) a value is NaN or inf.
+    """
+    if isinstance(x, (str, bytes)) or x is None:
+        raise TypeError(f"{name}: expected a real array of shape (..., {_fmt(tail)}), "
+                        f"got {type(x).__name__}")
+    try:
+        arr = np.asarray(x)
+    except Exception as exc:  # ragged lists and the like
+        raise TypeError(f"{name}: expected a real array of shape (..., {_fmt(tail)}), "
+                        f"got an object numpy cannot convert ({exc})") from None
+    if arr.dtype.kind not in "biuf":
+        raise TypeError(f"{name}: expected real numbers, got dtype {arr.dtype}")
+    arr = arr.astype(np.float64, copy=False)
+    n = len(tail)
+    if arr.ndim < n or arr.shape[arr.ndim - n:] != tail:
+        raise InvalidInputError(
+            f"{name}: expected shape (..., {_fmt(tail)}), got shape {arr.shape}")
+    if not allow_nonfinite and not np.all(np.isfinite(arr)):
+        bad = np.argwhere(~np.isfinite(arr))[0]
+        raise InvalidInputError(
+            f"{name}: expected finite values, got {arr[tuple(bad)]} at index {tuple(bad)}")
+    return arr
+
+
+def check_scalar(x: object, name: str, *, positive: bool = False,
+                 nonnegative: bool = False) -> float:
+    """Coerce a real scalar, rejecting NaN/inf and (optionally) signs.
+
+    Raises
+    ------
+    TypeError
+        If ``x`` is not a real number.
+    InvalidInputError
+        If ``x`` is not finite or violates the sign requirement.
+    """
+    if isinstance(x, bool) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
+        raise TypeError(f"{name}: expected a real number, got {type(x).__name__}")
+    v = float(x)
+    if not np.isfinite(v):
+        raise InvalidInputError(f"{name}: expected a finite number, got {v}")
+    if positive and not v > 0:
+        raise InvalidInputError(f"{name}: expected a positive number, got {v}")
+    if nonnegative and not v >= 0:
+        raise InvalidInputError(f"{name}: expected a non-negative number, got {v}")
+    return v
+
+
+def check_transform(T: ArrayLike, name: str, *, allow_nonfinite: bool = False,
+                    tol: float = ROTATION_TOL) -> NDArray[np.float64]:
+    """Check a homogeneous rigid transform ``[[R, t], [0, 0, 0, 1]]`` of shape (..., 4, 4).
+
+    Raises
+    ------
+    InvalidInputError
+        If the shape is wrong, a value is not finite, the last row is not
+        ``(0, 0, 0, 1)`` or ``R`` is not a proper rotation within ``tol``.
+    """
+    arr = check_array(T, name, (4, 4), allow_nonfinite=allow_nonfinite)
+    finite = np.all(np.isfinite(arr), axis=(-2, -1))
+    R = arr[..., :3, :3]
+    orth = np.abs(np.swapaxes(R, -1, -2) @ R - np.eye(3)).max(axis=(-2, -1))
+    det = np.linalg.det(R)
+    last = np.abs(arr[..., 3, :] - np.array([0.0, 0.0, 0.0, 1.0])).max(axis=-1)
+    bad = finite & ((orth > tol) | (np.abs(det - 1.0) > tol) | (last > tol))
+    if np.any(bad):
+        idx = tuple(np.argwhere(bad)[0]) if bad.ndim else ()
+        raise InvalidInputError(
+            f"{name}: expected a rigid transform [[R, t], [0, 0, 0, 1]] with R a proper "
+            f"rotation (tolerance {tol:g}); item {idx} has |R^T R - I| = "
+            f"{np.asarray(orth)[idx]:.3g}, det R = {np.asarray(det)[idx]:.6g}, "
+            f"last row {arr[idx][3].tolist()}")
+    return arr
+
+
+def _fmt(tail: tuple[int, ...]) -> str:
+    return ", ".join(str(t) for t in tail)

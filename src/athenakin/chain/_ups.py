@@ -1,0 +1,266 @@
+"""The passive serial UPS chain (paper Eq. 5, 6, 11, 12) and its 8 solutions.
+
+``T_s_e = Rz(u1) Rx(pi/2) Rz(u2) Rx(pi/2) Tz(p) Rz(u3) Rx(pi/2) Rz(u4) Rx(pi/2) Rz(u5)``.
+
+Closed form used here (derived in docs/conventions.md): with
+``R(a, b) = Rz(a) Rx(pi/2) Rz(b) Rx(pi/2)``, whose columns are
+``x = (ca cb, sa cb, sb)``, ``y = (sa, -ca, 0)``, ``z = (ca sb, sa sb, -cb)``,
+
+* ``T_s_e = [[R(u1, u2) R(u3, u4) Rz(u5), p * z(u1, u2)], [0, 1]]``;
+* the RCM (origin of E) seen from ``O_s`` is ``c = p * z(u1, u2)``, so
+  ``p = +|c|`` or ``-|c|`` (the paper's quadratic in ``p`` is ``p^2 = |c|^2``);
+* for each ``p``, ``z(u1, u2) = c / p`` gives two U-joint branches
+  ``(u1, u2)`` and ``(u1 + pi, -u2)`` (``sigma = sign(sin u2)``);
+* for each, ``W = R(u1, u2)^T R_s_e = R(u3, u4) Rz(u5)`` gives two wrist
+  branches ``(u3, u4, u5)`` and ``(u3 + pi, -u4, u5 + pi)`` (``tau = sign(sin u4)``).
+
+Slot ``k = 4 * r + 2 * b + w`` holds root ``r`` (0: ``p > 0``), U-joint branch
+``b`` (0: ``sin u2 > 0``) and wrist branch ``w`` (0: ``sin u4 > 0``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_array, check_transform
+from ..errors import Reason
+from ..study import dq_multiply, study_G, study_M
+
+__all__ = [
+    "DEGENERATE_TOL",
+    "P_ZERO_TOL",
+    "CLOSURE_TOL",
+    "SERIAL_P_SIGN",
+    "SERIAL_UJOINT",
+    "SERIAL_WRIST",
+    "UPSSolution",
+    "ups_transform",
+    "ups_study",
+    "ups_solutions",
+    "rotation_u_pair",
+    "closure_residual",
+]
+
+#: ``|sin u2|`` / ``|sin u4|`` at or below which the U-joint / spherical joint is
+#: declared degenerate (a continuum of solutions).
+DEGENERATE_TOL = 1e-12
+#: ``|p|`` (m) at or below which ``O_s`` is at the RCM (instrument axis undefined).
+P_ZERO_TOL = 1e-12
+#: Largest closure residual (see :func:`closure_residual`) of a solution reported valid.
+CLOSURE_TOL = 1e-9
+
+#: Labels of the 8 serial slots: sign of p, of sin u2, of sin u4.
+SERIAL_P_SIGN = np.array([1, 1, 1, 1, -1, -1, -1, -1])
+SERIAL_UJOINT = np.array([1, 1, -1, -1, 1, 1, -1, -1])
+SERIAL_WRIST = np.array([1, -1, 1, -1, 1, -1, 1, -1])
+
+
+@dataclasses.dataclass(frozen=True)
+class UPSSolution:
+    """All 8 solutions of the serial chain for given ``T_s_e``.
+
+    Attributes
+    ----------
+    valid : ndarray of bool, shape (..., 8)
+    reason : ndarray of int, shape (..., 8)
+        :class:`~athenakin.errors.Reason` (0 valid; ``SERIAL_P_ZERO``,
+        ``UJOINT_SINGULAR``, ``WRIST_SINGULAR`` for continua, ``CLOSURE_FAILED``).
+    p : ndarray, shape (..., 8)
+        Passive prismatic joint, m (NaN where invalid).
+    u : ndarray, shape (..., 8, 5)
+        ``u1..u5``, radians in (-pi, pi] (NaN where invalid).
+    residual : ndarray, shape (..., 8)
+        Closure residual of each solution (NaN where invalid).
+    """
+
+    valid: NDArray[np.bool_]
+    reason: NDArray[np.int8]
+    p: NDArray[np.float64]
+    u: NDArray[np.float64]
+    residual: NDArray[np.float64]
+
+
+def rotation_u_pair(ca: ArrayLike, sa: ArrayLike, cb: ArrayLike, sb: ArrayLike
+                    ) -> NDArray[np.float64]:
+    """``R(a, b) = Rz(a) Rx(pi/2) Rz(b) Rx(pi/2)`` from cosines and sines.
+
+    Parameters
+    ----------
+    ca, sa, cb, sb : array-like, shape (...)
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+    """
+    ca, sa, cb, sb = np.broadcast_arrays(*(np.asarray(v, float) for v in (ca, sa, cb, sb)))
+    z = np.zeros_like(ca)
+    return np.stack([ca * cb, sa, ca * sb,
+                     sa * cb, -ca, sa * sb,
+                     sb, z, -cb], axis=-1).reshape(ca.shape + (3, 3))
+
+
+def _rz(c: NDArray[np.float64], s: NDArray[np.float64]) -> NDArray[np.float64]:
+    z, o = np.zeros_like(c), np.ones_like(c)
+    return np.stack([c, -s, z, s, c, z, z, z, o], axis=-1).reshape(c.shape + (3, 3))
+
+
+def ups_transform(p: ArrayLike, u: ArrayLike) -> NDArray[np.float64]:
+    """Forward map of the serial chain, ``T_s_e(p, u1..u5)`` (Eq. 11 without ``B``).
+
+    Parameters
+    ----------
+    p : array-like, shape (...)
+        Passive prismatic joint (signed distance ``O_s`` -> RCM along z3), m.
+    u : array-like, shape (..., 5)
+        ``u1..u5`` in radians.
+
+    Returns
+    -------
+    ndarray, shape (..., 4, 4)
+    """
+    p = check_array(p, "p", ())
+    u = check_array(u, "u", (5,))
+    return _ups_transform(p, u)
+
+
+def _ups_transform(p: NDArray[np.float64], u: NDArray[np.float64]) -> NDArray[np.float64]:
+    c, s = np.cos(u), np.sin(u)
+    R1 = rotation_u_pair(c[..., 0], s[..., 0], c[..., 1], s[..., 1])
+    R2 = rotation_u_pair(c[..., 2], s[..., 2], c[..., 3], s[..., 3])
+    R = R1 @ R2 @ _rz(c[..., 4], s[..., 4])
+    shape = np.broadcast_shapes(np.shape(p), R.shape[:-2])
+    T = np.zeros(shape + (4, 4))
+    T[..., :3, :3] = R
+    T[..., :3, 3] = np.asarray(p)[..., None] * R1[..., :, 2]
+    T[..., 3, 3] = 1.0
+    return T
+
+
+def ups_study(p: ArrayLike, u: ArrayLike) -> NDArray[np.float64]:
+    """Study vector of the serial chain as the product ``M1 G1 M2 G2 ... M5 G5`` (Eq. 11, 12).
+
+    This is the paper's formulation; it is independent of :func:`ups_transform`
+    and the two agree by the homomorphism of Study's mapping.
+
+    Parameters
+    ----------
+    p : array-like, shape (...)
+    u : array-like, shape (..., 5)
+
+    Returns
+    -------
+    ndarray, shape (..., 8)
+        Unnormalised Study vector.
+    """
+    p = check_array(p, "p", ())
+    u = check_array(u, "u", (5,))
+    half = np.pi / 2
+    zero = np.zeros_like(p)
+    G = [study_G(zero, zero, half), study_G(zero, zero, half), study_G(zero, p, half),
+         study_G(zero, zero, half), study_G(zero, zero, zero)]
+    X = None
+    for i in range(5):
+        Xi = dq_multiply(study_M(u[..., i]), G[i])
+        X = Xi if X is None else dq_multiply(X, Xi)
+    assert X is not None
+    return X
+
+
+def closure_residual(T: NDArray[np.float64], T_target: NDArray[np.float64]
+                     ) -> NDArray[np.float64]:
+    """Closure residual ``max(max|R - R*|, max|t - t*| / 1 m)`` of two transforms (..., 4, 4)."""
+    dR = np.abs(T[..., :3, :3] - T_target[..., :3, :3]).max(axis=(-2, -1))
+    dt = np.abs(T[..., :3, 3] - T_target[..., :3, 3]).max(axis=-1)
+    return np.maximum(dR, dt)
+
+
+def _wrap(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    return np.where(a <= -np.pi, a + 2 * np.pi, a)
+
+
+def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
+                  p_zero_tol: float = P_ZERO_TOL, closure_tol: float = CLOSURE_TOL,
+                  _checked: bool = False) -> UPSSolution:
+    """All 8 solutions ``(p, u1..u5)`` of the serial chain for a pose ``T_s_e``.
+
+    Parameters
+    ----------
+    T_s_e : array-like, shape (..., 4, 4)
+        Pose of the RCM frame E in the serial base frame ``O_s``. NaN items are
+        flagged (``NONFINITE_INPUT``).
+    degenerate_tol : float, keyword-only
+        ``|sin u2|`` and ``|sin u4|`` at or below which the U-joint or the
+        spherical joint is degenerate: the slots get ``UJOINT_SINGULAR`` /
+        ``WRIST_SINGULAR`` and NaN values (a continuum, not an isolated solution).
+    p_zero_tol : float, keyword-only
+        ``|p|`` (m) at or below which all 8 slots get ``SERIAL_P_ZERO``.
+    closure_tol : float, keyword-only
+        Largest residual of a valid solution.
+
+    Returns
+    -------
+    UPSSolution
+        Slots ordered ``k = 4 r + 2 b + w`` (module docstring).
+    """
+    T = T_s_e if _checked else check_transform(T_s_e, "T_s_e", allow_nonfinite=True)
+    finite = np.all(np.isfinite(T), axis=(-2, -1))
+    T = np.where(finite[..., None, None], T, np.eye(4))
+    c = T[..., :3, 3]
+    n = np.linalg.norm(c, axis=-1)
+    base_reason = np.where(finite, 0, Reason.NONFINITE_INPUT)
+    base_reason = np.where((base_reason == 0) & (n <= p_zero_tol), Reason.SERIAL_P_ZERO,
+                           base_reason)
+    nn = np.where(n > p_zero_tol, n, 1.0)
+    psign = np.array([1.0, -1.0])
+    p = nn[..., None] * psign                           # (..., 2)
+    z3 = c[..., None, :] / p[..., None]                 # (..., 2, 3)
+    rho = np.hypot(z3[..., 0], z3[..., 1])              # (..., 2), |sin u2|
+    sig = np.array([1.0, -1.0])
+    rr = np.where(rho > 0, rho, 1.0)
+    # (..., 2 roots, 2 branches)
+    s2 = sig * rho[..., None]
+    c2 = np.broadcast_to(-z3[..., 2, None], s2.shape)
+    c1 = sig * (z3[..., 0] / rr)[..., None]
+    s1 = sig * (z3[..., 1] / rr)[..., None]
+    uj_deg = np.broadcast_to((rho <= degenerate_tol)[..., None], s2.shape)
+    R1 = rotation_u_pair(c1, s1, c2, s2)                # (..., 2, 2, 3, 3)
+    Rse = T[..., None, None, :3, :3]
+    W = np.swapaxes(R1, -1, -2) @ Rse
+    rho4 = np.hypot(W[..., 0, 2], W[..., 1, 2])         # |sin u4|
+    tau = np.array([1.0, -1.0])
+    r4 = np.where(rho4 > 0, rho4, 1.0)
+    s4 = tau * rho4[..., None]
+    c4 = np.broadcast_to(-W[..., 2, 2, None], s4.shape)
+    c3 = tau * (W[..., 0, 2] / r4)[..., None]
+    s3 = tau * (W[..., 1, 2] / r4)[..., None]
+    c5 = tau * (W[..., 2, 0] / r4)[..., None]
+    s5 = -tau * (W[..., 2, 1] / r4)[..., None]
+    wr_deg = np.broadcast_to((rho4 <= degenerate_tol)[..., None], s4.shape)
+
+    full = s4.shape  # (..., 2, 2, 2)
+    u = np.stack([
+        np.broadcast_to(np.arctan2(s1, c1)[..., None], full),
+        np.broadcast_to(np.arctan2(s2, c2)[..., None], full),
+        np.arctan2(s3, c3), np.arctan2(s4, c4), np.arctan2(s5, c5)], axis=-1)
+    u = _wrap(u)
+    pp = np.broadcast_to(p[..., None, None], full)
+    batch = full[:-3]
+    u = u.reshape(batch + (8, 5))
+    pp = pp.reshape(batch + (8,))
+
+    reason = np.broadcast_to(base_reason[..., None], batch + (8,)).astype(np.int8)
+    deg_u = np.broadcast_to(uj_deg[..., None], full).reshape(batch + (8,))
+    deg_w = wr_deg.reshape(batch + (8,))
+    reason = np.where((reason == 0) & deg_u, np.int8(Reason.UJOINT_SINGULAR), reason)
+    reason = np.where((reason == 0) & deg_w, np.int8(Reason.WRIST_SINGULAR), reason)
+    Tsol = _ups_transform(pp, u)
+    res = closure_residual(Tsol, T[..., None, :, :])
+    reason = np.where((reason == 0) & ~(res <= closure_tol), np.int8(Reason.CLOSURE_FAILED),
+                      reason).astype(np.int8)
+    valid = reason == 0
+    nan = np.where(valid, 1.0, np.nan)
+    return UPSSolution(valid=valid, reason=reason, p=pp * nan, u=u * nan[..., None],
+                       residual=res * nan)

@@ -1,0 +1,206 @@
+"""The design of an ATHENA-type robot: link lengths, stroke limits, A/B order, tool length.
+
+A :class:`Design` is a frozen value object. It holds no set-up: the RCM frame
+``T_b_e`` is fixed by the surgeon and passed separately to every function.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._validation import check_scalar
+from .errors import InvalidInputError
+
+__all__ = ["Design", "AB_ORDERS"]
+
+#: Allowed values of :attr:`Design.ab_order`.
+AB_ORDERS = ("q1<q2", "q1>q2")
+
+_LENGTHS = ("l1", "l2", "l3", "l4", "l5")
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Design:
+    """Geometry and limits of the robot (MODEL.md, paper Fig. 2).
+
+    Parameters
+    ----------
+    l1 : float
+        Length of the links from A and B to the circle ``k1`` (``r1 = sqrt(l1^2 - h^2)``), m.
+    l2 : float
+        Offset from D to the centre C of ``k2`` along base y, m.
+    l3 : float
+        Length of the links from A and B to D, m.
+    l4 : float
+        Offset from the intermediate origin ``O_i`` to ``O_s`` along ``z_i``, m.
+    l5 : float
+        Height of C above the base plane (base z), m.
+    q_min, q_max : tuple of 3 floats or None
+        Stroke limits of ``(q1, q2, q3)`` in metres; ``None`` means unlimited
+        (``-inf``/``+inf``). Individual entries may be ``-inf``/``+inf``.
+    ab_order : {"q1<q2", "q1>q2"}
+        Which carriage is on the left: with ``"q1<q2"`` (default) ``h = (q1 - q2)/2 <= 0``.
+    tool_length : float
+        Distance ``L`` from ``O_s`` to the tool tip along the instrument axis, m.
+    name : str
+        Free label.
+
+    Notes
+    -----
+    ``Design(l1=..., ..., l5=...)`` alone has unlimited strokes. See
+    :meth:`default` for the reference design and where its values come from.
+    """
+
+    l1: float
+    l2: float
+    l3: float
+    l4: float
+    l5: float
+    q_min: tuple[float, float, float] | None = None
+    q_max: tuple[float, float, float] | None = None
+    ab_order: Literal["q1<q2", "q1>q2"] = "q1<q2"
+    tool_length: float = 0.45
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        for k in _LENGTHS:
+            object.__setattr__(self, k, check_scalar(getattr(self, k), k, positive=True))
+        object.__setattr__(self, "tool_length",
+                           check_scalar(self.tool_length, "tool_length", positive=True))
+        for k in ("q_min", "q_max"):
+            v = getattr(self, k)
+            if v is None:
+                continue
+            if isinstance(v, (str, bytes)) or np.ndim(v) != 1 or len(v) != 3:
+                raise InvalidInputError(f"{k}: expected 3 numbers (q1, q2, q3) or None, got {v!r}")
+            vals = []
+            for i, x in enumerate(v):
+                if isinstance(x, bool) or not isinstance(x, (int, float, np.integer, np.floating)):
+                    raise TypeError(f"{k}[{i}]: expected a real number, got {type(x).__name__}")
+                fx = float(x)
+                if math.isnan(fx):
+                    raise InvalidInputError(f"{k}[{i}]: expected a number or +/-inf, got nan")
+                vals.append(fx)
+            object.__setattr__(self, k, tuple(vals))
+        lo, hi = self.stroke_min, self.stroke_max
+        if np.any(lo > hi):
+            raise InvalidInputError(f"stroke limits: expected q_min <= q_max, got q_min = "
+                                    f"{lo.tolist()}, q_max = {hi.tolist()}")
+        if self.ab_order not in AB_ORDERS:
+            raise InvalidInputError(f"ab_order: expected one of {AB_ORDERS}, got {self.ab_order!r}")
+        if not isinstance(self.name, str):
+            raise TypeError(f"name: expected str, got {type(self.name).__name__}")
+
+    # --- derived values ---------------------------------------------------------------
+    @property
+    def stroke_min(self) -> NDArray[np.float64]:
+        """Lower stroke limits as an array of shape (3,) (``-inf`` where unlimited)."""
+        return np.full(3, -np.inf) if self.q_min is None else np.asarray(self.q_min, float)
+
+    @property
+    def stroke_max(self) -> NDArray[np.float64]:
+        """Upper stroke limits as an array of shape (3,) (``+inf`` where unlimited)."""
+        return np.full(3, np.inf) if self.q_max is None else np.asarray(self.q_max, float)
+
+    @property
+    def h_sign(self) -> float:
+        """Sign of ``h = (q1 - q2) / 2`` that :attr:`ab_order` prescribes (-1 or +1)."""
+        return -1.0 if self.ab_order == "q1<q2" else 1.0
+
+    @property
+    def lengths(self) -> NDArray[np.float64]:
+        """``(l1, l2, l3, l4, l5)`` as an array of shape (5,)."""
+        return np.array([self.l1, self.l2, self.l3, self.l4, self.l5])
+
+    # --- constructors -----------------------------------------------------------------
+    @classmethod
+    def default(cls) -> Design:
+        """The reference design used throughout athenakin's docs, demo and tests.
+
+        The paper gives no dimensions. The lengths are those of the worked cases
+        in the project's ``shared/fixtures`` (``l1 = 0.30``, ``l2 = 0.10``,
+        ``l3 = 0.25``, ``l4 = 0.15``, ``l5 = 0.40`` m): a bench-top module about
+        half a metre across, the size of the experimental model of the paper's
+        Fig. 1 as far as a photograph allows. The stroke limits keep ``|q1 - q2|``
+        below ``2*l3 = 0.5`` m with the carriages 2 cm apart at least, and ``q3``
+        (the radius of ``k2``) between 0.20 and 0.70 m, which covers the whole
+        range where ``k1`` and ``k2`` intersect in the upper assembly mode. The
+        tool length (0.45 m) is that of a standard laparoscopic instrument shaft.
+        """
+        return cls(l1=0.30, l2=0.10, l3=0.25, l4=0.15, l5=0.40,
+                   q_min=(-0.30, -0.10, 0.20), q_max=(0.10, 0.30, 0.70),
+                   ab_order="q1<q2", tool_length=0.45, name="athenakin reference design")
+
+    @classmethod
+    def from_mapping(cls, data: Mapping[str, Any]) -> Design:
+        """Build a design from a mapping (e.g. a parsed TOML table).
+
+        Keys are the field names; unknown keys are rejected by name.
+        """
+        if not isinstance(data, Mapping):
+            raise TypeError(f"design data: expected a mapping, got {type(data).__name__}")
+        fields = {f.name for f in dataclasses.fields(cls)}
+        unknown = set(data) - fields
+        if unknown:
+            raise InvalidInputError(f"design: unknown key(s) {sorted(unknown)}; "
+                                    f"expected some of {sorted(fields)}")
+        missing = [k for k in _LENGTHS if k not in data]
+        if missing:
+            raise InvalidInputError(f"design: missing required length(s) {missing}")
+        kw = dict(data)
+        for k in ("q_min", "q_max"):
+            if k in kw and kw[k] is not None:
+                kw[k] = tuple(kw[k])
+        return cls(**kw)
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> Design:
+        """Load a design from a TOML file.
+
+        The file holds the fields at top level or under a ``[design]`` table::
+
+            [design]
+            l1 = 0.30
+            l2 = 0.10
+            l3 = 0.25
+            l4 = 0.15
+            l5 = 0.40
+            q_min = [-0.30, -0.10, 0.20]   # optional; TOML inf / -inf mean unlimited
+            q_max = [0.10, 0.30, 0.70]
+            ab_order = "q1<q2"
+            tool_length = 0.45
+        """
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+        if "design" in data and isinstance(data["design"], Mapping):
+            data = data["design"]
+        return cls.from_mapping(data)
+
+    def to_toml(self) -> str:
+        """TOML text that :meth:`from_toml` reads back to an equal design."""
+        lines = ["[design]"]
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if v is None:
+                continue
+            if isinstance(v, str):
+                lines.append(f'{f.name} = "{v}"')
+            elif isinstance(v, tuple):
+                lines.append(f"{f.name} = [{', '.join(_toml_float(x) for x in v)}]")
+            else:
+                lines.append(f"{f.name} = {_toml_float(v)}")
+        return "\n".join(lines) + "\n"
+
+
+def _toml_float(x: float) -> str:
+    if math.isinf(x):
+        return "inf" if x > 0 else "-inf"
+    return repr(float(x))

@@ -1,0 +1,335 @@
+"""The 3-DoF parallel module (paper Eq. 7-10, Section 4): both assembly modes and its IK.
+
+Geometry (MODEL.md): ``A = (q1, 0, 0)``, ``B = (q2, 0, 0)``, midpoint ``M``,
+``h = (q1 - q2) / 2``. In the plane ``x = x_M`` (coordinates ``(y, z)`` relative
+to ``M``), circle ``k1`` has centre ``(0, 0)`` and radius ``r1 = sqrt(l1^2 - h^2)``;
+circle ``k2`` has centre ``C = (m_y, l5)``, ``m_y = sqrt(l3^2 - h^2) + l2``, and
+radius ``q3``. ``O_i`` is an intersection; mode ``+1`` has the larger z.
+
+The intersection is computed in the stable factored form
+``w = m_y^2 * (r1 + q3 - d)(r1 + q3 + d)(d - r1 + q3)(d + r1 - q3)``, ``d = |C|``,
+which is the paper's ``w`` of Eq. 8; the printed Eq. 8 has ``sqrt(w)`` in the
+y coordinate where ``-l5/m_y * sqrt(w)`` belongs (see docs/errata.md).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_array, check_transform
+from ..design import Design
+from ..errors import Reason
+
+__all__ = [
+    "TANGENT_TOL",
+    "MODES",
+    "ParallelSolution",
+    "ParallelIK",
+    "parallel_forward_kinematics",
+    "parallel_ik_from_position",
+    "parallel_inverse_kinematics",
+    "circle_geometry",
+]
+
+#: Half-chord length (m) of ``k1 ∩ k2`` at or below which the circles count as tangent.
+#: Near tangency the intersection moves like ``sqrt(w)``: rounding alone gives a
+#: half-chord of about ``sqrt(eps) * 0.5 m ~ 1e-8 m``; below 1e-9 m the two modes are
+#: numerically the same configuration.
+TANGENT_TOL = 1e-9
+
+#: Assembly-mode labels in slot order.
+MODES = np.array([1, -1])
+
+
+@dataclasses.dataclass(frozen=True)
+class ParallelSolution:
+    """Both assembly modes of the parallel module for a batch of ``q``.
+
+    Attributes
+    ----------
+    valid : ndarray of bool, shape (..., 2)
+        Slot 0 is mode +1, slot 1 mode -1.
+    reason : ndarray of int, shape (..., 2)
+        :class:`~athenakin.errors.Reason` codes (0 where valid).
+    mode : ndarray of int, shape (2,)
+        ``(+1, -1)``.
+    O_i, O_s : ndarray, shape (..., 2, 3)
+        Origins of the intermediate frame and of the serial base frame, base
+        coordinates, m (NaN in invalid slots).
+    T_b_i, T_b_s : ndarray, shape (..., 2, 4, 4)
+        Poses of the intermediate frame and of ``O_s`` (Eq. 9, 10, with the
+        rotation entries divided by ``r1``).
+    theta : ndarray, shape (..., 2)
+        Angle of ``R_b_i = Rx(theta)``, radians in (-pi, pi].
+    r1, m_y, w, half_chord : ndarray, shape (...)
+        Radius of ``k1``, y of C, the paper's ``w`` (Eq. 8) and the half-chord
+        ``a = sqrt(max(w, 0)) / (2 m_y d)`` of the two intersections (m).
+    """
+
+    valid: NDArray[np.bool_]
+    reason: NDArray[np.int8]
+    mode: NDArray[np.int64]
+    O_i: NDArray[np.float64]
+    O_s: NDArray[np.float64]
+    T_b_i: NDArray[np.float64]
+    T_b_s: NDArray[np.float64]
+    theta: NDArray[np.float64]
+    r1: NDArray[np.float64]
+    m_y: NDArray[np.float64]
+    w: NDArray[np.float64]
+    half_chord: NDArray[np.float64]
+
+
+@dataclasses.dataclass(frozen=True)
+class ParallelIK:
+    """Result of the parallel module's inverse kinematics.
+
+    Attributes
+    ----------
+    q : ndarray, shape (..., 3)
+        Actuator values ``(q1, q2, q3)``, m (NaN where invalid).
+    mode : ndarray of int, shape (...)
+        Assembly mode of the pose (+1 or -1; +1 on the tangent boundary).
+    theta : ndarray, shape (...)
+        ``R_b_s = Rx(theta)``, radians.
+    valid : ndarray of bool, shape (...)
+    reason : ndarray of int, shape (...)
+    """
+
+    q: NDArray[np.float64]
+    mode: NDArray[np.int64]
+    theta: NDArray[np.float64]
+    valid: NDArray[np.bool_]
+    reason: NDArray[np.int8]
+
+
+def _actuator_checks(q: NDArray[np.float64], design: Design) -> NDArray[np.int8]:
+    """Reason code per item for non-finite values, stroke limits and A/B order."""
+    reason = np.zeros(q.shape[:-1], dtype=np.int8)
+    finite = np.all(np.isfinite(q), axis=-1)
+    lo, hi = design.stroke_min, design.stroke_max
+    with np.errstate(invalid="ignore"):
+        stroke = np.any((q < lo) | (q > hi), axis=-1)
+        order = design.h_sign * (q[..., 0] - q[..., 1]) < 0
+    reason = np.where(order, np.int8(Reason.AB_ORDER), reason)
+    reason = np.where(stroke, np.int8(Reason.STROKE_LIMIT), reason)
+    reason = np.where(~finite, np.int8(Reason.NONFINITE_INPUT), reason)
+    return reason.astype(np.int8)
+
+
+def circle_geometry(q: ArrayLike, design: Design) -> dict[str, NDArray[np.float64]]:
+    """The quantities of Eq. 7-8 for a batch of ``q``.
+
+    Parameters
+    ----------
+    q : array-like, shape (..., 3)
+    design : Design
+
+    Returns
+    -------
+    dict of ndarray, each shape (...)
+        ``x_M``, ``h``, ``r1``, ``m_y``, ``d`` (= ``|C - M|``), ``H`` (the paper's
+        ``h = m_y^2 + l5^2 + r1^2 - q3^2``), ``k = w / m_y^2 = 4 d^2 a^2``, ``w`` (the
+        paper's ``w``) and ``half_chord`` ``a`` (0 where ``k < 0``). ``r1`` and ``m_y`` are NaN where the links cannot span A-B.
+    """
+    q = np.asarray(q, dtype=float)
+    q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2]
+    h = 0.5 * (q1 - q2)
+    with np.errstate(invalid="ignore"):
+        r1 = np.sqrt(design.l1 ** 2 - h * h)
+        m_y = np.sqrt(design.l3 ** 2 - h * h) + design.l2
+        d2 = m_y * m_y + design.l5 ** 2
+        d = np.sqrt(d2)
+        H = d2 + r1 * r1 - q3 * q3
+        k = (r1 + q3 - d) * (r1 + q3 + d) * (d - r1 + q3) * (d + r1 - q3)
+        half = np.sqrt(np.maximum(k, 0.0)) / (2 * d)
+    return {"x_M": 0.5 * (q1 + q2), "h": h, "r1": r1, "m_y": m_y, "d": d, "H": H,
+            "k": k, "w": m_y * m_y * k, "half_chord": half}
+
+
+def _frames(x_M: NDArray[np.float64], y: NDArray[np.float64], z: NDArray[np.float64],
+            r1: NDArray[np.float64], l4: float
+            ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """T_b_i and T_b_s from O_i = (x_M, y, z) on k1 of radius r1."""
+    cy, cz = y / r1, z / r1  # z_i = (0, cy, cz)
+    T = np.zeros(np.shape(y) + (4, 4))
+    T[..., 0, 0] = 1.0
+    T[..., 1, 1] = cz
+    T[..., 1, 2] = cy
+    T[..., 2, 1] = -cy
+    T[..., 2, 2] = cz
+    T[..., 3, 3] = 1.0
+    T[..., 0, 3] = x_M
+    T[..., 1, 3] = y
+    T[..., 2, 3] = z
+    Ts = T.copy()
+    Ts[..., 1, 3] = y + l4 * cy
+    Ts[..., 2, 3] = z + l4 * cz
+    return T, Ts
+
+
+def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
+                                tangent_tol: float = TANGENT_TOL) -> ParallelSolution:
+    """Forward kinematics of the parallel module: both intersections of ``k1`` and ``k2``.
+
+    Parameters
+    ----------
+    q : array-like, shape (..., 3)
+        Actuator values ``(q1, q2, q3)`` in metres. NaN/inf items are flagged
+        (``Reason.NONFINITE_INPUT``), not raised.
+    design : Design, optional
+        Defaults to :meth:`Design.default`.
+    tangent_tol : float, keyword-only
+        Half-chord (m) at or below which ``k1`` and ``k2`` count as tangent
+        (paper's ``w = 0``): mode -1 is then reported as merged into mode +1
+        (``Reason.CIRCLES_TANGENT``).
+
+    Returns
+    -------
+    ParallelSolution
+        Slot 0 mode +1, slot 1 mode -1 (Eq. 8-10).
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        Wrong type or trailing shape of ``q``.
+    """
+    design = Design.default() if design is None else design
+    q = check_array(q, "q", (3,), allow_nonfinite=True)
+    reason = _actuator_checks(q, design)
+    qs = np.where(reason[..., None] == Reason.NONFINITE_INPUT, 0.0, q)
+    g = circle_geometry(qs, design)
+    h = g["h"]
+    link = (np.abs(h) >= design.l1) | (np.abs(h) > design.l3)
+    reason = np.where((reason == 0) & link, np.int8(Reason.LINK_TOO_SHORT), reason)
+    # signed half-chord: negative when the circles are apart (k < 0)
+    k = g["k"]
+    signed = np.sign(k) * np.sqrt(np.abs(k)) / (2 * g["d"])
+    disjoint = ~link & (signed < -tangent_tol)
+    reason = np.where((reason == 0) & disjoint, np.int8(Reason.CIRCLES_DISJOINT), reason)
+    ok = reason == 0
+    tangent = ok & (g["half_chord"] <= tangent_tol)
+
+    safe = np.where(ok, 1.0, np.nan)
+    r1, m_y, d, H = g["r1"] * safe, g["m_y"] * safe, g["d"] * safe, g["H"] * safe
+    l5 = design.l5
+    a = np.where(tangent, 0.0, g["half_chord"]) * safe  # half-chord
+    by, bz = H * m_y / (2 * d * d), H * l5 / (2 * d * d)
+    ey, ez = -l5 / d, m_y / d  # unit vector along the chord, pointing to larger z
+    s = MODES.astype(float)
+    y = by[..., None] + s * a[..., None] * ey[..., None]
+    z = bz[..., None] + s * a[..., None] * ez[..., None]
+    x_M = np.broadcast_to(g["x_M"][..., None], y.shape) * safe[..., None]
+    T_b_i, T_b_s = _frames(x_M, y, z, r1[..., None], design.l4)
+
+    slot_reason = np.stack([reason, np.where(tangent, np.int8(Reason.CIRCLES_TANGENT), reason)],
+                           axis=-1).astype(np.int8)
+    valid = slot_reason == 0
+    nanmask = np.where(valid, 1.0, np.nan)
+    T_b_i = T_b_i * nanmask[..., None, None]
+    T_b_s = T_b_s * nanmask[..., None, None]
+    theta = _wrap(np.arctan2(-y / r1[..., None], z / r1[..., None])) * nanmask
+    return ParallelSolution(
+        valid=valid, reason=slot_reason, mode=MODES.copy(),
+        O_i=T_b_i[..., :3, 3], O_s=T_b_s[..., :3, 3], T_b_i=T_b_i, T_b_s=T_b_s, theta=theta,
+        r1=g["r1"], m_y=g["m_y"], w=g["w"], half_chord=g["half_chord"])
+
+
+def _wrap(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Map angles to (-pi, pi]."""
+    return np.where(a <= -np.pi, a + 2 * np.pi, a)
+
+
+def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> ParallelIK:
+    """Actuator values that put ``O_s`` at a given point (paper Section 4, first paragraph).
+
+    The orientation follows from the position: ``z_i`` is the unit vector from
+    the base x-axis to ``O_s`` in the plane ``x = x_M``.
+
+    Parameters
+    ----------
+    O_s : array-like, shape (..., 3)
+        Position of the serial base frame, base coordinates, m.
+    design : Design, optional
+
+    Returns
+    -------
+    ParallelIK
+        Invalid items carry a reason: ``NOT_IN_MODULE_IMAGE`` (closer than
+        ``l4`` to the rail axis), ``LINK_TOO_SHORT`` (``r1 > l1`` or ``|h| > l3``),
+        ``STROKE_LIMIT``, ``NONFINITE_INPUT``.
+    """
+    design = Design.default() if design is None else design
+    O_s = check_array(O_s, "O_s", (3,), allow_nonfinite=True)
+    finite = np.all(np.isfinite(O_s), axis=-1)
+    P = np.where(finite[..., None], O_s, 0.0)
+    rho = np.hypot(P[..., 1], P[..., 2])
+    reason = np.where(finite, 0, Reason.NONFINITE_INPUT).astype(np.int8)
+    reason = np.where((reason == 0) & (rho <= design.l4), np.int8(Reason.NOT_IN_MODULE_IMAGE),
+                      reason)
+    r1 = rho - design.l4
+    with np.errstate(invalid="ignore", divide="ignore"):
+        h_abs = np.sqrt(design.l1 ** 2 - r1 * r1)
+        bad_link = (r1 > design.l1) | (h_abs > design.l3)
+        reason = np.where((reason == 0) & bad_link, np.int8(Reason.LINK_TOO_SHORT), reason)
+        ok = reason == 0
+        safe = np.where(ok, 1.0, np.nan)
+        h = design.h_sign * h_abs * safe
+        x_M = P[..., 0] * safe
+        f = r1 / rho
+        y, z = P[..., 1] * f * safe, P[..., 2] * f * safe
+        m_y = np.sqrt(design.l3 ** 2 - h * h) + design.l2
+        q3 = np.hypot(y - m_y, z - design.l5)
+        cross = m_y * z - design.l5 * y
+    mode = np.where(cross >= 0, 1, -1)
+    q = np.stack([x_M + h, x_M - h, q3], axis=-1)
+    act = _actuator_checks(np.where(ok[..., None], q, 0.0), design)
+    reason = np.where(ok & (act != 0), act, reason).astype(np.int8)
+    valid = reason == 0
+    q = np.where(valid[..., None], q, np.nan)
+    theta = np.where(valid, _wrap(np.arctan2(-y, z)), np.nan)
+    return ParallelIK(q=q, mode=mode, theta=theta, valid=valid, reason=reason)
+
+
+#: Tolerance on the orientation test of :func:`parallel_inverse_kinematics`.
+MODULE_POSE_TOL = 1e-9
+
+
+def parallel_inverse_kinematics(T_b_s: ArrayLike, design: Design | None = None, *,
+                                tol: float = MODULE_POSE_TOL) -> ParallelIK:
+    """Inverse kinematics of the parallel module from a pose of ``O_s``.
+
+    A pose is in the module's image only if ``R_b_s = Rx(theta)`` and ``z_s``
+    points from the base x-axis to ``O_s`` (paper Section 4).
+
+    Parameters
+    ----------
+    T_b_s : array-like, shape (..., 4, 4)
+    design : Design, optional
+    tol : float, keyword-only
+        Tolerance of the orientation test.
+
+    Returns
+    -------
+    ParallelIK
+        Items whose orientation is not that of the module get ``NOT_IN_MODULE_IMAGE``.
+    """
+    design = Design.default() if design is None else design
+    T = check_transform(T_b_s, "T_b_s", allow_nonfinite=True)
+    res = parallel_ik_from_position(T[..., :3, 3], design)
+    R = T[..., :3, :3]
+    with np.errstate(invalid="ignore"):
+        c, s = np.cos(res.theta), np.sin(res.theta)
+        Rx = np.zeros(R.shape)
+        Rx[..., 0, 0] = 1.0
+        Rx[..., 1, 1], Rx[..., 1, 2], Rx[..., 2, 1], Rx[..., 2, 2] = c, -s, s, c
+        err = np.abs(R - Rx).max(axis=(-2, -1))
+    bad = res.valid & ~(err <= tol)
+    reason = np.where(bad, np.int8(Reason.NOT_IN_MODULE_IMAGE), res.reason).astype(np.int8)
+    valid = reason == 0
+    return dataclasses.replace(
+        res, q=np.where(valid[..., None], res.q, np.nan),
+        theta=np.where(valid, res.theta, np.nan), valid=valid, reason=reason)

@@ -1,0 +1,174 @@
+"""Whole-robot forward kinematics: all (up to) 16 solutions (paper Section 3)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._transforms import invert_transform
+from .._validation import check_array, check_transform
+from ..chain._ups import (
+    CLOSURE_TOL,
+    DEGENERATE_TOL,
+    P_ZERO_TOL,
+    SERIAL_P_SIGN,
+    SERIAL_UJOINT,
+    SERIAL_WRIST,
+    ups_solutions,
+)
+from ..design import Design
+from ..errors import Reason
+from ..parallel._module import MODES, TANGENT_TOL, parallel_forward_kinematics
+from ._common import ErrorPolicy, item_reason_from_slots, raise_first_failure, resolve_policy
+
+__all__ = ["FKSolution", "forward_kinematics", "SLOT_MODE", "SLOT_P_SIGN", "SLOT_UJOINT",
+           "SLOT_WRIST", "slot_index"]
+
+#: Labels of the 16 slots ``k = 8 m + 4 r + 2 b + w``: assembly mode, sign of p,
+#: sign of sin u2 (U-joint branch), sign of sin u4 (spherical-joint branch).
+SLOT_MODE = np.repeat(MODES, 8)
+SLOT_P_SIGN = np.tile(SERIAL_P_SIGN, 2)
+SLOT_UJOINT = np.tile(SERIAL_UJOINT, 2)
+SLOT_WRIST = np.tile(SERIAL_WRIST, 2)
+
+
+def slot_index(mode: int, p_sign: int, ujoint: int, wrist: int) -> int:
+    """Slot (0..15) of the solution with the given labels (each +1 or -1)."""
+    for name, v in (("mode", mode), ("p_sign", p_sign), ("ujoint", ujoint), ("wrist", wrist)):
+        if v not in (1, -1):
+            raise ValueError(f"{name}: expected +1 or -1, got {v!r}")
+    return 8 * (mode == -1) + 4 * (p_sign == -1) + 2 * (ujoint == -1) + (wrist == -1)
+
+
+@dataclasses.dataclass(frozen=True)
+class FKSolution:
+    """The 16 forward-kinematics slots of a batch (leading shape ``...``).
+
+    Slot ``k = 8 m + 4 r + 2 b + w`` (see :data:`SLOT_MODE` and friends) holds
+    assembly mode ``m`` (0: +1, 1: -1), root ``r`` of the quadratic in ``p``
+    (0: ``p > 0``), U-joint branch ``b`` (0: ``sin u2 > 0``) and spherical-joint
+    branch ``w`` (0: ``sin u4 > 0``). Invalid slots hold NaN; :attr:`reason`
+    says why.
+
+    Attributes
+    ----------
+    valid : ndarray of bool, shape (..., 16)
+        Which slots hold a real, isolated solution verified by closure.
+    reason : ndarray of int8, shape (..., 16)
+        :class:`~athenakin.errors.Reason` per slot (0 where valid).
+    mode, p_sign, ujoint, wrist : ndarray of int, shape (..., 16)
+        Slot labels (+1 / -1).
+    p : ndarray, shape (..., 16)
+        Passive prismatic joint (signed distance ``O_s`` -> RCM), m.
+    u : ndarray, shape (..., 16, 5)
+        ``u1..u5``, radians in (-pi, pi].
+    T_b_s : ndarray, shape (..., 16, 4, 4)
+        Pose of ``O_s`` (Eq. 10) of each slot's assembly mode.
+    residual : ndarray, shape (..., 16)
+        Closure residual ``max(|R - R_e|, |t - t_e| / 1 m)`` of
+        ``T_b_s @ T_s_e(p, u)`` against the given ``T_b_e``.
+    item_reason : ndarray of int8, shape (...)
+        0 where the item has at least one valid slot, else why it has none.
+    """
+
+    valid: NDArray[np.bool_]
+    reason: NDArray[np.int8]
+    mode: NDArray[np.int64]
+    p_sign: NDArray[np.int64]
+    ujoint: NDArray[np.int64]
+    wrist: NDArray[np.int64]
+    p: NDArray[np.float64]
+    u: NDArray[np.float64]
+    T_b_s: NDArray[np.float64]
+    residual: NDArray[np.float64]
+    item_reason: NDArray[np.int8]
+
+    @property
+    def n_solutions(self) -> NDArray[np.int64]:
+        """Number of valid slots per item, shape (...)."""
+        return np.sum(self.valid, axis=-1)
+
+
+def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
+                       errors: ErrorPolicy = "auto", tangent_tol: float = TANGENT_TOL,
+                       degenerate_tol: float = DEGENERATE_TOL, p_zero_tol: float = P_ZERO_TOL,
+                       closure_tol: float = CLOSURE_TOL) -> FKSolution:
+    """All (up to) 16 configurations of the robot for actuator values ``q`` (Section 3).
+
+    Parameters
+    ----------
+    q : array-like, shape (..., 3)
+        Actuators ``(q1, q2, q3)``, m.
+    T_b_e : array-like, shape (..., 4, 4)
+        RCM frame E in the base frame (set-up, fixed by the surgeon). Broadcasts with ``q``.
+    design : Design, optional
+        Defaults to :meth:`Design.default`.
+    errors : {"auto", "raise", "flag"}, keyword-only
+        ``"raise"``: an item with no valid slot raises the matching
+        :class:`~athenakin.errors.KinematicsError`; ``"flag"``: never raise for
+        a domain failure, report it in ``valid``/``reason``; ``"auto"``
+        (default): raise for a single item, flag in a batch.
+    tangent_tol, degenerate_tol, p_zero_tol, closure_tol : float, keyword-only
+        See :data:`~athenakin.parallel.TANGENT_TOL`, :data:`~athenakin.chain.DEGENERATE_TOL`,
+        :data:`~athenakin.chain.P_ZERO_TOL`, :data:`~athenakin.chain.CLOSURE_TOL`.
+
+    Returns
+    -------
+    FKSolution
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        Wrong type/shape, or NaN/inf input with ``errors`` resolving to raise.
+    StrokeLimitError, OutOfWorkspaceError, DegenerateChainError, SingularConfigurationError
+        With ``errors`` resolving to raise, when an item has no valid slot.
+
+    Examples
+    --------
+    >>> import numpy as np, athenakin as ak
+    >>> d = ak.Design.default()
+    >>> sol = ak.forward_kinematics([-0.10, 0.10, 0.45], ak.default_rcm_frame(d), d)
+    >>> int(sol.n_solutions)
+    16
+    """
+    design = Design.default() if design is None else design
+    if not isinstance(design, Design):
+        raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
+    q = check_array(q, "q", (3,), allow_nonfinite=True)
+    T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
+    batch = np.broadcast_shapes(q.shape[:-1], T.shape[:-2])
+    raise_now = resolve_policy(errors, batch)
+    q = np.broadcast_to(q, batch + (3,))
+    T = np.broadcast_to(T, batch + (4, 4))
+    if raise_now:
+        check_array(q, "q", (3,))
+        check_array(T, "T_b_e", (4, 4))
+
+    par = parallel_forward_kinematics(q, design, tangent_tol=tangent_tol)
+    Ts = np.where(par.valid[..., None, None], par.T_b_s, np.eye(4))   # (..., 2, 4, 4)
+    T_s_e = invert_transform(Ts) @ T[..., None, :, :]
+    T_s_e = np.where(np.all(np.isfinite(T), axis=(-2, -1))[..., None, None, None], T_s_e,
+                     np.nan)
+    ser = ups_solutions(T_s_e, degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
+                        closure_tol=closure_tol, _checked=True)        # (..., 2, 8)
+
+    preason = np.broadcast_to(par.reason[..., None], ser.reason.shape)
+    reason = np.where(preason != 0, preason, ser.reason).astype(np.int8).reshape(batch + (16,))
+    valid = reason == 0
+    nan = np.where(valid, 1.0, np.nan)
+    T_b_s = np.broadcast_to(par.T_b_s[..., :, None, :, :], batch + (2, 8, 4, 4))
+    T_b_s = T_b_s.reshape(batch + (16, 4, 4))
+    item = item_reason_from_slots(valid, reason)
+    if raise_now:
+        raise_first_failure(item, "forward kinematics", {"q": q})
+
+    def lab(a: NDArray[np.int64]) -> NDArray[np.int64]:
+        return np.broadcast_to(a, batch + (16,))
+
+    return FKSolution(
+        valid=valid, reason=reason, mode=lab(SLOT_MODE), p_sign=lab(SLOT_P_SIGN),
+        ujoint=lab(SLOT_UJOINT), wrist=lab(SLOT_WRIST),
+        p=ser.p.reshape(batch + (16,)) * nan, u=ser.u.reshape(batch + (16, 5)) * nan[..., None],
+        T_b_s=T_b_s, residual=ser.residual.reshape(batch + (16,)) * nan, item_reason=item)

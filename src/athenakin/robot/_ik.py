@@ -1,0 +1,363 @@
+"""Whole-robot inverse kinematics (paper Section 4) and the controller forms.
+
+Paper form: given the RCM frame ``T_b_e`` and the spherical-joint angles
+``u3, u4, u5``, the frame ``W`` at the RCM with the instrument as z-axis is
+``T_b_w = T_b_e (R(u3, u4) Rz(u5))^-1``. Its y-axis ``y_w = R_b_s (s1, -c1, 0)``
+is perpendicular to ``z_s``, which fixes ``theta`` of ``R_b_s = Rx(theta)`` up to
+a half turn (the two solutions of the bilinear Eq. 16). ``O_s = c - p z_w`` must
+lie on the plane through the base x-axis spanned by ``z_s``: one linear
+equation in ``p``. The half turn is then fixed by ``z_s`` pointing away from the
+rail axis, and the parallel module's IK gives ``q``.
+
+The construction fails (a continuum of ``q``) when ``y_w`` is parallel to the
+base x-axis (``cos u1 = 0``) or the instrument is perpendicular to ``y_s``
+(``sin u1 sin u2 = 0``): there the paper's uniqueness claim does not hold
+(docs/errata.md).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._transforms import transform_from_rotation_translation
+from .._validation import check_array, check_transform
+from ..chain._ups import CLOSURE_TOL, _ups_transform, closure_residual, rotation_u_pair
+from ..design import Design
+from ..errors import Reason
+from ..parallel._module import parallel_ik_from_position
+from ._common import ErrorPolicy, raise_first_failure, resolve_policy
+
+__all__ = [
+    "IK_SINGULAR_TOL",
+    "PassiveJoints",
+    "InstrumentIK",
+    "inverse_kinematics",
+    "q_from_instrument",
+    "q_from_tool_tip",
+    "direction_from_angles",
+    "angles_from_direction",
+]
+
+#: Dimensionless size (``|cos u1|``, ``|sin u1 sin u2|``) at or below which the
+#: paper-form IK is declared singular (``Reason.IK_SINGULAR``).
+IK_SINGULAR_TOL = 1e-12
+
+
+@dataclasses.dataclass(frozen=True)
+class PassiveJoints:
+    """Passive joints and frames from :func:`inverse_kinematics` (leading shape ``...``).
+
+    Attributes
+    ----------
+    p : ndarray, shape (...)
+        Passive prismatic joint, m.
+    u : ndarray, shape (..., 5)
+        ``u1..u5`` in (-pi, pi] (``u3..u5`` are the given ones, wrapped).
+    mode : ndarray of int, shape (...)
+        Assembly mode of the parallel module (+1 / -1).
+    T_b_s : ndarray, shape (..., 4, 4)
+        Pose of ``O_s``.
+    residual : ndarray, shape (...)
+        Closure residual of ``T_b_s @ T_s_e(p, u)`` against ``T_b_e``.
+    valid : ndarray of bool, shape (...)
+    reason : ndarray of int8, shape (...)
+        :class:`~athenakin.errors.Reason` (0 where valid).
+    """
+
+    p: NDArray[np.float64]
+    u: NDArray[np.float64]
+    mode: NDArray[np.int64]
+    T_b_s: NDArray[np.float64]
+    residual: NDArray[np.float64]
+    valid: NDArray[np.bool_]
+    reason: NDArray[np.int8]
+
+    @property
+    def u1(self) -> NDArray[np.float64]:
+        """U-joint angle ``u1``, shape (...)."""
+        return self.u[..., 0]
+
+    @property
+    def u2(self) -> NDArray[np.float64]:
+        """U-joint angle ``u2``, shape (...)."""
+        return self.u[..., 1]
+
+
+@dataclasses.dataclass(frozen=True)
+class InstrumentIK:
+    """Result of the controller-form IK (:func:`q_from_instrument`, :func:`q_from_tool_tip`).
+
+    Attributes
+    ----------
+    p : ndarray, shape (...)
+        Insertion: signed distance ``O_s`` -> RCM along the instrument, m.
+    direction_b : ndarray, shape (..., 3)
+        Unit instrument direction (``O_s`` towards the RCM for ``p > 0``), base frame.
+    O_s : ndarray, shape (..., 3)
+        Position of ``O_s``, base frame, m.
+    mode : ndarray of int, shape (...)
+    valid : ndarray of bool, shape (...)
+    reason : ndarray of int8, shape (...)
+    """
+
+    p: NDArray[np.float64]
+    direction_b: NDArray[np.float64]
+    O_s: NDArray[np.float64]
+    mode: NDArray[np.int64]
+    valid: NDArray[np.bool_]
+    reason: NDArray[np.int8]
+
+
+def _wrap(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    a = np.mod(a + np.pi, 2 * np.pi) - np.pi
+    return np.where(a <= -np.pi, a + 2 * np.pi, a)
+
+
+def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None = None, *,
+                       errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
+                       closure_tol: float = CLOSURE_TOL
+                       ) -> tuple[NDArray[np.float64], PassiveJoints]:
+    """Actuator values for a given RCM frame and spherical-joint angles (paper Section 4).
+
+    Parameters
+    ----------
+    T_b_e : array-like, shape (..., 4, 4)
+        RCM frame E in the base frame.
+    u345 : array-like, shape (..., 3)
+        ``(u3, u4, u5)`` of the spherical joint, radians. Broadcasts with ``T_b_e``.
+    design : Design, optional
+    errors : {"auto", "raise", "flag"}, keyword-only
+        Failure policy, as in :func:`~athenakin.forward_kinematics`.
+    singular_tol : float, keyword-only
+        See :data:`IK_SINGULAR_TOL`.
+    closure_tol : float, keyword-only
+        Largest closure residual accepted.
+
+    Returns
+    -------
+    q : ndarray, shape (..., 3)
+        ``(q1, q2, q3)``, m; NaN where ``passive.valid`` is False.
+    passive : PassiveJoints
+        ``p``, ``u1..u5``, assembly mode, ``T_b_s``, residual, validity and reason.
+
+    Raises
+    ------
+    SingularConfigurationError
+        ``IK_SINGULAR``: a continuum of ``q`` (``cos u1 = 0`` or ``sin u1 sin u2 = 0``).
+    OutOfWorkspaceError, StrokeLimitError
+        The pose needs ``O_s`` where the parallel module cannot put it.
+
+    Examples
+    --------
+    >>> import numpy as np, athenakin as ak
+    >>> d = ak.Design.default()
+    >>> T = ak.default_rcm_frame(d)
+    >>> sol = ak.forward_kinematics([-0.10, 0.10, 0.45], T, d)
+    >>> q, passive = ak.inverse_kinematics(T, sol.u[0, 2:], d)
+    >>> np.allclose(q, [-0.10, 0.10, 0.45], atol=1e-12)
+    True
+    """
+    design = Design.default() if design is None else design
+    if not isinstance(design, Design):
+        raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
+    T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
+    u345 = check_array(u345, "u345", (3,), allow_nonfinite=True)
+    batch = np.broadcast_shapes(T.shape[:-2], u345.shape[:-1])
+    raise_now = resolve_policy(errors, batch)
+    T = np.broadcast_to(T, batch + (4, 4))
+    u345 = np.broadcast_to(u345, batch + (3,))
+    if raise_now:
+        check_array(T, "T_b_e", (4, 4))
+        check_array(u345, "u345", (3,))
+    finite = np.all(np.isfinite(T), axis=(-2, -1)) & np.all(np.isfinite(u345), axis=-1)
+    Tf = np.where(finite[..., None, None], T, np.eye(4))
+    uf = np.where(finite[..., None], u345, 0.0)
+
+    c3, s3 = np.cos(uf[..., 0]), np.sin(uf[..., 0])
+    c4, s4 = np.cos(uf[..., 1]), np.sin(uf[..., 1])
+    c5, s5 = np.cos(uf[..., 2]), np.sin(uf[..., 2])
+    W = rotation_u_pair(c3, s3, c4, s4)
+    W = W @ np.stack([c5, -s5, 0 * c5, s5, c5, 0 * c5, 0 * c5, 0 * c5, 1 + 0 * c5],
+                     axis=-1).reshape(c5.shape + (3, 3))
+    R_b_w = Tf[..., :3, :3] @ np.swapaxes(W, -1, -2)
+    c = Tf[..., :3, 3]
+    z3, yw = R_b_w[..., :, 2], R_b_w[..., :, 1]
+    ny = np.hypot(yw[..., 1], yw[..., 2])
+    n = yw[..., 1:] / np.where(ny > 0, ny, 1.0)[..., None]
+    den = np.sum(z3[..., 1:] * n, axis=-1)
+    singular = (ny <= singular_tol) | (np.abs(den) <= singular_tol)
+    reason = np.where(finite, 0, Reason.NONFINITE_INPUT).astype(np.int8)
+    reason = np.where((reason == 0) & singular, np.int8(Reason.IK_SINGULAR), reason)
+    p = np.sum(c[..., 1:] * n, axis=-1) / np.where(singular, 1.0, den)
+    O_s = c - p[..., None] * z3
+    pik = parallel_ik_from_position(np.where((reason == 0)[..., None], O_s, np.nan), design)
+    reason = np.where(reason == 0, pik.reason, reason).astype(np.int8)
+
+    ct, st = np.cos(pik.theta), np.sin(pik.theta)
+    zero, one = np.zeros_like(ct), np.ones_like(ct)
+    R_b_s = np.stack([one, zero, zero, zero, ct, -st, zero, st, ct],
+                     axis=-1).reshape(ct.shape + (3, 3))
+    R12 = np.swapaxes(R_b_s, -1, -2) @ R_b_w
+    u1 = np.arctan2(R12[..., 0, 1], -R12[..., 1, 1])
+    u2 = np.arctan2(R12[..., 2, 0], -R12[..., 2, 2])
+    u = _wrap(np.concatenate([np.stack([u1, u2], axis=-1), uf], axis=-1))
+    T_b_s = transform_from_rotation_translation(R_b_s, O_s)
+    with np.errstate(invalid="ignore"):
+        res = closure_residual(T_b_s @ _ups_transform(p, u), Tf)
+        reason = np.where((reason == 0) & ~(res <= closure_tol), np.int8(Reason.CLOSURE_FAILED),
+                          reason).astype(np.int8)
+    valid = reason == 0
+    if raise_now:
+        raise_first_failure(reason, "inverse kinematics", {"u345": u345, "p_rcm_b": c})
+    nan = np.where(valid, 1.0, np.nan)
+    q = pik.q * nan[..., None]
+    passive = PassiveJoints(p=p * nan, u=u * nan[..., None], mode=pik.mode,
+                            T_b_s=T_b_s * nan[..., None, None], residual=res * nan,
+                            valid=valid, reason=reason)
+    return q, passive
+
+
+def direction_from_angles(azimuth: ArrayLike, polar: ArrayLike) -> NDArray[np.float64]:
+    """Unit instrument direction in the RCM frame E from two angles about the RCM.
+
+    Spherical coordinates about ``z_e`` (the axis of the last spherical joint,
+    whose alignment with the instrument is the spherical joint's singularity):
+    ``d_e = (sin(polar) cos(azimuth), sin(polar) sin(azimuth), cos(polar))``.
+
+    Parameters
+    ----------
+    azimuth, polar : array-like, shape (...)
+        Radians; ``polar`` is the angle from ``z_e``.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+    """
+    a = check_array(azimuth, "azimuth", ())
+    b = check_array(polar, "polar", ())
+    a, b = np.broadcast_arrays(a, b)
+    return np.stack([np.sin(b) * np.cos(a), np.sin(b) * np.sin(a), np.cos(b)], axis=-1)
+
+
+def angles_from_direction(direction_e: ArrayLike) -> tuple[NDArray[np.float64],
+                                                           NDArray[np.float64]]:
+    """Inverse of :func:`direction_from_angles`: ``(azimuth, polar)`` of a direction.
+
+    Parameters
+    ----------
+    direction_e : array-like, shape (..., 3)
+        Non-zero direction (normalised here).
+
+    Returns
+    -------
+    azimuth : ndarray, shape (...)
+        In (-pi, pi]; 0 on the poles, where it is undefined.
+    polar : ndarray, shape (...)
+        In [0, pi].
+    """
+    d = _unit(check_array(direction_e, "direction_e", (3,)), "direction_e")
+    az = np.arctan2(d[..., 1], d[..., 0])
+    az = np.where(az <= -np.pi, az + 2 * np.pi, az)
+    return az, np.arctan2(np.hypot(d[..., 0], d[..., 1]), d[..., 2])
+
+
+def _unit(d: NDArray[np.float64], name: str) -> NDArray[np.float64]:
+    n = np.linalg.norm(d, axis=-1, keepdims=True)
+    if np.any(n == 0):
+        from ..errors import InvalidInputError
+
+        raise InvalidInputError(f"{name}: expected a non-zero direction vector, got zero")
+    return d / n
+
+
+def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
+                      design: Design | None = None, *, errors: ErrorPolicy = "auto"
+                      ) -> tuple[NDArray[np.float64], InstrumentIK]:
+    """Actuator values for an instrument direction about the RCM and an insertion ``p``.
+
+    ``O_s = RCM - p * d`` with ``d`` the instrument direction; the parallel
+    module's IK then gives the unique ``q`` (the passive joints have 4
+    solutions; :func:`~athenakin.forward_kinematics` lists them).
+
+    Parameters
+    ----------
+    T_b_e : array-like, shape (..., 4, 4)
+        RCM frame.
+    direction_e : array-like, shape (..., 3)
+        Instrument direction in frame E (pointing from ``O_s`` through the RCM
+        into the patient); normalised here. See :func:`direction_from_angles`.
+    p : array-like, shape (...)
+        Distance from ``O_s`` to the RCM along the direction, m.
+    design : Design, optional
+    errors : {"auto", "raise", "flag"}, keyword-only
+
+    Returns
+    -------
+    q : ndarray, shape (..., 3)
+    result : InstrumentIK
+    """
+    design = Design.default() if design is None else design
+    T = check_transform(T_b_e, "T_b_e")
+    d_e = _unit(check_array(direction_e, "direction_e", (3,)), "direction_e")
+    p = check_array(p, "p", ())
+    return _q_from_line(T, d_e, p, design, errors, np.zeros(p.shape, dtype=np.int8))
+
+
+def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = None, *,
+                    errors: ErrorPolicy = "auto") -> tuple[NDArray[np.float64], InstrumentIK]:
+    """Actuator values that put the tool tip at a point, the instrument through the RCM.
+
+    The tip is at ``O_s + L d`` (``L = design.tool_length``) and the instrument
+    passes through the RCM, so ``d = tip / |tip|`` and ``p = L - |tip|`` (tip in
+    frame E). The tip must be beyond the RCM (inserted), ``0 < |tip| < L``;
+    otherwise the reason is ``INSERTION_RANGE`` (a tip exactly at the RCM leaves
+    the direction undefined: ``IK_SINGULAR``).
+
+    Parameters
+    ----------
+    T_b_e : array-like, shape (..., 4, 4)
+    tip_e : array-like, shape (..., 3)
+        Tool-tip position in the RCM frame E, m.
+    design : Design, optional
+    errors : {"auto", "raise", "flag"}, keyword-only
+
+    Returns
+    -------
+    q : ndarray, shape (..., 3)
+    result : InstrumentIK
+    """
+    design = Design.default() if design is None else design
+    T = check_transform(T_b_e, "T_b_e")
+    tip = check_array(tip_e, "tip_e", (3,))
+    s = np.linalg.norm(tip, axis=-1)
+    L = design.tool_length
+    pre = np.zeros(s.shape, dtype=np.int8)
+    pre = np.where(s >= L, np.int8(Reason.INSERTION_RANGE), pre)
+    pre = np.where(s == 0, np.int8(Reason.IK_SINGULAR), pre).astype(np.int8)
+    d_e = tip / np.where(s > 0, s, 1.0)[..., None]
+    d_e = np.where((s > 0)[..., None], d_e, np.array([0.0, 0.0, 1.0]))
+    return _q_from_line(T, d_e, L - s, design, errors, pre)
+
+
+def _q_from_line(T: NDArray[np.float64], d_e: NDArray[np.float64], p: NDArray[np.float64],
+                 design: Design, errors: str, pre: NDArray[np.int8]
+                 ) -> tuple[NDArray[np.float64], InstrumentIK]:
+    batch = np.broadcast_shapes(T.shape[:-2], d_e.shape[:-1], p.shape, pre.shape)
+    raise_now = resolve_policy(errors, batch)
+    d_b = (T[..., :3, :3] @ d_e[..., None])[..., 0]
+    O_s = T[..., :3, 3] - p[..., None] * d_b
+    O_s, d_b = np.broadcast_to(O_s, batch + (3,)), np.broadcast_to(d_b, batch + (3,))
+    pre = np.broadcast_to(pre, batch)
+    pik = parallel_ik_from_position(np.where((pre == 0)[..., None], O_s, np.nan), design)
+    reason = np.where(pre != 0, pre, pik.reason).astype(np.int8)
+    if raise_now:
+        raise_first_failure(reason, "instrument inverse kinematics",
+                            {"O_s": O_s, "p": np.broadcast_to(p, batch)})
+    valid = reason == 0
+    nan = np.where(valid, 1.0, np.nan)
+    res = InstrumentIK(p=np.broadcast_to(p, batch) * nan, direction_b=d_b * nan[..., None],
+                       O_s=O_s * nan[..., None], mode=pik.mode, valid=valid, reason=reason)
+    return pik.q * nan[..., None], res

@@ -1,0 +1,55 @@
+"""The reference set-up (RCM frame) used by the demo, the CLI and the docs."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._transforms import transform_from_rotation_translation
+from ..design import Design
+from ..parallel._module import parallel_forward_kinematics
+
+__all__ = ["REFERENCE_Q", "REFERENCE_DIRECTION_B", "REFERENCE_P", "default_rcm_frame"]
+
+#: Actuator values of the reference configuration, m.
+REFERENCE_Q = np.array([-0.10, 0.10, 0.45])
+#: Instrument direction (base frame, before normalisation) at the reference configuration.
+REFERENCE_DIRECTION_B = np.array([0.3, -0.3, -1.0])
+#: Distance from ``O_s`` to the RCM at the reference configuration, m.
+REFERENCE_P = 0.20
+
+
+def default_rcm_frame(design: Design | None = None) -> NDArray[np.float64]:
+    """RCM frame ``T_b_e`` of the reference set-up for a design.
+
+    The surgeon's set-up is an input, never part of the design; this one is a
+    documented example. Put the robot at :data:`REFERENCE_Q` in assembly mode
+    +1 and the instrument along :data:`REFERENCE_DIRECTION_B` (down into the
+    patient, out of the module's plane); the RCM is :data:`REFERENCE_P` from
+    ``O_s`` along it. E has ``x_e`` along the instrument, ``z_e`` along the
+    rail axis made perpendicular to it, ``y_e = z_e x x_e``. The instrument is
+    then at azimuth 0, polar angle 90 deg in E (far from the spherical joint's
+    singularity at polar 0 / 180 deg).
+
+    Parameters
+    ----------
+    design : Design, optional
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+    """
+    design = Design.default() if design is None else design
+    par = parallel_forward_kinematics(REFERENCE_Q, design)
+    if not par.valid[0]:
+        from ..errors import OutOfWorkspaceError
+
+        raise OutOfWorkspaceError(
+            f"default_rcm_frame: the reference configuration q = {REFERENCE_Q.tolist()} m is not "
+            f"assembled in mode +1 for this design; build T_b_e for your set-up explicitly")
+    x_e = REFERENCE_DIRECTION_B / np.linalg.norm(REFERENCE_DIRECTION_B)
+    z_e = np.array([1.0, 0.0, 0.0]) - x_e[0] * x_e
+    z_e /= np.linalg.norm(z_e)
+    y_e = np.cross(z_e, x_e)
+    R = np.stack([x_e, y_e, z_e], axis=-1)
+    return transform_from_rotation_translation(R, par.O_s[0] + REFERENCE_P * x_e)

@@ -1,0 +1,520 @@
+"""Study parameters and dual quaternions (paper Eq. 1-4, 6).
+
+A Study vector is ``X = (x0, x1, x2, x3, y0, y1, y2, y3)``, read as the dual
+quaternion ``x + eps*y`` with Hamilton products and ``x0`` the scalar part. It
+is a point of P^7: ``X`` and ``lambda*X`` (``lambda != 0``) are the same
+displacement. A displacement is on the Study quadric
+``x0*y0 + x1*y1 + x2*y2 + x3*y3 = 0`` with ``x != 0``.
+
+With the paper's Eq. 3-4 the translation is ``t = -2 * y * conj(x) / |x|^2``,
+i.e. ``y = -t * x / 2`` (``t`` as a pure quaternion). This sign differs from
+the ``y = t * x / 2`` convention of pytransform3d and most robotics code.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_array, check_transform
+from ..errors import NotOnStudyQuadricError
+
+__all__ = [
+    "STUDY_QUADRIC_TOL",
+    "quaternion_multiply",
+    "dq_multiply",
+    "dq_conj_quaternion",
+    "dq_conj_dual",
+    "dq_conj_full",
+    "dq_inverse",
+    "study_quadric_residual",
+    "is_on_study_quadric",
+    "check_study",
+    "study_normalize",
+    "study_equal",
+    "study_from_transform",
+    "transform_from_study",
+    "paper_matrix_from_study",
+    "rotation_from_quaternion",
+    "quaternion_from_rotation",
+    "study_M",
+    "study_M_from_half_tangent",
+    "study_G",
+    "study_G_from_half_tangent",
+]
+
+#: Relative tolerance of the Study-quadric test: ``|x . y| <= tol * |x| * |X|``.
+STUDY_QUADRIC_TOL = 1e-10
+
+
+def quaternion_multiply(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
+    """Hamilton product of quaternions.
+
+    Parameters
+    ----------
+    a, b : array-like, shape (..., 4)
+        Quaternions ``(w, x, y, z)``, scalar first; leading axes broadcast.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        ``a * b``.
+    """
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    a0, a1, a2, a3 = np.moveaxis(a, -1, 0)
+    b0, b1, b2, b3 = np.moveaxis(b, -1, 0)
+    return np.stack([
+        a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
+        a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+        a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
+        a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0,
+    ], axis=-1)
+
+
+def _qconj(q: NDArray[np.float64]) -> NDArray[np.float64]:
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def dq_multiply(X1: ArrayLike, X2: ArrayLike) -> NDArray[np.float64]:
+    """Dual-quaternion product ``X1 * X2``; composes displacements (``T(X1 X2) = T(X1) T(X2)``).
+
+    Parameters
+    ----------
+    X1, X2 : array-like, shape (..., 8)
+        Study vectors ``(x0, x1, x2, x3, y0, y1, y2, y3)``; leading axes broadcast.
+
+    Returns
+    -------
+    ndarray, shape (..., 8)
+        ``(x1 x2, x1 y2 + y1 x2)``, unnormalised.
+    """
+    X1 = check_array(X1, "X1", (8,))
+    X2 = check_array(X2, "X2", (8,))
+    x1, y1 = X1[..., :4], X1[..., 4:]
+    x2, y2 = X2[..., :4], X2[..., 4:]
+    x = quaternion_multiply(x1, x2)
+    y = quaternion_multiply(x1, y2) + quaternion_multiply(y1, x2)
+    return np.concatenate([x, y], axis=-1)
+
+
+def dq_conj_quaternion(X: ArrayLike) -> NDArray[np.float64]:
+    """Quaternion conjugate of both parts, ``conj(x) + eps*conj(y)``.
+
+    For a Study vector this is the inverse displacement up to the factor ``|x|^2``.
+
+    Parameters
+    ----------
+    X : array-like, shape (..., 8)
+
+    Returns
+    -------
+    ndarray, shape (..., 8)
+    """
+    X = check_array(X, "X", (8,))
+    return X * np.array([1.0, -1.0, -1.0, -1.0, 1.0, -1.0, -1.0, -1.0])
+
+
+def dq_conj_dual(X: ArrayLike) -> NDArray[np.float64]:
+    """Dual conjugate ``x - eps*y``.
+
+    Parameters
+    ----------
+    X : array-like, shape (..., 8)
+
+    Returns
+    -------
+    ndarray, shape (..., 8)
+    """
+    X = check_array(X, "X", (8,))
+    return X * np.array([1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0])
+
+
+def dq_conj_full(X: ArrayLike) -> NDArray[np.float64]:
+    """Combined (quaternion and dual) conjugate ``conj(x) - eps*conj(y)``.
+
+    Parameters
+    ----------
+    X : array-like, shape (..., 8)
+
+    Returns
+    -------
+    ndarray, shape (..., 8)
+    """
+    X = check_array(X, "X", (8,))
+    return X * np.array([1.0, -1.0, -1.0, -1.0, -1.0, 1.0, 1.0, 1.0])
+
+
+def dq_inverse(X: ArrayLike) -> NDArray[np.float64]:
+    """Inverse dual quaternion, ``x^-1 - eps * x^-1 y x^-1``.
+
+    Parameters
+    ----------
+    X : array-like, shape (..., 8)
+        Dual quaternion with ``x != 0`` (need not be on the Study quadric).
+
+    Returns
+    -------
+    ndarray, shape (..., 8)
+        ``X^-1`` with ``X * X^-1 = (1, 0, 0, 0, 0, 0, 0, 0)`` exactly (not projectively).
+
+    Raises
+    ------
+    NotOnStudyQuadricError
+        If the quaternion part ``x`` is zero (no inverse).
+    """
+    X = check_array(X, "X", (8,))
+    x, y = X[..., :4], X[..., 4:]
+    n2 = np.sum(x * x, axis=-1, keepdims=True)
+    if np.any(n2 == 0.0):
+        raise NotOnStudyQuadricError("X: quaternion part x is zero, the dual quaternion "
+                                     "has no inverse")
+    xi = _qconj(x) / n2
+    yi = -quaternion_multiply(quaternion_multiply(xi, y), xi)
+    return np.concatenate([xi, yi], axis=-1)
+
+
+def study_quadric_residual(X: ArrayLike) -> NDArray[np.float64]:
+    """Value of the Study quadric ``x0*y0 + x1*y1 + x2*y2 + x3*y3``.
+
+    Parameters
+    ----------
+    X : array-like, shape (..., 8)
+
+    Returns
+    -------
+    ndarray, shape (...)
+    """
+    X = check_array(X, "X", (8,))
+    return np.sum(X[..., :4] * X[..., 4:], axis=-1)
+
+
+def is_on_study_quadric(X: ArrayLike, *, tol: float = STUDY_QUADRIC_TOL) -> NDArray[np.bool_]:
+    """Whether ``X`` is a valid Study vector (quadric holds and ``x != 0``).
+
+    The test is scale invariant: ``|x . y| <= tol * |x| * |X|``.
+
+    Parameters
+    ----------
+    X : array-like, shape (..., 8)
+    tol : float
+        Relative tolerance.
+
+    Returns
+    -------
+    ndarray of bool, shape (...)
+    """
+    X = check_array(X, "X", (8,))
+    nx = np.linalg.norm(X[..., :4], axis=-1)
+    nX = np.linalg.norm(X, axis=-1)
+    res = np.abs(np.sum(X[..., :4] * X[..., 4:], axis=-1))
+    return (nx > 0) & (res <= tol * nx * nX)
+
+
+def check_study(X: ArrayLike, name: str = "X", *,
+                tol: float = STUDY_QUADRIC_TOL) -> NDArray[np.float64]:
+    """Validate Study vectors and return them as a float array.
+
+    Raises
+    ------
+    InvalidInputError
+        Wrong shape or non-finite values.
+    NotOnStudyQuadricError
+        If an item is off the Study quadric or has ``x = 0``; the message gives
+        the first such item and its quadric value.
+    """
+    X = check_array(X, name, (8,))
+    ok = is_on_study_quadric(X, tol=tol)
+    if not np.all(ok):
+        idx = tuple(np.argwhere(~ok)[0]) if X.ndim > 1 else ()
+        bad = X[idx]
+        raise NotOnStudyQuadricError(
+            f"{name}: expected a Study vector with x0*y0 + x1*y1 + x2*y2 + x3*y3 = 0 and "
+            f"x != 0 (relative tolerance {tol:g}); item {idx} has x = {bad[:4].tolist()}, "
+            f"x.y = {float(np.dot(bad[:4], bad[4:])):.3g}")
+    return X
+
+
+def study_normalize(X: ArrayLike) -> NDArray[np.float64]:
+    """Canonical representative of a Study vector: ``|x| = 1`` and first non-zero ``x_i > 0``.
+
+    Parameters
+    ----------
+    X : array-like, shape (..., 8)
+
+    Returns
+    -------
+    ndarray, shape (..., 8)
+
+    Raises
+    ------
+    NotOnStudyQuadricError
+        If ``x = 0``.
+    """
+    X = check_array(X, "X", (8,))
+    x = X[..., :4]
+    n = np.linalg.norm(x, axis=-1, keepdims=True)
+    if np.any(n == 0.0):
+        raise NotOnStudyQuadricError("X: quaternion part x is zero, cannot normalise")
+    # sign: make the first component that is not (numerically) zero positive
+    ax = np.abs(x) > 1e-12 * n
+    first = np.argmax(ax, axis=-1)
+    s = np.sign(np.take_along_axis(x, first[..., None], axis=-1))
+    s = np.where(s == 0, 1.0, s)
+    return X / (n * s)
+
+
+def study_equal(X1: ArrayLike, X2: ArrayLike, *, atol: float = 1e-12) -> NDArray[np.bool_]:
+    """Projective equality ``X1 ~ lambda * X2`` of 8-vectors.
+
+    Both are scaled to unit Euclidean norm; they are equal when they agree up
+    to sign within ``atol`` (max-abs difference).
+
+    Parameters
+    ----------
+    X1, X2 : array-like, shape (..., 8)
+    atol : float
+
+    Returns
+    -------
+    ndarray of bool, shape (...)
+    """
+    X1 = check_array(X1, "X1", (8,))
+    X2 = check_array(X2, "X2", (8,))
+    n1 = X1 / np.linalg.norm(X1, axis=-1, keepdims=True)
+    n2 = X2 / np.linalg.norm(X2, axis=-1, keepdims=True)
+    d = np.minimum(np.abs(n1 - n2).max(axis=-1), np.abs(n1 + n2).max(axis=-1))
+    return d <= atol
+
+
+def rotation_from_quaternion(x: ArrayLike) -> NDArray[np.float64]:
+    """Rotation matrix of a (not necessarily unit) quaternion, the block of Eq. 3.
+
+    Parameters
+    ----------
+    x : array-like, shape (..., 4)
+        ``(x0, x1, x2, x3)``, scalar first, non-zero.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+    """
+    x = np.asarray(x, dtype=float)
+    x0, x1, x2, x3 = np.moveaxis(x, -1, 0)
+    D = x0 * x0 + x1 * x1 + x2 * x2 + x3 * x3
+    R = np.stack([
+        x0 * x0 + x1 * x1 - x2 * x2 - x3 * x3, 2 * (x1 * x2 - x0 * x3), 2 * (x1 * x3 + x0 * x2),
+        2 * (x1 * x2 + x0 * x3), x0 * x0 - x1 * x1 + x2 * x2 - x3 * x3, 2 * (x2 * x3 - x0 * x1),
+        2 * (x1 * x3 - x0 * x2), 2 * (x2 * x3 + x0 * x1), x0 * x0 - x1 * x1 - x2 * x2 + x3 * x3,
+    ], axis=-1).reshape(x.shape[:-1] + (3, 3))
+    return R / D[..., None, None]
+
+
+def quaternion_from_rotation(R: ArrayLike) -> NDArray[np.float64]:
+    """Unit quaternion of a rotation matrix (Shepperd's method, stable for all angles).
+
+    Parameters
+    ----------
+    R : array-like, shape (..., 3, 3)
+        Proper rotation matrices.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        ``(x0, x1, x2, x3)``, scalar first, unit norm, sign not canonicalised.
+    """
+    R = np.asarray(R, dtype=float)
+    tr = R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2]
+    cand = np.stack([
+        np.stack([1 + tr, R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0],
+                  R[..., 1, 0] - R[..., 0, 1]], axis=-1),
+        np.stack([R[..., 2, 1] - R[..., 1, 2], 1 + 2 * R[..., 0, 0] - tr,
+                  R[..., 0, 1] + R[..., 1, 0], R[..., 0, 2] + R[..., 2, 0]], axis=-1),
+        np.stack([R[..., 0, 2] - R[..., 2, 0], R[..., 0, 1] + R[..., 1, 0],
+                  1 + 2 * R[..., 1, 1] - tr, R[..., 1, 2] + R[..., 2, 1]], axis=-1),
+        np.stack([R[..., 1, 0] - R[..., 0, 1], R[..., 0, 2] + R[..., 2, 0],
+                  R[..., 1, 2] + R[..., 2, 1], 1 + 2 * R[..., 2, 2] - tr], axis=-1),
+    ], axis=-2)
+    diag = np.stack([tr, R[..., 0, 0], R[..., 1, 1], R[..., 2, 2]], axis=-1)
+    k = np.argmax(diag, axis=-1)
+    q = np.take_along_axis(cand, k[..., None, None], axis=-2)[..., 0, :]
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+
+
+def study_from_transform(T: ArrayLike) -> NDArray[np.float64]:
+    """Study vector of a displacement (inverse of Eq. 3-4).
+
+    Parameters
+    ----------
+    T : array-like, shape (..., 4, 4)
+        Rigid transforms ``[[R, t], [0, 0, 0, 1]]`` (ecosystem layout, MODEL.md).
+
+    Returns
+    -------
+    ndarray, shape (..., 8)
+        ``(x0..x3, y0..y3)`` with ``|x| = 1``, the first non-zero ``x_i`` positive,
+        and ``y = -t * x / 2`` so that :func:`transform_from_study` (Eq. 3-4) returns ``T``.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``T`` is not a rigid transform.
+    """
+    T = check_transform(T, "T")
+    x = quaternion_from_rotation(T[..., :3, :3])
+    t = np.concatenate([np.zeros(T.shape[:-2] + (1,)), T[..., :3, 3]], axis=-1)
+    y = -0.5 * quaternion_multiply(t, x)
+    return study_normalize(np.concatenate([x, y], axis=-1))
+
+
+def _eq3_parts(X: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Rotation block and translation ``(p, q, r) / Delta`` of Eq. 3-4, literally."""
+    x0, x1, x2, x3, y0, y1, y2, y3 = np.moveaxis(X, -1, 0)
+    D = x0 * x0 + x1 * x1 + x2 * x2 + x3 * x3
+    p = 2 * (-x0 * y1 + x1 * y0 - x2 * y3 + x3 * y2)
+    q = 2 * (-x0 * y2 + x1 * y3 + x2 * y0 - x3 * y1)
+    r = 2 * (-x0 * y3 - x1 * y2 + x2 * y1 + x3 * y0)
+    return rotation_from_quaternion(X[..., :4]), np.stack([p, q, r], axis=-1) / D[..., None]
+
+
+def transform_from_study(X: ArrayLike, *, tol: float = STUDY_QUADRIC_TOL) -> NDArray[np.float64]:
+    """Displacement of a Study vector, exactly as Eq. 3-4 define it.
+
+    Parameters
+    ----------
+    X : array-like, shape (..., 8)
+        Study vectors ``(x0..x3, y0..y3)``, any non-zero scale.
+    tol : float
+        Relative tolerance of the Study-quadric test.
+
+    Returns
+    -------
+    ndarray, shape (..., 4, 4)
+        ``[[R, t], [0, 0, 0, 1]]`` with ``t = (p, q, r) / Delta`` (Eq. 4).
+
+    Raises
+    ------
+    NotOnStudyQuadricError
+        If an item is off the quadric or has ``x = 0``: Eq. 3 is then not a displacement.
+    """
+    X = check_study(X, "X", tol=tol)
+    R, t = _eq3_parts(X)
+    T = np.zeros(X.shape[:-1] + (4, 4))
+    T[..., :3, :3] = R
+    T[..., :3, 3] = t
+    T[..., 3, 3] = 1.0
+    return T
+
+
+def paper_matrix_from_study(X: ArrayLike, *, tol: float = STUDY_QUADRIC_TOL
+                            ) -> NDArray[np.float64]:
+    """The 4x4 matrix of Eq. 3 in the paper's layout (homogenising coordinate first).
+
+    Parameters
+    ----------
+    X : array-like, shape (..., 8)
+
+    Returns
+    -------
+    ndarray, shape (..., 4, 4)
+        ``[[1, 0], [t, R]]``: acts on ``(1, x, y, z)``.
+    """
+    X = check_study(X, "X", tol=tol)
+    R, t = _eq3_parts(X)
+    T = np.zeros(X.shape[:-1] + (4, 4))
+    T[..., 0, 0] = 1.0
+    T[..., 1:, 0] = t
+    T[..., 1:, 1:] = R
+    return T
+
+
+def study_M(u: ArrayLike) -> NDArray[np.float64]:
+    """Study vector of ``M_i`` (Eq. 6), the rotation about z by ``u``.
+
+    Parameters
+    ----------
+    u : array-like, shape (...)
+        Angle in radians.
+
+    Returns
+    -------
+    ndarray, shape (..., 8)
+        ``(cos(u/2), 0, 0, sin(u/2), 0, 0, 0, 0)``.
+    """
+    u = check_array(u, "u", ())
+    X = np.zeros(u.shape + (8,))
+    X[..., 0] = np.cos(u / 2)
+    X[..., 3] = np.sin(u / 2)
+    return X
+
+
+def study_M_from_half_tangent(v: ArrayLike) -> NDArray[np.float64]:
+    """Study vector of ``M_i`` in the half-tangent ``v = tan(u/2)``, projectively ``(1, 0, 0, v, 0, 0, 0, 0)``.
+
+    The half turn ``u = pi`` (``v`` infinite) has no finite representative here;
+    use :func:`study_M`.
+
+    Parameters
+    ----------
+    v : array-like, shape (...)
+
+    Returns
+    -------
+    ndarray, shape (..., 8)
+    """
+    v = check_array(v, "v", ())
+    X = np.zeros(v.shape + (8,))
+    X[..., 0] = 1.0
+    X[..., 3] = v
+    return X
+
+
+def study_G(a: ArrayLike, d: ArrayLike, alpha: ArrayLike) -> NDArray[np.float64]:
+    """Study vector of ``G_i`` (Eq. 6): translate by ``(a, 0, d)``, then rotate about x by ``alpha``.
+
+    Parameters
+    ----------
+    a, d : array-like, shape (...)
+        Offsets along x and z, metres.
+    alpha : array-like, shape (...)
+        Twist angle, radians.
+
+    Returns
+    -------
+    ndarray, shape (..., 8)
+        ``(c, s, 0, 0, a*s/2, -a*c/2, -d*s/2, -d*c/2)`` with ``c, s = cos, sin(alpha/2)``.
+    """
+    a = check_array(a, "a", ())
+    d = check_array(d, "d", ())
+    alpha = check_array(alpha, "alpha", ())
+    return _G(a, d, np.cos(alpha / 2), np.sin(alpha / 2))
+
+
+def study_G_from_half_tangent(a: ArrayLike, d: ArrayLike, al: ArrayLike) -> NDArray[np.float64]:
+    """Study vector of ``G_i`` in the half-tangent ``al = tan(alpha/2)`` (projective, scale ``1/cos(alpha/2)``).
+
+    Parameters
+    ----------
+    a, d : array-like, shape (...)
+        Offsets along x and z, metres.
+    al : array-like, shape (...)
+        ``tan(alpha / 2)``.
+
+    Returns
+    -------
+    ndarray, shape (..., 8)
+        ``(1, al, 0, 0, a*al/2, -a/2, -d*al/2, -d/2)``.
+    """
+    a = check_array(a, "a", ())
+    d = check_array(d, "d", ())
+    al = check_array(al, "al", ())
+    return _G(a, d, np.ones_like(al), al)
+
+
+def _G(a: NDArray[np.float64], d: NDArray[np.float64], c: NDArray[np.float64],
+       s: NDArray[np.float64]) -> NDArray[np.float64]:
+    a, d, c, s = np.broadcast_arrays(a, d, c, s)
+    z = np.zeros_like(c)
+    return np.stack([c, s, z, z, a * s / 2, -a * c / 2, -d * s / 2, -d * c / 2], axis=-1)
+
+
