@@ -6,5 +6,5 @@ cd "$(dirname "$0")/.."
 python3 -m venv .venv
 . .venv/bin/activate
 python -m pip install --quiet --upgrade "pip>=25.1"
-python -m pip install --quiet -e ".[symbolic,plot,fast,progress]" --group test
+python -m pip install --quiet -e ".[all]" --group test
 python -m pytest -q -p no:cacheprovider "$@"
