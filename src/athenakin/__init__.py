@@ -36,6 +36,18 @@ from .robot import (
 
 __version__ = "0.1.0"
 
+#: Subpackages imported on first attribute access (optional heavy dependencies).
+_LAZY_SUBPACKAGES = ("analysis", "symbolic", "plot", "sim", "motion", "fast")
+
+
+def __getattr__(name: str) -> object:
+    """Import optional subpackages lazily: ``ak.analysis`` works without an explicit import."""
+    if name in _LAZY_SUBPACKAGES:
+        import importlib
+
+        return importlib.import_module(f"athenakin.{name}")
+    raise AttributeError(f"module 'athenakin' has no attribute {name!r}")
+
 __all__ = [
     "__version__",
     "chain",
