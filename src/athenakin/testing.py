@@ -6,13 +6,18 @@ explicit tolerances, and raise ``AssertionError`` with the worst entry.
 
 from __future__ import annotations
 
-import numpy as np
-from numpy.typing import ArrayLike
+import dataclasses
 
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .chain import ups_transform
+from .design import Design
+from .parallel import parallel_forward_kinematics
 from .study import study_normalize
 
 __all__ = ["assert_study_equal", "assert_dq_equal", "assert_transform_equal",
-           "assert_angles_equal"]
+           "assert_angles_equal", "RandomConfigurations", "random_configurations"]
 
 
 def assert_study_equal(X1: ArrayLike, X2: ArrayLike, *, atol: float = 1e-12) -> None:
@@ -63,3 +68,95 @@ def assert_angles_equal(a1: ArrayLike, a2: ArrayLike, *, atol: float = 1e-12) ->
     if not worst <= atol:
         idx = np.unravel_index(int(np.argmax(d)), d.shape) if d.ndim else ()
         raise AssertionError(f"angles differ by {worst:.3e} rad > {atol:g} at {idx}")
+
+
+@dataclasses.dataclass(frozen=True)
+class RandomConfigurations:
+    """Seeded random configurations of the whole robot and the set-ups they imply.
+
+    Attributes
+    ----------
+    q : ndarray, shape (n, 3)
+    mode : ndarray of int, shape (n,)
+    p : ndarray, shape (n,)
+    u : ndarray, shape (n, 5)
+    T_b_s : ndarray, shape (n, 4, 4)
+    T_b_e : ndarray, shape (n, 4, 4)
+        ``T_b_s @ T_s_e(p, u)``: the RCM frame for which the configuration is a solution.
+    slot : ndarray of int, shape (n,)
+        The forward-kinematics slot that must hold this configuration.
+    """
+
+    q: NDArray[np.float64]
+    mode: NDArray[np.int64]
+    p: NDArray[np.float64]
+    u: NDArray[np.float64]
+    T_b_s: NDArray[np.float64]
+    T_b_e: NDArray[np.float64]
+    slot: NDArray[np.int64]
+
+
+def random_configurations(n: int, design: Design | None = None, *, rng: object = None,
+                          margin: float = 0.05, length_margin: float = 0.01,
+                          p_range: tuple[float, float] = (0.05, 0.5)) -> RandomConfigurations:
+    """Draw ``n`` reachable configurations at a stated distance from every singular set.
+
+    Actuators are uniform within the stroke limits (within ``[-0.5, 0.5] x [-0.5, 0.5]
+    x [0, 1]`` m where unlimited), the assembly mode uniform among the real ones,
+    ``|p|`` uniform in ``p_range`` with a random sign and ``u1..u5`` uniform in
+    (-pi, pi]. Kept are configurations with ``|sin u2|``, ``|sin u4|``, ``|cos u1|``
+    and ``|sin u1 sin u2|`` above ``margin`` and ``|h|``, ``l3 - |h|`` and the
+    half-chord of ``k1 ∩ k2`` above ``length_margin`` (m).
+
+    Parameters
+    ----------
+    n : int
+    design : Design, optional
+    rng : int or numpy Generator, keyword-only
+    margin : float, keyword-only
+    length_margin : float, keyword-only
+    p_range : (float, float), keyword-only
+
+    Returns
+    -------
+    RandomConfigurations
+    """
+    design = Design.default() if design is None else design
+    gen = np.random.default_rng(rng)  # type: ignore[call-overload]
+    lo = np.where(np.isfinite(design.stroke_min), design.stroke_min, [-0.5, -0.5, 0.0])
+    hi = np.where(np.isfinite(design.stroke_max), design.stroke_max, [0.5, 0.5, 1.0])
+    out: dict[str, list[NDArray[np.float64]]] = {k: [] for k in ("q", "m", "p", "u", "Ts")}
+    have = 0
+    for _ in range(1000):
+        if have >= n:
+            break
+        N = max(4 * (n - have), 64)
+        q = gen.uniform(lo, hi, (N, 3))
+        par = parallel_forward_kinematics(q, design)
+        m = gen.integers(0, 2, N)
+        h = 0.5 * np.abs(q[:, 0] - q[:, 1])
+        p = gen.uniform(*p_range, N) * gen.choice([-1.0, 1.0], N)
+        u = gen.uniform(-np.pi, np.pi, (N, 5))
+        s, c = np.sin(u), np.cos(u)
+        ok = (par.valid[np.arange(N), m] & (h > length_margin)
+              & (h < design.l3 - length_margin) & (par.half_chord > length_margin)
+              & (np.abs(s[:, 1]) > margin) & (np.abs(s[:, 3]) > margin)
+              & (np.abs(c[:, 0]) > margin) & (np.abs(s[:, 0] * s[:, 1]) > margin))
+        idx = np.flatnonzero(ok)[: n - have]
+        out["q"].append(q[idx])
+        out["m"].append(m[idx])
+        out["p"].append(p[idx])
+        out["u"].append(u[idx])
+        out["Ts"].append(par.T_b_s[idx, m[idx]])
+        have += len(idx)
+    if have < n:
+        raise RuntimeError(f"random_configurations: found only {have} of {n} configurations; "
+                           f"the design's workspace is too small for the margins")
+    q = np.concatenate(out["q"])
+    mi = np.concatenate(out["m"])
+    p = np.concatenate(out["p"])
+    u = np.concatenate(out["u"])
+    Ts = np.concatenate(out["Ts"])
+    slot = 8 * mi + 4 * (p < 0) + 2 * (np.sin(u[:, 1]) < 0) + (np.sin(u[:, 3]) < 0)
+    return RandomConfigurations(q=q, mode=np.where(mi == 0, 1, -1), p=p, u=u, T_b_s=Ts,
+                                T_b_e=Ts @ ups_transform(p, u), slot=slot.astype(np.int64))
