@@ -35,10 +35,11 @@ __all__ = [
 ]
 
 #: Half-chord length (m) of ``k1 ∩ k2`` at or below which the circles count as tangent.
-#: Near tangency the intersection moves like ``sqrt(w)``: rounding alone gives a
-#: half-chord of about ``sqrt(eps) * 0.5 m ~ 1e-8 m``; below 1e-9 m the two modes are
-#: numerically the same configuration.
-TANGENT_TOL = 1e-9
+#: Near tangency the intersection moves like ``sqrt(w)``: a rounding error of one ulp
+#: in ``q3`` (1e-16 m) alone changes the half-chord by about ``sqrt(1e-16 m * 0.3 m) ~
+#: 5e-9 m`` on the reference design; below 1e-7 m (a hundred times the rounding noise,
+#: a tenth of a micrometre) the two modes are numerically the same configuration.
+TANGENT_TOL = 1e-7
 
 #: Assembly-mode labels in slot order.
 MODES = np.array([1, -1])
