@@ -107,7 +107,7 @@ def check_transform(T: ArrayLike, name: str, *, allow_nonfinite: bool = False,
     """
     arr = check_array(T, name, (4, 4), allow_nonfinite=allow_nonfinite)
     finite = np.all(np.isfinite(arr), axis=(-2, -1))
-    R = arr[..., :3, :3]
+    R = np.where(finite[..., None, None], arr[..., :3, :3], np.eye(3))
     orth = np.abs(np.swapaxes(R, -1, -2) @ R - np.eye(3)).max(axis=(-2, -1))
     det = np.linalg.det(R)
     last = np.abs(arr[..., 3, :] - np.array([0.0, 0.0, 0.0, 1.0])).max(axis=-1)

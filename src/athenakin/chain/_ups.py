@@ -218,33 +218,35 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     p = nn[..., None] * psign                           # (..., 2)
     z3 = c[..., None, :] / p[..., None]                 # (..., 2, 3)
     rho = np.hypot(z3[..., 0], z3[..., 1])              # (..., 2), |sin u2|
+    # Each angle pair is solved sequentially so that closure holds to rounding even
+    # where the first angle is ill-conditioned (near sin u2 = 0 or sin u4 = 0): the
+    # first angle from the direction, the second from the projection onto the
+    # plane it fixes, the last rotation from the remaining matrix.
     sig = np.array([1.0, -1.0])
-    rr = np.where(rho > 0, rho, 1.0)
-    # (..., 2 roots, 2 branches)
-    s2 = sig * rho[..., None]
-    c2 = np.broadcast_to(-z3[..., 2, None], s2.shape)
-    c1 = sig * (z3[..., 0] / rr)[..., None]
-    s1 = sig * (z3[..., 1] / rr)[..., None]
-    uj_deg = np.broadcast_to((rho <= degenerate_tol)[..., None], s2.shape)
+    u1 = np.arctan2(sig * z3[..., 1, None], sig * z3[..., 0, None])   # (..., 2, 2)
+    c1, s1 = np.cos(u1), np.sin(u1)
+    u2 = np.arctan2(c1 * z3[..., 0, None] + s1 * z3[..., 1, None],
+                    np.broadcast_to(-z3[..., 2, None], u1.shape))
+    c2, s2 = np.cos(u2), np.sin(u2)
+    uj_deg = np.broadcast_to((rho <= degenerate_tol)[..., None], u1.shape)
     R1 = rotation_u_pair(c1, s1, c2, s2)                # (..., 2, 2, 3, 3)
     Rse = T[..., None, None, :3, :3]
     W = np.swapaxes(R1, -1, -2) @ Rse
     rho4 = np.hypot(W[..., 0, 2], W[..., 1, 2])         # |sin u4|
     tau = np.array([1.0, -1.0])
-    r4 = np.where(rho4 > 0, rho4, 1.0)
-    s4 = tau * rho4[..., None]
-    c4 = np.broadcast_to(-W[..., 2, 2, None], s4.shape)
-    c3 = tau * (W[..., 0, 2] / r4)[..., None]
-    s3 = tau * (W[..., 1, 2] / r4)[..., None]
-    c5 = tau * (W[..., 2, 0] / r4)[..., None]
-    s5 = -tau * (W[..., 2, 1] / r4)[..., None]
-    wr_deg = np.broadcast_to((rho4 <= degenerate_tol)[..., None], s4.shape)
+    u3 = np.arctan2(tau * W[..., 1, 2, None], tau * W[..., 0, 2, None])  # (..., 2, 2, 2)
+    c3, s3 = np.cos(u3), np.sin(u3)
+    u4 = np.arctan2(c3 * W[..., 0, 2, None] + s3 * W[..., 1, 2, None],
+                    np.broadcast_to(-W[..., 2, 2, None], u3.shape))
+    c4, s4 = np.cos(u4), np.sin(u4)
+    W00, W10, W20 = W[..., 0, 0, None], W[..., 1, 0, None], W[..., 2, 0, None]
+    u5 = np.arctan2(s3 * W00 - c3 * W10, c3 * c4 * W00 + s3 * c4 * W10 + s4 * W20)
+    wr_deg = np.broadcast_to((rho4 <= degenerate_tol)[..., None], u3.shape)
 
-    full = s4.shape  # (..., 2, 2, 2)
+    full = u3.shape  # (..., 2, 2, 2)
     u = np.stack([
-        np.broadcast_to(np.arctan2(s1, c1)[..., None], full),
-        np.broadcast_to(np.arctan2(s2, c2)[..., None], full),
-        np.arctan2(s3, c3), np.arctan2(s4, c4), np.arctan2(s5, c5)], axis=-1)
+        np.broadcast_to(u1[..., None], full), np.broadcast_to(u2[..., None], full),
+        u3, u4, u5], axis=-1)
     u = _wrap(u)
     pp = np.broadcast_to(p[..., None, None], full)
     batch = full[:-3]
