@@ -28,18 +28,18 @@ def test_both_modes_lie_on_both_circles_and_frames_follow_model():
     g = circle_geometry(q, D)
     v = par.valid
     assert v.any()
-    O = par.O_i
+    Oi = par.O_i
     xM = 0.5 * (q[:, 0] + q[:, 1])
     r1, my = g["r1"][:, None], g["m_y"][:, None]
     with np.errstate(invalid="ignore"):
-        on_k1 = np.hypot(O[..., 1], O[..., 2]) - r1
-        on_k2 = np.hypot(O[..., 1] - my, O[..., 2] - D.l5) - q[:, 2:3]
+        on_k1 = np.hypot(Oi[..., 1], Oi[..., 2]) - r1
+        on_k2 = np.hypot(Oi[..., 1] - my, Oi[..., 2] - D.l5) - q[:, 2:3]
     assert np.abs(on_k1[v]).max() < 1e-14
     assert np.abs(on_k2[v]).max() < 1e-14
-    assert np.abs(O[..., 0] - xM[:, None])[v].max() == 0
+    assert np.abs(Oi[..., 0] - xM[:, None])[v].max() == 0
     # mode +1 has the larger z
     both = v.all(axis=1)
-    assert np.all(O[both, 0, 2] >= O[both, 1, 2])
+    assert np.all(Oi[both, 0, 2] >= Oi[both, 1, 2])
     # R_b_i = Rx(theta); z_i radial from M; O_s = O_i + l4 z_i; T_b_s has R_b_i
     R = par.T_b_i[..., :3, :3]
     th = par.theta
@@ -49,9 +49,9 @@ def test_both_modes_lie_on_both_circles_and_frames_follow_model():
     Rx[..., 2, 1], Rx[..., 2, 2] = np.sin(th), np.cos(th)
     assert np.abs(R - Rx)[v].max() < 1e-14
     z_i = R[..., :, 2]
-    radial = (O - np.stack([xM, 0 * xM, 0 * xM], -1)[:, None]) / r1[..., None]
+    radial = (Oi - np.stack([xM, 0 * xM, 0 * xM], -1)[:, None]) / r1[..., None]
     assert np.abs(z_i - radial)[v].max() < 1e-14
-    assert np.abs(par.O_s - (O + D.l4 * z_i))[v].max() < 1e-15
+    assert np.abs(par.O_s - (Oi + D.l4 * z_i))[v].max() < 1e-15
     np.testing.assert_array_equal(par.T_b_s[..., :3, :3][v], R[v])
     # invalid slots are NaN, not garbage
     assert np.all(np.isnan(par.O_s[~v]))
@@ -172,7 +172,8 @@ def test_batch_equals_loop():
 
 
 def test_input_validation_messages():
-    with pytest.raises(ak.InvalidInputError, match="q: expected shape \\(\\.\\.\\., 3\\), got shape \\(2,\\)"):
+    with pytest.raises(ak.InvalidInputError,
+                       match="q: expected shape \\(\\.\\.\\., 3\\), got shape \\(2,\\)"):
         parallel_forward_kinematics([0.1, 0.2], D)
     with pytest.raises(TypeError, match="q: expected a real array"):
         parallel_forward_kinematics("0.1 0.2 0.3", D)

@@ -159,7 +159,8 @@ def test_quadric_residual_and_check_study_messages():
         check_study(X)
     with pytest.raises(ak.NotOnStudyQuadricError, match="x != 0"):
         check_study(np.zeros(8))
-    with pytest.raises(ak.InvalidInputError, match="expected shape \\(\\.\\.\\., 8\\), got shape \\(7,\\)"):
+    with pytest.raises(ak.InvalidInputError,
+                       match="expected shape \\(\\.\\.\\., 8\\), got shape \\(7,\\)"):
         check_study(np.zeros(7))
     with pytest.raises(ak.InvalidInputError, match="expected finite"):
         check_study(np.r_[np.nan, np.zeros(7)])

@@ -7,8 +7,15 @@ import argparse
 import numpy as np
 
 from ..robot import REFERENCE_Q, forward_kinematics, inverse_kinematics
-from ._common import add_design_option, add_json_option, dump_json, fmt, load_design, table
-from ._common import load_rcm
+from ._common import (
+    add_design_option,
+    add_json_option,
+    dump_json,
+    fmt,
+    load_design,
+    load_rcm,
+    table,
+)
 from ._fk import FK_HEADERS, fk_json, fk_rows
 
 

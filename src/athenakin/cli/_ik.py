@@ -7,8 +7,15 @@ import argparse
 import numpy as np
 
 from ..robot import direction_from_angles, inverse_kinematics, q_from_instrument, q_from_tool_tip
-from ._common import add_design_option, add_json_option, add_setup_options, dump_json, fmt, \
-    load_design, load_rcm
+from ._common import (
+    add_design_option,
+    add_json_option,
+    add_setup_options,
+    dump_json,
+    fmt,
+    load_design,
+    load_rcm,
+)
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]

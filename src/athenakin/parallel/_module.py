@@ -134,7 +134,8 @@ def circle_geometry(q: ArrayLike, design: Design) -> dict[str, NDArray[np.float6
     dict of ndarray, each shape (...)
         ``x_M``, ``h``, ``r1``, ``m_y``, ``d`` (= ``|C - M|``), ``H`` (the paper's
         ``h = m_y^2 + l5^2 + r1^2 - q3^2``), ``k = w / m_y^2 = 4 d^2 a^2``, ``w`` (the
-        paper's ``w``) and ``half_chord`` ``a`` (0 where ``k < 0``). ``r1`` and ``m_y`` are NaN where the links cannot span A-B.
+        paper's ``w``) and ``half_chord`` ``a`` (0 where ``k < 0``). ``r1`` and
+        ``m_y`` are NaN where the links cannot span A-B.
     """
     q = np.asarray(q, dtype=float)
     q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2]

@@ -33,10 +33,12 @@ def raise_first_failure(item_reason: NDArray[np.int8], describe: str,
     values : dict of name -> ndarray with leading shape (...)
         Inputs to quote in the message.
     """
-    bad = np.argwhere(item_reason != 0)
-    if bad.size == 0:
+    item_reason = np.asarray(item_reason)
+    if not np.any(item_reason != 0):
         return
-    idx = tuple(bad[0])
+    idx = tuple(int(i) for i in np.argwhere(np.atleast_1d(item_reason != 0))[0])
+    if item_reason.ndim == 0:
+        idx = ()
     parts = []
     for k, v in values.items():
         a = np.asarray(v)[idx] if np.ndim(v) > 0 else np.asarray(v)

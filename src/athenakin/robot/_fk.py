@@ -19,7 +19,6 @@ from ..chain._ups import (
     ups_solutions,
 )
 from ..design import Design
-from ..errors import Reason
 from ..parallel._module import MODES, TANGENT_TOL, parallel_forward_kinematics
 from ._common import ErrorPolicy, item_reason_from_slots, raise_first_failure, resolve_policy
 

@@ -449,7 +449,7 @@ def study_M(u: ArrayLike) -> NDArray[np.float64]:
 
 
 def study_M_from_half_tangent(v: ArrayLike) -> NDArray[np.float64]:
-    """Study vector of ``M_i`` in the half-tangent ``v = tan(u/2)``, projectively ``(1, 0, 0, v, 0, 0, 0, 0)``.
+    """Study vector of ``M_i`` in the half-tangent ``v = tan(u/2)``: ``(1, 0, 0, v, 0, 0, 0, 0)``.
 
     The half turn ``u = pi`` (``v`` infinite) has no finite representative here;
     use :func:`study_M`.
@@ -470,7 +470,7 @@ def study_M_from_half_tangent(v: ArrayLike) -> NDArray[np.float64]:
 
 
 def study_G(a: ArrayLike, d: ArrayLike, alpha: ArrayLike) -> NDArray[np.float64]:
-    """Study vector of ``G_i`` (Eq. 6): translate by ``(a, 0, d)``, then rotate about x by ``alpha``.
+    """Study vector of ``G_i`` (Eq. 6): translate by ``(a, 0, d)``, rotate about x by ``alpha``.
 
     Parameters
     ----------
@@ -491,7 +491,7 @@ def study_G(a: ArrayLike, d: ArrayLike, alpha: ArrayLike) -> NDArray[np.float64]
 
 
 def study_G_from_half_tangent(a: ArrayLike, d: ArrayLike, al: ArrayLike) -> NDArray[np.float64]:
-    """Study vector of ``G_i`` in the half-tangent ``al = tan(alpha/2)`` (projective, scale ``1/cos(alpha/2)``).
+    """Study vector of ``G_i`` in the half-tangent ``al = tan(alpha/2)`` (times 1/cos(alpha/2)).
 
     Parameters
     ----------
