@@ -37,12 +37,25 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the process exit code (0 ok, 1 kinematics error, 2 usage)."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_protect_negative_numbers(argv))
     try:
         return int(args.func(args) or 0)
     except (KinematicsError, ValueError, TypeError, OSError) as exc:
         print(f"athenakin {args.command}: error: {type(exc).__name__}: {exc}", file=sys.stderr)
         return 1
+
+
+def _protect_negative_numbers(argv: list[str] | None) -> list[str]:
+    """Let negative numbers in scientific notation (``-1.4e-14``) pass as values.
+
+    argparse treats ``-1.4e-14`` as an option because its negative-number pattern
+    has no exponent; prefixing a space keeps it a value (``float(" -1e-3")`` works).
+    """
+    import re
+
+    args = sys.argv[1:] if argv is None else list(argv)
+    pat = re.compile(r"^-\d*\.?\d+(e[-+]?\d+)?$", re.IGNORECASE)
+    return [f" {a}" if pat.match(a) and "e" in a.lower() else a for a in args]
 
 
 if __name__ == "__main__":  # pragma: no cover

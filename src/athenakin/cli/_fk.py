@@ -24,7 +24,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Add the ``fk`` subcommand."""
     p = sub.add_parser("fk", help="forward kinematics: all 16 solutions for q1 q2 q3",
                        description="All (up to) 16 configurations for actuator values q (m).")
-    p.add_argument("q", nargs=3, type=float, metavar=("Q1", "Q2", "Q3"), help="actuators, m")
+    p.add_argument("q", nargs=3, type=float, metavar="Q",
+                   help="actuators q1 q2 q3, m (negative values are fine: -0.1)")
     add_design_option(p)
     add_setup_options(p)
     add_json_option(p)

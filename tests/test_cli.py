@@ -1,0 +1,81 @@
+"""The command line: fk, ik, demo (text and JSON), errors."""
+
+import importlib
+import json
+
+import numpy as np
+import pytest
+
+import athenakin as ak
+from athenakin.cli import COMMANDS, main
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_every_registered_command_imports():
+    for name in COMMANDS:
+        assert hasattr(importlib.import_module(f"athenakin.cli._{name}"), "register")
+
+
+def test_fk_table_and_json(capsys):
+    code, out, _ = run(capsys, "fk", "-0.1", "0.1", "0.45")
+    assert code == 0 and "16 solutions" in out
+    assert out.count(" ok ") == 16
+    code, out, _ = run(capsys, "fk", "-0.1", "0.1", "0.45", "--json")
+    data = json.loads(out)
+    assert data["n_solutions"] == 16
+    sol = ak.forward_kinematics([-0.1, 0.1, 0.45], ak.default_rcm_frame())
+    np.testing.assert_allclose([s["u_deg"] for s in data["solutions"]], np.degrees(sol.u),
+                               atol=1e-9)
+
+
+def test_ik_three_forms(capsys):
+    sol = ak.forward_kinematics([-0.1, 0.1, 0.45], ak.default_rcm_frame())
+    u345 = np.degrees(sol.u[0, 2:])
+    code, out, _ = run(capsys, "ik", "--u345", *map(str, u345), "--json")
+    assert code == 0
+    np.testing.assert_allclose(json.loads(out)["q_m"], [-0.1, 0.1, 0.45], atol=1e-9)
+    code, out, _ = run(capsys, "ik", "--direction", "0", "90", "--p", "0.2", "--json")
+    np.testing.assert_allclose(json.loads(out)["q_m"], [-0.1, 0.1, 0.45], atol=1e-12)
+    code, out, _ = run(capsys, "ik", "--tip", "0.25", "0", "0")
+    assert code == 0 and "q = (-0.100000, 0.100000, 0.450000) m" in out
+
+
+def test_design_and_rcm_options(tmp_path, capsys):
+    f = tmp_path / "d.toml"
+    f.write_text(ak.Design.default().to_toml())
+    T = ak.default_rcm_frame()
+    g = tmp_path / "rcm.json"
+    g.write_text(json.dumps({"T_b_e": T.tolist()}))
+    code, out, _ = run(capsys, "fk", "-0.1", "0.1", "0.45", "--design", str(f),
+                       "--rcm-file", str(g), "--json")
+    assert code == 0 and json.loads(out)["n_solutions"] == 16
+    code, out, _ = run(capsys, "fk", "-0.1", "0.1", "0.45", "--rcm", "0", "-0.2", "0.2",
+                       "0", "0", "0", "--json")
+    assert code == 0
+    assert json.loads(out)["T_b_e"][1][3] == -0.2
+
+
+def test_errors_exit_1_with_named_message(capsys):
+    code, _, err = run(capsys, "fk", "0.5", "0.1", "0.45")
+    assert code == 1 and "StrokeLimitError" in err and "q = " in err
+    code, _, err = run(capsys, "ik", "--direction", "0", "90")
+    assert code == 1 and "--direction needs --p" in err
+    with pytest.raises(SystemExit) as e:
+        main(["fk", "1", "2"])
+    assert e.value.code == 2
+
+
+def test_demo_prints_16_and_ik_recovers(capsys):
+    code, out, _ = run(capsys, "demo")
+    assert code == 0
+    assert "16 solutions" in out and "every solution's IK recovers q" in out
+    worst = float(out.strip().split("recovers q to ")[1].split(" m")[0])
+    assert worst < 1e-12
+    code, out, _ = run(capsys, "demo", "--json")
+    data = json.loads(out)
+    assert len(data["ik"]) == 16 and all(r["valid"] for r in data["ik"])

@@ -1,0 +1,78 @@
+"""Design: defaults, validation, TOML round trip."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import athenakin as ak
+
+
+def test_lengths_only_design_is_unlimited_with_defaults():
+    d = ak.Design(l1=0.30, l2=0.10, l3=0.25, l4=0.15, l5=0.40)
+    assert d.q_min is None and d.q_max is None
+    assert np.all(d.stroke_min == -np.inf) and np.all(d.stroke_max == np.inf)
+    assert d.ab_order == "q1<q2" and d.h_sign == -1.0
+    assert d.tool_length == 0.45
+
+
+def test_default_design_documented_values():
+    d = ak.Design.default()
+    np.testing.assert_array_equal(d.lengths, [0.30, 0.10, 0.25, 0.15, 0.40])
+    assert d.q_min == (-0.30, -0.10, 0.20) and d.q_max == (0.10, 0.30, 0.70)
+
+
+def test_design_is_frozen_and_keyword_only():
+    d = ak.Design.default()
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        d.l1 = 1.0  # type: ignore[misc]
+    with pytest.raises(TypeError):
+        ak.Design(0.3, 0.1, 0.25, 0.15, 0.4)  # type: ignore[misc]
+
+
+@pytest.mark.parametrize("kw, exc, match", [
+    ({"l1": -0.3}, ak.InvalidInputError, "l1: expected a positive number, got -0.3"),
+    ({"l2": float("nan")}, ak.InvalidInputError, "l2: expected a finite number"),
+    ({"l3": "0.25"}, TypeError, "l3: expected a real number, got str"),
+    ({"q_min": (0, 0)}, ak.InvalidInputError, "q_min: expected 3 numbers"),
+    ({"q_min": (0.5, 0, 0), "q_max": (0.1, 1, 1)}, ak.InvalidInputError, "q_min <= q_max"),
+    ({"ab_order": "left"}, ak.InvalidInputError, "ab_order: expected one of"),
+    ({"tool_length": 0.0}, ak.InvalidInputError, "tool_length: expected a positive"),
+])
+def test_design_validation(kw, exc, match):
+    base = dict(l1=0.30, l2=0.10, l3=0.25, l4=0.15, l5=0.40)
+    base.update(kw)
+    with pytest.raises(exc, match=match):
+        ak.Design(**base)
+
+
+def test_toml_round_trip(tmp_path):
+    for d in (ak.Design.default(),
+              ak.Design(l1=0.3, l2=0.1, l3=0.25, l4=0.15, l5=0.4, q_min=(-np.inf, -1, 0),
+                        q_max=(1, np.inf, 2), ab_order="q1>q2", tool_length=0.3)):
+        f = tmp_path / "d.toml"
+        f.write_text(d.to_toml())
+        assert ak.Design.from_toml(f) == d
+
+
+def test_toml_errors(tmp_path):
+    f = tmp_path / "bad.toml"
+    f.write_text("[design]\nl1 = 0.3\nl2 = 0.1\nl3 = 0.25\nl4 = 0.15\nl5 = 0.4\nlength = 3\n")
+    with pytest.raises(ak.InvalidInputError, match="unknown key\\(s\\) \\['length'\\]"):
+        ak.Design.from_toml(f)
+    f.write_text("l1 = 0.3\n")
+    with pytest.raises(ak.InvalidInputError, match="missing required length"):
+        ak.Design.from_toml(f)
+
+
+def test_ab_order_reversed_mirrors_actuators():
+    """With q1 > q2 the same pose is reached by swapping q1 and q2."""
+    d1 = ak.Design.default()
+    d2 = dataclasses.replace(d1, ab_order="q1>q2", q_min=None, q_max=None)
+    T = ak.default_rcm_frame(d1)
+    q = ak.robot.REFERENCE_Q
+    s1 = ak.forward_kinematics(q, T, d1)
+    s2 = ak.forward_kinematics(q[[1, 0, 2]], T, d2)
+    np.testing.assert_allclose(s1.T_b_s, s2.T_b_s, atol=0)
+    q2, _ = ak.inverse_kinematics(T, s1.u[0, 2:], d2)
+    np.testing.assert_allclose(q2, q[[1, 0, 2]], atol=1e-12)
