@@ -128,13 +128,26 @@ def ups_transform(p: ArrayLike, u: ArrayLike) -> NDArray[np.float64]:
 
 def _ups_transform(p: NDArray[np.float64], u: NDArray[np.float64]) -> NDArray[np.float64]:
     c, s = np.cos(u), np.sin(u)
-    R1 = rotation_u_pair(c[..., 0], s[..., 0], c[..., 1], s[..., 1])
-    R2 = rotation_u_pair(c[..., 2], s[..., 2], c[..., 3], s[..., 3])
-    R = R1 @ R2 @ _rz(c[..., 4], s[..., 4])
-    shape = np.broadcast_shapes(np.shape(p), R.shape[:-2])
+    return _chain_from_cs(p, *(c[..., i] for i in range(5)), *(s[..., i] for i in range(5)))
+
+
+def _chain_from_cs(p: NDArray[np.float64], c1: NDArray[np.float64], c2: NDArray[np.float64],
+                   c3: NDArray[np.float64], c4: NDArray[np.float64], c5: NDArray[np.float64],
+                   s1: NDArray[np.float64], s2: NDArray[np.float64], s3: NDArray[np.float64],
+                   s4: NDArray[np.float64], s5: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``T_s_e`` from ``p`` and the cosines/sines of ``u1..u5`` (element-wise products:
+    numpy's matmul on stacks of 3x3 matrices is slow)."""
+    # R1 = R(u1, u2) columns; W = R(u3, u4) Rz(u5) columns (module docstring)
+    a = ((c1 * c2, s1 * c2, s2), (s1, -c1, 0.0), (c1 * s2, s1 * s2, -c2))
+    bx, by, bz = (c3 * c4, s3 * c4, s4), (s3, -c3, 0.0), (c3 * s4, s3 * s4, -c4)
+    wcols = (tuple(c5 * x + s5 * y for x, y in zip(bx, by, strict=True)),
+             tuple(c5 * y - s5 * x for x, y in zip(bx, by, strict=True)), bz)
+    shape = np.broadcast_shapes(np.shape(p), np.shape(c1), np.shape(c3), np.shape(c5))
     T = np.zeros(shape + (4, 4))
-    T[..., :3, :3] = R
-    T[..., :3, 3] = np.asarray(p)[..., None] * R1[..., :, 2]
+    for j in range(3):
+        for i in range(3):
+            T[..., i, j] = a[0][i] * wcols[j][0] + a[1][i] * wcols[j][1] + a[2][i] * wcols[j][2]
+        T[..., j, 3] = p * a[2][j]
     T[..., 3, 3] = 1.0
     return T
 
@@ -175,10 +188,6 @@ def closure_residual(T: NDArray[np.float64], T_target: NDArray[np.float64]
     dR = np.abs(T[..., :3, :3] - T_target[..., :3, :3]).max(axis=(-2, -1))
     dt = np.abs(T[..., :3, 3] - T_target[..., :3, 3]).max(axis=-1)
     return np.maximum(dR, dt)
-
-
-def _wrap(a: NDArray[np.float64]) -> NDArray[np.float64]:
-    return np.where(a <= -np.pi, a + 2 * np.pi, a)
 
 
 def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
@@ -240,16 +249,25 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
                     np.broadcast_to(-W[..., 2, 2, None], u3.shape))
     c4, s4 = np.cos(u4), np.sin(u4)
     W00, W10, W20 = W[..., 0, 0, None], W[..., 1, 0, None], W[..., 2, 0, None]
-    u5 = np.arctan2(s3 * W00 - c3 * W10, c3 * c4 * W00 + s3 * c4 * W10 + s4 * W20)
+    y5 = s3 * W00 - c3 * W10
+    x5 = c3 * c4 * W00 + s3 * c4 * W10 + s4 * W20
+    u5 = np.arctan2(y5, x5)
+    n5 = np.hypot(x5, y5)
+    c5, s5 = x5 / n5, y5 / n5      # = cos, sin of the reported u5 to 1 ulp
     wr_deg = np.broadcast_to((rho4 <= degenerate_tol)[..., None], u3.shape)
 
     full = u3.shape  # (..., 2, 2, 2)
-    u = np.stack([
-        np.broadcast_to(u1[..., None], full), np.broadcast_to(u2[..., None], full),
-        u3, u4, u5], axis=-1)
-    u = _wrap(u)
-    pp = np.broadcast_to(p[..., None, None], full)
     batch = full[:-3]
+    u = np.empty(batch + (2, 2, 2, 5))
+    u[..., 0] = u1[..., None]
+    u[..., 1] = u2[..., None]
+    u[..., 2], u[..., 3], u[..., 4] = u3, u4, u5
+    u[u == -np.pi] = np.pi          # report angles in (-pi, pi]
+    pp = np.broadcast_to(p[..., None, None], full)
+    # closure check of the reported solution, from the cosines and sines of its angles
+    Tsol = _chain_from_cs(pp, c1[..., None], c2[..., None], c3, c4, c5,
+                          s1[..., None], s2[..., None], s3, s4, s5)
+    res = closure_residual(Tsol, T[..., None, None, None, :, :]).reshape(batch + (8,))
     u = u.reshape(batch + (8, 5))
     pp = pp.reshape(batch + (8,))
 
@@ -258,8 +276,6 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     deg_w = wr_deg.reshape(batch + (8,))
     reason = np.where((reason == 0) & deg_u, np.int8(Reason.UJOINT_SINGULAR), reason)
     reason = np.where((reason == 0) & deg_w, np.int8(Reason.WRIST_SINGULAR), reason)
-    Tsol = _ups_transform(pp, u)
-    res = closure_residual(Tsol, T[..., None, :, :])
     reason = np.where((reason == 0) & ~(res <= closure_tol), np.int8(Reason.CLOSURE_FAILED),
                       reason).astype(np.int8)
     valid = reason == 0
