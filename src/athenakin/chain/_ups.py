@@ -135,8 +135,10 @@ def _chain_from_cs(p: NDArray[np.float64], c1: NDArray[np.float64], c2: NDArray[
                    c3: NDArray[np.float64], c4: NDArray[np.float64], c5: NDArray[np.float64],
                    s1: NDArray[np.float64], s2: NDArray[np.float64], s3: NDArray[np.float64],
                    s4: NDArray[np.float64], s5: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``T_s_e`` from ``p`` and the cosines/sines of ``u1..u5`` (element-wise products:
-    numpy's matmul on stacks of 3x3 matrices is slow)."""
+    """``T_s_e`` from ``p`` and the cosines/sines of ``u1..u5``.
+
+    Element-wise products: numpy's matmul on stacks of 3x3 matrices is slow.
+    """
     # R1 = R(u1, u2) columns; W = R(u3, u4) Rz(u5) columns (module docstring)
     a = ((c1 * c2, s1 * c2, s2), (s1, -c1, 0.0), (c1 * s2, s1 * s2, -c2))
     bx, by, bz = (c3 * c4, s3 * c4, s4), (s3, -c3, 0.0), (c3 * s4, s3 * s4, -c4)
