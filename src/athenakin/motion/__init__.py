@@ -1,0 +1,42 @@
+"""Motion: instrument paths about the RCM to actuator trajectories, encoder streams to poses.
+
+* :func:`plan`, :func:`plan_directions`: a tool-tip path (straight segments in the
+  RCM frame) or a direction + insertion path -> a checked actuator trajectory
+  sampled at a uniform rate (Ruckig time law; docs/motion.md).
+* :class:`Tracker`: actuator readings, one sample at a time -> the instrument pose
+  of the forward-kinematics solution continuous with the previous one, with flags
+  for mode / branch switches, jumps and the approach to singularities.
+* :class:`Margins`, :func:`singularity_measures`: distances to the singularities.
+* Errors: :class:`SafetyViolationError`, :class:`TimingInfeasibleError`,
+  :class:`PathFileError`, :class:`TrackingError` (all :class:`MotionError`, a
+  :class:`~athenakin.errors.KinematicsError`).
+
+Needs the ``motion`` extra (``ruckig``) for planning; the tracker needs only numpy.
+"""
+
+from ._errors import (
+    MotionError,
+    PathFileError,
+    SafetyViolationError,
+    TimingInfeasibleError,
+    TrackingError,
+)
+from ._plan import Limits, Trajectory, check_samples, plan, plan_directions
+from ._safety import MEASURE_NAMES, Margins, SingularityMeasures, singularity_measures
+
+__all__ = [
+    "Limits",
+    "MEASURE_NAMES",
+    "Margins",
+    "MotionError",
+    "PathFileError",
+    "SafetyViolationError",
+    "SingularityMeasures",
+    "TimingInfeasibleError",
+    "TrackingError",
+    "Trajectory",
+    "check_samples",
+    "plan",
+    "plan_directions",
+    "singularity_measures",
+]

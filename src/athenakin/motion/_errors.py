@@ -1,0 +1,89 @@
+"""Errors of the motion subpackage: unsafe trajectories, infeasible timing, bad path files."""
+
+from __future__ import annotations
+
+from ..errors import InvalidInputError, KinematicsError
+
+__all__ = [
+    "MotionError",
+    "SafetyViolationError",
+    "TimingInfeasibleError",
+    "PathFileError",
+    "TrackingError",
+]
+
+
+class MotionError(KinematicsError):
+    """Base class of the errors raised by :mod:`athenakin.motion`."""
+
+
+class SafetyViolationError(MotionError):
+    """A sample of a planned trajectory violates a limit; no trajectory is returned.
+
+    Attributes
+    ----------
+    time : float
+        Time of the first violating sample, s.
+    index : int
+        Its index in the sampled trajectory (``traj.t[index] == time``).
+    limit : str
+        Which limit: ``"workspace"``, ``"stroke"``, ``"velocity"``, ``"acceleration"``,
+        ``"jerk"``, ``"tip_speed"`` or the name of a singularity margin
+        (``"half_chord"``, ``"h"``, ``"link"``, ``"sin_u2"``, ``"sin_u4"``, ``"p"``,
+        ``"depth"``, ``"cond"``; see :class:`~athenakin.motion.Margins`).
+    value : float
+        The offending value (SI units; dimensionless for sines and condition numbers).
+    bound : float
+        The limit it crosses.
+    actuator : int or None
+        0, 1, 2 for ``q1, q2, q3`` when the limit is per actuator, else None.
+    """
+
+    def __init__(self, message: str, *, time: float, index: int, limit: str, value: float,
+                 bound: float, actuator: int | None = None) -> None:
+        super().__init__(message)
+        self.time = time
+        self.index = index
+        self.limit = limit
+        self.value = value
+        self.bound = bound
+        self.actuator = actuator
+
+
+class TimingInfeasibleError(SafetyViolationError):
+    """Fixed waypoint times ask for more than the limits allow (``timing="fixed"``).
+
+    Besides the attributes of :class:`SafetyViolationError` (the first sample of
+    the trajectory squeezed into the requested times that breaks a limit), it
+    carries ``segment`` (index ``k`` of the segment from waypoint ``k`` to
+    ``k + 1``), ``required`` (the shortest duration the planner found within the
+    limits, s) and ``requested`` (the duration the waypoint times give, s).
+    """
+
+    def __init__(self, message: str, *, segment: int, required: float, requested: float,
+                 **kw: object) -> None:
+        super().__init__(message, **kw)  # type: ignore[arg-type]
+        self.segment = segment
+        self.required = required
+        self.requested = requested
+
+
+class PathFileError(MotionError, InvalidInputError):
+    """A path or stream file cannot be read: missing columns, non-numbers, too few rows.
+
+    The message names the file, the line and the column.
+    """
+
+
+class TrackingError(MotionError):
+    """Raised by a :class:`~athenakin.motion.Tracker` in ``strict`` mode on a flagged sample.
+
+    Attributes
+    ----------
+    pose : TrackedPose
+        The pose of the offending sample, with its flags.
+    """
+
+    def __init__(self, message: str, pose: object) -> None:
+        super().__init__(message)
+        self.pose = pose

@@ -1,0 +1,597 @@
+"""Instrument paths about the RCM to sampled actuator trajectories: :func:`plan`.
+
+Pipeline (docs/motion.md):
+
+1. The path is a polyline of tool-tip waypoints in the RCM frame E (straight
+   segments), or of direction + insertion waypoints (great-circle direction,
+   linear depth). Each segment is traversed rest to rest: the tip stops at every
+   waypoint, where the path has a corner.
+2. Geometry: every point of the path maps to unique actuator values through the
+   controller-form inverse kinematics (:func:`athenakin.q_from_tool_tip`); the
+   bounds of ``dq/dlam``, ``d2q/dlam2``, ``d3q/dlam3`` on a grid of the segment turn
+   the actuator limits into limits of the path parameter ``lam``.
+3. Timing: Ruckig computes the time-optimal jerk-limited profile ``lam(t)`` of each
+   segment within those limits, stretched to the requested waypoint times when
+   they are longer.
+4. Sampling at ``rate``: ``q`` from the exact inverse kinematics of the tip at
+   ``lam(t)``, ``qd, qdd, qddd`` by the chain rule.
+5. Safety: every sample is checked against the workspace, the stroke limits, the
+   singularity margins, and the velocity, acceleration, jerk and tip-speed
+   limits; the first violation raises :class:`SafetyViolationError`. Nothing is
+   returned unless every sample passes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_array, check_scalar, check_transform
+from ..design import Design
+from ..errors import Reason
+from ..robot import direction_from_angles
+from ._errors import SafetyViolationError, TimingInfeasibleError
+from ._path import Segment, arc_segment, line_segment, q_derivatives, q_on_tips, tip_speed_factor
+from ._safety import MEASURE_NAMES, Margins, SingularityMeasures, singularity_measures
+from ._timing import LamProfile, dwell, lam_profile, parameter_limits, squeezed
+
+__all__ = ["Limits", "Trajectory", "plan", "plan_directions", "check_samples",
+           "LIMIT_RTOL", "BOUND_GRID", "BOUND_SAFETY"]
+
+#: Relative tolerance of the velocity / acceleration / jerk / tip-speed checks.
+LIMIT_RTOL = 1e-6
+#: Grid points per segment on which the derivative bounds of ``q(lam)`` are taken.
+BOUND_GRID = 129
+#: Factor applied to the grid bounds (the maxima may fall between grid points).
+BOUND_SAFETY = 1.05
+#: Replanning rounds when a sample still exceeds a kinematic limit.
+MAX_REPLANS = 4
+
+Timing = Literal["stretch", "fixed"]
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Limits:
+    """Kinematic limits of a trajectory (stroke limits come from the design).
+
+    Attributes
+    ----------
+    v_max, a_max : ndarray, shape (3,)
+        Actuator speed (m/s) and acceleration (m/s^2) limits.
+    j_max : ndarray, shape (3,) or None
+        Actuator jerk limits (m/s^3); None: not limited (acceleration-limited
+        profile, whose acceleration steps).
+    tip_speed : float or None
+        Tool-tip speed limit (m/s).
+    """
+
+    v_max: NDArray[np.float64]
+    a_max: NDArray[np.float64]
+    j_max: NDArray[np.float64] | None = None
+    tip_speed: float | None = None
+
+    @classmethod
+    def build(cls, v_max: ArrayLike, a_max: ArrayLike, j_max: ArrayLike | None,
+              tip_speed: float | None) -> Limits:
+        """Validate scalars or (3,) arrays of positive limits."""
+        def vec(x: ArrayLike, name: str) -> NDArray[np.float64]:
+            a = check_array(x, name, ())
+            if a.ndim not in (0, 1) or (a.ndim == 1 and a.shape != (3,)):
+                raise ValueError(f"{name}: expected a number or 3 numbers (q1, q2, q3), "
+                                 f"got shape {a.shape}")
+            if np.any(a <= 0):
+                raise ValueError(f"{name}: expected positive limits, got {a.tolist()}")
+            return np.broadcast_to(a, (3,)).astype(float)
+
+        return cls(v_max=vec(v_max, "v_max"), a_max=vec(a_max, "a_max"),
+                   j_max=None if j_max is None else vec(j_max, "j_max"),
+                   tip_speed=None if tip_speed is None
+                   else check_scalar(tip_speed, "tip_speed", positive=True))
+
+
+@dataclasses.dataclass(frozen=True)
+class Trajectory:
+    """A planned, checked actuator trajectory sampled at a uniform rate.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N,)
+        Sample times, s, ``t[i] = t[0] + i / rate``.
+    q, qd, qdd : ndarray, shape (N, 3)
+        Actuator positions (m), velocities (m/s) and accelerations (m/s^2).
+    qddd : ndarray, shape (N, 3) or None
+        Jerks (m/s^3) when a jerk limit was given, else None.
+    tip_e : ndarray, shape (N, 3)
+        Tool tip in the RCM frame E, m (on the requested path by construction).
+    segment : ndarray of int, shape (N,)
+        Segment of each sample (``k``: from waypoint ``k`` to ``k + 1``).
+    mode : ndarray of int, shape (N,)
+        Assembly mode of the parallel module (+1 / -1).
+    measures : SingularityMeasures
+        Distance of every sample to every singularity.
+    waypoints_e : ndarray, shape (K, 3)
+        The tip waypoints (frame E, m).
+    waypoint_times : ndarray, shape (K,)
+        When the tip is at each waypoint (at rest), s.
+    stretched : ndarray of bool, shape (K - 1,)
+        Segments made longer than the requested times to respect the limits.
+    rate : float
+        Samples per second.
+    limits : Limits
+    margins : Margins
+    T_b_e : ndarray, shape (4, 4)
+    design : Design
+    """
+
+    t: NDArray[np.float64]
+    q: NDArray[np.float64]
+    qd: NDArray[np.float64]
+    qdd: NDArray[np.float64]
+    qddd: NDArray[np.float64] | None
+    tip_e: NDArray[np.float64]
+    segment: NDArray[np.int64]
+    mode: NDArray[np.int64]
+    measures: SingularityMeasures
+    waypoints_e: NDArray[np.float64]
+    waypoint_times: NDArray[np.float64]
+    stretched: NDArray[np.bool_]
+    rate: float
+    limits: Limits
+    margins: Margins
+    T_b_e: NDArray[np.float64]
+    design: Design
+
+    @property
+    def duration(self) -> float:
+        """Time from the first to the last sample, s."""
+        return float(self.t[-1] - self.t[0])
+
+    @property
+    def depth(self) -> NDArray[np.float64]:
+        """Depth of the tip beyond the RCM, ``|tip_e|``, m, shape (N,)."""
+        return np.linalg.norm(self.tip_e, axis=-1)
+
+    @property
+    def direction_e(self) -> NDArray[np.float64]:
+        """Unit instrument direction in frame E (O_s through the RCM to the tip), (N, 3)."""
+        return self.tip_e / self.depth[:, None]
+
+    @property
+    def p(self) -> NDArray[np.float64]:
+        """Distance from ``O_s`` to the RCM (the passive prismatic joint), m, shape (N,)."""
+        return self.design.tool_length - self.depth
+
+
+# --------------------------------------------------------------------------------------
+def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
+         rate: float = 1000.0, v_max: ArrayLike = 0.05, a_max: ArrayLike = 0.5,
+         j_max: ArrayLike | None = None, tip_speed: float | None = None,
+         times: ArrayLike | None = None, timing: Timing = "stretch",
+         margins: Margins | None = None) -> Trajectory:
+    """Plan an actuator trajectory that moves the tool tip along straight segments.
+
+    Parameters
+    ----------
+    tips_e : array-like, shape (K, 3)
+        Tool-tip waypoints in the RCM frame E (m), K >= 2, visited in order along
+        straight segments; the tip stops at each waypoint. Repeating a waypoint
+        makes a dwell (with ``times``).
+    T_b_e : array-like, shape (4, 4)
+        RCM frame (the surgeon's set-up).
+    design : Design, optional
+        Defaults to :meth:`Design.default`; ``design.tool_length`` is ``L`` in
+        ``tip = O_s + L d``.
+    rate : float, keyword-only
+        Samples per second (default 1 kHz).
+    v_max, a_max : float or array-like of shape (3,), keyword-only
+        Actuator velocity (m/s) and acceleration (m/s^2) limits.
+    j_max : float or array-like of shape (3,), optional, keyword-only
+        Actuator jerk limit (m/s^3). Without it the profile is acceleration-limited
+        (its acceleration steps) and :attr:`Trajectory.qddd` is None.
+    tip_speed : float, optional, keyword-only
+        Tool-tip speed limit (m/s).
+    times : array-like, shape (K,), optional, keyword-only
+        Requested arrival time at each waypoint (s, non-decreasing). Without it
+        every segment takes the shortest time the limits allow.
+    timing : {"stretch", "fixed"}, keyword-only
+        What to do when ``times`` ask for more than the limits allow:
+        ``"stretch"`` (default) lengthens those segments (see
+        :attr:`Trajectory.stretched`); ``"fixed"`` keeps the times and raises
+        :class:`TimingInfeasibleError` at the first sample that breaks a limit.
+    margins : Margins, optional, keyword-only
+        Least distances to the singularities (default :class:`Margins`).
+
+    Returns
+    -------
+    Trajectory
+        Every sample is inside the workspace and the stroke limits, keeps the
+        margins and respects the kinematic limits (relative tolerance
+        :data:`LIMIT_RTOL`).
+
+    Raises
+    ------
+    SafetyViolationError
+        The first sample (time, index) that leaves the workspace or the stroke
+        limits, crosses a singularity margin, or (after replanning) a kinematic limit.
+    TimingInfeasibleError
+        ``timing="fixed"`` and the requested times break a limit.
+    TypeError, ValueError
+        Malformed arguments (named in the message).
+
+    Examples
+    --------
+    >>> import numpy as np, athenakin as ak
+    >>> d = ak.Design.default()
+    >>> T = ak.default_rcm_frame(d)
+    >>> tips = [[0.25, 0.0, 0.0], [0.25, 0.03, 0.0], [0.22, 0.03, 0.02]]
+    >>> traj = ak.motion.plan(tips, T, d, rate=1000.0, v_max=0.05, a_max=0.5)
+    >>> bool(np.all(np.abs(traj.qd) <= 0.05 * (1 + 1e-6)))
+    True
+    """
+    design = _check_design(design)
+    tips = check_array(tips_e, "tips_e", (3,))
+    if tips.ndim != 2 or tips.shape[0] < 2:
+        raise ValueError(f"tips_e: expected shape (K, 3) with K >= 2 waypoints, "
+                         f"got shape {tips.shape}")
+    segs = [line_segment(tips[k], tips[k + 1]) for k in range(tips.shape[0] - 1)]
+    return _plan(segs, tips, T_b_e, design, rate=rate, v_max=v_max, a_max=a_max, j_max=j_max,
+                 tip_speed=tip_speed, times=times, timing=timing, margins=margins)
+
+
+def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_e: ArrayLike,
+                    design: Design | None = None, **options: object) -> Trajectory:
+    """Plan a trajectory through instrument-direction + insertion waypoints.
+
+    Between waypoints the instrument direction turns on the great circle (about
+    the RCM) while the insertion changes linearly; the tip stops at each waypoint.
+
+    Parameters
+    ----------
+    azimuth, polar : array-like, shape (K,)
+        Instrument direction in the RCM frame E, radians, as in
+        :func:`athenakin.direction_from_angles` (``polar`` from ``z_e``; ``polar`` near
+        0 or pi is the spherical joint's singularity ``sin u4 = 0``).
+    depth : array-like, shape (K,)
+        Insertion: depth of the tool tip beyond the RCM, m (``p = L - depth``).
+    T_b_e : array-like, shape (4, 4)
+    design : Design, optional
+    **options
+        The keyword-only options of :func:`plan` (``rate``, ``v_max``, ``a_max``,
+        ``j_max``, ``tip_speed``, ``times``, ``timing``, ``margins``).
+
+    Returns
+    -------
+    Trajectory
+
+    Raises
+    ------
+    SafetyViolationError, TimingInfeasibleError, TypeError, ValueError
+        As :func:`plan`; also ``ValueError`` for a segment between opposite directions.
+    """
+    design = _check_design(design)
+    az = check_array(azimuth, "azimuth", ())
+    po = check_array(polar, "polar", ())
+    dp = check_array(depth, "depth", ())
+    if az.ndim != 1 or az.shape[0] < 2 or po.shape != az.shape or dp.shape != az.shape:
+        raise ValueError(f"azimuth, polar, depth: expected three arrays of the same shape (K,) "
+                         f"with K >= 2, got shapes {az.shape}, {po.shape}, {dp.shape}")
+    if np.any(dp <= 0):
+        raise ValueError(f"depth: expected positive depths beyond the RCM (m), got "
+                         f"{dp.tolist()}")
+    dirs = direction_from_angles(az, po)
+    if np.any(np.sum(dirs[1:] * dirs[:-1], axis=-1) <= -1 + 1e-9):
+        raise ValueError("azimuth, polar: two consecutive directions are opposite; the great "
+                         "circle between them is undefined")
+    tips = dirs * dp[:, None]
+    segs = [arc_segment(tips[k], tips[k + 1]) for k in range(tips.shape[0] - 1)]
+    return _plan(segs, tips, T_b_e, design, **options)  # type: ignore[arg-type]
+
+
+def _check_design(design: Design | None) -> Design:
+    design = Design.default() if design is None else design
+    if not isinstance(design, Design):
+        raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
+    return design
+
+
+# --------------------------------------------------------------------------------------
+@dataclasses.dataclass
+class _SegmentPlan:
+    seg: Segment
+    K: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
+    tip_factor: float
+    tighten: float = 1.0        # extra factor (< 1) on all limits after a failed check
+    profile: LamProfile | None = None
+    requested: float | None = None
+
+
+def _segment_bounds(seg: Segment, T: NDArray[np.float64], design: Design
+                    ) -> tuple[tuple[NDArray[np.float64], ...], float]:
+    lam = np.linspace(0.0, 1.0, BOUND_GRID)
+    _, d1, d2, d3 = q_derivatives(seg, lam, T, design)
+    with np.errstate(invalid="ignore"):
+        K = tuple(BOUND_SAFETY * np.nan_to_num(np.nanmax(np.abs(d), axis=0), nan=0.0)
+                  if np.any(np.isfinite(d)) else np.zeros(3) for d in (d1, d2, d3))
+    tf = float(np.max(tip_speed_factor(seg, lam))) * BOUND_SAFETY
+    return K, tf  # type: ignore[return-value]
+
+
+def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, design: Design, *,
+          rate: float = 1000.0, v_max: ArrayLike = 0.05, a_max: ArrayLike = 0.5,
+          j_max: ArrayLike | None = None, tip_speed: float | None = None,
+          times: ArrayLike | None = None, timing: Timing = "stretch",
+          margins: Margins | None = None) -> Trajectory:
+    T = check_transform(T_b_e, "T_b_e")
+    if T.shape != (4, 4):
+        raise ValueError(f"T_b_e: expected one transform of shape (4, 4), got shape {T.shape}")
+    rate = check_scalar(rate, "rate", positive=True)
+    limits = Limits.build(v_max, a_max, j_max, tip_speed)
+    margins = Margins() if margins is None else margins
+    if not isinstance(margins, Margins):
+        raise TypeError(f"margins: expected athenakin.motion.Margins, got "
+                        f"{type(margins).__name__}")
+    if timing not in ("stretch", "fixed"):
+        raise ValueError(f"timing: expected 'stretch' or 'fixed', got {timing!r}")
+    K = tips.shape[0]
+    req: NDArray[np.float64] | None = None
+    t0 = 0.0
+    if times is not None:
+        tt = check_array(times, "times", ())
+        if tt.shape != (K,):
+            raise ValueError(f"times: expected shape ({K},) (one per waypoint), got {tt.shape}")
+        req = np.diff(tt)
+        if np.any(req < 0):
+            raise ValueError(f"times: expected non-decreasing arrival times, got {tt.tolist()}")
+        t0 = float(tt[0])
+    elif timing == "fixed":
+        raise ValueError("timing='fixed' needs times (the arrival time of each waypoint)")
+
+    plans = []
+    for k, seg in enumerate(segs):
+        Kd, tf = _segment_bounds(seg, T, design)
+        plans.append(_SegmentPlan(seg=seg, K=Kd, tip_factor=tf,  # type: ignore[arg-type]
+                                  requested=None if req is None else float(req[k])))
+    dt = 1.0 / rate
+    for _round in range(MAX_REPLANS + 1):
+        for sp in plans:
+            _time_segment(sp, limits, dt, timing)
+        samples = _sample(plans, T, design, rate, t0, limits)
+        bad = check_samples(samples, T, design, limits, margins)
+        if bad is None:
+            break
+        k = int(samples["segment"][bad["index"]])
+        sp = plans[k]
+        squeezed_seg = sp.profile is not None and sp.profile.scale > 1.0
+        kinematic = bad["limit"] in ("velocity", "acceleration", "jerk", "tip_speed")
+        if kinematic and squeezed_seg:
+            raise _timing_error(bad, samples, k, sp)
+        if not kinematic or _round == MAX_REPLANS:
+            raise _violation(bad, samples)
+        # the grid bounds missed a maximum: tighten this segment and replan
+        ratio = bad["bound"] / bad["value"] if bad["value"] > 0 else 0.5
+        sp.tighten *= min(0.98, ratio ** (1 / 3) * 0.98)
+    return _trajectory(samples, plans, tips, limits, margins, T, design, rate, t0)
+
+
+def _time_segment(sp: _SegmentPlan, limits: Limits, dt: float, timing: str) -> None:
+    if sp.seg.scale == 0.0:
+        sp.profile = dwell(sp.requested or 0.0)
+        return
+    f = sp.tighten
+    vmax, amax = limits.v_max * f, limits.a_max * f
+    jmax = None if limits.j_max is None else limits.j_max * f
+    K1, K2, K3 = sp.K
+    lim = parameter_limits(K1, K2, K3, v_max=vmax, a_max=amax, j_max=jmax,
+                           tip_factor=sp.tip_factor,
+                           tip_speed=None if limits.tip_speed is None
+                           else limits.tip_speed * f)
+    if sp.requested is None:
+        sp.profile = lam_profile(lim, dt=dt)
+        return
+    prof = lam_profile(lim, minimum_duration=sp.requested)
+    if prof.duration > sp.requested * (1 + 1e-12) + 1e-12 and timing == "fixed":
+        if sp.requested <= 0:
+            raise TimingInfeasibleError(
+                f"timing='fixed': segment {_seg_name(sp)} has zero duration but moves the tip "
+                f"{sp.seg.scale:.6g} m", segment=-1, required=prof.duration, requested=0.0,
+                time=math.nan, index=-1, limit="velocity", value=math.inf,
+                bound=float(limits.v_max.min()))
+        prof = squeezed(prof, sp.requested)
+    sp.profile = prof
+
+
+def _seg_name(sp: _SegmentPlan) -> str:
+    return f"{sp.seg.start.tolist()} -> {sp.seg.end.tolist()}"
+
+
+def _sample(plans: list[_SegmentPlan], T: NDArray[np.float64], design: Design, rate: float,
+            t0: float, limits: Limits) -> dict[str, NDArray]:  # type: ignore[type-arg]
+    durations = np.array([sp.profile.duration for sp in plans])  # type: ignore[union-attr]
+    ends = np.cumsum(durations)
+    total = float(ends[-1])
+    n = int(math.floor(total * rate + 1e-9)) + 1
+    if (n - 1) / rate < total - 1e-12:
+        n += 1
+    tl = np.arange(n) / rate
+    k = np.minimum(np.searchsorted(ends, tl, side="right"), len(plans) - 1)
+    # a sample exactly at a segment's end belongs to the next one (at rest there)
+    starts = ends - durations
+    tau = np.minimum(tl - starts[k], durations[k])
+    lam = np.zeros((4, n))
+    q = np.full((n, 3), np.nan)
+    dq = np.zeros((3, n, 3))
+    tipf = np.zeros(n)
+    for s, sp in enumerate(plans):
+        idx = np.flatnonzero(k == s)
+        if idx.size == 0:
+            continue
+        lam[:, idx] = np.stack(sp.profile.evaluate(tau[idx]))  # type: ignore[union-attr]
+        q0, d1, d2, d3 = q_derivatives(sp.seg, lam[0, idx], T, design)
+        q[idx], dq[0, idx], dq[1, idx], dq[2, idx] = q0, d1, d2, d3
+        tipf[idx] = tip_speed_factor(sp.seg, lam[0, idx])
+    tips = np.empty((n, 3))
+    for s, sp in enumerate(plans):
+        idx = np.flatnonzero(k == s)
+        tips[idx] = sp.seg.tips(lam[0, idx])
+    _, reason, mode = q_on_tips(tips, T, design)
+    ld, ldd, lddd = lam[1][:, None], lam[2][:, None], lam[3][:, None]
+    with np.errstate(invalid="ignore"):
+        qd = dq[0] * ld
+        qdd = dq[1] * ld ** 2 + dq[0] * ldd
+        qddd = dq[2] * ld ** 3 + 3 * dq[1] * ld * ldd + dq[0] * lddd
+    return {"t": t0 + tl, "q": q, "qd": qd, "qdd": qdd,
+            "qddd": None if limits.j_max is None else qddd, "tip_e": tips,
+            "segment": k, "reason": reason, "mode": mode, "tip_speed": tipf * lam[1]}
+
+
+def check_samples(samples: dict[str, NDArray], T_b_e: NDArray[np.float64],  # type: ignore[type-arg]
+                  design: Design, limits: Limits, margins: Margins) -> dict | None:  # type: ignore[type-arg]
+    """First sample that breaks a limit, or None.
+
+    Parameters
+    ----------
+    samples : dict
+        ``t (N,)``, ``q, qd, qdd (N, 3)``, ``qddd (N, 3) or None``, ``tip_e (N, 3)``,
+        ``reason (N,)`` (inverse-kinematics reason without stroke limits), ``mode (N,)``,
+        ``tip_speed (N,)``.
+    T_b_e : ndarray, shape (4, 4)
+    design : Design
+    limits : Limits
+    margins : Margins
+
+    Returns
+    -------
+    dict or None
+        ``index, limit, value, bound, actuator`` of the first violation (by sample
+        index; at that sample, in the order workspace, stroke, assembly mode,
+        margins of :data:`MEASURE_NAMES`, velocity, acceleration, jerk, tip speed).
+        The samples' :class:`SingularityMeasures` are stored under
+        ``samples["measures"]``.
+    """
+    q = samples["q"]
+    n = q.shape[0]
+    checks: list[tuple[str, NDArray[np.bool_], NDArray[np.float64], object, object]] = []
+    reason = samples["reason"]
+    checks.append(("workspace", reason != 0, reason.astype(float), 0.0, None))
+    lo, hi = design.stroke_min, design.stroke_max
+    with np.errstate(invalid="ignore"):
+        under, over = q < lo, q > hi
+    checks.append(("stroke", np.any(under | over, axis=-1), q, np.where(under, lo, hi), "act"))
+    mode = samples["mode"]
+    checks.append(("assembly_mode", (mode != mode[0]) & (reason == 0), mode.astype(float),
+                   float(mode[0]), None))
+    meas = singularity_measures(np.where(np.isfinite(q), q, 0.0), samples["tip_e"], T_b_e,
+                                design, mode=mode)
+    samples["measures"] = meas
+    for name in MEASURE_NAMES:
+        m = getattr(margins, name)
+        v = getattr(meas, name)
+        with np.errstate(invalid="ignore"):
+            bad = (v > m) if margins.is_upper(name) else (v < m)
+        checks.append((name, bad & (reason == 0), v, m, None))
+    tol = 1 + LIMIT_RTOL
+    for name, arr, lim in (("velocity", samples["qd"], limits.v_max),
+                           ("acceleration", samples["qdd"], limits.a_max),
+                           ("jerk", samples["qddd"], limits.j_max)):
+        if arr is None or lim is None:
+            continue
+        with np.errstate(invalid="ignore"):
+            bad = np.abs(arr) > lim * tol
+        checks.append((name, np.any(bad, axis=-1) & (reason == 0), arr,
+                       np.broadcast_to(lim, arr.shape), "act"))
+    if limits.tip_speed is not None:
+        v = samples["tip_speed"]
+        checks.append(("tip_speed", (np.abs(v) > limits.tip_speed * tol) & (reason == 0), v,
+                       limits.tip_speed, None))
+    first = n
+    for _, bad, *_ in checks:
+        idx = np.flatnonzero(bad)
+        if idx.size:
+            first = min(first, int(idx[0]))
+    if first == n:
+        return None
+    for name, bad, val, bnd, per in checks:
+        if not bad[first]:
+            continue
+        act = None
+        if per == "act":
+            row = np.abs(val[first]) / np.abs(np.asarray(bnd)[first]) if name != "stroke" \
+                else np.abs(val[first] - np.asarray(bnd)[first])
+            act = int(np.nanargmax(row))
+            value, bound = float(val[first, act]), float(np.asarray(bnd)[first, act])
+        else:
+            value = float(val[first])
+            bound = float(bnd)  # type: ignore[arg-type]
+        return {"index": first, "limit": name, "value": value, "bound": bound, "actuator": act}
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+def _describe(bad: dict, samples: dict) -> str:  # type: ignore[type-arg]
+    i = bad["index"]
+    t = float(samples["t"][i])
+    tip = np.array2string(samples["tip_e"][i], precision=5)
+    lim = bad["limit"]
+    who = f" of q{bad['actuator'] + 1}" if bad["actuator"] is not None else ""
+    if lim == "workspace":
+        r = Reason(int(bad["value"]))
+        what = f"leaves the workspace ({r.name}: {r.description})"
+    elif lim == "assembly_mode":
+        what = (f"switches the parallel module's assembly mode from {bad['bound']:+.0f} to "
+                f"{bad['value']:+.0f}")
+    elif lim in ("cond",):
+        what = (f"exceeds the singularity margin 'cond': condition number of d tip / d q = "
+                f"{bad['value']:.6g} > {bad['bound']:.6g}")
+    elif lim in MEASURE_NAMES:
+        what = (f"crosses the singularity margin '{lim}': {bad['value']:.6g} < "
+                f"{bad['bound']:.6g}")
+    elif lim == "stroke":
+        what = f"exceeds the stroke limit{who}: {bad['value']:.6g} m (limit {bad['bound']:.6g} m)"
+    else:
+        unit = {"velocity": "m/s", "acceleration": "m/s^2", "jerk": "m/s^3",
+                "tip_speed": "m/s"}[lim]
+        what = (f"exceeds the {lim.replace('_', ' ')} limit{who}: |{bad['value']:.6g}| > "
+                f"{bad['bound']:.6g} {unit}")
+    return (f"trajectory sample {i} at t = {t:.4f} s (segment {int(samples['segment'][i])}, "
+            f"tip_e = {tip} m) {what}")
+
+
+def _violation(bad: dict, samples: dict) -> SafetyViolationError:  # type: ignore[type-arg]
+    i = bad["index"]
+    return SafetyViolationError(_describe(bad, samples), time=float(samples["t"][i]), index=i,
+                                limit=bad["limit"], value=bad["value"], bound=bad["bound"],
+                                actuator=bad["actuator"])
+
+
+def _timing_error(bad: dict, samples: dict, k: int,  # type: ignore[type-arg]
+                  sp: _SegmentPlan) -> TimingInfeasibleError:
+    i = bad["index"]
+    prof = sp.profile
+    assert prof is not None and sp.requested is not None
+    msg = (f"timing='fixed': segment {k} ({_seg_name(sp)}) is given {sp.requested:.6g} s but "
+           f"needs {prof.min_duration:.6g} s within the limits; " + _describe(bad, samples))
+    return TimingInfeasibleError(msg, segment=k, required=prof.min_duration,
+                                 requested=sp.requested, time=float(samples["t"][i]), index=i,
+                                 limit=bad["limit"], value=bad["value"], bound=bad["bound"],
+                                 actuator=bad["actuator"])
+
+
+def _trajectory(samples: dict, plans: list[_SegmentPlan], tips: NDArray[np.float64],  # type: ignore[type-arg]
+                limits: Limits, margins: Margins, T: NDArray[np.float64], design: Design,
+                rate: float, t0: float) -> Trajectory:
+    durations = np.array([sp.profile.duration for sp in plans])  # type: ignore[union-attr]
+    wt = t0 + np.concatenate([[0.0], np.cumsum(durations)])
+    stretched = np.array([sp.requested is not None and sp.profile.duration  # type: ignore[union-attr]
+                          > sp.requested * (1 + 1e-9) + 1e-12 for sp in plans], dtype=bool)
+    ro = {k: np.asarray(v) for k, v in samples.items() if isinstance(v, np.ndarray)}
+    for v in ro.values():
+        v.setflags(write=False)
+    return Trajectory(
+        t=ro["t"], q=ro["q"], qd=ro["qd"], qdd=ro["qdd"], qddd=ro.get("qddd"),
+        tip_e=ro["tip_e"], segment=ro["segment"], mode=ro["mode"],
+        measures=samples["measures"], waypoints_e=tips.copy(), waypoint_times=wt,
+        stretched=stretched, rate=rate, limits=limits, margins=margins, T_b_e=T.copy(),
+        design=design)

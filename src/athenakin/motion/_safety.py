@@ -1,0 +1,197 @@
+"""Distances to the singularities of ATHENA along a motion, and the margins they must keep.
+
+Every measure is computed per sample from the actuator values ``q`` and the tool
+tip in the RCM frame (batch over leading axes). They are the singular set known
+for this robot (docs/errata.md, docs/motion.md):
+
+* parallel module (Eq. 7-10): the half-chord ``a`` of ``k1 ∩ k2`` (``a = 0``: the
+  two assembly modes meet, paper's ``w = 0``, a forward singularity); ``|h|``
+  (``h = 0``: ``dO_s/dq`` loses rank, because ``dr1/dh = dm_y/dh = 0``); the slack
+  ``min(l1, l3) - |h|`` (``|h| = l3``: ``dm_y/dh`` is infinite);
+* serial UPS chain (Eq. 11, 12): ``|sin u2|`` (U-joint axes aligned), ``|sin u4|``
+  (spherical-joint axes aligned, the instrument along ``z_e``), ``p`` (``O_s`` at
+  the RCM);
+* the tool-tip map: the depth ``|tip_e|`` of the tip beyond the RCM (0: the
+  instrument direction is undefined), and the condition number of the 3x3
+  Jacobian ``d tip / d q`` (dimensionless, both in metres), which grows without
+  bound at every singularity of the actuator-to-tip map.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..design import Design
+from ..parallel import circle_geometry, parallel_forward_kinematics
+
+__all__ = ["Margins", "SingularityMeasures", "singularity_measures", "MEASURE_NAMES",
+           "FD_STEP_Q"]
+
+#: Names of the measures, in the order the safety check reports them.
+MEASURE_NAMES = ("half_chord", "h", "link", "sin_u2", "sin_u4", "p", "depth", "cond")
+
+#: Step (m) of the central differences that give ``d O_s / d q`` for :attr:`cond`.
+FD_STEP_Q = 1e-7
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Margins:
+    """User-set margins to each singularity: a sample is unsafe when a measure crosses one.
+
+    All but :attr:`cond` are lower bounds (the measure must stay at or above the
+    margin); :attr:`cond` is an upper bound. Set a margin to 0 (or ``inf`` for
+    ``cond``) to switch its check off.
+
+    Parameters
+    ----------
+    half_chord : float
+        Least half-chord of ``k1 ∩ k2`` (m): distance of ``O_i`` to the point where
+        the two assembly modes meet (forward singularity, ``w = 0``). Default 5 mm.
+    h : float
+        Least ``|h| = |q1 - q2| / 2`` (m); ``h = 0`` is a rank loss of the parallel
+        module. Default 5 mm.
+    link : float
+        Least ``min(l1, l3) - |h|`` (m): the links from A and B stretched flat.
+        Default 5 mm.
+    sin_u2 : float
+        Least ``|sin u2|`` (U-joint at ``O_s``). Default ``sin 5 deg``.
+    sin_u4 : float
+        Least ``|sin u4|`` (spherical joint at the RCM; equal to ``sin`` of the
+        polar angle of the instrument about ``z_e``). Default ``sin 5 deg``.
+    p : float
+        Least distance from ``O_s`` to the RCM (m). Default 20 mm.
+    depth : float
+        Least depth of the tool tip beyond the RCM, ``|tip_e|`` (m). Default 5 mm.
+    cond : float
+        Largest condition number of ``d tip / d q``. Default 100.
+    """
+
+    half_chord: float = 0.005
+    h: float = 0.005
+    link: float = 0.005
+    sin_u2: float = math.sin(math.radians(5.0))
+    sin_u4: float = math.sin(math.radians(5.0))
+    p: float = 0.02
+    depth: float = 0.005
+    cond: float = 100.0
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
+                raise TypeError(f"Margins.{f.name}: expected a real number, got "
+                                f"{type(v).__name__}")
+            v = float(v)
+            if math.isnan(v) or v < 0 or (f.name != "cond" and math.isinf(v)):
+                raise ValueError(f"Margins.{f.name}: expected a finite number >= 0"
+                                 f"{' (or inf)' if f.name == 'cond' else ''}, got {v}")
+            object.__setattr__(self, f.name, v)
+        if self.cond < 1.0:
+            raise ValueError(f"Margins.cond: a condition number is >= 1, got {self.cond}")
+
+    def is_upper(self, name: str) -> bool:
+        """True when the margin of ``name`` is an upper bound (only ``cond``)."""
+        return name == "cond"
+
+
+@dataclasses.dataclass(frozen=True)
+class SingularityMeasures:
+    """Distance of each sample to each singularity (see the module docstring).
+
+    Attributes
+    ----------
+    half_chord, h, link, p, depth : ndarray, shape (...)
+        Metres.
+    sin_u2, sin_u4 : ndarray, shape (...)
+        Dimensionless, in [0, 1].
+    cond : ndarray, shape (...)
+        Condition number of ``d tip / d q`` (>= 1; inf where singular).
+    """
+
+    half_chord: NDArray[np.float64]
+    h: NDArray[np.float64]
+    link: NDArray[np.float64]
+    sin_u2: NDArray[np.float64]
+    sin_u4: NDArray[np.float64]
+    p: NDArray[np.float64]
+    depth: NDArray[np.float64]
+    cond: NDArray[np.float64]
+
+    def ratio(self, margins: Margins) -> dict[str, NDArray[np.float64]]:
+        """Each measure over its margin (``margin / cond`` for ``cond``): >= 1 is safe.
+
+        Measures whose margin is switched off are left out.
+        """
+        out = {}
+        for name in MEASURE_NAMES:
+            m = getattr(margins, name)
+            v = getattr(self, name)
+            if name == "cond":
+                if np.isfinite(m):
+                    out[name] = m / v
+            elif m > 0:
+                out[name] = v / m
+        return out
+
+
+def _o_s(q: NDArray[np.float64], design: Design, slot: NDArray[np.int64]) -> NDArray[np.float64]:
+    par = parallel_forward_kinematics(q, design)
+    return np.take_along_axis(par.O_s, slot[..., None, None], axis=-2)[..., 0, :]
+
+
+def singularity_measures(q: NDArray[np.float64], tip_e: NDArray[np.float64],
+                         T_b_e: NDArray[np.float64], design: Design, *,
+                         mode: NDArray[np.int64] | int = 1) -> SingularityMeasures:
+    """Distances to the singularities for actuator values and the tool tip they hold.
+
+    Parameters
+    ----------
+    q : ndarray, shape (..., 3)
+        Actuators, m (a valid configuration of the given assembly mode).
+    tip_e : ndarray, shape (..., 3)
+        Tool tip in the RCM frame, m (``O_s + L d``, the instrument through the RCM).
+    T_b_e : ndarray, shape (4, 4)
+        RCM frame.
+    design : Design
+    mode : int or ndarray of int, shape (...)
+        Assembly mode of each sample (+1 / -1).
+
+    Returns
+    -------
+    SingularityMeasures
+    """
+    q = np.asarray(q, float)
+    tip_e = np.asarray(tip_e, float)
+    g = circle_geometry(q, design)
+    habs = np.abs(g["h"])
+    depth = np.linalg.norm(tip_e, axis=-1)
+    d_e = tip_e / np.where(depth > 0, depth, 1.0)[..., None]
+    d_b = d_e @ T_b_e[:3, :3].T
+    slot = np.where(np.broadcast_to(mode, q.shape[:-1]) == 1, 0, 1).astype(np.int64)
+    free = dataclasses.replace(design, q_min=None, q_max=None)
+    O_s = _o_s(q, free, slot)
+    rho = np.hypot(O_s[..., 1], O_s[..., 2])
+    z_s = np.stack([np.zeros_like(rho), O_s[..., 1] / rho, O_s[..., 2] / rho], axis=-1)
+    sin_u2 = np.linalg.norm(np.cross(z_s, d_b), axis=-1)
+    sin_u4 = np.hypot(d_e[..., 0], d_e[..., 1])
+    p = design.tool_length - depth
+    # d tip / d q = (d tip / d O_s)(d O_s / d q); d tip / d O_s = u u^T + (1 - L/p)(I - u u^T)
+    dO = np.empty(q.shape + (3,))
+    for j in range(3):
+        e = np.zeros(3)
+        e[j] = FD_STEP_Q
+        dO[..., :, j] = (_o_s(q + e, free, slot) - _o_s(q - e, free, slot)) / (2 * FD_STEP_Q)
+    uu = d_b[..., :, None] * d_b[..., None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k = 1.0 - design.tool_length / p
+        A = uu + k[..., None, None] * (np.eye(3) - uu)
+        J = A @ dO
+        sv = np.linalg.svd(np.where(np.isfinite(J), J, 0.0), compute_uv=False)
+        cond = np.where(np.all(np.isfinite(J), axis=(-2, -1)), sv[..., 0] / sv[..., -1], np.inf)
+    return SingularityMeasures(
+        half_chord=g["half_chord"], h=habs, link=min(design.l1, design.l3) - habs,
+        sin_u2=sin_u2, sin_u4=sin_u4, p=p, depth=depth, cond=cond)
