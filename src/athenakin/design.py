@@ -180,9 +180,10 @@ class Design:
         """
         with open(path, "rb") as fh:
             data = tomllib.load(fh)
+        table: Mapping[str, Any] = data
         if "design" in data and isinstance(data["design"], Mapping):
-            data = data["design"]
-        return cls.from_mapping(data)
+            table = data["design"]
+        return cls.from_mapping(table)
 
     def to_toml(self) -> str:
         """TOML text that :meth:`from_toml` reads back to an equal design."""

@@ -96,7 +96,8 @@ class RandomConfigurations:
     slot: NDArray[np.int64]
 
 
-def random_configurations(n: int, design: Design | None = None, *, rng: object = None,
+def random_configurations(n: int, design: Design | None = None, *,
+                          rng: int | np.random.Generator | None = None,
                           margin: float = 0.05, length_margin: float = 0.01,
                           p_range: tuple[float, float] = (0.05, 0.5)) -> RandomConfigurations:
     """Draw ``n`` reachable configurations at a stated distance from every singular set.
@@ -122,10 +123,10 @@ def random_configurations(n: int, design: Design | None = None, *, rng: object =
     RandomConfigurations
     """
     design = Design.default() if design is None else design
-    gen = np.random.default_rng(rng)  # type: ignore[call-overload]
+    gen = np.random.default_rng(rng)
     lo = np.where(np.isfinite(design.stroke_min), design.stroke_min, [-0.5, -0.5, 0.0])
     hi = np.where(np.isfinite(design.stroke_max), design.stroke_max, [0.5, 0.5, 1.0])
-    out: dict[str, list[NDArray[np.float64]]] = {k: [] for k in ("q", "m", "p", "u", "Ts")}
+    out: dict[str, list[NDArray[np.generic]]] = {k: [] for k in ("q", "m", "p", "u", "Ts")}
     have = 0
     for _ in range(1000):
         if have >= n:

@@ -140,8 +140,9 @@ def _chain_from_cs(p: NDArray[np.float64], c1: NDArray[np.float64], c2: NDArray[
     Element-wise products: numpy's matmul on stacks of 3x3 matrices is slow.
     """
     # R1 = R(u1, u2) columns; W = R(u3, u4) Rz(u5) columns (module docstring)
-    a = ((c1 * c2, s1 * c2, s2), (s1, -c1, 0.0), (c1 * s2, s1 * s2, -c2))
-    bx, by, bz = (c3 * c4, s3 * c4, s4), (s3, -c3, 0.0), (c3 * s4, s3 * s4, -c4)
+    zero = np.zeros_like(c1)
+    a = ((c1 * c2, s1 * c2, s2), (s1, -c1, zero), (c1 * s2, s1 * s2, -c2))
+    bx, by, bz = (c3 * c4, s3 * c4, s4), (s3, -c3, np.zeros_like(c3)), (c3 * s4, s3 * s4, -c4)
     wcols = (tuple(c5 * x + s5 * y for x, y in zip(bx, by, strict=True)),
              tuple(c5 * y - s5 * x for x, y in zip(bx, by, strict=True)), bz)
     shape = np.broadcast_shapes(np.shape(p), np.shape(c1), np.shape(c3), np.shape(c5))
