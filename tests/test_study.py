@@ -213,3 +213,24 @@ def test_ups_study_product_equals_closed_form_chain():
     u = rng.uniform(-np.pi, np.pi, (500, 5))
     assert_transform_equal(transform_from_study(ak.chain.ups_study(p, u)),
                            ak.chain.ups_transform(p, u), atol=1e-13)
+
+
+# --- hypothesis: arbitrary rotations and translations, including half turns -----------------
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+finite = st.floats(-10, 10, allow_nan=False, allow_infinity=False)
+
+
+@settings(max_examples=300, deadline=None, derandomize=True)
+@given(axis=st.tuples(finite, finite, finite).filter(lambda a: np.linalg.norm(a) > 1e-3),
+       angle=st.floats(-np.pi, np.pi), t=st.tuples(finite, finite, finite),
+       scale=st.floats(-100, 100).filter(lambda s: abs(s) > 1e-3))
+def test_hypothesis_round_trip_and_scale_invariance(axis, angle, t, scale):
+    a = np.asarray(axis) / np.linalg.norm(axis)
+    x = np.r_[np.cos(angle / 2), np.sin(angle / 2) * a]
+    T = np.eye(4)
+    T[:3, :3] = rotation_from_quaternion(x)
+    T[:3, 3] = t
+    X = study_from_transform(T)
+    assert_transform_equal(transform_from_study(scale * X), T, atol=1e-12 * (1 + np.abs(t).max()))
