@@ -2,6 +2,8 @@
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import athenakin as ak
 from athenakin.study import (
@@ -216,8 +218,6 @@ def test_ups_study_product_equals_closed_form_chain():
 
 
 # --- hypothesis: arbitrary rotations and translations, including half turns -----------------
-from hypothesis import given, settings  # noqa: E402
-from hypothesis import strategies as st  # noqa: E402
 
 finite = st.floats(-10, 10, allow_nan=False, allow_infinity=False)
 
