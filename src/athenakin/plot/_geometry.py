@@ -1,0 +1,213 @@
+"""Where every part of the robot is, for one FK solution (pure numpy; used by views and exports).
+
+The points follow MODEL.md: ``A = (q1, 0, 0)``, ``B = (q2, 0, 0)``, midpoint ``M``,
+``D = (x_M, sqrt(l3^2 - h^2), 0)``, ``C = D + (0, l2, l5)``, ``O_i`` on ``k1 ∩ k2``,
+``O_s = O_i + l4 z_i`` (Eq. 8-10), and the serial chain of Eq. 11-12 from ``O_s`` to
+the RCM frame E. The spherical joint at the RCM (the kinematic equivalent of the
+passive spherical five-bar, Fig. 3) is described by the axes of ``u3``, ``u4``,
+``u5``, which all pass through the RCM.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._transforms import rot_x, rot_z
+from ..chain._ups import rotation_u_pair
+from ..design import Design
+from ..errors import Reason, error_for_reason
+from ..robot import default_rcm_frame, forward_kinematics
+
+__all__ = ["RobotGeometry", "robot_geometry", "circle_points", "N_CIRCLE"]
+
+#: Number of points on each drawn circle (k1, k2).
+N_CIRCLE = 121
+
+
+@dataclasses.dataclass(frozen=True)
+class RobotGeometry:
+    """Positions (m, base frame) and frames of the robot in one forward-kinematics slot.
+
+    Attributes
+    ----------
+    q : ndarray, shape (3,)
+        Actuators ``(q1, q2, q3)``, m.
+    slot : int
+        Forward-kinematics slot ``k = 8 m + 4 r + 2 b + w`` (see ``robot/_fk.py``).
+    mode, p_sign, ujoint, wrist : int
+        Labels of the slot (+1 / -1).
+    p : float
+        Passive prismatic joint, signed distance ``O_s`` -> RCM, m.
+    u : ndarray, shape (5,)
+        ``u1..u5``, radians.
+    points : dict of str -> ndarray, shape (3,)
+        ``A``, ``B``, ``M``, ``D``, ``C``, ``O_i``, ``O_s``, ``RCM``, ``tip`` (tool tip,
+        ``O_s + L z_3``) and ``C_foot`` (the corner ``D + (0, l2, 0)`` of the carrier).
+    frames : dict of str -> ndarray, shape (4, 4)
+        ``b`` (base), ``i`` (intermediate, Eq. 9), ``s`` (serial base, Eq. 10),
+        ``instrument`` (``T_b_s R(u1, u2)``: origin ``O_s``, z along the instrument)
+        and ``e`` (the RCM frame, the given set-up).
+    wrist_axes : ndarray, shape (3, 3)
+        Unit axes (rows) of ``u3``, ``u4``, ``u5`` through the RCM, base frame.
+    k1, k2 : ndarray, shape (N_CIRCLE, 3)
+        Points of the circles ``k1`` (centre M, radius ``r1``) and ``k2`` (centre C,
+        radius ``q3``) in the plane ``x = x_M``.
+    rail : ndarray, shape (2, 3)
+        End points of the drawn base rail (x axis) covering the strokes of A and B.
+    design : Design
+    T_b_e : ndarray, shape (4, 4)
+    """
+
+    q: NDArray[np.float64]
+    slot: int
+    mode: int
+    p_sign: int
+    ujoint: int
+    wrist: int
+    p: float
+    u: NDArray[np.float64]
+    points: dict[str, NDArray[np.float64]]
+    frames: dict[str, NDArray[np.float64]]
+    wrist_axes: NDArray[np.float64]
+    k1: NDArray[np.float64]
+    k2: NDArray[np.float64]
+    rail: NDArray[np.float64]
+    design: Design
+    T_b_e: NDArray[np.float64]
+
+    def segments(self) -> dict[str, tuple[NDArray[np.float64], NDArray[np.float64]]]:
+        """The bars of the mechanism as named segments ``(start, end)``.
+
+        ``link_a1``, ``link_b1`` (length ``l1``, A/B to ``O_i``), ``link_a3``,
+        ``link_b3`` (length ``l3``, A/B to D), ``carrier_y``, ``carrier_z`` (D to C
+        by ``(0, l2, 0)`` then ``(0, 0, l5)``), ``actuator_q3`` (C to ``O_i``,
+        length ``q3``), ``offset_l4`` (``O_i`` to ``O_s``) and ``instrument``
+        (``O_s`` to the tool tip).
+        """
+        P = self.points
+        return {
+            "link_a1": (P["A"], P["O_i"]), "link_b1": (P["B"], P["O_i"]),
+            "link_a3": (P["A"], P["D"]), "link_b3": (P["B"], P["D"]),
+            "carrier_y": (P["D"], P["C_foot"]), "carrier_z": (P["C_foot"], P["C"]),
+            "actuator_q3": (P["C"], P["O_i"]), "offset_l4": (P["O_i"], P["O_s"]),
+            "instrument": (P["O_s"], P["tip"]),
+        }
+
+    def bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Axis-aligned box ``(lo, hi)`` (each shape (3,)) around every drawn part."""
+        pts = np.concatenate([np.stack(list(self.points.values())), self.k1, self.k2, self.rail])
+        return pts.min(axis=0), pts.max(axis=0)
+
+
+def circle_points(centre: NDArray[np.float64], radius: float, n: int = N_CIRCLE
+                  ) -> NDArray[np.float64]:
+    """Points of a circle in the plane ``x = centre[0]``, shape (n, 3)."""
+    t = np.linspace(0.0, 2 * np.pi, n)
+    return np.stack([np.full(n, centre[0]), centre[1] + radius * np.cos(t),
+                     centre[2] + radius * np.sin(t)], axis=-1)
+
+
+def _tz(d: float) -> NDArray[np.float64]:
+    T = np.eye(4)
+    T[2, 3] = d
+    return T
+
+
+def _rot4(R: NDArray[np.float64]) -> NDArray[np.float64]:
+    T = np.eye(4)
+    T[:3, :3] = R
+    return T
+
+
+def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
+                   design: Design | None = None, *, slot: int = 0) -> RobotGeometry:
+    """Positions of all parts of the robot for actuator values ``q`` in one FK slot.
+
+    Parameters
+    ----------
+    q : array-like, shape (3,), optional
+        ``(q1, q2, q3)``, m. Defaults to :data:`athenakin.robot.REFERENCE_Q`.
+    T_b_e : array-like, shape (4, 4), optional
+        RCM frame (set-up). Defaults to :func:`athenakin.default_rcm_frame`.
+    design : Design, optional
+        Defaults to :meth:`Design.default`.
+    slot : int, keyword-only
+        Forward-kinematics slot 0..15 (0: mode +1, ``p > 0``, ``sin u2 > 0``,
+        ``sin u4 > 0``).
+
+    Returns
+    -------
+    RobotGeometry
+
+    Raises
+    ------
+    InvalidInputError
+        ``q`` is not of shape (3,) or ``slot`` is not in 0..15.
+    KinematicsError
+        The slot holds no valid solution (the subclass that matches its reason,
+        e.g. :class:`~athenakin.errors.OutOfWorkspaceError`).
+
+    Examples
+    --------
+    >>> import athenakin as ak
+    >>> from athenakin.plot import robot_geometry
+    >>> g = robot_geometry()
+    >>> bool(abs(g.points["O_s"] - g.frames["s"][:3, 3]).max() < 1e-15)
+    True
+    """
+    from ..errors import InvalidInputError
+    from ..robot import REFERENCE_Q
+
+    design = Design.default() if design is None else design
+    q = np.array(REFERENCE_Q if q is None else q, dtype=float)
+    if q.shape != (3,):
+        raise InvalidInputError(f"q: expected shape (3,), got shape {q.shape}")
+    if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 16:
+        raise InvalidInputError(f"slot: expected an integer in 0..15, got {slot!r}")
+    slot = int(slot)
+    T = default_rcm_frame(design) if T_b_e is None else np.asarray(T_b_e, dtype=float)
+    sol = forward_kinematics(q, T, design, errors="flag")
+    if not sol.valid[slot]:
+        why = Reason(int(sol.reason[slot])).name
+        raise error_for_reason(int(sol.reason[slot]), f"slot {slot} of q = {q.tolist()} m ({why})")
+    T_b_s = sol.T_b_s[slot]
+    p = float(sol.p[slot])
+    u = sol.u[slot].copy()
+    l1, l2, l3, l4, l5 = design.lengths
+    q1, q2, q3 = q
+    h = 0.5 * (q1 - q2)
+    x_M = 0.5 * (q1 + q2)
+    A, B, M = np.array([q1, 0.0, 0.0]), np.array([q2, 0.0, 0.0]), np.array([x_M, 0.0, 0.0])
+    D = np.array([x_M, np.sqrt(l3 * l3 - h * h), 0.0])
+    C_foot = D + np.array([0.0, l2, 0.0])
+    C = C_foot + np.array([0.0, 0.0, l5])
+    O_s = T_b_s[:3, 3].copy()
+    O_i = O_s - l4 * T_b_s[:3, 2]
+    T_b_i = T_b_s.copy()
+    T_b_i[:3, 3] = O_i
+    c, s = np.cos(u), np.sin(u)
+    T_b_3 = T_b_s @ _rot4(rotation_u_pair(c[0], s[0], c[1], s[1]))
+    T_rcm = T_b_3 @ _tz(p)                       # at the RCM, before u3
+    T_4 = T_rcm @ _rot4(rot_z(u[2]) @ rot_x(np.pi / 2))    # before u4
+    T_5 = T_4 @ _rot4(rot_z(u[3]) @ rot_x(np.pi / 2))      # before u5
+    wrist_axes = np.stack([T_rcm[:3, 2], T_4[:3, 2], T_5[:3, 2]])
+    tip = O_s + design.tool_length * T_b_3[:3, 2]
+    r1 = np.sqrt(l1 * l1 - h * h)
+    lo = np.minimum(design.stroke_min[:2], q[:2]).min()
+    hi = np.maximum(design.stroke_max[:2], q[:2]).max()
+    if not np.isfinite(lo):
+        lo = min(q1, q2) - 0.1
+    if not np.isfinite(hi):
+        hi = max(q1, q2) + 0.1
+    points = {"A": A, "B": B, "M": M, "D": D, "C_foot": C_foot, "C": C, "O_i": O_i,
+              "O_s": O_s, "RCM": T[:3, 3].copy(), "tip": tip}
+    frames = {"b": np.eye(4), "i": T_b_i, "s": T_b_s, "instrument": T_b_3, "e": T.copy()}
+    return RobotGeometry(
+        q=q, slot=slot, mode=int(sol.mode[slot]), p_sign=int(sol.p_sign[slot]),
+        ujoint=int(sol.ujoint[slot]), wrist=int(sol.wrist[slot]), p=p, u=u, points=points,
+        frames=frames, wrist_axes=wrist_axes, k1=circle_points(M, r1), k2=circle_points(C, q3),
+        rail=np.array([[lo - 0.05, 0.0, 0.0], [hi + 0.05, 0.0, 0.0]]), design=design,
+        T_b_e=T.copy())

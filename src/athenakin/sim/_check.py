@@ -1,0 +1,351 @@
+"""Check athenakin's forward kinematics with MuJoCo: drive the actuators, let MuJoCo close loops.
+
+MuJoCo knows nothing of Eq. 7-16: it integrates the exported tree
+(:func:`~athenakin.sim.mjcf_from_design`) under its equality constraints. After
+the position servos have brought ``q1, q2, q3`` to the targets and the motion
+has died out, the instrument's pose in MuJoCo is compared with the
+forward-kinematics solution at the actuator values MuJoCo reached, in the slot
+whose labels (assembly mode, sign of ``p``, of ``sin u2``, of ``sin u4``)
+MuJoCo's own state carries.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_array
+from ..design import Design
+from ..parallel import parallel_forward_kinematics
+from ..robot import default_rcm_frame, forward_kinematics
+from ..robot._fk import slot_index
+from ._layout import ACTUATED, JOINTS, mechanism_joint_values
+from ._mjcf import mjcf_from_design
+
+__all__ = ["MujocoCheck", "check_fk_with_mujoco", "sample_reachable_q", "load_model",
+           "settle", "RAMP_TIME", "SETTLE_TIME", "SPEED_TOL", "PATH_MARGINS"]
+
+#: Duration of the smooth ramp of the actuator targets from ``home`` to ``q``, s.
+RAMP_TIME = 1.0
+#: Longest time the targets are held before the state is read, s.
+SETTLE_TIME = 6.0
+#: The hold ends early once every joint speed is below this (m/s, rad/s). The
+#: motion then decays by a factor of about 10 every 0.1 s, so positions are
+#: within about 1e-12 of rest.
+SPEED_TOL = 1e-11
+#: Distances to the singularities kept along the straight path ``home -> q`` by
+#: :func:`sample_reachable_q`: ``|sin u2|``, ``|sin u4|``, ``|p|`` (m) and the
+#: half-chord of ``k1 ∩ k2`` (m).
+PATH_MARGINS = {"sin_u2": 0.2, "sin_u4": 0.2, "p": 0.02, "half_chord": 0.005}
+
+
+@dataclasses.dataclass(frozen=True)
+class MujocoCheck:
+    """MuJoCo's settled states compared with athenakin's forward kinematics.
+
+    Attributes
+    ----------
+    q : ndarray, shape (n, 3)
+        Actuator targets, m.
+    q_reached : ndarray, shape (n, 3)
+        Actuated joint values MuJoCo reached, m.
+    slot : ndarray of int, shape (n,)
+        FK slot whose labels MuJoCo's state carries (mode from the side of the
+        line ``M C`` on which ``O_i`` lies, signs of ``p``, ``sin u2``, ``sin u4``).
+    nearest_slot : ndarray of int, shape (n,)
+        Valid FK slot whose joint values (all 18 joints of the tree) are nearest to
+        MuJoCo's (-1 if none is valid). The instrument pose alone cannot tell the
+        two branches of the spherical joint apart: they hold the instrument alike.
+    tip_error : ndarray, shape (n,)
+        Distance between MuJoCo's tool tip and the slot's, m. Every FK quantity
+        here is computed at ``q_reached``.
+    axis_error : ndarray, shape (n,)
+        Angle between the instrument axes, rad.
+    pose_error : ndarray, shape (n,)
+        ``max(max|R - R_fk|, max|t - t_fk| / 1 m)`` of the instrument frame (origin
+        ``O_s``, z along the instrument).
+    joint_error : ndarray, shape (n,)
+        Largest difference of every joint of the tree (``p`` and slides in m,
+        hinges in rad, modulo 2 pi) from :func:`~athenakin.sim.mechanism_joint_values`.
+    constraint_residual : ndarray, shape (n,)
+        Largest violation of an equality constraint in MuJoCo at the end (m or rad).
+    speed : ndarray, shape (n,)
+        Largest joint speed at the end (m/s or rad/s).
+    hold_time : ndarray, shape (n,)
+        Simulated seconds of hold until the motion died out (see :func:`settle`).
+    """
+
+    q: NDArray[np.float64]
+    q_reached: NDArray[np.float64]
+    slot: NDArray[np.int64]
+    nearest_slot: NDArray[np.int64]
+    tip_error: NDArray[np.float64]
+    axis_error: NDArray[np.float64]
+    pose_error: NDArray[np.float64]
+    joint_error: NDArray[np.float64]
+    constraint_residual: NDArray[np.float64]
+    speed: NDArray[np.float64]
+    hold_time: NDArray[np.float64]
+
+    def summary(self) -> str:
+        """One paragraph with the worst errors."""
+        n = len(self.q)
+        same = int(np.sum(self.slot == self.nearest_slot))
+        return (f"{n} configurations: MuJoCo's state is nearest to its own labelled FK slot in "
+                f"{same}/{n}; worst instrument pose error {np.max(self.pose_error):.2e}, "
+                f"tool tip {np.max(self.tip_error):.2e} m, axis {np.max(self.axis_error):.2e} "
+                f"rad, joints {np.max(self.joint_error):.2e}, constraint residual "
+                f"{np.max(self.constraint_residual):.2e}, final speed {np.max(self.speed):.2e} "
+                f"(hold up to {np.max(self.hold_time):.2f} s)")
+
+
+def load_model(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
+               q: ArrayLike | None = None, slot: int = 0, gravity: bool = False) -> Any:
+    """Compile :func:`~athenakin.sim.mjcf_from_design` with MuJoCo.
+
+    Returns
+    -------
+    mujoco.MjModel
+    """
+    import mujoco
+
+    return mujoco.MjModel.from_xml_string(
+        mjcf_from_design(design, T_b_e, q=q, slot=slot, gravity=gravity))
+
+
+def _smoothstep(s: float) -> float:
+    return 0.5 - 0.5 * np.cos(np.pi * min(max(s, 0.0), 1.0))
+
+
+def settle(model: Any, data: Any, q: ArrayLike, *, ramp_time: float = RAMP_TIME,
+           settle_time: float = SETTLE_TIME, speed_tol: float = SPEED_TOL) -> float:
+    """Move the actuator targets smoothly from ``data.ctrl`` to ``q``, then hold them.
+
+    Parameters
+    ----------
+    model, data : mujoco.MjModel, mujoco.MjData
+        A model from :func:`load_model` and its state (modified in place).
+    q : array-like, shape (3,)
+        Actuator targets, m.
+    ramp_time, settle_time : float, keyword-only
+        Seconds of ramp and longest hold.
+    speed_tol : float, keyword-only
+        The hold stops once every joint speed is below this.
+
+    Returns
+    -------
+    float
+        Seconds of hold used.
+    """
+    import mujoco
+
+    q = np.asarray(q, dtype=float)
+    start = data.ctrl.copy()
+    dt = model.opt.timestep
+    n_ramp = int(round(ramp_time / dt))
+    for k in range(n_ramp):
+        data.ctrl[:] = start + _smoothstep((k + 1) / n_ramp) * (q - start)
+        mujoco.mj_step(model, data)
+    data.ctrl[:] = q
+    n_hold = int(round(settle_time / dt))
+    for k in range(n_hold):
+        mujoco.mj_step(model, data)
+        if k % 20 == 19 and np.abs(data.qvel).max() < speed_tol:
+            return (k + 1) * dt
+    return n_hold * dt
+
+
+def _wrap(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    return np.mod(a + np.pi, 2 * np.pi) - np.pi
+
+
+def _labels(model: Any, data: Any) -> tuple[int, int, int, int]:
+    """Slot labels read off MuJoCo's state alone (no athenakin kinematics)."""
+    qpos = {model.joint(i).name: float(data.qpos[model.jnt_qposadr[i]])
+            for i in range(model.njnt)}
+    M = 0.5 * (data.body("carriage_a").xpos + data.body("carriage_b").xpos)
+    C = data.body("k2_arm").xpos - M
+    Oi = data.site("platform_oi").xpos - M
+    mode = 1 if C[1] * Oi[2] - C[2] * Oi[1] >= 0 else -1
+    sgn = [1 if v >= 0 else -1 for v in (qpos["p"], np.sin(qpos["u2"]), np.sin(qpos["u4"]))]
+    return mode, sgn[0], sgn[1], sgn[2]
+
+
+def _pose_error(T: NDArray[np.float64], T_ref: NDArray[np.float64]) -> float:
+    dR = np.abs(T[:3, :3] - T_ref[:3, :3]).max()
+    return float(max(dR, np.abs(T[:3, 3] - T_ref[:3, 3]).max()))
+
+
+def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
+                         T_b_e: ArrayLike | None = None, *, start_slot: int = 0,
+                         home_q: ArrayLike | None = None, perturb: float = 0.0,
+                         rng: int | np.random.Generator | None = None,
+                         ramp_time: float = RAMP_TIME, settle_time: float = SETTLE_TIME,
+                         speed_tol: float = SPEED_TOL, gravity: bool = False,
+                         progress: bool = False) -> MujocoCheck:
+    """Drive MuJoCo's model to each ``q`` and compare the result with our FK.
+
+    For each target: reset to the keyframe ``home`` (assembled at ``home_q`` in
+    ``start_slot``), optionally disturb every joint by up to ``perturb`` (m or rad)
+    and let MuJoCo reassemble, ramp the actuator targets to ``q``, hold, then
+    read the instrument pose and every joint.
+
+    Parameters
+    ----------
+    q : array-like, shape (n, 3) or (3,)
+        Actuator targets, m. The straight path from ``home_q`` must stay away from
+        singularities in ``start_slot`` (see :func:`sample_reachable_q`), or
+        MuJoCo may end in another branch (which the result then reports).
+    design : Design, optional
+    T_b_e : array-like, shape (4, 4), optional
+    start_slot : int, keyword-only
+        FK slot of the keyframe.
+    home_q : array-like, shape (3,), keyword-only, optional
+        Actuators of the keyframe (default :data:`athenakin.robot.REFERENCE_Q`).
+    perturb : float, keyword-only
+        Size of a uniform random disturbance of all joints at the start.
+    rng : int or numpy.random.Generator, keyword-only, optional
+    ramp_time, settle_time, speed_tol : float, keyword-only
+        See :func:`settle`.
+    gravity : bool, keyword-only
+        Simulate under gravity. The servos then sag (about 1e-4 m) and the loops
+        open by the compliance of MuJoCo's soft constraints under load (about
+        1e-5 m): use it to see those effects, not for the check.
+    progress : bool, keyword-only
+        Show a tqdm progress bar.
+
+    Returns
+    -------
+    MujocoCheck
+    """
+    import mujoco
+
+    design = Design.default() if design is None else design
+    T = default_rcm_frame(design) if T_b_e is None else np.asarray(T_b_e, dtype=float)
+    qs = check_array(q, "q", (3,))
+    qs = qs.reshape(-1, 3)
+    rng = np.random.default_rng(rng)
+    model = load_model(design, T, q=home_q, slot=start_slot, gravity=gravity)
+    data = mujoco.MjData(model)
+    names = list(JOINTS)
+    adr = np.array([model.jnt_qposadr[model.joint(n).id] for n in names])
+    hinge = np.array([JOINTS[n][0] == "hinge" for n in names])
+    act_adr = [model.jnt_qposadr[model.joint(n).id] for n in ACTUATED]
+    eq_rows = mujoco.mjtConstraint.mjCNSTR_EQUALITY
+
+    out: dict[str, list[Any]] = {k: [] for k in (
+        "q_reached", "slot", "nearest_slot", "tip_error", "axis_error", "pose_error",
+        "joint_error", "constraint_residual", "speed", "hold_time")}
+    it = range(len(qs))
+    if progress:
+        from tqdm import tqdm
+
+        it = tqdm(it, desc="MuJoCo check", unit="config")
+    for n in it:
+        mujoco.mj_resetDataKeyframe(model, data, 0)
+        if perturb > 0:
+            data.qpos[:] += rng.uniform(-perturb, perturb, model.nq)
+            settle(model, data, data.ctrl.copy(), ramp_time=0.0, settle_time=settle_time,
+                   speed_tol=speed_tol)
+        hold = settle(model, data, qs[n], ramp_time=ramp_time, settle_time=settle_time,
+                      speed_tol=speed_tol)
+        mujoco.mj_forward(model, data)
+        k = slot_index(*_labels(model, data))
+        T_ins = np.eye(4)
+        T_ins[:3, :3] = data.body("instrument").xmat.reshape(3, 3)
+        T_ins[:3, 3] = data.body("instrument").xpos
+        tip = data.site("tool_tip").xpos.copy()
+        q_now = data.qpos[act_adr].copy()
+        sol = forward_kinematics(q_now, T, design, errors="flag")
+        joint_err = np.full(16, np.inf)
+        geoms = {}
+        for j in np.flatnonzero(sol.valid):
+            vals, geoms[j] = mechanism_joint_values(q_now, T, design, slot=int(j))
+            diff = data.qpos[adr] - np.array([vals[nm] for nm in names])
+            joint_err[j] = np.abs(np.where(hinge, _wrap(diff), diff)).max()
+        out["q_reached"].append(q_now)
+        out["slot"].append(k)
+        out["nearest_slot"].append(int(np.argmin(joint_err)) if sol.valid.any() else -1)
+        out["hold_time"].append(hold)
+        if sol.valid[k]:
+            g = geoms[k]
+            z_ref = g.frames["instrument"][:3, 2]
+            out["tip_error"].append(float(np.linalg.norm(tip - g.points["tip"])))
+            out["axis_error"].append(float(np.arctan2(np.linalg.norm(np.cross(T_ins[:3, 2], z_ref)),
+                                                      T_ins[:3, 2] @ z_ref)))
+            out["pose_error"].append(_pose_error(T_ins, g.frames["instrument"]))
+            out["joint_error"].append(float(joint_err[k]))
+        else:
+            for key in ("tip_error", "axis_error", "pose_error", "joint_error"):
+                out[key].append(np.inf)
+        rows = data.efc_type[:data.nefc] == eq_rows
+        out["constraint_residual"].append(float(np.abs(data.efc_pos[:data.nefc][rows]).max()))
+        out["speed"].append(float(np.abs(data.qvel).max()))
+    return MujocoCheck(q=qs, **{k: np.asarray(v) for k, v in out.items()})
+
+
+def sample_reachable_q(n: int, design: Design | None = None, T_b_e: ArrayLike | None = None,
+                       *, slot: int = 0, home_q: ArrayLike | None = None,
+                       radius: float = 0.12, n_path: int = 24,
+                       rng: int | np.random.Generator | None = None,
+                       max_tries: int = 200) -> NDArray[np.float64]:
+    """Random actuator targets reachable from ``home_q`` in ``slot`` along a straight line.
+
+    A candidate ``q = home_q + delta`` (``delta`` uniform in a cube of half-size
+    ``radius``) is kept when every point of the segment ``home_q -> q`` (``n_path``
+    samples) has a valid solution in ``slot`` at least :data:`PATH_MARGINS` away
+    from the singularities, so that a continuous motion stays in that slot.
+
+    Parameters
+    ----------
+    n : int
+        Number of targets.
+    design : Design, optional
+    T_b_e : array-like, shape (4, 4), optional
+    slot : int, keyword-only
+    home_q : array-like, shape (3,), keyword-only, optional
+        Default :data:`athenakin.robot.REFERENCE_Q`.
+    radius : float, keyword-only
+        Half-size of the sampling cube, m.
+    n_path : int, keyword-only
+    rng : int or numpy.random.Generator, keyword-only, optional
+    max_tries : int, keyword-only
+        Rounds of ``n`` candidates before giving up.
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+
+    Raises
+    ------
+    RuntimeError
+        Fewer than ``n`` targets found within ``max_tries`` rounds.
+    """
+    from ..robot import REFERENCE_Q
+
+    design = Design.default() if design is None else design
+    T = default_rcm_frame(design) if T_b_e is None else np.asarray(T_b_e, dtype=float)
+    home = np.asarray(REFERENCE_Q if home_q is None else home_q, dtype=float)
+    rng = np.random.default_rng(rng)
+    t = np.linspace(0.0, 1.0, n_path)
+    found: list[NDArray[np.float64]] = []
+    for _ in range(max_tries):
+        cand = home + rng.uniform(-radius, radius, (n, 3))
+        path = home + t[None, :, None] * (cand - home)[:, None, :]         # (n, n_path, 3)
+        sol = forward_kinematics(path, T, design, errors="flag")
+        par = parallel_forward_kinematics(path, design)
+        ok = sol.valid[..., slot]
+        with np.errstate(invalid="ignore"):
+            ok &= np.abs(np.sin(sol.u[..., slot, 1])) > PATH_MARGINS["sin_u2"]
+            ok &= np.abs(np.sin(sol.u[..., slot, 3])) > PATH_MARGINS["sin_u4"]
+            ok &= np.abs(sol.p[..., slot]) > PATH_MARGINS["p"]
+            ok &= par.half_chord > PATH_MARGINS["half_chord"]
+        good = cand[np.all(ok, axis=-1)]
+        found.extend(good)
+        if len(found) >= n:
+            return np.array(found[:n])
+    raise RuntimeError(f"sample_reachable_q: found {len(found)} of {n} targets reachable from "
+                       f"{home.tolist()} in slot {slot}; lower radius or n")

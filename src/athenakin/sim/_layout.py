@@ -1,0 +1,161 @@
+"""The physical model shared by the MJCF and URDF exports: bodies, joints, loop closures.
+
+ATHENA's parallel module is a closed-loop mechanism. Both exports use the same
+spanning tree (MuJoCo and URDF joint names alike) and the same loop closures:
+
+Tree (parent -> child: joint)::
+
+    base -> carriage_a : q1 (slide x, actuated)
+      carriage_a -> a_cross : a_ujoint_x (hinge x_b)       U-joint at A
+        a_cross -> link_a1 : a_ujoint_y (hinge y)          bar A-O_i, length l1
+          link_a1 -> platform : platform_y (hinge y)       frame i at O_i (Eq. 9)
+            platform -> ujoint_cross : u1 (hinge z_s)      U-joint at O_s (Eq. 10)
+              ujoint_cross -> instrument : u2              z along the instrument
+                instrument -> guide : p (slide z)          guide at the RCM
+                  guide -> sph_3 : u3; sph_3 -> sph_4 : u4; sph_4 -> sph_5 : u5
+      carriage_a -> link_a3 : a_base_z (hinge z_b)         bar A-D, length l3
+        link_a3 -> carrier : carrier_z (hinge z_b)         carries C = D + (0, l2, l5)
+          carrier -> k2_arm : k2_x (hinge x_b at C)
+            k2_arm -> k2_rod : q3 (slide, actuated)        the radius of k2
+    base -> carriage_b : q2 (slide x, actuated)
+      carriage_b -> b_cross : b_ujoint_x; b_cross -> link_b1 : b_ujoint_y   bar B-O_i
+      carriage_b -> link_b3 : b_base_z                                      bar B-D
+    base -> rcm_setup (fixed at T_b_e: the base of the spherical five-bar, set by S1, S2)
+
+Loop closures (:data:`LOOP_CLOSURES`): the tip of ``link_b1`` is at ``O_i``, the
+tip of ``link_b3`` is at D, the tip of ``k2_rod`` is at ``O_i`` (points), the
+frame of ``sph_5`` is the set-up frame E (a full pose), and two couplings keep
+the platform's x axis and the carrier parallel to the base (``platform_y =
+-a_ujoint_y``, ``carrier_z = -a_base_z``: a parallelogram or belt in hardware).
+
+The spherical joint ``u3, u4, u5`` at the RCM is the kinematic equivalent of the
+passive spherical five-bar (paper Fig. 3), whose geometry the paper does not give.
+The instrument roll (a fourth actuator) does not change the kinematics and is left out.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..design import Design
+from ..plot._geometry import RobotGeometry, robot_geometry
+
+__all__ = ["JOINTS", "ACTUATED", "LOOP_CLOSURES", "LoopClosure", "mechanism_joint_values"]
+
+#: Joints of the spanning tree in MJCF order: name -> (kind, parent body, child body).
+JOINTS: dict[str, tuple[str, str, str]] = {
+    "q1": ("slide", "base", "carriage_a"),
+    "a_ujoint_x": ("hinge", "carriage_a", "a_cross"),
+    "a_ujoint_y": ("hinge", "a_cross", "link_a1"),
+    "platform_y": ("hinge", "link_a1", "platform"),
+    "u1": ("hinge", "platform", "ujoint_cross"),
+    "u2": ("hinge", "ujoint_cross", "instrument"),
+    "p": ("slide", "instrument", "guide"),
+    "u3": ("hinge", "guide", "sph_3"),
+    "u4": ("hinge", "sph_3", "sph_4"),
+    "u5": ("hinge", "sph_4", "sph_5"),
+    "a_base_z": ("hinge", "carriage_a", "link_a3"),
+    "carrier_z": ("hinge", "link_a3", "carrier"),
+    "k2_x": ("hinge", "carrier", "k2_arm"),
+    "q3": ("slide", "k2_arm", "k2_rod"),
+    "q2": ("slide", "base", "carriage_b"),
+    "b_ujoint_x": ("hinge", "carriage_b", "b_cross"),
+    "b_ujoint_y": ("hinge", "b_cross", "link_b1"),
+    "b_base_z": ("hinge", "carriage_b", "link_b3"),
+}
+
+#: The three actuated joints, in the order of ``q``.
+ACTUATED = ("q1", "q2", "q3")
+
+
+@dataclasses.dataclass(frozen=True)
+class LoopClosure:
+    """One loop-closure constraint of the mechanism.
+
+    Attributes
+    ----------
+    name : str
+    kind : {"point", "pose", "coupling"}
+        ``point``: two points coincide (3 equations; MuJoCo ``connect``);
+        ``pose``: two frames coincide (6 equations; MuJoCo ``weld``);
+        ``coupling``: ``joint1 = -joint2`` (1 equation; MuJoCo ``joint``).
+    a, b : str
+        Sites (point, pose) or joints (coupling).
+    text : str
+        What it means, for the docs and the URDF comments.
+    """
+
+    name: str
+    kind: str
+    a: str
+    b: str
+    text: str
+
+
+#: Loop closures that turn the tree of :data:`JOINTS` into ATHENA's mechanism.
+LOOP_CLOSURES = (
+    LoopClosure("close_b1", "point", "link_b1_tip", "platform_oi",
+                "bar B-O_i (length l1) ends at O_i on the platform"),
+    LoopClosure("close_b3", "point", "link_b3_tip", "carrier_d",
+                "bar B-D (length l3) ends at D on the carrier"),
+    LoopClosure("close_q3", "point", "k2_rod_tip", "platform_oi",
+                "the q3 actuator (radius of k2, from C) ends at O_i"),
+    LoopClosure("close_rcm", "pose", "sph_5_frame", "rcm_setup_frame",
+                "the spherical joint's last frame is the RCM frame E fixed by S1, S2"),
+    LoopClosure("parallel_platform", "coupling", "platform_y", "a_ujoint_y",
+                "platform_y = -a_ujoint_y: the platform keeps x_i = x_b (Eq. 9)"),
+    LoopClosure("parallel_carrier", "coupling", "carrier_z", "a_base_z",
+                "carrier_z = -a_base_z: the carrier keeps its orientation (C = D + (0, l2, l5))"),
+)
+
+
+def mechanism_joint_values(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
+                           design: Design | None = None, *, slot: int = 0
+                           ) -> tuple[dict[str, float], RobotGeometry]:
+    """Values of every joint of the spanning tree in one forward-kinematics slot.
+
+    Parameters
+    ----------
+    q : array-like, shape (3,), optional
+        Actuators, m (default :data:`athenakin.robot.REFERENCE_Q`).
+    T_b_e : array-like, shape (4, 4), optional
+        RCM frame (default :func:`athenakin.default_rcm_frame`).
+    design : Design, optional
+    slot : int, keyword-only
+        Forward-kinematics slot 0..15.
+
+    Returns
+    -------
+    values : dict of str -> float
+        Joint name (:data:`JOINTS`) -> value (m for slides, rad for hinges).
+    geometry : RobotGeometry
+        The configuration they realise.
+
+    Raises
+    ------
+    KinematicsError
+        The slot holds no valid solution.
+    """
+    g = robot_geometry(q, T_b_e, design, slot=slot)
+    d = g.design
+    q1, q2, q3 = g.q
+    h = 0.5 * (q1 - q2)
+    r1 = np.sqrt(d.l1 ** 2 - h * h)
+    R_b_i = g.frames["i"][:3, :3]
+    theta = float(np.arctan2(R_b_i[2, 1], R_b_i[1, 1]))
+    phi_a = float(np.arctan2(-h, r1))
+    ang_a3 = float(np.arctan2(np.sqrt(d.l3 ** 2 - h * h), -h))
+    ang_b3 = float(np.arctan2(np.sqrt(d.l3 ** 2 - h * h), h))
+    arm = g.points["O_i"] - g.points["C"]
+    gamma = float(np.arctan2(-arm[1], arm[2]))
+    values = {
+        "q1": float(q1), "a_ujoint_x": theta, "a_ujoint_y": phi_a, "platform_y": -phi_a,
+        "u1": float(g.u[0]), "u2": float(g.u[1]), "p": g.p, "u3": float(g.u[2]),
+        "u4": float(g.u[3]), "u5": float(g.u[4]),
+        "a_base_z": ang_a3, "carrier_z": -ang_a3, "k2_x": gamma, "q3": float(q3),
+        "q2": float(q2), "b_ujoint_x": theta, "b_ujoint_y": -phi_a, "b_base_z": ang_b3,
+    }
+    return values, g

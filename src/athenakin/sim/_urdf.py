@@ -1,0 +1,259 @@
+"""URDF export of ATHENA's kinematic tree, with the loop closures documented.
+
+URDF describes trees only. The file holds the spanning tree of
+:mod:`athenakin.sim._layout` (the same joint names as the MJCF model), the two
+parallelism couplings as ``<mimic>`` joints, and, for each remaining loop
+closure, a pair of fixed "closure frames" that coincide on the real mechanism
+(e.g. ``link_b1_tip`` and ``platform_oi``). An XML comment at the top of the file
+lists them. A tool that supports closed chains (or a user's own constraint
+solver) closes the loops by making each pair coincide; with joint values from
+:func:`~athenakin.sim.mechanism_joint_values` they coincide already.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_transform
+from ..design import Design
+from ..robot import default_rcm_frame
+from ._layout import JOINTS, LOOP_CLOSURES
+from ._mjcf import BAR_RADIUS, DENSITY
+
+__all__ = ["urdf_from_design", "write_urdf", "CLOSURE_FRAMES", "CLOSURE_PAIRS", "MIMIC"]
+
+#: Fixed closure frames: name -> (parent link, xyz in the parent link frame as a
+#: function of the design). Pairs listed in :data:`CLOSURE_PAIRS` must coincide.
+CLOSURE_FRAMES = ("link_b1_tip", "platform_oi", "link_b3_tip", "carrier_d", "k2_rod_tip",
+                  "sph_5_frame", "rcm_setup_frame")
+#: Pairs of closure frames that coincide on the mechanism (positions; the last pair
+#: also in orientation).
+CLOSURE_PAIRS = (("link_b1_tip", "platform_oi"), ("link_b3_tip", "carrier_d"),
+                 ("k2_rod_tip", "platform_oi"), ("sph_5_frame", "rcm_setup_frame"))
+#: Joints that URDF ``<mimic>`` ties to another: name -> (master joint, multiplier).
+MIMIC = {"platform_y": ("a_ujoint_y", -1.0), "carrier_z": ("a_base_z", -1.0)}
+#: Joint limit used where the design has none (m), and for ``p``.
+_FREE_SLIDE = 2.0
+
+
+def _f(x: float) -> str:
+    return repr(float(x))
+
+
+def _vec(v: ArrayLike) -> str:
+    return " ".join(_f(x) for x in np.asarray(v, dtype=float).ravel())
+
+
+def _rpy_from_matrix(R: NDArray[np.float64]) -> NDArray[np.float64]:
+    """URDF roll-pitch-yaw (``R = Rz(y) Ry(p) Rx(r)``) of a rotation matrix."""
+    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
+    if abs(math.cos(pitch)) < 1e-12:
+        return np.array([math.atan2(-R[1, 2], R[1, 1]), pitch, 0.0])
+    return np.array([math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])])
+
+
+def _inertial(link: ET.Element, a: ArrayLike, b: ArrayLike, radius: float) -> None:
+    """Inertia of a solid cylinder from a to b (link frame), about its centre."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    length = max(float(np.linalg.norm(b - a)), 1e-3)
+    m = DENSITY * math.pi * radius ** 2 * length
+    ia = 0.5 * m * radius ** 2
+    it = m * (3 * radius ** 2 + length ** 2) / 12
+    u = (b - a) / length if np.linalg.norm(b - a) > 0 else np.array([0.0, 0.0, 1.0])
+    inertia = it * np.eye(3) + (ia - it) * np.outer(u, u)
+    el = ET.SubElement(link, "inertial")
+    ET.SubElement(el, "origin", {"xyz": _vec(0.5 * (a + b)), "rpy": "0 0 0"})
+    ET.SubElement(el, "mass", {"value": _f(m)})
+    ET.SubElement(el, "inertia", {"ixx": _f(inertia[0, 0]), "ixy": _f(inertia[0, 1]),
+                                  "ixz": _f(inertia[0, 2]), "iyy": _f(inertia[1, 1]),
+                                  "iyz": _f(inertia[1, 2]), "izz": _f(inertia[2, 2])})
+
+
+def _cylinder(link: ET.Element, a: ArrayLike, b: ArrayLike, radius: float,
+              material: str) -> None:
+    """Visual cylinder from a to b in the link frame."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    d = b - a
+    length = float(np.linalg.norm(d))
+    if length == 0:
+        return
+    z = d / length
+    x = np.cross([0.0, 1.0, 0.0], z) if abs(z[1]) < 0.9 else np.cross(z, [1.0, 0.0, 0.0])
+    x /= np.linalg.norm(x)
+    R = np.stack([x, np.cross(z, x), z], axis=-1)
+    vis = ET.SubElement(link, "visual")
+    ET.SubElement(vis, "origin", {"xyz": _vec(0.5 * (a + b)), "rpy": _vec(_rpy_from_matrix(R))})
+    geo = ET.SubElement(vis, "geometry")
+    ET.SubElement(geo, "cylinder", {"radius": _f(radius), "length": _f(length)})
+    ET.SubElement(vis, "material", {"name": material})
+
+
+def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
+                     robot_name: str = "athena") -> str:
+    """URDF text of the kinematic tree of ATHENA (loop closures as documented frame pairs).
+
+    Parameters
+    ----------
+    design : Design, optional
+        Defaults to :meth:`Design.default`.
+    T_b_e : array-like, shape (4, 4), optional
+        RCM frame of the set-up, placed as the fixed link ``rcm_setup``; defaults to
+        :func:`athenakin.default_rcm_frame`.
+    robot_name : str, keyword-only
+
+    Returns
+    -------
+    str
+        The URDF document. Joint values of a configuration:
+        :func:`~athenakin.sim.mechanism_joint_values` (``platform_y`` and
+        ``carrier_z`` follow by ``<mimic>``).
+
+    Notes
+    -----
+    The tree has 18 joints (16 independent, 2 mimic). The loop closures that URDF
+    cannot express are listed in the file's header comment and in
+    :data:`CLOSURE_PAIRS`; the spherical joint ``u3, u4, u5`` stands for the
+    passive spherical five-bar.
+    """
+    design = Design.default() if design is None else design
+    T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
+    d = design
+    lo, hi = d.stroke_min, d.stroke_max
+    robot = ET.Element("robot", {"name": robot_name})
+    for name, rgba in (("parallel", "0.2 0.4 0.8 1"), ("serial", "0.8 0.2 0.2 1"),
+                       ("actuator", "0.95 0.6 0.1 1"), ("joint", "0.55 0.55 0.55 1"),
+                       ("rail", "0.35 0.35 0.38 1")):
+        mat = ET.SubElement(robot, "material", {"name": name})
+        ET.SubElement(mat, "color", {"rgba": rgba})
+
+    r = BAR_RADIUS
+    # link geometry: (a, b, radius, material) in the link frame
+    shapes: dict[str, tuple[tuple[float, ...], tuple[float, ...], float, str]] = {
+        "base": ((-0.5, 0, -0.02), (0.5, 0, -0.02), 0.01, "rail"),
+        "carriage_a": ((-0.03, 0, -0.02), (0.03, 0, -0.02), 0.015, "rail"),
+        "carriage_b": ((-0.03, 0, -0.02), (0.03, 0, -0.02), 0.015, "rail"),
+        "a_cross": ((-0.01, 0, 0), (0.01, 0, 0), 0.01, "joint"),
+        "b_cross": ((-0.01, 0, 0), (0.01, 0, 0), 0.01, "joint"),
+        "link_a1": ((0, 0, 0), (0, 0, d.l1), r, "parallel"),
+        "link_b1": ((0, 0, 0), (0, 0, d.l1), r, "parallel"),
+        "platform": ((0, 0, 0), (0, 0, d.l4), r, "parallel"),
+        "ujoint_cross": ((0, 0, -0.01), (0, 0, 0.01), 0.01, "joint"),
+        "instrument": ((0, 0, 0), (0, 0, d.tool_length), 0.004, "serial"),
+        "guide": ((0, 0, -0.02), (0, 0, 0.02), 0.008, "serial"),
+        "sph_3": ((0, 0, 0), (0, -0.06, 0.06), 0.004, "serial"),
+        "sph_4": ((0, 0, 0), (0, -0.06, 0.06), 0.004, "serial"),
+        "sph_5": ((0, 0, -0.01), (0, 0, 0.01), 0.01, "serial"),
+        "link_a3": ((0, 0, 0), (d.l3, 0, 0), r, "parallel"),
+        "link_b3": ((0, 0, 0), (d.l3, 0, 0), r, "parallel"),
+        "carrier": ((0, 0, 0), (0, d.l2, d.l5), r, "parallel"),
+        "k2_arm": ((0, 0, 0), (0, 0, 0.1), 0.012, "actuator"),
+        "k2_rod": ((0, 0, -0.1), (0, 0, 0), r, "actuator"),
+    }
+    for name in ["base"] + [c for _, _, c in JOINTS.values()]:
+        link = ET.SubElement(robot, "link", {"name": name})
+        a, b, rad, mat = shapes[name]
+        if name != "base":
+            _inertial(link, a, b, rad)
+        _cylinder(link, a, b, rad, mat)
+
+    rx90, rx180 = (math.pi / 2, 0, 0), (math.pi, 0, 0)
+    # joint -> (origin xyz in parent, origin rpy, axis, limits)
+    origins: dict[str, tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]] = {
+        "q1": ((0, 0, 0), (0, 0, 0), (1, 0, 0)),
+        "a_ujoint_x": ((0, 0, 0), (0, 0, 0), (1, 0, 0)),
+        "a_ujoint_y": ((0, 0, 0), (0, 0, 0), (0, 1, 0)),
+        "platform_y": ((0, 0, d.l1), (0, 0, 0), (0, 1, 0)),
+        "u1": ((0, 0, d.l4), (0, 0, 0), (0, 0, 1)),
+        "u2": ((0, 0, 0), rx180, (0, 1, 0)),
+        "p": ((0, 0, 0), (0, 0, 0), (0, 0, 1)),
+        "u3": ((0, 0, 0), (0, 0, 0), (0, 0, 1)),
+        "u4": ((0, 0, 0), rx90, (0, 0, 1)),
+        "u5": ((0, 0, 0), rx90, (0, 0, 1)),
+        "a_base_z": ((0, 0, 0), (0, 0, 0), (0, 0, 1)),
+        "carrier_z": ((d.l3, 0, 0), (0, 0, 0), (0, 0, 1)),
+        "k2_x": ((0, d.l2, d.l5), (0, 0, 0), (1, 0, 0)),
+        "q3": ((0, 0, 0), (0, 0, 0), (0, 0, 1)),
+        "q2": ((0, 0, 0), (0, 0, 0), (1, 0, 0)),
+        "b_ujoint_x": ((0, 0, 0), (0, 0, 0), (1, 0, 0)),
+        "b_ujoint_y": ((0, 0, 0), (0, 0, 0), (0, 1, 0)),
+        "b_base_z": ((0, 0, 0), (0, 0, 0), (0, 0, 1)),
+    }
+    stroke = {"q1": 0, "q2": 1, "q3": 2}
+    for name, (kind, parent, child) in JOINTS.items():
+        xyz, rpy, axis = origins[name]
+        utype = "prismatic" if kind == "slide" else "continuous"
+        j = ET.SubElement(robot, "joint", {"name": name, "type": utype})
+        ET.SubElement(j, "parent", {"link": parent})
+        ET.SubElement(j, "child", {"link": child})
+        ET.SubElement(j, "origin", {"xyz": _vec(xyz), "rpy": _vec(rpy)})
+        ET.SubElement(j, "axis", {"xyz": _vec(axis)})
+        if kind == "slide":
+            i = stroke.get(name)
+            lower = lo[i] if i is not None and math.isfinite(lo[i]) else -_FREE_SLIDE
+            upper = hi[i] if i is not None and math.isfinite(hi[i]) else _FREE_SLIDE
+            ET.SubElement(j, "limit", {"lower": _f(lower), "upper": _f(upper),
+                                       "effort": "1000", "velocity": "1"})
+        if name in MIMIC:
+            master, mult = MIMIC[name]
+            ET.SubElement(j, "mimic", {"joint": master, "multiplier": _f(mult), "offset": "0"})
+
+    # rcm_setup: fixed at T_b_e (the base of the spherical five-bar, set by S1, S2)
+    ET.SubElement(robot, "link", {"name": "rcm_setup"})
+    j = ET.SubElement(robot, "joint", {"name": "rcm_setup_fixed", "type": "fixed"})
+    ET.SubElement(j, "parent", {"link": "base"})
+    ET.SubElement(j, "child", {"link": "rcm_setup"})
+    ET.SubElement(j, "origin", {"xyz": _vec(T[:3, 3]), "rpy": _vec(_rpy_from_matrix(T[:3, :3]))})
+
+    frames = {"link_b1_tip": ("link_b1", (0, 0, d.l1)), "platform_oi": ("platform", (0, 0, 0)),
+              "link_b3_tip": ("link_b3", (d.l3, 0, 0)), "carrier_d": ("carrier", (0, 0, 0)),
+              "k2_rod_tip": ("k2_rod", (0, 0, 0)), "sph_5_frame": ("sph_5", (0, 0, 0)),
+              "rcm_setup_frame": ("rcm_setup", (0, 0, 0))}
+    for name in CLOSURE_FRAMES:
+        parent, xyz = frames[name]
+        ET.SubElement(robot, "link", {"name": name})
+        j = ET.SubElement(robot, "joint", {"name": f"{name}_fixed", "type": "fixed"})
+        ET.SubElement(j, "parent", {"link": parent})
+        ET.SubElement(j, "child", {"link": name})
+        ET.SubElement(j, "origin", {"xyz": _vec(xyz), "rpy": "0 0 0"})
+
+    ET.indent(robot)
+    lines = [
+        "<?xml version=\"1.0\"?>",
+        "<!--",
+        f"  ATHENA kinematic tree exported by athenakin (design l1..l5 = {d.lengths.tolist()} m).",
+        "  URDF holds trees only; ATHENA is a closed-loop mechanism. Actuated joints: q1, q2, q3.",
+        "  Loop closures (not expressible in URDF; each pair of frames must coincide):",
+    ]
+    for c in LOOP_CLOSURES:
+        if c.kind == "coupling":
+            lines.append(f"    - {c.name}: {c.text} (expressed here as <mimic>)")
+        elif c.kind == "point":
+            lines.append(f"    - {c.name}: origin of {c.a} = origin of {c.b}: {c.text}")
+        else:
+            lines.append(f"    - {c.name}: frame {c.a} = frame {c.b}: {c.text}")
+    lines += [
+        "  The spherical joint u3, u4, u5 at the RCM stands for the passive spherical five-bar.",
+        "  Joint values of a configuration: athenakin.sim.mechanism_joint_values(q, T_b_e, design,",
+        "  slot=k), which closes every loop. The MJCF export encodes the same closures as",
+        "  MuJoCo equality constraints.",
+        "-->",
+    ]
+    return "\n".join(lines) + "\n" + ET.tostring(robot, encoding="unicode") + "\n"
+
+
+def write_urdf(path: str | Path, design: Design | None = None, T_b_e: ArrayLike | None = None,
+               **kwargs: object) -> Path:
+    """Write :func:`urdf_from_design` to ``path``; keyword arguments are passed on.
+
+    Returns
+    -------
+    Path
+    """
+    path = Path(path)
+    path.write_text(urdf_from_design(design, T_b_e, **kwargs))  # type: ignore[arg-type]
+    return path
