@@ -1,0 +1,566 @@
+"""Workspace, conditioning and assembly-mode maps on grids (vectorised, chunked).
+
+Four grids, each a frozen dataclass of arrays:
+
+* :func:`actuator_map` - the actuator plane ``(h, q3)``: where each assembly
+  mode closes, conditioning of ``d O_s / d q``, the loci where the modes meet.
+  The module is invariant under ``x_M = (q1 + q2) / 2``, so this plane is the
+  whole actuator space up to a translation along the rail.
+* :func:`point_workspace` - a voxel grid of ``O_s`` positions: which are
+  reachable within the stroke limits, in which assembly mode (each ``O_s`` has
+  exactly one ``q`` and one mode), the signed distance to the surface where the
+  modes meet, conditioning.
+* :func:`instrument_cone` - directions ``(azimuth, polar)`` about the RCM in
+  frame E times insertions ``p``: the cone of reachable directions and the
+  insertion range along each.
+* :func:`tool_tip_workspace` - a voxel grid of tool-tip positions in frame E.
+
+Results are saved with :func:`save_npz` (one ``.npz`` archive: the arrays by
+field name plus a JSON ``meta`` entry) and read with :func:`load_npz`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_transform
+from ..design import Design
+from ..errors import InvalidInputError
+from ..parallel import parallel_ik_from_position
+from ..robot import default_rcm_frame, direction_from_angles, q_from_instrument, q_from_tool_tip
+from ._jacobians import _design, _parallel_jacobian, _state, _tip_matrices
+from ._singularities import _svd
+
+__all__ = [
+    "ActuatorMap",
+    "PointWorkspace",
+    "InstrumentCone",
+    "ToolTipWorkspace",
+    "actuator_map",
+    "point_workspace",
+    "instrument_cone",
+    "tool_tip_workspace",
+    "save_npz",
+    "load_npz",
+    "CHUNK",
+]
+
+#: Grid points per vectorised chunk (bounds memory; the progress bar advances per chunk).
+CHUNK = 65536
+#: Grids with more points than this show a progress bar when ``progress=None``.
+PROGRESS_THRESHOLD = 500_000
+
+
+# --------------------------------------------------------------------------------------
+# helpers
+# --------------------------------------------------------------------------------------
+def _resolution(res: int | tuple[int, ...], n: int, name: str = "resolution") -> tuple[int, ...]:
+    r = (res,) * n if np.ndim(res) == 0 else tuple(res)  # type: ignore[arg-type]
+    if len(r) != n or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool)
+                              and v >= 2 for v in r):
+        raise InvalidInputError(f"{name}: expected an int >= 2 or {n} of them, got {res!r}")
+    return tuple(int(v) for v in r)
+
+
+def _chunks(n: int, progress: bool | None, desc: str) -> Iterator[slice]:
+    """Slices of ``range(n)`` in chunks of :data:`CHUNK`, with a tqdm bar if asked."""
+    starts = range(0, n, CHUNK)
+    show = n > PROGRESS_THRESHOLD if progress is None else bool(progress)
+    it: Any = starts
+    if show:
+        try:
+            from tqdm.auto import tqdm
+        except ImportError:  # pragma: no cover - tqdm is in the analysis extra
+            pass
+        else:
+            it = tqdm(starts, total=(n + CHUNK - 1) // CHUNK, desc=desc, unit="chunk")
+    for s in it:
+        yield slice(s, min(s + CHUNK, n))
+
+
+def _map_chunks(fn: Callable[[NDArray[np.float64]], dict[str, NDArray[Any]]],
+                pts: NDArray[np.float64], progress: bool | None, desc: str
+                ) -> dict[str, NDArray[Any]]:
+    """Apply ``fn`` to chunks of the rows of ``pts`` (n, k) and concatenate."""
+    parts: dict[str, list[NDArray[Any]]] = {}
+    for sl in _chunks(len(pts), progress, desc):
+        for k, v in fn(pts[sl]).items():
+            parts.setdefault(k, []).append(v)
+    return {k: np.concatenate(v) for k, v in parts.items()}
+
+
+def _cond(J: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    s = _svd(J)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c = np.where(s[..., -1] > 0, s[..., 0] / s[..., -1], np.inf)
+    return s[..., -1], np.where(np.isnan(s[..., 0]), np.nan, c)
+
+
+def _unlimited(design: Design) -> Design:
+    return dataclasses.replace(design, q_min=None, q_max=None)
+
+
+def _within(q: NDArray[np.float64], design: Design) -> NDArray[np.bool_]:
+    with np.errstate(invalid="ignore"):
+        return np.all((q >= design.stroke_min) & (q <= design.stroke_max), axis=-1)
+
+
+# --------------------------------------------------------------------------------------
+# actuator plane (h, q3)
+# --------------------------------------------------------------------------------------
+@dataclasses.dataclass(frozen=True)
+class ActuatorMap:
+    """Assembly and conditioning of the parallel module over the plane ``(h, q3)``.
+
+    Attributes
+    ----------
+    h : ndarray, shape (nh,)
+        ``(q1 - q2) / 2``, m.
+    q3 : ndarray, shape (nq,)
+        m.
+    modes : ndarray of int, shape (2,)
+        ``(+1, -1)``: the last axis of the per-mode arrays.
+    assembled : ndarray of bool, shape (nh, nq)
+        ``k1`` and ``k2`` intersect (both modes exist; they coincide on ``w = 0``).
+    half_chord : ndarray, shape (nh, nq)
+        Half-chord ``a`` of ``k1 ∩ k2`` (m), NaN where they do not intersect.
+    sigma_min, condition : ndarray, shape (nh, nq, 2)
+        Of ``d O_s / d q`` per mode (dimensionless).
+    inverse_sigma_min : ndarray, shape (nh, nq, 2)
+        ``1 / sigma_max(d O_s / d q)``: 0 at forward singularities.
+    h_stroke, q3_stroke : ndarray, shape (2,)
+        Range of ``h`` and of ``q3`` that the stroke limits allow.
+    """
+
+    h: NDArray[np.float64]
+    q3: NDArray[np.float64]
+    modes: NDArray[np.int64]
+    assembled: NDArray[np.bool_]
+    half_chord: NDArray[np.float64]
+    sigma_min: NDArray[np.float64]
+    condition: NDArray[np.float64]
+    inverse_sigma_min: NDArray[np.float64]
+    h_stroke: NDArray[np.float64]
+    q3_stroke: NDArray[np.float64]
+
+
+def actuator_map(design: Design | None = None, *, resolution: int | tuple[int, int] = 201,
+                 h_range: tuple[float, float] | None = None,
+                 q3_range: tuple[float, float] | None = None,
+                 progress: bool | None = None) -> ActuatorMap:
+    """Grid the actuator plane ``(h, q3)`` (``x_M = 0``; the module is invariant in ``x_M``).
+
+    Parameters
+    ----------
+    design : Design, optional
+    resolution : int or (int, int), keyword-only
+        Samples of ``h`` and ``q3``.
+    h_range, q3_range : (float, float), keyword-only
+        Defaults: ``|h| <= min(l1, l3)``; ``q3`` from 0 to ``1.1 (d + r1)_max``.
+    progress : bool, keyword-only
+        Show a tqdm bar (default: only for large grids).
+
+    Returns
+    -------
+    ActuatorMap
+    """
+    design = _design(design)
+    nh, nq = _resolution(resolution, 2)
+    hm = min(design.l1, design.l3)
+    h = np.linspace(*(h_range or (-hm, hm)), nh)
+    dmax = np.hypot(design.l3 + design.l2, design.l5) + design.l1
+    q3 = np.linspace(*(q3_range or (0.0, 1.1 * dmax)), nq)
+    H, Q3 = np.meshgrid(h, q3, indexing="ij")
+    pts = np.stack([H.ravel(), -H.ravel(), Q3.ravel()], axis=-1)  # q1 = h, q2 = -h
+
+    def fn(qq: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
+        out: dict[str, list[NDArray[Any]]] = {"s": [], "c": [], "i": []}
+        a = None
+        for m in (1, -1):
+            _, g = _state(qq, design, m)
+            a = g["a"]
+            J = _parallel_jacobian(g)
+            sv = _svd(J)
+            smin, cond = _cond(J)
+            with np.errstate(divide="ignore"):
+                out["i"].append(1.0 / sv[..., 0])
+            out["s"].append(smin)
+            out["c"].append(cond)
+        assert a is not None
+        return {"a": a, **{k: np.stack(v, axis=-1) for k, v in out.items()}}
+
+    r = _map_chunks(fn, pts, progress, "actuator map")
+    smin, smax = design.stroke_min, design.stroke_max
+    return ActuatorMap(
+        h=h, q3=q3, modes=np.array([1, -1]), assembled=np.isfinite(r["a"]).reshape(nh, nq),
+        half_chord=r["a"].reshape(nh, nq), sigma_min=r["s"].reshape(nh, nq, 2),
+        condition=r["c"].reshape(nh, nq, 2), inverse_sigma_min=r["i"].reshape(nh, nq, 2),
+        h_stroke=np.array([(smin[0] - smax[1]) / 2, (smax[0] - smin[1]) / 2]),
+        q3_stroke=np.array([smin[2], smax[2]]))
+
+
+# --------------------------------------------------------------------------------------
+# O_s workspace
+# --------------------------------------------------------------------------------------
+@dataclasses.dataclass(frozen=True)
+class PointWorkspace:
+    """Reachable positions of ``O_s`` on a voxel grid (base frame).
+
+    Attributes
+    ----------
+    x, y, z : ndarray, shapes (nx,), (ny,), (nz,)
+        Grid axes, m.
+    mode : ndarray of int8, shape (nx, ny, nz)
+        Assembly mode of the unique ``q`` that puts ``O_s`` there (+1 / -1),
+        0 where the module cannot put ``O_s`` there at all (ignoring strokes).
+    reachable : ndarray of bool, shape (nx, ny, nz)
+        ``mode != 0`` and ``q`` within the stroke limits.
+    q : ndarray, shape (nx, ny, nz, 3)
+        Actuators (ignoring strokes; NaN where ``mode == 0``).
+    mode_margin : ndarray, shape (nx, ny, nz)
+        ``mode * a`` (m): the signed half-chord of ``k1 ∩ k2``; its zero level set
+        is the surface where the two assembly modes meet.
+    sigma_min, condition : ndarray, shape (nx, ny, nz)
+        Of ``d O_s / d q`` (dimensionless; NaN where ``mode == 0``).
+    """
+
+    x: NDArray[np.float64]
+    y: NDArray[np.float64]
+    z: NDArray[np.float64]
+    mode: NDArray[np.int8]
+    reachable: NDArray[np.bool_]
+    q: NDArray[np.float64]
+    mode_margin: NDArray[np.float64]
+    sigma_min: NDArray[np.float64]
+    condition: NDArray[np.float64]
+
+
+def _default_bounds(design: Design) -> tuple[tuple[float, float], ...]:
+    lo, hi = design.stroke_min, design.stroke_max
+    xm = [(lo[0] + lo[1]) / 2, (hi[0] + hi[1]) / 2]
+    if not np.all(np.isfinite(xm)):
+        xm = [-0.5, 0.5]
+    R = design.l1 + design.l4
+    return ((xm[0], xm[1]), (-R, R), (-R, R))
+
+
+def point_workspace(design: Design | None = None, *, resolution: int | tuple[int, int, int] = 41,
+                    bounds: tuple[tuple[float, float], ...] | None = None,
+                    progress: bool | None = None) -> PointWorkspace:
+    """Reachable set of ``O_s`` with its assembly-mode regions and conditioning.
+
+    Uses the closed-form IK of the parallel module (paper Section 4), so
+    membership is exact at every grid point (no sampling of actuator space).
+
+    Parameters
+    ----------
+    design : Design, optional
+    resolution : int or (int, int, int), keyword-only
+        Grid points along x, y, z.
+    bounds : ((xmin, xmax), (ymin, ymax), (zmin, zmax)), keyword-only
+        Default: ``x_M`` over the stroke box, ``|y|, |z| <= l1 + l4``.
+    progress : bool, keyword-only
+
+    Returns
+    -------
+    PointWorkspace
+    """
+    design = _design(design)
+    n = _resolution(resolution, 3)
+    b = bounds or _default_bounds(design)
+    axes = [np.linspace(lo, hi, k) for (lo, hi), k in zip(b, n)]
+    P = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    free = _unlimited(design)
+
+    def fn(pp: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
+        ik = parallel_ik_from_position(pp, free)
+        m = np.where(ik.valid, ik.mode, 0)
+        q = np.where(ik.valid[..., None], ik.q, np.nan)
+        _, g = _state(np.nan_to_num(q), design, np.where(m == 0, 1, m))
+        smin, cond = _cond(_parallel_jacobian(g))
+        nan = np.where(m != 0, 1.0, np.nan)
+        return {"m": m.astype(np.int8), "q": q, "r": _within(q, design) & (m != 0),
+                "mm": m * g["a"] * nan, "s": smin * nan, "c": cond * nan}
+
+    r = _map_chunks(fn, P, progress, "O_s workspace")
+    sh = tuple(n)
+    return PointWorkspace(x=axes[0], y=axes[1], z=axes[2], mode=r["m"].reshape(sh),
+                          reachable=r["r"].reshape(sh), q=r["q"].reshape(sh + (3,)),
+                          mode_margin=r["mm"].reshape(sh), sigma_min=r["s"].reshape(sh),
+                          condition=r["c"].reshape(sh))
+
+
+# --------------------------------------------------------------------------------------
+# instrument cone
+# --------------------------------------------------------------------------------------
+@dataclasses.dataclass(frozen=True)
+class InstrumentCone:
+    """Instrument directions about the RCM and the insertion range along each.
+
+    Attributes
+    ----------
+    azimuth : ndarray, shape (na,)
+        rad, about ``z_e`` (:func:`~athenakin.direction_from_angles`).
+    polar : ndarray, shape (npol,)
+        rad, from ``z_e``.
+    p : ndarray, shape (np,)
+        Insertions (distance ``O_s`` -> RCM), m.
+    T_b_e : ndarray, shape (4, 4)
+    mode : ndarray of int8, shape (na, npol, np)
+        Assembly mode of the configuration (0: not reachable within strokes).
+    reachable : ndarray of bool, shape (na, npol, np)
+        Reachable within the strokes in an allowed mode (see ``modes`` argument).
+    p_min, p_max : ndarray, shape (na, npol)
+        Smallest / largest reachable insertion along the direction (NaN: none).
+    n_intervals : ndarray of int, shape (na, npol)
+        Number of separate reachable insertion intervals (0: direction not in the cone).
+    condition : ndarray, shape (na, npol, np)
+        Condition number of the tool-tip Jacobian (NaN where unreachable).
+    """
+
+    azimuth: NDArray[np.float64]
+    polar: NDArray[np.float64]
+    p: NDArray[np.float64]
+    T_b_e: NDArray[np.float64]
+    mode: NDArray[np.int8]
+    reachable: NDArray[np.bool_]
+    p_min: NDArray[np.float64]
+    p_max: NDArray[np.float64]
+    n_intervals: NDArray[np.int64]
+    condition: NDArray[np.float64]
+
+
+def _modes_arg(modes: tuple[int, ...]) -> tuple[int, ...]:
+    m = tuple(int(v) for v in modes)
+    if not m or any(v not in (1, -1) for v in m):
+        raise InvalidInputError(f"modes: expected a non-empty tuple of +1 / -1, got {modes!r}")
+    return m
+
+
+def instrument_cone(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
+                    resolution: int | tuple[int, int, int] = (73, 37, 46),
+                    p_range: tuple[float, float] | None = None, modes: tuple[int, ...] = (1,),
+                    progress: bool | None = None) -> InstrumentCone:
+    """The cone of instrument directions about the RCM with its insertion ranges.
+
+    For each direction ``d`` (spherical angles in E) and insertion ``p`` the
+    parallel module's IK puts ``O_s = c - p d`` (:func:`~athenakin.q_from_instrument`).
+
+    Parameters
+    ----------
+    T_b_e : array-like, shape (4, 4), optional
+        RCM frame; default :func:`~athenakin.default_rcm_frame`.
+    design : Design, optional
+    resolution : int or (int, int, int), keyword-only
+        Samples of azimuth over (-pi, pi], polar over [0, pi] and ``p``.
+    p_range : (float, float), keyword-only
+        Insertions; default ``(0.01 L, L)`` with ``L`` the tool length (the
+        instrument must pass the RCM).
+    modes : tuple of {1, -1}, keyword-only
+        Assembly modes counted as reachable (default: the working mode +1).
+    progress : bool, keyword-only
+
+    Returns
+    -------
+    InstrumentCone
+    """
+    design = _design(design)
+    T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
+    if T.shape != (4, 4):
+        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
+    na, npol, npp = _resolution(resolution, 3)
+    allowed = _modes_arg(modes)
+    L = design.tool_length
+    pr = p_range or (0.01 * L, L)
+    az = np.linspace(-np.pi, np.pi, na, endpoint=False) + 2 * np.pi / na
+    pol = np.linspace(0.0, np.pi, npol)
+    p = np.linspace(pr[0], pr[1], npp)
+    A, B, Pp = np.meshgrid(az, pol, p, indexing="ij")
+    pts = np.stack([A.ravel(), B.ravel(), Pp.ravel()], axis=-1)
+
+    def fn(x: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
+        d_e = direction_from_angles(x[:, 0], x[:, 1])
+        q, res = q_from_instrument(T, d_e, x[:, 2], design, errors="flag")
+        ok = res.valid & np.isin(res.mode, allowed)
+        m = np.where(ok, res.mode, 0)
+        _, g = _state(np.nan_to_num(q), design, np.where(m == 0, 1, m))
+        N, _, _ = _tip_matrices(g, T, L)
+        _, cond = _cond(N @ _parallel_jacobian(g))
+        return {"m": m.astype(np.int8), "r": ok, "c": np.where(ok, cond, np.nan)}
+
+    r = _map_chunks(fn, pts, progress, "instrument cone")
+    sh = (na, npol, npp)
+    reach = r["r"].reshape(sh)
+    pm = np.where(reach, p, np.nan)
+    with np.errstate(invalid="ignore"), _quiet():
+        p_min, p_max = np.nanmin(pm, axis=-1), np.nanmax(pm, axis=-1)
+    starts = reach & ~np.concatenate([np.zeros(sh[:-1] + (1,), bool), reach[..., :-1]], axis=-1)
+    return InstrumentCone(azimuth=az, polar=pol, p=p, T_b_e=T, mode=r["m"].reshape(sh),
+                          reachable=reach, p_min=p_min, p_max=p_max,
+                          n_intervals=starts.sum(axis=-1), condition=r["c"].reshape(sh))
+
+
+class _quiet:
+    """Silence numpy's 'All-NaN slice' RuntimeWarning in a with-block."""
+
+    def __enter__(self) -> None:
+        import warnings
+
+        self._cm = warnings.catch_warnings()
+        self._cm.__enter__()
+        warnings.simplefilter("ignore", RuntimeWarning)
+
+    def __exit__(self, *exc: object) -> None:
+        self._cm.__exit__(*exc)
+
+
+# --------------------------------------------------------------------------------------
+# tool-tip workspace
+# --------------------------------------------------------------------------------------
+@dataclasses.dataclass(frozen=True)
+class ToolTipWorkspace:
+    """Reachable tool-tip positions on a voxel grid in the RCM frame E.
+
+    Attributes
+    ----------
+    x, y, z : ndarray, shapes (nx,), (ny,), (nz,)
+        Grid axes in frame E (origin at the RCM), m.
+    T_b_e : ndarray, shape (4, 4)
+    mode : ndarray of int8, shape (nx, ny, nz)
+        Assembly mode (0: unreachable).
+    reachable : ndarray of bool, shape (nx, ny, nz)
+    q : ndarray, shape (nx, ny, nz, 3)
+        Actuators (NaN where unreachable).
+    sigma_min, condition : ndarray, shape (nx, ny, nz)
+        Of the tool-tip Jacobian ``d tip / d q`` (dimensionless).
+    """
+
+    x: NDArray[np.float64]
+    y: NDArray[np.float64]
+    z: NDArray[np.float64]
+    T_b_e: NDArray[np.float64]
+    mode: NDArray[np.int8]
+    reachable: NDArray[np.bool_]
+    q: NDArray[np.float64]
+    sigma_min: NDArray[np.float64]
+    condition: NDArray[np.float64]
+
+
+def tool_tip_workspace(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
+                       resolution: int | tuple[int, int, int] = 41,
+                       bounds: tuple[tuple[float, float], ...] | None = None,
+                       modes: tuple[int, ...] = (1,), progress: bool | None = None
+                       ) -> ToolTipWorkspace:
+    """Reachable tool-tip positions (instrument through the RCM), frame E.
+
+    Parameters
+    ----------
+    T_b_e : array-like, shape (4, 4), optional
+    design : Design, optional
+    resolution : int or (int, int, int), keyword-only
+    bounds : ((xmin, xmax), (ymin, ymax), (zmin, zmax)), keyword-only
+        In frame E; default ``[-L, L]^3`` (``L`` the tool length).
+    modes : tuple of {1, -1}, keyword-only
+    progress : bool, keyword-only
+
+    Returns
+    -------
+    ToolTipWorkspace
+    """
+    design = _design(design)
+    T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
+    if T.shape != (4, 4):
+        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
+    allowed = _modes_arg(modes)
+    n = _resolution(resolution, 3)
+    L = design.tool_length
+    b = bounds or ((-L, L),) * 3
+    axes = [np.linspace(lo, hi, k) for (lo, hi), k in zip(b, n)]
+    P = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+
+    def fn(tip: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
+        q, res = q_from_tool_tip(T, tip, design, errors="flag")
+        ok = res.valid & np.isin(res.mode, allowed)
+        m = np.where(ok, res.mode, 0)
+        _, g = _state(np.nan_to_num(q), design, np.where(m == 0, 1, m))
+        N, _, _ = _tip_matrices(g, T, L)
+        smin, cond = _cond(N @ _parallel_jacobian(g))
+        nan = np.where(ok, 1.0, np.nan)
+        return {"m": m.astype(np.int8), "r": ok, "q": q * nan[:, None], "s": smin * nan,
+                "c": cond * nan}
+
+    r = _map_chunks(fn, P, progress, "tool-tip workspace")
+    sh = tuple(n)
+    return ToolTipWorkspace(x=axes[0], y=axes[1], z=axes[2], T_b_e=T, mode=r["m"].reshape(sh),
+                            reachable=r["r"].reshape(sh), q=r["q"].reshape(sh + (3,)),
+                            sigma_min=r["s"].reshape(sh), condition=r["c"].reshape(sh))
+
+
+# --------------------------------------------------------------------------------------
+# storage
+# --------------------------------------------------------------------------------------
+_RESULTS = {c.__name__: c for c in (ActuatorMap, PointWorkspace, InstrumentCone,
+                                    ToolTipWorkspace)}
+
+
+def save_npz(path: str | Path, result: object, *, design: Design | None = None,
+             compressed: bool = True, **meta: Any) -> Path:
+    """Save a grid result to a NumPy ``.npz`` archive.
+
+    Each array field is stored under its name; ``meta`` (a JSON string) holds
+    the result type, the athenakin version, the design as TOML and any extra
+    keyword arguments (JSON-serialisable).
+
+    Parameters
+    ----------
+    path : str or Path
+    result : ActuatorMap, PointWorkspace, InstrumentCone or ToolTipWorkspace
+    design : Design, optional
+        Recorded in ``meta`` (recommended).
+    compressed : bool, keyword-only
+        ``np.savez_compressed`` (default) or ``np.savez``.
+    **meta
+        Extra metadata.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    from .. import __version__
+
+    name = type(result).__name__
+    if name not in _RESULTS or not dataclasses.is_dataclass(result):
+        raise TypeError(f"result: expected one of {sorted(_RESULTS)}, got {name}")
+    arrays = {f.name: np.asarray(getattr(result, f.name)) for f in dataclasses.fields(result)}
+    info = {"type": name, "athenakin_version": __version__,
+            "design_toml": design.to_toml() if design is not None else None, **meta}
+    path = Path(path)
+    saver = np.savez_compressed if compressed else np.savez
+    saver(path, meta=np.array(json.dumps(info)), **arrays)
+    return path if path.suffix == ".npz" else path.with_name(path.name + ".npz")
+
+
+def load_npz(path: str | Path) -> tuple[object, dict[str, Any]]:
+    """Read a file written by :func:`save_npz`.
+
+    Returns
+    -------
+    result : ActuatorMap, PointWorkspace, InstrumentCone or ToolTipWorkspace
+    meta : dict
+    """
+    with np.load(path, allow_pickle=False) as f:
+        meta = json.loads(str(f["meta"]))
+        cls = _RESULTS.get(meta.get("type", ""))
+        if cls is None:
+            raise InvalidInputError(f"{path}: not an athenakin grid result (meta.type = "
+                                    f"{meta.get('type')!r})")
+        kw = {fl.name: f[fl.name] for fl in dataclasses.fields(cls)}
+    return cls(**kw), meta

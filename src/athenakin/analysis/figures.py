@@ -1,0 +1,462 @@
+"""Figures of the singularity loci, workspaces, conditioning and the instrument cone.
+
+matplotlib is imported inside each function (``pip install athenakin[plot]``).
+Single-panel functions take ``ax=None`` and return the Axes they drew on;
+``figure_*`` functions build a whole figure and return it. Lengths are shown
+in millimetres, angles in degrees (the plot boundary).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..design import Design
+from ._jacobians import _design
+from ._singularities import singularity_loci
+from ._workspace import ActuatorMap, InstrumentCone, PointWorkspace, ToolTipWorkspace
+
+__all__ = [
+    "plot_singularity_loci",
+    "plot_actuator_space_3d",
+    "plot_actuator_conditioning",
+    "plot_workspace_slice",
+    "plot_workspace_3d",
+    "plot_instrument_cone",
+    "plot_cone_chart",
+    "plot_tool_tip_slice",
+    "figure_singularities",
+    "figure_workspace",
+    "figure_conditioning",
+    "figure_instrument_cone",
+    "figure_tool_tip",
+]
+
+MM = 1e3
+#: Colours of assembly mode +1, mode -1, and of positions outside the stroke limits.
+COLOR_MODE = {1: "#1f77b4", -1: "#ff7f0e"}
+COLOR_OUT = "#d9d9d9"
+COLOR_LOCI = {"w0": "#d62728", "h0": "#2ca02c", "l3": "#9467bd", "stroke": "black"}
+
+
+def _plt() -> Any:
+    import matplotlib
+
+    if matplotlib.get_backend().lower() not in ("agg", "module://matplotlib_inline.backend_inline"):
+        try:
+            import matplotlib.pyplot as plt  # noqa: F401
+        except Exception:  # pragma: no cover - headless without a GUI backend
+            matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _ax(ax: Any, projection: str | None = None) -> Any:
+    if ax is not None:
+        return ax
+    plt = _plt()
+    fig = plt.figure()
+    return fig.add_subplot(projection=projection)
+
+
+# --------------------------------------------------------------------------------------
+# actuator space
+# --------------------------------------------------------------------------------------
+def plot_singularity_loci(design: Design | None = None, *, am: ActuatorMap | None = None,
+                          mode: int = 1, ax: Any = None) -> Any:
+    """Singularity loci of the parallel module in the actuator plane ``(h, q3)``.
+
+    Background: ``log10`` of the condition number of ``d O_s / d q`` in ``mode``
+    (white where the circles do not intersect). Lines: ``w = 0`` (the assembly
+    modes meet; outer/inner tangency), ``h = 0`` (inverse singularity),
+    ``|h| = l3`` (D on the rail); dashed rectangle: the stroke limits.
+    """
+    design = _design(design)
+    ax = _ax(ax)
+    loci = singularity_loci(design)
+    if am is not None:
+        k = 0 if mode == 1 else 1
+        with np.errstate(divide="ignore", invalid="ignore"):
+            c = np.log10(am.condition[..., k]).T
+        im = ax.pcolormesh(am.h * MM, am.q3 * MM, np.clip(c, 0, 4), cmap="viridis_r",
+                           shading="auto", vmin=0, vmax=4, rasterized=True)
+        cb = ax.figure.colorbar(im, ax=ax, shrink=0.85)
+        cb.set_label(f"log10 cond(dO_s/dq), mode {mode:+d}")
+    h = loci["h"] * MM
+    ax.plot(h, loci["q3_external"] * MM, color=COLOR_LOCI["w0"], lw=2,
+            label="w = 0 (modes meet)")
+    ax.plot(h, loci["q3_internal"] * MM, color=COLOR_LOCI["w0"], lw=2, ls="-.")
+    ax.axvline(0, color=COLOR_LOCI["h0"], lw=2, label="h = 0 (A, B meet: inverse)")
+    for s in (-1, 1):
+        ax.axvline(s * design.l3 * MM, color=COLOR_LOCI["l3"], lw=2,
+                   label="|h| = l3 (D on the rail)" if s == 1 else None)
+    hs, qs = loci["h_stroke"] * MM, loci["q3_stroke"] * MM
+    if np.all(np.isfinite(hs)) and np.all(np.isfinite(qs)):
+        ax.add_patch(_rect(hs, qs, ax))
+    ax.set_xlabel("h = (q1 - q2)/2 [mm]")
+    ax.set_ylabel("q3 [mm]")
+    ax.set_xlim(h[0] * 1.05, h[-1] * 1.05)
+    ax.set_ylim(0, max(loci["q3_external"].max() * MM * 1.08, qs[1] * 1.05))
+    ax.legend(loc="upper left", fontsize=7, framealpha=0.9)
+    ax.set_title("Parallel-module singularities in actuator space")
+    return ax
+
+
+def _rect(hs: NDArray[np.float64], qs: NDArray[np.float64], ax: Any) -> Any:
+    from matplotlib.patches import Rectangle
+
+    return Rectangle((hs[0], qs[0]), hs[1] - hs[0], qs[1] - qs[0], fill=False, ls="--",
+                     lw=1.5, ec=COLOR_LOCI["stroke"], label="stroke limits")
+
+
+def plot_actuator_space_3d(design: Design | None = None, *, n: int = 41, ax: Any = None) -> Any:
+    """The singular surfaces inside the stroke box ``(q1, q2, q3)`` (3-D view).
+
+    ``w = 0`` surfaces (red), the plane ``q1 = q2`` (``h = 0``, green) and the
+    planes ``|q1 - q2| = 2 l3`` (purple), clipped to the stroke box (edges black).
+    """
+    design = _design(design)
+    ax = _ax(ax, "3d")
+    lo, hi = design.stroke_min.copy(), design.stroke_max.copy()
+    lo = np.where(np.isfinite(lo), lo, [-0.5, -0.5, 0.0])
+    hi = np.where(np.isfinite(hi), hi, [0.5, 0.5, 1.0])
+    q1, q2 = np.meshgrid(np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n),
+                         indexing="ij")
+    h = 0.5 * (q1 - q2)
+    with np.errstate(invalid="ignore"):
+        r1 = np.sqrt(design.l1 ** 2 - h * h)
+        d = np.hypot(np.sqrt(design.l3 ** 2 - h * h) + design.l2, design.l5)
+    order = design.h_sign * h >= 0
+    for q3s, ls in ((d + r1, 1.0), (np.abs(d - r1), 0.7)):
+        Z = np.where(order & (q3s >= lo[2]) & (q3s <= hi[2]), q3s, np.nan)
+        ax.plot_surface(q1 * MM, q2 * MM, Z * MM, color=COLOR_LOCI["w0"], alpha=0.55 * ls,
+                        linewidth=0, shade=True)
+    # h = 0 plane and |h| = l3 planes: vertical planes q2 = q1 + c
+    t = np.linspace(0, 1, 2)
+    for c, col in ((0.0, COLOR_LOCI["h0"]), (-2 * design.h_sign * design.l3, COLOR_LOCI["l3"])):
+        a = np.linspace(max(lo[0], lo[1] - c), min(hi[0], hi[1] - c), 2)
+        if a[0] >= a[1]:
+            continue
+        A, T3 = np.meshgrid(a, lo[2] + t * (hi[2] - lo[2]))
+        ax.plot_surface(A * MM, (A + c) * MM, T3 * MM, color=col, alpha=0.35, linewidth=0)
+    _box(ax, lo * MM, hi * MM)
+    ax.set_xlabel("q1 [mm]")
+    ax.set_ylabel("q2 [mm]")
+    ax.set_zlabel("q3 [mm]")
+    ax.set_title("Singular surfaces in the stroke box")
+    from matplotlib.patches import Patch
+
+    ax.legend(handles=[Patch(color=COLOR_LOCI["w0"], label="w = 0 (modes meet)"),
+                       Patch(color=COLOR_LOCI["h0"], label="q1 = q2 (h = 0)"),
+                       Patch(color=COLOR_LOCI["l3"], label="|q1 - q2| = 2 l3")],
+              loc="upper left", fontsize=7)
+    return ax
+
+
+def _box(ax: Any, lo: NDArray[np.float64], hi: NDArray[np.float64]) -> None:
+    import itertools
+
+    for a, b in itertools.combinations(itertools.product(*zip(lo, hi)), 2):
+        if sum(x != y for x, y in zip(a, b)) == 1:
+            ax.plot(*zip(a, b), color="k", lw=0.8)
+
+
+def plot_actuator_conditioning(am: ActuatorMap, *, mode: int = 1, quantity: str = "condition",
+                               ax: Any = None) -> Any:
+    """Colour map over ``(h, q3)`` of ``log10 cond``, ``sigma_min`` or ``inverse_sigma_min``."""
+    ax = _ax(ax)
+    k = 0 if mode == 1 else 1
+    v = getattr(am, quantity)[..., k].T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        data, label, cmap = ((np.clip(np.log10(v), 0, 4), "log10 condition number", "viridis_r")
+                             if quantity == "condition" else (v, quantity, "viridis"))
+    im = ax.pcolormesh(am.h * MM, am.q3 * MM, data, shading="auto", cmap=cmap, rasterized=True)
+    ax.figure.colorbar(im, ax=ax, shrink=0.85).set_label(label)
+    ax.add_patch(_rect(am.h_stroke * MM, am.q3_stroke * MM, ax))
+    ax.set_xlabel("h [mm]")
+    ax.set_ylabel("q3 [mm]")
+    ax.set_title(f"dO_s/dq, mode {mode:+d}")
+    return ax
+
+
+# --------------------------------------------------------------------------------------
+# O_s workspace
+# --------------------------------------------------------------------------------------
+def _slice_index(axis: NDArray[np.float64], value: float) -> int:
+    return int(np.argmin(np.abs(axis - value)))
+
+
+def plot_workspace_slice(pw: PointWorkspace, *, x: float | None = None, quantity: str = "mode",
+                         ax: Any = None) -> Any:
+    """A slice ``x = const`` of the ``O_s`` workspace in the base ``(y, z)`` plane.
+
+    ``quantity="mode"``: reachable voxels coloured by assembly mode (blue +1,
+    orange -1), grey where the module gets there only beyond the stroke
+    limits; the red line is the surface where the modes meet
+    (``mode_margin = 0``). ``quantity="condition"``: ``log10`` of the
+    condition number of ``d O_s / d q`` over the reachable voxels.
+    """
+    from matplotlib.colors import ListedColormap
+
+    ax = _ax(ax)
+    i = _slice_index(pw.x, 0.5 * (pw.x[0] + pw.x[-1]) if x is None else x)
+    Y, Z = pw.y * MM, pw.z * MM
+    if quantity == "mode":
+        code = np.where(pw.mode[i] == 0, np.nan,
+                        np.where(~pw.reachable[i], 0, np.where(pw.mode[i] == 1, 1, 2)))
+        cmap = ListedColormap([COLOR_OUT, COLOR_MODE[1], COLOR_MODE[-1]])
+        ax.pcolormesh(Y, Z, code.T, cmap=cmap, vmin=-0.5, vmax=2.5, shading="auto",
+                      rasterized=True)
+        mm = pw.mode_margin[i]
+        if np.any(np.isfinite(mm)):
+            ax.contour(Y, Z, np.nan_to_num(mm, nan=np.nan).T, levels=[0.0],
+                       colors=COLOR_LOCI["w0"], linewidths=1.5)
+        from matplotlib.patches import Patch
+
+        ax.legend(handles=[Patch(color=COLOR_MODE[1], label="mode +1"),
+                           Patch(color=COLOR_MODE[-1], label="mode -1"),
+                           Patch(color=COLOR_OUT, label="beyond strokes"),
+                           Patch(color=COLOR_LOCI["w0"], label="modes meet (w = 0)")],
+                  loc="lower left", fontsize=7)
+    else:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            c = np.where(pw.reachable[i], np.log10(pw.condition[i]), np.nan)
+        im = ax.pcolormesh(Y, Z, np.clip(c, 0, 4).T, cmap="viridis_r", vmin=0, vmax=4,
+                           shading="auto", rasterized=True)
+        ax.figure.colorbar(im, ax=ax, shrink=0.85).set_label("log10 cond(dO_s/dq)")
+    ax.plot(0, 0, "k+", ms=8)
+    ax.set_aspect("equal")
+    ax.set_xlabel("y_b [mm]")
+    ax.set_ylabel("z_b [mm]")
+    ax.set_title(f"O_s workspace, x_b = {pw.x[i] * MM:.0f} mm")
+    return ax
+
+
+def plot_workspace_3d(pw: PointWorkspace, *, ax: Any = None, max_points: int = 6000) -> Any:
+    """3-D view of the reachable ``O_s`` set: its boundary voxels coloured by mode."""
+    ax = _ax(ax, "3d")
+    r = pw.reachable
+    inner = r.copy()
+    for axis in range(3):
+        for s in (1, -1):
+            inner &= np.roll(r, s, axis=axis)
+    for axis in range(3):
+        idx = [slice(None)] * 3
+        for j in (0, -1):
+            idx[axis] = j  # type: ignore[call-overload]
+            inner[tuple(idx)] = False
+    boundary = r & ~inner
+    X, Y, Z = np.meshgrid(pw.x, pw.y, pw.z, indexing="ij")
+    rng = np.random.default_rng(0)
+    for m in (1, -1):
+        sel = np.flatnonzero(boundary & (pw.mode == m))
+        if sel.size > max_points:
+            sel = rng.choice(sel, max_points, replace=False)
+        ax.scatter(X.ravel()[sel] * MM, Y.ravel()[sel] * MM, Z.ravel()[sel] * MM, s=2,
+                   color=COLOR_MODE[m], alpha=0.5, label=f"mode {m:+d}", depthshade=True)
+    ax.scatter([0], [0], [0], color="k", marker="o", s=10)
+    xr = pw.x[[0, -1]] * MM
+    ax.plot(xr, [0, 0], [0, 0], "k-", lw=2, label="rail (x_b axis)")
+    ax.set_xlabel("x_b [mm]")
+    ax.set_ylabel("y_b [mm]")
+    ax.set_zlabel("z_b [mm]")
+    ax.legend(loc="upper left", fontsize=7, markerscale=4)
+    ax.set_title("Reachable O_s (boundary voxels)")
+    try:
+        ax.set_box_aspect((np.ptp(pw.x), np.ptp(pw.y), np.ptp(pw.z)))
+    except Exception:  # pragma: no cover - old matplotlib
+        pass
+    return ax
+
+
+# --------------------------------------------------------------------------------------
+# instrument cone and tool tip
+# --------------------------------------------------------------------------------------
+def plot_cone_chart(ic: InstrumentCone, *, quantity: str = "range", ax: Any = None) -> Any:
+    """The instrument cone on the ``(azimuth, polar)`` chart of frame E.
+
+    ``quantity="range"``: reachable insertion length ``p_max - p_min`` (mm);
+    ``"p_min"`` / ``"p_max"``; ``"condition"``: ``log10`` of the best condition
+    number of the tool-tip Jacobian along the direction. Hatched: directions with
+    two separate insertion intervals.
+    """
+    ax = _ax(ax)
+    A, B = np.degrees(ic.azimuth), np.degrees(ic.polar)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        if quantity == "range":
+            v, label, cmap = (ic.p_max - ic.p_min) * MM, "insertion range p_max - p_min [mm]", \
+                "magma"
+        elif quantity in ("p_min", "p_max"):
+            v, label, cmap = getattr(ic, quantity) * MM, f"{quantity} [mm]", "magma"
+        else:
+            import warnings
+
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                v = np.log10(np.nanmin(ic.condition, axis=-1))
+            label, cmap = "log10 min cond(d tip/dq) along the direction", "viridis_r"
+    order = np.argsort(A)
+    im = ax.pcolormesh(A[order], B, v[order].T, shading="auto", cmap=cmap, rasterized=True)
+    ax.figure.colorbar(im, ax=ax, shrink=0.85).set_label(label)
+    two = (ic.n_intervals > 1)[order].T.astype(float)
+    if np.any(two):
+        ax.contourf(A[order], B, two, levels=[0.5, 1.5], colors="none", hatches=["////"])
+    ax.set_xlabel("azimuth about z_e [deg]")
+    ax.set_ylabel("polar angle from z_e [deg]")
+    ax.set_ylim(180, 0)
+    ax.set_title("Instrument cone about the RCM")
+    return ax
+
+
+def plot_instrument_cone(ic: InstrumentCone, *, ax: Any = None, frame: str = "rcm",
+                         stride: int = 1) -> Any:
+    """3-D view of the instrument cone: the ``O_s`` segment of every reachable direction.
+
+    Each reachable direction ``d`` is drawn as the segment from ``c - p_max d``
+    to ``c - p_min d`` (where ``O_s`` can be), coloured by the insertion range;
+    the black dot is the RCM, the grey line the rail (``x_b`` axis).
+    """
+    import matplotlib as mpl
+
+    from ..robot import direction_from_angles
+
+    ax = _ax(ax, "3d")
+    A, B = np.meshgrid(ic.azimuth[::stride], ic.polar[::stride], indexing="ij")
+    pmin, pmax = ic.p_min[::stride, ::stride], ic.p_max[::stride, ::stride]
+    ok = np.isfinite(pmin)
+    d_e = direction_from_angles(A[ok], B[ok])
+    R, c = ic.T_b_e[:3, :3], ic.T_b_e[:3, 3]
+    if frame == "base":
+        d = d_e @ R.T
+        origin = c
+    else:
+        d, origin = d_e, np.zeros(3)
+    a = origin - pmax[ok][:, None] * d
+    b = origin - pmin[ok][:, None] * d
+    rng = (pmax - pmin)[ok]
+    norm = mpl.colors.Normalize(vmin=0, vmax=max(float(np.max(rng, initial=0)), 1e-9))
+    cmap = mpl.colormaps["magma"]
+    from mpl_toolkits.mplot3d.art3d import Line3DCollection
+
+    segs = np.stack([a, b], axis=1) * MM
+    lc = Line3DCollection(segs, colors=cmap(norm(rng)), linewidths=0.6, alpha=0.7)
+    ax.add_collection3d(lc)
+    ax.scatter(*(origin * MM), color="k", s=25)
+    if frame == "base":
+        xs = np.array([-0.4, 0.4]) * MM
+        ax.plot(xs, [0, 0], [0, 0], color="grey", lw=2)
+    pts = segs.reshape(-1, 3) if segs.size else np.zeros((1, 3))
+    allp = np.vstack([pts, origin[None] * MM])
+    ctr, half = allp.mean(axis=0), max(np.ptp(allp, axis=0).max() / 2, 1.0)
+    ax.set_xlim(ctr[0] - half, ctr[0] + half)
+    ax.set_ylim(ctr[1] - half, ctr[1] + half)
+    ax.set_zlim(ctr[2] - half, ctr[2] + half)
+    sm = mpl.cm.ScalarMappable(norm=norm, cmap=cmap)
+    ax.figure.colorbar(sm, ax=ax, shrink=0.7).set_label("insertion range [mm]")
+    f = "e" if frame == "rcm" else "b"
+    ax.set_xlabel(f"x_{f} [mm]")
+    ax.set_ylabel(f"y_{f} [mm]")
+    ax.set_zlabel(f"z_{f} [mm]")
+    ax.set_title("Instrument cone: where O_s can be on each line")
+    return ax
+
+
+def plot_tool_tip_slice(tw: ToolTipWorkspace, *, axis: int = 2, value: float = 0.0,
+                        quantity: str = "condition", ax: Any = None) -> Any:
+    """A slice of the tool-tip workspace (frame E) coloured by ``log10 cond`` or mode."""
+    from matplotlib.colors import ListedColormap
+
+    ax = _ax(ax)
+    axes = [tw.x, tw.y, tw.z]
+    i = _slice_index(axes[axis], value)
+    idx: list[Any] = [slice(None)] * 3
+    idx[axis] = i
+    other = [k for k in range(3) if k != axis]
+    U, V = axes[other[0]] * MM, axes[other[1]] * MM
+    if quantity == "mode":
+        m = tw.mode[tuple(idx)]
+        code = np.where(m == 0, np.nan, np.where(m == 1, 0, 1))
+        ax.pcolormesh(U, V, code.T, cmap=ListedColormap([COLOR_MODE[1], COLOR_MODE[-1]]),
+                      vmin=-0.5, vmax=1.5, shading="auto", rasterized=True)
+    else:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            c = np.log10(tw.condition[tuple(idx)])
+        im = ax.pcolormesh(U, V, np.clip(c, 0, 4).T, cmap="viridis_r", vmin=0, vmax=4,
+                           shading="auto", rasterized=True)
+        ax.figure.colorbar(im, ax=ax, shrink=0.85).set_label("log10 cond(d tip/dq)")
+    ax.plot(0, 0, "k+", ms=10)
+    names = "xyz"
+    ax.set_xlabel(f"{names[other[0]]}_e [mm]")
+    ax.set_ylabel(f"{names[other[1]]}_e [mm]")
+    ax.set_aspect("equal")
+    ax.set_title(f"Tool-tip workspace, {names[axis]}_e = {axes[axis][i] * MM:.0f} mm")
+    return ax
+
+
+# --------------------------------------------------------------------------------------
+# composite figures (used by the CLI and the docs)
+# --------------------------------------------------------------------------------------
+def figure_singularities(design: Design | None = None, *, am: ActuatorMap | None = None) -> Any:
+    """Singularity loci: the ``(h, q3)`` plane (both modes) and the 3-D stroke box."""
+    plt = _plt()
+    design = _design(design)
+    fig = plt.figure(figsize=(15, 4.8))
+    plot_singularity_loci(design, am=am, mode=1, ax=fig.add_subplot(1, 3, 1))
+    ax = fig.add_subplot(1, 3, 2)
+    plot_singularity_loci(design, am=am, mode=-1, ax=ax)
+    ax.set_title("... mode -1")
+    plot_actuator_space_3d(design, ax=fig.add_subplot(1, 3, 3, projection="3d"))
+    fig.tight_layout()
+    return fig
+
+
+def figure_workspace(pw: PointWorkspace, *, x_values: tuple[float, ...] | None = None) -> Any:
+    """``O_s`` workspace: slices by mode at three ``x`` and a 3-D view."""
+    plt = _plt()
+    xs = x_values or tuple(np.quantile(pw.x, [0.15, 0.5, 0.85]))
+    fig = plt.figure(figsize=(16, 4.6))
+    for k, x in enumerate(xs):
+        plot_workspace_slice(pw, x=x, ax=fig.add_subplot(1, len(xs) + 1, k + 1))
+    plot_workspace_3d(pw, ax=fig.add_subplot(1, len(xs) + 1, len(xs) + 1, projection="3d"))
+    fig.tight_layout()
+    return fig
+
+
+def figure_conditioning(am: ActuatorMap, pw: PointWorkspace, tw: ToolTipWorkspace | None = None
+                        ) -> Any:
+    """Conditioning maps: actuator plane, an ``O_s`` slice and a tool-tip slice."""
+    plt = _plt()
+    n = 3 if tw is None else 4
+    fig = plt.figure(figsize=(5 * n, 4.4))
+    plot_actuator_conditioning(am, mode=1, ax=fig.add_subplot(1, n, 1))
+    plot_actuator_conditioning(am, mode=-1, ax=fig.add_subplot(1, n, 2))
+    plot_workspace_slice(pw, quantity="condition", ax=fig.add_subplot(1, n, 3))
+    if tw is not None:
+        plot_tool_tip_slice(tw, axis=2, value=0.0, ax=fig.add_subplot(1, n, 4))
+    fig.tight_layout()
+    return fig
+
+
+def figure_instrument_cone(ic: InstrumentCone) -> Any:
+    """Instrument cone: 3-D view (frame E) and the chart of insertion ranges and conditioning."""
+    plt = _plt()
+    fig = plt.figure(figsize=(16, 4.8))
+    plot_instrument_cone(ic, ax=fig.add_subplot(1, 3, 1, projection="3d"),
+                         stride=max(1, len(ic.azimuth) // 48))
+    plot_cone_chart(ic, quantity="range", ax=fig.add_subplot(1, 3, 2))
+    plot_cone_chart(ic, quantity="condition", ax=fig.add_subplot(1, 3, 3))
+    fig.tight_layout()
+    return fig
+
+
+def figure_tool_tip(tw: ToolTipWorkspace) -> Any:
+    """Tool-tip workspace: three orthogonal slices through the RCM (frame E)."""
+    plt = _plt()
+    fig = plt.figure(figsize=(15, 4.6))
+    for k in range(3):
+        plot_tool_tip_slice(tw, axis=k, value=0.0, ax=fig.add_subplot(1, 3, k + 1))
+    fig.tight_layout()
+    return fig
