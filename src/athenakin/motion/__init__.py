@@ -23,8 +23,16 @@ from ._errors import (
 )
 from ._plan import Limits, Trajectory, check_samples, plan, plan_directions
 from ._safety import MEASURE_NAMES, Margins, SingularityMeasures, singularity_measures
+from ._tracker import JUMP_M, JUMP_RAD, TrackedPose, Tracker, TrackFlag, TrackLog, track
 
 __all__ = [
+    "JUMP_M",
+    "JUMP_RAD",
+    "TrackFlag",
+    "TrackLog",
+    "TrackedPose",
+    "Tracker",
+    "track",
     "Limits",
     "MEASURE_NAMES",
     "Margins",

@@ -1,0 +1,570 @@
+"""Streaming forward kinematics with continuity: encoder readings -> instrument pose.
+
+The robot's forward kinematics has up to 16 solutions (2 assembly modes x 2
+signs of ``p`` x 2 U-joint branches x 2 spherical-joint branches). A
+:class:`Tracker` follows one of them through a stream of actuator readings: at
+each sample it returns the solution continuous with the previous pose, and it
+says so, with :class:`TrackFlag` bits, whenever continuity is in doubt instead
+of switching silently.
+
+Continuity. The distance of a candidate to the previous pose is
+``step = max(|dO_s| / jump_m, max_i |wrap(du_i)| / jump_rad)`` (``O_s`` the origin
+of the serial chain, ``u1..u5`` the passive angles); ``step <= 1`` is "within the
+jump thresholds". The candidate with the previous labels (mode, sign of ``p``,
+branches) is kept while it is within the thresholds; otherwise the nearest
+candidate is taken and the label change is flagged.
+
+Cost. Away from the singularities only the candidate with the previous labels is
+computed, in closed form with scalar arithmetic (no numpy in the loop): a few
+microseconds per sample. Near a singularity (any measure below its margin), after
+a large step, or when that candidate is not valid, all 16 are computed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_array, check_scalar, check_transform
+from ..chain import DEGENERATE_TOL, P_ZERO_TOL
+from ..design import Design
+from ..errors import InvalidInputError
+from ..parallel import TANGENT_TOL
+from ..robot import forward_kinematics
+from ._errors import TrackingError
+from ._safety import Margins
+
+__all__ = ["TrackFlag", "TrackedPose", "Tracker", "TrackLog", "track", "JUMP_M", "JUMP_RAD"]
+
+#: Default jump threshold on ``O_s`` between consecutive samples, m.
+JUMP_M = 0.005
+#: Default jump threshold on the passive angles between consecutive samples, rad.
+JUMP_RAD = 0.1
+
+_TWO_PI = 2.0 * math.pi
+
+
+class TrackFlag(enum.IntFlag):
+    """Why a tracked sample deserves attention (bits; ``NONE`` when all is well).
+
+    Attributes
+    ----------
+    LOST
+        No forward-kinematics solution (outside the workspace, A/B order broken,
+        non-finite reading); the pose is that of the last valid sample, ``valid`` False.
+    REACQUIRED
+        First valid sample after ``LOST``: continuity with the pose before the loss
+        is not guaranteed.
+    JUMP
+        The returned solution moved more than the jump thresholds since the previous sample.
+    MODE_SWITCH
+        The assembly mode differs from the previous sample's.
+    BRANCH_SWITCH
+        A serial label (sign of ``p``, U-joint or spherical-joint branch) differs
+        from the previous sample's: expected when crossing ``sin u2 = 0`` or
+        ``sin u4 = 0``, where the continuous solution changes label.
+    AMBIGUOUS
+        Another solution is also within the jump thresholds of the previous pose:
+        the readings cannot tell which one the robot is in (e.g. next to the mode
+        boundary, where both assembly modes meet).
+    OUT_OF_STROKE
+        A reading lies outside the design's stroke limits (the pose is still computed).
+    NEAR_MODE_BOUNDARY, NEAR_H_ZERO, NEAR_LINK_LIMIT, NEAR_UJOINT, NEAR_WRIST, NEAR_P_ZERO
+        A singularity measure is below its margin (:class:`Margins`: ``half_chord``,
+        ``h``, ``link``, ``sin_u2``, ``sin_u4``, ``p``).
+    """
+
+    NONE = 0
+    LOST = 1
+    REACQUIRED = 2
+    JUMP = 4
+    MODE_SWITCH = 8
+    BRANCH_SWITCH = 16
+    AMBIGUOUS = 32
+    OUT_OF_STROKE = 64
+    NEAR_MODE_BOUNDARY = 128
+    NEAR_H_ZERO = 256
+    NEAR_LINK_LIMIT = 512
+    NEAR_UJOINT = 1024
+    NEAR_WRIST = 2048
+    NEAR_P_ZERO = 4096
+
+    @property
+    def near_singular(self) -> bool:
+        """True when any ``NEAR_*`` bit is set."""
+        return bool(self & _NEAR_ANY)
+
+
+_NEAR_ANY = (TrackFlag.NEAR_MODE_BOUNDARY | TrackFlag.NEAR_H_ZERO | TrackFlag.NEAR_LINK_LIMIT
+             | TrackFlag.NEAR_UJOINT | TrackFlag.NEAR_WRIST | TrackFlag.NEAR_P_ZERO)
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class TrackedPose:
+    """The tracked configuration of one sample (tuples, for speed; wrap with ``np.asarray``).
+
+    Attributes
+    ----------
+    index : int
+        Sample number (0 for the initial configuration).
+    q : tuple of 3 float
+        The reading, m.
+    valid : bool
+        False when the sample is ``LOST`` (then the fields below are those of the last
+        valid sample).
+    slot : int
+        Forward-kinematics slot ``8 m + 4 r + 2 b + w`` (as in
+        :class:`~athenakin.FKSolution`).
+    mode, p_sign, ujoint, wrist : int
+        Its labels (+1 / -1).
+    p : float
+        Signed distance from ``O_s`` to the RCM, m.
+    u : tuple of 5 float
+        Passive angles ``u1..u5``, radians in (-pi, pi].
+    O_s : tuple of 3 float
+        Origin of the serial chain, base frame, m.
+    direction_b : tuple of 3 float
+        Unit instrument axis ``z3`` (from ``O_s`` towards the RCM when ``p > 0``), base frame.
+    tip_b, tip_e : tuple of 3 float
+        Tool tip ``O_s + L z3`` in the base frame and in the RCM frame, m.
+    half_chord, h, sin_u2, sin_u4 : float
+        Singularity measures (see :class:`~athenakin.motion.SingularityMeasures`).
+    step : float
+        Distance to the previous pose in units of the jump thresholds (0 for the first).
+    flags : TrackFlag
+    """
+
+    index: int
+    q: tuple[float, float, float]
+    valid: bool
+    slot: int
+    mode: int
+    p_sign: int
+    ujoint: int
+    wrist: int
+    p: float
+    u: tuple[float, float, float, float, float]
+    O_s: tuple[float, float, float]
+    direction_b: tuple[float, float, float]
+    tip_b: tuple[float, float, float]
+    tip_e: tuple[float, float, float]
+    half_chord: float
+    h: float
+    sin_u2: float
+    sin_u4: float
+    step: float
+    flags: TrackFlag
+
+
+def _wrap(a: float) -> float:
+    a = math.fmod(a + math.pi, _TWO_PI)
+    if a <= 0.0:
+        a += _TWO_PI
+    return a - math.pi
+
+
+class _Geometry:
+    """Design constants and the RCM frame as Python floats (for the scalar fast path)."""
+
+    def __init__(self, T: NDArray[np.float64], design: Design) -> None:
+        self.l1, self.l2, self.l3 = design.l1, design.l2, design.l3
+        self.l4, self.l5 = design.l4, design.l5
+        self.L = design.tool_length
+        self.lo = tuple(float(v) for v in design.stroke_min)
+        self.hi = tuple(float(v) for v in design.stroke_max)
+        self.h_sign = design.h_sign
+        self.c = tuple(float(v) for v in T[:3, 3])
+        self.ex = tuple(float(v) for v in T[:3, 0])
+        self.ez = tuple(float(v) for v in T[:3, 2])
+        self.R = tuple(tuple(float(v) for v in row) for row in T[:3, :3])
+
+
+def _parallel(g: _Geometry, q1: float, q2: float, q3: float
+              ) -> tuple[float, float, float, float, float] | None:
+    """Circle geometry: ``(x_M, h, r1, a, ...)``; None when the module cannot assemble."""
+    h = 0.5 * (q1 - q2)
+    hh = h * h
+    if hh >= g.l1 * g.l1 or hh > g.l3 * g.l3 or g.h_sign * h < 0:
+        return None
+    r1 = math.sqrt(g.l1 * g.l1 - hh)
+    m_y = math.sqrt(g.l3 * g.l3 - hh) + g.l2
+    d2 = m_y * m_y + g.l5 * g.l5
+    d = math.sqrt(d2)
+    k = (r1 + q3 - d) * (r1 + q3 + d) * (d - r1 + q3) * (d + r1 - q3)
+    if k < 0.0:
+        a = -math.sqrt(-k) / (2.0 * d)
+        if a < -TANGENT_TOL:
+            return None
+        a = 0.0
+    else:
+        a = math.sqrt(k) / (2.0 * d)
+    return h, r1, m_y, d, a
+
+
+def _candidate(g: _Geometry, q1: float, q2: float, q3: float, par: tuple, mode: int,
+               r: int, b: int, w: int) -> tuple | None:
+    """The forward-kinematics solution with the given labels (None where not isolated)."""
+    h, r1, m_y, d, a = par
+    if mode == -1 and a <= TANGENT_TOL:
+        return None                      # merged into mode +1 at tangency
+    H = d * d + r1 * r1 - q3 * q3
+    f = H / (2.0 * d * d)
+    sa = mode * a / d
+    y = f * m_y - sa * g.l5
+    z = f * g.l5 + sa * m_y
+    cy, cz = y / r1, z / r1
+    Ox, Oy, Oz = 0.5 * (q1 + q2), y + g.l4 * cy, z + g.l4 * cz
+    # RCM seen from O_s in frame s: R_b_s^T (c - O_s), R_b_s = [[1,0,0],[0,cz,cy],[0,-cy,cz]]
+    bx, by, bz = g.c[0] - Ox, g.c[1] - Oy, g.c[2] - Oz
+    cx, cys, czs = bx, cz * by - cy * bz, cy * by + cz * bz
+    n = math.sqrt(cx * cx + cys * cys + czs * czs)
+    if n <= P_ZERO_TOL:
+        return None
+    p = r * n
+    zx, zy, zz = cx / p, cys / p, czs / p
+    rho = math.hypot(zx, zy)
+    if rho <= DEGENERATE_TOL:
+        return None
+    c1, s1 = b * zx / rho, b * zy / rho
+    c2, s2 = -zz, b * rho
+    # R_s_e columns x and z: R_b_s^T e
+    ex, ez = g.ex, g.ez
+    Ex = (ex[0], cz * ex[1] - cy * ex[2], cy * ex[1] + cz * ex[2])
+    Ez = (ez[0], cz * ez[1] - cy * ez[2], cy * ez[1] + cz * ez[2])
+    # W = R(u1, u2)^T R_s_e; rows x1, y1, z1 of R(u1, u2)^T
+    x1 = (c1 * c2, s1 * c2, s2)
+    z1 = (c1 * s2, s1 * s2, c2 * -1.0)
+    W00 = x1[0] * Ex[0] + x1[1] * Ex[1] + x1[2] * Ex[2]
+    W10 = s1 * Ex[0] - c1 * Ex[1]
+    W20 = z1[0] * Ex[0] + z1[1] * Ex[1] + z1[2] * Ex[2]
+    W02 = x1[0] * Ez[0] + x1[1] * Ez[1] + x1[2] * Ez[2]
+    W12 = s1 * Ez[0] - c1 * Ez[1]
+    W22 = z1[0] * Ez[0] + z1[1] * Ez[1] + z1[2] * Ez[2]
+    rho4 = math.hypot(W02, W12)
+    if rho4 <= DEGENERATE_TOL:
+        return None
+    c3, s3 = w * W02 / rho4, w * W12 / rho4
+    c4, s4 = -W22, w * rho4
+    u1 = math.atan2(s1, c1)
+    u2 = math.atan2(s2, c2)
+    u3 = math.atan2(s3, c3)
+    u4 = math.atan2(s4, c4)
+    u5 = math.atan2(s3 * W00 - c3 * W10, c3 * c4 * W00 + s3 * c4 * W10 + s4 * W20)
+    # instrument axis in the base frame: (c - O_s) / p
+    return (mode, r, b, w, p, (u1, u2, u3, u4, u5), (Ox, Oy, Oz), (bx / p, by / p, bz / p),
+            a, abs(h), rho, rho4)
+
+
+def _slot(mode: int, r: int, b: int, w: int) -> int:
+    return 8 * (mode == -1) + 4 * (r == -1) + 2 * (b == -1) + (w == -1)
+
+
+class Tracker:
+    """Follow the robot's configuration through a stream of actuator readings.
+
+    Parameters
+    ----------
+    T_b_e : array-like, shape (4, 4)
+        RCM frame (the set-up).
+    design : Design, optional
+        Defaults to :meth:`Design.default`.
+    q0 : array-like, shape (3,), keyword-only
+        The first reading (m), whose configuration must be known.
+    slot : int, optional, keyword-only
+        Forward-kinematics slot of ``q0`` (``8 m + 4 r + 2 b + w``, see
+        :func:`athenakin.robot.slot_index`). Default: the valid slot with labels
+        closest to (mode +1, p > 0, sin u2 > 0, sin u4 > 0), in that priority.
+    jump_m, jump_rad : float, keyword-only
+        Jump thresholds on ``O_s`` (m) and on the passive angles (rad) between
+        consecutive samples; see the module docstring.
+    margins : Margins, optional, keyword-only
+        Below these distances to the singularities samples get ``NEAR_*`` flags
+        and all 16 solutions are examined (only ``half_chord``, ``h``, ``link``,
+        ``sin_u2``, ``sin_u4`` and ``p`` are used).
+    raise_on : TrackFlag, keyword-only
+        Flags that make :meth:`update` raise :class:`TrackingError` (default none).
+
+    Raises
+    ------
+    KinematicsError
+        ``q0`` has no valid configuration, or ``slot`` is not valid for it.
+
+    Examples
+    --------
+    >>> import athenakin as ak
+    >>> d = ak.Design.default()
+    >>> tr = ak.motion.Tracker(ak.default_rcm_frame(d), d, q0=[-0.10, 0.10, 0.45])
+    >>> pose = tr.update([-0.1001, 0.1001, 0.4499])
+    >>> pose.mode, pose.flags == ak.motion.TrackFlag.NONE
+    (1, True)
+    """
+
+    def __init__(self, T_b_e: ArrayLike, design: Design | None = None, *, q0: ArrayLike,
+                 slot: int | None = None, jump_m: float = JUMP_M, jump_rad: float = JUMP_RAD,
+                 margins: Margins | None = None,
+                 raise_on: TrackFlag = TrackFlag.NONE) -> None:
+        design = Design.default() if design is None else design
+        if not isinstance(design, Design):
+            raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
+        T = check_transform(T_b_e, "T_b_e")
+        if T.shape != (4, 4):
+            raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
+        margins = Margins() if margins is None else margins
+        if not isinstance(margins, Margins):
+            raise TypeError(f"margins: expected athenakin.motion.Margins, got "
+                            f"{type(margins).__name__}")
+        self.T_b_e = T.copy()
+        self.design = design
+        self.jump_m = check_scalar(jump_m, "jump_m", positive=True)
+        self.jump_rad = check_scalar(jump_rad, "jump_rad", positive=True)
+        self.margins = margins
+        self.raise_on = TrackFlag(raise_on)
+        self._g = _Geometry(T, design)
+        # fast-path thresholds: a candidate far from every singularity, and far enough
+        # from the mode boundary that the other mode cannot be within the jump threshold
+        self._watch = (max(margins.half_chord, self.jump_m), margins.h, margins.link,
+                       margins.sin_u2, margins.sin_u4, margins.p)
+        self.reset(q0, slot=slot)
+
+    # ------------------------------------------------------------------------------
+    def reset(self, q0: ArrayLike, *, slot: int | None = None) -> TrackedPose:
+        """Restart the stream at a known configuration (see the class parameters)."""
+        q = check_array(q0, "q0", (3,))
+        if q.shape != (3,):
+            raise InvalidInputError(f"q0: expected shape (3,), got {q.shape}")
+        sol = forward_kinematics(q, self.T_b_e, self.design, errors="raise")
+        if slot is None:
+            order = sorted(range(16), key=lambda k: (sol.mode[k] != 1, sol.p_sign[k] != 1,
+                                                     sol.ujoint[k] != 1, sol.wrist[k] != 1))
+            slot = next(k for k in order if sol.valid[k])
+        elif not (isinstance(slot, (int, np.integer)) and 0 <= slot < 16):
+            raise InvalidInputError(f"slot: expected an integer in 0..15, got {slot!r}")
+        elif not sol.valid[slot]:
+            raise InvalidInputError(f"slot: slot {slot} is not a valid solution for q0 = "
+                                    f"{q.tolist()} (valid slots: "
+                                    f"{np.flatnonzero(sol.valid).tolist()})")
+        labels = (int(sol.mode[slot]), int(sol.p_sign[slot]), int(sol.ujoint[slot]),
+                  int(sol.wrist[slot]))
+        q1, q2, q3 = (float(v) for v in q)
+        par = _parallel(self._g, q1, q2, q3)
+        cand = None if par is None else _candidate(self._g, q1, q2, q3, par, *labels)
+        if cand is None:  # pragma: no cover - the core FK said it is valid
+            raise InvalidInputError(f"q0 = {q.tolist()}: slot {slot} is degenerate")
+        self._index = 0
+        self._prev = cand
+        self._lost = False
+        self.pose = self._pose((q1, q2, q3), cand, 0.0, self._near(cand))
+        return self.pose
+
+    # ------------------------------------------------------------------------------
+    def _near(self, c: tuple) -> TrackFlag:
+        hc, hw, lk, s2, s4, pp = self._watch
+        f = TrackFlag.NONE
+        if c[8] < self.margins.half_chord:
+            f |= TrackFlag.NEAR_MODE_BOUNDARY
+        if c[9] < hw:
+            f |= TrackFlag.NEAR_H_ZERO
+        if min(self._g.l1, self._g.l3) - c[9] < lk:
+            f |= TrackFlag.NEAR_LINK_LIMIT
+        if c[10] < s2:
+            f |= TrackFlag.NEAR_UJOINT
+        if c[11] < s4:
+            f |= TrackFlag.NEAR_WRIST
+        if abs(c[4]) < pp:
+            f |= TrackFlag.NEAR_P_ZERO
+        return f
+
+    def _step(self, c: tuple) -> float:
+        prev = self._prev
+        o, po = c[6], prev[6]
+        dO = math.sqrt((o[0] - po[0]) ** 2 + (o[1] - po[1]) ** 2 + (o[2] - po[2]) ** 2)
+        u, pu = c[5], prev[5]
+        du = max(abs(_wrap(u[0] - pu[0])), abs(_wrap(u[1] - pu[1])), abs(_wrap(u[2] - pu[2])),
+                 abs(_wrap(u[3] - pu[3])), abs(_wrap(u[4] - pu[4])))
+        return max(dO / self.jump_m, du / self.jump_rad)
+
+    def _pose(self, q: tuple[float, float, float], c: tuple, step: float, flags: TrackFlag,
+              valid: bool = True) -> TrackedPose:
+        g = self._g
+        o, dz = c[6], c[7]
+        L = g.L
+        tb = (o[0] + L * dz[0], o[1] + L * dz[1], o[2] + L * dz[2])
+        v = (tb[0] - g.c[0], tb[1] - g.c[1], tb[2] - g.c[2])
+        R = g.R
+        te = (R[0][0] * v[0] + R[1][0] * v[1] + R[2][0] * v[2],
+              R[0][1] * v[0] + R[1][1] * v[1] + R[2][1] * v[2],
+              R[0][2] * v[0] + R[1][2] * v[1] + R[2][2] * v[2])
+        mode, r, b, w = c[0], c[1], c[2], c[3]
+        return TrackedPose(self._index, q, valid, _slot(mode, r, b, w), mode, r, b, w, c[4],
+                           c[5], o, dz, tb, te, c[8], c[9], c[10], c[11], step, flags)
+
+    # ------------------------------------------------------------------------------
+    def update(self, q: ArrayLike | Sequence[float]) -> TrackedPose:
+        """Process one reading and return the tracked pose.
+
+        Parameters
+        ----------
+        q : array-like, shape (3,)
+            Actuator reading ``(q1, q2, q3)``, m.
+
+        Returns
+        -------
+        TrackedPose
+            Also stored as :attr:`pose`.
+
+        Raises
+        ------
+        TrackingError
+            When the pose carries a flag of ``raise_on``.
+        """
+        try:
+            q1, q2, q3 = float(q[0]), float(q[1]), float(q[2])  # type: ignore[index]
+            if len(q) != 3:  # type: ignore[arg-type]
+                raise ValueError
+        except (TypeError, ValueError, IndexError):
+            raise InvalidInputError(f"q: expected 3 numbers (q1, q2, q3) in m, got {q!r}") \
+                from None
+        self._index += 1
+        g = self._g
+        qt = (q1, q2, q3)
+        flags = TrackFlag.NONE
+        finite = math.isfinite(q1) and math.isfinite(q2) and math.isfinite(q3)
+        if finite and not (g.lo[0] <= q1 <= g.hi[0] and g.lo[1] <= q2 <= g.hi[1]
+                           and g.lo[2] <= q3 <= g.hi[2]):
+            flags |= TrackFlag.OUT_OF_STROKE
+        par = _parallel(g, q1, q2, q3) if finite else None
+        prev = self._prev
+        if par is None:
+            return self._lose(qt, flags)
+        if self._lost:
+            flags |= TrackFlag.REACQUIRED
+        # fast path: the candidate with the previous labels, far from every singularity
+        c = _candidate(g, q1, q2, q3, par, prev[0], prev[1], prev[2], prev[3])
+        if c is not None and not self._lost:
+            hc, hw, lk, s2, s4, pp = self._watch
+            step = self._step(c)
+            if (step <= 1.0 and c[8] >= hc and c[9] >= hw and c[10] >= s2 and c[11] >= s4
+                    and abs(c[4]) >= pp and min(g.l1, g.l3) - c[9] >= lk):
+                self._prev = c
+                pose = self._pose(qt, c, step, flags)
+                self.pose = pose
+                if flags & self.raise_on:
+                    raise TrackingError(f"sample {self._index}: {flags!r}", pose)
+                return pose
+        # slow path: all candidates
+        cands = []
+        for mode in (1, -1):
+            for r in (1, -1):
+                for b in (1, -1):
+                    for w in (1, -1):
+                        cc = _candidate(g, q1, q2, q3, par, mode, r, b, w)
+                        if cc is not None:
+                            cands.append((self._step(cc), cc))
+        if not cands:
+            return self._lose(qt, flags)
+        same = [sc for sc in cands if sc[1][:4] == prev[:4]]
+        if same and same[0][0] <= 1.0:
+            step, c = same[0]
+        else:
+            step, c = min(cands, key=lambda sc: sc[0])
+        if any(sc[0] <= 1.0 and sc[1][:4] != c[:4] for sc in cands):
+            flags |= TrackFlag.AMBIGUOUS
+        if step > 1.0:
+            flags |= TrackFlag.JUMP
+        if c[0] != prev[0]:
+            flags |= TrackFlag.MODE_SWITCH
+        if c[1:4] != prev[1:4]:
+            flags |= TrackFlag.BRANCH_SWITCH
+        flags |= self._near(c)
+        self._prev = c
+        self._lost = False
+        pose = self._pose(qt, c, step, flags)
+        self.pose = pose
+        if flags & self.raise_on:
+            raise TrackingError(f"sample {self._index} (q = {list(qt)} m): {flags!r}", pose)
+        return pose
+
+    def _lose(self, qt: tuple[float, float, float], flags: TrackFlag) -> TrackedPose:
+        flags |= TrackFlag.LOST
+        self._lost = True
+        pose = dataclasses.replace(self._pose(qt, self._prev, math.inf, flags, valid=False),
+                                   index=self._index)
+        self.pose = pose
+        if flags & self.raise_on:
+            raise TrackingError(f"sample {self._index} (q = {list(qt)} m): no forward-"
+                                f"kinematics solution: {flags!r}", pose)
+        return pose
+
+
+@dataclasses.dataclass(frozen=True)
+class TrackLog:
+    """The poses of a whole stream as arrays (see :class:`TrackedPose` for the fields).
+
+    Attributes
+    ----------
+    q : ndarray, shape (N, 3)
+    valid : ndarray of bool, shape (N,)
+    slot, mode, p_sign, ujoint, wrist : ndarray of int, shape (N,)
+    p, half_chord, h, sin_u2, sin_u4, step : ndarray, shape (N,)
+    u : ndarray, shape (N, 5)
+    O_s, direction_b, tip_b, tip_e : ndarray, shape (N, 3)
+    flags : ndarray of int, shape (N,)
+        :class:`TrackFlag` bits.
+    """
+
+    q: NDArray[np.float64]
+    valid: NDArray[np.bool_]
+    slot: NDArray[np.int64]
+    mode: NDArray[np.int64]
+    p_sign: NDArray[np.int64]
+    ujoint: NDArray[np.int64]
+    wrist: NDArray[np.int64]
+    p: NDArray[np.float64]
+    u: NDArray[np.float64]
+    O_s: NDArray[np.float64]
+    direction_b: NDArray[np.float64]
+    tip_b: NDArray[np.float64]
+    tip_e: NDArray[np.float64]
+    half_chord: NDArray[np.float64]
+    h: NDArray[np.float64]
+    sin_u2: NDArray[np.float64]
+    sin_u4: NDArray[np.float64]
+    step: NDArray[np.float64]
+    flags: NDArray[np.int64]
+
+    def events(self) -> list[tuple[int, TrackFlag]]:
+        """``(sample, flags)`` of every flagged sample."""
+        return [(int(i), TrackFlag(int(self.flags[i]))) for i in np.flatnonzero(self.flags)]
+
+
+def track(q_stream: ArrayLike, T_b_e: ArrayLike, design: Design | None = None,
+          **options: object) -> TrackLog:
+    """Run a :class:`Tracker` over a recorded stream; the first reading is ``q0``.
+
+    Parameters
+    ----------
+    q_stream : array-like, shape (N, 3)
+        Readings, m, N >= 1.
+    T_b_e : array-like, shape (4, 4)
+    design : Design, optional
+    **options
+        Keyword options of :class:`Tracker` (``slot``, ``jump_m``, ``jump_rad``,
+        ``margins``, ``raise_on``).
+
+    Returns
+    -------
+    TrackLog
+        Row 0 is the initial configuration (flags: its ``NEAR_*`` bits).
+    """
+    qs = check_array(q_stream, "q_stream", (3,), allow_nonfinite=True)
+    if qs.ndim != 2 or qs.shape[0] < 1:
+        raise InvalidInputError(f"q_stream: expected shape (N, 3) with N >= 1, got {qs.shape}")
+    tr = Tracker(T_b_e, design, q0=qs[0], **options)  # type: ignore[arg-type]
+    poses = [tr.pose] + [tr.update(row) for row in qs[1:].tolist()]
+    fields = [f.name for f in dataclasses.fields(TrackLog)]
+    return TrackLog(**{k: np.array([getattr(ps, k) for ps in poses]) for k in fields})
