@@ -1,0 +1,124 @@
+"""``athenakin plan``: a tool-tip (or direction + insertion) path CSV -> checked actuator trajectory."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from ._common import add_design_option, add_setup_options, load_design, load_rcm
+
+
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``plan`` subcommand."""
+    p = sub.add_parser(
+        "plan", help="plan a limit-respecting actuator trajectory from a tool-tip path CSV",
+        description="Read waypoints about the RCM (columns x_m,y_m,z_m: tool tip in frame E; or "
+                    "azimuth_deg,polar_deg,depth_m; optional t_s), plan a checked actuator "
+                    "trajectory sampled at --rate, write it as CSV or JSON (by the extension "
+                    "of -o) and, unless --no-plots, three PNG figures next to it. Columns and "
+                    "units: docs/motion.md.")
+    p.add_argument("path", type=Path, metavar="PATH.csv", help="waypoint file")
+    p.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
+                   help="trajectory file, .csv or .json")
+    p.add_argument("--rate", type=float, default=1000.0, help="samples per second (1000)")
+    p.add_argument("--v-max", type=float, default=0.05, help="actuator speed limit, m/s (0.05)")
+    p.add_argument("--a-max", type=float, default=0.5,
+                   help="actuator acceleration limit, m/s^2 (0.5)")
+    p.add_argument("--j-max", type=float, default=None,
+                   help="actuator jerk limit, m/s^3 (default: none)")
+    p.add_argument("--tip-speed", type=float, default=None, help="tool-tip speed limit, m/s")
+    p.add_argument("--timing", choices=("stretch", "fixed"), default="stretch",
+                   help="with t_s in the file: lengthen segments that break a limit (stretch, "
+                        "default) or fail (fixed)")
+    p.add_argument("--margin", action="append", default=[], metavar="NAME=VALUE",
+                   help="singularity margin, e.g. --margin sin_u4=0.2 (names: half_chord, h, "
+                        "link, p, depth in m; sin_u2, sin_u4; cond, an upper bound)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--plots", type=Path, metavar="PREFIX",
+                   help="figure prefix (default: OUT without its extension)")
+    g.add_argument("--no-plots", action="store_true", help="write no figures")
+    add_design_option(p)
+    add_setup_options(p)
+    p.set_defaults(func=run)
+
+
+def parse_margins(items: list[str]) -> object:
+    """``NAME=VALUE`` strings -> :class:`athenakin.motion.Margins`."""
+    from ..motion import Margins
+
+    kw = {}
+    names = {f for f in Margins.__dataclass_fields__}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or name.strip() not in names:
+            raise ValueError(f"--margin: expected NAME=VALUE with NAME in {sorted(names)}, "
+                             f"got {item!r}")
+        try:
+            kw[name.strip()] = float(value)
+        except ValueError:
+            raise ValueError(f"--margin {name}: expected a number, got {value!r}") from None
+    return Margins(**kw)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Execute ``plan``."""
+    from ..motion import plan, plan_directions
+    from ..motion._io import (
+        read_path_csv,
+        trajectory_csv_text,
+        trajectory_json_text,
+        write_text_atomic,
+    )
+
+    out = Path(args.output)
+    if out.suffix.lower() not in (".csv", ".json"):
+        raise ValueError(f"-o: expected a .csv or .json file name, got {str(out)!r}")
+    if not out.parent.exists():
+        raise ValueError(f"-o: folder {str(out.parent)!r} does not exist")
+    design = load_design(args)
+    T = load_rcm(args, design)
+    spec = read_path_csv(args.path)
+    opts = dict(rate=args.rate, v_max=args.v_max, a_max=args.a_max, j_max=args.j_max,
+                tip_speed=args.tip_speed, times=spec.times, timing=args.timing,
+                margins=parse_margins(args.margin))
+    if args.timing == "fixed" and spec.times is None:
+        raise ValueError(f"--timing fixed: {args.path} has no t_s column")
+    if spec.kind == "tip":
+        traj = plan(spec.tips_e, T, design, **opts)  # type: ignore[arg-type]
+    else:
+        traj = plan_directions(spec.azimuth, spec.polar, spec.depth, T, design,  # type: ignore[arg-type]
+                               **opts)
+    text = trajectory_json_text(traj) if out.suffix.lower() == ".json" \
+        else trajectory_csv_text(traj)
+    written = [out]
+    write_text_atomic(out, text)
+    if not args.no_plots:
+        from ..motion._plot import save_plots
+
+        prefix = args.plots if args.plots is not None else out.with_suffix("")
+        written += save_plots(traj, prefix)
+    _summary(traj, written)
+    return 0
+
+
+def _summary(traj: object, written: list[Path]) -> None:
+    t = traj  # Trajectory
+    lim = t.limits  # type: ignore[attr-defined]
+    print(f"planned {len(t.t)} samples at {t.rate:g} Hz, duration {t.duration:.3f} s, "  # type: ignore[attr-defined]
+          f"{len(t.waypoints_e)} waypoints")  # type: ignore[attr-defined]
+    print("waypoint times [s]: " + ", ".join(f"{v:.3f}" for v in t.waypoint_times))  # type: ignore[attr-defined]
+    if np.any(t.stretched):  # type: ignore[attr-defined]
+        print(f"stretched segments (requested times too short for the limits): "
+              f"{np.flatnonzero(t.stretched).tolist()}")  # type: ignore[attr-defined]
+    rows = [("|qd| max [m/s]", np.abs(t.qd).max(0), lim.v_max),  # type: ignore[attr-defined]
+            ("|qdd| max [m/s^2]", np.abs(t.qdd).max(0), lim.a_max)]  # type: ignore[attr-defined]
+    if t.qddd is not None:  # type: ignore[attr-defined]
+        rows.append(("|qddd| max [m/s^3]", np.abs(t.qddd).max(0), lim.j_max))  # type: ignore[attr-defined]
+    for name, v, bound in rows:
+        print(f"{name:>20}: " + "  ".join(f"q{i + 1} {v[i]:.4f}/{bound[i]:g}" for i in range(3)))
+    ratios = t.measures.ratio(t.margins)  # type: ignore[attr-defined]
+    worst = min(ratios, key=lambda k: float(np.min(ratios[k])))
+    print(f"closest to a singularity: {worst} at {float(np.min(ratios[worst])):.2f} x its margin")
+    print("wrote " + ", ".join(str(w) for w in written))

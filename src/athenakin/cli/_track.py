@@ -1,0 +1,95 @@
+"""``athenakin track``: replay a recorded actuator stream through the continuity tracker."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ._common import add_design_option, add_setup_options, load_design, load_rcm
+
+#: Flags that make ``--strict`` fail.
+STRICT_FLAGS = ("LOST", "JUMP", "MODE_SWITCH", "AMBIGUOUS")
+
+
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``track`` subcommand."""
+    p = sub.add_parser(
+        "track", help="replay a recorded q stream (CSV) through the pose tracker",
+        description="Read actuator readings (columns q1_m,q2_m,q3_m, optional t_s; other "
+                    "columns ignored, so a trajectory from 'athenakin plan' replays as is), "
+                    "follow the forward-kinematics solution continuous with the first "
+                    "sample, and report every flagged sample (mode or branch switch, jump, "
+                    "ambiguity, loss, approach to a singularity). Columns: docs/motion.md.")
+    p.add_argument("path", type=Path, metavar="STREAM.csv", help="recorded readings")
+    p.add_argument("-o", "--output", type=Path, metavar="OUT",
+                   help="write the tracked poses (.csv or .json)")
+    p.add_argument("--slot", type=int, default=None,
+                   help="FK slot (0-15) of the first reading (default: mode +1, p > 0, "
+                        "branches +1)")
+    p.add_argument("--jump-mm", type=float, default=5.0,
+                   help="jump threshold on O_s between samples, mm (5)")
+    p.add_argument("--jump-deg", type=float, default=math.degrees(0.1),
+                   help="jump threshold on the passive angles between samples, deg (5.73)")
+    p.add_argument("--margin", action="append", default=[], metavar="NAME=VALUE",
+                   help="singularity watch margin (half_chord, h, link, p in m; sin_u2, sin_u4)")
+    p.add_argument("--strict", action="store_true",
+                   help=f"exit with status 1 if any sample is flagged {', '.join(STRICT_FLAGS)}")
+    p.add_argument("--max-events", type=int, default=20, help="events listed (20)")
+    add_design_option(p)
+    add_setup_options(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Execute ``track``."""
+    import json
+
+    from ..motion import TrackFlag, track
+    from ..motion._io import _jsonable, read_q_stream_csv, track_csv_text, write_text_atomic
+    from ._plan import parse_margins
+
+    out = args.output
+    if out is not None and Path(out).suffix.lower() not in (".csv", ".json"):
+        raise ValueError(f"-o: expected a .csv or .json file name, got {str(out)!r}")
+    design = load_design(args)
+    T = load_rcm(args, design)
+    q, t = read_q_stream_csv(args.path)
+    log = track(q, T, design, slot=args.slot, jump_m=args.jump_mm * 1e-3,
+                jump_rad=math.radians(args.jump_deg), margins=parse_margins(args.margin))
+    events = log.events()
+    counts: dict[str, int] = {}
+    for _, f in events:
+        for bit in TrackFlag:
+            if bit and bit in f:
+                counts[bit.name] = counts.get(bit.name, 0) + 1  # type: ignore[index]
+    print(f"tracked {len(q)} samples from slot {int(log.slot[0])} (mode {int(log.mode[0]):+d}); "
+          f"{len(events)} flagged")
+    for name, c in sorted(counts.items()):
+        print(f"  {name}: {c} samples")
+    for i, f in events[:args.max_events]:
+        ts = f"t = {t[i]:.4f} s, " if t is not None else ""
+        print(f"  sample {i} ({ts}q = {np.round(q[i], 6).tolist()} m): {f.name or int(f)}"
+              f", mode {int(log.mode[i]):+d}, slot {int(log.slot[i])}")
+    if len(events) > args.max_events:
+        print(f"  ... {len(events) - args.max_events} more (see -o)")
+    last = len(q) - 1
+    print(f"last pose: tip_e = {np.round(log.tip_e[last], 6).tolist()} m, "
+          f"p = {log.p[last]:.6f} m, valid = {bool(log.valid[last])}")
+    if out is not None:
+        if Path(out).suffix.lower() == ".json":
+            import dataclasses
+
+            obj = {k: getattr(log, k) for k in (f.name for f in dataclasses.fields(log))}
+            obj["t_s"] = t
+            obj["flag_bits"] = {b.name: int(b) for b in TrackFlag if b}
+            write_text_atomic(out, json.dumps(_jsonable(obj)))
+        else:
+            write_text_atomic(out, track_csv_text(log, t))
+        print(f"wrote {out}")
+    if args.strict and any(counts.get(n) for n in STRICT_FLAGS):
+        print(f"athenakin track: --strict: flagged {', '.join(n for n in STRICT_FLAGS if counts.get(n))}")
+        return 1
+    return 0
