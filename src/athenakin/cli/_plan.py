@@ -1,4 +1,4 @@
-"""``athenakin plan``: a tool-tip (or direction + insertion) path CSV -> checked actuator trajectory."""
+"""``athenakin plan``: a tool-tip (or direction + insertion) path CSV -> checked trajectory."""
 
 from __future__ import annotations
 

@@ -90,6 +90,7 @@ def run(args: argparse.Namespace) -> int:
             write_text_atomic(out, track_csv_text(log, t))
         print(f"wrote {out}")
     if args.strict and any(counts.get(n) for n in STRICT_FLAGS):
-        print(f"athenakin track: --strict: flagged {', '.join(n for n in STRICT_FLAGS if counts.get(n))}")
+        bad = ", ".join(n for n in STRICT_FLAGS if counts.get(n))
+        print(f"athenakin track: --strict: flagged {bad}")
         return 1
     return 0
