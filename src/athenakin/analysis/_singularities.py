@@ -52,6 +52,7 @@ __all__ = [
     "singularity_loci",
     "sigma_min",
     "condition_number",
+    "singular_sets_within_strokes",
 ]
 
 #: Default tolerance of every condition (metres or dimensionless): ``near = value <= tol``.
@@ -224,8 +225,11 @@ def condition_number(J: ArrayLike) -> NDArray[np.float64]:
 
 
 def _svd(J: ArrayLike) -> NDArray[np.float64]:
-    """Singular values (..., k), descending; NaN where J is not finite, except that an
-    infinite entry (no NaN) gives ``sigma_max = inf`` (the limit at a forward singularity)."""
+    """Singular values (..., k), descending, NaN where J is not finite.
+
+    An infinite entry (and no NaN) gives ``sigma_max = inf``, the limit at a
+    forward singularity.
+    """
     J = np.asarray(J, dtype=float)
     ok = np.all(np.isfinite(J), axis=(-2, -1))
     s = np.linalg.svd(np.where(ok[..., None, None], J, 0.0), compute_uv=False)
@@ -461,3 +465,66 @@ def singularity_loci(design: Design | None = None, *, n: int = 801,
     return {"h": h, "q3_external": d + r1, "q3_internal": np.abs(d - r1),
             "h_ab": np.array(0.0), "h_l3": np.array(design.l3), "h_l1": np.array(design.l1),
             "h_stroke": h_stroke, "q3_stroke": np.array([smin[2], smax[2]])}
+
+
+def singular_sets_within_strokes(design: Design | None = None, *, n: int = 4001
+                                 ) -> dict[str, dict[str, object]]:
+    """Which parallel singular sets the stroke limits of a design let the robot reach.
+
+    The module depends on ``q`` only through ``h`` and ``q3`` (the ``x_M``
+    invariance), so each set is tested on the range of ``h`` that the stroke
+    box and the A/B order allow, ``h_sign * h`` in ``[0, |h|_max]``.
+
+    Parameters
+    ----------
+    design : Design, optional
+    n : int, keyword-only
+        Samples of ``h`` for the tangency curves (their extremes over the range).
+
+    Returns
+    -------
+    dict of name -> dict
+        For ``ab_coincide``, ``d_on_rail``, ``k1_degenerate``, ``k2_degenerate``,
+        ``circles_tangent``: ``{"reachable": bool, "detail": str}``; plus
+        ``"h_range"`` ``{"value": (h_lo, h_hi)}`` and ``"mode_safe_q3"``
+        ``{"value": (lo, hi)}``: the open ``q3`` interval strictly inside which
+        the circles intersect for every allowed ``h`` with ``|h| < l3`` (no
+        tangency, hence no assembly-mode change, can be reached).
+    """
+    design = _design(design)
+    lo, hi = design.stroke_min, design.stroke_max
+    hs = np.array([(lo[0] - hi[1]) / 2, (hi[0] - lo[1]) / 2])  # stroke range of h
+    sgn = design.h_sign
+    # A/B order: sgn * h >= 0
+    a, b = sorted(sgn * hs)
+    a = max(a, 0.0)
+    if a > b:
+        raise InvalidInputError(f"design: the stroke limits q_min = {lo.tolist()}, q_max = "
+                                f"{hi.tolist()} leave no configuration with ab_order "
+                                f"{design.ab_order!r}")
+    out: dict[str, dict[str, object]] = {}
+    out["h_range"] = {"value": tuple(float(v) + 0.0 for v in sorted((sgn * a, sgn * b)))}
+    out["ab_coincide"] = {"reachable": bool(a <= 0.0),
+                          "detail": f"|h| from {a:.4g} m: q1 = q2 is "
+                                    f"{'inside' if a <= 0 else 'outside'} the stroke box"}
+    out["d_on_rail"] = {"reachable": bool(b >= design.l3),
+                        "detail": f"|h| up to {b:.4g} m, l3 = {design.l3:.4g} m"}
+    out["k1_degenerate"] = {"reachable": bool(b >= design.l1 and design.l1 <= design.l3),
+                            "detail": f"|h| up to {b:.4g} m, l1 = {design.l1:.4g} m; the module "
+                                      f"closes only for |h| <= l3 = {design.l3:.4g} m"}
+    out["k2_degenerate"] = {"reachable": bool(lo[2] <= 0.0),
+                            "detail": f"q3 from {lo[2]:.4g} m"}
+    top = min(b, design.l3, design.l1)
+    h = np.linspace(a, top, int(n)) if top > a else np.array([a])
+    r1 = np.sqrt(design.l1 ** 2 - h * h)
+    d = np.hypot(np.sqrt(np.maximum(design.l3 ** 2 - h * h, 0.0)) + design.l2, design.l5)
+    inner, outer = np.abs(d - r1), d + r1
+    hit_inner = bool(lo[2] <= inner.max() and hi[2] >= inner.min())
+    hit_outer = bool(lo[2] <= outer.max() and hi[2] >= outer.min())
+    out["circles_tangent"] = {
+        "reachable": hit_inner or hit_outer,
+        "detail": f"internal tangency q3 = |d - r1| in [{inner.min():.4g}, {inner.max():.4g}] m, "
+                  f"external q3 = d + r1 in [{outer.min():.4g}, {outer.max():.4g}] m; strokes "
+                  f"q3 in [{lo[2]:.4g}, {hi[2]:.4g}] m"}
+    out["mode_safe_q3"] = {"value": (float(inner.max()), float(outer.min()))}
+    return out

@@ -50,6 +50,7 @@ __all__ = [
     "save_npz",
     "load_npz",
     "CHUNK",
+    "workspace_summary",
 ]
 
 #: Grid points per vectorised chunk (bounds memory; the progress bar advances per chunk).
@@ -275,7 +276,7 @@ def point_workspace(design: Design | None = None, *, resolution: int | tuple[int
     design = _design(design)
     n = _resolution(resolution, 3)
     b = bounds or _default_bounds(design)
-    axes = [np.linspace(lo, hi, k) for (lo, hi), k in zip(b, n)]
+    axes = [np.linspace(lo, hi, k) for (lo, hi), k in zip(b, n, strict=True)]
     P = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     free = _unlimited(design)
 
@@ -482,7 +483,7 @@ def tool_tip_workspace(T_b_e: ArrayLike | None = None, design: Design | None = N
     n = _resolution(resolution, 3)
     L = design.tool_length
     b = bounds or ((-L, L),) * 3
-    axes = [np.linspace(lo, hi, k) for (lo, hi), k in zip(b, n)]
+    axes = [np.linspace(lo, hi, k) for (lo, hi), k in zip(b, n, strict=True)]
     P = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
 
     def fn(tip: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
@@ -564,3 +565,48 @@ def load_npz(path: str | Path) -> tuple[object, dict[str, Any]]:
                                     f"{meta.get('type')!r})")
         kw = {fl.name: f[fl.name] for fl in dataclasses.fields(cls)}
     return cls(**kw), meta
+
+
+def _voxel_volume(*axes: NDArray[np.float64]) -> float:
+    return float(np.prod([ax[1] - ax[0] for ax in axes]))
+
+
+def workspace_summary(pw: PointWorkspace | None = None, ic: InstrumentCone | None = None,
+                      tw: ToolTipWorkspace | None = None) -> dict[str, object]:
+    """Scalar figures of merit of grid results (volumes, solid angle, conditioning).
+
+    Volumes are voxel counts times the voxel volume (m^3), so they converge
+    with the grid resolution at the rate of the boundary's voxelisation.
+
+    Returns
+    -------
+    dict of str -> float or int
+    """
+    out: dict[str, object] = {}
+    with np.errstate(invalid="ignore"), _quiet():
+        if pw is not None:
+            v = _voxel_volume(pw.x, pw.y, pw.z)
+            out["O_s reachable volume [m^3]"] = float(pw.reachable.sum() * v)
+            for m in (1, -1):
+                sel = pw.reachable & (pw.mode == m)
+                out[f"O_s volume, mode {m:+d} [m^3]"] = float(sel.sum() * v)
+            sel = pw.reachable & (pw.mode == 1)
+            out["O_s median cond(dO_s/dq), mode +1"] = float(np.nanmedian(pw.condition[sel]))
+            out["O_s min |signed half-chord|, mode +1 [m]"] = float(
+                np.nanmin(np.abs(pw.mode_margin[sel]))) if sel.any() else float("nan")
+        if ic is not None:
+            da = 2 * np.pi / len(ic.azimuth)
+            dp = ic.polar[1] - ic.polar[0]
+            w = np.sin(ic.polar) * dp * da
+            inside = np.isfinite(ic.p_min)
+            sa = float((inside * w[None, :]).sum())
+            out["cone solid angle [sr]"] = sa
+            out["cone fraction of the sphere"] = sa / (4 * np.pi)
+            out["cone max insertion range [m]"] = float(np.nanmax(ic.p_max - ic.p_min))
+            out["cone directions with 2+ insertion intervals"] = int((ic.n_intervals > 1).sum())
+            out["cone median cond(d tip/dq)"] = float(np.nanmedian(ic.condition))
+        if tw is not None:
+            v = _voxel_volume(tw.x, tw.y, tw.z)
+            out["tool-tip reachable volume [m^3]"] = float(tw.reachable.sum() * v)
+            out["tool-tip median cond(d tip/dq)"] = float(np.nanmedian(tw.condition))
+    return out

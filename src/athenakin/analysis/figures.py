@@ -96,12 +96,17 @@ def plot_singularity_loci(design: Design | None = None, *, am: ActuatorMap | Non
     hs, qs = loci["h_stroke"] * MM, loci["q3_stroke"] * MM
     if np.all(np.isfinite(hs)) and np.all(np.isfinite(qs)):
         ax.add_patch(_rect(hs, qs, ax))
+    top = max(loci["q3_external"].max() * MM * 1.15, qs[1] * 1.05 if np.isfinite(qs[1]) else 0)
+    lim = max(abs(h[0]), abs(h[-1]), *(abs(hs[np.isfinite(hs)]))) * 1.08
+    forbidden = (0, lim) if design.h_sign < 0 else (-lim, 0)
+    ax.axvspan(*forbidden, facecolor="none", edgecolor="0.6", hatch="//", lw=0,
+               label=f"excluded by the A/B order ({design.ab_order})")
     ax.set_xlabel("h = (q1 - q2)/2 [mm]")
     ax.set_ylabel("q3 [mm]")
-    ax.set_xlim(h[0] * 1.05, h[-1] * 1.05)
-    ax.set_ylim(0, max(loci["q3_external"].max() * MM * 1.08, qs[1] * 1.05))
+    ax.set_xlim(-lim, lim)
+    ax.set_ylim(0, top)
     ax.legend(loc="upper left", fontsize=7, framealpha=0.9)
-    ax.set_title("Parallel-module singularities in actuator space")
+    ax.set_title(f"Parallel singularities in (h, q3), mode {mode:+d}")
     return ax
 
 
@@ -159,9 +164,9 @@ def plot_actuator_space_3d(design: Design | None = None, *, n: int = 41, ax: Any
 def _box(ax: Any, lo: NDArray[np.float64], hi: NDArray[np.float64]) -> None:
     import itertools
 
-    for a, b in itertools.combinations(itertools.product(*zip(lo, hi)), 2):
-        if sum(x != y for x, y in zip(a, b)) == 1:
-            ax.plot(*zip(a, b), color="k", lw=0.8)
+    for a, b in itertools.combinations(itertools.product(*zip(lo, hi, strict=True)), 2):
+        if sum(x != y for x, y in zip(a, b, strict=True)) == 1:
+            ax.plot(*zip(a, b, strict=True), color="k", lw=0.8)
 
 
 def plot_actuator_conditioning(am: ActuatorMap, *, mode: int = 1, quantity: str = "condition",
@@ -190,7 +195,7 @@ def _slice_index(axis: NDArray[np.float64], value: float) -> int:
 
 
 def plot_workspace_slice(pw: PointWorkspace, *, x: float | None = None, quantity: str = "mode",
-                         ax: Any = None) -> Any:
+                         ax: Any = None, legend: bool = True) -> Any:
     """A slice ``x = const`` of the ``O_s`` workspace in the base ``(y, z)`` plane.
 
     ``quantity="mode"``: reachable voxels coloured by assembly mode (blue +1,
@@ -216,11 +221,12 @@ def plot_workspace_slice(pw: PointWorkspace, *, x: float | None = None, quantity
                        colors=COLOR_LOCI["w0"], linewidths=1.5)
         from matplotlib.patches import Patch
 
-        ax.legend(handles=[Patch(color=COLOR_MODE[1], label="mode +1"),
-                           Patch(color=COLOR_MODE[-1], label="mode -1"),
-                           Patch(color=COLOR_OUT, label="beyond strokes"),
-                           Patch(color=COLOR_LOCI["w0"], label="modes meet (w = 0)")],
-                  loc="lower left", fontsize=7)
+        if legend:
+            ax.legend(handles=[Patch(color=COLOR_MODE[1], label="mode +1"),
+                               Patch(color=COLOR_MODE[-1], label="mode -1"),
+                               Patch(color=COLOR_OUT, label="beyond strokes"),
+                               Patch(color=COLOR_LOCI["w0"], label="modes meet (w = 0)")],
+                      loc="center", fontsize=7)
     else:
         with np.errstate(divide="ignore", invalid="ignore"):
             c = np.where(pw.reachable[i], np.log10(pw.condition[i]), np.nan)
@@ -296,10 +302,11 @@ def plot_cone_chart(ic: InstrumentCone, *, quantity: str = "range", ax: Any = No
 
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
-                v = np.log10(np.nanmin(ic.condition, axis=-1))
+                v = np.clip(np.log10(np.nanmin(ic.condition, axis=-1)), 0, 4)
             label, cmap = "log10 min cond(d tip/dq) along the direction", "viridis_r"
     order = np.argsort(A)
-    im = ax.pcolormesh(A[order], B, v[order].T, shading="auto", cmap=cmap, rasterized=True)
+    kw = {"vmin": 0, "vmax": 4} if quantity == "condition" else {}
+    im = ax.pcolormesh(A[order], B, v[order].T, shading="auto", cmap=cmap, rasterized=True, **kw)
     ax.figure.colorbar(im, ax=ax, shrink=0.85).set_label(label)
     two = (ic.n_intervals > 1)[order].T.astype(float)
     if np.any(two):
@@ -307,60 +314,68 @@ def plot_cone_chart(ic: InstrumentCone, *, quantity: str = "range", ax: Any = No
     ax.set_xlabel("azimuth about z_e [deg]")
     ax.set_ylabel("polar angle from z_e [deg]")
     ax.set_ylim(180, 0)
-    ax.set_title("Instrument cone about the RCM")
+    ax.set_title("Instrument cone: insertion range per direction" if quantity == "range"
+                 else "Instrument cone about the RCM")
     return ax
 
 
-def plot_instrument_cone(ic: InstrumentCone, *, ax: Any = None, frame: str = "rcm",
-                         stride: int = 1) -> Any:
-    """3-D view of the instrument cone: the ``O_s`` segment of every reachable direction.
+def plot_instrument_cone(ic: InstrumentCone, *, ax: Any = None, frame: str = "base",
+                         radius: float | None = None, reference_q: Any = None) -> Any:
+    """3-D view of the instrument cone about the RCM.
 
-    Each reachable direction ``d`` is drawn as the segment from ``c - p_max d``
-    to ``c - p_min d`` (where ``O_s`` can be), coloured by the insertion range;
-    the black dot is the RCM, the grey line the rail (``x_b`` axis).
+    The sphere patch of radius ``radius`` (default: the largest sampled ``p``)
+    about the RCM marks every reachable instrument direction ``d`` on the
+    patient side (``c + radius d``), coloured by the insertion range
+    ``p_max - p_min`` along it; unreachable directions are left out. Black dot:
+    the RCM; black line: the rail (``x_b`` axis, ``frame="base"`` only); blue
+    line: the instrument at ``reference_q`` (optional), from ``O_s`` through the RCM.
     """
     import matplotlib as mpl
 
     from ..robot import direction_from_angles
 
     ax = _ax(ax, "3d")
-    A, B = np.meshgrid(ic.azimuth[::stride], ic.polar[::stride], indexing="ij")
-    pmin, pmax = ic.p_min[::stride, ::stride], ic.p_max[::stride, ::stride]
-    ok = np.isfinite(pmin)
-    d_e = direction_from_angles(A[ok], B[ok])
-    R, c = ic.T_b_e[:3, :3], ic.T_b_e[:3, 3]
-    if frame == "base":
-        d = d_e @ R.T
-        origin = c
-    else:
-        d, origin = d_e, np.zeros(3)
-    a = origin - pmax[ok][:, None] * d
-    b = origin - pmin[ok][:, None] * d
-    rng = (pmax - pmin)[ok]
-    norm = mpl.colors.Normalize(vmin=0, vmax=max(float(np.max(rng, initial=0)), 1e-9))
+    R = float(ic.p[-1]) if radius is None else float(radius)
+    Rb, c = ic.T_b_e[:3, :3], ic.T_b_e[:3, 3]
+    rot, origin = (Rb, c) if frame == "base" else (np.eye(3), np.zeros(3))
+    az = np.append(ic.azimuth, ic.azimuth[0] + 2 * np.pi)  # close the seam
+    A, B = np.meshgrid(az, ic.polar, indexing="ij")
+    P = (origin + R * direction_from_angles(A, B) @ rot.T) * MM
+    rng = np.concatenate([ic.p_max - ic.p_min, (ic.p_max - ic.p_min)[:1]], axis=0) * MM
+    norm = mpl.colors.Normalize(vmin=0, vmax=max(float(np.nanmax(rng, initial=0)), 1e-9))
     cmap = mpl.colormaps["magma"]
-    from mpl_toolkits.mplot3d.art3d import Line3DCollection
-
-    segs = np.stack([a, b], axis=1) * MM
-    lc = Line3DCollection(segs, colors=cmap(norm(rng)), linewidths=0.6, alpha=0.7)
-    ax.add_collection3d(lc)
-    ax.scatter(*(origin * MM), color="k", s=25)
+    col = cmap(norm(np.nan_to_num(rng)))
+    col[..., 3] = np.where(np.isfinite(rng), 0.6, 0.0)
+    ax.plot_surface(P[..., 0], P[..., 1], P[..., 2], facecolors=col, rstride=1, cstride=1,
+                    linewidth=0, antialiased=False, shade=False)
+    ax.scatter(*(origin * MM), color="k", s=30, depthshade=False)
+    pts = [P[np.isfinite(rng)].reshape(-1, 3), origin[None] * MM]
     if frame == "base":
-        xs = np.array([-0.4, 0.4]) * MM
-        ax.plot(xs, [0, 0], [0, 0], color="grey", lw=2)
-    pts = segs.reshape(-1, 3) if segs.size else np.zeros((1, 3))
-    allp = np.vstack([pts, origin[None] * MM])
-    ctr, half = allp.mean(axis=0), max(np.ptp(allp, axis=0).max() / 2, 1.0)
+        lo, hi = min(P[..., 0].min(), -0.3 * MM), max(P[..., 0].max(), 0.3 * MM)
+        ax.plot([lo, hi], [0, 0], [0, 0], color="k", lw=2.5)
+        pts.append(np.array([[lo, 0, 0], [hi, 0, 0]]))
+    if reference_q is not None:
+        from ._jacobians import parallel_state
+
+        O_b = parallel_state(reference_q, None, 1)["O_s"]
+        O_f = O_b if frame == "base" else (O_b - c) @ Rb
+        ax.plot(*np.stack([O_f, 2 * origin - O_f]).T * MM, color=COLOR_MODE[1], lw=2)
+        ax.scatter(*(O_f * MM), color=COLOR_MODE[1], s=20, depthshade=False)
+        pts.append(np.stack([O_f, 2 * origin - O_f]) * MM)
+    allp = np.vstack(pts)
+    ctr = 0.5 * (allp.min(axis=0) + allp.max(axis=0))
+    half = max(np.ptp(allp, axis=0).max() / 2, 1.0)
     ax.set_xlim(ctr[0] - half, ctr[0] + half)
     ax.set_ylim(ctr[1] - half, ctr[1] + half)
     ax.set_zlim(ctr[2] - half, ctr[2] + half)
     sm = mpl.cm.ScalarMappable(norm=norm, cmap=cmap)
-    ax.figure.colorbar(sm, ax=ax, shrink=0.7).set_label("insertion range [mm]")
+    ax.figure.colorbar(sm, ax=ax, shrink=0.7, pad=0.1).set_label("insertion range [mm]")
     f = "e" if frame == "rcm" else "b"
     ax.set_xlabel(f"x_{f} [mm]")
     ax.set_ylabel(f"y_{f} [mm]")
     ax.set_zlabel(f"z_{f} [mm]")
-    ax.set_title("Instrument cone: where O_s can be on each line")
+    ax.view_init(elev=20, azim=30)
+    ax.set_title("Instrument directions about the RCM")
     return ax
 
 
@@ -405,9 +420,7 @@ def figure_singularities(design: Design | None = None, *, am: ActuatorMap | None
     design = _design(design)
     fig = plt.figure(figsize=(15, 4.8))
     plot_singularity_loci(design, am=am, mode=1, ax=fig.add_subplot(1, 3, 1))
-    ax = fig.add_subplot(1, 3, 2)
-    plot_singularity_loci(design, am=am, mode=-1, ax=ax)
-    ax.set_title("... mode -1")
+    plot_singularity_loci(design, am=am, mode=-1, ax=fig.add_subplot(1, 3, 2))
     plot_actuator_space_3d(design, ax=fig.add_subplot(1, 3, 3, projection="3d"))
     fig.tight_layout()
     return fig
@@ -419,7 +432,8 @@ def figure_workspace(pw: PointWorkspace, *, x_values: tuple[float, ...] | None =
     xs = x_values or tuple(np.quantile(pw.x, [0.15, 0.5, 0.85]))
     fig = plt.figure(figsize=(16, 4.6))
     for k, x in enumerate(xs):
-        plot_workspace_slice(pw, x=x, ax=fig.add_subplot(1, len(xs) + 1, k + 1))
+        plot_workspace_slice(pw, x=x, ax=fig.add_subplot(1, len(xs) + 1, k + 1),
+                             legend=k == 0)
     plot_workspace_3d(pw, ax=fig.add_subplot(1, len(xs) + 1, len(xs) + 1, projection="3d"))
     fig.tight_layout()
     return fig
@@ -440,14 +454,15 @@ def figure_conditioning(am: ActuatorMap, pw: PointWorkspace, tw: ToolTipWorkspac
     return fig
 
 
-def figure_instrument_cone(ic: InstrumentCone) -> Any:
+def figure_instrument_cone(ic: InstrumentCone, *, reference_q: Any = None) -> Any:
     """Instrument cone: 3-D view (frame E) and the chart of insertion ranges and conditioning."""
     plt = _plt()
     fig = plt.figure(figsize=(16, 4.8))
     plot_instrument_cone(ic, ax=fig.add_subplot(1, 3, 1, projection="3d"),
-                         stride=max(1, len(ic.azimuth) // 48))
+                         reference_q=reference_q)
     plot_cone_chart(ic, quantity="range", ax=fig.add_subplot(1, 3, 2))
-    plot_cone_chart(ic, quantity="condition", ax=fig.add_subplot(1, 3, 3))
+    ax = plot_cone_chart(ic, quantity="condition", ax=fig.add_subplot(1, 3, 3))
+    ax.set_title("Best tool-tip conditioning along each direction")
     fig.tight_layout()
     return fig
 

@@ -16,7 +16,7 @@ from ..errors import KinematicsError
 __all__ = ["main", "COMMANDS"]
 
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
-COMMANDS = ["fk", "ik", "demo", "plan", "track"]
+COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities"]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,122 @@
+"""``athenakin workspace``: O_s workspace, instrument cone, tool-tip workspace, figures + npz."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ._common import (
+    add_design_option,
+    add_json_option,
+    add_setup_options,
+    dump_json,
+    load_design,
+    load_rcm,
+    table,
+)
+
+
+def add_output_options(p: argparse.ArgumentParser, default_dir: str) -> None:
+    """``--out``, ``--format``, ``--dpi``, ``--no-figures``, ``--no-files``."""
+    p.add_argument("--out", default=default_dir, metavar="DIR",
+                   help=f"output folder for figures and .npz data (default ./{default_dir})")
+    p.add_argument("--format", nargs="+", choices=("png", "svg", "pdf"), default=["png"],
+                   help="figure formats (default png)")
+    p.add_argument("--dpi", type=int, default=100, help="PNG resolution (default 100)")
+    p.add_argument("--no-figures", action="store_true", help="write the .npz data only")
+    p.add_argument("--no-files", action="store_true", help="print only; write nothing")
+
+
+def save_figure(fig: Any, stem: Path, formats: list[str], dpi: int) -> list[str]:
+    """Save ``fig`` as ``stem.<fmt>`` for each format, close it; return the paths."""
+    import matplotlib.pyplot as plt
+
+    paths = []
+    for f in formats:
+        path = stem.with_suffix(f".{f}")
+        fig.savefig(path, dpi=dpi)
+        paths.append(str(path))
+    plt.close(fig)
+    return paths
+
+
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``workspace`` subcommand."""
+    p = sub.add_parser(
+        "workspace", help="workspace, instrument cone, conditioning and assembly-mode maps",
+        description="Reachable O_s (with assembly-mode regions), the cone of instrument "
+                    "directions about the RCM with the insertion range along each, the tool-tip "
+                    "workspace and conditioning maps; writes figures and .npz data.")
+    p.add_argument("--resolution", type=int, default=61,
+                   help="grid points per axis of the O_s and tool-tip grids (default 61)")
+    p.add_argument("--cone-resolution", type=int, nargs=3, default=(73, 37, 46),
+                   metavar=("N_AZ", "N_POLAR", "N_P"),
+                   help="azimuth, polar and insertion samples of the cone (default 73 37 46)")
+    p.add_argument("--modes", type=int, nargs="+", choices=(1, -1), default=[1],
+                   help="assembly modes allowed for the cone and the tool tip (default 1)")
+    p.add_argument("--progress", action="store_true", help="show progress bars")
+    add_output_options(p, "athenakin-workspace")
+    add_design_option(p)
+    add_setup_options(p)
+    add_json_option(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Execute ``workspace``."""
+    from ..analysis import (
+        actuator_map,
+        instrument_cone,
+        point_workspace,
+        save_npz,
+        tool_tip_workspace,
+        workspace_summary,
+    )
+
+    design = load_design(args)
+    T = load_rcm(args, design)
+    prog = True if args.progress else None
+    modes = tuple(args.modes)
+    pw = point_workspace(design, resolution=args.resolution, progress=prog)
+    ic = instrument_cone(T, design, resolution=tuple(args.cone_resolution), modes=modes,
+                         progress=prog)
+    tw = tool_tip_workspace(T, design, resolution=args.resolution, modes=modes, progress=prog)
+    summary = workspace_summary(pw, ic, tw)
+    files: list[str] = []
+    if not args.no_files:
+        outdir = Path(args.out)
+        outdir.mkdir(parents=True, exist_ok=True)
+        am = actuator_map(design, resolution=161, progress=prog)
+        for name, res in (("o_s_workspace", pw), ("instrument_cone", ic), ("tool_tip", tw),
+                          ("actuator_map", am)):
+            files.append(str(save_npz(outdir / f"{name}.npz", res, design=design,
+                                      T_b_e=np.asarray(T).tolist(), modes=list(modes))))
+        if not args.no_figures:
+            from ..analysis import figures as F
+            from ..robot import REFERENCE_Q
+
+            ref = REFERENCE_Q if args.rcm is None and args.rcm_file is None else None
+            figs = (("workspace", F.figure_workspace(pw)),
+                    ("conditioning", F.figure_conditioning(am, pw, tw)),
+                    ("instrument_cone", F.figure_instrument_cone(ic, reference_q=ref)),
+                    ("tool_tip", F.figure_tool_tip(tw)))
+            for name, fig in figs:
+                files += save_figure(fig, outdir / name, args.format, args.dpi)
+    if args.json:
+        print(dump_json({"summary": summary, "files": files}))
+        return 0
+    print(table(["quantity", "value"], [[k, _fmt(v)] for k, v in summary.items()]))
+    for f in files:
+        print(f"wrote {f}")
+    return 0
+
+
+def _fmt(v: object) -> str:
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    if isinstance(v, (tuple, list)):
+        return "(" + ", ".join(_fmt(x) for x in v) + ")"
+    return str(v)
