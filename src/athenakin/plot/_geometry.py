@@ -19,12 +19,15 @@ from .._transforms import rot_x, rot_z
 from ..chain._ups import rotation_u_pair
 from ..design import Design
 from ..errors import Reason, error_for_reason
+from ..parallel import parallel_forward_kinematics
 from ..robot import default_rcm_frame, forward_kinematics
 
-__all__ = ["RobotGeometry", "robot_geometry", "circle_points", "N_CIRCLE"]
+__all__ = ["RobotGeometry", "robot_geometry", "circle_points", "N_CIRCLE", "ARC_MARGIN"]
 
 #: Number of points on each drawn circle (k1, k2).
 N_CIRCLE = 121
+#: Angle by which the drawn arc of ``k2`` extends beyond the intersections with ``k1``, rad.
+ARC_MARGIN = np.radians(25.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -51,10 +54,19 @@ class RobotGeometry:
         ``instrument`` (``T_b_s R(u1, u2)``: origin ``O_s``, z along the instrument)
         and ``e`` (the RCM frame, the given set-up).
     wrist_axes : ndarray, shape (3, 3)
-        Unit axes (rows) of ``u3``, ``u4``, ``u5`` through the RCM, base frame.
+        Unit axes (rows) of ``u3``, ``u4``, ``u5`` through the RCM, base frame. Their
+        signs tell the two branches of the spherical joint apart.
+    ujoint_axes : ndarray, shape (2, 3)
+        Unit axes of ``u1`` (``z_s``) and ``u2`` through ``O_s``; the sign of the
+        second tells the two U-joint branches apart.
     k1, k2 : ndarray, shape (N_CIRCLE, 3)
         Points of the circles ``k1`` (centre M, radius ``r1``) and ``k2`` (centre C,
         radius ``q3``) in the plane ``x = x_M``.
+    k2_arc : ndarray, shape (N_CIRCLE, 3)
+        The arc of ``k2`` through both intersections with ``k1`` (on the side of M),
+        extended by :data:`ARC_MARGIN` at each end: what views draw of ``k2``.
+    intersections : ndarray, shape (2, 3)
+        ``k1 ∩ k2``: ``O_i`` of assembly mode +1 and -1 (NaN where absent).
     rail : ndarray, shape (2, 3)
         End points of the drawn base rail (x axis) covering the strokes of A and B.
     design : Design
@@ -72,8 +84,11 @@ class RobotGeometry:
     points: dict[str, NDArray[np.float64]]
     frames: dict[str, NDArray[np.float64]]
     wrist_axes: NDArray[np.float64]
+    ujoint_axes: NDArray[np.float64]
     k1: NDArray[np.float64]
     k2: NDArray[np.float64]
+    k2_arc: NDArray[np.float64]
+    intersections: NDArray[np.float64]
     rail: NDArray[np.float64]
     design: Design
     T_b_e: NDArray[np.float64]
@@ -97,8 +112,12 @@ class RobotGeometry:
         }
 
     def bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Axis-aligned box ``(lo, hi)`` (each shape (3,)) around every drawn part."""
-        pts = np.concatenate([np.stack(list(self.points.values())), self.k1, self.k2, self.rail])
+        """Axis-aligned box ``(lo, hi)`` (each shape (3,)) around every drawn part.
+
+        The full circle ``k2`` is left out (views draw :attr:`k2_arc`).
+        """
+        pts = np.concatenate([np.stack(list(self.points.values())), self.k1, self.k2_arc,
+                              self.rail])
         return pts.min(axis=0), pts.max(axis=0)
 
 
@@ -108,6 +127,19 @@ def circle_points(centre: NDArray[np.float64], radius: float, n: int = N_CIRCLE
     t = np.linspace(0.0, 2 * np.pi, n)
     return np.stack([np.full(n, centre[0]), centre[1] + radius * np.cos(t),
                      centre[2] + radius * np.sin(t)], axis=-1)
+
+
+def _k2_arc(C: NDArray[np.float64], radius: float, M: NDArray[np.float64],
+            ends: NDArray[np.float64], n: int = N_CIRCLE) -> NDArray[np.float64]:
+    """Arc of the circle (centre C, plane x = C[0]) between two points, on M's side."""
+    ang = np.arctan2(ends[:, 2] - C[2], ends[:, 1] - C[1])
+    ang = ang[np.isfinite(ang)]
+    am = np.arctan2(M[2] - C[2], M[1] - C[1])
+    rel = np.mod(ang - am + np.pi, 2 * np.pi) - np.pi       # relative to the direction of M
+    lo, hi = rel.min() - ARC_MARGIN, rel.max() + ARC_MARGIN
+    t = am + np.linspace(lo, hi, n)
+    return np.stack([np.full(n, C[0]), C[1] + radius * np.cos(t), C[2] + radius * np.sin(t)],
+                    axis=-1)
 
 
 def _tz(d: float) -> NDArray[np.float64]:
@@ -194,6 +226,10 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     T_4 = T_rcm @ _rot4(rot_z(u[2]) @ rot_x(np.pi / 2))    # before u4
     T_5 = T_4 @ _rot4(rot_z(u[3]) @ rot_x(np.pi / 2))      # before u5
     wrist_axes = np.stack([T_rcm[:3, 2], T_4[:3, 2], T_5[:3, 2]])
+    T_u2 = T_b_s @ _rot4(rot_z(u[0]) @ rot_x(np.pi / 2))      # before u2
+    ujoint_axes = np.stack([T_b_s[:3, 2], T_u2[:3, 2]])
+    par = parallel_forward_kinematics(q, design)
+    intersections = par.O_i.copy()
     tip = O_s + design.tool_length * T_b_3[:3, 2]
     r1 = np.sqrt(l1 * l1 - h * h)
     lo = np.minimum(design.stroke_min[:2], q[:2]).min()
@@ -208,6 +244,8 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     return RobotGeometry(
         q=q, slot=slot, mode=int(sol.mode[slot]), p_sign=int(sol.p_sign[slot]),
         ujoint=int(sol.ujoint[slot]), wrist=int(sol.wrist[slot]), p=p, u=u, points=points,
-        frames=frames, wrist_axes=wrist_axes, k1=circle_points(M, r1), k2=circle_points(C, q3),
+        frames=frames, wrist_axes=wrist_axes, ujoint_axes=ujoint_axes, k1=circle_points(M, r1),
+        k2=circle_points(C, q3), k2_arc=_k2_arc(C, q3, M, intersections),
+        intersections=intersections,
         rail=np.array([[lo - 0.05, 0.0, 0.0], [hi + 0.05, 0.0, 0.0]]), design=design,
         T_b_e=T.copy())

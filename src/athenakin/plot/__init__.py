@@ -1,0 +1,33 @@
+"""Views of ATHENA: static 3-D figures, interactive HTML, the 16-solution grid, animations.
+
+matplotlib, plotly, imageio and tqdm (extra ``plot``) are imported only when a
+function that needs them runs.
+
+* :func:`robot_geometry`: where every part is in one FK solution (numpy only).
+* :func:`plot_robot`, :func:`plot_fk_solutions`, :func:`save_view`: matplotlib.
+* :func:`robot_figure`, :func:`write_html`: interactive plotly page.
+* :func:`animate`, :func:`instrument_cone_path`: GIF / MP4 of a motion.
+"""
+
+from ._animate import animate, instrument_cone_path, render_frames
+from ._geometry import N_CIRCLE, RobotGeometry, circle_points, robot_geometry
+from ._html import robot_figure, write_html
+from ._mpl import COLORS, arc_points, plot_fk_solutions, plot_robot, save_view, slot_label
+
+__all__ = [
+    "COLORS",
+    "N_CIRCLE",
+    "RobotGeometry",
+    "animate",
+    "arc_points",
+    "circle_points",
+    "instrument_cone_path",
+    "plot_fk_solutions",
+    "plot_robot",
+    "render_frames",
+    "robot_figure",
+    "robot_geometry",
+    "save_view",
+    "slot_label",
+    "write_html",
+]
