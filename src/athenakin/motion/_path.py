@@ -13,6 +13,14 @@ Actuator values come from the exact inverse kinematics of each point
 (:func:`athenakin.q_from_tool_tip`); their derivatives with respect to ``lam``
 from central differences of that closed form (step :data:`FD_STEP_TIP` in tip
 metres), accurate to about 1e-7 relative.
+
+The timing works on a second parameter ``s`` in [0, 1], proportional to the arc
+length of the segment's image in actuator space (:func:`reparametrised`):
+``|dq/ds|`` is then the same all along the segment, so that limits of ``ds/dt``
+derived from the worst point of the segment are nearly tight everywhere, even
+where ``q(lam)`` speeds up next to a singularity. ``lam(s)`` is a quintic
+interpolating spline of the tabulated inverse of ``s(lam)``; it only sets the
+pace along the path: every sample still lies exactly on it.
 """
 
 from __future__ import annotations
@@ -26,10 +34,12 @@ from ..design import Design
 from ..robot import q_from_tool_tip
 
 __all__ = ["Segment", "line_segment", "arc_segment", "q_on_tips", "q_derivatives",
-           "FD_STEP_TIP"]
+           "reparametrised", "tip_speed_factor", "FD_STEP_TIP", "REPARAM_GRID"]
 
 #: Step of the central differences of ``q(lam)``, in metres of tip motion.
 FD_STEP_TIP = 2e-4
+#: Grid points of the arc-length table of :func:`reparametrised`.
+REPARAM_GRID = 1001
 
 # 5-point central-difference stencils at offsets -2h..2h
 _D1 = np.array([1.0, -8.0, 0.0, 8.0, -1.0]) / 12.0
@@ -55,9 +65,21 @@ class Segment:
     start: NDArray[np.float64]
     end: NDArray[np.float64]
     scale: float
+    lam_of_s: object | None = dataclasses.field(default=None, repr=False)
 
-    def tips(self, lam: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Tool tip (frame E, m) at path parameters ``lam`` of shape (...) -> (..., 3)."""
+    def lam(self, s: NDArray[np.float64], nu: int = 0) -> NDArray[np.float64]:
+        """``lam(s)`` or its derivative of order ``nu`` (identity without reparametrisation)."""
+        s = np.asarray(s, float)
+        if self.lam_of_s is None:
+            return s if nu == 0 else np.full(s.shape, 1.0 if nu == 1 else 0.0)
+        return self.lam_of_s(s, nu)  # type: ignore[operator]
+
+    def tips(self, s: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Tool tip (frame E, m) at path parameters ``s`` of shape (...) -> (..., 3)."""
+        return self.tips_lam(self.lam(s))
+
+    def tips_lam(self, lam: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Tool tip (frame E, m) at geometric parameters ``lam`` of shape (...) -> (..., 3)."""
         lam = np.asarray(lam, float)[..., None]
         if self.kind == "line":
             return self.start + lam * (self.end - self.start)
@@ -104,35 +126,71 @@ def q_on_tips(tips_e: NDArray[np.float64], T_b_e: NDArray[np.float64], design: D
     return q, res.reason, res.mode
 
 
-def q_derivatives(seg: Segment, lam: NDArray[np.float64], T_b_e: NDArray[np.float64],
+def _q_lam_derivatives(seg: Segment, lam: NDArray[np.float64], T_b_e: NDArray[np.float64],
+                       design: Design) -> tuple[NDArray[np.float64], ...]:
+    q0, _, _ = q_on_tips(seg.tips_lam(lam), T_b_e, design)
+    if seg.scale == 0.0:
+        z = np.zeros_like(q0)
+        return q0, z, z, z
+    h = FD_STEP_TIP / seg.scale
+    pts = lam[:, None] + h * _OFFSETS                        # (n, 5)
+    qs, _, _ = q_on_tips(seg.tips_lam(pts), T_b_e, design)  # (n, 5, 3)
+    d1 = np.einsum("k,nki->ni", _D1, qs) / h
+    d2 = np.einsum("k,nki->ni", _D2, qs) / h ** 2
+    d3 = np.einsum("k,nki->ni", _D3, qs) / h ** 3
+    return q0, d1, d2, d3
+
+
+def q_derivatives(seg: Segment, s: NDArray[np.float64], T_b_e: NDArray[np.float64],
                   design: Design) -> tuple[NDArray[np.float64], ...]:
-    """``q`` and its first three derivatives with respect to ``lam`` along a segment.
+    """``q`` and its first three derivatives with respect to the path parameter ``s``.
 
     Parameters
     ----------
     seg : Segment
-    lam : ndarray, shape (n,)
+    s : ndarray, shape (n,)
     T_b_e : ndarray, shape (4, 4)
     design : Design
 
     Returns
     -------
     q, dq, ddq, dddq : ndarray, shape (n, 3)
-        ``q(lam)`` (exact IK) and ``d^k q / d lam^k`` (m). NaN where a stencil point
+        ``q(s)`` (exact IK) and ``d^k q / d s^k`` (m). NaN where a stencil point
         leaves the workspace.
     """
-    lam = np.asarray(lam, float)
-    q0, _, _ = q_on_tips(seg.tips(lam), T_b_e, design)
+    s = np.asarray(s, float)
+    lam = seg.lam(s)
+    q0, d1, d2, d3 = _q_lam_derivatives(seg, lam, T_b_e, design)
+    if seg.lam_of_s is None:
+        return q0, d1, d2, d3
+    l1, l2, l3 = (seg.lam(s, k)[:, None] for k in (1, 2, 3))
+    return (q0, d1 * l1, d2 * l1 ** 2 + d1 * l2,
+            d3 * l1 ** 3 + 3 * d2 * l1 * l2 + d1 * l3)
+
+
+def reparametrised(seg: Segment, T_b_e: NDArray[np.float64], design: Design, *,
+                   n: int = REPARAM_GRID) -> Segment:
+    """The segment with ``s`` proportional to the arc length of ``q(lam)`` (module docstring).
+
+    Returns the segment unchanged for a dwell, or where ``q(lam)`` is not defined
+    on the whole segment (it then leaves the workspace; the safety check says where).
+    """
+    from scipy.integrate import cumulative_simpson
+    from scipy.interpolate import make_interp_spline
+
     if seg.scale == 0.0:
-        z = np.zeros_like(q0)
-        return q0, z, z, z
-    h = FD_STEP_TIP / seg.scale
-    pts = lam[:, None] + h * _OFFSETS                       # (n, 5)
-    qs, _, _ = q_on_tips(seg.tips(pts), T_b_e, design)     # (n, 5, 3)
-    d1 = np.einsum("k,nki->ni", _D1, qs) / h
-    d2 = np.einsum("k,nki->ni", _D2, qs) / h ** 2
-    d3 = np.einsum("k,nki->ni", _D3, qs) / h ** 3
-    return q0, d1, d2, d3
+        return seg
+    lam = np.linspace(0.0, 1.0, n)
+    _, d1, _, _ = _q_lam_derivatives(dataclasses.replace(seg, lam_of_s=None), lam, T_b_e,
+                                     design)
+    speed = np.linalg.norm(d1, axis=-1)
+    if not np.all(np.isfinite(speed)) or np.any(speed <= 0):
+        return seg
+    cum = np.concatenate([[0.0], cumulative_simpson(speed, x=lam)])
+    if not np.all(np.diff(cum) > 0):
+        return seg
+    spl = make_interp_spline(cum / cum[-1], lam, k=5)
+    return dataclasses.replace(seg, lam_of_s=spl)
 
 
 def tip_speed_factor(seg: Segment, lam: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -35,7 +35,15 @@ from ..design import Design
 from ..errors import Reason
 from ..robot import direction_from_angles
 from ._errors import SafetyViolationError, TimingInfeasibleError
-from ._path import Segment, arc_segment, line_segment, q_derivatives, q_on_tips, tip_speed_factor
+from ._path import (
+    Segment,
+    arc_segment,
+    line_segment,
+    q_derivatives,
+    q_on_tips,
+    reparametrised,
+    tip_speed_factor,
+)
 from ._safety import MEASURE_NAMES, Margins, SingularityMeasures, singularity_measures
 from ._timing import LamProfile, dwell, lam_profile, parameter_limits, squeezed
 
@@ -352,6 +360,7 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
 
     plans = []
     for k, seg in enumerate(segs):
+        seg = reparametrised(seg, T, design)
         Kd, tf = _segment_bounds(seg, T, design)
         plans.append(_SegmentPlan(seg=seg, K=Kd, tip_factor=tf,  # type: ignore[arg-type]
                                   requested=None if req is None else float(req[k])))
@@ -474,16 +483,19 @@ def check_samples(samples: dict[str, NDArray], T_b_e: NDArray[np.float64],  # ty
     """
     q = samples["q"]
     n = q.shape[0]
-    checks: list[tuple[str, NDArray[np.bool_], NDArray[np.float64], object, object]] = []
+    # (name, bad (n,) or (n, 3) per actuator, value, bound)
+    checks: list[tuple[str, NDArray[np.bool_], NDArray[np.float64], object]] = []
     reason = samples["reason"]
-    checks.append(("workspace", reason != 0, reason.astype(float), 0.0, None))
+    ok = reason == 0
+    checks.append(("workspace", ~ok, reason.astype(float), 0.0))
     lo, hi = design.stroke_min, design.stroke_max
     with np.errstate(invalid="ignore"):
         under, over = q < lo, q > hi
-    checks.append(("stroke", np.any(under | over, axis=-1), q, np.where(under, lo, hi), "act"))
+    checks.append(("stroke", (under | over) & ok[:, None], q,
+                   np.where(under, lo, hi)))
     mode = samples["mode"]
-    checks.append(("assembly_mode", (mode != mode[0]) & (reason == 0), mode.astype(float),
-                   float(mode[0]), None))
+    checks.append(("assembly_mode", (mode != mode[0]) & ok, mode.astype(float),
+                   float(mode[0])))
     meas = singularity_measures(np.where(np.isfinite(q), q, 0.0), samples["tip_e"], T_b_e,
                                 design, mode=mode)
     samples["measures"] = meas
@@ -492,7 +504,7 @@ def check_samples(samples: dict[str, NDArray], T_b_e: NDArray[np.float64],  # ty
         v = getattr(meas, name)
         with np.errstate(invalid="ignore"):
             bad = (v > m) if margins.is_upper(name) else (v < m)
-        checks.append((name, bad & (reason == 0), v, m, None))
+        checks.append((name, bad & ok, v, m))
     tol = 1 + LIMIT_RTOL
     for name, arr, lim in (("velocity", samples["qd"], limits.v_max),
                            ("acceleration", samples["qdd"], limits.a_max),
@@ -501,32 +513,32 @@ def check_samples(samples: dict[str, NDArray], T_b_e: NDArray[np.float64],  # ty
             continue
         with np.errstate(invalid="ignore"):
             bad = np.abs(arr) > lim * tol
-        checks.append((name, np.any(bad, axis=-1) & (reason == 0), arr,
-                       np.broadcast_to(lim, arr.shape), "act"))
+        checks.append((name, bad & ok[:, None], arr, np.broadcast_to(lim, arr.shape)))
     if limits.tip_speed is not None:
         v = samples["tip_speed"]
-        checks.append(("tip_speed", (np.abs(v) > limits.tip_speed * tol) & (reason == 0), v,
-                       limits.tip_speed, None))
+        with np.errstate(invalid="ignore"):
+            bad = np.abs(v) > limits.tip_speed * tol
+        checks.append(("tip_speed", bad & ok, v, limits.tip_speed))
     first = n
     for _, bad, *_ in checks:
-        idx = np.flatnonzero(bad)
+        idx = np.flatnonzero(bad if bad.ndim == 1 else np.any(bad, axis=-1))
         if idx.size:
             first = min(first, int(idx[0]))
     if first == n:
         return None
-    for name, bad, val, bnd, per in checks:
-        if not bad[first]:
+    for name, bad, val, bnd in checks:
+        row = bad[first]
+        if not np.any(row):
             continue
-        act = None
-        if per == "act":
-            row = np.abs(val[first]) / np.abs(np.asarray(bnd)[first]) if name != "stroke" \
-                else np.abs(val[first] - np.asarray(bnd)[first])
-            act = int(np.nanargmax(row))
-            value, bound = float(val[first, act]), float(np.asarray(bnd)[first, act])
-        else:
-            value = float(val[first])
-            bound = float(bnd)  # type: ignore[arg-type]
-        return {"index": first, "limit": name, "value": value, "bound": bound, "actuator": act}
+        if bad.ndim == 2:
+            b = np.asarray(bnd)[first]
+            excess = np.where(row, np.abs(val[first] - np.sign(val[first]) * np.abs(b))
+                              if name != "stroke" else np.abs(val[first] - b), -np.inf)
+            act = int(np.argmax(excess))
+            return {"index": first, "limit": name, "value": float(val[first, act]),
+                    "bound": float(b[act]), "actuator": act}
+        return {"index": first, "limit": name, "value": float(val[first]),
+                "bound": float(bnd), "actuator": None}  # type: ignore[arg-type]
     raise AssertionError("unreachable")  # pragma: no cover
 
 
