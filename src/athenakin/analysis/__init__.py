@@ -1,4 +1,87 @@
-"""Jacobians, singularities and workspace of the ATHENA robot (tentative init)."""
-from ._jacobians import *  # noqa
-from ._singularities import *  # noqa
-from ._workspace import *  # noqa
+"""Jacobians, the complete singularity set, workspace and assembly-mode maps of ATHENA.
+
+* :mod:`._jacobians` - analytic Jacobians: the parallel module ``d O_s / d q`` and its
+  inverse, the serial UPS chain, the passive joints, and the whole robot in controller
+  variables (instrument direction angles + insertion, tool-tip velocity).
+* :mod:`._singularities` - every singularity condition with its closed-form test and
+  distance measure (:func:`singularities`), the loci in actuator space.
+* :mod:`._workspace` - grids: actuator plane, ``O_s`` workspace with assembly-mode
+  regions, instrument cone about the RCM, tool-tip workspace; ``.npz`` storage.
+* :mod:`.figures` - matplotlib figures (imported on demand: ``athenakin.analysis.figures``).
+
+Derivations and the findings for the default design: ``docs/singularities.md``.
+"""
+
+from ._jacobians import (
+    Frame,
+    instrument_inverse_jacobian,
+    instrument_jacobian,
+    parallel_inverse_jacobian,
+    parallel_jacobian,
+    parallel_state,
+    parallel_twist_jacobian,
+    passive_jacobian,
+    serial_jacobian,
+    tool_tip_inverse_jacobian,
+    tool_tip_jacobian,
+)
+from ._singularities import (
+    CONDITIONS,
+    DEFAULT_TOL,
+    Condition,
+    SingularityReport,
+    condition_number,
+    sigma_min,
+    singular_sets_within_strokes,
+    singularities,
+    singularity_loci,
+)
+from ._workspace import (
+    CHUNK,
+    ActuatorMap,
+    InstrumentCone,
+    PointWorkspace,
+    ToolTipWorkspace,
+    actuator_map,
+    instrument_cone,
+    load_npz,
+    point_workspace,
+    save_npz,
+    tool_tip_workspace,
+    workspace_summary,
+)
+
+__all__ = [
+    "Frame",
+    "parallel_jacobian",
+    "parallel_inverse_jacobian",
+    "parallel_twist_jacobian",
+    "parallel_state",
+    "serial_jacobian",
+    "passive_jacobian",
+    "instrument_jacobian",
+    "instrument_inverse_jacobian",
+    "tool_tip_jacobian",
+    "tool_tip_inverse_jacobian",
+    "CONDITIONS",
+    "DEFAULT_TOL",
+    "Condition",
+    "SingularityReport",
+    "singularities",
+    "singularity_loci",
+    "sigma_min",
+    "condition_number",
+    "singular_sets_within_strokes",
+    "ActuatorMap",
+    "PointWorkspace",
+    "InstrumentCone",
+    "ToolTipWorkspace",
+    "actuator_map",
+    "point_workspace",
+    "instrument_cone",
+    "tool_tip_workspace",
+    "save_npz",
+    "load_npz",
+    "CHUNK",
+    "workspace_summary",
+]
