@@ -16,7 +16,8 @@ from ..errors import KinematicsError
 __all__ = ["main", "COMMANDS"]
 
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
-COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities"]
+COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
+            "animate", "export"]
 
 
 def build_parser() -> argparse.ArgumentParser:

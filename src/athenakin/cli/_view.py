@@ -1,0 +1,92 @@
+"""``athenakin view``: a picture of the robot (PNG/SVG/PDF) or an interactive page (HTML)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from ._common import add_design_option, add_setup_options, load_design, load_rcm
+
+VIEW_SUFFIXES = (".png", ".svg", ".pdf", ".html")
+
+
+def add_q_argument(p: argparse.ArgumentParser) -> None:
+    """Optional positional ``Q1 Q2 Q3`` (m); none means the reference configuration."""
+    p.add_argument("q", nargs="*", type=float, metavar="Q",
+                   help="actuators q1 q2 q3, m (default: the reference configuration "
+                        "-0.10 0.10 0.45)")
+
+
+def q_from_args(args: argparse.Namespace) -> np.ndarray | None:
+    """``args.q`` as an array of shape (3,), or None when not given."""
+    if not args.q:
+        return None
+    if len(args.q) != 3:
+        raise ValueError(f"q: expected 3 numbers (q1 q2 q3, m), got {len(args.q)}")
+    return np.array(args.q, dtype=float)
+
+
+def add_slot_option(p: argparse.ArgumentParser) -> None:
+    """``--slot K``."""
+    p.add_argument("--slot", type=int, default=0, metavar="K",
+                   help="forward-kinematics solution 0..15 (0: mode +1, p > 0, sin u2 > 0, "
+                        "sin u4 > 0; see 'athenakin fk')")
+
+
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``view`` subcommand."""
+    p = sub.add_parser(
+        "view", help="draw the robot: PNG/SVG/PDF picture or interactive HTML page",
+        description="Draw the robot in one forward-kinematics solution (or all 16 with --all): "
+                    "rail and carriages A, B, the parallel module, circles k1 and k2, frames "
+                    "O_i, O_s and E, the U-joint, the instrument through the RCM and the "
+                    "spherical joint. The suffix of -o picks the output: .png, .svg, .pdf "
+                    "(matplotlib) or .html (self-contained interactive page with a menu of "
+                    "the solutions).")
+    add_q_argument(p)
+    p.add_argument("-o", "--output", type=Path, required=True, metavar="FILE",
+                   help="output file: .png, .svg, .pdf or .html")
+    add_slot_option(p)
+    p.add_argument("--all", action="store_true",
+                   help="all 16 solutions side by side (static formats)")
+    p.add_argument("--no-frames", action="store_true", help="hide the frame triads")
+    p.add_argument("--no-labels", action="store_true", help="hide the text labels (static)")
+    p.add_argument("--view", nargs=2, type=float, metavar=("ELEV", "AZIM"),
+                   help="camera elevation and azimuth, deg (static formats)")
+    p.add_argument("--dpi", type=int, default=120, help="resolution of PNG output (120)")
+    add_design_option(p)
+    add_setup_options(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Execute ``view``."""
+    from ..plot import save_view
+
+    out = Path(args.output)
+    if out.suffix.lower() not in VIEW_SUFFIXES:
+        raise ValueError(f"-o: expected a file ending in {', '.join(VIEW_SUFFIXES)}, "
+                         f"got {str(out)!r}")
+    if not out.parent.exists():
+        raise ValueError(f"-o: folder {str(out.parent)!r} does not exist")
+    design = load_design(args)
+    T = load_rcm(args, design)
+    q = q_from_args(args)
+    kw: dict = {"show_frames": not args.no_frames}  # type: ignore[type-arg]
+    if out.suffix.lower() != ".html":
+        if args.view:
+            kw["view"] = tuple(args.view)
+        if not args.all:
+            kw["show_labels"] = not args.no_labels
+        kw["dpi"] = args.dpi
+    else:
+        kw["all_slots"] = True
+    if out.suffix.lower() != ".html" and args.all:
+        save_view(out, q, T, design, all_solutions=True, **kw)
+    else:
+        save_view(out, q, T, design, slot=args.slot, **kw)
+    what = "all solutions" if args.all else f"solution {args.slot}"
+    print(f"wrote {out} ({what})")
+    return 0
