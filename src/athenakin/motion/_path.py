@@ -11,8 +11,8 @@ A path is a sequence of segments between waypoints, each parametrised by
 
 Actuator values come from the exact inverse kinematics of each point
 (:func:`athenakin.q_from_tool_tip`); their derivatives with respect to ``lam``
-from central differences of that closed form (step :data:`FD_STEP_TIP` in tip
-metres), accurate to about 1e-7 relative.
+from Taylor arithmetic through the same closed form (:mod:`._jet`), exact to
+rounding, also next to a singularity.
 
 The timing works on a second parameter ``s`` in [0, 1], proportional to the arc
 length of the segment's image in actuator space (:func:`reparametrised`):
@@ -32,21 +32,13 @@ from numpy.typing import NDArray
 
 from ..design import Design
 from ..robot import q_from_tool_tip
+from ._jet import Jet, jet_sin_cos, q_jet
 
 __all__ = ["Segment", "line_segment", "arc_segment", "q_on_tips", "q_derivatives",
-           "reparametrised", "tip_speed_factor", "FD_STEP_TIP", "REPARAM_GRID"]
+           "reparametrised", "tip_speed_factor", "REPARAM_GRID"]
 
-#: Step of the central differences of ``q(lam)``, in metres of tip motion.
-FD_STEP_TIP = 2e-4
 #: Grid points of the arc-length table of :func:`reparametrised`.
 REPARAM_GRID = 1001
-
-# 5-point central-difference stencils at offsets -2h..2h
-_D1 = np.array([1.0, -8.0, 0.0, 8.0, -1.0]) / 12.0
-_D2 = np.array([-1.0, 16.0, -30.0, 16.0, -1.0]) / 12.0
-_D3 = np.array([-1.0, 2.0, 0.0, -2.0, 1.0]) / 2.0
-_OFFSETS = np.array([-2.0, -1.0, 0.0, 1.0, 2.0])
-
 
 @dataclasses.dataclass(frozen=True)
 class Segment:
@@ -77,6 +69,24 @@ class Segment:
     def tips(self, s: NDArray[np.float64]) -> NDArray[np.float64]:
         """Tool tip (frame E, m) at path parameters ``s`` of shape (...) -> (..., 3)."""
         return self.tips_lam(self.lam(s))
+
+    def tips_jet(self, lam: NDArray[np.float64]) -> list[Jet]:
+        """Jets (Taylor coefficients in ``lam``, order 3) of the tip coordinates at ``lam`` (n,)."""
+        lam = np.asarray(lam, float)
+        if self.kind == "line":
+            dv = self.end - self.start
+            z = np.zeros_like(lam)
+            return [Jet([self.start[i] + lam * dv[i], z + dv[i], z, z]) for i in range(3)]
+        r0, r1 = np.linalg.norm(self.start), np.linalg.norm(self.end)
+        d0, d1 = self.start / r0, self.end / r1
+        omega = float(np.arctan2(np.linalg.norm(np.cross(d0, d1)), np.dot(d0, d1)))
+        rad = Jet([r0 + lam * (r1 - r0), np.full(lam.shape, r1 - r0), 0 * lam, 0 * lam])
+        if omega == 0.0:
+            return [rad * float(d0[i]) for i in range(3)]
+        sa, _ = jet_sin_cos(lam - 1.0, -omega)   # sin((1 - lam) omega)
+        sb, _ = jet_sin_cos(lam, omega)          # sin(lam omega)
+        so = np.sin(omega)
+        return [(sa * float(d0[i]) + sb * float(d1[i])) * rad / so for i in range(3)]
 
     def tips_lam(self, lam: NDArray[np.float64]) -> NDArray[np.float64]:
         """Tool tip (frame E, m) at geometric parameters ``lam`` of shape (...) -> (..., 3)."""
@@ -128,17 +138,18 @@ def q_on_tips(tips_e: NDArray[np.float64], T_b_e: NDArray[np.float64], design: D
 
 def _q_lam_derivatives(seg: Segment, lam: NDArray[np.float64], T_b_e: NDArray[np.float64],
                        design: Design) -> tuple[NDArray[np.float64], ...]:
-    q0, _, _ = q_on_tips(seg.tips_lam(lam), T_b_e, design)
+    """``q`` (exact IK) and its derivatives in ``lam`` (Taylor arithmetic), each (n, 3)."""
+    q0, reason, _ = q_on_tips(seg.tips_lam(lam), T_b_e, design)
     if seg.scale == 0.0:
         z = np.zeros_like(q0)
         return q0, z, z, z
-    h = FD_STEP_TIP / seg.scale
-    pts = lam[:, None] + h * _OFFSETS                        # (n, 5)
-    qs, _, _ = q_on_tips(seg.tips_lam(pts), T_b_e, design)  # (n, 5, 3)
-    d1 = np.einsum("k,nki->ni", _D1, qs) / h
-    d2 = np.einsum("k,nki->ni", _D2, qs) / h ** 2
-    d3 = np.einsum("k,nki->ni", _D3, qs) / h ** 3
-    return q0, d1, d2, d3
+    free = dataclasses.replace(design, q_min=None, q_max=None)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        jets = q_jet(seg.tips_jet(lam), T_b_e, free)
+    bad = (reason != 0)[:, None]
+    d = [np.where(bad, np.nan, np.stack([j.derivatives()[k] for j in jets], axis=-1))
+         for k in (1, 2, 3)]
+    return q0, d[0], d[1], d[2]
 
 
 def q_derivatives(seg: Segment, s: NDArray[np.float64], T_b_e: NDArray[np.float64],
