@@ -91,12 +91,12 @@ def test_parallel_inverse_jacobian_is_the_inverse_and_matches_ik(rc):
     J = parallel_jacobian(rc.q, DESIGN, mode=rc.mode)
     Ji = parallel_inverse_jacobian(rc.q, DESIGN, mode=rc.mode)
     np.testing.assert_allclose(Ji @ J, np.broadcast_to(np.eye(3), J.shape), rtol=0, atol=1e-9)
-    O = _O_s(rc.q, rc.mode)
+    O_b = _O_s(rc.q, rc.mode)
 
     def ik(P):
         return ak.parallel.parallel_ik_from_position(P, DESIGN).q
 
-    _assert_fd(Ji, _fd(ik, O, 3))
+    _assert_fd(Ji, _fd(ik, O_b, 3))
 
 
 def test_parallel_twist_jacobian_matches_finite_differences(rc):
@@ -150,8 +150,8 @@ def test_passive_jacobian_matches_finite_differences_of_fk(rc):
 
 
 def _instrument(q, mode, T, frame):
-    O = _O_s(q, mode)
-    r = T[:, :3, 3] - O
+    O_b = _O_s(q, mode)
+    r = T[:, :3, 3] - O_b
     p = np.linalg.norm(r, axis=-1)
     d_b = r / p[:, None]
     d_f = d_b if frame == "base" else np.einsum("nji,nj->ni", T[:, :3, :3], d_b)
@@ -160,9 +160,9 @@ def _instrument(q, mode, T, frame):
 
 
 def _tip(q, mode, T, frame):
-    O = _O_s(q, mode)
-    r = T[:, :3, 3] - O
-    t = O + DESIGN.tool_length * r / np.linalg.norm(r, axis=-1)[:, None]
+    O_b = _O_s(q, mode)
+    r = T[:, :3, 3] - O_b
+    t = O_b + DESIGN.tool_length * r / np.linalg.norm(r, axis=-1)[:, None]
     return t if frame == "base" else np.einsum("nji,nj->ni", T[:, :3, :3], t - T[:, :3, 3])
 
 
@@ -200,8 +200,8 @@ def test_tool_tip_jacobian_matches_finite_differences(rc, frame):
 
 
 def test_tool_tip_inverse_jacobian_matches_q_from_tool_tip(rc):
-    O = _O_s(rc.q, rc.mode)
-    p = np.linalg.norm(rc.T_b_e[:, :3, 3] - O, axis=-1)
+    O_b = _O_s(rc.q, rc.mode)
+    p = np.linalg.norm(rc.T_b_e[:, :3, 3] - O_b, axis=-1)
     ok = p < DESIGN.tool_length - 0.05  # the tip beyond the RCM, away from p = L
     T, q, m = rc.T_b_e[ok], rc.q[ok], rc.mode[ok]
     Ji = tool_tip_inverse_jacobian(q, T, DESIGN, mode=m, frame="rcm")
