@@ -207,8 +207,14 @@ def _parallel(g: _Geometry, q1: float, q2: float, q3: float
 
 
 def _candidate(g: _Geometry, q1: float, q2: float, q3: float, par: tuple, mode: int,
-               r: int, b: int, w: int) -> tuple | None:
-    """The forward-kinematics solution with the given labels (None where not isolated)."""
+               r: int, b: int, w: int, hint: tuple | None) -> tuple | None:
+    """The forward-kinematics solution with the given labels.
+
+    At a serial singularity (``sin u2 = 0`` or ``sin u4 = 0``: a continuum of
+    solutions) the free angle is taken from ``hint`` (the previous ``u1..u5``), the
+    continuous choice; without a hint, or at ``p = 0`` or a merged assembly mode,
+    None.
+    """
     h, r1, m_y, d, a = par
     if mode == -1 and a <= TANGENT_TOL:
         return None                      # merged into mode +1 at tangency
@@ -228,10 +234,14 @@ def _candidate(g: _Geometry, q1: float, q2: float, q3: float, par: tuple, mode: 
     p = r * n
     zx, zy, zz = cx / p, cys / p, czs / p
     rho = math.hypot(zx, zy)
-    if rho <= DEGENERATE_TOL:
+    if rho > DEGENERATE_TOL:
+        c1, s1 = b * zx / rho, b * zy / rho
+        c2, s2 = -zz, b * rho
+    elif hint is None:
         return None
-    c1, s1 = b * zx / rho, b * zy / rho
-    c2, s2 = -zz, b * rho
+    else:                                # U-joint axes aligned: keep u1
+        c1, s1 = math.cos(hint[0]), math.sin(hint[0])
+        c2, s2 = -zz, 0.0
     # R_s_e columns x and z: R_b_s^T e
     ex, ez = g.ex, g.ez
     Ex = (ex[0], cz * ex[1] - cy * ex[2], cy * ex[1] + cz * ex[2])
@@ -246,10 +256,14 @@ def _candidate(g: _Geometry, q1: float, q2: float, q3: float, par: tuple, mode: 
     W12 = s1 * Ez[0] - c1 * Ez[1]
     W22 = z1[0] * Ez[0] + z1[1] * Ez[1] + z1[2] * Ez[2]
     rho4 = math.hypot(W02, W12)
-    if rho4 <= DEGENERATE_TOL:
+    if rho4 > DEGENERATE_TOL:
+        c3, s3 = w * W02 / rho4, w * W12 / rho4
+        c4, s4 = -W22, w * rho4
+    elif hint is None:
         return None
-    c3, s3 = w * W02 / rho4, w * W12 / rho4
-    c4, s4 = -W22, w * rho4
+    else:                                # spherical-joint axes aligned: keep u3
+        c3, s3 = math.cos(hint[2]), math.sin(hint[2])
+        c4, s4 = -W22, 0.0
     u1 = math.atan2(s1, c1)
     u2 = math.atan2(s2, c2)
     u3 = math.atan2(s3, c3)
@@ -352,7 +366,7 @@ class Tracker:
                   int(sol.wrist[slot]))
         q1, q2, q3 = (float(v) for v in q)
         par = _parallel(self._g, q1, q2, q3)
-        cand = None if par is None else _candidate(self._g, q1, q2, q3, par, *labels)
+        cand = None if par is None else _candidate(self._g, q1, q2, q3, par, *labels, None)
         if cand is None:  # pragma: no cover - the core FK said it is valid
             raise InvalidInputError(f"q0 = {q.tolist()}: slot {slot} is degenerate")
         self._index = 0
@@ -444,7 +458,7 @@ class Tracker:
         if self._lost:
             flags |= TrackFlag.REACQUIRED
         # fast path: the candidate with the previous labels, far from every singularity
-        c = _candidate(g, q1, q2, q3, par, prev[0], prev[1], prev[2], prev[3])
+        c = _candidate(g, q1, q2, q3, par, prev[0], prev[1], prev[2], prev[3], prev[5])
         if c is not None and not self._lost:
             hc, hw, lk, s2, s4, pp = self._watch
             step = self._step(c)
@@ -462,7 +476,7 @@ class Tracker:
             for r in (1, -1):
                 for b in (1, -1):
                     for w in (1, -1):
-                        cc = _candidate(g, q1, q2, q3, par, mode, r, b, w)
+                        cc = _candidate(g, q1, q2, q3, par, mode, r, b, w, prev[5])
                         if cc is not None:
                             cands.append((self._step(cc), cc))
         if not cands:
