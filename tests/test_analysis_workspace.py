@@ -49,8 +49,8 @@ def test_point_workspace_membership_matches_fk(pw):
     par = ak.parallel.parallel_forward_kinematics(pw.q[has], ak.Design(
         l1=DESIGN.l1, l2=DESIGN.l2, l3=DESIGN.l3, l4=DESIGN.l4, l5=DESIGN.l5))
     slot = np.where(pw.mode[has] == 1, 0, 1)
-    O = par.O_s[np.arange(slot.size), slot]
-    np.testing.assert_allclose(O, P[has], rtol=0, atol=1e-9)
+    O_b = par.O_s[np.arange(slot.size), slot]
+    np.testing.assert_allclose(O_b, P[has], rtol=0, atol=1e-9)
     # reachable = within the strokes
     lo, hi = DESIGN.stroke_min, DESIGN.stroke_max
     inside = np.all((pw.q[has] >= lo) & (pw.q[has] <= hi), axis=-1)
