@@ -1,0 +1,183 @@
+"""Static views: the images are not blank and show each part where it projects."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from matplotlib.colors import to_rgb  # noqa: E402
+from mpl_toolkits.mplot3d import proj3d  # noqa: E402
+
+import athenakin as ak  # noqa: E402
+from athenakin.plot import (  # noqa: E402
+    COLORS,
+    plot_fk_solutions,
+    plot_robot,
+    robot_geometry,
+    save_view,
+)
+
+SEED = 4242
+#: Largest RGB distance (0..255 scale) of a pixel that counts as a part's colour.
+COLOR_TOL = 45
+#: Half-size of the pixel window searched around a projected point.
+WINDOW = 3
+
+
+def render(ax):
+    fig = ax.figure
+    fig.canvas.draw()
+    return np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(float)
+
+
+def pixel_of(ax, p):
+    """Row, column of the 3-D point p in the rendered canvas."""
+    x2, y2, _ = proj3d.proj_transform(p[0], p[1], p[2], ax.get_proj())
+    x, y = ax.transData.transform((x2, y2))
+    h = ax.figure.canvas.get_width_height()[1]
+    return int(round(h - y)), int(round(x))
+
+
+def has_color_near(img, rc, color, window=WINDOW):
+    r, c = rc
+    patch = img[max(r - window, 0):r + window + 1, max(c - window, 0):c + window + 1]
+    target = 255 * np.array(to_rgb(color))
+    return bool(np.min(np.linalg.norm(patch - target, axis=-1)) < COLOR_TOL)
+
+
+def color_fraction(img, color):
+    target = 255 * np.array(to_rgb(color))
+    return float(np.mean(np.linalg.norm(img - target, axis=-1) < COLOR_TOL))
+
+
+PARTS = {"instrument": "serial", "actuator_q3": "actuator", "link_a1": "parallel",
+         "link_b1": "parallel", "link_a3": "parallel", "link_b3": "parallel",
+         "carrier_z": "parallel"}
+
+
+def parts_seen(ax, img, g):
+    """For each bar: the share of 5 points along it with its colour nearby."""
+    out = {}
+    for name, key in PARTS.items():
+        a, b = g.segments()[name]
+        hits = [has_color_near(img, pixel_of(ax, a + t * (b - a)), COLORS[key])
+                for t in (0.2, 0.35, 0.5, 0.65, 0.8)]
+        out[name] = np.mean(hits)
+    return out
+
+
+@pytest.fixture
+def fresh_axes():
+    fig = plt.figure(figsize=(6.4, 6.0), dpi=100)
+    ax = fig.add_subplot(projection="3d")
+    yield ax
+    plt.close(fig)
+
+
+def test_default_view_is_not_blank_and_has_every_colour(fresh_axes):
+    ax = plot_robot(ax=fresh_axes)
+    img = render(ax)
+    assert img.std() > 20
+    assert np.mean(np.linalg.norm(img - 255, axis=-1) > 30) > 0.05     # > 5% not white
+    for key in ("serial", "actuator", "parallel", "sphere", "rail"):
+        assert color_fraction(img, COLORS[key]) > 1e-4, key      # > 38 pixels
+
+
+def test_parts_are_where_they_project_over_seeded_configurations():
+    rng = np.random.default_rng(SEED)
+    d = ak.Design.default()
+    T = ak.default_rcm_frame(d)
+    q = rng.uniform(d.stroke_min, d.stroke_max, (60, 3))
+    sol = ak.forward_kinematics(q, T, d, errors="flag")
+    picks = [(q[i], int(rng.choice(np.flatnonzero(sol.valid[i]))))
+             for i in np.flatnonzero(sol.valid.any(axis=1))[:8]]
+    assert len(picks) == 8
+    fig = plt.figure(figsize=(6.4, 6.0), dpi=100)
+    ax = fig.add_subplot(projection="3d")
+    for qi, slot in picks:
+        ax.cla()
+        g = robot_geometry(qi, T, d, slot=slot)
+        plot_robot(geometry=g, ax=ax, show_frames=False, show_labels=False)
+        img = render(ax)
+        seen = parts_seen(ax, img, g)
+        assert min(seen.values()) >= 0.6, (qi, slot, seen)
+        assert has_color_near(img, pixel_of(ax, g.points["RCM"]), COLORS["sphere"], 5)
+    plt.close(fig)
+
+
+def test_a_part_is_not_where_another_configuration_puts_it(fresh_axes):
+    """Slot 0 draws the instrument downwards; slot 4's (upwards) instrument is not in the image."""
+    g0, g4 = robot_geometry(slot=0), robot_geometry(slot=4)
+    ax = plot_robot(geometry=g0, ax=fresh_axes, show_frames=False, show_labels=False)
+    img = render(ax)
+    a, b = g4.segments()["instrument"]
+    far = [a + t * (b - a) for t in (0.6, 0.7, 0.8, 0.9)]
+    assert not any(has_color_near(img, pixel_of(ax, p), COLORS["serial"]) for p in far)
+
+
+def test_views_differ_by_configuration_and_camera(fresh_axes):
+    img0 = render(plot_robot(ax=fresh_axes, slot=0))
+    fresh_axes.cla()
+    img4 = render(plot_robot(ax=fresh_axes, slot=4))
+    fresh_axes.cla()
+    img_cam = render(plot_robot(ax=fresh_axes, slot=0, view=(60.0, 30.0)))
+    assert np.mean(np.abs(img0 - img4)) > 1.0
+    assert np.mean(np.abs(img0 - img_cam)) > 1.0
+
+
+def test_grid_shows_all_sixteen_solutions():
+    fig = plot_fk_solutions(fig=plt.figure(figsize=(9, 9), dpi=60))
+    axes = [a for a in fig.axes if a.name == "3d"]
+    assert len(axes) == 16
+    img = render(axes[0])
+    for k, ax in enumerate(axes):
+        g = robot_geometry(slot=k)
+        assert ax.get_title().startswith(f"slot {k}: mode {g.mode:+d}")
+        a, b = g.segments()["instrument"]
+        hits = [has_color_near(img, pixel_of(ax, a + t * (b - a)), COLORS["serial"], 2)
+                for t in (0.3, 0.5, 0.7)]
+        assert sum(hits) >= 2, k
+    # every panel uses the same axis box
+    lims = {tuple(np.round(ax.get_xlim3d() + ax.get_ylim3d() + ax.get_zlim3d(), 12))
+            for ax in axes}
+    assert len(lims) == 1
+    plt.close(fig)
+
+
+def test_save_png_svg_pdf(tmp_path):
+    import imageio.v3 as iio
+
+    png = save_view(tmp_path / "robot.png", dpi=60)
+    img = iio.imread(png)
+    assert img.shape[0] > 300 and img.std() > 20
+    svg = save_view(tmp_path / "robot.svg").read_text()
+    assert svg.lstrip().startswith("<?xml") and "<svg" in svg
+    assert COLORS["serial"] in svg and COLORS["actuator"] in svg and "RCM" in svg
+    pdf = save_view(tmp_path / "robot.pdf").read_bytes()
+    assert pdf.startswith(b"%PDF")
+    assert not plt.get_fignums()                      # figures are closed after saving
+
+
+def test_save_grid_png(tmp_path):
+    import imageio.v3 as iio
+
+    img = iio.imread(save_view(tmp_path / "grid.png", all_solutions=True, dpi=40))
+    h, w = img.shape[:2]
+    for r in range(4):                                  # every panel has coloured pixels
+        for c in range(4):
+            panel = img[r * h // 4:(r + 1) * h // 4, c * w // 4:(c + 1) * w // 4, :3]
+            assert color_fraction(panel.astype(float), COLORS["serial"]) > 1e-4
+
+
+def test_save_rejects_unknown_suffix(tmp_path):
+    with pytest.raises(ValueError, match=r"\.png, \.svg, \.pdf or \.html"):
+        save_view(tmp_path / "robot.jpg")
+
+
+def test_invalid_slot_raises_before_drawing():
+    n = len(plt.get_fignums())
+    with pytest.raises(ak.StrokeLimitError):
+        plot_robot([0.2, 0.1, 0.45])
+    assert len(plt.get_fignums()) == n
