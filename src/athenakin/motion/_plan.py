@@ -475,9 +475,11 @@ def check_samples(samples: dict[str, NDArray], T_b_e: NDArray[np.float64],  # ty
     Returns
     -------
     dict or None
-        ``index, limit, value, bound, actuator`` of the first violation (by sample
-        index; at that sample, in the order workspace, stroke, assembly mode,
-        margins of :data:`MEASURE_NAMES`, velocity, acceleration, jerk, tip speed).
+        ``index, limit, value, bound, actuator`` of the first violation of a
+        geometric limit (workspace, stroke, assembly mode, margins of
+        :data:`MEASURE_NAMES`, in this order at one sample), or if there is none, of
+        the first violation of a kinematic limit (velocity, acceleration, jerk, tip
+        speed). Geometric limits come first because no timing can fix them.
         The samples' :class:`SingularityMeasures` are stored under
         ``samples["measures"]``.
     """
@@ -519,11 +521,18 @@ def check_samples(samples: dict[str, NDArray], T_b_e: NDArray[np.float64],  # ty
         with np.errstate(invalid="ignore"):
             bad = np.abs(v) > limits.tip_speed * tol
         checks.append(("tip_speed", bad & ok, v, limits.tip_speed))
+    # geometric limits first: no timing can fix them (and next to the workspace boundary a
+    # path may break a kinematic limit before it leaves)
+    n_geo = 3 + len(MEASURE_NAMES)
     first = n
-    for _, bad, *_ in checks:
-        idx = np.flatnonzero(bad if bad.ndim == 1 else np.any(bad, axis=-1))
-        if idx.size:
-            first = min(first, int(idx[0]))
+    for group in (checks[:n_geo], checks[n_geo:]):
+        for _, bad, *_ in group:
+            idx = np.flatnonzero(bad if bad.ndim == 1 else np.any(bad, axis=-1))
+            if idx.size:
+                first = min(first, int(idx[0]))
+        if first < n:
+            checks = group
+            break
     if first == n:
         return None
     for name, bad, val, bnd in checks:
