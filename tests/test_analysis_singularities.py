@@ -344,3 +344,25 @@ def test_default_design_findings():
     for q3 in (lo - 1e-4, hi + 1e-4):
         q = np.stack([h, -h, np.full_like(h, q3)], axis=-1)
         assert not np.all(singularities(q, design=DESIGN).assembled)
+
+
+@pytest.mark.parametrize("name", ["ab_coincide", "circles_tangent", "d_on_rail", "ujoint",
+                                  "wrist", "p_zero", "ik_cos_u1", "ik_sin_u1_sin_u2",
+                                  "tip_at_rcm"])
+def test_near_singular_configurations(name):
+    from athenakin.analysis import MEASURE_OF, near_singular_configurations
+
+    dist = np.array(DISTANCES)
+    q, T = near_singular_configurations(name, dist, DESIGN)
+    assert q.shape == (dist.size, 3) and T.shape == (dist.size, 4, 4)
+    rep = singularities(q, T, DESIGN)
+    np.testing.assert_allclose(rep.conditions[name].value, dist, rtol=2e-3)
+    measure, power = MEASURE_OF[name]
+    _assert_power_law(list(rep.measures[measure]), power)
+
+
+def test_near_singular_configurations_rejects_unknown_names():
+    from athenakin.analysis import near_singular_configurations
+
+    with pytest.raises(ak.InvalidInputError, match="name: expected one of"):
+        near_singular_configurations("stroke_limit", [1e-3])

@@ -53,6 +53,8 @@ __all__ = [
     "sigma_min",
     "condition_number",
     "singular_sets_within_strokes",
+    "near_singular_configurations",
+    "MEASURE_OF",
 ]
 
 #: Default tolerance of every condition (metres or dimensionless): ``near = value <= tol``.
@@ -528,3 +530,84 @@ def singular_sets_within_strokes(design: Design | None = None, *, n: int = 4001
                   f"q3 in [{lo[2]:.4g}, {hi[2]:.4g}] m"}
     out["mode_safe_q3"] = {"value": (float(inner.max()), float(outer.min()))}
     return out
+
+
+#: The Jacobian measure that vanishes on each condition's set, and its power law.
+MEASURE_OF = {
+    "ab_coincide": ("parallel_sigma_min", 1.0),
+    "circles_tangent": ("parallel_inverse_sigma_min", 0.5),
+    "d_on_rail": ("parallel_inverse_sigma_min", 0.5),
+    "ujoint": ("serial_sigma_min", 1.0),
+    "wrist": ("serial_sigma_min", 1.0),
+    "p_zero": ("serial_sigma_min", 1.0),
+    "ik_cos_u1": ("ik_sigma_min", 1.0),
+    "ik_sin_u1_sin_u2": ("ik_sigma_min", 1.0),
+    "tip_at_rcm": ("tool_tip_sigma_min", 1.0),
+}
+
+
+def near_singular_configurations(name: str, distances: ArrayLike, design: Design | None = None,
+                                 *, h: float | None = None
+                                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Configurations at given distances from one singular set (for tests and figures).
+
+    Parallel sets are approached at ``x_M = 0`` along ``q3`` (``circles_tangent``,
+    external tangency) or ``h``; the serial, IK and tool-tip sets from the
+    reference configuration :data:`~athenakin.robot.REFERENCE_Q` (mode +1) with
+    ``p = 0.2`` m and ``u = (0.5, 0.7, 0.3, 1.0, 0.4)`` rad, by moving one passive
+    joint and building the RCM frame that closes the chain.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`MEASURE_OF`.
+    distances : array-like, shape (n,)
+        Values of the condition's closed-form measure to produce (m or sines).
+    design : Design, optional
+    h : float, keyword-only
+        ``h`` of the tangency cases (default ``-0.9 min(l1, l3)``).
+
+    Returns
+    -------
+    q : ndarray, shape (n, 3)
+    T_b_e : ndarray, shape (n, 4, 4)
+        RCM frames (the reference set-up for the parallel cases).
+    """
+    from ..chain import ups_transform
+    from ..parallel import parallel_forward_kinematics
+    from ..robot import REFERENCE_Q
+
+    design = _design(design)
+    e = np.asarray(distances, dtype=float).reshape(-1)
+    n = e.size
+    T0 = _rcm(None, design)
+    if name not in MEASURE_OF:
+        raise InvalidInputError(f"name: expected one of {list(MEASURE_OF)}, got {name!r}")
+    hh = -0.9 * min(design.l1, design.l3) if h is None else float(h)
+    if name == "ab_coincide":
+        q = np.stack([-e, e, np.full(n, REFERENCE_Q[2])], axis=-1)
+    elif name == "d_on_rail":
+        q = np.stack([-(design.l3 - e), design.l3 - e, np.full(n, REFERENCE_Q[2])], axis=-1)
+    elif name == "circles_tangent":
+        r1 = np.sqrt(design.l1 ** 2 - hh * hh)
+        d = np.hypot(np.sqrt(design.l3 ** 2 - hh * hh) + design.l2, design.l5)
+        q = np.stack([np.full(n, hh), np.full(n, -hh), d + r1 - e], axis=-1)
+    if name in ("ab_coincide", "d_on_rail", "circles_tangent"):
+        return q, np.broadcast_to(T0, (n, 4, 4)).copy()
+    u = np.tile([0.5, 0.7, 0.3, 1.0, 0.4], (n, 1))
+    p = np.full(n, 0.2)
+    s = np.arcsin(np.clip(e, -1, 1))
+    if name == "ujoint":
+        u[:, 1] = s
+    elif name == "wrist":
+        u[:, 3] = s
+    elif name == "p_zero":
+        p = e.copy()
+    elif name == "ik_cos_u1":
+        u[:, 0] = np.pi / 2 + s
+    elif name == "ik_sin_u1_sin_u2":
+        u[:, 0], u[:, 1] = s, np.pi / 2
+    else:  # tip_at_rcm
+        p = design.tool_length + e
+    Ts = parallel_forward_kinematics(REFERENCE_Q, design).T_b_s[0]
+    return np.broadcast_to(REFERENCE_Q, (n, 3)).copy(), Ts @ ups_transform(p, u)
