@@ -209,7 +209,8 @@ def read_q_stream_csv(path: str | Path) -> tuple[NDArray[np.float64], NDArray[np
     if not np.all(np.isfinite(q[0])):
         raise PathFileError(f"{path}, line {rows[0][0]}: the first reading must be complete "
                             f"(it sets the initial configuration)")
-    t = _numbers(path, header, rows, ["t_s"])[:, 0] if "t_s" in header else None
+    t = (_numbers(path, header, rows, ["t_s"], allow_nonfinite=True)[:, 0]
+         if "t_s" in header else None)
     return q, t
 
 
