@@ -380,3 +380,19 @@ def test_trajectory_is_read_only():
         traj.q[0, 0] = 1.0
     with pytest.raises(dataclasses.FrozenInstanceError):
         traj.rate = 10.0  # type: ignore[misc]
+
+
+def test_cond_is_the_condition_number_of_the_tip_jacobian():
+    """Cross-check of the analysis-based measure with central differences of the core FK."""
+    traj = plan(SQUARE[:3], T, D)
+    idx = np.linspace(0, len(traj.t) - 1, 7).astype(int)
+    h = 1e-7
+    for i in idx:
+        J = np.empty((3, 3))
+        for j in range(3):
+            e = np.zeros(3)
+            e[j] = h
+            tp = fk_tip_and_axis(np.array([traj.q[i] + e]), traj.mode[[i]])[0][0]
+            tm = fk_tip_and_axis(np.array([traj.q[i] - e]), traj.mode[[i]])[0][0]
+            J[:, j] = (tp - tm) / (2 * h)
+        assert traj.measures.cond[i] == pytest.approx(np.linalg.cond(J), rel=1e-5)

@@ -1,8 +1,8 @@
 """Distances to the singularities of ATHENA along a motion, and the margins they must keep.
 
-Every measure is computed per sample from the actuator values ``q`` and the tool
-tip in the RCM frame (batch over leading axes). They are the singular set known
-for this robot (docs/errata.md, docs/motion.md):
+Every measure is computed per sample from the actuator values ``q`` with
+:mod:`athenakin.analysis` (batch over leading axes). They cover the singular set
+of the robot (docs/singularities.md, docs/motion.md):
 
 * parallel module (Eq. 7-10): the half-chord ``a`` of ``k1 ∩ k2`` (``a = 0``: the
   two assembly modes meet, paper's ``w = 0``, a forward singularity); ``|h|``
@@ -26,16 +26,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..design import Design
-from ..parallel import circle_geometry, parallel_forward_kinematics
 
-__all__ = ["Margins", "SingularityMeasures", "singularity_measures", "MEASURE_NAMES",
-           "FD_STEP_Q"]
+__all__ = ["Margins", "SingularityMeasures", "singularity_measures", "MEASURE_NAMES"]
 
 #: Names of the measures, in the order the safety check reports them.
 MEASURE_NAMES = ("half_chord", "h", "link", "sin_u2", "sin_u4", "p", "depth", "cond")
-
-#: Step (m) of the central differences that give ``d O_s / d q`` for :attr:`cond`.
-FD_STEP_Q = 1e-7
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -138,22 +133,24 @@ class SingularityMeasures:
         return out
 
 
-def _o_s(q: NDArray[np.float64], design: Design, slot: NDArray[np.int64]) -> NDArray[np.float64]:
-    par = parallel_forward_kinematics(q, design)
-    return np.take_along_axis(par.O_s, slot[..., None, None], axis=-2)[..., 0, :]
-
-
 def singularity_measures(q: NDArray[np.float64], tip_e: NDArray[np.float64],
                          T_b_e: NDArray[np.float64], design: Design, *,
                          mode: NDArray[np.int64] | int = 1) -> SingularityMeasures:
     """Distances to the singularities for actuator values and the tool tip they hold.
 
+    The values come from :func:`athenakin.analysis.singularities` (closed-form
+    conditions ``ab_coincide``, ``d_on_rail``, ``k1_degenerate``, ``p_zero``, ``ujoint``,
+    ``wrist``, ``tip_at_rcm`` and the half-chord) and
+    :func:`athenakin.analysis.tool_tip_jacobian` (analytic ``d tip / d q``).
+
     Parameters
     ----------
     q : ndarray, shape (..., 3)
-        Actuators, m (a valid configuration of the given assembly mode).
+        Actuators, m (a configuration of the given assembly mode).
     tip_e : ndarray, shape (..., 3)
-        Tool tip in the RCM frame, m (``O_s + L d``, the instrument through the RCM).
+        Tool tip in the RCM frame, m (``O_s + L d``, the instrument through the RCM);
+        its depth must agree with ``q`` (it is the planner's target, used to name
+        the sample; the measures themselves come from ``q``).
     T_b_e : ndarray, shape (4, 4)
         RCM frame.
     design : Design
@@ -164,34 +161,17 @@ def singularity_measures(q: NDArray[np.float64], tip_e: NDArray[np.float64],
     -------
     SingularityMeasures
     """
+    from ..analysis import condition_number, singularities, tool_tip_jacobian
+
     q = np.asarray(q, float)
-    tip_e = np.asarray(tip_e, float)
-    g = circle_geometry(q, design)
-    habs = np.abs(g["h"])
-    depth = np.linalg.norm(tip_e, axis=-1)
-    d_e = tip_e / np.where(depth > 0, depth, 1.0)[..., None]
-    d_b = d_e @ T_b_e[:3, :3].T
-    slot = np.where(np.broadcast_to(mode, q.shape[:-1]) == 1, 0, 1).astype(np.int64)
+    mode = np.broadcast_to(np.asarray(mode), q.shape[:-1])
     free = dataclasses.replace(design, q_min=None, q_max=None)
-    O_s = _o_s(q, free, slot)
-    rho = np.hypot(O_s[..., 1], O_s[..., 2])
-    z_s = np.stack([np.zeros_like(rho), O_s[..., 1] / rho, O_s[..., 2] / rho], axis=-1)
-    sin_u2 = np.linalg.norm(np.cross(z_s, d_b), axis=-1)
-    sin_u4 = np.hypot(d_e[..., 0], d_e[..., 1])
-    p = design.tool_length - depth
-    # d tip / d q = (d tip / d O_s)(d O_s / d q); d tip / d O_s = u u^T + (1 - L/p)(I - u u^T)
-    dO = np.empty(q.shape + (3,))
-    for j in range(3):
-        e = np.zeros(3)
-        e[j] = FD_STEP_Q
-        dO[..., :, j] = (_o_s(q + e, free, slot) - _o_s(q - e, free, slot)) / (2 * FD_STEP_Q)
-    uu = d_b[..., :, None] * d_b[..., None, :]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        k = 1.0 - design.tool_length / p
-        A = uu + k[..., None, None] * (np.eye(3) - uu)
-        J = A @ dO
-        sv = np.linalg.svd(np.where(np.isfinite(J), J, 0.0), compute_uv=False)
-        cond = np.where(np.all(np.isfinite(J), axis=(-2, -1)), sv[..., 0] / sv[..., -1], np.inf)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rep = singularities(q, T_b_e, free, mode=mode, jacobians=False)
+        c = rep.conditions
+        cond = condition_number(tool_tip_jacobian(q, T_b_e, free, mode=mode))
     return SingularityMeasures(
-        half_chord=g["half_chord"], h=habs, link=min(design.l1, design.l3) - habs,
-        sin_u2=sin_u2, sin_u4=sin_u4, p=p, depth=depth, cond=cond)
+        half_chord=rep.measures["half_chord"], h=c["ab_coincide"].value,
+        link=np.minimum(c["d_on_rail"].value, c["k1_degenerate"].value),
+        sin_u2=c["ujoint"].value, sin_u4=c["wrist"].value, p=c["p_zero"].value,
+        depth=c["tip_at_rcm"].value, cond=np.where(np.isnan(cond), np.inf, cond))
