@@ -180,7 +180,7 @@ def robot_figure(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
                "zaxis": {**axis, "title": "z [m]",
                          "range": [centre[2] - half, centre[2] + half]},
                "aspectmode": "cube", "domain": {"x": [0.0, 0.74], "y": [0.0, 1.0]},
-               "camera": {"eye": {"x": 1.25, "y": -1.35, "z": 0.75}}},
+               "camera": {"eye": {"x": 1.4, "y": -1.5, "z": 0.8}}},
         legend={"x": 0.75, "y": 0.5, "yanchor": "middle", "font": {"size": 11}},
         margin={"l": 0, "r": 0, "t": 50, "b": 0}, paper_bgcolor="white")
     if len(slots) > 1:

@@ -1,0 +1,110 @@
+"""Interactive HTML: the plotly figure, and the page rendered by headless Chromium."""
+
+import shutil
+from pathlib import Path
+
+import imageio.v3 as iio
+import numpy as np
+from matplotlib.colors import to_rgb
+from playwright.sync_api import sync_playwright
+
+from athenakin.plot import COLORS, robot_figure, robot_geometry, write_html
+from athenakin.plot._html import HTML_DIV_ID
+
+#: Debian's chromium (scripts/test.sh installs it); Playwright never downloads a browser here.
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update",
+                 "--disable-sync"]
+COLOR_TOL = 45
+
+
+def color_fraction(img, color):
+    target = 255 * np.array(to_rgb(color))
+    return float(np.mean(np.linalg.norm(img[..., :3].astype(float) - target, axis=-1)
+                         < COLOR_TOL))
+
+
+def test_figure_has_every_solution_behind_a_menu():
+    fig = robot_figure()
+    menu = fig.layout.updatemenus[0]
+    assert len(menu.buttons) == 16
+    shown = np.array([b.args[0]["visible"] for b in menu.buttons])       # (16, n_traces)
+    assert np.all(shown.sum(axis=0) == 1)              # each trace belongs to one solution
+    for k, b in enumerate(menu.buttons):
+        assert b.label.startswith(f"slot {k}:")
+        idx = np.flatnonzero(shown[k])
+        assert np.all(np.diff(idx) == 1) and len(idx) >= 14
+        single = robot_figure(slot=k, all_slots=False)
+        assert [fig.data[i].name for i in idx] == [t.name for t in single.data]
+    np.testing.assert_array_equal([bool(t.visible) for t in fig.data], shown[0])
+    names = {t.name for t in fig.data}
+    for part in ("instrument", "circle k1", "actuator q3 (radius of k2)",
+                 "spherical joint at the RCM (u3, u4, u5)", "base rail (x_b)"):
+        assert part in names
+
+
+def test_figure_traces_hold_the_geometry():
+    g = robot_geometry(slot=3)
+    fig = robot_figure(slot=3, all_slots=False)
+    assert len(fig.layout.updatemenus) == 0
+    ins = next(t for t in fig.data if t.name == "instrument")
+    np.testing.assert_allclose(np.array([ins.x[:2], ins.y[:2], ins.z[:2]]).T,
+                               np.stack(g.segments()["instrument"]), atol=1e-15)
+    pts = next(t for t in fig.data if t.name == "points and joints")
+    i = list(pts.text).index("RCM = O_e")
+    np.testing.assert_allclose([pts.x[i], pts.y[i], pts.z[i]], g.points["RCM"], atol=1e-15)
+
+
+def test_write_html_is_self_contained(tmp_path):
+    text = write_html(tmp_path / "robot.html").read_text()
+    assert f'id="{HTML_DIV_ID}"' in text
+    assert "<script src=" not in text
+    assert len(text) > 1_000_000                     # plotly.js is inline
+    small = write_html(tmp_path / "cdn.html", include_plotlyjs="cdn").read_text()
+    assert len(small) < len(text) - 3_000_000       # plotly.js from the CDN instead
+
+
+def test_page_renders_in_headless_chromium(tmp_path):
+    assert Path(CHROMIUM).exists(), (
+        f"{CHROMIUM} not found: install Debian's chromium (apt-get install chromium); "
+        "scripts/test.sh does it")
+    page_path = write_html(tmp_path / "robot.html")
+    errors, requests = [], []
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        try:
+            page = browser.new_page(viewport={"width": 1000, "height": 800})
+            page.on("pageerror", lambda e: errors.append(f"pageerror: {e}"))
+            page.on("console", lambda m: errors.append(f"console: {m.text}")
+                    if m.type == "error" else None)
+            page.on("request", lambda r: requests.append(r.url))
+            page.goto(page_path.as_uri())
+            page.wait_for_function(
+                f"() => {{ const d = document.getElementById('{HTML_DIV_ID}'); "
+                "return d && d._fullLayout && d.querySelector('canvas'); }", timeout=30000)
+            page.wait_for_timeout(800)
+            shot0 = tmp_path / "robot_slot0.png"
+            page.screenshot(path=str(shot0))
+            n_visible = page.evaluate(
+                f"() => document.getElementById('{HTML_DIV_ID}').data"
+                ".filter(t => t.visible === true).length")
+            # choose slot 4 in the menu, as a user would
+            page.locator(".updatemenu-header-group").first.click()
+            page.locator(".updatemenu-dropdown-button").nth(4).click()
+            page.wait_for_timeout(800)
+            title = page.evaluate(
+                f"() => document.getElementById('{HTML_DIV_ID}').layout.title.text")
+            shot4 = tmp_path / "robot_slot4.png"
+            page.screenshot(path=str(shot4))
+        finally:
+            browser.close()
+    assert errors == []
+    assert all(u.startswith("file://") for u in requests), requests   # nothing from the network
+    assert n_visible == len(robot_figure(all_slots=False).data)
+    assert "slot 4" in title
+    img0, img4 = iio.imread(shot0), iio.imread(shot4)
+    assert img0.std() > 15
+    for key in ("serial", "parallel", "actuator"):
+        assert color_fraction(img0, COLORS[key]) > 2e-4, key
+    assert np.mean(np.abs(img0.astype(float) - img4.astype(float))) > 0.5
