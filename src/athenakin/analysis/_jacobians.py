@@ -448,7 +448,7 @@ def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
     """
     design, g = _state(q, design, mode)
     T = _rcm(T_b_e, design)
-    frame = _frame(frame)
+    _frame(frame)
     d_b, p, R_f, d_f = _instrument(g, T, frame)
     Jp = _parallel_jacobian(g)
     dx, dy, dz = d_f[..., 0], d_f[..., 1], d_f[..., 2]
@@ -487,7 +487,7 @@ def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
     """
     design, g = _state(q, design, mode)
     T = _rcm(T_b_e, design)
-    frame = _frame(frame)
+    _frame(frame)
     d_b, p, R_f, d_f = _instrument(g, T, frame)
     az = np.arctan2(d_f[..., 1], d_f[..., 0])
     pol = np.arctan2(np.hypot(d_f[..., 0], d_f[..., 1]), d_f[..., 2])
@@ -537,7 +537,7 @@ def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
     """
     design, g = _state(q, design, mode)
     T = _rcm(T_b_e, design)
-    frame = _frame(frame)
+    _frame(frame)
     N, _, _ = _tip_matrices(g, T, design.tool_length)
     J = N @ _parallel_jacobian(g)
     if frame == "rcm":
@@ -564,7 +564,7 @@ def tool_tip_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
     """
     design, g = _state(q, design, mode)
     T = _rcm(T_b_e, design)
-    frame = _frame(frame)
+    _frame(frame)
     _, Ninv, _ = _tip_matrices(g, T, design.tool_length)
     J = _parallel_inverse_jacobian(g) @ Ninv
     if frame == "rcm":

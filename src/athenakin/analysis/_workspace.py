@@ -21,8 +21,10 @@ field name plus a JSON ``meta`` entry) and read with :func:`load_npz`.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
+import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -63,7 +65,7 @@ PROGRESS_THRESHOLD = 500_000
 # helpers
 # --------------------------------------------------------------------------------------
 def _resolution(res: int | tuple[int, ...], n: int, name: str = "resolution") -> tuple[int, ...]:
-    r = (res,) * n if np.ndim(res) == 0 else tuple(res)  # type: ignore[arg-type]
+    r: tuple[Any, ...] = (res,) * n if np.ndim(res) == 0 else tuple(res)  # type: ignore[arg-type]
     if len(r) != n or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool)
                               and v >= 2 for v in r):
         raise InvalidInputError(f"{name}: expected an int >= 2 or {n} of them, got {res!r}")
@@ -175,9 +177,11 @@ def actuator_map(design: Design | None = None, *, resolution: int | tuple[int, i
     design = _design(design)
     nh, nq = _resolution(resolution, 2)
     hm = min(design.l1, design.l3)
-    h = np.linspace(*(h_range or (-hm, hm)), nh)
+    h_lo, h_hi = h_range or (-hm, hm)
+    h = np.linspace(h_lo, h_hi, nh)
     dmax = np.hypot(design.l3 + design.l2, design.l5) + design.l1
-    q3 = np.linspace(*(q3_range or (0.0, 1.1 * dmax)), nq)
+    q_lo, q_hi = q3_range or (0.0, 1.1 * dmax)
+    q3 = np.linspace(q_lo, q_hi, nq)
     H, Q3 = np.meshgrid(h, q3, indexing="ij")
     pts = np.stack([H.ravel(), -H.ravel(), Q3.ravel()], axis=-1)  # q1 = h, q2 = -h
 
@@ -408,18 +412,12 @@ def instrument_cone(T_b_e: ArrayLike | None = None, design: Design | None = None
                           n_intervals=starts.sum(axis=-1), condition=r["c"].reshape(sh))
 
 
-class _quiet:
+@contextlib.contextmanager
+def _quiet() -> Iterator[None]:
     """Silence numpy's 'All-NaN slice' RuntimeWarning in a with-block."""
-
-    def __enter__(self) -> None:
-        import warnings
-
-        self._cm = warnings.catch_warnings()
-        self._cm.__enter__()
+    with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-
-    def __exit__(self, *exc: object) -> None:
-        self._cm.__exit__(*exc)
+        yield
 
 
 # --------------------------------------------------------------------------------------
@@ -544,7 +542,7 @@ def save_npz(path: str | Path, result: object, *, design: Design | None = None,
     info = {"type": name, "athenakin_version": __version__,
             "design_toml": design.to_toml() if design is not None else None, **meta}
     path = Path(path)
-    saver = np.savez_compressed if compressed else np.savez
+    saver: Any = np.savez_compressed if compressed else np.savez
     saver(path, meta=np.array(json.dumps(info)), **arrays)
     return path if path.suffix == ".npz" else path.with_name(path.name + ".npz")
 

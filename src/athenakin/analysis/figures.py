@@ -218,7 +218,7 @@ def plot_workspace_slice(pw: PointWorkspace, *, x: float | None = None, quantity
                       rasterized=True)
         mm = pw.mode_margin[i]
         if np.any(np.isfinite(mm)):
-            ax.contour(Y, Z, np.nan_to_num(mm, nan=np.nan).T, levels=[0.0],
+            ax.contour(Y, Z, mm.T, levels=[0.0],
                        colors=COLOR_LOCI["w0"], linewidths=1.5)
         from matplotlib.patches import Patch
 

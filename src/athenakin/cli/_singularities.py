@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -92,7 +93,8 @@ def run(args: argparse.Namespace) -> int:
     rows = [[k, "yes" if v["reachable"] else "no", str(v["detail"])]
             for k, v in sets.items() if "reachable" in v]
     print(table(["set", "reachable", "detail"], rows))
-    lo, hi = sets["mode_safe_q3"]["value"]  # type: ignore[misc]
+    safe: Any = sets["mode_safe_q3"]["value"]
+    lo, hi = float(safe[0]), float(safe[1])
     print(f"q3 strictly inside ({lo:.4f}, {hi:.4f}) m keeps both circles intersecting for every "
           f"allowed h: no assembly-mode change possible")
     for f in files:
