@@ -64,13 +64,7 @@ def parse_margins(items: list[str]) -> object:
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``plan``."""
-    from ..motion import plan, plan_directions
-    from ..motion._io import (
-        read_path_csv,
-        trajectory_csv_text,
-        trajectory_json_text,
-        write_text_atomic,
-    )
+    from ..motion import plan, plan_directions, read_path_csv, save_trajectory
 
     out = Path(args.output)
     if out.suffix.lower() not in (".csv", ".json"):
@@ -90,10 +84,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         traj = plan_directions(spec.azimuth, spec.polar, spec.depth, T, design,  # type: ignore[arg-type]
                                **opts)
-    text = trajectory_json_text(traj) if out.suffix.lower() == ".json" \
-        else trajectory_csv_text(traj)
-    written = [out]
-    write_text_atomic(out, text)
+    written = [save_trajectory(traj, out)]
     if not args.no_plots:
         from ..motion._plot import save_plots
 

@@ -7,6 +7,9 @@
   of the forward-kinematics solution continuous with the previous one, with flags
   for mode / branch switches, jumps and the approach to singularities.
 * :class:`Margins`, :func:`singularity_measures`: distances to the singularities.
+* Files and figures: :func:`read_path_csv`, :func:`read_q_stream_csv`,
+  :func:`save_trajectory`, :func:`save_plots` and the ``plot_*`` functions
+  (matplotlib imported on first use).
 * Errors: :class:`SafetyViolationError`, :class:`TimingInfeasibleError`,
   :class:`PathFileError`, :class:`TrackingError` (all :class:`MotionError`, a
   :class:`~athenakin.errors.KinematicsError`).
@@ -21,7 +24,9 @@ from ._errors import (
     TimingInfeasibleError,
     TrackingError,
 )
+from ._io import PathSpec, read_path_csv, read_q_stream_csv, save_trajectory
 from ._plan import Limits, Trajectory, check_samples, plan, plan_directions
+from ._plot import plot_actuators, plot_singularity_distance, plot_tip_path, save_plots
 from ._safety import MEASURE_NAMES, Margins, SingularityMeasures, singularity_measures
 from ._tracker import JUMP_M, JUMP_RAD, TrackedPose, Tracker, TrackFlag, TrackLog, track
 
@@ -38,6 +43,7 @@ __all__ = [
     "Margins",
     "MotionError",
     "PathFileError",
+    "PathSpec",
     "SafetyViolationError",
     "SingularityMeasures",
     "TimingInfeasibleError",
@@ -46,5 +52,12 @@ __all__ = [
     "check_samples",
     "plan",
     "plan_directions",
+    "plot_actuators",
+    "plot_singularity_distance",
+    "plot_tip_path",
+    "read_path_csv",
+    "read_q_stream_csv",
+    "save_plots",
+    "save_trajectory",
     "singularity_measures",
 ]

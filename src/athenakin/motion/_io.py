@@ -38,6 +38,7 @@ __all__ = [
     "trajectory_json_text",
     "track_csv_text",
     "write_text_atomic",
+    "save_trajectory",
 ]
 
 #: Columns of a tool-tip path file (frame E, m); ``t_s`` is optional.
@@ -314,3 +315,30 @@ def write_text_atomic(path: str | Path, text: str | bytes) -> None:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+def save_trajectory(traj: Trajectory, path: str | Path) -> Path:
+    """Write a trajectory as CSV or JSON, chosen by the extension of ``path``.
+
+    Parameters
+    ----------
+    traj : Trajectory
+    path : str or Path
+        ``*.csv`` (columns :func:`trajectory_columns`) or ``*.json``.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    ValueError
+        Another extension.
+    """
+    path = Path(path)
+    ext = path.suffix.lower()
+    if ext not in (".csv", ".json"):
+        raise ValueError(f"path: expected a .csv or .json file name, got {str(path)!r}")
+    write_text_atomic(path, trajectory_json_text(traj) if ext == ".json"
+                      else trajectory_csv_text(traj))
+    return path
