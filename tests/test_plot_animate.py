@@ -1,0 +1,84 @@
+"""Animations: the instrument path about the RCM, GIF and MP4 output, progress bar."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import imageio.v2 as iio2  # noqa: E402
+import imageio.v3 as iio  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+import athenakin as ak  # noqa: E402
+from athenakin.plot import animate, instrument_cone_path, render_frames  # noqa: E402
+
+SEED = 99
+SMALL = (320, 256)
+
+
+@pytest.mark.parametrize("case", range(6))
+def test_cone_path_keeps_the_instrument_on_the_cone(case):
+    rng = np.random.default_rng(SEED + case)
+    d = ak.Design.default()
+    T = ak.default_rcm_frame(d)
+    axis_e = np.array([1.0, 0.0, 0.0]) + rng.normal(0, 0.05, 3)
+    cone = rng.uniform(0.02, 0.08)
+    p = rng.uniform(0.17, 0.21)
+    q = instrument_cone_path(40, T, d, axis_e=axis_e, cone_angle=cone, p=p)
+    sol = ak.forward_kinematics(q, T, d)
+    assert np.all(sol.valid[:, 0])
+    z3 = np.stack([ak.plot.robot_geometry(qi, T, d).frames["instrument"][:3, 2] for qi in q])
+    axis_b = T[:3, :3] @ (axis_e / np.linalg.norm(axis_e))
+    np.testing.assert_allclose(np.arccos(np.clip(z3 @ axis_b, -1, 1)), cone, atol=1e-7)
+    np.testing.assert_allclose(sol.p[:, 0], p, atol=1e-12)
+    # the sweep goes all the way round: directions spread over the whole circle
+    perp = z3 - np.outer(z3 @ axis_b, axis_b)
+    ang = np.sort(np.arctan2(perp @ np.cross(axis_b, perp[0]), perp @ perp[0]))
+    assert np.max(np.diff(np.r_[ang, ang[0] + 2 * np.pi])) < 2 * np.pi / 40 + 1e-6
+
+
+def test_cone_path_out_of_reach_names_the_sample():
+    with pytest.raises(ak.OutOfWorkspaceError, match="instrument path sample 0"):
+        instrument_cone_path(8, cone_angle=0.25, p=0.25)
+
+
+def test_frames_move_and_are_not_blank():
+    q = instrument_cone_path(4)
+    frames = render_frames(q, size=SMALL, progress=False)
+    assert len(frames) == 4
+    assert all(f.shape == (SMALL[1], SMALL[0], 3) and f.dtype == np.uint8 for f in frames)
+    assert all(f.std() > 15 for f in frames)
+    diffs = [np.mean(np.abs(frames[i].astype(float) - frames[i + 1])) for i in range(3)]
+    assert min(diffs) > 0.05
+
+
+def test_gif(tmp_path, capsys):
+    q = instrument_cone_path(5)
+    path = animate(tmp_path / "motion.gif", q, size=SMALL, fps=10)
+    frames = iio.imread(path)
+    assert frames.shape[:3] == (5, SMALL[1], SMALL[0])
+    assert frames[0].std() > 15
+    assert "rendering" in capsys.readouterr().err          # the tqdm bar
+
+
+def test_mp4(tmp_path):
+    q = np.linspace([-0.10, 0.10, 0.45], [-0.12, 0.12, 0.50], 6)
+    path = animate(tmp_path / "motion.mp4", q, size=(320, 256), progress=False)
+    reader = iio2.get_reader(path)
+    try:
+        assert reader.count_frames() == 6
+        f = reader.get_data(0)
+        assert f.shape == (256, 320, 3) and f.std() > 15
+    finally:
+        reader.close()
+
+
+def test_animate_rejects_unknown_suffix(tmp_path):
+    with pytest.raises(ValueError, match=r"\.gif or \.mp4"):
+        animate(tmp_path / "motion.avi", instrument_cone_path(2), progress=False)
+
+
+def test_a_frame_without_solution_is_named():
+    q = np.array([[-0.10, 0.10, 0.45], [0.2, 0.1, 0.45]])
+    with pytest.raises(ak.StrokeLimitError, match="frame 1"):
+        render_frames(q, size=SMALL, progress=False)
