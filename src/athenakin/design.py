@@ -129,11 +129,15 @@ class Design:
         in the project's ``shared/fixtures`` (``l1 = 0.30``, ``l2 = 0.10``,
         ``l3 = 0.25``, ``l4 = 0.15``, ``l5 = 0.40`` m): a bench-top module about
         half a metre across, the size of the experimental model of the paper's
-        Fig. 1 as far as a photograph allows. The stroke limits keep ``|q1 - q2|``
-        below ``2*l3 = 0.5`` m with the carriages 2 cm apart at least, and ``q3``
-        (the radius of ``k2``) between 0.20 and 0.70 m, which covers the whole
-        range where ``k1`` and ``k2`` intersect in the upper assembly mode. The
-        tool length (0.45 m) is that of a standard laparoscopic instrument shaft.
+        Fig. 1 as far as a photograph allows. The stroke limits are per-actuator
+        boxes, ``q1`` in [-0.30, 0.10] m, ``q2`` in [-0.10, 0.30] m (two 0.4 m
+        rails that overlap by 0.2 m) and ``q3`` in [0.20, 0.70] m. Being boxes, they
+        do not exclude the coupled conditions: ``q1 = q2`` (``h = 0``, a singularity
+        of the module), ``|q1 - q2| / 2 > l3`` (reported as ``LINK_TOO_SHORT``) and
+        the two tangencies of ``k1`` and ``k2`` (``w = 0``, where the assembly modes
+        meet; keeping ``q3`` within (0.2546, 0.5781) m avoids them). See
+        docs/singularities.md for the map of these sets. The tool length (0.45 m) is
+        that of a standard laparoscopic instrument shaft.
         """
         return cls(l1=0.30, l2=0.10, l3=0.25, l4=0.15, l5=0.40,
                    q_min=(-0.30, -0.10, 0.20), q_max=(0.10, 0.30, 0.70),
