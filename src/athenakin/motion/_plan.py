@@ -235,7 +235,7 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
     >>> import numpy as np, athenakin as ak
     >>> d = ak.Design.default()
     >>> T = ak.default_rcm_frame(d)
-    >>> tips = [[0.25, 0.0, 0.0], [0.25, 0.03, 0.0], [0.22, 0.03, 0.02]]
+    >>> tips = [[0.25, 0.0, 0.0], [0.27, -0.02, 0.0], [0.27, -0.02, 0.02]]
     >>> traj = ak.motion.plan(tips, T, d, rate=1000.0, v_max=0.05, a_max=0.5)
     >>> bool(np.all(np.abs(traj.qd) <= 0.05 * (1 + 1e-6)))
     True
