@@ -143,6 +143,35 @@ def test_near_ujoint_singularity_converges_slower():
     assert res.hold_time[1] > 2 * res.hold_time[0]
 
 
+def test_mujoco_sees_the_parallel_singularity_at_h_zero():
+    """With q held, MuJoCo's constraint Jacobian loses a rank at h = (q1 - q2)/2 = 0, like |h|.
+
+    The core found this singularity of the parallel module (dO_s/dq is singular at
+    h = 0); MuJoCo's model of the mechanism, built from bars and joints, agrees.
+    """
+    m = load_model()
+    d = mujoco.MjData(m)
+    act = np.zeros((3, m.nv))
+    for i, name in enumerate(ACTUATED):
+        act[i, m.joint(name).dofadr[0]] = 1.0
+
+    def smallest_singular_value(q):
+        v, _ = mechanism_joint_values(q)
+        d.qpos[:] = [v[n] for n in JOINTS]
+        mujoco.mj_forward(m, d)
+        J = np.zeros((d.nefc, m.nv))
+        if mujoco.mj_isSparse(m):
+            mujoco.mju_sparse2dense(J, d.efc_J, d.efc_J_rownnz, d.efc_J_rowadr, d.efc_J_colind)
+        else:
+            J = d.efc_J[:d.nefc * m.nv].reshape(d.nefc, m.nv)
+        return np.linalg.svd(np.vstack([J, act]), compute_uv=False)[-1]
+
+    hs = np.array([0.04, 0.01, 1e-3, 1e-4])
+    s = np.array([smallest_singular_value([-0.01 - h, -0.01 + h, 0.5]) for h in hs])
+    np.testing.assert_allclose(s / hs, s[0] / hs[0], rtol=0.15)    # proportional to |h|
+    assert smallest_singular_value([-0.01, -0.01, 0.5]) < 1e-12
+
+
 def test_gravity_opens_the_loops_by_the_constraint_compliance_only():
     """Under gravity the servos sag and the soft loops open a little; FK at the reached q holds."""
     q = sample_reachable_q(3, rng=SEED)

@@ -37,9 +37,11 @@ SETTLE_TIME = 6.0
 #: within about 1e-12 of rest.
 SPEED_TOL = 1e-11
 #: Distances to the singularities kept along the straight path ``home -> q`` by
-#: :func:`sample_reachable_q`: ``|sin u2|``, ``|sin u4|``, ``|p|`` (m) and the
-#: half-chord of ``k1 ∩ k2`` (m).
-PATH_MARGINS = {"sin_u2": 0.2, "sin_u4": 0.2, "p": 0.02, "half_chord": 0.005}
+#: :func:`sample_reachable_q`: ``|sin u2|``, ``|sin u4|``, ``|p|`` (m), the
+#: half-chord of ``k1 ∩ k2`` (m) and ``|h| = |q1 - q2| / 2`` (m; at ``h = 0`` the
+#: parallel module is singular, and MuJoCo's constrained model loses a rank there).
+#: Near any of them the mechanism is soft in one direction and MuJoCo settles slowly.
+PATH_MARGINS = {"sin_u2": 0.2, "sin_u4": 0.2, "p": 0.02, "half_chord": 0.005, "h": 0.02}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -343,6 +345,7 @@ def sample_reachable_q(n: int, design: Design | None = None, T_b_e: ArrayLike | 
             ok &= np.abs(np.sin(sol.u[..., slot, 3])) > PATH_MARGINS["sin_u4"]
             ok &= np.abs(sol.p[..., slot]) > PATH_MARGINS["p"]
             ok &= par.half_chord > PATH_MARGINS["half_chord"]
+            ok &= 0.5 * np.abs(path[..., 0] - path[..., 1]) > PATH_MARGINS["h"]
         good = cand[np.all(ok, axis=-1)]
         found.extend(good)
         if len(found) >= n:
