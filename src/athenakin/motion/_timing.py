@@ -18,6 +18,9 @@ from numpy.typing import NDArray
 
 __all__ = ["ParameterLimits", "parameter_limits", "LamProfile", "lam_profile"]
 
+#: Time step (s) of the acceleration difference that gives the (piecewise-constant) jerk.
+_JERK_STEP = 1e-7
+
 
 @dataclasses.dataclass(frozen=True)
 class ParameterLimits:
@@ -121,15 +124,19 @@ class LamProfile:
             return out[0], out[1], out[2], out[3]
         k = self.scale
         tr = self._traj
-        prof = tr.profiles[0][0]  # type: ignore[attr-defined]
-        bounds = np.cumsum(prof.t)
-        jerk = np.asarray(prof.j)
+        dur = float(tr.duration)  # type: ignore[attr-defined]
         for i, t in enumerate(tau):
-            ts = min(max(t * k, 0.0), tr.duration)  # type: ignore[attr-defined]
+            ts = min(max(t * k, 0.0), dur)
             p, v, a = tr.at_time(ts)  # type: ignore[attr-defined]
             out[0, i], out[1, i], out[2, i] = p[0], v[0], a[0]
-            ph = int(np.searchsorted(bounds, ts, side="right"))
-            out[3, i] = jerk[min(ph, len(jerk) - 1)] if ts < tr.duration else 0.0  # type: ignore[attr-defined]
+            # jerk is constant within a phase: difference of the acceleration over a
+            # tiny step (a convex combination of the two phases' jerks at a switch)
+            if ts + _JERK_STEP <= dur:
+                out[3, i] = (tr.at_time(ts + _JERK_STEP)[2][0] - a[0]) / _JERK_STEP  # type: ignore[attr-defined]
+            elif ts >= dur:
+                out[3, i] = 0.0
+            else:
+                out[3, i] = (a[0] - tr.at_time(ts - _JERK_STEP)[2][0]) / _JERK_STEP  # type: ignore[attr-defined]
         out[1] *= k
         out[2] *= k * k
         out[3] *= k ** 3
