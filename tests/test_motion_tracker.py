@@ -145,6 +145,32 @@ def test_smooth_streams_keep_their_labels(slot):
     assert_no_silent_switch(log)
 
 
+def test_random_streams_across_the_workspace_never_switch_silently():
+    rng = np.random.default_rng(SEED + 3)
+    qs0 = random_q(200, rng)
+    sol = ak.forward_kinematics(qs0, T, D)
+    starts = qs0[sol.valid[:, 0]][:20]
+    for q0 in starts:
+        t = np.linspace(0, 1, 200)[:, None]
+        stream = q0 + rng.uniform(0.002, 0.02, 3) * np.sin(2 * np.pi * rng.uniform(0.5, 2, 3) * t)
+        log = track(stream, T, D)
+        assert_no_silent_switch(log)
+        # the tracker computes poses beyond the strokes (flagged), the core FK does not
+        ref = ak.forward_kinematics(stream, T, dataclasses.replace(D, q_min=None, q_max=None))
+        lost = (log.flags & TrackFlag.LOST) != 0
+        assert_allclose(lost, ref.n_solutions == 0)
+        outside = np.any((stream < D.stroke_min) | (stream > D.stroke_max), axis=1)
+        flagged = (log.flags & TrackFlag.OUT_OF_STROKE) != 0
+        assert_allclose(flagged[~lost], outside[~lost])
+        ok = log.valid & ~lost
+        # the tracked solution is one of the core FK's solutions at every valid sample
+        rows = np.flatnonzero(ok)
+        sl = log.slot[rows]
+        good = ref.valid[rows, sl]
+        assert np.all(good | (log.flags[rows] != 0))
+        assert_allclose(log.p[rows][good], ref.p[rows, sl][good], atol=1e-12)
+
+
 # --- the parallel module's mode boundary --------------------------------------------------------
 @pytest.mark.parametrize("slot", [0, 8])
 def test_mode_boundary_is_flagged_and_the_mode_kept(slot):
