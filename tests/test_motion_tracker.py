@@ -255,7 +255,7 @@ def test_lost_reading_keeps_last_pose():
     for bad in ([np.nan, 0.1, 0.45], [0.1, -0.1, 0.45], [-0.1, 0.1, 0.05]):   # NaN, A/B, k2
         p = tr.update(bad)
         assert p.flags & TrackFlag.LOST and not p.valid
-        assert p.tip_e == good.tip_e and p.index == tr.pose.index
+        assert p.tip_e == good.tip_e and p.sample == tr.pose.sample
     p = tr.update(Q_REF)
     assert p.valid and p.flags & TrackFlag.REACQUIRED and p.slot == good.slot
 

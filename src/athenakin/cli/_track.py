@@ -64,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
     for _, f in events:
         for bit in TrackFlag:
             if bit and bit in f:
-                counts[bit.name] = counts.get(bit.name, 0) + 1  # type: ignore[index]
+                counts[str(bit.name)] = counts.get(str(bit.name), 0) + 1
     print(f"tracked {len(q)} samples from slot {int(log.slot[0])} (mode {int(log.mode[0]):+d}); "
           f"{len(events)} flagged")
     for name, c in sorted(counts.items()):

@@ -292,7 +292,7 @@ def track_csv_text(log: TrackLog, t: NDArray[np.float64] | None = None) -> str:
     buf.write(",".join(TRACK_COLUMNS) + "\n")
     u = np.degrees(log.u)
     for i in range(n):
-        names = "|".join(f.name for f in TrackFlag if f and f in TrackFlag(int(log.flags[i])))
+        names = "|".join(str(f.name) for f in TrackFlag if f and f in TrackFlag(int(log.flags[i])))
         vals = [str(i), repr(float(tt[i])), *(repr(float(v)) for v in log.q[i]),
                 str(int(log.valid[i])), str(int(log.mode[i])), str(int(log.slot[i])),
                 repr(float(log.p[i])), *(repr(float(v)) for v in u[i]),

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -418,7 +418,7 @@ def _seg_name(sp: _SegmentPlan) -> str:
 
 
 def _sample(plans: list[_SegmentPlan], T: NDArray[np.float64], design: Design, rate: float,
-            t0: float, limits: Limits) -> dict[str, NDArray]:  # type: ignore[type-arg]
+            t0: float, limits: Limits) -> dict[str, Any]:
     durations = np.array([sp.profile.duration for sp in plans])  # type: ignore[union-attr]
     ends = np.cumsum(durations)
     total = float(ends[-1])
@@ -457,7 +457,7 @@ def _sample(plans: list[_SegmentPlan], T: NDArray[np.float64], design: Design, r
             "segment": k, "reason": reason, "mode": mode, "tip_speed": tipf * lam[1]}
 
 
-def check_samples(samples: dict[str, NDArray], T_b_e: NDArray[np.float64],  # type: ignore[type-arg]
+def check_samples(samples: dict[str, Any], T_b_e: NDArray[np.float64],
                   design: Design, limits: Limits, margins: Margins) -> dict | None:  # type: ignore[type-arg]
     """First sample that breaks a limit, or None.
 
@@ -606,7 +606,7 @@ def _trajectory(samples: dict, plans: list[_SegmentPlan], tips: NDArray[np.float
     durations = np.array([sp.profile.duration for sp in plans])  # type: ignore[union-attr]
     wt = t0 + np.concatenate([[0.0], np.cumsum(durations)])
     stretched = np.array([sp.requested is not None and sp.profile.duration  # type: ignore[union-attr]
-                          > sp.requested * (1 + 1e-9) + 1e-12 for sp in plans], dtype=bool)
+                          > sp.requested * (1 + 1e-9) + 1e-12 for sp in plans], dtype=np.bool_)
     ro = {k: np.asarray(v) for k, v in samples.items() if isinstance(v, np.ndarray)}
     for v in ro.values():
         v.setflags(write=False)

@@ -114,7 +114,7 @@ class TrackedPose(NamedTuple):
 
     Attributes
     ----------
-    index : int
+    sample : int
         Sample number (0 for the initial configuration).
     q : tuple of 3 float
         The reading, m.
@@ -143,7 +143,7 @@ class TrackedPose(NamedTuple):
     flags : TrackFlag
     """
 
-    index: int
+    sample: int
     q: tuple[float, float, float]
     valid: bool
     slot: int
@@ -447,7 +447,7 @@ class Tracker:
             When the pose carries a flag of ``raise_on``.
         """
         try:
-            q1, q2, q3 = float(q[0]), float(q[1]), float(q[2])  # type: ignore[index]
+            q1, q2, q3 = float(q[0]), float(q[1]), float(q[2])  # type: ignore[index,arg-type]
             if len(q) != 3:  # type: ignore[arg-type]
                 raise ValueError
         except (TypeError, ValueError, IndexError):
