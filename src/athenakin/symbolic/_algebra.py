@@ -158,7 +158,7 @@ def paper_matrix(X: Sequence[sp.Expr]) -> sp.Matrix:
 
 
 def transform_matrix(X: Sequence[sp.Expr]) -> sp.Matrix:
-    """The displacement of Eq. 3-4 in the ecosystem layout ``[[R, t], [0, 1]]`` (divided by Delta)."""
+    """The displacement of Eq. 3-4 as ``[[R, t], [0, 1]]`` (ecosystem layout, divided by Delta)."""
     R, t, D = _eq3_parts(X)
     M = sp.eye(4)
     M[:3, :3] = R / D

@@ -1,4 +1,4 @@
-"""Run the whole derivation, cache it (JSON of sympy ``srepr``), and generate the numeric solver's code.
+"""Run the whole derivation, cache it (JSON of sympy ``srepr``), generate the solver's code.
 
 ``derive()`` runs every step from the chain definition (Eq. 6, 11, 12) to the
 quadratic in ``p``, the quadrics of the remaining joints and Eq. 15-16, and
@@ -191,6 +191,7 @@ def numeric_source(results: dict[str, sp.Basic], sha256: str) -> str:
         "Regenerate with ``python -m athenakin.symbolic._derivation``.",
         '"""',
         "",
+        "# ruff: noqa: E501",
         "import numpy as np",
         "",
         f'DERIVATION_SHA256 = "{sha256}"',

@@ -1,4 +1,4 @@
-"""The elimination of Section 3.2: ``sl``, ``sr``, ``y`` from ``sl``, ``x`` from ``sr``, the quadratic in ``p``.
+"""The elimination of Section 3.2: ``sl``, ``sr``, ``y``, ``x`` and the quadratic in ``p``.
 
 The steps, each a function returning its result:
 

@@ -3,6 +3,7 @@
 Regenerate with ``python -m athenakin.symbolic._derivation``.
 """
 
+# ruff: noqa: E501
 import numpy as np
 
 DERIVATION_SHA256 = "14d725a81f544bca503333a75fc5169146b397cde8eeda937dadb3337b6eb9cb"

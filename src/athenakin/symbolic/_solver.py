@@ -1,0 +1,300 @@
+"""Forward kinematics the paper's way: all 16 solutions through the quadratic in ``p``.
+
+This is the second FK solver of athenakin, generated from the derivation
+(:mod:`athenakin.symbolic._derivation`): the expressions it evaluates are the
+cached results of LIA and the elimination of Section 3.2, turned into numpy code
+(``_cache/_numeric.py``); it does not import sympy. Per assembly mode:
+
+1. Study vectors ``b`` of ``T_b_s`` (Eq. 10) and ``e`` of ``T_b_e``; the paper's
+   assignment of values with ``B = 1``: ``f = B^-1 E`` (dual-quaternion product).
+2. The quadratic in ``p`` (generated from :func:`~athenakin.symbolic.p_quadratic`):
+   two roots, ``r = 0`` the positive one.
+3. At each root the skew matrix ``K(p)`` (``sr`` in ``x`` after ``y`` from ``sl``)
+   has rank 2; its null space is the pencil of quaternion parts ``x`` of the
+   closure (SVD).
+4. The U-joint quadric (LIA of degree 2) on the pencil: a homogeneous quadratic,
+   two points ``x``; the Segre inverse gives ``(v1, v2)`` homogeneously.
+5. The wrist: ``h = conj(x) f_x``, the generated wrist quadratic in ``v5``, then
+   ``(v3, v4)`` by the Segre inverse.
+
+Half-tangents are kept homogeneous (``v = s / t``), so half turns (``u = pi``,
+``t = 0``), where the affine ``v`` of the paper is infinite, are ordinary
+solutions; angles are ``u = 2 atan2(s, t)`` in (-pi, pi].
+
+The result is a :class:`~athenakin.robot.FKSolution` with the slot layout and
+reason codes of :func:`athenakin.forward_kinematics` (slot ``k = 8m + 4r + 2b + w``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_array, check_transform
+from ..chain import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL, closure_residual, ups_transform
+from ..design import Design
+from ..errors import Reason
+from ..parallel import TANGENT_TOL, parallel_forward_kinematics
+from ..robot import FKSolution
+from ..robot._common import ErrorPolicy, item_reason_from_slots, raise_first_failure, resolve_policy
+from ..robot._fk import SLOT_MODE, SLOT_P_SIGN, SLOT_UJOINT, SLOT_WRIST
+from ..study import dq_conj_quaternion, dq_multiply, quaternion_multiply, study_from_transform
+
+__all__ = ["forward_kinematics_algebraic", "serial_solutions_algebraic", "PENCIL_TOL"]
+
+#: Largest coefficient (relative, unit pencil vectors) of the U-joint quadratic on the
+#: pencil, or of the wrist quadratic, at which it counts as identically zero: the
+#: whole pencil lies on the quadric, a continuum (``sin u2 = 0`` or ``sin u4 = 0``).
+PENCIL_TOL = 1e-12
+
+_checked_hash = False
+
+
+def _numeric():  # type: ignore[no-untyped-def]
+    """The generated module, checked once against the cache's hash."""
+    global _checked_hash
+    from ._cache import _numeric as gen
+
+    if not _checked_hash:
+        import hashlib
+        import json
+        from pathlib import Path
+
+        path = Path(__file__).parent / "_cache" / "derivation.json"
+        data = json.loads(path.read_text())
+        text = json.dumps(data["results"], sort_keys=True, separators=(",", ":"))
+        h = hashlib.sha256(text.encode()).hexdigest()
+        if not (h == data["sha256"] == gen.DERIVATION_SHA256):
+            raise RuntimeError(
+                f"{path}: the cached derivation (hash {h[:12]}..., stored "
+                f"{str(data['sha256'])[:12]}...) and the generated code (from "
+                f"{gen.DERIVATION_SHA256[:12]}...) disagree; regenerate with "
+                f"python -m athenakin.symbolic._derivation")
+        _checked_hash = True
+    return gen
+
+
+def _hroots(A: NDArray[np.float64], B: NDArray[np.float64], C: NDArray[np.float64]
+            ) -> NDArray[np.float64]:
+    """Both roots ``(a : b)`` of ``A a^2 + B a b + C b^2 = 0``, shape (..., 2, 2).
+
+    Stable form: ``q = -(B + sign(B) sqrt(B^2 - 4AC)) / 2``, roots ``(q : A)``, ``(C : q)``;
+    a root at infinity (``A = 0``) is ``(q : 0)``. A negative discriminant (rounding
+    at a double root) is clipped to 0.
+    """
+    sq = np.sqrt(np.maximum(B * B - 4.0 * A * C, 0.0))
+    q = -0.5 * (B + np.where(B >= 0, sq, -sq))
+    return np.stack([np.stack([q, A], axis=-1), np.stack([C, q], axis=-1)], axis=-2)
+
+
+def _segre_inverse(r: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``(s_a, t_a)``, ``(s_b, t_b)`` from ``r ~ (-s_a s_b, t_a t_b, s_a t_b, t_a s_b)``.
+
+    Of the two representatives of each pair (see
+    :func:`athenakin.symbolic.segre_inverse`) the one with the larger norm is used.
+    """
+    r0, r1, r2, r3 = np.moveaxis(r, -1, 0)
+    a1, a2 = np.stack([r2, r1], axis=-1), np.stack([-r0, r3], axis=-1)
+    b1, b2 = np.stack([r3, r1], axis=-1), np.stack([-r0, r2], axis=-1)
+    ua = np.hypot(r2, r1) >= np.hypot(r0, r3)
+    ub = np.hypot(r3, r1) >= np.hypot(r0, r2)
+    return np.where(ua[..., None], a1, a2), np.where(ub[..., None], b1, b2)
+
+
+def _angle(st: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Angle ``2 atan2(s, t)`` in (-pi, pi] and its sine, from homogeneous ``(s, t)``."""
+    s, t = st[..., 0], st[..., 1]
+    u = 2.0 * np.arctan2(s, t)
+    u = np.where(u > np.pi, u - 2 * np.pi, u)
+    u = np.where(u <= -np.pi, u + 2 * np.pi, u)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sin = 2.0 * s * t / (s * s + t * t)
+    return u, sin
+
+
+def _order(first_negative: NDArray[np.bool_], a: NDArray[np.float64], axis: int
+           ) -> NDArray[np.float64]:
+    """Swap the two entries along ``axis`` where ``first_negative`` (broadcast) holds."""
+    flipped = np.flip(a, axis=axis)
+    return np.where(first_negative, flipped, a)
+
+
+def serial_solutions_algebraic(f: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
+                               p_zero_tol: float = P_ZERO_TOL
+                               ) -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                          NDArray[np.int8]]:
+    """The 8 serial solutions for the Study vector ``f`` of ``T_s_e`` (steps 2-5 of the module).
+
+    Parameters
+    ----------
+    f : array-like, shape (..., 8)
+        Study vector of the RCM frame in ``O_s`` (on the Study quadric, any scale).
+    degenerate_tol : float, keyword-only
+        ``|sin u2|`` / ``|sin u4|`` at or below which the slot is a continuum.
+    p_zero_tol : float, keyword-only
+        ``|p|`` (m) at or below which all slots get ``SERIAL_P_ZERO``.
+
+    Returns
+    -------
+    p : ndarray, shape (..., 8)
+    u : ndarray, shape (..., 8, 5)
+        Radians in (-pi, pi].
+    reason : ndarray of int8, shape (..., 8)
+        0, ``SERIAL_P_ZERO``, ``UJOINT_SINGULAR`` or ``WRIST_SINGULAR`` (values are
+        still filled where finite; the caller masks them).
+    """
+    gen = _numeric()
+    f = check_array(f, "f", (8,))
+    f = f / np.linalg.norm(f[..., :4], axis=-1, keepdims=True)
+    batch = f.shape[:-1]
+    # 2. quadratic in p
+    a2, a1, a0 = np.moveaxis(gen.quadratic_coefficients(f), -1, 0)
+    roots = _hroots(a2, a1, a0)                                  # (..., 2, 2): (p_num, p_den)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        p = roots[..., 0] / roots[..., 1]
+    p = np.where(np.isfinite(p), p, 0.0)
+    p = np.sort(p, axis=-1)[..., ::-1]                           # r = 0: larger (p > 0)
+    pzero = np.all(np.abs(p) <= p_zero_tol, axis=-1)
+    # 3. pencil: null space of K(p)
+    K = gen.k_matrix(f[..., None, :], p)                         # (..., 2, 4, 4)
+    _, _, Vh = np.linalg.svd(K)
+    n1, n2 = Vh[..., 2, :], Vh[..., 3, :]                        # (..., 2, 4)
+    # 4. U-joint quadric on the pencil
+    S = gen.UJOINT_QUADRIC
+    A = np.einsum("...i,ij,...j->...", n1, S, n1)
+    B = 2.0 * np.einsum("...i,ij,...j->...", n1, S, n2)
+    C = np.einsum("...i,ij,...j->...", n2, S, n2)
+    uj_flat = np.maximum(np.maximum(np.abs(A), np.abs(B)), np.abs(C)) <= PENCIL_TOL
+    ab = _hroots(A, B, C)                                        # (..., 2, 2 branch, 2)
+    x = ab[..., 0, None] * n1[..., None, :] + ab[..., 1, None] * n2[..., None, :]
+    x = x / np.linalg.norm(x, axis=-1, keepdims=True)            # (..., 2, 2, 4)
+    st1, st2 = _segre_inverse(x)
+    u1, _ = _angle(st1)
+    u2, sin2 = _angle(st2)
+    neg = (sin2[..., 0] < 0)[..., None]                          # b = 0: sin u2 > 0
+    u1, u2, sin2 = (_order(neg, a, -1) for a in (u1, u2, sin2))
+    x = _order(neg[..., None], x, -2)
+    # 5. wrist
+    h = quaternion_multiply(x * np.array([1.0, -1.0, -1.0, -1.0]), f[..., None, None, :4])
+    css, cst, ctt = np.moveaxis(gen.wrist_quadratic(h), -1, 0)   # (..., 2, 2)
+    wr_flat = np.maximum(np.maximum(np.abs(css), np.abs(cst)), np.abs(ctt)) <= PENCIL_TOL
+    st5 = _hroots(css, cst, ctt)                                 # (..., 2, 2, 2 w, 2)
+    m5c = np.stack([st5[..., 1], 0 * st5[..., 1], 0 * st5[..., 1], -st5[..., 0]], axis=-1)
+    r34 = quaternion_multiply(h[..., None, :], m5c)              # (..., 2, 2, 2, 4)
+    st3, st4 = _segre_inverse(r34)
+    u3, _ = _angle(st3)
+    u4, sin4 = _angle(st4)
+    u5, _ = _angle(st5)
+    negw = (sin4[..., 0] < 0)[..., None]                         # w = 0: sin u4 > 0
+    u3, u4, u5, sin4 = (_order(negw, a, -1) for a in (u3, u4, u5, sin4))
+
+    full = batch + (2, 2, 2)
+    u = np.stack([np.broadcast_to(u1[..., None], full), np.broadcast_to(u2[..., None], full),
+                  u3, u4, u5], axis=-1).reshape(batch + (8, 5))
+    pp = np.broadcast_to(p[..., None, None], full).reshape(batch + (8,))
+    with np.errstate(invalid="ignore"):
+        deg_u = ~(np.abs(sin2) > degenerate_tol) | uj_flat[..., None]
+        deg_w = ~(np.abs(sin4) > degenerate_tol) | wr_flat[..., None]
+    deg_u = np.broadcast_to(deg_u[..., None], full).reshape(batch + (8,))
+    deg_w = deg_w.reshape(batch + (8,))
+    reason = np.zeros(batch + (8,), dtype=np.int8)
+    reason = np.where(np.broadcast_to(pzero[..., None], reason.shape),
+                      np.int8(Reason.SERIAL_P_ZERO), reason)
+    reason = np.where((reason == 0) & deg_u, np.int8(Reason.UJOINT_SINGULAR), reason)
+    reason = np.where((reason == 0) & deg_w, np.int8(Reason.WRIST_SINGULAR), reason)
+    return pp, u, reason.astype(np.int8)
+
+
+def forward_kinematics_algebraic(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None,
+                                 *, errors: ErrorPolicy = "auto",
+                                 tangent_tol: float = TANGENT_TOL,
+                                 degenerate_tol: float = DEGENERATE_TOL,
+                                 p_zero_tol: float = P_ZERO_TOL,
+                                 closure_tol: float = CLOSURE_TOL) -> FKSolution:
+    """All (up to) 16 configurations through the paper's algebraic route (Section 3.2).
+
+    Same arguments, result type, slot layout and reason codes as
+    :func:`athenakin.forward_kinematics`; the serial chain is solved by the
+    generated code of the derivation (module docstring) instead of the closed form.
+
+    Parameters
+    ----------
+    q : array-like, shape (..., 3)
+        Actuators ``(q1, q2, q3)``, m.
+    T_b_e : array-like, shape (..., 4, 4)
+        RCM frame E in the base frame; broadcasts with ``q``.
+    design : Design, optional
+        Defaults to :meth:`Design.default`.
+    errors : {"auto", "raise", "flag"}, keyword-only
+    tangent_tol, degenerate_tol, p_zero_tol, closure_tol : float, keyword-only
+        As in :func:`athenakin.forward_kinematics`.
+
+    Returns
+    -------
+    FKSolution
+
+    Raises
+    ------
+    TypeError, InvalidInputError, KinematicsError
+        As :func:`athenakin.forward_kinematics`.
+
+    Examples
+    --------
+    >>> import numpy as np, athenakin as ak
+    >>> from athenakin.symbolic import forward_kinematics_algebraic
+    >>> d = ak.Design.default()
+    >>> q, T = [-0.10, 0.10, 0.45], ak.default_rcm_frame(d)
+    >>> sol = forward_kinematics_algebraic(q, T, d)
+    >>> ref = ak.forward_kinematics(q, T, d)
+    >>> int(sol.n_solutions), bool(np.allclose(sol.p, ref.p, atol=1e-12))
+    (16, True)
+    """
+    design = Design.default() if design is None else design
+    if not isinstance(design, Design):
+        raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
+    q = check_array(q, "q", (3,), allow_nonfinite=True)
+    T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
+    batch = np.broadcast_shapes(q.shape[:-1], T.shape[:-2])
+    raise_now = resolve_policy(errors, batch)
+    q = np.broadcast_to(q, batch + (3,))
+    T = np.broadcast_to(T, batch + (4, 4))
+    if raise_now:
+        check_array(q, "q", (3,))
+        check_array(T, "T_b_e", (4, 4))
+
+    par = parallel_forward_kinematics(q, design, tangent_tol=tangent_tol)
+    finite = np.all(np.isfinite(T), axis=(-2, -1))
+    Ts = np.where(par.valid[..., None, None], par.T_b_s, np.eye(4))       # (..., 2, 4, 4)
+    Te = np.where(finite[..., None, None], T, np.eye(4))
+    b = study_from_transform(Ts)                                          # (..., 2, 8)
+    e = study_from_transform(Te)[..., None, :]
+    f = dq_multiply(dq_conj_quaternion(b), e)                             # B^-1 E
+    p, u, sreason = serial_solutions_algebraic(f, degenerate_tol=degenerate_tol,
+                                               p_zero_tol=p_zero_tol)     # (..., 2, 8)
+    T_s_e = np.linalg.solve(Ts, Te[..., None, :, :])                      # (..., 2, 4, 4)
+    with np.errstate(invalid="ignore"):
+        res = closure_residual(ups_transform(np.where(np.isfinite(p), p, 0.0),
+                                             np.where(np.isfinite(u), u, 0.0)),
+                               T_s_e[..., None, :, :])
+    res = np.where(np.all(np.isfinite(u), axis=-1) & np.isfinite(p), res, np.inf)
+    sreason = np.where(~finite[..., None, None], np.int8(Reason.NONFINITE_INPUT), sreason)
+    sreason = np.where((sreason == 0) & ~(res <= closure_tol), np.int8(Reason.CLOSURE_FAILED),
+                       sreason)
+    preason = np.broadcast_to(par.reason[..., None], sreason.shape)
+    reason = np.where(preason != 0, preason, sreason).astype(np.int8).reshape(batch + (16,))
+    valid = reason == 0
+    nan = np.where(valid, 1.0, np.nan)
+    T_b_s = np.broadcast_to(par.T_b_s[..., :, None, :, :], batch + (2, 8, 4, 4))
+    item = item_reason_from_slots(valid, reason)
+    if raise_now:
+        raise_first_failure(item, "forward kinematics", {"q": q})
+
+    def lab(a: NDArray[np.int64]) -> NDArray[np.int64]:
+        return np.broadcast_to(a, batch + (16,))
+
+    return FKSolution(
+        valid=valid, reason=reason, mode=lab(SLOT_MODE), p_sign=lab(SLOT_P_SIGN),
+        ujoint=lab(SLOT_UJOINT), wrist=lab(SLOT_WRIST),
+        p=p.reshape(batch + (16,)) * nan, u=u.reshape(batch + (16, 5)) * nan[..., None],
+        T_b_s=T_b_s.reshape(batch + (16, 4, 4)), residual=res.reshape(batch + (16,)) * nan,
+        item_reason=item)
