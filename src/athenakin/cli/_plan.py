@@ -64,7 +64,7 @@ def parse_margins(items: list[str]) -> object:
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``plan``."""
-    from ..motion import plan, plan_directions, read_path_csv, save_trajectory
+    from ..motion import plan, plan_directions, read_path_csv
 
     out = Path(args.output)
     if out.suffix.lower() not in (".csv", ".json"):
@@ -84,12 +84,21 @@ def run(args: argparse.Namespace) -> int:
     else:
         traj = plan_directions(spec.azimuth, spec.polar, spec.depth, T, design,  # type: ignore[arg-type]
                                **opts)
-    written = [save_trajectory(traj, out)]
+    # render everything first, then write: a failure leaves no partial output
+    from ..motion._io import trajectory_csv_text, trajectory_json_text, write_text_atomic
+
+    files: dict[Path, str | bytes] = {
+        out: trajectory_json_text(traj) if out.suffix.lower() == ".json"
+        else trajectory_csv_text(traj)}
     if not args.no_plots:
-        from ..motion._plot import save_plots
+        from ..motion._plot import plot_paths, render_plots
 
         prefix = args.plots if args.plots is not None else out.with_suffix("")
-        written += save_plots(traj, prefix)
+        pngs = render_plots(traj)
+        files.update({path: pngs[k] for k, path in plot_paths(prefix).items()})
+    for path, data in files.items():
+        write_text_atomic(path, data)
+    written = list(files)
     _summary(traj, written)
     return 0
 

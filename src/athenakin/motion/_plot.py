@@ -19,7 +19,8 @@ import numpy as np
 from ._plan import Trajectory
 from ._safety import MEASURE_NAMES
 
-__all__ = ["plot_actuators", "plot_tip_path", "plot_singularity_distance", "save_plots"]
+__all__ = ["plot_actuators", "plot_tip_path", "plot_singularity_distance", "render_plots",
+           "plot_paths", "save_plots"]
 
 _COLORS = ("tab:blue", "tab:orange", "tab:green")
 
@@ -165,6 +166,35 @@ def plot_singularity_distance(traj: Trajectory, *, ax: Any = None) -> Any:
     return ax
 
 
+def render_plots(traj: Trajectory, *, dpi: int = 120) -> dict[str, bytes]:
+    """The three figures as PNG bytes, keyed ``"actuators"``, ``"path3d"``, ``"singularity"``."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    figs = {"actuators": plot_actuators(traj)[0].figure}
+    fig = plt.figure(figsize=(13, 6), constrained_layout=True)
+    plot_tip_path(traj, ax=fig.add_subplot(1, 2, 1, projection="3d"), context=True)
+    plot_tip_path(traj, ax=fig.add_subplot(1, 2, 2, projection="3d"), context=False)
+    figs["path3d"] = fig
+    figs["singularity"] = plot_singularity_distance(traj).figure
+    out = {}
+    for name, f in figs.items():
+        buf = io.BytesIO()
+        f.savefig(buf, format="png", dpi=dpi)
+        plt.close(f)
+        out[name] = buf.getvalue()
+    return out
+
+
+def plot_paths(prefix: str | Path) -> dict[str, Path]:
+    """File names ``<prefix>_actuators.png``, ``_path3d.png``, ``_singularity.png``."""
+    prefix = Path(prefix)
+    return {k: prefix.with_name(f"{prefix.name}_{k}.png")
+            for k in ("actuators", "path3d", "singularity")}
+
+
 def save_plots(traj: Trajectory, prefix: str | Path, *, dpi: int = 120) -> list[Path]:
     """Write the three figures as ``<prefix>_actuators.png``, ``_path3d.png``, ``_singularity.png``.
 
@@ -173,27 +203,10 @@ def save_plots(traj: Trajectory, prefix: str | Path, *, dpi: int = 120) -> list[
     list of Path
         The files written.
     """
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
     from ._io import write_text_atomic
 
-    prefix = Path(prefix)
-    out = []
-    figs = []
-    figs.append(("actuators", plot_actuators(traj)[0].figure))
-    fig = plt.figure(figsize=(13, 6), constrained_layout=True)
-    plot_tip_path(traj, ax=fig.add_subplot(1, 2, 1, projection="3d"), context=True)
-    plot_tip_path(traj, ax=fig.add_subplot(1, 2, 2, projection="3d"), context=False)
-    figs.append(("path3d", fig))
-    figs.append(("singularity", plot_singularity_distance(traj).figure))
-    for suffix, fig in figs:
-        buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=dpi)
-        plt.close(fig)
-        path = prefix.with_name(f"{prefix.name}_{suffix}.png")
-        write_text_atomic(path, buf.getvalue())
-        out.append(path)
-    return out
+    pngs = render_plots(traj, dpi=dpi)
+    paths = plot_paths(prefix)
+    for k, data in pngs.items():
+        write_text_atomic(paths[k], data)
+    return list(paths.values())
