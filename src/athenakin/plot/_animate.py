@@ -148,7 +148,7 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
         it = tqdm(it, desc="rendering", unit="frame")
     frames: list[NDArray[np.uint8]] = []
     fig = Figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
-    FigureCanvasAgg(fig)
+    canvas = FigureCanvasAgg(fig)
     ax = fig.add_subplot(projection="3d")
     fig.subplots_adjust(left=0, right=1, bottom=0, top=0.93)
     n = len(geoms)
@@ -157,8 +157,8 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
         frac = k / max(n - 1, 1)
         plot_robot(geometry=geoms[k], ax=ax, limits=(lo, hi),
                    view=(view[0], view[1] + orbit * frac), **kwargs)
-        fig.canvas.draw()
-        rgba = np.asarray(fig.canvas.buffer_rgba())
+        canvas.draw()
+        rgba = np.asarray(canvas.buffer_rgba())
         frames.append(rgba[..., :3].copy())
     return frames
 
@@ -210,5 +210,5 @@ def animate(path: str | Path, q: ArrayLike, T_b_e: ArrayLike | None = None,
         with iio2.get_writer(path, format="FFMPEG", mode="I", fps=fps, codec="libx264",
                              quality=7, pixelformat="yuv420p", macro_block_size=16) as w:
             for f in frames:
-                w.append_data(f)
+                w.append_data(f)  # type: ignore[attr-defined]
     return path

@@ -154,6 +154,12 @@ def _rot4(R: NDArray[np.float64]) -> NDArray[np.float64]:
     return T
 
 
+def _rz_rx90(angle: float) -> NDArray[np.float64]:
+    """``Rz(angle) Rx(pi/2)`` as a 4x4 transform."""
+    R: NDArray[np.float64] = np.matmul(rot_z(np.asarray(angle)), rot_x(np.asarray(np.pi / 2)))
+    return _rot4(R)
+
+
 def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
                    design: Design | None = None, *, slot: int = 0) -> RobotGeometry:
     """Positions of all parts of the robot for actuator values ``q`` in one FK slot.
@@ -223,10 +229,10 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     c, s = np.cos(u), np.sin(u)
     T_b_3 = T_b_s @ _rot4(rotation_u_pair(c[0], s[0], c[1], s[1]))
     T_rcm = T_b_3 @ _tz(p)                       # at the RCM, before u3
-    T_4 = T_rcm @ _rot4(rot_z(u[2]) @ rot_x(np.pi / 2))    # before u4
-    T_5 = T_4 @ _rot4(rot_z(u[3]) @ rot_x(np.pi / 2))      # before u5
+    T_4 = T_rcm @ _rz_rx90(u[2])                 # before u4
+    T_5 = T_4 @ _rz_rx90(u[3])                   # before u5
     wrist_axes = np.stack([T_rcm[:3, 2], T_4[:3, 2], T_5[:3, 2]])
-    T_u2 = T_b_s @ _rot4(rot_z(u[0]) @ rot_x(np.pi / 2))      # before u2
+    T_u2 = T_b_s @ _rz_rx90(u[0])                # before u2
     ujoint_axes = np.stack([T_b_s[:3, 2], T_u2[:3, 2]])
     par = parallel_forward_kinematics(q, design)
     intersections = par.O_i.copy()

@@ -18,8 +18,8 @@ from ..robot import default_rcm_frame, forward_kinematics
 from ._geometry import RobotGeometry, robot_geometry
 
 if TYPE_CHECKING:  # pragma: no cover
-    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
+    from mpl_toolkits.mplot3d.axes3d import Axes3D as Axes
 
 __all__ = ["plot_robot", "plot_fk_solutions", "save_view", "COLORS", "slot_label",
            "arc_points"]
@@ -58,6 +58,15 @@ def arc_points(centre: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[n
     return centre + radius * (np.cos(t) * a + np.sin(t) * perp / norm)
 
 
+def _point(ax: Axes, p: ArrayLike, **kw: Any) -> None:
+    p = np.asarray(p, dtype=float)
+    ax.scatter([p[0]], [p[1]], [p[2]], **kw)
+
+
+def _points(ax: Axes, pts: NDArray[np.float64], **kw: Any) -> None:
+    ax.scatter(pts[:, 0], pts[:, 1], pts[:, 2], **kw)
+
+
 def _line(ax: Axes, a: ArrayLike, b: ArrayLike, **kw: Any) -> None:
     a, b = np.asarray(a), np.asarray(b)
     ax.plot([a[0], b[0]], [a[1], b[1]], [a[2], b[2]], **kw)
@@ -90,8 +99,8 @@ def _draw(ax: Axes, g: RobotGeometry, *, show_frames: bool, show_labels: bool,
         ax.plot(*g.k2_arc.T, color=COLORS["circle_k2"], lw=0.9, ls="--", alpha=0.7)
         other = g.intersections[1 if g.mode > 0 else 0]
         if np.all(np.isfinite(other)):
-            ax.scatter(*other, s=30, facecolors="none", edgecolors=COLORS["joint"],
-                       depthshade=False)  # O_i of the other assembly mode
+            _point(ax, other, s=30, facecolors="none", edgecolors=COLORS["joint"],
+                   depthshade=False)  # O_i of the other assembly mode
     for name in ("link_a1", "link_b1", "link_a3", "link_b3", "carrier_y", "carrier_z",
                  "offset_l4"):
         _line(ax, *seg[name], color=COLORS["parallel"], lw=2.6, solid_capstyle="round")
@@ -101,16 +110,16 @@ def _draw(ax: Axes, g: RobotGeometry, *, show_frames: bool, show_labels: bool,
     if not rcm_on_shaft:
         _line(ax, P["O_s"], P["RCM"], color=COLORS["serial"], lw=1.0, ls=":")
     carriages = np.stack([P["A"], P["B"]])
-    ax.scatter(*carriages.T, s=70, marker="s", color=COLORS["rail"], depthshade=False)
+    _points(ax, carriages, s=70, marker="s", color=COLORS["rail"], depthshade=False)
     joints = np.stack([P["D"], P["O_i"], P["C"]])
-    ax.scatter(*joints.T, s=22, color=COLORS["joint"], depthshade=False)
-    ax.scatter(*P["O_s"], s=55, marker="o", color=COLORS["joint"], edgecolor="k",
-               depthshade=False)  # U-joint
+    _points(ax, joints, s=22, color=COLORS["joint"], depthshade=False)
+    _point(ax, P["O_s"], s=55, marker="o", color=COLORS["joint"], edgecolor="k",
+           depthshade=False)  # U-joint
     o, (a1, a2) = P["O_s"], g.ujoint_axes
     _line(ax, o - 0.03 * a1, o + 0.03 * a1, color="#333333", lw=2.0)     # u1 axis
     _line(ax, o, o + 0.06 * a2, color="#333333", lw=3.0)                 # fork along +u2
-    ax.scatter(*P["tip"], s=14, color=COLORS["serial"], depthshade=False)
-    ax.scatter(*P["RCM"], s=90, marker="*", color=COLORS["sphere"], depthshade=False)
+    _point(ax, P["tip"], s=14, color=COLORS["serial"], depthshade=False)
+    _point(ax, P["RCM"], s=90, marker="*", color=COLORS["sphere"], depthshade=False)
     # the spherical joint at the RCM: its three axes and the arcs between them
     c = P["RCM"]
     ax_ = g.wrist_axes
@@ -132,7 +141,8 @@ def _draw(ax: Axes, g: RobotGeometry, *, show_frames: bool, show_labels: bool,
             for name, key in (("$O_i$", "O_i"), ("$O_s$", "O_s"), ("RCM", "RCM")):
                 p = P[key]
                 ax.text(p[0], p[1], p[2] + 0.02, name, fontsize=9, color="#111111")
-        ax.text(*P["tip"], " tip", fontsize=8, color=COLORS["serial"])
+        ax.text(P["tip"][0], P["tip"][1], P["tip"][2], " tip", fontsize=8,
+                color=COLORS["serial"])
 
 
 def _style(ax: Axes, lo: NDArray[np.float64], hi: NDArray[np.float64],
@@ -251,8 +261,8 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
     T = default_rcm_frame(design) if T_b_e is None else np.asarray(T_b_e, dtype=float)
     sol = forward_kinematics(q, T, design, errors="flag")
     geoms: dict[int, RobotGeometry] = {}
-    for k in np.flatnonzero(sol.valid):
-        geoms[int(k)] = robot_geometry(q, T, design, slot=int(k))
+    for k in map(int, np.flatnonzero(sol.valid)):
+        geoms[k] = robot_geometry(q, T, design, slot=k)
     if geoms:
         los, his = zip(*(g.bounds() for g in geoms.values()), strict=True)
         lo, hi = _cube_limits(np.min(los, axis=0), np.max(his, axis=0))

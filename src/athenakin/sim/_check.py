@@ -264,8 +264,8 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
         sol = forward_kinematics(q_now, T, design, errors="flag")
         joint_err = np.full(16, np.inf)
         geoms = {}
-        for j in np.flatnonzero(sol.valid):
-            vals, geoms[j] = mechanism_joint_values(q_now, T, design, slot=int(j))
+        for j in map(int, np.flatnonzero(sol.valid)):
+            vals, geoms[j] = mechanism_joint_values(q_now, T, design, slot=j)
             diff = data.qpos[adr] - np.array([vals[nm] for nm in names])
             joint_err[j] = np.abs(np.where(hinge, _wrap(diff), diff)).max()
         out["q_reached"].append(q_now)

@@ -128,8 +128,8 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     for name, rgba in (("parallel", "0.2 0.4 0.8 1"), ("serial", "0.8 0.2 0.2 1"),
                        ("actuator", "0.95 0.6 0.1 1"), ("joint", "0.55 0.55 0.55 1"),
                        ("rail", "0.35 0.35 0.38 1")):
-        mat = ET.SubElement(robot, "material", {"name": name})
-        ET.SubElement(mat, "color", {"rgba": rgba})
+        material = ET.SubElement(robot, "material", {"name": name})
+        ET.SubElement(material, "color", {"rgba": rgba})
 
     r = BAR_RADIUS
     # link geometry: (a, b, radius, material) in the link frame
