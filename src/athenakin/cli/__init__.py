@@ -17,7 +17,7 @@ __all__ = ["main", "COMMANDS"]
 
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
 COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
-            "animate", "export"]
+            "animate", "export", "derive"]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -115,7 +115,7 @@ def segre_map(s_a: sp.Expr, t_a: sp.Expr, s_b: sp.Expr, t_b: sp.Expr) -> tuple[s
 def segre_inverse(r: tuple[sp.Expr, ...]
                   ) -> tuple[tuple[tuple[sp.Expr, sp.Expr], tuple[sp.Expr, sp.Expr]],
                              tuple[tuple[sp.Expr, sp.Expr], tuple[sp.Expr, sp.Expr]]]:
-    """Two representatives each of ``(s_a : t_a)``, ``(s_b : t_b)`` from a point ``r`` of the quadric.
+    """Two representatives each of ``(s_a : t_a)`` and ``(s_b : t_b)`` from a quadric point ``r``.
 
     For ``r = segre_map(s_a, t_a, s_b, t_b)``: ``(s_a : t_a) = (r2 : r1) = (-r0 : r3)``
     (the first is ``t_b`` times it, the second ``s_b`` times it) and
