@@ -7,5 +7,12 @@ python3 -m venv .venv
 . .venv/bin/activate
 python -m pip install --quiet --upgrade "pip>=25.1"
 python -m pip install --quiet -e ".[all]" --group test
-command -v chromium >/dev/null || { apt-get update -qq && apt-get install -y -qq chromium >/dev/null; }
+# headless Chromium (Debian package) for the interactive-view test; never a downloaded browser
+if ! command -v chromium >/dev/null; then
+    if [ "$(id -u)" = 0 ]; then SUDO=""; elif command -v sudo >/dev/null; then SUDO="sudo"; else
+        echo "tests need Debian's chromium package (apt-get install chromium); run as root" >&2
+        exit 1
+    fi
+    $SUDO apt-get update -qq && $SUDO apt-get install -y -qq chromium >/dev/null
+fi
 python -m pytest -q -p no:cacheprovider "$@"
