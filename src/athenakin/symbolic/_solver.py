@@ -107,8 +107,7 @@ def _angle(st: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.flo
     u = 2.0 * np.arctan2(s, t)
     u = np.where(u > np.pi, u - 2 * np.pi, u)
     u = np.where(u <= -np.pi, u + 2 * np.pi, u)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        sin = 2.0 * s * t / (s * s + t * t)
+    sin = 2.0 * s * t / (s * s + t * t)
     return u, sin
 
 
@@ -145,13 +144,20 @@ def serial_solutions_algebraic(f: ArrayLike, *, degenerate_tol: float = DEGENERA
     """
     gen = _numeric()
     f = check_array(f, "f", (8,))
-    f = f / np.linalg.norm(f[..., :4], axis=-1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return _serial(gen, f / np.linalg.norm(f[..., :4], axis=-1, keepdims=True),
+                       degenerate_tol, p_zero_tol)
+
+
+def _serial(gen, f: NDArray[np.float64], degenerate_tol: float,  # type: ignore[no-untyped-def]
+            p_zero_tol: float) -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                        NDArray[np.int8]]:
+    """Body of :func:`serial_solutions_algebraic` (``f`` normalised, warnings silenced)."""
     batch = f.shape[:-1]
     # 2. quadratic in p
     a2, a1, a0 = np.moveaxis(gen.quadratic_coefficients(f), -1, 0)
     roots = _hroots(a2, a1, a0)                                  # (..., 2, 2): (p_num, p_den)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        p = roots[..., 0] / roots[..., 1]
+    p = roots[..., 0] / roots[..., 1]
     p = np.where(np.isfinite(p), p, 0.0)
     p = np.sort(p, axis=-1)[..., ::-1]                           # r = 0: larger (p > 0)
     pzero = np.all(np.abs(p) <= p_zero_tol, axis=-1)
@@ -192,9 +198,8 @@ def serial_solutions_algebraic(f: ArrayLike, *, degenerate_tol: float = DEGENERA
     u = np.stack([np.broadcast_to(u1[..., None], full), np.broadcast_to(u2[..., None], full),
                   u3, u4, u5], axis=-1).reshape(batch + (8, 5))
     pp = np.broadcast_to(p[..., None, None], full).reshape(batch + (8,))
-    with np.errstate(invalid="ignore"):
-        deg_u = ~(np.abs(sin2) > degenerate_tol) | uj_flat[..., None]
-        deg_w = ~(np.abs(sin4) > degenerate_tol) | wr_flat[..., None]
+    deg_u = ~(np.abs(sin2) > degenerate_tol) | uj_flat[..., None]
+    deg_w = ~(np.abs(sin4) > degenerate_tol) | wr_flat[..., None]
     deg_u = np.broadcast_to(deg_u[..., None], full).reshape(batch + (8,))
     deg_w = deg_w.reshape(batch + (8,))
     reason = np.zeros(batch + (8,), dtype=np.int8)
