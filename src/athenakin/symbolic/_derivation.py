@@ -35,7 +35,7 @@ from ._ik import compare_eq16, ik_bilinear_equations
 from ._printed import printed_eq13, printed_eq14
 from ._remaining import H_SYMBOLS, quadric_matrix, ujoint_quadric, wrist_quadratic, wrist_quadric
 
-__all__ = ["CACHE_DIR", "CACHE_FILE", "NUMERIC_MODULE", "CACHE_FORMAT", "derive",
+__all__ = ["CACHE_DIR", "CACHE_FILE", "NUMERIC_MODULE", "CACHE_FORMAT", "derive", "clear_caches",
            "payload_from_results", "payload_hash", "write_cache", "load_derivation",
            "cached_hash", "numeric_source"]
 
@@ -53,11 +53,27 @@ def _pfaffian(K: sp.Matrix) -> sp.Expr:
     return sp.expand(K[0, 1] * K[2, 3] - K[0, 2] * K[1, 3] + K[0, 3] * K[1, 2])
 
 
-def derive(*, log: Callable[[str], None] | None = None) -> dict[str, sp.Basic]:
+def clear_caches() -> None:
+    """Forget the in-process memoised steps, so that the next :func:`derive` recomputes all."""
+    from . import _elimination, _ik, _printed, _remaining
+
+    for fn in (_elimination.implicit_sets, _elimination.elimination_steps,
+               _ik.ik_bilinear_equations, _remaining.ujoint_quadric,
+               _remaining.wrist_quaternion, _remaining.wrist_quadric,
+               _remaining.wrist_quadratic, _printed.printed_eq13, _printed.printed_eq14,
+               _printed.printed_eq16):
+        fn.cache_clear()
+
+
+def derive(*, fresh: bool = False, log: Callable[[str], None] | None = None
+           ) -> dict[str, sp.Basic]:
     """Run the derivation end to end.
 
     Parameters
     ----------
+    fresh : bool, keyword-only
+        Clear the in-process memoised steps first (see :func:`clear_caches`), so
+        that nothing computed earlier in the process is reused.
     log : callable, keyword-only, optional
         Called with one line per step (name and seconds).
 
@@ -73,6 +89,8 @@ def derive(*, log: Callable[[str], None] | None = None) -> dict[str, sp.Basic]:
         ``wrist_quadratic``; the IK: ``ik_equations`` (Eq. 15-16 derived) and
         ``eq16_comparison`` (entry of Eq. 15 the printed Eq. 16 equals, scale).
     """
+    if fresh:
+        clear_caches()
     out: dict[str, sp.Basic] = {}
     t0 = time.perf_counter()
 
@@ -224,7 +242,7 @@ def numeric_source(results: dict[str, sp.Basic], sha256: str) -> str:
 def write_cache(results: dict[str, sp.Basic] | None = None, *,
                 log: Callable[[str], None] | None = None) -> str:
     """Derive (unless given), write ``derivation.json`` and ``_numeric.py``; return the hash."""
-    results = derive(log=log) if results is None else results
+    results = derive(fresh=True, log=log) if results is None else results
     payload = payload_from_results(results)
     h = payload_hash(payload)
     CACHE_DIR.mkdir(exist_ok=True)

@@ -253,7 +253,7 @@ class EliminationSteps:
     factors : tuple of (sympy.Expr, int)
         Its factorisation (factor, multiplicity), constants dropped.
     quadratic : sympy.Poly
-        The factor of degree 2 in ``p``.
+        The product of the factors that contain ``p``: of degree 2 in ``p``.
     """
 
     sl: tuple[sp.Expr, ...]
@@ -267,6 +267,13 @@ class EliminationSteps:
     back_substituted: sp.Expr
     factors: tuple[tuple[sp.Expr, int], ...]
     quadratic: sp.Poly
+
+
+@functools.lru_cache(maxsize=16)
+def _elimination_steps(b: tuple[sp.Expr, ...], e: tuple[sp.Expr, ...],
+                       unknowns: tuple[int, ...], equations: tuple[int, ...]
+                       ) -> EliminationSteps:
+    return _run_steps(b, e, unknowns, equations)
 
 
 def elimination_steps(*, b: Sequence[sp.Expr] | None = IDENTITY,
@@ -287,9 +294,14 @@ def elimination_steps(*, b: Sequence[sp.Expr] | None = IDENTITY,
     Returns
     -------
     EliminationSteps
+        Memoised per argument set (``elimination_steps.cache_clear()`` forgets).
     """
-    bv = _values(b, B_SYMBOLS, "b")
-    ev = _values(e, E_SYMBOLS, "e")
+    return _elimination_steps(_values(b, B_SYMBOLS, "b"), _values(e, E_SYMBOLS, "e"),
+                              tuple(unknowns), tuple(equations))
+
+
+def _run_steps(bv: tuple[sp.Expr, ...], ev: tuple[sp.Expr, ...], unknowns: tuple[int, ...],
+               equations: tuple[int, ...]) -> EliminationSteps:
     sl0, sr0 = implicit_sets()
     sl = assign(sl0, b=bv, e=ev)
     sr = assign(sr0, b=bv, e=ev)
@@ -302,12 +314,13 @@ def elimination_steps(*, b: Sequence[sp.Expr] | None = IDENTITY,
     num = reduce_study(back_substitute(K, xsol, rest), bv, ev)
     _, flist = sp.factor_list(num)
     factors = tuple((f, m) for f, m in flist if f.free_symbols)
-    quad = [f for f, _ in factors if P_SYMBOL in f.free_symbols
-            and sp.degree(f, P_SYMBOL) == 2]
-    if len(quad) != 1:
-        raise ValueError(f"expected one factor of degree 2 in p after back substitution, got "
-                         f"{[(sp.degree(f, P_SYMBOL), m) for f, m in factors]}")
-    q = sp.Poly(quad[0], P_SYMBOL)
+    # the factors that contain p (one irreducible quadratic for symbolic data; two linear
+    # factors when the assigned numbers make the roots rational)
+    with_p = [(f, m) for f, m in factors if P_SYMBOL in f.free_symbols]
+    q = sp.Poly(sp.Mul(*[f**m for f, m in with_p]), P_SYMBOL)
+    if q.degree() != 2:
+        raise ValueError(f"expected the p-dependent factors after back substitution to be of "
+                         f"degree 2 in p, got {[(sp.degree(f, P_SYMBOL), m) for f, m in factors]}")
     if q.LC().could_extract_minus_sign():
         q = -q
     return EliminationSteps(sl=sl, sr=sr, y_solution=ysol, M=M, K=K, symmetric_part=sym,
@@ -389,3 +402,6 @@ def groebner_remaining(p: sp.Expr, *, b: Sequence[sp.Expr] | None = IDENTITY,
     G = sp.groebner(eqs, *gens, order="lex")
     sols = sp.solve(list(G.exprs), list(gens), dict=True)
     return GroebnerStep(p=pv, equations=eqs, basis=tuple(G.exprs), solutions=tuple(sols))
+
+
+elimination_steps.cache_clear = _elimination_steps.cache_clear  # type: ignore[attr-defined]
