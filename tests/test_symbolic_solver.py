@@ -221,3 +221,22 @@ def test_tampered_cache_is_refused(tmp_path):
     bad.write_text(json.dumps(data))
     with pytest.raises(ValueError, match="cache format"):
         dv.load_derivation(bad)
+
+
+def test_dual_matrix_spans_the_pencil():
+    """K K~ = -Pf(K) I for skew 4x4 K: at a root the columns of K~ are null vectors."""
+    from athenakin.symbolic._solver import _dual, _pencil
+
+    rng = np.random.default_rng(SEED + 6)
+    A = rng.normal(size=(200, 4, 4))
+    K = A - np.swapaxes(A, -1, -2)
+    pf = K[:, 0, 1] * K[:, 2, 3] - K[:, 0, 2] * K[:, 1, 3] + K[:, 0, 3] * K[:, 1, 2]
+    np.testing.assert_allclose(K @ _dual(K), -pf[:, None, None] * np.eye(4), atol=1e-12)
+    # rank-2 skew matrices (a ^ b): the pencil is the orthogonal complement of a, b
+    a, b = rng.normal(size=(2, 200, 4))
+    K2 = a[:, :, None] * b[:, None, :] - b[:, :, None] * a[:, None, :]
+    n1, n2 = _pencil(K2)
+    for n in (n1, n2):
+        np.testing.assert_allclose((K2 @ n[..., None])[..., 0], 0.0, atol=1e-12)
+    np.testing.assert_allclose(np.sum(n1 * n2, axis=-1), 0.0, atol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(n2, axis=-1), 1.0, atol=1e-12)

@@ -11,7 +11,7 @@ cached results of LIA and the elimination of Section 3.2, turned into numpy code
    two roots, ``r = 0`` the positive one.
 3. At each root the skew matrix ``K(p)`` (``sr`` in ``x`` after ``y`` from ``sl``)
    has rank 2; its null space is the pencil of quaternion parts ``x`` of the
-   closure (SVD).
+   closure, spanned by the columns of the dual matrix ``K~`` (``K K~ = -Pf(K) I``).
 4. The U-joint quadric (LIA of degree 2) on the pencil: a homogeneous quadratic,
    two points ``x``; the Segre inverse gives ``(v1, v2)`` homogeneously.
 5. The wrist: ``h = conj(x) f_x``, the generated wrist quadratic in ``v5``, then
@@ -72,6 +72,33 @@ def _numeric():  # type: ignore[no-untyped-def]
                 f"python -m athenakin.symbolic._derivation")
         _checked_hash = True
     return gen
+
+
+def _dual(K: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Dual of skew 4x4 matrices: ``K K~ = -Pf(K) I`` (``Pf = k01 k23 - k02 k13 + k03 k12``)."""
+    k01, k02, k03 = K[..., 0, 1], K[..., 0, 2], K[..., 0, 3]
+    k12, k13, k23 = K[..., 1, 2], K[..., 1, 3], K[..., 2, 3]
+    z = np.zeros_like(k01)
+    return np.stack([z, k23, -k13, k12, -k23, z, k03, -k02,
+                     k13, -k03, z, k01, -k12, k02, -k01, z], axis=-1).reshape(K.shape)
+
+
+def _pencil(K: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Orthonormal basis ``(n1, n2)`` of the null space of rank-2 skew matrices (..., 4, 4).
+
+    At a root of the Pfaffian (the quadratic in ``p``) ``K K~ = 0``: the columns of the
+    dual ``K~`` span the null space. ``n1`` is the longest column, normalised; ``n2`` the
+    column with the largest part orthogonal to it (Gram-Schmidt).
+    """
+    C = np.swapaxes(_dual(K), -1, -2)                      # rows = columns of K~
+    norms = np.linalg.norm(C, axis=-1)
+    i = np.argmax(norms, axis=-1)
+    a = np.take_along_axis(C, i[..., None, None], axis=-2)[..., 0, :]
+    n1 = a / np.linalg.norm(a, axis=-1, keepdims=True)
+    R = C - np.sum(C * n1[..., None, :], axis=-1, keepdims=True) * n1[..., None, :]
+    j = np.argmax(np.linalg.norm(R, axis=-1), axis=-1)
+    b = np.take_along_axis(R, j[..., None, None], axis=-2)[..., 0, :]
+    return n1, b / np.linalg.norm(b, axis=-1, keepdims=True)
 
 
 def _hroots(A: NDArray[np.float64], B: NDArray[np.float64], C: NDArray[np.float64]
@@ -163,8 +190,7 @@ def _serial(gen, f: NDArray[np.float64], degenerate_tol: float,  # type: ignore[
     pzero = np.all(np.abs(p) <= p_zero_tol, axis=-1)
     # 3. pencil: null space of K(p)
     K = gen.k_matrix(f[..., None, :], p)                         # (..., 2, 4, 4)
-    _, _, Vh = np.linalg.svd(K)
-    n1, n2 = Vh[..., 2, :], Vh[..., 3, :]                        # (..., 2, 4)
+    n1, n2 = _pencil(K)                                          # (..., 2, 4)
     # 4. U-joint quadric on the pencil
     S = gen.UJOINT_QUADRIC
     A = np.einsum("...i,ij,...j->...", n1, S, n1)
