@@ -60,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.check:
         t = time.perf_counter()
-        fresh = dv.payload_from_results(dv.derive())
+        fresh = dv.payload_from_results(dv.derive(fresh=True))
         cached = json.loads(dv.CACHE_FILE.read_text())["results"]
         bad = sorted(k for k in set(fresh) | set(cached) if fresh.get(k) != cached.get(k))
         dt = time.perf_counter() - t
@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
             return 1
         print(f"derivation matches the cache ({len(fresh)} results, {dt:.1f} s)")
         return 0
-    results = dv.derive() if args.rederive else dv.load_derivation()
+    results = dv.derive(fresh=True) if args.rederive else dv.load_derivation()
     if args.list:
         print("\n".join(sorted(results)))
         return 0
