@@ -1,0 +1,44 @@
+"""Compiled (numba) fast paths of athenakin's kinematics, with the reference's results.
+
+Drop-in replacements of the reference functions (same signatures, results,
+reason codes, NaN policy and errors), compiled on first use and cached on disk
+(``numba`` ``cache=True``):
+
+- :func:`forward_kinematics` (all 16 slots), :func:`inverse_kinematics` (paper
+  form), :func:`q_from_instrument`, :func:`q_from_tool_tip` (controller forms);
+- :func:`parallel_forward_kinematics`, :func:`parallel_ik_from_position`,
+  :func:`parallel_inverse_kinematics` (the parallel module).
+
+Each takes ``parallel=True`` (where batches are large) to use numba's threads.
+For control loops, :class:`ControlLoop` holds a design and an RCM frame and
+answers single poses in a microsecond or two; for sweeps over millions of
+poses, :func:`sweep_fk` streams chunks in bounded memory. See
+``docs/performance.md`` for the measurements and how they were taken.
+
+Importing this subpackage imports numba; ``import athenakin`` does not.
+"""
+
+from ._api import (
+    design_params,
+    forward_kinematics,
+    inverse_kinematics,
+    parallel_forward_kinematics,
+    parallel_ik_from_position,
+    parallel_inverse_kinematics,
+    q_from_instrument,
+    q_from_tool_tip,
+)
+
+from ._control import ControlLoop
+
+__all__ = [
+    "ControlLoop",
+    "design_params",
+    "forward_kinematics",
+    "inverse_kinematics",
+    "q_from_instrument",
+    "q_from_tool_tip",
+    "parallel_forward_kinematics",
+    "parallel_ik_from_position",
+    "parallel_inverse_kinematics",
+]

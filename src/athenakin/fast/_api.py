@@ -1,0 +1,501 @@
+"""Public fast paths: the reference functions' signatures, results and errors (private module).
+
+Each function takes the arguments of its reference in :mod:`athenakin.robot` /
+:mod:`athenakin.parallel` and returns the same result types with the same
+shapes, dtypes, slot layout, reason codes and NaN policy. Validation is
+optimistic: arrays of the common kind (float64, right trailing shape) go
+straight to the compiled kernel, which also reports non-finite values and
+non-rigid transforms; whenever anything is off (a wrong type or shape, an
+error to raise, an input the kernel cannot reproduce exactly), the call is
+handed to the reference implementation, which raises the very same exception
+(or, for a false alarm, returns the very same result).
+
+Extra keyword-only options (not in the reference): ``parallel=True`` spreads
+the batch over numba's threads; ``out=`` (FK) reuses the arrays of an earlier
+result of the same shape instead of allocating.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from typing import Any, TypeVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .. import parallel as _ref_parallel
+from .. import robot as _ref_robot
+from .._validation import ROTATION_TOL, check_transform
+from ..chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
+from ..design import Design
+from ..parallel._module import (
+    MODES,
+    MODULE_POSE_TOL,
+    TANGENT_TOL,
+    ParallelIK,
+    ParallelSolution,
+)
+from ..robot._common import ErrorPolicy, resolve_policy
+from ..robot._fk import SLOT_MODE, SLOT_P_SIGN, SLOT_UJOINT, SLOT_WRIST, FKSolution
+from ..robot._ik import IK_SINGULAR_TOL, InstrumentIK, PassiveJoints
+from . import _fk_kernels as _fk
+from . import _ik_kernels as _ik
+
+__all__ = [
+    "design_params",
+    "forward_kinematics",
+    "inverse_kinematics",
+    "q_from_instrument",
+    "q_from_tool_tip",
+    "parallel_forward_kinematics",
+    "parallel_ik_from_position",
+    "parallel_inverse_kinematics",
+]
+
+_F8 = np.dtype(np.float64)
+_PARAMS: dict[int, tuple[Design, NDArray[np.float64]]] = {}
+_DEFAULT: list[NDArray[np.float64]] = []
+_FK_TOL_DEFAULT = np.array([TANGENT_TOL, DEGENERATE_TOL, P_ZERO_TOL, CLOSURE_TOL])
+_LABELS: dict[tuple[int, ...], tuple[NDArray[np.int64], ...]] = {}
+_MAX_CACHE = 64
+_PLAIN = {c for c in (FKSolution, PassiveJoints, InstrumentIK)
+          if dataclasses.is_dataclass(c) and not hasattr(c, "__post_init__")
+          and "__slots__" not in c.__dict__
+          and {f.name for f in dataclasses.fields(c)} == set(c.__annotations__)}
+
+
+_R = TypeVar("_R")
+
+
+def _new(cls: type[_R], **fields: Any) -> _R:
+    """Instance of a frozen result dataclass without its per-field ``object.__setattr__``.
+
+    Equivalent to ``cls(**fields)`` for these plain dataclasses (no ``__post_init__``,
+    no slots); saves about 0.7 us per result, a sixth of a single FK call.
+    """
+    if cls in _PLAIN:
+        obj = object.__new__(cls)
+        obj.__dict__.update(fields)
+        return obj
+    return cls(**fields)
+
+
+class _Delegate(Exception):
+    """Internal: hand the call to the reference implementation."""
+
+
+def design_params(design: Design | None) -> NDArray[np.float64]:
+    """The design as the kernels' parameter vector (cached per design object).
+
+    Parameters
+    ----------
+    design : Design or None
+        ``None`` means :meth:`Design.default`.
+
+    Returns
+    -------
+    ndarray, shape (13,)
+        ``l1..l5``, ``q_min`` (3), ``q_max`` (3), ``h_sign``, ``tool_length``
+        (shared by all calls: do not modify).
+
+    Raises
+    ------
+    TypeError
+        If ``design`` is not a :class:`~athenakin.Design`.
+    """
+    if design is None:
+        if not _DEFAULT:
+            _DEFAULT.append(_make_params(Design.default()))
+        return _DEFAULT[0]
+    hit = _PARAMS.get(id(design))
+    if hit is not None and hit[0] is design:
+        return hit[1]
+    if not isinstance(design, Design):
+        raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
+    if len(_PARAMS) >= _MAX_CACHE:
+        _PARAMS.clear()
+    P = _make_params(design)
+    _PARAMS[id(design)] = (design, P)
+    return P
+
+
+def _make_params(d: Design) -> NDArray[np.float64]:
+    return np.array([d.l1, d.l2, d.l3, d.l4, d.l5, *d.stroke_min, *d.stroke_max, d.h_sign,
+                     d.tool_length])
+
+
+def _arr(x: object, tail: tuple[int, ...]) -> NDArray[np.float64]:
+    """float64, C-contiguous, writable array with trailing shape ``tail``, else _Delegate."""
+    if type(x) is not np.ndarray or x.dtype is not _F8:
+        a = np.asarray(x)
+        if a.dtype.kind not in "biuf":
+            raise _Delegate
+        x = a.astype(np.float64)
+    n = len(tail)
+    if x.ndim < n or x.shape[x.ndim - n:] != tail:
+        raise _Delegate
+    if not (x.flags.c_contiguous and x.flags.writeable):
+        x = np.array(x, dtype=np.float64, order="C")
+    return x
+
+
+def _flat(a: NDArray[np.float64], bx: tuple[int, ...], batch: tuple[int, ...], N: int,
+          tail: tuple[int, ...]) -> NDArray[np.float64]:
+    """``a`` (bx + tail) as (n, *tail) with n = N, or n = 1 when it broadcasts as a single item."""
+    if bx == batch:
+        return a.reshape((N,) + tail)
+    if math.prod(bx) == 1:
+        return a.reshape((1,) + tail)
+    return np.ascontiguousarray(np.broadcast_to(a, batch + tail)).reshape((N,) + tail)
+
+
+def _batch(*shapes: tuple[int, ...]) -> tuple[int, ...]:
+    """Broadcast batch shape (shortcut when all but one are scalar items)."""
+    big = [s for s in shapes if s]
+    if not big:
+        return ()
+    if len(big) == 1 or all(s == big[0] for s in big[1:]):
+        return big[0]
+    return np.broadcast_shapes(*shapes)
+
+
+def _labels(batch: tuple[int, ...]) -> tuple[NDArray[np.int64], ...]:
+    lab = _LABELS.get(batch)
+    if lab is None:
+        if len(_LABELS) >= _MAX_CACHE:
+            _LABELS.clear()
+        lab = tuple(np.broadcast_to(a, batch + (16,))
+                    for a in (SLOT_MODE, SLOT_P_SIGN, SLOT_UJOINT, SLOT_WRIST))
+        _LABELS[batch] = lab
+    return lab
+
+
+def _check_out(out: FKSolution, batch: tuple[int, ...]) -> tuple[NDArray, ...]:
+    arrs = (out.reason, out.valid, out.p, out.u, out.T_b_s, out.residual, out.item_reason)
+    shapes = (batch + (16,), batch + (16,), batch + (16,), batch + (16, 5), batch + (16, 4, 4),
+              batch + (16,), batch)
+    dtypes = (np.int8, np.bool_, np.float64, np.float64, np.float64, np.float64, np.int8)
+    for a, s, t in zip(arrs, shapes, dtypes):
+        if a.shape != s or a.dtype != t or not a.flags.c_contiguous or not a.flags.writeable:
+            raise ValueError(f"out: expected an FKSolution of batch shape {batch} with "
+                             f"writable C-contiguous arrays, got an array of shape {a.shape}, "
+                             f"dtype {a.dtype}")
+    return arrs
+
+
+# --- whole robot: forward kinematics ------------------------------------------------------
+def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
+                       errors: ErrorPolicy = "auto", tangent_tol: float = TANGENT_TOL,
+                       degenerate_tol: float = DEGENERATE_TOL, p_zero_tol: float = P_ZERO_TOL,
+                       closure_tol: float = CLOSURE_TOL, parallel: bool = False,
+                       out: FKSolution | None = None) -> FKSolution:
+    """All (up to) 16 configurations for actuator values ``q``: compiled :func:`athenakin.forward_kinematics`.
+
+    Same parameters, result and errors as the reference, plus:
+
+    Parameters
+    ----------
+    parallel : bool, keyword-only
+        Spread the batch over numba's threads (``numba.set_num_threads``).
+    out : FKSolution, optional, keyword-only
+        An earlier result of the same batch shape whose arrays are overwritten
+        (no allocation) and returned; its label arrays are left as they are.
+
+    Returns
+    -------
+    FKSolution
+
+    Examples
+    --------
+    >>> import athenakin as ak
+    >>> d = ak.Design.default()
+    >>> sol = ak.fast.forward_kinematics([-0.10, 0.10, 0.45], ak.default_rcm_frame(d), d)
+    >>> int(sol.n_solutions)
+    16
+    """
+    def reference() -> FKSolution:
+        return _ref_robot.forward_kinematics(
+            q, T_b_e, design, errors=errors, tangent_tol=tangent_tol,
+            degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol, closure_tol=closure_tol)
+
+    P = design_params(design)
+    try:
+        qa = _arr(q, (3,))
+        Ta = _arr(T_b_e, (4, 4))
+    except _Delegate:
+        return reference()
+    bq, bT = qa.shape[:-1], Ta.shape[:-2]
+    batch = bq if bq == bT else _batch(bq, bT)
+    raise_now = resolve_policy(errors, batch)
+    N = math.prod(batch)
+    if (tangent_tol == TANGENT_TOL and degenerate_tol == DEGENERATE_TOL
+            and p_zero_tol == P_ZERO_TOL and closure_tol == CLOSURE_TOL):
+        tol = _FK_TOL_DEFAULT
+    else:
+        tol = np.array([tangent_tol, degenerate_tol, p_zero_tol, closure_tol], dtype=float)
+    if not batch and out is None and not parallel:
+        return _fk_single(qa, Ta, P, tol, raise_now, reference)
+    if out is None:
+        reason = np.empty((N, 16), np.int8)
+        valid = np.empty((N, 16), np.bool_)
+        p = np.empty((N, 16))
+        u = np.empty((N, 16, 5))
+        Tbs = np.empty((N, 16, 4, 4))
+        res = np.empty((N, 16))
+        item = np.empty(N, np.int8)
+    else:
+        reason, valid, p, u, Tbs, res, item = (
+            a.reshape((N,) + a.shape[len(batch):]) for a in _check_out(out, batch))
+    kernel = _fk.fk_full_parallel if parallel else _fk.fk_full
+    flags = kernel(_flat(qa, bq, batch, N, (3,)), _flat(Ta, bT, batch, N, (4, 4)), P, tol,
+                   ROTATION_TOL, reason, valid, p, u, Tbs, res, item)
+    if flags & _fk.FLAG_NONRIGID:
+        check_transform(Ta, "T_b_e", allow_nonfinite=True)   # raises unless a false alarm
+    if raise_now and (flags & (_fk.FLAG_Q_NONFINITE | _fk.FLAG_T_NONFINITE)
+                      or (item[0] != 0 if N == 1 else item.any())):
+        return reference()     # raises the reference's error
+    if out is not None:
+        return out
+    if not batch:
+        reason, valid, p, u, Tbs, res, item = (reason[0], valid[0], p[0], u[0], Tbs[0], res[0],
+                                               item.reshape(()))
+    elif len(batch) > 1:
+        reason, valid, p, u, Tbs, res = (a.reshape(batch + a.shape[1:])
+                                         for a in (reason, valid, p, u, Tbs, res))
+        item = item.reshape(batch)
+    mode, p_sign, ujoint, wrist = _labels(batch)
+    return _new(FKSolution, valid=valid, reason=reason, mode=mode, p_sign=p_sign, ujoint=ujoint,
+                      wrist=wrist, p=p, u=u, T_b_s=Tbs, residual=res, item_reason=item)
+
+
+_ONE_LABELS: list[tuple[NDArray[np.int64], ...]] = []
+
+
+def _fk_single(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.float64],
+               tol: NDArray[np.float64], raise_now: bool, reference: Callable[[], FKSolution]
+               ) -> FKSolution:
+    """One pose through the packed-buffer kernel (about half the call overhead)."""
+    fbuf = np.empty(_fk.ONE_F)
+    ibuf = np.empty(_fk.ONE_I, np.int8)
+    flags = _fk.fk_one(qa, Ta, P, tol, ROTATION_TOL, fbuf, ibuf)
+    if flags & _fk.FLAG_NONRIGID:
+        check_transform(Ta, "T_b_e", allow_nonfinite=True)
+    if raise_now and (flags & (_fk.FLAG_Q_NONFINITE | _fk.FLAG_T_NONFINITE)
+                      or ibuf[_fk.ONE_ITEM] != 0):
+        return reference()
+    if not _ONE_LABELS:
+        _ONE_LABELS.append(_labels(()))
+    mode, p_sign, ujoint, wrist = _ONE_LABELS[0]
+    return _new(FKSolution, valid=ibuf[_fk.ONE_VALID:_fk.ONE_ITEM].view(np.bool_),
+                      reason=ibuf[_fk.ONE_REASON:_fk.ONE_VALID], mode=mode, p_sign=p_sign,
+                      ujoint=ujoint, wrist=wrist, p=fbuf[_fk.ONE_P:_fk.ONE_U],
+                      u=fbuf[_fk.ONE_U:_fk.ONE_T].reshape(16, 5),
+                      T_b_s=fbuf[_fk.ONE_T:_fk.ONE_RES].reshape(16, 4, 4),
+                      residual=fbuf[_fk.ONE_RES:_fk.ONE_F],
+                      item_reason=ibuf[_fk.ONE_ITEM:_fk.ONE_I].reshape(()))
+
+
+# --- whole robot: inverse kinematics, paper form -----------------------------------------
+def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None = None, *,
+                       errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
+                       closure_tol: float = CLOSURE_TOL, parallel: bool = False
+                       ) -> tuple[NDArray[np.float64], PassiveJoints]:
+    """Actuator values from the RCM frame and ``u3, u4, u5``: compiled :func:`athenakin.inverse_kinematics`.
+
+    Same parameters, results and errors as the reference; ``parallel=True``
+    spreads the batch over numba's threads.
+
+    Returns
+    -------
+    q : ndarray, shape (..., 3)
+    passive : PassiveJoints
+    """
+    def reference() -> tuple[NDArray[np.float64], PassiveJoints]:
+        return _ref_robot.inverse_kinematics(T_b_e, u345, design, errors=errors,
+                                             singular_tol=singular_tol, closure_tol=closure_tol)
+
+    P = design_params(design)
+    try:
+        Ta = _arr(T_b_e, (4, 4))
+        Ua = _arr(u345, (3,))
+    except _Delegate:
+        return reference()
+    bT, bU = Ta.shape[:-2], Ua.shape[:-1]
+    batch = bT if bT == bU else _batch(bT, bU)
+    raise_now = resolve_policy(errors, batch)
+    N = math.prod(batch)
+    if not batch and not parallel:
+        fbuf = np.empty(_ik.ONE_F)
+        ibuf = np.empty(3, np.int64)
+        flags = _ik.ik_paper_one(Ta, Ua, P, float(singular_tol), float(closure_tol),
+                                 ROTATION_TOL, fbuf, ibuf)
+        if flags & _fk.FLAG_NONRIGID:
+            check_transform(Ta, "T_b_e", allow_nonfinite=True)
+        if flags & _ik.FLAG_SLOW or (raise_now and (
+                flags & (_fk.FLAG_T_NONFINITE | _ik.FLAG_V_NONFINITE) or ibuf[2] != 0)):
+            return reference()
+        return fbuf[_ik.ONE_Q:_ik.ONE_P], _new(
+            PassiveJoints,
+            p=fbuf[_ik.ONE_P:_ik.ONE_U].reshape(()), u=fbuf[_ik.ONE_U:_ik.ONE_T],
+            mode=ibuf[0:1].reshape(()), T_b_s=fbuf[_ik.ONE_T:_ik.ONE_RES].reshape(4, 4),
+            residual=fbuf[_ik.ONE_RES:_ik.ONE_F].reshape(()),
+            valid=ibuf[1:2].astype(np.bool_).reshape(()),
+            reason=ibuf[2:3].astype(np.int8).reshape(()))
+    q = np.empty((N, 3))
+    p = np.empty(N)
+    u = np.empty((N, 5))
+    mode = np.empty(N, np.int64)
+    Tbs = np.empty((N, 4, 4))
+    res = np.empty(N)
+    valid = np.empty(N, np.bool_)
+    reason = np.empty(N, np.int8)
+    kernel = _ik.ik_paper_parallel if parallel else _ik.ik_paper
+    flags = kernel(_flat(Ta, bT, batch, N, (4, 4)), _flat(Ua, bU, batch, N, (3,)), P,
+                   float(singular_tol), float(closure_tol), ROTATION_TOL, q, p, u, mode, Tbs,
+                   res, valid, reason)
+    if flags & _fk.FLAG_NONRIGID:
+        check_transform(Ta, "T_b_e", allow_nonfinite=True)
+    if flags & _ik.FLAG_SLOW or (raise_now and (
+            flags & (_fk.FLAG_T_NONFINITE | _ik.FLAG_V_NONFINITE)
+            or (reason[0] != 0 if N == 1 else reason.any()))):
+        return reference()
+    if batch != (N,):
+        q, p, u, mode, Tbs, res, valid, reason = (
+            a.reshape(batch + a.shape[1:]) for a in (q, p, u, mode, Tbs, res, valid, reason))
+    return q, _new(PassiveJoints, p=p, u=u, mode=mode, T_b_s=Tbs, residual=res, valid=valid,
+                            reason=reason)
+
+
+# --- whole robot: controller forms -------------------------------------------------------
+def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors: str,
+          kind: int, parallel: bool) -> tuple[NDArray[np.float64], InstrumentIK]:
+    P = design_params(design)
+    Ta = _arr(T_b_e, (4, 4))
+    Va = _arr(V, (3,))
+    Pa = _arr(p_in, ()) if kind == 0 else np.zeros(1)
+    bT, bV = Ta.shape[:-2], Va.shape[:-1]
+    bP = Pa.shape if kind == 0 else ()
+    batch = bT if (bT == bV and bV == bP) else _batch(bT, bV, bP)
+    raise_now = resolve_policy(errors, batch)
+    N = math.prod(batch)
+    q = np.empty((N, 3))
+    p = np.empty(N)
+    d_b = np.empty((N, 3))
+    O_s = np.empty((N, 3))
+    mode = np.empty(N, np.int64)
+    valid = np.empty(N, np.bool_)
+    reason = np.empty(N, np.int8)
+    kernel = _ik.ik_line_parallel if parallel else _ik.ik_line
+    flags = kernel(_flat(Ta, bT, batch, N, (4, 4)), _flat(Va, bV, batch, N, (3,)),
+                   _flat(Pa, bP, batch, N, ()) if kind == 0 else Pa, P, kind, ROTATION_TOL,
+                   q, p, d_b, O_s, mode, valid, reason)
+    if flags or (raise_now and (reason[0] != 0 if N == 1 else reason.any())):
+        raise _Delegate   # the reference raises (or, for a false rigidity alarm, computes)
+    if batch != (N,):
+        q, p, d_b, O_s, mode, valid, reason = (
+            a.reshape(batch + a.shape[1:]) for a in (q, p, d_b, O_s, mode, valid, reason))
+    return q, _new(InstrumentIK, p=p, direction_b=d_b, O_s=O_s, mode=mode, valid=valid,
+                           reason=reason)
+
+
+def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
+                      design: Design | None = None, *, errors: ErrorPolicy = "auto",
+                      parallel: bool = False) -> tuple[NDArray[np.float64], InstrumentIK]:
+    """Actuators for an instrument direction and insertion: compiled :func:`athenakin.q_from_instrument`.
+
+    Same parameters, results and errors as the reference; ``parallel=True``
+    spreads the batch over numba's threads.
+    """
+    try:
+        return _line(T_b_e, direction_e, p, design, errors, 0, parallel)
+    except _Delegate:
+        return _ref_robot.q_from_instrument(T_b_e, direction_e, p, design, errors=errors)
+
+
+def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = None, *,
+                    errors: ErrorPolicy = "auto", parallel: bool = False
+                    ) -> tuple[NDArray[np.float64], InstrumentIK]:
+    """Actuators that put the tool tip at a point: compiled :func:`athenakin.q_from_tool_tip`.
+
+    Same parameters, results and errors as the reference; ``parallel=True``
+    spreads the batch over numba's threads.
+    """
+    try:
+        return _line(T_b_e, tip_e, None, design, errors, 1, parallel)
+    except _Delegate:
+        return _ref_robot.q_from_tool_tip(T_b_e, tip_e, design, errors=errors)
+
+
+# --- the parallel module ------------------------------------------------------------------
+def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
+                                tangent_tol: float = TANGENT_TOL) -> ParallelSolution:
+    """Both assembly modes of the parallel module: compiled :func:`athenakin.parallel.parallel_forward_kinematics`."""
+    P = design_params(design)
+    try:
+        qa = _arr(q, (3,))
+    except _Delegate:
+        return _ref_parallel.parallel_forward_kinematics(q, design, tangent_tol=tangent_tol)
+    batch = qa.shape[:-1]
+    N = math.prod(batch)
+    valid = np.empty((N, 2), np.bool_)
+    reason = np.empty((N, 2), np.int8)
+    T_b_i = np.empty((N, 2, 4, 4))
+    T_b_s = np.empty((N, 2, 4, 4))
+    theta = np.empty((N, 2))
+    r1, m_y, w, half = np.empty(N), np.empty(N), np.empty(N), np.empty(N)
+    _ik.parallel_fk(qa.reshape(N, 3), P, float(tangent_tol), valid, reason, T_b_i, T_b_s,
+                    theta, r1, m_y, w, half)
+    valid, reason, T_b_i, T_b_s, theta = (a.reshape(batch + a.shape[1:])
+                                          for a in (valid, reason, T_b_i, T_b_s, theta))
+    r1, m_y, w, half = (a.reshape(batch) for a in (r1, m_y, w, half))
+    return ParallelSolution(valid=valid, reason=reason, mode=MODES.copy(),
+                            O_i=T_b_i[..., :3, 3], O_s=T_b_s[..., :3, 3], T_b_i=T_b_i,
+                            T_b_s=T_b_s, theta=theta, r1=r1, m_y=m_y, w=w, half_chord=half)
+
+
+def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> ParallelIK:
+    """Actuators that put ``O_s`` at a point: compiled :func:`athenakin.parallel.parallel_ik_from_position`."""
+    P = design_params(design)
+    try:
+        Oa = _arr(O_s, (3,))
+    except _Delegate:
+        return _ref_parallel.parallel_ik_from_position(O_s, design)
+    batch = Oa.shape[:-1]
+    N = math.prod(batch)
+    q = np.empty((N, 3))
+    mode = np.empty(N, np.int64)
+    theta = np.empty(N)
+    valid = np.empty(N, np.bool_)
+    reason = np.empty(N, np.int8)
+    _ik.parallel_ik_position(Oa.reshape(N, 3), P, q, mode, theta, valid, reason)
+    return ParallelIK(q=q.reshape(batch + (3,)), mode=mode.reshape(batch),
+                      theta=theta.reshape(batch), valid=valid.reshape(batch),
+                      reason=reason.reshape(batch))
+
+
+def parallel_inverse_kinematics(T_b_s: ArrayLike, design: Design | None = None, *,
+                                tol: float = MODULE_POSE_TOL) -> ParallelIK:
+    """Parallel module's IK from a pose of ``O_s``: :func:`athenakin.parallel.parallel_inverse_kinematics`.
+
+    The position part runs compiled; the orientation test is the reference's numpy code.
+    """
+    design_params(design)
+    T = check_transform(T_b_s, "T_b_s", allow_nonfinite=True)
+    res = parallel_ik_from_position(np.ascontiguousarray(T[..., :3, 3]), design)
+    R = T[..., :3, :3]
+    with np.errstate(invalid="ignore"):
+        c, s = np.cos(res.theta), np.sin(res.theta)
+        Rx = np.zeros(R.shape)
+        Rx[..., 0, 0] = 1.0
+        Rx[..., 1, 1], Rx[..., 1, 2], Rx[..., 2, 1], Rx[..., 2, 2] = c, -s, s, c
+        err = np.abs(R - Rx).max(axis=(-2, -1))
+    bad = res.valid & ~(err <= tol)
+    from ..errors import Reason
+
+    reason = np.where(bad, np.int8(Reason.NOT_IN_MODULE_IMAGE), res.reason).astype(np.int8)
+    valid = reason == 0
+    return dataclasses.replace(
+        res, q=np.where(valid[..., None], res.q, np.nan),
+        theta=np.where(valid, res.theta, np.nan), valid=valid, reason=reason)

@@ -1,0 +1,156 @@
+"""Single-pose kinematics for control loops: fixed design and set-up, no allocation (private)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_array, check_transform
+from ..chain._ups import CLOSURE_TOL
+from ..design import Design
+from ..robot._ik import IK_SINGULAR_TOL
+from . import _fk_kernels as _fk
+from . import _ik_kernels as _ik
+from ._api import _FK_TOL_DEFAULT, design_params
+
+__all__ = ["ControlLoop"]
+
+_F8 = np.dtype(np.float64)
+
+
+def _vec3(x: object, name: str) -> NDArray[np.float64]:
+    """``x`` as a float64 C-contiguous writable array of shape (3,) (copied if needed)."""
+    if type(x) is np.ndarray and x.dtype is _F8 and x.shape == (3,):
+        f = x.flags
+        if f.c_contiguous and f.writeable:
+            return x
+    a = check_array(x, name, (3,), allow_nonfinite=True)
+    if a.shape != (3,):
+        raise ValueError(f"{name}: expected shape (3,), got {a.shape}")
+    return np.array(a, dtype=np.float64, order="C")
+
+
+class ControlLoop:
+    """Kinematics of single poses for one design and one RCM frame, in about a microsecond.
+
+    Meant for control loops (encoders to pose, commands to actuators at 1 kHz
+    and more): the design and the set-up ``T_b_e`` are validated once, the
+    compiled kernels are called with preallocated buffers, and the results are
+    raw arrays and :class:`~athenakin.errors.Reason` codes (nothing raises for
+    a pose out of reach). The values are those of the reference functions.
+
+    The returned arrays are views of internal buffers that the next call of
+    the same method overwrites (copy them to keep them). Use one instance per
+    thread.
+
+    Parameters
+    ----------
+    T_b_e : array-like, shape (4, 4)
+        RCM frame E in the base frame (finite rigid transform).
+    design : Design, optional
+        Defaults to :meth:`Design.default`.
+
+    Examples
+    --------
+    >>> import numpy as np, athenakin as ak
+    >>> d = ak.Design.default()
+    >>> ctl = ak.fast.ControlLoop(ak.default_rcm_frame(d), d)
+    >>> reason, p, u = ctl.fk(np.array([-0.10, 0.10, 0.45]))
+    >>> int((reason == 0).sum())
+    16
+    >>> q, r = ctl.q_from_tool_tip(np.array([0.05, 0.0, 0.0]))
+    >>> r
+    0
+    """
+
+    def __init__(self, T_b_e: ArrayLike, design: Design | None = None) -> None:
+        T = check_transform(T_b_e, "T_b_e")
+        if T.shape != (4, 4):
+            raise ValueError(f"T_b_e: expected one transform of shape (4, 4), got {T.shape}")
+        self._T = np.array(T, dtype=np.float64, order="C")
+        self._P = design_params(design)
+        self._design = Design.default() if design is None else design
+        self._fbuf = np.empty(_fk.ONE_F)
+        self._ibuf = np.empty(_fk.ONE_I, np.int8)
+        self._reason = self._ibuf[_fk.ONE_REASON:_fk.ONE_VALID]
+        self._p = self._fbuf[_fk.ONE_P:_fk.ONE_U]
+        self._u = self._fbuf[_fk.ONE_U:_fk.ONE_T].reshape(16, 5)
+        self._kfbuf = np.empty(_ik.ONE_F)
+        self._kibuf = np.empty(3, np.int64)
+        self._kq = self._kfbuf[_ik.ONE_Q:_ik.ONE_P]
+        self._q = np.empty(3)
+        self._tol = _FK_TOL_DEFAULT
+        self._inf = float("inf")
+
+    @property
+    def T_b_e(self) -> NDArray[np.float64]:
+        """The RCM frame (a copy), shape (4, 4)."""
+        return self._T.copy()
+
+    def fk(self, q: ArrayLike) -> tuple[NDArray[np.int8], NDArray[np.float64],
+                                        NDArray[np.float64]]:
+        """The 16 forward-kinematics slots of actuator values ``q``.
+
+        Parameters
+        ----------
+        q : ndarray, shape (3,)
+            ``(q1, q2, q3)``, m (a float64 array avoids a conversion).
+
+        Returns
+        -------
+        reason : ndarray of int8, shape (16,)
+            Reason per slot (0: valid), as :attr:`FKSolution.reason`.
+        p : ndarray, shape (16,)
+        u : ndarray, shape (16, 5)
+            As :attr:`FKSolution.p` and :attr:`FKSolution.u` (NaN in invalid slots).
+        """
+        _fk.fk_one(_vec3(q, "q"), self._T, self._P, self._tol, self._inf, self._fbuf,
+                   self._ibuf)
+        return self._reason, self._p, self._u
+
+    def ik(self, u345: ArrayLike) -> tuple[NDArray[np.float64], int]:
+        """Paper-form IK: actuators for the spherical-joint angles ``u3, u4, u5``.
+
+        Parameters
+        ----------
+        u345 : ndarray, shape (3,)
+            Radians.
+
+        Returns
+        -------
+        q : ndarray, shape (3,)
+            NaN unless ``reason == 0``.
+        reason : int
+            As :attr:`PassiveJoints.reason` of :func:`athenakin.inverse_kinematics`.
+        """
+        u = _vec3(u345, "u345")
+        flags = _ik.ik_paper_one(self._T, u, self._P, IK_SINGULAR_TOL, CLOSURE_TOL, self._inf,
+                                 self._kfbuf, self._kibuf)
+        if flags & _ik.FLAG_SLOW:   # |u| beyond the kernels' exact range: numpy reference
+            from ..robot import inverse_kinematics
+
+            q, passive = inverse_kinematics(self._T, u, self._design, errors="flag")
+            self._kq[:] = q
+            return self._kq, int(passive.reason)
+        return self._kq, int(self._kibuf[2])
+
+    def q_from_instrument(self, direction_e: ArrayLike, p: float
+                          ) -> tuple[NDArray[np.float64], int]:
+        """Actuators for an instrument direction in E and an insertion ``p`` (m).
+
+        Returns ``(q (3,), reason)`` as :func:`athenakin.q_from_instrument`; a
+        zero or non-finite direction gives ``NONFINITE_INPUT`` here instead of
+        raising.
+        """
+        d = _vec3(direction_e, "direction_e")
+        r = _ik.ik_line_one(self._T, d, float(p), self._P, 0, self._q)
+        return self._q, r
+
+    def q_from_tool_tip(self, tip_e: ArrayLike) -> tuple[NDArray[np.float64], int]:
+        """Actuators that put the tool tip at ``tip_e`` (frame E, m).
+
+        Returns ``(q (3,), reason)`` as :func:`athenakin.q_from_tool_tip`; a
+        non-finite tip gives ``NONFINITE_INPUT`` here instead of raising.
+        """
+        r = _ik.ik_line_one(self._T, _vec3(tip_e, "tip_e"), 0.0, self._P, 1, self._q)
+        return self._q, r

@@ -1,0 +1,498 @@
+"""Compiled forward kinematics of the whole robot (private): all 16 slots per pose.
+
+The arithmetic mirrors :func:`athenakin.forward_kinematics` operation by
+operation (same formulas, same order of the floating-point operations where
+numpy's order is defined), with three differences that change no result
+beyond rounding:
+
+* the 8 serial slots of an assembly mode are sign flips of one another
+  (``p -> -p`` negates rows 1, 2 of ``W = R(u1, u2)^T R_s_e``, the U-joint
+  branch rows 0, 1; negation is exact in floating point), so ``W``, ``|sin u4|``
+  and the closure residual are computed once per mode, and each angle once per
+  distinct pair of signs;
+* angles come from the branch-free ``atan`` of :mod:`._scalar` (no libm call),
+  and the closure check rebuilds ``T_s_e`` from the cosines and sines directly
+  (``cos(atan2(s, c)) = c / hypot(s, c)``) instead of calling ``cos``/``sin``;
+* the parallel module and the serial chain are evaluated for every pose
+  without branches, and invalid results are masked afterwards.
+
+Work per pose: 10 ``atan`` (5 per mode), 20 square roots, about 40 divisions
+and 600 multiply-adds; no transcendental library call. The pose loop runs in
+chunks of :data:`CHUNK`: a vectorised pass writes per-mode values into a
+structure-of-arrays scratch, a second pass expands them into the 16 slots.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from ._scalar import atan2_from_q1, atan_q1, finite_sum, hypot, nanmax2
+
+__all__ = ["CHUNK", "scratch", "fk_chunk", "gather", "fk_full", "fk_full_parallel", "fk_counts",
+           "rigid_flags", "FLAG_NONRIGID", "FLAG_Q_NONFINITE", "FLAG_T_NONFINITE"]
+
+#: Poses per chunk of the two-pass loop (the scratch holds 74 doubles per pose).
+CHUNK = 64
+
+# Reason codes (athenakin.errors.Reason), as floats in the scratch.
+_NONFINITE, _STROKE, _AB_ORDER, _LINK, _DISJOINT, _TANGENT = 1.0, 2.0, 3.0, 4.0, 5.0, 6.0
+_P_ZERO, _UJOINT, _WRIST, _CLOSURE = 7.0, 8.0, 9.0, 10.0
+
+#: Bits of the flags the kernels return.
+FLAG_NONRIGID = 1        # some T_b_e is not rigid within half the tolerance: re-check exactly
+FLAG_Q_NONFINITE = 2     # some q holds NaN / inf
+FLAG_T_NONFINITE = 4     # some T_b_e holds NaN / inf
+
+# Scratch rows per mode (offset MS * m) and shared rows.
+_R, _PR, _NN, _RES = 0, 1, 2, 3
+_V1 = 4      # 2 values, index f (f = 0: sig * rs = +1)
+_V2 = 6      # 4 values, index 2 b + r
+_V3 = 10     # 4 values, index 2 g + r (g = 0: tau * sig = +1)
+_V4 = 14     # 4 values, index 2 w + r
+_V5 = 18     # 2 values, index h (h = 0: tau * rs = +1)
+_YS, _ZS, _CY, _CZ, _Y, _Z = 20, 21, 22, 23, 24, 25
+MS = 26
+# Rows of the shared scratch: x_M and r1 of the parallel module.
+_XM, _R1 = 0, 1
+NSH = 2
+# Rows of the gathered input: q (3), T_b_e row-major (16), T finite (1).
+_GQ, _GT, _GFIN = 0, 3, 19
+NG = 20
+# Scratch arrays are flat, row-major (row * CHUNK + column) with CHUNK a compile-time
+# constant: LLVM then proves that rows do not overlap and vectorises the pose loops.
+
+_OPTS = dict(error_model="numpy", cache=True)
+
+
+@njit(**_OPTS)
+def scratch():
+    """Fresh scratch arrays ``G, SH, S0, S1`` of one chunk (flat, row-major)."""
+    return (np.empty(NG * CHUNK), np.empty(NSH * CHUNK), np.empty(MS * CHUNK),
+            np.empty(MS * CHUNK))
+
+
+@njit(**_OPTS)
+def _rot_pair(ca, sa, cb, sb):
+    """Rows of ``R(a, b) = Rz(a) Rx(pi/2) Rz(b) Rx(pi/2)`` (chain._ups.rotation_u_pair)."""
+    return (ca * cb, sa, ca * sb, sa * cb, -ca, sa * sb, sb, 0.0, -cb)
+
+
+@njit(**_OPTS)
+def _fin16(T, j):
+    s = 0.0
+    for r in range(4):
+        for c in range(4):
+            s += finite_sum(T[j, r, c])
+    return s == 0.0
+
+
+@njit(**_OPTS)
+def gather(q, T, c0, n, G):
+    """Copy poses c0..c0+n-1 (q or T may have a single row: broadcast) into ``G`` columns."""
+    for ii in range(n):
+        i = c0 + ii
+        iq = i if q.shape[0] > 1 else 0
+        it = i if T.shape[0] > 1 else 0
+        for c in range(3):
+            G[(_GQ + c) * CHUNK + ii] = q[iq, c]
+        for r in range(4):
+            for c in range(4):
+                G[(_GT + 4 * r + c) * CHUNK + ii] = T[it, r, c]
+        G[(_GFIN) * CHUNK + ii] = 1.0 if _fin16(T, it) else 0.0
+
+
+@njit(**_OPTS)
+def _parallel_stage(G, P, tol, SH, S0, S1, n):
+    """Parallel module, both assembly modes (parallel_forward_kinematics) for n columns."""
+    l1, l2, l3, l5 = P[0], P[1], P[2], P[4]
+    lo0, lo1, lo2, hi0, hi1, hi2, hs = P[5], P[6], P[7], P[8], P[9], P[10], P[11]
+    ttol = tol[0]
+    for ii in range(n):
+        q1, q2, q3 = G[(_GQ) * CHUNK + ii], G[(_GQ + 1) * CHUNK + ii], G[(_GQ + 2) * CHUNK + ii]
+        # parallel._module._actuator_checks
+        fin_q = (finite_sum(q1) + finite_sum(q2) + finite_sum(q3)) == 0.0
+        stroke = (q1 < lo0) | (q1 > hi0) | (q2 < lo1) | (q2 > hi1) | (q3 < lo2) | (q3 > hi2)
+        order = hs * (q1 - q2) < 0.0
+        pr = _NONFINITE if not fin_q else _STROKE if stroke else _AB_ORDER if order else 0.0
+        q1 = q1 if fin_q else 0.0
+        q2 = q2 if fin_q else 0.0
+        q3 = q3 if fin_q else 0.0
+        # parallel._module.circle_geometry
+        h = 0.5 * (q1 - q2)
+        r1 = math.sqrt(l1 * l1 - h * h)
+        m_y = math.sqrt(l3 * l3 - h * h) + l2
+        d2 = m_y * m_y + l5 * l5
+        d = math.sqrt(d2)
+        H = (d2 + r1 * r1) - q3 * q3
+        k = (((r1 + q3) - d) * ((r1 + q3) + d)) * ((d - r1) + q3) * ((d + r1) - q3)
+        half = math.sqrt(k if not (k < 0.0) else 0.0) / (2.0 * d)
+        ah = abs(h)
+        link = (ah >= l1) | (ah > l3)
+        pr = _LINK if (pr == 0.0) & link else pr
+        disjoint = (not link) & (k < 0.0) & (math.sqrt(abs(k)) / (2.0 * d) > ttol)
+        pr = _DISJOINT if (pr == 0.0) & disjoint else pr
+        ok = pr == 0.0
+        tangent = ok & (half <= ttol)
+        nan = 0.0 if ok else math.nan
+        a = (0.0 if tangent else half) + nan
+        dd = (2.0 * d) * d
+        by = (H * m_y) / dd
+        bz = (H * l5) / dd
+        ey = (-l5) / d
+        ez = m_y / d
+        SH[_XM * CHUNK + ii] = 0.5 * (q1 + q2) + nan
+        SH[_R1 * CHUNK + ii] = r1 + nan
+        S0[_PR * CHUNK + ii] = pr
+        S1[_PR * CHUNK + ii] = _TANGENT if tangent else pr
+        S0[_Y * CHUNK + ii] = by + a * ey
+        S0[_Z * CHUNK + ii] = bz + a * ez
+        S1[_Y * CHUNK + ii] = by + (-a) * ey
+        S1[_Z * CHUNK + ii] = bz + (-a) * ez
+
+
+@njit(**_OPTS)
+def _serial_stage(G, P, tol, SH, Sm, n):
+    """Serial chain (ups_solutions) of one assembly mode, scratch ``Sm``."""
+    l4 = P[3]
+    dtol, pztol, ctol = tol[1], tol[2], tol[3]
+    for ii in range(n):
+        xm, r1 = SH[_XM * CHUNK + ii], SH[_R1 * CHUNK + ii]
+        y, z, pr = Sm[_Y * CHUNK + ii], Sm[_Z * CHUNK + ii], Sm[_PR * CHUNK + ii]
+        t00, t01, t02, t03 = G[(_GT) * CHUNK + ii], G[(_GT + 1) * CHUNK + ii], G[(_GT + 2) * CHUNK + ii], G[(_GT + 3) * CHUNK + ii]
+        t10, t11, t12, t13 = G[(_GT + 4) * CHUNK + ii], G[(_GT + 5) * CHUNK + ii], G[(_GT + 6) * CHUNK + ii], G[(_GT + 7) * CHUNK + ii]
+        t20, t21, t22, t23 = G[(_GT + 8) * CHUNK + ii], G[(_GT + 9) * CHUNK + ii], G[(_GT + 10) * CHUNK + ii], G[(_GT + 11) * CHUNK + ii]
+        t30, t31, t32, t33 = G[(_GT + 12) * CHUNK + ii], G[(_GT + 13) * CHUNK + ii], G[(_GT + 14) * CHUNK + ii], G[(_GT + 15) * CHUNK + ii]
+        cy = y / r1
+        cz = z / r1
+        ys = y + l4 * cy
+        zs = z + l4 * cz
+        # T_s_e = T_b_s^-1 @ T_b_e, T_b_s = [[1, 0, 0, xm], [0, cz, cy, ys], [0, -cy, cz, zs]]
+        ti0 = -xm
+        ti1 = -(cz * ys - cy * zs)
+        ti2 = -(cy * ys + cz * zs)
+        e00 = t00 + ti0 * t30
+        e01 = t01 + ti0 * t31
+        e02 = t02 + ti0 * t32
+        e03 = t03 + ti0 * t33
+        e10 = (cz * t10 - cy * t20) + ti1 * t30
+        e11 = (cz * t11 - cy * t21) + ti1 * t31
+        e12 = (cz * t12 - cy * t22) + ti1 * t32
+        e13 = (cz * t13 - cy * t23) + ti1 * t33
+        e20 = (cy * t10 + cz * t20) + ti2 * t30
+        e21 = (cy * t11 + cz * t21) + ti2 * t31
+        e22 = (cy * t12 + cz * t22) + ti2 * t32
+        e23 = (cy * t13 + cz * t23) + ti2 * t33
+        fin = (finite_sum(e00) + finite_sum(e01) + finite_sum(e02) + finite_sum(e03)
+               + finite_sum(e10) + finite_sum(e11) + finite_sum(e12) + finite_sum(e13)
+               + finite_sum(e20) + finite_sum(e21) + finite_sum(e22) + finite_sum(e23)) == 0.0
+        fin = fin & (G[(_GFIN) * CHUNK + ii] != 0.0)
+        # chain._ups.ups_solutions, slot (p > 0, sin u2 > 0, sin u4 > 0)
+        nrm = math.sqrt((e03 * e03 + e13 * e13) + e23 * e23)
+        pz = nrm <= pztol
+        nn = nrm if nrm > pztol else 1.0
+        zx = e03 / nn
+        zy = e13 / nn
+        zz = e23 / nn
+        rho = hypot(zx, zy)
+        rr = rho if rho > 0.0 else 1.0
+        A1 = zx / rr
+        B1 = zy / rr
+        c2 = -zz
+        x0, x1 = A1 * c2, B1 * c2
+        z0, z1 = A1 * rho, B1 * rho
+        # W = R1^T R_s_e (rows: the columns x, y, z of R1)
+        W02 = (x0 * e02 + x1 * e12) + rho * e22
+        W12 = B1 * e02 - A1 * e12
+        W20 = (z0 * e00 + z1 * e10) + zz * e20
+        W21 = (z0 * e01 + z1 * e11) + zz * e21
+        W22 = (z0 * e02 + z1 * e12) + zz * e22
+        rho4 = hypot(W02, W12)
+        r4 = rho4 if rho4 > 0.0 else 1.0
+        A3 = W02 / r4
+        B3 = W12 / r4
+        A5 = W20 / r4
+        B5 = W21 / r4
+        # closure residual (identical for the 8 slots: they are sign flips of each other)
+        r5 = hypot(A5, B5)
+        r5 = r5 if r5 > 0.0 else 1.0
+        c5 = A5 / r5
+        s5 = -(B5 / r5)
+        a00, a01, a02, a10, a11, a12, a20, a21, a22 = _rot_pair(A1, B1, c2, rho)
+        b00, b01, b02, b10, b11, b12, b20, b21, b22 = _rot_pair(A3, B3, -W22, rho4)
+        m00 = (a00 * b00 + a01 * b10) + a02 * b20
+        m01 = (a00 * b01 + a01 * b11) + a02 * b21
+        m02 = (a00 * b02 + a01 * b12) + a02 * b22
+        m10 = (a10 * b00 + a11 * b10) + a12 * b20
+        m11 = (a10 * b01 + a11 * b11) + a12 * b21
+        m12 = (a10 * b02 + a11 * b12) + a12 * b22
+        m20 = (a20 * b00 + a21 * b10) + a22 * b20
+        m21 = (a20 * b01 + a21 * b11) + a22 * b21
+        m22 = (a20 * b02 + a21 * b12) + a22 * b22
+        res = abs(m00 * c5 + m01 * s5 - e00)
+        res = nanmax2(res, abs(m01 * c5 - m00 * s5 - e01))
+        res = nanmax2(res, abs(m02 - e02))
+        res = nanmax2(res, abs(m10 * c5 + m11 * s5 - e10))
+        res = nanmax2(res, abs(m11 * c5 - m10 * s5 - e11))
+        res = nanmax2(res, abs(m12 - e12))
+        res = nanmax2(res, abs(m20 * c5 + m21 * s5 - e20))
+        res = nanmax2(res, abs(m21 * c5 - m20 * s5 - e21))
+        res = nanmax2(res, abs(m22 - e22))
+        res = nanmax2(res, abs(nn * a02 - e03))
+        res = nanmax2(res, abs(nn * a12 - e13))
+        res = nanmax2(res, abs(nn * a22 - e23))
+        ser = (_NONFINITE if not fin else _P_ZERO if pz else _UJOINT if rho <= dtol
+               else _WRIST if rho4 <= dtol else _CLOSURE if not (res <= ctol) else 0.0)
+        Sm[(_R) * CHUNK + ii] = pr if pr != 0.0 else ser
+        Sm[(_NN) * CHUNK + ii] = nn
+        Sm[(_RES) * CHUNK + ii] = res
+        # the 16 distinct angles of the mode (first-quadrant atan, then sign patterns)
+        a1 = atan_q1(abs(B1), abs(A1))
+        Sm[(_V1) * CHUNK + ii] = atan2_from_q1(a1, B1, A1)
+        Sm[(_V1 + 1) * CHUNK + ii] = atan2_from_q1(a1, -B1, -A1)
+        a2 = atan_q1(rho, abs(zz))
+        Sm[(_V2) * CHUNK + ii] = atan2_from_q1(a2, rho, -zz)
+        Sm[(_V2 + 1) * CHUNK + ii] = atan2_from_q1(a2, rho, zz)
+        Sm[(_V2 + 2) * CHUNK + ii] = atan2_from_q1(a2, -rho, -zz)
+        Sm[(_V2 + 3) * CHUNK + ii] = atan2_from_q1(a2, -rho, zz)
+        a3 = atan_q1(abs(B3), abs(A3))
+        Sm[(_V3) * CHUNK + ii] = atan2_from_q1(a3, B3, A3)
+        Sm[(_V3 + 1) * CHUNK + ii] = atan2_from_q1(a3, -B3, A3)
+        Sm[(_V3 + 2) * CHUNK + ii] = atan2_from_q1(a3, -B3, -A3)
+        Sm[(_V3 + 3) * CHUNK + ii] = atan2_from_q1(a3, B3, -A3)
+        a4 = atan_q1(rho4, abs(W22))
+        Sm[(_V4) * CHUNK + ii] = atan2_from_q1(a4, rho4, -W22)
+        Sm[(_V4 + 1) * CHUNK + ii] = atan2_from_q1(a4, rho4, W22)
+        Sm[(_V4 + 2) * CHUNK + ii] = atan2_from_q1(a4, -rho4, -W22)
+        Sm[(_V4 + 3) * CHUNK + ii] = atan2_from_q1(a4, -rho4, W22)
+        a5 = atan_q1(abs(B5), abs(A5))
+        Sm[(_V5) * CHUNK + ii] = atan2_from_q1(a5, -B5, A5)
+        Sm[(_V5 + 1) * CHUNK + ii] = atan2_from_q1(a5, B5, -A5)
+        Sm[(_YS) * CHUNK + ii] = ys
+        Sm[(_ZS) * CHUNK + ii] = zs
+        Sm[(_CY) * CHUNK + ii] = cy
+        Sm[(_CZ) * CHUNK + ii] = cz
+
+
+@njit(**_OPTS)
+def fk_chunk(q, T, P, tol, G, SH, S0, S1, c0, n):
+    """Scratch for poses c0..c0+n-1: gather, parallel module, serial chain of each mode."""
+    gather(q, T, c0, n, G)
+    _parallel_stage(G, P, tol, SH, S0, S1, n)
+    _serial_stage(G, P, tol, SH, S0, n)
+    _serial_stage(G, P, tol, SH, S1, n)
+
+
+@njit(**_OPTS)
+def _input_flags(q, T, rot_tol):
+    """FLAG_* bits: non-finite q / T, and T not rigid within ``rot_tol / 2`` (re-check exactly)."""
+    flags = 0
+    for i in range(q.shape[0]):
+        if not ((finite_sum(q[i, 0]) + finite_sum(q[i, 1]) + finite_sum(q[i, 2])) == 0.0):
+            flags |= FLAG_Q_NONFINITE
+    flags |= rigid_flags(T, rot_tol)
+    return flags
+
+
+@njit(**_OPTS)
+def rigid_flags(T, rot_tol):
+    """FLAG_T_NONFINITE / FLAG_NONRIGID over transforms ``T`` (n, 4, 4).
+
+    ``FLAG_NONRIGID`` is conservative: it is set when ``|R^T R - I|``,
+    ``|det R - 1|`` or the last row's deviation exceeds half the tolerance of
+    :func:`athenakin._validation.check_transform`, which then decides exactly.
+    """
+    flags = 0
+    lim = 0.5 * rot_tol
+    for j in range(T.shape[0]):
+        if not _fin16(T, j):
+            flags |= FLAG_T_NONFINITE
+            continue
+        dev = 0.0
+        for a in range(3):
+            for b in range(3):
+                g = T[j, 0, a] * T[j, 0, b] + T[j, 1, a] * T[j, 1, b] + T[j, 2, a] * T[j, 2, b]
+                dev = max(dev, abs(g - (1.0 if a == b else 0.0)))
+        det = (T[j, 0, 0] * (T[j, 1, 1] * T[j, 2, 2] - T[j, 1, 2] * T[j, 2, 1])
+               - T[j, 0, 1] * (T[j, 1, 0] * T[j, 2, 2] - T[j, 1, 2] * T[j, 2, 0])
+               + T[j, 0, 2] * (T[j, 1, 0] * T[j, 2, 1] - T[j, 1, 1] * T[j, 2, 0]))
+        dev = max(dev, abs(det - 1.0))
+        dev = max(dev, abs(T[j, 3, 0]), abs(T[j, 3, 1]), abs(T[j, 3, 2]), abs(T[j, 3, 3] - 1.0))
+        if not dev <= lim:
+            flags |= FLAG_NONRIGID
+    return flags
+
+
+@njit(**_OPTS)
+def _store_mode(Sm, ii, i, k0, xm, reason, valid, p, u, Tbs, res):
+    """Expand one assembly mode's scratch column into its 8 slots (branch-free)."""
+    R = Sm[_R * CHUNK + ii]
+    ok = R == 0.0
+    mask = 0.0 if ok else math.nan
+    pmask = 0.0 if Sm[_PR * CHUNK + ii] == 0.0 else math.nan
+    nn = Sm[_NN * CHUNK + ii] + mask
+    rv = Sm[_RES * CHUNK + ii] + mask
+    v1 = (Sm[_V1 * CHUNK + ii] + mask, Sm[(_V1 + 1) * CHUNK + ii] + mask)
+    v2 = (Sm[_V2 * CHUNK + ii] + mask, Sm[(_V2 + 1) * CHUNK + ii] + mask,
+          Sm[(_V2 + 2) * CHUNK + ii] + mask, Sm[(_V2 + 3) * CHUNK + ii] + mask)
+    v3 = (Sm[_V3 * CHUNK + ii] + mask, Sm[(_V3 + 1) * CHUNK + ii] + mask,
+          Sm[(_V3 + 2) * CHUNK + ii] + mask, Sm[(_V3 + 3) * CHUNK + ii] + mask)
+    v4 = (Sm[_V4 * CHUNK + ii] + mask, Sm[(_V4 + 1) * CHUNK + ii] + mask,
+          Sm[(_V4 + 2) * CHUNK + ii] + mask, Sm[(_V4 + 3) * CHUNK + ii] + mask)
+    v5 = (Sm[_V5 * CHUNK + ii] + mask, Sm[(_V5 + 1) * CHUNK + ii] + mask)
+    r8 = np.int8(R)
+    for j in range(8):
+        r = j >> 2
+        b = (j >> 1) & 1
+        w = j & 1
+        k = k0 + j
+        reason[i, k] = r8
+        valid[i, k] = ok
+        res[i, k] = rv
+        p[i, k] = nn if r == 0 else -nn
+        u[i, k, 0] = v1[b ^ r]
+        u[i, k, 1] = v2[2 * b + r]
+        u[i, k, 2] = v3[2 * (w ^ b) + r]
+        u[i, k, 3] = v4[2 * w + r]
+        u[i, k, 4] = v5[w ^ r]
+    # T_b_s = [[1, 0, 0, xm], [0, cz, cy, ys], [0, -cy, cz, zs], [0, 0, 0, 1]] (NaN if the
+    # assembly mode is invalid)
+    one, zero = 1.0 + pmask, pmask
+    cy = Sm[_CY * CHUNK + ii] + pmask
+    cz = Sm[_CZ * CHUNK + ii] + pmask
+    ys = Sm[_YS * CHUNK + ii] + pmask
+    zs = Sm[_ZS * CHUNK + ii] + pmask
+    xmm = xm + pmask
+    nk = 8 if Tbs.shape[1] == 16 else 1
+    kb = k0 if Tbs.shape[1] == 16 else k0 // 8
+    for j in range(nk):
+        k = kb + j
+        Tbs[i, k, 0, 0] = one
+        Tbs[i, k, 0, 1] = zero
+        Tbs[i, k, 0, 2] = zero
+        Tbs[i, k, 0, 3] = xmm
+        Tbs[i, k, 1, 0] = zero
+        Tbs[i, k, 1, 1] = cz
+        Tbs[i, k, 1, 2] = cy
+        Tbs[i, k, 1, 3] = ys
+        Tbs[i, k, 2, 0] = zero
+        Tbs[i, k, 2, 1] = -cy
+        Tbs[i, k, 2, 2] = cz
+        Tbs[i, k, 2, 3] = zs
+        Tbs[i, k, 3, 0] = zero
+        Tbs[i, k, 3, 1] = zero
+        Tbs[i, k, 3, 2] = zero
+        Tbs[i, k, 3, 3] = one
+
+
+@njit(**_OPTS)
+def _store_full(SH, S0, S1, n, c0, reason, valid, p, u, Tbs, res, item):
+    """Expand scratch columns into the 16 slots of FKSolution's arrays (rows c0..c0+n-1)."""
+    for ii in range(n):
+        i = c0 + ii
+        xm = SH[_XM * CHUNK + ii]
+        R0 = S0[_R * CHUNK + ii]
+        R1 = S1[_R * CHUNK + ii]
+        item[i] = np.int8(0 if (R0 == 0.0) | (R1 == 0.0) else R0)
+        _store_mode(S0, ii, i, 0, xm, reason, valid, p, u, Tbs, res)
+        _store_mode(S1, ii, i, 8, xm, reason, valid, p, u, Tbs, res)
+
+
+@njit(**_OPTS)
+def _chunk_full(q, T, P, tol, G, SH, S0, S1, c0, n, reason, valid, p, u, Tbs, res, item):
+    fk_chunk(q, T, P, tol, G, SH, S0, S1, c0, n)
+    _store_full(SH, S0, S1, n, c0, reason, valid, p, u, Tbs, res, item)
+
+
+@njit(**_OPTS)
+def fk_full(q, T, P, tol, rot_tol, reason, valid, p, u, Tbs, res, item):
+    """All 16 slots of ``N = max(len(q), len(T))`` poses into FKSolution-shaped arrays.
+
+    Parameters
+    ----------
+    q : (Nq, 3) float64, Nq in (1, N); T : (NT, 4, 4) float64, NT in (1, N)
+    P : (13,) design parameters (see ``_api.design_params``); tol : (4,) tolerances
+        (tangent, degenerate, p_zero, closure); rot_tol : rigidity tolerance
+    reason : (N, 16) int8; valid : (N, 16) bool; p, res : (N, 16); u : (N, 16, 5);
+    Tbs : (N, 16, 4, 4) or (N, 2, 4, 4) (then one matrix per mode); item : (N,) int8
+
+    Returns
+    -------
+    int
+        FLAG_* bits about the input.
+    """
+    N = item.shape[0]
+    G, SH, S0, S1 = scratch()
+    for c0 in range(0, N, CHUNK):
+        _chunk_full(q, T, P, tol, G, SH, S0, S1, c0, min(CHUNK, N - c0), reason, valid, p, u, Tbs, res,
+                    item)
+    return _input_flags(q, T, rot_tol)
+
+
+@njit(parallel=True, **_OPTS)
+def fk_full_parallel(q, T, P, tol, rot_tol, reason, valid, p, u, Tbs, res, item):
+    """:func:`fk_full` with the chunks spread over numba's threads."""
+    N = item.shape[0]
+    nchunk = (N + CHUNK - 1) // CHUNK
+    for ci in prange(nchunk):
+        G, SH, S0, S1 = scratch()
+        c0 = ci * CHUNK
+        _chunk_full(q, T, P, tol, G, SH, S0, S1, c0, min(CHUNK, N - c0), reason, valid, p, u, Tbs, res,
+                    item)
+    return _input_flags(q, T, rot_tol)
+
+
+@njit(**_OPTS)
+def _count_chunk(S0, S1, n, counts, reasons, slots):
+    for ii in range(n):
+        R0 = S0[_R * CHUNK + ii]
+        R1 = S1[_R * CHUNK + ii]
+        ns = 8 * ((R0 == 0.0) + (R1 == 0.0))
+        counts[ns] += 1
+        it = 0 if (R0 == 0.0) | (R1 == 0.0) else int(R0)
+        reasons[it] += 1
+        slots[0] += R0 == 0.0
+        slots[1] += R1 == 0.0
+
+
+@njit(**_OPTS)
+def fk_counts(q, T, P, tol, counts, reasons, slots):
+    """Reduce FK to histograms (no per-pose output): the kernel of a memory-free sweep.
+
+    ``counts[k]`` += number of poses with ``k`` valid slots (k in 0..16),
+    ``reasons[r]`` += number of poses whose ``item_reason`` is ``r``,
+    ``slots[m]`` += number of poses whose assembly mode ``m`` has its 8 slots valid.
+    """
+    N = max(q.shape[0], T.shape[0])
+    G, SH, S0, S1 = scratch()
+    for c0 in range(0, N, CHUNK):
+        n = min(CHUNK, N - c0)
+        fk_chunk(q, T, P, tol, G, SH, S0, S1, c0, n)
+        _count_chunk(S0, S1, n, counts, reasons, slots)
+
+
+#: Layout of the packed single-pose buffers of :func:`fk_one`.
+ONE_P, ONE_U, ONE_T, ONE_RES, ONE_F = 0, 16, 96, 352, 368
+ONE_REASON, ONE_VALID, ONE_ITEM, ONE_I = 0, 16, 32, 33
+
+
+@njit(**_OPTS)
+def fk_one(q, T, P, tol, rot_tol, fbuf, ibuf):
+    """One pose, q (3,) and T (4, 4), into packed buffers (low call overhead).
+
+    ``fbuf`` (368,): p (16), u (16 x 5), T_b_s (16 x 4 x 4), residual (16);
+    ``ibuf`` (33,) int8: reason (16), valid (16, 0/1), item_reason (1).
+    Returns the FLAG_* bits.
+    """
+    q2 = q.reshape((1, 3))
+    T2 = T.reshape((1, 4, 4))
+    G, SH, S0, S1 = scratch()
+    _chunk_full(q2, T2, P, tol, G, SH, S0, S1, 0, 1,
+                ibuf[ONE_REASON:ONE_VALID].reshape((1, 16)),
+                ibuf[ONE_VALID:ONE_ITEM].reshape((1, 16)),
+                fbuf[ONE_P:ONE_U].reshape((1, 16)), fbuf[ONE_U:ONE_T].reshape((1, 16, 5)),
+                fbuf[ONE_T:ONE_RES].reshape((1, 16, 4, 4)),
+                fbuf[ONE_RES:ONE_F].reshape((1, 16)), ibuf[ONE_ITEM:ONE_I])
+    return _input_flags(q2, T2, rot_tol)

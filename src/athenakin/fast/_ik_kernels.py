@@ -1,0 +1,657 @@
+"""Compiled inverse kinematics and parallel-module kernels (private).
+
+Mirrors of :func:`athenakin.inverse_kinematics`, :func:`athenakin.q_from_instrument`,
+:func:`athenakin.q_from_tool_tip` and :mod:`athenakin.parallel` (same formulas,
+same reason codes, same NaN policy). As in :mod:`._fk_kernels` the pose loop
+runs in chunks: a gather pass copies the inputs into a flat structure-of-arrays
+scratch, a vectorised pass computes, a last pass writes the caller's arrays.
+
+The controller forms are trig-free (two ``hypot``, two square roots per pose).
+The paper form needs ``sin``/``cos`` of the given ``u3, u4, u5`` (the branch-free
+Cephes :func:`._scalar.sincos`) and the angles ``u1, u2`` (branch-free ``atan``);
+the orientation of the parallel module, ``Rx(theta)``, is formed from the
+position of ``O_s`` without any angle (``cos theta = z / hypot(y, z)``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from ._fk_kernels import CHUNK, FLAG_T_NONFINITE, rigid_flags
+from ._scalar import SINCOS_MAX, atan2, finite_sum, hypot, nanmax2, sincos, wrap_mod, wrap_pi
+
+__all__ = ["ik_paper", "ik_paper_parallel", "ik_line", "ik_line_parallel",
+           "parallel_ik_position", "parallel_fk", "FLAG_SLOW", "FLAG_V_NONFINITE",
+           "FLAG_P_NONFINITE", "FLAG_ZERO_DIRECTION", "WRAP_EXACT_MAX"]
+
+# Reason codes (athenakin.errors.Reason) as floats.
+_NONFINITE, _STROKE, _AB_ORDER, _LINK = 1.0, 2.0, 3.0, 4.0
+_DISJOINT, _TANGENT, _CLOSURE = 5.0, 6.0, 10.0
+_NOT_IMAGE, _IK_SINGULAR, _INSERTION = 11.0, 12.0, 13.0
+
+#: Flags returned by the IK kernels (FLAG_NONRIGID = 1 and FLAG_T_NONFINITE = 4 as in FK).
+FLAG_SLOW = 8              # some |u| > WRAP_EXACT_MAX: recompute those items in numpy
+FLAG_V_NONFINITE = 16      # direction / tip / u345 holds NaN or inf
+FLAG_P_NONFINITE = 32      # p holds NaN or inf
+FLAG_ZERO_DIRECTION = 64   # a direction vector is zero
+#: Largest ``|u|`` (rad) for which the kernels reproduce numpy's ``mod`` and ``sin``/``cos``
+#: to 1e-12; items beyond are flagged (FLAG_SLOW) and recomputed by the caller.
+WRAP_EXACT_MAX = 1.0e3
+
+_OPTS = dict(error_model="numpy", cache=True)
+
+# --- parallel module IK (parallel_ik_from_position) --------------------------------------
+# Rows of the IK scratch (flat, row * CHUNK + column).
+_OX, _OY, _OZ, _PRE = 0, 1, 2, 3          # inputs of the parallel IK (O_s, earlier reason)
+_Q1, _Q2, _Q3, _MODE, _REASON, _CT, _ST, _TH = 4, 5, 6, 7, 8, 9, 10, 11
+_P, _U1, _U2, _U3, _U4, _U5, _RES = 12, 13, 14, 15, 16, 17, 18
+_DX, _DY, _DZ = 19, 20, 21
+NK = 22
+
+
+@njit(**_OPTS)
+def _pik_stage(K, P, n):
+    """parallel_ik_from_position for n columns (rows _OX.._PRE in, _Q1.._TH out)."""
+    l1, l2, l3, l4, l5 = P[0], P[1], P[2], P[3], P[4]
+    lo0, lo1, lo2, hi0, hi1, hi2, hs = P[5], P[6], P[7], P[8], P[9], P[10], P[11]
+    for ii in range(n):
+        pre = K[_PRE * CHUNK + ii]
+        nanin = 0.0 if pre == 0.0 else math.nan
+        ox = K[_OX * CHUNK + ii] + nanin
+        oy = K[_OY * CHUNK + ii] + nanin
+        oz = K[_OZ * CHUNK + ii] + nanin
+        fin = (finite_sum(ox) + finite_sum(oy) + finite_sum(oz)) == 0.0
+        px = ox if fin else 0.0
+        py = oy if fin else 0.0
+        pz = oz if fin else 0.0
+        rho = hypot(py, pz)
+        reason = _NONFINITE if not fin else _NOT_IMAGE if rho <= l4 else 0.0
+        r1 = rho - l4
+        h_abs = math.sqrt(l1 * l1 - r1 * r1)
+        bad = (r1 > l1) | (h_abs > l3)
+        reason = _LINK if (reason == 0.0) & bad else reason
+        ok = reason == 0.0
+        mask = 0.0 if ok else math.nan
+        h = hs * h_abs + mask
+        xm = px + mask
+        f = r1 / rho
+        y = py * f + mask
+        z = pz * f + mask
+        m_y = math.sqrt(l3 * l3 - h * h) + l2
+        q3 = hypot(y - m_y, z - l5)
+        cross = m_y * z - l5 * y
+        q1 = xm + h
+        q2 = xm - h
+        # parallel._module._actuator_checks on q (items that passed so far)
+        finq = (finite_sum(q1) + finite_sum(q2) + finite_sum(q3)) == 0.0
+        stroke = (q1 < lo0) | (q1 > hi0) | (q2 < lo1) | (q2 > hi1) | (q3 < lo2) | (q3 > hi2)
+        order = hs * (q1 - q2) < 0.0
+        act = _NONFINITE if not finq else _STROKE if stroke else _AB_ORDER if order else 0.0
+        reason = act if ok & (act != 0.0) else reason
+        reason = pre if pre != 0.0 else reason
+        vmask = 0.0 if reason == 0.0 else math.nan
+        hh = hypot(y, z)
+        K[_Q1 * CHUNK + ii] = q1 + vmask
+        K[_Q2 * CHUNK + ii] = q2 + vmask
+        K[_Q3 * CHUNK + ii] = q3 + vmask
+        K[_MODE * CHUNK + ii] = 1.0 if cross >= 0.0 else -1.0
+        K[_REASON * CHUNK + ii] = reason
+        K[_CT * CHUNK + ii] = z / hh + vmask
+        K[_ST * CHUNK + ii] = -y / hh + vmask
+        K[_TH * CHUNK + ii] = atan2(-y, z) + vmask
+
+
+@njit(**_OPTS)
+def parallel_ik_position(O, P, q, mode, theta, valid, reason):
+    """:func:`athenakin.parallel.parallel_ik_from_position` for O (N, 3)."""
+    N = O.shape[0]
+    K = np.empty(NK * CHUNK)
+    for c0 in range(0, N, CHUNK):
+        n = min(CHUNK, N - c0)
+        for ii in range(n):
+            for c in range(3):
+                K[(_OX + c) * CHUNK + ii] = O[c0 + ii, c]
+            K[_PRE * CHUNK + ii] = 0.0
+        _pik_stage(K, P, n)
+        for ii in range(n):
+            i = c0 + ii
+            for c in range(3):
+                q[i, c] = K[(_Q1 + c) * CHUNK + ii]
+            mode[i] = np.int64(K[_MODE * CHUNK + ii])
+            theta[i] = K[_TH * CHUNK + ii]
+            r = K[_REASON * CHUNK + ii]
+            reason[i] = np.int8(r)
+            valid[i] = r == 0.0
+
+
+# --- controller forms (q_from_instrument, q_from_tool_tip) ------------------------------
+@njit(**_OPTS)
+def _line_gather(T, V, Pp, c0, n, kind, L, G):
+    """Inputs of the controller forms into G: T (16), V (3), p (1)."""
+    for ii in range(n):
+        i = c0 + ii
+        it = i if T.shape[0] > 1 else 0
+        iv = i if V.shape[0] > 1 else 0
+        ip = i if Pp.shape[0] > 1 else 0
+        for r in range(3):
+            for c in range(4):
+                G[(4 * r + c) * CHUNK + ii] = T[it, r, c]
+        for c in range(3):
+            G[(12 + c) * CHUNK + ii] = V[iv, c]
+        G[15 * CHUNK + ii] = Pp[ip] if kind == 0 else L
+
+
+@njit(**_OPTS)
+def _line_stage(G, K, kind, n):
+    """O_s = RCM - p R d (d normalised; for kind 1, d and p from the tool tip)."""
+    for ii in range(n):
+        vx, vy, vz = G[12 * CHUNK + ii], G[13 * CHUNK + ii], G[14 * CHUNK + ii]
+        s = math.sqrt((vx * vx + vy * vy) + vz * vz)
+        L = G[15 * CHUNK + ii]
+        if kind == 1:
+            pre = _IK_SINGULAR if s == 0.0 else _INSERTION if s >= L else 0.0
+            sp = s if s > 0.0 else 1.0
+            dx = vx / sp if s > 0.0 else 0.0
+            dy = vy / sp if s > 0.0 else 0.0
+            dz = vz / sp if s > 0.0 else 1.0
+            p = L - s
+        else:
+            pre = 0.0
+            dx, dy, dz = vx / s, vy / s, vz / s
+            p = L
+        bx = (G[0 * CHUNK + ii] * dx + G[1 * CHUNK + ii] * dy) + G[2 * CHUNK + ii] * dz
+        by = (G[4 * CHUNK + ii] * dx + G[5 * CHUNK + ii] * dy) + G[6 * CHUNK + ii] * dz
+        bz = (G[8 * CHUNK + ii] * dx + G[9 * CHUNK + ii] * dy) + G[10 * CHUNK + ii] * dz
+        K[_OX * CHUNK + ii] = G[3 * CHUNK + ii] - p * bx
+        K[_OY * CHUNK + ii] = G[7 * CHUNK + ii] - p * by
+        K[_OZ * CHUNK + ii] = G[11 * CHUNK + ii] - p * bz
+        K[_PRE * CHUNK + ii] = pre
+        K[_P * CHUNK + ii] = p
+        K[_DX * CHUNK + ii] = bx
+        K[_DY * CHUNK + ii] = by
+        K[_DZ * CHUNK + ii] = bz
+
+
+@njit(**_OPTS)
+def _line_store(K, c0, n, q, p, d_b, O_s, mode, valid, reason):
+    for ii in range(n):
+        i = c0 + ii
+        r = K[_REASON * CHUNK + ii]
+        mask = 0.0 if r == 0.0 else math.nan
+        q[i, 0] = K[_Q1 * CHUNK + ii]
+        q[i, 1] = K[_Q2 * CHUNK + ii]
+        q[i, 2] = K[_Q3 * CHUNK + ii]
+        p[i] = K[_P * CHUNK + ii] + mask
+        d_b[i, 0] = K[_DX * CHUNK + ii] + mask
+        d_b[i, 1] = K[_DY * CHUNK + ii] + mask
+        d_b[i, 2] = K[_DZ * CHUNK + ii] + mask
+        O_s[i, 0] = K[_OX * CHUNK + ii] + mask
+        O_s[i, 1] = K[_OY * CHUNK + ii] + mask
+        O_s[i, 2] = K[_OZ * CHUNK + ii] + mask
+        mode[i] = np.int64(K[_MODE * CHUNK + ii])
+        reason[i] = np.int8(r)
+        valid[i] = r == 0.0
+
+
+@njit(**_OPTS)
+def _line_chunk(T, V, Pp, P, kind, G, K, c0, n, q, p, d_b, O_s, mode, valid, reason):
+    _line_gather(T, V, Pp, c0, n, kind, P[12], G)
+    _line_stage(G, K, kind, n)
+    _pik_stage(K, P, n)
+    _line_store(K, c0, n, q, p, d_b, O_s, mode, valid, reason)
+
+
+@njit(**_OPTS)
+def _line_flags(T, V, Pp, kind, rot_tol):
+    flags = rigid_flags(T, rot_tol)
+    for i in range(V.shape[0]):
+        if not (finite_sum(V[i, 0]) + finite_sum(V[i, 1]) + finite_sum(V[i, 2])) == 0.0:
+            flags |= FLAG_V_NONFINITE
+        elif kind == 0 and V[i, 0] == 0.0 and V[i, 1] == 0.0 and V[i, 2] == 0.0:
+            flags |= FLAG_ZERO_DIRECTION
+    if kind == 0:
+        for i in range(Pp.shape[0]):
+            if not finite_sum(Pp[i]) == 0.0:
+                flags |= FLAG_P_NONFINITE
+    return flags
+
+
+@njit(**_OPTS)
+def ik_line(T, V, Pp, P, kind, rot_tol, q, p, d_b, O_s, mode, valid, reason):
+    """Controller-form IK: kind 0 = (direction V, insertion Pp), kind 1 = tool tip V.
+
+    Parameters
+    ----------
+    T : (NT, 4, 4); V : (NV, 3); Pp : (NP,) -- each with 1 or N rows (broadcast)
+    P : (13,) design parameters; kind : int; rot_tol : rigidity tolerance
+    q, d_b, O_s : (N, 3); p : (N,); mode : (N,) int64; valid : (N,) bool; reason : (N,) int8
+
+    Returns
+    -------
+    int
+        FLAG_* bits about the input (the caller raises the reference's errors).
+    """
+    flags = _line_flags(T, V, Pp, kind, rot_tol)
+    if flags & (FLAG_T_NONFINITE | FLAG_V_NONFINITE | FLAG_P_NONFINITE | FLAG_ZERO_DIRECTION):
+        return flags    # the caller raises the reference's error
+    N = reason.shape[0]
+    G = np.empty(16 * CHUNK)
+    K = np.empty(NK * CHUNK)
+    for c0 in range(0, N, CHUNK):
+        _line_chunk(T, V, Pp, P, kind, G, K, c0, min(CHUNK, N - c0), q, p, d_b, O_s, mode,
+                    valid, reason)
+    return flags
+
+
+@njit(parallel=True, **_OPTS)
+def ik_line_parallel(T, V, Pp, P, kind, rot_tol, q, p, d_b, O_s, mode, valid, reason):
+    """:func:`ik_line` with the chunks spread over numba's threads."""
+    flags = _line_flags(T, V, Pp, kind, rot_tol)
+    if flags & (FLAG_T_NONFINITE | FLAG_V_NONFINITE | FLAG_P_NONFINITE | FLAG_ZERO_DIRECTION):
+        return flags    # the caller raises the reference's error
+    N = reason.shape[0]
+    nchunk = (N + CHUNK - 1) // CHUNK
+    for ci in prange(nchunk):
+        G = np.empty(16 * CHUNK)
+        K = np.empty(NK * CHUNK)
+        c0 = ci * CHUNK
+        _line_chunk(T, V, Pp, P, kind, G, K, c0, min(CHUNK, N - c0), q, p, d_b, O_s, mode,
+                    valid, reason)
+    return flags
+
+
+# --- paper form (inverse_kinematics) -----------------------------------------------------
+_NGP = 20   # gathered: T (16), u345 (3), finite (1)
+
+
+@njit(**_OPTS)
+def _paper_gather(T, U, c0, n, G):
+    for ii in range(n):
+        i = c0 + ii
+        it = i if T.shape[0] > 1 else 0
+        iu = i if U.shape[0] > 1 else 0
+        s = 0.0
+        for r in range(4):
+            for c in range(4):
+                v = T[it, r, c]
+                G[(4 * r + c) * CHUNK + ii] = v
+                s += finite_sum(v)
+        for c in range(3):
+            v = U[iu, c]
+            G[(16 + c) * CHUNK + ii] = v
+            s += finite_sum(v)
+        G[19 * CHUNK + ii] = 1.0 if s == 0.0 else 0.0
+
+
+@njit(**_OPTS)
+def _paper_stage1(G, K, stol, n):
+    """From T_b_e and u345 to O_s (rows _OX.._PRE), p, the wrapped u3..u5 and R_b_w."""
+    for ii in range(n):
+        fin = G[19 * CHUNK + ii] != 0.0
+        e00 = G[0 * CHUNK + ii] if fin else 1.0
+        e01 = G[1 * CHUNK + ii] if fin else 0.0
+        e02 = G[2 * CHUNK + ii] if fin else 0.0
+        e03 = G[3 * CHUNK + ii] if fin else 0.0
+        e10 = G[4 * CHUNK + ii] if fin else 0.0
+        e11 = G[5 * CHUNK + ii] if fin else 1.0
+        e12 = G[6 * CHUNK + ii] if fin else 0.0
+        e13 = G[7 * CHUNK + ii] if fin else 0.0
+        e20 = G[8 * CHUNK + ii] if fin else 0.0
+        e21 = G[9 * CHUNK + ii] if fin else 0.0
+        e22 = G[10 * CHUNK + ii] if fin else 1.0
+        e23 = G[11 * CHUNK + ii] if fin else 0.0
+        u3 = G[16 * CHUNK + ii] if fin else 0.0
+        u4 = G[17 * CHUNK + ii] if fin else 0.0
+        u5 = G[18 * CHUNK + ii] if fin else 0.0
+        s3, c3 = sincos(u3)
+        s4, c4 = sincos(u4)
+        s5, c5 = sincos(u5)
+        # W = R(u3, u4) Rz(u5)
+        w00 = c3 * c4 * c5 + s3 * s5
+        w01 = c3 * c4 * (-s5) + s3 * c5
+        w02 = c3 * s4
+        w10 = s3 * c4 * c5 + (-c3) * s5
+        w11 = s3 * c4 * (-s5) + (-c3) * c5
+        w12 = s3 * s4
+        w20 = s4 * c5
+        w21 = s4 * (-s5)
+        w22 = -c4
+        # R_b_w = R_b_e W^T
+        b00 = (e00 * w00 + e01 * w01) + e02 * w02
+        b01 = (e00 * w10 + e01 * w11) + e02 * w12
+        b02 = (e00 * w20 + e01 * w21) + e02 * w22
+        b10 = (e10 * w00 + e11 * w01) + e12 * w02
+        b11 = (e10 * w10 + e11 * w11) + e12 * w12
+        b12 = (e10 * w20 + e11 * w21) + e12 * w22
+        b20 = (e20 * w00 + e21 * w01) + e22 * w02
+        b21 = (e20 * w10 + e21 * w11) + e22 * w12
+        b22 = (e20 * w20 + e21 * w21) + e22 * w22
+        ny = hypot(b11, b21)
+        nd = ny if ny > 0.0 else 1.0
+        n0 = b11 / nd
+        n1 = b21 / nd
+        den = b12 * n0 + b22 * n1
+        sing = (ny <= stol) | (abs(den) <= stol)
+        pre = _NONFINITE if not fin else _IK_SINGULAR if sing else 0.0
+        p = (e13 * n0 + e23 * n1) / (1.0 if sing else den)
+        K[_OX * CHUNK + ii] = e03 - p * b02
+        K[_OY * CHUNK + ii] = e13 - p * b12
+        K[_OZ * CHUNK + ii] = e23 - p * b22
+        K[_PRE * CHUNK + ii] = pre
+        K[_P * CHUNK + ii] = p
+        K[_U3 * CHUNK + ii] = wrap_mod(u3)
+        K[_U4 * CHUNK + ii] = wrap_mod(u4)
+        K[_U5 * CHUNK + ii] = wrap_mod(u5)
+        # keep R_b_w and W for stage 2 (in G, over T_b_e's rotation entries and spare rows)
+        G[0 * CHUNK + ii] = b00
+        G[1 * CHUNK + ii] = b01
+        G[2 * CHUNK + ii] = b02
+        G[4 * CHUNK + ii] = b10
+        G[5 * CHUNK + ii] = b11
+        G[6 * CHUNK + ii] = b12
+        G[8 * CHUNK + ii] = b20
+        G[9 * CHUNK + ii] = b21
+        G[10 * CHUNK + ii] = b22
+        G[12 * CHUNK + ii] = e00
+        G[13 * CHUNK + ii] = e01
+        G[14 * CHUNK + ii] = e02
+        G[15 * CHUNK + ii] = e10
+        G[16 * CHUNK + ii] = e11
+        G[17 * CHUNK + ii] = e12
+        G[18 * CHUNK + ii] = e20
+        G[19 * CHUNK + ii] = e21
+        G[20 * CHUNK + ii] = e22
+        G[21 * CHUNK + ii] = e03
+        G[22 * CHUNK + ii] = e13
+        G[23 * CHUNK + ii] = e23
+        G[24 * CHUNK + ii] = w00
+        G[25 * CHUNK + ii] = w01
+        G[26 * CHUNK + ii] = w02
+        G[27 * CHUNK + ii] = w10
+        G[28 * CHUNK + ii] = w11
+        G[29 * CHUNK + ii] = w12
+        G[30 * CHUNK + ii] = w20
+        G[31 * CHUNK + ii] = w21
+        G[32 * CHUNK + ii] = w22
+
+
+_NGP2 = 33
+
+
+@njit(**_OPTS)
+def _paper_stage2(G, K, ctol, n):
+    """u1, u2 from R_b_s^T R_b_w, then the closure check of T_b_s T_s_e(p, u)."""
+    for ii in range(n):
+        ct, st = K[_CT * CHUNK + ii], K[_ST * CHUNK + ii]
+        b00, b01, b02 = G[0 * CHUNK + ii], G[1 * CHUNK + ii], G[2 * CHUNK + ii]
+        b10, b11, b12 = G[4 * CHUNK + ii], G[5 * CHUNK + ii], G[6 * CHUNK + ii]
+        b20, b21, b22 = G[8 * CHUNK + ii], G[9 * CHUNK + ii], G[10 * CHUNK + ii]
+        r01 = b01
+        r11 = ct * b11 + st * b21
+        r20 = -st * b10 + ct * b20
+        r22 = -st * b12 + ct * b22
+        K[_U1 * CHUNK + ii] = wrap_mod(atan2(r01, -r11))
+        K[_U2 * CHUNK + ii] = wrap_mod(atan2(r20, -r22))
+        h1 = hypot(r01, r11)
+        h2 = hypot(r20, r22)
+        c1, s1 = -r11 / h1, r01 / h1
+        c2, s2 = -r22 / h2, r20 / h2
+        # R_s_e = R(u1, u2) W, t_s_e = p z(u1, u2); then T_b_s @ T_s_e against T_b_e
+        a00, a01, a02 = c1 * c2, s1, c1 * s2
+        a10, a11, a12 = s1 * c2, -c1, s1 * s2
+        a20, a22 = s2, -c2
+        w00, w01, w02 = G[24 * CHUNK + ii], G[25 * CHUNK + ii], G[26 * CHUNK + ii]
+        w10, w11, w12 = G[27 * CHUNK + ii], G[28 * CHUNK + ii], G[29 * CHUNK + ii]
+        w20, w21, w22 = G[30 * CHUNK + ii], G[31 * CHUNK + ii], G[32 * CHUNK + ii]
+        m00 = (a00 * w00 + a01 * w10) + a02 * w20
+        m01 = (a00 * w01 + a01 * w11) + a02 * w21
+        m02 = (a00 * w02 + a01 * w12) + a02 * w22
+        m10 = (a10 * w00 + a11 * w10) + a12 * w20
+        m11 = (a10 * w01 + a11 * w11) + a12 * w21
+        m12 = (a10 * w02 + a11 * w12) + a12 * w22
+        m20 = a20 * w00 + a22 * w20
+        m21 = a20 * w01 + a22 * w21
+        m22 = a20 * w02 + a22 * w22
+        p = K[_P * CHUNK + ii]
+        tx, ty, tz = p * a02, p * a12, p * a22
+        # R_b_s = [[1, 0, 0], [0, ct, -st], [0, st, ct]]
+        res = abs(m00 - G[12 * CHUNK + ii])
+        res = nanmax2(res, abs(m01 - G[13 * CHUNK + ii]))
+        res = nanmax2(res, abs(m02 - G[14 * CHUNK + ii]))
+        res = nanmax2(res, abs((ct * m10 - st * m20) - G[15 * CHUNK + ii]))
+        res = nanmax2(res, abs((ct * m11 - st * m21) - G[16 * CHUNK + ii]))
+        res = nanmax2(res, abs((ct * m12 - st * m22) - G[17 * CHUNK + ii]))
+        res = nanmax2(res, abs((st * m10 + ct * m20) - G[18 * CHUNK + ii]))
+        res = nanmax2(res, abs((st * m11 + ct * m21) - G[19 * CHUNK + ii]))
+        res = nanmax2(res, abs((st * m12 + ct * m22) - G[20 * CHUNK + ii]))
+        res = nanmax2(res, abs((tx + K[_OX * CHUNK + ii]) - G[21 * CHUNK + ii]))
+        res = nanmax2(res, abs(((ct * ty - st * tz) + K[_OY * CHUNK + ii]) - G[22 * CHUNK + ii]))
+        res = nanmax2(res, abs(((st * ty + ct * tz) + K[_OZ * CHUNK + ii]) - G[23 * CHUNK + ii]))
+        r = K[_REASON * CHUNK + ii]
+        r = _CLOSURE if (r == 0.0) & (not (res <= ctol)) else r
+        K[_REASON * CHUNK + ii] = r
+        K[_RES * CHUNK + ii] = res
+
+
+@njit(**_OPTS)
+def _paper_store(K, c0, n, q, p, u, mode, Tbs, res, valid, reason):
+    for ii in range(n):
+        i = c0 + ii
+        r = K[_REASON * CHUNK + ii]
+        mask = 0.0 if r == 0.0 else math.nan
+        q[i, 0] = K[_Q1 * CHUNK + ii] + mask
+        q[i, 1] = K[_Q2 * CHUNK + ii] + mask
+        q[i, 2] = K[_Q3 * CHUNK + ii] + mask
+        p[i] = K[_P * CHUNK + ii] + mask
+        for c in range(5):
+            u[i, c] = K[(_U1 + c) * CHUNK + ii] + mask
+        mode[i] = np.int64(K[_MODE * CHUNK + ii])
+        ct = K[_CT * CHUNK + ii] + mask
+        st = K[_ST * CHUNK + ii] + mask
+        one, zero = 1.0 + mask, mask
+        Tbs[i, 0, 0] = one
+        Tbs[i, 0, 1] = zero
+        Tbs[i, 0, 2] = zero
+        Tbs[i, 0, 3] = K[_OX * CHUNK + ii] + mask
+        Tbs[i, 1, 0] = zero
+        Tbs[i, 1, 1] = ct
+        Tbs[i, 1, 2] = -st
+        Tbs[i, 1, 3] = K[_OY * CHUNK + ii] + mask
+        Tbs[i, 2, 0] = zero
+        Tbs[i, 2, 1] = st
+        Tbs[i, 2, 2] = ct
+        Tbs[i, 2, 3] = K[_OZ * CHUNK + ii] + mask
+        Tbs[i, 3, 0] = zero
+        Tbs[i, 3, 1] = zero
+        Tbs[i, 3, 2] = zero
+        Tbs[i, 3, 3] = one
+        res[i] = K[_RES * CHUNK + ii] + mask
+        reason[i] = np.int8(r)
+        valid[i] = r == 0.0
+
+
+@njit(**_OPTS)
+def _paper_chunk(T, U, P, stol, ctol, G, K, c0, n, q, p, u, mode, Tbs, res, valid, reason):
+    _paper_gather(T, U, c0, n, G)
+    _paper_stage1(G, K, stol, n)
+    _pik_stage(K, P, n)
+    _paper_stage2(G, K, ctol, n)
+    _paper_store(K, c0, n, q, p, u, mode, Tbs, res, valid, reason)
+
+
+@njit(**_OPTS)
+def _paper_flags(T, U, rot_tol):
+    flags = rigid_flags(T, rot_tol)
+    for i in range(U.shape[0]):
+        s = 0.0
+        big = False
+        for c in range(3):
+            s += finite_sum(U[i, c])
+            big = big | (abs(U[i, c]) > WRAP_EXACT_MAX)
+        if not s == 0.0:
+            flags |= FLAG_V_NONFINITE
+        elif big:
+            flags |= FLAG_SLOW
+    return flags
+
+
+@njit(**_OPTS)
+def ik_paper(T, U, P, stol, ctol, rot_tol, q, p, u, mode, Tbs, res, valid, reason):
+    """Paper-form IK (inverse_kinematics) of N = max(len(T), len(U)) items.
+
+    Parameters
+    ----------
+    T : (NT, 4, 4); U : (NU, 3) -- 1 or N rows each
+    P : (13,) design parameters; stol, ctol : singular and closure tolerances
+    q : (N, 3); p, res : (N,); u : (N, 5); mode : (N,) int64; Tbs : (N, 4, 4);
+    valid : (N,) bool; reason : (N,) int8
+
+    Returns
+    -------
+    int
+        FLAG_* bits (FLAG_SLOW: some ``|u| > WRAP_EXACT_MAX``, recompute those items).
+    """
+    N = reason.shape[0]
+    G = np.empty(_NGP2 * CHUNK)
+    K = np.empty(NK * CHUNK)
+    for c0 in range(0, N, CHUNK):
+        _paper_chunk(T, U, P, stol, ctol, G, K, c0, min(CHUNK, N - c0), q, p, u, mode, Tbs,
+                     res, valid, reason)
+    return _paper_flags(T, U, rot_tol)
+
+
+@njit(parallel=True, **_OPTS)
+def ik_paper_parallel(T, U, P, stol, ctol, rot_tol, q, p, u, mode, Tbs, res, valid, reason):
+    """:func:`ik_paper` with the chunks spread over numba's threads."""
+    N = reason.shape[0]
+    nchunk = (N + CHUNK - 1) // CHUNK
+    for ci in prange(nchunk):
+        G = np.empty(_NGP2 * CHUNK)
+        K = np.empty(NK * CHUNK)
+        c0 = ci * CHUNK
+        _paper_chunk(T, U, P, stol, ctol, G, K, c0, min(CHUNK, N - c0), q, p, u, mode, Tbs,
+                     res, valid, reason)
+    return _paper_flags(T, U, rot_tol)
+
+
+# --- parallel module FK (parallel_forward_kinematics) ------------------------------------
+@njit(**_OPTS)
+def parallel_fk(q, P, ttol, valid, reason, T_b_i, T_b_s, theta, r1o, myo, wo, halfo):
+    """:func:`athenakin.parallel.parallel_forward_kinematics` for q (N, 3)."""
+    l1, l2, l3, l4, l5 = P[0], P[1], P[2], P[3], P[4]
+    lo0, lo1, lo2, hi0, hi1, hi2, hs = P[5], P[6], P[7], P[8], P[9], P[10], P[11]
+    for i in range(q.shape[0]):
+        q1, q2, q3 = q[i, 0], q[i, 1], q[i, 2]
+        fin_q = (finite_sum(q1) + finite_sum(q2) + finite_sum(q3)) == 0.0
+        stroke = (q1 < lo0) | (q1 > hi0) | (q2 < lo1) | (q2 > hi1) | (q3 < lo2) | (q3 > hi2)
+        order = hs * (q1 - q2) < 0.0
+        pr = _NONFINITE if not fin_q else _STROKE if stroke else _AB_ORDER if order else 0.0
+        q1 = q1 if fin_q else 0.0
+        q2 = q2 if fin_q else 0.0
+        q3 = q3 if fin_q else 0.0
+        h = 0.5 * (q1 - q2)
+        r1 = math.sqrt(l1 * l1 - h * h)
+        m_y = math.sqrt(l3 * l3 - h * h) + l2
+        d2 = m_y * m_y + l5 * l5
+        d = math.sqrt(d2)
+        H = (d2 + r1 * r1) - q3 * q3
+        k = (((r1 + q3) - d) * ((r1 + q3) + d)) * ((d - r1) + q3) * ((d + r1) - q3)
+        half = math.sqrt(k if not (k < 0.0) else 0.0) / (2.0 * d)
+        ah = abs(h)
+        link = (ah >= l1) | (ah > l3)
+        pr = _LINK if (pr == 0.0) & link else pr
+        disjoint = (not link) & (k < 0.0) & (math.sqrt(abs(k)) / (2.0 * d) > ttol)
+        pr = _DISJOINT if (pr == 0.0) & disjoint else pr
+        ok = pr == 0.0
+        tangent = ok & (half <= ttol)
+        r1o[i] = r1
+        myo[i] = m_y
+        wo[i] = m_y * m_y * k
+        halfo[i] = half
+        nan = 0.0 if ok else math.nan
+        a = (0.0 if tangent else half) + nan
+        dd = (2.0 * d) * d
+        by = (H * m_y) / dd
+        bz = (H * l5) / dd
+        ey = (-l5) / d
+        ez = m_y / d
+        xm = 0.5 * (q1 + q2) + nan
+        r1n = r1 + nan
+        for m in range(2):
+            sr = pr if m == 0 else (_TANGENT if tangent else pr)
+            reason[i, m] = np.int8(sr)
+            valid[i, m] = sr == 0.0
+            mask = 0.0 if sr == 0.0 else math.nan
+            sa = a if m == 0 else -a
+            y = by + sa * ey
+            z = bz + sa * ez
+            cy = y / r1n
+            cz = z / r1n
+            theta[i, m] = wrap_pi(atan2(-cy, cz)) + mask
+            for F, off in ((T_b_i, 0.0), (T_b_s, l4)):
+                F[i, m, 0, 0] = 1.0 + mask
+                F[i, m, 0, 1] = mask
+                F[i, m, 0, 2] = mask
+                F[i, m, 0, 3] = xm + mask
+                F[i, m, 1, 0] = mask
+                F[i, m, 1, 1] = cz + mask
+                F[i, m, 1, 2] = cy + mask
+                F[i, m, 1, 3] = (y + off * cy if off != 0.0 else y) + mask
+                F[i, m, 2, 0] = mask
+                F[i, m, 2, 1] = -cy + mask
+                F[i, m, 2, 2] = cz + mask
+                F[i, m, 2, 3] = (z + off * cz if off != 0.0 else z) + mask
+                F[i, m, 3, 0] = mask
+                F[i, m, 3, 1] = mask
+                F[i, m, 3, 2] = mask
+                F[i, m, 3, 3] = 1.0 + mask
+
+
+#: Layout of the packed single-item buffer of :func:`ik_paper_one`:
+#: q (3), p (1), u (5), T_b_s (16), residual (1); ints: mode, valid, reason.
+ONE_Q, ONE_P, ONE_U, ONE_T, ONE_RES, ONE_F = 0, 3, 4, 9, 25, 26
+
+
+@njit(**_OPTS)
+def ik_paper_one(T, U, P, stol, ctol, rot_tol, fbuf, ibuf):
+    """Paper-form IK of one item, T (4, 4) and U (3,), into packed buffers.
+
+    ``fbuf`` (26,): q, p, u, T_b_s, residual; ``ibuf`` (3,) int64: mode, valid, reason.
+    Returns the FLAG_* bits.
+    """
+    T2 = T.reshape((1, 4, 4))
+    U2 = U.reshape((1, 3))
+    G = np.empty(_NGP2 * CHUNK)
+    K = np.empty(NK * CHUNK)
+    valid = np.empty(1, np.bool_)
+    reason = np.empty(1, np.int8)
+    _paper_chunk(T2, U2, P, stol, ctol, G, K, 0, 1, fbuf[ONE_Q:ONE_P].reshape((1, 3)),
+                 fbuf[ONE_P:ONE_U], fbuf[ONE_U:ONE_T].reshape((1, 5)), ibuf[0:1],
+                 fbuf[ONE_T:ONE_RES].reshape((1, 4, 4)), fbuf[ONE_RES:ONE_F], valid, reason)
+    ibuf[1] = valid[0]
+    ibuf[2] = reason[0]
+    return _paper_flags(T2, U2, rot_tol)
+
+
+@njit(**_OPTS)
+def ik_line_one(T, V, pv, P, kind, q):
+    """Controller-form IK of one item (no input checks): writes q (3,), returns the reason.
+
+    ``kind`` 0: V is the direction in E and ``pv`` the insertion; 1: V is the tool tip.
+    """
+    G = np.empty(16 * CHUNK)
+    K = np.empty(NK * CHUNK)
+    for r in range(3):
+        for c in range(4):
+            G[(4 * r + c) * CHUNK] = T[r, c]
+    for c in range(3):
+        G[(12 + c) * CHUNK] = V[c]
+    G[15 * CHUNK] = pv if kind == 0 else P[12]
+    _line_stage(G, K, kind, 1)
+    _pik_stage(K, P, 1)
+    for c in range(3):
+        q[c] = K[(_Q1 + c) * CHUNK]
+    return int(K[_REASON * CHUNK])
