@@ -381,3 +381,19 @@ def test_section4_serial_solutions_never_coincide():
     u = sol.u.reshape(-1, 2, 2, 2, 2, 5)
     d = np.abs(np.angle(np.exp(1j * (u[..., 0, :, :, :] - u[..., 1, :, :, :]))))
     assert np.nanmin(d.max(axis=-1)) > 1.0
+
+
+def test_section4_parallel_ik_from_the_intermediate_frame():
+    """O_i frame: x_i = x_b, z_i meets the base x-axis at M; triangles give q1, q2, q3."""
+    cfg = random_configurations(500, D, rng=SEED + 12)
+    par = ak.parallel.parallel_forward_kinematics(cfg.q, D)
+    n = np.arange(500)
+    m = (cfg.mode == -1).astype(int)
+    Ti = par.T_b_i[n, m]
+    np.testing.assert_allclose(Ti[:, :3, 0], np.tile([1.0, 0.0, 0.0], (500, 1)), atol=1e-15)
+    r1 = ak.parallel.circle_geometry(cfg.q, D)["r1"]
+    foot = Ti[:, :3, 3] - r1[:, None] * Ti[:, :3, 2]          # back along z_i by r1
+    np.testing.assert_allclose(foot[:, 1:], 0.0, atol=1e-14)
+    np.testing.assert_allclose(foot[:, 0], cfg.q[:, :2].mean(axis=1), atol=1e-15)
+    ik = ak.parallel.parallel_ik_from_position(par.O_s[n, m], D)
+    np.testing.assert_allclose(ik.q, cfg.q, atol=1e-11)
