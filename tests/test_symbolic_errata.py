@@ -397,3 +397,17 @@ def test_section4_parallel_ik_from_the_intermediate_frame():
     np.testing.assert_allclose(foot[:, 0], cfg.q[:, :2].mean(axis=1), atol=1e-15)
     ik = ak.parallel.parallel_ik_from_position(par.O_s[n, m], D)
     np.testing.assert_allclose(ik.q, cfg.q, atol=1e-11)
+
+
+def test_eq16_corrected_compact_form_in_the_printed_right_chain():
+    """With (w0..w3) the first four entries of Eq. 14 (which holds), the two equations are
+    w2 v1 v2 + w0 v1 - w1 v2 + w3 = 0 and w3 v1 v2 + w1 v1 + w0 v2 - w2 = 0."""
+    from athenakin.symbolic import printed_eq14
+
+    v1, v2 = V_SYMBOLS[:2]
+    w = list(printed_eq14())[:4]
+    compact = (w[2] * v1 * v2 + w[0] * v1 - w[1] * v2 + w[3],
+               w[3] * v1 * v2 + w[1] * v1 + w[0] * v2 - w[2])
+    for derived, c in zip(ik_bilinear_equations(), compact, strict=True):
+        ratio = sp.cancel(derived / sp.expand(c))
+        assert ratio.is_number and ratio != 0
