@@ -195,7 +195,9 @@ def test_elimination_steps_structure(cached):
     nx2 = sum(c**2 for c in f[:4])
     ny2 = sum(c**2 for c in f[4:])
     assert reduce_study(quad - nx2 * (nx2 * P_SYMBOL**2 - 4 * ny2), f) == 0
-    assert reduce_study(quad + pf, f) == 0          # the quadratic is -Pf(K)
+    assert sp.expand(quad + pf) == 0                # the quadratic is -Pf(K)
+    dot = sum(f[i] * f[i + 4] for i in range(4))
+    assert sp.expand(quad - (nx2**2 * P_SYMBOL**2 - 4 * (nx2 * ny2 - dot**2))) == 0
     # det K = Pf(K)^2 (K skew), checked at seeded points
     rng = np.random.default_rng(SEED + 9)
     detf = sp.lambdify([F_SYMBOLS, P_SYMBOL], K, "numpy")
@@ -308,3 +310,25 @@ def test_transform_matrix_is_eq3_eq4():
         X8 = np.r_[x, y]
         np.testing.assert_allclose(np.array(f(X8), float), ak.study.transform_from_study(X8),
                                    rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", ["athenakin.symbolic._lia", "athenakin.symbolic._elimination",
+                                  "athenakin.symbolic._solver"])
+def test_docstring_examples(name):
+    import doctest
+    import importlib
+
+    res = doctest.testmod(importlib.import_module(name),
+                          optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    assert res.failed == 0 and res.attempted > 0
+
+
+def test_back_substitution_can_lose_a_root_for_special_poses():
+    """E a pure translation (0, 0, 2) from O_s: the 3x3 minor has the factor (p - 2)."""
+    st = elimination_steps(e=(1, 0, 0, 0, 0, 0, 0, -1))
+    assert st.quadratic == sp.Poly(P_SYMBOL**2 - 4, P_SYMBOL)
+    assert st.roots_lost and [f for f, _ in st.factors] == [P_SYMBOL - 2]
+    assert sp.rem(st.minor, P_SYMBOL - 2, P_SYMBOL) == 0
+    generic = elimination_steps()
+    assert not generic.roots_lost
+    assert sp.Poly(generic.back_substituted, P_SYMBOL).degree() == 2

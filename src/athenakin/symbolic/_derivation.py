@@ -49,10 +49,6 @@ NUMERIC_MODULE = CACHE_DIR / "_numeric.py"
 CACHE_FORMAT = 1
 
 
-def _pfaffian(K: sp.Matrix) -> sp.Expr:
-    return sp.expand(K[0, 1] * K[2, 3] - K[0, 2] * K[1, 3] + K[0, 3] * K[1, 2])
-
-
 def clear_caches() -> None:
     """Forget the in-process memoised steps, so that the next :func:`derive` recomputes all."""
     from . import _elimination, _ik, _printed, _remaining
@@ -119,7 +115,7 @@ def derive(*, fresh: bool = False, log: Callable[[str], None] | None = None
     out["quadratic"] = st.quadratic.as_expr()
     out["quadratic_coefficients"] = sp.Tuple(*[st.quadratic.coeff_monomial(P_SYMBOL**k)
                                                for k in (2, 1, 0)])
-    out["pfaffian"] = _pfaffian(st.K)
+    out["pfaffian"] = st.pfaffian
     step("elimination (quadratic in p)")
     out["ujoint_quadric"] = ujoint_quadric()
     out["wrist_quadric"] = wrist_quadric()

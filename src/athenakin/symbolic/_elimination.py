@@ -22,8 +22,9 @@ The steps, each a function returning its result:
    minor of a 3x3 skew matrix, whose determinant is identically 0. The default
    solves equations 1, 2, 3 for ``x0, x1, x2`` (the paper's "e.g. x0, x1, x2").
 7. :func:`back_substitute` / :func:`p_quadratic`: back substitution into the
-   remaining equation leaves ``Pf(M(p))`` times factors free of ``p``: the
-   quadratic in ``p``.
+   remaining equation leaves ``Pf(K(p))`` times factors free of ``p``: the
+   quadratic in ``p`` (for special data the minor can share a root with the
+   Pfaffian, which then cancels: :func:`p_quadratic` returns ``-Pf(K)`` itself).
 8. :func:`groebner_remaining`: for numeric (exact) values, the paper's last step:
    ``lc = lambda rc`` at a root ``p`` and a lex Groebner basis for ``v1..v5``.
 """
@@ -248,12 +249,22 @@ class EliminationSteps:
         Three ``x_i`` in terms of the fourth (from ``K``).
     minor : sympy.Expr
         The 3x3 minor of the Cramer solution.
+    pfaffian : sympy.Expr
+        ``Pf(K) = K01 K23 - K02 K13 + K03 K12``; ``det K = Pf(K)^2``.
+    equations : tuple of int
+        The three equations used for the Cramer step.
     back_substituted : sympy.Expr
-        Numerator of the remaining equation after back substitution.
+        Numerator of the remaining equation after back substitution, common
+        factors with the minor cancelled (the paper's step).
     factors : tuple of (sympy.Expr, int)
         Its factorisation (factor, multiplicity), constants dropped.
     quadratic : sympy.Poly
-        The product of the factors that contain ``p``: of degree 2 in ``p``.
+        ``-Pf(K)``, primitive, leading coefficient positive: the quadratic in ``p``.
+        Generically ``back_substituted`` is this quadratic times factors free of
+        ``p``; for special data the minor can share a root with ``Pf(K)``, and the
+        back-substituted equation then misses that root (``roots_lost``).
+    roots_lost : bool
+        Whether ``back_substituted`` has fewer roots in ``p`` than the quadratic.
     """
 
     sl: tuple[sp.Expr, ...]
@@ -264,14 +275,17 @@ class EliminationSteps:
     symmetric_part: sp.Matrix
     x_solution: dict[sp.Symbol, sp.Expr]
     minor: sp.Expr
+    pfaffian: sp.Expr
+    equations: tuple[int, ...]
     back_substituted: sp.Expr
     factors: tuple[tuple[sp.Expr, int], ...]
     quadratic: sp.Poly
+    roots_lost: bool
 
 
 @functools.lru_cache(maxsize=16)
 def _elimination_steps(b: tuple[sp.Expr, ...], e: tuple[sp.Expr, ...],
-                       unknowns: tuple[int, ...], equations: tuple[int, ...]
+                       unknowns: tuple[int, ...], equations: tuple[int, ...] | None
                        ) -> EliminationSteps:
     return _run_steps(b, e, unknowns, equations)
 
@@ -279,7 +293,7 @@ def _elimination_steps(b: tuple[sp.Expr, ...], e: tuple[sp.Expr, ...],
 def elimination_steps(*, b: Sequence[sp.Expr] | None = IDENTITY,
                       e: Sequence[sp.Expr] | None = F_SYMBOLS,
                       unknowns: Sequence[int] = (0, 1, 2),
-                      equations: Sequence[int] = (1, 2, 3)) -> EliminationSteps:
+                      equations: Sequence[int] | None = None) -> EliminationSteps:
     """Run steps 1-7 of Section 3.2 for an assignment of ``B`` and ``E``.
 
     Parameters
@@ -290,18 +304,25 @@ def elimination_steps(*, b: Sequence[sp.Expr] | None = IDENTITY,
         minor alone has about 29,000 terms), as the paper warns.
     unknowns, equations : 3 ints each, keyword-only
         See :func:`solve_x_from_sr`; the remaining equation is back-substituted.
+        Default equations: the first of (1, 2, 3), (0, 2, 3), (0, 1, 3), (0, 1, 2)
+        whose minor is not identically zero.
 
     Returns
     -------
     EliminationSteps
         Memoised per argument set (``elimination_steps.cache_clear()`` forgets).
+
+    Raises
+    ------
+    ValueError
+        If the assigned numbers are not on the Study quadric (``K`` not skew).
     """
     return _elimination_steps(_values(b, B_SYMBOLS, "b"), _values(e, E_SYMBOLS, "e"),
-                              tuple(unknowns), tuple(equations))
+                              tuple(unknowns), None if equations is None else tuple(equations))
 
 
 def _run_steps(bv: tuple[sp.Expr, ...], ev: tuple[sp.Expr, ...], unknowns: tuple[int, ...],
-               equations: tuple[int, ...]) -> EliminationSteps:
+               equations: tuple[int, ...] | None) -> EliminationSteps:
     sl0, sr0 = implicit_sets()
     sl = assign(sl0, b=bv, e=ev)
     sr = assign(sr0, b=bv, e=ev)
@@ -309,23 +330,37 @@ def _run_steps(bv: tuple[sp.Expr, ...], ev: tuple[sp.Expr, ...], unknowns: tuple
     M = sr_in_x(sr, ysol)
     sym = (M + M.T) / 2
     K = M.applyfunc(lambda m: reduce_study(m, bv, ev))
-    xsol, D = solve_x_from_sr(K, unknowns=unknowns, equations=equations)
-    rest = next(i for i in range(4) if i not in equations)
+    if sp.expand(K + K.T) != sp.zeros(4):
+        raise ValueError("b, e: expected Study vectors on the Study quadric (the symmetric "
+                         "part of M does not vanish)")
+    pf = sp.expand(K[0, 1] * K[2, 3] - K[0, 2] * K[1, 3] + K[0, 3] * K[1, 2])
+    choices = [equations] if equations is not None else [
+        c for c in ((1, 2, 3), (0, 2, 3), (0, 1, 3), (0, 1, 2)) if set(c) != set(unknowns)]
+    for eqs in choices:
+        try:
+            xsol, D = solve_x_from_sr(K, unknowns=unknowns, equations=eqs)
+        except ValueError:
+            if equations is not None:
+                raise
+            continue
+        break
+    else:
+        raise ValueError(f"no three equations determine x{list(unknowns)} (all minors vanish)")
+    rest = next(i for i in range(4) if i not in eqs)
     num = reduce_study(back_substitute(K, xsol, rest), bv, ev)
     _, flist = sp.factor_list(num)
     factors = tuple((f, m) for f, m in flist if f.free_symbols)
-    # the factors that contain p (one irreducible quadratic for symbolic data; two linear
-    # factors when the assigned numbers make the roots rational)
-    with_p = [(f, m) for f, m in factors if P_SYMBOL in f.free_symbols]
-    q = sp.Poly(sp.Mul(*[f**m for f, m in with_p]), P_SYMBOL)
+    q = sp.Poly(-pf, P_SYMBOL)
     if q.degree() != 2:
-        raise ValueError(f"expected the p-dependent factors after back substitution to be of "
-                         f"degree 2 in p, got {[(sp.degree(f, P_SYMBOL), m) for f, m in factors]}")
+        raise ValueError(f"expected Pf(K) of degree 2 in p, got degree {q.degree()}")
+    q = q.primitive()[1]
     if q.LC().could_extract_minus_sign():
         q = -q
+    deg_num = sum(m * sp.degree(f, P_SYMBOL) for f, m in factors if P_SYMBOL in f.free_symbols)
     return EliminationSteps(sl=sl, sr=sr, y_solution=ysol, M=M, K=K, symmetric_part=sym,
-                            x_solution=xsol, minor=D, back_substituted=num, factors=factors,
-                            quadratic=q)
+                            x_solution=xsol, minor=D, pfaffian=pf, equations=tuple(eqs),
+                            back_substituted=num, factors=factors, quadratic=q,
+                            roots_lost=deg_num < 2)
 
 
 def p_quadratic(*, b: Sequence[sp.Expr] | None = IDENTITY,

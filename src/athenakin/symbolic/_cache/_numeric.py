@@ -6,7 +6,7 @@ Regenerate with ``python -m athenakin.symbolic._derivation``.
 # ruff: noqa: E501
 import numpy as np
 
-DERIVATION_SHA256 = "14d725a81f544bca503333a75fc5169146b397cde8eeda937dadb3337b6eb9cb"
+DERIVATION_SHA256 = "f5802dba4bc9e322126fdca6bbbdd87fca646b7ed276ab0a3a4ba603ea44c9e1"
 
 #: Symmetric matrix of the U-joint quadric (LIA of degree 2 on the left chain, B = 1).
 UJOINT_QUADRIC = np.array([[0.0, 0.5, 0.0, 0.0], [0.5, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.5], [0.0, 0.0, 0.5, 0.0]])
@@ -28,18 +28,15 @@ def quadratic_coefficients(f):
     _t3 = f2**2
     _t4 = f3**2
     _t5 = 2*_t0
-    _t6 = 8*f1*f5
-    _t7 = f2*f6
-    _t8 = f3*f7
-    _t9 = f5**2
-    _t10 = 4*_t1
-    _t11 = f6**2
-    _t12 = f7**2
-    _t13 = f4**2
-    _t14 = 4*_t0
-    _t15 = 4*_t3
-    _t16 = 4*_t4
-    out = [_t0*_t2 + _t2*_t3 + _t2*_t4 + 2*_t3*_t4 + _t3*_t5 + _t4*_t5 + f0**4 + f1**4 + f2**4 + f3**4, 0, -8*_t0*_t9 - _t10*_t11 - _t10*_t12 - _t10*_t9 - _t11*_t14 - _t11*_t16 - 8*_t11*_t3 - _t12*_t14 - _t12*_t15 - 8*_t12*_t4 - _t13*_t14 - _t13*_t15 - _t13*_t16 - _t15*_t9 - _t16*_t9 - _t6*_t7 - _t6*_t8 - 8*_t7*_t8]
+    _t6 = f5**2
+    _t7 = 4*_t1
+    _t8 = f6**2
+    _t9 = f7**2
+    _t10 = f4**2
+    _t11 = 4*_t0
+    _t12 = 4*_t3
+    _t13 = 4*_t4
+    out = [_t0*_t2 + _t2*_t3 + _t2*_t4 + 2*_t3*_t4 + _t3*_t5 + _t4*_t5 + f0**4 + f1**4 + f2**4 + f3**4, 0, -_t10*_t11 - _t10*_t12 - _t10*_t13 - _t11*_t8 - _t11*_t9 - _t12*_t6 - _t12*_t9 - _t13*_t6 - _t13*_t8 - _t6*_t7 - _t7*_t8 - _t7*_t9 + 8*f0*f1*f4*f5 + 8*f0*f2*f4*f6 + 8*f0*f3*f4*f7 + 8*f1*f2*f5*f6 + 8*f1*f3*f5*f7 + 8*f2*f3*f6*f7]
     return _stack(out, (3,))
 
 
