@@ -53,7 +53,7 @@ def clear_caches() -> None:
     """Forget the in-process memoised steps, so that the next :func:`derive` recomputes all."""
     from . import _elimination, _ik, _printed, _remaining
 
-    for fn in (_elimination.implicit_sets, _elimination.elimination_steps,
+    for fn in (_elimination.implicit_sets, _elimination._elimination_steps,
                _ik.ik_bilinear_equations, _remaining.ujoint_quadric,
                _remaining.wrist_quaternion, _remaining.wrist_quadric,
                _remaining.wrist_quadratic, _printed.printed_eq13, _printed.printed_eq14,
