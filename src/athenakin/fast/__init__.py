@@ -30,9 +30,13 @@ from ._api import (
 )
 
 from ._control import ControlLoop
+from ._sweep import DEFAULT_CHUNK_SIZE, SweepSummary, sweep_fk
 
 __all__ = [
     "ControlLoop",
+    "DEFAULT_CHUNK_SIZE",
+    "SweepSummary",
+    "sweep_fk",
     "design_params",
     "forward_kinematics",
     "inverse_kinematics",

@@ -338,10 +338,9 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
             return reference()
         return fbuf[_ik.ONE_Q:_ik.ONE_P], _new(
             PassiveJoints,
-            p=fbuf[_ik.ONE_P:_ik.ONE_U].reshape(()), u=fbuf[_ik.ONE_U:_ik.ONE_T],
+            p=fbuf[_ik.ONE_P], u=fbuf[_ik.ONE_U:_ik.ONE_T],
             mode=ibuf[0:1].reshape(()), T_b_s=fbuf[_ik.ONE_T:_ik.ONE_RES].reshape(4, 4),
-            residual=fbuf[_ik.ONE_RES:_ik.ONE_F].reshape(()),
-            valid=ibuf[1:2].astype(np.bool_).reshape(()),
+            residual=fbuf[_ik.ONE_RES], valid=ibuf[1] != 0,
             reason=ibuf[2:3].astype(np.int8).reshape(()))
     q = np.empty((N, 3))
     p = np.empty(N)
@@ -364,6 +363,8 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     if batch != (N,):
         q, p, u, mode, Tbs, res, valid, reason = (
             a.reshape(batch + a.shape[1:]) for a in (q, p, u, mode, Tbs, res, valid, reason))
+        if not batch:   # numpy scalars, as the reference's ufuncs give for 0-d operands
+            p, res, valid = p[()], res[()], valid[()]
     return q, _new(PassiveJoints, p=p, u=u, mode=mode, T_b_s=Tbs, residual=res, valid=valid,
                             reason=reason)
 
@@ -379,6 +380,18 @@ def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors:
     bP = Pa.shape if kind == 0 else ()
     batch = bT if (bT == bV and bV == bP) else _batch(bT, bV, bP)
     raise_now = resolve_policy(errors, batch)
+    if not batch and not parallel:
+        fbuf = np.empty(_ik.LINE_F)
+        ibuf = np.empty(3, np.int64)
+        flags = _ik.ik_line_one_packed(Ta, Va, float(Pa) if kind == 0 else 0.0, P, kind,
+                                       ROTATION_TOL, fbuf, ibuf)
+        if flags or (raise_now and ibuf[2] != 0):
+            raise _Delegate
+        return fbuf[_ik.LINE_Q:_ik.LINE_P], _new(
+            InstrumentIK, p=fbuf[_ik.LINE_P],
+            direction_b=fbuf[_ik.LINE_D:_ik.LINE_O], O_s=fbuf[_ik.LINE_O:_ik.LINE_F],
+            mode=ibuf[0:1].reshape(()), valid=ibuf[1] != 0,
+            reason=ibuf[2:3].astype(np.int8).reshape(()))
     N = math.prod(batch)
     q = np.empty((N, 3))
     p = np.empty(N)
@@ -396,6 +409,8 @@ def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors:
     if batch != (N,):
         q, p, d_b, O_s, mode, valid, reason = (
             a.reshape(batch + a.shape[1:]) for a in (q, p, d_b, O_s, mode, valid, reason))
+        if not batch:
+            p, valid = p[()], valid[()]
     return q, _new(InstrumentIK, p=p, direction_b=d_b, O_s=O_s, mode=mode, valid=valid,
                            reason=reason)
 
@@ -449,7 +464,7 @@ def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
                     theta, r1, m_y, w, half)
     valid, reason, T_b_i, T_b_s, theta = (a.reshape(batch + a.shape[1:])
                                           for a in (valid, reason, T_b_i, T_b_s, theta))
-    r1, m_y, w, half = (a.reshape(batch) for a in (r1, m_y, w, half))
+    r1, m_y, w, half = (a.reshape(batch)[()] for a in (r1, m_y, w, half))
     return ParallelSolution(valid=valid, reason=reason, mode=MODES.copy(),
                             O_i=T_b_i[..., :3, 3], O_s=T_b_s[..., :3, 3], T_b_i=T_b_i,
                             T_b_s=T_b_s, theta=theta, r1=r1, m_y=m_y, w=w, half_chord=half)
@@ -471,7 +486,7 @@ def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> P
     reason = np.empty(N, np.int8)
     _ik.parallel_ik_position(Oa.reshape(N, 3), P, q, mode, theta, valid, reason)
     return ParallelIK(q=q.reshape(batch + (3,)), mode=mode.reshape(batch),
-                      theta=theta.reshape(batch), valid=valid.reshape(batch),
+                      theta=theta.reshape(batch), valid=valid.reshape(batch)[()],
                       reason=reason.reshape(batch))
 
 

@@ -496,3 +496,24 @@ def fk_one(q, T, P, tol, rot_tol, fbuf, ibuf):
                 fbuf[ONE_T:ONE_RES].reshape((1, 16, 4, 4)),
                 fbuf[ONE_RES:ONE_F].reshape((1, 16)), ibuf[ONE_ITEM:ONE_I])
     return _input_flags(q2, T2, rot_tol)
+
+
+@njit(parallel=True, **_OPTS)
+def fk_counts_parallel(q, T, P, tol, counts, reasons, slots):
+    """:func:`fk_counts` with the chunks spread over numba's threads."""
+    N = max(q.shape[0], T.shape[0])
+    nchunk = (N + CHUNK - 1) // CHUNK
+    acc = np.zeros((nchunk, 17 + 16 + 2), np.int64)
+    for ci in prange(nchunk):
+        G, SH, S0, S1 = scratch()
+        c0 = ci * CHUNK
+        n = min(CHUNK, N - c0)
+        fk_chunk(q, T, P, tol, G, SH, S0, S1, c0, n)
+        _count_chunk(S0, S1, n, acc[ci, 0:17], acc[ci, 17:33], acc[ci, 33:35])
+    for ci in range(nchunk):
+        for k in range(17):
+            counts[k] += acc[ci, k]
+        for k in range(16):
+            reasons[k] += acc[ci, 17 + k]
+        for k in range(2):
+            slots[k] += acc[ci, 33 + k]

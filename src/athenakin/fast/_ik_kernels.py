@@ -655,3 +655,33 @@ def ik_line_one(T, V, pv, P, kind, q):
     for c in range(3):
         q[c] = K[(_Q1 + c) * CHUNK]
     return int(K[_REASON * CHUNK])
+
+
+#: Packed single-item output of :func:`ik_line_one_packed`: q (3), p, d_b (3), O_s (3).
+LINE_Q, LINE_P, LINE_D, LINE_O, LINE_F = 0, 3, 4, 7, 10
+
+
+@njit(**_OPTS)
+def ik_line_one_packed(T, V, pv, P, kind, rot_tol, fbuf, ibuf):
+    """Controller-form IK of one item with input flags: fbuf (10,), ibuf (3,) int64.
+
+    ``ibuf`` receives mode, valid, reason. Returns the FLAG_* bits (nothing computed
+    when an input is non-finite or a direction is zero: the caller raises).
+    """
+    T2 = T.reshape((1, 4, 4))
+    V2 = V.reshape((1, 3))
+    Pp = np.empty(1)
+    Pp[0] = pv
+    flags = _line_flags(T2, V2, Pp, kind, rot_tol)
+    if flags & (FLAG_T_NONFINITE | FLAG_V_NONFINITE | FLAG_P_NONFINITE | FLAG_ZERO_DIRECTION):
+        return flags
+    G = np.empty(16 * CHUNK)
+    K = np.empty(NK * CHUNK)
+    valid = np.empty(1, np.bool_)
+    reason = np.empty(1, np.int8)
+    _line_chunk(T2, V2, Pp, P, kind, G, K, 0, 1, fbuf[LINE_Q:LINE_P].reshape((1, 3)),
+                fbuf[LINE_P:LINE_D], fbuf[LINE_D:LINE_O].reshape((1, 3)),
+                fbuf[LINE_O:LINE_F].reshape((1, 3)), ibuf[0:1], valid, reason)
+    ibuf[1] = valid[0]
+    ibuf[2] = reason[0]
+    return flags
