@@ -61,6 +61,12 @@ def _numeric():  # type: ignore[no-untyped-def]
         from pathlib import Path
 
         path = Path(__file__).parent / "_cache" / "derivation.json"
+        if not path.is_file():
+            raise RuntimeError(
+                f"{path}: the cached derivation is missing, so the generated solver code "
+                f"cannot be checked; install athenakin with its package data "
+                f"(symbolic/_cache/*.json) or regenerate with "
+                f"python -m athenakin.symbolic._derivation")
         data = json.loads(path.read_text())
         text = json.dumps(data["results"], sort_keys=True, separators=(",", ":"))
         h = hashlib.sha256(text.encode()).hexdigest()
