@@ -240,3 +240,20 @@ def test_dual_matrix_spans_the_pencil():
         np.testing.assert_allclose((K2 @ n[..., None])[..., 0], 0.0, atol=1e-12)
     np.testing.assert_allclose(np.sum(n1 * n2, axis=-1), 0.0, atol=1e-12)
     np.testing.assert_allclose(np.linalg.norm(n2, axis=-1), 1.0, atol=1e-12)
+
+
+def test_solver_checks_the_cache_hash_at_first_use(tmp_path, monkeypatch):
+    from athenakin.symbolic import _solver
+
+    monkeypatch.setattr(_solver, "_checked_hash", False)
+    monkeypatch.setattr(_solver, "__file__", str(tmp_path / "_solver.py"))
+    with pytest.raises(RuntimeError, match="missing"):
+        _solver._numeric()
+    (tmp_path / "_cache").mkdir()
+    data = json.loads(dv.CACHE_FILE.read_text())
+    data["results"]["K"] = data["results"]["K"].replace("Integer(2)", "Integer(3)", 1)
+    (tmp_path / "_cache" / "derivation.json").write_text(json.dumps(data))
+    with pytest.raises(RuntimeError, match="disagree"):
+        _solver._numeric()
+    monkeypatch.setattr(_solver, "__file__", str(dv.CACHE_DIR.parent / "_solver.py"))
+    assert _solver._numeric() is gen
