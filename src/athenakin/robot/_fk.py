@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
+from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -19,7 +21,7 @@ from ..chain._ups import (
     ups_solutions,
 )
 from ..design import Design
-from ..parallel._module import MODES, TANGENT_TOL, parallel_forward_kinematics
+from ..parallel._module import MODES, TANGENT_TOL, ParallelSolution, parallel_forward_kinematics
 from ._common import ErrorPolicy, item_reason_from_slots, raise_first_failure, resolve_policy
 
 __all__ = ["FKSolution", "forward_kinematics", "SLOT_MODE", "SLOT_P_SIGN", "SLOT_UJOINT",
@@ -90,10 +92,15 @@ class FKSolution:
         return np.sum(self.valid, axis=-1)
 
 
+FKMethod = Literal["closed", "algebraic"]
+_METHODS = ("closed", "algebraic")
+
+
 def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
-                       errors: ErrorPolicy = "auto", tangent_tol: float = TANGENT_TOL,
-                       degenerate_tol: float = DEGENERATE_TOL, p_zero_tol: float = P_ZERO_TOL,
-                       closure_tol: float = CLOSURE_TOL) -> FKSolution:
+                       method: FKMethod = "closed", errors: ErrorPolicy = "auto",
+                       tangent_tol: float = TANGENT_TOL, degenerate_tol: float = DEGENERATE_TOL,
+                       p_zero_tol: float = P_ZERO_TOL, closure_tol: float = CLOSURE_TOL
+                       ) -> FKSolution:
     """All (up to) 16 configurations of the robot for actuator values ``q`` (Section 3).
 
     Parameters
@@ -104,6 +111,12 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
         RCM frame E in the base frame (set-up, fixed by the surgeon). Broadcasts with ``q``.
     design : Design, optional
         Defaults to :meth:`Design.default`.
+    method : {"closed", "algebraic"}, keyword-only
+        How the serial chain is solved: ``"closed"`` (default) by the closed form of
+        :func:`athenakin.chain.ups_solutions`; ``"algebraic"`` the paper's way (Section
+        3.2: the quadratic in ``p`` and the remaining joints from the cached
+        derivation, :func:`athenakin.symbolic.forward_kinematics_algebraic`). Both
+        return the same slots; the parallel module is shared.
     errors : {"auto", "raise", "flag"}, keyword-only
         ``"raise"``: an item with no valid slot raises the matching
         :class:`~athenakin.errors.KinematicsError`; ``"flag"``: never raise for
@@ -132,29 +145,61 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     >>> int(sol.n_solutions)
     16
     """
+    if method not in _METHODS:
+        raise ValueError(f"method: expected one of {_METHODS}, got {method!r}")
+    design, q, T, batch, raise_now = _prepare(q, T_b_e, design, errors)
+    par = parallel_forward_kinematics(q, design, tangent_tol=tangent_tol)
+    if method == "closed":
+        step = _serial_closed_form
+    else:
+        from ..symbolic._solver import serial_step_algebraic as step
+    p, u, sreason, residual = step(par, T, degenerate_tol=degenerate_tol,
+                                   p_zero_tol=p_zero_tol, closure_tol=closure_tol)
+    return _assemble(par, p, u, sreason, residual, q, batch, raise_now)
+
+
+SerialStep = Callable[..., tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int8],
+                                 NDArray[np.float64]]]
+
+
+def _prepare(q: ArrayLike, T_b_e: ArrayLike, design: Design | None, errors: str
+             ) -> tuple[Design, NDArray[np.float64], NDArray[np.float64], tuple[int, ...], bool]:
+    """Validate and broadcast the inputs of a forward-kinematics call."""
     design = Design.default() if design is None else design
     if not isinstance(design, Design):
         raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
-    q = check_array(q, "q", (3,), allow_nonfinite=True)
+    qa = check_array(q, "q", (3,), allow_nonfinite=True)
     T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
-    batch = np.broadcast_shapes(q.shape[:-1], T.shape[:-2])
+    batch = np.broadcast_shapes(qa.shape[:-1], T.shape[:-2])
     raise_now = resolve_policy(errors, batch)
-    q = np.broadcast_to(q, batch + (3,))
+    qa = np.broadcast_to(qa, batch + (3,))
     T = np.broadcast_to(T, batch + (4, 4))
     if raise_now:
-        check_array(q, "q", (3,))
+        check_array(qa, "q", (3,))
         check_array(T, "T_b_e", (4, 4))
+    return design, qa, T, batch, raise_now
 
-    par = parallel_forward_kinematics(q, design, tangent_tol=tangent_tol)
+
+def _serial_closed_form(par: ParallelSolution, T: NDArray[np.float64], *, degenerate_tol: float,
+                        p_zero_tol: float, closure_tol: float
+                        ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int8],
+                                   NDArray[np.float64]]:
+    """The serial step: 8 solutions per assembly mode, shape (..., 2, 8)."""
     Ts = np.where(par.valid[..., None, None], par.T_b_s, np.eye(4))   # (..., 2, 4, 4)
     T_s_e = invert_transform(Ts) @ T[..., None, :, :]
     T_s_e = np.where(np.all(np.isfinite(T), axis=(-2, -1))[..., None, None, None], T_s_e,
                      np.nan)
     ser = ups_solutions(T_s_e, degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
-                        closure_tol=closure_tol, _checked=True)        # (..., 2, 8)
+                        closure_tol=closure_tol, _checked=True)
+    return ser.p, ser.u, ser.reason, ser.residual
 
-    preason = np.broadcast_to(par.reason[..., None], ser.reason.shape)
-    reason = np.where(preason != 0, preason, ser.reason).astype(np.int8).reshape(batch + (16,))
+
+def _assemble(par: ParallelSolution, p: NDArray[np.float64], u: NDArray[np.float64],
+              sreason: NDArray[np.int8], residual: NDArray[np.float64], q: NDArray[np.float64],
+              batch: tuple[int, ...], raise_now: bool) -> FKSolution:
+    """Combine the parallel module's 2 modes with the serial step's (..., 2, 8) slots."""
+    preason = np.broadcast_to(par.reason[..., None], sreason.shape)
+    reason = np.where(preason != 0, preason, sreason).astype(np.int8).reshape(batch + (16,))
     valid = reason == 0
     nan = np.where(valid, 1.0, np.nan)
     T_b_s = np.broadcast_to(par.T_b_s[..., :, None, :, :], batch + (2, 8, 4, 4))
@@ -169,5 +214,5 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     return FKSolution(
         valid=valid, reason=reason, mode=lab(SLOT_MODE), p_sign=lab(SLOT_P_SIGN),
         ujoint=lab(SLOT_UJOINT), wrist=lab(SLOT_WRIST),
-        p=ser.p.reshape(batch + (16,)) * nan, u=ser.u.reshape(batch + (16, 5)) * nan[..., None],
-        T_b_s=T_b_s, residual=ser.residual.reshape(batch + (16,)) * nan, item_reason=item)
+        p=p.reshape(batch + (16,)) * nan, u=u.reshape(batch + (16, 5)) * nan[..., None],
+        T_b_s=T_b_s, residual=residual.reshape(batch + (16,)) * nan, item_reason=item)

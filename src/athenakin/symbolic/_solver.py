@@ -30,17 +30,17 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_transform
+from .._validation import check_array
 from ..chain import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL, closure_residual, ups_transform
 from ..design import Design
 from ..errors import Reason
-from ..parallel import TANGENT_TOL, parallel_forward_kinematics
+from ..parallel import TANGENT_TOL, ParallelSolution
 from ..robot import FKSolution
-from ..robot._common import ErrorPolicy, item_reason_from_slots, raise_first_failure, resolve_policy
-from ..robot._fk import SLOT_MODE, SLOT_P_SIGN, SLOT_UJOINT, SLOT_WRIST
+from ..robot._common import ErrorPolicy
 from ..study import dq_conj_quaternion, dq_multiply, quaternion_multiply, study_from_transform
 
-__all__ = ["forward_kinematics_algebraic", "serial_solutions_algebraic", "PENCIL_TOL"]
+__all__ = ["forward_kinematics_algebraic", "serial_solutions_algebraic", "serial_step_algebraic",
+           "PENCIL_TOL"]
 
 #: Largest coefficient (relative, unit pencil vectors) of the U-joint quadratic on the
 #: pencil, or of the wrist quadratic, at which it counts as identically zero: the
@@ -286,20 +286,34 @@ def forward_kinematics_algebraic(q: ArrayLike, T_b_e: ArrayLike, design: Design 
     >>> int(sol.n_solutions), bool(np.allclose(sol.p, ref.p, atol=1e-12))
     (16, True)
     """
-    design = Design.default() if design is None else design
-    if not isinstance(design, Design):
-        raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
-    q = check_array(q, "q", (3,), allow_nonfinite=True)
-    T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
-    batch = np.broadcast_shapes(q.shape[:-1], T.shape[:-2])
-    raise_now = resolve_policy(errors, batch)
-    q = np.broadcast_to(q, batch + (3,))
-    T = np.broadcast_to(T, batch + (4, 4))
-    if raise_now:
-        check_array(q, "q", (3,))
-        check_array(T, "T_b_e", (4, 4))
+    from ..robot import forward_kinematics
 
-    par = parallel_forward_kinematics(q, design, tangent_tol=tangent_tol)
+    return forward_kinematics(q, T_b_e, design, method="algebraic", errors=errors,
+                              tangent_tol=tangent_tol, degenerate_tol=degenerate_tol,
+                              p_zero_tol=p_zero_tol, closure_tol=closure_tol)
+
+
+def serial_step_algebraic(par: ParallelSolution, T: NDArray[np.float64], *,
+                          degenerate_tol: float, p_zero_tol: float, closure_tol: float
+                          ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int8],
+                                     NDArray[np.float64]]:
+    """The serial step of the forward kinematics, the paper's way (shape (..., 2, 8)).
+
+    Plugged into :func:`athenakin.forward_kinematics` by ``method="algebraic"``.
+
+    Parameters
+    ----------
+    par : ParallelSolution
+        Both assembly modes for the batch.
+    T : ndarray, shape (..., 4, 4)
+        RCM frames (may hold NaN items).
+    degenerate_tol, p_zero_tol, closure_tol : float, keyword-only
+
+    Returns
+    -------
+    p, u, reason, residual : ndarray
+        Shapes (..., 2, 8), (..., 2, 8, 5), (..., 2, 8), (..., 2, 8).
+    """
     finite = np.all(np.isfinite(T), axis=(-2, -1))
     Ts = np.where(par.valid[..., None, None], par.T_b_s, np.eye(4))       # (..., 2, 4, 4)
     Te = np.where(finite[..., None, None], T, np.eye(4))
@@ -317,21 +331,4 @@ def forward_kinematics_algebraic(q: ArrayLike, T_b_e: ArrayLike, design: Design 
     sreason = np.where(~finite[..., None, None], np.int8(Reason.NONFINITE_INPUT), sreason)
     sreason = np.where((sreason == 0) & ~(res <= closure_tol), np.int8(Reason.CLOSURE_FAILED),
                        sreason)
-    preason = np.broadcast_to(par.reason[..., None], sreason.shape)
-    reason = np.where(preason != 0, preason, sreason).astype(np.int8).reshape(batch + (16,))
-    valid = reason == 0
-    nan = np.where(valid, 1.0, np.nan)
-    T_b_s = np.broadcast_to(par.T_b_s[..., :, None, :, :], batch + (2, 8, 4, 4))
-    item = item_reason_from_slots(valid, reason)
-    if raise_now:
-        raise_first_failure(item, "forward kinematics", {"q": q})
-
-    def lab(a: NDArray[np.int64]) -> NDArray[np.int64]:
-        return np.broadcast_to(a, batch + (16,))
-
-    return FKSolution(
-        valid=valid, reason=reason, mode=lab(SLOT_MODE), p_sign=lab(SLOT_P_SIGN),
-        ujoint=lab(SLOT_UJOINT), wrist=lab(SLOT_WRIST),
-        p=p.reshape(batch + (16,)) * nan, u=u.reshape(batch + (16, 5)) * nan[..., None],
-        T_b_s=T_b_s.reshape(batch + (16, 4, 4)), residual=res.reshape(batch + (16,)) * nan,
-        item_reason=item)
+    return p, u, sreason.astype(np.int8), res
