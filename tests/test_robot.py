@@ -376,3 +376,14 @@ def test_design_default_used_when_omitted():
     a = ak.forward_kinematics(ak.robot.REFERENCE_Q, T)
     b = ak.forward_kinematics(ak.robot.REFERENCE_Q, T, ak.Design.default())
     np.testing.assert_array_equal(a.u, b.u)
+
+
+def test_method_algebraic_matches_closed_form_and_bad_method_named():
+    c = random_configurations(300, D, rng=SEED + 9)
+    a = ak.forward_kinematics(c.q, c.T_b_e, D, method="closed")
+    b = ak.forward_kinematics(c.q, c.T_b_e, D, method="algebraic")
+    np.testing.assert_array_equal(a.valid, b.valid)
+    np.testing.assert_allclose(b.p, a.p, atol=1e-11)
+    assert_angles_equal(b.u, a.u, atol=1e-9)
+    with pytest.raises(ValueError, match="method: expected one of"):
+        ak.forward_kinematics(c.q[0], c.T_b_e[0], D, method="newton")

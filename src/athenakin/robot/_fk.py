@@ -68,8 +68,8 @@ class FKSolution:
     T_b_s : ndarray, shape (..., 16, 4, 4)
         Pose of ``O_s`` (Eq. 10) of each slot's assembly mode.
     residual : ndarray, shape (..., 16)
-        Closure residual ``max(|R - R_e|, |t - t_e| / 1 m)`` of
-        ``T_b_s @ T_s_e(p, u)`` against the given ``T_b_e``.
+        Closure residual ``max(max|R - R*|, max|t - t*| / 1 m)`` of the chain
+        ``T_s_e(p, u)`` against the target ``T_b_s^-1 @ T_b_e``, both in the frame ``O_s``.
     item_reason : ndarray of int8, shape (...)
         0 where the item has at least one valid slot, else why it has none.
     """
