@@ -129,7 +129,10 @@ def _make_params(d: Design) -> NDArray[np.float64]:
 def _arr(x: object, tail: tuple[int, ...]) -> NDArray[np.float64]:
     """float64, C-contiguous, writable array with trailing shape ``tail``, else _Delegate."""
     if type(x) is not np.ndarray or x.dtype is not _F8:
-        a = np.asarray(x)
+        try:
+            a = np.asarray(x)
+        except Exception:   # ragged lists and the like: the reference says what is wrong
+            raise _Delegate from None
         if a.dtype.kind not in "biuf":
             raise _Delegate
         x = a.astype(np.float64)

@@ -1,0 +1,40 @@
+"""The benchmark suite runs (quick mode) and prints one table: it cannot rot unnoticed."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def test_benchmarks_quick_run_prints_one_table():
+    proc = subprocess.run([sys.executable, os.path.join(ROOT, "benchmarks", "run.py"), "--quick",
+                           "--min-time", "0.002", "--repeat", "1"],
+                          capture_output=True, text=True, timeout=600, cwd=ROOT)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    lines = proc.stdout.splitlines()
+    assert lines[0].startswith("# athenakin benchmarks (quick)")
+    table = [ln for ln in lines if ln.startswith("|")]
+    assert table[0].startswith("| group | case | batch | per call | per pose | poses/s | x base")
+    assert len(table) == len(lines) - 1          # one table, nothing else
+    rows = [ln.split("|")[1:-1] for ln in table[2:]]
+    assert all("ERROR" not in r[3] for r in rows)
+    groups = {r[0].strip() for r in rows}
+    assert {"fk-batch", "fk-single", "ik-batch", "ik-single"} <= groups
+    names = " ".join(r[1] for r in rows)
+    for peer in ("pure Python", "scipy least_squares", "Pinocchio", "athenakin.fast",
+                 "numpy reference"):
+        assert peer in names
+    for g in groups:                             # every group has its baseline and ratios
+        assert sum(r[6].strip() == "base" for r in rows if r[0].strip() == g) == 1
+
+
+def test_baselines_agree_with_athenakin():
+    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
+    try:
+        import baselines
+    finally:
+        sys.path.pop(0)
+    baselines.check_baselines(n=20)

@@ -1,0 +1,98 @@
+"""athenakin.fast.sweep_fk: same counts as the reference FK, streaming in bounded memory."""
+
+from __future__ import annotations
+
+import tracemalloc
+
+import numpy as np
+import pytest
+
+import athenakin as ak
+from athenakin import fast
+from athenakin.errors import InvalidInputError
+
+DESIGN = ak.Design.default()
+T0 = ak.default_rcm_frame(DESIGN)
+
+
+def _draw(a, b):
+    """Chunk [a, b) of a seeded stream of actuator values (a function of the indices only)."""
+    rng = np.random.default_rng(a)
+    return rng.uniform([-0.35, -0.15, 0.15], [0.15, 0.35, 0.75], (b - a, 3))
+
+
+def _all(n, chunk):
+    return np.concatenate([_draw(a, min(a + chunk, n)) for a in range(0, n, chunk)])
+
+
+@pytest.mark.parametrize("parallel", [False, True], ids=["serial", "parallel"])
+def test_counts_match_reference(parallel):
+    n, chunk = 30_000, 4_096
+    s = fast.sweep_fk(_draw, T0, DESIGN, n=n, chunk_size=chunk, progress=False,
+                      parallel=parallel)
+    ref = ak.forward_kinematics(_all(n, chunk), T0, DESIGN)
+    assert s.n == n
+    np.testing.assert_array_equal(s.n_solutions, np.bincount(ref.n_solutions, minlength=17))
+    np.testing.assert_array_equal(s.item_reason,
+                                  np.bincount(ref.item_reason, minlength=len(ak.Reason)))
+    np.testing.assert_array_equal(s.mode_valid, ref.valid[:, [0, 8]].sum(axis=0))
+    assert s.item_reason[0] > 0 and s.item_reason[1:].sum() > 0   # both kinds occur
+    assert s.poses_per_second > 0
+
+
+def test_reduce_callback_sees_every_chunk_with_reference_values():
+    n, chunk = 10_000, 3_000
+    q = _all(n, chunk)
+    seen = []
+
+    def reduce(start, qc, sol):
+        np.testing.assert_array_equal(qc, q[start:start + len(qc)])
+        seen.append((start, sol.p.copy(), sol.reason.copy()))
+
+    s = fast.sweep_fk(q, T0, DESIGN, chunk_size=chunk, reduce=reduce, progress=True)
+    assert [a for a, _, _ in seen] == list(range(0, n, chunk))
+    ref = ak.forward_kinematics(q, T0, DESIGN)
+    np.testing.assert_array_equal(np.concatenate([r for _, _, r in seen]), ref.reason)
+    np.testing.assert_allclose(np.concatenate([p for _, p, _ in seen]), ref.p, atol=1e-12,
+                               rtol=0)
+    s2 = fast.sweep_fk(q, T0, DESIGN, chunk_size=chunk, progress=False)
+    np.testing.assert_array_equal(s.n_solutions, s2.n_solutions)
+
+
+def _peak_bytes(n, chunk, **kw):
+    tracemalloc.start()
+    try:
+        fast.sweep_fk(_draw, T0, DESIGN, n=n, chunk_size=chunk, progress=False, **kw)
+        return tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
+@pytest.mark.parametrize("with_reduce", [False, True], ids=["counts", "reduce"])
+def test_memory_does_not_grow_with_the_number_of_poses(with_reduce):
+    """Peak traced memory is set by the chunk, not by n (10x more poses, same peak)."""
+    chunk = 2_000
+    kw = {"reduce": lambda a, q, s: None} if with_reduce else {}
+    fast.sweep_fk(_draw, T0, DESIGN, n=chunk, chunk_size=chunk, progress=False, **kw)  # warm
+    small = _peak_bytes(4 * chunk, chunk, **kw)
+    large = _peak_bytes(40 * chunk, chunk, **kw)
+    per_pose = 3_200 if with_reduce else 200
+    assert large < 1.5 * small + 100_000
+    assert large < 3 * chunk * per_pose
+    if not with_reduce:   # less than holding all q (24 B/pose) of the sweep
+        assert large < 40 * chunk * 24
+
+
+def test_sweep_argument_errors():
+    with pytest.raises(TypeError, match="n: required"):
+        fast.sweep_fk(_draw, T0, DESIGN, progress=False)
+    with pytest.raises(InvalidInputError, match="chunk_size"):
+        fast.sweep_fk(np.zeros((4, 3)), T0, DESIGN, chunk_size=0, progress=False)
+    with pytest.raises(InvalidInputError, match="q: expected shape"):
+        fast.sweep_fk(np.zeros((4, 2)), T0, DESIGN, progress=False)
+    with pytest.raises(InvalidInputError, match=r"q\(0, 4\): expected shape"):
+        fast.sweep_fk(lambda a, b: np.zeros((1, 3)), T0, DESIGN, n=4, progress=False)
+    with pytest.raises(InvalidInputError, match="T_b_e"):
+        fast.sweep_fk(np.zeros((4, 3)), np.stack([T0, T0]), DESIGN, progress=False)
+    with pytest.raises(InvalidInputError, match="n: expected at most"):
+        fast.sweep_fk(np.zeros((4, 3)), T0, DESIGN, n=5, progress=False)
