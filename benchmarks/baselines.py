@@ -105,13 +105,13 @@ def fk_python(q, T, d: DesignTuple, *, tol=1e-12, closure_tol=1e-9):
     Re = [[T[i][j] for j in range(3)] for i in range(3)]
     te = [T[i][3] for i in range(3)]
     slots = []
-    for reason, R, O in _parallel_fk(q, d):
+    for reason, R, Os in _parallel_fk(q, d):
         if reason:
             slots += [(reason, math.nan, [math.nan] * 5)] * 8
             continue
         Rt = [[R[j][i] for j in range(3)] for i in range(3)]
         Rse = _matmul(Rt, Re)
-        c = [sum(Rt[i][k] * (te[k] - O[k]) for k in range(3)) for i in range(3)]
+        c = [sum(Rt[i][k] * (te[k] - Os[k]) for k in range(3)) for i in range(3)]
         n = math.sqrt(c[0] ** 2 + c[1] ** 2 + c[2] ** 2)
         for ps in (1.0, -1.0):
             if n <= tol:
@@ -148,20 +148,20 @@ def fk_python(q, T, d: DesignTuple, *, tol=1e-12, closure_tol=1e-9):
     return slots
 
 
-def _parallel_ik(O, d):
-    """(reason, q, theta) that put O_s at O."""
-    if not all(math.isfinite(v) for v in O):
+def _parallel_ik(Os, d):
+    """(reason, q, theta) that put O_s at Os."""
+    if not all(math.isfinite(v) for v in Os):
         return NONFINITE, None, None
-    rho = math.hypot(O[1], O[2])
+    rho = math.hypot(Os[1], Os[2])
     if rho <= d.l4:
         return NOT_IMAGE, None, None
     r1 = rho - d.l4
     if r1 > d.l1 or d.l1 ** 2 - r1 * r1 > d.l3 ** 2:
         return LINK, None, None
     h = d.h_sign * math.sqrt(d.l1 ** 2 - r1 * r1)
-    y, z = O[1] * r1 / rho, O[2] * r1 / rho
+    y, z = Os[1] * r1 / rho, Os[2] * r1 / rho
     m_y = math.sqrt(d.l3 ** 2 - h * h) + d.l2
-    q = [O[0] + h, O[0] - h, math.hypot(y - m_y, z - d.l5)]
+    q = [Os[0] + h, Os[0] - h, math.hypot(y - m_y, z - d.l5)]
     reason = _actuator_reason(q, d)
     if reason:
         return reason, None, None
@@ -186,8 +186,8 @@ def ik_python(T, u345, d: DesignTuple, *, tol=1e-12, closure_tol=1e-9):
         return IK_SINGULAR, None
     c = [T[i][3] for i in range(3)]
     p = (c[1] * n[0] + c[2] * n[1]) / den
-    O = [c[i] - p * z3[i] for i in range(3)]
-    reason, q, theta = _parallel_ik(O, d)
+    Os = [c[i] - p * z3[i] for i in range(3)]
+    reason, q, theta = _parallel_ik(Os, d)
     if reason:
         return reason, None
     ct, st = math.cos(theta), math.sin(theta)
@@ -196,7 +196,7 @@ def ik_python(T, u345, d: DesignTuple, *, tol=1e-12, closure_tol=1e-9):
     u = [math.atan2(R12[0][1], -R12[1][1]), math.atan2(R12[2][0], -R12[2][2]), *u345]
     Rc, tc = _ups(p, u)
     Rb = _matmul(Rbs, Rc)
-    tb = [sum(Rbs[i][k] * tc[k] for k in range(3)) + O[i] for i in range(3)]
+    tb = [sum(Rbs[i][k] * tc[k] for k in range(3)) + Os[i] for i in range(3)]
     res = max(max(abs(Rb[i][j] - Re[i][j]) for i in range(3) for j in range(3)),
               max(abs(tb[i] - c[i]) for i in range(3)))
     return (0, q) if res <= closure_tol else (CLOSURE, None)
@@ -211,8 +211,8 @@ def q_from_tool_tip_python(T, tip, d: DesignTuple):
         return INSERTION, None
     dirn = [v / s for v in tip]
     db = [sum(T[i][k] * dirn[k] for k in range(3)) for i in range(3)]
-    O = [T[i][3] - (d.L - s) * db[i] for i in range(3)]
-    reason, q, _ = _parallel_ik(O, d)
+    Os = [T[i][3] - (d.L - s) * db[i] for i in range(3)]
+    reason, q, _ = _parallel_ik(Os, d)
     return reason, q
 
 
@@ -231,11 +231,11 @@ def fk_least_squares(q, T, design: ak.Design, x0):
     from scipy.optimize import least_squares
 
     d = DesignTuple(design)
-    _, R, O = _parallel_fk(list(q), d)[0]
+    _, R, Os = _parallel_fk(list(q), d)[0]
     Rt = [[R[j][i] for j in range(3)] for i in range(3)]
     Re = [[T[i][j] for j in range(3)] for i in range(3)]
     Rse = _matmul(Rt, Re)
-    c = [sum(Rt[i][k] * (T[k][3] - O[k]) for k in range(3)) for i in range(3)]
+    c = [sum(Rt[i][k] * (T[k][3] - Os[k]) for k in range(3)) for i in range(3)]
     target = np.array([v for row in Rse for v in row] + c)
 
     def residual(x):
@@ -246,7 +246,7 @@ def fk_least_squares(q, T, design: ak.Design, x0):
 
 
 def pinocchio_ups_model():
-    """The UPS chain ``Rz(u1) Rx(pi/2) Rz(u2) Rx(pi/2) Tz(p) Rz(u3) Rx(pi/2) Rz(u4) Rx(pi/2) Rz(u5)``.
+    """The UPS chain ``Rz(u1) Rx Rz(u2) Rx Tz(p) Rz(u3) Rx Rz(u4) Rx Rz(u5)``, ``Rx = Rx(pi/2)``.
 
     Returns
     -------

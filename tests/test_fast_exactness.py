@@ -271,17 +271,17 @@ def test_parallel_fk_random(design):
 
 def test_parallel_ik_random():
     rng = np.random.default_rng(SEED + 11)
-    O = rng.uniform([-0.4, -0.6, -0.6], [0.4, 0.6, 0.6], (8000, 3))
-    O[::3] = ak.parallel.parallel_forward_kinematics(
+    Os = rng.uniform([-0.4, -0.6, -0.6], [0.4, 0.6, 0.6], (8000, 3))
+    Os[::3] = ak.parallel.parallel_forward_kinematics(
         rng.uniform(DESIGN.stroke_min, DESIGN.stroke_max, (2667, 3)), DESIGN).O_s[:, 0]
-    O = np.where(np.isnan(O), 0.3, O)
+    Os = np.where(np.isnan(Os), 0.3, Os)
 
     def perturb(args, s):
         return _scale(args[0], s), args[1]
 
     compare_conditioned(lambda o, d: fast.parallel_ik_from_position(o, d),
                         lambda o, d: ak.parallel.parallel_ik_from_position(o, d),
-                        (O, DESIGN), perturb)
+                        (Os, DESIGN), perturb)
     rc = akt.random_configurations(1000, DESIGN, rng=SEED + 12)
     T = rc.T_b_s.copy()
     T[::2, :3, :3] = _random_rotations(rng, 500)

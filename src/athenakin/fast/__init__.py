@@ -28,7 +28,6 @@ from ._api import (
     q_from_instrument,
     q_from_tool_tip,
 )
-
 from ._control import ControlLoop
 from ._sweep import DEFAULT_CHUNK_SIZE, SweepSummary, sweep_fk
 

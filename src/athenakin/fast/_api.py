@@ -180,7 +180,7 @@ def _check_out(out: FKSolution, batch: tuple[int, ...]) -> tuple[NDArray, ...]:
     shapes = (batch + (16,), batch + (16,), batch + (16,), batch + (16, 5), batch + (16, 4, 4),
               batch + (16,), batch)
     dtypes = (np.int8, np.bool_, np.float64, np.float64, np.float64, np.float64, np.int8)
-    for a, s, t in zip(arrs, shapes, dtypes):
+    for a, s, t in zip(arrs, shapes, dtypes, strict=True):
         if a.shape != s or a.dtype != t or not a.flags.c_contiguous or not a.flags.writeable:
             raise ValueError(f"out: expected an FKSolution of batch shape {batch} with "
                              f"writable C-contiguous arrays, got an array of shape {a.shape}, "
@@ -194,7 +194,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
                        degenerate_tol: float = DEGENERATE_TOL, p_zero_tol: float = P_ZERO_TOL,
                        closure_tol: float = CLOSURE_TOL, parallel: bool = False,
                        out: FKSolution | None = None) -> FKSolution:
-    """All (up to) 16 configurations for actuator values ``q``: compiled :func:`athenakin.forward_kinematics`.
+    """All 16 configurations for actuators ``q``: compiled :func:`~athenakin.forward_kinematics`.
 
     Same parameters, result and errors as the reference, plus:
 
@@ -305,7 +305,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
                        errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
                        closure_tol: float = CLOSURE_TOL, parallel: bool = False
                        ) -> tuple[NDArray[np.float64], PassiveJoints]:
-    """Actuator values from the RCM frame and ``u3, u4, u5``: compiled :func:`athenakin.inverse_kinematics`.
+    """Actuators for a frame E and ``u3, u4, u5``: compiled :func:`~athenakin.inverse_kinematics`.
 
     Same parameters, results and errors as the reference; ``parallel=True``
     spreads the batch over numba's threads.
@@ -421,7 +421,7 @@ def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors:
 def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
                       design: Design | None = None, *, errors: ErrorPolicy = "auto",
                       parallel: bool = False) -> tuple[NDArray[np.float64], InstrumentIK]:
-    """Actuators for an instrument direction and insertion: compiled :func:`athenakin.q_from_instrument`.
+    """Actuators for a direction and insertion: compiled :func:`~athenakin.q_from_instrument`.
 
     Same parameters, results and errors as the reference; ``parallel=True``
     spreads the batch over numba's threads.
@@ -449,7 +449,7 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
 # --- the parallel module ------------------------------------------------------------------
 def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
                                 tangent_tol: float = TANGENT_TOL) -> ParallelSolution:
-    """Both assembly modes of the parallel module: compiled :func:`athenakin.parallel.parallel_forward_kinematics`."""
+    """Both assembly modes: compiled :func:`~athenakin.parallel.parallel_forward_kinematics`."""
     P = design_params(design)
     try:
         qa = _arr(q, (3,))
@@ -474,7 +474,7 @@ def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
 
 
 def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> ParallelIK:
-    """Actuators that put ``O_s`` at a point: compiled :func:`athenakin.parallel.parallel_ik_from_position`."""
+    """Actuators for ``O_s``: compiled :func:`~athenakin.parallel.parallel_ik_from_position`."""
     P = design_params(design)
     try:
         Oa = _arr(O_s, (3,))
@@ -495,7 +495,7 @@ def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> P
 
 def parallel_inverse_kinematics(T_b_s: ArrayLike, design: Design | None = None, *,
                                 tol: float = MODULE_POSE_TOL) -> ParallelIK:
-    """Parallel module's IK from a pose of ``O_s``: :func:`athenakin.parallel.parallel_inverse_kinematics`.
+    """Module IK from a pose: :func:`~athenakin.parallel.parallel_inverse_kinematics`.
 
     The position part runs compiled; the orientation test is the reference's numpy code.
     """

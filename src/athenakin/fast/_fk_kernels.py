@@ -161,10 +161,14 @@ def _serial_stage(G, P, tol, SH, Sm, n):
     for ii in range(n):
         xm, r1 = SH[_XM * CHUNK + ii], SH[_R1 * CHUNK + ii]
         y, z, pr = Sm[_Y * CHUNK + ii], Sm[_Z * CHUNK + ii], Sm[_PR * CHUNK + ii]
-        t00, t01, t02, t03 = G[(_GT) * CHUNK + ii], G[(_GT + 1) * CHUNK + ii], G[(_GT + 2) * CHUNK + ii], G[(_GT + 3) * CHUNK + ii]
-        t10, t11, t12, t13 = G[(_GT + 4) * CHUNK + ii], G[(_GT + 5) * CHUNK + ii], G[(_GT + 6) * CHUNK + ii], G[(_GT + 7) * CHUNK + ii]
-        t20, t21, t22, t23 = G[(_GT + 8) * CHUNK + ii], G[(_GT + 9) * CHUNK + ii], G[(_GT + 10) * CHUNK + ii], G[(_GT + 11) * CHUNK + ii]
-        t30, t31, t32, t33 = G[(_GT + 12) * CHUNK + ii], G[(_GT + 13) * CHUNK + ii], G[(_GT + 14) * CHUNK + ii], G[(_GT + 15) * CHUNK + ii]
+        t00, t01 = G[_GT * CHUNK + ii], G[(_GT + 1) * CHUNK + ii]
+        t02, t03 = G[(_GT + 2) * CHUNK + ii], G[(_GT + 3) * CHUNK + ii]
+        t10, t11 = G[(_GT + 4) * CHUNK + ii], G[(_GT + 5) * CHUNK + ii]
+        t12, t13 = G[(_GT + 6) * CHUNK + ii], G[(_GT + 7) * CHUNK + ii]
+        t20, t21 = G[(_GT + 8) * CHUNK + ii], G[(_GT + 9) * CHUNK + ii]
+        t22, t23 = G[(_GT + 10) * CHUNK + ii], G[(_GT + 11) * CHUNK + ii]
+        t30, t31 = G[(_GT + 12) * CHUNK + ii], G[(_GT + 13) * CHUNK + ii]
+        t32, t33 = G[(_GT + 14) * CHUNK + ii], G[(_GT + 15) * CHUNK + ii]
         cy = y / r1
         cz = z / r1
         ys = y + l4 * cy
@@ -426,8 +430,8 @@ def fk_full(q, T, P, tol, rot_tol, reason, valid, p, u, Tbs, res, item):
     N = item.shape[0]
     G, SH, S0, S1 = scratch()
     for c0 in range(0, N, CHUNK):
-        _chunk_full(q, T, P, tol, G, SH, S0, S1, c0, min(CHUNK, N - c0), reason, valid, p, u, Tbs, res,
-                    item)
+        _chunk_full(q, T, P, tol, G, SH, S0, S1, c0, min(CHUNK, N - c0), reason, valid, p, u,
+                    Tbs, res, item)
     return _input_flags(q, T, rot_tol)
 
 
@@ -439,8 +443,8 @@ def fk_full_parallel(q, T, P, tol, rot_tol, reason, valid, p, u, Tbs, res, item)
     for ci in prange(nchunk):
         G, SH, S0, S1 = scratch()
         c0 = ci * CHUNK
-        _chunk_full(q, T, P, tol, G, SH, S0, S1, c0, min(CHUNK, N - c0), reason, valid, p, u, Tbs, res,
-                    item)
+        _chunk_full(q, T, P, tol, G, SH, S0, S1, c0, min(CHUNK, N - c0), reason, valid, p, u,
+                    Tbs, res, item)
     return _input_flags(q, T, rot_tol)
 
 

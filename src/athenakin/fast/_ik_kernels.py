@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit, prange
 
 from ._fk_kernels import CHUNK, FLAG_T_NONFINITE, rigid_flags
-from ._scalar import SINCOS_MAX, atan2, finite_sum, hypot, nanmax2, sincos, wrap_mod, wrap_pi
+from ._scalar import atan2, finite_sum, hypot, nanmax2, sincos, wrap_mod, wrap_pi
 
 __all__ = ["ik_paper", "ik_paper_parallel", "ik_line", "ik_line_parallel",
            "parallel_ik_position", "parallel_fk", "FLAG_SLOW", "FLAG_V_NONFINITE",
@@ -105,15 +105,15 @@ def _pik_stage(K, P, n):
 
 
 @njit(**_OPTS)
-def parallel_ik_position(O, P, q, mode, theta, valid, reason):
+def parallel_ik_position(Os, P, q, mode, theta, valid, reason):
     """:func:`athenakin.parallel.parallel_ik_from_position` for O (N, 3)."""
-    N = O.shape[0]
+    N = Os.shape[0]
     K = np.empty(NK * CHUNK)
     for c0 in range(0, N, CHUNK):
         n = min(CHUNK, N - c0)
         for ii in range(n):
             for c in range(3):
-                K[(_OX + c) * CHUNK + ii] = O[c0 + ii, c]
+                K[(_OX + c) * CHUNK + ii] = Os[c0 + ii, c]
             K[_PRE * CHUNK + ii] = 0.0
         _pik_stage(K, P, n)
         for ii in range(n):
@@ -386,7 +386,7 @@ def _paper_stage2(G, K, ctol, n):
     """u1, u2 from R_b_s^T R_b_w, then the closure check of T_b_s T_s_e(p, u)."""
     for ii in range(n):
         ct, st = K[_CT * CHUNK + ii], K[_ST * CHUNK + ii]
-        b00, b01, b02 = G[0 * CHUNK + ii], G[1 * CHUNK + ii], G[2 * CHUNK + ii]
+        b01 = G[1 * CHUNK + ii]
         b10, b11, b12 = G[4 * CHUNK + ii], G[5 * CHUNK + ii], G[6 * CHUNK + ii]
         b20, b21, b22 = G[8 * CHUNK + ii], G[9 * CHUNK + ii], G[10 * CHUNK + ii]
         r01 = b01

@@ -5,7 +5,6 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections.abc import Callable
-from typing import Union
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -25,7 +24,7 @@ __all__ = ["SweepSummary", "sweep_fk", "DEFAULT_CHUNK_SIZE"]
 #: into an FKSolution for a ``reduce`` callback; 120 B per pose otherwise).
 DEFAULT_CHUNK_SIZE = 1 << 16
 
-QSource = Union[ArrayLike, Callable[[int, int], ArrayLike]]
+QSource = ArrayLike | Callable[[int, int], ArrayLike]
 
 
 @dataclasses.dataclass(frozen=True)
