@@ -33,12 +33,14 @@ def cases(quick: bool) -> list[dict]:
     dt = bl.DesignTuple(d)
     T = ak.default_rcm_frame(d)
     Tl = T.tolist()
-    n = 2_000 if quick else 20_000          # compiled / numpy batches
+    n = 2_000 if quick else 4_000           # compiled / numpy batches (results stay in cache)
+    n_big = 4_000 if quick else 50_000      # a batch whose results do not fit in cache
     n_py = 50 if quick else 1_000           # pure-Python loops
     n_ls = 3 if quick else 50               # scipy least_squares
     n_sweep = 200_000 if quick else 10_000_000
     rng = np.random.default_rng(2024)
     q = rng.uniform(d.stroke_min, d.stroke_max, (n, 3))
+    q_big = rng.uniform(d.stroke_min, d.stroke_max, (n_big, 3))
     q_py = q[:n_py].tolist()
     q1 = np.array(ak.robot.REFERENCE_Q)
     ref1 = ak.forward_kinematics(q1, T, d)
@@ -74,6 +76,9 @@ def cases(quick: bool) -> list[dict]:
         {"name": "athenakin.fast -> FKSolution", "group": "fk-batch", "batch": n,
          "call": lambda: fast.forward_kinematics(q, T, d),
          "note": "allocates ~3 KiB/pose of results"},
+        {"name": "athenakin.fast -> FKSolution, large batch", "group": "fk-batch",
+         "batch": n_big, "call": lambda: fast.forward_kinematics(q_big, T, d),
+         "note": "memory-bound: 3 KiB/pose written to fresh pages"},
         {"name": "athenakin.fast, out= (arrays reused)", "group": "fk-batch", "batch": n,
          "call": lambda: fast.forward_kinematics(q, T, d, out=out)},
         {"name": "athenakin.fast, out=, parallel=True", "group": "fk-batch", "batch": n,

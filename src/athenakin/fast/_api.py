@@ -229,17 +229,20 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
         Ta = _arr(T_b_e, (4, 4))
     except _Delegate:
         return reference()
-    bq, bT = qa.shape[:-1], Ta.shape[:-2]
-    batch = bq if bq == bT else _batch(bq, bT)
-    raise_now = resolve_policy(errors, batch)
-    N = math.prod(batch)
     if (tangent_tol == TANGENT_TOL and degenerate_tol == DEGENERATE_TOL
             and p_zero_tol == P_ZERO_TOL and closure_tol == CLOSURE_TOL):
         tol = _FK_TOL_DEFAULT
     else:
         tol = np.array([tangent_tol, degenerate_tol, p_zero_tol, closure_tol], dtype=float)
-    if not batch and out is None and not parallel:
-        return _fk_single(qa, Ta, P, tol, raise_now, reference)
+    if qa.ndim == 1 and Ta.ndim == 2 and out is None and not parallel:
+        if errors == "auto" or errors == "raise":
+            return _fk_single(qa, Ta, P, tol, True, reference)
+        resolve_policy(errors, ())
+        return _fk_single(qa, Ta, P, tol, False, reference)
+    bq, bT = qa.shape[:-1], Ta.shape[:-2]
+    batch = bq if bq == bT else _batch(bq, bT)
+    raise_now = resolve_policy(errors, batch)
+    N = math.prod(batch)
     if out is None:
         reason = np.empty((N, 16), np.int8)
         valid = np.empty((N, 16), np.bool_)
@@ -292,12 +295,10 @@ def _fk_single(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.f
         _ONE_LABELS.append(_labels(()))
     mode, p_sign, ujoint, wrist = _ONE_LABELS[0]
     return _new(FKSolution, valid=ibuf[_fk.ONE_VALID:_fk.ONE_ITEM].view(np.bool_),
-                      reason=ibuf[_fk.ONE_REASON:_fk.ONE_VALID], mode=mode, p_sign=p_sign,
-                      ujoint=ujoint, wrist=wrist, p=fbuf[_fk.ONE_P:_fk.ONE_U],
-                      u=fbuf[_fk.ONE_U:_fk.ONE_T].reshape(16, 5),
-                      T_b_s=fbuf[_fk.ONE_T:_fk.ONE_RES].reshape(16, 4, 4),
-                      residual=fbuf[_fk.ONE_RES:_fk.ONE_F],
-                      item_reason=ibuf[_fk.ONE_ITEM:_fk.ONE_I].reshape(()))
+                reason=ibuf[:_fk.ONE_VALID], mode=mode, p_sign=p_sign, ujoint=ujoint,
+                wrist=wrist, p=fbuf[:_fk.ONE_U], u=fbuf[_fk.ONE_U:_fk.ONE_T].reshape(16, 5),
+                T_b_s=fbuf[_fk.ONE_T:_fk.ONE_RES].reshape(16, 4, 4),
+                residual=fbuf[_fk.ONE_RES:], item_reason=ibuf[_fk.ONE_ITEM:].reshape(()))
 
 
 # --- whole robot: inverse kinematics, paper form -----------------------------------------

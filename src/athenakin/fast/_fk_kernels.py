@@ -70,8 +70,9 @@ _OPTS = dict(error_model="numpy", cache=True)
 @njit(**_OPTS)
 def scratch():
     """Fresh scratch arrays ``G, SH, S0, S1`` of one chunk (flat, row-major)."""
-    return (np.empty(NG * CHUNK), np.empty(NSH * CHUNK), np.empty(MS * CHUNK),
-            np.empty(MS * CHUNK))
+    buf = np.empty((NG + NSH + 2 * MS) * CHUNK)     # one allocation, four views
+    a, b, c = NG * CHUNK, (NG + NSH) * CHUNK, (NG + NSH + MS) * CHUNK
+    return buf[:a], buf[a:b], buf[b:c], buf[c:]
 
 
 @njit(**_OPTS)
