@@ -266,3 +266,14 @@ def test_control_loop_matches_reference():
         fast.ControlLoop(np.full((4, 4), np.nan))
     with pytest.raises(ValueError):
         ctl.fk([0.1, 0.2])
+
+
+@pytest.mark.parametrize("name", ["athenakin.fast._api", "athenakin.fast._control",
+                                  "athenakin.fast._sweep"])
+def test_docstring_examples(name):
+    import doctest
+    import importlib
+
+    res = doctest.testmod(importlib.import_module(name),
+                          optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    assert res.failed == 0 and res.attempted > 0

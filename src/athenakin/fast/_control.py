@@ -58,7 +58,7 @@ class ControlLoop:
     >>> reason, p, u = ctl.fk(np.array([-0.10, 0.10, 0.45]))
     >>> int((reason == 0).sum())
     16
-    >>> q, r = ctl.q_from_tool_tip(np.array([0.05, 0.0, 0.0]))
+    >>> q, r = ctl.q_from_tool_tip(np.array([0.25, 0.0, 0.0]))   # tip 25 cm past the RCM
     >>> r
     0
     """
