@@ -120,6 +120,9 @@ def test_invalid_arguments_raise_like_reference(q, T):
 
 def test_bad_options_raise_like_reference():
     _same_call(fast.forward_kinematics, ak.forward_kinematics, Q0, T0, DESIGN, errors="loud")
+    _same_call(fast.forward_kinematics, ak.forward_kinematics, Q0, T0, DESIGN, method="newton")
+    _same_call(fast.forward_kinematics, ak.forward_kinematics, Q0, T0, DESIGN,
+               method="algebraic")
     _same_call(fast.inverse_kinematics, ak.inverse_kinematics, T0, Q0, DESIGN, errors="x")
     with pytest.raises(TypeError, match="design: expected athenakin.Design"):
         fast.forward_kinematics(Q0, T0, "design")

@@ -190,13 +190,15 @@ def _check_out(out: FKSolution, batch: tuple[int, ...]) -> tuple[NDArray, ...]:
 
 # --- whole robot: forward kinematics ------------------------------------------------------
 def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
-                       errors: ErrorPolicy = "auto", tangent_tol: float = TANGENT_TOL,
+                       method: str = "closed", errors: ErrorPolicy = "auto",
+                       tangent_tol: float = TANGENT_TOL,
                        degenerate_tol: float = DEGENERATE_TOL, p_zero_tol: float = P_ZERO_TOL,
                        closure_tol: float = CLOSURE_TOL, parallel: bool = False,
                        out: FKSolution | None = None) -> FKSolution:
     """All 16 configurations for actuators ``q``: compiled :func:`~athenakin.forward_kinematics`.
 
-    Same parameters, result and errors as the reference, plus:
+    Same parameters, result and errors as the reference (``method="closed"`` is
+    compiled; any other ``method`` is the reference's own computation), plus:
 
     Parameters
     ----------
@@ -220,9 +222,11 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     """
     def reference() -> FKSolution:
         return _ref_robot.forward_kinematics(
-            q, T_b_e, design, errors=errors, tangent_tol=tangent_tol,
+            q, T_b_e, design, method=method, errors=errors, tangent_tol=tangent_tol,
             degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol, closure_tol=closure_tol)
 
+    if method != "closed":
+        return reference()
     P = design_params(design)
     try:
         qa = _arr(q, (3,))
