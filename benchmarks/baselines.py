@@ -68,7 +68,7 @@ def _actuator_reason(q, d):
     return 0
 
 
-def _parallel_fk(q, d, tangent_tol=1e-9):
+def _parallel_fk(q, d, tangent_tol=ak.parallel.TANGENT_TOL):
     """Both assembly modes: list of (reason, R_b_s, O_s)."""
     reason = _actuator_reason(q, d)
     if reason:
@@ -100,7 +100,8 @@ def _parallel_fk(q, d, tangent_tol=1e-9):
     return out
 
 
-def fk_python(q, T, d: DesignTuple, *, tol=1e-12, closure_tol=1e-9):
+def fk_python(q, T, d: DesignTuple, *, tol=ak.chain.DEGENERATE_TOL,
+              closure_tol=ak.chain.CLOSURE_TOL):
     """All 16 slots of one pose: list of (reason, p, [u1..u5]) in athenakin's slot order."""
     Re = [[T[i][j] for j in range(3)] for i in range(3)]
     te = [T[i][3] for i in range(3)]
@@ -168,7 +169,8 @@ def _parallel_ik(Os, d):
     return 0, q, math.atan2(-y, z)
 
 
-def ik_python(T, u345, d: DesignTuple, *, tol=1e-12, closure_tol=1e-9):
+def ik_python(T, u345, d: DesignTuple, *, tol=ak.robot.IK_SINGULAR_TOL,
+              closure_tol=ak.chain.CLOSURE_TOL):
     """Paper-form IK of one item: (reason, q or None)."""
     c3, s3 = math.cos(u345[0]), math.sin(u345[0])
     c4, s4 = math.cos(u345[1]), math.sin(u345[1])

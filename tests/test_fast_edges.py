@@ -280,3 +280,25 @@ def test_docstring_examples(name):
     res = doctest.testmod(importlib.import_module(name),
                           optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
     assert res.failed == 0 and res.attempted > 0
+
+
+@pytest.mark.parametrize("which", [1, 3], ids=["u-joint", "wrist"])
+def test_near_singular_band_matches_reference(which):
+    """|sin u2| or |sin u4| from 1e-3 down to 1e-11 (above DEGENERATE_TOL): the same slots are
+    valid, and every quantity the pose determines agrees (there u1 and u3 alone are
+    ill-conditioned, only their combination with the next angle is fixed by the pose)."""
+    rc = akt.random_configurations(1, DESIGN, rng=SEED + 7)
+    eps = np.array([1e-3, 1e-5, 1e-7, 1e-9, 1e-11])
+    u = np.repeat(rc.u, len(eps), axis=0)
+    u[:, which] = eps * np.array([1, -1, 1, -1, 1])
+    T = rc.T_b_s[0] @ ups_transform(np.full(len(eps), rc.p[0]), u)
+    got = fast.forward_kinematics(rc.q[0], T, DESIGN)
+    ref = ak.forward_kinematics(rc.q[0], T, DESIGN)
+    np.testing.assert_array_equal(got.reason, ref.reason)
+    assert got.valid.all(axis=1).any()
+    np.testing.assert_allclose(got.p, ref.p, atol=1e-12, rtol=0)
+    chain_got = ups_transform(got.p[got.valid], got.u[got.valid])
+    chain_ref = ups_transform(ref.p[ref.valid], ref.u[ref.valid])
+    akt.assert_transform_equal(chain_got, chain_ref, atol=1e-12)
+    for k in (1, 3) if which == 1 else (3,):
+        akt.assert_angles_equal(got.u[..., k][got.valid], ref.u[..., k][ref.valid], atol=1e-12)
