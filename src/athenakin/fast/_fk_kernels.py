@@ -12,12 +12,14 @@ beyond rounding:
   distinct pair of signs;
 * angles come from the branch-free ``atan`` of :mod:`._scalar` (no libm call),
   and the closure check rebuilds ``T_s_e`` from the cosines and sines directly
-  (``cos(atan2(s, c)) = c / hypot(s, c)``) instead of calling ``cos``/``sin``;
+  (``cos(atan2(s, c)) = c / hypot(s, c)``) instead of calling ``cos``/``sin``
+  (the reference's sequence is kept: ``u2`` from the projection on the plane ``u1``
+  fixes, ``u4`` likewise, ``u5`` from what ``u3, u4`` leave of ``W``);
 * the parallel module and the serial chain are evaluated for every pose
   without branches, and invalid results are masked afterwards.
 
-Work per pose: 10 ``atan`` (5 per mode), 20 square roots, about 40 divisions
-and 600 multiply-adds; no transcendental library call. The pose loop runs in
+Work per pose: 10 ``atan`` (5 per mode), 26 square roots, about 50 divisions
+and 650 multiply-adds; no transcendental library call. The pose loop runs in
 chunks of :data:`CHUNK`: a vectorised pass writes per-mode values into a
 structure-of-arrays scratch, a second pass expands them into the 16 slots.
 """
