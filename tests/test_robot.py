@@ -387,3 +387,29 @@ def test_method_algebraic_matches_closed_form_and_bad_method_named():
     assert_angles_equal(b.u, a.u, atol=1e-9)
     with pytest.raises(ValueError, match="method: expected one of"):
         ak.forward_kinematics(c.q[0], c.T_b_e[0], D, method="newton")
+
+
+def test_backend_numba_same_results_as_numpy():
+    c = random_configurations(500, D, rng=SEED + 10)
+    a = ak.forward_kinematics(c.q, c.T_b_e, D)
+    b = ak.forward_kinematics(c.q, c.T_b_e, D, backend="numba")
+    np.testing.assert_array_equal(a.valid, b.valid)
+    np.testing.assert_array_equal(a.reason, b.reason)
+    np.testing.assert_allclose(b.p, a.p, atol=1e-12)
+    assert_angles_equal(b.u, a.u, atol=1e-12)
+    qa, pa = ak.inverse_kinematics(c.T_b_e, c.u[:, 2:], D)
+    qb, pb = ak.inverse_kinematics(c.T_b_e, c.u[:, 2:], D, backend="numba")
+    np.testing.assert_allclose(qb, qa, atol=1e-12)
+    np.testing.assert_array_equal(pa.mode, pb.mode)
+    T = ak.default_rcm_frame(D)
+    tip = ak.direction_from_angles(0.1, 1.5) * 0.25
+    np.testing.assert_allclose(ak.q_from_tool_tip(T, tip, D, backend="numba")[0],
+                               ak.q_from_tool_tip(T, tip, D)[0], atol=1e-12)
+    np.testing.assert_allclose(ak.q_from_instrument(T, tip, 0.2, D, backend="numba")[0],
+                               ak.q_from_instrument(T, tip, 0.2, D)[0], atol=1e-12)
+    with pytest.raises(ak.StrokeLimitError):
+        ak.forward_kinematics([0.5, 0.1, 0.45], T, D, backend="numba")
+    with pytest.raises(ValueError, match="backend: expected one of"):
+        ak.forward_kinematics(c.q[0], T, D, backend="cuda")
+    with pytest.raises(TypeError, match="design: expected athenakin.Design"):
+        ak.q_from_tool_tip(T, tip, "default")

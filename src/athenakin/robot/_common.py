@@ -7,10 +7,30 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from ..design import Design
 from ..errors import Reason, error_for_reason
 
 ErrorPolicy = Literal["auto", "raise", "flag"]
 _POLICIES = ("auto", "raise", "flag")
+
+Backend = Literal["numpy", "numba"]
+_BACKENDS = ("numpy", "numba")
+
+
+def use_compiled(backend: str) -> bool:
+    """True for ``backend="numba"`` (the :mod:`athenakin.fast` kernels), False for numpy."""
+    if backend not in _BACKENDS:
+        raise ValueError(f"backend: expected one of {_BACKENDS}, got {backend!r}")
+    return backend == "numba"
+
+
+def resolve_design(design: object) -> Design:
+    """``Design.default()`` for None, else ``design`` after a type check."""
+    if design is None:
+        return Design.default()
+    if not isinstance(design, Design):
+        raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
+    return design
 
 
 def resolve_policy(errors: str, batch_shape: tuple[int, ...]) -> bool:

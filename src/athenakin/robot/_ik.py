@@ -28,7 +28,14 @@ from ..chain._ups import CLOSURE_TOL, _ups_transform, closure_residual, rotation
 from ..design import Design
 from ..errors import Reason
 from ..parallel._module import parallel_ik_from_position
-from ._common import ErrorPolicy, raise_first_failure, resolve_policy
+from ._common import (
+    Backend,
+    ErrorPolicy,
+    raise_first_failure,
+    resolve_design,
+    resolve_policy,
+    use_compiled,
+)
 
 __all__ = [
     "IK_SINGULAR_TOL",
@@ -118,7 +125,7 @@ def _wrap(a: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None = None, *,
                        errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
-                       closure_tol: float = CLOSURE_TOL
+                       closure_tol: float = CLOSURE_TOL, backend: Backend = "numpy"
                        ) -> tuple[NDArray[np.float64], PassiveJoints]:
     """Actuator values for a given RCM frame and spherical-joint angles (paper Section 4).
 
@@ -135,6 +142,8 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
         See :data:`IK_SINGULAR_TOL`.
     closure_tol : float, keyword-only
         Largest closure residual accepted.
+    backend : {"numpy", "numba"}, keyword-only
+        ``"numba"``: the compiled kernel of :mod:`athenakin.fast` (same results).
 
     Returns
     -------
@@ -160,9 +169,12 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     >>> np.allclose(q, [-0.10, 0.10, 0.45], atol=1e-12)
     True
     """
-    design = Design.default() if design is None else design
-    if not isinstance(design, Design):
-        raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
+    if use_compiled(backend):
+        from ..fast import inverse_kinematics as compiled
+
+        return compiled(T_b_e, u345, design, errors=errors, singular_tol=singular_tol,
+                        closure_tol=closure_tol)
+    design = resolve_design(design)
     T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
     u345 = check_array(u345, "u345", (3,), allow_nonfinite=True)
     batch = np.broadcast_shapes(T.shape[:-2], u345.shape[:-1])
@@ -274,8 +286,8 @@ def _unit(d: NDArray[np.float64], name: str) -> NDArray[np.float64]:
 
 
 def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
-                      design: Design | None = None, *, errors: ErrorPolicy = "auto"
-                      ) -> tuple[NDArray[np.float64], InstrumentIK]:
+                      design: Design | None = None, *, errors: ErrorPolicy = "auto",
+                      backend: Backend = "numpy") -> tuple[NDArray[np.float64], InstrumentIK]:
     """Actuator values for an instrument direction about the RCM and an insertion ``p``.
 
     ``O_s = RCM - p * d`` with ``d`` the instrument direction; the parallel
@@ -293,13 +305,19 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
         Distance from ``O_s`` to the RCM along the direction, m.
     design : Design, optional
     errors : {"auto", "raise", "flag"}, keyword-only
+    backend : {"numpy", "numba"}, keyword-only
+        ``"numba"``: the compiled kernel of :mod:`athenakin.fast` (same results).
 
     Returns
     -------
     q : ndarray, shape (..., 3)
     result : InstrumentIK
     """
-    design = Design.default() if design is None else design
+    if use_compiled(backend):
+        from ..fast import q_from_instrument as compiled
+
+        return compiled(T_b_e, direction_e, p, design, errors=errors)
+    design = resolve_design(design)
     T = check_transform(T_b_e, "T_b_e")
     d_e = _unit(check_array(direction_e, "direction_e", (3,)), "direction_e")
     p = check_array(p, "p", ())
@@ -307,7 +325,8 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
 
 
 def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = None, *,
-                    errors: ErrorPolicy = "auto") -> tuple[NDArray[np.float64], InstrumentIK]:
+                    errors: ErrorPolicy = "auto", backend: Backend = "numpy"
+                    ) -> tuple[NDArray[np.float64], InstrumentIK]:
     """Actuator values that put the tool tip at a point, the instrument through the RCM.
 
     The tip is at ``O_s + L d`` (``L = design.tool_length``) and the instrument
@@ -323,13 +342,19 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
         Tool-tip position in the RCM frame E, m.
     design : Design, optional
     errors : {"auto", "raise", "flag"}, keyword-only
+    backend : {"numpy", "numba"}, keyword-only
+        ``"numba"``: the compiled kernel of :mod:`athenakin.fast` (same results).
 
     Returns
     -------
     q : ndarray, shape (..., 3)
     result : InstrumentIK
     """
-    design = Design.default() if design is None else design
+    if use_compiled(backend):
+        from ..fast import q_from_tool_tip as compiled
+
+        return compiled(T_b_e, tip_e, design, errors=errors)
+    design = resolve_design(design)
     T = check_transform(T_b_e, "T_b_e")
     tip = check_array(tip_e, "tip_e", (3,))
     s = np.linalg.norm(tip, axis=-1)
