@@ -50,3 +50,11 @@ def rot_z(a: NDArray[np.float64]) -> NDArray[np.float64]:
     c, s = np.cos(a), np.sin(a)
     z, o = np.zeros_like(c), np.ones_like(c)
     return np.stack([c, -s, z, s, c, z, z, z, o], axis=-1).reshape(c.shape + (3, 3))
+
+
+def wrap_angle(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Angles mapped to ``(-pi, pi]`` (values already in that range are returned unchanged)."""
+    a = np.asarray(a, float)
+    inside = (a > -np.pi) & (a <= np.pi)
+    w = np.mod(a + np.pi, 2 * np.pi) - np.pi
+    return np.where(inside, a, np.where(w <= -np.pi, w + 2 * np.pi, w))

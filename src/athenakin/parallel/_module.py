@@ -19,6 +19,7 @@ import dataclasses
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._transforms import wrap_angle
 from .._validation import check_array, check_transform
 from ..design import Design
 from ..errors import Reason
@@ -233,16 +234,11 @@ def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
     nanmask = np.where(valid, 1.0, np.nan)
     T_b_i = T_b_i * nanmask[..., None, None]
     T_b_s = T_b_s * nanmask[..., None, None]
-    theta = _wrap(np.arctan2(-y / r1[..., None], z / r1[..., None])) * nanmask
+    theta = wrap_angle(np.arctan2(-y / r1[..., None], z / r1[..., None])) * nanmask
     return ParallelSolution(
         valid=valid, reason=slot_reason, mode=MODES.copy(),
         O_i=T_b_i[..., :3, 3], O_s=T_b_s[..., :3, 3], T_b_i=T_b_i, T_b_s=T_b_s, theta=theta,
         r1=g["r1"], m_y=g["m_y"], w=g["w"], half_chord=g["half_chord"])
-
-
-def _wrap(a: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Map angles to (-pi, pi]."""
-    return np.where(a <= -np.pi, a + 2 * np.pi, a)
 
 
 def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> ParallelIK:
@@ -292,7 +288,7 @@ def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> P
     reason = np.where(ok & (act != 0), act, reason).astype(np.int8)
     valid = reason == 0
     q = np.where(valid[..., None], q, np.nan)
-    theta = np.where(valid, _wrap(np.arctan2(-y, z)), np.nan)
+    theta = np.where(valid, wrap_angle(np.arctan2(-y, z)), np.nan)
     return ParallelIK(q=q, mode=mode, theta=theta, valid=valid, reason=reason)
 
 

@@ -22,7 +22,7 @@ import dataclasses
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._transforms import transform_from_rotation_translation
+from .._transforms import transform_from_rotation_translation, wrap_angle
 from .._validation import check_array, check_transform
 from ..chain._ups import CLOSURE_TOL, _ups_transform, closure_residual, rotation_u_pair
 from ..design import Design
@@ -118,11 +118,6 @@ class InstrumentIK:
     reason: NDArray[np.int8]
 
 
-def _wrap(a: NDArray[np.float64]) -> NDArray[np.float64]:
-    a = np.mod(a + np.pi, 2 * np.pi) - np.pi
-    return np.where(a <= -np.pi, a + 2 * np.pi, a)
-
-
 def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None = None, *,
                        errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
                        closure_tol: float = CLOSURE_TOL, backend: Backend = "numpy"
@@ -215,7 +210,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     R12 = np.swapaxes(R_b_s, -1, -2) @ R_b_w
     u1 = np.arctan2(R12[..., 0, 1], -R12[..., 1, 1])
     u2 = np.arctan2(R12[..., 2, 0], -R12[..., 2, 2])
-    u = _wrap(np.concatenate([np.stack([u1, u2], axis=-1), uf], axis=-1))
+    u = wrap_angle(np.concatenate([np.stack([u1, u2], axis=-1), uf], axis=-1))
     T_b_s = transform_from_rotation_translation(R_b_s, O_s)
     with np.errstate(invalid="ignore"):
         res = closure_residual(T_b_s @ _ups_transform(p, u), Tf)

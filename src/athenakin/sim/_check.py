@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._transforms import wrap_angle
 from .._validation import check_array
 from ..design import Design
 from ..parallel import parallel_forward_kinematics
@@ -160,10 +161,6 @@ def settle(model: Any, data: Any, q: ArrayLike, *, ramp_time: float = RAMP_TIME,
     return n_hold * dt
 
 
-def _wrap(a: NDArray[np.float64]) -> NDArray[np.float64]:
-    return np.mod(a + np.pi, 2 * np.pi) - np.pi
-
-
 def _labels(model: Any, data: Any) -> tuple[int, int, int, int]:
     """Slot labels read off MuJoCo's state alone (no athenakin kinematics)."""
     qpos = {model.joint(i).name: float(data.qpos[model.jnt_qposadr[i]])
@@ -267,7 +264,7 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
         for j in map(int, np.flatnonzero(sol.valid)):
             vals, geoms[j] = mechanism_joint_values(q_now, T, design, slot=j)
             diff = data.qpos[adr] - np.array([vals[nm] for nm in names])
-            joint_err[j] = np.abs(np.where(hinge, _wrap(diff), diff)).max()
+            joint_err[j] = np.abs(np.where(hinge, wrap_angle(diff), diff)).max()
         out["q_reached"].append(q_now)
         out["slot"].append(k)
         out["nearest_slot"].append(int(np.argmin(joint_err)) if sol.valid.any() else -1)
