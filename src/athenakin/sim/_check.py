@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import wrap_angle
 from .._validation import check_array
+from ..chain import closure_residual
 from ..design import Design
 from ..parallel import parallel_forward_kinematics
 from ..robot import default_rcm_frame, forward_kinematics
@@ -173,11 +174,6 @@ def _labels(model: Any, data: Any) -> tuple[int, int, int, int]:
     return mode, sgn[0], sgn[1], sgn[2]
 
 
-def _pose_error(T: NDArray[np.float64], T_ref: NDArray[np.float64]) -> float:
-    dR = np.abs(T[:3, :3] - T_ref[:3, :3]).max()
-    return float(max(dR, np.abs(T[:3, 3] - T_ref[:3, 3]).max()))
-
-
 def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
                          T_b_e: ArrayLike | None = None, *, start_slot: int = 0,
                          home_q: ArrayLike | None = None, perturb: float = 0.0,
@@ -275,7 +271,7 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
             out["tip_error"].append(float(np.linalg.norm(tip - g.points["tip"])))
             out["axis_error"].append(float(np.arctan2(np.linalg.norm(np.cross(T_ins[:3, 2], z_ref)),
                                                       T_ins[:3, 2] @ z_ref)))
-            out["pose_error"].append(_pose_error(T_ins, g.frames["instrument"]))
+            out["pose_error"].append(float(closure_residual(T_ins, g.frames["instrument"])))
             out["joint_error"].append(float(joint_err[k]))
         else:
             for key in ("tip_error", "axis_error", "pose_error", "joint_error"):

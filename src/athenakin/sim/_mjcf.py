@@ -14,9 +14,10 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from ..design import Design
+from ..study import quaternion_from_rotation
 from ._layout import ACTUATED, JOINTS, LOOP_CLOSURES, mechanism_joint_values
 
 __all__ = ["mjcf_from_design", "write_mjcf", "MJCF_TIMESTEP", "ACTUATOR_KP", "ACTUATOR_KV",
@@ -59,25 +60,6 @@ def _f(x: float) -> str:
 
 def _vec(v: ArrayLike) -> str:
     return " ".join(_f(x) for x in np.asarray(v, dtype=float).ravel())
-
-
-def _quat_from_matrix(R: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Unit quaternion (w, x, y, z) of a rotation matrix (Shepperd's method)."""
-    t = np.trace(R)
-    if t > 0:
-        s = 2.0 * math.sqrt(t + 1.0)
-        q = [0.25 * s, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s]
-    else:
-        i = int(np.argmax(np.diag(R)))
-        j, k = (i + 1) % 3, (i + 2) % 3
-        s = 2.0 * math.sqrt(1.0 + R[i, i] - R[j, j] - R[k, k])
-        q = [0.0, 0.0, 0.0, 0.0]
-        q[0] = (R[k, j] - R[j, k]) / s
-        q[1 + i] = 0.25 * s
-        q[1 + j] = (R[j, i] + R[i, j]) / s
-        q[1 + k] = (R[k, i] + R[i, k]) / s
-    qa = np.array(q)
-    return qa / np.linalg.norm(qa)
 
 
 def _body(parent: ET.Element, name: str, pos: ArrayLike = (0, 0, 0),
@@ -264,7 +246,7 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     _site(lb3, "link_b3_tip", (d.l3, 0, 0))
 
     # --- the set-up: frame E, where S1 and S2 hold the spherical five-bar -------------
-    setup = _body(wb, "rcm_setup", pos=T[:3, 3], quat=_quat_from_matrix(T[:3, :3]))
+    setup = _body(wb, "rcm_setup", pos=T[:3, 3], quat=quaternion_from_rotation(T[:3, :3]))
     _sphere(setup, "rcm_setup", 0.006, "setup")
     _site(setup, "rcm_setup_frame")
 
