@@ -205,6 +205,21 @@ class Design:
         return "\n".join(lines) + "\n"
 
 
+def resolve_design(design: object) -> Design:
+    """``Design.default()`` for None, else ``design`` after a type check (public boundaries).
+
+    Raises
+    ------
+    TypeError
+        If ``design`` is neither None nor a :class:`Design`.
+    """
+    if design is None:
+        return Design.default()
+    if not isinstance(design, Design):
+        raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
+    return design
+
+
 def _toml_float(x: float) -> str:
     if math.isinf(x):
         return "inf" if x > 0 else "-inf"

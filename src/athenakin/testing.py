@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .chain import ups_transform
-from .design import Design
+from .design import Design, resolve_design
 from .parallel import parallel_forward_kinematics
 from .study import study_normalize
 
@@ -122,7 +122,7 @@ def random_configurations(n: int, design: Design | None = None, *,
     -------
     RandomConfigurations
     """
-    design = Design.default() if design is None else design
+    design = resolve_design(design)
     gen = np.random.default_rng(rng)
     lo = np.where(np.isfinite(design.stroke_min), design.stroke_min, [-0.5, -0.5, 0.0])
     hi = np.where(np.isfinite(design.stroke_max), design.stroke_max, [0.5, 0.5, 1.0])

@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_scalar, check_transform
-from ..design import Design
+from ..design import Design, resolve_design
 from ..errors import Reason
 from ..robot import direction_from_angles
 from ._errors import SafetyViolationError, TimingInfeasibleError
@@ -240,7 +240,7 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
     >>> bool(np.all(np.abs(traj.qd) <= 0.05 * (1 + 1e-6)))
     True
     """
-    design = _check_design(design)
+    design = resolve_design(design)
     tips = check_array(tips_e, "tips_e", (3,))
     if tips.ndim != 2 or tips.shape[0] < 2:
         raise ValueError(f"tips_e: expected shape (K, 3) with K >= 2 waypoints, "
@@ -280,7 +280,7 @@ def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_
     SafetyViolationError, TimingInfeasibleError, TypeError, ValueError
         As :func:`plan`; also ``ValueError`` for a segment between opposite directions.
     """
-    design = _check_design(design)
+    design = resolve_design(design)
     az = check_array(azimuth, "azimuth", ())
     po = check_array(polar, "polar", ())
     dp = check_array(depth, "depth", ())
@@ -297,13 +297,6 @@ def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_
     tips = dirs * dp[:, None]
     segs = [arc_segment(tips[k], tips[k + 1]) for k in range(tips.shape[0] - 1)]
     return _plan(segs, tips, T_b_e, design, **options)  # type: ignore[arg-type]
-
-
-def _check_design(design: Design | None) -> Design:
-    design = Design.default() if design is None else design
-    if not isinstance(design, Design):
-        raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
-    return design
 
 
 # --------------------------------------------------------------------------------------

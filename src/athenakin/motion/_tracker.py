@@ -33,7 +33,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_scalar, check_transform
 from ..chain import DEGENERATE_TOL, P_ZERO_TOL
-from ..design import Design
+from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..parallel import TANGENT_TOL
 from ..robot import forward_kinematics
@@ -330,9 +330,7 @@ class Tracker:
                  slot: int | None = None, jump_m: float = JUMP_M, jump_rad: float = JUMP_RAD,
                  margins: Margins | None = None,
                  raise_on: TrackFlag = TrackFlag.NONE) -> None:
-        design = Design.default() if design is None else design
-        if not isinstance(design, Design):
-            raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
+        design = resolve_design(design)
         T = check_transform(T_b_e, "T_b_e")
         if T.shape != (4, 4):
             raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")

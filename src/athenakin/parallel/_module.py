@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import wrap_angle
 from .._validation import check_array, check_transform
-from ..design import Design
+from ..design import Design, resolve_design
 from ..errors import Reason
 
 __all__ = [
@@ -200,7 +200,7 @@ def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
     TypeError, InvalidInputError
         Wrong type or trailing shape of ``q``.
     """
-    design = Design.default() if design is None else design
+    design = resolve_design(design)
     q = check_array(q, "q", (3,), allow_nonfinite=True)
     reason = _actuator_checks(q, design)
     qs = np.where(reason[..., None] == Reason.NONFINITE_INPUT, 0.0, q)
@@ -260,7 +260,7 @@ def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> P
         ``l4`` to the rail axis), ``LINK_TOO_SHORT`` (``r1 > l1`` or ``|h| > l3``),
         ``STROKE_LIMIT``, ``NONFINITE_INPUT``.
     """
-    design = Design.default() if design is None else design
+    design = resolve_design(design)
     O_s = check_array(O_s, "O_s", (3,), allow_nonfinite=True)
     finite = np.all(np.isfinite(O_s), axis=-1)
     P = np.where(finite[..., None], O_s, 0.0)
@@ -315,7 +315,7 @@ def parallel_inverse_kinematics(T_b_s: ArrayLike, design: Design | None = None, 
     ParallelIK
         Items whose orientation is not that of the module get ``NOT_IN_MODULE_IMAGE``.
     """
-    design = Design.default() if design is None else design
+    design = resolve_design(design)
     T = check_transform(T_b_s, "T_b_s", allow_nonfinite=True)
     res = parallel_ik_from_position(T[..., :3, 3], design)
     R = T[..., :3, :3]

@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array
-from ..design import Design
+from ..design import Design, resolve_design
 from ..errors import KinematicsError
 from ..robot import default_rcm_frame, q_from_instrument
 from ._geometry import RobotGeometry, robot_geometry
@@ -60,7 +60,7 @@ def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
     """
     from ..robot import REFERENCE_P
 
-    design = Design.default() if design is None else design
+    design = resolve_design(design)
     T = default_rcm_frame(design) if T_b_e is None else np.asarray(T_b_e, dtype=float)
     a = check_array(axis_e, "axis_e", (3,))
     a = a / np.linalg.norm(a)
@@ -135,7 +135,7 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
 
     from ..robot import REFERENCE_Q
 
-    design = Design.default() if design is None else design
+    design = resolve_design(design)
     T = default_rcm_frame(design) if T_b_e is None else np.asarray(T_b_e, dtype=float)
     qs = check_array(REFERENCE_Q if q is None else q, "q", (3,)).reshape(-1, 3)
     geoms = _geometries(qs, T, design, slot)

@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import rot_x, rot_z
 from ..chain._ups import rotation_u_pair
-from ..design import Design
+from ..design import Design, resolve_design
 from ..errors import Reason, error_for_reason
 from ..parallel import parallel_forward_kinematics
 from ..robot import default_rcm_frame, forward_kinematics
@@ -199,7 +199,7 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     from ..errors import InvalidInputError
     from ..robot import REFERENCE_Q
 
-    design = Design.default() if design is None else design
+    design = resolve_design(design)
     q = np.array(REFERENCE_Q if q is None else q, dtype=float)
     if q.shape != (3,):
         raise InvalidInputError(f"q: expected shape (3,), got shape {q.shape}")

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..design import Design
+from ..design import Design, resolve_design
 from ..robot import default_rcm_frame, forward_kinematics
 from ._geometry import RobotGeometry, robot_geometry
 from ._mpl import ARC_RADIUS, COLORS, FRAME_LENGTH, arc_points, slot_label
@@ -146,7 +146,7 @@ def robot_figure(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
 
     from ..robot import REFERENCE_Q
 
-    design = Design.default() if design is None else design
+    design = resolve_design(design)
     q = np.asarray(REFERENCE_Q if q is None else q, dtype=float)
     T = default_rcm_frame(design) if T_b_e is None else np.asarray(T_b_e, dtype=float)
     first = robot_geometry(q, T, design, slot=slot)

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..design import Design
+from ..design import Design, resolve_design
 from ..errors import Reason
 from ..robot import default_rcm_frame, forward_kinematics
 from ._geometry import RobotGeometry, robot_geometry
@@ -256,7 +256,7 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
 
     from ..robot import REFERENCE_Q
 
-    design = Design.default() if design is None else design
+    design = resolve_design(design)
     q = np.asarray(REFERENCE_Q if q is None else q, dtype=float)
     T = default_rcm_frame(design) if T_b_e is None else np.asarray(T_b_e, dtype=float)
     sol = forward_kinematics(q, T, design, errors="flag")

@@ -7,7 +7,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from ..design import Design
+from ..design import resolve_design
 from ..errors import Reason, error_for_reason
 
 ErrorPolicy = Literal["auto", "raise", "flag"]
@@ -16,21 +16,15 @@ _POLICIES = ("auto", "raise", "flag")
 Backend = Literal["numpy", "numba"]
 _BACKENDS = ("numpy", "numba")
 
+__all__ = ["ErrorPolicy", "Backend", "use_compiled", "resolve_design", "resolve_policy",
+           "raise_first_failure", "item_reason_from_slots"]
+
 
 def use_compiled(backend: str) -> bool:
     """True for ``backend="numba"`` (the :mod:`athenakin.fast` kernels), False for numpy."""
     if backend not in _BACKENDS:
         raise ValueError(f"backend: expected one of {_BACKENDS}, got {backend!r}")
     return backend == "numba"
-
-
-def resolve_design(design: object) -> Design:
-    """``Design.default()`` for None, else ``design`` after a type check."""
-    if design is None:
-        return Design.default()
-    if not isinstance(design, Design):
-        raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
-    return design
 
 
 def resolve_policy(errors: str, batch_shape: tuple[int, ...]) -> bool:

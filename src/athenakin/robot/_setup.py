@@ -6,7 +6,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._transforms import transform_from_rotation_translation
-from ..design import Design
+from ..design import Design, resolve_design
 from ..parallel._module import parallel_forward_kinematics
 
 __all__ = ["REFERENCE_Q", "REFERENCE_DIRECTION_B", "REFERENCE_P", "default_rcm_frame"]
@@ -39,7 +39,7 @@ def default_rcm_frame(design: Design | None = None) -> NDArray[np.float64]:
     -------
     ndarray, shape (4, 4)
     """
-    design = Design.default() if design is None else design
+    design = resolve_design(design)
     par = parallel_forward_kinematics(REFERENCE_Q, design)
     if not par.valid[0]:
         from ..errors import OutOfWorkspaceError

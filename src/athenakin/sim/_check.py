@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._transforms import wrap_angle
 from .._validation import check_array
 from ..chain import closure_residual
-from ..design import Design
+from ..design import Design, resolve_design
 from ..parallel import parallel_forward_kinematics
 from ..robot import default_rcm_frame, forward_kinematics
 from ..robot._fk import slot_index
@@ -218,7 +218,7 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
     """
     import mujoco
 
-    design = Design.default() if design is None else design
+    design = resolve_design(design)
     T = default_rcm_frame(design) if T_b_e is None else np.asarray(T_b_e, dtype=float)
     qs = check_array(q, "q", (3,))
     qs = qs.reshape(-1, 3)
@@ -321,7 +321,7 @@ def sample_reachable_q(n: int, design: Design | None = None, T_b_e: ArrayLike | 
     """
     from ..robot import REFERENCE_Q
 
-    design = Design.default() if design is None else design
+    design = resolve_design(design)
     T = default_rcm_frame(design) if T_b_e is None else np.asarray(T_b_e, dtype=float)
     home = np.asarray(REFERENCE_Q if home_q is None else home_q, dtype=float)
     rng = np.random.default_rng(rng)

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_transform
-from ..design import Design
+from ..design import Design, resolve_design
 from ..robot import default_rcm_frame
 from ._layout import JOINTS, LOOP_CLOSURES
 from ._mjcf import BAR_RADIUS, DENSITY
@@ -120,7 +120,7 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     :data:`CLOSURE_PAIRS`; the spherical joint ``u3, u4, u5`` stands for the
     passive spherical five-bar.
     """
-    design = Design.default() if design is None else design
+    design = resolve_design(design)
     T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
     d = design
     lo, hi = d.stroke_min, d.stroke_max
