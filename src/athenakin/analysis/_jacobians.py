@@ -31,6 +31,7 @@ from ..design import Design
 from ..errors import InvalidInputError
 from ..parallel import TANGENT_TOL
 from ..robot import default_rcm_frame
+from ..robot._common import Backend, use_compiled
 
 __all__ = [
     "Frame",
@@ -171,8 +172,8 @@ def _parallel_jacobian(g: dict[str, NDArray[np.float64]]) -> NDArray[np.float64]
     return J
 
 
-def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1
-                      ) -> NDArray[np.float64]:
+def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1, *,
+                      backend: Backend = "numpy") -> NDArray[np.float64]:
     """Jacobian of the parallel module, ``d O_s / d q``, in the base frame (analytic).
 
     Parameters
@@ -183,6 +184,10 @@ def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLik
         Defaults to :meth:`~athenakin.Design.default`.
     mode : {1, -1} or array-like of them
         Assembly mode (slot 0 / 1 of :func:`~athenakin.parallel.parallel_forward_kinematics`).
+    backend : {"numpy", "numba"}, keyword-only
+        ``"numba"`` runs the compiled kernel of :mod:`athenakin.fast` (extra
+        ``[fast]``; the same result to 1e-12 with the same NaN / inf entries,
+        the same errors); ``"numpy"`` (default) is this reference implementation.
 
     Returns
     -------
@@ -204,6 +209,10 @@ def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLik
     >>> J.shape
     (3, 3)
     """
+    if use_compiled(backend):
+        from ..fast import parallel_jacobian as compiled
+
+        return compiled(q, design, mode)
     _, g = _state(q, design, mode)
     return _parallel_jacobian(g)
 
@@ -229,7 +238,8 @@ def _parallel_inverse_jacobian(g: dict[str, NDArray[np.float64]]) -> NDArray[np.
     return np.stack([dx + dh, dx - dh, dq3], axis=-2)
 
 
-def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1
+def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None,
+                              mode: ArrayLike = 1, *, backend: Backend = "numpy"
                               ) -> NDArray[np.float64]:
     """Inverse Jacobian of the parallel module, ``d q / d O_s``, base frame (analytic).
 
@@ -243,17 +253,26 @@ def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None, mode: 
         Actuators of the configuration, m.
     design : Design, optional
     mode : {1, -1} or array-like of them
+    backend : {"numpy", "numba"}, keyword-only
+        ``"numba"`` runs the compiled kernel of :mod:`athenakin.fast` (extra
+        ``[fast]``; the same result to 1e-12 with the same NaN / inf entries,
+        the same errors); ``"numpy"`` (default) is this reference implementation.
 
     Returns
     -------
     ndarray, shape (..., 3, 3)
         Rows ``q1, q2, q3``; columns x, y, z of ``O_s`` in the base frame.
     """
+    if use_compiled(backend):
+        from ..fast import parallel_inverse_jacobian as compiled
+
+        return compiled(q, design, mode)
     _, g = _state(q, design, mode)
     return _parallel_inverse_jacobian(g)
 
 
-def parallel_twist_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1
+def parallel_twist_jacobian(q: ArrayLike, design: Design | None = None,
+                            mode: ArrayLike = 1, *, backend: Backend = "numpy"
                             ) -> NDArray[np.float64]:
     """Twist of the frame ``O_s`` per actuator rate, ``(v, omega)``, base frame.
 
@@ -262,6 +281,10 @@ def parallel_twist_jacobian(q: ArrayLike, design: Design | None = None, mode: Ar
     q : array-like, shape (..., 3)
     design : Design, optional
     mode : {1, -1} or array-like of them
+    backend : {"numpy", "numba"}, keyword-only
+        ``"numba"`` runs the compiled kernel of :mod:`athenakin.fast` (extra
+        ``[fast]``; the same result to 1e-12 with the same NaN / inf entries,
+        the same errors); ``"numpy"`` (default) is this reference implementation.
 
     Returns
     -------
@@ -269,6 +292,10 @@ def parallel_twist_jacobian(q: ArrayLike, design: Design | None = None, mode: Ar
         Rows 0-2: velocity of ``O_s`` (= :func:`parallel_jacobian`); rows 3-5:
         angular velocity ``(dtheta/dq, 0, 0)`` of ``R_b_s = Rx(theta)``.
     """
+    if use_compiled(backend):
+        from ..fast import parallel_twist_jacobian as compiled
+
+        return compiled(q, design, mode)
     _, g = _state(q, design, mode)
     J = np.zeros(g["h"].shape + (6, 3))
     J[..., :3, :] = _parallel_jacobian(g)
@@ -418,7 +445,8 @@ def _instrument(g: dict[str, NDArray[np.float64]], T: NDArray[np.float64], frame
 
 def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                         design: Design | None = None, *, mode: ArrayLike = 1,
-                        frame: Frame = "rcm") -> NDArray[np.float64]:
+                        frame: Frame = "rcm", backend: Backend = "numpy"
+                        ) -> NDArray[np.float64]:
     """Jacobian from actuator rates to instrument direction angles and insertion.
 
     The instrument is the line from ``O_s`` through the RCM ``c``; ``p = |c - O_s|``
@@ -438,6 +466,10 @@ def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
     mode : {1, -1} or array-like of them, keyword-only
     frame : {"rcm", "base"}, keyword-only
         Frame whose z-axis the angles are measured about (E, or the base frame).
+    backend : {"numpy", "numba"}, keyword-only
+        ``"numba"`` runs the compiled kernel of :mod:`athenakin.fast` (extra
+        ``[fast]``; the same result to 1e-12 with the same NaN / inf entries,
+        the same errors); ``"numpy"`` (default) is this reference implementation.
 
     Returns
     -------
@@ -446,6 +478,10 @@ def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
         Infinite at ``p = 0`` and on the poles of the chart (``sin(polar) = 0``;
         for ``frame="rcm"`` these are the spherical joint's ``sin u4 = 0``).
     """
+    if use_compiled(backend):
+        from ..fast import instrument_jacobian as compiled
+
+        return compiled(q, T_b_e, design, mode=mode, frame=frame)
     design, g = _state(q, design, mode)
     T = _rcm(T_b_e, design)
     _frame(frame)
@@ -467,7 +503,8 @@ def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
 
 def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                                 design: Design | None = None, *, mode: ArrayLike = 1,
-                                frame: Frame = "rcm") -> NDArray[np.float64]:
+                                frame: Frame = "rcm", backend: Backend = "numpy"
+                                ) -> NDArray[np.float64]:
     """Actuator rates per rate of ``(azimuth, polar, p)`` (inverse of :func:`instrument_jacobian`).
 
     ``dq = J_par^-1 K d(azimuth, polar, p)`` with
@@ -477,7 +514,7 @@ def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
 
     Parameters
     ----------
-    q, T_b_e, design, mode, frame
+    q, T_b_e, design, mode, frame, backend
         As in :func:`instrument_jacobian`.
 
     Returns
@@ -485,6 +522,10 @@ def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
     ndarray, shape (..., 3, 3)
         Rows ``q1, q2, q3``; columns ``azimuth``, ``polar`` (m/rad), ``p`` (m/m).
     """
+    if use_compiled(backend):
+        from ..fast import instrument_inverse_jacobian as compiled
+
+        return compiled(q, T_b_e, design, mode=mode, frame=frame)
     design, g = _state(q, design, mode)
     T = _rcm(T_b_e, design)
     _frame(frame)
@@ -513,7 +554,8 @@ def _tip_matrices(g: dict[str, NDArray[np.float64]], T: NDArray[np.float64], L: 
 
 def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                       design: Design | None = None, *, mode: ArrayLike = 1,
-                      frame: Frame = "base") -> NDArray[np.float64]:
+                      frame: Frame = "base", backend: Backend = "numpy"
+                      ) -> NDArray[np.float64]:
     """Jacobian from actuator rates to the tool-tip velocity.
 
     The tip is ``t = O_s + L d`` (``L = design.tool_length``, ``d`` the unit
@@ -529,12 +571,20 @@ def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
     mode : {1, -1} or array-like of them, keyword-only
     frame : {"base", "rcm"}, keyword-only
         Frame the tip velocity is expressed in.
+    backend : {"numpy", "numba"}, keyword-only
+        ``"numba"`` runs the compiled kernel of :mod:`athenakin.fast` (extra
+        ``[fast]``; the same result to 1e-12 with the same NaN / inf entries,
+        the same errors); ``"numpy"`` (default) is this reference implementation.
 
     Returns
     -------
     ndarray, shape (..., 3, 3)
         Rows: tip velocity components in ``frame``; columns ``q1, q2, q3`` (m/m).
     """
+    if use_compiled(backend):
+        from ..fast import tool_tip_jacobian as compiled
+
+        return compiled(q, T_b_e, design, mode=mode, frame=frame)
     design, g = _state(q, design, mode)
     T = _rcm(T_b_e, design)
     _frame(frame)
@@ -547,14 +597,15 @@ def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
 
 def tool_tip_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                               design: Design | None = None, *, mode: ArrayLike = 1,
-                              frame: Frame = "base") -> NDArray[np.float64]:
+                              frame: Frame = "base", backend: Backend = "numpy"
+                              ) -> NDArray[np.float64]:
     """Actuator rates per tool-tip velocity (inverse of :func:`tool_tip_jacobian`).
 
     ``dq = J_par^-1 N^-1 R_f dt_f`` with ``N^-1 = d d^T + p / (p - L) (I - d d^T)``.
 
     Parameters
     ----------
-    q, T_b_e, design, mode, frame
+    q, T_b_e, design, mode, frame, backend
         As in :func:`tool_tip_jacobian`.
 
     Returns
@@ -562,6 +613,10 @@ def tool_tip_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
     ndarray, shape (..., 3, 3)
         Rows ``q1, q2, q3``; columns: tip velocity components in ``frame``.
     """
+    if use_compiled(backend):
+        from ..fast import tool_tip_inverse_jacobian as compiled
+
+        return compiled(q, T_b_e, design, mode=mode, frame=frame)
     design, g = _state(q, design, mode)
     T = _rcm(T_b_e, design)
     _frame(frame)

@@ -7,9 +7,13 @@ reason codes, NaN policy and errors), compiled on first use and cached on disk
 - :func:`forward_kinematics` (all 16 slots), :func:`inverse_kinematics` (paper
   form), :func:`q_from_instrument`, :func:`q_from_tool_tip` (controller forms);
 - :func:`parallel_forward_kinematics`, :func:`parallel_ik_from_position`,
-  :func:`parallel_inverse_kinematics` (the parallel module).
+  :func:`parallel_inverse_kinematics` (the parallel module);
+- the analytic Jacobians of :mod:`athenakin.analysis`: :func:`parallel_jacobian`,
+  :func:`parallel_inverse_jacobian`, :func:`parallel_twist_jacobian`,
+  :func:`instrument_jacobian`, :func:`instrument_inverse_jacobian`,
+  :func:`tool_tip_jacobian`, :func:`tool_tip_inverse_jacobian`.
 
-Each takes ``parallel=True`` (where batches are large) to use numba's threads.
+The kinematics functions (not the Jacobians) take ``parallel=True`` to use numba's threads.
 For control loops, :class:`ControlLoop` holds a design and an RCM frame and
 answers single poses in a microsecond or two; for sweeps over millions of
 poses, :func:`sweep_fk` streams chunks in bounded memory. See
@@ -29,6 +33,15 @@ from ._api import (
     q_from_tool_tip,
 )
 from ._control import ControlLoop
+from ._jac_api import (
+    instrument_inverse_jacobian,
+    instrument_jacobian,
+    parallel_inverse_jacobian,
+    parallel_jacobian,
+    parallel_twist_jacobian,
+    tool_tip_inverse_jacobian,
+    tool_tip_jacobian,
+)
 from ._sweep import DEFAULT_CHUNK_SIZE, SweepSummary, sweep_fk
 
 __all__ = [
@@ -44,4 +57,11 @@ __all__ = [
     "parallel_forward_kinematics",
     "parallel_ik_from_position",
     "parallel_inverse_kinematics",
+    "parallel_jacobian",
+    "parallel_inverse_jacobian",
+    "parallel_twist_jacobian",
+    "instrument_jacobian",
+    "instrument_inverse_jacobian",
+    "tool_tip_jacobian",
+    "tool_tip_inverse_jacobian",
 ]

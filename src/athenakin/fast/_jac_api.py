@@ -1,0 +1,234 @@
+"""Public compiled Jacobians: the signatures, results and errors of :mod:`athenakin.analysis`.
+
+Each function takes the arguments of its reference in
+:mod:`athenakin.analysis` and returns the same array (shape, dtype, values to
+rounding, the same NaN / inf entries). Validation is optimistic, as in
+:mod:`._api`: float64 arrays of the right trailing shape, modes of +1 / -1 and
+a known ``frame`` go straight to the kernel, which also checks that the RCM
+frames are finite rigid transforms; anything else (a wrong type, shape, mode
+or frame, a non-finite or non-rigid ``T_b_e``, a design whose reference set-up
+cannot be built) is handed to the reference function, which raises the very
+same exception (or, for a false alarm, returns the very same result).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import ROTATION_TOL
+from ..analysis import _jacobians as _ref
+from ..analysis._jacobians import Frame
+from ..design import Design
+from ..parallel import TANGENT_TOL
+from ..robot import default_rcm_frame
+from . import _jac_kernels as _jk
+from ._api import _arr, _batch, _Delegate, _flat, design_params
+
+__all__ = [
+    "parallel_jacobian",
+    "parallel_inverse_jacobian",
+    "parallel_twist_jacobian",
+    "instrument_jacobian",
+    "instrument_inverse_jacobian",
+    "tool_tip_jacobian",
+    "tool_tip_inverse_jacobian",
+]
+
+_MODE_1 = (np.ones(1), ())
+_MODE_M1 = (-np.ones(1), ())
+_FRAMES: dict[int, tuple[Design | None, NDArray[np.float64]]] = {}
+_MAX_CACHE = 64
+
+
+def _modes(mode: object, bq: tuple[int, ...]) -> tuple[NDArray[np.float64], tuple[int, ...]]:
+    """Mode as a flat float64 array (1 or prod(bq) rows) and its shape, else _Delegate."""
+    if type(mode) is int:
+        if mode == 1:
+            return _MODE_1
+        if mode == -1:
+            return _MODE_M1
+        raise _Delegate
+    try:
+        m = np.asarray(mode)
+    except Exception:
+        raise _Delegate from None
+    if m.dtype.kind not in "biuf":
+        raise _Delegate
+    mf = m.astype(np.float64)
+    if not np.all((mf == 1.0) | (mf == -1.0)):
+        raise _Delegate
+    bm = mf.shape
+    if bm != bq:
+        try:
+            if np.broadcast_shapes(bq, bm) != bq:   # the reference binds mode to q's batch
+                raise _Delegate
+        except ValueError:
+            raise _Delegate from None
+    return mf, bm
+
+
+def _mode_rows(mf: NDArray[np.float64], bm: tuple[int, ...], batch: tuple[int, ...], N: int
+               ) -> NDArray[np.float64]:
+    if bm == batch:
+        return mf.reshape(N)
+    if math.prod(bm) == 1:
+        return mf.reshape(1)
+    return np.ascontiguousarray(np.broadcast_to(mf, batch)).reshape(N)
+
+
+def _default_frame(design: Design | None) -> NDArray[np.float64]:
+    """The reference set-up of a design as (1, 4, 4) (cached per design object)."""
+    hit = _FRAMES.get(id(design))
+    if hit is not None and hit[0] is design:
+        return hit[1]
+    try:
+        T = np.array(default_rcm_frame(design), dtype=np.float64).reshape(1, 4, 4)
+    except Exception:       # the reference raises it, after its own argument checks
+        raise _Delegate from None
+    T.flags.writeable = False
+    if len(_FRAMES) >= _MAX_CACHE:
+        _FRAMES.clear()
+    _FRAMES[id(design)] = (design, T)
+    return T
+
+
+def _params(design: Design | None) -> NDArray[np.float64]:
+    try:
+        return design_params(design)
+    except TypeError:
+        raise _Delegate from None
+
+
+def _parallel(q: object, design: Design | None, mode: object, kind: int) -> NDArray[np.float64]:
+    P = _params(design)
+    qa = _arr(q, (3,))
+    bq = qa.shape[:-1]
+    mf, bm = _modes(mode, bq)
+    N = math.prod(bq)
+    rows = 6 if kind == _jk.PAR_TWIST else 3
+    out = np.empty((N, rows, 3))
+    _jk.parallel_kernel(qa.reshape(N, 3), _mode_rows(mf, bm, bq, N), P, TANGENT_TOL, kind,
+                        out)
+    return out.reshape(bq + (rows, 3))
+
+
+def _robot(q: object, T_b_e: object, design: Design | None, mode: object, frame: object,
+           kind: int) -> NDArray[np.float64]:
+    if frame == "rcm":
+        rcm = True
+    elif frame == "base":
+        rcm = False
+    else:
+        raise _Delegate
+    P = _params(design)
+    qa = _arr(q, (3,))
+    bq = qa.shape[:-1]
+    mf, bm = _modes(mode, bq)
+    if T_b_e is None:
+        Ta, bT, check = _default_frame(design), (), False
+    else:
+        Ta = _arr(T_b_e, (4, 4))
+        bT, check = Ta.shape[:-2], True
+    batch = bq if bq == bT else _batch(bq, bT)
+    N = math.prod(batch)
+    out = np.empty((N, 3, 3))
+    flags = _jk.robot_kernel(_flat(qa, bq, batch, N, (3,)), _mode_rows(mf, bm, batch, N),
+                             _flat(Ta, bT, batch, N, (4, 4)), P, TANGENT_TOL, kind, rcm, check,
+                             ROTATION_TOL, out)
+    if flags:
+        raise _Delegate     # non-finite (the reference raises) or maybe non-rigid (it decides)
+    return out.reshape(batch + (3, 3))
+
+
+# --- the parallel module ------------------------------------------------------------------
+def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1
+                      ) -> NDArray[np.float64]:
+    """Compiled :func:`~athenakin.analysis.parallel_jacobian`.
+
+    Same parameters, result (shape (..., 3, 3), NaN / inf entries) and errors as
+    the reference.
+
+    Examples
+    --------
+    >>> import athenakin as ak
+    >>> J = ak.fast.parallel_jacobian([-0.10, 0.10, 0.45], ak.Design.default(), mode=1)
+    >>> J.shape
+    (3, 3)
+    """
+    try:
+        return _parallel(q, design, mode, _jk.PAR_JAC)
+    except _Delegate:
+        return _ref.parallel_jacobian(q, design, mode)
+
+
+def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1
+                              ) -> NDArray[np.float64]:
+    """Compiled :func:`~athenakin.analysis.parallel_inverse_jacobian`."""
+    try:
+        return _parallel(q, design, mode, _jk.PAR_INV)
+    except _Delegate:
+        return _ref.parallel_inverse_jacobian(q, design, mode)
+
+
+def parallel_twist_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1
+                            ) -> NDArray[np.float64]:
+    """Compiled :func:`~athenakin.analysis.parallel_twist_jacobian`."""
+    try:
+        return _parallel(q, design, mode, _jk.PAR_TWIST)
+    except _Delegate:
+        return _ref.parallel_twist_jacobian(q, design, mode)
+
+
+# --- whole robot in controller variables ----------------------------------------------------
+def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
+                        design: Design | None = None, *, mode: ArrayLike = 1,
+                        frame: Frame = "rcm") -> NDArray[np.float64]:
+    """Compiled :func:`~athenakin.analysis.instrument_jacobian`.
+
+    Same parameters, result and errors as the reference.
+
+    Examples
+    --------
+    >>> import numpy as np, athenakin as ak
+    >>> q = np.array([[-0.10, 0.10, 0.45], [-0.12, 0.08, 0.40]])
+    >>> J = ak.fast.instrument_jacobian(q, None, ak.Design.default(), mode=1)
+    >>> bool(np.allclose(J, ak.analysis.instrument_jacobian(q, mode=1), atol=1e-12))
+    True
+    """
+    try:
+        return _robot(q, T_b_e, design, mode, frame, _jk.INSTR_JAC)
+    except _Delegate:
+        return _ref.instrument_jacobian(q, T_b_e, design, mode=mode, frame=frame)
+
+
+def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
+                                design: Design | None = None, *, mode: ArrayLike = 1,
+                                frame: Frame = "rcm") -> NDArray[np.float64]:
+    """Compiled :func:`~athenakin.analysis.instrument_inverse_jacobian`."""
+    try:
+        return _robot(q, T_b_e, design, mode, frame, _jk.INSTR_INV)
+    except _Delegate:
+        return _ref.instrument_inverse_jacobian(q, T_b_e, design, mode=mode, frame=frame)
+
+
+def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
+                      design: Design | None = None, *, mode: ArrayLike = 1,
+                      frame: Frame = "base") -> NDArray[np.float64]:
+    """Compiled :func:`~athenakin.analysis.tool_tip_jacobian`."""
+    try:
+        return _robot(q, T_b_e, design, mode, frame, _jk.TIP_JAC)
+    except _Delegate:
+        return _ref.tool_tip_jacobian(q, T_b_e, design, mode=mode, frame=frame)
+
+
+def tool_tip_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
+                              design: Design | None = None, *, mode: ArrayLike = 1,
+                              frame: Frame = "base") -> NDArray[np.float64]:
+    """Compiled :func:`~athenakin.analysis.tool_tip_inverse_jacobian`."""
+    try:
+        return _robot(q, T_b_e, design, mode, frame, _jk.TIP_INV)
+    except _Delegate:
+        return _ref.tool_tip_inverse_jacobian(q, T_b_e, design, mode=mode, frame=frame)
