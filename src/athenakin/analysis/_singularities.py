@@ -30,10 +30,9 @@ from numpy.typing import ArrayLike, NDArray
 from .._transforms import invert_transform
 from .._validation import check_array
 from ..chain import ups_solutions
-from ..design import Design
+from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ._jacobians import (
-    _design,
     _parallel_inverse_jacobian,
     _parallel_jacobian,
     _rcm,
@@ -306,7 +305,7 @@ def singularities(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
     >>> rep.near_names()
     ['ab_coincide']
     """
-    design = _design(design)
+    design = resolve_design(design)
     tols = _tolerances(tol)
     q = check_array(q, "q", (3,), allow_nonfinite=True)
     _, g = _state(q, design, mode)
@@ -455,7 +454,7 @@ def singularity_loci(design: Design | None = None, *, n: int = 801,
         ``h_l3`` (``l3``), ``h_l1`` (``l1``); ``h_stroke`` (2,), the range of ``h``
         the stroke limits allow (over all ``x_M``), ``q3_stroke`` (2,).
     """
-    design = _design(design)
+    design = resolve_design(design)
     hmax = min(design.l1, design.l3)
     lo, hi = h_range if h_range is not None else (-hmax, hmax)
     h = np.linspace(lo, hi, int(n))
@@ -493,7 +492,7 @@ def singular_sets_within_strokes(design: Design | None = None, *, n: int = 4001
         the circles intersect for every allowed ``h`` with ``|h| < l3`` (no
         tangency, hence no assembly-mode change, can be reached).
     """
-    design = _design(design)
+    design = resolve_design(design)
     lo, hi = design.stroke_min, design.stroke_max
     hs = np.array([(lo[0] - hi[1]) / 2, (hi[0] - lo[1]) / 2])  # stroke range of h
     sgn = design.h_sign
@@ -577,7 +576,7 @@ def near_singular_configurations(name: str, distances: ArrayLike, design: Design
     from ..parallel import parallel_forward_kinematics
     from ..robot import REFERENCE_Q
 
-    design = _design(design)
+    design = resolve_design(design)
     e = np.asarray(distances, dtype=float).reshape(-1)
     n = e.size
     T0 = _rcm(None, design)

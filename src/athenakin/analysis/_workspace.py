@@ -33,11 +33,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_transform
-from ..design import Design
+from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..parallel import parallel_ik_from_position
 from ..robot import default_rcm_frame, direction_from_angles, q_from_instrument, q_from_tool_tip
-from ._jacobians import _design, _parallel_jacobian, _state, _tip_matrices
+from ._jacobians import _parallel_jacobian, _state, _tip_matrices
 from ._singularities import _svd
 
 __all__ = [
@@ -174,7 +174,7 @@ def actuator_map(design: Design | None = None, *, resolution: int | tuple[int, i
     -------
     ActuatorMap
     """
-    design = _design(design)
+    design = resolve_design(design)
     nh, nq = _resolution(resolution, 2)
     hm = min(design.l1, design.l3)
     h_lo, h_hi = h_range or (-hm, hm)
@@ -277,7 +277,7 @@ def point_workspace(design: Design | None = None, *, resolution: int | tuple[int
     -------
     PointWorkspace
     """
-    design = _design(design)
+    design = resolve_design(design)
     n = _resolution(resolution, 3)
     b = bounds or _default_bounds(design)
     axes = [np.linspace(lo, hi, k) for (lo, hi), k in zip(b, n, strict=True)]
@@ -376,7 +376,7 @@ def instrument_cone(T_b_e: ArrayLike | None = None, design: Design | None = None
     -------
     InstrumentCone
     """
-    design = _design(design)
+    design = resolve_design(design)
     T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
     if T.shape != (4, 4):
         raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
@@ -473,7 +473,7 @@ def tool_tip_workspace(T_b_e: ArrayLike | None = None, design: Design | None = N
     -------
     ToolTipWorkspace
     """
-    design = _design(design)
+    design = resolve_design(design)
     T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
     if T.shape != (4, 4):
         raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")

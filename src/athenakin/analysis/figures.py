@@ -13,8 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..design import Design
-from ._jacobians import _design
+from ..design import Design, resolve_design
 from ._singularities import singularity_loci
 from ._workspace import ActuatorMap, InstrumentCone, PointWorkspace, ToolTipWorkspace
 
@@ -75,7 +74,7 @@ def plot_singularity_loci(design: Design | None = None, *, am: ActuatorMap | Non
     modes meet; outer/inner tangency), ``h = 0`` (inverse singularity),
     ``|h| = l3`` (D on the rail); dashed rectangle: the stroke limits.
     """
-    design = _design(design)
+    design = resolve_design(design)
     ax = _ax(ax)
     loci = singularity_loci(design)
     if am is not None:
@@ -124,7 +123,7 @@ def plot_actuator_space_3d(design: Design | None = None, *, n: int = 41, ax: Any
     ``w = 0`` surfaces (red), the plane ``q1 = q2`` (``h = 0``, green) and the
     planes ``|q1 - q2| = 2 l3`` (purple), clipped to the stroke box (edges black).
     """
-    design = _design(design)
+    design = resolve_design(design)
     ax = _ax(ax, "3d")
     lo, hi = design.stroke_min.copy(), design.stroke_max.copy()
     lo = np.where(np.isfinite(lo), lo, [-0.5, -0.5, 0.0])
@@ -420,7 +419,7 @@ def plot_tool_tip_slice(tw: ToolTipWorkspace, *, axis: int = 2, value: float = 0
 def figure_singularities(design: Design | None = None, *, am: ActuatorMap | None = None) -> Any:
     """Singularity loci: the ``(h, q3)`` plane (both modes) and the 3-D stroke box."""
     plt = _plt()
-    design = _design(design)
+    design = resolve_design(design)
     fig = plt.figure(figsize=(15, 4.8))
     plot_singularity_loci(design, am=am, mode=1, ax=fig.add_subplot(1, 3, 1))
     plot_singularity_loci(design, am=am, mode=-1, ax=fig.add_subplot(1, 3, 2))
@@ -491,7 +490,7 @@ def figure_measure_scaling(design: Design | None = None, *, n: int = 45) -> Any:
     from ._singularities import MEASURE_OF, near_singular_configurations, singularities
 
     plt = _plt()
-    design = _design(design)
+    design = resolve_design(design)
     dist = np.logspace(-13, -1, n)
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.6), sharey=True)
     groups = (("parallel module", ("ab_coincide", "circles_tangent", "d_on_rail")),
