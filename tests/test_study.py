@@ -170,6 +170,19 @@ def test_quadric_residual_and_check_study_messages():
         check_study(np.array(["a"] * 8))
 
 
+@pytest.mark.parametrize(("call", "match"), [
+    (lambda: quaternion_from_rotation(np.eye(4)), "R: expected shape \\(\\.\\.\\., 3, 3\\)"),
+    (lambda: quaternion_from_rotation(np.full((3, 3), np.nan)), "R: expected finite"),
+    (lambda: rotation_from_quaternion([1.0, 0.0, 0.0]), "x: expected shape \\(\\.\\.\\., 4\\)"),
+    (lambda: rotation_from_quaternion([np.inf, 0.0, 0.0, 0.0]), "x: expected finite"),
+    (lambda: ak.study.quaternion_multiply([1.0, 0.0, 0.0], [1.0, 0, 0, 0]), "a: expected shape"),
+    (lambda: ak.study.quaternion_multiply([1.0, 0, 0, 0], [np.nan, 0, 0, 0]), "b: expected finite"),
+])
+def test_quaternion_helpers_reject_bad_input_naming_the_argument(call, match):
+    with pytest.raises(ak.InvalidInputError, match=match):
+        call()
+
+
 def rz(u):
     c, s = np.cos(u), np.sin(u)
     return np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])

@@ -60,8 +60,11 @@ def quaternion_multiply(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
     ndarray, shape (..., 4)
         ``a * b``.
     """
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(b, dtype=float)
+    return _qmul(check_array(a, "a", (4,)), check_array(b, "b", (4,)))
+
+
+def _qmul(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Hamilton product of checked (..., 4) arrays (NaN propagates)."""
     a0, a1, a2, a3 = np.moveaxis(a, -1, 0)
     b0, b1, b2, b3 = np.moveaxis(b, -1, 0)
     return np.stack([
@@ -93,8 +96,8 @@ def dq_multiply(X1: ArrayLike, X2: ArrayLike) -> NDArray[np.float64]:
     X2 = check_array(X2, "X2", (8,))
     x1, y1 = X1[..., :4], X1[..., 4:]
     x2, y2 = X2[..., :4], X2[..., 4:]
-    x = quaternion_multiply(x1, x2)
-    y = quaternion_multiply(x1, y2) + quaternion_multiply(y1, x2)
+    x = _qmul(x1, x2)
+    y = _qmul(x1, y2) + _qmul(y1, x2)
     return np.concatenate([x, y], axis=-1)
 
 
@@ -170,7 +173,7 @@ def dq_inverse(X: ArrayLike) -> NDArray[np.float64]:
         raise NotOnStudyQuadricError("X: quaternion part x is zero, the dual quaternion "
                                      "has no inverse")
     xi = _qconj(x) / n2
-    yi = -quaternion_multiply(quaternion_multiply(xi, y), xi)
+    yi = -_qmul(_qmul(xi, y), xi)
     return np.concatenate([xi, yi], axis=-1)
 
 
@@ -298,8 +301,16 @@ def rotation_from_quaternion(x: ArrayLike) -> NDArray[np.float64]:
     Returns
     -------
     ndarray, shape (..., 3, 3)
+
+    Raises
+    ------
+    InvalidInputError
+        If the shape is not (..., 4) or a value is not finite.
     """
-    x = np.asarray(x, dtype=float)
+    return _rotation_from_quaternion(check_array(x, "x", (4,)))
+
+
+def _rotation_from_quaternion(x: NDArray[np.float64]) -> NDArray[np.float64]:
     x0, x1, x2, x3 = np.moveaxis(x, -1, 0)
     D = x0 * x0 + x1 * x1 + x2 * x2 + x3 * x3
     R = np.stack([
@@ -322,8 +333,16 @@ def quaternion_from_rotation(R: ArrayLike) -> NDArray[np.float64]:
     -------
     ndarray, shape (..., 4)
         ``(x0, x1, x2, x3)``, scalar first, unit norm, sign not canonicalised.
+
+    Raises
+    ------
+    InvalidInputError
+        If the shape is not (..., 3, 3) or a value is not finite.
     """
-    R = np.asarray(R, dtype=float)
+    return _quaternion_from_rotation(check_array(R, "R", (3, 3)))
+
+
+def _quaternion_from_rotation(R: NDArray[np.float64]) -> NDArray[np.float64]:
     tr = R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2]
     cand = np.stack([
         np.stack([1 + tr, R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0],
@@ -361,9 +380,9 @@ def study_from_transform(T: ArrayLike) -> NDArray[np.float64]:
         If ``T`` is not a rigid transform.
     """
     T = check_transform(T, "T")
-    x = quaternion_from_rotation(T[..., :3, :3])
+    x = _quaternion_from_rotation(T[..., :3, :3])
     t = np.concatenate([np.zeros(T.shape[:-2] + (1,)), T[..., :3, 3]], axis=-1)
-    y = -0.5 * quaternion_multiply(t, x)
+    y = -0.5 * _qmul(t, x)
     return study_normalize(np.concatenate([x, y], axis=-1))
 
 
@@ -374,7 +393,7 @@ def _eq3_parts(X: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.
     p = 2 * (-x0 * y1 + x1 * y0 - x2 * y3 + x3 * y2)
     q = 2 * (-x0 * y2 + x1 * y3 + x2 * y0 - x3 * y1)
     r = 2 * (-x0 * y3 - x1 * y2 + x2 * y1 + x3 * y0)
-    return rotation_from_quaternion(X[..., :4]), np.stack([p, q, r], axis=-1) / D[..., None]
+    return _rotation_from_quaternion(X[..., :4]), np.stack([p, q, r], axis=-1) / D[..., None]
 
 
 def transform_from_study(X: ArrayLike, *, tol: float = STUDY_QUADRIC_TOL) -> NDArray[np.float64]:

@@ -37,7 +37,8 @@ from ..errors import Reason
 from ..parallel import TANGENT_TOL, ParallelSolution
 from ..robot import FKSolution
 from ..robot._common import ErrorPolicy
-from ..study import dq_conj_quaternion, dq_multiply, quaternion_multiply, study_from_transform
+from ..study import dq_conj_quaternion, dq_multiply, study_from_transform
+from ..study._study import _qmul
 
 __all__ = ["forward_kinematics_algebraic", "serial_solutions_algebraic", "serial_step_algebraic",
            "PENCIL_TOL"]
@@ -213,12 +214,12 @@ def _serial(gen, f: NDArray[np.float64], degenerate_tol: float,  # type: ignore[
     u1, u2, sin2 = (_order(neg, a, -1) for a in (u1, u2, sin2))
     x = _order(neg[..., None], x, -2)
     # 5. wrist
-    h = quaternion_multiply(x * np.array([1.0, -1.0, -1.0, -1.0]), f[..., None, None, :4])
+    h = _qmul(x * np.array([1.0, -1.0, -1.0, -1.0]), f[..., None, None, :4])
     css, cst, ctt = np.moveaxis(gen.wrist_quadratic(h), -1, 0)   # (..., 2, 2)
     wr_flat = np.maximum(np.maximum(np.abs(css), np.abs(cst)), np.abs(ctt)) <= PENCIL_TOL
     st5 = _hroots(css, cst, ctt)                                 # (..., 2, 2, 2 w, 2)
     m5c = np.stack([st5[..., 1], 0 * st5[..., 1], 0 * st5[..., 1], -st5[..., 0]], axis=-1)
-    r34 = quaternion_multiply(h[..., None, :], m5c)              # (..., 2, 2, 2, 4)
+    r34 = _qmul(h[..., None, :], m5c)              # (..., 2, 2, 2, 4)
     st3, st4 = _segre_inverse(r34)
     u3, _ = _angle(st3)
     u4, sin4 = _angle(st4)
