@@ -111,8 +111,22 @@ def test_bad_slot(slot):
 
 
 def test_bad_q_shape():
-    with pytest.raises(ak.InvalidInputError, match=r"q: expected shape \(3,\)"):
+    with pytest.raises(ak.InvalidInputError,
+                       match=r"q: expected shape \(\.\.\., 3\), got shape \(2,\)"):
         robot_geometry([0.1, 0.2])
+    with pytest.raises(ak.InvalidInputError, match=r"q: expected shape \(3,\), got shape \(2, 3\)"):
+        robot_geometry(np.zeros((2, 3)))
+
+
+@pytest.mark.parametrize(("T", "match"), [
+    (np.full((4, 4), np.nan), "T_b_e: expected finite"),
+    (np.eye(3), r"T_b_e: expected shape \(\.\.\., 4, 4\)"),
+    (np.stack([np.eye(4)] * 2), r"T_b_e: expected shape \(4, 4\), got shape \(2, 4, 4\)"),
+    (np.diag([1.0, 1.0, -1.0, 1.0]), "T_b_e: expected a rigid transform"),
+])
+def test_bad_rcm_frame_is_named(T, match):
+    with pytest.raises(ak.InvalidInputError, match=match):
+        robot_geometry(None, T)
 
 
 def test_out_of_stroke_raises_named_error():

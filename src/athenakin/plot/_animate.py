@@ -11,7 +11,8 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import check_array
 from ..design import Design, resolve_design
 from ..errors import KinematicsError
-from ..robot import default_rcm_frame, q_from_instrument
+from ..robot import q_from_instrument
+from ..robot._setup import resolve_rcm_frame
 from ._geometry import RobotGeometry, robot_geometry
 from ._mpl import VIEW, _cube_limits, plot_robot
 
@@ -61,7 +62,7 @@ def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
     from ..robot import REFERENCE_P
 
     design = resolve_design(design)
-    T = default_rcm_frame(design) if T_b_e is None else np.asarray(T_b_e, dtype=float)
+    T = resolve_rcm_frame(T_b_e, design)
     a = check_array(axis_e, "axis_e", (3,))
     a = a / np.linalg.norm(a)
     helper = np.array([0.0, 0.0, 1.0]) if abs(a[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
@@ -136,7 +137,7 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
     from ..robot import REFERENCE_Q
 
     design = resolve_design(design)
-    T = default_rcm_frame(design) if T_b_e is None else np.asarray(T_b_e, dtype=float)
+    T = resolve_rcm_frame(T_b_e, design)
     qs = check_array(REFERENCE_Q if q is None else q, "q", (3,)).reshape(-1, 3)
     geoms = _geometries(qs, T, design, slot)
     los, his = zip(*(g.bounds() for g in geoms), strict=True)

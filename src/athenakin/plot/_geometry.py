@@ -16,11 +16,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import rot_x, rot_z
+from .._validation import check_array
 from ..chain._ups import rotation_u_pair
 from ..design import Design, resolve_design
 from ..errors import Reason, error_for_reason
 from ..parallel import parallel_forward_kinematics
-from ..robot import default_rcm_frame, forward_kinematics
+from ..robot import forward_kinematics
+from ..robot._setup import resolve_rcm_frame
 
 __all__ = ["RobotGeometry", "robot_geometry", "circle_points", "N_CIRCLE", "ARC_MARGIN"]
 
@@ -200,13 +202,13 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     from ..robot import REFERENCE_Q
 
     design = resolve_design(design)
-    q = np.array(REFERENCE_Q if q is None else q, dtype=float)
+    q = check_array(REFERENCE_Q if q is None else q, "q", (3,)).copy()
     if q.shape != (3,):
         raise InvalidInputError(f"q: expected shape (3,), got shape {q.shape}")
     if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 16:
         raise InvalidInputError(f"slot: expected an integer in 0..15, got {slot!r}")
     slot = int(slot)
-    T = default_rcm_frame(design) if T_b_e is None else np.asarray(T_b_e, dtype=float)
+    T = resolve_rcm_frame(T_b_e, design)
     sol = forward_kinematics(q, T, design, errors="flag")
     if not sol.valid[slot]:
         why = Reason(int(sol.reason[slot])).name

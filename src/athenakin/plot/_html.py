@@ -19,8 +19,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._validation import check_array
 from ..design import Design, resolve_design
-from ..robot import default_rcm_frame, forward_kinematics
+from ..robot import forward_kinematics
+from ..robot._setup import resolve_rcm_frame
 from ._geometry import RobotGeometry, robot_geometry
 from ._mpl import ARC_RADIUS, COLORS, FRAME_LENGTH, arc_points, slot_label
 
@@ -147,8 +149,8 @@ def robot_figure(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     from ..robot import REFERENCE_Q
 
     design = resolve_design(design)
-    q = np.asarray(REFERENCE_Q if q is None else q, dtype=float)
-    T = default_rcm_frame(design) if T_b_e is None else np.asarray(T_b_e, dtype=float)
+    q = check_array(REFERENCE_Q if q is None else q, "q", (3,))
+    T = resolve_rcm_frame(T_b_e, design)
     first = robot_geometry(q, T, design, slot=slot)
     if all_slots:
         sol = forward_kinematics(q, T, design, errors="flag")

@@ -12,9 +12,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._validation import check_array
 from ..design import Design, resolve_design
 from ..errors import Reason
-from ..robot import default_rcm_frame, forward_kinematics
+from ..robot import forward_kinematics
+from ..robot._setup import resolve_rcm_frame
 from ._geometry import RobotGeometry, robot_geometry
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -257,8 +259,8 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
     from ..robot import REFERENCE_Q
 
     design = resolve_design(design)
-    q = np.asarray(REFERENCE_Q if q is None else q, dtype=float)
-    T = default_rcm_frame(design) if T_b_e is None else np.asarray(T_b_e, dtype=float)
+    q = check_array(REFERENCE_Q if q is None else q, "q", (3,))
+    T = resolve_rcm_frame(T_b_e, design)
     sol = forward_kinematics(q, T, design, errors="flag")
     geoms: dict[int, RobotGeometry] = {}
     for k in map(int, np.flatnonzero(sol.valid)):

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import transform_from_rotation_translation
+from .._validation import check_transform
 from ..design import Design, resolve_design
+from ..errors import InvalidInputError
 from ..parallel._module import parallel_forward_kinematics
 
 __all__ = ["REFERENCE_Q", "REFERENCE_DIRECTION_B", "REFERENCE_P", "default_rcm_frame"]
@@ -53,3 +55,22 @@ def default_rcm_frame(design: Design | None = None) -> NDArray[np.float64]:
     y_e = np.cross(z_e, x_e)
     R = np.stack([x_e, y_e, z_e], axis=-1)
     return transform_from_rotation_translation(R, par.O_s[0] + REFERENCE_P * x_e)
+
+
+def resolve_rcm_frame(T_b_e: ArrayLike | None, design: Design, *, single: bool = True
+                      ) -> NDArray[np.float64]:
+    """``T_b_e`` checked as a rigid transform, or :func:`default_rcm_frame` for None.
+
+    With ``single`` (views, exports, simulation) the shape must be exactly (4, 4).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``T_b_e`` is not a finite rigid transform (of shape (4, 4) with ``single``).
+    """
+    if T_b_e is None:
+        return default_rcm_frame(design)
+    T = check_transform(T_b_e, "T_b_e")
+    if single and T.shape != (4, 4):
+        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got shape {T.shape}")
+    return T

@@ -21,9 +21,11 @@ from .._transforms import wrap_angle
 from .._validation import check_array
 from ..chain import closure_residual
 from ..design import Design, resolve_design
+from ..errors import InvalidInputError
 from ..parallel import parallel_forward_kinematics
-from ..robot import default_rcm_frame, forward_kinematics
+from ..robot import forward_kinematics
 from ..robot._fk import slot_index
+from ..robot._setup import resolve_rcm_frame
 from ._layout import ACTUATED, JOINTS, mechanism_joint_values
 from ._mjcf import mjcf_from_design
 
@@ -219,7 +221,7 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
     import mujoco
 
     design = resolve_design(design)
-    T = default_rcm_frame(design) if T_b_e is None else np.asarray(T_b_e, dtype=float)
+    T = resolve_rcm_frame(T_b_e, design)
     qs = check_array(q, "q", (3,))
     qs = qs.reshape(-1, 3)
     rng = np.random.default_rng(rng)
@@ -316,14 +318,20 @@ def sample_reachable_q(n: int, design: Design | None = None, T_b_e: ArrayLike | 
 
     Raises
     ------
+    TypeError, InvalidInputError
+        ``n`` is not a non-negative integer.
     RuntimeError
         Fewer than ``n`` targets found within ``max_tries`` rounds.
     """
     from ..robot import REFERENCE_Q
 
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
+        raise TypeError(f"n: expected an int, got {type(n).__name__}")
+    if n < 0:
+        raise InvalidInputError(f"n: expected a non-negative int, got {n}")
     design = resolve_design(design)
-    T = default_rcm_frame(design) if T_b_e is None else np.asarray(T_b_e, dtype=float)
-    home = np.asarray(REFERENCE_Q if home_q is None else home_q, dtype=float)
+    T = resolve_rcm_frame(T_b_e, design)
+    home = check_array(REFERENCE_Q if home_q is None else home_q, "home_q", (3,))
     rng = np.random.default_rng(rng)
     t = np.linspace(0.0, 1.0, n_path)
     found: list[NDArray[np.float64]] = []

@@ -19,9 +19,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_transform
 from ..design import Design, resolve_design
-from ..robot import default_rcm_frame
+from ..robot._setup import resolve_rcm_frame
 from ._layout import JOINTS, LOOP_CLOSURES
 from ._mjcf import BAR_RADIUS, DENSITY
 
@@ -121,7 +120,7 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     passive spherical five-bar.
     """
     design = resolve_design(design)
-    T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
+    T = resolve_rcm_frame(T_b_e, design)
     d = design
     lo, hi = d.stroke_min, d.stroke_max
     robot = ET.Element("robot", {"name": robot_name})
