@@ -309,10 +309,10 @@ def test_ik_near_its_singular_set(eps):
     u = np.array([np.pi / 2 - eps, 0.8, 0.3, 1.0, 0.5])
     T = par.T_b_s[0] @ ak.chain.ups_transform(0.2, u)
     q, passive = ak.inverse_kinematics(T, u[2:], D, errors="flag")
-    if passive.valid:
-        assert passive.residual < 1e-11
-        # accuracy degrades like eps_mach / eps
-        assert np.abs(q - ak.robot.REFERENCE_Q).max() < 1e-14 / eps + 1e-12
+    assert passive.valid and passive.reason == 0       # eps > IK_SINGULAR_TOL: still solved
+    assert passive.residual < 1e-11
+    # accuracy degrades like eps_mach / eps
+    assert np.abs(q - ak.robot.REFERENCE_Q).max() < 1e-14 / eps + 1e-12
 
 
 def test_ik_singular_exactly_raises():
