@@ -79,3 +79,18 @@ def test_demo_prints_16_and_ik_recovers(capsys):
     code, out, _ = run(capsys, "demo", "--json")
     data = json.loads(out)
     assert len(data["ik"]) == 16 and all(r["valid"] for r in data["ik"])
+
+
+def test_readme_fk_and_ik_command_lines_succeed(capsys):
+    """The ``fk`` / ``ik`` lines of the README's "Command line" block run as printed."""
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    block = text.split("## Command line", 1)[1].split("```bash", 1)[1].split("```", 1)[0]
+    lines = [ln.split("#", 1)[0].split() for ln in block.splitlines()]
+    commands = [ln[1:] for ln in lines if ln[:1] == ["athenakin"] and ln[1] in ("fk", "ik")]
+    assert len(commands) == 4
+    for argv in commands:
+        code, out, err = run(capsys, *argv)
+        assert code == 0, (argv, err)
+        assert "q = (" in out or "16 solutions" in out, argv
