@@ -334,6 +334,7 @@ def test_default_design_findings():
     assert f["circles_tangent"]["reachable"]      # the modes can meet within the strokes
     lo, hi = f["mode_safe_q3"]["value"]
     assert DESIGN.q_min[2] < lo < hi < DESIGN.q_max[2]
+    assert (round(lo, 4), round(hi, 4)) == (0.2546, 0.5781)     # quoted in README, docs
     # check the safe interval: on a grid of allowed h the circles intersect with margin
     h = np.linspace(-DESIGN.l3 + 1e-9, 0.0, 2001)
     for q3 in (lo + 1e-6, hi - 1e-6):
