@@ -80,7 +80,7 @@ def _mode_rows(mf: NDArray[np.float64], bm: tuple[int, ...], batch: tuple[int, .
 
 
 def _default_frame(design: Design | None) -> NDArray[np.float64]:
-    """The reference set-up of a design as (1, 4, 4) (cached per design object)."""
+    """The reference set-up of a design as (1, 4, 4) (cached per design object; never exposed)."""
     hit = _FRAMES.get(id(design))
     if hit is not None and hit[0] is design:
         return hit[1]
@@ -88,7 +88,6 @@ def _default_frame(design: Design | None) -> NDArray[np.float64]:
         T = np.array(default_rcm_frame(design), dtype=np.float64).reshape(1, 4, 4)
     except Exception:       # the reference raises it, after its own argument checks
         raise _Delegate from None
-    T.flags.writeable = False
     if len(_FRAMES) >= _MAX_CACHE:
         _FRAMES.clear()
     _FRAMES[id(design)] = (design, T)

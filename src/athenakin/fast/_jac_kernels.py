@@ -13,18 +13,25 @@ array by array. Two differences change no result beyond rounding:
   numpy's), not from the C library, so that the item loop has no library call.
 
 The batch kernels take inputs with either ``N`` rows or a single row (which is
-broadcast) and write ``out`` of shape ``(N, rows, 3)``; the item loop is
-unswitched by hand (one loop per kind) so that LLVM sees straight-line code.
+broadcast) and write ``out`` of shape ``(N, rows, 3)``. As in the FK kernels, the
+items are walked in chunks of :data:`CHUNK`: a pass gathers the inputs into the
+rows of a flat scratch, a straight-line pass per kind (helpers inlined in numba
+IR, loops unswitched by hand, selects instead of branches) computes, and LLVM
+vectorises it (AVX-512 divisions and square roots; an LLVM call left in the loop,
+or an input indexed through a broadcast select, kept it scalar and 4-5 x
+slower), a last pass scatters the results. The rigidity test of the frames runs
+in the same chunks, vectorised too.
 """
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
-from ._fk_kernels import FLAG_NONRIGID, FLAG_T_NONFINITE, rigid_flags
-from ._scalar import atan2, hypot, sincos
+from ._fk_kernels import FLAG_NONRIGID, FLAG_T_NONFINITE
+from ._scalar import atan2, finite_sum, hypot, sincos
 
 __all__ = ["PAR_JAC", "PAR_INV", "PAR_TWIST", "INSTR_JAC", "INSTR_INV", "TIP_JAC", "TIP_INV",
            "parallel_kernel", "robot_kernel", "FLAG_NONRIGID", "FLAG_T_NONFINITE"]
@@ -34,11 +41,22 @@ PAR_JAC, PAR_INV, PAR_TWIST = 0, 1, 2
 #: Kinds of :func:`robot_kernel`: instrument angles + insertion and tool tip, each and inverse.
 INSTR_JAC, INSTR_INV, TIP_JAC, TIP_INV = 0, 1, 2, 3
 
+#: Items per chunk: a pass gathers the inputs into rows of a scratch, a straight-line pass
+#: computes (LLVM vectorises it), a last pass scatters the results into ``out``.
+CHUNK = 64
+# Rows of the gathered input: q (3), mode (1), R of T_b_e row-major (9), its translation (3),
+# its last row (4).
+_GQ, _GM, _GR, _GT, _GL = 0, 3, 4, 13, 16
+NG = 20
+# Scratch arrays are flat, row-major (row * CHUNK + column), CHUNK a compile-time constant.
+
 _OPTS = dict(error_model="numpy", cache=True)
+# helpers are inlined in numba IR: an LLVM call left in the item loop stops vectorisation
+_INLINE = dict(error_model="numpy", cache=True, inline="always")
 
 
 # --- the parallel module (parallel_state, _dphi_dq, _parallel_jacobian, _inverse) --------
-@njit(**_OPTS)
+@njit(**_INLINE)
 def _module(q1, q2, q3, m, P, ttol):
     """``parallel_state`` of one item: ``h, x_M, r1, s3, m_y, y, z, ey, ez, D``."""
     l1, l2, l3, l5 = P[0], P[1], P[2], P[4]
@@ -60,7 +78,7 @@ def _module(q1, q2, q3, m, P, ttol):
     return h, 0.5 * (q1 + q2), r1, s3, m_y, y, z, ey, ez, -m * a * d
 
 
-@njit(**_OPTS)
+@njit(**_INLINE)
 def _dphi(h, r1, s3, m_y, q3, ey, ez, D, l5):
     """``d phi / d q`` (3 values; ``_dphi_dq``)."""
     dr1_dh = -h / r1
@@ -71,7 +89,7 @@ def _dphi(h, r1, s3, m_y, q3, ey, ez, D, l5):
     return 0.5 * dphi_dh, -0.5 * dphi_dh, -q3 / D
 
 
-@njit(**_OPTS)
+@njit(**_INLINE)
 def _pjac(q1, q2, q3, m, P, ttol):
     """``d O_s / d q`` (row-major 9-tuple) and ``d phi / d q`` of one item."""
     l4, l5 = P[3], P[4]
@@ -87,7 +105,7 @@ def _pjac(q1, q2, q3, m, P, ttol):
     return J, (f0, f1, f2)
 
 
-@njit(**_OPTS)
+@njit(**_INLINE)
 def _pinv(h, r1, s3, m_y, y, z, ey, ez, q3, l4, l5):
     """``d q / d O_s`` (row-major 9-tuple; ``_parallel_inverse_jacobian``)."""
     rho = r1 + l4
@@ -106,7 +124,7 @@ def _pinv(h, r1, s3, m_y, y, z, ey, ez, q3, l4, l5):
             (ym * (y2 - m2) + zl * z2) / q3)
 
 
-@njit(**_OPTS)
+@njit(**_INLINE)
 def _mm(A, B):
     """3 x 3 product of row-major 9-tuples, sums in index order."""
     return (A[0] * B[0] + A[1] * B[3] + A[2] * B[6], A[0] * B[1] + A[1] * B[4] + A[2] * B[7],
@@ -117,75 +135,28 @@ def _mm(A, B):
             A[6] * B[2] + A[7] * B[5] + A[8] * B[8])
 
 
-@njit(**_OPTS)
+@njit(**_INLINE)
 def _tr(A):
     return (A[0], A[3], A[6], A[1], A[4], A[7], A[2], A[5], A[8])
 
 
-@njit(**_OPTS)
-def _store(out, i, J):
-    out[i, 0, 0], out[i, 0, 1], out[i, 0, 2] = J[0], J[1], J[2]
-    out[i, 1, 0], out[i, 1, 1], out[i, 1, 2] = J[3], J[4], J[5]
-    out[i, 2, 0], out[i, 2, 1], out[i, 2, 2] = J[6], J[7], J[8]
-
-
-@njit(**_OPTS)
-def parallel_kernel(q, m, P, ttol, kind, out):
-    """Jacobians of the parallel module for ``N = out.shape[0]`` items.
-
-    Parameters
-    ----------
-    q : (N or 1, 3) float64
-    m : (N or 1,) float64, +1 or -1
-    P : (13,) float64, :func:`athenakin.fast.design_params`
-    ttol : float, :data:`athenakin.parallel.TANGENT_TOL`
-    kind : int, :data:`PAR_JAC`, :data:`PAR_INV` or :data:`PAR_TWIST`
-    out : (N, 3, 3) or, for ``PAR_TWIST``, (N, 6, 3) float64
-    """
-    n = out.shape[0]
-    bq, bm = q.shape[0] > 1, m.shape[0] > 1
-    if kind == PAR_JAC:
-        for i in range(n):
-            iq, im = i if bq else 0, i if bm else 0
-            J, _ = _pjac(q[iq, 0], q[iq, 1], q[iq, 2], m[im], P, ttol)
-            _store(out, i, J)
-    elif kind == PAR_INV:
-        l4, l5 = P[3], P[4]
-        for i in range(n):
-            iq, im = i if bq else 0, i if bm else 0
-            q3 = q[iq, 2]
-            h, _, r1, s3, m_y, y, z, ey, ez, _ = _module(q[iq, 0], q[iq, 1], q3, m[im], P, ttol)
-            _store(out, i, _pinv(h, r1, s3, m_y, y, z, ey, ez, q3, l4, l5))
-    else:
-        for i in range(n):
-            iq, im = i if bq else 0, i if bm else 0
-            J, f = _pjac(q[iq, 0], q[iq, 1], q[iq, 2], m[im], P, ttol)
-            _store(out, i, J)
-            out[i, 3, 0], out[i, 3, 1], out[i, 3, 2] = f[0], f[1], f[2]
-            for r in range(4, 6):
-                for c in range(3):
-                    out[i, r, c] = 0.0
-
-
 # --- whole robot in controller variables (_instrument, _tip_matrices and the four Jacobians) --
-@njit(**_OPTS)
-def _line(T, it, rcm, xm, r1, ey, ez, l4):
-    """``_instrument``: unit direction ``d_b``, insertion ``p``, ``R_f`` (9-tuple), ``d_f``."""
+_EYE = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+
+
+@njit(**_INLINE)
+def _line(R, c, xm, r1, ey, ez, l4):
+    """``_instrument``: unit direction ``d_b``, insertion ``p`` and ``d_f = R_f^T d_b``."""
     rho = r1 + l4
-    r0, r1_, r2 = T[it, 0, 3] - xm, T[it, 1, 3] - rho * ey, T[it, 2, 3] - rho * ez
+    r0, r1_, r2 = c[0] - xm, c[1] - rho * ey, c[2] - rho * ez
     p = math.sqrt(r0 * r0 + r1_ * r1_ + r2 * r2)
     d = (r0 / p, r1_ / p, r2 / p)
-    if rcm:
-        R = (T[it, 0, 0], T[it, 0, 1], T[it, 0, 2], T[it, 1, 0], T[it, 1, 1], T[it, 1, 2],
-             T[it, 2, 0], T[it, 2, 1], T[it, 2, 2])
-    else:
-        R = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
     df = (R[0] * d[0] + R[3] * d[1] + R[6] * d[2], R[1] * d[0] + R[4] * d[1] + R[7] * d[2],
           R[2] * d[0] + R[5] * d[1] + R[8] * d[2])
-    return d, p, R, df
+    return d, p, df
 
 
-@njit(**_OPTS)
+@njit(**_INLINE)
 def _instrument_jac(d, p, R, df, Jp):
     """``instrument_jacobian``: ``K @ J_par``."""
     dx, dy, dz = df
@@ -203,7 +174,7 @@ def _instrument_jac(d, p, R, df, Jp):
     return _mm(K, Jp)
 
 
-@njit(**_OPTS)
+@njit(**_INLINE)
 def _instrument_inv(d, p, R, df, Pinv):
     """``instrument_inverse_jacobian``: ``J_par^-1 @ K``."""
     az = atan2(df[1], df[0])
@@ -221,7 +192,7 @@ def _instrument_inv(d, p, R, df, Pinv):
     return _mm(Pinv, K)
 
 
-@njit(**_OPTS)
+@njit(**_INLINE)
 def _tip(d, p, L, inverse):
     """``_tip_matrices``: ``N`` or, with ``inverse``, ``N^-1`` (row-major 9-tuple)."""
     f = p / (p - L) if inverse else 1.0 - L / p
@@ -232,32 +203,161 @@ def _tip(d, p, L, inverse):
             o[6] + f * (0.0 - o[6]), o[7] + f * (0.0 - o[7]), o[8] + f * (1.0 - o[8]))
 
 
+# --- chunked loops: gather into rows, compute (vectorised), scatter ------------------------
+@njit(**_INLINE)
+def _gather(q, m, c0, nn, G):
+    """Copy q and the mode of items c0..c0+nn-1 into rows of ``G`` (one row: broadcast)."""
+    bq, bm = q.shape[0] > 1, m.shape[0] > 1
+    for ii in range(nn):
+        i = c0 + ii
+        iq, im = i if bq else 0, i if bm else 0
+        G[(_GQ) * CHUNK + ii] = q[iq, 0]
+        G[(_GQ + 1) * CHUNK + ii] = q[iq, 1]
+        G[(_GQ + 2) * CHUNK + ii] = q[iq, 2]
+        G[(_GM) * CHUNK + ii] = m[im]
+
+
+@njit(**_INLINE)
+def _gather_T(T, c0, nn, G):
+    """Copy the rotation and translation of the frames of items c0..c0+nn-1 into ``G``."""
+    bt = T.shape[0] > 1
+    for ii in range(nn):
+        it = c0 + ii if bt else 0
+        for r in range(3):
+            for c in range(3):
+                G[(_GR + 3 * r + c) * CHUNK + ii] = T[it, r, c]
+            G[(_GT + r) * CHUNK + ii] = T[it, r, 3]
+        for c in range(4):
+            G[(_GL + c) * CHUNK + ii] = T[it, 3, c]
+
+
+@njit(**_INLINE)
+def _rigid_counts(G, nn, lim):
+    """Numbers of gathered frames that are not finite, and that are not rigid within ``lim``.
+
+    The test of :func:`._fk_kernels.rigid_flags` (``|R^T R - I|``, ``|det R - 1|`` and
+    the last row's deviation), branch-free so that the loop vectorises.
+    """
+    n_nonfinite = 0
+    n_nonrigid = 0
+    for ii in range(nn):
+        R0, R1, R2 = G[(_GR) * CHUNK + ii], G[(_GR + 1) * CHUNK + ii], G[(_GR + 2) * CHUNK + ii]
+        R3, R4, R5 = G[(_GR + 3) * CHUNK + ii], G[(_GR + 4) * CHUNK + ii], G[(_GR + 5) * CHUNK + ii]
+        R6, R7, R8 = G[(_GR + 6) * CHUNK + ii], G[(_GR + 7) * CHUNK + ii], G[(_GR + 8) * CHUNK + ii]
+        L0, L1, L2, L3 = (G[(_GL) * CHUNK + ii], G[(_GL + 1) * CHUNK + ii],
+                          G[(_GL + 2) * CHUNK + ii], G[(_GL + 3) * CHUNK + ii])
+        t0, t1, t2 = G[(_GT) * CHUNK + ii], G[(_GT + 1) * CHUNK + ii], G[(_GT + 2) * CHUNK + ii]
+        fin = (finite_sum(R0) + finite_sum(R1) + finite_sum(R2) + finite_sum(R3)
+               + finite_sum(R4) + finite_sum(R5) + finite_sum(R6) + finite_sum(R7)
+               + finite_sum(R8) + finite_sum(L0) + finite_sum(L1) + finite_sum(L2)
+               + finite_sum(L3) + finite_sum(t0) + finite_sum(t1) + finite_sum(t2)) == 0.0
+        e = (abs(R0 * R0 + R3 * R3 + R6 * R6 - 1.0), abs(R1 * R1 + R4 * R4 + R7 * R7 - 1.0),
+             abs(R2 * R2 + R5 * R5 + R8 * R8 - 1.0), abs(R0 * R1 + R3 * R4 + R6 * R7),
+             abs(R0 * R2 + R3 * R5 + R6 * R8), abs(R1 * R2 + R4 * R5 + R7 * R8),
+             abs(R0 * (R4 * R8 - R5 * R7) - R1 * (R3 * R8 - R5 * R6)
+                 + R2 * (R3 * R7 - R4 * R6) - 1.0),
+             abs(L0), abs(L1), abs(L2), abs(L3 - 1.0))
+        ok = ((e[0] <= lim) & (e[1] <= lim) & (e[2] <= lim) & (e[3] <= lim) & (e[4] <= lim)
+              & (e[5] <= lim) & (e[6] <= lim) & (e[7] <= lim) & (e[8] <= lim) & (e[9] <= lim)
+              & (e[10] <= lim))
+        n_nonfinite += 0 if fin else 1
+        n_nonrigid += 1 if fin and not ok else 0
+    return n_nonfinite, n_nonrigid
+
+
+@njit(**_INLINE)
+def _put(S, ii, J):
+    for k in range(len(J)):
+        S[k * CHUNK + ii] = J[k]
+
+
+@njit(**_INLINE)
+def _scatter(S, c0, nn, rows, out):
+    for ii in range(nn):
+        for k in range(rows * 3):
+            out[c0 + ii, k // 3, k % 3] = S[k * CHUNK + ii]
+
+
+@njit(**_INLINE)
+def _q(G, ii):
+    return (G[(_GQ) * CHUNK + ii], G[(_GQ + 1) * CHUNK + ii], G[(_GQ + 2) * CHUNK + ii],
+            G[(_GM) * CHUNK + ii])
+
+
 @njit(**_OPTS)
-def _robot_item(q, m, T, P, ttol, kind, rcm, iq, im, it):
-    q1, q2, q3, mm = q[iq, 0], q[iq, 1], q[iq, 2], m[im]
+def parallel_kernel(q, m, P, ttol, kind, out):
+    """Jacobians of the parallel module for ``N = out.shape[0]`` items.
+
+    Parameters
+    ----------
+    q : (N or 1, 3) float64
+    m : (N or 1,) float64, +1 or -1
+    P : (13,) float64, :func:`athenakin.fast.design_params`
+    ttol : float, :data:`athenakin.parallel.TANGENT_TOL`
+    kind : int, :data:`PAR_JAC`, :data:`PAR_INV` or :data:`PAR_TWIST`
+    out : (N, 3, 3) or, for ``PAR_TWIST``, (N, 6, 3) float64
+    """
+    n = out.shape[0]
     l4, l5 = P[3], P[4]
-    h, xm, r1, s3, m_y, y, z, ey, ez, _ = _module(q1, q2, q3, mm, P, ttol)
+    G = np.empty(NG * CHUNK)
+    S = np.empty(12 * CHUNK)
+    for c0 in range(0, n, CHUNK):
+        nn = min(CHUNK, n - c0)
+        _gather(q, m, c0, nn, G)
+        if kind == PAR_INV:
+            for ii in range(nn):
+                q1, q2, q3, mm = _q(G, ii)
+                h, _, r1, s3, m_y, y, z, ey, ez, _ = _module(q1, q2, q3, mm, P, ttol)
+                _put(S, ii, _pinv(h, r1, s3, m_y, y, z, ey, ez, q3, l4, l5))
+            _scatter(S, c0, nn, 3, out)
+            continue
+        for ii in range(nn):
+            q1, q2, q3, mm = _q(G, ii)
+            J, f = _pjac(q1, q2, q3, mm, P, ttol)
+            _put(S, ii, J)
+            S[9 * CHUNK + ii], S[10 * CHUNK + ii], S[11 * CHUNK + ii] = f[0], f[1], f[2]
+        if kind == PAR_JAC:
+            _scatter(S, c0, nn, 3, out)
+            continue
+        _scatter(S, c0, nn, 4, out)
+        for ii in range(nn):
+            for k in range(6):
+                out[c0 + ii, 4 + k // 3, k % 3] = 0.0
+
+
+@njit(**_INLINE)
+def _robot_item(G, ii, P, ttol, kind, rcm):
+    """One item of :func:`robot_kernel` from the gathered rows (straight-line code)."""
+    q1, q2, q3, m = _q(G, ii)
+    l4, l5 = P[3], P[4]
+    h, xm, r1, s3, m_y, y, z, ey, ez, _ = _module(q1, q2, q3, m, P, ttol)
     if kind == INSTR_JAC or kind == TIP_JAC:
-        Jp, _ = _pjac(q1, q2, q3, mm, P, ttol)
+        Jp, _ = _pjac(q1, q2, q3, m, P, ttol)
     else:
         Jp = _pinv(h, r1, s3, m_y, y, z, ey, ez, q3, l4, l5)
+    Rt = (G[(_GR) * CHUNK + ii], G[(_GR + 1) * CHUNK + ii], G[(_GR + 2) * CHUNK + ii],
+          G[(_GR + 3) * CHUNK + ii], G[(_GR + 4) * CHUNK + ii], G[(_GR + 5) * CHUNK + ii],
+          G[(_GR + 6) * CHUNK + ii], G[(_GR + 7) * CHUNK + ii], G[(_GR + 8) * CHUNK + ii])
+    c = (G[(_GT) * CHUNK + ii], G[(_GT + 1) * CHUNK + ii], G[(_GT + 2) * CHUNK + ii])
     if kind == INSTR_JAC or kind == INSTR_INV:
-        d, p, R, df = _line(T, it, rcm, xm, r1, ey, ez, l4)
+        # R_f: the frame's rotation, or the identity (multiplied as the reference does)
+        R = (Rt[0] if rcm else 1.0, Rt[1] if rcm else 0.0, Rt[2] if rcm else 0.0,
+             Rt[3] if rcm else 0.0, Rt[4] if rcm else 1.0, Rt[5] if rcm else 0.0,
+             Rt[6] if rcm else 0.0, Rt[7] if rcm else 0.0, Rt[8] if rcm else 1.0)
+        d, p, df = _line(R, c, xm, r1, ey, ez, l4)
         if kind == INSTR_JAC:
             return _instrument_jac(d, p, R, df, Jp)
         return _instrument_inv(d, p, R, df, Jp)
-    d, p, _, _ = _line(T, it, False, xm, r1, ey, ez, l4)
+    d, p, _ = _line(_EYE, c, xm, r1, ey, ez, l4)
     if kind == TIP_JAC:
         J = _mm(_tip(d, p, P[12], False), Jp)
-        return _mm(_tr(_rf(T, it)), J) if rcm else J
-    J = _mm(Jp, _tip(d, p, P[12], True))
-    return _mm(J, _rf(T, it)) if rcm else J
-
-
-@njit(**_OPTS)
-def _rf(T, it):
-    return (T[it, 0, 0], T[it, 0, 1], T[it, 0, 2], T[it, 1, 0], T[it, 1, 1], T[it, 1, 2],
-            T[it, 2, 0], T[it, 2, 1], T[it, 2, 2])
+        Jr = _mm(_tr(Rt), J)
+    else:
+        J = _mm(Jp, _tip(d, p, P[12], True))
+        Jr = _mm(J, Rt)
+    return (Jr[0] if rcm else J[0], Jr[1] if rcm else J[1], Jr[2] if rcm else J[2],
+            Jr[3] if rcm else J[3], Jr[4] if rcm else J[4], Jr[5] if rcm else J[5],
+            Jr[6] if rcm else J[6], Jr[7] if rcm else J[7], Jr[8] if rcm else J[8])
 
 
 @njit(**_OPTS)
@@ -273,36 +373,40 @@ def robot_kernel(q, m, T, P, ttol, kind, rcm, check, rot_tol, out):
     ttol : float, :data:`athenakin.parallel.TANGENT_TOL`
     kind : int, :data:`INSTR_JAC`, :data:`INSTR_INV`, :data:`TIP_JAC` or :data:`TIP_INV`
     rcm : bool, ``frame == "rcm"``
-    check : bool, check ``T`` first (:func:`._fk_kernels.rigid_flags`)
+    check : bool, check that ``T`` holds finite rigid transforms (within half the tolerance)
     rot_tol : float, :data:`athenakin._validation.ROTATION_TOL`
     out : (N, 3, 3) float64
 
     Returns
     -------
     int
-        0, or the flags of :func:`rigid_flags` (then nothing is computed: the
-        caller hands the call to the reference, which raises or decides).
+        0, or :data:`FLAG_T_NONFINITE` / :data:`FLAG_NONRIGID` (then ``out`` is
+        incomplete: the caller hands the call to the reference, which raises or decides).
     """
-    if check:
-        flags = rigid_flags(T, rot_tol)
-        if flags:
-            return flags
+    lim = 0.5 * rot_tol
     n = out.shape[0]
-    bq, bm, bt = q.shape[0] > 1, m.shape[0] > 1, T.shape[0] > 1
-    if kind == INSTR_JAC:
-        for i in range(n):
-            _store(out, i, _robot_item(q, m, T, P, ttol, INSTR_JAC, rcm, i if bq else 0,
-                                       i if bm else 0, i if bt else 0))
-    elif kind == INSTR_INV:
-        for i in range(n):
-            _store(out, i, _robot_item(q, m, T, P, ttol, INSTR_INV, rcm, i if bq else 0,
-                                       i if bm else 0, i if bt else 0))
-    elif kind == TIP_JAC:
-        for i in range(n):
-            _store(out, i, _robot_item(q, m, T, P, ttol, TIP_JAC, rcm, i if bq else 0,
-                                       i if bm else 0, i if bt else 0))
-    else:
-        for i in range(n):
-            _store(out, i, _robot_item(q, m, T, P, ttol, TIP_INV, rcm, i if bq else 0,
-                                       i if bm else 0, i if bt else 0))
+    G = np.empty(NG * CHUNK)
+    S = np.empty(9 * CHUNK)
+    for c0 in range(0, n, CHUNK):
+        nn = min(CHUNK, n - c0)
+        _gather(q, m, c0, nn, G)
+        _gather_T(T, c0, nn, G)
+        if check:
+            n_nonfinite, n_nonrigid = _rigid_counts(G, nn, lim)
+            if n_nonfinite or n_nonrigid:
+                return (FLAG_T_NONFINITE if n_nonfinite else 0) | (
+                    FLAG_NONRIGID if n_nonrigid else 0)
+        if kind == INSTR_JAC:
+            for ii in range(nn):
+                _put(S, ii, _robot_item(G, ii, P, ttol, INSTR_JAC, rcm))
+        elif kind == INSTR_INV:
+            for ii in range(nn):
+                _put(S, ii, _robot_item(G, ii, P, ttol, INSTR_INV, rcm))
+        elif kind == TIP_JAC:
+            for ii in range(nn):
+                _put(S, ii, _robot_item(G, ii, P, ttol, TIP_JAC, rcm))
+        else:
+            for ii in range(nn):
+                _put(S, ii, _robot_item(G, ii, P, ttol, TIP_INV, rcm))
+        _scatter(S, c0, nn, 3, out)
     return 0
