@@ -120,9 +120,9 @@ def parallel_ik_position(Os, P, q, mode, theta, valid, reason):
             i = c0 + ii
             for c in range(3):
                 q[i, c] = K[(_Q1 + c) * CHUNK + ii]
-            mode[i] = np.int64(K[_MODE * CHUNK + ii])
-            theta[i] = K[_TH * CHUNK + ii]
             r = K[_REASON * CHUNK + ii]
+            mode[i] = np.int64(K[_MODE * CHUNK + ii]) if r == 0.0 else 0
+            theta[i] = K[_TH * CHUNK + ii]
             reason[i] = np.int8(r)
             valid[i] = r == 0.0
 
@@ -191,7 +191,7 @@ def _line_store(K, c0, n, q, p, d_b, O_s, mode, valid, reason):
         O_s[i, 0] = K[_OX * CHUNK + ii] + mask
         O_s[i, 1] = K[_OY * CHUNK + ii] + mask
         O_s[i, 2] = K[_OZ * CHUNK + ii] + mask
-        mode[i] = np.int64(K[_MODE * CHUNK + ii])
+        mode[i] = np.int64(K[_MODE * CHUNK + ii]) if r == 0.0 else 0
         reason[i] = np.int8(r)
         valid[i] = r == 0.0
 
@@ -448,7 +448,7 @@ def _paper_store(K, c0, n, q, p, u, mode, Tbs, res, valid, reason):
         p[i] = K[_P * CHUNK + ii] + mask
         for c in range(5):
             u[i, c] = K[(_U1 + c) * CHUNK + ii] + mask
-        mode[i] = np.int64(K[_MODE * CHUNK + ii])
+        mode[i] = np.int64(K[_MODE * CHUNK + ii]) if r == 0.0 else 0
         ct = K[_CT * CHUNK + ii] + mask
         st = K[_ST * CHUNK + ii] + mask
         one, zero = 1.0 + mask, mask

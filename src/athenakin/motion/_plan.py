@@ -491,8 +491,10 @@ def check_samples(samples: dict[str, Any], T_b_e: NDArray[np.float64],
     mode = samples["mode"]
     checks.append(("assembly_mode", (mode != mode[0]) & ok, mode.astype(float),
                    float(mode[0])))
+    # samples outside the workspace (mode 0, q NaN) are reported by the workspace check;
+    # measure them as mode +1 at q = 0 only to keep the arrays whole
     meas = singularity_measures(np.where(np.isfinite(q), q, 0.0), samples["tip_e"], T_b_e,
-                                design, mode=mode)
+                                design, mode=np.where(ok, mode, 1))
     samples["measures"] = meas
     for name in MEASURE_NAMES:
         m = getattr(margins, name)

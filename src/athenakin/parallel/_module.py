@@ -94,7 +94,7 @@ class ParallelIK:
     q : ndarray, shape (..., 3)
         Actuator values ``(q1, q2, q3)``, m (NaN where invalid).
     mode : ndarray of int, shape (...)
-        Assembly mode of the pose (+1 or -1; +1 on the tangent boundary).
+        Assembly mode of the pose (+1 or -1; +1 on the tangent boundary; 0 where invalid).
     theta : ndarray, shape (...)
         ``R_b_s = Rx(theta)``, radians.
     valid : ndarray of bool, shape (...)
@@ -289,7 +289,8 @@ def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> P
     valid = reason == 0
     q = np.where(valid[..., None], q, np.nan)
     theta = np.where(valid, wrap_angle(np.arctan2(-y, z)), np.nan)
-    return ParallelIK(q=q, mode=mode, theta=theta, valid=valid, reason=reason)
+    return ParallelIK(q=q, mode=np.where(valid, mode, 0), theta=theta, valid=valid,
+                      reason=reason)
 
 
 #: Tolerance on the orientation test of :func:`parallel_inverse_kinematics`.

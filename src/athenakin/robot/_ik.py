@@ -64,7 +64,7 @@ class PassiveJoints:
     u : ndarray, shape (..., 5)
         ``u1..u5`` in (-pi, pi] (``u3..u5`` are the given ones, wrapped).
     mode : ndarray of int, shape (...)
-        Assembly mode of the parallel module (+1 / -1).
+        Assembly mode of the parallel module (+1 / -1; 0 where invalid).
     T_b_s : ndarray, shape (..., 4, 4)
         Pose of ``O_s``.
     residual : ndarray, shape (...)
@@ -106,6 +106,7 @@ class InstrumentIK:
     O_s : ndarray, shape (..., 3)
         Position of ``O_s``, base frame, m.
     mode : ndarray of int, shape (...)
+        Assembly mode (+1 / -1; 0 where invalid).
     valid : ndarray of bool, shape (...)
     reason : ndarray of int8, shape (...)
     """
@@ -221,7 +222,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
         raise_first_failure(reason, "inverse kinematics", {"u345": u345, "p_rcm_b": c})
     nan = np.where(valid, 1.0, np.nan)
     q = pik.q * nan[..., None]
-    passive = PassiveJoints(p=p * nan, u=u * nan[..., None], mode=pik.mode,
+    passive = PassiveJoints(p=p * nan, u=u * nan[..., None], mode=np.where(valid, pik.mode, 0),
                             T_b_s=T_b_s * nan[..., None, None], residual=res * nan,
                             valid=valid, reason=reason)
     return q, passive
@@ -379,5 +380,5 @@ def _q_from_line(T: NDArray[np.float64], d_e: NDArray[np.float64], p: NDArray[np
     valid = reason == 0
     nan = np.where(valid, 1.0, np.nan)
     res = InstrumentIK(p=np.broadcast_to(p, batch) * nan, direction_b=d_b * nan[..., None],
-                       O_s=O_s * nan[..., None], mode=pik.mode, valid=valid, reason=reason)
+                       O_s=O_s * nan[..., None], mode=np.where(valid, pik.mode, 0), valid=valid, reason=reason)
     return pik.q * nan[..., None], res
