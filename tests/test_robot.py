@@ -413,3 +413,16 @@ def test_backend_numba_same_results_as_numpy():
         ak.forward_kinematics(c.q[0], T, D, backend="cuda")
     with pytest.raises(TypeError, match="design: expected athenakin.Design"):
         ak.q_from_tool_tip(T, tip, "default")
+
+
+def test_invalid_items_report_mode_zero():
+    T = ak.default_rcm_frame(D)
+    _, passive = ak.inverse_kinematics(T, [[0.1, np.nan, 0.2], [0.3, 0.2, 0.1]], D)
+    assert passive.mode.tolist() == [0, 0] and not passive.valid.any()
+    _, res = ak.q_from_tool_tip(T, [[0.5, 0.0, 0.0], [0.25, 0.0, 0.0]], D)
+    assert res.mode.tolist() == [0, 1]
+
+
+def test_analysis_mode_shape_named():
+    with pytest.raises(ak.InvalidInputError, match="mode: expected \\+1/-1 broadcastable"):
+        ak.analysis.parallel_jacobian(ak.robot.REFERENCE_Q, D, mode=[1, -1])

@@ -25,13 +25,13 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_transform
+from .._validation import check_array
 from ..chain._ups import rotation_u_pair
-from ..design import Design
+from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..parallel import TANGENT_TOL
-from ..robot import default_rcm_frame
 from ..robot._common import Backend, use_compiled
+from ..robot._setup import resolve_rcm_frame
 
 __all__ = [
     "Frame",
@@ -55,14 +55,6 @@ _FRAMES = ("base", "rcm")
 # --------------------------------------------------------------------------------------
 # argument handling
 # --------------------------------------------------------------------------------------
-def _design(design: Design | None) -> Design:
-    if design is None:
-        return Design.default()
-    if not isinstance(design, Design):
-        raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
-    return design
-
-
 def _mode(mode: ArrayLike) -> NDArray[np.float64]:
     m = np.asarray(mode)
     if m.dtype.kind not in "biuf" or not np.all(np.isin(m, (1, -1))):
@@ -77,7 +69,7 @@ def _frame(frame: str) -> str:
 
 
 def _rcm(T_b_e: ArrayLike | None, design: Design) -> NDArray[np.float64]:
-    return default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
+    return resolve_rcm_frame(T_b_e, design, single=False)
 
 
 # --------------------------------------------------------------------------------------
@@ -107,9 +99,16 @@ def parallel_state(q: ArrayLike, design: Design | None = None, mode: ArrayLike =
         ``|h| >= l1``). Stroke limits and the A/B order are *not* applied: the
         Jacobian is local geometry.
     """
-    design = _design(design)
+    design = resolve_design(design)
     q = check_array(q, "q", (3,), allow_nonfinite=True)
     m = _mode(mode)
+    try:
+        fits = np.broadcast_shapes(m.shape, q.shape[:-1]) == q.shape[:-1]
+    except ValueError:
+        fits = False
+    if not fits:
+        raise InvalidInputError(f"mode: expected +1/-1 broadcastable to q's batch shape "
+                                f"{q.shape[:-1]}, got shape {m.shape}")
     q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2]
     h = 0.5 * (q1 - q2)
     l1, l2, l3, l4, l5 = design.lengths
@@ -152,7 +151,7 @@ def _dphi_dq(g: dict[str, NDArray[np.float64]]) -> NDArray[np.float64]:
 
 def _state(q: ArrayLike, design: Design | None, mode: ArrayLike
            ) -> tuple[Design, dict[str, NDArray[np.float64]]]:
-    design = _design(design)
+    design = resolve_design(design)
     g = parallel_state(q, design, mode)
     g["l4"] = np.asarray(design.l4)
     g["l5"] = np.asarray(design.l5)
