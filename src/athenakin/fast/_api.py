@@ -38,7 +38,7 @@ from ..parallel._module import (
     ParallelSolution,
 )
 from ..robot._common import ErrorPolicy, resolve_policy
-from ..robot._fk import SLOT_MODE, SLOT_P_SIGN, SLOT_UJOINT, SLOT_WRIST, FKSolution
+from ..robot._fk import SLOT_MODE, SLOT_P_SIGN, SLOT_UJOINT, SLOT_WRIST, FKMethod, FKSolution
 from ..robot._ik import IK_SINGULAR_TOL, InstrumentIK, PassiveJoints
 from . import _fk_kernels as _fk
 from . import _ik_kernels as _ik
@@ -176,7 +176,8 @@ def _labels(batch: tuple[int, ...]) -> tuple[NDArray[np.int64], ...]:
 
 
 def _check_out(out: FKSolution, batch: tuple[int, ...]) -> tuple[NDArray, ...]:
-    arrs = (out.reason, out.valid, out.p, out.u, out.T_b_s, out.residual, out.item_reason)
+    arrs: tuple[NDArray, ...] = (out.reason, out.valid, out.p, out.u, out.T_b_s, out.residual,
+                                 out.item_reason)
     shapes = (batch + (16,), batch + (16,), batch + (16,), batch + (16, 5), batch + (16, 4, 4),
               batch + (16,), batch)
     dtypes = (np.int8, np.bool_, np.float64, np.float64, np.float64, np.float64, np.int8)
@@ -190,7 +191,7 @@ def _check_out(out: FKSolution, batch: tuple[int, ...]) -> tuple[NDArray, ...]:
 
 # --- whole robot: forward kinematics ------------------------------------------------------
 def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
-                       method: str = "closed", errors: ErrorPolicy = "auto",
+                       method: FKMethod = "closed", errors: ErrorPolicy = "auto",
                        tangent_tol: float = TANGENT_TOL,
                        degenerate_tol: float = DEGENERATE_TOL, p_zero_tol: float = P_ZERO_TOL,
                        closure_tol: float = CLOSURE_TOL, parallel: bool = False,
@@ -541,8 +542,8 @@ def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
     r1, m_y, w, half = np.empty(N), np.empty(N), np.empty(N), np.empty(N)
     _ik.parallel_fk(qa.reshape(N, 3), P, float(tangent_tol), valid, reason, T_b_i, T_b_s,
                     theta, r1, m_y, w, half)
-    valid, reason, T_b_i, T_b_s, theta = (a.reshape(batch + a.shape[1:])
-                                          for a in (valid, reason, T_b_i, T_b_s, theta))
+    valid, reason, T_b_i, T_b_s, theta = (  # type: ignore[assignment]
+        a.reshape(batch + a.shape[1:]) for a in (valid, reason, T_b_i, T_b_s, theta))
     r1, m_y, w, half = (a.reshape(batch)[()] for a in (r1, m_y, w, half))
     return ParallelSolution(valid=valid, reason=reason, mode=MODES.copy(),
                             O_i=T_b_i[..., :3, 3], O_s=T_b_s[..., :3, 3], T_b_i=T_b_i,

@@ -18,7 +18,7 @@ __all__ = ["ControlLoop"]
 _F8 = np.dtype(np.float64)
 
 
-def _vec3(x: object, name: str) -> NDArray[np.float64]:
+def _vec3(x: ArrayLike, name: str) -> NDArray[np.float64]:
     """``x`` as a float64 C-contiguous writable array of shape (3,) (copied if needed)."""
     if type(x) is np.ndarray and x.dtype is _F8 and x.shape == (3,):
         f = x.flags

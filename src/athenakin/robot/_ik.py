@@ -380,5 +380,6 @@ def _q_from_line(T: NDArray[np.float64], d_e: NDArray[np.float64], p: NDArray[np
     valid = reason == 0
     nan = np.where(valid, 1.0, np.nan)
     res = InstrumentIK(p=np.broadcast_to(p, batch) * nan, direction_b=d_b * nan[..., None],
-                       O_s=O_s * nan[..., None], mode=np.where(valid, pik.mode, 0), valid=valid, reason=reason)
+                       O_s=O_s * nan[..., None], mode=np.where(valid, pik.mode, 0), valid=valid,
+                       reason=reason)
     return pik.q * nan[..., None], res
