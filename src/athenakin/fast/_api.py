@@ -36,6 +36,7 @@ from ..parallel._module import (
     TANGENT_TOL,
     ParallelIK,
     ParallelSolution,
+    module_orientation_check,
 )
 from ..robot._common import ErrorPolicy, resolve_policy
 from ..robot._fk import SLOT_MODE, SLOT_P_SIGN, SLOT_UJOINT, SLOT_WRIST, FKMethod, FKSolution
@@ -579,18 +580,4 @@ def parallel_inverse_kinematics(T_b_s: ArrayLike, design: Design | None = None, 
     design_params(design)
     T = check_transform(T_b_s, "T_b_s", allow_nonfinite=True)
     res = parallel_ik_from_position(np.ascontiguousarray(T[..., :3, 3]), design)
-    R = T[..., :3, :3]
-    with np.errstate(invalid="ignore"):
-        c, s = np.cos(res.theta), np.sin(res.theta)
-        Rx = np.zeros(R.shape)
-        Rx[..., 0, 0] = 1.0
-        Rx[..., 1, 1], Rx[..., 1, 2], Rx[..., 2, 1], Rx[..., 2, 2] = c, -s, s, c
-        err = np.abs(R - Rx).max(axis=(-2, -1))
-    bad = res.valid & ~(err <= tol)
-    from ..errors import Reason
-
-    reason = np.where(bad, np.int8(Reason.NOT_IN_MODULE_IMAGE), res.reason).astype(np.int8)
-    valid = reason == 0
-    return dataclasses.replace(
-        res, q=np.where(valid[..., None], res.q, np.nan),
-        theta=np.where(valid, res.theta, np.nan), valid=valid, reason=reason)
+    return module_orientation_check(res, T, tol)

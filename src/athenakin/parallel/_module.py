@@ -318,7 +318,14 @@ def parallel_inverse_kinematics(T_b_s: ArrayLike, design: Design | None = None, 
     """
     design = resolve_design(design)
     T = check_transform(T_b_s, "T_b_s", allow_nonfinite=True)
-    res = parallel_ik_from_position(T[..., :3, 3], design)
+    return module_orientation_check(parallel_ik_from_position(T[..., :3, 3], design), T, tol)
+
+
+def module_orientation_check(res: ParallelIK, T: NDArray[np.float64], tol: float) -> ParallelIK:
+    """Invalidate the items of a position IK whose pose ``T`` is not ``Rx(theta)`` (private).
+
+    Shared by the reference and the compiled :func:`parallel_inverse_kinematics`.
+    """
     R = T[..., :3, :3]
     with np.errstate(invalid="ignore"):
         c, s = np.cos(res.theta), np.sin(res.theta)
