@@ -51,12 +51,12 @@ def check_array(
         If the trailing shape differs or (unless allowed) a value is NaN or inf.
     """
     if isinstance(x, (str, bytes)) or x is None:
-        raise TypeError(f"{name}: expected a real array of shape (..., {_fmt(tail)}), "
+        raise TypeError(f"{name}: expected a real array of shape ({_fmt(tail)}), "
                         f"got {type(x).__name__}")
     try:
         arr = np.asarray(x)
     except Exception as exc:  # ragged lists and the like
-        raise TypeError(f"{name}: expected a real array of shape (..., {_fmt(tail)}), "
+        raise TypeError(f"{name}: expected a real array of shape ({_fmt(tail)}), "
                         f"got an object numpy cannot convert ({exc})") from None
     if arr.dtype.kind not in "biuf":
         raise TypeError(f"{name}: expected real numbers, got dtype {arr.dtype}")
@@ -64,7 +64,7 @@ def check_array(
     n = len(tail)
     if arr.ndim < n or arr.shape[arr.ndim - n:] != tail:
         raise InvalidInputError(
-            f"{name}: expected shape (..., {_fmt(tail)}), got shape {arr.shape}")
+            f"{name}: expected shape ({_fmt(tail)}), got shape {arr.shape}")
     if not allow_nonfinite and not np.all(np.isfinite(arr)):
         bad = np.argwhere(~np.isfinite(arr))[0]
         raise InvalidInputError(
@@ -123,4 +123,5 @@ def check_transform(T: ArrayLike, name: str, *, allow_nonfinite: bool = False,
 
 
 def _fmt(tail: tuple[int, ...]) -> str:
-    return ", ".join(str(t) for t in tail)
+    """``(..., 3)``-style shape text without its parentheses; ``...`` for scalars."""
+    return ", ".join(["..."] + [str(t) for t in tail])

@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_transform
-from ..errors import Reason
+from ..errors import InvalidInputError, Reason
 from ..study import dq_multiply, study_G, study_M
 
 __all__ = [
@@ -95,7 +95,13 @@ def rotation_u_pair(ca: ArrayLike, sa: ArrayLike, cb: ArrayLike, sb: ArrayLike
     -------
     ndarray, shape (..., 3, 3)
     """
-    ca, sa, cb, sb = np.broadcast_arrays(*(np.asarray(v, float) for v in (ca, sa, cb, sb)))
+    args = [check_array(v, n, (), allow_nonfinite=True)
+            for v, n in ((ca, "ca"), (sa, "sa"), (cb, "cb"), (sb, "sb"))]
+    try:
+        ca, sa, cb, sb = np.broadcast_arrays(*args)
+    except ValueError:
+        raise InvalidInputError(f"ca, sa, cb, sb: expected broadcastable shapes, got "
+                                f"{[a.shape for a in args]}") from None
     z = np.zeros_like(ca)
     return np.stack([ca * cb, sa, ca * sb,
                      sa * cb, -ca, sa * sb,
@@ -187,7 +193,19 @@ def ups_study(p: ArrayLike, u: ArrayLike) -> NDArray[np.float64]:
 
 def closure_residual(T: NDArray[np.float64], T_target: NDArray[np.float64]
                      ) -> NDArray[np.float64]:
-    """Closure residual ``max(max|R - R*|, max|t - t*| / 1 m)`` of two transforms (..., 4, 4)."""
+    """Closure residual ``max(max|R - R*|, max|t - t*| / 1 m)`` of two transforms (..., 4, 4).
+
+    Parameters
+    ----------
+    T, T_target : array-like, shape (..., 4, 4)
+        Transforms, broadcast against each other (NaN items give NaN).
+
+    Returns
+    -------
+    ndarray, shape (...)
+    """
+    T = check_array(T, "T", (4, 4), allow_nonfinite=True)
+    T_target = check_array(T_target, "T_target", (4, 4), allow_nonfinite=True)
     dR = np.abs(T[..., :3, :3] - T_target[..., :3, :3]).max(axis=(-2, -1))
     dt = np.abs(T[..., :3, 3] - T_target[..., :3, 3]).max(axis=-1)
     return np.maximum(dR, dt)
