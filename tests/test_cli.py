@@ -94,3 +94,14 @@ def test_readme_fk_and_ik_command_lines_succeed(capsys):
         code, out, err = run(capsys, *argv)
         assert code == 0, (argv, err)
         assert "q = (" in out or "16 solutions" in out, argv
+
+
+def test_missing_optional_package_names_the_extra(monkeypatch, capsys):
+    import athenakin.cli._fk as fk
+
+    def boom(args):
+        raise ModuleNotFoundError("No module named 'matplotlib'", name="matplotlib")
+
+    monkeypatch.setattr(fk, "run", boom)
+    code, _, err = run(capsys, "fk", "-0.1", "0.1", "0.45")
+    assert code == 1 and "pip install 'athenakin[plot]'" in err

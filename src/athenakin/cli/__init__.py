@@ -15,6 +15,11 @@ from ..errors import KinematicsError
 
 __all__ = ["main", "COMMANDS"]
 
+#: Optional third-party packages and the extra that installs each.
+_EXTRA_OF = {"sympy": "symbolic", "matplotlib": "plot", "plotly": "plot", "imageio": "plot",
+             "mujoco": "sim", "yourdfpy": "sim", "numba": "fast", "tqdm": "progress",
+             "scipy": "analysis", "ruckig": "motion", "toppra": "motion", "pinocchio": "bench"}
+
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
 COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
             "animate", "export", "derive"]
@@ -41,6 +46,11 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(_protect_negative_numbers(argv))
     try:
         return int(args.func(args) or 0)
+    except ModuleNotFoundError as exc:
+        extra = _EXTRA_OF.get((exc.name or "").split(".")[0], "all")
+        print(f"athenakin {args.command}: error: this command needs the optional package "
+              f"{exc.name!r}: pip install 'athenakin[{extra}]'", file=sys.stderr)
+        return 1
     except (KinematicsError, ValueError, TypeError, OSError) as exc:
         print(f"athenakin {args.command}: error: {type(exc).__name__}: {exc}", file=sys.stderr)
         return 1
