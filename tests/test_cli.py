@@ -105,3 +105,16 @@ def test_missing_optional_package_names_the_extra(monkeypatch, capsys):
     monkeypatch.setattr(fk, "run", boom)
     code, _, err = run(capsys, "fk", "-0.1", "0.1", "0.45")
     assert code == 1 and "pip install 'athenakin[plot]'" in err
+
+
+def test_import_athenakin_stays_light():
+    """Optional heavy dependencies are imported only by the subpackages that need them."""
+    import subprocess
+    import sys
+
+    code = ("import sys, athenakin, athenakin.cli; athenakin.cli.build_parser(); heavy = {'sympy', 'matplotlib', 'numba', "
+            "'mujoco', 'scipy', 'plotly', 'ruckig', 'toppra', 'pinocchio', 'yourdfpy', "
+            "'imageio'}; print(sorted({m.split('.')[0] for m in sys.modules} & heavy))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "[]"
