@@ -112,7 +112,8 @@ def test_import_athenakin_stays_light():
     import subprocess
     import sys
 
-    code = ("import sys, athenakin, athenakin.cli; athenakin.cli.build_parser(); heavy = {'sympy', 'matplotlib', 'numba', "
+    code = ("import sys, athenakin, athenakin.cli; athenakin.cli.build_parser(); "
+            "heavy = {'sympy', 'matplotlib', 'numba', "
             "'mujoco', 'scipy', 'plotly', 'ruckig', 'toppra', 'pinocchio', 'yourdfpy', "
             "'imageio'}; print(sorted({m.split('.')[0] for m in sys.modules} & heavy))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
