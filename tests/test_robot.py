@@ -221,7 +221,7 @@ def test_tool_tip_out_of_insertion_range():
 def test_stroke_limit_single_raises_batch_flags():
     T = ak.default_rcm_frame(D)
     q_bad = [D.q_min[0] - 1e-9, 0.1, 0.45]
-    with pytest.raises(ak.StrokeLimitError, match="stroke limits.*q = "):
+    with pytest.raises(ak.StrokeLimitError, match="stroke limits.*q = .*q1 = .* m < q_min = "):
         ak.forward_kinematics(q_bad, T, D)
     sol = ak.forward_kinematics([q_bad, ak.robot.REFERENCE_Q], T, D)
     assert not sol.valid[0].any() and sol.valid[1].all()
@@ -426,3 +426,14 @@ def test_invalid_items_report_mode_zero():
 def test_analysis_mode_shape_named():
     with pytest.raises(ak.InvalidInputError, match="mode: expected \\+1/-1 broadcastable"):
         ak.analysis.parallel_jacobian(ak.robot.REFERENCE_Q, D, mode=[1, -1])
+
+
+def test_ik_stroke_violation_names_the_actuator():
+    T = ak.default_rcm_frame(D)
+    rng = np.random.default_rng(SEED + 11)
+    tips = ak.direction_from_angles(rng.uniform(-1, 1, 200), rng.uniform(0.8, 2.3, 200)) * 0.25
+    _, res = ak.q_from_tool_tip(T, tips, D)
+    bad = np.flatnonzero(res.reason == Reason.STROKE_LIMIT)
+    assert bad.size
+    with pytest.raises(ak.StrokeLimitError, match="q[123] = .* m [<>] q_m(in|ax) = "):
+        ak.q_from_tool_tip(T, tips[bad[0]], D)

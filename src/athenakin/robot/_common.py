@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..design import resolve_design
+from ..design import Design, resolve_design
 from ..errors import Reason, error_for_reason
 
 ErrorPolicy = Literal["auto", "raise", "flag"]
@@ -35,7 +36,9 @@ def resolve_policy(errors: str, batch_shape: tuple[int, ...]) -> bool:
 
 
 def raise_first_failure(item_reason: NDArray[np.int8], describe: str,
-                        values: dict[str, NDArray[np.float64]]) -> None:
+                        values: dict[str, NDArray[np.float64]], *, design: Design | None = None,
+                        q_of: Callable[[tuple[int, ...]], NDArray[np.float64]] | None = None
+                        ) -> None:
     """Raise the exception of the first item whose reason is non-zero.
 
     Parameters
@@ -46,6 +49,10 @@ def raise_first_failure(item_reason: NDArray[np.int8], describe: str,
         What was computed (for the message).
     values : dict of name -> ndarray with leading shape (...)
         Inputs to quote in the message.
+    design : Design, keyword-only
+        With ``q_of``: a stroke-limit failure names the actuator and its limit.
+    q_of : callable, keyword-only
+        ``q_of(index)`` gives the actuator values (3,) of the failing item.
     """
     item_reason = np.asarray(item_reason)
     if not np.any(item_reason != 0):
@@ -57,9 +64,23 @@ def raise_first_failure(item_reason: NDArray[np.int8], describe: str,
     for k, v in values.items():
         a = np.asarray(v)[idx] if np.ndim(v) > 0 else np.asarray(v)
         parts.append(f"{k} = {np.array2string(np.asarray(a), precision=6)}")
+    code = int(item_reason[idx])
+    if code == Reason.STROKE_LIMIT and design is not None and q_of is not None:
+        parts.append(stroke_detail(np.asarray(q_of(idx), dtype=float), design))
     where = f"item {idx}, " if idx else ""
-    raise error_for_reason(int(item_reason[idx]), f"{describe} failed for {where}"
-                           + ", ".join(parts))
+    raise error_for_reason(code, f"{describe} failed for {where}" + ", ".join(parts))
+
+
+def stroke_detail(q: NDArray[np.float64], design: Design) -> str:
+    """Name the actuators of ``q`` (3,) outside the strokes: ``q2 = 0.31 m > q_max = 0.3 m``."""
+    lo, hi = design.stroke_min, design.stroke_max
+    out = []
+    for i in range(3):
+        if q[i] < lo[i]:
+            out.append(f"q{i + 1} = {q[i]:.6g} m < q_min = {lo[i]:.6g} m")
+        elif q[i] > hi[i]:
+            out.append(f"q{i + 1} = {q[i]:.6g} m > q_max = {hi[i]:.6g} m")
+    return "; ".join(out)
 
 
 def item_reason_from_slots(valid: NDArray[np.bool_], reason: NDArray[np.int8]

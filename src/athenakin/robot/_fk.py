@@ -173,7 +173,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
         from ..symbolic._solver import serial_step_algebraic as step
     p, u, sreason, residual = step(par, T, degenerate_tol=degenerate_tol,
                                    p_zero_tol=p_zero_tol, closure_tol=closure_tol)
-    return _assemble(par, p, u, sreason, residual, q, batch, raise_now)
+    return _assemble(par, p, u, sreason, residual, q, batch, raise_now, design)
 
 
 SerialStep = Callable[..., tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int8],
@@ -212,7 +212,7 @@ def _serial_closed_form(par: ParallelSolution, T: NDArray[np.float64], *, degene
 
 def _assemble(par: ParallelSolution, p: NDArray[np.float64], u: NDArray[np.float64],
               sreason: NDArray[np.int8], residual: NDArray[np.float64], q: NDArray[np.float64],
-              batch: tuple[int, ...], raise_now: bool) -> FKSolution:
+              batch: tuple[int, ...], raise_now: bool, design: Design) -> FKSolution:
     """Combine the parallel module's 2 modes with the serial step's (..., 2, 8) slots."""
     preason = np.broadcast_to(par.reason[..., None], sreason.shape)
     reason = np.where(preason != 0, preason, sreason).astype(np.int8).reshape(batch + (16,))
@@ -222,7 +222,8 @@ def _assemble(par: ParallelSolution, p: NDArray[np.float64], u: NDArray[np.float
     T_b_s = T_b_s.reshape(batch + (16, 4, 4))
     item = item_reason_from_slots(valid, reason)
     if raise_now:
-        raise_first_failure(item, "forward kinematics", {"q": q})
+        raise_first_failure(item, "forward kinematics", {"q": q}, design=design,
+                            q_of=lambda idx: q[idx])
 
     def lab(a: NDArray[np.int64]) -> NDArray[np.int64]:
         return np.broadcast_to(a, batch + (16,))

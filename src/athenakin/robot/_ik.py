@@ -219,13 +219,20 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
                           reason).astype(np.int8)
     valid = reason == 0
     if raise_now:
-        raise_first_failure(reason, "inverse kinematics", {"u345": u345, "p_rcm_b": c})
+        raise_first_failure(reason, "inverse kinematics", {"u345": u345, "p_rcm_b": c},
+                            design=design, q_of=lambda idx: _unlimited_q(O_s[idx], design))
     nan = np.where(valid, 1.0, np.nan)
     q = pik.q * nan[..., None]
     passive = PassiveJoints(p=p * nan, u=u * nan[..., None], mode=np.where(valid, pik.mode, 0),
                             T_b_s=T_b_s * nan[..., None, None], residual=res * nan,
                             valid=valid, reason=reason)
     return q, passive
+
+
+def _unlimited_q(O_s: NDArray[np.float64], design: Design) -> NDArray[np.float64]:
+    """Actuator values for ``O_s`` ignoring the stroke limits (to name a violated limit)."""
+    free = dataclasses.replace(design, q_min=None, q_max=None)
+    return parallel_ik_from_position(O_s, free).q
 
 
 def direction_from_angles(azimuth: ArrayLike, polar: ArrayLike) -> NDArray[np.float64]:
@@ -376,7 +383,8 @@ def _q_from_line(T: NDArray[np.float64], d_e: NDArray[np.float64], p: NDArray[np
     reason = np.where(pre != 0, pre, pik.reason).astype(np.int8)
     if raise_now:
         raise_first_failure(reason, "instrument inverse kinematics",
-                            {"O_s": O_s, "p": np.broadcast_to(p, batch)})
+                            {"O_s": O_s, "p": np.broadcast_to(p, batch)}, design=design,
+                            q_of=lambda idx: _unlimited_q(O_s[idx], design))
     valid = reason == 0
     nan = np.where(valid, 1.0, np.nan)
     res = InstrumentIK(p=np.broadcast_to(p, batch) * nan, direction_b=d_b * nan[..., None],
