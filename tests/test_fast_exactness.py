@@ -20,6 +20,8 @@ import pytest
 import athenakin as ak
 import athenakin.testing as akt
 from athenakin import fast
+from athenakin._transforms import transform_from_rotation_translation as _transforms
+from athenakin.study import rotation_from_quaternion
 
 SEED = 20240611
 ATOL = 1e-12
@@ -119,21 +121,7 @@ def _perturb_qT(args, s):
 
 
 def _random_rotations(rng, n):
-    qn = rng.normal(size=(n, 4))
-    qn /= np.linalg.norm(qn, axis=1, keepdims=True)
-    w, x, y, z = qn.T
-    return np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
-                     2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
-                     2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-                    axis=-1).reshape(n, 3, 3)
-
-
-def _transforms(R, t):
-    T = np.zeros(R.shape[:-2] + (4, 4))
-    T[..., :3, :3] = R
-    T[..., :3, 3] = t
-    T[..., 3, 3] = 1.0
-    return T
+    return rotation_from_quaternion(rng.normal(size=(n, 4)))
 
 
 # --- forward kinematics -------------------------------------------------------------------

@@ -17,6 +17,8 @@ import pytest
 
 import athenakin as ak
 from athenakin import analysis, fast
+from athenakin._transforms import transform_from_rotation_translation as _transforms
+from athenakin.study import rotation_from_quaternion
 from athenakin.testing import random_configurations
 
 SEED = 20240611
@@ -87,21 +89,7 @@ def _same_call(fast_fn, ref_fn, *args, **kw):
 
 
 def _random_rotations(rng, n):
-    qn = rng.normal(size=(n, 4))
-    qn /= np.linalg.norm(qn, axis=1, keepdims=True)
-    w, x, y, z = qn.T
-    return np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
-                     2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
-                     2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-                    axis=-1).reshape(n, 3, 3)
-
-
-def _transforms(R, t):
-    T = np.zeros(R.shape[:-2] + (4, 4))
-    T[..., :3, :3] = R
-    T[..., :3, 3] = t
-    T[..., 3, 3] = 1.0
-    return T
+    return rotation_from_quaternion(rng.normal(size=(n, 4)))
 
 
 @pytest.fixture(scope="module")
@@ -195,7 +183,7 @@ def _edge_rows():
     g = ak.parallel.circle_geometry(Q0, DESIGN)
 
     def at(c, R=None):
-        return _transforms(np.eye(3) if R is None else R, c)
+        return _transforms(np.eye(3) if R is None else np.asarray(R, float), np.asarray(c, float))
 
     rows = [
         ("reference", Q0, 1, T0),
