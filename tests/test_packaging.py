@@ -113,3 +113,15 @@ def test_docs_link_existing_files(name):
     base = (ROOT / name).parent
     for target in re.findall(r"\]\(([^)#:]+)(?:#[^)]*)?\)", text):
         assert (base / target).exists(), f"{name} links to missing {target}"
+
+
+def test_mujoco_agreement_claim_states_its_gravity_condition():
+    """README's 1e-12 agreement holds only without gravity, and the default export has gravity."""
+    from athenakin.sim import mjcf_from_design
+
+    readme = (ROOT / "README.md").read_text()
+    i = readme.index("1e-12 m / rad")
+    claim = readme[max(0, i - 300):i + 300]
+    assert "gravity off" in claim and "--no-gravity" in claim
+    assert 'gravity="0 0 -9.81"' in mjcf_from_design()
+    assert 'gravity="0 0 0"' in mjcf_from_design(gravity=False)
