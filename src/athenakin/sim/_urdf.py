@@ -97,16 +97,17 @@ def _cylinder(link: ET.Element, a: ArrayLike, b: ArrayLike, radius: float,
     ET.SubElement(vis, "material", {"name": material})
 
 
-def _matrix_from_rpy(rpy: ArrayLike) -> NDArray[np.float64]:
+def _matrix_from_rpy(rpy: tuple[float, ...]) -> NDArray[np.float64]:
     """URDF roll-pitch-yaw to a rotation matrix, ``Rz(y) Ry(p) Rx(r)``."""
     r, p, y = (np.asarray(float(v)) for v in rpy)
     return rot_z(y) @ rot_y(p) @ rot_x(r)
 
 
-def _rotation_about(axis: ArrayLike, angle: float) -> NDArray[np.float64]:
+def _rotation_about(axis: tuple[float, ...], angle: float) -> NDArray[np.float64]:
     """Rotation about a coordinate axis (the joint axes here are x, y or z)."""
-    rot = {(1, 0, 0): rot_x, (0, 1, 0): rot_y, (0, 0, 1): rot_z}[tuple(int(a) for a in axis)]
-    return rot(np.asarray(float(angle)))
+    rots = {(1, 0, 0): rot_x, (0, 1, 0): rot_y, (0, 0, 1): rot_z}
+    a = (int(axis[0]), int(axis[1]), int(axis[2]))
+    return rots[a](np.asarray(float(angle)))
 
 
 def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
