@@ -198,3 +198,20 @@ def test_zero_configuration_can_be_chosen(tmp_path):
                                rtol=0, atol=1e-12)
     jv = mechanism_joint_values(ak.robot.REFERENCE_Q, T, d, q_zero=qz, zero_slot=9)
     assert closure_errors(robot, jv.urdf, T).max() < 1e-12
+
+
+def test_rpy_conversion_agrees_with_scipy_and_survives_gimbal_lock():
+    from scipy.spatial.transform import Rotation
+
+    from athenakin.sim._urdf import _matrix_from_rpy, _rpy_from_matrix
+
+    rng = np.random.default_rng(SEED + 2)
+    for R in Rotation.random(200, random_state=rng).as_matrix():
+        rpy = _rpy_from_matrix(R)
+        np.testing.assert_allclose(rpy, Rotation.from_matrix(R).as_euler("xyz"), rtol=0,
+                                   atol=1e-9)
+        np.testing.assert_allclose(_matrix_from_rpy(tuple(rpy)), R, rtol=0, atol=1e-12)
+    for pitch in (np.pi / 2, -np.pi / 2):                   # gimbal lock: the matrix holds
+        R = Rotation.from_euler("xyz", [0.3, pitch, -0.7]).as_matrix()
+        np.testing.assert_allclose(_matrix_from_rpy(tuple(_rpy_from_matrix(R))), R, rtol=0,
+                                   atol=1e-12)

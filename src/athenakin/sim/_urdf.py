@@ -54,7 +54,13 @@ def _vec(v: ArrayLike) -> str:
 
 
 def _rpy_from_matrix(R: NDArray[np.float64]) -> NDArray[np.float64]:
-    """URDF roll-pitch-yaw (``R = Rz(y) Ry(p) Rx(r)``) of a rotation matrix."""
+    """URDF roll-pitch-yaw (``R = Rz(y) Ry(p) Rx(r)``) of a rotation matrix.
+
+    scipy's ``Rotation.as_euler("xyz")`` computes the same angles but warns at pitch
+    +-90 deg (gimbal lock), which the reference configuration hits (``u4 = 90`` deg);
+    this keeps the export numpy-only and silent. tests/test_sim_urdf.py checks it
+    against scipy.
+    """
     pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
     if abs(math.cos(pitch)) < 1e-12:
         return np.array([math.atan2(-R[1, 2], R[1, 1]), pitch, 0.0])
