@@ -33,9 +33,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_transform
+from ..chain import SERIAL_P_SIGN, SERIAL_UJOINT, SERIAL_WRIST
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, Reason
-from ..chain import SERIAL_P_SIGN, SERIAL_UJOINT, SERIAL_WRIST
 from ._balls import angle, ball, import_flint, sign, wrap
 
 __all__ = ["CertStatus", "CertifiedFK", "certified_forward_kinematics",
