@@ -241,3 +241,25 @@ def test_bad_shapes_and_non_rigid_frame_are_named():
         certified_forward_kinematics(Q_REF, skew, D)
     with pytest.raises(InvalidInputError, match="broadcast"):
         certified_forward_kinematics(np.tile(Q_REF, (3, 1)), np.tile(T_REF, (2, 1, 1)), D)
+
+
+# ------------------------------------------------------------------------- packaging
+def test_docstring_example_runs():
+    import doctest
+
+    import athenakin.certified._fk as mod
+
+    assert doctest.testmod(mod, optionflags=doctest.ELLIPSIS).failed == 0
+
+
+def test_flint_is_imported_only_on_first_use():
+    import subprocess
+    import sys
+
+    code = ("import sys, athenakin as ak; a = 'flint' in sys.modules; "
+            "f = ak.certified_forward_kinematics; b = 'flint' in sys.modules; "
+            "ak.certified_forward_kinematics([-0.1, 0.1, 0.45], ak.default_rcm_frame()); "
+            "print(a, b, 'flint' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "False False True"

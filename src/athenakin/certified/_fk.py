@@ -426,7 +426,7 @@ def _solve(arb: Any, qf: NDArray[np.float64], Tf: NDArray[np.float64], design: D
             continue
         # the eight solutions from the base angles (exact identities, module docstring):
         # each distinct value is enclosed and converted once, the slots index into them
-        cand = {
+        cand: dict[str, dict[Any, Any]] = {
             "u1": {1: alpha, -1: alpha + pi},                                 # by eps
             "u2": {(1, 1): beta, (-1, 1): -beta, (1, -1): pi - beta,
                    (-1, -1): beta - pi},                                      # by (sigma, r)
