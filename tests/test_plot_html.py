@@ -34,7 +34,7 @@ def test_figure_has_every_solution_behind_a_menu():
     for k, b in enumerate(menu.buttons):
         assert b.label.startswith(f"slot {k}:")
         idx = np.flatnonzero(shown[k])
-        assert np.all(np.diff(idx) == 1) and len(idx) >= 14
+        assert np.all(np.diff(idx) == 1) and len(idx) >= 13
         single = robot_figure(slot=k, all_slots=False)
         assert [fig.data[i].name for i in idx] == [t.name for t in single.data]
     np.testing.assert_array_equal([bool(t.visible) for t in fig.data], shown[0])
@@ -50,10 +50,11 @@ def test_figure_traces_hold_the_geometry():
     assert len(fig.layout.updatemenus) == 0
     ins = next(t for t in fig.data if t.name == "instrument")
     np.testing.assert_allclose(np.array([ins.x[:2], ins.y[:2], ins.z[:2]]).T,
-                               np.stack(g.segments()["instrument"]), atol=1e-15)
-    pts = next(t for t in fig.data if t.name == "points and joints")
-    i = list(pts.text).index("RCM = O_e")
-    np.testing.assert_allclose([pts.x[i], pts.y[i], pts.z[i]], g.points["RCM"], atol=1e-15)
+                               1e3 * np.stack(g.segments()["instrument"]), atol=1e-12)
+    pts = next(t for t in fig.data if t.name == "points (hover: mm)")
+    i = list(pts.text).index("RCM")
+    np.testing.assert_allclose([pts.x[i], pts.y[i], pts.z[i]], 1e3 * g.points["RCM"],
+                               atol=1e-12)
 
 
 def test_write_html_is_self_contained(tmp_path):
