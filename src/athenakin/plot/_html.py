@@ -43,7 +43,7 @@ HTML_DIV_ID = "athenakin-robot"
 
 #: Default camera of the scene (plotly's eye, in units of the half box); far enough that
 #: the whole axis box stays inside the page.
-CAMERA_EYE = {"x": 1.55, "y": -1.65, "z": 0.85}
+CAMERA_EYE = {"x": 1.55, "y": -1.65, "z": 0.8}
 #: plotly text positions tried for a point label, each with its direction on the screen.
 _TEXT_POSITIONS = {"top right": (1, 1), "top left": (-1, 1), "bottom right": (1, -1),
                    "bottom left": (-1, -1), "middle right": (1, 0), "middle left": (-1, 0),
@@ -216,8 +216,8 @@ def _traces(g: RobotGeometry, *, show_frames: bool, frame_length: float,
     other = g.intersections[1 if g.mode > 0 else 0]
     if np.all(np.isfinite(other)):
         x, y, z = (other * MM).tolist()
-        out.append({"type": "scatter3d", "mode": "markers", "name": "O_i of the other mode",
-                    "x": [x], "y": [y], "z": [z],
+        out.append({"type": "scatter3d", "mode": "markers",
+                    "name": "O_i of the other assembly mode", "x": [x], "y": [y], "z": [z],
                     "marker": {"size": 5, "color": COLORS["joint"], "symbol": "circle-open"},
                     "hovertemplate": _hover("O_i of the other assembly mode")})
     if show_frames:
@@ -318,7 +318,7 @@ def robot_figure(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
                "zaxis": {**axis, "title": "z_b [mm]",
                          "range": [MM * (centre[2] - half), MM * (centre[2] + half)]},
                "aspectmode": "cube", "domain": {"x": [0.0, 0.74], "y": [0.0, 1.0]},
-               "camera": {"eye": dict(CAMERA_EYE)}},
+               "camera": {"eye": dict(CAMERA_EYE), "center": {"x": 0.0, "y": 0.0, "z": -0.15}}},
         legend={"x": 0.75, "y": 0.5, "yanchor": "middle", "font": {"size": 11}},
         margin={"l": 0, "r": 0, "t": 50, "b": 0}, paper_bgcolor="white",
         hoverlabel={"align": "left"})

@@ -496,8 +496,8 @@ def save_view(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | N
     q, T_b_e, design, slot
         As in :func:`plot_robot`.
     all_solutions : bool, keyword-only
-        The 16-solution grid (static) or a page that switches between the solutions
-        (HTML; it does so in any case).
+        The 16-solution grid (static) or, in HTML, every solution at once with one
+        legend entry per slot (without it the page has a menu over the solutions).
     dpi : int, keyword-only
         Resolution of raster output.
     **kwargs
@@ -519,7 +519,8 @@ def save_view(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | N
     if suffix == ".html":
         from ._html import write_html
 
-        return write_html(path, q, T_b_e, design, slot=slot, **kwargs)
+        return write_html(path, q, T_b_e, design, slot=slot, all_solutions=all_solutions,
+                          **kwargs)
     if suffix not in (".png", ".svg", ".pdf"):
         raise ValueError(f"path: expected a .png, .svg, .pdf or .html file, got {path.name!r}")
     if all_solutions:
