@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import csv
 from pathlib import Path
 
 import numpy as np
@@ -51,23 +50,14 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def read_q_file(path: Path) -> np.ndarray:
-    """Actuator rows from a CSV with columns q1_m, q2_m, q3_m, or 3 numbers per line."""
-    text = Path(path).read_text()
-    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
-    if not lines:
-        raise ValueError(f"--q-file {path}: no data")
-    head = [c.strip() for c in next(csv.reader([lines[0]]))]
-    if {"q1_m", "q2_m", "q3_m"} <= set(head):
-        idx = [head.index(c) for c in ("q1_m", "q2_m", "q3_m")]
-        rows = [[r[i] for i in idx] for r in csv.reader(lines[1:])]
-    else:
-        rows = [ln.replace(",", " ").split() for ln in lines]
-    try:
-        q = np.array(rows, dtype=float)
-    except ValueError as exc:
-        raise ValueError(f"--q-file {path}: expected numbers, {exc}") from None
-    if q.ndim != 2 or q.shape[1] != 3:
-        raise ValueError(f"--q-file {path}: expected 3 values per row, got shape {q.shape}")
+    """Actuator rows, shape (N, 3), m (the motion subpackage's q-stream reader)."""
+    from ..motion import read_q_stream_csv
+
+    q, _ = read_q_stream_csv(path)
+    bad = np.flatnonzero(~np.all(np.isfinite(q), axis=1))
+    if bad.size:
+        raise ValueError(f"--q-file {path}: reading {int(bad[0])} is incomplete "
+                         f"(an animation needs every q1, q2, q3)")
     return q
 
 

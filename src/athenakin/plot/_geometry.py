@@ -1,6 +1,6 @@
 """Where every part of the robot is, for one FK solution (pure numpy; used by views and exports).
 
-The points follow MODEL.md: ``A = (q1, 0, 0)``, ``B = (q2, 0, 0)``, midpoint ``M``,
+The points follow docs/conventions.md: ``A = (q1, 0, 0)``, ``B = (q2, 0, 0)``, midpoint ``M``,
 ``D = (x_M, sqrt(l3^2 - h^2), 0)``, ``C = D + (0, l2, l5)``, ``O_i`` on ``k1 ∩ k2``,
 ``O_s = O_i + l4 z_i`` (Eq. 8-10), and the serial chain of Eq. 11-12 from ``O_s`` to
 the RCM frame E. The spherical joint at the RCM (the kinematic equivalent of the
