@@ -12,6 +12,13 @@
 Needs scipy (extra ``[calibration]``). See docs/calibration.md.
 """
 
+from ._accuracy import (
+    TipError,
+    TipErrorMap,
+    tip_error,
+    tip_error_map,
+    tip_error_monte_carlo,
+)
 from ._errors import (
     CalibrationError,
     CalibrationWarning,
@@ -24,12 +31,29 @@ from ._identify import (
     IdentifiabilityReport,
     analyse_jacobian,
 )
+from ._io import (
+    AXIS_COLUMNS,
+    Q_COLUMNS,
+    TIP_COLUMNS,
+    Measurements,
+    calibration_toml,
+    measurements_csv_text,
+    plan_csv_text,
+    read_measurements_csv,
+)
 from ._model import (
     DEFAULT_PARAMETERS,
     PARAMETER_GROUPS,
     PARAMETER_UNITS,
     PARAMETERS,
     resolve_parameters,
+)
+from ._plan import PosePlan, plan_poses
+from ._report import (
+    plot_parameter_confidence,
+    plot_residuals,
+    plot_tip_error_map,
+    write_report,
 )
 from ._solve import (
     DEFAULT_AXIS_WEIGHT,
@@ -43,6 +67,25 @@ from ._solve import (
 from ._synthetic import SyntheticData, random_poses, synthetic_measurements
 
 __all__ = [
+    "TipError",
+    "TipErrorMap",
+    "tip_error",
+    "tip_error_map",
+    "tip_error_monte_carlo",
+    "AXIS_COLUMNS",
+    "Q_COLUMNS",
+    "TIP_COLUMNS",
+    "Measurements",
+    "calibration_toml",
+    "measurements_csv_text",
+    "plan_csv_text",
+    "read_measurements_csv",
+    "plot_parameter_confidence",
+    "plot_residuals",
+    "plot_tip_error_map",
+    "write_report",
+    "PosePlan",
+    "plan_poses",
     "CalibrationError",
     "CalibrationWarning",
     "MeasurementFileError",

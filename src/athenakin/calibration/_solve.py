@@ -527,16 +527,17 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
     x0 = prob.theta0[prob.free]
     x_scale = 1.0 / np.where(report.column_norms > 0, report.column_norms, 1.0)
     x_scale = x_scale / np.max(x_scale)
-    opts = dict(jac=prob.jacobian, method="trf", x_scale=x_scale, ftol=tol, xtol=tol, gtol=tol,
+    opts = dict(method="trf", x_scale=x_scale, ftol=tol, xtol=tol, gtol=tol,
                 max_nfev=max_nfev)
-    sol = least_squares(prob.residual, x0, loss="linear", **opts)  # type: ignore[arg-type]
+    sol = least_squares(prob.residual, x0, jac=prob.jacobian, loss="linear",
+                        **opts)  # type: ignore[arg-type]
     use = np.ones(n_used, bool)
     r_rows = sol.fun.reshape(n_used, rows_per)
     if loss != "linear":
         scale = f_scale if f_scale is not None else 2.0 * _robust_sigma(r_rows)
         if not np.isfinite(scale) or scale <= 0:
             scale = RESIDUAL_FLOOR
-        sol = least_squares(prob.residual, sol.x, loss=loss, f_scale=scale,
+        sol = least_squares(prob.residual, sol.x, jac=prob.jacobian, loss=loss, f_scale=scale,
                             **opts)  # type: ignore[arg-type]
         r_rows = sol.fun.reshape(n_used, rows_per)
         s_rob = sigma if sigma is not None else _robust_sigma(r_rows)
@@ -544,7 +545,8 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
         sub = dataclasses.replace(prob, q=prob.q[use], tips=prob.tips[use],
                                   axes=None if prob.axes is None else prob.axes[use],
                                   mode=prob.mode[use])
-        sol = least_squares(sub.residual, sol.x, loss="linear", **opts)  # type: ignore[arg-type]
+        sol = least_squares(sub.residual, sol.x, jac=sub.jacobian, loss="linear",
+                            **opts)  # type: ignore[arg-type]
     theta = prob.full(sol.x)
     _, r_after = prob.evaluate(theta, False)
     _, r_before = prob.evaluate(prob.theta0, False)

@@ -78,8 +78,9 @@ def random_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *, mode
     """``n`` random readings (N, 3) within the strokes that the nominal robot reaches.
 
     Uniform in the stroke box, kept where the module assembles in ``mode`` with a
-    half-chord of at least ``margin`` (m), ``|q1 - q2| / 2 >= margin`` and the tip beyond
-    the RCM by at least ``margin`` (``margin < p < L - margin``).
+    half-chord of at least ``margin`` (m), ``margin <= |q1 - q2| / 2 <= min(l1, l3) - margin``
+    (away from the links' stretched limits) and the tip beyond the RCM by at least
+    ``margin`` (``margin < p < L - margin``).
 
     Raises
     ------
@@ -102,7 +103,8 @@ def random_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *, mode
         par = parallel_forward_kinematics(cand, design)
         slot = 0 if mode == 1 else 1
         ok = par.valid[:, slot] & (par.half_chord >= margin)
-        ok &= np.abs(cand[:, 0] - cand[:, 1]) / 2 >= margin
+        h = np.abs(cand[:, 0] - cand[:, 1]) / 2
+        ok &= (h >= margin) & (h <= min(design.l1, design.l3) - margin)
         with np.errstate(invalid="ignore"):
             pr = predict(theta, cand, np.full(len(cand), float(mode)))
             ok &= (pr.rho > margin) & (pr.rho < design.tool_length - margin)

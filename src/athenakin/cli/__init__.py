@@ -23,6 +23,7 @@ _EXTRA_OF = {"sympy": "symbolic", "matplotlib": "plot", "plotly": "plot", "image
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
 COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
             "animate", "export", "derive"]
+COMMANDS.append("calibrate")  # athenakin.calibration (issue 14)
 
 
 def build_parser() -> argparse.ArgumentParser:
