@@ -38,18 +38,21 @@ IDENTIFIABILITY_TOL = 1e-7
 #: (standard deviations blow up by the inverse of this ratio).
 WEAK_IDENTIFIABILITY_TOL = 1e-3
 
-#: Physical meaning of the inseparable combinations met in practice (support -> text).
-_KNOWN = {
-    frozenset({"q1_offset", "q2_offset", "reg_tx"}):
-        "offset of q1 + offset of q2 moves like a shift of the base along x (the rail "
-        "axis): the tracker registration absorbs it",
-    frozenset({"q1_offset", "q2_offset", "rcm_x", "reg_tx"}):
-        "offset of q1 + offset of q2 with the RCM moved along x moves like a shift of the "
-        "base along x (the rail axis): the tracker registration absorbs it",
-    frozenset({"q1_offset", "q2_offset", "rcm_x"}):
-        "offset of q1 + offset of q2 moves the carriages along the rail like a shift of the "
-        "RCM along x",
-}
+_RAIL = frozenset({"q1_offset", "q2_offset"})
+_REG_T = frozenset({"reg_tx", "reg_ty", "reg_tz"})
+
+
+def _meaning(coef: dict[str, float]) -> str:
+    """Physical meaning of an inseparable combination met in practice, or ''."""
+    robot = {k for k in coef if not k.startswith("reg_")}
+    reg = set(coef) - robot
+    if (_RAIL <= robot <= _RAIL | {"rcm_x"} and reg and reg <= _REG_T
+            and all(abs(coef[k] - coef["q1_offset"]) < 1e-6 for k in robot)):
+        what = ("offset of q1 + offset of q2" + (" with the RCM moved along x" if
+                                                   "rcm_x" in robot else ""))
+        return (f"{what} moves like a shift of the base along x (the rail axis): the "
+                "tracker registration absorbs it")
+    return ""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -130,10 +133,10 @@ def _describe(v: NDArray[np.float64], names: tuple[str, ...]) -> str:
     parts = [f"{x:+.4g} {names[i]}" + ("" if PARAMETER_UNITS[names[i]] == "m" else " [rad]")
              for i, x in enumerate(v) if keep[i]]
     text = " ".join(parts)
-    support = frozenset(names[i] for i in np.flatnonzero(keep))
-    if len(support) == 1:
-        return f"{text}: {next(iter(support))} has no effect on these measurements"
-    meaning = _KNOWN.get(support)
+    coef = {names[i]: float(v[i]) for i in np.flatnonzero(keep)}
+    if len(coef) == 1:
+        return f"{text}: {next(iter(coef))} has no effect on these measurements"
+    meaning = _meaning(coef)
     return f"{text}" + (f": {meaning}" if meaning else "")
 
 
@@ -157,7 +160,7 @@ def analyse_jacobian(J: NDArray[np.float64], names: tuple[str, ...], *,
     norms = np.linalg.norm(J, axis=0)
     safe = np.where(norms > 0, norms, 1.0)
     Jn = J / safe
-    _, s, Vt = np.linalg.svd(Jn, full_matrices=True)
+    _, s, Vt = np.linalg.svd(Jn, full_matrices=m < n)   # Vt (n, n) either way
     s_full = np.zeros(n)
     s_full[:len(s)] = s
     smax = s_full[0] if s_full[0] > 0 else 1.0

@@ -14,7 +14,7 @@ from .._validation import check_array, check_transform
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, Reason
 from ..parallel import parallel_forward_kinematics
-from ._errors import CalibrationWarning, NotIdentifiableError
+from ._errors import CalibrationError, CalibrationWarning, NotIdentifiableError
 from ._identify import (
     IDENTIFIABILITY_TOL,
     IdentifiabilityReport,
@@ -485,6 +485,8 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
     NotIdentifiableError
         Too few poses for the parameters, or poses that cannot separate them (the message
         names the inseparable combinations).
+    CalibrationError
+        The fit diverged to a non-physical design (wrong assembly mode, frame or units).
 
     Examples
     --------
@@ -549,6 +551,11 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
                             **opts)  # type: ignore[arg-type]
     theta = prob.full(sol.x)
     _, r_after = prob.evaluate(theta, False)
+    if np.any(theta[:6] <= 0) or not np.all(np.isfinite(r_after)):
+        raise CalibrationError(
+            f"calibration diverged ({sol.message}): the fit leaves a non-physical design "
+            f"(l1..l5, tool_length = {np.array2string(theta[:6], precision=6)} m) or poses "
+            "the model cannot assemble; check the assembly mode, the frame and the units (m)")
     _, r_before = prob.evaluate(prob.theta0, False)
     J = prob.jac_full(theta)[:, prob.free].reshape(n_used, rows_per, -1)[use].reshape(
         -1, len(names))

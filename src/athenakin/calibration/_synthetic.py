@@ -176,7 +176,7 @@ def synthetic_measurements(design: Design | None, T_b_e: ArrayLike, *, n: int = 
                              f"{list(PARAMETERS[:12])}")
         theta[PARAMETERS.index(k)] = float(v)
     if q is None:   # random poses that both the nominal and the true robot reach
-        qa = random_poses(2 * n + 16, T, design, mode=mode, rng=gen)
+        qa = random_poses(n + max(4, n // 2), T, design, mode=mode, rng=gen)
         with np.errstate(invalid="ignore"):
             pr = predict(theta, qa, np.full(len(qa), float(mode)))
             ok = np.isfinite(pr.rho) & (pr.rho > 1e-3) & (pr.rho < theta[5] - 1e-3)
