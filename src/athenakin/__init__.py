@@ -38,7 +38,7 @@ __version__ = "0.1.0"
 
 #: Subpackages imported on first attribute access (optional heavy dependencies).
 _LAZY_SUBPACKAGES = ("analysis", "symbolic", "plot", "sim", "motion", "fast")
-_LAZY_SUBPACKAGES += ("calibration",)
+_LAZY_SUBPACKAGES += ("calibration",)  # type: ignore[assignment]
 
 
 def __getattr__(name: str) -> object:

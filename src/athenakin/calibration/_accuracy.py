@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import check_array
 from ..errors import InvalidInputError
 from ..robot import direction_from_angles, q_from_instrument
-from ._model import PARAMETERS, predict
+from ._model import PARAMETERS, Seed, predict
 from ._solve import CalibrationResult
 
 __all__ = ["TipError", "TipErrorMap", "tip_error", "tip_error_monte_carlo", "tip_error_map"]
@@ -120,14 +120,14 @@ def tip_error(result: CalibrationResult, q: ArrayLike, *, encoder_resolution: fl
 
 def tip_error_monte_carlo(result: CalibrationResult, q: ArrayLike, *,
                           encoder_resolution: float = 0.0, n_samples: int = 2000,
-                          mode: int = 1, rng: object = None) -> NDArray[np.float64]:
+                          mode: int = 1, rng: Seed = None) -> NDArray[np.float64]:
     """Covariance (N, 3, 3) of the tip by sampling parameters and encoder errors.
 
     Parameters are drawn from ``N(estimates, covariance)``, encoder errors uniformly in
     ``[-res/2, res/2]``, and the tip is computed with the nonlinear model.
     """
     qa = _readings(q)
-    gen = np.random.default_rng(rng)  # type: ignore[call-overload]
+    gen = np.random.default_rng(rng)
     theta, free = _theta(result)
     draws = gen.multivariate_normal(theta[free], result.covariance, size=n_samples,
                                     method="eigh")

@@ -129,7 +129,7 @@ def read_measurements_csv(path: str | Path, *, require_tips: bool = True) -> Mea
         if len(rec) < len(header):
             raise MeasurementFileError(f"{path}: line {ln}: expected {len(header)} fields "
                                        f"({', '.join(header)}), got {len(rec)}")
-        for k, (c, i) in enumerate(zip(cols, idx)):
+        for k, (c, i) in enumerate(zip(cols, idx, strict=True)):
             data[r, k] = _cell(rec[i], path, ln, c)
     return Measurements(q=data[:, 0:3], tips=data[:, 3:6] if has_tips else None,
                         axes=data[:, 6:9] if has_axes else None,
@@ -187,8 +187,11 @@ def _toml_value(x: object) -> str:
 
 
 def calibration_toml(result: CalibrationResult) -> str:
-    """TOML text: the calibrated ``[design]`` (readable by :meth:`Design.from_toml`) and a
-    ``[calibration]`` table (offsets, RCM, registration, noise, residuals, std devs)."""
+    """TOML text of a calibration: the calibrated design and a ``[calibration]`` table.
+
+    The ``[design]`` table is read back by :meth:`Design.from_toml`; ``[calibration]``
+    holds the offsets, RCM, registration, noise, residuals and standard deviations.
+    """
     cal: dict[str, object] = {
         "frame": result.frame,
         "estimated": list(result.names),
@@ -209,5 +212,5 @@ def calibration_toml(result: CalibrationResult) -> str:
     if result.T_t_b is not None:
         lines.append(f"T_t_b = {_toml_value(result.T_t_b.tolist())}")
     lines += ["", "[calibration.std]"]
-    lines += [f"{n} = {_toml_value(s)}" for n, s in zip(result.names, result.std)]
+    lines += [f"{n} = {_toml_value(s)}" for n, s in zip(result.names, result.std, strict=True)]
     return "\n".join(lines) + "\n"

@@ -42,6 +42,7 @@ __all__ = [
     "PARAMETER_UNITS",
     "PARAMETER_GROUPS",
     "MeasurementFrame",
+    "Seed",
     "resolve_parameters",
     "parameter_vector",
     "design_from_parameters",
@@ -69,6 +70,8 @@ _INDEX = {n: i for i, n in enumerate(PARAMETERS)}
 _REG = slice(12, 18)
 
 MeasurementFrame = Literal["base", "tracker"]
+#: What ``rng=`` accepts (``np.random.default_rng``).
+Seed = int | np.random.Generator | None
 _FRAMES = ("base", "tracker")
 
 

@@ -15,6 +15,7 @@ from ._identify import IdentifiabilityReport, analyse_jacobian, d_optimal_subset
 from ._model import (
     PARAMETERS,
     MeasurementFrame,
+    Seed,
     parameter_vector,
     predict,
     resolve_parameters,
@@ -54,7 +55,7 @@ def plan_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *,
                params: Iterable[str] | str | None = None, frame: MeasurementFrame = "base",
                axes: bool = False, candidates: ArrayLike | None = None,
                n_candidates: int = 2000, mode: int = 1, margin: float = 1e-2,
-               axis_weight: float = DEFAULT_AXIS_WEIGHT, rng: object = None) -> PosePlan:
+               axis_weight: float = DEFAULT_AXIS_WEIGHT, rng: Seed = None) -> PosePlan:
     """Pick ``n`` poses that maximise the identifiability of ``params`` (D-optimal).
 
     Candidates are random readings within the strokes that the nominal robot reaches

@@ -137,7 +137,7 @@ def write_report(result: CalibrationResult, path: str | Path, *, figures: bool =
              f"{result.identifiability.condition:.3g} (scaled columns).", "",
              "| parameter | nominal | estimate | change | std (1 sigma) |",
              "|---|---:|---:|---:|---:|"]
-    for n, a, b, s in zip(result.names, result.nominal, result.estimates, result.std):
+    for n, a, b, s in zip(result.names, result.nominal, result.estimates, result.std, strict=True):
         u, f = ("urad", 1e6) if PARAMETER_UNITS[n] == "rad" else ("um", 1e6)
         lines.append(f"| {n} | {a:.9g} | {b:.9g} | {(b - a) * f:+.2f} {u} | {s * f:.2f} {u} |")
     lines += ["", f"Actuator offsets (q_true = q_reading + offset): "

@@ -177,7 +177,8 @@ class CalibrationResult:
     def table(self) -> list[tuple[str, float, float, float]]:
         """Rows ``(name, nominal, estimate, std)`` of the estimated parameters."""
         return [(n, float(a), float(b), float(c))
-                for n, a, b, c in zip(self.names, self.nominal, self.estimates, self.std)]
+                for n, a, b, c in zip(self.names, self.nominal, self.estimates, self.std,
+                                      strict=True)]
 
 
 # --------------------------------------------------------------------------------------
@@ -358,7 +359,7 @@ def identifiability(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None
                     frame: MeasurementFrame = "base", axes: bool = False, mode: object = 1,
                     q_offset: ArrayLike | None = None, axis_weight: float = DEFAULT_AXIS_WEIGHT,
                     tol: float = IDENTIFIABILITY_TOL) -> IdentifiabilityReport:
-    """Can these poses identify these parameters? (Before measuring anything.)
+    """Whether these poses can identify these parameters (before measuring anything).
 
     The identification Jacobian is evaluated at the nominal parameters (the tracker
     registration at identity: it does not change the analysis).
@@ -562,7 +563,8 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
     dof = J.shape[0] - J.shape[1]
     ssr = float(np.sum(r_after[use] ** 2))
     s_hat = float(sigma) if sigma is not None else float(np.sqrt(ssr / max(dof, 1)))
-    cov = s_hat ** 2 * np.linalg.pinv(J.T @ J, rcond=1e-15, hermitian=True)
+    cov = np.asarray(s_hat ** 2 * np.linalg.pinv(J.T @ J, rcond=1e-15, hermitian=True),
+                     dtype=np.float64)
     outl = np.linalg.norm(r_after, axis=1) > outlier_threshold * max(s_hat, RESIDUAL_FLOOR)
     if loss != "linear":
         outl = ~use
@@ -608,7 +610,7 @@ def _result(design: Design, names: tuple[str, ...], prob: _Problem, theta: NDArr
     return CalibrationResult(
         design=design_from_parameters(theta, design), names=names, estimates=theta[prob.free],
         nominal=prob.theta0[prob.free], std=np.sqrt(np.clip(np.diag(cov), 0.0, None)),
-        covariance=cov, parameters={n: float(v) for n, v in zip(PARAMETERS, theta)},
+        covariance=cov, parameters={n: float(v) for n, v in zip(PARAMETERS, theta, strict=True)},
         q_offset=theta[6:9].copy(), rcm=theta[9:12].copy(), T_b_e=T_new, T_t_b=T_t_b,
         frame="base" if prob.R0 is None else "tracker", mode=m_all.astype(np.int64),
         residuals_before=spread(r_before), residuals_after=spread(r_after),

@@ -30,6 +30,7 @@ from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ._model import (
     PARAMETERS,
+    Seed,
     design_from_parameters,
     parameter_vector,
     predict,
@@ -74,7 +75,7 @@ class SyntheticData:
 
 
 def random_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *, mode: int = 1,
-                 margin: float = 5e-3, rng: object = None) -> NDArray[np.float64]:
+                 margin: float = 5e-3, rng: Seed = None) -> NDArray[np.float64]:
     """``n`` random readings (N, 3) within the strokes that the nominal robot reaches.
 
     Uniform in the stroke box, kept where the module assembles in ``mode`` with a
@@ -95,7 +96,7 @@ def random_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *, mode
     if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
         raise InvalidInputError("random_poses: the design has unlimited strokes; give the "
                                 "poses (candidates) explicitly")
-    gen = np.random.default_rng(rng)  # type: ignore[call-overload]
+    gen = np.random.default_rng(rng)
     theta = parameter_vector(design, T[:3, 3])
     out = np.zeros((0, 3))
     for _ in range(50):
@@ -122,7 +123,7 @@ def synthetic_measurements(design: Design | None, T_b_e: ArrayLike, *, n: int = 
                            frame: str = "base", T_t_b: ArrayLike | None = None,
                            axes: bool = False, axis_noise: float = 2e-4,
                            encoder_resolution: float = 0.0, outlier_fraction: float = 0.0,
-                           outlier_size: float = 2e-3, mode: int = 1, rng: object = None
+                           outlier_size: float = 2e-3, mode: int = 1, rng: Seed = None
                            ) -> SyntheticData:
     """Measurements of a perturbed robot under the noise model of this module.
 
@@ -165,16 +166,16 @@ def synthetic_measurements(design: Design | None, T_b_e: ArrayLike, *, n: int = 
     T = check_transform(T_b_e, "T_b_e")
     if frame not in ("base", "tracker"):
         raise ValueError(f"frame: expected 'base' or 'tracker', got {frame!r}")
-    gen = np.random.default_rng(rng)  # type: ignore[call-overload]
+    gen = np.random.default_rng(rng)
     theta = parameter_vector(design, T[:3, 3])
     theta[:6] += perturbation * gen.standard_normal(6)
     theta[6:9] += offset_std * gen.standard_normal(3)
     theta[9:12] += rcm_std * gen.standard_normal(3)
-    for k, v in (true or {}).items():
-        if k not in PARAMETERS[:12]:
-            raise ValueError(f"true: unknown parameter {k!r}; expected some of "
+    for name, v in (true or {}).items():
+        if name not in PARAMETERS[:12]:
+            raise ValueError(f"true: unknown parameter {name!r}; expected some of "
                              f"{list(PARAMETERS[:12])}")
-        theta[PARAMETERS.index(k)] = float(v)
+        theta[PARAMETERS.index(name)] = float(v)
     if q is None:   # random poses that both the nominal and the true robot reach
         qa = random_poses(n + max(4, n // 2), T, design, mode=mode, rng=gen)
         with np.errstate(invalid="ignore"):
@@ -217,7 +218,7 @@ def synthetic_measurements(design: Design | None, T_b_e: ArrayLike, *, n: int = 
         tips = tips @ Ttb[:3, :3].T + Ttb[:3, 3]
         if ax is not None:
             ax = ax @ Ttb[:3, :3].T
-    params = {k: float(v) for k, v in zip(PARAMETERS, theta)}
+    params = {k: float(v) for k, v in zip(PARAMETERS, theta, strict=True)}
     return SyntheticData(q=qa, tips=tips, axes=ax, true_design=design_from_parameters(theta,
                          design), true_parameters=params, T_t_b=Ttb, outliers=outl,
                          frame=frame)
