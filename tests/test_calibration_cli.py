@@ -1,5 +1,6 @@
 """``athenakin calibrate`` and the calibration files (CSV in, plan CSV, TOML, report)."""
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -123,3 +124,19 @@ def test_cli_unidentifiable_data_is_refused(tmp_path, capsys):
                        "tracker", "--params", "default", "offsets", "rcm")
     assert code == 1 and "NotIdentifiableError" in err and "rail axis" in err
     assert not (tmp_path / "c.toml").exists()
+
+
+def test_docs_python_blocks_run():
+    text = (Path(__file__).resolve().parents[1] / "docs" / "calibration.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    assert blocks
+    for code in blocks:
+        exec(compile(code, "docs/calibration.md", "exec"), {})
+
+
+def test_calibrate_docstring_example():
+    import doctest
+
+    import athenakin.calibration._solve as mod
+
+    assert doctest.testmod(mod).failed == 0
