@@ -380,6 +380,6 @@ def _run_distributed(client: Any, chunks: Sequence[list[dict[str, Any]]], todo: 
 
     futures = {client.submit(_chunk_frame, chunks[i], i * CHUNK_SIZE, *args, pure=True,
                              retries=retries): i for i in todo}
-    for fut, df in as_completed(list(futures), with_results=True):
+    for fut, df in as_completed(list(futures), with_results=True, loop=client.loop):
         finished(futures[fut], df)
         fut.release()
