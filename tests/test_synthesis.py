@@ -213,3 +213,38 @@ def test_invalid_designs_are_flagged_rows_not_an_abort() -> None:
     assert "l1" in df["reason"][4]
     assert df["reason"][0] == "" and 0 < df["coverage"][0] <= 1
     assert df.loc[1:, "coverage"].isna().all()
+
+
+def test_pareto_mask_table() -> None:
+    from athenakin.synthesis import pareto_mask
+
+    F = np.array([[1.0, 5.0], [2.0, 2.0], [3.0, 3.0], [5.0, 1.0], [2.0, 2.0], [np.nan, 0.0]])
+    assert pareto_mask(F).tolist() == [True, True, False, True, True, False]
+
+
+def test_bounds_checked_by_name() -> None:
+    from athenakin.synthesis import check_bounds, default_bounds
+
+    b = default_bounds(REF)
+    assert check_bounds(b) == b and b["l1"] == pytest.approx((0.225, 0.375))
+    with pytest.raises(InvalidInputError, match=r"missing \['q3_max'\]"):
+        check_bounds({k: v for k, v in b.items() if k != "q3_max"})
+    with pytest.raises(InvalidInputError, match="bounds.l2: expected finite lo <= hi"):
+        check_bounds(dict(b, l2=(0.2, 0.1)))
+
+
+def test_optimize_places_the_reference_on_the_front() -> None:
+    pytest.importorskip("pymoo")
+    pytest.importorskip("dask")
+    from athenakin.synthesis import optimize, pareto_mask
+
+    r = optimize(_task(), population=8, generations=2, samples=600, seed=3,
+                 scheduler="synchronous")
+    assert len(r.table) == 1 + 8 * 2 and r.table["generation"].iloc[0] == -1
+    assert r.reference["name"] == REF.name
+    F = np.stack([-r.front["coverage_mode"], r.front["size"], r.front["tip_error_max"]], -1)
+    assert pareto_mask(F).all() and r.front["valid"].all()
+    # gains are real improvements of designs that dominate the reference
+    if r.dominating:
+        assert r.gains["coverage_mode"] >= 0 and r.gains["size"] >= 0
+        assert not r.reference_on_front

@@ -27,10 +27,30 @@ from ._metrics import (
     reachability,
     row_from_design,
 )
+from ._search import (
+    DEFAULT_OBJECTIVES,
+    SEARCH_VARIABLES,
+    SearchResult,
+    bounds_from_toml,
+    check_bounds,
+    default_bounds,
+    optimize,
+    pareto_mask,
+    random_designs,
+)
 from ._study import CHUNK_SIZE, LOCAL_SCHEDULERS, design_rows, evaluate, read_study
 from ._task import Task, TaskSamples, rcm_frame_from_axis, sample_task
 
 __all__ = [
+    "DEFAULT_OBJECTIVES",
+    "SEARCH_VARIABLES",
+    "SearchResult",
+    "bounds_from_toml",
+    "check_bounds",
+    "default_bounds",
+    "optimize",
+    "pareto_mask",
+    "random_designs",
     "CHUNK_SIZE",
     "DEFAULT_ENCODER_RESOLUTION",
     "DEFAULT_SAMPLES",
