@@ -151,17 +151,20 @@ class AthenaApp:
         else:
             T = T_b_e
         try:
-            return app_setup(d, T, backend=self._backend)  # type: ignore[arg-type]
-        except (ValueError, TypeError, KinematicsError) as exc:
-            what = "RCM frame" if T is not None else "design"
-            self.errors.append(f"{what}: {_error_text(exc)}; using the reference "
-                               f"{'set-up' if T is not None else 'design'} instead")
-        try:
-            return app_setup(d, None, backend=self._backend)  # type: ignore[arg-type]
+            base = app_setup(d, None, backend=self._backend)  # type: ignore[arg-type]
         except (ValueError, TypeError, KinematicsError) as exc:
             self.errors.append(f"design: {_error_text(exc)}; showing the reference design "
                                f"instead")
-            return app_setup(None, None, backend=self._backend)  # type: ignore[arg-type]
+            d = None
+            base = app_setup(None, None, backend=self._backend)  # type: ignore[arg-type]
+        if T is None:
+            return base
+        try:
+            return app_setup(d, T, backend=self._backend)  # type: ignore[arg-type]
+        except (ValueError, TypeError, KinematicsError) as exc:
+            self.errors.append(f"RCM frame: {_error_text(exc)}; using the reference set-up "
+                               f"instead")
+            return base
 
     @property
     def url(self) -> str:
