@@ -25,7 +25,7 @@ _EXTRA_OF = {"sympy": "symbolic", "matplotlib": "plot", "plotly": "plot", "image
 
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
 COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
-            "animate", "export", "derive", "design", "calibrate"]
+            "animate", "export", "derive", "design", "calibrate", "app"]
 
 
 class _Parser(argparse.ArgumentParser):
