@@ -14,6 +14,7 @@ import dataclasses
 import io
 import math
 import os
+import stat
 import tempfile
 from pathlib import Path
 
@@ -80,7 +81,7 @@ def _read_table(path: str | Path, *, header_row: bool = True
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # a byte-order mark is not a column
     except UnicodeDecodeError as exc:
         raise PathFileError(f"{path}: not a UTF-8 text file ({exc.reason})") from None
     rows = []
@@ -317,12 +318,24 @@ def track_csv_text(log: TrackLog, t: NDArray[np.float64] | None = None) -> str:
 
 
 def write_text_atomic(path: str | Path, text: str | bytes) -> None:
-    """Write a file through a temporary file in the same folder and a rename."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent or ".")
+    """Write a file through a temporary file in the same folder and a rename.
+
+    The file gets the permissions a new file would get (``0o666 & ~umask``) or,
+    when it replaces a file, that file's permissions; a symbolic link is
+    followed (its target is replaced, the link stays a link).
+    """
+    path = Path(os.path.realpath(path))
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(text.encode("utf-8") if isinstance(text, str) else text)
+        try:
+            mode = stat.S_IMODE(os.stat(path).st_mode)
+        except FileNotFoundError:
+            mask = os.umask(0o022)
+            os.umask(mask)
+            mode = 0o666 & ~mask
+        os.chmod(tmp, mode)
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
