@@ -20,8 +20,9 @@ def python_blocks(path):
 def test_python_blocks_in_docs_run(path):
     blocks = python_blocks(path)
     assert blocks, f"{path} has no python block"
+    ns = {}                        # one page's blocks run in order, as a reader runs them
     for code in blocks:
-        exec(compile(code, str(path), "exec"), {})
+        exec(compile(code, str(path), "exec"), ns)
 
 
 @pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: str(p.relative_to(ROOT)))

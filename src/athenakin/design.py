@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Literal
@@ -16,11 +15,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - exercised by scripts/test_matrix.sh on Python 3.10
-    import tomli as tomllib
-
+from ._compat import tomllib
 from ._validation import check_scalar
 from .errors import InvalidInputError
 
