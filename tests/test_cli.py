@@ -137,6 +137,8 @@ def test_design_prints_and_writes_and_refuses_to_overwrite(tmp_path, capsys):
     example = Path(__file__).resolve().parent.parent / "examples" / "my_robot.toml"
     code, _, _ = run(capsys, "design", "--design", str(example), "--write", str(f), "--force")
     assert code == 0 and ak.Design.from_toml(f) == ak.Design.from_toml(example)
+    code, _, err = run(capsys, "design", "--design", str(f), "--write", str(f), "--force")
+    assert code != 0 and "input" in err and ak.Design.from_toml(f) == ak.Design.from_toml(example)
 
 
 def test_readme_demo_with_the_example_design_runs(capsys, monkeypatch):
