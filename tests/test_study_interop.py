@@ -74,3 +74,18 @@ def test_errors():
         quaternion_wxyz_from_xyzw([np.nan, 0.0, 0.0, 1.0])
     with pytest.raises(TypeError, match="scipy.spatial.transform.Rotation"):
         quaternion_from_scipy_rotation(np.eye(3))
+
+
+def test_calibration_rotation_vector_is_scipy_rodrigues():
+    """calibration's exp([omega]_x) (now scipy's) matches Rodrigues' formula, small angles too."""
+    from athenakin.calibration._model import rotation_from_vector
+
+    rng = np.random.default_rng(SEED + 1)
+    cases = [*rng.normal(size=(50, 3)), np.zeros(3), np.array([1e-10, 0.0, 0.0]),
+             np.pi * np.eye(3)[1]]
+    for w in cases:
+        th = np.linalg.norm(w)
+        K = np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
+        ref = (np.eye(3) + K + 0.5 * K @ K if th < 1e-8 else
+               np.eye(3) + np.sin(th) / th * K + (1 - np.cos(th)) / th ** 2 * K @ K)
+        np.testing.assert_allclose(rotation_from_vector(w), ref, rtol=0, atol=1e-14)
