@@ -6,7 +6,8 @@ import importlib
 import pytest
 
 MODULES = ["athenakin.robot._fk", "athenakin.robot._ik", "athenakin.study._study",
-           "athenakin.chain._ups", "athenakin.parallel._module", "athenakin.design"]
+           "athenakin.chain._ups", "athenakin.parallel._module", "athenakin.design",
+           "athenakin.study._interop", "athenakin.sim._layout", "athenakin._serialize"]
 
 
 @pytest.mark.parametrize("name", MODULES)
