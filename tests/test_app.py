@@ -284,3 +284,49 @@ def test_app_keeps_running_on_bad_inputs(tmp_path):
         assert 'data-level="error"' in app._status.content
     finally:
         app.stop()
+
+
+def test_cli_without_viser_names_the_extra(monkeypatch, capsys):
+    import sys
+
+    from athenakin.cli import main
+
+    monkeypatch.setitem(sys.modules, "viser", None)          # import viser fails
+    assert main(["app", "--port", "0"]) == 1
+    assert "pip install 'athenakin[app]'" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_app_tip_handle_and_slot_menu_in_process():
+    from types import SimpleNamespace
+
+    from athenakin.app import AthenaApp
+
+    app = AthenaApp(port=0, backend="numpy")
+    try:
+        r = app.view.readouts
+        T = app.setup.T_b_e
+        target_e = r.tip_e + np.array([0.0, 0.01, 0.01])
+        app._handle.position = tuple(T[:3, :3] @ target_e + T[:3, 3])   # a drag ...
+        app._on_handle(SimpleNamespace(phase="update"))
+        app._on_handle(SimpleNamespace(phase="end"))                      # ... and release
+        q_ref, _ = ak.q_from_tool_tip(T, target_e, D)
+        np.testing.assert_allclose(app.q, q_ref, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(app._handle.position, app.view.readouts.tip_b, atol=1e-6)
+        assert [sl.value for sl in app._q_sliders] == pytest.approx(q_ref * 1e3, abs=1e-3)
+        far = T[:3, :3] @ (r.tip_e * 5.0) + T[:3, 3]                    # beyond the tool
+        app._handle.position = tuple(far)
+        app._on_handle(SimpleNamespace(phase="end"))
+        assert "stopped at the workspace boundary" in app._status.content
+        assert app.view.geometry is not None                               # held, drawn
+        _, ok = ak.q_from_tool_tip(T, app.view.readouts.tip_e, D, errors="flag")
+        assert ok.valid
+        # the slot menu: invalid slots are marked with their reason
+        v = app.set_q([-0.1, 0.1, 0.26])                # near the tangency: some invalid
+        opts = app._slot_dd.options
+        assert len(opts) == 17 and opts[0].startswith("all valid")
+        for s in v.slots:
+            assert opts[1 + s.slot].startswith(s.label)
+            assert ("invalid" in opts[1 + s.slot]) == (not s.valid)
+    finally:
+        app.stop()

@@ -411,7 +411,8 @@ def forward_view(setup: AppSetup, q: ArrayLike, *, slot: Slot = 0) -> AppView:
         return AppView(q=q, slots=slots, requested=requested, geometry=None, ghosts=(),
                        readouts=None, level="error",
                        message="no solution at this q: " + "; ".join(reasons))
-    message, level = "", "ok"
+    message = ""
+    level: Literal["ok", "warn", "error"] = "ok"
     if requested == "all":
         first = int(np.flatnonzero(valid)[0])
         others = [int(k) for k in np.flatnonzero(valid) if k != first]

@@ -321,11 +321,11 @@ class AthenaApp:
                 self.view = view
                 self._draw(view)
             self._sync_gui(view, sync_ik=sync_ik)
-            msg, level = view.message, view.level
+            msg, level = view.message, str(view.level)
             if extra is not None:
                 msg = extra[0] + ("; " + msg if msg else "")
                 level = "error" if view.level == "error" else extra[1]
-            status, ro, slots = view_html(view)
+            _, ro, slots = view_html(view)
             self._status.content = message_html(msg, level)
             if ro:
                 self._readouts.content = ro

@@ -49,16 +49,13 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``app``: serve until SIGINT (Ctrl-C) or SIGTERM."""
-    from ..app import _model  # noqa: F401  (numpy only)
+    from ..app import _server
     from ._common import load_rcm
 
     try:
-        from ..app._server import AthenaApp
+        _server._import_viser()
     except ModuleNotFoundError as exc:
-        if exc.name != "viser":
-            raise
-        print("athenakin app: error: this command needs the optional package 'viser': "
-              "pip install 'athenakin[app]'", file=sys.stderr)
+        print(f"athenakin app: error: {exc}", file=sys.stderr)
         return 1
     if not 0 <= args.port <= 65535:
         raise ValueError(f"--port: expected 0..65535, got {args.port}")
@@ -67,8 +64,8 @@ def run(args: argparse.Namespace) -> int:
         from ..design import Design
 
         rcm = load_rcm(args, Design.default())
-    app = AthenaApp(args.design, rcm, host=args.host, port=args.port,
-                    trajectory=args.trajectory, backend=args.backend)
+    app = _server.AthenaApp(args.design, rcm, host=args.host, port=args.port,
+                            trajectory=args.trajectory, backend=args.backend)
     for e in app.errors:
         print(f"athenakin app: warning: {e}", file=sys.stderr)
     print(f"athenakin app: serving ATHENA at {app.url} (Ctrl-C stops)", flush=True)
