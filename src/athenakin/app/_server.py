@@ -456,11 +456,11 @@ class AthenaApp:
             start = time.perf_counter() - float(self._time.value)
             if self._time.value >= t_end:
                 start = time.perf_counter()
-            while True:
-                t = time.perf_counter() - start
-                if t > t_end or self.playback is not pb:
+            while self.playback is pb:
+                t = min(time.perf_counter() - start, t_end)
+                self._time.value = float(t)                 # calls _on_time
+                if t >= t_end:
                     break
-                self._time.value = float(min(t, t_end))     # calls _on_time
                 time.sleep(1 / 30)
 
         threading.Thread(target=run, daemon=True, name="athenakin-playback").start()
