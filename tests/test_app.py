@@ -363,3 +363,34 @@ def test_launch_playback_and_setup_tab_in_process(tmp_path, capsys):
         assert "set-up not changed" in app._status.content
     finally:
         app.stop()
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_cli_reports_bad_inputs_at_startup_and_serves(tmp_path):
+    import signal
+    import subprocess
+    import sys
+
+    bad = _csv(tmp_path, "[design]\nl1 = 0.3\nl2 = 0.1\nl3 = 0.25\nl4 = 0.15\nl5 = 5.0\n",
+               "far.toml")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "athenakin.cli", "app", "--port", "0", "--backend", "numpy",
+         "--design", str(bad), "--trajectory", str(tmp_path / "none.csv")],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        lines = []
+        for line in proc.stdout:
+            lines.append(line)
+            if "serving ATHENA at" in line:
+                break
+        text = "".join(lines)
+        assert "warning: design: OutOfWorkspaceError" in text and "assembles nowhere" in text
+        assert "warning: trajectory: PathFileError" in text and "none.csv" in text
+        assert "serving ATHENA at http://127.0.0.1:" in text
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=20) == 0
+        assert "athenakin app: stopped" in proc.stdout.read()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()

@@ -9,7 +9,7 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from ._common import add_design_option
+from ._common import add_design_option, add_setup_options
 
 #: Interface the app binds unless told otherwise (this machine only).
 DEFAULT_HOST = "127.0.0.1"
@@ -29,12 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                     "cannot be used is reported at start-up and in the page, and the app runs "
                     "on the reference set-up instead.")
     add_design_option(p)
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("--rcm", nargs=6, type=float, metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
-                   help="RCM frame E in the base frame: position (m) and fixed-axis x-y-z "
-                        "angles (deg) (default: the reference set-up)")
-    g.add_argument("--rcm-file", metavar="FILE", type=Path,
-                   help='JSON file {"T_b_e": 4x4 nested list}')
+    add_setup_options(p)
     p.add_argument("--trajectory", metavar="CSV", type=Path,
                    help="trajectory CSV to play back (columns q1_m, q2_m, q3_m, optional t_s)")
     p.add_argument("--host", default=DEFAULT_HOST,
