@@ -59,6 +59,9 @@ def run(args: argparse.Namespace) -> int:
         from ..design import Design
 
         rcm = load_rcm(args, Design.default())
+    if args.backend != "numpy":
+        print("athenakin app: starting (a first start compiles the numba kernels: up to a "
+              "minute)", flush=True)
     app = _server.AthenaApp(args.design, rcm, host=args.host, port=args.port,
                             trajectory=args.trajectory, backend=args.backend)
     for e in app.errors:
