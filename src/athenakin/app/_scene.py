@@ -116,7 +116,7 @@ def _polyline_segments(pts: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def _seg(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    return np.stack([a, b])[None]
+    return np.array([[a, b]])
 
 
 #: Point names drawn as joints, their labels, colours and whether they are the big ones.
@@ -151,17 +151,16 @@ def robot_scene(g: RobotGeometry, *, frames: bool = True, labels: bool = True,
     c = {k: rgb(v) for k, v in COLORS.items()}
     lines = [
         LineSet("rail", _seg(*g.rail), c["rail"], 6.0),
-        LineSet("parallel", np.concatenate(
-            [np.stack(seg[k])[None] for k in ("link_a1", "link_b1", "link_a3", "link_b3",
-                                               "carrier_y", "carrier_z", "offset_l4")]),
-            c["parallel"], 5.0),
-        LineSet("actuator_q3", np.stack(seg["actuator_q3"])[None], c["actuator"], 6.0),
+        LineSet("parallel", np.array(
+            [seg[k] for k in ("link_a1", "link_b1", "link_a3", "link_b3", "carrier_y",
+                              "carrier_z", "offset_l4")]), c["parallel"], 5.0),
+        LineSet("actuator_q3", np.array([seg["actuator_q3"]]), c["actuator"], 6.0),
         LineSet("circle_k1", _polyline_segments(g.k1), c["circle_k1"], 1.5),
         LineSet("circle_k2", _polyline_segments(g.k2_arc), c["circle_k2"], 1.5),
         LineSet("ujoint", np.concatenate([
             _seg(P["O_s"] - 0.03 * g.ujoint_axes[0], P["O_s"] + 0.03 * g.ujoint_axes[0]),
             _seg(P["O_s"], P["O_s"] + 0.045 * g.ujoint_axes[1])]), rgb("#333333"), 4.0),
-        LineSet("instrument", np.stack(seg["instrument"])[None], c["serial"], 6.0),
+        LineSet("instrument", np.array([seg["instrument"]]), c["serial"], 6.0),
     ]
     if not 0.0 <= g.p <= g.design.tool_length:
         lines.append(LineSet("instrument_axis", _seg(P["O_s"], P["RCM"]), c["serial"], 1.0))
