@@ -60,7 +60,8 @@ def cases(quick: bool) -> list[dict]:
     out = [
         {"name": "core forward_kinematics of one q (16 slots, numpy)", "group": "app-update",
          "batch": 1, "baseline": True,
-         "call": _alternate(lambda q: ak.forward_kinematics(q, T, d, errors="flag"))},
+         "call": _alternate(lambda q: ak.forward_kinematics(q, T, d, errors="flag",
+                                                          backend="numpy"))},
         {"name": f"forward_view, one slot ({be})", "group": "app-update", "batch": 1,
          "call": _alternate(lambda q: forward_view(s, q)),
          "note": "pure layer of a q-slider move; target < 5 ms"},
