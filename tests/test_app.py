@@ -205,6 +205,15 @@ def test_inverse_step_stops_at_the_workspace_boundary(setup):
     assert np.max(np.abs(np.diff(qs, axis=0))) < 0.01
 
 
+def test_inverse_step_names_the_stroke_limit_it_stops_at(setup):
+    r = forward_view(setup, setup.q_home).readouts
+    st = inverse_step(setup, r.tip_e, r.tip_e + np.array([0.0, 0.0, -0.2]), r.q, r.mode)
+    assert not st.reached and st.reason == Reason.STROKE_LIMIT
+    assert "STROKE_LIMIT" in st.message
+    assert np.all(st.q >= D.stroke_min) and np.all(st.q <= D.stroke_max)
+    assert np.min(np.minimum(st.q - D.stroke_min, D.stroke_max - st.q)) < 0.01   # at the limit
+
+
 def test_inverse_step_holds_q_when_even_the_first_step_fails(setup):
     r = forward_view(setup, setup.q_home).readouts
     st = inverse_step(setup, r.tip_e, -r.tip_e, r.q, r.mode, n=1)   # tip behind the RCM...
