@@ -110,10 +110,15 @@ def test_all_slots_ghosts_the_other_valid_ones(setup):
     valid = [s.slot for s in v.slots if s.valid]
     assert v.geometry.slot == valid[0]
     assert sorted(g.slot for g in v.ghosts) == valid[1:]
-    ghosts = ghost_scene(v.ghosts)
-    inst = next(ls for ls in ghosts.lines if ls.name == "ghost_instrument")
+    ghosts = ghost_scene(v.ghosts, v.geometry)
+    by = {ls.name: ls for ls in ghosts.lines}
+    inst = by["ghost_instrument"]
     assert inst.segments.shape == (len(valid) - 1, 2, 3)
     assert all(c > 150 for c in inst.color)           # paler than the solid red
+    assert "ghost_circle_k1" not in by and "ghost_rail" not in by    # drawn by the solid slot
+    other = next(g for g in v.ghosts if g.mode != v.geometry.mode)    # the other mode, once
+    np.testing.assert_array_equal(by["ghost_parallel"].segments,
+                                  robot_scene(other).lines[1].segments)
 
 
 def test_near_a_singular_set_warns(setup):

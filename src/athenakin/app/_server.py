@@ -371,7 +371,8 @@ class AthenaApp:
     def _draw(self, view: AppView) -> None:
         assert view.geometry is not None
         solid = robot_scene(view.geometry)
-        ghosts = ghost_scene(view.ghosts) if view.ghosts else Scene((), (), ())
+        ghosts = (ghost_scene(view.ghosts, view.geometry) if view.ghosts
+                  else Scene((), (), ()))
         scene = self.server.scene
         handles = {}
         with self.server.atomic():
