@@ -9,7 +9,8 @@ Group ``app-update`` (target: under 5 ms per update, so that a dragged slider ke
 * ``inverse_step`` + ``forward_view``: one move of the tip handle / IK sliders (48 IK
   samples on the segment from the last tip, then the view);
 * ``AthenaApp.set_q``: the whole server-side update, the pure layer plus the viser
-  scene and GUI messages (a server on a free loopback port, no browser connected).
+  scene and GUI messages (a server on a free loopback port, no browser connected), with
+  one slot and with all valid slots ghosted.
 
 Baseline: the core 16-solution forward kinematics of one q (numpy), what any update
 needs at least. Each case alternates between two configurations so that nothing is
@@ -80,4 +81,9 @@ def cases(quick: bool) -> list[dict]:
         out.append({"name": f"AthenaApp.set_q: view + viser messages ({be})",
                     "group": "app-update", "batch": 1, "call": _alternate(app.set_q),
                     "note": "whole server-side update; target < 5 ms"})
+        ghosted = AthenaApp(port=0, backend=be)
+        ghosted.slot = "all"
+        atexit.register(ghosted.stop)
+        out.append({"name": f"AthenaApp.set_q, all valid slots ghosted ({be})",
+                    "group": "app-update", "batch": 1, "call": _alternate(ghosted.set_q)})
     return out
