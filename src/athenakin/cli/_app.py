@@ -59,26 +59,29 @@ def run(args: argparse.Namespace) -> int:
         from ..design import Design
 
         rcm = load_rcm(args, Design.default())
-    if args.backend != "numpy":
-        print("athenakin app: starting (a first start compiles the numba kernels: up to a "
-              "minute)", flush=True)
-    app = _server.AthenaApp(args.design, rcm, host=args.host, port=args.port,
-                            trajectory=args.trajectory, backend=args.backend)
-    for e in app.errors:
-        print(f"athenakin app: warning: {e}", file=sys.stderr)
-    print(f"athenakin app: serving ATHENA at {app.url} (Ctrl-C stops)", flush=True)
     stop = threading.Event()
 
     def on_signal(signum: int, frame: object) -> None:
         stop.set()
 
+    # handlers first: a Ctrl-C during the start (or right after the URL) also stops cleanly
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    app = None
     try:
+        if args.backend != "numpy":
+            print("athenakin app: starting (a first start compiles the numba kernels: up to "
+                  "a minute)", flush=True)
+        app = _server.AthenaApp(args.design, rcm, host=args.host, port=args.port,
+                                trajectory=args.trajectory, backend=args.backend)
+        for e in app.errors:
+            print(f"athenakin app: warning: {e}", file=sys.stderr)
+        print(f"athenakin app: serving ATHENA at {app.url} (Ctrl-C stops)", flush=True)
         while not stop.wait(0.2):
             pass
     finally:
         for s, h in old.items():
             signal.signal(s, h)
-        app.stop()
+        if app is not None:
+            app.stop()
     print("athenakin app: stopped", flush=True)
     return 0
