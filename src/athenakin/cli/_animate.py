@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import csv
 from pathlib import Path
 
 import numpy as np
@@ -69,45 +68,18 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def read_q_file(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
-    """Actuator rows from a CSV with columns q1_m, q2_m, q3_m, or 3 numbers per line.
+    """Actuator rows (the motion subpackage's q-stream reader).
 
     Returns ``(q, t)``: ``q`` of shape (n, 3), m; ``t`` of shape (n,), s, from an
     optional ``t_s`` column, else None.
     """
-    try:
-        text = Path(path).read_text(encoding="utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"--q-file {path}: not a UTF-8 text file ({exc.reason})") from None
-    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
-    if not lines:
-        raise ValueError(f"--q-file {path}: no data")
-    try:
-        head = [c.strip() for c in next(csv.reader([lines[0]]))]
-        t = None
-        if {"q1_m", "q2_m", "q3_m"} <= set(head):
-            cols = ["q1_m", "q2_m", "q3_m"] + (["t_s"] if "t_s" in head else [])
-            idx = [head.index(c) for c in cols]
-            body = list(csv.reader(lines[1:]))
-            short = [i for i, r in enumerate(body) if len(r) <= max(idx)]
-            if short:
-                raise ValueError(f"--q-file {path}: data row {short[0] + 1} has fewer "
-                                 f"columns than the header")
-            rows = [[r[i] for i in idx] for r in body]
-        else:
-            rows = [ln.replace(",", " ").split() for ln in lines]
-    except csv.Error as exc:
-        raise ValueError(f"--q-file {path}: not CSV ({exc})") from None
-    try:
-        data = np.array(rows, dtype=float)
-    except ValueError as exc:
-        raise ValueError(f"--q-file {path}: expected numbers, {exc}") from None
-    if "t_s" in head and data.ndim == 2 and data.shape[1] == 4:
-        data, t = data[:, :3], data[:, 3]
-    q = data
-    if q.ndim != 2 or q.shape[1] != 3:
-        raise ValueError(f"--q-file {path}: expected 3 values per row, got shape {q.shape}")
-    if not np.all(np.isfinite(q)):
-        raise ValueError(f"--q-file {path}: expected finite q values (m)")
+    from ..motion import read_q_stream_csv
+
+    q, t = read_q_stream_csv(path)
+    bad = np.flatnonzero(~np.all(np.isfinite(q), axis=1))
+    if bad.size:
+        raise ValueError(f"--q-file {path}: reading {int(bad[0])} is incomplete "
+                         f"(an animation needs every q1, q2, q3)")
     if t is not None and (not np.all(np.isfinite(t)) or np.any(np.diff(t) < 0)):
         raise ValueError(f"--q-file {path}: t_s must be finite and non-decreasing")
     return q, t

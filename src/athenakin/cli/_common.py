@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._serialize import json_text, to_jsonable  # noqa: F401  (re-exported)
 from .._transforms import rot_x, rot_y, rot_z, transform_from_rotation_translation
 from ..design import Design
 from ..robot import default_rcm_frame
@@ -140,23 +141,6 @@ def fmt(x: float, nd: int = 6) -> str:
     return text[1:] if text.startswith("-") and float(text) == 0 else text
 
 
-def to_jsonable(x: Any) -> Any:
-    """NaN-free JSON value: arrays to lists, NaN to None."""
-    if isinstance(x, dict):
-        return {k: to_jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [to_jsonable(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return to_jsonable(x.tolist())
-    if isinstance(x, (float, np.floating)):
-        return None if not np.isfinite(x) else float(x)
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
-
-
 def dump_json(obj: Any) -> str:
-    """JSON text of ``obj`` (see :func:`to_jsonable`)."""
-    return json.dumps(to_jsonable(obj), indent=2)
+    """JSON text of ``obj``, indented (see :func:`athenakin._serialize.to_jsonable`)."""
+    return json_text(obj, indent=2)

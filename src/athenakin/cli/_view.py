@@ -54,7 +54,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                    help="output file: .png, .svg, .pdf or .html")
     add_slot_option(p)
     p.add_argument("--all", action="store_true",
-                   help="all 16 solutions side by side (static formats)")
+                   help="all 16 solutions: side by side (static formats) or all at once "
+                        "with one legend entry per solution (HTML)")
     p.add_argument("--no-frames", action="store_true", help="hide the frame triads")
     p.add_argument("--no-labels", action="store_true", help="hide the text labels (static)")
     p.add_argument("--view", nargs=2, type=float, metavar=("ELEV", "AZIM"),
@@ -98,7 +99,4 @@ def _render(args: argparse.Namespace, out: Path, q: np.ndarray | None, T: np.nda
         kw["dpi"] = args.dpi
     else:
         kw["all_slots"] = True
-    if out.suffix.lower() != ".html" and args.all:
-        save_view(out, q, T, design, all_solutions=True, **kw)  # type: ignore[arg-type]
-    else:
-        save_view(out, q, T, design, slot=args.slot, **kw)  # type: ignore[arg-type]
+    save_view(out, q, T, design, slot=args.slot, all_solutions=args.all, **kw)

@@ -1,0 +1,410 @@
+"""The app's pure layer (set-up, forward view, inverse step, playback, scene, read-outs) and
+the viser binding in process (bad inputs keep it running). The browser: test_app_browser.py."""
+
+import dataclasses
+import importlib.util
+
+import numpy as np
+import pytest
+
+import athenakin as ak
+from athenakin.app import (
+    WARN_DISTANCE_M,
+    angles_from_tip,
+    app_setup,
+    forward_view,
+    ghost_scene,
+    inverse_step,
+    load_playback,
+    playback_q,
+    readouts_html,
+    robot_scene,
+    slots_html,
+    tip_from_angles,
+)
+from athenakin.errors import InvalidInputError, OutOfWorkspaceError, Reason
+from athenakin.motion import PathFileError
+from athenakin.plot import robot_geometry
+
+D = ak.Design.default()
+HAS_VISER = importlib.util.find_spec("viser") is not None
+
+
+@pytest.fixture(scope="module")
+def setup():
+    return app_setup(D, backend="numpy")
+
+
+def _random_q(rng, n, setup):
+    return setup.q_lo + rng.random((n, 3)) * (setup.q_hi - setup.q_lo)
+
+
+def test_setup_defaults_are_the_reference_setup(setup):
+    np.testing.assert_array_equal(setup.q_home, ak.robot.REFERENCE_Q)
+    np.testing.assert_allclose(setup.T_b_e, ak.default_rcm_frame(D), rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(setup.q_lo, D.stroke_min)
+    np.testing.assert_array_equal(setup.q_hi, D.stroke_max)
+    assert setup.backend == "numpy"
+
+
+def test_setup_of_a_design_that_cannot_assemble_is_a_named_error():
+    bad = dataclasses.replace(D, l5=5.0, name="broken")     # k2 never reaches k1
+    with pytest.raises(OutOfWorkspaceError, match="broken: the parallel module assembles "
+                                                  "nowhere"):
+        app_setup(bad, backend="numpy")
+
+
+def test_setup_starts_where_the_design_assembles():
+    # the reference q is beyond these strokes: the start is the nearest assembled grid point
+    d = dataclasses.replace(D, q_min=(-0.30, 0.15, 0.20), q_max=(-0.15, 0.30, 0.70))
+    s = app_setup(d, backend="numpy")
+    assert np.all((s.q_home >= s.q_lo) & (s.q_home <= s.q_hi))
+    assert ak.parallel.parallel_forward_kinematics(s.q_home, d).valid[0]
+    v = forward_view(s, s.q_home)
+    assert v.geometry is not None
+
+
+@pytest.mark.parametrize("T, match", [
+    (np.diag([1.0, 2.0, 1.0, 1.0]), "rigid transform"),
+    (np.eye(3), r"expected shape \(..., 4, 4\), got shape \(3, 3\)"),
+])
+def test_setup_rejects_a_non_rigid_rcm_frame(T, match):
+    with pytest.raises(InvalidInputError, match=match):
+        app_setup(D, T, backend="numpy")
+
+
+def test_forward_view_reads_out_the_fk_values(setup):
+    rng = np.random.default_rng(16)
+    checked = 0
+    for q in _random_q(rng, 12, setup):
+        sol = ak.forward_kinematics(q, setup.T_b_e, D, errors="flag")
+        for k in (0, 5, 11):
+            v = forward_view(setup, q, slot=k)
+            assert [s.valid for s in v.slots] == sol.valid.tolist()
+            assert [s.reason for s in v.slots] == sol.reason.tolist()
+            if not sol.valid.any():
+                assert v.geometry is None and v.level == "error"
+                assert Reason(int(sol.reason[0])).name in v.message
+                continue
+            g = v.geometry
+            assert sol.valid[g.slot]
+            if sol.valid[k]:
+                assert g.slot == k
+            else:
+                assert f"slot {k} has no solution here" in v.message
+            r = v.readouts
+            np.testing.assert_allclose(r.q, q, rtol=0, atol=0)
+            np.testing.assert_allclose(r.p, sol.p[g.slot], rtol=0, atol=1e-12)
+            np.testing.assert_allclose(r.u, sol.u[g.slot], rtol=0, atol=1e-12)
+            assert r.mode == sol.mode[g.slot]
+            ref = robot_geometry(q, setup.T_b_e, D, slot=g.slot)
+            np.testing.assert_allclose(r.tip_b, ref.points["tip"], rtol=0, atol=1e-12)
+            T = setup.T_b_e
+            np.testing.assert_allclose(T[:3, :3] @ r.tip_e + T[:3, 3], r.tip_b, atol=1e-12)
+            checked += 1
+    assert checked >= 15
+
+
+def test_all_slots_ghosts_the_other_valid_ones(setup):
+    v = forward_view(setup, setup.q_home, slot="all")
+    valid = [s.slot for s in v.slots if s.valid]
+    assert v.geometry.slot == valid[0]
+    assert sorted(g.slot for g in v.ghosts) == valid[1:]
+    ghosts = ghost_scene(v.ghosts, v.geometry)
+    by = {ls.name: ls for ls in ghosts.lines}
+    inst = by["ghost_instrument"]
+    assert inst.segments.shape == (len(valid) - 1, 2, 3)
+    assert all(c > 150 for c in inst.color)           # paler than the solid red
+    assert "ghost_circle_k1" not in by and "ghost_rail" not in by    # drawn by the solid slot
+    other = next(g for g in v.ghosts if g.mode != v.geometry.mode)    # the other mode, once
+    np.testing.assert_array_equal(by["ghost_parallel"].segments,
+                                  robot_scene(other).lines[1].segments)
+
+
+def test_near_a_singular_set_warns(setup):
+    q = np.array([0.0, 0.002, 0.45])                  # |h| = 1 mm: A and B almost meet
+    v = forward_view(setup, q)
+    assert "ab_coincide" in v.readouts.near and v.level == "warn"
+    d = {x.name: x for x in v.readouts.distances}
+    assert d["ab_coincide"].value == pytest.approx(0.001, abs=1e-15)
+    assert d["ab_coincide"].warn_at == WARN_DISTANCE_M
+    text = readouts_html(v.readouts)
+    assert 'data-ro="d_ab_coincide" data-warn="1"' in text
+    far = readouts_html(forward_view(setup, setup.q_home).readouts)
+    assert 'data-ro="d_ab_coincide" data-warn' not in far
+    assert 'data-ro="q1" style="text-align:right;">-100.00<' in far
+
+
+@pytest.mark.parametrize("slot", [-1, 16, 2.0, "some", True])
+def test_bad_slot_is_named(setup, slot):
+    with pytest.raises(InvalidInputError, match="slot: expected an integer in 0..15 or 'all'"):
+        forward_view(setup, setup.q_home, slot=slot)
+
+
+def test_bad_q_is_named(setup):
+    with pytest.raises(InvalidInputError, match="q"):
+        forward_view(setup, [0.1, np.nan, 0.4])
+
+
+def test_slots_html_greys_invalid_slots_with_their_reason(setup):
+    q = np.array([-0.1, 0.1, 0.45])
+    v = forward_view(setup, q)
+    text = slots_html(v.slots, v.geometry.slot)
+    for s in v.slots:
+        assert f'data-slot="{s.slot}" data-valid="{int(s.valid)}"' in text
+        if not s.valid:
+            assert Reason(s.reason).name in text
+
+
+def test_scene_draws_the_geometry_of_the_static_views(setup):
+    g = robot_geometry(slot=3)
+    sc = robot_scene(g)
+    by = {ls.name: ls for ls in sc.lines}
+    np.testing.assert_array_equal(by["instrument"].segments[0],
+                                  np.stack(g.segments()["instrument"]))
+    np.testing.assert_array_equal(by["actuator_q3"].segments[0],
+                                  np.stack(g.segments()["actuator_q3"]))
+    np.testing.assert_array_equal(by["circle_k1"].segments[:, 0], g.k1[:-1])
+    assert len(by["frame_x"].segments) == 4                   # O_b, O_i, O_s, O_e
+    labels = {lab.text: lab.position for lab in sc.labels}
+    np.testing.assert_array_equal(labels["tip"], g.points["tip"])
+    lo, hi = sc.bounds()
+    assert np.all(lo <= g.points["RCM"]) and np.all(g.points["RCM"] <= hi)
+
+
+def test_angles_round_trip():
+    rng = np.random.default_rng(3)
+    for az, pol, depth in zip(rng.uniform(-3, 3, 20), rng.uniform(0.1, 3.0, 20),
+                              rng.uniform(0.01, 0.4, 20), strict=True):
+        back = angles_from_tip(tip_from_angles(az, pol, depth))
+        np.testing.assert_allclose(back, (az, pol, depth), rtol=0, atol=1e-12)
+
+
+def test_inverse_step_reaches_a_target_and_fk_puts_the_tip_there(setup):
+    v = forward_view(setup, setup.q_home)
+    r = v.readouts
+    rng = np.random.default_rng(7)
+    for d in rng.normal(scale=0.01, size=(8, 3)):
+        st = inverse_step(setup, r.tip_e, r.tip_e + d, r.q, r.mode)
+        assert st.reached and st.reason == 0 and st.message == ""
+        q_ref, _ = ak.q_from_tool_tip(setup.T_b_e, r.tip_e + d, D)
+        np.testing.assert_allclose(st.q, q_ref, rtol=0, atol=1e-12)
+        w = forward_view(setup, st.q, slot=0)
+        np.testing.assert_allclose(w.readouts.tip_e, r.tip_e + d, rtol=0, atol=1e-9)
+
+
+def test_inverse_step_stops_at_the_workspace_boundary(setup):
+    r = forward_view(setup, setup.q_home).readouts
+    target = r.tip_e + np.array([0.0, 0.5, 0.0])       # far out of the workspace
+    st = inverse_step(setup, r.tip_e, target, r.q, r.mode, n=64)
+    assert not st.reached and st.reason != 0
+    assert "workspace boundary" in st.message
+    _, ok = ak.q_from_tool_tip(setup.T_b_e, st.tip_e, D, errors="flag")
+    assert ok.valid and ok.mode == r.mode                   # the robot stays where it is valid
+    beyond = st.tip_e + (target - r.tip_e) / 64
+    _, nxt = ak.q_from_tool_tip(setup.T_b_e, beyond, D, errors="flag")
+    assert not nxt.valid                                    # ... and just before the boundary
+    # no jump: each of the sampled steps moves q by little
+    qs, _ = ak.q_from_tool_tip(setup.T_b_e, r.tip_e + np.linspace(0, 1, 65)[1:, None]
+                               * (st.tip_e - r.tip_e), D, errors="flag")
+    assert np.max(np.abs(np.diff(qs, axis=0))) < 0.01
+
+
+def test_inverse_step_names_the_stroke_limit_it_stops_at(setup):
+    r = forward_view(setup, setup.q_home).readouts
+    st = inverse_step(setup, r.tip_e, r.tip_e + np.array([0.0, 0.0, -0.2]), r.q, r.mode)
+    assert not st.reached and st.reason == Reason.STROKE_LIMIT
+    assert "STROKE_LIMIT" in st.message
+    assert np.all(st.q >= D.stroke_min) and np.all(st.q <= D.stroke_max)
+    assert np.min(np.minimum(st.q - D.stroke_min, D.stroke_max - st.q)) < 0.01   # at the limit
+
+
+def test_inverse_step_holds_q_when_even_the_first_step_fails(setup):
+    r = forward_view(setup, setup.q_home).readouts
+    st = inverse_step(setup, r.tip_e, -r.tip_e, r.q, r.mode, n=1)   # tip behind the RCM...
+    st2 = inverse_step(setup, r.tip_e, r.tip_e * 2.0, r.q, r.mode, n=1)   # beyond L
+    for s in (st, st2):
+        assert not s.reached
+        np.testing.assert_array_equal(s.q, r.q)
+        assert "actuators held" in s.message
+    assert st2.reason == Reason.INSERTION_RANGE
+
+
+def _csv(tmp_path, text, name="traj.csv"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def test_playback_reads_a_plan_csv_and_samples_it(tmp_path):
+    p = _csv(tmp_path, "t_s,q1_m,q2_m,q3_m,tip_x_m\n0.0,-0.1,0.1,0.45,1\n0.5,-0.11,0.1,0.45,1\n"
+                       "1.0,-0.12,0.1,,1\n")
+    pb = load_playback(p)
+    np.testing.assert_array_equal(pb.t, [0.0, 0.5, 1.0])
+    np.testing.assert_array_equal(pb.q[2], pb.q[1])          # a missing reading holds
+    assert pb.duration == 1.0
+    for t, k in ((-1.0, 0), (0.0, 0), (0.49, 0), (0.5, 1), (0.9, 1), (7.0, 2)):
+        q, i = playback_q(pb, t)
+        assert i == k
+        np.testing.assert_array_equal(q, pb.q[k])
+
+
+@pytest.mark.parametrize("text, match", [
+    ("t_s,q1_m,q2_m,q3_m\n0,-0.1,0.1,0.45\n1,-0.1,abc,0.45\n", "line 3.*q2_m"),
+    ("t_s,q1_m,q3_m\n0,-0.1,0.45\n", "missing"),
+    ("t_s,q1_m,q2_m,q3_m\n0,-0.1,0.1,0.45\n0,-0.1,0.1,0.45\n", "does not increase"),
+    ("t_s,q1_m,q2_m,q3_m\n", "no readings"),
+])
+def test_playback_names_bad_rows(tmp_path, text, match):
+    with pytest.raises(PathFileError, match=match):
+        load_playback(_csv(tmp_path, text))
+
+
+def test_playback_of_a_missing_file_is_a_path_error(tmp_path):
+    with pytest.raises(PathFileError, match="cannot read"):
+        load_playback(tmp_path / "nope.csv")
+
+
+def test_cli_registers_app():
+    from athenakin.cli import COMMANDS, build_parser
+
+    assert "app" in COMMANDS
+    args = build_parser().parse_args(["app", "--port", "0"])
+    assert args.host == "127.0.0.1" and args.port == 0
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_app_keeps_running_on_bad_inputs(tmp_path):
+    from athenakin.app import AthenaApp
+
+    bad_design = _csv(tmp_path, "[design]\nl1 = 0.05\nl2 = 0.1\nl3 = 0.04\nl4 = 0.15\n"
+                                "l5 = 5.0\n", "bad.toml")
+    rcm = _csv(tmp_path, '{"T_b_e": [[1, 0, 0, 0], [0, 2, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}',
+               "rcm.json")
+    traj = _csv(tmp_path, "t_s,q1_m,q2_m,q3_m\n0,-0.1,0.1,0.45\n1,x,0.1,0.45\n")
+    app = AthenaApp(bad_design, rcm, port=0, trajectory=traj, backend="numpy")
+    try:
+        text = " | ".join(app.errors)
+        assert "bad.toml" in text or "design" in text
+        assert "rigid transform" in text
+        assert "line 3" in text and "q1_m" in text
+        assert app.setup.design == D                    # fell back to the reference
+        assert "Problems" in app._banner.content
+        v = app.set_q([-0.12, 0.08, 0.47])              # ... and keeps answering
+        assert v.geometry is not None and app.view is v
+        np.testing.assert_allclose(v.readouts.q, [-0.12, 0.08, 0.47])
+        bad = app.set_q([0.1, -0.1, 0.45])              # no solution: message, robot kept
+        assert bad.geometry is None and app.view is v
+        assert 'data-level="error"' in app._status.content
+    finally:
+        app.stop()
+
+
+def test_cli_without_viser_names_the_extra(monkeypatch, capsys):
+    import sys
+
+    from athenakin.cli import main
+
+    monkeypatch.setitem(sys.modules, "viser", None)          # import viser fails
+    assert main(["app", "--port", "0"]) == 1
+    assert "pip install 'athenakin[app]'" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_app_tip_handle_and_slot_menu_in_process():
+    from types import SimpleNamespace
+
+    from athenakin.app import AthenaApp
+
+    app = AthenaApp(port=0, backend="numpy")
+    try:
+        r = app.view.readouts
+        T = app.setup.T_b_e
+        target_e = r.tip_e + np.array([0.0, 0.01, 0.01])
+        app._handle.position = tuple(T[:3, :3] @ target_e + T[:3, 3])   # a drag ...
+        app._on_handle(SimpleNamespace(phase="update"))
+        app._on_handle(SimpleNamespace(phase="end"))                      # ... and release
+        q_ref, _ = ak.q_from_tool_tip(T, target_e, D)
+        np.testing.assert_allclose(app.q, q_ref, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(app._handle.position, app.view.readouts.tip_b, atol=1e-6)
+        assert [sl.value for sl in app._q_sliders] == pytest.approx(q_ref * 1e3, abs=1e-3)
+        far = T[:3, :3] @ (r.tip_e * 5.0) + T[:3, 3]                    # beyond the tool
+        app._handle.position = tuple(far)
+        app._on_handle(SimpleNamespace(phase="end"))
+        assert "stopped at the workspace boundary" in app._status.content
+        assert app.view.geometry is not None                               # held, drawn
+        _, ok = ak.q_from_tool_tip(T, app.view.readouts.tip_e, D, errors="flag")
+        assert ok.valid
+        # the slot menu: invalid slots are marked with their reason
+        v = app.set_q([-0.1, 0.1, 0.26])                # near the tangency: some invalid
+        opts = app._slot_dd.options
+        assert len(opts) == 17 and opts[0].startswith("all valid")
+        for s in v.slots:
+            assert opts[1 + s.slot].startswith(s.label)
+            assert ("invalid" in opts[1 + s.slot]) == (not s.valid)
+    finally:
+        app.stop()
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_launch_playback_and_setup_tab_in_process(tmp_path, capsys):
+    import time
+
+    from athenakin.app import launch
+
+    traj = _csv(tmp_path, "t_s,q1_m,q2_m,q3_m\n0,-0.1,0.1,0.45\n0.1,-0.11,0.09,0.46\n"
+                          "0.2,-0.12,0.08,0.47\n")
+    app = launch(port=0, trajectory=traj, backend="numpy")
+    try:
+        assert f"ATHENA at {app.url}" in capsys.readouterr().out
+        assert app.url.startswith("http://127.0.0.1:")
+        np.testing.assert_allclose(app.q, [-0.1, 0.1, 0.45])
+        app._start_playing()                                    # the play button
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < 10 and not np.allclose(app.q, [-0.12, 0.08, 0.47]):
+            time.sleep(0.05)
+        np.testing.assert_allclose(app.q, [-0.12, 0.08, 0.47])
+        # the set-up tab: another design is applied, a bad one refused
+        other = dataclasses.replace(D, q_min=(-0.25, -0.05, 0.25), name="narrow")
+        (tmp_path / "narrow.toml").write_text(other.to_toml())
+        app._design_path.value = str(tmp_path / "narrow.toml")
+        app._change_setup()
+        assert app.setup.design == other
+        assert [sl.min for sl in app._q_sliders] == pytest.approx([-250.0, -50.0, 250.0])
+        app._design_path.value = str(tmp_path / "missing.toml")
+        app._change_setup()
+        assert app.setup.design == other
+        assert "set-up not changed" in app._status.content
+    finally:
+        app.stop()
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_cli_reports_bad_inputs_at_startup_and_serves(tmp_path):
+    import signal
+    import subprocess
+    import sys
+
+    bad = _csv(tmp_path, "[design]\nl1 = 0.3\nl2 = 0.1\nl3 = 0.25\nl4 = 0.15\nl5 = 5.0\n",
+               "far.toml")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "athenakin.cli", "app", "--port", "0", "--backend", "numpy",
+         "--design", str(bad), "--trajectory", str(tmp_path / "none.csv")],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        lines = []
+        for line in proc.stdout:
+            lines.append(line)
+            if "serving ATHENA at" in line:
+                break
+        text = "".join(lines)
+        assert "warning: design: OutOfWorkspaceError" in text and "assembles nowhere" in text
+        assert "warning: trajectory: PathFileError" in text and "none.csv" in text
+        assert "serving ATHENA at http://127.0.0.1:" in text
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=20) == 0
+        assert "athenakin app: stopped" in proc.stdout.read()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
