@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..design import Design
 from ._common import add_design_option, add_setup_options, check_dpi, load_design, load_rcm
 from ._output import add_force_option, outputs
 
@@ -87,7 +88,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _render(args: argparse.Namespace, out: Path, q: np.ndarray | None, T: np.ndarray,
-            design: object) -> None:
+            design: Design) -> None:
     from ..plot import save_view
 
     kw: dict = {"show_frames": not args.no_frames}  # type: ignore[type-arg]
