@@ -231,6 +231,10 @@ def argv_for(command: str) -> st.SearchStrategy[list[str]]:
                  opt("--slot", st.sampled_from([["0"], ["16"]])),
                  opt("--check", st.sampled_from([["-1"], ["100000000"]])),
                  INPUT_OPTS]
+    elif command == "design":
+        parts = [c, opt("--write", st.sampled_from([[OUT + "/d.toml"], ["{design}"],
+                                                    [OUT + "/missing/d.toml"]])),
+                 opt("--force", st.just([])), opt("--design", st.just(["{design}"]))]
     elif command == "demo":
         parts = [c, opt("--design", st.just(["{design}"])), opt("--json", st.just([]))]
     else:
@@ -240,7 +244,7 @@ def argv_for(command: str) -> st.SearchStrategy[list[str]]:
 
 #: Examples per command: the slow commands (rendering, planning) get fewer.
 BUDGET = {"fk": 60, "ik": 60, "singularities": 30, "plan": 40, "track": 30, "view": 12,
-          "animate": 12, "workspace": 12, "export": 15, "demo": 10}
+          "animate": 12, "workspace": 12, "export": 15, "demo": 10, "design": 20}
 
 
 def _run(argv: list[str], csv: str, design: str, rcm: str) -> None:
