@@ -248,3 +248,35 @@ def test_optimize_places_the_reference_on_the_front() -> None:
     if r.dominating:
         assert r.gains["coverage_mode"] >= 0 and r.gains["size"] >= 0
         assert not r.reference_on_front
+
+
+EXAMPLE = str(__import__("pathlib").Path(__file__).parents[1]
+              / "examples/synthesis/task_pancreas.toml")
+
+
+def test_cli_synthesize_locally_with_figures(tmp_path, capsys) -> None:
+    pytest.importorskip("dask")
+    pytest.importorskip("matplotlib")
+    from athenakin.cli import main
+
+    out = tmp_path / "r.parquet"
+    rc = main(["synthesize", EXAMPLE, "--designs", "3", "--samples", "500", "-o", str(out),
+               "--scheduler", "synchronous"])
+    text = capsys.readouterr().out
+    assert rc == 0 and "4 designs" in text and "cov. 1 mode" in text
+    for name in ("pareto.png", "parameters.png", "coverage.png"):
+        assert (tmp_path / "r.parquet-figures" / name).stat().st_size > 1000
+    from athenakin.synthesis import read_study
+
+    df = read_study(out)
+    assert len(df) == 4 and df["name"][0] == REF.name
+
+
+def test_cli_bad_task_file_is_one_line(tmp_path, capsys) -> None:
+    from athenakin.cli import main
+
+    p = tmp_path / "t.toml"
+    p.write_text("[task]\nrcm = [0, 0, 0]\n")
+    assert main(["synthesize", str(p), "-o", str(tmp_path / "o")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "TaskFileError" in err and "missing axis" in err

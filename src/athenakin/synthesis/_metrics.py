@@ -208,9 +208,10 @@ def metrics_or_reason(row: Mapping[str, Any], task: Task, *, samples: int, seed:
         design = design_from_row(row)
     except (InvalidInputError, TypeError, ValueError) as exc:
         return dict.fromkeys(METRIC_COLUMNS, math.nan), f"{type(exc).__name__}: {exc}"
-    if not _assembles(design):
+    metrics = evaluate_design(design, task, samples=samples, seed=seed,
+                              encoder_resolution=encoder_resolution)
+    if metrics["coverage"] == 0.0 and not _assembles(design):
         return (dict.fromkeys(METRIC_COLUMNS, math.nan),
                 f"strokes cannot assemble: no q of a {ASSEMBLY_GRID}^3 grid over the stroke box "
                 f"closes the parallel module")
-    return evaluate_design(design, task, samples=samples, seed=seed,
-                           encoder_resolution=encoder_resolution), ""
+    return metrics, ""
