@@ -161,11 +161,9 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
     qv, mv = q[idx], mode[idx]
     J_tip = tool_tip_jacobian(qv, T, design, mode=mv)
     J_par = parallel_jacobian(qv, design, mode=mv)
-    d_b = (T[:3, :3] @ s.direction_e[idx].T).T
-    O_s = T[:3, 3] - (design.tool_length - s.depth[idx])[:, None] * d_b
     lo, hi = design.stroke_min, design.stroke_max
     counts, margin, arg_margin, cond, arg_cond, q_lo, q_hi, tip = reduce_samples(
-        qv, mv, np.ones(len(idx), np.bool_), O_s, T[:3, 3].copy(), s.direction_e[idx],
+        idx, qv, mv, np.ascontiguousarray(T[:3, :3]), T[:3, 3].copy(), s.direction_e, s.depth,
         J_tip, J_par, design.lengths, design.tool_length, lo, hi, float(encoder_resolution))
     out: dict[str, float] = {}
     n_plus, n_minus = int(counts[1]), int(counts[2])
