@@ -64,7 +64,7 @@ def reference(task: Task, designs: list[object]) -> object:
 @pytest.fixture(scope="module")
 def cluster(reference: object) -> object:   # after the reference: numba's cache is warm
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  host="127.0.0.1", dashboard_address=None,
+                                  host="127.0.0.1", dashboard_address="127.0.0.1:0",
                                   silence_logs=50) as lc:
         yield lc
 
