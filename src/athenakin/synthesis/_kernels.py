@@ -21,10 +21,9 @@ CONDITION_ORDER = ("circles_tangent", "d_on_rail", "k1_degenerate", "ab_coincide
                    "k2_degenerate", "stroke_limit", "p_zero", "ujoint", "wrist", "ik_cos_u1",
                    "ik_sin_u1_sin_u2", "tip_at_rcm")
 
-_OPTS = {"cache": True, "nogil": True, "fastmath": False, "error_model": "numpy"}
 
 
-@njit(**_OPTS)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _cond3(J):  # type: ignore[no-untyped-def]
     """2-norm condition number of a 3 x 3 matrix from the eigenvalues of J^T J."""
     a11 = J[0, 0] * J[0, 0] + J[1, 0] * J[1, 0] + J[2, 0] * J[2, 0]
@@ -57,7 +56,7 @@ def _cond3(J):  # type: ignore[no-untyped-def]
     return math.sqrt(e1 / e3)
 
 
-@njit(**_OPTS)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _kappa_f2(J):  # type: ignore[no-untyped-def]
     """Squared Frobenius condition number ``|J|_F^2 |adj J|_F^2 / det(J)^2`` of a 3 x 3 matrix.
 
@@ -88,7 +87,7 @@ def _kappa_f2(J):  # type: ignore[no-untyped-def]
     return num / (det * det)
 
 
-@njit(**_OPTS)
+@njit(cache=True, nogil=True, error_model="numpy")
 def reduce_samples(idx, q, mode, R, rcm, d_e, depth, J_tip, J_par, lengths, L, lo,  # type: ignore[no-untyped-def]
                    hi, resolution):
     """Reduce one design's reachable samples ``idx`` (rows of ``J_tip``, ``J_par``).

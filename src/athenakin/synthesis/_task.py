@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import tomllib
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import transform_from_rotation_translation
@@ -187,7 +187,9 @@ class Task:
 
     @classmethod
     def from_toml(cls, path: str | Path) -> Task:
-        """Load a task from a TOML file (a ``[task]`` table, or the keys at top level)::
+        """Load a task from a TOML file.
+
+        The file holds a ``[task]`` table, or the keys at top level::
 
             [task]
             rcm = [0.0, 0.35, -0.10]      # m, base frame
