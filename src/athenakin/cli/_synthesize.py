@@ -148,6 +148,7 @@ def _report(df: Any, result: Any, top: int) -> dict[str, Any]:
         rep["reference_on_front"] = result.reference_on_front
         rep["dominating"] = result.dominating
         rep["gains"] = result.gains
+        rep["trade_offs"] = result.trade_offs
     return rep
 
 
@@ -176,4 +177,8 @@ def _print(task: Any, rep: dict[str, Any], files: list[str], search: bool) -> No
               + (f" by {rep['dominating']} of them" if rep["dominating"] else ""))
         for k, v in rep["gains"].items():
             print(f"  best gain over the reference in {k}: {v:.4g}")
+        for k, t in rep["trade_offs"].items():
+            others = ", ".join(f"{m} {t[m]:+.4g}" for m in t if m not in ("design", k))
+            print(f"  best {k} on the front: design {int(t['design'])}, {t[k]:+.4g} against "
+                  f"the reference, at {others}")
     print("files: " + ", ".join(files))
