@@ -158,7 +158,8 @@ def _print(task: Any, rep: dict[str, Any], files: list[str], search: bool) -> No
     print(f"task {task.name!r}: cone {math.degrees(task.half_angle):.1f} deg about "
           f"{[round(x, 4) for x in task.axis.tolist()]}, depth {task.depth[0]:.3f}.."
           f"{task.depth[1]:.3f} m beyond the RCM")
-    print(f"{rep['designs']} designs, {rep['valid']} valid")
+    n = rep["designs"]
+    print(f"{n} design{'' if n == 1 else 's'}, {rep['valid']} valid")
     headers = ["design", "coverage", "cov. 1 mode", "size m", "tip err. um", "margin m",
                "cond tip"]
 
