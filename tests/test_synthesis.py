@@ -280,3 +280,11 @@ def test_cli_bad_task_file_is_one_line(tmp_path, capsys) -> None:
     assert main(["synthesize", str(p), "-o", str(tmp_path / "o")]) == 1
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "TaskFileError" in err and "missing axis" in err
+
+
+def test_docstring_examples_of_the_task_module() -> None:
+    import doctest
+
+    import athenakin.synthesis._task as mod
+
+    assert doctest.testmod(mod, optionflags=doctest.ELLIPSIS).failed == 0
