@@ -107,7 +107,7 @@ def reachability(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLES, 
     samples : int, keyword-only
     seed : int, keyword-only
     backend : {"numba", "numpy"}, keyword-only
-        Backend of :func:`athenakin.q_from_instrument`.
+        Backend of :func:`athenakin.q_from_instrument` (the compiled kernel by default).
 
     Returns
     -------
@@ -120,7 +120,7 @@ def reachability(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLES, 
     reason : ndarray of int8, shape (n,)
         :class:`~athenakin.errors.Reason` of each sample (0 where reachable).
     """
-    from ..robot import q_from_instrument
+    from .._dispatch import q_from_instrument
 
     s = _samples(task, int(samples), int(seed))
     q, res = q_from_instrument(task.T_b_e, s.direction_e, design.tool_length - s.depth, design,
@@ -149,8 +149,7 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
         One entry per name in :data:`METRIC_COLUMNS`. Metrics taken over the
         reachable samples are NaN exactly where ``coverage == 0``.
     """
-    from ..analysis import condition_number, singularities
-    from ..fast import parallel_jacobian, tool_tip_jacobian
+    from ..analysis import condition_number, parallel_jacobian, singularities, tool_tip_jacobian
     from ._kernels import CONDITION_ORDER, reduce_samples
 
     s, q, mode, _ = reachability(design, task, samples=samples, seed=seed)
@@ -159,8 +158,8 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
     valid = mode != 0
     idx = np.flatnonzero(valid)
     qv, mv = q[idx], mode[idx]
-    J_tip = tool_tip_jacobian(qv, T, design, mode=mv)
-    J_par = parallel_jacobian(qv, design, mode=mv)
+    J_tip = tool_tip_jacobian(qv, T, design, mode=mv, backend="numba")
+    J_par = parallel_jacobian(qv, design, mode=mv, backend="numba")
     lo, hi = design.stroke_min, design.stroke_max
     counts, margin, arg_margin, cond, arg_cond, q_lo, q_hi, tip = reduce_samples(
         idx, qv, mv, np.ascontiguousarray(T[:3, :3]), T[:3, 3].copy(), s.direction_e, s.depth,
