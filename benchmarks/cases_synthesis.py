@@ -31,6 +31,10 @@ def _task() -> Task:
     return Task(rcm=T[:3, 3], axis=T[:3, 0], half_angle=np.radians(25.0), depth=(0.2, 0.3))
 
 
+def _warm() -> None:
+    evaluate_design(ak.Design.default(), _task(), samples=100, seed=0)
+
+
 def _client(n_workers: int):
     if n_workers not in _CLUSTERS:
         from distributed import Client, LocalCluster
@@ -38,6 +42,8 @@ def _client(n_workers: int):
         cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
                                host="127.0.0.1", dashboard_address="127.0.0.1:0", silence_logs=50)
         client = Client(cluster, set_as_default=False)
+        client.wait_for_workers(n_workers)
+        client.run(_warm)                     # every worker imports and loads the kernels
         _CLUSTERS[n_workers] = (cluster, client)
         atexit.register(lambda: (client.close(), cluster.close()))
     return _CLUSTERS[n_workers][1]
