@@ -70,8 +70,11 @@ def run(args: argparse.Namespace) -> int:
                                   connect_timeout=args.connect_timeout)
     result: Any = None
     if args.optimize:
+        if out.exists() and (not out.is_dir() or any(out.iterdir())):
+            raise FileExistsError(f"{out}: exists and is not an empty folder; a search writes "
+                                  f"a new one (-o)")
         result = optimize(task, bounds=bounds, reference=ref, population=args.population,
-                          generations=args.generations, **common)
+                          generations=args.generations, progress=not args.json, **common)
         df = result.table
         out.mkdir(parents=True, exist_ok=True)
         df.to_parquet(out / "part-000000.parquet", index=False)
