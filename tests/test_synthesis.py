@@ -288,3 +288,21 @@ def test_docstring_examples_of_the_task_module() -> None:
     import athenakin.synthesis._task as mod
 
     assert doctest.testmod(mod, optionflags=doctest.ELLIPSIS).failed == 0
+
+
+def test_cli_optimize_json(tmp_path, capsys) -> None:
+    pytest.importorskip("pymoo")
+    import json
+
+    from athenakin.cli import main
+
+    out = tmp_path / "s.parquet"
+    args = ["synthesize", EXAMPLE, "--optimize", "--population", "4", "--generations", "1",
+            "--samples", "300", "--scheduler", "synchronous", "-o", str(out), "--no-figures"]
+    assert main([*args, "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["designs"] == 5 and rep["front"] and set(rep["trade_offs"]) == {
+        "coverage_mode", "size", "tip_error_max"}
+    assert isinstance(rep["reference_on_front"], bool)
+    assert main(args) == 1                                     # the folder is not empty now
+    assert "FileExistsError" in capsys.readouterr().err
