@@ -62,7 +62,8 @@ def _designs(n: int) -> list:
 def _study(n_workers: int, designs: list, task: Task, samples: int):
     def call():
         evaluate(designs, task, samples=samples, seed=next(_SEEDS),
-                 scheduler=_client(n_workers), progress=False)
+                 scheduler=_client(n_workers), progress=False,
+                 chunk_size=max(1, len(designs) // 8))    # 8 chunks: 4 per worker of 2
     return call
 
 
