@@ -306,3 +306,15 @@ def test_cli_optimize_json(tmp_path, capsys) -> None:
     assert isinstance(rep["reference_on_front"], bool)
     assert main(args) == 1                                     # the folder is not empty now
     assert "FileExistsError" in capsys.readouterr().err
+
+
+def test_mapping_without_strokes_is_an_unlimited_design_in_the_table() -> None:
+    pytest.importorskip("dask")
+    from athenakin.synthesis import evaluate
+
+    row = {"l1": 0.3, "l2": 0.1, "l3": 0.25, "l4": 0.15, "l5": 0.4, "name": math.nan}
+    df = evaluate([row], _task(), samples=300, seed=0, scheduler="synchronous", progress=False)
+    r = df.iloc[0]
+    assert r["valid"] and r["name"] == "" and r["tool_length"] == REF.tool_length
+    assert r["q1_min"] == -math.inf and r["q3_max"] == math.inf and r["size"] == math.inf
+    assert r["stroke_use_q1"] == 0.0 and r["coverage"] > 0

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import math
@@ -62,7 +63,8 @@ def design_rows(designs: Any) -> list[dict[str, Any]]:
     designs : sequence of Design or of mappings, or pandas.DataFrame
         A :class:`~athenakin.Design` or a mapping / DataFrame row with the columns of
         :data:`~athenakin.synthesis.PARAMETER_COLUMNS` (``l1..l5`` required; missing
-        strokes are unlimited). Bad values are kept: :func:`evaluate` flags them.
+        strokes are unlimited, ``tool_length`` 0.45 m, ``ab_order`` ``"q1<q2"``, as for
+        :class:`~athenakin.Design`). Bad values are kept: :func:`evaluate` flags them.
 
     Returns
     -------
@@ -80,7 +82,7 @@ def design_rows(designs: Any) -> list[dict[str, Any]]:
         if isinstance(d, Design):
             row = row_from_design(d)
         elif isinstance(d, Mapping):
-            row = {}
+            row = dict(_DEFAULTS)                 # what Design assumes for a missing key
             for k, v in d.items():
                 if k not in PARAMETER_COLUMNS and k != "name":
                     continue
@@ -88,12 +90,19 @@ def design_rows(designs: Any) -> list[dict[str, Any]]:
         else:
             raise TypeError(f"designs[{i}]: expected a Design or a mapping, got "
                             f"{type(d).__name__}")
-        row["name"] = str(getattr(d, "name", "") if isinstance(d, Design)
-                          else d.get("name", "") or "")
+        name = d.name if isinstance(d, Design) else d.get("name", "")
+        row["name"] = name if isinstance(name, str) else ""
         rows.append(row)
     if not rows:
         raise InvalidInputError("designs: expected at least one design, got none")
     return rows
+
+
+#: Parameters a mapping may leave out: unlimited strokes, the default tool and A/B order.
+_DEFAULTS: dict[str, Any] = {
+    **{f"q{i}_min": -math.inf for i in (1, 2, 3)}, **{f"q{i}_max": math.inf for i in (1, 2, 3)},
+    **{f.name: f.default for f in dataclasses.fields(Design) if f.name in ("tool_length",
+                                                                          "ab_order")}}
 
 
 def _plain(v: Any) -> Any:
