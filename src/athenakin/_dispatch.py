@@ -195,7 +195,8 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
                        method: FKMethod = "closed", errors: ErrorPolicy = "auto",
                        tangent_tol: float = TANGENT_TOL, degenerate_tol: float = DEGENERATE_TOL,
                        p_zero_tol: float = P_ZERO_TOL, closure_tol: float = CLOSURE_TOL,
-                       backend: Backend = "auto") -> FKSolution:
+                       fields: tuple[str, ...] | None = None, backend: Backend = "auto"
+                       ) -> FKSolution:
     """All (up to) 16 configurations of the robot for actuator values ``q`` (Section 3).
 
     Parameters
@@ -208,6 +209,10 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
         Defaults to :meth:`Design.default`.
     method, errors, tangent_tol, degenerate_tol, p_zero_tol, closure_tol : keyword-only
         As in the reference :func:`athenakin.robot.forward_kinematics`.
+    fields : tuple of str, optional, keyword-only
+        Compute and store only these arrays (names in :data:`athenakin.robot.FK_FIELDS`;
+        e.g. ``("p", "u", "valid")`` for sweeps, a third less memory written); the
+        result always holds ``item_reason``. ``None`` (default): all.
     backend : {"auto", "numpy", "numba"}, keyword-only
         ``"auto"`` (default): the compiled kernels of :mod:`athenakin.fast` where
         numba imports, else the numpy reference; ``"numba"``: compiled (ImportError
@@ -237,7 +242,8 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
         api = _STATE["api"]
         if (type(q) is np.ndarray and type(T_b_e) is np.ndarray and q.dtype is _F8
                 and T_b_e.dtype is _F8 and q.shape == (3,) and T_b_e.shape == (4, 4)
-                and method == "closed" and (errors == "auto" or errors == "raise")
+                and fields is None and method == "closed"
+                and (errors == "auto" or errors == "raise")
                 and tangent_tol == TANGENT_TOL and degenerate_tol == DEGENERATE_TOL
                 and p_zero_tol == P_ZERO_TOL and closure_tol == CLOSURE_TOL):
             # the lean single call (control loops): straight to the packed kernel
@@ -248,9 +254,11 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
                     return sol  # type: ignore[no-any-return]
         return api.forward_kinematics(  # type: ignore[no-any-return]
             q, T_b_e, design, method=method, errors=errors, tangent_tol=tangent_tol,
-            degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol, closure_tol=closure_tol)
+            degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol, closure_tol=closure_tol,
+            fields=fields)
     kw = dict(method=method, errors=errors, tangent_tol=tangent_tol,
-              degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol, closure_tol=closure_tol)
+              degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol, closure_tol=closure_tol,
+              fields=fields)
     if resolve_backend(backend):
         api = _api()
         return _first("fk", lambda: api.forward_kinematics(q, T_b_e, design, **kw))

@@ -2,7 +2,9 @@
 
 from ..design import Design
 from ._fk import (
+    FK_FIELDS,
     SLOT_MODE,
+    SLOT_MODE_INDEX,
     SLOT_P_SIGN,
     SLOT_UJOINT,
     SLOT_WRIST,
@@ -24,6 +26,7 @@ from ._setup import REFERENCE_DIRECTION_B, REFERENCE_P, REFERENCE_Q, default_rcm
 
 __all__ = [
     "Design",
+    "FK_FIELDS",
     "FKSolution",
     "IK_SINGULAR_TOL",
     "InstrumentIK",
@@ -32,6 +35,7 @@ __all__ = [
     "REFERENCE_P",
     "REFERENCE_Q",
     "SLOT_MODE",
+    "SLOT_MODE_INDEX",
     "SLOT_P_SIGN",
     "SLOT_UJOINT",
     "SLOT_WRIST",
