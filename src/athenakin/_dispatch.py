@@ -17,8 +17,9 @@ values to 1e-12, the same reason codes and raise the same errors (tested).
 
 The compiled kernels are cached on disk (numba ``cache=True``) next to their
 sources, or under the user cache directory (``~/.cache/athenakin/numba``) when the
-package directory is not writable. When the first call of a process compiles them,
-one line on stderr says so (``athenakin warmup`` compiles them ahead).
+package directory is not writable. When the first call of a process takes long
+(compiling them the first time, about a minute; loading numba and the cache
+later, about a second), one line on stderr says so.
 """
 
 from __future__ import annotations
@@ -174,8 +175,8 @@ def _notice() -> None:
     if not _STATE.get("noticed"):
         _STATE["noticed"] = True
         where = os.environ.get("NUMBA_CACHE_DIR") or "the package's __pycache__"
-        print("athenakin: compiling the numba kernels on first use (once; cached in "
-              f"{where}; `athenakin warmup` does it ahead) ...", file=sys.stderr, flush=True)
+        print("athenakin: compiling the numba kernels on first use, or loading them from the "
+              f"cache ({where}) ...", file=sys.stderr, flush=True)
 
 
 def _first(name: str, call: Callable[[], _R]) -> _R:
