@@ -139,6 +139,16 @@ def test_a_long_first_call_says_so_on_stderr(monkeypatch, capsys):
     assert "probe" in _dispatch._WARM
 
 
+def test_warmup_command(capsys, monkeypatch):
+    from athenakin.cli import main
+
+    assert main(["warmup"]) == 0
+    assert "11 entry points ready" in capsys.readouterr().out
+    monkeypatch.setitem(_dispatch._STATE, "numba", False)
+    assert main(["warmup"]) == 0
+    assert "nothing to compile" in capsys.readouterr().out
+
+
 # --- fields=, the per-mode T_b_s, old attribute access -----------------------------------
 @pytest.mark.parametrize("backend", ["numba", "numpy"])
 @pytest.mark.parametrize("fields", [("p", "u", "valid"), ("T_b_s",), ("reason", "residual"),

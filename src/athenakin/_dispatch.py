@@ -51,6 +51,7 @@ __all__ = [
     "numba_available",
     "resolve_backend",
     "user_cache_dir",
+    "warmup",
     "forward_kinematics",
     "inverse_kinematics",
     "q_from_instrument",
@@ -189,6 +190,49 @@ def _first(name: str, call: Callable[[], _R]) -> _R:
     finally:
         timer.cancel()
         _WARM.add(name)
+
+
+def warmup(design: Design | None = None) -> int:
+    """Run every compiled entry point once, single pose and batch: compiles or loads the kernels.
+
+    Parameters
+    ----------
+    design : Design, optional
+
+    Returns
+    -------
+    int
+        Number of entry points run (0 where numba is not available).
+    """
+    if not numba_available():
+        return 0
+    from .robot._setup import REFERENCE_Q, default_rcm_frame
+
+    T = default_rcm_frame(design)
+    q = np.array(REFERENCE_Q, dtype=float)
+    qq = np.stack([q, q])
+    sol = forward_kinematics(q, T, design, errors="flag")
+    forward_kinematics(qq, T, design, errors="flag")
+    forward_kinematics(qq, T, design, errors="flag", fields=("p", "u", "valid"))
+    u345 = np.nan_to_num(np.ascontiguousarray(sol.u[0, 2:]))
+    inverse_kinematics(T, u345, design, errors="flag")
+    inverse_kinematics(T, np.stack([u345, u345]), design, errors="flag")
+    tip = np.array([0.0, 0.0, 0.1])
+    q_from_tool_tip(T, tip, design, errors="flag")
+    q_from_tool_tip(T, np.stack([tip, tip]), design, errors="flag")
+    q_from_instrument(T, tip, 0.2, design, errors="flag")
+    q_from_instrument(T, np.stack([tip, tip]), np.array([0.2, 0.2]), design, errors="flag")
+    names = ("parallel_jacobian", "parallel_inverse_jacobian", "parallel_twist_jacobian",
+             "instrument_jacobian", "instrument_inverse_jacobian", "tool_tip_jacobian",
+             "tool_tip_inverse_jacobian")
+    for name in names:
+        fn = globals()[name]
+        for x in (q, qq):
+            if name.startswith("parallel"):
+                fn(x, design)
+            else:
+                fn(x, None, design)
+    return 4 + len(names)
 
 
 # --- whole robot ---------------------------------------------------------------------------

@@ -22,7 +22,7 @@ _EXTRA_OF = {"sympy": "symbolic", "matplotlib": "plot", "plotly": "plot", "image
 
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
 COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
-            "animate", "export", "derive"]
+            "animate", "export", "derive", "warmup"]
 
 
 def build_parser() -> argparse.ArgumentParser:
