@@ -166,6 +166,28 @@ def test_fields_hold_the_full_results_values(rc, backend, fields):
     assert "FKSolution(batch (200,)" in repr(part)
 
 
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+@pytest.mark.parametrize("fields", [("valid",), ("p", "u"), ("T_b_s", "mode", "residual"),
+                                    "reason"])
+def test_ik_fields_hold_the_full_results_values(rc, backend, fields):
+    u = rc.u[:, 2:].copy()
+    u[:3] = [0.1, 0.0, 0.2]         # sin u4 = 0: a few singular items among the valid ones
+    q_full, full = ak.inverse_kinematics(rc.T_b_e, u, D, backend=backend)
+    q, part = ak.inverse_kinematics(rc.T_b_e, u, D, fields=fields, backend=backend)
+    np.testing.assert_array_equal(q, q_full)
+    names = (fields,) if isinstance(fields, str) else fields
+    for name in names:
+        np.testing.assert_array_equal(getattr(part, name), getattr(full, name), err_msg=name)
+    for name in (f for f in ak.robot.IK_FIELDS if f not in names):
+        with pytest.raises(AttributeError, match=f"PassiveJoints.{name} was not computed"):
+            getattr(part, name)
+    q1, one = ak.inverse_kinematics(rc.T_b_e[5], u[5], D, fields=("valid",), backend=backend)
+    np.testing.assert_array_equal(q1, q_full[5])
+    assert one.valid == full.valid[5]
+    with pytest.raises(ValueError, match="fields: expected names among"):
+        ak.inverse_kinematics(rc.T_b_e, u, D, fields=("q",), backend=backend)
+
+
 def test_fields_and_out_are_checked():
     with pytest.raises(ValueError, match=r"fields: expected names among"):
         ak.forward_kinematics([-0.1, 0.1, 0.45], T0, D, fields=("p", "tip"))

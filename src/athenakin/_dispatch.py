@@ -217,6 +217,7 @@ def warmup(design: Design | None = None) -> int:
     u345 = np.nan_to_num(np.ascontiguousarray(sol.u[0, 2:]))
     inverse_kinematics(T, u345, design, errors="flag")
     inverse_kinematics(T, np.stack([u345, u345]), design, errors="flag")
+    inverse_kinematics(T, np.stack([u345, u345]), design, errors="flag", fields=("valid",))
     tip = np.array([0.0, 0.0, 0.1])
     q_from_tool_tip(T, tip, design, errors="flag")
     q_from_tool_tip(T, np.stack([tip, tip]), design, errors="flag")
@@ -312,8 +313,8 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
 
 def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None = None, *,
                        errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
-                       closure_tol: float = CLOSURE_TOL, backend: Backend = "auto"
-                       ) -> tuple[NDArray[np.float64], PassiveJoints]:
+                       closure_tol: float = CLOSURE_TOL, fields: tuple[str, ...] | None = None,
+                       backend: Backend = "auto") -> tuple[NDArray[np.float64], PassiveJoints]:
     """Actuator values for a given RCM frame and spherical-joint angles (paper Section 4).
 
     Parameters
@@ -325,6 +326,9 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     design : Design, optional
     errors, singular_tol, closure_tol : keyword-only
         As in the reference :func:`athenakin.robot.inverse_kinematics`.
+    fields : tuple of str, optional, keyword-only
+        Compute and store only these arrays of ``passive`` (names in
+        :data:`athenakin.robot.IK_FIELDS`; ``q`` is always returned). ``None``: all.
     backend : {"auto", "numpy", "numba"}, keyword-only
         As in :func:`forward_kinematics`.
 
@@ -347,14 +351,15 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     if "ik" in _WARM and _STATE["numba"] and (backend == "auto" or backend == "numba"):
         return _STATE["api"].inverse_kinematics(  # type: ignore[no-any-return]
             T_b_e, u345, design, errors=errors, singular_tol=singular_tol,
-            closure_tol=closure_tol)
+            closure_tol=closure_tol, fields=fields)
     if resolve_backend(backend):
         api = _api()
         return _first("ik", lambda: api.inverse_kinematics(
             T_b_e, u345, design, errors=errors, singular_tol=singular_tol,
-            closure_tol=closure_tol))
+            closure_tol=closure_tol, fields=fields))
     return _ref_ik.inverse_kinematics(T_b_e, u345, design, errors=errors,
-                                      singular_tol=singular_tol, closure_tol=closure_tol)
+                                      singular_tol=singular_tol, closure_tol=closure_tol,
+                                      fields=fields)
 
 
 def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,

@@ -41,10 +41,17 @@ from ..robot import _fk as _ref_fk
 from ..robot import _ik as _ref_ik
 from ..robot._common import ErrorPolicy, resolve_policy
 from ..robot._fk import FKMethod, FKSolution, check_fields, fk_solution
-from ..robot._ik import IK_SINGULAR_TOL, InstrumentIK, PassiveJoints
+from ..robot._ik import (
+    IK_SINGULAR_TOL,
+    InstrumentIK,
+    PassiveJoints,
+    check_ik_fields,
+    passive_joints,
+)
 from . import _fk_kernels as _fk
 from . import _fk_sized as _fz
 from . import _ik_kernels as _ik
+from . import _ik_sized as _iz
 
 __all__ = [
     "design_params",
@@ -391,8 +398,8 @@ def _fk_single(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.f
 # --- whole robot: inverse kinematics, paper form -----------------------------------------
 def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None = None, *,
                        errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
-                       closure_tol: float = CLOSURE_TOL, parallel: bool = False
-                       ) -> tuple[NDArray[np.float64], PassiveJoints]:
+                       closure_tol: float = CLOSURE_TOL, fields: tuple[str, ...] | None = None,
+                       parallel: bool = False) -> tuple[NDArray[np.float64], PassiveJoints]:
     """Actuators for a frame E and ``u3, u4, u5``: compiled :func:`~athenakin.inverse_kinematics`.
 
     Same parameters, results and errors as the reference; ``parallel=True``
@@ -405,8 +412,10 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     """
     def reference() -> tuple[NDArray[np.float64], PassiveJoints]:
         return _ref_ik.inverse_kinematics(T_b_e, u345, design, errors=errors,
-                                             singular_tol=singular_tol, closure_tol=closure_tol)
+                                          singular_tol=singular_tol, closure_tol=closure_tol,
+                                          fields=fields)
 
+    names = check_ik_fields(fields)
     P = design_params(design)
     try:
         Ta = _arr(T_b_e, (4, 4))
@@ -417,7 +426,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     batch = bT if bT == bU else _batch(bT, bU)
     raise_now = resolve_policy(errors, batch)
     N = math.prod(batch)
-    if not batch and not parallel:
+    if not batch and not parallel and names is None:
         fbuf = np.empty(_ik.ONE_F)
         ibuf = np.empty(3, np.int64)
         flags = _ik.ik_paper_one(Ta, Ua, P, float(singular_tol), float(closure_tol),
@@ -433,18 +442,30 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
             mode=ibuf[0:1].reshape(()), T_b_s=fbuf[_ik.ONE_T:_ik.ONE_RES].reshape(4, 4),
             residual=fbuf[_ik.ONE_RES], valid=ibuf[1] != 0,
             reason=ibuf[2:3].astype(np.int8).reshape(()))
+    want = _iz.WANT_ALL if names is None else _ik_want(names)
+
+    def alloc(bit: int, tail: tuple[int, ...], dtype: type = np.float64) -> NDArray:
+        return np.empty(((N if want & bit else 0),) + tail, dtype)
+
     q = np.empty((N, 3))
-    p = np.empty(N)
-    u = np.empty((N, 5))
-    mode = np.empty(N, np.int64)
-    Tbs = np.empty((N, 4, 4))
-    res = np.empty(N)
-    valid = np.empty(N, np.bool_)
-    reason = np.empty(N, np.int8)
-    kernel = _ik.ik_paper_parallel if parallel else _ik.ik_paper
-    flags = kernel(_flat(Ta, bT, batch, N, (4, 4)), _flat(Ua, bU, batch, N, (3,)), P,
-                   float(singular_tol), float(closure_tol), ROTATION_TOL, q, p, u, mode, Tbs,
-                   res, valid, reason)
+    p = alloc(_iz.WANT_P, ())
+    u = alloc(_iz.WANT_U, (5,))
+    mode = alloc(_iz.WANT_MODE, (), np.int64)
+    Tbs = alloc(_iz.WANT_T, (4, 4))
+    res = alloc(_iz.WANT_RES, ())
+    # reason is needed to raise; valid with it
+    valid = alloc(_iz.WANT_VALID, (), np.bool_)
+    reason = np.empty(N, np.int8) if (raise_now or want & _iz.WANT_REASON) else alloc(
+        _iz.WANT_REASON, (), np.int8)
+    Tf, Uf = _flat(Ta, bT, batch, N, (4, 4)), _flat(Ua, bU, batch, N, (3,))
+    if want == _iz.WANT_ALL:
+        kernel = _ik.ik_paper_parallel if parallel else _ik.ik_paper
+        flags = kernel(Tf, Uf, P, float(singular_tol), float(closure_tol), ROTATION_TOL, q, p, u,
+                       mode, Tbs, res, valid, reason)
+    else:
+        flags = _iz.ik_paper_select(Tf, Uf, P, float(singular_tol), float(closure_tol),
+                                    ROTATION_TOL, want | (_iz.WANT_REASON if len(reason) else 0),
+                                    q, p, u, mode, Tbs, res, valid, reason)
     if flags & _fk.FLAG_NONRIGID:
         check_transform(Ta, "T_b_e", allow_nonfinite=True)
     if flags & _ik.FLAG_SLOW or (raise_now and (
@@ -453,11 +474,25 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
         return reference()
     if batch != (N,):
         q, p, u, mode, Tbs, res, valid, reason = (
-            a.reshape(batch + a.shape[1:]) for a in (q, p, u, mode, Tbs, res, valid, reason))
+            a.reshape(batch + a.shape[1:]) if len(a) == N else a
+            for a in (q, p, u, mode, Tbs, res, valid, reason))
         if not batch:   # numpy scalars, as the reference's ufuncs give for 0-d operands
             p, res, valid = p[()], res[()], valid[()]
+    if names is not None:
+        return q, passive_joints(names, p=p, u=u, mode=mode, T_b_s=Tbs, residual=res,
+                                 valid=valid, reason=reason)
     return q, _new(PassiveJoints, p=p, u=u, mode=mode, T_b_s=Tbs, residual=res, valid=valid,
-                            reason=reason)
+                   reason=reason)
+
+
+def _ik_want(names: tuple[str, ...]) -> int:
+    """``WANT_*`` bits of :mod:`._ik_sized` for the field names."""
+    bits = {"p": _iz.WANT_P, "u": _iz.WANT_U, "mode": _iz.WANT_MODE, "T_b_s": _iz.WANT_T,
+            "residual": _iz.WANT_RES, "valid": _iz.WANT_VALID, "reason": _iz.WANT_REASON}
+    w = 0
+    for n in names:
+        w |= bits[n]
+    return w
 
 
 # --- whole robot: controller forms -------------------------------------------------------

@@ -13,6 +13,7 @@ from ._fk import (
     slot_index,
 )
 from ._ik import (
+    IK_FIELDS,
     IK_SINGULAR_TOL,
     InstrumentIK,
     PassiveJoints,
@@ -28,6 +29,7 @@ __all__ = [
     "Design",
     "FK_FIELDS",
     "FKSolution",
+    "IK_FIELDS",
     "IK_SINGULAR_TOL",
     "InstrumentIK",
     "PassiveJoints",
