@@ -60,6 +60,60 @@ def test_auto_is_compiled_and_matches_the_reference(rc):
     np.testing.assert_array_equal(passive.reason, passive_ref.reason)
 
 
+def _outcome(fn, *args, **kw):
+    try:
+        return fn(*args, **kw)
+    except Exception as exc:        # the error is part of the result to compare
+        return exc
+
+
+def _assert_same_outcome(a, b):
+    if isinstance(b, Exception):
+        assert type(a) is type(b) and str(a) == str(b), (a, b)
+        return
+    assert not isinstance(a, Exception), a
+    for x, y in zip(a if isinstance(a, tuple) else (a,), b if isinstance(b, tuple) else (b,),
+                    strict=True):
+        if isinstance(y, np.ndarray):
+            np.testing.assert_allclose(x, y, rtol=0, atol=1e-12, equal_nan=True)
+        else:
+            for name in vars(y):
+                np.testing.assert_allclose(getattr(x, name), getattr(y, name), rtol=0,
+                                           atol=1e-12, equal_nan=True, err_msg=name)
+
+
+def _single_items():
+    T_bad = T0.copy()
+    T_bad[0, 0] += 1e-3                                   # not rigid
+    T_nan = T0.copy()
+    T_nan[1, 3] = np.nan
+    sol = ak.robot.forward_kinematics([-0.1, 0.1, 0.45], T0, D)
+    u = np.ascontiguousarray(sol.u[0, 2:])
+    tip_e = T0[:3, :3].T @ (sol.tip[0] - T0[:3, 3])
+    return [("ok", T0, np.array([-0.1, 0.1, 0.45]), u, tip_e),
+            ("unreachable", T0, np.array([0.5, 0.1, 0.45]), u + 1.0, np.array([0.3, 0.3, 0.3])),
+            ("nan", T_nan, np.array([np.nan, 0.1, 0.45]), u * np.nan, tip_e * np.nan),
+            ("not rigid", T_bad, np.array([-0.1, 0.1, 0.45]), u, tip_e),
+            ("read-only", T0, np.array([-0.1, 0.1, 0.45]), u, tip_e)]
+
+
+@pytest.mark.parametrize("label, T, q, u, tip", _single_items(),
+                         ids=[c[0] for c in _single_items()])
+def test_lean_single_calls_are_the_reference(label, T, q, u, tip):
+    ok = _single_items()[0]
+    ak.forward_kinematics(ok[2], T0, D)                   # warm the entry points
+    ak.inverse_kinematics(T0, ok[3], D)
+    ak.q_from_tool_tip(T0, ok[4], D)
+    if label == "read-only":
+        for a in (q, u, tip):
+            a.flags.writeable = False
+    for errors in ("auto", "flag"):
+        for name, args in (("forward_kinematics", (q, T)), ("inverse_kinematics", (T, u)),
+                           ("q_from_tool_tip", (T, tip))):
+            _assert_same_outcome(_outcome(getattr(ak, name), *args, D, errors=errors),
+                                 _outcome(getattr(ak.robot, name), *args, D, errors=errors))
+
+
 def test_without_numba_every_public_function_is_the_reference(rc, no_numba):
     assert not _dispatch.numba_available()
     assert_same_fk(ak.forward_kinematics(rc.q, rc.T_b_e, D),

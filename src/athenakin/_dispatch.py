@@ -349,7 +349,18 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     True
     """
     if "ik" in _WARM and _STATE["numba"] and (backend == "auto" or backend == "numba"):
-        return _STATE["api"].inverse_kinematics(  # type: ignore[no-any-return]
+        api = _STATE["api"]
+        if (type(T_b_e) is np.ndarray and type(u345) is np.ndarray and T_b_e.dtype is _F8
+                and u345.dtype is _F8 and T_b_e.shape == (4, 4) and u345.shape == (3,)
+                and fields is None and (errors == "auto" or errors == "raise")
+                and singular_tol == IK_SINGULAR_TOL and closure_tol == CLOSURE_TOL):
+            # the lean single call (control loops): straight to the packed kernel
+            fT, fu = T_b_e.flags, u345.flags
+            if fT.c_contiguous and fT.writeable and fu.c_contiguous and fu.writeable:
+                res = api._ik_one_plain(T_b_e, u345, api.design_params(design))
+                if res is not None:
+                    return res  # type: ignore[no-any-return]
+        return api.inverse_kinematics(  # type: ignore[no-any-return]
             T_b_e, u345, design, errors=errors, singular_tol=singular_tol,
             closure_tol=closure_tol, fields=fields)
     if resolve_backend(backend):
@@ -423,7 +434,16 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
     athenakin.robot.q_from_tool_tip : the numpy reference, with the details.
     """
     if "line" in _WARM and _STATE["numba"] and (backend == "auto" or backend == "numba"):
-        return _STATE["api"].q_from_tool_tip(  # type: ignore[no-any-return]
+        api = _STATE["api"]
+        if (type(T_b_e) is np.ndarray and type(tip_e) is np.ndarray and T_b_e.dtype is _F8
+                and tip_e.dtype is _F8 and T_b_e.shape == (4, 4) and tip_e.shape == (3,)
+                and (errors == "auto" or errors == "raise")):
+            fT, ft = T_b_e.flags, tip_e.flags
+            if fT.c_contiguous and fT.writeable and ft.c_contiguous and ft.writeable:
+                res = api._line_one_plain(T_b_e, tip_e, 0.0, 1, api.design_params(design))
+                if res is not None:
+                    return res  # type: ignore[no-any-return]
+        return api.q_from_tool_tip(  # type: ignore[no-any-return]
             T_b_e, tip_e, design, errors=errors)
     if resolve_backend(backend):
         api = _api()

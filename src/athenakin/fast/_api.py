@@ -495,6 +495,44 @@ def _ik_want(names: tuple[str, ...]) -> int:
     return w
 
 
+def _ik_one_plain(Ta: NDArray[np.float64], Ua: NDArray[np.float64], P: NDArray[np.float64]
+                  ) -> tuple[NDArray[np.float64], PassiveJoints] | None:
+    """One item, default tolerances: the result, or None if anything is off (lean path).
+
+    For C-contiguous writable float64 ``T_b_e`` (4, 4) and ``u345`` (3,). None (an
+    input flag, or no solution) sends the caller down the general path, which
+    raises the reference's error or recomputes.
+    """
+    fbuf = np.empty(_ik.ONE_F)
+    ibuf = np.empty(3, np.int64)
+    if _ik.ik_paper_one(Ta, Ua, P, IK_SINGULAR_TOL, CLOSURE_TOL, ROTATION_TOL, fbuf, ibuf) \
+            or ibuf[2]:
+        return None
+    return fbuf[_ik.ONE_Q:_ik.ONE_P], _new(
+        PassiveJoints, p=fbuf[_ik.ONE_P], u=fbuf[_ik.ONE_U:_ik.ONE_T],
+        mode=ibuf[0:1].reshape(()), T_b_s=fbuf[_ik.ONE_T:_ik.ONE_RES].reshape(4, 4),
+        residual=fbuf[_ik.ONE_RES], valid=ibuf[1] != 0,
+        reason=ibuf[2:3].astype(np.int8).reshape(()))
+
+
+def _line_one_plain(Ta: NDArray[np.float64], Va: NDArray[np.float64], p: float, kind: int,
+                    P: NDArray[np.float64]) -> tuple[NDArray[np.float64], InstrumentIK] | None:
+    """One controller-form item (``kind`` 0: direction and ``p``, 1: tool tip), lean path.
+
+    None when an input flag is set or the item has no solution (the general path
+    then raises the reference's error).
+    """
+    fbuf = np.empty(_ik.LINE_F)
+    ibuf = np.empty(3, np.int64)
+    if _ik.ik_line_one_packed(Ta, Va, p, P, kind, ROTATION_TOL, fbuf, ibuf) or ibuf[2]:
+        return None
+    return fbuf[_ik.LINE_Q:_ik.LINE_P], _new(
+        InstrumentIK, p=fbuf[_ik.LINE_P],
+        direction_b=fbuf[_ik.LINE_D:_ik.LINE_O], O_s=fbuf[_ik.LINE_O:_ik.LINE_F],
+        mode=ibuf[0:1].reshape(()), valid=ibuf[1] != 0,
+        reason=ibuf[2:3].astype(np.int8).reshape(()))
+
+
 # --- whole robot: controller forms -------------------------------------------------------
 def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors: str,
           kind: int, parallel: bool) -> tuple[NDArray[np.float64], InstrumentIK]:
