@@ -315,55 +315,29 @@ def _want(names: tuple[str, ...]) -> int:
     return w
 
 
-_FK_PLAIN = FKSolution in _PLAIN
 _object_new = object.__new__
 _object_setattr = object.__setattr__
 
 
-def _one_record_dtype() -> np.dtype:
-    """One pose's packed buffers of ``fk_one`` and, over the same bytes, its result fields.
-
-    Fields ``f`` (float64, ONE_F) and ``i`` (int8, ONE_I) are the kernel's buffers;
-    ``valid``, ``reason``, ``p``, ``u``, ``T_b_s``, ``residual`` and ``item_reason``
-    overlay them with the FKSolution's shapes and dtypes. Taking a field of a 0-d
-    structured array costs a third of a slice plus a reshape: with the allocation,
-    about 0.7 us less per call than views of two plain buffers.
-    """
-    f, i = 0, _fz.ONE_F * 8
-    fields = [("f", np.float64, (_fz.ONE_F,), f), ("i", np.int8, (_fz.ONE_I,), i),
-              ("valid", np.bool_, (16,), i + _fz.ONE_VALID),
-              ("reason", np.int8, (16,), i + _fz.ONE_REASON),
-              ("p", np.float64, (16,), f + 8 * _fz.ONE_P),
-              ("u", np.float64, (16, 5), f + 8 * _fz.ONE_U),
-              ("T_b_s_mode", np.float64, (2, 4, 4), f + 8 * _fz.ONE_T),
-              ("residual", np.float64, (16,), f + 8 * _fz.ONE_RES),
-              ("item_reason", np.int8, (), i + _fz.ONE_ITEM)]
-    assert _fz.ONE_ITEM + 1 == _fz.ONE_I and _fz.ONE_RES + 16 == _fz.ONE_F
-    return np.dtype({"names": [x[0] for x in fields],
-                     "formats": [(x[1], x[2]) if x[2] else x[1] for x in fields],
-                     "offsets": [x[3] for x in fields], "itemsize": i + 8 * (-(-_fz.ONE_I // 8))})
+def _one_view(name: str, fbuf: NDArray[np.float64], ibuf: NDArray[np.int8]) -> NDArray:
+    """A field of a single-pose FKSolution as a view of the packed kernel buffers."""
+    if name == "p":
+        return fbuf[_fz.ONE_P:_fz.ONE_U]
+    if name == "u":
+        return fbuf[_fz.ONE_U:_fz.ONE_T].reshape(16, 5)
+    if name == "valid":
+        return ibuf[_fz.ONE_VALID:_fz.ONE_ITEM].view(np.bool_)
+    if name == "reason":
+        return ibuf[_fz.ONE_REASON:_fz.ONE_VALID]
+    if name == "T_b_s_mode":
+        return fbuf[_fz.ONE_T:_fz.ONE_RES].reshape(2, 4, 4)
+    if name == "residual":
+        return fbuf[_fz.ONE_RES:_fz.ONE_F]
+    return ibuf[_fz.ONE_ITEM:_fz.ONE_I].reshape(())     # item_reason
 
 
-_ONE_RECORD = _one_record_dtype()
-_ONE_BYTES = _ONE_RECORD.itemsize
-_ndarray = np.ndarray     # over a fresh uint8 buffer: 0.2 us less than np.empty((), _ONE_RECORD)
-
-
-def _one_solution(rec: np.ndarray, P: NDArray[np.float64]) -> FKSolution:
-    """The FKSolution of one pose: fields of the 0-d record the kernel has filled.
-
-    Built as a dict literal set as the instance ``__dict__`` (what the frozen
-    dataclass's ``__init__`` leaves there, in field order), 0.3 us less than
-    ``FKSolution(**fields)``.
-    """
-    fields = {"valid": rec["valid"], "reason": rec["reason"], "p": rec["p"], "u": rec["u"],
-              "T_b_s_mode": rec["T_b_s_mode"], "residual": rec["residual"],
-              "item_reason": rec["item_reason"], "tool_length": P.item(12)}
-    if not _FK_PLAIN:
-        return FKSolution(**fields)
-    obj = _object_new(FKSolution)
-    _object_setattr(obj, "__dict__", fields)
-    return obj
+_empty = np.empty
+_I8 = np.int8
 
 
 def _fk_one_plain(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.float64]
@@ -372,27 +346,35 @@ def _fk_one_plain(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[n
 
     None (the kernel flagged the input, or the pose has no valid slot) sends the
     caller down the general path, which raises the reference's error or, for a
-    false rigidity alarm, returns the same result.
+    false rigidity alarm, returns the same result. The result's arrays are views
+    of the kernel's two packed buffers, made on first access (a control loop that
+    reads ``p``, ``u`` and ``valid`` pays for those three only).
     """
-    rec = _ndarray((), _ONE_RECORD, np.empty(_ONE_BYTES, np.uint8))
-    ibuf = rec["i"]
-    if _fz.fk_one_modes(qa, Ta, P, _FK_TOL_DEFAULT, ROTATION_TOL, rec["f"], ibuf) or ibuf[-1]:
+    fbuf = _empty(_fz.ONE_F)
+    ibuf = _empty(_fz.ONE_I, _I8)
+    if _fz.fk_one_modes(qa, Ta, P, _FK_TOL_DEFAULT, ROTATION_TOL, fbuf, ibuf) or ibuf[-1]:
         return None
-    return _one_solution(rec, P)
+    obj = _object_new(FKSolution)
+    _object_setattr(obj, "__dict__", {"_lazy": (_one_view, fbuf, ibuf),
+                                      "tool_length": P.item(12)})
+    return obj
 
 
 def _fk_single(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.float64],
                tol: NDArray[np.float64], raise_now: bool, reference: Callable[[], FKSolution]
                ) -> FKSolution:
     """One pose through the packed-buffer kernel (about half the call overhead)."""
-    rec = _ndarray((), _ONE_RECORD, np.empty(_ONE_BYTES, np.uint8))
-    ibuf = rec["i"]
-    flags = _fz.fk_one_modes(qa, Ta, P, tol, ROTATION_TOL, rec["f"], ibuf)
+    fbuf = _empty(_fz.ONE_F)
+    ibuf = _empty(_fz.ONE_I, _I8)
+    flags = _fz.fk_one_modes(qa, Ta, P, tol, ROTATION_TOL, fbuf, ibuf)
     if flags & _fk.FLAG_NONRIGID:
         check_transform(Ta, "T_b_e", allow_nonfinite=True)
     if raise_now and (flags & (_fk.FLAG_Q_NONFINITE | _fk.FLAG_T_NONFINITE) or ibuf[-1] != 0):
         return reference()
-    return _one_solution(rec, P)
+    obj = _object_new(FKSolution)
+    _object_setattr(obj, "__dict__", {"_lazy": (_one_view, fbuf, ibuf),
+                                      "tool_length": P.item(12)})
+    return obj
 
 
 # --- whole robot: inverse kinematics, paper form -----------------------------------------

@@ -114,7 +114,14 @@ class FKSolution:
     tool_length: float
 
     def __getattr__(self, name: str) -> Any:
-        # only reached for a field that a fields=(...) call left out
+        # reached only for a field not in __dict__: one that a single-pose result of the
+        # compiled path materialises on first access (``_lazy = (view, *buffers)``: the
+        # kernel's packed buffers), or one that a fields=(...) call left out
+        lazy = self.__dict__.get("_lazy")
+        if lazy is not None and name in _LAZY_FIELDS:
+            value = lazy[0](name, *lazy[1:])
+            self.__dict__[name] = value
+            return value
         if name in _FIELD_ATTRS:
             raise AttributeError(
                 f"FKSolution.{name} was not computed: this result was asked for with "
@@ -123,9 +130,13 @@ class FKSolution:
         raise AttributeError(f"'FKSolution' object has no attribute {name!r}")
 
     def __repr__(self) -> str:
-        have = ", ".join(f"{k}: {np.shape(v)}" for k, v in self.__dict__.items()
-                         if isinstance(v, np.ndarray))
-        return f"FKSolution(batch {np.shape(self.item_reason)}; {have})"
+        have = []
+        for k in _LAZY_FIELDS:
+            try:
+                have.append(f"{k}: {np.shape(getattr(self, k))}")
+            except AttributeError:
+                pass
+        return f"FKSolution(batch {np.shape(self.item_reason)}; {', '.join(have)})"
 
     @property
     def n_solutions(self) -> NDArray[np.int64]:
@@ -186,6 +197,7 @@ class FKSolution:
 
 
 _FIELD_ATTRS = {f: ("T_b_s_mode" if f == "T_b_s" else f) for f in FK_FIELDS}
+_LAZY_FIELDS = ("valid", "reason", "p", "u", "T_b_s_mode", "residual", "item_reason")
 _FIELD_ATTRS.update({v: v for v in _FIELD_ATTRS.values()})
 
 
