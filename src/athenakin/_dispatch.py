@@ -157,19 +157,19 @@ def resolve_backend(backend: str) -> bool:
 
 
 def _api() -> ModuleType:
-    api = _STATE.get("api")
-    if api is None:
-        from .fast import _api as api
-        _STATE["api"] = api
-    return api
+    if "api" not in _STATE:
+        from .fast import _api
+
+        _STATE["api"] = _api
+    return _STATE["api"]  # type: ignore[no-any-return]
 
 
 def _jac() -> ModuleType:
-    jac = _STATE.get("jac")
-    if jac is None:
-        from .fast import _jac_api as jac
-        _STATE["jac"] = jac
-    return jac
+    if "jac" not in _STATE:
+        from .fast import _jac_api
+
+        _STATE["jac"] = _jac_api
+    return _STATE["jac"]  # type: ignore[no-any-return]
 
 
 def _notice() -> None:
