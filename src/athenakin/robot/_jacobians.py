@@ -1,6 +1,6 @@
 """Analytic Jacobians of the parallel module, the serial chain and the whole robot.
 
-Conventions (MODEL.md): lengths in m, angles in rad, batch over leading axes.
+Conventions (docs/conventions.md): lengths in m, angles in rad, batch over leading axes.
 Twists are ordered ``(v, omega)`` (linear velocity first, as Pinocchio and
 RTB do). All Jacobians are derived in ``docs/singularities.md``.
 
