@@ -17,6 +17,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._dispatch import forward_kinematics, q_from_tool_tip
 from .._validation import check_array
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, OutOfWorkspaceError, Reason
@@ -30,8 +31,6 @@ from ..robot import (
     SLOT_P_SIGN,
     SLOT_UJOINT,
     SLOT_WRIST,
-    forward_kinematics,
-    q_from_tool_tip,
 )
 from ..robot._setup import resolve_rcm_frame
 

@@ -120,7 +120,7 @@ def reachability(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLES, 
     reason : ndarray of int8, shape (n,)
         :class:`~athenakin.errors.Reason` of each sample (0 where reachable).
     """
-    from ..robot import q_from_instrument
+    from .._dispatch import q_from_instrument
 
     s = _samples(task, int(samples), int(seed))
     q, res = q_from_instrument(task.T_b_e, s.direction_e, design.tool_length - s.depth, design,
