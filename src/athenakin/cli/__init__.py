@@ -25,8 +25,7 @@ _EXTRA_OF = {"sympy": "symbolic", "matplotlib": "plot", "plotly": "plot", "image
 
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
 COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
-            "animate", "export", "derive", "design", "calibrate", "app"]
-COMMANDS.append("synthesize")  # design studies (athenakin.synthesis)
+            "animate", "export", "derive", "design", "calibrate", "synthesize", "app", "warmup"]
 
 
 class _Parser(argparse.ArgumentParser):

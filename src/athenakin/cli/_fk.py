@@ -6,8 +6,9 @@ import argparse
 
 import numpy as np
 
+from .._dispatch import forward_kinematics
 from ..errors import Reason
-from ..robot import FKSolution, forward_kinematics
+from ..robot import FKSolution
 from ._common import (
     add_design_option,
     add_json_option,
@@ -41,21 +42,24 @@ def fk_rows(sol: FKSolution) -> list[list[str]]:
         rows.append([str(k), f"{int(sol.mode[k]):+d}", f"{int(sol.p_sign[k]):+d}",
                      f"{int(sol.ujoint[k]):+d}", f"{int(sol.wrist[k]):+d}", status,
                      fmt(sol.p[k])] + [fmt(a, 3) for a in deg]
-                    + ["-" if not np.isfinite(sol.residual[k]) else f"{sol.residual[k]:.1e}"])
+                    + ["-" if not np.isfinite(sol.residual[k]) else f"{sol.residual[k]:.1e}"]
+                    + [fmt(x) for x in sol.tip[k]])
     return rows
 
 
 FK_HEADERS = ["slot", "mode", "p+-", "U", "S", "status", "p [m]", "u1 [deg]", "u2 [deg]",
-              "u3 [deg]", "u4 [deg]", "u5 [deg]", "residual"]
+              "u3 [deg]", "u4 [deg]", "u5 [deg]", "residual", "tip x [m]", "tip y [m]",
+              "tip z [m]"]
 
 
 def fk_json(sol: FKSolution) -> dict:  # type: ignore[type-arg]
-    """JSON-ready dict of an unbatched solution (degrees)."""
+    """JSON-ready dict of an unbatched solution (degrees; tip and ``T_b_tip`` in the base frame)."""
     return {"n_solutions": int(sol.n_solutions), "solutions": [
         {"slot": k, "valid": bool(sol.valid[k]), "reason": Reason(int(sol.reason[k])).name,
          "mode": int(sol.mode[k]), "p_sign": int(sol.p_sign[k]), "ujoint": int(sol.ujoint[k]),
          "wrist": int(sol.wrist[k]), "p_m": sol.p[k], "u_deg": np.degrees(sol.u[k]),
-         "residual": sol.residual[k], "O_s_m": sol.T_b_s[k, :3, 3]} for k in range(16)]}
+         "residual": sol.residual[k], "O_s_m": sol.T_b_s[k, :3, 3], "tip_m": sol.tip[k],
+         "T_b_tip": sol.T_b_tip[k]} for k in range(16)]}
 
 
 def run(args: argparse.Namespace) -> int:
