@@ -122,6 +122,8 @@ def test_interface_of_the_checks_default_parameters_and_design():
         assert abs(getattr(res.design, n) - getattr(data.true_design, n)) < 1e-9
     assert res.covariance.shape == (6, 6) and res.std.shape == (6,)
     assert res.residuals_before.shape == (30, 3) and res.rms_before > 1e-4
+    lazy = ak.calibration.calibrate(data.q, data.tips, T, D)   # the lazy attribute works
+    assert lazy.design == res.design
 
 
 def test_mode_minus_one_is_followed():

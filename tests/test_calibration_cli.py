@@ -49,6 +49,30 @@ def test_malformed_csv_is_a_named_error(tmp_path, text, match):
         cal.read_measurements_csv(path)
 
 
+def test_mode_column_is_read_per_row(tmp_path, capsys):
+    data = cal.synthetic_measurements(D, T, n=12, noise=0.0, mode=-1, rng=6)
+    text = cal.measurements_csv_text(data.q, data.tips).splitlines()
+    head = next(i for i, ln in enumerate(text) if ln.startswith("q1_m"))
+    text[head] += ",mode"
+    text[head + 1:] = [ln + ",-1" for ln in text[head + 1:]]
+    path = tmp_path / "m.csv"
+    path.write_text("\n".join(text) + "\n")
+    assert cal.read_measurements_csv(path).mode.tolist() == [-1] * 12
+    code, out, err = run(capsys, "calibrate", path, "-o", tmp_path / "c.toml", "--no-report")
+    assert code == 0, err
+    assert abs(ak.Design.from_toml(tmp_path / "c.toml").l1 - data.true_design.l1) < 1e-9
+    path.write_text("\n".join(text).replace(",-1", ",2") + "\n")
+    with pytest.raises(cal.MeasurementFileError, match="column 'mode'"):
+        cal.read_measurements_csv(path)
+
+
+def test_tips_in_millimetres_are_caught(tmp_path):
+    data = cal.synthetic_measurements(D, T, n=30, noise=0.0, rng=7)
+    with pytest.warns(cal.CalibrationWarning, match="check the units"), \
+            pytest.raises(cal.CalibrationError):
+        cal.calibrate(data.q, data.tips * 1000, T, D)
+
+
 def test_empty_and_nan_cells_become_bad_rows(tmp_path):
     path = tmp_path / "m.csv"
     path.write_text("q1_m,q2_m,q3_m,x_m,y_m,z_m,extra\n-0.1,0.1,0.45,,0,0,a\n"

@@ -58,6 +58,9 @@ MAX_BAD_FRACTION = 0.1
 #: Floor (m) of the residual standard deviation used to flag outliers: noise-free data
 #: leave residuals of rounding size (1e-16 m), which are no outliers.
 RESIDUAL_FLOOR = 1e-12
+#: RMS distance (m) of the measured tips from the nominal model above which a warning asks
+#: to check units, frame and set-up (a calibration corrects millimetres, not decimetres).
+UNITS_WARNING = 0.05
 #: Margin (m) of the insertion range: a pose needs ``margin < p < L - margin``.
 INSERTION_MARGIN = 1e-3
 
@@ -107,7 +110,8 @@ class CalibrationResult:
     covariance : ndarray, shape (n, n)
         ``sigma^2 (J^T J)^-1`` at the solution (``sigma`` below).
     parameters : dict of str -> float
-        Every parameter of :data:`~athenakin.calibration.PARAMETERS`, estimated or fixed.
+        Every parameter of :data:`~athenakin.calibration.PARAMETERS`, estimated or fixed
+        (``reg_r*`` relative to a first rigid fit of the nominal tips: use :attr:`T_t_b`).
     q_offset : ndarray, shape (3,)
         Actuator zero offsets: ``q_true = q_reading + q_offset``, m.
     rcm : ndarray, shape (3,)
@@ -527,6 +531,12 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
     elif report.weak:
         warnings.warn(f"calibration: weakly identifiable (condition {report.condition:.3g}); "
                       "the standard deviations will be large", CalibrationWarning, stacklevel=2)
+    rms0 = float(np.sqrt(np.mean(np.sum(prob.evaluate(prob.theta0, False)[1][:, :3] ** 2,
+                                        axis=1))))
+    if rms0 > UNITS_WARNING:
+        warnings.warn(f"calibration: the measured tips are {rms0:.3g} m (RMS) from the nominal "
+                      "model; check the units (m), the frame and T_b_e", CalibrationWarning,
+                      stacklevel=2)
     x0 = prob.theta0[prob.free]
     x_scale = 1.0 / np.where(report.column_norms > 0, report.column_norms, 1.0)
     x_scale = x_scale / np.max(x_scale)

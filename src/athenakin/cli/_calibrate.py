@@ -32,7 +32,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                    help="frame of the measured tips: base (registered tracker, default) or "
                         "tracker (registration estimated too)")
     p.add_argument("--mode", type=int, choices=(1, -1), default=1,
-                   help="assembly mode of the robot (default +1)")
+                   help="assembly mode of the robot (default +1; a 'mode' column in the "
+                        "file overrides it per row)")
     p.add_argument("--loss", choices=("linear", "soft_l1", "huber", "cauchy", "arctan"),
                    default="linear", help="robust loss against outliers (default linear)")
     p.add_argument("--encoder-resolution", type=float, default=0.0, metavar="M",
@@ -75,7 +76,8 @@ def run(args: argparse.Namespace) -> int:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", cal.CalibrationWarning)
         res = cal.calibrate(data.q, data.tips, T, design, params=args.params, frame=args.frame,
-                            axes=data.axes, mode=args.mode, loss=args.loss)
+                            axes=data.axes, mode=args.mode if data.mode is None else data.mode,
+                            loss=args.loss)
     for w in caught:
         print(f"warning: {w.message}")
     rows = [[n, f"{a:.9g}", f"{b:.9g}", f"{(b - a) * 1e6:+.2f}", f"{s * 1e6:.2f}"]
