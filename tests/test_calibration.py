@@ -126,6 +126,20 @@ def test_interface_of_the_checks_default_parameters_and_design():
     assert lazy.design == res.design
 
 
+def test_mode_auto_picks_each_rows_assembly_mode():
+    a = cal.synthetic_measurements(D, T, n=10, noise=0.0, mode=-1, rng=23, perturbation=0.0,
+                                   true={"l1": 0.3003, "l4": 0.1498})
+    q = np.concatenate([a.q, cal.random_poses(20, T, D, rng=24)])
+    b = cal.synthetic_measurements(D, T, q=q[10:], noise=0.0, rng=23, perturbation=0.0,
+                                   true={"l1": 0.3003, "l4": 0.1498})
+    tips = np.concatenate([a.tips, b.tips])
+    res = cal.calibrate(q, tips, T, D, mode="auto")
+    assert res.mode.tolist() == [-1] * 10 + [1] * 20
+    assert_allclose([res.design.l1, res.design.l4], [0.3003, 0.1498], rtol=0, atol=1e-9)
+    with pytest.raises(InvalidInputError, match="frame='base'"):
+        cal.calibrate(q, tips, T, D, mode="auto", frame="tracker")
+
+
 def test_mode_minus_one_is_followed():
     data = cal.synthetic_measurements(D, T, n=12, noise=0.0, mode=-1, rng=22)
     res = cal.calibrate(data.q, data.tips, T, D, mode=-1)

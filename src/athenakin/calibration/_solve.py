@@ -326,8 +326,16 @@ def _setup(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | Non
         raise ValueError(f"bad_rows: expected 'exclude' or 'raise', got {bad_rows!r}")
     if not np.isfinite(axis_weight) or axis_weight <= 0:
         raise InvalidInputError(f"axis_weight: expected a positive number (m), got {axis_weight}")
-    m = _mode_array(mode, n)
     off = np.zeros(3) if q_offset is None else check_array(q_offset, "q_offset", (3,))
+    if isinstance(mode, str):
+        if mode != "auto":
+            raise InvalidInputError(f"mode: expected +1, -1, an array of them or 'auto', "
+                                    f"got {mode!r}")
+        if frame != "base":
+            raise InvalidInputError("mode='auto' needs tips in the base frame (frame='base')")
+        m = _nearest_mode(qa, ta, design, T, off)
+    else:
+        m = _mode_array(mode, n)
     chk = check_measurements(qa, design, T, mode=m, tips=ta, axes=aa, q_offset=off)
     nbad = int(np.sum(~chk.usable))
     if nbad:
@@ -356,6 +364,18 @@ def _setup(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | Non
     prob = _Problem(q=qa[use], tips=ta[use], axes=None if aa is None else aa[use], mode=m[use],
                     R0=R0, theta0=theta0, free=free, axis_weight=float(axis_weight))
     return design, prob, names, chk, m, T
+
+
+def _nearest_mode(q: NDArray[np.float64], tips: NDArray[np.float64], design: Design,
+                  T: NDArray[np.float64], off: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Per row, the assembly mode whose nominal tip is nearer the measured one (+1 on ties)."""
+    theta = parameter_vector(design, T[:3, 3], q_offset=off)
+    qs = np.nan_to_num(q)
+    with np.errstate(invalid="ignore"):
+        dist = [np.linalg.norm(predict(theta, qs, np.full(len(q), s)).tip_base - tips, axis=1)
+                for s in (1.0, -1.0)]
+    d_plus, d_minus = (np.where(np.isfinite(x), x, np.inf) for x in dist)
+    return np.where(d_minus < d_plus, -1.0, 1.0)
 
 
 def identifiability(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
@@ -449,8 +469,10 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
         of ``tips``: measurement model (c), full instrument poses.
     axis_weight : float, keyword-only
         Metres of residual per unit of axis error (:data:`DEFAULT_AXIS_WEIGHT`).
-    mode : {1, -1} or array-like of them, shape (N,), keyword-only
-        Assembly mode of each row.
+    mode : {1, -1}, array-like of them, shape (N,), or "auto", keyword-only
+        Assembly mode of each row, kept while the parameters change. ``"auto"`` (base
+        frame only): per row, the mode whose nominal forward-kinematics tip is nearer the
+        measured tip.
     q_offset : array-like, shape (3,), keyword-only
         Starting (or fixed) actuator zero offsets, m.
     registration : array-like, shape (4, 4), keyword-only

@@ -31,9 +31,10 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--frame", choices=("base", "tracker"), default="base",
                    help="frame of the measured tips: base (registered tracker, default) or "
                         "tracker (registration estimated too)")
-    p.add_argument("--mode", type=int, choices=(1, -1), default=1,
-                   help="assembly mode of the robot (default +1; a 'mode' column in the "
-                        "file overrides it per row)")
+    p.add_argument("--mode", choices=("1", "-1", "auto"), default="1",
+                   help="assembly mode of the robot: 1 (default), -1, or auto (per row, the "
+                        "mode whose nominal tip is nearer the measured one; base frame); a "
+                        "'mode' column in the file overrides it per row")
     p.add_argument("--loss", choices=("linear", "soft_l1", "huber", "cauchy", "arctan"),
                    default="linear", help="robust loss against outliers (default linear)")
     p.add_argument("--encoder-resolution", type=float, default=0.0, metavar="M",
@@ -62,7 +63,8 @@ def run(args: argparse.Namespace) -> int:
         if args.measurements is not None:
             raise ValueError("--plan: give no measurement file (it writes the poses to -o)")
         plan = cal.plan_poses(args.plan, T, design, params=args.params, frame=args.frame,
-                              n_candidates=args.candidates, mode=args.mode, rng=args.seed)
+                              n_candidates=args.candidates,
+                              mode=-1 if args.mode == "-1" else 1, rng=args.seed)
         out.write_text(cal.plan_csv_text(plan.q, comment=(
             f"D-optimal for {' '.join(plan.names)}; frame {args.frame}; "
             f"log det = {plan.logdet:.4f}; condition {plan.identifiability.condition:.4g}")))
@@ -76,7 +78,8 @@ def run(args: argparse.Namespace) -> int:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", cal.CalibrationWarning)
         res = cal.calibrate(data.q, data.tips, T, design, params=args.params, frame=args.frame,
-                            axes=data.axes, mode=args.mode if data.mode is None else data.mode,
+                            axes=data.axes,
+                            mode=_mode(args.mode) if data.mode is None else data.mode,
                             loss=args.loss)
     for w in caught:
         print(f"warning: {w.message}")
@@ -92,3 +95,7 @@ def run(args: argparse.Namespace) -> int:
         files = cal.write_report(res, rep, encoder_resolution=args.encoder_resolution)
         print("wrote " + ", ".join(str(f) for f in files))
     return 0
+
+
+def _mode(text: str) -> int | str:
+    return text if text == "auto" else int(text)
