@@ -103,6 +103,15 @@ def test_cli_calibrates_the_example_data_set(tmp_path, capsys):
         assert (tmp_path / f"cal_report_{fig}.png").stat().st_size > 1000
 
 
+def test_html_report(tmp_path):
+    data = cal.synthetic_measurements(D, T, n=20, rng=5)
+    res = cal.calibrate(data.q, data.tips, T, D)
+    files = cal.write_report(res, tmp_path / "r.html", figures=False)
+    text = files[0].read_text()
+    assert text.startswith("<!DOCTYPE html>") and text.count("<tr>") == 7
+    assert "<td>tool_length</td>" in text and "<b>" in text
+
+
 def test_cli_tracker_frame_without_report(tmp_path, capsys):
     data = cal.synthetic_measurements(D, T, n=30, frame="tracker", rng=3)
     src = tmp_path / "m.csv"

@@ -39,8 +39,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                    default="linear", help="robust loss against outliers (default linear)")
     p.add_argument("--encoder-resolution", type=float, default=0.0, metavar="M",
                    help="encoder quantum (m) for the tip-error map of the report")
-    p.add_argument("--report", type=Path, metavar="REPORT.md",
-                   help="report file (default: OUT with _report.md)")
+    p.add_argument("--report", type=Path, metavar="REPORT",
+                   help="report file, .md or .html (default: OUT with _report.md)")
     p.add_argument("--no-report", action="store_true", help="write no report")
     p.add_argument("--candidates", type=int, default=2000,
                    help="--plan: random candidate poses (default 2000)")
