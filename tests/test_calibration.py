@@ -249,6 +249,12 @@ def test_mismatched_lengths_and_shapes():
         cal.calibrate(data.q, data.tips, T, D, params=["l7"])
     with pytest.raises(ValueError, match="frame='tracker'"):
         cal.calibrate(data.q, data.tips, T, D, params=["reg_tx"])
+    with pytest.raises(InvalidInputError, match="sigma: expected a positive number"):
+        cal.calibrate(data.q, data.tips, T, D, sigma=-1.0)
+    with pytest.raises(ValueError, match="loss"):
+        cal.calibrate(data.q, data.tips, T, D, loss="l2")
+    with pytest.raises(TypeError, match="expected athenakin.Design"):
+        cal.calibrate(data.q, data.tips, T, "design")
 
 
 def test_a_few_bad_rows_are_flagged_and_excluded():

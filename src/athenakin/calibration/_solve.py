@@ -532,6 +532,10 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
     if on_unidentifiable not in ("raise", "warn"):
         raise ValueError(f"on_unidentifiable: expected 'raise' or 'warn', got "
                          f"{on_unidentifiable!r}")
+    for name, v in (("sigma", sigma), ("f_scale", f_scale),
+                    ("outlier_threshold", outlier_threshold)):
+        if v is not None and not (np.isfinite(v) and v > 0):
+            raise InvalidInputError(f"{name}: expected a positive number, got {v!r}")
     design, prob, names, chk, m_all, T = _setup(
         q, tips, T_b_e, design, params=params, frame=frame, axes=axes, mode=mode,
         q_offset=q_offset, registration=registration, axis_weight=axis_weight,
