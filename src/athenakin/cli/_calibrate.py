@@ -27,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--params", nargs="+", metavar="NAME", default=None,
                    help="parameters to estimate: l1..l5 tool_length q1_offset q2_offset "
                         "q3_offset rcm_x rcm_y rcm_z, or groups lengths offsets rcm default "
-                        "(default: l1..l5 tool_length)")
+                        "(default: l1..l5 tool_length); give MEASUREMENTS.csv before it")
     p.add_argument("--frame", choices=("base", "tracker"), default="base",
                    help="frame of the measured tips: base (registered tracker, default) or "
                         "tracker (registration estimated too)")
