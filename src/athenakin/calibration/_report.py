@@ -24,7 +24,7 @@ def _pyplot() -> Any:
         import matplotlib.pyplot as plt
     except ModuleNotFoundError as exc:  # pragma: no cover - depends on the install
         raise ModuleNotFoundError("calibration figures need matplotlib: pip install "
-                                  "'athenakin[plot]'", name="matplotlib") from exc
+                                  "'athenakin[calibration]'", name="matplotlib") from exc
     return plt
 
 

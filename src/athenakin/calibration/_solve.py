@@ -525,7 +525,11 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
     >>> abs(res.design.l1 - data.true_design.l1) < 1e-9
     True
     """
-    from scipy.optimize import least_squares
+    try:
+        from scipy.optimize import least_squares
+    except ModuleNotFoundError as exc:  # pragma: no cover - depends on the install
+        raise ModuleNotFoundError("calibrate needs scipy: pip install 'athenakin[calibration]'",
+                                  name="scipy") from exc
 
     if loss not in _LOSSES:
         raise ValueError(f"loss: expected one of {_LOSSES}, got {loss!r}")
