@@ -1,16 +1,21 @@
 """``athenakin calibrate`` and the calibration files (CSV in, plan CSV, TOML, report)."""
 
 import re
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-import tomllib
 from numpy.testing import assert_allclose
 
 import athenakin as ak
 from athenakin import calibration as cal
 from athenakin.cli import main
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
 
 D = ak.Design.default()
 T = ak.default_rcm_frame(D)

@@ -1,10 +1,10 @@
 """Measurement model of calibration: the tool tip (and axis) as a function of every parameter.
 
 The tool tip of ATHENA depends on the mechanism only through ``O_s`` and the RCM point
-``c`` (MODEL.md, "The instrument"): the instrument passes through ``O_s`` and ``c``, so with
-``u = (c - O_s) / |c - O_s|`` (the ``p > 0`` branch: the instrument is inserted through the
-RCM) the tip is ``t = O_s + L u``. ``O_s`` comes from the parallel module (Eq. 7-10) at the
-true actuator values ``q_true = q_reading + offset``:
+``c`` (docs/conventions.md, the instrument): the instrument passes through ``O_s`` and
+``c``, so with ``u = (c - O_s) / |c - O_s|`` (the ``p > 0`` branch: the instrument is
+inserted through the RCM) the tip is ``t = O_s + L u``. ``O_s`` comes from the parallel
+module (Eq. 7-10) at the true actuator values ``q_true = q_reading + offset``:
 
 * ``A = (q1, 0, 0)``, ``B = (q2, 0, 0)``, ``h = (q1 - q2) / 2``, ``x_M = (q1 + q2) / 2``;
 * in the plane ``x = x_M`` (coordinates ``(y, z)`` about ``M``), ``O_i = P`` is the
