@@ -181,50 +181,29 @@ def plan_csv_text(q: NDArray[np.float64], *, comment: str = "") -> str:
     return "\n".join(lines) + "\n"
 
 
-def _toml_value(x: object) -> str:
-    if isinstance(x, str):
-        return '"' + x.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    if isinstance(x, (bool, np.bool_)):
-        return "true" if x else "false"
-    if isinstance(x, (int, np.integer)):
-        return str(int(x))
-    if isinstance(x, (float, np.floating)):
-        f = float(x)
-        if math.isnan(f):
-            return "nan"
-        if math.isinf(f):
-            return "inf" if f > 0 else "-inf"
-        return repr(f)
-    if isinstance(x, (list, tuple, np.ndarray)):
-        return "[" + ", ".join(_toml_value(v) for v in x) + "]"
-    raise TypeError(f"cannot write {type(x).__name__} to TOML")
-
-
 def calibration_toml(result: CalibrationResult) -> str:
     """TOML text of a calibration: the calibrated design and a ``[calibration]`` table.
 
     The ``[design]`` table is read back by :meth:`Design.from_toml`; ``[calibration]``
     holds the offsets, RCM, registration, noise, residuals and standard deviations.
     """
+    import tomli_w
+
     cal: dict[str, object] = {
         "frame": result.frame,
         "estimated": list(result.names),
-        "q_offset": result.q_offset.tolist(),
-        "rcm": result.rcm.tolist(),
-        "sigma": result.sigma,
-        "rms_before": result.rms_before,
-        "rms_after": result.rms_after,
+        "q_offset": [float(v) for v in result.q_offset],
+        "rcm": [float(v) for v in result.rcm],
+        "sigma": float(result.sigma),
+        "rms_before": float(result.rms_before),
+        "rms_after": float(result.rms_after),
         "rows": int(result.excluded.size),
         "rows_excluded": int(np.sum(result.excluded)),
         "rows_outliers": int(np.sum(result.outliers)),
-        "condition": result.identifiability.condition,
+        "condition": float(result.identifiability.condition),
     }
-    lines = [result.design.to_toml().rstrip("\n"), "",
-             "# athenakin calibrate: q_true = q_reading + q_offset (m); std = 1 sigma",
-             "[calibration]"]
-    lines += [f"{k} = {_toml_value(v)}" for k, v in cal.items()]
     if result.T_t_b is not None:
-        lines.append(f"T_t_b = {_toml_value(result.T_t_b.tolist())}")
-    lines += ["", "[calibration.std]"]
-    lines += [f"{n} = {_toml_value(s)}" for n, s in zip(result.names, result.std, strict=True)]
-    return "\n".join(lines) + "\n"
+        cal["T_t_b"] = [[float(v) for v in row] for row in result.T_t_b]
+    cal["std"] = {n: float(v) for n, v in zip(result.names, result.std, strict=True)}
+    return (result.design.to_toml() + "\n# athenakin calibrate: q_true = q_reading + q_offset "
+            "(m); std = 1 sigma\n" + tomli_w.dumps({"calibration": cal}))
