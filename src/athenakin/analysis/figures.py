@@ -322,7 +322,7 @@ def plot_cone_chart(ic: InstrumentCone, *, quantity: str = "range", ax: Any = No
                 warnings.simplefilter("ignore", RuntimeWarning)
                 v = np.clip(np.log10(np.nanmin(ic.condition, axis=-1)), 0, 4)
             label, cmap = "log10 min cond(d tip/dq) along the direction", "viridis_r"
-    A, order = wrapped_azimuth(A, np.isfinite(v).any(axis=1))
+    A, order = wrapped_azimuth(A, np.asarray(np.isfinite(v).any(axis=1)))
     kw = {"vmin": 0, "vmax": 4} if quantity == "condition" else {}
     im = ax.pcolormesh(A[order], B, v[order].T, shading="auto", cmap=cmap, rasterized=True, **kw)
     ax.figure.colorbar(im, ax=ax, shrink=0.85).set_label(label)

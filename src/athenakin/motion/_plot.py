@@ -57,12 +57,12 @@ def plot_actuators(traj: Trajectory, *, axes: Any = None) -> Any:
     """
     import matplotlib.pyplot as plt
 
-    lim = traj.limits
+    limits = traj.limits
     rows = [("q", MM * traj.q, "position [mm]", None),
-            ("qd", MM * traj.qd, "velocity [mm/s]", MM * np.asarray(lim.v_max)),
-            ("qdd", MM * traj.qdd, "acceleration [mm/s²]", MM * np.asarray(lim.a_max))]
+            ("qd", MM * traj.qd, "velocity [mm/s]", MM * np.asarray(limits.v_max)),
+            ("qdd", MM * traj.qdd, "acceleration [mm/s²]", MM * np.asarray(limits.a_max))]
     if traj.qddd is not None:
-        rows.append(("qddd", MM * traj.qddd, "jerk [mm/s³]", MM * np.asarray(lim.j_max)))
+        rows.append(("qddd", MM * traj.qddd, "jerk [mm/s³]", MM * np.asarray(limits.j_max)))
     if axes is None:
         _, axes = plt.subplots(len(rows), 1, sharex=True, figsize=(9, 2.3 * len(rows) + 0.8),
                                constrained_layout=True)
