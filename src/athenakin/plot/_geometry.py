@@ -1,6 +1,6 @@
 """Where every part of the robot is, for one FK solution (pure numpy; used by views and exports).
 
-The points follow MODEL.md: ``A = (q1, 0, 0)``, ``B = (q2, 0, 0)``, midpoint ``M``,
+The points follow docs/conventions.md: ``A = (q1, 0, 0)``, ``B = (q2, 0, 0)``, midpoint ``M``,
 ``D = (x_M, sqrt(l3^2 - h^2), 0)``, ``C = D + (0, l2, l5)``, ``O_i`` on ``k1 ∩ k2``,
 ``O_s = O_i + l4 z_i`` (Eq. 8-10), and the serial chain of Eq. 11-12 from ``O_s`` to
 the RCM frame E. The spherical joint at the RCM (the kinematic equivalent of the
@@ -21,7 +21,7 @@ from ..chain._ups import rotation_u_pair
 from ..design import Design, resolve_design
 from ..errors import Reason, error_for_reason
 from ..parallel import parallel_forward_kinematics
-from ..robot import forward_kinematics
+from ..robot import FKSolution, forward_kinematics
 from ..robot._setup import resolve_rcm_frame
 
 __all__ = ["RobotGeometry", "robot_geometry", "circle_points", "N_CIRCLE", "ARC_MARGIN",
@@ -180,7 +180,8 @@ def _rz_rx90(angle: float) -> NDArray[np.float64]:
 
 
 def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
-                   design: Design | None = None, *, slot: int = 0) -> RobotGeometry:
+                   design: Design | None = None, *, slot: int = 0,
+                   fk: FKSolution | None = None) -> RobotGeometry:
     """Positions of all parts of the robot for actuator values ``q`` in one FK slot.
 
     Parameters
@@ -194,6 +195,10 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     slot : int, keyword-only
         Forward-kinematics slot 0..15 (0: mode +1, ``p > 0``, ``sin u2 > 0``,
         ``sin u4 > 0``).
+    fk : FKSolution, keyword-only, optional
+        The result of ``forward_kinematics(q, T_b_e, design)`` for this ``q`` (slots of
+        shape (16,)), e.g. from the numba backend, to draw several slots of one ``q``
+        without solving it again; by default it is solved here.
 
     Returns
     -------
@@ -226,7 +231,13 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
         raise InvalidInputError(f"slot: expected an integer in 0..15, got {slot!r}")
     slot = int(slot)
     T = resolve_rcm_frame(T_b_e, design)
-    sol = forward_kinematics(q, T, design, errors="flag")
+    if fk is None:
+        sol = forward_kinematics(q, T, design, errors="flag")
+    elif np.shape(fk.valid) != (16,):
+        raise InvalidInputError(f"fk: expected the solution of one q (valid of shape (16,)), "
+                                f"got valid of shape {np.shape(fk.valid)}")
+    else:
+        sol = fk
     if not sol.valid[slot]:
         why = Reason(int(sol.reason[slot])).name
         raise error_for_reason(int(sol.reason[slot]), f"slot {slot} of q = {q.tolist()} m ({why})")
