@@ -4,12 +4,16 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..design import Design
 from ._common import add_design_option, add_setup_options, check_dpi, load_design, load_rcm
 from ._output import add_force_option, outputs
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..design import Design
 
 VIEW_SUFFIXES = (".png", ".svg", ".pdf", ".html")
 
