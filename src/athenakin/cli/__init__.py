@@ -21,11 +21,12 @@ __all__ = ["main", "entry_point", "COMMANDS"]
 #: Optional third-party packages and the extra that installs each.
 _EXTRA_OF = {"sympy": "symbolic", "matplotlib": "plot", "plotly": "plot", "imageio": "plot",
              "mujoco": "sim", "yourdfpy": "sim", "numba": "fast", "tqdm": "progress",
-             "scipy": "analysis", "ruckig": "motion", "pinocchio": "bench"}
+             "scipy": "analysis", "ruckig": "motion", "pinocchio": "bench",
+             "flint": "certified"}
 
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
 COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
-            "animate", "export", "derive", "design", "calibrate", "app"]
+            "animate", "export", "derive", "design", "calibrate", "synthesize", "app", "warmup"]
 
 
 class _Parser(argparse.ArgumentParser):
@@ -111,6 +112,9 @@ def _one_line(exc: BaseException) -> str:
     """``Type: message`` on one line (long messages cut)."""
     if isinstance(exc, RecursionError):
         text = "input nested too deeply"
+    elif isinstance(exc, OverflowError):
+        text = (f"numeric overflow ({' '.join(str(exc).split())}): a length or value is too "
+                f"large (lengths are in m)")
     elif isinstance(exc, MemoryError):
         text = "out of memory (reduce the resolution or the number of samples)"
     else:

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from ._common import add_design_option, load_design
-from ._output import add_force_option, outputs
+from ._output import outputs
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -17,21 +17,21 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                     "TOML that --design reads; with --write FILE, write it to FILE, a starting "
                     "point to edit (lengths in m). An existing FILE is kept unless --force.")
     p.add_argument("--write", metavar="FILE", type=Path, help="write the TOML to FILE")
-    add_force_option(p)
+    p.add_argument("--force", action="store_true", help="replace FILE if it exists")
     add_design_option(p)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``design``."""
+    design = load_design(args)
     if args.write is None:
         if args.force:
             raise ValueError("--force goes with --write FILE")
-        print(load_design(args).to_toml(), end="")
+        print(design.to_toml(), end="")
         return 0
     with outputs(args, option="--write") as outs:
-        outs.add(args.write)
-        outs.write(args.write, load_design(args).to_toml())
+        outs.write(outs.add(args.write), design.to_toml())
         outs.commit()
     print(f"wrote {args.write}")
     return 0

@@ -2,7 +2,9 @@
 
 from ..design import Design
 from ._fk import (
+    FK_FIELDS,
     SLOT_MODE,
+    SLOT_MODE_INDEX,
     SLOT_P_SIGN,
     SLOT_UJOINT,
     SLOT_WRIST,
@@ -11,6 +13,7 @@ from ._fk import (
     slot_index,
 )
 from ._ik import (
+    IK_FIELDS,
     IK_SINGULAR_TOL,
     InstrumentIK,
     PassiveJoints,
@@ -24,7 +27,9 @@ from ._setup import REFERENCE_DIRECTION_B, REFERENCE_P, REFERENCE_Q, default_rcm
 
 __all__ = [
     "Design",
+    "FK_FIELDS",
     "FKSolution",
+    "IK_FIELDS",
     "IK_SINGULAR_TOL",
     "InstrumentIK",
     "PassiveJoints",
@@ -32,6 +37,7 @@ __all__ = [
     "REFERENCE_P",
     "REFERENCE_Q",
     "SLOT_MODE",
+    "SLOT_MODE_INDEX",
     "SLOT_P_SIGN",
     "SLOT_UJOINT",
     "SLOT_WRIST",
