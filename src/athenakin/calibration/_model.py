@@ -162,12 +162,10 @@ def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def rotation_from_vector(omega: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Rotation matrix ``exp([omega]_x)`` of a rotation vector (3,) (Rodrigues), rad."""
-    th = float(np.linalg.norm(omega))
-    K = _skew(np.asarray(omega, dtype=float))
-    if th < 1e-8:
-        return np.eye(3) + K + 0.5 * K @ K
-    return np.eye(3) + np.sin(th) / th * K + (1 - np.cos(th)) / th ** 2 * K @ K
+    """Rotation matrix ``exp([omega]_x)`` of a rotation vector (3,), rad (scipy's Rotation)."""
+    from scipy.spatial.transform import Rotation
+
+    return np.asarray(Rotation.from_rotvec(np.asarray(omega, dtype=float)).as_matrix())
 
 
 def _left_jacobian(omega: NDArray[np.float64]) -> NDArray[np.float64]:
