@@ -122,6 +122,53 @@ def check_transform(T: ArrayLike, name: str, *, allow_nonfinite: bool = False,
     return arr
 
 
+def broadcast_batch(**shapes: tuple[int, ...]) -> tuple[int, ...]:
+    """Broadcast the batch (leading) shapes of named arguments.
+
+    Parameters
+    ----------
+    **shapes : tuple of int
+        Each argument's batch shape (its shape without the trailing item axes),
+        keyed by the argument's name.
+
+    Returns
+    -------
+    tuple of int
+        The broadcast batch shape.
+
+    Raises
+    ------
+    InvalidInputError
+        If the shapes do not broadcast; the message names every argument and its shape.
+    """
+    try:
+        return tuple(np.broadcast_shapes(*shapes.values()))
+    except ValueError:
+        listed = ", ".join(f"{k} {tuple(v)}" for k, v in shapes.items())
+        raise InvalidInputError(
+            f"batch shapes do not broadcast: {listed} (the leading axes of the arguments "
+            f"must broadcast against each other, as numpy arrays do)") from None
+
+
+def check_tolerance(x: object, name: str) -> float:
+    """Coerce a tolerance keyword: a non-negative real number (``inf`` accepts everything).
+
+    Raises
+    ------
+    TypeError
+        If ``x`` is not a real number (``None``, a string, ...).
+    InvalidInputError
+        If ``x`` is NaN or negative.
+    """
+    if isinstance(x, bool) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
+        raise TypeError(f"{name}: expected a non-negative real number (a tolerance), "
+                        f"got {type(x).__name__}")
+    v = float(x)
+    if not v >= 0:
+        raise InvalidInputError(f"{name}: expected a non-negative tolerance, got {v}")
+    return v
+
+
 def _fmt(tail: tuple[int, ...]) -> str:
     """``(..., 3)``-style shape text without its parentheses; ``...`` for scalars."""
     return ", ".join(["..."] + [str(t) for t in tail])

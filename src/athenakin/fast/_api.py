@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import parallel as _ref_parallel
 from .. import robot as _ref_robot
-from .._validation import ROTATION_TOL, check_transform
+from .._validation import ROTATION_TOL, broadcast_batch, check_transform
 from ..chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
 from ..design import Design
 from ..parallel._module import (
@@ -155,14 +155,18 @@ def _flat(a: NDArray[np.float64], bx: tuple[int, ...], batch: tuple[int, ...], N
     return np.ascontiguousarray(np.broadcast_to(a, batch + tail)).reshape((N,) + tail)
 
 
-def _batch(*shapes: tuple[int, ...]) -> tuple[int, ...]:
-    """Broadcast batch shape (shortcut when all but one are scalar items)."""
-    big = [s for s in shapes if s]
+def _batch(**named: tuple[int, ...]) -> tuple[int, ...]:
+    """Broadcast batch shape (shortcut when all but one are scalar items).
+
+    Shapes that do not broadcast raise the reference's named error
+    (:func:`athenakin._validation.broadcast_batch`).
+    """
+    big = [s for s in named.values() if s]
     if not big:
         return ()
     if len(big) == 1 or all(s == big[0] for s in big[1:]):
         return big[0]
-    return np.broadcast_shapes(*shapes)
+    return broadcast_batch(**named)
 
 
 def _labels(batch: tuple[int, ...]) -> tuple[NDArray[np.int64], ...]:
@@ -259,7 +263,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
         resolve_policy(errors, ())
         return _fk_single(qa, Ta, P, tol, False, reference)
     bq, bT = qa.shape[:-1], Ta.shape[:-2]
-    batch = bq if bq == bT else _batch(bq, bT)
+    batch = bq if bq == bT else _batch(q=bq, T_b_e=bT)
     raise_now = resolve_policy(errors, batch)
     N = math.prod(batch)
     if out is None:
@@ -404,7 +408,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     except _Delegate:
         return reference()
     bT, bU = Ta.shape[:-2], Ua.shape[:-1]
-    batch = bT if bT == bU else _batch(bT, bU)
+    batch = bT if bT == bU else _batch(T_b_e=bT, u345=bU)
     raise_now = resolve_policy(errors, batch)
     N = math.prod(batch)
     if not batch and not parallel:
@@ -422,7 +426,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
             p=fbuf[_ik.ONE_P], u=fbuf[_ik.ONE_U:_ik.ONE_T],
             mode=ibuf[0:1].reshape(()), T_b_s=fbuf[_ik.ONE_T:_ik.ONE_RES].reshape(4, 4),
             residual=fbuf[_ik.ONE_RES], valid=ibuf[1] != 0,
-            reason=ibuf[2:3].astype(np.int8).reshape(()))
+            reason=ibuf[2:3].astype(np.int8).reshape(()), q_error=fbuf[_ik.ONE_QE])
     q = np.empty((N, 3))
     p = np.empty(N)
     u = np.empty((N, 5))
@@ -431,10 +435,11 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     res = np.empty(N)
     valid = np.empty(N, np.bool_)
     reason = np.empty(N, np.int8)
+    qe = np.empty(N)
     kernel = _ik.ik_paper_parallel if parallel else _ik.ik_paper
     flags = kernel(_flat(Ta, bT, batch, N, (4, 4)), _flat(Ua, bU, batch, N, (3,)), P,
                    float(singular_tol), float(closure_tol), ROTATION_TOL, q, p, u, mode, Tbs,
-                   res, valid, reason)
+                   res, valid, reason, qe)
     if flags & _fk.FLAG_NONRIGID:
         check_transform(Ta, "T_b_e", allow_nonfinite=True)
     if flags & _ik.FLAG_SLOW or (raise_now and (
@@ -442,12 +447,13 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
             or (reason[0] != 0 if N == 1 else reason.any()))):
         return reference()
     if batch != (N,):
-        q, p, u, mode, Tbs, res, valid, reason = (
-            a.reshape(batch + a.shape[1:]) for a in (q, p, u, mode, Tbs, res, valid, reason))
+        q, p, u, mode, Tbs, res, valid, reason, qe = (
+            a.reshape(batch + a.shape[1:])
+            for a in (q, p, u, mode, Tbs, res, valid, reason, qe))
         if not batch:   # numpy scalars, as the reference's ufuncs give for 0-d operands
-            p, res, valid = p[()], res[()], valid[()]
+            p, res, valid, qe = p[()], res[()], valid[()], qe[()]
     return q, _new(PassiveJoints, p=p, u=u, mode=mode, T_b_s=Tbs, residual=res, valid=valid,
-                            reason=reason)
+                            reason=reason, q_error=qe)
 
 
 # --- whole robot: controller forms -------------------------------------------------------
@@ -459,7 +465,8 @@ def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors:
     Pa = _arr(p_in, ()) if kind == 0 else np.zeros(1)
     bT, bV = Ta.shape[:-2], Va.shape[:-1]
     bP = Pa.shape if kind == 0 else ()
-    batch = bT if (bT == bV and bV == bP) else _batch(bT, bV, bP)
+    batch = bT if (bT == bV and bV == bP) else (
+        _batch(T_b_e=bT, direction_e=bV, p=bP) if kind == 0 else _batch(T_b_e=bT, tip_e=bV))
     raise_now = resolve_policy(errors, batch)
     if not batch and not parallel:
         fbuf = np.empty(_ik.LINE_F)
@@ -470,9 +477,9 @@ def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors:
             raise _Delegate
         return fbuf[_ik.LINE_Q:_ik.LINE_P], _new(
             InstrumentIK, p=fbuf[_ik.LINE_P],
-            direction_b=fbuf[_ik.LINE_D:_ik.LINE_O], O_s=fbuf[_ik.LINE_O:_ik.LINE_F],
+            direction_b=fbuf[_ik.LINE_D:_ik.LINE_O], O_s=fbuf[_ik.LINE_O:_ik.LINE_QE],
             mode=ibuf[0:1].reshape(()), valid=ibuf[1] != 0,
-            reason=ibuf[2:3].astype(np.int8).reshape(()))
+            reason=ibuf[2:3].astype(np.int8).reshape(()), q_error=fbuf[_ik.LINE_QE])
     N = math.prod(batch)
     q = np.empty((N, 3))
     p = np.empty(N)
@@ -481,19 +488,21 @@ def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors:
     mode = np.empty(N, np.int64)
     valid = np.empty(N, np.bool_)
     reason = np.empty(N, np.int8)
+    qe = np.empty(N)
     kernel = _ik.ik_line_parallel if parallel else _ik.ik_line
     flags = kernel(_flat(Ta, bT, batch, N, (4, 4)), _flat(Va, bV, batch, N, (3,)),
                    _flat(Pa, bP, batch, N, ()) if kind == 0 else Pa, P, kind, ROTATION_TOL,
-                   q, p, d_b, O_s, mode, valid, reason)
+                   q, p, d_b, O_s, mode, valid, reason, qe)
     if flags or (raise_now and (reason[0] != 0 if N == 1 else reason.any())):
         raise _Delegate   # the reference raises (or, for a false rigidity alarm, computes)
     if batch != (N,):
-        q, p, d_b, O_s, mode, valid, reason = (
-            a.reshape(batch + a.shape[1:]) for a in (q, p, d_b, O_s, mode, valid, reason))
+        q, p, d_b, O_s, mode, valid, reason, qe = (
+            a.reshape(batch + a.shape[1:])
+            for a in (q, p, d_b, O_s, mode, valid, reason, qe))
         if not batch:
-            p, valid = p[()], valid[()]
+            p, valid, qe = p[()], valid[()], qe[()]
     return q, _new(InstrumentIK, p=p, direction_b=d_b, O_s=O_s, mode=mode, valid=valid,
-                           reason=reason)
+                           reason=reason, q_error=qe)
 
 
 def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
@@ -565,10 +574,11 @@ def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> P
     theta = np.empty(N)
     valid = np.empty(N, np.bool_)
     reason = np.empty(N, np.int8)
-    _ik.parallel_ik_position(Oa.reshape(N, 3), P, q, mode, theta, valid, reason)
+    qe = np.empty(N)
+    _ik.parallel_ik_position(Oa.reshape(N, 3), P, q, mode, theta, valid, reason, qe)
     return ParallelIK(q=q.reshape(batch + (3,)), mode=mode.reshape(batch),
                       theta=theta.reshape(batch), valid=valid.reshape(batch)[()],
-                      reason=reason.reshape(batch))
+                      reason=reason.reshape(batch), q_error=qe.reshape(batch))
 
 
 def parallel_inverse_kinematics(T_b_s: ArrayLike, design: Design | None = None, *,

@@ -11,6 +11,7 @@ from ._fk import (
     slot_index,
 )
 from ._ik import (
+    IK_Q_ERROR_MAX,
     IK_SINGULAR_TOL,
     InstrumentIK,
     PassiveJoints,
@@ -25,6 +26,7 @@ from ._setup import REFERENCE_DIRECTION_B, REFERENCE_P, REFERENCE_Q, default_rcm
 __all__ = [
     "Design",
     "FKSolution",
+    "IK_Q_ERROR_MAX",
     "IK_SINGULAR_TOL",
     "InstrumentIK",
     "PassiveJoints",

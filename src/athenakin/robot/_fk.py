@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import invert_transform
-from .._validation import check_array, check_transform
+from .._validation import broadcast_batch, check_array, check_transform
 from ..chain._ups import (
     CLOSURE_TOL,
     DEGENERATE_TOL,
@@ -186,7 +186,7 @@ def _prepare(q: ArrayLike, T_b_e: ArrayLike, design: Design | None, errors: str
     design = resolve_design(design)
     qa = check_array(q, "q", (3,), allow_nonfinite=True)
     T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
-    batch = np.broadcast_shapes(qa.shape[:-1], T.shape[:-2])
+    batch = broadcast_batch(q=qa.shape[:-1], T_b_e=T.shape[:-2])
     raise_now = resolve_policy(errors, batch)
     qa = np.broadcast_to(qa, batch + (3,))
     T = np.broadcast_to(T, batch + (4, 4))
