@@ -37,7 +37,9 @@ from .robot import (
 __version__ = "0.1.0"
 
 #: Subpackages imported on first attribute access (optional heavy dependencies).
-_LAZY_SUBPACKAGES = ("analysis", "symbolic", "plot", "sim", "motion", "fast")
+_LAZY_SUBPACKAGES = ("analysis", "symbolic", "plot", "sim", "motion", "fast", "certified")
+#: Public functions of lazily imported subpackages, reachable as ``ak.<name>``.
+_LAZY_FUNCTIONS = {"certified_forward_kinematics": "certified"}
 
 
 def __getattr__(name: str) -> object:
@@ -46,6 +48,10 @@ def __getattr__(name: str) -> object:
         import importlib
 
         return importlib.import_module(f"athenakin.{name}")
+    if name in _LAZY_FUNCTIONS:
+        import importlib
+
+        return getattr(importlib.import_module(f"athenakin.{_LAZY_FUNCTIONS[name]}"), name)
     raise AttributeError(f"module 'athenakin' has no attribute {name!r}")
 
 __all__ = [
