@@ -85,7 +85,11 @@ def check_scalar(x: object, name: str, *, positive: bool = False,
     """
     if isinstance(x, bool) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
         raise TypeError(f"{name}: expected a real number, got {type(x).__name__}")
-    v = float(x)
+    try:
+        v = float(x)
+    except OverflowError:
+        raise InvalidInputError(f"{name}: expected a finite number, got an integer too large "
+                                f"for a float") from None
     if not np.isfinite(v):
         raise InvalidInputError(f"{name}: expected a finite number, got {v}")
     if positive and not v > 0:

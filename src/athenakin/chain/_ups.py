@@ -25,7 +25,7 @@ import dataclasses
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_transform
+from .._validation import check_array, check_tolerance, check_transform
 from ..errors import InvalidInputError, Reason
 from ..study import dq_multiply, study_G, study_M
 
@@ -236,6 +236,9 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
         Slots ordered ``k = 4 r + 2 b + w`` (module docstring).
     """
     T = T_s_e if _checked else check_transform(T_s_e, "T_s_e", allow_nonfinite=True)
+    degenerate_tol = check_tolerance(degenerate_tol, "degenerate_tol")
+    p_zero_tol = check_tolerance(p_zero_tol, "p_zero_tol")
+    closure_tol = check_tolerance(closure_tol, "closure_tol")
     finite = np.all(np.isfinite(T), axis=(-2, -1))
     T = np.where(finite[..., None, None], T, np.eye(4))
     c = T[..., :3, 3]

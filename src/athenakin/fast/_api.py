@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import parallel as _ref_parallel
 from .. import robot as _ref_robot
-from .._validation import ROTATION_TOL, broadcast_batch, check_transform
+from .._validation import ROTATION_TOL, broadcast_batch, check_tolerance, check_transform
 from ..chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
 from ..design import Design
 from ..parallel._module import (
@@ -256,7 +256,10 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
             and p_zero_tol == P_ZERO_TOL and closure_tol == CLOSURE_TOL):
         tol = _FK_TOL_DEFAULT
     else:
-        tol = np.array([tangent_tol, degenerate_tol, p_zero_tol, closure_tol], dtype=float)
+        tol = np.array([check_tolerance(tangent_tol, "tangent_tol"),
+                        check_tolerance(degenerate_tol, "degenerate_tol"),
+                        check_tolerance(p_zero_tol, "p_zero_tol"),
+                        check_tolerance(closure_tol, "closure_tol")])
     if qa.ndim == 1 and Ta.ndim == 2 and out is None and not parallel:
         if errors == "auto" or errors == "raise":
             return _fk_single(qa, Ta, P, tol, True, reference)
@@ -410,12 +413,13 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     bT, bU = Ta.shape[:-2], Ua.shape[:-1]
     batch = bT if bT == bU else _batch(T_b_e=bT, u345=bU)
     raise_now = resolve_policy(errors, batch)
+    stol = check_tolerance(singular_tol, "singular_tol")
+    ctol = check_tolerance(closure_tol, "closure_tol")
     N = math.prod(batch)
     if not batch and not parallel:
         fbuf = np.empty(_ik.ONE_F)
         ibuf = np.empty(3, np.int64)
-        flags = _ik.ik_paper_one(Ta, Ua, P, float(singular_tol), float(closure_tol),
-                                 ROTATION_TOL, fbuf, ibuf)
+        flags = _ik.ik_paper_one(Ta, Ua, P, stol, ctol, ROTATION_TOL, fbuf, ibuf)
         if flags & _fk.FLAG_NONRIGID:
             check_transform(Ta, "T_b_e", allow_nonfinite=True)
         if flags & _ik.FLAG_SLOW or (raise_now and (
@@ -438,8 +442,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     qe = np.empty(N)
     kernel = _ik.ik_paper_parallel if parallel else _ik.ik_paper
     flags = kernel(_flat(Ta, bT, batch, N, (4, 4)), _flat(Ua, bU, batch, N, (3,)), P,
-                   float(singular_tol), float(closure_tol), ROTATION_TOL, q, p, u, mode, Tbs,
-                   res, valid, reason, qe)
+                   stol, ctol, ROTATION_TOL, q, p, u, mode, Tbs, res, valid, reason, qe)
     if flags & _fk.FLAG_NONRIGID:
         check_transform(Ta, "T_b_e", allow_nonfinite=True)
     if flags & _ik.FLAG_SLOW or (raise_now and (
@@ -550,8 +553,9 @@ def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
     T_b_s = np.empty((N, 2, 4, 4))
     theta = np.empty((N, 2))
     r1, m_y, w, half = np.empty(N), np.empty(N), np.empty(N), np.empty(N)
-    _ik.parallel_fk(qa.reshape(N, 3), P, float(tangent_tol), valid, reason, T_b_i, T_b_s,
-                    theta, r1, m_y, w, half)
+    ttol = check_tolerance(tangent_tol, "tangent_tol")
+    _ik.parallel_fk(qa.reshape(N, 3), P, ttol, valid, reason, T_b_i, T_b_s, theta, r1, m_y, w,
+                    half)
     valid, reason, T_b_i, T_b_s, theta = (  # type: ignore[assignment]
         a.reshape(batch + a.shape[1:]) for a in (valid, reason, T_b_i, T_b_s, theta))
     r1, m_y, w, half = (a.reshape(batch)[()] for a in (r1, m_y, w, half))

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import wrap_angle
-from .._validation import check_array, check_transform
+from .._validation import check_array, check_tolerance, check_transform
 from ..design import Design, resolve_design
 from ..errors import Reason
 
@@ -210,6 +210,7 @@ def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
     """
     design = resolve_design(design)
     q = check_array(q, "q", (3,), allow_nonfinite=True)
+    tangent_tol = check_tolerance(tangent_tol, "tangent_tol")
     reason = _actuator_checks(q, design)
     qs = np.where(reason[..., None] == Reason.NONFINITE_INPUT, 0.0, q)
     g = circle_geometry(qs, design)

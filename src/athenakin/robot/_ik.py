@@ -399,7 +399,11 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
     d_e = _unit(check_array(direction_e, "direction_e", (3,), allow_nonfinite=True),
                 "direction_e")
     p = check_array(p, "p", (), allow_nonfinite=True)
-    broadcast_batch(T_b_e=T.shape[:-2], direction_e=d_e.shape[:-1], p=p.shape)
+    batch = broadcast_batch(T_b_e=T.shape[:-2], direction_e=d_e.shape[:-1], p=p.shape)
+    if resolve_policy(errors, batch):   # a failure raises: name the non-finite argument
+        check_array(T, "T_b_e", (4, 4))
+        check_array(direction_e, "direction_e", (3,))
+        check_array(p, "p", ())
     pre = np.where(np.abs(p) <= P_ZERO_TOL, np.int8(Reason.SERIAL_P_ZERO), np.int8(0))
     return _q_from_line(T, d_e, p, design, errors, pre.astype(np.int8))
 
@@ -437,7 +441,10 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
     design = resolve_design(design)
     T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
     tip = check_array(tip_e, "tip_e", (3,), allow_nonfinite=True)
-    broadcast_batch(T_b_e=T.shape[:-2], tip_e=tip.shape[:-1])
+    batch = broadcast_batch(T_b_e=T.shape[:-2], tip_e=tip.shape[:-1])
+    if resolve_policy(errors, batch):   # a failure raises: name the non-finite argument
+        check_array(T, "T_b_e", (4, 4))
+        check_array(tip, "tip_e", (3,))
     m = np.max(np.abs(tip), axis=-1)
     with np.errstate(invalid="ignore"):
         s = m * np.linalg.norm(tip / np.where(m > 0, m, 1.0)[..., None], axis=-1)
