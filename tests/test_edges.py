@@ -239,3 +239,28 @@ def test_track_cli_rejects_decreasing_time(tmp_path, capsys):
         if r[head.index("valid")] == "1":
             assert all(np.isfinite(float(r[head.index(c)]))
                        for c in ("tip_x_m", "tip_y_m", "tip_z_m", "p_m"))
+
+
+# --- item 8: parallel=True from several threads on the workqueue layer -----------------------
+def test_parallel_kernels_from_threads_on_workqueue_layer():
+    """Used to abort the interpreter (SIGABRT); now serialised by fast._threads."""
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import threading, numpy as np, numba, athenakin as ak\n"
+        "d = ak.Design.default(); T = ak.default_rcm_frame(d)\n"
+        "q = np.tile([-0.1, 0.1, 0.45], (4000, 1))\n"
+        "def work():\n"
+        "    for _ in range(5):\n"
+        "        ak.fast.forward_kinematics(q, T, d, parallel=True)\n"
+        "        ak.fast.inverse_kinematics(T, [0.3, 1.0, 0.4], d, parallel=True)\n"
+        "ts = [threading.Thread(target=work) for _ in range(4)]\n"
+        "[t.start() for t in ts]; [t.join() for t in ts]\n"
+        "print(numba.threading_layer())\n")
+    env = dict(os.environ, NUMBA_THREADING_LAYER="workqueue", NUMBA_NUM_THREADS="2")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip() == "workqueue"

@@ -43,6 +43,7 @@ from ..robot._fk import SLOT_MODE, SLOT_P_SIGN, SLOT_UJOINT, SLOT_WRIST, FKMetho
 from ..robot._ik import IK_SINGULAR_TOL, InstrumentIK, PassiveJoints
 from . import _fk_kernels as _fk
 from . import _ik_kernels as _ik
+from ._threads import parallel_guard
 
 __all__ = [
     "design_params",
@@ -281,8 +282,9 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
         reason, valid, p, u, Tbs, res, item = (
             a.reshape((N,) + a.shape[len(batch):]) for a in _check_out(out, batch))
     kernel = _fk.fk_full_parallel if parallel else _fk.fk_full
-    flags = kernel(_flat(qa, bq, batch, N, (3,)), _flat(Ta, bT, batch, N, (4, 4)), P, tol,
-                   ROTATION_TOL, reason, valid, p, u, Tbs, res, item)
+    with parallel_guard(parallel):
+        flags = kernel(_flat(qa, bq, batch, N, (3,)), _flat(Ta, bT, batch, N, (4, 4)), P, tol,
+                       ROTATION_TOL, reason, valid, p, u, Tbs, res, item)
     if flags & _fk.FLAG_NONRIGID:
         check_transform(Ta, "T_b_e", allow_nonfinite=True)   # raises unless a false alarm
     if raise_now and (flags & (_fk.FLAG_Q_NONFINITE | _fk.FLAG_T_NONFINITE)
@@ -441,8 +443,9 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     reason = np.empty(N, np.int8)
     qe = np.empty(N)
     kernel = _ik.ik_paper_parallel if parallel else _ik.ik_paper
-    flags = kernel(_flat(Ta, bT, batch, N, (4, 4)), _flat(Ua, bU, batch, N, (3,)), P,
-                   stol, ctol, ROTATION_TOL, q, p, u, mode, Tbs, res, valid, reason, qe)
+    with parallel_guard(parallel):
+        flags = kernel(_flat(Ta, bT, batch, N, (4, 4)), _flat(Ua, bU, batch, N, (3,)), P,
+                       stol, ctol, ROTATION_TOL, q, p, u, mode, Tbs, res, valid, reason, qe)
     if flags & _fk.FLAG_NONRIGID:
         check_transform(Ta, "T_b_e", allow_nonfinite=True)
     if flags & _ik.FLAG_SLOW or (raise_now and (
@@ -493,9 +496,10 @@ def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors:
     reason = np.empty(N, np.int8)
     qe = np.empty(N)
     kernel = _ik.ik_line_parallel if parallel else _ik.ik_line
-    flags = kernel(_flat(Ta, bT, batch, N, (4, 4)), _flat(Va, bV, batch, N, (3,)),
-                   _flat(Pa, bP, batch, N, ()) if kind == 0 else Pa, P, kind, ROTATION_TOL,
-                   q, p, d_b, O_s, mode, valid, reason, qe)
+    with parallel_guard(parallel):
+        flags = kernel(_flat(Ta, bT, batch, N, (4, 4)), _flat(Va, bV, batch, N, (3,)),
+                       _flat(Pa, bP, batch, N, ()) if kind == 0 else Pa, P, kind, ROTATION_TOL,
+                       q, p, d_b, O_s, mode, valid, reason, qe)
     if flags or (raise_now and (reason[0] != 0 if N == 1 else reason.any())):
         raise _Delegate   # the reference raises (or, for a false rigidity alarm, computes)
     if batch != (N,):
