@@ -264,3 +264,26 @@ def test_parallel_kernels_from_threads_on_workqueue_layer():
                          timeout=300)
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip() == "workqueue"
+
+
+# --- item 3: the tangency merge is visible in the residual ----------------------------------
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_tangency_merge_reported_in_residual(backend):
+    g = ak.parallel.circle_geometry(np.array([-0.1, 0.1, 0.3]), D)
+    q3 = float(g["d"] - g["r1"]) + np.array([6e-16, 3e-15, 2.5e-14])   # just past tangency
+    q = np.stack([np.full(3, -0.1), np.full(3, 0.1), q3], axis=-1)
+    a = ak.parallel.circle_geometry(q, D)["half_chord"]
+    assert np.all((a > 5e-9) & (a <= ak.parallel.TANGENT_TOL))   # merged at the default
+    merged = ak.parallel.parallel_forward_kinematics(q, D)
+    true = ak.parallel.parallel_forward_kinematics(q, D, tangent_tol=0.0)
+    assert np.all(merged.reason[:, 1] == Reason.CIRCLES_TANGENT) and true.valid.all()
+    off = np.linalg.norm(merged.O_s[:, 0] - true.O_s[:, 0], axis=-1)
+    assert np.all(off > 1e-9)
+    assert np.all(off <= merged.residual[:, 0] * (1 + 1e-6))
+    sol = ak.forward_kinematics(q, T0, D, errors="flag", backend=backend)
+    res = sol.residual[:, :8]
+    ok = sol.valid[:, :8]
+    assert ok.any()
+    assert np.all(res[ok] >= np.broadcast_to(off[:, None], res.shape)[ok] * (1 - 1e-6))
+    fast = ak.fast.parallel_forward_kinematics(q, D)
+    assert_allclose(fast.residual, merged.residual, rtol=1e-9, atol=1e-18)

@@ -557,15 +557,17 @@ def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
     T_b_s = np.empty((N, 2, 4, 4))
     theta = np.empty((N, 2))
     r1, m_y, w, half = np.empty(N), np.empty(N), np.empty(N), np.empty(N)
+    pres = np.empty((N, 2))
     ttol = check_tolerance(tangent_tol, "tangent_tol")
     _ik.parallel_fk(qa.reshape(N, 3), P, ttol, valid, reason, T_b_i, T_b_s, theta, r1, m_y, w,
-                    half)
-    valid, reason, T_b_i, T_b_s, theta = (  # type: ignore[assignment]
-        a.reshape(batch + a.shape[1:]) for a in (valid, reason, T_b_i, T_b_s, theta))
+                    half, pres)
+    valid, reason, T_b_i, T_b_s, theta, pres = (  # type: ignore[assignment]
+        a.reshape(batch + a.shape[1:]) for a in (valid, reason, T_b_i, T_b_s, theta, pres))
     r1, m_y, w, half = (a.reshape(batch)[()] for a in (r1, m_y, w, half))
     return ParallelSolution(valid=valid, reason=reason, mode=MODES.copy(),
                             O_i=T_b_i[..., :3, 3], O_s=T_b_s[..., :3, 3], T_b_i=T_b_i,
-                            T_b_s=T_b_s, theta=theta, r1=r1, m_y=m_y, w=w, half_chord=half)
+                            T_b_s=T_b_s, theta=theta, r1=r1, m_y=m_y, w=w, half_chord=half,
+                            residual=pres)
 
 
 def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> ParallelIK:

@@ -591,7 +591,7 @@ def ik_paper_parallel(T, U, P, stol, ctol, rot_tol, q, p, u, mode, Tbs, res, val
 
 # --- parallel module FK (parallel_forward_kinematics) ------------------------------------
 @njit(**_OPTS)
-def parallel_fk(q, P, ttol, valid, reason, T_b_i, T_b_s, theta, r1o, myo, wo, halfo):
+def parallel_fk(q, P, ttol, valid, reason, T_b_i, T_b_s, theta, r1o, myo, wo, halfo, reso):
     """:func:`athenakin.parallel.parallel_forward_kinematics` for q (N, 3)."""
     l1, l2, l3, l4, l5 = P[0], P[1], P[2], P[3], P[4]
     lo0, lo1, lo2, hi0, hi1, hi2, hs = P[5], P[6], P[7], P[8], P[9], P[10], P[11]
@@ -632,11 +632,13 @@ def parallel_fk(q, P, ttol, valid, reason, T_b_i, T_b_s, theta, r1o, myo, wo, ha
         ez = m_y / d
         xm = 0.5 * (q1 + q2) + nan
         r1n = r1 + nan
+        pres = (math.sqrt(abs(k)) / (2.0 * d)) * ((r1n + l4) / r1n) if tangent else 0.0
         for m in range(2):
             sr = pr if m == 0 else (_TANGENT if tangent else pr)
             reason[i, m] = np.int8(sr)
             valid[i, m] = sr == 0.0
             mask = 0.0 if sr == 0.0 else math.nan
+            reso[i, m] = pres + mask
             sa = a if m == 0 else -a
             y = by + sa * ey
             z = bz + sa * ez

@@ -71,6 +71,12 @@ class ParallelSolution:
     r1, m_y, w, half_chord : ndarray, shape (...)
         Radius of ``k1``, y of C, the paper's ``w`` (Eq. 8) and the half-chord
         ``a = sqrt(max(w, 0)) / (2 m_y d)`` of the two intersections (m).
+    residual : ndarray, shape (..., 2)
+        How far (m) the reported ``O_s`` may be from the true mechanism's: 0 for an
+        isolated intersection; where the modes merge (half-chord ``<= tangent_tol``)
+        ``O_i`` is put at the chord midpoint, up to the half-chord ``a`` off the true
+        intersections, and ``O_s`` up to ``a (r1 + l4) / r1``. NaN in invalid slots.
+        :func:`~athenakin.forward_kinematics` adds it to every slot's ``residual``.
     """
 
     valid: NDArray[np.bool_]
@@ -85,6 +91,7 @@ class ParallelSolution:
     m_y: NDArray[np.float64]
     w: NDArray[np.float64]
     half_chord: NDArray[np.float64]
+    residual: NDArray[np.float64]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -244,10 +251,14 @@ def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
     T_b_i = T_b_i * nanmask[..., None, None]
     T_b_s = T_b_s * nanmask[..., None, None]
     theta = wrap_angle(np.arctan2(-y / r1[..., None], z / r1[..., None])) * nanmask
+    with np.errstate(invalid="ignore", divide="ignore"):
+        pres = np.where(tangent, np.sqrt(np.abs(k)) / (2 * g["d"]) * ((r1 + design.l4) / r1),
+                        0.0)
     return ParallelSolution(
         valid=valid, reason=slot_reason, mode=MODES.copy(),
         O_i=T_b_i[..., :3, 3], O_s=T_b_s[..., :3, 3], T_b_i=T_b_i, T_b_s=T_b_s, theta=theta,
-        r1=g["r1"], m_y=g["m_y"], w=g["w"], half_chord=g["half_chord"])
+        r1=g["r1"], m_y=g["m_y"], w=g["w"], half_chord=g["half_chord"],
+        residual=pres[..., None] * nanmask)
 
 
 def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> ParallelIK:

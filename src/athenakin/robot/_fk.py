@@ -215,6 +215,7 @@ def _assemble(par: ParallelSolution, p: NDArray[np.float64], u: NDArray[np.float
               batch: tuple[int, ...], raise_now: bool, design: Design) -> FKSolution:
     """Combine the parallel module's 2 modes with the serial step's (..., 2, 8) slots."""
     preason = np.broadcast_to(par.reason[..., None], sreason.shape)
+    residual = np.maximum(residual, par.residual[..., None])   # merged modes (issue 13)
     reason = np.where(preason != 0, preason, sreason).astype(np.int8).reshape(batch + (16,))
     valid = reason == 0
     nan = np.where(valid, 1.0, np.nan)
