@@ -316,7 +316,7 @@ def singularities(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
     _, g = _state(q, design, mode)
     h, r1, d, q3 = g["h"], g["r1"], g["d"], g["q3"]
     l1, l3 = design.l1, design.l3
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore", over="ignore"):
         r1v = np.sqrt(np.maximum(l1 * l1 - h * h, 0.0))
         s3v = np.sqrt(np.maximum(l3 * l3 - h * h, 0.0))
         dv = np.sqrt((s3v + design.l2) ** 2 + design.l5 ** 2)
