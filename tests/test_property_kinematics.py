@@ -208,8 +208,8 @@ def test_q_from_instrument_net(T, d, p, batch):
         if np.any(res.valid):    # the FK of the returned q has the instrument's O_s
             qv = np.atleast_2d(qq)[0]
             sol = ak.forward_kinematics(qv, T, D, errors="flag")
-            O = np.atleast_2d(res.O_s)[0]
-            assert np.min(np.abs(sol.T_b_s[sol.valid][:, :3, 3] - O).max(-1),
+            O_s = np.atleast_2d(res.O_s)[0]
+            assert np.min(np.abs(sol.T_b_s[sol.valid][:, :3, 3] - O_s).max(-1),
                           initial=np.inf) <= 1e-6
     assert_unchanged(before, T, dd)
     a, b = got["numpy"], got["numba"]
@@ -267,10 +267,10 @@ def test_parallel_net(q, tol):
 
 
 @NET
-@given(O=vec(-1.0, 1.0))
-def test_parallel_ik_net(O):
-    ref = ak.parallel.parallel_ik_from_position(O, D)
-    fast = ak.fast.parallel_ik_from_position(O, D)
+@given(O_s=vec(-1.0, 1.0))
+def test_parallel_ik_net(O_s):
+    ref = ak.parallel.parallel_ik_from_position(O_s, D)
+    fast = ak.fast.parallel_ik_from_position(O_s, D)
     assert int(ref.reason) == int(fast.reason)
     assert_finite_where(ref.valid, ref.q, ref.theta, ref.q_error)
     if ref.valid:

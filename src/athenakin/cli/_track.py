@@ -59,14 +59,14 @@ def run(args: argparse.Namespace) -> int:
     q, t = read_q_stream_csv(args.path)
     if t is not None:
         t = np.asarray(t, dtype=float)
-        bad = np.flatnonzero(np.isinf(t))
-        if bad.size:
-            raise ValueError(f"{args.path}: t_s must be finite (or empty), got {t[bad[0]]} at "
-                             f"sample {int(bad[0])}")
+        inf = np.flatnonzero(np.isinf(t))
+        if inf.size:
+            raise ValueError(f"{args.path}: t_s must be finite (or empty), got {t[inf[0]]} at "
+                             f"sample {int(inf[0])}")
         seen = np.flatnonzero(np.isfinite(t))       # empty cells (NaN) are missing readings
-        back = np.flatnonzero(np.diff(t[seen]) < 0)
-        if back.size:
-            i, j = int(seen[back[0]]), int(seen[back[0] + 1])
+        dec = np.flatnonzero(np.diff(t[seen]) < 0)
+        if dec.size:
+            i, j = int(seen[dec[0]]), int(seen[dec[0] + 1])
             raise ValueError(f"{args.path}: t_s must not decrease, got t_s = {t[j]:g} s at "
                              f"sample {j} after {t[i]:g} s at sample {i}")
     log = track(q, T, design, slot=args.slot, jump_m=args.jump_mm * 1e-3,

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import threading
-from typing import ContextManager
+from contextlib import AbstractContextManager
 
 __all__ = ["parallel_guard", "THREADSAFE_LAYERS"]
 
@@ -24,7 +24,7 @@ _LOCK = threading.RLock()
 _NULL = contextlib.nullcontext()
 
 
-def parallel_guard(parallel: bool) -> ContextManager[object]:
+def parallel_guard(parallel: bool) -> AbstractContextManager[object]:
     """Context for a kernel launch: a process-wide lock unless the layer is thread-safe.
 
     Parameters

@@ -375,14 +375,14 @@ def position_ik_error(O_s: ArrayLike, design: Design | None = None,
         The ``q_error`` that :class:`ParallelIK` reports.
     """
     design = resolve_design(design)
-    O = check_array(O_s, "O_s", (3,), allow_nonfinite=True)
-    return position_ik(O, design, np.asarray(dO, dtype=float)).q_error
+    pos = check_array(O_s, "O_s", (3,), allow_nonfinite=True)
+    return position_ik(pos, design, np.asarray(dO, dtype=float)).q_error
 
 
 def link_detail(O_s: ArrayLike, design: Design) -> str:
     """Say why ``O_s`` (3,) fails the link test: too far from, or too close to, the rail axis."""
-    O = np.asarray(O_s, dtype=float)
-    rho = float(np.hypot(O[1], O[2]))
+    pos = np.asarray(O_s, dtype=float)
+    rho = float(np.hypot(pos[1], pos[2]))
     far = rho - design.l4 > design.l1
     if far:
         return (f"O_s is {rho:.6g} m from the rail axis, farther than l1 + l4 = "
