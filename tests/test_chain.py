@@ -17,7 +17,7 @@ SEED = 11
 
 
 def chain_product(p, u):
-    """Eq. 11 typed as a product of 4x4 matrices (MODEL.md), for one configuration."""
+    """Eq. 11 typed as a product of 4x4 matrices (docs/conventions.md), for one configuration."""
     def rz(a):
         c, s = np.cos(a), np.sin(a)
         return np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])

@@ -2,6 +2,7 @@
 
 import importlib
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -119,3 +120,27 @@ def test_import_athenakin_stays_light():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == "[]"
+
+
+# --- athenakin design: print / write the design ------------------------------------------
+def test_design_prints_and_writes_and_refuses_to_overwrite(tmp_path, capsys):
+    code, out, _ = run(capsys, "design")
+    assert code == 0 and out.startswith("[design]\n") and "l1 = 0.3" in out
+    f = tmp_path / "my_robot.toml"
+    code, out, _ = run(capsys, "design", "--write", str(f))
+    assert code == 0 and f"wrote {f}" in out
+    assert ak.Design.from_toml(f) == ak.Design.default()
+    before = f.read_bytes()
+    code, _, err = run(capsys, "design", "--write", str(f))
+    assert code == 1 and "exists" in err and "--force" in err
+    assert f.read_bytes() == before
+    example = Path(__file__).resolve().parent.parent / "examples" / "my_robot.toml"
+    code, _, _ = run(capsys, "design", "--design", str(example), "--write", str(f), "--force")
+    assert code == 0 and ak.Design.from_toml(f) == ak.Design.from_toml(example)
+
+
+def test_readme_demo_with_the_example_design_runs(capsys, monkeypatch):
+    """The README's `athenakin demo --design my_robot.toml`, run where the file is."""
+    monkeypatch.chdir(Path(__file__).resolve().parent.parent / "examples")
+    code, out, _ = run(capsys, "demo", "--design", "my_robot.toml")
+    assert code == 0 and "16" in out

@@ -1,11 +1,20 @@
 """Design: defaults, validation, TOML round trip."""
 
 import dataclasses
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import athenakin as ak
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:
+    import tomli as tomllib
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
 
 def test_lengths_only_design_is_unlimited_with_defaults():
@@ -77,3 +86,33 @@ def test_ab_order_reversed_mirrors_actuators():
     np.testing.assert_allclose(s1.T_b_s, s2.T_b_s, atol=0)
     q2, _ = ak.inverse_kinematics(T, s1.u[0, 2:], d2)
     np.testing.assert_allclose(q2, q[[1, 0, 2]], atol=1e-12)
+
+
+# --- TOML written by a library (tomli-w): any name, unlimited strokes ------------------
+@pytest.mark.parametrize("name", ['quote "inside"', "back\\slash", "two\nlines", "tab\there",
+                                  "ünïcödé 設計", "'single'", "trailing \\", ""])
+def test_toml_round_trip_of_any_name(tmp_path, name):
+    d = ak.Design(l1=0.3, l2=0.1, l3=0.25, l4=0.15, l5=0.4, q_min=(-np.inf, -0.1, 0.2),
+                  q_max=(0.1, np.inf, np.inf), name=name)
+    text = d.to_toml()
+    assert tomllib.loads(text)["design"]["name"] == name      # valid TOML
+    f = tmp_path / "d.toml"
+    f.write_text(text, encoding="utf-8")
+    assert ak.Design.from_toml(f) == d
+
+
+def test_write_toml_refuses_to_overwrite(tmp_path):
+    f = tmp_path / "d.toml"
+    d = ak.Design.default()
+    assert d.write_toml(f) == f and ak.Design.from_toml(f) == d
+    with pytest.raises(FileExistsError):
+        d.write_toml(f)
+    other = ak.Design(l1=0.31, l2=0.1, l3=0.25, l4=0.15, l5=0.4)
+    other.write_toml(f, overwrite=True)
+    assert ak.Design.from_toml(f) == other
+
+
+def test_example_design_file_loads():
+    d = ak.Design.from_toml(EXAMPLES / "my_robot.toml")
+    assert d.tool_length == 0.50 and d.name.startswith("my robot")
+    assert ak.Design.from_mapping(tomllib.loads(d.to_toml())["design"]) == d

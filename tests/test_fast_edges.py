@@ -74,7 +74,7 @@ def test_fk_named_edge_cases_batch_and_single():
     q = np.stack([r[1] for r in rows])
     T = np.stack([r[2] for r in rows])
     got = fast.forward_kinematics(q, T, DESIGN)
-    ref = ak.forward_kinematics(q, T, DESIGN)
+    ref = ak.robot.forward_kinematics(q, T, DESIGN)
     assert_same(got, ref)
     for i, (name, _, _, expected) in enumerate(rows):
         if expected is not None:
@@ -82,8 +82,8 @@ def test_fk_named_edge_cases_batch_and_single():
     tan = [r[0] for r in rows].index("tangent circles")
     assert got.reason[tan, 8] == Reason.CIRCLES_TANGENT
     for name, qi, Ti, _ in rows:   # one at a time: the same result or the same error
-        _same_call(fast.forward_kinematics, ak.forward_kinematics, qi, Ti, DESIGN)
-        _same_call(fast.forward_kinematics, ak.forward_kinematics, qi, Ti, DESIGN,
+        _same_call(fast.forward_kinematics, ak.robot.forward_kinematics, qi, Ti, DESIGN)
+        _same_call(fast.forward_kinematics, ak.robot.forward_kinematics, qi, Ti, DESIGN,
                    errors="flag")
         with pytest.raises(Exception) if got.item_reason[[r[0] for r in rows].index(name)] \
                 else _nullcontext():
@@ -100,10 +100,11 @@ class _nullcontext:
 
 def test_fk_link_too_short_and_mirrored_designs():
     q = np.array([[-0.4, 0.4, 0.5], [-0.31, 0.3, 0.5], [0.1, -0.1, 0.45], [-0.1, -0.1, 0.45]])
-    assert_same(fast.forward_kinematics(q, T0, UNLIMITED), ak.forward_kinematics(q, T0, UNLIMITED))
+    assert_same(fast.forward_kinematics(q, T0, UNLIMITED),
+                ak.robot.forward_kinematics(q, T0, UNLIMITED))
     assert Reason.LINK_TOO_SHORT in fast.forward_kinematics(q, T0, UNLIMITED).reason
     for qi in q:
-        _same_call(fast.forward_kinematics, ak.forward_kinematics, qi, T0, UNLIMITED)
+        _same_call(fast.forward_kinematics, ak.robot.forward_kinematics, qi, T0, UNLIMITED)
 
 
 @pytest.mark.parametrize("q, T", [
@@ -113,31 +114,32 @@ def test_fk_link_too_short_and_mirrored_designs():
 ], ids=["str", "None", "complex", "short q", "3x4 T", "T str", "ragged", "reflection",
         "scaled R", "last row"])
 def test_invalid_arguments_raise_like_reference(q, T):
-    _same_call(fast.forward_kinematics, ak.forward_kinematics, q, T, DESIGN)
+    _same_call(fast.forward_kinematics, ak.robot.forward_kinematics, q, T, DESIGN)
     if isinstance(T, np.ndarray) and T.shape == (4, 4):
-        _same_call(fast.inverse_kinematics, ak.inverse_kinematics, T, q, DESIGN)
+        _same_call(fast.inverse_kinematics, ak.robot.inverse_kinematics, T, q, DESIGN)
 
 
 def test_bad_options_raise_like_reference():
-    _same_call(fast.forward_kinematics, ak.forward_kinematics, Q0, T0, DESIGN, errors="loud")
-    _same_call(fast.forward_kinematics, ak.forward_kinematics, Q0, T0, DESIGN, method="newton")
-    _same_call(fast.forward_kinematics, ak.forward_kinematics, Q0, T0, DESIGN,
+    _same_call(fast.forward_kinematics, ak.robot.forward_kinematics, Q0, T0, DESIGN, errors="loud")
+    _same_call(fast.forward_kinematics, ak.robot.forward_kinematics, Q0, T0, DESIGN,
+               method="newton")
+    _same_call(fast.forward_kinematics, ak.robot.forward_kinematics, Q0, T0, DESIGN,
                method="algebraic")
-    _same_call(fast.inverse_kinematics, ak.inverse_kinematics, T0, Q0, DESIGN, errors="x")
+    _same_call(fast.inverse_kinematics, ak.robot.inverse_kinematics, T0, Q0, DESIGN, errors="x")
     with pytest.raises(TypeError, match="design: expected athenakin.Design"):
         fast.forward_kinematics(Q0, T0, "design")
     with pytest.raises(TypeError):
-        ak.forward_kinematics(Q0, T0, "design")
+        ak.robot.forward_kinematics(Q0, T0, "design")
 
 
 def test_nearly_rigid_frame_within_tolerance_is_accepted():
     """A rotation off by 0.8e-9 (inside the 1e-9 tolerance, outside the kernels' quick check)."""
     T = T0.copy()
     T[:3, :3] *= 1 + 0.4e-9
-    _same_call(fast.forward_kinematics, ak.forward_kinematics, Q0, T, DESIGN)
-    _same_call(fast.inverse_kinematics, ak.inverse_kinematics, T,
-               ak.forward_kinematics(Q0, T0, DESIGN).u[0, 2:], DESIGN)
-    _same_call(fast.q_from_tool_tip, ak.q_from_tool_tip, T, [0.25, 0.0, 0.0], DESIGN)
+    _same_call(fast.forward_kinematics, ak.robot.forward_kinematics, Q0, T, DESIGN)
+    _same_call(fast.inverse_kinematics, ak.robot.inverse_kinematics, T,
+               ak.robot.forward_kinematics(Q0, T0, DESIGN).u[0, 2:], DESIGN)
+    _same_call(fast.q_from_tool_tip, ak.robot.q_from_tool_tip, T, [0.25, 0.0, 0.0], DESIGN)
 
 
 def test_ik_named_edge_cases():
@@ -149,15 +151,15 @@ def test_ik_named_edge_cases():
     cases.append((T0, np.array([np.nan, 0.0, 0.0])))
     cases.append((np.full((4, 4), np.nan), np.zeros(3)))
     cases.append((T0, np.array([1e4, 2.0, -1e5])))          # beyond the kernels' exact range
-    cases.append((T0, ak.forward_kinematics(Q0, T0, DESIGN).u[0, 2:] + 2 * np.pi))
+    cases.append((T0, ak.robot.forward_kinematics(Q0, T0, DESIGN).u[0, 2:] + 2 * np.pi))
     T = np.stack([c[0] for c in cases])
     u = np.stack([c[1] for c in cases])
     got = fast.inverse_kinematics(T, u, DESIGN)
-    assert_same(got, ak.inverse_kinematics(T, u, DESIGN))
+    assert_same(got, ak.robot.inverse_kinematics(T, u, DESIGN))
     assert got[1].reason[0] == Reason.IK_SINGULAR and got[1].reason[1] == Reason.IK_SINGULAR
     for Ti, ui in cases:
-        _same_call(fast.inverse_kinematics, ak.inverse_kinematics, Ti, ui, DESIGN)
-        _same_call(fast.inverse_kinematics, ak.inverse_kinematics, Ti, ui, DESIGN,
+        _same_call(fast.inverse_kinematics, ak.robot.inverse_kinematics, Ti, ui, DESIGN)
+        _same_call(fast.inverse_kinematics, ak.robot.inverse_kinematics, Ti, ui, DESIGN,
                    errors="flag")
 
 
@@ -165,11 +167,11 @@ def test_controller_forms_edge_cases():
     tips = np.array([[0.25, 0, 0], [0.0, 0, 0], [0.5, 0, 0], [0.45, 0, 0], [0.3, 0.1, -0.05],
                      [-0.2, 0.0, 0.0]])
     assert_same(fast.q_from_tool_tip(T0, tips, DESIGN, errors="flag"),
-                ak.q_from_tool_tip(T0, tips, DESIGN, errors="flag"))
+                ak.robot.q_from_tool_tip(T0, tips, DESIGN, errors="flag"))
     reasons = fast.q_from_tool_tip(T0, tips, DESIGN, errors="flag")[1].reason
     assert reasons[1] == Reason.IK_SINGULAR and reasons[2] == Reason.INSERTION_RANGE
     for t in list(tips) + [[np.nan, 0, 0], [0.1, np.inf, 0.0], "x", [0.1, 0.2]]:
-        _same_call(fast.q_from_tool_tip, ak.q_from_tool_tip, T0, t, DESIGN)
+        _same_call(fast.q_from_tool_tip, ak.robot.q_from_tool_tip, T0, t, DESIGN)
     # O_s on the rail axis (not in the module's image), zero / non-finite direction, bad p
     axis_T = T0.copy()
     axis_T[:3, 3] = [0.05, 0.0, 0.1]
@@ -177,8 +179,8 @@ def test_controller_forms_edge_cases():
                  (T0, [0.0, 0.0, 0.0], 0.2), (T0, [np.nan, 0, 1], 0.2), (T0, [1, 0, 0], np.inf),
                  (np.full((4, 4), np.nan), [1, 0, 0], 0.2), (T0 * 2, [1, 0, 0], 0.2),
                  (T0, [[1, 0, 0], [0, 1, 0]], [0.2, 0.3, 0.4])]:
-        _same_call(fast.q_from_instrument, ak.q_from_instrument, *args, DESIGN)
-        _same_call(fast.q_from_instrument, ak.q_from_instrument, *args, DESIGN, errors="flag")
+        _same_call(fast.q_from_instrument, ak.robot.q_from_instrument, *args, DESIGN)
+        _same_call(fast.q_from_instrument, ak.robot.q_from_instrument, *args, DESIGN, errors="flag")
 
 
 @pytest.mark.parametrize("qshape, Tshape", [((5,), (5,)), ((5,), ()), ((2, 3), (3,)),
@@ -188,17 +190,17 @@ def test_broadcasting(qshape, Tshape):
     q = rng.uniform(DESIGN.stroke_min, DESIGN.stroke_max, qshape + (3,))
     rc = akt.random_configurations(max(1, int(np.prod(Tshape))), DESIGN, rng=SEED + 2)
     T = rc.T_b_e[: int(np.prod(Tshape))].reshape(Tshape + (4, 4))
-    assert_same(fast.forward_kinematics(q, T, DESIGN), ak.forward_kinematics(q, T, DESIGN))
+    assert_same(fast.forward_kinematics(q, T, DESIGN), ak.robot.forward_kinematics(q, T, DESIGN))
     u = rng.uniform(-np.pi, np.pi, qshape + (3,))
     assert_same(fast.inverse_kinematics(T, u, DESIGN, errors="flag"),
-                ak.inverse_kinematics(T, u, DESIGN, errors="flag"))
+                ak.robot.inverse_kinematics(T, u, DESIGN, errors="flag"))
     tips = rng.normal(scale=0.2, size=qshape + (3,))
     assert_same(fast.q_from_tool_tip(T, tips, DESIGN, errors="flag"),
-                ak.q_from_tool_tip(T, tips, DESIGN, errors="flag"))
+                ak.robot.q_from_tool_tip(T, tips, DESIGN, errors="flag"))
     p = rng.uniform(0, 0.4, qshape)
     tips[..., 0] += 1e-3   # no zero direction
     assert_same(fast.q_from_instrument(T, tips, p, DESIGN, errors="flag"),
-                ak.q_from_instrument(T, tips, p, DESIGN, errors="flag"))
+                ak.robot.q_from_instrument(T, tips, p, DESIGN, errors="flag"))
 
 
 def test_input_types_and_layouts():
@@ -208,8 +210,9 @@ def test_input_types_and_layouts():
     qro = np.array(q)
     qro.flags.writeable = False
     for qq in (q, qi, qn, qro, np.array(q)[::-1][::-1]):
-        assert_same(fast.forward_kinematics(qq, T0, DESIGN), ak.forward_kinematics(qq, T0, DESIGN))
-    assert_same(fast.forward_kinematics(q[0], T0.tolist()), ak.forward_kinematics(q[0], T0))
+        assert_same(fast.forward_kinematics(qq, T0, DESIGN),
+                    ak.robot.forward_kinematics(qq, T0, DESIGN))
+    assert_same(fast.forward_kinematics(q[0], T0.tolist()), ak.robot.forward_kinematics(q[0], T0))
 
 
 def test_out_reuses_arrays():
@@ -218,7 +221,7 @@ def test_out_reuses_arrays():
     p_arr = out.p
     res = fast.forward_kinematics(rc.q[150:], rc.T_b_e[150:], DESIGN, out=out)
     assert res is out and res.p is p_arr
-    assert_same(res, ak.forward_kinematics(rc.q[150:], rc.T_b_e[150:], DESIGN))
+    assert_same(res, ak.robot.forward_kinematics(rc.q[150:], rc.T_b_e[150:], DESIGN))
     with pytest.raises(ValueError, match="out: expected an FKSolution of batch shape"):
         fast.forward_kinematics(rc.q[:10], rc.T_b_e[:10], DESIGN, out=out)
 
@@ -241,30 +244,30 @@ def test_control_loop_matches_reference():
     for i in range(0, 200, 10):
         T = rc.T_b_e[i]
         ctl = fast.ControlLoop(T, DESIGN)
-        ref = ak.forward_kinematics(rc.q[i], T, DESIGN, errors="flag")
+        ref = ak.robot.forward_kinematics(rc.q[i], T, DESIGN, errors="flag")
         reason, p, u = ctl.fk(rc.q[i])
         np.testing.assert_array_equal(reason, ref.reason)
         np.testing.assert_allclose(p, ref.p, atol=1e-12, rtol=0)
         akt.assert_angles_equal(np.nan_to_num(u), np.nan_to_num(ref.u), atol=1e-12)
         q, r = ctl.ik(rc.u[i, 2:])
-        qr, pj = ak.inverse_kinematics(T, rc.u[i, 2:], DESIGN, errors="flag")
+        qr, pj = ak.robot.inverse_kinematics(T, rc.u[i, 2:], DESIGN, errors="flag")
         assert r == pj.reason
         np.testing.assert_allclose(q, qr, atol=1e-12, rtol=0)
         tip = rng.normal(scale=0.2, size=3)
         q, r = ctl.q_from_tool_tip(tip)
-        qr, res = ak.q_from_tool_tip(T, tip, DESIGN, errors="flag")
+        qr, res = ak.robot.q_from_tool_tip(T, tip, DESIGN, errors="flag")
         assert r == res.reason
         np.testing.assert_allclose(q, qr, atol=1e-12, rtol=0)
         d_e, pp = rng.normal(size=3), rng.uniform(0, 0.4)
         q, r = ctl.q_from_instrument(d_e, pp)
-        qr, res = ak.q_from_instrument(T, d_e, pp, DESIGN, errors="flag")
+        qr, res = ak.robot.q_from_instrument(T, d_e, pp, DESIGN, errors="flag")
         assert r == res.reason
         np.testing.assert_allclose(q, qr, atol=1e-12, rtol=0)
     ctl = fast.ControlLoop(T0)
     assert ctl.fk([np.nan, 0.1, 0.45])[0][0] == Reason.NONFINITE_INPUT
     assert ctl.q_from_instrument([0.0, 0.0, 0.0], 0.2)[1] == Reason.NONFINITE_INPUT
     q, r = ctl.ik([1e4, 1.0, 2.0])
-    assert r == ak.inverse_kinematics(T0, [1e4, 1.0, 2.0], errors="flag")[1].reason
+    assert r == ak.robot.inverse_kinematics(T0, [1e4, 1.0, 2.0], errors="flag")[1].reason
     with pytest.raises(ak.InvalidInputError):
         fast.ControlLoop(np.full((4, 4), np.nan))
     with pytest.raises(ValueError):
@@ -293,7 +296,7 @@ def test_near_singular_band_matches_reference(which):
     u[:, which] = eps * np.array([1, -1, 1, -1, 1])
     T = rc.T_b_s[0] @ ups_transform(np.full(len(eps), rc.p[0]), u)
     got = fast.forward_kinematics(rc.q[0], T, DESIGN)
-    ref = ak.forward_kinematics(rc.q[0], T, DESIGN)
+    ref = ak.robot.forward_kinematics(rc.q[0], T, DESIGN)
     np.testing.assert_array_equal(got.reason, ref.reason)
     assert got.valid.all(axis=1).any()
     np.testing.assert_allclose(got.p, ref.p, atol=1e-12, rtol=0)

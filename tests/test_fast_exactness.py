@@ -129,16 +129,16 @@ def test_fk_and_ik_well_conditioned_strict():
     """Away from every singular set (random_configurations' margins): plain 1e-12, all items."""
     rc = akt.random_configurations(5000, DESIGN, rng=SEED - 1)
     assert_same(fast.forward_kinematics(rc.q, rc.T_b_e, DESIGN),
-                ak.forward_kinematics(rc.q, rc.T_b_e, DESIGN))
+                ak.robot.forward_kinematics(rc.q, rc.T_b_e, DESIGN))
     assert_same(fast.inverse_kinematics(rc.T_b_e, rc.u[:, 2:], DESIGN),
-                ak.inverse_kinematics(rc.T_b_e, rc.u[:, 2:], DESIGN))
+                ak.robot.inverse_kinematics(rc.T_b_e, rc.u[:, 2:], DESIGN))
 
 
 def test_fk_random_configurations_per_item_frames():
     rc = akt.random_configurations(6000, DESIGN, rng=SEED, margin=0.0, length_margin=0.0)
     got, ref, stable = compare_conditioned(
         lambda q, T, d: fast.forward_kinematics(q, T, d),
-        lambda q, T, d: ak.forward_kinematics(q, T, d), (rc.q, rc.T_b_e, DESIGN),
+        lambda q, T, d: ak.robot.forward_kinematics(q, T, d), (rc.q, rc.T_b_e, DESIGN),
         _perturb_qT)
     # the drawn configuration is among the 16 (where the slot is valid)
     ok = got.valid[np.arange(len(rc.q)), rc.slot]
@@ -155,7 +155,7 @@ def test_fk_random_actuators_shared_frame(design):
     T = ak.default_rcm_frame(DESIGN)
     got, ref, _ = compare_conditioned(
         lambda q, T, d: fast.forward_kinematics(q, T, d),
-        lambda q, T, d: ak.forward_kinematics(q, T, d), (q, T, design), _perturb_qT)
+        lambda q, T, d: ak.robot.forward_kinematics(q, T, d), (q, T, design), _perturb_qT)
     # the sample exercises most reason codes
     codes = set(np.unique(ref.reason).tolist())
     assert {0, 2, 3, 5}.issubset(codes) if design is not UNLIMITED else {0, 3, 4, 5} <= codes
@@ -167,7 +167,7 @@ def test_fk_random_frames_and_actuators():
     q = rng.uniform(DESIGN.stroke_min, DESIGN.stroke_max, (n, 3))
     T = _transforms(_random_rotations(rng, n), rng.uniform(-0.6, 0.6, (n, 3)))
     compare_conditioned(lambda q, T, d: fast.forward_kinematics(q, T, d),
-                        lambda q, T, d: ak.forward_kinematics(q, T, d), (q, T, DESIGN),
+                        lambda q, T, d: ak.robot.forward_kinematics(q, T, d), (q, T, DESIGN),
                         _perturb_qT)
 
 
@@ -175,8 +175,8 @@ def test_fk_tolerance_options():
     rc = akt.random_configurations(500, DESIGN, rng=SEED + 3)
     kw = dict(tangent_tol=1e-3, degenerate_tol=0.2, p_zero_tol=0.1, closure_tol=1e-14)
     got = fast.forward_kinematics(rc.q, rc.T_b_e, DESIGN, **kw)
-    ref = ak.forward_kinematics(rc.q, rc.T_b_e, DESIGN, **kw)
-    stable = np.all(ref.reason == ak.forward_kinematics(
+    ref = ak.robot.forward_kinematics(rc.q, rc.T_b_e, DESIGN, **kw)
+    stable = np.all(ref.reason == ak.robot.forward_kinematics(
         _scale(rc.q, 1), rc.T_b_e, DESIGN, **kw).reason, axis=1)
     assert stable.mean() > 0.95
     assert_same(got, ref, items=stable)
@@ -193,7 +193,7 @@ def test_ik_paper_form_round_trip_set():
     rc = akt.random_configurations(6000, DESIGN, rng=SEED + 4, margin=0.0, length_margin=0.0)
     got, ref, stable = compare_conditioned(
         lambda T, u, d: fast.inverse_kinematics(T, u, d),
-        lambda T, u, d: ak.inverse_kinematics(T, u, d), (rc.T_b_e, rc.u[:, 2:], DESIGN),
+        lambda T, u, d: ak.robot.inverse_kinematics(T, u, d), (rc.T_b_e, rc.u[:, 2:], DESIGN),
         _perturb_Tu)
     ok = got[1].valid & stable
     assert ok.mean() > 0.95
@@ -208,7 +208,7 @@ def test_ik_paper_form_random_angles(span):
     u[::5] = rc.u[::5, 2:] + rng.normal(scale=0.05, size=(1200, 3))
     got, ref, _ = compare_conditioned(
         lambda T, u, d: fast.inverse_kinematics(T, u, d, errors="flag"),
-        lambda T, u, d: ak.inverse_kinematics(T, u, d, errors="flag"), (rc.T_b_e, u, DESIGN),
+        lambda T, u, d: ak.robot.inverse_kinematics(T, u, d, errors="flag"), (rc.T_b_e, u, DESIGN),
         _perturb_Tu)
     assert {0, 2, 4}.issubset(set(np.unique(ref[1].reason).tolist()))
 
@@ -224,7 +224,7 @@ def test_q_from_tool_tip_random():
         return T, _scale(t, s), d
 
     compare_conditioned(lambda T, t, d: fast.q_from_tool_tip(T, t, d, errors="flag"),
-                        lambda T, t, d: ak.q_from_tool_tip(T, t, d, errors="flag"),
+                        lambda T, t, d: ak.robot.q_from_tool_tip(T, t, d, errors="flag"),
                         (T, tips, DESIGN), perturb)
 
 
@@ -239,7 +239,8 @@ def test_q_from_instrument_random():
         return T, dd, _scale(pp, s), d
 
     compare_conditioned(lambda T, dd, pp, d: fast.q_from_instrument(T, dd, pp, d, errors="flag"),
-                        lambda T, dd, pp, d: ak.q_from_instrument(T, dd, pp, d, errors="flag"),
+                        lambda T, dd, pp, d: ak.robot.q_from_instrument(T, dd, pp, d,
+                                                                        errors="flag"),
                         (T, d_e, p, DESIGN), perturb)
 
 
@@ -283,9 +284,9 @@ def test_single_items_equal_batch_items():
     ikb = fast.inverse_kinematics(rc.T_b_e, rc.u[:, 2:], DESIGN)
     for i in range(40):
         one = fast.forward_kinematics(rc.q[i], rc.T_b_e[i], DESIGN)
-        assert_same(one, ak.forward_kinematics(rc.q[i], rc.T_b_e[i], DESIGN))
+        assert_same(one, ak.robot.forward_kinematics(rc.q[i], rc.T_b_e[i], DESIGN))
         for f in ("p", "u", "T_b_s", "residual", "reason"):
             np.testing.assert_array_equal(getattr(one, f), getattr(batch, f)[i])
         q1, pj = fast.inverse_kinematics(rc.T_b_e[i], rc.u[i, 2:], DESIGN)
-        assert_same((q1, pj), ak.inverse_kinematics(rc.T_b_e[i], rc.u[i, 2:], DESIGN))
+        assert_same((q1, pj), ak.robot.inverse_kinematics(rc.T_b_e[i], rc.u[i, 2:], DESIGN))
         np.testing.assert_array_equal(q1, ikb[0][i])

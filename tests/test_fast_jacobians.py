@@ -18,6 +18,7 @@ import pytest
 import athenakin as ak
 from athenakin import analysis, fast
 from athenakin._transforms import transform_from_rotation_translation as _transforms
+from athenakin.robot import _jacobians as _ref_jac
 from athenakin.study import rotation_from_quaternion
 from athenakin.testing import random_configurations
 
@@ -36,7 +37,7 @@ FRAMES = ["base", "rcm"]
 
 
 def _call(name, which, q, T, design, mode, frame):
-    fn = getattr(fast if which == "fast" else analysis, name)
+    fn = getattr(fast if which == "fast" else _ref_jac, name)
     if name in PARALLEL:
         return fn(q, design, mode)
     return fn(q, T, design, mode=mode, frame=frame)
@@ -131,12 +132,12 @@ def test_default_frame_and_shared_frame(configurations):
     for name in ROBOT:
         for frame in FRAMES:
             assert_close(fast.__dict__[name](q, None, DESIGN, mode=m, frame=frame),
-                         getattr(analysis, name)(q, None, DESIGN, mode=m, frame=frame))
+                         getattr(_ref_jac, name)(q, None, DESIGN, mode=m, frame=frame))
             assert_close(fast.__dict__[name](q, T0, mode=m, frame=frame),
-                         getattr(analysis, name)(q, T0, mode=m, frame=frame))
+                         getattr(_ref_jac, name)(q, T0, mode=m, frame=frame))
         # defaults of the keyword options, and the reference set-up of OTHER
-        assert_close(fast.__dict__[name](q), getattr(analysis, name)(q))
-        assert_close(fast.__dict__[name](q, None, OTHER), getattr(analysis, name)(q, None, OTHER))
+        assert_close(fast.__dict__[name](q), getattr(_ref_jac, name)(q))
+        assert_close(fast.__dict__[name](q, None, OTHER), getattr(_ref_jac, name)(q, None, OTHER))
 
 
 # --- unrestricted random sets (unassembled, near-singular and far-away items) -------------
@@ -270,7 +271,7 @@ UNBUILDABLE = ak.Design(l1=0.05, l2=0.10, l3=0.04, l4=0.15, l5=0.40)   # no refe
 
 @pytest.mark.parametrize("name", PARALLEL + ROBOT)
 def test_invalid_arguments_raise_like_reference(name):
-    fast_fn, ref_fn = getattr(fast, name), getattr(analysis, name)
+    fast_fn, ref_fn = getattr(fast, name), getattr(_ref_jac, name)
     raised = 0
     bad_q = ["x", None, [0.1, 0.2], [[0.1, 0.2, 0.3], [0.1, 0.2]], np.array([1j, 0, 0]),
              np.zeros((2, 4))]
@@ -304,7 +305,8 @@ def test_backend_option():
     for name in PARALLEL + ROBOT:
         fn = getattr(analysis, name)
         np.testing.assert_array_equal(fn(q, backend="numba"), getattr(fast, name)(q))
-        np.testing.assert_array_equal(fn(q, backend="numpy"), fn(q))
+        np.testing.assert_array_equal(fn(q), getattr(fast, name)(q))   # "auto": compiled
+        np.testing.assert_array_equal(fn(q, backend="numpy"), getattr(_ref_jac, name)(q))
         with pytest.raises(ValueError, match="backend"):
             fn(q, backend="cuda")
 
@@ -321,11 +323,11 @@ def test_broadcasting(qshape, Tshape, mshape):
     T = rc.T_b_e[:nT].reshape(Tshape + (4, 4))
     mode = rng.choice([1, -1], mshape) if mshape else -1
     for name in PARALLEL:
-        assert_close(getattr(fast, name)(q, DESIGN, mode), getattr(analysis, name)(q, DESIGN, mode))
+        assert_close(getattr(fast, name)(q, DESIGN, mode), getattr(_ref_jac, name)(q, DESIGN, mode))
     for name in ROBOT:
         for frame in FRAMES:
             assert_close(getattr(fast, name)(q, T, DESIGN, mode=mode, frame=frame),
-                         getattr(analysis, name)(q, T, DESIGN, mode=mode, frame=frame))
+                         getattr(_ref_jac, name)(q, T, DESIGN, mode=mode, frame=frame))
 
 
 def test_input_types_and_layouts():
@@ -340,11 +342,11 @@ def test_input_types_and_layouts():
         for mode in (1, -1, np.int64(-1), True, [1, -1], np.array([1.0, -1.0]), (1,)):
             for name in PARALLEL:
                 assert_close(getattr(fast, name)(qq, DESIGN, mode),
-                             getattr(analysis, name)(qq, DESIGN, mode))
+                             getattr(_ref_jac, name)(qq, DESIGN, mode))
             for name in ROBOT:
                 for T in (T2, Tnc, T0.tolist()):
                     assert_close(getattr(fast, name)(qq, T, DESIGN, mode=mode),
-                                 getattr(analysis, name)(qq, T, DESIGN, mode=mode))
+                                 getattr(_ref_jac, name)(qq, T, DESIGN, mode=mode))
 
 
 def test_single_items_equal_batch_items(configurations):

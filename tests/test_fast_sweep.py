@@ -30,7 +30,7 @@ def test_counts_match_reference(parallel):
     n, chunk = 30_000, 4_096
     s = fast.sweep_fk(_draw, T0, DESIGN, n=n, chunk_size=chunk, progress=False,
                       parallel=parallel)
-    ref = ak.forward_kinematics(_all(n, chunk), T0, DESIGN)
+    ref = ak.robot.forward_kinematics(_all(n, chunk), T0, DESIGN)
     assert s.n == n
     np.testing.assert_array_equal(s.n_solutions, np.bincount(ref.n_solutions, minlength=17))
     np.testing.assert_array_equal(s.item_reason,
@@ -51,7 +51,7 @@ def test_reduce_callback_sees_every_chunk_with_reference_values():
 
     s = fast.sweep_fk(q, T0, DESIGN, chunk_size=chunk, reduce=reduce, progress=True)
     assert [a for a, _, _ in seen] == list(range(0, n, chunk))
-    ref = ak.forward_kinematics(q, T0, DESIGN)
+    ref = ak.robot.forward_kinematics(q, T0, DESIGN)
     np.testing.assert_array_equal(np.concatenate([r for _, _, r in seen]), ref.reason)
     np.testing.assert_allclose(np.concatenate([p for _, p, _ in seen]), ref.p, atol=1e-12,
                                rtol=0)

@@ -346,11 +346,12 @@ def test_sin_u4_is_the_sine_of_the_polar_angle():
 
 
 def test_leaving_the_workspace_raises_workspace():
+    # the end waypoint is outside: found before any timing, naming the waypoint (issue 13.6)
     end = TIP0 + 1.02 * (TOWARD_H0 - TIP0)
-    with pytest.raises(SafetyViolationError, match="leaves the workspace") as ei:
+    with pytest.raises(SafetyViolationError, match="waypoint 1 .* outside the workspace") as ei:
         plan([TIP0, end], T, D, margins=OFF)
     assert ei.value.limit == "workspace"
-    assert ei.value.index > 0
+    assert ei.value.waypoint == 1 and ei.value.index == -1
 
 
 def test_stroke_limit_names_the_actuator():

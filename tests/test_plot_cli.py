@@ -42,6 +42,19 @@ def test_view_all_solutions(tmp_path):
     assert iio.imread(out).shape[0] == 16 * 30
 
 
+def test_view_all_solutions_html(tmp_path, capsys):
+    """``--all`` with an HTML page draws the 16 solutions at once, one legend entry each."""
+    import re
+
+    out = tmp_path / "all.html"
+    assert main(["view", "--all", "-o", str(out)]) == 0
+    text = out.read_text()
+    assert "<title>ATHENA, q = (-100, 100, 450) mm: all 16 solutions</title>" in text
+    groups = set(re.findall(r'"legendgroup":"(slot \d+)"', text))
+    assert groups == {f"slot {k}" for k in range(16)}
+    assert "(all solutions)" in capsys.readouterr().out
+
+
 def test_view_errors(tmp_path, capsys):
     assert main(["view", "-o", str(tmp_path / "robot.jpg")]) == 1
     assert "expected a file ending in .png" in capsys.readouterr().err

@@ -181,3 +181,102 @@ def test_invalid_slot_raises_before_drawing():
     with pytest.raises(ak.StrokeLimitError):
         plot_robot([0.2, 0.1, 0.45])
     assert len(plt.get_fignums()) == n
+
+
+# --- issue 12, item 12: labels, ticks, legend, units, the grid ---------------------------
+def _boxes(fig, artists):
+    r = fig.canvas.get_renderer()
+    return [np.asarray(a.get_window_extent(r).extents) for a in artists]
+
+
+def _overlaps(a, b):
+    return min(a[2], b[2]) > max(a[0], b[0]) and min(a[3], b[3]) > max(a[1], b[1])
+
+
+def _inside(box, fig_box):
+    return (box[0] >= fig_box[0] - 0.5 and box[1] >= fig_box[1] - 0.5
+            and box[2] <= fig_box[2] + 0.5 and box[3] <= fig_box[3] + 0.5)
+
+
+def _label_cases():
+    rng = np.random.default_rng(SEED + 1)
+    d = ak.Design.default()
+    T = ak.default_rcm_frame(d)
+    q = rng.uniform(d.stroke_min, d.stroke_max, (40, 3))
+    sol = ak.forward_kinematics(q, T, d, errors="flag")
+    cases = [(ak.robot.REFERENCE_Q, 0), (ak.robot.REFERENCE_Q, 9)]
+    cases += [(q[i], int(np.flatnonzero(sol.valid[i])[-1]))
+              for i in np.flatnonzero(sol.valid.any(axis=1))[:3]]
+    return cases
+
+
+@pytest.mark.parametrize("case", range(5))
+def test_labels_and_tick_labels_do_not_overlap_and_lie_in_the_figure(case):
+    q, slot = _label_cases()[case]
+    fig = plt.figure(figsize=(7.0, 6.6), dpi=50)
+    ax = fig.add_subplot(projection="3d")
+    fig.subplots_adjust(left=0.02, right=0.93, bottom=0.04, top=0.93)
+    plot_robot(q, slot=slot, ax=ax)
+    fig.canvas.draw()
+    fig_box = fig.bbox.extents
+    labels = [t for t in ax.texts if t.get_text()]
+    assert {"A", "B", "C", "D", "tip"} <= {t.get_text() for t in labels}
+    boxes = _boxes(fig, labels) + _boxes(fig, [ax.get_legend()])
+    for i in range(len(boxes)):
+        assert _inside(boxes[i], fig_box), (labels + ["legend"])[i]
+        for j in range(i):
+            assert not _overlaps(boxes[i], boxes[j]), (case, (labels + ["legend"])[i],
+                                                        labels[j].get_text())
+    ticks = []
+    for axis, lim in ((ax.xaxis, ax.get_xlim3d()), (ax.yaxis, ax.get_ylim3d()),
+                      (ax.zaxis, ax.get_zlim3d())):
+        ticks += [t.label1 for t in axis.get_major_ticks()          # the ticks drawn
+                  if lim[0] <= t.get_loc() <= lim[1] and t.label1.get_text()]
+    assert len(ticks) >= 9
+    for t in ticks + [ax.xaxis.label, ax.yaxis.label, ax.zaxis.label]:
+        assert _inside(_boxes(fig, [t])[0], fig_box), t.get_text()
+    plt.close(fig)
+
+
+def test_coincident_points_share_one_label(fresh_axes):
+    """In the reference configuration M is the base origin O_b: one label names both."""
+    ax = plot_robot(ax=fresh_axes)
+    texts = [t.get_text() for t in ax.texts]
+    assert "M, $O_b$" in texts and "M" not in texts and "$O_b$" not in texts
+
+
+def test_axes_are_in_mm_and_a_legend_names_the_colours(fresh_axes):
+    ax = plot_robot(ax=fresh_axes)
+    fresh_axes.figure.canvas.draw()
+    for axis, name in ((ax.xaxis, "x"), (ax.yaxis, "y"), (ax.zaxis, "z")):
+        assert axis.get_label_text() == f"{name}$_b$ [mm]"
+        for t in axis.get_major_ticks():
+            assert t.label1.get_text() == f"{1000 * t.get_loc():.0f}"
+    leg = ax.get_legend()
+    colours = {t.get_text(): h.get_color() for t, h in zip(leg.get_texts(), leg.legend_handles,
+                                                          strict=True)}
+    assert colours["parallel module"] == COLORS["parallel"]
+    assert colours["actuator q3"] == COLORS["actuator"]
+    assert colours["instrument"] == COLORS["serial"]
+    assert colours["RCM, spherical joint u3-u5"] == COLORS["sphere"]
+    assert colours["frame axis x"] == COLORS["x"]
+
+
+def test_grid_panels_are_filled_and_name_their_branches():
+    fig = plot_fk_solutions(fig=plt.figure(figsize=(9, 9), dpi=40))
+    axes = [a for a in fig.axes if a.name == "3d"]
+    fig.canvas.draw()
+    fill = []
+    for k, ax in enumerate(axes):
+        g = robot_geometry(slot=k)
+        title = ax.get_title()
+        assert f"mode {g.mode:+d}" in title
+        assert f"U-joint {'+' if g.ujoint > 0 else '-'}" in title
+        assert f"wrist {'+' if g.wrist > 0 else '-'}" in title
+        # the drawing's share of its panel, across and up (rows, columns of pixel_of)
+        pts = np.concatenate([np.stack(list(g.points.values())), g.k1, g.rail])
+        rc = np.array([pixel_of(ax, p) for p in pts])
+        fill.append((np.ptp(rc[:, 1]) / ax.bbox.width, np.ptp(rc[:, 0]) / ax.bbox.height))
+    # the solutions together span most of the shared box (about half of it before)
+    assert np.min(np.max(fill, axis=0)) > 0.7, np.max(fill, axis=0)
+    plt.close(fig)

@@ -13,8 +13,8 @@ from athenakin.testing import assert_angles_equal, random_configurations
 
 SEED = 3
 D = ak.Design.default()
-# a copy of the project's shared/fixtures/athena_cases.json (four worked cases, computed
-# independently with MODEL.md's conventions), kept in the repository so a clone is self-contained
+# four worked cases computed independently with the conventions of docs/conventions.md
+# (tests/data/athena_cases.json, in the repository so a clone is self-contained)
 FIXTURES = Path(__file__).resolve().parent / "data" / "athena_cases.json"
 N_ROUND_TRIP = 10_000
 

@@ -88,7 +88,7 @@ def test_keyframe_of_every_slot_is_assembled(slot):
     mujoco.mj_resetDataKeyframe(m, d, 0)
     mujoco.mj_forward(m, d)
     assert equality_residual(d) < 1e-13
-    _, g = mechanism_joint_values(slot=slot)
+    g = mechanism_joint_values(slot=slot).geometry
     T = np.eye(4)
     T[:3, :3] = d.body("instrument").xmat.reshape(3, 3)
     T[:3, 3] = d.body("instrument").xpos
@@ -156,7 +156,7 @@ def test_mujoco_sees_the_parallel_singularity_at_h_zero():
         act[i, m.joint(name).dofadr[0]] = 1.0
 
     def smallest_singular_value(q):
-        v, _ = mechanism_joint_values(q)
+        v = mechanism_joint_values(q).values
         d.qpos[:] = [v[n] for n in JOINTS]
         mujoco.mj_forward(m, d)
         J = np.zeros((d.nefc, m.nv))
@@ -201,7 +201,7 @@ def test_keyframe_q_is_the_requested_q():
     q = np.array([-0.12, 0.07, 0.42])
     m = load_model(q=q, slot=5)
     np.testing.assert_allclose(m.key_ctrl[0], q)
-    v, _ = mechanism_joint_values(q, slot=5)
+    v = mechanism_joint_values(q, slot=5).values
     np.testing.assert_allclose(m.key_qpos[0], [v[n] for n in JOINTS], atol=1e-15)
     assert np.all(REFERENCE_Q != q)
 
@@ -216,9 +216,9 @@ def test_check_detects_a_micrometre_error():
     settle(m, data, q)
     mujoco.mj_forward(m, data)
     tip = data.site("tool_tip").xpos
-    good = mechanism_joint_values(q, design=d)[1].points["tip"]
+    good = mechanism_joint_values(q, design=d).geometry.points["tip"]
     wrong_design = ak.Design(l1=d.l1, l2=d.l2, l3=d.l3, l4=d.l4 + 1e-6, l5=d.l5,
                              q_min=d.q_min, q_max=d.q_max, tool_length=d.tool_length)
-    wrong = mechanism_joint_values(q, ak.default_rcm_frame(d), wrong_design)[1].points["tip"]
+    wrong = mechanism_joint_values(q, ak.default_rcm_frame(d), wrong_design).geometry.points["tip"]
     assert np.linalg.norm(tip - good) < TOL
     assert np.linalg.norm(tip - wrong) > 100 * TOL

@@ -64,7 +64,7 @@ def test_rederivation_matches_the_cache():
 # --------------------------------------------------------------------- Eq. 11-14
 
 def test_eq11_eq12_serial_chain_is_the_model_chain():
-    """B M1 G1 ... M5 G5 with the DH of Eq. 12 equals the MODEL.md chain (core's T_s_e)."""
+    """B M1 G1 ... M5 G5 with the DH of Eq. 12 equals the conventions.md chain (core's T_s_e)."""
     cfg = random_configurations(200, rng=SEED)
     X1 = lambdify8(serial_chain(b=(1, 0, 0, 0, 0, 0, 0, 0)), [V_SYMBOLS, P_SYMBOL])
     XB = lambdify8(serial_chain(), [B_SYMBOLS, V_SYMBOLS, P_SYMBOL])

@@ -196,7 +196,7 @@ def test_eq9_eq10_frames_need_division_by_r1_and_l4_on_the_translation():
         # printed B: translation is O_i (not O_s), l4 multiplies a rotation column
         np.testing.assert_allclose(B[1:, 0], A[1:, 0], atol=0)
         assert np.abs(B[1:, 0] - par.O_s[0]).max() > 0.01
-        # corrected (MODEL.md): A with the rotation divided by r1, B = A Tz(l4),
+        # corrected (docs/conventions.md): A with the rotation divided by r1, B = A Tz(l4),
         # evaluated with the corrected O_i: the core's T_b_i, T_b_s
         Ac = np.array([[1, 0, 0, 0], [q[0] / 2 + q[1] / 2, 1, 0, 0],
                        [y, 0, z / r1, y / r1], [z, 0, -y / r1, z / r1]])

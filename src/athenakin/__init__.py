@@ -10,6 +10,12 @@ serial UPS chain), :mod:`athenakin.robot` (whole robot), :mod:`athenakin.testing
 """
 
 from . import chain, parallel, robot, study
+from ._dispatch import (
+    forward_kinematics,
+    inverse_kinematics,
+    q_from_instrument,
+    q_from_tool_tip,
+)
 from .design import Design
 from .errors import (
     DegenerateChainError,
@@ -28,16 +34,13 @@ from .robot import (
     angles_from_direction,
     default_rcm_frame,
     direction_from_angles,
-    forward_kinematics,
-    inverse_kinematics,
-    q_from_instrument,
-    q_from_tool_tip,
 )
 
 __version__ = "0.1.0"
 
 #: Subpackages imported on first attribute access (optional heavy dependencies).
-_LAZY_SUBPACKAGES = ("analysis", "symbolic", "plot", "sim", "motion", "fast", "certified")
+_LAZY_SUBPACKAGES = ("analysis", "symbolic", "plot", "sim", "motion", "fast", "certified",
+                     "calibration")
 #: Public functions of lazily imported subpackages, reachable as ``ak.<name>``.
 _LAZY_FUNCTIONS = {"certified_forward_kinematics": "certified"}
 

@@ -8,13 +8,18 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
-import tomllib
 from numpy.typing import NDArray
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - exercised by scripts/test_matrix.sh on Python 3.10
+    import tomli as tomllib
 
 from ._validation import check_scalar
 from .errors import InvalidInputError
@@ -35,7 +40,7 @@ LENGTH_RANGE = (1e-6, 1e3)
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class Design:
-    """Geometry and limits of the robot (MODEL.md, paper Fig. 2).
+    """Geometry and limits of the robot (docs/conventions.md, paper Fig. 2).
 
     Parameters
     ----------
@@ -150,7 +155,7 @@ class Design:
         """The reference design used throughout athenakin's docs, demo and tests.
 
         The paper gives no dimensions. The lengths are those of the worked cases
-        in the project's ``shared/fixtures`` (``l1 = 0.30``, ``l2 = 0.10``,
+        in ``tests/data/athena_cases.json`` (``l1 = 0.30``, ``l2 = 0.10``,
         ``l3 = 0.25``, ``l4 = 0.15``, ``l5 = 0.40`` m): a bench-top module about
         half a metre across, the size of the experimental model of the paper's
         Fig. 1 as far as a photograph allows. The stroke limits are per-actuator
@@ -214,19 +219,65 @@ class Design:
         return cls.from_mapping(table)
 
     def to_toml(self) -> str:
-        """TOML text that :meth:`from_toml` reads back to an equal design."""
-        lines = ["[design]"]
-        for f in dataclasses.fields(self):
-            v = getattr(self, f.name)
-            if v is None:
-                continue
-            if isinstance(v, str):
-                lines.append(f'{f.name} = "{v}"')
-            elif isinstance(v, tuple):
-                lines.append(f"{f.name} = [{', '.join(_toml_float(x) for x in v)}]")
-            else:
-                lines.append(f"{f.name} = {_toml_float(v)}")
-        return "\n".join(lines) + "\n"
+        r"""TOML text that :meth:`from_toml` reads back to an equal design.
+
+        Written with tomli-w, so that any name (quotes, backslashes, newlines,
+        non-ASCII) and the unlimited strokes (``inf``) are valid TOML. Fields that
+        are None are left out.
+
+        Returns
+        -------
+        str
+            A ``[design]`` table with one key per field.
+
+        Examples
+        --------
+        >>> d = Design.default()
+        >>> print(d.to_toml().splitlines()[1])
+        l1 = 0.3
+        >>> print(Design(l1=.3, l2=.1, l3=.25, l4=.15, l5=.4, name='a "b"').to_toml())
+        [design]
+        l1 = 0.3
+        l2 = 0.1
+        l3 = 0.25
+        l4 = 0.15
+        l5 = 0.4
+        ab_order = "q1<q2"
+        tool_length = 0.45
+        name = "a \"b\""
+        <BLANKLINE>
+        """
+        import tomli_w
+
+        table = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        table = {k: list(v) if isinstance(v, tuple) else v
+                 for k, v in table.items() if v is not None}
+        return tomli_w.dumps({"design": table})
+
+    def write_toml(self, path: str | Path, *, overwrite: bool = False) -> Path:
+        """Write :meth:`to_toml` to a file.
+
+        Parameters
+        ----------
+        path : str or Path
+            The file to write (UTF-8).
+        overwrite : bool, keyword-only
+            Replace an existing file (default: refuse).
+
+        Returns
+        -------
+        Path
+
+        Raises
+        ------
+        FileExistsError
+            ``path`` exists and ``overwrite`` is false.
+        """
+        path = Path(path)
+        text = self.to_toml()
+        with open(path, "w" if overwrite else "x", encoding="utf-8") as fh:
+            fh.write(text)
+        return path
 
 
 def resolve_design(design: object) -> Design:
@@ -242,9 +293,3 @@ def resolve_design(design: object) -> Design:
     if not isinstance(design, Design):
         raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
     return design
-
-
-def _toml_float(x: float) -> str:
-    if math.isinf(x):
-        return "inf" if x > 0 else "-inf"
-    return repr(float(x))

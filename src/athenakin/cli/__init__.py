@@ -9,30 +9,46 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
+import warnings
+from typing import NoReturn
 
 from ..errors import KinematicsError
 
-__all__ = ["main", "COMMANDS"]
+__all__ = ["main", "entry_point", "COMMANDS"]
 
 #: Optional third-party packages and the extra that installs each.
 _EXTRA_OF = {"sympy": "symbolic", "matplotlib": "plot", "plotly": "plot", "imageio": "plot",
              "mujoco": "sim", "yourdfpy": "sim", "numba": "fast", "tqdm": "progress",
-             "scipy": "analysis", "ruckig": "motion", "toppra": "motion", "pinocchio": "bench"}
+             "scipy": "analysis", "ruckig": "motion", "pinocchio": "bench"}
 
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
 COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
-            "animate", "export", "derive"]
+            "animate", "export", "derive", "design", "calibrate", "app"]
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with messages that say what a missing positional expects."""
+
+    def error(self, message: str) -> NoReturn:  # noqa: D102
+        if "the following arguments are required: Q" in message:
+            message = ("expected three actuator values q1 q2 q3 (m), e.g. "
+                       f"'{self.prog} -0.1 0.1 0.45'")
+        super().error(message)
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every registered subcommand."""
     from .. import __version__
 
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="athenakin",
-        description="Kinematics of the ATHENA surgical robot (lengths in m, angles in deg).")
+        description="Kinematics of the ATHENA surgical robot (lengths in m, angles in deg).",
+        epilog=f"Set {DEBUG_ENV}=1 (or pass --debug) to see the traceback of an error.")
     parser.add_argument("--version", action="version", version=f"athenakin {__version__}")
+    parser.add_argument("--debug", action="store_true",
+                        help="on an error, show the Python traceback and warnings")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     for name in COMMANDS:
@@ -40,20 +56,88 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Environment variable that, set to a non-empty value other than 0, acts as ``--debug``.
+DEBUG_ENV = "ATHENAKIN_DEBUG"
+
+#: Errors that a bad input (argument, file, design) can cause: one line, exit code 1.
+_INPUT_ERRORS = (KinematicsError, ValueError, TypeError, OSError, RecursionError,
+                 MemoryError, OverflowError, ZeroDivisionError)
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run the CLI; returns the process exit code (0 ok, 1 kinematics error, 2 usage)."""
+    """Run the CLI; returns the process exit code.
+
+    0: success; 1: an error (a bad input, a kinematics error, a failed check:
+    one line on standard error that names it, nothing written); 2: a usage error
+    (argparse); 70: an internal error (a bug: please report it with the
+    traceback that ``--debug`` shows). With ``--debug`` or ``ATHENAKIN_DEBUG=1``,
+    errors propagate with their traceback and warnings are shown.
+    """
     parser = build_parser()
     args = parser.parse_args(_protect_negative_numbers(argv))
+    debug = bool(args.debug) or os.environ.get(DEBUG_ENV, "") not in ("", "0")
+    name = f"athenakin {args.command}"
+    with warnings.catch_warnings():
+        if not debug:
+            # numeric warnings of intermediate NaN (outside the workspace, at a
+            # singularity) are flagged in the results; they are not messages for the user
+            warnings.simplefilter("ignore", RuntimeWarning)
+        try:
+            return int(args.func(args) or 0)
+        except BrokenPipeError:
+            _silence_stdout()
+            return 1
+        except ModuleNotFoundError as exc:
+            if debug:
+                raise
+            extra = _EXTRA_OF.get((exc.name or "").split(".")[0], "all")
+            print(f"{name}: error: this command needs the optional package "
+                  f"{exc.name!r}: pip install 'athenakin[{extra}]'", file=sys.stderr)
+            return 1
+        except _INPUT_ERRORS as exc:
+            if debug:
+                raise
+            print(f"{name}: error: {_one_line(exc)}", file=sys.stderr)
+            return 1
+        except Exception as exc:
+            if debug:
+                raise
+            print(f"{name}: internal error: {_one_line(exc)} (a bug: rerun with --debug for "
+                  f"the traceback and report it)", file=sys.stderr)
+            return 70
+
+
+def _one_line(exc: BaseException) -> str:
+    """``Type: message`` on one line (long messages cut)."""
+    if isinstance(exc, RecursionError):
+        text = "input nested too deeply"
+    elif isinstance(exc, MemoryError):
+        text = "out of memory (reduce the resolution or the number of samples)"
+    else:
+        text = " ".join(str(exc).split()) or "(no message)"
+    if len(text) > 600:
+        text = text[:597] + "..."
+    return f"{type(exc).__name__}: {text}"
+
+
+def _silence_stdout() -> None:
+    """After a closed pipe (``athenakin demo | head -1``): drop further output quietly."""
     try:
-        return int(args.func(args) or 0)
-    except ModuleNotFoundError as exc:
-        extra = _EXTRA_OF.get((exc.name or "").split(".")[0], "all")
-        print(f"athenakin {args.command}: error: this command needs the optional package "
-              f"{exc.name!r}: pip install 'athenakin[{extra}]'", file=sys.stderr)
-        return 1
-    except (KinematicsError, ValueError, TypeError, OSError) as exc:
-        print(f"athenakin {args.command}: error: {type(exc).__name__}: {exc}", file=sys.stderr)
-        return 1
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # stdout replaced (tests): nothing to do
+        pass
+
+
+def entry_point() -> None:
+    """Console-script entry point: :func:`main`, exiting quietly on a closed pipe."""
+    try:
+        code = main()
+        sys.stdout.flush()
+    except BrokenPipeError:
+        _silence_stdout()
+        code = 1
+    sys.exit(code)
 
 
 def _protect_negative_numbers(argv: list[str] | None) -> list[str]:
@@ -70,4 +154,4 @@ def _protect_negative_numbers(argv: list[str] | None) -> list[str]:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    entry_point()

@@ -1,7 +1,5 @@
 """``python -m athenakin.cli``."""
 
-import sys
+from . import entry_point
 
-from . import main
-
-sys.exit(main())
+entry_point()

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._serialize import json_text, to_jsonable  # noqa: F401  (re-exported)
 from .._transforms import rot_x, rot_y, rot_z, transform_from_rotation_translation
 from ..design import Design
 from ..robot import default_rcm_frame
@@ -39,21 +40,88 @@ def add_json_option(p: argparse.ArgumentParser) -> None:
 
 def load_design(args: argparse.Namespace) -> Design:
     """The design named by ``--design`` or the default."""
-    return Design.from_toml(args.design) if getattr(args, "design", None) else Design.default()
+    if not getattr(args, "design", None):
+        return Design.default()
+    try:
+        return Design.from_toml(args.design)
+    except RecursionError:
+        raise ValueError(f"--design {args.design}: tables nested too deeply") from None
 
 
 def load_rcm(args: argparse.Namespace, design: Design) -> NDArray[np.float64]:
     """The RCM frame from ``--rcm`` / ``--rcm-file`` or the reference set-up."""
     if getattr(args, "rcm", None):
+        check_finite(args.rcm, "--rcm")
         x, y, z, r, p, w = args.rcm
         R = rot_z(np.radians(w)) @ rot_y(np.radians(p)) @ rot_x(np.radians(r))
         return transform_from_rotation_translation(R, np.array([x, y, z]))
     if getattr(args, "rcm_file", None):
-        data = json.loads(Path(args.rcm_file).read_text())
-        if not isinstance(data, dict) or "T_b_e" not in data:
-            raise ValueError(f"{args.rcm_file}: expected a JSON object with key 'T_b_e'")
-        return np.asarray(data["T_b_e"], dtype=float)
+        return read_rcm_json(args.rcm_file)
     return default_rcm_frame(design)
+
+
+#: Resolution bounds of raster figures (dots per inch): a 10 x 8 inch figure at the
+#: upper bound is 6000 x 4800 pixels, about 115 MB in memory.
+DPI_RANGE = (10, 600)
+
+
+def check_dpi(dpi: int, option: str = "--dpi") -> int:
+    """``dpi`` within :data:`DPI_RANGE`, else ``ValueError``."""
+    lo, hi = DPI_RANGE
+    if not lo <= dpi <= hi:
+        raise ValueError(f"{option}: expected a resolution from {lo} to {hi} dots per inch, "
+                         f"got {dpi}")
+    return dpi
+
+
+def check_count(value: int, option: str, lo: int, hi: int, what: str = "") -> int:
+    """An integer option within ``[lo, hi]`` (a resource limit checked up front)."""
+    if not lo <= value <= hi:
+        raise ValueError(f"{option}: expected {lo} to {hi}{' ' + what if what else ''}, "
+                         f"got {value}")
+    return value
+
+
+def check_finite(values: Any, option: str, *, positive: bool = False) -> None:
+    """Every number of an option finite (and positive), else ``ValueError``."""
+    a = np.atleast_1d(np.asarray(values, dtype=float))
+    if not np.all(np.isfinite(a)) or (positive and not np.all(a > 0)):
+        kind = "finite positive" if positive else "finite"
+        shown = a.tolist() if a.size > 1 else float(a[0])
+        raise ValueError(f"{option}: expected {kind} numbers, got {shown}")
+
+
+def read_rcm_json(path: str | Path) -> NDArray[np.float64]:
+    """The RCM frame from a JSON file ``{"T_b_e": 4x4 nested list}``.
+
+    Raises
+    ------
+    ValueError
+        Not UTF-8 JSON, nested too deeply, no key ``T_b_e``, not a 4x4 array of
+        finite numbers (the message names the file).
+    OSError
+        The file cannot be read.
+    """
+    from .._validation import check_transform
+
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8-sig"))
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"--rcm-file {path}: not a UTF-8 text file ({exc.reason})") from None
+    except RecursionError:
+        raise ValueError(f"--rcm-file {path}: JSON nested too deeply") from None
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"--rcm-file {path}: not JSON ({exc})") from None
+    if not isinstance(data, dict) or "T_b_e" not in data:
+        raise ValueError(f"--rcm-file {path}: expected a JSON object with key 'T_b_e'")
+    try:
+        T = np.asarray(data["T_b_e"], dtype=float)
+    except (TypeError, ValueError, OverflowError, RecursionError):
+        raise ValueError(f"--rcm-file {path}: T_b_e: expected a 4x4 nested list of "
+                         f"numbers") from None
+    if T.shape != (4, 4):
+        raise ValueError(f"--rcm-file {path}: T_b_e: expected shape (4, 4), got {T.shape}")
+    return check_transform(T, "T_b_e")
 
 
 def table(headers: list[str], rows: list[list[Any]]) -> str:
@@ -73,23 +141,6 @@ def fmt(x: float, nd: int = 6) -> str:
     return text[1:] if text.startswith("-") and float(text) == 0 else text
 
 
-def to_jsonable(x: Any) -> Any:
-    """NaN-free JSON value: arrays to lists, NaN to None."""
-    if isinstance(x, dict):
-        return {k: to_jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [to_jsonable(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return to_jsonable(x.tolist())
-    if isinstance(x, (float, np.floating)):
-        return None if not np.isfinite(x) else float(x)
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
-
-
 def dump_json(obj: Any) -> str:
-    """JSON text of ``obj`` (see :func:`to_jsonable`)."""
-    return json.dumps(to_jsonable(obj), indent=2)
+    """JSON text of ``obj``, indented (see :func:`athenakin._serialize.to_jsonable`)."""
+    return json_text(obj, indent=2)

@@ -8,6 +8,8 @@ import sys
 import time
 from pathlib import Path
 
+from ._output import add_force_option, outputs
+
 #: Results shown by default, in reading order (see :func:`athenakin.symbolic.derive`).
 DEFAULT_NAMES = ["left_chain", "eq13_comparison", "right_chain", "eq14_comparison", "sl", "sr",
                  "y_solution", "K", "quadratic", "pfaffian", "ujoint_quadric", "wrist_quadratic",
@@ -44,6 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                         "{'srepr', 'latex', 'text'})")
     p.add_argument("--output", "-o", metavar="FILE", type=Path,
                    help="write to FILE instead of standard output")
+    add_force_option(p)
     p.add_argument("--list", action="store_true", help="list the available result names")
     p.add_argument("--rederive", action="store_true",
                    help="run the derivation now instead of reading the cache (about 20 s)")
@@ -54,6 +57,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``derive``."""
+    if args.output:  # checked before the (slow) work
+        with outputs(args) as outs:
+            outs.add(args.output)
     import sympy as sp
 
     from ..symbolic import _derivation as dv
@@ -93,7 +99,9 @@ def run(args: argparse.Namespace) -> int:
             blocks.append(f"{head}\n{body}")
         text = "\n\n".join(blocks)
     if args.output:
-        args.output.write_text(text + "\n")
+        with outputs(args) as outs:
+            outs.write(outs.add(args.output), text + "\n")
+            outs.commit()
         print(f"wrote {len(names)} results to {args.output}")
     else:
         print(text)

@@ -7,11 +7,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import add_design_option, add_setup_options, load_design, load_rcm
+from ..design import Design
+from ._common import add_design_option, add_setup_options, check_count, load_design, load_rcm
+from ._output import add_force_option, outputs
 from ._view import add_q_argument, add_slot_option, q_from_args
 
 #: Largest error (m and rad) the ``--check`` accepts between MuJoCo and the FK.
 CHECK_TOL = 1e-9
+#: Most configurations ``--check`` simulates (about 0.1 s each).
+MAX_CHECK = 1000
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -35,6 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                    help="simulate the MJCF model in MuJoCo at N configurations (default 20) "
                         "and compare with the forward kinematics")
     p.add_argument("--seed", type=int, default=0, help="seed of the --check samples (0)")
+    add_force_option(p)
     add_design_option(p)
     add_setup_options(p)
     p.set_defaults(func=run)
@@ -54,28 +59,40 @@ def _format(args: argparse.Namespace, out: Path) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``export``."""
-    from ..sim import write_mjcf, write_urdf
+    from ..sim import mjcf_from_design, urdf_from_design
 
     out = Path(args.output)
-    if not out.parent.exists():
-        raise ValueError(f"-o: folder {str(out.parent)!r} does not exist")
     fmt = _format(args, out)
     if args.check and fmt != "mjcf":
         raise ValueError("--check simulates the MJCF model: use --format mjcf")
-    if args.check < 0:
-        raise ValueError(f"--check: expected a positive number, got {args.check}")
-    design = load_design(args)
-    T = load_rcm(args, design)
-    q = q_from_args(args)
-    if fmt == "mjcf":
-        write_mjcf(out, design, T, q=q, slot=args.slot, gravity=not args.no_gravity)
-        print(f"wrote {out}: MJCF of the closed-loop mechanism, keyframe 'home' in solution "
-              f"{args.slot}")
-    else:
-        write_urdf(out, design, T)
-        print(f"wrote {out}: URDF of the kinematic tree (loop closures listed in its header)")
-    if not args.check:
-        return 0
+    check_count(args.check, "--check", 0, MAX_CHECK, "configurations")
+    with outputs(args) as outs:
+        outs.add(out)
+        design = load_design(args)
+        T = load_rcm(args, design)
+        q = q_from_args(args)
+        if fmt == "mjcf":
+            outs.write(out, mjcf_from_design(design, T, q=q, slot=args.slot,
+                                             gravity=not args.no_gravity))
+            what = (f"MJCF of the closed-loop mechanism, keyframe 'home' in solution "
+                    f"{args.slot}")
+        else:
+            outs.write(out, urdf_from_design(design, T))
+            what = "URDF of the kinematic tree (loop closures listed in its header)"
+        ok = True
+        if args.check:
+            ok = _check(args, design, T, q)
+        if not ok:
+            print(f"{out} not written: the MuJoCo check failed")
+            return 1
+        outs.commit()
+    print(f"wrote {out}: {what}")
+    return 0
+
+
+def _check(args: argparse.Namespace, design: Design, T: np.ndarray, q: np.ndarray | None
+           ) -> bool:
+    """Simulate the model in MuJoCo at ``--check`` configurations; print the verdict."""
     from ..robot import REFERENCE_Q
     from ..sim import check_fk_with_mujoco, sample_reachable_q
 
@@ -91,4 +108,4 @@ def run(args: argparse.Namespace) -> int:
               and worst <= CHECK_TOL)
     print(f"{'PASSED' if ok else 'FAILED'}: MuJoCo agrees with the forward kinematics to "
           f"{worst:.1e} (tolerance {CHECK_TOL:.0e} m / rad) in solution {args.slot}")
-    return 0 if ok else 1
+    return ok

@@ -41,6 +41,10 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``ik``."""
+    if args.p is not None and args.direction is None:
+        given = "--tip" if args.tip is not None else "--u345"
+        raise ValueError(f"--p goes with --direction only; {given} sets the insertion itself "
+                         f"(drop --p)")
     design = load_design(args)
     T = load_rcm(args, design)
     out: dict = {}  # type: ignore[type-arg]

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ._common import add_design_option, add_setup_options, load_design, load_rcm
+from ._output import add_force_option, outputs
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -29,6 +30,12 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--j-max", type=float, default=None,
                    help="actuator jerk limit, m/s^3 (default: none)")
     p.add_argument("--tip-speed", type=float, default=None, help="tool-tip speed limit, m/s")
+    p.add_argument("--max-duration", type=float, default=None, metavar="S",
+                   help="refuse a trajectory longer than this, s (default: "
+                        "athenakin.motion.MAX_DURATION, 3600)")
+    p.add_argument("--max-samples", type=int, default=None, metavar="N",
+                   help="refuse a trajectory of more samples than this (default: "
+                        "athenakin.motion.MAX_SAMPLES, 2000000)")
     p.add_argument("--timing", choices=("stretch", "fixed"), default="stretch",
                    help="with t_s in the file: lengthen segments that break a limit (stretch, "
                         "default) or fail (fixed)")
@@ -39,6 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     g.add_argument("--plots", type=Path, metavar="PREFIX",
                    help="figure prefix (default: OUT without its extension)")
     g.add_argument("--no-plots", action="store_true", help="write no figures")
+    add_force_option(p)
     add_design_option(p)
     add_setup_options(p)
     p.set_defaults(func=run)
@@ -69,36 +77,41 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     if out.suffix.lower() not in (".csv", ".json"):
         raise ValueError(f"-o: expected a .csv or .json file name, got {str(out)!r}")
-    if not out.parent.exists():
-        raise ValueError(f"-o: folder {str(out.parent)!r} does not exist")
-    design = load_design(args)
-    T = load_rcm(args, design)
-    spec = read_path_csv(args.path)
-    opts = dict(rate=args.rate, v_max=args.v_max, a_max=args.a_max, j_max=args.j_max,
-                tip_speed=args.tip_speed, times=spec.times, timing=args.timing,
-                margins=parse_margins(args.margin))
-    if args.timing == "fixed" and spec.times is None:
-        raise ValueError(f"--timing fixed: {args.path} has no t_s column")
-    if spec.kind == "tip":
-        traj = plan(spec.tips_e, T, design, **opts)  # type: ignore[arg-type]
-    else:
-        traj = plan_directions(spec.azimuth, spec.polar, spec.depth, T, design,  # type: ignore[arg-type]
-                               **opts)
-    # render everything first, then write: a failure leaves no partial output
-    from ..motion._io import trajectory_csv_text, trajectory_json_text, write_text_atomic
+    with outputs(args) as outs:
+        # every output is checked before any work, written only when all is done
+        outs.add(out)
+        figures: dict[str, Path] = {}
+        if not args.no_plots:
+            from ..motion._plot import plot_paths
 
-    files: dict[Path, str | bytes] = {
-        out: trajectory_json_text(traj) if out.suffix.lower() == ".json"
-        else trajectory_csv_text(traj)}
-    if not args.no_plots:
-        from ..motion._plot import plot_paths, render_plots
+            prefix = args.plots if args.plots is not None else out.with_suffix("")
+            figures = {k: outs.add(path, option="--plots")
+                       for k, path in plot_paths(prefix).items()}
+        design = load_design(args)
+        T = load_rcm(args, design)
+        spec = read_path_csv(args.path)
+        opts = dict(rate=args.rate, v_max=args.v_max, a_max=args.a_max, j_max=args.j_max,
+                    tip_speed=args.tip_speed, times=spec.times, timing=args.timing,
+                    margins=parse_margins(args.margin), max_duration=args.max_duration,
+                    max_samples=args.max_samples)
+        if args.timing == "fixed" and spec.times is None:
+            raise ValueError(f"--timing fixed: {args.path} has no t_s column")
+        if spec.kind == "tip":
+            traj = plan(spec.tips_e, T, design, **opts)  # type: ignore[arg-type]
+        else:
+            traj = plan_directions(spec.azimuth, spec.polar, spec.depth, T,  # type: ignore[arg-type]
+                                   design, **opts)
+        from ..motion._io import trajectory_csv_text, trajectory_json_text
 
-        prefix = args.plots if args.plots is not None else out.with_suffix("")
-        pngs = render_plots(traj)
-        files.update({path: pngs[k] for k, path in plot_paths(prefix).items()})
-    for path, data in files.items():
-        write_text_atomic(path, data)
-    written = list(files)
+        outs.write(out, trajectory_json_text(traj) if out.suffix.lower() == ".json"
+                   else trajectory_csv_text(traj))
+        if figures:
+            from ..motion._plot import render_plots
+
+            pngs = render_plots(traj)
+            for k, path in figures.items():
+                outs.write(path, pngs[k])
+        written = outs.commit()
     _summary(traj, written)
     return 0
 

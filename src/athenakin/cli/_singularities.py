@@ -12,13 +12,20 @@ from ._common import (
     add_design_option,
     add_json_option,
     add_setup_options,
+    check_count,
+    check_dpi,
+    check_finite,
     dump_json,
     fmt,
     load_design,
     load_rcm,
     table,
 )
-from ._workspace import add_output_options, save_figure
+from ._output import Outputs, outputs
+from ._workspace import add_output_options, declare_outputs, save_figure
+
+#: Most samples per axis of the (h, q3) map (it holds resolution^2 points).
+MAX_MAP_RESOLUTION = 2001
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -46,10 +53,22 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``singularities``."""
-    from ..analysis import actuator_map, save_npz, singular_sets_within_strokes, singularities
-
     if len(args.q) not in (0, 3):
         raise ValueError(f"q: expected 3 values q1 q2 q3 (m) or none, got {len(args.q)}")
+    if args.q:
+        check_finite(args.q, "q")
+    if args.tol is not None:
+        check_finite(args.tol, "--tol", positive=True)
+    check_count(args.resolution, "--resolution", 2, MAX_MAP_RESOLUTION, "samples per axis")
+    check_dpi(args.dpi)
+    with outputs(args, option="--out") as outs:
+        declare_outputs(args, outs, ["actuator_map"], ["singularities"])
+        return _run(args, outs)
+
+
+def _run(args: argparse.Namespace, outs: Outputs) -> int:
+    from ..analysis import actuator_map, save_npz, singular_sets_within_strokes, singularities
+
     design = load_design(args)
     out: dict[str, object] = {}
     if args.q:
@@ -66,14 +85,14 @@ def run(args: argparse.Namespace) -> int:
     files: list[str] = []
     if not args.no_files:
         outdir = Path(args.out)
-        outdir.mkdir(parents=True, exist_ok=True)
         am = actuator_map(design, resolution=args.resolution)
-        files.append(str(save_npz(outdir / "actuator_map.npz", am, design=design)))
+        save_npz(outs.temp(outdir / "actuator_map.npz"), am, design=design)
         if not args.no_figures:
             from ..analysis.figures import figure_singularities
 
-            files += save_figure(figure_singularities(design, am=am), outdir / "singularities",
-                                 args.format, args.dpi)
+            save_figure(figure_singularities(design, am=am), outdir / "singularities",
+                        args.format, args.dpi, outs)
+        files = [str(f) for f in outs.commit()]
     out["files"] = files
     if args.json:
         print(dump_json(out))

@@ -45,10 +45,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``track``."""
-    import json
-
+    from .._serialize import json_text
     from ..motion import TrackFlag, track
-    from ..motion._io import _jsonable, read_q_stream_csv, track_csv_text, write_text_atomic
+    from ..motion._io import read_q_stream_csv, track_csv_text, write_text_atomic
     from ._plan import parse_margins
 
     out = args.output
@@ -97,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
             obj = {k: getattr(log, k) for k in (f.name for f in dataclasses.fields(log))}
             obj["t_s"] = t
             obj["flag_bits"] = {b.name: int(b) for b in TrackFlag if b}
-            write_text_atomic(out, json.dumps(_jsonable(obj)))
+            write_text_atomic(out, json_text(obj))
         else:
             write_text_atomic(out, track_csv_text(log, t))
         print(f"wrote {out}")

@@ -7,7 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import add_design_option, add_setup_options, load_design, load_rcm
+from ._common import add_design_option, add_setup_options, check_dpi, load_design, load_rcm
+from ._output import add_force_option, outputs
 
 VIEW_SUFFIXES = (".png", ".svg", ".pdf", ".html")
 
@@ -25,7 +26,10 @@ def q_from_args(args: argparse.Namespace) -> np.ndarray | None:
         return None
     if len(args.q) != 3:
         raise ValueError(f"q: expected 3 numbers (q1 q2 q3, m), got {len(args.q)}")
-    return np.array(args.q, dtype=float)
+    q = np.array(args.q, dtype=float)
+    if not np.all(np.isfinite(q)):
+        raise ValueError(f"q: expected finite numbers (q1 q2 q3, m), got {args.q}")
+    return q
 
 
 def add_slot_option(p: argparse.ArgumentParser) -> None:
@@ -50,12 +54,14 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                    help="output file: .png, .svg, .pdf or .html")
     add_slot_option(p)
     p.add_argument("--all", action="store_true",
-                   help="all 16 solutions side by side (static formats)")
+                   help="all 16 solutions: side by side (static formats) or all at once "
+                        "with one legend entry per solution (HTML)")
     p.add_argument("--no-frames", action="store_true", help="hide the frame triads")
     p.add_argument("--no-labels", action="store_true", help="hide the text labels (static)")
     p.add_argument("--view", nargs=2, type=float, metavar=("ELEV", "AZIM"),
                    help="camera elevation and azimuth, deg (static formats)")
     p.add_argument("--dpi", type=int, default=120, help="resolution of PNG output (120)")
+    add_force_option(p)
     add_design_option(p)
     add_setup_options(p)
     p.set_defaults(func=run)
@@ -63,17 +69,27 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``view``."""
-    from ..plot import save_view
-
     out = Path(args.output)
     if out.suffix.lower() not in VIEW_SUFFIXES:
         raise ValueError(f"-o: expected a file ending in {', '.join(VIEW_SUFFIXES)}, "
                          f"got {str(out)!r}")
-    if not out.parent.exists():
-        raise ValueError(f"-o: folder {str(out.parent)!r} does not exist")
-    design = load_design(args)
-    T = load_rcm(args, design)
-    q = q_from_args(args)
+    check_dpi(args.dpi)
+    with outputs(args) as outs:
+        outs.add(out)
+        design = load_design(args)
+        T = load_rcm(args, design)
+        q = q_from_args(args)
+        _render(args, outs.temp(out), q, T, design)
+        outs.commit()
+    what = "all solutions" if args.all else f"solution {args.slot}"
+    print(f"wrote {out} ({what})")
+    return 0
+
+
+def _render(args: argparse.Namespace, out: Path, q: np.ndarray | None, T: np.ndarray,
+            design: object) -> None:
+    from ..plot import save_view
+
     kw: dict = {"show_frames": not args.no_frames}  # type: ignore[type-arg]
     if out.suffix.lower() != ".html":
         if args.view:
@@ -83,10 +99,4 @@ def run(args: argparse.Namespace) -> int:
         kw["dpi"] = args.dpi
     else:
         kw["all_slots"] = True
-    if out.suffix.lower() != ".html" and args.all:
-        save_view(out, q, T, design, all_solutions=True, **kw)
-    else:
-        save_view(out, q, T, design, slot=args.slot, **kw)
-    what = "all solutions" if args.all else f"solution {args.slot}"
-    print(f"wrote {out} ({what})")
-    return 0
+    save_view(out, q, T, design, slot=args.slot, all_solutions=args.all, **kw)

@@ -12,11 +12,20 @@ from ._common import (
     add_design_option,
     add_json_option,
     add_setup_options,
+    check_count,
+    check_dpi,
     dump_json,
     load_design,
     load_rcm,
     table,
 )
+from ._output import Outputs, add_force_option, outputs
+
+#: Most grid points per axis of ``--resolution`` (the O_s and tool-tip grids hold
+#: resolution^3 points: 201^3 = 8.1 million, a few hundred MB).
+MAX_RESOLUTION = 201
+#: Most samples of the instrument cone (N_AZ x N_POLAR x N_P).
+MAX_CONE_SAMPLES = 2_000_000
 
 
 def add_output_options(p: argparse.ArgumentParser, default_dir: str) -> None:
@@ -28,19 +37,39 @@ def add_output_options(p: argparse.ArgumentParser, default_dir: str) -> None:
     p.add_argument("--dpi", type=int, default=100, help="PNG resolution (default 100)")
     p.add_argument("--no-figures", action="store_true", help="write the .npz data only")
     p.add_argument("--no-files", action="store_true", help="print only; write nothing")
+    add_force_option(p)
 
 
-def save_figure(fig: Any, stem: Path, formats: list[str], dpi: int) -> list[str]:
-    """Save ``fig`` as ``stem.<fmt>`` for each format, close it; return the paths."""
+def save_figure(fig: Any, stem: Path, formats: list[str], dpi: int,
+                outs: Outputs | None = None) -> list[str]:
+    """Save ``fig`` as ``stem.<fmt>`` for each format, close it; return the paths.
+
+    With ``outs``, each file is rendered into its temporary file (declared before).
+    """
     import matplotlib.pyplot as plt
 
     paths = []
-    for f in formats:
-        path = stem.with_suffix(f".{f}")
-        fig.savefig(path, dpi=dpi)
-        paths.append(str(path))
-    plt.close(fig)
+    try:
+        for f in dict.fromkeys(formats):
+            path = stem.with_suffix(f".{f}")
+            fig.savefig(path if outs is None else outs.temp(path), dpi=dpi)
+            paths.append(str(path))
+    finally:
+        plt.close(fig)
     return paths
+
+
+def declare_outputs(args: argparse.Namespace, outs: Outputs, npz: list[str],
+                    figures: list[str]) -> None:
+    """Declare ``--out``/name.npz and the figures in each ``--format`` (unless turned off)."""
+    if args.no_files:
+        return
+    for name in npz:
+        outs.add_in_folder(args.out, f"{name}.npz", option="--out")
+    if not args.no_figures:
+        for name in figures:
+            for f in dict.fromkeys(args.format):
+                outs.add_in_folder(args.out, f"{name}.{f}", option="--out")
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -76,35 +105,48 @@ def run(args: argparse.Namespace) -> int:
         workspace_summary,
     )
 
-    design = load_design(args)
-    T = load_rcm(args, design)
-    prog = True if args.progress else None
-    modes = tuple(args.modes)
-    pw = point_workspace(design, resolution=args.resolution, progress=prog)
-    ic = instrument_cone(T, design, resolution=tuple(args.cone_resolution), modes=modes,
-                         progress=prog)
-    tw = tool_tip_workspace(T, design, resolution=args.resolution, modes=modes, progress=prog)
-    summary = workspace_summary(pw, ic, tw)
+    check_count(args.resolution, "--resolution", 2, MAX_RESOLUTION, "grid points per axis")
+    for n in args.cone_resolution:
+        check_count(n, "--cone-resolution", 2, MAX_RESOLUTION, "samples per axis")
+    if int(np.prod(args.cone_resolution)) > MAX_CONE_SAMPLES:
+        raise ValueError(f"--cone-resolution: expected at most {MAX_CONE_SAMPLES} samples in "
+                         f"all, got {' x '.join(map(str, args.cone_resolution))}")
+    check_dpi(args.dpi)
     files: list[str] = []
-    if not args.no_files:
-        outdir = Path(args.out)
-        outdir.mkdir(parents=True, exist_ok=True)
-        am = actuator_map(design, resolution=161, progress=prog)
-        for name, res in (("o_s_workspace", pw), ("instrument_cone", ic), ("tool_tip", tw),
-                          ("actuator_map", am)):
-            files.append(str(save_npz(outdir / f"{name}.npz", res, design=design,
-                                      T_b_e=np.asarray(T).tolist(), modes=list(modes))))
-        if not args.no_figures:
-            from ..analysis import figures as F
-            from ..robot import REFERENCE_Q
+    with outputs(args, option="--out") as outs:
+        declare_outputs(args, outs, ["o_s_workspace", "instrument_cone", "tool_tip",
+                                     "actuator_map"],
+                        ["workspace", "conditioning", "instrument_cone", "tool_tip"])
+        design = load_design(args)
+        T = load_rcm(args, design)
+        prog = True if args.progress else None
+        modes = tuple(args.modes)
+        pw = point_workspace(design, resolution=args.resolution, progress=prog)
+        ic = instrument_cone(T, design, resolution=tuple(args.cone_resolution), modes=modes,
+                             progress=prog)
+        tw = tool_tip_workspace(T, design, resolution=args.resolution, modes=modes,
+                                progress=prog)
+        summary = workspace_summary(pw, ic, tw)
+        if not args.no_files:
+            outdir = Path(args.out)
+            am = actuator_map(design, resolution=161, progress=prog)
+            for name, res in (("o_s_workspace", pw), ("instrument_cone", ic),
+                              ("tool_tip", tw), ("actuator_map", am)):
+                save_npz(outs.temp(outdir / f"{name}.npz"), res, design=design,
+                         T_b_e=np.asarray(T).tolist(), modes=list(modes))
+            if not args.no_figures:
+                from ..analysis import figures as F
+                from ..robot import REFERENCE_Q
 
-            ref = REFERENCE_Q if args.rcm is None and args.rcm_file is None else None
-            figs = (("workspace", F.figure_workspace(pw)),
-                    ("conditioning", F.figure_conditioning(am, pw, tw)),
-                    ("instrument_cone", F.figure_instrument_cone(ic, reference_q=ref)),
-                    ("tool_tip", F.figure_tool_tip(tw)))
-            for name, fig in figs:
-                files += save_figure(fig, outdir / name, args.format, args.dpi)
+                ref = REFERENCE_Q if args.rcm is None and args.rcm_file is None else None
+                figs = (("workspace", lambda: F.figure_workspace(pw)),
+                        ("conditioning", lambda: F.figure_conditioning(am, pw, tw)),
+                        ("instrument_cone",
+                         lambda: F.figure_instrument_cone(ic, reference_q=ref)),
+                        ("tool_tip", lambda: F.figure_tool_tip(tw)))
+                for name, make in figs:
+                    save_figure(make(), outdir / name, args.format, args.dpi, outs)
+            files = [str(f) for f in outs.commit()]
     if args.json:
         print(dump_json({"summary": summary, "files": files}))
         return 0

@@ -25,11 +25,10 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .. import parallel as _ref_parallel
-from .. import robot as _ref_robot
 from .._validation import ROTATION_TOL, broadcast_batch, check_tolerance, check_transform
 from ..chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
 from ..design import Design
+from ..parallel import _module as _ref_parallel
 from ..parallel._module import (
     MODES,
     MODULE_POSE_TOL,
@@ -38,6 +37,8 @@ from ..parallel._module import (
     ParallelSolution,
     module_orientation_check,
 )
+from ..robot import _fk as _ref_fk
+from ..robot import _ik as _ref_ik
 from ..robot._common import ErrorPolicy, resolve_policy
 from ..robot._fk import SLOT_MODE, SLOT_P_SIGN, SLOT_UJOINT, SLOT_WRIST, FKMethod, FKSolution
 from ..robot._ik import IK_SINGULAR_TOL, InstrumentIK, PassiveJoints
@@ -241,7 +242,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
                 return sol
 
     def reference() -> FKSolution:
-        return _ref_robot.forward_kinematics(
+        return _ref_fk.forward_kinematics(
             q, T_b_e, design, method=method, errors=errors, tangent_tol=tangent_tol,
             degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol, closure_tol=closure_tol)
 
@@ -403,7 +404,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     passive : PassiveJoints
     """
     def reference() -> tuple[NDArray[np.float64], PassiveJoints]:
-        return _ref_robot.inverse_kinematics(T_b_e, u345, design, errors=errors,
+        return _ref_ik.inverse_kinematics(T_b_e, u345, design, errors=errors,
                                              singular_tol=singular_tol, closure_tol=closure_tol)
 
     P = design_params(design)
@@ -523,7 +524,7 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
     try:
         return _line(T_b_e, direction_e, p, design, errors, 0, parallel)
     except _Delegate:
-        return _ref_robot.q_from_instrument(T_b_e, direction_e, p, design, errors=errors)
+        return _ref_ik.q_from_instrument(T_b_e, direction_e, p, design, errors=errors)
 
 
 def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = None, *,
@@ -537,7 +538,7 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
     try:
         return _line(T_b_e, tip_e, None, design, errors, 1, parallel)
     except _Delegate:
-        return _ref_robot.q_from_tool_tip(T_b_e, tip_e, design, errors=errors)
+        return _ref_ik.q_from_tool_tip(T_b_e, tip_e, design, errors=errors)
 
 
 # --- the parallel module ------------------------------------------------------------------

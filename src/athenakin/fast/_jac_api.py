@@ -1,14 +1,14 @@
 """Public compiled Jacobians: the signatures, results and errors of :mod:`athenakin.analysis`.
 
-Each function takes the arguments of its reference in
-:mod:`athenakin.analysis` and returns the same array (shape, dtype, values to
-rounding, the same NaN / inf entries). Validation is optimistic, as in
-:mod:`._api`: float64 arrays of the right trailing shape, modes of +1 / -1 and
-a known ``frame`` go straight to the kernel, which also checks that the RCM
-frames are finite rigid transforms; anything else (a wrong type, shape, mode
-or frame, a non-finite or non-rigid ``T_b_e``, a design whose reference set-up
-cannot be built) is handed to the reference function, which raises the very
-same exception (or, for a false alarm, returns the very same result).
+Each function takes the arguments of its public twin in :mod:`athenakin.analysis`
+(whose numpy reference is :mod:`athenakin.robot._jacobians`) and returns the same
+array (shape, dtype, values to rounding, the same NaN / inf entries). Validation is
+optimistic, as in :mod:`._api`: float64 arrays of the right trailing shape, modes of
++1 / -1 and a known ``frame`` go straight to the kernel, which also checks that the
+RCM frames are finite rigid transforms; anything else (a wrong type, shape, mode or
+frame, a non-finite or non-rigid ``T_b_e``, a design whose reference set-up cannot be
+built) is handed to the reference function, which raises the very same exception
+(or, for a false alarm, returns the very same result).
 """
 
 from __future__ import annotations
@@ -19,11 +19,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import ROTATION_TOL
-from ..analysis import _jacobians as _ref
-from ..analysis._jacobians import Frame
 from ..design import Design
 from ..parallel import TANGENT_TOL
-from ..robot import default_rcm_frame
+from ..robot import _jacobians as _ref
+from ..robot._jacobians import Frame
+from ..robot._setup import default_rcm_frame
 from . import _jac_kernels as _jk
 from ._api import _arr, _batch, _Delegate, _flat, design_params
 

@@ -8,6 +8,8 @@ __all__ = [
     "MotionError",
     "SafetyViolationError",
     "TimingInfeasibleError",
+    "PathInfeasibleError",
+    "TrajectoryLimitError",
     "PathFileError",
     "TrackingError",
 ]
@@ -66,6 +68,55 @@ class TimingInfeasibleError(SafetyViolationError):
         self.segment = segment
         self.required = required
         self.requested = requested
+
+
+class PathInfeasibleError(SafetyViolationError):
+    """The path itself breaks a limit, found before any timing or sampling.
+
+    A waypoint, or a point of a segment, is outside the workspace or the stroke
+    limits, or the path changes the assembly mode. Besides the attributes of
+    :class:`SafetyViolationError` (``time`` is NaN and ``index`` -1: no sample
+    exists yet), it carries ``waypoint`` (index ``k`` of the offending waypoint,
+    or None) and ``segment`` (index ``k`` of the segment from waypoint ``k`` to
+    ``k + 1``, or None).
+    """
+
+    def __init__(self, message: str, *, waypoint: int | None = None,
+                 segment: int | None = None, **kw: object) -> None:
+        kw.setdefault("time", float("nan"))
+        kw.setdefault("index", -1)
+        super().__init__(message, **kw)  # type: ignore[arg-type]
+        self.waypoint = waypoint
+        self.segment = segment
+
+
+class TrajectoryLimitError(MotionError):
+    """The trajectory would break a resource limit, or its time law cannot be computed.
+
+    Raised before the trajectory is sampled, so within about a second and in
+    bounded memory.
+
+    Attributes
+    ----------
+    limit : str
+        ``"max_duration"`` (s), ``"max_samples"`` or ``"time_law"`` (the time-optimal
+        profile of a segment could not be computed within its limits).
+    value : float
+        The duration (s) or sample count the trajectory would need (NaN for
+        ``"time_law"``).
+    bound : float
+        The limit it exceeds.
+    segment : int or None
+        The segment responsible (``k``: from waypoint ``k`` to ``k + 1``), if one is.
+    """
+
+    def __init__(self, message: str, *, limit: str, value: float, bound: float,
+                 segment: int | None = None) -> None:
+        super().__init__(message)
+        self.limit = limit
+        self.value = value
+        self.bound = bound
+        self.segment = segment
 
 
 class PathFileError(MotionError, InvalidInputError):

@@ -12,16 +12,16 @@ from __future__ import annotations
 import csv
 import dataclasses
 import io
-import json
 import math
 import os
+import stat
 import tempfile
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from .._serialize import json_text
 from ._errors import PathFileError
 from ._plan import Trajectory
 from ._tracker import TrackFlag, TrackLog
@@ -72,10 +72,16 @@ class PathSpec:
     times: NDArray[np.float64] | None = None
 
 
-def _read_table(path: str | Path) -> tuple[list[str], list[tuple[int, list[str]]]]:
+def _read_table(path: str | Path, *, header_row: bool = True
+                ) -> tuple[list[str], list[tuple[int, list[str]]]]:
+    """The one CSV reader: header cells and ``(line number, cells)`` rows.
+
+    With ``header_row=False`` every line is a row (cells split at commas or
+    whitespace) and the header is empty.
+    """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # a byte-order mark is not a column
     except UnicodeDecodeError as exc:
         raise PathFileError(f"{path}: not a UTF-8 text file ({exc.reason})") from None
     rows = []
@@ -83,11 +89,18 @@ def _read_table(path: str | Path) -> tuple[list[str], list[tuple[int, list[str]]
     for lineno, line in enumerate(text.splitlines(), start=1):
         if not line.strip() or line.lstrip().startswith("#"):
             continue
+        if not header_row:
+            rows.append((lineno, line.replace(",", " ").split()))
+            continue
         cells = [c.strip() for c in next(csv.reader([line]))]
         if header is None:
             header = cells
             continue
         rows.append((lineno, cells))
+    if not header_row:
+        if not rows:
+            raise PathFileError(f"{path}: empty file (expected data rows)")
+        return [], rows
     if header is None:
         raise PathFileError(f"{path}: empty file (expected a header row and data rows)")
     dup = sorted({c for c in header if header.count(c) > 1})
@@ -186,7 +199,8 @@ def read_q_stream_csv(path: str | Path) -> tuple[NDArray[np.float64], NDArray[np
         CSV with columns ``q1_m, q2_m, q3_m`` (m) and optionally ``t_s``; other
         columns are ignored, so a trajectory file written by ``athenakin plan``
         replays as it is. Empty cells or ``nan`` mark missing readings (the tracker
-        flags them ``LOST``).
+        flags them ``LOST``). A file without a header row holds three numbers
+        per line, q1 q2 q3 in m, separated by commas or whitespace.
 
     Returns
     -------
@@ -199,6 +213,14 @@ def read_q_stream_csv(path: str | Path) -> tuple[NDArray[np.float64], NDArray[np
         Missing columns, a non-number, no data rows.
     """
     header, rows = _read_table(path)
+    if not set(Q_COLUMNS) & set(header) and _all_numbers(header):
+        _, rows = _read_table(path, header_row=False)
+        width = {len(cells) for _, cells in rows}
+        if width != {3}:
+            bad = next((n, c) for n, c in rows if len(c) != 3)
+            raise PathFileError(f"{path}, line {bad[0]}: expected 3 values per row "
+                                f"(q1 q2 q3, m), got {len(bad[1])}")
+        header = list(Q_COLUMNS)
     missing = [c for c in Q_COLUMNS if c not in header]
     if missing:
         raise PathFileError(f"{path}: a q stream needs the columns {', '.join(Q_COLUMNS)} "
@@ -213,6 +235,14 @@ def read_q_stream_csv(path: str | Path) -> tuple[NDArray[np.float64], NDArray[np
     t = (_numbers(path, header, rows, ["t_s"], allow_nonfinite=True)[:, 0]
          if "t_s" in header else None)
     return q, t
+
+
+def _all_numbers(cells: list[str]) -> bool:
+    try:
+        [float(p) for c in cells for p in c.replace(",", " ").split()]
+    except ValueError:
+        return False
+    return bool(cells)
 
 
 # --------------------------------------------------------------------------------------
@@ -239,22 +269,6 @@ def trajectory_csv_text(traj: Trajectory) -> str:
     return buf.getvalue()
 
 
-def _jsonable(x: Any) -> Any:
-    if isinstance(x, dict):
-        return {k: _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _jsonable(x.tolist())
-    if isinstance(x, (float, np.floating)):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, (np.bool_,)):
-        return bool(x)
-    return x
-
-
 def trajectory_json_text(traj: Trajectory) -> str:
     """The trajectory, its limits, margins, set-up and design as JSON text (SI units)."""
     lim = traj.limits
@@ -276,7 +290,7 @@ def trajectory_json_text(traj: Trajectory) -> str:
         "qddd_m_s3": traj.qddd, "tip_e_m": traj.tip_e, "segment": traj.segment,
         "measures": dataclasses.asdict(traj.measures),
     }
-    return json.dumps(_jsonable(obj))
+    return json_text(obj)
 
 
 TRACK_COLUMNS = ["index", "t_s", "q1_m", "q2_m", "q3_m", "valid", "mode", "slot", "p_m",
@@ -304,12 +318,24 @@ def track_csv_text(log: TrackLog, t: NDArray[np.float64] | None = None) -> str:
 
 
 def write_text_atomic(path: str | Path, text: str | bytes) -> None:
-    """Write a file through a temporary file in the same folder and a rename."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent or ".")
+    """Write a file through a temporary file in the same folder and a rename.
+
+    The file gets the permissions a new file would get (``0o666 & ~umask``) or,
+    when it replaces a file, that file's permissions; a symbolic link is
+    followed (its target is replaced, the link stays a link).
+    """
+    path = Path(os.path.realpath(path))
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(text.encode("utf-8") if isinstance(text, str) else text)
+        try:
+            mode = stat.S_IMODE(os.stat(path).st_mode)
+        except FileNotFoundError:
+            mask = os.umask(0o022)
+            os.umask(mask)
+            mode = 0o666 & ~mask
+        os.chmod(tmp, mode)
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

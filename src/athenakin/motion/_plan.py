@@ -34,7 +34,12 @@ from .._validation import check_array, check_scalar, check_transform
 from ..design import Design, resolve_design
 from ..errors import Reason
 from ..robot import direction_from_angles
-from ._errors import SafetyViolationError, TimingInfeasibleError
+from ._errors import (
+    PathInfeasibleError,
+    SafetyViolationError,
+    TimingInfeasibleError,
+    TrajectoryLimitError,
+)
 from ._path import (
     Segment,
     arc_segment,
@@ -45,10 +50,17 @@ from ._path import (
     tip_speed_factor,
 )
 from ._safety import MEASURE_NAMES, Margins, SingularityMeasures, singularity_measures
-from ._timing import LamProfile, dwell, lam_profile, parameter_limits, squeezed
+from ._timing import (
+    LamProfile,
+    TimeLawError,
+    dwell,
+    lam_profile,
+    parameter_limits,
+    squeezed,
+)
 
 __all__ = ["Limits", "Trajectory", "plan", "plan_directions", "check_samples",
-           "LIMIT_RTOL", "BOUND_GRID", "BOUND_SAFETY"]
+           "LIMIT_RTOL", "BOUND_GRID", "BOUND_SAFETY", "MAX_DURATION", "MAX_SAMPLES"]
 
 #: Relative tolerance of the velocity / acceleration / jerk / tip-speed checks.
 LIMIT_RTOL = 1e-6
@@ -58,6 +70,13 @@ BOUND_GRID = 129
 BOUND_SAFETY = 1.05
 #: Replanning rounds when a sample still exceeds a kinematic limit.
 MAX_REPLANS = 4
+#: Default longest trajectory :func:`plan` accepts, s (``max_duration``).
+MAX_DURATION = 3600.0
+#: Default largest number of samples :func:`plan` accepts (``max_samples``); each
+#: sample holds about 60 floats while it is checked, about 1 GB at this bound.
+MAX_SAMPLES = 2_000_000
+#: Samples checked at a time: a violation stops the sampling there.
+CHECK_CHUNK = 20_000
 
 Timing = Literal["stretch", "fixed"]
 
@@ -179,7 +198,8 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
          rate: float = 1000.0, v_max: ArrayLike = 0.05, a_max: ArrayLike = 0.5,
          j_max: ArrayLike | None = None, tip_speed: float | None = None,
          times: ArrayLike | None = None, timing: Timing = "stretch",
-         margins: Margins | None = None) -> Trajectory:
+         margins: Margins | None = None, max_duration: float | None = None,
+         max_samples: int | None = None) -> Trajectory:
     """Plan an actuator trajectory that moves the tool tip along straight segments.
 
     Parameters
@@ -212,6 +232,11 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
         :class:`TimingInfeasibleError` at the first sample that breaks a limit.
     margins : Margins, optional, keyword-only
         Least distances to the singularities (default :class:`Margins`).
+    max_duration : float, optional, keyword-only
+        Longest trajectory accepted, s (default :data:`MAX_DURATION`).
+    max_samples : int, optional, keyword-only
+        Largest number of samples accepted (default :data:`MAX_SAMPLES`); bounds
+        the memory and time of the planning.
 
     Returns
     -------
@@ -222,9 +247,20 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
 
     Raises
     ------
+    PathInfeasibleError
+        Checked first, before any timing: a waypoint, or a point of a segment
+        (on a grid of :data:`BOUND_GRID` points), is outside the workspace or the
+        stroke limits, or the path changes the assembly mode. The message names
+        the waypoint or segment (and hints at millimetres typed for metres).
+    TrajectoryLimitError
+        Checked before sampling: the trajectory would last longer than
+        ``max_duration`` or need more than ``max_samples`` samples, or a segment's
+        time law cannot be computed within its limits (named in the message).
     SafetyViolationError
         The first sample (time, index) that leaves the workspace or the stroke
         limits, crosses a singularity margin, or (after replanning) a kinematic limit.
+        Samples are checked in chunks as they are made, so that the first
+        violation stops the planning.
     TimingInfeasibleError
         ``timing="fixed"`` and the requested times break a limit.
     TypeError, ValueError
@@ -247,7 +283,8 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
                          f"got shape {tips.shape}")
     segs = [line_segment(tips[k], tips[k + 1]) for k in range(tips.shape[0] - 1)]
     return _plan(segs, tips, T_b_e, design, rate=rate, v_max=v_max, a_max=a_max, j_max=j_max,
-                 tip_speed=tip_speed, times=times, timing=timing, margins=margins)
+                 tip_speed=tip_speed, times=times, timing=timing, margins=margins,
+                 max_duration=max_duration, max_samples=max_samples)
 
 
 def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_e: ArrayLike,
@@ -269,7 +306,8 @@ def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_
     design : Design, optional
     **options
         The keyword-only options of :func:`plan` (``rate``, ``v_max``, ``a_max``,
-        ``j_max``, ``tip_speed``, ``times``, ``timing``, ``margins``).
+        ``j_max``, ``tip_speed``, ``times``, ``timing``, ``margins``,
+        ``max_duration``, ``max_samples``).
 
     Returns
     -------
@@ -277,7 +315,9 @@ def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_
 
     Raises
     ------
-    SafetyViolationError, TimingInfeasibleError, TypeError, ValueError
+    PathInfeasibleError, TrajectoryLimitError, SafetyViolationError, TimingInfeasibleError
+        As :func:`plan`.
+    TypeError, ValueError
         As :func:`plan`; also ``ValueError`` for a segment between opposite directions.
     """
     design = resolve_design(design)
@@ -311,25 +351,105 @@ class _SegmentPlan:
 
 
 def _segment_bounds(seg: Segment, T: NDArray[np.float64], design: Design
-                    ) -> tuple[tuple[NDArray[np.float64], ...], float]:
+                    ) -> tuple[tuple[NDArray[np.float64], ...], float, dict[str, Any]]:
     lam = np.linspace(0.0, 1.0, BOUND_GRID)
-    _, d1, d2, d3 = q_derivatives(seg, lam, T, design)
+    q0, d1, d2, d3 = q_derivatives(seg, lam, T, design)
     with np.errstate(invalid="ignore"):
         K = tuple(BOUND_SAFETY * np.nan_to_num(np.nanmax(np.abs(d), axis=0), nan=0.0)
                   if np.any(np.isfinite(d)) else np.zeros(3) for d in (d1, d2, d3))
     tf = float(np.max(tip_speed_factor(seg, lam))) * BOUND_SAFETY
-    return K, tf  # type: ignore[return-value]
+    tips = seg.tips(lam)
+    _, reason, mode = q_on_tips(tips, T, design)
+    grid = {"lam": lam, "q": q0, "tip_e": tips, "reason": reason, "mode": mode}
+    return K, tf, grid  # type: ignore[return-value]
+
+
+def _mm_hint(tip: NDArray[np.float64], design: Design) -> str:
+    r = float(np.linalg.norm(tip))
+    if r > 4.0 * max(design.tool_length, float(np.max(design.lengths))):
+        return (f"; |tip_e| = {r:.6g} m is far beyond the robot's reach: lengths are in "
+                f"metres (millimetres typed?)")
+    return ""
+
+
+def _check_waypoints(tips: NDArray[np.float64], T: NDArray[np.float64], design: Design) -> None:
+    """Each waypoint inside the workspace and the strokes, one assembly mode (before timing)."""
+    q, reason, mode = q_on_tips(tips, T, design)
+    for k in range(tips.shape[0]):
+        tip = np.array2string(tips[k], precision=6)
+        if reason[k] != 0:
+            r = Reason(int(reason[k]))
+            raise PathInfeasibleError(
+                f"waypoint {k} (tip_e = {tip} m) is outside the workspace ({r.name}: "
+                f"{r.description}){_mm_hint(tips[k], design)}", waypoint=k, limit="workspace",
+                value=float(reason[k]), bound=0.0)
+        _check_stroke(q[k], f"waypoint {k} (tip_e = {tip} m)", design, waypoint=k)
+        if mode[k] != mode[0]:
+            raise PathInfeasibleError(
+                f"waypoint {k} (tip_e = {tip} m) is reached in assembly mode {int(mode[k]):+d}, "
+                f"waypoint 0 in mode {int(mode[0]):+d}: the path would switch the parallel "
+                f"module's assembly mode", waypoint=k, limit="assembly_mode",
+                value=float(mode[k]), bound=float(mode[0]))
+
+
+def _check_stroke(q: NDArray[np.float64], what: str, design: Design, *,
+                  waypoint: int | None = None, segment: int | None = None) -> None:
+    lo, hi = design.stroke_min, design.stroke_max
+    for i in range(3):
+        if q[i] < lo[i] or q[i] > hi[i]:
+            b = float(lo[i] if q[i] < lo[i] else hi[i])
+            raise PathInfeasibleError(
+                f"{what} exceeds the stroke limit of q{i + 1}: {q[i]:.6g} m (limit {b:.6g} m)",
+                waypoint=waypoint, segment=segment, limit="stroke", value=float(q[i]),
+                bound=b, actuator=i)
+
+
+def _check_segment(k: int, grid: dict[str, Any], mode0: int, design: Design) -> None:
+    """Every grid point of segment ``k`` inside the workspace and strokes, in mode ``mode0``."""
+    out = np.flatnonzero(grid["reason"] != 0)
+    where = f"segment {k} (waypoint {k} -> {k + 1})"
+    if out.size:
+        j = int(out[0])
+        r = Reason(int(grid["reason"][j]))
+        raise PathInfeasibleError(
+            f"{where} leaves the workspace at lam = {grid['lam'][j]:.4g} (tip_e = "
+            f"{np.array2string(grid['tip_e'][j], precision=6)} m; {r.name}: {r.description})",
+            segment=k, limit="workspace", value=float(r), bound=0.0)
+    lo, hi = design.stroke_min, design.stroke_max
+    bad = np.flatnonzero(np.any((grid["q"] < lo) | (grid["q"] > hi), axis=-1))
+    if bad.size:
+        j = int(bad[0])
+        _check_stroke(grid["q"][j], f"{where} at lam = {grid['lam'][j]:.4g} (tip_e = "
+                      f"{np.array2string(grid['tip_e'][j], precision=6)} m)", design,
+                      segment=k)
+    sw = np.flatnonzero(grid["mode"] != mode0)
+    if sw.size:
+        j = int(sw[0])
+        raise PathInfeasibleError(
+            f"{where} switches the parallel module's assembly mode from {mode0:+d} to "
+            f"{int(grid['mode'][j]):+d} at lam = {grid['lam'][j]:.4g} (tip_e = "
+            f"{np.array2string(grid['tip_e'][j], precision=6)} m)", segment=k,
+            limit="assembly_mode", value=float(grid["mode"][j]), bound=float(mode0))
 
 
 def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, design: Design, *,
           rate: float = 1000.0, v_max: ArrayLike = 0.05, a_max: ArrayLike = 0.5,
           j_max: ArrayLike | None = None, tip_speed: float | None = None,
           times: ArrayLike | None = None, timing: Timing = "stretch",
-          margins: Margins | None = None) -> Trajectory:
+          margins: Margins | None = None, max_duration: float | None = None,
+          max_samples: int | None = None) -> Trajectory:
     T = check_transform(T_b_e, "T_b_e")
     if T.shape != (4, 4):
         raise ValueError(f"T_b_e: expected one transform of shape (4, 4), got shape {T.shape}")
     rate = check_scalar(rate, "rate", positive=True)
+    max_duration = MAX_DURATION if max_duration is None else check_scalar(
+        max_duration, "max_duration", positive=True)
+    if max_samples is None:
+        max_samples = MAX_SAMPLES
+    elif (isinstance(max_samples, bool) or not isinstance(max_samples, (int, np.integer))
+          or max_samples < 2):
+        raise ValueError(f"max_samples: expected an integer >= 2, got {max_samples!r}")
+    max_samples = int(max_samples)
     limits = Limits.build(v_max, a_max, j_max, tip_speed)
     margins = Margins() if margins is None else margins
     if not isinstance(margins, Margins):
@@ -348,21 +468,28 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
         if np.any(req < 0):
             raise ValueError(f"times: expected non-decreasing arrival times, got {tt.tolist()}")
         t0 = float(tt[0])
+        _check_budget(float(tt[-1] - tt[0]), rate, max_duration, max_samples, None)
     elif timing == "fixed":
         raise ValueError("timing='fixed' needs times (the arrival time of each waypoint)")
 
+    # the path first: waypoints, then each segment on a grid (no timing can fix these)
+    _check_waypoints(tips, T, design)
+    mode0 = int(q_on_tips(tips[:1], T, design)[2][0])
     plans = []
     for k, seg in enumerate(segs):
         seg = reparametrised(seg, T, design)
-        Kd, tf = _segment_bounds(seg, T, design)
+        Kd, tf, grid = _segment_bounds(seg, T, design)
+        _check_segment(k, grid, mode0, design)
         plans.append(_SegmentPlan(seg=seg, K=Kd, tip_factor=tf,  # type: ignore[arg-type]
                                   requested=None if req is None else float(req[k])))
     dt = 1.0 / rate
     for _round in range(MAX_REPLANS + 1):
-        for sp in plans:
-            _time_segment(sp, limits, dt, timing)
-        samples = _sample(plans, T, design, rate, t0, limits)
-        bad = check_samples(samples, T, design, limits, margins)
+        for k, sp in enumerate(plans):
+            _time_segment(sp, limits, dt, timing, k, max_duration)
+        durations = [sp.profile.duration for sp in plans]  # type: ignore[union-attr]
+        longest = int(np.argmax(durations))
+        _check_budget(float(np.sum(durations)), rate, max_duration, max_samples, longest)
+        samples, bad = _sample_checked(plans, T, design, rate, t0, limits, margins)
         if bad is None:
             break
         k = int(samples["segment"][bad["index"]])
@@ -379,7 +506,26 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
     return _trajectory(samples, plans, tips, limits, margins, T, design, rate, t0)
 
 
-def _time_segment(sp: _SegmentPlan, limits: Limits, dt: float, timing: str) -> None:
+def _check_budget(duration: float, rate: float, max_duration: float, max_samples: int,
+                  segment: int | None) -> None:
+    """Duration and sample count within their bounds (before any sample is made)."""
+    which = "" if segment is None else f" (the longest segment: {segment})"
+    if not duration <= max_duration:
+        raise TrajectoryLimitError(
+            f"the trajectory would last {duration:.6g} s{which}, longer than max_duration = "
+            f"{max_duration:g} s (slow near a singularity or the workspace border? raise "
+            f"max_duration to accept it)", limit="max_duration", value=duration,
+            bound=max_duration, segment=segment)
+    n = duration * rate + 2
+    if not n <= max_samples:
+        raise TrajectoryLimitError(
+            f"the trajectory would need {n:.6g} samples ({duration:.6g} s at {rate:g} Hz), "
+            f"more than max_samples = {max_samples}: lower the rate or raise max_samples",
+            limit="max_samples", value=n, bound=float(max_samples), segment=segment)
+
+
+def _time_segment(sp: _SegmentPlan, limits: Limits, dt: float, timing: str, k: int,
+                  max_duration: float) -> None:
     if sp.seg.scale == 0.0:
         sp.profile = dwell(sp.requested or 0.0)
         return
@@ -387,14 +533,32 @@ def _time_segment(sp: _SegmentPlan, limits: Limits, dt: float, timing: str) -> N
     vmax, amax = limits.v_max * f, limits.a_max * f
     jmax = None if limits.j_max is None else limits.j_max * f
     K1, K2, K3 = sp.K
-    lim = parameter_limits(K1, K2, K3, v_max=vmax, a_max=amax, j_max=jmax,
-                           tip_factor=sp.tip_factor,
-                           tip_speed=None if limits.tip_speed is None
-                           else limits.tip_speed * f)
-    if sp.requested is None:
-        sp.profile = lam_profile(lim, dt=dt)
-        return
-    prof = lam_profile(lim, minimum_duration=sp.requested)
+    where = f"segment {k} (waypoint {k} -> {k + 1}, {_seg_name(sp)})"
+    try:
+        lim = parameter_limits(K1, K2, K3, v_max=vmax, a_max=amax, j_max=jmax,
+                               tip_factor=sp.tip_factor,
+                               tip_speed=None if limits.tip_speed is None
+                               else limits.tip_speed * f)
+    except ValueError as exc:
+        raise TrajectoryLimitError(f"{where}: {exc}", limit="time_law", value=math.nan,
+                                   bound=math.nan, segment=k) from None
+    # a rest-to-rest motion over lam in [0, 1] takes at least max(1 / v, 2 / sqrt(a))
+    t_low = max(1.0 / lim.v if lim.v > 0 else math.inf, 2.0 / math.sqrt(lim.a)
+                if lim.a > 0 else math.inf)
+    if not t_low <= max_duration:
+        raise TrajectoryLimitError(
+            f"{where} would take at least {t_low:.6g} s within the actuator limits, longer "
+            f"than max_duration = {max_duration:g} s (the actuators move fast along the path "
+            f"there: near a singularity or the workspace border?)", limit="max_duration",
+            value=t_low, bound=max_duration, segment=k)
+    try:
+        if sp.requested is None:
+            sp.profile = lam_profile(lim, dt=dt)
+            return
+        prof = lam_profile(lim, minimum_duration=sp.requested)
+    except TimeLawError as exc:
+        raise TrajectoryLimitError(f"{where}: {exc}", limit="time_law", value=math.nan,
+                                   bound=math.nan, segment=k) from None
     if prof.duration > sp.requested * (1 + 1e-12) + 1e-12 and timing == "fixed":
         if sp.requested <= 0:
             raise TimingInfeasibleError(
@@ -410,15 +574,59 @@ def _seg_name(sp: _SegmentPlan) -> str:
     return f"{sp.seg.start.tolist()} -> {sp.seg.end.tolist()}"
 
 
-def _sample(plans: list[_SegmentPlan], T: NDArray[np.float64], design: Design, rate: float,
-            t0: float, limits: Limits) -> dict[str, Any]:
+def _sample_checked(plans: list[_SegmentPlan], T: NDArray[np.float64], design: Design,
+                    rate: float, t0: float, limits: Limits, margins: Margins
+                    ) -> tuple[dict[str, Any], dict | None]:  # type: ignore[type-arg]
+    """Sample and check in chunks of :data:`CHECK_CHUNK`; stop at the first violation.
+
+    Returns the samples made (all of them, or up to the end of the chunk holding
+    the violation) with their measures, and the violation (``check_samples``'s
+    dict, index into the returned samples) or None.
+    """
     durations = np.array([sp.profile.duration for sp in plans])  # type: ignore[union-attr]
-    ends = np.cumsum(durations)
-    total = float(ends[-1])
+    total = float(np.sum(durations))
     n = int(math.floor(total * rate + 1e-9)) + 1
     if (n - 1) / rate < total - 1e-12:
         n += 1
-    tl = np.arange(n) / rate
+    chunks: list[dict[str, Any]] = []
+    mode0: int | None = None
+    bad = None
+    for i0 in range(0, n, CHECK_CHUNK):
+        c = _sample(plans, T, design, rate, t0, limits, np.arange(i0, min(n, i0 + CHECK_CHUNK)))
+        if mode0 is None:
+            ok = np.flatnonzero(c["reason"] == 0)
+            mode0 = int(c["mode"][ok[0]]) if ok.size else 1
+        bad = check_samples(c, T, design, limits, margins, mode0=mode0)
+        chunks.append(c)
+        if bad is not None:
+            bad["index"] += i0
+            break
+    return _concat(chunks), bad
+
+
+def _concat(chunks: list[dict[str, Any]]) -> dict[str, Any]:
+    if len(chunks) == 1:
+        return chunks[0]
+    out: dict[str, Any] = {}
+    for key, v in chunks[0].items():
+        if v is None:
+            out[key] = None
+        elif isinstance(v, np.ndarray):
+            out[key] = np.concatenate([c[key] for c in chunks])
+        else:  # SingularityMeasures
+            out[key] = dataclasses.replace(v, **{
+                f.name: np.concatenate([getattr(c[key], f.name) for c in chunks])
+                for f in dataclasses.fields(v)})
+    return out
+
+
+def _sample(plans: list[_SegmentPlan], T: NDArray[np.float64], design: Design, rate: float,
+            t0: float, limits: Limits, index: NDArray[np.int64]) -> dict[str, Any]:
+    """The samples of global indices ``index`` (n,) of the trajectory."""
+    durations = np.array([sp.profile.duration for sp in plans])  # type: ignore[union-attr]
+    ends = np.cumsum(durations)
+    n = index.shape[0]
+    tl = index / rate
     k = np.minimum(np.searchsorted(ends, tl, side="right"), len(plans) - 1)
     # a sample exactly at a segment's end belongs to the next one (at rest there)
     starts = ends - durations
@@ -427,6 +635,7 @@ def _sample(plans: list[_SegmentPlan], T: NDArray[np.float64], design: Design, r
     q = np.full((n, 3), np.nan)
     dq = np.zeros((3, n, 3))
     tipf = np.zeros(n)
+    tips = np.empty((n, 3))
     for s, sp in enumerate(plans):
         idx = np.flatnonzero(k == s)
         if idx.size == 0:
@@ -435,9 +644,6 @@ def _sample(plans: list[_SegmentPlan], T: NDArray[np.float64], design: Design, r
         q0, d1, d2, d3 = q_derivatives(sp.seg, lam[0, idx], T, design)
         q[idx], dq[0, idx], dq[1, idx], dq[2, idx] = q0, d1, d2, d3
         tipf[idx] = tip_speed_factor(sp.seg, lam[0, idx])
-    tips = np.empty((n, 3))
-    for s, sp in enumerate(plans):
-        idx = np.flatnonzero(k == s)
         tips[idx] = sp.seg.tips(lam[0, idx])
     _, reason, mode = q_on_tips(tips, T, design)
     ld, ldd, lddd = lam[1][:, None], lam[2][:, None], lam[3][:, None]
@@ -451,7 +657,8 @@ def _sample(plans: list[_SegmentPlan], T: NDArray[np.float64], design: Design, r
 
 
 def check_samples(samples: dict[str, Any], T_b_e: NDArray[np.float64],
-                  design: Design, limits: Limits, margins: Margins) -> dict | None:  # type: ignore[type-arg]
+                  design: Design, limits: Limits, margins: Margins, *,
+                  mode0: int | None = None) -> dict | None:  # type: ignore[type-arg]
     """First sample that breaks a limit, or None.
 
     Parameters
@@ -464,6 +671,8 @@ def check_samples(samples: dict[str, Any], T_b_e: NDArray[np.float64],
     design : Design
     limits : Limits
     margins : Margins
+    mode0 : int, optional, keyword-only
+        Assembly mode the samples must keep (default: that of the first sample).
 
     Returns
     -------
@@ -489,8 +698,8 @@ def check_samples(samples: dict[str, Any], T_b_e: NDArray[np.float64],
     checks.append(("stroke", (under | over) & ok[:, None], q,
                    np.where(under, lo, hi)))
     mode = samples["mode"]
-    checks.append(("assembly_mode", (mode != mode[0]) & ok, mode.astype(float),
-                   float(mode[0])))
+    m0 = int(mode[0]) if mode0 is None else int(mode0)
+    checks.append(("assembly_mode", (mode != m0) & ok, mode.astype(float), float(m0)))
     # samples outside the workspace (mode 0, q NaN) are reported by the workspace check;
     # measure them as mode +1 at q = 0 only to keep the arrays whole
     meas = singularity_measures(np.where(np.isfinite(q), q, 0.0), samples["tip_e"], T_b_e,

@@ -16,7 +16,11 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["ParameterLimits", "parameter_limits", "LamProfile", "lam_profile"]
+__all__ = ["ParameterLimits", "parameter_limits", "LamProfile", "lam_profile", "TimeLawError"]
+
+
+class TimeLawError(ValueError):
+    """Ruckig cannot compute the profile of ``lam`` within the given limits (one line)."""
 
 #: Time step (s) of the acceleration difference that gives the (piecewise-constant) jerk.
 _JERK_STEP = 1e-7
@@ -75,7 +79,12 @@ def parameter_limits(K1: NDArray[np.float64], K2: NDArray[np.float64], K3: NDArr
             v = min(v, tip_speed / tip_factor)
         a = float(np.min(np.where(K1 > 0, (a_max - K2 * v * v) / K1, inf)))
         if not math.isfinite(v) or not math.isfinite(a):
-            raise ValueError("parameter_limits: no actuator moves along the segment")
+            raise ValueError("no actuator moves along the segment (or its motion is not "
+                             "defined there): no limit of the path parameter")
+        if not (v > 0 and a > 0):
+            raise ValueError(f"the actuator limits leave no speed or acceleration along the "
+                             f"segment (path parameter limits v = {v:.3g} 1/s, a = {a:.3g} "
+                             f"1/s^2)")
         j = math.inf
         if j_max is not None:
             X = K3 * v ** 3 + 3 * K2 * v * a
@@ -172,17 +181,41 @@ def lam_profile(lim: ParameterLimits, *, minimum_duration: float | None = None,
     if dt is not None:
         inp.duration_discretization = DurationDiscretization.Discrete
     tr = Trajectory(1)
-    res = otg.calculate(inp, tr)
-    if res not in (Result.Working, Result.Finished):
-        raise RuntimeError(f"ruckig failed ({res}) for limits {lim}")
+    _calculate(otg, inp, tr, lim, Result)
     t_min = float(tr.duration)
     if minimum_duration is not None and minimum_duration > t_min:
         inp.minimum_duration = float(minimum_duration)
-        res = otg.calculate(inp, tr)
-        if res not in (Result.Working, Result.Finished):
-            raise RuntimeError(f"ruckig failed ({res}) for limits {lim}, "
-                               f"minimum duration {minimum_duration} s")
+        _calculate(otg, inp, tr, lim, Result, minimum_duration)
     return LamProfile(duration=float(tr.duration), min_duration=t_min, scale=1.0, _traj=tr)
+
+
+#: Ruckig's error codes (ruckig::Result) and what they mean here.
+_RUCKIG_ERRORS = {
+    -100: "invalid input (limits not finite or not positive)",
+    -101: "the duration exceeds Ruckig's numerical range (about 7e3 s)",
+    -102: "the minimum duration exceeds Ruckig's numerical range",
+    -110: "no profile within the limits",
+    -111: "the minimum duration is too long",
+}
+
+
+def _calculate(otg: object, inp: object, tr: object, lim: ParameterLimits, Result: object,
+               minimum_duration: float | None = None) -> None:
+    """``otg.calculate(inp, tr)``; any failure becomes a one-line :class:`TimeLawError`."""
+    what = (f"path-parameter limits v = {lim.v:.6g} 1/s, a = {lim.a:.6g} 1/s^2, "
+            f"j = {lim.j:.6g} 1/s^3" + ("" if minimum_duration is None
+                                        else f", minimum duration {minimum_duration:.6g} s"))
+    try:
+        res = otg.calculate(inp, tr)  # type: ignore[attr-defined]
+    except Exception as exc:  # ruckig raises RuckigError, or ValueError for an unknown code
+        code = next((int(t) for t in str(exc).replace(":", " ").split()
+                     if t.lstrip("-").isdigit() and int(t) < 0), None)
+        why = _RUCKIG_ERRORS.get(code, " ".join(str(exc).split())[:200]) if code else \
+            " ".join(str(exc).split())[:200]
+        raise TimeLawError(f"the time law (Ruckig) failed: {why} ({what})") from None
+    if res not in (Result.Working, Result.Finished):  # type: ignore[attr-defined]
+        why = _RUCKIG_ERRORS.get(int(res.value) if hasattr(res, "value") else -1, str(res))
+        raise TimeLawError(f"the time law (Ruckig) failed: {why} ({what})")
 
 
 def squeezed(prof: LamProfile, duration: float) -> LamProfile:

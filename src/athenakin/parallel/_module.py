@@ -1,6 +1,6 @@
 """The 3-DoF parallel module (paper Eq. 7-10, Section 4): both assembly modes and its IK.
 
-Geometry (MODEL.md): ``A = (q1, 0, 0)``, ``B = (q2, 0, 0)``, midpoint ``M``,
+Geometry (docs/conventions.md): ``A = (q1, 0, 0)``, ``B = (q2, 0, 0)``, midpoint ``M``,
 ``h = (q1 - q2) / 2``. In the plane ``x = x_M`` (coordinates ``(y, z)`` relative
 to ``M``), circle ``k1`` has centre ``(0, 0)`` and radius ``r1 = sqrt(l1^2 - h^2)``;
 circle ``k2`` has centre ``C = (m_y, l5)``, ``m_y = sqrt(l3^2 - h^2) + l2``, and

@@ -10,9 +10,17 @@ function that needs them runs.
 """
 
 from ._animate import animate, instrument_cone_path, render_frames
-from ._geometry import N_CIRCLE, RobotGeometry, circle_points, robot_geometry
+from ._geometry import (
+    COLORS,
+    N_CIRCLE,
+    RobotGeometry,
+    arc_points,
+    circle_points,
+    robot_geometry,
+    slot_label,
+)
 from ._html import robot_figure, write_html
-from ._mpl import COLORS, arc_points, plot_fk_solutions, plot_robot, save_view, slot_label
+from ._mpl import plot_fk_solutions, plot_robot, save_view
 
 __all__ = [
     "COLORS",

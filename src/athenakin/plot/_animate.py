@@ -13,8 +13,8 @@ from ..design import Design, resolve_design
 from ..errors import KinematicsError
 from ..robot import q_from_instrument
 from ..robot._setup import resolve_rcm_frame
-from ._geometry import RobotGeometry, robot_geometry
-from ._mpl import VIEW, _cube_limits, plot_robot
+from ._geometry import VIEW, RobotGeometry, cube_limits, robot_geometry
+from ._mpl import plot_robot
 
 __all__ = ["instrument_cone_path", "render_frames", "animate", "ANIMATION_SIZE"]
 
@@ -141,7 +141,7 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
     qs = check_array(REFERENCE_Q if q is None else q, "q", (3,)).reshape(-1, 3)
     geoms = _geometries(qs, T, design, slot)
     los, his = zip(*(g.bounds() for g in geoms), strict=True)
-    lo, hi = _cube_limits(np.min(los, axis=0), np.max(his, axis=0))
+    lo, hi = cube_limits(np.min(los, axis=0), np.max(his, axis=0))
     it: Any = range(len(geoms))
     if progress:
         from tqdm import tqdm

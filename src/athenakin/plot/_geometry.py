@@ -1,6 +1,6 @@
 """Where every part of the robot is, for one FK solution (pure numpy; used by views and exports).
 
-The points follow MODEL.md: ``A = (q1, 0, 0)``, ``B = (q2, 0, 0)``, midpoint ``M``,
+The points follow docs/conventions.md: ``A = (q1, 0, 0)``, ``B = (q2, 0, 0)``, midpoint ``M``,
 ``D = (x_M, sqrt(l3^2 - h^2), 0)``, ``C = D + (0, l2, l5)``, ``O_i`` on ``k1 ∩ k2``,
 ``O_s = O_i + l4 z_i`` (Eq. 8-10), and the serial chain of Eq. 11-12 from ``O_s`` to
 the RCM frame E. The spherical joint at the RCM (the kinematic equivalent of the
@@ -21,13 +21,30 @@ from ..chain._ups import rotation_u_pair
 from ..design import Design, resolve_design
 from ..errors import Reason, error_for_reason
 from ..parallel import parallel_forward_kinematics
-from ..robot import forward_kinematics
+from ..robot import FKSolution, forward_kinematics
 from ..robot._setup import resolve_rcm_frame
 
-__all__ = ["RobotGeometry", "robot_geometry", "circle_points", "N_CIRCLE", "ARC_MARGIN"]
+__all__ = ["RobotGeometry", "robot_geometry", "circle_points", "N_CIRCLE", "ARC_MARGIN",
+           "COLORS", "FRAME_LENGTH", "ARC_RADIUS", "VIEW", "MM", "arc_points", "slot_label",
+           "cube_limits"]
 
 #: Number of points on each drawn circle (k1, k2).
 N_CIRCLE = 121
+#: Colours of the parts (paper Fig. 2: parallel module blue, serial part red), shared by
+#: the matplotlib and the HTML views.
+COLORS = {
+    "rail": "#555555", "parallel": "#1f4fbf", "actuator": "#f28e0f", "joint": "#7f7f7f",
+    "serial": "#cc2222", "sphere": "#8e44ad", "circle_k1": "#1f4fbf", "circle_k2": "#f28e0f",
+    "x": "#d62728", "y": "#2ca02c", "z": "#1f77b4",
+}
+#: Default length of drawn frame axes, m.
+FRAME_LENGTH = 0.08
+#: Radius of the drawn spherical-joint arcs about the RCM, m.
+ARC_RADIUS = 0.07
+#: Default view direction (elevation, azimuth), degrees.
+VIEW = (20.0, -35.0)
+#: Millimetres per metre: every view shows lengths in mm (the plot boundary).
+MM = 1e3
 #: Angle by which the drawn arc of ``k2`` extends beyond the intersections with ``k1``, rad.
 ARC_MARGIN = np.radians(25.0)
 
@@ -163,7 +180,8 @@ def _rz_rx90(angle: float) -> NDArray[np.float64]:
 
 
 def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
-                   design: Design | None = None, *, slot: int = 0) -> RobotGeometry:
+                   design: Design | None = None, *, slot: int = 0,
+                   fk: FKSolution | None = None) -> RobotGeometry:
     """Positions of all parts of the robot for actuator values ``q`` in one FK slot.
 
     Parameters
@@ -177,6 +195,10 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     slot : int, keyword-only
         Forward-kinematics slot 0..15 (0: mode +1, ``p > 0``, ``sin u2 > 0``,
         ``sin u4 > 0``).
+    fk : FKSolution, keyword-only, optional
+        The result of ``forward_kinematics(q, T_b_e, design)`` for this ``q`` (slots of
+        shape (16,)), e.g. from the numba backend, to draw several slots of one ``q``
+        without solving it again; by default it is solved here.
 
     Returns
     -------
@@ -209,7 +231,13 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
         raise InvalidInputError(f"slot: expected an integer in 0..15, got {slot!r}")
     slot = int(slot)
     T = resolve_rcm_frame(T_b_e, design)
-    sol = forward_kinematics(q, T, design, errors="flag")
+    if fk is None:
+        sol = forward_kinematics(q, T, design, errors="flag")
+    elif np.shape(fk.valid) != (16,):
+        raise InvalidInputError(f"fk: expected the solution of one q (valid of shape (16,)), "
+                                f"got valid of shape {np.shape(fk.valid)}")
+    else:
+        sol = fk
     if not sol.valid[slot]:
         why = Reason(int(sol.reason[slot])).name
         raise error_for_reason(int(sol.reason[slot]), f"slot {slot} of q = {q.tolist()} m ({why})")
@@ -257,3 +285,31 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
         intersections=intersections,
         rail=np.array([[lo - 0.05, 0.0, 0.0], [hi + 0.05, 0.0, 0.0]]), design=design,
         T_b_e=T.copy())
+
+
+def slot_label(g: RobotGeometry) -> str:
+    """Short text of a slot: ``slot 3: mode +1, p>0, U-, S-``."""
+    return (f"slot {g.slot}: mode {g.mode:+d}, p{'>' if g.p_sign > 0 else '<'}0, "
+            f"U{'+' if g.ujoint > 0 else '-'}, S{'+' if g.wrist > 0 else '-'}")
+
+
+def arc_points(centre: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64],
+               radius: float, n: int = 16) -> NDArray[np.float64]:
+    """Great-circle arc of ``radius`` about ``centre`` from direction a to direction b, (n, 3)."""
+    a = a / np.linalg.norm(a)
+    b = b / np.linalg.norm(b)
+    ang = float(np.arccos(np.clip(a @ b, -1.0, 1.0)))
+    perp = b - (a @ b) * a
+    norm = np.linalg.norm(perp)
+    if norm == 0:
+        return np.repeat((centre + radius * a)[None], n, axis=0)
+    t = np.linspace(0.0, ang, n)[:, None]
+    return centre + radius * (np.cos(t) * a + np.sin(t) * perp / norm)
+
+
+def cube_limits(lo: NDArray[np.float64], hi: NDArray[np.float64], pad: float = 0.05
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """A cube ``(lo, hi)`` around the box ``lo``, ``hi`` (m) with a margin ``pad`` (m)."""
+    c = 0.5 * (lo + hi)
+    half = 0.5 * float(np.max(hi - lo)) + pad
+    return c - half, c + half

@@ -23,30 +23,128 @@ from .._validation import check_array
 from ..design import Design, resolve_design
 from ..robot import forward_kinematics
 from ..robot._setup import resolve_rcm_frame
-from ._geometry import RobotGeometry, robot_geometry
-from ._mpl import ARC_RADIUS, COLORS, FRAME_LENGTH, arc_points, slot_label
+from ._geometry import (
+    ARC_RADIUS,
+    COLORS,
+    FRAME_LENGTH,
+    MM,
+    RobotGeometry,
+    arc_points,
+    robot_geometry,
+    slot_label,
+)
 
-__all__ = ["robot_figure", "write_html", "HTML_DIV_ID"]
+__all__ = ["robot_figure", "write_html", "HTML_DIV_ID", "screen_points", "label_boxes",
+           "text_positions"]
 
 #: ``id`` of the plot's ``<div>`` in pages written by :func:`write_html`.
 HTML_DIV_ID = "athenakin-robot"
 
 
-def _polyline(segments: list[tuple[NDArray[np.float64], ...]]) -> tuple[list[Any], ...]:
-    """x, y, z lists of several polylines separated by None (one plotly trace)."""
+#: Default camera of the scene (plotly's eye, in units of the half box); far enough that
+#: the whole axis box stays inside the page.
+CAMERA_EYE = {"x": 1.55, "y": -1.65, "z": 0.8}
+#: plotly text positions tried for a point label, each with its direction on the screen.
+_TEXT_POSITIONS = {"top right": (1, 1), "top left": (-1, 1), "bottom right": (1, -1),
+                   "bottom left": (-1, -1), "middle right": (1, 0), "middle left": (-1, 0),
+                   "top center": (0, 1), "bottom center": (0, -1)}
+#: Estimated size of a label character and line on the page (px, 12 px font).
+_CHAR_PX, _LINE_PX = 7.0, 14.0
+
+
+def _polyline(segments: list[NDArray[np.float64]]) -> tuple[list[Any], ...]:
+    """x, y, z lists (mm) of several polylines (m) separated by None (one plotly trace)."""
     xs: list[Any] = []
     ys: list[Any] = []
     zs: list[Any] = []
     for pts in segments:
-        arr = np.asarray(pts)
+        arr = np.asarray(pts) * MM
         xs += arr[:, 0].tolist() + [None]
         ys += arr[:, 1].tolist() + [None]
         zs += arr[:, 2].tolist() + [None]
     return xs, ys, zs
 
 
-def _traces(g: RobotGeometry, *, show_frames: bool, frame_length: float) -> list[dict[str, Any]]:
-    """Scatter3d trace specs (plotly dicts) of one solution."""
+def screen_points(pts: NDArray[np.float64], lo: NDArray[np.float64], hi: NDArray[np.float64],
+                  *, eye: dict[str, float] = CAMERA_EYE, size: float = 600.0
+                  ) -> NDArray[np.float64]:
+    """Approximate page position (px, y up) of points in a cubic scene seen from ``eye``.
+
+    An orthographic view along ``eye`` of the scene box ``lo``..``hi`` (m) scaled to
+    ``size`` px; plotly's perspective differs by a few per cent, enough to decide
+    on which side of its point each label goes.
+    """
+    e = np.array([eye["x"], eye["y"], eye["z"]])
+    e /= np.linalg.norm(e)
+    right = np.cross([0.0, 0.0, 1.0], e)
+    right /= np.linalg.norm(right)
+    up = np.cross(e, right)
+    u = (np.atleast_2d(pts) - 0.5 * (lo + hi)) / float(np.max(hi - lo))
+    return size * np.column_stack([u @ right, u @ up])
+
+
+def label_boxes(xy: NDArray[np.float64], texts: list[str], positions: list[str],
+                marker_px: float = 6.0) -> NDArray[np.float64]:
+    """Estimated page boxes ``(x0, y0, x1, y1)`` (px) of labels at plotly text positions."""
+    out = []
+    for (x, y), t, pos in zip(xy, texts, positions, strict=True):
+        dx, dy = _TEXT_POSITIONS[pos]
+        w, h = _CHAR_PX * len(t), _LINE_PX
+        cx = x + dx * (marker_px + w / 2)
+        cy = y + dy * (marker_px + h / 2)
+        out.append([cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2])
+    return np.array(out).reshape(-1, 4)
+
+
+def _overlap(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
+    w = min(a[2], b[2]) - max(a[0], b[0])
+    h = min(a[3], b[3]) - max(a[1], b[1])
+    return max(w, 0.0) * max(h, 0.0)
+
+
+def text_positions(xy: NDArray[np.float64], texts: list[str]) -> list[str]:
+    """A plotly text position per label such that the estimated labels do not overlap.
+
+    Greedy, in order: each label takes the first of the 8 positions whose box
+    overlaps no label placed before it and no other point (or, failing that, the
+    position with the least overlap).
+    """
+    half = 5.0
+    points = [np.r_[p - half, p + half] for p in xy]
+    placed: list[NDArray[np.float64]] = []
+    out = []
+    for i, (p, t) in enumerate(zip(xy, texts, strict=True)):
+        best: tuple[float, str, NDArray[np.float64]] | None = None
+        for pos in _TEXT_POSITIONS:
+            box = label_boxes(p[None], [t], [pos])[0]
+            cost = (sum(_overlap(box, b) for b in placed)
+                    + sum(_overlap(box, b) for j, b in enumerate(points) if j != i))
+            if best is None or cost < best[0]:
+                best = (cost, pos, box)
+            if cost == 0.0:
+                break
+        assert best is not None
+        out.append(best[1])
+        placed.append(best[2])
+    return out
+
+
+def _hover(name: str) -> str:
+    return (f"<b>{name}</b><br>x<sub>b</sub> = %{{x:.1f}} mm<br>y<sub>b</sub> = %{{y:.1f}} mm"
+            "<br>z<sub>b</sub> = %{z:.1f} mm<extra></extra>")
+
+
+#: Labelled points of the view: key in :attr:`RobotGeometry.points`, text, name in the hover.
+POINT_LABELS = (("A", "A", "carriage A (q1)"), ("B", "B", "carriage B (q2)"),
+                ("M", "M", "M, midpoint of A and B"), ("D", "D", "D"), ("C", "C", "C"),
+                ("O_i", "O_i", "O_i"), ("O_s", "O_s", "O_s, U-joint"),
+                ("RCM", "RCM", "RCM = O_e"), ("tip", "tip", "tool tip"))
+
+
+def _traces(g: RobotGeometry, *, show_frames: bool, frame_length: float,
+            box: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+            ) -> list[dict[str, Any]]:
+    """Scatter3d trace specs (plotly dicts, coordinates in mm) of one solution."""
     P = g.points
     seg = g.segments()
 
@@ -54,7 +152,8 @@ def _traces(g: RobotGeometry, *, show_frames: bool, frame_length: float) -> list
               ) -> dict[str, Any]:
         x, y, z = _polyline(segs)
         return {"type": "scatter3d", "mode": "lines", "name": name, "x": x, "y": y, "z": z,
-                "line": {"color": color, "width": width, "dash": dash}, "hoverinfo": "name"}
+                "line": {"color": color, "width": width, "dash": dash},
+                "hovertemplate": _hover(name)}
 
     out = [
         lines("base rail (x_b)", [g.rail], COLORS["rail"], 9),
@@ -79,28 +178,48 @@ def _traces(g: RobotGeometry, *, show_frames: bool, frame_length: float) -> list
     sph = [np.stack([c - 0.4 * ARC_RADIUS * a, c + 0.4 * ARC_RADIUS * a]) for a in ax_]
     sph += [arc_points(c, ax_[k], ax_[k + 1], ARC_RADIUS) for k in range(2)]
     out.append(lines("spherical joint at the RCM (u3, u4, u5)", sph, COLORS["sphere"], 5))
-    names = ["A", "B", "M", "D", "C", "O_i", "O_s", "RCM", "tip"]
-    labels = ["A", "B", "M", "D", "C", "O_i", "O_s (U-joint)", "RCM = O_e", "tool tip"]
-    pts = np.stack([P[n] for n in names])
+    keys, labels, names = (list(t) for t in zip(*POINT_LABELS, strict=True))
+    pts = np.stack([P[k] for k in keys])
+    if show_frames:                         # the base frame's origin, labelled with M
+        keys.append("O_b")
+        labels.append("O_b")
+        names.append("O_b, origin of the base frame")
+        pts = np.vstack([pts, np.zeros(3)])
+    lo, hi = box if box is not None else g.bounds()
+    xy = screen_points(pts, lo, hi)
+    # points drawn at one place share one label (M and O_b in the reference configuration)
+    text = list(labels)
+    for i in range(len(text)):
+        for j in range(i):
+            if text[j] and np.hypot(*(xy[i] - xy[j])) < 4.0:
+                text[j] = f"{text[j]}, {text[i]}"
+                text[i] = ""
+                break
+    shown = [i for i, t in enumerate(text) if t]
+    positions = ["top center"] * len(text)
+    for i, pos in zip(shown, text_positions(xy[shown], [text[i] for i in shown]), strict=True):
+        positions[i] = pos
+    hover = [f"<b>{n}</b><br>x<sub>b</sub> = {p[0] * MM:.1f} mm<br>y<sub>b</sub> = "
+             f"{p[1] * MM:.1f} mm<br>z<sub>b</sub> = {p[2] * MM:.1f} mm"
+             for n, p in zip(names, pts, strict=True)]
+    palette = {"A": COLORS["rail"], "B": COLORS["rail"], "RCM": COLORS["sphere"],
+               "tip": COLORS["serial"], "O_b": "#222222"}
+    symbols = {"A": "square", "B": "square", "RCM": "diamond"}
+    sizes = {"A": 7, "B": 7, "M": 3, "O_i": 5, "O_s": 6, "RCM": 7, "tip": 3, "O_b": 3}
+    out.append({"type": "scatter3d", "mode": "markers+text", "name": "points (hover: mm)",
+                "x": (pts[:, 0] * MM).tolist(), "y": (pts[:, 1] * MM).tolist(),
+                "z": (pts[:, 2] * MM).tolist(), "text": text, "textposition": positions,
+                "hovertext": hover, "hoverinfo": "text",
+                "marker": {"size": [sizes.get(k, 4) for k in keys],
+                           "color": [palette.get(k, COLORS["joint"]) for k in keys],
+                           "symbol": [symbols.get(k, "circle") for k in keys]}})
     other = g.intersections[1 if g.mode > 0 else 0]
-    hover = [f"{lab}<br>({p[0]:.4f}, {p[1]:.4f}, {p[2]:.4f}) m"
-             for lab, p in zip(labels, pts, strict=True)]
-    colors = [COLORS["rail"], COLORS["rail"], COLORS["joint"], COLORS["joint"],
-              COLORS["joint"], COLORS["joint"], COLORS["joint"], COLORS["sphere"],
-              COLORS["serial"]]
-    symbols = ["square", "square", "circle", "circle", "circle", "circle", "circle", "diamond",
-               "circle"]
-    out.append({"type": "scatter3d", "mode": "markers+text", "name": "points and joints",
-                "x": pts[:, 0].tolist(), "y": pts[:, 1].tolist(), "z": pts[:, 2].tolist(),
-                "text": labels, "textposition": "top center", "hovertext": hover,
-                "hoverinfo": "text",
-                "marker": {"size": [7, 7, 3, 4, 4, 5, 6, 7, 3], "color": colors,
-                           "symbol": symbols}})
     if np.all(np.isfinite(other)):
-        out.append({"type": "scatter3d", "mode": "markers", "name": "O_i of the other mode",
-                    "x": [float(other[0])], "y": [float(other[1])], "z": [float(other[2])],
+        x, y, z = (other * MM).tolist()
+        out.append({"type": "scatter3d", "mode": "markers",
+                    "name": "O_i of the other assembly mode", "x": [x], "y": [y], "z": [z],
                     "marker": {"size": 5, "color": COLORS["joint"], "symbol": "circle-open"},
-                    "hoverinfo": "name"})
+                    "hovertemplate": _hover("O_i of the other assembly mode")})
     if show_frames:
         frames = [("O_b", g.frames["b"], 1.5), ("O_i", g.frames["i"], 1.0),
                   ("O_s", g.frames["s"], 1.0), ("O_e (RCM)", g.frames["e"], 1.0)]
@@ -108,16 +227,17 @@ def _traces(g: RobotGeometry, *, show_frames: bool, frame_length: float) -> list
             segs = [np.stack([T[:3, 3], T[:3, 3] + s * frame_length * T[:3, i]])
                     for _, T, s in frames]
             out.append(lines(f"frame axes {axis} (O_b, O_i, O_s, O_e)", segs, COLORS[axis], 5))
-        out.append({"type": "scatter3d", "mode": "text", "name": "O_b", "x": [0.0],
-                    "y": [0.0], "z": [-0.03], "text": ["O_b"], "hoverinfo": "skip"})
     return out
 
 
 def robot_figure(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
                  design: Design | None = None, *, slot: int = 0, all_slots: bool = True,
-                 show_frames: bool = True, frame_length: float = FRAME_LENGTH,
-                 title: str | None = None) -> Any:
+                 all_solutions: bool = False, show_frames: bool = True,
+                 frame_length: float = FRAME_LENGTH, title: str | None = None) -> Any:
     """Interactive plotly figure of the robot, with a menu over the FK solutions.
+
+    Coordinates are in millimetres (base frame); hovering over any point of a
+    part shows its name and coordinates.
 
     Parameters
     ----------
@@ -130,9 +250,14 @@ def robot_figure(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     all_slots : bool, keyword-only
         Include every valid solution, selectable in a drop-down menu; otherwise
         only ``slot``.
+    all_solutions : bool, keyword-only
+        Show every valid solution at once, one legend entry per slot (a click on it
+        hides or shows that solution, a double click shows it alone); the menu
+        then offers "all solutions" and each slot.
     show_frames : bool, keyword-only
         Triads of ``O_b``, ``O_i``, ``O_s``, ``O_e``.
     frame_length : float, keyword-only
+        m.
     title : str, keyword-only, optional
 
     Returns
@@ -152,47 +277,64 @@ def robot_figure(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     q = check_array(REFERENCE_Q if q is None else q, "q", (3,))
     T = resolve_rcm_frame(T_b_e, design)
     first = robot_geometry(q, T, design, slot=slot)
-    if all_slots:
+    if all_slots or all_solutions:
         sol = forward_kinematics(q, T, design, errors="flag")
         slots = [int(k) for k in np.flatnonzero(sol.valid)]
     else:
         slots = [first.slot]
     geoms = {k: (first if k == first.slot else robot_geometry(q, T, design, slot=k))
              for k in slots}
-    fig = go.Figure()
-    owner: list[int] = []
-    for k in slots:
-        for tr in _traces(geoms[k], show_frames=show_frames, frame_length=frame_length):
-            tr["visible"] = k == first.slot
-            tr["legendgroup"] = tr["name"]
-            fig.add_trace(tr)
-            owner.append(k)
     los, his = zip(*(g.bounds() for g in geoms.values()), strict=True)
     lo, hi = np.min(los, axis=0), np.max(his, axis=0)
     centre, half = 0.5 * (lo + hi), 0.5 * float(np.max(hi - lo)) + 0.05
+    box = (centre - half, centre + half)
+    fig = go.Figure()
+    owner: list[int] = []
+    for k in slots:
+        for j, tr in enumerate(_traces(geoms[k], show_frames=show_frames,
+                                       frame_length=frame_length, box=box)):
+            if all_solutions:
+                tr["visible"] = True
+                tr["legendgroup"] = f"slot {k}"
+                tr["showlegend"] = j == 0
+                if j == 0:
+                    tr["legendgrouptitle"] = {"text": ""}
+                    tr["name"] = slot_label(geoms[k])
+            else:
+                tr["visible"] = k == first.slot
+                tr["legendgroup"] = tr["name"]
+            fig.add_trace(tr)
+            owner.append(k)
     axis = {"showbackground": True, "backgroundcolor": "#f4f4f6", "gridcolor": "#cccccc"}
-    qmm = ", ".join(f"{1000 * v:.0f}" for v in q)
+    qmm = ", ".join(f"{MM * v:.0f}" for v in q)
+    head = (f"ATHENA, q = ({qmm}) mm: all {len(slots)} solutions" if all_solutions
+            else f"ATHENA, q = ({qmm}) mm: {slot_label(first)}")
     fig.update_layout(
-        title={"text": title or f"ATHENA, q = ({qmm}) mm: {slot_label(first)}",
-               "x": 0.02},
-        scene={"xaxis": {**axis, "title": "x [m]",
-                         "range": [centre[0] - half, centre[0] + half]},
-               "yaxis": {**axis, "title": "y [m]",
-                         "range": [centre[1] - half, centre[1] + half]},
-               "zaxis": {**axis, "title": "z [m]",
-                         "range": [centre[2] - half, centre[2] + half]},
+        title={"text": title or head, "x": 0.02},
+        scene={"xaxis": {**axis, "title": "x_b [mm]",
+                         "range": [MM * (centre[0] - half), MM * (centre[0] + half)]},
+               "yaxis": {**axis, "title": "y_b [mm]",
+                         "range": [MM * (centre[1] - half), MM * (centre[1] + half)]},
+               "zaxis": {**axis, "title": "z_b [mm]",
+                         "range": [MM * (centre[2] - half), MM * (centre[2] + half)]},
                "aspectmode": "cube", "domain": {"x": [0.0, 0.74], "y": [0.0, 1.0]},
-               "camera": {"eye": {"x": 1.4, "y": -1.5, "z": 0.8}}},
+               "camera": {"eye": dict(CAMERA_EYE), "center": {"x": 0.0, "y": 0.0, "z": -0.15}}},
         legend={"x": 0.75, "y": 0.5, "yanchor": "middle", "font": {"size": 11}},
-        margin={"l": 0, "r": 0, "t": 50, "b": 0}, paper_bgcolor="white")
+        margin={"l": 0, "r": 0, "t": 50, "b": 0}, paper_bgcolor="white",
+        hoverlabel={"align": "left"})
+    buttons = []
+    if all_solutions:
+        buttons.append({"label": f"all {len(slots)} solutions", "method": "update",
+                        "args": [{"visible": [True] * len(owner)}, {"title.text": head}]})
     if len(slots) > 1:
-        buttons = [{"label": slot_label(geoms[k]), "method": "update",
-                    "args": [{"visible": [o == k for o in owner]},
-                             {"title.text": f"ATHENA, q = ({qmm}) mm: {slot_label(geoms[k])}"}]}
-                   for k in slots]
+        buttons += [{"label": slot_label(geoms[k]), "method": "update",
+                     "args": [{"visible": [o == k for o in owner]},
+                              {"title.text": f"ATHENA, q = ({qmm}) mm: {slot_label(geoms[k])}"}]}
+                    for k in slots]
+        active = 0 if all_solutions else slots.index(first.slot)
         fig.update_layout(updatemenus=[{
             "buttons": buttons, "direction": "down", "x": 0.99, "xanchor": "right", "y": 0.99,
-            "yanchor": "top", "active": slots.index(first.slot), "showactive": True}])
+            "yanchor": "top", "active": active, "showactive": True}])
     return fig
 
 
@@ -200,6 +342,8 @@ def write_html(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | 
                design: Design | None = None, *, slot: int = 0,
                include_plotlyjs: bool | str = True, **kwargs: Any) -> Path:
     """Write :func:`robot_figure` as an HTML page (self-contained by default).
+
+    The page's ``<title>`` is the figure's title (``q`` and the solution shown).
 
     Parameters
     ----------
@@ -215,8 +359,13 @@ def write_html(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | 
     -------
     Path
     """
+    import html
+
     path = Path(path)
     fig = robot_figure(q, T_b_e, design, slot=slot, **kwargs)
-    fig.write_html(path, include_plotlyjs=include_plotlyjs, full_html=True, div_id=HTML_DIV_ID,
-                   config={"displaylogo": False, "responsive": True})
+    text = fig.to_html(include_plotlyjs=include_plotlyjs, full_html=True, div_id=HTML_DIV_ID,
+                       config={"displaylogo": False, "responsive": True})
+    page_title = html.escape(fig.layout.title.text or "ATHENA")
+    text = text.replace("<head>", f"<head>\n<title>{page_title}</title>", 1)
+    path.write_text(text, encoding="utf-8")
     return path

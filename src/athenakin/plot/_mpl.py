@@ -17,47 +17,33 @@ from ..design import Design, resolve_design
 from ..errors import Reason
 from ..robot import forward_kinematics
 from ..robot._setup import resolve_rcm_frame
-from ._geometry import RobotGeometry, robot_geometry
+from ._geometry import (
+    ARC_RADIUS,
+    COLORS,
+    FRAME_LENGTH,
+    MM,
+    VIEW,
+    RobotGeometry,
+    arc_points,
+    cube_limits,
+    robot_geometry,
+    slot_label,
+)
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
     from mpl_toolkits.mplot3d.axes3d import Axes3D as Axes
 
-__all__ = ["plot_robot", "plot_fk_solutions", "save_view", "COLORS", "slot_label",
-           "arc_points"]
+__all__ = ["plot_robot", "plot_fk_solutions", "save_view", "place_labels", "legend_handles"]
 
-#: Colours of the parts (paper Fig. 2: parallel module blue, serial part red).
-COLORS = {
-    "rail": "#555555", "parallel": "#1f4fbf", "actuator": "#f28e0f", "joint": "#7f7f7f",
-    "serial": "#cc2222", "sphere": "#8e44ad", "circle_k1": "#1f4fbf", "circle_k2": "#f28e0f",
-    "x": "#d62728", "y": "#2ca02c", "z": "#1f77b4",
-}
-#: Default length of drawn frame axes, m.
-FRAME_LENGTH = 0.08
-#: Radius of the drawn spherical-joint arcs about the RCM, m.
-ARC_RADIUS = 0.07
-#: Default view direction (elevation, azimuth), degrees.
-VIEW = (20.0, -35.0)
-
-
-def slot_label(g: RobotGeometry) -> str:
-    """Short text of a slot: ``slot 3: mode +1, p>0, U-, S-``."""
-    return (f"slot {g.slot}: mode {g.mode:+d}, p{'>' if g.p_sign > 0 else '<'}0, "
-            f"U{'+' if g.ujoint > 0 else '-'}, S{'+' if g.wrist > 0 else '-'}")
-
-
-def arc_points(centre: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64],
-               radius: float, n: int = 16) -> NDArray[np.float64]:
-    """Great-circle arc of ``radius`` about ``centre`` from direction a to direction b, (n, 3)."""
-    a = a / np.linalg.norm(a)
-    b = b / np.linalg.norm(b)
-    ang = float(np.arccos(np.clip(a @ b, -1.0, 1.0)))
-    perp = b - (a @ b) * a
-    norm = np.linalg.norm(perp)
-    if norm == 0:
-        return np.repeat((centre + radius * a)[None], n, axis=0)
-    t = np.linspace(0.0, ang, n)[:, None]
-    return centre + radius * (np.cos(t) * a + np.sin(t) * perp / norm)
+#: Font size of the point labels, pt.
+LABEL_SIZE = 8.5
+#: Distances (pt) at which a label is tried around its point, nearest first.
+LABEL_RADII = (5.0, 11.0, 18.0, 28.0, 40.0)
+#: Half-size (px at 100 dpi) of the box kept free around each labelled point.
+MARKER_HALF = 4.0
+#: Points that project closer than this (px at 100 dpi) share one label.
+MERGE_PX = 6.0
 
 
 def _point(ax: Axes, p: ArrayLike, **kw: Any) -> None:
@@ -74,25 +60,176 @@ def _line(ax: Axes, a: ArrayLike, b: ArrayLike, **kw: Any) -> None:
     ax.plot([a[0], b[0]], [a[1], b[1]], [a[2], b[2]], **kw)
 
 
-def _triad(ax: Axes, T: NDArray[np.float64], length: float, name: str | None,
-           labels: bool) -> None:
+def _triad(ax: Axes, T: NDArray[np.float64], length: float) -> None:
     o = T[:3, 3]
     for i, c in enumerate("xyz"):
         _line(ax, o, o + length * T[:3, i], color=COLORS[c], lw=1.6, solid_capstyle="round")
-    if labels and name:
-        e = o + 0.6 * length * (T[:3, 0] - T[:3, 2])
-        ax.text(e[0], e[1], e[2], name, fontsize=8, color="#222222")
 
 
-def _cube_limits(lo: NDArray[np.float64], hi: NDArray[np.float64], pad: float = 0.05
-                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    c = 0.5 * (lo + hi)
-    half = 0.5 * float(np.max(hi - lo)) + pad
-    return c - half, c + half
+def legend_handles(*, show_frames: bool = True, show_circles: bool = True) -> list[Any]:
+    """Proxy artists naming the colour of every part (for ``ax.legend(handles=...)``)."""
+    from matplotlib.lines import Line2D
+
+    h = [Line2D([], [], color=COLORS["rail"], lw=4, marker="s", ms=6,
+                label="rail, carriages A, B (q1, q2)"),
+         Line2D([], [], color=COLORS["parallel"], lw=2.6, label="parallel module"),
+         Line2D([], [], color=COLORS["actuator"], lw=3.4, label="actuator q3"),
+         Line2D([], [], color="#333333", lw=2.5, marker="o", mfc=COLORS["joint"], mec="k",
+                label="U-joint at O_s (fork: +u2)"),
+         Line2D([], [], color=COLORS["serial"], lw=3.0, label="instrument"),
+         Line2D([], [], color=COLORS["sphere"], lw=2.2, marker="*", ms=9,
+                label="RCM, spherical joint u3-u5")]
+    if show_circles:
+        h.append(Line2D([], [], color=COLORS["circle_k1"], lw=0.9, ls="--",
+                        label="circles k1 (blue), k2 (orange)"))
+    if show_frames:
+        h += [Line2D([], [], color=COLORS[c], lw=1.6, label=f"frame axis {c}") for c in "xyz"]
+    return h
 
 
-def _draw(ax: Axes, g: RobotGeometry, *, show_frames: bool, show_labels: bool,
-          show_circles: bool, frame_length: float) -> None:
+def _renderer(fig: Any) -> Any:
+    get = getattr(fig.canvas, "get_renderer", None)
+    if get is not None:
+        return get()
+    fig.draw_without_rendering()                      # pragma: no cover - non-Agg canvas
+    return fig._get_renderer()                        # pragma: no cover
+
+
+def _project(ax: Axes, pts: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Display coordinates (px) of 3-D points, shape (n, 2), with the axes' current view."""
+    from mpl_toolkits.mplot3d import proj3d
+
+    pts = np.atleast_2d(pts)
+    x, y, _ = proj3d.proj_transform(pts[:, 0], pts[:, 1], pts[:, 2], ax.get_proj())
+    return np.asarray(ax.transData.transform(np.column_stack([x, y])))
+
+
+def _overlap(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Overlap areas of box ``a`` (x0, y0, x1, y1) with each of the boxes ``b``, shape (n,)."""
+    b = np.asarray(b, dtype=float).reshape(-1, 4)
+    w = np.minimum(a[2], b[:, 2]) - np.maximum(a[0], b[:, 0])
+    h = np.minimum(a[3], b[:, 3]) - np.maximum(a[1], b[:, 1])
+    return np.asarray(np.maximum(w, 0.0) * np.maximum(h, 0.0))
+
+
+def _sample(poly: NDArray[np.float64], step: float) -> NDArray[np.float64]:
+    """Points along a polyline (n, 2) no farther apart than ``step``."""
+    out = [poly[:1]]
+    for a, b in zip(poly[:-1], poly[1:], strict=True):
+        n = max(int(np.ceil(np.hypot(*(b - a)) / step)), 1)
+        out.append(a + np.linspace(0.0, 1.0, n + 1)[1:, None] * (b - a))
+    return np.concatenate(out)
+
+
+def place_labels(ax: Axes, items: list[tuple[str, NDArray[np.float64], str]], *,
+                 lines: list[NDArray[np.float64]] | None = None,
+                 boxes: list[NDArray[np.float64]] | None = None,
+                 fontsize: float = LABEL_SIZE) -> list[Any]:
+    """Label 3-D points so that no two labels overlap and every label lies in the axes.
+
+    Points that project to nearly the same pixel share one label (``"M, O_b"``).
+    Each label is tried at 8 directions around its point at growing distances
+    (:data:`LABEL_RADII`) and goes to the place of least cost: overlap with labels
+    placed before it and with ``boxes`` (weight 100), with the labelled points
+    (weight 10) and with the drawn ``lines`` (weight 1); a place outside the
+    axes is never taken while another is free. A label placed far from its point
+    gets a thin leader line. The labels are 2-D annotations at the points'
+    projections, so place them after the limits and view are final.
+
+    Parameters
+    ----------
+    ax : Axes3D
+    items : list of (str, ndarray shape (3,), str)
+        Text, point (data units) and colour, most important first.
+    lines : list of ndarray shape (n, 3), optional
+        Drawn polylines (data units) that labels keep clear of where they can.
+    boxes : list of ndarray shape (4,), optional
+        Display boxes ``(x0, y0, x1, y1)`` (px) that labels avoid (e.g. a legend).
+    fontsize : float
+
+    Returns
+    -------
+    list of matplotlib.text.Annotation
+    """
+    fig = ax.figure
+    ax.apply_aspect()
+    renderer = _renderer(fig)
+    scale = fig.dpi / 100.0
+    anchors = _project(ax, np.stack([p for _, p, _ in items])) if items else np.zeros((0, 2))
+    merged: list[tuple[str, NDArray[np.float64], NDArray[np.float64], str]] = []
+    for (text, p, color), xy in zip(items, anchors, strict=True):
+        for k, (t0, p0, xy0, c0) in enumerate(merged):
+            if np.hypot(*(xy - xy0)) < MERGE_PX * scale:
+                merged[k] = (f"{t0}, {text}", p0, xy0, c0)
+                break
+        else:
+            merged.append((text, p, xy, color))
+    half = MARKER_HALF * scale
+    marks = np.array([[x - half, y - half, x + half, y + half] for _, _, (x, y), _ in merged])
+    hard = [np.asarray(b, dtype=float).reshape(4) for b in boxes or []]
+    soft = np.zeros((0, 4))
+    if lines:
+        pts = np.concatenate([_sample(_project(ax, np.asarray(ln, dtype=float)), 3.0 * scale)
+                              for ln in lines])
+        lw = 1.5 * scale
+        soft = np.column_stack([pts - lw, pts + lw])
+    frame = ax.bbox.extents
+    inv = ax.transData.inverted()
+    out = []
+    dirs = [(1, 1), (1, -1), (-1, 1), (-1, -1), (1, 0), (-1, 0), (0, 1), (0, -1)]
+    for text, _, xy, color in merged:
+        x2, y2 = inv.transform(xy)
+        ann = ax.annotate(text, xy=(x2, y2), xycoords="data", xytext=(0, 0),
+                          textcoords="offset points", fontsize=fontsize, color=color,
+                          annotation_clip=False, zorder=20)
+        best: tuple[float, Any, str, str, NDArray[np.float64]] | None = None
+        for r in LABEL_RADII:
+            for dx, dy in dirs:
+                ha = "left" if dx > 0 else "right" if dx < 0 else "center"
+                va = "bottom" if dy > 0 else "top" if dy < 0 else "center"
+                off = (r * dx / np.hypot(dx, dy), r * dy / np.hypot(dx, dy))
+                ann.set(ha=ha, va=va)
+                ann.xyann = off
+                box = np.asarray(ann.get_window_extent(renderer).extents)
+                cost = (100.0 * float(sum(_overlap(box, b).sum() for b in hard))
+                        + 10.0 * float(_overlap(box, marks).sum())
+                        + float(_overlap(box, soft).sum()) + 0.5 * r)
+                inside = (box[0] >= frame[0] and box[1] >= frame[1] and box[2] <= frame[2]
+                          and box[3] <= frame[3])
+                cost += 0.0 if inside else 1e12
+                if best is None or cost < best[0]:
+                    best = (cost, off, ha, va, box)
+        assert best is not None
+        _, off, ha, va, box = best
+        ann.set(ha=ha, va=va)
+        ann.xyann = off
+        if np.hypot(*off) > LABEL_RADII[1] + 1:         # far from its point: a leader line
+            ann.remove()
+            ann = ax.annotate(text, xy=(x2, y2), xycoords="data", xytext=off,
+                              textcoords="offset points", fontsize=fontsize, color=color,
+                              ha=ha, va=va, annotation_clip=False, zorder=20,
+                              arrowprops={"arrowstyle": "-", "color": "0.5", "lw": 0.6,
+                                          "shrinkA": 1.0, "shrinkB": 3.0})
+        hard.append(box)
+        out.append(ann)
+    return out
+
+
+def _labels(g: RobotGeometry, *, show_frames: bool) -> list[tuple[str, NDArray[np.float64], str]]:
+    P = g.points
+    dark = "#111111"
+    items = [("RCM" if not show_frames else "$O_e$ (RCM)", P["RCM"], COLORS["sphere"]),
+             ("$O_s$", P["O_s"], dark), ("$O_i$", P["O_i"], dark), ("tip", P["tip"],
+                                                                   COLORS["serial"]),
+             ("A", P["A"], dark), ("B", P["B"], dark), ("M", P["M"], dark),
+             ("D", P["D"], dark), ("C", P["C"], dark)]
+    if show_frames:
+        items.append(("$O_b$", g.frames["b"][:3, 3], dark))
+    return items
+
+
+def _draw(ax: Axes, g: RobotGeometry, *, show_frames: bool, show_circles: bool,
+          frame_length: float, joint_scale: float = 1.0) -> None:
     P = g.points
     seg = g.segments()
     _line(ax, g.rail[0], g.rail[1], color=COLORS["rail"], lw=4, alpha=0.8)
@@ -118,45 +255,61 @@ def _draw(ax: Axes, g: RobotGeometry, *, show_frames: bool, show_labels: bool,
     _point(ax, P["O_s"], s=55, marker="o", color=COLORS["joint"], edgecolor="k",
            depthshade=False)  # U-joint
     o, (a1, a2) = P["O_s"], g.ujoint_axes
-    _line(ax, o - 0.03 * a1, o + 0.03 * a1, color="#333333", lw=2.0)     # u1 axis
-    _line(ax, o, o + 0.06 * a2, color="#333333", lw=3.0)                 # fork along +u2
+    js = joint_scale
+    _line(ax, o - 0.03 * js * a1, o + 0.03 * js * a1, color="#333333", lw=2.0)  # u1 axis
+    _line(ax, o, o + 0.06 * js * a2, color="#333333", lw=3.0)                   # fork, +u2
     _point(ax, P["tip"], s=14, color=COLORS["serial"], depthshade=False)
     _point(ax, P["RCM"], s=90, marker="*", color=COLORS["sphere"], depthshade=False)
     # the spherical joint at the RCM: its three axes and the arcs between them
     c = P["RCM"]
     ax_ = g.wrist_axes
+    r = ARC_RADIUS * js
     for k in range(3):
-        _line(ax, c - 0.4 * ARC_RADIUS * ax_[k], c + 0.4 * ARC_RADIUS * ax_[k],
-              color=COLORS["sphere"], lw=1.2)
+        _line(ax, c - 0.4 * r * ax_[k], c + 0.4 * r * ax_[k], color=COLORS["sphere"], lw=1.2)
     for k in range(2):
-        ax.plot(*arc_points(c, ax_[k], ax_[k + 1], ARC_RADIUS).T, color=COLORS["sphere"], lw=2.2)
+        ax.plot(*arc_points(c, ax_[k], ax_[k + 1], r).T, color=COLORS["sphere"], lw=2.2)
     if show_frames:
-        _triad(ax, g.frames["b"], frame_length, "$O_b$", show_labels)
-        _triad(ax, g.frames["i"], frame_length, "$O_i$", show_labels)
-        _triad(ax, g.frames["s"], frame_length, "$O_s$", show_labels)
-        _triad(ax, g.frames["e"], frame_length, "$O_e$ (RCM)", show_labels)
-    if show_labels:
-        for name in ("A", "B", "D", "C", "M"):
-            p = P[name]
-            ax.text(p[0], p[1], p[2] - 0.035, name, fontsize=9, color="#111111")
-        if not show_frames:
-            for name, key in (("$O_i$", "O_i"), ("$O_s$", "O_s"), ("RCM", "RCM")):
-                p = P[key]
-                ax.text(p[0], p[1], p[2] + 0.02, name, fontsize=9, color="#111111")
-        ax.text(P["tip"][0], P["tip"][1], P["tip"][2], " tip", fontsize=8,
-                color=COLORS["serial"])
+        for key in ("b", "i", "s", "e"):
+            _triad(ax, g.frames[key], frame_length)
+
+
+def _drawn_lines(g: RobotGeometry, *, show_frames: bool, show_circles: bool,
+                 frame_length: float, joint_scale: float = 1.0) -> list[NDArray[np.float64]]:
+    """Every polyline the view draws (m), which labels keep clear of."""
+    c, r = g.points["RCM"], ARC_RADIUS * joint_scale
+    out = [np.stack(ab) for ab in g.segments().values()] + [g.rail]
+    out += [arc_points(c, g.wrist_axes[k], g.wrist_axes[k + 1], r) for k in range(2)]
+    out += [np.stack([c - 0.4 * r * a, c + 0.4 * r * a]) for a in g.wrist_axes]
+    o = g.points["O_s"]
+    out.append(np.stack([o, o + 0.06 * joint_scale * g.ujoint_axes[1]]))
+    if show_circles:
+        out += [g.k1, g.k2_arc]
+    if show_frames:
+        for key in ("b", "i", "s", "e"):
+            T = g.frames[key]
+            out += [np.stack([T[:3, 3], T[:3, 3] + frame_length * T[:3, i]]) for i in range(3)]
+    return out
+
+
+def _mm_axes(ax: Axes) -> None:
+    """Tick labels in mm (data stay in m) and axis labels that say so."""
+    from matplotlib.ticker import FuncFormatter, MaxNLocator
+
+    fmt = FuncFormatter(lambda v, _pos: f"{v * MM:.0f}")
+    for axis, name in ((ax.xaxis, "x"), (ax.yaxis, "y"), (ax.zaxis, "z")):
+        axis.set_major_locator(MaxNLocator(5))
+        axis.set_major_formatter(fmt)
+        axis.set_label_text(f"{name}$_b$ [mm]", fontsize=8)
 
 
 def _style(ax: Axes, lo: NDArray[np.float64], hi: NDArray[np.float64],
-           view: tuple[float, float]) -> None:
+           view: tuple[float, float], zoom: float = 0.95, cube: bool = True) -> None:
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_zlim(lo[2], hi[2])
-    ax.set_box_aspect((1, 1, 1), zoom=1.1)
-    ax.set_xlabel("x [m]", fontsize=8)
-    ax.set_ylabel("y [m]", fontsize=8)
-    ax.set_zlabel("z [m]", fontsize=8)
-    ax.tick_params(labelsize=7)
+    ax.set_box_aspect((1, 1, 1) if cube else tuple(hi - lo), zoom=zoom)
+    _mm_axes(ax)
+    ax.tick_params(labelsize=7, pad=0)
     ax.view_init(elev=view[0], azim=view[1])
 
 
@@ -164,9 +317,10 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
                design: Design | None = None, *, slot: int = 0,
                geometry: RobotGeometry | None = None, ax: Axes | None = None,
                show_frames: bool = True, show_labels: bool = True, show_circles: bool = True,
-               frame_length: float = FRAME_LENGTH, view: tuple[float, float] = VIEW,
-               limits: tuple[ArrayLike, ArrayLike] | None = None, title: str | None = None
-               ) -> Axes:
+               show_legend: bool = True, frame_length: float = FRAME_LENGTH,
+               view: tuple[float, float] = VIEW,
+               limits: tuple[ArrayLike, ArrayLike] | None = None, title: str | None = None,
+               joint_scale: float = 1.0) -> Axes:
     """Draw the robot in one forward-kinematics solution on a 3-D matplotlib axes.
 
     Shows the base rail with carriages A and B, the bars of the parallel module
@@ -174,7 +328,9 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     the intermediate and ``O_s`` frames, the U-joint at ``O_s``, the instrument
     (red) through the RCM, the spherical joint at the RCM (purple: its three axes
     and the arcs between them, the kinematic equivalent of the spherical five-bar)
-    and the RCM frame E.
+    and the RCM frame E. Lengths are drawn in metres and labelled in millimetres
+    on every axis; labels are placed so that none overlaps another
+    (:func:`place_labels`).
 
     Parameters
     ----------
@@ -189,16 +345,19 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
         Draw this instead of computing it from ``q``, ``T_b_e``, ``design``, ``slot``.
     ax : mpl_toolkits.mplot3d.Axes3D, keyword-only, optional
         Axes to draw on (a new figure otherwise).
-    show_frames, show_labels, show_circles : bool, keyword-only
-        Frame triads (x red, y green, z blue), text labels, circles ``k1``/``k2``.
+    show_frames, show_labels, show_circles, show_legend : bool, keyword-only
+        Frame triads (x red, y green, z blue), text labels, circles ``k1``/``k2``,
+        the legend of the colours.
     frame_length : float, keyword-only
         Length of the drawn frame axes, m.
     view : (float, float), keyword-only
         Elevation and azimuth, degrees.
     limits : (array-like, array-like), keyword-only, optional
-        Axis box ``(lo, hi)`` (each shape (3,)); default: a cube around the robot.
+        Axis box ``(lo, hi)`` (each shape (3,), m); default: a cube around the robot.
     title : str, keyword-only, optional
         Default: ``q`` and the slot's labels.
+    joint_scale : float, keyword-only
+        Size factor of the U-joint fork and the spherical-joint arcs (the branch cues).
 
     Returns
     -------
@@ -215,16 +374,27 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     if ax is None:
         fig = plt.figure(figsize=(7.0, 6.6))
         ax = fig.add_subplot(projection="3d")
-        fig.subplots_adjust(left=0.0, right=0.96, bottom=0.02, top=0.92)
-    _draw(ax, g, show_frames=show_frames, show_labels=show_labels, show_circles=show_circles,
-          frame_length=frame_length)
-    lo, hi = (_cube_limits(*g.bounds()) if limits is None else
+        fig.subplots_adjust(left=0.02, right=0.93, bottom=0.04, top=0.93)
+    _draw(ax, g, show_frames=show_frames, show_circles=show_circles,
+          frame_length=frame_length, joint_scale=joint_scale)
+    lo, hi = (cube_limits(*g.bounds()) if limits is None else
               (np.asarray(limits[0], float), np.asarray(limits[1], float)))
     _style(ax, lo, hi, view)
     if title is None:
-        qmm = ", ".join(f"{1000 * v:.0f}" for v in g.q)
+        qmm = ", ".join(f"{MM * v:.0f}" for v in g.q)
         title = f"q = ({qmm}) mm\n{slot_label(g)}"
     ax.set_title(title, fontsize=9)
+    boxes = []
+    if show_legend:
+        leg = ax.legend(handles=legend_handles(show_frames=show_frames,
+                                               show_circles=show_circles),
+                        loc="upper left", fontsize=6.5, framealpha=0.9, borderaxespad=0.2)
+        ax.apply_aspect()
+        boxes.append(np.asarray(leg.get_window_extent(_renderer(ax.figure)).extents))
+    if show_labels:
+        drawn = _drawn_lines(g, show_frames=show_frames, show_circles=show_circles,
+                             frame_length=frame_length, joint_scale=joint_scale)
+        place_labels(ax, _labels(g, show_frames=show_frames), lines=drawn, boxes=boxes)
     return ax
 
 
@@ -236,8 +406,11 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
 
     Row ``m * 2 + r`` (assembly mode, sign of ``p``), column ``2 b + w`` (U-joint and
     spherical-joint branches); that is, slot ``k`` is at row ``k // 4``, column
-    ``k % 4``. Every panel uses the same axis box. A slot without a solution shows
-    its reason instead.
+    ``k % 4``. Every panel uses the same axis box, fitted tightly around all the
+    solutions, and a title naming its assembly mode and branch signs; the U-joint
+    fork (along ``+u2``) and the spherical-joint arcs, which tell the branches of
+    one row apart, are drawn twice their usual size. A slot without a solution
+    shows its reason instead. One legend names the colours.
 
     Parameters
     ----------
@@ -265,9 +438,10 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
     geoms: dict[int, RobotGeometry] = {}
     for k in map(int, np.flatnonzero(sol.valid)):
         geoms[k] = robot_geometry(q, T, design, slot=k)
+    pad = 0.01
     if geoms:
         los, his = zip(*(g.bounds() for g in geoms.values()), strict=True)
-        lo, hi = _cube_limits(np.min(los, axis=0), np.max(his, axis=0))
+        lo, hi = np.min(los, axis=0) - pad, np.max(his, axis=0) + pad
     else:
         lo, hi = -np.ones(3), np.ones(3)
     if fig is None:
@@ -275,25 +449,36 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
     for k in range(16):
         ax = fig.add_subplot(4, 4, k + 1, projection="3d")
         if k in geoms:
-            plot_robot(geometry=geoms[k], ax=ax, show_frames=show_frames, show_labels=False,
-                       limits=(lo, hi), view=view, title=slot_label(geoms[k]),
-                       frame_length=0.08)
-            for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
-                axis.set_ticklabels([])
-                axis.label.set_visible(False)
-            ax.title.set_fontsize(11)
+            g = geoms[k]
+            plot_robot(geometry=g, ax=ax, show_frames=show_frames, show_labels=False,
+                       show_legend=False, limits=(lo, hi), view=view, title="",
+                       frame_length=0.08, joint_scale=2.0)
+            ax.set_box_aspect(tuple(hi - lo), zoom=1.45)
+            ax.set_axis_off()                   # no panes: the robot fills the panel
+            ax.set_title(_panel_title(g), fontsize=10.5, y=0.99, va="top")
         else:
             ax.set_axis_off()
             ax.text2D(0.5, 0.5, f"slot {k}\nno solution:\n{Reason(int(sol.reason[k])).name}",
                       ha="center", va="center", transform=ax.transAxes, fontsize=10)
-    qmm = ", ".join(f"{1000 * v:.0f}" for v in q)
+    qmm = ", ".join(f"{MM * v:.0f}" for v in q)
     fig.suptitle(title or f"ATHENA: the {len(geoms)} forward-kinematics solutions of "
                  f"q = ({qmm}) mm", fontsize=15)
-    fig.text(0.5, 0.005, "rows: assembly mode and sign of p; columns: U-joint branch (fork at "
-             "O_s) and spherical-joint branch (purple arcs at the RCM); same axis box in every "
-             "panel", ha="center", fontsize=11)
-    fig.subplots_adjust(left=0.0, right=1.0, bottom=0.02, top=0.95, wspace=0.0, hspace=0.05)
+    fig.legend(handles=legend_handles(show_frames=show_frames), loc="lower center", ncol=4,
+               fontsize=10, frameon=False, bbox_to_anchor=(0.5, 0.022))
+    fig.text(0.5, 0.004, "rows: assembly mode and sign of p; columns: U-joint branch (sign of "
+             "sin u2: the fork at O_s points along +u2) and spherical-joint branch (sign of "
+             "sin u4: the purple arcs at the RCM); one axis box (mm) in every panel",
+             ha="center", fontsize=10)
+    fig.subplots_adjust(left=0.0, right=1.0, bottom=0.065, top=0.955, wspace=0.0, hspace=0.0)
     return fig
+
+
+def _panel_title(g: RobotGeometry) -> str:
+    """Two lines: slot, assembly mode and sign of p; the two branch signs in words."""
+    sgn = {1: "+", -1: "-"}
+    return (f"slot {g.slot}: mode {g.mode:+d}, p {'>' if g.p_sign > 0 else '<'} 0\n"
+            f"U-joint {sgn[g.ujoint]} (sin u2 {'>' if g.ujoint > 0 else '<'} 0), "
+            f"wrist {sgn[g.wrist]} (sin u4 {'>' if g.wrist > 0 else '<'} 0)")
 
 
 def save_view(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
@@ -311,8 +496,8 @@ def save_view(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | N
     q, T_b_e, design, slot
         As in :func:`plot_robot`.
     all_solutions : bool, keyword-only
-        The 16-solution grid (static) or a page that switches between the solutions
-        (HTML; it does so in any case).
+        The 16-solution grid (static) or, in HTML, every solution at once with one
+        legend entry per slot (without it the page has a menu over the solutions).
     dpi : int, keyword-only
         Resolution of raster output.
     **kwargs
@@ -334,7 +519,8 @@ def save_view(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | N
     if suffix == ".html":
         from ._html import write_html
 
-        return write_html(path, q, T_b_e, design, slot=slot, **kwargs)
+        return write_html(path, q, T_b_e, design, slot=slot, all_solutions=all_solutions,
+                          **kwargs)
     if suffix not in (".png", ".svg", ".pdf"):
         raise ValueError(f"path: expected a .png, .svg, .pdf or .html file, got {path.name!r}")
     if all_solutions:

@@ -14,18 +14,25 @@ from ..errors import Reason, error_for_reason
 ErrorPolicy = Literal["auto", "raise", "flag"]
 _POLICIES = ("auto", "raise", "flag")
 
-Backend = Literal["numpy", "numba"]
-_BACKENDS = ("numpy", "numba")
+#: The reference functions of :mod:`athenakin.robot` are numpy only; the backend
+#: choice (compiled or numpy) is made above them, in :mod:`athenakin._dispatch`.
+ReferenceBackend = Literal["numpy"]
 
-__all__ = ["ErrorPolicy", "Backend", "use_compiled", "resolve_design", "resolve_policy",
-           "raise_first_failure", "item_reason_from_slots"]
+__all__ = ["ErrorPolicy", "ReferenceBackend", "check_reference_backend", "resolve_design",
+           "resolve_policy", "raise_first_failure", "item_reason_from_slots"]
 
 
-def use_compiled(backend: str) -> bool:
-    """True for ``backend="numba"`` (the :mod:`athenakin.fast` kernels), False for numpy."""
-    if backend not in _BACKENDS:
-        raise ValueError(f"backend: expected one of {_BACKENDS}, got {backend!r}")
-    return backend == "numba"
+def check_reference_backend(backend: str, name: str) -> None:
+    """Refuse a backend other than ``"numpy"`` in the reference function ``name``.
+
+    The compiled kernels sit above the reference (they use it as their oracle), so
+    the choice of backend belongs to the public functions of :mod:`athenakin`
+    (``athenakin.forward_kinematics(..., backend="numba")``), not to the reference.
+    """
+    if backend != "numpy":
+        raise ValueError(f"backend: the reference athenakin.robot.{name} is the numpy "
+                         f"implementation (backend='numpy'), got {backend!r}; "
+                         f"athenakin.{name}(..., backend={backend!r}) chooses the backend")
 
 
 def resolve_policy(errors: str, batch_shape: tuple[int, ...]) -> bool:

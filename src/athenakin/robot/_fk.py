@@ -23,13 +23,13 @@ from ..chain._ups import (
 from ..design import Design
 from ..parallel._module import MODES, TANGENT_TOL, ParallelSolution, parallel_forward_kinematics
 from ._common import (
-    Backend,
     ErrorPolicy,
+    ReferenceBackend,
+    check_reference_backend,
     item_reason_from_slots,
     raise_first_failure,
     resolve_design,
     resolve_policy,
-    use_compiled,
 )
 
 __all__ = ["FKSolution", "forward_kinematics", "SLOT_MODE", "SLOT_P_SIGN", "SLOT_UJOINT",
@@ -108,7 +108,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
                        method: FKMethod = "closed", errors: ErrorPolicy = "auto",
                        tangent_tol: float = TANGENT_TOL, degenerate_tol: float = DEGENERATE_TOL,
                        p_zero_tol: float = P_ZERO_TOL, closure_tol: float = CLOSURE_TOL,
-                       backend: Backend = "numpy") -> FKSolution:
+                       backend: ReferenceBackend = "numpy") -> FKSolution:
     """All (up to) 16 configurations of the robot for actuator values ``q`` (Section 3).
 
     Parameters
@@ -133,10 +133,10 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     tangent_tol, degenerate_tol, p_zero_tol, closure_tol : float, keyword-only
         See :data:`~athenakin.parallel.TANGENT_TOL`, :data:`~athenakin.chain.DEGENERATE_TOL`,
         :data:`~athenakin.chain.P_ZERO_TOL`, :data:`~athenakin.chain.CLOSURE_TOL`.
-    backend : {"numpy", "numba"}, keyword-only
-        ``"numba"`` runs the compiled kernels of :mod:`athenakin.fast` (extra
-        ``[fast]``; same results to 1e-12, same reasons and errors, 40x faster in
-        batches); ``"numpy"`` (default) is the reference implementation.
+    backend : {"numpy"}, keyword-only
+        This is the numpy reference (the oracle of the compiled kernels); the public
+        function of the same name in :mod:`athenakin` chooses the backend
+        (``backend="auto"``: compiled where numba imports).
 
     Returns
     -------
@@ -159,12 +159,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     """
     if method not in _METHODS:
         raise ValueError(f"method: expected one of {_METHODS}, got {method!r}")
-    if use_compiled(backend):
-        from ..fast import forward_kinematics as compiled
-
-        return compiled(q, T_b_e, design, method=method, errors=errors, tangent_tol=tangent_tol,
-                        degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
-                        closure_tol=closure_tol)
+    check_reference_backend(backend, "forward_kinematics")
     design, q, T, batch, raise_now = _prepare(q, T_b_e, design, errors)
     par = parallel_forward_kinematics(q, design, tangent_tol=tangent_tol)
     if method == "closed":

@@ -35,12 +35,12 @@ from ..design import Design
 from ..errors import Reason
 from ..parallel._module import IK_ROUNDING_ULPS, link_detail, parallel_ik_from_position, position_ik
 from ._common import (
-    Backend,
     ErrorPolicy,
+    ReferenceBackend,
+    check_reference_backend,
     raise_first_failure,
     resolve_design,
     resolve_policy,
-    use_compiled,
 )
 
 __all__ = [
@@ -144,7 +144,7 @@ class InstrumentIK:
 
 def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None = None, *,
                        errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
-                       closure_tol: float = CLOSURE_TOL, backend: Backend = "numpy"
+                       closure_tol: float = CLOSURE_TOL, backend: ReferenceBackend = "numpy"
                        ) -> tuple[NDArray[np.float64], PassiveJoints]:
     """Actuator values for a given RCM frame and spherical-joint angles (paper Section 4).
 
@@ -161,8 +161,10 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
         See :data:`IK_SINGULAR_TOL`.
     closure_tol : float, keyword-only
         Largest closure residual accepted.
-    backend : {"numpy", "numba"}, keyword-only
-        ``"numba"``: the compiled kernel of :mod:`athenakin.fast` (same results).
+    backend : {"numpy"}, keyword-only
+        This is the numpy reference (the oracle of the compiled kernels); the public
+        function of the same name in :mod:`athenakin` chooses the backend
+        (``backend="auto"``: compiled where numba imports).
 
     Returns
     -------
@@ -188,11 +190,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     >>> np.allclose(q, [-0.10, 0.10, 0.45], atol=1e-12)
     True
     """
-    if use_compiled(backend):
-        from ..fast import inverse_kinematics as compiled
-
-        return compiled(T_b_e, u345, design, errors=errors, singular_tol=singular_tol,
-                        closure_tol=closure_tol)
+    check_reference_backend(backend, "inverse_kinematics")
     design, T, u345, batch, raise_now, singular_tol, closure_tol = check_ik_arguments(
         T_b_e, u345, design, errors, singular_tol, closure_tol)
     T = np.broadcast_to(T, batch + (4, 4))
@@ -364,7 +362,8 @@ def _unit(d: NDArray[np.float64], name: str) -> NDArray[np.float64]:
 
 def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
                       design: Design | None = None, *, errors: ErrorPolicy = "auto",
-                      backend: Backend = "numpy") -> tuple[NDArray[np.float64], InstrumentIK]:
+                      backend: ReferenceBackend = "numpy"
+                      ) -> tuple[NDArray[np.float64], InstrumentIK]:
     """Actuator values for an instrument direction about the RCM and an insertion ``p``.
 
     ``O_s = RCM - p * d`` with ``d`` the instrument direction; the parallel
@@ -382,18 +381,17 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
         Distance from ``O_s`` to the RCM along the direction, m.
     design : Design, optional
     errors : {"auto", "raise", "flag"}, keyword-only
-    backend : {"numpy", "numba"}, keyword-only
-        ``"numba"``: the compiled kernel of :mod:`athenakin.fast` (same results).
+    backend : {"numpy"}, keyword-only
+        This is the numpy reference (the oracle of the compiled kernels); the public
+        function of the same name in :mod:`athenakin` chooses the backend
+        (``backend="auto"``: compiled where numba imports).
 
     Returns
     -------
     q : ndarray, shape (..., 3)
     result : InstrumentIK
     """
-    if use_compiled(backend):
-        from ..fast import q_from_instrument as compiled
-
-        return compiled(T_b_e, direction_e, p, design, errors=errors)
+    check_reference_backend(backend, "q_from_instrument")
     design = resolve_design(design)
     T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
     d_e = _unit(check_array(direction_e, "direction_e", (3,), allow_nonfinite=True),
@@ -409,7 +407,7 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
 
 
 def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = None, *,
-                    errors: ErrorPolicy = "auto", backend: Backend = "numpy"
+                    errors: ErrorPolicy = "auto", backend: ReferenceBackend = "numpy"
                     ) -> tuple[NDArray[np.float64], InstrumentIK]:
     """Actuator values that put the tool tip at a point, the instrument through the RCM.
 
@@ -426,18 +424,17 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
         Tool-tip position in the RCM frame E, m.
     design : Design, optional
     errors : {"auto", "raise", "flag"}, keyword-only
-    backend : {"numpy", "numba"}, keyword-only
-        ``"numba"``: the compiled kernel of :mod:`athenakin.fast` (same results).
+    backend : {"numpy"}, keyword-only
+        This is the numpy reference (the oracle of the compiled kernels); the public
+        function of the same name in :mod:`athenakin` chooses the backend
+        (``backend="auto"``: compiled where numba imports).
 
     Returns
     -------
     q : ndarray, shape (..., 3)
     result : InstrumentIK
     """
-    if use_compiled(backend):
-        from ..fast import q_from_tool_tip as compiled
-
-        return compiled(T_b_e, tip_e, design, errors=errors)
+    check_reference_backend(backend, "q_from_tool_tip")
     design = resolve_design(design)
     T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
     tip = check_array(tip_e, "tip_e", (3,), allow_nonfinite=True)

@@ -7,8 +7,10 @@ need the ``mujoco`` package (extra ``sim``).
   prismatic actuators on ``q1, q2, q3``, passive joints, loop closures as
   equality constraints, keyframe ``home``.
 * :func:`urdf_from_design` / :func:`write_urdf`: the spanning tree, couplings as
-  ``<mimic>``, the other loop closures as documented pairs of frames.
-* :func:`mechanism_joint_values`: every joint of the tree in one FK slot.
+  ``<mimic>``, the other loop closures as documented pairs of frames; joint zero
+  is the assembled reference configuration, with a ``tool_tip`` link.
+* :func:`mechanism_joint_values`: every joint of the tree in one FK slot, in the
+  model's convention and relative to the URDF's joint zero (docs/ros.md).
 * :func:`check_fk_with_mujoco`: drive MuJoCo to ``q``, let it close the loops,
   compare with :func:`athenakin.forward_kinematics`.
 """
@@ -24,7 +26,15 @@ from ._check import (
     sample_reachable_q,
     settle,
 )
-from ._layout import ACTUATED, JOINTS, LOOP_CLOSURES, LoopClosure, mechanism_joint_values
+from ._layout import (
+    ACTUATED,
+    JOINTS,
+    LOOP_CLOSURES,
+    LoopClosure,
+    MechanismJointValues,
+    mechanism_joint_values,
+    urdf_joint_zero,
+)
 from ._mjcf import mjcf_from_design, write_mjcf
 from ._urdf import CLOSURE_PAIRS, MIMIC, urdf_from_design, write_urdf
 
@@ -39,6 +49,7 @@ __all__ = [
     "SETTLE_TIME",
     "SPEED_TOL",
     "LoopClosure",
+    "MechanismJointValues",
     "MujocoCheck",
     "check_fk_with_mujoco",
     "load_model",
@@ -47,6 +58,7 @@ __all__ = [
     "sample_reachable_q",
     "settle",
     "urdf_from_design",
+    "urdf_joint_zero",
     "write_mjcf",
     "write_urdf",
 ]

@@ -260,7 +260,8 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
         joint_err = np.full(16, np.inf)
         geoms = {}
         for j in map(int, np.flatnonzero(sol.valid)):
-            vals, geoms[j] = mechanism_joint_values(q_now, T, design, slot=j)
+            jv = mechanism_joint_values(q_now, T, design, slot=j)
+            vals, geoms[j] = jv.values, jv.geometry
             diff = data.qpos[adr] - np.array([vals[nm] for nm in names])
             joint_err[j] = np.abs(np.where(hinge, wrap_angle(diff), diff)).max()
         out["q_reached"].append(q_now)

@@ -43,7 +43,8 @@ from numpy.typing import ArrayLike
 from ..design import Design
 from ..plot._geometry import RobotGeometry, robot_geometry
 
-__all__ = ["JOINTS", "ACTUATED", "LOOP_CLOSURES", "LoopClosure", "mechanism_joint_values"]
+__all__ = ["JOINTS", "ACTUATED", "LOOP_CLOSURES", "LoopClosure", "MechanismJointValues",
+           "mechanism_joint_values", "urdf_joint_zero"]
 
 #: Joints of the spanning tree in MJCF order: name -> (kind, parent body, child body).
 JOINTS: dict[str, tuple[str, str, str]] = {
@@ -112,34 +113,38 @@ LOOP_CLOSURES = (
 )
 
 
-def mechanism_joint_values(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
-                           design: Design | None = None, *, slot: int = 0
-                           ) -> tuple[dict[str, float], RobotGeometry]:
-    """Values of every joint of the spanning tree in one forward-kinematics slot.
+@dataclasses.dataclass(frozen=True)
+class MechanismJointValues:
+    """Every joint of the spanning tree in one configuration.
 
-    Parameters
+    Attributes
     ----------
-    q : array-like, shape (3,), optional
-        Actuators, m (default :data:`athenakin.robot.REFERENCE_Q`).
-    T_b_e : array-like, shape (4, 4), optional
-        RCM frame (default :func:`athenakin.default_rcm_frame`).
-    design : Design, optional
-    slot : int, keyword-only
-        Forward-kinematics slot 0..15.
-
-    Returns
-    -------
     values : dict of str -> float
-        Joint name (:data:`JOINTS`) -> value (m for slides, rad for hinges).
+        Joint name (:data:`JOINTS`) -> value in the model's convention (m for
+        slides, rad for hinges): what the MJCF export's ``qpos`` holds. ``q1``,
+        ``q2``, ``q3`` are the actuators and ``p``, ``u1..u5`` the passive joints of
+        the forward kinematics.
+    urdf : dict of str -> float
+        The same joints relative to the URDF's joint zero (``values[name] -
+        zero[name]``; hinges wrapped to ``(-pi, pi]``): what a ROS
+        ``sensor_msgs/JointState`` for the file of
+        :func:`~athenakin.sim.urdf_from_design` holds. Mimic joints
+        (:data:`~athenakin.sim.MIMIC`) are included; ``robot_state_publisher``
+        also derives them itself.
+    zero : dict of str -> float
+        The URDF's joint zero in the model's convention: the joint values of the
+        assembled zero configuration (``q_zero``, ``zero_slot``).
     geometry : RobotGeometry
-        The configuration they realise.
-
-    Raises
-    ------
-    KinematicsError
-        The slot holds no valid solution.
+        The configuration the values realise (points and frames, base frame).
     """
-    g = robot_geometry(q, T_b_e, design, slot=slot)
+
+    values: dict[str, float]
+    urdf: dict[str, float]
+    zero: dict[str, float]
+    geometry: RobotGeometry
+
+
+def _absolute_joint_values(g: RobotGeometry) -> dict[str, float]:
     d = g.design
     q1, q2, q3 = g.q
     h = 0.5 * (q1 - q2)
@@ -151,11 +156,87 @@ def mechanism_joint_values(q: ArrayLike | None = None, T_b_e: ArrayLike | None =
     ang_b3 = float(np.arctan2(np.sqrt(d.l3 ** 2 - h * h), h))
     arm = g.points["O_i"] - g.points["C"]
     gamma = float(np.arctan2(-arm[1], arm[2]))
-    values = {
+    return {
         "q1": float(q1), "a_ujoint_x": theta, "a_ujoint_y": phi_a, "platform_y": -phi_a,
         "u1": float(g.u[0]), "u2": float(g.u[1]), "p": g.p, "u3": float(g.u[2]),
         "u4": float(g.u[3]), "u5": float(g.u[4]),
         "a_base_z": ang_a3, "carrier_z": -ang_a3, "k2_x": gamma, "q3": float(q3),
         "q2": float(q2), "b_ujoint_x": theta, "b_ujoint_y": -phi_a, "b_base_z": ang_b3,
     }
-    return values, g
+
+
+def urdf_joint_zero(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
+                    q_zero: ArrayLike | None = None, zero_slot: int = 0) -> dict[str, float]:
+    """The joint values (model convention) that the URDF export takes as joint zero.
+
+    Parameters
+    ----------
+    T_b_e : array-like, shape (4, 4), optional
+        RCM frame (default :func:`athenakin.default_rcm_frame`).
+    design : Design, optional
+    q_zero : array-like, shape (3,), optional
+        Actuators of the zero configuration, m (default
+        :data:`athenakin.robot.REFERENCE_Q`, the reference configuration).
+    zero_slot : int, keyword-only
+        Its forward-kinematics slot (default 0).
+
+    Returns
+    -------
+    dict of str -> float
+        Joint name -> value (m, rad) in the assembled zero configuration.
+
+    Raises
+    ------
+    KinematicsError
+        The zero configuration does not assemble (pick another ``q_zero``).
+    """
+    return _absolute_joint_values(robot_geometry(q_zero, T_b_e, design, slot=zero_slot))
+
+
+def mechanism_joint_values(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
+                           design: Design | None = None, *, slot: int = 0,
+                           q_zero: ArrayLike | None = None, zero_slot: int = 0
+                           ) -> MechanismJointValues:
+    """Values of every joint of the spanning tree in one forward-kinematics slot.
+
+    Parameters
+    ----------
+    q : array-like, shape (3,), optional
+        Actuators, m (default :data:`athenakin.robot.REFERENCE_Q`).
+    T_b_e : array-like, shape (4, 4), optional
+        RCM frame (default :func:`athenakin.default_rcm_frame`).
+    design : Design, optional
+    slot : int, keyword-only
+        Forward-kinematics slot 0..15.
+    q_zero, zero_slot : keyword-only
+        The URDF's zero configuration (see :func:`urdf_joint_zero`); pass the
+        values given to :func:`~athenakin.sim.urdf_from_design`.
+
+    Returns
+    -------
+    MechanismJointValues
+        ``.values`` (model / MJCF convention), ``.urdf`` (relative to the URDF
+        zero, for ROS), ``.zero`` and ``.geometry``.
+
+    Raises
+    ------
+    KinematicsError
+        The slot holds no valid solution.
+
+    Examples
+    --------
+    >>> from athenakin.sim import mechanism_joint_values
+    >>> jv = mechanism_joint_values()           # the reference configuration, slot 0
+    >>> round(jv.values["q3"], 3), abs(jv.urdf["q3"]) < 1e-15   # URDF zero = reference
+    (0.45, True)
+    """
+    g = robot_geometry(q, T_b_e, design, slot=slot)
+    values = _absolute_joint_values(g)
+    zero = urdf_joint_zero(g.T_b_e, g.design, q_zero=q_zero, zero_slot=zero_slot)
+    rel = {}
+    for name, v in values.items():
+        x = v - zero[name]
+        if JOINTS[name][0] == "hinge":
+            x = float(-np.remainder(-x + np.pi, 2 * np.pi) + np.pi)
+        rel[name] = x
+    return MechanismJointValues(values=values, urdf=rel, zero=zero, geometry=g)

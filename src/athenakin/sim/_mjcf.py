@@ -145,7 +145,8 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     partly redundant, 1 ``weld``, 2 ``joint`` couplings), 3 degrees of freedom.
     Parts do not collide. Stroke limits become joint ranges and control ranges.
     """
-    values, g = mechanism_joint_values(q, T_b_e, design, slot=slot)
+    jv = mechanism_joint_values(q, T_b_e, design, slot=slot)
+    values, g = jv.values, jv.geometry
     d = g.design
     T = g.T_b_e
     lo, hi = d.stroke_min, d.stroke_max

@@ -7,7 +7,11 @@ closure, a pair of fixed "closure frames" that coincide on the real mechanism
 (e.g. ``link_b1_tip`` and ``platform_oi``). An XML comment at the top of the file
 lists them. A tool that supports closed chains (or a user's own constraint
 solver) closes the loops by making each pair coincide; with joint values from
-:func:`~athenakin.sim.mechanism_joint_values` they coincide already.
+:func:`~athenakin.sim.mechanism_joint_values` (``.urdf``) they coincide already.
+
+Joint zero is the assembled reference configuration (:func:`urdf_joint_zero`):
+each joint's origin includes its value there, so that all zeros give a closed
+mechanism and every zero lies within its joint's limits (docs/ros.md).
 """
 
 from __future__ import annotations
@@ -19,9 +23,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._transforms import rot_x, rot_y, rot_z
 from ..design import Design, resolve_design
 from ..robot._setup import resolve_rcm_frame
-from ._layout import JOINTS, LOOP_CLOSURES
+from ._layout import JOINTS, LOOP_CLOSURES, urdf_joint_zero
 from ._mjcf import BAR_RADIUS, DENSITY
 
 __all__ = ["urdf_from_design", "write_urdf", "CLOSURE_FRAMES", "CLOSURE_PAIRS", "MIMIC"]
@@ -92,8 +97,21 @@ def _cylinder(link: ET.Element, a: ArrayLike, b: ArrayLike, radius: float,
     ET.SubElement(vis, "material", {"name": material})
 
 
+def _matrix_from_rpy(rpy: ArrayLike) -> NDArray[np.float64]:
+    """URDF roll-pitch-yaw to a rotation matrix, ``Rz(y) Ry(p) Rx(r)``."""
+    r, p, y = (np.asarray(float(v)) for v in rpy)
+    return rot_z(y) @ rot_y(p) @ rot_x(r)
+
+
+def _rotation_about(axis: ArrayLike, angle: float) -> NDArray[np.float64]:
+    """Rotation about a coordinate axis (the joint axes here are x, y or z)."""
+    rot = {(1, 0, 0): rot_x, (0, 1, 0): rot_y, (0, 0, 1): rot_z}[tuple(int(a) for a in axis)]
+    return rot(np.asarray(float(angle)))
+
+
 def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
-                     robot_name: str = "athena") -> str:
+                     robot_name: str = "athena", q_zero: ArrayLike | None = None,
+                     zero_slot: int = 0) -> str:
     """URDF text of the kinematic tree of ATHENA (loop closures as documented frame pairs).
 
     Parameters
@@ -104,17 +122,28 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
         RCM frame of the set-up, placed as the fixed link ``rcm_setup``; defaults to
         :func:`athenakin.default_rcm_frame`.
     robot_name : str, keyword-only
+    q_zero : array-like, shape (3,), keyword-only, optional
+        Actuators of the configuration taken as joint zero, m (default
+        :data:`athenakin.robot.REFERENCE_Q`); it must assemble.
+    zero_slot : int, keyword-only
+        Forward-kinematics slot of the zero configuration (default 0).
 
     Returns
     -------
     str
-        The URDF document. Joint values of a configuration:
-        :func:`~athenakin.sim.mechanism_joint_values` (``platform_y`` and
-        ``carrier_z`` follow by ``<mimic>``).
+        The URDF document. All joints at zero give the assembled configuration
+        ``(q_zero, zero_slot)`` with every loop closed, and every zero lies within
+        its joint's limits. Joint values of a configuration:
+        ``mechanism_joint_values(q, T_b_e, design, slot=k).urdf`` (``platform_y``
+        and ``carrier_z`` follow by ``<mimic>``). The fixed link ``tool_tip`` is
+        the tool tip, ``O_s + L z_3`` (``L = design.tool_length``).
 
     Notes
     -----
-    The tree has 18 joints (16 independent, 2 mimic). The loop closures that URDF
+    The tree has 18 joints (16 independent, 2 mimic). Each joint's origin is its
+    origin in the model (:mod:`athenakin.sim._layout`) moved by its value in the
+    zero configuration, so a URDF value is the model value minus that value
+    (:func:`~athenakin.sim.urdf_joint_zero`). The loop closures that URDF
     cannot express are listed in the file's header comment and in
     :data:`CLOSURE_PAIRS`; the spherical joint ``u3, u4, u5`` stands for the
     passive spherical five-bar.
@@ -122,6 +151,7 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     design = resolve_design(design)
     T = resolve_rcm_frame(T_b_e, design)
     d = design
+    zero = urdf_joint_zero(T, d, q_zero=q_zero, zero_slot=zero_slot)
     lo, hi = d.stroke_min, d.stroke_max
     robot = ET.Element("robot", {"name": robot_name})
     for name, rgba in (("parallel", "0.2 0.4 0.8 1"), ("serial", "0.8 0.2 0.2 1"),
@@ -185,6 +215,12 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     stroke = {"q1": 0, "q2": 1, "q3": 2}
     for name, (kind, parent, child) in JOINTS.items():
         xyz, rpy, axis = origins[name]
+        # move the origin by the joint's value in the zero configuration
+        R0, ax = _matrix_from_rpy(rpy), np.asarray(axis, float)
+        if kind == "slide":
+            xyz = tuple(np.asarray(xyz, float) + R0 @ ax * zero[name])
+        else:
+            rpy = tuple(_rpy_from_matrix(R0 @ _rotation_about(axis, zero[name])))
         utype = "prismatic" if kind == "slide" else "continuous"
         j = ET.SubElement(robot, "joint", {"name": name, "type": utype})
         ET.SubElement(j, "parent", {"link": parent})
@@ -195,6 +231,7 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
             i = stroke.get(name)
             lower = lo[i] if i is not None and math.isfinite(lo[i]) else -_FREE_SLIDE
             upper = hi[i] if i is not None and math.isfinite(hi[i]) else _FREE_SLIDE
+            lower, upper = lower - zero[name], upper - zero[name]
             ET.SubElement(j, "limit", {"lower": _f(lower), "upper": _f(upper),
                                        "effort": "1000", "velocity": "1"})
         if name in MIMIC:
@@ -207,6 +244,13 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     ET.SubElement(j, "parent", {"link": "base"})
     ET.SubElement(j, "child", {"link": "rcm_setup"})
     ET.SubElement(j, "origin", {"xyz": _vec(T[:3, 3]), "rpy": _vec(_rpy_from_matrix(T[:3, :3]))})
+
+    # the tool tip, O_s + L z_3, on the instrument (z along the instrument, origin O_s)
+    ET.SubElement(robot, "link", {"name": "tool_tip"})
+    j = ET.SubElement(robot, "joint", {"name": "tool_tip_fixed", "type": "fixed"})
+    ET.SubElement(j, "parent", {"link": "instrument"})
+    ET.SubElement(j, "child", {"link": "tool_tip"})
+    ET.SubElement(j, "origin", {"xyz": _vec((0, 0, d.tool_length)), "rpy": "0 0 0"})
 
     frames = {"link_b1_tip": ("link_b1", (0, 0, d.l1)), "platform_oi": ("platform", (0, 0, 0)),
               "link_b3_tip": ("link_b3", (d.l3, 0, 0)), "carrier_d": ("carrier", (0, 0, 0)),
@@ -237,9 +281,12 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
             lines.append(f"    - {c.name}: frame {c.a} = frame {c.b}: {c.text}")
     lines += [
         "  The spherical joint u3, u4, u5 at the RCM stands for the passive spherical five-bar.",
-        "  Joint values of a configuration: athenakin.sim.mechanism_joint_values(q, T_b_e, design,",
-        "  slot=k), which closes every loop. The MJCF export encodes the same closures as",
-        "  MuJoCo equality constraints.",
+        "  Joint zero: the assembled configuration q = "
+        f"{[round(v, 12) for v in (zero['q1'], zero['q2'], zero['q3'])]} m, FK slot {zero_slot};",
+        "  every zero lies within its limits. Joint values of a configuration (relative to that",
+        "  zero): athenakin.sim.mechanism_joint_values(q, T_b_e, design, slot=k).urdf, which",
+        "  closes every loop (docs/ros.md). Link tool_tip: the tool tip O_s + L z_3.",
+        "  The MJCF export encodes the same closures as MuJoCo equality constraints.",
         "-->",
     ]
     return "\n".join(lines) + "\n" + ET.tostring(robot, encoding="unicode") + "\n"

@@ -366,7 +366,7 @@ def study_from_transform(T: ArrayLike) -> NDArray[np.float64]:
     Parameters
     ----------
     T : array-like, shape (..., 4, 4)
-        Rigid transforms ``[[R, t], [0, 0, 0, 1]]`` (ecosystem layout, MODEL.md).
+        Rigid transforms ``[[R, t], [0, 0, 0, 1]]`` (ecosystem layout, docs/conventions.md).
 
     Returns
     -------

@@ -51,7 +51,7 @@ _EXPORTS = {
     "printed_eq13": "_printed", "printed_eq14": "_printed", "printed_eq15_factors": "_printed",
     "printed_eq16": "_printed",
     "derive": "_derivation", "load_derivation": "_derivation", "write_cache": "_derivation",
-    "forward_kinematics_algebraic": "_solver", "serial_solutions_algebraic": "_solver",
+    "forward_kinematics_algebraic": "_fk_algebraic", "serial_solutions_algebraic": "_solver",
 }
 
 __all__ = sorted(_EXPORTS)

@@ -1,7 +1,7 @@
 """Dual-quaternion algebra in sympy (paper Eq. 1-6): the building blocks of the derivation.
 
 A Study vector is an 8-tuple ``(x0, x1, x2, x3, y0, y1, y2, y3)`` read as the dual
-quaternion ``x + eps*y`` with Hamilton products, ``x0`` the scalar part (MODEL.md).
+quaternion ``x + eps*y`` with Hamilton products, ``x0`` the scalar part (docs/conventions.md).
 Here it is a :class:`sympy.ImmutableMatrix` of shape (8, 1). The translation of a
 Study vector is ``t = -2 y conj(x) / |x|^2`` (Eq. 3-4), i.e. ``y = -t x / 2``.
 

@@ -31,16 +31,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array
-from ..chain import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL, closure_residual, ups_transform
-from ..design import Design
+from ..chain import DEGENERATE_TOL, P_ZERO_TOL, closure_residual, ups_transform
 from ..errors import Reason
-from ..parallel import TANGENT_TOL, ParallelSolution
-from ..robot import FKSolution
-from ..robot._common import ErrorPolicy
+from ..parallel import ParallelSolution
 from ..study import dq_conj_quaternion, dq_multiply, study_from_transform
 from ..study._study import _qmul
 
-__all__ = ["forward_kinematics_algebraic", "serial_solutions_algebraic", "serial_step_algebraic",
+__all__ = ["serial_solutions_algebraic", "serial_step_algebraic",
            "PENCIL_TOL"]
 
 #: Largest coefficient (relative, unit pencil vectors) of the U-joint quadratic on the
@@ -241,57 +238,6 @@ def _serial(gen, f: NDArray[np.float64], degenerate_tol: float,  # type: ignore[
     reason = np.where((reason == 0) & deg_u, np.int8(Reason.UJOINT_SINGULAR), reason)
     reason = np.where((reason == 0) & deg_w, np.int8(Reason.WRIST_SINGULAR), reason)
     return pp, u, reason.astype(np.int8)
-
-
-def forward_kinematics_algebraic(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None,
-                                 *, errors: ErrorPolicy = "auto",
-                                 tangent_tol: float = TANGENT_TOL,
-                                 degenerate_tol: float = DEGENERATE_TOL,
-                                 p_zero_tol: float = P_ZERO_TOL,
-                                 closure_tol: float = CLOSURE_TOL) -> FKSolution:
-    """All (up to) 16 configurations through the paper's algebraic route (Section 3.2).
-
-    Same arguments, result type, slot layout and reason codes as
-    :func:`athenakin.forward_kinematics`; the serial chain is solved by the
-    generated code of the derivation (module docstring) instead of the closed form.
-
-    Parameters
-    ----------
-    q : array-like, shape (..., 3)
-        Actuators ``(q1, q2, q3)``, m.
-    T_b_e : array-like, shape (..., 4, 4)
-        RCM frame E in the base frame; broadcasts with ``q``.
-    design : Design, optional
-        Defaults to :meth:`Design.default`.
-    errors : {"auto", "raise", "flag"}, keyword-only
-    tangent_tol, degenerate_tol, p_zero_tol, closure_tol : float, keyword-only
-        As in :func:`athenakin.forward_kinematics`.
-
-    Returns
-    -------
-    FKSolution
-
-    Raises
-    ------
-    TypeError, InvalidInputError, KinematicsError
-        As :func:`athenakin.forward_kinematics`.
-
-    Examples
-    --------
-    >>> import numpy as np, athenakin as ak
-    >>> from athenakin.symbolic import forward_kinematics_algebraic
-    >>> d = ak.Design.default()
-    >>> q, T = [-0.10, 0.10, 0.45], ak.default_rcm_frame(d)
-    >>> sol = forward_kinematics_algebraic(q, T, d)
-    >>> ref = ak.forward_kinematics(q, T, d)
-    >>> int(sol.n_solutions), bool(np.allclose(sol.p, ref.p, atol=1e-12))
-    (16, True)
-    """
-    from ..robot import forward_kinematics
-
-    return forward_kinematics(q, T_b_e, design, method="algebraic", errors=errors,
-                              tangent_tol=tangent_tol, degenerate_tol=degenerate_tol,
-                              p_zero_tol=p_zero_tol, closure_tol=closure_tol)
 
 
 def serial_step_algebraic(par: ParallelSolution, T: NDArray[np.float64], *,

@@ -1,0 +1,496 @@
+"""Backend dispatch: the public kinematics functions run compiled by default (private module).
+
+Layers, each importing only those below it::
+
+    numpy reference   robot (FK, IK, robot._jacobians), parallel, chain, study, design
+          ^
+    compiled kernels  fast (numba; falls back to the reference for what it cannot do)
+          ^
+    dispatch          this module: ``backend="auto" | "numpy" | "numba"``
+          ^
+    public names      athenakin.forward_kinematics, ..., athenakin.analysis.*_jacobian
+
+``backend="auto"`` (the default) runs the compiled kernels of :mod:`athenakin.fast`
+where numba imports, and the numpy reference otherwise (a platform without numba
+wheels, or ``ATHENAKIN_BACKEND=numpy`` in the environment). Both return the same
+values to 1e-12, the same reason codes and raise the same errors (tested).
+
+The compiled kernels are cached on disk (numba ``cache=True``) next to their
+sources, or under the user cache directory (``~/.cache/athenakin/numba``) when the
+package directory is not writable. When the first call of a process compiles them,
+one line on stderr says so (``athenakin warmup`` compiles them ahead).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import threading
+from collections.abc import Callable
+from types import ModuleType
+from typing import Any, Literal, TypeVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
+from .design import Design
+from .parallel._module import TANGENT_TOL
+from .robot import _fk as _ref_fk
+from .robot import _ik as _ref_ik
+from .robot import _jacobians as _ref_jac
+from .robot._common import ErrorPolicy
+from .robot._fk import FKMethod, FKSolution
+from .robot._ik import IK_SINGULAR_TOL, InstrumentIK, PassiveJoints
+from .robot._jacobians import Frame
+
+__all__ = [
+    "Backend",
+    "BACKENDS",
+    "numba_available",
+    "resolve_backend",
+    "user_cache_dir",
+    "forward_kinematics",
+    "inverse_kinematics",
+    "q_from_instrument",
+    "q_from_tool_tip",
+    "parallel_jacobian",
+    "parallel_inverse_jacobian",
+    "parallel_twist_jacobian",
+    "instrument_jacobian",
+    "instrument_inverse_jacobian",
+    "tool_tip_jacobian",
+    "tool_tip_inverse_jacobian",
+]
+
+#: ``"auto"``: compiled where numba imports, else numpy; ``"numpy"``: the reference;
+#: ``"numba"``: the compiled kernels (ImportError without numba).
+Backend = Literal["auto", "numpy", "numba"]
+BACKENDS = ("auto", "numpy", "numba")
+
+#: Seconds a first (compiling) call may take before the one-line notice is printed.
+NOTICE_AFTER_S = 1.0
+
+_F8 = np.dtype(np.float64)
+_STATE: dict[str, Any] = {}     # "numba": bool, "api": fast._api, "jac": fast._jac_api
+_WARM: set[str] = set()         # entry points whose first compiled call has returned
+_R = TypeVar("_R")
+
+
+# --- backend resolution -----------------------------------------------------------------
+def user_cache_dir() -> str:
+    """The per-user cache directory of athenakin's compiled kernels.
+
+    ``$XDG_CACHE_HOME/athenakin/numba`` (default ``~/.cache/athenakin/numba``) on Linux,
+    ``~/Library/Caches/athenakin/numba`` on macOS, ``%LOCALAPPDATA%/athenakin/numba``
+    on Windows.
+    """
+    if sys.platform == "win32":
+        base = os.environ.get("LOCALAPPDATA") or os.path.expanduser("~")
+    elif sys.platform == "darwin":
+        base = os.path.expanduser("~/Library/Caches")
+    else:
+        base = os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache")
+    return os.path.join(base, "athenakin", "numba")
+
+
+def _configure_numba_cache() -> None:
+    """Point numba's cache at the user cache directory if the package one is read-only.
+
+    Only before numba is imported and only when ``NUMBA_CACHE_DIR`` is unset: a
+    site-packages that the user cannot write (system install, container image) then
+    caches the kernels under :func:`user_cache_dir` instead of recompiling each time.
+    """
+    if "NUMBA_CACHE_DIR" in os.environ or "numba" in sys.modules:
+        return
+    here = os.path.join(os.path.dirname(os.path.abspath(__file__)), "fast")
+    pyc = os.path.join(here, "__pycache__")
+    if os.access(pyc if os.path.isdir(pyc) else here, os.W_OK):
+        return
+    os.environ["NUMBA_CACHE_DIR"] = user_cache_dir()
+
+
+def numba_available() -> bool:
+    """Whether the compiled kernels can run here (numba imports; cached per process).
+
+    ``ATHENAKIN_BACKEND=numpy`` in the environment makes it False (the numpy
+    reference everywhere, e.g. to compare or on a platform where numba misbehaves).
+    """
+    ok = _STATE.get("numba")
+    if ok is None:
+        if os.environ.get("ATHENAKIN_BACKEND", "").strip().lower() == "numpy":
+            ok = False
+        else:
+            _configure_numba_cache()
+            try:
+                import numba  # noqa: F401
+                ok = True
+            except ImportError:
+                ok = False
+        _STATE["numba"] = ok
+    return bool(ok)
+
+
+def resolve_backend(backend: str) -> bool:
+    """True when ``backend`` runs the compiled kernels here, False for the numpy reference.
+
+    Raises
+    ------
+    ValueError
+        ``backend`` is not one of :data:`BACKENDS`.
+    ImportError
+        ``backend="numba"`` where numba cannot be imported.
+    """
+    if backend == "auto":
+        return numba_available()
+    if backend == "numpy":
+        return False
+    if backend == "numba":
+        if not numba_available():
+            raise ImportError("backend='numba': numba cannot be imported here (or "
+                              "ATHENAKIN_BACKEND=numpy is set); install numba (a dependency of "
+                              "athenakin) or use backend='auto' / 'numpy'")
+        return True
+    raise ValueError(f"backend: expected one of {BACKENDS}, got {backend!r}")
+
+
+def _api() -> ModuleType:
+    api = _STATE.get("api")
+    if api is None:
+        from .fast import _api as api
+        _STATE["api"] = api
+    return api
+
+
+def _jac() -> ModuleType:
+    jac = _STATE.get("jac")
+    if jac is None:
+        from .fast import _jac_api as jac
+        _STATE["jac"] = jac
+    return jac
+
+
+def _notice() -> None:
+    if not _STATE.get("noticed"):
+        _STATE["noticed"] = True
+        where = os.environ.get("NUMBA_CACHE_DIR") or "the package's __pycache__"
+        print("athenakin: compiling the numba kernels on first use (once; cached in "
+              f"{where}; `athenakin warmup` does it ahead) ...", file=sys.stderr, flush=True)
+
+
+def _first(name: str, call: Callable[[], _R]) -> _R:
+    """The first compiled call of an entry point: a notice on stderr if it compiles long."""
+    timer = threading.Timer(NOTICE_AFTER_S, _notice)
+    timer.daemon = True
+    timer.start()
+    try:
+        return call()
+    finally:
+        timer.cancel()
+        _WARM.add(name)
+
+
+# --- whole robot ---------------------------------------------------------------------------
+def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
+                       method: FKMethod = "closed", errors: ErrorPolicy = "auto",
+                       tangent_tol: float = TANGENT_TOL, degenerate_tol: float = DEGENERATE_TOL,
+                       p_zero_tol: float = P_ZERO_TOL, closure_tol: float = CLOSURE_TOL,
+                       backend: Backend = "auto") -> FKSolution:
+    """All (up to) 16 configurations of the robot for actuator values ``q`` (Section 3).
+
+    Parameters
+    ----------
+    q : array-like, shape (..., 3)
+        Actuators ``(q1, q2, q3)``, m.
+    T_b_e : array-like, shape (..., 4, 4)
+        RCM frame E in the base frame. Broadcasts with ``q``.
+    design : Design, optional
+        Defaults to :meth:`Design.default`.
+    method, errors, tangent_tol, degenerate_tol, p_zero_tol, closure_tol : keyword-only
+        As in the reference :func:`athenakin.robot.forward_kinematics`.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        ``"auto"`` (default): the compiled kernels of :mod:`athenakin.fast` where
+        numba imports, else the numpy reference; ``"numba"``: compiled (ImportError
+        without numba); ``"numpy"``: the reference. Same results to 1e-12, same
+        reason codes and errors.
+
+    Returns
+    -------
+    FKSolution
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        Wrong type/shape, or NaN/inf input with ``errors`` resolving to raise.
+    StrokeLimitError, OutOfWorkspaceError, DegenerateChainError, SingularConfigurationError
+        With ``errors`` resolving to raise, when an item has no valid slot.
+
+    Examples
+    --------
+    >>> import athenakin as ak
+    >>> d = ak.Design.default()
+    >>> sol = ak.forward_kinematics([-0.10, 0.10, 0.45], ak.default_rcm_frame(d), d)
+    >>> int(sol.n_solutions)
+    16
+    """
+    if "fk" in _WARM and _STATE["numba"] and (backend == "auto" or backend == "numba"):
+        api = _STATE["api"]
+        if (type(q) is np.ndarray and type(T_b_e) is np.ndarray and q.dtype is _F8
+                and T_b_e.dtype is _F8 and q.shape == (3,) and T_b_e.shape == (4, 4)
+                and method == "closed" and (errors == "auto" or errors == "raise")
+                and tangent_tol == TANGENT_TOL and degenerate_tol == DEGENERATE_TOL
+                and p_zero_tol == P_ZERO_TOL and closure_tol == CLOSURE_TOL):
+            # the lean single call (control loops): straight to the packed kernel
+            fq, fT = q.flags, T_b_e.flags
+            if fq.c_contiguous and fq.writeable and fT.c_contiguous and fT.writeable:
+                sol = api._fk_one_plain(q, T_b_e, api.design_params(design))
+                if sol is not None:
+                    return sol  # type: ignore[no-any-return]
+        return api.forward_kinematics(  # type: ignore[no-any-return]
+            q, T_b_e, design, method=method, errors=errors, tangent_tol=tangent_tol,
+            degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol, closure_tol=closure_tol)
+    kw = dict(method=method, errors=errors, tangent_tol=tangent_tol,
+              degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol, closure_tol=closure_tol)
+    if resolve_backend(backend):
+        api = _api()
+        return _first("fk", lambda: api.forward_kinematics(q, T_b_e, design, **kw))
+    return _ref_fk.forward_kinematics(q, T_b_e, design, **kw)  # type: ignore[arg-type]
+
+
+def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None = None, *,
+                       errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
+                       closure_tol: float = CLOSURE_TOL, backend: Backend = "auto"
+                       ) -> tuple[NDArray[np.float64], PassiveJoints]:
+    """Actuator values for a given RCM frame and spherical-joint angles (paper Section 4).
+
+    Parameters
+    ----------
+    T_b_e : array-like, shape (..., 4, 4)
+        RCM frame E in the base frame.
+    u345 : array-like, shape (..., 3)
+        ``(u3, u4, u5)`` of the spherical joint, radians. Broadcasts with ``T_b_e``.
+    design : Design, optional
+    errors, singular_tol, closure_tol : keyword-only
+        As in the reference :func:`athenakin.robot.inverse_kinematics`.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        As in :func:`forward_kinematics`.
+
+    Returns
+    -------
+    q : ndarray, shape (..., 3)
+        ``(q1, q2, q3)``, m; NaN where ``passive.valid`` is False.
+    passive : PassiveJoints
+
+    Examples
+    --------
+    >>> import numpy as np, athenakin as ak
+    >>> d = ak.Design.default()
+    >>> T = ak.default_rcm_frame(d)
+    >>> sol = ak.forward_kinematics([-0.10, 0.10, 0.45], T, d)
+    >>> q, passive = ak.inverse_kinematics(T, sol.u[0, 2:], d)
+    >>> np.allclose(q, [-0.10, 0.10, 0.45], atol=1e-12)
+    True
+    """
+    if "ik" in _WARM and _STATE["numba"] and (backend == "auto" or backend == "numba"):
+        return _STATE["api"].inverse_kinematics(  # type: ignore[no-any-return]
+            T_b_e, u345, design, errors=errors, singular_tol=singular_tol,
+            closure_tol=closure_tol)
+    if resolve_backend(backend):
+        api = _api()
+        return _first("ik", lambda: api.inverse_kinematics(
+            T_b_e, u345, design, errors=errors, singular_tol=singular_tol,
+            closure_tol=closure_tol))
+    return _ref_ik.inverse_kinematics(T_b_e, u345, design, errors=errors,
+                                      singular_tol=singular_tol, closure_tol=closure_tol)
+
+
+def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
+                      design: Design | None = None, *, errors: ErrorPolicy = "auto",
+                      backend: Backend = "auto") -> tuple[NDArray[np.float64], InstrumentIK]:
+    """Actuator values for an instrument direction about the RCM and an insertion ``p``.
+
+    Parameters
+    ----------
+    T_b_e : array-like, shape (..., 4, 4)
+    direction_e : array-like, shape (..., 3)
+        Instrument direction in frame E (normalised here).
+    p : array-like, shape (...)
+        Distance from ``O_s`` to the RCM along the direction, m.
+    design : Design, optional
+    errors : {"auto", "raise", "flag"}, keyword-only
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        As in :func:`forward_kinematics`.
+
+    Returns
+    -------
+    q : ndarray, shape (..., 3)
+    result : InstrumentIK
+
+    See Also
+    --------
+    athenakin.robot.q_from_instrument : the numpy reference, with the details.
+    """
+    if "line" in _WARM and _STATE["numba"] and (backend == "auto" or backend == "numba"):
+        return _STATE["api"].q_from_instrument(  # type: ignore[no-any-return]
+            T_b_e, direction_e, p, design, errors=errors)
+    if resolve_backend(backend):
+        api = _api()
+        return _first("line", lambda: api.q_from_instrument(T_b_e, direction_e, p, design,
+                                                            errors=errors))
+    return _ref_ik.q_from_instrument(T_b_e, direction_e, p, design, errors=errors)
+
+
+def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = None, *,
+                    errors: ErrorPolicy = "auto", backend: Backend = "auto"
+                    ) -> tuple[NDArray[np.float64], InstrumentIK]:
+    """Actuator values that put the tool tip at a point, the instrument through the RCM.
+
+    Parameters
+    ----------
+    T_b_e : array-like, shape (..., 4, 4)
+    tip_e : array-like, shape (..., 3)
+        Tool-tip position in the RCM frame E, m.
+    design : Design, optional
+    errors : {"auto", "raise", "flag"}, keyword-only
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        As in :func:`forward_kinematics`.
+
+    Returns
+    -------
+    q : ndarray, shape (..., 3)
+    result : InstrumentIK
+
+    See Also
+    --------
+    athenakin.robot.q_from_tool_tip : the numpy reference, with the details.
+    """
+    if "line" in _WARM and _STATE["numba"] and (backend == "auto" or backend == "numba"):
+        return _STATE["api"].q_from_tool_tip(  # type: ignore[no-any-return]
+            T_b_e, tip_e, design, errors=errors)
+    if resolve_backend(backend):
+        api = _api()
+        return _first("line", lambda: api.q_from_tool_tip(T_b_e, tip_e, design, errors=errors))
+    return _ref_ik.q_from_tool_tip(T_b_e, tip_e, design, errors=errors)
+
+
+# --- Jacobians -------------------------------------------------------------------------------
+def _jacobian(name: str, backend: str, args: tuple[Any, ...], kw: dict[str, Any]
+              ) -> NDArray[np.float64]:
+    if resolve_backend(backend):
+        fn = getattr(_jac(), name)
+        if name in _WARM:
+            return fn(*args, **kw)  # type: ignore[no-any-return]
+        return _first(name, lambda: fn(*args, **kw))
+    return getattr(_ref_jac, name)(*args, **kw)  # type: ignore[no-any-return]
+
+
+def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1, *,
+                      backend: Backend = "auto") -> NDArray[np.float64]:
+    """Jacobian of the parallel module, ``d O_s / d q``, in the base frame (analytic).
+
+    Parameters
+    ----------
+    q : array-like, shape (..., 3)
+        Actuators ``(q1, q2, q3)``, m.
+    design : Design, optional
+    mode : {1, -1} or array-like of them
+        Assembly mode.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        As in :func:`athenakin.forward_kinematics` (same result to 1e-12, same
+        NaN / inf entries, same errors).
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Rows: x, y, z of ``O_s`` (base frame); columns: ``q1, q2, q3``.
+
+    See Also
+    --------
+    athenakin.robot._jacobians.parallel_jacobian : the numpy reference and its derivation.
+
+    Examples
+    --------
+    >>> import athenakin as ak
+    >>> J = ak.analysis.parallel_jacobian([-0.10, 0.10, 0.45], ak.Design.default(), mode=1)
+    >>> J.shape
+    (3, 3)
+    """
+    return _jacobian("parallel_jacobian", backend, (q, design, mode), {})
+
+
+def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1,
+                              *, backend: Backend = "auto") -> NDArray[np.float64]:
+    """Inverse Jacobian of the parallel module, ``d q / d O_s``, shape (..., 3, 3).
+
+    Parameters as :func:`parallel_jacobian`; the numpy reference is
+    :func:`athenakin.robot._jacobians.parallel_inverse_jacobian`.
+    """
+    return _jacobian("parallel_inverse_jacobian", backend, (q, design, mode), {})
+
+
+def parallel_twist_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1,
+                            *, backend: Backend = "auto") -> NDArray[np.float64]:
+    """Twist ``(v, omega)`` of the frame ``O_s`` per actuator velocity, shape (..., 6, 3).
+
+    Parameters as :func:`parallel_jacobian`; the numpy reference is
+    :func:`athenakin.robot._jacobians.parallel_twist_jacobian`.
+    """
+    return _jacobian("parallel_twist_jacobian", backend, (q, design, mode), {})
+
+
+def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
+                        design: Design | None = None, *, mode: ArrayLike = 1,
+                        frame: Frame = "rcm", backend: Backend = "auto") -> NDArray[np.float64]:
+    """Instrument direction angles and insertion per actuator velocity, shape (..., 3, 3).
+
+    Parameters
+    ----------
+    q : array-like, shape (..., 3)
+    T_b_e : array-like, shape (..., 4, 4), optional
+        RCM frame (default: the reference set-up of the design).
+    design : Design, optional
+    mode : {1, -1} or array-like of them, keyword-only
+    frame : {"rcm", "base"}, keyword-only
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        As in :func:`parallel_jacobian`.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+
+    See Also
+    --------
+    athenakin.robot._jacobians.instrument_jacobian : the numpy reference, with the details.
+    """
+    return _jacobian("instrument_jacobian", backend, (q, T_b_e, design),
+                     {"mode": mode, "frame": frame})
+
+
+def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
+                                design: Design | None = None, *, mode: ArrayLike = 1,
+                                frame: Frame = "rcm", backend: Backend = "auto"
+                                ) -> NDArray[np.float64]:
+    """Inverse of :func:`instrument_jacobian`, shape (..., 3, 3) (same parameters)."""
+    return _jacobian("instrument_inverse_jacobian", backend, (q, T_b_e, design),
+                     {"mode": mode, "frame": frame})
+
+
+def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
+                      design: Design | None = None, *, mode: ArrayLike = 1,
+                      frame: Frame = "base", backend: Backend = "auto") -> NDArray[np.float64]:
+    """Tool-tip velocity per actuator velocity, shape (..., 3, 3).
+
+    Parameters as :func:`instrument_jacobian` (``frame`` defaults to ``"base"``);
+    the numpy reference is :func:`athenakin.robot._jacobians.tool_tip_jacobian`.
+    """
+    return _jacobian("tool_tip_jacobian", backend, (q, T_b_e, design),
+                     {"mode": mode, "frame": frame})
+
+
+def tool_tip_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
+                              design: Design | None = None, *, mode: ArrayLike = 1,
+                              frame: Frame = "base", backend: Backend = "auto"
+                              ) -> NDArray[np.float64]:
+    """Inverse of :func:`tool_tip_jacobian`, shape (..., 3, 3) (same parameters)."""
+    return _jacobian("tool_tip_inverse_jacobian", backend, (q, T_b_e, design),
+                     {"mode": mode, "frame": frame})

@@ -1,0 +1,627 @@
+"""The app's state as pure functions: set-up, forward view, inverse step, playback (numpy only).
+
+Nothing here knows about a browser: :func:`forward_view` turns actuator values into
+everything the page shows (the 16 slots with their reasons, the robot's geometry, the
+read-outs), :func:`inverse_step` moves the actuators towards a tool-tip target without a
+jump, and :func:`load_playback` / :func:`playback_q` read and sample a trajectory CSV. The
+viser binding (:mod:`athenakin.app._server`) only draws what these return.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_array
+from ..design import Design, resolve_design
+from ..errors import InvalidInputError, OutOfWorkspaceError, Reason
+from ..parallel import parallel_forward_kinematics
+from ..plot._geometry import RobotGeometry, robot_geometry
+from ..robot import (
+    REFERENCE_DIRECTION_B,
+    REFERENCE_P,
+    REFERENCE_Q,
+    SLOT_MODE,
+    SLOT_P_SIGN,
+    SLOT_UJOINT,
+    SLOT_WRIST,
+    forward_kinematics,
+    q_from_tool_tip,
+)
+from ..robot._setup import resolve_rcm_frame
+
+__all__ = [
+    "WARN_DISTANCE_M",
+    "WARN_SINE",
+    "WARN_CONDITION",
+    "INVERSE_STEPS",
+    "AppSetup",
+    "SlotStatus",
+    "Distance",
+    "Readouts",
+    "AppView",
+    "InverseStep",
+    "Playback",
+    "app_setup",
+    "slot_statuses",
+    "forward_view",
+    "readouts",
+    "inverse_step",
+    "tip_from_angles",
+    "angles_from_tip",
+    "load_playback",
+    "playback_q",
+]
+
+#: Distance (m) to a singular set at or below which a read-out turns to the warning colour.
+WARN_DISTANCE_M = 0.005
+#: Dimensionless distance (a sine) at or below which a read-out warns: ``sin 5 deg``.
+WARN_SINE = math.sin(math.radians(5.0))
+#: Condition number at or above which a Jacobian read-out warns.
+WARN_CONDITION = 100.0
+#: Points on the straight tool-tip segment from the last reached tip to a target that
+#: :func:`inverse_step` checks (the actuators stop at the last valid one).
+INVERSE_STEPS = 48
+#: Half-width of the slider range of an actuator without stroke limits, m.
+UNLIMITED_HALF_RANGE = 0.3
+#: Points per actuator of the grid on which :func:`app_setup` looks for an assembled pose.
+SEARCH_GRID = 9
+
+Slot = int | Literal["all"]
+
+
+@dataclasses.dataclass(frozen=True)
+class AppSetup:
+    """What the app works on: a design, an RCM frame, the actuator ranges.
+
+    Attributes
+    ----------
+    design : Design
+    T_b_e : ndarray, shape (4, 4)
+        RCM frame (checked rigid).
+    q_lo, q_hi : ndarray, shape (3,)
+        Slider ranges of ``q1, q2, q3``, m: the stroke limits, or
+        ``q_home -/+ UNLIMITED_HALF_RANGE`` where a stroke is unlimited.
+    q_home : ndarray, shape (3,)
+        Start configuration: :data:`~athenakin.robot.REFERENCE_Q` where it assembles,
+        else the assembled grid point nearest to it.
+    backend : {"numba", "numpy"}
+        Kernels used for the forward and inverse kinematics.
+    """
+
+    design: Design
+    T_b_e: NDArray[np.float64]
+    q_lo: NDArray[np.float64]
+    q_hi: NDArray[np.float64]
+    q_home: NDArray[np.float64]
+    backend: Literal["numba", "numpy"]
+
+
+def _numba_available() -> bool:
+    try:
+        import numba  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def _rcm_frame_at(q: NDArray[np.float64], design: Design) -> NDArray[np.float64]:
+    """The reference set-up's recipe (:func:`~athenakin.default_rcm_frame`) at another ``q``."""
+    from .._transforms import transform_from_rotation_translation
+
+    O_s = parallel_forward_kinematics(q, design).O_s[0]
+    x_e = REFERENCE_DIRECTION_B / np.linalg.norm(REFERENCE_DIRECTION_B)
+    z_e = np.array([1.0, 0.0, 0.0]) - x_e[0] * x_e
+    z_e /= np.linalg.norm(z_e)
+    R = np.stack([x_e, np.cross(z_e, x_e), z_e], axis=-1)
+    return transform_from_rotation_translation(R, O_s + REFERENCE_P * x_e)
+
+
+def app_setup(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
+              backend: Literal["auto", "numba", "numpy"] = "auto") -> AppSetup:
+    """Check a design and an RCM frame for the app and find where it starts.
+
+    Parameters
+    ----------
+    design : Design, optional
+        Defaults to :meth:`Design.default`.
+    T_b_e : array-like, shape (4, 4), optional
+        RCM frame; default: the reference set-up (:func:`~athenakin.default_rcm_frame`),
+        built at the start configuration when the reference ``q`` does not assemble.
+    backend : {"auto", "numba", "numpy"}, keyword-only
+        ``"auto"``: numba when installed (extra ``fast``), else numpy.
+
+    Returns
+    -------
+    AppSetup
+
+    Raises
+    ------
+    InvalidInputError
+        ``T_b_e`` is not a rigid transform of shape (4, 4), or ``backend`` is unknown.
+    OutOfWorkspaceError
+        The parallel module assembles nowhere on a grid over the stroke ranges (the
+        design cannot assemble).
+    """
+    design = resolve_design(design)
+    if backend not in ("auto", "numba", "numpy"):
+        raise InvalidInputError(f"backend: expected 'auto', 'numba' or 'numpy', got {backend!r}")
+    chosen: Literal["numba", "numpy"] = (
+        ("numba" if _numba_available() else "numpy") if backend == "auto" else backend)
+    lo, hi = design.stroke_min.copy(), design.stroke_max.copy()
+    ref = np.clip(REFERENCE_Q, lo, hi)
+    lo = np.where(np.isfinite(lo), lo, ref - UNLIMITED_HALF_RANGE)
+    hi = np.where(np.isfinite(hi), hi, ref + UNLIMITED_HALF_RANGE)
+    if parallel_forward_kinematics(ref, design).valid[0]:
+        home = ref
+    else:
+        axes = [np.linspace(a, b, SEARCH_GRID) for a, b in zip(lo, hi, strict=True)]
+        grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+        ok = parallel_forward_kinematics(grid, design).valid[:, 0]
+        if not np.any(ok):
+            raise OutOfWorkspaceError(
+                f"design {design.name or '(unnamed)'}: the parallel module assembles nowhere "
+                f"within the actuator ranges q_min = {np.round(lo, 4).tolist()} m, q_max = "
+                f"{np.round(hi, 4).tolist()} m (checked on a {SEARCH_GRID}^3 grid): check "
+                f"the link lengths l1..l5 and the strokes", Reason.CIRCLES_DISJOINT)
+        cand = grid[ok]
+        home = cand[np.argmin(np.linalg.norm(cand - ref, axis=-1))]
+    T = _rcm_frame_at(home, design) if T_b_e is None else resolve_rcm_frame(T_b_e, design)
+    return AppSetup(design=design, T_b_e=T, q_lo=lo, q_hi=hi, q_home=home.copy(),
+                    backend=chosen)
+
+
+@dataclasses.dataclass(frozen=True)
+class SlotStatus:
+    """One of the 16 forward-kinematics slots at the current ``q``.
+
+    Attributes
+    ----------
+    slot : int
+    valid : bool
+    reason : int
+        :class:`~athenakin.errors.Reason` code (0 where valid).
+    label : str
+        ``"slot 3: mode +1, p>0, U-, S-"``.
+    why : str
+        ``""`` where valid, else the reason's name and description.
+    """
+
+    slot: int
+    valid: bool
+    reason: int
+    label: str
+    why: str
+
+
+def _label(k: int) -> str:
+    return (f"slot {k}: mode {int(SLOT_MODE[k]):+d}, p{'>' if SLOT_P_SIGN[k] > 0 else '<'}0, "
+            f"U{'+' if SLOT_UJOINT[k] > 0 else '-'}, S{'+' if SLOT_WRIST[k] > 0 else '-'}")
+
+
+def slot_statuses(valid: ArrayLike, reason: ArrayLike) -> tuple[SlotStatus, ...]:
+    """The 16 slots from an FK result's ``valid`` and ``reason`` (each shape (16,))."""
+    out = []
+    for k, (v, r) in enumerate(zip(np.asarray(valid).tolist(), np.asarray(reason).tolist(),
+                                   strict=True)):
+        why = "" if v else f"{Reason(r).name}: {Reason(r).description}"
+        out.append(SlotStatus(slot=k, valid=bool(v), reason=int(r), label=_label(k), why=why))
+    return tuple(out)
+
+
+@dataclasses.dataclass(frozen=True)
+class Distance:
+    """Distance of the configuration to one singular set (a read-out line).
+
+    Attributes
+    ----------
+    name : str
+        Key of :data:`athenakin.analysis.CONDITIONS`.
+    value : float
+        The condition's closed-form measure (m or dimensionless; NaN if undefined).
+    unit : str
+        ``"m"`` or ``"1"``.
+    warn_at : float
+        Threshold of the warning colour (:data:`WARN_DISTANCE_M` or :data:`WARN_SINE`).
+    near : bool
+        ``value <= warn_at``.
+    meaning : str
+    """
+
+    name: str
+    value: float
+    unit: str
+    warn_at: float
+    near: bool
+    meaning: str
+
+
+@dataclasses.dataclass(frozen=True)
+class Readouts:
+    """The live read-outs of one configuration (one slot).
+
+    Attributes
+    ----------
+    q : ndarray, shape (3,)
+        Actuators, m.
+    slot, mode : int
+    p : float
+        Passive prismatic joint, m.
+    u : ndarray, shape (5,)
+        ``u1..u5``, rad.
+    tip_b, tip_e : ndarray, shape (3,)
+        Tool tip in the base frame and in the RCM frame E, m.
+    distances : tuple of Distance
+        One per singularity condition of :func:`athenakin.analysis.singularities`.
+    conditioning : dict of str -> float
+        2-norm condition numbers of the Jacobians ``d O_s / d q``
+        (``parallel_condition``) and ``d tip / d q`` (``tool_tip_condition``),
+        dimensionless (inf where singular, NaN where undefined).
+    conditioning_warn : dict of str -> bool
+        Not below :data:`WARN_CONDITION` (or not finite).
+    """
+
+    q: NDArray[np.float64]
+    slot: int
+    mode: int
+    p: float
+    u: NDArray[np.float64]
+    tip_b: NDArray[np.float64]
+    tip_e: NDArray[np.float64]
+    distances: tuple[Distance, ...]
+    conditioning: dict[str, float]
+    conditioning_warn: dict[str, bool]
+
+    @property
+    def near(self) -> list[str]:
+        """Names of the singular sets within the warning distance."""
+        return [d.name for d in self.distances if d.near]
+
+
+def readouts(setup: AppSetup, g: RobotGeometry) -> Readouts:
+    """Read-outs of the slot drawn in ``g`` (its q, joints, tip, singularity distances).
+
+    Parameters
+    ----------
+    setup : AppSetup
+    g : RobotGeometry
+        From :func:`athenakin.plot.robot_geometry` with the set-up's design and frame.
+
+    Returns
+    -------
+    Readouts
+    """
+    from ..analysis import (
+        CONDITIONS,
+        condition_number,
+        parallel_jacobian,
+        singularities,
+        tool_tip_jacobian,
+    )
+
+    rep = singularities(g.q, setup.T_b_e, setup.design, mode=g.mode, jacobians=False)
+    dist = []
+    for name, c in rep.conditions.items():
+        v = float(c.value)
+        warn_at = WARN_DISTANCE_M if c.unit == "m" else WARN_SINE
+        dist.append(Distance(name=name, value=v, unit=c.unit, warn_at=warn_at,
+                             near=bool(np.isfinite(v) and v <= warn_at),
+                             meaning=CONDITIONS[name].meaning))
+    be = setup.backend
+    with np.errstate(invalid="ignore", divide="ignore"):
+        jacs = {"parallel_condition": parallel_jacobian(g.q, setup.design, g.mode, backend=be),
+                "tool_tip_condition": tool_tip_jacobian(g.q, setup.T_b_e, setup.design,
+                                                        mode=g.mode, backend=be)}
+        cond = {k: float(condition_number(J)) for k, J in jacs.items()}
+    warn = {k: bool(not v < WARN_CONDITION) for k, v in cond.items()}
+    tip_b = g.points["tip"]
+    T = setup.T_b_e
+    tip_e = T[:3, :3].T @ (tip_b - T[:3, 3])
+    return Readouts(q=g.q.copy(), slot=g.slot, mode=g.mode, p=g.p, u=g.u.copy(), tip_b=tip_b.copy(),
+                    tip_e=tip_e, distances=tuple(dist), conditioning=cond, conditioning_warn=warn)
+
+
+@dataclasses.dataclass(frozen=True)
+class AppView:
+    """Everything the page shows for one actuator configuration.
+
+    Attributes
+    ----------
+    q : ndarray, shape (3,)
+        Actuators, m.
+    slots : tuple of SlotStatus
+        All 16 slots, valid or not (with the reason).
+    requested : int or "all"
+        The slot asked for.
+    geometry : RobotGeometry or None
+        The slot drawn solid (None: no slot is valid at ``q``).
+    ghosts : tuple of RobotGeometry
+        The other valid slots (drawn ghosted) when ``requested == "all"``.
+    readouts : Readouts or None
+        Of :attr:`geometry`.
+    message : str
+        Status line (why nothing is drawn, which slot stands in for an invalid one).
+    level : {"ok", "warn", "error"}
+    """
+
+    q: NDArray[np.float64]
+    slots: tuple[SlotStatus, ...]
+    requested: Slot
+    geometry: RobotGeometry | None
+    ghosts: tuple[RobotGeometry, ...]
+    readouts: Readouts | None
+    message: str
+    level: Literal["ok", "warn", "error"]
+
+
+def _check_slot(slot: object) -> Slot:
+    if slot == "all":
+        return "all"
+    if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 16:
+        raise InvalidInputError(f"slot: expected an integer in 0..15 or 'all', got {slot!r}")
+    return int(slot)
+
+
+def _nearest_valid(k: int, valid: NDArray[np.bool_]) -> int:
+    """The valid slot that shares the most labels with slot ``k`` (the lowest on a tie)."""
+    labels = np.stack([SLOT_MODE, SLOT_P_SIGN, SLOT_UJOINT, SLOT_WRIST], axis=-1)
+    same = np.sum(labels == labels[k], axis=-1) + 0.5 * (np.arange(16) == k)
+    same = np.where(valid, same, -1.0)
+    return int(np.argmax(same))
+
+
+def forward_view(setup: AppSetup, q: ArrayLike, *, slot: Slot = 0) -> AppView:
+    """The view of the robot at actuator values ``q`` (forward mode).
+
+    Parameters
+    ----------
+    setup : AppSetup
+    q : array-like, shape (3,)
+        Actuators, m.
+    slot : int or "all", keyword-only
+        Slot 0..15 to draw, or ``"all"``: the first valid slot solid, the other
+        valid ones ghosted. An invalid slot is replaced by the valid slot sharing
+        the most labels with it, and the message says so.
+
+    Returns
+    -------
+    AppView
+        Never raises for a configuration without a solution: ``geometry`` is then
+        None and ``message`` holds the reasons.
+
+    Raises
+    ------
+    InvalidInputError
+        ``q`` is not 3 finite numbers, or ``slot`` is not in 0..15 or ``"all"``.
+    """
+    q = check_array(q, "q", (3,)).copy()
+    if q.shape != (3,):
+        raise InvalidInputError(f"q: expected shape (3,), got shape {q.shape}")
+    requested = _check_slot(slot)
+    sol = forward_kinematics(q, setup.T_b_e, setup.design, errors="flag", backend=setup.backend)
+    valid = np.asarray(sol.valid)
+    slots = slot_statuses(valid, sol.reason)
+    if not valid.any():
+        reasons = sorted({s.why for s in slots})
+        return AppView(q=q, slots=slots, requested=requested, geometry=None, ghosts=(),
+                       readouts=None, level="error",
+                       message="no solution at this q: " + "; ".join(reasons))
+    message, level = "", "ok"
+    if requested == "all":
+        first = int(np.flatnonzero(valid)[0])
+        others = [int(k) for k in np.flatnonzero(valid) if k != first]
+        message = f"{int(valid.sum())} valid slots: {slots[first].label} solid, the others ghosted"
+    else:
+        first = requested if valid[requested] else _nearest_valid(requested, valid)
+        others = []
+        if first != requested:
+            message = (f"slot {requested} has no solution here ({slots[requested].why}); "
+                       f"showing {slots[first].label}")
+            level = "warn"
+    geom = robot_geometry(q, setup.T_b_e, setup.design, slot=first, fk=sol)
+    ghosts = tuple(robot_geometry(q, setup.T_b_e, setup.design, slot=k, fk=sol)
+                   for k in others)
+    ro = readouts(setup, geom)
+    if ro.near and level == "ok":
+        level = "warn"
+        message = (message + "; " if message else "") + "near: " + ", ".join(ro.near)
+    return AppView(q=q, slots=slots, requested=requested, geometry=geom, ghosts=ghosts,
+                   readouts=ro, message=message, level=level)
+
+
+def tip_from_angles(azimuth: float, polar: float, depth: float) -> NDArray[np.float64]:
+    """Tool tip in frame E from the instrument's angles about the RCM and the depth.
+
+    Parameters
+    ----------
+    azimuth, polar : float
+        Radians (:func:`~athenakin.direction_from_angles`).
+    depth : float
+        Distance of the tip beyond the RCM, m (``|tip_e|``).
+
+    Returns
+    -------
+    ndarray, shape (3,)
+    """
+    from ..robot import direction_from_angles
+
+    return float(depth) * direction_from_angles(azimuth, polar)
+
+
+def angles_from_tip(tip_e: ArrayLike) -> tuple[float, float, float]:
+    """``(azimuth, polar, depth)`` of a tool tip in frame E (rad, rad, m).
+
+    The inverse of :func:`tip_from_angles` (azimuth 0 on the poles, all 0 at the RCM).
+    """
+    from ..robot import angles_from_direction
+
+    tip = check_array(tip_e, "tip_e", (3,))
+    depth = float(np.linalg.norm(tip))
+    if depth == 0:
+        return 0.0, 0.0, 0.0
+    az, pol = angles_from_direction(tip)
+    return float(az), float(pol), depth
+
+
+@dataclasses.dataclass(frozen=True)
+class InverseStep:
+    """Result of :func:`inverse_step`.
+
+    Attributes
+    ----------
+    q : ndarray, shape (3,)
+        New actuator values, m (the previous ones where nothing could be reached).
+    tip_e : ndarray, shape (3,)
+        Tool tip the actuators now hold, frame E, m.
+    mode : int
+        Assembly mode of ``q`` (+1 / -1).
+    reached : bool
+        The target itself was reached.
+    reason : int
+        :class:`~athenakin.errors.Reason` that stopped the motion (0 if reached).
+    message : str
+    """
+
+    q: NDArray[np.float64]
+    tip_e: NDArray[np.float64]
+    mode: int
+    reached: bool
+    reason: int
+    message: str
+
+
+def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from: ArrayLike,
+                 mode_from: int = 1, *, n: int = INVERSE_STEPS) -> InverseStep:
+    """Move the tool tip from where it is towards a target; the actuators follow, never jump.
+
+    The straight segment ``tip_from -> tip_to`` (frame E) is sampled at ``n`` points
+    and solved by the controller-form IK (:func:`~athenakin.q_from_tool_tip`). The
+    actuators go to the last point before the first one that fails (out of the
+    workspace, a stroke limit, the tip not beyond the RCM) or changes the assembly
+    mode, so a target across the workspace boundary leaves the robot at the boundary.
+
+    Parameters
+    ----------
+    setup : AppSetup
+    tip_from : array-like, shape (3,)
+        Tip held now (frame E, m).
+    tip_to : array-like, shape (3,)
+        Target tip (frame E, m).
+    q_from : array-like, shape (3,)
+        Actuators now, m (returned unchanged if even the first step fails).
+    mode_from : int
+        Assembly mode now.
+    n : int, keyword-only
+        Samples on the segment.
+
+    Returns
+    -------
+    InverseStep
+    """
+    a = check_array(tip_from, "tip_from", (3,))
+    b = check_array(tip_to, "tip_to", (3,))
+    q0 = check_array(q_from, "q_from", (3,))
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise InvalidInputError(f"n: expected a positive integer, got {n!r}")
+    s = np.linspace(0.0, 1.0, int(n) + 1)[1:]
+    tips = a + s[:, None] * (b - a)
+    q, res = q_from_tool_tip(setup.T_b_e, tips, setup.design, errors="flag",
+                             backend=setup.backend)
+    ok = np.asarray(res.valid) & (np.asarray(res.mode) == mode_from)
+    bad = np.flatnonzero(~ok)
+    if bad.size == 0:
+        return InverseStep(q=q[-1].copy(), tip_e=b.copy(), mode=int(mode_from), reached=True,
+                           reason=0, message="")
+    k = int(bad[0])
+    r = int(res.reason[k])
+    why = (f"{Reason(r).name}: {Reason(r).description}" if r else
+           f"the assembly mode would change from {mode_from:+d}")
+    if k == 0:
+        return InverseStep(q=q0.copy(), tip_e=a.copy(), mode=int(mode_from), reached=False,
+                           reason=r, message=f"target out of reach ({why}); actuators held")
+    return InverseStep(q=q[k - 1].copy(), tip_e=tips[k - 1].copy(), mode=int(mode_from),
+                       reached=False, reason=r,
+                       message=f"stopped at the workspace boundary ({why})")
+
+
+@dataclasses.dataclass(frozen=True)
+class Playback:
+    """A trajectory to play back.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N,)
+        Sample times, s (``0, 1, 2, ...`` when the file has no ``t_s`` column).
+    q : ndarray, shape (N, 3)
+        Actuators, m (a missing reading repeats the previous one).
+    source : str
+    """
+
+    t: NDArray[np.float64]
+    q: NDArray[np.float64]
+    source: str
+
+    @property
+    def duration(self) -> float:
+        """``t[-1] - t[0]``, s."""
+        return float(self.t[-1] - self.t[0])
+
+
+def load_playback(path: str | Path) -> Playback:
+    """Read a trajectory CSV (as written by ``athenakin plan``) for playback.
+
+    Parameters
+    ----------
+    path : str or Path
+        CSV with columns ``q1_m, q2_m, q3_m`` and optionally ``t_s``
+        (:func:`athenakin.motion.read_q_stream_csv`).
+
+    Returns
+    -------
+    Playback
+
+    Raises
+    ------
+    PathFileError
+        The file cannot be read, misses a column, has a non-number (the message names
+        the line and column), times that do not increase, or no rows.
+    """
+    from ..motion._errors import PathFileError
+    from ..motion._io import read_q_stream_csv
+
+    try:
+        q, t = read_q_stream_csv(path)
+    except OSError as exc:
+        raise PathFileError(f"{path}: cannot read the file ({exc.strerror or exc})") from exc
+    if t is None:
+        t = np.arange(len(q), dtype=float)
+    if not np.all(np.isfinite(t)):
+        k = int(np.flatnonzero(~np.isfinite(t))[0])
+        raise PathFileError(f"{path}: data row {k + 1}: t_s is missing or not finite")
+    if len(t) > 1 and np.any(np.diff(t) <= 0):
+        k = int(np.flatnonzero(np.diff(t) <= 0)[0])
+        raise PathFileError(f"{path}: data row {k + 2}: t_s = {t[k + 1]} does not increase "
+                            f"(previous {t[k]})")
+    q = q.copy()
+    for i in range(1, len(q)):                      # hold the last reading where one is missing
+        if not np.all(np.isfinite(q[i])):
+            q[i] = q[i - 1]
+    return Playback(t=np.asarray(t, dtype=float), q=q, source=str(path))
+
+
+def playback_q(pb: Playback, t: float) -> tuple[NDArray[np.float64], int]:
+    """Actuators at time ``t`` of a playback: the last sample at or before ``t``.
+
+    Returns
+    -------
+    q : ndarray, shape (3,)
+    index : int
+        Sample index (clipped to the recording).
+    """
+    k = int(np.clip(np.searchsorted(pb.t, float(t), side="right") - 1, 0, len(pb.t) - 1))
+    return pb.q[k].copy(), k

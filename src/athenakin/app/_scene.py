@@ -1,0 +1,214 @@
+"""Scene description of a robot view: coloured line sets, points and labels (numpy only).
+
+The parts, colours and sizes are those of the static views (:mod:`athenakin.plot`):
+the positions come from :class:`~athenakin.plot.RobotGeometry`, the colours from
+:data:`athenakin.plot.COLORS`. A renderer draws each :class:`LineSet` as one node of
+line segments, each :class:`PointSet` as one point cloud, and each :class:`Label` as
+a text label; ghosts (the other valid slots) are the same parts, paler.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..plot._geometry import RobotGeometry
+from ..plot._mpl import ARC_RADIUS, COLORS, FRAME_LENGTH, arc_points
+
+__all__ = ["LineSet", "PointSet", "Label", "Scene", "robot_scene", "ghost_scene", "rgb",
+           "GHOST_BLEND"]
+
+#: How far a ghost's colours are blended towards white (0: solid colour, 1: white).
+GHOST_BLEND = 0.7
+
+
+def rgb(color: str) -> tuple[int, int, int]:
+    """``"#1f4fbf"`` -> ``(31, 79, 191)``."""
+    h = color.lstrip("#")
+    if len(h) != 6:
+        raise ValueError(f"color: expected '#rrggbb', got {color!r}")
+    return int(h[0:2], 16), int(h[2:4], 16), int(h[4:6], 16)
+
+
+def _blend(c: tuple[int, int, int], f: float) -> tuple[int, int, int]:
+    r, g, b = (round(v + f * (255 - v)) for v in c)
+    return r, g, b
+
+
+@dataclasses.dataclass(frozen=True)
+class LineSet:
+    """Straight segments of one part, drawn in one colour.
+
+    Attributes
+    ----------
+    name : str
+    segments : ndarray, shape (n, 2, 3)
+        Start and end of each segment, base frame, m.
+    color : tuple of 3 int
+        RGB, 0..255.
+    width : float
+        Line width, pixels.
+    """
+
+    name: str
+    segments: NDArray[np.float64]
+    color: tuple[int, int, int]
+    width: float
+
+
+@dataclasses.dataclass(frozen=True)
+class PointSet:
+    """Joints and points, one colour each.
+
+    Attributes
+    ----------
+    name : str
+    points : ndarray, shape (n, 3)
+        Base frame, m.
+    colors : ndarray of uint8, shape (n, 3)
+    size : float
+        Point size, m.
+    """
+
+    name: str
+    points: NDArray[np.float64]
+    colors: NDArray[np.uint8]
+    size: float
+
+
+@dataclasses.dataclass(frozen=True)
+class Label:
+    """A text label at a point (base frame, m)."""
+
+    text: str
+    position: NDArray[np.float64]
+
+
+@dataclasses.dataclass(frozen=True)
+class Scene:
+    """Everything drawn for one view.
+
+    Attributes
+    ----------
+    lines : tuple of LineSet
+    points : tuple of PointSet
+    labels : tuple of Label
+    """
+
+    lines: tuple[LineSet, ...]
+    points: tuple[PointSet, ...]
+    labels: tuple[Label, ...]
+
+    def bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Axis-aligned box ``(lo, hi)`` (each shape (3,)) around every line and point."""
+        pts = [ls.segments.reshape(-1, 3) for ls in self.lines]
+        pts += [ps.points for ps in self.points]
+        allp = np.concatenate(pts)
+        allp = allp[np.all(np.isfinite(allp), axis=-1)]
+        return allp.min(axis=0), allp.max(axis=0)
+
+
+def _polyline_segments(pts: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A polyline (n, 3) as n - 1 segments (n - 1, 2, 3)."""
+    return np.stack([pts[:-1], pts[1:]], axis=1)
+
+
+def _seg(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    return np.stack([a, b])[None]
+
+
+#: Point names drawn as joints, their labels, colours and whether they are the big ones.
+_POINTS = (("A", "A", "rail"), ("B", "B", "rail"), ("M", "M", "joint"), ("D", "D", "joint"),
+           ("C", "C", "joint"), ("O_i", "O_i", "joint"), ("O_s", "O_s", "joint"),
+           ("RCM", "RCM", "sphere"), ("tip", "tip", "serial"))
+
+
+def robot_scene(g: RobotGeometry, *, frames: bool = True, labels: bool = True,
+                frame_length: float = FRAME_LENGTH) -> Scene:
+    """The parts of one solution as a scene (the static views' parts and colours).
+
+    Parameters
+    ----------
+    g : RobotGeometry
+    frames : bool, keyword-only
+        Triads of ``O_b``, ``O_i``, ``O_s``, ``O_e`` (x red, y green, z blue).
+    labels : bool, keyword-only
+        Text labels of the points.
+    frame_length : float, keyword-only
+        Length of the drawn frame axes, m.
+
+    Returns
+    -------
+    Scene
+        Line sets ``rail``, ``parallel``, ``actuator_q3``, ``circle_k1``, ``circle_k2``,
+        ``ujoint``, ``instrument``, ``instrument_axis`` (only when the RCM is off the
+        shaft), ``spherical_joint`` and ``frame_x``/``_y``/``_z``; one point set
+        ``joints``.
+    """
+    P, seg = g.points, g.segments()
+    c = {k: rgb(v) for k, v in COLORS.items()}
+    lines = [
+        LineSet("rail", _seg(*g.rail), c["rail"], 6.0),
+        LineSet("parallel", np.concatenate(
+            [np.stack(seg[k])[None] for k in ("link_a1", "link_b1", "link_a3", "link_b3",
+                                               "carrier_y", "carrier_z", "offset_l4")]),
+            c["parallel"], 5.0),
+        LineSet("actuator_q3", np.stack(seg["actuator_q3"])[None], c["actuator"], 6.0),
+        LineSet("circle_k1", _polyline_segments(g.k1), c["circle_k1"], 1.5),
+        LineSet("circle_k2", _polyline_segments(g.k2_arc), c["circle_k2"], 1.5),
+        LineSet("ujoint", np.concatenate([
+            _seg(P["O_s"] - 0.03 * g.ujoint_axes[0], P["O_s"] + 0.03 * g.ujoint_axes[0]),
+            _seg(P["O_s"], P["O_s"] + 0.045 * g.ujoint_axes[1])]), rgb("#333333"), 4.0),
+        LineSet("instrument", np.stack(seg["instrument"])[None], c["serial"], 6.0),
+    ]
+    if not 0.0 <= g.p <= g.design.tool_length:
+        lines.append(LineSet("instrument_axis", _seg(P["O_s"], P["RCM"]), c["serial"], 1.0))
+    rc, ax = P["RCM"], g.wrist_axes
+    sph = [_seg(rc - 0.4 * ARC_RADIUS * a, rc + 0.4 * ARC_RADIUS * a) for a in ax]
+    sph += [_polyline_segments(arc_points(rc, ax[k], ax[k + 1], ARC_RADIUS)) for k in range(2)]
+    lines.append(LineSet("spherical_joint", np.concatenate(sph), c["sphere"], 3.0))
+    if frames:
+        triads = [(g.frames["b"], 1.5), (g.frames["i"], 1.0), (g.frames["s"], 1.0),
+                  (g.frames["e"], 1.0)]
+        for i, axis in enumerate("xyz"):
+            lines.append(LineSet(f"frame_{axis}", np.concatenate(
+                [_seg(T[:3, 3], T[:3, 3] + s * frame_length * T[:3, i]) for T, s in triads]),
+                c[axis], 3.0))
+    pts = np.stack([P[k] for k, _, _ in _POINTS])
+    cols = np.array([c[col] for _, _, col in _POINTS], dtype=np.uint8)
+    points = [PointSet("joints", pts, cols, 0.012)]
+    other = g.intersections[1 if g.mode > 0 else 0]
+    if np.all(np.isfinite(other)):
+        points.append(PointSet("other_mode_O_i", other[None], np.array([c["joint"]], np.uint8),
+                               0.008))
+    labs = tuple(Label(text, P[k].copy()) for k, text, _ in _POINTS) if labels else ()
+    return Scene(lines=tuple(lines), points=tuple(points), labels=labs)
+
+
+def ghost_scene(geoms: tuple[RobotGeometry, ...] | list[RobotGeometry]) -> Scene:
+    """The moving parts of other solutions, paler, merged into one line set per part.
+
+    The rail and the frames are left out (they are drawn once by the solid view).
+
+    Parameters
+    ----------
+    geoms : sequence of RobotGeometry
+
+    Returns
+    -------
+    Scene
+        Line sets named ``ghost_<part>`` (possibly with no segments), no labels.
+    """
+    parts: dict[str, list[NDArray[np.float64]]] = {}
+    style: dict[str, tuple[tuple[int, int, int], float]] = {}
+    for g in geoms:
+        s = robot_scene(g, frames=False, labels=False)
+        for ls in s.lines:
+            if ls.name == "rail":
+                continue
+            parts.setdefault(ls.name, []).append(ls.segments)
+            style[ls.name] = (_blend(ls.color, GHOST_BLEND), max(1.0, 0.6 * ls.width))
+    lines = tuple(LineSet(f"ghost_{k}", np.concatenate(v), *style[k]) for k, v in parts.items())
+    return Scene(lines=lines, points=(), labels=())

@@ -1,0 +1,535 @@
+"""The viser binding: a local web page with sliders, a tip handle and read-outs (extra ``app``).
+
+Why viser: a maintained 3-D viewer for robotics written for Python, whose web client
+ships inside the wheel (works offline, no JavaScript build), with GUI inputs (sliders,
+dropdowns, tabs, HTML), draggable transform controls and a websocket that pushes only
+what changed. Plotly (the static HTML page) has no server round trip; Dash/Panel would
+need a 3-D widget and their own state plumbing; MeshCat has no GUI controls.
+
+Everything the page shows comes from the pure functions of :mod:`athenakin.app`
+(:func:`~athenakin.app.forward_view`, :func:`~athenakin.app.inverse_step`, ...): this
+module only turns them into scene nodes and GUI values, under one lock.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..design import Design
+from ..errors import KinematicsError
+from ._model import (
+    AppSetup,
+    AppView,
+    Playback,
+    angles_from_tip,
+    app_setup,
+    forward_view,
+    inverse_step,
+    load_playback,
+    playback_q,
+    tip_from_angles,
+)
+from ._scene import Scene, ghost_scene, robot_scene
+from ._text import ERROR_COLOR, message_html, view_html
+
+__all__ = ["AthenaApp", "launch", "DEFAULT_PORT"]
+
+#: Port the app asks for when none is given (viser takes the next free one if busy).
+DEFAULT_PORT = 8080
+_ALL = "all valid slots (others ghosted)"
+
+
+def _import_viser() -> Any:
+    try:
+        import viser
+    except ModuleNotFoundError as exc:
+        raise ModuleNotFoundError(
+            "athenakin.app needs the optional package 'viser': pip install 'athenakin[app]'",
+            name="viser") from exc
+    return viser
+
+
+def _load_rcm_file(path: str | Path) -> NDArray[np.float64]:
+    """``T_b_e`` from a JSON file ``{"T_b_e": 4x4 nested list}`` (as ``--rcm-file``)."""
+    try:
+        data = json.loads(Path(path).read_text())
+    except (OSError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{path}: cannot read the RCM frame ({exc})") from exc
+    if not isinstance(data, dict) or "T_b_e" not in data:
+        raise ValueError(f"{path}: expected a JSON object with key 'T_b_e'")
+    return np.asarray(data["T_b_e"], dtype=float)
+
+
+def _error_text(exc: BaseException) -> str:
+    return f"{type(exc).__name__}: {exc}"
+
+
+class AthenaApp:
+    """The live app: a viser server drawing ATHENA, driven by sliders and a tip handle.
+
+    Parameters
+    ----------
+    design : Design, str or Path, optional
+        The design, or a TOML file to load it from. A file that cannot be read, or a
+        design that cannot assemble, leaves the app running on the reference design
+        with the message shown in the page (and in :attr:`errors`).
+    T_b_e : array-like, shape (4, 4), str or Path, optional
+        RCM frame, or a JSON file ``{"T_b_e": ...}``. A frame that is not rigid is
+        reported the same way (the reference set-up is used instead).
+    host : str, keyword-only
+        Interface to bind; ``"127.0.0.1"`` (default) serves this machine only.
+    port : int, keyword-only
+        Port (viser takes the next free one when it is busy; 0: any free port).
+    trajectory : str or Path, keyword-only, optional
+        Trajectory CSV (``athenakin plan``) to load into the playback tab.
+    backend : {"auto", "numba", "numpy"}, keyword-only
+    verbose : bool, keyword-only
+        viser's own log lines.
+
+    Attributes
+    ----------
+    url : str
+        ``http://HOST:PORT/``.
+    errors : list of str
+        Start-up problems shown in the page (bad design, frame or trajectory).
+    """
+
+    def __init__(self, design: Design | str | Path | None = None,
+                 T_b_e: ArrayLike | str | Path | None = None, *, host: str = "127.0.0.1",
+                 port: int = DEFAULT_PORT, trajectory: str | Path | None = None,
+                 backend: str = "auto", verbose: bool = False) -> None:
+        viser = _import_viser()
+        self._lock = threading.RLock()
+        self._syncing = False
+        self._backend = backend
+        self.errors: list[str] = []
+        self.setup = self._make_setup(design, T_b_e)
+        self.server = viser.ViserServer(host=host, port=port, verbose=verbose)
+        self.host = host
+        self.port = int(self.server.get_port())
+        self.q = self.setup.q_home.copy()
+        self.slot: int | str = 0
+        self.view: AppView | None = None
+        self.playback: Playback | None = None
+        self._dragging = False
+        self._line_handles: dict[str, Any] = {}
+        self._point_handles: dict[str, Any] = {}
+        self._label_handles: dict[str, Any] = {}
+        self._build_gui()
+        if trajectory is not None:
+            self._load_trajectory(str(trajectory))
+        self._apply_q(self.q, sync_ik=True)
+        self._frame_camera()
+
+    # ------------------------------------------------------------------ set-up
+    def _make_setup(self, design: Design | str | Path | None,
+                    T_b_e: ArrayLike | str | Path | None) -> AppSetup:
+        d: Design | None = None
+        if isinstance(design, (str, Path)):
+            try:
+                d = Design.from_toml(design)
+            except (OSError, ValueError, TypeError, KinematicsError) as exc:
+                self.errors.append(f"design file {design}: {_error_text(exc)}; "
+                                   f"showing the reference design instead")
+        elif design is not None:
+            d = design
+        T: ArrayLike | None = None
+        if isinstance(T_b_e, (str, Path)):
+            try:
+                T = _load_rcm_file(T_b_e)
+            except ValueError as exc:
+                self.errors.append(f"RCM file: {exc}; using the reference set-up")
+        else:
+            T = T_b_e
+        try:
+            base = app_setup(d, None, backend=self._backend)  # type: ignore[arg-type]
+        except (ValueError, TypeError, KinematicsError) as exc:
+            self.errors.append(f"design: {_error_text(exc)}; showing the reference design "
+                               f"instead")
+            d = None
+            base = app_setup(None, None, backend=self._backend)  # type: ignore[arg-type]
+        if T is None:
+            return base
+        try:
+            return app_setup(d, T, backend=self._backend)  # type: ignore[arg-type]
+        except (ValueError, TypeError, KinematicsError) as exc:
+            self.errors.append(f"RCM frame: {_error_text(exc)}; using the reference set-up "
+                               f"instead")
+            return base
+
+    @property
+    def url(self) -> str:
+        """Address of the page."""
+        host = "127.0.0.1" if self.host in ("0.0.0.0", "") else self.host
+        return f"http://{host}:{self.port}/"
+
+    # ------------------------------------------------------------------ GUI
+    def _build_gui(self) -> None:
+        gui, s = self.server.gui, self.setup
+        self.server.scene.set_up_direction("+z")
+        gui.configure_theme(control_width="large", show_logo=False)
+        self._banner = gui.add_html(self._banner_html())
+        tabs = gui.add_tab_group()
+        with tabs.add_tab("Forward"):
+            self._q_sliders = []
+            for i in range(3):
+                lo, hi = float(s.q_lo[i] * 1e3), float(s.q_hi[i] * 1e3)
+                sl = gui.add_slider(f"q{i + 1} [mm]", min=lo, max=hi, step=0.5,
+                                    initial_value=float(np.clip(self.q[i] * 1e3, lo, hi)),
+                                    hint=f"actuator q{i + 1}, stroke {lo:.0f}..{hi:.0f} mm")
+                sl.on_update(self._on_q)
+                self._q_sliders.append(sl)
+            self._slot_dd = gui.add_dropdown("FK slot", options=self._slot_options(None),
+                                             initial_value=self._slot_options(None)[1])
+            self._slot_dd.on_update(self._on_slot)
+        with tabs.add_tab("Inverse"):
+            L = s.design.tool_length * 1e3
+            self._az = gui.add_slider("azimuth [deg]", min=-180.0, max=180.0, step=0.1,
+                                      initial_value=0.0, hint="instrument about z_e")
+            self._pol = gui.add_slider("polar [deg]", min=0.0, max=180.0, step=0.1,
+                                       initial_value=90.0, hint="angle from z_e")
+            self._depth = gui.add_slider("tip depth [mm]", min=1.0, max=float(L - 1.0),
+                                         step=0.5, initial_value=min(250.0, L / 2),
+                                         hint="tool tip beyond the RCM")
+            for sl in (self._az, self._pol, self._depth):
+                sl.on_update(self._on_angles)
+            self._handle_cb = gui.add_checkbox("tip handle", initial_value=True,
+                                               hint="drag the tool tip in the 3-D view")
+            self._handle_cb.on_update(self._on_handle_visible)
+        with tabs.add_tab("Playback"):
+            self._traj_path = gui.add_text("trajectory CSV", initial_value="",
+                                           hint="written by 'athenakin plan'")
+            self._traj_load = gui.add_button("load trajectory")
+            self._traj_load.on_click(lambda _: self._load_trajectory(self._traj_path.value))
+            self._time = gui.add_slider("time [s]", min=0.0, max=1.0, step=0.001,
+                                        initial_value=0.0, disabled=True)
+            self._time.on_update(self._on_time)
+            self._play = gui.add_button("play", disabled=True)
+            self._play.on_click(lambda _: self._start_playing())
+        with tabs.add_tab("Set-up"):
+            self._design_path = gui.add_text("design TOML", initial_value="")
+            self._rcm_path = gui.add_text("RCM frame JSON", initial_value="",
+                                          hint='{"T_b_e": 4x4 nested list}')
+            self._apply_setup = gui.add_button("apply set-up")
+            self._apply_setup.on_click(lambda _: self._change_setup())
+        self._status = gui.add_html(message_html("", "ok"))
+        self._readouts = gui.add_html("")
+        with gui.add_folder("Slots (16 FK solutions)", expand_by_default=False):
+            self._slots_html = gui.add_html("")
+        self._handle = self.server.scene.add_transform_controls(
+            "/tip_handle", scale=0.08, disable_rotations=True, depth_test=False)
+        self._handle.on_update(self._on_handle)
+        self.server.scene.add_grid("/ground", width=1.2, height=1.2, cell_size=0.05,
+                                   section_size=0.25, position=(0.0, 0.25, 0.0))
+
+    def _banner_html(self) -> str:
+        if not self.errors:
+            d = self.setup.design
+            return (f"<div data-ro='banner'><b>ATHENA</b> {d.name or ''} "
+                    f"(backend {self.setup.backend})</div>")
+        items = "".join(f"<li>{_escape(e)}</li>" for e in self.errors)
+        return (f"<div data-ro='banner' data-level='error' style='color:{ERROR_COLOR}'>"
+                f"<b>Problems</b><ul style='margin:0;padding-left:1.2em'>{items}</ul></div>")
+
+    def _slot_options(self, view: AppView | None) -> list[str]:
+        if view is None:
+            return [_ALL] + [f"slot {k}" for k in range(16)]
+        return [_ALL] + [s.label if s.valid else f"{s.label} - invalid: "
+                         f"{s.why.split(':')[0]}" for s in view.slots]
+
+    # ------------------------------------------------------------------ callbacks
+    def _on_q(self, _: object) -> None:
+        if self._syncing:
+            return
+        q = np.array([sl.value for sl in self._q_sliders], dtype=float) * 1e-3
+        self._apply_q(q, sync_ik=True)
+
+    def _on_slot(self, _: object) -> None:
+        if self._syncing:
+            return
+        v = self._slot_dd.value
+        with self._lock:
+            self.slot = "all" if v == _ALL else int(v.split(":")[0].split()[1])
+        self._apply_q(self.q, sync_ik=True)
+
+    def _on_angles(self, _: object) -> None:
+        if self._syncing:
+            return
+        tip = tip_from_angles(math.radians(self._az.value), math.radians(self._pol.value),
+                              self._depth.value * 1e-3)
+        self._move_tip(tip, snap_angles=True)
+
+    def _on_handle(self, event: Any) -> None:
+        if self._syncing:
+            return
+        phase = getattr(event, "phase", "update")
+        self._dragging = phase != "end"
+        T = self.setup.T_b_e
+        tip_b = np.asarray(self._handle.position, dtype=float)
+        self._move_tip(T[:3, :3].T @ (tip_b - T[:3, 3]), snap_angles=False)
+        if phase == "end":
+            self._place_handle()
+
+    def _on_handle_visible(self, _: object) -> None:
+        self._handle.visible = bool(self._handle_cb.value)
+
+    def _on_time(self, _: object) -> None:
+        if self._syncing or self.playback is None:
+            return
+        q, _k = playback_q(self.playback, self.playback.t[0] + self._time.value)
+        self._apply_q(q, sync_ik=True)
+
+    # ------------------------------------------------------------------ actions
+    def set_q(self, q: ArrayLike) -> AppView:
+        """Move the actuators (m) as the sliders would; returns the new view."""
+        return self._apply_q(np.asarray(q, dtype=float), sync_ik=True)
+
+    def _move_tip(self, tip_e: NDArray[np.float64], *, snap_angles: bool) -> None:
+        with self._lock:
+            v = self.view
+            if v is None or v.readouts is None:
+                self._set_status("the tip cannot be moved: no valid configuration", "error")
+                return
+            r = v.readouts
+            step = inverse_step(self.setup, r.tip_e, tip_e, r.q, r.mode)
+            slot = self.slot if self.slot == "all" else _inverse_slot(int(self.slot), step.mode)
+            if slot != self.slot:
+                self.slot = slot
+            self._apply_q(step.q, sync_ik=not snap_angles or not step.reached,
+                          extra=(step.message, "warn") if step.message else None)
+
+    def _apply_q(self, q: NDArray[np.float64], *, sync_ik: bool,
+                 extra: tuple[str, str] | None = None) -> AppView:
+        with self._lock:
+            t0 = time.perf_counter()
+            try:
+                view = forward_view(self.setup, q, slot=self.slot)  # type: ignore[arg-type]
+            except (ValueError, TypeError, KinematicsError) as exc:
+                self._set_status(_error_text(exc), "error")
+                return self.view  # type: ignore[return-value]
+            self.q = view.q
+            if view.geometry is not None:
+                self.view = view
+                self._draw(view)
+            self._sync_gui(view, sync_ik=sync_ik)
+            msg, level = view.message, view.level
+            if extra is not None:
+                msg = extra[0] + ("; " + msg if msg else "")
+                level = "error" if view.level == "error" else extra[1]
+            status, ro, slots = view_html(view)
+            self._status.content = message_html(msg, level)
+            if ro:
+                self._readouts.content = ro
+            self._slots_html.content = slots
+            self.last_update_s = time.perf_counter() - t0
+            return view
+
+    def _set_status(self, text: str, level: str) -> None:
+        self._status.content = message_html(text, level)
+
+    def _sync_gui(self, view: AppView, *, sync_ik: bool) -> None:
+        self._syncing = True
+        try:
+            for i, sl in enumerate(self._q_sliders):
+                v = float(np.clip(round(view.q[i] * 1e3, 3), sl.min, sl.max))
+                if abs(sl.value - v) > 1e-9:
+                    sl.value = v
+            opts = self._slot_options(view)
+            if tuple(opts) != tuple(self._slot_dd.options):
+                self._slot_dd.options = opts
+            want = opts[0] if self.slot == "all" else opts[1 + int(self.slot)]
+            if self._slot_dd.value != want:
+                self._slot_dd.value = want
+            if sync_ik and view.readouts is not None:
+                az, pol, depth = angles_from_tip(view.readouts.tip_e)
+                self._az.value = float(np.clip(round(math.degrees(az), 2), -180, 180))
+                self._pol.value = float(np.clip(round(math.degrees(pol), 2), 0, 180))
+                self._depth.value = float(np.clip(round(depth * 1e3, 2), self._depth.min,
+                                                  self._depth.max))
+            if not self._dragging:
+                self._place_handle()
+        finally:
+            self._syncing = False
+
+    def _place_handle(self) -> None:
+        if self.view is not None and self.view.readouts is not None:
+            prev, self._syncing = self._syncing, True
+            try:
+                self._handle.position = tuple(float(x) for x in self.view.readouts.tip_b)
+            finally:
+                self._syncing = prev
+
+    def _draw(self, view: AppView) -> None:
+        assert view.geometry is not None
+        solid = robot_scene(view.geometry)
+        ghosts = ghost_scene(view.ghosts) if view.ghosts else Scene((), (), ())
+        scene = self.server.scene
+        handles = {}
+        with self.server.atomic():
+            for ls in solid.lines + ghosts.lines:
+                pts = ls.segments.astype(np.float32)
+                h = self._line_handles.pop(ls.name, None)
+                if h is None:
+                    h = scene.add_line_segments(f"/robot/{ls.name}", points=pts,
+                                                colors=ls.color, thickness=ls.width,
+                                                thickness_units="screen")
+                else:
+                    h.points = pts
+                handles[ls.name] = h
+            for h in self._line_handles.values():      # parts not drawn any more
+                h.remove()
+            self._line_handles = handles
+            for ps in solid.points:
+                pts = ps.points.astype(np.float32)
+                h = self._point_handles.get(ps.name)
+                if h is not None and len(h.points) == len(pts):
+                    h.points = pts
+                else:
+                    if h is not None:
+                        h.remove()
+                    self._point_handles[ps.name] = scene.add_point_cloud(
+                        f"/robot/{ps.name}", points=pts, colors=ps.colors, point_size=ps.size,
+                        point_shape="circle", precision="float32")
+            for name in set(self._point_handles) - {ps.name for ps in solid.points}:
+                self._point_handles.pop(name).remove()
+            for lab in solid.labels:
+                h = self._label_handles.get(lab.text)
+                if h is None:
+                    self._label_handles[lab.text] = scene.add_label(
+                        f"/labels/{lab.text}", lab.text, position=tuple(lab.position))
+                else:
+                    h.position = tuple(float(x) for x in lab.position)
+
+    def _frame_camera(self) -> None:
+        if self.view is None or self.view.geometry is None:
+            return
+        lo, hi = self.view.geometry.bounds()
+        centre = 0.5 * (lo + hi)
+        span = float(np.max(hi - lo))
+        cam = self.server.initial_camera
+        cam.look_at = tuple(float(x) for x in centre)
+        cam.position = tuple(float(x) for x in centre + span * np.array([1.1, -1.3, 0.8]))
+        cam.up = (0.0, 0.0, 1.0)
+
+    # ------------------------------------------------------------------ playback, set-up
+    def _load_trajectory(self, path: str) -> None:
+        try:
+            pb = load_playback(path.strip())
+        except (OSError, ValueError, KinematicsError) as exc:
+            self._set_status(f"trajectory not loaded: {_error_text(exc)}", "error")
+            self.errors.append(f"trajectory: {_error_text(exc)}")
+            self._banner.content = self._banner_html()
+            return
+        with self._lock:
+            self.playback = pb
+            self._syncing = True
+            try:
+                self._traj_path.value = path
+                self._time.max = max(pb.duration, 1e-3)
+                self._time.step = float(np.min(np.diff(pb.t))) if len(pb.t) > 1 else 1e-3
+                self._time.value = 0.0
+                self._time.disabled = False
+                self._play.disabled = False
+            finally:
+                self._syncing = False
+        self._apply_q(pb.q[0], sync_ik=True,
+                      extra=(f"trajectory {Path(pb.source).name}: {len(pb.t)} samples, "
+                             f"{pb.duration:.3f} s", "ok"))
+
+    def _start_playing(self) -> None:
+        pb = self.playback
+        if pb is None:
+            return
+
+        def run() -> None:
+            t_end = pb.duration
+            start = time.perf_counter() - float(self._time.value)
+            if self._time.value >= t_end:
+                start = time.perf_counter()
+            while True:
+                t = time.perf_counter() - start
+                if t > t_end or self.playback is not pb:
+                    break
+                self._time.value = float(min(t, t_end))     # calls _on_time
+                time.sleep(1 / 30)
+
+        threading.Thread(target=run, daemon=True, name="athenakin-playback").start()
+
+    def _change_setup(self) -> None:
+        design = self._design_path.value.strip() or None
+        rcm = self._rcm_path.value.strip() or None
+        before = len(self.errors)
+        setup = self._make_setup(design, rcm)
+        problems = self.errors[before:]
+        del self.errors[before:]
+        if problems:
+            self._set_status("set-up not changed: " + " | ".join(problems), "error")
+            return
+        with self._lock:
+            self.setup = setup
+            self.errors = []
+            self._banner.content = self._banner_html()
+            self._syncing = True
+            try:
+                for i, sl in enumerate(self._q_sliders):
+                    sl.min, sl.max = float(setup.q_lo[i] * 1e3), float(setup.q_hi[i] * 1e3)
+            finally:
+                self._syncing = False
+            self._apply_q(setup.q_home, sync_ik=True)
+
+    # ------------------------------------------------------------------ life cycle
+    def stop(self) -> None:
+        """Stop the server (the page disconnects)."""
+        self.playback = None
+        self.server.stop()
+
+    def __enter__(self) -> AthenaApp:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+
+def _inverse_slot(slot: int, mode: int) -> int:
+    """The slot with the IK's mode and ``p > 0``, and the branches of ``slot``."""
+    from ..robot import SLOT_UJOINT, SLOT_WRIST, slot_index
+
+    return slot_index(mode, 1, int(SLOT_UJOINT[slot]), int(SLOT_WRIST[slot]))
+
+
+def _escape(text: str) -> str:
+    import html
+
+    return html.escape(text)
+
+
+def launch(design: Design | str | Path | None = None, T_b_e: ArrayLike | str | Path | None = None,
+           *, host: str = "127.0.0.1", port: int = DEFAULT_PORT,
+           trajectory: str | Path | None = None, backend: str = "auto") -> AthenaApp:
+    """Start the app in the background (e.g. from a notebook) and print its address.
+
+    Parameters
+    ----------
+    design, T_b_e, host, port, trajectory, backend
+        As in :class:`AthenaApp`.
+
+    Returns
+    -------
+    AthenaApp
+        Call :meth:`AthenaApp.stop` to end it.
+    """
+    app = AthenaApp(design, T_b_e, host=host, port=port, trajectory=trajectory,
+                    backend=backend)
+    for e in app.errors:
+        print(f"athenakin app: {e}", file=sys.stderr)
+    print(f"athenakin app: ATHENA at {app.url}")
+    return app

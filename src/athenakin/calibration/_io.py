@@ -1,0 +1,216 @@
+"""Files of calibration: measurement CSV in, plan CSV out, calibrated design TOML out.
+
+Measurement CSV (docs/calibration.md): a header row with the columns ``q1_m, q2_m, q3_m``
+(actuator readings, m) and ``x_m, y_m, z_m`` (measured tool tip, m, in the base or the
+tracker frame), optionally ``dx, dy, dz`` (measured unit instrument axis, same frame);
+other columns are ignored. Lines starting with ``#`` and blank lines are skipped. An
+empty cell or ``nan`` makes its row a bad row (excluded and reported by
+:func:`~athenakin.calibration.calibrate`); text that is not a number is an error naming
+file, line and column.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import math
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._errors import MeasurementFileError
+from ._solve import CalibrationResult
+
+__all__ = [
+    "Q_COLUMNS",
+    "TIP_COLUMNS",
+    "AXIS_COLUMNS",
+    "Measurements",
+    "read_measurements_csv",
+    "measurements_csv_text",
+    "plan_csv_text",
+    "calibration_toml",
+]
+
+#: Actuator readings, m.
+Q_COLUMNS = ("q1_m", "q2_m", "q3_m")
+#: Measured tool tip, m.
+TIP_COLUMNS = ("x_m", "y_m", "z_m")
+#: Measured instrument axis (unit vector, optional).
+AXIS_COLUMNS = ("dx", "dy", "dz")
+
+
+@dataclasses.dataclass(frozen=True)
+class Measurements:
+    """A measurement file.
+
+    Attributes
+    ----------
+    q : ndarray, shape (N, 3)
+        Readings, m (NaN for empty / ``nan`` cells).
+    tips : ndarray, shape (N, 3) or None
+        Measured tips, m; None in a plan file (readings only).
+    axes : ndarray, shape (N, 3) or None
+        Measured axes when the file has ``dx, dy, dz``.
+    lines : ndarray of int, shape (N,)
+        Line number of each row in the file (1-based), for reports.
+    """
+
+    q: NDArray[np.float64]
+    tips: NDArray[np.float64] | None
+    axes: NDArray[np.float64] | None
+    lines: NDArray[np.int64]
+
+
+def _cell(text: str, path: str | Path, line: int, col: str) -> float:
+    t = text.strip()
+    if t == "" or t.lower() == "nan":
+        return math.nan
+    try:
+        return float(t)
+    except ValueError:
+        raise MeasurementFileError(f"{path}: line {line}, column {col!r}: expected a number "
+                                   f"(m), got {text!r}") from None
+
+
+def read_measurements_csv(path: str | Path, *, require_tips: bool = True) -> Measurements:
+    """Read a measurement (or, with ``require_tips=False``, a plan) CSV file.
+
+    Parameters
+    ----------
+    path : str or Path
+    require_tips : bool, keyword-only
+        Whether ``x_m, y_m, z_m`` must be present.
+
+    Returns
+    -------
+    Measurements
+
+    Raises
+    ------
+    MeasurementFileError
+        Missing header or columns, a row with too few fields, a cell that is not a number,
+        no data rows. (``OSError`` if the file cannot be read.)
+    """
+    with open(path, newline="") as fh:
+        text = fh.read()
+    rows: list[tuple[int, list[str]]] = []
+    header: list[str] | None = None
+    for ln, rec in enumerate(csv.reader(io.StringIO(text)), start=1):
+        if not rec or all(not c.strip() for c in rec) or rec[0].lstrip().startswith("#"):
+            continue
+        if header is None:
+            header = [c.strip() for c in rec]
+            continue
+        rows.append((ln, rec))
+    if header is None:
+        raise MeasurementFileError(f"{path}: no header row; expected the columns "
+                                   f"{', '.join(Q_COLUMNS + TIP_COLUMNS)}")
+    need = Q_COLUMNS + (TIP_COLUMNS if require_tips else ())
+    missing = [c for c in need if c not in header]
+    if missing:
+        raise MeasurementFileError(f"{path}: missing column(s) {missing}; the header has "
+                                   f"{header}, expected {list(need)} (units in the names: m)")
+    has_tips = all(c in header for c in TIP_COLUMNS)
+    has_axes = all(c in header for c in AXIS_COLUMNS)
+    partial = [c for c in AXIS_COLUMNS if c in header]
+    if partial and not has_axes:
+        raise MeasurementFileError(f"{path}: axis columns must be all of {list(AXIS_COLUMNS)}, "
+                                   f"got only {partial}")
+    if not rows:
+        raise MeasurementFileError(f"{path}: no data rows after the header")
+    cols = list(Q_COLUMNS) + (list(TIP_COLUMNS) if has_tips else []) + (
+        list(AXIS_COLUMNS) if has_axes else [])
+    idx = [header.index(c) for c in cols]
+    data = np.empty((len(rows), len(cols)))
+    for r, (ln, rec) in enumerate(rows):
+        if len(rec) < len(header):
+            raise MeasurementFileError(f"{path}: line {ln}: expected {len(header)} fields "
+                                       f"({', '.join(header)}), got {len(rec)}")
+        for k, (c, i) in enumerate(zip(cols, idx, strict=True)):
+            data[r, k] = _cell(rec[i], path, ln, c)
+    return Measurements(q=data[:, 0:3], tips=data[:, 3:6] if has_tips else None,
+                        axes=data[:, 6:9] if has_axes else None,
+                        lines=np.array([ln for ln, _ in rows], dtype=np.int64))
+
+
+def _fmt_rows(a: NDArray[np.float64]) -> list[str]:
+    return [",".join(repr(float(x)) for x in row) for row in a]
+
+
+def measurements_csv_text(q: NDArray[np.float64], tips: NDArray[np.float64],
+                          axes: NDArray[np.float64] | None = None, *, frame: str = "base",
+                          comment: str = "") -> str:
+    """CSV text of a measurement set that :func:`read_measurements_csv` reads back."""
+    cols = Q_COLUMNS + TIP_COLUMNS + (AXIS_COLUMNS if axes is not None else ())
+    parts = [np.asarray(q, float), np.asarray(tips, float)]
+    if axes is not None:
+        parts.append(np.asarray(axes, float))
+    lines = [f"# athenakin calibration measurements; tips in the {frame} frame",
+             "# q1_m,q2_m,q3_m: actuator readings (m); x_m,y_m,z_m: measured tool tip (m)"]
+    if axes is not None:
+        lines.append("# dx,dy,dz: measured instrument axis (unit vector, O_s towards the RCM)")
+    lines += [f"# {c}" for c in comment.splitlines() if c]
+    lines.append(",".join(cols))
+    lines += _fmt_rows(np.concatenate(parts, axis=1))
+    return "\n".join(lines) + "\n"
+
+
+def plan_csv_text(q: NDArray[np.float64], *, comment: str = "") -> str:
+    """CSV text of a measurement plan: ``pose, q1_m, q2_m, q3_m`` (readings to command)."""
+    lines = ["# athenakin calibration plan: command these actuator values (m), measure the "
+             "tool tip at each", *[f"# {c}" for c in comment.splitlines() if c],
+             "pose," + ",".join(Q_COLUMNS)]
+    lines += [f"{i}," + r for i, r in enumerate(_fmt_rows(np.asarray(q, float)))]
+    return "\n".join(lines) + "\n"
+
+
+def _toml_value(x: object) -> str:
+    if isinstance(x, str):
+        return '"' + x.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(x, (bool, np.bool_)):
+        return "true" if x else "false"
+    if isinstance(x, (int, np.integer)):
+        return str(int(x))
+    if isinstance(x, (float, np.floating)):
+        f = float(x)
+        if math.isnan(f):
+            return "nan"
+        if math.isinf(f):
+            return "inf" if f > 0 else "-inf"
+        return repr(f)
+    if isinstance(x, (list, tuple, np.ndarray)):
+        return "[" + ", ".join(_toml_value(v) for v in x) + "]"
+    raise TypeError(f"cannot write {type(x).__name__} to TOML")
+
+
+def calibration_toml(result: CalibrationResult) -> str:
+    """TOML text of a calibration: the calibrated design and a ``[calibration]`` table.
+
+    The ``[design]`` table is read back by :meth:`Design.from_toml`; ``[calibration]``
+    holds the offsets, RCM, registration, noise, residuals and standard deviations.
+    """
+    cal: dict[str, object] = {
+        "frame": result.frame,
+        "estimated": list(result.names),
+        "q_offset": result.q_offset.tolist(),
+        "rcm": result.rcm.tolist(),
+        "sigma": result.sigma,
+        "rms_before": result.rms_before,
+        "rms_after": result.rms_after,
+        "rows": int(result.excluded.size),
+        "rows_excluded": int(np.sum(result.excluded)),
+        "rows_outliers": int(np.sum(result.outliers)),
+        "condition": result.identifiability.condition,
+    }
+    lines = [result.design.to_toml().rstrip("\n"), "",
+             "# athenakin calibrate: q_true = q_reading + q_offset (m); std = 1 sigma",
+             "[calibration]"]
+    lines += [f"{k} = {_toml_value(v)}" for k, v in cal.items()]
+    if result.T_t_b is not None:
+        lines.append(f"T_t_b = {_toml_value(result.T_t_b.tolist())}")
+    lines += ["", "[calibration.std]"]
+    lines += [f"{n} = {_toml_value(s)}" for n, s in zip(result.names, result.std, strict=True)]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,170 @@
+"""Figures and the written report of a calibration (matplotlib imported on demand)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ._accuracy import TipErrorMap, tip_error_map
+from ._model import PARAMETER_UNITS
+from ._solve import CalibrationResult
+
+__all__ = ["plot_residuals", "plot_parameter_confidence", "plot_tip_error_map", "write_report"]
+
+_UM = 1e6
+
+
+def _pyplot() -> Any:
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg", force=False)
+        import matplotlib.pyplot as plt
+    except ModuleNotFoundError as exc:  # pragma: no cover - depends on the install
+        raise ModuleNotFoundError("calibration figures need matplotlib: pip install "
+                                  "'athenakin[plot]'", name="matplotlib") from exc
+    return plt
+
+
+def _axes(ax: Any, **kw: Any) -> Any:
+    if ax is not None:
+        return ax
+    plt = _pyplot()
+    _, ax = plt.subplots(figsize=(7, 4), **kw)
+    return ax
+
+
+def plot_residuals(result: CalibrationResult, *, ax: Any = None) -> Any:
+    """Tip residual per row (norm, um) before and after calibration; outliers marked.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    ax = _axes(ax)
+    rows = np.arange(result.excluded.size)
+    b = np.linalg.norm(result.residuals_before[:, :3], axis=1) * _UM
+    a = np.linalg.norm(result.residuals_after[:, :3], axis=1) * _UM
+    ax.plot(rows, b, "o", ms=3, color="0.6", label=f"before (RMS {result.rms_before * _UM:.1f} um)")
+    ax.plot(rows, a, "o", ms=3, color="C0", label=f"after (RMS {result.rms_after * _UM:.1f} um)")
+    if np.any(result.outliers):
+        ax.plot(rows[result.outliers], a[result.outliers], "x", color="C3", ms=8,
+                label="flagged outlier")
+    ax.set_yscale("log")
+    ax.set_xlabel("measurement row")
+    ax.set_ylabel("|tip residual| (um)")
+    ax.set_title("Residuals before and after calibration")
+    ax.legend(fontsize=8)
+    return ax
+
+
+def plot_parameter_confidence(result: CalibrationResult, *, ax: Any = None) -> Any:
+    """Change of each estimated parameter from nominal with its 3-sigma interval.
+
+    Lengths in um, registration angles in urad.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    ax = _axes(ax)
+    delta = (result.estimates - result.nominal) * _UM
+    err = 3 * result.std * _UM
+    y = np.arange(len(result.names))
+    ax.errorbar(delta, y, xerr=err, fmt="o", color="C0", capsize=3)
+    ax.axvline(0.0, color="0.5", lw=0.8)
+    ax.set_yticks(y)
+    ax.set_yticklabels([f"{n} ({'urad' if PARAMETER_UNITS[n] == 'rad' else 'um'})"
+                        for n in result.names], fontsize=8)
+    ax.invert_yaxis()
+    ax.set_xlabel("estimate - nominal (um or urad), bars: +/- 3 sigma")
+    ax.set_title("Parameter estimates and confidence")
+    return ax
+
+
+def plot_tip_error_map(m: TipErrorMap, *, ax: Any = None) -> Any:
+    """Expected RMS tip error (um) over the instrument cone (polar plot: azimuth, polar angle).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    if ax is None:
+        plt = _pyplot()
+        _, ax = plt.subplots(figsize=(6, 5), subplot_kw={"projection": "polar"})
+    A, B = np.meshgrid(m.azimuth, np.degrees(m.polar), indexing="ij")
+    pc = ax.pcolormesh(A, B, np.ma.masked_invalid(m.rms * _UM), shading="nearest",
+                       cmap="viridis")
+    ax.figure.colorbar(pc, ax=ax, label="expected RMS tip error (um)")
+    ax.set_title(f"Tip error over the instrument cone (depth {m.depth * 1e3:.0f} mm, "
+                 f"encoder {m.encoder_resolution * _UM:.1f} um)", fontsize=9)
+    return ax
+
+
+def write_report(result: CalibrationResult, path: str | Path, *, figures: bool = True,
+                 encoder_resolution: float = 0.0, title: str = "athenakin calibration report"
+                 ) -> list[Path]:
+    """Write a Markdown report (``.md``) with PNG figures next to it.
+
+    Parameters
+    ----------
+    result : CalibrationResult
+    path : str or Path
+        The report file; figures are ``<stem>_residuals.png``, ``<stem>_parameters.png``,
+        ``<stem>_tip_error.png``.
+    figures : bool, keyword-only
+    encoder_resolution : float, keyword-only
+        For the tip-error map, m.
+    title : str, keyword-only
+
+    Returns
+    -------
+    list of Path
+        The files written (report first).
+    """
+    path = Path(path)
+    out = [path]
+    lines = [f"# {title}", "",
+             f"Measurements in the **{result.frame}** frame; "
+             f"{int(result.excluded.size)} rows, {int(np.sum(result.excluded))} excluded, "
+             f"{int(np.sum(result.outliers))} flagged as outliers.", "",
+             f"RMS tip residual: **{result.rms_before * _UM:.2f} um** before, "
+             f"**{result.rms_after * _UM:.2f} um** after; noise estimate sigma = "
+             f"{result.sigma * _UM:.2f} um per coordinate.", "",
+             f"Identifiability: {len(result.names)} parameters, condition "
+             f"{result.identifiability.condition:.3g} (scaled columns).", "",
+             "| parameter | nominal | estimate | change | std (1 sigma) |",
+             "|---|---:|---:|---:|---:|"]
+    for n, a, b, s in zip(result.names, result.nominal, result.estimates, result.std, strict=True):
+        u, f = ("urad", 1e6) if PARAMETER_UNITS[n] == "rad" else ("um", 1e6)
+        lines.append(f"| {n} | {a:.9g} | {b:.9g} | {(b - a) * f:+.2f} {u} | {s * f:.2f} {u} |")
+    lines += ["", f"Actuator offsets (q_true = q_reading + offset): "
+              f"{np.array2string(result.q_offset * _UM, precision=2)} um.",
+              f"RCM point: {np.array2string(result.rcm, precision=6)} m."]
+    if result.T_t_b is not None:
+        lines.append("Tracker registration T_t_b: `" + np.array2string(
+            result.T_t_b, precision=6).replace("\n", " ") + "`.")
+    if np.any(result.excluded):
+        lines += ["", "Excluded rows: " + result.check.describe(limit=20) + "."]
+    if np.any(result.outliers):
+        lines += ["", "Outlier rows: " + ", ".join(str(i) for i in
+                                                   np.flatnonzero(result.outliers)) + "."]
+    if figures:
+        plt = _pyplot()
+        stem = path.with_suffix("")
+        for suffix, fn in (("residuals", lambda: plot_residuals(result)),
+                           ("parameters", lambda: plot_parameter_confidence(result)),
+                           ("tip_error", lambda: plot_tip_error_map(tip_error_map(
+                               result, encoder_resolution=encoder_resolution)))):
+            ax = fn()
+            fig = ax.figure
+            fig.tight_layout()
+            png = Path(f"{stem}_{suffix}.png")
+            fig.savefig(png, dpi=110)
+            plt.close(fig)
+            out.append(png)
+            lines += ["", f"![{suffix}]({png.name})"]
+    path.write_text("\n".join(lines) + "\n")
+    return out

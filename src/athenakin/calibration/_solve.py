@@ -1,0 +1,620 @@
+"""Calibration: checked measurements -> identifiability -> nonlinear least squares -> result."""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+from collections.abc import Iterable
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_array, check_transform
+from ..design import Design, resolve_design
+from ..errors import InvalidInputError, Reason
+from ..parallel import parallel_forward_kinematics
+from ._errors import CalibrationError, CalibrationWarning, NotIdentifiableError
+from ._identify import (
+    IDENTIFIABILITY_TOL,
+    IdentifiabilityReport,
+    analyse_jacobian,
+    raise_if_not_identifiable,
+)
+from ._model import (
+    PARAMETERS,
+    MeasurementFrame,
+    Prediction,
+    design_from_parameters,
+    parameter_vector,
+    predict,
+    resolve_parameters,
+    rotation_from_vector,
+)
+
+__all__ = [
+    "CalibrationResult",
+    "Loss",
+    "OUTLIER_THRESHOLD",
+    "DEFAULT_AXIS_WEIGHT",
+    "calibrate",
+    "identifiability",
+    "check_measurements",
+    "MeasurementCheck",
+]
+
+Loss = Literal["linear", "soft_l1", "huber", "cauchy", "arctan"]
+_LOSSES = ("linear", "soft_l1", "huber", "cauchy", "arctan")
+
+#: A row is flagged as an outlier when its residual norm exceeds this many robust standard
+#: deviations of one component (for isotropic Gaussian noise ``|r|^2 / sigma^2`` is
+#: chi-square with 3 degrees of freedom: ``P(|r| > 4.5 sigma) = 2.6e-4``).
+OUTLIER_THRESHOLD = 4.5
+#: Weight (m per unit of direction error) of measured instrument axes against tip
+#: positions: 0.1 m makes 0.2 mrad of axis error count like 20 um of tip error.
+DEFAULT_AXIS_WEIGHT = 0.1
+#: Largest share of rows that may be flagged bad and excluded before the data set is refused.
+MAX_BAD_FRACTION = 0.1
+#: Floor (m) of the residual standard deviation used to flag outliers: noise-free data
+#: leave residuals of rounding size (1e-16 m), which are no outliers.
+RESIDUAL_FLOOR = 1e-12
+#: Margin (m) of the insertion range: a pose needs ``margin < p < L - margin``.
+INSERTION_MARGIN = 1e-3
+
+_REG = PARAMETERS.index("reg_rx")
+
+
+@dataclasses.dataclass(frozen=True)
+class MeasurementCheck:
+    """Rows of a data set that cannot be used, and why.
+
+    Attributes
+    ----------
+    reason : ndarray of int8, shape (N,)
+        :class:`~athenakin.errors.Reason` per row (0 where usable): ``NONFINITE_INPUT``,
+        ``STROKE_LIMIT``, ``AB_ORDER``, ``LINK_TOO_SHORT``, ``CIRCLES_DISJOINT``,
+        ``CIRCLES_TANGENT`` (the row's assembly mode does not exist for the nominal
+        design), ``INSERTION_RANGE`` (the tip is not beyond the RCM within the tool).
+    usable : ndarray of bool, shape (N,)
+    """
+
+    reason: NDArray[np.int8]
+    usable: NDArray[np.bool_]
+
+    def describe(self, limit: int = 5) -> str:
+        """``"row 3: input holds NaN or inf; row 7: ..."`` for the first ``limit`` bad rows."""
+        bad = np.flatnonzero(~self.usable)
+        parts = [f"row {i}: {Reason(int(self.reason[i])).description}" for i in bad[:limit]]
+        more = f" (and {len(bad) - limit} more)" if len(bad) > limit else ""
+        return "; ".join(parts) + more
+
+
+@dataclasses.dataclass(frozen=True)
+class CalibrationResult:
+    """A calibrated ATHENA and how well it is known.
+
+    Attributes
+    ----------
+    design : Design
+        The calibrated design (``l1..l5``, ``tool_length`` estimated or kept; strokes,
+        A/B order and name from the nominal design).
+    names : tuple of str
+        The estimated parameters, in :data:`~athenakin.calibration.PARAMETERS` order.
+    estimates, nominal : ndarray, shape (n,)
+        Estimated and starting values of ``names`` (m, rad).
+    std : ndarray, shape (n,)
+        Standard deviations of the estimates (m, rad).
+    covariance : ndarray, shape (n, n)
+        ``sigma^2 (J^T J)^-1`` at the solution (``sigma`` below).
+    parameters : dict of str -> float
+        Every parameter of :data:`~athenakin.calibration.PARAMETERS`, estimated or fixed.
+    q_offset : ndarray, shape (3,)
+        Actuator zero offsets: ``q_true = q_reading + q_offset``, m.
+    rcm : ndarray, shape (3,)
+        RCM point in the base frame (estimated or given), m.
+    T_b_e : ndarray, shape (4, 4)
+        The RCM frame with its origin at :attr:`rcm` (rotation as given).
+    T_t_b : ndarray, shape (4, 4) or None
+        Tracker registration (pose of the base in the tracker frame) for ``frame="tracker"``.
+    frame : {"base", "tracker"}
+        Frame of the measured tips.
+    mode : ndarray of int, shape (N,)
+        Assembly mode followed for each row.
+    residuals_before, residuals_after : ndarray, shape (N, 3) or (N, 6)
+        Measured minus predicted (tips, m; then weighted axis errors) with the nominal and
+        with the calibrated parameters (NaN for excluded rows).
+    rms_before, rms_after : float
+        RMS tip error (norm per row, m) over the rows used.
+    sigma : float
+        Standard deviation of one residual component, from the residuals after
+        (``sqrt(SSR / (m - n))``) or the ``sigma`` given.
+    outliers : ndarray of bool, shape (N,)
+        Rows whose residual exceeds ``outlier_threshold * sigma``; with a robust loss
+        they are left out of the final fit and of the covariance.
+    excluded : ndarray of bool, shape (N,)
+        Rows refused before fitting (:attr:`check` says why).
+    check : MeasurementCheck
+    identifiability : IdentifiabilityReport
+        At the nominal parameters, before solving.
+    success : bool
+    message : str
+    nfev : int
+        Model evaluations of the solver.
+    """
+
+    design: Design
+    names: tuple[str, ...]
+    estimates: NDArray[np.float64]
+    nominal: NDArray[np.float64]
+    std: NDArray[np.float64]
+    covariance: NDArray[np.float64]
+    parameters: dict[str, float]
+    q_offset: NDArray[np.float64]
+    rcm: NDArray[np.float64]
+    T_b_e: NDArray[np.float64]
+    T_t_b: NDArray[np.float64] | None
+    frame: str
+    mode: NDArray[np.int64]
+    residuals_before: NDArray[np.float64]
+    residuals_after: NDArray[np.float64]
+    rms_before: float
+    rms_after: float
+    sigma: float
+    outliers: NDArray[np.bool_]
+    excluded: NDArray[np.bool_]
+    check: MeasurementCheck
+    identifiability: IdentifiabilityReport
+    success: bool
+    message: str
+    nfev: int
+
+    @property
+    def correlation(self) -> NDArray[np.float64]:
+        """Correlation matrix of the estimates, shape (n, n)."""
+        s = np.where(self.std > 0, self.std, 1.0)
+        return self.covariance / np.outer(s, s)
+
+    def table(self) -> list[tuple[str, float, float, float]]:
+        """Rows ``(name, nominal, estimate, std)`` of the estimated parameters."""
+        return [(n, float(a), float(b), float(c))
+                for n, a, b, c in zip(self.names, self.nominal, self.estimates, self.std,
+                                      strict=True)]
+
+
+# --------------------------------------------------------------------------------------
+# input checks
+# --------------------------------------------------------------------------------------
+def _rows(x: ArrayLike, name: str, n: int | None = None) -> NDArray[np.float64]:
+    a = check_array(x, name, (3,), allow_nonfinite=True)
+    if a.ndim != 2:
+        raise InvalidInputError(f"{name}: expected shape (N, 3), got shape {a.shape}")
+    if n is not None and a.shape[0] != n:
+        raise InvalidInputError(f"{name}: expected {n} rows (one per row of q), got "
+                                f"{a.shape[0]} (mismatched lengths)")
+    return a
+
+
+def _mode_array(mode: object, n: int) -> NDArray[np.float64]:
+    m = np.asarray(mode)
+    if m.dtype.kind not in "biuf" or not np.all(np.isin(m, (1, -1))):
+        raise InvalidInputError(f"mode: expected +1 or -1 (assembly mode) per row, got {mode!r}")
+    if m.ndim > 1 or (m.ndim == 1 and m.shape[0] != n):
+        raise InvalidInputError(f"mode: expected a scalar or shape ({n},), got shape {m.shape}")
+    return np.broadcast_to(m.astype(float), (n,)).copy()
+
+
+def check_measurements(q: ArrayLike, design: Design | None, T_b_e: ArrayLike, *,
+                       mode: object = 1, tips: ArrayLike | None = None,
+                       axes: ArrayLike | None = None, q_offset: ArrayLike | None = None
+                       ) -> MeasurementCheck:
+    """Which rows of a data set the nominal model can use (finite, assembled, inserted).
+
+    Parameters
+    ----------
+    q : array-like, shape (N, 3)
+        Actuator readings, m.
+    design : Design or None
+        The nominal design (None: :meth:`Design.default`).
+    T_b_e : array-like, shape (4, 4)
+        The RCM frame (its origin is the RCM point).
+    mode : {1, -1} or array-like of them, shape (N,), keyword-only
+    tips, axes : array-like, shape (N, 3), optional, keyword-only
+        Only checked for NaN / inf.
+    q_offset : array-like, shape (3,), optional, keyword-only
+        Starting actuator offsets (``q_true = q + q_offset``).
+
+    Returns
+    -------
+    MeasurementCheck
+    """
+    design = resolve_design(design)
+    qa = _rows(q, "q")
+    n = qa.shape[0]
+    T = check_transform(T_b_e, "T_b_e")
+    m = _mode_array(mode, n)
+    off = np.zeros(3) if q_offset is None else check_array(q_offset, "q_offset", (3,))
+    finite = np.all(np.isfinite(qa), axis=-1)
+    for a, nm in ((tips, "tips"), (axes, "axes")):
+        if a is not None:
+            finite &= np.all(np.isfinite(_rows(a, nm, n)), axis=-1)
+    par = parallel_forward_kinematics(np.where(finite[:, None], qa + off, 0.0), design)
+    slot = np.where(m > 0, 0, 1)
+    reason = np.take_along_axis(par.reason, slot[:, None], axis=1)[:, 0].astype(np.int8)
+    theta = parameter_vector(design, T[:3, 3], q_offset=off)
+    with np.errstate(invalid="ignore"):
+        pr = predict(theta, np.where(finite[:, None], qa, 0.0), m)
+        L = design.tool_length
+        inserted = (pr.rho > INSERTION_MARGIN) & (pr.rho < L - INSERTION_MARGIN)
+    reason = np.where((reason == 0) & ~inserted, np.int8(Reason.INSERTION_RANGE), reason)
+    reason = np.where(~finite, np.int8(Reason.NONFINITE_INPUT), reason).astype(np.int8)
+    return MeasurementCheck(reason=reason, usable=reason == 0)
+
+
+# --------------------------------------------------------------------------------------
+# the problem
+# --------------------------------------------------------------------------------------
+@dataclasses.dataclass(frozen=True)
+class _Problem:
+    q: NDArray[np.float64]
+    tips: NDArray[np.float64]
+    axes: NDArray[np.float64] | None
+    mode: NDArray[np.float64]
+    R0: NDArray[np.float64] | None
+    theta0: NDArray[np.float64]
+    free: NDArray[np.int64]
+    axis_weight: float
+
+    def full(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
+        th = self.theta0.copy()
+        th[self.free] = x
+        return th
+
+    def evaluate(self, theta: NDArray[np.float64], jacobian: bool
+                 ) -> tuple[Prediction, NDArray[np.float64]]:
+        pr = predict(theta, self.q, self.mode, R0=self.R0, jacobian=jacobian)
+        r = pr.tip - self.tips
+        if self.axes is not None:
+            r = np.concatenate([r, self.axis_weight * (pr.axis - self.axes)], axis=1)
+        return pr, r
+
+    def residual(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
+        return self.evaluate(self.full(x), False)[1].ravel()
+
+    def jacobian(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
+        return self.jac_full(self.full(x))[:, self.free]
+
+    def jac_full(self, theta: NDArray[np.float64]) -> NDArray[np.float64]:
+        pr = predict(theta, self.q, self.mode, R0=self.R0, jacobian=True)
+        assert pr.J_tip is not None and pr.J_axis is not None
+        J = pr.J_tip
+        if self.axes is not None:
+            J = np.concatenate([J, self.axis_weight * pr.J_axis], axis=1)
+        return J.reshape(-1, J.shape[-1])
+
+
+def _kabsch(p: NDArray[np.float64], m: NDArray[np.float64]
+            ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Rotation R and translation t minimising ``sum |R p + t - m|^2`` (Kabsch / Horn)."""
+    pc, mc = p.mean(axis=0), m.mean(axis=0)
+    U, _, Vt = np.linalg.svd((p - pc).T @ (m - mc))
+    S = np.diag([1.0, 1.0, float(np.sign(np.linalg.det(Vt.T @ U.T)) or 1.0)])
+    R = Vt.T @ S @ U.T
+    return R, mc - R @ pc
+
+
+def _setup(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | None, *,
+           params: Iterable[str] | str | None, frame: str, axes: ArrayLike | None,
+           mode: object, q_offset: ArrayLike | None, registration: ArrayLike | None,
+           axis_weight: float, bad_rows: str, max_bad_fraction: float
+           ) -> tuple[Design, _Problem, tuple[str, ...], MeasurementCheck,
+                      NDArray[np.float64], NDArray[np.float64]]:
+    """Validate, drop bad rows, build the problem (shared by calibrate and identifiability)."""
+    design = resolve_design(design)
+    names = resolve_parameters(params, frame)
+    qa = _rows(q, "q")
+    n = qa.shape[0]
+    ta = _rows(tips, "tips", n)
+    aa = None if axes is None else _rows(axes, "axes", n)
+    T = check_transform(T_b_e, "T_b_e")
+    if T.shape != (4, 4):
+        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got shape {T.shape}")
+    if bad_rows not in ("exclude", "raise"):
+        raise ValueError(f"bad_rows: expected 'exclude' or 'raise', got {bad_rows!r}")
+    if not np.isfinite(axis_weight) or axis_weight <= 0:
+        raise InvalidInputError(f"axis_weight: expected a positive number (m), got {axis_weight}")
+    m = _mode_array(mode, n)
+    off = np.zeros(3) if q_offset is None else check_array(q_offset, "q_offset", (3,))
+    chk = check_measurements(qa, design, T, mode=m, tips=ta, axes=aa, q_offset=off)
+    nbad = int(np.sum(~chk.usable))
+    if nbad:
+        if bad_rows == "raise":
+            raise InvalidInputError(f"{nbad} of {n} rows cannot be used: {chk.describe()}")
+        if nbad > max_bad_fraction * n:
+            raise InvalidInputError(
+                f"{nbad} of {n} rows cannot be used (more than {max_bad_fraction:.0%}): "
+                f"{chk.describe()}; check the columns, units (m) and the nominal design")
+        warnings.warn(f"calibration: {nbad} of {n} rows excluded: {chk.describe()}",
+                      CalibrationWarning, stacklevel=3)
+    use = chk.usable
+    theta0 = parameter_vector(design, T[:3, 3], q_offset=off)
+    R0 = None
+    if frame == "tracker":
+        pr = predict(theta0, qa[use], m[use])
+        if registration is None:
+            if int(np.sum(use)) < 3:
+                raise NotIdentifiableError("too few poses to register the tracker (need 3)")
+            R0, t0 = _kabsch(pr.tip_base, ta[use])
+        else:
+            Treg = check_transform(registration, "registration")
+            R0, t0 = Treg[:3, :3], Treg[:3, 3]
+        theta0[_REG + 3:_REG + 6] = t0
+    free = np.array([PARAMETERS.index(nm) for nm in names], dtype=np.int64)
+    prob = _Problem(q=qa[use], tips=ta[use], axes=None if aa is None else aa[use], mode=m[use],
+                    R0=R0, theta0=theta0, free=free, axis_weight=float(axis_weight))
+    return design, prob, names, chk, m, T
+
+
+def identifiability(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
+                    params: Iterable[str] | str | None = None,
+                    frame: MeasurementFrame = "base", axes: bool = False, mode: object = 1,
+                    q_offset: ArrayLike | None = None, axis_weight: float = DEFAULT_AXIS_WEIGHT,
+                    tol: float = IDENTIFIABILITY_TOL) -> IdentifiabilityReport:
+    """Whether these poses can identify these parameters (before measuring anything).
+
+    The identification Jacobian is evaluated at the nominal parameters (the tracker
+    registration at identity: it does not change the analysis).
+
+    Parameters
+    ----------
+    q : array-like, shape (N, 3)
+        Actuator readings of the poses, m.
+    T_b_e : array-like, shape (4, 4)
+        Nominal RCM frame.
+    design : Design, optional
+    params : iterable of str, keyword-only
+        Parameters to estimate (:data:`~athenakin.calibration.PARAMETERS` or groups);
+        default ``l1..l5, tool_length`` (plus the registration for ``frame="tracker"``).
+    frame : {"base", "tracker"}, keyword-only
+    axes : bool, keyword-only
+        Whether instrument axes are measured too.
+    mode, q_offset, axis_weight
+        As in :func:`calibrate`.
+    tol : float, keyword-only
+
+    Returns
+    -------
+    IdentifiabilityReport
+
+    Raises
+    ------
+    InvalidInputError
+        Bad shapes, or rows the nominal design cannot reach (not excluded here).
+    """
+    qa = _rows(q, "q")
+    design = resolve_design(design)
+    T = check_transform(T_b_e, "T_b_e")
+    tips = predict(parameter_vector(design, T[:3, 3]), np.nan_to_num(qa),
+                   _mode_array(mode, qa.shape[0]))
+    _, prob, names, _, _, _ = _setup(
+        qa, tips.tip_base, T, design, params=params, frame=frame,
+        axes=tips.axis if axes else None, mode=mode, q_offset=q_offset,
+        registration=np.eye(4) if frame == "tracker" else None, axis_weight=axis_weight,
+        bad_rows="raise", max_bad_fraction=0.0)
+    return analyse_jacobian(prob.jac_full(prob.theta0)[:, prob.free], names, tol=tol)
+
+
+def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
+              params: Iterable[str] | str | None = None, frame: MeasurementFrame = "base",
+              axes: ArrayLike | None = None, axis_weight: float = DEFAULT_AXIS_WEIGHT,
+              mode: object = 1, q_offset: ArrayLike | None = None,
+              registration: ArrayLike | None = None, loss: Loss = "linear",
+              f_scale: float | None = None, sigma: float | None = None,
+              outlier_threshold: float = OUTLIER_THRESHOLD, bad_rows: str = "exclude",
+              max_bad_fraction: float = MAX_BAD_FRACTION,
+              on_unidentifiable: Literal["raise", "warn"] = "raise",
+              identifiability_tol: float = IDENTIFIABILITY_TOL, tol: float = 1e-15,
+              max_nfev: int = 200) -> CalibrationResult:
+    """Identify the geometry of a real ATHENA from measured tool tips.
+
+    Minimises ``sum_i rho(|tip_model(q_i; theta) - tip_i|^2)`` over the estimated
+    parameters with :func:`scipy.optimize.least_squares` (trust region reflective,
+    analytic Jacobian, parameters scaled by their Jacobian column norms). The assembly
+    mode of every row is the one given (default +1, the working mode) and is kept while
+    the parameters change: the model follows the FK slot of the nominal pose.
+
+    Parameters
+    ----------
+    q : array-like, shape (N, 3)
+        Actuator readings ``(q1, q2, q3)``, m. The true actuator values are
+        ``q + q_offset``.
+    tips : array-like, shape (N, 3)
+        Measured tool tips, m: in the base frame (``frame="base"``) or in the tracker's
+        own frame (``frame="tracker"``, registration estimated).
+    T_b_e : array-like, shape (4, 4)
+        Nominal RCM frame; its origin is the RCM point (estimated with ``params``
+        ``rcm``/``rcm_x``.., else fixed).
+    design : Design, optional
+        Nominal design (starting values; strokes and A/B order are kept).
+    params : iterable of str or str, keyword-only
+        Estimated parameters (names of :data:`~athenakin.calibration.PARAMETERS` or
+        the groups ``lengths``, ``offsets``, ``rcm``, ``registration``, ``default``).
+        Default ``l1..l5, tool_length``.
+    frame : {"base", "tracker"}, keyword-only
+    axes : array-like, shape (N, 3), optional, keyword-only
+        Measured instrument directions (unit, from ``O_s`` towards the RCM), in the frame
+        of ``tips``: measurement model (c), full instrument poses.
+    axis_weight : float, keyword-only
+        Metres of residual per unit of axis error (:data:`DEFAULT_AXIS_WEIGHT`).
+    mode : {1, -1} or array-like of them, shape (N,), keyword-only
+        Assembly mode of each row.
+    q_offset : array-like, shape (3,), keyword-only
+        Starting (or fixed) actuator zero offsets, m.
+    registration : array-like, shape (4, 4), keyword-only
+        Starting ``T_t_b`` for ``frame="tracker"`` (default: fitted to the nominal tips).
+    loss : {"linear", "soft_l1", "huber", "cauchy", "arctan"}, keyword-only
+        Robust loss of :func:`scipy.optimize.least_squares`. With a robust loss the rows
+        flagged as outliers are dropped and the inliers refitted with the linear loss
+        (so the covariance is that of least squares on the inliers).
+    f_scale : float, keyword-only
+        Residual (m) at which the robust loss bends; default ``2 * sigma`` from a first
+        linear fit (median absolute deviation).
+    sigma : float, keyword-only
+        Known standard deviation (m) of one measured coordinate; default: estimated from
+        the residuals.
+    outlier_threshold : float, keyword-only
+        Rows with ``|residual| > outlier_threshold * sigma`` are flagged.
+    bad_rows : {"exclude", "raise"}, keyword-only
+        Rows with NaN/inf or outside the nominal workspace: excluded with a
+        :class:`CalibrationWarning` (at most ``max_bad_fraction`` of them), or raise.
+    max_bad_fraction : float, keyword-only
+    on_unidentifiable : {"raise", "warn"}, keyword-only
+        What to do when the identifiability analysis finds inseparable combinations.
+    identifiability_tol : float, keyword-only
+    tol : float, keyword-only
+        ``ftol``, ``xtol`` and ``gtol`` of the solver.
+    max_nfev : int, keyword-only
+
+    Returns
+    -------
+    CalibrationResult
+
+    Raises
+    ------
+    InvalidInputError
+        Wrong shapes, mismatched lengths, too many bad rows (or any, with
+        ``bad_rows="raise"``).
+    NotIdentifiableError
+        Too few poses for the parameters, or poses that cannot separate them (the message
+        names the inseparable combinations).
+    CalibrationError
+        The fit diverged to a non-physical design (wrong assembly mode, frame or units).
+
+    Examples
+    --------
+    >>> import athenakin as ak
+    >>> from athenakin import calibration as cal
+    >>> d = ak.Design.default(); T = ak.default_rcm_frame(d)
+    >>> data = cal.synthetic_measurements(d, T, n=40, noise=0.0, rng=1)
+    >>> res = cal.calibrate(data.q, data.tips, T, d)
+    >>> abs(res.design.l1 - data.true_design.l1) < 1e-9
+    True
+    """
+    from scipy.optimize import least_squares
+
+    if loss not in _LOSSES:
+        raise ValueError(f"loss: expected one of {_LOSSES}, got {loss!r}")
+    if on_unidentifiable not in ("raise", "warn"):
+        raise ValueError(f"on_unidentifiable: expected 'raise' or 'warn', got "
+                         f"{on_unidentifiable!r}")
+    design, prob, names, chk, m_all, T = _setup(
+        q, tips, T_b_e, design, params=params, frame=frame, axes=axes, mode=mode,
+        q_offset=q_offset, registration=registration, axis_weight=axis_weight,
+        bad_rows=bad_rows, max_bad_fraction=max_bad_fraction)
+    n_used = prob.q.shape[0]
+    rows_per = 3 if prob.axes is None else 6
+    if rows_per * n_used <= len(names):
+        raise NotIdentifiableError(
+            f"too few poses: {n_used} usable poses give {rows_per * n_used} equations for "
+            f"{len(names)} parameters {list(names)}; measure more than "
+            f"{len(names) // rows_per} poses (and more than that for a useful estimate)")
+    J0 = prob.jac_full(prob.theta0)[:, prob.free]
+    report = analyse_jacobian(J0, names, tol=identifiability_tol)
+    if not report.identifiable:
+        if on_unidentifiable == "raise":
+            raise_if_not_identifiable(report, n_used)
+        warnings.warn(f"calibration: not identifiable: {'; '.join(report.combinations)}",
+                      CalibrationWarning, stacklevel=2)
+    elif report.weak:
+        warnings.warn(f"calibration: weakly identifiable (condition {report.condition:.3g}); "
+                      "the standard deviations will be large", CalibrationWarning, stacklevel=2)
+    x0 = prob.theta0[prob.free]
+    x_scale = 1.0 / np.where(report.column_norms > 0, report.column_norms, 1.0)
+    x_scale = x_scale / np.max(x_scale)
+    opts = dict(method="trf", x_scale=x_scale, ftol=tol, xtol=tol, gtol=tol,
+                max_nfev=max_nfev)
+    sol = least_squares(prob.residual, x0, jac=prob.jacobian, loss="linear",
+                        **opts)  # type: ignore[arg-type]
+    use = np.ones(n_used, bool)
+    r_rows = sol.fun.reshape(n_used, rows_per)
+    if loss != "linear":
+        scale = f_scale if f_scale is not None else 2.0 * _robust_sigma(r_rows)
+        if not np.isfinite(scale) or scale <= 0:
+            scale = RESIDUAL_FLOOR
+        sol = least_squares(prob.residual, sol.x, jac=prob.jacobian, loss=loss, f_scale=scale,
+                            **opts)  # type: ignore[arg-type]
+        r_rows = sol.fun.reshape(n_used, rows_per)
+        s_rob = sigma if sigma is not None else _robust_sigma(r_rows)
+        use = np.linalg.norm(r_rows, axis=1) <= outlier_threshold * max(s_rob, RESIDUAL_FLOOR)
+        sub = dataclasses.replace(prob, q=prob.q[use], tips=prob.tips[use],
+                                  axes=None if prob.axes is None else prob.axes[use],
+                                  mode=prob.mode[use])
+        sol = least_squares(sub.residual, sol.x, jac=sub.jacobian, loss="linear",
+                            **opts)  # type: ignore[arg-type]
+    theta = prob.full(sol.x)
+    _, r_after = prob.evaluate(theta, False)
+    if np.any(theta[:6] <= 0) or not np.all(np.isfinite(r_after)):
+        raise CalibrationError(
+            f"calibration diverged ({sol.message}): the fit leaves a non-physical design "
+            f"(l1..l5, tool_length = {np.array2string(theta[:6], precision=6)} m) or poses "
+            "the model cannot assemble; check the assembly mode, the frame and the units (m)")
+    _, r_before = prob.evaluate(prob.theta0, False)
+    J = prob.jac_full(theta)[:, prob.free].reshape(n_used, rows_per, -1)[use].reshape(
+        -1, len(names))
+    dof = J.shape[0] - J.shape[1]
+    ssr = float(np.sum(r_after[use] ** 2))
+    s_hat = float(sigma) if sigma is not None else float(np.sqrt(ssr / max(dof, 1)))
+    cov = np.asarray(s_hat ** 2 * np.linalg.pinv(J.T @ J, rcond=1e-15, hermitian=True),
+                     dtype=np.float64)
+    outl = np.linalg.norm(r_after, axis=1) > outlier_threshold * max(s_hat, RESIDUAL_FLOOR)
+    if loss != "linear":
+        outl = ~use
+    if np.any(outl):
+        warnings.warn(f"calibration: {int(np.sum(outl))} row(s) flagged as outliers "
+                      f"(residual above {outlier_threshold} sigma = "
+                      f"{outlier_threshold * s_hat:.3g} m)", CalibrationWarning, stacklevel=2)
+    return _result(design, names, prob, theta, cov, chk, m_all, T, r_before, r_after, use,
+                   outl, s_hat, report, sol, rows_per)
+
+
+def _robust_sigma(r: NDArray[np.float64]) -> float:
+    """Standard deviation of one component from the median absolute deviation (tips only)."""
+    return float(1.4826 * np.median(np.abs(r[:, :3])))
+
+
+def _result(design: Design, names: tuple[str, ...], prob: _Problem, theta: NDArray[np.float64],
+            cov: NDArray[np.float64], chk: MeasurementCheck, m_all: NDArray[np.float64],
+            T: NDArray[np.float64], r_before: NDArray[np.float64], r_after: NDArray[np.float64],
+            use: NDArray[np.bool_], outl: NDArray[np.bool_], s_hat: float,
+            report: IdentifiabilityReport, sol: object, rows_per: int) -> CalibrationResult:
+    n_all = chk.usable.shape[0]
+
+    def spread(a: NDArray[np.float64]) -> NDArray[np.float64]:
+        out = np.full((n_all, rows_per), np.nan)
+        out[chk.usable] = -a     # measured minus predicted
+        return out
+
+    def spread_b(a: NDArray[np.bool_]) -> NDArray[np.bool_]:
+        out = np.zeros(n_all, bool)
+        out[chk.usable] = a
+        return out
+
+    T_t_b = None
+    if prob.R0 is not None:
+        T_t_b = np.eye(4)
+        T_t_b[:3, :3] = rotation_from_vector(theta[_REG:_REG + 3]) @ prob.R0
+        T_t_b[:3, 3] = theta[_REG + 3:_REG + 6]
+    T_new = T.copy()
+    T_new[:3, 3] = theta[9:12]
+    rms = [float(np.sqrt(np.mean(np.sum(r[use][:, :3] ** 2, axis=1))))
+           for r in (r_before, r_after)]
+    return CalibrationResult(
+        design=design_from_parameters(theta, design), names=names, estimates=theta[prob.free],
+        nominal=prob.theta0[prob.free], std=np.sqrt(np.clip(np.diag(cov), 0.0, None)),
+        covariance=cov, parameters={n: float(v) for n, v in zip(PARAMETERS, theta, strict=True)},
+        q_offset=theta[6:9].copy(), rcm=theta[9:12].copy(), T_b_e=T_new, T_t_b=T_t_b,
+        frame="base" if prob.R0 is None else "tracker", mode=m_all.astype(np.int64),
+        residuals_before=spread(r_before), residuals_after=spread(r_after),
+        rms_before=rms[0], rms_after=rms[1], sigma=s_hat, outliers=spread_b(outl),
+        excluded=~chk.usable, check=chk, identifiability=report,
+        success=bool(getattr(sol, "success", False)), message=str(getattr(sol, "message", "")),
+        nfev=int(getattr(sol, "nfev", 0)))

@@ -1,0 +1,224 @@
+"""Synthetic calibration data: a perturbed "true" robot measured with a known noise model.
+
+Noise model (every test and demo knows the truth):
+
+* the true robot is the nominal design with every length ``l1..l5`` and the tool length
+  moved by ``N(0, perturbation^2)``, actuator zero offsets ``N(0, offset_std^2)`` and the
+  RCM point moved by ``N(0, rcm_std^2)`` per axis (or the values given in ``true``);
+* the readings ``q`` are the poses asked for (or random poses that the nominal robot
+  reaches); the true actuator positions are ``q + offset`` plus, with
+  ``encoder_resolution > 0``, a uniform quantisation error in ``[-res/2, res/2]``;
+* the tracker measures the true tip with independent Gaussian noise ``N(0, noise^2)``
+  on each coordinate (isotropic), in the base frame or, with ``frame="tracker"``, in a
+  tracker frame ``p_t = R p_b + t`` (a random registration unless given);
+* optionally the instrument axis too, with Gaussian noise ``N(0, axis_noise^2)`` per
+  component (then renormalised);
+* optionally a fraction of rows are outliers: ``outlier_size`` (m) added in a random
+  direction.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_array, check_transform
+from ..design import Design, resolve_design
+from ..errors import InvalidInputError
+from ._model import (
+    PARAMETERS,
+    Seed,
+    design_from_parameters,
+    parameter_vector,
+    predict,
+    rotation_from_vector,
+)
+
+__all__ = ["SyntheticData", "synthetic_measurements", "random_poses"]
+
+
+@dataclasses.dataclass(frozen=True)
+class SyntheticData:
+    """Measurements of a known robot.
+
+    Attributes
+    ----------
+    q : ndarray, shape (N, 3)
+        Actuator readings, m.
+    tips : ndarray, shape (N, 3)
+        Measured tool tips (base or tracker frame), m.
+    axes : ndarray, shape (N, 3) or None
+        Measured unit instrument axes (same frame), when asked for.
+    true_design : Design
+        The robot that was measured.
+    true_parameters : dict of str -> float
+        Every parameter of :data:`~athenakin.calibration.PARAMETERS` (registration as
+        rotation vector about the identity and translation).
+    T_t_b : ndarray, shape (4, 4) or None
+        True registration for ``frame="tracker"``.
+    outliers : ndarray of bool, shape (N,)
+        Rows with an added gross error.
+    frame : {"base", "tracker"}
+    """
+
+    q: NDArray[np.float64]
+    tips: NDArray[np.float64]
+    axes: NDArray[np.float64] | None
+    true_design: Design
+    true_parameters: dict[str, float]
+    T_t_b: NDArray[np.float64] | None
+    outliers: NDArray[np.bool_]
+    frame: str
+
+
+def random_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *, mode: int = 1,
+                 margin: float = 5e-3, rng: Seed = None) -> NDArray[np.float64]:
+    """``n`` random readings (N, 3) within the strokes that the nominal robot reaches.
+
+    Uniform in the stroke box, kept where the module assembles in ``mode`` with a
+    half-chord of at least ``margin`` (m), ``margin <= |q1 - q2| / 2 <= min(l1, l3) - margin``
+    (away from the links' stretched limits) and the tip beyond the RCM by at least
+    ``margin`` (``margin < p < L - margin``).
+
+    Raises
+    ------
+    InvalidInputError
+        If a stroke is unlimited, or too few samples fall in the workspace.
+    """
+    from ..parallel import parallel_forward_kinematics
+
+    design = resolve_design(design)
+    T = check_transform(T_b_e, "T_b_e")
+    lo, hi = design.stroke_min, design.stroke_max
+    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+        raise InvalidInputError("random_poses: the design has unlimited strokes; give the "
+                                "poses (candidates) explicitly")
+    gen = np.random.default_rng(rng)
+    theta = parameter_vector(design, T[:3, 3])
+    out = np.zeros((0, 3))
+    for _ in range(50):
+        cand = lo + (hi - lo) * gen.random((max(4 * n, 256), 3))
+        par = parallel_forward_kinematics(cand, design)
+        slot = 0 if mode == 1 else 1
+        ok = par.valid[:, slot] & (par.half_chord >= margin)
+        h = np.abs(cand[:, 0] - cand[:, 1]) / 2
+        ok &= (h >= margin) & (h <= min(design.l1, design.l3) - margin)
+        with np.errstate(invalid="ignore"):
+            pr = predict(theta, cand, np.full(len(cand), float(mode)))
+            ok &= (pr.rho > margin) & (pr.rho < design.tool_length - margin)
+        out = np.concatenate([out, cand[ok]])
+        if len(out) >= n:
+            return out[:n]
+    raise InvalidInputError(f"random_poses: only {len(out)} of {n} poses found in the "
+                            "workspace; widen the strokes or lower the margin")
+
+
+def synthetic_measurements(design: Design | None, T_b_e: ArrayLike, *, n: int = 80,
+                           q: ArrayLike | None = None, noise: float = 20e-6,
+                           perturbation: float = 5e-4, offset_std: float = 0.0,
+                           rcm_std: float = 0.0, true: Mapping[str, float] | None = None,
+                           frame: str = "base", T_t_b: ArrayLike | None = None,
+                           axes: bool = False, axis_noise: float = 2e-4,
+                           encoder_resolution: float = 0.0, outlier_fraction: float = 0.0,
+                           outlier_size: float = 2e-3, mode: int = 1, rng: Seed = None
+                           ) -> SyntheticData:
+    """Measurements of a perturbed robot under the noise model of this module.
+
+    Parameters
+    ----------
+    design : Design or None
+        Nominal design.
+    T_b_e : array-like, shape (4, 4)
+        Nominal RCM frame (its origin the nominal RCM point).
+    n : int, keyword-only
+        Number of random poses (ignored when ``q`` is given).
+    q : array-like, shape (N, 3), keyword-only
+        Readings to measure at.
+    noise : float, keyword-only
+        Tracker noise, standard deviation per coordinate, m.
+    perturbation, offset_std, rcm_std : float, keyword-only
+        Standard deviations (m) of the true lengths/tool length, offsets and RCM about
+        the nominal values.
+    true : mapping, keyword-only
+        Explicit true values of some :data:`~athenakin.calibration.PARAMETERS`
+        (registration entries excepted); override the random ones.
+    frame : {"base", "tracker"}, keyword-only
+    T_t_b : array-like, shape (4, 4), keyword-only
+        True registration (default: random rotation, translation about 1 m).
+    axes : bool, keyword-only
+        Also measure instrument axes.
+    axis_noise : float, keyword-only
+        Standard deviation of each axis component.
+    encoder_resolution : float, keyword-only
+        Quantum of the actuator readings, m (uniform error).
+    outlier_fraction, outlier_size : float, keyword-only
+    mode : {1, -1}, keyword-only
+    rng : seed or Generator, keyword-only
+
+    Returns
+    -------
+    SyntheticData
+    """
+    design = resolve_design(design)
+    T = check_transform(T_b_e, "T_b_e")
+    if frame not in ("base", "tracker"):
+        raise ValueError(f"frame: expected 'base' or 'tracker', got {frame!r}")
+    gen = np.random.default_rng(rng)
+    theta = parameter_vector(design, T[:3, 3])
+    theta[:6] += perturbation * gen.standard_normal(6)
+    theta[6:9] += offset_std * gen.standard_normal(3)
+    theta[9:12] += rcm_std * gen.standard_normal(3)
+    for name, v in (true or {}).items():
+        if name not in PARAMETERS[:12]:
+            raise ValueError(f"true: unknown parameter {name!r}; expected some of "
+                             f"{list(PARAMETERS[:12])}")
+        theta[PARAMETERS.index(name)] = float(v)
+    if q is None:   # random poses that both the nominal and the true robot reach
+        qa = random_poses(n + max(4, n // 2), T, design, mode=mode, rng=gen)
+        with np.errstate(invalid="ignore"):
+            pr = predict(theta, qa, np.full(len(qa), float(mode)))
+            ok = np.isfinite(pr.rho) & (pr.rho > 1e-3) & (pr.rho < theta[5] - 1e-3)
+        if np.sum(ok) < n:
+            raise InvalidInputError("synthetic_measurements: the perturbed robot reaches too "
+                                    "few random poses; lower the perturbation")
+        qa = qa[ok][:n]
+    else:
+        qa = check_array(q, "q", (3,))
+    nq = qa.shape[0]
+    q_true_read = qa.copy()
+    if encoder_resolution > 0:
+        q_true_read = qa + encoder_resolution * (gen.random(qa.shape) - 0.5)
+    pr = predict(theta, q_true_read, np.full(nq, float(mode)))
+    if not np.all(np.isfinite(pr.tip_base)):
+        raise InvalidInputError("synthetic_measurements: the perturbed robot cannot reach "
+                                "every pose; lower the perturbation")
+    tips = pr.tip_base + noise * gen.standard_normal((nq, 3))
+    ax = None
+    if axes:
+        ax = pr.axis + axis_noise * gen.standard_normal((nq, 3))
+        ax /= np.linalg.norm(ax, axis=1, keepdims=True)
+    outl = np.zeros(nq, bool)
+    if outlier_fraction > 0:
+        k = max(1, int(round(outlier_fraction * nq)))
+        idx = gen.choice(nq, size=k, replace=False)
+        dirs = gen.standard_normal((k, 3))
+        tips[idx] += outlier_size * dirs / np.linalg.norm(dirs, axis=1, keepdims=True)
+        outl[idx] = True
+    Ttb = None
+    if frame == "tracker":
+        if T_t_b is None:
+            Ttb = np.eye(4)
+            Ttb[:3, :3] = rotation_from_vector(gen.standard_normal(3))
+            Ttb[:3, 3] = gen.standard_normal(3) * 0.6
+        else:
+            Ttb = check_transform(T_t_b, "T_t_b")
+        tips = tips @ Ttb[:3, :3].T + Ttb[:3, 3]
+        if ax is not None:
+            ax = ax @ Ttb[:3, :3].T
+    params = {k: float(v) for k, v in zip(PARAMETERS, theta, strict=True)}
+    return SyntheticData(q=qa, tips=tips, axes=ax, true_design=design_from_parameters(theta,
+                         design), true_parameters=params, T_t_b=Ttb, outliers=outl,
+                         frame=frame)

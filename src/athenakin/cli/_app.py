@@ -1,0 +1,89 @@
+"""``athenakin app``: a live ATHENA in the browser (local web server, extra ``app``)."""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import threading
+from pathlib import Path
+from typing import Any
+
+from ._common import add_design_option
+
+#: Interface the app binds unless told otherwise (this machine only).
+DEFAULT_HOST = "127.0.0.1"
+
+
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``app`` subcommand."""
+    p = sub.add_parser(
+        "app", help="live robot in the browser: sliders q1..q3, a draggable tool tip, read-outs",
+        description="Start a local web server (viser) showing the robot live: sliders for "
+                    "q1, q2, q3 within the strokes, the 16 FK solutions (or all valid ones "
+                    "ghosted), a draggable tool tip and azimuth / polar / depth sliders "
+                    "driving the controller-form IK, read-outs of q, p, u1..u5, the tip, the "
+                    "assembly mode, the distances to the singular sets and the Jacobians' "
+                    "conditioning, and playback of a trajectory CSV from 'athenakin plan'. "
+                    "Prints the URL; Ctrl-C stops it. A design, RCM frame or trajectory that "
+                    "cannot be used is reported at start-up and in the page, and the app runs "
+                    "on the reference set-up instead.")
+    add_design_option(p)
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--rcm", nargs=6, type=float, metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
+                   help="RCM frame E in the base frame: position (m) and fixed-axis x-y-z "
+                        "angles (deg) (default: the reference set-up)")
+    g.add_argument("--rcm-file", metavar="FILE", type=Path,
+                   help='JSON file {"T_b_e": 4x4 nested list}')
+    p.add_argument("--trajectory", metavar="CSV", type=Path,
+                   help="trajectory CSV to play back (columns q1_m, q2_m, q3_m, optional t_s)")
+    p.add_argument("--host", default=DEFAULT_HOST,
+                   help=f"interface to bind ({DEFAULT_HOST}: this machine only; 0.0.0.0: "
+                        f"every interface, only when asked)")
+    p.add_argument("--port", type=int, default=8080,
+                   help="port (8080; the next free one is taken when it is busy; 0: any)")
+    p.add_argument("--backend", choices=("auto", "numba", "numpy"), default="auto",
+                   help="kinematics kernels (auto: numba when installed)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Execute ``app``: serve until SIGINT (Ctrl-C) or SIGTERM."""
+    from ..app import _model  # noqa: F401  (numpy only)
+    from ._common import load_rcm
+
+    try:
+        from ..app._server import AthenaApp
+    except ModuleNotFoundError as exc:
+        if exc.name != "viser":
+            raise
+        print("athenakin app: error: this command needs the optional package 'viser': "
+              "pip install 'athenakin[app]'", file=sys.stderr)
+        return 1
+    if not 0 <= args.port <= 65535:
+        raise ValueError(f"--port: expected 0..65535, got {args.port}")
+    rcm: Any = args.rcm_file
+    if args.rcm:
+        from ..design import Design
+
+        rcm = load_rcm(args, Design.default())
+    app = AthenaApp(args.design, rcm, host=args.host, port=args.port,
+                    trajectory=args.trajectory, backend=args.backend)
+    for e in app.errors:
+        print(f"athenakin app: warning: {e}", file=sys.stderr)
+    print(f"athenakin app: serving ATHENA at {app.url} (Ctrl-C stops)", flush=True)
+    stop = threading.Event()
+
+    def on_signal(signum: int, frame: object) -> None:
+        stop.set()
+
+    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        while not stop.wait(0.2):
+            pass
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+        app.stop()
+    print("athenakin app: stopped", flush=True)
+    return 0

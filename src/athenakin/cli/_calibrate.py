@@ -1,0 +1,92 @@
+"""``athenakin calibrate``: measurement CSV -> calibrated design TOML + report; or a pose plan."""
+
+from __future__ import annotations
+
+import argparse
+import warnings
+from pathlib import Path
+
+from ._common import add_design_option, add_setup_options, load_design, load_rcm, table
+
+
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``calibrate`` subcommand."""
+    p = sub.add_parser(
+        "calibrate", help="identify the robot's geometry from measured tool tips",
+        description="Calibrate: read measurements (CSV columns q1_m,q2_m,q3_m: actuator "
+                    "readings; x_m,y_m,z_m: measured tool tip; optional dx,dy,dz: instrument "
+                    "axis; all in m), estimate the parameters with their uncertainty, write "
+                    "the calibrated design TOML (-o) and a Markdown report with figures. "
+                    "With --plan N: write the N poses to measure (D-optimal) to -o instead. "
+                    "Columns, units and the model: docs/calibration.md.")
+    p.add_argument("measurements", nargs="?", type=Path, metavar="MEASUREMENTS.csv",
+                   help="measurement file (not with --plan)")
+    p.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
+                   help="calibrated design .toml (or, with --plan, the poses .csv)")
+    p.add_argument("--plan", type=int, metavar="N", help="plan N poses to measure")
+    p.add_argument("--params", nargs="+", metavar="NAME", default=None,
+                   help="parameters to estimate: l1..l5 tool_length q1_offset q2_offset "
+                        "q3_offset rcm_x rcm_y rcm_z, or groups lengths offsets rcm default "
+                        "(default: l1..l5 tool_length)")
+    p.add_argument("--frame", choices=("base", "tracker"), default="base",
+                   help="frame of the measured tips: base (registered tracker, default) or "
+                        "tracker (registration estimated too)")
+    p.add_argument("--mode", type=int, choices=(1, -1), default=1,
+                   help="assembly mode of the robot (default +1)")
+    p.add_argument("--loss", choices=("linear", "soft_l1", "huber", "cauchy", "arctan"),
+                   default="linear", help="robust loss against outliers (default linear)")
+    p.add_argument("--encoder-resolution", type=float, default=0.0, metavar="M",
+                   help="encoder quantum (m) for the tip-error map of the report")
+    p.add_argument("--report", type=Path, metavar="REPORT.md",
+                   help="report file (default: OUT with _report.md)")
+    p.add_argument("--no-report", action="store_true", help="write no report")
+    p.add_argument("--candidates", type=int, default=2000,
+                   help="--plan: random candidate poses (default 2000)")
+    p.add_argument("--seed", type=int, default=0, help="--plan: random seed (default 0)")
+    add_design_option(p)
+    add_setup_options(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Execute ``calibrate``."""
+    from .. import calibration as cal
+
+    out = Path(args.output)
+    if not out.parent.exists():
+        raise ValueError(f"-o: folder {str(out.parent)!r} does not exist")
+    design = load_design(args)
+    T = load_rcm(args, design)
+    if args.plan is not None:
+        if args.measurements is not None:
+            raise ValueError("--plan: give no measurement file (it writes the poses to -o)")
+        plan = cal.plan_poses(args.plan, T, design, params=args.params, frame=args.frame,
+                              n_candidates=args.candidates, mode=args.mode, rng=args.seed)
+        out.write_text(cal.plan_csv_text(plan.q, comment=(
+            f"D-optimal for {' '.join(plan.names)}; frame {args.frame}; "
+            f"log det = {plan.logdet:.4f}; condition {plan.identifiability.condition:.4g}")))
+        print(plan.identifiability.summary())
+        print(f"wrote {len(plan.q)} poses to {out}")
+        return 0
+    if args.measurements is None:
+        raise ValueError("expected a measurement file (or --plan N)")
+    data = cal.read_measurements_csv(args.measurements)
+    assert data.tips is not None
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", cal.CalibrationWarning)
+        res = cal.calibrate(data.q, data.tips, T, design, params=args.params, frame=args.frame,
+                            axes=data.axes, mode=args.mode, loss=args.loss)
+    for w in caught:
+        print(f"warning: {w.message}")
+    rows = [[n, f"{a:.9g}", f"{b:.9g}", f"{(b - a) * 1e6:+.2f}", f"{s * 1e6:.2f}"]
+            for n, a, b, s in res.table()]
+    print(table(["parameter", "nominal", "estimate", "change (um|urad)", "std (um|urad)"], rows))
+    print(f"RMS tip residual: {res.rms_before * 1e6:.2f} um before, "
+          f"{res.rms_after * 1e6:.2f} um after (sigma {res.sigma * 1e6:.2f} um)")
+    out.write_text(cal.calibration_toml(res))
+    print(f"wrote {out}")
+    if not args.no_report:
+        rep = args.report or out.with_name(out.stem + "_report.md")
+        files = cal.write_report(res, rep, encoder_resolution=args.encoder_resolution)
+        print("wrote " + ", ".join(str(f) for f in files))
+    return 0

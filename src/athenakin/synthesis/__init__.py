@@ -1,0 +1,75 @@
+"""Design studies: which ATHENA geometry serves a surgical task best, on one machine or a cluster.
+
+* :mod:`._task` - the surgical task (:class:`Task`: RCM, cone of instrument
+  directions, tip depths), its RCM frame and its samples;
+* :mod:`._metrics` - the metrics of one design over the task (coverage, per-mode
+  coverage, singularity margins, conditioning, stroke use, size, tip error);
+* :mod:`._study` - :func:`evaluate`: a batch of designs on Dask (local scheduler
+  by default, a ``distributed`` cluster by address or client), Parquet chunks,
+  resume, retries;
+* :mod:`._search` - :func:`optimize`: NSGA-II (pymoo) over ``l1..l5`` and the
+  strokes, the Pareto front and the reference design on it;
+* :mod:`.figures` - Pareto front, parameter coordinates, coverage maps (matplotlib).
+
+Needs the ``synthesis`` extra (``pip install 'athenakin[synthesis]'``) for
+:func:`evaluate` and :func:`optimize`; :class:`Task` needs only numpy.
+Definitions and the scale-out arithmetic: ``docs/synthesis.md``.
+"""
+
+from ._errors import SchedulerUnreachableError, StudyMismatchError, SynthesisError, TaskFileError
+from ._metrics import (
+    DEFAULT_ENCODER_RESOLUTION,
+    DEFAULT_SAMPLES,
+    METRIC_COLUMNS,
+    PARAMETER_COLUMNS,
+    design_from_row,
+    evaluate_design,
+    reachability,
+    row_from_design,
+)
+from ._search import (
+    DEFAULT_OBJECTIVES,
+    SEARCH_VARIABLES,
+    SearchResult,
+    bounds_from_toml,
+    check_bounds,
+    default_bounds,
+    optimize,
+    pareto_mask,
+    random_designs,
+)
+from ._study import CHUNK_SIZE, LOCAL_SCHEDULERS, design_rows, evaluate, read_study
+from ._task import Task, TaskSamples, rcm_frame_from_axis, sample_task
+
+__all__ = [
+    "DEFAULT_OBJECTIVES",
+    "SEARCH_VARIABLES",
+    "SearchResult",
+    "bounds_from_toml",
+    "check_bounds",
+    "default_bounds",
+    "optimize",
+    "pareto_mask",
+    "random_designs",
+    "CHUNK_SIZE",
+    "DEFAULT_ENCODER_RESOLUTION",
+    "DEFAULT_SAMPLES",
+    "LOCAL_SCHEDULERS",
+    "METRIC_COLUMNS",
+    "PARAMETER_COLUMNS",
+    "SchedulerUnreachableError",
+    "StudyMismatchError",
+    "SynthesisError",
+    "Task",
+    "TaskFileError",
+    "TaskSamples",
+    "design_from_row",
+    "design_rows",
+    "evaluate",
+    "evaluate_design",
+    "reachability",
+    "rcm_frame_from_axis",
+    "read_study",
+    "row_from_design",
+    "sample_task",
+]

@@ -1,0 +1,216 @@
+"""Metrics of one design against a task (docs/synthesis.md defines each one exactly)."""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..design import Design
+from ..errors import InvalidInputError
+from ._task import Task, TaskSamples, sample_task
+
+__all__ = ["METRIC_COLUMNS", "PARAMETER_COLUMNS", "DEFAULT_SAMPLES",
+           "DEFAULT_ENCODER_RESOLUTION", "ASSEMBLY_GRID", "evaluate_design", "design_from_row",
+           "row_from_design", "reachability"]
+
+#: Task samples per design unless told otherwise.
+DEFAULT_SAMPLES = 100_000
+#: Encoder resolution of each actuator (m) used for the tip error unless told otherwise.
+DEFAULT_ENCODER_RESOLUTION = 1e-6
+#: Grid points per actuator of the check that the module assembles within the strokes.
+ASSEMBLY_GRID = 15
+
+#: Design parameters, one column each (strokes flattened per actuator).
+PARAMETER_COLUMNS = ("l1", "l2", "l3", "l4", "l5", "q1_min", "q2_min", "q3_min", "q1_max",
+                     "q2_max", "q3_max", "tool_length", "ab_order")
+
+_CONDITIONS = ("circles_tangent", "d_on_rail", "k1_degenerate", "ab_coincide", "k2_degenerate",
+               "stroke_limit", "p_zero", "ujoint", "wrist", "ik_cos_u1", "ik_sin_u1_sin_u2",
+               "tip_at_rcm")
+
+#: Metric columns of the study table, in order.
+METRIC_COLUMNS = (("coverage", "coverage_mode", "mode", "coverage_plus", "coverage_minus")
+                  + tuple(f"margin_{c}" for c in _CONDITIONS)
+                  + ("margin_min", "cond_tip_max", "cond_parallel_max", "stroke_use_q1",
+                     "stroke_use_q2", "stroke_use_q3", "size", "tip_error_max",
+                     "tip_error_mean"))
+
+#: Conditions whose value is a length (m); the others are dimensionless sines.
+_LENGTH_CONDITIONS = ("circles_tangent", "d_on_rail", "k1_degenerate", "ab_coincide",
+                      "k2_degenerate", "stroke_limit", "p_zero", "tip_at_rcm")
+
+
+def row_from_design(design: Design) -> dict[str, Any]:
+    """The parameter columns of a design (a plain dict of floats and one str)."""
+    lo, hi = design.stroke_min, design.stroke_max
+    row: dict[str, Any] = {f"l{i + 1}": float(x) for i, x in enumerate(design.lengths)}
+    row.update({f"q{i + 1}_min": float(lo[i]) for i in range(3)})
+    row.update({f"q{i + 1}_max": float(hi[i]) for i in range(3)})
+    row["tool_length"] = float(design.tool_length)
+    row["ab_order"] = design.ab_order
+    return row
+
+
+def design_from_row(row: Mapping[str, Any]) -> Design:
+    """Build a :class:`~athenakin.Design` from the parameter columns of a row.
+
+    Raises
+    ------
+    InvalidInputError, TypeError
+        What :class:`~athenakin.Design` raises for a bad value (negative length,
+        ``q_min > q_max``, ...): the message is the row's ``reason``.
+    """
+    missing = [k for k in PARAMETER_COLUMNS[:5] if k not in row]
+    if missing:
+        raise InvalidInputError(f"design: missing {missing}")
+    kw: dict[str, Any] = {k: row[k] for k in PARAMETER_COLUMNS[:5]}
+    kw["q_min"] = tuple(float(row.get(f"q{i}_min", -math.inf)) for i in (1, 2, 3))
+    kw["q_max"] = tuple(float(row.get(f"q{i}_max", math.inf)) for i in (1, 2, 3))
+    if "tool_length" in row:
+        kw["tool_length"] = row["tool_length"]
+    if "ab_order" in row:
+        kw["ab_order"] = row["ab_order"]
+    return Design(**kw)
+
+
+@functools.lru_cache(maxsize=4)
+def _samples(task: Task, n: int, seed: int) -> TaskSamples:
+    return sample_task(task, n, seed=seed)
+
+
+def _assembles(design: Design) -> bool:
+    """True when some q of a grid over the (finite) stroke box closes the module."""
+    from ..parallel import parallel_forward_kinematics
+
+    lo, hi = design.stroke_min, design.stroke_max
+    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+        return True
+    axes = [np.linspace(lo[i], hi[i], ASSEMBLY_GRID) for i in range(3)]
+    q = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    return bool(np.any(parallel_forward_kinematics(q, design).valid))
+
+
+def reachability(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: int = 0,
+                 backend: str = "numba") -> tuple[TaskSamples, NDArray[np.float64],
+                                                  NDArray[np.int64], NDArray[np.int8]]:
+    """Which task samples a design reaches, and in which assembly mode.
+
+    Parameters
+    ----------
+    design : Design
+    task : Task
+    samples : int, keyword-only
+    seed : int, keyword-only
+    backend : {"numba", "numpy"}, keyword-only
+        Backend of :func:`athenakin.q_from_instrument`.
+
+    Returns
+    -------
+    samples : TaskSamples
+        The task samples (shared by every design of a study with this seed).
+    q : ndarray, shape (n, 3)
+        Actuator values (NaN where unreachable), m.
+    mode : ndarray of int, shape (n,)
+        Assembly mode (+1 / -1), 0 where unreachable.
+    reason : ndarray of int8, shape (n,)
+        :class:`~athenakin.errors.Reason` of each sample (0 where reachable).
+    """
+    from ..robot import q_from_instrument
+
+    s = _samples(task, int(samples), int(seed))
+    q, res = q_from_instrument(task.T_b_e, s.direction_e, design.tool_length - s.depth, design,
+                               errors="flag", backend=backend)  # type: ignore[arg-type]
+    return s, q, res.mode, res.reason
+
+
+def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: int = 0,
+                    encoder_resolution: float = DEFAULT_ENCODER_RESOLUTION) -> dict[str, float]:
+    """Every metric of one design over the task samples (docs/synthesis.md).
+
+    Parameters
+    ----------
+    design : Design
+    task : Task
+    samples : int, keyword-only
+        Number of task samples (uniform over the cone's solid angle and depth).
+    seed : int, keyword-only
+        Seed of the task samples; every design of a study sees the same samples.
+    encoder_resolution : float, keyword-only
+        Resolution of each actuator's encoder, m.
+
+    Returns
+    -------
+    dict of str -> float
+        One entry per name in :data:`METRIC_COLUMNS`. Metrics taken over the
+        reachable samples are NaN exactly where ``coverage == 0``.
+    """
+    from ..analysis import condition_number, singularities
+    from ..fast import parallel_jacobian, tool_tip_jacobian
+    from ._kernels import CONDITION_ORDER, reduce_samples
+
+    s, q, mode, _ = reachability(design, task, samples=samples, seed=seed)
+    T = task.T_b_e
+    n = s.depth.shape[0]
+    valid = mode != 0
+    idx = np.flatnonzero(valid)
+    qv, mv = q[idx], mode[idx]
+    J_tip = tool_tip_jacobian(qv, T, design, mode=mv)
+    J_par = parallel_jacobian(qv, design, mode=mv)
+    d_b = (T[:3, :3] @ s.direction_e[idx].T).T
+    O_s = T[:3, 3] - (design.tool_length - s.depth[idx])[:, None] * d_b
+    lo, hi = design.stroke_min, design.stroke_max
+    counts, margin, arg_margin, cond, arg_cond, q_lo, q_hi, tip = reduce_samples(
+        qv, mv, np.ones(len(idx), np.bool_), O_s, T[:3, 3].copy(), s.direction_e[idx],
+        J_tip, J_par, design.lengths, design.tool_length, lo, hi, float(encoder_resolution))
+    out: dict[str, float] = {}
+    n_plus, n_minus = int(counts[1]), int(counts[2])
+    out["coverage"] = counts[0] / n
+    out["coverage_mode"] = max(n_plus, n_minus) / n
+    out["mode"] = 1.0 if n_plus >= n_minus else -1.0
+    out["coverage_plus"] = n_plus / n
+    out["coverage_minus"] = n_minus / n
+    nan = math.nan
+    if counts[0] == 0:
+        out.update({f"margin_{c}": nan for c in _CONDITIONS})
+        out.update(margin_min=nan, cond_tip_max=nan, cond_parallel_max=nan, stroke_use_q1=nan,
+                   stroke_use_q2=nan, stroke_use_q3=nan, tip_error_max=nan, tip_error_mean=nan)
+    else:
+        # the kernel picks the worst samples; the reported values are the analysis module's
+        picks = np.unique(arg_margin)
+        rep = singularities(qv[picks], T, design, mode=mv[picks], jacobians=False)
+        for c, k in zip(CONDITION_ORDER, arg_margin, strict=True):
+            out[f"margin_{c}"] = float(rep.conditions[c].value[np.searchsorted(picks, k)])
+        length_margins = [out[f"margin_{c}"] for c in _LENGTH_CONDITIONS if c != "stroke_limit"]
+        out["margin_min"] = float(min(length_margins))
+        out["cond_tip_max"] = float(condition_number(J_tip[arg_cond[0]]))
+        out["cond_parallel_max"] = float(condition_number(J_par[arg_cond[1]]))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            use = (q_hi - q_lo) / (hi - lo)
+        for i in range(3):
+            out[f"stroke_use_q{i + 1}"] = float(use[i])
+        out["tip_error_max"] = float(tip[0])
+        out["tip_error_mean"] = float(tip[1] / counts[0])
+    stroke = float(np.sum(hi - lo))
+    out["size"] = float(2 * design.l1 + 2 * design.l3 + design.l2 + design.l4 + design.l5
+                        + stroke)
+    return {k: float(out[k]) for k in METRIC_COLUMNS}
+
+
+def metrics_or_reason(row: Mapping[str, Any], task: Task, *, samples: int, seed: int,
+                      encoder_resolution: float) -> tuple[dict[str, float], str]:
+    """Metrics of one parameter row, or NaN metrics and the reason it is invalid."""
+    try:
+        design = design_from_row(row)
+    except (InvalidInputError, TypeError, ValueError) as exc:
+        return dict.fromkeys(METRIC_COLUMNS, math.nan), f"{type(exc).__name__}: {exc}"
+    if not _assembles(design):
+        return (dict.fromkeys(METRIC_COLUMNS, math.nan),
+                f"strokes cannot assemble: no q of a {ASSEMBLY_GRID}^3 grid over the stroke box "
+                f"closes the parallel module")
+    return evaluate_design(design, task, samples=samples, seed=seed,
+                           encoder_resolution=encoder_resolution), ""

@@ -1,0 +1,302 @@
+"""Multi-objective design search: NSGA-II (pymoo) over l1..l5 and the strokes, on Dask."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..design import Design
+from ..errors import InvalidInputError
+from ._errors import TaskFileError
+from ._metrics import DEFAULT_ENCODER_RESOLUTION, METRIC_COLUMNS, row_from_design
+from ._study import CONNECT_TIMEOUT, _require, evaluate, open_scheduler
+from ._task import Task
+
+__all__ = ["SEARCH_VARIABLES", "DEFAULT_OBJECTIVES", "SearchResult", "default_bounds",
+           "bounds_from_toml", "check_bounds", "optimize", "pareto_mask", "random_designs"]
+
+#: Decision variables of the search, in order.
+SEARCH_VARIABLES = ("l1", "l2", "l3", "l4", "l5", "q1_min", "q1_max", "q2_min", "q2_max",
+                    "q3_min", "q3_max")
+#: Objectives and their sense: the largest single-mode coverage, the smallest robot, the
+#: smallest worst-case tip error from encoder resolution.
+DEFAULT_OBJECTIVES: dict[str, str] = {"coverage_mode": "max", "size": "min",
+                                      "tip_error_max": "min"}
+
+
+def default_bounds(design: Design | None = None, *, spread: float = 0.25
+                   ) -> dict[str, tuple[float, float]]:
+    """Search bounds about a design: lengths times ``1 -+ spread``, strokes +- ``spread`` x 0.4 m.
+
+    Parameters
+    ----------
+    design : Design, optional
+        Centre of the bounds (default :meth:`~athenakin.Design.default`).
+    spread : float, keyword-only
+        Relative half-width for the lengths; strokes move by ``0.4 spread`` m.
+
+    Returns
+    -------
+    dict of str -> (float, float)
+        ``{name: (lo, hi)}`` for every name of :data:`SEARCH_VARIABLES`, m.
+    """
+    d = design or Design.default()
+    row = row_from_design(d)
+    out = {}
+    for k in SEARCH_VARIABLES:
+        v = float(row[k])
+        if not math.isfinite(v):
+            raise InvalidInputError(f"default_bounds: {k} of the design is unlimited; give "
+                                    f"explicit bounds")
+        w = spread * v if k.startswith("l") else 0.4 * spread
+        out[k] = (v - abs(w), v + abs(w))
+    return out
+
+
+def check_bounds(bounds: Mapping[str, Any]) -> dict[str, tuple[float, float]]:
+    """Validate search bounds: every variable of :data:`SEARCH_VARIABLES`, ``lo <= hi`` finite.
+
+    Raises
+    ------
+    InvalidInputError
+        For a missing, unknown or malformed entry (named).
+    """
+    if not isinstance(bounds, Mapping):
+        raise TypeError(f"bounds: expected a mapping name -> (lo, hi), got "
+                        f"{type(bounds).__name__}")
+    unknown = sorted(set(bounds) - set(SEARCH_VARIABLES))
+    missing = [k for k in SEARCH_VARIABLES if k not in bounds]
+    if unknown or missing:
+        raise InvalidInputError(f"bounds: expected exactly {list(SEARCH_VARIABLES)}; missing "
+                                f"{missing}, unknown {unknown}")
+    out = {}
+    for k in SEARCH_VARIABLES:
+        v = bounds[k]
+        try:
+            lo, hi = (float(x) for x in v)
+        except (TypeError, ValueError):
+            raise InvalidInputError(f"bounds.{k}: expected [lo, hi] (m), got {v!r}") from None
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
+            raise InvalidInputError(f"bounds.{k}: expected finite lo <= hi (m), got "
+                                    f"[{lo!r}, {hi!r}]")
+        out[k] = (lo, hi)
+    return out
+
+
+def bounds_from_toml(path: str | Path) -> dict[str, tuple[float, float]] | None:
+    """The ``[bounds]`` table of a task file (None when it has none).
+
+    Raises
+    ------
+    TaskFileError
+        If the file cannot be read or the table is malformed.
+    """
+    try:
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise TaskFileError(f"{path}: cannot read the bounds ({exc})") from None
+    if "bounds" not in data:
+        return None
+    try:
+        return check_bounds(data["bounds"])
+    except (InvalidInputError, TypeError) as exc:
+        raise TaskFileError(f"{path}: {exc}") from None
+
+
+def random_designs(n: int, bounds: Mapping[str, Any], *, seed: int = 0,
+                   base: Design | None = None) -> list[dict[str, Any]]:
+    """``n`` parameter rows drawn uniformly within ``bounds`` (seeded).
+
+    ``tool_length`` and ``ab_order`` come from ``base`` (default
+    :meth:`~athenakin.Design.default`). Rows whose strokes cross (``q_min > q_max``)
+    are kept: :func:`~athenakin.synthesis.evaluate` flags them.
+    """
+    b = check_bounds(bounds)
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise InvalidInputError(f"n: expected a positive integer, got {n!r}")
+    base = base or Design.default()
+    rng = np.random.default_rng(seed)
+    lo = np.array([b[k][0] for k in SEARCH_VARIABLES])
+    hi = np.array([b[k][1] for k in SEARCH_VARIABLES])
+    X = lo + (hi - lo) * rng.random((int(n), len(SEARCH_VARIABLES)))
+    return [_row(x, base, f"random {i}") for i, x in enumerate(X)]
+
+
+def _row(x: NDArray[np.float64], base: Design, name: str) -> dict[str, Any]:
+    row: dict[str, Any] = {k: float(v) for k, v in zip(SEARCH_VARIABLES, x, strict=True)}
+    row.update(tool_length=base.tool_length, ab_order=base.ab_order, name=name)
+    return row
+
+
+def _objective_matrix(df: Any, objectives: Mapping[str, str]) -> NDArray[np.float64]:
+    """Objectives as minimisation (max -> negated); NaN where not defined."""
+    cols = []
+    for k, sense in objectives.items():
+        v = df[k].to_numpy(dtype=float)
+        cols.append(-v if sense == "max" else v)
+    return np.stack(cols, axis=-1)
+
+
+def pareto_mask(F: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Non-dominated rows of an objective matrix ``(n, k)`` to minimise (NaN rows excluded)."""
+    F = np.asarray(F, dtype=float)
+    ok = np.all(np.isfinite(F), axis=1)
+    mask = np.zeros(len(F), dtype=bool)
+    idx = np.flatnonzero(ok)
+    G = F[idx]
+    for j, i in enumerate(idx):
+        dom = np.all(G <= G[j], axis=1) & np.any(G < G[j], axis=1)
+        mask[i] = not np.any(dom)
+    return mask
+
+
+@dataclasses.dataclass(frozen=True)
+class SearchResult:
+    """Result of :func:`optimize`.
+
+    Attributes
+    ----------
+    table : pandas.DataFrame
+        Every design evaluated (the study table plus ``generation``; the reference
+        design is generation -1).
+    front : pandas.DataFrame
+        The Pareto front: the valid designs of ``table`` with full objectives that no
+        other dominates, sorted by the first objective.
+    reference : pandas.Series
+        The reference design's row.
+    objectives : dict of str -> {"max", "min"}
+    reference_on_front : bool
+        No evaluated design dominates the reference.
+    dominating : int
+        How many front designs dominate the reference.
+    gains : dict of str -> float
+        Per objective, the best improvement over the reference among the front designs
+        that dominate it (in the metric's unit, positive = better); empty when none does.
+    """
+
+    table: Any
+    front: Any
+    reference: Any
+    objectives: dict[str, str]
+    reference_on_front: bool
+    dominating: int
+    gains: dict[str, float]
+
+
+def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
+             reference: Design | None = None,
+             objectives: Mapping[str, str] | None = None, population: int = 24,
+             generations: int = 8, samples: int = 20_000, seed: int = 0,
+             scheduler: Any = None, encoder_resolution: float = DEFAULT_ENCODER_RESOLUTION,
+             connect_timeout: float = CONNECT_TIMEOUT, progress: bool = False
+             ) -> SearchResult:
+    """NSGA-II over ``l1..l5`` and the strokes within ``bounds``, evaluated on Dask.
+
+    Each generation is one :func:`~athenakin.synthesis.evaluate` call on the same
+    scheduler (one connection for the whole search). Designs that are invalid or
+    reach no task sample are infeasible (one constraint), so NSGA-II ranks them
+    behind every feasible one.
+
+    Parameters
+    ----------
+    task : Task
+    bounds : mapping name -> (lo, hi), optional, keyword-only
+        For every name of :data:`SEARCH_VARIABLES`, m (default :func:`default_bounds`
+        of ``reference``).
+    reference : Design, optional, keyword-only
+        Design placed on the front (default :meth:`~athenakin.Design.default`); it also
+        gives ``tool_length`` and ``ab_order`` to every candidate.
+    objectives : mapping metric -> {"max", "min"}, optional, keyword-only
+        Default :data:`DEFAULT_OBJECTIVES`.
+    population, generations : int, keyword-only
+        NSGA-II population size and number of generations.
+    samples, seed : int, keyword-only
+        Task samples per design and their seed; ``seed`` also seeds NSGA-II.
+    scheduler : None, str or distributed.Client, keyword-only
+        As for :func:`~athenakin.synthesis.evaluate`.
+    encoder_resolution : float, keyword-only
+    connect_timeout : float, keyword-only
+    progress : bool, keyword-only
+        Print one line per generation (pymoo's verbose output).
+
+    Returns
+    -------
+    SearchResult
+    """
+    pd = _require("pandas")
+    _require("pymoo")
+    from pymoo.algorithms.moo.nsga2 import NSGA2
+    from pymoo.core.problem import Problem
+    from pymoo.optimize import minimize
+
+    ref = reference or Design.default()
+    b = check_bounds(bounds if bounds is not None else default_bounds(ref))
+    obj = dict(objectives or DEFAULT_OBJECTIVES)
+    for k, sense in obj.items():
+        if k not in METRIC_COLUMNS or sense not in ("max", "min"):
+            raise InvalidInputError(f"objectives: expected metric -> 'max'|'min' with a metric "
+                                    f"of {list(METRIC_COLUMNS)}, got {k!r}: {sense!r}")
+    kind, handle, owned = open_scheduler(scheduler, connect_timeout=connect_timeout)
+    sched = handle
+    tables: list[Any] = []
+    lo = np.array([b[k][0] for k in SEARCH_VARIABLES])
+    hi = np.array([b[k][1] for k in SEARCH_VARIABLES])
+
+    def run(rows: list[dict[str, Any]], generation: int) -> Any:
+        df = evaluate(rows, task, samples=samples, seed=seed, scheduler=sched,
+                      encoder_resolution=encoder_resolution, progress=False)
+        df.insert(1, "generation", generation)
+        tables.append(df)
+        return df
+
+    class _Problem(Problem):  # type: ignore[misc]
+        def __init__(self) -> None:
+            super().__init__(n_var=len(SEARCH_VARIABLES), n_obj=len(obj), n_ieq_constr=1,
+                             xl=lo, xu=hi)
+            self.generation = 0
+
+        def _evaluate(self, X: NDArray[np.float64], out: dict[str, Any], *a: Any,
+                      **kw: Any) -> None:
+            rows = [_row(x, ref, f"nsga2 g{self.generation} #{i}") for i, x in enumerate(X)]
+            df = run(rows, self.generation)
+            self.generation += 1
+            F = _objective_matrix(df, obj)
+            feasible = df["valid"].to_numpy() & (df["coverage"].to_numpy() > 0) & np.all(
+                np.isfinite(F), axis=1)
+            out["F"] = np.where(feasible[:, None], F, 1e9)
+            out["G"] = np.where(feasible, -1.0, 1.0)[:, None]
+
+    try:
+        run([dict(row_from_design(ref), name=ref.name or "reference")], -1)
+        minimize(_Problem(), NSGA2(pop_size=int(population)), ("n_gen", int(generations)),
+                 seed=int(seed), verbose=bool(progress))
+    finally:
+        if owned:
+            handle.close()
+    table = pd.concat(tables, ignore_index=True)
+    table["design"] = np.arange(len(table))
+    F = _objective_matrix(table, obj)
+    usable = table["valid"].to_numpy() & (table["coverage"].to_numpy() > 0)
+    F_use = np.where(usable[:, None], F, np.nan)
+    mask = pareto_mask(F_use)
+    first = next(iter(obj))
+    front = table[mask].sort_values(first, ascending=obj[first] == "min")
+    ref_row = table.iloc[0]
+    f_ref = F_use[0]
+    dom = np.all(F_use <= f_ref, axis=1) & np.any(F_use < f_ref, axis=1) & mask
+    gains = {}
+    if np.all(np.isfinite(f_ref)) and np.any(dom):
+        for j, k in enumerate(obj):
+            gains[k] = float(np.max(f_ref[j] - F_use[dom, j]))
+    return SearchResult(table=table, front=front, reference=ref_row, objectives=obj,
+                        reference_on_front=not bool(np.any(
+                            np.all(F_use <= f_ref, axis=1) & np.any(F_use < f_ref, axis=1))),
+                        dominating=int(np.count_nonzero(dom)), gains=gains)

@@ -1,0 +1,385 @@
+"""Design studies on Dask: one row per design, chunks as Parquet files, resume, retries."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._validation import check_scalar
+from ..design import Design
+from ..errors import InvalidInputError
+from ._errors import SchedulerUnreachableError, StudyMismatchError
+from ._metrics import (
+    DEFAULT_ENCODER_RESOLUTION,
+    DEFAULT_SAMPLES,
+    METRIC_COLUMNS,
+    PARAMETER_COLUMNS,
+    metrics_or_reason,
+    row_from_design,
+)
+from ._task import Task
+
+__all__ = ["evaluate", "design_rows", "open_scheduler", "LOCAL_SCHEDULERS", "CHUNK_SIZE",
+           "CONNECT_TIMEOUT", "RETRIES", "read_study"]
+
+#: Names of Dask's local schedulers accepted by ``scheduler=``.
+LOCAL_SCHEDULERS = ("threads", "processes", "synchronous", "sync", "single-threaded")
+#: Designs per Dask task and per Parquet chunk (fixed, so that a study resumes chunk by chunk).
+CHUNK_SIZE = 8
+#: Seconds to wait for a scheduler given by address before :class:`SchedulerUnreachableError`.
+CONNECT_TIMEOUT = 5.0
+#: How many times Dask may retry a chunk whose worker failed.
+RETRIES = 3
+_FORMAT = "athenakin-synthesis-1"
+_MANIFEST = "_study.json"
+
+
+def _extra() -> str:
+    return "pip install 'athenakin[synthesis]'"
+
+
+def _require(name: str) -> Any:
+    import importlib
+
+    try:
+        return importlib.import_module(name)
+    except ModuleNotFoundError as exc:
+        raise ModuleNotFoundError(f"athenakin.synthesis needs {name!r}: {_extra()}",
+                                  name=name) from exc
+
+
+def design_rows(designs: Any) -> list[dict[str, Any]]:
+    """Parameter rows of a batch of designs, in input order.
+
+    Parameters
+    ----------
+    designs : sequence of Design or of mappings, or pandas.DataFrame
+        A :class:`~athenakin.Design` or a mapping / DataFrame row with the columns of
+        :data:`~athenakin.synthesis.PARAMETER_COLUMNS` (``l1..l5`` required; missing
+        strokes are unlimited). Bad values are kept: :func:`evaluate` flags them.
+
+    Returns
+    -------
+    list of dict
+    """
+    if hasattr(designs, "to_dict") and hasattr(designs, "columns"):
+        records: Iterable[Any] = designs.to_dict(orient="records")
+    elif isinstance(designs, (Design, Mapping)) or not isinstance(designs, Iterable):
+        raise TypeError(f"designs: expected a sequence of Design or mappings, or a DataFrame, "
+                        f"got {type(designs).__name__}")
+    else:
+        records = designs
+    rows = []
+    for i, d in enumerate(records):
+        if isinstance(d, Design):
+            row = row_from_design(d)
+        elif isinstance(d, Mapping):
+            row = {}
+            for k, v in d.items():
+                if k not in PARAMETER_COLUMNS and k != "name":
+                    continue
+                row[str(k)] = v if isinstance(v, str) else _plain(v)
+        else:
+            raise TypeError(f"designs[{i}]: expected a Design or a mapping, got "
+                            f"{type(d).__name__}")
+        row["name"] = str(getattr(d, "name", "") if isinstance(d, Design)
+                          else d.get("name", "") or "")
+        rows.append(row)
+    if not rows:
+        raise InvalidInputError("designs: expected at least one design, got none")
+    return rows
+
+
+def _plain(v: Any) -> Any:
+    if isinstance(v, (bool, np.bool_)):
+        return v
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return v
+
+
+def _chunk_frame(rows: list[dict[str, Any]], start: int, task_map: dict[str, Any],
+                 samples: int, seed: int, resolution: float) -> Any:
+    """Evaluate one chunk of designs (runs on a Dask worker); returns a DataFrame."""
+    import pandas as pd
+
+    task = Task.from_mapping(task_map)
+    recs = []
+    for j, row in enumerate(rows):
+        metrics, reason = metrics_or_reason(row, task, samples=samples, seed=seed,
+                                            encoder_resolution=resolution)
+        rec: dict[str, Any] = {"design": start + j, "name": row.get("name", "")}
+        for k in PARAMETER_COLUMNS:
+            v = row.get(k, "q1<q2" if k == "ab_order" else math.nan)
+            rec[k] = v if k == "ab_order" else _float_or_nan(v)
+        rec["valid"] = reason == ""
+        rec["reason"] = reason
+        rec.update(metrics)
+        recs.append(rec)
+    df = pd.DataFrame.from_records(recs)
+    df["ab_order"] = df["ab_order"].astype(str)
+    return df
+
+
+def _float_or_nan(v: Any) -> float:
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def _fingerprint(rows: list[dict[str, Any]], task: Task, samples: int, seed: int,
+                 resolution: float) -> str:
+    blob = json.dumps({"format": _FORMAT, "rows": rows, "task": task.to_mapping(),
+                       "samples": samples, "seed": seed, "resolution": resolution,
+                       "chunk": CHUNK_SIZE}, sort_keys=True, default=str)
+    return hashlib.sha256(blob.encode()).hexdigest()
+
+
+def open_scheduler(scheduler: Any, *, connect_timeout: float = CONNECT_TIMEOUT
+                   ) -> tuple[str, Any, bool]:
+    """Resolve ``scheduler=`` into ``(kind, handle, owned)``.
+
+    ``None`` -> Dask's local threaded scheduler; a name of :data:`LOCAL_SCHEDULERS`
+    -> that local scheduler; a ``distributed.Client`` -> that client; any other
+    string -> the address of a ``distributed`` scheduler (``"tcp://host:8786"``),
+    connected here (``owned``: the caller closes it).
+
+    Raises
+    ------
+    SchedulerUnreachableError
+        If no scheduler answers at the address within ``connect_timeout`` s.
+    TypeError
+        For any other kind of object.
+    """
+    if scheduler is None:
+        return "local", "threads", False
+    if isinstance(scheduler, str) and scheduler in LOCAL_SCHEDULERS:
+        return "local", scheduler, False
+    if isinstance(scheduler, str):
+        distributed = _require("distributed")
+        import logging
+
+        logger = logging.getLogger("distributed")
+        level = logger.level
+        logger.setLevel(logging.CRITICAL)
+        try:
+            client = distributed.Client(scheduler, timeout=connect_timeout,
+                                        set_as_default=False)
+        except (OSError, TimeoutError, ValueError) as exc:
+            why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise SchedulerUnreachableError(
+                f"no Dask scheduler answers at {scheduler!r} within {connect_timeout:g} s "
+                f"({why})") from None
+        finally:
+            logger.setLevel(level)
+        return "distributed", client, True
+    try:
+        from distributed import Client
+    except ModuleNotFoundError:
+        Client = None  # noqa: N806
+    if Client is not None and isinstance(scheduler, Client):
+        return "distributed", scheduler, False
+    raise TypeError(f"scheduler: expected None, one of {LOCAL_SCHEDULERS}, an address string "
+                    f"or a distributed.Client, got {type(scheduler).__name__}")
+
+
+def _part_path(out: Path, i: int) -> Path:
+    return out / f"part-{i:06d}.parquet"
+
+
+def _write_part(out: Path, i: int, df: Any) -> None:
+    tmp = out / f".part-{i:06d}.parquet.tmp"
+    df.to_parquet(tmp, index=False)
+    os.replace(tmp, _part_path(out, i))
+
+
+def _prepare_out(out: Path, fingerprint: str, n_chunks: int, meta: dict[str, Any]
+                 ) -> dict[int, Any]:
+    """Create or check the study folder; return the chunks already written."""
+    import pandas as pd
+
+    out.mkdir(parents=True, exist_ok=True)
+    manifest = out / _MANIFEST
+    if manifest.exists():
+        old = json.loads(manifest.read_text())
+        if old.get("fingerprint") != fingerprint:
+            raise StudyMismatchError(
+                f"{out}: holds chunks of another study (designs, task, samples, seed or "
+                f"encoder resolution differ); use another output path or delete it")
+    else:
+        manifest.write_text(json.dumps({**meta, "fingerprint": fingerprint}, indent=1,
+                                       default=str))
+    done = {}
+    for i in range(n_chunks):
+        p = _part_path(out, i)
+        if p.exists():
+            done[i] = pd.read_parquet(p)
+    return done
+
+
+def read_study(out: str | Path) -> Any:
+    """Read a study folder written by :func:`evaluate` (every chunk so far, in design order)."""
+    pd = _require("pandas")
+    out = Path(out)
+    parts = sorted(out.glob("part-*.parquet"))
+    if not parts:
+        raise InvalidInputError(f"{out}: no study chunks (part-*.parquet) found")
+    return pd.concat([pd.read_parquet(p) for p in parts], ignore_index=True)
+
+
+def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: int = 0,
+             scheduler: Any = None, out: str | Path | None = None,
+             encoder_resolution: float = DEFAULT_ENCODER_RESOLUTION,
+             progress: bool | None = None,
+             on_chunk: Callable[[int, int], None] | None = None,
+             connect_timeout: float = CONNECT_TIMEOUT, retries: int = RETRIES) -> Any:
+    """Evaluate a batch of designs against a task, on this machine or a Dask cluster.
+
+    Parameters
+    ----------
+    designs : sequence of Design or mappings, or pandas.DataFrame
+        See :func:`design_rows`. Invalid designs (negative lengths, ``q_min > q_max``,
+        strokes within which the module never closes) become rows with
+        ``valid = False`` and a ``reason``; the study goes on.
+    task : Task
+    samples : int, keyword-only
+        Task samples per design (the same samples for every design).
+    seed : int, keyword-only
+        Seed of the task samples. Given the seed, the table is identical bit for bit
+        whatever the scheduler and the number of workers.
+    scheduler : None, str or distributed.Client, keyword-only
+        ``None``: Dask's local threaded scheduler; ``"processes"``, ``"synchronous"``:
+        another local scheduler; ``"tcp://host:8786"``: a ``distributed`` scheduler at
+        that address; a ``distributed.Client``: that cluster.
+    out : path, optional, keyword-only
+        Folder of the study as Parquet (``part-NNNNNN.parquet``, one per chunk of
+        :data:`CHUNK_SIZE` designs, written as each finishes, plus ``_study.json``).
+        If the folder already holds chunks of the same study they are read, not
+        recomputed: an interrupted study resumes.
+    encoder_resolution : float, keyword-only
+        Actuator encoder resolution, m (tip-error metrics).
+    progress : bool, optional, keyword-only
+        tqdm progress bar over chunks (default: when there is more than one chunk to
+        compute and tqdm is installed).
+    on_chunk : callable ``(done, total)``, optional, keyword-only
+        Called after each chunk is finished (and written).
+    connect_timeout : float, keyword-only
+        Seconds to wait for a scheduler given by address.
+    retries : int, keyword-only
+        Retries of a failed chunk on a ``distributed`` cluster (a worker that dies
+        mid-study is also survived by the scheduler's own rescheduling).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per design, in input order: ``design`` (index), ``name``, the
+        parameter columns, ``valid``, ``reason`` and the metric columns
+        (``docs/synthesis.md``); ``coverage`` is in [0, 1].
+
+    Raises
+    ------
+    SchedulerUnreachableError
+        If ``scheduler`` is an address where no scheduler answers.
+    StudyMismatchError
+        If ``out`` holds chunks of a different study.
+    """
+    pd = _require("pandas")
+    _require("dask")
+    if not isinstance(task, Task):
+        raise TypeError(f"task: expected athenakin.synthesis.Task, got {type(task).__name__}")
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:
+        raise InvalidInputError(f"samples: expected a positive integer, got {samples!r}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InvalidInputError(f"seed: expected a non-negative integer, got {seed!r}")
+    resolution = check_scalar(encoder_resolution, "encoder_resolution", positive=True)
+    rows = design_rows(designs)
+    samples, seed = int(samples), int(seed)
+    chunks = [rows[i:i + CHUNK_SIZE] for i in range(0, len(rows), CHUNK_SIZE)]
+    task_map = task.to_mapping()
+    done: dict[int, Any] = {}
+    out_path = None if out is None else Path(out)
+    if out_path is not None:
+        fp = _fingerprint(rows, task, samples, seed, resolution)
+        done = _prepare_out(out_path, fp, len(chunks), {
+            "format": _FORMAT, "designs": len(rows), "chunk_size": CHUNK_SIZE,
+            "task": task_map, "samples": samples, "seed": seed,
+            "encoder_resolution": resolution})
+    todo = [i for i in range(len(chunks)) if i not in done]
+    kind, handle, owned = open_scheduler(scheduler, connect_timeout=connect_timeout)
+    bar = _bar(len(chunks), len(done), progress and len(todo) > 0 if progress is not None
+               else len(todo) > 1)
+
+    def finished(i: int, df: Any) -> None:
+        if out_path is not None:
+            _write_part(out_path, i, df)
+        done[i] = df
+        if bar is not None:
+            bar.update(1)
+        if on_chunk is not None:
+            on_chunk(len(done), len(chunks))
+
+    args = (task_map, samples, seed, resolution)
+    try:
+        if todo and kind == "local":
+            _run_local(handle, chunks, todo, args, finished)
+        elif todo:
+            _run_distributed(handle, chunks, todo, args, finished, retries)
+    finally:
+        if bar is not None:
+            bar.close()
+        if owned:
+            handle.close()
+    table = pd.concat([done[i] for i in range(len(chunks))], ignore_index=True)
+    return table
+
+
+def _bar(total: int, initial: int, show: bool) -> Any:
+    if not show:
+        return None
+    try:
+        from tqdm.auto import tqdm
+    except ModuleNotFoundError:
+        return None
+    return tqdm(total=total, initial=initial, desc="designs (chunks)", unit="chunk")
+
+
+def _run_local(name: str, chunks: Sequence[list[dict[str, Any]]], todo: list[int],
+               args: tuple[Any, ...], finished: Callable[[int, Any], None]) -> None:
+    """Dask's local scheduler; each chunk is handed over (and written) as it finishes."""
+    import dask
+    from dask.callbacks import Callback
+
+    tasks = {}
+    for i in todo:
+        d = dask.delayed(_chunk_frame, pure=True)(chunks[i], i * CHUNK_SIZE, *args)
+        tasks[d.key] = (i, d)
+
+    class _Done(Callback):  # type: ignore[misc]
+        def _posttask(self, key: Any, result: Any, dsk: Any, state: Any, worker: Any) -> None:
+            if key in tasks:
+                finished(tasks[key][0], result)
+
+    with _Done():
+        dask.compute(*[d for _, d in tasks.values()], scheduler=name)
+
+
+def _run_distributed(client: Any, chunks: Sequence[list[dict[str, Any]]], todo: list[int],
+                     args: tuple[Any, ...], finished: Callable[[int, Any], None],
+                     retries: int) -> None:
+    """A ``distributed`` cluster; results are collected (and written) as they complete."""
+    from distributed import as_completed
+
+    futures = {client.submit(_chunk_frame, chunks[i], i * CHUNK_SIZE, *args, pure=True,
+                             retries=retries): i for i in todo}
+    for fut, df in as_completed(list(futures), with_results=True, loop=client.loop):
+        finished(futures[fut], df)
+        fut.release()

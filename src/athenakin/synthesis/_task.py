@@ -1,0 +1,303 @@
+"""The surgical task: a cone of instrument directions about the RCM and a range of tip depths."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._transforms import transform_from_rotation_translation
+from .._validation import check_scalar
+from ..errors import InvalidInputError
+from ._errors import TaskFileError
+
+__all__ = ["Task", "TaskSamples", "rcm_frame_from_axis", "sample_task", "UNIT_TOL"]
+
+#: Tolerance on ``|axis| = 1`` (the axis must be given as a unit vector).
+UNIT_TOL = 1e-9
+
+_KEYS = ("rcm", "axis", "half_angle", "half_angle_deg", "depth", "name")
+
+
+def _vec3(v: object, name: str) -> NDArray[np.float64]:
+    if isinstance(v, (str, bytes)):
+        raise TypeError(f"{name}: expected 3 numbers, got {type(v).__name__}")
+    try:
+        a = np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}: expected 3 numbers, got {v!r}") from None
+    if a.shape != (3,):
+        raise InvalidInputError(f"{name}: expected shape (3,), got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise InvalidInputError(f"{name}: expected finite numbers, got {a.tolist()}")
+    return a
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Task:
+    """What the surgeon needs: instrument directions about the RCM and tip depths.
+
+    Parameters
+    ----------
+    rcm : array-like, shape (3,)
+        Remote centre of motion in the base frame, m.
+    axis : array-like, shape (3,)
+        Central instrument direction, a unit vector in the base frame pointing
+        from the robot side through the RCM into the patient.
+    half_angle : float
+        Half angle of the cone of instrument directions about ``axis``, rad,
+        in ``(0, pi/2]``.
+    depth : tuple of 2 floats
+        ``(d_min, d_max)``: range of the tool tip's depth beyond the RCM along the
+        instrument, m, ``0 <= d_min <= d_max``. The tip is ``rcm + depth * direction``
+        and ``O_s = rcm - (tool_length - depth) * direction``.
+    name : str
+        Free label.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``axis`` is not a unit vector, ``half_angle`` is outside ``(0, pi/2]`` or the
+        depths are not ``0 <= d_min <= d_max`` (finite).
+
+    Examples
+    --------
+    >>> from athenakin.synthesis import Task
+    >>> t = Task(rcm=[0.0, 0.35, -0.1], axis=[0.0, 0.0, -1.0], half_angle=0.5,
+    ...          depth=(0.05, 0.15))
+    >>> t.depth
+    (0.05, 0.15)
+    """
+
+    rcm: NDArray[np.float64]
+    axis: NDArray[np.float64]
+    half_angle: float
+    depth: tuple[float, float]
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "rcm", _vec3(self.rcm, "rcm"))
+        ax = _vec3(self.axis, "axis")
+        n = float(np.linalg.norm(ax))
+        if abs(n - 1.0) > UNIT_TOL:
+            raise InvalidInputError(f"axis: expected a unit vector (|axis| = 1 within "
+                                    f"{UNIT_TOL:g}), got |axis| = {n:.12g}")
+        object.__setattr__(self, "axis", ax / n)
+        a = check_scalar(self.half_angle, "half_angle")
+        if not 0.0 < a <= math.pi / 2:
+            raise InvalidInputError(f"half_angle: expected a value in (0, pi/2] rad, got {a!r}")
+        object.__setattr__(self, "half_angle", a)
+        d = self.depth
+        if isinstance(d, (str, bytes)) or np.ndim(d) != 1 or len(d) != 2:
+            raise InvalidInputError(f"depth: expected (d_min, d_max) in m, got {d!r}")
+        lo = check_scalar(d[0], "depth[0]")
+        hi = check_scalar(d[1], "depth[1]")
+        if not 0.0 <= lo <= hi:
+            raise InvalidInputError(f"depth: expected 0 <= d_min <= d_max (m), got "
+                                    f"({lo!r}, {hi!r})")
+        object.__setattr__(self, "depth", (lo, hi))
+        if not isinstance(self.name, str):
+            raise TypeError(f"name: expected str, got {type(self.name).__name__}")
+        self.rcm.flags.writeable = False
+        self.axis.flags.writeable = False
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Task):
+            return NotImplemented
+        return (np.array_equal(self.rcm, other.rcm) and np.array_equal(self.axis, other.axis)
+                and self.half_angle == other.half_angle and self.depth == other.depth
+                and self.name == other.name)
+
+    def __hash__(self) -> int:
+        return hash((tuple(self.rcm), tuple(self.axis), self.half_angle, self.depth, self.name))
+
+    @property
+    def T_b_e(self) -> NDArray[np.float64]:
+        """RCM frame of the task, shape (4, 4): see :func:`rcm_frame_from_axis`."""
+        return rcm_frame_from_axis(self.rcm, self.axis)
+
+    @property
+    def solid_angle(self) -> float:
+        """Solid angle of the cone, ``2 pi (1 - cos half_angle)``, sr."""
+        return 2.0 * math.pi * (1.0 - math.cos(self.half_angle))
+
+    def to_mapping(self) -> dict[str, Any]:
+        """Plain-Python fields (lists, floats): what :meth:`from_mapping` reads back."""
+        return {"rcm": self.rcm.tolist(), "axis": self.axis.tolist(),
+                "half_angle": self.half_angle, "depth": list(self.depth), "name": self.name}
+
+    def to_toml(self) -> str:
+        """TOML text (a ``[task]`` table) that :meth:`from_toml` reads back to an equal task."""
+        def num(x: float) -> str:
+            return repr(float(x))
+
+        lines = ["[task]",
+                 f"rcm = [{', '.join(num(x) for x in self.rcm)}]",
+                 f"axis = [{', '.join(num(x) for x in self.axis)}]",
+                 f"half_angle = {num(self.half_angle)}",
+                 f"depth = [{num(self.depth[0])}, {num(self.depth[1])}]"]
+        if self.name:
+            lines.append(f"name = {self.name!r}".replace("'", '"'))
+        return "\n".join(lines) + "\n"
+
+    @classmethod
+    def from_mapping(cls, data: Mapping[str, Any]) -> Task:
+        """Build a task from a mapping (e.g. a parsed TOML table).
+
+        Keys: ``rcm``, ``axis``, ``depth``, exactly one of ``half_angle`` (rad) or
+        ``half_angle_deg`` (deg), and optionally ``name``. ``axis`` may be any
+        non-zero vector here; it is normalised (a file is written by hand).
+
+        Raises
+        ------
+        TaskFileError
+            For a missing, unknown or malformed entry (the message names it).
+        """
+        if not isinstance(data, Mapping):
+            raise TaskFileError(f"task: expected a table, got {type(data).__name__}")
+        unknown = sorted(set(data) - set(_KEYS))
+        if unknown:
+            raise TaskFileError(f"task: unknown key(s) {unknown}; expected some of "
+                                f"{list(_KEYS)}")
+        missing = [k for k in ("rcm", "axis", "depth") if k not in data]
+        if ("half_angle" in data) == ("half_angle_deg" in data):
+            missing.append("half_angle (rad) or half_angle_deg (exactly one)")
+        if missing:
+            raise TaskFileError(f"task: missing {', '.join(missing)}")
+        try:
+            axis = _vec3(data["axis"], "axis")
+            n = float(np.linalg.norm(axis))
+            if n == 0.0:
+                raise InvalidInputError("axis: expected a non-zero vector, got (0, 0, 0)")
+            if "half_angle_deg" in data:
+                half = math.radians(check_scalar(data["half_angle_deg"], "half_angle_deg"))
+            else:
+                half = data["half_angle"]
+            return cls(rcm=data["rcm"], axis=axis / n, half_angle=half,
+                       depth=tuple(data["depth"]) if isinstance(data["depth"], (list, tuple))
+                       else data["depth"], name=str(data.get("name", "")))
+        except (InvalidInputError, TypeError) as exc:
+            raise TaskFileError(f"task: {exc}") from None
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> Task:
+        """Load a task from a TOML file (a ``[task]`` table, or the keys at top level)::
+
+            [task]
+            rcm = [0.0, 0.35, -0.10]      # m, base frame
+            axis = [0.0, 0.0, -1.0]       # unit, from the robot through the RCM
+            half_angle_deg = 25.0         # or half_angle (rad)
+            depth = [0.05, 0.15]          # m beyond the RCM
+
+        Raises
+        ------
+        TaskFileError
+            If the file cannot be read, is not TOML or holds a bad task (one line
+            naming the file and the problem).
+        """
+        try:
+            with open(path, "rb") as fh:
+                data = tomllib.load(fh)
+        except OSError as exc:
+            raise TaskFileError(f"{path}: cannot read the task file ({exc.strerror})") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise TaskFileError(f"{path}: not valid TOML ({exc})") from None
+        table: Any = data.get("task", data)
+        try:
+            return cls.from_mapping(table)
+        except TaskFileError as exc:
+            raise TaskFileError(f"{path}: {exc}") from None
+
+
+def rcm_frame_from_axis(rcm: ArrayLike, axis: ArrayLike) -> NDArray[np.float64]:
+    """RCM frame ``T_b_e`` of a task, built as :func:`athenakin.default_rcm_frame` builds its own.
+
+    ``x_e`` is the central instrument direction ``axis``, ``z_e`` the rail axis
+    ``x_b`` made perpendicular to it (``y_b`` if the axis is within 1e-6 rad of the
+    rail), ``y_e = z_e x x_e``; the origin is the RCM. The central direction is
+    then at azimuth 0, polar 90 deg in E, as in the reference set-up, far from the
+    spherical joint's singularity (polar 0 / 180 deg).
+
+    Parameters
+    ----------
+    rcm : array-like, shape (3,)
+        RCM in the base frame, m.
+    axis : array-like, shape (3,)
+        Unit central instrument direction, base frame.
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+    """
+    x_e = _vec3(axis, "axis")
+    x_e = x_e / np.linalg.norm(x_e)
+    ref = np.array([1.0, 0.0, 0.0])
+    if np.linalg.norm(np.cross(ref, x_e)) < 1e-6:
+        ref = np.array([0.0, 1.0, 0.0])
+    z_e = ref - (ref @ x_e) * x_e
+    z_e /= np.linalg.norm(z_e)
+    y_e = np.cross(z_e, x_e)
+    return transform_from_rotation_translation(np.stack([x_e, y_e, z_e], axis=-1),
+                                               _vec3(rcm, "rcm"))
+
+
+@dataclasses.dataclass(frozen=True)
+class TaskSamples:
+    """Samples of a task, uniform over the cone's solid angle and over depth.
+
+    Attributes
+    ----------
+    direction_e : ndarray, shape (n, 3)
+        Unit instrument directions in the task's RCM frame E.
+    depth : ndarray, shape (n,)
+        Depth of the tip beyond the RCM, m.
+    theta, phi : ndarray, shape (n,)
+        Angle from the cone axis (rad, in ``[0, half_angle]``) and azimuth about it
+        (rad, in ``[0, 2 pi)``, 0 towards ``y_e``).
+    """
+
+    direction_e: NDArray[np.float64]
+    depth: NDArray[np.float64]
+    theta: NDArray[np.float64]
+    phi: NDArray[np.float64]
+
+
+def sample_task(task: Task, n: int, *, seed: int = 0) -> TaskSamples:
+    """Draw ``n`` task samples, uniform over the cone's solid angle and over depth.
+
+    ``cos theta`` is uniform in ``[cos half_angle, 1]`` (uniform in solid angle),
+    ``phi`` uniform in ``[0, 2 pi)``, ``depth`` uniform in ``[d_min, d_max]``, all from
+    ``numpy.random.default_rng(seed)`` (PCG64: the same numbers on every machine).
+    In E the cone axis is ``x_e``: ``d_e = (cos theta, sin theta cos phi, sin theta sin phi)``.
+
+    Parameters
+    ----------
+    task : Task
+    n : int
+        Number of samples (>= 1).
+    seed : int, keyword-only
+
+    Returns
+    -------
+    TaskSamples
+    """
+    if not isinstance(task, Task):
+        raise TypeError(f"task: expected athenakin.synthesis.Task, got {type(task).__name__}")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise InvalidInputError(f"samples: expected a positive integer, got {n!r}")
+    rng = np.random.default_rng(seed)
+    u = rng.random((3, int(n)))
+    cos_t = 1.0 - u[0] * (1.0 - math.cos(task.half_angle))
+    theta = np.arccos(cos_t)
+    sin_t = np.sqrt(np.maximum(1.0 - cos_t * cos_t, 0.0))
+    phi = 2.0 * math.pi * u[1]
+    d_e = np.stack([cos_t, sin_t * np.cos(phi), sin_t * np.sin(phi)], axis=-1)
+    lo, hi = task.depth
+    depth = lo + (hi - lo) * u[2]
+    return TaskSamples(direction_e=d_e, depth=depth, theta=theta, phi=phi)
