@@ -287,3 +287,19 @@ def test_tangency_merge_reported_in_residual(backend):
     assert np.all(res[ok] >= np.broadcast_to(off[:, None], res.shape)[ok] * (1 - 1e-6))
     fast = ak.fast.parallel_forward_kinematics(q, D)
     assert_allclose(fast.residual, merged.residual, rtol=1e-9, atol=1e-18)
+
+
+# --- item 2: the serial degeneracy test is relative to the direction's rounding --------------
+def test_ujoint_degenerate_at_short_p_on_both_backends():
+    """u2 = 0 with a short p: the direction is known to eps / p only, u1 is arbitrary."""
+    par = ak.parallel.parallel_forward_kinematics(ak.robot.REFERENCE_Q, D)
+    p = np.geomspace(1e-6, 1e-2, 9)
+    u = np.tile([0.4, 0.0, 0.3, 1.0, 0.5], (p.size, 1))
+    T = par.T_b_s[0] @ ak.chain.ups_transform(p, u)
+    out = {}
+    for backend in BACKENDS:
+        sol = ak.forward_kinematics(ak.robot.REFERENCE_Q, T, D, errors="flag", backend=backend)
+        # mode +1 (slots 0-7): the U-joint singularity, never 8 valid slots with a random u1
+        assert np.all(sol.reason[:, :8] == Reason.UJOINT_SINGULAR), sol.reason[:, :8]
+        out[backend] = sol.reason
+    np.testing.assert_array_equal(out["numpy"], out["numba"])

@@ -42,6 +42,8 @@ CHUNK = 64
 # Reason codes (athenakin.errors.Reason), as floats in the scratch.
 _NONFINITE, _STROKE, _AB_ORDER, _LINK, _DISJOINT, _TANGENT = 1.0, 2.0, 3.0, 4.0, 5.0, 6.0
 _P_ZERO, _UJOINT, _WRIST, _CLOSURE = 7.0, 8.0, 9.0, 10.0
+#: chain.DEGENERATE_ULPS times the machine epsilon.
+_DEG_ROUND = 64.0 * 2.220446049250313e-16
 
 #: Bits of the flags the kernels return.
 FLAG_NONRIGID = 1        # some T_b_e is not rigid within half the tolerance: re-check exactly
@@ -258,8 +260,11 @@ def _serial_stage(G, P, tol, SH, Sm, n):
         res = nanmax2(res, abs(nn * a02 - e03))
         res = nanmax2(res, abs(nn * a12 - e13))
         res = nanmax2(res, abs(nn * a22 - e23))
-        ser = (_NONFINITE if not fin else _P_ZERO if pz else _UJOINT if rho <= dtol
-               else _WRIST if rho4 <= dtol else _CLOSURE if not (res <= ctol) else 0.0)
+        # degeneracy relative to the direction's rounding, ~eps * (|t_b_e| + |O_s|) / p
+        sc = (max(abs(t03), max(abs(t13), abs(t23))) + max(abs(xm), max(abs(ys), abs(zs))))
+        dt = max(dtol, _DEG_ROUND * sc / nn)
+        ser = (_NONFINITE if not fin else _P_ZERO if pz else _UJOINT if rho <= dt
+               else _WRIST if rho4 <= dt else _CLOSURE if not (res <= ctol) else 0.0)
         Sm[(_R) * CHUNK + ii] = pr if pr != 0.0 else ser
         Sm[(_NN) * CHUNK + ii] = nn
         Sm[(_RES) * CHUNK + ii] = res

@@ -200,8 +200,10 @@ def _serial_closed_form(par: ParallelSolution, T: NDArray[np.float64], *, degene
     T_s_e = invert_transform(Ts) @ T[..., None, :, :]
     T_s_e = np.where(np.all(np.isfinite(T), axis=(-2, -1))[..., None, None, None], T_s_e,
                      np.nan)
+    scale = (np.abs(T[..., None, :3, 3]).max(axis=-1)
+             + np.abs(par.T_b_s[..., :3, 3]).max(axis=-1))   # rounding of t_s_e (issue 13)
     ser = ups_solutions(T_s_e, degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
-                        closure_tol=closure_tol, _checked=True)
+                        closure_tol=closure_tol, scale=scale, _checked=True)
     return ser.p, ser.u, ser.reason, ser.residual
 
 
