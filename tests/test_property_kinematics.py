@@ -349,3 +349,37 @@ def test_tracker_options_named(bad):
     name = next(iter(bad))
     with pytest.raises((KinematicsError, TypeError, ValueError), match=name):
         Tracker(T0, D, **kw)
+
+
+# --- one validation path: the same error type on every backend --------------------------------
+def _kind(f: Callable[..., Any], *a: Any, **k: Any) -> str:
+    try:
+        f(*a, **k)
+    except Exception as exc:     # noqa: BLE001 - the type is what is compared
+        return type(exc).__name__
+    return "ok"
+
+
+@pytest.mark.parametrize("kw", [{}, {"tangent_tol": None}, {"closure_tol": math.nan},
+                                {"errors": "loud"}])
+def test_same_error_type_on_both_backends(kw):
+    """Calls with several bad arguments raise the same error type (options are checked first)."""
+    qs = ["abc", [1.0, 2.0], np.zeros((2, 3)), [math.nan, 0.0, 0.45], [-0.1, 0.1, 0.45]]
+    Ts = [T0, np.zeros((3, 4, 4)), np.eye(3), np.broadcast_to(T0, (3, 4, 4)),
+          np.full((4, 4), math.nan)]
+    for q in qs:
+        for T in Ts:
+            kinds = {_kind(ak.forward_kinematics, q, T, D, backend=b, **kw) for b in BACKENDS}
+            assert len(kinds) == 1, (q, T, kw, kinds)
+    ik_kw = {k: v for k, v in kw.items() if k in ("errors", "closure_tol")}
+    for T in Ts:
+        for u in ([0.3, 1.0, 0.4], [math.nan, 0, 0], np.zeros((2, 3)), [1, 2]):
+            kinds = {_kind(ak.inverse_kinematics, T, u, D, backend=b, **ik_kw) for b in BACKENDS}
+            assert len(kinds) == 1, (T, u, kinds)
+            e = {k: v for k, v in kw.items() if k == "errors"}
+            for p in (0.2, math.nan, np.zeros(2)):
+                kinds = {_kind(ak.q_from_instrument, T, u, p, D, backend=b, **e)
+                         for b in BACKENDS}
+                assert len(kinds) == 1, (T, u, p, kinds)
+            kinds = {_kind(ak.q_from_tool_tip, T, u, D, backend=b, **e) for b in BACKENDS}
+            assert len(kinds) == 1, (T, u, kinds)

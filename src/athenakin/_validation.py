@@ -173,6 +173,34 @@ def check_tolerance(x: object, name: str) -> float:
     return v
 
 
+#: Values of the ``errors=`` keyword of the batch functions.
+ERROR_POLICIES = ("auto", "raise", "flag")
+
+
+def check_options(errors: object, **tolerances: object) -> tuple[float, ...]:
+    """Check the option keywords of a kinematics call, before any array argument.
+
+    Every backend checks options first, in this order (``errors``, then the
+    tolerances in the order given), so that a call with several bad arguments
+    raises the same error on every backend.
+
+    Returns
+    -------
+    tuple of float
+        The tolerances, coerced (:func:`check_tolerance`).
+
+    Raises
+    ------
+    ValueError
+        ``errors`` is not one of :data:`ERROR_POLICIES`.
+    TypeError, InvalidInputError
+        A tolerance is not a non-negative real number.
+    """
+    if not (isinstance(errors, str) and errors in ERROR_POLICIES):
+        raise ValueError(f"errors: expected one of {ERROR_POLICIES}, got {errors!r}")
+    return tuple(check_tolerance(v, k) for k, v in tolerances.items())
+
+
 def _fmt(tail: tuple[int, ...]) -> str:
     """``(..., 3)``-style shape text without its parentheses; ``...`` for scalars."""
     return ", ".join(["..."] + [str(t) for t in tail])

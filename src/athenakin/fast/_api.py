@@ -25,7 +25,13 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import ROTATION_TOL, broadcast_batch, check_tolerance, check_transform
+from .._validation import (
+    ROTATION_TOL,
+    broadcast_batch,
+    check_options,
+    check_tolerance,
+    check_transform,
+)
 from ..chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
 from ..design import Design
 from ..parallel import _module as _ref_parallel
@@ -248,6 +254,8 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
 
     if method != "closed":
         return reference()
+    check_options(errors, tangent_tol=tangent_tol, degenerate_tol=degenerate_tol,
+                  p_zero_tol=p_zero_tol, closure_tol=closure_tol)    # as the reference
     P = design_params(design)
     try:
         qa = _arr(q, (3,))
@@ -407,6 +415,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
         return _ref_ik.inverse_kinematics(T_b_e, u345, design, errors=errors,
                                              singular_tol=singular_tol, closure_tol=closure_tol)
 
+    stol, ctol = check_options(errors, singular_tol=singular_tol, closure_tol=closure_tol)
     P = design_params(design)
     try:
         Ta = _arr(T_b_e, (4, 4))
@@ -416,8 +425,6 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     bT, bU = Ta.shape[:-2], Ua.shape[:-1]
     batch = bT if bT == bU else _batch(T_b_e=bT, u345=bU)
     raise_now = resolve_policy(errors, batch)
-    stol = check_tolerance(singular_tol, "singular_tol")
-    ctol = check_tolerance(closure_tol, "closure_tol")
     N = math.prod(batch)
     if not batch and not parallel:
         fbuf = np.empty(_ik.ONE_F)
@@ -466,6 +473,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
 # --- whole robot: controller forms -------------------------------------------------------
 def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors: str,
           kind: int, parallel: bool) -> tuple[NDArray[np.float64], InstrumentIK]:
+    check_options(errors)
     P = design_params(design)
     Ta = _arr(T_b_e, (4, 4))
     Va = _arr(V, (3,))

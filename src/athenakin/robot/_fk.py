@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import invert_transform
-from .._validation import broadcast_batch, check_array, check_transform
+from .._validation import broadcast_batch, check_array, check_options, check_transform
 from ..chain._ups import (
     CLOSURE_TOL,
     DEGENERATE_TOL,
@@ -160,6 +160,9 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     if method not in _METHODS:
         raise ValueError(f"method: expected one of {_METHODS}, got {method!r}")
     check_reference_backend(backend, "forward_kinematics")
+    tangent_tol, degenerate_tol, p_zero_tol, closure_tol = check_options(
+        errors, tangent_tol=tangent_tol, degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
+        closure_tol=closure_tol)
     design, q, T, batch, raise_now = _prepare(q, T_b_e, design, errors)
     par = parallel_forward_kinematics(q, design, tangent_tol=tangent_tol)
     if method == "closed":

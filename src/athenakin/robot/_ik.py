@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import transform_from_rotation_translation, wrap_angle
-from .._validation import broadcast_batch, check_array, check_tolerance, check_transform
+from .._validation import broadcast_batch, check_array, check_options, check_transform
 from ..chain._ups import (
     CLOSURE_TOL,
     P_ZERO_TOL,
@@ -257,15 +257,14 @@ def check_ik_arguments(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None,
                                   tuple[int, ...], bool, float, float]:
     """The one validation path of the paper-form IK, for every backend (private).
 
-    Order: design, ``T_b_e``, ``u345``, batch broadcast, ``errors``, tolerances.
+    Order: options (``errors``, tolerances), design, ``T_b_e``, ``u345``, batch broadcast.
     """
+    stol, ctol = check_options(errors, singular_tol=singular_tol, closure_tol=closure_tol)
     design = resolve_design(design)
     T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
     u345 = check_array(u345, "u345", (3,), allow_nonfinite=True)
     batch = broadcast_batch(T_b_e=T.shape[:-2], u345=u345.shape[:-1])
     raise_now = resolve_policy(errors, batch)
-    stol = check_tolerance(singular_tol, "singular_tol")
-    ctol = check_tolerance(closure_tol, "closure_tol")
     return design, T, u345, batch, raise_now, stol, ctol
 
 
@@ -392,6 +391,7 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
     result : InstrumentIK
     """
     check_reference_backend(backend, "q_from_instrument")
+    check_options(errors)
     design = resolve_design(design)
     T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
     d_e = _unit(check_array(direction_e, "direction_e", (3,), allow_nonfinite=True),
@@ -435,6 +435,7 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
     result : InstrumentIK
     """
     check_reference_backend(backend, "q_from_tool_tip")
+    check_options(errors)
     design = resolve_design(design)
     T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
     tip = check_array(tip_e, "tip_e", (3,), allow_nonfinite=True)
