@@ -207,6 +207,8 @@ def test_tracker_never_valid_non_finite():
         assert not pose.valid and TrackFlag.LOST in pose.flags
     pose = tr.update([-0.1, 0.1, 0.45])
     assert pose.valid and np.all(np.isfinite(pose.tip_b))
+    with pytest.raises(ak.InvalidInputError, match="q: expected 3 numbers"):
+        tr.update([10 ** 400, 0, 0])
 
 
 def test_tracker_raise_on_by_name():

@@ -475,7 +475,7 @@ class Tracker:
             q1, q2, q3 = float(q[0]), float(q[1]), float(q[2])  # type: ignore[index,arg-type]
             if len(q) != 3:  # type: ignore[arg-type]
                 raise ValueError
-        except (TypeError, ValueError, IndexError):
+        except (TypeError, ValueError, IndexError, OverflowError):
             raise InvalidInputError(f"q: expected 3 numbers (q1, q2, q3) in m, got {q!r}") \
                 from None
         self._index += 1
