@@ -36,6 +36,24 @@ def test_ik_at_h_zero_solves_every_fk_slot(q, backend):
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("q", [[0.0, 0.25, 0.7], [-0.3, -0.1, 0.45], [0.1, 0.3, 0.2]])
+def test_ik_on_the_stroke_limits(q, backend):
+    """A pose the FK produced on a stroke limit comes back on it, not 1 ulp outside."""
+    T = np.array([[0.27617239, 0.0, 0.96110812, 0.05523448],
+                  [-0.27617239, 0.95782629, 0.07935755, -0.20828117],
+                  [-0.92057462, -0.28734789, 0.26452517, 0.22076719], [0, 0, 0, 1.0]])
+    T[:3, :3] = ak.study.rotation_from_quaternion(ak.study.quaternion_from_rotation(T[:3, :3]))
+    for frame in (T0, T):
+        sol = ak.forward_kinematics(q, frame, D, errors="flag")
+        qq, pas = ak.inverse_kinematics(frame, sol.u[sol.valid][:, 2:], D, errors="flag",
+                                        backend=backend)
+        assert np.all(pas.valid | (pas.reason == Reason.IK_SINGULAR)), pas.reason
+        ok = pas.valid
+        assert np.all(np.abs(qq[ok] - q).max(-1) <= pas.q_error[ok])
+        assert np.all((qq[ok] >= D.stroke_min) & (qq[ok] <= D.stroke_max))
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_tool_tip_ik_at_h_zero(backend):
     q0 = [0.02, 0.02, 0.45]
     sol = ak.forward_kinematics(q0, T0, D, errors="flag")

@@ -32,9 +32,9 @@ D = ak.Design.default()
 T0 = ak.default_rcm_frame(D)
 FREE = ak.Design(l1=D.l1, l2=D.l2, l3=D.l3, l4=D.l4, l5=D.l5)
 
-NET = settings(derandomize=True, max_examples=40, deadline=None, database=None,
+NET = settings(derandomize=True, max_examples=120, deadline=None, database=None,
                suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
-SMALL = settings(NET, max_examples=20)
+SMALL = settings(NET, max_examples=40)
 
 # --- strategies ---------------------------------------------------------------------------
 HOSTILE = st.sampled_from([math.nan, math.inf, -math.inf, 1e300, -1e300, 1e-300, 0.0, -0.0,

@@ -97,6 +97,11 @@ def _pik_stage(K, P, n):
         cross = m_y * z - l5 * y
         q1 = xm + h
         q2 = xm - h
+        qe = _q_error(r1, h_abs, dr, l3)
+        # within the error bound of a stroke limit: on it (parallel._module.position_ik)
+        q1 = lo0 if (q1 < lo0) & (q1 >= lo0 - qe) else hi0 if (q1 > hi0) & (q1 <= hi0 + qe) else q1
+        q2 = lo1 if (q2 < lo1) & (q2 >= lo1 - qe) else hi1 if (q2 > hi1) & (q2 <= hi1 + qe) else q2
+        q3 = lo2 if (q3 < lo2) & (q3 >= lo2 - qe) else hi2 if (q3 > hi2) & (q3 <= hi2 + qe) else q3
         # parallel._module._actuator_checks on q (items that passed so far)
         finq = (finite_sum(q1) + finite_sum(q2) + finite_sum(q3)) == 0.0
         stroke = (q1 < lo0) | (q1 > hi0) | (q2 < lo1) | (q2 > hi1) | (q3 < lo2) | (q3 > hi2)
@@ -114,7 +119,7 @@ def _pik_stage(K, P, n):
         K[_CT * CHUNK + ii] = z / hh + vmask
         K[_ST * CHUNK + ii] = -y / hh + vmask
         K[_TH * CHUNK + ii] = atan2(-y, z) + vmask
-        K[_QE * CHUNK + ii] = _q_error(r1, h_abs, dr, l3) + vmask
+        K[_QE * CHUNK + ii] = qe + vmask
 
 
 @njit(**_OPTS)

@@ -329,6 +329,12 @@ def position_ik(O_s: NDArray[np.float64], design: Design,
         err = _q_error(r1, h_abs, dr, design)
     mode = np.where(cross >= 0, 1, -1)
     q = np.stack([x_M + h, x_M - h, q3], axis=-1)
+    # within the error bound of a stroke limit: on it (a pose the FK produced at the limit)
+    lo, hi = design.stroke_min, design.stroke_max
+    e = err[..., None]
+    with np.errstate(invalid="ignore"):
+        q = np.where((q < lo) & (q >= lo - e), lo, q)
+        q = np.where((q > hi) & (q <= hi + e), hi, q)
     act = _actuator_checks(np.where(ok[..., None], q, 0.0), design)
     reason = np.where(ok & (act != 0), act, reason).astype(np.int8)
     valid = reason == 0
