@@ -323,3 +323,15 @@ def test_ujoint_degenerate_at_short_p_on_both_backends():
         assert np.all(sol.reason[:, :8] == Reason.UJOINT_SINGULAR), sol.reason[:, :8]
         out[backend] = sol.reason
     np.testing.assert_array_equal(out["numpy"], out["numba"])
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_jacobians_broadcast_like_fk(backend):
+    A = ak.analysis
+    q = np.tile(ak.robot.REFERENCE_Q, (2, 1, 1))
+    T = np.broadcast_to(T0, (3, 4, 4))
+    for f in (A.instrument_jacobian, A.instrument_inverse_jacobian, A.tool_tip_jacobian,
+              A.tool_tip_inverse_jacobian):
+        assert f(q, T, D, backend=backend).shape == (2, 3, 3, 3)
+        with pytest.raises(ValueError, match=r"q \(2,\), T_b_e \(3,\)"):
+            f(q[:, 0], T, D, backend=backend)
