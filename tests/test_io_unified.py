@@ -35,7 +35,9 @@ def test_one_csv_reader_for_q_files(tmp_path, monkeypatch):
     monkeypatch.setattr(motion_io, "_read_table", spy)
     f = tmp_path / "q.csv"
     f.write_text("t_s,q1_m,q2_m,q3_m\n0,-0.1,0.1,0.45\n0.1,-0.1,0.1,0.46\n")
-    np.testing.assert_array_equal(_animate.read_q_file(f), [[-0.1, 0.1, 0.45], [-0.1, 0.1, 0.46]])
+    q, t = _animate.read_q_file(f)
+    np.testing.assert_array_equal(q, [[-0.1, 0.1, 0.45], [-0.1, 0.1, 0.46]])
+    np.testing.assert_array_equal(t, [0.0, 0.1])
     assert calls
 
 
