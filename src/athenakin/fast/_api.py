@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import (
+    ERROR_POLICIES,
     ROTATION_TOL,
     broadcast_batch,
     check_options,
@@ -76,6 +77,7 @@ _PLAIN = {c for c in (FKSolution, PassiveJoints, InstrumentIK)
 
 
 _R = TypeVar("_R")
+_POLICY_SET = frozenset(ERROR_POLICIES)
 
 
 def _new(cls: type[_R], **fields: Any) -> _R:
@@ -415,7 +417,11 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
         return _ref_ik.inverse_kinematics(T_b_e, u345, design, errors=errors,
                                              singular_tol=singular_tol, closure_tol=closure_tol)
 
-    stol, ctol = check_options(errors, singular_tol=singular_tol, closure_tol=closure_tol)
+    if (type(errors) is str and errors in _POLICY_SET and type(singular_tol) is float
+            and type(closure_tol) is float and singular_tol >= 0 and closure_tol >= 0):
+        stol, ctol = singular_tol, closure_tol      # plain options: the check in brief
+    else:
+        stol, ctol = check_options(errors, singular_tol=singular_tol, closure_tol=closure_tol)
     P = design_params(design)
     try:
         Ta = _arr(T_b_e, (4, 4))
@@ -473,7 +479,8 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
 # --- whole robot: controller forms -------------------------------------------------------
 def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors: str,
           kind: int, parallel: bool) -> tuple[NDArray[np.float64], InstrumentIK]:
-    check_options(errors)
+    if not (type(errors) is str and errors in _POLICY_SET):
+        check_options(errors)
     P = design_params(design)
     Ta = _arr(T_b_e, (4, 4))
     Va = _arr(V, (3,))
