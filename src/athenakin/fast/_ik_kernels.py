@@ -77,7 +77,7 @@ def _pik_stage(K, P, n):
         pz = oz if fin else 0.0
         rho = hypot(py, pz)
         reason = _NONFINITE if not fin else _NOT_IMAGE if rho <= l4 else 0.0
-        scale = max(abs(px), max(abs(py), abs(pz)))
+        scale = max(abs(py), abs(pz))
         dr = _ROUND * ((scale + l1) + l4) + K[_DO * CHUNK + ii]
         r1 = rho - l4
         r1 = l1 if (r1 > l1) & (r1 - l1 <= dr) else r1
@@ -97,7 +97,7 @@ def _pik_stage(K, P, n):
         cross = m_y * z - l5 * y
         q1 = xm + h
         q2 = xm - h
-        qe = _q_error(r1, h_abs, dr, l3)
+        qe = _q_error(r1, h_abs, dr, l3) + _ROUND * abs(px)
         # within the error bound of a stroke limit: on it (parallel._module.position_ik)
         q1 = lo0 if (q1 < lo0) & (q1 >= lo0 - qe) else hi0 if (q1 > hi0) & (q1 <= hi0 + qe) else q1
         q2 = lo1 if (q2 < lo1) & (q2 >= lo1 - qe) else hi1 if (q2 > hi1) & (q2 <= hi1 + qe) else q2

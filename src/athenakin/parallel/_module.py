@@ -300,7 +300,7 @@ def position_ik(O_s: NDArray[np.float64], design: Design,
     """
     finite = np.all(np.isfinite(O_s), axis=-1)
     P = np.where(finite[..., None], O_s, 0.0)
-    scale = np.max(np.abs(P), axis=-1, initial=0.0)
+    scale = np.max(np.abs(P[..., 1:]), axis=-1, initial=0.0)   # what r1 is computed from
     with np.errstate(over="ignore", invalid="ignore"):
         rho = np.hypot(P[..., 1], P[..., 2])
     reason = np.where(finite, 0, Reason.NONFINITE_INPUT).astype(np.int8)
@@ -326,7 +326,8 @@ def position_ik(O_s: NDArray[np.float64], design: Design,
         m_y = np.sqrt(l3 ** 2 - h * h) + design.l2
         q3 = np.hypot(y - m_y, z - design.l5)
         cross = m_y * z - design.l5 * y
-        err = _q_error(r1, h_abs, dr, design)
+        # and the rounding of x_M (q1, q2 = x_M +/- h)
+        err = _q_error(r1, h_abs, dr, design) + IK_ROUNDING_ULPS * _EPS * np.abs(P[..., 0])
     mode = np.where(cross >= 0, 1, -1)
     q = np.stack([x_M + h, x_M - h, q3], axis=-1)
     # within the error bound of a stroke limit: on it (a pose the FK produced at the limit)
