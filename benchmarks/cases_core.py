@@ -4,10 +4,12 @@ Groups (ratios are per pose, against the group's baseline):
 
 * ``fk-batch``: all 16 FK solutions of a batch of poses (one RCM frame). Baseline: the
   straightforward per-pose pure-Python implementation (``baselines.fk_python``). Also:
-  athenakin's numpy reference, the compiled paths (FKSolution; reused output arrays;
-  a counting sweep without per-pose output), ``scipy.optimize.least_squares`` (one
-  solution per pose) and Pinocchio's serial forward map (the easier direction, one pose
-  at a time from Python).
+  the public function with default arguments (``ak.forward_kinematics(q, T, d)``: the
+  compiled kernels; batches of 2e5 poses, with only ``p, u, valid`` and with the full
+  result), athenakin's numpy reference (``backend="numpy"``), the compiled paths
+  (FKSolution; reused output arrays; a counting sweep without per-pose output),
+  ``scipy.optimize.least_squares`` (one solution per pose) and Pinocchio's serial forward
+  map (the easier direction, one pose at a time from Python).
 * ``fk-single``: one pose per call from Python (latency).
 * ``ik-batch`` / ``ik-single``: the paper-form IK (``u3, u4, u5`` -> ``q``) and the
   controller form ``q_from_tool_tip``; baseline: the pure-Python paper form.
@@ -38,9 +40,11 @@ def cases(quick: bool) -> list[dict]:
     n_py = 50 if quick else 1_000           # pure-Python loops
     n_ls = 3 if quick else 50               # scipy least_squares
     n_sweep = 200_000 if quick else 10_000_000
+    n_2e5 = 20_000 if quick else 200_000    # the issue-11 batch size
     rng = np.random.default_rng(2024)
     q = rng.uniform(d.stroke_min, d.stroke_max, (n, 3))
     q_big = rng.uniform(d.stroke_min, d.stroke_max, (n_big, 3))
+    q_2e5 = rng.uniform(d.stroke_min, d.stroke_max, (n_2e5, 3))
     q_py = q[:n_py].tolist()
     q1 = np.array(ak.robot.REFERENCE_Q)
     ref1 = ak.forward_kinematics(q1, T, d)
@@ -49,6 +53,8 @@ def cases(quick: bool) -> list[dict]:
     u345 = np.where(np.isnan(u345), ref1.u[0, 2:], u345)
     u345_py = u345[:n_py].tolist()
     u1 = np.array(ref1.u[0, 2:])
+    u345_2e5 = np.resize(u345, (n_2e5, 3))
+    puv = ("p", "u", "valid")
     tips = rng.uniform(-0.15, 0.15, (n, 3)) + [0.2, 0.0, 0.0]
     tips_py = tips[:n_py].tolist()
     tip1 = np.array([0.25, 0.0, 0.0])
@@ -72,13 +78,22 @@ def cases(quick: bool) -> list[dict]:
         {"name": "pure Python per pose (math module)", "group": "fk-batch", "batch": n_py,
          "baseline": True, "call": loop(lambda x: bl.fk_python(x, Tl, dt), q_py)},
         {"name": "athenakin numpy reference", "group": "fk-batch", "batch": n,
+         "call": lambda: ak.forward_kinematics(q, T, d, backend="numpy")},
+        {"name": "ak.forward_kinematics, default args", "group": "fk-batch", "batch": n,
          "call": lambda: ak.forward_kinematics(q, T, d)},
+        {"name": "ak.forward_kinematics, default args, 2e5 poses", "group": "fk-batch",
+         "batch": n_2e5, "call": lambda: ak.forward_kinematics(q_2e5, T, d),
+         "note": "target >= 5 M/s; 1.2 KiB/pose to fresh pages"},
+        {"name": "ak.forward_kinematics, fields=(p, u, valid), 2e5 poses",
+         "group": "fk-batch", "batch": n_2e5,
+         "call": lambda: ak.forward_kinematics(q_2e5, T, d, fields=puv),
+         "note": "target >= 8 M/s; 784 B/pose"},
         {"name": "athenakin.fast -> FKSolution", "group": "fk-batch", "batch": n,
          "call": lambda: fast.forward_kinematics(q, T, d),
-         "note": "allocates ~3 KiB/pose of results"},
+         "note": "allocates 1.2 KiB/pose of results"},
         {"name": "athenakin.fast -> FKSolution, large batch", "group": "fk-batch",
          "batch": n_big, "call": lambda: fast.forward_kinematics(q_big, T, d),
-         "note": "memory-bound: 3 KiB/pose written to fresh pages"},
+         "note": "memory-bound: 1.2 KiB/pose written to fresh pages"},
         {"name": "athenakin.fast, out= (arrays reused)", "group": "fk-batch", "batch": n,
          "call": lambda: fast.forward_kinematics(q, T, d, out=out)},
         {"name": "athenakin.fast, out=, parallel=True", "group": "fk-batch", "batch": n,
@@ -103,7 +118,11 @@ def cases(quick: bool) -> list[dict]:
         {"name": "pure Python (math module)", "group": "fk-single", "batch": 1,
          "baseline": True, "call": lambda: bl.fk_python(q_py[0], Tl, dt)},
         {"name": "athenakin numpy reference", "group": "fk-single", "batch": 1,
-         "call": lambda: ak.forward_kinematics(q1, T, d)},
+         "call": lambda: ak.forward_kinematics(q1, T, d, backend="numpy"),
+         "note": "the no-numba fallback; target <= 60 us"},
+        {"name": "ak.forward_kinematics(q, T, d), default args", "group": "fk-single",
+         "batch": 1, "call": lambda: ak.forward_kinematics(q1, T, d),
+         "note": "target <= 4 us"},
         {"name": "athenakin.fast -> FKSolution", "group": "fk-single", "batch": 1,
          "call": lambda: fast.forward_kinematics(q1, T, d)},
         {"name": "athenakin.fast.ControlLoop.fk (raw arrays)", "group": "fk-single",
@@ -119,7 +138,10 @@ def cases(quick: bool) -> list[dict]:
          "baseline": True,
          "call": loop(lambda x: bl.ik_python(Tl, x, dt), u345_py)},
         {"name": "athenakin numpy reference, paper form", "group": "ik-batch", "batch": n,
-         "call": lambda: ak.inverse_kinematics(T, u345, d)},
+         "call": lambda: ak.inverse_kinematics(T, u345, d, backend="numpy")},
+        {"name": "ak.inverse_kinematics, default args, 2e5 poses", "group": "ik-batch",
+         "batch": n_2e5, "call": lambda: ak.inverse_kinematics(T, u345_2e5, d),
+         "note": "target >= 25 M/s"},
         {"name": "athenakin.fast, paper form", "group": "ik-batch", "batch": n,
          "call": lambda: fast.inverse_kinematics(T, u345, d)},
         {"name": "athenakin.fast, paper form, parallel=True", "group": "ik-batch", "batch": n,
@@ -128,7 +150,10 @@ def cases(quick: bool) -> list[dict]:
         {"name": "pure Python per pose, q_from_tool_tip", "group": "ik-batch", "batch": n_py,
          "call": loop(lambda x: bl.q_from_tool_tip_python(Tl, x, dt), tips_py)},
         {"name": "athenakin numpy reference, q_from_tool_tip", "group": "ik-batch",
-         "batch": n, "call": lambda: ak.q_from_tool_tip(T, tips, d, errors="flag")},
+         "batch": n,
+         "call": lambda: ak.q_from_tool_tip(T, tips, d, errors="flag", backend="numpy")},
+        {"name": "ak.q_from_tool_tip, default args", "group": "ik-batch", "batch": n,
+         "call": lambda: ak.q_from_tool_tip(T, tips, d, errors="flag")},
         {"name": "athenakin.fast, q_from_tool_tip", "group": "ik-batch", "batch": n,
          "call": lambda: fast.q_from_tool_tip(T, tips, d, errors="flag")},
         {"name": "athenakin.fast, q_from_tool_tip, parallel=True", "group": "ik-batch",
@@ -139,7 +164,13 @@ def cases(quick: bool) -> list[dict]:
         {"name": "pure Python, paper form", "group": "ik-single", "batch": 1, "baseline": True,
          "call": lambda: bl.ik_python(Tl, u345_py[0], dt)},
         {"name": "athenakin numpy reference, paper form", "group": "ik-single", "batch": 1,
-         "call": lambda: ak.inverse_kinematics(T, u1, d)},
+         "call": lambda: ak.inverse_kinematics(T, u1, d, backend="numpy")},
+        {"name": "ak.inverse_kinematics(T, u345, d), default args", "group": "ik-single",
+         "batch": 1, "call": lambda: ak.inverse_kinematics(T, u1, d),
+         "note": "target <= 1.5 us"},
+        {"name": "ak.q_from_tool_tip(T, tip, d), default args", "group": "ik-single",
+         "batch": 1, "call": lambda: ak.q_from_tool_tip(T, tip1, d),
+         "note": "target <= 1.5 us"},
         {"name": "athenakin.fast, paper form", "group": "ik-single", "batch": 1,
          "call": lambda: fast.inverse_kinematics(T, u1, d)},
         {"name": "athenakin.fast.ControlLoop.ik (raw)", "group": "ik-single", "batch": 1,

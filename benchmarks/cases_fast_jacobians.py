@@ -19,7 +19,8 @@ from __future__ import annotations
 import numpy as np
 
 import athenakin as ak
-from athenakin import analysis, fast
+from athenakin import fast
+from athenakin.robot import _jacobians as ref
 from athenakin.testing import random_configurations
 
 
@@ -39,44 +40,44 @@ def cases(quick: bool) -> list[dict]:
                     "call": fast_call, "note": note})
 
     pair("jacobian", "instrument_jacobian", True,
-         lambda: analysis.instrument_jacobian(q, T, d, mode=m),
+         lambda: ref.instrument_jacobian(q, T, d, mode=m),
          lambda: fast.instrument_jacobian(q, T, d, mode=m), "per-item frames")
     out.append({"name": "athenakin.fast, instrument_jacobian, one shared frame",
                 "group": "jacobian", "batch": n, "note": "T_b_e=None (reference set-up)",
                 "call": lambda: fast.instrument_jacobian(q, None, d, mode=m)})
     pair("jacobian", "instrument_inverse_jacobian", False,
-         lambda: analysis.instrument_inverse_jacobian(q, T, d, mode=m),
+         lambda: ref.instrument_inverse_jacobian(q, T, d, mode=m),
          lambda: fast.instrument_inverse_jacobian(q, T, d, mode=m), "per-item frames")
     pair("jacobian-tool-tip", "tool_tip_jacobian", True,
-         lambda: analysis.tool_tip_jacobian(q, T, d, mode=m, frame="rcm"),
+         lambda: ref.tool_tip_jacobian(q, T, d, mode=m, frame="rcm"),
          lambda: fast.tool_tip_jacobian(q, T, d, mode=m, frame="rcm"), "frame='rcm'")
     pair("jacobian-tool-tip", "tool_tip_inverse_jacobian", False,
-         lambda: analysis.tool_tip_inverse_jacobian(q, T, d, mode=m, frame="rcm"),
+         lambda: ref.tool_tip_inverse_jacobian(q, T, d, mode=m, frame="rcm"),
          lambda: fast.tool_tip_inverse_jacobian(q, T, d, mode=m, frame="rcm"), "frame='rcm'")
     pair("jacobian-parallel", "parallel_jacobian", True,
-         lambda: analysis.parallel_jacobian(q, d, m),
+         lambda: ref.parallel_jacobian(q, d, m),
          lambda: fast.parallel_jacobian(q, d, m))
     pair("jacobian-parallel", "parallel_inverse_jacobian", False,
-         lambda: analysis.parallel_inverse_jacobian(q, d, m),
+         lambda: ref.parallel_inverse_jacobian(q, d, m),
          lambda: fast.parallel_inverse_jacobian(q, d, m))
 
     single = [
         ("numpy reference, instrument_jacobian", True,
-         lambda: analysis.instrument_jacobian(q1, T1, d, mode=m1)),
+         lambda: ref.instrument_jacobian(q1, T1, d, mode=m1)),
         ("athenakin.fast, instrument_jacobian", False,
          lambda: fast.instrument_jacobian(q1, T1, d, mode=m1)),
         ("athenakin.fast, instrument_inverse_jacobian", False,
          lambda: fast.instrument_inverse_jacobian(q1, T1, d, mode=m1)),
         ("numpy reference, tool_tip_jacobian", False,
-         lambda: analysis.tool_tip_jacobian(q1, T1, d, mode=m1)),
+         lambda: ref.tool_tip_jacobian(q1, T1, d, mode=m1)),
         ("athenakin.fast, tool_tip_jacobian", False,
          lambda: fast.tool_tip_jacobian(q1, T1, d, mode=m1)),
         ("numpy reference, parallel_jacobian", False,
-         lambda: analysis.parallel_jacobian(q1, d, m1)),
+         lambda: ref.parallel_jacobian(q1, d, m1)),
         ("athenakin.fast, parallel_jacobian", False,
          lambda: fast.parallel_jacobian(q1, d, m1)),
         ("analysis.parallel_jacobian(..., backend='numba')", False,
-         lambda: analysis.parallel_jacobian(q1, d, m1, backend="numba")),
+         lambda: ref.parallel_jacobian(q1, d, m1, backend="numba")),
     ]
     for name, base, call in single:
         out.append({"name": name, "group": "jacobian-single", "batch": 1, "baseline": base,

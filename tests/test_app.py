@@ -110,10 +110,15 @@ def test_all_slots_ghosts_the_other_valid_ones(setup):
     valid = [s.slot for s in v.slots if s.valid]
     assert v.geometry.slot == valid[0]
     assert sorted(g.slot for g in v.ghosts) == valid[1:]
-    ghosts = ghost_scene(v.ghosts)
-    inst = next(ls for ls in ghosts.lines if ls.name == "ghost_instrument")
+    ghosts = ghost_scene(v.ghosts, v.geometry)
+    by = {ls.name: ls for ls in ghosts.lines}
+    inst = by["ghost_instrument"]
     assert inst.segments.shape == (len(valid) - 1, 2, 3)
     assert all(c > 150 for c in inst.color)           # paler than the solid red
+    assert "ghost_circle_k1" not in by and "ghost_rail" not in by    # drawn by the solid slot
+    other = next(g for g in v.ghosts if g.mode != v.geometry.mode)    # the other mode, once
+    np.testing.assert_array_equal(by["ghost_parallel"].segments,
+                                  robot_scene(other).lines[1].segments)
 
 
 def test_near_a_singular_set_warns(setup):
@@ -205,6 +210,15 @@ def test_inverse_step_stops_at_the_workspace_boundary(setup):
     assert np.max(np.abs(np.diff(qs, axis=0))) < 0.01
 
 
+def test_inverse_step_names_the_stroke_limit_it_stops_at(setup):
+    r = forward_view(setup, setup.q_home).readouts
+    st = inverse_step(setup, r.tip_e, r.tip_e + np.array([0.0, 0.0, -0.2]), r.q, r.mode)
+    assert not st.reached and st.reason == Reason.STROKE_LIMIT
+    assert "STROKE_LIMIT" in st.message
+    assert np.all(st.q >= D.stroke_min) and np.all(st.q <= D.stroke_max)
+    assert np.min(np.minimum(st.q - D.stroke_min, D.stroke_max - st.q)) < 0.01   # at the limit
+
+
 def test_inverse_step_holds_q_when_even_the_first_step_fails(setup):
     r = forward_view(setup, setup.q_home).readouts
     st = inverse_step(setup, r.tip_e, -r.tip_e, r.q, r.mode, n=1)   # tip behind the RCM...
@@ -284,3 +298,113 @@ def test_app_keeps_running_on_bad_inputs(tmp_path):
         assert 'data-level="error"' in app._status.content
     finally:
         app.stop()
+
+
+def test_cli_without_viser_names_the_extra(monkeypatch, capsys):
+    import sys
+
+    from athenakin.cli import main
+
+    monkeypatch.setitem(sys.modules, "viser", None)          # import viser fails
+    assert main(["app", "--port", "0"]) == 1
+    assert "pip install 'athenakin[app]'" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_app_tip_handle_and_slot_menu_in_process():
+    from types import SimpleNamespace
+
+    from athenakin.app import AthenaApp
+
+    app = AthenaApp(port=0, backend="numpy")
+    try:
+        r = app.view.readouts
+        T = app.setup.T_b_e
+        target_e = r.tip_e + np.array([0.0, 0.01, 0.01])
+        app._handle.position = tuple(T[:3, :3] @ target_e + T[:3, 3])   # a drag ...
+        app._on_handle(SimpleNamespace(phase="update"))
+        app._on_handle(SimpleNamespace(phase="end"))                      # ... and release
+        q_ref, _ = ak.q_from_tool_tip(T, target_e, D)
+        np.testing.assert_allclose(app.q, q_ref, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(app._handle.position, app.view.readouts.tip_b, atol=1e-6)
+        assert [sl.value for sl in app._q_sliders] == pytest.approx(q_ref * 1e3, abs=1e-3)
+        far = T[:3, :3] @ (r.tip_e * 5.0) + T[:3, 3]                    # beyond the tool
+        app._handle.position = tuple(far)
+        app._on_handle(SimpleNamespace(phase="end"))
+        assert "stopped at the workspace boundary" in app._status.content
+        assert app.view.geometry is not None                               # held, drawn
+        _, ok = ak.q_from_tool_tip(T, app.view.readouts.tip_e, D, errors="flag")
+        assert ok.valid
+        # the slot menu: invalid slots are marked with their reason
+        v = app.set_q([-0.1, 0.1, 0.26])                # near the tangency: some invalid
+        opts = app._slot_dd.options
+        assert len(opts) == 17 and opts[0].startswith("all valid")
+        for s in v.slots:
+            assert opts[1 + s.slot].startswith(s.label)
+            assert ("invalid" in opts[1 + s.slot]) == (not s.valid)
+    finally:
+        app.stop()
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_launch_playback_and_setup_tab_in_process(tmp_path, capsys):
+    import time
+
+    from athenakin.app import launch
+
+    traj = _csv(tmp_path, "t_s,q1_m,q2_m,q3_m\n0,-0.1,0.1,0.45\n0.1,-0.11,0.09,0.46\n"
+                          "0.2,-0.12,0.08,0.47\n")
+    app = launch(port=0, trajectory=traj, backend="numpy")
+    try:
+        assert f"ATHENA at {app.url}" in capsys.readouterr().out
+        assert app.url.startswith("http://127.0.0.1:")
+        np.testing.assert_allclose(app.q, [-0.1, 0.1, 0.45])
+        app._start_playing()                                    # the play button
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < 10 and not np.allclose(app.q, [-0.12, 0.08, 0.47]):
+            time.sleep(0.05)
+        np.testing.assert_allclose(app.q, [-0.12, 0.08, 0.47])
+        # the set-up tab: another design is applied, a bad one refused
+        other = dataclasses.replace(D, q_min=(-0.25, -0.05, 0.25), name="narrow")
+        (tmp_path / "narrow.toml").write_text(other.to_toml())
+        app._design_path.value = str(tmp_path / "narrow.toml")
+        app._change_setup()
+        assert app.setup.design == other
+        assert [sl.min for sl in app._q_sliders] == pytest.approx([-250.0, -50.0, 250.0])
+        app._design_path.value = str(tmp_path / "missing.toml")
+        app._change_setup()
+        assert app.setup.design == other
+        assert "set-up not changed" in app._status.content
+    finally:
+        app.stop()
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_cli_reports_bad_inputs_at_startup_and_serves(tmp_path):
+    import signal
+    import subprocess
+    import sys
+
+    bad = _csv(tmp_path, "[design]\nl1 = 0.3\nl2 = 0.1\nl3 = 0.25\nl4 = 0.15\nl5 = 5.0\n",
+               "far.toml")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "athenakin.cli", "app", "--port", "0", "--backend", "numpy",
+         "--design", str(bad), "--trajectory", str(tmp_path / "none.csv")],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        lines = []
+        for line in proc.stdout:
+            lines.append(line)
+            if "serving ATHENA at" in line:
+                break
+        text = "".join(lines)
+        assert "warning: design: OutOfWorkspaceError" in text and "assembles nowhere" in text
+        assert "warning: trajectory: PathFileError" in text and "none.csv" in text
+        assert "serving ATHENA at http://127.0.0.1:" in text
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=20) == 0
+        assert "athenakin app: stopped" in proc.stdout.read()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()

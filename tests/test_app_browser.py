@@ -73,11 +73,13 @@ def app(tmp_path_factory):
         if "serving ATHENA at " in line:
             url = line.split("serving ATHENA at ")[1].split()[0]
             break
-    assert url == f"http://127.0.0.1:{port}/", "".join(lines)
+    # the port asked for (viser moves on to the next one only if another process took it)
+    assert url is not None and url.startswith("http://127.0.0.1:"), "".join(lines)
+    port = int(url.rstrip("/").rsplit(":", 1)[1])
     errors = []
     with playwright.sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        page = browser.new_page(viewport={"width": 1280, "height": 800})
+        page = browser.new_page(viewport={"width": 900, "height": 640})
         page.on("pageerror", lambda e: errors.append(f"pageerror: {e}"))
         page.on("console", lambda m: errors.append(f"console: {m.text}")
                 if m.type == "error" else None)
@@ -133,6 +135,7 @@ def test_canvas_renders_the_robot(app):
     page = app["page"]
     assert page.locator("canvas").count() >= 1
     img, fractions = _drawn_screenshot(page, app["dir"] / "start.png")
+    app["start"] = img
     assert img.std() > 15
     for key, f in fractions.items():
         assert f > 2e-4, key
@@ -144,7 +147,9 @@ def test_q1_slider_moves_the_robot_and_reads_out_fk(app):
     sliders = page.locator(SLIDERS)
     assert sliders.count() == 3                                   # q1, q2, q3: q1 first
     assert _slider_values(page) == [-100.0, 100.0, 450.0]
-    before, _ = _drawn_screenshot(page)
+    before = app.get("start")
+    if before is None:
+        before, _ = _drawn_screenshot(page)
     sliders.nth(0).focus()
     for _ in range(6):                                            # 6 steps of 0.5 mm
         page.keyboard.press("ArrowRight")

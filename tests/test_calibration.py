@@ -122,6 +122,22 @@ def test_interface_of_the_checks_default_parameters_and_design():
         assert abs(getattr(res.design, n) - getattr(data.true_design, n)) < 1e-9
     assert res.covariance.shape == (6, 6) and res.std.shape == (6,)
     assert res.residuals_before.shape == (30, 3) and res.rms_before > 1e-4
+    lazy = ak.calibration.calibrate(data.q, data.tips, T, D)   # the lazy attribute works
+    assert lazy.design == res.design
+
+
+def test_mode_auto_picks_each_rows_assembly_mode():
+    a = cal.synthetic_measurements(D, T, n=10, noise=0.0, mode=-1, rng=23, perturbation=0.0,
+                                   true={"l1": 0.3003, "l4": 0.1498})
+    q = np.concatenate([a.q, cal.random_poses(20, T, D, rng=24)])
+    b = cal.synthetic_measurements(D, T, q=q[10:], noise=0.0, rng=23, perturbation=0.0,
+                                   true={"l1": 0.3003, "l4": 0.1498})
+    tips = np.concatenate([a.tips, b.tips])
+    res = cal.calibrate(q, tips, T, D, mode="auto")
+    assert res.mode.tolist() == [-1] * 10 + [1] * 20
+    assert_allclose([res.design.l1, res.design.l4], [0.3003, 0.1498], rtol=0, atol=1e-9)
+    with pytest.raises(InvalidInputError, match="frame='base'"):
+        cal.calibrate(q, tips, T, D, mode="auto", frame="tracker")
 
 
 def test_mode_minus_one_is_followed():
@@ -233,6 +249,12 @@ def test_mismatched_lengths_and_shapes():
         cal.calibrate(data.q, data.tips, T, D, params=["l7"])
     with pytest.raises(ValueError, match="frame='tracker'"):
         cal.calibrate(data.q, data.tips, T, D, params=["reg_tx"])
+    with pytest.raises(InvalidInputError, match="sigma: expected a positive number"):
+        cal.calibrate(data.q, data.tips, T, D, sigma=-1.0)
+    with pytest.raises(ValueError, match="loss"):
+        cal.calibrate(data.q, data.tips, T, D, loss="l2")
+    with pytest.raises(TypeError, match="expected athenakin.Design"):
+        cal.calibrate(data.q, data.tips, T, "design")
 
 
 def test_a_few_bad_rows_are_flagged_and_excluded():

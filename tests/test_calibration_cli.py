@@ -1,16 +1,21 @@
 """``athenakin calibrate`` and the calibration files (CSV in, plan CSV, TOML, report)."""
 
 import re
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-import tomllib
 from numpy.testing import assert_allclose
 
 import athenakin as ak
 from athenakin import calibration as cal
 from athenakin.cli import main
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
 
 D = ak.Design.default()
 T = ak.default_rcm_frame(D)
@@ -49,6 +54,30 @@ def test_malformed_csv_is_a_named_error(tmp_path, text, match):
         cal.read_measurements_csv(path)
 
 
+def test_mode_column_is_read_per_row(tmp_path, capsys):
+    data = cal.synthetic_measurements(D, T, n=12, noise=0.0, mode=-1, rng=6)
+    text = cal.measurements_csv_text(data.q, data.tips).splitlines()
+    head = next(i for i, ln in enumerate(text) if ln.startswith("q1_m"))
+    text[head] += ",mode"
+    text[head + 1:] = [ln + ",-1" for ln in text[head + 1:]]
+    path = tmp_path / "m.csv"
+    path.write_text("\n".join(text) + "\n")
+    assert cal.read_measurements_csv(path).mode.tolist() == [-1] * 12
+    code, out, err = run(capsys, "calibrate", path, "-o", tmp_path / "c.toml", "--no-report")
+    assert code == 0, err
+    assert abs(ak.Design.from_toml(tmp_path / "c.toml").l1 - data.true_design.l1) < 1e-9
+    path.write_text("\n".join(text).replace(",-1", ",2") + "\n")
+    with pytest.raises(cal.MeasurementFileError, match="column 'mode'"):
+        cal.read_measurements_csv(path)
+
+
+def test_tips_in_millimetres_are_caught(tmp_path):
+    data = cal.synthetic_measurements(D, T, n=30, noise=0.0, rng=7)
+    with pytest.warns(cal.CalibrationWarning, match="check the units"), \
+            pytest.raises(cal.CalibrationError):
+        cal.calibrate(data.q, data.tips * 1000, T, D)
+
+
 def test_empty_and_nan_cells_become_bad_rows(tmp_path):
     path = tmp_path / "m.csv"
     path.write_text("q1_m,q2_m,q3_m,x_m,y_m,z_m,extra\n-0.1,0.1,0.45,,0,0,a\n"
@@ -77,6 +106,15 @@ def test_cli_calibrates_the_example_data_set(tmp_path, capsys):
     assert "| l1 |" in report.read_text()
     for fig in ("residuals", "parameters", "tip_error"):
         assert (tmp_path / f"cal_report_{fig}.png").stat().st_size > 1000
+
+
+def test_html_report(tmp_path):
+    data = cal.synthetic_measurements(D, T, n=20, rng=5)
+    res = cal.calibrate(data.q, data.tips, T, D)
+    files = cal.write_report(res, tmp_path / "r.html", figures=False)
+    text = files[0].read_text()
+    assert text.startswith("<!DOCTYPE html>") and text.count("<tr>") == 7
+    assert "<td>tool_length</td>" in text and "<b>" in text
 
 
 def test_cli_tracker_frame_without_report(tmp_path, capsys):

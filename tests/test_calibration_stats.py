@@ -19,14 +19,18 @@ def truth(data, names):
 @pytest.mark.parametrize("params, kw", [
     (None, {}),
     (["default", "offsets"], {"offset_std": 3e-4}),
+    (None, {"frame": "tracker"}),
 ])
 def test_z_scores_over_30_seeds_are_standard_normal(params, kw):
     """20 um noise, 80 poses: (estimate - truth) / std ~ N(0, 1) pooled over 30 seeds."""
     z = []
     for seed in range(30):
         data = cal.synthetic_measurements(D, T, n=80, noise=NOISE, rng=1000 + seed, **kw)
-        res = cal.calibrate(data.q, data.tips, T, D, params=params)
-        z.append((res.estimates - truth(data, res.names)) / res.std)
+        res = cal.calibrate(data.q, data.tips, T, D, params=params,
+                            frame=kw.get("frame", "base"))
+        robot = [i for i, n in enumerate(res.names) if not n.startswith("reg_")]
+        names = [res.names[i] for i in robot]
+        z.append((res.estimates[robot] - truth(data, names)) / res.std[robot])
         assert abs(res.sigma / NOISE - 1) < 0.25
     z = np.concatenate(z)
     assert np.mean(np.abs(z) < 3) >= 0.98          # "every estimate within 3 sigma"

@@ -263,3 +263,41 @@ def test_flint_is_imported_only_on_first_use():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == "False False True"
+
+
+# ------------------------------------------------------------------------------ CLI
+def test_cli_fk_certify_table_and_json(capsys):
+    import json
+
+    from athenakin.cli import main
+
+    assert main(["fk", "-0.10", "0.10", "0.45", "--certify"]) == 0
+    out = capsys.readouterr().out
+    assert "exactly 16 real solutions (proven)" in out and out.count("CERTIFIED") == 16
+    assert main(["fk", "-0.10", "0.10", "0.45", "--certify", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)["certificate"]
+    assert data["complete"] and data["n_certified"] == 16
+    cert = certified_forward_kinematics(Q_REF, T_REF, D)
+    assert data["slots"][3]["p_m"] == [cert.p_lo[3], cert.p_hi[3]]
+    assert np.array_equal(np.array(data["slots"][3]["u_rad"]),
+                          np.stack([cert.u_lo[3], cert.u_hi[3]], axis=-1))
+
+
+def test_cli_fk_certify_unreachable_and_missing_flint(capsys, monkeypatch):
+    import builtins
+
+    from athenakin.cli import main
+
+    assert main(["fk", "-0.10", "0.10", "2.0", "--certify"]) == 0
+    out = capsys.readouterr().out
+    assert "exactly 0 real solutions (proven)" in out and "STROKE_LIMIT" in out
+    real_import = builtins.__import__
+
+    def no_flint(name, *args, **kwargs):
+        if name == "flint":
+            raise ImportError("No module named 'flint'")
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_flint)
+    assert main(["fk", "-0.10", "0.10", "0.45", "--certify"]) != 0
+    assert "pip install 'athenakin[certified]'" in capsys.readouterr().err

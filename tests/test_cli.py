@@ -32,6 +32,17 @@ def test_fk_table_and_json(capsys):
     sol = ak.forward_kinematics([-0.1, 0.1, 0.45], ak.default_rcm_frame())
     np.testing.assert_allclose([s["u_deg"] for s in data["solutions"]], np.degrees(sol.u),
                                atol=1e-9)
+    np.testing.assert_allclose([s["tip_m"] for s in data["solutions"]], sol.tip, atol=1e-12)
+    np.testing.assert_allclose([s["T_b_tip"] for s in data["solutions"]], sol.T_b_tip,
+                               atol=1e-12)
+
+
+def test_fk_table_shows_the_tool_tip(capsys):
+    code, out, _ = run(capsys, "fk", "-0.1", "0.1", "0.45")
+    sol = ak.forward_kinematics([-0.1, 0.1, 0.45], ak.default_rcm_frame())
+    assert code == 0 and "tip x [m]" in out and "tip z [m]" in out
+    row = next(ln for ln in out.splitlines() if ln.split()[:1] == ["0"])
+    np.testing.assert_allclose([float(x) for x in row.split()[-3:]], sol.tip[0], atol=1e-5)
 
 
 def test_ik_three_forms(capsys):
@@ -90,11 +101,11 @@ def test_readme_fk_and_ik_command_lines_succeed(capsys):
     block = text.split("## Command line", 1)[1].split("```bash", 1)[1].split("```", 1)[0]
     lines = [ln.split("#", 1)[0].split() for ln in block.splitlines()]
     commands = [ln[1:] for ln in lines if ln[:1] == ["athenakin"] and ln[1] in ("fk", "ik")]
-    assert len(commands) == 4
+    assert len(commands) == 5
     for argv in commands:
         code, out, err = run(capsys, *argv)
         assert code == 0, (argv, err)
-        assert "q = (" in out or "16 solutions" in out, argv
+        assert "q = (" in out or "16 solutions" in out or "16 real solutions" in out, argv
 
 
 def test_missing_optional_package_names_the_extra(monkeypatch, capsys):

@@ -79,7 +79,7 @@ def test_geometry_matches_mechanism_constraints():
 def test_slot_labels_and_values_come_from_fk():
     d = ak.Design.default()
     T = ak.default_rcm_frame(d)
-    sol = ak.forward_kinematics(REFERENCE_Q, T, d)
+    sol = ak.robot.forward_kinematics(REFERENCE_Q, T, d)    # the reference, as plot uses
     for k in range(16):
         g = robot_geometry(REFERENCE_Q, T, d, slot=k)
         assert (g.mode, g.p_sign, g.ujoint, g.wrist) == (

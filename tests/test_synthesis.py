@@ -130,7 +130,7 @@ def test_tip_and_o_s_follow_the_task_definition() -> None:
     ok = mode != 0
     assert 0.3 < ok.mean() < 1.0
     q_tip, res = ak.q_from_tool_tip(t.T_b_e, s.depth[:, None] * s.direction_e, REF,
-                                    errors="flag")
+                                    errors="flag", backend="numpy")
     assert np.array_equal(res.valid, ok)
     assert_allclose(q_tip[ok], q[ok], rtol=0, atol=1e-12)
     d_b = s.direction_e[ok] @ t.T_b_e[:3, :3].T
@@ -147,8 +147,8 @@ def brute() -> dict[str, object]:
     ok = mode != 0
     qv, mv = q[ok], mode[ok]
     rep = ak.analysis.singularities(qv, t.T_b_e, REF, mode=mv, jacobians=False)
-    J = ak.analysis.tool_tip_jacobian(qv, t.T_b_e, REF, mode=mv)
-    Jp = ak.analysis.parallel_jacobian(qv, REF, mode=mv)
+    J = ak.analysis.tool_tip_jacobian(qv, t.T_b_e, REF, mode=mv, backend="numpy")
+    Jp = ak.analysis.parallel_jacobian(qv, REF, mode=mv, backend="numpy")
     corners = np.array([c for c in itertools.product((1.0, -1.0), repeat=3)])
     err = res * np.max(np.linalg.norm(np.einsum("nij,kj->nki", J, corners), axis=-1), axis=-1)
     return {"task": t, "n": n, "seed": seed, "res": res, "ok": ok, "q": qv, "mode": mv,
@@ -248,3 +248,73 @@ def test_optimize_places_the_reference_on_the_front() -> None:
     if r.dominating:
         assert r.gains["coverage_mode"] >= 0 and r.gains["size"] >= 0
         assert not r.reference_on_front
+
+
+EXAMPLE = str(__import__("pathlib").Path(__file__).parents[1]
+              / "examples/synthesis/task_pancreas.toml")
+
+
+def test_cli_synthesize_locally_with_figures(tmp_path, capsys) -> None:
+    pytest.importorskip("dask")
+    pytest.importorskip("matplotlib")
+    from athenakin.cli import main
+
+    out = tmp_path / "r.parquet"
+    rc = main(["synthesize", EXAMPLE, "--designs", "3", "--samples", "500", "-o", str(out),
+               "--scheduler", "synchronous"])
+    text = capsys.readouterr().out
+    assert rc == 0 and "4 designs" in text and "cov. 1 mode" in text
+    for name in ("pareto.png", "parameters.png", "coverage.png"):
+        assert (tmp_path / "r.parquet-figures" / name).stat().st_size > 1000
+    from athenakin.synthesis import read_study
+
+    df = read_study(out)
+    assert len(df) == 4 and df["name"][0] == REF.name
+
+
+def test_cli_bad_task_file_is_one_line(tmp_path, capsys) -> None:
+    from athenakin.cli import main
+
+    p = tmp_path / "t.toml"
+    p.write_text("[task]\nrcm = [0, 0, 0]\n")
+    assert main(["synthesize", str(p), "-o", str(tmp_path / "o")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "TaskFileError" in err and "missing axis" in err
+
+
+def test_docstring_examples_of_the_task_module() -> None:
+    import doctest
+
+    import athenakin.synthesis._task as mod
+
+    assert doctest.testmod(mod, optionflags=doctest.ELLIPSIS).failed == 0
+
+
+def test_cli_optimize_json(tmp_path, capsys) -> None:
+    pytest.importorskip("pymoo")
+    import json
+
+    from athenakin.cli import main
+
+    out = tmp_path / "s.parquet"
+    args = ["synthesize", EXAMPLE, "--optimize", "--population", "4", "--generations", "1",
+            "--samples", "300", "--scheduler", "synchronous", "-o", str(out), "--no-figures"]
+    assert main([*args, "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["designs"] == 5 and rep["front"] and set(rep["trade_offs"]) == {
+        "coverage_mode", "size", "tip_error_max"}
+    assert isinstance(rep["reference_on_front"], bool)
+    assert main(args) == 1                                     # the folder is not empty now
+    assert "FileExistsError" in capsys.readouterr().err
+
+
+def test_mapping_without_strokes_is_an_unlimited_design_in_the_table() -> None:
+    pytest.importorskip("dask")
+    from athenakin.synthesis import evaluate
+
+    row = {"l1": 0.3, "l2": 0.1, "l3": 0.25, "l4": 0.15, "l5": 0.4, "name": math.nan}
+    df = evaluate([row], _task(), samples=300, seed=0, scheduler="synchronous", progress=False)
+    r = df.iloc[0]
+    assert r["valid"] and r["name"] == "" and r["tool_length"] == REF.tool_length
+    assert r["q1_min"] == -math.inf and r["q3_max"] == math.inf and r["size"] == math.inf
+    assert r["stroke_use_q1"] == 0.0 and r["coverage"] > 0

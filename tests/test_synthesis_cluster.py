@@ -64,7 +64,7 @@ def reference(task: Task, designs: list[object]) -> object:
 @pytest.fixture(scope="module")
 def cluster(reference: object) -> object:   # after the reference: numba's cache is warm
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  host="127.0.0.1", dashboard_address=None,
+                                  host="127.0.0.1", dashboard_address="127.0.0.1:0",
                                   silence_logs=50) as lc:
         yield lc
 
@@ -138,3 +138,33 @@ def test_unreachable_scheduler_is_a_named_one_line_error(task) -> None:
                  connect_timeout=1.0, progress=False)
     assert "\n" not in str(exc.value)
     assert time.monotonic() - t0 < 20
+
+
+def test_cli_on_the_cluster_by_address(cluster, tmp_path, capsys) -> None:
+    from pathlib import Path
+
+    from athenakin.cli import main
+
+    example = Path(__file__).parents[1] / "examples/synthesis/task_pancreas.toml"
+    out = tmp_path / "r.parquet"
+    rc = main(["synthesize", str(example), "--designs", "9", "--samples", "500", "-o", str(out),
+               "--scheduler", cluster.scheduler_address, "--no-figures", "--json"])
+    assert rc == 0
+    import json
+
+    rep = json.loads(capsys.readouterr().out)
+    df = read_study(out)
+    assert rep["designs"] == 10 and len(df) == 10 and list(df["design"]) == list(range(10))
+    assert df["coverage"].between(0, 1).all() and df["name"][0] == ak.Design.default().name
+
+
+def test_cli_unreachable_scheduler_one_line(capsys, tmp_path) -> None:
+    from pathlib import Path
+
+    from athenakin.cli import main
+
+    example = Path(__file__).parents[1] / "examples/synthesis/task_pancreas.toml"
+    rc = main(["synthesize", str(example), "--scheduler", "tcp://127.0.0.1:9",
+               "--connect-timeout", "1", "-o", str(tmp_path / "o"), "--no-figures"])
+    err = capsys.readouterr().err.strip()
+    assert rc == 1 and "\n" not in err and "SchedulerUnreachableError" in err

@@ -9,14 +9,19 @@ rows carry a 2 mm gross error and one a missed reading. The same as::
         --params default offsets --loss soft_l1
 """
 
+import sys
 import warnings
 from pathlib import Path
 
 import numpy as np
-import tomllib
 
 import athenakin as ak
 from athenakin import calibration as cal
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:
+    import tomli as tomllib
 
 HERE = Path(__file__).resolve().parent
 

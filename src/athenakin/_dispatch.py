@@ -17,8 +17,9 @@ values to 1e-12, the same reason codes and raise the same errors (tested).
 
 The compiled kernels are cached on disk (numba ``cache=True``) next to their
 sources, or under the user cache directory (``~/.cache/athenakin/numba``) when the
-package directory is not writable. When the first call of a process compiles them,
-one line on stderr says so (``athenakin warmup`` compiles them ahead).
+package directory is not writable. When the first call of a process takes long
+(compiling them the first time, about a minute; loading numba and the cache
+later, about a second), one line on stderr says so.
 """
 
 from __future__ import annotations
@@ -50,6 +51,7 @@ __all__ = [
     "numba_available",
     "resolve_backend",
     "user_cache_dir",
+    "warmup",
     "forward_kinematics",
     "inverse_kinematics",
     "q_from_instrument",
@@ -155,27 +157,27 @@ def resolve_backend(backend: str) -> bool:
 
 
 def _api() -> ModuleType:
-    api = _STATE.get("api")
-    if api is None:
-        from .fast import _api as api
-        _STATE["api"] = api
-    return api
+    if "api" not in _STATE:
+        from .fast import _api
+
+        _STATE["api"] = _api
+    return _STATE["api"]  # type: ignore[no-any-return]
 
 
 def _jac() -> ModuleType:
-    jac = _STATE.get("jac")
-    if jac is None:
-        from .fast import _jac_api as jac
-        _STATE["jac"] = jac
-    return jac
+    if "jac" not in _STATE:
+        from .fast import _jac_api
+
+        _STATE["jac"] = _jac_api
+    return _STATE["jac"]  # type: ignore[no-any-return]
 
 
 def _notice() -> None:
     if not _STATE.get("noticed"):
         _STATE["noticed"] = True
         where = os.environ.get("NUMBA_CACHE_DIR") or "the package's __pycache__"
-        print("athenakin: compiling the numba kernels on first use (once; cached in "
-              f"{where}; `athenakin warmup` does it ahead) ...", file=sys.stderr, flush=True)
+        print("athenakin: compiling the numba kernels on first use, or loading them from the "
+              f"cache ({where}) ...", file=sys.stderr, flush=True)
 
 
 def _first(name: str, call: Callable[[], _R]) -> _R:
@@ -190,12 +192,57 @@ def _first(name: str, call: Callable[[], _R]) -> _R:
         _WARM.add(name)
 
 
+def warmup(design: Design | None = None) -> int:
+    """Run every compiled entry point once, single pose and batch: compiles or loads the kernels.
+
+    Parameters
+    ----------
+    design : Design, optional
+
+    Returns
+    -------
+    int
+        Number of entry points run (0 where numba is not available).
+    """
+    if not numba_available():
+        return 0
+    from .robot._setup import REFERENCE_Q, default_rcm_frame
+
+    T = default_rcm_frame(design)
+    q = np.array(REFERENCE_Q, dtype=float)
+    qq = np.stack([q, q])
+    sol = forward_kinematics(q, T, design, errors="flag")
+    forward_kinematics(qq, T, design, errors="flag")
+    forward_kinematics(qq, T, design, errors="flag", fields=("p", "u", "valid"))
+    u345 = np.nan_to_num(np.ascontiguousarray(sol.u[0, 2:]))
+    inverse_kinematics(T, u345, design, errors="flag")
+    inverse_kinematics(T, np.stack([u345, u345]), design, errors="flag")
+    inverse_kinematics(T, np.stack([u345, u345]), design, errors="flag", fields=("valid",))
+    tip = np.array([0.0, 0.0, 0.1])
+    q_from_tool_tip(T, tip, design, errors="flag")
+    q_from_tool_tip(T, np.stack([tip, tip]), design, errors="flag")
+    q_from_instrument(T, tip, 0.2, design, errors="flag")
+    q_from_instrument(T, np.stack([tip, tip]), np.array([0.2, 0.2]), design, errors="flag")
+    names = ("parallel_jacobian", "parallel_inverse_jacobian", "parallel_twist_jacobian",
+             "instrument_jacobian", "instrument_inverse_jacobian", "tool_tip_jacobian",
+             "tool_tip_inverse_jacobian")
+    for name in names:
+        fn = globals()[name]
+        for x in (q, qq):
+            if name.startswith("parallel"):
+                fn(x, design)
+            else:
+                fn(x, None, design)
+    return 4 + len(names)
+
+
 # --- whole robot ---------------------------------------------------------------------------
 def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
                        method: FKMethod = "closed", errors: ErrorPolicy = "auto",
                        tangent_tol: float = TANGENT_TOL, degenerate_tol: float = DEGENERATE_TOL,
                        p_zero_tol: float = P_ZERO_TOL, closure_tol: float = CLOSURE_TOL,
-                       backend: Backend = "auto") -> FKSolution:
+                       fields: tuple[str, ...] | None = None, backend: Backend = "auto"
+                       ) -> FKSolution:
     """All (up to) 16 configurations of the robot for actuator values ``q`` (Section 3).
 
     Parameters
@@ -208,6 +255,10 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
         Defaults to :meth:`Design.default`.
     method, errors, tangent_tol, degenerate_tol, p_zero_tol, closure_tol : keyword-only
         As in the reference :func:`athenakin.robot.forward_kinematics`.
+    fields : tuple of str, optional, keyword-only
+        Compute and store only these arrays (names in :data:`athenakin.robot.FK_FIELDS`;
+        e.g. ``("p", "u", "valid")`` for sweeps, a third less memory written); the
+        result always holds ``item_reason``. ``None`` (default): all.
     backend : {"auto", "numpy", "numba"}, keyword-only
         ``"auto"`` (default): the compiled kernels of :mod:`athenakin.fast` where
         numba imports, else the numpy reference; ``"numba"``: compiled (ImportError
@@ -237,7 +288,8 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
         api = _STATE["api"]
         if (type(q) is np.ndarray and type(T_b_e) is np.ndarray and q.dtype is _F8
                 and T_b_e.dtype is _F8 and q.shape == (3,) and T_b_e.shape == (4, 4)
-                and method == "closed" and (errors == "auto" or errors == "raise")
+                and fields is None and method == "closed"
+                and (errors == "auto" or errors == "raise")
                 and tangent_tol == TANGENT_TOL and degenerate_tol == DEGENERATE_TOL
                 and p_zero_tol == P_ZERO_TOL and closure_tol == CLOSURE_TOL):
             # the lean single call (control loops): straight to the packed kernel
@@ -248,9 +300,11 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
                     return sol  # type: ignore[no-any-return]
         return api.forward_kinematics(  # type: ignore[no-any-return]
             q, T_b_e, design, method=method, errors=errors, tangent_tol=tangent_tol,
-            degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol, closure_tol=closure_tol)
+            degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol, closure_tol=closure_tol,
+            fields=fields)
     kw = dict(method=method, errors=errors, tangent_tol=tangent_tol,
-              degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol, closure_tol=closure_tol)
+              degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol, closure_tol=closure_tol,
+              fields=fields)
     if resolve_backend(backend):
         api = _api()
         return _first("fk", lambda: api.forward_kinematics(q, T_b_e, design, **kw))
@@ -259,8 +313,8 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
 
 def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None = None, *,
                        errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
-                       closure_tol: float = CLOSURE_TOL, backend: Backend = "auto"
-                       ) -> tuple[NDArray[np.float64], PassiveJoints]:
+                       closure_tol: float = CLOSURE_TOL, fields: tuple[str, ...] | None = None,
+                       backend: Backend = "auto") -> tuple[NDArray[np.float64], PassiveJoints]:
     """Actuator values for a given RCM frame and spherical-joint angles (paper Section 4).
 
     Parameters
@@ -272,6 +326,9 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     design : Design, optional
     errors, singular_tol, closure_tol : keyword-only
         As in the reference :func:`athenakin.robot.inverse_kinematics`.
+    fields : tuple of str, optional, keyword-only
+        Compute and store only these arrays of ``passive`` (names in
+        :data:`athenakin.robot.IK_FIELDS`; ``q`` is always returned). ``None``: all.
     backend : {"auto", "numpy", "numba"}, keyword-only
         As in :func:`forward_kinematics`.
 
@@ -292,16 +349,28 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     True
     """
     if "ik" in _WARM and _STATE["numba"] and (backend == "auto" or backend == "numba"):
-        return _STATE["api"].inverse_kinematics(  # type: ignore[no-any-return]
+        api = _STATE["api"]
+        if (type(T_b_e) is np.ndarray and type(u345) is np.ndarray and T_b_e.dtype is _F8
+                and u345.dtype is _F8 and T_b_e.shape == (4, 4) and u345.shape == (3,)
+                and fields is None and (errors == "auto" or errors == "raise")
+                and singular_tol == IK_SINGULAR_TOL and closure_tol == CLOSURE_TOL):
+            # the lean single call (control loops): straight to the packed kernel
+            fT, fu = T_b_e.flags, u345.flags
+            if fT.c_contiguous and fT.writeable and fu.c_contiguous and fu.writeable:
+                res = api._ik_one_plain(T_b_e, u345, api.design_params(design))
+                if res is not None:
+                    return res  # type: ignore[no-any-return]
+        return api.inverse_kinematics(  # type: ignore[no-any-return]
             T_b_e, u345, design, errors=errors, singular_tol=singular_tol,
-            closure_tol=closure_tol)
+            closure_tol=closure_tol, fields=fields)
     if resolve_backend(backend):
         api = _api()
         return _first("ik", lambda: api.inverse_kinematics(
             T_b_e, u345, design, errors=errors, singular_tol=singular_tol,
-            closure_tol=closure_tol))
+            closure_tol=closure_tol, fields=fields))
     return _ref_ik.inverse_kinematics(T_b_e, u345, design, errors=errors,
-                                      singular_tol=singular_tol, closure_tol=closure_tol)
+                                      singular_tol=singular_tol, closure_tol=closure_tol,
+                                      fields=fields)
 
 
 def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
@@ -365,7 +434,16 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
     athenakin.robot.q_from_tool_tip : the numpy reference, with the details.
     """
     if "line" in _WARM and _STATE["numba"] and (backend == "auto" or backend == "numba"):
-        return _STATE["api"].q_from_tool_tip(  # type: ignore[no-any-return]
+        api = _STATE["api"]
+        if (type(T_b_e) is np.ndarray and type(tip_e) is np.ndarray and T_b_e.dtype is _F8
+                and tip_e.dtype is _F8 and T_b_e.shape == (4, 4) and tip_e.shape == (3,)
+                and (errors == "auto" or errors == "raise")):
+            fT, ft = T_b_e.flags, tip_e.flags
+            if fT.c_contiguous and fT.writeable and ft.c_contiguous and ft.writeable:
+                res = api._line_one_plain(T_b_e, tip_e, 0.0, 1, api.design_params(design))
+                if res is not None:
+                    return res  # type: ignore[no-any-return]
+        return api.q_from_tool_tip(  # type: ignore[no-any-return]
             T_b_e, tip_e, design, errors=errors)
     if resolve_backend(backend):
         api = _api()

@@ -17,6 +17,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._dispatch import forward_kinematics, numba_available, q_from_tool_tip
 from .._validation import check_array
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, OutOfWorkspaceError, Reason
@@ -30,8 +31,6 @@ from ..robot import (
     SLOT_P_SIGN,
     SLOT_UJOINT,
     SLOT_WRIST,
-    forward_kinematics,
-    q_from_tool_tip,
 )
 from ..robot._setup import resolve_rcm_frame
 
@@ -102,14 +101,6 @@ class AppSetup:
     backend: Literal["numba", "numpy"]
 
 
-def _numba_available() -> bool:
-    try:
-        import numba  # noqa: F401
-    except ImportError:
-        return False
-    return True
-
-
 def _rcm_frame_at(q: NDArray[np.float64], design: Design) -> NDArray[np.float64]:
     """The reference set-up's recipe (:func:`~athenakin.default_rcm_frame`) at another ``q``."""
     from .._transforms import transform_from_rotation_translation
@@ -134,7 +125,8 @@ def app_setup(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
         RCM frame; default: the reference set-up (:func:`~athenakin.default_rcm_frame`),
         built at the start configuration when the reference ``q`` does not assemble.
     backend : {"auto", "numba", "numpy"}, keyword-only
-        ``"auto"``: numba when installed (extra ``fast``), else numpy.
+        ``"auto"``: the compiled kernels where numba imports, else the numpy reference
+        (:func:`athenakin.forward_kinematics`).
 
     Returns
     -------
@@ -152,7 +144,7 @@ def app_setup(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
     if backend not in ("auto", "numba", "numpy"):
         raise InvalidInputError(f"backend: expected 'auto', 'numba' or 'numpy', got {backend!r}")
     chosen: Literal["numba", "numpy"] = (
-        ("numba" if _numba_available() else "numpy") if backend == "auto" else backend)
+        ("numba" if numba_available() else "numpy") if backend == "auto" else backend)
     lo, hi = design.stroke_min.copy(), design.stroke_max.copy()
     ref = np.clip(REFERENCE_Q, lo, hi)
     lo = np.where(np.isfinite(lo), lo, ref - UNLIMITED_HALF_RANGE)
@@ -411,7 +403,8 @@ def forward_view(setup: AppSetup, q: ArrayLike, *, slot: Slot = 0) -> AppView:
         return AppView(q=q, slots=slots, requested=requested, geometry=None, ghosts=(),
                        readouts=None, level="error",
                        message="no solution at this q: " + "; ".join(reasons))
-    message, level = "", "ok"
+    message = ""
+    level: Literal["ok", "warn", "error"] = "ok"
     if requested == "all":
         first = int(np.flatnonzero(valid)[0])
         others = [int(k) for k in np.flatnonzero(valid) if k != first]

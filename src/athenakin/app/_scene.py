@@ -116,7 +116,7 @@ def _polyline_segments(pts: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def _seg(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    return np.stack([a, b])[None]
+    return np.array([[a, b]])
 
 
 #: Point names drawn as joints, their labels, colours and whether they are the big ones.
@@ -151,17 +151,16 @@ def robot_scene(g: RobotGeometry, *, frames: bool = True, labels: bool = True,
     c = {k: rgb(v) for k, v in COLORS.items()}
     lines = [
         LineSet("rail", _seg(*g.rail), c["rail"], 6.0),
-        LineSet("parallel", np.concatenate(
-            [np.stack(seg[k])[None] for k in ("link_a1", "link_b1", "link_a3", "link_b3",
-                                               "carrier_y", "carrier_z", "offset_l4")]),
-            c["parallel"], 5.0),
-        LineSet("actuator_q3", np.stack(seg["actuator_q3"])[None], c["actuator"], 6.0),
+        LineSet("parallel", np.array(
+            [seg[k] for k in ("link_a1", "link_b1", "link_a3", "link_b3", "carrier_y",
+                              "carrier_z", "offset_l4")]), c["parallel"], 5.0),
+        LineSet("actuator_q3", np.array([seg["actuator_q3"]]), c["actuator"], 6.0),
         LineSet("circle_k1", _polyline_segments(g.k1), c["circle_k1"], 1.5),
         LineSet("circle_k2", _polyline_segments(g.k2_arc), c["circle_k2"], 1.5),
         LineSet("ujoint", np.concatenate([
             _seg(P["O_s"] - 0.03 * g.ujoint_axes[0], P["O_s"] + 0.03 * g.ujoint_axes[0]),
             _seg(P["O_s"], P["O_s"] + 0.045 * g.ujoint_axes[1])]), rgb("#333333"), 4.0),
-        LineSet("instrument", np.stack(seg["instrument"])[None], c["serial"], 6.0),
+        LineSet("instrument", np.array([seg["instrument"]]), c["serial"], 6.0),
     ]
     if not 0.0 <= g.p <= g.design.tool_length:
         lines.append(LineSet("instrument_axis", _seg(P["O_s"], P["RCM"]), c["serial"], 1.0))
@@ -187,28 +186,42 @@ def robot_scene(g: RobotGeometry, *, frames: bool = True, labels: bool = True,
     return Scene(lines=tuple(lines), points=tuple(points), labels=labs)
 
 
-def ghost_scene(geoms: tuple[RobotGeometry, ...] | list[RobotGeometry]) -> Scene:
-    """The moving parts of other solutions, paler, merged into one line set per part.
+#: Parts that depend only on q (the same in every slot) and only on the assembly mode.
+_Q_PARTS = ("circle_k1", "circle_k2", "rail")
+_MODE_PARTS = ("parallel", "actuator_q3")
 
-    The rail and the frames are left out (they are drawn once by the solid view).
+
+def ghost_scene(geoms: tuple[RobotGeometry, ...] | list[RobotGeometry],
+                solid: RobotGeometry | None = None) -> Scene:
+    """The parts of other solutions, paler, merged into one line set per part.
+
+    Parts drawn by the solid view are not repeated: the rail and the circles (the same in
+    every slot of one q), the frames, and the parallel module of the solid slot's assembly
+    mode; the other mode's parallel module is drawn once.
 
     Parameters
     ----------
     geoms : sequence of RobotGeometry
+        The ghosted slots (one q).
+    solid : RobotGeometry, optional
+        The slot drawn solid.
 
     Returns
     -------
     Scene
-        Line sets named ``ghost_<part>`` (possibly with no segments), no labels.
+        Line sets named ``ghost_<part>``, no points, no labels.
     """
     parts: dict[str, list[NDArray[np.float64]]] = {}
     style: dict[str, tuple[tuple[int, int, int], float]] = {}
+    modes_done = {solid.mode} if solid is not None else set()
     for g in geoms:
         s = robot_scene(g, frames=False, labels=False)
+        new_mode = g.mode not in modes_done
         for ls in s.lines:
-            if ls.name == "rail":
+            if ls.name in _Q_PARTS or (ls.name in _MODE_PARTS and not new_mode):
                 continue
             parts.setdefault(ls.name, []).append(ls.segments)
             style[ls.name] = (_blend(ls.color, GHOST_BLEND), max(1.0, 0.6 * ls.width))
+        modes_done.add(g.mode)
     lines = tuple(LineSet(f"ghost_{k}", np.concatenate(v), *style[k]) for k, v in parts.items())
     return Scene(lines=lines, points=(), labels=())

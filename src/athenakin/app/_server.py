@@ -321,11 +321,11 @@ class AthenaApp:
                 self.view = view
                 self._draw(view)
             self._sync_gui(view, sync_ik=sync_ik)
-            msg, level = view.message, view.level
+            msg, level = view.message, str(view.level)
             if extra is not None:
                 msg = extra[0] + ("; " + msg if msg else "")
                 level = "error" if view.level == "error" else extra[1]
-            status, ro, slots = view_html(view)
+            _, ro, slots = view_html(view)
             self._status.content = message_html(msg, level)
             if ro:
                 self._readouts.content = ro
@@ -371,20 +371,22 @@ class AthenaApp:
     def _draw(self, view: AppView) -> None:
         assert view.geometry is not None
         solid = robot_scene(view.geometry)
-        ghosts = ghost_scene(view.ghosts) if view.ghosts else Scene((), (), ())
+        ghosts = (ghost_scene(view.ghosts, view.geometry) if view.ghosts
+                  else Scene((), (), ()))
         scene = self.server.scene
         handles = {}
         with self.server.atomic():
-            for ls in solid.lines + ghosts.lines:
-                pts = ls.segments.astype(np.float32)
-                h = self._line_handles.pop(ls.name, None)
+            groups = {**_by_width(solid, "w"), **_by_width(ghosts, "ghost_w")}
+            for name, (pts, cols, width) in groups.items():
+                h = self._line_handles.pop(name, None)
                 if h is None:
-                    h = scene.add_line_segments(f"/robot/{ls.name}", points=pts,
-                                                colors=ls.color, thickness=ls.width,
-                                                thickness_units="screen")
-                else:
+                    h = scene.add_line_segments(f"/robot/{name}", points=pts, colors=cols,
+                                                thickness=width, thickness_units="screen")
+                elif len(h.points) == len(pts):
                     h.points = pts
-                handles[ls.name] = h
+                else:
+                    h.points, h.colors = pts, cols
+                handles[name] = h
             for h in self._line_handles.values():      # parts not drawn any more
                 h.remove()
             self._line_handles = handles
@@ -406,7 +408,7 @@ class AthenaApp:
                 if h is None:
                     self._label_handles[lab.text] = scene.add_label(
                         f"/labels/{lab.text}", lab.text, position=tuple(lab.position))
-                else:
+                elif not np.allclose(h.position, lab.position, rtol=0, atol=1e-7):
                     h.position = tuple(float(x) for x in lab.position)
 
     def _frame_camera(self) -> None:
@@ -417,7 +419,7 @@ class AthenaApp:
         span = float(np.max(hi - lo))
         cam = self.server.initial_camera
         cam.look_at = tuple(float(x) for x in centre)
-        cam.position = tuple(float(x) for x in centre + span * np.array([1.1, -1.3, 0.8]))
+        cam.position = tuple(float(x) for x in centre + span * np.array([0.8, -0.95, 0.55]))
         cam.up = (0.0, 0.0, 1.0)
 
     # ------------------------------------------------------------------ playback, set-up
@@ -455,11 +457,11 @@ class AthenaApp:
             start = time.perf_counter() - float(self._time.value)
             if self._time.value >= t_end:
                 start = time.perf_counter()
-            while True:
-                t = time.perf_counter() - start
-                if t > t_end or self.playback is not pb:
+            while self.playback is pb:
+                t = min(time.perf_counter() - start, t_end)
+                self._time.value = float(t)                 # calls _on_time
+                if t >= t_end:
                     break
-                self._time.value = float(min(t, t_end))     # calls _on_time
                 time.sleep(1 / 30)
 
         threading.Thread(target=run, daemon=True, name="athenakin-playback").start()
@@ -497,6 +499,34 @@ class AthenaApp:
 
     def __exit__(self, *exc: object) -> None:
         self.stop()
+
+
+def _vertex_color(rgb: tuple[int, int, int]) -> NDArray[np.uint8]:
+    """An sRGB colour (0..255) as a per-vertex colour that shows as given.
+
+    three.js reads vertex colours as linear and converts them to sRGB on output.
+    """
+    c = np.asarray(rgb, dtype=float) / 255.0
+    lin = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return np.round(255.0 * lin).astype(np.uint8)
+
+
+def _by_width(scene: Scene, prefix: str
+              ) -> dict[str, tuple[NDArray[np.float32], NDArray[np.uint8], float]]:
+    """The scene's line sets merged per line width: ``name -> (points, colours, width)``.
+
+    One scene node per width instead of one per part: fewer messages per update.
+    """
+    groups: dict[float, list[Any]] = {}
+    for ls in scene.lines:
+        groups.setdefault(ls.width, []).append(ls)
+    out = {}
+    for w, sets in groups.items():
+        pts = np.concatenate([ls.segments for ls in sets]).astype(np.float32)
+        cols = np.concatenate([np.broadcast_to(_vertex_color(ls.color), ls.segments.shape)
+                               for ls in sets])
+        out[f"{prefix}{w:g}"] = (pts, cols, w)
+    return out
 
 
 def _inverse_slot(slot: int, mode: int) -> int:

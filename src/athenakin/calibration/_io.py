@@ -2,11 +2,11 @@
 
 Measurement CSV (docs/calibration.md): a header row with the columns ``q1_m, q2_m, q3_m``
 (actuator readings, m) and ``x_m, y_m, z_m`` (measured tool tip, m, in the base or the
-tracker frame), optionally ``dx, dy, dz`` (measured unit instrument axis, same frame);
-other columns are ignored. Lines starting with ``#`` and blank lines are skipped. An
-empty cell or ``nan`` makes its row a bad row (excluded and reported by
-:func:`~athenakin.calibration.calibrate`); text that is not a number is an error naming
-file, line and column.
+tracker frame), optionally ``dx, dy, dz`` (measured unit instrument axis, same frame) and
+``mode`` (assembly mode of the row, +1 or -1); other columns are ignored. Lines starting
+with ``#`` and blank lines are skipped. An empty cell or ``nan`` makes its row a bad row
+(excluded and reported by :func:`~athenakin.calibration.calibrate`); text that is not a
+number is an error naming file, line and column.
 """
 
 from __future__ import annotations
@@ -56,12 +56,15 @@ class Measurements:
         Measured axes when the file has ``dx, dy, dz``.
     lines : ndarray of int, shape (N,)
         Line number of each row in the file (1-based), for reports.
+    mode : ndarray of int, shape (N,) or None
+        Assembly mode of each row (+1 / -1) when the file has a ``mode`` column.
     """
 
     q: NDArray[np.float64]
     tips: NDArray[np.float64] | None
     axes: NDArray[np.float64] | None
     lines: NDArray[np.int64]
+    mode: NDArray[np.int64] | None = None
 
 
 def _cell(text: str, path: str | Path, line: int, col: str) -> float:
@@ -131,9 +134,20 @@ def read_measurements_csv(path: str | Path, *, require_tips: bool = True) -> Mea
                                        f"({', '.join(header)}), got {len(rec)}")
         for k, (c, i) in enumerate(zip(cols, idx, strict=True)):
             data[r, k] = _cell(rec[i], path, ln, c)
+    mode = None
+    if "mode" in header:
+        i = header.index("mode")
+        vals = []
+        for ln, rec in rows:
+            t = rec[i].strip()
+            if t not in ("1", "+1", "-1"):
+                raise MeasurementFileError(f"{path}: line {ln}, column 'mode': expected +1 or "
+                                           f"-1 (assembly mode), got {rec[i]!r}")
+            vals.append(int(t))
+        mode = np.array(vals, dtype=np.int64)
     return Measurements(q=data[:, 0:3], tips=data[:, 3:6] if has_tips else None,
                         axes=data[:, 6:9] if has_axes else None,
-                        lines=np.array([ln for ln, _ in rows], dtype=np.int64))
+                        lines=np.array([ln for ln, _ in rows], dtype=np.int64), mode=mode)
 
 
 def _fmt_rows(a: NDArray[np.float64]) -> list[str]:
@@ -167,50 +181,29 @@ def plan_csv_text(q: NDArray[np.float64], *, comment: str = "") -> str:
     return "\n".join(lines) + "\n"
 
 
-def _toml_value(x: object) -> str:
-    if isinstance(x, str):
-        return '"' + x.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    if isinstance(x, (bool, np.bool_)):
-        return "true" if x else "false"
-    if isinstance(x, (int, np.integer)):
-        return str(int(x))
-    if isinstance(x, (float, np.floating)):
-        f = float(x)
-        if math.isnan(f):
-            return "nan"
-        if math.isinf(f):
-            return "inf" if f > 0 else "-inf"
-        return repr(f)
-    if isinstance(x, (list, tuple, np.ndarray)):
-        return "[" + ", ".join(_toml_value(v) for v in x) + "]"
-    raise TypeError(f"cannot write {type(x).__name__} to TOML")
-
-
 def calibration_toml(result: CalibrationResult) -> str:
     """TOML text of a calibration: the calibrated design and a ``[calibration]`` table.
 
     The ``[design]`` table is read back by :meth:`Design.from_toml`; ``[calibration]``
     holds the offsets, RCM, registration, noise, residuals and standard deviations.
     """
+    import tomli_w
+
     cal: dict[str, object] = {
         "frame": result.frame,
         "estimated": list(result.names),
-        "q_offset": result.q_offset.tolist(),
-        "rcm": result.rcm.tolist(),
-        "sigma": result.sigma,
-        "rms_before": result.rms_before,
-        "rms_after": result.rms_after,
+        "q_offset": [float(v) for v in result.q_offset],
+        "rcm": [float(v) for v in result.rcm],
+        "sigma": float(result.sigma),
+        "rms_before": float(result.rms_before),
+        "rms_after": float(result.rms_after),
         "rows": int(result.excluded.size),
         "rows_excluded": int(np.sum(result.excluded)),
         "rows_outliers": int(np.sum(result.outliers)),
-        "condition": result.identifiability.condition,
+        "condition": float(result.identifiability.condition),
     }
-    lines = [result.design.to_toml().rstrip("\n"), "",
-             "# athenakin calibrate: q_true = q_reading + q_offset (m); std = 1 sigma",
-             "[calibration]"]
-    lines += [f"{k} = {_toml_value(v)}" for k, v in cal.items()]
     if result.T_t_b is not None:
-        lines.append(f"T_t_b = {_toml_value(result.T_t_b.tolist())}")
-    lines += ["", "[calibration.std]"]
-    lines += [f"{n} = {_toml_value(s)}" for n, s in zip(result.names, result.std, strict=True)]
-    return "\n".join(lines) + "\n"
+        cal["T_t_b"] = [[float(v) for v in row] for row in result.T_t_b]
+    cal["std"] = {n: float(v) for n, v in zip(result.names, result.std, strict=True)}
+    return (result.design.to_toml() + "\n# athenakin calibrate: q_true = q_reading + q_offset "
+            "(m); std = 1 sigma\n" + tomli_w.dumps({"calibration": cal}))

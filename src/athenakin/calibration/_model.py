@@ -1,10 +1,10 @@
 """Measurement model of calibration: the tool tip (and axis) as a function of every parameter.
 
 The tool tip of ATHENA depends on the mechanism only through ``O_s`` and the RCM point
-``c`` (MODEL.md, "The instrument"): the instrument passes through ``O_s`` and ``c``, so with
-``u = (c - O_s) / |c - O_s|`` (the ``p > 0`` branch: the instrument is inserted through the
-RCM) the tip is ``t = O_s + L u``. ``O_s`` comes from the parallel module (Eq. 7-10) at the
-true actuator values ``q_true = q_reading + offset``:
+``c`` (docs/conventions.md, the instrument): the instrument passes through ``O_s`` and
+``c``, so with ``u = (c - O_s) / |c - O_s|`` (the ``p > 0`` branch: the instrument is
+inserted through the RCM) the tip is ``t = O_s + L u``. ``O_s`` comes from the parallel
+module (Eq. 7-10) at the true actuator values ``q_true = q_reading + offset``:
 
 * ``A = (q1, 0, 0)``, ``B = (q2, 0, 0)``, ``h = (q1 - q2) / 2``, ``x_M = (q1 + q2) / 2``;
 * in the plane ``x = x_M`` (coordinates ``(y, z)`` about ``M``), ``O_i = P`` is the
@@ -180,6 +180,12 @@ def _left_jacobian(omega: NDArray[np.float64]) -> NDArray[np.float64]:
             + (th - np.sin(th)) / th ** 3 * K @ K)
 
 
+def _rotate(R: NDArray[np.float64], J: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``R @ J`` for J of shape (n, 3, k) as one 2-D product (a batched 3x3 matmul is slow)."""
+    n, _, k = J.shape
+    return (np.swapaxes(J, 1, 2).reshape(-1, 3) @ R.T).reshape(n, k, 3).swapaxes(1, 2).copy()
+
+
 @dataclasses.dataclass(frozen=True)
 class Prediction:
     """Model output for N poses (private).
@@ -257,28 +263,30 @@ def predict(theta: NDArray[np.float64], q: NDArray[np.float64], mode: NDArray[np
 
     n = q.shape[0]
     with np.errstate(invalid="ignore", divide="ignore"):
-        # dP/d(r1, m_y, l5, q3): -A^-1 F_theta, A = [[Py, Pz], [Py - m_y, Pz - l5]]
+        # dP/d(r1, m_y, l5, q3) = -A^-1 F_theta with A = [[Py, Pz], [Py - m_y, Pz - l5]]
+        # and F_theta = [[-r1, 0, 0, 0], [0, -(Py - m_y), -(Pz - l5), -q3]] (sparse: by hand)
         inv = 1.0 / det
-        Ai = np.empty((n, 2, 2))
-        Ai[:, 0, 0], Ai[:, 0, 1] = (Pz - l5) * inv, -Pz * inv
-        Ai[:, 1, 0], Ai[:, 1, 1] = -(Py - m_y) * inv, Py * inv
-        Ft = np.zeros((n, 2, 4))
-        Ft[:, 0, 0] = -r1
-        Ft[:, 1, 1] = -(Py - m_y)
-        Ft[:, 1, 2] = -(Pz - l5)
-        Ft[:, 1, 3] = -q3
-        dP_dv = -Ai @ Ft                                   # (n, 2, 4)
-        # d(r1, m_y, l5, q3) / dz with z = (q1, q2, q3, l1, l2, l3, l4, l5) (true q)
-        dv_dz = np.zeros((n, 4, 8))
-        dv_dz[:, 0, 0], dv_dz[:, 0, 1] = -h / (2 * r1), h / (2 * r1)
-        dv_dz[:, 0, 3] = l1 / r1
-        dv_dz[:, 1, 0], dv_dz[:, 1, 1] = -h / (2 * s3), h / (2 * s3)
-        dv_dz[:, 1, 4] = 1.0
-        dv_dz[:, 1, 5] = l3 / s3
-        dv_dz[:, 2, 7] = 1.0
-        dv_dz[:, 3, 2] = 1.0
-        dP_dz = dP_dv @ dv_dz                              # (n, 2, 8)
-        dk_dz = -(l4 / (r1 * r1))[:, None] * dv_dz[:, 0, :]
+        a00, a01 = (Pz - l5) * inv, -Pz * inv
+        a10, a11 = -(Py - m_y) * inv, Py * inv
+        dP_dr1 = np.stack([a00 * r1, a10 * r1], axis=-1)               # (n, 2)
+        f1, f2, f3 = Py - m_y, Pz - l5, q3
+        dP_dmy = np.stack([a01 * f1, a11 * f1], axis=-1)
+        dP_dl5 = np.stack([a01 * f2, a11 * f2], axis=-1)
+        dP_dq3 = np.stack([a01 * f3, a11 * f3], axis=-1)
+        # chain rule to z = (q1, q2, q3, l1, l2, l3, l4, l5) (true q)
+        dr1_dh, dmy_dh = -h / r1, -h / s3
+        dP_dh = dP_dr1 * dr1_dh[:, None] + dP_dmy * dmy_dh[:, None]
+        dP_dz = np.zeros((n, 2, 8))
+        dP_dz[:, :, 0] = 0.5 * dP_dh
+        dP_dz[:, :, 1] = -0.5 * dP_dh
+        dP_dz[:, :, 2] = dP_dq3
+        dP_dz[:, :, 3] = dP_dr1 * (l1 / r1)[:, None]
+        dP_dz[:, :, 4] = dP_dmy
+        dP_dz[:, :, 5] = dP_dmy * (l3 / s3)[:, None]
+        dP_dz[:, :, 7] = dP_dl5
+        dr1_dz = np.zeros((n, 8))
+        dr1_dz[:, 0], dr1_dz[:, 1], dr1_dz[:, 3] = 0.5 * dr1_dh, -0.5 * dr1_dh, l1 / r1
+        dk_dz = -(l4 / (r1 * r1))[:, None] * dr1_dz
         dk_dz[:, 6] += 1.0 / r1
         P = np.stack([Py, Pz], axis=-1)
         dOs_dz = np.zeros((n, 3, 8))
@@ -286,11 +294,13 @@ def predict(theta: NDArray[np.float64], q: NDArray[np.float64], mode: NDArray[np
         dOs_dz[:, 1:, :] = kk[:, None, None] * dP_dz + P[:, :, None] * dk_dz[:, None, :]
         Pm = np.eye(3) - u[:, :, None] * u[:, None, :]
         G = Pm / rho[:, None, None]                        # du/dc = -du/dO_s
-    dt_dOs = np.eye(3) - L * G
+        # G @ dOs_dz without a batched 3x3 matmul (slow for tiny matrices)
+        uX = np.sum(u[:, :, None] * dOs_dz, axis=1)        # (n, 8)
+        GX = (dOs_dz - u[:, :, None] * uX[:, None, :]) / rho[:, None, None]
     J_tip = np.zeros((n, 3, len(PARAMETERS)))
     J_axis = np.zeros((n, 3, len(PARAMETERS)))
-    Jt_z = dt_dOs @ dOs_dz                                 # (n, 3, 8)
-    Ju_z = -G @ dOs_dz
+    Jt_z = dOs_dz - L * GX                                 # (I - L G) dO_s/dz, (n, 3, 8)
+    Ju_z = -GX
     for J, Jz in ((J_tip, Jt_z), (J_axis, Ju_z)):
         J[:, :, 0:5] = Jz[:, :, 3:8]                      # l1..l5
         J[:, :, 6:9] = Jz[:, :, 0:3]                      # offsets: q_true = q + offset
@@ -299,13 +309,10 @@ def predict(theta: NDArray[np.float64], q: NDArray[np.float64], mode: NDArray[np
     J_axis[:, :, 9:12] = G
     J_q = Jt_z[:, :, 0:3]
     if R0 is not None:
-        J_tip = R @ J_tip
-        J_axis = R @ J_axis
-        J_q = R @ J_q
+        J_tip, J_axis, J_q = (_rotate(R, J) for J in (J_tip, J_axis, J_q))
         Jl = _left_jacobian(theta[12:15])
-        rp = tip_b @ R.T
-        J_tip[:, :, 12:15] = -_skew(rp) @ Jl
+        J_tip[:, :, 12:15] = -(_skew(tip_b @ R.T).reshape(-1, 3) @ Jl).reshape(n, 3, 3)
         J_tip[:, :, 15:18] = np.eye(3)
-        J_axis[:, :, 12:15] = -_skew(axis) @ Jl
+        J_axis[:, :, 12:15] = -(_skew(axis).reshape(-1, 3) @ Jl).reshape(n, 3, 3)
     return Prediction(tip=tip, axis=axis, tip_base=tip_b, O_s=O_s, det=det, rho=rho,
                       J_tip=J_tip, J_axis=J_axis, J_q=J_q)

@@ -24,7 +24,7 @@ def _pyplot() -> Any:
         import matplotlib.pyplot as plt
     except ModuleNotFoundError as exc:  # pragma: no cover - depends on the install
         raise ModuleNotFoundError("calibration figures need matplotlib: pip install "
-                                  "'athenakin[plot]'", name="matplotlib") from exc
+                                  "'athenakin[calibration]'", name="matplotlib") from exc
     return plt
 
 
@@ -106,7 +106,7 @@ def plot_tip_error_map(m: TipErrorMap, *, ax: Any = None) -> Any:
 def write_report(result: CalibrationResult, path: str | Path, *, figures: bool = True,
                  encoder_resolution: float = 0.0, title: str = "athenakin calibration report"
                  ) -> list[Path]:
-    """Write a Markdown report (``.md``) with PNG figures next to it.
+    """Write a Markdown (``.md``) or HTML (``.html``) report with PNG figures next to it.
 
     Parameters
     ----------
@@ -166,5 +166,45 @@ def write_report(result: CalibrationResult, path: str | Path, *, figures: bool =
             plt.close(fig)
             out.append(png)
             lines += ["", f"![{suffix}]({png.name})"]
-    path.write_text("\n".join(lines) + "\n")
+    text = "\n".join(lines) + "\n"
+    path.write_text(_html(text, title) if path.suffix.lower() in (".html", ".htm") else text)
     return out
+
+
+def _html(markdown: str, title: str) -> str:
+    """The report's own Markdown (headings, paragraphs, one table, images) as HTML."""
+    import html
+    import re
+
+    def inline(t: str) -> str:
+        t = html.escape(t)
+        t = re.sub(r"\*\*(.+?)\*\*", r"<b>\1</b>", t)
+        return re.sub(r"`(.+?)`", r"<code>\1</code>", t)
+
+    body: list[str] = []
+    rows: list[str] = []
+    for ln in markdown.splitlines() + [""]:
+        if ln.startswith("|"):
+            if not set(ln) <= set("|-: "):
+                rows.append(ln)
+            continue
+        if rows:
+            cells = [[c.strip() for c in r.strip("|").split("|")] for r in rows]
+            head = "".join(f"<th>{inline(c)}</th>" for c in cells[0])
+            tr = "".join("<tr>" + "".join(f"<td>{inline(c)}</td>" for c in r) + "</tr>"
+                         for r in cells[1:])
+            body.append(f"<table><tr>{head}</tr>{tr}</table>")
+            rows = []
+        m = re.match(r"!\[(.*)\]\((.*)\)", ln)
+        if ln.startswith("# "):
+            body.append(f"<h1>{inline(ln[2:])}</h1>")
+        elif m:
+            body.append(f'<p><img alt="{html.escape(m[1])}" src="{html.escape(m[2])}"></p>')
+        elif ln.strip():
+            body.append(f"<p>{inline(ln)}</p>")
+    style = ("body{font-family:sans-serif;max-width:60em;margin:2em auto}"
+             "table{border-collapse:collapse}td,th{border:1px solid #bbb;padding:2px 8px;"
+             "text-align:right}img{max-width:100%}")
+    return (f"<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>{html.escape(title)}"
+            f"</title><style>{style}</style></head><body>\n" + "\n".join(body)
+            + "\n</body></html>\n")

@@ -58,6 +58,9 @@ MAX_BAD_FRACTION = 0.1
 #: Floor (m) of the residual standard deviation used to flag outliers: noise-free data
 #: leave residuals of rounding size (1e-16 m), which are no outliers.
 RESIDUAL_FLOOR = 1e-12
+#: RMS distance (m) of the measured tips from the nominal model above which a warning asks
+#: to check units, frame and set-up (a calibration corrects millimetres, not decimetres).
+UNITS_WARNING = 0.05
 #: Margin (m) of the insertion range: a pose needs ``margin < p < L - margin``.
 INSERTION_MARGIN = 1e-3
 
@@ -107,7 +110,8 @@ class CalibrationResult:
     covariance : ndarray, shape (n, n)
         ``sigma^2 (J^T J)^-1`` at the solution (``sigma`` below).
     parameters : dict of str -> float
-        Every parameter of :data:`~athenakin.calibration.PARAMETERS`, estimated or fixed.
+        Every parameter of :data:`~athenakin.calibration.PARAMETERS`, estimated or fixed
+        (``reg_r*`` relative to a first rigid fit of the nominal tips: use :attr:`T_t_b`).
     q_offset : ndarray, shape (3,)
         Actuator zero offsets: ``q_true = q_reading + q_offset``, m.
     rcm : ndarray, shape (3,)
@@ -322,8 +326,16 @@ def _setup(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | Non
         raise ValueError(f"bad_rows: expected 'exclude' or 'raise', got {bad_rows!r}")
     if not np.isfinite(axis_weight) or axis_weight <= 0:
         raise InvalidInputError(f"axis_weight: expected a positive number (m), got {axis_weight}")
-    m = _mode_array(mode, n)
     off = np.zeros(3) if q_offset is None else check_array(q_offset, "q_offset", (3,))
+    if isinstance(mode, str):
+        if mode != "auto":
+            raise InvalidInputError(f"mode: expected +1, -1, an array of them or 'auto', "
+                                    f"got {mode!r}")
+        if frame != "base":
+            raise InvalidInputError("mode='auto' needs tips in the base frame (frame='base')")
+        m = _nearest_mode(qa, ta, design, T, off)
+    else:
+        m = _mode_array(mode, n)
     chk = check_measurements(qa, design, T, mode=m, tips=ta, axes=aa, q_offset=off)
     nbad = int(np.sum(~chk.usable))
     if nbad:
@@ -352,6 +364,18 @@ def _setup(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | Non
     prob = _Problem(q=qa[use], tips=ta[use], axes=None if aa is None else aa[use], mode=m[use],
                     R0=R0, theta0=theta0, free=free, axis_weight=float(axis_weight))
     return design, prob, names, chk, m, T
+
+
+def _nearest_mode(q: NDArray[np.float64], tips: NDArray[np.float64], design: Design,
+                  T: NDArray[np.float64], off: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Per row, the assembly mode whose nominal tip is nearer the measured one (+1 on ties)."""
+    theta = parameter_vector(design, T[:3, 3], q_offset=off)
+    qs = np.nan_to_num(q)
+    with np.errstate(invalid="ignore"):
+        dist = [np.linalg.norm(predict(theta, qs, np.full(len(q), s)).tip_base - tips, axis=1)
+                for s in (1.0, -1.0)]
+    d_plus, d_minus = (np.where(np.isfinite(x), x, np.inf) for x in dist)
+    return np.where(d_minus < d_plus, -1.0, 1.0)
 
 
 def identifiability(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
@@ -445,8 +469,10 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
         of ``tips``: measurement model (c), full instrument poses.
     axis_weight : float, keyword-only
         Metres of residual per unit of axis error (:data:`DEFAULT_AXIS_WEIGHT`).
-    mode : {1, -1} or array-like of them, shape (N,), keyword-only
-        Assembly mode of each row.
+    mode : {1, -1}, array-like of them, shape (N,), or "auto", keyword-only
+        Assembly mode of each row, kept while the parameters change. ``"auto"`` (base
+        frame only): per row, the mode whose nominal forward-kinematics tip is nearer the
+        measured tip.
     q_offset : array-like, shape (3,), keyword-only
         Starting (or fixed) actuator zero offsets, m.
     registration : array-like, shape (4, 4), keyword-only
@@ -499,13 +525,21 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
     >>> abs(res.design.l1 - data.true_design.l1) < 1e-9
     True
     """
-    from scipy.optimize import least_squares
+    try:
+        from scipy.optimize import least_squares
+    except ModuleNotFoundError as exc:  # pragma: no cover - depends on the install
+        raise ModuleNotFoundError("calibrate needs scipy: pip install 'athenakin[calibration]'",
+                                  name="scipy") from exc
 
     if loss not in _LOSSES:
         raise ValueError(f"loss: expected one of {_LOSSES}, got {loss!r}")
     if on_unidentifiable not in ("raise", "warn"):
         raise ValueError(f"on_unidentifiable: expected 'raise' or 'warn', got "
                          f"{on_unidentifiable!r}")
+    for name, v in (("sigma", sigma), ("f_scale", f_scale),
+                    ("outlier_threshold", outlier_threshold)):
+        if v is not None and not (np.isfinite(v) and v > 0):
+            raise InvalidInputError(f"{name}: expected a positive number, got {v!r}")
     design, prob, names, chk, m_all, T = _setup(
         q, tips, T_b_e, design, params=params, frame=frame, axes=axes, mode=mode,
         q_offset=q_offset, registration=registration, axis_weight=axis_weight,
@@ -527,6 +561,12 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
     elif report.weak:
         warnings.warn(f"calibration: weakly identifiable (condition {report.condition:.3g}); "
                       "the standard deviations will be large", CalibrationWarning, stacklevel=2)
+    rms0 = float(np.sqrt(np.mean(np.sum(prob.evaluate(prob.theta0, False)[1][:, :3] ** 2,
+                                        axis=1))))
+    if rms0 > UNITS_WARNING:
+        warnings.warn(f"calibration: the measured tips are {rms0:.3g} m (RMS) from the nominal "
+                      "model; check the units (m), the frame and T_b_e", CalibrationWarning,
+                      stacklevel=2)
     x0 = prob.theta0[prob.free]
     x_scale = 1.0 / np.where(report.column_norms > 0, report.column_norms, 1.0)
     x_scale = x_scale / np.max(x_scale)

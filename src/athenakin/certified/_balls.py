@@ -16,9 +16,9 @@ def import_flint() -> Any:
     """Import python-flint, or say which extra installs it."""
     try:
         import flint
-    except ImportError as exc:  # pragma: no cover - exercised only without the extra
-        raise ImportError("athenakin.certified needs python-flint: "
-                          "pip install 'athenakin[certified]'") from exc
+    except ImportError as exc:
+        raise ModuleNotFoundError("athenakin.certified needs python-flint: "
+                                  "pip install 'athenakin[certified]'", name="flint") from exc
     return flint
 
 

@@ -21,11 +21,12 @@ __all__ = ["main", "entry_point", "COMMANDS"]
 #: Optional third-party packages and the extra that installs each.
 _EXTRA_OF = {"sympy": "symbolic", "matplotlib": "plot", "plotly": "plot", "imageio": "plot",
              "mujoco": "sim", "yourdfpy": "sim", "numba": "fast", "tqdm": "progress",
-             "scipy": "analysis", "ruckig": "motion", "pinocchio": "bench"}
+             "scipy": "analysis", "ruckig": "motion", "pinocchio": "bench",
+             "flint": "certified"}
 
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
 COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
-            "animate", "export", "derive", "design", "calibrate", "app"]
+            "animate", "export", "derive", "design", "calibrate", "synthesize", "app", "warmup"]
 
 
 class _Parser(argparse.ArgumentParser):

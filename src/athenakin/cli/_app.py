@@ -9,7 +9,7 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from ._common import add_design_option
+from ._common import add_design_option, add_setup_options
 
 #: Interface the app binds unless told otherwise (this machine only).
 DEFAULT_HOST = "127.0.0.1"
@@ -29,12 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                     "cannot be used is reported at start-up and in the page, and the app runs "
                     "on the reference set-up instead.")
     add_design_option(p)
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("--rcm", nargs=6, type=float, metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
-                   help="RCM frame E in the base frame: position (m) and fixed-axis x-y-z "
-                        "angles (deg) (default: the reference set-up)")
-    g.add_argument("--rcm-file", metavar="FILE", type=Path,
-                   help='JSON file {"T_b_e": 4x4 nested list}')
+    add_setup_options(p)
     p.add_argument("--trajectory", metavar="CSV", type=Path,
                    help="trajectory CSV to play back (columns q1_m, q2_m, q3_m, optional t_s)")
     p.add_argument("--host", default=DEFAULT_HOST,
@@ -49,16 +44,13 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``app``: serve until SIGINT (Ctrl-C) or SIGTERM."""
-    from ..app import _model  # noqa: F401  (numpy only)
+    from ..app import _server
     from ._common import load_rcm
 
     try:
-        from ..app._server import AthenaApp
+        _server._import_viser()
     except ModuleNotFoundError as exc:
-        if exc.name != "viser":
-            raise
-        print("athenakin app: error: this command needs the optional package 'viser': "
-              "pip install 'athenakin[app]'", file=sys.stderr)
+        print(f"athenakin app: error: {exc}", file=sys.stderr)
         return 1
     if not 0 <= args.port <= 65535:
         raise ValueError(f"--port: expected 0..65535, got {args.port}")
@@ -67,23 +59,29 @@ def run(args: argparse.Namespace) -> int:
         from ..design import Design
 
         rcm = load_rcm(args, Design.default())
-    app = AthenaApp(args.design, rcm, host=args.host, port=args.port,
-                    trajectory=args.trajectory, backend=args.backend)
-    for e in app.errors:
-        print(f"athenakin app: warning: {e}", file=sys.stderr)
-    print(f"athenakin app: serving ATHENA at {app.url} (Ctrl-C stops)", flush=True)
     stop = threading.Event()
 
     def on_signal(signum: int, frame: object) -> None:
         stop.set()
 
+    # handlers first: a Ctrl-C during the start (or right after the URL) also stops cleanly
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    app = None
     try:
+        if args.backend != "numpy":
+            print("athenakin app: starting (a first start compiles the numba kernels: up to "
+                  "a minute)", flush=True)
+        app = _server.AthenaApp(args.design, rcm, host=args.host, port=args.port,
+                                trajectory=args.trajectory, backend=args.backend)
+        for e in app.errors:
+            print(f"athenakin app: warning: {e}", file=sys.stderr)
+        print(f"athenakin app: serving ATHENA at {app.url} (Ctrl-C stops)", flush=True)
         while not stop.wait(0.2):
             pass
     finally:
         for s, h in old.items():
             signal.signal(s, h)
-        app.stop()
+        if app is not None:
+            app.stop()
     print("athenakin app: stopped", flush=True)
     return 0

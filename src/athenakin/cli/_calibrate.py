@@ -27,18 +27,20 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--params", nargs="+", metavar="NAME", default=None,
                    help="parameters to estimate: l1..l5 tool_length q1_offset q2_offset "
                         "q3_offset rcm_x rcm_y rcm_z, or groups lengths offsets rcm default "
-                        "(default: l1..l5 tool_length)")
+                        "(default: l1..l5 tool_length); give MEASUREMENTS.csv before it")
     p.add_argument("--frame", choices=("base", "tracker"), default="base",
                    help="frame of the measured tips: base (registered tracker, default) or "
                         "tracker (registration estimated too)")
-    p.add_argument("--mode", type=int, choices=(1, -1), default=1,
-                   help="assembly mode of the robot (default +1)")
+    p.add_argument("--mode", choices=("1", "-1", "auto"), default="1",
+                   help="assembly mode of the robot: 1 (default), -1, or auto (per row, the "
+                        "mode whose nominal tip is nearer the measured one; base frame); a "
+                        "'mode' column in the file overrides it per row")
     p.add_argument("--loss", choices=("linear", "soft_l1", "huber", "cauchy", "arctan"),
                    default="linear", help="robust loss against outliers (default linear)")
     p.add_argument("--encoder-resolution", type=float, default=0.0, metavar="M",
                    help="encoder quantum (m) for the tip-error map of the report")
-    p.add_argument("--report", type=Path, metavar="REPORT.md",
-                   help="report file (default: OUT with _report.md)")
+    p.add_argument("--report", type=Path, metavar="REPORT",
+                   help="report file, .md or .html (default: OUT with _report.md)")
     p.add_argument("--no-report", action="store_true", help="write no report")
     p.add_argument("--candidates", type=int, default=2000,
                    help="--plan: random candidate poses (default 2000)")
@@ -61,7 +63,8 @@ def run(args: argparse.Namespace) -> int:
         if args.measurements is not None:
             raise ValueError("--plan: give no measurement file (it writes the poses to -o)")
         plan = cal.plan_poses(args.plan, T, design, params=args.params, frame=args.frame,
-                              n_candidates=args.candidates, mode=args.mode, rng=args.seed)
+                              n_candidates=args.candidates,
+                              mode=-1 if args.mode == "-1" else 1, rng=args.seed)
         out.write_text(cal.plan_csv_text(plan.q, comment=(
             f"D-optimal for {' '.join(plan.names)}; frame {args.frame}; "
             f"log det = {plan.logdet:.4f}; condition {plan.identifiability.condition:.4g}")))
@@ -75,7 +78,9 @@ def run(args: argparse.Namespace) -> int:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", cal.CalibrationWarning)
         res = cal.calibrate(data.q, data.tips, T, design, params=args.params, frame=args.frame,
-                            axes=data.axes, mode=args.mode, loss=args.loss)
+                            axes=data.axes,
+                            mode=_mode(args.mode) if data.mode is None else data.mode,
+                            loss=args.loss)
     for w in caught:
         print(f"warning: {w.message}")
     rows = [[n, f"{a:.9g}", f"{b:.9g}", f"{(b - a) * 1e6:+.2f}", f"{s * 1e6:.2f}"]
@@ -90,3 +95,7 @@ def run(args: argparse.Namespace) -> int:
         files = cal.write_report(res, rep, encoder_resolution=args.encoder_resolution)
         print("wrote " + ", ".join(str(f) for f in files))
     return 0
+
+
+def _mode(text: str) -> int | str:
+    return text if text == "auto" else int(text)

@@ -47,11 +47,19 @@ from ..parallel._module import (
 from ..robot import _fk as _ref_fk
 from ..robot import _ik as _ref_ik
 from ..robot._common import ErrorPolicy, resolve_policy
-from ..robot._fk import SLOT_MODE, SLOT_P_SIGN, SLOT_UJOINT, SLOT_WRIST, FKMethod, FKSolution
-from ..robot._ik import IK_SINGULAR_TOL, InstrumentIK, PassiveJoints
+from ..robot._fk import FKMethod, FKSolution, check_fields, fk_solution
+from ..robot._ik import (
+    IK_SINGULAR_TOL,
+    InstrumentIK,
+    PassiveJoints,
+    check_ik_fields,
+    passive_joints,
+)
 from . import _fk_kernels as _fk
+from . import _fk_sized as _fz
 from . import _ik_kernels as _ik
 from ._threads import parallel_guard
+from . import _ik_sized as _iz
 
 __all__ = [
     "design_params",
@@ -68,7 +76,6 @@ _F8 = np.dtype(np.float64)
 _PARAMS: dict[int, tuple[Design, NDArray[np.float64]]] = {}
 _DEFAULT: list[NDArray[np.float64]] = []
 _FK_TOL_DEFAULT = np.array([TANGENT_TOL, DEGENERATE_TOL, P_ZERO_TOL, CLOSURE_TOL])
-_LABELS: dict[tuple[int, ...], tuple[NDArray[np.int64], ...]] = {}
 _MAX_CACHE = 64
 _PLAIN = {c for c in (FKSolution, PassiveJoints, InstrumentIK)
           if dataclasses.is_dataclass(c) and not hasattr(c, "__post_init__")
@@ -179,21 +186,10 @@ def _batch(**named: tuple[int, ...]) -> tuple[int, ...]:
     return broadcast_batch(**named)
 
 
-def _labels(batch: tuple[int, ...]) -> tuple[NDArray[np.int64], ...]:
-    lab = _LABELS.get(batch)
-    if lab is None:
-        if len(_LABELS) >= _MAX_CACHE:
-            _LABELS.clear()
-        lab = tuple(np.broadcast_to(a, batch + (16,))
-                    for a in (SLOT_MODE, SLOT_P_SIGN, SLOT_UJOINT, SLOT_WRIST))
-        _LABELS[batch] = lab
-    return lab
-
-
 def _check_out(out: FKSolution, batch: tuple[int, ...]) -> tuple[NDArray, ...]:
-    arrs: tuple[NDArray, ...] = (out.reason, out.valid, out.p, out.u, out.T_b_s, out.residual,
-                                 out.item_reason)
-    shapes = (batch + (16,), batch + (16,), batch + (16,), batch + (16, 5), batch + (16, 4, 4),
+    arrs: tuple[NDArray, ...] = (out.reason, out.valid, out.p, out.u, out.T_b_s_mode,
+                                 out.residual, out.item_reason)
+    shapes = (batch + (16,), batch + (16,), batch + (16,), batch + (16, 5), batch + (2, 4, 4),
               batch + (16,), batch)
     dtypes = (np.int8, np.bool_, np.float64, np.float64, np.float64, np.float64, np.int8)
     for a, s, t in zip(arrs, shapes, dtypes, strict=True):
@@ -209,8 +205,8 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
                        method: FKMethod = "closed", errors: ErrorPolicy = "auto",
                        tangent_tol: float = TANGENT_TOL,
                        degenerate_tol: float = DEGENERATE_TOL, p_zero_tol: float = P_ZERO_TOL,
-                       closure_tol: float = CLOSURE_TOL, parallel: bool = False,
-                       out: FKSolution | None = None) -> FKSolution:
+                       closure_tol: float = CLOSURE_TOL, fields: tuple[str, ...] | None = None,
+                       parallel: bool = False, out: FKSolution | None = None) -> FKSolution:
     """All 16 configurations for actuators ``q``: compiled :func:`~athenakin.forward_kinematics`.
 
     Same parameters, result and errors as the reference (``method="closed"`` is
@@ -221,8 +217,8 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     parallel : bool, keyword-only
         Spread the batch over numba's threads (``numba.set_num_threads``).
     out : FKSolution, optional, keyword-only
-        An earlier result of the same batch shape whose arrays are overwritten
-        (no allocation) and returned; its label arrays are left as they are.
+        An earlier (full) result of the same batch shape whose arrays are
+        overwritten (no allocation) and returned.
 
     Returns
     -------
@@ -238,7 +234,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     """
     if (type(q) is np.ndarray and type(T_b_e) is np.ndarray and q.dtype is _F8
             and T_b_e.dtype is _F8 and q.shape == (3,) and T_b_e.shape == (4, 4)
-            and out is None and not parallel and method == "closed"
+            and out is None and fields is None and not parallel and method == "closed"
             and (errors == "auto" or errors == "raise") and tangent_tol == TANGENT_TOL
             and degenerate_tol == DEGENERATE_TOL and p_zero_tol == P_ZERO_TOL
             and closure_tol == CLOSURE_TOL):
@@ -252,8 +248,10 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     def reference() -> FKSolution:
         return _ref_fk.forward_kinematics(
             q, T_b_e, design, method=method, errors=errors, tangent_tol=tangent_tol,
-            degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol, closure_tol=closure_tol)
+            degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol, closure_tol=closure_tol,
+            fields=fields)
 
+    names = check_fields(fields)
     if method != "closed":
         return reference()
     check_options(errors, tangent_tol=tangent_tol, degenerate_tol=degenerate_tol,
@@ -272,7 +270,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
                         check_tolerance(degenerate_tol, "degenerate_tol"),
                         check_tolerance(p_zero_tol, "p_zero_tol"),
                         check_tolerance(closure_tol, "closure_tol")])
-    if qa.ndim == 1 and Ta.ndim == 2 and out is None and not parallel:
+    if qa.ndim == 1 and Ta.ndim == 2 and out is None and names is None and not parallel:
         if errors == "auto" or errors == "raise":
             return _fk_single(qa, Ta, P, tol, True, reference)
         resolve_policy(errors, ())
@@ -281,92 +279,84 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     batch = bq if bq == bT else _batch(q=bq, T_b_e=bT)
     raise_now = resolve_policy(errors, batch)
     N = math.prod(batch)
-    if out is None:
-        reason = np.empty((N, 16), np.int8)
-        valid = np.empty((N, 16), np.bool_)
-        p = np.empty((N, 16))
-        u = np.empty((N, 16, 5))
-        Tbs = np.empty((N, 16, 4, 4))
-        res = np.empty((N, 16))
-        item = np.empty(N, np.int8)
-    else:
+    want = _fz.WANT_ALL if names is None else _want(names)
+    if out is not None:
+        if names is not None:
+            raise ValueError("out: not with fields (out= reuses the arrays of a full result)")
         reason, valid, p, u, Tbs, res, item = (
             a.reshape((N,) + a.shape[len(batch):]) for a in _check_out(out, batch))
-    kernel = _fk.fk_full_parallel if parallel else _fk.fk_full
-    with parallel_guard(parallel):
-        flags = kernel(_flat(qa, bq, batch, N, (3,)), _flat(Ta, bT, batch, N, (4, 4)), P, tol,
-                       ROTATION_TOL, reason, valid, p, u, Tbs, res, item)
+    else:
+        def alloc(bit: int, tail: tuple[int, ...], dtype: type = np.float64) -> NDArray:
+            return np.empty(((N if want & bit else 0),) + tail, dtype)
+
+        reason = alloc(_fz.WANT_REASON, (16,), np.int8)
+        valid = alloc(_fz.WANT_VALID, (16,), np.bool_)
+        p = alloc(_fz.WANT_P, (16,))
+        u = alloc(_fz.WANT_U, (16, 5))
+        Tbs = alloc(_fz.WANT_T, (2, 4, 4))
+        res = alloc(_fz.WANT_RES, (16,))
+        item = np.empty(N, np.int8)
+    qf, Tf = _flat(qa, bq, batch, N, (3,)), _flat(Ta, bT, batch, N, (4, 4))
+    if want != _fz.WANT_ALL:
+        flags = _fz.fk_select(qf, Tf, P, tol, ROTATION_TOL, want, reason, valid, p, u, Tbs, res,
+                              item)
+    else:
+        kernel = _fk.fk_full_parallel if parallel else _fk.fk_full
+        with parallel_guard(parallel):
+            flags = kernel(qf, Tf, P, tol, ROTATION_TOL, reason, valid, p, u, Tbs, res, item)
     if flags & _fk.FLAG_NONRIGID:
         check_transform(Ta, "T_b_e", allow_nonfinite=True)   # raises unless a false alarm
     if raise_now and (flags & (_fk.FLAG_Q_NONFINITE | _fk.FLAG_T_NONFINITE)
                       or (item[0] != 0 if N == 1 else item.any())):
         return reference()     # raises the reference's error
     if out is not None:
+        for k in _CACHED:          # expansions of the overwritten arrays: recompute on access
+            out.__dict__.pop(k, None)
         return out
-    if not batch:
-        reason, valid, p, u, Tbs, res, item = (reason[0], valid[0], p[0], u[0], Tbs[0], res[0],
-                                               item.reshape(()))
-    elif len(batch) > 1:
-        reason, valid, p, u, Tbs, res = (a.reshape(batch + a.shape[1:])
+    if batch != (N,):
+        reason, valid, p, u, Tbs, res = (a.reshape(batch + a.shape[1:]) if len(a) else a
                                          for a in (reason, valid, p, u, Tbs, res))
         item = item.reshape(batch)
-    mode, p_sign, ujoint, wrist = _labels(batch)
-    return _new(FKSolution, valid=valid, reason=reason, mode=mode, p_sign=p_sign, ujoint=ujoint,
-                      wrist=wrist, p=p, u=u, T_b_s=Tbs, residual=res, item_reason=item)
+    return fk_solution(names, valid=valid, reason=reason, p=p, u=u, T_b_s_mode=Tbs,
+                       residual=res, item_reason=item, tool_length=P.item(12))
 
 
-_ONE_LABELS = _labels(())
-_FK_PLAIN = FKSolution in _PLAIN
+_CACHED = ("T_b_s", "tip", "T_b_tip")
+
+
+def _want(names: tuple[str, ...]) -> int:
+    """``WANT_*`` bits of the field names."""
+    bits = {"valid": _fz.WANT_VALID, "reason": _fz.WANT_REASON, "p": _fz.WANT_P,
+            "u": _fz.WANT_U, "T_b_s": _fz.WANT_T, "residual": _fz.WANT_RES}
+    w = 0
+    for n in names:
+        w |= bits[n]
+    return w
+
+
 _object_new = object.__new__
 _object_setattr = object.__setattr__
 
 
-def _one_record_dtype() -> np.dtype:
-    """One pose's packed buffers of ``fk_one`` and, over the same bytes, its result fields.
-
-    Fields ``f`` (float64, ONE_F) and ``i`` (int8, ONE_I) are the kernel's buffers;
-    ``valid``, ``reason``, ``p``, ``u``, ``T_b_s``, ``residual`` and ``item_reason``
-    overlay them with the FKSolution's shapes and dtypes. Taking a field of a 0-d
-    structured array costs a third of a slice plus a reshape: with the allocation,
-    about 0.7 us less per call than views of two plain buffers.
-    """
-    f, i = 0, _fk.ONE_F * 8
-    fields = [("f", np.float64, (_fk.ONE_F,), f), ("i", np.int8, (_fk.ONE_I,), i),
-              ("valid", np.bool_, (16,), i + _fk.ONE_VALID),
-              ("reason", np.int8, (16,), i + _fk.ONE_REASON),
-              ("p", np.float64, (16,), f + 8 * _fk.ONE_P),
-              ("u", np.float64, (16, 5), f + 8 * _fk.ONE_U),
-              ("T_b_s", np.float64, (16, 4, 4), f + 8 * _fk.ONE_T),
-              ("residual", np.float64, (16,), f + 8 * _fk.ONE_RES),
-              ("item_reason", np.int8, (), i + _fk.ONE_ITEM)]
-    assert _fk.ONE_ITEM + 1 == _fk.ONE_I and _fk.ONE_RES + 16 == _fk.ONE_F
-    return np.dtype({"names": [x[0] for x in fields],
-                     "formats": [(x[1], x[2]) if x[2] else x[1] for x in fields],
-                     "offsets": [x[3] for x in fields], "itemsize": i + 8 * (-(-_fk.ONE_I // 8))})
+def _one_view(name: str, fbuf: NDArray[np.float64], ibuf: NDArray[np.int8]) -> NDArray:
+    """A field of a single-pose FKSolution as a view of the packed kernel buffers."""
+    if name == "p":
+        return fbuf[_fz.ONE_P:_fz.ONE_U]
+    if name == "u":
+        return fbuf[_fz.ONE_U:_fz.ONE_T].reshape(16, 5)
+    if name == "valid":
+        return ibuf[_fz.ONE_VALID:_fz.ONE_ITEM].view(np.bool_)
+    if name == "reason":
+        return ibuf[_fz.ONE_REASON:_fz.ONE_VALID]
+    if name == "T_b_s_mode":
+        return fbuf[_fz.ONE_T:_fz.ONE_RES].reshape(2, 4, 4)
+    if name == "residual":
+        return fbuf[_fz.ONE_RES:_fz.ONE_F]
+    return ibuf[_fz.ONE_ITEM:_fz.ONE_I].reshape(())     # item_reason
 
 
-_ONE_RECORD = _one_record_dtype()
-_ONE_BYTES = _ONE_RECORD.itemsize
-_ndarray = np.ndarray     # over a fresh uint8 buffer: 0.2 us less than np.empty((), _ONE_RECORD)
-
-
-def _one_solution(rec: np.ndarray) -> FKSolution:
-    """The FKSolution of one pose: fields of the 0-d record the kernel has filled.
-
-    Built as a dict literal set as the instance ``__dict__`` (what the frozen
-    dataclass's ``__init__`` leaves there, in field order), 0.3 us less than
-    ``FKSolution(**fields)``.
-    """
-    mode, p_sign, ujoint, wrist = _ONE_LABELS
-    fields = {"valid": rec["valid"], "reason": rec["reason"], "mode": mode, "p_sign": p_sign,
-              "ujoint": ujoint, "wrist": wrist, "p": rec["p"], "u": rec["u"],
-              "T_b_s": rec["T_b_s"], "residual": rec["residual"],
-              "item_reason": rec["item_reason"]}
-    if not _FK_PLAIN:
-        return FKSolution(**fields)
-    obj = _object_new(FKSolution)
-    _object_setattr(obj, "__dict__", fields)
-    return obj
+_empty = np.empty
+_I8 = np.int8
 
 
 def _fk_one_plain(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.float64]
@@ -375,34 +365,42 @@ def _fk_one_plain(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[n
 
     None (the kernel flagged the input, or the pose has no valid slot) sends the
     caller down the general path, which raises the reference's error or, for a
-    false rigidity alarm, returns the same result.
+    false rigidity alarm, returns the same result. The result's arrays are views
+    of the kernel's two packed buffers, made on first access (a control loop that
+    reads ``p``, ``u`` and ``valid`` pays for those three only).
     """
-    rec = _ndarray((), _ONE_RECORD, np.empty(_ONE_BYTES, np.uint8))
-    ibuf = rec["i"]
-    if _fk.fk_one(qa, Ta, P, _FK_TOL_DEFAULT, ROTATION_TOL, rec["f"], ibuf) or ibuf[-1]:
+    fbuf = _empty(_fz.ONE_F)
+    ibuf = _empty(_fz.ONE_I, _I8)
+    if _fz.fk_one_modes(qa, Ta, P, _FK_TOL_DEFAULT, ROTATION_TOL, fbuf, ibuf) or ibuf[-1]:
         return None
-    return _one_solution(rec)
+    obj = _object_new(FKSolution)
+    _object_setattr(obj, "__dict__", {"_lazy": (_one_view, fbuf, ibuf),
+                                      "tool_length": P.item(12)})
+    return obj
 
 
 def _fk_single(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.float64],
                tol: NDArray[np.float64], raise_now: bool, reference: Callable[[], FKSolution]
                ) -> FKSolution:
     """One pose through the packed-buffer kernel (about half the call overhead)."""
-    rec = _ndarray((), _ONE_RECORD, np.empty(_ONE_BYTES, np.uint8))
-    ibuf = rec["i"]
-    flags = _fk.fk_one(qa, Ta, P, tol, ROTATION_TOL, rec["f"], ibuf)
+    fbuf = _empty(_fz.ONE_F)
+    ibuf = _empty(_fz.ONE_I, _I8)
+    flags = _fz.fk_one_modes(qa, Ta, P, tol, ROTATION_TOL, fbuf, ibuf)
     if flags & _fk.FLAG_NONRIGID:
         check_transform(Ta, "T_b_e", allow_nonfinite=True)
     if raise_now and (flags & (_fk.FLAG_Q_NONFINITE | _fk.FLAG_T_NONFINITE) or ibuf[-1] != 0):
         return reference()
-    return _one_solution(rec)
+    obj = _object_new(FKSolution)
+    _object_setattr(obj, "__dict__", {"_lazy": (_one_view, fbuf, ibuf),
+                                      "tool_length": P.item(12)})
+    return obj
 
 
 # --- whole robot: inverse kinematics, paper form -----------------------------------------
 def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None = None, *,
                        errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
-                       closure_tol: float = CLOSURE_TOL, parallel: bool = False
-                       ) -> tuple[NDArray[np.float64], PassiveJoints]:
+                       closure_tol: float = CLOSURE_TOL, fields: tuple[str, ...] | None = None,
+                       parallel: bool = False) -> tuple[NDArray[np.float64], PassiveJoints]:
     """Actuators for a frame E and ``u3, u4, u5``: compiled :func:`~athenakin.inverse_kinematics`.
 
     Same parameters, results and errors as the reference; ``parallel=True``
@@ -415,8 +413,10 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     """
     def reference() -> tuple[NDArray[np.float64], PassiveJoints]:
         return _ref_ik.inverse_kinematics(T_b_e, u345, design, errors=errors,
-                                             singular_tol=singular_tol, closure_tol=closure_tol)
+                                          singular_tol=singular_tol, closure_tol=closure_tol,
+                                          fields=fields)
 
+    names = check_ik_fields(fields)
     if (type(errors) is str and errors in _POLICY_SET and type(singular_tol) is float
             and type(closure_tol) is float and singular_tol >= 0 and closure_tol >= 0):
         stol, ctol = singular_tol, closure_tol      # plain options: the check in brief
@@ -432,7 +432,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     batch = bT if bT == bU else _batch(T_b_e=bT, u345=bU)
     raise_now = resolve_policy(errors, batch)
     N = math.prod(batch)
-    if not batch and not parallel:
+    if not batch and not parallel and names is None:
         fbuf = np.empty(_ik.ONE_F)
         ibuf = np.empty(3, np.int64)
         flags = _ik.ik_paper_one(Ta, Ua, P, stol, ctol, ROTATION_TOL, fbuf, ibuf)
@@ -447,19 +447,32 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
             mode=ibuf[0:1].reshape(()), T_b_s=fbuf[_ik.ONE_T:_ik.ONE_RES].reshape(4, 4),
             residual=fbuf[_ik.ONE_RES], valid=ibuf[1] != 0,
             reason=ibuf[2:3].astype(np.int8).reshape(()), q_error=fbuf[_ik.ONE_QE])
+    want = _iz.WANT_ALL if names is None else _ik_want(names)
+
+    def alloc(bit: int, tail: tuple[int, ...], dtype: type = np.float64) -> NDArray:
+        return np.empty(((N if want & bit else 0),) + tail, dtype)
+
     q = np.empty((N, 3))
-    p = np.empty(N)
-    u = np.empty((N, 5))
-    mode = np.empty(N, np.int64)
-    Tbs = np.empty((N, 4, 4))
-    res = np.empty(N)
-    valid = np.empty(N, np.bool_)
-    reason = np.empty(N, np.int8)
-    qe = np.empty(N)
-    kernel = _ik.ik_paper_parallel if parallel else _ik.ik_paper
-    with parallel_guard(parallel):
-        flags = kernel(_flat(Ta, bT, batch, N, (4, 4)), _flat(Ua, bU, batch, N, (3,)), P,
-                       stol, ctol, ROTATION_TOL, q, p, u, mode, Tbs, res, valid, reason, qe)
+    p = alloc(_iz.WANT_P, ())
+    u = alloc(_iz.WANT_U, (5,))
+    mode = alloc(_iz.WANT_MODE, (), np.int64)
+    Tbs = alloc(_iz.WANT_T, (4, 4))
+    res = alloc(_iz.WANT_RES, ())
+    # reason is needed to raise; valid with it
+    valid = alloc(_iz.WANT_VALID, (), np.bool_)
+    reason = np.empty(N, np.int8) if (raise_now or want & _iz.WANT_REASON) else alloc(
+        _iz.WANT_REASON, (), np.int8)
+    Tf, Uf = _flat(Ta, bT, batch, N, (4, 4)), _flat(Ua, bU, batch, N, (3,))
+    qe = np.empty(N) if want == _iz.WANT_ALL else np.empty(0)
+    if want == _iz.WANT_ALL:
+        kernel = _ik.ik_paper_parallel if parallel else _ik.ik_paper
+        with parallel_guard(parallel):
+            flags = kernel(Tf, Uf, P, stol, ctol, ROTATION_TOL, q, p, u, mode, Tbs, res, valid,
+                           reason, qe)
+    else:
+        flags = _iz.ik_paper_select(Tf, Uf, P, stol, ctol,
+                                    ROTATION_TOL, want | (_iz.WANT_REASON if len(reason) else 0),
+                                    q, p, u, mode, Tbs, res, valid, reason)
     if flags & _fk.FLAG_NONRIGID:
         check_transform(Ta, "T_b_e", allow_nonfinite=True)
     if flags & _ik.FLAG_SLOW or (raise_now and (
@@ -468,12 +481,64 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
         return reference()
     if batch != (N,):
         q, p, u, mode, Tbs, res, valid, reason, qe = (
-            a.reshape(batch + a.shape[1:])
+            a.reshape(batch + a.shape[1:]) if len(a) == N else a
             for a in (q, p, u, mode, Tbs, res, valid, reason, qe))
         if not batch:   # numpy scalars, as the reference's ufuncs give for 0-d operands
-            p, res, valid, qe = p[()], res[()], valid[()], qe[()]
+            p, res, valid = p[()], res[()], valid[()]
+            qe = qe[()] if qe.ndim == 0 else qe
+    if names is not None:
+        return q, passive_joints(names, p=p, u=u, mode=mode, T_b_s=Tbs, residual=res,
+                                 valid=valid, reason=reason)
     return q, _new(PassiveJoints, p=p, u=u, mode=mode, T_b_s=Tbs, residual=res, valid=valid,
-                            reason=reason, q_error=qe)
+                   reason=reason, q_error=qe)
+
+
+def _ik_want(names: tuple[str, ...]) -> int:
+    """``WANT_*`` bits of :mod:`._ik_sized` for the field names."""
+    bits = {"p": _iz.WANT_P, "u": _iz.WANT_U, "mode": _iz.WANT_MODE, "T_b_s": _iz.WANT_T,
+            "residual": _iz.WANT_RES, "valid": _iz.WANT_VALID, "reason": _iz.WANT_REASON}
+    w = 0
+    for n in names:
+        w |= bits[n]
+    return w
+
+
+def _ik_one_plain(Ta: NDArray[np.float64], Ua: NDArray[np.float64], P: NDArray[np.float64]
+                  ) -> tuple[NDArray[np.float64], PassiveJoints] | None:
+    """One item, default tolerances: the result, or None if anything is off (lean path).
+
+    For C-contiguous writable float64 ``T_b_e`` (4, 4) and ``u345`` (3,). None (an
+    input flag, or no solution) sends the caller down the general path, which
+    raises the reference's error or recomputes.
+    """
+    fbuf = np.empty(_ik.ONE_F)
+    ibuf = np.empty(3, np.int64)
+    if _ik.ik_paper_one(Ta, Ua, P, IK_SINGULAR_TOL, CLOSURE_TOL, ROTATION_TOL, fbuf, ibuf) \
+            or ibuf[2]:
+        return None
+    return fbuf[_ik.ONE_Q:_ik.ONE_P], _new(
+        PassiveJoints, p=fbuf[_ik.ONE_P], u=fbuf[_ik.ONE_U:_ik.ONE_T],
+        mode=ibuf[0:1].reshape(()), T_b_s=fbuf[_ik.ONE_T:_ik.ONE_RES].reshape(4, 4),
+        residual=fbuf[_ik.ONE_RES], valid=ibuf[1] != 0,
+        reason=ibuf[2:3].astype(np.int8).reshape(()), q_error=fbuf[_ik.ONE_QE])
+
+
+def _line_one_plain(Ta: NDArray[np.float64], Va: NDArray[np.float64], p: float, kind: int,
+                    P: NDArray[np.float64]) -> tuple[NDArray[np.float64], InstrumentIK] | None:
+    """One controller-form item (``kind`` 0: direction and ``p``, 1: tool tip), lean path.
+
+    None when an input flag is set or the item has no solution (the general path
+    then raises the reference's error).
+    """
+    fbuf = np.empty(_ik.LINE_F)
+    ibuf = np.empty(3, np.int64)
+    if _ik.ik_line_one_packed(Ta, Va, p, P, kind, ROTATION_TOL, fbuf, ibuf) or ibuf[2]:
+        return None
+    return fbuf[_ik.LINE_Q:_ik.LINE_P], _new(
+        InstrumentIK, p=fbuf[_ik.LINE_P],
+        direction_b=fbuf[_ik.LINE_D:_ik.LINE_O], O_s=fbuf[_ik.LINE_O:_ik.LINE_QE],
+        mode=ibuf[0:1].reshape(()), valid=ibuf[1] != 0,
+        reason=ibuf[2:3].astype(np.int8).reshape(()), q_error=fbuf[_ik.LINE_QE])
 
 
 # --- whole robot: controller forms -------------------------------------------------------

@@ -2,7 +2,9 @@
 
 from ..design import Design
 from ._fk import (
+    FK_FIELDS,
     SLOT_MODE,
+    SLOT_MODE_INDEX,
     SLOT_P_SIGN,
     SLOT_UJOINT,
     SLOT_WRIST,
@@ -12,6 +14,7 @@ from ._fk import (
 )
 from ._ik import (
     IK_Q_ERROR_MAX,
+    IK_FIELDS,
     IK_SINGULAR_TOL,
     InstrumentIK,
     PassiveJoints,
@@ -25,8 +28,10 @@ from ._setup import REFERENCE_DIRECTION_B, REFERENCE_P, REFERENCE_Q, default_rcm
 
 __all__ = [
     "Design",
+    "FK_FIELDS",
     "FKSolution",
     "IK_Q_ERROR_MAX",
+    "IK_FIELDS",
     "IK_SINGULAR_TOL",
     "InstrumentIK",
     "PassiveJoints",
@@ -34,6 +39,7 @@ __all__ = [
     "REFERENCE_P",
     "REFERENCE_Q",
     "SLOT_MODE",
+    "SLOT_MODE_INDEX",
     "SLOT_P_SIGN",
     "SLOT_UJOINT",
     "SLOT_WRIST",

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Callable
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -18,6 +19,7 @@ from ..chain._ups import (
     SERIAL_P_SIGN,
     SERIAL_UJOINT,
     SERIAL_WRIST,
+    rotation_u_pair,
     ups_solutions,
 )
 from ..design import Design
@@ -32,8 +34,8 @@ from ._common import (
     resolve_policy,
 )
 
-__all__ = ["FKSolution", "forward_kinematics", "SLOT_MODE", "SLOT_P_SIGN", "SLOT_UJOINT",
-           "SLOT_WRIST", "slot_index"]
+__all__ = ["FKSolution", "forward_kinematics", "SLOT_MODE", "SLOT_MODE_INDEX", "SLOT_P_SIGN",
+           "SLOT_UJOINT", "SLOT_WRIST", "FK_FIELDS", "check_fields", "slot_index"]
 
 #: Labels of the 16 slots ``k = 8 m + 4 r + 2 b + w``: assembly mode, sign of p,
 #: sign of sin u2 (U-joint branch), sign of sin u4 (spherical-joint branch).
@@ -51,7 +53,16 @@ def slot_index(mode: int, p_sign: int, ujoint: int, wrist: int) -> int:
     return 8 * (mode == -1) + 4 * (p_sign == -1) + 2 * (ujoint == -1) + (wrist == -1)
 
 
-@dataclasses.dataclass(frozen=True)
+#: Index of each slot's assembly mode in the per-mode axis of :attr:`FKSolution.T_b_s_mode`
+#: (0: mode +1, 1: mode -1).
+SLOT_MODE_INDEX = np.repeat(np.arange(2), 8)
+
+#: The arrays an :class:`FKSolution` can hold, for ``forward_kinematics(..., fields=...)``
+#: (``"T_b_s"`` is stored per mode, :attr:`FKSolution.T_b_s_mode`).
+FK_FIELDS = ("valid", "reason", "p", "u", "T_b_s", "residual")
+
+
+@dataclasses.dataclass(frozen=True, repr=False)
 class FKSolution:
     """The 16 forward-kinematics slots of a batch (leading shape ``...``).
 
@@ -61,43 +72,177 @@ class FKSolution:
     branch ``w`` (0: ``sin u4 > 0``). Invalid slots hold NaN; :attr:`reason`
     says why.
 
+    Values that depend only on the assembly mode are stored once per mode
+    (:attr:`T_b_s_mode`); the per-slot :attr:`T_b_s` of earlier versions is a
+    property that expands them on first access. A result computed with
+    ``fields=(...)`` holds only those arrays (and ``item_reason``); reading
+    another one raises an ``AttributeError`` that says so.
+
     Attributes
     ----------
     valid : ndarray of bool, shape (..., 16)
         Which slots hold a real, isolated solution verified by closure.
     reason : ndarray of int8, shape (..., 16)
         :class:`~athenakin.errors.Reason` per slot (0 where valid).
-    mode, p_sign, ujoint, wrist : ndarray of int, shape (..., 16)
-        Slot labels (+1 / -1).
     p : ndarray, shape (..., 16)
         Passive prismatic joint (signed distance ``O_s`` -> RCM), m.
     u : ndarray, shape (..., 16, 5)
         ``u1..u5``, radians in (-pi, pi].
-    T_b_s : ndarray, shape (..., 16, 4, 4)
-        Pose of ``O_s`` (Eq. 10) of each slot's assembly mode.
+    T_b_s_mode : ndarray, shape (..., 2, 4, 4)
+        Pose of ``O_s`` (Eq. 10) per assembly mode (index 0: mode +1, 1: mode -1;
+        NaN where the parallel module cannot take that mode).
     residual : ndarray, shape (..., 16)
         Closure residual ``max(max|R - R*|, max|t - t*| / 1 m)`` of the chain
         ``T_s_e(p, u)`` against the target ``T_b_s^-1 @ T_b_e``, both in the frame ``O_s``.
     item_reason : ndarray of int8, shape (...)
         0 where the item has at least one valid slot, else why it has none.
+    tool_length : float
+        ``design.tool_length`` (m), for :attr:`tip` and :attr:`T_b_tip`.
+
+    Properties: :attr:`T_b_s` (..., 16, 4, 4), :attr:`tip` (..., 16, 3),
+    :attr:`T_b_tip` (..., 16, 4, 4), :attr:`mode`, :attr:`p_sign`, :attr:`ujoint`,
+    :attr:`wrist` (..., 16), :attr:`n_solutions` (...).
     """
 
     valid: NDArray[np.bool_]
     reason: NDArray[np.int8]
-    mode: NDArray[np.int64]
-    p_sign: NDArray[np.int64]
-    ujoint: NDArray[np.int64]
-    wrist: NDArray[np.int64]
     p: NDArray[np.float64]
     u: NDArray[np.float64]
-    T_b_s: NDArray[np.float64]
+    T_b_s_mode: NDArray[np.float64]
     residual: NDArray[np.float64]
     item_reason: NDArray[np.int8]
+    tool_length: float
+
+    def __getattr__(self, name: str) -> Any:
+        # reached only for a field not in __dict__: one that a single-pose result of the
+        # compiled path materialises on first access (``_lazy = (view, *buffers)``: the
+        # kernel's packed buffers), or one that a fields=(...) call left out
+        lazy = self.__dict__.get("_lazy")
+        if lazy is not None and name in _LAZY_FIELDS:
+            value = lazy[0](name, *lazy[1:])
+            self.__dict__[name] = value
+            return value
+        if name in _FIELD_ATTRS:
+            raise AttributeError(
+                f"FKSolution.{name} was not computed: this result was asked for with "
+                f"fields={tuple(f for f in FK_FIELDS if _FIELD_ATTRS[f] in self.__dict__)}; "
+                f"call forward_kinematics(..., fields=None) (all) or add {name!r}")
+        raise AttributeError(f"'FKSolution' object has no attribute {name!r}")
+
+    def __repr__(self) -> str:
+        have = []
+        for k in _LAZY_FIELDS:
+            try:
+                have.append(f"{k}: {np.shape(getattr(self, k))}")
+            except AttributeError:
+                pass
+        return f"FKSolution(batch {np.shape(self.item_reason)}; {', '.join(have)})"
 
     @property
     def n_solutions(self) -> NDArray[np.int64]:
         """Number of valid slots per item, shape (...)."""
         return np.sum(self.valid, axis=-1)
+
+    def _labels(self, a: NDArray[np.int64]) -> NDArray[np.int64]:
+        return np.broadcast_to(a, np.shape(self.item_reason) + (16,))
+
+    @property
+    def mode(self) -> NDArray[np.int64]:
+        """Assembly mode of each slot (+1 / -1), shape (..., 16) (read-only view)."""
+        return self._labels(SLOT_MODE)
+
+    @property
+    def p_sign(self) -> NDArray[np.int64]:
+        """Sign of the root ``p`` of each slot (+1 / -1), shape (..., 16)."""
+        return self._labels(SLOT_P_SIGN)
+
+    @property
+    def ujoint(self) -> NDArray[np.int64]:
+        """U-joint branch (sign of ``sin u2``) of each slot, shape (..., 16)."""
+        return self._labels(SLOT_UJOINT)
+
+    @property
+    def wrist(self) -> NDArray[np.int64]:
+        """Spherical-joint branch (sign of ``sin u4``) of each slot, shape (..., 16)."""
+        return self._labels(SLOT_WRIST)
+
+    @functools.cached_property
+    def T_b_s(self) -> NDArray[np.float64]:
+        """Pose of ``O_s`` of each slot's assembly mode, shape (..., 16, 4, 4).
+
+        Expanded from :attr:`T_b_s_mode` on first access (then cached): slot ``k``
+        holds ``T_b_s_mode[..., SLOT_MODE_INDEX[k], :, :]``.
+        """
+        return np.take(self.T_b_s_mode, SLOT_MODE_INDEX, axis=-3)
+
+    @functools.cached_property
+    def T_b_tip(self) -> NDArray[np.float64]:
+        """Instrument frame at the tool tip of each slot, base frame, shape (..., 16, 4, 4).
+
+        Rotation ``R_b_s R(u1, u2)`` (the instrument link, whose z-axis ``z3`` is the
+        instrument axis), origin :attr:`tip`. NaN where the slot is invalid.
+        Computed on first access (then cached).
+        """
+        return _tip_frames(self.T_b_s_mode, self.u, self.tool_length)
+
+    @functools.cached_property
+    def tip(self) -> NDArray[np.float64]:
+        """Tool tip of each slot, base frame, m, shape (..., 16, 3).
+
+        ``O_s + tool_length * z3`` with ``z3 = R_b_s R(u1, u2) e_z`` the instrument
+        axis of the slot (``O_s + p z3`` is the RCM); the point that
+        :func:`~athenakin.q_from_tool_tip` inverts. NaN where the slot is invalid.
+        """
+        return self.T_b_tip[..., :3, 3]
+
+
+_FIELD_ATTRS = {f: ("T_b_s_mode" if f == "T_b_s" else f) for f in FK_FIELDS}
+_LAZY_FIELDS = ("valid", "reason", "p", "u", "T_b_s_mode", "residual", "item_reason")
+_FIELD_ATTRS.update({v: v for v in _FIELD_ATTRS.values()})
+
+
+def _tip_frames(T_b_s_mode: NDArray[np.float64], u: NDArray[np.float64], L: float
+                ) -> NDArray[np.float64]:
+    """``T_b_tip`` (..., 16, 4, 4) from the per-mode ``T_b_s`` and the slots' ``u``."""
+    R_b_s = np.take(T_b_s_mode[..., :3, :3], SLOT_MODE_INDEX, axis=-3)     # (..., 16, 3, 3)
+    O_s = np.take(T_b_s_mode[..., :3, 3], SLOT_MODE_INDEX, axis=-2)        # (..., 16, 3)
+    c1, s1 = np.cos(u[..., 0]), np.sin(u[..., 0])
+    c2, s2 = np.cos(u[..., 1]), np.sin(u[..., 1])
+    R_s_3 = rotation_u_pair(c1, s1, c2, s2)
+    R = R_b_s @ R_s_3
+    out = np.zeros(R.shape[:-2] + (4, 4))
+    out[..., :3, :3] = R
+    out[..., :3, 3] = O_s + L * R[..., :, 2]
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def check_fields(fields: str | tuple[str, ...] | list[str] | None) -> tuple[str, ...] | None:
+    """Validate ``fields`` of :func:`forward_kinematics`: None (all) or names in :data:`FK_FIELDS`.
+
+    Raises
+    ------
+    ValueError
+        A name that is not in :data:`FK_FIELDS`.
+    """
+    if fields is None:
+        return None
+    names = (fields,) if isinstance(fields, str) else tuple(fields)
+    bad = [f for f in names if f not in FK_FIELDS]
+    if bad:
+        raise ValueError(f"fields: expected names among {FK_FIELDS}, got {bad}")
+    return names
+
+
+def fk_solution(fields: tuple[str, ...] | None, **arrays: Any) -> FKSolution:
+    """An :class:`FKSolution` of ``arrays``, or of only ``fields`` of them and ``item_reason``."""
+    if fields is not None:
+        keep = {_FIELD_ATTRS[f] for f in fields} | {"item_reason", "tool_length"}
+        arrays = {k: v for k, v in arrays.items() if k in keep}
+        obj = object.__new__(FKSolution)
+        object.__setattr__(obj, "__dict__", arrays)
+        return obj
+    return FKSolution(**arrays)
 
 
 FKMethod = Literal["closed", "algebraic"]
@@ -108,6 +253,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
                        method: FKMethod = "closed", errors: ErrorPolicy = "auto",
                        tangent_tol: float = TANGENT_TOL, degenerate_tol: float = DEGENERATE_TOL,
                        p_zero_tol: float = P_ZERO_TOL, closure_tol: float = CLOSURE_TOL,
+                       fields: tuple[str, ...] | None = None,
                        backend: ReferenceBackend = "numpy") -> FKSolution:
     """All (up to) 16 configurations of the robot for actuator values ``q`` (Section 3).
 
@@ -133,6 +279,11 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     tangent_tol, degenerate_tol, p_zero_tol, closure_tol : float, keyword-only
         See :data:`~athenakin.parallel.TANGENT_TOL`, :data:`~athenakin.chain.DEGENERATE_TOL`,
         :data:`~athenakin.chain.P_ZERO_TOL`, :data:`~athenakin.chain.CLOSURE_TOL`.
+    fields : tuple of str, optional, keyword-only
+        Compute and return only these arrays (names in :data:`FK_FIELDS`, e.g.
+        ``("p", "u", "valid")`` for a sweep); ``None`` (default): all. The result
+        always holds ``item_reason``; reading an array left out raises
+        ``AttributeError``.
     backend : {"numpy"}, keyword-only
         This is the numpy reference (the oracle of the compiled kernels); the public
         function of the same name in :mod:`athenakin` chooses the backend
@@ -160,6 +311,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     if method not in _METHODS:
         raise ValueError(f"method: expected one of {_METHODS}, got {method!r}")
     check_reference_backend(backend, "forward_kinematics")
+    names = check_fields(fields)
     tangent_tol, degenerate_tol, p_zero_tol, closure_tol = check_options(
         errors, tangent_tol=tangent_tol, degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
         closure_tol=closure_tol)
@@ -171,7 +323,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
         from ..symbolic._solver import serial_step_algebraic as step
     p, u, sreason, residual = step(par, T, degenerate_tol=degenerate_tol,
                                    p_zero_tol=p_zero_tol, closure_tol=closure_tol)
-    return _assemble(par, p, u, sreason, residual, q, batch, raise_now, design)
+    return _assemble(par, p, u, sreason, residual, q, batch, raise_now, design, names)
 
 
 SerialStep = Callable[..., tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int8],
@@ -212,25 +364,21 @@ def _serial_closed_form(par: ParallelSolution, T: NDArray[np.float64], *, degene
 
 def _assemble(par: ParallelSolution, p: NDArray[np.float64], u: NDArray[np.float64],
               sreason: NDArray[np.int8], residual: NDArray[np.float64], q: NDArray[np.float64],
-              batch: tuple[int, ...], raise_now: bool, design: Design) -> FKSolution:
+              batch: tuple[int, ...], raise_now: bool, design: Design,
+              fields: tuple[str, ...] | None = None) -> FKSolution:
     """Combine the parallel module's 2 modes with the serial step's (..., 2, 8) slots."""
     preason = np.broadcast_to(par.reason[..., None], sreason.shape)
     residual = np.maximum(residual, par.residual[..., None])   # merged modes (issue 13)
     reason = np.where(preason != 0, preason, sreason).astype(np.int8).reshape(batch + (16,))
     valid = reason == 0
     nan = np.where(valid, 1.0, np.nan)
-    T_b_s = np.broadcast_to(par.T_b_s[..., :, None, :, :], batch + (2, 8, 4, 4))
-    T_b_s = T_b_s.reshape(batch + (16, 4, 4))
     item = item_reason_from_slots(valid, reason)
     if raise_now:
         raise_first_failure(item, "forward kinematics", {"q": q}, design=design,
                             q_of=lambda idx: q[idx])
-
-    def lab(a: NDArray[np.int64]) -> NDArray[np.int64]:
-        return np.broadcast_to(a, batch + (16,))
-
-    return FKSolution(
-        valid=valid, reason=reason, mode=lab(SLOT_MODE), p_sign=lab(SLOT_P_SIGN),
-        ujoint=lab(SLOT_UJOINT), wrist=lab(SLOT_WRIST),
-        p=p.reshape(batch + (16,)) * nan, u=u.reshape(batch + (16, 5)) * nan[..., None],
-        T_b_s=T_b_s, residual=residual.reshape(batch + (16,)) * nan, item_reason=item)
+    return fk_solution(
+        fields, valid=valid, reason=reason, p=p.reshape(batch + (16,)) * nan,
+        u=u.reshape(batch + (16, 5)) * nan[..., None],
+        T_b_s_mode=np.array(np.broadcast_to(par.T_b_s, batch + (2, 4, 4))),
+        residual=residual.reshape(batch + (16,)) * nan, item_reason=item,
+        tool_length=float(design.tool_length))

@@ -18,6 +18,7 @@ base x-axis (``cos u1 = 0``) or the instrument is perpendicular to ``y_s``
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -44,7 +45,10 @@ from ._common import (
 )
 
 __all__ = [
+    "IK_FIELDS",
     "IK_SINGULAR_TOL",
+    "check_ik_fields",
+    "passive_joints",
     "PassiveJoints",
     "InstrumentIK",
     "inverse_kinematics",
@@ -64,6 +68,10 @@ IK_SINGULAR_TOL = 1e-12
 #: item is flagged ``IK_SINGULAR`` instead. At ``q1 = q2`` the bound is about 1e-6 m
 #: (``dq ~ sqrt(dO_s)``): those poses are solved, not flagged.
 IK_Q_ERROR_MAX = 1e-5
+
+
+#: The arrays a :class:`PassiveJoints` can hold, for ``inverse_kinematics(..., fields=...)``.
+IK_FIELDS = ("p", "u", "mode", "T_b_s", "residual", "valid", "reason")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -90,6 +98,9 @@ class PassiveJoints:
         amplified near the singular sets (``1 / (|cos u1| |sin u1 sin u2|)`` for ``p``,
         ``sqrt`` at ``q1 = q2``). NaN where invalid; never above :data:`IK_Q_ERROR_MAX`
         in a valid item (beyond it the item is ``IK_SINGULAR``).
+
+    A result computed with ``fields=(...)`` holds only those arrays; reading
+    another one raises an ``AttributeError`` that says so.
     """
 
     p: NDArray[np.float64]
@@ -101,6 +112,15 @@ class PassiveJoints:
     reason: NDArray[np.int8]
     q_error: NDArray[np.float64]
 
+    def __getattr__(self, name: str) -> Any:
+        # only reached for a field that a fields=(...) call left out
+        if name in IK_FIELDS:
+            raise AttributeError(
+                f"PassiveJoints.{name} was not computed: this result was asked for with "
+                f"fields={tuple(f for f in IK_FIELDS if f in self.__dict__)}; call "
+                f"inverse_kinematics(..., fields=None) (all) or add {name!r}")
+        raise AttributeError(f"'PassiveJoints' object has no attribute {name!r}")
+
     @property
     def u1(self) -> NDArray[np.float64]:
         """U-joint angle ``u1``, shape (...)."""
@@ -110,6 +130,33 @@ class PassiveJoints:
     def u2(self) -> NDArray[np.float64]:
         """U-joint angle ``u2``, shape (...)."""
         return self.u[..., 1]
+
+
+def check_ik_fields(fields: str | tuple[str, ...] | list[str] | None
+                    ) -> tuple[str, ...] | None:
+    """Validate ``fields`` of :func:`inverse_kinematics`: None (all) or names in :data:`IK_FIELDS`.
+
+    Raises
+    ------
+    ValueError
+        A name that is not in :data:`IK_FIELDS`.
+    """
+    if fields is None:
+        return None
+    names = (fields,) if isinstance(fields, str) else tuple(fields)
+    bad = [f for f in names if f not in IK_FIELDS]
+    if bad:
+        raise ValueError(f"fields: expected names among {IK_FIELDS}, got {bad}")
+    return names
+
+
+def passive_joints(fields: tuple[str, ...] | None, **arrays: Any) -> PassiveJoints:
+    """A :class:`PassiveJoints` of ``arrays``, or of only ``fields`` of them."""
+    if fields is not None:
+        obj = object.__new__(PassiveJoints)
+        object.__setattr__(obj, "__dict__", {k: v for k, v in arrays.items() if k in fields})
+        return obj
+    return PassiveJoints(**arrays)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -144,7 +191,8 @@ class InstrumentIK:
 
 def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None = None, *,
                        errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
-                       closure_tol: float = CLOSURE_TOL, backend: ReferenceBackend = "numpy"
+                       closure_tol: float = CLOSURE_TOL, fields: tuple[str, ...] | None = None,
+                       backend: ReferenceBackend = "numpy"
                        ) -> tuple[NDArray[np.float64], PassiveJoints]:
     """Actuator values for a given RCM frame and spherical-joint angles (paper Section 4).
 
@@ -161,6 +209,9 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
         See :data:`IK_SINGULAR_TOL`.
     closure_tol : float, keyword-only
         Largest closure residual accepted.
+    fields : tuple of str, optional, keyword-only
+        Compute and return only these arrays of ``passive`` (names in
+        :data:`IK_FIELDS`; ``q`` is always returned); ``None`` (default): all.
     backend : {"numpy"}, keyword-only
         This is the numpy reference (the oracle of the compiled kernels); the public
         function of the same name in :mod:`athenakin` chooses the backend
@@ -191,6 +242,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     True
     """
     check_reference_backend(backend, "inverse_kinematics")
+    names = check_ik_fields(fields)
     design, T, u345, batch, raise_now, singular_tol, closure_tol = check_ik_arguments(
         T_b_e, u345, design, errors, singular_tol, closure_tol)
     T = np.broadcast_to(T, batch + (4, 4))
@@ -245,9 +297,10 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
                             detail_of=lambda idx: _detail(int(reason[idx]), O_s[idx], design))
     nan = np.where(valid, 1.0, np.nan)
     q = pik.q * nan[..., None]
-    passive = PassiveJoints(p=p * nan, u=u * nan[..., None], mode=np.where(valid, pik.mode, 0),
-                            T_b_s=T_b_s * nan[..., None, None], residual=res * nan,
-                            valid=valid, reason=reason, q_error=pik.q_error * nan)
+    passive = passive_joints(names, p=p * nan, u=u * nan[..., None],
+                             mode=np.where(valid, pik.mode, 0),
+                             T_b_s=T_b_s * nan[..., None, None], residual=res * nan,
+                             valid=valid, reason=reason, q_error=pik.q_error * nan)
     return q, passive
 
 

@@ -21,10 +21,9 @@ CONDITION_ORDER = ("circles_tangent", "d_on_rail", "k1_degenerate", "ab_coincide
                    "k2_degenerate", "stroke_limit", "p_zero", "ujoint", "wrist", "ik_cos_u1",
                    "ik_sin_u1_sin_u2", "tip_at_rcm")
 
-_OPTS = {"cache": True, "nogil": True, "fastmath": False, "error_model": "numpy"}
 
 
-@njit(**_OPTS)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _cond3(J):  # type: ignore[no-untyped-def]
     """2-norm condition number of a 3 x 3 matrix from the eigenvalues of J^T J."""
     a11 = J[0, 0] * J[0, 0] + J[1, 0] * J[1, 0] + J[2, 0] * J[2, 0]
@@ -57,19 +56,52 @@ def _cond3(J):  # type: ignore[no-untyped-def]
     return math.sqrt(e1 / e3)
 
 
-@njit(**_OPTS)
-def reduce_samples(q, mode, valid, O_s, rcm, d_e, J_tip, J_par, lengths, L, lo, hi,  # type: ignore[no-untyped-def]
-                   resolution):
-    """Reduce one design's samples.
+@njit(cache=True, nogil=True, error_model="numpy")
+def _kappa_f2(J):  # type: ignore[no-untyped-def]
+    """Squared Frobenius condition number ``|J|_F^2 |adj J|_F^2 / det(J)^2`` of a 3 x 3 matrix.
 
-    Returns ``counts (3,)`` (reachable, mode +1, mode -1), ``margin (12,)`` and
-    ``arg_margin (12,)`` (min of each condition and its sample), ``cond (2,)`` and
-    ``arg_cond (2,)`` (max estimated condition of the tip and parallel Jacobians),
-    ``q_lo (3,)``, ``q_hi (3,)`` (actuator ranges), ``tip (2,)`` (max and sum of the
-    worst-case tip error).
+    ``kappa_2 <= kappa_F <= 3 kappa_2`` (3 x 3), so the sample of the largest
+    ``kappa_2`` is among those with ``kappa_F >= max(kappa_F) / 3``.
     """
-    l1, l2, l3, l4, l5 = lengths[0], lengths[1], lengths[2], lengths[3], lengths[4]
-    n = q.shape[0]
+    a, b, c = J[0, 0], J[0, 1], J[0, 2]
+    d, e, f = J[1, 0], J[1, 1], J[1, 2]
+    g, h, i = J[2, 0], J[2, 1], J[2, 2]
+    m0 = e * i - f * h
+    m1 = d * i - f * g
+    m2 = d * h - e * g
+    m3 = b * i - c * h
+    m4 = a * i - c * g
+    m5 = a * h - b * g
+    m6 = b * f - c * e
+    m7 = a * f - c * d
+    m8 = a * e - b * d
+    det = a * m0 - b * m1 + c * m2
+    fro = a * a + b * b + c * c + d * d + e * e + f * f + g * g + h * h + i * i
+    adj = (m0 * m0 + m1 * m1 + m2 * m2 + m3 * m3 + m4 * m4 + m5 * m5 + m6 * m6 + m7 * m7
+           + m8 * m8)
+    num = fro * adj
+    if not math.isfinite(num):
+        return math.inf
+    if det == 0.0:
+        return math.inf
+    return num / (det * det)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def reduce_samples(idx, q, mode, R, rcm, d_e, depth, J_tip, J_par, lengths, L, lo,  # type: ignore[no-untyped-def]
+                   hi, resolution):
+    """Reduce one design's reachable samples ``idx`` (rows of ``J_tip``, ``J_par``).
+
+    ``q``, ``mode`` are indexed like ``J_tip`` (reachable samples only); ``d_e``,
+    ``depth`` like the task samples (``idx`` maps the first onto the second).
+    Returns ``counts (3,)`` (reachable, mode +1, mode -1), ``margin (12,)`` and
+    ``arg_margin (12,)`` (min of each condition and its row), ``cond (2,)`` and
+    ``arg_cond (2,)`` (largest condition number of the tip and parallel Jacobians,
+    closed-form eigenvalues, and its row), ``q_lo (3,)``, ``q_hi (3,)`` (actuator
+    ranges), ``tip (2,)`` (max and sum of the worst-case tip error).
+    """
+    l1, l2, l3, l5 = lengths[0], lengths[1], lengths[2], lengths[4]
+    n = idx.shape[0]
     counts = np.zeros(3, np.int64)
     margin = np.full(12, np.inf)
     arg_margin = np.full(12, -1, np.int64)
@@ -79,15 +111,16 @@ def reduce_samples(q, mode, valid, O_s, rcm, d_e, J_tip, J_par, lengths, L, lo, 
     q_hi = np.full(3, -np.inf)
     tip = np.zeros(2)
     v = np.empty(12)
-    for k in range(n):
-        if not valid[k]:
-            continue
+    kf = np.empty((2, n))
+    kf_max = np.zeros(2)
+    for j in range(n):
+        k = idx[j]
         counts[0] += 1
-        if mode[k] > 0:
+        if mode[j] > 0:
             counts[1] += 1
         else:
             counts[2] += 1
-        q1, q2, q3 = q[k, 0], q[k, 1], q[k, 2]
+        q1, q2, q3 = q[j, 0], q[j, 1], q[j, 2]
         h = 0.5 * (q1 - q2)
         ah = abs(h)
         r1 = math.sqrt(max(l1 * l1 - h * h, 0.0))
@@ -100,46 +133,58 @@ def reduce_samples(q, mode, valid, O_s, rcm, d_e, J_tip, J_par, lengths, L, lo, 
         v[4] = abs(q3)
         st = math.inf
         for i in range(3):
-            st = min(st, q[k, i] - lo[i], hi[i] - q[k, i])
-            q_lo[i] = min(q_lo[i], q[k, i])
-            q_hi[i] = max(q_hi[i], q[k, i])
+            st = min(st, q[j, i] - lo[i], hi[i] - q[j, i])
+            q_lo[i] = min(q_lo[i], q[j, i])
+            q_hi[i] = max(q_hi[i], q[j, i])
         v[5] = st
-        # instrument line in the frame of O_s: R_b_s = Rx(theta), z_s radial from M
-        oy, oz = O_s[k, 1], O_s[k, 2]
+        # O_s = rcm - (L - depth) d_b; the instrument line in the frame of O_s,
+        # R_b_s = Rx(theta) with z_s radial from M (docs/singularities.md)
+        de0, de1, de2 = d_e[k, 0], d_e[k, 1], d_e[k, 2]
+        pp = L - depth[k]
+        rbx = pp * (R[0, 0] * de0 + R[0, 1] * de1 + R[0, 2] * de2)
+        rby = pp * (R[1, 0] * de0 + R[1, 1] * de1 + R[1, 2] * de2)
+        rbz = pp * (R[2, 0] * de0 + R[2, 1] * de1 + R[2, 2] * de2)
+        oy, oz = rcm[1] - rby, rcm[2] - rbz
         rr = math.sqrt(oy * oy + oz * oz)
         ey, ez = oy / rr, oz / rr
-        rbx, rby, rbz = rcm[0] - O_s[k, 0], rcm[1] - oy, rcm[2] - oz
         rs0, rs1, rs2 = rbx, ez * rby - ey * rbz, ey * rby + ez * rbz
         p = math.sqrt(rs0 * rs0 + rs1 * rs1 + rs2 * rs2)
         ds0, ds1 = rs0 / p, rs1 / p
         sxy = math.sqrt(ds0 * ds0 + ds1 * ds1)
         v[6] = p
         v[7] = sxy
-        v[8] = math.sqrt(d_e[k, 0] * d_e[k, 0] + d_e[k, 1] * d_e[k, 1])
+        v[8] = math.sqrt(de0 * de0 + de1 * de1)
         v[9] = abs(ds0) / sxy if sxy > 0.0 else 0.0
         v[10] = abs(ds1)
         v[11] = abs(p - L)
         for c in range(12):
             if v[c] < margin[c]:
                 margin[c] = v[c]
-                arg_margin[c] = k
-        ct = _cond3(J_tip[k])
-        if ct > cond[0]:
-            cond[0] = ct
-            arg_cond[0] = k
-        cp = _cond3(J_par[k])
-        if cp > cond[1]:
-            cond[1] = cp
-            arg_cond[1] = k
+                arg_margin[c] = j
+        kt = _kappa_f2(J_tip[j])
+        kp = _kappa_f2(J_par[j])
+        kf[0, j] = kt
+        kf[1, j] = kp
+        kf_max[0] = max(kf_max[0], kt)
+        kf_max[1] = max(kf_max[1], kp)
         # worst case |J dq| over the box |dq_i| <= resolution: a vertex (convexity)
         worst = 0.0
         for s1 in (1.0, -1.0):
             for s2 in (1.0, -1.0):
-                e0 = J_tip[k, 0, 0] + s1 * J_tip[k, 0, 1] + s2 * J_tip[k, 0, 2]
-                e1 = J_tip[k, 1, 0] + s1 * J_tip[k, 1, 1] + s2 * J_tip[k, 1, 2]
-                e2 = J_tip[k, 2, 0] + s1 * J_tip[k, 2, 1] + s2 * J_tip[k, 2, 2]
+                e0 = J_tip[j, 0, 0] + s1 * J_tip[j, 0, 1] + s2 * J_tip[j, 0, 2]
+                e1 = J_tip[j, 1, 0] + s1 * J_tip[j, 1, 1] + s2 * J_tip[j, 1, 2]
+                e2 = J_tip[j, 2, 0] + s1 * J_tip[j, 2, 1] + s2 * J_tip[j, 2, 2]
                 worst = max(worst, e0 * e0 + e1 * e1 + e2 * e2)
         err = resolution * math.sqrt(worst)
         tip[0] = max(tip[0], err)
         tip[1] += err
+    # exact 2-norm condition numbers only where kappa_F^2 >= max(kappa_F^2) / 9
+    for m in range(2):
+        floor = kf_max[m] / 9.0
+        for j in range(n):
+            if kf[m, j] >= floor or not math.isfinite(kf[m, j]):
+                c2 = _cond3(J_tip[j]) if m == 0 else _cond3(J_par[j])
+                if c2 > cond[m]:
+                    cond[m] = c2
+                    arg_cond[m] = j
     return counts, margin, arg_margin, cond, arg_cond, q_lo, q_hi, tip

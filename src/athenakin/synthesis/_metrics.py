@@ -107,7 +107,7 @@ def reachability(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLES, 
     samples : int, keyword-only
     seed : int, keyword-only
     backend : {"numba", "numpy"}, keyword-only
-        Backend of :func:`athenakin.q_from_instrument`.
+        Backend of :func:`athenakin.q_from_instrument` (the compiled kernel by default).
 
     Returns
     -------
@@ -120,7 +120,7 @@ def reachability(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLES, 
     reason : ndarray of int8, shape (n,)
         :class:`~athenakin.errors.Reason` of each sample (0 where reachable).
     """
-    from ..robot import q_from_instrument
+    from .._dispatch import q_from_instrument
 
     s = _samples(task, int(samples), int(seed))
     q, res = q_from_instrument(task.T_b_e, s.direction_e, design.tool_length - s.depth, design,
@@ -149,8 +149,7 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
         One entry per name in :data:`METRIC_COLUMNS`. Metrics taken over the
         reachable samples are NaN exactly where ``coverage == 0``.
     """
-    from ..analysis import condition_number, singularities
-    from ..fast import parallel_jacobian, tool_tip_jacobian
+    from ..analysis import condition_number, parallel_jacobian, singularities, tool_tip_jacobian
     from ._kernels import CONDITION_ORDER, reduce_samples
 
     s, q, mode, _ = reachability(design, task, samples=samples, seed=seed)
@@ -159,13 +158,11 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
     valid = mode != 0
     idx = np.flatnonzero(valid)
     qv, mv = q[idx], mode[idx]
-    J_tip = tool_tip_jacobian(qv, T, design, mode=mv)
-    J_par = parallel_jacobian(qv, design, mode=mv)
-    d_b = (T[:3, :3] @ s.direction_e[idx].T).T
-    O_s = T[:3, 3] - (design.tool_length - s.depth[idx])[:, None] * d_b
+    J_tip = tool_tip_jacobian(qv, T, design, mode=mv, backend="numba")
+    J_par = parallel_jacobian(qv, design, mode=mv, backend="numba")
     lo, hi = design.stroke_min, design.stroke_max
     counts, margin, arg_margin, cond, arg_cond, q_lo, q_hi, tip = reduce_samples(
-        qv, mv, np.ones(len(idx), np.bool_), O_s, T[:3, 3].copy(), s.direction_e[idx],
+        idx, qv, mv, np.ascontiguousarray(T[:3, :3]), T[:3, 3].copy(), s.direction_e, s.depth,
         J_tip, J_par, design.lengths, design.tool_length, lo, hi, float(encoder_resolution))
     out: dict[str, float] = {}
     n_plus, n_minus = int(counts[1]), int(counts[2])
@@ -208,9 +205,10 @@ def metrics_or_reason(row: Mapping[str, Any], task: Task, *, samples: int, seed:
         design = design_from_row(row)
     except (InvalidInputError, TypeError, ValueError) as exc:
         return dict.fromkeys(METRIC_COLUMNS, math.nan), f"{type(exc).__name__}: {exc}"
-    if not _assembles(design):
+    metrics = evaluate_design(design, task, samples=samples, seed=seed,
+                              encoder_resolution=encoder_resolution)
+    if metrics["coverage"] == 0.0 and not _assembles(design):
         return (dict.fromkeys(METRIC_COLUMNS, math.nan),
                 f"strokes cannot assemble: no q of a {ASSEMBLY_GRID}^3 grid over the stroke box "
                 f"closes the parallel module")
-    return evaluate_design(design, task, samples=samples, seed=seed,
-                           encoder_resolution=encoder_resolution), ""
+    return metrics, ""

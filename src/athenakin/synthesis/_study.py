@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import math
@@ -19,7 +20,6 @@ from ._errors import SchedulerUnreachableError, StudyMismatchError
 from ._metrics import (
     DEFAULT_ENCODER_RESOLUTION,
     DEFAULT_SAMPLES,
-    METRIC_COLUMNS,
     PARAMETER_COLUMNS,
     metrics_or_reason,
     row_from_design,
@@ -63,7 +63,8 @@ def design_rows(designs: Any) -> list[dict[str, Any]]:
     designs : sequence of Design or of mappings, or pandas.DataFrame
         A :class:`~athenakin.Design` or a mapping / DataFrame row with the columns of
         :data:`~athenakin.synthesis.PARAMETER_COLUMNS` (``l1..l5`` required; missing
-        strokes are unlimited). Bad values are kept: :func:`evaluate` flags them.
+        strokes are unlimited, ``tool_length`` 0.45 m, ``ab_order`` ``"q1<q2"``, as for
+        :class:`~athenakin.Design`). Bad values are kept: :func:`evaluate` flags them.
 
     Returns
     -------
@@ -81,7 +82,7 @@ def design_rows(designs: Any) -> list[dict[str, Any]]:
         if isinstance(d, Design):
             row = row_from_design(d)
         elif isinstance(d, Mapping):
-            row = {}
+            row = dict(_DEFAULTS)                 # what Design assumes for a missing key
             for k, v in d.items():
                 if k not in PARAMETER_COLUMNS and k != "name":
                     continue
@@ -89,12 +90,19 @@ def design_rows(designs: Any) -> list[dict[str, Any]]:
         else:
             raise TypeError(f"designs[{i}]: expected a Design or a mapping, got "
                             f"{type(d).__name__}")
-        row["name"] = str(getattr(d, "name", "") if isinstance(d, Design)
-                          else d.get("name", "") or "")
+        name = d.name if isinstance(d, Design) else d.get("name", "")
+        row["name"] = name if isinstance(name, str) else ""
         rows.append(row)
     if not rows:
         raise InvalidInputError("designs: expected at least one design, got none")
     return rows
+
+
+#: Parameters a mapping may leave out: unlimited strokes, the default tool and A/B order.
+_DEFAULTS: dict[str, Any] = {
+    **{f"q{i}_min": -math.inf for i in (1, 2, 3)}, **{f"q{i}_max": math.inf for i in (1, 2, 3)},
+    **{f.name: f.default for f in dataclasses.fields(Design) if f.name in ("tool_length",
+                                                                          "ab_order")}}
 
 
 def _plain(v: Any) -> Any:
@@ -137,10 +145,10 @@ def _float_or_nan(v: Any) -> float:
 
 
 def _fingerprint(rows: list[dict[str, Any]], task: Task, samples: int, seed: int,
-                 resolution: float) -> str:
+                 resolution: float, chunk_size: int) -> str:
     blob = json.dumps({"format": _FORMAT, "rows": rows, "task": task.to_mapping(),
                        "samples": samples, "seed": seed, "resolution": resolution,
-                       "chunk": CHUNK_SIZE}, sort_keys=True, default=str)
+                       "chunk": chunk_size}, sort_keys=True, default=str)
     return hashlib.sha256(blob.encode()).hexdigest()
 
 
@@ -182,14 +190,18 @@ def open_scheduler(scheduler: Any, *, connect_timeout: float = CONNECT_TIMEOUT
         finally:
             logger.setLevel(level)
         return "distributed", client, True
-    try:
-        from distributed import Client
-    except ModuleNotFoundError:
-        Client = None  # noqa: N806
-    if Client is not None and isinstance(scheduler, Client):
+    if _is_client(scheduler):
         return "distributed", scheduler, False
     raise TypeError(f"scheduler: expected None, one of {LOCAL_SCHEDULERS}, an address string "
                     f"or a distributed.Client, got {type(scheduler).__name__}")
+
+
+def _is_client(obj: object) -> bool:
+    try:
+        from distributed import Client
+    except ModuleNotFoundError:
+        return False
+    return isinstance(obj, Client)
 
 
 def _part_path(out: Path, i: int) -> Path:
@@ -241,7 +253,8 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
              encoder_resolution: float = DEFAULT_ENCODER_RESOLUTION,
              progress: bool | None = None,
              on_chunk: Callable[[int, int], None] | None = None,
-             connect_timeout: float = CONNECT_TIMEOUT, retries: int = RETRIES) -> Any:
+             connect_timeout: float = CONNECT_TIMEOUT, retries: int = RETRIES,
+             chunk_size: int = CHUNK_SIZE) -> Any:
     """Evaluate a batch of designs against a task, on this machine or a Dask cluster.
 
     Parameters
@@ -262,7 +275,7 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
         that address; a ``distributed.Client``: that cluster.
     out : path, optional, keyword-only
         Folder of the study as Parquet (``part-NNNNNN.parquet``, one per chunk of
-        :data:`CHUNK_SIZE` designs, written as each finishes, plus ``_study.json``).
+        ``chunk_size`` designs, written as each finishes, plus ``_study.json``).
         If the folder already holds chunks of the same study they are read, not
         recomputed: an interrupted study resumes.
     encoder_resolution : float, keyword-only
@@ -277,6 +290,10 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
     retries : int, keyword-only
         Retries of a failed chunk on a ``distributed`` cluster (a worker that dies
         mid-study is also survived by the scheduler's own rescheduling).
+    chunk_size : int, keyword-only
+        Designs per Dask task and per Parquet file (part of the study's identity:
+        resume with the same value). Larger chunks for very large studies keep the
+        scheduler's per-task overhead small (docs/synthesis.md).
 
     Returns
     -------
@@ -301,16 +318,19 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InvalidInputError(f"seed: expected a non-negative integer, got {seed!r}")
     resolution = check_scalar(encoder_resolution, "encoder_resolution", positive=True)
+    if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) or (
+            chunk_size < 1):
+        raise InvalidInputError(f"chunk_size: expected a positive integer, got {chunk_size!r}")
     rows = design_rows(designs)
-    samples, seed = int(samples), int(seed)
-    chunks = [rows[i:i + CHUNK_SIZE] for i in range(0, len(rows), CHUNK_SIZE)]
+    samples, seed, chunk_size = int(samples), int(seed), int(chunk_size)
+    chunks = [rows[i:i + chunk_size] for i in range(0, len(rows), chunk_size)]
     task_map = task.to_mapping()
     done: dict[int, Any] = {}
     out_path = None if out is None else Path(out)
     if out_path is not None:
-        fp = _fingerprint(rows, task, samples, seed, resolution)
+        fp = _fingerprint(rows, task, samples, seed, resolution, chunk_size)
         done = _prepare_out(out_path, fp, len(chunks), {
-            "format": _FORMAT, "designs": len(rows), "chunk_size": CHUNK_SIZE,
+            "format": _FORMAT, "designs": len(rows), "chunk_size": chunk_size,
             "task": task_map, "samples": samples, "seed": seed,
             "encoder_resolution": resolution})
     todo = [i for i in range(len(chunks)) if i not in done]
@@ -330,9 +350,9 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
     args = (task_map, samples, seed, resolution)
     try:
         if todo and kind == "local":
-            _run_local(handle, chunks, todo, args, finished)
+            _run_local(handle, chunks, todo, chunk_size, args, finished)
         elif todo:
-            _run_distributed(handle, chunks, todo, args, finished, retries)
+            _run_distributed(handle, chunks, todo, chunk_size, args, finished, retries)
     finally:
         if bar is not None:
             bar.close()
@@ -352,7 +372,7 @@ def _bar(total: int, initial: int, show: bool) -> Any:
     return tqdm(total=total, initial=initial, desc="designs (chunks)", unit="chunk")
 
 
-def _run_local(name: str, chunks: Sequence[list[dict[str, Any]]], todo: list[int],
+def _run_local(name: str, chunks: Sequence[list[dict[str, Any]]], todo: list[int], size: int,
                args: tuple[Any, ...], finished: Callable[[int, Any], None]) -> None:
     """Dask's local scheduler; each chunk is handed over (and written) as it finishes."""
     import dask
@@ -360,7 +380,7 @@ def _run_local(name: str, chunks: Sequence[list[dict[str, Any]]], todo: list[int
 
     tasks = {}
     for i in todo:
-        d = dask.delayed(_chunk_frame, pure=True)(chunks[i], i * CHUNK_SIZE, *args)
+        d = dask.delayed(_chunk_frame, pure=True)(chunks[i], i * size, *args)
         tasks[d.key] = (i, d)
 
     class _Done(Callback):  # type: ignore[misc]
@@ -373,12 +393,12 @@ def _run_local(name: str, chunks: Sequence[list[dict[str, Any]]], todo: list[int
 
 
 def _run_distributed(client: Any, chunks: Sequence[list[dict[str, Any]]], todo: list[int],
-                     args: tuple[Any, ...], finished: Callable[[int, Any], None],
+                     size: int, args: tuple[Any, ...], finished: Callable[[int, Any], None],
                      retries: int) -> None:
     """A ``distributed`` cluster; results are collected (and written) as they complete."""
     from distributed import as_completed
 
-    futures = {client.submit(_chunk_frame, chunks[i], i * CHUNK_SIZE, *args, pure=True,
+    futures = {client.submit(_chunk_frame, chunks[i], i * size, *args, pure=True,
                              retries=retries): i for i in todo}
     for fut, df in as_completed(list(futures), with_results=True, loop=client.loop):
         finished(futures[fut], df)

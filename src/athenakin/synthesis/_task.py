@@ -4,13 +4,18 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
+import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
 
 from .._transforms import transform_from_rotation_translation
 from .._validation import check_scalar
@@ -134,17 +139,12 @@ class Task:
 
     def to_toml(self) -> str:
         """TOML text (a ``[task]`` table) that :meth:`from_toml` reads back to an equal task."""
-        def num(x: float) -> str:
-            return repr(float(x))
+        import tomli_w
 
-        lines = ["[task]",
-                 f"rcm = [{', '.join(num(x) for x in self.rcm)}]",
-                 f"axis = [{', '.join(num(x) for x in self.axis)}]",
-                 f"half_angle = {num(self.half_angle)}",
-                 f"depth = [{num(self.depth[0])}, {num(self.depth[1])}]"]
-        if self.name:
-            lines.append(f"name = {self.name!r}".replace("'", '"'))
-        return "\n".join(lines) + "\n"
+        table = self.to_mapping()
+        if not table["name"]:
+            del table["name"]
+        return str(tomli_w.dumps({"task": table}))
 
     @classmethod
     def from_mapping(cls, data: Mapping[str, Any]) -> Task:
@@ -187,7 +187,9 @@ class Task:
 
     @classmethod
     def from_toml(cls, path: str | Path) -> Task:
-        """Load a task from a TOML file (a ``[task]`` table, or the keys at top level)::
+        """Load a task from a TOML file.
+
+        The file holds a ``[task]`` table, or the keys at top level::
 
             [task]
             rcm = [0.0, 0.35, -0.10]      # m, base frame

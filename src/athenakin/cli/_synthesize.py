@@ -1,0 +1,188 @@
+"""``athenakin synthesize``: a design study against a surgical task, locally or on a cluster."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from ._common import add_json_option, dump_json, fmt, table
+
+_SHOWN = ("coverage", "coverage_mode", "size", "tip_error_max", "margin_min", "cond_tip_max")
+
+
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``synthesize`` subcommand."""
+    p = sub.add_parser(
+        "synthesize", help="design study against a surgical task (Dask; local or a cluster)",
+        description="Evaluate designs against the task of TASK.toml (RCM, cone of instrument "
+                    "directions, tip depths): the reference design alone, N random designs "
+                    "within the [bounds] of the file (--designs), or an NSGA-II search "
+                    "(--optimize). Writes the table as Parquet (resumable) and figures.")
+    p.add_argument("task", metavar="TASK.toml", help="task file ([task], optional [bounds])")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--designs", type=int, default=0, metavar="N",
+                   help="N random designs within the bounds, after the reference design")
+    g.add_argument("--optimize", action="store_true", help="NSGA-II over l1..l5 and strokes")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="Dask scheduler: tcp://host:port of a distributed cluster, or "
+                        "threads|processes|synchronous (default: local threads)")
+    p.add_argument("-o", "--out", default="synthesis.parquet", metavar="PATH",
+                   help="Parquet folder of the results (default synthesis.parquet); an "
+                        "interrupted study resumes from it")
+    p.add_argument("--samples", type=int, default=20_000,
+                   help="task samples per design (default 20000)")
+    p.add_argument("--seed", type=int, default=0, help="seed of samples and search")
+    p.add_argument("--population", type=int, default=24, help="NSGA-II population (24)")
+    p.add_argument("--generations", type=int, default=8, help="NSGA-II generations (8)")
+    p.add_argument("--encoder-resolution", type=float, default=1e-6, metavar="M",
+                   help="actuator encoder resolution for the tip error, m (default 1e-6)")
+    p.add_argument("--figures", default=None, metavar="DIR",
+                   help="folder for figures (default: next to the output, <out>-figures)")
+    p.add_argument("--no-figures", action="store_true", help="write no figures")
+    p.add_argument("--top", type=int, default=5, help="designs listed (default 5)")
+    p.add_argument("--connect-timeout", type=float, default=5.0, metavar="S",
+                   help="seconds to wait for the scheduler (default 5)")
+    add_json_option(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Execute ``synthesize``."""
+    from .. import Design
+    from ..synthesis import (
+        Task,
+        bounds_from_toml,
+        default_bounds,
+        evaluate,
+        optimize,
+        random_designs,
+        row_from_design,
+    )
+
+    task = Task.from_toml(args.task)
+    ref = Design.default()
+    bounds = bounds_from_toml(args.task) or default_bounds(ref)
+    out = Path(args.out)
+    common: dict[str, Any] = dict(samples=args.samples, seed=args.seed,
+                                  scheduler=args.scheduler,
+                                  encoder_resolution=args.encoder_resolution,
+                                  connect_timeout=args.connect_timeout)
+    result: Any = None
+    if args.optimize:
+        if out.exists() and (not out.is_dir() or any(out.iterdir())):
+            raise FileExistsError(f"{out}: exists and is not an empty folder; a search writes "
+                                  f"a new one (-o)")
+        result = optimize(task, bounds=bounds, reference=ref, population=args.population,
+                          generations=args.generations, progress=not args.json, **common)
+        df = result.table
+        out.mkdir(parents=True, exist_ok=True)
+        df.to_parquet(out / "part-000000.parquet", index=False)
+    else:
+        rows = [row_from_design(ref) | {"name": ref.name}]
+        if args.designs:
+            rows += random_designs(args.designs, bounds, seed=args.seed, base=ref)
+        df = evaluate(rows, task, out=out, progress=not args.json, **common)
+    files = [str(out)]
+    if not args.no_figures:
+        files += _figures(df, result, task, ref, Path(args.figures or f"{out}-figures"), args)
+    report = _report(df, result, args.top)
+    if args.json:
+        print(dump_json({"task": task.to_mapping(), "results": str(out), "files": files,
+                         **report}))
+        return 0
+    _print(task, report, files, result is not None)
+    return 0
+
+
+def _figures(df: Any, result: Any, task: Any, ref: Any, folder: Path,
+             args: argparse.Namespace) -> list[str]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..synthesis import design_from_row
+    from ..synthesis.figures import (
+        plot_coverage_map,
+        plot_parameter_coordinates,
+        plot_pareto,
+    )
+    from ._workspace import save_figure
+
+    folder.mkdir(parents=True, exist_ok=True)
+    files: list[str] = []
+    front = result.front if result is not None else None
+    reference = df.iloc[0]
+    fig, ax = plt.subplots(figsize=(6.4, 4.8), layout="constrained")
+    plot_pareto(df, front=front, reference=reference, ax=ax)
+    files += save_figure(fig, folder / "pareto", ["png"], 110)
+    if int(df["valid"].sum()) > 1:
+        fig, ax = plt.subplots(figsize=(9, 4.8), layout="constrained")
+        plot_parameter_coordinates(df, highlight=front, ax=ax)
+        files += save_figure(fig, folder / "parameters", ["png"], 110)
+    best = df[df["valid"]].sort_values("coverage_mode", ascending=False)
+    chosen = [design_from_row(reference)]
+    if len(best) and best.index[0] != 0:
+        chosen.append(design_from_row(best.iloc[0]))
+    fig, axes = plt.subplots(1, len(chosen), figsize=(5 * len(chosen), 4.6),
+                             layout="constrained", squeeze=False)
+    names = ["reference design", f"best coverage (design {best['design'].iloc[0]})"
+             if len(best) else ""]
+    for ax, d, name in zip(axes[0], chosen, names, strict=False):
+        plot_coverage_map(d, task, samples=min(args.samples, 20_000), seed=args.seed, ax=ax)
+        ax.set_title(name)
+    files += save_figure(fig, folder / "coverage", ["png"], 110)
+    return files
+
+
+def _report(df: Any, result: Any, top: int) -> dict[str, Any]:
+    cols = ["design", "name", *_SHOWN]
+    valid = df[df["valid"]]
+    best = valid.sort_values("coverage_mode", ascending=False).head(top)
+    rep: dict[str, Any] = {
+        "designs": int(len(df)), "valid": int(df["valid"].sum()),
+        "reference": {k: df.iloc[0][k] for k in cols},
+        "best": [{k: r[k] for k in cols} for _, r in best.iterrows()],
+        "invalid": [{"design": int(r["design"]), "reason": r["reason"]}
+                    for _, r in df[~df["valid"]].head(top).iterrows()]}
+    if result is not None:
+        rep["front"] = [{k: r[k] for k in cols} for _, r in result.front.iterrows()]
+        rep["reference_on_front"] = result.reference_on_front
+        rep["dominating"] = result.dominating
+        rep["gains"] = result.gains
+        rep["trade_offs"] = result.trade_offs
+    return rep
+
+
+def _print(task: Any, rep: dict[str, Any], files: list[str], search: bool) -> None:
+    import math
+
+    print(f"task {task.name!r}: cone {math.degrees(task.half_angle):.1f} deg about "
+          f"{[round(x, 4) for x in task.axis.tolist()]}, depth {task.depth[0]:.3f}.."
+          f"{task.depth[1]:.3f} m beyond the RCM")
+    n = rep["designs"]
+    print(f"{n} design{'' if n == 1 else 's'}, {rep['valid']} valid")
+    headers = ["design", "coverage", "cov. 1 mode", "size m", "tip err. um", "margin m",
+               "cond tip"]
+
+    def line(r: dict[str, Any]) -> list[Any]:
+        return [r["design"], fmt(r["coverage"], 4), fmt(r["coverage_mode"], 4),
+                fmt(r["size"], 3), fmt(r["tip_error_max"] * 1e6, 2), fmt(r["margin_min"], 4),
+                fmt(r["cond_tip_max"], 1)]
+
+    print(table(headers, [line(rep["reference"])] + [line(r) for r in rep["best"]
+                                                     if r["design"] != 0]))
+    for r in rep["invalid"]:
+        print(f"design {r['design']} invalid: {r['reason']}")
+    if search:
+        print(f"Pareto front: {len(rep['front'])} designs; the reference design is "
+              f"{'on the front' if rep['reference_on_front'] else 'dominated'}"
+              + (f" by {rep['dominating']} of them" if rep["dominating"] else ""))
+        for k, v in rep["gains"].items():
+            print(f"  best gain over the reference in {k}: {v:.4g}")
+        for k, t in rep["trade_offs"].items():
+            others = ", ".join(f"{m} {t[m]:+.4g}" for m in t if m not in ("design", k))
+            print(f"  best {k} on the front: design {int(t['design'])}, {t[k]:+.4g} against "
+                  f"the reference, at {others}")
+    print("files: " + ", ".join(files))

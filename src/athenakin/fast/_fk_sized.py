@@ -1,0 +1,168 @@
+"""Compiled FK sized to the information (private): ``T_b_s`` once per mode, chosen fields only.
+
+The arithmetic is that of :mod:`._fk_kernels` (the same scratch stages, hence the
+same values bit for bit); only the stores differ:
+
+* ``T_b_s`` is written once per assembly mode, ``(N, 2, 4, 4)`` instead of
+  ``(N, 16, 4, 4)`` (the 8 slots of a mode share it): 256 instead of 2048 bytes
+  per pose;
+* :func:`fk_select` writes only the fields asked for (``want``, a bit mask of
+  ``WANT_*``): a sweep that needs ``p``, ``u`` and ``valid`` writes 784 bytes per
+  pose instead of 1185. The arrays of the fields not asked for may have 0 rows.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ._fk_kernels import (
+    _CY,
+    _CZ,
+    _NN,
+    _PR,
+    _PRES,
+    _R,
+    _RES,
+    _V1,
+    _V2,
+    _V3,
+    _V4,
+    _V5,
+    _XM,
+    _YS,
+    _ZS,
+    CHUNK,
+    _chunk_full,
+    _input_flags,
+    fk_chunk,
+    scratch,
+)
+from ._scalar import nanmax2
+
+__all__ = ["WANT_VALID", "WANT_REASON", "WANT_P", "WANT_U", "WANT_T", "WANT_RES", "WANT_ALL",
+           "fk_select", "fk_one_modes", "ONE_P", "ONE_U", "ONE_T", "ONE_RES", "ONE_F",
+           "ONE_REASON", "ONE_VALID", "ONE_ITEM", "ONE_I"]
+
+#: Bits of ``want`` in :func:`fk_select`.
+WANT_VALID, WANT_REASON, WANT_P, WANT_U, WANT_T, WANT_RES = 1, 2, 4, 8, 16, 32
+WANT_ALL = 63
+
+_OPTS = dict(error_model="numpy", cache=True)
+
+#: Layout of the packed single-pose buffers of :func:`fk_one_modes` (T_b_s per mode).
+ONE_P, ONE_U, ONE_T, ONE_RES, ONE_F = 0, 16, 96, 128, 144
+ONE_REASON, ONE_VALID, ONE_ITEM, ONE_I = 0, 16, 32, 33
+
+
+@njit(**_OPTS)
+def fk_one_modes(q, T, P, tol, rot_tol, fbuf, ibuf):
+    """One pose, q (3,) and T (4, 4), into packed buffers with ``T_b_s`` per mode.
+
+    ``fbuf`` (144,): p (16), u (16 x 5), T_b_s (2 x 4 x 4), residual (16);
+    ``ibuf`` (33,) int8: reason (16), valid (16, 0/1), item_reason (1).
+    Returns the FLAG_* bits of :mod:`._fk_kernels`.
+    """
+    q2 = q.reshape((1, 3))
+    T2 = T.reshape((1, 4, 4))
+    G, SH, S0, S1 = scratch()
+    _chunk_full(q2, T2, P, tol, G, SH, S0, S1, 0, 1,
+                ibuf[ONE_REASON:ONE_VALID].reshape((1, 16)),
+                ibuf[ONE_VALID:ONE_ITEM].reshape((1, 16)),
+                fbuf[ONE_P:ONE_U].reshape((1, 16)), fbuf[ONE_U:ONE_T].reshape((1, 16, 5)),
+                fbuf[ONE_T:ONE_RES].reshape((1, 2, 4, 4)),
+                fbuf[ONE_RES:ONE_F].reshape((1, 16)), ibuf[ONE_ITEM:ONE_I])
+    return _input_flags(q2, T2, rot_tol)
+
+
+@njit(**_OPTS)
+def _store_mode_select(Sm, ii, i, k0, m, xm, pres, want, reason, valid, p, u, Tbs, res):
+    """:func:`._fk_kernels._store_mode` writing only the fields in ``want``."""
+    R = Sm[_R * CHUNK + ii]
+    ok = R == 0.0
+    mask = 0.0 if ok else math.nan
+    if want & (WANT_VALID | WANT_REASON | WANT_RES):
+        r8 = np.int8(R)
+        rv = nanmax2(Sm[_RES * CHUNK + ii], pres) + mask   # merged modes (_fk_kernels)
+        for j in range(8):
+            if want & WANT_REASON:
+                reason[i, k0 + j] = r8
+            if want & WANT_VALID:
+                valid[i, k0 + j] = ok
+            if want & WANT_RES:
+                res[i, k0 + j] = rv
+    if want & WANT_P:
+        nn = Sm[_NN * CHUNK + ii] + mask
+        for j in range(8):
+            p[i, k0 + j] = nn if (j >> 2) == 0 else -nn
+    if want & WANT_U:
+        v1 = (Sm[_V1 * CHUNK + ii] + mask, Sm[(_V1 + 1) * CHUNK + ii] + mask)
+        v2 = (Sm[_V2 * CHUNK + ii] + mask, Sm[(_V2 + 1) * CHUNK + ii] + mask,
+              Sm[(_V2 + 2) * CHUNK + ii] + mask, Sm[(_V2 + 3) * CHUNK + ii] + mask)
+        v3 = (Sm[_V3 * CHUNK + ii] + mask, Sm[(_V3 + 1) * CHUNK + ii] + mask,
+              Sm[(_V3 + 2) * CHUNK + ii] + mask, Sm[(_V3 + 3) * CHUNK + ii] + mask)
+        v4 = (Sm[_V4 * CHUNK + ii] + mask, Sm[(_V4 + 1) * CHUNK + ii] + mask,
+              Sm[(_V4 + 2) * CHUNK + ii] + mask, Sm[(_V4 + 3) * CHUNK + ii] + mask)
+        v5 = (Sm[_V5 * CHUNK + ii] + mask, Sm[(_V5 + 1) * CHUNK + ii] + mask)
+        for j in range(8):
+            r = j >> 2
+            b = (j >> 1) & 1
+            w = j & 1
+            k = k0 + j
+            u[i, k, 0] = v1[b ^ r]
+            u[i, k, 1] = v2[2 * b + r]
+            u[i, k, 2] = v3[2 * (w ^ b) + r]
+            u[i, k, 3] = v4[2 * w + r]
+            u[i, k, 4] = v5[w ^ r]
+    if want & WANT_T:
+        pmask = 0.0 if Sm[_PR * CHUNK + ii] == 0.0 else math.nan
+        one, zero = 1.0 + pmask, pmask
+        cy = Sm[_CY * CHUNK + ii] + pmask
+        cz = Sm[_CZ * CHUNK + ii] + pmask
+        Tbs[i, m, 0, 0] = one
+        Tbs[i, m, 0, 1] = zero
+        Tbs[i, m, 0, 2] = zero
+        Tbs[i, m, 0, 3] = xm + pmask
+        Tbs[i, m, 1, 0] = zero
+        Tbs[i, m, 1, 1] = cz
+        Tbs[i, m, 1, 2] = cy
+        Tbs[i, m, 1, 3] = Sm[_YS * CHUNK + ii] + pmask
+        Tbs[i, m, 2, 0] = zero
+        Tbs[i, m, 2, 1] = -cy
+        Tbs[i, m, 2, 2] = cz
+        Tbs[i, m, 2, 3] = Sm[_ZS * CHUNK + ii] + pmask
+        Tbs[i, m, 3, 0] = zero
+        Tbs[i, m, 3, 1] = zero
+        Tbs[i, m, 3, 2] = zero
+        Tbs[i, m, 3, 3] = one
+
+
+@njit(**_OPTS)
+def fk_select(q, T, P, tol, rot_tol, want, reason, valid, p, u, Tbs, res, item):
+    """The fields ``want`` of ``N = len(item)`` poses (``T_b_s`` per mode: (N, 2, 4, 4)).
+
+    Parameters as :func:`._fk_kernels.fk_full`; arrays of fields not in ``want``
+    are not touched (they may have 0 rows). ``item`` is always written.
+
+    Returns
+    -------
+    int
+        FLAG_* bits about the input.
+    """
+    N = item.shape[0]
+    G, SH, S0, S1 = scratch()
+    for c0 in range(0, N, CHUNK):
+        n = min(CHUNK, N - c0)
+        fk_chunk(q, T, P, tol, G, SH, S0, S1, c0, n)
+        for ii in range(n):
+            i = c0 + ii
+            xm = SH[_XM * CHUNK + ii]
+            pres = SH[_PRES * CHUNK + ii]
+            R0 = S0[_R * CHUNK + ii]
+            R1 = S1[_R * CHUNK + ii]
+            item[i] = np.int8(0 if (R0 == 0.0) | (R1 == 0.0) else R0)
+            _store_mode_select(S0, ii, i, 0, 0, xm, pres, want, reason, valid, p, u, Tbs, res)
+            _store_mode_select(S1, ii, i, 8, 1, xm, pres, want, reason, valid, p, u, Tbs, res)
+    return _input_flags(q, T, rot_tol)

@@ -1,0 +1,334 @@
+"""The backend dispatch (athenakin._dispatch), FK results sized to the information, the tool tip.
+
+Both paths are tested: ``backend="auto"`` with numba (compiled) and without it
+(simulated by the availability state), against the numpy reference of
+``athenakin.robot`` (1e-12, same reason codes).
+"""
+
+from __future__ import annotations
+
+import ast
+import pathlib
+import sys
+import threading
+
+import numpy as np
+import pytest
+
+import athenakin as ak
+from athenakin import _dispatch
+from athenakin.robot import _jacobians as ref_jac
+from athenakin.testing import random_configurations
+
+D = ak.Design.default()
+T0 = ak.default_rcm_frame(D)
+SRC = pathlib.Path(ak.__file__).parent
+FK_ARRAYS = ("valid", "reason", "p", "u", "T_b_s", "T_b_s_mode", "residual", "item_reason",
+             "mode", "p_sign", "ujoint", "wrist", "tip", "T_b_tip")
+
+
+@pytest.fixture(scope="module")
+def rc():
+    return random_configurations(200, D, rng=20261123)
+
+
+@pytest.fixture
+def no_numba(monkeypatch):
+    """As on a platform without numba: the availability check says False."""
+    monkeypatch.setitem(_dispatch._STATE, "numba", False)
+
+
+def assert_same_fk(a, b, atol=1e-12):
+    for name in FK_ARRAYS:
+        x, y = getattr(a, name), getattr(b, name)
+        assert x.shape == y.shape, name
+        if x.dtype.kind == "f":
+            np.testing.assert_allclose(x, y, rtol=0, atol=atol, equal_nan=True, err_msg=name)
+        else:
+            np.testing.assert_array_equal(x, y, err_msg=name)
+
+
+def test_auto_is_compiled_and_matches_the_reference(rc):
+    got = ak.forward_kinematics(rc.q, rc.T_b_e, D)
+    assert "fk" in _dispatch._WARM and _dispatch._STATE["numba"] is True
+    assert_same_fk(got, ak.robot.forward_kinematics(rc.q, rc.T_b_e, D))
+    one = ak.forward_kinematics(rc.q[0], rc.T_b_e[0], D)       # the lean single-pose path
+    assert_same_fk(one, ak.robot.forward_kinematics(rc.q[0], rc.T_b_e[0], D))
+    q, passive = ak.inverse_kinematics(rc.T_b_e, rc.u[:, 2:], D)
+    q_ref, passive_ref = ak.robot.inverse_kinematics(rc.T_b_e, rc.u[:, 2:], D)
+    np.testing.assert_allclose(q, q_ref, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(passive.reason, passive_ref.reason)
+
+
+def _outcome(fn, *args, **kw):
+    try:
+        return fn(*args, **kw)
+    except Exception as exc:        # the error is part of the result to compare
+        return exc
+
+
+def _assert_same_outcome(a, b):
+    if isinstance(b, Exception):
+        assert type(a) is type(b) and str(a) == str(b), (a, b)
+        return
+    assert not isinstance(a, Exception), a
+    for x, y in zip(a if isinstance(a, tuple) else (a,), b if isinstance(b, tuple) else (b,),
+                    strict=True):
+        if isinstance(y, np.ndarray):
+            np.testing.assert_allclose(x, y, rtol=0, atol=1e-12, equal_nan=True)
+        else:
+            for name in vars(y):
+                np.testing.assert_allclose(getattr(x, name), getattr(y, name), rtol=0,
+                                           atol=1e-12, equal_nan=True, err_msg=name)
+
+
+def _single_items():
+    T_bad = T0.copy()
+    T_bad[0, 0] += 1e-3                                   # not rigid
+    T_nan = T0.copy()
+    T_nan[1, 3] = np.nan
+    sol = ak.robot.forward_kinematics([-0.1, 0.1, 0.45], T0, D)
+    u = np.ascontiguousarray(sol.u[0, 2:])
+    tip_e = T0[:3, :3].T @ (sol.tip[0] - T0[:3, 3])
+    return [("ok", T0, np.array([-0.1, 0.1, 0.45]), u, tip_e),
+            ("unreachable", T0, np.array([0.5, 0.1, 0.45]), u + 1.0, np.array([0.3, 0.3, 0.3])),
+            ("nan", T_nan, np.array([np.nan, 0.1, 0.45]), u * np.nan, tip_e * np.nan),
+            ("not rigid", T_bad, np.array([-0.1, 0.1, 0.45]), u, tip_e),
+            ("read-only", T0, np.array([-0.1, 0.1, 0.45]), u, tip_e)]
+
+
+@pytest.mark.parametrize("label, T, q, u, tip", _single_items(),
+                         ids=[c[0] for c in _single_items()])
+def test_lean_single_calls_are_the_reference(label, T, q, u, tip):
+    ok = _single_items()[0]
+    ak.forward_kinematics(ok[2], T0, D)                   # warm the entry points
+    ak.inverse_kinematics(T0, ok[3], D)
+    ak.q_from_tool_tip(T0, ok[4], D)
+    if label == "read-only":
+        for a in (q, u, tip):
+            a.flags.writeable = False
+    for errors in ("auto", "flag"):
+        for name, args in (("forward_kinematics", (q, T)), ("inverse_kinematics", (T, u)),
+                           ("q_from_tool_tip", (T, tip))):
+            _assert_same_outcome(_outcome(getattr(ak, name), *args, D, errors=errors),
+                                 _outcome(getattr(ak.robot, name), *args, D, errors=errors))
+
+
+def test_without_numba_every_public_function_is_the_reference(rc, no_numba):
+    assert not _dispatch.numba_available()
+    assert_same_fk(ak.forward_kinematics(rc.q, rc.T_b_e, D),
+                   ak.robot.forward_kinematics(rc.q, rc.T_b_e, D), atol=0)
+    q, passive = ak.inverse_kinematics(rc.T_b_e, rc.u[:, 2:], D)
+    np.testing.assert_array_equal(q, ak.robot.inverse_kinematics(rc.T_b_e, rc.u[:, 2:], D)[0])
+    tip = [0.01, -0.02, -0.1]
+    np.testing.assert_array_equal(ak.q_from_tool_tip(T0, tip, D, errors="flag")[0],
+                                  ak.robot.q_from_tool_tip(T0, tip, D, errors="flag")[0])
+    d_e = [0.1, 0.2, -1.0]
+    np.testing.assert_array_equal(
+        ak.q_from_instrument(T0, d_e, 0.2, D, errors="flag")[0],
+        ak.robot.q_from_instrument(T0, d_e, 0.2, D, errors="flag")[0])
+    np.testing.assert_array_equal(ak.analysis.instrument_jacobian(rc.q[:5], rc.T_b_e[:5], D),
+                                  ref_jac.instrument_jacobian(rc.q[:5], rc.T_b_e[:5], D))
+    with pytest.raises(ImportError, match="backend='numba'"):
+        ak.forward_kinematics(rc.q[0], rc.T_b_e[0], D, backend="numba")
+    with pytest.raises(ImportError, match="numba"):
+        ak.analysis.parallel_jacobian(rc.q[0], D, backend="numba")
+
+
+def test_environment_variable_forces_the_reference(monkeypatch):
+    monkeypatch.setenv("ATHENAKIN_BACKEND", "numpy")
+    monkeypatch.delitem(_dispatch._STATE, "numba", raising=False)
+    assert _dispatch.numba_available() is False
+    assert _dispatch.resolve_backend("auto") is False
+
+
+@pytest.mark.parametrize("call", [
+    lambda b: ak.forward_kinematics([-0.1, 0.1, 0.45], T0, D, backend=b),
+    lambda b: ak.inverse_kinematics(T0, [0.1, 1.0, 0.2], D, backend=b),
+    lambda b: ak.q_from_tool_tip(T0, [0.0, 0.0, -0.1], D, backend=b),
+    lambda b: ak.analysis.tool_tip_jacobian([-0.1, 0.1, 0.45], backend=b),
+], ids=["fk", "ik", "tool_tip", "jacobian"])
+def test_unknown_backend_is_refused(call):
+    with pytest.raises(ValueError, match=r"backend: expected one of \('auto', 'numpy', 'numba'\)"):
+        call("cuda")
+
+
+def test_reference_says_where_the_backend_is_chosen():
+    with pytest.raises(ValueError, match=r"athenakin\.forward_kinematics\(\.\.\., backend="):
+        ak.robot.forward_kinematics([-0.1, 0.1, 0.45], T0, D, backend="numba")
+    with pytest.raises(ValueError, match="athenakin.q_from_tool_tip"):
+        ak.robot.q_from_tool_tip(T0, [0.0, 0.0, -0.1], D, backend="auto")
+
+
+def test_numba_cache_falls_back_to_the_user_cache_dir(monkeypatch, tmp_path):
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    monkeypatch.delitem(sys.modules, "numba")      # as before numba's first import
+    monkeypatch.setattr(_dispatch.os, "access", lambda path, mode: True)
+    _dispatch._configure_numba_cache()
+    assert "NUMBA_CACHE_DIR" not in _dispatch.os.environ      # writable: numba's default
+    monkeypatch.setattr(_dispatch.os, "access", lambda path, mode: False)
+    _dispatch._configure_numba_cache()
+    if sys.platform.startswith("linux"):
+        assert _dispatch.os.environ["NUMBA_CACHE_DIR"] == str(tmp_path / "athenakin" / "numba")
+    assert _dispatch.os.environ["NUMBA_CACHE_DIR"] == _dispatch.user_cache_dir()
+
+
+def test_a_long_first_call_says_so_on_stderr(monkeypatch, capsys):
+    monkeypatch.setattr(_dispatch, "NOTICE_AFTER_S", 0.0)
+    monkeypatch.setitem(_dispatch._STATE, "noticed", False)
+    monkeypatch.setattr(_dispatch, "_WARM", set())
+    done = threading.Event()
+
+    def compiling():
+        for _ in range(1000):           # until the notice is out (at most ~10 s)
+            if _dispatch._STATE["noticed"]:
+                break
+            done.wait(0.01)
+        return 42
+
+    assert _dispatch._first("probe", compiling) == 42
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "compiling the numba kernels" in err
+    assert "probe" in _dispatch._WARM
+
+
+def test_warmup_command(capsys, monkeypatch):
+    from athenakin.cli import main
+
+    assert main(["warmup"]) == 0
+    assert "11 entry points ready" in capsys.readouterr().out
+    monkeypatch.setitem(_dispatch._STATE, "numba", False)
+    assert main(["warmup"]) == 0
+    assert "nothing to compile" in capsys.readouterr().out
+
+
+# --- fields=, the per-mode T_b_s, old attribute access -----------------------------------
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+@pytest.mark.parametrize("fields", [("p", "u", "valid"), ("T_b_s",), ("reason", "residual"),
+                                    "valid"])
+def test_fields_hold_the_full_results_values(rc, backend, fields):
+    full = ak.forward_kinematics(rc.q, rc.T_b_e, D, backend=backend)
+    part = ak.forward_kinematics(rc.q, rc.T_b_e, D, fields=fields, backend=backend)
+    names = (fields,) if isinstance(fields, str) else fields
+    for name in names + ("item_reason",):
+        np.testing.assert_array_equal(getattr(part, name), getattr(full, name), err_msg=name)
+    left_out = [f for f in ak.robot.FK_FIELDS if f not in names]
+    for name in left_out:
+        with pytest.raises(AttributeError, match=f"FKSolution.{name} was not computed"):
+            getattr(part, name)
+    assert "FKSolution(batch (200,)" in repr(part)
+
+
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+@pytest.mark.parametrize("fields", [("valid",), ("p", "u"), ("T_b_s", "mode", "residual"),
+                                    "reason"])
+def test_ik_fields_hold_the_full_results_values(rc, backend, fields):
+    u = rc.u[:, 2:].copy()
+    u[:3] = [0.1, 0.0, 0.2]         # sin u4 = 0: a few singular items among the valid ones
+    q_full, full = ak.inverse_kinematics(rc.T_b_e, u, D, backend=backend)
+    q, part = ak.inverse_kinematics(rc.T_b_e, u, D, fields=fields, backend=backend)
+    np.testing.assert_array_equal(q, q_full)
+    names = (fields,) if isinstance(fields, str) else fields
+    for name in names:
+        np.testing.assert_array_equal(getattr(part, name), getattr(full, name), err_msg=name)
+    for name in (f for f in ak.robot.IK_FIELDS if f not in names):
+        with pytest.raises(AttributeError, match=f"PassiveJoints.{name} was not computed"):
+            getattr(part, name)
+    q1, one = ak.inverse_kinematics(rc.T_b_e[5], u[5], D, fields=("valid",), backend=backend)
+    np.testing.assert_array_equal(q1, q_full[5])
+    assert one.valid == full.valid[5]
+    with pytest.raises(ValueError, match="fields: expected names among"):
+        ak.inverse_kinematics(rc.T_b_e, u, D, fields=("q",), backend=backend)
+
+
+def test_fields_and_out_are_checked():
+    with pytest.raises(ValueError, match=r"fields: expected names among"):
+        ak.forward_kinematics([-0.1, 0.1, 0.45], T0, D, fields=("p", "tip"))
+    with pytest.raises(ValueError, match=r"fields: expected names among"):
+        ak.robot.forward_kinematics([-0.1, 0.1, 0.45], T0, D, fields=("q",))
+    q = np.array([[-0.1, 0.1, 0.45]] * 3)
+    out = ak.fast.forward_kinematics(q, T0, D)
+    with pytest.raises(ValueError, match="out: not with fields"):
+        ak.fast.forward_kinematics(q, T0, D, fields=("p",), out=out)
+
+
+def test_T_b_s_is_stored_once_per_mode_and_expands_per_slot(rc):
+    sol = ak.forward_kinematics(rc.q[:7], rc.T_b_e[:7], D)
+    assert sol.T_b_s_mode.shape == (7, 2, 4, 4) and "T_b_s" not in sol.__dict__
+    par = ak.parallel.parallel_forward_kinematics(rc.q[:7], D)
+    np.testing.assert_allclose(sol.T_b_s_mode, par.T_b_s, rtol=0, atol=1e-12, equal_nan=True)
+    assert sol.T_b_s.shape == (7, 16, 4, 4)
+    for k in range(16):
+        np.testing.assert_array_equal(sol.T_b_s[:, k], sol.T_b_s_mode[:, k // 8])
+    assert sol.mode.shape == (7, 16) and list(sol.mode[0]) == [1] * 8 + [-1] * 8
+
+
+def test_out_drops_stale_expansions(rc):
+    out = ak.fast.forward_kinematics(rc.q[:4], rc.T_b_e[:4], D)
+    stale = out.tip.copy()
+    ak.fast.forward_kinematics(rc.q[4:8], rc.T_b_e[4:8], D, out=out)
+    np.testing.assert_array_equal(out.tip, ak.forward_kinematics(rc.q[4:8], rc.T_b_e[4:8], D).tip)
+    assert not np.array_equal(out.tip, stale, equal_nan=True)
+
+
+# --- the tool tip -----------------------------------------------------------------------------
+def test_tip_is_what_q_from_tool_tip_inverts(rc):
+    sol = ak.forward_kinematics(rc.q, rc.T_b_e, D)
+    assert sol.tip.shape == (200, 16, 3) and sol.T_b_tip.shape == (200, 16, 4, 4)
+    R, c = rc.T_b_e[:, None, :3, :3], rc.T_b_e[:, None, :3, 3]
+    tip_e = np.einsum("...ji,...j->...i", R, sol.tip - c)             # R^T (tip - c)
+    # the instrument axis z3 of each slot passes through the RCM at p
+    z3 = sol.T_b_tip[..., :3, 2]
+    O_s = sol.T_b_s[..., :3, 3]
+    np.testing.assert_allclose((O_s + sol.p[..., None] * z3)[sol.valid],
+                               np.broadcast_to(c, O_s.shape)[sol.valid], rtol=0, atol=1e-12)
+    # inserted (0 < p < L: the tip beyond the RCM), the case q_from_tool_tip solves
+    inserted = sol.valid & (sol.p > 0) & (sol.p < D.tool_length)
+    np.testing.assert_allclose(np.linalg.norm(tip_e, axis=-1)[inserted],
+                               D.tool_length - sol.p[inserted], rtol=0, atol=1e-12)
+    assert inserted.sum() > 200
+    idx = np.nonzero(inserted)
+    q, res = ak.q_from_tool_tip(rc.T_b_e[idx[0]], tip_e[idx], D)
+    assert res.valid.all()
+    np.testing.assert_allclose(q, rc.q[idx[0]], rtol=0, atol=1e-10)
+    np.testing.assert_array_equal(res.mode, sol.mode[idx])
+
+
+def test_tip_frame_is_rigid_and_nan_where_invalid(rc):
+    sol = ak.forward_kinematics(rc.q[:50], rc.T_b_e[:50], D)
+    R = sol.T_b_tip[..., :3, :3][sol.valid]
+    np.testing.assert_allclose(R @ np.swapaxes(R, -1, -2), np.broadcast_to(np.eye(3), R.shape),
+                               rtol=0, atol=1e-12)
+    np.testing.assert_allclose(np.linalg.det(R), 1.0, rtol=0, atol=1e-12)
+    bad = ak.forward_kinematics([[0.5, 0.1, 0.45], [-0.1, 0.1, 0.45]], T0, D)
+    assert np.isnan(bad.tip[0]).all() and np.isfinite(bad.tip[1][bad.valid[1]]).all()
+    ref = ak.robot.forward_kinematics(rc.q[:50], rc.T_b_e[:50], D)
+    np.testing.assert_allclose(sol.T_b_tip, ref.T_b_tip, rtol=0, atol=1e-12, equal_nan=True)
+
+
+# --- the layers import one way --------------------------------------------------------------
+def _imports(path):
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    pkg = ".".join(("athenakin",) + path.relative_to(SRC).parent.parts)
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                up = pkg.split(".")[: len(pkg.split(".")) - node.level + 1]
+                base = ".".join(up + ([base] if base else []))
+            yield from [base] + [f"{base}.{a.name}" for a in node.names]
+        elif isinstance(node, ast.Import):
+            yield from (a.name for a in node.names)
+
+
+@pytest.mark.parametrize("layer, forbidden", [
+    ("robot", ("athenakin.fast", "athenakin._dispatch", "athenakin.analysis")),
+    ("parallel", ("athenakin.fast", "athenakin._dispatch", "athenakin.analysis")),
+    ("chain", ("athenakin.fast", "athenakin._dispatch", "athenakin.analysis")),
+    ("fast", ("athenakin._dispatch", "athenakin.analysis", "athenakin.plot", "athenakin.cli")),
+])
+def test_layers_import_downwards_only(layer, forbidden):
+    for path in sorted((SRC / layer).rglob("*.py")):
+        for name in _imports(path):
+            assert not name.startswith(forbidden), f"{path.name} imports {name}"
