@@ -58,8 +58,8 @@ from ..robot._ik import (
 from . import _fk_kernels as _fk
 from . import _fk_sized as _fz
 from . import _ik_kernels as _ik
-from ._threads import parallel_guard
 from . import _ik_sized as _iz
+from ._threads import parallel_guard
 
 __all__ = [
     "design_params",

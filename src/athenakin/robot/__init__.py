@@ -13,8 +13,8 @@ from ._fk import (
     slot_index,
 )
 from ._ik import (
-    IK_Q_ERROR_MAX,
     IK_FIELDS,
+    IK_Q_ERROR_MAX,
     IK_SINGULAR_TOL,
     InstrumentIK,
     PassiveJoints,
