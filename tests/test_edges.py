@@ -344,3 +344,18 @@ def test_parallel_ik_far_points_agree(O_s):
     ref = ak.parallel.parallel_ik_from_position(O_s, D)
     fast = ak.fast.parallel_ik_from_position(O_s, D)
     assert int(ref.reason) == int(fast.reason) != 0
+
+
+@pytest.mark.parametrize("frame", ["T0", "tilted"])
+def test_tool_tip_subnormal_is_a_unit_direction(frame):
+    """A tip of 5e-324 m: the direction is a unit vector and both backends agree."""
+    T = T0.copy()
+    if frame == "tilted":
+        T[:3, :3] = ak.study.rotation_from_quaternion(np.array([0.3, -0.5, 0.7, 0.4]) / np.sqrt(
+            0.99)) @ T0[:3, :3]
+    out = [ak.q_from_tool_tip(T, [0.0, 5e-324, 5e-324], D, errors="flag", backend=b)
+           for b in BACKENDS]
+    assert int(out[0][1].reason) == int(out[1][1].reason)
+    for _, res in out:
+        if res.valid:
+            assert_allclose(np.linalg.norm(res.direction_b), 1.0, rtol=0, atol=1e-15)

@@ -503,7 +503,9 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
     pre = np.zeros(s.shape, dtype=np.int8)
     pre = np.where(s >= L, np.int8(Reason.INSERTION_RANGE), pre)
     pre = np.where(s == 0, np.int8(Reason.IK_SINGULAR), pre).astype(np.int8)
-    d_e = tip / np.where(s > 0, s, 1.0)[..., None]
+    with np.errstate(invalid="ignore"):   # scaled first: a unit vector even for subnormals
+        ts = tip / np.where(m > 0, m, 1.0)[..., None]
+        d_e = ts / np.linalg.norm(ts, axis=-1, keepdims=True)
     d_e = np.where((s > 0)[..., None], d_e, np.array([0.0, 0.0, 1.0]))
     return _q_from_line(T, d_e, L - s, design, errors, pre)
 
