@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 import athenakin as ak
+import athenakin.analysis  # noqa: F401  (ak.analysis)
 from athenakin import fast
 from athenakin.robot import _jacobians as ref
 from athenakin.testing import random_configurations
@@ -76,8 +77,10 @@ def cases(quick: bool) -> list[dict]:
          lambda: ref.parallel_jacobian(q1, d, m1)),
         ("athenakin.fast, parallel_jacobian", False,
          lambda: fast.parallel_jacobian(q1, d, m1)),
-        ("analysis.parallel_jacobian(..., backend='numba')", False,
-         lambda: ref.parallel_jacobian(q1, d, m1, backend="numba")),
+        ("ak.analysis.parallel_jacobian, default arguments", False,
+         lambda: ak.analysis.parallel_jacobian(q1, d, m1)),
+        ("ak.analysis.instrument_jacobian, default arguments", False,
+         lambda: ak.analysis.instrument_jacobian(q1, T1, d, mode=m1)),
     ]
     for name, base, call in single:
         out.append({"name": name, "group": "jacobian-single", "batch": 1, "baseline": base,

@@ -82,3 +82,57 @@ def test_a_frame_without_solution_is_named():
     q = np.array([[-0.10, 0.10, 0.45], [0.2, 0.1, 0.45]])
     with pytest.raises(ak.StrokeLimitError, match="frame 1"):
         render_frames(q, size=SMALL, progress=False)
+
+
+# --- issue 12, item 12: the animation starts at the reference and shows the cone ---------
+@pytest.mark.parametrize("lead", [1, 3, 6])
+def test_cone_path_with_lead_starts_and_ends_at_the_reference(lead):
+    d = ak.Design.default()
+    T = ak.default_rcm_frame(d)
+    cone = 0.08
+    q = instrument_cone_path(30, T, d, cone_angle=cone, lead=lead)
+    assert q.shape == (30, 3)
+    np.testing.assert_allclose(q[0], ak.robot.REFERENCE_Q, atol=1e-12)
+    np.testing.assert_allclose(q[-1], ak.robot.REFERENCE_Q, atol=1e-12)
+    z3 = np.stack([ak.plot.robot_geometry(qi, T, d).frames["instrument"][:3, 2] for qi in q])
+    tilt = np.arccos(np.clip(z3 @ T[:3, 0], -1, 1))        # from the cone axis x_e
+    np.testing.assert_allclose(tilt[lead:30 - lead], cone, atol=1e-7)
+    assert np.all(np.diff(tilt[:lead + 1]) > 0) and np.all(np.diff(tilt[29 - lead:]) < 0)
+
+
+def test_cone_path_rejects_a_lead_that_leaves_no_cone():
+    with pytest.raises(ak.InvalidInputError, match="lead: expected an integer in 0..4"):
+        instrument_cone_path(10, lead=5)
+
+
+def test_every_frame_shows_the_whole_sweep():
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import to_rgb
+    from mpl_toolkits.mplot3d import proj3d
+
+    from athenakin.plot._animate import TRACE_COLOR, draw_motion_frame
+    from athenakin.plot._geometry import cube_limits
+
+    d = ak.Design.default()
+    T = ak.default_rcm_frame(d)
+    q = instrument_cone_path(16, T, d, lead=2)
+    geoms = [ak.plot.robot_geometry(qi, T, d) for qi in q]
+    lo, hi = cube_limits(*geoms[0].bounds())
+    fig = plt.figure(figsize=(6.4, 6.0), dpi=100)
+    ax = fig.add_subplot(projection="3d")
+    draw_motion_frame(ax, geoms, 0, limits=(lo, hi), show_labels=False)
+    fig.canvas.draw()
+    img = np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(float)
+    target = 255 * np.array(to_rgb(TRACE_COLOR))
+    h = fig.canvas.get_width_height()[1]
+    seen = []
+    for g in geoms[4:12]:                 # where the tip goes later in the motion
+        x2, y2, _ = proj3d.proj_transform(*g.points["tip"], ax.get_proj())
+        x, y = ax.transData.transform((x2, y2))
+        r, c = int(round(h - y)), int(round(x))
+        patch = img[r - 3:r + 4, c - 3:c + 4]
+        seen.append(np.min(np.linalg.norm(patch - target, axis=-1)) < 60)
+    assert np.mean(seen) >= 0.75, seen
+    assert "motion: instrument sweep, tip path" in [t.get_text()
+                                                    for t in ax.get_legend().get_texts()]
+    plt.close(fig)

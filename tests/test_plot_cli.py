@@ -72,6 +72,17 @@ def test_animate_cone_gif(tmp_path, capsys):
     assert "instrument cone of half-angle 4.0 deg" in capsys.readouterr().out
 
 
+
+def test_animate_cone_starts_at_the_reference(tmp_path, capsys, monkeypatch):
+    """The default motion's first and last frames are the reference configuration."""
+    seen = {}
+    monkeypatch.setattr("athenakin.plot.animate", lambda path, q, *a, **k: seen.update(q=q))
+    assert main(["animate", "-o", str(tmp_path / "m.gif"), "--no-progress"]) == 0
+    assert "starting and ending on the cone axis x_e" in capsys.readouterr().out
+    assert seen["q"].shape == (36, 3)
+    np.testing.assert_allclose(seen["q"][[0, -1]], [ak.robot.REFERENCE_Q] * 2, atol=1e-12)
+
+
 def test_animate_segment_and_q_file(tmp_path, capsys):
     out = tmp_path / "seg.gif"
     assert main(["animate", "-o", str(out), "--from", "-0.1", "0.1", "0.45", "--to", "-0.12",

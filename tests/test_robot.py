@@ -396,6 +396,7 @@ def test_method_algebraic_matches_closed_form_and_bad_method_named():
         ak.forward_kinematics(c.q[0], c.T_b_e[0], D, method="newton")
 
 
+@pytest.mark.skipif(not ak._dispatch.numba_available(), reason="numba not available here")
 def test_backend_numba_same_results_as_numpy():
     c = random_configurations(500, D, rng=SEED + 10)
     a = ak.forward_kinematics(c.q, c.T_b_e, D)

@@ -212,7 +212,10 @@ class Design:
             tool_length = 0.45
         """
         with open(path, "rb") as fh:
-            data = tomllib.load(fh)
+            try:
+                data = tomllib.load(fh)
+            except RecursionError:  # tomllib recurses once per nested array or table
+                raise InvalidInputError(f"{path}: TOML nested too deeply") from None
         table: Mapping[str, Any] = data
         if "design" in data and isinstance(data["design"], Mapping):
             table = data["design"]

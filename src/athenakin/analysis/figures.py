@@ -25,6 +25,7 @@ __all__ = [
     "plot_workspace_3d",
     "plot_instrument_cone",
     "plot_cone_chart",
+    "wrapped_azimuth",
     "plot_tool_tip_slice",
     "figure_singularities",
     "figure_workspace",
@@ -39,6 +40,8 @@ MM = 1e3
 COLOR_MODE = {1: "#1f77b4", -1: "#ff7f0e"}
 COLOR_OUT = "#d9d9d9"
 COLOR_LOCI = {"w0": "#d62728", "h0": "#2ca02c", "l3": "#9467bd", "stroke": "black"}
+#: Hatching and outline of the directions with two insertion intervals.
+TWO_INTERVALS_COLOR = "#00bcd4"
 
 
 def _plt() -> Any:
@@ -170,16 +173,28 @@ def _box(ax: Any, lo: NDArray[np.float64], hi: NDArray[np.float64]) -> None:
 
 
 def plot_actuator_conditioning(am: ActuatorMap, *, mode: int = 1, quantity: str = "condition",
-                               ax: Any = None) -> Any:
-    """Colour map over ``(h, q3)`` of ``log10 cond``, ``sigma_min`` or ``inverse_sigma_min``."""
+                               ax: Any = None, norm: Any = None, colorbar: bool = True) -> Any:
+    """Colour map over ``(h, q3)`` of ``log10 cond``, ``sigma_min`` or ``inverse_sigma_min``.
+
+    ``log10 cond`` is drawn on the fixed range 0..4 (as every conditioning map
+    here), so maps of both assembly modes compare; pass ``norm``
+    (a :class:`matplotlib.colors.Normalize`) to share any other range, and
+    ``colorbar=False`` to draw one colour bar for several panels.
+    """
     ax = _ax(ax)
     k = 0 if mode == 1 else 1
     v = getattr(am, quantity)[..., k].T
     with np.errstate(divide="ignore", invalid="ignore"):
-        data, label, cmap = ((np.clip(np.log10(v), 0, 4), "log10 condition number", "viridis_r")
+        data, label, cmap = ((np.clip(np.log10(v), 0, 4), "log10 cond(dO_s/dq)", "viridis_r")
                              if quantity == "condition" else (v, quantity, "viridis"))
-    im = ax.pcolormesh(am.h * MM, am.q3 * MM, data, shading="auto", cmap=cmap, rasterized=True)
-    ax.figure.colorbar(im, ax=ax, shrink=0.85).set_label(label)
+    if norm is None and quantity == "condition":
+        from matplotlib.colors import Normalize
+
+        norm = Normalize(vmin=0.0, vmax=4.0)
+    im = ax.pcolormesh(am.h * MM, am.q3 * MM, data, shading="auto", cmap=cmap, norm=norm,
+                       rasterized=True)
+    if colorbar:
+        ax.figure.colorbar(im, ax=ax, shrink=0.85).set_label(label)
     ax.add_patch(_rect(am.h_stroke * MM, am.q3_stroke * MM, ax))
     ax.set_xlabel("h [mm]")
     ax.set_ylabel("q3 [mm]")
@@ -287,8 +302,10 @@ def plot_cone_chart(ic: InstrumentCone, *, quantity: str = "range", ax: Any = No
 
     ``quantity="range"``: reachable insertion length ``p_max - p_min`` (mm);
     ``"p_min"`` / ``"p_max"``; ``"condition"``: ``log10`` of the best condition
-    number of the tool-tip Jacobian along the direction. Hatched: directions with
-    two separate insertion intervals.
+    number of the tool-tip Jacobian along the direction. Hatched and outlined
+    (cyan): directions with two separate insertion intervals. The azimuth axis
+    starts in the widest gap of unreachable azimuths (:func:`wrapped_azimuth`), so
+    a region that crosses +-180 deg is drawn in one piece.
     """
     ax = _ax(ax)
     A, B = np.degrees(ic.azimuth), np.degrees(ic.polar)
@@ -305,19 +322,74 @@ def plot_cone_chart(ic: InstrumentCone, *, quantity: str = "range", ax: Any = No
                 warnings.simplefilter("ignore", RuntimeWarning)
                 v = np.clip(np.log10(np.nanmin(ic.condition, axis=-1)), 0, 4)
             label, cmap = "log10 min cond(d tip/dq) along the direction", "viridis_r"
-    order = np.argsort(A)
+    A, order = wrapped_azimuth(A, np.asarray(np.isfinite(v).any(axis=1)))
     kw = {"vmin": 0, "vmax": 4} if quantity == "condition" else {}
     im = ax.pcolormesh(A[order], B, v[order].T, shading="auto", cmap=cmap, rasterized=True, **kw)
     ax.figure.colorbar(im, ax=ax, shrink=0.85).set_label(label)
     two = (ic.n_intervals > 1)[order].T.astype(float)
     if np.any(two):
-        ax.contourf(A[order], B, two, levels=[0.5, 1.5], colors="none", hatches=["////"])
+        import matplotlib as mpl
+        from matplotlib.patches import Patch
+
+        with mpl.rc_context({"hatch.linewidth": 1.6, "hatch.color": TWO_INTERVALS_COLOR}):
+            ax.contourf(A[order], B, two, levels=[0.5, 1.5], colors="none", hatches=["xxx"])
+        ax.contour(A[order], B, two, levels=[0.5], colors=TWO_INTERVALS_COLOR, linewidths=1.5)
+        ax.legend(handles=[Patch(facecolor="none", edgecolor=TWO_INTERVALS_COLOR, hatch="xxx",
+                                 lw=1.5, label="two insertion intervals")],
+                  loc="lower right", fontsize=7, framealpha=0.9)
     ax.set_xlabel("azimuth about z_e [deg]")
     ax.set_ylabel("polar angle from z_e [deg]")
+    ax.set_xlim(A[order][0], A[order][-1])
     ax.set_ylim(180, 0)
     ax.set_title("Instrument cone: insertion range per direction" if quantity == "range"
                  else "Instrument cone about the RCM")
     return ax
+
+
+def wrapped_azimuth(azimuth_deg: NDArray[np.float64], occupied: NDArray[np.bool_]
+                    ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Azimuths shifted by whole turns so that the occupied ones form one run.
+
+    Parameters
+    ----------
+    azimuth_deg : ndarray, shape (n,)
+        Azimuths, degrees, one turn.
+    occupied : ndarray of bool, shape (n,)
+        Azimuths with something to draw.
+
+    Returns
+    -------
+    wrapped : ndarray, shape (n,)
+        ``azimuth_deg`` plus 0 or 360, in one turn that starts in the middle of
+        the widest circular gap of unoccupied azimuths (unchanged when there is
+        none: every azimuth occupied, or none).
+    order : ndarray of int, shape (n,)
+        Indices that sort ``wrapped``.
+    """
+    a = np.asarray(azimuth_deg, dtype=float)
+    occ = np.asarray(occupied, dtype=bool)
+    order = np.argsort(a)
+    if occ.all() or not occ.any():
+        return a, order
+    s_occ = occ[order]
+    s_a = a[order]
+    n = len(s_a)
+    first = int(np.flatnonzero(s_occ)[0])
+    best, best_len, run, start = 0, -1, 0, 0
+    for step in range(1, n + 1):          # circular runs of unoccupied azimuths
+        i = (first + step) % n
+        if not s_occ[i]:
+            if run == 0:
+                start = i
+            run += 1
+            if run > best_len:
+                best, best_len = start, run
+        else:
+            run = 0
+    cut_index = (best + best_len // 2) % n
+    cut = s_a[cut_index]
+    wrapped = np.where(a < cut, a + 360.0, a)
+    return wrapped, np.argsort(wrapped)
 
 
 def plot_instrument_cone(ic: InstrumentCone, *, ax: Any = None, frame: str = "base",
@@ -374,8 +446,14 @@ def plot_instrument_cone(ic: InstrumentCone, *, ax: Any = None, frame: str = "ba
     f = "e" if frame == "rcm" else "b"
     ax.set_xlabel(f"x_{f} [mm]")
     ax.set_ylabel(f"y_{f} [mm]")
-    ax.set_zlabel(f"z_{f} [mm]")
+    ax.zaxis.set_rotate_label(False)
+    ax.set_zlabel(f"z_{f} [mm]", rotation=90)
+    from matplotlib.ticker import MaxNLocator
+
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+        axis.set_major_locator(MaxNLocator(4))
     ax.view_init(elev=20, azim=30)
+    ax.set_box_aspect((1, 1, 1), zoom=0.8)     # room for the tick and axis labels
     ax.set_title("Instrument directions about the RCM")
     return ax
 
@@ -444,15 +522,21 @@ def figure_workspace(pw: PointWorkspace, *, x_values: tuple[float, ...] | None =
 def figure_conditioning(am: ActuatorMap, pw: PointWorkspace, tw: ToolTipWorkspace | None = None
                         ) -> Any:
     """Conditioning maps: actuator plane, an ``O_s`` slice and a tool-tip slice."""
+    from matplotlib.colors import Normalize
+
     plt = _plt()
     n = 3 if tw is None else 4
-    fig = plt.figure(figsize=(5 * n, 4.4))
-    plot_actuator_conditioning(am, mode=1, ax=fig.add_subplot(1, n, 1))
-    plot_actuator_conditioning(am, mode=-1, ax=fig.add_subplot(1, n, 2))
+    fig = plt.figure(figsize=(5 * n, 4.4), layout="constrained")
+    fig.get_layout_engine().set(w_pad=0.08, wspace=0.04)
+    norm = Normalize(vmin=0.0, vmax=4.0)            # one colour range for both modes
+    pair = [fig.add_subplot(1, n, k + 1) for k in range(2)]
+    for ax, mode in zip(pair, (1, -1), strict=True):
+        plot_actuator_conditioning(am, mode=mode, ax=ax, norm=norm, colorbar=False)
+    cb = fig.colorbar(pair[0].collections[0], ax=pair, shrink=0.85)
+    cb.set_label("log10 cond(dO_s/dq), modes +1 and -1")
     plot_workspace_slice(pw, quantity="condition", ax=fig.add_subplot(1, n, 3))
     if tw is not None:
         plot_tool_tip_slice(tw, axis=2, value=0.0, ax=fig.add_subplot(1, n, 4))
-    fig.tight_layout()
     return fig
 
 

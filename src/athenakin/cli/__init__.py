@@ -112,6 +112,9 @@ def _one_line(exc: BaseException) -> str:
     """``Type: message`` on one line (long messages cut)."""
     if isinstance(exc, RecursionError):
         text = "input nested too deeply"
+    elif isinstance(exc, OverflowError):
+        text = (f"numeric overflow ({' '.join(str(exc).split())}): a length or value is too "
+                f"large (lengths are in m)")
     elif isinstance(exc, MemoryError):
         text = "out of memory (reduce the resolution or the number of samples)"
     else:

@@ -138,8 +138,10 @@ def run(args: argparse.Namespace) -> int:
             what = f"segment {args.q_from} -> {args.q_to} m"
         else:
             cone = np.radians(args.cone) if args.cone is not None else 0.1
-            q = instrument_cone_path(args.frames or 36, T, design, cone_angle=cone, p=args.p)
-            what = f"instrument cone of half-angle {np.degrees(cone):.1f} deg about the RCM"
+            n = args.frames or 36
+            q = instrument_cone_path(n, T, design, cone_angle=cone, p=args.p, lead=n // 6)
+            what = (f"instrument cone of half-angle {np.degrees(cone):.1f} deg about the RCM"
+                    + (", starting and ending on the cone axis x_e" if n // 6 else ""))
         animate(outs.temp(out), q, T, design, slot=args.slot, fps=fps, orbit=args.orbit,
                 progress=not args.no_progress)
         outs.commit()

@@ -7,6 +7,7 @@ import warnings
 from pathlib import Path
 
 from ._common import add_design_option, add_setup_options, load_design, load_rcm, table
+from ._output import Outputs, add_force_option, outputs
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -45,6 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--candidates", type=int, default=2000,
                    help="--plan: random candidate poses (default 2000)")
     p.add_argument("--seed", type=int, default=0, help="--plan: random seed (default 0)")
+    add_force_option(p)
     add_design_option(p)
     add_setup_options(p)
     p.set_defaults(func=run)
@@ -52,11 +54,15 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``calibrate``."""
+    out = Path(args.output)
+    with outputs(args) as outs:
+        outs.add(out)
+        return _run(args, out, outs)
+
+
+def _run(args: argparse.Namespace, out: Path, outs: Outputs) -> int:
     from .. import calibration as cal
 
-    out = Path(args.output)
-    if not out.parent.exists():
-        raise ValueError(f"-o: folder {str(out.parent)!r} does not exist")
     design = load_design(args)
     T = load_rcm(args, design)
     if args.plan is not None:
@@ -65,9 +71,10 @@ def run(args: argparse.Namespace) -> int:
         plan = cal.plan_poses(args.plan, T, design, params=args.params, frame=args.frame,
                               n_candidates=args.candidates,
                               mode=-1 if args.mode == "-1" else 1, rng=args.seed)
-        out.write_text(cal.plan_csv_text(plan.q, comment=(
+        outs.write(out, cal.plan_csv_text(plan.q, comment=(
             f"D-optimal for {' '.join(plan.names)}; frame {args.frame}; "
             f"log det = {plan.logdet:.4f}; condition {plan.identifiability.condition:.4g}")))
+        outs.commit()
         print(plan.identifiability.summary())
         print(f"wrote {len(plan.q)} poses to {out}")
         return 0
@@ -88,7 +95,8 @@ def run(args: argparse.Namespace) -> int:
     print(table(["parameter", "nominal", "estimate", "change (um|urad)", "std (um|urad)"], rows))
     print(f"RMS tip residual: {res.rms_before * 1e6:.2f} um before, "
           f"{res.rms_after * 1e6:.2f} um after (sigma {res.sigma * 1e6:.2f} um)")
-    out.write_text(cal.calibration_toml(res))
+    outs.write(out, cal.calibration_toml(res))
+    outs.commit()
     print(f"wrote {out}")
     if not args.no_report:
         rep = args.report or out.with_name(out.stem + "_report.md")

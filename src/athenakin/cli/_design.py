@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from ._common import add_design_option, load_design
+from ._output import outputs
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -29,8 +30,8 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError("--force goes with --write FILE")
         print(design.to_toml(), end="")
         return 0
-    if args.write.exists() and not args.force:
-        raise FileExistsError(f"--write: {str(args.write)!r} exists (add --force to replace it)")
-    design.write_toml(args.write, overwrite=args.force)
+    with outputs(args, option="--write") as outs:
+        outs.write(outs.add(args.write), design.to_toml())
+        outs.commit()
     print(f"wrote {args.write}")
     return 0

@@ -4,11 +4,16 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..design import Design
 from ._common import add_design_option, add_setup_options, check_dpi, load_design, load_rcm
 from ._output import add_force_option, outputs
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..design import Design
 
 VIEW_SUFFIXES = (".png", ".svg", ".pdf", ".html")
 
@@ -87,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _render(args: argparse.Namespace, out: Path, q: np.ndarray | None, T: np.ndarray,
-            design: object) -> None:
+            design: Design) -> None:
     from ..plot import save_view
 
     kw: dict = {"show_frames": not args.no_frames}  # type: ignore[type-arg]

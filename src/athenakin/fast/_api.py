@@ -338,25 +338,29 @@ _object_new = object.__new__
 _object_setattr = object.__setattr__
 
 
-def _one_view(name: str, fbuf: NDArray[np.float64], ibuf: NDArray[np.int8]) -> NDArray:
-    """A field of a single-pose FKSolution as a view of the packed kernel buffers."""
-    if name == "p":
-        return fbuf[_fz.ONE_P:_fz.ONE_U]
-    if name == "u":
-        return fbuf[_fz.ONE_U:_fz.ONE_T].reshape(16, 5)
-    if name == "valid":
-        return ibuf[_fz.ONE_VALID:_fz.ONE_ITEM].view(np.bool_)
-    if name == "reason":
-        return ibuf[_fz.ONE_REASON:_fz.ONE_VALID]
-    if name == "T_b_s_mode":
-        return fbuf[_fz.ONE_T:_fz.ONE_RES].reshape(2, 4, 4)
-    if name == "residual":
-        return fbuf[_fz.ONE_RES:_fz.ONE_F]
-    return ibuf[_fz.ONE_ITEM:_fz.ONE_I].reshape(())     # item_reason
-
-
 _empty = np.empty
 _I8 = np.int8
+_BOOL = np.bool_
+
+
+def _fk_one(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.float64],
+            tol: NDArray[np.float64]) -> tuple[int, FKSolution]:
+    """One pose into the result's own arrays: ``(flags, result)`` (flags as the kernels')."""
+    reason = _empty(16, _I8)
+    valid = _empty(16, _BOOL)
+    p = _empty(16)
+    u = _empty((16, 5))
+    Tbs = _empty((2, 4, 4))
+    res = _empty(16)
+    item = _empty(1, _I8)
+    flags = _fz.fk_one_arrays(qa, Ta, P, tol, ROTATION_TOL, reason, valid, p, u, Tbs, res, item)
+    obj = _object_new(FKSolution)
+    # the instance __dict__ the frozen dataclass's __init__ would leave, 1 us less
+    _object_setattr(obj, "__dict__", {"valid": valid, "reason": reason, "p": p, "u": u,
+                                      "T_b_s_mode": Tbs, "residual": res,
+                                      "item_reason": item.reshape(()),
+                                      "tool_length": P.item(12)})
+    return flags, obj
 
 
 def _fk_one_plain(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.float64]
@@ -365,35 +369,24 @@ def _fk_one_plain(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[n
 
     None (the kernel flagged the input, or the pose has no valid slot) sends the
     caller down the general path, which raises the reference's error or, for a
-    false rigidity alarm, returns the same result. The result's arrays are views
-    of the kernel's two packed buffers, made on first access (a control loop that
-    reads ``p``, ``u`` and ``valid`` pays for those three only).
+    false rigidity alarm, returns the same result.
     """
-    fbuf = _empty(_fz.ONE_F)
-    ibuf = _empty(_fz.ONE_I, _I8)
-    if _fz.fk_one_modes(qa, Ta, P, _FK_TOL_DEFAULT, ROTATION_TOL, fbuf, ibuf) or ibuf[-1]:
+    flags, sol = _fk_one(qa, Ta, P, _FK_TOL_DEFAULT)
+    if flags or sol.item_reason:
         return None
-    obj = _object_new(FKSolution)
-    _object_setattr(obj, "__dict__", {"_lazy": (_one_view, fbuf, ibuf),
-                                      "tool_length": P.item(12)})
-    return obj
+    return sol
 
 
 def _fk_single(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.float64],
                tol: NDArray[np.float64], raise_now: bool, reference: Callable[[], FKSolution]
                ) -> FKSolution:
-    """One pose through the packed-buffer kernel (about half the call overhead)."""
-    fbuf = _empty(_fz.ONE_F)
-    ibuf = _empty(_fz.ONE_I, _I8)
-    flags = _fz.fk_one_modes(qa, Ta, P, tol, ROTATION_TOL, fbuf, ibuf)
+    """One pose through the single-pose kernel (about half the call overhead)."""
+    flags, sol = _fk_one(qa, Ta, P, tol)
     if flags & _fk.FLAG_NONRIGID:
         check_transform(Ta, "T_b_e", allow_nonfinite=True)
-    if raise_now and (flags & (_fk.FLAG_Q_NONFINITE | _fk.FLAG_T_NONFINITE) or ibuf[-1] != 0):
+    if raise_now and (flags & (_fk.FLAG_Q_NONFINITE | _fk.FLAG_T_NONFINITE) or sol.item_reason):
         return reference()
-    obj = _object_new(FKSolution)
-    _object_setattr(obj, "__dict__", {"_lazy": (_one_view, fbuf, ibuf),
-                                      "tool_length": P.item(12)})
-    return obj
+    return sol
 
 
 # --- whole robot: inverse kinematics, paper form -----------------------------------------
@@ -503,6 +496,9 @@ def _ik_want(names: tuple[str, ...]) -> int:
     return w
 
 
+_I64 = np.int64
+
+
 def _ik_one_plain(Ta: NDArray[np.float64], Ua: NDArray[np.float64], P: NDArray[np.float64]
                   ) -> tuple[NDArray[np.float64], PassiveJoints] | None:
     """One item, default tolerances: the result, or None if anything is off (lean path).
@@ -511,8 +507,8 @@ def _ik_one_plain(Ta: NDArray[np.float64], Ua: NDArray[np.float64], P: NDArray[n
     input flag, or no solution) sends the caller down the general path, which
     raises the reference's error or recomputes.
     """
-    fbuf = np.empty(_ik.ONE_F)
-    ibuf = np.empty(3, np.int64)
+    fbuf = _empty(_ik.ONE_F)
+    ibuf = _empty(3, _I64)
     if _ik.ik_paper_one(Ta, Ua, P, IK_SINGULAR_TOL, CLOSURE_TOL, ROTATION_TOL, fbuf, ibuf) \
             or ibuf[2]:
         return None
@@ -530,8 +526,8 @@ def _line_one_plain(Ta: NDArray[np.float64], Va: NDArray[np.float64], p: float, 
     None when an input flag is set or the item has no solution (the general path
     then raises the reference's error).
     """
-    fbuf = np.empty(_ik.LINE_F)
-    ibuf = np.empty(3, np.int64)
+    fbuf = _empty(_ik.LINE_F)
+    ibuf = _empty(3, _I64)
     if _ik.ik_line_one_packed(Ta, Va, p, P, kind, ROTATION_TOL, fbuf, ibuf) or ibuf[2]:
         return None
     return fbuf[_ik.LINE_Q:_ik.LINE_P], _new(

@@ -43,39 +43,13 @@ from ._fk_kernels import (
 from ._scalar import nanmax2
 
 __all__ = ["WANT_VALID", "WANT_REASON", "WANT_P", "WANT_U", "WANT_T", "WANT_RES", "WANT_ALL",
-           "fk_select", "fk_one_modes", "ONE_P", "ONE_U", "ONE_T", "ONE_RES", "ONE_F",
-           "ONE_REASON", "ONE_VALID", "ONE_ITEM", "ONE_I"]
+           "fk_select", "fk_one_arrays"]
 
 #: Bits of ``want`` in :func:`fk_select`.
 WANT_VALID, WANT_REASON, WANT_P, WANT_U, WANT_T, WANT_RES = 1, 2, 4, 8, 16, 32
 WANT_ALL = 63
 
 _OPTS = dict(error_model="numpy", cache=True)
-
-#: Layout of the packed single-pose buffers of :func:`fk_one_modes` (T_b_s per mode).
-ONE_P, ONE_U, ONE_T, ONE_RES, ONE_F = 0, 16, 96, 128, 144
-ONE_REASON, ONE_VALID, ONE_ITEM, ONE_I = 0, 16, 32, 33
-
-
-@njit(**_OPTS)
-def fk_one_modes(q, T, P, tol, rot_tol, fbuf, ibuf):
-    """One pose, q (3,) and T (4, 4), into packed buffers with ``T_b_s`` per mode.
-
-    ``fbuf`` (144,): p (16), u (16 x 5), T_b_s (2 x 4 x 4), residual (16);
-    ``ibuf`` (33,) int8: reason (16), valid (16, 0/1), item_reason (1).
-    Returns the FLAG_* bits of :mod:`._fk_kernels`.
-    """
-    q2 = q.reshape((1, 3))
-    T2 = T.reshape((1, 4, 4))
-    G, SH, S0, S1 = scratch()
-    _chunk_full(q2, T2, P, tol, G, SH, S0, S1, 0, 1,
-                ibuf[ONE_REASON:ONE_VALID].reshape((1, 16)),
-                ibuf[ONE_VALID:ONE_ITEM].reshape((1, 16)),
-                fbuf[ONE_P:ONE_U].reshape((1, 16)), fbuf[ONE_U:ONE_T].reshape((1, 16, 5)),
-                fbuf[ONE_T:ONE_RES].reshape((1, 2, 4, 4)),
-                fbuf[ONE_RES:ONE_F].reshape((1, 16)), ibuf[ONE_ITEM:ONE_I])
-    return _input_flags(q2, T2, rot_tol)
-
 
 @njit(**_OPTS)
 def _store_mode_select(Sm, ii, i, k0, m, xm, pres, want, reason, valid, p, u, Tbs, res):
@@ -166,3 +140,19 @@ def fk_select(q, T, P, tol, rot_tol, want, reason, valid, p, u, Tbs, res, item):
             _store_mode_select(S0, ii, i, 0, 0, xm, pres, want, reason, valid, p, u, Tbs, res)
             _store_mode_select(S1, ii, i, 8, 1, xm, pres, want, reason, valid, p, u, Tbs, res)
     return _input_flags(q, T, rot_tol)
+
+
+@njit(**_OPTS)
+def fk_one_arrays(q, T, P, tol, rot_tol, reason, valid, p, u, Tbs, res, item):
+    """One pose into the result's own arrays (shapes (16,), (16, 5), (2, 4, 4), (1,)).
+
+    The 1-pose form of :func:`._fk_kernels.fk_full`: the reshapes happen here, in
+    compiled code, instead of as numpy views in Python. Returns the FLAG_* bits.
+    """
+    q2 = q.reshape((1, 3))
+    T2 = T.reshape((1, 4, 4))
+    G, SH, S0, S1 = scratch()
+    _chunk_full(q2, T2, P, tol, G, SH, S0, S1, 0, 1, reason.reshape((1, 16)),
+                valid.reshape((1, 16)), p.reshape((1, 16)), u.reshape((1, 16, 5)),
+                Tbs.reshape((1, 2, 4, 4)), res.reshape((1, 16)), item)
+    return _input_flags(q2, T2, rot_tol)

@@ -92,7 +92,10 @@ def _read_table(path: str | Path, *, header_row: bool = True
         if not header_row:
             rows.append((lineno, line.replace(",", " ").split()))
             continue
-        cells = [c.strip() for c in next(csv.reader([line]))]
+        try:
+            cells = [c.strip() for c in next(csv.reader([line]))]
+        except csv.Error as exc:  # a NUL byte, a cell longer than the csv module's limit
+            raise PathFileError(f"{path}, line {lineno}: not CSV ({exc})") from None
         if header is None:
             header = cells
             continue

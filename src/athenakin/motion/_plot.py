@@ -20,9 +20,13 @@ from ._plan import Trajectory
 from ._safety import MEASURE_NAMES
 
 __all__ = ["plot_actuators", "plot_tip_path", "plot_singularity_distance", "render_plots",
-           "plot_paths", "save_plots"]
+           "plot_paths", "save_plots", "waypoint_labels"]
 
 _COLORS = ("tab:blue", "tab:orange", "tab:green")
+#: Waypoints closer than this (mm) share one label in :func:`plot_tip_path`.
+WAYPOINT_TOL = 0.5
+#: Millimetres per metre: figures show lengths in mm.
+MM = 1e3
 
 _MEASURE_LABELS = {
     "half_chord": "half-chord k1∩k2 (mode boundary)",
@@ -39,6 +43,8 @@ _MEASURE_LABELS = {
 def plot_actuators(traj: Trajectory, *, axes: Any = None) -> Any:
     """Actuator position, velocity, acceleration (and jerk) over time, limits dashed.
 
+    Lengths in mm (as in every figure of athenakin), time in s.
+
     Parameters
     ----------
     traj : Trajectory
@@ -51,16 +57,17 @@ def plot_actuators(traj: Trajectory, *, axes: Any = None) -> Any:
     """
     import matplotlib.pyplot as plt
 
-    rows = [("q", traj.q, "position [m]", None),
-            ("qd", traj.qd, "velocity [m/s]", traj.limits.v_max),
-            ("qdd", traj.qdd, "acceleration [m/s²]", traj.limits.a_max)]
+    limits = traj.limits
+    rows = [("q", MM * traj.q, "position [mm]", None),
+            ("qd", MM * traj.qd, "velocity [mm/s]", MM * np.asarray(limits.v_max)),
+            ("qdd", MM * traj.qdd, "acceleration [mm/s²]", MM * np.asarray(limits.a_max))]
     if traj.qddd is not None:
-        rows.append(("qddd", traj.qddd, "jerk [m/s³]", traj.limits.j_max))
+        rows.append(("qddd", MM * traj.qddd, "jerk [mm/s³]", MM * np.asarray(limits.j_max)))
     if axes is None:
         _, axes = plt.subplots(len(rows), 1, sharex=True, figsize=(9, 2.3 * len(rows) + 0.8),
                                constrained_layout=True)
     axes = np.atleast_1d(axes)
-    lo, hi = traj.design.stroke_min, traj.design.stroke_max
+    lo, hi = MM * traj.design.stroke_min, MM * traj.design.stroke_max
     for ax, (_, data, label, lim) in zip(axes, rows, strict=True):
         for i in range(3):
             ax.plot(traj.t, data[:, i], color=_COLORS[i], lw=1.2, label=f"q{i + 1}")
@@ -123,17 +130,48 @@ def plot_tip_path(traj: Trajectory, *, ax: Any = None, context: bool = True,
         pts = np.concatenate([tip, O_e, np.zeros((1, 3))])
         ax.set_title("instrument about the RCM (frame E)")
     else:
-        for k, w in enumerate(wp):
-            ax.text(w[0], w[1], w[2], f" {k}", fontsize=8)
+        for text, w in waypoint_labels(wp):
+            ax.text(w[0], w[1], w[2], f" {text}", fontsize=8)
         ax.set_title("tool-tip path (frame E; numbers: waypoints)")
     c, r = (pts.max(0) + pts.min(0)) / 2, max((pts.max(0) - pts.min(0)).max() / 2, 1e-3)
     for setter, ci in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), c, strict=True):
         setter(ci - r, ci + r)
+    from matplotlib.ticker import MaxNLocator
+
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+        axis.set_major_locator(MaxNLocator(5))
     ax.set_xlabel("x_e [mm]")
     ax.set_ylabel("y_e [mm]")
     ax.set_zlabel("z_e [mm]")
     ax.legend(loc="upper left", fontsize=8)
     return ax
+
+
+def waypoint_labels(waypoints: np.ndarray, *, tol: float = WAYPOINT_TOL
+                    ) -> list[tuple[str, np.ndarray]]:
+    """One label per distinct waypoint place: ``"0, 4"`` where waypoints 0 and 4 coincide.
+
+    Parameters
+    ----------
+    waypoints : ndarray, shape (K, 3)
+        Waypoints in drawing units (mm).
+    tol : float
+        Waypoints closer than this (same units) share a label.
+
+    Returns
+    -------
+    list of (str, ndarray shape (3,))
+        Text and position, in the order of each place's first waypoint.
+    """
+    places: list[tuple[list[int], np.ndarray]] = []
+    for k, w in enumerate(np.asarray(waypoints, dtype=float)):
+        for idx, p in places:
+            if np.linalg.norm(w - p) <= tol:
+                idx.append(k)
+                break
+        else:
+            places.append(([k], w))
+    return [(", ".join(map(str, idx)), p) for idx, p in places]
 
 
 def plot_singularity_distance(traj: Trajectory, *, ax: Any = None) -> Any:

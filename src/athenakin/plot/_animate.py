@@ -16,7 +16,8 @@ from ..robot._setup import resolve_rcm_frame
 from ._geometry import VIEW, RobotGeometry, cube_limits, robot_geometry
 from ._mpl import plot_robot
 
-__all__ = ["instrument_cone_path", "render_frames", "animate", "ANIMATION_SIZE"]
+__all__ = ["instrument_cone_path", "render_frames", "animate", "draw_motion_frame",
+           "ANIMATION_SIZE", "TRACE_COLOR"]
 
 #: Default frame size (width, height) in pixels; multiples of 16 suit video codecs.
 ANIMATION_SIZE = (800, 640)
@@ -25,13 +26,17 @@ ANIMATION_SIZE = (800, 640)
 def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
                          design: Design | None = None, *, axis_e: ArrayLike = (1.0, 0.0, 0.0),
                          cone_angle: float = 0.1, p: ArrayLike | None = None,
-                         turns: float = 1.0) -> NDArray[np.float64]:
+                         turns: float = 1.0, lead: int = 0) -> NDArray[np.float64]:
     """Actuator values that sweep the instrument around a cone about the RCM.
 
     The instrument direction (frame E) turns ``turns`` times around ``axis_e`` at
     the half-angle ``cone_angle``; the insertion ``p`` (distance ``O_s`` -> RCM)
     is fixed or given per frame. Each direction is mapped to ``q`` by
-    :func:`athenakin.q_from_instrument` (the controller-form IK).
+    :func:`athenakin.q_from_instrument` (the controller-form IK). With ``lead``,
+    the motion starts on the axis (for the defaults: at
+    :data:`athenakin.robot.REFERENCE_Q`), tilts out to the cone in ``lead``
+    samples, sweeps it, and comes back to the axis in ``lead`` samples, so that
+    an animation starts and ends at the reference and loops without a jump.
 
     Parameters
     ----------
@@ -48,6 +53,9 @@ def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
     p : array-like, shape () or (n,), keyword-only, optional
         Insertion, m (default :data:`athenakin.robot.REFERENCE_P`).
     turns : float, keyword-only
+    lead : int, keyword-only
+        Samples (of the ``n``) that tilt out from the axis at the start, and as many
+        that tilt back at the end; 0 (default): every sample is on the cone.
 
     Returns
     -------
@@ -56,10 +64,18 @@ def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
 
     Raises
     ------
+    InvalidInputError
+        ``n - 2 lead`` is less than 2.
     KinematicsError
         A sample is out of the workspace (the message names the first).
     """
+    from ..errors import InvalidInputError
     from ..robot import REFERENCE_P
+
+    if isinstance(lead, bool) or not isinstance(lead, (int, np.integer)) or lead < 0 \
+            or n - 2 * lead < 2:
+        raise InvalidInputError(f"lead: expected an integer in 0..{(n - 2) // 2} for n = {n} "
+                                f"samples (2 lead + at least 2 on the cone), got {lead!r}")
 
     design = resolve_design(design)
     T = resolve_rcm_frame(T_b_e, design)
@@ -69,9 +85,15 @@ def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
     e1 = np.cross(helper, a)
     e1 /= np.linalg.norm(e1)
     e2 = np.cross(a, e1)
-    t = 2 * np.pi * turns * np.arange(n) / n
-    d = (np.cos(cone_angle) * a + np.sin(cone_angle) * (np.cos(t)[:, None] * e1
-                                                         + np.sin(t)[:, None] * e2))
+    m = n - 2 * lead
+    t = 2 * np.pi * turns * np.arange(m) / m
+    tilt = np.full(m, float(cone_angle))
+    if lead:
+        ramp = cone_angle * np.arange(lead) / lead             # 0 (on the axis) .. < cone
+        t = np.concatenate([np.zeros(lead), t, np.full(lead, t[-1])])
+        tilt = np.concatenate([ramp, tilt, cone_angle * np.arange(lead - 1, -1, -1) / lead])
+    d = (np.cos(tilt)[:, None] * a + np.sin(tilt)[:, None] * (np.cos(t)[:, None] * e1
+                                                               + np.sin(t)[:, None] * e2))
     pp = np.broadcast_to(np.asarray(REFERENCE_P if p is None else p, dtype=float), (n,))
     q, res = q_from_instrument(T, d, pp, design, errors="flag")
     if not np.all(res.valid):
@@ -95,10 +117,59 @@ def _geometries(qs: NDArray[np.float64], T: NDArray[np.float64], design: Design,
     return out
 
 
+#: Colour of the traced motion (the instrument's sweep and the tool-tip path).
+TRACE_COLOR = "#e8743b"
+#: Number of instrument lines drawn of the sweep.
+TRACE_LINES = 24
+
+
+def draw_motion_frame(ax: Any, geoms: list[RobotGeometry], k: int, *,
+                      limits: tuple[NDArray[np.float64], NDArray[np.float64]],
+                      view: tuple[float, float] = VIEW, trace: bool = True,
+                      **kwargs: Any) -> Any:
+    """Draw frame ``k`` of a motion: the robot, and (``trace``) the whole motion faintly.
+
+    The trace is the tool-tip path (dashed; solid up to frame ``k``) and
+    :data:`TRACE_LINES` instrument lines spread over the motion, from ``O_s``
+    through the RCM to the tip: the surface the instrument sweeps.
+
+    Parameters
+    ----------
+    ax : Axes3D
+    geoms : list of RobotGeometry
+        Every frame of the motion.
+    k : int
+        The frame drawn.
+    limits : (ndarray, ndarray), keyword-only
+        Axis box (m), the same for every frame.
+    view : (float, float), keyword-only
+    trace : bool, keyword-only
+    **kwargs
+        Passed to :func:`~athenakin.plot.plot_robot`.
+
+    Returns
+    -------
+    Axes3D
+    """
+    if trace and len(geoms) > 1:
+        from matplotlib.lines import Line2D
+
+        kwargs.setdefault("legend_extra", [Line2D([], [], color=TRACE_COLOR, lw=1.5,
+                                                  label="motion: instrument sweep, tip path")])
+        tips = np.stack([g.points["tip"] for g in geoms])
+        ax.plot(*tips.T, color=TRACE_COLOR, lw=1.2, ls="--", alpha=0.9)
+        ax.plot(*tips[:k + 1].T, color=TRACE_COLOR, lw=2.4)
+        for j in np.unique(np.linspace(0, len(geoms) - 1, TRACE_LINES).astype(int)):
+            a, b = geoms[j].points["O_s"], geoms[j].points["tip"]
+            ax.plot(*np.stack([a, b]).T, color=TRACE_COLOR, lw=0.9, alpha=0.45)
+    return plot_robot(geometry=geoms[k], ax=ax, limits=limits, view=view, **kwargs)
+
+
 def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None = None,
                   *, slot: int = 0, size: tuple[int, int] = ANIMATION_SIZE, dpi: int = 100,
                   view: tuple[float, float] = VIEW, orbit: float = 0.0,
-                  progress: bool = True, **kwargs: Any) -> list[NDArray[np.uint8]]:
+                  progress: bool = True, trace: bool = True,
+                  **kwargs: Any) -> list[NDArray[np.uint8]]:
     """Draw the robot at every ``q`` of a motion; one RGB image per sample.
 
     Parameters
@@ -119,6 +190,10 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
         Degrees the camera turns about z over the motion.
     progress : bool, keyword-only
         tqdm progress bar.
+    trace : bool, keyword-only
+        Draw the whole motion in every frame (:func:`draw_motion_frame`): the
+        tool-tip path and the instrument lines it sweeps, which make a small
+        cone about the RCM visible.
     **kwargs
         Passed to :func:`~athenakin.plot.plot_robot`.
 
@@ -156,8 +231,8 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
     for k in it:
         ax.cla()
         frac = k / max(n - 1, 1)
-        plot_robot(geometry=geoms[k], ax=ax, limits=(lo, hi),
-                   view=(view[0], view[1] + orbit * frac), **kwargs)
+        draw_motion_frame(ax, geoms, k, limits=(lo, hi),
+                          view=(view[0], view[1] + orbit * frac), trace=trace, **kwargs)
         canvas.draw()
         rgba = np.asarray(canvas.buffer_rgba())
         frames.append(rgba[..., :3].copy())

@@ -253,7 +253,8 @@ def robot_figure(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     all_solutions : bool, keyword-only
         Show every valid solution at once, one legend entry per slot (a click on it
         hides or shows that solution, a double click shows it alone); the menu
-        then offers "all solutions" and each slot.
+        then offers "all solutions" and each slot. Only the first solution's points
+        carry text labels (the others are named on hover).
     show_frames : bool, keyword-only
         Triads of ``O_b``, ``O_i``, ``O_s``, ``O_e``.
     frame_length : float, keyword-only
@@ -291,15 +292,16 @@ def robot_figure(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     fig = go.Figure()
     owner: list[int] = []
     for k in slots:
-        for j, tr in enumerate(_traces(geoms[k], show_frames=show_frames,
-                                       frame_length=frame_length, box=box)):
+        for tr in _traces(geoms[k], show_frames=show_frames, frame_length=frame_length,
+                          box=box):
             if all_solutions:
                 tr["visible"] = True
                 tr["legendgroup"] = f"slot {k}"
-                tr["showlegend"] = j == 0
-                if j == 0:
-                    tr["legendgrouptitle"] = {"text": ""}
+                tr["showlegend"] = tr["name"] == "instrument"     # one entry, in red
+                if tr["showlegend"]:
                     tr["name"] = slot_label(geoms[k])
+                if tr["mode"] == "markers+text" and k != slots[0]:
+                    tr["mode"] = "markers"      # one set of labels; hover names the rest
             else:
                 tr["visible"] = k == first.slot
                 tr["legendgroup"] = tr["name"]

@@ -42,6 +42,8 @@ LABEL_SIZE = 8.5
 LABEL_RADII = (5.0, 11.0, 18.0, 28.0, 40.0)
 #: Half-size (px at 100 dpi) of the box kept free around each labelled point.
 MARKER_HALF = 4.0
+#: Share of a label's width (height) left of (below) its anchor, by alignment.
+_SHIFT = {"left": 0.0, "bottom": 0.0, "center": 0.5, "right": 1.0, "top": 1.0}
 #: Points that project closer than this (px at 100 dpi) share one label.
 MERGE_PX = 6.0
 
@@ -181,16 +183,19 @@ def place_labels(ax: Axes, items: list[tuple[str, NDArray[np.float64], str]], *,
         x2, y2 = inv.transform(xy)
         ann = ax.annotate(text, xy=(x2, y2), xycoords="data", xytext=(0, 0),
                           textcoords="offset points", fontsize=fontsize, color=color,
-                          annotation_clip=False, zorder=20)
+                          ha="left", va="bottom", annotation_clip=False, zorder=20)
+        ext = ann.get_window_extent(renderer)          # measured once; boxes follow
+        w, h = ext.width, ext.height
+        x0, y0 = ext.x0, ext.y0                        # the box's corner at offset 0
         best: tuple[float, Any, str, str, NDArray[np.float64]] | None = None
         for r in LABEL_RADII:
             for dx, dy in dirs:
                 ha = "left" if dx > 0 else "right" if dx < 0 else "center"
                 va = "bottom" if dy > 0 else "top" if dy < 0 else "center"
                 off = (r * dx / np.hypot(dx, dy), r * dy / np.hypot(dx, dy))
-                ann.set(ha=ha, va=va)
-                ann.xyann = off
-                box = np.asarray(ann.get_window_extent(renderer).extents)
+                bx = x0 + off[0] * fig.dpi / 72.0 - _SHIFT[ha] * w
+                by = y0 + off[1] * fig.dpi / 72.0 - _SHIFT[va] * h
+                box = np.array([bx, by, bx + w, by + h])
                 cost = (100.0 * float(sum(_overlap(box, b).sum() for b in hard))
                         + 10.0 * float(_overlap(box, marks).sum())
                         + float(_overlap(box, soft).sum()) + 0.5 * r)
@@ -320,7 +325,7 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
                show_legend: bool = True, frame_length: float = FRAME_LENGTH,
                view: tuple[float, float] = VIEW,
                limits: tuple[ArrayLike, ArrayLike] | None = None, title: str | None = None,
-               joint_scale: float = 1.0) -> Axes:
+               joint_scale: float = 1.0, legend_extra: list[Any] | None = None) -> Axes:
     """Draw the robot in one forward-kinematics solution on a 3-D matplotlib axes.
 
     Shows the base rail with carriages A and B, the bars of the parallel module
@@ -358,6 +363,8 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
         Default: ``q`` and the slot's labels.
     joint_scale : float, keyword-only
         Size factor of the U-joint fork and the spherical-joint arcs (the branch cues).
+    legend_extra : list of matplotlib artists, keyword-only, optional
+        More legend handles (e.g. what the caller drew before).
 
     Returns
     -------
@@ -387,7 +394,8 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     boxes = []
     if show_legend:
         leg = ax.legend(handles=legend_handles(show_frames=show_frames,
-                                               show_circles=show_circles),
+                                               show_circles=show_circles)
+                        + list(legend_extra or []),
                         loc="upper left", fontsize=6.5, framealpha=0.9, borderaxespad=0.2)
         ax.apply_aspect()
         boxes.append(np.asarray(leg.get_window_extent(_renderer(ax.figure)).extents))

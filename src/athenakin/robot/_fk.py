@@ -114,14 +114,7 @@ class FKSolution:
     tool_length: float
 
     def __getattr__(self, name: str) -> Any:
-        # reached only for a field not in __dict__: one that a single-pose result of the
-        # compiled path materialises on first access (``_lazy = (view, *buffers)``: the
-        # kernel's packed buffers), or one that a fields=(...) call left out
-        lazy = self.__dict__.get("_lazy")
-        if lazy is not None and name in _LAZY_FIELDS:
-            value = lazy[0](name, *lazy[1:])
-            self.__dict__[name] = value
-            return value
+        # only reached for a field that a fields=(...) call left out
         if name in _FIELD_ATTRS:
             raise AttributeError(
                 f"FKSolution.{name} was not computed: this result was asked for with "
@@ -131,7 +124,7 @@ class FKSolution:
 
     def __repr__(self) -> str:
         have = []
-        for k in _LAZY_FIELDS:
+        for k in _ARRAY_FIELDS:
             try:
                 have.append(f"{k}: {np.shape(getattr(self, k))}")
             except AttributeError:
@@ -197,7 +190,7 @@ class FKSolution:
 
 
 _FIELD_ATTRS = {f: ("T_b_s_mode" if f == "T_b_s" else f) for f in FK_FIELDS}
-_LAZY_FIELDS = ("valid", "reason", "p", "u", "T_b_s_mode", "residual", "item_reason")
+_ARRAY_FIELDS = ("valid", "reason", "p", "u", "T_b_s_mode", "residual", "item_reason")
 _FIELD_ATTRS.update({v: v for v in _FIELD_ATTRS.values()})
 
 

@@ -189,6 +189,7 @@ class InstrumentIK:
     q_error: NDArray[np.float64]
 
 
+
 def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None = None, *,
                        errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
                        closure_tol: float = CLOSURE_TOL, fields: tuple[str, ...] | None = None,

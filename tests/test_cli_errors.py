@@ -1,0 +1,180 @@
+"""Every CLI failure is one line on stderr and a non-zero exit (issue 13.11, issue 12.6).
+
+The inputs that used to end in a traceback, an exhausted memory or a silent
+wrong answer; resource limits are checked before any work.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import pytest
+
+from athenakin.cli import main
+
+
+def _one_line_error(capsys, code: int, *, want: str = "") -> str:
+    err = capsys.readouterr().err
+    assert code == 1, err
+    assert "Traceback" not in err and err.count("\n") == 1 and err.startswith("athenakin "), err
+    assert want in err, err
+    return err
+
+
+@pytest.fixture
+def files(tmp_path: Path) -> dict[str, Path]:
+    deep_json = tmp_path / "deep.json"
+    deep_json.write_text('{"T_b_e": ' + "[" * 50_000 + "]" * 50_000 + "}")
+    deep_toml = tmp_path / "deep.toml"
+    deep_toml.write_text("a = " + "[" * 50_000 + "]" * 50_000 + "\n")
+    huge = tmp_path / "huge.toml"
+    huge.write_text("[design]\nl1 = 1e200\nl2 = 0.1\nl3 = 0.25\nl4 = 0.15\nl5 = 0.4\n")
+    bom = tmp_path / "bom.csv"
+    bom.write_text("x_m,y_m,z_m\n0.25,0,0\n0.26,-0.01,0\n", encoding="utf-8-sig")
+    bom_q = tmp_path / "bom_q.csv"
+    bom_q.write_text("t_s,q1_m,q2_m,q3_m\n0,-0.1,0.1,0.45\n0.01,-0.1,0.1,0.451\n",
+                     encoding="utf-8-sig")
+    return {"deep_json": deep_json, "deep_toml": deep_toml, "huge": huge, "bom": bom,
+            "bom_q": bom_q, "tmp": tmp_path}
+
+
+def test_deeply_nested_json_and_toml_are_one_line_errors(files, capsys):
+    code = main(["fk", "-0.1", "0.1", "0.45", "--rcm-file", str(files["deep_json"])])
+    _one_line_error(capsys, code, want="nested too deeply")
+    code = main(["fk", "-0.1", "0.1", "0.45", "--design", str(files["deep_toml"])])
+    _one_line_error(capsys, code, want="nested too deeply")
+
+
+@pytest.mark.parametrize("argv", [
+    ["fk", "-0.1", "0.1", "0.45"],
+    ["ik", "--tip", "0.25", "0", "0"],
+    ["singularities", "-0.1", "0.1", "0.45", "--no-files"],
+])
+def test_overflow_designs_are_one_line_errors(files, capsys, argv):
+    code = main([*argv, "--design", str(files["huge"])])
+    _one_line_error(capsys, code)
+
+
+@pytest.mark.parametrize("argv,want", [
+    (["animate", "-o", "{tmp}/a.gif", "--fps", "0", "--no-progress"], "--fps"),
+    (["animate", "-o", "{tmp}/a.gif", "--fps", "1e9", "--no-progress"], "--fps"),
+    (["animate", "-o", "{tmp}/a.gif", "--frames", "100000000", "--no-progress"], "--frames"),
+    (["view", "-o", "{tmp}/v.png", "--dpi", "20000"], "--dpi"),
+    (["workspace", "--resolution", "3000", "--out", "{tmp}/ws"], "--resolution"),
+    (["workspace", "--cone-resolution", "1000", "1000", "1000", "--no-files"],
+     "--cone-resolution"),
+    (["singularities", "--resolution", "100000", "--no-figures", "--out", "{tmp}/s"],
+     "--resolution"),
+    (["singularities", "nan", "0", "0.45", "--no-files"], "finite"),
+    (["singularities", "-0.1", "0.1", "0.45", "--tol", "nan", "--no-files"], "--tol"),
+    (["export", "-o", "{tmp}/m.xml", "--check", "100000000"], "--check"),
+    (["view", "nan", "0.1", "0.45", "-o", "{tmp}/v.png"], "finite"),
+    (["fk", "-0.1", "0.1", "0.45", "--rcm", "nan", "0", "0", "0", "0", "0"], "--rcm"),
+])
+def test_resource_limits_and_non_finite_values_are_checked_up_front(files, capsys, argv, want):
+    code = main([a.format(tmp=files["tmp"]) for a in argv])
+    _one_line_error(capsys, code, want=want)
+    assert sorted(p.name for p in files["tmp"].iterdir()) == sorted(
+        ["deep.json", "deep.toml", "huge.toml", "bom.csv", "bom_q.csv"])
+
+
+def test_plan_reads_a_csv_with_a_byte_order_mark(files, capsys):
+    out = files["tmp"] / "t.csv"
+    assert main(["plan", str(files["bom"]), "-o", str(out), "--no-plots"]) == 0
+    assert out.read_text().startswith("t_s,")
+
+
+def test_track_keeps_the_time_column_of_a_csv_with_a_byte_order_mark(files):
+    from athenakin.motion import read_q_stream_csv
+
+    q, t = read_q_stream_csv(files["bom_q"])
+    assert t is not None and t.tolist() == [0.0, 0.01] and q.shape == (2, 3)
+
+
+def test_fk_with_two_values_says_three_actuator_values_are_expected(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["fk", "-0.1", "0.1"])
+    assert e.value.code == 2
+    assert "three actuator values q1 q2 q3 (m)" in capsys.readouterr().err
+
+
+def test_ik_refuses_p_with_tip(capsys):
+    code = main(["ik", "--tip", "0.25", "0", "0", "--p", "0.2"])
+    _one_line_error(capsys, code, want="--p goes with --direction only")
+    code = main(["ik", "--u345", "10", "80", "0", "--p", "0.2"])
+    _one_line_error(capsys, code, want="--p")
+
+
+def test_runtime_warnings_do_not_leak(capsys):
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        main(["fk", "1e300", "0", "0.45"])
+    assert not [w for w in rec if issubclass(w.category, RuntimeWarning)]
+    assert "Warning" not in capsys.readouterr().err
+
+
+def test_debug_shows_the_traceback(capsys):
+    with pytest.raises(ValueError, match="--p goes with"):
+        main(["--debug", "ik", "--tip", "0.25", "0", "0", "--p", "0.2"])
+
+
+def test_unexpected_errors_are_one_line_with_exit_code_70(monkeypatch, capsys):
+    import athenakin.cli._demo as demo
+
+    def bug(args):
+        raise KeyError("oops")
+
+    monkeypatch.setattr(demo, "run", bug)
+    assert main(["demo"]) == 70
+    err = capsys.readouterr().err
+    assert "internal error" in err and "--debug" in err and err.count("\n") == 1
+
+
+def test_animate_says_when_it_subsampled_and_why_the_video_is_longer(tmp_path, capsys,
+                                                                     monkeypatch):
+    import athenakin.plot as plot
+
+    seen = {}
+
+    def fake_animate(path, q, T, design, *, fps, **kw):   # the rendering is tested elsewhere
+        seen.update(frames=len(q), fps=fps)
+        Path(path).write_bytes(b"GIF89a")
+
+    monkeypatch.setattr(plot, "animate", fake_animate)
+    rows = "\n".join(f"{0.001 * i:.3f},-0.1,0.1,{0.45 + 1e-5 * i:.6f}" for i in range(4180))
+    src = tmp_path / "traj.csv"
+    src.write_text("t_s,q1_m,q2_m,q3_m\n" + rows + "\n")
+    out = tmp_path / "a.gif"
+    assert main(["animate", "-o", str(out), "--q-file", str(src), "--no-progress",
+                 "--fps", "15"]) == 0
+    text = capsys.readouterr().out
+    assert "120 of 4180 rows" in text
+    assert "the video lasts 7.93 s" in text and "4.18 s motion" in text
+    # without --fps the video plays the motion in its own time (at most 50 fps)
+    out2 = tmp_path / "b.gif"
+    assert main(["animate", "-o", str(out2), "--q-file", str(src), "--no-progress",
+                 "--frames", "40"]) == 0
+    text = capsys.readouterr().out
+    assert "40 of 4180 rows" in text and "video lasts" not in text
+    assert seen["frames"] == 40 and abs(39 / seen["fps"] - 4.179) < 1e-9
+
+
+def test_python_dash_m_athenakin_runs():
+    r = subprocess.run([sys.executable, "-m", "athenakin", "fk", "-0.1", "0.1", "0.45",
+                        "--json"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and json.loads(r.stdout)["n_solutions"] == 16
+
+
+def test_a_closed_pipe_ends_quietly():
+    """``athenakin demo | head -1``: no 'BrokenPipeError' on stderr."""
+    p = subprocess.Popen([sys.executable, "-m", "athenakin", "demo"], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE)
+    p.stdout.close()                      # the reader is gone before anything is written
+    err = p.stderr.read().decode()
+    p.wait(timeout=120)
+    p.stderr.close()
+    assert err == "" and p.returncode != 0
