@@ -16,7 +16,10 @@ from athenakin.errors import Reason
 
 D = ak.Design.default()
 T0 = ak.default_rcm_frame(D)
-BACKENDS = ("numpy", "numba")
+#: Both backends where numba imports; the reference alone elsewhere (ATHENAKIN_BACKEND=numpy).
+BACKENDS = ("numpy", "numba") if ak._dispatch.numba_available() else ("numpy",)
+needs_numba = pytest.mark.skipif(not ak._dispatch.numba_available(),
+                                 reason="numba not available here")
 FREE = ak.Design(l1=D.l1, l2=D.l2, l3=D.l3, l4=D.l4, l5=D.l5)
 
 
@@ -96,7 +99,7 @@ def test_ik_near_singular_sets_valid_means_within_q_error(name):
         assert np.all(err[ok] <= pas.q_error[ok])
         assert np.all(pas.q_error[ok] <= ak.robot.IK_Q_ERROR_MAX)
         out[backend] = pas.reason
-    assert out["numpy"].tolist() == out["numba"].tolist()
+    assert out[BACKENDS[0]].tolist() == out[BACKENDS[-1]].tolist()
 
 
 # --- item 4: scale --------------------------------------------------------------------------
@@ -262,6 +265,7 @@ def test_track_cli_rejects_decreasing_time(tmp_path, capsys):
 
 
 # --- item 8: parallel=True from several threads on the workqueue layer -----------------------
+@needs_numba
 def test_parallel_kernels_from_threads_on_workqueue_layer():
     """Used to abort the interpreter (SIGABRT); now serialised by fast._threads."""
     import os
@@ -305,8 +309,9 @@ def test_tangency_merge_reported_in_residual(backend):
     ok = sol.valid[:, :8]
     assert ok.any()
     assert np.all(res[ok] >= np.broadcast_to(off[:, None], res.shape)[ok] * (1 - 1e-6))
-    fast = ak.fast.parallel_forward_kinematics(q, D)
-    assert_allclose(fast.residual, merged.residual, rtol=1e-9, atol=1e-18)
+    if "numba" in BACKENDS:
+        fast = ak.fast.parallel_forward_kinematics(q, D)
+        assert_allclose(fast.residual, merged.residual, rtol=1e-9, atol=1e-18)
 
 
 # --- item 2: the serial degeneracy test is relative to the direction's rounding --------------
@@ -322,7 +327,7 @@ def test_ujoint_degenerate_at_short_p_on_both_backends():
         # mode +1 (slots 0-7): the U-joint singularity, never 8 valid slots with a random u1
         assert np.all(sol.reason[:, :8] == Reason.UJOINT_SINGULAR), sol.reason[:, :8]
         out[backend] = sol.reason
-    np.testing.assert_array_equal(out["numpy"], out["numba"])
+    np.testing.assert_array_equal(out[BACKENDS[0]], out[BACKENDS[-1]])
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
@@ -339,6 +344,7 @@ def test_jacobians_broadcast_like_fk(backend):
 
 @pytest.mark.parametrize("O_s", [[1e300, 0.0, 1e155], [1e300, 0.0, 0.45], [0.0, 1e155, 0.0],
                                  [-1e200, 0.3, 0.2]])
+@needs_numba
 def test_parallel_ik_far_points_agree(O_s):
     """The rounding that the link test absorbs depends on y, z only (not on a huge x)."""
     ref = ak.parallel.parallel_ik_from_position(O_s, D)
@@ -355,7 +361,7 @@ def test_tool_tip_subnormal_is_a_unit_direction(frame):
             0.99)) @ T0[:3, :3]
     out = [ak.q_from_tool_tip(T, [0.0, 5e-324, 5e-324], D, errors="flag", backend=b)
            for b in BACKENDS]
-    assert int(out[0][1].reason) == int(out[1][1].reason)
+    assert int(out[0][1].reason) == int(out[-1][1].reason)
     for _, res in out:
         if res.valid:
             assert_allclose(np.linalg.norm(res.direction_b), 1.0, rtol=0, atol=1e-15)
