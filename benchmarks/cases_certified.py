@@ -31,7 +31,9 @@ def cases(quick: bool) -> list[dict]:
     dt = bl.DesignTuple(d)
     return [
         {"name": "athenakin numpy reference FK (floats)", "group": "fk-certified", "batch": 1,
-         "baseline": True, "call": lambda: ak.forward_kinematics(q1, T, d)},
+         "baseline": True, "call": lambda: ak.robot.forward_kinematics(q1, T, d)},
+        {"name": "ak.forward_kinematics, default args (compiled)", "group": "fk-certified",
+         "batch": 1, "call": lambda: ak.forward_kinematics(q1, T, d)},
         {"name": "pure Python FK (math module)", "group": "fk-certified", "batch": 1,
          "call": lambda: bl.fk_python(q1.tolist(), T.tolist(), dt)},
         {"name": "certified FK, one pose (16 boxes)", "group": "fk-certified", "batch": 1,

@@ -20,7 +20,8 @@ EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 def test_lengths_only_design_is_unlimited_with_defaults():
     d = ak.Design(l1=0.30, l2=0.10, l3=0.25, l4=0.15, l5=0.40)
     assert d.q_min is None and d.q_max is None
-    assert np.all(d.stroke_min == -np.inf) and np.all(d.stroke_max == np.inf)
+    # q3 is a length: its lower limit is 0 even without strokes (issue 13)
+    assert d.stroke_min.tolist() == [-np.inf, -np.inf, 0.0] and np.all(d.stroke_max == np.inf)
     assert d.ab_order == "q1<q2" and d.h_sign == -1.0
     assert d.tool_length == 0.45
 

@@ -313,7 +313,7 @@ def test_transform_matrix_is_eq3_eq4():
 
 
 @pytest.mark.parametrize("name", ["athenakin.symbolic._lia", "athenakin.symbolic._elimination",
-                                  "athenakin.symbolic._solver"])
+                                  "athenakin.symbolic._fk_algebraic"])
 def test_docstring_examples(name):
     import doctest
     import importlib

@@ -85,7 +85,11 @@ def check_scalar(x: object, name: str, *, positive: bool = False,
     """
     if isinstance(x, bool) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
         raise TypeError(f"{name}: expected a real number, got {type(x).__name__}")
-    v = float(x)
+    try:
+        v = float(x)
+    except OverflowError:
+        raise InvalidInputError(f"{name}: expected a finite number, got an integer too large "
+                                f"for a float") from None
     if not np.isfinite(v):
         raise InvalidInputError(f"{name}: expected a finite number, got {v}")
     if positive and not v > 0:
@@ -120,6 +124,81 @@ def check_transform(T: ArrayLike, name: str, *, allow_nonfinite: bool = False,
             f"{np.asarray(orth)[idx]:.3g}, det R = {np.asarray(det)[idx]:.6g}, "
             f"last row {arr[idx][3].tolist()}")
     return arr
+
+
+def broadcast_batch(**shapes: tuple[int, ...]) -> tuple[int, ...]:
+    """Broadcast the batch (leading) shapes of named arguments.
+
+    Parameters
+    ----------
+    **shapes : tuple of int
+        Each argument's batch shape (its shape without the trailing item axes),
+        keyed by the argument's name.
+
+    Returns
+    -------
+    tuple of int
+        The broadcast batch shape.
+
+    Raises
+    ------
+    InvalidInputError
+        If the shapes do not broadcast; the message names every argument and its shape.
+    """
+    try:
+        return tuple(np.broadcast_shapes(*shapes.values()))
+    except ValueError:
+        listed = ", ".join(f"{k} {tuple(v)}" for k, v in shapes.items())
+        raise InvalidInputError(
+            f"batch shapes do not broadcast: {listed} (the leading axes of the arguments "
+            f"must broadcast against each other, as numpy arrays do)") from None
+
+
+def check_tolerance(x: object, name: str) -> float:
+    """Coerce a tolerance keyword: a non-negative real number (``inf`` accepts everything).
+
+    Raises
+    ------
+    TypeError
+        If ``x`` is not a real number (``None``, a string, ...).
+    InvalidInputError
+        If ``x`` is NaN or negative.
+    """
+    if isinstance(x, bool) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
+        raise TypeError(f"{name}: expected a non-negative real number (a tolerance), "
+                        f"got {type(x).__name__}")
+    v = float(x)
+    if not v >= 0:
+        raise InvalidInputError(f"{name}: expected a non-negative tolerance, got {v}")
+    return v
+
+
+#: Values of the ``errors=`` keyword of the batch functions.
+ERROR_POLICIES = ("auto", "raise", "flag")
+
+
+def check_options(errors: object, **tolerances: object) -> tuple[float, ...]:
+    """Check the option keywords of a kinematics call, before any array argument.
+
+    Every backend checks options first, in this order (``errors``, then the
+    tolerances in the order given), so that a call with several bad arguments
+    raises the same error on every backend.
+
+    Returns
+    -------
+    tuple of float
+        The tolerances, coerced (:func:`check_tolerance`).
+
+    Raises
+    ------
+    ValueError
+        ``errors`` is not one of :data:`ERROR_POLICIES`.
+    TypeError, InvalidInputError
+        A tolerance is not a non-negative real number.
+    """
+    if not (isinstance(errors, str) and errors in ERROR_POLICIES):
+        raise ValueError(f"errors: expected one of {ERROR_POLICIES}, got {errors!r}")
+    return tuple(check_tolerance(v, k) for k, v in tolerances.items())
 
 
 def _fmt(tail: tuple[int, ...]) -> str:

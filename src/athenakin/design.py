@@ -19,12 +19,18 @@ from ._compat import tomllib
 from ._validation import check_scalar
 from .errors import InvalidInputError
 
-__all__ = ["Design", "AB_ORDERS"]
+__all__ = ["Design", "AB_ORDERS", "LENGTH_RANGE"]
 
 #: Allowed values of :attr:`Design.ab_order`.
 AB_ORDERS = ("q1<q2", "q1>q2")
 
 _LENGTHS = ("l1", "l2", "l3", "l4", "l5")
+
+#: Range (m) of every length of a design (``l1..l5``, ``tool_length``) and of the finite
+#: stroke limits: from a micrometre to a kilometre. Outside it the kinematics would square
+#: lengths into overflow or lose every digit to rounding (issue 13); a robot of that size is
+#: a typing error (mm for m), reported as such.
+LENGTH_RANGE = (1e-6, 1e3)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -71,10 +77,13 @@ class Design:
     name: str = ""
 
     def __post_init__(self) -> None:
-        for k in _LENGTHS:
-            object.__setattr__(self, k, check_scalar(getattr(self, k), k, positive=True))
-        object.__setattr__(self, "tool_length",
-                           check_scalar(self.tool_length, "tool_length", positive=True))
+        for k in (*_LENGTHS, "tool_length"):
+            v = check_scalar(getattr(self, k), k, positive=True)
+            if not LENGTH_RANGE[0] <= v <= LENGTH_RANGE[1]:
+                raise InvalidInputError(
+                    f"{k}: expected a length in metres within [{LENGTH_RANGE[0]:g}, "
+                    f"{LENGTH_RANGE[1]:g}], got {v:g}")
+            object.__setattr__(self, k, v)
         for k in ("q_min", "q_max"):
             v = getattr(self, k)
             if v is None:
@@ -85,9 +94,17 @@ class Design:
             for i, x in enumerate(v):
                 if isinstance(x, bool) or not isinstance(x, (int, float, np.integer, np.floating)):
                     raise TypeError(f"{k}[{i}]: expected a real number, got {type(x).__name__}")
-                fx = float(x)
+                try:
+                    fx = float(x)
+                except OverflowError:
+                    raise InvalidInputError(f"{k}[{i}]: expected a number or +/-inf, got an "
+                                            f"integer too large for a float") from None
                 if math.isnan(fx):
                     raise InvalidInputError(f"{k}[{i}]: expected a number or +/-inf, got nan")
+                if math.isfinite(fx) and abs(fx) > LENGTH_RANGE[1]:
+                    raise InvalidInputError(
+                        f"{k}[{i}]: expected a stroke limit within +/-{LENGTH_RANGE[1]:g} m "
+                        f"or +/-inf (unlimited), got {fx:g}")
                 vals.append(fx)
             object.__setattr__(self, k, tuple(vals))
         lo, hi = self.stroke_min, self.stroke_max
@@ -102,8 +119,15 @@ class Design:
     # --- derived values ---------------------------------------------------------------
     @property
     def stroke_min(self) -> NDArray[np.float64]:
-        """Lower stroke limits as an array of shape (3,) (``-inf`` where unlimited)."""
-        return np.full(3, -np.inf) if self.q_min is None else np.asarray(self.q_min, float)
+        """Lower stroke limits as an array of shape (3,) (``-inf`` where unlimited).
+
+        ``q3`` is a length (the radius of ``k2``): its lower limit is never below 0,
+        whatever :attr:`q_min` says, so that a negative ``q3`` is a stroke violation,
+        not a mirror image of ``-q3``.
+        """
+        lo = np.full(3, -np.inf) if self.q_min is None else np.asarray(self.q_min, float)
+        lo[2] = max(lo[2], 0.0)
+        return lo
 
     @property
     def stroke_max(self) -> NDArray[np.float64]:

@@ -105,7 +105,8 @@ _DESCRIPTIONS = {
     Reason.STROKE_LIMIT: "an actuator value is outside the design's stroke limits",
     Reason.AB_ORDER: "the order of A and B on the rail contradicts the design (ab_order)",
     Reason.LINK_TOO_SHORT: ("links l1/l3 cannot span A-B: |q1 - q2| / 2 would reach l1 or "
-                            "exceed l3 (for a pose: O_s beyond l1 + l4 from the rail axis)"),
+                            "exceed l3 (for a pose: O_s too far from the rail axis, beyond "
+                            "l1 + l4, or too close to it)"),
     Reason.CIRCLES_DISJOINT: "circles k1 and k2 do not intersect (w < 0)",
     Reason.CIRCLES_TANGENT: "circles k1 and k2 touch (w = 0): both assembly modes coincide",
     Reason.SERIAL_P_ZERO: "O_s coincides with the RCM (p = 0): the instrument axis is undefined",

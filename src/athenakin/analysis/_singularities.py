@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import invert_transform
-from .._validation import check_array
+from .._validation import broadcast_batch, check_array, check_tolerance
 from ..chain import ups_solutions
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
@@ -250,7 +250,7 @@ def _tolerances(tol: float | Mapping[str, float] | None) -> dict[str, float]:
             raise InvalidInputError(f"tol: unknown condition(s) {sorted(unknown)}; expected "
                                     f"some of {list(CONDITIONS)}")
         for k, v in tol.items():
-            out[k] = float(v)
+            out[k] = check_tolerance(v, f"tol[{k!r}]")
         return out
     if isinstance(tol, bool) or not isinstance(tol, (int, float, np.floating, np.integer)):
         raise TypeError(f"tol: expected a number or a mapping name -> number, got "
@@ -308,10 +308,15 @@ def singularities(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
     design = resolve_design(design)
     tols = _tolerances(tol)
     q = check_array(q, "q", (3,), allow_nonfinite=True)
+    T = None
+    if T_b_e is not None:   # any broadcast that the forward kinematics accepts
+        T = _rcm(T_b_e, design)
+        batch = broadcast_batch(q=q.shape[:-1], T_b_e=T.shape[:-2])
+        q, T = np.broadcast_to(q, batch + (3,)), np.broadcast_to(T, batch + (4, 4))
     _, g = _state(q, design, mode)
     h, r1, d, q3 = g["h"], g["r1"], g["d"], g["q3"]
     l1, l3 = design.l1, design.l3
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore", over="ignore"):
         r1v = np.sqrt(np.maximum(l1 * l1 - h * h, 0.0))
         s3v = np.sqrt(np.maximum(l3 * l3 - h * h, 0.0))
         dv = np.sqrt((s3v + design.l2) ** 2 + design.l5 ** 2)
@@ -342,8 +347,7 @@ def singularities(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
             measures["parallel_condition"] = np.where(smin > 0, smax / smin, np.inf) * np.where(
                 np.isnan(smax), np.nan, 1.0)
             measures["parallel_inverse_sigma_min"] = 1.0 / smax
-    if T_b_e is not None:
-        T = _rcm(T_b_e, design)
+    if T is not None:
         vals.update(_instrument_conditions(g, T, design))
         if jacobians:
             measures.update(_instrument_measures(q, g, T, design, Jp))
@@ -406,7 +410,7 @@ def _instrument_measures(q: NDArray[np.float64], g: dict[str, NDArray[np.float64
     ok = np.all(np.isfinite(T_s_e), axis=(-2, -1))
     with np.errstate(invalid="ignore", divide="ignore"):
         ser = ups_solutions(np.where(ok[..., None, None], T_s_e, np.eye(4)),
-                            degenerate_tol=0.0, p_zero_tol=0.0, closure_tol=np.inf)
+                            degenerate_tol=0.0, p_zero_tol=0.0, closure_tol=np.inf, scale=0.0)
     p = np.where(ok, ser.p[..., 0], np.nan)
     u = np.where(ok[..., None], ser.u[..., 0, :], np.nan)
     Js = serial_jacobian(np.nan_to_num(p), np.nan_to_num(u), frame="s")

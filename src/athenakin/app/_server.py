@@ -13,6 +13,8 @@ module only turns them into scene nodes and GUI values, under one lock.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import math
 import sys
@@ -113,7 +115,12 @@ class AthenaApp:
         self._backend = backend
         self.errors: list[str] = []
         self.setup = self._make_setup(design, T_b_e)
-        self.server = viser.ViserServer(host=host, port=port, verbose=verbose)
+        self._verbose = verbose
+        if verbose:
+            self.server = viser.ViserServer(host=host, port=port, verbose=verbose)
+        else:  # viser prints its banner whatever ``verbose`` says: keep stdout for the caller
+            with contextlib.redirect_stdout(io.StringIO()):
+                self.server = viser.ViserServer(host=host, port=port, verbose=verbose)
         self.host = host
         self.port = int(self.server.get_port())
         self.q = self.setup.q_home.copy()
@@ -492,7 +499,11 @@ class AthenaApp:
     def stop(self) -> None:
         """Stop the server (the page disconnects)."""
         self.playback = None
-        self.server.stop()
+        if self._verbose:
+            self.server.stop()
+        else:  # viser's stop (which joins its thread) prints a line: keep stdout clean
+            with contextlib.redirect_stdout(io.StringIO()):
+                self.server.stop()
 
     def __enter__(self) -> AthenaApp:
         return self

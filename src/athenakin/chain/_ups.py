@@ -25,12 +25,13 @@ import dataclasses
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_transform
+from .._validation import check_array, check_tolerance, check_transform
 from ..errors import InvalidInputError, Reason
 from ..study import dq_multiply, study_G, study_M
 
 __all__ = [
     "DEGENERATE_TOL",
+    "DEGENERATE_ULPS",
     "P_ZERO_TOL",
     "CLOSURE_TOL",
     "SERIAL_P_SIGN",
@@ -51,6 +52,12 @@ DEGENERATE_TOL = 1e-12
 P_ZERO_TOL = 1e-12
 #: Largest closure residual (see :func:`closure_residual`) of a solution reported valid.
 CLOSURE_TOL = 1e-9
+
+#: Rounding (in ulps of the coordinates' size) below which ``|sin u2|`` and ``|sin u4|``
+#: count as zero: the instrument direction ``t / p`` is only known to ``eps * size / p``,
+#: so for a short ``p`` the fixed ``DEGENERATE_TOL`` alone would accept an arbitrary ``u1``.
+DEGENERATE_ULPS = 64.0
+_EPS = float(np.finfo(float).eps)
 
 #: Labels of the 8 serial slots: sign of p, of sin u2, of sin u4.
 SERIAL_P_SIGN = np.array([1, 1, 1, 1, -1, -1, -1, -1])
@@ -213,7 +220,7 @@ def closure_residual(T: NDArray[np.float64], T_target: NDArray[np.float64]
 
 def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
                   p_zero_tol: float = P_ZERO_TOL, closure_tol: float = CLOSURE_TOL,
-                  _checked: bool = False) -> UPSSolution:
+                  scale: ArrayLike | None = None, _checked: bool = False) -> UPSSolution:
     """All 8 solutions ``(p, u1..u5)`` of the serial chain for a pose ``T_s_e``.
 
     Parameters
@@ -229,6 +236,12 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
         ``|p|`` (m) at or below which all 8 slots get ``SERIAL_P_ZERO``.
     closure_tol : float, keyword-only
         Largest residual of a valid solution.
+    scale : array-like, shape (...), optional, keyword-only
+        Size (m) of the coordinates ``T_s_e``'s translation was computed from (e.g.
+        ``|t_b_e| + |O_s|``): its rounding, about ``eps * scale``, tilts the instrument
+        direction by ``eps * scale / p``, so ``|sin u2|`` and ``|sin u4|`` below
+        ``DEGENERATE_ULPS * eps * scale / p`` are degenerate whatever ``degenerate_tol``
+        says. Default: ``|t_s_e|`` itself.
 
     Returns
     -------
@@ -236,6 +249,9 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
         Slots ordered ``k = 4 r + 2 b + w`` (module docstring).
     """
     T = T_s_e if _checked else check_transform(T_s_e, "T_s_e", allow_nonfinite=True)
+    degenerate_tol = check_tolerance(degenerate_tol, "degenerate_tol")
+    p_zero_tol = check_tolerance(p_zero_tol, "p_zero_tol")
+    closure_tol = check_tolerance(closure_tol, "closure_tol")
     finite = np.all(np.isfinite(T), axis=(-2, -1))
     T = np.where(finite[..., None, None], T, np.eye(4))
     c = T[..., :3, 3]
@@ -244,6 +260,9 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     base_reason = np.where((base_reason == 0) & (n <= p_zero_tol), Reason.SERIAL_P_ZERO,
                            base_reason)
     nn = np.where(n > p_zero_tol, n, 1.0)
+    sc = n if scale is None else np.asarray(scale, dtype=float)
+    with np.errstate(invalid="ignore", over="ignore"):
+        dtol = np.maximum(degenerate_tol, DEGENERATE_ULPS * _EPS * sc / nn)   # (...)
     psign = np.array([1.0, -1.0])
     p = nn[..., None] * psign                           # (..., 2)
     z3 = c[..., None, :] / p[..., None]                 # (..., 2, 3)
@@ -258,7 +277,7 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     u2 = np.arctan2(c1 * z3[..., 0, None] + s1 * z3[..., 1, None],
                     np.broadcast_to(-z3[..., 2, None], u1.shape))
     c2, s2 = np.cos(u2), np.sin(u2)
-    uj_deg = np.broadcast_to((rho <= degenerate_tol)[..., None], u1.shape)
+    uj_deg = np.broadcast_to((rho <= dtol[..., None])[..., None], u1.shape)
     R1 = rotation_u_pair(c1, s1, c2, s2)                # (..., 2, 2, 3, 3)
     Rse = T[..., None, None, :3, :3]
     W = np.swapaxes(R1, -1, -2) @ Rse
@@ -275,7 +294,7 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     u5 = np.arctan2(y5, x5)
     n5 = np.hypot(x5, y5)
     c5, s5 = x5 / n5, y5 / n5      # = cos, sin of the reported u5 to 1 ulp
-    wr_deg = np.broadcast_to((rho4 <= degenerate_tol)[..., None], u3.shape)
+    wr_deg = np.broadcast_to((rho4 <= dtol[..., None, None])[..., None], u3.shape)
 
     full = u3.shape  # (..., 2, 2, 2)
     batch = full[:-3]

@@ -56,6 +56,18 @@ def run(args: argparse.Namespace) -> int:
     design = load_design(args)
     T = load_rcm(args, design)
     q, t = read_q_stream_csv(args.path)
+    if t is not None:
+        t = np.asarray(t, dtype=float)
+        inf = np.flatnonzero(np.isinf(t))
+        if inf.size:
+            raise ValueError(f"{args.path}: t_s must be finite (or empty), got {t[inf[0]]} at "
+                             f"sample {int(inf[0])}")
+        seen = np.flatnonzero(np.isfinite(t))       # empty cells (NaN) are missing readings
+        dec = np.flatnonzero(np.diff(t[seen]) < 0)
+        if dec.size:
+            i, j = int(seen[dec[0]]), int(seen[dec[0] + 1])
+            raise ValueError(f"{args.path}: t_s must not decrease, got t_s = {t[j]:g} s at "
+                             f"sample {j} after {t[i]:g} s at sample {i}")
     log = track(q, T, design, slot=args.slot, jump_m=args.jump_mm * 1e-3,
                 jump_rad=math.radians(args.jump_deg), margins=parse_margins(args.margin))
     events = log.events()

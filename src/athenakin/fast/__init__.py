@@ -14,6 +14,9 @@ reason codes, NaN policy and errors), compiled on first use and cached on disk
   :func:`tool_tip_jacobian`, :func:`tool_tip_inverse_jacobian`.
 
 The kinematics functions (not the Jacobians) take ``parallel=True`` to use numba's threads.
+Concurrent ``parallel=True`` calls from several Python threads are serialised when numba
+runs on its ``workqueue`` threading layer, which is not thread-safe (it would abort the
+interpreter); on ``tbb`` and ``omp`` they run concurrently (:mod:`athenakin.fast._threads`).
 For control loops, :class:`ControlLoop` holds a design and an RCM frame and
 answers single poses in a microsecond or two; for sweeps over millions of
 poses, :func:`sweep_fk` streams chunks in bounded memory. See

@@ -25,7 +25,14 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import ROTATION_TOL, check_transform
+from .._validation import (
+    ERROR_POLICIES,
+    ROTATION_TOL,
+    broadcast_batch,
+    check_options,
+    check_tolerance,
+    check_transform,
+)
 from ..chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
 from ..design import Design
 from ..parallel import _module as _ref_parallel
@@ -52,6 +59,7 @@ from . import _fk_kernels as _fk
 from . import _fk_sized as _fz
 from . import _ik_kernels as _ik
 from . import _ik_sized as _iz
+from ._threads import parallel_guard
 
 __all__ = [
     "design_params",
@@ -76,6 +84,7 @@ _PLAIN = {c for c in (FKSolution, PassiveJoints, InstrumentIK)
 
 
 _R = TypeVar("_R")
+_POLICY_SET = frozenset(ERROR_POLICIES)
 
 
 def _new(cls: type[_R], **fields: Any) -> _R:
@@ -163,14 +172,18 @@ def _flat(a: NDArray[np.float64], bx: tuple[int, ...], batch: tuple[int, ...], N
     return np.ascontiguousarray(np.broadcast_to(a, batch + tail)).reshape((N,) + tail)
 
 
-def _batch(*shapes: tuple[int, ...]) -> tuple[int, ...]:
-    """Broadcast batch shape (shortcut when all but one are scalar items)."""
-    big = [s for s in shapes if s]
+def _batch(**named: tuple[int, ...]) -> tuple[int, ...]:
+    """Broadcast batch shape (shortcut when all but one are scalar items).
+
+    Shapes that do not broadcast raise the reference's named error
+    (:func:`athenakin._validation.broadcast_batch`).
+    """
+    big = [s for s in named.values() if s]
     if not big:
         return ()
     if len(big) == 1 or all(s == big[0] for s in big[1:]):
         return big[0]
-    return np.broadcast_shapes(*shapes)
+    return broadcast_batch(**named)
 
 
 def _check_out(out: FKSolution, batch: tuple[int, ...]) -> tuple[NDArray, ...]:
@@ -241,6 +254,8 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     names = check_fields(fields)
     if method != "closed":
         return reference()
+    check_options(errors, tangent_tol=tangent_tol, degenerate_tol=degenerate_tol,
+                  p_zero_tol=p_zero_tol, closure_tol=closure_tol)    # as the reference
     P = design_params(design)
     try:
         qa = _arr(q, (3,))
@@ -251,14 +266,17 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
             and p_zero_tol == P_ZERO_TOL and closure_tol == CLOSURE_TOL):
         tol = _FK_TOL_DEFAULT
     else:
-        tol = np.array([tangent_tol, degenerate_tol, p_zero_tol, closure_tol], dtype=float)
+        tol = np.array([check_tolerance(tangent_tol, "tangent_tol"),
+                        check_tolerance(degenerate_tol, "degenerate_tol"),
+                        check_tolerance(p_zero_tol, "p_zero_tol"),
+                        check_tolerance(closure_tol, "closure_tol")])
     if qa.ndim == 1 and Ta.ndim == 2 and out is None and names is None and not parallel:
         if errors == "auto" or errors == "raise":
             return _fk_single(qa, Ta, P, tol, True, reference)
         resolve_policy(errors, ())
         return _fk_single(qa, Ta, P, tol, False, reference)
     bq, bT = qa.shape[:-1], Ta.shape[:-2]
-    batch = bq if bq == bT else _batch(bq, bT)
+    batch = bq if bq == bT else _batch(q=bq, T_b_e=bT)
     raise_now = resolve_policy(errors, batch)
     N = math.prod(batch)
     want = _fz.WANT_ALL if names is None else _want(names)
@@ -284,7 +302,8 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
                               item)
     else:
         kernel = _fk.fk_full_parallel if parallel else _fk.fk_full
-        flags = kernel(qf, Tf, P, tol, ROTATION_TOL, reason, valid, p, u, Tbs, res, item)
+        with parallel_guard(parallel):
+            flags = kernel(qf, Tf, P, tol, ROTATION_TOL, reason, valid, p, u, Tbs, res, item)
     if flags & _fk.FLAG_NONRIGID:
         check_transform(Ta, "T_b_e", allow_nonfinite=True)   # raises unless a false alarm
     if raise_now and (flags & (_fk.FLAG_Q_NONFINITE | _fk.FLAG_T_NONFINITE)
@@ -391,6 +410,11 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
                                           fields=fields)
 
     names = check_ik_fields(fields)
+    if (type(errors) is str and errors in _POLICY_SET and type(singular_tol) is float
+            and type(closure_tol) is float and singular_tol >= 0 and closure_tol >= 0):
+        stol, ctol = singular_tol, closure_tol      # plain options: the check in brief
+    else:
+        stol, ctol = check_options(errors, singular_tol=singular_tol, closure_tol=closure_tol)
     P = design_params(design)
     try:
         Ta = _arr(T_b_e, (4, 4))
@@ -398,14 +422,13 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     except _Delegate:
         return reference()
     bT, bU = Ta.shape[:-2], Ua.shape[:-1]
-    batch = bT if bT == bU else _batch(bT, bU)
+    batch = bT if bT == bU else _batch(T_b_e=bT, u345=bU)
     raise_now = resolve_policy(errors, batch)
     N = math.prod(batch)
     if not batch and not parallel and names is None:
         fbuf = np.empty(_ik.ONE_F)
         ibuf = np.empty(3, np.int64)
-        flags = _ik.ik_paper_one(Ta, Ua, P, float(singular_tol), float(closure_tol),
-                                 ROTATION_TOL, fbuf, ibuf)
+        flags = _ik.ik_paper_one(Ta, Ua, P, stol, ctol, ROTATION_TOL, fbuf, ibuf)
         if flags & _fk.FLAG_NONRIGID:
             check_transform(Ta, "T_b_e", allow_nonfinite=True)
         if flags & _ik.FLAG_SLOW or (raise_now and (
@@ -416,7 +439,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
             p=fbuf[_ik.ONE_P], u=fbuf[_ik.ONE_U:_ik.ONE_T],
             mode=ibuf[0:1].reshape(()), T_b_s=fbuf[_ik.ONE_T:_ik.ONE_RES].reshape(4, 4),
             residual=fbuf[_ik.ONE_RES], valid=ibuf[1] != 0,
-            reason=ibuf[2:3].astype(np.int8).reshape(()))
+            reason=ibuf[2:3].astype(np.int8).reshape(()), q_error=fbuf[_ik.ONE_QE])
     want = _iz.WANT_ALL if names is None else _ik_want(names)
 
     def alloc(bit: int, tail: tuple[int, ...], dtype: type = np.float64) -> NDArray:
@@ -433,12 +456,14 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     reason = np.empty(N, np.int8) if (raise_now or want & _iz.WANT_REASON) else alloc(
         _iz.WANT_REASON, (), np.int8)
     Tf, Uf = _flat(Ta, bT, batch, N, (4, 4)), _flat(Ua, bU, batch, N, (3,))
+    qe = np.empty(N) if want == _iz.WANT_ALL else np.empty(0)
     if want == _iz.WANT_ALL:
         kernel = _ik.ik_paper_parallel if parallel else _ik.ik_paper
-        flags = kernel(Tf, Uf, P, float(singular_tol), float(closure_tol), ROTATION_TOL, q, p, u,
-                       mode, Tbs, res, valid, reason)
+        with parallel_guard(parallel):
+            flags = kernel(Tf, Uf, P, stol, ctol, ROTATION_TOL, q, p, u, mode, Tbs, res, valid,
+                           reason, qe)
     else:
-        flags = _iz.ik_paper_select(Tf, Uf, P, float(singular_tol), float(closure_tol),
+        flags = _iz.ik_paper_select(Tf, Uf, P, stol, ctol,
                                     ROTATION_TOL, want | (_iz.WANT_REASON if len(reason) else 0),
                                     q, p, u, mode, Tbs, res, valid, reason)
     if flags & _fk.FLAG_NONRIGID:
@@ -448,16 +473,17 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
             or (reason[0] != 0 if N == 1 else reason.any()))):
         return reference()
     if batch != (N,):
-        q, p, u, mode, Tbs, res, valid, reason = (
+        q, p, u, mode, Tbs, res, valid, reason, qe = (
             a.reshape(batch + a.shape[1:]) if len(a) == N else a
-            for a in (q, p, u, mode, Tbs, res, valid, reason))
+            for a in (q, p, u, mode, Tbs, res, valid, reason, qe))
         if not batch:   # numpy scalars, as the reference's ufuncs give for 0-d operands
             p, res, valid = p[()], res[()], valid[()]
+            qe = qe[()] if qe.ndim == 0 else qe
     if names is not None:
         return q, passive_joints(names, p=p, u=u, mode=mode, T_b_s=Tbs, residual=res,
                                  valid=valid, reason=reason)
     return q, _new(PassiveJoints, p=p, u=u, mode=mode, T_b_s=Tbs, residual=res, valid=valid,
-                   reason=reason)
+                   reason=reason, q_error=qe)
 
 
 def _ik_want(names: tuple[str, ...]) -> int:
@@ -490,7 +516,7 @@ def _ik_one_plain(Ta: NDArray[np.float64], Ua: NDArray[np.float64], P: NDArray[n
         PassiveJoints, p=fbuf[_ik.ONE_P], u=fbuf[_ik.ONE_U:_ik.ONE_T],
         mode=ibuf[0:1].reshape(()), T_b_s=fbuf[_ik.ONE_T:_ik.ONE_RES].reshape(4, 4),
         residual=fbuf[_ik.ONE_RES], valid=ibuf[1] != 0,
-        reason=ibuf[2:3].astype(np.int8).reshape(()))
+        reason=ibuf[2:3].astype(np.int8).reshape(()), q_error=fbuf[_ik.ONE_QE])
 
 
 def _line_one_plain(Ta: NDArray[np.float64], Va: NDArray[np.float64], p: float, kind: int,
@@ -506,21 +532,24 @@ def _line_one_plain(Ta: NDArray[np.float64], Va: NDArray[np.float64], p: float, 
         return None
     return fbuf[_ik.LINE_Q:_ik.LINE_P], _new(
         InstrumentIK, p=fbuf[_ik.LINE_P],
-        direction_b=fbuf[_ik.LINE_D:_ik.LINE_O], O_s=fbuf[_ik.LINE_O:_ik.LINE_F],
+        direction_b=fbuf[_ik.LINE_D:_ik.LINE_O], O_s=fbuf[_ik.LINE_O:_ik.LINE_QE],
         mode=ibuf[0:1].reshape(()), valid=ibuf[1] != 0,
-        reason=ibuf[2:3].astype(np.int8).reshape(()))
+        reason=ibuf[2:3].astype(np.int8).reshape(()), q_error=fbuf[_ik.LINE_QE])
 
 
 # --- whole robot: controller forms -------------------------------------------------------
 def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors: str,
           kind: int, parallel: bool) -> tuple[NDArray[np.float64], InstrumentIK]:
+    if not (type(errors) is str and errors in _POLICY_SET):
+        check_options(errors)
     P = design_params(design)
     Ta = _arr(T_b_e, (4, 4))
     Va = _arr(V, (3,))
     Pa = _arr(p_in, ()) if kind == 0 else np.zeros(1)
     bT, bV = Ta.shape[:-2], Va.shape[:-1]
     bP = Pa.shape if kind == 0 else ()
-    batch = bT if (bT == bV and bV == bP) else _batch(bT, bV, bP)
+    batch = bT if (bT == bV and bV == bP) else (
+        _batch(T_b_e=bT, direction_e=bV, p=bP) if kind == 0 else _batch(T_b_e=bT, tip_e=bV))
     raise_now = resolve_policy(errors, batch)
     if not batch and not parallel:
         fbuf = np.empty(_ik.LINE_F)
@@ -531,9 +560,9 @@ def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors:
             raise _Delegate
         return fbuf[_ik.LINE_Q:_ik.LINE_P], _new(
             InstrumentIK, p=fbuf[_ik.LINE_P],
-            direction_b=fbuf[_ik.LINE_D:_ik.LINE_O], O_s=fbuf[_ik.LINE_O:_ik.LINE_F],
+            direction_b=fbuf[_ik.LINE_D:_ik.LINE_O], O_s=fbuf[_ik.LINE_O:_ik.LINE_QE],
             mode=ibuf[0:1].reshape(()), valid=ibuf[1] != 0,
-            reason=ibuf[2:3].astype(np.int8).reshape(()))
+            reason=ibuf[2:3].astype(np.int8).reshape(()), q_error=fbuf[_ik.LINE_QE])
     N = math.prod(batch)
     q = np.empty((N, 3))
     p = np.empty(N)
@@ -542,19 +571,22 @@ def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors:
     mode = np.empty(N, np.int64)
     valid = np.empty(N, np.bool_)
     reason = np.empty(N, np.int8)
+    qe = np.empty(N)
     kernel = _ik.ik_line_parallel if parallel else _ik.ik_line
-    flags = kernel(_flat(Ta, bT, batch, N, (4, 4)), _flat(Va, bV, batch, N, (3,)),
-                   _flat(Pa, bP, batch, N, ()) if kind == 0 else Pa, P, kind, ROTATION_TOL,
-                   q, p, d_b, O_s, mode, valid, reason)
+    with parallel_guard(parallel):
+        flags = kernel(_flat(Ta, bT, batch, N, (4, 4)), _flat(Va, bV, batch, N, (3,)),
+                       _flat(Pa, bP, batch, N, ()) if kind == 0 else Pa, P, kind, ROTATION_TOL,
+                       q, p, d_b, O_s, mode, valid, reason, qe)
     if flags or (raise_now and (reason[0] != 0 if N == 1 else reason.any())):
         raise _Delegate   # the reference raises (or, for a false rigidity alarm, computes)
     if batch != (N,):
-        q, p, d_b, O_s, mode, valid, reason = (
-            a.reshape(batch + a.shape[1:]) for a in (q, p, d_b, O_s, mode, valid, reason))
+        q, p, d_b, O_s, mode, valid, reason, qe = (
+            a.reshape(batch + a.shape[1:])
+            for a in (q, p, d_b, O_s, mode, valid, reason, qe))
         if not batch:
-            p, valid = p[()], valid[()]
+            p, valid, qe = p[()], valid[()], qe[()]
     return q, _new(InstrumentIK, p=p, direction_b=d_b, O_s=O_s, mode=mode, valid=valid,
-                           reason=reason)
+                           reason=reason, q_error=qe)
 
 
 def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
@@ -602,14 +634,17 @@ def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
     T_b_s = np.empty((N, 2, 4, 4))
     theta = np.empty((N, 2))
     r1, m_y, w, half = np.empty(N), np.empty(N), np.empty(N), np.empty(N)
-    _ik.parallel_fk(qa.reshape(N, 3), P, float(tangent_tol), valid, reason, T_b_i, T_b_s,
-                    theta, r1, m_y, w, half)
-    valid, reason, T_b_i, T_b_s, theta = (  # type: ignore[assignment]
-        a.reshape(batch + a.shape[1:]) for a in (valid, reason, T_b_i, T_b_s, theta))
+    pres = np.empty((N, 2))
+    ttol = check_tolerance(tangent_tol, "tangent_tol")
+    _ik.parallel_fk(qa.reshape(N, 3), P, ttol, valid, reason, T_b_i, T_b_s, theta, r1, m_y, w,
+                    half, pres)
+    valid, reason, T_b_i, T_b_s, theta, pres = (  # type: ignore[assignment]
+        a.reshape(batch + a.shape[1:]) for a in (valid, reason, T_b_i, T_b_s, theta, pres))
     r1, m_y, w, half = (a.reshape(batch)[()] for a in (r1, m_y, w, half))
     return ParallelSolution(valid=valid, reason=reason, mode=MODES.copy(),
                             O_i=T_b_i[..., :3, 3], O_s=T_b_s[..., :3, 3], T_b_i=T_b_i,
-                            T_b_s=T_b_s, theta=theta, r1=r1, m_y=m_y, w=w, half_chord=half)
+                            T_b_s=T_b_s, theta=theta, r1=r1, m_y=m_y, w=w, half_chord=half,
+                            residual=pres)
 
 
 def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> ParallelIK:
@@ -626,10 +661,11 @@ def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> P
     theta = np.empty(N)
     valid = np.empty(N, np.bool_)
     reason = np.empty(N, np.int8)
-    _ik.parallel_ik_position(Oa.reshape(N, 3), P, q, mode, theta, valid, reason)
+    qe = np.empty(N)
+    _ik.parallel_ik_position(Oa.reshape(N, 3), P, q, mode, theta, valid, reason, qe)
     return ParallelIK(q=q.reshape(batch + (3,)), mode=mode.reshape(batch),
                       theta=theta.reshape(batch), valid=valid.reshape(batch)[()],
-                      reason=reason.reshape(batch))
+                      reason=reason.reshape(batch), q_error=qe.reshape(batch))
 
 
 def parallel_inverse_kinematics(T_b_s: ArrayLike, design: Design | None = None, *,

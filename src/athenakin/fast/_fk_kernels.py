@@ -42,6 +42,8 @@ CHUNK = 64
 # Reason codes (athenakin.errors.Reason), as floats in the scratch.
 _NONFINITE, _STROKE, _AB_ORDER, _LINK, _DISJOINT, _TANGENT = 1.0, 2.0, 3.0, 4.0, 5.0, 6.0
 _P_ZERO, _UJOINT, _WRIST, _CLOSURE = 7.0, 8.0, 9.0, 10.0
+#: chain.DEGENERATE_ULPS times the machine epsilon.
+_DEG_ROUND = 64.0 * 2.220446049250313e-16
 
 #: Bits of the flags the kernels return.
 FLAG_NONRIGID = 1        # some T_b_e is not rigid within half the tolerance: re-check exactly
@@ -58,8 +60,8 @@ _V5 = 18     # 2 values, index h (h = 0: tau * rs = +1)
 _YS, _ZS, _CY, _CZ, _Y, _Z = 20, 21, 22, 23, 24, 25
 MS = 26
 # Rows of the shared scratch: x_M and r1 of the parallel module.
-_XM, _R1 = 0, 1
-NSH = 2
+_XM, _R1, _PRES = 0, 1, 2      # _PRES: closure error of a merged (tangent) mode, m
+NSH = 3
 # Rows of the gathered input: q (3), T_b_e row-major (16), T finite (1).
 _GQ, _GT, _GFIN = 0, 3, 19
 NG = 20
@@ -110,7 +112,7 @@ def gather(q, T, c0, n, G):
 @njit(**_OPTS)
 def _parallel_stage(G, P, tol, SH, S0, S1, n):
     """Parallel module, both assembly modes (parallel_forward_kinematics) for n columns."""
-    l1, l2, l3, l5 = P[0], P[1], P[2], P[4]
+    l1, l2, l3, l4, l5 = P[0], P[1], P[2], P[3], P[4]
     lo0, lo1, lo2, hi0, hi1, hi2, hs = P[5], P[6], P[7], P[8], P[9], P[10], P[11]
     ttol = tol[0]
     for ii in range(n):
@@ -148,6 +150,9 @@ def _parallel_stage(G, P, tol, SH, S0, S1, n):
         ez = m_y / d
         SH[_XM * CHUNK + ii] = 0.5 * (q1 + q2) + nan
         SH[_R1 * CHUNK + ii] = r1 + nan
+        # parallel._module: the merged O_i is up to the half-chord off the true intersections
+        SH[_PRES * CHUNK + ii] = ((math.sqrt(abs(k)) / (2.0 * d)) * ((r1 + l4) / r1)
+                                  if tangent else 0.0)
         S0[_PR * CHUNK + ii] = pr
         S1[_PR * CHUNK + ii] = _TANGENT if tangent else pr
         S0[_Y * CHUNK + ii] = by + a * ey
@@ -255,8 +260,11 @@ def _serial_stage(G, P, tol, SH, Sm, n):
         res = nanmax2(res, abs(nn * a02 - e03))
         res = nanmax2(res, abs(nn * a12 - e13))
         res = nanmax2(res, abs(nn * a22 - e23))
-        ser = (_NONFINITE if not fin else _P_ZERO if pz else _UJOINT if rho <= dtol
-               else _WRIST if rho4 <= dtol else _CLOSURE if not (res <= ctol) else 0.0)
+        # degeneracy relative to the direction's rounding, ~eps * (|t_b_e| + |O_s|) / p
+        sc = (max(abs(t03), max(abs(t13), abs(t23))) + max(abs(xm), max(abs(ys), abs(zs))))
+        dt = max(dtol, _DEG_ROUND * sc / nn)
+        ser = (_NONFINITE if not fin else _P_ZERO if pz else _UJOINT if rho <= dt
+               else _WRIST if rho4 <= dt else _CLOSURE if not (res <= ctol) else 0.0)
         Sm[(_R) * CHUNK + ii] = pr if pr != 0.0 else ser
         Sm[(_NN) * CHUNK + ii] = nn
         Sm[(_RES) * CHUNK + ii] = res
@@ -338,14 +346,14 @@ def rigid_flags(T, rot_tol):
 
 
 @njit(**_OPTS)
-def _store_mode(Sm, ii, i, k0, xm, reason, valid, p, u, Tbs, res):
+def _store_mode(Sm, ii, i, k0, xm, pres, reason, valid, p, u, Tbs, res):
     """Expand one assembly mode's scratch column into its 8 slots (branch-free)."""
     R = Sm[_R * CHUNK + ii]
     ok = R == 0.0
     mask = 0.0 if ok else math.nan
     pmask = 0.0 if Sm[_PR * CHUNK + ii] == 0.0 else math.nan
     nn = Sm[_NN * CHUNK + ii] + mask
-    rv = Sm[_RES * CHUNK + ii] + mask
+    rv = nanmax2(Sm[_RES * CHUNK + ii], pres) + mask
     v1 = (Sm[_V1 * CHUNK + ii] + mask, Sm[(_V1 + 1) * CHUNK + ii] + mask)
     v2 = (Sm[_V2 * CHUNK + ii] + mask, Sm[(_V2 + 1) * CHUNK + ii] + mask,
           Sm[(_V2 + 2) * CHUNK + ii] + mask, Sm[(_V2 + 3) * CHUNK + ii] + mask)
@@ -405,11 +413,12 @@ def _store_full(SH, S0, S1, n, c0, reason, valid, p, u, Tbs, res, item):
     for ii in range(n):
         i = c0 + ii
         xm = SH[_XM * CHUNK + ii]
+        pres = SH[_PRES * CHUNK + ii]
         R0 = S0[_R * CHUNK + ii]
         R1 = S1[_R * CHUNK + ii]
         item[i] = np.int8(0 if (R0 == 0.0) | (R1 == 0.0) else R0)
-        _store_mode(S0, ii, i, 0, xm, reason, valid, p, u, Tbs, res)
-        _store_mode(S1, ii, i, 8, xm, reason, valid, p, u, Tbs, res)
+        _store_mode(S0, ii, i, 0, xm, pres, reason, valid, p, u, Tbs, res)
+        _store_mode(S1, ii, i, 8, xm, pres, reason, valid, p, u, Tbs, res)
 
 
 @njit(**_OPTS)

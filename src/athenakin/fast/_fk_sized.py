@@ -23,6 +23,7 @@ from ._fk_kernels import (
     _CZ,
     _NN,
     _PR,
+    _PRES,
     _R,
     _RES,
     _V1,
@@ -39,6 +40,7 @@ from ._fk_kernels import (
     fk_chunk,
     scratch,
 )
+from ._scalar import nanmax2
 
 __all__ = ["WANT_VALID", "WANT_REASON", "WANT_P", "WANT_U", "WANT_T", "WANT_RES", "WANT_ALL",
            "fk_select", "fk_one_arrays"]
@@ -50,14 +52,14 @@ WANT_ALL = 63
 _OPTS = dict(error_model="numpy", cache=True)
 
 @njit(**_OPTS)
-def _store_mode_select(Sm, ii, i, k0, m, xm, want, reason, valid, p, u, Tbs, res):
+def _store_mode_select(Sm, ii, i, k0, m, xm, pres, want, reason, valid, p, u, Tbs, res):
     """:func:`._fk_kernels._store_mode` writing only the fields in ``want``."""
     R = Sm[_R * CHUNK + ii]
     ok = R == 0.0
     mask = 0.0 if ok else math.nan
     if want & (WANT_VALID | WANT_REASON | WANT_RES):
         r8 = np.int8(R)
-        rv = Sm[_RES * CHUNK + ii] + mask
+        rv = nanmax2(Sm[_RES * CHUNK + ii], pres) + mask   # merged modes (_fk_kernels)
         for j in range(8):
             if want & WANT_REASON:
                 reason[i, k0 + j] = r8
@@ -131,11 +133,12 @@ def fk_select(q, T, P, tol, rot_tol, want, reason, valid, p, u, Tbs, res, item):
         for ii in range(n):
             i = c0 + ii
             xm = SH[_XM * CHUNK + ii]
+            pres = SH[_PRES * CHUNK + ii]
             R0 = S0[_R * CHUNK + ii]
             R1 = S1[_R * CHUNK + ii]
             item[i] = np.int8(0 if (R0 == 0.0) | (R1 == 0.0) else R0)
-            _store_mode_select(S0, ii, i, 0, 0, xm, want, reason, valid, p, u, Tbs, res)
-            _store_mode_select(S1, ii, i, 8, 1, xm, want, reason, valid, p, u, Tbs, res)
+            _store_mode_select(S0, ii, i, 0, 0, xm, pres, want, reason, valid, p, u, Tbs, res)
+            _store_mode_select(S1, ii, i, 8, 1, xm, pres, want, reason, valid, p, u, Tbs, res)
     return _input_flags(q, T, rot_tol)
 
 

@@ -31,6 +31,11 @@ __all__ = ["ik_paper", "ik_paper_parallel", "ik_line", "ik_line_parallel",
 _NONFINITE, _STROKE, _AB_ORDER, _LINK = 1.0, 2.0, 3.0, 4.0
 _DISJOINT, _TANGENT, _CLOSURE = 5.0, 6.0, 10.0
 _NOT_IMAGE, _IK_SINGULAR, _INSERTION = 11.0, 12.0, 13.0
+_P_ZERO = 7.0
+#: athenakin.robot.IK_Q_ERROR_MAX (m).
+_QE_MAX = 1e-5
+#: athenakin.chain.P_ZERO_TOL (m): |p| at or below which the instrument axis is undefined.
+_P_ZERO_TOL = 1e-12
 
 #: Flags returned by the IK kernels (FLAG_NONRIGID = 1 and FLAG_T_NONFINITE = 4 as in FK).
 FLAG_SLOW = 8              # some |u| > WRAP_EXACT_MAX: recompute those items in numpy
@@ -49,7 +54,10 @@ _OX, _OY, _OZ, _PRE = 0, 1, 2, 3          # inputs of the parallel IK (O_s, earl
 _Q1, _Q2, _Q3, _MODE, _REASON, _CT, _ST, _TH = 4, 5, 6, 7, 8, 9, 10, 11
 _P, _U1, _U2, _U3, _U4, _U5, _RES = 12, 13, 14, 15, 16, 17, 18
 _DX, _DY, _DZ = 19, 20, 21
-NK = 22
+_DO, _QE = 22, 23                        # error already in O_s (in); q_error (out)
+NK = 24
+#: parallel._module.IK_ROUNDING_ULPS times the machine epsilon.
+_ROUND = 64.0 * 2.220446049250313e-16
 
 
 @njit(**_OPTS)
@@ -69,10 +77,14 @@ def _pik_stage(K, P, n):
         pz = oz if fin else 0.0
         rho = hypot(py, pz)
         reason = _NONFINITE if not fin else _NOT_IMAGE if rho <= l4 else 0.0
+        scale = max(abs(py), abs(pz))
+        dr = _ROUND * ((scale + l1) + l4) + K[_DO * CHUNK + ii]
         r1 = rho - l4
-        h_abs = math.sqrt(l1 * l1 - r1 * r1)
+        r1 = l1 if (r1 > l1) & (r1 - l1 <= dr) else r1
+        h_abs = math.sqrt((l1 - r1) * (l1 + r1))
         bad = (r1 > l1) | (h_abs > l3)
         reason = _LINK if (reason == 0.0) & bad else reason
+        h_abs = 0.0 if h_abs * h_abs <= 2.0 * r1 * dr else h_abs
         ok = reason == 0.0
         mask = 0.0 if ok else math.nan
         h = hs * h_abs + mask
@@ -85,6 +97,11 @@ def _pik_stage(K, P, n):
         cross = m_y * z - l5 * y
         q1 = xm + h
         q2 = xm - h
+        qe = _q_error(r1, h_abs, dr, l3) + _ROUND * abs(px)
+        # within the error bound of a stroke limit: on it (parallel._module.position_ik)
+        q1 = lo0 if (q1 < lo0) & (q1 >= lo0 - qe) else hi0 if (q1 > hi0) & (q1 <= hi0 + qe) else q1
+        q2 = lo1 if (q2 < lo1) & (q2 >= lo1 - qe) else hi1 if (q2 > hi1) & (q2 <= hi1 + qe) else q2
+        q3 = lo2 if (q3 < lo2) & (q3 >= lo2 - qe) else hi2 if (q3 > hi2) & (q3 <= hi2 + qe) else q3
         # parallel._module._actuator_checks on q (items that passed so far)
         finq = (finite_sum(q1) + finite_sum(q2) + finite_sum(q3)) == 0.0
         stroke = (q1 < lo0) | (q1 > hi0) | (q2 < lo1) | (q2 > hi1) | (q3 < lo2) | (q3 > hi2)
@@ -102,10 +119,23 @@ def _pik_stage(K, P, n):
         K[_CT * CHUNK + ii] = z / hh + vmask
         K[_ST * CHUNK + ii] = -y / hh + vmask
         K[_TH * CHUNK + ii] = atan2(-y, z) + vmask
+        K[_QE * CHUNK + ii] = qe + vmask
 
 
 @njit(**_OPTS)
-def parallel_ik_position(Os, P, q, mode, theta, valid, reason):
+def _q_error(r1, h_abs, dr, l3):
+    """parallel._module._q_error: bound on the error of q for an error dr of r1."""
+    r1p = r1 if r1 > 0.0 else 0.0
+    dh = 2.0 * r1p * dr / (math.sqrt(h_abs * h_abs + 2.0 * r1p * dr) + h_abs) + dr
+    hd = h_abs + dh
+    s3 = l3 * l3 - hd * hd
+    s3 = math.sqrt(s3) if s3 > 0.0 else 0.0
+    dmy = hd * dh / s3 if s3 > 0.0 else dh
+    return (2.0 * dr + dh) + dmy
+
+
+@njit(**_OPTS)
+def parallel_ik_position(Os, P, q, mode, theta, valid, reason, qe):
     """:func:`athenakin.parallel.parallel_ik_from_position` for O (N, 3)."""
     N = Os.shape[0]
     K = np.empty(NK * CHUNK)
@@ -115,6 +145,7 @@ def parallel_ik_position(Os, P, q, mode, theta, valid, reason):
             for c in range(3):
                 K[(_OX + c) * CHUNK + ii] = Os[c0 + ii, c]
             K[_PRE * CHUNK + ii] = 0.0
+            K[_DO * CHUNK + ii] = 0.0
         _pik_stage(K, P, n)
         for ii in range(n):
             i = c0 + ii
@@ -123,6 +154,7 @@ def parallel_ik_position(Os, P, q, mode, theta, valid, reason):
             r = K[_REASON * CHUNK + ii]
             mode[i] = np.int64(K[_MODE * CHUNK + ii]) if r == 0.0 else 0
             theta[i] = K[_TH * CHUNK + ii]
+            qe[i] = K[_QE * CHUNK + ii]
             reason[i] = np.int8(r)
             valid[i] = r == 0.0
 
@@ -149,19 +181,23 @@ def _line_stage(G, K, kind, n):
     """O_s = RCM - p R d (d normalised; for kind 1, d and p from the tool tip)."""
     for ii in range(n):
         vx, vy, vz = G[12 * CHUNK + ii], G[13 * CHUNK + ii], G[14 * CHUNK + ii]
-        s = math.sqrt((vx * vx + vy * vy) + vz * vz)
+        # scale by the largest component first: no underflow / overflow of the norm
+        m = max(abs(vx), max(abs(vy), abs(vz)))
+        ms = m if m > 0.0 else 1.0
+        sx, sy, sz = vx / ms, vy / ms, vz / ms
+        sn = math.sqrt((sx * sx + sy * sy) + sz * sz)
+        s = m * sn
         L = G[15 * CHUNK + ii]
         if kind == 1:
-            pre = _IK_SINGULAR if s == 0.0 else _INSERTION if s >= L else 0.0
-            sp = s if s > 0.0 else 1.0
-            dx = vx / sp if s > 0.0 else 0.0
-            dy = vy / sp if s > 0.0 else 0.0
-            dz = vz / sp if s > 0.0 else 1.0
+            pre = _IK_SINGULAR if m == 0.0 else _INSERTION if s >= L else 0.0
+            dx = sx / sn if m > 0.0 else 0.0
+            dy = sy / sn if m > 0.0 else 0.0
+            dz = sz / sn if m > 0.0 else 1.0
             p = L - s
         else:
-            pre = 0.0
-            dx, dy, dz = vx / s, vy / s, vz / s
             p = L
+            pre = _P_ZERO if abs(p) <= _P_ZERO_TOL else 0.0
+            dx, dy, dz = sx / sn, sy / sn, sz / sn
         bx = (G[0 * CHUNK + ii] * dx + G[1 * CHUNK + ii] * dy) + G[2 * CHUNK + ii] * dz
         by = (G[4 * CHUNK + ii] * dx + G[5 * CHUNK + ii] * dy) + G[6 * CHUNK + ii] * dz
         bz = (G[8 * CHUNK + ii] * dx + G[9 * CHUNK + ii] * dy) + G[10 * CHUNK + ii] * dz
@@ -169,6 +205,7 @@ def _line_stage(G, K, kind, n):
         K[_OY * CHUNK + ii] = G[7 * CHUNK + ii] - p * by
         K[_OZ * CHUNK + ii] = G[11 * CHUNK + ii] - p * bz
         K[_PRE * CHUNK + ii] = pre
+        K[_DO * CHUNK + ii] = 0.0
         K[_P * CHUNK + ii] = p
         K[_DX * CHUNK + ii] = bx
         K[_DY * CHUNK + ii] = by
@@ -176,7 +213,7 @@ def _line_stage(G, K, kind, n):
 
 
 @njit(**_OPTS)
-def _line_store(K, c0, n, q, p, d_b, O_s, mode, valid, reason):
+def _line_store(K, c0, n, q, p, d_b, O_s, mode, valid, reason, qe):
     for ii in range(n):
         i = c0 + ii
         r = K[_REASON * CHUNK + ii]
@@ -191,17 +228,18 @@ def _line_store(K, c0, n, q, p, d_b, O_s, mode, valid, reason):
         O_s[i, 0] = K[_OX * CHUNK + ii] + mask
         O_s[i, 1] = K[_OY * CHUNK + ii] + mask
         O_s[i, 2] = K[_OZ * CHUNK + ii] + mask
+        qe[i] = K[_QE * CHUNK + ii] + mask
         mode[i] = np.int64(K[_MODE * CHUNK + ii]) if r == 0.0 else 0
         reason[i] = np.int8(r)
         valid[i] = r == 0.0
 
 
 @njit(**_OPTS)
-def _line_chunk(T, V, Pp, P, kind, G, K, c0, n, q, p, d_b, O_s, mode, valid, reason):
+def _line_chunk(T, V, Pp, P, kind, G, K, c0, n, q, p, d_b, O_s, mode, valid, reason, qe):
     _line_gather(T, V, Pp, c0, n, kind, P[12], G)
     _line_stage(G, K, kind, n)
     _pik_stage(K, P, n)
-    _line_store(K, c0, n, q, p, d_b, O_s, mode, valid, reason)
+    _line_store(K, c0, n, q, p, d_b, O_s, mode, valid, reason, qe)
 
 
 @njit(**_OPTS)
@@ -220,14 +258,15 @@ def _line_flags(T, V, Pp, kind, rot_tol):
 
 
 @njit(**_OPTS)
-def ik_line(T, V, Pp, P, kind, rot_tol, q, p, d_b, O_s, mode, valid, reason):
+def ik_line(T, V, Pp, P, kind, rot_tol, q, p, d_b, O_s, mode, valid, reason, qe):
     """Controller-form IK: kind 0 = (direction V, insertion Pp), kind 1 = tool tip V.
 
     Parameters
     ----------
     T : (NT, 4, 4); V : (NV, 3); Pp : (NP,) -- each with 1 or N rows (broadcast)
     P : (13,) design parameters; kind : int; rot_tol : rigidity tolerance
-    q, d_b, O_s : (N, 3); p : (N,); mode : (N,) int64; valid : (N,) bool; reason : (N,) int8
+    q, d_b, O_s : (N, 3); p, qe : (N,); mode : (N,) int64; valid : (N,) bool;
+    reason : (N,) int8
 
     Returns
     -------
@@ -242,12 +281,12 @@ def ik_line(T, V, Pp, P, kind, rot_tol, q, p, d_b, O_s, mode, valid, reason):
     K = np.empty(NK * CHUNK)
     for c0 in range(0, N, CHUNK):
         _line_chunk(T, V, Pp, P, kind, G, K, c0, min(CHUNK, N - c0), q, p, d_b, O_s, mode,
-                    valid, reason)
+                    valid, reason, qe)
     return flags
 
 
 @njit(parallel=True, **_OPTS)
-def ik_line_parallel(T, V, Pp, P, kind, rot_tol, q, p, d_b, O_s, mode, valid, reason):
+def ik_line_parallel(T, V, Pp, P, kind, rot_tol, q, p, d_b, O_s, mode, valid, reason, qe):
     """:func:`ik_line` with the chunks spread over numba's threads."""
     flags = _line_flags(T, V, Pp, kind, rot_tol)
     if flags & (FLAG_T_NONFINITE | FLAG_V_NONFINITE | FLAG_P_NONFINITE | FLAG_ZERO_DIRECTION):
@@ -259,7 +298,7 @@ def ik_line_parallel(T, V, Pp, P, kind, rot_tol, q, p, d_b, O_s, mode, valid, re
         K = np.empty(NK * CHUNK)
         c0 = ci * CHUNK
         _line_chunk(T, V, Pp, P, kind, G, K, c0, min(CHUNK, N - c0), q, p, d_b, O_s, mode,
-                    valid, reason)
+                    valid, reason, qe)
     return flags
 
 
@@ -337,6 +376,7 @@ def _paper_stage1(G, K, stol, n):
         sing = (ny <= stol) | (abs(den) <= stol)
         pre = _NONFINITE if not fin else _IK_SINGULAR if sing else 0.0
         p = (e13 * n0 + e23 * n1) / (1.0 if sing else den)
+        K[_DO * CHUNK + ii] = paper_o_error(e03, e13, e23, p, ny, den)
         K[_OX * CHUNK + ii] = e03 - p * b02
         K[_OY * CHUNK + ii] = e13 - p * b12
         K[_OZ * CHUNK + ii] = e23 - p * b22
@@ -379,6 +419,19 @@ def _paper_stage1(G, K, stol, n):
 
 
 _NGP2 = 33
+
+
+@njit(**_OPTS)
+def paper_o_error(cx, cy, cz, p, ny, den):
+    """Bound (m) on the error of O_s = c - p z_w in the paper-form IK (robot._ik mirror).
+
+    ``n = y_w / |y_w|`` carries a relative error ``eps / ny`` and ``p = (c . n) / den``
+    divides it by ``den``: ``dp ~ eps (|c| + |p|) (1 + 1 / ny) / |den|``.
+    """
+    s = ((abs(cx) + abs(cy)) + abs(cz)) + abs(p)
+    a = 1.0 + 1.0 / ny if ny > 0.0 else math.inf
+    ad = abs(den)
+    return _ROUND * s * (a / ad) if ad > 0.0 else math.inf
 
 
 @njit(**_OPTS)
@@ -431,13 +484,14 @@ def _paper_stage2(G, K, ctol, n):
         res = nanmax2(res, abs(((ct * ty - st * tz) + K[_OY * CHUNK + ii]) - G[22 * CHUNK + ii]))
         res = nanmax2(res, abs(((st * ty + ct * tz) + K[_OZ * CHUNK + ii]) - G[23 * CHUNK + ii]))
         r = K[_REASON * CHUNK + ii]
+        r = _IK_SINGULAR if (r == 0.0) & (not (K[_QE * CHUNK + ii] <= _QE_MAX)) else r
         r = _CLOSURE if (r == 0.0) & (not (res <= ctol)) else r
         K[_REASON * CHUNK + ii] = r
         K[_RES * CHUNK + ii] = res
 
 
 @njit(**_OPTS)
-def _paper_store(K, c0, n, q, p, u, mode, Tbs, res, valid, reason):
+def _paper_store(K, c0, n, q, p, u, mode, Tbs, res, valid, reason, qe):
     for ii in range(n):
         i = c0 + ii
         r = K[_REASON * CHUNK + ii]
@@ -469,17 +523,19 @@ def _paper_store(K, c0, n, q, p, u, mode, Tbs, res, valid, reason):
         Tbs[i, 3, 2] = zero
         Tbs[i, 3, 3] = one
         res[i] = K[_RES * CHUNK + ii] + mask
+        qe[i] = K[_QE * CHUNK + ii] + mask
         reason[i] = np.int8(r)
         valid[i] = r == 0.0
 
 
 @njit(**_OPTS)
-def _paper_chunk(T, U, P, stol, ctol, G, K, c0, n, q, p, u, mode, Tbs, res, valid, reason):
+def _paper_chunk(T, U, P, stol, ctol, G, K, c0, n, q, p, u, mode, Tbs, res, valid, reason,
+                 qe):
     _paper_gather(T, U, c0, n, G)
     _paper_stage1(G, K, stol, n)
     _pik_stage(K, P, n)
     _paper_stage2(G, K, ctol, n)
-    _paper_store(K, c0, n, q, p, u, mode, Tbs, res, valid, reason)
+    _paper_store(K, c0, n, q, p, u, mode, Tbs, res, valid, reason, qe)
 
 
 @njit(**_OPTS)
@@ -499,14 +555,14 @@ def _paper_flags(T, U, rot_tol):
 
 
 @njit(**_OPTS)
-def ik_paper(T, U, P, stol, ctol, rot_tol, q, p, u, mode, Tbs, res, valid, reason):
+def ik_paper(T, U, P, stol, ctol, rot_tol, q, p, u, mode, Tbs, res, valid, reason, qe):
     """Paper-form IK (inverse_kinematics) of N = max(len(T), len(U)) items.
 
     Parameters
     ----------
     T : (NT, 4, 4); U : (NU, 3) -- 1 or N rows each
     P : (13,) design parameters; stol, ctol : singular and closure tolerances
-    q : (N, 3); p, res : (N,); u : (N, 5); mode : (N,) int64; Tbs : (N, 4, 4);
+    q : (N, 3); p, res, qe : (N,); u : (N, 5); mode : (N,) int64; Tbs : (N, 4, 4);
     valid : (N,) bool; reason : (N,) int8
 
     Returns
@@ -519,12 +575,13 @@ def ik_paper(T, U, P, stol, ctol, rot_tol, q, p, u, mode, Tbs, res, valid, reaso
     K = np.empty(NK * CHUNK)
     for c0 in range(0, N, CHUNK):
         _paper_chunk(T, U, P, stol, ctol, G, K, c0, min(CHUNK, N - c0), q, p, u, mode, Tbs,
-                     res, valid, reason)
+                     res, valid, reason, qe)
     return _paper_flags(T, U, rot_tol)
 
 
 @njit(parallel=True, **_OPTS)
-def ik_paper_parallel(T, U, P, stol, ctol, rot_tol, q, p, u, mode, Tbs, res, valid, reason):
+def ik_paper_parallel(T, U, P, stol, ctol, rot_tol, q, p, u, mode, Tbs, res, valid, reason,
+                      qe):
     """:func:`ik_paper` with the chunks spread over numba's threads."""
     N = reason.shape[0]
     nchunk = (N + CHUNK - 1) // CHUNK
@@ -533,13 +590,13 @@ def ik_paper_parallel(T, U, P, stol, ctol, rot_tol, q, p, u, mode, Tbs, res, val
         K = np.empty(NK * CHUNK)
         c0 = ci * CHUNK
         _paper_chunk(T, U, P, stol, ctol, G, K, c0, min(CHUNK, N - c0), q, p, u, mode, Tbs,
-                     res, valid, reason)
+                     res, valid, reason, qe)
     return _paper_flags(T, U, rot_tol)
 
 
 # --- parallel module FK (parallel_forward_kinematics) ------------------------------------
 @njit(**_OPTS)
-def parallel_fk(q, P, ttol, valid, reason, T_b_i, T_b_s, theta, r1o, myo, wo, halfo):
+def parallel_fk(q, P, ttol, valid, reason, T_b_i, T_b_s, theta, r1o, myo, wo, halfo, reso):
     """:func:`athenakin.parallel.parallel_forward_kinematics` for q (N, 3)."""
     l1, l2, l3, l4, l5 = P[0], P[1], P[2], P[3], P[4]
     lo0, lo1, lo2, hi0, hi1, hi2, hs = P[5], P[6], P[7], P[8], P[9], P[10], P[11]
@@ -580,11 +637,13 @@ def parallel_fk(q, P, ttol, valid, reason, T_b_i, T_b_s, theta, r1o, myo, wo, ha
         ez = m_y / d
         xm = 0.5 * (q1 + q2) + nan
         r1n = r1 + nan
+        pres = (math.sqrt(abs(k)) / (2.0 * d)) * ((r1n + l4) / r1n) if tangent else 0.0
         for m in range(2):
             sr = pr if m == 0 else (_TANGENT if tangent else pr)
             reason[i, m] = np.int8(sr)
             valid[i, m] = sr == 0.0
             mask = 0.0 if sr == 0.0 else math.nan
+            reso[i, m] = pres + mask
             sa = a if m == 0 else -a
             y = by + sa * ey
             z = bz + sa * ez
@@ -611,15 +670,16 @@ def parallel_fk(q, P, ttol, valid, reason, T_b_i, T_b_s, theta, r1o, myo, wo, ha
 
 
 #: Layout of the packed single-item buffer of :func:`ik_paper_one`:
-#: q (3), p (1), u (5), T_b_s (16), residual (1); ints: mode, valid, reason.
-ONE_Q, ONE_P, ONE_U, ONE_T, ONE_RES, ONE_F = 0, 3, 4, 9, 25, 26
+#: q (3), p (1), u (5), T_b_s (16), residual (1), q_error (1); ints: mode, valid, reason.
+ONE_Q, ONE_P, ONE_U, ONE_T, ONE_RES, ONE_QE, ONE_F = 0, 3, 4, 9, 25, 26, 27
 
 
 @njit(**_OPTS)
 def ik_paper_one(T, U, P, stol, ctol, rot_tol, fbuf, ibuf):
     """Paper-form IK of one item, T (4, 4) and U (3,), into packed buffers.
 
-    ``fbuf`` (26,): q, p, u, T_b_s, residual; ``ibuf`` (3,) int64: mode, valid, reason.
+    ``fbuf`` (27,): q, p, u, T_b_s, residual, q_error; ``ibuf`` (3,) int64: mode, valid,
+    reason.
     Returns the FLAG_* bits.
     """
     T2 = T.reshape((1, 4, 4))
@@ -630,7 +690,8 @@ def ik_paper_one(T, U, P, stol, ctol, rot_tol, fbuf, ibuf):
     reason = np.empty(1, np.int8)
     _paper_chunk(T2, U2, P, stol, ctol, G, K, 0, 1, fbuf[ONE_Q:ONE_P].reshape((1, 3)),
                  fbuf[ONE_P:ONE_U], fbuf[ONE_U:ONE_T].reshape((1, 5)), ibuf[0:1],
-                 fbuf[ONE_T:ONE_RES].reshape((1, 4, 4)), fbuf[ONE_RES:ONE_F], valid, reason)
+                 fbuf[ONE_T:ONE_RES].reshape((1, 4, 4)), fbuf[ONE_RES:ONE_QE], valid, reason,
+                 fbuf[ONE_QE:ONE_F])
     ibuf[1] = valid[0]
     ibuf[2] = reason[0]
     return _paper_flags(T2, U2, rot_tol)
@@ -657,13 +718,14 @@ def ik_line_one(T, V, pv, P, kind, q):
     return int(K[_REASON * CHUNK])
 
 
-#: Packed single-item output of :func:`ik_line_one_packed`: q (3), p, d_b (3), O_s (3).
-LINE_Q, LINE_P, LINE_D, LINE_O, LINE_F = 0, 3, 4, 7, 10
+#: Packed single-item output of :func:`ik_line_one_packed`: q (3), p, d_b (3), O_s (3),
+#: q_error.
+LINE_Q, LINE_P, LINE_D, LINE_O, LINE_QE, LINE_F = 0, 3, 4, 7, 10, 11
 
 
 @njit(**_OPTS)
 def ik_line_one_packed(T, V, pv, P, kind, rot_tol, fbuf, ibuf):
-    """Controller-form IK of one item with input flags: fbuf (10,), ibuf (3,) int64.
+    """Controller-form IK of one item with input flags: fbuf (11,), ibuf (3,) int64.
 
     ``ibuf`` receives mode, valid, reason. Returns the FLAG_* bits (nothing computed
     when an input is non-finite or a direction is zero: the caller raises).
@@ -681,7 +743,8 @@ def ik_line_one_packed(T, V, pv, P, kind, rot_tol, fbuf, ibuf):
     reason = np.empty(1, np.int8)
     _line_chunk(T2, V2, Pp, P, kind, G, K, 0, 1, fbuf[LINE_Q:LINE_P].reshape((1, 3)),
                 fbuf[LINE_P:LINE_D], fbuf[LINE_D:LINE_O].reshape((1, 3)),
-                fbuf[LINE_O:LINE_F].reshape((1, 3)), ibuf[0:1], valid, reason)
+                fbuf[LINE_O:LINE_QE].reshape((1, 3)), ibuf[0:1], valid, reason,
+                fbuf[LINE_QE:LINE_F])
     ibuf[1] = valid[0]
     ibuf[2] = reason[0]
     return flags

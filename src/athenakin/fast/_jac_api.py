@@ -131,7 +131,7 @@ def _robot(q: object, T_b_e: object, design: Design | None, mode: object, frame:
     else:
         Ta = _arr(T_b_e, (4, 4))
         bT, check = Ta.shape[:-2], True
-    batch = bq if bq == bT else _batch(bq, bT)
+    batch = bq if bq == bT else _batch(q=bq, T_b_e=bT)
     N = math.prod(batch)
     out = np.empty((N, 3, 3))
     flags = _jk.robot_kernel(_flat(qa, bq, batch, N, (3,)), _mode_rows(mf, bm, batch, N),

@@ -17,6 +17,7 @@ from ..parallel._module import TANGENT_TOL
 from ..robot._fk import FKSolution
 from . import _fk_kernels as _fk
 from ._api import design_params, forward_kinematics
+from ._threads import parallel_guard
 
 __all__ = ["SweepSummary", "sweep_fk", "DEFAULT_CHUNK_SIZE"]
 
@@ -152,7 +153,8 @@ def sweep_fk(q: QSource, T_b_e: ArrayLike, design: Design | None = None, *,
             if reduce is None:
                 if not qc.flags.writeable:
                     qc = qc.copy()
-                count(qc, T1, P, tol, counts, reasons, slots)
+                with parallel_guard(parallel):
+                    count(qc, T1, P, tol, counts, reasons, slots)
             else:
                 if buf is None or buf.item_reason.shape != (stop - start,):
                     buf = None

@@ -197,8 +197,8 @@ def _parallel(g: _Geometry, q1: float, q2: float, q3: float
     """Circle geometry: ``(x_M, h, r1, a, ...)``; None when the module cannot assemble."""
     h = 0.5 * (q1 - q2)
     hh = h * h
-    if hh >= g.l1 * g.l1 or hh > g.l3 * g.l3 or g.h_sign * h < 0:
-        return None
+    if hh >= g.l1 * g.l1 or hh > g.l3 * g.l3 or g.h_sign * h < 0 or q3 < 0.0:
+        return None                      # q3 is a length: negative is no configuration
     r1 = math.sqrt(g.l1 * g.l1 - hh)
     m_y = math.sqrt(g.l3 * g.l3 - hh) + g.l2
     d2 = m_y * m_y + g.l5 * g.l5
@@ -277,9 +277,36 @@ def _candidate(g: _Geometry, q1: float, q2: float, q3: float, par: tuple, mode: 
     u3 = math.atan2(s3, c3)
     u4 = math.atan2(s4, c4)
     u5 = math.atan2(s3 * W00 - c3 * W10, c3 * c4 * W00 + s3 * c4 * W10 + s4 * W20)
+    if not math.isfinite(Ox + Oy + Oz + p + u1 + u2 + u3 + u4 + u5 + bx + by + bz):
+        return None                      # overflow (readings near 1e308): no valid pose
     # instrument axis in the base frame: (c - O_s) / p
     return (mode, r, b, w, p, (u1, u2, u3, u4, u5), (Ox, Oy, Oz), (bx / p, by / p, bz / p),
             a, abs(h), rho, rho4)
+
+
+_ALL_FLAGS = TrackFlag(sum(int(f) for f in TrackFlag))
+
+
+def _track_flag(x: object, name: str) -> TrackFlag:
+    """A :class:`TrackFlag` from a flag, its int, or names (``"LOST"``, ``"LOST|JUMP"``)."""
+    if isinstance(x, TrackFlag):
+        return x
+    if isinstance(x, str):
+        out = TrackFlag.NONE
+        for part in x.split("|"):
+            key = part.strip().upper()
+            if key not in TrackFlag.__members__:
+                raise InvalidInputError(f"{name}: expected TrackFlag names such as 'LOST' or "
+                                        f"'LOST|JUMP', got {x!r} ({part.strip()!r} is not one "
+                                        f"of {list(TrackFlag.__members__)})")
+            out |= TrackFlag[key]
+        return out
+    if isinstance(x, (int, np.integer)) and not isinstance(x, bool):
+        if not 0 <= int(x) <= int(_ALL_FLAGS):
+            raise InvalidInputError(f"{name}: expected TrackFlag bits within "
+                                    f"0..{int(_ALL_FLAGS)}, got {int(x)}")
+        return TrackFlag(int(x))
+    raise TypeError(f"{name}: expected a TrackFlag (or its name), got {type(x).__name__}")
 
 
 def _slot(mode: int, r: int, b: int, w: int) -> int:
@@ -343,7 +370,7 @@ class Tracker:
         self.jump_m = check_scalar(jump_m, "jump_m", positive=True)
         self.jump_rad = check_scalar(jump_rad, "jump_rad", positive=True)
         self.margins = margins
-        self.raise_on = TrackFlag(raise_on)
+        self.raise_on = _track_flag(raise_on, "raise_on")
         self._raise_bits = int(self.raise_on)
         self._g = _Geometry(T, design)
         # fast-path thresholds: a candidate far from every singularity, and far enough
@@ -448,7 +475,7 @@ class Tracker:
             q1, q2, q3 = float(q[0]), float(q[1]), float(q[2])  # type: ignore[index,arg-type]
             if len(q) != 3:  # type: ignore[arg-type]
                 raise ValueError
-        except (TypeError, ValueError, IndexError):
+        except (TypeError, ValueError, IndexError, OverflowError):
             raise InvalidInputError(f"q: expected 3 numbers (q1, q2, q3) in m, got {q!r}") \
                 from None
         self._index += 1

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import wrap_angle
-from .._validation import check_array, check_transform
+from .._validation import check_array, check_tolerance, check_transform
 from ..design import Design, resolve_design
 from ..errors import Reason
 
@@ -33,6 +33,8 @@ __all__ = [
     "parallel_ik_from_position",
     "parallel_inverse_kinematics",
     "circle_geometry",
+    "IK_ROUNDING_ULPS",
+    "position_ik_error",
 ]
 
 #: Half-chord length (m) of ``k1 ∩ k2`` at or below which the circles count as tangent.
@@ -69,6 +71,12 @@ class ParallelSolution:
     r1, m_y, w, half_chord : ndarray, shape (...)
         Radius of ``k1``, y of C, the paper's ``w`` (Eq. 8) and the half-chord
         ``a = sqrt(max(w, 0)) / (2 m_y d)`` of the two intersections (m).
+    residual : ndarray, shape (..., 2)
+        How far (m) the reported ``O_s`` may be from the true mechanism's: 0 for an
+        isolated intersection; where the modes merge (half-chord ``<= tangent_tol``)
+        ``O_i`` is put at the chord midpoint, up to the half-chord ``a`` off the true
+        intersections, and ``O_s`` up to ``a (r1 + l4) / r1``. NaN in invalid slots.
+        :func:`~athenakin.forward_kinematics` adds it to every slot's ``residual``.
     """
 
     valid: NDArray[np.bool_]
@@ -83,6 +91,7 @@ class ParallelSolution:
     m_y: NDArray[np.float64]
     w: NDArray[np.float64]
     half_chord: NDArray[np.float64]
+    residual: NDArray[np.float64]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -99,6 +108,11 @@ class ParallelIK:
         ``R_b_s = Rx(theta)``, radians.
     valid : ndarray of bool, shape (...)
     reason : ndarray of int, shape (...)
+    q_error : ndarray, shape (...)
+        The conditioning of the solution: a bound (m) on the error of every entry of
+        ``q`` caused by rounding of ``O_s`` (see :func:`position_ik_error`); NaN where
+        invalid. Near ``q1 = q2`` the IK is ill-conditioned (``dq ~ sqrt(dO_s)``) and
+        this grows to about ``1e-7`` m on the reference design.
     """
 
     q: NDArray[np.float64]
@@ -106,6 +120,7 @@ class ParallelIK:
     theta: NDArray[np.float64]
     valid: NDArray[np.bool_]
     reason: NDArray[np.int8]
+    q_error: NDArray[np.float64]
 
 
 def _actuator_checks(q: NDArray[np.float64], design: Design) -> NDArray[np.int8]:
@@ -202,6 +217,7 @@ def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
     """
     design = resolve_design(design)
     q = check_array(q, "q", (3,), allow_nonfinite=True)
+    tangent_tol = check_tolerance(tangent_tol, "tangent_tol")
     reason = _actuator_checks(q, design)
     qs = np.where(reason[..., None] == Reason.NONFINITE_INPUT, 0.0, q)
     g = circle_geometry(qs, design)
@@ -235,10 +251,14 @@ def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
     T_b_i = T_b_i * nanmask[..., None, None]
     T_b_s = T_b_s * nanmask[..., None, None]
     theta = wrap_angle(np.arctan2(-y / r1[..., None], z / r1[..., None])) * nanmask
+    with np.errstate(invalid="ignore", divide="ignore"):
+        pres = np.where(tangent, np.sqrt(np.abs(k)) / (2 * g["d"]) * ((r1 + design.l4) / r1),
+                        0.0)
     return ParallelSolution(
         valid=valid, reason=slot_reason, mode=MODES.copy(),
         O_i=T_b_i[..., :3, 3], O_s=T_b_s[..., :3, 3], T_b_i=T_b_i, T_b_s=T_b_s, theta=theta,
-        r1=g["r1"], m_y=g["m_y"], w=g["w"], half_chord=g["half_chord"])
+        r1=g["r1"], m_y=g["m_y"], w=g["w"], half_chord=g["half_chord"],
+        residual=pres[..., None] * nanmask)
 
 
 def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> ParallelIK:
@@ -262,35 +282,121 @@ def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> P
     """
     design = resolve_design(design)
     O_s = check_array(O_s, "O_s", (3,), allow_nonfinite=True)
+    return position_ik(O_s, design)
+
+
+#: Rounding of a position, in units of ``eps * (|O_s| + l1 + l4)``, that the parallel IK
+#: absorbs: a point that the forward kinematics put at ``r1 = l1`` (``q1 = q2``) comes back
+#: a few ulps beyond ``l1`` and must not read as "out of the workspace".
+IK_ROUNDING_ULPS = 64.0
+
+
+def position_ik(O_s: NDArray[np.float64], design: Design,
+                dO: NDArray[np.float64] | float = 0.0) -> ParallelIK:
+    """:func:`parallel_ik_from_position` on a checked array (private; shared with the robot IK).
+
+    ``dO`` is a bound (m) on the error of ``O_s`` already present in the input
+    (from an upstream computation); rounding of ``O_s`` itself is always added.
+    """
     finite = np.all(np.isfinite(O_s), axis=-1)
     P = np.where(finite[..., None], O_s, 0.0)
-    rho = np.hypot(P[..., 1], P[..., 2])
+    scale = np.max(np.abs(P[..., 1:]), axis=-1, initial=0.0)   # what r1 is computed from
+    with np.errstate(over="ignore", invalid="ignore"):
+        rho = np.hypot(P[..., 1], P[..., 2])
     reason = np.where(finite, 0, Reason.NONFINITE_INPUT).astype(np.int8)
     reason = np.where((reason == 0) & (rho <= design.l4), np.int8(Reason.NOT_IN_MODULE_IMAGE),
                       reason)
-    r1 = rho - design.l4
-    with np.errstate(invalid="ignore", divide="ignore"):
-        h_abs = np.sqrt(design.l1 ** 2 - r1 * r1)
-        bad_link = (r1 > design.l1) | (h_abs > design.l3)
+    l1, l3 = design.l1, design.l3
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        r1 = rho - design.l4
+        dr = IK_ROUNDING_ULPS * _EPS * (scale + l1 + design.l4) + dO
+        # within rounding of the span: h = 0 (ill-conditioned, not out of the workspace)
+        r1 = np.where((r1 > l1) & (r1 - l1 <= dr), l1, r1)
+        h_abs = np.sqrt((l1 - r1) * (l1 + r1))
+        bad_link = (r1 > l1) | (h_abs > l3)
         reason = np.where((reason == 0) & bad_link, np.int8(Reason.LINK_TOO_SHORT), reason)
         ok = reason == 0
+        # |h| indistinguishable from 0 at this rounding: q1 = q2 exactly
+        h_abs = np.where(h_abs * h_abs <= 2.0 * r1 * dr, 0.0, h_abs)
         safe = np.where(ok, 1.0, np.nan)
         h = design.h_sign * h_abs * safe
         x_M = P[..., 0] * safe
         f = r1 / rho
         y, z = P[..., 1] * f * safe, P[..., 2] * f * safe
-        m_y = np.sqrt(design.l3 ** 2 - h * h) + design.l2
+        m_y = np.sqrt(l3 ** 2 - h * h) + design.l2
         q3 = np.hypot(y - m_y, z - design.l5)
         cross = m_y * z - design.l5 * y
+        # and the rounding of x_M (q1, q2 = x_M +/- h)
+        err = _q_error(r1, h_abs, dr, design) + IK_ROUNDING_ULPS * _EPS * np.abs(P[..., 0])
     mode = np.where(cross >= 0, 1, -1)
     q = np.stack([x_M + h, x_M - h, q3], axis=-1)
+    # within the error bound of a stroke limit: on it (a pose the FK produced at the limit)
+    lo, hi = design.stroke_min, design.stroke_max
+    e = err[..., None]
+    with np.errstate(invalid="ignore"):
+        q = np.where((q < lo) & (q >= lo - e), lo, q)
+        q = np.where((q > hi) & (q <= hi + e), hi, q)
     act = _actuator_checks(np.where(ok[..., None], q, 0.0), design)
     reason = np.where(ok & (act != 0), act, reason).astype(np.int8)
     valid = reason == 0
     q = np.where(valid[..., None], q, np.nan)
     theta = np.where(valid, wrap_angle(np.arctan2(-y, z)), np.nan)
     return ParallelIK(q=q, mode=np.where(valid, mode, 0), theta=theta, valid=valid,
-                      reason=reason)
+                      reason=reason, q_error=np.where(valid, err, np.nan))
+
+
+_EPS = float(np.finfo(float).eps)
+
+
+def _q_error(r1: NDArray[np.float64], h_abs: NDArray[np.float64], dr: NDArray[np.float64],
+             design: Design) -> NDArray[np.float64]:
+    """Bound on the error of ``q`` for an error ``dr`` of ``r1`` (and of ``O_s``).
+
+    ``|h(r1 + dr) - h(r1)| <= 2 r1 dr / (sqrt(h^2 + 2 r1 dr) + h)`` (``h = sqrt(l1^2 -
+    r1^2)``): ``r1 dr / h`` away from ``h = 0`` and ``sqrt(2 r1 dr)`` at it. ``q3`` moves
+    with ``O_i`` (``dr``) and with ``m_y`` (``|h| dh / sqrt(l3^2 - h^2)``).
+    """
+    r1p = np.maximum(r1, 0.0)
+    dh = 2.0 * r1p * dr / (np.sqrt(h_abs * h_abs + 2.0 * r1p * dr) + h_abs) + dr
+    s3 = np.sqrt(np.maximum(design.l3 ** 2 - (h_abs + dh) ** 2, 0.0))
+    dmy = np.where(s3 > 0, (h_abs + dh) * dh / np.where(s3 > 0, s3, 1.0), dh)
+    return 2.0 * dr + dh + dmy
+
+
+def position_ik_error(O_s: ArrayLike, design: Design | None = None,
+                      dO: ArrayLike = 0.0) -> NDArray[np.float64]:
+    """Bound (m) on the error of :func:`parallel_ik_from_position`'s ``q`` at ``O_s``.
+
+    Parameters
+    ----------
+    O_s : array-like, shape (..., 3)
+        Position of the serial base frame, m (NaN items give NaN).
+    design : Design, optional
+    dO : array-like, shape (...)
+        Error (m) already in ``O_s``; rounding of ``O_s`` (``IK_ROUNDING_ULPS`` ulps of
+        ``|O_s| + l1 + l4``) is added.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        The ``q_error`` that :class:`ParallelIK` reports.
+    """
+    design = resolve_design(design)
+    pos = check_array(O_s, "O_s", (3,), allow_nonfinite=True)
+    return position_ik(pos, design, np.asarray(dO, dtype=float)).q_error
+
+
+def link_detail(O_s: ArrayLike, design: Design) -> str:
+    """Say why ``O_s`` (3,) fails the link test: too far from, or too close to, the rail axis."""
+    pos = np.asarray(O_s, dtype=float)
+    rho = float(np.hypot(pos[1], pos[2]))
+    far = rho - design.l4 > design.l1
+    if far:
+        return (f"O_s is {rho:.6g} m from the rail axis, farther than l1 + l4 = "
+                f"{design.l1 + design.l4:.6g} m (too far)")
+    lim = design.l4 + float(np.sqrt(max(design.l1 ** 2 - design.l3 ** 2, 0.0)))
+    return (f"O_s is {rho:.6g} m from the rail axis, closer than l4 + sqrt(l1^2 - l3^2) = "
+            f"{lim:.6g} m: |h| would exceed l3 (too close)")
 
 
 #: Tolerance on the orientation test of :func:`parallel_inverse_kinematics`.
@@ -338,4 +444,5 @@ def module_orientation_check(res: ParallelIK, T: NDArray[np.float64], tol: float
     valid = reason == 0
     return dataclasses.replace(
         res, q=np.where(valid[..., None], res.q, np.nan),
-        theta=np.where(valid, res.theta, np.nan), valid=valid, reason=reason)
+        theta=np.where(valid, res.theta, np.nan), valid=valid, reason=reason,
+        q_error=np.where(valid, res.q_error, np.nan))

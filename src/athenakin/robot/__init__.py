@@ -14,6 +14,7 @@ from ._fk import (
 )
 from ._ik import (
     IK_FIELDS,
+    IK_Q_ERROR_MAX,
     IK_SINGULAR_TOL,
     InstrumentIK,
     PassiveJoints,
@@ -29,6 +30,7 @@ __all__ = [
     "Design",
     "FK_FIELDS",
     "FKSolution",
+    "IK_Q_ERROR_MAX",
     "IK_FIELDS",
     "IK_SINGULAR_TOL",
     "InstrumentIK",

@@ -44,7 +44,8 @@ def resolve_policy(errors: str, batch_shape: tuple[int, ...]) -> bool:
 
 def raise_first_failure(item_reason: NDArray[np.int8], describe: str,
                         values: dict[str, NDArray[np.float64]], *, design: Design | None = None,
-                        q_of: Callable[[tuple[int, ...]], NDArray[np.float64]] | None = None
+                        q_of: Callable[[tuple[int, ...]], NDArray[np.float64]] | None = None,
+                        detail_of: Callable[[tuple[int, ...]], str] | None = None
                         ) -> None:
     """Raise the exception of the first item whose reason is non-zero.
 
@@ -60,6 +61,8 @@ def raise_first_failure(item_reason: NDArray[np.int8], describe: str,
         With ``q_of``: a stroke-limit failure names the actuator and its limit.
     q_of : callable, keyword-only
         ``q_of(index)`` gives the actuator values (3,) of the failing item.
+    detail_of : callable, keyword-only
+        ``detail_of(index)`` gives extra words about the failing item (or "").
     """
     item_reason = np.asarray(item_reason)
     if not np.any(item_reason != 0):
@@ -74,6 +77,10 @@ def raise_first_failure(item_reason: NDArray[np.int8], describe: str,
     code = int(item_reason[idx])
     if code == Reason.STROKE_LIMIT and design is not None and q_of is not None:
         parts.append(stroke_detail(np.asarray(q_of(idx), dtype=float), design))
+    if detail_of is not None:
+        extra = detail_of(idx)
+        if extra:
+            parts.append(extra)
     where = f"item {idx}, " if idx else ""
     raise error_for_reason(code, f"{describe} failed for {where}" + ", ".join(parts))
 

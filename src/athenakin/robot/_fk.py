@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import invert_transform
-from .._validation import check_array, check_transform
+from .._validation import broadcast_batch, check_array, check_options, check_transform
 from ..chain._ups import (
     CLOSURE_TOL,
     DEGENERATE_TOL,
@@ -305,6 +305,9 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
         raise ValueError(f"method: expected one of {_METHODS}, got {method!r}")
     check_reference_backend(backend, "forward_kinematics")
     names = check_fields(fields)
+    tangent_tol, degenerate_tol, p_zero_tol, closure_tol = check_options(
+        errors, tangent_tol=tangent_tol, degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
+        closure_tol=closure_tol)
     design, q, T, batch, raise_now = _prepare(q, T_b_e, design, errors)
     par = parallel_forward_kinematics(q, design, tangent_tol=tangent_tol)
     if method == "closed":
@@ -326,7 +329,7 @@ def _prepare(q: ArrayLike, T_b_e: ArrayLike, design: Design | None, errors: str
     design = resolve_design(design)
     qa = check_array(q, "q", (3,), allow_nonfinite=True)
     T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
-    batch = np.broadcast_shapes(qa.shape[:-1], T.shape[:-2])
+    batch = broadcast_batch(q=qa.shape[:-1], T_b_e=T.shape[:-2])
     raise_now = resolve_policy(errors, batch)
     qa = np.broadcast_to(qa, batch + (3,))
     T = np.broadcast_to(T, batch + (4, 4))
@@ -345,8 +348,10 @@ def _serial_closed_form(par: ParallelSolution, T: NDArray[np.float64], *, degene
     T_s_e = invert_transform(Ts) @ T[..., None, :, :]
     T_s_e = np.where(np.all(np.isfinite(T), axis=(-2, -1))[..., None, None, None], T_s_e,
                      np.nan)
+    scale = (np.abs(T[..., None, :3, 3]).max(axis=-1)
+             + np.abs(par.T_b_s[..., :3, 3]).max(axis=-1))   # rounding of t_s_e (issue 13)
     ser = ups_solutions(T_s_e, degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
-                        closure_tol=closure_tol, _checked=True)
+                        closure_tol=closure_tol, scale=scale, _checked=True)
     return ser.p, ser.u, ser.reason, ser.residual
 
 
@@ -356,6 +361,7 @@ def _assemble(par: ParallelSolution, p: NDArray[np.float64], u: NDArray[np.float
               fields: tuple[str, ...] | None = None) -> FKSolution:
     """Combine the parallel module's 2 modes with the serial step's (..., 2, 8) slots."""
     preason = np.broadcast_to(par.reason[..., None], sreason.shape)
+    residual = np.maximum(residual, par.residual[..., None])   # merged modes (issue 13)
     reason = np.where(preason != 0, preason, sreason).astype(np.int8).reshape(batch + (16,))
     valid = reason == 0
     nan = np.where(valid, 1.0, np.nan)

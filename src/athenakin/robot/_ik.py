@@ -24,11 +24,17 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import transform_from_rotation_translation, wrap_angle
-from .._validation import check_array, check_transform
-from ..chain._ups import CLOSURE_TOL, _ups_transform, closure_residual, rotation_u_pair
+from .._validation import broadcast_batch, check_array, check_options, check_transform
+from ..chain._ups import (
+    CLOSURE_TOL,
+    P_ZERO_TOL,
+    _ups_transform,
+    closure_residual,
+    rotation_u_pair,
+)
 from ..design import Design
 from ..errors import Reason
-from ..parallel._module import parallel_ik_from_position
+from ..parallel._module import IK_ROUNDING_ULPS, link_detail, parallel_ik_from_position, position_ik
 from ._common import (
     ErrorPolicy,
     ReferenceBackend,
@@ -56,6 +62,13 @@ __all__ = [
 #: paper-form IK is declared singular (``Reason.IK_SINGULAR``).
 IK_SINGULAR_TOL = 1e-12
 
+#: Largest error bound ``q_error`` (m) of a valid paper-form IK result: beyond it, close
+#: to the singular sets ``cos u1 = 0`` and ``sin u1 sin u2 = 0`` (where the error grows like
+#: ``eps / distance``), rounding alone could move ``q`` by more than 10 micrometres and the
+#: item is flagged ``IK_SINGULAR`` instead. At ``q1 = q2`` the bound is about 1e-6 m
+#: (``dq ~ sqrt(dO_s)``): those poses are solved, not flagged.
+IK_Q_ERROR_MAX = 1e-5
+
 
 #: The arrays a :class:`PassiveJoints` can hold, for ``inverse_kinematics(..., fields=...)``.
 IK_FIELDS = ("p", "u", "mode", "T_b_s", "residual", "valid", "reason")
@@ -80,6 +93,11 @@ class PassiveJoints:
     valid : ndarray of bool, shape (...)
     reason : ndarray of int8, shape (...)
         :class:`~athenakin.errors.Reason` (0 where valid).
+    q_error : ndarray, shape (...)
+        Conditioning of the solution: a bound (m) on the error of ``q`` from rounding,
+        amplified near the singular sets (``1 / (|cos u1| |sin u1 sin u2|)`` for ``p``,
+        ``sqrt`` at ``q1 = q2``). NaN where invalid; never above :data:`IK_Q_ERROR_MAX`
+        in a valid item (beyond it the item is ``IK_SINGULAR``).
 
     A result computed with ``fields=(...)`` holds only those arrays; reading
     another one raises an ``AttributeError`` that says so.
@@ -92,6 +110,7 @@ class PassiveJoints:
     residual: NDArray[np.float64]
     valid: NDArray[np.bool_]
     reason: NDArray[np.int8]
+    q_error: NDArray[np.float64]
 
     def __getattr__(self, name: str) -> Any:
         # only reached for a field that a fields=(...) call left out
@@ -156,6 +175,9 @@ class InstrumentIK:
         Assembly mode (+1 / -1; 0 where invalid).
     valid : ndarray of bool, shape (...)
     reason : ndarray of int8, shape (...)
+    q_error : ndarray, shape (...)
+        Conditioning of the solution: a bound (m) on the error of ``q`` from rounding
+        (largest, about 1e-7 m, at ``q1 = q2``); NaN where invalid.
     """
 
     p: NDArray[np.float64]
@@ -164,6 +186,7 @@ class InstrumentIK:
     mode: NDArray[np.int64]
     valid: NDArray[np.bool_]
     reason: NDArray[np.int8]
+    q_error: NDArray[np.float64]
 
 
 
@@ -221,11 +244,8 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     """
     check_reference_backend(backend, "inverse_kinematics")
     names = check_ik_fields(fields)
-    design = resolve_design(design)
-    T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
-    u345 = check_array(u345, "u345", (3,), allow_nonfinite=True)
-    batch = np.broadcast_shapes(T.shape[:-2], u345.shape[:-1])
-    raise_now = resolve_policy(errors, batch)
+    design, T, u345, batch, raise_now, singular_tol, closure_tol = check_ik_arguments(
+        T_b_e, u345, design, errors, singular_tol, closure_tol)
     T = np.broadcast_to(T, batch + (4, 4))
     u345 = np.broadcast_to(u345, batch + (3,))
     if raise_now:
@@ -252,8 +272,11 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     reason = np.where((reason == 0) & singular, np.int8(Reason.IK_SINGULAR), reason)
     p = np.sum(c[..., 1:] * n, axis=-1) / np.where(singular, 1.0, den)
     O_s = c - p[..., None] * z3
-    pik = parallel_ik_from_position(np.where((reason == 0)[..., None], O_s, np.nan), design)
+    dO = paper_o_error(c, p, ny, den)
+    pik = position_ik(np.where((reason == 0)[..., None], O_s, np.nan), design, dO)
     reason = np.where(reason == 0, pik.reason, reason).astype(np.int8)
+    reason = np.where((reason == 0) & ~(pik.q_error <= IK_Q_ERROR_MAX),
+                      np.int8(Reason.IK_SINGULAR), reason).astype(np.int8)
 
     ct, st = np.cos(pik.theta), np.sin(pik.theta)
     zero, one = np.zeros_like(ct), np.ones_like(ct)
@@ -271,14 +294,58 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     valid = reason == 0
     if raise_now:
         raise_first_failure(reason, "inverse kinematics", {"u345": u345, "p_rcm_b": c},
-                            design=design, q_of=lambda idx: _unlimited_q(O_s[idx], design))
+                            design=design, q_of=lambda idx: _unlimited_q(O_s[idx], design),
+                            detail_of=lambda idx: _detail(int(reason[idx]), O_s[idx], design))
     nan = np.where(valid, 1.0, np.nan)
     q = pik.q * nan[..., None]
     passive = passive_joints(names, p=p * nan, u=u * nan[..., None],
                              mode=np.where(valid, pik.mode, 0),
                              T_b_s=T_b_s * nan[..., None, None], residual=res * nan,
-                             valid=valid, reason=reason)
+                             valid=valid, reason=reason, q_error=pik.q_error * nan)
     return q, passive
+
+
+def check_ik_arguments(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None, errors: str,
+                       singular_tol: object, closure_tol: object
+                       ) -> tuple[Design, NDArray[np.float64], NDArray[np.float64],
+                                  tuple[int, ...], bool, float, float]:
+    """The one validation path of the paper-form IK, for every backend (private).
+
+    Order: options (``errors``, tolerances), design, ``T_b_e``, ``u345``, batch broadcast.
+    """
+    stol, ctol = check_options(errors, singular_tol=singular_tol, closure_tol=closure_tol)
+    design = resolve_design(design)
+    T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
+    u345 = check_array(u345, "u345", (3,), allow_nonfinite=True)
+    batch = broadcast_batch(T_b_e=T.shape[:-2], u345=u345.shape[:-1])
+    raise_now = resolve_policy(errors, batch)
+    return design, T, u345, batch, raise_now, stol, ctol
+
+
+def paper_o_error(c: NDArray[np.float64], p: NDArray[np.float64], ny: NDArray[np.float64],
+                  den: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Bound (m) on the error of ``O_s = c - p z_w`` in the paper-form IK (private).
+
+    ``n = y_w / |y_w|`` carries a relative error ``eps / ny`` and ``p = (c . n) / den``
+    divides it by ``den``: ``dp ~ eps (|c| + |p|) (1 + 1 / ny) / |den|`` (the numba kernel
+    computes the same, :func:`athenakin.fast._ik_kernels.paper_o_error`).
+    """
+    s = np.sum(np.abs(c), axis=-1) + np.abs(p)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        a = np.where(ny > 0, 1.0 + 1.0 / np.where(ny > 0, ny, 1.0), np.inf)
+        ad = np.abs(den)
+        return np.where(ad > 0, IK_ROUNDING_ULPS * _EPS * s * (a / np.where(ad > 0, ad, 1.0)),
+                        np.inf)
+
+
+_EPS = float(np.finfo(float).eps)
+
+
+def _detail(code: int, O_s: NDArray[np.float64], design: Design) -> str:
+    """Extra words for a failure at ``O_s``: which way the link test failed."""
+    if code == Reason.LINK_TOO_SHORT and np.all(np.isfinite(O_s)):
+        return link_detail(O_s, design)
+    return ""
 
 
 def _unlimited_q(O_s: NDArray[np.float64], design: Design) -> NDArray[np.float64]:
@@ -332,12 +399,18 @@ def angles_from_direction(direction_e: ArrayLike) -> tuple[NDArray[np.float64],
 
 
 def _unit(d: NDArray[np.float64], name: str) -> NDArray[np.float64]:
-    n = np.linalg.norm(d, axis=-1, keepdims=True)
-    if np.any(n == 0):
+    """``d / |d|`` scaled by the largest component first (no underflow or overflow).
+
+    Non-finite items give NaN; a zero vector raises.
+    """
+    m = np.max(np.abs(d), axis=-1, keepdims=True)
+    if np.any(m == 0):
         from ..errors import InvalidInputError
 
         raise InvalidInputError(f"{name}: expected a non-zero direction vector, got zero")
-    return d / n
+    with np.errstate(invalid="ignore"):
+        ds = d / m
+        return ds / np.linalg.norm(ds, axis=-1, keepdims=True)
 
 
 def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
@@ -372,11 +445,19 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
     result : InstrumentIK
     """
     check_reference_backend(backend, "q_from_instrument")
+    check_options(errors)
     design = resolve_design(design)
-    T = check_transform(T_b_e, "T_b_e")
-    d_e = _unit(check_array(direction_e, "direction_e", (3,)), "direction_e")
-    p = check_array(p, "p", ())
-    return _q_from_line(T, d_e, p, design, errors, np.zeros(p.shape, dtype=np.int8))
+    T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
+    d_e = _unit(check_array(direction_e, "direction_e", (3,), allow_nonfinite=True),
+                "direction_e")
+    p = check_array(p, "p", (), allow_nonfinite=True)
+    batch = broadcast_batch(T_b_e=T.shape[:-2], direction_e=d_e.shape[:-1], p=p.shape)
+    if resolve_policy(errors, batch):   # a failure raises: name the non-finite argument
+        check_array(T, "T_b_e", (4, 4))
+        check_array(direction_e, "direction_e", (3,))
+        check_array(p, "p", ())
+    pre = np.where(np.abs(p) <= P_ZERO_TOL, np.int8(Reason.SERIAL_P_ZERO), np.int8(0))
+    return _q_from_line(T, d_e, p, design, errors, pre.astype(np.int8))
 
 
 def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = None, *,
@@ -408,15 +489,24 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
     result : InstrumentIK
     """
     check_reference_backend(backend, "q_from_tool_tip")
+    check_options(errors)
     design = resolve_design(design)
-    T = check_transform(T_b_e, "T_b_e")
-    tip = check_array(tip_e, "tip_e", (3,))
-    s = np.linalg.norm(tip, axis=-1)
+    T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
+    tip = check_array(tip_e, "tip_e", (3,), allow_nonfinite=True)
+    batch = broadcast_batch(T_b_e=T.shape[:-2], tip_e=tip.shape[:-1])
+    if resolve_policy(errors, batch):   # a failure raises: name the non-finite argument
+        check_array(T, "T_b_e", (4, 4))
+        check_array(tip, "tip_e", (3,))
+    m = np.max(np.abs(tip), axis=-1)
+    with np.errstate(invalid="ignore"):
+        s = m * np.linalg.norm(tip / np.where(m > 0, m, 1.0)[..., None], axis=-1)
     L = design.tool_length
     pre = np.zeros(s.shape, dtype=np.int8)
     pre = np.where(s >= L, np.int8(Reason.INSERTION_RANGE), pre)
     pre = np.where(s == 0, np.int8(Reason.IK_SINGULAR), pre).astype(np.int8)
-    d_e = tip / np.where(s > 0, s, 1.0)[..., None]
+    with np.errstate(invalid="ignore"):   # scaled first: a unit vector even for subnormals
+        ts = tip / np.where(m > 0, m, 1.0)[..., None]
+        d_e = ts / np.linalg.norm(ts, axis=-1, keepdims=True)
     d_e = np.where((s > 0)[..., None], d_e, np.array([0.0, 0.0, 1.0]))
     return _q_from_line(T, d_e, L - s, design, errors, pre)
 
@@ -424,21 +514,27 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
 def _q_from_line(T: NDArray[np.float64], d_e: NDArray[np.float64], p: NDArray[np.float64],
                  design: Design, errors: str, pre: NDArray[np.int8]
                  ) -> tuple[NDArray[np.float64], InstrumentIK]:
-    batch = np.broadcast_shapes(T.shape[:-2], d_e.shape[:-1], p.shape, pre.shape)
+    batch = broadcast_batch(T_b_e=T.shape[:-2], direction=d_e.shape[:-1], p=p.shape,
+                            check=pre.shape)
     raise_now = resolve_policy(errors, batch)
-    d_b = (T[..., :3, :3] @ d_e[..., None])[..., 0]
-    O_s = T[..., :3, 3] - p[..., None] * d_b
+    finite = (np.all(np.isfinite(T), axis=(-2, -1)) & np.all(np.isfinite(d_e), axis=-1)
+              & np.isfinite(p))
+    pre = np.where(finite, pre, np.int8(Reason.NONFINITE_INPUT)).astype(np.int8)
+    with np.errstate(invalid="ignore", over="ignore"):
+        d_b = (T[..., :3, :3] @ d_e[..., None])[..., 0]
+        O_s = T[..., :3, 3] - p[..., None] * d_b
     O_s, d_b = np.broadcast_to(O_s, batch + (3,)), np.broadcast_to(d_b, batch + (3,))
     pre = np.broadcast_to(pre, batch)
-    pik = parallel_ik_from_position(np.where((pre == 0)[..., None], O_s, np.nan), design)
+    pik = position_ik(np.where((pre == 0)[..., None], O_s, np.nan), design)
     reason = np.where(pre != 0, pre, pik.reason).astype(np.int8)
     if raise_now:
         raise_first_failure(reason, "instrument inverse kinematics",
                             {"O_s": O_s, "p": np.broadcast_to(p, batch)}, design=design,
-                            q_of=lambda idx: _unlimited_q(O_s[idx], design))
+                            q_of=lambda idx: _unlimited_q(O_s[idx], design),
+                            detail_of=lambda idx: _detail(int(reason[idx]), O_s[idx], design))
     valid = reason == 0
     nan = np.where(valid, 1.0, np.nan)
     res = InstrumentIK(p=np.broadcast_to(p, batch) * nan, direction_b=d_b * nan[..., None],
                        O_s=O_s * nan[..., None], mode=np.where(valid, pik.mode, 0), valid=valid,
-                       reason=reason)
+                       reason=reason, q_error=pik.q_error * nan)
     return pik.q * nan[..., None], res

@@ -25,7 +25,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array
+from .._validation import broadcast_batch, check_array
 from ..chain._ups import rotation_u_pair
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
@@ -146,6 +146,17 @@ def _dphi_dq(g: dict[str, NDArray[np.float64]]) -> NDArray[np.float64]:
         dphi_dh = coef_h / D
         dphi_dq3 = -q3 / D
     return np.stack([0.5 * dphi_dh, -0.5 * dphi_dh, dphi_dq3], axis=-1)
+
+
+def _state_rcm(q: ArrayLike, T_b_e: ArrayLike | None, design: Design | None, mode: ArrayLike
+               ) -> tuple[Design, dict[str, NDArray[np.float64]], NDArray[np.float64]]:
+    """:func:`_state` and the RCM frame, ``q`` broadcast with ``T_b_e`` (named error if not)."""
+    design = resolve_design(design)
+    qa = check_array(q, "q", (3,), allow_nonfinite=True)
+    T = _rcm(T_b_e, design)
+    batch = broadcast_batch(q=qa.shape[:-1], T_b_e=T.shape[:-2])
+    design, g = _state(np.broadcast_to(qa, batch + (3,)), design, mode)
+    return design, g, T
 
 
 def _state(q: ArrayLike, design: Design | None, mode: ArrayLike
@@ -448,8 +459,7 @@ def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
         Infinite at ``p = 0`` and on the poles of the chart (``sin(polar) = 0``;
         for ``frame="rcm"`` these are the spherical joint's ``sin u4 = 0``).
     """
-    design, g = _state(q, design, mode)
-    T = _rcm(T_b_e, design)
+    design, g, T = _state_rcm(q, T_b_e, design, mode)
     _frame(frame)
     d_b, p, R_f, d_f = _instrument(g, T, frame)
     Jp = _parallel_jacobian(g)
@@ -488,8 +498,7 @@ def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
     ndarray, shape (..., 3, 3)
         Rows ``q1, q2, q3``; columns ``azimuth``, ``polar`` (m/rad), ``p`` (m/m).
     """
-    design, g = _state(q, design, mode)
-    T = _rcm(T_b_e, design)
+    design, g, T = _state_rcm(q, T_b_e, design, mode)
     _frame(frame)
     d_b, p, R_f, d_f = _instrument(g, T, frame)
     az = np.arctan2(d_f[..., 1], d_f[..., 0])
@@ -539,8 +548,7 @@ def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
     ndarray, shape (..., 3, 3)
         Rows: tip velocity components in ``frame``; columns ``q1, q2, q3`` (m/m).
     """
-    design, g = _state(q, design, mode)
-    T = _rcm(T_b_e, design)
+    design, g, T = _state_rcm(q, T_b_e, design, mode)
     _frame(frame)
     N, _, _ = _tip_matrices(g, T, design.tool_length)
     J = N @ _parallel_jacobian(g)
@@ -567,8 +575,7 @@ def tool_tip_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
     ndarray, shape (..., 3, 3)
         Rows ``q1, q2, q3``; columns: tip velocity components in ``frame``.
     """
-    design, g = _state(q, design, mode)
-    T = _rcm(T_b_e, design)
+    design, g, T = _state_rcm(q, T_b_e, design, mode)
     _frame(frame)
     _, Ninv, _ = _tip_matrices(g, T, design.tool_length)
     J = _parallel_inverse_jacobian(g) @ Ninv
