@@ -40,6 +40,20 @@ def test_plan_refuses_to_write_over_its_own_input(wp, capsys):
     assert wp.read_text() == WAYPOINTS
 
 
+def test_track_refuses_its_input_and_needs_force_to_replace(tmp_path, capsys):
+    src = tmp_path / "q.csv"
+    text = "q1_m,q2_m,q3_m\n-0.1,0.1,0.45\n-0.1,0.1,0.451\n"
+    src.write_text(text)
+    assert main(["track", str(src), "-o", str(src)]) == 1
+    assert src.read_text() == text and "is an input" in capsys.readouterr().err
+    out = tmp_path / "poses.csv"
+    out.write_text("keep me")
+    assert main(["track", str(src), "-o", str(out)]) == 1
+    assert out.read_text() == "keep me" and "--force" in capsys.readouterr().err
+    assert main(["track", str(src), "-o", str(out), "--force"]) == 0
+    assert out.read_text().startswith("t_s,") or "q1_m" in out.read_text()
+
+
 def test_plan_refuses_to_write_over_an_input_through_a_symlink(wp, tmp_path):
     link = tmp_path / "link.csv"
     link.symlink_to(wp)

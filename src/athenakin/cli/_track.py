@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ._common import add_design_option, add_setup_options, load_design, load_rcm
+from ._output import Outputs, add_force_option, outputs
 
 #: Flags that make ``--strict`` fail.
 STRICT_FLAGS = ("LOST", "JUMP", "MODE_SWITCH", "AMBIGUOUS")
@@ -38,6 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--strict", action="store_true",
                    help=f"exit with status 1 if any sample is flagged {', '.join(STRICT_FLAGS)}")
     p.add_argument("--max-events", type=int, default=20, help="events listed (20)")
+    add_force_option(p)
     add_design_option(p)
     add_setup_options(p)
     p.set_defaults(func=run)
@@ -45,14 +47,22 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``track``."""
-    from .._serialize import json_text
-    from ..motion import TrackFlag, track
-    from ..motion._io import read_q_stream_csv, track_csv_text, write_text_atomic
-    from ._plan import parse_margins
-
     out = args.output
     if out is not None and Path(out).suffix.lower() not in (".csv", ".json"):
         raise ValueError(f"-o: expected a .csv or .json file name, got {str(out)!r}")
+    with outputs(args) as outs:   # checked before any work: never over an input or, without
+        if out is not None:       # --force, an existing file; written only at the end
+            outs.add(out)
+        return _track(args, outs)
+
+
+def _track(args: argparse.Namespace, outs: Outputs) -> int:
+    from .._serialize import json_text
+    from ..motion import TrackFlag, track
+    from ..motion._io import read_q_stream_csv, track_csv_text
+    from ._plan import parse_margins
+
+    out = args.output
     design = load_design(args)
     T = load_rcm(args, design)
     q, t = read_q_stream_csv(args.path)
@@ -96,9 +106,10 @@ def run(args: argparse.Namespace) -> int:
             obj = {k: getattr(log, k) for k in (f.name for f in dataclasses.fields(log))}
             obj["t_s"] = t
             obj["flag_bits"] = {b.name: int(b) for b in TrackFlag if b}
-            write_text_atomic(out, json_text(obj))
+            outs.write(out, json_text(obj))
         else:
-            write_text_atomic(out, track_csv_text(log, t))
+            outs.write(out, track_csv_text(log, t))
+        outs.commit()
         print(f"wrote {out}")
     if args.strict and any(counts.get(n) for n in STRICT_FLAGS):
         bad = ", ".join(n for n in STRICT_FLAGS if counts.get(n))
