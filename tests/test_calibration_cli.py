@@ -108,6 +108,21 @@ def test_cli_calibrates_the_example_data_set(tmp_path, capsys):
         assert (tmp_path / f"cal_report_{fig}.png").stat().st_size > 1000
 
 
+def test_cli_report_is_checked_first_and_written_with_the_toml(tmp_path, capsys):
+    """An existing report figure stops the command before any work; nothing is written."""
+    out = tmp_path / "cal.toml"
+    fig = tmp_path / "cal_report_residuals.png"
+    fig.write_bytes(b"keep")
+    code, _, err = run(capsys, "calibrate", EXAMPLE / "measurements.csv", "-o", out)
+    assert code == 1 and "--force" in err and "cal_report_residuals.png" in err
+    assert not out.exists() and not (tmp_path / "cal_report.md").exists()
+    assert fig.read_bytes() == b"keep"
+    code, text, err = run(capsys, "calibrate", EXAMPLE / "measurements.csv", "-o", out,
+                          "--force")
+    assert code == 0, err
+    assert out.exists() and fig.read_bytes() != b"keep" and "cal_report.md" in text
+
+
 def test_html_report(tmp_path):
     data = cal.synthetic_measurements(D, T, n=20, rng=5)
     res = cal.calibrate(data.q, data.tips, T, D)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import tempfile
 import warnings
 from pathlib import Path
 
@@ -60,9 +61,25 @@ def run(args: argparse.Namespace) -> int:
         return _run(args, out, outs)
 
 
+#: Figures the report writes next to it, ``<report stem>_<name>.png``.
+REPORT_FIGURES = ("residuals", "parameters", "tip_error")
+
+
+def _report_path(args: argparse.Namespace, out: Path, outs: Outputs) -> Path | None:
+    """Declare the report and its figures as outputs (checked before any work)."""
+    if args.no_report or args.plan is not None:
+        return None
+    rep = Path(args.report or out.with_name(out.stem + "_report.md"))
+    outs.add(rep, option="--report")
+    for name in REPORT_FIGURES:
+        outs.add(Path(f"{rep.with_suffix('')}_{name}.png"), option="--report")
+    return rep
+
+
 def _run(args: argparse.Namespace, out: Path, outs: Outputs) -> int:
     from .. import calibration as cal
 
+    rep = _report_path(args, out, outs)
     design = load_design(args)
     T = load_rcm(args, design)
     if args.plan is not None:
@@ -96,12 +113,13 @@ def _run(args: argparse.Namespace, out: Path, outs: Outputs) -> int:
     print(f"RMS tip residual: {res.rms_before * 1e6:.2f} um before, "
           f"{res.rms_after * 1e6:.2f} um after (sigma {res.sigma * 1e6:.2f} um)")
     outs.write(out, cal.calibration_toml(res))
-    outs.commit()
-    print(f"wrote {out}")
-    if not args.no_report:
-        rep = args.report or out.with_name(out.stem + "_report.md")
-        files = cal.write_report(res, rep, encoder_resolution=args.encoder_resolution)
-        print("wrote " + ", ".join(str(f) for f in files))
+    if rep is not None:   # rendered aside, then committed with the TOML: all or nothing
+        with tempfile.TemporaryDirectory() as tmp:
+            for f in cal.write_report(res, Path(tmp) / rep.name,
+                                      encoder_resolution=args.encoder_resolution):
+                outs.write(rep.parent / f.name, f.read_bytes())
+    files = outs.commit()
+    print("wrote " + ", ".join(str(f) for f in files))
     return 0
 
 
