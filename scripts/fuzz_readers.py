@@ -1,4 +1,4 @@
-"""Coverage-guided fuzz target for athenakin's file readers (TOML, JSON, CSV).
+"""Coverage-guided fuzz target for athenakin's file readers (TOML, JSON, CSV, measurements).
 
 Each input is written to a file and read by one of the readers (the first byte
 picks which); a reader may only return or raise a named error:
@@ -35,16 +35,19 @@ SEEDS = {
     "path": b"x_m,y_m,z_m,t_s\n0.25,0,0,0\n0.26,-0.01,0,1\n",
     "direction": b"azimuth_deg,polar_deg,depth_m\n0,90,0.25\n10,80,0.25\n",
     "stream": b"t_s,q1_m,q2_m,q3_m\n0,-0.1,0.1,0.45\n0.01,-0.1,0.1,nan\n",
+    "measurements": b"q1_m,q2_m,q3_m,x_m,y_m,z_m,mode\n-0.1,0.1,0.45,0.1,-0.2,0.3,1\n",
 }
 
 
 def _readers() -> list[tuple[str, Callable[[Path], object]]]:
     from athenakin.cli._common import read_rcm_json
     from athenakin.design import Design
+    from athenakin.calibration import read_measurements_csv
     from athenakin.motion import read_path_csv, read_q_stream_csv
 
     return [("toml", Design.from_toml), ("json", read_rcm_json), ("path", read_path_csv),
-            ("direction", read_path_csv), ("stream", read_q_stream_csv)]
+            ("direction", read_path_csv), ("stream", read_q_stream_csv),
+            ("measurements", read_measurements_csv)]
 
 
 _READERS: list[tuple[str, Callable[[Path], object]]] = []

@@ -11,15 +11,14 @@ number is an error naming file, line and column.
 
 from __future__ import annotations
 
-import csv
 import dataclasses
-import io
 import math
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
+from .._csv import read_table
 from ._errors import MeasurementFileError
 from ._solve import CalibrationResult
 
@@ -97,20 +96,7 @@ def read_measurements_csv(path: str | Path, *, require_tips: bool = True) -> Mea
         Missing header or columns, a row with too few fields, a cell that is not a number,
         no data rows. (``OSError`` if the file cannot be read.)
     """
-    with open(path, newline="") as fh:
-        text = fh.read()
-    rows: list[tuple[int, list[str]]] = []
-    header: list[str] | None = None
-    for ln, rec in enumerate(csv.reader(io.StringIO(text)), start=1):
-        if not rec or all(not c.strip() for c in rec) or rec[0].lstrip().startswith("#"):
-            continue
-        if header is None:
-            header = [c.strip() for c in rec]
-            continue
-        rows.append((ln, rec))
-    if header is None:
-        raise MeasurementFileError(f"{path}: no header row; expected the columns "
-                                   f"{', '.join(Q_COLUMNS + TIP_COLUMNS)}")
+    header, rows = read_table(path, error=MeasurementFileError)
     need = Q_COLUMNS + (TIP_COLUMNS if require_tips else ())
     missing = [c for c in need if c not in header]
     if missing:
@@ -129,7 +115,7 @@ def read_measurements_csv(path: str | Path, *, require_tips: bool = True) -> Mea
     idx = [header.index(c) for c in cols]
     data = np.empty((len(rows), len(cols)))
     for r, (ln, rec) in enumerate(rows):
-        if len(rec) < len(header):
+        if len(rec) < len(header):  # (a row may carry trailing extra cells)
             raise MeasurementFileError(f"{path}: line {ln}: expected {len(header)} fields "
                                        f"({', '.join(header)}), got {len(rec)}")
         for k, (c, i) in enumerate(zip(cols, idx, strict=True)):

@@ -9,7 +9,6 @@ a temporary file and rename it, so that a failed run leaves nothing behind.
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import io
 import math
@@ -21,6 +20,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from .._csv import read_table
 from .._serialize import json_text
 from ._errors import PathFileError
 from ._plan import Trajectory
@@ -74,42 +74,8 @@ class PathSpec:
 
 def _read_table(path: str | Path, *, header_row: bool = True
                 ) -> tuple[list[str], list[tuple[int, list[str]]]]:
-    """The one CSV reader: header cells and ``(line number, cells)`` rows.
-
-    With ``header_row=False`` every line is a row (cells split at commas or
-    whitespace) and the header is empty.
-    """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")  # a byte-order mark is not a column
-    except UnicodeDecodeError as exc:
-        raise PathFileError(f"{path}: not a UTF-8 text file ({exc.reason})") from None
-    rows = []
-    header: list[str] | None = None
-    for lineno, line in enumerate(text.splitlines(), start=1):
-        if not line.strip() or line.lstrip().startswith("#"):
-            continue
-        if not header_row:
-            rows.append((lineno, line.replace(",", " ").split()))
-            continue
-        try:
-            cells = [c.strip() for c in next(csv.reader([line]))]
-        except csv.Error as exc:  # a NUL byte, a cell longer than the csv module's limit
-            raise PathFileError(f"{path}, line {lineno}: not CSV ({exc})") from None
-        if header is None:
-            header = cells
-            continue
-        rows.append((lineno, cells))
-    if not header_row:
-        if not rows:
-            raise PathFileError(f"{path}: empty file (expected data rows)")
-        return [], rows
-    if header is None:
-        raise PathFileError(f"{path}: empty file (expected a header row and data rows)")
-    dup = sorted({c for c in header if header.count(c) > 1})
-    if dup:
-        raise PathFileError(f"{path}: duplicate column(s) {dup}")
-    return header, rows
+    """Header and ``(line number, cells)`` rows through the package's one CSV reader."""
+    return read_table(path, header_row=header_row, error=PathFileError)
 
 
 def _numbers(path: str | Path, header: list[str], rows: list[tuple[int, list[str]]],

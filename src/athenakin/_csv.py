@@ -1,0 +1,68 @@
+"""The package's one CSV reader (private): header and numbered rows of a text table.
+
+Used by every file format built on CSV (motion paths and q streams, calibration
+measurements); each format adds its own columns, units and messages on top.
+"""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+__all__ = ["read_table"]
+
+
+def read_table(path: str | Path, *, header_row: bool = True, error: type[Exception] = ValueError
+               ) -> tuple[list[str], list[tuple[int, list[str]]]]:
+    """Header cells and ``(line number, cells)`` rows of a CSV file.
+
+    Blank lines and lines starting with ``#`` are skipped; a UTF-8 byte-order mark is
+    not part of the first column; cells are stripped of spaces.
+
+    Parameters
+    ----------
+    path : str or Path
+    header_row : bool, keyword-only
+        With False every line is a row (cells split at commas or whitespace) and the
+        header is empty.
+    error : exception class, keyword-only
+        Raised (with the file, the line and what was expected) for a file that is not
+        UTF-8 text or not CSV, an empty file or duplicate column names.
+
+    Returns
+    -------
+    header : list of str
+    rows : list of (int, list of str)
+        1-based line numbers and the cells of each data row.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")  # a byte-order mark is not a column
+    except UnicodeDecodeError as exc:
+        raise error(f"{path}: not a UTF-8 text file ({exc.reason})") from None
+    rows = []
+    header: list[str] | None = None
+    for lineno, line in enumerate(text.splitlines(), start=1):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        if not header_row:
+            rows.append((lineno, line.replace(",", " ").split()))
+            continue
+        try:
+            cells = [c.strip() for c in next(csv.reader([line]))]
+        except csv.Error as exc:  # a NUL byte, a cell longer than the csv module's limit
+            raise error(f"{path}, line {lineno}: not CSV ({exc})") from None
+        if header is None:
+            header = cells
+            continue
+        rows.append((lineno, cells))
+    if not header_row:
+        if not rows:
+            raise error(f"{path}: empty file (expected data rows)")
+        return [], rows
+    if header is None:
+        raise error(f"{path}: empty file, no header row (expected a header row and data rows)")
+    dup = sorted({c for c in header if header.count(c) > 1})
+    if dup:
+        raise error(f"{path}: duplicate column(s) {dup}")
+    return header, rows
