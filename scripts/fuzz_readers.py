@@ -40,9 +40,9 @@ SEEDS = {
 
 
 def _readers() -> list[tuple[str, Callable[[Path], object]]]:
+    from athenakin.calibration import read_measurements_csv
     from athenakin.cli._common import read_rcm_json
     from athenakin.design import Design
-    from athenakin.calibration import read_measurements_csv
     from athenakin.motion import read_path_csv, read_q_stream_csv
 
     return [("toml", Design.from_toml), ("json", read_rcm_json), ("path", read_path_csv),
