@@ -50,6 +50,9 @@ def _readers() -> list[tuple[str, Callable[[Path], object]]]:
             ("measurements", read_measurements_csv)]
 
 
+#: Inputs the fuzzer once crashed on (first byte: the reader), kept as regression tests.
+REGRESSIONS = Path(__file__).resolve().parents[1] / "tests" / "data" / "fuzz_regressions"
+
 _READERS: list[tuple[str, Callable[[Path], object]]] = []
 _DIR = tempfile.mkdtemp(prefix="athenakin-fuzz-")
 
@@ -118,6 +121,8 @@ def main(argv: list[str]) -> int:
     corpus.mkdir(exist_ok=True)
     for i, (name, content) in enumerate(SEEDS.items()):
         (corpus / name).write_bytes(bytes([i]) + content)
+    for found in sorted(REGRESSIONS.iterdir()):  # earlier findings: start from them too
+        (corpus / f"regression-{found.name}").write_bytes(found.read_bytes())
     atheris.Setup([argv[0], *[a for a in argv[1:]], str(corpus)], read_one)
     atheris.Fuzz()
     return 0

@@ -75,6 +75,28 @@ def test_toml_errors(tmp_path):
         ak.Design.from_toml(f)
 
 
+@pytest.mark.parametrize("line, match", [
+    ("q_max = 0.45", "q_max: expected a list of 3 numbers"),  # found by the fuzzer (CI)
+    ('q_min = "abc"', "q_min: expected a list of 3 numbers"),
+    ("q_min = {a = 1}", "q_min: expected a list of 3 numbers"),
+    ('q_max = ["a", 0.3, 0.7]', "q_max\\[0\\]: expected a real number, got str"),
+    ('l1 = "0.3"', "l1: expected a real number, got str"),
+    ("tool_length = true", "tool_length: expected a real number, got bool"),
+    ("name = 5", "name: expected str, got int"),
+    ("ab_order = [1]", "ab_order: expected one of"),
+])
+def test_toml_wrong_types_are_invalid_input(tmp_path, line, match):
+    """A value of the wrong type in a design file is bad input (InvalidInputError), never a
+    bare TypeError: the file readers raise only named errors (issue 13)."""
+    f = tmp_path / "bad.toml"
+    base = "l1 = 0.3\nl2 = 0.1\nl3 = 0.25\nl4 = 0.15\nl5 = 0.4\n"
+    key = line.split(" =")[0]
+    base = "\n".join(x for x in base.splitlines() if not x.startswith(key + " "))
+    f.write_text("[design]\n" + base + "\n" + line + "\n")
+    with pytest.raises(ak.InvalidInputError, match=match):
+        ak.Design.from_toml(f)
+
+
 def test_ab_order_reversed_mirrors_actuators():
     """With q1 > q2 the same pose is reached by swapping q1 and q2."""
     d1 = ak.Design.default()

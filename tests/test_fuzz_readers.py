@@ -11,6 +11,7 @@ from __future__ import annotations
 import importlib.util
 from pathlib import Path
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -61,3 +62,13 @@ def test_deep_nesting_is_a_named_error_of_every_reader():
     for i, _ in enumerate(fuzz.SEEDS):
         fuzz.read_one(bytes([i]) + b"a = " + b"[" * 100_000 + b"]" * 100_000 + b"\n")
         fuzz.read_one(bytes([i]) + b'{"T_b_e": ' + b"[" * 100_000 + b"]" * 100_000 + b"}")
+
+
+REGRESSIONS = sorted((Path(__file__).parent / "data" / "fuzz_regressions").iterdir())
+
+
+@pytest.mark.parametrize("path", REGRESSIONS, ids=[p.name for p in REGRESSIONS])
+def test_fuzzer_findings_stay_fixed(path):
+    """Every input the coverage-guided fuzzer (scripts/fuzz.sh) crashed on, kept as a file
+    (first byte: the reader); the fuzzer also starts from them."""
+    fuzz.read_one(path.read_bytes())

@@ -172,6 +172,12 @@ class Design:
         """Build a design from a mapping (e.g. a parsed TOML table).
 
         Keys are the field names; unknown keys are rejected by name.
+
+        Raises
+        ------
+        InvalidInputError
+            On an unknown or missing key, or a value of the wrong type or range
+            (a scalar where ``q_min``/``q_max`` want 3 numbers, a string length, ...).
         """
         if not isinstance(data, Mapping):
             raise TypeError(f"design data: expected a mapping, got {type(data).__name__}")
@@ -185,9 +191,17 @@ class Design:
             raise InvalidInputError(f"design: missing required length(s) {missing}")
         kw = dict(data)
         for k in ("q_min", "q_max"):
-            if k in kw and kw[k] is not None:
-                kw[k] = tuple(kw[k])
-        return cls(**kw)
+            v = kw.get(k)
+            if v is None:
+                continue
+            if isinstance(v, (str, bytes, Mapping)) or not hasattr(v, "__len__"):
+                raise InvalidInputError(f"design: {k}: expected a list of 3 numbers "
+                                        f"(q1, q2, q3), got {type(v).__name__} {v!r}")
+            kw[k] = tuple(v)
+        try:
+            return cls(**kw)
+        except TypeError as exc:  # a value of the wrong type, read from a file: bad input
+            raise InvalidInputError(f"design: {exc}") from None
 
     @classmethod
     def from_toml(cls, path: str | Path) -> Design:
