@@ -133,3 +133,21 @@ def test_nonfinite_pose_flagged_in_batch():
     sol = ups_solutions(T)
     assert sol.valid[0].all()
     assert np.all(sol.reason[1] == Reason.NONFINITE_INPUT)
+
+
+def test_scale_and_tolerances_named():
+    """Audit of issue 13: a 400-digit scale is a named error, not an OverflowError."""
+    T = ups_transform(0.2, np.array([0.3, 0.5, 0.2, 0.4, 0.1]))
+    with pytest.raises((TypeError, ValueError), match="scale"):
+        ups_solutions(T, scale=10**400)
+    with pytest.raises(ValueError, match="closure_tol"):
+        ups_solutions(T, closure_tol=float("nan"))
+
+
+def test_huge_translation_valid_is_finite():
+    """Audit of issue 13: |t| = 1e300 overflowed |t|^2 and gave valid slots with p = inf."""
+    T = ups_transform(1e300, np.array([0.3, 0.5, 0.2, 0.4, 0.1]))
+    sol = ups_solutions(T)
+    assert sol.valid.any()
+    assert np.all(np.isfinite(sol.p[sol.valid]))
+    np.testing.assert_allclose(np.abs(sol.p[sol.valid]), 1e300, rtol=1e-15)

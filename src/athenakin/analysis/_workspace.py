@@ -24,6 +24,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import json
+import math
 import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -64,12 +65,26 @@ PROGRESS_THRESHOLD = 500_000
 # --------------------------------------------------------------------------------------
 # helpers
 # --------------------------------------------------------------------------------------
+#: Most grid points a workspace function evaluates: each point keeps a few hundred bytes
+#: of results, so a larger grid is a memory error in the making, refused up front.
+MAX_GRID_POINTS = 50_000_000
+
+
 def _resolution(res: int | tuple[int, ...], n: int, name: str = "resolution") -> tuple[int, ...]:
-    r: tuple[Any, ...] = (res,) * n if np.ndim(res) == 0 else tuple(res)  # type: ignore[arg-type]
+    try:
+        scalar = np.ndim(res) == 0
+        r: tuple[Any, ...] = (res,) * n if scalar else tuple(res)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{name}: expected an int >= 2 or {n} of them, got "
+                                f"{res!r}") from None
     if len(r) != n or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool)
                               and v >= 2 for v in r):
         raise InvalidInputError(f"{name}: expected an int >= 2 or {n} of them, got {res!r}")
-    return tuple(int(v) for v in r)
+    out = tuple(int(v) for v in r)
+    if math.prod(out) > MAX_GRID_POINTS:
+        raise InvalidInputError(f"{name}: {' x '.join(map(str, out))} grid points exceed the "
+                                f"limit of {MAX_GRID_POINTS:,} (MAX_GRID_POINTS)")
+    return out
 
 
 def _chunks(n: int, progress: bool | None, desc: str) -> Iterator[slice]:
