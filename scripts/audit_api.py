@@ -563,6 +563,9 @@ def is_named(exc: BaseException, names: tuple[str, ...]) -> bool:
         return any(n and n in msg for n in names)
     if isinstance(exc, ImportError) and "extra" in str(exc):
         return True       # an optional dependency missing: the message names the extra
+    if isinstance(exc, (FileNotFoundError, IsADirectoryError, NotADirectoryError,
+                        PermissionError)) and exc.filename is not None:
+        return True       # the file named by the path argument cannot be opened: says which
     return False
 
 
@@ -732,6 +735,8 @@ def public_callables(only: str | None) -> list[tuple[str, Any]]:
                 continue
             if isinstance(o, type) and issubclass(o, enum.Enum):
                 continue
+            if not isinstance(o, type) and not inspect.isroutine(o):
+                continue          # a typing alias (analysis.Frame), not a callable API
             key = prefix + n
             if id(o) in seen and not (key.startswith("fast.") or key.startswith("robot.")):
                 continue
@@ -1147,7 +1152,16 @@ def main(argv: list[str] | None = None) -> int:
     signal.signal(signal.SIGALRM, _alarm)
     audit = Audit(timeout=ns.timeout)
     t0 = time.perf_counter()
-    ak._dispatch.warmup(D) if ak._dispatch.numba_available() else None
+    if ak._dispatch.numba_available():       # compile time is not a hang: warm every kernel
+        ak._dispatch.warmup(D)
+        qs = np.stack([Q0, Q0])
+        ak.fast.forward_kinematics(qs, T0, D, parallel=True)
+        ak.fast.inverse_kinematics(T0, np.stack([REF["u345"]] * 2), D, parallel=True)
+        ak.fast.q_from_tool_tip(T0, np.stack([REF["tip_e"]] * 2), D, parallel=True)
+        ak.fast.q_from_instrument(T0, np.stack([REF["direction_e"]] * 2), REF["p_ik"], D,
+                                  parallel=True)
+        ak.fast.sweep_fk(qs, T0, D, progress=False)
+        ak.fast.sweep_fk(qs, T0, D, progress=False, parallel=True)
     with tempfile.TemporaryDirectory(prefix="athenakin-audit-") as tmpdir:
         tmp = Path(tmpdir)
         cwd = os.getcwd()

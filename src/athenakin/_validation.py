@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
 from collections.abc import Iterable, Mapping
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -267,6 +269,28 @@ def check_count(x: object, name: str, *, minimum: int = 1, maximum: int | None =
                  else f"an integer of about {int(abs(v).bit_length() * 0.30103)} digits")
         raise InvalidInputError(f"{name}: expected an integer >= {minimum}{hi}, got {shown}")
     return v
+
+
+def check_path(x: object, name: str = "path") -> Path:
+    """Coerce a file path argument: a ``str`` or ``os.PathLike``, not empty.
+
+    An int would be taken by ``open`` for a file descriptor (``open(1, "w")`` writes
+    to, then closes, the process's stdout); bytes, None and the rest are refused too.
+
+    Raises
+    ------
+    TypeError
+        ``x`` is not a str or an ``os.PathLike``.
+    InvalidInputError
+        ``x`` is empty.
+    """
+    if not isinstance(x, (str, os.PathLike)):
+        raise TypeError(f"{name}: expected a file path (str or os.PathLike), got "
+                        f"{type(x).__name__}")
+    p = Path(x)
+    if str(x) == "":
+        raise InvalidInputError(f"{name}: expected a file path, got an empty string")
+    return p
 
 
 #: Values of the ``errors=`` keyword of the batch functions.

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_transform
+from .._validation import check_path, check_transform
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..parallel import parallel_ik_from_position
@@ -550,13 +550,15 @@ def save_npz(path: str | Path, result: object, *, design: Design | None = None,
     """
     from .. import __version__
 
+    path = check_path(path)
+    if design is not None and not isinstance(design, Design):
+        raise TypeError(f"design: expected athenakin.Design or None, got {type(design).__name__}")
     name = type(result).__name__
     if name not in _RESULTS or not dataclasses.is_dataclass(result):
         raise TypeError(f"result: expected one of {sorted(_RESULTS)}, got {name}")
     arrays = {f.name: np.asarray(getattr(result, f.name)) for f in dataclasses.fields(result)}
     info = {"type": name, "athenakin_version": __version__,
             "design_toml": design.to_toml() if design is not None else None, **meta}
-    path = Path(path)
     saver: Any = np.savez_compressed if compressed else np.savez
     saver(path, meta=np.array(json.dumps(info)), **arrays)
     return path if path.suffix == ".npz" else path.with_name(path.name + ".npz")
@@ -570,7 +572,7 @@ def load_npz(path: str | Path) -> tuple[object, dict[str, Any]]:
     result : ActuatorMap, PointWorkspace, InstrumentCone or ToolTipWorkspace
     meta : dict
     """
-    with np.load(path, allow_pickle=False) as f:
+    with np.load(check_path(path), allow_pickle=False) as f:
         meta = json.loads(str(f["meta"]))
         cls = _RESULTS.get(meta.get("type", ""))
         if cls is None:
@@ -595,6 +597,10 @@ def workspace_summary(pw: PointWorkspace | None = None, ic: InstrumentCone | Non
     -------
     dict of str -> float or int
     """
+    for name, v, cls in (("pw", pw, PointWorkspace), ("ic", ic, InstrumentCone),
+                         ("tw", tw, ToolTipWorkspace)):
+        if v is not None and not isinstance(v, cls):
+            raise TypeError(f"{name}: expected {cls.__name__} or None, got {type(v).__name__}")
     out: dict[str, object] = {}
     with np.errstate(invalid="ignore"), _quiet():
         if pw is not None:

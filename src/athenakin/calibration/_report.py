@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from .._validation import check_path
 from ._accuracy import TipErrorMap, tip_error_map
 from ._model import PARAMETER_UNITS
 from ._solve import CalibrationResult
@@ -124,7 +125,7 @@ def write_report(result: CalibrationResult, path: str | Path, *, figures: bool =
     list of Path
         The files written (report first).
     """
-    path = Path(path)
+    path = check_path(path)
     out = [path]
     lines = [f"# {title}", "",
              f"Measurements in the **{result.frame}** frame; "

@@ -262,12 +262,7 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     T = np.where(finite[..., None, None], T, np.eye(4))
     c = T[..., :3, 3]
     with np.errstate(over="ignore"):
-        n = np.linalg.norm(c, axis=-1)
-    big = ~np.isfinite(n)               # |t| beyond sqrt(float max): scale before squaring
-    if np.any(big):
-        m = np.where(big, np.abs(c).max(axis=-1), 1.0)
-        with np.errstate(over="ignore"):
-            n = np.where(big, m * np.linalg.norm(c / m[..., None], axis=-1), n)
+        n = np.linalg.norm(c, axis=-1)      # inf beyond 1e154 m: no solution there (below)
     base_reason = np.where(finite, 0, Reason.NONFINITE_INPUT)
     base_reason = np.where((base_reason == 0) & (n <= p_zero_tol), Reason.SERIAL_P_ZERO,
                            base_reason)
@@ -336,7 +331,7 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     ctol = closure_tol + CLOSURE_ULPS * _EPS * np.fmax(sc, 0.0)[..., None]
     reason = np.where((reason == 0) & ~(res <= ctol), np.int8(Reason.CLOSURE_FAILED),
                       reason).astype(np.int8)
-    # a solution that cannot be represented (p beyond float range) is no solution
+    # |t|^2 overflowed (|t| > 1e154 m): p = inf is no solution (the kernels flag it too)
     reason = np.where((reason == 0) & ~np.isfinite(pp), np.int8(Reason.CLOSURE_FAILED),
                       reason).astype(np.int8)
     valid = reason == 0

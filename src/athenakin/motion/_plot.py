@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from .._validation import check_path
 from ._plan import Trajectory
 from ._safety import MEASURE_NAMES
 
@@ -228,7 +229,7 @@ def render_plots(traj: Trajectory, *, dpi: int = 120) -> dict[str, bytes]:
 
 def plot_paths(prefix: str | Path) -> dict[str, Path]:
     """File names ``<prefix>_actuators.png``, ``_path3d.png``, ``_singularity.png``."""
-    prefix = Path(prefix)
+    prefix = check_path(prefix, "prefix")
     return {k: prefix.with_name(f"{prefix.name}_{k}.png")
             for k in ("actuators", "path3d", "singularity")}
 

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._validation import check_path
 from ..design import Design
 from ..study import quaternion_from_rotation
 from ._layout import ACTUATED, JOINTS, LOOP_CLOSURES, mechanism_joint_values
@@ -288,6 +289,6 @@ def write_mjcf(path: str | Path, design: Design | None = None, T_b_e: ArrayLike 
     Path
         The path written.
     """
-    path = Path(path)
+    path = check_path(path)
     path.write_text(mjcf_from_design(design, T_b_e, **kwargs))  # type: ignore[arg-type]
     return path

@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import rot_x, rot_y, rot_z
+from .._validation import check_path
 from ..design import Design, resolve_design
 from ..robot._setup import resolve_rcm_frame
 from ._layout import JOINTS, LOOP_CLOSURES, urdf_joint_zero
@@ -307,6 +308,6 @@ def write_urdf(path: str | Path, design: Design | None = None, T_b_e: ArrayLike 
     -------
     Path
     """
-    path = Path(path)
+    path = check_path(path)
     path.write_text(urdf_from_design(design, T_b_e, **kwargs))  # type: ignore[arg-type]
     return path

@@ -17,6 +17,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
+from .._validation import check_path
 from ..design import Design
 from ..errors import InvalidInputError
 from ._errors import TaskFileError
@@ -104,7 +105,7 @@ def bounds_from_toml(path: str | Path) -> dict[str, tuple[float, float]] | None:
         If the file cannot be read or the table is malformed.
     """
     try:
-        with open(path, "rb") as fh:
+        with open(check_path(path), "rb") as fh:
             data = tomllib.load(fh)
     except (OSError, tomllib.TOMLDecodeError) as exc:
         raise TaskFileError(f"{path}: cannot read the bounds ({exc})") from None

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import check_scalar
+from .._validation import check_path, check_scalar
 from ..design import Design
 from ..errors import InvalidInputError
 from ._errors import SchedulerUnreachableError, StudyMismatchError
@@ -241,7 +241,7 @@ def _prepare_out(out: Path, fingerprint: str, n_chunks: int, meta: dict[str, Any
 def read_study(out: str | Path) -> Any:
     """Read a study folder written by :func:`evaluate` (every chunk so far, in design order)."""
     pd = _require("pandas")
-    out = Path(out)
+    out = check_path(out, "out")
     parts = sorted(out.glob("part-*.parquet"))
     if not parts:
         raise InvalidInputError(f"{out}: no study chunks (part-*.parquet) found")
