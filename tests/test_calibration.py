@@ -294,3 +294,26 @@ def test_robust_loss_flags_the_outliers_and_matches_the_clean_fit():
     with pytest.warns(cal.CalibrationWarning, match="outliers"):
         lin = cal.calibrate(data.q, data.tips, T, D)   # flagged only
     assert np.all(lin.outliers[data.outliers])
+
+
+def test_audit_options_named():
+    """Audit of issue 13: options of the calibration reached numpy or float() unchecked
+    (frame arrays, axis_weight=None, sigma=1e308 squared to inf, tol=None, mode=10**400)."""
+    data = cal.synthetic_measurements(D, T, n=12, rng=3)
+    bad = [({"frame": np.array(["base", "base"])}, "frame"), ({"axis_weight": None}, "axis_weight"),
+           ({"sigma": 1e308}, "sigma"), ({"outlier_threshold": None}, "outlier_threshold"),
+           ({"identifiability_tol": 10**400}, "tol"), ({"tol": "x"}, "tol"),
+           ({"max_nfev": float("nan")}, "max_nfev")]
+    for kw, match in bad:
+        with pytest.raises((TypeError, ValueError), match=match):
+            cal.calibrate(data.q, data.tips, T, D, **kw)
+    with pytest.raises(InvalidInputError, match="mode"):
+        cal.random_poses(3, T, D, mode=10**400)
+    with pytest.raises(TypeError, match="margin"):
+        cal.random_poses(3, T, D, margin="x")
+    for kw, match in (({"noise": 10**400}, "noise"), ({"true": 1.0}, "true"),
+                      ({"outlier_fraction": float("inf")}, "outlier_fraction")):
+        with pytest.raises((TypeError, ValueError), match=match):
+            cal.synthetic_measurements(D, T, n=4, rng=1, **kw)
+    with pytest.raises((TypeError, ValueError), match="J"):
+        cal.analyse_jacobian(None, ("a",))

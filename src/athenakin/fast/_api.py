@@ -190,6 +190,9 @@ def _batch(**named: tuple[int, ...]) -> tuple[int, ...]:
 
 
 def _check_out(out: FKSolution, batch: tuple[int, ...]) -> tuple[NDArray, ...]:
+    if not isinstance(out, FKSolution):
+        raise TypeError(f"out: expected an FKSolution (of a previous call) or None, got "
+                        f"{type(out).__name__}")
     arrs: tuple[NDArray, ...] = (out.reason, out.valid, out.p, out.u, out.T_b_s_mode,
                                  out.residual, out.item_reason)
     shapes = (batch + (16,), batch + (16,), batch + (16,), batch + (16, 5), batch + (2, 4, 4),
