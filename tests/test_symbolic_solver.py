@@ -257,3 +257,11 @@ def test_solver_checks_the_cache_hash_at_first_use(tmp_path, monkeypatch):
         _solver._numeric()
     monkeypatch.setattr(_solver, "__file__", str(dv.CACHE_DIR.parent / "_solver.py"))
     assert _solver._numeric() is gen
+
+
+def test_serial_tolerances_named():
+    """Audit of issue 13: a 400-digit tolerance was an OverflowError from inside."""
+    f = ak.study.study_from_transform(ups_transform(0.2, np.array([0.3, 0.5, 0.2, 0.4, 0.1])))
+    for kw in ({"degenerate_tol": 10**400}, {"p_zero_tol": None}):
+        with pytest.raises((TypeError, ValueError), match=next(iter(kw))):
+            serial_solutions_algebraic(f, **kw)

@@ -271,6 +271,25 @@ def check_count(x: object, name: str, *, minimum: int = 1, maximum: int | None =
     return v
 
 
+def check_instance(x: object, name: str, cls: type | tuple[type, ...]) -> None:
+    """Refuse ``x`` unless it is an instance of ``cls`` (a result object, a model...).
+
+    Raises
+    ------
+    TypeError
+        Naming the argument, the expected and the received type.
+    """
+    if not isinstance(x, cls):
+        want = " or ".join(c.__name__ for c in (cls if isinstance(cls, tuple) else (cls,)))
+        raise TypeError(f"{name}: expected {want}, got {type(x).__name__}")
+
+
+def check_axes(ax: object, name: str = "ax") -> None:
+    """Refuse an ``ax`` that is not None and not a matplotlib Axes (anything with ``plot``)."""
+    if ax is not None and not callable(getattr(ax, "plot", None)):
+        raise TypeError(f"{name}: expected a matplotlib Axes or None, got {type(ax).__name__}")
+
+
 def check_path(x: object, name: str = "path") -> Path:
     """Coerce a file path argument: a ``str`` or ``os.PathLike``, not empty.
 

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_path, check_transform
+from .._validation import check_array, check_path, check_transform
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..parallel import parallel_ik_from_position
@@ -192,10 +192,10 @@ def actuator_map(design: Design | None = None, *, resolution: int | tuple[int, i
     design = resolve_design(design)
     nh, nq = _resolution(resolution, 2)
     hm = min(design.l1, design.l3)
-    h_lo, h_hi = h_range or (-hm, hm)
+    h_lo, h_hi = _interval(h_range, "h_range") or (-hm, hm)
     h = np.linspace(h_lo, h_hi, nh)
     dmax = np.hypot(design.l3 + design.l2, design.l5) + design.l1
-    q_lo, q_hi = q3_range or (0.0, 1.1 * dmax)
+    q_lo, q_hi = _interval(q3_range, "q3_range") or (0.0, 1.1 * dmax)
     q3 = np.linspace(q_lo, q_hi, nq)
     H, Q3 = np.meshgrid(h, q3, indexing="ij")
     pts = np.stack([H.ravel(), -H.ravel(), Q3.ravel()], axis=-1)  # q1 = h, q2 = -h
@@ -294,7 +294,7 @@ def point_workspace(design: Design | None = None, *, resolution: int | tuple[int
     """
     design = resolve_design(design)
     n = _resolution(resolution, 3)
-    b = bounds or _default_bounds(design)
+    b = _box(bounds) or _default_bounds(design)
     axes = [np.linspace(lo, hi, k) for (lo, hi), k in zip(b, n, strict=True)]
     P = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     free = _unlimited(design)
@@ -357,8 +357,33 @@ class InstrumentCone:
     condition: NDArray[np.float64]
 
 
+def _interval(x: object, name: str) -> tuple[float, float] | None:
+    """None, or ``(lo, hi)``: two finite numbers with ``lo <= hi`` (a named error otherwise)."""
+    if x is None:
+        return None
+    a = check_array(x, name, (2,))
+    if a.shape != (2,) or not a[0] <= a[1]:
+        raise InvalidInputError(f"{name}: expected (lo, hi) with lo <= hi, got {x!r}")
+    return float(a[0]), float(a[1])
+
+
+def _box(bounds: object) -> tuple[tuple[float, float], ...] | None:
+    """None, or three intervals ``((x_lo, x_hi), (y_lo, y_hi), (z_lo, z_hi))``."""
+    if bounds is None:
+        return None
+    a = check_array(bounds, "bounds", (2,))
+    if a.shape != (3, 2) or not np.all(a[:, 0] <= a[:, 1]):
+        raise InvalidInputError(f"bounds: expected ((x_lo, x_hi), (y_lo, y_hi), (z_lo, z_hi)) "
+                                f"with lo <= hi, got {bounds!r}")
+    return tuple((float(lo), float(hi)) for lo, hi in a)
+
+
 def _modes_arg(modes: tuple[int, ...]) -> tuple[int, ...]:
-    m = tuple(int(v) for v in modes)
+    try:
+        m = tuple(int(v) for v in modes)
+    except (TypeError, ValueError, OverflowError):
+        raise InvalidInputError(f"modes: expected a non-empty tuple of +1 / -1, got "
+                                f"{modes!r}") from None
     if not m or any(v not in (1, -1) for v in m):
         raise InvalidInputError(f"modes: expected a non-empty tuple of +1 / -1, got {modes!r}")
     return m
@@ -398,7 +423,7 @@ def instrument_cone(T_b_e: ArrayLike | None = None, design: Design | None = None
     na, npol, npp = _resolution(resolution, 3)
     allowed = _modes_arg(modes)
     L = design.tool_length
-    pr = p_range or (0.01 * L, L)
+    pr = _interval(p_range, "p_range") or (0.01 * L, L)
     az = np.linspace(-np.pi, np.pi, na, endpoint=False) + 2 * np.pi / na
     pol = np.linspace(0.0, np.pi, npol)
     p = np.linspace(pr[0], pr[1], npp)
@@ -495,7 +520,7 @@ def tool_tip_workspace(T_b_e: ArrayLike | None = None, design: Design | None = N
     allowed = _modes_arg(modes)
     n = _resolution(resolution, 3)
     L = design.tool_length
-    b = bounds or ((-L, L),) * 3
+    b = _box(bounds) or ((-L, L),) * 3
     axes = [np.linspace(lo, hi, k) for (lo, hi), k in zip(b, n, strict=True)]
     P = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
 

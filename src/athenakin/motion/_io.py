@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from .._csv import read_table
 from .._serialize import json_text
-from .._validation import check_path
+from .._validation import check_instance, check_path
 from ._errors import PathFileError
 from ._plan import Trajectory
 from ._tracker import TrackFlag, TrackLog
@@ -331,6 +331,7 @@ def save_trajectory(traj: Trajectory, path: str | Path) -> Path:
     ValueError
         Another extension.
     """
+    check_instance(traj, "traj", Trajectory)
     path = check_path(path)
     ext = path.suffix.lower()
     if ext not in (".csv", ".json"):

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import check_path
+from .._validation import check_axes, check_count, check_instance, check_path
 from ._plan import Trajectory
 from ._safety import MEASURE_NAMES
 
@@ -41,6 +41,10 @@ _MEASURE_LABELS = {
 }
 
 
+#: Largest ``dpi`` of the saved figures (three figures at 20000 dpi are gigabytes).
+MAX_DPI = 1200
+
+
 def plot_actuators(traj: Trajectory, *, axes: Any = None) -> Any:
     """Actuator position, velocity, acceleration (and jerk) over time, limits dashed.
 
@@ -56,6 +60,10 @@ def plot_actuators(traj: Trajectory, *, axes: Any = None) -> Any:
     -------
     ndarray of Axes
     """
+    check_instance(traj, "traj", Trajectory)
+    if axes is not None:
+        for a in np.atleast_1d(np.asarray(axes, dtype=object)).ravel():
+            check_axes(a, "axes")
     import matplotlib.pyplot as plt
 
     limits = traj.limits
@@ -109,6 +117,9 @@ def plot_tip_path(traj: Trajectory, *, ax: Any = None, context: bool = True,
     -------
     Axes
     """
+    check_instance(traj, "traj", Trajectory)
+    check_axes(ax)
+    shafts = check_count(shafts, "shafts", minimum=0, maximum=10_000)
     import matplotlib.pyplot as plt
 
     if ax is None:
@@ -187,6 +198,8 @@ def plot_singularity_distance(traj: Trajectory, *, ax: Any = None) -> Any:
     -------
     Axes
     """
+    check_instance(traj, "traj", Trajectory)
+    check_axes(ax)
     import matplotlib.pyplot as plt
 
     if ax is None:
@@ -207,6 +220,8 @@ def plot_singularity_distance(traj: Trajectory, *, ax: Any = None) -> Any:
 
 def render_plots(traj: Trajectory, *, dpi: int = 120) -> dict[str, bytes]:
     """The three figures as PNG bytes, keyed ``"actuators"``, ``"path3d"``, ``"singularity"``."""
+    check_instance(traj, "traj", Trajectory)
+    dpi = check_count(dpi, "dpi", minimum=1, maximum=MAX_DPI)
     import matplotlib
 
     matplotlib.use("Agg", force=False)

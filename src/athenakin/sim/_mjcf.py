@@ -152,6 +152,8 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     T = g.T_b_e
     lo, hi = d.stroke_min, d.stroke_max
 
+    if not isinstance(model_name, str):
+        raise TypeError(f"model_name: expected str, got {type(model_name).__name__}")
     root = ET.Element("mujoco", {"model": model_name})
     ET.SubElement(root, "compiler", {"angle": "radian", "autolimits": "true"})
     ET.SubElement(root, "option", {

@@ -17,8 +17,8 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-from .._validation import check_path
-from ..design import Design
+from .._validation import check_array, check_path, check_scalar
+from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ._errors import TaskFileError
 from ._metrics import DEFAULT_ENCODER_RESOLUTION, METRIC_COLUMNS, row_from_design
@@ -53,7 +53,8 @@ def default_bounds(design: Design | None = None, *, spread: float = 0.25
     dict of str -> (float, float)
         ``{name: (lo, hi)}`` for every name of :data:`SEARCH_VARIABLES`, m.
     """
-    d = design or Design.default()
+    d = resolve_design(design)
+    spread = check_scalar(spread, "spread", nonnegative=True)
     row = row_from_design(d)
     out = {}
     for k in SEARCH_VARIABLES:
@@ -128,7 +129,7 @@ def random_designs(n: int, bounds: Mapping[str, Any], *, seed: int = 0,
     b = check_bounds(bounds)
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise InvalidInputError(f"n: expected a positive integer, got {n!r}")
-    base = base or Design.default()
+    base = resolve_design(base)
     rng = np.random.default_rng(seed)
     lo = np.array([b[k][0] for k in SEARCH_VARIABLES])
     hi = np.array([b[k][1] for k in SEARCH_VARIABLES])
@@ -153,7 +154,10 @@ def _objective_matrix(df: Any, objectives: Mapping[str, str]) -> NDArray[np.floa
 
 def pareto_mask(F: NDArray[np.float64]) -> NDArray[np.bool_]:
     """Non-dominated rows of an objective matrix ``(n, k)`` to minimise (NaN rows excluded)."""
-    F = np.asarray(F, dtype=float)
+    F = check_array(F, "F", (), allow_nonfinite=True)
+    if F.ndim != 2:
+        raise InvalidInputError(f"F: expected an objective matrix of shape (n, k), got shape "
+                                f"{F.shape}")
     ok = np.all(np.isfinite(F), axis=1)
     mask = np.zeros(len(F), dtype=bool)
     idx = np.flatnonzero(ok)
