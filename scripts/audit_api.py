@@ -238,7 +238,7 @@ OVERRIDES: dict[str, Callable[[dict[str, Path]], tuple[tuple, dict]]] = {
     "motion.plan": lambda f: ((BY_NAME["tips_e"], T0, D), dict(rate=200.0)),
     "motion.plan_directions": lambda f: (([0.3, 0.35], [0.2, 0.2], [0.08, 0.08], T0, D),
                                          dict(rate=200.0)),
-    "motion.check_samples": lambda f: ((None, T0, D, None, None), {}),
+    "motion.check_samples": lambda f: _samples_args(),
     "motion.read_path_csv": lambda f: ((f["path_csv"],), {}),
     "motion.read_q_stream_csv": lambda f: ((f["q_csv"],), {}),
     "motion.save_plots": lambda f: ((TRAJ(), f["tmp"] / "fig"), dict(dpi=30)),
@@ -301,6 +301,16 @@ OVERRIDES: dict[str, Callable[[dict[str, Path]], tuple[tuple, dict]]] = {
     "symbolic.forward_kinematics_algebraic": lambda f: ((Q0, T0, D), {}),
     "symbolic.serial_solutions_algebraic": lambda f: ((REF["X"],), {}),
 }
+
+
+def _samples_args() -> tuple[tuple, dict]:
+    """Base arguments of motion.check_samples: the samples of a planned trajectory."""
+    tr = TRAJ()
+    n = len(tr.t)
+    samples = dict(t=tr.t, q=tr.q, qd=tr.qd, qdd=tr.qdd, qddd=tr.qddd, tip_e=tr.tip_e,
+                   reason=np.zeros(n, np.int8), mode=tr.mode, tip_speed=np.zeros(n))
+    limits = ak.motion.Limits(v_max=np.full(3, 0.05), a_max=np.full(3, 0.5))
+    return (samples, T0, D, limits, ak.motion.Margins()), {}
 
 
 def _scipy_rot() -> Any:
