@@ -317,3 +317,24 @@ def test_audit_options_named():
             cal.synthetic_measurements(D, T, n=4, rng=1, **kw)
     with pytest.raises((TypeError, ValueError), match="J"):
         cal.analyse_jacobian(None, ("a",))
+
+
+def test_audit_writers_and_plots_named(tmp_path):
+    """Audit of issue 13: a result that is not a CalibrationResult, q=None, a non-str
+    comment reached AttributeError / numpy tracebacks in the writers and plots."""
+    for fn in (cal.calibration_toml, cal.plot_residuals, cal.plot_parameter_confidence,
+               cal.tip_error_map):
+        with pytest.raises(TypeError, match="result"):
+            fn(None)
+    with pytest.raises(TypeError, match="result"):
+        cal.write_report(None, tmp_path / "r")
+    with pytest.raises(TypeError, match="m"):
+        cal.plot_tip_error_map(None)
+    q = np.array([[-0.1, 0.1, 0.45]])
+    with pytest.raises(TypeError, match="q"):
+        cal.measurements_csv_text(None, q)
+    with pytest.raises(ValueError, match="tips"):
+        cal.measurements_csv_text(q, np.zeros((2, 3)))
+    with pytest.raises(TypeError, match="comment"):
+        cal.plan_csv_text(q, comment=1)
+    assert cal.plan_csv_text(q).count("\n") == 3

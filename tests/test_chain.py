@@ -153,3 +153,9 @@ def test_huge_translation_valid_is_finite(p):
     sol = ups_solutions(T)
     assert np.all(np.isfinite(sol.p[sol.valid]))
     assert sol.valid.any() == (p < 1e154)
+
+
+def test_scale_must_broadcast_to_the_batch():
+    T = ups_transform(0.2, np.array([0.3, 0.5, 0.2, 0.4, 0.1]))
+    with pytest.raises(ValueError, match="scale"):
+        ups_solutions(T, scale=[])

@@ -107,3 +107,9 @@ def test_sweep_counts_and_out_named():
         fast.sweep_fk(np.zeros((2, 3)), T, n=float("inf"), progress=False)
     with pytest.raises(TypeError, match="out"):
         fast.forward_kinematics(np.zeros((2, 3)), T, out=1.0)
+
+
+def test_sweep_tolerances_named():
+    with pytest.raises(InvalidInputError, match="closure_tol"):
+        fast.sweep_fk(np.zeros((2, 3)), ak.default_rcm_frame(), closure_tol=10**400,
+                      progress=False)

@@ -265,3 +265,15 @@ def test_serial_tolerances_named():
     for kw in ({"degenerate_tol": 10**400}, {"p_zero_tol": None}):
         with pytest.raises((TypeError, ValueError), match=next(iter(kw))):
             serial_solutions_algebraic(f, **kw)
+
+
+@pytest.mark.parametrize("bad", [None, "x0", 1.0, [1, 2, 3], [object()] * 8])
+def test_symbolic_vectors_named(bad):
+    """Audit of issue 13: the symbolic helpers on a non-vector raised from inside sympy."""
+    from athenakin import symbolic
+    for fn in (symbolic.dq_conj_quaternion, symbolic.study_quadric, symbolic.paper_matrix,
+               symbolic.transform_matrix):
+        with pytest.raises((TypeError, ValueError), match="X"):
+            fn(bad)
+    with pytest.raises((TypeError, ValueError), match="X1"):
+        symbolic.dq_multiply(bad, [1, 0, 0, 0, 0, 0, 0, 0])

@@ -344,3 +344,21 @@ def test_audit_arguments_named() -> None:
         ak.synthesis.design_from_row(None)
     with pytest.raises(InvalidInputError, match="rcm"):
         ak.synthesis.rcm_frame_from_axis([10**400, 0, 0], [0, 0, 1.0])
+
+
+def test_audit_study_arguments_named(tmp_path) -> None:
+    """Audit of issue 13: optimize(reference=nan, generations=1e308), evaluate(out=nan,
+    on_chunk=nan) and design_rows(0-d array) named the wrong argument or none."""
+    pytest.importorskip("pandas")
+    task = ak.synthesis.Task(rcm=np.array([0.0, 0.3, 0.1]), axis=np.array([0.0, 0.0, -1.0]),
+                             half_angle=0.3, depth=(0.05, 0.1))
+    with pytest.raises(TypeError, match="reference"):
+        ak.synthesis.optimize(task, reference=float("nan"))
+    with pytest.raises(InvalidInputError, match="generations"):
+        ak.synthesis.optimize(task, generations=1e308)
+    with pytest.raises(TypeError, match="out"):
+        ak.synthesis.evaluate([ak.Design.default()], task, samples=10, out=float("nan"))
+    with pytest.raises(TypeError, match="on_chunk"):
+        ak.synthesis.evaluate([ak.Design.default()], task, samples=10, on_chunk=1.0)
+    with pytest.raises(TypeError, match="designs"):
+        ak.synthesis.design_rows(np.array(1.0))

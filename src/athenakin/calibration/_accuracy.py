@@ -15,7 +15,7 @@ import dataclasses
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array
+from .._validation import check_array, check_instance
 from ..errors import InvalidInputError
 from ..robot import direction_from_angles, q_from_instrument
 from ._model import PARAMETERS, Seed, predict
@@ -103,6 +103,7 @@ def tip_error(result: CalibrationResult, q: ArrayLike, *, encoder_resolution: fl
     -------
     TipError
     """
+    check_instance(result, "result", CalibrationResult)
     qa = _readings(q)
     if encoder_resolution < 0 or not np.isfinite(encoder_resolution):
         raise InvalidInputError(f"encoder_resolution: expected a number >= 0 (m), got "
@@ -126,6 +127,7 @@ def tip_error_monte_carlo(result: CalibrationResult, q: ArrayLike, *,
     Parameters are drawn from ``N(estimates, covariance)``, encoder errors uniformly in
     ``[-res/2, res/2]``, and the tip is computed with the nonlinear model.
     """
+    check_instance(result, "result", CalibrationResult)
     qa = _readings(q)
     gen = np.random.default_rng(rng)
     theta, free = _theta(result)
@@ -162,6 +164,7 @@ def tip_error_map(result: CalibrationResult, *, depth: float | None = None,
     -------
     TipErrorMap
     """
+    check_instance(result, "result", CalibrationResult)
     d = result.design
     L = d.tool_length
     dep = 0.5 * L if depth is None else float(depth)

@@ -271,7 +271,9 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
         sc = n
     else:
         sc = check_array(scale, "scale", (), allow_nonfinite=True)
-        broadcast_batch(T_s_e=n.shape, scale=sc.shape)
+        if broadcast_batch(T_s_e=n.shape, scale=sc.shape) != n.shape:
+            raise InvalidInputError(f"scale: expected a shape that broadcasts to the batch of "
+                                    f"T_s_e {n.shape}, got {sc.shape}")
     with np.errstate(invalid="ignore", over="ignore"):
         dtol = np.maximum(degenerate_tol, DEGENERATE_ULPS * _EPS * sc / nn)   # (...)
     psign = np.array([1.0, -1.0])

@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._transforms import wrap_angle
 from .._validation import check_array, check_count, check_instance, check_scalar, check_tolerance
 from ..chain import closure_residual
-from ..design import Design, resolve_design
+from ..design import LENGTH_RANGE, Design, resolve_design
 from ..errors import InvalidInputError, OutOfWorkspaceError
 from ..parallel import parallel_forward_kinematics
 from ..robot import forward_kinematics
@@ -245,6 +245,9 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
     qs = check_array(q, "q", (3,))
     qs = qs.reshape(-1, 3)
     perturb = check_scalar(perturb, "perturb", nonnegative=True)
+    if perturb > LENGTH_RANGE[1]:
+        raise InvalidInputError(f"perturb: expected at most {LENGTH_RANGE[1]:g} (m or rad), "
+                                f"got {perturb:g}")
     rng = np.random.default_rng(rng)
     model = load_model(design, T, q=home_q, slot=start_slot, gravity=gravity)
     data = mujoco.MjData(model)
@@ -357,6 +360,8 @@ def sample_reachable_q(n: int, design: Design | None = None, T_b_e: ArrayLike | 
     home = check_array(REFERENCE_Q if home_q is None else home_q, "home_q", (3,))
     slot = _check_slot(slot)
     radius = check_scalar(radius, "radius", positive=True)
+    if radius > LENGTH_RANGE[1]:
+        raise InvalidInputError(f"radius: expected at most {LENGTH_RANGE[1]:g} m, got {radius:g}")
     n_path = check_count(n_path, "n_path", minimum=2, maximum=100_000)
     max_tries = check_count(max_tries, "max_tries", minimum=1)
     rng = np.random.default_rng(rng)

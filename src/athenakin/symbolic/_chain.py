@@ -29,6 +29,7 @@ from ._algebra import (
     dq_product,
     study_G,
     study_M,
+    study_vector,
 )
 
 __all__ = [
@@ -81,7 +82,7 @@ def serial_chain(b: Sequence[sp.Expr] | None = None) -> sp.ImmutableMatrix:
     sympy.ImmutableMatrix, shape (8, 1)
         Polynomial in ``b``, ``v1..v5``, ``p``; equals ``E`` projectively.
     """
-    b = B_SYMBOLS if b is None else b
+    b = B_SYMBOLS if b is None else tuple(study_vector(b, "b"))
     factors: list[Sequence[sp.Expr]] = [b]
     for M, G in joint_factors():
         factors += [M, G]

@@ -28,6 +28,7 @@ from typing import Any
 import sympy as sp
 from sympy.printing.pycode import pycode
 
+from .._validation import check_path
 from ._algebra import F_SYMBOLS, P_SYMBOL, V_SYMBOLS, X_SYMBOLS
 from ._chain import compare_vectors, left_chain, right_chain
 from ._elimination import elimination_steps, implicit_sets
@@ -158,7 +159,7 @@ def load_derivation(path: Path = CACHE_FILE) -> dict[str, sp.Basic]:
         corrupted: regenerate with ``python -m athenakin.symbolic._derivation``),
         or the format is unknown.
     """
-    data = json.loads(Path(path).read_text())
+    data = json.loads(check_path(path).read_text())
     if data.get("format") != CACHE_FORMAT:
         raise ValueError(f"{path}: expected cache format {CACHE_FORMAT}, got "
                          f"{data.get('format')!r}")

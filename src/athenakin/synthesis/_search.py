@@ -17,7 +17,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-from .._validation import check_array, check_path, check_scalar
+from .._validation import check_array, check_count, check_instance, check_path, check_scalar
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ._errors import TaskFileError
@@ -252,7 +252,11 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
     from pymoo.core.problem import Problem
     from pymoo.optimize import minimize
 
+    if reference is not None:
+        check_instance(reference, "reference", Design)
     ref = reference or Design.default()
+    population = check_count(population, "population", minimum=2, maximum=100_000)
+    generations = check_count(generations, "generations", minimum=1, maximum=100_000)
     b = check_bounds(bounds if bounds is not None else default_bounds(ref))
     obj = dict(objectives or DEFAULT_OBJECTIVES)
     for k, sense in obj.items():
