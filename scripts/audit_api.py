@@ -505,6 +505,8 @@ def _mutated(snap: list[tuple[Any, np.ndarray]]) -> bool:
 
 @dataclasses.dataclass
 class Outcome:
+    """What one call gave: a result, an exception or a hang, and its side effects."""
+
     kind: str                        # "result" | "exc" | "hang"
     value: Any = None
     exc: BaseException | None = None
@@ -531,6 +533,7 @@ def _closed_std_fds() -> list[int]:
 
 
 def invoke(f: Callable[..., Any], args: tuple, kw: dict, timeout: float) -> Outcome:
+    """Call ``f(*args, **kw)`` under a ``timeout`` alarm; note mutated inputs, closed fds."""
     if not _STD_FDS:
         _STD_FDS.update({fd: os.dup(fd) for fd in (0, 1, 2)})
     snap = _snapshot(args, kw)
@@ -564,6 +567,7 @@ def _close_figures() -> None:
 
 
 def is_named(exc: BaseException, names: tuple[str, ...]) -> bool:
+    """Whether ``exc`` is a named error (module docstring) for a function of ``names``."""
     if isinstance(exc, KinematicsError):
         return True
     if type(exc) in (TypeError, ValueError) or (
@@ -573,8 +577,8 @@ def is_named(exc: BaseException, names: tuple[str, ...]) -> bool:
         return any(n and n in msg for n in names)
     if isinstance(exc, ImportError) and "extra" in str(exc):
         return True       # an optional dependency missing: the message names the extra
-    if isinstance(exc, (FileNotFoundError, IsADirectoryError, NotADirectoryError,
-                        PermissionError)) and exc.filename is not None:
+    if isinstance(exc, (FileNotFoundError, FileExistsError, IsADirectoryError,
+                        NotADirectoryError, PermissionError)) and exc.filename is not None:
         return True       # the file named by the path argument cannot be opened: says which
     return False
 
@@ -609,6 +613,7 @@ def _valid_arrays(value: Any) -> Iterator[tuple[np.ndarray, str, np.ndarray]]:
 
 
 def nonfinite_valid(value: Any) -> str:
+    """'' or what non-finite value a valid-flagged item of ``value`` holds."""
     for valid, name, a in _valid_arrays(value):
         if a.shape[:valid.ndim] != valid.shape:
             continue
@@ -691,6 +696,8 @@ def _short(o: Outcome) -> str:
 # --- the run --------------------------------------------------------------------------------
 @dataclasses.dataclass
 class Audit:
+    """Counts per class, per function, and the findings with their inputs."""
+
     timeout: float
     counts: collections.Counter = dataclasses.field(default_factory=collections.Counter)
     per_func: dict[str, collections.Counter] = dataclasses.field(default_factory=dict)
@@ -698,6 +705,7 @@ class Audit:
     notes: list[str] = dataclasses.field(default_factory=list)
 
     def record(self, func: str, label: str, cls: str, detail: str = "") -> None:
+        """Count one call of class ``cls``; keep it when it is a finding."""
         self.counts[cls] += 1
         self.counts["calls"] += 1
         self.per_func.setdefault(func, collections.Counter())[cls] += 1
@@ -705,6 +713,7 @@ class Audit:
             self.findings.append(dict(func=func, input=label, cls=cls, detail=detail[:600]))
 
     def classify(self, func: str, label: str, out: Outcome, names: tuple[str, ...]) -> str:
+        """Record an outcome under its class and return the class."""
         if out.mutated:
             self.record(func, label, "mutated", "an input array changed")
         if out.closed_fds:
@@ -729,6 +738,7 @@ class Audit:
 
 
 def public_callables(only: str | None) -> list[tuple[str, Any]]:
+    """Every public function and class of athenakin and its subpackages' ``__all__``."""
     seen: set[int] = set()
     out: list[tuple[str, Any]] = []
     mods: list[tuple[str, Any]] = [("", ak)]
@@ -835,6 +845,7 @@ def _twin(key: str) -> Any:
 
 def fuzz_function(audit: Audit, key: str, f: Any, files: dict[str, Path], quick: bool,
                   budget_s: float) -> None:
+    """Call ``f`` with its base arguments, then each argument replaced by its hostile pool."""
     params = _params(f)
     names = tuple(p.name for p in params) + (key.split(".")[-1], "batch shapes", "shape")
     # the reference functions of athenakin.robot take backend="numpy" only: nothing to compare
@@ -1138,6 +1149,7 @@ def _ups_edges(audit: Audit) -> None:
 
 
 def edges(audit: Audit, seed: int) -> None:
+    """The kinematic edge cases, checked by round trips on both backends."""
     rng = np.random.default_rng(seed)
     for label, q, d in edge_qs(rng):
         _fk_round_trip(audit, label, q, d)
@@ -1147,6 +1159,7 @@ def edges(audit: Audit, seed: int) -> None:
 
 # --- main -----------------------------------------------------------------------------------
 def main(argv: list[str] | None = None) -> int:
+    """Run the audit; 0 when it finds nothing, 1 otherwise."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--only", help="audit only the functions whose qualified name contains "

@@ -338,3 +338,17 @@ def test_audit_writers_and_plots_named(tmp_path):
     with pytest.raises(TypeError, match="comment"):
         cal.plan_csv_text(q, comment=1)
     assert cal.plan_csv_text(q).count("\n") == 3
+
+
+def test_audit_identifiability_arguments_named():
+    """Audit of issue 13: unknown parameter names (KeyError), frame arrays and a 400-digit
+    depth reached the internals unchecked."""
+    with pytest.raises(ValueError, match="names"):
+        cal.analyse_jacobian(np.zeros((3, 3)), ("a", "b", "c"))
+    data = cal.synthetic_measurements(D, T, n=12, rng=3)
+    with pytest.raises(ValueError, match="frame"):
+        cal.identifiability(data.q, T, D, frame=np.array(["base", "base"]))
+    res = cal.calibrate(data.q, data.tips, T, D)
+    for kw, match in (({"depth": 10**400}, "depth"), ({"resolution": (3, 10**9)}, "resolution")):
+        with pytest.raises(ValueError, match=match):
+            cal.tip_error_map(res, **kw)

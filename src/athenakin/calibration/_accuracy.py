@@ -15,7 +15,7 @@ import dataclasses
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_instance
+from .._validation import check_array, check_count, check_instance, check_scalar
 from ..errors import InvalidInputError
 from ..robot import direction_from_angles, q_from_instrument
 from ._model import PARAMETERS, Seed, predict
@@ -167,10 +167,14 @@ def tip_error_map(result: CalibrationResult, *, depth: float | None = None,
     check_instance(result, "result", CalibrationResult)
     d = result.design
     L = d.tool_length
-    dep = 0.5 * L if depth is None else float(depth)
+    dep = 0.5 * L if depth is None else check_scalar(depth, "depth")
     if not 0 < dep < L:
         raise InvalidInputError(f"depth: expected 0 < depth < tool_length = {L:.6g} m, got {dep}")
-    na, npol = resolution
+    try:
+        na, npol = (check_count(r, "resolution", minimum=2, maximum=100_000) for r in resolution)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"resolution: expected (n_azimuth, n_polar), two integers in "
+                                f"2..100000, got {resolution!r} ({exc})") from None
     az = np.linspace(-np.pi, np.pi, na, endpoint=False) + 2 * np.pi / na
     pol = np.linspace(0.0, np.pi, npol)
     A, B = np.meshgrid(az, pol, indexing="ij")

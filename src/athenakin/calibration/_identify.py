@@ -162,6 +162,10 @@ def analyse_jacobian(J: NDArray[np.float64], names: tuple[str, ...], *,
     if not isinstance(names, tuple) or J.ndim != 2:
         raise InvalidInputError(f"J, names: expected a Jacobian (m, n) and a tuple of n names, "
                                 f"got shape {np.shape(J)} and {type(names).__name__}")
+    unknown = [nm for nm in names if nm not in PARAMETER_UNITS]
+    if unknown:
+        raise InvalidInputError(f"names: unknown parameter(s) {unknown}; expected names among "
+                                f"{list(PARAMETER_UNITS)}")
     tol = check_tolerance(tol, "tol")
     m, n = J.shape
     norms = np.linalg.norm(J, axis=0)

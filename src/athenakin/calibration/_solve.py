@@ -10,7 +10,14 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_count, check_scalar, check_tolerance, check_transform
+from .._validation import (
+    check_array,
+    check_choice,
+    check_count,
+    check_scalar,
+    check_tolerance,
+    check_transform,
+)
 from ..design import LENGTH_RANGE, Design, resolve_design
 from ..errors import InvalidInputError, Reason
 from ..parallel import parallel_forward_kinematics
@@ -413,6 +420,7 @@ def identifiability(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None
     InvalidInputError
         Bad shapes, or rows the nominal design cannot reach (not excluded here).
     """
+    check_choice(frame, "frame", ("base", "tracker"))
     qa = _rows(q, "q")
     design = resolve_design(design)
     T = check_transform(T_b_e, "T_b_e")

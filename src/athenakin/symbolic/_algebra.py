@@ -129,7 +129,7 @@ def dq_conj_quaternion(X: Sequence[sp.Expr]) -> sp.ImmutableMatrix:
 
 def study_M(v: sp.Expr) -> sp.ImmutableMatrix:
     """``M_i`` of Eq. 6 in the half-tangent ``v = tan(u/2)``: ``(1, 0, 0, v, 0, 0, 0, 0)``."""
-    return study_vector([1, 0, 0, v, 0, 0, 0, 0])
+    return study_vector([1, 0, 0, v, 0, 0, 0, 0], "v")
 
 
 def study_G(a: sp.Expr, d: sp.Expr, al: sp.Expr) -> sp.ImmutableMatrix:
@@ -139,7 +139,7 @@ def study_G(a: sp.Expr, d: sp.Expr, al: sp.Expr) -> sp.ImmutableMatrix:
     followed by the rotation about x by ``alpha``.
     """
     a, d, al = sp.sympify(a), sp.sympify(d), sp.sympify(al)
-    return study_vector([1, al, 0, 0, a * al / 2, -a / 2, -d * al / 2, -d / 2])
+    return study_vector([1, al, 0, 0, a * al / 2, -a / 2, -d * al / 2, -d / 2], "a, d, al")
 
 
 def study_quadric(X: Sequence[sp.Expr]) -> sp.Expr:

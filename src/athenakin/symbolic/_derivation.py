@@ -159,7 +159,11 @@ def load_derivation(path: Path = CACHE_FILE) -> dict[str, sp.Basic]:
         corrupted: regenerate with ``python -m athenakin.symbolic._derivation``),
         or the format is unknown.
     """
-    data = json.loads(check_path(path).read_text())
+    path = check_path(path)
+    try:
+        data = json.loads(path.read_text())
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"path: {path} is not a derivation cache ({exc})") from None
     if data.get("format") != CACHE_FORMAT:
         raise ValueError(f"{path}: expected cache format {CACHE_FORMAT}, got "
                          f"{data.get('format')!r}")

@@ -252,6 +252,9 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
     population = check_count(population, "population", minimum=2, maximum=100_000)
     generations = check_count(generations, "generations", minimum=1, maximum=100_000)
     b = check_bounds(bounds if bounds is not None else default_bounds(ref))
+    if objectives is not None and not isinstance(objectives, Mapping):
+        raise TypeError(f"objectives: expected a mapping metric -> 'max' | 'min', got "
+                        f"{type(objectives).__name__}")
     obj = dict(objectives or DEFAULT_OBJECTIVES)
     for k, sense in obj.items():
         if k not in METRIC_COLUMNS or sense not in ("max", "min"):
