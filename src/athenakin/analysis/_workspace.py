@@ -361,7 +361,7 @@ def _interval(x: object, name: str) -> tuple[float, float] | None:
     """None, or ``(lo, hi)``: two finite numbers with ``lo <= hi`` (a named error otherwise)."""
     if x is None:
         return None
-    a = check_array(x, name, (2,))
+    a = check_array(x, name, (2,))  # type: ignore[arg-type]
     if a.shape != (2,) or not a[0] <= a[1]:
         raise InvalidInputError(f"{name}: expected (lo, hi) with lo <= hi, got {x!r}")
     return float(a[0]), float(a[1])
@@ -371,7 +371,7 @@ def _box(bounds: object) -> tuple[tuple[float, float], ...] | None:
     """None, or three intervals ``((x_lo, x_hi), (y_lo, y_hi), (z_lo, z_hi))``."""
     if bounds is None:
         return None
-    a = check_array(bounds, "bounds", (2,))
+    a = check_array(bounds, "bounds", (2,))  # type: ignore[arg-type]
     if a.shape != (3, 2) or not np.all(a[:, 0] <= a[:, 1]):
         raise InvalidInputError(f"bounds: expected ((x_lo, x_hi), (y_lo, y_hi), (z_lo, z_hi)) "
                                 f"with lo <= hi, got {bounds!r}")
@@ -622,10 +622,10 @@ def workspace_summary(pw: PointWorkspace | None = None, ic: InstrumentCone | Non
     -------
     dict of str -> float or int
     """
-    for name, v, cls in (("pw", pw, PointWorkspace), ("ic", ic, InstrumentCone),
-                         ("tw", tw, ToolTipWorkspace)):
-        if v is not None and not isinstance(v, cls):
-            raise TypeError(f"{name}: expected {cls.__name__} or None, got {type(v).__name__}")
+    for name, arg, cls in (("pw", pw, PointWorkspace), ("ic", ic, InstrumentCone),
+                           ("tw", tw, ToolTipWorkspace)):
+        if arg is not None and not isinstance(arg, cls):
+            raise TypeError(f"{name}: expected {cls.__name__} or None, got {type(arg).__name__}")
     out: dict[str, object] = {}
     with np.errstate(invalid="ignore"), _quiet():
         if pw is not None:

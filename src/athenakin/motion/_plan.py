@@ -678,7 +678,7 @@ def _check_sample_arguments(samples: object, T_b_e: object, design: object, limi
                                     f"({'N' if n is None else n}{''.join(f', {t}' for t in tail)})"
                                     f", got {getattr(a, 'shape', type(a).__name__)}")
         n = a.shape[0]
-    check_transform(T_b_e, "T_b_e")
+    check_transform(T_b_e, "T_b_e")  # type: ignore[arg-type]
     check_instance(design, "design", Design)
     check_instance(limits, "limits", Limits)
     check_instance(margins, "margins", Margins)
