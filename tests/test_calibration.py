@@ -311,6 +311,8 @@ def test_audit_options_named():
         cal.random_poses(3, T, D, mode=10**400)
     with pytest.raises(TypeError, match="margin"):
         cal.random_poses(3, T, D, margin="x")
+    with pytest.raises(TypeError, match="rng"):
+        cal.random_poses(3, T, D, rng="seed")
     for kw, match in (({"noise": 10**400}, "noise"), ({"true": 1.0}, "true"),
                       ({"outlier_fraction": float("inf")}, "outlier_fraction")):
         with pytest.raises((TypeError, ValueError), match=match):

@@ -247,3 +247,5 @@ def test_audit_arguments_named():
         ak.sim.sample_reachable_q(2, d, np.eye(4), rng=1, max_tries=2)
     with pytest.raises(TypeError, match="model_name"):
         ak.sim.mjcf_from_design(d, T, model_name=None)
+    with pytest.raises(TypeError, match="rng"):
+        ak.sim.sample_reachable_q(2, d, T, rng=[[1, 2], [3]])

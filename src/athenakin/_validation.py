@@ -290,6 +290,15 @@ def check_axes(ax: object, name: str = "ax") -> None:
         raise TypeError(f"{name}: expected a matplotlib Axes or None, got {type(ax).__name__}")
 
 
+def check_rng(rng: object, name: str = "rng") -> np.random.Generator:
+    """``np.random.default_rng(rng)``, with a named error for what it cannot seed from."""
+    try:
+        return np.random.default_rng(rng)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as exc:
+        raise TypeError(f"{name}: expected a seed (non-negative int), a numpy Generator or "
+                        f"None, got {type(rng).__name__} ({exc})") from None
+
+
 def check_path(x: object, name: str = "path") -> Path:
     """Coerce a file path argument: a ``str`` or ``os.PathLike``, not empty.
 

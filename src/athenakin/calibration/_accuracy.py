@@ -15,7 +15,7 @@ import dataclasses
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_count, check_instance, check_scalar
+from .._validation import check_array, check_count, check_instance, check_rng, check_scalar
 from ..errors import InvalidInputError
 from ..robot import direction_from_angles, q_from_instrument
 from ._model import PARAMETERS, Seed, predict
@@ -129,7 +129,7 @@ def tip_error_monte_carlo(result: CalibrationResult, q: ArrayLike, *,
     """
     check_instance(result, "result", CalibrationResult)
     qa = _readings(q)
-    gen = np.random.default_rng(rng)
+    gen = check_rng(rng)
     theta, free = _theta(result)
     draws = gen.multivariate_normal(theta[free], result.covariance, size=n_samples,
                                     method="eigh")

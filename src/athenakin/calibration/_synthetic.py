@@ -25,7 +25,7 @@ from collections.abc import Mapping
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_choice, check_scalar, check_transform
+from .._validation import check_array, check_choice, check_rng, check_scalar, check_transform
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ._model import (
@@ -105,7 +105,7 @@ def random_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *, mode
     if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
         raise InvalidInputError("random_poses: the design has unlimited strokes; give the "
                                 "poses (candidates) explicitly")
-    gen = np.random.default_rng(rng)
+    gen = check_rng(rng)
     theta = parameter_vector(design, T[:3, 3])
     out = np.zeros((0, 3))
     for _ in range(50):
@@ -185,7 +185,7 @@ def synthetic_measurements(design: Design | None, T_b_e: ArrayLike, *, n: int = 
         raise TypeError(f"true: expected a mapping parameter name -> value, got "
                         f"{type(true).__name__}")
     _check_mode(mode)
-    gen = np.random.default_rng(rng)
+    gen = check_rng(rng)
     theta = parameter_vector(design, T[:3, 3])
     theta[:6] += perturbation * gen.standard_normal(6)
     theta[6:9] += offset_std * gen.standard_normal(3)

@@ -18,7 +18,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import wrap_angle
-from .._validation import check_array, check_count, check_instance, check_scalar, check_tolerance
+from .._validation import (
+    check_array,
+    check_count,
+    check_instance,
+    check_rng,
+    check_scalar,
+    check_tolerance,
+)
 from ..chain import closure_residual
 from ..design import LENGTH_RANGE, Design, resolve_design
 from ..errors import InvalidInputError, OutOfWorkspaceError
@@ -248,7 +255,7 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
     if perturb > LENGTH_RANGE[1]:
         raise InvalidInputError(f"perturb: expected at most {LENGTH_RANGE[1]:g} (m or rad), "
                                 f"got {perturb:g}")
-    rng = np.random.default_rng(rng)
+    rng = check_rng(rng)
     model = load_model(design, T, q=home_q, slot=start_slot, gravity=gravity)
     data = mujoco.MjData(model)
     names = list(JOINTS)
@@ -364,7 +371,7 @@ def sample_reachable_q(n: int, design: Design | None = None, T_b_e: ArrayLike | 
         raise InvalidInputError(f"radius: expected at most {LENGTH_RANGE[1]:g} m, got {radius:g}")
     n_path = check_count(n_path, "n_path", minimum=2, maximum=100_000)
     max_tries = check_count(max_tries, "max_tries", minimum=1)
-    rng = np.random.default_rng(rng)
+    rng = check_rng(rng)
     t = np.linspace(0.0, 1.0, n_path)
     found: list[NDArray[np.float64]] = []
     for _ in range(max_tries):
