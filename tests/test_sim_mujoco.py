@@ -248,4 +248,4 @@ def test_audit_arguments_named():
     with pytest.raises(TypeError, match="model_name"):
         ak.sim.mjcf_from_design(d, T, model_name=None)
     with pytest.raises(TypeError, match="rng"):
-        ak.sim.sample_reachable_q(2, d, T, rng=[[1, 2], [3]])
+        ak.sim.sample_reachable_q(2, d, T, rng=[[1.0, 2.0, 3.0], [4.0]])
