@@ -346,3 +346,12 @@ def test_audit_arguments_named(tmp_path):
     bad.write_text("not json")
     with pytest.raises(ValueError, match="path"):
         symbolic.load_derivation(bad)
+
+
+@pytest.mark.parametrize("kw", [{"unknowns": "abc"}, {"equations": "abc"},
+                                {"unknowns": (0, 1, 9)}, {"equations": 3}])
+def test_elimination_indices_named(kw):
+    """Audit of issue 13: string indices reached sympy's Matrix.extract (IndexError)."""
+    from athenakin import symbolic
+    with pytest.raises((TypeError, ValueError), match=next(iter(kw))):
+        symbolic.elimination_steps(**kw)
