@@ -76,6 +76,10 @@ __all__ = [
 ]
 
 _F8 = np.dtype(np.float64)
+# The defaults of the option keywords: the lean single-call paths test identity with them
+# first (the default argument is this very object), then the general check.
+_AUTO = "auto"
+_CLOSED = "closed"
 _PARAMS: dict[int, tuple[Design, NDArray[np.float64]]] = {}
 _DEFAULT: list[NDArray[np.float64]] = []
 _FK_TOL_DEFAULT = np.array([TANGENT_TOL, DEGENERATE_TOL, P_ZERO_TOL, CLOSURE_TOL])
@@ -240,10 +244,13 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     """
     if (type(q) is np.ndarray and type(T_b_e) is np.ndarray and q.dtype is _F8
             and T_b_e.dtype is _F8 and q.shape == (3,) and T_b_e.shape == (4, 4)
-            and out is None and fields is None and not parallel and is_option(method, "closed")
-            and is_raising_policy(errors) and is_default(tangent_tol, TANGENT_TOL)
-            and is_default(degenerate_tol, DEGENERATE_TOL)
-            and is_default(p_zero_tol, P_ZERO_TOL) and is_default(closure_tol, CLOSURE_TOL)):
+            and out is None and fields is None and not parallel
+            and (method is _CLOSED or is_option(method, "closed"))
+            and (errors is _AUTO or is_raising_policy(errors))
+            and (tangent_tol is TANGENT_TOL or is_default(tangent_tol, TANGENT_TOL))
+            and (degenerate_tol is DEGENERATE_TOL or is_default(degenerate_tol, DEGENERATE_TOL))
+            and (p_zero_tol is P_ZERO_TOL or is_default(p_zero_tol, P_ZERO_TOL))
+            and (closure_tol is CLOSURE_TOL or is_default(closure_tol, CLOSURE_TOL))):
         # the common single call (control loops): no closure, no option handling
         fq, fT = q.flags, T_b_e.flags
         if fq.c_contiguous and fq.writeable and fT.c_contiguous and fT.writeable:
@@ -258,7 +265,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
             fields=fields)
 
     names = check_fields(fields)
-    if not is_option(method, "closed"):
+    if not (method is _CLOSED or is_option(method, "closed")):
         return reference()
     check_options(errors, tangent_tol=tangent_tol, degenerate_tol=degenerate_tol,
                   p_zero_tol=p_zero_tol, closure_tol=closure_tol)    # as the reference
