@@ -40,7 +40,8 @@ from ._model import (
     playback_q,
     tip_from_angles,
 )
-from ._scene import Scene, ghost_scene, robot_scene
+from ._ghosts import ghost_scene
+from ._scene import Scene, robot_scene
 from ._text import ERROR_COLOR, message_html, view_html
 
 __all__ = ["AthenaApp", "launch", "DEFAULT_PORT"]
