@@ -19,6 +19,7 @@ The app's logic is pure and testable without a browser (numpy only):
 Only :class:`AthenaApp` and :func:`launch` import viser (``pip install 'athenakin[app]'``).
 """
 
+from ._ghosts import GHOST_BLEND, SlotGhosts, ghost_scene, slot_ghosts
 from ._model import (
     INVERSE_STEPS,
     WARN_CONDITION,
@@ -41,7 +42,6 @@ from ._model import (
     slot_statuses,
     tip_from_angles,
 )
-from ._ghosts import GHOST_BLEND, SlotGhosts, ghost_scene, slot_ghosts
 from ._scene import PART_STYLE, Label, LineSet, PointSet, Scene, robot_scene
 from ._text import message_html, readouts_html, slots_html, view_html
 

@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..design import Design
 from ..errors import KinematicsError
+from ._ghosts import ghost_scene
 from ._model import (
     AppSetup,
     AppView,
@@ -41,7 +42,6 @@ from ._model import (
     playback_q,
     tip_from_angles,
 )
-from ._ghosts import ghost_scene
 from ._scene import Scene, robot_scene
 from ._text import ERROR_COLOR, message_html, view_html
 
@@ -398,8 +398,11 @@ class AthenaApp:
                 self._syncing = prev
 
     def _draw(self, view: AppView) -> None:
-        """Send the scene of ``view``: one line-segments node per line width (solid and
-        ghosted apart), one point cloud per point set, the labels that moved."""
+        """Send the scene of ``view`` (inside the caller's atomic block).
+
+        One line-segments node per line width (solid and ghosted apart), one point cloud
+        per point set, the labels that moved.
+        """
         assert view.geometry is not None
         solid = robot_scene(view.geometry)
         ghosts = (ghost_scene(view.ghosts, view.geometry) if view.ghosts is not None
