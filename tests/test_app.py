@@ -430,6 +430,31 @@ def test_app_tip_handle_and_slot_menu_in_process():
 
 
 @pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_tip_handle_snaps_back_when_a_drag_ends_before_its_last_update():
+    """viser runs the handle's callbacks on a thread pool: the end of a drag can be handled
+    before its last update. The handle must still snap to the tip reached, and follow the
+    sliders afterwards."""
+    from types import SimpleNamespace
+
+    from athenakin.app import AthenaApp
+
+    app = AthenaApp(port=0, backend="numpy")
+    try:
+        T, r = app.setup.T_b_e, app.view.readouts
+        app._on_handle(SimpleNamespace(phase="start"))
+        app.tip_handle.position = tuple(T[:3, :3] @ (r.tip_e * 5.0) + T[:3, 3])  # too far
+        app._on_handle(SimpleNamespace(phase="end"))            # the end first ...
+        app._on_handle(SimpleNamespace(phase="update"))         # ... then the last update
+        tip = app.view.readouts.tip_b
+        assert np.linalg.norm(tip - r.tip_b) > 1e-3             # it moved, to the boundary
+        np.testing.assert_allclose(app.tip_handle.position, tip, rtol=0, atol=1e-6)
+        app.set_q(app.setup.q_home)
+        np.testing.assert_allclose(app.tip_handle.position, r.tip_b, rtol=0, atol=1e-6)
+    finally:
+        app.stop()
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
 def test_launch_playback_and_setup_tab_in_process(tmp_path, capsys):
     import time
 

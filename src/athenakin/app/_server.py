@@ -132,7 +132,6 @@ class AthenaApp:
         self.view: AppView | None = None
         self.playback: Playback | None = None
         self._dragging = False
-        self._drags = 0
         self._line_handles: dict[str, Any] = {}
         self._point_handles: dict[str, Any] = {}
         self._label_handles: dict[str, Any] = {}
@@ -289,17 +288,16 @@ class AthenaApp:
         self._move_tip(tip, snap_angles=True)
 
     def _on_handle(self, event: Any) -> None:
-        # Only the browser moves the handle's events (setting its position here fires
+        # Only the browser fires the handle's events (setting its position here fires
         # none), so there is no ``_syncing`` check: another thread's sync must not drop
         # a drag.
         phase = getattr(event, "phase", "update")
         # viser runs these callbacks on a thread pool, so the end of a drag may be handled
-        # before its last update (or a quick click's start after its end): count the
-        # drags in progress instead of reading the phase of the latest event. Every
+        # before its last update: only a start or an end says whether a drag is on. Every
         # update reads the handle's latest position, so their order does not matter.
-        with self._lock:
-            self._drags += {"start": 1, "end": -1}.get(phase, 0)
-            self._dragging = self._drags > 0
+        if phase in ("start", "end"):
+            with self._lock:
+                self._dragging = phase == "start"
         T = self.setup.T_b_e
         tip_b = np.asarray(self._handle.position, dtype=float)
         self._move_tip(T[:3, :3].T @ (tip_b - T[:3, 3]), snap_angles=False)
