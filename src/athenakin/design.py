@@ -15,7 +15,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from ._compat import tomllib
+from ._toml import read_toml
 from ._validation import check_scalar
 from .errors import InvalidInputError
 
@@ -220,11 +220,7 @@ class Design:
             ab_order = "q1<q2"
             tool_length = 0.45
         """
-        with open(path, "rb") as fh:
-            try:
-                data = tomllib.load(fh)
-            except RecursionError:  # tomllib recurses once per nested array or table
-                raise InvalidInputError(f"{path}: TOML nested too deeply") from None
+        data = read_toml(path, what="design file")
         table: Mapping[str, Any] = data
         if "design" in data and isinstance(data["design"], Mapping):
             table = data["design"]

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -12,11 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - Python 3.10
-    import tomli as tomllib
-
+from .._toml import read_toml
 from ..design import Design
 from ..errors import InvalidInputError
 from ._errors import TaskFileError
@@ -104,9 +99,8 @@ def bounds_from_toml(path: str | Path) -> dict[str, tuple[float, float]] | None:
         If the file cannot be read or the table is malformed.
     """
     try:
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
-    except (OSError, tomllib.TOMLDecodeError) as exc:
+        data = read_toml(path, error=TaskFileError, what="task file")
+    except OSError as exc:
         raise TaskFileError(f"{path}: cannot read the bounds ({exc})") from None
     if "bounds" not in data:
         return None

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -12,11 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - Python 3.10
-    import tomli as tomllib
-
+from .._toml import read_toml
 from .._transforms import transform_from_rotation_translation
 from .._validation import check_scalar
 from ..errors import InvalidInputError
@@ -204,12 +199,9 @@ class Task:
             naming the file and the problem).
         """
         try:
-            with open(path, "rb") as fh:
-                data = tomllib.load(fh)
+            data = read_toml(path, error=TaskFileError, what="task file")
         except OSError as exc:
             raise TaskFileError(f"{path}: cannot read the task file ({exc.strerror})") from None
-        except tomllib.TOMLDecodeError as exc:
-            raise TaskFileError(f"{path}: not valid TOML ({exc})") from None
         table: Any = data.get("task", data)
         try:
             return cls.from_mapping(table)

@@ -1,0 +1,56 @@
+"""The package's one TOML file reader (private): design files, task files, bounds.
+
+Every TOML reader of athenakin goes through :func:`read_toml`, so that a file that is
+not UTF-8, not TOML, or nested too deeply for the parser's recursion is one named
+error that says which file and what is wrong, never a raw ``UnicodeDecodeError`` or
+``RecursionError`` (issue 13, found by the fuzz target ``scripts/fuzz_readers.py``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from ._compat import tomllib
+from .errors import InvalidInputError
+
+__all__ = ["read_toml"]
+
+
+def read_toml(path: str | Path, *, error: type[Exception] = InvalidInputError,
+              what: str = "TOML file") -> dict[str, Any]:
+    """Parse a TOML file into a dict.
+
+    Parameters
+    ----------
+    path : str or Path
+    error : exception class, keyword-only
+        Raised (with a one-line message naming ``path``) when the content is not UTF-8
+        TOML or is nested too deeply. Default :class:`~athenakin.errors.InvalidInputError`.
+    what : str, keyword-only
+        What the file is, for the messages (e.g. ``"task file"``).
+
+    Returns
+    -------
+    dict
+        The parsed top-level table.
+
+    Raises
+    ------
+    OSError
+        The file cannot be opened or read (left to the caller, which knows the option).
+    error
+        Not UTF-8, not valid TOML, or tables / arrays nested too deeply.
+    """
+    with open(path, "rb") as fh:
+        raw = fh.read()
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise error(f"{path}: {what} is not UTF-8 text (byte {exc.start})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise error(f"{path}: not valid TOML ({exc})") from None
+    except RecursionError:  # tomllib recurses once per nested array or table
+        raise error(f"{path}: {what}: TOML nested too deeply") from None
