@@ -2,7 +2,7 @@
 
 With the slot selector on "all valid slots", the app draws one slot solid and up to 15
 others paler. Building a :class:`~athenakin.plot.RobotGeometry` and a scene per ghost
-costs about a millisecond each in Python overhead; here the parts the ghosts draw (the
+costs about one reference FK call each in Python overhead; here the parts the ghosts draw (the
 U-joint, the instrument, the spherical joint, the parallel module of the other assembly
 mode) are computed at once from the forward-kinematics arrays, one numpy operation per
 quantity for all slots. :func:`ghost_scene` turns them into the line sets of the static
@@ -59,8 +59,6 @@ class SlotGhosts:
         Assembly mode of each (+1 / -1).
     p : ndarray, shape (k,)
         Passive prismatic joint, m.
-    O_s : ndarray, shape (k, 3)
-        Centre of the U-joint.
     tip : ndarray, shape (k, 3)
         Tool tip.
     ujoint_axes : ndarray, shape (k, 2, 3)
@@ -74,13 +72,14 @@ class SlotGhosts:
         parallel module cannot take that mode.
     tool_length : float
         ``L``, m.
+
+    Properties: :attr:`O_s` (k, 3), the centre of each ghost's U-joint.
     """
 
     q: NDArray[np.float64]
     slot: NDArray[np.int64]
     mode: NDArray[np.int64]
     p: NDArray[np.float64]
-    O_s: NDArray[np.float64]
     tip: NDArray[np.float64]
     ujoint_axes: NDArray[np.float64]
     wrist_axes: NDArray[np.float64]
@@ -92,6 +91,11 @@ class SlotGhosts:
     def __len__(self) -> int:
         """Number of ghosted slots."""
         return int(self.slot.shape[0])
+
+    @property
+    def O_s(self) -> NDArray[np.float64]:
+        """Centre of the U-joint of each ghost, shape (k, 3) (from :attr:`O_s_mode`)."""
+        return self.O_s_mode[(1 - self.mode) // 2]
 
 
 def slot_ghosts(fk: FKSolution, q: ArrayLike, T_b_e: ArrayLike, design: Design,
@@ -143,7 +147,7 @@ def slot_ghosts(fk: FKSolution, q: ArrayLike, T_b_e: ArrayLike, design: Design,
     l4 = design.lengths[3]
     O_s_mode = fk.T_b_s_mode[:, :3, 3]
     return SlotGhosts(
-        q=np.asarray(q, dtype=float).copy(), slot=k, mode=mode, p=fk.p[k].copy(), O_s=O_s.copy(),
+        q=np.asarray(q, dtype=float).copy(), slot=k, mode=mode, p=fk.p[k].copy(),
         tip=O_s + design.tool_length * R_b_3[:, :, 2], ujoint_axes=ujoint_axes,
         wrist_axes=wrist_axes, rcm=T[:3, 3].copy(),
         O_i_mode=O_s_mode - l4 * fk.T_b_s_mode[:, :3, 2], O_s_mode=O_s_mode.copy(),
