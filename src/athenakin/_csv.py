@@ -9,6 +9,8 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
+from ._validation import check_path
+
 __all__ = ["read_table"]
 
 
@@ -35,7 +37,7 @@ def read_table(path: str | Path, *, header_row: bool = True, error: type[Excepti
     rows : list of (int, list of str)
         1-based line numbers and the cells of each data row.
     """
-    path = Path(path)
+    path = check_path(path)
     try:
         text = path.read_text(encoding="utf-8-sig")  # a byte-order mark is not a column
     except UnicodeDecodeError as exc:

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import check_scalar
+from .._validation import check_path, check_scalar
 from ..design import Design
 from ..errors import InvalidInputError
 from ._errors import SchedulerUnreachableError, StudyMismatchError
@@ -72,7 +72,8 @@ def design_rows(designs: Any) -> list[dict[str, Any]]:
     """
     if hasattr(designs, "to_dict") and hasattr(designs, "columns"):
         records: Iterable[Any] = designs.to_dict(orient="records")
-    elif isinstance(designs, (Design, Mapping)) or not isinstance(designs, Iterable):
+    elif (isinstance(designs, (Design, Mapping)) or not isinstance(designs, Iterable)
+          or isinstance(designs, np.ndarray) and designs.ndim == 0):
         raise TypeError(f"designs: expected a sequence of Design or mappings, or a DataFrame, "
                         f"got {type(designs).__name__}")
     else:
@@ -241,7 +242,7 @@ def _prepare_out(out: Path, fingerprint: str, n_chunks: int, meta: dict[str, Any
 def read_study(out: str | Path) -> Any:
     """Read a study folder written by :func:`evaluate` (every chunk so far, in design order)."""
     pd = _require("pandas")
-    out = Path(out)
+    out = check_path(out, "out")
     parts = sorted(out.glob("part-*.parquet"))
     if not parts:
         raise InvalidInputError(f"{out}: no study chunks (part-*.parquet) found")
@@ -326,7 +327,10 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
     chunks = [rows[i:i + chunk_size] for i in range(0, len(rows), chunk_size)]
     task_map = task.to_mapping()
     done: dict[int, Any] = {}
-    out_path = None if out is None else Path(out)
+    out_path = None if out is None else check_path(out, "out")
+    if on_chunk is not None and not callable(on_chunk):
+        raise TypeError(f"on_chunk: expected a callable (done, total) or None, got "
+                        f"{type(on_chunk).__name__}")
     if out_path is not None:
         fp = _fingerprint(rows, task, samples, seed, resolution, chunk_size)
         done = _prepare_out(out_path, fp, len(chunks), {
