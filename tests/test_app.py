@@ -202,6 +202,10 @@ def test_slot_ghosts_rejects_an_invalid_slot(setup):
     bad = int(np.flatnonzero(~sol.valid)[0]) if not sol.valid.all() else 16
     with pytest.raises(InvalidInputError, match="slots: expected valid slots"):
         slot_ghosts(sol, setup.q_home, setup.T_b_e, D, [bad])
+    with pytest.raises(InvalidInputError, match="fk: expected the FKSolution"):
+        slot_ghosts(sol.valid, setup.q_home, setup.T_b_e, D, [0])
+    with pytest.raises(InvalidInputError, match="ghosts, solid: expected"):
+        ghost_scene([robot_geometry(setup.q_home, slot=1)], robot_geometry(setup.q_home))
 
 
 def test_near_a_singular_set_warns(setup):

@@ -123,8 +123,14 @@ def slot_ghosts(fk: FKSolution, q: ArrayLike, T_b_e: ArrayLike, design: Design,
     Raises
     ------
     InvalidInputError
-        ``fk`` is not the result of one ``q``, or a slot is out of 0..15 or invalid.
+        ``fk`` is not the result of one ``q``, ``design`` not a Design, or a slot is out
+        of 0..15 or invalid.
     """
+    if not isinstance(fk, FKSolution):
+        raise InvalidInputError(f"fk: expected the FKSolution of one q, got "
+                                f"{type(fk).__name__}")
+    if not isinstance(design, Design):
+        raise InvalidInputError(f"design: expected a Design, got {type(design).__name__}")
     if np.shape(fk.valid) != (16,):
         raise InvalidInputError(f"fk: expected the solution of one q (valid of shape (16,)), "
                                 f"got valid of shape {np.shape(fk.valid)}")
@@ -217,7 +223,15 @@ def ghost_scene(ghosts: SlotGhosts, solid: RobotGeometry) -> Scene:
         ``ghost_instrument_axis`` (only when a ghost's RCM is off the shaft) and
         ``ghost_spherical_joint``; in each, the segments of the slots in the order of
         ``ghosts.slot``. No points, no labels.
+
+    Raises
+    ------
+    InvalidInputError
+        ``ghosts`` is not a SlotGhosts or ``solid`` not a RobotGeometry.
     """
+    if not isinstance(ghosts, SlotGhosts) or not isinstance(solid, RobotGeometry):
+        raise InvalidInputError(f"ghosts, solid: expected a SlotGhosts and a RobotGeometry, got "
+                                f"{type(ghosts).__name__} and {type(solid).__name__}")
     g = ghosts
     if len(g) == 0:
         return Scene((), (), ())
