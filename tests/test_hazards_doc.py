@@ -12,7 +12,8 @@ ROOT = Path(__file__).resolve().parents[1]
 def test_hazards_document_cites_existing_tests():
     text = (ROOT / "docs" / "hazards.md").read_text()
     rows = [ln for ln in text.splitlines() if re.match(r"\| H\d+ \|", ln)]
-    assert [int(re.match(r"\| H(\d+)", r).group(1)) for r in rows] == list(range(1, 9))
+    assert [int(re.match(r"\| H(\d+)", r).group(1)) for r in rows] == list(range(1, len(rows) + 1))
+    assert len(rows) >= 8
     for hazard in ("Wrong FK branch", "assembly-mode change", "Singular IK", "Stroke violation",
                    "Stale calibration", "Malformed input file", "Lost or corrupt output"):
         assert hazard in text, hazard
