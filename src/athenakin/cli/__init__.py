@@ -154,7 +154,11 @@ def _protect_negative_numbers(argv: list[str] | None) -> list[str]:
 
     args = sys.argv[1:] if argv is None else list(argv)
     pat = re.compile(r"^-\d*\.?\d+(e[-+]?\d+)?$", re.IGNORECASE)
-    return [f" {a}" if pat.match(a) and "e" in a.lower() else a for a in args]
+    # "-inf" and "-nan" too, so that the value is reported as not finite, not as a missing
+    # positional or an unknown option
+    nonfinite = re.compile(r"^-(inf|infinity|nan)$", re.IGNORECASE)
+    return [f" {a}" if (pat.match(a) and "e" in a.lower()) or nonfinite.match(a) else a
+            for a in args]
 
 
 if __name__ == "__main__":  # pragma: no cover

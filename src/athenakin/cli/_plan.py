@@ -23,7 +23,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("path", type=Path, metavar="PATH.csv", help="waypoint file")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
                    help="trajectory file, .csv or .json")
-    p.add_argument("--rate", type=float, default=1000.0, help="samples per second (1000)")
+    p.add_argument("--rate", type=float, default=1000.0,
+                   help="samples per second, at least 1 (1000)")
     p.add_argument("--v-max", type=float, default=0.05, help="actuator speed limit, m/s (0.05)")
     p.add_argument("--a-max", type=float, default=0.5,
                    help="actuator acceleration limit, m/s^2 (0.5)")

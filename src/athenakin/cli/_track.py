@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import add_design_option, add_setup_options, load_design, load_rcm
+from ._common import add_design_option, add_setup_options, fmt, load_design, load_rcm
 from ._output import Outputs, add_force_option, outputs
 
 #: Flags that make ``--strict`` fail.
@@ -91,14 +91,14 @@ def _track(args: argparse.Namespace, outs: Outputs) -> int:
     for name, c in sorted(counts.items()):
         print(f"  {name}: {c} samples")
     for i, f in events[:args.max_events]:
-        ts = f"t = {t[i]:.4f} s, " if t is not None else ""
+        ts = "" if t is None else "t missing, " if np.isnan(t[i]) else f"t = {t[i]:.6g} s, "
         print(f"  sample {i} ({ts}q = {np.round(q[i], 6).tolist()} m): {f.name or int(f)}"
               f", mode {int(log.mode[i]):+d}, slot {int(log.slot[i])}")
     if len(events) > args.max_events:
         print(f"  ... {len(events) - args.max_events} more (see -o)")
     last = len(q) - 1
     print(f"last pose: tip_e = {np.round(log.tip_e[last], 6).tolist()} m, "
-          f"p = {log.p[last]:.6f} m, valid = {bool(log.valid[last])}")
+          f"p = {fmt(float(log.p[last]))} m, valid = {bool(log.valid[last])}")
     if out is not None:
         if Path(out).suffix.lower() == ".json":
             import dataclasses

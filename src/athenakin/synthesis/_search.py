@@ -4,18 +4,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - Python 3.10
-    import tomli as tomllib
 
 from ..design import Design
 from ..errors import InvalidInputError
@@ -103,11 +97,12 @@ def bounds_from_toml(path: str | Path) -> dict[str, tuple[float, float]] | None:
     TaskFileError
         If the file cannot be read or the table is malformed.
     """
+    from .._toml import read_toml
+
     try:
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
-    except (OSError, tomllib.TOMLDecodeError) as exc:
-        raise TaskFileError(f"{path}: cannot read the bounds ({exc})") from None
+        data = read_toml(path, error=TaskFileError)
+    except OSError as exc:
+        raise TaskFileError(f"{path}: cannot read the bounds ({exc.strerror})") from None
     if "bounds" not in data:
         return None
     try:

@@ -4,18 +4,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - Python 3.10
-    import tomli as tomllib
 
 from .._transforms import transform_from_rotation_translation
 from .._validation import check_scalar
@@ -203,13 +197,12 @@ class Task:
             If the file cannot be read, is not TOML or holds a bad task (one line
             naming the file and the problem).
         """
+        from .._toml import read_toml
+
         try:
-            with open(path, "rb") as fh:
-                data = tomllib.load(fh)
+            data = read_toml(path, error=TaskFileError)
         except OSError as exc:
             raise TaskFileError(f"{path}: cannot read the task file ({exc.strerror})") from None
-        except tomllib.TOMLDecodeError as exc:
-            raise TaskFileError(f"{path}: not valid TOML ({exc})") from None
         table: Any = data.get("task", data)
         try:
             return cls.from_mapping(table)
