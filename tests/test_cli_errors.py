@@ -7,11 +7,13 @@ wrong answer; resource limits are checked before any work.
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from athenakin.cli import main
@@ -178,3 +180,69 @@ def test_a_closed_pipe_ends_quietly():
     p.wait(timeout=120)
     p.stderr.close()
     assert err == "" and p.returncode != 0
+
+
+# --- findings of the CLI audit (scripts/audit_cli.py, issue 13) ---------------------------
+
+@pytest.fixture
+def bad(tmp_path: Path) -> Path:
+    """Input files of the audit's findings."""
+    import athenakin as ak
+
+    toml = ak.Design.default().to_toml()
+    (tmp_path / "bom.toml").write_bytes(b"\xef\xbb\xbf" + toml.encode())
+    (tmp_path / "nan.toml").write_text(toml.replace("l1 = 0.3", "l1 = nan"))
+    (tmp_path / "digits.toml").write_text(toml.replace("l1 = 0.3", "l1 = " + "9" * 5000))
+    (tmp_path / "binary.toml").write_bytes(bytes(range(256)))
+    T = np.eye(4)
+    T[0, 3] = np.nan
+    (tmp_path / "nan.json").write_text(json.dumps({"T_b_e": T.tolist()}))
+    (tmp_path / "digits.json").write_text('{"T_b_e": [[' + "1" * 5000 + ', 0, 0, 0]]}')
+    T[0, 3] = 1e308
+    (tmp_path / "far.json").write_text(json.dumps({"T_b_e": T.tolist()}))
+    (tmp_path / "path.csv").write_text("x_m,y_m,z_m\n0.25,0,0\n0.253,0.002,0.001\n")
+    return tmp_path
+
+
+@pytest.mark.parametrize("argv,want", [
+    # a bad design or RCM file: the message names the file (it used to say only "l1: ...",
+    # "TOMLDecodeError: Invalid statement", a bare UnicodeDecodeError, or Python's
+    # "Exceeds the limit (4300 digits)")
+    (["fk", "-0.1", "0.1", "0.45", "--design", "{d}/nan.toml"], "nan.toml: l1: expected a finite"),
+    (["fk", "-0.1", "0.1", "0.45", "--design", "{d}/digits.toml"], "digits.toml: a number"),
+    (["fk", "-0.1", "0.1", "0.45", "--design", "{d}/binary.toml"], "binary.toml: not a UTF-8"),
+    (["design", "--design", "{d}/nan.toml"], "nan.toml"),
+    (["fk", "-0.1", "0.1", "0.45", "--rcm-file", "{d}/nan.json"], "nan.json: T_b_e: expected "
+                                                                    "finite values, got nan at "
+                                                                    "index (0, 3)"),
+    (["fk", "-0.1", "0.1", "0.45", "--rcm-file", "{d}/digits.json"], "digits.json: a number"),
+    # an RCM frame far beyond any link: a unit mistake, not "U-joint axes aligned"
+    (["fk", "-0.1", "0.1", "0.45", "--rcm-file", "{d}/far.json"], "far.json: T_b_e: the RCM"),
+    (["view", "-o", "{d}/v.png", "--rcm", "1e30", "0", "0", "0", "0", "0"], "--rcm: the RCM"),
+    # -inf is a (non-finite) value, not a missing positional
+    (["fk", "-inf", "0.1", "0.45"], "expected finite values, got -inf"),
+    # a denormal rate gave a 2-sample trajectory of infinite duration, exit 0
+    (["plan", "{d}/path.csv", "-o", "{d}/t.csv", "--no-plots", "--rate", "5e-324"],
+     "rate: expected at least 1"),
+])
+def test_audit_findings_are_one_line_errors_naming_the_problem(bad, capsys, argv, want):
+    before = sorted(p.name for p in bad.iterdir())
+    code = main([a.format(d=bad) for a in argv])
+    _one_line_error(capsys, code, want=want)
+    assert sorted(p.name for p in bad.iterdir()) == before
+
+
+def test_a_design_file_with_a_byte_order_mark_is_read(bad, capsys):
+    assert main(["fk", "-0.1", "0.1", "0.45", "--design", str(bad / "bom.toml")]) == 0
+    assert "16 solutions" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv", [
+    ["singularities", "1e308", "0.1", "0.45", "--no-files"],    # not assembled: no value
+    ["workspace", "--resolution", "3", "--cone-resolution", "3", "3", "3", "--no-files"],
+])
+def test_text_output_prints_no_nan(capsys, argv):
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert not re.search(r"\bnan\b", out, re.I), out
+    assert not re.search(r"\d{20}", out), out   # no 300-digit fixed-point numbers
