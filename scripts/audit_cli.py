@@ -327,7 +327,7 @@ def unlock(root: Path) -> None:
 _TRACE = re.compile(r"^Traceback \(most recent call last\)", re.M)
 _PROGRESS = re.compile(r"(\d+%\|)|(it/s)|(s/it)|(\r)")
 #: Words on a line of text output that say its values are not valid.
-_INVALID_WORDS = ("LOST", "valid = False", "NOT assembled", "invalid", "not valid")
+_INVALID_WORDS = ("LOST", "valid = False", "NOT assembled", "invalid", "not valid", "excluded")
 _WORD_NONFINITE = re.compile(r"(?<![\w.])[-+]?(nan|inf|infinity)(?![\w])", re.I)
 
 
