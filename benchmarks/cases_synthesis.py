@@ -12,6 +12,11 @@ Groups:
   over 1 worker (target >= 1.7 on an idle 2-core machine). The clusters start on the
   first (untimed) call and stop at exit; every call uses a new seed, so no result is
   served from the cluster's memory.
+* ``synthesis-threads``: the same study on Dask's local schedulers, no cluster: the
+  default threaded scheduler (all cores) against ``"synchronous"`` (one thread). The
+  compiled kernels release the GIL (``nogil=True``), so threads compute in parallel;
+  "x base" is the speed-up of the default over one thread (about 1.5-1.8 expected on an
+  idle 2-core machine; the Python and numpy parts still take turns).
 """
 
 import atexit
@@ -67,6 +72,13 @@ def _study(n_workers: int, designs: list, task: Task, samples: int):
     return call
 
 
+def _local(scheduler, designs: list, task: Task, samples: int):
+    def call():
+        evaluate(designs, task, samples=samples, seed=next(_SEEDS), scheduler=scheduler,
+                 progress=False, chunk_size=max(1, len(designs) // 8))
+    return call
+
+
 def cases(quick: bool) -> list[dict]:
     d = ak.Design.default()
     task = _task()
@@ -92,4 +104,12 @@ def cases(quick: bool) -> list[dict]:
         {"name": "evaluate on LocalCluster, 2 workers", "group": "synthesis-scale",
          "batch": n_designs, "call": _study(2, designs, task, scale_samples),
          "note": "x base = speed-up over 1 worker (target >= 1.7)"},
+        {"name": "evaluate, Dask local scheduler 'synchronous' (one thread)",
+         "group": "synthesis-threads", "batch": n_designs, "baseline": True,
+         "call": _local("synchronous", designs, task, scale_samples),
+         "note": f"{scale_samples} samples per design; poses/s = designs/s"},
+        {"name": "evaluate, Dask's default threaded scheduler (all cores)",
+         "group": "synthesis-threads", "batch": n_designs,
+         "call": _local(None, designs, task, scale_samples),
+         "note": "x base = speed-up of the threads (the kernels release the GIL)"},
     ]

@@ -1,4 +1,7 @@
-"""Coverage-guided fuzz target for athenakin's file readers (TOML, JSON, CSV, measurements).
+"""Coverage-guided fuzz target for athenakin's file readers.
+
+The readers: design TOML, RCM JSON, path and q-stream CSV, calibration measurements,
+synthesis task and bounds TOML, app playback CSV.
 
 Each input is written to a file and read by one of the readers (the first byte
 picks which); a reader may only return or raise a named error:
@@ -36,6 +39,13 @@ SEEDS = {
     "direction": b"azimuth_deg,polar_deg,depth_m\n0,90,0.25\n10,80,0.25\n",
     "stream": b"t_s,q1_m,q2_m,q3_m\n0,-0.1,0.1,0.45\n0.01,-0.1,0.1,nan\n",
     "measurements": b"q1_m,q2_m,q3_m,x_m,y_m,z_m,mode\n-0.1,0.1,0.45,0.1,-0.2,0.3,1\n",
+    "task": b'[task]\nname = "t"\nrcm = [0.055, -0.208, 0.221]\naxis = [0.276, -0.276, -0.921]\n'
+            b"half_angle_deg = 25.0\ndepth = [0.20, 0.30]\n",
+    "bounds": b"[bounds]\nl1 = [0.22, 0.40]\nl2 = [0.05, 0.15]\nl3 = [0.18, 0.32]\n"
+              b"l4 = [0.10, 0.20]\nl5 = [0.30, 0.50]\nq1_min = [-0.40, -0.20]\n"
+              b"q1_max = [0.00, 0.20]\nq2_min = [-0.20, 0.00]\nq2_max = [0.20, 0.40]\n"
+              b"q3_min = [0.15, 0.30]\nq3_max = [0.50, 0.80]\n",
+    "playback": b"t_s,q1_m,q2_m,q3_m\n0,-0.1,0.1,0.45\n0.01,-0.1,0.1,0.46\n",
 }
 
 
@@ -45,9 +55,18 @@ def _readers() -> list[tuple[str, Callable[[Path], object]]]:
     from athenakin.design import Design
     from athenakin.motion import read_path_csv, read_q_stream_csv
 
-    return [("toml", Design.from_toml), ("json", read_rcm_json), ("path", read_path_csv),
-            ("direction", read_path_csv), ("stream", read_q_stream_csv),
-            ("measurements", read_measurements_csv)]
+    readers: list[tuple[str, Callable[[Path], object]]] = [
+        ("toml", Design.from_toml), ("json", read_rcm_json), ("path", read_path_csv),
+        ("direction", read_path_csv), ("stream", read_q_stream_csv),
+        ("measurements", read_measurements_csv)]
+    # appended, never inserted: a finding's first byte keeps naming its reader
+    from athenakin.app._model import load_playback
+    from athenakin.synthesis import Task
+    from athenakin.synthesis._search import bounds_from_toml
+
+    readers += [("task", Task.from_toml), ("bounds", bounds_from_toml),
+                ("playback", load_playback)]
+    return readers
 
 
 #: Inputs the fuzzer once crashed on (first byte: the reader), kept as regression tests.
@@ -117,6 +136,8 @@ def main(argv: list[str]) -> int:
         import athenakin.cli._common  # noqa: F401
         import athenakin.design  # noqa: F401
         import athenakin.motion._io  # noqa: F401
+        import athenakin.synthesis._search  # noqa: F401
+        import athenakin.synthesis._task  # noqa: F401
     corpus = Path(_DIR) / "corpus"
     corpus.mkdir(exist_ok=True)
     for i, (name, content) in enumerate(SEEDS.items()):

@@ -138,3 +138,18 @@ def test_example_design_file_loads():
     d = ak.Design.from_toml(EXAMPLES / "my_robot.toml")
     assert d.tool_length == 0.50 and d.name.startswith("my robot")
     assert ak.Design.from_mapping(tomllib.loads(d.to_toml())["design"]) == d
+
+
+def test_toml_not_utf8_or_too_deep_is_invalid_input(tmp_path):
+    """One TOML reader (athenakin._toml) for designs, tasks and bounds: named errors."""
+    from athenakin.synthesis import Task, TaskFileError
+
+    f = tmp_path / "bad.toml"
+    f.write_bytes(b"[design]\nname = \"\xff\"\n")
+    with pytest.raises(ak.InvalidInputError, match="not UTF-8 text"):
+        ak.Design.from_toml(f)
+    f.write_bytes(b"a = " + b"[" * 100_000 + b"]" * 100_000 + b"\n")
+    with pytest.raises(ak.InvalidInputError, match="nested too deeply"):
+        ak.Design.from_toml(f)
+    with pytest.raises(TaskFileError, match="nested too deeply"):
+        Task.from_toml(f)

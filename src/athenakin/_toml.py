@@ -1,10 +1,9 @@
-"""The one TOML reader of the package (private): design, task and bounds files.
+"""The package's one TOML file reader (private): design files, task files, bounds.
 
-Every reader of a TOML file goes through :func:`read_toml`, so that a file is
-read the same way everywhere: UTF-8 with or without a byte-order mark (as
-Windows editors write it), and every way it can be malformed (not UTF-8, not
-TOML, nested too deeply for the parser, an integer too long to convert) is one
-error of the caller's type whose message starts with the file name.
+Every TOML reader of athenakin goes through :func:`read_toml`, so that a file that is
+not UTF-8, not TOML, or nested too deeply for the parser's recursion is one named
+error that says which file and what is wrong, never a raw ``UnicodeDecodeError`` or
+``RecursionError`` (issue 13, found by the fuzz target ``scripts/fuzz_readers.py``).
 """
 
 from __future__ import annotations
@@ -18,50 +17,53 @@ from .errors import InvalidInputError
 __all__ = ["read_toml"]
 
 
-def read_toml(path: str | Path, *, error: type[Exception] = InvalidInputError
-              ) -> dict[str, Any]:
-    r"""The parsed content of a TOML file.
+def read_toml(path: str | Path, *, error: type[Exception] = InvalidInputError,
+              what: str = "TOML file") -> dict[str, Any]:
+    r"""Parse a TOML file into a dict.
 
     Parameters
     ----------
     path : str or Path
-        The file (UTF-8; a leading byte-order mark is ignored).
-    error : type of Exception
-        The error raised for a file that is not valid TOML (default
-        :class:`~athenakin.errors.InvalidInputError`).
+        UTF-8 text; a leading byte-order mark (as Windows editors write) is ignored.
+    error : exception class, keyword-only
+        Raised (with a one-line message naming ``path``) when the content is not UTF-8
+        TOML or is nested too deeply. Default :class:`~athenakin.errors.InvalidInputError`.
+    what : str, keyword-only
+        What the file is, for the messages (e.g. ``"task file"``).
 
     Returns
     -------
     dict
-        The top-level table.
+        The parsed top-level table.
 
     Raises
     ------
     OSError
-        The file cannot be read (missing, a folder, no permission).
+        The file cannot be opened or read (left to the caller, which knows the option).
     error
-        Not UTF-8, not TOML, nested too deeply or holding an integer of more
-        digits than Python converts; the message names the file and the problem.
+        Not UTF-8, not valid TOML, tables / arrays nested too deeply, or an integer
+        of more digits than Python converts.
 
     Examples
     --------
     >>> import tempfile, pathlib
     >>> f = pathlib.Path(tempfile.mkdtemp()) / "a.toml"
-    >>> _ = f.write_bytes(b"\xef\xbb\xbfl1 = 0.3\n")
+    >>> _ = f.write_bytes(b"\xef\xbb\xbfl1 = 0.3\n")   # with a byte-order mark
     >>> read_toml(f)
     {'l1': 0.3}
     """
-    raw = Path(path).read_bytes()
+    with open(path, "rb") as fh:
+        raw = fh.read()
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        raise error(f"{path}: not a UTF-8 text file (byte {exc.start}: {exc.reason})") from None
+        raise error(f"{path}: {what} is not UTF-8 text (byte {exc.start})") from None
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise error(f"{path}: not valid TOML ({exc})") from None
     except RecursionError:  # tomllib recurses once per nested array or table
-        raise error(f"{path}: TOML nested too deeply") from None
+        raise error(f"{path}: {what}: TOML nested too deeply") from None
     except ValueError as exc:  # an integer beyond sys.get_int_max_str_digits()
-        raise error(f"{path}: a number that cannot be read ({' '.join(str(exc).split())[:120]})"
-                    ) from None
+        raise error(f"{path}: {what}: a number that cannot be read "
+                    f"({' '.join(str(exc).split())[:120]})") from None

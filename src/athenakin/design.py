@@ -15,6 +15,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from ._toml import read_toml
 from ._validation import check_scalar
 from .errors import InvalidInputError
 
@@ -227,9 +228,7 @@ class Design:
             Not UTF-8 TOML (a byte-order mark is fine), or a bad design; the message
             starts with the file name.
         """
-        from ._toml import read_toml
-
-        data = read_toml(path)
+        data = read_toml(path, what="design file")
         table: Mapping[str, Any] = data
         if "design" in data and isinstance(data["design"], Mapping):
             table = data["design"]

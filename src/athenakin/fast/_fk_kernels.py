@@ -68,7 +68,7 @@ NG = 20
 # Scratch arrays are flat, row-major (row * CHUNK + column) with CHUNK a compile-time
 # constant: LLVM then proves that rows do not overlap and vectorises the pose loops.
 
-_OPTS = dict(error_model="numpy", cache=True)
+_OPTS = dict(error_model="numpy", cache=True, nogil=True)
 
 
 @njit(**_OPTS)

@@ -49,7 +49,7 @@ __all__ = ["WANT_VALID", "WANT_REASON", "WANT_P", "WANT_U", "WANT_T", "WANT_RES"
 WANT_VALID, WANT_REASON, WANT_P, WANT_U, WANT_T, WANT_RES = 1, 2, 4, 8, 16, 32
 WANT_ALL = 63
 
-_OPTS = dict(error_model="numpy", cache=True)
+_OPTS = dict(error_model="numpy", cache=True, nogil=True)
 
 @njit(**_OPTS)
 def _store_mode_select(Sm, ii, i, k0, m, xm, pres, want, reason, valid, p, u, Tbs, res):

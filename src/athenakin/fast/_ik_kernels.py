@@ -46,7 +46,7 @@ FLAG_ZERO_DIRECTION = 64   # a direction vector is zero
 #: to 1e-12; items beyond are flagged (FLAG_SLOW) and recomputed by the caller.
 WRAP_EXACT_MAX = 1.0e3
 
-_OPTS = dict(error_model="numpy", cache=True)
+_OPTS = dict(error_model="numpy", cache=True, nogil=True)
 
 # --- parallel module IK (parallel_ik_from_position) --------------------------------------
 # Rows of the IK scratch (flat, row * CHUNK + column).

@@ -44,7 +44,7 @@ __all__ = ["WANT_P", "WANT_U", "WANT_MODE", "WANT_T", "WANT_RES", "WANT_VALID", 
 WANT_P, WANT_U, WANT_MODE, WANT_T, WANT_RES, WANT_VALID, WANT_REASON = 1, 2, 4, 8, 16, 32, 64
 WANT_ALL = 127
 
-_OPTS = dict(error_model="numpy", cache=True)
+_OPTS = dict(error_model="numpy", cache=True, nogil=True)
 
 
 @njit(**_OPTS)

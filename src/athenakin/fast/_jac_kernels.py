@@ -50,9 +50,9 @@ _GQ, _GM, _GR, _GT, _GL = 0, 3, 4, 13, 16
 NG = 20
 # Scratch arrays are flat, row-major (row * CHUNK + column), CHUNK a compile-time constant.
 
-_OPTS = dict(error_model="numpy", cache=True)
+_OPTS = dict(error_model="numpy", cache=True, nogil=True)
 # helpers are inlined in numba IR: an LLVM call left in the item loop stops vectorisation
-_INLINE = dict(error_model="numpy", cache=True, inline="always")
+_INLINE = dict(error_model="numpy", cache=True, nogil=True, inline="always")
 
 
 # --- the parallel module (parallel_state, _dphi_dq, _parallel_jacobian, _inverse) --------

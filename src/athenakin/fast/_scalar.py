@@ -56,7 +56,7 @@ _FOUR_OVER_PI = 4.0 / math.pi
 _PI_HI = math.pi
 _PI_LO = 1.2246467991473532e-16    # pi - _PI_HI
 
-_OPTS = dict(error_model="numpy", cache=True)
+_OPTS = dict(error_model="numpy", cache=True, nogil=True)
 
 
 @njit(**_OPTS)

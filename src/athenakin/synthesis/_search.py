@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._toml import read_toml
 from ..design import Design
 from ..errors import InvalidInputError
 from ._errors import TaskFileError
@@ -97,12 +98,10 @@ def bounds_from_toml(path: str | Path) -> dict[str, tuple[float, float]] | None:
     TaskFileError
         If the file cannot be read or the table is malformed.
     """
-    from .._toml import read_toml
-
     try:
-        data = read_toml(path, error=TaskFileError)
+        data = read_toml(path, error=TaskFileError, what="task file")
     except OSError as exc:
-        raise TaskFileError(f"{path}: cannot read the bounds ({exc.strerror})") from None
+        raise TaskFileError(f"{path}: cannot read the bounds ({exc})") from None
     if "bounds" not in data:
         return None
     try:

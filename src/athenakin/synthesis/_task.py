@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._toml import read_toml
 from .._transforms import transform_from_rotation_translation
 from .._validation import check_scalar
 from ..errors import InvalidInputError
@@ -197,10 +198,8 @@ class Task:
             If the file cannot be read, is not TOML or holds a bad task (one line
             naming the file and the problem).
         """
-        from .._toml import read_toml
-
         try:
-            data = read_toml(path, error=TaskFileError)
+            data = read_toml(path, error=TaskFileError, what="task file")
         except OSError as exc:
             raise TaskFileError(f"{path}: cannot read the task file ({exc.strerror})") from None
         table: Any = data.get("task", data)
