@@ -73,12 +73,13 @@ import subprocess
 import sys
 import tempfile
 import time
-import tomllib
 import traceback
 from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+import tomllib
 
 REPO = Path(__file__).resolve().parents[1]
 FINDINGS = ("TRACEBACK", "INTERNAL", "CRASH", "MULTILINE", "VAGUE", "NONFINITE",
@@ -293,7 +294,8 @@ def snapshot(root: Path) -> dict[str, tuple[Any, ...]]:
 
 def make_files(root: Path, files: dict[str, Any]) -> None:
     """Create the case's files: bytes, ``"dir"``, ``("ro",)`` (read-only folder),
-    ``("unreadable", bytes)``, ``("link", target)``."""
+    ``("unreadable", bytes)``, ``("link", target)``.
+    """
     later = []
     for rel, spec in files.items():
         p = root / rel
@@ -332,7 +334,7 @@ _WORD_NONFINITE = re.compile(r"(?<![\w.])[-+]?(nan|inf|infinity)(?![\w])", re.I)
 
 
 def _error_lines(stderr: str) -> list[str]:
-    """stderr without progress-bar lines and blank lines."""
+    """Stderr without progress-bar lines and blank lines."""
     return [ln for ln in stderr.splitlines() if ln.strip() and not _PROGRESS.search(ln)]
 
 
@@ -843,7 +845,7 @@ def plan_cases(specs: dict[str, tuple[list[Option], list[str]]], fx: Fixtures,
                 words = ["", "nan", "x" * 10_000, "=", "\x00"] if o.flag != "--margin" else \
                     ["sin_u4=nan", "p=inf", "sin_u4=-1", "h=1e308", "zzz=1", "p", "=0.1"]
                 targets = [(j, a) for j, a in enumerate(bl) if o.flag in a] or [(0, bl[0])]
-                for j, a in targets[:1]:
+                for _j, a in targets[:1]:
                     for w in words:
                         cases.append(_with_option(cmd, a, o, [w], f"{o.flag} {w[:20]!r}",
                                                   nonfinite=w.endswith(("nan", "inf"))))
@@ -1025,7 +1027,8 @@ def app_cases(fx: Fixtures) -> list[Case]:
     """``app``: start-up with bad inputs; a good start must bind 127.0.0.1 only."""
     c = [Case("app", "baseline", ["app", "--port", "0"])]
     for lab, argv in (("--port -1", ["--port", "-1"]), ("--port 70000", ["--port", "70000"]),
-                      ("--port nan", ["--port", "nan"]), ("--rcm nan", ["--rcm", "nan", *fx.rcm6[1:]]),
+                      ("--port nan", ["--port", "nan"]),
+                      ("--rcm nan", ["--rcm", "nan", *fx.rcm6[1:]]),
                       ("--host bad", ["--host", "999.1.1.1", "--port", "0"])):
         c.append(Case("app", lab, ["app", *argv], mention=(argv[0], argv[1])))
     for lab, opt, name, content in (("--design binary", "--design", "d.toml", bytes(range(256))),

@@ -209,8 +209,10 @@ def bad(tmp_path: Path) -> Path:
     # "TOMLDecodeError: Invalid statement", a bare UnicodeDecodeError, or Python's
     # "Exceeds the limit (4300 digits)")
     (["fk", "-0.1", "0.1", "0.45", "--design", "{d}/nan.toml"], "nan.toml: l1: expected a finite"),
-    (["fk", "-0.1", "0.1", "0.45", "--design", "{d}/digits.toml"], "digits.toml: a number"),
-    (["fk", "-0.1", "0.1", "0.45", "--design", "{d}/binary.toml"], "binary.toml: not a UTF-8"),
+    (["fk", "-0.1", "0.1", "0.45", "--design", "{d}/digits.toml"],
+     "digits.toml: design file: a number"),
+    (["fk", "-0.1", "0.1", "0.45", "--design", "{d}/binary.toml"],
+     "binary.toml: design file is not UTF-8"),
     (["design", "--design", "{d}/nan.toml"], "nan.toml"),
     (["fk", "-0.1", "0.1", "0.45", "--rcm-file", "{d}/nan.json"], "nan.json: T_b_e: expected "
                                                                     "finite values, got nan at "
