@@ -248,3 +248,80 @@ def test_text_output_prints_no_nan(capsys, argv):
     out = capsys.readouterr().out
     assert not re.search(r"\bnan\b", out, re.I), out
     assert not re.search(r"\d{20}", out), out   # no 300-digit fixed-point numbers
+
+
+@pytest.fixture
+def task(tmp_path: Path) -> Path:
+    src = Path(__file__).parents[1] / "examples/synthesis/task_pancreas.toml"
+    (tmp_path / "task.toml").write_text(src.read_text())
+    (tmp_path / "far.toml").write_text(src.read_text().replace(
+        "rcm = [0.055234, -0.208281, 0.220767]", "rcm = [1e308, 0, 0]"))
+    (tmp_path / "deep.toml").write_text(src.read_text().replace(
+        "depth = [0.20, 0.30]", "depth = [0.20, 1e308]"))
+    (tmp_path / "many.csv").write_text("x_m,y_m,z_m\n" + "0.25,0,0\n" * 1001)
+    (tmp_path / "q.csv").write_text("q1_m,q2_m,q3_m\n-0.1,0.1,0.45\n-0.1,0.1,0.451\n")
+    return tmp_path
+
+
+@pytest.mark.parametrize("argv,want", [
+    # synthesize checked nothing up front: 1e20 samples failed with numpy's "Maximum allowed
+    # dimension exceeded" after creating the results folder; NaN timeouts were accepted;
+    # a huge encoder resolution or task gave NaN metrics in a valid design
+    (["synthesize", "{d}/task.toml", "--samples", "99999999999999999999", "-o", "{d}/s"],
+     "--samples: expected 1 to 1000000"),
+    (["synthesize", "{d}/task.toml", "--connect-timeout", "nan", "-o", "{d}/s"],
+     "--connect-timeout"),
+    (["synthesize", "{d}/task.toml", "--designs", "-1", "-o", "{d}/s"], "--designs"),
+    (["synthesize", "{d}/task.toml", "--top", "-1", "-o", "{d}/s"], "--top"),
+    (["synthesize", "{d}/task.toml", "--encoder-resolution", "1e308", "-o", "{d}/s",
+      "--no-figures"], "encoder_resolution: expected at most 0.01 m"),
+    (["synthesize", "{d}/far.toml", "-o", "{d}/s", "--no-figures"], "rcm: expected coordinates"),
+    (["synthesize", "{d}/deep.toml", "-o", "{d}/s", "--no-figures"], "depth: expected 0 <="),
+    (["synthesize", "{d}/task.toml", "-o", "{d}/task.toml"], "is a file"),
+    # plan: limits beyond any actuator made Ruckig fail ("error in step 2 in dof: 0");
+    # 100,000 waypoints ran for a quarter of an hour
+    (["plan", "{d}/many.csv", "-o", "{d}/t.csv", "--no-plots"], "many.csv: 1001 waypoints"),
+    (["plan", "{d}/many.csv", "-o", "{d}/t.csv", "--a-max", "1e30"], "--a-max"),
+    (["plan", "{d}/many.csv", "-o", "{d}/t.csv", "--v-max", "5e-324"], "--v-max"),
+    # options named as typed, not as the library's keywords (jump_m: got -0.001)
+    (["track", "{d}/q.csv", "--jump-mm", "-1"], "--jump-mm"),
+    (["track", "{d}/q.csv", "--jump-deg", "nan"], "--jump-deg"),
+    (["animate", "-o", "{d}/a.gif", "--cone", "1e308"], "--cone"),
+    (["calibrate", "--plan", "99999999999999999999", "-o", "{d}/p.csv"], "--plan"),
+    (["calibrate", "--plan", "5", "--candidates", "99999999999999999999", "-o", "{d}/p.csv"],
+     "--candidates"),
+    (["calibrate", "--plan", "5", "-o", "{d}/p.csv", "--encoder-resolution", "nan"],
+     "--encoder-resolution"),
+    # the web server waited for ever (deaf to Ctrl-C) on an address it cannot bind
+    (["app", "--host", "999.1.1.1", "--port", "0"], "--host"),
+    (["app", "--host", "8.8.8.8", "--port", "0"], "--host"),
+])
+def test_options_are_checked_before_any_work(task, capsys, argv, want):
+    if argv[0] == "synthesize":
+        pytest.importorskip("dask")
+    before = sorted(p.name for p in task.iterdir())
+    code = main([a.format(d=task) for a in argv])
+    _one_line_error(capsys, code, want=want)
+    assert sorted(p.name for p in task.iterdir()) == before
+
+
+def test_synthesize_needs_force_to_replace_its_figures(task, capsys):
+    pytest.importorskip("dask")
+    figs = task / "figs"
+    figs.mkdir()
+    (figs / "pareto.png").write_bytes(b"precious")
+    argv = ["synthesize", str(task / "task.toml"), "--samples", "50", "-o", str(task / "s"),
+            "--figures", str(figs)]
+    _one_line_error(capsys, main(argv), want="--figures")
+    assert (figs / "pareto.png").read_bytes() == b"precious" and not (task / "s").exists()
+    assert main([*argv, "--force"]) == 0
+    assert (figs / "pareto.png").read_bytes().startswith(b"\x89PNG")
+    assert not [p for p in figs.iterdir() if p.name.startswith(".")]
+
+
+def test_track_prints_missing_and_huge_times_readably(task, capsys):
+    (task / "s.csv").write_text("t_s,q1_m,q2_m,q3_m\n0,-0.1,0.1,0.45\n,-0.1,0.1,0.451\n"
+                                "1e308,nan,nan,nan\n")
+    assert main(["track", str(task / "s.csv")]) == 0
+    out = capsys.readouterr().out
+    assert "t = 1e+308 s" in out and not re.search(r"\d{20}", out), out

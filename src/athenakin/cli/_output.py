@@ -140,6 +140,15 @@ class Outputs:
             raise ValueError(f"{option}: {str(folder)!r} exists and is not a folder")
         return self.add(folder / name, option=option, create_folder=True)
 
+    def drop(self, path: Path) -> None:
+        """Undeclare an output that the command turned out not to write (nothing to check)."""
+        path = Path(path)
+        if path in self._targets:
+            self._targets.remove(path)
+        tmp = self._temps.pop(path, None)
+        if tmp is not None:
+            tmp.unlink(missing_ok=True)
+
     # ---------------------------------------------------------------------- render
     def temp(self, path: Path) -> Path:
         """A fresh temporary file for ``path`` (same folder and suffix) to render into.

@@ -8,7 +8,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import add_design_option, add_setup_options, fmt, load_design, load_rcm
+from ._common import (
+    add_design_option,
+    add_setup_options,
+    check_count,
+    check_finite,
+    fmt,
+    load_design,
+    load_rcm,
+)
 from ._output import Outputs, add_force_option, outputs
 
 #: Flags that make ``--strict`` fail.
@@ -48,6 +56,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 def run(args: argparse.Namespace) -> int:
     """Execute ``track``."""
     out = args.output
+    for opt, v in (("--jump-mm", args.jump_mm), ("--jump-deg", args.jump_deg)):
+        check_finite(v, opt, positive=True)
+    check_count(args.max_events, "--max-events", 0, 10**9, "events")
     if out is not None and Path(out).suffix.lower() not in (".csv", ".json"):
         raise ValueError(f"-o: expected a .csv or .json file name, got {str(out)!r}")
     with outputs(args) as outs:   # checked before any work: never over an input or, without

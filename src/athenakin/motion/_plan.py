@@ -61,7 +61,7 @@ from ._timing import (
 
 __all__ = ["Limits", "Trajectory", "plan", "plan_directions", "check_samples",
            "LIMIT_RTOL", "BOUND_GRID", "BOUND_SAFETY", "MAX_DURATION", "MAX_SAMPLES",
-           "MIN_RATE"]
+           "MIN_RATE", "MAX_WAYPOINTS"]
 
 #: Relative tolerance of the velocity / acceleration / jerk / tip-speed checks.
 LIMIT_RTOL = 1e-6
@@ -79,6 +79,9 @@ MAX_SAMPLES = 2_000_000
 #: Lowest sampling rate :func:`plan` accepts, Hz: a sample period longer than a second
 #: is no controller's, and a rate of 1e-300 Hz would make the period infinite.
 MIN_RATE = 1.0
+#: Most waypoints :func:`plan` accepts (each segment is bounded, timed and checked on
+#: its own, about 10 ms): a path of 100,000 waypoints ran for a quarter of an hour.
+MAX_WAYPOINTS = 1000
 #: Samples checked at a time: a violation stops the sampling there.
 CHECK_CHUNK = 20_000
 
@@ -465,6 +468,9 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
     if timing not in ("stretch", "fixed"):
         raise ValueError(f"timing: expected 'stretch' or 'fixed', got {timing!r}")
     K = tips.shape[0]
+    if K > MAX_WAYPOINTS:
+        raise ValueError(f"waypoints: expected at most {MAX_WAYPOINTS}, got {K} (plan the path "
+                         f"in parts)")
     req: NDArray[np.float64] | None = None
     t0 = 0.0
     if times is not None:

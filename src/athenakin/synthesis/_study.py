@@ -27,7 +27,7 @@ from ._metrics import (
 from ._task import Task
 
 __all__ = ["evaluate", "design_rows", "open_scheduler", "LOCAL_SCHEDULERS", "CHUNK_SIZE",
-           "CONNECT_TIMEOUT", "RETRIES", "read_study"]
+           "CONNECT_TIMEOUT", "RETRIES", "read_study", "MAX_SAMPLES", "MAX_ENCODER_RESOLUTION"]
 
 #: Names of Dask's local schedulers accepted by ``scheduler=``.
 LOCAL_SCHEDULERS = ("threads", "processes", "synchronous", "sync", "single-threaded")
@@ -35,6 +35,10 @@ LOCAL_SCHEDULERS = ("threads", "processes", "synchronous", "sync", "single-threa
 CHUNK_SIZE = 8
 #: Seconds to wait for a scheduler given by address before :class:`SchedulerUnreachableError`.
 CONNECT_TIMEOUT = 5.0
+#: Most task samples per design (each design evaluates them all, about 1 KB each).
+MAX_SAMPLES = 1_000_000
+#: Coarsest encoder resolution accepted, m (beyond it the tip error is meaningless).
+MAX_ENCODER_RESOLUTION = 1e-2
 #: How many times Dask may retry a chunk whose worker failed.
 RETRIES = 3
 _FORMAT = "athenakin-synthesis-1"
@@ -313,11 +317,16 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
     _require("dask")
     if not isinstance(task, Task):
         raise TypeError(f"task: expected athenakin.synthesis.Task, got {type(task).__name__}")
-    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:
-        raise InvalidInputError(f"samples: expected a positive integer, got {samples!r}")
+    if (isinstance(samples, bool) or not isinstance(samples, (int, np.integer))
+            or not 1 <= samples <= MAX_SAMPLES):
+        raise InvalidInputError(f"samples: expected an integer from 1 to {MAX_SAMPLES}, got "
+                                f"{samples!r}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InvalidInputError(f"seed: expected a non-negative integer, got {seed!r}")
     resolution = check_scalar(encoder_resolution, "encoder_resolution", positive=True)
+    if not resolution <= MAX_ENCODER_RESOLUTION:
+        raise InvalidInputError(f"encoder_resolution: expected at most "
+                                f"{MAX_ENCODER_RESOLUTION:g} m, got {resolution:g}")
     if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) or (
             chunk_size < 1):
         raise InvalidInputError(f"chunk_size: expected a positive integer, got {chunk_size!r}")
