@@ -293,8 +293,10 @@ def snapshot(root: Path) -> dict[str, tuple[Any, ...]]:
 
 
 def make_files(root: Path, files: dict[str, Any]) -> None:
-    """Create the case's files: bytes, ``"dir"``, ``("ro",)`` (read-only folder),
-    ``("unreadable", bytes)``, ``("link", target)``.
+    """Create the case's files.
+
+    Each is bytes, ``"dir"``, ``("ro",)`` (a read-only folder), ``("unreadable", bytes)``
+    or ``("link", target)``.
     """
     later = []
     for rel, spec in files.items():
@@ -511,9 +513,18 @@ def judge_files(root: Path, before: dict[str, Any], after: dict[str, Any]) -> tu
     return "", ""
 
 
+#: Error types that name a problem of the request itself (a pose out of the workspace, a
+#: singular configuration, a path or time law that cannot be met): they need not repeat
+#: the option that led there.
+_DOMAIN_ERRORS = re.compile(r"error: (OutOfWorkspace|StrokeLimit|SingularConfiguration|"
+                            r"DegenerateChain|PathInfeasible|TrajectoryLimit|NotIdentifiable|"
+                            r"Calibration\w*|Synthesis\w*)Error:")
+
+
 def _named(case: Case, line: str, klass: str) -> tuple[str, str]:
     low = line.lower()
-    if not case.mention or any(m.lower() in low for m in case.mention if m):
+    if (not case.mention or any(m.lower() in low for m in case.mention if m)
+            or _DOMAIN_ERRORS.search(line)):
         return klass, line[:200]
     return "VAGUE", line[:200] + f"   [expected a mention of {list(case.mention)}]"
 
@@ -789,7 +800,9 @@ def baselines(fx: Fixtures) -> dict[str, list[list[str]]]:
         "calibrate": [["meas.csv", "-o", "cal.toml", "--no-report"],
                       ["--plan", "8", "-o", "poses.csv", "--candidates", "50"]],
         "synthesize": [["task.toml", "--samples", "100", "--no-figures", "-o", "syn.parquet",
-                        "--json"]],
+                        "--json"],
+                       ["task.toml", "--optimize", "--population", "4", "--generations", "1",
+                        "--samples", "50", "--no-figures", "-o", "opt.parquet", "--json"]],
         "app": [["--port", "0"]],
         "warmup": [[]],
     }
@@ -848,7 +861,7 @@ def plan_cases(specs: dict[str, tuple[list[Option], list[str]]], fx: Fixtures,
                 for _j, a in targets[:1]:
                     for w in words:
                         cases.append(_with_option(cmd, a, o, [w], f"{o.flag} {w[:20]!r}",
-                                                  nonfinite=w.endswith(("nan", "inf"))))
+                                                  nonfinite=w.endswith(("nan", "inf")), fx=fx))
                 continue
             targets = [(j, a) for j, a in enumerate(bl) if o.flag in a] or [(0, bl[0])]
             for _j, a in targets:
@@ -877,10 +890,10 @@ def plan_cases(specs: dict[str, tuple[list[Option], list[str]]], fx: Fixtures,
                         cases.append(_case(cmd, [*q, *a[3:]], f"Q[{pos}]={val}", fx,
                                            mention=("q", val),
                                            nonfinite=val in ("nan", "inf", "-inf")))
-                for q, lab in (([], "no Q"), (a[:2], "2 Q"), ([*a[:3], "0.1"], "4 Q"),
+                for q, lab in (([], "no Q"), (a[:2], "2 Q"), ([*a[:3], "0.123"], "4 Q"),
                                (["abc", *a[1:3]], "Q not a number"),
                                (["0x10", *a[1:3]], "Q hex")):
-                    cases.append(_case(cmd, [*q, *a[3:]], lab, fx, mention=("q", "Q")))
+                    cases.append(_case(cmd, [*q, *a[3:]], lab, fx, mention=("q", "Q", "0.123")))
         # input files
         for flag, kind in INPUT_KINDS.items():
             if flag.startswith("-") and not any(o.flag == flag for o in opts):

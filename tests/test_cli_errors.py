@@ -278,6 +278,10 @@ def task(tmp_path: Path) -> Path:
     (["synthesize", "{d}/far.toml", "-o", "{d}/s", "--no-figures"], "rcm: expected coordinates"),
     (["synthesize", "{d}/deep.toml", "-o", "{d}/s", "--no-figures"], "depth: expected 0 <="),
     (["synthesize", "{d}/task.toml", "-o", "{d}/task.toml"], "is a file"),
+    # a malformed address: the results folder was created first, and distributed's Client
+    # printed a traceback from its __del__ 10 s later
+    (["synthesize", "{d}/task.toml", "-o", "{d}/s", "--scheduler", "nan"],
+     "scheduler: expected one of"),
     # plan: limits beyond any actuator made Ruckig fail ("error in step 2 in dof: 0");
     # 100,000 waypoints ran for a quarter of an hour
     (["plan", "{d}/many.csv", "-o", "{d}/t.csv", "--no-plots"], "many.csv: 1001 waypoints"),
@@ -286,6 +290,7 @@ def task(tmp_path: Path) -> Path:
     # options named as typed, not as the library's keywords (jump_m: got -0.001)
     (["track", "{d}/q.csv", "--jump-mm", "-1"], "--jump-mm"),
     (["track", "{d}/q.csv", "--jump-deg", "nan"], "--jump-deg"),
+    (["track", "{d}/q.csv", "--jump-mm", "5e-324"], "--jump-mm"),   # was "jump_m: got 0.0"
     (["animate", "-o", "{d}/a.gif", "--cone", "1e308"], "--cone"),
     (["calibrate", "--plan", "99999999999999999999", "-o", "{d}/p.csv"], "--plan"),
     (["calibrate", "--plan", "5", "--candidates", "99999999999999999999", "-o", "{d}/p.csv"],

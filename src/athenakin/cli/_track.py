@@ -12,13 +12,14 @@ from ._common import (
     add_design_option,
     add_setup_options,
     check_count,
-    check_finite,
     fmt,
     load_design,
     load_rcm,
 )
 from ._output import Outputs, add_force_option, outputs
 
+#: Smallest jump threshold (mm or deg): below it, the threshold in SI units underflows.
+JUMP_MIN = 1e-6
 #: Flags that make ``--strict`` fail.
 STRICT_FLAGS = ("LOST", "JUMP", "MODE_SWITCH", "AMBIGUOUS")
 
@@ -56,8 +57,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 def run(args: argparse.Namespace) -> int:
     """Execute ``track``."""
     out = args.output
-    for opt, v in (("--jump-mm", args.jump_mm), ("--jump-deg", args.jump_deg)):
-        check_finite(v, opt, positive=True)
+    for opt, v, hi in (("--jump-mm", args.jump_mm, 1e6), ("--jump-deg", args.jump_deg, 360.0)):
+        if not JUMP_MIN <= v <= hi:
+            raise ValueError(f"{opt}: expected a threshold from {JUMP_MIN:g} to {hi:g}, got {v:g}")
     check_count(args.max_events, "--max-events", 0, 10**9, "events")
     if out is not None and Path(out).suffix.lower() not in (".csv", ".json"):
         raise ValueError(f"-o: expected a .csv or .json file name, got {str(out)!r}")

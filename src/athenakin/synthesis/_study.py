@@ -7,6 +7,7 @@ import hashlib
 import json
 import math
 import os
+import re
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -35,6 +36,8 @@ LOCAL_SCHEDULERS = ("threads", "processes", "synchronous", "sync", "single-threa
 CHUNK_SIZE = 8
 #: Seconds to wait for a scheduler given by address before :class:`SchedulerUnreachableError`.
 CONNECT_TIMEOUT = 5.0
+#: The form of a scheduler address: ``[protocol://]host:port``.
+_ADDRESS = re.compile(r"^([a-z][a-z0-9+.-]*://)?[^\s/]+:\d{1,5}$")
 #: Most task samples per design (each design evaluates them all, about 1 KB each).
 MAX_SAMPLES = 1_000_000
 #: Coarsest encoder resolution accepted, m (beyond it the tip error is meaningless).
@@ -177,6 +180,10 @@ def open_scheduler(scheduler: Any, *, connect_timeout: float = CONNECT_TIMEOUT
     if isinstance(scheduler, str) and scheduler in LOCAL_SCHEDULERS:
         return "local", scheduler, False
     if isinstance(scheduler, str):
+        if not _ADDRESS.match(scheduler):   # distributed.Client would fail and then print a
+            raise InvalidInputError(        # traceback from its __del__, 10 s later
+                f"scheduler: expected one of {LOCAL_SCHEDULERS} or an address "
+                f"'tcp://host:port', got {scheduler!r}")
         distributed = _require("distributed")
         import logging
 
@@ -336,14 +343,20 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
     task_map = task.to_mapping()
     done: dict[int, Any] = {}
     out_path = None if out is None else Path(out)
+    # the scheduler first: an address that does not answer leaves no results folder behind
+    kind, handle, owned = open_scheduler(scheduler, connect_timeout=connect_timeout)
     if out_path is not None:
         fp = _fingerprint(rows, task, samples, seed, resolution, chunk_size)
-        done = _prepare_out(out_path, fp, len(chunks), {
-            "format": _FORMAT, "designs": len(rows), "chunk_size": chunk_size,
-            "task": task_map, "samples": samples, "seed": seed,
-            "encoder_resolution": resolution})
+        try:
+            done = _prepare_out(out_path, fp, len(chunks), {
+                "format": _FORMAT, "designs": len(rows), "chunk_size": chunk_size,
+                "task": task_map, "samples": samples, "seed": seed,
+                "encoder_resolution": resolution})
+        except BaseException:
+            if owned:
+                handle.close()
+            raise
     todo = [i for i in range(len(chunks)) if i not in done]
-    kind, handle, owned = open_scheduler(scheduler, connect_timeout=connect_timeout)
     bar = _bar(len(chunks), len(done), progress and len(todo) > 0 if progress is not None
                else len(todo) > 1)
 
