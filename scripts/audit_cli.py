@@ -1109,7 +1109,10 @@ def run_app(case: Case, root: Path, env: dict[str, str], serve_s: float, start_s
         return "FILES", f"binds beyond this machine: {wild}", code, so, se
     if _TRACE.search(se):
         return "TRACEBACK", se.strip().splitlines()[-1][:200], code, so, se
-    return "ok", f"bound {bound}; exit {code} after SIGINT", code, so, se
+    if case.mention and not any(m in se for m in case.mention):   # a bad input file: the
+        return "VAGUE", f"served without a warning naming {list(case.mention)}", code, so, se
+    warn = [ln for ln in se.splitlines() if "warning" in ln][:1]
+    return "ok", f"bound {bound}; exit {code} after SIGINT {warn}", code, so, se
 
 
 def listening_addresses(pid: int) -> list[str]:
@@ -1189,9 +1192,10 @@ def main(argv: list[str] | None = None) -> int:
             make_files(root, case.files)
             before = snapshot(root)
             if case.cmd == "app":
+                t0 = time.perf_counter()
                 k, d, code, so, se = run_app(case, root, env, serve_s=5.0,
                                              start_s=args.timeout)
-                dt = 0.0
+                dt = time.perf_counter() - t0
                 if not k:
                     after = snapshot(root)
                     k, d = judge(case, code, so, se, before, after)

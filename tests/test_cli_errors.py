@@ -330,3 +330,15 @@ def test_track_prints_missing_and_huge_times_readably(task, capsys):
     assert main(["track", str(task / "s.csv")]) == 0
     out = capsys.readouterr().out
     assert "t = 1e+308 s" in out and not re.search(r"\d{20}", out), out
+
+
+def test_app_warning_about_a_bad_rcm_file_names_the_file(bad):
+    # `athenakin app --rcm-file nan.json` served the reference set-up with a warning that
+    # said "RCM frame: ..." without naming the file
+    from types import SimpleNamespace
+
+    from athenakin.app._server import AthenaApp
+
+    fake = SimpleNamespace(errors=[], _backend="numpy")
+    AthenaApp._make_setup(fake, None, bad / "nan.json")   # type: ignore[arg-type]
+    assert len(fake.errors) == 1 and "nan.json" in fake.errors[0], fake.errors

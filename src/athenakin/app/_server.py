@@ -169,7 +169,8 @@ class AthenaApp:
         try:
             return app_setup(d, T, backend=self._backend)  # type: ignore[arg-type]
         except (ValueError, TypeError, KinematicsError) as exc:
-            self.errors.append(f"RCM frame: {_error_text(exc)}; using the reference set-up "
+            where = f"RCM file {T_b_e}" if isinstance(T_b_e, (str, Path)) else "RCM frame"
+            self.errors.append(f"{where}: {_error_text(exc)}; using the reference set-up "
                                f"instead")
             return base
 
