@@ -69,6 +69,7 @@ import resource
 import select
 import shutil
 import signal
+import stat
 import subprocess
 import sys
 import tempfile
@@ -286,6 +287,8 @@ def snapshot(root: Path) -> dict[str, tuple[Any, ...]]:
                 snap[rel] = ("link", os.readlink(p))
             elif p.is_dir():
                 snap[rel] = ("dir", st.st_mode & 0o7777)
+            elif not stat.S_ISREG(st.st_mode):   # a FIFO: never read it (it would block)
+                snap[rel] = ("special", stat.S_IFMT(st.st_mode), st.st_mode & 0o7777)
             else:
                 h = hashlib.sha1(p.read_bytes()).hexdigest()
                 snap[rel] = ("file", st.st_mode & 0o7777, h)
@@ -314,6 +317,8 @@ def make_files(root: Path, files: dict[str, Any]) -> None:
             later.append((p, 0o000))
         elif spec[0] == "link":
             os.symlink(spec[1], p)
+        elif spec[0] == "fifo":
+            os.mkfifo(p)
     for p, mode in later:
         os.chmod(p, mode)
 
@@ -639,6 +644,7 @@ class Fixtures:
         }
         if full:
             v["unreadable"] = ("unreadable", good)
+            v["endless (/dev/zero)"] = ("link", "/dev/zero")
             v["utf16"] = text.encode("utf-16")
             v["nul_byte"] = good[: len(good) // 2] + b"\x00" + good[len(good) // 2:]
         if kind in ("design", "task"):
@@ -1003,6 +1009,8 @@ def output_cases(cmd: str, o: Option, bl: list[list[str]], fx: Fixtures) -> list
         made = [good]
     if flag == "--report":
         a = [x for x in a if x != "--no-report"]
+    if flag == "--plots":
+        a = [x for x in a if x != "--no-plots"]
     ext = Path(good).suffix
     precious = b"precious, must survive\n"
     input_name = next((y for y in a if y in BASE_FILES), None)
@@ -1033,6 +1041,9 @@ def output_cases(cmd: str, o: Option, bl: list[list[str]], fx: Fixtures) -> list
         cases.append(c)
     if not folder:
         cases.append(mk("dangling symlink", good, {good: ("link", "nowhere/x" + ext)}))
+        # a FIFO (as /dev/null): --force must not put a file in its place
+        cases.append(mk("a FIFO (--force)", good, {good: ("fifo",)}, ["--force"],
+                        inputs=(good,)))
     return cases
 
 

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from ._compat import tomllib
+from ._input import MAX_CONFIG_BYTES, read_bytes
 from .errors import InvalidInputError
 
 __all__ = ["read_toml"]
@@ -52,8 +53,7 @@ def read_toml(path: str | Path, *, error: type[Exception] = InvalidInputError,
     >>> read_toml(f)
     {'l1': 0.3}
     """
-    with open(path, "rb") as fh:
-        raw = fh.read()
+    raw = read_bytes(path, limit=MAX_CONFIG_BYTES, error=error, what=what)
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:

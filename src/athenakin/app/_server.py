@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._input import MAX_CONFIG_BYTES, read_bytes
 from ..design import Design
 from ..errors import KinematicsError
 from ._model import (
@@ -63,7 +64,7 @@ def _import_viser() -> Any:
 def _load_rcm_file(path: str | Path) -> NDArray[np.float64]:
     """``T_b_e`` from a JSON file ``{"T_b_e": 4x4 nested list}`` (as ``--rcm-file``)."""
     try:
-        data = json.loads(Path(path).read_text())
+        data = json.loads(read_bytes(path, limit=MAX_CONFIG_BYTES, what="RCM file"))
     except (OSError, json.JSONDecodeError) as exc:
         raise ValueError(f"{path}: cannot read the RCM frame ({exc})") from exc
     if not isinstance(data, dict) or "T_b_e" not in data:

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._input import MAX_CONFIG_BYTES, read_bytes
 from .._serialize import json_text, to_jsonable  # noqa: F401  (re-exported)
 from .._transforms import rot_x, rot_y, rot_z, transform_from_rotation_translation
 from ..design import LENGTH_RANGE, Design
@@ -106,8 +107,9 @@ def read_rcm_json(path: str | Path) -> NDArray[np.float64]:
     """
     from .._validation import check_transform
 
+    raw = read_bytes(path, limit=MAX_CONFIG_BYTES, what="--rcm-file")
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8-sig"))
+        data = json.loads(raw.decode("utf-8-sig"))
     except UnicodeDecodeError as exc:
         raise ValueError(f"--rcm-file {path}: not a UTF-8 text file ({exc.reason})") from None
     except RecursionError:
