@@ -124,6 +124,7 @@ class Case:
     mention: tuple[str, ...] = ()                          # what an error must name
     nonfinite_arg: bool = False                            # a NaN/inf number was given
     timeout: float | None = None
+    interrupt: float | None = None                         # SIGINT after this many s
 
 
 @dataclass
@@ -200,9 +201,12 @@ class Runner:
         resource.setrlimit(resource.RLIMIT_AS, (self.mem, self.mem))
         resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
 
-    def run(self, argv: list[str], cwd: Path, timeout: float | None = None
-            ) -> tuple[int | None, str, str, float]:
-        """Exit code (None: timed out; negative: signal), stdout, stderr, seconds."""
+    def run(self, argv: list[str], cwd: Path, timeout: float | None = None,
+            interrupt: float | None = None) -> tuple[int | None, str, str, float]:
+        """Exit code (None: timed out; negative: signal), stdout, stderr, seconds.
+
+        With ``interrupt``, the child gets SIGINT (Ctrl-C) after that many seconds.
+        """
         timeout = timeout or self.timeout
         out, err = cwd.parent / f"{cwd.name}.out", cwd.parent / f"{cwd.name}.err"
         t0 = time.perf_counter()
@@ -212,6 +216,11 @@ class Runner:
                                         stdin=subprocess.DEVNULL, stdout=fo, stderr=fe,
                                         env={**os.environ, **self.env},
                                         preexec_fn=self._limits)
+                if interrupt is not None:
+                    with contextlib.suppress(subprocess.TimeoutExpired):
+                        proc.wait(interrupt)
+                    if proc.poll() is None:
+                        proc.send_signal(signal.SIGINT)
                 try:
                     code: int | None = proc.wait(timeout)
                 except subprocess.TimeoutExpired:
@@ -226,6 +235,10 @@ class Runner:
             if pid == 0:  # child
                 self._child(argv, cwd, out, err)
             fd = os.pidfd_open(pid)
+            if interrupt is not None:
+                ready, _, _ = select.select([fd], [], [], interrupt)
+                if not ready:
+                    os.kill(pid, signal.SIGINT)
             ready, _, _ = select.select([fd], [], [], timeout)
             os.close(fd)
             if not ready:
@@ -464,7 +477,7 @@ def judge(case: Case, code: int | None, out: str, err: str, before: dict[str, An
         return "TRACEBACK", (last[0] if last else "")[:200]
     if code == 70:
         return "INTERNAL", err.strip()[:300]
-    if code not in (0, 1, 2):
+    if code not in (0, 1, 2) and not (code == 130 and case.interrupt is not None):
         return "CRASH", f"exit {code} " + err.strip()[-200:]
     lines = _error_lines(err)
     if code == 2:
@@ -472,6 +485,10 @@ def judge(case: Case, code: int | None, out: str, err: str, before: dict[str, An
         if len(usage) != 1 or "error:" not in usage[0]:
             return "MULTILINE", " | ".join(lines)[:300]
         return _named(case, usage[0], "usage")
+    if code == 130 and case.interrupt is not None:   # Ctrl-C: one line, nothing left
+        if len(lines) != 1:
+            return "MULTILINE", " | ".join(lines)[:300]
+        return "error", lines[0][:200]
     if code == 1:
         if len(lines) != 1:
             # `track --strict` and `export --check` report a failed check on stdout and exit 1
@@ -911,6 +928,7 @@ def plan_cases(specs: dict[str, tuple[list[Option], list[str]]], fx: Fixtures,
         for o in opts:
             if o.flag in OUTPUT_OPTIONS:
                 cases += output_cases(cmd, o, bl, fx)
+    cases += [c for c in interrupt_cases(fx) if not only or c.cmd in only]
     return cases
 
 
@@ -1045,6 +1063,20 @@ def output_cases(cmd: str, o: Option, bl: list[list[str]], fx: Fixtures) -> list
         cases.append(mk("a FIFO (--force)", good, {good: ("fifo",)}, ["--force"],
                         inputs=(good,)))
     return cases
+
+
+def interrupt_cases(fx: Fixtures) -> list[Case]:
+    """Ctrl-C (SIGINT) in the middle of long runs: one line, exit 130, no file left."""
+    zigzag = ("x_m,y_m,z_m\n" + "".join(f"{0.25 + 0.003 * (i % 2)},{0.002 * (i % 2)},0\n"
+                                          for i in range(600))).encode()
+    many_q = fx.qstream + b"".join(fx.qstream.splitlines(keepends=True)[-1:] * 100_000)
+    specs = [("plan", ["plan", "zig.csv", "-o", "t.csv"], {"zig.csv": zigzag}),
+             ("workspace", ["workspace", "--resolution", "61", "--out", "ws"], {}),
+             ("animate", ["animate", "-o", "a.gif", "--frames", "300", "--no-progress"], {}),
+             ("export", ["export", "-o", "m.xml", "--check", "200"], {}),
+             ("track", ["track", "q.csv", "-o", "t.csv"], {"q.csv": many_q})]
+    return [Case(cmd, "Ctrl-C after 2 s", argv, files, tuple(files), interrupt=2.0)
+            for cmd, argv, files in specs]
 
 
 def app_cases(fx: Fixtures) -> list[Case]:
@@ -1211,7 +1243,7 @@ def main(argv: list[str] | None = None) -> int:
                     after = snapshot(root)
                     k, d = judge(case, code, so, se, before, after)
             else:
-                code, so, se, dt = runner.run(case.argv, root, case.timeout)
+                code, so, se, dt = runner.run(case.argv, root, case.timeout, case.interrupt)
                 after = snapshot(root)
                 k, d = judge(case, code, so, se, before, after)
                 if k == "ok":

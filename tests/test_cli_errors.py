@@ -342,3 +342,17 @@ def test_app_warning_about_a_bad_rcm_file_names_the_file(bad):
     fake = SimpleNamespace(errors=[], _backend="numpy")
     AthenaApp._make_setup(fake, None, bad / "nan.json")   # type: ignore[arg-type]
     assert len(fake.errors) == 1 and "nan.json" in fake.errors[0], fake.errors
+
+
+def test_ctrl_c_is_one_line_exit_130_and_leaves_no_file(tmp_path, monkeypatch, capsys):
+    # Ctrl-C in a long run printed a KeyboardInterrupt traceback (found by the audit)
+    from athenakin.design import Design
+
+    def interrupted(self):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(Design, "to_toml", interrupted)
+    out = tmp_path / "d.toml"
+    assert main(["design", "--write", str(out)]) == 130
+    err = capsys.readouterr().err
+    assert err == "athenakin design: interrupted\n" and not list(tmp_path.iterdir())
