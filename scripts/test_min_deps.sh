@@ -7,8 +7,13 @@
 # of those features. Two stages, because the motion extra needs a newer scipy than analysis:
 #   1. numpy, tomli-w, sympy, scipy (analysis's bound), numba, tqdm at their minimum;
 #   2. scipy raised to the motion extra's bound, ruckig at its minimum.
-# Not covered at their minimum: the plot, sim and bench extras (matplotlib, plotly, imageio,
-# mujoco, yourdfpy, pin): their tests need the rendering/simulation stacks at current versions.
+#   3. the extras certified, calibration, synthesis, plot, sim and app at their lower bounds
+#      (python-flint, matplotlib, dask, distributed, pandas, pyarrow, pymoo, plotly, imageio,
+#      mujoco, yourdfpy, viser), numpy still at its minimum. This stage found mujoco 3.2.0-3.2.2
+#      rejecting the exported MJCF (site-based equality constraints): the bound is 3.2.3.
+# Not run here: the bench extra (pin, pytest-benchmark): the oldest pin in the registry, 3.3.1,
+# needs numpy 2, so it cannot share this venv; benchmarks/baselines.py was checked with pin 3.3.1
+# and pytest-benchmark 4.0.0 by hand (tests/test_fast_bench.py::test_baselines_agree_with_athenakin).
 # tests/test_packaging.py checks that the pins below equal pyproject's lower bounds.
 #
 # Usage: bash scripts/test_min_deps.sh [PYTEST_ARGS...]
@@ -36,6 +41,27 @@ numba==0.59.0
 tqdm==4.60.0
 ruckig==0.12.1
 PINS
+cat > "$work/stage3.txt" <<'PINS'
+numpy==1.24.0
+tomli-w==1.0.0
+scipy==1.12.0
+numba==0.59.0
+tqdm==4.60.0
+ruckig==0.12.1
+python-flint==0.6
+matplotlib==3.7
+dask==2024.1
+distributed==2024.1
+pandas==2.0
+pyarrow==14
+pymoo==0.6.1
+plotly==5.18
+imageio==2.30
+imageio-ffmpeg==0.5
+mujoco==3.2.3
+yourdfpy==0.0.56
+viser==1.1
+PINS
 
 start=$SECONDS
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
@@ -53,4 +79,12 @@ echo "== stage 1: core, analysis, symbolic, fast at their lower bounds"
 echo "== stage 2: motion at its lower bounds"
 "$venv/bin/python" -m pytest -q -p no:cacheprovider tests/test_motion_tracker.py \
     tests/test_motion_plan.py -k "not time_optimal" "$@"
+"$venv/bin/python" -m pip install --quiet -c "$work/stage3.txt" \
+    -e ".[analysis,symbolic,fast,motion,certified,calibration,synthesis,plot,sim,app]"
+"$venv/bin/python" -m pip freeze | grep -iE "^(python-flint|matplotlib|dask|distributed|pandas|pyarrow|pymoo|plotly|imageio|imageio-ffmpeg|mujoco|yourdfpy|viser)=="
+echo "== stage 3: the extras certified, calibration, synthesis, plot, sim, app at their lower bounds"
+"$venv/bin/python" -m pytest -q -p no:cacheprovider tests/test_certified.py \
+    tests/test_calibration.py tests/test_synthesis.py tests/test_synthesis_cluster.py \
+    tests/test_plot_mpl.py tests/test_plot_geometry.py tests/test_plot_animate.py \
+    tests/test_sim_mujoco.py tests/test_sim_urdf.py tests/test_app.py "$@"
 echo "== lower bounds: $((SECONDS - start)) s"

@@ -97,7 +97,8 @@ def test_min_deps_constraints_match_the_declared_lower_bounds():
     for name, version in re.findall(r"^([A-Za-z0-9_.-]+)==([0-9][^\s]*)$", script, flags=re.M):
         pins.setdefault(name, set()).add(Version(version))
     reqs = list(PROJECT["dependencies"])
-    for name in ("analysis", "motion", "symbolic"):
+    for name in ("analysis", "motion", "symbolic", "certified", "calibration", "synthesis",
+                 "plot", "sim", "app"):
         reqs += PROJECT["optional-dependencies"][name]
     for r in reqs:
         m = re.match(r"^([A-Za-z0-9_.-]+)>=([0-9.]+)(;.*)?$", r)
