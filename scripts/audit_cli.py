@@ -12,17 +12,20 @@ process with a time limit (``--timeout``, 20 s) and a memory limit (RLIMIT_AS,
 * input files (design TOML, RCM JSON, path CSV, q stream CSV, trajectory CSV,
   measurement CSV, task TOML): nonexistent, unreadable, a directory, empty,
   binary, UTF-8 with BOM, CRLF, UTF-16, a huge row, a NaN row, unsorted times,
-  and per format values that are NaN, inf, huge, negative, zero, of the wrong
-  type, deeply nested;
+  endless (``/dev/zero``), and per format values that are NaN, inf, huge,
+  negative, zero, of the wrong type, deeply nested;
 * outputs: an existing file (without and with ``--force``), the command's own
-  input, a nonexistent folder, a read-only folder, an unknown extension, a folder.
+  input, a nonexistent folder, a read-only folder, an unknown extension, a folder,
+  a dangling symlink, a FIFO (``--force`` must not replace it, as it would /dev/null);
+* Ctrl-C (SIGINT) two seconds into five long runs.
 
 Every run is classified:
 
 ``ok``            exit 0, output sane (JSON parses, files have their format,
                   nothing valid holds NaN/inf);
-``error``         exit 1 with one line on stderr naming the problem (the option,
-                  the file or the value);
+``error``         exit 1 (130 after Ctrl-C) with one line on stderr naming the
+                  problem (the option, the file or the value; a kinematics error
+                  such as OutOfWorkspaceError names it by its type);
 ``usage``         exit 2, argparse's usage and one error line;
 ``TRACEBACK``     a Python traceback on stderr;
 ``INTERNAL``      exit 70 (the CLI's "internal error: a bug");
@@ -35,7 +38,8 @@ Every run is classified:
 ``TIMEOUT``       still running after ``--timeout`` seconds (killed);
 ``FILES``         after a failure a new, partial or temporary file, or an existing
                   file modified (or an input modified, ever; or a file replaced
-                  without ``--force``).
+                  without ``--force``);
+``EXPOSED``       ``app`` listening on more than 127.0.0.1 without ``--host``.
 
 Upper-case classes are findings. Runs fork from a warm server process (the package,
 numpy, matplotlib, the compiled kernels imported once) so that the whole audit takes a
@@ -84,7 +88,7 @@ import tomllib
 
 REPO = Path(__file__).resolve().parents[1]
 FINDINGS = ("TRACEBACK", "INTERNAL", "CRASH", "MULTILINE", "VAGUE", "NONFINITE",
-            "ACCEPTED_NAN", "BAD_OUTPUT", "TIMEOUT", "FILES")
+            "ACCEPTED_NAN", "BAD_OUTPUT", "TIMEOUT", "FILES", "EXPOSED")
 
 #: Adversarial values of a number: first position of an option gets all, the others a few.
 NUMBERS = ["nan", "inf", "-inf", "-1", "0", "1e308", "5e-324", "1e30", "99999999999999999999"]
@@ -107,8 +111,7 @@ OPTION_DEFAULTS = {"--j-max": ["5"], "--tip-speed": ["0.05"], "--max-duration": 
                    "--orbit": ["10"], "--seed": ["1"], "--encoder-resolution": ["1e-6"],
                    "--candidates": ["50"], "--plan": ["8"], "--population": ["4"],
                    "--generations": ["1"], "--designs": ["1"], "--top": ["3"],
-                   "--connect-timeout": ["1"], "--port": ["0"], "--check": ["2"],
-                   "--max-samples-": ["1"]}
+                   "--connect-timeout": ["1"], "--port": ["0"], "--check": ["2"]}
 
 
 # ------------------------------------------------------------------------------ cases
@@ -1149,7 +1152,7 @@ def run_app(case: Case, root: Path, env: dict[str, str], serve_s: float, start_s
     if not bound:
         return "BAD_OUTPUT", "served but no listening socket found", code, so, se
     if wild and "--host" not in case.argv:
-        return "FILES", f"binds beyond this machine: {wild}", code, so, se
+        return "EXPOSED", f"binds beyond this machine: {wild}", code, so, se
     if _TRACE.search(se):
         return "TRACEBACK", se.strip().splitlines()[-1][:200], code, so, se
     if case.mention and not any(m in se for m in case.mention):   # a bad input file: the
