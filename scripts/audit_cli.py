@@ -199,6 +199,9 @@ class Runner:
                 __import__(mod)
 
     def _limits(self) -> None:
+        # Ctrl-C as in a terminal: a harness started in the background (nohup, &) ignores
+        # SIGINT, and its children would inherit that
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
         os.setsid()
         drop_dac_override()
         resource.setrlimit(resource.RLIMIT_AS, (self.mem, self.mem))
@@ -268,6 +271,7 @@ class Runner:
             os.dup2(os.open(out, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644), 1)
             os.dup2(os.open(err, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644), 2)
             os.environ.update(self.env)
+            signal.signal(signal.SIGINT, signal.default_int_handler)   # Python's own
             sys.argv = ["athenakin", *argv]
             try:
                 from athenakin.cli import entry_point
