@@ -15,6 +15,13 @@ Group ``app-update`` (target: under 5 ms per update, so that a dragged slider ke
 Baseline: the core 16-solution forward kinematics of one q (numpy), what any update
 needs at least. Each case alternates between two configurations so that nothing is
 skipped as unchanged.
+
+Group ``app-ghosts`` (what ghosting the other valid slots costs; 15 ghosts at these q):
+the whole update with all valid slots ghosted against the whole one-slot update
+(``AthenaApp.set_q``, the baseline). Group ``app-ghost-scene``: the ghosts' geometry and
+scene alone (from the FK to the line sets), batched over the slots (``slot_ghosts`` +
+``ghost_scene``) against one slot at a time (``robot_geometry`` + ``robot_scene`` per
+ghost, the app's first implementation, kept here as the baseline).
 """
 
 import atexit
@@ -23,7 +30,9 @@ import importlib.util
 import numpy as np
 
 import athenakin as ak
-from athenakin.app import app_setup, forward_view, inverse_step
+from athenakin.app import app_setup, forward_view, ghost_scene, inverse_step, slot_ghosts
+from athenakin.app._scene import robot_scene
+from athenakin.plot import robot_geometry
 
 Q_A = np.array([-0.100, 0.100, 0.450])
 Q_B = np.array([-0.105, 0.098, 0.452])
@@ -73,6 +82,26 @@ def cases(quick: bool) -> list[dict]:
         {"name": f"inverse_step (48 IK samples) + forward_view ({be})", "group": "app-update",
          "batch": 1, "call": ik_move(), "note": "a tip-handle / IK-slider move"},
     ]
+    def ghosts_batched(q):
+        sol = ak.forward_kinematics(q, T, d, errors="flag", backend=be)
+        k = np.flatnonzero(sol.valid)
+        solid = robot_geometry(q, T, d, slot=int(k[0]), fk=sol)
+        return ghost_scene(slot_ghosts(sol, q, T, d, k[1:]), solid)
+
+    def ghosts_loop(q):
+        sol = ak.forward_kinematics(q, T, d, errors="flag", backend=be)
+        k = np.flatnonzero(sol.valid)
+        robot_geometry(q, T, d, slot=int(k[0]), fk=sol)
+        return [robot_scene(robot_geometry(q, T, d, slot=int(j), fk=sol), frames=False,
+                            labels=False) for j in k[1:]]
+
+    out += [
+        {"name": f"ghosts' geometry + scene, one slot at a time ({be})",
+         "group": "app-ghost-scene", "batch": 1, "baseline": True,
+         "call": _alternate(ghosts_loop), "note": "the first implementation"},
+        {"name": f"ghosts' geometry + scene, batched over the slots ({be})",
+         "group": "app-ghost-scene", "batch": 1, "call": _alternate(ghosts_batched)},
+    ]
     if importlib.util.find_spec("viser") is not None:
         from athenakin.app import AthenaApp
 
@@ -85,5 +114,13 @@ def cases(quick: bool) -> list[dict]:
         ghosted.slot = "all"
         atexit.register(ghosted.stop)
         out.append({"name": f"AthenaApp.set_q, all valid slots ghosted ({be})",
-                    "group": "app-update", "batch": 1, "call": _alternate(ghosted.set_q)})
+                    "group": "app-update", "batch": 1, "call": _alternate(ghosted.set_q),
+                    "note": "target < 5 ms"})
+        out += [
+            {"name": f"AthenaApp.set_q, one slot ({be})", "group": "app-ghosts", "batch": 1,
+             "baseline": True, "call": _alternate(app.set_q)},
+            {"name": f"AthenaApp.set_q, all valid slots ghosted ({be})",
+             "group": "app-ghosts", "batch": 1, "call": _alternate(ghosted.set_q),
+             "note": "x base: the one-slot update's time / this one's"},
+        ]
     return out

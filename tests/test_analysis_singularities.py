@@ -367,3 +367,20 @@ def test_near_singular_configurations_rejects_unknown_names():
 
     with pytest.raises(ak.InvalidInputError, match="name: expected one of"):
         near_singular_configurations("stroke_limit", [1e-3])
+
+
+def test_audit_arguments_named():
+    """Audit of issue 13: counts, tolerances and matrices are checked by name."""
+    with pytest.raises(ak.InvalidInputError, match="n"):
+        ak.analysis.singularity_loci(n=float("inf"))
+    with pytest.raises(ak.InvalidInputError, match="n"):
+        ak.analysis.singular_sets_within_strokes(n=10**400)
+    assert len(ak.analysis.singularity_loci(n=11.0)["h"]) == 11      # an integral float
+    with pytest.raises(ak.InvalidInputError, match="tol"):
+        ak.analysis.singularities([-0.1, 0.1, 0.45], tol=10**400)
+    with pytest.raises((TypeError, ValueError), match="distances"):
+        ak.analysis.near_singular_configurations("ab_coincide", 10**400)
+    for bad in (None, "J", np.zeros(3), np.zeros((0, 3))):
+        with pytest.raises((TypeError, ValueError), match="J"):
+            ak.analysis.sigma_min(bad)
+    np.testing.assert_allclose(ak.analysis.condition_number(np.eye(3)), 1.0)

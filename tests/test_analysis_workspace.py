@@ -237,3 +237,26 @@ def test_analysis_does_not_import_matplotlib():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout
     assert out.strip() == "False"
+
+
+def test_audit_arguments_named(tmp_path):
+    """Audit of issue 13: resolution 10**400, paths that are not paths, summaries of
+    non-results were numpy / pathlib / AttributeError tracebacks."""
+    with pytest.raises(ak.InvalidInputError, match="resolution"):
+        ak.analysis.point_workspace(resolution=10**400)
+    with pytest.raises(ak.InvalidInputError, match="resolution"):
+        ak.analysis.actuator_map(resolution=[[1, 2], [3]])
+    with pytest.raises(ak.InvalidInputError, match="MAX_GRID_POINTS"):
+        ak.analysis.point_workspace(resolution=(1000, 1000, 1000))
+    pw = ak.analysis.point_workspace(resolution=3, progress=False)
+    for bad in (None, 1, True, b"x.npz"):
+        with pytest.raises(TypeError, match="path"):
+            ak.analysis.save_npz(bad, pw)
+        with pytest.raises(TypeError, match="path"):
+            ak.analysis.load_npz(bad)
+    with pytest.raises(TypeError, match="design"):
+        ak.analysis.save_npz(tmp_path / "w.npz", pw, design="default")
+    with pytest.raises(TypeError, match="pw"):
+        ak.analysis.workspace_summary(pw=float("nan"))
+    with pytest.raises(TypeError, match="ic"):
+        ak.analysis.workspace_summary(ic=pw)

@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 
 import athenakin as ak
+from athenakin._transforms import rot_x, transform_from_rotation_translation
 from athenakin.app import (
+    GHOST_BLEND,
     WARN_DISTANCE_M,
     angles_from_tip,
     app_setup,
@@ -19,12 +21,16 @@ from athenakin.app import (
     playback_q,
     readouts_html,
     robot_scene,
+    slot_ghosts,
     slots_html,
     tip_from_angles,
 )
+from athenakin.app._ghosts import arcs_points
 from athenakin.errors import InvalidInputError, OutOfWorkspaceError, Reason
 from athenakin.motion import PathFileError
 from athenakin.plot import robot_geometry
+from athenakin.plot._mpl import arc_points
+from athenakin.robot import SLOT_MODE
 
 D = ak.Design.default()
 HAS_VISER = importlib.util.find_spec("viser") is not None
@@ -109,16 +115,97 @@ def test_all_slots_ghosts_the_other_valid_ones(setup):
     v = forward_view(setup, setup.q_home, slot="all")
     valid = [s.slot for s in v.slots if s.valid]
     assert v.geometry.slot == valid[0]
-    assert sorted(g.slot for g in v.ghosts) == valid[1:]
+    assert v.ghosts.slot.tolist() == valid[1:] and len(v.ghosts) == len(valid) - 1
     ghosts = ghost_scene(v.ghosts, v.geometry)
     by = {ls.name: ls for ls in ghosts.lines}
     inst = by["ghost_instrument"]
     assert inst.segments.shape == (len(valid) - 1, 2, 3)
     assert all(c > 150 for c in inst.color)           # paler than the solid red
     assert "ghost_circle_k1" not in by and "ghost_rail" not in by    # drawn by the solid slot
-    other = next(g for g in v.ghosts if g.mode != v.geometry.mode)    # the other mode, once
-    np.testing.assert_array_equal(by["ghost_parallel"].segments,
-                                  robot_scene(other).lines[1].segments)
+    other = next(int(k) for k in v.ghosts.slot if SLOT_MODE[k] != v.geometry.mode)
+    np.testing.assert_allclose(by["ghost_parallel"].segments,        # the other mode, once
+                               robot_scene(robot_geometry(setup.q_home, slot=other)).lines[1]
+                               .segments, rtol=0, atol=1e-12)
+    assert forward_view(setup, setup.q_home, slot=3).ghosts is None
+
+
+def _ghost_scene_loop(geoms, solid):
+    """Reference: the ghosts drawn one slot at a time from each slot's RobotGeometry and
+    robot_scene (the app's first implementation)."""
+    parts, style, modes_done = {}, {}, {solid.mode}
+    for g in geoms:
+        new_mode = g.mode not in modes_done
+        for ls in robot_scene(g, frames=False, labels=False).lines:
+            if ls.name in ("circle_k1", "circle_k2", "rail") or (
+                    ls.name in ("parallel", "actuator_q3") and not new_mode):
+                continue
+            parts.setdefault(ls.name, []).append(ls.segments)
+            color = tuple(round(c + GHOST_BLEND * (255 - c)) for c in ls.color)
+            style[ls.name] = (color, max(1.0, 0.6 * ls.width))
+        modes_done.add(g.mode)
+    return {f"ghost_{k}": (np.concatenate(v), *style[k]) for k, v in parts.items()}
+
+
+@pytest.mark.parametrize("design", ["default", "other"])
+def test_batched_ghosts_draw_what_one_slot_at_a_time_draws(design):
+    rng = np.random.default_rng(16)
+    if design == "default":
+        d, T = D, None
+    else:
+        d = dataclasses.replace(D, l4=D.l4 * 1.3, tool_length=D.tool_length * 0.8)
+        T = ak.default_rcm_frame(d) @ transform_from_rotation_translation(
+            rot_x(np.asarray(0.2)), np.array([0.01, -0.02, 0.03]))
+    s = app_setup(d, T, backend="numpy")
+    checked = 0
+    for q in _random_q(rng, 12, s):
+        sol = ak.forward_kinematics(q, s.T_b_e, d, errors="flag")
+        valid = np.flatnonzero(sol.valid)
+        if len(valid) < 2:
+            continue
+        solid = robot_geometry(q, s.T_b_e, d, slot=int(valid[0]), fk=sol)
+        order = rng.permutation(valid[1:])                  # any subset, any order
+        ghosts = slot_ghosts(sol, q, s.T_b_e, d, order)
+        ref = _ghost_scene_loop([robot_geometry(q, s.T_b_e, d, slot=int(k), fk=sol)
+                                 for k in order], solid)
+        got = {ls.name: ls for ls in ghost_scene(ghosts, solid).lines}
+        assert set(got) == set(ref)
+        for name, (segments, color, width) in ref.items():
+            np.testing.assert_allclose(got[name].segments, segments, rtol=0, atol=1e-12,
+                                       err_msg=name)
+            assert got[name].color == color and got[name].width == width
+        for i, k in enumerate(order):                      # the geometry itself
+            g = robot_geometry(q, s.T_b_e, d, slot=int(k), fk=sol)
+            np.testing.assert_allclose(ghosts.tip[i], g.points["tip"], rtol=0, atol=1e-12)
+            np.testing.assert_allclose(ghosts.wrist_axes[i], g.wrist_axes, rtol=0, atol=1e-12)
+            np.testing.assert_allclose(ghosts.ujoint_axes[i], g.ujoint_axes, rtol=0,
+                                       atol=1e-12)
+            np.testing.assert_allclose(ghosts.O_i_mode[(1 - g.mode) // 2], g.points["O_i"],
+                                       rtol=0, atol=1e-12)
+        checked += 1
+    assert checked >= 5
+
+
+def test_batched_arcs_match_the_static_views_including_parallel_axes():
+    rng = np.random.default_rng(7)
+    a = rng.normal(size=(5, 3))
+    b = rng.normal(size=(5, 3))
+    b[0] = 2.5 * a[0]                                     # parallel: a point repeated
+    b[1] = -a[1]                                          # antiparallel: no plane, repeated too
+    c = np.array([0.1, -0.2, 0.3])
+    got = arcs_points(c, a, b, 0.07)
+    for i in range(5):
+        np.testing.assert_allclose(got[i], arc_points(c, a[i], b[i], 0.07), rtol=0, atol=1e-14)
+
+
+def test_slot_ghosts_rejects_an_invalid_slot(setup):
+    sol = ak.forward_kinematics(setup.q_home, setup.T_b_e, D, errors="flag")
+    bad = int(np.flatnonzero(~sol.valid)[0]) if not sol.valid.all() else 16
+    with pytest.raises(InvalidInputError, match="slots: expected valid slots"):
+        slot_ghosts(sol, setup.q_home, setup.T_b_e, D, [bad])
+    with pytest.raises(InvalidInputError, match="fk: expected the FKSolution"):
+        slot_ghosts(sol.valid, setup.q_home, setup.T_b_e, D, [0])
+    with pytest.raises(InvalidInputError, match="ghosts, solid: expected"):
+        ghost_scene([robot_geometry(setup.q_home, slot=1)], robot_geometry(setup.q_home))
 
 
 def test_near_a_singular_set_warns(setup):
@@ -342,6 +429,31 @@ def test_app_tip_handle_and_slot_menu_in_process():
         for s in v.slots:
             assert opts[1 + s.slot].startswith(s.label)
             assert ("invalid" in opts[1 + s.slot]) == (not s.valid)
+    finally:
+        app.stop()
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_tip_handle_snaps_back_when_a_drag_ends_before_its_last_update():
+    """viser runs the handle's callbacks on a thread pool: the end of a drag can be handled
+    before its last update. The handle must still snap to the tip reached, and follow the
+    sliders afterwards."""
+    from types import SimpleNamespace
+
+    from athenakin.app import AthenaApp
+
+    app = AthenaApp(port=0, backend="numpy")
+    try:
+        T, r = app.setup.T_b_e, app.view.readouts
+        app._on_handle(SimpleNamespace(phase="start"))
+        app.tip_handle.position = tuple(T[:3, :3] @ (r.tip_e * 5.0) + T[:3, 3])  # too far
+        app._on_handle(SimpleNamespace(phase="end"))            # the end first ...
+        app._on_handle(SimpleNamespace(phase="update"))         # ... then the last update
+        tip = app.view.readouts.tip_b
+        assert np.linalg.norm(tip - r.tip_b) > 1e-3             # it moved, to the boundary
+        np.testing.assert_allclose(app.tip_handle.position, tip, rtol=0, atol=1e-6)
+        app.set_q(app.setup.q_home)
+        np.testing.assert_allclose(app.tip_handle.position, r.tip_b, rtol=0, atol=1e-6)
     finally:
         app.stop()
 

@@ -54,8 +54,26 @@ def _color_fraction(img, color):
 
 
 @pytest.fixture(scope="module")
-def app(tmp_path_factory):
+def browser():
     assert Path(CHROMIUM).exists(), f"{CHROMIUM} not found: apt-get install chromium"
+    with playwright.sync_playwright() as pw:
+        b = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        yield b
+        b.close()
+
+
+def _open_page(browser, url, errors):
+    page = browser.new_page(viewport={"width": 900, "height": 640})
+    page.on("pageerror", lambda e: errors.append(f"pageerror: {e}"))
+    page.on("console", lambda m: errors.append(f"console: {m.text}")
+            if m.type == "error" else None)
+    page.goto(url)
+    page.wait_for_selector("[data-ro=q1]", timeout=START_TIMEOUT_S * 1000)
+    return page
+
+
+@pytest.fixture(scope="module")
+def app(tmp_path_factory, browser):
     d = tmp_path_factory.mktemp("app")
     (d / "traj.csv").write_text(TRAJECTORY)
     (d / "bad.csv").write_text(BAD_TRAJECTORY)
@@ -77,17 +95,10 @@ def app(tmp_path_factory):
     assert url is not None and url.startswith("http://127.0.0.1:"), "".join(lines)
     port = int(url.rstrip("/").rsplit(":", 1)[1])
     errors = []
-    with playwright.sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        page = browser.new_page(viewport={"width": 900, "height": 640})
-        page.on("pageerror", lambda e: errors.append(f"pageerror: {e}"))
-        page.on("console", lambda m: errors.append(f"console: {m.text}")
-                if m.type == "error" else None)
-        page.goto(url)
-        page.wait_for_selector("[data-ro=q1]", timeout=START_TIMEOUT_S * 1000)
-        page.wait_for_timeout(1000)
-        yield {"proc": proc, "page": page, "errors": errors, "dir": d, "port": port}
-        browser.close()
+    page = _open_page(browser, url, errors)
+    page.wait_for_timeout(1000)
+    yield {"proc": proc, "page": page, "errors": errors, "dir": d, "port": port}
+    page.close()
     if proc.poll() is None:
         proc.kill()
         proc.wait()
@@ -211,6 +222,120 @@ def test_playback_and_a_bad_trajectory_in_the_page(app):
     page.keyboard.press("ArrowLeft")
     _wait_ro(page, "q3", "469.50")
     assert app["proc"].poll() is None
+
+
+#: The x arrow of the tip handle (viser's transform controls, drei's default axis colours).
+GIZMO_X_COLOR = "#ff2060"
+#: Camera distance from the tool tip for the drag test, m, and the direction it looks from
+#: (base frame): the handle's x arrow then points left on the screen, away from the GUI panel.
+DRAG_CAMERA_DISTANCE = 0.35
+DRAG_CAMERA_FROM = np.array([0.35, 1.0, 0.45])
+#: Mouse travel along the x arrow, pixels.
+DRAG_PIXELS = 40.0
+
+
+def _camera_basis(cam):
+    P = np.asarray(cam.position, dtype=float)
+    f = np.asarray(cam.look_at, dtype=float) - P
+    f /= np.linalg.norm(f)
+    r = np.cross(f, np.asarray(cam.up_direction, dtype=float))
+    r /= np.linalg.norm(r)
+    return P, f, r, np.cross(r, f), math.tan(cam.fov / 2)
+
+
+def _pixel(cam, box, X):
+    """Canvas pixel of a point (base frame, m): a three.js perspective camera (vertical
+    field of view ``cam.fov``, the canvas's aspect) at ``cam.position`` looking at
+    ``cam.look_at`` with ``cam.up_direction`` up."""
+    P, f, r, u, t = _camera_basis(cam)
+    d = np.asarray(X, dtype=float) - P
+    xn = (d @ r) / ((d @ f) * t * cam.aspect)
+    yn = (d @ u) / ((d @ f) * t)
+    return np.array([box["x"] + (xn + 1) / 2 * box["width"],
+                     box["y"] + (1 - yn) / 2 * box["height"]])
+
+
+def _along_axis(cam, box, px, origin, axis):
+    """Where the ray through a canvas pixel passes closest to the line ``origin + s axis``:
+    ``s`` (m), as the transform controls move their handle along a dragged arrow."""
+    P, f, r, u, t = _camera_basis(cam)
+    xn = 2 * (px[0] - box["x"]) / box["width"] - 1
+    yn = 1 - 2 * (px[1] - box["y"]) / box["height"]
+    d = f + xn * t * cam.aspect * r + yn * t * u
+    w0 = origin - P
+    b, c, dd, e = axis @ d, d @ d, axis @ w0, d @ w0
+    return (b * e - c * dd) / (c - b * b)
+
+
+def _wait_settled(page, app):
+    """The server's read-outs once the page shows them and they stopped changing."""
+    t0, last = time.monotonic(), None
+    while time.monotonic() - t0 < UPDATE_TIMEOUT_MS / 1e3:
+        r = app.view.readouts
+        want = [_fmt(r.q[i]) for i in range(3)]
+        if [_ro(page, f"q{i + 1}") for i in range(3)] == want and want == last:
+            return r
+        last = want
+        page.wait_for_timeout(300)
+    raise AssertionError(f"the page did not settle on the server's read-outs {last}")
+
+
+def test_dragging_the_tip_handle_with_the_mouse_drives_q(browser):
+    """A real drag of the handle's x arrow in Chromium: q follows the controller-form IK.
+
+    The app runs in this process (the same AthenaApp as the CLI) so that the test can
+    place the camera: looking at the tool tip from a known direction, the x arrow of the
+    handle lands at a known pixel, and the mouse drags it left by DRAG_PIXELS."""
+    from athenakin.app import AthenaApp
+
+    app = AthenaApp(port=_free_port(), backend="numpy")
+    errors = []
+    try:
+        page = _open_page(browser, app.url, errors)
+        r0 = _wait_settled(page, app)
+        tip0, scale = r0.tip_b.copy(), float(app.tip_handle.scale)
+        cam = next(iter(app.server.get_clients().values())).camera
+        cam.position = tip0 + DRAG_CAMERA_DISTANCE * DRAG_CAMERA_FROM / np.linalg.norm(
+            DRAG_CAMERA_FROM)
+        cam.look_at = tip0                               # after the position (viser moves both)
+        box = page.locator("canvas").first.bounding_box()
+        x = np.array([1.0, 0.0, 0.0])
+        grab = _pixel(cam, box, tip0 + 0.6 * scale * x)  # on the arrow's shaft
+        out = _pixel(cam, box, tip0 + scale * x) - _pixel(cam, box, tip0)
+        assert out[0] < -0.5 * np.linalg.norm(out)       # the arrow points left
+        end = grab + DRAG_PIXELS * out / np.linalg.norm(out)
+        gx, gy = np.round(grab).astype(int)
+        t0 = time.monotonic()                            # the camera moved: the arrow is there
+        while True:
+            img = imageio.imread(page.screenshot())[gy - 2:gy + 3, gx - 2:gx + 3]
+            if _color_fraction(img, GIZMO_X_COLOR) > 0 or (
+                    time.monotonic() - t0 > UPDATE_TIMEOUT_MS / 1e3):
+                break
+            page.wait_for_timeout(200)
+        assert _color_fraction(img, GIZMO_X_COLOR) > 0, "the handle's x arrow is not drawn"
+        page.mouse.move(*grab)
+        page.mouse.down()
+        page.mouse.move(*end, steps=3)
+        page.mouse.up()
+        want = _along_axis(cam, box, end, tip0, x) - _along_axis(cam, box, grab, tip0, x)
+        t0 = time.monotonic()
+        while np.allclose(app.view.readouts.tip_b, tip0, rtol=0, atol=1e-9) and (
+                time.monotonic() - t0 < UPDATE_TIMEOUT_MS / 1e3):
+            page.wait_for_timeout(200)
+        r = _wait_settled(page, app)
+        moved = r.tip_b - tip0
+        assert moved[0] == pytest.approx(want, abs=2e-3)  # the handle followed the mouse
+        assert want > 0.01 and np.all(np.abs(moved[1:]) < 1e-9)    # along x only
+        q, res = ak.q_from_tool_tip(app.setup.T_b_e, r.tip_e)
+        assert res.valid
+        for i in range(3):                               # read-outs: the IK of the new tip
+            assert float(_ro(page, f"q{i + 1}")) == pytest.approx(q[i] * 1e3, abs=5e-3 + 1e-9)
+        assert np.max(np.abs(q - r0.q)) > 1e-3
+        assert page.get_attribute("[data-ro=status]", "data-level") == "ok"
+        assert errors == []
+        page.close()
+    finally:
+        app.stop()
 
 
 def test_no_page_errors(app):

@@ -294,3 +294,63 @@ def test_robust_loss_flags_the_outliers_and_matches_the_clean_fit():
     with pytest.warns(cal.CalibrationWarning, match="outliers"):
         lin = cal.calibrate(data.q, data.tips, T, D)   # flagged only
     assert np.all(lin.outliers[data.outliers])
+
+
+def test_audit_options_named():
+    """Audit of issue 13: options of the calibration reached numpy or float() unchecked
+    (frame arrays, axis_weight=None, sigma=1e308 squared to inf, tol=None, mode=10**400)."""
+    data = cal.synthetic_measurements(D, T, n=12, rng=3)
+    bad = [({"frame": np.array(["base", "base"])}, "frame"), ({"axis_weight": None}, "axis_weight"),
+           ({"sigma": 1e308}, "sigma"), ({"outlier_threshold": None}, "outlier_threshold"),
+           ({"identifiability_tol": 10**400}, "tol"), ({"tol": "x"}, "tol"),
+           ({"max_nfev": float("nan")}, "max_nfev")]
+    for kw, match in bad:
+        with pytest.raises((TypeError, ValueError), match=match):
+            cal.calibrate(data.q, data.tips, T, D, **kw)
+    with pytest.raises(InvalidInputError, match="mode"):
+        cal.random_poses(3, T, D, mode=10**400)
+    with pytest.raises(TypeError, match="margin"):
+        cal.random_poses(3, T, D, margin="x")
+    with pytest.raises(TypeError, match="rng"):
+        cal.random_poses(3, T, D, rng="seed")
+    for kw, match in (({"noise": 10**400}, "noise"), ({"true": 1.0}, "true"),
+                      ({"outlier_fraction": float("inf")}, "outlier_fraction")):
+        with pytest.raises((TypeError, ValueError), match=match):
+            cal.synthetic_measurements(D, T, n=4, rng=1, **kw)
+    with pytest.raises((TypeError, ValueError), match="J"):
+        cal.analyse_jacobian(None, ("a",))
+
+
+def test_audit_writers_and_plots_named(tmp_path):
+    """Audit of issue 13: a result that is not a CalibrationResult, q=None, a non-str
+    comment reached AttributeError / numpy tracebacks in the writers and plots."""
+    for fn in (cal.calibration_toml, cal.plot_residuals, cal.plot_parameter_confidence,
+               cal.tip_error_map):
+        with pytest.raises(TypeError, match="result"):
+            fn(None)
+    with pytest.raises(TypeError, match="result"):
+        cal.write_report(None, tmp_path / "r")
+    with pytest.raises(TypeError, match="m"):
+        cal.plot_tip_error_map(None)
+    q = np.array([[-0.1, 0.1, 0.45]])
+    with pytest.raises(TypeError, match="q"):
+        cal.measurements_csv_text(None, q)
+    with pytest.raises(ValueError, match="tips"):
+        cal.measurements_csv_text(q, np.zeros((2, 3)))
+    with pytest.raises(TypeError, match="comment"):
+        cal.plan_csv_text(q, comment=1)
+    assert cal.plan_csv_text(q).count("\n") == 3
+
+
+def test_audit_identifiability_arguments_named():
+    """Audit of issue 13: unknown parameter names (KeyError), frame arrays and a 400-digit
+    depth reached the internals unchecked."""
+    with pytest.raises(ValueError, match="names"):
+        cal.analyse_jacobian(np.zeros((3, 3)), ("a", "b", "c"))
+    data = cal.synthetic_measurements(D, T, n=12, rng=3)
+    with pytest.raises(ValueError, match="frame"):
+        cal.identifiability(data.q, T, D, frame=np.array(["base", "base"]))
+    res = cal.calibrate(data.q, data.tips, T, D)
+    for kw, match in (({"depth": 10**400}, "depth"), ({"resolution": (3, 10**9)}, "resolution")):
+        with pytest.raises(ValueError, match=match):
+            cal.tip_error_map(res, **kw)

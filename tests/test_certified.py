@@ -301,3 +301,9 @@ def test_cli_fk_certify_unreachable_and_missing_flint(capsys, monkeypatch):
     monkeypatch.setattr(builtins, "__import__", no_flint)
     assert main(["fk", "-0.10", "0.10", "0.45", "--certify"]) != 0
     assert "pip install 'athenakin[certified]'" in capsys.readouterr().err
+
+
+def test_input_tol_huge_int_named():
+    """Audit of issue 13: input_tol = 10**400 was an OverflowError."""
+    with pytest.raises(InvalidInputError, match="input_tol"):
+        certified_forward_kinematics([-0.1, 0.1, 0.45], ak.default_rcm_frame(), input_tol=10**400)

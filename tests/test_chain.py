@@ -133,3 +133,29 @@ def test_nonfinite_pose_flagged_in_batch():
     sol = ups_solutions(T)
     assert sol.valid[0].all()
     assert np.all(sol.reason[1] == Reason.NONFINITE_INPUT)
+
+
+def test_scale_and_tolerances_named():
+    """Audit of issue 13: a 400-digit scale is a named error, not an OverflowError."""
+    T = ups_transform(0.2, np.array([0.3, 0.5, 0.2, 0.4, 0.1]))
+    with pytest.raises((TypeError, ValueError), match="scale"):
+        ups_solutions(T, scale=10**400)
+    with pytest.raises(ValueError, match="closure_tol"):
+        ups_solutions(T, closure_tol=float("nan"))
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+@pytest.mark.parametrize("p", [1e8, 1e150, 1e200, 1e300])
+def test_huge_translation_valid_is_finite(p):
+    """Audit of issue 13: |t| = 1e300 overflowed |t|^2 and gave valid slots with p = inf;
+    a far pose closes to its own rounding (eps |t|), and is valid while |t|^2 is finite."""
+    T = ups_transform(p, np.array([0.3, 0.5, 0.2, 0.4, 0.1]))
+    sol = ups_solutions(T)
+    assert np.all(np.isfinite(sol.p[sol.valid]))
+    assert sol.valid.any() == (p < 1e154)
+
+
+def test_scale_must_broadcast_to_the_batch():
+    T = ups_transform(0.2, np.array([0.3, 0.5, 0.2, 0.4, 0.1]))
+    with pytest.raises(ValueError, match="scale"):
+        ups_solutions(T, scale=[])

@@ -339,3 +339,47 @@ def test_layers_import_downwards_only(layer, forbidden):
     for path in sorted((SRC / layer).rglob("*.py")):
         for name in _imports(path):
             assert not name.startswith(forbidden), f"{path.name} imports {name}"
+
+
+# --- the audit of issue 13 (scripts/audit_api.py) -------------------------------------------
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("kw, match", [
+    ({"method": np.array(["closed", "closed"])}, "method"),
+    ({"errors": np.array(["auto", "auto"])}, "errors"),
+    ({"tangent_tol": np.array([1e-7, 1e-7])}, "tangent_tol"),
+    ({"closure_tol": 10**400}, "closure_tol"),
+    ({"fields": 2.0}, "fields"),
+])
+def test_fk_option_arrays_named(backend, kw, match):
+    """The lean single-call path compares options with ``==``: an array must not reach it."""
+    T = ak.default_rcm_frame()
+    q = np.array([-0.1, 0.1, 0.45])
+    ak.forward_kinematics(q, T, backend=backend)           # warm: the lean path is live
+    with pytest.raises((TypeError, ValueError), match=match):
+        ak.forward_kinematics(q, T, backend=backend, **kw)
+
+
+@pytest.mark.parametrize("fn, args", [
+    (ak.forward_kinematics, ([-0.1, 0.1, 0.45], None)),
+    (ak.inverse_kinematics, (None, [0.1, 0.2, 0.3])),
+    (ak.q_from_tool_tip, (None, [0.0, 0.0, 0.1])),
+])
+def test_backend_not_a_string_named(fn, args):
+    a = tuple(ak.default_rcm_frame() if x is None else x for x in args)
+    with pytest.raises(ValueError, match="backend"):
+        fn(*a, backend=np.array(["numpy", "numpy"]))
+
+
+@pytest.mark.parametrize("t", [1e8, 1e12])
+def test_far_rcm_backends_agree(t):
+    """A pose 1e8 m away closes only to eps * 1e8: both backends allow that rounding."""
+    T = ak.default_rcm_frame().copy()
+    T[:3, 3] = t
+    q = np.array([-0.1, 0.1, 0.45])
+    ref = ak.forward_kinematics(q, T, errors="flag", backend="numpy")
+    assert ref.valid.all()
+    if _dispatch.numba_available():
+        fast = ak.forward_kinematics(q, T, errors="flag", backend="numba")
+        np.testing.assert_array_equal(fast.reason, ref.reason)
+    near = ak.forward_kinematics(q, ak.default_rcm_frame(), backend="numpy")
+    assert near.residual.max() < 1e-12     # the allowance is rounding, nothing near

@@ -307,6 +307,17 @@ def test_near_singular_band_matches_reference(which):
         akt.assert_angles_equal(got.u[..., k][got.valid], ref.u[..., k][ref.valid], atol=1e-12)
 
 
+def test_control_loop_insertion_named():
+    """Audit of issue 13: p = 10**400 was OverflowError, p = "x" an unnamed ValueError."""
+    loop = ak.fast.ControlLoop(ak.default_rcm_frame())
+    d = np.array([0.0, 0.0, 1.0])
+    q, reason = loop.q_from_instrument(d, 10**400)         # beyond float range: flagged
+    assert reason == ak.Reason.NONFINITE_INPUT and np.isnan(q).all()
+    for bad in ("0.1", [0.1], None):
+        with pytest.raises(TypeError, match="p: expected a real number"):
+            loop.q_from_instrument(d, bad)
+
+
 def test_every_compiled_kernel_releases_the_gil():
     """Each numba kernel runs with ``nogil=True``: Python threads (Dask's default threaded
     scheduler in athenakin.synthesis, a user's thread pool) then compute in parallel."""

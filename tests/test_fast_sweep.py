@@ -96,3 +96,20 @@ def test_sweep_argument_errors():
         fast.sweep_fk(np.zeros((4, 3)), np.stack([T0, T0]), DESIGN, progress=False)
     with pytest.raises(InvalidInputError, match="n: expected at most"):
         fast.sweep_fk(np.zeros((4, 3)), T0, DESIGN, n=5, progress=False)
+
+
+def test_sweep_counts_and_out_named():
+    """Audit of issue 13: q = 10**400, n = inf, out = 1.0 were raw Overflow/AttributeErrors."""
+    T = ak.default_rcm_frame()
+    with pytest.raises((TypeError, ValueError), match="q"):
+        fast.sweep_fk([[10**400, 0, 0.45]], T, progress=False)
+    with pytest.raises(InvalidInputError, match="n"):
+        fast.sweep_fk(np.zeros((2, 3)), T, n=float("inf"), progress=False)
+    with pytest.raises(TypeError, match="out"):
+        fast.forward_kinematics(np.zeros((2, 3)), T, out=1.0)
+
+
+def test_sweep_tolerances_named():
+    with pytest.raises(InvalidInputError, match="closure_tol"):
+        fast.sweep_fk(np.zeros((2, 3)), ak.default_rcm_frame(), closure_tol=10**400,
+                      progress=False)

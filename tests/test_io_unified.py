@@ -67,3 +67,13 @@ def test_animate_refuses_incomplete_readings(tmp_path):
     with pytest.raises(ValueError, match="reading 1 is incomplete"):
         _animate.read_q_file(f)
     assert math.isnan(read_q_stream_csv(f)[0][1, 1])    # the tracker's reader keeps it (LOST)
+
+
+@pytest.mark.parametrize("bad", [0, 1, True, None, b"q.csv"])
+def test_path_arguments_are_paths(bad, tmp_path):
+    """Audit of issue 13: an int path was taken for a file descriptor (``path=True`` read
+    or wrote, then closed, the process's stdout); a path is a str or os.PathLike."""
+    with pytest.raises(TypeError, match="path"):
+        read_q_stream_csv(bad)
+    with pytest.raises(TypeError, match="path"):
+        motion_io.write_text_atomic(bad, "x")

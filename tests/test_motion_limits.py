@@ -156,3 +156,23 @@ def test_chunked_sampling_gives_the_same_trajectory(monkeypatch):
 def test_new_errors_are_motion_errors():
     assert issubclass(PathInfeasibleError, SafetyViolationError)
     assert issubclass(TrajectoryLimitError, MotionError)
+
+
+def test_margins_and_measures_arguments_named():
+    """Audit of issue 13: Margins(half_chord=10**400) and singularity_measures(q="abc",
+    T_b_e=None, design=None) were Overflow/Value/KeyErrors from inside."""
+    with pytest.raises(ValueError, match="half_chord"):
+        Margins(half_chord=10**400)
+    d = ak.Design.default()
+    T = ak.default_rcm_frame(d)
+    q = np.array([-0.1, 0.1, 0.45])
+    tip = np.zeros(3)
+    from athenakin.motion import singularity_measures
+    with pytest.raises(TypeError, match="q"):
+        singularity_measures("abc", tip, T, d)
+    with pytest.raises(TypeError, match="T_b_e"):
+        singularity_measures(q, tip, None, d)
+    with pytest.raises(ValueError, match="mode"):
+        singularity_measures(q, tip, T, d, mode=[])
+    m = singularity_measures(q, tip, T, None)        # design None: the default, as elsewhere
+    assert np.isfinite(m.h)

@@ -298,3 +298,15 @@ def test_bad_arguments():
         Tracker(T, D, q0=Q_REF, margins=0.01)
     with pytest.raises(ak.InvalidInputError, match="q_stream"):
         track(np.zeros((0, 3)), T, D)
+
+
+def test_tracker_slot_bool_and_mapping_reading_named():
+    """Audit of issue 13: slot=True and a dict reading were numpy / KeyError tracebacks."""
+    d = ak.Design.default()
+    T = ak.default_rcm_frame(d)
+    q0 = np.array([-0.1, 0.1, 0.45])
+    with pytest.raises(ak.InvalidInputError, match="slot"):
+        ak.motion.Tracker(T, d, q0=q0, slot=True)
+    tr = ak.motion.Tracker(T, d, q0=q0)
+    with pytest.raises(ak.InvalidInputError, match="q: expected 3 numbers"):
+        tr.update({"q1": -0.1})

@@ -177,3 +177,26 @@ def test_input_validation_messages():
         parallel_forward_kinematics([0.1, 0.2], D)
     with pytest.raises(TypeError, match="q: expected a real array"):
         parallel_forward_kinematics("0.1 0.2 0.3", D)
+
+
+def test_circle_geometry_checks_its_arguments():
+    """Audit of issue 13: circle_geometry validates q and design like the other functions."""
+    D = ak.Design.default()
+    with pytest.raises(TypeError, match="q"):
+        circle_geometry(None, D)
+    with pytest.raises(ak.InvalidInputError, match="q"):
+        circle_geometry(np.zeros((2, 4)), D)
+    with pytest.raises(TypeError, match="design"):
+        circle_geometry([0.0, 0.0, 0.45], "default")
+    g = circle_geometry([[np.nan, 0.0, 0.45]], D)         # NaN items stay NaN, no raise
+    assert np.isnan(g["w"]).all()
+
+
+def test_tolerance_and_error_arguments_named():
+    D = ak.Design.default()
+    sol = ak.parallel.parallel_forward_kinematics([-0.1, 0.1, 0.45], D)
+    for tol in (None, float("nan"), -1.0):
+        with pytest.raises((TypeError, ValueError), match="tol"):
+            ak.parallel.parallel_inverse_kinematics(sol.T_b_s[0], D, tol=tol)
+    with pytest.raises((TypeError, ValueError), match="dO"):
+        ak.parallel.position_ik_error(sol.O_s[0], D, dO=10**400)

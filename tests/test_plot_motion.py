@@ -58,3 +58,19 @@ def test_actuator_plots_in_mm(traj):
                                               "acceleration [mm/s²]", "jerk [mm/s³]"]
     np.testing.assert_allclose(axes[0].lines[0].get_ydata(), 1e3 * traj.q[:, 0])
     plt.close(axes[0].figure)
+
+
+def test_audit_arguments_named(traj):
+    """Audit of issue 13: a plot of None, an ax that is not an Axes, shafts=None and
+    dpi=20000 were AttributeError / TypeError tracebacks or a memory blow-up."""
+    with pytest.raises(TypeError, match="traj"):
+        plot_actuators(None)
+    with pytest.raises(TypeError, match="ax"):
+        plot_tip_path(traj, ax=float("nan"))
+    with pytest.raises(TypeError, match="shafts"):
+        plot_tip_path(traj, shafts=None)
+    with pytest.raises(TypeError, match="traj"):
+        ak.motion.save_trajectory(None, "x.csv")
+    with pytest.raises(ak.InvalidInputError, match="dpi"):
+        ak.motion.save_plots(traj, "fig", dpi=20000)
+    plt.close("all")

@@ -396,3 +396,54 @@ def test_same_error_type_on_both_backends(kw):
                 assert len(kinds) == 1, (T, u, p, kinds)
             kinds = {_kind(ak.q_from_tool_tip, T, u, D, backend=b, **e) for b in BACKENDS}
             assert len(kinds) == 1, (T, u, kinds)
+
+
+# --- the audit's classes of bug (scripts/audit_api.py, issue 13) -----------------------------
+@st.composite
+def boundary_q(draw: st.DrawFn) -> np.ndarray:
+    """q on an edge of the actuator space: q1 = q2, |q1 - q2| / 2 = l3, within a few ulps."""
+    x = draw(st.floats(-0.1, 0.1))
+    q3 = draw(st.floats(0.3, 0.55))
+    ulps = draw(st.integers(-4, 4)) * np.finfo(float).eps
+    h = draw(st.sampled_from([0.0, D.l3])) * (1 + ulps)
+    return np.array([x - h, x + h, q3])
+
+
+@NET
+@given(q=boundary_q(), T=rigid())
+def test_ik_round_trip_at_the_edges_net(q, T):
+    """FK -> IK at q1 = q2 and |h| = l3: never "out of workspace" for a pose the FK made,
+    and a valid q within the q_error it reports (the audit found both broken at |h| = l3)."""
+    sol = ak.forward_kinematics(q, T, FREE, errors="flag", backend="numpy")
+    for k in np.flatnonzero(sol.valid)[:4]:
+        for backend in BACKENDS:
+            qq, pas = ak.inverse_kinematics(T, sol.u[k, 2:], FREE, errors="flag",
+                                            backend=backend)
+            if pas.valid:
+                assert np.abs(qq - q).max() <= pas.q_error
+            else:
+                assert pas.reason in (ak.Reason.IK_SINGULAR, ak.Reason.CLOSURE_FAILED)
+
+
+OPTION_VALUES = [np.array([1e-7, 1e-7]), np.array(["auto", "auto"]), 10**400, None, [1.0],
+                 float("nan"), object()]
+
+
+@pytest.mark.parametrize("fn, args, options", [
+    (ak.forward_kinematics, ("q", "T"), ("method", "errors", "tangent_tol", "degenerate_tol",
+                                         "p_zero_tol", "closure_tol", "fields", "backend")),
+    (ak.inverse_kinematics, ("T", "u"), ("errors", "singular_tol", "closure_tol", "fields",
+                                         "backend")),
+    (ak.q_from_tool_tip, ("T", "tip"), ("errors", "backend")),
+    (ak.analysis.tool_tip_jacobian, ("q", "T"), ("frame", "backend")),
+])
+def test_hostile_options_named(fn, args, options):
+    """Every option keyword given an array, a 400-digit int, None, a list, NaN or an object:
+    a named error or a result, on every backend, also on the lean single-call paths."""
+    values = {"q": np.array([-0.1, 0.1, 0.45]), "T": T0.copy(), "u": np.array([0.1, 0.2, 0.3]),
+              "tip": np.array([0.0, 0.0, 0.1])}
+    a = tuple(values[n] for n in args)
+    named_call([], fn, *a)                          # warm: the lean paths are live
+    for name in options:
+        for v in OPTION_VALUES:
+            named_call([name], fn, *a, **{name: v})

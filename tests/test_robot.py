@@ -445,3 +445,57 @@ def test_ik_stroke_violation_names_the_actuator():
     assert bad.size
     with pytest.raises(ak.StrokeLimitError, match="q[123] = .* m [<>] q_m(in|ax) = "):
         ak.q_from_tool_tip(T, tips[bad[0]], D)
+
+
+# --- the audit of issue 13 (scripts/audit_api.py): options checked by name --------------------
+@pytest.mark.parametrize("kw, match", [
+    ({"method": np.array(["closed", "closed"])}, "method"),
+    ({"errors": np.array(["auto", "auto"])}, "errors"),
+    ({"backend": np.array(["numpy", "numpy"])}, "backend"),
+    ({"tangent_tol": 10**400}, "tangent_tol"),
+    ({"closure_tol": 10**400}, "closure_tol"),
+    ({"fields": 1.5}, "fields"),
+    ({"fields": [1, 2]}, "fields"),
+    ({"fields": np.array("p")}, "fields"),
+])
+def test_reference_fk_options_named(kw, match):
+    """An array, a huge int or a non-iterable option is a named error, not numpy's."""
+    with pytest.raises((TypeError, ValueError), match=match):
+        ak.robot.forward_kinematics([-0.1, 0.1, 0.45], ak.default_rcm_frame(D), D, **kw)
+
+
+@pytest.mark.parametrize("kw", [{"singular_tol": 10**400}, {"fields": 3},
+                                {"backend": np.array(["numpy", "numpy"])}])
+def test_reference_ik_options_named(kw):
+    with pytest.raises((TypeError, ValueError), match=next(iter(kw))):
+        ak.robot.inverse_kinematics(ak.default_rcm_frame(D), [0.1, 0.2, 0.3], D, **kw)
+
+
+def test_fields_accepts_any_sequence_of_names():
+    T = ak.default_rcm_frame(D)
+    for fields in (["p", "valid"], ("p", "valid"), np.array(["p", "valid"]), "p"):
+        sol = ak.robot.forward_kinematics([-0.1, 0.1, 0.45], T, D, fields=fields)
+        assert sol.p.shape == (16,)
+
+
+@pytest.mark.parametrize("bad", [np.array([1, 1]), np.array([]), "1", None, [1]])
+def test_slot_index_rejects_arrays_by_name(bad):
+    with pytest.raises(ValueError, match="mode"):
+        ak.robot.slot_index(bad, 1, 1, 1)
+    assert ak.robot.slot_index(-1, -1, -1, -1) == 15
+
+
+@pytest.mark.parametrize("backend", ["numpy", pytest.param("numba", marks=pytest.mark.skipif(
+    not ak._dispatch.numba_available(), reason="numba not available"))])
+def test_ik_at_links_l3_stretched(backend):
+    """Audit of issue 13: at |q1 - q2| / 2 = l3 the FK finds 16 slots; the IK of each comes
+    back valid (was LINK_TOO_SHORT for 10 of them) and within its q_error (was 2e-9 m off
+    with q_error 3e-13: the bound missed the square root of m_y = sqrt(l3^2 - h^2))."""
+    T = ak.default_rcm_frame(D)
+    q = np.array([-D.l3, D.l3, 0.45])
+    sol = ak.forward_kinematics(q, T, D, errors="flag", backend="numpy")
+    assert sol.valid.all()
+    qq, pas = ak.inverse_kinematics(T, sol.u[:, 2:], D, errors="flag", backend=backend)
+    np.testing.assert_array_equal(pas.reason, 0)
+    assert np.all(np.abs(qq - q).max(axis=-1) <= pas.q_error)
+    assert pas.q_error.max() < 1e-6          # ill-conditioned (sqrt), still sub-micrometre

@@ -222,3 +222,30 @@ def test_check_detects_a_micrometre_error():
     wrong = mechanism_joint_values(q, ak.default_rcm_frame(d), wrong_design).geometry.points["tip"]
     assert np.linalg.norm(tip - good) < TOL
     assert np.linalg.norm(tip - wrong) > 100 * TOL
+
+
+def test_audit_arguments_named():
+    """Audit of issue 13: settle(None, ...), perturb=None, slot=nan, radius=nan and an
+    unreachable sample were AttributeError / TypeError / IndexError / RuntimeError."""
+    d = ak.Design.default()
+    T = ak.default_rcm_frame(d)
+    model = ak.sim.load_model(d, T)
+    data = mujoco.MjData(model)
+    with pytest.raises(TypeError, match="model"):
+        ak.sim.settle(None, data, REFERENCE_Q)
+    with pytest.raises(TypeError, match="data"):
+        ak.sim.settle(model, None, REFERENCE_Q)
+    with pytest.raises(ak.InvalidInputError, match="ramp_time"):
+        ak.sim.settle(model, data, REFERENCE_Q, ramp_time=1e200)
+    with pytest.raises(TypeError, match="perturb"):
+        ak.sim.check_fk_with_mujoco(REFERENCE_Q, d, T, perturb=None)
+    with pytest.raises(ak.InvalidInputError, match="slot"):
+        ak.sim.sample_reachable_q(2, d, T, slot=float("nan"))
+    with pytest.raises(ak.InvalidInputError, match="radius"):
+        ak.sim.sample_reachable_q(2, d, T, radius=float("nan"))
+    with pytest.raises(ak.OutOfWorkspaceError, match="reachable"):
+        ak.sim.sample_reachable_q(2, d, np.eye(4), rng=1, max_tries=2)
+    with pytest.raises(TypeError, match="model_name"):
+        ak.sim.mjcf_from_design(d, T, model_name=None)
+    with pytest.raises(TypeError, match="rng"):
+        ak.sim.sample_reachable_q(2, d, T, rng=[[1.0, 2.0, 3.0], [4.0]])

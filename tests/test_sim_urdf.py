@@ -215,3 +215,15 @@ def test_rpy_conversion_agrees_with_scipy_and_survives_gimbal_lock():
         R = Rotation.from_euler("xyz", [0.3, pitch, -0.7]).as_matrix()
         np.testing.assert_allclose(_matrix_from_rpy(tuple(_rpy_from_matrix(R))), R, rtol=0,
                                    atol=1e-12)
+
+
+def test_audit_arguments_named():
+    """Audit of issue 13: robot_name=None and q_zero=10**400 named their argument."""
+    d = ak.Design.default()
+    T = ak.default_rcm_frame(d)
+    with pytest.raises(TypeError, match="robot_name"):
+        ak.sim.urdf_from_design(d, T, robot_name=None)
+    with pytest.raises(TypeError, match="q_zero"):
+        ak.sim.urdf_joint_zero(T, d, q_zero=[10**400, 0, 0])
+    with pytest.raises(TypeError, match="path"):
+        ak.sim.write_urdf(1, d, T)

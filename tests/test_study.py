@@ -247,3 +247,15 @@ def test_hypothesis_round_trip_and_scale_invariance(axis, angle, t, scale):
     T[:3, 3] = t
     X = study_from_transform(T)
     assert_transform_equal(transform_from_study(scale * X), T, atol=1e-12 * (1 + np.abs(t).max()))
+
+
+@pytest.mark.parametrize("tol", [None, float("nan"), -1.0, "1e-10", 10**400])
+def test_tolerances_named(tol):
+    """Audit of issue 13: a bad ``tol``/``atol`` names itself (was numpy's TypeError)."""
+    X = ak.study.study_from_transform(np.eye(4))
+    for f in (ak.study.is_on_study_quadric, ak.study.check_study,
+              ak.study.transform_from_study, ak.study.paper_matrix_from_study):
+        with pytest.raises((TypeError, ValueError), match="tol"):
+            f(X, tol=tol)
+    with pytest.raises((TypeError, ValueError), match="atol"):
+        ak.study.study_equal(X, X, atol=tol)

@@ -89,3 +89,9 @@ def test_calibration_rotation_vector_is_scipy_rodrigues():
         ref = (np.eye(3) + K + 0.5 * K @ K if th < 1e-8 else
                np.eye(3) + np.sin(th) / th * K + (1 - np.cos(th)) / th ** 2 * K @ K)
         np.testing.assert_allclose(rotation_from_vector(w), ref, rtol=0, atol=1e-14)
+
+
+def test_zero_quaternion_named():
+    """Audit of issue 13: a zero quaternion is InvalidInputError naming ``x`` (was scipy's)."""
+    with pytest.raises(ak.InvalidInputError, match="x: expected non-zero"):
+        scipy_rotation_from_quaternion(np.zeros((2, 4)))

@@ -332,3 +332,26 @@ def test_back_substitution_can_lose_a_root_for_special_poses():
     generic = elimination_steps()
     assert not generic.roots_lost
     assert sp.Poly(generic.back_substituted, P_SYMBOL).degree() == 2
+
+
+def test_audit_arguments_named(tmp_path):
+    """Audit of issue 13: joint_factors(nan), study_M(None) and a file that is not a cache
+    were raw TypeError / SympifyError / JSONDecodeError."""
+    from athenakin import symbolic
+    with pytest.raises(TypeError, match="v"):
+        symbolic.joint_factors(float("nan"))
+    with pytest.raises(TypeError, match="v"):
+        symbolic.study_M(None)
+    bad = tmp_path / "x.json"
+    bad.write_text("not json")
+    with pytest.raises(ValueError, match="path"):
+        symbolic.load_derivation(bad)
+
+
+@pytest.mark.parametrize("kw", [{"unknowns": "abc"}, {"equations": "abc"},
+                                {"unknowns": (0, 1, 9)}, {"equations": 3}])
+def test_elimination_indices_named(kw):
+    """Audit of issue 13: string indices reached sympy's Matrix.extract (IndexError)."""
+    from athenakin import symbolic
+    with pytest.raises((TypeError, ValueError), match=next(iter(kw))):
+        symbolic.elimination_steps(**kw)

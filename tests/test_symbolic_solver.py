@@ -257,3 +257,23 @@ def test_solver_checks_the_cache_hash_at_first_use(tmp_path, monkeypatch):
         _solver._numeric()
     monkeypatch.setattr(_solver, "__file__", str(dv.CACHE_DIR.parent / "_solver.py"))
     assert _solver._numeric() is gen
+
+
+def test_serial_tolerances_named():
+    """Audit of issue 13: a 400-digit tolerance was an OverflowError from inside."""
+    f = ak.study.study_from_transform(ups_transform(0.2, np.array([0.3, 0.5, 0.2, 0.4, 0.1])))
+    for kw in ({"degenerate_tol": 10**400}, {"p_zero_tol": None}):
+        with pytest.raises((TypeError, ValueError), match=next(iter(kw))):
+            serial_solutions_algebraic(f, **kw)
+
+
+@pytest.mark.parametrize("bad", [None, "x0", 1.0, [1, 2, 3], [object()] * 8])
+def test_symbolic_vectors_named(bad):
+    """Audit of issue 13: the symbolic helpers on a non-vector raised from inside sympy."""
+    from athenakin import symbolic
+    for fn in (symbolic.dq_conj_quaternion, symbolic.study_quadric, symbolic.paper_matrix,
+               symbolic.transform_matrix):
+        with pytest.raises((TypeError, ValueError), match="X"):
+            fn(bad)
+    with pytest.raises((TypeError, ValueError), match="X1"):
+        symbolic.dq_multiply(bad, [1, 0, 0, 0, 0, 0, 0, 0])

@@ -318,3 +318,47 @@ def test_mapping_without_strokes_is_an_unlimited_design_in_the_table() -> None:
     assert r["valid"] and r["name"] == "" and r["tool_length"] == REF.tool_length
     assert r["q1_min"] == -math.inf and r["q3_max"] == math.inf and r["size"] == math.inf
     assert r["stroke_use_q1"] == 0.0 and r["coverage"] > 0
+
+
+def test_audit_arguments_named() -> None:
+    """Audit of issue 13: designs, tasks, counts and matrices of the synthesis API were
+    AttributeError / TypeError / numpy tracebacks; each now names its argument."""
+    d = ak.Design.default()
+    task = ak.synthesis.Task(rcm=np.array([0.0, 0.3, 0.1]), axis=np.array([0.0, 0.0, -1.0]),
+                             half_angle=0.3, depth=(0.05, 0.1))
+    with pytest.raises(TypeError, match="design"):
+        ak.synthesis.row_from_design(None)
+    with pytest.raises(TypeError, match="design"):
+        ak.synthesis.default_bounds(float("nan"))
+    with pytest.raises(TypeError, match="spread"):
+        ak.synthesis.default_bounds(d, spread=None)
+    with pytest.raises(TypeError, match="design"):
+        ak.synthesis.evaluate_design(None, task, samples=10)
+    with pytest.raises(TypeError, match="task"):
+        ak.synthesis.reachability(d, [[1, 2]], samples=10)
+    with pytest.raises(InvalidInputError, match="samples"):
+        ak.synthesis.reachability(d, task, samples=10**400)
+    with pytest.raises((TypeError, ValueError), match="F"):
+        ak.synthesis.pareto_mask(None)
+    with pytest.raises(TypeError, match="row"):
+        ak.synthesis.design_from_row(None)
+    with pytest.raises(InvalidInputError, match="rcm"):
+        ak.synthesis.rcm_frame_from_axis([10**400, 0, 0], [0, 0, 1.0])
+
+
+def test_audit_study_arguments_named(tmp_path) -> None:
+    """Audit of issue 13: optimize(reference=nan, generations=1e308), evaluate(out=nan,
+    on_chunk=nan) and design_rows(0-d array) named the wrong argument or none."""
+    pytest.importorskip("pandas")
+    task = ak.synthesis.Task(rcm=np.array([0.0, 0.3, 0.1]), axis=np.array([0.0, 0.0, -1.0]),
+                             half_angle=0.3, depth=(0.05, 0.1))
+    with pytest.raises(TypeError, match="reference"):
+        ak.synthesis.optimize(task, reference=float("nan"))
+    with pytest.raises(InvalidInputError, match="generations"):
+        ak.synthesis.optimize(task, generations=1e308)
+    with pytest.raises(TypeError, match="out"):
+        ak.synthesis.evaluate([ak.Design.default()], task, samples=10, out=float("nan"))
+    with pytest.raises(TypeError, match="on_chunk"):
+        ak.synthesis.evaluate([ak.Design.default()], task, samples=10, on_chunk=1.0)
+    with pytest.raises(TypeError, match="designs"):
+        ak.synthesis.design_rows(np.array(1.0))

@@ -10,6 +10,7 @@ import csv
 from pathlib import Path
 
 from ._input import MAX_TABLE_BYTES, read_bytes
+from ._validation import check_path
 
 __all__ = ["read_table"]
 
@@ -38,7 +39,7 @@ def read_table(path: str | Path, *, header_row: bool = True, error: type[Excepti
     rows : list of (int, list of str)
         1-based line numbers and the cells of each data row.
     """
-    path = Path(path)
+    path = check_path(path)
     raw = read_bytes(path, limit=MAX_TABLE_BYTES, error=error, what="CSV file")
     try:
         text = raw.decode("utf-8-sig")  # a byte-order mark is not a column

@@ -7,7 +7,11 @@ with the argument's name, what was expected and what was received.
 
 from __future__ import annotations
 
+import math
 import numbers
+import os
+from collections.abc import Iterable, Mapping
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -168,10 +172,154 @@ def check_tolerance(x: object, name: str) -> float:
     if isinstance(x, bool) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
         raise TypeError(f"{name}: expected a non-negative real number (a tolerance), "
                         f"got {type(x).__name__}")
-    v = float(x)
+    try:
+        v = float(x)
+    except OverflowError:      # an int beyond float range (10**400)
+        raise InvalidInputError(f"{name}: expected a non-negative tolerance, got an integer "
+                                f"too large for a float") from None
     if not v >= 0:
         raise InvalidInputError(f"{name}: expected a non-negative tolerance, got {v}")
     return v
+
+
+def check_choice(x: object, name: str, choices: tuple[str, ...]) -> str:
+    """Check a string option (``errors=``, ``method=``, ``backend=``, ``frame=``...).
+
+    Only a ``str`` among ``choices`` passes: an array, a list or any other object
+    raises here rather than deep inside a comparison (``np.array(["a", "a"]) == "a"``
+    has no truth value).
+
+    Raises
+    ------
+    ValueError
+        ``x`` is not one of ``choices``.
+    """
+    if not (isinstance(x, str) and x in choices):
+        raise ValueError(f"{name}: expected one of {choices}, got {x!r}")
+    return x
+
+
+def is_option(x: object, value: str) -> bool:
+    """``x == value`` for a string option, False (never an error) for any other object."""
+    return isinstance(x, str) and x == value
+
+
+def is_raising_policy(errors: object) -> bool:
+    """``errors`` is ``"auto"`` or ``"raise"`` (a str; False for any other object)."""
+    return is_option(errors, "auto") or is_option(errors, "raise")
+
+
+def is_default(x: object, default: float) -> bool:
+    """``x`` is the float ``default`` itself (a fast path's test; False for arrays, None...)."""
+    return type(x) is float and x == default
+
+
+def check_names(fields: object, name: str, allowed: tuple[str, ...]) -> tuple[str, ...] | None:
+    """Check a ``fields=`` keyword: None, one name, or a list / tuple of names in ``allowed``.
+
+    Raises
+    ------
+    TypeError
+        ``fields`` is not None, a str, or a list / tuple of str.
+    ValueError
+        A name is not in ``allowed``.
+    """
+    if fields is None:
+        return None
+    if isinstance(fields, str):
+        names: tuple[object, ...] = (fields,)
+    elif (isinstance(fields, Iterable) and not isinstance(fields, (bytes, Mapping))
+          and not (isinstance(fields, np.ndarray) and fields.ndim != 1)):
+        names = tuple(fields)
+    else:
+        raise TypeError(f"{name}: expected None, a name or a list of names among {allowed}, "
+                        f"got {type(fields).__name__}")
+    if not all(isinstance(f, str) for f in names):
+        raise TypeError(f"{name}: expected names (str) among {allowed}, got {list(names)!r}")
+    bad = [f for f in names if f not in allowed]
+    if bad:
+        raise ValueError(f"{name}: expected names among {allowed}, got {bad}")
+    return names  # type: ignore[return-value]
+
+
+def check_count(x: object, name: str, *, minimum: int = 1, maximum: int | None = None) -> int:
+    """Coerce a count (number of samples, points, iterations): an integer in range.
+
+    An integral float (``801.0``) is accepted; NaN, inf, fractions, bools and huge
+    values are refused by name before anything is allocated.
+
+    Raises
+    ------
+    TypeError
+        ``x`` is not a real number.
+    InvalidInputError
+        ``x`` is not an integer, or is out of ``[minimum, maximum]``.
+    """
+    if isinstance(x, bool) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
+        raise TypeError(f"{name}: expected an integer, got {type(x).__name__}")
+    if isinstance(x, (numbers.Integral, np.integer)):
+        v = int(x)
+    else:
+        fx = float(x)
+        if not (math.isfinite(fx) and fx.is_integer()):
+            raise InvalidInputError(f"{name}: expected an integer, got {fx}")
+        v = int(fx)
+    if v < minimum or (maximum is not None and v > maximum):
+        hi = "" if maximum is None else f" and <= {maximum:,}"
+        shown = (f"{v}" if abs(v) < 10**15
+                 else f"an integer of about {int(abs(v).bit_length() * 0.30103)} digits")
+        raise InvalidInputError(f"{name}: expected an integer >= {minimum}{hi}, got {shown}")
+    return v
+
+
+def check_instance(x: object, name: str, cls: type | tuple[type, ...]) -> None:
+    """Refuse ``x`` unless it is an instance of ``cls`` (a result object, a model...).
+
+    Raises
+    ------
+    TypeError
+        Naming the argument, the expected and the received type.
+    """
+    if not isinstance(x, cls):
+        want = " or ".join(c.__name__ for c in (cls if isinstance(cls, tuple) else (cls,)))
+        raise TypeError(f"{name}: expected {want}, got {type(x).__name__}")
+
+
+def check_axes(ax: object, name: str = "ax") -> None:
+    """Refuse an ``ax`` that is not None and not a matplotlib Axes (anything with ``plot``)."""
+    if ax is not None and not callable(getattr(ax, "plot", None)):
+        raise TypeError(f"{name}: expected a matplotlib Axes or None, got {type(ax).__name__}")
+
+
+def check_rng(rng: object, name: str = "rng") -> np.random.Generator:
+    """``np.random.default_rng(rng)``, with a named error for what it cannot seed from."""
+    try:
+        return np.random.default_rng(rng)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as exc:
+        raise TypeError(f"{name}: expected a seed (non-negative int), a numpy Generator or "
+                        f"None, got {type(rng).__name__} ({exc})") from None
+
+
+def check_path(x: object, name: str = "path") -> Path:
+    """Coerce a file path argument: a ``str`` or ``os.PathLike``, not empty.
+
+    An int would be taken by ``open`` for a file descriptor (``open(1, "w")`` writes
+    to, then closes, the process's stdout); bytes, None and the rest are refused too.
+
+    Raises
+    ------
+    TypeError
+        ``x`` is not a str or an ``os.PathLike``.
+    InvalidInputError
+        ``x`` is empty.
+    """
+    if not isinstance(x, (str, os.PathLike)):
+        raise TypeError(f"{name}: expected a file path (str or os.PathLike), got "
+                        f"{type(x).__name__}")
+    p = Path(x)
+    if str(x) == "":
+        raise InvalidInputError(f"{name}: expected a file path, got an empty string")
+    return p
 
 
 #: Values of the ``errors=`` keyword of the batch functions.
@@ -197,8 +345,7 @@ def check_options(errors: object, **tolerances: object) -> tuple[float, ...]:
     TypeError, InvalidInputError
         A tolerance is not a non-negative real number.
     """
-    if not (isinstance(errors, str) and errors in ERROR_POLICIES):
-        raise ValueError(f"errors: expected one of {ERROR_POLICIES}, got {errors!r}")
+    check_choice(errors, "errors", ERROR_POLICIES)
     return tuple(check_tolerance(v, k) for k, v in tolerances.items())
 
 

@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import invert_transform
-from .._validation import broadcast_batch, check_array, check_tolerance
+from .._validation import broadcast_batch, check_array, check_count, check_scalar, check_tolerance
 from ..chain import ups_solutions
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
@@ -225,13 +225,29 @@ def condition_number(J: ArrayLike) -> NDArray[np.float64]:
             np.isfinite(s[..., 0]), 1.0, np.nan)
 
 
+def _check_matrix(J: ArrayLike) -> NDArray[np.float64]:
+    """``J`` as a float array of matrices (..., m, n), m, n >= 1 (NaN / inf kept)."""
+    if isinstance(J, (str, bytes)) or J is None:
+        raise TypeError(f"J: expected a real array of shape (..., m, n), got {type(J).__name__}")
+    try:
+        a = np.asarray(J)
+    except (ValueError, TypeError) as exc:
+        raise TypeError(f"J: expected a real array of shape (..., m, n) ({exc})") from None
+    if a.dtype.kind not in "biuf":
+        raise TypeError(f"J: expected real numbers, got dtype {a.dtype}")
+    if a.ndim < 2 or 0 in a.shape[-2:]:
+        raise InvalidInputError(f"J: expected matrices of shape (..., m, n) with m, n >= 1, "
+                                f"got shape {a.shape}")
+    return a.astype(np.float64, copy=False)
+
+
 def _svd(J: ArrayLike) -> NDArray[np.float64]:
     """Singular values (..., k), descending, NaN where J is not finite.
 
     An infinite entry (and no NaN) gives ``sigma_max = inf``, the limit at a
     forward singularity.
     """
-    J = np.asarray(J, dtype=float)
+    J = _check_matrix(J)
     ok = np.all(np.isfinite(J), axis=(-2, -1))
     s = np.linalg.svd(np.where(ok[..., None, None], J, 0.0), compute_uv=False)
     s = np.where(ok[..., None], s, np.nan)
@@ -255,9 +271,7 @@ def _tolerances(tol: float | Mapping[str, float] | None) -> dict[str, float]:
     if isinstance(tol, bool) or not isinstance(tol, (int, float, np.floating, np.integer)):
         raise TypeError(f"tol: expected a number or a mapping name -> number, got "
                         f"{type(tol).__name__}")
-    if not tol >= 0:
-        raise InvalidInputError(f"tol: expected a non-negative number, got {tol}")
-    return dict.fromkeys(CONDITIONS, float(tol))
+    return dict.fromkeys(CONDITIONS, check_tolerance(tol, "tol"))
 
 
 def singularities(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None = None,
@@ -433,6 +447,10 @@ def _instrument_measures(q: NDArray[np.float64], g: dict[str, NDArray[np.float64
             "tool_tip_condition": np.where(np.isfinite(st[..., 0]), tcond, np.nan)}
 
 
+#: Most samples of a singular-set curve (``n`` of :func:`singularity_loci`, ...).
+MAX_SAMPLES = 10_000_000
+
+
 def singularity_loci(design: Design | None = None, *, n: int = 801,
                      h_range: tuple[float, float] | None = None
                      ) -> dict[str, NDArray[np.float64]]:
@@ -461,7 +479,7 @@ def singularity_loci(design: Design | None = None, *, n: int = 801,
     design = resolve_design(design)
     hmax = min(design.l1, design.l3)
     lo, hi = h_range if h_range is not None else (-hmax, hmax)
-    h = np.linspace(lo, hi, int(n))
+    h = np.linspace(lo, hi, check_count(n, "n", minimum=2, maximum=MAX_SAMPLES))
     with np.errstate(invalid="ignore"):
         r1 = np.sqrt(design.l1 ** 2 - h * h)
         d = np.hypot(np.sqrt(design.l3 ** 2 - h * h) + design.l2, design.l5)
@@ -520,7 +538,8 @@ def singular_sets_within_strokes(design: Design | None = None, *, n: int = 4001
     out["k2_degenerate"] = {"reachable": bool(lo[2] <= 0.0),
                             "detail": f"q3 from {lo[2]:.4g} m"}
     top = min(b, design.l3, design.l1)
-    h = np.linspace(a, top, int(n)) if top > a else np.array([a])
+    n = check_count(n, "n", minimum=2, maximum=MAX_SAMPLES)
+    h = np.linspace(a, top, n) if top > a else np.array([a])
     r1 = np.sqrt(design.l1 ** 2 - h * h)
     d = np.hypot(np.sqrt(np.maximum(design.l3 ** 2 - h * h, 0.0)) + design.l2, design.l5)
     inner, outer = np.abs(d - r1), d + r1
@@ -581,12 +600,12 @@ def near_singular_configurations(name: str, distances: ArrayLike, design: Design
     from ..robot import REFERENCE_Q
 
     design = resolve_design(design)
-    e = np.asarray(distances, dtype=float).reshape(-1)
+    e = check_array(distances, "distances", ()).reshape(-1)
     n = e.size
     T0 = _rcm(None, design)
     if name not in MEASURE_OF:
         raise InvalidInputError(f"name: expected one of {list(MEASURE_OF)}, got {name!r}")
-    hh = -0.9 * min(design.l1, design.l3) if h is None else float(h)
+    hh = -0.9 * min(design.l1, design.l3) if h is None else check_scalar(h, "h")
     if name == "ab_coincide":
         q = np.stack([-e, e, np.full(n, REFERENCE_Q[2])], axis=-1)
     elif name == "d_on_rail":

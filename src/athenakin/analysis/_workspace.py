@@ -24,6 +24,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import json
+import math
 import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -32,7 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_transform
+from .._validation import check_array, check_path, check_transform
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..parallel import parallel_ik_from_position
@@ -64,12 +65,26 @@ PROGRESS_THRESHOLD = 500_000
 # --------------------------------------------------------------------------------------
 # helpers
 # --------------------------------------------------------------------------------------
+#: Most grid points a workspace function evaluates: each point keeps a few hundred bytes
+#: of results, so a larger grid is a memory error in the making, refused up front.
+MAX_GRID_POINTS = 50_000_000
+
+
 def _resolution(res: int | tuple[int, ...], n: int, name: str = "resolution") -> tuple[int, ...]:
-    r: tuple[Any, ...] = (res,) * n if np.ndim(res) == 0 else tuple(res)  # type: ignore[arg-type]
+    try:
+        scalar = np.ndim(res) == 0
+        r: tuple[Any, ...] = (res,) * n if scalar else tuple(res)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{name}: expected an int >= 2 or {n} of them, got "
+                                f"{res!r}") from None
     if len(r) != n or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool)
                               and v >= 2 for v in r):
         raise InvalidInputError(f"{name}: expected an int >= 2 or {n} of them, got {res!r}")
-    return tuple(int(v) for v in r)
+    out = tuple(int(v) for v in r)
+    if math.prod(out) > MAX_GRID_POINTS:
+        raise InvalidInputError(f"{name}: {' x '.join(map(str, out))} grid points exceed the "
+                                f"limit of {MAX_GRID_POINTS:,} (MAX_GRID_POINTS)")
+    return out
 
 
 def _chunks(n: int, progress: bool | None, desc: str) -> Iterator[slice]:
@@ -177,10 +192,10 @@ def actuator_map(design: Design | None = None, *, resolution: int | tuple[int, i
     design = resolve_design(design)
     nh, nq = _resolution(resolution, 2)
     hm = min(design.l1, design.l3)
-    h_lo, h_hi = h_range or (-hm, hm)
+    h_lo, h_hi = _interval(h_range, "h_range") or (-hm, hm)
     h = np.linspace(h_lo, h_hi, nh)
     dmax = np.hypot(design.l3 + design.l2, design.l5) + design.l1
-    q_lo, q_hi = q3_range or (0.0, 1.1 * dmax)
+    q_lo, q_hi = _interval(q3_range, "q3_range") or (0.0, 1.1 * dmax)
     q3 = np.linspace(q_lo, q_hi, nq)
     H, Q3 = np.meshgrid(h, q3, indexing="ij")
     pts = np.stack([H.ravel(), -H.ravel(), Q3.ravel()], axis=-1)  # q1 = h, q2 = -h
@@ -279,7 +294,7 @@ def point_workspace(design: Design | None = None, *, resolution: int | tuple[int
     """
     design = resolve_design(design)
     n = _resolution(resolution, 3)
-    b = bounds or _default_bounds(design)
+    b = _box(bounds) or _default_bounds(design)
     axes = [np.linspace(lo, hi, k) for (lo, hi), k in zip(b, n, strict=True)]
     P = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     free = _unlimited(design)
@@ -342,8 +357,33 @@ class InstrumentCone:
     condition: NDArray[np.float64]
 
 
+def _interval(x: object, name: str) -> tuple[float, float] | None:
+    """None, or ``(lo, hi)``: two finite numbers with ``lo <= hi`` (a named error otherwise)."""
+    if x is None:
+        return None
+    a = check_array(x, name, (2,))  # type: ignore[arg-type]
+    if a.shape != (2,) or not a[0] <= a[1]:
+        raise InvalidInputError(f"{name}: expected (lo, hi) with lo <= hi, got {x!r}")
+    return float(a[0]), float(a[1])
+
+
+def _box(bounds: object) -> tuple[tuple[float, float], ...] | None:
+    """None, or three intervals ``((x_lo, x_hi), (y_lo, y_hi), (z_lo, z_hi))``."""
+    if bounds is None:
+        return None
+    a = check_array(bounds, "bounds", (2,))  # type: ignore[arg-type]
+    if a.shape != (3, 2) or not np.all(a[:, 0] <= a[:, 1]):
+        raise InvalidInputError(f"bounds: expected ((x_lo, x_hi), (y_lo, y_hi), (z_lo, z_hi)) "
+                                f"with lo <= hi, got {bounds!r}")
+    return tuple((float(lo), float(hi)) for lo, hi in a)
+
+
 def _modes_arg(modes: tuple[int, ...]) -> tuple[int, ...]:
-    m = tuple(int(v) for v in modes)
+    try:
+        m = tuple(int(v) for v in modes)
+    except (TypeError, ValueError, OverflowError):
+        raise InvalidInputError(f"modes: expected a non-empty tuple of +1 / -1, got "
+                                f"{modes!r}") from None
     if not m or any(v not in (1, -1) for v in m):
         raise InvalidInputError(f"modes: expected a non-empty tuple of +1 / -1, got {modes!r}")
     return m
@@ -383,7 +423,7 @@ def instrument_cone(T_b_e: ArrayLike | None = None, design: Design | None = None
     na, npol, npp = _resolution(resolution, 3)
     allowed = _modes_arg(modes)
     L = design.tool_length
-    pr = p_range or (0.01 * L, L)
+    pr = _interval(p_range, "p_range") or (0.01 * L, L)
     az = np.linspace(-np.pi, np.pi, na, endpoint=False) + 2 * np.pi / na
     pol = np.linspace(0.0, np.pi, npol)
     p = np.linspace(pr[0], pr[1], npp)
@@ -480,7 +520,7 @@ def tool_tip_workspace(T_b_e: ArrayLike | None = None, design: Design | None = N
     allowed = _modes_arg(modes)
     n = _resolution(resolution, 3)
     L = design.tool_length
-    b = bounds or ((-L, L),) * 3
+    b = _box(bounds) or ((-L, L),) * 3
     axes = [np.linspace(lo, hi, k) for (lo, hi), k in zip(b, n, strict=True)]
     P = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
 
@@ -535,13 +575,15 @@ def save_npz(path: str | Path, result: object, *, design: Design | None = None,
     """
     from .. import __version__
 
+    path = check_path(path)
+    if design is not None and not isinstance(design, Design):
+        raise TypeError(f"design: expected athenakin.Design or None, got {type(design).__name__}")
     name = type(result).__name__
     if name not in _RESULTS or not dataclasses.is_dataclass(result):
         raise TypeError(f"result: expected one of {sorted(_RESULTS)}, got {name}")
     arrays = {f.name: np.asarray(getattr(result, f.name)) for f in dataclasses.fields(result)}
     info = {"type": name, "athenakin_version": __version__,
             "design_toml": design.to_toml() if design is not None else None, **meta}
-    path = Path(path)
     saver: Any = np.savez_compressed if compressed else np.savez
     saver(path, meta=np.array(json.dumps(info)), **arrays)
     return path if path.suffix == ".npz" else path.with_name(path.name + ".npz")
@@ -555,7 +597,7 @@ def load_npz(path: str | Path) -> tuple[object, dict[str, Any]]:
     result : ActuatorMap, PointWorkspace, InstrumentCone or ToolTipWorkspace
     meta : dict
     """
-    with np.load(path, allow_pickle=False) as f:
+    with np.load(check_path(path), allow_pickle=False) as f:
         meta = json.loads(str(f["meta"]))
         cls = _RESULTS.get(meta.get("type", ""))
         if cls is None:
@@ -580,6 +622,10 @@ def workspace_summary(pw: PointWorkspace | None = None, ic: InstrumentCone | Non
     -------
     dict of str -> float or int
     """
+    for name, arg, cls in (("pw", pw, PointWorkspace), ("ic", ic, InstrumentCone),
+                           ("tw", tw, ToolTipWorkspace)):
+        if arg is not None and not isinstance(arg, cls):
+            raise TypeError(f"{name}: expected {cls.__name__} or None, got {type(arg).__name__}")
     out: dict[str, object] = {}
     with np.errstate(invalid="ignore"), _quiet():
         if pw is not None:

@@ -12,12 +12,14 @@ The app's logic is pure and testable without a browser (numpy only):
 * :func:`inverse_step`: move the tool tip towards a target, the actuators follow
   through the controller-form IK and stop at the workspace boundary;
 * :func:`load_playback`, :func:`playback_q`: a trajectory CSV from ``athenakin plan``;
-* :func:`robot_scene`, :func:`ghost_scene`: the lines and points to draw;
+* :func:`robot_scene`, :func:`ghost_scene`: the lines and points to draw, the ghosted
+  slots batched (:func:`slot_ghosts`);
 * :func:`view_html`, :func:`readouts_html`, :func:`slots_html`: the read-outs as HTML.
 
 Only :class:`AthenaApp` and :func:`launch` import viser (``pip install 'athenakin[app]'``).
 """
 
+from ._ghosts import GHOST_BLEND, SlotGhosts, ghost_scene, slot_ghosts
 from ._model import (
     INVERSE_STEPS,
     WARN_CONDITION,
@@ -40,11 +42,13 @@ from ._model import (
     slot_statuses,
     tip_from_angles,
 )
-from ._scene import Label, LineSet, PointSet, Scene, ghost_scene, robot_scene
+from ._scene import PART_STYLE, Label, LineSet, PointSet, Scene, robot_scene
 from ._text import message_html, readouts_html, slots_html, view_html
 
 __all__ = [
+    "GHOST_BLEND",
     "INVERSE_STEPS",
+    "PART_STYLE",
     "WARN_CONDITION",
     "WARN_DISTANCE_M",
     "WARN_SINE",
@@ -59,6 +63,7 @@ __all__ = [
     "PointSet",
     "Readouts",
     "Scene",
+    "SlotGhosts",
     "SlotStatus",
     "angles_from_tip",
     "app_setup",
@@ -72,6 +77,7 @@ __all__ = [
     "message_html",
     "readouts_html",
     "robot_scene",
+    "slot_ghosts",
     "slot_statuses",
     "slots_html",
     "tip_from_angles",

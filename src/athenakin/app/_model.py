@@ -33,6 +33,7 @@ from ..robot import (
     SLOT_WRIST,
 )
 from ..robot._setup import resolve_rcm_frame
+from ._ghosts import SlotGhosts, slot_ghosts
 
 __all__ = [
     "WARN_DISTANCE_M",
@@ -332,8 +333,9 @@ class AppView:
         The slot asked for.
     geometry : RobotGeometry or None
         The slot drawn solid (None: no slot is valid at ``q``).
-    ghosts : tuple of RobotGeometry
-        The other valid slots (drawn ghosted) when ``requested == "all"``.
+    ghosts : SlotGhosts or None
+        The other valid slots (drawn ghosted), batched over the slots, when
+        ``requested == "all"`` (None otherwise or when no other slot is valid).
     readouts : Readouts or None
         Of :attr:`geometry`.
     message : str
@@ -345,7 +347,7 @@ class AppView:
     slots: tuple[SlotStatus, ...]
     requested: Slot
     geometry: RobotGeometry | None
-    ghosts: tuple[RobotGeometry, ...]
+    ghosts: SlotGhosts | None
     readouts: Readouts | None
     message: str
     level: Literal["ok", "warn", "error"]
@@ -400,7 +402,7 @@ def forward_view(setup: AppSetup, q: ArrayLike, *, slot: Slot = 0) -> AppView:
     slots = slot_statuses(valid, sol.reason)
     if not valid.any():
         reasons = sorted({s.why for s in slots})
-        return AppView(q=q, slots=slots, requested=requested, geometry=None, ghosts=(),
+        return AppView(q=q, slots=slots, requested=requested, geometry=None, ghosts=None,
                        readouts=None, level="error",
                        message="no solution at this q: " + "; ".join(reasons))
     message = ""
@@ -417,8 +419,7 @@ def forward_view(setup: AppSetup, q: ArrayLike, *, slot: Slot = 0) -> AppView:
                        f"showing {slots[first].label}")
             level = "warn"
     geom = robot_geometry(q, setup.T_b_e, setup.design, slot=first, fk=sol)
-    ghosts = tuple(robot_geometry(q, setup.T_b_e, setup.design, slot=k, fk=sol)
-                   for k in others)
+    ghosts = slot_ghosts(sol, q, setup.T_b_e, setup.design, others) if others else None
     ro = readouts(setup, geom)
     if ro.near and level == "ok":
         level = "warn"

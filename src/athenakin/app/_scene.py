@@ -17,11 +17,22 @@ from numpy.typing import NDArray
 from ..plot._geometry import RobotGeometry
 from ..plot._mpl import ARC_RADIUS, COLORS, FRAME_LENGTH, arc_points
 
-__all__ = ["LineSet", "PointSet", "Label", "Scene", "robot_scene", "ghost_scene", "rgb",
-           "GHOST_BLEND"]
+__all__ = ["LineSet", "PointSet", "Label", "Scene", "robot_scene", "rgb", "PART_STYLE"]
 
-#: How far a ghost's colours are blended towards white (0: solid colour, 1: white).
-GHOST_BLEND = 0.7
+#: Colour (``"#rrggbb"``) and line width (pixels) of each drawn part (the static views').
+PART_STYLE: dict[str, tuple[str, float]] = {
+    "rail": (COLORS["rail"], 6.0), "parallel": (COLORS["parallel"], 5.0),
+    "actuator_q3": (COLORS["actuator"], 6.0), "circle_k1": (COLORS["circle_k1"], 1.5),
+    "circle_k2": (COLORS["circle_k2"], 1.5), "ujoint": ("#333333", 4.0),
+    "instrument": (COLORS["serial"], 6.0), "instrument_axis": (COLORS["serial"], 1.0),
+    "spherical_joint": (COLORS["sphere"], 3.0), "frame_x": (COLORS["x"], 3.0),
+    "frame_y": (COLORS["y"], 3.0), "frame_z": (COLORS["z"], 3.0),
+}
+#: Half-length of the drawn ``u1`` axis and length of the ``u2`` fork at ``O_s``, m.
+UJOINT_AXIS_HALF = 0.03
+UJOINT_FORK = 0.045
+#: Half-length of the drawn spherical-joint axes, in units of the arc radius.
+WRIST_AXIS_HALF = 0.4
 
 
 def rgb(color: str) -> tuple[int, int, int]:
@@ -30,11 +41,6 @@ def rgb(color: str) -> tuple[int, int, int]:
     if len(h) != 6:
         raise ValueError(f"color: expected '#rrggbb', got {color!r}")
     return int(h[0:2], 16), int(h[2:4], 16), int(h[4:6], 16)
-
-
-def _blend(c: tuple[int, int, int], f: float) -> tuple[int, int, int]:
-    r, g, b = (round(v + f * (255 - v)) for v in c)
-    return r, g, b
 
 
 @dataclasses.dataclass(frozen=True)
@@ -149,32 +155,37 @@ def robot_scene(g: RobotGeometry, *, frames: bool = True, labels: bool = True,
     """
     P, seg = g.points, g.segments()
     c = {k: rgb(v) for k, v in COLORS.items()}
+
+    def part(name: str, segments: NDArray[np.float64]) -> LineSet:
+        color, width = PART_STYLE[name]
+        return LineSet(name, segments, rgb(color), width)
+
+    O_s, uj = P["O_s"], g.ujoint_axes
     lines = [
-        LineSet("rail", _seg(*g.rail), c["rail"], 6.0),
-        LineSet("parallel", np.array(
-            [seg[k] for k in ("link_a1", "link_b1", "link_a3", "link_b3", "carrier_y",
-                              "carrier_z", "offset_l4")]), c["parallel"], 5.0),
-        LineSet("actuator_q3", np.array([seg["actuator_q3"]]), c["actuator"], 6.0),
-        LineSet("circle_k1", _polyline_segments(g.k1), c["circle_k1"], 1.5),
-        LineSet("circle_k2", _polyline_segments(g.k2_arc), c["circle_k2"], 1.5),
-        LineSet("ujoint", np.concatenate([
-            _seg(P["O_s"] - 0.03 * g.ujoint_axes[0], P["O_s"] + 0.03 * g.ujoint_axes[0]),
-            _seg(P["O_s"], P["O_s"] + 0.045 * g.ujoint_axes[1])]), rgb("#333333"), 4.0),
-        LineSet("instrument", np.array([seg["instrument"]]), c["serial"], 6.0),
+        part("rail", _seg(*g.rail)),
+        part("parallel", np.array([seg[k] for k in ("link_a1", "link_b1", "link_a3", "link_b3",
+                                                    "carrier_y", "carrier_z", "offset_l4")])),
+        part("actuator_q3", np.array([seg["actuator_q3"]])),
+        part("circle_k1", _polyline_segments(g.k1)),
+        part("circle_k2", _polyline_segments(g.k2_arc)),
+        part("ujoint", np.concatenate([
+            _seg(O_s - UJOINT_AXIS_HALF * uj[0], O_s + UJOINT_AXIS_HALF * uj[0]),
+            _seg(O_s, O_s + UJOINT_FORK * uj[1])])),
+        part("instrument", np.array([seg["instrument"]])),
     ]
     if not 0.0 <= g.p <= g.design.tool_length:
-        lines.append(LineSet("instrument_axis", _seg(P["O_s"], P["RCM"]), c["serial"], 1.0))
+        lines.append(part("instrument_axis", _seg(P["O_s"], P["RCM"])))
     rc, ax = P["RCM"], g.wrist_axes
-    sph = [_seg(rc - 0.4 * ARC_RADIUS * a, rc + 0.4 * ARC_RADIUS * a) for a in ax]
+    h = WRIST_AXIS_HALF * ARC_RADIUS
+    sph = [_seg(rc - h * a, rc + h * a) for a in ax]
     sph += [_polyline_segments(arc_points(rc, ax[k], ax[k + 1], ARC_RADIUS)) for k in range(2)]
-    lines.append(LineSet("spherical_joint", np.concatenate(sph), c["sphere"], 3.0))
+    lines.append(part("spherical_joint", np.concatenate(sph)))
     if frames:
         triads = [(g.frames["b"], 1.5), (g.frames["i"], 1.0), (g.frames["s"], 1.0),
                   (g.frames["e"], 1.0)]
         for i, axis in enumerate("xyz"):
-            lines.append(LineSet(f"frame_{axis}", np.concatenate(
-                [_seg(T[:3, 3], T[:3, 3] + s * frame_length * T[:3, i]) for T, s in triads]),
-                c[axis], 3.0))
+            lines.append(part(f"frame_{axis}", np.concatenate(
+                [_seg(T[:3, 3], T[:3, 3] + s * frame_length * T[:3, i]) for T, s in triads])))
     pts = np.stack([P[k] for k, _, _ in _POINTS])
     cols = np.array([c[col] for _, _, col in _POINTS], dtype=np.uint8)
     points = [PointSet("joints", pts, cols, 0.012)]
@@ -184,44 +195,3 @@ def robot_scene(g: RobotGeometry, *, frames: bool = True, labels: bool = True,
                                0.008))
     labs = tuple(Label(text, P[k].copy()) for k, text, _ in _POINTS) if labels else ()
     return Scene(lines=tuple(lines), points=tuple(points), labels=labs)
-
-
-#: Parts that depend only on q (the same in every slot) and only on the assembly mode.
-_Q_PARTS = ("circle_k1", "circle_k2", "rail")
-_MODE_PARTS = ("parallel", "actuator_q3")
-
-
-def ghost_scene(geoms: tuple[RobotGeometry, ...] | list[RobotGeometry],
-                solid: RobotGeometry | None = None) -> Scene:
-    """The parts of other solutions, paler, merged into one line set per part.
-
-    Parts drawn by the solid view are not repeated: the rail and the circles (the same in
-    every slot of one q), the frames, and the parallel module of the solid slot's assembly
-    mode; the other mode's parallel module is drawn once.
-
-    Parameters
-    ----------
-    geoms : sequence of RobotGeometry
-        The ghosted slots (one q).
-    solid : RobotGeometry, optional
-        The slot drawn solid.
-
-    Returns
-    -------
-    Scene
-        Line sets named ``ghost_<part>``, no points, no labels.
-    """
-    parts: dict[str, list[NDArray[np.float64]]] = {}
-    style: dict[str, tuple[tuple[int, int, int], float]] = {}
-    modes_done = {solid.mode} if solid is not None else set()
-    for g in geoms:
-        s = robot_scene(g, frames=False, labels=False)
-        new_mode = g.mode not in modes_done
-        for ls in s.lines:
-            if ls.name in _Q_PARTS or (ls.name in _MODE_PARTS and not new_mode):
-                continue
-            parts.setdefault(ls.name, []).append(ls.segments)
-            style[ls.name] = (_blend(ls.color, GHOST_BLEND), max(1.0, 0.6 * ls.width))
-        modes_done.add(g.mode)
-    lines = tuple(LineSet(f"ghost_{k}", np.concatenate(v), *style[k]) for k, v in parts.items())
-    return Scene(lines=lines, points=(), labels=())

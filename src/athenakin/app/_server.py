@@ -14,6 +14,7 @@ module only turns them into scene nodes and GUI values, under one lock.
 from __future__ import annotations
 
 import contextlib
+import functools
 import io
 import json
 import math
@@ -29,6 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._input import MAX_CONFIG_BYTES, read_bytes
 from ..design import Design
 from ..errors import KinematicsError
+from ._ghosts import ghost_scene
 from ._model import (
     AppSetup,
     AppView,
@@ -41,7 +43,7 @@ from ._model import (
     playback_q,
     tip_from_angles,
 )
-from ._scene import Scene, ghost_scene, robot_scene
+from ._scene import Scene, robot_scene
 from ._text import ERROR_COLOR, message_html, view_html
 
 __all__ = ["AthenaApp", "launch", "DEFAULT_PORT"]
@@ -49,6 +51,8 @@ __all__ = ["AthenaApp", "launch", "DEFAULT_PORT"]
 #: Port the app asks for when none is given (viser takes the next free one if busy).
 DEFAULT_PORT = 8080
 _ALL = "all valid slots (others ghosted)"
+#: A label is sent again when its point moved by more than this, m.
+LABEL_TOL_M = 1e-7
 
 
 def _import_viser() -> Any:
@@ -132,6 +136,9 @@ class AthenaApp:
         self._line_handles: dict[str, Any] = {}
         self._point_handles: dict[str, Any] = {}
         self._label_handles: dict[str, Any] = {}
+        self._line_layouts: dict[str, tuple[tuple[tuple[int, int, int], int], ...]] = {}
+        self._label_texts: tuple[str, ...] = ()
+        self._label_pos = np.zeros((0, 3))
         self._build_gui()
         if trajectory is not None:
             self._load_trajectory(str(trajectory))
@@ -174,6 +181,11 @@ class AthenaApp:
             self.errors.append(f"{where}: {_error_text(exc)}; using the reference set-up "
                                f"instead")
             return base
+
+    @property
+    def tip_handle(self) -> Any:
+        """The draggable tool-tip handle (viser's transform controls), e.g. to hide it."""
+        return self._handle
 
     @property
     def url(self) -> str:
@@ -278,10 +290,16 @@ class AthenaApp:
         self._move_tip(tip, snap_angles=True)
 
     def _on_handle(self, event: Any) -> None:
-        if self._syncing:
-            return
+        # Only the browser fires the handle's events (setting its position here fires
+        # none), so there is no ``_syncing`` check: another thread's sync must not drop
+        # a drag.
         phase = getattr(event, "phase", "update")
-        self._dragging = phase != "end"
+        # viser runs these callbacks on a thread pool, so the end of a drag may be handled
+        # before its last update: only a start or an end says whether a drag is on. Every
+        # update reads the handle's latest position, so their order does not matter.
+        if phase in ("start", "end"):
+            with self._lock:
+                self._dragging = phase == "start"
         T = self.setup.T_b_e
         tip_b = np.asarray(self._handle.position, dtype=float)
         self._move_tip(T[:3, :3].T @ (tip_b - T[:3, 3]), snap_angles=False)
@@ -318,7 +336,9 @@ class AthenaApp:
 
     def _apply_q(self, q: NDArray[np.float64], *, sync_ik: bool,
                  extra: tuple[str, str] | None = None) -> AppView:
-        with self._lock:
+        # One atomic block: the scene, the sliders and the read-outs of this q reach the
+        # page together, and the event loop is woken once, not once per message.
+        with self._lock, self.server.atomic():
             t0 = time.perf_counter()
             try:
                 view = forward_view(self.setup, q, slot=self.slot)  # type: ignore[arg-type]
@@ -378,47 +398,61 @@ class AthenaApp:
                 self._syncing = prev
 
     def _draw(self, view: AppView) -> None:
+        """Send the scene of ``view`` (inside the caller's atomic block).
+
+        One line-segments node per line width (solid and ghosted apart), one point cloud
+        per point set, the labels that moved.
+        """
         assert view.geometry is not None
         solid = robot_scene(view.geometry)
-        ghosts = (ghost_scene(view.ghosts, view.geometry) if view.ghosts
+        ghosts = (ghost_scene(view.ghosts, view.geometry) if view.ghosts is not None
                   else Scene((), (), ()))
         scene = self.server.scene
         handles = {}
-        with self.server.atomic():
-            groups = {**_by_width(solid, "w"), **_by_width(ghosts, "ghost_w")}
-            for name, (pts, cols, width) in groups.items():
-                h = self._line_handles.pop(name, None)
-                if h is None:
-                    h = scene.add_line_segments(f"/robot/{name}", points=pts, colors=cols,
-                                                thickness=width, thickness_units="screen")
-                elif len(h.points) == len(pts):
-                    h.points = pts
-                else:
-                    h.points, h.colors = pts, cols
-                handles[name] = h
-            for h in self._line_handles.values():      # parts not drawn any more
-                h.remove()
-            self._line_handles = handles
-            for ps in solid.points:
-                pts = ps.points.astype(np.float32)
-                h = self._point_handles.get(ps.name)
-                if h is not None and len(h.points) == len(pts):
-                    h.points = pts
-                else:
-                    if h is not None:
-                        h.remove()
-                    self._point_handles[ps.name] = scene.add_point_cloud(
-                        f"/robot/{ps.name}", points=pts, colors=ps.colors, point_size=ps.size,
-                        point_shape="circle", precision="float32")
-            for name in set(self._point_handles) - {ps.name for ps in solid.points}:
-                self._point_handles.pop(name).remove()
-            for lab in solid.labels:
-                h = self._label_handles.get(lab.text)
-                if h is None:
-                    self._label_handles[lab.text] = scene.add_label(
-                        f"/labels/{lab.text}", lab.text, position=tuple(lab.position))
-                elif not np.allclose(h.position, lab.position, rtol=0, atol=1e-7):
-                    h.position = tuple(float(x) for x in lab.position)
+        groups = {**_by_width(solid, "w"), **_by_width(ghosts, "ghost_w")}
+        for name, (pts, layout, width) in groups.items():
+            h = self._line_handles.pop(name, None)
+            if h is None:
+                h = scene.add_line_segments(f"/robot/{name}", points=pts,
+                                            colors=_layout_colors(layout), thickness=width,
+                                            thickness_units="screen")
+            elif self._line_layouts.get(name) == layout:
+                h.points = pts                          # the colours are those sent before
+            else:
+                h.points, h.colors = pts, _layout_colors(layout)
+            self._line_layouts[name] = layout
+            handles[name] = h
+        for name, h in self._line_handles.items():      # parts not drawn any more
+            h.remove()
+            self._line_layouts.pop(name, None)
+        self._line_handles = handles
+        for ps in solid.points:
+            pts = ps.points.astype(np.float32)
+            h = self._point_handles.get(ps.name)
+            if h is not None and len(h.points) == len(pts):
+                h.points = pts
+            else:
+                if h is not None:
+                    h.remove()
+                self._point_handles[ps.name] = scene.add_point_cloud(
+                    f"/robot/{ps.name}", points=pts, colors=ps.colors, point_size=ps.size,
+                    point_shape="circle", precision="float32")
+        for name in set(self._point_handles) - {ps.name for ps in solid.points}:
+            self._point_handles.pop(name).remove()
+        texts = tuple(lab.text for lab in solid.labels)
+        pos = np.array([lab.position for lab in solid.labels]).reshape(-1, 3)
+        if texts != self._label_texts or len(self._label_handles) != len(texts):
+            moved = np.ones(len(texts), dtype=bool)
+        else:                                           # one comparison for all labels
+            moved = np.any(np.abs(pos - self._label_pos) > LABEL_TOL_M, axis=-1)
+        for text, p, m in zip(texts, pos, moved.tolist(), strict=True):
+            h = self._label_handles.get(text)
+            if h is None:
+                self._label_handles[text] = scene.add_label(f"/labels/{text}", text,
+                                                            position=tuple(p.tolist()))
+            elif m:
+                h.position = p
+        self._label_texts, self._label_pos = texts, pos
 
     def _frame_camera(self) -> None:
         if self.view is None or self.view.geometry is None:
@@ -514,6 +548,7 @@ class AthenaApp:
         self.stop()
 
 
+@functools.lru_cache(maxsize=64)
 def _vertex_color(rgb: tuple[int, int, int]) -> NDArray[np.uint8]:
     """An sRGB colour (0..255) as a per-vertex colour that shows as given.
 
@@ -524,11 +559,16 @@ def _vertex_color(rgb: tuple[int, int, int]) -> NDArray[np.uint8]:
     return np.round(255.0 * lin).astype(np.uint8)
 
 
-def _by_width(scene: Scene, prefix: str
-              ) -> dict[str, tuple[NDArray[np.float32], NDArray[np.uint8], float]]:
-    """The scene's line sets merged per line width: ``name -> (points, colours, width)``.
+#: A node's colour layout: ``(colour, number of segments)`` of each part, in order.
+_Layout = tuple[tuple[tuple[int, int, int], int], ...]
 
-    One scene node per width instead of one per part: fewer messages per update.
+
+def _by_width(scene: Scene, prefix: str) -> dict[str, tuple[NDArray[np.float32], _Layout, float]]:
+    """The scene's line sets merged per line width: ``name -> (points, layout, width)``.
+
+    One scene node per width instead of one per part: fewer messages per update. The
+    colours follow from the layout (:func:`_layout_colors`), and only a changed layout
+    needs them sent again.
     """
     groups: dict[float, list[Any]] = {}
     for ls in scene.lines:
@@ -536,10 +576,14 @@ def _by_width(scene: Scene, prefix: str
     out = {}
     for w, sets in groups.items():
         pts = np.concatenate([ls.segments for ls in sets]).astype(np.float32)
-        cols = np.concatenate([np.broadcast_to(_vertex_color(ls.color), ls.segments.shape)
-                               for ls in sets])
-        out[f"{prefix}{w:g}"] = (pts, cols, w)
+        layout = tuple((ls.color, len(ls.segments)) for ls in sets)
+        out[f"{prefix}{w:g}"] = (pts, layout, w)
     return out
+
+
+def _layout_colors(layout: _Layout) -> NDArray[np.uint8]:
+    """Per-vertex colours (n, 2, 3) of a node's layout."""
+    return np.concatenate([np.broadcast_to(_vertex_color(c), (n, 2, 3)) for c, n in layout])
 
 
 def _inverse_slot(slot: int, mode: int) -> int:

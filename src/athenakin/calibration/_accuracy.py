@@ -15,7 +15,7 @@ import dataclasses
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array
+from .._validation import check_array, check_count, check_instance, check_rng, check_scalar
 from ..errors import InvalidInputError
 from ..robot import direction_from_angles, q_from_instrument
 from ._model import PARAMETERS, Seed, predict
@@ -103,6 +103,7 @@ def tip_error(result: CalibrationResult, q: ArrayLike, *, encoder_resolution: fl
     -------
     TipError
     """
+    check_instance(result, "result", CalibrationResult)
     qa = _readings(q)
     if encoder_resolution < 0 or not np.isfinite(encoder_resolution):
         raise InvalidInputError(f"encoder_resolution: expected a number >= 0 (m), got "
@@ -126,8 +127,9 @@ def tip_error_monte_carlo(result: CalibrationResult, q: ArrayLike, *,
     Parameters are drawn from ``N(estimates, covariance)``, encoder errors uniformly in
     ``[-res/2, res/2]``, and the tip is computed with the nonlinear model.
     """
+    check_instance(result, "result", CalibrationResult)
     qa = _readings(q)
-    gen = np.random.default_rng(rng)
+    gen = check_rng(rng)
     theta, free = _theta(result)
     draws = gen.multivariate_normal(theta[free], result.covariance, size=n_samples,
                                     method="eigh")
@@ -162,12 +164,17 @@ def tip_error_map(result: CalibrationResult, *, depth: float | None = None,
     -------
     TipErrorMap
     """
+    check_instance(result, "result", CalibrationResult)
     d = result.design
     L = d.tool_length
-    dep = 0.5 * L if depth is None else float(depth)
+    dep = 0.5 * L if depth is None else check_scalar(depth, "depth")
     if not 0 < dep < L:
         raise InvalidInputError(f"depth: expected 0 < depth < tool_length = {L:.6g} m, got {dep}")
-    na, npol = resolution
+    try:
+        na, npol = (check_count(r, "resolution", minimum=2, maximum=100_000) for r in resolution)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"resolution: expected (n_azimuth, n_polar), two integers in "
+                                f"2..100000, got {resolution!r} ({exc})") from None
     az = np.linspace(-np.pi, np.pi, na, endpoint=False) + 2 * np.pi / na
     pol = np.linspace(0.0, np.pi, npol)
     A, B = np.meshgrid(az, pol, indexing="ij")

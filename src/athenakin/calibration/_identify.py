@@ -19,6 +19,8 @@ import dataclasses
 import numpy as np
 from numpy.typing import NDArray
 
+from .._validation import check_array, check_tolerance
+from ..errors import InvalidInputError
 from ._errors import NotIdentifiableError
 from ._model import PARAMETER_UNITS
 
@@ -156,6 +158,15 @@ def analyse_jacobian(J: NDArray[np.float64], names: tuple[str, ...], *,
     -------
     IdentifiabilityReport
     """
+    J = check_array(J, "J", (len(names),)) if isinstance(names, tuple) else J
+    if not isinstance(names, tuple) or J.ndim != 2:
+        raise InvalidInputError(f"J, names: expected a Jacobian (m, n) and a tuple of n names, "
+                                f"got shape {np.shape(J)} and {type(names).__name__}")
+    unknown = [nm for nm in names if nm not in PARAMETER_UNITS]
+    if unknown:
+        raise InvalidInputError(f"names: unknown parameter(s) {unknown}; expected names among "
+                                f"{list(PARAMETER_UNITS)}")
+    tol = check_tolerance(tol, "tol")
     m, n = J.shape
     norms = np.linalg.norm(J, axis=0)
     safe = np.where(norms > 0, norms, 1.0)

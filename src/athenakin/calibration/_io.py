@@ -19,6 +19,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._csv import read_table
+from .._validation import check_array, check_choice, check_instance
+from ..errors import InvalidInputError
 from ._errors import MeasurementFileError
 from ._solve import CalibrationResult
 
@@ -140,19 +142,31 @@ def _fmt_rows(a: NDArray[np.float64]) -> list[str]:
     return [",".join(repr(float(x)) for x in row) for row in a]
 
 
+def _comment(comment: object) -> str:
+    if not isinstance(comment, str):
+        raise TypeError(f"comment: expected str, got {type(comment).__name__}")
+    return comment
+
+
 def measurements_csv_text(q: NDArray[np.float64], tips: NDArray[np.float64],
                           axes: NDArray[np.float64] | None = None, *, frame: str = "base",
                           comment: str = "") -> str:
     """CSV text of a measurement set that :func:`read_measurements_csv` reads back."""
     cols = Q_COLUMNS + TIP_COLUMNS + (AXIS_COLUMNS if axes is not None else ())
-    parts = [np.asarray(q, float), np.asarray(tips, float)]
-    if axes is not None:
-        parts.append(np.asarray(axes, float))
+    check_choice(frame, "frame", ("base", "tracker"))
+    parts = [check_array(q, "q", (3,), allow_nonfinite=True)]
+    n = parts[0].shape[0] if parts[0].ndim == 2 else -1
+    for name, a in (("tips", tips), ("axes", axes)):
+        if a is not None:
+            parts.append(check_array(a, name, (3,), allow_nonfinite=True))
+    if n < 0 or any(p.shape != (n, 3) for p in parts):
+        raise InvalidInputError(f"q, tips, axes: expected arrays of shape (n, 3) with one n, "
+                                f"got {[p.shape for p in parts]}")
     lines = [f"# athenakin calibration measurements; tips in the {frame} frame",
              "# q1_m,q2_m,q3_m: actuator readings (m); x_m,y_m,z_m: measured tool tip (m)"]
     if axes is not None:
         lines.append("# dx,dy,dz: measured instrument axis (unit vector, O_s towards the RCM)")
-    lines += [f"# {c}" for c in comment.splitlines() if c]
+    lines += [f"# {c}" for c in _comment(comment).splitlines() if c]
     lines.append(",".join(cols))
     lines += _fmt_rows(np.concatenate(parts, axis=1))
     return "\n".join(lines) + "\n"
@@ -161,9 +175,12 @@ def measurements_csv_text(q: NDArray[np.float64], tips: NDArray[np.float64],
 def plan_csv_text(q: NDArray[np.float64], *, comment: str = "") -> str:
     """CSV text of a measurement plan: ``pose, q1_m, q2_m, q3_m`` (readings to command)."""
     lines = ["# athenakin calibration plan: command these actuator values (m), measure the "
-             "tool tip at each", *[f"# {c}" for c in comment.splitlines() if c],
+             "tool tip at each", *[f"# {c}" for c in _comment(comment).splitlines() if c],
              "pose," + ",".join(Q_COLUMNS)]
-    lines += [f"{i}," + r for i, r in enumerate(_fmt_rows(np.asarray(q, float)))]
+    qa = check_array(q, "q", (3,), allow_nonfinite=True)
+    if qa.ndim != 2:
+        raise InvalidInputError(f"q: expected shape (n, 3), got {qa.shape}")
+    lines += [f"{i}," + r for i, r in enumerate(_fmt_rows(qa))]
     return "\n".join(lines) + "\n"
 
 
@@ -173,6 +190,7 @@ def calibration_toml(result: CalibrationResult) -> str:
     The ``[design]`` table is read back by :meth:`Design.from_toml`; ``[calibration]``
     holds the offsets, RCM, registration, noise, residuals and standard deviations.
     """
+    check_instance(result, "result", CalibrationResult)
     import tomli_w
 
     cal: dict[str, object] = {

@@ -34,6 +34,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from .._validation import check_choice
 from ..design import Design
 
 __all__ = [
@@ -92,8 +93,7 @@ def resolve_parameters(params: object, frame: str) -> tuple[str, ...]:
         Not an iterable of strings; an unknown name (the message lists the known ones);
         registration parameters with ``frame="base"``.
     """
-    if frame not in _FRAMES:
-        raise ValueError(f"frame: expected one of {_FRAMES}, got {frame!r}")
+    check_choice(frame, "frame", _FRAMES)
     if params is None:
         names: list[str] = list(DEFAULT_PARAMETERS)
     else:

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from .._validation import check_axes, check_instance, check_path
 from ._accuracy import TipErrorMap, tip_error_map
 from ._model import PARAMETER_UNITS
 from ._solve import CalibrationResult
@@ -43,6 +44,8 @@ def plot_residuals(result: CalibrationResult, *, ax: Any = None) -> Any:
     -------
     matplotlib.axes.Axes
     """
+    check_instance(result, "result", CalibrationResult)
+    check_axes(ax)
     ax = _axes(ax)
     rows = np.arange(result.excluded.size)
     b = np.linalg.norm(result.residuals_before[:, :3], axis=1) * _UM
@@ -69,6 +72,8 @@ def plot_parameter_confidence(result: CalibrationResult, *, ax: Any = None) -> A
     -------
     matplotlib.axes.Axes
     """
+    check_instance(result, "result", CalibrationResult)
+    check_axes(ax)
     ax = _axes(ax)
     delta = (result.estimates - result.nominal) * _UM
     err = 3 * result.std * _UM
@@ -91,6 +96,8 @@ def plot_tip_error_map(m: TipErrorMap, *, ax: Any = None) -> Any:
     -------
     matplotlib.axes.Axes
     """
+    check_instance(m, "m", TipErrorMap)
+    check_axes(ax)
     if ax is None:
         plt = _pyplot()
         _, ax = plt.subplots(figsize=(6, 5), subplot_kw={"projection": "polar"})
@@ -124,7 +131,8 @@ def write_report(result: CalibrationResult, path: str | Path, *, figures: bool =
     list of Path
         The files written (report first).
     """
-    path = Path(path)
+    check_instance(result, "result", CalibrationResult)
+    path = check_path(path)
     out = [path]
     lines = [f"# {title}", "",
              f"Measurements in the **{result.frame}** frame; "

@@ -10,8 +10,15 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_transform
-from ..design import Design, resolve_design
+from .._validation import (
+    check_array,
+    check_choice,
+    check_count,
+    check_scalar,
+    check_tolerance,
+    check_transform,
+)
+from ..design import LENGTH_RANGE, Design, resolve_design
 from ..errors import InvalidInputError, Reason
 from ..parallel import parallel_forward_kinematics
 from ._errors import CalibrationError, CalibrationWarning, NotIdentifiableError
@@ -324,8 +331,7 @@ def _setup(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | Non
         raise InvalidInputError(f"T_b_e: expected shape (4, 4), got shape {T.shape}")
     if bad_rows not in ("exclude", "raise"):
         raise ValueError(f"bad_rows: expected 'exclude' or 'raise', got {bad_rows!r}")
-    if not np.isfinite(axis_weight) or axis_weight <= 0:
-        raise InvalidInputError(f"axis_weight: expected a positive number (m), got {axis_weight}")
+    axis_weight = check_scalar(axis_weight, "axis_weight", positive=True)
     off = np.zeros(3) if q_offset is None else check_array(q_offset, "q_offset", (3,))
     if isinstance(mode, str):
         if mode != "auto":
@@ -414,6 +420,7 @@ def identifiability(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None
     InvalidInputError
         Bad shapes, or rows the nominal design cannot reach (not excluded here).
     """
+    check_choice(frame, "frame", ("base", "tracker"))
     qa = _rows(q, "q")
     design = resolve_design(design)
     T = check_transform(T_b_e, "T_b_e")
@@ -538,8 +545,14 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
                          f"{on_unidentifiable!r}")
     for name, v in (("sigma", sigma), ("f_scale", f_scale),
                     ("outlier_threshold", outlier_threshold)):
-        if v is not None and not (np.isfinite(v) and v > 0):
-            raise InvalidInputError(f"{name}: expected a positive number, got {v!r}")
+        if v is not None or name == "outlier_threshold":    # sigma, f_scale may be None
+            check_scalar(v, name, positive=True)
+    if sigma is not None and sigma > LENGTH_RANGE[1]:     # squared below: no overflow
+        raise InvalidInputError(f"sigma: expected a standard deviation (m) of at most "
+                                f"{LENGTH_RANGE[1]:g}, got {sigma!r}")
+    tol = check_tolerance(tol, "tol")
+    if max_nfev is not None:
+        max_nfev = check_count(max_nfev, "max_nfev", minimum=1)
     design, prob, names, chk, m_all, T = _setup(
         q, tips, T_b_e, design, params=params, frame=frame, axes=axes, mode=mode,
         q_offset=q_offset, registration=registration, axis_weight=axis_weight,

@@ -25,7 +25,7 @@ from collections.abc import Mapping
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_transform
+from .._validation import check_array, check_choice, check_rng, check_scalar, check_transform
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ._model import (
@@ -74,6 +74,13 @@ class SyntheticData:
     frame: str
 
 
+def _check_mode(mode: object) -> int:
+    """An assembly mode: the integer +1 or -1 (a named error for anything else)."""
+    if isinstance(mode, bool) or not isinstance(mode, (int, np.integer)) or mode not in (1, -1):
+        raise InvalidInputError(f"mode: expected +1 or -1 (assembly mode), got {mode!r}")
+    return int(mode)
+
+
 def random_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *, mode: int = 1,
                  margin: float = 5e-3, rng: Seed = None) -> NDArray[np.float64]:
     """``n`` random readings (N, 3) within the strokes that the nominal robot reaches.
@@ -92,11 +99,13 @@ def random_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *, mode
 
     design = resolve_design(design)
     T = check_transform(T_b_e, "T_b_e")
+    _check_mode(mode)
+    margin = check_scalar(margin, "margin", nonnegative=True)
     lo, hi = design.stroke_min, design.stroke_max
     if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
         raise InvalidInputError("random_poses: the design has unlimited strokes; give the "
                                 "poses (candidates) explicitly")
-    gen = np.random.default_rng(rng)
+    gen = check_rng(rng)
     theta = parameter_vector(design, T[:3, 3])
     out = np.zeros((0, 3))
     for _ in range(50):
@@ -164,9 +173,19 @@ def synthetic_measurements(design: Design | None, T_b_e: ArrayLike, *, n: int = 
     """
     design = resolve_design(design)
     T = check_transform(T_b_e, "T_b_e")
-    if frame not in ("base", "tracker"):
-        raise ValueError(f"frame: expected 'base' or 'tracker', got {frame!r}")
-    gen = np.random.default_rng(rng)
+    check_choice(frame, "frame", ("base", "tracker"))
+    for name, v in (("noise", noise), ("perturbation", perturbation), ("offset_std", offset_std),
+                    ("rcm_std", rcm_std), ("axis_noise", axis_noise),
+                    ("encoder_resolution", encoder_resolution), ("outlier_size", outlier_size)):
+        check_scalar(v, name, nonnegative=True)
+    if not 0.0 <= check_scalar(outlier_fraction, "outlier_fraction") <= 1.0:
+        raise InvalidInputError(f"outlier_fraction: expected a fraction in [0, 1], got "
+                                f"{outlier_fraction!r}")
+    if true is not None and not isinstance(true, Mapping):
+        raise TypeError(f"true: expected a mapping parameter name -> value, got "
+                        f"{type(true).__name__}")
+    _check_mode(mode)
+    gen = check_rng(rng)
     theta = parameter_vector(design, T[:3, 3])
     theta[:6] += perturbation * gen.standard_normal(6)
     theta[6:9] += offset_std * gen.standard_normal(3)

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import dataclasses
 import enum
+import math
 from typing import Any
 
 import numpy as np
@@ -254,7 +255,10 @@ def _check_tol(input_tol: object) -> float:
     if isinstance(input_tol, bool) or not isinstance(input_tol, (int, float, np.floating,
                                                                  np.integer)):
         raise TypeError(f"input_tol: expected a real number, got {type(input_tol).__name__}")
-    tol = float(input_tol)
+    try:
+        tol = float(input_tol)
+    except OverflowError:
+        tol = math.inf
     if not (0.0 <= tol <= 1e-6):
         raise InvalidInputError(f"input_tol: expected a relative radius in [0, 1e-6], got {tol!r}")
     return tol

@@ -25,13 +25,14 @@ import dataclasses
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_tolerance, check_transform
+from .._validation import broadcast_batch, check_array, check_tolerance, check_transform
 from ..errors import InvalidInputError, Reason
 from ..study import dq_multiply, study_G, study_M
 
 __all__ = [
     "DEGENERATE_TOL",
     "DEGENERATE_ULPS",
+    "CLOSURE_ULPS",
     "P_ZERO_TOL",
     "CLOSURE_TOL",
     "SERIAL_P_SIGN",
@@ -58,6 +59,11 @@ CLOSURE_TOL = 1e-9
 #: so for a short ``p`` the fixed ``DEGENERATE_TOL`` alone would accept an arbitrary ``u1``.
 DEGENERATE_ULPS = 64.0
 _EPS = float(np.finfo(float).eps)
+#: Rounding of a closure check, in ulps of the chain's scale: the translation of a pose
+#: ``scale`` metres from the origin is known only to about ``eps * scale``, so a closure
+#: residual of that size is rounding, not a failure (a far RCM, 1e8 m, issue 13). The
+#: closure test is ``residual <= closure_tol + CLOSURE_ULPS * eps * scale``.
+CLOSURE_ULPS = 16.0
 
 #: Labels of the 8 serial slots: sign of p, of sin u2, of sin u4.
 SERIAL_P_SIGN = np.array([1, 1, 1, 1, -1, -1, -1, -1])
@@ -255,12 +261,19 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     finite = np.all(np.isfinite(T), axis=(-2, -1))
     T = np.where(finite[..., None, None], T, np.eye(4))
     c = T[..., :3, 3]
-    n = np.linalg.norm(c, axis=-1)
+    with np.errstate(over="ignore"):
+        n = np.linalg.norm(c, axis=-1)      # inf beyond 1e154 m: no solution there (below)
     base_reason = np.where(finite, 0, Reason.NONFINITE_INPUT)
     base_reason = np.where((base_reason == 0) & (n <= p_zero_tol), Reason.SERIAL_P_ZERO,
                            base_reason)
     nn = np.where(n > p_zero_tol, n, 1.0)
-    sc = n if scale is None else np.asarray(scale, dtype=float)
+    if scale is None:
+        sc = n
+    else:
+        sc = check_array(scale, "scale", (), allow_nonfinite=True)
+        if broadcast_batch(T_s_e=n.shape, scale=sc.shape) != n.shape:
+            raise InvalidInputError(f"scale: expected a shape that broadcasts to the batch of "
+                                    f"T_s_e {n.shape}, got {sc.shape}")
     with np.errstate(invalid="ignore", over="ignore"):
         dtol = np.maximum(degenerate_tol, DEGENERATE_ULPS * _EPS * sc / nn)   # (...)
     psign = np.array([1.0, -1.0])
@@ -316,7 +329,12 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     deg_w = wr_deg.reshape(batch + (8,))
     reason = np.where((reason == 0) & deg_u, np.int8(Reason.UJOINT_SINGULAR), reason)
     reason = np.where((reason == 0) & deg_w, np.int8(Reason.WRIST_SINGULAR), reason)
-    reason = np.where((reason == 0) & ~(res <= closure_tol), np.int8(Reason.CLOSURE_FAILED),
+    # rounding of a far pose (a NaN scale, of an unassembled mode, allows nothing)
+    ctol = closure_tol + CLOSURE_ULPS * _EPS * np.fmax(sc, 0.0)[..., None]
+    reason = np.where((reason == 0) & ~(res <= ctol), np.int8(Reason.CLOSURE_FAILED),
+                      reason).astype(np.int8)
+    # |t|^2 overflowed (|t| > 1e154 m): p = inf is no solution (the kernels flag it too)
+    reason = np.where((reason == 0) & ~np.isfinite(pp), np.int8(Reason.CLOSURE_FAILED),
                       reason).astype(np.int8)
     valid = reason == 0
     nan = np.where(valid, 1.0, np.nan)

@@ -32,6 +32,9 @@ from .._validation import (
     check_options,
     check_tolerance,
     check_transform,
+    is_default,
+    is_option,
+    is_raising_policy,
 )
 from ..chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
 from ..design import Design
@@ -73,6 +76,10 @@ __all__ = [
 ]
 
 _F8 = np.dtype(np.float64)
+# The defaults of the option keywords: the lean single-call paths test identity with them
+# first (the default argument is this very object), then the general check.
+_AUTO = "auto"
+_CLOSED = "closed"
 _PARAMS: dict[int, tuple[Design, NDArray[np.float64]]] = {}
 _DEFAULT: list[NDArray[np.float64]] = []
 _FK_TOL_DEFAULT = np.array([TANGENT_TOL, DEGENERATE_TOL, P_ZERO_TOL, CLOSURE_TOL])
@@ -187,6 +194,9 @@ def _batch(**named: tuple[int, ...]) -> tuple[int, ...]:
 
 
 def _check_out(out: FKSolution, batch: tuple[int, ...]) -> tuple[NDArray, ...]:
+    if not isinstance(out, FKSolution):
+        raise TypeError(f"out: expected an FKSolution (of a previous call) or None, got "
+                        f"{type(out).__name__}")
     arrs: tuple[NDArray, ...] = (out.reason, out.valid, out.p, out.u, out.T_b_s_mode,
                                  out.residual, out.item_reason)
     shapes = (batch + (16,), batch + (16,), batch + (16,), batch + (16, 5), batch + (2, 4, 4),
@@ -234,10 +244,13 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     """
     if (type(q) is np.ndarray and type(T_b_e) is np.ndarray and q.dtype is _F8
             and T_b_e.dtype is _F8 and q.shape == (3,) and T_b_e.shape == (4, 4)
-            and out is None and fields is None and not parallel and method == "closed"
-            and (errors == "auto" or errors == "raise") and tangent_tol == TANGENT_TOL
-            and degenerate_tol == DEGENERATE_TOL and p_zero_tol == P_ZERO_TOL
-            and closure_tol == CLOSURE_TOL):
+            and out is None and fields is None and not parallel
+            and (method is _CLOSED or is_option(method, "closed"))
+            and (errors is _AUTO or is_raising_policy(errors))
+            and (tangent_tol is TANGENT_TOL or is_default(tangent_tol, TANGENT_TOL))
+            and (degenerate_tol is DEGENERATE_TOL or is_default(degenerate_tol, DEGENERATE_TOL))
+            and (p_zero_tol is P_ZERO_TOL or is_default(p_zero_tol, P_ZERO_TOL))
+            and (closure_tol is CLOSURE_TOL or is_default(closure_tol, CLOSURE_TOL))):
         # the common single call (control loops): no closure, no option handling
         fq, fT = q.flags, T_b_e.flags
         if fq.c_contiguous and fq.writeable and fT.c_contiguous and fT.writeable:
@@ -252,7 +265,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
             fields=fields)
 
     names = check_fields(fields)
-    if method != "closed":
+    if not (method is _CLOSED or is_option(method, "closed")):
         return reference()
     check_options(errors, tangent_tol=tangent_tol, degenerate_tol=degenerate_tol,
                   p_zero_tol=p_zero_tol, closure_tol=closure_tol)    # as the reference
@@ -262,8 +275,8 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
         Ta = _arr(T_b_e, (4, 4))
     except _Delegate:
         return reference()
-    if (tangent_tol == TANGENT_TOL and degenerate_tol == DEGENERATE_TOL
-            and p_zero_tol == P_ZERO_TOL and closure_tol == CLOSURE_TOL):
+    if (is_default(tangent_tol, TANGENT_TOL) and is_default(degenerate_tol, DEGENERATE_TOL)
+            and is_default(p_zero_tol, P_ZERO_TOL) and is_default(closure_tol, CLOSURE_TOL)):
         tol = _FK_TOL_DEFAULT
     else:
         tol = np.array([check_tolerance(tangent_tol, "tangent_tol"),

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -28,6 +30,18 @@ def _vec3(x: ArrayLike, name: str) -> NDArray[np.float64]:
     if a.shape != (3,):
         raise ValueError(f"{name}: expected shape (3,), got {a.shape}")
     return np.array(a, dtype=np.float64, order="C")
+
+
+def _real(x: object, name: str) -> float:
+    """``x`` as a float (NaN / inf kept: the kernel flags them); a named error otherwise."""
+    if type(x) is float:
+        return x
+    if isinstance(x, bool) or not isinstance(x, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name}: expected a real number, got {type(x).__name__}")
+    try:
+        return float(x)
+    except OverflowError:
+        return math.inf if x > 0 else -math.inf    # 10**400: beyond float range, flagged
 
 
 class ControlLoop:
@@ -143,7 +157,7 @@ class ControlLoop:
         raising.
         """
         d = _vec3(direction_e, "direction_e")
-        r = _ik.ik_line_one(self._T, d, float(p), self._P, 0, self._q)
+        r = _ik.ik_line_one(self._T, d, _real(p, "p"), self._P, 0, self._q)
         return self._q, r
 
     def q_from_tool_tip(self, tip_e: ArrayLike) -> tuple[NDArray[np.float64], int]:

@@ -44,6 +44,8 @@ _NONFINITE, _STROKE, _AB_ORDER, _LINK, _DISJOINT, _TANGENT = 1.0, 2.0, 3.0, 4.0,
 _P_ZERO, _UJOINT, _WRIST, _CLOSURE = 7.0, 8.0, 9.0, 10.0
 #: chain.DEGENERATE_ULPS times the machine epsilon.
 _DEG_ROUND = 64.0 * 2.220446049250313e-16
+#: chain.CLOSURE_ULPS times the machine epsilon: the closure test's rounding allowance.
+_CLOSE_ROUND = 16.0 * 2.220446049250313e-16
 
 #: Bits of the flags the kernels return.
 FLAG_NONRIGID = 1        # some T_b_e is not rigid within half the tolerance: re-check exactly
@@ -263,8 +265,9 @@ def _serial_stage(G, P, tol, SH, Sm, n):
         # degeneracy relative to the direction's rounding, ~eps * (|t_b_e| + |O_s|) / p
         sc = (max(abs(t03), max(abs(t13), abs(t23))) + max(abs(xm), max(abs(ys), abs(zs))))
         dt = max(dtol, _DEG_ROUND * sc / nn)
+        ct = ctol + _CLOSE_ROUND * sc        # closure allows the rounding of a far pose
         ser = (_NONFINITE if not fin else _P_ZERO if pz else _UJOINT if rho <= dt
-               else _WRIST if rho4 <= dt else _CLOSURE if not (res <= ctol) else 0.0)
+               else _WRIST if rho4 <= dt else _CLOSURE if not (res <= ct) else 0.0)
         Sm[(_R) * CHUNK + ii] = pr if pr != 0.0 else ser
         Sm[(_NN) * CHUNK + ii] = nn
         Sm[(_RES) * CHUNK + ii] = res

@@ -82,6 +82,8 @@ def _pik_stage(K, P, n):
         r1 = rho - l4
         r1 = l1 if (r1 > l1) & (r1 - l1 <= dr) else r1
         h_abs = math.sqrt((l1 - r1) * (l1 + r1))
+        # within rounding of |h| = l3: on it (parallel._module.position_ik)
+        h_abs = l3 if (h_abs > l3) & (h_abs - l3 <= _h_error(r1, h_abs, dr)) else h_abs
         bad = (r1 > l1) | (h_abs > l3)
         reason = _LINK if (reason == 0.0) & bad else reason
         h_abs = 0.0 if h_abs * h_abs <= 2.0 * r1 * dr else h_abs
@@ -125,13 +127,20 @@ def _pik_stage(K, P, n):
 @njit(**_OPTS)
 def _q_error(r1, h_abs, dr, l3):
     """parallel._module._q_error: bound on the error of q for an error dr of r1."""
-    r1p = r1 if r1 > 0.0 else 0.0
-    dh = 2.0 * r1p * dr / (math.sqrt(h_abs * h_abs + 2.0 * r1p * dr) + h_abs) + dr
+    dh = _h_error(r1, h_abs, dr)
     hd = h_abs + dh
     s3 = l3 * l3 - hd * hd
     s3 = math.sqrt(s3) if s3 > 0.0 else 0.0
-    dmy = hd * dh / s3 if s3 > 0.0 else dh
+    near = math.sqrt((2.0 * h_abs + dh) * dh)
+    dmy = min(hd * dh / s3, near) if s3 > 0.0 else near
     return (2.0 * dr + dh) + dmy
+
+
+@njit(**_OPTS)
+def _h_error(r1, h_abs, dr):
+    """parallel._module._h_error: bound on the error of |h| for an error dr of r1."""
+    r1p = r1 if r1 > 0.0 else 0.0
+    return 2.0 * r1p * dr / (math.sqrt(h_abs * h_abs + 2.0 * r1p * dr) + h_abs) + dr
 
 
 @njit(**_OPTS)

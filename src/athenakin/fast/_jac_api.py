@@ -18,7 +18,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import ROTATION_TOL
+from .._validation import ROTATION_TOL, is_option
 from ..design import Design
 from ..parallel import TANGENT_TOL
 from ..robot import _jacobians as _ref
@@ -116,9 +116,9 @@ def _parallel(q: object, design: Design | None, mode: object, kind: int) -> NDAr
 
 def _robot(q: object, T_b_e: object, design: Design | None, mode: object, frame: object,
            kind: int) -> NDArray[np.float64]:
-    if frame == "rcm":
+    if is_option(frame, "rcm"):
         rcm = True
-    elif frame == "base":
+    elif is_option(frame, "base"):
         rcm = False
     else:
         raise _Delegate

@@ -9,7 +9,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_transform
+from .._validation import check_array, check_count, check_tolerance, check_transform
 from ..chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
 from ..design import Design
 from ..errors import InvalidInputError, Reason
@@ -62,11 +62,11 @@ def _chunk_source(q: QSource, n: int | None) -> tuple[Callable[[int, int], Array
     if callable(q):
         if n is None:
             raise TypeError("n: required when q is a callable q(start, stop)")
-        return q, int(n)
-    arr = q if isinstance(q, np.ndarray) else np.asarray(q, dtype=float)
+        return q, check_count(n, "n", minimum=0)
+    arr = q if isinstance(q, np.ndarray) else check_array(q, "q", (3,), allow_nonfinite=True)
     if arr.ndim != 2 or arr.shape[1] != 3:
         raise InvalidInputError(f"q: expected shape (N, 3) or a callable, got shape {arr.shape}")
-    total = arr.shape[0] if n is None else int(n)
+    total = arr.shape[0] if n is None else check_count(n, "n", minimum=0)
     if total > arr.shape[0]:
         raise InvalidInputError(f"n: expected at most len(q) = {arr.shape[0]}, got {total}")
     return (lambda a, b: arr[a:b]), total
@@ -131,7 +131,10 @@ def sweep_fk(q: QSource, T_b_e: ArrayLike, design: Design | None = None, *,
         raise InvalidInputError(f"chunk_size: expected a positive integer, got {chunk_size!r}")
     source, total = _chunk_source(q, n)
     T1 = np.ascontiguousarray(T, dtype=np.float64).reshape(1, 4, 4)
-    tol = np.array([tangent_tol, degenerate_tol, p_zero_tol, closure_tol], dtype=float)
+    tol = np.array([check_tolerance(tangent_tol, "tangent_tol"),
+                    check_tolerance(degenerate_tol, "degenerate_tol"),
+                    check_tolerance(p_zero_tol, "p_zero_tol"),
+                    check_tolerance(closure_tol, "closure_tol")])
     counts = np.zeros(17, np.int64)
     reasons = np.zeros(16, np.int64)
     slots = np.zeros(2, np.int64)

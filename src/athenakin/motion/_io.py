@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from .._csv import read_table
 from .._serialize import json_text
+from .._validation import check_instance, check_path
 from ._errors import PathFileError
 from ._plan import Trajectory
 from ._tracker import TrackFlag, TrackLog
@@ -293,7 +294,7 @@ def write_text_atomic(path: str | Path, text: str | bytes) -> None:
     when it replaces a file, that file's permissions; a symbolic link is
     followed (its target is replaced, the link stays a link).
     """
-    path = Path(os.path.realpath(path))
+    path = Path(os.path.realpath(check_path(path)))
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
     try:
         with os.fdopen(fd, "wb") as fh:
@@ -330,7 +331,8 @@ def save_trajectory(traj: Trajectory, path: str | Path) -> Path:
     ValueError
         Another extension.
     """
-    path = Path(path)
+    check_instance(traj, "traj", Trajectory)
+    path = check_path(path)
     ext = path.suffix.lower()
     if ext not in (".csv", ".json"):
         raise ValueError(f"path: expected a .csv or .json file name, got {str(path)!r}")

@@ -30,9 +30,9 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_scalar, check_transform
+from .._validation import check_array, check_instance, check_scalar, check_transform
 from ..design import Design, resolve_design
-from ..errors import Reason
+from ..errors import InvalidInputError, Reason
 from ..robot import direction_from_angles
 from ._errors import (
     PathInfeasibleError,
@@ -669,6 +669,37 @@ def _sample(plans: list[_SegmentPlan], T: NDArray[np.float64], design: Design, r
             "segment": k, "reason": reason, "mode": mode, "tip_speed": tipf * lam[1]}
 
 
+_SAMPLE_KEYS = {"t": (), "q": (3,), "qd": (3,), "qdd": (3,), "tip_e": (3,), "reason": (),
+                "mode": (), "tip_speed": ()}
+
+
+def _check_sample_arguments(samples: object, T_b_e: object, design: object, limits: object,
+                            margins: object, mode0: object) -> None:
+    """The boundary checks of :func:`check_samples` (named errors, nothing computed)."""
+    if not isinstance(samples, dict):
+        raise TypeError(f"samples: expected a dict of sample arrays, got {type(samples).__name__}")
+    missing = sorted(set(_SAMPLE_KEYS) - set(samples))
+    if missing:
+        raise InvalidInputError(f"samples: missing {missing}; expected the keys "
+                                f"{sorted(_SAMPLE_KEYS)} (and qddd)")
+    n = None
+    for k, tail in _SAMPLE_KEYS.items():
+        a = samples[k]
+        if not isinstance(a, np.ndarray) or a.ndim != 1 + len(tail) or a.shape[1:] != tail \
+                or (n is not None and a.shape[0] != n):
+            raise InvalidInputError(f"samples[{k!r}]: expected an array of shape "
+                                    f"({'N' if n is None else n}{''.join(f', {t}' for t in tail)})"
+                                    f", got {getattr(a, 'shape', type(a).__name__)}")
+        n = a.shape[0]
+    check_transform(T_b_e, "T_b_e")  # type: ignore[arg-type]
+    check_instance(design, "design", Design)
+    check_instance(limits, "limits", Limits)
+    check_instance(margins, "margins", Margins)
+    if mode0 is not None and (isinstance(mode0, bool) or not isinstance(mode0, (int, np.integer))
+                              or mode0 not in (1, -1)):
+        raise InvalidInputError(f"mode0: expected +1, -1 or None, got {mode0!r}")
+
+
 def check_samples(samples: dict[str, Any], T_b_e: NDArray[np.float64],
                   design: Design, limits: Limits, margins: Margins, *,
                   mode0: int | None = None) -> dict | None:  # type: ignore[type-arg]
@@ -698,6 +729,7 @@ def check_samples(samples: dict[str, Any], T_b_e: NDArray[np.float64],
         The samples' :class:`SingularityMeasures` are stored under
         ``samples["measures"]``.
     """
+    _check_sample_arguments(samples, T_b_e, design, limits, margins, mode0)
     q = samples["q"]
     n = q.shape[0]
     # (name, bad (n,) or (n, 3) per actuator, value, bound)

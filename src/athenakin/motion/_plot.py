@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from .._validation import check_axes, check_count, check_instance, check_path
 from ._plan import Trajectory
 from ._safety import MEASURE_NAMES
 
@@ -40,6 +41,10 @@ _MEASURE_LABELS = {
 }
 
 
+#: Largest ``dpi`` of the saved figures (three figures at 20000 dpi are gigabytes).
+MAX_DPI = 1200
+
+
 def plot_actuators(traj: Trajectory, *, axes: Any = None) -> Any:
     """Actuator position, velocity, acceleration (and jerk) over time, limits dashed.
 
@@ -55,6 +60,10 @@ def plot_actuators(traj: Trajectory, *, axes: Any = None) -> Any:
     -------
     ndarray of Axes
     """
+    check_instance(traj, "traj", Trajectory)
+    if axes is not None:
+        for a in np.atleast_1d(np.asarray(axes, dtype=object)).ravel():
+            check_axes(a, "axes")
     import matplotlib.pyplot as plt
 
     limits = traj.limits
@@ -108,6 +117,9 @@ def plot_tip_path(traj: Trajectory, *, ax: Any = None, context: bool = True,
     -------
     Axes
     """
+    check_instance(traj, "traj", Trajectory)
+    check_axes(ax)
+    shafts = check_count(shafts, "shafts", minimum=0, maximum=10_000)
     import matplotlib.pyplot as plt
 
     if ax is None:
@@ -186,6 +198,8 @@ def plot_singularity_distance(traj: Trajectory, *, ax: Any = None) -> Any:
     -------
     Axes
     """
+    check_instance(traj, "traj", Trajectory)
+    check_axes(ax)
     import matplotlib.pyplot as plt
 
     if ax is None:
@@ -206,6 +220,8 @@ def plot_singularity_distance(traj: Trajectory, *, ax: Any = None) -> Any:
 
 def render_plots(traj: Trajectory, *, dpi: int = 120) -> dict[str, bytes]:
     """The three figures as PNG bytes, keyed ``"actuators"``, ``"path3d"``, ``"singularity"``."""
+    check_instance(traj, "traj", Trajectory)
+    dpi = check_count(dpi, "dpi", minimum=1, maximum=MAX_DPI)
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -228,7 +244,7 @@ def render_plots(traj: Trajectory, *, dpi: int = 120) -> dict[str, bytes]:
 
 def plot_paths(prefix: str | Path) -> dict[str, Path]:
     """File names ``<prefix>_actuators.png``, ``_path3d.png``, ``_singularity.png``."""
-    prefix = Path(prefix)
+    prefix = check_path(prefix, "prefix")
     return {k: prefix.with_name(f"{prefix.name}_{k}.png")
             for k in ("actuators", "path3d", "singularity")}
 

@@ -25,7 +25,9 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from ..design import Design
+from .._validation import broadcast_batch, check_array, check_transform
+from ..design import Design, resolve_design
+from ..errors import InvalidInputError
 
 __all__ = ["Margins", "SingularityMeasures", "singularity_measures", "MEASURE_NAMES"]
 
@@ -80,7 +82,10 @@ class Margins:
             if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
                 raise TypeError(f"Margins.{f.name}: expected a real number, got "
                                 f"{type(v).__name__}")
-            v = float(v)
+            try:
+                v = float(v)
+            except OverflowError:          # 10**400: beyond float range
+                v = math.inf
             if math.isnan(v) or v < 0 or (f.name != "cond" and math.isinf(v)):
                 raise ValueError(f"Margins.{f.name}: expected a finite number >= 0"
                                  f"{' (or inf)' if f.name == 'cond' else ''}, got {v}")
@@ -163,8 +168,20 @@ def singularity_measures(q: NDArray[np.float64], tip_e: NDArray[np.float64],
     """
     from ..analysis import condition_number, singularities, tool_tip_jacobian
 
-    q = np.asarray(q, float)
-    mode = np.broadcast_to(np.asarray(mode), q.shape[:-1])
+    design = resolve_design(design)
+    q = check_array(q, "q", (3,), allow_nonfinite=True)
+    tip_e = check_array(tip_e, "tip_e", (3,), allow_nonfinite=True)
+    T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
+    m = check_array(mode, "mode", ())
+    if not np.all(np.isin(m, (1, -1))):
+        raise InvalidInputError(f"mode: expected +1 or -1 (assembly mode), got {mode!r}")
+    broadcast_batch(q=q.shape[:-1], T_b_e=T.shape[:-2], mode=m.shape)
+    try:
+        mode = np.broadcast_to(m, q.shape[:-1])
+    except ValueError:
+        raise InvalidInputError(f"mode: shape {m.shape} does not broadcast to the batch of q "
+                                f"{q.shape[:-1]}") from None
+    T_b_e = T
     free = dataclasses.replace(design, q_min=None, q_max=None)
     with np.errstate(invalid="ignore", divide="ignore"):
         rep = singularities(q, T_b_e, free, mode=mode, jacobians=False)

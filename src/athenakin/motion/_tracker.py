@@ -390,7 +390,8 @@ class Tracker:
             order = sorted(range(16), key=lambda k: (sol.mode[k] != 1, sol.p_sign[k] != 1,
                                                      sol.ujoint[k] != 1, sol.wrist[k] != 1))
             slot = next(k for k in order if sol.valid[k])
-        elif not (isinstance(slot, (int, np.integer)) and 0 <= slot < 16):
+        elif not (isinstance(slot, (int, np.integer)) and not isinstance(slot, bool)
+                  and 0 <= slot < 16):
             raise InvalidInputError(f"slot: expected an integer in 0..15, got {slot!r}")
         elif not sol.valid[slot]:
             raise InvalidInputError(f"slot: slot {slot} is not a valid solution for q0 = "
@@ -475,7 +476,7 @@ class Tracker:
             q1, q2, q3 = float(q[0]), float(q[1]), float(q[2])  # type: ignore[index,arg-type]
             if len(q) != 3:  # type: ignore[arg-type]
                 raise ValueError
-        except (TypeError, ValueError, IndexError, OverflowError):
+        except (TypeError, ValueError, LookupError, OverflowError):
             raise InvalidInputError(f"q: expected 3 numbers (q1, q2, q3) in m, got {q!r}") \
                 from None
         self._index += 1

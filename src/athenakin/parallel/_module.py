@@ -153,7 +153,8 @@ def circle_geometry(q: ArrayLike, design: Design) -> dict[str, NDArray[np.float6
         paper's ``w``) and ``half_chord`` ``a`` (0 where ``k < 0``). ``r1`` and
         ``m_y`` are NaN where the links cannot span A-B.
     """
-    q = np.asarray(q, dtype=float)
+    design = resolve_design(design)
+    q = check_array(q, "q", (3,), allow_nonfinite=True)
     q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2]
     h = 0.5 * (q1 - q2)
     with np.errstate(invalid="ignore"):
@@ -313,6 +314,9 @@ def position_ik(O_s: NDArray[np.float64], design: Design,
         # within rounding of the span: h = 0 (ill-conditioned, not out of the workspace)
         r1 = np.where((r1 > l1) & (r1 - l1 <= dr), l1, r1)
         h_abs = np.sqrt((l1 - r1) * (l1 + r1))
+        # within rounding of |h| = l3 (links l3 stretched along the rail): on it, not out
+        # of the workspace (a pose the FK produced there, issue 13 audit)
+        h_abs = np.where((h_abs > l3) & (h_abs - l3 <= _h_error(r1, h_abs, dr)), l3, h_abs)
         bad_link = (r1 > l1) | (h_abs > l3)
         reason = np.where((reason == 0) & bad_link, np.int8(Reason.LINK_TOO_SHORT), reason)
         ok = reason == 0
@@ -356,11 +360,21 @@ def _q_error(r1: NDArray[np.float64], h_abs: NDArray[np.float64], dr: NDArray[np
     r1^2)``): ``r1 dr / h`` away from ``h = 0`` and ``sqrt(2 r1 dr)`` at it. ``q3`` moves
     with ``O_i`` (``dr``) and with ``m_y`` (``|h| dh / sqrt(l3^2 - h^2)``).
     """
-    r1p = np.maximum(r1, 0.0)
-    dh = 2.0 * r1p * dr / (np.sqrt(h_abs * h_abs + 2.0 * r1p * dr) + h_abs) + dr
+    dh = _h_error(r1, h_abs, dr)
     s3 = np.sqrt(np.maximum(design.l3 ** 2 - (h_abs + dh) ** 2, 0.0))
-    dmy = np.where(s3 > 0, (h_abs + dh) * dh / np.where(s3 > 0, s3, 1.0), dh)
+    # m_y = sqrt(l3^2 - h^2): slope (h + dh) / s3 away from |h| = l3, and at most
+    # sqrt(|h'^2 - h^2|) <= sqrt((2 h + dh) dh) everywhere (the square root's modulus)
+    near = np.sqrt((2.0 * h_abs + dh) * dh)
+    dmy = np.where(s3 > 0, np.minimum((h_abs + dh) * dh / np.where(s3 > 0, s3, 1.0), near),
+                   near)
     return 2.0 * dr + dh + dmy
+
+
+def _h_error(r1: NDArray[np.float64], h_abs: NDArray[np.float64], dr: NDArray[np.float64]
+             ) -> NDArray[np.float64]:
+    """Bound on the error of ``|h| = sqrt(l1^2 - r1^2)`` for an error ``dr`` of ``r1``."""
+    r1p = np.maximum(r1, 0.0)
+    return 2.0 * r1p * dr / (np.sqrt(h_abs * h_abs + 2.0 * r1p * dr) + h_abs) + dr
 
 
 def position_ik_error(O_s: ArrayLike, design: Design | None = None,
@@ -383,7 +397,8 @@ def position_ik_error(O_s: ArrayLike, design: Design | None = None,
     """
     design = resolve_design(design)
     pos = check_array(O_s, "O_s", (3,), allow_nonfinite=True)
-    return position_ik(pos, design, np.asarray(dO, dtype=float)).q_error
+    dO = check_array(dO, "dO", ())
+    return position_ik(pos, design, dO).q_error
 
 
 def link_detail(O_s: ArrayLike, design: Design) -> str:
@@ -432,6 +447,7 @@ def module_orientation_check(res: ParallelIK, T: NDArray[np.float64], tol: float
 
     Shared by the reference and the compiled :func:`parallel_inverse_kinematics`.
     """
+    tol = check_tolerance(tol, "tol")
     R = T[..., :3, :3]
     with np.errstate(invalid="ignore"):
         c, s = np.cos(res.theta), np.sin(res.theta)

@@ -8,6 +8,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from .._validation import check_choice, is_option
 from ..design import Design, resolve_design
 from ..errors import Reason, error_for_reason
 
@@ -29,7 +30,7 @@ def check_reference_backend(backend: str, name: str) -> None:
     the choice of backend belongs to the public functions of :mod:`athenakin`
     (``athenakin.forward_kinematics(..., backend="numba")``), not to the reference.
     """
-    if backend != "numpy":
+    if not is_option(backend, "numpy"):
         raise ValueError(f"backend: the reference athenakin.robot.{name} is the numpy "
                          f"implementation (backend='numpy'), got {backend!r}; "
                          f"athenakin.{name}(..., backend={backend!r}) chooses the backend")
@@ -37,8 +38,7 @@ def check_reference_backend(backend: str, name: str) -> None:
 
 def resolve_policy(errors: str, batch_shape: tuple[int, ...]) -> bool:
     """Return True when failures must raise (``"raise"``, or ``"auto"`` on a single item)."""
-    if errors not in _POLICIES:
-        raise ValueError(f"errors: expected one of {_POLICIES}, got {errors!r}")
+    check_choice(errors, "errors", _POLICIES)
     return errors == "raise" or (errors == "auto" and batch_shape == ())
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import numbers
 from collections.abc import Callable
 from typing import Any, Literal
 
@@ -11,7 +12,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import invert_transform
-from .._validation import broadcast_batch, check_array, check_options, check_transform
+from .._validation import (
+    broadcast_batch,
+    check_array,
+    check_choice,
+    check_names,
+    check_options,
+    check_transform,
+)
 from ..chain._ups import (
     CLOSURE_TOL,
     DEGENERATE_TOL,
@@ -48,7 +56,8 @@ SLOT_WRIST = np.tile(SERIAL_WRIST, 2)
 def slot_index(mode: int, p_sign: int, ujoint: int, wrist: int) -> int:
     """Slot (0..15) of the solution with the given labels (each +1 or -1)."""
     for name, v in (("mode", mode), ("p_sign", p_sign), ("ujoint", ujoint), ("wrist", wrist)):
-        if v not in (1, -1):
+        # a number, not an array (whose ``in`` has no truth value)
+        if not isinstance(v, (numbers.Real, np.number)) or v not in (1, -1):
             raise ValueError(f"{name}: expected +1 or -1, got {v!r}")
     return 8 * (mode == -1) + 4 * (p_sign == -1) + 2 * (ujoint == -1) + (wrist == -1)
 
@@ -215,16 +224,12 @@ def check_fields(fields: str | tuple[str, ...] | list[str] | None) -> tuple[str,
 
     Raises
     ------
+    TypeError
+        ``fields`` is not None, a name or a list / tuple of names.
     ValueError
         A name that is not in :data:`FK_FIELDS`.
     """
-    if fields is None:
-        return None
-    names = (fields,) if isinstance(fields, str) else tuple(fields)
-    bad = [f for f in names if f not in FK_FIELDS]
-    if bad:
-        raise ValueError(f"fields: expected names among {FK_FIELDS}, got {bad}")
-    return names
+    return check_names(fields, "fields", FK_FIELDS)
 
 
 def fk_solution(fields: tuple[str, ...] | None, **arrays: Any) -> FKSolution:
@@ -301,8 +306,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     >>> int(sol.n_solutions)
     16
     """
-    if method not in _METHODS:
-        raise ValueError(f"method: expected one of {_METHODS}, got {method!r}")
+    check_choice(method, "method", _METHODS)
     check_reference_backend(backend, "forward_kinematics")
     names = check_fields(fields)
     tangent_tol, degenerate_tol, p_zero_tol, closure_tol = check_options(

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import transform_from_rotation_translation, wrap_angle
-from .._validation import broadcast_batch, check_array, check_options, check_transform
+from .._validation import broadcast_batch, check_array, check_names, check_options, check_transform
 from ..chain._ups import (
     CLOSURE_TOL,
     P_ZERO_TOL,
@@ -138,16 +138,12 @@ def check_ik_fields(fields: str | tuple[str, ...] | list[str] | None
 
     Raises
     ------
+    TypeError
+        ``fields`` is not None, a name or a list / tuple of names.
     ValueError
         A name that is not in :data:`IK_FIELDS`.
     """
-    if fields is None:
-        return None
-    names = (fields,) if isinstance(fields, str) else tuple(fields)
-    bad = [f for f in names if f not in IK_FIELDS]
-    if bad:
-        raise ValueError(f"fields: expected names among {IK_FIELDS}, got {bad}")
-    return names
+    return check_names(fields, "fields", IK_FIELDS)
 
 
 def passive_joints(fields: tuple[str, ...] | None, **arrays: Any) -> PassiveJoints:

@@ -62,7 +62,7 @@ def _mode(mode: ArrayLike) -> NDArray[np.float64]:
 
 
 def _frame(frame: str) -> str:
-    if frame not in _FRAMES:
+    if not (isinstance(frame, str) and frame in _FRAMES):
         raise InvalidInputError(f"frame: expected one of {_FRAMES}, got {frame!r}")
     return frame
 

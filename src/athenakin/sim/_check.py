@@ -18,10 +18,17 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import wrap_angle
-from .._validation import check_array
+from .._validation import (
+    check_array,
+    check_count,
+    check_instance,
+    check_rng,
+    check_scalar,
+    check_tolerance,
+)
 from ..chain import closure_residual
-from ..design import Design, resolve_design
-from ..errors import InvalidInputError
+from ..design import LENGTH_RANGE, Design, resolve_design
+from ..errors import InvalidInputError, OutOfWorkspaceError
 from ..parallel import parallel_forward_kinematics
 from ..robot import forward_kinematics
 from ..robot._fk import slot_index
@@ -126,6 +133,17 @@ def _smoothstep(s: float) -> float:
     return 0.5 - 0.5 * np.cos(np.pi * min(max(s, 0.0), 1.0))
 
 
+#: Most simulated seconds of one ramp or hold of :func:`settle` (MuJoCo steps at about
+#: a millisecond: an hour is already millions of steps).
+MAX_SIM_TIME = 3600.0
+
+
+def _check_slot(slot: object) -> int:
+    if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 16:
+        raise InvalidInputError(f"slot: expected an integer in 0..15, got {slot!r}")
+    return int(slot)
+
+
 def settle(model: Any, data: Any, q: ArrayLike, *, ramp_time: float = RAMP_TIME,
            settle_time: float = SETTLE_TIME, speed_tol: float = SPEED_TOL) -> float:
     """Move the actuator targets smoothly from ``data.ctrl`` to ``q``, then hold them.
@@ -148,7 +166,16 @@ def settle(model: Any, data: Any, q: ArrayLike, *, ramp_time: float = RAMP_TIME,
     """
     import mujoco
 
-    q = np.asarray(q, dtype=float)
+    check_instance(model, "model", mujoco.MjModel)
+    check_instance(data, "data", mujoco.MjData)
+    q = check_array(q, "q", (3,))
+    ramp_time = check_scalar(ramp_time, "ramp_time", nonnegative=True)
+    settle_time = check_scalar(settle_time, "settle_time", nonnegative=True)
+    speed_tol = check_tolerance(speed_tol, "speed_tol")
+    for name, v in (("ramp_time", ramp_time), ("settle_time", settle_time)):
+        if v > MAX_SIM_TIME:
+            raise InvalidInputError(f"{name}: expected at most {MAX_SIM_TIME:g} s of simulated "
+                                    f"time, got {v:g}")
     start = data.ctrl.copy()
     dt = model.opt.timestep
     n_ramp = int(round(ramp_time / dt))
@@ -224,7 +251,11 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
     T = resolve_rcm_frame(T_b_e, design)
     qs = check_array(q, "q", (3,))
     qs = qs.reshape(-1, 3)
-    rng = np.random.default_rng(rng)
+    perturb = check_scalar(perturb, "perturb", nonnegative=True)
+    if perturb > LENGTH_RANGE[1]:
+        raise InvalidInputError(f"perturb: expected at most {LENGTH_RANGE[1]:g} (m or rad), "
+                                f"got {perturb:g}")
+    rng = check_rng(rng)
     model = load_model(design, T, q=home_q, slot=start_slot, gravity=gravity)
     data = mujoco.MjData(model)
     names = list(JOINTS)
@@ -321,8 +352,9 @@ def sample_reachable_q(n: int, design: Design | None = None, T_b_e: ArrayLike | 
     ------
     TypeError, InvalidInputError
         ``n`` is not a non-negative integer.
-    RuntimeError
-        Fewer than ``n`` targets found within ``max_tries`` rounds.
+    OutOfWorkspaceError
+        Fewer than ``n`` targets found within ``max_tries`` rounds (a
+        :class:`~athenakin.KinematicsError`; it was a bare ``RuntimeError``).
     """
     from ..robot import REFERENCE_Q
 
@@ -333,7 +365,13 @@ def sample_reachable_q(n: int, design: Design | None = None, T_b_e: ArrayLike | 
     design = resolve_design(design)
     T = resolve_rcm_frame(T_b_e, design)
     home = check_array(REFERENCE_Q if home_q is None else home_q, "home_q", (3,))
-    rng = np.random.default_rng(rng)
+    slot = _check_slot(slot)
+    radius = check_scalar(radius, "radius", positive=True)
+    if radius > LENGTH_RANGE[1]:
+        raise InvalidInputError(f"radius: expected at most {LENGTH_RANGE[1]:g} m, got {radius:g}")
+    n_path = check_count(n_path, "n_path", minimum=2, maximum=100_000)
+    max_tries = check_count(max_tries, "max_tries", minimum=1)
+    rng = check_rng(rng)
     t = np.linspace(0.0, 1.0, n_path)
     found: list[NDArray[np.float64]] = []
     for _ in range(max_tries):
@@ -352,5 +390,5 @@ def sample_reachable_q(n: int, design: Design | None = None, T_b_e: ArrayLike | 
         found.extend(good)
         if len(found) >= n:
             return np.array(found[:n])
-    raise RuntimeError(f"sample_reachable_q: found {len(found)} of {n} targets reachable from "
-                       f"{home.tolist()} in slot {slot}; lower radius or n")
+    raise OutOfWorkspaceError(f"sample_reachable_q: found {len(found)} of {n} targets reachable "
+                              f"from {home.tolist()} in slot {slot}; lower radius or n")

@@ -40,6 +40,7 @@ import dataclasses
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._validation import check_array
 from ..design import Design
 from ..plot._geometry import RobotGeometry, robot_geometry
 
@@ -190,6 +191,8 @@ def urdf_joint_zero(T_b_e: ArrayLike | None = None, design: Design | None = None
     KinematicsError
         The zero configuration does not assemble (pick another ``q_zero``).
     """
+    if q_zero is not None:
+        q_zero = check_array(q_zero, "q_zero", (3,))
     return _absolute_joint_values(robot_geometry(q_zero, T_b_e, design, slot=zero_slot))
 
 

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array
+from ..errors import InvalidInputError
 
 __all__ = [
     "quaternion_xyzw_from_wxyz",
@@ -125,6 +126,10 @@ def scipy_rotation_from_quaternion(x: ArrayLike) -> Any:
     [0.0, 0.0, 1.0, 0.0]
     """
     q = quaternion_xyzw_from_wxyz(x)
+    zero = ~(np.linalg.norm(q, axis=-1) > 0)
+    if np.any(zero):
+        idx = tuple(np.argwhere(zero)[0]) if zero.ndim else ()
+        raise InvalidInputError(f"x: expected non-zero quaternions, item {idx} is zero")
     Rotation = _scipy_rotation_class()
     return Rotation.from_quat(q if q.ndim == 1 else q.reshape(-1, 4))
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_transform
+from .._validation import check_array, check_tolerance, check_transform
 from ..errors import NotOnStudyQuadricError
 
 __all__ = [
@@ -208,6 +208,7 @@ def is_on_study_quadric(X: ArrayLike, *, tol: float = STUDY_QUADRIC_TOL) -> NDAr
     ndarray of bool, shape (...)
     """
     X = check_array(X, "X", (8,))
+    tol = check_tolerance(tol, "tol")
     nx = np.linalg.norm(X[..., :4], axis=-1)
     nX = np.linalg.norm(X, axis=-1)
     res = np.abs(np.sum(X[..., :4] * X[..., 4:], axis=-1))
@@ -227,6 +228,7 @@ def check_study(X: ArrayLike, name: str = "X", *,
         the first such item and its quadric value.
     """
     X = check_array(X, name, (8,))
+    tol = check_tolerance(tol, "tol")
     ok = is_on_study_quadric(X, tol=tol)
     if not np.all(ok):
         idx = tuple(np.argwhere(~ok)[0]) if X.ndim > 1 else ()
@@ -284,6 +286,7 @@ def study_equal(X1: ArrayLike, X2: ArrayLike, *, atol: float = 1e-12) -> NDArray
     """
     X1 = check_array(X1, "X1", (8,))
     X2 = check_array(X2, "X2", (8,))
+    atol = check_tolerance(atol, "atol")
     n1 = X1 / np.linalg.norm(X1, axis=-1, keepdims=True)
     n2 = X2 / np.linalg.norm(X2, axis=-1, keepdims=True)
     d = np.minimum(np.abs(n1 - n2).max(axis=-1), np.abs(n1 + n2).max(axis=-1))

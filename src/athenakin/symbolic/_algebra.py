@@ -55,12 +55,29 @@ V_SYMBOLS: tuple[sp.Symbol, ...] = sp.symbols("v1:6", real=True)
 P_SYMBOL: sp.Symbol = sp.Symbol("p", real=True)
 
 
-def study_vector(entries: Sequence[sp.Expr]) -> sp.ImmutableMatrix:
-    """An 8-vector ``(x0..x3, y0..y3)`` as an immutable (8, 1) sympy matrix."""
-    entries = list(entries)
+def study_vector(entries: Sequence[sp.Expr], name: str = "entries") -> sp.ImmutableMatrix:
+    """An 8-vector ``(x0..x3, y0..y3)`` as an immutable (8, 1) sympy matrix.
+
+    Raises
+    ------
+    TypeError
+        ``entries`` is not a sequence of expressions (sympy cannot read an entry).
+    ValueError
+        It does not have 8 entries. Both messages start with ``name``.
+    """
+    try:
+        if isinstance(entries, (str, bytes)):
+            raise TypeError
+        entries = list(entries)
+    except TypeError:
+        raise TypeError(f"{name}: expected 8 sympy expressions (x0..x3, y0..y3), got "
+                        f"{type(entries).__name__}") from None
     if len(entries) != 8:
-        raise ValueError(f"entries: expected 8 components (x0..x3, y0..y3), got {len(entries)}")
-    return sp.ImmutableMatrix(8, 1, [sp.sympify(c) for c in entries])
+        raise ValueError(f"{name}: expected 8 components (x0..x3, y0..y3), got {len(entries)}")
+    try:
+        return sp.ImmutableMatrix(8, 1, [sp.sympify(c, strict=True) for c in entries])
+    except (sp.SympifyError, TypeError, ValueError) as exc:
+        raise TypeError(f"{name}: expected sympy expressions or numbers, got {exc}") from None
 
 
 def quaternion_multiply(a: Sequence[sp.Expr], b: Sequence[sp.Expr]) -> list[sp.Expr]:
@@ -86,7 +103,7 @@ def dq_multiply(X1: Sequence[sp.Expr], X2: Sequence[sp.Expr]) -> sp.ImmutableMat
     sympy.ImmutableMatrix, shape (8, 1)
         ``(x1 x2, x1 y2 + y1 x2)``.
     """
-    X1, X2 = list(X1), list(X2)
+    X1, X2 = list(study_vector(X1, "X1")), list(study_vector(X2, "X2"))
     x = quaternion_multiply(X1[:4], X2[:4])
     y = [u + w for u, w in zip(quaternion_multiply(X1[:4], X2[4:]),
                                quaternion_multiply(X1[4:], X2[:4]), strict=True)]
@@ -106,13 +123,13 @@ def dq_product(factors: Sequence[Sequence[sp.Expr]]) -> sp.ImmutableMatrix:
 
 def dq_conj_quaternion(X: Sequence[sp.Expr]) -> sp.ImmutableMatrix:
     """``conj(x) + eps conj(y)``: for a Study vector, the inverse displacement (up to scale)."""
-    X = list(X)
+    X = list(study_vector(X, "X"))
     return study_vector([X[0], -X[1], -X[2], -X[3], X[4], -X[5], -X[6], -X[7]])
 
 
 def study_M(v: sp.Expr) -> sp.ImmutableMatrix:
     """``M_i`` of Eq. 6 in the half-tangent ``v = tan(u/2)``: ``(1, 0, 0, v, 0, 0, 0, 0)``."""
-    return study_vector([1, 0, 0, v, 0, 0, 0, 0])
+    return study_vector([1, 0, 0, v, 0, 0, 0, 0], "v")
 
 
 def study_G(a: sp.Expr, d: sp.Expr, al: sp.Expr) -> sp.ImmutableMatrix:
@@ -122,17 +139,17 @@ def study_G(a: sp.Expr, d: sp.Expr, al: sp.Expr) -> sp.ImmutableMatrix:
     followed by the rotation about x by ``alpha``.
     """
     a, d, al = sp.sympify(a), sp.sympify(d), sp.sympify(al)
-    return study_vector([1, al, 0, 0, a * al / 2, -a / 2, -d * al / 2, -d / 2])
+    return study_vector([1, al, 0, 0, a * al / 2, -a / 2, -d * al / 2, -d / 2], "a, d, al")
 
 
 def study_quadric(X: Sequence[sp.Expr]) -> sp.Expr:
     """The Study quadric ``x0*y0 + x1*y1 + x2*y2 + x3*y3`` of an 8-vector, expanded."""
-    X = list(X)
+    X = list(study_vector(X, "X"))
     return sp.expand(sum(X[i] * X[i + 4] for i in range(4)))
 
 
 def _eq3_parts(X: Sequence[sp.Expr]) -> tuple[sp.Matrix, sp.Matrix, sp.Expr]:
-    x0, x1, x2, x3, y0, y1, y2, y3 = list(X)
+    x0, x1, x2, x3, y0, y1, y2, y3 = list(study_vector(X, "X"))
     R = sp.Matrix([
         [x0**2 + x1**2 - x2**2 - x3**2, 2 * (x1 * x2 - x0 * x3), 2 * (x1 * x3 + x0 * x2)],
         [2 * (x1 * x2 + x0 * x3), x0**2 - x1**2 + x2**2 - x3**2, 2 * (x2 * x3 - x0 * x1)],

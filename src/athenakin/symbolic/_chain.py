@@ -29,6 +29,7 @@ from ._algebra import (
     dq_product,
     study_G,
     study_M,
+    study_vector,
 )
 
 __all__ = [
@@ -63,6 +64,16 @@ def joint_factors(v: Sequence[sp.Expr] = V_SYMBOLS,
     p : sympy expression
         The prismatic joint ``d3``.
     """
+    try:
+        if isinstance(v, (str, bytes)):
+            raise TypeError
+        v = list(v)
+        if len(v) != len(DH_PARAMETERS):
+            raise ValueError
+        p = sp.sympify(p, strict=True)
+    except (TypeError, ValueError, sp.SympifyError):
+        raise TypeError(f"v, p: expected {len(DH_PARAMETERS)} half-tangents and one sympy "
+                        f"expression, got {type(v).__name__} and {type(p).__name__}") from None
     return [(study_M(vi), study_G(a, d.subs(P_SYMBOL, p), al))
             for vi, (a, d, al) in zip(v, DH_PARAMETERS, strict=True)]
 
@@ -81,7 +92,7 @@ def serial_chain(b: Sequence[sp.Expr] | None = None) -> sp.ImmutableMatrix:
     sympy.ImmutableMatrix, shape (8, 1)
         Polynomial in ``b``, ``v1..v5``, ``p``; equals ``E`` projectively.
     """
-    b = B_SYMBOLS if b is None else b
+    b = B_SYMBOLS if b is None else tuple(study_vector(b, "b"))
     factors: list[Sequence[sp.Expr]] = [b]
     for M, G in joint_factors():
         factors += [M, G]

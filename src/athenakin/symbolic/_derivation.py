@@ -28,6 +28,7 @@ from typing import Any
 import sympy as sp
 from sympy.printing.pycode import pycode
 
+from .._validation import check_path
 from ._algebra import F_SYMBOLS, P_SYMBOL, V_SYMBOLS, X_SYMBOLS
 from ._chain import compare_vectors, left_chain, right_chain
 from ._elimination import elimination_steps, implicit_sets
@@ -158,7 +159,11 @@ def load_derivation(path: Path = CACHE_FILE) -> dict[str, sp.Basic]:
         corrupted: regenerate with ``python -m athenakin.symbolic._derivation``),
         or the format is unknown.
     """
-    data = json.loads(Path(path).read_text())
+    path = check_path(path)
+    try:
+        data = json.loads(path.read_text())
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"path: {path} is not a derivation cache ({exc})") from None
     if data.get("format") != CACHE_FORMAT:
         raise ValueError(f"{path}: expected cache format {CACHE_FORMAT}, got "
                          f"{data.get('format')!r}")

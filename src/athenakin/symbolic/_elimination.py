@@ -35,6 +35,7 @@ import dataclasses
 import functools
 from collections.abc import Mapping, Sequence
 
+import numpy as np
 import sympy as sp
 
 from ._algebra import B_SYMBOLS, E_SYMBOLS, F_SYMBOLS, P_SYMBOL, V_SYMBOLS, X_SYMBOLS
@@ -197,8 +198,10 @@ def solve_x_from_sr(M: sp.Matrix, *, unknowns: Sequence[int] = (0, 1, 2),
         If the chosen minor is identically zero.
     """
     unknowns, equations = list(unknowns), list(equations)
-    if len(set(unknowns)) != 3 or len(set(equations)) != 3:
-        raise ValueError(f"unknowns, equations: expected 3 distinct indices each, got "
+    if not all(isinstance(i, (int, np.integer)) and not isinstance(i, bool) and 0 <= i < 4
+               for i in unknowns + equations) or len(set(unknowns)) != 3 \
+            or len(set(equations)) != 3:
+        raise ValueError(f"unknowns, equations: expected 3 distinct indices in 0..3 each, got "
                          f"{unknowns} and {equations}")
     free = next(k for k in range(4) if k not in unknowns)
     A = M.extract(equations, unknowns)
@@ -317,8 +320,19 @@ def elimination_steps(*, b: Sequence[sp.Expr] | None = IDENTITY,
     ValueError
         If the assigned numbers are not on the Study quadric (``K`` not skew).
     """
+    try:
+        unknowns = tuple(unknowns)
+        equations = None if equations is None else tuple(equations)
+    except TypeError:
+        raise TypeError(f"unknowns, equations: expected 3 indices each, got "
+                        f"{type(unknowns).__name__} and {type(equations).__name__}") from None
+    for name, idx in (("unknowns", unknowns), ("equations", equations)):
+        if idx is not None and not (len(idx) == 3 and all(
+                isinstance(i, (int, np.integer)) and not isinstance(i, bool) and 0 <= i < 4
+                for i in idx)):
+            raise ValueError(f"{name}: expected 3 indices in 0..3, got {idx!r}")
     return _elimination_steps(_values(b, B_SYMBOLS, "b"), _values(e, E_SYMBOLS, "e"),
-                              tuple(unknowns), None if equations is None else tuple(equations))
+                              unknowns, equations)
 
 
 def _run_steps(bv: tuple[sp.Expr, ...], ev: tuple[sp.Expr, ...], unknowns: tuple[int, ...],

@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array
+from .._validation import check_array, check_tolerance
 from ..chain import DEGENERATE_TOL, P_ZERO_TOL, closure_residual, ups_transform
 from ..errors import Reason
 from ..parallel import ParallelSolution
@@ -175,6 +175,8 @@ def serial_solutions_algebraic(f: ArrayLike, *, degenerate_tol: float = DEGENERA
     """
     gen = _numeric()
     f = check_array(f, "f", (8,))
+    degenerate_tol = check_tolerance(degenerate_tol, "degenerate_tol")
+    p_zero_tol = check_tolerance(p_zero_tol, "p_zero_tol")
     with np.errstate(invalid="ignore", divide="ignore"):
         return _serial(gen, f / np.linalg.norm(f[..., :4], axis=-1, keepdims=True),
                        degenerate_tol, p_zero_tol)

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._validation import check_count, check_instance, check_scalar
 from ..design import Design
 from ..errors import InvalidInputError
 from ._task import Task, TaskSamples, sample_task
@@ -47,6 +48,7 @@ _LENGTH_CONDITIONS = ("circles_tangent", "d_on_rail", "k1_degenerate", "ab_coinc
 
 def row_from_design(design: Design) -> dict[str, Any]:
     """The parameter columns of a design (a plain dict of floats and one str)."""
+    check_instance(design, "design", Design)
     lo, hi = design.stroke_min, design.stroke_max
     row: dict[str, Any] = {f"l{i + 1}": float(x) for i, x in enumerate(design.lengths)}
     row.update({f"q{i + 1}_min": float(lo[i]) for i in range(3)})
@@ -65,6 +67,9 @@ def design_from_row(row: Mapping[str, Any]) -> Design:
         What :class:`~athenakin.Design` raises for a bad value (negative length,
         ``q_min > q_max``, ...): the message is the row's ``reason``.
     """
+    if not (isinstance(row, Mapping) or hasattr(row, "keys") and hasattr(row, "__getitem__")):
+        raise TypeError(f"row: expected a mapping of the parameter columns, got "
+                        f"{type(row).__name__}")
     missing = [k for k in PARAMETER_COLUMNS[:5] if k not in row]
     if missing:
         raise InvalidInputError(f"design: missing {missing}")
@@ -76,6 +81,10 @@ def design_from_row(row: Mapping[str, Any]) -> Design:
     if "ab_order" in row:
         kw["ab_order"] = row["ab_order"]
     return Design(**kw)
+
+
+#: Most task samples of one evaluation (each keeps about a hundred bytes per sample).
+MAX_TASK_SAMPLES = 100_000_000
 
 
 @functools.lru_cache(maxsize=4)
@@ -122,7 +131,10 @@ def reachability(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLES, 
     """
     from .._dispatch import q_from_instrument
 
-    s = _samples(task, int(samples), int(seed))
+    check_instance(design, "design", Design)
+    check_instance(task, "task", Task)
+    s = _samples(task, check_count(samples, "samples", minimum=1, maximum=MAX_TASK_SAMPLES),
+                 check_count(seed, "seed", minimum=0))
     q, res = q_from_instrument(task.T_b_e, s.direction_e, design.tool_length - s.depth, design,
                                errors="flag", backend=backend)  # type: ignore[arg-type]
     return s, q, res.mode, res.reason
@@ -152,6 +164,7 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
     from ..analysis import condition_number, parallel_jacobian, singularities, tool_tip_jacobian
     from ._kernels import CONDITION_ORDER, reduce_samples
 
+    encoder_resolution = check_scalar(encoder_resolution, "encoder_resolution", nonnegative=True)
     s, q, mode, _ = reachability(design, task, samples=samples, seed=seed)
     T = task.T_b_e
     n = s.depth.shape[0]

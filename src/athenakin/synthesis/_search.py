@@ -12,7 +12,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._toml import read_toml
-from ..design import Design
+from .._validation import check_array, check_count, check_instance, check_path, check_scalar
+from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ._errors import TaskFileError
 from ._metrics import DEFAULT_ENCODER_RESOLUTION, METRIC_COLUMNS, row_from_design
@@ -47,7 +48,8 @@ def default_bounds(design: Design | None = None, *, spread: float = 0.25
     dict of str -> (float, float)
         ``{name: (lo, hi)}`` for every name of :data:`SEARCH_VARIABLES`, m.
     """
-    d = design or Design.default()
+    d = resolve_design(design)
+    spread = check_scalar(spread, "spread", nonnegative=True)
     row = row_from_design(d)
     out = {}
     for k in SEARCH_VARIABLES:
@@ -99,7 +101,7 @@ def bounds_from_toml(path: str | Path) -> dict[str, tuple[float, float]] | None:
         If the file cannot be read or the table is malformed.
     """
     try:
-        data = read_toml(path, error=TaskFileError, what="task file")
+        data = read_toml(check_path(path), error=TaskFileError, what="task file")
     except OSError as exc:
         raise TaskFileError(f"{path}: cannot read the bounds ({exc})") from None
     if "bounds" not in data:
@@ -121,7 +123,7 @@ def random_designs(n: int, bounds: Mapping[str, Any], *, seed: int = 0,
     b = check_bounds(bounds)
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise InvalidInputError(f"n: expected a positive integer, got {n!r}")
-    base = base or Design.default()
+    base = resolve_design(base)
     rng = np.random.default_rng(seed)
     lo = np.array([b[k][0] for k in SEARCH_VARIABLES])
     hi = np.array([b[k][1] for k in SEARCH_VARIABLES])
@@ -146,7 +148,10 @@ def _objective_matrix(df: Any, objectives: Mapping[str, str]) -> NDArray[np.floa
 
 def pareto_mask(F: NDArray[np.float64]) -> NDArray[np.bool_]:
     """Non-dominated rows of an objective matrix ``(n, k)`` to minimise (NaN rows excluded)."""
-    F = np.asarray(F, dtype=float)
+    F = check_array(F, "F", (), allow_nonfinite=True)
+    if F.ndim != 2:
+        raise InvalidInputError(f"F: expected an objective matrix of shape (n, k), got shape "
+                                f"{F.shape}")
     ok = np.all(np.isfinite(F), axis=1)
     mask = np.zeros(len(F), dtype=bool)
     idx = np.flatnonzero(ok)
@@ -241,8 +246,15 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
     from pymoo.core.problem import Problem
     from pymoo.optimize import minimize
 
+    if reference is not None:
+        check_instance(reference, "reference", Design)
     ref = reference or Design.default()
+    population = check_count(population, "population", minimum=2, maximum=100_000)
+    generations = check_count(generations, "generations", minimum=1, maximum=100_000)
     b = check_bounds(bounds if bounds is not None else default_bounds(ref))
+    if objectives is not None and not isinstance(objectives, Mapping):
+        raise TypeError(f"objectives: expected a mapping metric -> 'max' | 'min', got "
+                        f"{type(objectives).__name__}")
     obj = dict(objectives or DEFAULT_OBJECTIVES)
     for k, sense in obj.items():
         if k not in METRIC_COLUMNS or sense not in ("max", "min"):

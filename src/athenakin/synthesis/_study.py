@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import check_scalar
+from .._validation import check_path, check_scalar
 from ..design import Design
 from ..errors import InvalidInputError
 from ._errors import SchedulerUnreachableError, StudyMismatchError
@@ -79,7 +79,8 @@ def design_rows(designs: Any) -> list[dict[str, Any]]:
     """
     if hasattr(designs, "to_dict") and hasattr(designs, "columns"):
         records: Iterable[Any] = designs.to_dict(orient="records")
-    elif isinstance(designs, (Design, Mapping)) or not isinstance(designs, Iterable):
+    elif (isinstance(designs, (Design, Mapping)) or not isinstance(designs, Iterable)
+          or isinstance(designs, np.ndarray) and designs.ndim == 0):
         raise TypeError(f"designs: expected a sequence of Design or mappings, or a DataFrame, "
                         f"got {type(designs).__name__}")
     else:
@@ -252,7 +253,7 @@ def _prepare_out(out: Path, fingerprint: str, n_chunks: int, meta: dict[str, Any
 def read_study(out: str | Path) -> Any:
     """Read a study folder written by :func:`evaluate` (every chunk so far, in design order)."""
     pd = _require("pandas")
-    out = Path(out)
+    out = check_path(out, "out")
     parts = sorted(out.glob("part-*.parquet"))
     if not parts:
         raise InvalidInputError(f"{out}: no study chunks (part-*.parquet) found")
@@ -342,7 +343,10 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
     chunks = [rows[i:i + chunk_size] for i in range(0, len(rows), chunk_size)]
     task_map = task.to_mapping()
     done: dict[int, Any] = {}
-    out_path = None if out is None else Path(out)
+    out_path = None if out is None else check_path(out, "out")
+    if on_chunk is not None and not callable(on_chunk):
+        raise TypeError(f"on_chunk: expected a callable (done, total) or None, got "
+                        f"{type(on_chunk).__name__}")
     # the scheduler first: an address that does not answer leaves no results folder behind
     kind, handle, owned = open_scheduler(scheduler, connect_timeout=connect_timeout)
     if out_path is not None:

@@ -31,6 +31,9 @@ def _vec3(v: object, name: str) -> NDArray[np.float64]:
         raise TypeError(f"{name}: expected 3 numbers, got {type(v).__name__}")
     try:
         a = np.asarray(v, dtype=float)
+    except OverflowError:
+        raise InvalidInputError(f"{name}: expected 3 finite numbers, got an integer too large "
+                                f"for a float") from None
     except (TypeError, ValueError):
         raise TypeError(f"{name}: expected 3 numbers, got {v!r}") from None
     if a.shape != (3,):
