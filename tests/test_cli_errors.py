@@ -7,11 +7,13 @@ wrong answer; resource limits are checked before any work.
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from athenakin.cli import main
@@ -178,3 +180,179 @@ def test_a_closed_pipe_ends_quietly():
     p.wait(timeout=120)
     p.stderr.close()
     assert err == "" and p.returncode != 0
+
+
+# --- findings of the CLI audit (scripts/audit_cli.py, issue 13) ---------------------------
+
+@pytest.fixture
+def bad(tmp_path: Path) -> Path:
+    """Input files of the audit's findings."""
+    import athenakin as ak
+
+    toml = ak.Design.default().to_toml()
+    (tmp_path / "bom.toml").write_bytes(b"\xef\xbb\xbf" + toml.encode())
+    (tmp_path / "nan.toml").write_text(toml.replace("l1 = 0.3", "l1 = nan"))
+    (tmp_path / "digits.toml").write_text(toml.replace("l1 = 0.3", "l1 = " + "9" * 5000))
+    (tmp_path / "binary.toml").write_bytes(bytes(range(256)))
+    T = np.eye(4)
+    T[0, 3] = np.nan
+    (tmp_path / "nan.json").write_text(json.dumps({"T_b_e": T.tolist()}))
+    (tmp_path / "digits.json").write_text('{"T_b_e": [[' + "1" * 5000 + ', 0, 0, 0]]}')
+    T[0, 3] = 1e308
+    (tmp_path / "far.json").write_text(json.dumps({"T_b_e": T.tolist()}))
+    (tmp_path / "path.csv").write_text("x_m,y_m,z_m\n0.25,0,0\n0.253,0.002,0.001\n")
+    return tmp_path
+
+
+@pytest.mark.parametrize("argv,want", [
+    # a bad design or RCM file: the message names the file (it used to say only "l1: ...",
+    # "TOMLDecodeError: Invalid statement", a bare UnicodeDecodeError, or Python's
+    # "Exceeds the limit (4300 digits)")
+    (["fk", "-0.1", "0.1", "0.45", "--design", "{d}/nan.toml"], "nan.toml: l1: expected a finite"),
+    (["fk", "-0.1", "0.1", "0.45", "--design", "{d}/digits.toml"],
+     "digits.toml: design file: a number"),
+    (["fk", "-0.1", "0.1", "0.45", "--design", "{d}/binary.toml"],
+     "binary.toml: design file is not UTF-8"),
+    (["design", "--design", "{d}/nan.toml"], "nan.toml"),
+    (["fk", "-0.1", "0.1", "0.45", "--rcm-file", "{d}/nan.json"], "nan.json: T_b_e: expected "
+                                                                    "finite values, got nan at "
+                                                                    "index (0, 3)"),
+    (["fk", "-0.1", "0.1", "0.45", "--rcm-file", "{d}/digits.json"], "digits.json: a number"),
+    # an RCM frame far beyond any link: a unit mistake, not "U-joint axes aligned"
+    (["fk", "-0.1", "0.1", "0.45", "--rcm-file", "{d}/far.json"], "far.json: T_b_e: the RCM"),
+    (["view", "-o", "{d}/v.png", "--rcm", "1e30", "0", "0", "0", "0", "0"], "--rcm: the RCM"),
+    # -inf is a (non-finite) value, not a missing positional
+    (["fk", "-inf", "0.1", "0.45"], "expected finite values, got -inf"),
+    # a denormal rate gave a 2-sample trajectory of infinite duration, exit 0
+    (["plan", "{d}/path.csv", "-o", "{d}/t.csv", "--no-plots", "--rate", "5e-324"],
+     "rate: expected at least 1"),
+])
+def test_audit_findings_are_one_line_errors_naming_the_problem(bad, capsys, argv, want):
+    before = sorted(p.name for p in bad.iterdir())
+    code = main([a.format(d=bad) for a in argv])
+    _one_line_error(capsys, code, want=want)
+    assert sorted(p.name for p in bad.iterdir()) == before
+
+
+def test_a_design_file_with_a_byte_order_mark_is_read(bad, capsys):
+    assert main(["fk", "-0.1", "0.1", "0.45", "--design", str(bad / "bom.toml")]) == 0
+    assert "16 solutions" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv", [
+    ["singularities", "1e308", "0.1", "0.45", "--no-files"],    # not assembled: no value
+    ["workspace", "--resolution", "3", "--cone-resolution", "3", "3", "3", "--no-files"],
+])
+def test_text_output_prints_no_nan(capsys, argv):
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert not re.search(r"\bnan\b", out, re.I), out
+    assert not re.search(r"\d{20}", out), out   # no 300-digit fixed-point numbers
+
+
+@pytest.fixture
+def task(tmp_path: Path) -> Path:
+    src = Path(__file__).parents[1] / "examples/synthesis/task_pancreas.toml"
+    (tmp_path / "task.toml").write_text(src.read_text())
+    (tmp_path / "far.toml").write_text(src.read_text().replace(
+        "rcm = [0.055234, -0.208281, 0.220767]", "rcm = [1e308, 0, 0]"))
+    (tmp_path / "deep.toml").write_text(src.read_text().replace(
+        "depth = [0.20, 0.30]", "depth = [0.20, 1e308]"))
+    (tmp_path / "many.csv").write_text("x_m,y_m,z_m\n" + "0.25,0,0\n" * 1001)
+    (tmp_path / "q.csv").write_text("q1_m,q2_m,q3_m\n-0.1,0.1,0.45\n-0.1,0.1,0.451\n")
+    return tmp_path
+
+
+@pytest.mark.parametrize("argv,want", [
+    # synthesize checked nothing up front: 1e20 samples failed with numpy's "Maximum allowed
+    # dimension exceeded" after creating the results folder; NaN timeouts were accepted;
+    # a huge encoder resolution or task gave NaN metrics in a valid design
+    (["synthesize", "{d}/task.toml", "--samples", "99999999999999999999", "-o", "{d}/s"],
+     "--samples: expected 1 to 1000000"),
+    (["synthesize", "{d}/task.toml", "--connect-timeout", "nan", "-o", "{d}/s"],
+     "--connect-timeout"),
+    (["synthesize", "{d}/task.toml", "--designs", "-1", "-o", "{d}/s"], "--designs"),
+    (["synthesize", "{d}/task.toml", "--top", "-1", "-o", "{d}/s"], "--top"),
+    (["synthesize", "{d}/task.toml", "--encoder-resolution", "1e308", "-o", "{d}/s",
+      "--no-figures"], "encoder_resolution: expected at most 0.01 m"),
+    (["synthesize", "{d}/far.toml", "-o", "{d}/s", "--no-figures"], "rcm: expected coordinates"),
+    (["synthesize", "{d}/deep.toml", "-o", "{d}/s", "--no-figures"], "depth: expected 0 <="),
+    (["synthesize", "{d}/task.toml", "-o", "{d}/task.toml"], "is a file"),
+    # a malformed address: the results folder was created first, and distributed's Client
+    # printed a traceback from its __del__ 10 s later
+    (["synthesize", "{d}/task.toml", "-o", "{d}/s", "--scheduler", "nan"],
+     "scheduler: expected one of"),
+    # plan: limits beyond any actuator made Ruckig fail ("error in step 2 in dof: 0");
+    # 100,000 waypoints ran for a quarter of an hour
+    (["plan", "{d}/many.csv", "-o", "{d}/t.csv", "--no-plots"], "many.csv: 1001 waypoints"),
+    (["plan", "{d}/many.csv", "-o", "{d}/t.csv", "--a-max", "1e30"], "--a-max"),
+    (["plan", "{d}/many.csv", "-o", "{d}/t.csv", "--v-max", "5e-324"], "--v-max"),
+    # options named as typed, not as the library's keywords (jump_m: got -0.001)
+    (["track", "{d}/q.csv", "--jump-mm", "-1"], "--jump-mm"),
+    (["track", "{d}/q.csv", "--jump-deg", "nan"], "--jump-deg"),
+    (["track", "{d}/q.csv", "--jump-mm", "5e-324"], "--jump-mm"),   # was "jump_m: got 0.0"
+    (["animate", "-o", "{d}/a.gif", "--cone", "1e308"], "--cone"),
+    (["calibrate", "--plan", "99999999999999999999", "-o", "{d}/p.csv"], "--plan"),
+    (["calibrate", "--plan", "5", "--candidates", "99999999999999999999", "-o", "{d}/p.csv"],
+     "--candidates"),
+    (["calibrate", "--plan", "5", "-o", "{d}/p.csv", "--encoder-resolution", "nan"],
+     "--encoder-resolution"),
+    # the web server waited for ever (deaf to Ctrl-C) on an address it cannot bind
+    (["app", "--host", "999.1.1.1", "--port", "0"], "--host"),
+    (["app", "--host", "8.8.8.8", "--port", "0"], "--host"),
+])
+def test_options_are_checked_before_any_work(task, capsys, argv, want):
+    if argv[0] == "synthesize":
+        pytest.importorskip("dask")
+    before = sorted(p.name for p in task.iterdir())
+    code = main([a.format(d=task) for a in argv])
+    _one_line_error(capsys, code, want=want)
+    assert sorted(p.name for p in task.iterdir()) == before
+
+
+def test_synthesize_needs_force_to_replace_its_figures(task, capsys):
+    pytest.importorskip("dask")
+    figs = task / "figs"
+    figs.mkdir()
+    (figs / "pareto.png").write_bytes(b"precious")
+    argv = ["synthesize", str(task / "task.toml"), "--samples", "50", "-o", str(task / "s"),
+            "--figures", str(figs)]
+    _one_line_error(capsys, main(argv), want="--figures")
+    assert (figs / "pareto.png").read_bytes() == b"precious" and not (task / "s").exists()
+    assert main([*argv, "--force"]) == 0
+    assert (figs / "pareto.png").read_bytes().startswith(b"\x89PNG")
+    assert not [p for p in figs.iterdir() if p.name.startswith(".")]
+
+
+def test_track_prints_missing_and_huge_times_readably(task, capsys):
+    (task / "s.csv").write_text("t_s,q1_m,q2_m,q3_m\n0,-0.1,0.1,0.45\n,-0.1,0.1,0.451\n"
+                                "1e308,nan,nan,nan\n")
+    assert main(["track", str(task / "s.csv")]) == 0
+    out = capsys.readouterr().out
+    assert "t = 1e+308 s" in out and not re.search(r"\d{20}", out), out
+
+
+def test_app_warning_about_a_bad_rcm_file_names_the_file(bad):
+    # `athenakin app --rcm-file nan.json` served the reference set-up with a warning that
+    # said "RCM frame: ..." without naming the file
+    from types import SimpleNamespace
+
+    from athenakin.app._server import AthenaApp
+
+    fake = SimpleNamespace(errors=[], _backend="numpy")
+    AthenaApp._make_setup(fake, None, bad / "nan.json")   # type: ignore[arg-type]
+    assert len(fake.errors) == 1 and "nan.json" in fake.errors[0], fake.errors
+
+
+def test_ctrl_c_is_one_line_exit_130_and_leaves_no_file(tmp_path, monkeypatch, capsys):
+    # Ctrl-C in a long run printed a KeyboardInterrupt traceback (found by the audit)
+    from athenakin.design import Design
+
+    def interrupted(self):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(Design, "to_toml", interrupted)
+    out = tmp_path / "d.toml"
+    assert main(["design", "--write", str(out)]) == 130
+    err = capsys.readouterr().err
+    assert err == "athenakin design: interrupted\n" and not list(tmp_path.iterdir())

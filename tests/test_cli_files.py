@@ -226,3 +226,37 @@ def test_motion_write_text_atomic_follows_symlinks_and_umask(tmp_path):
     finally:
         os.umask(old)
     assert stat.S_IMODE((tmp_path / "n.txt").stat().st_mode) == 0o640
+
+
+# --- the CLI audit (scripts/audit_cli.py) ----------------------------------------------
+@pytest.mark.parametrize("argv", [
+    ["design", "--write", "{f}", "--force"],
+    ["plan", "{wp}", "-o", "{f}.csv", "--no-plots", "--force"],
+])
+def test_force_never_replaces_a_fifo_or_device(wp, tmp_path, capsys, argv):
+    # `--force` put a regular file in the place of a FIFO; as root, `-o /dev/null --force`
+    # would have replaced /dev/null itself
+    fifo = tmp_path / "fifo"
+    target = Path(argv[argv.index("{f}" if "{f}" in argv else "{f}.csv")].format(f=fifo))
+    os.mkfifo(target)
+    code = main([a.format(f=fifo, wp=wp) for a in argv])
+    err = capsys.readouterr().err
+    assert code == 1 and "not a regular file" in err, err
+    assert stat.S_ISFIFO(os.lstat(target).st_mode)
+
+
+@pytest.mark.parametrize("argv", [
+    ["fk", "-0.1", "0.1", "0.45", "--design", "/dev/zero"],
+    ["fk", "-0.1", "0.1", "0.45", "--rcm-file", "/dev/zero"],
+    ["plan", "/dev/zero", "-o", "{tmp}/t.csv"],
+    ["track", "/dev/zero"],
+])
+def test_an_endless_input_file_is_refused_quickly(tmp_path, capsys, argv):
+    # /dev/zero was read until memory ran out (a MemoryError after seconds under a limit,
+    # the machine's memory without one)
+    if not os.path.exists("/dev/zero"):
+        pytest.skip("no /dev/zero")
+    code = main([a.format(tmp=tmp_path) for a in argv])
+    err = capsys.readouterr().err
+    assert code == 1 and "larger than" in err and err.count("\n") == 1, err
+    assert not list(tmp_path.iterdir())

@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
+from ._input import MAX_TABLE_BYTES, read_bytes
 from ._validation import check_path
 
 __all__ = ["read_table"]
@@ -29,7 +30,8 @@ def read_table(path: str | Path, *, header_row: bool = True, error: type[Excepti
         header is empty.
     error : exception class, keyword-only
         Raised (with the file, the line and what was expected) for a file that is not
-        UTF-8 text or not CSV, an empty file or duplicate column names.
+        UTF-8 text or not CSV, an empty file, duplicate column names, or a file larger
+        than :data:`~athenakin._input.MAX_TABLE_BYTES`.
 
     Returns
     -------
@@ -38,8 +40,9 @@ def read_table(path: str | Path, *, header_row: bool = True, error: type[Excepti
         1-based line numbers and the cells of each data row.
     """
     path = check_path(path)
+    raw = read_bytes(path, limit=MAX_TABLE_BYTES, error=error, what="CSV file")
     try:
-        text = path.read_text(encoding="utf-8-sig")  # a byte-order mark is not a column
+        text = raw.decode("utf-8-sig")  # a byte-order mark is not a column
     except UnicodeDecodeError as exc:
         raise error(f"{path}: not a UTF-8 text file ({exc.reason})") from None
     rows = []

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from ._compat import tomllib
+from ._input import MAX_CONFIG_BYTES, read_bytes
 from .errors import InvalidInputError
 
 __all__ = ["read_toml"]
@@ -19,11 +20,12 @@ __all__ = ["read_toml"]
 
 def read_toml(path: str | Path, *, error: type[Exception] = InvalidInputError,
               what: str = "TOML file") -> dict[str, Any]:
-    """Parse a TOML file into a dict.
+    r"""Parse a TOML file into a dict.
 
     Parameters
     ----------
     path : str or Path
+        UTF-8 text; a leading byte-order mark (as Windows editors write) is ignored.
     error : exception class, keyword-only
         Raised (with a one-line message naming ``path``) when the content is not UTF-8
         TOML or is nested too deeply. Default :class:`~athenakin.errors.InvalidInputError`.
@@ -40,12 +42,20 @@ def read_toml(path: str | Path, *, error: type[Exception] = InvalidInputError,
     OSError
         The file cannot be opened or read (left to the caller, which knows the option).
     error
-        Not UTF-8, not valid TOML, or tables / arrays nested too deeply.
+        Not UTF-8, not valid TOML, tables / arrays nested too deeply, or an integer
+        of more digits than Python converts.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> f = pathlib.Path(tempfile.mkdtemp()) / "a.toml"
+    >>> _ = f.write_bytes(b"\xef\xbb\xbfl1 = 0.3\n")   # with a byte-order mark
+    >>> read_toml(f)
+    {'l1': 0.3}
     """
-    with open(path, "rb") as fh:
-        raw = fh.read()
+    raw = read_bytes(path, limit=MAX_CONFIG_BYTES, error=error, what=what)
     try:
-        text = raw.decode("utf-8")
+        text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise error(f"{path}: {what} is not UTF-8 text (byte {exc.start})") from None
     try:
@@ -54,3 +64,6 @@ def read_toml(path: str | Path, *, error: type[Exception] = InvalidInputError,
         raise error(f"{path}: not valid TOML ({exc})") from None
     except RecursionError:  # tomllib recurses once per nested array or table
         raise error(f"{path}: {what}: TOML nested too deeply") from None
+    except ValueError as exc:  # an integer beyond sys.get_int_max_str_digits()
+        raise error(f"{path}: {what}: a number that cannot be read "
+                    f"({' '.join(str(exc).split())[:120]})") from None

@@ -72,7 +72,8 @@ def check_array(
     if not allow_nonfinite and not np.all(np.isfinite(arr)):
         bad = np.argwhere(~np.isfinite(arr))[0]
         raise InvalidInputError(
-            f"{name}: expected finite values, got {arr[tuple(bad)]} at index {tuple(bad)}")
+            f"{name}: expected finite values, got {arr[tuple(bad)]} at index "
+            f"{tuple(int(i) for i in bad)}")
     return arr
 
 

@@ -219,12 +219,23 @@ class Design:
             q_max = [0.10, 0.30, 0.70]
             ab_order = "q1<q2"
             tool_length = 0.45
+
+        Raises
+        ------
+        OSError
+            The file cannot be read.
+        InvalidInputError
+            Not UTF-8 TOML (a byte-order mark is fine), or a bad design; the message
+            starts with the file name.
         """
         data = read_toml(path, what="design file")
         table: Mapping[str, Any] = data
         if "design" in data and isinstance(data["design"], Mapping):
             table = data["design"]
-        return cls.from_mapping(table)
+        try:
+            return cls.from_mapping(table)
+        except (InvalidInputError, TypeError) as exc:
+            raise InvalidInputError(f"{path}: {exc}") from None
 
     def to_toml(self) -> str:
         r"""TOML text that :meth:`from_toml` reads back to an equal design.

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._input import MAX_CONFIG_BYTES, read_bytes
 from ..design import Design
 from ..errors import KinematicsError
 from ._ghosts import ghost_scene
@@ -67,7 +68,7 @@ def _import_viser() -> Any:
 def _load_rcm_file(path: str | Path) -> NDArray[np.float64]:
     """``T_b_e`` from a JSON file ``{"T_b_e": 4x4 nested list}`` (as ``--rcm-file``)."""
     try:
-        data = json.loads(Path(path).read_text())
+        data = json.loads(read_bytes(path, limit=MAX_CONFIG_BYTES, what="RCM file"))
     except (OSError, json.JSONDecodeError) as exc:
         raise ValueError(f"{path}: cannot read the RCM frame ({exc})") from exc
     if not isinstance(data, dict) or "T_b_e" not in data:
@@ -176,7 +177,8 @@ class AthenaApp:
         try:
             return app_setup(d, T, backend=self._backend)  # type: ignore[arg-type]
         except (ValueError, TypeError, KinematicsError) as exc:
-            self.errors.append(f"RCM frame: {_error_text(exc)}; using the reference set-up "
+            where = f"RCM file {T_b_e}" if isinstance(T_b_e, (str, Path)) else "RCM frame"
+            self.errors.append(f"{where}: {_error_text(exc)}; using the reference set-up "
                                f"instead")
             return base
 

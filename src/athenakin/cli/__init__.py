@@ -71,7 +71,8 @@ def main(argv: list[str] | None = None) -> int:
     0: success; 1: an error (a bad input, a kinematics error, a failed check:
     one line on standard error that names it, nothing written); 2: a usage error
     (argparse); 70: an internal error (a bug: please report it with the
-    traceback that ``--debug`` shows). With ``--debug`` or ``ATHENAKIN_DEBUG=1``,
+    traceback that ``--debug`` shows); 130: interrupted (Ctrl-C; no output file is
+    left half-written). With ``--debug`` or ``ATHENAKIN_DEBUG=1``,
     errors propagate with their traceback and warnings are shown.
     """
     parser = build_parser()
@@ -88,6 +89,11 @@ def main(argv: list[str] | None = None) -> int:
         except BrokenPipeError:
             _silence_stdout()
             return 1
+        except KeyboardInterrupt:   # Ctrl-C: outputs are discarded (Outputs), no traceback
+            if debug:
+                raise
+            print(f"{name}: interrupted", file=sys.stderr)
+            return 130
         except ModuleNotFoundError as exc:
             if debug:
                 raise
@@ -141,6 +147,8 @@ def entry_point() -> None:
     except BrokenPipeError:
         _silence_stdout()
         code = 1
+    except KeyboardInterrupt:   # Ctrl-C before the command ran (importing, parsing)
+        code = 130
     sys.exit(code)
 
 
@@ -154,7 +162,11 @@ def _protect_negative_numbers(argv: list[str] | None) -> list[str]:
 
     args = sys.argv[1:] if argv is None else list(argv)
     pat = re.compile(r"^-\d*\.?\d+(e[-+]?\d+)?$", re.IGNORECASE)
-    return [f" {a}" if pat.match(a) and "e" in a.lower() else a for a in args]
+    # "-inf" and "-nan" too, so that the value is reported as not finite, not as a missing
+    # positional or an unknown option
+    nonfinite = re.compile(r"^-(inf|infinity|nan)$", re.IGNORECASE)
+    return [f" {a}" if (pat.match(a) and "e" in a.lower()) or nonfinite.match(a) else a
+            for a in args]
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -103,6 +103,8 @@ def run(args: argparse.Namespace) -> int:
                    ("--from", args.q_from), ("--to", args.q_to)):
         if v is not None:
             check_finite(v, opt)
+    if args.cone is not None and not 0 < args.cone <= 90:
+        raise ValueError(f"--cone: expected a half-angle in (0, 90] deg, got {args.cone:g}")
     if (args.q_from is None) != (args.q_to is None):
         raise ValueError("--from and --to go together")
     with outputs(args) as outs:

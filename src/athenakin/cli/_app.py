@@ -42,6 +42,30 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.set_defaults(func=run)
 
 
+def check_host(host: str) -> str:
+    """``host`` if this machine can listen on it, else ``ValueError`` naming it.
+
+    Checked before the server starts: the web server binds in a thread of its own,
+    and an address it cannot bind (``999.1.1.1``, another machine's) used to leave
+    it waiting for ever, deaf to Ctrl-C.
+    """
+    import socket
+
+    try:
+        infos = socket.getaddrinfo(host, 0, type=socket.SOCK_STREAM)
+    except (OSError, UnicodeError) as exc:
+        raise ValueError(f"--host {host!r}: not an address of this machine "
+                         f"({getattr(exc, 'strerror', None) or exc})") from None
+    family, kind, proto, _, addr = infos[0]
+    with socket.socket(family, kind, proto) as s:
+        try:
+            s.bind(addr)
+        except OSError as exc:
+            raise ValueError(f"--host {host!r}: cannot listen on it "
+                             f"({exc.strerror or exc})") from None
+    return host
+
+
 def run(args: argparse.Namespace) -> int:
     """Execute ``app``: serve until SIGINT (Ctrl-C) or SIGTERM."""
     from ..app import _server
@@ -54,6 +78,7 @@ def run(args: argparse.Namespace) -> int:
         return 1
     if not 0 <= args.port <= 65535:
         raise ValueError(f"--port: expected 0..65535, got {args.port}")
+    check_host(args.host)
     rcm: Any = args.rcm_file
     if args.rcm:
         from ..design import Design

@@ -7,7 +7,15 @@ import tempfile
 import warnings
 from pathlib import Path
 
-from ._common import add_design_option, add_setup_options, load_design, load_rcm, table
+from ._common import (
+    add_design_option,
+    add_setup_options,
+    check_count,
+    check_finite,
+    load_design,
+    load_rcm,
+    table,
+)
 from ._output import Outputs, add_force_option, outputs
 
 
@@ -53,8 +61,21 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.set_defaults(func=run)
 
 
+#: Most poses ``--plan`` chooses and random candidates it chooses them from.
+MAX_PLAN = 10_000
+MAX_CANDIDATES = 1_000_000
+
+
 def run(args: argparse.Namespace) -> int:
     """Execute ``calibrate``."""
+    if args.plan is not None:
+        check_count(args.plan, "--plan", 1, MAX_PLAN, "poses")
+    check_count(args.candidates, "--candidates", 1, MAX_CANDIDATES, "candidate poses")
+    check_count(args.seed, "--seed", 0, 2**63 - 1, "(a seed)")
+    check_finite(args.encoder_resolution, "--encoder-resolution")
+    if not 0 <= args.encoder_resolution <= 1e-2:
+        raise ValueError(f"--encoder-resolution: expected 0 to 0.01 m, got "
+                         f"{args.encoder_resolution:g}")
     out = Path(args.output)
     with outputs(args) as outs:
         outs.add(out)

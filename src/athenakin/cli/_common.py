@@ -10,9 +10,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._input import MAX_CONFIG_BYTES, read_bytes
 from .._serialize import json_text, to_jsonable  # noqa: F401  (re-exported)
 from .._transforms import rot_x, rot_y, rot_z, transform_from_rotation_translation
-from ..design import Design
+from ..design import LENGTH_RANGE, Design
+from ..errors import InvalidInputError
 from ..robot import default_rcm_frame
 
 
@@ -54,7 +56,8 @@ def load_rcm(args: argparse.Namespace, design: Design) -> NDArray[np.float64]:
         check_finite(args.rcm, "--rcm")
         x, y, z, r, p, w = args.rcm
         R = rot_z(np.radians(w)) @ rot_y(np.radians(p)) @ rot_x(np.radians(r))
-        return transform_from_rotation_translation(R, np.array([x, y, z]))
+        return check_rcm_position(transform_from_rotation_translation(R, np.array([x, y, z])),
+                                  "--rcm")
     if getattr(args, "rcm_file", None):
         return read_rcm_json(args.rcm_file)
     return default_rcm_frame(design)
@@ -104,14 +107,18 @@ def read_rcm_json(path: str | Path) -> NDArray[np.float64]:
     """
     from .._validation import check_transform
 
+    raw = read_bytes(path, limit=MAX_CONFIG_BYTES, what="--rcm-file")
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8-sig"))
+        data = json.loads(raw.decode("utf-8-sig"))
     except UnicodeDecodeError as exc:
         raise ValueError(f"--rcm-file {path}: not a UTF-8 text file ({exc.reason})") from None
     except RecursionError:
         raise ValueError(f"--rcm-file {path}: JSON nested too deeply") from None
     except json.JSONDecodeError as exc:
         raise ValueError(f"--rcm-file {path}: not JSON ({exc})") from None
+    except ValueError as exc:  # an integer beyond sys.get_int_max_str_digits()
+        raise ValueError(f"--rcm-file {path}: a number that cannot be read "
+                         f"({' '.join(str(exc).split())[:120]})") from None
     if not isinstance(data, dict) or "T_b_e" not in data:
         raise ValueError(f"--rcm-file {path}: expected a JSON object with key 'T_b_e'")
     try:
@@ -121,7 +128,27 @@ def read_rcm_json(path: str | Path) -> NDArray[np.float64]:
                          f"numbers") from None
     if T.shape != (4, 4):
         raise ValueError(f"--rcm-file {path}: T_b_e: expected shape (4, 4), got {T.shape}")
-    return check_transform(T, "T_b_e")
+    try:
+        return check_rcm_position(check_transform(T, "T_b_e"), f"--rcm-file {path}: T_b_e")
+    except InvalidInputError as exc:
+        msg = str(exc)
+        raise InvalidInputError(msg if msg.startswith("--rcm-file") else
+                                f"--rcm-file {path}: {msg}") from None
+
+
+def check_rcm_position(T: NDArray[np.float64], option: str) -> NDArray[np.float64]:
+    """``T`` if its origin is within :data:`~athenakin.design.LENGTH_RANGE` of the base.
+
+    An RCM kilometres away is a unit mistake (mm for m) or a typo; far beyond the
+    longest link, the kinematics would only report rounding errors as singularities.
+    """
+    reach = LENGTH_RANGE[1]
+    t = T[:3, 3]
+    if not float(np.max(np.abs(t))) <= reach:
+        raise InvalidInputError(f"{option}: the RCM at {np.array2string(t, precision=6)} m is "
+                                f"too far; expected coordinates within +/-{reach:g} m "
+                                f"(positions are in m)")
+    return T
 
 
 def table(headers: list[str], rows: list[list[Any]]) -> str:
@@ -134,9 +161,11 @@ def table(headers: list[str], rows: list[list[Any]]) -> str:
 
 
 def fmt(x: float, nd: int = 6) -> str:
-    """Fixed-point number, or '-' for NaN."""
+    """Fixed-point number (scientific beyond 1e9 in magnitude), or '-' for NaN or inf."""
     if not np.isfinite(x):
         return "-"
+    if abs(x) >= 1e9:
+        return f"{x:.{nd}e}"
     text = f"{x:.{nd}f}"
     return text[1:] if text.startswith("-") and float(text) == 0 else text
 

@@ -10,7 +10,9 @@ temporary file behind. The rules:
 * an output never replaces an existing file unless ``--force`` is given;
 * a written file gets the permissions a new file would get (``0o666 & ~umask``),
   or, when it replaces a file, that file's permissions;
-* replacing a symbolic link writes the file it points to; the link stays a link.
+* replacing a symbolic link writes the file it points to; the link stays a link;
+* an output is never a device, FIFO or socket (``-o /dev/null --force`` would replace
+  ``/dev/null`` itself).
 """
 
 from __future__ import annotations
@@ -123,6 +125,11 @@ class Outputs:
             raise ValueError(f"{opt}: {str(path)!r} is written twice by this command")
         if path.is_dir():
             raise ValueError(f"{opt}: {str(path)!r} is a folder, expected a file name")
+        if os.path.exists(path) and not stat.S_ISREG(os.stat(path).st_mode):
+            # /dev/null, a FIFO, a socket: os.replace would put a file in its place (as root,
+            # /dev/null itself)
+            raise ValueError(f"{opt}: {str(path)!r} is not a regular file (a device, FIFO or "
+                             f"socket); expected a file name")
         if os.path.lexists(path) and not self.force:
             raise FileExistsError(f"{opt}: {str(path)!r} exists; use --force to replace it")
         parent = _existing_ancestor(path.parent) if create_folder else path.parent
@@ -139,6 +146,15 @@ class Outputs:
         if folder.exists() and not folder.is_dir():
             raise ValueError(f"{option}: {str(folder)!r} exists and is not a folder")
         return self.add(folder / name, option=option, create_folder=True)
+
+    def drop(self, path: Path) -> None:
+        """Undeclare an output that the command turned out not to write (nothing to check)."""
+        path = Path(path)
+        if path in self._targets:
+            self._targets.remove(path)
+        tmp = self._temps.pop(path, None)
+        if tmp is not None:
+            tmp.unlink(missing_ok=True)
 
     # ---------------------------------------------------------------------- render
     def temp(self, path: Path) -> Path:

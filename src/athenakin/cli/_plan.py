@@ -23,7 +23,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("path", type=Path, metavar="PATH.csv", help="waypoint file")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
                    help="trajectory file, .csv or .json")
-    p.add_argument("--rate", type=float, default=1000.0, help="samples per second (1000)")
+    p.add_argument("--rate", type=float, default=1000.0,
+                   help="samples per second, at least 1 (1000)")
     p.add_argument("--v-max", type=float, default=0.05, help="actuator speed limit, m/s (0.05)")
     p.add_argument("--a-max", type=float, default=0.5,
                    help="actuator acceleration limit, m/s^2 (0.5)")
@@ -70,9 +71,26 @@ def parse_margins(items: list[str]) -> object:
     return Margins(**kw)
 
 
+#: Plausible ranges of the actuator limits (beyond them the time law has no meaning).
+LIMIT_RANGES = {"--v-max": (1e-6, 1e3), "--a-max": (1e-6, 1e4), "--j-max": (1e-6, 1e7),
+                "--tip-speed": (1e-6, 1e3)}
+
+
+def check_limits(args: argparse.Namespace) -> None:
+    """Each actuator limit finite and within :data:`LIMIT_RANGES` (before any work)."""
+    for opt, (lo, hi) in LIMIT_RANGES.items():
+        v = getattr(args, opt[2:].replace("-", "_"))
+        if v is not None and not lo <= v <= hi:
+            raise ValueError(f"{opt}: expected a limit from {lo:g} to {hi:g} (SI units), "
+                             f"got {v:g}")
+
+
 def run(args: argparse.Namespace) -> int:
     """Execute ``plan``."""
     from ..motion import plan, plan_directions, read_path_csv
+    from ..motion._plan import MAX_WAYPOINTS
+
+    check_limits(args)
 
     out = Path(args.output)
     if out.suffix.lower() not in (".csv", ".json"):
@@ -90,6 +108,10 @@ def run(args: argparse.Namespace) -> int:
         design = load_design(args)
         T = load_rcm(args, design)
         spec = read_path_csv(args.path)
+        n = len(spec.tips_e if spec.tips_e is not None else spec.azimuth)  # type: ignore[arg-type]
+        if n > MAX_WAYPOINTS:
+            raise ValueError(f"{args.path}: {n} waypoints; expected at most {MAX_WAYPOINTS} "
+                             f"(plan the path in parts)")
         opts = dict(rate=args.rate, v_max=args.v_max, a_max=args.a_max, j_max=args.j_max,
                     tip_speed=args.tip_speed, times=spec.times, timing=args.timing,
                     margins=parse_margins(args.margin), max_duration=args.max_duration,

@@ -106,7 +106,8 @@ def _run(args: argparse.Namespace, outs: Outputs) -> int:
                 for k, c in rep.conditions.items()]
         print(table(["condition", "kind", "value", "unit", "near"], rows))
         print(table(["measure", "value"],
-                    [[k, f"{float(v):.6g}"] for k, v in rep.measures.items()]))
+                    [[k, "-" if np.isnan(float(v)) else f"{float(v):.6g}"]
+                     for k, v in rep.measures.items()]))
         print()
     print("singular sets within the stroke limits of the design:")
     rows = [[k, "yes" if v["reachable"] else "no", str(v["detail"])]

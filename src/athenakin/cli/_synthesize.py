@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 from typing import Any
 
-from ._common import add_json_option, dump_json, fmt, table
+from ._common import add_json_option, check_count, check_finite, dump_json, fmt, table
+from ._output import Outputs
 
 _SHOWN = ("coverage", "coverage_mode", "size", "tip_error_max", "margin_min", "cond_tip_max")
 
@@ -43,27 +45,64 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--top", type=int, default=5, help="designs listed (default 5)")
     p.add_argument("--connect-timeout", type=float, default=5.0, metavar="S",
                    help="seconds to wait for the scheduler (default 5)")
+    p.add_argument("--force", action="store_true",
+                   help="replace existing figures (the results folder -o is resumed, "
+                        "never replaced)")
     add_json_option(p)
     p.set_defaults(func=run)
+
+
+#: Figures written to --figures, and the bounds of the counts (checked before any work).
+FIGURES = ("pareto", "parameters", "coverage")
+MAX_DESIGNS = 100_000
+MAX_POPULATION = 10_000
+MAX_GENERATIONS = 10_000
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    """Every option within its bounds, before any work (nothing is written on a failure)."""
+    from ..synthesis._study import MAX_SAMPLES
+
+    check_count(args.samples, "--samples", 1, MAX_SAMPLES, "task samples per design")
+    check_count(args.designs, "--designs", 0, MAX_DESIGNS, "random designs")
+    check_count(args.population, "--population", 2, MAX_POPULATION, "designs per generation")
+    check_count(args.generations, "--generations", 1, MAX_GENERATIONS, "generations")
+    check_count(args.top, "--top", 0, MAX_DESIGNS, "designs listed")
+    check_count(args.seed, "--seed", 0, 2**63 - 1, "(a seed)")
+    check_finite(args.connect_timeout, "--connect-timeout", positive=True)
+    check_finite(args.encoder_resolution, "--encoder-resolution", positive=True)
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"-o: {str(out)!r} is a file; expected a results folder (new, or "
+                         f"one to resume)")
+    parent = next((f for f in (out.parent, *out.parent.parents) if f.exists()), Path("."))
+    if not out.exists() and not os.access(parent, os.W_OK | os.X_OK):
+        raise PermissionError(f"-o: folder {str(parent)!r} is not writable")
 
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``synthesize``."""
     from .. import Design
-    from ..synthesis import (
-        Task,
-        bounds_from_toml,
-        default_bounds,
-        evaluate,
-        optimize,
-        random_designs,
-        row_from_design,
-    )
+    from ..synthesis import Task, bounds_from_toml, default_bounds
 
+    _check_options(args)
     task = Task.from_toml(args.task)
     ref = Design.default()
     bounds = bounds_from_toml(args.task) or default_bounds(ref)
     out = Path(args.out)
+    with Outputs(force=args.force, inputs=[Path(args.task)], option="--figures") as outs:
+        figs: dict[str, Path] = {}
+        if not args.no_figures:   # checked before any work: never replaced without --force
+            folder = Path(args.figures or f"{out}-figures")
+            figs = {n: outs.add_in_folder(folder, f"{n}.png", option="--figures")
+                    for n in FIGURES}
+        return _run(args, task, ref, bounds, out, outs, figs)
+
+
+def _run(args: argparse.Namespace, task: Any, ref: Any, bounds: Any, out: Path,
+         outs: Outputs, figs: dict[str, Path]) -> int:
+    from ..synthesis import evaluate, optimize, random_designs, row_from_design
+
     common: dict[str, Any] = dict(samples=args.samples, seed=args.seed,
                                   scheduler=args.scheduler,
                                   encoder_resolution=args.encoder_resolution,
@@ -84,8 +123,9 @@ def run(args: argparse.Namespace) -> int:
             rows += random_designs(args.designs, bounds, seed=args.seed, base=ref)
         df = evaluate(rows, task, out=out, progress=not args.json, **common)
     files = [str(out)]
-    if not args.no_figures:
-        files += _figures(df, result, task, ref, Path(args.figures or f"{out}-figures"), args)
+    if figs:
+        _figures(df, result, task, ref, figs, args, outs)
+        files += [str(f) for f in outs.commit()]
     report = _report(df, result, args.top)
     if args.json:
         print(dump_json({"task": task.to_mapping(), "results": str(out), "files": files,
@@ -95,8 +135,8 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _figures(df: Any, result: Any, task: Any, ref: Any, folder: Path,
-             args: argparse.Namespace) -> list[str]:
+def _figures(df: Any, result: Any, task: Any, ref: Any, figs: dict[str, Path],
+             args: argparse.Namespace, outs: Outputs) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -110,17 +150,17 @@ def _figures(df: Any, result: Any, task: Any, ref: Any, folder: Path,
     )
     from ._workspace import save_figure
 
-    folder.mkdir(parents=True, exist_ok=True)
-    files: list[str] = []
     front = result.front if result is not None else None
     reference = df.iloc[0]
     fig, ax = plt.subplots(figsize=(6.4, 4.8), layout="constrained")
     plot_pareto(df, front=front, reference=reference, ax=ax)
-    files += save_figure(fig, folder / "pareto", ["png"], 110)
+    save_figure(fig, figs["pareto"].with_suffix(""), ["png"], 110, outs)
     if int(df["valid"].sum()) > 1:
         fig, ax = plt.subplots(figsize=(9, 4.8), layout="constrained")
         plot_parameter_coordinates(df, highlight=front, ax=ax)
-        files += save_figure(fig, folder / "parameters", ["png"], 110)
+        save_figure(fig, figs["parameters"].with_suffix(""), ["png"], 110, outs)
+    else:   # one valid design: no parameter plot
+        outs.drop(figs["parameters"])
     best = df[df["valid"]].sort_values("coverage_mode", ascending=False)
     chosen = [design_from_row(reference)]
     if len(best) and best.index[0] != 0:
@@ -132,8 +172,7 @@ def _figures(df: Any, result: Any, task: Any, ref: Any, folder: Path,
     for ax, d, name in zip(axes[0], chosen, names, strict=False):
         plot_coverage_map(d, task, samples=min(args.samples, 20_000), seed=args.seed, ax=ax)
         ax.set_title(name)
-    files += save_figure(fig, folder / "coverage", ["png"], 110)
-    return files
+    save_figure(fig, figs["coverage"].with_suffix(""), ["png"], 110, outs)
 
 
 def _report(df: Any, result: Any, top: int) -> dict[str, Any]:

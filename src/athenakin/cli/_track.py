@@ -8,9 +8,18 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import add_design_option, add_setup_options, load_design, load_rcm
+from ._common import (
+    add_design_option,
+    add_setup_options,
+    check_count,
+    fmt,
+    load_design,
+    load_rcm,
+)
 from ._output import Outputs, add_force_option, outputs
 
+#: Smallest jump threshold (mm or deg): below it, the threshold in SI units underflows.
+JUMP_MIN = 1e-6
 #: Flags that make ``--strict`` fail.
 STRICT_FLAGS = ("LOST", "JUMP", "MODE_SWITCH", "AMBIGUOUS")
 
@@ -48,6 +57,10 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 def run(args: argparse.Namespace) -> int:
     """Execute ``track``."""
     out = args.output
+    for opt, v, hi in (("--jump-mm", args.jump_mm, 1e6), ("--jump-deg", args.jump_deg, 360.0)):
+        if not JUMP_MIN <= v <= hi:
+            raise ValueError(f"{opt}: expected a threshold from {JUMP_MIN:g} to {hi:g}, got {v:g}")
+    check_count(args.max_events, "--max-events", 0, 10**9, "events")
     if out is not None and Path(out).suffix.lower() not in (".csv", ".json"):
         raise ValueError(f"-o: expected a .csv or .json file name, got {str(out)!r}")
     with outputs(args) as outs:   # checked before any work: never over an input or, without
@@ -91,14 +104,14 @@ def _track(args: argparse.Namespace, outs: Outputs) -> int:
     for name, c in sorted(counts.items()):
         print(f"  {name}: {c} samples")
     for i, f in events[:args.max_events]:
-        ts = f"t = {t[i]:.4f} s, " if t is not None else ""
+        ts = "" if t is None else "t missing, " if np.isnan(t[i]) else f"t = {t[i]:.6g} s, "
         print(f"  sample {i} ({ts}q = {np.round(q[i], 6).tolist()} m): {f.name or int(f)}"
               f", mode {int(log.mode[i]):+d}, slot {int(log.slot[i])}")
     if len(events) > args.max_events:
         print(f"  ... {len(events) - args.max_events} more (see -o)")
     last = len(q) - 1
     print(f"last pose: tip_e = {np.round(log.tip_e[last], 6).tolist()} m, "
-          f"p = {log.p[last]:.6f} m, valid = {bool(log.valid[last])}")
+          f"p = {fmt(float(log.p[last]))} m, valid = {bool(log.valid[last])}")
     if out is not None:
         if Path(out).suffix.lower() == ".json":
             import dataclasses

@@ -151,14 +151,17 @@ def run(args: argparse.Namespace) -> int:
         print(dump_json({"summary": summary, "files": files}))
         return 0
     print(table(["quantity", "value"], [[k, _fmt(v)] for k, v in summary.items()]))
+    if any(isinstance(v, float) and v != v for v in summary.values()):
+        print("-: no sample to compute it from (a finer --resolution or --cone-resolution "
+              "may find some)")
     for f in files:
         print(f"wrote {f}")
     return 0
 
 
 def _fmt(v: object) -> str:
-    if isinstance(v, float):
-        return f"{v:.6g}"
+    if isinstance(v, float):   # NaN: no sample to take it from (a coarse grid, an empty cone)
+        return "-" if v != v else f"{v:.6g}"
     if isinstance(v, (tuple, list)):
         return "(" + ", ".join(_fmt(x) for x in v) + ")"
     return str(v)

@@ -60,7 +60,8 @@ from ._timing import (
 )
 
 __all__ = ["Limits", "Trajectory", "plan", "plan_directions", "check_samples",
-           "LIMIT_RTOL", "BOUND_GRID", "BOUND_SAFETY", "MAX_DURATION", "MAX_SAMPLES"]
+           "LIMIT_RTOL", "BOUND_GRID", "BOUND_SAFETY", "MAX_DURATION", "MAX_SAMPLES",
+           "MIN_RATE", "MAX_WAYPOINTS"]
 
 #: Relative tolerance of the velocity / acceleration / jerk / tip-speed checks.
 LIMIT_RTOL = 1e-6
@@ -75,6 +76,12 @@ MAX_DURATION = 3600.0
 #: Default largest number of samples :func:`plan` accepts (``max_samples``); each
 #: sample holds about 60 floats while it is checked, about 1 GB at this bound.
 MAX_SAMPLES = 2_000_000
+#: Lowest sampling rate :func:`plan` accepts, Hz: a sample period longer than a second
+#: is no controller's, and a rate of 1e-300 Hz would make the period infinite.
+MIN_RATE = 1.0
+#: Most waypoints :func:`plan` accepts (each segment is bounded, timed and checked on
+#: its own, about 10 ms): a path of 100,000 waypoints ran for a quarter of an hour.
+MAX_WAYPOINTS = 1000
 #: Samples checked at a time: a violation stops the sampling there.
 CHECK_CHUNK = 20_000
 
@@ -214,7 +221,7 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
         Defaults to :meth:`Design.default`; ``design.tool_length`` is ``L`` in
         ``tip = O_s + L d``.
     rate : float, keyword-only
-        Samples per second (default 1 kHz).
+        Samples per second (default 1 kHz), at least :data:`MIN_RATE` (1 Hz).
     v_max, a_max : float or array-like of shape (3,), keyword-only
         Actuator velocity (m/s) and acceleration (m/s^2) limits.
     j_max : float or array-like of shape (3,), optional, keyword-only
@@ -442,6 +449,9 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
     if T.shape != (4, 4):
         raise ValueError(f"T_b_e: expected one transform of shape (4, 4), got shape {T.shape}")
     rate = check_scalar(rate, "rate", positive=True)
+    if not rate >= MIN_RATE:
+        raise ValueError(f"rate: expected at least {MIN_RATE:g} sample per second (Hz), "
+                         f"got {rate:g}")
     max_duration = MAX_DURATION if max_duration is None else check_scalar(
         max_duration, "max_duration", positive=True)
     if max_samples is None:
@@ -458,6 +468,9 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
     if timing not in ("stretch", "fixed"):
         raise ValueError(f"timing: expected 'stretch' or 'fixed', got {timing!r}")
     K = tips.shape[0]
+    if K > MAX_WAYPOINTS:
+        raise ValueError(f"waypoints: expected at most {MAX_WAYPOINTS}, got {K} (plan the path "
+                         f"in parts)")
     req: NDArray[np.float64] | None = None
     t0 = 0.0
     if times is not None:

@@ -7,6 +7,7 @@ import hashlib
 import json
 import math
 import os
+import re
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -27,7 +28,7 @@ from ._metrics import (
 from ._task import Task
 
 __all__ = ["evaluate", "design_rows", "open_scheduler", "LOCAL_SCHEDULERS", "CHUNK_SIZE",
-           "CONNECT_TIMEOUT", "RETRIES", "read_study"]
+           "CONNECT_TIMEOUT", "RETRIES", "read_study", "MAX_SAMPLES", "MAX_ENCODER_RESOLUTION"]
 
 #: Names of Dask's local schedulers accepted by ``scheduler=``.
 LOCAL_SCHEDULERS = ("threads", "processes", "synchronous", "sync", "single-threaded")
@@ -35,6 +36,12 @@ LOCAL_SCHEDULERS = ("threads", "processes", "synchronous", "sync", "single-threa
 CHUNK_SIZE = 8
 #: Seconds to wait for a scheduler given by address before :class:`SchedulerUnreachableError`.
 CONNECT_TIMEOUT = 5.0
+#: The form of a scheduler address: ``[protocol://]host:port``.
+_ADDRESS = re.compile(r"^([a-z][a-z0-9+.-]*://)?[^\s/]+:\d{1,5}$")
+#: Most task samples per design (each design evaluates them all, about 1 KB each).
+MAX_SAMPLES = 1_000_000
+#: Coarsest encoder resolution accepted, m (beyond it the tip error is meaningless).
+MAX_ENCODER_RESOLUTION = 1e-2
 #: How many times Dask may retry a chunk whose worker failed.
 RETRIES = 3
 _FORMAT = "athenakin-synthesis-1"
@@ -174,6 +181,10 @@ def open_scheduler(scheduler: Any, *, connect_timeout: float = CONNECT_TIMEOUT
     if isinstance(scheduler, str) and scheduler in LOCAL_SCHEDULERS:
         return "local", scheduler, False
     if isinstance(scheduler, str):
+        if not _ADDRESS.match(scheduler):   # distributed.Client would fail and then print a
+            raise InvalidInputError(        # traceback from its __del__, 10 s later
+                f"scheduler: expected one of {LOCAL_SCHEDULERS} or an address "
+                f"'tcp://host:port', got {scheduler!r}")
         distributed = _require("distributed")
         import logging
 
@@ -314,11 +325,16 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
     _require("dask")
     if not isinstance(task, Task):
         raise TypeError(f"task: expected athenakin.synthesis.Task, got {type(task).__name__}")
-    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:
-        raise InvalidInputError(f"samples: expected a positive integer, got {samples!r}")
+    if (isinstance(samples, bool) or not isinstance(samples, (int, np.integer))
+            or not 1 <= samples <= MAX_SAMPLES):
+        raise InvalidInputError(f"samples: expected an integer from 1 to {MAX_SAMPLES}, got "
+                                f"{samples!r}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InvalidInputError(f"seed: expected a non-negative integer, got {seed!r}")
     resolution = check_scalar(encoder_resolution, "encoder_resolution", positive=True)
+    if not resolution <= MAX_ENCODER_RESOLUTION:
+        raise InvalidInputError(f"encoder_resolution: expected at most "
+                                f"{MAX_ENCODER_RESOLUTION:g} m, got {resolution:g}")
     if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) or (
             chunk_size < 1):
         raise InvalidInputError(f"chunk_size: expected a positive integer, got {chunk_size!r}")
@@ -331,14 +347,20 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
     if on_chunk is not None and not callable(on_chunk):
         raise TypeError(f"on_chunk: expected a callable (done, total) or None, got "
                         f"{type(on_chunk).__name__}")
+    # the scheduler first: an address that does not answer leaves no results folder behind
+    kind, handle, owned = open_scheduler(scheduler, connect_timeout=connect_timeout)
     if out_path is not None:
         fp = _fingerprint(rows, task, samples, seed, resolution, chunk_size)
-        done = _prepare_out(out_path, fp, len(chunks), {
-            "format": _FORMAT, "designs": len(rows), "chunk_size": chunk_size,
-            "task": task_map, "samples": samples, "seed": seed,
-            "encoder_resolution": resolution})
+        try:
+            done = _prepare_out(out_path, fp, len(chunks), {
+                "format": _FORMAT, "designs": len(rows), "chunk_size": chunk_size,
+                "task": task_map, "samples": samples, "seed": seed,
+                "encoder_resolution": resolution})
+        except BaseException:
+            if owned:
+                handle.close()
+            raise
     todo = [i for i in range(len(chunks)) if i not in done]
-    kind, handle, owned = open_scheduler(scheduler, connect_timeout=connect_timeout)
     bar = _bar(len(chunks), len(done), progress and len(todo) > 0 if progress is not None
                else len(todo) > 1)
 

@@ -14,6 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._toml import read_toml
 from .._transforms import transform_from_rotation_translation
 from .._validation import check_scalar
+from ..design import LENGTH_RANGE
 from ..errors import InvalidInputError
 from ._errors import TaskFileError
 
@@ -86,6 +87,9 @@ class Task:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "rcm", _vec3(self.rcm, "rcm"))
+        if not float(np.max(np.abs(self.rcm))) <= LENGTH_RANGE[1]:
+            raise InvalidInputError(f"rcm: expected coordinates within +/-{LENGTH_RANGE[1]:g} m, "
+                                    f"got {self.rcm.tolist()}")
         ax = _vec3(self.axis, "axis")
         n = float(np.linalg.norm(ax))
         if abs(n - 1.0) > UNIT_TOL:
@@ -101,9 +105,9 @@ class Task:
             raise InvalidInputError(f"depth: expected (d_min, d_max) in m, got {d!r}")
         lo = check_scalar(d[0], "depth[0]")
         hi = check_scalar(d[1], "depth[1]")
-        if not 0.0 <= lo <= hi:
-            raise InvalidInputError(f"depth: expected 0 <= d_min <= d_max (m), got "
-                                    f"({lo!r}, {hi!r})")
+        if not 0.0 <= lo <= hi <= LENGTH_RANGE[1]:
+            raise InvalidInputError(f"depth: expected 0 <= d_min <= d_max <= "
+                                    f"{LENGTH_RANGE[1]:g} (m), got ({lo!r}, {hi!r})")
         object.__setattr__(self, "depth", (lo, hi))
         if not isinstance(self.name, str):
             raise TypeError(f"name: expected str, got {type(self.name).__name__}")
