@@ -34,7 +34,7 @@ from typing import Any, Literal, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._validation import is_default, is_option, is_raising_policy
+from ._validation import OPTION_AUTO, OPTION_CLOSED, is_default, is_option, is_raising_policy
 from .chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
 from .design import Design
 from .parallel._module import TANGENT_TOL
@@ -75,10 +75,6 @@ BACKENDS = ("auto", "numpy", "numba")
 NOTICE_AFTER_S = 1.0
 
 _F8 = np.dtype(np.float64)
-# The defaults of the option keywords: the lean single-call paths test identity with them
-# first (the default argument is this very object), then the general check.
-_AUTO = "auto"
-_CLOSED = "closed"
 _STATE: dict[str, Any] = {}     # "numba": bool, "api": fast._api, "jac": fast._jac_api
 _WARM: set[str] = set()         # entry points whose first compiled call has returned
 _R = TypeVar("_R")
@@ -296,12 +292,12 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     >>> int(sol.n_solutions)
     16
     """
-    if "fk" in _WARM and _STATE["numba"] and (backend is _AUTO or _compiled_choice(backend)):
+    if "fk" in _WARM and _STATE["numba"] and (backend is OPTION_AUTO or _compiled_choice(backend)):
         api = _STATE["api"]
         if (type(q) is np.ndarray and type(T_b_e) is np.ndarray and q.dtype is _F8
                 and T_b_e.dtype is _F8 and q.shape == (3,) and T_b_e.shape == (4, 4)
-                and fields is None and (method is _CLOSED or is_option(method, "closed"))
-                and (errors is _AUTO or is_raising_policy(errors))
+                and fields is None and (method is OPTION_CLOSED or is_option(method, "closed"))
+                and (errors is OPTION_AUTO or is_raising_policy(errors))
                 and (tangent_tol is TANGENT_TOL or is_default(tangent_tol, TANGENT_TOL))
                 and (degenerate_tol is DEGENERATE_TOL or is_default(degenerate_tol, DEGENERATE_TOL))
                 and (p_zero_tol is P_ZERO_TOL or is_default(p_zero_tol, P_ZERO_TOL))
@@ -362,11 +358,11 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     >>> np.allclose(q, [-0.10, 0.10, 0.45], atol=1e-12)
     True
     """
-    if "ik" in _WARM and _STATE["numba"] and (backend is _AUTO or _compiled_choice(backend)):
+    if "ik" in _WARM and _STATE["numba"] and (backend is OPTION_AUTO or _compiled_choice(backend)):
         api = _STATE["api"]
         if (type(T_b_e) is np.ndarray and type(u345) is np.ndarray and T_b_e.dtype is _F8
                 and u345.dtype is _F8 and T_b_e.shape == (4, 4) and u345.shape == (3,)
-                and fields is None and (errors is _AUTO or is_raising_policy(errors))
+                and fields is None and (errors is OPTION_AUTO or is_raising_policy(errors))
                 and (singular_tol is IK_SINGULAR_TOL or is_default(singular_tol, IK_SINGULAR_TOL))
                 and (closure_tol is CLOSURE_TOL or is_default(closure_tol, CLOSURE_TOL))):
             # the lean single call (control loops): straight to the packed kernel
@@ -414,7 +410,8 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
     --------
     athenakin.robot.q_from_instrument : the numpy reference, with the details.
     """
-    if "line" in _WARM and _STATE["numba"] and (backend is _AUTO or _compiled_choice(backend)):
+    if ("line" in _WARM and _STATE["numba"]
+            and (backend is OPTION_AUTO or _compiled_choice(backend))):
         return _STATE["api"].q_from_instrument(  # type: ignore[no-any-return]
             T_b_e, direction_e, p, design, errors=errors)
     if resolve_backend(backend):
@@ -448,11 +445,12 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
     --------
     athenakin.robot.q_from_tool_tip : the numpy reference, with the details.
     """
-    if "line" in _WARM and _STATE["numba"] and (backend is _AUTO or _compiled_choice(backend)):
+    if ("line" in _WARM and _STATE["numba"]
+            and (backend is OPTION_AUTO or _compiled_choice(backend))):
         api = _STATE["api"]
         if (type(T_b_e) is np.ndarray and type(tip_e) is np.ndarray and T_b_e.dtype is _F8
                 and tip_e.dtype is _F8 and T_b_e.shape == (4, 4) and tip_e.shape == (3,)
-                and (errors is _AUTO or is_raising_policy(errors))):
+                and (errors is OPTION_AUTO or is_raising_policy(errors))):
             fT, ft = T_b_e.flags, tip_e.flags
             if fT.c_contiguous and fT.writeable and ft.c_contiguous and ft.writeable:
                 res = api._line_one_plain(T_b_e, tip_e, 0.0, 1, api.design_params(design))

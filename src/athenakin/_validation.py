@@ -199,6 +199,13 @@ def check_choice(x: object, name: str, choices: tuple[str, ...]) -> str:
     return x
 
 
+#: The default values of the option keywords ``backend``/``errors`` and ``method``. The lean
+#: single-call paths test identity with them first (a default argument is this very
+#: interned string, so the common call costs no function call), then :func:`is_option`.
+OPTION_AUTO = "auto"
+OPTION_CLOSED = "closed"
+
+
 def is_option(x: object, value: str) -> bool:
     """``x == value`` for a string option, False (never an error) for any other object."""
     return isinstance(x, str) and x == value

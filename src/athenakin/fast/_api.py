@@ -27,6 +27,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import (
     ERROR_POLICIES,
+    OPTION_AUTO,
+    OPTION_CLOSED,
     ROTATION_TOL,
     broadcast_batch,
     check_options,
@@ -76,10 +78,6 @@ __all__ = [
 ]
 
 _F8 = np.dtype(np.float64)
-# The defaults of the option keywords: the lean single-call paths test identity with them
-# first (the default argument is this very object), then the general check.
-_AUTO = "auto"
-_CLOSED = "closed"
 _PARAMS: dict[int, tuple[Design, NDArray[np.float64]]] = {}
 _DEFAULT: list[NDArray[np.float64]] = []
 _FK_TOL_DEFAULT = np.array([TANGENT_TOL, DEGENERATE_TOL, P_ZERO_TOL, CLOSURE_TOL])
@@ -245,8 +243,8 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     if (type(q) is np.ndarray and type(T_b_e) is np.ndarray and q.dtype is _F8
             and T_b_e.dtype is _F8 and q.shape == (3,) and T_b_e.shape == (4, 4)
             and out is None and fields is None and not parallel
-            and (method is _CLOSED or is_option(method, "closed"))
-            and (errors is _AUTO or is_raising_policy(errors))
+            and (method is OPTION_CLOSED or is_option(method, "closed"))
+            and (errors is OPTION_AUTO or is_raising_policy(errors))
             and (tangent_tol is TANGENT_TOL or is_default(tangent_tol, TANGENT_TOL))
             and (degenerate_tol is DEGENERATE_TOL or is_default(degenerate_tol, DEGENERATE_TOL))
             and (p_zero_tol is P_ZERO_TOL or is_default(p_zero_tol, P_ZERO_TOL))
@@ -265,7 +263,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
             fields=fields)
 
     names = check_fields(fields)
-    if not (method is _CLOSED or is_option(method, "closed")):
+    if not (method is OPTION_CLOSED or is_option(method, "closed")):
         return reference()
     check_options(errors, tangent_tol=tangent_tol, degenerate_tol=degenerate_tol,
                   p_zero_tol=p_zero_tol, closure_tol=closure_tol)    # as the reference
