@@ -12,7 +12,12 @@ from pathlib import Path
 from ._input import MAX_TABLE_BYTES, read_bytes
 from ._validation import check_path
 
-__all__ = ["read_table"]
+__all__ = ["read_table", "Q_COLUMNS", "TIP_COLUMNS"]
+
+#: Columns of actuator readings, m: q streams, trajectories and calibration measurements.
+Q_COLUMNS = ("q1_m", "q2_m", "q3_m")
+#: Columns of a tool-tip position, m: tip paths (frame E) and measured tips (tracker frame).
+TIP_COLUMNS = ("x_m", "y_m", "z_m")
 
 
 def read_table(path: str | Path, *, header_row: bool = True, error: type[Exception] = ValueError

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from .._csv import read_table
+from .._csv import Q_COLUMNS, TIP_COLUMNS, read_table
 from .._validation import check_array, check_choice, check_instance
 from ..errors import InvalidInputError
 from ._errors import MeasurementFileError
@@ -35,10 +35,6 @@ __all__ = [
     "calibration_toml",
 ]
 
-#: Actuator readings, m.
-Q_COLUMNS = ("q1_m", "q2_m", "q3_m")
-#: Measured tool tip, m.
-TIP_COLUMNS = ("x_m", "y_m", "z_m")
 #: Measured instrument axis (unit vector, optional).
 AXIS_COLUMNS = ("dx", "dy", "dz")
 

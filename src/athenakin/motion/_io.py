@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from .._csv import read_table
+from .._csv import Q_COLUMNS, TIP_COLUMNS, read_table
 from .._serialize import json_text
 from .._validation import check_instance, check_path
 from ._errors import PathFileError
@@ -42,12 +42,8 @@ __all__ = [
     "save_trajectory",
 ]
 
-#: Columns of a tool-tip path file (frame E, m); ``t_s`` is optional.
-TIP_COLUMNS = ("x_m", "y_m", "z_m")
 #: Columns of a direction + insertion path file; ``t_s`` is optional.
 DIRECTION_COLUMNS = ("azimuth_deg", "polar_deg", "depth_m")
-#: Columns of a q stream (``t_s`` optional, other columns ignored).
-Q_COLUMNS = ("q1_m", "q2_m", "q3_m")
 
 
 @dataclasses.dataclass(frozen=True)
