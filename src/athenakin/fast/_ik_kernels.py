@@ -499,6 +499,30 @@ def _paper_stage2(G, K, ctol, n):
         K[_RES * CHUNK + ii] = res
 
 
+@njit(**_OPTS, inline="always")
+def _store_T_b_s(K, ii, mask, Tbs, i):
+    """Write the pose of ``O_s`` of chunk column ``ii`` into ``Tbs[i]`` (NaN when ``mask`` is)."""
+    ct = K[_CT * CHUNK + ii] + mask
+    st = K[_ST * CHUNK + ii] + mask
+    one, zero = 1.0 + mask, mask
+    Tbs[i, 0, 0] = one
+    Tbs[i, 0, 1] = zero
+    Tbs[i, 0, 2] = zero
+    Tbs[i, 0, 3] = K[_OX * CHUNK + ii] + mask
+    Tbs[i, 1, 0] = zero
+    Tbs[i, 1, 1] = ct
+    Tbs[i, 1, 2] = -st
+    Tbs[i, 1, 3] = K[_OY * CHUNK + ii] + mask
+    Tbs[i, 2, 0] = zero
+    Tbs[i, 2, 1] = st
+    Tbs[i, 2, 2] = ct
+    Tbs[i, 2, 3] = K[_OZ * CHUNK + ii] + mask
+    Tbs[i, 3, 0] = zero
+    Tbs[i, 3, 1] = zero
+    Tbs[i, 3, 2] = zero
+    Tbs[i, 3, 3] = one
+
+
 @njit(**_OPTS)
 def _paper_store(K, c0, n, q, p, u, mode, Tbs, res, valid, reason, qe):
     for ii in range(n):
@@ -512,25 +536,7 @@ def _paper_store(K, c0, n, q, p, u, mode, Tbs, res, valid, reason, qe):
         for c in range(5):
             u[i, c] = K[(_U1 + c) * CHUNK + ii] + mask
         mode[i] = np.int64(K[_MODE * CHUNK + ii]) if r == 0.0 else 0
-        ct = K[_CT * CHUNK + ii] + mask
-        st = K[_ST * CHUNK + ii] + mask
-        one, zero = 1.0 + mask, mask
-        Tbs[i, 0, 0] = one
-        Tbs[i, 0, 1] = zero
-        Tbs[i, 0, 2] = zero
-        Tbs[i, 0, 3] = K[_OX * CHUNK + ii] + mask
-        Tbs[i, 1, 0] = zero
-        Tbs[i, 1, 1] = ct
-        Tbs[i, 1, 2] = -st
-        Tbs[i, 1, 3] = K[_OY * CHUNK + ii] + mask
-        Tbs[i, 2, 0] = zero
-        Tbs[i, 2, 1] = st
-        Tbs[i, 2, 2] = ct
-        Tbs[i, 2, 3] = K[_OZ * CHUNK + ii] + mask
-        Tbs[i, 3, 0] = zero
-        Tbs[i, 3, 1] = zero
-        Tbs[i, 3, 2] = zero
-        Tbs[i, 3, 3] = one
+        _store_T_b_s(K, ii, mask, Tbs, i)
         res[i] = K[_RES * CHUNK + ii] + mask
         qe[i] = K[_QE * CHUNK + ii] + mask
         reason[i] = np.int8(r)

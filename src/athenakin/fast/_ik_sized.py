@@ -15,19 +15,14 @@ from numba import njit
 
 from ._fk_kernels import CHUNK
 from ._ik_kernels import (
-    _CT,
     _MODE,
     _NGP2,
-    _OX,
-    _OY,
-    _OZ,
     _P,
     _Q1,
     _Q2,
     _Q3,
     _REASON,
     _RES,
-    _ST,
     _U1,
     NK,
     _paper_flags,
@@ -35,6 +30,7 @@ from ._ik_kernels import (
     _paper_stage1,
     _paper_stage2,
     _pik_stage,
+    _store_T_b_s,
 )
 
 __all__ = ["WANT_P", "WANT_U", "WANT_MODE", "WANT_T", "WANT_RES", "WANT_VALID", "WANT_REASON",
@@ -65,25 +61,7 @@ def _store_select(K, c0, n, want, q, p, u, mode, Tbs, res, valid, reason):
         if want & WANT_MODE:
             mode[i] = np.int64(K[_MODE * CHUNK + ii]) if r == 0.0 else 0
         if want & WANT_T:
-            ct = K[_CT * CHUNK + ii] + mask
-            st = K[_ST * CHUNK + ii] + mask
-            one, zero = 1.0 + mask, mask
-            Tbs[i, 0, 0] = one
-            Tbs[i, 0, 1] = zero
-            Tbs[i, 0, 2] = zero
-            Tbs[i, 0, 3] = K[_OX * CHUNK + ii] + mask
-            Tbs[i, 1, 0] = zero
-            Tbs[i, 1, 1] = ct
-            Tbs[i, 1, 2] = -st
-            Tbs[i, 1, 3] = K[_OY * CHUNK + ii] + mask
-            Tbs[i, 2, 0] = zero
-            Tbs[i, 2, 1] = st
-            Tbs[i, 2, 2] = ct
-            Tbs[i, 2, 3] = K[_OZ * CHUNK + ii] + mask
-            Tbs[i, 3, 0] = zero
-            Tbs[i, 3, 1] = zero
-            Tbs[i, 3, 2] = zero
-            Tbs[i, 3, 3] = one
+            _store_T_b_s(K, ii, mask, Tbs, i)
         if want & WANT_RES:
             res[i] = K[_RES * CHUNK + ii] + mask
         if want & WANT_REASON:
