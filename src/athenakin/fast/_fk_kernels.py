@@ -348,6 +348,61 @@ def rigid_flags(T, rot_tol):
     return flags
 
 
+@njit(**_OPTS, inline="always")
+def _store_u_mode(Sm, ii, mask, u, i, k0):
+    """``u`` of the 8 slots ``k0..k0+7`` of one assembly mode from its scratch column ``ii``.
+
+    Slot ``k0 + j`` has root ``r = j >> 2``, U-joint branch ``b = (j >> 1) & 1`` and wrist
+    branch ``w = j & 1`` (:data:`athenakin.robot.SLOT_MODE` and friends); ``mask`` is 0 or NaN.
+    """
+    v1 = (Sm[_V1 * CHUNK + ii] + mask, Sm[(_V1 + 1) * CHUNK + ii] + mask)
+    v2 = (Sm[_V2 * CHUNK + ii] + mask, Sm[(_V2 + 1) * CHUNK + ii] + mask,
+          Sm[(_V2 + 2) * CHUNK + ii] + mask, Sm[(_V2 + 3) * CHUNK + ii] + mask)
+    v3 = (Sm[_V3 * CHUNK + ii] + mask, Sm[(_V3 + 1) * CHUNK + ii] + mask,
+          Sm[(_V3 + 2) * CHUNK + ii] + mask, Sm[(_V3 + 3) * CHUNK + ii] + mask)
+    v4 = (Sm[_V4 * CHUNK + ii] + mask, Sm[(_V4 + 1) * CHUNK + ii] + mask,
+          Sm[(_V4 + 2) * CHUNK + ii] + mask, Sm[(_V4 + 3) * CHUNK + ii] + mask)
+    v5 = (Sm[_V5 * CHUNK + ii] + mask, Sm[(_V5 + 1) * CHUNK + ii] + mask)
+    for j in range(8):
+        r = j >> 2
+        b = (j >> 1) & 1
+        w = j & 1
+        k = k0 + j
+        u[i, k, 0] = v1[b ^ r]
+        u[i, k, 1] = v2[2 * b + r]
+        u[i, k, 2] = v3[2 * (w ^ b) + r]
+        u[i, k, 3] = v4[2 * w + r]
+        u[i, k, 4] = v5[w ^ r]
+
+
+@njit(**_OPTS, inline="always")
+def _store_T_b_s_mode(Sm, ii, xm, pmask, Tbs, i, k):
+    """``Tbs[i, k] = [[1, 0, 0, xm], [0, cz, cy, ys], [0, -cy, cz, zs], [0, 0, 0, 1]]``.
+
+    The pose of ``O_s`` of one assembly mode (scratch column ``ii``); NaN where ``pmask``
+    is (the mode does not assemble).
+    """
+    one, zero = 1.0 + pmask, pmask
+    cy = Sm[_CY * CHUNK + ii] + pmask
+    cz = Sm[_CZ * CHUNK + ii] + pmask
+    Tbs[i, k, 0, 0] = one
+    Tbs[i, k, 0, 1] = zero
+    Tbs[i, k, 0, 2] = zero
+    Tbs[i, k, 0, 3] = xm + pmask
+    Tbs[i, k, 1, 0] = zero
+    Tbs[i, k, 1, 1] = cz
+    Tbs[i, k, 1, 2] = cy
+    Tbs[i, k, 1, 3] = Sm[_YS * CHUNK + ii] + pmask
+    Tbs[i, k, 2, 0] = zero
+    Tbs[i, k, 2, 1] = -cy
+    Tbs[i, k, 2, 2] = cz
+    Tbs[i, k, 2, 3] = Sm[_ZS * CHUNK + ii] + pmask
+    Tbs[i, k, 3, 0] = zero
+    Tbs[i, k, 3, 1] = zero
+    Tbs[i, k, 3, 2] = zero
+    Tbs[i, k, 3, 3] = one
+
+
 @njit(**_OPTS)
 def _store_mode(Sm, ii, i, k0, xm, pres, reason, valid, p, u, Tbs, res):
     """Expand one assembly mode's scratch column into its 8 slots (branch-free)."""
@@ -357,57 +412,18 @@ def _store_mode(Sm, ii, i, k0, xm, pres, reason, valid, p, u, Tbs, res):
     pmask = 0.0 if Sm[_PR * CHUNK + ii] == 0.0 else math.nan
     nn = Sm[_NN * CHUNK + ii] + mask
     rv = nanmax2(Sm[_RES * CHUNK + ii], pres) + mask
-    v1 = (Sm[_V1 * CHUNK + ii] + mask, Sm[(_V1 + 1) * CHUNK + ii] + mask)
-    v2 = (Sm[_V2 * CHUNK + ii] + mask, Sm[(_V2 + 1) * CHUNK + ii] + mask,
-          Sm[(_V2 + 2) * CHUNK + ii] + mask, Sm[(_V2 + 3) * CHUNK + ii] + mask)
-    v3 = (Sm[_V3 * CHUNK + ii] + mask, Sm[(_V3 + 1) * CHUNK + ii] + mask,
-          Sm[(_V3 + 2) * CHUNK + ii] + mask, Sm[(_V3 + 3) * CHUNK + ii] + mask)
-    v4 = (Sm[_V4 * CHUNK + ii] + mask, Sm[(_V4 + 1) * CHUNK + ii] + mask,
-          Sm[(_V4 + 2) * CHUNK + ii] + mask, Sm[(_V4 + 3) * CHUNK + ii] + mask)
-    v5 = (Sm[_V5 * CHUNK + ii] + mask, Sm[(_V5 + 1) * CHUNK + ii] + mask)
     r8 = np.int8(R)
     for j in range(8):
-        r = j >> 2
-        b = (j >> 1) & 1
-        w = j & 1
         k = k0 + j
         reason[i, k] = r8
         valid[i, k] = ok
         res[i, k] = rv
-        p[i, k] = nn if r == 0 else -nn
-        u[i, k, 0] = v1[b ^ r]
-        u[i, k, 1] = v2[2 * b + r]
-        u[i, k, 2] = v3[2 * (w ^ b) + r]
-        u[i, k, 3] = v4[2 * w + r]
-        u[i, k, 4] = v5[w ^ r]
-    # T_b_s = [[1, 0, 0, xm], [0, cz, cy, ys], [0, -cy, cz, zs], [0, 0, 0, 1]] (NaN if the
-    # assembly mode is invalid)
-    one, zero = 1.0 + pmask, pmask
-    cy = Sm[_CY * CHUNK + ii] + pmask
-    cz = Sm[_CZ * CHUNK + ii] + pmask
-    ys = Sm[_YS * CHUNK + ii] + pmask
-    zs = Sm[_ZS * CHUNK + ii] + pmask
-    xmm = xm + pmask
+        p[i, k] = nn if (j >> 2) == 0 else -nn
+    _store_u_mode(Sm, ii, mask, u, i, k0)
     nk = 8 if Tbs.shape[1] == 16 else 1
     kb = k0 if Tbs.shape[1] == 16 else k0 // 8
     for j in range(nk):
-        k = kb + j
-        Tbs[i, k, 0, 0] = one
-        Tbs[i, k, 0, 1] = zero
-        Tbs[i, k, 0, 2] = zero
-        Tbs[i, k, 0, 3] = xmm
-        Tbs[i, k, 1, 0] = zero
-        Tbs[i, k, 1, 1] = cz
-        Tbs[i, k, 1, 2] = cy
-        Tbs[i, k, 1, 3] = ys
-        Tbs[i, k, 2, 0] = zero
-        Tbs[i, k, 2, 1] = -cy
-        Tbs[i, k, 2, 2] = cz
-        Tbs[i, k, 2, 3] = zs
-        Tbs[i, k, 3, 0] = zero
-        Tbs[i, k, 3, 1] = zero
-        Tbs[i, k, 3, 2] = zero
-        Tbs[i, k, 3, 3] = one
+        _store_T_b_s_mode(Sm, ii, xm, pmask, Tbs, i, kb + j)
 
 
 @njit(**_OPTS)

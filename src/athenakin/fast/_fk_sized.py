@@ -19,24 +19,17 @@ import numpy as np
 from numba import njit
 
 from ._fk_kernels import (
-    _CY,
-    _CZ,
     _NN,
     _PR,
     _PRES,
     _R,
     _RES,
-    _V1,
-    _V2,
-    _V3,
-    _V4,
-    _V5,
     _XM,
-    _YS,
-    _ZS,
     CHUNK,
     _chunk_full,
     _input_flags,
+    _store_T_b_s_mode,
+    _store_u_mode,
     fk_chunk,
     scratch,
 )
@@ -72,45 +65,10 @@ def _store_mode_select(Sm, ii, i, k0, m, xm, pres, want, reason, valid, p, u, Tb
         for j in range(8):
             p[i, k0 + j] = nn if (j >> 2) == 0 else -nn
     if want & WANT_U:
-        v1 = (Sm[_V1 * CHUNK + ii] + mask, Sm[(_V1 + 1) * CHUNK + ii] + mask)
-        v2 = (Sm[_V2 * CHUNK + ii] + mask, Sm[(_V2 + 1) * CHUNK + ii] + mask,
-              Sm[(_V2 + 2) * CHUNK + ii] + mask, Sm[(_V2 + 3) * CHUNK + ii] + mask)
-        v3 = (Sm[_V3 * CHUNK + ii] + mask, Sm[(_V3 + 1) * CHUNK + ii] + mask,
-              Sm[(_V3 + 2) * CHUNK + ii] + mask, Sm[(_V3 + 3) * CHUNK + ii] + mask)
-        v4 = (Sm[_V4 * CHUNK + ii] + mask, Sm[(_V4 + 1) * CHUNK + ii] + mask,
-              Sm[(_V4 + 2) * CHUNK + ii] + mask, Sm[(_V4 + 3) * CHUNK + ii] + mask)
-        v5 = (Sm[_V5 * CHUNK + ii] + mask, Sm[(_V5 + 1) * CHUNK + ii] + mask)
-        for j in range(8):
-            r = j >> 2
-            b = (j >> 1) & 1
-            w = j & 1
-            k = k0 + j
-            u[i, k, 0] = v1[b ^ r]
-            u[i, k, 1] = v2[2 * b + r]
-            u[i, k, 2] = v3[2 * (w ^ b) + r]
-            u[i, k, 3] = v4[2 * w + r]
-            u[i, k, 4] = v5[w ^ r]
+        _store_u_mode(Sm, ii, mask, u, i, k0)
     if want & WANT_T:
         pmask = 0.0 if Sm[_PR * CHUNK + ii] == 0.0 else math.nan
-        one, zero = 1.0 + pmask, pmask
-        cy = Sm[_CY * CHUNK + ii] + pmask
-        cz = Sm[_CZ * CHUNK + ii] + pmask
-        Tbs[i, m, 0, 0] = one
-        Tbs[i, m, 0, 1] = zero
-        Tbs[i, m, 0, 2] = zero
-        Tbs[i, m, 0, 3] = xm + pmask
-        Tbs[i, m, 1, 0] = zero
-        Tbs[i, m, 1, 1] = cz
-        Tbs[i, m, 1, 2] = cy
-        Tbs[i, m, 1, 3] = Sm[_YS * CHUNK + ii] + pmask
-        Tbs[i, m, 2, 0] = zero
-        Tbs[i, m, 2, 1] = -cy
-        Tbs[i, m, 2, 2] = cz
-        Tbs[i, m, 2, 3] = Sm[_ZS * CHUNK + ii] + pmask
-        Tbs[i, m, 3, 0] = zero
-        Tbs[i, m, 3, 1] = zero
-        Tbs[i, m, 3, 2] = zero
-        Tbs[i, m, 3, 3] = one
+        _store_T_b_s_mode(Sm, ii, xm, pmask, Tbs, i, m)
 
 
 @njit(**_OPTS)
