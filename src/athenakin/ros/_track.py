@@ -21,7 +21,7 @@ from ._read import CHUNK, iter_joint_states
 from ._write import McapOutput, TrackedBatch
 
 __all__ = ["TrackingSummary", "track_recording", "track_to_mcap", "write_trajectory",
-           "tracked_batch"]
+           "write_track_log", "tracked_batch"]
 
 _LOST = int(TrackFlag.LOST)
 _FIELDS = ("q", "valid", "slot", "mode", "p", "u", "O_s", "half_chord", "sin_u2", "sin_u4",
@@ -38,6 +38,8 @@ class TrackingSummary:
         Readings tracked.
     n_valid : int
         Readings with a pose (the others are ``LOST``: no pose published).
+    n_flagged : int
+        Readings with at least one flag.
     counts : dict of str -> int
         Readings carrying each :class:`~athenakin.motion.TrackFlag` bit, by name.
     events : list of (int, int, tuple, int, int, int)
@@ -57,6 +59,7 @@ class TrackingSummary:
 
     n: int
     n_valid: int
+    n_flagged: int
     counts: dict[str, int]
     events: list[tuple[int, int, tuple[float, ...], int, int, int]]
     first_slot: int
@@ -141,7 +144,7 @@ def _stream(chunks: Iterable[tuple[NDArray[np.int64], NDArray[np.float64]]],
             options: dict[str, Any], max_events: int,
             progress: Callable[[int], None] | None) -> TrackingSummary:
     st = _Stream(T, design, options)
-    n = n_valid = 0
+    n = n_valid = n_flagged = 0
     counts: dict[str, int] = {}
     events: list[tuple[int, int, tuple[float, ...], int, int, int]] = []
     last: tuple[tuple[float, ...], float, bool] = ((math.nan,) * 3, math.nan, False)
@@ -149,6 +152,7 @@ def _stream(chunks: Iterable[tuple[NDArray[np.int64], NDArray[np.float64]]],
         cols = st.run(q)
         out.write_tracked(tracked_batch(stamps, cols))
         flags = cols["flags"]
+        n_flagged += int(np.count_nonzero(flags))
         for bit in TrackFlag:
             if bit:
                 c = int(np.count_nonzero(flags & int(bit)))
@@ -168,7 +172,7 @@ def _stream(chunks: Iterable[tuple[NDArray[np.int64], NDArray[np.float64]]],
         n += len(q)
         if progress is not None:
             progress(n)
-    return TrackingSummary(n=n, n_valid=n_valid, counts=counts, events=events,
+    return TrackingSummary(n=n, n_valid=n_valid, n_flagged=n_flagged, counts=counts, events=events,
                            first_slot=st.first[0], first_mode=st.first[1], last_tip_e=last[0],
                            last_p=last[1], last_valid=last[2], messages=dict(out.counts),
                            path=out.path)
@@ -332,4 +336,40 @@ def write_trajectory(path: str | Path, traj: Trajectory, *, start_ns: int = 0,
             sl = slice(k, k + CHUNK)
             cols = {f: getattr(log, f)[sl] for f in _FIELDS}
             w.write_tracked(tracked_batch(stamps[sl], cols))
+    return Path(path)
+
+
+def write_track_log(path: str | Path, stamps_ns: ArrayLike, log: TrackLog,
+                    T_b_e: ArrayLike | None = None, design: Design | None = None, *,
+                    target: str | Path | None = None) -> Path:
+    """Write an already tracked stream (a :class:`~athenakin.motion.TrackLog`) as MCAP.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.mcap`` file (written atomically); with ``target``, the file written
+        directly (the caller renames it).
+    stamps_ns : array-like of int, shape (N,)
+        Stamp of each reading, ns.
+    log : TrackLog
+    T_b_e, design
+        The set-up the log was tracked with.
+    target : str or Path, keyword-only, optional
+
+    Returns
+    -------
+    Path
+    """
+    check_instance(log, "log", TrackLog)
+    design = resolve_design(design)
+    T = resolve_rcm_frame(T_b_e, design)
+    s = np.asarray(stamps_ns)
+    if s.shape != (len(log.q),) or not np.issubdtype(s.dtype, np.integer):
+        raise InvalidInputError(f"stamps_ns: expected {len(log.q)} integers (ns), got "
+                                f"{s.dtype} of shape {s.shape}")
+    with McapOutput(path, design, T, target=target) as w:
+        for k in range(0, len(s), CHUNK):
+            sl = slice(k, k + CHUNK)
+            cols = {f: getattr(log, f)[sl] for f in _FIELDS}
+            w.write_tracked(tracked_batch(s[sl].astype(np.int64), cols))
     return Path(path)
