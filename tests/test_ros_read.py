@@ -8,9 +8,6 @@ import pytest
 pytest.importorskip("rosbags")
 pytest.importorskip("mcap_ros2")
 
-import athenakin as ak  # noqa: E402
-from athenakin.ros import RecordingError, iter_joint_states, read_joint_states  # noqa: E402
-
 from _ros_recordings import (  # noqa: E402
     NAMES,
     positions,
@@ -20,6 +17,9 @@ from _ros_recordings import (  # noqa: E402
     write_ros1,
     write_rosbag2,
 )
+
+import athenakin as ak  # noqa: E402
+from athenakin.ros import RecordingError, iter_joint_states, read_joint_states  # noqa: E402
 
 N = 40
 
