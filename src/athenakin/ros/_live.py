@@ -101,7 +101,7 @@ class FoxgloveStream:
         except Exception as exc:   # the SDK raises its own RuntimeError: name the address
             raise OSError(f"cannot serve Foxglove on {host}:{port} ({exc})") from None
         self.host = host
-        self.port = int(self._server.port())
+        self.port = int(self._server.port)
 
     @property
     def url(self) -> str:
