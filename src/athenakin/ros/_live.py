@@ -29,7 +29,7 @@ from ..robot._setup import resolve_rcm_frame
 from ._errors import ros_extra_missing
 from ._write import _MSG_TYPES, TOPICS, RosEncoder, TrackedBatch, msgdef
 
-__all__ = ["FoxgloveStream", "DEFAULT_PORT"]
+__all__ = ["FoxgloveStream", "DEFAULT_PORT", "serve_app"]
 
 #: Port of the Foxglove WebSocket server (Foxglove's default).
 DEFAULT_PORT = 8765
@@ -187,6 +187,16 @@ class FoxgloveStream:
             for key in ("tf", "joint_states", "tool_tip"):
                 self._channels[key].log(msgs[key][0].tobytes(), log_time=stamp)
 
+    def set_setup(self, design: Design | None, T_b_e: ArrayLike | None) -> None:
+        """Change the design and RCM frame; the URDF and fixed frames are sent again."""
+        design = resolve_design(design)
+        T = resolve_rcm_frame(T_b_e, design)
+        encoder = RosEncoder(design, T)
+        with self._lock:
+            self.design, self.T_b_e, self.encoder = design, T, encoder
+            self._last = None
+            self._resend |= set(_STATIC)
+
     # ------------------------------------------------------------------ following
     def follow(self, state: Callable[[], tuple[ArrayLike, int | None]], *,
                rate: float = 30.0) -> None:
@@ -246,6 +256,29 @@ class FoxgloveStream:
 
     def __exit__(self, *exc: object) -> None:
         self.stop()
+
+
+def serve_app(app: Any, *, host: str = "127.0.0.1", port: int = DEFAULT_PORT,
+              rate: float = 30.0) -> FoxgloveStream:
+    """Serve the live robot of an :class:`athenakin.app.AthenaApp` to Foxglove.
+
+    Polls ``app.q``, ``app.slot`` and ``app.setup`` (design, RCM frame) ``rate``
+    times a second and publishes every change; call ``.stop()`` on the result.
+    """
+    setup = app.setup
+    live = FoxgloveStream(setup.T_b_e, setup.design, host=host, port=port)
+    seen = [setup]
+
+    def state() -> tuple[ArrayLike, int | None]:
+        cur = app.setup
+        if cur is not seen[0]:
+            seen[0] = cur
+            live.set_setup(cur.design, cur.T_b_e)
+        slot = app.slot
+        return np.array(app.q, dtype=float), slot if isinstance(slot, int) else None
+
+    live.follow(state, rate=rate)
+    return live
 
 
 class _Listener:
