@@ -96,7 +96,8 @@ def run(args: argparse.Namespace) -> int:
 
     out = Path(args.output)
     if out.suffix.lower() not in (".csv", ".json", ".mcap"):
-        raise ValueError(f"-o: expected a .csv, .json or .mcap file name, got {str(out)!r}")
+        raise ValueError(f"-o: expected a .csv or .json file name, or .mcap (ROS 2 topics), got "
+                         f"{str(out)!r}")
     with outputs(args) as outs:
         # every output is checked before any work, written only when all is done
         outs.add(out)

@@ -74,7 +74,8 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"{opt}: expected a threshold from {JUMP_MIN:g} to {hi:g}, got {v:g}")
     check_count(args.max_events, "--max-events", 0, 10**9, "events")
     if out is not None and Path(out).suffix.lower() not in (".csv", ".json", ".mcap"):
-        raise ValueError(f"-o: expected a .csv, .json or .mcap file name, got {str(out)!r}")
+        raise ValueError(f"-o: expected a .csv or .json file name, or .mcap (ROS 2 topics), got "
+                         f"{str(out)!r}")
     joints = tuple(j.strip() for j in args.joints.split(","))
     if len(joints) != 3 or not all(joints):
         raise ValueError(f"--joints: expected 3 comma-separated names (J1,J2,J3), got "
