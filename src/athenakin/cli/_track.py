@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -161,7 +162,7 @@ def _track_recording(args: argparse.Namespace, outs: Outputs) -> int:
     return 0
 
 
-def _progress() -> object:
+def _progress() -> Callable[[int], None]:
     def show(n: int) -> None:
         print(f"\r  {n} readings", end="", file=sys.stderr, flush=True)
     return show

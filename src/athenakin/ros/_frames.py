@@ -77,8 +77,8 @@ def _origin(el: ET.Element | None) -> NDArray[np.float64]:
     if el is None:
         return T
     xyz = [float(v) for v in el.get("xyz", "0 0 0").split()]
-    r, p, y = (float(v) for v in el.get("rpy", "0 0 0").split())
-    T[:3, :3] = rot_z(y) @ rot_y(p) @ rot_x(r)
+    r, p, y = (np.array(float(v)) for v in el.get("rpy", "0 0 0").split())
+    T[:3, :3] = np.asarray(rot_z(y)) @ np.asarray(rot_y(p)) @ np.asarray(rot_x(r))
     T[:3, 3] = xyz
     return T
 

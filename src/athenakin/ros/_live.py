@@ -97,7 +97,7 @@ class FoxgloveStream:
         try:
             self._server = foxglove.start_server(name=name, host=host, port=int(port),
                                                  context=self._context,
-                                                 server_listener=listener)
+                                                 server_listener=listener)  # type: ignore[arg-type]
         except Exception as exc:   # the SDK raises its own RuntimeError: name the address
             raise OSError(f"cannot serve Foxglove on {host}:{port} ({exc})") from None
         self.host = host

@@ -96,7 +96,7 @@ class JointStates:
     @property
     def finite(self) -> NDArray[np.bool_]:
         """True where all three positions are finite, shape (N,)."""
-        return np.isfinite(self.q).all(axis=-1)
+        return np.asarray(np.isfinite(self.q).all(axis=-1))
 
 
 # ---------------------------------------------------------------------------- formats
