@@ -239,3 +239,44 @@ def test_track_to_mcap_bad_stamps(bad, match, tmp_path):
     with pytest.raises(ak.InvalidInputError, match=match):
         track_to_mcap(bad["stamps_ns"], q_stream(3), tmp_path / "a.mcap", T, D)
     assert not (tmp_path / "a.mcap").exists()
+
+
+def test_mcap_structure_crcs_and_index(tracked):
+    """The file's CRCs check, its chunk indexes find every message, and a streaming reader
+    that ignores the summary sees the same messages in log-time order."""
+    from mcap.reader import NonSeekingReader, SeekingReader
+
+    _, out, summary = tracked
+    with open(out, "rb") as fh:
+        seeking = [(c.topic, m.log_time, m.sequence)
+                   for _, c, m in SeekingReader(fh, validate_crcs=True).iter_messages()]
+    with open(out, "rb") as fh:
+        streamed = [(c.topic, m.log_time, m.sequence)
+                    for _, c, m in NonSeekingReader(fh, validate_crcs=True).iter_messages()]
+    assert sorted(seeking) == sorted(streamed)
+    assert [t for _, t, _ in streamed] == sorted(t for _, t, _ in streamed)
+    assert len(streamed) == sum(summary.messages.values())
+    for topic in ("/athena/status", "/tf"):
+        seqs = [s for tp, _, s in streamed if tp == topic]
+        assert seqs == list(range(len(seqs)))
+
+
+def test_foxglove_layout_names_written_topics_and_fields():
+    """docs/foxglove_layout.json refers only to topics and fields the files hold."""
+    import json
+    import re
+
+    from athenakin.ros import STATUS_MSGDEF
+
+    layout = json.loads((Path(__file__).resolve().parents[1] / "docs" /
+                         "foxglove_layout.json").read_text())
+    text = json.dumps(layout)
+    paths = set(re.findall(r'"(/[a-z_/]+)(?:\.([a-z_.]+))?"', text))
+    assert paths
+    status_fields = set(re.findall(r"^\w+(?:/\w+)*\s+(\w+)", STATUS_MSGDEF, flags=re.M))
+    for topic, field in paths:
+        assert topic in TOPICS.values(), topic
+        if topic == "/athena/status" and field:
+            assert field in status_fields, field
+        if topic == "/athena/tool_tip" and field:
+            assert field.startswith("pose.position.") or field.startswith("pose.orientation.")

@@ -48,6 +48,7 @@ from ._frames import (
     quaternion_xyzw,
     urdf_model,
 )
+from ._mcap import COMPRESSIONS, McapFile
 
 __all__ = ["McapOutput", "RosEncoder", "TrackedBatch", "TOPICS", "STATUS_TYPE",
            "STATUS_MSGDEF", "TF_FRAMES", "STATUS_FLAG_FIELDS"]
@@ -99,6 +100,8 @@ _MSG_TYPES = {"tool_tip": "geometry_msgs/msg/PoseStamped", "tf": "tf2_msgs/msg/T
               "robot_description": "std_msgs/msg/String",
               "trajectory": "trajectory_msgs/msg/JointTrajectory"}
 _SEP = "=" * 80 + "\n"
+#: Uncompressed bytes per MCAP chunk (about).
+_CHUNK_BYTES = 4 * 2**20
 #: QoS of a latched topic as rosbag2 records it (durability 1: transient local).
 _LATCHED_QOS = ("- history: 3\n  depth: 0\n  reliability: 1\n  durability: 1\n"
                 "  deadline:\n    sec: 2147483647\n    nsec: 4294967295\n"
@@ -325,14 +328,8 @@ class McapOutput:
 
     def __init__(self, path: str | Path, design: Design, T_b_e: ArrayLike, *,
                  compression: str = "zstd", target: str | Path | None = None) -> None:
-        try:
-            from mcap.writer import CompressionType, Writer
-        except ModuleNotFoundError as exc:  # pragma: no cover
-            raise ros_extra_missing(exc) from None
-        kinds = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4,
-                 "none": CompressionType.NONE}
-        if compression not in kinds:
-            raise ValueError(f"compression: expected one of {sorted(kinds)}, got "
+        if compression not in COMPRESSIONS:
+            raise ValueError(f"compression: expected one of {COMPRESSIONS}, got "
                              f"{compression!r}")
         self.path = check_path(path)
         if os.path.exists(self.path) and not stat.S_ISREG(os.stat(self.path).st_mode):
@@ -349,8 +346,11 @@ class McapOutput:
         else:
             self._tmp = Path(target)
             self._fh = open(self._tmp, "wb")   # noqa: SIM115 - closed in close/discard
-        self._writer = Writer(self._fh, compression=kinds[compression], chunk_size=4 * 2**20)
-        self._writer.start(profile="ros2", library="athenakin.ros")
+        try:
+            self._file = McapFile(self._fh, compression=compression)
+        except BaseException:
+            self.discard()
+            raise
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, int] = {}
         self._seq: dict[str, int] = {}
@@ -365,11 +365,11 @@ class McapOutput:
             typ = _MSG_TYPES[key]
             sid = self._schemas.get(typ)
             if sid is None:
-                sid = self._writer.register_schema(typ, "ros2msg", msgdef(typ).encode())
+                sid = self._file.schema(typ, "ros2msg", msgdef(typ).encode())
                 self._schemas[typ] = sid
             meta = {"offered_qos_profiles": _LATCHED_QOS} \
                 if key in ("robot_description", "tf_static") else {}
-            cid = self._writer.register_channel(TOPICS[key], "cdr", sid, meta)
+            cid = self._file.channel(TOPICS[key], "cdr", sid, meta)
             self._channels[key] = cid
             self._seq[key] = 0
             self.counts[TOPICS[key]] = 0
@@ -377,7 +377,7 @@ class McapOutput:
 
     def _add(self, key: str, stamp: int, data: bytes) -> None:
         cid = self._channel(key)
-        self._writer.add_message(cid, stamp, data, stamp, self._seq[key])
+        self._file.single(cid, self._seq[key], stamp, data)
         self._seq[key] += 1
         self.counts[TOPICS[key]] += 1
 
@@ -404,29 +404,57 @@ class McapOutput:
 
     def _interleave(self, stamps: NDArray[np.int64], status: NDArray[np.uint8],
                     ok: NDArray[np.intp], msgs: dict[str, NDArray[np.uint8]] | None) -> None:
-        add = self._writer.add_message
-        cs = self._channel("status")
+        """Write the messages of a batch in chunks, each reading's messages together."""
+        n = len(stamps)
         keys = ("tool_tip", "tf", "joint_states")
-        cids = [self._channel(k) for k in keys]
-        seq = [self._seq[k] for k in ("status", *keys)]
-        st = stamps.tolist()
-        srows = [r.tobytes() for r in status]
-        is_ok = np.zeros(len(st), bool)
+        cs = self._channel("status")
+        S = McapFile.message_records(cs, self._seq["status"] + np.arange(n), stamps, status)
+        rs = S.shape[1]
+        is_ok = np.zeros(n, bool)
         is_ok[ok] = True
-        rows = [[r.tobytes() for r in msgs[k]] for k in keys] if msgs is not None else None
-        j = 0
-        for i, t in enumerate(st):
-            add(cs, t, srows[i], t, seq[0] + i)
-            if is_ok[i]:
-                assert rows is not None
-                for c, (cid, r) in enumerate(zip(cids, rows, strict=True)):
-                    add(cid, t, r[j], t, seq[c + 1] + j)
-                j += 1
-        self._seq["status"] += len(st)
-        self.counts[TOPICS["status"]] += len(st)
+        if msgs is not None:
+            parts = [McapFile.message_records(self._channel(k), self._seq[k]
+                                              + np.arange(len(ok)), stamps[ok], msgs[k])
+                     for k in keys]
+            pre = np.cumsum([0] + [p.shape[1] for p in parts])[:-1]
+            P = np.concatenate(parts, axis=1)
+        else:
+            P = np.zeros((0, 0), np.uint8)
+            pre = np.zeros(3, np.int64)
+        rp = P.shape[1]
+        per = max(1, _CHUNK_BYTES // (rs + rp))
+        pos = np.cumsum(is_ok) - 1                  # row of P of each valid reading
+        for a in range(0, n, per):
+            b = min(n, a + per)
+            v = is_ok[a:b]
+            sizes = rs + v * rp
+            row_off = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+            if v.all():
+                j0 = int(pos[a])
+                rec = np.concatenate([S[a:b], P[j0:j0 + (b - a)]], axis=1).ravel()
+            else:
+                rec = np.empty(int(sizes.sum()), np.uint8)
+                edges = np.flatnonzero(np.diff(v.astype(np.int8))) + 1
+                for i0, i1 in zip(np.r_[0, edges], np.r_[edges, b - a], strict=True):
+                    if v[i0]:
+                        j0 = int(pos[a + i0])
+                        block = np.concatenate([S[a + i0:a + i1], P[j0:j0 + i1 - i0]],
+                                               axis=1).ravel()
+                    else:
+                        block = S[a + i0:a + i1].ravel()
+                    rec[row_off[i0]:row_off[i0] + block.size] = block
+            index = {cs: (stamps[a:b], row_off)}
+            if msgs is not None:
+                tv = stamps[a:b][v]
+                for k, off in zip(keys, pre, strict=True):
+                    index[self._channels[k]] = (tv, row_off[v] + rs + off)
+            self._file.chunk(rec, index)
+        self._seq["status"] += n
+        self.counts[TOPICS["status"]] += n
         for k in keys:
-            self._seq[k] += j
-            self.counts[TOPICS[k]] += j
+            if msgs is not None:
+                self._seq[k] += len(ok)
+                self.counts[TOPICS[k]] += len(ok)
 
     def write_trajectory_message(self, stamp_ns: int, t_s: NDArray[np.float64],
                                  q: NDArray[np.float64], qd: NDArray[np.float64] | None,
@@ -441,7 +469,7 @@ class McapOutput:
         """Finish the file and move it into place; returns its path."""
         if self._closed:
             return self.path
-        self._writer.finish()
+        self._file.close()
         self._fh.close()
         self._closed = True
         if self._rename:
