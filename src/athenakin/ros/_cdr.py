@@ -123,7 +123,8 @@ class Template:
                          "formats": ["<" + f[2].replace("b1", "?") for f in self.fields],
                          "offsets": [f[1] for f in self.fields], "itemsize": self.size})
 
-    def encode(self, n: int, values: dict[str, ArrayLike]) -> NDArray[np.uint8]:
+    def encode(self, n: int, values: dict[str, ArrayLike],
+               out: NDArray[np.uint8] | None = None) -> NDArray[np.uint8]:
         """``n`` messages, shape (n, size) bytes, with the numbers of ``values``.
 
         Parameters
@@ -132,8 +133,12 @@ class Template:
             Number of messages.
         values : dict of str -> array-like, shape (n,) or scalar
             Value of each named number (those not given keep the template's value).
+        out : uint8 array, shape (n, size), optional
+            Where to write (rows may be strided, each row contiguous): a slice of a
+            larger buffer, to build records in place.
         """
-        out = np.empty((n, self.size), dtype=np.uint8)
+        if out is None:
+            out = np.empty((n, self.size), dtype=np.uint8)
         out[:] = np.frombuffer(self.data, dtype=np.uint8)
         rec = out.view(self.dtype()).reshape(n)
         for k, v in values.items():

@@ -12,6 +12,7 @@ from the URDF text itself (its joints' origins and axes), the way
 from __future__ import annotations
 
 import dataclasses
+import functools
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -84,7 +85,19 @@ def _origin(el: ET.Element | None) -> NDArray[np.float64]:
 
 
 def urdf_model(design: Design, T_b_e: NDArray[np.float64]) -> UrdfModel:
-    """Parse :func:`athenakin.sim.urdf_from_design` of ``design`` and ``T_b_e``."""
+    """Parse :func:`athenakin.sim.urdf_from_design` of ``design`` and ``T_b_e``.
+
+    The parse of the last few set-ups is kept (the arguments are values: a frozen
+    design and the bytes of ``T_b_e``), so that a CLI or a live stream does not export
+    and parse the URDF again for every file or client.
+    """
+    T = np.ascontiguousarray(T_b_e, dtype=float)
+    return _urdf_model(design, T.tobytes())
+
+
+@functools.lru_cache(maxsize=8)
+def _urdf_model(design: Design, T_bytes: bytes) -> UrdfModel:
+    T_b_e = np.frombuffer(T_bytes, dtype=float).reshape(4, 4).copy()
     text = urdf_from_design(design, T_b_e)
     root = ET.fromstring(text)
     joints: dict[str, _Joint] = {}

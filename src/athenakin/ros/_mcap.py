@@ -16,7 +16,7 @@ import zlib
 from typing import IO
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 __all__ = ["McapFile", "MESSAGE_HEADER", "COMPRESSIONS"]
 
@@ -116,19 +116,29 @@ class McapFile:
 
     # ------------------------------------------------------------------ messages
     @staticmethod
-    def message_records(channel: int, sequence: NDArray[np.int64], log_time: NDArray[np.int64],
-                        data: NDArray[np.uint8]) -> NDArray[np.uint8]:
-        """Message records of ``n`` messages of one size: shape (n, MESSAGE_HEADER + size)."""
-        n, size = data.shape
-        out = np.empty((n, MESSAGE_HEADER + size), dtype=np.uint8)
-        head = out[:, :MESSAGE_HEADER].copy().view(_MSG_DTYPE).reshape(n)
+    def message_headers(out: NDArray[np.uint8], channel: int, sequence: ArrayLike,
+                        log_time: ArrayLike, size: int) -> None:
+        """Write the headers of ``n`` Message records of ``size`` data bytes into ``out``.
+
+        ``out`` has shape (n, MESSAGE_HEADER), each row contiguous (a column slice of a
+        larger buffer); the data follows each header in the caller's buffer.
+        """
+        n = out.shape[0]
+        head = out.view(_MSG_DTYPE).reshape(n)
         head["op"] = _OP["message"]
         head["length"] = MESSAGE_HEADER - 9 + size
         head["channel"] = channel
         head["sequence"] = np.asarray(sequence) & 0xFFFFFFFF
         head["log_time"] = log_time
         head["publish_time"] = log_time
-        out[:, :MESSAGE_HEADER] = head.view(np.uint8).reshape(n, MESSAGE_HEADER)
+
+    @staticmethod
+    def message_records(channel: int, sequence: ArrayLike, log_time: ArrayLike,
+                        data: NDArray[np.uint8]) -> NDArray[np.uint8]:
+        """Message records of ``n`` messages of one size: shape (n, MESSAGE_HEADER + size)."""
+        n, size = data.shape
+        out = np.empty((n, MESSAGE_HEADER + size), dtype=np.uint8)
+        McapFile.message_headers(out[:, :MESSAGE_HEADER], channel, sequence, log_time, size)
         out[:, MESSAGE_HEADER:] = data
         return out
 

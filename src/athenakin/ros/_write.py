@@ -22,6 +22,7 @@ Topics (docs/ros.md):
 from __future__ import annotations
 
 import dataclasses
+import functools
 import os
 import stat
 import tempfile
@@ -48,7 +49,7 @@ from ._frames import (
     quaternion_xyzw,
     urdf_model,
 )
-from ._mcap import COMPRESSIONS, McapFile
+from ._mcap import COMPRESSIONS, MESSAGE_HEADER, McapFile
 
 __all__ = ["McapOutput", "RosEncoder", "TrackedBatch", "TOPICS", "STATUS_TYPE",
            "STATUS_MSGDEF", "TF_FRAMES", "STATUS_FLAG_FIELDS"]
@@ -110,6 +111,7 @@ _LATCHED_QOS = ("- history: 3\n  depth: 0\n  reliability: 1\n  durability: 1\n"
                 "    nsec: 4294967295\n  avoid_ros_namespace_conventions: false\n")
 
 
+@functools.lru_cache(maxsize=32)
 def msgdef(typename: str) -> str:
     """The ROS 2 message definition of ``typename`` with its dependencies (MCAP ``ros2msg``)."""
     try:
@@ -259,36 +261,40 @@ class RosEncoder:
             _put_pose(vals, j.origin[None], f"t{k}", f"r{k}")
         return _tf_template(pairs).encode(1, vals).tobytes()
 
-    def poses(self, stamps_ns: NDArray[np.int64], q: NDArray[np.float64],
-              p: NDArray[np.float64], u: NDArray[np.float64], O_s: NDArray[np.float64]
-              ) -> dict[str, NDArray[np.uint8]]:
-        """Messages ``tool_tip``, ``tf``, ``joint_states`` of N poses, each (N, size) bytes."""
+    def pose_values(self, stamps_ns: NDArray[np.int64], q: NDArray[np.float64],
+                    p: NDArray[np.float64], u: NDArray[np.float64], O_s: NDArray[np.float64]
+                    ) -> dict[str, dict[str, Any]]:
+        """The numbers of the ``tool_tip``, ``tf`` and ``joint_states`` messages of N poses."""
         n = len(stamps_ns)
         jv = joint_values(self.model, q, p, u, O_s)
         poses = link_poses(self.model, jv, links=(*MOVING_LINKS, TOOL_TIP_FRAME))
         poses[RCM_FRAME] = np.broadcast_to(self.model.T_b_e, (n, 4, 4))
-        out = {}
-        vals: dict[str, Any] = {}
-        _stamp_fields(vals, stamps_ns, ["stamp"])
-        _put_pose(vals, poses[TOOL_TIP_FRAME], "p", "o")
-        out["tool_tip"] = self.templates["tool_tip"].encode(n, vals)
-        vals = {}
-        _stamp_fields(vals, stamps_ns, [f"stamp{k}" for k in range(len(self.tf_pairs))])
+        sec, nsec = split_stamps(stamps_ns)
+        tip: dict[str, Any] = {"stamp.sec": sec, "stamp.nanosec": nsec}
+        _put_pose(tip, poses[TOOL_TIP_FRAME], "p", "o")
+        tf: dict[str, Any] = {}
         for k, (_, child) in enumerate(self.tf_pairs):
-            _put_pose(vals, poses[child], f"t{k}", f"r{k}")
-        out["tf"] = self.templates["tf"].encode(n, vals)
-        vals = {f"pos.{i}": jv[name] for i, name in enumerate(JOINTS)}
-        _stamp_fields(vals, stamps_ns, ["stamp"])
-        out["joint_states"] = self.templates["joint_states"].encode(n, vals)
-        return out
+            tf[f"stamp{k}.sec"], tf[f"stamp{k}.nanosec"] = sec, nsec
+            _put_pose(tf, poses[child], f"t{k}", f"r{k}")
+        js: dict[str, Any] = {f"pos.{i}": jv[name] for i, name in enumerate(JOINTS)}
+        js["stamp.sec"], js["stamp.nanosec"] = sec, nsec
+        return {"tool_tip": tip, "tf": tf, "joint_states": js}
 
-    def status(self, b: TrackedBatch, first_sample: int = 0) -> NDArray[np.uint8]:
-        """``/athena/status`` messages of a batch, (N, size) bytes."""
+    def poses(self, stamps_ns: NDArray[np.int64], q: NDArray[np.float64],
+              p: NDArray[np.float64], u: NDArray[np.float64], O_s: NDArray[np.float64]
+              ) -> dict[str, NDArray[np.uint8]]:
+        """Messages ``tool_tip``, ``tf``, ``joint_states`` of N poses, each (N, size) bytes."""
+        vals = self.pose_values(stamps_ns, q, p, u, O_s)
+        return {k: self.templates[k].encode(len(stamps_ns), v) for k, v in vals.items()}
+
+    def status_values(self, b: TrackedBatch, first_sample: int = 0) -> dict[str, Any]:
+        """The numbers of the ``/athena/status`` messages of a batch."""
         n = len(b.stamps_ns)
         flags = np.asarray(b.flags, dtype=np.int64)
+        valid = np.asarray(b.valid, bool)
         vals: dict[str, Any] = {"sample": np.arange(n) + first_sample,
-                                "valid": b.valid, "mode": np.where(b.valid, b.mode, 0),
-                                "slot": np.where(b.valid, b.slot, 0), "flags": flags,
+                                "valid": valid, "mode": np.where(valid, b.mode, 0),
+                                "slot": np.where(valid, b.slot, 0), "flags": flags,
                                 "near_singular": (flags & _NEAR_BITS) != 0,
                                 "step": b.step, "half_chord": b.half_chord,
                                 "sin_u2": b.sin_u2, "sin_u4": b.sin_u4,
@@ -298,8 +304,13 @@ class RosEncoder:
                                 else b.clearance_flags}
         for name, bit in STATUS_FLAG_FIELDS.items():
             vals[name] = (flags & bit) != 0
-        _stamp_fields(vals, b.stamps_ns, ["stamp"])
-        return self.templates["status"].encode(n, vals)
+        vals["stamp.sec"], vals["stamp.nanosec"] = split_stamps(b.stamps_ns)
+        return vals
+
+    def status(self, b: TrackedBatch, first_sample: int = 0) -> NDArray[np.uint8]:
+        """``/athena/status`` messages of a batch, (N, size) bytes."""
+        return self.templates["status"].encode(len(b.stamps_ns),
+                                               self.status_values(b, first_sample))
 
 
 class McapOutput:
@@ -390,71 +401,70 @@ class McapOutput:
         self._add("tf_static", int(stamp_ns), self.encoder.tf_static(int(stamp_ns)))
 
     def write_tracked(self, b: TrackedBatch) -> None:
-        """Write a batch of tracked readings: status for each, poses for the valid ones."""
+        """Write a batch of tracked readings: status for each, poses for the valid ones.
+
+        Each chunk of the file is one byte array of ``rows x (status, tool tip, tf,
+        joint states)`` Message records built in place; the rows of readings without
+        a pose keep only their status record.
+        """
         n = len(b.stamps_ns)
         if n == 0:
             return
         stamps = np.asarray(b.stamps_ns, dtype=np.int64)
         self.write_static(int(stamps[0]))
-        status = self.encoder.status(b, self._seq.get("status", 0))
-        ok = np.flatnonzero(b.valid)
-        msgs = self.encoder.poses(stamps[ok], b.q[ok], b.p[ok], b.u[ok], b.O_s[ok]) \
-            if ok.size else None
-        self._interleave(stamps, status, ok, msgs)
-
-    def _interleave(self, stamps: NDArray[np.int64], status: NDArray[np.uint8],
-                    ok: NDArray[np.intp], msgs: dict[str, NDArray[np.uint8]] | None) -> None:
-        """Write the messages of a batch in chunks, each reading's messages together."""
-        n = len(stamps)
-        keys = ("tool_tip", "tf", "joint_states")
-        cs = self._channel("status")
-        S = McapFile.message_records(cs, self._seq["status"] + np.arange(n), stamps, status)
-        rs = S.shape[1]
-        is_ok = np.zeros(n, bool)
-        is_ok[ok] = True
-        if msgs is not None:
-            parts = [McapFile.message_records(self._channel(k), self._seq[k]
-                                              + np.arange(len(ok)), stamps[ok], msgs[k])
-                     for k in keys]
-            pre = np.cumsum([0] + [p.shape[1] for p in parts])[:-1]
-            P = np.concatenate(parts, axis=1)
-        else:
-            P = np.zeros((0, 0), np.uint8)
-            pre = np.zeros(3, np.int64)
-        rp = P.shape[1]
-        per = max(1, _CHUNK_BYTES // (rs + rp))
-        pos = np.cumsum(is_ok) - 1                  # row of P of each valid reading
+        keys = ("status", "tool_tip", "tf", "joint_states")
+        cids = [self._channel(k) for k in keys]
+        sizes = [self.encoder.templates[k].size for k in keys]
+        cols = np.cumsum([0] + [MESSAGE_HEADER + z for z in sizes])
+        row = int(cols[-1])
+        rs = int(cols[1])
+        per = max(1, _CHUNK_BYTES // row)
+        valid = np.asarray(b.valid, bool)
         for a in range(0, n, per):
-            b = min(n, a + per)
-            v = is_ok[a:b]
-            sizes = rs + v * rp
-            row_off = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+            e = min(n, a + per)
+            m = e - a
+            v = valid[a:e]
+            st = stamps[a:e]
+            buf = np.empty((m, row), dtype=np.uint8)
+            sub = TrackedBatch(**{f.name: (None if getattr(b, f.name) is None
+                                           else getattr(b, f.name)[a:e])
+                                  for f in dataclasses.fields(TrackedBatch)})
+            vals = {"status": self.encoder.status_values(sub, self._seq["status"])}
+            if v.any():
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    vals.update(self.encoder.pose_values(st, sub.q, sub.p, sub.u, sub.O_s))
+            seq_pose = np.cumsum(v) - 1
+            for j, k in enumerate(keys):
+                if k not in vals:
+                    continue
+                c0 = int(cols[j])
+                seq = self._seq[k] + (np.arange(m) if k == "status" else seq_pose)
+                McapFile.message_headers(buf[:, c0:c0 + MESSAGE_HEADER], cids[j], seq, st,
+                                         sizes[j])
+                self.encoder.templates[k].encode(m, vals[k],
+                                                 out=buf[:, c0 + MESSAGE_HEADER:int(cols[j + 1])])
             if v.all():
-                j0 = int(pos[a])
-                rec = np.concatenate([S[a:b], P[j0:j0 + (b - a)]], axis=1).ravel()
+                rec = buf.reshape(-1)
+                row_off = np.arange(m, dtype=np.int64) * row
+            elif not v.any():
+                rec = np.ascontiguousarray(buf[:, :rs]).reshape(-1)
+                row_off = np.arange(m, dtype=np.int64) * rs
             else:
-                rec = np.empty(int(sizes.sum()), np.uint8)
-                edges = np.flatnonzero(np.diff(v.astype(np.int8))) + 1
-                for i0, i1 in zip(np.r_[0, edges], np.r_[edges, b - a], strict=True):
-                    if v[i0]:
-                        j0 = int(pos[a + i0])
-                        block = np.concatenate([S[a + i0:a + i1], P[j0:j0 + i1 - i0]],
-                                               axis=1).ravel()
-                    else:
-                        block = S[a + i0:a + i1].ravel()
-                    rec[row_off[i0]:row_off[i0] + block.size] = block
-            index = {cs: (stamps[a:b], row_off)}
-            if msgs is not None:
-                tv = stamps[a:b][v]
-                for k, off in zip(keys, pre, strict=True):
-                    index[self._channels[k]] = (tv, row_off[v] + rs + off)
+                keep = np.ones((m, row), bool)
+                keep[~v, rs:] = False
+                rec = buf[keep]
+                row_off = np.concatenate([[0], np.cumsum(np.where(v, row, rs))[:-1]])
+            index = {cids[0]: (st, row_off)}
+            if v.any():
+                for j in range(1, 4):
+                    index[cids[j]] = (st[v], row_off[v] + int(cols[j]))
             self._file.chunk(rec, index)
-        self._seq["status"] += n
-        self.counts[TOPICS["status"]] += n
-        for k in keys:
-            if msgs is not None:
-                self._seq[k] += len(ok)
-                self.counts[TOPICS[k]] += len(ok)
+            nv = int(v.sum())
+            self._seq["status"] += m
+            self.counts[TOPICS["status"]] += m
+            for k in keys[1:]:
+                self._seq[k] += nv
+                self.counts[TOPICS[k]] += nv
 
     def write_trajectory_message(self, stamp_ns: int, t_s: NDArray[np.float64],
                                  q: NDArray[np.float64], qd: NDArray[np.float64] | None,
