@@ -280,3 +280,18 @@ def test_foxglove_layout_names_written_topics_and_fields():
             assert field in status_fields, field
         if topic == "/athena/tool_tip" and field:
             assert field.startswith("pose.position.") or field.startswith("pose.orientation.")
+
+
+def test_stream_starting_with_unusable_readings(tmp_path):
+    """Readings before the first that assembles are LOST; tracking starts there."""
+    from rosbags.highlevel import AnyReader  # noqa: F401  (the extra is present)
+
+    q = q_stream(8, seed=4)
+    q[0] = np.nan
+    q[1] = [0.3, -0.3, 0.45]                               # A/B order broken: no pose
+    s = track_to_mcap(stamps(8), q, tmp_path / "a.mcap", T, D)
+    assert s.n == 8 and s.n_valid == 6 and s.first_slot == 0
+    assert s.counts["LOST"] == 2 and [e[0] for e in s.events[:2]] == [0, 1]
+    msgs, _ = _rosbags_read(tmp_path / "a.mcap")
+    assert [m.valid for _, m in msgs["/athena/status"]] == [False, False] + [True] * 6
+    assert len(msgs["/athena/tool_tip"]) == 6
