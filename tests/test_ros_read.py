@@ -199,3 +199,55 @@ def test_max_readings(tmp_path):
     path = write_mcap(tmp_path / "a.mcap", positions(q_stream(30)), stamps(30))
     with pytest.raises(RecordingError, match=r"more than 10 readings"):
         read_joint_states(path, max_readings=10)
+
+
+@pytest.mark.parametrize("compression, chunked", [("none", True), ("lz4", True),
+                                                   ("zstd", True), ("none", False)])
+def test_mcap_variants_of_the_mcap_library(compression, chunked, tmp_path):
+    """Chunked (any compression) or not, as the mcap library writes them, with the
+    definitions of another topic in between."""
+    from mcap.writer import CompressionType, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    q = q_stream(30)
+    pos = positions(q)
+    st = stamps(30)
+    path = tmp_path / "v.mcap"
+    kind = {"none": CompressionType.NONE, "lz4": CompressionType.LZ4,
+            "zstd": CompressionType.ZSTD}[compression]
+    T_ = store.types
+    with open(path, "wb") as fh:
+        w = Writer(fh, compression=kind, use_chunking=chunked, chunk_size=512)
+        w.start(profile="ros2")
+        text = store.generate_msgdef("sensor_msgs/msg/JointState", ros_version=2)[0]
+        sid = w.register_schema("sensor_msgs/msg/JointState", "ros2msg", text.encode())
+        cid = w.register_channel("/joint_states", "cdr", sid)
+        for i in range(30):
+            if i == 12:
+                s2 = w.register_schema("std_msgs/msg/String", "ros2msg", b"string data")
+                c2 = w.register_channel("/chatter", "cdr", s2)
+                w.add_message(c2, int(st[i]), bytes(store.serialize_cdr(
+                    T_["std_msgs/msg/String"](data="x"), "std_msgs/msg/String")), int(st[i]))
+            m = T_["sensor_msgs/msg/JointState"](
+                header=T_["std_msgs/msg/Header"](stamp=T_["builtin_interfaces/msg/Time"](
+                    sec=int(st[i] // 10**9), nanosec=int(st[i] % 10**9)), frame_id="f"),
+                name=list(NAMES), position=pos[i], velocity=np.zeros(0), effort=np.zeros(0))
+            w.add_message(cid, int(st[i]), bytes(store.serialize_cdr(
+                m, "sensor_msgs/msg/JointState")), int(st[i]), i)
+        w.finish()
+    js = read_joint_states(path)
+    np.testing.assert_array_equal(js.q, q)
+    np.testing.assert_array_equal(js.stamps_ns, st)
+    with pytest.raises(RecordingError, match="'/chatter' holds std_msgs/msg/String"):
+        read_joint_states(path, topic="/chatter")
+
+
+def test_corrupt_mcap_chunk(tmp_path):
+    path = write_mcap(tmp_path / "a.mcap", positions(q_stream(300)), stamps(300))
+    data = bytearray(path.read_bytes())
+    i = data.index(b"zstd") + 40                 # inside the first chunk's compressed data
+    data[i:i + 64] = b"\x00" * 64
+    path.write_bytes(bytes(data))
+    with pytest.raises(RecordingError, match="truncated or corrupt"):
+        read_joint_states(path)
