@@ -82,8 +82,8 @@ class McapFile:
         self._channels: list[bytes] = []
         self._chunk_indexes: list[bytes] = []
         self._counts: dict[int, int] = {}
-        self._start = None
-        self._end = None
+        self._start: int | None = None
+        self._end: int | None = None
         self._n_chunks = 0
         self._write(MAGIC)
         self._write(_record("header", _s(profile) + _s(library)))

@@ -426,9 +426,10 @@ class McapOutput:
             v = valid[a:e]
             st = stamps[a:e]
             buf = np.empty((m, row), dtype=np.uint8)
-            sub = TrackedBatch(**{f.name: (None if getattr(b, f.name) is None
-                                           else getattr(b, f.name)[a:e])
-                                  for f in dataclasses.fields(TrackedBatch)})
+            part: dict[str, Any] = {f.name: (None if getattr(b, f.name) is None
+                                             else getattr(b, f.name)[a:e])
+                                    for f in dataclasses.fields(TrackedBatch)}
+            sub = TrackedBatch(**part)
             vals = {"status": self.encoder.status_values(sub, self._seq["status"])}
             if v.any():
                 with np.errstate(invalid="ignore", divide="ignore"):
