@@ -295,3 +295,18 @@ def test_stream_starting_with_unusable_readings(tmp_path):
     msgs, _ = _rosbags_read(tmp_path / "a.mcap")
     assert [m.valid for _, m in msgs["/athena/status"]] == [False, False] + [True] * 6
     assert len(msgs["/athena/tool_tip"]) == 6
+
+
+def test_ctrl_c_leaves_nothing(tmp_path):
+    """A KeyboardInterrupt half way (here from the progress callback) leaves no file."""
+    src = write_mcap(tmp_path / "a.mcap", positions(q_stream(200)), stamps(200))
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+
+    def interrupt(n):
+        if n >= 64:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        track_recording(src, out_dir / "o.mcap", T, D, chunk_size=32, progress=interrupt)
+    assert list(out_dir.iterdir()) == []
