@@ -148,3 +148,14 @@ def test_serve_app_follows_q_and_setup(monkeypatch):
     assert published and np.allclose(published[-1][0], [-0.11, 0.09, 0.46], atol=0)
     assert published[-1][1] is None and published[0][1] == 0
     assert live.T_b_e is not T           # the new set-up was taken
+
+
+def test_track_refuses_a_fifo_without_blocking(tmp_path, capsys):
+    import os
+
+    if not hasattr(os, "mkfifo"):
+        pytest.skip("no FIFOs here")
+    fifo = tmp_path / "rec.mcap"
+    os.mkfifo(fifo)
+    assert main(["track", str(fifo), "-o", str(tmp_path / "o.mcap")]) == 1
+    assert "not a regular file" in capsys.readouterr().err

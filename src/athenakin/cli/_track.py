@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
+import stat
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -92,9 +94,11 @@ def run(args: argparse.Namespace) -> int:
 
 def is_csv(path: Path) -> bool:
     """True for a CSV stream (by its name, ``.csv``, or by not being a ROS recording)."""
-    if Path(path).suffix.lower() == ".csv" or Path(path).is_dir():
-        return Path(path).suffix.lower() == ".csv"
+    if Path(path).suffix.lower() == ".csv":
+        return True
     try:
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            return False             # a folder (rosbag2), or a FIFO/device the reader refuses
         with open(path, "rb") as fh:
             head = fh.read(16)
     except OSError:
