@@ -251,3 +251,33 @@ def test_corrupt_mcap_chunk(tmp_path):
     path.write_bytes(bytes(data))
     with pytest.raises(RecordingError, match="truncated or corrupt"):
         read_joint_states(path)
+
+
+def test_joint_order_changing_mid_stream(tmp_path):
+    """Messages whose names change order (or gain a joint) are each read by name."""
+    from mcap_ros2.writer import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    text = store.generate_msgdef("sensor_msgs/msg/JointState", ros_version=2)[0]
+    q = q_stream(9)
+    st = stamps(9)
+    orders = [("q1", "q2", "q3"), ("q3", "x", "q1", "q2"), ("q2", "q3", "q1")]
+    path = tmp_path / "mixed.mcap"
+    with open(path, "wb") as fh:
+        w = Writer(fh)
+        schema = w.register_msgdef("sensor_msgs/msg/JointState", text)
+        for i in range(9):
+            names = orders[i % 3]
+            val = {"q1": q[i, 0], "q2": q[i, 1], "q3": q[i, 2], "x": 5.0}
+            w.write_message("/joint_states", schema, {
+                "header": {"stamp": {"sec": int(st[i] // 10**9), "nanosec": int(st[i] % 10**9)},
+                           "frame_id": ""},
+                "name": list(names), "position": [val[n] for n in names],
+                "velocity": [2 * val[n] for n in names] if i % 2 else [], "effort": []},
+                log_time=int(st[i]), publish_time=int(st[i]))
+        w.finish()
+    js = read_joint_states(path)
+    np.testing.assert_array_equal(js.q, q)
+    np.testing.assert_array_equal(js.qd[1::2], 2 * q[1::2])
+    assert np.isnan(js.qd[0::2]).all()
