@@ -93,12 +93,20 @@ def run(args: argparse.Namespace) -> int:
 
 
 def is_csv(path: Path) -> bool:
-    """True for a CSV stream (by its name, ``.csv``, or by not being a ROS recording)."""
+    """True for a CSV stream (by its name, ``.csv``, or by not being a ROS recording).
+
+    A folder is a rosbag2 recording. A FIFO or device named like a recording (``.mcap``,
+    ``.bag``, ``.db3``) goes to the recording reader, which refuses it; any other goes to
+    the CSV reader, which reads a bounded amount (``/dev/zero`` is "larger than" its limit).
+    """
     if Path(path).suffix.lower() == ".csv":
         return True
     try:
-        if not stat.S_ISREG(os.stat(path).st_mode):
-            return False             # a folder (rosbag2), or a FIFO/device the reader refuses
+        mode = os.stat(path).st_mode
+        if stat.S_ISDIR(mode):
+            return False
+        if not stat.S_ISREG(mode):
+            return Path(path).suffix.lower() not in (".mcap", ".bag", ".db3")
         with open(path, "rb") as fh:
             head = fh.read(16)
     except OSError:
