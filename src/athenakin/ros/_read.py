@@ -370,8 +370,16 @@ class _McapStream:
                 raise ValueError(f"record of {length} bytes past the end of the file")
             if op == 0x02:                                 # Footer: done
                 return
+            if op not in (0x03, 0x04, 0x05, 0x06):         # attachments, indexes, ...: skip
+                fh.seek(length, 1)
+                pos += length
+                continue
+            if length > MAX_CHUNK_BYTES:
+                raise ValueError(f"record of {length} bytes (at most {MAX_CHUNK_BYTES})")
             body = fh.read(length)
             pos += length
+            if len(body) != length:
+                raise ValueError("file ends inside a record")
             if op == 0x06:                                 # Chunk
                 yield from self._chunk(body)
             elif op == 0x05:
