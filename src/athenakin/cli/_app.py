@@ -39,6 +39,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                    help="port (8080; the next free one is taken when it is busy; 0: any)")
     p.add_argument("--backend", choices=("auto", "numba", "numpy"), default="auto",
                    help="kinematics kernels (auto: numba when installed)")
+    p.add_argument("--foxglove", nargs="?", type=int, const=8765, default=None, metavar="PORT",
+                   help="also serve the live robot to Foxglove over its WebSocket protocol on "
+                        "--host (port 8765; extra 'ros'; topics: docs/ros.md)")
     p.set_defaults(func=run)
 
 
@@ -78,6 +81,8 @@ def run(args: argparse.Namespace) -> int:
         return 1
     if not 0 <= args.port <= 65535:
         raise ValueError(f"--port: expected 0..65535, got {args.port}")
+    if args.foxglove is not None and not 0 <= args.foxglove <= 65535:
+        raise ValueError(f"--foxglove: expected a port 0..65535, got {args.foxglove}")
     check_host(args.host)
     rcm: Any = args.rcm_file
     if args.rcm:
@@ -92,6 +97,7 @@ def run(args: argparse.Namespace) -> int:
     # handlers first: a Ctrl-C during the start (or right after the URL) also stops cleanly
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     app = None
+    live: Any = None
     try:
         if args.backend != "numpy":
             print("athenakin app: starting (a first start compiles the numba kernels: up to "
@@ -100,12 +106,19 @@ def run(args: argparse.Namespace) -> int:
                                 trajectory=args.trajectory, backend=args.backend)
         for e in app.errors:
             print(f"athenakin app: warning: {e}", file=sys.stderr)
+        if args.foxglove is not None:
+            from ..ros._live import serve_app
+
+            live = serve_app(app, host=args.host, port=args.foxglove)
+            print(f"athenakin app: Foxglove WebSocket at {live.url}", flush=True)
         print(f"athenakin app: serving ATHENA at {app.url} (Ctrl-C stops)", flush=True)
         while not stop.wait(0.2):
             pass
     finally:
         for s, h in old.items():
             signal.signal(s, h)
+        if live is not None:
+            live.stop()
         if app is not None:
             app.stop()
     print("athenakin app: stopped", flush=True)

@@ -17,12 +17,14 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
         "plan", help="plan a limit-respecting actuator trajectory from a tool-tip path CSV",
         description="Read waypoints about the RCM (columns x_m,y_m,z_m: tool tip in frame E; or "
                     "azimuth_deg,polar_deg,depth_m; optional t_s), plan a checked actuator "
-                    "trajectory sampled at --rate, write it as CSV or JSON (by the extension "
-                    "of -o) and, unless --no-plots, three PNG figures next to it. Columns and "
-                    "units: docs/motion.md.")
+                    "trajectory sampled at --rate, write it as CSV, JSON or MCAP (ROS 2 "
+                    "topics for Foxglove, extra 'ros'; by the extension of -o) and, unless "
+                    "--no-plots, three PNG figures next to it. Columns and units: "
+                    "docs/motion.md; topics: docs/ros.md.")
     p.add_argument("path", type=Path, metavar="PATH.csv", help="waypoint file")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
-                   help="trajectory file, .csv or .json")
+                   help="trajectory file, .csv, .json or .mcap (trajectory_msgs/JointTrajectory "
+                        "and the robot's topics, docs/ros.md)")
     p.add_argument("--rate", type=float, default=1000.0,
                    help="samples per second, at least 1 (1000)")
     p.add_argument("--v-max", type=float, default=0.05, help="actuator speed limit, m/s (0.05)")
@@ -93,8 +95,9 @@ def run(args: argparse.Namespace) -> int:
     check_limits(args)
 
     out = Path(args.output)
-    if out.suffix.lower() not in (".csv", ".json"):
-        raise ValueError(f"-o: expected a .csv or .json file name, got {str(out)!r}")
+    if out.suffix.lower() not in (".csv", ".json", ".mcap"):
+        raise ValueError(f"-o: expected a .csv or .json file name, or .mcap (ROS 2 topics), got "
+                         f"{str(out)!r}")
     with outputs(args) as outs:
         # every output is checked before any work, written only when all is done
         outs.add(out)
@@ -125,8 +128,13 @@ def run(args: argparse.Namespace) -> int:
                                    design, **opts)
         from ..motion._io import trajectory_csv_text, trajectory_json_text
 
-        outs.write(out, trajectory_json_text(traj) if out.suffix.lower() == ".json"
-                   else trajectory_csv_text(traj))
+        if out.suffix.lower() == ".mcap":
+            from ..ros import write_trajectory
+
+            write_trajectory(out, traj, target=outs.temp(out))
+        else:
+            outs.write(out, trajectory_json_text(traj) if out.suffix.lower() == ".json"
+                       else trajectory_csv_text(traj))
         if figures:
             from ..motion._plot import render_plots
 

@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
+import stat
+import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -27,15 +31,26 @@ STRICT_FLAGS = ("LOST", "JUMP", "MODE_SWITCH", "AMBIGUOUS")
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Add the ``track`` subcommand."""
     p = sub.add_parser(
-        "track", help="replay a recorded q stream (CSV) through the pose tracker",
-        description="Read actuator readings (columns q1_m,q2_m,q3_m, optional t_s; other "
-                    "columns ignored, so a trajectory from 'athenakin plan' replays as is), "
-                    "follow the forward-kinematics solution continuous with the first "
-                    "sample, and report every flagged sample (mode or branch switch, jump, "
-                    "ambiguity, loss, approach to a singularity). Columns: docs/motion.md.")
-    p.add_argument("path", type=Path, metavar="STREAM.csv", help="recorded readings")
+        "track", help="replay a recorded q stream (CSV, ROS bag, MCAP) through the pose tracker",
+        description="Read actuator readings (a CSV with columns q1_m,q2_m,q3_m, optional t_s, "
+                    "other columns ignored, so a trajectory from 'athenakin plan' replays as "
+                    "is; or a ROS recording of sensor_msgs/JointState: a rosbag2 folder, an "
+                    "MCAP file or a ROS 1 bag, extra 'ros'), follow the forward-kinematics "
+                    "solution continuous with the first sample, and report every flagged "
+                    "sample (mode or branch switch, jump, ambiguity, loss, approach to a "
+                    "singularity). -o OUT.mcap writes the poses, frames and joints as ROS 2 "
+                    "topics for Foxglove / RViz. Columns: docs/motion.md; topics: docs/ros.md.")
+    p.add_argument("path", type=Path, metavar="RECORDING",
+                   help="recorded readings: STREAM.csv, a rosbag2 folder, an MCAP file or a "
+                        "ROS 1 bag")
     p.add_argument("-o", "--output", type=Path, metavar="OUT",
-                   help="write the tracked poses (.csv or .json)")
+                   help="write the tracked poses (.csv, .json, or .mcap: ROS 2 topics)")
+    p.add_argument("--topic", default="/joint_states",
+                   help="JointState topic of a ROS recording (/joint_states)")
+    p.add_argument("--joints", default="q1,q2,q3", metavar="J1,J2,J3",
+                   help="names of the joints read as q1, q2, q3 in a ROS recording (q1,q2,q3)")
+    p.add_argument("--scale", type=float, default=1.0,
+                   help="factor from the recording's unit to m (0.001 for mm encoders; 1)")
     p.add_argument("--slot", type=int, default=None,
                    help="FK slot (0-15) of the first reading (default: mode +1, p > 0, "
                         "branches +1)")
@@ -61,15 +76,112 @@ def run(args: argparse.Namespace) -> int:
         if not JUMP_MIN <= v <= hi:
             raise ValueError(f"{opt}: expected a threshold from {JUMP_MIN:g} to {hi:g}, got {v:g}")
     check_count(args.max_events, "--max-events", 0, 10**9, "events")
-    if out is not None and Path(out).suffix.lower() not in (".csv", ".json"):
-        raise ValueError(f"-o: expected a .csv or .json file name, got {str(out)!r}")
+    if out is not None and Path(out).suffix.lower() not in (".csv", ".json", ".mcap"):
+        raise ValueError(f"-o: expected a .csv or .json file name, or .mcap (ROS 2 topics), got "
+                         f"{str(out)!r}")
+    joints = tuple(j.strip() for j in args.joints.split(","))
+    if len(joints) != 3 or not all(joints):
+        raise ValueError(f"--joints: expected 3 comma-separated names (J1,J2,J3), got "
+                         f"{args.joints!r}")
+    args.joint_names = joints
     with outputs(args) as outs:   # checked before any work: never over an input or, without
         if out is not None:       # --force, an existing file; written only at the end
             outs.add(out)
+        if not is_csv(args.path):
+            return _track_recording(args, outs)
         return _track(args, outs)
 
 
-def _track(args: argparse.Namespace, outs: Outputs) -> int:
+def is_csv(path: Path) -> bool:
+    """True for a CSV stream (by its name, ``.csv``, or by not being a ROS recording).
+
+    A folder is a rosbag2 recording. A FIFO or device named like a recording (``.mcap``,
+    ``.bag``, ``.db3``) goes to the recording reader, which refuses it; any other goes to
+    the CSV reader, which reads a bounded amount (``/dev/zero`` is "larger than" its limit).
+    """
+    if Path(path).suffix.lower() == ".csv":
+        return True
+    try:
+        mode = os.stat(path).st_mode
+        if stat.S_ISDIR(mode):
+            return False
+        if not stat.S_ISREG(mode):
+            return Path(path).suffix.lower() not in (".mcap", ".bag", ".db3")
+        with open(path, "rb") as fh:
+            head = fh.read(16)
+    except OSError:
+        return True                  # the CSV reader names the problem
+    return not head.startswith((b"\x89MCAP0", b"#ROSBAG V2.0", b"SQLite format 3"))
+
+
+def _print_summary(n: int, first_slot: int, first_mode: int, counts: dict[str, int],
+                   events: list, max_events: int, n_events: int, last: str) -> None:
+    print(f"tracked {n} samples from slot {first_slot} (mode {first_mode:+d}); "
+          f"{n_events} flagged")
+    for name, c in sorted(counts.items()):
+        print(f"  {name}: {c} samples")
+    for line in events[:max_events]:
+        print(line)
+    if n_events > max_events:
+        print(f"  ... {n_events - max_events} more (see -o)")
+    print(last)
+
+
+def _track_recording(args: argparse.Namespace, outs: Outputs) -> int:
+    """A ROS recording: streamed into an MCAP file, or read whole for CSV / JSON / no output."""
+    from ..motion import TrackFlag
+    from ._plan import parse_margins
+
+    try:
+        from .. import ros
+    except ModuleNotFoundError as exc:
+        raise ValueError(f"{args.path}: reading ROS recordings needs the extra 'ros' "
+                         f"(pip install 'athenakin[ros]'): {exc}") from None
+    out = args.output
+    design = load_design(args)
+    T = load_rcm(args, design)
+    opts = dict(slot=args.slot, jump_m=args.jump_mm * 1e-3, jump_rad=math.radians(args.jump_deg),
+                margins=parse_margins(args.margin))
+    if out is None or Path(out).suffix.lower() != ".mcap":
+        js = ros.read_joint_states(args.path, topic=args.topic, joints=args.joint_names,
+                                   scale=args.scale)
+        if len(js) == 0:
+            raise ValueError(f"{args.path}: topic {args.topic!r} holds no message")
+        t = (js.stamps_ns - js.stamps_ns[0]) * 1e-9
+        return _track(args, outs, q=js.q, t=t)
+    progress = _progress() if sys.stderr.isatty() else None
+    s = ros.track_recording(args.path, out, T, design, topic=args.topic,
+                            joints=args.joint_names, scale=args.scale,
+                            max_events=args.max_events, target=outs.temp(out),
+                            progress=progress, **opts)
+    if progress is not None:
+        print(file=sys.stderr)
+    if s.n == 0:
+        raise ValueError(f"{args.path}: topic {args.topic!r} holds no message")
+    lines = [f"  sample {i} (stamp {st} ns, q = {np.round(q, 6).tolist()} m): "
+             f"{TrackFlag(f).name or f}, mode {m:+d}, slot {k}"
+             for i, st, q, f, m, k in s.events]
+    last = (f"last pose: tip_e = {np.round(s.last_tip_e, 6).tolist()} m, "
+            f"p = {fmt(s.last_p)} m, valid = {s.last_valid}")
+    _print_summary(s.n, s.first_slot, s.first_mode, s.counts, lines, args.max_events,
+                   s.n_flagged, last)
+    outs.commit()
+    print(f"wrote {out} ({', '.join(f'{k}: {v}' for k, v in s.messages.items())} messages)")
+    if args.strict and any(s.counts.get(n) for n in STRICT_FLAGS):
+        bad = ", ".join(n for n in STRICT_FLAGS if s.counts.get(n))
+        print(f"athenakin track: --strict: flagged {bad}")
+        return 1
+    return 0
+
+
+def _progress() -> Callable[[int], None]:
+    def show(n: int) -> None:
+        print(f"\r  {n} readings", end="", file=sys.stderr, flush=True)
+    return show
+
+
+def _track(args: argparse.Namespace, outs: Outputs, *, q: np.ndarray | None = None,
+           t: np.ndarray | None = None) -> int:
     from .._serialize import json_text
     from ..motion import TrackFlag, track
     from ..motion._io import read_q_stream_csv, track_csv_text
@@ -78,7 +190,8 @@ def _track(args: argparse.Namespace, outs: Outputs) -> int:
     out = args.output
     design = load_design(args)
     T = load_rcm(args, design)
-    q, t = read_q_stream_csv(args.path)
+    if q is None:
+        q, t = read_q_stream_csv(args.path)
     if t is not None:
         t = np.asarray(t, dtype=float)
         inf = np.flatnonzero(np.isinf(t))
@@ -113,7 +226,15 @@ def _track(args: argparse.Namespace, outs: Outputs) -> int:
     print(f"last pose: tip_e = {np.round(log.tip_e[last], 6).tolist()} m, "
           f"p = {fmt(float(log.p[last]))} m, valid = {bool(log.valid[last])}")
     if out is not None:
-        if Path(out).suffix.lower() == ".json":
+        if Path(out).suffix.lower() == ".mcap":
+            from ..ros._track import write_track_log
+
+            if t is None or not np.isfinite(t).all():
+                stamps = np.arange(len(q), dtype=np.int64) * 1_000_000   # 1 kHz
+            else:
+                stamps = np.rint(np.asarray(t) * 1e9).astype(np.int64)
+            write_track_log(outs.temp(out), stamps, log, T, design)
+        elif Path(out).suffix.lower() == ".json":
             import dataclasses
 
             obj = {k: getattr(log, k) for k in (f.name for f in dataclasses.fields(log))}

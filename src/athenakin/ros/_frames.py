@@ -1,0 +1,267 @@
+"""Every joint and every link frame of the exported URDF, for many readings at once (private).
+
+:func:`athenakin.sim.mechanism_joint_values` gives the joints of one configuration
+(it solves the forward kinematics again); a recording has thousands. Here the joint
+values come from what the tracker already knows (``q``, ``p``, ``u1..u5`` and
+``O_s`` of every reading) with numpy over the whole batch, and the link frames
+from the URDF text itself (its joints' origins and axes), the way
+``robot_state_publisher`` computes them. The tests check both against
+:func:`~athenakin.sim.mechanism_joint_values` and :func:`athenakin.forward_kinematics`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import xml.etree.ElementTree as ET
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._transforms import rot_x, rot_y, rot_z
+from ..design import Design
+from ..sim import JOINTS, urdf_from_design, urdf_joint_zero
+
+__all__ = ["UrdfModel", "urdf_model", "joint_values", "link_poses", "quaternion_xyzw",
+           "MOVING_LINKS", "BASE_FRAME", "RCM_FRAME", "TOOL_TIP_FRAME"]
+
+#: Frame of the base (the URDF's root link).
+BASE_FRAME = "base"
+#: Frame of the RCM, ``T_b_e`` (published beside the URDF's ``rcm_setup``).
+RCM_FRAME = "rcm"
+#: Frame of the tool tip (the URDF's ``tool_tip`` link: the instrument frame at the tip).
+TOOL_TIP_FRAME = "tool_tip"
+#: Links moved by a joint of :data:`athenakin.sim.JOINTS` (children of the tree's joints).
+MOVING_LINKS = tuple(child for _, _, child in JOINTS.values())
+
+
+@dataclasses.dataclass(frozen=True)
+class _Joint:
+    name: str
+    kind: str               # "prismatic", "continuous", "revolute", "fixed"
+    parent: str
+    child: str
+    origin: NDArray[np.float64]   # (4, 4)
+    axis: NDArray[np.float64]     # (3,)
+
+
+@dataclasses.dataclass(frozen=True)
+class UrdfModel:
+    """The URDF of one design and set-up, parsed for vectorised forward kinematics.
+
+    Attributes
+    ----------
+    text : str
+        The URDF (what ``/robot_description`` carries).
+    joints : tuple
+        Joints in an order where every parent comes before its child.
+    zero : dict of str -> float
+        The URDF's joint zero in the model's convention (:func:`urdf_joint_zero`).
+    design : Design
+    T_b_e : ndarray, shape (4, 4)
+    """
+
+    text: str
+    joints: tuple[_Joint, ...]
+    zero: dict[str, float]
+    design: Design
+    T_b_e: NDArray[np.float64]
+
+    @property
+    def links(self) -> tuple[str, ...]:
+        """Every link but the root, in the order of :attr:`joints`."""
+        return tuple(j.child for j in self.joints)
+
+
+def _origin(el: ET.Element | None) -> NDArray[np.float64]:
+    T = np.eye(4)
+    if el is None:
+        return T
+    xyz = [float(v) for v in el.get("xyz", "0 0 0").split()]
+    r, p, y = (np.array(float(v)) for v in el.get("rpy", "0 0 0").split())
+    T[:3, :3] = np.asarray(rot_z(y)) @ np.asarray(rot_y(p)) @ np.asarray(rot_x(r))
+    T[:3, 3] = xyz
+    return T
+
+
+def urdf_model(design: Design, T_b_e: NDArray[np.float64]) -> UrdfModel:
+    """Parse :func:`athenakin.sim.urdf_from_design` of ``design`` and ``T_b_e``.
+
+    The parse of the last few set-ups is kept (the arguments are values: a frozen
+    design and the bytes of ``T_b_e``), so that a CLI or a live stream does not export
+    and parse the URDF again for every file or client.
+    """
+    T = np.ascontiguousarray(T_b_e, dtype=float)
+    return _urdf_model(design, T.tobytes())
+
+
+@functools.lru_cache(maxsize=8)
+def _urdf_model(design: Design, T_bytes: bytes) -> UrdfModel:
+    T_b_e = np.frombuffer(T_bytes, dtype=float).reshape(4, 4).copy()
+    text = urdf_from_design(design, T_b_e)
+    root = ET.fromstring(text)
+    joints: dict[str, _Joint] = {}
+    for el in root.iter("joint"):
+        axis_el = el.find("axis")
+        axis = np.array([float(v) for v in (axis_el.get("xyz", "1 0 0") if axis_el is not None
+                                            else "1 0 0").split()])
+        parent, child = el.find("parent"), el.find("child")
+        assert parent is not None and child is not None
+        j = _Joint(el.get("name", ""), el.get("type", "fixed"), parent.get("link", ""),
+                   child.get("link", ""), _origin(el.find("origin")), axis)
+        joints[j.child] = j
+    order: list[_Joint] = []
+    done = {BASE_FRAME}
+    while len(order) < len(joints):
+        ready = [j for c, j in joints.items() if c not in done and j.parent in done]
+        if not ready:  # pragma: no cover - the export writes a tree
+            raise ValueError("URDF: the joints do not form a tree rooted at 'base'")
+        for j in ready:
+            order.append(j)
+            done.add(j.child)
+    return UrdfModel(text=text, joints=tuple(order), zero=urdf_joint_zero(T_b_e, design),
+                     design=design, T_b_e=np.array(T_b_e, dtype=float))
+
+
+def joint_values(model: UrdfModel, q: NDArray[np.float64], p: NDArray[np.float64],
+                 u: NDArray[np.float64], O_s: NDArray[np.float64]) -> dict[str, NDArray]:
+    """Every joint of :data:`~athenakin.sim.JOINTS` relative to the URDF zero, per reading.
+
+    Parameters
+    ----------
+    model : UrdfModel
+    q : ndarray, shape (N, 3)
+        Actuators, m.
+    p : ndarray, shape (N,)
+        Signed distance from ``O_s`` to the RCM, m.
+    u : ndarray, shape (N, 5)
+        Passive angles ``u1..u5``, rad.
+    O_s : ndarray, shape (N, 3)
+        Origin of the serial chain, base frame, m.
+
+    Returns
+    -------
+    dict of str -> ndarray, shape (N,)
+        What :func:`~athenakin.sim.mechanism_joint_values` puts in ``.urdf`` (m for
+        prismatic joints, rad in ``(-pi, pi]`` for hinges), in the order of ``JOINTS``.
+    """
+    d = model.design
+    q1, q2, q3 = q[:, 0], q[:, 1], q[:, 2]
+    h = 0.5 * (q1 - q2)
+    r1 = np.sqrt(d.l1 ** 2 - h * h)
+    s3 = np.sqrt(d.l3 ** 2 - h * h)
+    y, z = O_s[:, 1], O_s[:, 2]
+    theta = np.arctan2(-y, z)                 # R_b_i = Rx(theta), z_i radial from M to O_i
+    rad = np.hypot(y, z)
+    Oi_y, Oi_z = y - d.l4 * y / rad, z - d.l4 * z / rad
+    gamma = np.arctan2(-(Oi_y - (s3 + d.l2)), Oi_z - d.l5)
+    phi_a = np.arctan2(-h, r1)
+    ang_a3 = np.arctan2(s3, -h)
+    absolute = {
+        "q1": q1, "a_ujoint_x": theta, "a_ujoint_y": phi_a, "platform_y": -phi_a,
+        "u1": u[:, 0], "u2": u[:, 1], "p": p, "u3": u[:, 2], "u4": u[:, 3], "u5": u[:, 4],
+        "a_base_z": ang_a3, "carrier_z": -ang_a3, "k2_x": gamma, "q3": q3, "q2": q2,
+        "b_ujoint_x": theta, "b_ujoint_y": -phi_a, "b_base_z": np.arctan2(s3, h),
+    }
+    out = {}
+    for name, (kind, _, _) in JOINTS.items():
+        x = absolute[name] - model.zero[name]
+        if kind == "hinge":
+            x = -np.remainder(-x + np.pi, 2 * np.pi) + np.pi
+        out[name] = np.asarray(x, dtype=float)
+    return out
+
+
+def _motion(j: _Joint, v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Transforms (N, 4, 4) of joint ``j`` moved by ``v`` (N,)."""
+    n = len(v)
+    M = np.zeros((n, 4, 4))
+    M[:, 3, 3] = 1.0
+    a = j.axis
+    if j.kind == "prismatic":
+        M[:, 0, 0] = M[:, 1, 1] = M[:, 2, 2] = 1.0
+        M[:, :3, 3] = v[:, None] * a
+        return M
+    c, s = np.cos(v), np.sin(v)
+    C = 1.0 - c
+    x, y, z = a
+    M[:, 0, 0] = c + x * x * C
+    M[:, 0, 1] = x * y * C - z * s
+    M[:, 0, 2] = x * z * C + y * s
+    M[:, 1, 0] = y * x * C + z * s
+    M[:, 1, 1] = c + y * y * C
+    M[:, 1, 2] = y * z * C - x * s
+    M[:, 2, 0] = z * x * C - y * s
+    M[:, 2, 1] = z * y * C + x * s
+    M[:, 2, 2] = c + z * z * C
+    return M
+
+
+def link_poses(model: UrdfModel, values: dict[str, NDArray[np.float64]],
+               links: tuple[str, ...] | None = None) -> dict[str, NDArray[np.float64]]:
+    """Pose ``T_base_link`` of every link for joint values (the URDF's forward kinematics).
+
+    Parameters
+    ----------
+    model : UrdfModel
+    values : dict of str -> ndarray, shape (N,)
+        Joint values relative to the URDF zero (:func:`joint_values`); mimic joints
+        take their value from here too.
+    links : tuple of str, optional
+        The links wanted (default: all); their ancestors are computed as needed.
+
+    Returns
+    -------
+    dict of str -> ndarray, shape (N, 4, 4)
+    """
+    n = len(next(iter(values.values())))
+    poses: dict[str, NDArray[np.float64]] = {BASE_FRAME: np.broadcast_to(np.eye(4), (n, 4, 4))}
+    need: set[str] | None = None
+    if links is not None:
+        parent = {j.child: j.parent for j in model.joints}
+        need = set()
+        for name in links:
+            while name != BASE_FRAME and name not in need:
+                need.add(name)
+                name = parent[name]
+    for j in model.joints:
+        if need is not None and j.child not in need:
+            continue
+        T = poses[j.parent] @ j.origin
+        if j.kind != "fixed":
+            T = T @ _motion(j, values[j.name])
+        poses[j.child] = T
+    del poses[BASE_FRAME]
+    return poses if links is None else {k: poses[k] for k in links}
+
+
+def quaternion_xyzw(R: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Unit quaternions ``(x, y, z, w)`` (ROS order, ``w >= 0``) of rotations (N, 3, 3).
+
+    Shepperd's method: the largest of the four squared components picks the formula,
+    so no division by a small number.
+    """
+    m00, m11, m22 = R[:, 0, 0], R[:, 1, 1], R[:, 2, 2]
+    tr = m00 + m11 + m22
+    cand = np.stack([tr, m00, m11, m22], axis=-1)
+    k = np.argmax(cand, axis=-1)
+    out = np.empty((len(R), 4))
+    r = 1.0 + 2.0 * cand[np.arange(len(R)), k] - tr      # 4 * (largest component)^2
+    s = np.sqrt(np.maximum(r, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        f = 0.5 / s
+        w = np.where(k == 0, 0.5 * s, np.where(k == 1, (R[:, 2, 1] - R[:, 1, 2]) * f,
+                                                np.where(k == 2, (R[:, 0, 2] - R[:, 2, 0]) * f,
+                                                         (R[:, 1, 0] - R[:, 0, 1]) * f)))
+        x = np.where(k == 1, 0.5 * s, np.where(k == 0, (R[:, 2, 1] - R[:, 1, 2]) * f,
+                                                np.where(k == 2, (R[:, 0, 1] + R[:, 1, 0]) * f,
+                                                         (R[:, 0, 2] + R[:, 2, 0]) * f)))
+        y = np.where(k == 2, 0.5 * s, np.where(k == 0, (R[:, 0, 2] - R[:, 2, 0]) * f,
+                                                np.where(k == 1, (R[:, 0, 1] + R[:, 1, 0]) * f,
+                                                         (R[:, 1, 2] + R[:, 2, 1]) * f)))
+        z = np.where(k == 3, 0.5 * s, np.where(k == 0, (R[:, 1, 0] - R[:, 0, 1]) * f,
+                                                np.where(k == 1, (R[:, 0, 2] + R[:, 2, 0]) * f,
+                                                         (R[:, 1, 2] + R[:, 2, 1]) * f)))
+    out[:, 0], out[:, 1], out[:, 2], out[:, 3] = x, y, z, w
+    out *= np.where(out[:, 3:4] < 0.0, -1.0, 1.0)
+    return out

@@ -1,0 +1,375 @@
+"""Track a recorded stream and write the poses as ROS 2 topics; plans as trajectories (private)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable, Iterable, Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_array, check_instance
+from ..design import Design, resolve_design
+from ..errors import InvalidInputError, KinematicsError
+from ..motion import Tracker, TrackFlag, TrackLog, track
+from ..motion._plan import Trajectory
+from ..robot._setup import resolve_rcm_frame
+from ._read import CHUNK, iter_joint_states
+from ._write import McapOutput, TrackedBatch
+
+__all__ = ["TrackingSummary", "track_recording", "track_to_mcap", "write_trajectory",
+           "write_track_log", "tracked_batch"]
+
+_LOST = int(TrackFlag.LOST)
+_FIELDS = ("q", "valid", "slot", "mode", "p", "u", "O_s", "half_chord", "sin_u2", "sin_u4",
+           "step", "flags")
+
+
+@dataclasses.dataclass(frozen=True)
+class TrackingSummary:
+    """What tracking a stream into an MCAP file found.
+
+    Attributes
+    ----------
+    n : int
+        Readings tracked.
+    n_valid : int
+        Readings with a pose (the others are ``LOST``: no pose published).
+    n_flagged : int
+        Readings with at least one flag.
+    counts : dict of str -> int
+        Readings carrying each :class:`~athenakin.motion.TrackFlag` bit, by name.
+    events : list of (int, int, tuple, int, int, int)
+        The first flagged readings: ``(index, stamp_ns, q, flags, mode, slot)``.
+    first_slot, first_mode : int
+        Forward-kinematics slot and assembly mode of the first valid reading (-1, 0
+        when none).
+    last_tip_e : tuple of 3 float
+        Tool tip of the last valid reading, RCM frame, m.
+    last_p : float
+    last_valid : bool
+    messages : dict of str -> int
+        Messages written per topic.
+    path : Path or None
+        The MCAP file (None when nothing was written).
+    """
+
+    n: int
+    n_valid: int
+    n_flagged: int
+    counts: dict[str, int]
+    events: list[tuple[int, int, tuple[float, ...], int, int, int]]
+    first_slot: int
+    first_mode: int
+    last_tip_e: tuple[float, ...]
+    last_p: float
+    last_valid: bool
+    messages: dict[str, int]
+    path: Path | None
+
+
+def tracked_batch(stamps_ns: NDArray[np.int64], log: TrackLog | dict[str, Any]) -> TrackedBatch:
+    """The fields the MCAP writer needs of a :class:`~athenakin.motion.TrackLog` (or a dict)."""
+    g = (lambda k: log[k]) if isinstance(log, dict) else (lambda k: getattr(log, k))
+    return TrackedBatch(stamps_ns=np.asarray(stamps_ns, np.int64), q=g("q"),
+                        valid=np.asarray(g("valid"), bool), p=g("p"), u=g("u"), O_s=g("O_s"),
+                        mode=g("mode"), slot=g("slot"), flags=g("flags"), step=g("step"),
+                        half_chord=g("half_chord"), sin_u2=g("sin_u2"), sin_u4=g("sin_u4"))
+
+
+class _Stream:
+    """A :class:`~athenakin.motion.Tracker` over chunks.
+
+    It starts at the first reading that assembles (readings before it are ``LOST``).
+    """
+
+    def __init__(self, T_b_e: NDArray[np.float64], design: Design,
+                 options: dict[str, Any]) -> None:
+        self.T, self.design, self.options = T_b_e, design, options
+        self.tracker: Tracker | None = None
+        self.first: tuple[int, int] = (-1, 0)
+
+    def run(self, q: NDArray[np.float64]) -> dict[str, Any]:
+        rows: list[Any] = []
+        qs = q.tolist()
+        i = 0
+        while self.tracker is None and i < len(qs):
+            row = qs[i]
+            if all(math.isfinite(v) for v in row):
+                try:
+                    self.tracker = Tracker(self.T, self.design, q0=row, **self.options)
+                except InvalidInputError:
+                    raise                      # a slot that is not valid there, a bad option
+                except KinematicsError:
+                    pass                       # does not assemble: LOST, try the next one
+                else:
+                    pose = self.tracker.pose
+                    self.first = (pose.slot, pose.mode)
+                    rows.append(pose)
+                    i += 1
+                    break
+            rows.append(None)
+            i += 1
+        if self.tracker is not None:
+            up = self.tracker.update
+            rows.extend(up(r) for r in qs[i:])
+        return _columns(rows, q)
+
+
+def _columns(rows: list[Any], q: NDArray[np.float64]) -> dict[str, Any]:
+    n = len(rows)
+    out: dict[str, Any] = {
+        "q": q, "valid": np.zeros(n, bool), "slot": np.zeros(n, np.int64),
+        "mode": np.zeros(n, np.int64), "p": np.full(n, np.nan), "u": np.full((n, 5), np.nan),
+        "O_s": np.full((n, 3), np.nan), "half_chord": np.full(n, np.nan),
+        "sin_u2": np.full(n, np.nan), "sin_u4": np.full(n, np.nan),
+        "step": np.full(n, np.inf), "flags": np.full(n, _LOST, np.int64),
+        "tip_e": np.full((n, 3), np.nan)}
+    idx = [k for k, r in enumerate(rows) if r is not None]
+    if idx:
+        sub = [rows[k] for k in idx]
+        cols = list(zip(*sub, strict=True))
+        names = type(sub[0])._fields
+        for name, col in zip(names, cols, strict=True):
+            if name in out and name != "q":
+                out[name][idx] = np.array(col, dtype=out[name].dtype)
+    return out
+
+
+def _stream(chunks: Iterable[tuple[NDArray[np.int64], NDArray[np.float64]]],
+            out: McapOutput, T: NDArray[np.float64], design: Design,
+            options: dict[str, Any], max_events: int,
+            progress: Callable[[int], None] | None) -> TrackingSummary:
+    st = _Stream(T, design, options)
+    n = n_valid = n_flagged = 0
+    counts: dict[str, int] = {}
+    events: list[tuple[int, int, tuple[float, ...], int, int, int]] = []
+    last: tuple[tuple[float, ...], float, bool] = ((math.nan,) * 3, math.nan, False)
+    for stamps, q in chunks:
+        cols = st.run(q)
+        out.write_tracked(tracked_batch(stamps, cols))
+        flags = cols["flags"]
+        n_flagged += int(np.count_nonzero(flags))
+        for bit in TrackFlag:
+            if bit:
+                c = int(np.count_nonzero(flags & int(bit)))
+                if c:
+                    counts[str(bit.name)] = counts.get(str(bit.name), 0) + c
+        if len(events) < max_events:
+            for i in np.flatnonzero(flags)[:max_events - len(events)]:
+                events.append((n + int(i), int(stamps[i]), tuple(q[i].tolist()),
+                               int(flags[i]), int(cols["mode"][i]), int(cols["slot"][i])))
+        ok = np.flatnonzero(cols["valid"])
+        n_valid += ok.size
+        if ok.size:
+            j = ok[-1]
+            last = (tuple(cols["tip_e"][j].tolist()), float(cols["p"][j]), bool(j == len(q) - 1))
+        elif len(q):
+            last = (last[0], last[1], False)
+        n += len(q)
+        if progress is not None:
+            progress(n)
+    return TrackingSummary(n=n, n_valid=n_valid, n_flagged=n_flagged, counts=counts, events=events,
+                           first_slot=st.first[0], first_mode=st.first[1], last_tip_e=last[0],
+                           last_p=last[1], last_valid=last[2], messages=dict(out.counts),
+                           path=out.path)
+
+
+def _options(options: dict[str, Any]) -> dict[str, Any]:
+    allowed = {"slot", "jump_m", "jump_rad", "margins"}
+    bad = set(options) - allowed
+    if bad:
+        raise TypeError(f"unexpected tracker option(s) {sorted(bad)}; expected some of "
+                        f"{sorted(allowed)}")
+    return options
+
+
+def _check_events(max_events: object) -> int:
+    if isinstance(max_events, bool) or not isinstance(max_events, (int, np.integer)) \
+            or not 0 <= max_events <= 10**6:
+        raise InvalidInputError(f"max_events: expected an integer from 0 to 1000000, got "
+                                f"{max_events!r}")
+    return int(max_events)
+
+
+def track_recording(recording: str | Path, out: str | Path, T_b_e: ArrayLike | None = None,
+                    design: Design | None = None, *, topic: str = "/joint_states",
+                    joints: tuple[str, str, str] | list[str] = ("q1", "q2", "q3"),
+                    scale: float = 1.0, chunk_size: int = CHUNK, max_events: int = 20,
+                    target: str | Path | None = None,
+                    progress: Callable[[int], None] | None = None,
+                    **tracker_options: Any) -> TrackingSummary:
+    """Track the actuator readings of a recording and write the poses to an MCAP file.
+
+    The recording is read, tracked and written in chunks of ``chunk_size``
+    readings (bounded memory). The output (topics in docs/ros.md) appears only
+    when everything succeeded.
+
+    Parameters
+    ----------
+    recording : str or Path
+        See :func:`read_joint_states`.
+    out : str or Path
+        The MCAP file to write.
+    T_b_e : array-like, shape (4, 4), optional
+        RCM frame (default :func:`athenakin.default_rcm_frame`).
+    design : Design, optional
+    topic, joints, scale : keyword-only
+        The input (:func:`read_joint_states`).
+    chunk_size : int, keyword-only
+    max_events : int, keyword-only
+        Flagged readings listed in the summary.
+    target : str or Path, keyword-only, optional
+        Write there and do not rename (for a caller that renames, the CLI).
+    progress : callable, keyword-only, optional
+        Called with the number of readings done after each chunk.
+    **tracker_options
+        ``slot``, ``jump_m``, ``jump_rad``, ``margins`` of
+        :class:`~athenakin.motion.Tracker` (``slot`` is that of the first reading that
+        assembles).
+
+    Returns
+    -------
+    TrackingSummary
+
+    Raises
+    ------
+    RecordingError
+        See :func:`read_joint_states`; nothing is written.
+    """
+    design = resolve_design(design)
+    T = resolve_rcm_frame(T_b_e, design)
+    opts = _options(tracker_options)
+    nmax = _check_events(max_events)
+    chunks = ((js.stamps_ns, js.q) for js in
+              iter_joint_states(recording, topic=topic, joints=joints, scale=scale,
+                                chunk_size=chunk_size))
+    with McapOutput(out, design, T, target=target) as w:
+        return _stream(chunks, w, T, design, opts, nmax, progress)
+
+
+def track_to_mcap(stamps_ns: ArrayLike, q: ArrayLike, out: str | Path,
+                  T_b_e: ArrayLike | None = None, design: Design | None = None, *,
+                  max_events: int = 20, target: str | Path | None = None,
+                  **tracker_options: Any) -> TrackingSummary:
+    """Track readings given as arrays (e.g. a CSV stream) and write the poses to MCAP.
+
+    Parameters
+    ----------
+    stamps_ns : array-like of int, shape (N,)
+        Time of each reading, ns, never decreasing.
+    q : array-like, shape (N, 3)
+        Readings, m (NaN: a missing reading, flagged ``LOST``).
+    out, T_b_e, design, max_events, target, **tracker_options
+        As :func:`track_recording`.
+
+    Returns
+    -------
+    TrackingSummary
+    """
+    design = resolve_design(design)
+    T = resolve_rcm_frame(T_b_e, design)
+    qa = check_array(q, "q", (3,), allow_nonfinite=True)
+    if qa.ndim != 2:
+        raise InvalidInputError(f"q: expected shape (N, 3), got {qa.shape}")
+    s = np.asarray(stamps_ns)
+    if s.shape != (len(qa),) or not np.issubdtype(s.dtype, np.integer):
+        raise InvalidInputError(f"stamps_ns: expected {len(qa)} integers (ns), got "
+                                f"{s.dtype} of shape {s.shape}")
+    s = s.astype(np.int64)
+    dec = np.flatnonzero(np.diff(s) < 0)
+    if dec.size:
+        raise InvalidInputError(f"stamps_ns: stamps go backwards at reading {dec[0] + 1}: "
+                                f"{s[dec[0] + 1]} ns after {s[dec[0]]} ns")
+    opts = _options(tracker_options)
+    nmax = _check_events(max_events)
+
+    def chunks() -> Iterator[tuple[NDArray[np.int64], NDArray[np.float64]]]:
+        for k in range(0, len(qa), CHUNK):
+            yield s[k:k + CHUNK], qa[k:k + CHUNK]
+
+    with McapOutput(out, design, T, target=target) as w:
+        return _stream(chunks(), w, T, design, opts, nmax, None)
+
+
+def write_trajectory(path: str | Path, traj: Trajectory, *, start_ns: int = 0,
+                     target: str | Path | None = None) -> Path:
+    """Write a planned trajectory as MCAP: the plan and what the robot will show.
+
+    Topics: ``/athena/trajectory`` (one ``trajectory_msgs/msg/JointTrajectory``,
+    joints ``q1, q2, q3``, one point per sample with positions m, velocities m/s,
+    accelerations m/s^2 and ``time_from_start``) at ``start_ns``, and, for every
+    sample, stamped ``start_ns + t``: ``/athena/tool_tip``, ``/tf``,
+    ``/athena/joint_states``, ``/athena/status``, plus ``/robot_description`` and
+    ``/tf_static`` once (docs/ros.md).
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.mcap`` file (written atomically).
+    traj : Trajectory
+        From :func:`athenakin.motion.plan`.
+    start_ns : int, keyword-only
+        Stamp of the first sample, ns since the epoch (default 0).
+    target : str or Path, keyword-only, optional
+        Write there and do not rename (for a caller that renames).
+
+    Returns
+    -------
+    Path
+    """
+    check_instance(traj, "traj", Trajectory)
+    if isinstance(start_ns, bool) or not isinstance(start_ns, (int, np.integer)) \
+            or not 0 <= start_ns < 2**62:
+        raise InvalidInputError(f"start_ns: expected an integer from 0 to 2**62, got "
+                                f"{start_ns!r}")
+    t = np.asarray(traj.t, dtype=float)
+    stamps = int(start_ns) + np.rint((t - t[0]) * 1e9).astype(np.int64)
+    log = track(traj.q, traj.T_b_e, traj.design)
+    with McapOutput(path, traj.design, traj.T_b_e, target=target) as w:
+        w.write_static(int(stamps[0]))
+        w.write_trajectory_message(int(stamps[0]), t, traj.q, traj.qd, traj.qdd)
+        for k in range(0, len(t), CHUNK):
+            sl = slice(k, k + CHUNK)
+            cols = {f: getattr(log, f)[sl] for f in _FIELDS}
+            w.write_tracked(tracked_batch(stamps[sl], cols))
+    return Path(path)
+
+
+def write_track_log(path: str | Path, stamps_ns: ArrayLike, log: TrackLog,
+                    T_b_e: ArrayLike | None = None, design: Design | None = None, *,
+                    target: str | Path | None = None) -> Path:
+    """Write an already tracked stream (a :class:`~athenakin.motion.TrackLog`) as MCAP.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.mcap`` file (written atomically); with ``target``, the file written
+        directly (the caller renames it).
+    stamps_ns : array-like of int, shape (N,)
+        Stamp of each reading, ns.
+    log : TrackLog
+    T_b_e, design
+        The set-up the log was tracked with.
+    target : str or Path, keyword-only, optional
+
+    Returns
+    -------
+    Path
+    """
+    check_instance(log, "log", TrackLog)
+    design = resolve_design(design)
+    T = resolve_rcm_frame(T_b_e, design)
+    s = np.asarray(stamps_ns)
+    if s.shape != (len(log.q),) or not np.issubdtype(s.dtype, np.integer):
+        raise InvalidInputError(f"stamps_ns: expected {len(log.q)} integers (ns), got "
+                                f"{s.dtype} of shape {s.shape}")
+    with McapOutput(path, design, T, target=target) as w:
+        for k in range(0, len(s), CHUNK):
+            sl = slice(k, k + CHUNK)
+            cols = {f: getattr(log, f)[sl] for f in _FIELDS}
+            w.write_tracked(tracked_batch(s[sl].astype(np.int64), cols))
+    return Path(path)

@@ -1,0 +1,557 @@
+"""Write tracked poses and trajectories as MCAP files of ROS 2 messages (private).
+
+One :class:`McapOutput` writes one file through a temporary file in the same
+folder, renamed into place only when everything is written: a failure (or
+Ctrl-C) leaves nothing, never a partial file. Messages are encoded by
+:mod:`._cdr` (vectorised over readings) and written with the mcap library,
+chunked and zstd-compressed; the schemas are the ROS 2 message definitions
+(from rosbags' type store), so Foxglove, rosbags, mcap-ros2-support and
+``ros2 bag`` read the file as it is.
+
+Topics (docs/ros.md):
+
+``/athena/tool_tip``     geometry_msgs/msg/PoseStamped, frame ``base``
+``/tf``                  tf2_msgs/msg/TFMessage: base -> moving links, tool_tip, rcm
+``/tf_static``           tf2_msgs/msg/TFMessage: the URDF's fixed frames (once)
+``/athena/joint_states`` sensor_msgs/msg/JointState: every joint of the URDF
+``/athena/status``       athenakin_msgs/msg/TrackStatus: the tracker's flags
+``/robot_description``   std_msgs/msg/String: the URDF (once, transient local)
+``/athena/trajectory``   trajectory_msgs/msg/JointTrajectory (plans only)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import os
+import stat
+import tempfile
+from pathlib import Path
+from types import TracebackType
+from typing import IO, Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_path
+from ..design import Design
+from ..sim import JOINTS
+from ._cdr import CdrBuilder, Template, split_stamps
+from ._errors import ros_extra_missing
+from ._frames import (
+    BASE_FRAME,
+    MOVING_LINKS,
+    RCM_FRAME,
+    TOOL_TIP_FRAME,
+    UrdfModel,
+    joint_values,
+    link_poses,
+    quaternion_xyzw,
+    urdf_model,
+)
+from ._mcap import COMPRESSIONS, MESSAGE_HEADER, McapFile
+
+__all__ = ["McapOutput", "RosEncoder", "TrackedBatch", "TOPICS", "STATUS_TYPE",
+           "STATUS_MSGDEF", "TF_FRAMES", "STATUS_FLAG_FIELDS"]
+
+#: Topic of each output stream.
+TOPICS = {
+    "tool_tip": "/athena/tool_tip",
+    "tf": "/tf",
+    "tf_static": "/tf_static",
+    "joint_states": "/athena/joint_states",
+    "status": "/athena/status",
+    "robot_description": "/robot_description",
+    "trajectory": "/athena/trajectory",
+}
+#: Child frames of ``/tf`` (parent ``base``), in message order.
+TF_FRAMES = (*MOVING_LINKS, TOOL_TIP_FRAME, RCM_FRAME)
+#: Type of ``/athena/status``.
+STATUS_TYPE = "athenakin_msgs/msg/TrackStatus"
+#: Its definition (ROS 2 .msg syntax).
+STATUS_MSGDEF = """\
+# The continuity tracker's verdict on one actuator reading (athenakin.motion.TrackFlag).
+std_msgs/Header header
+uint32 sample              # index of the reading in the stream
+bool valid                 # false: no forward-kinematics solution (LOST); no pose published
+int8 mode                  # assembly mode, +1 / -1 (0 when not valid)
+uint8 slot                 # forward-kinematics slot 8 m + 4 r + 2 b + w
+uint32 flags               # athenakin.motion.TrackFlag bits
+bool lost
+bool mode_switch
+bool branch_switch
+bool jump
+bool ambiguous
+bool out_of_stroke
+bool near_singular         # any NEAR_* bit
+float64 step               # distance to the previous pose, in units of the jump thresholds
+float64 half_chord         # m: distance to the assembly-mode boundary
+float64 sin_u2
+float64 sin_u4
+float64 clearance_m        # smallest distance between bodies, m; NaN: not computed
+uint32 clearance_flags     # collision flags; 0: none or not computed
+"""
+#: Boolean fields of the status and the TrackFlag bits they report.
+STATUS_FLAG_FIELDS = {"lost": 1, "mode_switch": 8, "branch_switch": 16, "jump": 4,
+                      "ambiguous": 32, "out_of_stroke": 64}
+_NEAR_BITS = 128 | 256 | 512 | 1024 | 2048 | 4096
+_MSG_TYPES = {"tool_tip": "geometry_msgs/msg/PoseStamped", "tf": "tf2_msgs/msg/TFMessage",
+              "tf_static": "tf2_msgs/msg/TFMessage",
+              "joint_states": "sensor_msgs/msg/JointState", "status": STATUS_TYPE,
+              "robot_description": "std_msgs/msg/String",
+              "trajectory": "trajectory_msgs/msg/JointTrajectory"}
+_SEP = "=" * 80 + "\n"
+#: Uncompressed bytes per MCAP chunk (about).
+_CHUNK_BYTES = 4 * 2**20
+#: QoS of a latched topic as rosbag2 records it (durability 1: transient local).
+_LATCHED_QOS = ("- history: 3\n  depth: 0\n  reliability: 1\n  durability: 1\n"
+                "  deadline:\n    sec: 2147483647\n    nsec: 4294967295\n"
+                "  lifespan:\n    sec: 2147483647\n    nsec: 4294967295\n"
+                "  liveliness: 1\n  liveliness_lease_duration:\n    sec: 2147483647\n"
+                "    nsec: 4294967295\n  avoid_ros_namespace_conventions: false\n")
+
+
+@functools.lru_cache(maxsize=32)
+def msgdef(typename: str) -> str:
+    """The ROS 2 message definition of ``typename`` with its dependencies (MCAP ``ros2msg``)."""
+    try:
+        from rosbags.typesys import Stores, get_typestore
+    except ModuleNotFoundError as exc:  # pragma: no cover
+        raise ros_extra_missing(exc) from None
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    if typename == STATUS_TYPE:
+        head = store.generate_msgdef("std_msgs/msg/Header", ros_version=2)[0]
+        return STATUS_MSGDEF + _SEP + "MSG: std_msgs/Header\n" + head
+    return store.generate_msgdef(typename, ros_version=2)[0]
+
+
+# ---------------------------------------------------------------------------- templates
+def _pose_template() -> Template:
+    b = CdrBuilder()
+    b.header(BASE_FRAME)
+    b.vec3("p")
+    b.quat("o")
+    return b.template()
+
+
+def _tf_template(pairs: tuple[tuple[str, str], ...]) -> Template:
+    b = CdrBuilder()
+    b.num("u4", len(pairs))
+    for k, (parent, child) in enumerate(pairs):
+        b.header(parent, name=f"stamp{k}")
+        b.string(child)
+        b.vec3(f"t{k}")
+        b.quat(f"r{k}")
+    return b.template()
+
+
+def _joint_state_template(names: tuple[str, ...]) -> Template:
+    b = CdrBuilder()
+    b.header("")
+    b.strings(names)
+    b.f8_seq("pos", len(names))
+    b.num("u4", 0)      # velocity[]
+    b.num("u4", 0)      # effort[]
+    return b.template()
+
+
+def _status_template() -> Template:
+    b = CdrBuilder()
+    b.header(BASE_FRAME)
+    b.num("u4", 0, "sample")
+    b.num("b1", False, "valid")
+    b.num("i1", 0, "mode")
+    b.num("u1", 0, "slot")
+    b.num("u4", 0, "flags")
+    for name in (*STATUS_FLAG_FIELDS, "near_singular"):
+        b.num("b1", False, name)
+    for name in ("step", "half_chord", "sin_u2", "sin_u4", "clearance_m"):
+        b.num("f8", 0.0, name)
+    b.num("u4", 0, "clearance_flags")
+    return b.template()
+
+
+def _string_message(text: str) -> bytes:
+    b = CdrBuilder()
+    b.string(text)
+    return bytes(b.buf)
+
+
+def _stamp_fields(values: dict[str, Any], stamps_ns: NDArray[np.int64], names: list[str]
+                  ) -> None:
+    sec, nsec = split_stamps(stamps_ns)
+    for n in names:
+        values[f"{n}.sec"] = sec
+        values[f"{n}.nanosec"] = nsec
+
+
+def _put_pose(values: dict[str, Any], T: NDArray[np.float64], tname: str, rname: str) -> None:
+    for i, c in enumerate("xyz"):
+        values[f"{tname}.{c}"] = T[:, i, 3]
+    quat = quaternion_xyzw(T[:, :3, :3])
+    for i, c in enumerate("xyzw"):
+        values[f"{rname}.{c}"] = quat[:, i]
+
+
+# ---------------------------------------------------------------------------- the file
+@dataclasses.dataclass(frozen=True)
+class TrackedBatch:
+    """What :meth:`McapOutput.write_tracked` needs of a batch of tracked readings.
+
+    Attributes
+    ----------
+    stamps_ns : ndarray of int64, shape (N,)
+    q : ndarray, shape (N, 3)
+    valid : ndarray of bool, shape (N,)
+    p : ndarray, shape (N,)
+    u : ndarray, shape (N, 5)
+    O_s : ndarray, shape (N, 3)
+    mode, slot, flags : ndarray of int, shape (N,)
+    step, half_chord, sin_u2, sin_u4 : ndarray, shape (N,)
+    clearance_m : ndarray, shape (N,) or None
+        Smallest distance between bodies (athenakin.collision), m; None: not computed.
+    clearance_flags : ndarray of int, shape (N,) or None
+    """
+
+    stamps_ns: NDArray[np.int64]
+    q: NDArray[np.float64]
+    valid: NDArray[np.bool_]
+    p: NDArray[np.float64]
+    u: NDArray[np.float64]
+    O_s: NDArray[np.float64]
+    mode: NDArray[np.int64]
+    slot: NDArray[np.int64]
+    flags: NDArray[np.int64]
+    step: NDArray[np.float64]
+    half_chord: NDArray[np.float64]
+    sin_u2: NDArray[np.float64]
+    sin_u4: NDArray[np.float64]
+    clearance_m: NDArray[np.float64] | None = None
+    clearance_flags: NDArray[np.int64] | None = None
+
+
+class RosEncoder:
+    """The CDR messages of ATHENA's topics for one design and set-up (no file).
+
+    Parameters
+    ----------
+    design : Design
+    T_b_e : ndarray, shape (4, 4)
+    """
+
+    def __init__(self, design: Design, T_b_e: ArrayLike) -> None:
+        self.model: UrdfModel = urdf_model(design, np.asarray(T_b_e, dtype=float))
+        self.tf_pairs = tuple((BASE_FRAME, c) for c in TF_FRAMES)
+        self.templates = {"tool_tip": _pose_template(), "tf": _tf_template(self.tf_pairs),
+                          "joint_states": _joint_state_template(tuple(JOINTS)),
+                          "status": _status_template()}
+
+    def robot_description(self) -> bytes:
+        """``std_msgs/msg/String`` holding the URDF."""
+        return _string_message(self.model.text)
+
+    def tf_static(self, stamp_ns: int) -> bytes:
+        """``tf2_msgs/msg/TFMessage`` of the URDF's fixed frames (but ``tool_tip``)."""
+        fixed = [j for j in self.model.joints if j.kind == "fixed"
+                 and j.child != TOOL_TIP_FRAME]
+        pairs = tuple((j.parent, j.child) for j in fixed)
+        vals: dict[str, Any] = {}
+        _stamp_fields(vals, np.array([int(stamp_ns)]), [f"stamp{k}" for k in range(len(pairs))])
+        for k, j in enumerate(fixed):
+            _put_pose(vals, j.origin[None], f"t{k}", f"r{k}")
+        return _tf_template(pairs).encode(1, vals).tobytes()
+
+    def pose_values(self, stamps_ns: NDArray[np.int64], q: NDArray[np.float64],
+                    p: NDArray[np.float64], u: NDArray[np.float64], O_s: NDArray[np.float64]
+                    ) -> dict[str, dict[str, Any]]:
+        """The numbers of the ``tool_tip``, ``tf`` and ``joint_states`` messages of N poses."""
+        n = len(stamps_ns)
+        jv = joint_values(self.model, q, p, u, O_s)
+        poses = link_poses(self.model, jv, links=(*MOVING_LINKS, TOOL_TIP_FRAME))
+        poses[RCM_FRAME] = np.broadcast_to(self.model.T_b_e, (n, 4, 4))
+        sec, nsec = split_stamps(stamps_ns)
+        tip: dict[str, Any] = {"stamp.sec": sec, "stamp.nanosec": nsec}
+        _put_pose(tip, poses[TOOL_TIP_FRAME], "p", "o")
+        tf: dict[str, Any] = {}
+        for k, (_, child) in enumerate(self.tf_pairs):
+            tf[f"stamp{k}.sec"], tf[f"stamp{k}.nanosec"] = sec, nsec
+            _put_pose(tf, poses[child], f"t{k}", f"r{k}")
+        js: dict[str, Any] = {f"pos.{i}": jv[name] for i, name in enumerate(JOINTS)}
+        js["stamp.sec"], js["stamp.nanosec"] = sec, nsec
+        return {"tool_tip": tip, "tf": tf, "joint_states": js}
+
+    def poses(self, stamps_ns: NDArray[np.int64], q: NDArray[np.float64],
+              p: NDArray[np.float64], u: NDArray[np.float64], O_s: NDArray[np.float64]
+              ) -> dict[str, NDArray[np.uint8]]:
+        """Messages ``tool_tip``, ``tf``, ``joint_states`` of N poses, each (N, size) bytes."""
+        vals = self.pose_values(stamps_ns, q, p, u, O_s)
+        return {k: self.templates[k].encode(len(stamps_ns), v) for k, v in vals.items()}
+
+    def status_values(self, b: TrackedBatch, first_sample: int = 0) -> dict[str, Any]:
+        """The numbers of the ``/athena/status`` messages of a batch."""
+        n = len(b.stamps_ns)
+        flags = np.asarray(b.flags, dtype=np.int64)
+        valid = np.asarray(b.valid, bool)
+        vals: dict[str, Any] = {"sample": np.arange(n) + first_sample,
+                                "valid": valid, "mode": np.where(valid, b.mode, 0),
+                                "slot": np.where(valid, b.slot, 0), "flags": flags,
+                                "near_singular": (flags & _NEAR_BITS) != 0,
+                                "step": b.step, "half_chord": b.half_chord,
+                                "sin_u2": b.sin_u2, "sin_u4": b.sin_u4,
+                                "clearance_m": np.nan if b.clearance_m is None
+                                else b.clearance_m,
+                                "clearance_flags": 0 if b.clearance_flags is None
+                                else b.clearance_flags}
+        for name, bit in STATUS_FLAG_FIELDS.items():
+            vals[name] = (flags & bit) != 0
+        vals["stamp.sec"], vals["stamp.nanosec"] = split_stamps(b.stamps_ns)
+        return vals
+
+    def status(self, b: TrackedBatch, first_sample: int = 0) -> NDArray[np.uint8]:
+        """``/athena/status`` messages of a batch, (N, size) bytes."""
+        return self.templates["status"].encode(len(b.stamps_ns),
+                                               self.status_values(b, first_sample))
+
+
+class McapOutput:
+    """An MCAP file of ATHENA's ROS 2 topics, written atomically.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write (``.mcap``). It appears only when :meth:`close` succeeds;
+        the context manager closes it on success and discards it on an exception.
+    design : Design
+    T_b_e : ndarray, shape (4, 4)
+    compression : {"zstd", "lz4", "none"}, keyword-only
+        Chunk compression (default zstd).
+    target : str or Path, keyword-only, optional
+        Write this file instead of a temporary one and do no rename (the caller
+        renames it: the CLI's own output manager).
+
+    Examples
+    --------
+    ::
+
+        with McapOutput("run.mcap", design, T_b_e) as out:
+            out.write_tracked(batch)
+    """
+
+    def __init__(self, path: str | Path, design: Design, T_b_e: ArrayLike, *,
+                 compression: str = "zstd", target: str | Path | None = None) -> None:
+        if compression not in COMPRESSIONS:
+            raise ValueError(f"compression: expected one of {COMPRESSIONS}, got "
+                             f"{compression!r}")
+        self.path = check_path(path)
+        if os.path.exists(self.path) and not stat.S_ISREG(os.stat(self.path).st_mode):
+            raise ValueError(f"path: {str(self.path)!r} is not a regular file (a device, FIFO "
+                             f"or socket)")
+        self.encoder = RosEncoder(design, T_b_e)
+        self.model = self.encoder.model
+        self._rename = target is None
+        if target is None:
+            real = Path(os.path.realpath(self.path))
+            fd, tmp = tempfile.mkstemp(prefix=f".{real.name}.", suffix=".mcap", dir=real.parent)
+            self._tmp = Path(tmp)
+            self._fh: IO[bytes] = os.fdopen(fd, "wb")
+        else:
+            self._tmp = Path(target)
+            self._fh = open(self._tmp, "wb")   # noqa: SIM115 - closed in close/discard
+        try:
+            self._file = McapFile(self._fh, compression=compression)
+        except BaseException:
+            self.discard()
+            raise
+        self._schemas: dict[str, int] = {}
+        self._channels: dict[str, int] = {}
+        self._seq: dict[str, int] = {}
+        self._static_done = False
+        self._closed = False
+        self.counts: dict[str, int] = {}
+
+    # ------------------------------------------------------------------ channels
+    def _channel(self, key: str) -> int:
+        cid = self._channels.get(key)
+        if cid is None:
+            typ = _MSG_TYPES[key]
+            sid = self._schemas.get(typ)
+            if sid is None:
+                sid = self._file.schema(typ, "ros2msg", msgdef(typ).encode())
+                self._schemas[typ] = sid
+            meta = {"offered_qos_profiles": _LATCHED_QOS} \
+                if key in ("robot_description", "tf_static") else {}
+            cid = self._file.channel(TOPICS[key], "cdr", sid, meta)
+            self._channels[key] = cid
+            self._seq[key] = 0
+            self.counts[TOPICS[key]] = 0
+        return cid
+
+    def _add(self, key: str, stamp: int, data: bytes) -> None:
+        cid = self._channel(key)
+        self._file.single(cid, self._seq[key], stamp, data)
+        self._seq[key] += 1
+        self.counts[TOPICS[key]] += 1
+
+    def write_static(self, stamp_ns: int) -> None:
+        """``/robot_description`` (the URDF) and ``/tf_static`` (fixed frames), once."""
+        if self._static_done:
+            return
+        self._static_done = True
+        self._add("robot_description", int(stamp_ns), self.encoder.robot_description())
+        self._add("tf_static", int(stamp_ns), self.encoder.tf_static(int(stamp_ns)))
+
+    def write_tracked(self, b: TrackedBatch) -> None:
+        """Write a batch of tracked readings: status for each, poses for the valid ones.
+
+        Each chunk of the file is one byte array of ``rows x (status, tool tip, tf,
+        joint states)`` Message records built in place; the rows of readings without
+        a pose keep only their status record.
+        """
+        n = len(b.stamps_ns)
+        if n == 0:
+            return
+        stamps = np.asarray(b.stamps_ns, dtype=np.int64)
+        self.write_static(int(stamps[0]))
+        keys = ("status", "tool_tip", "tf", "joint_states")
+        cids = [self._channel(k) for k in keys]
+        sizes = [self.encoder.templates[k].size for k in keys]
+        cols = np.cumsum([0] + [MESSAGE_HEADER + z for z in sizes])
+        row = int(cols[-1])
+        rs = int(cols[1])
+        per = max(1, _CHUNK_BYTES // row)
+        valid = np.asarray(b.valid, bool)
+        for a in range(0, n, per):
+            e = min(n, a + per)
+            m = e - a
+            v = valid[a:e]
+            st = stamps[a:e]
+            buf = np.empty((m, row), dtype=np.uint8)
+            part: dict[str, Any] = {f.name: (None if getattr(b, f.name) is None
+                                             else getattr(b, f.name)[a:e])
+                                    for f in dataclasses.fields(TrackedBatch)}
+            sub = TrackedBatch(**part)
+            vals = {"status": self.encoder.status_values(sub, self._seq["status"])}
+            if v.any():
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    vals.update(self.encoder.pose_values(st, sub.q, sub.p, sub.u, sub.O_s))
+            seq_pose = np.cumsum(v) - 1
+            for j, k in enumerate(keys):
+                if k not in vals:
+                    continue
+                c0 = int(cols[j])
+                seq = self._seq[k] + (np.arange(m) if k == "status" else seq_pose)
+                McapFile.message_headers(buf[:, c0:c0 + MESSAGE_HEADER], cids[j], seq, st,
+                                         sizes[j])
+                self.encoder.templates[k].encode(m, vals[k],
+                                                 out=buf[:, c0 + MESSAGE_HEADER:int(cols[j + 1])])
+            if v.all():
+                rec = buf.reshape(-1)
+                row_off = np.arange(m, dtype=np.int64) * row
+            elif not v.any():
+                rec = np.ascontiguousarray(buf[:, :rs]).reshape(-1)
+                row_off = np.arange(m, dtype=np.int64) * rs
+            else:
+                keep = np.ones((m, row), bool)
+                keep[~v, rs:] = False
+                rec = buf[keep]
+                row_off = np.concatenate([[0], np.cumsum(np.where(v, row, rs))[:-1]])
+            index = {cids[0]: (st, row_off)}
+            if v.any():
+                for j in range(1, 4):
+                    index[cids[j]] = (st[v], row_off[v] + int(cols[j]))
+            self._file.chunk(rec, index)
+            nv = int(v.sum())
+            self._seq["status"] += m
+            self.counts[TOPICS["status"]] += m
+            for k in keys[1:]:
+                self._seq[k] += nv
+                self.counts[TOPICS[k]] += nv
+
+    def write_trajectory_message(self, stamp_ns: int, t_s: NDArray[np.float64],
+                                 q: NDArray[np.float64], qd: NDArray[np.float64] | None,
+                                 qdd: NDArray[np.float64] | None,
+                                 joint_names: tuple[str, ...] = ("q1", "q2", "q3")) -> None:
+        """One ``trajectory_msgs/msg/JointTrajectory`` with every sample as a point."""
+        self._add("trajectory", int(stamp_ns), _trajectory_bytes(stamp_ns, t_s, q, qd, qdd,
+                                                                  joint_names))
+
+    # ------------------------------------------------------------------ finish
+    def close(self) -> Path:
+        """Finish the file and move it into place; returns its path."""
+        if self._closed:
+            return self.path
+        self._file.close()
+        self._fh.close()
+        self._closed = True
+        if self._rename:
+            real = Path(os.path.realpath(self.path))
+            try:
+                mode = stat.S_IMODE(os.stat(real).st_mode)
+            except FileNotFoundError:
+                mask = os.umask(0o022)
+                os.umask(mask)
+                mode = 0o666 & ~mask
+            os.chmod(self._tmp, mode)
+            os.replace(self._tmp, real)
+        return self.path
+
+    def discard(self) -> None:
+        """Drop the file (nothing is written)."""
+        if not self._closed:
+            self._closed = True
+            self._fh.close()
+        if self._rename:
+            self._tmp.unlink(missing_ok=True)
+
+    def __enter__(self) -> McapOutput:
+        return self
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.discard()
+
+
+def _trajectory_bytes(stamp_ns: int, t_s: NDArray[np.float64], q: NDArray[np.float64],
+                      qd: NDArray[np.float64] | None, qdd: NDArray[np.float64] | None,
+                      joint_names: tuple[str, ...]) -> bytes:
+    """CDR of a JointTrajectory: header, joint names, then one point per sample."""
+    n = len(t_s)
+    b = CdrBuilder()
+    b.header(BASE_FRAME)
+    b.strings(joint_names)
+    b.num("u4", n)
+    head = bytearray(b.buf)
+    sec, nsec = split_stamps(np.array([int(stamp_ns)]))
+    head[4:12] = np.array([sec[0]], "<i4").tobytes() + np.array([nsec[0]], "<u4").tobytes()
+    dt = np.rint((np.asarray(t_s, float) - float(t_s[0])) * 1e9).astype(np.int64)
+    dsec, dnsec = split_stamps(dt)
+    parts = [bytes(head)]
+    start = len(head)
+    k = 0
+    cols = [q, qd, qdd]
+    while k < n:
+        # the layout of a point depends on its start offset modulo 8; from the second
+        # point on it repeats when the point's size is a multiple of 8
+        pb = CdrBuilder()
+        pb.buf = bytearray(b"\x00" * start)   # offsets relative to the message start
+        for name, arr in zip(("pos", "vel", "acc"), cols, strict=True):
+            pb.f8_seq(name, 0 if arr is None else arr.shape[1])
+        pb.num("u4", 0)                       # effort[]
+        pb.num("i4", 0, "dsec")
+        pb.num("u4", 0, "dnsec")
+        size = len(pb.buf) - start
+        tpl = Template(bytes(pb.buf[start:]),
+                       tuple((nm, off - start, kd) for nm, off, kd in pb.fields))
+        m = n - k if size % 8 == 0 else 1
+        vals: dict[str, Any] = {"dsec": dsec[k:k + m], "dnsec": dnsec[k:k + m]}
+        for name, arr in zip(("pos", "vel", "acc"), cols, strict=True):
+            if arr is not None:
+                for i in range(arr.shape[1]):
+                    vals[f"{name}.{i}"] = arr[k:k + m, i]
+        parts.append(tpl.encode(m, vals).tobytes())
+        start += size * m
+        k += m
+    return b"".join(parts)
