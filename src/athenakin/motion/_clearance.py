@@ -110,7 +110,8 @@ def sample_clearance(check: ClearanceCheck, q: NDArray[np.float64], T_b_e: NDArr
     -------
     distance : ndarray, shape (n,)
         Signed least distance between the bodies and to the obstacles, m (negative:
-        penetration); NaN where no slot of the sample's labels is valid.
+        penetration; ``+inf`` when no pair is checked); NaN where no slot of the
+        sample's labels is valid.
     pair : ndarray of str, shape (n, 2)
         The two names (body, body or obstacle) of the least distance ("" where NaN).
     """
@@ -129,14 +130,11 @@ def sample_clearance(check: ClearanceCheck, q: NDArray[np.float64], T_b_e: NDArr
             res = clearance(q[todo], T_b_e, design, slot=slot, bodies=check.bodies,
                             environment=check.environment)
             md = np.asarray(res.min_distance, dtype=float).reshape(-1)
-            ok = np.isfinite(md)
-            dist[todo[ok]] = md[ok]
-            cp = np.asarray(res.closest_pair).reshape(-1)
-            if cp.dtype.kind in "iu":
-                index[todo[ok]] = cp[ok]
-                names[todo[ok]] = _pair_names(res, cp[ok].astype(np.int64))
-            else:  # names already
-                names[todo[ok]] = np.asarray(res.closest_pair).reshape(-1, 2)[ok]
+            ok = np.asarray(res.valid, dtype=bool).reshape(-1)
+            dist[todo[ok]] = md[ok]       # +inf where no pair is checked
+            cp = np.asarray(res.closest_pair).reshape(-1).astype(np.int64)
+            index[todo[ok]] = cp[ok]
+            names[todo[ok]] = _pair_names(res, cp[ok])
             todo = todo[~ok]
     return dist, names
 

@@ -698,7 +698,7 @@ def _collision(bad: dict, samples: dict, check: ClearanceCheck  # type: ignore[t
                ) -> CollisionError:
     i = bad["index"]
     a, b = bad["pair"]
-    what = ("makes {a!r} and {b!r} touch or overlap" if bad["value"] <= 0 else
+    what = ("makes {a!r} and {b!r} overlap" if bad["value"] < 0 else
             "brings {a!r} and {b!r} closer than the clearance margin").format(a=a, b=b)
     msg = (f"trajectory sample {i} at t = {float(samples['t'][i]):.4f} s (segment "
            f"{int(samples['segment'][i])}, tip_e = "

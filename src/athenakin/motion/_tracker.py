@@ -22,7 +22,7 @@ a large step, or when that candidate is not valid, all 16 are computed.
 Collisions. Asked for with ``bodies=``, ``environment=`` or ``clearance_margin=``
 (:mod:`athenakin.collision`, imported then), every valid sample also gets the least
 clearance between the robot's bodies and to the obstacles, the pair that has it, and
-the flags ``COLLISION`` (clearance <= 0) and ``NEAR_COLLISION`` (clearance below the
+the flags ``COLLISION`` (clearance < 0: overlap) and ``NEAR_COLLISION`` (clearance below the
 margin, collisions included). The check is off by default: it costs tens of
 microseconds per sample, several times the tracker's own work.
 """
@@ -87,7 +87,8 @@ class TrackFlag(enum.IntFlag):
         A singularity measure is below its margin (:class:`Margins`: ``half_chord``,
         ``h``, ``link``, ``sin_u2``, ``sin_u4``, ``p``).
     COLLISION
-        Two bodies, or a body and an obstacle, touch or overlap (clearance <= 0); only
+        Two bodies, or a body and an obstacle, overlap (clearance < 0, as
+        :attr:`athenakin.collision.Clearance.colliding`); only
         when the tracker checks collisions (``bodies=``, ``environment=`` or
         ``clearance_margin=``).
     NEAR_COLLISION
@@ -466,7 +467,7 @@ class Tracker:
         flags = int(pose.flags)
         if d < check.margin:              # False for NaN (no valid slot: nothing to check)
             flags |= _B["NEAR_COLLISION"]
-            if d <= 0.0:
+            if d < 0.0:
                 flags |= _B["COLLISION"]
         return pose._replace(clearance=d, closest_pair=(str(pair[0, 0]), str(pair[0, 1])),
                              flags=TrackFlag(flags) if flags else _FLAG_NONE)

@@ -161,12 +161,14 @@ def _collision_metrics(spec: CollisionSpec, design: Design, T: NDArray[np.float6
             res = clearance(q[todo], T, design, slot=slot, bodies=bodies,
                             environment=spec.environment)
             md = np.asarray(res.min_distance, dtype=float).reshape(-1)
-            ok = np.isfinite(md)
+            ok = np.asarray(res.valid, dtype=bool).reshape(-1)
             dist[todo[ok]] = md[ok]
             todo = todo[~ok]
-    free = reached & (dist >= spec.margin)
+    with np.errstate(invalid="ignore"):
+        free = reached & (dist >= spec.margin)
+    seen = ~np.isnan(dist)
     return {"collision_free_coverage": float(np.count_nonzero(free)) / k,
-            "min_clearance": float(np.nanmin(dist)) if np.any(np.isfinite(dist)) else math.nan}
+            "min_clearance": float(np.min(dist[seen])) if np.any(seen) else math.nan}
 
 #: Conditions whose value is a length (m); the others are dimensionless sines.
 _LENGTH_CONDITIONS = ("circles_tangent", "d_on_rail", "k1_degenerate", "ab_coincide",
