@@ -1,0 +1,200 @@
+"""Compiled capsule-capsule distances (numba), the batch path of ``athenakin.collision``.
+
+The same five candidates as the numpy reference
+(:func:`athenakin.collision._distance.segment_segment`): the four end-point-to-segment
+distances and Lumelsky's interior critical point where the segments are not parallel;
+the smallest wins. No tolerance decides a branch, so parallel, degenerate (zero-length),
+touching and crossing segments are exact. Witness points and the normal fallback
+(``d1 x d2``, a normal of ``d1``, ``+z``) follow the reference too.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = ["capsule_pairs", "segment_distance"]
+
+_OPTS = dict(error_model="numpy", cache=True, nogil=True, fastmath=False)
+
+
+@njit(inline="always", **_OPTS)
+def _point_seg(x0, x1, x2, a0, a1, a2, d0, d1, d2, dd):
+    """Closest point a + t d of a segment to x: (squared distance, c0, c1, c2)."""
+    t = 0.0
+    if dd > 0.0:
+        t = ((x0 - a0) * d0 + (x1 - a1) * d1 + (x2 - a2) * d2) / dd
+        if t < 0.0:
+            t = 0.0
+        elif t > 1.0:
+            t = 1.0
+    c0 = a0 + t * d0
+    c1 = a1 + t * d1
+    c2 = a2 + t * d2
+    e0 = x0 - c0
+    e1 = x1 - c1
+    e2 = x2 - c2
+    return math.sqrt(e0 * e0 + e1 * e1 + e2 * e2), c0, c1, c2
+
+
+@njit(**_OPTS)
+def segment_distance(S, out_c):
+    """Distance of the segments ``S[0]-S[1]`` and ``S[2]-S[3]``; closest points into ``out_c``.
+
+    Parameters
+    ----------
+    S : ndarray, shape (4, 3)
+        ``p1, q1, p2, q2``.
+    out_c : ndarray, shape (2, 3)
+        Receives the closest points on the first and on the second segment.
+    """
+    return _seg_seg(S[0, 0], S[0, 1], S[0, 2], S[1, 0], S[1, 1], S[1, 2],
+                    S[2, 0], S[2, 1], S[2, 2], S[3, 0], S[3, 1], S[3, 2], out_c, 0)
+
+
+@njit(inline="always", **_OPTS)
+def _seg_seg(p10, p11, p12, q10, q11, q12, p20, p21, p22, q20, q21, q22, C, k):
+    """Segment-segment distance; closest points written to C[k], C[k+1] (shape (., 3))."""
+    d10 = q10 - p10
+    d11 = q11 - p11
+    d12 = q12 - p12
+    d20 = q20 - p20
+    d21 = q21 - p21
+    d22 = q22 - p22
+    r0 = p10 - p20
+    r1 = p11 - p21
+    r2 = p12 - p22
+    a = d10 * d10 + d11 * d11 + d12 * d12
+    e = d20 * d20 + d21 * d21 + d22 * d22
+    b = d10 * d20 + d11 * d21 + d12 * d22
+    c = d10 * r0 + d11 * r1 + d12 * r2
+    f = d20 * r0 + d21 * r1 + d22 * r2
+    denom = a * e - b * b
+    # candidate 1: p2 against segment 1
+    best, x0, x1, x2 = _point_seg(p20, p21, p22, p10, p11, p12, d10, d11, d12, a)
+    y0, y1, y2 = p20, p21, p22
+    # candidate 2: q2 against segment 1
+    dist, c0, c1, c2 = _point_seg(q20, q21, q22, p10, p11, p12, d10, d11, d12, a)
+    if dist < best:
+        best, x0, x1, x2, y0, y1, y2 = dist, c0, c1, c2, q20, q21, q22
+    # candidate 3: p1 against segment 2
+    dist, c0, c1, c2 = _point_seg(p10, p11, p12, p20, p21, p22, d20, d21, d22, e)
+    if dist < best:
+        best, x0, x1, x2, y0, y1, y2 = dist, p10, p11, p12, c0, c1, c2
+    # candidate 4: q1 against segment 2
+    dist, c0, c1, c2 = _point_seg(q10, q11, q12, p20, p21, p22, d20, d21, d22, e)
+    if dist < best:
+        best, x0, x1, x2, y0, y1, y2 = dist, q10, q11, q12, c0, c1, c2
+    # candidate 5: the interior critical point (not parallel)
+    if denom > 0.0:
+        s = (b * f - c * e) / denom
+        t = (a * f - b * c) / denom
+        s = 0.0 if s < 0.0 else (1.0 if s > 1.0 else s)
+        t = 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
+        i0 = p10 + s * d10
+        i1 = p11 + s * d11
+        i2 = p12 + s * d12
+        j0 = p20 + t * d20
+        j1 = p21 + t * d21
+        j2 = p22 + t * d22
+        g0 = i0 - j0
+        g1 = i1 - j1
+        g2 = i2 - j2
+        dist = math.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
+        if dist < best:
+            best, x0, x1, x2, y0, y1, y2 = dist, i0, i1, i2, j0, j1, j2
+    C[k, 0] = x0
+    C[k, 1] = x1
+    C[k, 2] = x2
+    C[k + 1, 0] = y0
+    C[k + 1, 1] = y1
+    C[k + 1, 2] = y2
+    return best
+
+
+@njit(inline="always", **_OPTS)
+def _normal(C, k, d10, d11, d12, d20, d21, d22):
+    """Unit normal from C[k] towards C[k+1], with the reference's fallbacks."""
+    tiny = 1e-300
+    v0 = C[k + 1, 0] - C[k, 0]
+    v1 = C[k + 1, 1] - C[k, 1]
+    v2 = C[k + 1, 2] - C[k, 2]
+    n = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+    if n > tiny:
+        return v0 / n, v1 / n, v2 / n
+    x0 = d11 * d22 - d12 * d21
+    x1 = d12 * d20 - d10 * d22
+    x2 = d10 * d21 - d11 * d20
+    nx = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+    if nx > tiny:
+        return x0 / nx, x1 / nx, x2 / nx
+    b0, b1, b2 = d10, d11, d12
+    if not math.sqrt(d10 * d10 + d11 * d11 + d12 * d12) > 0.0:
+        b0, b1, b2 = d20, d21, d22
+    # cross with the axis of the smallest |component| (first on ties, as np.argmin)
+    a0, a1, a2 = abs(b0), abs(b1), abs(b2)
+    if a0 <= a1 and a0 <= a2:
+        y0, y1, y2 = 0.0, b2, -b1            # b x e_x
+    elif a1 <= a2:
+        y0, y1, y2 = -b2, 0.0, b0            # b x e_y
+    else:
+        y0, y1, y2 = b1, -b0, 0.0            # b x e_z
+    ny = math.sqrt(y0 * y0 + y1 * y1 + y2 * y2)
+    if ny > tiny:
+        return y0 / ny, y1 / ny, y2 / ny
+    return 0.0, 0.0, 1.0
+
+
+@njit(**_OPTS)
+def capsule_pairs(solids, radii, ij):
+    """Signed distances and witness points of capsule pairs over a batch.
+
+    Parameters
+    ----------
+    solids : ndarray, shape (n, n_solids, 2, 3)
+        Segment end points of every solid, per item (C-contiguous float64).
+    radii : ndarray, shape (n_solids,)
+    ij : ndarray of intp, shape (n_pairs, 2)
+        The solids of each pair.
+
+    Returns
+    -------
+    dist : ndarray, shape (n, n_pairs)
+    witness : ndarray, shape (n, n_pairs, 2, 3)
+    """
+    n = solids.shape[0]
+    P = ij.shape[0]
+    dist = np.empty((n, P))
+    wit = np.empty((n, P, 2, 3))
+    C = np.empty((2, 3))
+    for m in range(n):
+        for k in range(P):
+            i = ij[k, 0]
+            j = ij[k, 1]
+            p10 = solids[m, i, 0, 0]
+            p11 = solids[m, i, 0, 1]
+            p12 = solids[m, i, 0, 2]
+            q10 = solids[m, i, 1, 0]
+            q11 = solids[m, i, 1, 1]
+            q12 = solids[m, i, 1, 2]
+            p20 = solids[m, j, 0, 0]
+            p21 = solids[m, j, 0, 1]
+            p22 = solids[m, j, 0, 2]
+            q20 = solids[m, j, 1, 0]
+            q21 = solids[m, j, 1, 1]
+            q22 = solids[m, j, 1, 2]
+            d = _seg_seg(p10, p11, p12, q10, q11, q12, p20, p21, p22, q20, q21, q22, C, 0)
+            n0, n1, n2 = _normal(C, 0, q10 - p10, q11 - p11, q12 - p12,
+                                 q20 - p20, q21 - p21, q22 - p22)
+            r1 = radii[i]
+            r2 = radii[j]
+            dist[m, k] = d - r1 - r2
+            wit[m, k, 0, 0] = C[0, 0] + r1 * n0
+            wit[m, k, 0, 1] = C[0, 1] + r1 * n1
+            wit[m, k, 0, 2] = C[0, 2] + r1 * n2
+            wit[m, k, 1, 0] = C[1, 0] - r2 * n0
+            wit[m, k, 1, 1] = C[1, 1] - r2 * n1
+            wit[m, k, 1, 2] = C[1, 2] - r2 * n2
+    return dist, wit
