@@ -1,0 +1,219 @@
+"""Collisions wherever a pose is made (issue 20, item 4): tracker, planner, workspace, synthesis.
+
+Every clearance here is checked against :func:`athenakin.collision.clearance` called
+independently (batch == loop), and the carriages give an exact reference: both lie on
+the rail's axis, so the clearance of ``carriage_a`` and ``carriage_b`` is
+``(q2 - q1) - carriage_length - r_a - r_b`` in closed form.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+import athenakin as ak
+from athenakin.collision import Bodies, Environment, clearance
+from athenakin.errors import InvalidInputError
+from athenakin.motion import (
+    CollisionError,
+    Margins,
+    SafetyViolationError,
+    Tracker,
+    TrackFlag,
+    TrackingError,
+    plan,
+    track,
+)
+
+D = ak.Design.default()
+T = ak.default_rcm_frame(D)
+Q0 = np.array([-0.10, 0.10, 0.45])
+BODIES = Bodies.default(D)
+#: Gap q2 - q1 at which the carriages touch (m): their length plus both radii.
+TOUCH = (BODIES.geometry.carriage_length + BODIES.radius["carriage_a"]
+         + BODIES.radius["carriage_b"])
+SQUARE = np.array([[0.25, 0.0, 0.0], [0.27, -0.02, 0.0], [0.27, -0.02, 0.02],
+                   [0.25, 0.0, 0.02], [0.25, 0.0, 0.0]])
+
+
+def _closing_stream(n: int = 41, gap_end: float = 0.06) -> np.ndarray:
+    """q1 and q2 move towards each other (gap 0.2 m -> ``gap_end``), q3 fixed."""
+    gap = np.linspace(Q0[1] - Q0[0], gap_end, n)
+    return np.stack([-gap / 2, gap / 2, np.full(n, Q0[2])], axis=-1)
+
+
+def _reference(q: np.ndarray, slots: np.ndarray, **kw: object) -> tuple[np.ndarray, list]:
+    """Least clearance and closest pair of each row, one clearance() call per row."""
+    d, pairs = [], []
+    for qi, k in zip(q, slots, strict=True):
+        c = clearance(qi, T, D, slot=int(k), **kw)  # type: ignore[arg-type]
+        d.append(float(c.min_distance))
+        pairs.append(c.pairs[int(c.closest_pair)] if c.closest_pair >= 0 else ("", ""))
+    return np.array(d), pairs
+
+
+# --------------------------------------------------------------------------------------
+# tracker
+# --------------------------------------------------------------------------------------
+def test_tracker_default_checks_nothing() -> None:
+    log = track(_closing_stream(), T, D)
+    assert np.all(np.isnan(log.clearance)) and np.all(log.closest_pair == "")
+    bits = TrackFlag.COLLISION | TrackFlag.NEAR_COLLISION
+    assert not np.any(log.flags & int(bits))
+    tr = Tracker(T, D, q0=Q0)
+    assert tr.clearance_margin is None and math.isnan(tr.pose.clearance)
+
+
+def test_tracker_flags_the_carriages_closing() -> None:
+    qs = _closing_stream()
+    margin = 0.01
+    log = track(qs, T, D, bodies=BODIES, clearance_margin=margin)
+    gap = qs[:, 1] - qs[:, 0]
+    # batch == loop: each sample against its own clearance() call in the tracked slot
+    ref, pairs = _reference(qs, log.slot, bodies=BODIES)
+    assert_allclose(log.clearance, ref, rtol=0, atol=1e-12)
+    assert [tuple(p) for p in log.closest_pair] == [tuple(p) for p in pairs]
+    # the carriages give an upper bound in closed form, reached once they are the closest
+    assert np.all(log.clearance <= gap - TOUCH + 1e-12)
+    deep = gap < TOUCH - 0.01
+    assert deep.any()
+    assert_allclose(log.clearance[deep], gap[deep] - TOUCH, rtol=0, atol=1e-12)
+    assert np.all(log.closest_pair[deep] == ["carriage_a", "carriage_b"])
+    coll = (log.flags & int(TrackFlag.COLLISION)) != 0
+    near = (log.flags & int(TrackFlag.NEAR_COLLISION)) != 0
+    np.testing.assert_array_equal(coll, log.clearance < 0)
+    np.testing.assert_array_equal(near, log.clearance < margin)
+    assert coll.any() and (near & ~coll).any() and (~near).any()
+    # the Tracker, one update at a time, gives the same poses as track()'s batch
+    tr = Tracker(T, D, q0=qs[0], bodies=BODIES, clearance_margin=margin)
+    poses = [tr.pose] + [tr.update(q) for q in qs[1:]]
+    assert_allclose([p.clearance for p in poses], log.clearance, rtol=0, atol=0)
+    assert [int(p.flags) for p in poses] == log.flags.tolist()
+    assert [p.closest_pair for p in poses] == [tuple(p) for p in log.closest_pair]
+
+
+def test_tracker_margin_alone_uses_the_default_bodies() -> None:
+    qs = _closing_stream(11)
+    a = track(qs, T, D, clearance_margin=0.0)
+    b = track(qs, T, D, bodies=Bodies.default(D), clearance_margin=0.0)
+    assert_allclose(a.clearance, b.clearance, rtol=0, atol=0)
+    # margin 0: NEAR_COLLISION exactly where the bodies overlap
+    near = (a.flags & int(TrackFlag.NEAR_COLLISION)) != 0
+    np.testing.assert_array_equal(near, a.clearance < 0)
+    assert Tracker(T, D, q0=Q0, environment=Environment()).clearance_margin == 0.005
+
+
+def test_tracker_raise_on_collision_names_the_pair() -> None:
+    qs = _closing_stream()
+    with pytest.raises(TrackingError, match="'carriage_a' and 'carriage_b'") as ei:
+        track(qs, T, D, bodies=BODIES, raise_on="COLLISION")
+    log = track(qs, T, D, bodies=BODIES)
+    first = int(np.flatnonzero(log.clearance < 0)[0])
+    assert ei.value.pose.sample == first and ei.value.pose.clearance < 0
+    tr = Tracker(T, D, q0=qs[0], bodies=BODIES, raise_on="COLLISION")
+    with pytest.raises(TrackingError, match="COLLISION") as ei2:
+        for q in qs[1:]:
+            tr.update(q)
+    assert ei2.value.pose.sample == first
+
+
+def test_tracker_environment_obstacle() -> None:
+    """A halfspace below the rail: the rail and the carriages lie on it, all else above."""
+    env = Environment().halfspace([0.0, 0.0, -0.01], [0.0, 0.0, 1.0], name="table")
+    tr = Tracker(T, D, q0=Q0, environment=env, clearance_margin=0.0)
+    c = clearance(Q0, T, D, slot=tr.pose.slot, environment=env)
+    assert_allclose(tr.pose.clearance, c.min_distance, rtol=0, atol=1e-12)
+    # the carriage (radius 25 mm) reaches 15 mm below the table's surface
+    assert tr.pose.closest_pair[1] == "table" and tr.pose.clearance == pytest.approx(-0.015,
+                                                                                      abs=1e-12)
+    assert TrackFlag.COLLISION in tr.pose.flags
+
+
+@pytest.mark.parametrize(("kw", "err", "match"), [
+    ({"clearance_margin": -0.001}, InvalidInputError, "clearance_margin"),
+    ({"clearance_margin": math.nan}, InvalidInputError, "clearance_margin"),
+    ({"clearance_margin": 5.0}, InvalidInputError, "clearance_margin"),
+    ({"bodies": "default"}, TypeError, "bodies"),
+    ({"environment": [1, 2]}, TypeError, "environment"),
+])
+def test_tracker_bad_collision_options_are_named(kw: dict, err: type, match: str) -> None:
+    with pytest.raises(err, match=match):
+        Tracker(T, D, q0=Q0, **kw)
+    with pytest.raises(err, match=match):
+        track(_closing_stream(3), T, D, **kw)
+
+
+def test_lost_samples_are_not_checked() -> None:
+    qs = np.array([Q0, [math.nan, 0.1, 0.45], Q0])
+    log = track(qs, T, D, bodies=BODIES)
+    assert not log.valid[1] and math.isnan(log.clearance[1])
+    assert np.isfinite(log.clearance[[0, 2]]).all()
+
+
+# --------------------------------------------------------------------------------------
+# planner
+# --------------------------------------------------------------------------------------
+def _slots(traj: object) -> np.ndarray:
+    """Slot 8 m + 4 r of each sample (the bodies depend on the mode and sign of p only)."""
+    return 8 * (traj.mode == -1) + 4 * (traj.p < 0)  # type: ignore[attr-defined]
+
+
+def test_plan_without_check_is_unchanged() -> None:
+    traj = plan(SQUARE, T, D)
+    assert traj.clearance is None and traj.closest_pair is None
+    assert traj.clearance_margin is None
+
+
+def test_plan_records_the_clearance_of_every_sample() -> None:
+    traj = plan(SQUARE[:3], T, D, rate=100.0, bodies=BODIES, clearance_margin=0.0)
+    assert traj.clearance_margin == 0.0 and traj.clearance is not None
+    ref, pairs = _reference(traj.q, _slots(traj), bodies=BODIES)
+    assert_allclose(traj.clearance, ref, rtol=0, atol=1e-12)
+    assert [tuple(p) for p in traj.closest_pair] == [tuple(p) for p in pairs]
+    assert np.all(traj.clearance >= 0)
+
+
+def test_plan_refuses_the_first_sample_too_close() -> None:
+    """A sphere on the tip's path: the error names the first sample within the margin."""
+    mid = 0.5 * (SQUARE[0] + SQUARE[1])
+    centre = (T @ np.append(mid, 1.0))[:3]            # on the path, in the base frame
+    env = Environment().sphere(centre, 0.004, name="tumour")
+    margin = 0.003
+    free = plan(SQUARE[:2], T, D, rate=200.0)
+    ref, pairs = _reference(free.q, _slots(free), bodies=BODIES, environment=env)
+    first = int(np.flatnonzero(ref < margin)[0])
+    with pytest.raises(CollisionError) as ei:
+        plan(SQUARE[:2], T, D, rate=200.0, bodies=BODIES, environment=env,
+             clearance_margin=margin)
+    e = ei.value
+    assert isinstance(e, SafetyViolationError) and e.limit == "clearance"
+    assert e.index == first and e.time == pytest.approx(free.t[first], abs=1e-12)
+    assert e.pair == pairs[first] and "tumour" in e.pair
+    assert e.value == pytest.approx(ref[first], abs=1e-12) and e.bound == margin
+    assert f"sample {first} at t = {free.t[first]:.4f} s" in str(e)
+    assert "'tumour'" in str(e)
+
+
+def test_plan_collision_comes_before_a_kinematic_limit_but_after_an_earlier_geometric_one(
+) -> None:
+    """The carriages: a margin larger than their clearance everywhere refuses sample 0."""
+    traj = plan(SQUARE[:2], T, D, rate=100.0, bodies=BODIES, clearance_margin=0.0)
+    big = float(np.max(traj.clearance)) + 0.001
+    with pytest.raises(CollisionError) as ei:
+        plan(SQUARE[:2], T, D, rate=100.0, bodies=BODIES, clearance_margin=big)
+    assert ei.value.index == 0
+    # a singularity margin broken at sample 0 too: the existing check reports it first
+    with pytest.raises(SafetyViolationError) as ei2:
+        plan(SQUARE[:2], T, D, rate=100.0, bodies=BODIES, clearance_margin=big,
+             margins=Margins(p=10.0))
+    assert ei2.value.limit == "p" and not isinstance(ei2.value, CollisionError)
+
+
+def test_plan_bad_collision_options_are_named() -> None:
+    with pytest.raises(InvalidInputError, match="clearance_margin"):
+        plan(SQUARE[:2], T, D, clearance_margin=-1.0)
+    with pytest.raises(TypeError, match="bodies"):
+        plan(SQUARE[:2], T, D, bodies={"link_a": 0.01})
