@@ -217,3 +217,57 @@ def test_plan_bad_collision_options_are_named() -> None:
         plan(SQUARE[:2], T, D, clearance_margin=-1.0)
     with pytest.raises(TypeError, match="bodies"):
         plan(SQUARE[:2], T, D, bodies={"link_a": 0.01})
+
+
+# --------------------------------------------------------------------------------------
+# command line
+# --------------------------------------------------------------------------------------
+def test_cli_track_with_bodies_reports_and_writes_the_clearance(tmp_path, capsys) -> None:
+    from athenakin.cli import main
+
+    qs = _closing_stream(21)
+    src = tmp_path / "stream.csv"
+    src.write_text("q1_m,q2_m,q3_m\n" + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in qs.tolist()))
+    bodies = tmp_path / "design.toml"
+    bodies.write_text(BODIES.with_radius(carriage_a=0.03).to_toml())
+    out = tmp_path / "log.csv"
+    assert main(["track", str(src), "--bodies", str(bodies), "--clearance-margin", "0.002",
+                 "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "COLLISION:" in text and "least clearance: " in text
+    assert "between carriage_a and carriage_b" in text
+    lines = out.read_text().splitlines()
+    header = lines[0].split(",")
+    assert header[-3:] == ["clearance_m", "closest_a", "closest_b"]
+    ref = track(qs, T, D, bodies=BODIES.with_radius(carriage_a=0.03), clearance_margin=0.002)
+    got = np.array([float(ln.split(",")[-3]) for ln in lines[1:]])
+    assert_allclose(got, ref.clearance, rtol=0, atol=0)
+    # no collision option: the file keeps its columns
+    assert main(["track", str(src), "-o", str(out), "--force"]) == 0
+    assert out.read_text().splitlines()[0].split(",")[-1] == "flag_names"
+
+
+def test_cli_plan_environment_refused_with_the_pair(tmp_path, capsys) -> None:
+    from athenakin.cli import main
+
+    src = tmp_path / "path.csv"
+    src.write_text("x_m,y_m,z_m\n0.25,0,0\n0.27,-0.02,0\n")
+    mid = (T @ np.append(0.5 * (SQUARE[0] + SQUARE[1]), 1.0))[:3]
+    env = tmp_path / "env.toml"
+    env.write_text(Environment().sphere(mid, 0.004, name="tumour").to_toml())
+    out = tmp_path / "traj.json"
+    code = main(["plan", str(src), "-o", str(out), "--no-plots", "--rate", "200",
+                 "--environment", str(env), "--clearance-margin", "0.003"])
+    err = capsys.readouterr().err
+    assert code == 1 and "CollisionError" in err and "'tumour'" in err and "sample " in err
+    assert not out.exists()
+    assert main(["plan", str(src), "-o", str(out), "--no-plots", "--rate", "200",
+                 "--clearance-margin", "0"]) == 0
+    assert "least clearance: " in capsys.readouterr().out
+    import json
+
+    obj = json.loads(out.read_text())
+    assert obj["clearance_margin_m"] == 0.0 and len(obj["clearance_m"]) == len(obj["t_s"])
+    assert main(["plan", str(src), "-o", str(out), "--no-plots", "--force",
+                 "--clearance-margin", "-1"]) == 1
+    assert "--clearance-margin" in capsys.readouterr().err
