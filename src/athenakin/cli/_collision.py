@@ -1,5 +1,7 @@
-"""Collision options shared by ``track`` and ``plan``: ``--bodies``, ``--environment``,
-``--clearance-margin`` (athenakin.collision, imported only when one is given)."""
+"""Collision options of ``track`` and ``plan``: bodies, environment, clearance margin.
+
+:mod:`athenakin.collision` is imported only when one of them is given.
+"""
 
 from __future__ import annotations
 

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import add_design_option, add_setup_options, load_design, load_rcm
 from ._collision import add_collision_options, collision_options
+from ._common import add_design_option, add_setup_options, load_design, load_rcm
 from ._output import add_force_option, outputs
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._collision import add_collision_options, collision_options
 from ._common import (
     add_design_option,
     add_setup_options,
@@ -16,7 +17,6 @@ from ._common import (
     load_design,
     load_rcm,
 )
-from ._collision import add_collision_options, collision_options
 from ._output import Outputs, add_force_option, outputs
 
 #: Smallest jump threshold (mm or deg): below it, the threshold in SI units underflows.

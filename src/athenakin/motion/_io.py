@@ -213,8 +213,11 @@ def _all_numbers(cells: list[str]) -> bool:
 
 # --------------------------------------------------------------------------------------
 def trajectory_columns(traj: Trajectory) -> list[str]:
-    """Column names of the trajectory CSV (jerk columns only with a jerk limit; clearance
-    columns ``clearance_m, closest_a, closest_b`` only when collisions were checked)."""
+    """Column names of the trajectory CSV.
+
+    Jerk columns only with a jerk limit; :data:`CLEARANCE_COLUMNS` only when
+    collisions were checked.
+    """
     cols = ["t_s", "q1_m", "q2_m", "q3_m", "qd1_m_s", "qd2_m_s", "qd3_m_s",
             "qdd1_m_s2", "qdd2_m_s2", "qdd3_m_s2"]
     if traj.qddd is not None:

@@ -696,8 +696,8 @@ def track(q_stream: ArrayLike, T_b_e: ArrayLike, design: Design | None = None,
     qs = check_array(q_stream, "q_stream", (3,), allow_nonfinite=True)
     if qs.ndim != 2 or qs.shape[0] < 1:
         raise InvalidInputError(f"q_stream: expected shape (N, 3) with N >= 1, got {qs.shape}")
-    coll = {k: options.pop(k) for k in ("bodies", "environment", "clearance_margin")
-            if k in options}
+    coll: dict[str, object] = {k: options.pop(k) for k in
+                               ("bodies", "environment", "clearance_margin") if k in options}
     if any(v is not None for v in coll.values()):
         poses = _track_checked(qs, T_b_e, design, coll, options)
     else:
