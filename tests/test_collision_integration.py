@@ -271,3 +271,146 @@ def test_cli_plan_environment_refused_with_the_pair(tmp_path, capsys) -> None:
     assert main(["plan", str(src), "-o", str(out), "--no-plots", "--force",
                  "--clearance-margin", "-1"]) == 1
     assert "--clearance-margin" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------------------------
+# synthesis
+# --------------------------------------------------------------------------------------
+def _task() -> object:
+    from athenakin.synthesis import Task
+
+    return Task(rcm=T[:3, 3], axis=T[:3, 0], half_angle=0.45, depth=(0.2, 0.3))
+
+
+def _independent_collision_metrics(design: ak.Design, task: object, bodies: Bodies, n: int,
+                                   k: int, margin: float = 0.0) -> tuple[float, float]:
+    """Reach the task samples, place the bodies in all 16 slots, pick each sample's slot."""
+    from athenakin.synthesis import reachability
+
+    s, q, mode, _ = reachability(design, task, samples=n, seed=0)  # type: ignore[arg-type]
+    q, mode, depth = q[:k], mode[:k], s.depth[:k]
+    ok = mode != 0
+    c = clearance(np.where(ok[:, None], q, 0.0), task.T_b_e, design,  # type: ignore[attr-defined]
+                  slot="all", bodies=bodies)
+    p_neg = design.tool_length - depth < 0
+    slot = 8 * (mode == -1) + 4 * p_neg
+    d = c.min_distance[np.arange(k), slot]
+    # the FK slot with p > 0 sits at index 8 m (or the first valid sibling)
+    d = np.where(ok, d, np.nan)
+    free = ok & (d >= margin)
+    return float(np.count_nonzero(free)) / k, float(np.nanmin(d))
+
+
+def test_evaluate_design_collision_columns() -> None:
+    from athenakin.synthesis import COLLISION_COLUMNS, METRIC_COLUMNS, evaluate_design
+    from athenakin.synthesis._metrics import collision_spec
+
+    task = _task()
+    m0 = evaluate_design(D, task, samples=3000)  # type: ignore[arg-type]
+    assert set(COLLISION_COLUMNS) <= set(m0) == set(METRIC_COLUMNS)
+    assert all(math.isnan(m0[c]) for c in COLLISION_COLUMNS)
+    big = Bodies.default(D).with_radius(instrument=0.004)
+    for margin in (0.0, 0.01):
+        m = evaluate_design(D, task, samples=3000,  # type: ignore[arg-type]
+                            collision=collision_spec(bodies=big, collision_samples=1500,
+                                                     clearance_margin=margin))
+        free, least = _independent_collision_metrics(D, task, big, 3000, 1500, margin)
+        assert m["collision_free_coverage"] == pytest.approx(free, abs=0)
+        assert m["min_clearance"] == pytest.approx(least, abs=1e-12)
+        assert 0 <= m["collision_free_coverage"] <= m0["coverage"] + 0.05
+        # everything else is as without the check
+        assert all(m[c] == m0[c] or (math.isnan(m[c]) and math.isnan(m0[c]))
+                   for c in METRIC_COLUMNS if c not in COLLISION_COLUMNS)
+
+
+def test_evaluate_design_scaled_bodies_follow_l1() -> None:
+    from athenakin.synthesis import evaluate_design
+    from athenakin.synthesis._metrics import collision_spec
+
+    task = _task()
+    big = ak.Design(l1=0.4, l2=0.1, l3=0.3, l4=0.15, l5=0.45, q_min=D.q_min, q_max=D.q_max)
+    for design in (D, big):
+        scaled = evaluate_design(design, task, samples=2000,  # type: ignore[arg-type]
+                                 collision=collision_spec(bodies="scaled"))
+        free, least = _independent_collision_metrics(
+            design, task, Bodies.default(design, scale_with_design=True), 2000, 2000)
+        assert scaled["collision_free_coverage"] == free
+        assert scaled["min_clearance"] == pytest.approx(least, abs=1e-12)
+    # the reference design's l1 is the reference length: scaled == default radii
+    a = evaluate_design(D, task, samples=2000, collision=collision_spec(bodies="scaled"))  # type: ignore[arg-type]
+    b = evaluate_design(D, task, samples=2000, collision=collision_spec(bodies="default"))  # type: ignore[arg-type]
+    assert a["min_clearance"] == b["min_clearance"]
+
+
+@pytest.mark.parametrize(("kw", "err", "match"), [
+    ({"bodies": "huge"}, InvalidInputError, "bodies"),
+    ({"bodies": 3}, TypeError, "bodies"),
+    ({"environment": "table"}, TypeError, "environment"),
+    ({"clearance_margin": -0.1}, InvalidInputError, "clearance_margin"),
+    ({"collision_samples": 0}, InvalidInputError, "collision_samples"),
+])
+def test_synthesis_bad_collision_options_are_named(kw: dict, err: type, match: str) -> None:
+    pytest.importorskip("dask")
+    pytest.importorskip("pandas")
+    from athenakin.synthesis import evaluate
+
+    with pytest.raises(err, match=match):
+        evaluate([D], _task(), samples=100, scheduler="synchronous", **kw)  # type: ignore[arg-type]
+
+
+def test_evaluate_study_with_collisions(tmp_path) -> None:
+    pytest.importorskip("dask")
+    pytest.importorskip("pandas")
+    from athenakin.synthesis import StudyMismatchError, evaluate, evaluate_design
+    from athenakin.synthesis._metrics import collision_spec
+
+    task = _task()
+    designs = [D, ak.Design(l1=0.35, l2=0.1, l3=0.25, l4=0.15, l5=0.4, q_min=D.q_min,
+                            q_max=D.q_max)]
+    out = tmp_path / "study"
+    df = evaluate(designs, task, samples=800, scheduler="synchronous", out=out,  # type: ignore[arg-type]
+                  bodies="scaled", collision_samples=500)
+    for i, d in enumerate(designs):
+        m = evaluate_design(d, task, samples=800,  # type: ignore[arg-type]
+                            collision=collision_spec(bodies="scaled", collision_samples=500))
+        assert df["collision_free_coverage"].iloc[i] == m["collision_free_coverage"]
+        assert df["min_clearance"].iloc[i] == m["min_clearance"]
+    # resuming the same study reads it back; the same folder without the check is another study
+    again = evaluate(designs, task, samples=800, scheduler="synchronous", out=out,  # type: ignore[arg-type]
+                     bodies="scaled", collision_samples=500)
+    assert again["min_clearance"].tolist() == df["min_clearance"].tolist()
+    with pytest.raises(StudyMismatchError):
+        evaluate(designs, task, samples=800, scheduler="synchronous", out=out)  # type: ignore[arg-type]
+    plain = evaluate(designs, task, samples=800, scheduler="synchronous")  # type: ignore[arg-type]
+    assert plain["min_clearance"].isna().all()
+
+
+def test_check_constraints_named() -> None:
+    from athenakin.synthesis import check_constraints
+
+    assert check_constraints({"min_clearance": (">=", 0)}) == {"min_clearance": (">=", 0.0)}
+    assert check_constraints(None) == {}
+    with pytest.raises(InvalidInputError, match="unknown metric 'nope'"):
+        check_constraints({"nope": (">=", 0)})
+    with pytest.raises(InvalidInputError, match=r"constraints\['min_clearance'\]"):
+        check_constraints({"min_clearance": ("==", 0)})
+    with pytest.raises(InvalidInputError, match="bound"):
+        check_constraints({"min_clearance": (">=", math.nan)})
+    with pytest.raises(TypeError, match="constraints"):
+        check_constraints([("min_clearance", ">=", 0)])
+
+
+def test_optimize_with_a_clearance_constraint_and_objective() -> None:
+    pytest.importorskip("pymoo")
+    pytest.importorskip("dask")
+    from athenakin.synthesis import optimize
+
+    r = optimize(_task(), population=6, generations=2, samples=400, seed=5,  # type: ignore[arg-type]
+                 scheduler="synchronous",
+                 objectives={"collision_free_coverage": "max", "size": "min"},
+                 constraints={"min_clearance": (">=", -0.02)})
+    assert r.constraints == {"min_clearance": (">=", -0.02)}
+    assert r.table["min_clearance"].notna().any()       # the check ran (default bodies)
+    assert len(r.front) and (r.front["min_clearance"] >= -0.02).all()
+    feasible = r.table["valid"] & (r.table["coverage"] > 0) & (r.table["min_clearance"] >= -0.02)
+    assert set(r.front["design"]) <= set(r.table["design"][feasible])
