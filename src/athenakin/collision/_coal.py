@@ -34,8 +34,8 @@ def coal_shape(obstacle: Obstacle) -> Any:
     if obstacle.kind == "mesh":
         model = coal.BVHModelOBBRSS()
         model.beginModel(len(obstacle.faces), len(obstacle.vertices))
-        model.addSubModel(np.ascontiguousarray(obstacle.vertices, dtype=np.float64),
-                          np.ascontiguousarray(obstacle.faces, dtype=np.int64))
+        model.addVertices(np.ascontiguousarray(obstacle.vertices, dtype=np.float64))
+        model.addTriangles(np.ascontiguousarray(obstacle.faces, dtype=np.int64))
         model.endModel()
         if obstacle.convex:
             model.buildConvexHull(True, "Qt")

@@ -26,6 +26,9 @@ __all__ = ["point_segment", "segment_segment", "capsule_capsule", "capsule_halfs
 
 F = NDArray[np.float64]
 
+#: Relative size below which ``c2 - c1`` is rounding noise (:func:`separation_normal`).
+NOISE = 1e-12
+
 
 def _dot(x: F, y: F) -> F:
     return np.einsum("...i,...i->...", x, y)
@@ -114,6 +117,9 @@ def segment_segment(p1: F, q1: F, p2: F, q2: F) -> tuple[F, F, F]:
 def separation_normal(c1: F, c2: F, d1: F, d2: F) -> F:
     """Unit vector from ``c1`` towards ``c2``; where they coincide, one normal to both segments.
 
+    "Coincide" is ``|c2 - c1| <= NOISE (|c1| + |d1| + |d2|)``, the rounding noise of
+    the closest points of touching or crossing segments.
+
     ``d1``, ``d2`` are the segment directions: the fallback is ``d1 x d2`` (crossing
     segments), else a vector normal to ``d1`` (or ``d2``; parallel or degenerate), else
     ``+z``.
@@ -121,8 +127,13 @@ def separation_normal(c1: F, c2: F, d1: F, d2: F) -> F:
     v = c2 - c1
     n = np.linalg.norm(v, axis=-1)
     tiny = 1e-300
+    # below rounding noise (relative 1e-12 of the coordinates), c2 - c1 has no direction
+    noise = NOISE * (np.linalg.norm(c1, axis=-1) + np.linalg.norm(d1, axis=-1)
+                     + np.linalg.norm(d2, axis=-1)) + tiny
     x = np.cross(d1, d2)
     nx = np.linalg.norm(x, axis=-1)
+    # d1 x d2 of (nearly) parallel segments is rounding noise too: no direction
+    nx = np.where(nx > NOISE * np.linalg.norm(d1, axis=-1) * np.linalg.norm(d2, axis=-1), nx, 0.0)
     base = np.where(np.linalg.norm(d1, axis=-1)[..., None] > 0, d1, d2)
     # a vector normal to base: cross with the axis of its smallest component
     ax = np.eye(3)[np.argmin(np.abs(base), axis=-1)]
@@ -130,7 +141,7 @@ def separation_normal(c1: F, c2: F, d1: F, d2: F) -> F:
     ny = np.linalg.norm(y, axis=-1)
     z = np.broadcast_to(np.array([0.0, 0.0, 1.0]), v.shape)
     with np.errstate(invalid="ignore", divide="ignore"):
-        out = np.where((n > tiny)[..., None], v / np.where(n > tiny, n, 1.0)[..., None],
+        out = np.where((n > noise)[..., None], v / np.where(n > tiny, n, 1.0)[..., None],
                        np.where((nx > tiny)[..., None], x / np.where(nx > tiny, nx, 1.0)[..., None],
                                 np.where((ny > tiny)[..., None],
                                          y / np.where(ny > tiny, ny, 1.0)[..., None], z)))

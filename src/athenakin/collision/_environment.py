@@ -189,11 +189,11 @@ def _load_mesh(path: Path, scale: float, name: str) -> tuple[NDArray[np.float64]
     except ImportError:  # pragma: no cover - the extra is installed in CI
         raise ImportError("Environment.mesh needs trimesh: pip install 'athenakin[collision]'") \
             from None
-    if not path.is_file():
-        raise InvalidInputError(f"{name}: mesh file {str(path)!r} does not exist")
     if path.suffix.lower() not in (".stl", ".obj", ".ply"):
         raise InvalidInputError(f"{name}: expected an STL, OBJ or PLY file, got "
                                 f"{path.suffix or 'no extension'} ({str(path)!r})")
+    if not path.is_file():
+        raise InvalidInputError(f"{name}: mesh file {str(path)!r} does not exist")
     try:
         mesh = trimesh.load(str(path), force="mesh", process=False)
     except Exception as exc:  # trimesh raises many kinds on a bad file

@@ -11,13 +11,17 @@ touching and crossing segments are exact. Witness points and the normal fallback
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numba import njit
 
 __all__ = ["capsule_pairs", "segment_distance"]
 
-_OPTS = dict(error_model="numpy", cache=True, nogil=True, fastmath=False)
+_OPTS: dict[str, Any] = dict(error_model="numpy", cache=True, nogil=True, fastmath=False)
+#: As :data:`athenakin.collision._distance.NOISE` (the layers keep one value each; a test
+#: checks they agree).
+NOISE = 1e-12
 
 
 @njit(inline="always", **_OPTS)
@@ -122,13 +126,17 @@ def _normal(C, k, d10, d11, d12, d20, d21, d22):
     v1 = C[k + 1, 1] - C[k, 1]
     v2 = C[k + 1, 2] - C[k, 2]
     n = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
-    if n > tiny:
+    noise = NOISE * (math.sqrt(C[k, 0] * C[k, 0] + C[k, 1] * C[k, 1] + C[k, 2] * C[k, 2])
+                     + math.sqrt(d10 * d10 + d11 * d11 + d12 * d12)
+                     + math.sqrt(d20 * d20 + d21 * d21 + d22 * d22)) + tiny
+    if n > noise:
         return v0 / n, v1 / n, v2 / n
     x0 = d11 * d22 - d12 * d21
     x1 = d12 * d20 - d10 * d22
     x2 = d10 * d21 - d11 * d20
     nx = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
-    if nx > tiny:
+    if nx > tiny and nx > NOISE * math.sqrt(d10 * d10 + d11 * d11 + d12 * d12) * math.sqrt(
+            d20 * d20 + d21 * d21 + d22 * d22):
         return x0 / nx, x1 / nx, x2 / nx
     b0, b1, b2 = d10, d11, d12
     if not math.sqrt(d10 * d10 + d11 * d11 + d12 * d12) > 0.0:
