@@ -5,11 +5,8 @@ the caller asks for it (``bodies=``, ``environment=`` or ``clearance_margin=``):
 check costs far more than the tracker's scalar fast path. The collision package is
 imported inside the functions, so that the motion subpackage still loads without it.
 
-The bodies of a forward-kinematics slot depend only on its assembly mode and the
-sign of ``p`` (the U-joint and spherical-joint branches ``b, w`` describe the same
-pose of every body), so a sample is checked in slot ``8 m + 4 r`` and, where that
-slot is degenerate (exactly at ``sin u2 = 0`` or ``sin u4 = 0``), in the first
-valid sibling ``8 m + 4 r + 2 b + w``.
+Each sample is checked in the slot of its labels (assembly mode, sign of ``p``):
+:func:`athenakin.analysis._collision.labelled_clearance`.
 """
 
 from __future__ import annotations
@@ -82,15 +79,6 @@ def clearance_check(design: Design, bodies: object, environment: object,
     return ClearanceCheck(bodies=bodies, environment=environment, margin=float(margin))
 
 
-def _pair_names(result: Any, index: NDArray[np.int64]) -> NDArray[np.str_]:
-    """The ``(n, 2)`` names of the closest pair of each item of a ``Clearance``."""
-    pairs = np.array([tuple(p) for p in result.pairs], dtype=str).reshape(-1, 2)
-    out = np.full(index.shape + (2,), "", dtype=pairs.dtype if pairs.size else "<U1")
-    ok = index >= 0
-    out[ok] = pairs[index[ok]]
-    return out
-
-
 def sample_clearance(check: ClearanceCheck, q: NDArray[np.float64], T_b_e: NDArray[np.float64],
                      design: Design, mode: NDArray[np.int64], p_sign: NDArray[np.int64]
                      ) -> tuple[NDArray[np.float64], NDArray[np.str_]]:
@@ -115,28 +103,10 @@ def sample_clearance(check: ClearanceCheck, q: NDArray[np.float64], T_b_e: NDArr
     pair : ndarray of str, shape (n, 2)
         The two names (body, body or obstacle) of the least distance ("" where NaN).
     """
-    from ..collision import clearance
+    from ..analysis._collision import labelled_clearance
 
-    n = q.shape[0]
-    dist = np.full(n, np.nan)
-    index = np.full(n, -1, dtype=np.int64)
-    names: NDArray[np.str_] = np.full((n, 2), "", dtype="<U64")
-    group = 8 * (np.asarray(mode) == -1) + 4 * (np.asarray(p_sign) == -1)
-    for g in np.unique(group):
-        todo = np.flatnonzero(group == g)
-        for slot in range(int(g), int(g) + 4):
-            if todo.size == 0:
-                break
-            res = clearance(q[todo], T_b_e, design, slot=slot, bodies=check.bodies,
-                            environment=check.environment)
-            md = np.asarray(res.min_distance, dtype=float).reshape(-1)
-            ok = np.asarray(res.valid, dtype=bool).reshape(-1)
-            dist[todo[ok]] = md[ok]       # +inf where no pair is checked
-            cp = np.asarray(res.closest_pair).reshape(-1).astype(np.int64)
-            index[todo[ok]] = cp[ok]
-            names[todo[ok]] = _pair_names(res, cp[ok])
-            todo = todo[~ok]
-    return dist, names
+    return labelled_clearance(q, T_b_e, design, np.asarray(mode), np.asarray(p_sign) == -1,
+                              bodies=check.bodies, environment=check.environment)
 
 
 def describe_pair(pair: NDArray[np.str_] | tuple[str, str]) -> str:

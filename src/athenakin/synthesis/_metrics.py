@@ -144,31 +144,20 @@ def _collision_metrics(spec: CollisionSpec, design: Design, T: NDArray[np.float6
                        q: NDArray[np.float64], mode: NDArray[np.int64],
                        depth: NDArray[np.float64]) -> dict[str, float]:
     """``collision_free_coverage`` and ``min_clearance`` over the first ``spec.samples``."""
-    from ..collision import clearance
+    from ..analysis._collision import labelled_clearance
 
     k = min(spec.samples, q.shape[0])
     q, mode, depth = q[:k], mode[:k], depth[:k]
-    bodies = spec.bodies_for(design)
-    dist = np.full(k, np.nan)
     reached = mode != 0
-    # the bodies of a slot depend on its mode and the sign of p only (docs/collision.md)
-    group = 8 * (mode == -1) + 4 * (design.tool_length - depth < 0)
-    for g in np.unique(group[reached]):
-        todo = np.flatnonzero(reached & (group == g))
-        for slot in range(int(g), int(g) + 4):
-            if todo.size == 0:
-                break
-            res = clearance(q[todo], T, design, slot=slot, bodies=bodies,
-                            environment=spec.environment)
-            md = np.asarray(res.min_distance, dtype=float).reshape(-1)
-            ok = np.asarray(res.valid, dtype=bool).reshape(-1)
-            dist[todo[ok]] = md[ok]
-            todo = todo[~ok]
+    dist, _ = labelled_clearance(np.where(reached[:, None], q, 0.0), T, design, mode,
+                                 design.tool_length - depth < 0,
+                                 bodies=spec.bodies_for(design), environment=spec.environment)
     with np.errstate(invalid="ignore"):
         free = reached & (dist >= spec.margin)
     seen = ~np.isnan(dist)
     return {"collision_free_coverage": float(np.count_nonzero(free)) / k,
             "min_clearance": float(np.min(dist[seen])) if np.any(seen) else math.nan}
+
 
 #: Conditions whose value is a length (m); the others are dimensionless sines.
 _LENGTH_CONDITIONS = ("circles_tangent", "d_on_rail", "k1_degenerate", "ab_coincide",
