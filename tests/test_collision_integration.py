@@ -4,12 +4,6 @@ Every clearance here is checked against :func:`athenakin.collision.clearance` ca
 independently (batch == loop), and the carriages give an exact reference: both lie on
 the rail's axis, so the clearance of ``carriage_a`` and ``carriage_b`` is
 ``(q2 - q1) - carriage_length - r_a - r_b`` in closed form.
-
-The comparisons between two computations leave the links of the spherical mechanism
-out (``RIGID``): ``athenakin._mechanism`` puts ``S_4`` on the side of ``O_s`` by the
-sign of ``a4 . (S_3 - RCM)``, a product that is zero for every configuration (the
-``u4`` axis is perpendicular to the instrument), so the side is rounding noise and may
-differ between a batch and a loop (reported to the collision core).
 """
 
 from __future__ import annotations
@@ -43,8 +37,6 @@ TOUCH = (BODIES.geometry.carriage_length + BODIES.radius["carriage_a"]
          + BODIES.radius["carriage_b"])
 SQUARE = np.array([[0.25, 0.0, 0.0], [0.27, -0.02, 0.0], [0.27, -0.02, 0.02],
                    [0.25, 0.0, 0.02], [0.25, 0.0, 0.0]])
-#: The default bodies without the two links whose placement is rounding noise (above).
-RIGID = BODIES.with_excluded("sphere_link_1", "sphere_link_2")
 
 
 def _closing_stream(n: int = 41, gap_end: float = 0.06) -> np.ndarray:
@@ -78,10 +70,10 @@ def test_tracker_default_checks_nothing() -> None:
 def test_tracker_flags_the_carriages_closing() -> None:
     qs = _closing_stream()
     margin = 0.01
-    log = track(qs, T, D, bodies=RIGID, clearance_margin=margin)
+    log = track(qs, T, D, bodies=BODIES, clearance_margin=margin)
     gap = qs[:, 1] - qs[:, 0]
     # batch == loop: each sample against its own clearance() call in the tracked slot
-    ref, pairs = _reference(qs, log.slot, bodies=RIGID)
+    ref, pairs = _reference(qs, log.slot, bodies=BODIES)
     assert_allclose(log.clearance, ref, rtol=0, atol=1e-12)
     assert [tuple(p) for p in log.closest_pair] == [tuple(p) for p in pairs]
     # the carriages give an upper bound in closed form, reached once they are the closest
@@ -96,11 +88,28 @@ def test_tracker_flags_the_carriages_closing() -> None:
     np.testing.assert_array_equal(near, log.clearance < margin)
     assert coll.any() and (near & ~coll).any() and (~near).any()
     # the Tracker, one update at a time, gives the same poses as track()'s batch
-    tr = Tracker(T, D, q0=qs[0], bodies=RIGID, clearance_margin=margin)
+    tr = Tracker(T, D, q0=qs[0], bodies=BODIES, clearance_margin=margin)
     poses = [tr.pose] + [tr.update(q) for q in qs[1:]]
     assert_allclose([p.clearance for p in poses], log.clearance, rtol=0, atol=0)
     assert [int(p.flags) for p in poses] == log.flags.tolist()
     assert [p.closest_pair for p in poses] == [tuple(p) for p in log.closest_pair]
+
+
+@pytest.mark.parametrize("slot", [1, 3, 9])
+def test_tracker_checks_the_tracked_branch(slot: int) -> None:
+    """The wrist branch places the spherical mechanism's middle joint: the tracked slot counts."""
+    qs = _closing_stream(9)
+    log = track(qs, T, D, slot=slot, bodies=BODIES)
+    assert (log.slot % 2 == 1).all()
+    ref, pairs = _reference(qs, log.slot, bodies=BODIES)
+    assert_allclose(log.clearance, ref, rtol=0, atol=1e-12)
+    other, _ = _reference(qs, log.slot - 1, bodies=BODIES)
+    s1 = np.array([clearance(q, T, D, slot=int(k), bodies=BODIES).distances
+                   for q, k in zip(qs, log.slot, strict=True)])
+    s0 = np.array([clearance(q, T, D, slot=int(k) - 1, bodies=BODIES).distances
+                   for q, k in zip(qs, log.slot, strict=True)])
+    assert np.max(np.abs(s1 - s0)) > 1e-3   # the branches place the bodies differently
+    assert other.shape == ref.shape
 
 
 def test_tracker_margin_alone_uses_the_default_bodies() -> None:
@@ -176,9 +185,9 @@ def test_plan_without_check_is_unchanged() -> None:
 
 
 def test_plan_records_the_clearance_of_every_sample() -> None:
-    traj = plan(SQUARE[:3], T, D, rate=100.0, bodies=RIGID, clearance_margin=0.0)
+    traj = plan(SQUARE[:3], T, D, rate=100.0, bodies=BODIES, clearance_margin=0.0)
     assert traj.clearance_margin == 0.0 and traj.clearance is not None
-    ref, pairs = _reference(traj.q, _slots(traj), bodies=RIGID)
+    ref, pairs = _reference(traj.q, _slots(traj), bodies=BODIES)
     assert_allclose(traj.clearance, ref, rtol=0, atol=1e-12)
     assert [tuple(p) for p in traj.closest_pair] == [tuple(p) for p in pairs]
     assert np.all(traj.clearance >= 0)
@@ -191,10 +200,10 @@ def test_plan_refuses_the_first_sample_too_close() -> None:
     env = Environment().sphere(centre, 0.004, name="tumour")
     margin = 0.003
     free = plan(SQUARE[:2], T, D, rate=200.0)
-    ref, pairs = _reference(free.q, _slots(free), bodies=RIGID, environment=env)
+    ref, pairs = _reference(free.q, _slots(free), bodies=BODIES, environment=env)
     first = int(np.flatnonzero(ref < margin)[0])
     with pytest.raises(CollisionError) as ei:
-        plan(SQUARE[:2], T, D, rate=200.0, bodies=RIGID, environment=env,
+        plan(SQUARE[:2], T, D, rate=200.0, bodies=BODIES, environment=env,
              clearance_margin=margin)
     e = ei.value
     assert isinstance(e, SafetyViolationError) and e.limit == "clearance"
@@ -317,7 +326,7 @@ def test_evaluate_design_collision_columns() -> None:
     m0 = evaluate_design(D, task, samples=3000)  # type: ignore[arg-type]
     assert set(COLLISION_COLUMNS) <= set(m0) == set(METRIC_COLUMNS)
     assert all(math.isnan(m0[c]) for c in COLLISION_COLUMNS)
-    big = RIGID.with_radius(instrument=0.004)
+    big = BODIES.with_radius(instrument=0.004)
     for margin in (0.0, 0.01):
         m = evaluate_design(D, task, samples=3000,  # type: ignore[arg-type]
                             collision=collision_spec(bodies=big, collision_samples=1500,
@@ -345,8 +354,7 @@ def test_evaluate_design_scaled_bodies_follow_l1() -> None:
                                     bodies=Bodies.default(design, scale_with_design=True)))
         assert scaled["collision_free_coverage"] == given["collision_free_coverage"]
         assert scaled["min_clearance"] == given["min_clearance"]
-        rigid = Bodies.default(design, scale_with_design=True).with_excluded(
-            "sphere_link_1", "sphere_link_2")
+        rigid = Bodies.default(design, scale_with_design=True)
         m = evaluate_design(design, task, samples=2000,  # type: ignore[arg-type]
                             collision=collision_spec(bodies=rigid))
         free, least = _independent_collision_metrics(design, task, rigid, 2000, 2000)
@@ -457,13 +465,13 @@ def test_instrument_cone_collision_layers() -> None:
 
     plain = instrument_cone(T, D, resolution=(12, 9, 8))
     assert plain.clearance is None and plain.collision_free is None and plain.blocked is None
-    ic = instrument_cone(T, D, resolution=(12, 9, 8), bodies=RIGID, clearance_margin=0.002)
+    ic = instrument_cone(T, D, resolution=(12, 9, 8), bodies=BODIES, clearance_margin=0.002)
     np.testing.assert_array_equal(ic.reachable, plain.reachable)
     A, P, Pp = np.meshgrid(ic.azimuth, ic.polar, ic.p, indexing="ij")
     d_e = ak.direction_from_angles(A.ravel(), P.ravel())
     q, res = ak.q_from_instrument(T, d_e, Pp.ravel(), D, errors="flag")
     reach = ic.reachable.ravel()
-    ref = _labelled_reference(q, reach, Pp.ravel() < 0, res.mode, T, bodies=RIGID)
+    ref = _labelled_reference(q, reach, Pp.ravel() < 0, res.mode, T, bodies=BODIES)
     assert_allclose(ic.clearance.ravel(), ref, rtol=0, atol=1e-12)
     assert np.isnan(ic.clearance[~ic.reachable]).all()
     np.testing.assert_array_equal(ic.collision_free, ic.reachable & (ic.clearance >= 0.002))
@@ -472,7 +480,7 @@ def test_instrument_cone_collision_layers() -> None:
     s = workspace_summary(ic=ic)
     assert s["cone collision-free solid angle [sr]"] <= s["cone solid angle [sr]"] + 1e-12
     # a larger margin frees no more
-    ic2 = instrument_cone(T, D, resolution=(12, 9, 8), bodies=RIGID, clearance_margin=0.02)
+    ic2 = instrument_cone(T, D, resolution=(12, 9, 8), bodies=BODIES, clearance_margin=0.02)
     assert not (ic2.collision_free & ~ic.collision_free).any()
     assert (ic2.blocked | ~ic.blocked).all()
 
@@ -481,20 +489,20 @@ def test_tool_tip_and_point_workspace_collision_layers(tmp_path) -> None:
     from athenakin.analysis import load_npz, point_workspace, save_npz, tool_tip_workspace
 
     env = Environment().halfspace([0.0, 0.0, -0.05], [0.0, 0.0, 1.0], name="floor")
-    tw = tool_tip_workspace(T, D, resolution=7, bodies=RIGID, environment=env)
+    tw = tool_tip_workspace(T, D, resolution=7, bodies=BODIES, environment=env)
     X, Y, Z = np.meshgrid(tw.x, tw.y, tw.z, indexing="ij")
     tips = np.stack([X.ravel(), Y.ravel(), Z.ravel()], -1)
     q, res = ak.q_from_tool_tip(T, tips, D, errors="flag")
     reach = tw.reachable.ravel()
     ref = _labelled_reference(q, reach, np.linalg.norm(tips, axis=-1) > D.tool_length,
-                              res.mode, T, bodies=RIGID, environment=env)
+                              res.mode, T, bodies=BODIES, environment=env)
     assert_allclose(tw.clearance.ravel(), ref, rtol=0, atol=1e-12)
     np.testing.assert_array_equal(tw.collision_free, tw.reachable & (tw.clearance >= 0))
-    pw = point_workspace(D, resolution=7, bodies=RIGID, clearance_margin=0.0)
+    pw = point_workspace(D, resolution=7, bodies=BODIES, clearance_margin=0.0)
     P = np.stack(np.meshgrid(pw.x, pw.y, pw.z, indexing="ij"), -1).reshape(-1, 3)
     r = pw.reachable.ravel()
     ref = _labelled_reference(pw.q.reshape(-1, 3), r, np.zeros(len(P), bool),
-                              pw.mode.ravel().astype(int), T, bodies=RIGID)
+                              pw.mode.ravel().astype(int), T, bodies=BODIES)
     assert_allclose(pw.clearance.ravel(), ref, rtol=0, atol=1e-12)
     # the layers survive a save / load round trip; maps without them load as before
     path = save_npz(tmp_path / "tw.npz", tw, design=D)

@@ -1,13 +1,16 @@
 """Clearance of configurations given by their labels (private; :mod:`athenakin.collision` lazily).
 
 The workspace maps, the motion planner and tracker and the design metrics know each
-configuration by its actuators ``q``, its assembly mode and the sign of ``p``. The
-bodies of a forward-kinematics slot depend only on those two labels (the U-joint and
-spherical-joint branches ``b, w`` describe the same pose of every body), so a
-configuration is checked in slot ``8 m + 4 r`` and, where that slot is degenerate
-(exactly at ``sin u2 = 0`` or ``sin u4 = 0``), in its first valid sibling
-``8 m + 4 r + 2 b + w``. The collision package is imported inside the function, so
-that the callers load without it.
+configuration by its actuators ``q``, its assembly mode, the sign of ``p`` and (the
+tracker) the spherical joint's branch. The bodies of forward-kinematics slot
+``k = 8 m + 4 r + 2 b + w`` depend on ``m``, ``r`` and ``w`` only: the U-joint branch
+``b`` describes the same pose of every body, while the wrist branch ``w`` puts the
+middle joint ``S_4`` of the spherical mechanism on one side of the instrument or the
+other (``athenakin._mechanism``). Without a wrist label the branch ``sin u4 > 0``
+(``w = 0``) is taken, the tracker's default. Where the slot is degenerate (exactly at
+``sin u2 = 0`` or ``sin u4 = 0``) its siblings are tried: the other ``b``, then the
+other ``w``. The collision package is imported inside the function, so that the
+callers load without it.
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ __all__ = ["labelled_clearance"]
 
 def labelled_clearance(q: NDArray[np.float64], T_b_e: NDArray[np.float64], design: Design,
                        mode: NDArray[np.int64], p_negative: NDArray[np.bool_], *,
-                       bodies: Any, environment: Any
+                       bodies: Any, environment: Any, wrist: NDArray[np.int64] | None = None
                        ) -> tuple[NDArray[np.float64], NDArray[np.str_]]:
     """Least clearance of each configuration and the pair that has it.
 
@@ -40,6 +43,8 @@ def labelled_clearance(q: NDArray[np.float64], T_b_e: NDArray[np.float64], desig
         Whether ``p < 0`` (``O_s`` beyond the RCM).
     bodies : athenakin.collision.Bodies
     environment : athenakin.collision.Environment or None
+    wrist : ndarray of int, shape (n,), optional
+        Spherical-joint branch (+1: ``sin u4 > 0``, -1); default +1.
 
     Returns
     -------
@@ -57,9 +62,12 @@ def labelled_clearance(q: NDArray[np.float64], T_b_e: NDArray[np.float64], desig
     dist = np.full(n, np.nan)
     names: NDArray[np.str_] = np.full((n, 2), "", dtype="<U64")
     group = 8 * (mode == -1) + 4 * np.asarray(p_negative, dtype=bool).reshape(-1)
+    if wrist is not None:
+        group = group + (np.asarray(wrist).reshape(-1) == -1)
     for g in np.unique(group[mode != 0]):
         todo = np.flatnonzero((mode != 0) & (group == g))
-        for slot in range(int(g), int(g) + 4):
+        w = int(g) % 2
+        for slot in (int(g), int(g) + 2, int(g) - w + 1 - w, int(g) - w + 3 - w):
             if todo.size == 0:
                 break
             res = clearance(q[todo], T_b_e, design, slot=slot, bodies=bodies,

@@ -5,8 +5,8 @@ the caller asks for it (``bodies=``, ``environment=`` or ``clearance_margin=``):
 check costs far more than the tracker's scalar fast path. The collision package is
 imported inside the functions, so that the motion subpackage still loads without it.
 
-Each sample is checked in the slot of its labels (assembly mode, sign of ``p``):
-:func:`athenakin.analysis._collision.labelled_clearance`.
+Each sample is checked in the slot of its labels (assembly mode, sign of ``p``, the
+spherical joint's branch): :func:`athenakin.analysis._collision.labelled_clearance`.
 """
 
 from __future__ import annotations
@@ -80,7 +80,8 @@ def clearance_check(design: Design, bodies: object, environment: object,
 
 
 def sample_clearance(check: ClearanceCheck, q: NDArray[np.float64], T_b_e: NDArray[np.float64],
-                     design: Design, mode: NDArray[np.int64], p_sign: NDArray[np.int64]
+                     design: Design, mode: NDArray[np.int64], p_sign: NDArray[np.int64],
+                     wrist: NDArray[np.int64] | None = None
                      ) -> tuple[NDArray[np.float64], NDArray[np.str_]]:
     """Least clearance of each sample and the pair that has it.
 
@@ -93,6 +94,9 @@ def sample_clearance(check: ClearanceCheck, q: NDArray[np.float64], T_b_e: NDArr
     design : Design
     mode, p_sign : ndarray of int, shape (n,)
         Assembly mode and sign of ``p`` of each sample (+1 / -1).
+    wrist : ndarray of int, shape (n,), optional
+        Spherical-joint branch (+1 / -1, default +1): it places the middle joint of the
+        spherical mechanism.
 
     Returns
     -------
@@ -106,7 +110,7 @@ def sample_clearance(check: ClearanceCheck, q: NDArray[np.float64], T_b_e: NDArr
     from ..analysis._collision import labelled_clearance
 
     return labelled_clearance(q, T_b_e, design, np.asarray(mode), np.asarray(p_sign) == -1,
-                              bodies=check.bodies, environment=check.environment)
+                              bodies=check.bodies, environment=check.environment, wrist=wrist)
 
 
 def describe_pair(pair: NDArray[np.str_] | tuple[str, str]) -> str:

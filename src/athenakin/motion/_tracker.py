@@ -464,7 +464,8 @@ class Tracker:
         check = self._check
         assert check is not None
         dist, pair = sample_clearance(check, np.array([pose.q]), self.T_b_e, self.design,
-                                      np.array([pose.mode]), np.array([pose.p_sign]))
+                                      np.array([pose.mode]), np.array([pose.p_sign]),
+                                      np.array([pose.wrist]))
         d = float(dist[0])
         flags = int(pose.flags)
         if d < check.margin:              # False for NaN (no valid slot: nothing to check)
@@ -726,7 +727,8 @@ def _track_checked(qs: NDArray[np.float64], T_b_e: ArrayLike, design: Design | N
     idx = np.flatnonzero(ok)
     dist, pair = sample_clearance(check, np.array([poses[i].q for i in idx]).reshape(-1, 3),
                                   tr.T_b_e, tr.design, np.array([poses[i].mode for i in idx]),
-                                  np.array([poses[i].p_sign for i in idx]))
+                                  np.array([poses[i].p_sign for i in idx]),
+                                  np.array([poses[i].wrist for i in idx]))
     for j, i in enumerate(idx):
         d = float(dist[j])
         flags = int(poses[i].flags)
