@@ -524,3 +524,42 @@ def test_workspace_bad_collision_options_are_named() -> None:
         point_workspace(D, resolution=4, environment="floor")
     with pytest.raises(InvalidInputError, match="T_b_e"):
         point_workspace(D, resolution=4, clearance_margin=0.0, T_b_e=np.eye(4)[:3])
+
+
+def test_workspace_figures_show_the_collision_layers() -> None:
+    pytest.importorskip("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from athenakin.analysis import instrument_cone, tool_tip_workspace
+    from athenakin.analysis.figures import (
+        figure_instrument_cone,
+        plot_cone_chart,
+        plot_tool_tip_slice,
+    )
+
+    ic = instrument_cone(T, D, resolution=(16, 9, 6), clearance_margin=0.0)
+    plain = instrument_cone(T, D, resolution=(16, 9, 6))
+    assert ic.blocked is not None and ic.blocked.any()
+
+    def labels(ax: object) -> list[str]:
+        leg = ax.get_legend()  # type: ignore[attr-defined]
+        return [] if leg is None else [t.get_text() for t in leg.get_texts()]
+
+    fig, axes = plt.subplots(1, 3)
+    assert "blocked by a collision" in labels(plot_cone_chart(ic, ax=axes[0]))
+    assert "blocked by a collision" not in labels(plot_cone_chart(plain, ax=axes[1]))
+    ax = plot_cone_chart(ic, quantity="clearance", ax=axes[2])
+    assert "clearance" in ax.collections[0].colorbar.ax.get_ylabel()
+    with pytest.raises(InvalidInputError, match="collision check"):
+        plot_cone_chart(plain, quantity="clearance", ax=axes[2])
+    plt.close(fig)
+    fig = figure_instrument_cone(ic)
+    assert any(a.get_title().startswith("Best clearance") for a in fig.axes)
+    plt.close(fig)
+    tw = tool_tip_workspace(T, D, resolution=9, clearance_margin=0.0)
+    fig, ax = plt.subplots()
+    assert labels(plot_tool_tip_slice(tw, ax=ax)) == ["bodies collide"]
+    plt.close(fig)
