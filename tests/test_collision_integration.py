@@ -563,3 +563,85 @@ def test_workspace_figures_show_the_collision_layers() -> None:
     fig, ax = plt.subplots()
     assert labels(plot_tool_tip_slice(tw, ax=ax)) == ["bodies collide"]
     plt.close(fig)
+
+
+# --------------------------------------------------------------------------------------
+# static views: solids
+# --------------------------------------------------------------------------------------
+def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    ab = b - a
+    t = np.clip(((p - a) @ ab) / max(ab @ ab, 1e-300), 0.0, 1.0)
+    return np.linalg.norm(p - (a + t[..., None] * ab), axis=-1)
+
+
+def test_capsule_surface_is_at_the_radius() -> None:
+    from athenakin.plot._solids import capsule_surface
+
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        a, b = rng.normal(size=(2, 3))
+        if rng.random() < 0.2:
+            b = a.copy()                                  # a sphere
+        r = float(rng.uniform(0.001, 0.5))
+        X, Y, Z = capsule_surface(a, b, r, n_around=12, n_cap=4)
+        P = np.stack([X, Y, Z], axis=-1).reshape(-1, 3)
+        assert_allclose(_segment_distance(P, a, b), r, rtol=0, atol=1e-12)
+        # both poles are reached: the surface spans the whole capsule
+        w = (b - a) / max(np.linalg.norm(b - a), 1e-300)
+        if np.linalg.norm(b - a) > 0:
+            s = (P - a) @ w
+            assert s.min() == pytest.approx(-r, abs=1e-12)
+            assert s.max() == pytest.approx(np.linalg.norm(b - a) + r, abs=1e-12)
+    with pytest.raises(InvalidInputError, match="radius"):
+        capsule_surface([0, 0, 0], [1, 0, 0], -1.0)
+    with pytest.raises(InvalidInputError, match="n_around"):
+        capsule_surface([0, 0, 0], [1, 0, 0], 1.0, n_around=2)
+
+
+def test_plot_robot_draws_the_bodies_and_the_closest_pair() -> None:
+    pytest.importorskip("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    from athenakin.plot import plot_robot
+    from athenakin.plot._solids import BODY_COLORS, CLOSEST_COLOR, COLLIDING_COLOR, draw_bodies
+
+    sticks = plot_robot(Q0, T, D)
+    n0 = sum(isinstance(c, Poly3DCollection) for c in sticks.collections)
+    plt.close(sticks.figure)
+    ax = plot_robot(Q0, T, D, bodies=True, show_labels=False)
+    solids = [c for c in ax.collections if isinstance(c, Poly3DCollection)]
+    assert len(solids) - n0 == len(BODIES.names)
+    texts = [t.get_text() for t in ax.texts]
+    ref = clearance(Q0, T, D, bodies=BODIES)
+    a, b = ref.pairs[int(ref.closest_pair)]
+    assert any(f"clearance {float(ref.min_distance) * 1e3:.1f} mm" in t and f"{a} - {b}" in t
+               for t in texts)
+    plt.close(ax.figure)
+    # overlapping carriages: the pair is drawn in the colliding colour
+    fig = plt.figure()
+    ax = fig.add_subplot(projection="3d")
+    q = np.array([-0.03, 0.03, 0.45])
+    c = draw_bodies(ax, q, T, D, bodies=BODIES)
+    assert bool(c.colliding) and c.pairs[int(c.closest_pair)] == ("carriage_a", "carriage_b")
+    faces = [np.asarray(s.get_facecolor())[:, :3].mean(axis=0) for s in ax.collections
+             if isinstance(s, Poly3DCollection)]
+    assert len(faces) == len(BODIES.names)
+
+    def cos(x: np.ndarray, name: str) -> float:
+        y = np.array(matplotlib.colors.to_rgb(name))
+        return float(x @ y / np.linalg.norm(x) / np.linalg.norm(y))
+
+    # shading scales the colours; their direction in RGB tells which colour was drawn
+    for f, name in zip(faces, BODIES.names, strict=True):
+        hot = cos(f, COLLIDING_COLOR) > cos(f, BODY_COLORS[name])
+        assert hot == (name in ("carriage_a", "carriage_b")), name
+    assert CLOSEST_COLOR != COLLIDING_COLOR
+    with pytest.raises(TypeError, match="bodies"):
+        draw_bodies(ax, q, T, D, bodies="thick")
+    with pytest.raises(InvalidInputError, match="alpha"):
+        draw_bodies(ax, q, T, D, alpha=0.0)
+    plt.close(fig)
