@@ -645,3 +645,57 @@ def test_plot_robot_draws_the_bodies_and_the_closest_pair() -> None:
     with pytest.raises(InvalidInputError, match="alpha"):
         draw_bodies(ax, q, T, D, alpha=0.0)
     plt.close(fig)
+
+
+# --------------------------------------------------------------------------------------
+# live app: solids, closest pair, clearance
+# --------------------------------------------------------------------------------------
+def test_app_bodies_view_meshes_and_clearance() -> None:
+    from athenakin.app._bodies import bodies_view, capsule_mesh, clearance_html
+    from athenakin.plot import robot_geometry
+
+    v, f = capsule_mesh([0.0, 0.0, 0.0], [0.1, 0.02, 0.0], 0.01, n_around=8, n_cap=2)
+    assert f.max() < len(v) and f.shape == (2 * 5 * 8, 3)
+    assert_allclose(_segment_distance(v.astype(float), np.zeros(3), np.array([0.1, 0.02, 0.0])),
+                    0.01, rtol=0, atol=1e-7)                     # float32 vertices
+    # outward normals: each triangle's normal points away from the segment
+    tri = v[f].astype(float)
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    ok = np.linalg.norm(n, axis=-1) > 1e-12
+    centre = tri.mean(axis=1)
+    t = np.clip(centre @ np.array([0.1, 0.02, 0.0]) / (0.1 ** 2 + 0.02 ** 2), 0, 1)
+    out = centre - t[:, None] * np.array([0.1, 0.02, 0.0])
+    assert np.all(np.sum(n[ok] * out[ok], axis=-1) > 0)
+    for q, colliding in ((Q0, False), (np.array([-0.03, 0.03, 0.45]), True)):
+        g = robot_geometry(q, T, D, slot=0)
+        bv = bodies_view(g, bodies=BODIES)
+        ref = clearance(q, T, D, bodies=BODIES)
+        assert bv.clearance == float(ref.min_distance) and bv.colliding == colliding
+        assert bv.pair == ref.pairs[int(ref.closest_pair)]
+        assert_allclose(bv.witness, ref.witness_points[int(ref.closest_pair)], rtol=0, atol=0)
+        assert [m.name for m in bv.meshes] == list(BODIES.names)
+        assert {m.name for m in bv.meshes if m.closest} == set(bv.pair)
+        text = clearance_html(bv)
+        assert f"{bv.clearance * 1e3:.1f} mm" in text and bv.pair[0] in text
+        assert ("collision" in text) == colliding
+
+
+def test_app_draws_the_bodies_in_process() -> None:
+    pytest.importorskip("viser")
+    from athenakin.app import AthenaApp
+
+    app = AthenaApp(port=0, backend="numpy")
+    try:
+        layer = app.bodies
+        assert layer.view is not None and set(layer._meshes) == set(BODIES.names)
+        ref = clearance(app.q, app.setup.T_b_e, app.setup.design, slot=app.view.geometry.slot)
+        assert layer.view.clearance == pytest.approx(float(ref.min_distance), abs=1e-12)
+        assert "clearance" in layer.readout.content
+        app.set_q([-0.03, 0.03, 0.45])                    # the carriages overlap
+        assert layer.view.colliding and layer.view.pair == ("carriage_a", "carriage_b")
+        assert "collision" in layer.readout.content
+        layer.checkbox.value = False
+        layer.update(app.view.geometry)
+        assert not layer._meshes and layer.readout.content == ""
+    finally:
+        app.stop()
