@@ -39,7 +39,8 @@ def test_mujoco_contacts_and_geom_distances_agree_with_clearance():
     bodies = Bodies.default(d)
     n_hit = 0
     for q, slot in configs:
-        m = mujoco.MjModel.from_xml_string(mjcf_from_design(d, T, q=q, slot=slot))
+        m = mujoco.MjModel.from_xml_string(mjcf_from_design(d, T, q=q, slot=slot,
+                                                             bodies=bodies))
         data = mujoco.MjData(m)
         mujoco.mj_resetDataKeyframe(m, data, 0)
         mujoco.mj_forward(m, data)
@@ -84,9 +85,12 @@ def test_mjcf_excludes_exactly_the_excluded_pairs():
                             mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b2))))
     want = {frozenset((COLLISION_BODY[x], COLLISION_BODY[y])) for x, y in b.excluded_pairs}
     assert excl == want
-    # no collision geoms on request; drawn geoms never collide
-    m0 = mujoco.MjModel.from_xml_string(mjcf_from_design(collision=False))
+    # the plain export has no collision geoms (it simulates contact-free, as before);
+    # collision=True alone gives the default bodies
+    m0 = mujoco.MjModel.from_xml_string(mjcf_from_design())
     assert m0.nexclude == 0 and not np.any(m0.geom_contype)
+    m1 = mujoco.MjModel.from_xml_string(mjcf_from_design(collision=True))
+    assert np.count_nonzero(m1.geom_contype) == len(BODIES)
 
 
 def test_urdf_collision_elements_placed_by_pinocchio():

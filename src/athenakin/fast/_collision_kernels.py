@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-__all__ = ["capsule_pairs", "segment_distance"]
+__all__ = ["capsule_pairs", "capsule_distances", "segment_distance"]
 
 _OPTS: dict[str, Any] = dict(error_model="numpy", cache=True, nogil=True, fastmath=False)
 #: As :data:`athenakin.collision._distance.NOISE` (the layers keep one value each; a test
@@ -25,22 +25,20 @@ NOISE = 1e-12
 
 
 @njit(inline="always", **_OPTS)
-def _point_seg(x0, x1, x2, a0, a1, a2, d0, d1, d2, dd):
-    """Closest point a + t d of a segment to x: (squared distance, c0, c1, c2)."""
-    t = 0.0
-    if dd > 0.0:
-        t = ((x0 - a0) * d0 + (x1 - a1) * d1 + (x2 - a2) * d2) / dd
-        if t < 0.0:
-            t = 0.0
-        elif t > 1.0:
-            t = 1.0
+def _point_seg(x0, x1, x2, a0, a1, a2, d0, d1, d2, inv_dd):
+    """Closest point a + t d of a segment to x: (squared distance, c0, c1, c2).
+
+    ``inv_dd`` is ``1 / (d . d)``, or 0 for a zero-length segment (then ``t = 0``).
+    """
+    t = ((x0 - a0) * d0 + (x1 - a1) * d1 + (x2 - a2) * d2) * inv_dd
+    t = min(max(t, 0.0), 1.0)
     c0 = a0 + t * d0
     c1 = a1 + t * d1
     c2 = a2 + t * d2
     e0 = x0 - c0
     e1 = x1 - c1
     e2 = x2 - c2
-    return math.sqrt(e0 * e0 + e1 * e1 + e2 * e2), c0, c1, c2
+    return e0 * e0 + e1 * e1 + e2 * e2, c0, c1, c2
 
 
 @njit(**_OPTS)
@@ -76,27 +74,28 @@ def _seg_seg(p10, p11, p12, q10, q11, q12, p20, p21, p22, q20, q21, q22, C, k):
     c = d10 * r0 + d11 * r1 + d12 * r2
     f = d20 * r0 + d21 * r1 + d22 * r2
     denom = a * e - b * b
+    inv_a = 1.0 / a if a > 0.0 else 0.0
+    inv_e = 1.0 / e if e > 0.0 else 0.0
     # candidate 1: p2 against segment 1
-    best, x0, x1, x2 = _point_seg(p20, p21, p22, p10, p11, p12, d10, d11, d12, a)
+    best, x0, x1, x2 = _point_seg(p20, p21, p22, p10, p11, p12, d10, d11, d12, inv_a)
     y0, y1, y2 = p20, p21, p22
     # candidate 2: q2 against segment 1
-    dist, c0, c1, c2 = _point_seg(q20, q21, q22, p10, p11, p12, d10, d11, d12, a)
+    dist, c0, c1, c2 = _point_seg(q20, q21, q22, p10, p11, p12, d10, d11, d12, inv_a)
     if dist < best:
         best, x0, x1, x2, y0, y1, y2 = dist, c0, c1, c2, q20, q21, q22
     # candidate 3: p1 against segment 2
-    dist, c0, c1, c2 = _point_seg(p10, p11, p12, p20, p21, p22, d20, d21, d22, e)
+    dist, c0, c1, c2 = _point_seg(p10, p11, p12, p20, p21, p22, d20, d21, d22, inv_e)
     if dist < best:
         best, x0, x1, x2, y0, y1, y2 = dist, p10, p11, p12, c0, c1, c2
     # candidate 4: q1 against segment 2
-    dist, c0, c1, c2 = _point_seg(q10, q11, q12, p20, p21, p22, d20, d21, d22, e)
+    dist, c0, c1, c2 = _point_seg(q10, q11, q12, p20, p21, p22, d20, d21, d22, inv_e)
     if dist < best:
         best, x0, x1, x2, y0, y1, y2 = dist, q10, q11, q12, c0, c1, c2
     # candidate 5: the interior critical point (not parallel)
     if denom > 0.0:
-        s = (b * f - c * e) / denom
-        t = (a * f - b * c) / denom
-        s = 0.0 if s < 0.0 else (1.0 if s > 1.0 else s)
-        t = 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
+        inv = 1.0 / denom
+        s = min(max((b * f - c * e) * inv, 0.0), 1.0)
+        t = min(max((a * f - b * c) * inv, 0.0), 1.0)
         i0 = p10 + s * d10
         i1 = p11 + s * d11
         i2 = p12 + s * d12
@@ -106,7 +105,7 @@ def _seg_seg(p10, p11, p12, q10, q11, q12, p20, p21, p22, q20, q21, q22, C, k):
         g0 = i0 - j0
         g1 = i1 - j1
         g2 = i2 - j2
-        dist = math.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
+        dist = g0 * g0 + g1 * g1 + g2 * g2
         if dist < best:
             best, x0, x1, x2, y0, y1, y2 = dist, i0, i1, i2, j0, j1, j2
     C[k, 0] = x0
@@ -115,7 +114,8 @@ def _seg_seg(p10, p11, p12, q10, q11, q12, p20, p21, p22, q20, q21, q22, C, k):
     C[k + 1, 0] = y0
     C[k + 1, 1] = y1
     C[k + 1, 2] = y2
-    return best
+    # candidates compared by squared distance (sqrt is monotonic): one sqrt, of the winner
+    return math.sqrt(best)
 
 
 @njit(inline="always", **_OPTS)
@@ -206,3 +206,26 @@ def capsule_pairs(solids, radii, ij):
             wit[m, k, 1, 1] = C[1, 1] - r2 * n1
             wit[m, k, 1, 2] = C[1, 2] - r2 * n2
     return dist, wit
+
+
+@njit(**_OPTS)
+def capsule_distances(solids, radii, ij):
+    """Signed distances only (no witness points) of capsule pairs over a batch.
+
+    Same arguments and the same ``dist`` as :func:`capsule_pairs`, which it matches
+    exactly; for callers that need no witness points (planners, design studies).
+    """
+    n = solids.shape[0]
+    P = ij.shape[0]
+    dist = np.empty((n, P))
+    C = np.empty((2, 3))
+    for m in range(n):
+        for k in range(P):
+            i = ij[k, 0]
+            j = ij[k, 1]
+            d = _seg_seg(solids[m, i, 0, 0], solids[m, i, 0, 1], solids[m, i, 0, 2],
+                         solids[m, i, 1, 0], solids[m, i, 1, 1], solids[m, i, 1, 2],
+                         solids[m, j, 0, 0], solids[m, j, 0, 1], solids[m, j, 0, 2],
+                         solids[m, j, 1, 0], solids[m, j, 1, 1], solids[m, j, 1, 2], C, 0)
+            dist[m, k] = d - radii[i] - radii[j]
+    return dist

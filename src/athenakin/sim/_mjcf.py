@@ -158,7 +158,7 @@ def _collision_geoms(root: ET.Element, bodies: Bodies, segs: dict[str, tuple[
 def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
                      q: ArrayLike | None = None, slot: int = 0, gravity: bool = True,
                      model_name: str = "athena", bodies: Bodies | None = None,
-                     collision: bool = True) -> str:
+                     collision: bool | None = None) -> str:
     """MJCF text of the closed-loop mechanism, assembled in a keyframe ``home``.
 
     Parameters
@@ -176,10 +176,13 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
         Standard gravity along ``-z_b`` (True) or none.
     model_name : str, keyword-only
     bodies : athenakin.collision.Bodies, keyword-only, optional
-        The capsules exported as collision geoms (default
-        :meth:`~athenakin.collision.Bodies.default` of the design).
-    collision : bool, keyword-only
-        Export the collision geoms (default True); False gives the model without them.
+        The capsules exported as collision geoms; giving them turns ``collision`` on.
+    collision : bool, keyword-only, optional
+        Export collision geoms (of ``bodies``, default
+        :meth:`~athenakin.collision.Bodies.default` of the design). Default: only when
+        ``bodies`` is given, so that the plain export simulates as before, free of
+        contacts (where the capsules overlap, MuJoCo's contacts push the mechanism off
+        its forward kinematics).
 
     Returns
     -------
@@ -200,11 +203,12 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     partly redundant, 1 ``weld``, 2 ``joint`` couplings), 3 degrees of freedom.
     Stroke limits become joint ranges and control ranges.
 
-    The drawn parts never collide (``contype = conaffinity = 0``). The capsules of
-    ``bodies`` are collision geoms ``collision_<body>`` (:func:`collision_geom_name`, group
-    :data:`COLLISION_GROUP`, massless) on the MJCF bodies of :data:`COLLISION_BODY`, and
-    every pair of ``bodies.excluded_pairs`` (those that share a joint, and the user's) is
-    a ``<contact><exclude>``: MuJoCo's own collision detection then reports contacts
+    The drawn parts never collide (``contype = conaffinity = 0``). With ``collision``,
+    the capsules of ``bodies`` are collision geoms ``collision_<body>``
+    (:func:`collision_geom_name`, group :data:`COLLISION_GROUP`, massless) on the MJCF
+    bodies of :data:`~athenakin.sim._layout.COLLISION_BODY`, and every pair of
+    ``bodies.excluded_pairs`` (those that share a joint, and the user's) is a
+    ``<contact><exclude>``: MuJoCo's own collision detection then reports contacts
     between the pairs that :func:`athenakin.collision.clearance` checks, with the same
     distances at the keyframe (tested). The actuator's capsule is its rod at the
     keyframe length, sliding with ``q3``.
@@ -317,8 +321,10 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     _sphere(setup, "rcm_setup", 0.006, "setup")
     _site(setup, "rcm_setup_frame")
 
+    if collision is None:
+        collision = bodies is not None
     if not isinstance(collision, bool):
-        raise TypeError(f"collision: expected a bool, got {type(collision).__name__}")
+        raise TypeError(f"collision: expected a bool or None, got {type(collision).__name__}")
     if collision:
         if bodies is None:
             bodies = Bodies.default(d)
