@@ -567,7 +567,7 @@ def instrument_cone(T_b_e: ArrayLike | None = None, design: Design | None = None
     if check is not None:
         cl = r["cl"].reshape(sh)
         free = _free(reach, cl, check.margin)
-        blocked = reach.any(axis=-1) & ~free.any(axis=-1)
+        blocked = np.asarray(reach.any(axis=-1) & ~free.any(axis=-1), dtype=bool)
     return InstrumentCone(azimuth=az, polar=pol, p=p, T_b_e=T, mode=r["m"].reshape(sh),
                           reachable=reach, p_min=p_min, p_max=p_max,
                           n_intervals=starts.sum(axis=-1), condition=r["c"].reshape(sh),

@@ -75,14 +75,14 @@ def capsule_surface(a: ArrayLike, b: ArrayLike, radius: float, *, n_around: int 
     helper = np.array([1.0, 0.0, 0.0]) if abs(w[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     u = np.cross(w, helper)
     u /= np.linalg.norm(u)
-    v = np.cross(w, u)
+    v_axis = np.cross(w, u)
     # profile: (position along the axis from a, distance from the axis)
     phi = np.linspace(0.0, 0.5 * np.pi, n_cap + 1)
     cap_a = np.stack([-r * np.cos(phi), r * np.sin(phi)], axis=-1)         # pole -> equator
     cap_b = np.stack([length + r * np.sin(phi), r * np.cos(phi)], axis=-1)  # equator -> pole
     prof = np.concatenate([cap_a, cap_b], axis=0)
     t = np.linspace(0.0, 2.0 * np.pi, n_around + 1)
-    ring = np.cos(t)[None, :, None] * u + np.sin(t)[None, :, None] * v
+    ring = np.cos(t)[None, :, None] * u + np.sin(t)[None, :, None] * v_axis
     P = a + prof[:, 0, None, None] * w + prof[:, 1, None, None] * ring
     return P[..., 0], P[..., 1], P[..., 2]
 
