@@ -699,3 +699,30 @@ def test_app_draws_the_bodies_in_process() -> None:
         assert not layer._meshes and layer.readout.content == ""
     finally:
         app.stop()
+
+
+def test_cli_workspace_and_synthesize_collision_options(tmp_path, capsys) -> None:
+    import json
+
+    from athenakin.cli import main
+
+    assert main(["workspace", "--resolution", "7", "--cone-resolution", "8", "6", "5",
+                 "--clearance-margin", "0", "--no-files", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)["summary"]
+    assert summary["cone collision-free solid angle [sr]"] <= summary["cone solid angle [sr]"]
+    assert "tool-tip collision-free volume [m^3]" in summary
+    assert main(["workspace", "--resolution", "7", "--cone-resolution", "8", "6", "5",
+                 "--no-files", "--json"]) == 0
+    assert "tool-tip collision-free volume [m^3]" not in json.loads(
+        capsys.readouterr().out)["summary"]
+    pytest.importorskip("dask")
+    pytest.importorskip("pandas")
+    task = tmp_path / "task.toml"
+    task.write_text(_task().to_toml())  # type: ignore[attr-defined]
+    args = ["synthesize", str(task), "--samples", "300", "--no-figures", "--json",
+            "--scheduler", "synchronous", "--collision-samples", "200"]
+    assert main([*args, "-o", str(tmp_path / "a"), "--bodies", "scaled"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["collisions"] and "min_clearance" in rep["reference"]
+    assert main([*args, "-o", str(tmp_path / "b"), "--min-clearance", "0"]) == 1
+    assert "--min-clearance" in capsys.readouterr().err

@@ -13,7 +13,8 @@ from typing import Any
 from ..design import Design
 
 
-def add_collision_options(p: argparse.ArgumentParser, *, what: str) -> None:
+def add_collision_options(p: argparse.ArgumentParser, *, what: str,
+                          default_margin: str = "0.005") -> None:
     """Add the three options; any of them turns the clearance check on."""
     g = p.add_argument_group("collisions (any of these turns the clearance check on)")
     g.add_argument("--bodies", type=Path, metavar="FILE",
@@ -24,7 +25,7 @@ def add_collision_options(p: argparse.ArgumentParser, *, what: str) -> None:
                    help="obstacles: a TOML file of [[environment.obstacle]] tables")
     g.add_argument("--clearance-margin", type=float, default=None, metavar="M",
                    help=f"least clearance between the bodies and to the obstacles, m; {what} "
-                        f"(default 0.005 when the check is on)")
+                        f"(default {default_margin} when the check is on)")
 
 
 def collision_options(args: argparse.Namespace, design: Design) -> dict[str, Any]:
