@@ -90,7 +90,7 @@ def test_tracker_flags_the_carriages_closing() -> None:
     # the Tracker, one update at a time, gives the same poses as track()'s batch
     tr = Tracker(T, D, q0=qs[0], bodies=BODIES, clearance_margin=margin)
     poses = [tr.pose] + [tr.update(q) for q in qs[1:]]
-    assert_allclose([p.clearance for p in poses], log.clearance, rtol=0, atol=0)
+    assert_allclose([p.clearance for p in poses], log.clearance, rtol=0, atol=1e-12)
     assert [int(p.flags) for p in poses] == log.flags.tolist()
     assert [p.closest_pair for p in poses] == [tuple(p) for p in log.closest_pair]
 
@@ -110,6 +110,38 @@ def test_tracker_checks_the_tracked_branch(slot: int) -> None:
                    for q, k in zip(qs, log.slot, strict=True)])
     assert np.max(np.abs(s1 - s0)) > 1e-3   # the branches place the bodies differently
     assert other.shape == ref.shape
+
+
+def test_tracker_places_the_bodies_as_the_mechanism_does() -> None:
+    """The tracker's scalar placement of the 19 points == athenakin._mechanism's, any slot."""
+    from athenakin._mechanism import mechanism_points
+    from athenakin.motion._clearance import PoseClearance
+
+    rng = np.random.default_rng(11)
+    geo = BODIES.with_geometry(ak.collision.BodyGeometry(carriage_length=0.08,
+                                                         sphere_radius=0.12, rail_margin=0.03))
+    fast = PoseClearance(D, T, geo)
+    checked = 0
+    for _ in range(60):
+        q = D.stroke_min + (D.stroke_max - D.stroke_min) * rng.random(3)
+        fk = ak.forward_kinematics(q, T, D, errors="flag")
+        for k in np.flatnonzero(fk.valid)[:: 3]:
+            try:
+                tr = Tracker(T, D, q0=q, slot=int(k))
+            except ak.errors.KinematicsError:
+                continue
+            pose = tr.pose
+            ref = mechanism_points(q, T, D, slot=int(k), geometry=geo.geometry).xyz
+            got = fast.points(pose.q, pose.p, pose.u, pose.O_s, pose.direction_b)
+            assert_allclose(got, ref, rtol=0, atol=1e-12)
+            d, pair = fast(pose.q, pose.p, pose.u, pose.O_s, pose.direction_b)
+            c = clearance(q, T, D, slot=int(k), bodies=geo)
+            assert d == pytest.approx(float(c.min_distance), abs=1e-12)
+            # the pair: that of the least distance (ties, e.g. link_a and link_b by symmetry,
+            # are broken by rounding)
+            assert float(c.distance(*pair)) == pytest.approx(d, abs=1e-12)
+            checked += 1
+    assert checked > 100
 
 
 def test_tracker_margin_alone_uses_the_default_bodies() -> None:
@@ -147,6 +179,14 @@ def test_tracker_environment_obstacle() -> None:
     assert tr.pose.closest_pair[1] == "table" and tr.pose.clearance == pytest.approx(-0.015,
                                                                                       abs=1e-12)
     assert TrackFlag.COLLISION in tr.pose.flags
+    # one update at a time (points from the pose) == track()'s batch (clearance())
+    qs = _closing_stream(9)
+    env2 = env.sphere([0.0, 0.3, 0.25], 0.05, name="lamp")
+    tr = Tracker(T, D, q0=qs[0], environment=env2, clearance_margin=0.0)
+    poses = [tr.pose] + [tr.update(q) for q in qs[1:]]
+    log = track(qs, T, D, environment=env2, clearance_margin=0.0)
+    assert_allclose([p.clearance for p in poses], log.clearance, rtol=0, atol=1e-12)
+    assert [int(p.flags) for p in poses] == log.flags.tolist()
 
 
 @pytest.mark.parametrize(("kw", "err", "match"), [

@@ -23,10 +23,11 @@ Collisions. Asked for with ``bodies=``, ``environment=`` or ``clearance_margin=`
 (:mod:`athenakin.collision`, imported then), every valid sample also gets the least
 clearance between the robot's bodies and to the obstacles, the pair that has it, and
 the flags ``COLLISION`` (clearance < 0: overlap) and ``NEAR_COLLISION`` (clearance
-below the margin, collisions included). The check is off by default: it costs a few
-microseconds per sample in the compiled kernel, but about a millisecond per call of
-:meth:`Tracker.update` (placing the bodies of one configuration in numpy), a hundred
-times the tracker's own work; :func:`track` checks a recorded stream in one batch.
+below the margin, collisions included). The check is off by default.
+:meth:`Tracker.update` places the bodies from the tracked pose in scalar arithmetic
+and calls the compiled capsule kernel once (tens of microseconds per sample, several
+times the tracker's own work; about a millisecond with obstacles); :func:`track` checks a
+recorded stream in one batch of :func:`athenakin.collision.clearance`.
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..parallel import TANGENT_TOL
 from ..robot import forward_kinematics
-from ._clearance import clearance_check, sample_clearance
+from ._clearance import PoseClearance, clearance_check, sample_clearance
 from ._errors import TrackingError
 from ._safety import Margins
 
@@ -415,6 +416,8 @@ class Tracker:
         self._raise_bits = int(self.raise_on)
         self._g = _Geometry(T, design)
         self._check = clearance_check(design, bodies, environment, clearance_margin)
+        self._pose_clearance = (None if self._check is None else PoseClearance(
+            design, T, self._check.bodies, self._check.environment))
         # fast-path thresholds: a candidate far from every singularity, and far enough
         # from the mode boundary that the other mode cannot be within the jump threshold
         self._watch = (max(margins.half_chord, self.jump_m), margins.h, margins.link,
@@ -463,10 +466,9 @@ class Tracker:
         """``pose`` with its clearance, closest pair and collision flags."""
         check = self._check
         assert check is not None
-        dist, pair = sample_clearance(check, np.array([pose.q]), self.T_b_e, self.design,
-                                      np.array([pose.mode]), np.array([pose.p_sign]),
-                                      np.array([pose.wrist]))
-        d = float(dist[0])
+        assert self._pose_clearance is not None       # the points from the pose, one call
+        d, names = self._pose_clearance(pose.q, pose.p, pose.u, pose.O_s, pose.direction_b)
+        pair = np.array([names])
         flags = int(pose.flags)
         if d < check.margin:              # False for NaN (no valid slot: nothing to check)
             flags |= _B["NEAR_COLLISION"]
