@@ -4,9 +4,11 @@ Group ``collision-pairs``; batch = capsule pairs (configurations x checked pairs
 default bodies, 53 per configuration), so "poses/s" reads pairs per second. Baseline:
 one ``coal.distance`` call per pair (Capsule-Capsule, shapes and transforms built
 beforehand, so only coal's own distance and its Python binding are timed). Targets: the
-compiled kernel at >= 2 M pairs/s on one core and >= 20x the per-pair coal calls. The other rows: the
-numpy reference on the same segments, and the whole :func:`athenakin.collision.clearance`
-(forward kinematics, the bodies' points, the pairs, the result) in one slot and in all 16.
+compiled kernel at >= 2 M pairs/s on one core and >= 20x the per-pair coal calls (coal
+computes the nearest points too: ``capsule_pairs``, with witness points, is the like-for-like
+row; ``capsule_distances`` gives the distances alone). The other rows: the numpy reference
+on the same segments, and the whole :func:`athenakin.collision.clearance` (forward
+kinematics, the bodies' points, the pairs, the result) in one slot and in all 16.
 The run's header prints the machine load (os.getloadavg).
 """
 

@@ -143,7 +143,7 @@ class Bodies:
             missing = [b for b in BODIES if b not in radii]
             if missing:
                 raise InvalidInputError(f"radii: missing the radius of {missing}")
-            radii = tuple(radii[b] for b in BODIES)  # type: ignore[index]
+            radii = tuple(radii[b] for b in BODIES)  # type: ignore[call-overload]
         if isinstance(radii, (str, bytes)) or not isinstance(radii, Iterable):
             raise TypeError(f"radii: expected {len(BODIES)} radii (m) in the order of "
                             f"BODIES, got {type(radii).__name__}")

@@ -26,19 +26,16 @@ NOISE = 1e-12
 
 @njit(inline="always", **_OPTS)
 def _point_seg(x0, x1, x2, a0, a1, a2, d0, d1, d2, inv_dd):
-    """Closest point a + t d of a segment to x: (squared distance, c0, c1, c2).
+    """Closest point a + t d of a segment to x: (squared distance, t).
 
     ``inv_dd`` is ``1 / (d . d)``, or 0 for a zero-length segment (then ``t = 0``).
     """
     t = ((x0 - a0) * d0 + (x1 - a1) * d1 + (x2 - a2) * d2) * inv_dd
     t = min(max(t, 0.0), 1.0)
-    c0 = a0 + t * d0
-    c1 = a1 + t * d1
-    c2 = a2 + t * d2
-    e0 = x0 - c0
-    e1 = x1 - c1
-    e2 = x2 - c2
-    return e0 * e0 + e1 * e1 + e2 * e2, c0, c1, c2
+    e0 = x0 - (a0 + t * d0)
+    e1 = x1 - (a1 + t * d1)
+    e2 = x2 - (a2 + t * d2)
+    return e0 * e0 + e1 * e1 + e2 * e2, t
 
 
 @njit(**_OPTS)
@@ -52,13 +49,20 @@ def segment_distance(S, out_c):
     out_c : ndarray, shape (2, 3)
         Receives the closest points on the first and on the second segment.
     """
-    return _seg_seg(S[0, 0], S[0, 1], S[0, 2], S[1, 0], S[1, 1], S[1, 2],
-                    S[2, 0], S[2, 1], S[2, 2], S[3, 0], S[3, 1], S[3, 2], out_c, 0)
+    d, x0, x1, x2, y0, y1, y2 = _seg_seg(S[0, 0], S[0, 1], S[0, 2], S[1, 0], S[1, 1], S[1, 2],
+                                         S[2, 0], S[2, 1], S[2, 2], S[3, 0], S[3, 1], S[3, 2])
+    out_c[0, 0] = x0
+    out_c[0, 1] = x1
+    out_c[0, 2] = x2
+    out_c[1, 0] = y0
+    out_c[1, 1] = y1
+    out_c[1, 2] = y2
+    return d
 
 
 @njit(inline="always", **_OPTS)
-def _seg_seg(p10, p11, p12, q10, q11, q12, p20, p21, p22, q20, q21, q22, C, k):
-    """Segment-segment distance; closest points written to C[k], C[k+1] (shape (., 3))."""
+def _seg_seg(p10, p11, p12, q10, q11, q12, p20, p21, p22, q20, q21, q22):
+    """Segment-segment distance and closest points: (dist, x0, x1, x2, y0, y1, y2)."""
     d10 = q10 - p10
     d11 = q11 - p11
     d12 = q12 - p12
@@ -76,57 +80,65 @@ def _seg_seg(p10, p11, p12, q10, q11, q12, p20, p21, p22, q20, q21, q22, C, k):
     denom = a * e - b * b
     inv_a = 1.0 / a if a > 0.0 else 0.0
     inv_e = 1.0 / e if e > 0.0 else 0.0
+    # the candidates carry only their parameters (s on segment 1, t on segment 2)
     # candidate 1: p2 against segment 1
-    best, x0, x1, x2 = _point_seg(p20, p21, p22, p10, p11, p12, d10, d11, d12, inv_a)
-    y0, y1, y2 = p20, p21, p22
+    best, sb = _point_seg(p20, p21, p22, p10, p11, p12, d10, d11, d12, inv_a)
+    tb = 0.0
+    # (selections written as one conditional expression per value: compiled to selects,
+    # not to branches that the varying winner would mispredict)
     # candidate 2: q2 against segment 1
-    dist, c0, c1, c2 = _point_seg(q20, q21, q22, p10, p11, p12, d10, d11, d12, inv_a)
-    if dist < best:
-        best, x0, x1, x2, y0, y1, y2 = dist, c0, c1, c2, q20, q21, q22
+    dist, u = _point_seg(q20, q21, q22, p10, p11, p12, d10, d11, d12, inv_a)
+    w = dist < best
+    best = dist if w else best
+    sb = u if w else sb
+    tb = 1.0 if w else tb
     # candidate 3: p1 against segment 2
-    dist, c0, c1, c2 = _point_seg(p10, p11, p12, p20, p21, p22, d20, d21, d22, inv_e)
-    if dist < best:
-        best, x0, x1, x2, y0, y1, y2 = dist, p10, p11, p12, c0, c1, c2
+    dist, u = _point_seg(p10, p11, p12, p20, p21, p22, d20, d21, d22, inv_e)
+    w = dist < best
+    best = dist if w else best
+    sb = 0.0 if w else sb
+    tb = u if w else tb
     # candidate 4: q1 against segment 2
-    dist, c0, c1, c2 = _point_seg(q10, q11, q12, p20, p21, p22, d20, d21, d22, inv_e)
-    if dist < best:
-        best, x0, x1, x2, y0, y1, y2 = dist, q10, q11, q12, c0, c1, c2
-    # candidate 5: the interior critical point (not parallel)
-    if denom > 0.0:
-        inv = 1.0 / denom
-        s = min(max((b * f - c * e) * inv, 0.0), 1.0)
-        t = min(max((a * f - b * c) * inv, 0.0), 1.0)
-        i0 = p10 + s * d10
-        i1 = p11 + s * d11
-        i2 = p12 + s * d12
-        j0 = p20 + t * d20
-        j1 = p21 + t * d21
-        j2 = p22 + t * d22
-        g0 = i0 - j0
-        g1 = i1 - j1
-        g2 = i2 - j2
-        dist = g0 * g0 + g1 * g1 + g2 * g2
-        if dist < best:
-            best, x0, x1, x2, y0, y1, y2 = dist, i0, i1, i2, j0, j1, j2
-    C[k, 0] = x0
-    C[k, 1] = x1
-    C[k, 2] = x2
-    C[k + 1, 0] = y0
-    C[k + 1, 1] = y1
-    C[k + 1, 2] = y2
+    dist, u = _point_seg(q10, q11, q12, p20, p21, p22, d20, d21, d22, inv_e)
+    w = dist < best
+    best = dist if w else best
+    sb = 1.0 if w else sb
+    tb = u if w else tb
+    # candidate 5: the interior critical point (not parallel: denom > 0)
+    inv = 1.0 / denom if denom > 0.0 else 0.0
+    s = min(max((b * f - c * e) * inv, 0.0), 1.0)
+    t = min(max((a * f - b * c) * inv, 0.0), 1.0)
+    g0 = (p10 + s * d10) - (p20 + t * d20)
+    g1 = (p11 + s * d11) - (p21 + t * d21)
+    g2 = (p12 + s * d12) - (p22 + t * d22)
+    dist = g0 * g0 + g1 * g1 + g2 * g2
+    w = (denom > 0.0) and (dist < best)
+    best = dist if w else best
+    sb = s if w else sb
+    tb = t if w else tb
+    x0 = p10 + sb * d10
+    x1 = p11 + sb * d11
+    x2 = p12 + sb * d12
+    y0 = p20 + tb * d20
+    y1 = p21 + tb * d21
+    y2 = p22 + tb * d22
     # candidates compared by squared distance (sqrt is monotonic): one sqrt, of the winner
-    return math.sqrt(best)
+    return math.sqrt(best), x0, x1, x2, y0, y1, y2
 
 
 @njit(inline="always", **_OPTS)
-def _normal(C, k, d10, d11, d12, d20, d21, d22):
-    """Unit normal from C[k] towards C[k+1], with the reference's fallbacks."""
+def _normal(n, x0, x1, x2, y0, y1, y2, d10, d11, d12, d20, d21, d22):
+    """Unit normal from x towards y (``n = |y - x|``), with the reference's fallbacks."""
     tiny = 1e-300
-    v0 = C[k + 1, 0] - C[k, 0]
-    v1 = C[k + 1, 1] - C[k, 1]
-    v2 = C[k + 1, 2] - C[k, 2]
-    n = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
-    noise = NOISE * (math.sqrt(C[k, 0] * C[k, 0] + C[k, 1] * C[k, 1] + C[k, 2] * C[k, 2])
+    v0 = y0 - x0
+    v1 = y1 - x1
+    v2 = y2 - x2
+    # fast path: above 1e-6 m the direction is far above the rounding noise of any
+    # coordinates within the 1e3 m that athenakin accepts
+    if n > 1e-6:
+        inv = 1.0 / n
+        return v0 * inv, v1 * inv, v2 * inv
+    noise = NOISE * (math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
                      + math.sqrt(d10 * d10 + d11 * d11 + d12 * d12)
                      + math.sqrt(d20 * d20 + d21 * d21 + d22 * d22)) + tiny
     if n > noise:
@@ -155,7 +167,6 @@ def _normal(C, k, d10, d11, d12, d20, d21, d22):
     return 0.0, 0.0, 1.0
 
 
-@njit(**_OPTS)
 def capsule_pairs(solids, radii, ij):
     """Signed distances and witness points of capsule pairs over a batch.
 
@@ -171,12 +182,36 @@ def capsule_pairs(solids, radii, ij):
     -------
     dist : ndarray, shape (n, n_pairs)
     witness : ndarray, shape (n, n_pairs, 2, 3)
+
+    Notes
+    -----
+    The outputs are allocated here, by numpy, and filled by the compiled loop: numpy
+    asks the kernel for huge pages on large arrays, numba's allocator does not, and
+    first touching 4 KiB pages cost as much as the distances themselves (measured).
     """
-    n = solids.shape[0]
-    P = ij.shape[0]
+    n, P = solids.shape[0], ij.shape[0]
     dist = np.empty((n, P))
     wit = np.empty((n, P, 2, 3))
-    C = np.empty((2, 3))
+    _capsule_pairs_into(solids, radii, ij, dist, wit)
+    return dist, wit
+
+
+def capsule_distances(solids, radii, ij):
+    """Signed distances only (no witness points) of capsule pairs over a batch.
+
+    Same arguments and the same ``dist`` as :func:`capsule_pairs`, exactly; for callers
+    that need no witness points (planners, design studies).
+    """
+    dist = np.empty((solids.shape[0], ij.shape[0]))
+    _capsule_distances_into(solids, radii, ij, dist)
+    return dist
+
+
+@njit(**_OPTS)
+def _capsule_pairs_into(solids, radii, ij, dist, wit):
+    """Fill ``dist`` (n, P) and ``wit`` (n, P, 2, 3): see :func:`capsule_pairs`."""
+    n = solids.shape[0]
+    P = ij.shape[0]
     for m in range(n):
         for k in range(P):
             i = ij[k, 0]
@@ -193,32 +228,26 @@ def capsule_pairs(solids, radii, ij):
             q20 = solids[m, j, 1, 0]
             q21 = solids[m, j, 1, 1]
             q22 = solids[m, j, 1, 2]
-            d = _seg_seg(p10, p11, p12, q10, q11, q12, p20, p21, p22, q20, q21, q22, C, 0)
-            n0, n1, n2 = _normal(C, 0, q10 - p10, q11 - p11, q12 - p12,
-                                 q20 - p20, q21 - p21, q22 - p22)
+            d, x0, x1, x2, y0, y1, y2 = _seg_seg(p10, p11, p12, q10, q11, q12,
+                                                 p20, p21, p22, q20, q21, q22)
+            n0, n1, n2 = _normal(d, x0, x1, x2, y0, y1, y2, q10 - p10, q11 - p11,
+                                 q12 - p12, q20 - p20, q21 - p21, q22 - p22)
             r1 = radii[i]
             r2 = radii[j]
             dist[m, k] = d - r1 - r2
-            wit[m, k, 0, 0] = C[0, 0] + r1 * n0
-            wit[m, k, 0, 1] = C[0, 1] + r1 * n1
-            wit[m, k, 0, 2] = C[0, 2] + r1 * n2
-            wit[m, k, 1, 0] = C[1, 0] - r2 * n0
-            wit[m, k, 1, 1] = C[1, 1] - r2 * n1
-            wit[m, k, 1, 2] = C[1, 2] - r2 * n2
-    return dist, wit
+            wit[m, k, 0, 0] = x0 + r1 * n0
+            wit[m, k, 0, 1] = x1 + r1 * n1
+            wit[m, k, 0, 2] = x2 + r1 * n2
+            wit[m, k, 1, 0] = y0 - r2 * n0
+            wit[m, k, 1, 1] = y1 - r2 * n1
+            wit[m, k, 1, 2] = y2 - r2 * n2
 
 
 @njit(**_OPTS)
-def capsule_distances(solids, radii, ij):
-    """Signed distances only (no witness points) of capsule pairs over a batch.
-
-    Same arguments and the same ``dist`` as :func:`capsule_pairs`, which it matches
-    exactly; for callers that need no witness points (planners, design studies).
-    """
+def _capsule_distances_into(solids, radii, ij, dist):
+    """Fill ``dist`` (n, P): see :func:`capsule_distances`."""
     n = solids.shape[0]
     P = ij.shape[0]
-    dist = np.empty((n, P))
-    C = np.empty((2, 3))
     for m in range(n):
         for k in range(P):
             i = ij[k, 0]
@@ -226,6 +255,5 @@ def capsule_distances(solids, radii, ij):
             d = _seg_seg(solids[m, i, 0, 0], solids[m, i, 0, 1], solids[m, i, 0, 2],
                          solids[m, i, 1, 0], solids[m, i, 1, 1], solids[m, i, 1, 2],
                          solids[m, j, 0, 0], solids[m, j, 0, 1], solids[m, j, 0, 2],
-                         solids[m, j, 1, 0], solids[m, j, 1, 1], solids[m, j, 1, 2], C, 0)
+                         solids[m, j, 1, 0], solids[m, j, 1, 1], solids[m, j, 1, 2])[0]
             dist[m, k] = d - radii[i] - radii[j]
-    return dist

@@ -148,11 +148,11 @@ def _collision_geoms(root: ET.Element, bodies: Bodies, segs: dict[str, tuple[
             attrs.update(type="sphere", pos=_vec(a))
         ET.SubElement(parent, "geom", attrs)
     contact = ET.SubElement(root, "contact")
-    for a, b in bodies.excluded_pairs:
-        ba, bb = COLLISION_BODY[a], COLLISION_BODY[b]
-        if ba != bb:
-            ET.SubElement(contact, "exclude", {"name": f"exclude_{a}_{b}", "body1": ba,
-                                               "body2": bb})
+    for x, y in bodies.excluded_pairs:
+        bx, by = COLLISION_BODY[x], COLLISION_BODY[y]
+        if bx != by:
+            ET.SubElement(contact, "exclude", {"name": f"exclude_{x}_{y}", "body1": bx,
+                                               "body2": by})
 
 
 def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = None, *,

@@ -256,9 +256,9 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
         segs = collision_segments(zero, d, bodies, rail)
         for body in BODIES:
             owner = COLLISION_BODY[body]
-            a, b = segs[body]
-            _collision(links["base" if owner == "world" else owner], f"collision_{body}", a, b,
-                       bodies.radius[body])
+            end_a, end_b = segs[body]
+            _collision(links["base" if owner == "world" else owner], f"collision_{body}",
+                       end_a, end_b, bodies.radius[body])
 
     rx90, rx180 = (math.pi / 2, 0, 0), (math.pi, 0, 0)
     # joint -> (origin xyz in parent, origin rpy, axis, limits)
