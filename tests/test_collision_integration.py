@@ -766,3 +766,17 @@ def test_cli_workspace_and_synthesize_collision_options(tmp_path, capsys) -> Non
     assert rep["collisions"] and "min_clearance" in rep["reference"]
     assert main([*args, "-o", str(tmp_path / "b"), "--min-clearance", "0"]) == 1
     assert "--min-clearance" in capsys.readouterr().err
+
+
+def test_cli_view_bodies(tmp_path, capsys) -> None:
+    pytest.importorskip("matplotlib")
+    from athenakin.cli import main
+
+    out = tmp_path / "v.png"
+    assert main(["view", "-o", str(out), "--bodies", "--no-labels"]) == 0
+    assert out.stat().st_size > 1000
+    thick = tmp_path / "bodies.toml"
+    thick.write_text(BODIES.with_radius(link_a=0.03).to_toml())
+    assert main(["view", "-o", str(out), "--bodies", str(thick), "--force"]) == 0
+    assert main(["view", "-o", str(tmp_path / "v.html"), "--bodies"]) == 1
+    assert "--bodies" in capsys.readouterr().err
