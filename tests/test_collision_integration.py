@@ -293,6 +293,9 @@ def test_cli_track_with_bodies_reports_and_writes_the_clearance(tmp_path, capsys
     text = capsys.readouterr().out
     assert "COLLISION:" in text and "least clearance: " in text
     assert "between carriage_a and carriage_b" in text
+    # --strict fails on a collision (the flag exists only with the check)
+    assert main(["track", str(src), "--clearance-margin", "0", "--strict"]) == 1
+    assert "COLLISION" in capsys.readouterr().out
     lines = out.read_text().splitlines()
     header = lines[0].split(",")
     assert header[-3:] == ["clearance_m", "closest_a", "closest_b"]
@@ -564,6 +567,8 @@ def test_workspace_bad_collision_options_are_named() -> None:
         point_workspace(D, resolution=4, environment="floor")
     with pytest.raises(InvalidInputError, match="T_b_e"):
         point_workspace(D, resolution=4, clearance_margin=0.0, T_b_e=np.eye(4)[:3])
+    with pytest.raises(InvalidInputError, match="collision check only"):
+        point_workspace(D, resolution=4, T_b_e=T)
 
 
 def test_workspace_figures_show_the_collision_layers() -> None:

@@ -375,6 +375,10 @@ def point_workspace(design: Design | None = None, *, resolution: int | tuple[int
     design = resolve_design(design)
     check = _collision_check(design, bodies, environment, clearance_margin)
     T = None
+    if check is None and T_b_e is not None:
+        raise InvalidInputError("T_b_e: places the serial chain for the collision check only; "
+                                "pass bodies=, environment= or clearance_margin= too (the O_s "
+                                "workspace itself does not depend on it)")
     if check is not None:
         T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
         if T.shape != (4, 4):

@@ -21,8 +21,8 @@ from ._output import Outputs, add_force_option, outputs
 
 #: Smallest jump threshold (mm or deg): below it, the threshold in SI units underflows.
 JUMP_MIN = 1e-6
-#: Flags that make ``--strict`` fail.
-STRICT_FLAGS = ("LOST", "JUMP", "MODE_SWITCH", "AMBIGUOUS")
+#: Flags that make ``--strict`` fail (``COLLISION`` only appears with the collision check).
+STRICT_FLAGS = ("LOST", "JUMP", "MODE_SWITCH", "AMBIGUOUS", "COLLISION")
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
