@@ -106,6 +106,7 @@ class _Lean:
 
 
 def finding() -> dict:
+    """Which pairs collide over the strokes and in the instrument cone; figures and doc block."""
     Q = _stroke_grid()
     res: dict = {"grid": GRID, "n_configurations": len(Q), "radii": dict(BODIES_DEFAULT.radius),
                  "cone": list(CONE)}
