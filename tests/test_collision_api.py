@@ -300,3 +300,15 @@ def test_all_pairs_excluded_gives_no_pairs(setup):
     c = clearance(q[:3], T, d, bodies=b)
     assert c.pairs == () and c.distances.shape == (3, 0)
     assert np.all(c.min_distance == np.inf) and np.all(c.closest_pair == -1)
+
+
+def test_missing_coal_names_the_extra(monkeypatch, setup):
+    import sys
+
+    d, T, q = setup
+    monkeypatch.setitem(sys.modules, "coal", None)      # import coal -> ImportError
+    env = Environment().box((0.0, 0.3, 0.0), (0.05, 0.05, 0.05))
+    with pytest.raises(ImportError, match=r"athenakin\[collision\]"):
+        clearance(q[:2], T, d, environment=env)
+    # capsules, spheres and halfspaces need no coal
+    clearance(q[:2], T, d, environment=Environment().sphere((0, 0.3, 0), 0.05))

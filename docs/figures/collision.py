@@ -94,12 +94,24 @@ def _stroke_grid() -> np.ndarray:
     return Q
 
 
+class _Lean:
+    """The fields of a Clearance this script uses, gathered chunk by chunk (no witnesses)."""
+
+    def __init__(self, q: np.ndarray, slot, chunk: int = 1000) -> None:
+        parts = [clearance(q[i:i + chunk], T, D, slot=slot, bodies=BODIES_DEFAULT)
+                 for i in range(0, len(q), chunk)]
+        self.pairs = parts[0].pairs
+        for f in ("distances", "valid", "colliding", "closest_pair"):
+            setattr(self, f, np.concatenate([getattr(c, f) for c in parts]))
+
+
 def finding() -> dict:
+    """Which pairs collide over the strokes and in the instrument cone; figures and doc block."""
     Q = _stroke_grid()
     res: dict = {"grid": GRID, "n_configurations": len(Q), "radii": dict(BODIES_DEFAULT.radius),
                  "cone": list(CONE)}
     # --- the strokes, all 16 slots ------------------------------------------------------
-    c = clearance(Q, T, D, slot="all", bodies=BODIES_DEFAULT)
+    c = _Lean(Q, "all")
     pairs = c.pairs
     res["pairs_checked"] = len(pairs)
     per_slot = {}
@@ -110,13 +122,20 @@ def finding() -> dict:
         if k == 0:
             can = np.any(dk < 0, axis=0)
             frac = np.mean(dk < 0, axis=0)
+            mp0 = mechanism_points(Q[v], T, D, slot=0)
+            p_ins = np.linalg.norm(mp0["O_s"] - mp0["RCM"], axis=-1)
+            gap = np.abs(Q[v, 0] - Q[v, 1])
+
+            def rng(x, sel):
+                return [float(x[sel].min()), float(x[sel].max())]
+
             res["slot0_pairs_that_collide"] = sorted(
                 [{"pair": list(pairs[i]), "fraction": float(frac[i]),
-                  "min_distance": float(dk[:, i].min())} for i in np.flatnonzero(can)],
-                key=lambda x: -x["fraction"])
-            res["slot0_min_clearance_free_pairs"] = {
-                f"{pairs[i][0]}-{pairs[i][1]}": float(dk[:, i].min())
-                for i in np.flatnonzero(~can)}
+                  "min_distance": float(dk[:, i].min()),
+                  "p_range": rng(p_ins, dk[:, i] < 0), "gap_range": rng(gap, dk[:, i] < 0)}
+                 for i in np.flatnonzero(can)], key=lambda x: -x["fraction"])
+            res["slot0_p_range"] = rng(p_ins, np.ones(len(p_ins), bool))
+            res["slot0_gap_range"] = rng(gap, np.ones(len(gap), bool))
     res["per_slot"] = per_slot
     v_any = c.valid
     can_any = np.any(np.where(v_any[..., None], c.distances, np.inf) < 0, axis=(0, 1))
@@ -141,7 +160,7 @@ def finding() -> dict:
     top = res["slot0_pairs_that_collide"][:10]
     axs[2].barh([f"{p['pair'][0]} / {p['pair'][1]}" for p in top][::-1],
                 [100 * p["fraction"] for p in top][::-1], color="#d62728")
-    axs[2].set_xlabel("% of assembled configurations (slot 0) where the pair collides")
+    axs[2].set_xlabel("% of slot-0 configurations where the pair collides")
     axs[2].tick_params(axis="y", labelsize=7)
     fig.tight_layout()
     fig.savefig(OUT / "collision_workspace.png", dpi=80)
@@ -156,7 +175,7 @@ def finding() -> dict:
     d_e = ak.direction_from_angles(A.ravel(), B.ravel())
     q, ik = ak.q_from_instrument(T, d_e, P.ravel(), D, errors="flag")
     ok = ik.valid & (ik.mode == 1)
-    cc = clearance(np.where(ok[:, None], q, REFERENCE_Q), T, D, slot=0, bodies=BODIES_DEFAULT)
+    cc = _Lean(np.where(ok[:, None], q, REFERENCE_Q), 0)
     # the slot-0 configuration is the IK's: same O_s (checked)
     Os_fk = mechanism_points(np.where(ok[:, None], q, REFERENCE_Q), T, D, slot=0)["O_s"]
     Os_ik = T[:3, 3] - P.ravel()[:, None] * (d_e @ T[:3, :3].T)
@@ -179,6 +198,14 @@ def finding() -> dict:
     for k in cc.closest_pair[blocked]:
         cnt[names[k]] = cnt.get(names[k], 0) + 1
     res["cone_blocking_pairs"] = dict(sorted(cnt.items(), key=lambda kv: -kv[1]))
+    # pairs that collide anywhere in slot 0: on the stroke grid or in the cone
+    dmin_grid = {tuple(p["pair"]): p["min_distance"] for p in res["slot0_pairs_that_collide"]}
+    dmin_all = np.nanmin(np.concatenate([c.distances[c.valid[:, 0], 0],
+                                         cc.distances[reach]]), axis=0)
+    res["slot0_min_distance_grid_and_cone"] = {f"{a}-{b}": float(dmin_all[i])
+                                               for i, (a, b) in enumerate(pairs)}
+    res["cone_only_collisions"] = [f"{a}-{b}" for i, (a, b) in enumerate(pairs)
+                                   if dmin_all[i] < 0 and (a, b) not in dmin_grid]
     frac = np.where(reach3.sum(-1) > 0, free3.sum(-1) / np.maximum(reach3.sum(-1), 1), np.nan)
     fig, ax = plt.subplots(figsize=(8, 4.5))
     im = ax.pcolormesh(np.degrees(az), np.degrees(pol), frac.T, cmap="RdYlGn", vmin=0, vmax=1,
@@ -209,16 +236,26 @@ def _write_doc(res: dict) -> None:
         "- Pairs that collide somewhere in slot 0 (share of its configurations, deepest "
         "penetration):",
         "",
-        "| pair | share | deepest (mm) |",
-        "|---|---:|---:|",
+        "| pair | share | deepest (mm) | insertion p where it collides (m) "
+        "| q1 - q2 where it collides (abs, m) |",
+        "|---|---:|---:|---|---|",
     ]
     for p in res["slot0_pairs_that_collide"]:
         lines.append(f"| {p['pair'][0]} / {p['pair'][1]} | {100 * p['fraction']:.1f} % | "
-                     f"{-1000 * p['min_distance']:.1f} |")
-    never = sorted(res["slot0_min_clearance_free_pairs"].items(), key=lambda kv: kv[1])[:5]
+                     f"{-1000 * p['min_distance']:.1f} | {p['p_range'][0]:.3f} .. "
+                     f"{p['p_range'][1]:.3f} | {p['gap_range'][0]:.3f} .. "
+                     f"{p['gap_range'][1]:.3f} |")
+    lines += ["", f"(Over all of slot 0: p in {res['slot0_p_range'][0]:.3f} .. "
+              f"{res['slot0_p_range'][1]:.3f} m, q1 - q2 (abs) in {res['slot0_gap_range'][0]:.3f}"
+              f" .. {res['slot0_gap_range'][1]:.3f} m.)"]
+    never = sorted([(k, v) for k, v in res["slot0_min_distance_grid_and_cone"].items()
+                    if v >= 0], key=lambda kv: kv[1])[:5]
+    cone_only = res["cone_only_collisions"]
     lines += [
         "",
-        "- Never colliding in slot 0, closest first (smallest clearance over the strokes): "
+        "- Colliding in the cone samples but not on the stroke grid (a thin band the grid "
+        "steps over): " + (", ".join(cone_only) if cone_only else "none") + ".",
+        "- Never colliding in slot 0 on either sampling, closest first (smallest clearance): "
         + ", ".join(f"{k} {1000 * v:.1f} mm" for k, v in never) + ".",
         f"- In any slot, {len(res['any_slot_pairs_that_collide'])} pairs can collide.",
         f"- **Instrument cone** (mode +1): {res['cone_directions_reachable']} directions are "

@@ -145,11 +145,12 @@ def segment_clearance(segments: NDArray[np.float64], valid: NDArray[np.bool_],
     names, bb, obs = _pair_tables(bodies, environment)
     n = segments.shape[0]
     P = len(names)
-    dist = np.full((n, P), np.nan)
-    wit = np.full((n, P, 2, 3), np.nan)
+    # every row is computed (invalid rows hold NaN segments and give NaN), then invalid
+    # rows are set to NaN: no gather / scatter copies of the large witness array
+    dist = np.empty((n, P))
+    wit = np.empty((n, P, 2, 3))
     rad = bodies.radius_array
-    iv = np.flatnonzero(valid)
-    seg = segments[iv]
+    seg = segments
     # segments of every capsule-like solid: bodies, then sphere/capsule obstacles
     prim_seg = []
     prim_rad = []
@@ -182,41 +183,54 @@ def segment_clearance(segments: NDArray[np.float64], valid: NDArray[np.bool_],
         else:
             coal_rows.append((col, o, idx))
             col += len(idx)
-    if len(iv) == 0:
-        return names, dist, wit
-    m = len(iv)
     if prim_seg:
-        fixed = np.broadcast_to(np.array(prim_seg, dtype=np.float64), (m, len(prim_seg), 2, 3))
+        fixed = np.broadcast_to(np.array(prim_seg, dtype=np.float64), (n, len(prim_seg), 2, 3))
         solids = np.concatenate([seg, fixed], axis=1)
     else:
         solids = seg
     radii = np.concatenate([rad, np.array(prim_rad, dtype=np.float64)])
     if cap_pairs:
         ij = np.array(cap_pairs, dtype=np.intp).reshape(-1, 2)
-        cols = np.array(cap_cols, dtype=np.intp)
+        c0, c1 = cap_cols[0], cap_cols[-1] + 1
+        contiguous = cap_cols == list(range(c0, c1))
         if compiled:
-            from ..fast._collision_kernels import capsule_pairs
-            d, w = capsule_pairs(np.ascontiguousarray(solids), radii, ij)
+            from ..fast._collision_kernels import capsule_pairs_into
+            solids = np.ascontiguousarray(solids)
+            if contiguous:
+                capsule_pairs_into(solids, radii, ij, dist[:, c0:c1], wit[:, c0:c1])
+            else:
+                d = np.empty((n, len(ij)))
+                w = np.empty((n, len(ij), 2, 3))
+                capsule_pairs_into(solids, radii, ij, d, w)
+                dist[:, cap_cols] = d
+                wit[:, cap_cols] = w
         else:
             A = solids[:, ij[:, 0]]
             B = solids[:, ij[:, 1]]
-            d, w = capsule_capsule(A[..., 0, :], A[..., 1, :], radii[ij[:, 0]],
-                                   B[..., 0, :], B[..., 1, :], radii[ij[:, 1]])
-        dist[iv[:, None], cols] = d
-        wit[iv[:, None], cols] = w
+            with np.errstate(invalid="ignore"):
+                d, w = capsule_capsule(A[..., 0, :], A[..., 1, :], radii[ij[:, 0]],
+                                       B[..., 0, :], B[..., 1, :], radii[ij[:, 1]])
+            dist[:, cap_cols] = d
+            wit[:, cap_cols] = w
     for c, i, o in half_rows:
         d, w = capsule_halfspace(seg[:, i, 0], seg[:, i, 1], rad[i], np.array(o.point),
                                  np.array(o.normal))
-        dist[iv, c] = d
-        wit[iv, c] = w
+        dist[:, c] = d
+        wit[:, c] = w
     if coal_rows:
         from ._coal import capsule_obstacle_distances, coal_shape
+        iv = np.flatnonzero(valid)
         for c, o, idx in coal_rows:
             shape = coal_shape(o)
             for j, i in enumerate(idx):
-                d, w = capsule_obstacle_distances(seg[:, i], float(rad[i]), o, shape)
+                d, w = capsule_obstacle_distances(seg[iv, i], float(rad[i]), o, shape)
+                dist[:, c + j] = np.nan
+                wit[:, c + j] = np.nan
                 dist[iv, c + j] = d
                 wit[iv, c + j] = w
+    if not np.all(valid):
+        dist[~valid] = np.nan
+        wit[~valid] = np.nan
     return names, dist, wit
 
 

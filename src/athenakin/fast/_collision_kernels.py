@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-__all__ = ["capsule_pairs", "capsule_distances", "segment_distance"]
+__all__ = ["capsule_pairs", "capsule_pairs_into", "capsule_distances", "segment_distance"]
 
 _OPTS: dict[str, Any] = dict(error_model="numpy", cache=True, nogil=True, fastmath=False)
 #: As :data:`athenakin.collision._distance.NOISE` (the layers keep one value each; a test
@@ -192,7 +192,7 @@ def capsule_pairs(solids, radii, ij):
     n, P = solids.shape[0], ij.shape[0]
     dist = np.empty((n, P))
     wit = np.empty((n, P, 2, 3))
-    _capsule_pairs_into(solids, radii, ij, dist, wit)
+    capsule_pairs_into(solids, radii, ij, dist, wit)
     return dist, wit
 
 
@@ -208,8 +208,11 @@ def capsule_distances(solids, radii, ij):
 
 
 @njit(**_OPTS)
-def _capsule_pairs_into(solids, radii, ij, dist, wit):
-    """Fill ``dist`` (n, P) and ``wit`` (n, P, 2, 3): see :func:`capsule_pairs`."""
+def capsule_pairs_into(solids, radii, ij, dist, wit):
+    """Fill ``dist`` (n, P) and ``wit`` (n, P, 2, 3) (views allowed): see :func:`capsule_pairs`.
+
+    Rows with NaN end points give NaN (no exception).
+    """
     n = solids.shape[0]
     P = ij.shape[0]
     for m in range(n):
