@@ -269,6 +269,20 @@ def test_plan_collision_comes_before_a_kinematic_limit_but_after_an_earlier_geom
     assert ei2.value.limit == "p" and not isinstance(ei2.value, CollisionError)
 
 
+def test_plan_directions_checks_collisions_too() -> None:
+    from athenakin.motion import plan_directions
+
+    kw = dict(rate=100.0, bodies=BODIES)
+    free = plan_directions([0.0, 0.1], [1.5, 1.45], [0.25, 0.25], T, D, clearance_margin=0.0,
+                           **kw)
+    ref, _ = _reference(free.q, _slots(free), bodies=BODIES)
+    assert_allclose(free.clearance, ref, rtol=0, atol=1e-12)
+    with pytest.raises(CollisionError) as ei:
+        plan_directions([0.0, 0.1], [1.5, 1.45], [0.25, 0.25], T, D,
+                        clearance_margin=float(np.min(ref)) + 1e-4, **kw)
+    assert ei.value.index == int(np.flatnonzero(ref < np.min(ref) + 1e-4)[0])
+
+
 def test_plan_bad_collision_options_are_named() -> None:
     with pytest.raises(InvalidInputError, match="clearance_margin"):
         plan(SQUARE[:2], T, D, clearance_margin=-1.0)
