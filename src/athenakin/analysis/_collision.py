@@ -20,9 +20,58 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._validation import check_scalar
 from ..design import Design
+from ..errors import InvalidInputError
 
-__all__ = ["labelled_clearance"]
+__all__ = ["labelled_clearance", "collision_options", "MAX_CLEARANCE_MARGIN"]
+
+#: Largest clearance margin accepted, m (a margin of a metre or more is a unit mistake).
+MAX_CLEARANCE_MARGIN = 1.0
+
+
+def collision_options(design: Design, bodies: object, environment: object,
+                      clearance_margin: object, *, default_margin: float,
+                      bodies_modes: tuple[str, ...] = ()) -> tuple[Any, Any, float] | None:
+    """The checked ``(bodies, environment, margin)`` a caller asks for, or None for no check.
+
+    Any of the three turns the check on. ``bodies`` defaults to
+    :meth:`Bodies.default(design) <athenakin.collision.Bodies.default>`, or may be one of
+    ``bodies_modes`` (a name the caller resolves); ``margin`` defaults to
+    ``default_margin``.
+
+    Raises
+    ------
+    TypeError
+        ``bodies`` is not a :class:`~athenakin.collision.Bodies` (nor a name of
+        ``bodies_modes``), or ``environment`` not an
+        :class:`~athenakin.collision.Environment`.
+    InvalidInputError
+        An unknown name for ``bodies``; ``clearance_margin`` negative, NaN or above
+        :data:`MAX_CLEARANCE_MARGIN`.
+    """
+    if bodies is None and environment is None and clearance_margin is None:
+        return None
+    from ..collision import Bodies, Environment
+
+    expected = "athenakin.collision.Bodies" + (f" or one of {bodies_modes}" if bodies_modes
+                                               else " or None")
+    if bodies is None:
+        bodies = Bodies.default(design)
+    elif isinstance(bodies, str) and bodies_modes:
+        if bodies not in bodies_modes:
+            raise InvalidInputError(f"bodies: expected {expected}, got {bodies!r}")
+    elif not isinstance(bodies, Bodies):
+        raise TypeError(f"bodies: expected {expected}, got {type(bodies).__name__}")
+    if environment is not None and not isinstance(environment, Environment):
+        raise TypeError(f"environment: expected athenakin.collision.Environment or None, got "
+                        f"{type(environment).__name__}")
+    margin = default_margin if clearance_margin is None else check_scalar(
+        clearance_margin, "clearance_margin", nonnegative=True)
+    if not margin <= MAX_CLEARANCE_MARGIN:
+        raise InvalidInputError(f"clearance_margin: expected a distance in [0, "
+                                f"{MAX_CLEARANCE_MARGIN:g}] m, got {margin!r}")
+    return bodies, environment, float(margin)
 
 
 def labelled_clearance(q: NDArray[np.float64], T_b_e: NDArray[np.float64], design: Design,

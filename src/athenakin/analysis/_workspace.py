@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_path, check_scalar, check_transform
+from .._validation import check_array, check_path, check_transform
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..parallel import parallel_ik_from_position
@@ -130,10 +130,6 @@ def _cond(J: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float
     return s[..., -1], np.where(np.isnan(s[..., 0]), np.nan, c)
 
 
-#: Largest clearance margin of the workspace maps, m.
-MAX_CLEARANCE_MARGIN = 1.0
-
-
 @dataclasses.dataclass(frozen=True)
 class _Check:
     bodies: Any
@@ -144,24 +140,10 @@ class _Check:
 def _collision_check(design: Design, bodies: object, environment: object,
                      clearance_margin: object) -> _Check | None:
     """The collision check asked for (None: none); bodies default to ``Bodies.default``."""
-    if bodies is None and environment is None and clearance_margin is None:
-        return None
-    from ..collision import Bodies, Environment
+    from ._collision import collision_options
 
-    if bodies is None:
-        bodies = Bodies.default(design)
-    elif not isinstance(bodies, Bodies):
-        raise TypeError(f"bodies: expected athenakin.collision.Bodies or None, got "
-                        f"{type(bodies).__name__}")
-    if environment is not None and not isinstance(environment, Environment):
-        raise TypeError(f"environment: expected athenakin.collision.Environment or None, got "
-                        f"{type(environment).__name__}")
-    margin = 0.0 if clearance_margin is None else check_scalar(
-        clearance_margin, "clearance_margin", nonnegative=True)
-    if not margin <= MAX_CLEARANCE_MARGIN:
-        raise InvalidInputError(f"clearance_margin: expected a distance in [0, "
-                                f"{MAX_CLEARANCE_MARGIN:g}] m, got {margin!r}")
-    return _Check(bodies=bodies, environment=environment, margin=float(margin))
+    opts = collision_options(design, bodies, environment, clearance_margin, default_margin=0.0)
+    return None if opts is None else _Check(*opts)
 
 
 def _clearance(check: _Check, q: NDArray[np.float64], T: NDArray[np.float64], design: Design,

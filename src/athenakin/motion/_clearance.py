@@ -18,7 +18,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .._validation import check_scalar
 from ..design import Design
 
 __all__ = ["DEFAULT_CLEARANCE_MARGIN", "ClearanceCheck", "clearance_check", "sample_clearance",
@@ -27,8 +26,6 @@ __all__ = ["DEFAULT_CLEARANCE_MARGIN", "ClearanceCheck", "clearance_check", "sam
 #: Clearance (m) below which a sample is ``NEAR_COLLISION`` (tracker) or refused
 #: (planner) when the check is asked for without a margin.
 DEFAULT_CLEARANCE_MARGIN = 0.005
-#: Largest clearance margin accepted, m (a margin of a metre or more is a unit mistake).
-MAX_CLEARANCE_MARGIN = 1.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -54,29 +51,15 @@ def clearance_check(design: Design, bodies: object, environment: object,
         ``bodies`` is not a :class:`~athenakin.collision.Bodies`, or ``environment`` not
         an :class:`~athenakin.collision.Environment`.
     InvalidInputError
-        ``clearance_margin`` is negative, NaN or above :data:`MAX_CLEARANCE_MARGIN`.
+        ``clearance_margin`` is negative, NaN or above 1 m.
     """
-    if bodies is None and environment is None and clearance_margin is None:
+    from ..analysis._collision import collision_options
+
+    opts = collision_options(design, bodies, environment, clearance_margin,
+                             default_margin=DEFAULT_CLEARANCE_MARGIN)
+    if opts is None:
         return None
-    from ..collision import Bodies, Environment
-
-    if bodies is None:
-        bodies = Bodies.default(design)
-    elif not isinstance(bodies, Bodies):
-        raise TypeError(f"bodies: expected athenakin.collision.Bodies or None, got "
-                        f"{type(bodies).__name__}")
-    if environment is not None and not isinstance(environment, Environment):
-        raise TypeError(f"environment: expected athenakin.collision.Environment or None, got "
-                        f"{type(environment).__name__}")
-    if clearance_margin is None:
-        margin = DEFAULT_CLEARANCE_MARGIN
-    else:
-        margin = check_scalar(clearance_margin, "clearance_margin", nonnegative=True)
-        if not margin <= MAX_CLEARANCE_MARGIN:
-            from ..errors import InvalidInputError
-
-            raise InvalidInputError(f"clearance_margin: expected a distance in [0, "
-                                    f"{MAX_CLEARANCE_MARGIN:g}] m, got {margin!r}")
+    bodies, environment, margin = opts
     return ClearanceCheck(bodies=bodies, environment=environment, margin=float(margin))
 
 
@@ -112,17 +95,6 @@ def sample_clearance(check: ClearanceCheck, q: NDArray[np.float64], T_b_e: NDArr
 
     return labelled_clearance(q, T_b_e, design, np.asarray(mode), np.asarray(p_sign) == -1,
                               bodies=check.bodies, environment=check.environment, wrist=wrist)
-
-
-def describe_pair(pair: NDArray[np.str_] | tuple[str, str]) -> str:
-    """``'link_a' and 'instrument'`` for messages."""
-    a, b = (str(x) for x in pair)
-    return f"{a!r} and {b!r}"
-
-
-def is_close(distance: float, margin: float) -> bool:
-    """``distance < margin`` (False for NaN)."""
-    return not math.isnan(distance) and distance < margin
 
 
 class PoseClearance:

@@ -51,8 +51,6 @@ METRIC_COLUMNS = (("coverage", "coverage_mode", "mode", "coverage_plus", "covera
 DEFAULT_COLLISION_SAMPLES = 10_000
 #: Most task samples per design whose clearance is checked.
 MAX_COLLISION_SAMPLES = 1_000_000
-#: Largest clearance margin accepted, m.
-MAX_CLEARANCE_MARGIN = 1.0
 _BODIES_MODES = ("default", "scaled")
 
 
@@ -115,25 +113,13 @@ def collision_spec(bodies: object = None, environment: object = None,
     if bodies is None and environment is None and clearance_margin is None \
             and collision_samples is None:
         return None
-    from ..collision import Bodies, Environment
+    from ..analysis._collision import collision_options
 
-    if bodies is None:
-        bodies = "default"
-    if isinstance(bodies, str):
-        if bodies not in _BODIES_MODES:
-            raise InvalidInputError(f"bodies: expected athenakin.collision.Bodies or one of "
-                                    f"{_BODIES_MODES}, got {bodies!r}")
-    elif not isinstance(bodies, Bodies):
-        raise TypeError(f"bodies: expected athenakin.collision.Bodies or one of "
-                        f"{_BODIES_MODES}, got {type(bodies).__name__}")
-    if environment is not None and not isinstance(environment, Environment):
-        raise TypeError(f"environment: expected athenakin.collision.Environment or None, got "
-                        f"{type(environment).__name__}")
-    margin = 0.0 if clearance_margin is None else check_scalar(
-        clearance_margin, "clearance_margin", nonnegative=True)
-    if not margin <= MAX_CLEARANCE_MARGIN:
-        raise InvalidInputError(f"clearance_margin: expected a distance in [0, "
-                                f"{MAX_CLEARANCE_MARGIN:g}] m, got {margin!r}")
+    opts = collision_options(Design.default(), "default" if bodies is None else bodies,
+                             environment, clearance_margin, default_margin=0.0,
+                             bodies_modes=_BODIES_MODES)
+    assert opts is not None
+    bodies, environment, margin = opts
     n = DEFAULT_COLLISION_SAMPLES if collision_samples is None else check_count(
         collision_samples, "collision_samples", minimum=1, maximum=MAX_COLLISION_SAMPLES)
     return CollisionSpec(bodies=bodies, environment=environment, margin=float(margin),
