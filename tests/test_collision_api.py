@@ -333,3 +333,19 @@ def test_malformed_files_are_one_named_error(tmp_path, text):
     reader = Bodies.from_toml if text.startswith("[bodies]") else Environment.from_toml
     with pytest.raises(InvalidInputError, match="bad.toml"):
         reader(f)
+
+
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+def test_witness_false_gives_the_same_distances(setup, backend):
+    d, T, q = setup
+    env = Environment().halfspace((0, 0, -0.05), (0, 0, 1), name="table").sphere(
+        (0.0, 0.35, 0.2), 0.05, name="ball")
+    a = clearance(q, T, d, slot="all", environment=env, backend=backend)
+    b = clearance(q, T, d, slot="all", environment=env, witness=False, backend=backend)
+    assert b.witness_points.shape == a.witness_points.shape
+    assert np.isnan(b.witness_points).all() and b.witness_points.base is not None
+    assert not b.witness_points.flags.writeable
+    assert_allclose(b.distances, a.distances, rtol=0, atol=0, equal_nan=True)
+    assert np.array_equal(b.closest_pair, a.closest_pair)
+    with pytest.raises(TypeError, match="witness"):
+        clearance(q, T, d, witness="no")
