@@ -19,7 +19,11 @@ from numba import njit
 __all__ = ["capsule_pairs", "capsule_pairs_into", "capsule_distances", "capsule_distances_into",
            "segment_distance"]
 
-_OPTS: dict[str, Any] = dict(error_model="numpy", cache=True, nogil=True, fastmath=False)
+#: ``contract``: fused multiply-adds (about 15 % faster, measured). No other fast-math flag:
+#: NaN rows must stay NaN, and the results stay within 1e-13 m of the numpy reference
+#: (tested); every candidate is still a true pair of points on the segments.
+_OPTS: dict[str, Any] = dict(error_model="numpy", cache=True, nogil=True,
+                             fastmath={"contract"})
 #: As :data:`athenakin.collision._distance.NOISE` (the layers keep one value each; a test
 #: checks they agree).
 NOISE = 1e-12
