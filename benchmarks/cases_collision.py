@@ -19,7 +19,11 @@ from athenakin._mechanism import body_segments, mechanism_points
 from athenakin.collision import Bodies, Environment, clearance
 from athenakin.collision._clearance import segment_clearance
 from athenakin.collision._coal import capsule_transform, import_coal
-from athenakin.fast._collision_kernels import capsule_distances, capsule_pairs
+from athenakin.fast._collision_kernels import (
+    capsule_distances,
+    capsule_pairs,
+    capsule_pairs_into,
+)
 
 
 def _configurations(n: int):
@@ -62,6 +66,8 @@ def cases(quick: bool) -> list[dict]:
         for a, Ta, b, Tb in jobs:
             coal.distance(a, Ta, b, Tb, req, res)
 
+    out_d = np.empty((len(seg), len(ij)))
+    out_w = np.empty((len(seg), len(ij), 2, 3))
     n_all = max(1, n // 16)
     return [
         {"name": "coal.distance per pair (Capsule-Capsule)", "group": "collision-pairs",
@@ -70,6 +76,10 @@ def cases(quick: bool) -> list[dict]:
         {"name": "capsule_pairs kernel (numba, one core)", "group": "collision-pairs",
          "batch": n_pairs, "call": lambda: capsule_pairs(seg, radii, ij),
          "note": "distances + witness points; target >= 2 M pairs/s, >= 20x coal"},
+        {"name": "capsule_pairs_into kernel (numba, one core, outputs reused)",
+         "group": "collision-pairs", "batch": n_pairs,
+         "call": lambda: capsule_pairs_into(seg, radii, ij, out_d, out_w),
+         "note": "as a loop that keeps its buffers: no fresh pages to fault in"},
         {"name": "capsule_distances kernel (numba, one core)", "group": "collision-pairs",
          "batch": n_pairs, "call": lambda: capsule_distances(seg, radii, ij),
          "note": "signed distances only"},
@@ -79,6 +89,10 @@ def cases(quick: bool) -> list[dict]:
         {"name": "clearance(q, T_b_e, slot=0), FK included", "group": "collision-pairs",
          "batch": n * len(ij), "call": lambda: clearance(q, T, d, slot=0, bodies=bodies),
          "note": "the whole public call"},
+        {"name": "clearance(q, T_b_e, slot=0, witness=False), FK included",
+         "group": "collision-pairs", "batch": n * len(ij),
+         "call": lambda: clearance(q, T, d, slot=0, bodies=bodies, witness=False),
+         "note": "distances only"},
         {"name": "clearance(q, T_b_e, slot='all'), FK included", "group": "collision-pairs",
          "batch": n_all * 16 * len(ij),
          "call": lambda: clearance(q[:n_all], T, d, slot="all", bodies=bodies),

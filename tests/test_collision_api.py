@@ -312,3 +312,40 @@ def test_missing_coal_names_the_extra(monkeypatch, setup):
         clearance(q[:2], T, d, environment=env)
     # capsules, spheres and halfspaces need no coal
     clearance(q[:2], T, d, environment=Environment().sphere((0, 0.3, 0), 0.05))
+
+
+@pytest.mark.parametrize("text", [
+    "[environment]\nobstacle = 3\n",
+    "[[environment.obstacle]]\nkind = 'cone'\n",
+    "[[environment.obstacle]]\nkind = 'sphere'\ncenter = [0, 0]\nradius = 0.1\n",
+    "[[environment.obstacle]]\nkind = 'sphere'\ncenter = [0, 0, 0]\nradius = 'big'\n",
+    "[[environment.obstacle]]\nkind = 'sphere'\ncenter = [0, 0, 0]\n",
+    "[[environment.obstacle]]\nkind = 'halfspace'\npoint = [0, 0, 0]\nnormal = [0, 0, 0]\n",
+    "[[environment.obstacle]]\nkind = 'sphere'\ncenter = [0, 0, 0]\nradius = 0.1\nallow = 5\n",
+    "[[environment.obstacle]]\nkind = 'mesh'\npath = 'nowhere.stl'\n",
+    "[[environment.obstacle]]\nkind = 'box'\nT_b_box = [1, 2]\nhalf_extents = [1, 1, 1]\n",
+    "[bodies]\nradius = 5\n", "[bodies]\nexclude = [[1, 2]]\n",
+    "[bodies]\ngeometry = { carriage_length = 'x' }\n", "[bodies]\nexclude = 'rail'\n",
+])
+def test_malformed_files_are_one_named_error(tmp_path, text):
+    f = tmp_path / "bad.toml"
+    f.write_text(text, encoding="utf-8")
+    reader = Bodies.from_toml if text.startswith("[bodies]") else Environment.from_toml
+    with pytest.raises(InvalidInputError, match="bad.toml"):
+        reader(f)
+
+
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+def test_witness_false_gives_the_same_distances(setup, backend):
+    d, T, q = setup
+    env = Environment().halfspace((0, 0, -0.05), (0, 0, 1), name="table").sphere(
+        (0.0, 0.35, 0.2), 0.05, name="ball")
+    a = clearance(q, T, d, slot="all", environment=env, backend=backend)
+    b = clearance(q, T, d, slot="all", environment=env, witness=False, backend=backend)
+    assert b.witness_points.shape == a.witness_points.shape
+    assert np.isnan(b.witness_points).all() and b.witness_points.base is not None
+    assert not b.witness_points.flags.writeable
+    assert_allclose(b.distances, a.distances, rtol=0, atol=0, equal_nan=True)
+    assert np.array_equal(b.closest_pair, a.closest_pair)
+    with pytest.raises(TypeError, match="witness"):
+        clearance(q, T, d, witness="no")
