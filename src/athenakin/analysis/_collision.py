@@ -120,7 +120,7 @@ def labelled_clearance(q: NDArray[np.float64], T_b_e: NDArray[np.float64], desig
             if todo.size == 0:
                 break
             res = clearance(q[todo], T_b_e, design, slot=slot, bodies=bodies,
-                            environment=environment)
+                            environment=environment, witness=False)
             ok = np.asarray(res.valid, dtype=bool).reshape(-1)
             dist[todo[ok]] = np.asarray(res.min_distance, dtype=float).reshape(-1)[ok]
             cp = np.asarray(res.closest_pair).reshape(-1).astype(np.int64)[ok]

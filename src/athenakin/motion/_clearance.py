@@ -180,7 +180,7 @@ class PoseClearance:
 
             pairs, dd, _ = segment_clearance(seg[None], np.ones(1, dtype=bool), self.bodies,
                                              self.environment,
-                                             compiled=resolve_backend("auto"))
+                                             compiled=resolve_backend("auto"), witness=False)
             dist = dd[0]
         else:
             from ..fast._collision_kernels import capsule_distances
