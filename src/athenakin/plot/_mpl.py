@@ -368,8 +368,8 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
         More legend handles (e.g. what the caller drew before).
     bodies : athenakin.collision.Bodies or True, keyword-only, optional
         Also draw the bodies as solids (shaded capsules), the pair with the least
-        clearance coloured and the clearance written (:func:`athenakin.plot._solids.
-        draw_bodies`); ``True``: the default bodies.
+        clearance coloured and the clearance written
+        (:func:`~athenakin.plot.draw_bodies`); ``True``: the default bodies.
 
     Returns
     -------
