@@ -76,3 +76,14 @@ def test_bad_slot(slot):
 def test_bad_geometry(field, value):
     with pytest.raises((InvalidInputError, ValueError), match=field):
         BodyGeometry(**{field: value})
+
+
+def test_sphere_link_points_are_continuous(setup):
+    """S_4 follows the u4 axis continuously: no flip with the rounding of a zero dot product."""
+    d, T, q = setup
+    t = np.linspace(0.0, 1.0, 201)[:, None]
+    path = q[0] + t * (q[1] - q[0])
+    mp = mechanism_points(path, T, d, slot=0)
+    for name in ("S_3", "S_4", "S_5"):
+        step = np.linalg.norm(np.diff(mp[name], axis=0), axis=-1)
+        assert step.max() < 0.01, name

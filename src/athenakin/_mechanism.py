@@ -27,9 +27,12 @@ body                from -> to         what it is
 
 The spherical joint at the RCM (the passive spherical five-bar of the paper's Fig. 3,
 whose dimensions the paper does not give) is modelled by its kinematic equivalent,
-two links whose ends lie on the joint axes at ``sphere_radius`` from the RCM: ``S_5``
-on the fixed axis ``u5`` (``z_e``), ``S_4`` on the axis of ``u4`` and ``S_3`` on the
-instrument axis (the guide), each on the side of ``O_s`` (outside the patient).
+two links whose ends lie on the joint axes at ``sphere_radius`` from the RCM: ``S_3``
+on the instrument axis (the guide) on the side of ``O_s`` (outside the patient), ``S_4``
+on the axis of ``u4`` in the direction the chain gives it (``R_3 Rz(u3) Rx(pi/2) e_z``)
+and ``S_5`` on the fixed axis ``u5`` at ``+z_e``. The ``u4`` axis is perpendicular to the
+instrument, and so is ``u5`` at the home pose: a "side of ``O_s``" would flip ``S_4``
+and ``S_5`` with the rounding of a zero, so their sides are fixed by the chain instead.
 """
 
 from __future__ import annotations
@@ -241,9 +244,10 @@ def mechanism_points(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = Non
     out = -side * d                                      # from the RCM towards O_s
     rs = geometry.sphere_radius
     S_3 = RCM + rs * out
-    # the u4 and u5 axis points on the side of O_s
-    a4 = a4 * np.where(np.einsum("...i,...i->...", a4, out) < 0, -1.0, 1.0)[..., None]
-    ze = z_e * np.where(np.einsum("...i,...i->...", z_e, out) < 0, -1.0, 1.0)[..., None]
+    # S_4 on the u4 axis as the chain orients it (R_3 Rz(u3) Rx(pi/2) e_z), S_5 on +z_e:
+    # u4 is perpendicular to the instrument, and at the home pose so is u5, so a side of
+    # O_s would flip them with the rounding of a zero dot product.
+    ze = z_e
     S_4 = RCM + rs * a4
     S_5 = RCM + rs * ze
     lo = np.min(np.where(np.isfinite(design.stroke_min[:2]), design.stroke_min[:2], np.inf))

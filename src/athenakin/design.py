@@ -25,6 +25,9 @@ __all__ = ["Design", "AB_ORDERS", "LENGTH_RANGE"]
 AB_ORDERS = ("q1<q2", "q1>q2")
 
 _LENGTHS = ("l1", "l2", "l3", "l4", "l5")
+#: Tables of a design file that other models read (``athenakin.collision``:
+#: ``Bodies.from_toml``, ``Environment.from_toml``), skipped by :meth:`Design.from_toml`.
+_OTHER_TABLES = ("bodies", "environment")
 
 #: Range (m) of every length of a design (``l1..l5``, ``tool_length``) and of the finite
 #: stroke limits: from a micrometre to a kilometre. Outside it the kinematics would square
@@ -220,6 +223,10 @@ class Design:
             ab_order = "q1<q2"
             tool_length = 0.45
 
+        A ``[bodies]`` or ``[environment]`` table in the same file belongs to
+        :mod:`athenakin.collision` (``Bodies.from_toml``, ``Environment.from_toml``) and
+        is skipped here.
+
         Raises
         ------
         OSError
@@ -232,6 +239,8 @@ class Design:
         table: Mapping[str, Any] = data
         if "design" in data and isinstance(data["design"], Mapping):
             table = data["design"]
+        else:  # fields at top level: the tables of other models are not design keys
+            table = {k: v for k, v in data.items() if k not in _OTHER_TABLES}
         try:
             return cls.from_mapping(table)
         except (InvalidInputError, TypeError) as exc:

@@ -15,6 +15,15 @@ Four grids, each a frozen dataclass of arrays:
   insertion range along each.
 * :func:`tool_tip_workspace` - a voxel grid of tool-tip positions in frame E.
 
+Collisions. :func:`point_workspace`, :func:`instrument_cone` and
+:func:`tool_tip_workspace` take ``bodies=``, ``environment=`` and ``clearance_margin=``
+(any of them turns the check on; :mod:`athenakin.collision`, imported then): each
+reachable grid point then gets the least clearance between the robot's bodies and to
+the obstacles (``clearance``) and a collision-free layer (``collision_free``: reachable
+and a clearance of at least the margin, default 0); the cone also marks the directions
+that a collision blocks (``blocked``: in the cone, but no collision-free insertion).
+Without the check these fields are None.
+
 Results are saved with :func:`save_npz` (one ``.npz`` archive: the arrays by
 field name plus a JSON ``meta`` entry) and read with :func:`load_npz`.
 """
@@ -119,6 +128,39 @@ def _cond(J: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float
     with np.errstate(divide="ignore", invalid="ignore"):
         c = np.where(s[..., -1] > 0, s[..., 0] / s[..., -1], np.inf)
     return s[..., -1], np.where(np.isnan(s[..., 0]), np.nan, c)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Check:
+    bodies: Any
+    environment: Any
+    margin: float
+
+
+def _collision_check(design: Design, bodies: object, environment: object,
+                     clearance_margin: object) -> _Check | None:
+    """The collision check asked for (None: none); bodies default to ``Bodies.default``."""
+    from ._collision import collision_options
+
+    opts = collision_options(design, bodies, environment, clearance_margin, default_margin=0.0)
+    return None if opts is None else _Check(*opts)
+
+
+def _clearance(check: _Check, q: NDArray[np.float64], T: NDArray[np.float64], design: Design,
+               mode: NDArray[Any], p_negative: NDArray[np.bool_]) -> NDArray[np.float64]:
+    """Least clearance of each reachable point (``mode != 0``), NaN elsewhere."""
+    from ._collision import labelled_clearance
+
+    dist, _ = labelled_clearance(np.where(np.isfinite(q), q, 0.0), T, design,
+                                 np.asarray(mode, dtype=np.int64), p_negative,
+                                 bodies=check.bodies, environment=check.environment)
+    return dist
+
+
+def _free(reachable: NDArray[np.bool_], clearance: NDArray[np.float64], margin: float
+          ) -> NDArray[np.bool_]:
+    with np.errstate(invalid="ignore"):
+        return reachable & (clearance >= margin)
 
 
 def _unlimited(design: Design) -> Design:
@@ -249,6 +291,11 @@ class PointWorkspace:
         is the surface where the two assembly modes meet.
     sigma_min, condition : ndarray, shape (nx, ny, nz)
         Of ``d O_s / d q`` (dimensionless; NaN where ``mode == 0``).
+    clearance : ndarray, shape (nx, ny, nz), or None
+        Least clearance of the bodies (m, NaN where not reachable) with the serial
+        chain set up at ``T_b_e`` (``p > 0``); None without the collision check.
+    collision_free : ndarray of bool, shape (nx, ny, nz), or None
+        Reachable with a clearance of at least the margin; None without the check.
     """
 
     x: NDArray[np.float64]
@@ -260,6 +307,8 @@ class PointWorkspace:
     mode_margin: NDArray[np.float64]
     sigma_min: NDArray[np.float64]
     condition: NDArray[np.float64]
+    clearance: NDArray[np.float64] | None = None
+    collision_free: NDArray[np.bool_] | None = None
 
 
 def _default_bounds(design: Design) -> tuple[tuple[float, float], ...]:
@@ -273,7 +322,9 @@ def _default_bounds(design: Design) -> tuple[tuple[float, float], ...]:
 
 def point_workspace(design: Design | None = None, *, resolution: int | tuple[int, int, int] = 41,
                     bounds: tuple[tuple[float, float], ...] | None = None,
-                    progress: bool | None = None) -> PointWorkspace:
+                    progress: bool | None = None, bodies: object = None,
+                    environment: object = None, clearance_margin: float | None = None,
+                    T_b_e: ArrayLike | None = None) -> PointWorkspace:
     """Reachable set of ``O_s`` with its assembly-mode regions and conditioning.
 
     Uses the closed-form IK of the parallel module (paper Section 4), so
@@ -287,12 +338,33 @@ def point_workspace(design: Design | None = None, *, resolution: int | tuple[int
     bounds : ((xmin, xmax), (ymin, ymax), (zmin, zmax)), keyword-only
         Default: ``x_M`` over the stroke box, ``|y|, |z| <= l1 + l4``.
     progress : bool, keyword-only
+    bodies : athenakin.collision.Bodies, optional, keyword-only
+        Check the clearance of these bodies at every reachable point (layers
+        ``clearance``, ``collision_free``); default ``Bodies.default(design)`` when
+        ``environment`` or ``clearance_margin`` turns the check on.
+    environment : athenakin.collision.Environment, optional, keyword-only
+        Obstacles (base frame).
+    clearance_margin : float, optional, keyword-only
+        Least clearance of a collision-free point, m (default 0: no overlap).
+    T_b_e : array-like, shape (4, 4), optional, keyword-only
+        RCM frame that places the serial chain and the instrument for the check
+        (default :func:`~athenakin.default_rcm_frame`); not used without it.
 
     Returns
     -------
     PointWorkspace
     """
     design = resolve_design(design)
+    check = _collision_check(design, bodies, environment, clearance_margin)
+    T = None
+    if check is None and T_b_e is not None:
+        raise InvalidInputError("T_b_e: places the serial chain for the collision check only; "
+                                "pass bodies=, environment= or clearance_margin= too (the O_s "
+                                "workspace itself does not depend on it)")
+    if check is not None:
+        T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
+        if T.shape != (4, 4):
+            raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
     n = _resolution(resolution, 3)
     b = _box(bounds) or _default_bounds(design)
     axes = [np.linspace(lo, hi, k) for (lo, hi), k in zip(b, n, strict=True)]
@@ -306,15 +378,25 @@ def point_workspace(design: Design | None = None, *, resolution: int | tuple[int
         _, g = _state(np.nan_to_num(q), design, np.where(m == 0, 1, m))
         smin, cond = _cond(_parallel_jacobian(g))
         nan = np.where(m != 0, 1.0, np.nan)
-        return {"m": m.astype(np.int8), "q": q, "r": _within(q, design) & (m != 0),
-                "mm": m * g["a"] * nan, "s": smin * nan, "c": cond * nan}
+        reach = _within(q, design) & (m != 0)
+        out = {"m": m.astype(np.int8), "q": q, "r": reach,
+               "mm": m * g["a"] * nan, "s": smin * nan, "c": cond * nan}
+        if check is not None:
+            assert T is not None
+            out["cl"] = _clearance(check, q, T, design, np.where(reach, m, 0),
+                                   np.zeros(len(q), dtype=bool))
+        return out
 
     r = _map_chunks(fn, P, progress, "O_s workspace")
     sh = tuple(n)
+    cl = None if check is None else r["cl"].reshape(sh)
+    reach = r["r"].reshape(sh)
     return PointWorkspace(x=axes[0], y=axes[1], z=axes[2], mode=r["m"].reshape(sh),
-                          reachable=r["r"].reshape(sh), q=r["q"].reshape(sh + (3,)),
+                          reachable=reach, q=r["q"].reshape(sh + (3,)),
                           mode_margin=r["mm"].reshape(sh), sigma_min=r["s"].reshape(sh),
-                          condition=r["c"].reshape(sh))
+                          condition=r["c"].reshape(sh), clearance=cl,
+                          collision_free=None if check is None or cl is None
+                          else _free(reach, cl, check.margin))
 
 
 # --------------------------------------------------------------------------------------
@@ -343,6 +425,14 @@ class InstrumentCone:
         Number of separate reachable insertion intervals (0: direction not in the cone).
     condition : ndarray, shape (na, npol, np)
         Condition number of the tool-tip Jacobian (NaN where unreachable).
+    clearance : ndarray, shape (na, npol, np), or None
+        Least clearance of the bodies, m (NaN where unreachable); None without the
+        collision check.
+    collision_free : ndarray of bool, shape (na, npol, np), or None
+        Reachable with a clearance of at least the margin.
+    blocked : ndarray of bool, shape (na, npol), or None
+        Directions in the cone (some insertion reachable) that a collision blocks:
+        no reachable insertion along them is collision-free.
     """
 
     azimuth: NDArray[np.float64]
@@ -355,6 +445,9 @@ class InstrumentCone:
     p_max: NDArray[np.float64]
     n_intervals: NDArray[np.int64]
     condition: NDArray[np.float64]
+    clearance: NDArray[np.float64] | None = None
+    collision_free: NDArray[np.bool_] | None = None
+    blocked: NDArray[np.bool_] | None = None
 
 
 def _interval(x: object, name: str) -> tuple[float, float] | None:
@@ -392,7 +485,9 @@ def _modes_arg(modes: tuple[int, ...]) -> tuple[int, ...]:
 def instrument_cone(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                     resolution: int | tuple[int, int, int] = (73, 37, 46),
                     p_range: tuple[float, float] | None = None, modes: tuple[int, ...] = (1,),
-                    progress: bool | None = None) -> InstrumentCone:
+                    progress: bool | None = None, bodies: object = None,
+                    environment: object = None, clearance_margin: float | None = None
+                    ) -> InstrumentCone:
     """The cone of instrument directions about the RCM with its insertion ranges.
 
     For each direction ``d`` (spherical angles in E) and insertion ``p`` the
@@ -411,12 +506,16 @@ def instrument_cone(T_b_e: ArrayLike | None = None, design: Design | None = None
     modes : tuple of {1, -1}, keyword-only
         Assembly modes counted as reachable (default: the working mode +1).
     progress : bool, keyword-only
+    bodies, environment, clearance_margin : keyword-only
+        The collision check (see :func:`point_workspace`): layers ``clearance``,
+        ``collision_free`` and the directions a collision ``blocked``.
 
     Returns
     -------
     InstrumentCone
     """
     design = resolve_design(design)
+    check = _collision_check(design, bodies, environment, clearance_margin)
     T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
     if T.shape != (4, 4):
         raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
@@ -438,7 +537,10 @@ def instrument_cone(T_b_e: ArrayLike | None = None, design: Design | None = None
         _, g = _state(np.nan_to_num(q), design, np.where(m == 0, 1, m))
         N, _, _ = _tip_matrices(g, T, L)
         _, cond = _cond(N @ _parallel_jacobian(g))
-        return {"m": m.astype(np.int8), "r": ok, "c": np.where(ok, cond, np.nan)}
+        out = {"m": m.astype(np.int8), "r": ok, "c": np.where(ok, cond, np.nan)}
+        if check is not None:
+            out["cl"] = _clearance(check, q, T, design, m, x[:, 2] < 0)
+        return out
 
     r = _map_chunks(fn, pts, progress, "instrument cone")
     sh = (na, npol, npp)
@@ -447,9 +549,15 @@ def instrument_cone(T_b_e: ArrayLike | None = None, design: Design | None = None
     with np.errstate(invalid="ignore"), _quiet():
         p_min, p_max = np.nanmin(pm, axis=-1), np.nanmax(pm, axis=-1)
     starts = reach & ~np.concatenate([np.zeros(sh[:-1] + (1,), bool), reach[..., :-1]], axis=-1)
+    cl = free = blocked = None
+    if check is not None:
+        cl = r["cl"].reshape(sh)
+        free = _free(reach, cl, check.margin)
+        blocked = np.asarray(reach.any(axis=-1) & ~free.any(axis=-1), dtype=bool)
     return InstrumentCone(azimuth=az, polar=pol, p=p, T_b_e=T, mode=r["m"].reshape(sh),
                           reachable=reach, p_min=p_min, p_max=p_max,
-                          n_intervals=starts.sum(axis=-1), condition=r["c"].reshape(sh))
+                          n_intervals=starts.sum(axis=-1), condition=r["c"].reshape(sh),
+                          clearance=cl, collision_free=free, blocked=blocked)
 
 
 @contextlib.contextmanager
@@ -479,6 +587,11 @@ class ToolTipWorkspace:
         Actuators (NaN where unreachable).
     sigma_min, condition : ndarray, shape (nx, ny, nz)
         Of the tool-tip Jacobian ``d tip / d q`` (dimensionless).
+    clearance : ndarray, shape (nx, ny, nz), or None
+        Least clearance of the bodies, m (NaN where unreachable); None without the
+        collision check.
+    collision_free : ndarray of bool, shape (nx, ny, nz), or None
+        Reachable with a clearance of at least the margin.
     """
 
     x: NDArray[np.float64]
@@ -490,13 +603,16 @@ class ToolTipWorkspace:
     q: NDArray[np.float64]
     sigma_min: NDArray[np.float64]
     condition: NDArray[np.float64]
+    clearance: NDArray[np.float64] | None = None
+    collision_free: NDArray[np.bool_] | None = None
 
 
 def tool_tip_workspace(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                        resolution: int | tuple[int, int, int] = 41,
                        bounds: tuple[tuple[float, float], ...] | None = None,
-                       modes: tuple[int, ...] = (1,), progress: bool | None = None
-                       ) -> ToolTipWorkspace:
+                       modes: tuple[int, ...] = (1,), progress: bool | None = None,
+                       bodies: object = None, environment: object = None,
+                       clearance_margin: float | None = None) -> ToolTipWorkspace:
     """Reachable tool-tip positions (instrument through the RCM), frame E.
 
     Parameters
@@ -508,12 +624,16 @@ def tool_tip_workspace(T_b_e: ArrayLike | None = None, design: Design | None = N
         In frame E; default ``[-L, L]^3`` (``L`` the tool length).
     modes : tuple of {1, -1}, keyword-only
     progress : bool, keyword-only
+    bodies, environment, clearance_margin : keyword-only
+        The collision check (see :func:`point_workspace`): layers ``clearance`` and
+        ``collision_free``.
 
     Returns
     -------
     ToolTipWorkspace
     """
     design = resolve_design(design)
+    check = _collision_check(design, bodies, environment, clearance_margin)
     T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
     if T.shape != (4, 4):
         raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
@@ -532,14 +652,22 @@ def tool_tip_workspace(T_b_e: ArrayLike | None = None, design: Design | None = N
         N, _, _ = _tip_matrices(g, T, L)
         smin, cond = _cond(N @ _parallel_jacobian(g))
         nan = np.where(ok, 1.0, np.nan)
-        return {"m": m.astype(np.int8), "r": ok, "q": q * nan[:, None], "s": smin * nan,
-                "c": cond * nan}
+        out = {"m": m.astype(np.int8), "r": ok, "q": q * nan[:, None], "s": smin * nan,
+               "c": cond * nan}
+        if check is not None:
+            out["cl"] = _clearance(check, q, T, design, m,
+                                   np.linalg.norm(tip, axis=-1) > L)
+        return out
 
     r = _map_chunks(fn, P, progress, "tool-tip workspace")
     sh = tuple(n)
+    reach = r["r"].reshape(sh)
+    cl = None if check is None else r["cl"].reshape(sh)
     return ToolTipWorkspace(x=axes[0], y=axes[1], z=axes[2], T_b_e=T, mode=r["m"].reshape(sh),
-                            reachable=r["r"].reshape(sh), q=r["q"].reshape(sh + (3,)),
-                            sigma_min=r["s"].reshape(sh), condition=r["c"].reshape(sh))
+                            reachable=reach, q=r["q"].reshape(sh + (3,)),
+                            sigma_min=r["s"].reshape(sh), condition=r["c"].reshape(sh),
+                            clearance=cl, collision_free=None if check is None or cl is None
+                            else _free(reach, cl, check.margin))
 
 
 # --------------------------------------------------------------------------------------
@@ -581,7 +709,8 @@ def save_npz(path: str | Path, result: object, *, design: Design | None = None,
     name = type(result).__name__
     if name not in _RESULTS or not dataclasses.is_dataclass(result):
         raise TypeError(f"result: expected one of {sorted(_RESULTS)}, got {name}")
-    arrays = {f.name: np.asarray(getattr(result, f.name)) for f in dataclasses.fields(result)}
+    arrays = {f.name: np.asarray(getattr(result, f.name)) for f in dataclasses.fields(result)
+              if getattr(result, f.name) is not None}      # the layers left out are None
     info = {"type": name, "athenakin_version": __version__,
             "design_toml": design.to_toml() if design is not None else None, **meta}
     saver: Any = np.savez_compressed if compressed else np.savez
@@ -603,7 +732,7 @@ def load_npz(path: str | Path) -> tuple[object, dict[str, Any]]:
         if cls is None:
             raise InvalidInputError(f"{path}: not an athenakin grid result (meta.type = "
                                     f"{meta.get('type')!r})")
-        kw = {fl.name: f[fl.name] for fl in dataclasses.fields(cls)}
+        kw = {fl.name: f[fl.name] for fl in dataclasses.fields(cls) if fl.name in f.files}
     return cls(**kw), meta
 
 
@@ -638,6 +767,8 @@ def workspace_summary(pw: PointWorkspace | None = None, ic: InstrumentCone | Non
             out["O_s median cond(dO_s/dq), mode +1"] = float(np.nanmedian(pw.condition[sel]))
             out["O_s min |signed half-chord|, mode +1 [m]"] = float(
                 np.nanmin(np.abs(pw.mode_margin[sel]))) if sel.any() else float("nan")
+            if pw.collision_free is not None:
+                out["O_s collision-free volume [m^3]"] = float(pw.collision_free.sum() * v)
         if ic is not None:
             da = 2 * np.pi / len(ic.azimuth)
             dp = ic.polar[1] - ic.polar[0]
@@ -649,8 +780,15 @@ def workspace_summary(pw: PointWorkspace | None = None, ic: InstrumentCone | Non
             out["cone max insertion range [m]"] = float(np.nanmax(ic.p_max - ic.p_min))
             out["cone directions with 2+ insertion intervals"] = int((ic.n_intervals > 1).sum())
             out["cone median cond(d tip/dq)"] = float(np.nanmedian(ic.condition))
+            if ic.collision_free is not None and ic.blocked is not None:
+                free = ic.collision_free.any(axis=-1)
+                out["cone collision-free solid angle [sr]"] = float((free * w[None, :]).sum())
+                out["cone solid angle blocked by a collision [sr]"] = float(
+                    (ic.blocked * w[None, :]).sum())
         if tw is not None:
             v = _voxel_volume(tw.x, tw.y, tw.z)
             out["tool-tip reachable volume [m^3]"] = float(tw.reachable.sum() * v)
             out["tool-tip median cond(d tip/dq)"] = float(np.nanmedian(tw.condition))
+            if tw.collision_free is not None:
+                out["tool-tip collision-free volume [m^3]"] = float(tw.collision_free.sum() * v)
     return out

@@ -42,6 +42,22 @@ COLOR_OUT = "#d9d9d9"
 COLOR_LOCI = {"w0": "#d62728", "h0": "#2ca02c", "l3": "#9467bd", "stroke": "black"}
 #: Hatching and outline of the directions with two insertion intervals.
 TWO_INTERVALS_COLOR = "#00bcd4"
+#: Hatching and outline of what a collision blocks (maps computed with the collision check).
+COLLISION_COLOR = "#e7298a"
+
+
+def _collision_overlay(ax: Any, U: NDArray[np.float64], V: NDArray[np.float64],
+                       blocked: NDArray[np.bool_], label: str) -> Any:
+    """Hatch and outline ``blocked`` (shape (len(U), len(V))); returns the legend patch."""
+    import matplotlib as mpl
+    from matplotlib.patches import Patch
+
+    b = np.asarray(blocked, dtype=float).T
+    if np.any(b):
+        with mpl.rc_context({"hatch.linewidth": 1.2, "hatch.color": COLLISION_COLOR}):
+            ax.contourf(U, V, b, levels=[0.5, 1.5], colors="none", hatches=["////"])
+        ax.contour(U, V, b, levels=[0.5], colors=COLLISION_COLOR, linewidths=1.2)
+    return Patch(facecolor="none", edgecolor=COLLISION_COLOR, hatch="////", lw=1.2, label=label)
 
 
 def _plt() -> Any:
@@ -217,7 +233,9 @@ def plot_workspace_slice(pw: PointWorkspace, *, x: float | None = None, quantity
     orange -1), grey where the module gets there only beyond the stroke
     limits; the red line is the surface where the modes meet
     (``mode_margin = 0``). ``quantity="condition"``: ``log10`` of the
-    condition number of ``d O_s / d q`` over the reachable voxels.
+    condition number of ``d O_s / d q`` over the reachable voxels. A map computed
+    with the collision check (``pw.collision_free``) hatches, in magenta, the
+    reachable voxels where the bodies collide.
     """
     from matplotlib.colors import ListedColormap
 
@@ -236,12 +254,15 @@ def plot_workspace_slice(pw: PointWorkspace, *, x: float | None = None, quantity
                        colors=COLOR_LOCI["w0"], linewidths=1.5)
         from matplotlib.patches import Patch
 
+        handles = [Patch(color=COLOR_MODE[1], label="mode +1"),
+                   Patch(color=COLOR_MODE[-1], label="mode -1"),
+                   Patch(color=COLOR_OUT, label="beyond strokes"),
+                   Patch(color=COLOR_LOCI["w0"], label="modes meet (w = 0)")]
+        if pw.collision_free is not None:
+            handles.append(_collision_overlay(ax, Y, Z, pw.reachable[i] & ~pw.collision_free[i],
+                                              "bodies collide"))
         if legend:
-            ax.legend(handles=[Patch(color=COLOR_MODE[1], label="mode +1"),
-                               Patch(color=COLOR_MODE[-1], label="mode -1"),
-                               Patch(color=COLOR_OUT, label="beyond strokes"),
-                               Patch(color=COLOR_LOCI["w0"], label="modes meet (w = 0)")],
-                      loc="center", fontsize=7)
+            ax.legend(handles=handles, loc="center", fontsize=7)
     else:
         with np.errstate(divide="ignore", invalid="ignore"):
             c = np.where(pw.reachable[i], np.log10(pw.condition[i]), np.nan)
@@ -302,10 +323,13 @@ def plot_cone_chart(ic: InstrumentCone, *, quantity: str = "range", ax: Any = No
 
     ``quantity="range"``: reachable insertion length ``p_max - p_min`` (mm);
     ``"p_min"`` / ``"p_max"``; ``"condition"``: ``log10`` of the best condition
-    number of the tool-tip Jacobian along the direction. Hatched and outlined
-    (cyan): directions with two separate insertion intervals. The azimuth axis
-    starts in the widest gap of unreachable azimuths (:func:`wrapped_azimuth`), so
-    a region that crosses +-180 deg is drawn in one piece.
+    number of the tool-tip Jacobian along the direction; ``"clearance"`` (a cone
+    computed with the collision check): the best clearance of the bodies over the
+    reachable insertions along the direction (mm). Hatched and outlined (cyan):
+    directions with two separate insertion intervals; (magenta, with the collision
+    check): directions a collision blocks (:attr:`InstrumentCone.blocked`). The
+    azimuth axis starts in the widest gap of unreachable azimuths
+    (:func:`wrapped_azimuth`), so a region that crosses +-180 deg is drawn in one piece.
     """
     ax = _ax(ax)
     A, B = np.degrees(ic.azimuth), np.degrees(ic.polar)
@@ -315,6 +339,19 @@ def plot_cone_chart(ic: InstrumentCone, *, quantity: str = "range", ax: Any = No
                 "magma"
         elif quantity in ("p_min", "p_max"):
             v, label, cmap = getattr(ic, quantity) * MM, f"{quantity} [mm]", "magma"
+        elif quantity == "clearance":
+            if ic.clearance is None:
+                from ..errors import InvalidInputError
+
+                raise InvalidInputError("quantity='clearance': the cone was computed without "
+                                        "the collision check (bodies=, environment= or "
+                                        "clearance_margin= of instrument_cone)")
+            import warnings
+
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                v = np.nanmax(ic.clearance, axis=-1) * MM
+            label, cmap = "best clearance along the direction [mm]", "RdYlGn"
         else:
             import warnings
 
@@ -327,6 +364,7 @@ def plot_cone_chart(ic: InstrumentCone, *, quantity: str = "range", ax: Any = No
     im = ax.pcolormesh(A[order], B, v[order].T, shading="auto", cmap=cmap, rasterized=True, **kw)
     ax.figure.colorbar(im, ax=ax, shrink=0.85).set_label(label)
     two = (ic.n_intervals > 1)[order].T.astype(float)
+    handles = []
     if np.any(two):
         import matplotlib as mpl
         from matplotlib.patches import Patch
@@ -334,9 +372,13 @@ def plot_cone_chart(ic: InstrumentCone, *, quantity: str = "range", ax: Any = No
         with mpl.rc_context({"hatch.linewidth": 1.6, "hatch.color": TWO_INTERVALS_COLOR}):
             ax.contourf(A[order], B, two, levels=[0.5, 1.5], colors="none", hatches=["xxx"])
         ax.contour(A[order], B, two, levels=[0.5], colors=TWO_INTERVALS_COLOR, linewidths=1.5)
-        ax.legend(handles=[Patch(facecolor="none", edgecolor=TWO_INTERVALS_COLOR, hatch="xxx",
-                                 lw=1.5, label="two insertion intervals")],
-                  loc="lower right", fontsize=7, framealpha=0.9)
+        handles.append(Patch(facecolor="none", edgecolor=TWO_INTERVALS_COLOR, hatch="xxx",
+                             lw=1.5, label="two insertion intervals"))
+    if ic.blocked is not None:
+        handles.append(_collision_overlay(ax, A[order], B, ic.blocked[order],
+                                          "blocked by a collision"))
+    if handles:
+        ax.legend(handles=handles, loc="lower right", fontsize=7, framealpha=0.9)
     ax.set_xlabel("azimuth about z_e [deg]")
     ax.set_ylabel("polar angle from z_e [deg]")
     ax.set_xlim(A[order][0], A[order][-1])
@@ -402,6 +444,7 @@ def plot_instrument_cone(ic: InstrumentCone, *, ax: Any = None, frame: str = "ba
     ``p_max - p_min`` along it; unreachable directions are left out. Black dot:
     the RCM; black line: the rail (``x_b`` axis, ``frame="base"`` only); blue
     line: the instrument at ``reference_q`` (optional), from ``O_s`` through the RCM.
+    With the collision check, the directions a collision blocks are drawn in magenta.
     """
     import matplotlib as mpl
 
@@ -419,6 +462,9 @@ def plot_instrument_cone(ic: InstrumentCone, *, ax: Any = None, frame: str = "ba
     cmap = mpl.colormaps["magma"]
     col = cmap(norm(np.nan_to_num(rng)))
     col[..., 3] = np.where(np.isfinite(rng), 0.6, 0.0)
+    if ic.blocked is not None:
+        blocked = np.concatenate([ic.blocked, ic.blocked[:1]], axis=0)
+        col[blocked] = mpl.colors.to_rgba(COLLISION_COLOR, 0.8)
     ax.plot_surface(P[..., 0], P[..., 1], P[..., 2], facecolors=col, rstride=1, cstride=1,
                     linewidth=0, antialiased=False, shade=False)
     ax.scatter(*(origin * MM), color="k", s=30, depthshade=False)
@@ -460,7 +506,11 @@ def plot_instrument_cone(ic: InstrumentCone, *, ax: Any = None, frame: str = "ba
 
 def plot_tool_tip_slice(tw: ToolTipWorkspace, *, axis: int = 2, value: float = 0.0,
                         quantity: str = "condition", ax: Any = None) -> Any:
-    """A slice of the tool-tip workspace (frame E) coloured by ``log10 cond`` or mode."""
+    """A slice of the tool-tip workspace (frame E) coloured by ``log10 cond`` or mode.
+
+    A map computed with the collision check (``tw.collision_free``) hatches, in
+    magenta, the reachable tips where the bodies collide.
+    """
     from matplotlib.colors import ListedColormap
 
     ax = _ax(ax)
@@ -481,6 +531,10 @@ def plot_tool_tip_slice(tw: ToolTipWorkspace, *, axis: int = 2, value: float = 0
         im = ax.pcolormesh(U, V, np.clip(c, 0, 4).T, cmap="viridis_r", vmin=0, vmax=4,
                            shading="auto", rasterized=True)
         ax.figure.colorbar(im, ax=ax, shrink=0.85).set_label("log10 cond(d tip/dq)")
+    if tw.collision_free is not None:
+        ax.legend(handles=[_collision_overlay(
+            ax, U, V, tw.reachable[tuple(idx)] & ~tw.collision_free[tuple(idx)],
+            "bodies collide")], loc="lower right", fontsize=7, framealpha=0.9)
     ax.plot(0, 0, "k+", ms=10)
     names = "xyz"
     ax.set_xlabel(f"{names[other[0]]}_e [mm]")
@@ -541,14 +595,22 @@ def figure_conditioning(am: ActuatorMap, pw: PointWorkspace, tw: ToolTipWorkspac
 
 
 def figure_instrument_cone(ic: InstrumentCone, *, reference_q: Any = None) -> Any:
-    """Instrument cone: 3-D view (frame E) and the chart of insertion ranges and conditioning."""
+    """Instrument cone: 3-D view (frame E) and the chart of insertion ranges and conditioning.
+
+    With the collision check the third panel shows the best clearance per direction
+    instead of the conditioning.
+    """
     plt = _plt()
     fig = plt.figure(figsize=(16, 4.8))
     plot_instrument_cone(ic, ax=fig.add_subplot(1, 3, 1, projection="3d"),
                          reference_q=reference_q)
     plot_cone_chart(ic, quantity="range", ax=fig.add_subplot(1, 3, 2))
-    ax = plot_cone_chart(ic, quantity="condition", ax=fig.add_subplot(1, 3, 3))
-    ax.set_title("Best tool-tip conditioning along each direction")
+    if ic.clearance is not None:
+        ax = plot_cone_chart(ic, quantity="clearance", ax=fig.add_subplot(1, 3, 3))
+        ax.set_title("Best clearance of the bodies along each direction")
+    else:
+        ax = plot_cone_chart(ic, quantity="condition", ax=fig.add_subplot(1, 3, 3))
+        ax.set_title("Best tool-tip conditioning along each direction")
     fig.tight_layout()
     return fig
 

@@ -140,6 +140,10 @@ class AthenaApp:
         self._label_texts: tuple[str, ...] = ()
         self._label_pos = np.zeros((0, 3))
         self._build_gui()
+        # bodies as solids, closest pair, clearance (issue 20): app/_bodies.py
+        from ._bodies import BodiesLayer
+
+        self.bodies = BodiesLayer(self.server)
         if trajectory is not None:
             self._load_trajectory(str(trajectory))
         self._apply_q(self.q, sync_ik=True)
@@ -453,6 +457,7 @@ class AthenaApp:
             elif m:
                 h.position = p
         self._label_texts, self._label_pos = texts, pos
+        self.bodies.update(view.geometry)    # bodies as solids (issue 20): app/_bodies.py
 
     def _frame_camera(self) -> None:
         if self.view is None or self.view.geometry is None:

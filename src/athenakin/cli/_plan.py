@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._collision import add_collision_options, collision_options
 from ._common import add_design_option, add_setup_options, load_design, load_rcm
 from ._output import add_force_option, outputs
 
@@ -45,6 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--margin", action="append", default=[], metavar="NAME=VALUE",
                    help="singularity margin, e.g. --margin sin_u4=0.2 (names: half_chord, h, "
                         "link, p, depth in m; sin_u2, sin_u4; cond, an upper bound)")
+    add_collision_options(p, what="a trajectory with a sample closer than this is refused")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--plots", type=Path, metavar="PREFIX",
                    help="figure prefix (default: OUT without its extension)")
@@ -118,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
         opts = dict(rate=args.rate, v_max=args.v_max, a_max=args.a_max, j_max=args.j_max,
                     tip_speed=args.tip_speed, times=spec.times, timing=args.timing,
                     margins=parse_margins(args.margin), max_duration=args.max_duration,
-                    max_samples=args.max_samples)
+                    max_samples=args.max_samples, **collision_options(args, design))
         if args.timing == "fixed" and spec.times is None:
             raise ValueError(f"--timing fixed: {args.path} has no t_s column")
         if spec.kind == "tip":
@@ -164,4 +166,9 @@ def _summary(traj: object, written: list[Path]) -> None:
     ratios = t.measures.ratio(t.margins)  # type: ignore[attr-defined]
     worst = min(ratios, key=lambda k: float(np.min(ratios[k])))
     print(f"closest to a singularity: {worst} at {float(np.min(ratios[worst])):.2f} x its margin")
+    if t.clearance is not None and np.any(np.isfinite(t.clearance)):  # type: ignore[attr-defined]
+        i = int(np.nanargmin(t.clearance))  # type: ignore[attr-defined]
+        a, b = t.closest_pair[i]  # type: ignore[attr-defined]
+        print(f"least clearance: {float(t.clearance[i]):.6g} m between {a} and {b} at "  # type: ignore[attr-defined]
+              f"t = {float(t.t[i]):.4f} s (margin {t.clearance_margin:g} m)")  # type: ignore[attr-defined]
     print("wrote " + ", ".join(str(w) for w in written))

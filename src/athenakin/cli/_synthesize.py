@@ -48,6 +48,20 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--force", action="store_true",
                    help="replace existing figures (the results folder -o is resumed, "
                         "never replaced)")
+    g = p.add_argument_group("collisions (any of these turns the clearance check on: columns "
+                             "collision_free_coverage, min_clearance)")
+    g.add_argument("--bodies", default=None, metavar="default|scaled|FILE",
+                   help="the default capsules for every design, those scaled with l1, or the "
+                        "[bodies] table of a TOML file (radii in m)")
+    g.add_argument("--environment", type=Path, default=None, metavar="FILE",
+                   help="obstacles: a TOML file of [[environment.obstacle]] tables")
+    g.add_argument("--clearance-margin", type=float, default=None, metavar="M",
+                   help="a sample is collision-free with at least this clearance, m (0)")
+    g.add_argument("--collision-samples", type=int, default=None, metavar="N",
+                   help="task samples checked per design (default 10000)")
+    g.add_argument("--min-clearance", type=float, default=None, metavar="M",
+                   help="with --optimize: designs whose min_clearance is below M are "
+                        "infeasible (a constraint)")
     add_json_option(p)
     p.set_defaults(func=run)
 
@@ -99,6 +113,27 @@ def run(args: argparse.Namespace) -> int:
         return _run(args, task, ref, bounds, out, outs, figs)
 
 
+def _collision_options(args: argparse.Namespace) -> dict[str, Any]:
+    """``bodies``, ``environment``, ``clearance_margin``, ``collision_samples`` as given."""
+    out: dict[str, Any] = {}
+    if args.bodies is not None:
+        if args.bodies in ("default", "scaled"):
+            out["bodies"] = args.bodies
+        else:
+            from ..collision import Bodies
+
+            out["bodies"] = Bodies.from_toml(args.bodies)
+    if args.environment is not None:
+        from ..collision import Environment
+
+        out["environment"] = Environment.from_toml(args.environment)
+    if args.clearance_margin is not None:
+        out["clearance_margin"] = args.clearance_margin
+    if args.collision_samples is not None:
+        out["collision_samples"] = args.collision_samples
+    return out
+
+
 def _run(args: argparse.Namespace, task: Any, ref: Any, bounds: Any, out: Path,
          outs: Outputs, figs: dict[str, Path]) -> int:
     from ..synthesis import evaluate, optimize, random_designs, row_from_design
@@ -106,9 +141,15 @@ def _run(args: argparse.Namespace, task: Any, ref: Any, bounds: Any, out: Path,
     common: dict[str, Any] = dict(samples=args.samples, seed=args.seed,
                                   scheduler=args.scheduler,
                                   encoder_resolution=args.encoder_resolution,
-                                  connect_timeout=args.connect_timeout)
+                                  connect_timeout=args.connect_timeout,
+                                  **_collision_options(args))
     result: Any = None
+    if args.min_clearance is not None and not args.optimize:
+        raise ValueError("--min-clearance: a constraint of the search; use it with --optimize")
     if args.optimize:
+        if args.min_clearance is not None:
+            check_finite(args.min_clearance, "--min-clearance")
+            common["constraints"] = {"min_clearance": (">=", args.min_clearance)}
         if out.exists() and (not out.is_dir() or any(out.iterdir())):
             raise FileExistsError(f"{out}: exists and is not an empty folder; a search writes "
                                   f"a new one (-o)")
@@ -176,11 +217,14 @@ def _figures(df: Any, result: Any, task: Any, ref: Any, figs: dict[str, Path],
 
 
 def _report(df: Any, result: Any, top: int) -> dict[str, Any]:
-    cols = ["design", "name", *_SHOWN]
+    checked = "min_clearance" in df and bool(df["valid"].any()) and bool(
+        df["collision_free_coverage"].notna().any())
+    cols = ["design", "name", *_SHOWN, *(("collision_free_coverage", "min_clearance")
+                                         if checked else ())]
     valid = df[df["valid"]]
     best = valid.sort_values("coverage_mode", ascending=False).head(top)
     rep: dict[str, Any] = {
-        "designs": int(len(df)), "valid": int(df["valid"].sum()),
+        "designs": int(len(df)), "valid": int(df["valid"].sum()), "collisions": checked,
         "reference": {k: df.iloc[0][k] for k in cols},
         "best": [{k: r[k] for k in cols} for _, r in best.iterrows()],
         "invalid": [{"design": int(r["design"]), "reason": r["reason"]}
@@ -203,12 +247,14 @@ def _print(task: Any, rep: dict[str, Any], files: list[str], search: bool) -> No
     n = rep["designs"]
     print(f"{n} design{'' if n == 1 else 's'}, {rep['valid']} valid")
     headers = ["design", "coverage", "cov. 1 mode", "size m", "tip err. um", "margin m",
-               "cond tip"]
+               "cond tip"] + (["cov. free", "clearance mm"] if rep["collisions"] else [])
 
     def line(r: dict[str, Any]) -> list[Any]:
+        extra = ([fmt(r["collision_free_coverage"], 4), fmt(r["min_clearance"] * 1e3, 2)]
+                 if rep["collisions"] else [])
         return [r["design"], fmt(r["coverage"], 4), fmt(r["coverage_mode"], 4),
                 fmt(r["size"], 3), fmt(r["tip_error_max"] * 1e6, 2), fmt(r["margin_min"], 4),
-                fmt(r["cond_tip_max"], 1)]
+                fmt(r["cond_tip_max"], 1)] + extra
 
     print(table(headers, [line(rep["reference"])] + [line(r) for r in rep["best"]
                                                      if r["design"] != 0]))

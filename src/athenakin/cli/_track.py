@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._collision import add_collision_options, collision_options
 from ._common import (
     add_design_option,
     add_setup_options,
@@ -24,8 +25,8 @@ from ._output import Outputs, add_force_option, outputs
 
 #: Smallest jump threshold (mm or deg): below it, the threshold in SI units underflows.
 JUMP_MIN = 1e-6
-#: Flags that make ``--strict`` fail.
-STRICT_FLAGS = ("LOST", "JUMP", "MODE_SWITCH", "AMBIGUOUS")
+#: Flags that make ``--strict`` fail (``COLLISION`` only appears with the collision check).
+STRICT_FLAGS = ("LOST", "JUMP", "MODE_SWITCH", "AMBIGUOUS", "COLLISION")
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -63,6 +64,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--strict", action="store_true",
                    help=f"exit with status 1 if any sample is flagged {', '.join(STRICT_FLAGS)}")
     p.add_argument("--max-events", type=int, default=20, help="events listed (20)")
+    add_collision_options(p, what="closer samples are flagged NEAR_COLLISION, overlapping "
+                                   "ones COLLISION")
     add_force_option(p)
     add_design_option(p)
     add_setup_options(p)
@@ -204,8 +207,10 @@ def _track(args: argparse.Namespace, outs: Outputs, *, q: np.ndarray | None = No
             i, j = int(seen[dec[0]]), int(seen[dec[0] + 1])
             raise ValueError(f"{args.path}: t_s must not decrease, got t_s = {t[j]:g} s at "
                              f"sample {j} after {t[i]:g} s at sample {i}")
+    coll = collision_options(args, design)
     log = track(q, T, design, slot=args.slot, jump_m=args.jump_mm * 1e-3,
-                jump_rad=math.radians(args.jump_deg), margins=parse_margins(args.margin))
+                jump_rad=math.radians(args.jump_deg), margins=parse_margins(args.margin),
+                **coll)
     events = log.events()
     counts: dict[str, int] = {}
     for _, f in events:
@@ -222,6 +227,11 @@ def _track(args: argparse.Namespace, outs: Outputs, *, q: np.ndarray | None = No
               f", mode {int(log.mode[i]):+d}, slot {int(log.slot[i])}")
     if len(events) > args.max_events:
         print(f"  ... {len(events) - args.max_events} more (see -o)")
+    if coll and np.any(np.isfinite(log.clearance)):
+        i = int(np.nanargmin(log.clearance))
+        a, b = log.closest_pair[i]
+        print(f"least clearance: {fmt(float(log.clearance[i]))} m between {a} and {b} at "
+              f"sample {i}")
     last = len(q) - 1
     print(f"last pose: tip_e = {np.round(log.tip_e[last], 6).tolist()} m, "
           f"p = {fmt(float(log.p[last]))} m, valid = {bool(log.valid[last])}")

@@ -66,6 +66,10 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--view", nargs=2, type=float, metavar=("ELEV", "AZIM"),
                    help="camera elevation and azimuth, deg (static formats)")
     p.add_argument("--dpi", type=int, default=120, help="resolution of PNG output (120)")
+    p.add_argument("--bodies", nargs="?", const="default", default=None, metavar="FILE",
+                   help="also draw the bodies as shaded capsules, the closest pair coloured "
+                        "(one solution, static formats): the default capsules, or the "
+                        "[bodies] table of FILE (the --design file's when it has one)")
     add_force_option(p)
     add_design_option(p)
     add_setup_options(p)
@@ -79,6 +83,9 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"-o: expected a file ending in {', '.join(VIEW_SUFFIXES)}, "
                          f"got {str(out)!r}")
     check_dpi(args.dpi)
+    if args.bodies is not None and (args.all or out.suffix.lower() == ".html"):
+        raise ValueError("--bodies: draws one solution in a static format (.png, .svg, "
+                         ".pdf), not with --all or .html")
     with outputs(args) as outs:
         outs.add(out)
         design = load_design(args)
@@ -97,6 +104,12 @@ def _render(args: argparse.Namespace, out: Path, q: np.ndarray | None, T: np.nda
 
     kw: dict = {"show_frames": not args.no_frames}  # type: ignore[type-arg]
     if out.suffix.lower() != ".html":
+        if args.bodies is not None:       # the bodies as solids (issue 20): plot/_solids.py
+            from ..collision import Bodies
+
+            src = args.bodies if args.bodies != "default" else getattr(args, "design", None)
+            kw["bodies"] = (Bodies.from_toml(src, design=design) if src is not None
+                            else Bodies.default(design))
         if args.view:
             kw["view"] = tuple(args.view)
         if not args.all:

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from ._collision import add_collision_options, collision_options
 from ._common import (
     add_design_option,
     add_json_option,
@@ -87,6 +88,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--modes", type=int, nargs="+", choices=(1, -1), default=[1],
                    help="assembly modes allowed for the cone and the tool tip (default 1)")
     p.add_argument("--progress", action="store_true", help="show progress bars")
+    add_collision_options(p, what="the maps gain a collision-free layer, the cone the "
+                                  "directions a collision blocks", default_margin="0")
     add_output_options(p, "athenakin-workspace")
     add_design_option(p)
     add_setup_options(p)
@@ -121,11 +124,13 @@ def run(args: argparse.Namespace) -> int:
         T = load_rcm(args, design)
         prog = True if args.progress else None
         modes = tuple(args.modes)
-        pw = point_workspace(design, resolution=args.resolution, progress=prog)
+        coll = collision_options(args, design)
+        pw = point_workspace(design, resolution=args.resolution, progress=prog,
+                             **({**coll, "T_b_e": T} if coll else {}))
         ic = instrument_cone(T, design, resolution=tuple(args.cone_resolution), modes=modes,
-                             progress=prog)
+                             progress=prog, **coll)
         tw = tool_tip_workspace(T, design, resolution=args.resolution, modes=modes,
-                                progress=prog)
+                                progress=prog, **coll)
         summary = workspace_summary(pw, ic, tw)
         if not args.no_files:
             outdir = Path(args.out)

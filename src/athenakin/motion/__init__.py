@@ -11,13 +11,17 @@
   :func:`save_trajectory`, :func:`save_plots` and the ``plot_*`` functions
   (matplotlib imported on first use).
 * Errors: :class:`SafetyViolationError`, :class:`TimingInfeasibleError`,
-  :class:`PathFileError`, :class:`TrackingError` (all :class:`MotionError`, a
-  :class:`~athenakin.errors.KinematicsError`).
+  :class:`CollisionError`, :class:`PathFileError`, :class:`TrackingError` (all
+  :class:`MotionError`, a :class:`~athenakin.errors.KinematicsError`).
+* Collisions (:mod:`athenakin.collision`, imported only when asked): the tracker's
+  ``COLLISION`` / ``NEAR_COLLISION`` flags and the planner's clearance check, both
+  switched on by ``bodies=``, ``environment=`` or ``clearance_margin=``.
 
 Needs the ``motion`` extra (``ruckig``) for planning; the tracker needs only numpy.
 """
 
 from ._errors import (
+    CollisionError,
     MotionError,
     PathFileError,
     SafetyViolationError,
@@ -31,6 +35,7 @@ from ._safety import MEASURE_NAMES, Margins, SingularityMeasures, singularity_me
 from ._tracker import JUMP_M, JUMP_RAD, TrackedPose, Tracker, TrackFlag, TrackLog, track
 
 __all__ = [
+    "CollisionError",
     "JUMP_M",
     "JUMP_RAD",
     "TrackFlag",

@@ -12,6 +12,7 @@ __all__ = [
     "TrajectoryLimitError",
     "PathFileError",
     "TrackingError",
+    "CollisionError",
 ]
 
 
@@ -50,6 +51,24 @@ class SafetyViolationError(MotionError):
         self.value = value
         self.bound = bound
         self.actuator = actuator
+
+
+class CollisionError(SafetyViolationError):
+    """A sample of a planned trajectory brings two bodies (or a body and an obstacle) too close.
+
+    Raised by :func:`~athenakin.motion.plan` when collisions are checked
+    (``bodies=``, ``environment=`` or ``clearance_margin=``). Besides the attributes
+    of :class:`SafetyViolationError` (``limit`` is ``"clearance"``, ``value`` the
+    signed clearance in m, negative for a penetration, ``bound`` the margin in m),
+    it carries ``pair``: the names of the two bodies, or of the body and the
+    obstacle (:mod:`athenakin.collision`).
+    """
+
+    def __init__(self, message: str, *, time: float, index: int, value: float, bound: float,
+                 pair: tuple[str, str]) -> None:
+        super().__init__(message, time=time, index=index, limit="clearance", value=value,
+                         bound=bound)
+        self.pair = pair
 
 
 class TimingInfeasibleError(SafetyViolationError):

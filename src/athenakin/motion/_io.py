@@ -213,12 +213,17 @@ def _all_numbers(cells: list[str]) -> bool:
 
 # --------------------------------------------------------------------------------------
 def trajectory_columns(traj: Trajectory) -> list[str]:
-    """Column names of the trajectory CSV (jerk columns only with a jerk limit)."""
+    """Column names of the trajectory CSV.
+
+    Jerk columns only with a jerk limit; :data:`CLEARANCE_COLUMNS` only when
+    collisions were checked.
+    """
     cols = ["t_s", "q1_m", "q2_m", "q3_m", "qd1_m_s", "qd2_m_s", "qd3_m_s",
             "qdd1_m_s2", "qdd2_m_s2", "qdd3_m_s2"]
     if traj.qddd is not None:
         cols += ["qddd1_m_s3", "qddd2_m_s3", "qddd3_m_s3"]
-    return cols + ["tip_x_m", "tip_y_m", "tip_z_m", "segment"]
+    cols += ["tip_x_m", "tip_y_m", "tip_z_m", "segment"]
+    return cols + (CLEARANCE_COLUMNS if traj.clearance is not None else [])
 
 
 def trajectory_csv_text(traj: Trajectory) -> str:
@@ -230,9 +235,23 @@ def trajectory_csv_text(traj: Trajectory) -> str:
     data = np.concatenate(parts, axis=1)
     buf = io.StringIO()
     buf.write(",".join(trajectory_columns(traj)) + "\n")
-    for row, seg in zip(data.tolist(), traj.segment.tolist(), strict=True):
-        buf.write(",".join(repr(v) for v in row) + f",{seg}\n")
+    extra = _clearance_cells(traj.clearance, traj.closest_pair, len(traj.t))
+    for row, seg, ex in zip(data.tolist(), traj.segment.tolist(), extra, strict=True):
+        buf.write(",".join(repr(v) for v in row) + f",{seg}{ex}\n")
     return buf.getvalue()
+
+
+#: Extra columns of the trajectory and track CSV files when collisions are checked.
+CLEARANCE_COLUMNS = ["clearance_m", "closest_a", "closest_b"]
+
+
+def _clearance_cells(clearance: NDArray[np.float64] | None, pair: NDArray[np.str_] | None,
+                     n: int) -> list[str]:
+    """``",clearance,a,b"`` per row ("" per row when not checked)."""
+    if clearance is None or pair is None:
+        return [""] * n
+    return [f",{float(c)!r},{a},{b}" for c, (a, b) in zip(clearance.tolist(), pair.tolist(),
+                                                         strict=True)]
 
 
 def trajectory_json_text(traj: Trajectory) -> str:
@@ -256,6 +275,10 @@ def trajectory_json_text(traj: Trajectory) -> str:
         "qddd_m_s3": traj.qddd, "tip_e_m": traj.tip_e, "segment": traj.segment,
         "measures": dataclasses.asdict(traj.measures),
     }
+    if traj.clearance is not None:
+        obj["clearance_margin_m"] = traj.clearance_margin
+        obj["clearance_m"] = traj.clearance
+        obj["closest_pair"] = traj.closest_pair
     return json_text(obj)
 
 
@@ -265,11 +288,17 @@ TRACK_COLUMNS = ["index", "t_s", "q1_m", "q2_m", "q3_m", "valid", "mode", "slot"
 
 
 def track_csv_text(log: TrackLog, t: NDArray[np.float64] | None = None) -> str:
-    """A :class:`TrackLog` as CSV text (columns :data:`TRACK_COLUMNS`; tip in frame E)."""
+    """A :class:`TrackLog` as CSV text (columns :data:`TRACK_COLUMNS`; tip in frame E).
+
+    When collisions were checked (some clearance is not NaN) the columns
+    :data:`CLEARANCE_COLUMNS` follow.
+    """
     n = log.q.shape[0]
     tt = np.full(n, np.nan) if t is None else np.asarray(t, float)
+    checked = bool(np.any(~np.isnan(log.clearance)))
+    extra = _clearance_cells(log.clearance if checked else None, log.closest_pair, n)
     buf = io.StringIO()
-    buf.write(",".join(TRACK_COLUMNS) + "\n")
+    buf.write(",".join(TRACK_COLUMNS + (CLEARANCE_COLUMNS if checked else [])) + "\n")
     u = np.degrees(log.u)
     for i in range(n):
         names = "|".join(str(f.name) for f in TrackFlag if f and f in TrackFlag(int(log.flags[i])))
@@ -279,7 +308,7 @@ def track_csv_text(log: TrackLog, t: NDArray[np.float64] | None = None) -> str:
                 *(repr(float(v)) for v in log.tip_e[i]), repr(float(log.half_chord[i])),
                 repr(float(log.sin_u2[i])), repr(float(log.sin_u4[i])),
                 repr(float(log.step[i])), str(int(log.flags[i])), names]
-        buf.write(",".join(vals) + "\n")
+        buf.write(",".join(vals) + extra[i] + "\n")
     return buf.getvalue()
 
 

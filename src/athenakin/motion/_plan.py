@@ -19,6 +19,10 @@ Pipeline (docs/motion.md):
    singularity margins, and the velocity, acceleration, jerk and tip-speed
    limits; the first violation raises :class:`SafetyViolationError`. Nothing is
    returned unless every sample passes.
+6. Collisions, when asked (``bodies=``, ``environment=`` or ``clearance_margin=``):
+   every sample's least clearance between the robot's bodies and to the obstacles
+   (:mod:`athenakin.collision`) must be at least the margin; the first sample closer
+   raises :class:`CollisionError`, naming its time, index and the pair.
 """
 
 from __future__ import annotations
@@ -34,7 +38,9 @@ from .._validation import check_array, check_instance, check_scalar, check_trans
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, Reason
 from ..robot import direction_from_angles
+from ._clearance import ClearanceCheck, clearance_check, sample_clearance
 from ._errors import (
+    CollisionError,
     PathInfeasibleError,
     SafetyViolationError,
     TimingInfeasibleError,
@@ -159,6 +165,13 @@ class Trajectory:
     margins : Margins
     T_b_e : ndarray, shape (4, 4)
     design : Design
+    clearance : ndarray, shape (N,) or None
+        Least clearance of each sample between the robot's bodies and to the
+        obstacles, m (None when collisions were not checked).
+    closest_pair : ndarray of str, shape (N, 2) or None
+        The two names (body, body or obstacle) of that clearance.
+    clearance_margin : float or None
+        The margin every sample keeps, m (None when not checked).
     """
 
     t: NDArray[np.float64]
@@ -178,6 +191,9 @@ class Trajectory:
     margins: Margins
     T_b_e: NDArray[np.float64]
     design: Design
+    clearance: NDArray[np.float64] | None = None
+    closest_pair: NDArray[np.str_] | None = None
+    clearance_margin: float | None = None
 
     @property
     def duration(self) -> float:
@@ -206,7 +222,8 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
          j_max: ArrayLike | None = None, tip_speed: float | None = None,
          times: ArrayLike | None = None, timing: Timing = "stretch",
          margins: Margins | None = None, max_duration: float | None = None,
-         max_samples: int | None = None) -> Trajectory:
+         max_samples: int | None = None, bodies: object = None, environment: object = None,
+         clearance_margin: float | None = None) -> Trajectory:
     """Plan an actuator trajectory that moves the tool tip along straight segments.
 
     Parameters
@@ -244,6 +261,16 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
     max_samples : int, optional, keyword-only
         Largest number of samples accepted (default :data:`MAX_SAMPLES`); bounds
         the memory and time of the planning.
+    bodies : athenakin.collision.Bodies, optional, keyword-only
+        Check that every sample keeps these bodies ``clearance_margin`` apart (and
+        from the obstacles). Default: no collision check, unless ``environment`` or
+        ``clearance_margin`` is given, then :meth:`Bodies.default(design)
+        <athenakin.collision.Bodies.default>`.
+    environment : athenakin.collision.Environment, optional, keyword-only
+        Obstacles every sample's bodies must keep clear of (turns the check on).
+    clearance_margin : float, optional, keyword-only
+        Least clearance of every sample, m (turns the check on); default 5 mm when
+        the check is on, 0 to refuse only contact and penetration.
 
     Returns
     -------
@@ -270,6 +297,10 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
         violation stops the planning.
     TimingInfeasibleError
         ``timing="fixed"`` and the requested times break a limit.
+    CollisionError
+        (A :class:`SafetyViolationError`.) The first sample whose clearance is below
+        ``clearance_margin``: its time, index and the pair of bodies (or body and
+        obstacle) in the message and the attributes.
     TypeError, ValueError
         Malformed arguments (named in the message).
 
@@ -291,7 +322,8 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
     segs = [line_segment(tips[k], tips[k + 1]) for k in range(tips.shape[0] - 1)]
     return _plan(segs, tips, T_b_e, design, rate=rate, v_max=v_max, a_max=a_max, j_max=j_max,
                  tip_speed=tip_speed, times=times, timing=timing, margins=margins,
-                 max_duration=max_duration, max_samples=max_samples)
+                 max_duration=max_duration, max_samples=max_samples, bodies=bodies,
+                 environment=environment, clearance_margin=clearance_margin)
 
 
 def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_e: ArrayLike,
@@ -314,7 +346,8 @@ def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_
     **options
         The keyword-only options of :func:`plan` (``rate``, ``v_max``, ``a_max``,
         ``j_max``, ``tip_speed``, ``times``, ``timing``, ``margins``,
-        ``max_duration``, ``max_samples``).
+        ``max_duration``, ``max_samples``, ``bodies``, ``environment``,
+        ``clearance_margin``).
 
     Returns
     -------
@@ -323,6 +356,7 @@ def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_
     Raises
     ------
     PathInfeasibleError, TrajectoryLimitError, SafetyViolationError, TimingInfeasibleError
+    CollisionError
         As :func:`plan`.
     TypeError, ValueError
         As :func:`plan`; also ``ValueError`` for a segment between opposite directions.
@@ -444,7 +478,8 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
           j_max: ArrayLike | None = None, tip_speed: float | None = None,
           times: ArrayLike | None = None, timing: Timing = "stretch",
           margins: Margins | None = None, max_duration: float | None = None,
-          max_samples: int | None = None) -> Trajectory:
+          max_samples: int | None = None, bodies: object = None, environment: object = None,
+          clearance_margin: float | None = None) -> Trajectory:
     T = check_transform(T_b_e, "T_b_e")
     if T.shape != (4, 4):
         raise ValueError(f"T_b_e: expected one transform of shape (4, 4), got shape {T.shape}")
@@ -467,6 +502,7 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
                         f"{type(margins).__name__}")
     if timing not in ("stretch", "fixed"):
         raise ValueError(f"timing: expected 'stretch' or 'fixed', got {timing!r}")
+    check = clearance_check(design, bodies, environment, clearance_margin)
     K = tips.shape[0]
     if K > MAX_WAYPOINTS:
         raise ValueError(f"waypoints: expected at most {MAX_WAYPOINTS}, got {K} (plan the path "
@@ -502,7 +538,9 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
         durations = [sp.profile.duration for sp in plans]  # type: ignore[union-attr]
         longest = int(np.argmax(durations))
         _check_budget(float(np.sum(durations)), rate, max_duration, max_samples, longest)
-        samples, bad = _sample_checked(plans, T, design, rate, t0, limits, margins)
+        samples, bad = _sample_checked(plans, T, design, rate, t0, limits, margins, check)
+        if bad is not None and bad["limit"] == "clearance":
+            raise _collision(bad, samples, check)  # type: ignore[arg-type]
         if bad is None:
             break
         k = int(samples["segment"][bad["index"]])
@@ -516,7 +554,7 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
         # the grid bounds missed a maximum: tighten this segment and replan
         ratio = bad["bound"] / bad["value"] if bad["value"] > 0 else 0.5
         sp.tighten *= min(0.98, ratio ** (1 / 3) * 0.98)
-    return _trajectory(samples, plans, tips, limits, margins, T, design, rate, t0)
+    return _trajectory(samples, plans, tips, limits, margins, T, design, rate, t0, check)
 
 
 def _check_budget(duration: float, rate: float, max_duration: float, max_samples: int,
@@ -588,13 +626,16 @@ def _seg_name(sp: _SegmentPlan) -> str:
 
 
 def _sample_checked(plans: list[_SegmentPlan], T: NDArray[np.float64], design: Design,
-                    rate: float, t0: float, limits: Limits, margins: Margins
+                    rate: float, t0: float, limits: Limits, margins: Margins,
+                    check: ClearanceCheck | None = None
                     ) -> tuple[dict[str, Any], dict | None]:  # type: ignore[type-arg]
     """Sample and check in chunks of :data:`CHECK_CHUNK`; stop at the first violation.
 
     Returns the samples made (all of them, or up to the end of the chunk holding
     the violation) with their measures, and the violation (``check_samples``'s
-    dict, index into the returned samples) or None.
+    dict, index into the returned samples) or None. With a clearance ``check``
+    the samples also hold ``clearance`` and ``closest_pair``, and a sample closer
+    than the margin is a geometric violation (``limit == "clearance"``, ``pair``).
     """
     durations = np.array([sp.profile.duration for sp in plans])  # type: ignore[union-attr]
     total = float(np.sum(durations))
@@ -610,11 +651,61 @@ def _sample_checked(plans: list[_SegmentPlan], T: NDArray[np.float64], design: D
             ok = np.flatnonzero(c["reason"] == 0)
             mode0 = int(c["mode"][ok[0]]) if ok.size else 1
         bad = check_samples(c, T, design, limits, margins, mode0=mode0)
+        if check is not None:
+            bad = _check_clearance(c, bad, check, T, design)
         chunks.append(c)
         if bad is not None:
             bad["index"] += i0
             break
     return _concat(chunks), bad
+
+
+_KINEMATIC = ("velocity", "acceleration", "jerk", "tip_speed")
+
+
+def _check_clearance(c: dict[str, Any], bad: dict | None,  # type: ignore[type-arg]
+                     check: ClearanceCheck, T: NDArray[np.float64], design: Design
+                     ) -> dict | None:  # type: ignore[type-arg]
+    """Add the clearance of the samples ``c``; the first violation, geometric ones first.
+
+    A sample closer than the margin is a geometric violation, like leaving the
+    workspace: it comes before every kinematic one, and before a later geometric one.
+    """
+    n = c["q"].shape[0]
+    ok = c["reason"] == 0
+    dist = np.full(n, np.nan)
+    pair = np.full((n, 2), "", dtype="<U64")
+    if np.any(ok):
+        idx = np.flatnonzero(ok)
+        p_sign = np.where(design.tool_length - np.linalg.norm(c["tip_e"][idx], axis=-1) < 0,
+                          -1, 1)
+        dist[idx], pair[idx] = sample_clearance(check, c["q"][idx], T, design, c["mode"][idx],
+                                                p_sign)
+    c["clearance"] = dist
+    c["closest_pair"] = pair
+    with np.errstate(invalid="ignore"):
+        close = np.flatnonzero(dist < check.margin)
+    if close.size == 0:
+        return bad
+    i = int(close[0])
+    if bad is None or bad["limit"] in _KINEMATIC or i < bad["index"]:
+        return {"index": i, "limit": "clearance", "value": float(dist[i]),
+                "bound": check.margin, "actuator": None, "pair": tuple(str(x) for x in pair[i])}
+    return bad
+
+
+def _collision(bad: dict, samples: dict, check: ClearanceCheck  # type: ignore[type-arg]
+               ) -> CollisionError:
+    i = bad["index"]
+    a, b = bad["pair"]
+    what = ("makes {a!r} and {b!r} overlap" if bad["value"] < 0 else
+            "brings {a!r} and {b!r} closer than the clearance margin").format(a=a, b=b)
+    msg = (f"trajectory sample {i} at t = {float(samples['t'][i]):.4f} s (segment "
+           f"{int(samples['segment'][i])}, tip_e = "
+           f"{np.array2string(samples['tip_e'][i], precision=5)} m) {what}: clearance "
+           f"{bad['value']:.6g} m < {check.margin:.6g} m")
+    return CollisionError(msg, time=float(samples["t"][i]), index=i, value=bad["value"],
+                          bound=check.margin, pair=(a, b))
 
 
 def _concat(chunks: list[dict[str, Any]]) -> dict[str, Any]:
@@ -851,7 +942,7 @@ def _timing_error(bad: dict, samples: dict, k: int,  # type: ignore[type-arg]
 
 def _trajectory(samples: dict, plans: list[_SegmentPlan], tips: NDArray[np.float64],  # type: ignore[type-arg]
                 limits: Limits, margins: Margins, T: NDArray[np.float64], design: Design,
-                rate: float, t0: float) -> Trajectory:
+                rate: float, t0: float, check: ClearanceCheck | None = None) -> Trajectory:
     durations = np.array([sp.profile.duration for sp in plans])  # type: ignore[union-attr]
     wt = t0 + np.concatenate([[0.0], np.cumsum(durations)])
     stretched = np.array([sp.requested is not None and sp.profile.duration  # type: ignore[union-attr]
@@ -864,4 +955,5 @@ def _trajectory(samples: dict, plans: list[_SegmentPlan], tips: NDArray[np.float
         tip_e=ro["tip_e"], segment=ro["segment"], mode=ro["mode"],
         measures=samples["measures"], waypoints_e=tips.copy(), waypoint_times=wt,
         stretched=stretched, rate=rate, limits=limits, margins=margins, T_b_e=T.copy(),
-        design=design)
+        design=design, clearance=ro.get("clearance"), closest_pair=ro.get("closest_pair"),
+        clearance_margin=None if check is None else check.margin)

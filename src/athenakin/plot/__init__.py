@@ -7,6 +7,8 @@ function that needs them runs.
 * :func:`plot_robot`, :func:`plot_fk_solutions`, :func:`save_view`: matplotlib.
 * :func:`robot_figure`, :func:`write_html`: interactive plotly page.
 * :func:`animate`, :func:`instrument_cone_path`: GIF / MP4 of a motion.
+* :func:`draw_bodies`, :func:`capsule_surface`: the bodies as shaded capsules, the
+  pair with the least clearance coloured (``plot_robot(..., bodies=True)``).
 """
 
 from ._animate import animate, instrument_cone_path, render_frames
@@ -21,6 +23,7 @@ from ._geometry import (
 )
 from ._html import robot_figure, write_html
 from ._mpl import plot_fk_solutions, plot_robot, save_view
+from ._solids import capsule_surface, draw_bodies
 
 __all__ = [
     "COLORS",
@@ -28,7 +31,9 @@ __all__ = [
     "RobotGeometry",
     "animate",
     "arc_points",
+    "capsule_surface",
     "circle_points",
+    "draw_bodies",
     "instrument_cone_path",
     "plot_fk_solutions",
     "plot_robot",

@@ -325,7 +325,8 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
                show_legend: bool = True, frame_length: float = FRAME_LENGTH,
                view: tuple[float, float] = VIEW,
                limits: tuple[ArrayLike, ArrayLike] | None = None, title: str | None = None,
-               joint_scale: float = 1.0, legend_extra: list[Any] | None = None) -> Axes:
+               joint_scale: float = 1.0, legend_extra: list[Any] | None = None,
+               bodies: Any = None) -> Axes:
     """Draw the robot in one forward-kinematics solution on a 3-D matplotlib axes.
 
     Shows the base rail with carriages A and B, the bars of the parallel module
@@ -365,6 +366,10 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
         Size factor of the U-joint fork and the spherical-joint arcs (the branch cues).
     legend_extra : list of matplotlib artists, keyword-only, optional
         More legend handles (e.g. what the caller drew before).
+    bodies : athenakin.collision.Bodies or True, keyword-only, optional
+        Also draw the bodies as solids (shaded capsules), the pair with the least
+        clearance coloured and the clearance written
+        (:func:`~athenakin.plot.draw_bodies`); ``True``: the default bodies.
 
     Returns
     -------
@@ -384,6 +389,11 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
         fig.subplots_adjust(left=0.02, right=0.93, bottom=0.04, top=0.93)
     _draw(ax, g, show_frames=show_frames, show_circles=show_circles,
           frame_length=frame_length, joint_scale=joint_scale)
+    if bodies is not None and bodies is not False:       # solids (issue 20): plot/_solids.py
+        from ._solids import draw_bodies
+
+        draw_bodies(ax, g.q, g.T_b_e, g.design, slot=g.slot,
+                    bodies=None if bodies is True else bodies)
     lo, hi = (cube_limits(*g.bounds()) if limits is None else
               (np.asarray(limits[0], float), np.asarray(limits[1], float)))
     _style(ax, lo, hi, view)

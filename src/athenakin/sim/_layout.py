@@ -38,14 +38,17 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
+from .._mechanism import mechanism_points
 from .._validation import check_array
+from ..collision._bodies import Bodies
 from ..design import Design
 from ..plot._geometry import RobotGeometry, robot_geometry
 
 __all__ = ["JOINTS", "ACTUATED", "LOOP_CLOSURES", "LoopClosure", "MechanismJointValues",
-           "mechanism_joint_values", "urdf_joint_zero"]
+           "mechanism_joint_values", "urdf_joint_zero", "COLLISION_BODY", "collision_segments",
+           "rail_segment"]
 
 #: Joints of the spanning tree in MJCF order: name -> (kind, parent body, child body).
 JOINTS: dict[str, tuple[str, str, str]] = {
@@ -243,3 +246,63 @@ def mechanism_joint_values(q: ArrayLike | None = None, T_b_e: ArrayLike | None =
             x = float(-np.remainder(-x + np.pi, 2 * np.pi) + np.pi)
         rel[name] = x
     return MechanismJointValues(values=values, urdf=rel, zero=zero, geometry=g)
+
+
+#: athenakin body (:data:`athenakin._mechanism.BODIES`) -> the MJCF body / URDF link that
+#: carries its collision capsule ("world" for the rail: the URDF's ``base``).
+COLLISION_BODY: dict[str, str] = {
+    "rail": "world", "carriage_a": "carriage_a", "carriage_b": "carriage_b",
+    "link_a": "link_a1", "link_b": "link_b1", "link_ad": "link_a3", "link_bd": "link_b3",
+    "carrier": "carrier", "actuator": "k2_rod", "platform": "platform",
+    "instrument": "instrument", "sphere_link_1": "sph_4", "sphere_link_2": "sph_3"}
+
+def rail_segment(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: int,
+                 bodies: Bodies) -> NDArray[np.float64]:
+    """End points of the rail (base frame) in a configuration, shape (2, 3)."""
+    mp = mechanism_points(q, T_b_e, design, slot=slot, geometry=bodies.geometry)
+    return np.stack([mp["rail_lo"], mp["rail_hi"]])
+
+
+def collision_segments(values: dict[str, float], design: Design, bodies: Bodies,
+                       rail: NDArray[np.float64]) -> dict[str, tuple[NDArray[np.float64],
+                                                                      NDArray[np.float64]]]:
+    """End points of every body's capsule in the frame of the body (link) that carries it.
+
+    Parameters
+    ----------
+    values : dict
+        Joint values of the configuration the export is assembled in (``p`` and ``q3``
+        are used: the side of the guide, the actuator rod's length).
+    design : Design
+    bodies : Bodies
+    rail : ndarray, shape (2, 3)
+        The rail's end points in the base frame (:func:`rail_segment`).
+
+    Returns
+    -------
+    dict
+        Body name -> (a, b), each shape (3,), in the frame of ``COLLISION_BODY[body]``.
+    """
+    d = design
+    half = 0.5 * bodies.geometry.carriage_length
+    rs = bodies.geometry.sphere_radius
+    side = 1.0 if values["p"] >= 0 else -1.0       # O_s on the -z side of the RCM if p > 0
+    z = np.zeros(3)
+
+    def v(*x: float) -> NDArray[np.float64]:
+        return np.array(x, dtype=float)
+
+    return {
+        "rail": (rail[0], rail[1]),
+        "carriage_a": (v(-half, 0, 0), v(half, 0, 0)),
+        "carriage_b": (v(-half, 0, 0), v(half, 0, 0)),
+        "link_a": (z, v(0, 0, d.l1)), "link_b": (z, v(0, 0, d.l1)),
+        "link_ad": (z, v(d.l3, 0, 0)), "link_bd": (z, v(d.l3, 0, 0)),
+        "carrier": (z, v(0, d.l2, d.l5)),
+        # the rod of the q3 actuator at its keyframe length, sliding with q3 through C
+        "actuator": (v(0, 0, -values["q3"]), z),
+        "platform": (z, v(0, 0, d.l4)),
+        "instrument": (z, v(0, 0, d.tool_length)),
+        "sphere_link_2": (v(0, -rs, 0), v(0, 0, -side * rs)),    # S_4 -> S_3 in sph_3
+        "sphere_link_1": (v(0, -rs, 0), v(0, 0, rs)),            # S_5 -> S_4 in sph_4
+    }

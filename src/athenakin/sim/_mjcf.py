@@ -14,15 +14,25 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
+from .._mechanism import BODIES
 from .._validation import check_path
+from ..collision._bodies import Bodies
 from ..design import Design
 from ..study import quaternion_from_rotation
-from ._layout import ACTUATED, JOINTS, LOOP_CLOSURES, mechanism_joint_values
+from ._layout import (
+    ACTUATED,
+    COLLISION_BODY,
+    JOINTS,
+    LOOP_CLOSURES,
+    collision_segments,
+    mechanism_joint_values,
+    rail_segment,
+)
 
 __all__ = ["mjcf_from_design", "write_mjcf", "MJCF_TIMESTEP", "ACTUATOR_KP", "ACTUATOR_KV",
-           "EQUALITY_SOLREF"]
+           "EQUALITY_SOLREF", "COLLISION_GROUP", "collision_geom_name"]
 
 #: Integration step of the exported model, s.
 MJCF_TIMESTEP = 1e-3
@@ -45,6 +55,17 @@ DENSITY = 2700.0
 BAR_RADIUS = 0.008
 #: Radius of the drawn spherical-joint arcs about the RCM, m.
 SPHERE_RADIUS = 0.06
+
+#: MuJoCo geom group of the collision capsules (hidden in the viewer by default).
+COLLISION_GROUP = 3
+#: Smallest radius of an exported capsule (MuJoCo needs a positive size), m.
+_MIN_RADIUS = 1e-6
+
+
+def collision_geom_name(body: str) -> str:
+    """Name of the MJCF collision geom of an athenakin body (``"collision_<body>"``)."""
+    return f"collision_{body}"
+
 
 _RX90 = (math.cos(math.pi / 4), math.sin(math.pi / 4), 0.0, 0.0)
 _RX180 = (0.0, 1.0, 0.0, 0.0)
@@ -107,9 +128,37 @@ def _arc(body: ET.Element, name: str, rgba: str, n: int = 4) -> None:
         _capsule(body, f"{name}_{k}", pts[k], pts[k + 1], rgba, radius=0.004)
 
 
+def _collision_geoms(root: ET.Element, bodies: Bodies, segs: dict[str, tuple[
+        NDArray[np.float64], NDArray[np.float64]]]) -> None:
+    """Capsules of ``bodies`` as collision geoms, and the excluded pairs as <exclude>."""
+    by_name = {"world": root.find("worldbody")}
+    for el in root.iter("body"):
+        by_name[el.get("name", "")] = el
+    for body in BODIES:
+        parent = by_name[COLLISION_BODY[body]]
+        assert parent is not None
+        a, b = segs[body]
+        r = max(bodies.radius[body], _MIN_RADIUS)
+        attrs = {"name": collision_geom_name(body), "size": _f(r),
+                 "contype": "1", "conaffinity": "1", "group": str(COLLISION_GROUP),
+                 "mass": "0", "rgba": "0.9 0.2 0.2 0.3"}
+        if float(np.linalg.norm(b - a)) > 1e-9:
+            attrs.update(type="capsule", fromto=_vec(np.concatenate([a, b])))
+        else:
+            attrs.update(type="sphere", pos=_vec(a))
+        ET.SubElement(parent, "geom", attrs)
+    contact = ET.SubElement(root, "contact")
+    for x, y in bodies.excluded_pairs:
+        bx, by = COLLISION_BODY[x], COLLISION_BODY[y]
+        if bx != by:
+            ET.SubElement(contact, "exclude", {"name": f"exclude_{x}_{y}", "body1": bx,
+                                               "body2": by})
+
+
 def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
                      q: ArrayLike | None = None, slot: int = 0, gravity: bool = True,
-                     model_name: str = "athena") -> str:
+                     model_name: str = "athena", bodies: Bodies | None = None,
+                     collision: bool | None = None) -> str:
     """MJCF text of the closed-loop mechanism, assembled in a keyframe ``home``.
 
     Parameters
@@ -126,6 +175,14 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     gravity : bool, keyword-only
         Standard gravity along ``-z_b`` (True) or none.
     model_name : str, keyword-only
+    bodies : athenakin.collision.Bodies, keyword-only, optional
+        The capsules exported as collision geoms; giving them turns ``collision`` on.
+    collision : bool, keyword-only, optional
+        Export collision geoms (of ``bodies``, default
+        :meth:`~athenakin.collision.Bodies.default` of the design). Default: only when
+        ``bodies`` is given, so that the plain export simulates as before, free of
+        contacts (where the capsules overlap, MuJoCo's contacts push the mechanism off
+        its forward kinematics).
 
     Returns
     -------
@@ -144,7 +201,17 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     Bodies, joints and loop closures are those of :mod:`athenakin.sim._layout`:
     18 joints, 15 independent constraint equations (3 ``connect`` whose rows are
     partly redundant, 1 ``weld``, 2 ``joint`` couplings), 3 degrees of freedom.
-    Parts do not collide. Stroke limits become joint ranges and control ranges.
+    Stroke limits become joint ranges and control ranges.
+
+    The drawn parts never collide (``contype = conaffinity = 0``). With ``collision``,
+    the capsules of ``bodies`` are collision geoms ``collision_<body>``
+    (:func:`collision_geom_name`, group :data:`COLLISION_GROUP`, massless) on the MJCF
+    bodies of :data:`~athenakin.sim._layout.COLLISION_BODY`, and every pair of
+    ``bodies.excluded_pairs`` (those that share a joint, and the user's) is a
+    ``<contact><exclude>``: MuJoCo's own collision detection then reports contacts
+    between the pairs that :func:`athenakin.collision.clearance` checks, with the same
+    distances at the keyframe (tested). The actuator's capsule is its rod at the
+    keyframe length, sliding with ``q3``.
     """
     jv = mechanism_joint_values(q, T_b_e, design, slot=slot)
     values, g = jv.values, jv.geometry
@@ -253,6 +320,19 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     setup = _body(wb, "rcm_setup", pos=T[:3, 3], quat=quaternion_from_rotation(T[:3, :3]))
     _sphere(setup, "rcm_setup", 0.006, "setup")
     _site(setup, "rcm_setup_frame")
+
+    if collision is None:
+        collision = bodies is not None
+    if not isinstance(collision, bool):
+        raise TypeError(f"collision: expected a bool or None, got {type(collision).__name__}")
+    if collision:
+        if bodies is None:
+            bodies = Bodies.default(d)
+        elif not isinstance(bodies, Bodies):
+            raise TypeError(f"bodies: expected athenakin.collision.Bodies or None, got "
+                            f"{type(bodies).__name__}")
+        rail_pts = rail_segment(g.q, T, d, slot=g.slot, bodies=bodies)
+        _collision_geoms(root, bodies, collision_segments(values, d, bodies, rail_pts))
 
     eq = ET.SubElement(root, "equality")
     for c in LOOP_CLOSURES:

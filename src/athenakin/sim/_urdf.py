@@ -23,11 +23,20 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._mechanism import BODIES
 from .._transforms import rot_x, rot_y, rot_z
 from .._validation import check_path
+from ..collision._bodies import Bodies
 from ..design import Design, resolve_design
 from ..robot._setup import resolve_rcm_frame
-from ._layout import JOINTS, LOOP_CLOSURES, urdf_joint_zero
+from ._layout import (
+    COLLISION_BODY,
+    JOINTS,
+    LOOP_CLOSURES,
+    collision_segments,
+    rail_segment,
+    urdf_joint_zero,
+)
 from ._mjcf import BAR_RADIUS, DENSITY
 
 __all__ = ["urdf_from_design", "write_urdf", "CLOSURE_FRAMES", "CLOSURE_PAIRS", "MIMIC"]
@@ -117,9 +126,34 @@ def _rotation_about(axis: tuple[float, ...], angle: float) -> NDArray[np.float64
     return rots[a](np.asarray(float(angle)))
 
 
+def _collision(link: ET.Element, name: str, a: NDArray[np.float64], b: NDArray[np.float64],
+               radius: float) -> None:
+    """A capsule as URDF collision elements: a cylinder from a to b and a sphere at each end."""
+    radius = max(radius, 1e-6)
+    d = b - a
+    length = float(np.linalg.norm(d))
+    if length > 1e-9:
+        z = d / length
+        x = np.cross([0.0, 1.0, 0.0], z) if abs(z[1]) < 0.9 else np.cross(z, [1.0, 0.0, 0.0])
+        x /= np.linalg.norm(x)
+        R = np.stack([x, np.cross(z, x), z], axis=-1)
+        col = ET.SubElement(link, "collision", {"name": name})
+        ET.SubElement(col, "origin", {"xyz": _vec(0.5 * (a + b)),
+                                      "rpy": _vec(_rpy_from_matrix(R))})
+        geo = ET.SubElement(col, "geometry")
+        ET.SubElement(geo, "cylinder", {"radius": _f(radius), "length": _f(length)})
+    ends = ((f"{name}_a", a), (f"{name}_b", b)) if length > 1e-9 else ((f"{name}_a", a),)
+    for nm, c in ends:
+        col = ET.SubElement(link, "collision", {"name": nm})
+        ET.SubElement(col, "origin", {"xyz": _vec(c), "rpy": "0 0 0"})
+        geo = ET.SubElement(col, "geometry")
+        ET.SubElement(geo, "sphere", {"radius": _f(radius)})
+
+
 def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
                      robot_name: str = "athena", q_zero: ArrayLike | None = None,
-                     zero_slot: int = 0) -> str:
+                     zero_slot: int = 0, bodies: Bodies | None = None,
+                     collision: bool = True) -> str:
     """URDF text of the kinematic tree of ATHENA (loop closures as documented frame pairs).
 
     Parameters
@@ -135,6 +169,14 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
         :data:`athenakin.robot.REFERENCE_Q`); it must assemble.
     zero_slot : int, keyword-only
         Forward-kinematics slot of the zero configuration (default 0).
+    bodies : athenakin.collision.Bodies, keyword-only, optional
+        Capsules exported as ``<collision>`` elements (default
+        :meth:`~athenakin.collision.Bodies.default` of the design): for each body a
+        cylinder ``collision_<body>`` and spheres ``collision_<body>_a``, ``_b`` at its
+        ends, on the link of :data:`~athenakin.sim._layout.COLLISION_BODY` (``base`` for
+        the rail). The actuator's capsule is its rod at the zero configuration's length.
+    collision : bool, keyword-only
+        Export the ``<collision>`` elements (default True).
 
     Returns
     -------
@@ -199,6 +241,24 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
         if name != "base":
             _inertial(link, a, b, rad)
         _cylinder(link, a, b, rad, mat)
+
+    if not isinstance(collision, bool):
+        raise TypeError(f"collision: expected a bool, got {type(collision).__name__}")
+    if collision:
+        if bodies is None:
+            bodies = Bodies.default(d)
+        elif not isinstance(bodies, Bodies):
+            raise TypeError(f"bodies: expected athenakin.collision.Bodies or None, got "
+                            f"{type(bodies).__name__}")
+        links = {el.get("name"): el for el in robot.iter("link")}
+        rail = rail_segment((zero["q1"], zero["q2"], zero["q3"]), T, d, slot=zero_slot,
+                            bodies=bodies)
+        segs = collision_segments(zero, d, bodies, rail)
+        for body in BODIES:
+            owner = COLLISION_BODY[body]
+            end_a, end_b = segs[body]
+            _collision(links["base" if owner == "world" else owner], f"collision_{body}",
+                       end_a, end_b, bodies.radius[body])
 
     rx90, rx180 = (math.pi / 2, 0, 0), (math.pi, 0, 0)
     # joint -> (origin xyz in parent, origin rpy, axis, limits)

@@ -3,7 +3,9 @@
 * :mod:`._task` - the surgical task (:class:`Task`: RCM, cone of instrument
   directions, tip depths), its RCM frame and its samples;
 * :mod:`._metrics` - the metrics of one design over the task (coverage, per-mode
-  coverage, singularity margins, conditioning, stroke use, size, tip error);
+  coverage, singularity margins, conditioning, stroke use, size, tip error and, when
+  asked, the collision-free coverage and least clearance of the robot's bodies,
+  :mod:`athenakin.collision` imported then);
 * :mod:`._study` - :func:`evaluate`: a batch of designs on Dask (local scheduler
   by default, a ``distributed`` cluster by address or client), Parquet chunks,
   resume, retries;
@@ -18,6 +20,8 @@ Definitions and the scale-out arithmetic: ``docs/synthesis.md``.
 
 from ._errors import SchedulerUnreachableError, StudyMismatchError, SynthesisError, TaskFileError
 from ._metrics import (
+    COLLISION_COLUMNS,
+    DEFAULT_COLLISION_SAMPLES,
     DEFAULT_ENCODER_RESOLUTION,
     DEFAULT_SAMPLES,
     METRIC_COLUMNS,
@@ -33,6 +37,7 @@ from ._search import (
     SearchResult,
     bounds_from_toml,
     check_bounds,
+    check_constraints,
     default_bounds,
     optimize,
     pareto_mask,
@@ -42,6 +47,9 @@ from ._study import CHUNK_SIZE, LOCAL_SCHEDULERS, design_rows, evaluate, read_st
 from ._task import Task, TaskSamples, rcm_frame_from_axis, sample_task
 
 __all__ = [
+    "COLLISION_COLUMNS",
+    "DEFAULT_COLLISION_SAMPLES",
+    "check_constraints",
     "DEFAULT_OBJECTIVES",
     "SEARCH_VARIABLES",
     "SearchResult",

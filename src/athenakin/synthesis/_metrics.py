@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from collections.abc import Mapping
@@ -17,7 +18,8 @@ from ._task import Task, TaskSamples, sample_task
 
 __all__ = ["METRIC_COLUMNS", "PARAMETER_COLUMNS", "DEFAULT_SAMPLES",
            "DEFAULT_ENCODER_RESOLUTION", "ASSEMBLY_GRID", "evaluate_design", "design_from_row",
-           "row_from_design", "reachability"]
+           "row_from_design", "reachability", "CollisionSpec", "collision_spec",
+           "COLLISION_COLUMNS", "DEFAULT_COLLISION_SAMPLES", "MAX_COLLISION_SAMPLES"]
 
 #: Task samples per design unless told otherwise.
 DEFAULT_SAMPLES = 100_000
@@ -34,12 +36,114 @@ _CONDITIONS = ("circles_tangent", "d_on_rail", "k1_degenerate", "ab_coincide", "
                "stroke_limit", "p_zero", "ujoint", "wrist", "ik_cos_u1", "ik_sin_u1_sin_u2",
                "tip_at_rcm")
 
+#: Metric columns of the collision check (NaN when collisions are not checked).
+COLLISION_COLUMNS = ("collision_free_coverage", "min_clearance")
+
 #: Metric columns of the study table, in order.
 METRIC_COLUMNS = (("coverage", "coverage_mode", "mode", "coverage_plus", "coverage_minus")
                   + tuple(f"margin_{c}" for c in _CONDITIONS)
                   + ("margin_min", "cond_tip_max", "cond_parallel_max", "stroke_use_q1",
                      "stroke_use_q2", "stroke_use_q3", "size", "tip_error_max",
-                     "tip_error_mean"))
+                     "tip_error_mean") + COLLISION_COLUMNS)
+
+#: Task samples per design whose clearance is checked unless told otherwise (the first
+#: ones of the task samples: a uniform subsample, the same for every design).
+DEFAULT_COLLISION_SAMPLES = 10_000
+#: Most task samples per design whose clearance is checked.
+MAX_COLLISION_SAMPLES = 1_000_000
+_BODIES_MODES = ("default", "scaled")
+
+
+@dataclasses.dataclass(frozen=True)
+class CollisionSpec:
+    """How a study checks the clearance of the robot's bodies (:func:`collision_spec`).
+
+    Attributes
+    ----------
+    bodies : athenakin.collision.Bodies or {"default", "scaled"}
+        The same capsules for every design (their radii in metres), or per design
+        :meth:`Bodies.default(design) <athenakin.collision.Bodies.default>`
+        (``"default"``: the radii of a bench-top ATHENA; ``"scaled"``: those radii
+        scaled with the design's ``l1``, ``scale_with_design=True``).
+    environment : athenakin.collision.Environment or None
+        Obstacles, in the base frame.
+    margin : float
+        A sample is collision-free when its clearance is at least this, m.
+    samples : int
+        How many of the task samples are checked (the first ones).
+    """
+
+    bodies: Any
+    environment: Any
+    margin: float
+    samples: int
+
+    def bodies_for(self, design: Design) -> Any:
+        """The bodies of ``design``."""
+        from ..collision import Bodies
+
+        if isinstance(self.bodies, str):
+            return Bodies.default(design, scale_with_design=self.bodies == "scaled")
+        return self.bodies
+
+    def fingerprint(self) -> dict[str, Any]:
+        """A JSON-able description (the identity of a study that checks collisions)."""
+        b = self.bodies if isinstance(self.bodies, str) else self.bodies.to_toml_table()
+        e = None if self.environment is None else self.environment.to_toml_table()
+        return {"bodies": b, "environment": e, "margin": self.margin, "samples": self.samples}
+
+
+def collision_spec(bodies: object = None, environment: object = None,
+                   clearance_margin: object = None, collision_samples: object = None
+                   ) -> CollisionSpec | None:
+    """The collision check a study asks for, or None (no check: the columns are NaN).
+
+    Any of the four arguments turns the check on. Defaults: ``bodies="default"``, no
+    obstacles, a margin of 0 (collision-free means no contact), and
+    :data:`DEFAULT_COLLISION_SAMPLES` samples.
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        A malformed argument (named): ``bodies`` neither a
+        :class:`~athenakin.collision.Bodies` nor ``"default"`` / ``"scaled"``,
+        ``environment`` not an :class:`~athenakin.collision.Environment`, a negative
+        or NaN margin, a sample count outside ``1..MAX_COLLISION_SAMPLES``.
+    """
+    if bodies is None and environment is None and clearance_margin is None \
+            and collision_samples is None:
+        return None
+    from ..analysis._collision import collision_options
+
+    opts = collision_options(Design.default(), "default" if bodies is None else bodies,
+                             environment, clearance_margin, default_margin=0.0,
+                             bodies_modes=_BODIES_MODES)
+    assert opts is not None
+    bodies, environment, margin = opts
+    n = DEFAULT_COLLISION_SAMPLES if collision_samples is None else check_count(
+        collision_samples, "collision_samples", minimum=1, maximum=MAX_COLLISION_SAMPLES)
+    return CollisionSpec(bodies=bodies, environment=environment, margin=float(margin),
+                         samples=int(n))
+
+
+def _collision_metrics(spec: CollisionSpec, design: Design, T: NDArray[np.float64],
+                       q: NDArray[np.float64], mode: NDArray[np.int64],
+                       depth: NDArray[np.float64]) -> dict[str, float]:
+    """``collision_free_coverage`` and ``min_clearance`` over the first ``spec.samples``."""
+    from ..analysis._collision import labelled_clearance
+
+    k = min(spec.samples, q.shape[0])
+    q, mode, depth = q[:k], mode[:k], depth[:k]
+    reached = mode != 0
+    dist, _ = labelled_clearance(np.where(reached[:, None], q, 0.0), T, design, mode,
+                                 design.tool_length - depth < 0,
+                                 bodies=spec.bodies_for(design), environment=spec.environment)
+    with np.errstate(invalid="ignore"):
+        free = reached & (dist >= spec.margin)
+    seen = ~np.isnan(dist)
+    return {"collision_free_coverage": float(np.count_nonzero(free)) / k,
+            "min_clearance": float(np.min(dist[seen])) if np.any(seen) else math.nan}
+
 
 #: Conditions whose value is a length (m); the others are dimensionless sines.
 _LENGTH_CONDITIONS = ("circles_tangent", "d_on_rail", "k1_degenerate", "ab_coincide",
@@ -141,7 +245,8 @@ def reachability(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLES, 
 
 
 def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: int = 0,
-                    encoder_resolution: float = DEFAULT_ENCODER_RESOLUTION) -> dict[str, float]:
+                    encoder_resolution: float = DEFAULT_ENCODER_RESOLUTION,
+                    collision: CollisionSpec | None = None) -> dict[str, float]:
     """Every metric of one design over the task samples (docs/synthesis.md).
 
     Parameters
@@ -154,12 +259,19 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
         Seed of the task samples; every design of a study sees the same samples.
     encoder_resolution : float, keyword-only
         Resolution of each actuator's encoder, m.
+    collision : CollisionSpec, optional, keyword-only
+        Check the clearance of the robot's bodies (:func:`collision_spec`) on the
+        first ``collision.samples`` task samples: ``collision_free_coverage`` is the
+        fraction of them reached with a clearance of at least ``collision.margin``,
+        ``min_clearance`` the least clearance (m) over those reached. Without it
+        both are NaN.
 
     Returns
     -------
     dict of str -> float
         One entry per name in :data:`METRIC_COLUMNS`. Metrics taken over the
-        reachable samples are NaN exactly where ``coverage == 0``.
+        reachable samples are NaN exactly where ``coverage == 0`` (``min_clearance``
+        also where no checked sample is reached).
     """
     from ..analysis import condition_number, parallel_jacobian, singularities, tool_tip_jacobian
     from ._kernels import CONDITION_ORDER, reduce_samples
@@ -205,6 +317,11 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
             out[f"stroke_use_q{i + 1}"] = float(use[i])
         out["tip_error_max"] = float(tip[0])
         out["tip_error_mean"] = float(tip[1] / counts[0])
+    if collision is None:
+        out.update(dict.fromkeys(COLLISION_COLUMNS, nan))
+    else:
+        check_instance(collision, "collision", CollisionSpec)
+        out.update(_collision_metrics(collision, design, T, q, mode, s.depth))
     stroke = float(np.sum(hi - lo))
     out["size"] = float(2 * design.l1 + 2 * design.l3 + design.l2 + design.l4 + design.l5
                         + stroke)
@@ -212,14 +329,15 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
 
 
 def metrics_or_reason(row: Mapping[str, Any], task: Task, *, samples: int, seed: int,
-                      encoder_resolution: float) -> tuple[dict[str, float], str]:
+                      encoder_resolution: float, collision: CollisionSpec | None = None
+                      ) -> tuple[dict[str, float], str]:
     """Metrics of one parameter row, or NaN metrics and the reason it is invalid."""
     try:
         design = design_from_row(row)
     except (InvalidInputError, TypeError, ValueError) as exc:
         return dict.fromkeys(METRIC_COLUMNS, math.nan), f"{type(exc).__name__}: {exc}"
     metrics = evaluate_design(design, task, samples=samples, seed=seed,
-                              encoder_resolution=encoder_resolution)
+                              encoder_resolution=encoder_resolution, collision=collision)
     if metrics["coverage"] == 0.0 and not _assembles(design):
         return (dict.fromkeys(METRIC_COLUMNS, math.nan),
                 f"strokes cannot assemble: no q of a {ASSEMBLY_GRID}^3 grid over the stroke box "

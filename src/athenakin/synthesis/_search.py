@@ -16,12 +16,19 @@ from .._validation import check_array, check_count, check_instance, check_path, 
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ._errors import TaskFileError
-from ._metrics import DEFAULT_ENCODER_RESOLUTION, METRIC_COLUMNS, row_from_design
+from ._metrics import (
+    COLLISION_COLUMNS,
+    DEFAULT_ENCODER_RESOLUTION,
+    METRIC_COLUMNS,
+    collision_spec,
+    row_from_design,
+)
 from ._study import CONNECT_TIMEOUT, _require, evaluate, open_scheduler
 from ._task import Task
 
 __all__ = ["SEARCH_VARIABLES", "DEFAULT_OBJECTIVES", "SearchResult", "default_bounds",
-           "bounds_from_toml", "check_bounds", "optimize", "pareto_mask", "random_designs"]
+           "bounds_from_toml", "check_bounds", "optimize", "pareto_mask", "random_designs",
+           "check_constraints"]
 
 #: Decision variables of the search, in order.
 SEARCH_VARIABLES = ("l1", "l2", "l3", "l4", "l5", "q1_min", "q1_max", "q2_min", "q2_max",
@@ -146,6 +153,50 @@ def _objective_matrix(df: Any, objectives: Mapping[str, str]) -> NDArray[np.floa
     return np.stack(cols, axis=-1)
 
 
+_CONSTRAINT_OPS = (">=", "<=")
+
+
+def check_constraints(constraints: object) -> dict[str, tuple[str, float]]:
+    """Validate search constraints: metric -> ``(">=" | "<=", bound)``.
+
+    Examples: ``{"min_clearance": (">=", 0.002)}`` (every reached sample keeps 2 mm
+    between the bodies), ``{"collision_free_coverage": (">=", 0.9)}``.
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        Not a mapping, an unknown metric, an operator other than ``">="`` / ``"<="``,
+        or a bound that is not a finite number (each named).
+    """
+    if constraints is None:
+        return {}
+    if not isinstance(constraints, Mapping):
+        raise TypeError(f"constraints: expected a mapping metric -> ('>=' | '<=', bound), got "
+                        f"{type(constraints).__name__}")
+    out: dict[str, tuple[str, float]] = {}
+    for k, v in constraints.items():
+        if k not in METRIC_COLUMNS:
+            raise InvalidInputError(f"constraints: unknown metric {k!r}; expected one of "
+                                    f"{list(METRIC_COLUMNS)}")
+        if (isinstance(v, (str, bytes)) or not isinstance(v, (tuple, list)) or len(v) != 2
+                or v[0] not in _CONSTRAINT_OPS):
+            raise InvalidInputError(f"constraints[{k!r}]: expected ('>=' | '<=', bound), got "
+                                    f"{v!r}")
+        out[str(k)] = (str(v[0]), check_scalar(v[1], f"constraints[{k!r}] bound"))
+    return out
+
+
+def _constraint_matrix(df: Any, constraints: Mapping[str, tuple[str, float]]
+                       ) -> NDArray[np.float64]:
+    """``G <= 0`` where a constraint holds (pymoo's sense), +1 where its metric is NaN."""
+    cols = []
+    for k, (op, bound) in constraints.items():
+        v = df[k].to_numpy(dtype=float)
+        g = bound - v if op == ">=" else v - bound
+        cols.append(np.where(np.isfinite(g), g, 1.0))
+    return np.stack(cols, axis=-1) if cols else np.zeros((len(df), 0))
+
+
 def pareto_mask(F: NDArray[np.float64]) -> NDArray[np.bool_]:
     """Non-dominated rows of an objective matrix ``(n, k)`` to minimise (NaN rows excluded)."""
     F = check_array(F, "F", (), allow_nonfinite=True)
@@ -188,6 +239,8 @@ class SearchResult:
         Per objective, the front design best in it (``"design"``) and its change
         against the reference in every objective (metric units, signed as the metric:
         ``{"design": 148, "coverage_mode": +0.26, "size": +0.23, ...}``).
+    constraints : dict of str -> (str, float)
+        The constraints of the search (empty when none); the front keeps them all.
     """
 
     table: Any
@@ -198,6 +251,7 @@ class SearchResult:
     dominating: int
     gains: dict[str, float]
     trade_offs: dict[str, dict[str, float]] = dataclasses.field(default_factory=dict)
+    constraints: dict[str, tuple[str, float]] = dataclasses.field(default_factory=dict)
 
 
 def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
@@ -205,14 +259,17 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
              objectives: Mapping[str, str] | None = None, population: int = 24,
              generations: int = 8, samples: int = 20_000, seed: int = 0,
              scheduler: Any = None, encoder_resolution: float = DEFAULT_ENCODER_RESOLUTION,
-             connect_timeout: float = CONNECT_TIMEOUT, progress: bool = False
+             connect_timeout: float = CONNECT_TIMEOUT, progress: bool = False,
+             constraints: Mapping[str, tuple[str, float]] | None = None,
+             bodies: Any = None, environment: Any = None,
+             clearance_margin: float | None = None, collision_samples: int | None = None
              ) -> SearchResult:
     """NSGA-II over ``l1..l5`` and the strokes within ``bounds``, evaluated on Dask.
 
     Each generation is one :func:`~athenakin.synthesis.evaluate` call on the same
     scheduler (one connection for the whole search). Designs that are invalid or
     reach no task sample are infeasible (one constraint), so NSGA-II ranks them
-    behind every feasible one.
+    behind every feasible one; each of ``constraints`` is one more.
 
     Parameters
     ----------
@@ -235,6 +292,15 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
     connect_timeout : float, keyword-only
     progress : bool, keyword-only
         Print one line per generation (pymoo's verbose output).
+    constraints : mapping metric -> (">=" | "<=", bound), optional, keyword-only
+        Inequality constraints on metric columns (:func:`check_constraints`), e.g.
+        ``{"min_clearance": (">=", 0.0)}``: designs whose bodies collide somewhere in
+        the task are infeasible. A NaN metric breaks its constraint. The front holds
+        only designs that keep every constraint.
+    bodies, environment, clearance_margin, collision_samples : keyword-only
+        The collision check of :func:`~athenakin.synthesis.evaluate`. When an objective
+        or a constraint uses ``collision_free_coverage`` or ``min_clearance`` and none
+        of these is given, the check runs with ``bodies="default"``.
 
     Returns
     -------
@@ -260,6 +326,12 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
         if k not in METRIC_COLUMNS or sense not in ("max", "min"):
             raise InvalidInputError(f"objectives: expected metric -> 'max'|'min' with a metric "
                                     f"of {list(METRIC_COLUMNS)}, got {k!r}: {sense!r}")
+    cons = check_constraints(constraints)
+    uses_collision = any(k in COLLISION_COLUMNS for k in (*obj, *cons))
+    if uses_collision and bodies is None and environment is None and clearance_margin is None \
+            and collision_samples is None:
+        bodies = "default"
+    collision_spec(bodies, environment, clearance_margin, collision_samples)  # check early
     kind, handle, owned = open_scheduler(scheduler, connect_timeout=connect_timeout)
     sched = handle
     tables: list[Any] = []
@@ -268,15 +340,17 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
 
     def run(rows: list[dict[str, Any]], generation: int) -> Any:
         df = evaluate(rows, task, samples=samples, seed=seed, scheduler=sched,
-                      encoder_resolution=encoder_resolution, progress=False)
+                      encoder_resolution=encoder_resolution, progress=False, bodies=bodies,
+                      environment=environment, clearance_margin=clearance_margin,
+                      collision_samples=collision_samples)
         df.insert(1, "generation", generation)
         tables.append(df)
         return df
 
     class _Problem(Problem):  # type: ignore[misc]
         def __init__(self) -> None:
-            super().__init__(n_var=len(SEARCH_VARIABLES), n_obj=len(obj), n_ieq_constr=1,
-                             xl=lo, xu=hi)
+            super().__init__(n_var=len(SEARCH_VARIABLES), n_obj=len(obj),
+                             n_ieq_constr=1 + len(cons), xl=lo, xu=hi)
             self.generation = 0
 
         def _evaluate(self, X: NDArray[np.float64], out: dict[str, Any], *a: Any,
@@ -288,7 +362,9 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
             feasible = df["valid"].to_numpy() & (df["coverage"].to_numpy() > 0) & np.all(
                 np.isfinite(F), axis=1)
             out["F"] = np.where(feasible[:, None], F, 1e9)
-            out["G"] = np.where(feasible, -1.0, 1.0)[:, None]
+            G = _constraint_matrix(df, cons)
+            out["G"] = np.concatenate([np.where(feasible, -1.0, 1.0)[:, None],
+                                       np.where(feasible[:, None], G, 1.0)], axis=1)
 
     try:
         run([dict(row_from_design(ref), name=ref.name or "reference")], -1)
@@ -300,7 +376,8 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
     table = pd.concat(tables, ignore_index=True)
     table["design"] = np.arange(len(table))
     F = _objective_matrix(table, obj)
-    usable = table["valid"].to_numpy() & (table["coverage"].to_numpy() > 0)
+    usable = table["valid"].to_numpy() & (table["coverage"].to_numpy() > 0) & np.all(
+        _constraint_matrix(table, cons) <= 0, axis=1)
     F_use = np.where(usable[:, None], F, np.nan)
     mask = pareto_mask(F_use)
     first = next(iter(obj))
@@ -319,6 +396,7 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
             trade_offs[k] = {"design": float(best["design"]),
                              **{m: float(best[m] - ref_row[m]) for m in obj}}
     return SearchResult(table=table, front=front, reference=ref_row, objectives=obj,
+                        constraints=cons,
                         trade_offs=trade_offs,
                         reference_on_front=not bool(np.any(
                             np.all(F_use <= f_ref, axis=1) & np.any(F_use < f_ref, axis=1))),

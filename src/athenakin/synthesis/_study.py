@@ -22,6 +22,8 @@ from ._metrics import (
     DEFAULT_ENCODER_RESOLUTION,
     DEFAULT_SAMPLES,
     PARAMETER_COLUMNS,
+    CollisionSpec,
+    collision_spec,
     metrics_or_reason,
     row_from_design,
 )
@@ -123,7 +125,8 @@ def _plain(v: Any) -> Any:
 
 
 def _chunk_frame(rows: list[dict[str, Any]], start: int, task_map: dict[str, Any],
-                 samples: int, seed: int, resolution: float) -> Any:
+                 samples: int, seed: int, resolution: float,
+                 collision: CollisionSpec | None = None) -> Any:
     """Evaluate one chunk of designs (runs on a Dask worker); returns a DataFrame."""
     import pandas as pd
 
@@ -131,7 +134,7 @@ def _chunk_frame(rows: list[dict[str, Any]], start: int, task_map: dict[str, Any
     recs = []
     for j, row in enumerate(rows):
         metrics, reason = metrics_or_reason(row, task, samples=samples, seed=seed,
-                                            encoder_resolution=resolution)
+                                            encoder_resolution=resolution, collision=collision)
         rec: dict[str, Any] = {"design": start + j, "name": row.get("name", "")}
         for k in PARAMETER_COLUMNS:
             v = row.get(k, "q1<q2" if k == "ab_order" else math.nan)
@@ -153,10 +156,13 @@ def _float_or_nan(v: Any) -> float:
 
 
 def _fingerprint(rows: list[dict[str, Any]], task: Task, samples: int, seed: int,
-                 resolution: float, chunk_size: int) -> str:
-    blob = json.dumps({"format": _FORMAT, "rows": rows, "task": task.to_mapping(),
-                       "samples": samples, "seed": seed, "resolution": resolution,
-                       "chunk": chunk_size}, sort_keys=True, default=str)
+                 resolution: float, chunk_size: int, collision: CollisionSpec | None = None
+                 ) -> str:
+    ident = {"format": _FORMAT, "rows": rows, "task": task.to_mapping(), "samples": samples,
+             "seed": seed, "resolution": resolution, "chunk": chunk_size}
+    if collision is not None:      # studies without the check keep their identity
+        ident["collision"] = collision.fingerprint()
+    blob = json.dumps(ident, sort_keys=True, default=str)
     return hashlib.sha256(blob.encode()).hexdigest()
 
 
@@ -266,7 +272,9 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
              progress: bool | None = None,
              on_chunk: Callable[[int, int], None] | None = None,
              connect_timeout: float = CONNECT_TIMEOUT, retries: int = RETRIES,
-             chunk_size: int = CHUNK_SIZE) -> Any:
+             chunk_size: int = CHUNK_SIZE, bodies: Any = None, environment: Any = None,
+             clearance_margin: float | None = None, collision_samples: int | None = None
+             ) -> Any:
     """Evaluate a batch of designs against a task, on this machine or a Dask cluster.
 
     Parameters
@@ -306,6 +314,21 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
         Designs per Dask task and per Parquet file (part of the study's identity:
         resume with the same value). Larger chunks for very large studies keep the
         scheduler's per-task overhead small (docs/synthesis.md).
+    bodies : athenakin.collision.Bodies or {"default", "scaled"}, optional, keyword-only
+        Check the clearance of the robot's bodies: the given capsules for every
+        design (radii in m), or per design ``Bodies.default(design)`` with the radii
+        of a bench-top ATHENA (``"default"``) or scaled with the design's ``l1``
+        (``"scaled"``). Any of ``bodies``, ``environment``, ``clearance_margin``,
+        ``collision_samples`` turns the check on (``bodies`` then defaults to
+        ``"default"``); without it ``collision_free_coverage`` and ``min_clearance``
+        are NaN. Needs the ``collision`` extra only for boxes and meshes.
+    environment : athenakin.collision.Environment, optional, keyword-only
+        Obstacles in the base frame.
+    clearance_margin : float, optional, keyword-only
+        A sample is collision-free when its clearance is at least this (m, default 0).
+    collision_samples : int, optional, keyword-only
+        How many task samples are checked, the first ones (a uniform subsample;
+        default :data:`~athenakin.synthesis.DEFAULT_COLLISION_SAMPLES`).
 
     Returns
     -------
@@ -338,6 +361,7 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
     if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) or (
             chunk_size < 1):
         raise InvalidInputError(f"chunk_size: expected a positive integer, got {chunk_size!r}")
+    collision = collision_spec(bodies, environment, clearance_margin, collision_samples)
     rows = design_rows(designs)
     samples, seed, chunk_size = int(samples), int(seed), int(chunk_size)
     chunks = [rows[i:i + chunk_size] for i in range(0, len(rows), chunk_size)]
@@ -350,12 +374,14 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
     # the scheduler first: an address that does not answer leaves no results folder behind
     kind, handle, owned = open_scheduler(scheduler, connect_timeout=connect_timeout)
     if out_path is not None:
-        fp = _fingerprint(rows, task, samples, seed, resolution, chunk_size)
-        try:
-            done = _prepare_out(out_path, fp, len(chunks), {
-                "format": _FORMAT, "designs": len(rows), "chunk_size": chunk_size,
+        fp = _fingerprint(rows, task, samples, seed, resolution, chunk_size, collision)
+        meta = {"format": _FORMAT, "designs": len(rows), "chunk_size": chunk_size,
                 "task": task_map, "samples": samples, "seed": seed,
-                "encoder_resolution": resolution})
+                "encoder_resolution": resolution}
+        if collision is not None:
+            meta["collision"] = collision.fingerprint()
+        try:
+            done = _prepare_out(out_path, fp, len(chunks), meta)
         except BaseException:
             if owned:
                 handle.close()
@@ -373,7 +399,7 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
         if on_chunk is not None:
             on_chunk(len(done), len(chunks))
 
-    args = (task_map, samples, seed, resolution)
+    args = (task_map, samples, seed, resolution, collision)
     try:
         if todo and kind == "local":
             _run_local(handle, chunks, todo, chunk_size, args, finished)

@@ -1,0 +1,46 @@
+"""Collision options of ``track`` and ``plan``: bodies, environment, clearance margin.
+
+:mod:`athenakin.collision` is imported only when one of them is given.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+from typing import Any
+
+from ..design import Design
+
+
+def add_collision_options(p: argparse.ArgumentParser, *, what: str,
+                          default_margin: str = "0.005") -> None:
+    """Add the three options; any of them turns the clearance check on."""
+    g = p.add_argument_group("collisions (any of these turns the clearance check on)")
+    g.add_argument("--bodies", type=Path, metavar="FILE",
+                   help="TOML file with a [bodies] table (radii in m, excluded pairs); "
+                        "default: the --design file's [bodies] table, else the default "
+                        "capsules")
+    g.add_argument("--environment", type=Path, metavar="FILE",
+                   help="obstacles: a TOML file of [[environment.obstacle]] tables")
+    g.add_argument("--clearance-margin", type=float, default=None, metavar="M",
+                   help=f"least clearance between the bodies and to the obstacles, m; {what} "
+                        f"(default {default_margin} when the check is on)")
+
+
+def collision_options(args: argparse.Namespace, design: Design) -> dict[str, Any]:
+    """``bodies``, ``environment``, ``clearance_margin`` keyword options (empty: no check)."""
+    bodies_path = getattr(args, "bodies", None)
+    env_path = getattr(args, "environment", None)
+    margin = getattr(args, "clearance_margin", None)
+    if bodies_path is None and env_path is None and margin is None:
+        return {}
+    if margin is not None and not (math.isfinite(margin) and 0.0 <= margin <= 1.0):
+        raise ValueError(f"--clearance-margin: expected a distance from 0 to 1 m, got {margin:g}")
+    from ..collision import Bodies, Environment
+
+    source = bodies_path if bodies_path is not None else getattr(args, "design", None)
+    bodies = (Bodies.from_toml(source, design=design) if source is not None
+              else Bodies.default(design))
+    env = None if env_path is None else Environment.from_toml(env_path)
+    return {"bodies": bodies, "environment": env, "clearance_margin": margin}

@@ -1,0 +1,106 @@
+"""coal for the shapes without a closed form here: boxes and meshes (private).
+
+coal (the successor of hpp-fcl, Pinocchio's collision library) is imported on first use;
+without it a named ImportError says which extra to install.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._environment import Obstacle
+
+__all__ = ["import_coal", "coal_shape", "capsule_transform", "capsule_obstacle_distances"]
+
+
+def import_coal() -> Any:
+    """The coal module, or an ImportError naming the ``[collision]`` extra."""
+    try:
+        import coal
+    except ImportError:
+        raise ImportError("box and mesh obstacles need coal: pip install "
+                          "'athenakin[collision]' (coal and trimesh)") from None
+    return coal
+
+
+def coal_shape(obstacle: Obstacle) -> Any:
+    """The coal collision geometry of a box or mesh obstacle (in its own frame)."""
+    coal = import_coal()
+    if obstacle.kind == "box":
+        return coal.Box(*(2.0 * np.asarray(obstacle.half_extents)))
+    if obstacle.kind == "mesh":
+        model = coal.BVHModelOBBRSS()
+        model.beginModel(len(obstacle.faces), len(obstacle.vertices))
+        model.addVertices(np.ascontiguousarray(obstacle.vertices, dtype=np.float64))
+        model.addTriangles(np.ascontiguousarray(obstacle.faces, dtype=np.int64))
+        model.endModel()
+        if obstacle.convex:
+            model.buildConvexHull(True, "Qt")
+            return model.convex
+        return model
+    raise ValueError(f"coal_shape: no coal shape for a {obstacle.kind}")  # pragma: no cover
+
+
+def _transform(R: NDArray[np.float64], t: NDArray[np.float64]) -> Any:
+    coal = import_coal()
+    return coal.Transform3s(np.ascontiguousarray(R), np.ascontiguousarray(t))
+
+
+def capsule_transform(a: NDArray[np.float64], b: NDArray[np.float64]) -> tuple[float, Any]:
+    """Length and pose of coal's capsule frame (axis ``z``, centred) for the segment a-b."""
+    d = b - a
+    L = float(np.linalg.norm(d))
+    z = d / L if L > 0 else np.array([0.0, 0.0, 1.0])
+    ax = np.eye(3)[int(np.argmin(np.abs(z)))]
+    x = np.cross(ax, z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    return L, _transform(np.stack([x, y, z], axis=1), 0.5 * (a + b))
+
+
+def capsule_obstacle_distances(seg: NDArray[np.float64], radius: float,
+                               obstacle: Obstacle,
+                               shape: Any | None = None) -> tuple[NDArray[np.float64],
+                                                                  NDArray[np.float64]]:
+    """Signed distances of capsules to a box or mesh obstacle, one coal call each.
+
+    Parameters
+    ----------
+    seg : ndarray, shape (n, 2, 3)
+        Capsule segments (rows with a NaN give NaN).
+    radius : float
+        Capsule radius, m.
+    obstacle : Obstacle
+        A box or a mesh.
+    shape : coal geometry, optional
+        :func:`coal_shape` of ``obstacle``, built once by the caller.
+
+    Returns
+    -------
+    distance : ndarray, shape (n,)
+    witness : ndarray, shape (n, 2, 3)
+        Nearest points on the capsule and on the obstacle.
+    """
+    coal = import_coal()
+    shape = coal_shape(obstacle) if shape is None else shape
+    T_o = _transform(obstacle.T_b_o[:3, :3], obstacle.T_b_o[:3, 3])
+    n = seg.shape[0]
+    dist = np.full(n, np.nan)
+    wit = np.full((n, 2, 3), np.nan)
+    req = coal.DistanceRequest()
+    req.enable_signed_distance = True
+    for i in range(n):
+        a, b = seg[i, 0], seg[i, 1]
+        if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
+            continue
+        L, T_c = capsule_transform(a, b)
+        cap = coal.Capsule(radius, L) if L > 0 else coal.Sphere(radius)
+        res = coal.DistanceResult()
+        d = coal.distance(cap, T_c, shape, T_o, req, res)
+        dist[i] = d
+        wit[i, 0] = res.getNearestPoint1()
+        wit[i, 1] = res.getNearestPoint2()
+    return dist, wit

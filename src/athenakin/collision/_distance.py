@@ -1,0 +1,193 @@
+"""Exact closed-form distances between segments, points and planes: the numpy reference.
+
+Capsules are segments swept by a ball, so the signed distance of two capsules is the
+distance of their segments minus both radii (negative: the penetration depth, the
+shortest translation that separates them; two crossing segments separate by an
+arbitrarily small move, so they add nothing to it).
+
+Segment to segment (:func:`segment_segment`): the minimum of a convex quadratic over
+the unit square ``(s, t)`` lies either at its interior critical point (Lumelsky's
+``s = (b f - c e) / (a e - b^2)``, ``t = (a f - b c) / (a e - b^2)``) or on an edge,
+where it is the distance of an end point to the other segment. The reference takes
+the smallest of these five candidates, each a true pair of points on the segments, so
+it is exact for parallel (``a e - b^2 = 0``: the interior candidate is dropped),
+degenerate (zero length: the end-point candidates remain) and touching or crossing
+segments (distance 0), with no tolerance that decides a branch. The compiled kernel
+(:mod:`athenakin.fast._collision_kernels`) does the same operations in the same order.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["point_segment", "segment_segment", "capsule_capsule", "capsule_halfspace",
+           "separation_normal"]
+
+F = NDArray[np.float64]
+
+#: Relative size below which ``c2 - c1`` is rounding noise (:func:`separation_normal`).
+NOISE = 1e-12
+
+
+def _dot(x: F, y: F) -> F:
+    return np.einsum("...i,...i->...", x, y)
+
+
+def point_segment(x: F, a: F, b: F) -> tuple[F, F]:
+    """Closest point of the segment ``a``-``b`` to ``x`` and its distance.
+
+    Parameters
+    ----------
+    x, a, b : ndarray, shape (..., 3)
+        Broadcast together; ``a == b`` is a point.
+
+    Returns
+    -------
+    dist : ndarray, shape (...)
+    c : ndarray, shape (..., 3)
+        Closest point on the segment.
+    """
+    d = b - a
+    dd = _dot(d, d)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.where(dd > 0, _dot(x - a, d) / np.where(dd > 0, dd, 1.0), 0.0)
+    t = np.clip(t, 0.0, 1.0)
+    c = a + t[..., None] * d
+    return np.linalg.norm(x - c, axis=-1), c
+
+
+def segment_segment(p1: F, q1: F, p2: F, q2: F) -> tuple[F, F, F]:
+    """Distance of the segments ``p1``-``q1`` and ``p2``-``q2``, and their closest points.
+
+    Parameters
+    ----------
+    p1, q1, p2, q2 : ndarray, shape (..., 3)
+        End points; broadcast together. Zero-length segments are points.
+
+    Returns
+    -------
+    dist : ndarray, shape (...)
+        Euclidean distance (>= 0), m.
+    c1, c2 : ndarray, shape (..., 3)
+        Closest points on the first and on the second segment (``|c1 - c2| = dist``);
+        where the closest pair is not unique (parallel overlapping segments), one of them.
+    """
+    p1, q1, p2, q2 = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64)
+                                            for v in (p1, q1, p2, q2)))
+    d1 = q1 - p1
+    d2 = q2 - p2
+    r = p1 - p2
+    a = _dot(d1, d1)
+    e = _dot(d2, d2)
+    b = _dot(d1, d2)
+    c = _dot(d1, r)
+    f = _dot(d2, r)
+    denom = a * e - b * b
+    # candidates 1-4: an end point against the other segment
+    best, c1 = point_segment(p2, p1, q1)
+    c2 = p2.copy()
+    for x, on_first, seg in ((q2, True, (p1, q1)), (p1, False, (p2, q2)),
+                             (q1, False, (p2, q2))):
+        dist, cc = point_segment(x, *seg)
+        better = dist < best
+        best = np.where(better, dist, best)
+        if on_first:
+            c1 = np.where(better[..., None], cc, c1)
+            c2 = np.where(better[..., None], x, c2)
+        else:
+            c1 = np.where(better[..., None], x, c1)
+            c2 = np.where(better[..., None], cc, c2)
+    # candidate 5: the interior critical point, where the segments are not parallel
+    ok = denom > 0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        safe = np.where(ok, denom, 1.0)
+        s = np.clip((b * f - c * e) / safe, 0.0, 1.0)
+        t = np.clip((a * f - b * c) / safe, 0.0, 1.0)
+    i1 = p1 + s[..., None] * d1
+    i2 = p2 + t[..., None] * d2
+    di = np.linalg.norm(i1 - i2, axis=-1)
+    better = ok & (di < best)
+    best = np.where(better, di, best)
+    c1 = np.where(better[..., None], i1, c1)
+    c2 = np.where(better[..., None], i2, c2)
+    return best, c1, c2
+
+
+def separation_normal(c1: F, c2: F, d1: F, d2: F) -> F:
+    """Unit vector from ``c1`` towards ``c2``; where they coincide, one normal to both segments.
+
+    "Coincide" is ``|c2 - c1| <= NOISE (|c1| + |d1| + |d2|)``, the rounding noise of
+    the closest points of touching or crossing segments.
+
+    ``d1``, ``d2`` are the segment directions: the fallback is ``d1 x d2`` (crossing
+    segments), else a vector normal to ``d1`` (or ``d2``; parallel or degenerate), else
+    ``+z``.
+    """
+    v = c2 - c1
+    n = np.linalg.norm(v, axis=-1)
+    tiny = 1e-300
+    # below rounding noise (relative 1e-12 of the coordinates), c2 - c1 has no direction
+    noise = NOISE * (np.linalg.norm(c1, axis=-1) + np.linalg.norm(d1, axis=-1)
+                     + np.linalg.norm(d2, axis=-1)) + tiny
+    x = np.cross(d1, d2)
+    nx = np.linalg.norm(x, axis=-1)
+    # d1 x d2 of (nearly) parallel segments is rounding noise too: no direction
+    nx = np.where(nx > NOISE * np.linalg.norm(d1, axis=-1) * np.linalg.norm(d2, axis=-1), nx, 0.0)
+    base = np.where(np.linalg.norm(d1, axis=-1)[..., None] > 0, d1, d2)
+    # a vector normal to base: cross with the axis of its smallest component
+    ax = np.eye(3)[np.argmin(np.abs(base), axis=-1)]
+    y = np.cross(base, ax)
+    ny = np.linalg.norm(y, axis=-1)
+    z = np.broadcast_to(np.array([0.0, 0.0, 1.0]), v.shape)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = np.where((n > noise)[..., None], v / np.where(n > tiny, n, 1.0)[..., None],
+                       np.where((nx > tiny)[..., None], x / np.where(nx > tiny, nx, 1.0)[..., None],
+                                np.where((ny > tiny)[..., None],
+                                         y / np.where(ny > tiny, ny, 1.0)[..., None], z)))
+    return out  # type: ignore[no-any-return]
+
+
+def capsule_capsule(p1: F, q1: F, r1: F | float, p2: F, q2: F,
+                    r2: F | float) -> tuple[F, F]:
+    """Signed distance of two capsules and their witness points.
+
+    Parameters
+    ----------
+    p1, q1, p2, q2 : ndarray, shape (..., 3)
+        Segment end points, m.
+    r1, r2 : float or ndarray, shape (...)
+        Radii, m.
+
+    Returns
+    -------
+    distance : ndarray, shape (...)
+        ``|c1 - c2| - r1 - r2``; negative is the penetration depth, m.
+    witness : ndarray, shape (..., 2, 3)
+        The point of each capsule's surface nearest the other (deepest point when they
+        overlap), ``c1 + r1 n`` and ``c2 - r2 n`` with ``n`` from :func:`separation_normal`.
+    """
+    dist, c1, c2 = segment_segment(p1, q1, p2, q2)
+    n = separation_normal(c1, c2, np.broadcast_to(q1 - p1, c1.shape),
+                          np.broadcast_to(q2 - p2, c2.shape))
+    r1a = np.asarray(r1, dtype=np.float64)
+    r2a = np.asarray(r2, dtype=np.float64)
+    w = np.stack([c1 + r1a[..., None] * n, c2 - r2a[..., None] * n], axis=-2)
+    return dist - r1a - r2a, w
+
+
+def capsule_halfspace(p: F, q: F, r: F | float, point: F, normal: F) -> tuple[F, F]:
+    """Signed distance of a capsule to the solid ``{x : normal . (x - point) <= 0}``.
+
+    ``normal`` is a unit vector. Returns ``(distance, witness)`` as :func:`capsule_capsule`
+    does, the witness on the capsule first and on the plane second.
+    """
+    hp = _dot(p - point, normal)
+    hq = _dot(q - point, normal)
+    use_q = hq < hp
+    h = np.where(use_q, hq, hp)
+    e = np.where(use_q[..., None], q, p)
+    ra = np.asarray(r, dtype=np.float64)
+    w = np.stack(np.broadcast_arrays(e - ra[..., None] * normal, e - h[..., None] * normal),
+                 axis=-2)
+    return h - ra, w

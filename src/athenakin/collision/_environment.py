@@ -1,0 +1,464 @@
+"""Obstacles around the robot: the patient, the table, the ports (private).
+
+An :class:`Environment` is a frozen tuple of :class:`Obstacle`; every builder method
+returns a new environment, so calls chain::
+
+    env = (Environment()
+           .halfspace((0, 0, -0.2), (0, 0, 1), name="table")
+           .sphere((0, 0, 0.3), 0.1, name="abdomen", allow=("instrument",)))
+
+Shapes, all fixed in the base frame ``b`` (m):
+
+- ``halfspace``: every ``x`` with ``normal . (x - point) <= 0`` (the normal points out of
+  the solid, towards the free side);
+- ``sphere``, ``capsule``: exact closed forms like the bodies';
+- ``box`` (pose + half extents) and ``mesh`` (STL / OBJ / PLY file through trimesh):
+  distances by coal (extra ``[collision]``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._mechanism import BODIES
+from .._toml import read_toml
+from .._validation import check_array, check_path, check_scalar, check_transform
+from ..errors import InvalidInputError
+
+__all__ = ["Environment", "Obstacle", "OBSTACLE_KINDS", "MAX_OBSTACLES", "MAX_MESH_FACES"]
+
+#: Kinds of obstacle.
+OBSTACLE_KINDS = ("halfspace", "sphere", "capsule", "box", "mesh")
+#: Most obstacles in one environment.
+MAX_OBSTACLES = 1000
+#: Most triangles of one mesh obstacle (checked after loading, before building the BVH).
+MAX_MESH_FACES = 2_000_000
+_MAX_COORD = 1e3
+
+ObstacleKind = Literal["halfspace", "sphere", "capsule", "box", "mesh"]
+
+
+def _vec3(x: ArrayLike, name: str) -> tuple[float, float, float]:
+    a = check_array(x, name, (3,))
+    if a.shape != (3,):
+        raise InvalidInputError(f"{name}: expected 3 numbers (m), got shape {a.shape}")
+    if np.any(np.abs(a) > _MAX_COORD):
+        raise InvalidInputError(f"{name}: expected coordinates within +/-{_MAX_COORD:g} m, got "
+                                f"{a.tolist()}")
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
+def _length(x: object, name: str, *, positive: bool = False) -> float:
+    v = check_scalar(x, name, nonnegative=not positive, positive=positive)
+    if v > _MAX_COORD:
+        raise InvalidInputError(f"{name}: expected a length within {_MAX_COORD:g} m, got {v:g}")
+    return v
+
+
+def _allow(allow: object, name: str) -> tuple[str, ...]:
+    if isinstance(allow, str):
+        allow = (allow,)
+    if isinstance(allow, bytes) or not isinstance(allow, Iterable):
+        raise TypeError(f"{name}: expected a list of body names among {BODIES}, got "
+                        f"{type(allow).__name__}")
+    out = []
+    for k, b in enumerate(allow):
+        if not isinstance(b, str):
+            raise TypeError(f"{name}[{k}]: expected a body name (str), got {type(b).__name__}")
+        if b not in BODIES:
+            raise InvalidInputError(f"{name}[{k}]: unknown body {b!r}; expected one of {BODIES}")
+        if b not in out:
+            out.append(b)
+    return tuple(sorted(out, key=BODIES.index))
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Obstacle:
+    """One obstacle of an :class:`Environment` (base frame, m).
+
+    Attributes
+    ----------
+    kind : {"halfspace", "sphere", "capsule", "box", "mesh"}
+    name : str
+        Unique in its environment; the second name of its clearance pairs.
+    allow : tuple of str
+        Bodies that may cross it (never paired with it).
+    point, normal : tuple of 3 floats
+        ``halfspace``: a point of the boundary plane and the unit outward normal.
+    center, radius : ``sphere``: centre and radius; ``capsule``: ``a``, ``b`` and radius.
+    a, b : tuple of 3 floats
+        ``capsule``: end points of its segment.
+    T_b_o : ndarray, shape (4, 4)
+        ``box`` / ``mesh``: pose of the shape's frame in the base frame.
+    half_extents : tuple of 3 floats
+        ``box``: half sizes along the box frame's axes.
+    path : str
+        ``mesh``: the file, as given.
+    scale : float
+        ``mesh``: factor from file units to metres (0.001 for a file in mm).
+    convex : bool
+        ``mesh``: use the convex hull (signed distance, penetration depth) instead of the
+        triangle surface (a BVH; distance 0 once a body touches or crosses the surface).
+    vertices, faces : ndarray
+        ``mesh``: the loaded triangles (in the shape frame, m).
+    """
+
+    kind: ObstacleKind
+    name: str
+    allow: tuple[str, ...] = ()
+    point: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    center: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    radius: float = 0.0
+    a: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    b: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    T_b_o: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.eye(4))
+    half_extents: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    path: str = ""
+    scale: float = 1.0
+    convex: bool = False
+    vertices: NDArray[np.float64] = dataclasses.field(
+        default_factory=lambda: np.zeros((0, 3)))
+    faces: NDArray[np.int64] = dataclasses.field(
+        default_factory=lambda: np.zeros((0, 3), dtype=np.int64))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Obstacle):
+            return NotImplemented
+        for f in dataclasses.fields(self):
+            x, y = getattr(self, f.name), getattr(other, f.name)
+            if isinstance(x, np.ndarray):
+                if x.shape != np.shape(y) or not np.array_equal(x, y):
+                    return False
+            elif x != y:
+                return False
+        return True
+
+    __hash__ = None  # type: ignore[assignment]
+
+    @property
+    def is_primitive(self) -> bool:
+        """Whether the exact closed forms handle it (halfspace, sphere, capsule)."""
+        return self.kind in ("halfspace", "sphere", "capsule")
+
+    def to_toml_table(self) -> dict[str, Any]:
+        """The obstacle as a TOML table (``kind``, ``name``, shape keys, ``allow``)."""
+        t: dict[str, Any] = {"kind": self.kind, "name": self.name}
+        if self.kind == "halfspace":
+            t.update(point=list(self.point), normal=list(self.normal))
+        elif self.kind == "sphere":
+            t.update(center=list(self.center), radius=self.radius)
+        elif self.kind == "capsule":
+            t.update(a=list(self.a), b=list(self.b), radius=self.radius)
+        elif self.kind == "box":
+            t.update(T_b_box=self.T_b_o.tolist(), half_extents=list(self.half_extents))
+        else:
+            t.update(path=self.path, T_b_mesh=self.T_b_o.tolist(), scale=self.scale,
+                     convex=self.convex)
+        if self.allow:
+            t["allow"] = list(self.allow)
+        return t
+
+
+def _pose(T_or_center: ArrayLike, name: str) -> NDArray[np.float64]:
+    arr = np.asarray(T_or_center) if not isinstance(T_or_center, (str, bytes)) else None
+    if arr is not None and arr.shape == (4, 4):
+        T = check_transform(arr, name)
+        if np.any(np.abs(T[:3, 3]) > _MAX_COORD):
+            raise InvalidInputError(f"{name}: expected a position within +/-{_MAX_COORD:g} m")
+        return np.array(T, dtype=np.float64)
+    if arr is not None and arr.shape == (3,):
+        T = np.eye(4)
+        T[:3, 3] = _vec3(arr, name)
+        return T
+    raise InvalidInputError(f"{name}: expected a centre (3,) or a pose (4, 4), got "
+                            f"{'a ' + type(T_or_center).__name__ if arr is None else arr.shape}")
+
+
+def _load_mesh(path: Path, scale: float, name: str) -> tuple[NDArray[np.float64],
+                                                             NDArray[np.int64]]:
+    try:
+        import trimesh
+    except ImportError:  # pragma: no cover - the extra is installed in CI
+        raise ImportError("Environment.mesh needs trimesh: pip install 'athenakin[collision]'") \
+            from None
+    if path.suffix.lower() not in (".stl", ".obj", ".ply"):
+        raise InvalidInputError(f"{name}: expected an STL, OBJ or PLY file, got "
+                                f"{path.suffix or 'no extension'} ({str(path)!r})")
+    if not path.is_file():
+        raise InvalidInputError(f"{name}: mesh file {str(path)!r} does not exist")
+    try:
+        mesh = trimesh.load(str(path), force="mesh", process=False)
+    except Exception as exc:  # trimesh raises many kinds on a bad file
+        raise InvalidInputError(f"{name}: mesh file {str(path)!r} does not load "
+                                f"({type(exc).__name__}: {exc})") from None
+    V = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=np.float64)
+    F = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64)
+    if V.ndim != 2 or V.shape[1:] != (3,) or F.ndim != 2 or F.shape[1:] != (3,) or len(F) == 0:
+        raise InvalidInputError(f"{name}: mesh file {str(path)!r} holds no triangles")
+    if len(F) > MAX_MESH_FACES:
+        raise InvalidInputError(f"{name}: mesh file {str(path)!r} has {len(F)} triangles; "
+                                f"expected at most {MAX_MESH_FACES}")
+    if not np.all(np.isfinite(V)):
+        raise InvalidInputError(f"{name}: mesh file {str(path)!r} has non-finite vertices")
+    if F.min() < 0 or F.max() >= len(V):
+        raise InvalidInputError(f"{name}: mesh file {str(path)!r} has faces that index "
+                                f"missing vertices")
+    return V * scale, F
+
+
+@dataclasses.dataclass(frozen=True)
+class Environment:
+    """The obstacles around the robot, built by chaining (each method returns a new one).
+
+    Attributes
+    ----------
+    obstacles : tuple of Obstacle
+        In the order they were added (the order of the obstacle pairs of a clearance).
+    """
+
+    obstacles: tuple[Obstacle, ...] = ()
+
+    def __post_init__(self) -> None:
+        obs = tuple(self.obstacles)
+        if len(obs) > MAX_OBSTACLES:
+            raise InvalidInputError(f"environment: expected at most {MAX_OBSTACLES} obstacles, "
+                                    f"got {len(obs)}")
+        seen: set[str] = set()
+        for o in obs:
+            if not isinstance(o, Obstacle):
+                raise TypeError(f"obstacles: expected Obstacle items, got {type(o).__name__}")
+            if o.name in seen:
+                raise InvalidInputError(f"name: obstacle name {o.name!r} used twice; names "
+                                        f"must be unique")
+            if o.name in BODIES:
+                raise InvalidInputError(f"name: obstacle name {o.name!r} is a body name")
+            seen.add(o.name)
+        object.__setattr__(self, "obstacles", obs)
+
+    def __len__(self) -> int:
+        return len(self.obstacles)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Obstacle names, in order."""
+        return tuple(o.name for o in self.obstacles)
+
+    def __getitem__(self, name: str) -> Obstacle:
+        for o in self.obstacles:
+            if o.name == name:
+                return o
+        raise InvalidInputError(f"name: no obstacle {name!r}; the environment has {self.names}")
+
+    # --- builders -----------------------------------------------------------------------
+    def _add(self, kind: str, name: object, allow: object, **kw: Any) -> Environment:
+        if name is None:
+            name = f"{kind}_{len(self.obstacles)}"
+        if not isinstance(name, str):
+            raise TypeError(f"name: expected a str, got {type(name).__name__}")
+        if not name or not name.strip():
+            raise InvalidInputError("name: expected a non-empty obstacle name")
+        ob = Obstacle(kind=kind, name=name, allow=_allow(allow, "allow"),  # type: ignore[arg-type]
+                      **kw)
+        return Environment(self.obstacles + (ob,))
+
+    def halfspace(self, point: ArrayLike, normal: ArrayLike, *, name: str | None = None,
+                  allow: Iterable[str] = ()) -> Environment:
+        """Add the solid ``{x : normal . (x - point) <= 0}`` (a floor, a table top, a wall).
+
+        Parameters
+        ----------
+        point : array-like, shape (3,)
+            A point of the boundary plane, m.
+        normal : array-like, shape (3,)
+            Outward normal (towards the free side); normalised here.
+        name : str, keyword-only, optional
+            Default ``"halfspace_<k>"``.
+        allow : list of str, keyword-only
+            Bodies that may cross it.
+
+        Raises
+        ------
+        InvalidInputError
+            A zero (or non-finite) normal, an unknown body in ``allow``, a name used twice.
+        """
+        p = _vec3(point, "point")
+        n = np.array(check_array(normal, "normal", (3,)), dtype=float).reshape(-1)
+        if n.shape != (3,):
+            raise InvalidInputError(f"normal: expected 3 numbers, got shape {n.shape}")
+        norm = float(np.linalg.norm(n))
+        if not norm > 1e-12 or not math.isfinite(norm):
+            raise InvalidInputError(f"normal: expected a non-zero vector, got {n.tolist()}")
+        n = n / norm
+        return self._add("halfspace", name, allow, point=p,
+                         normal=(float(n[0]), float(n[1]), float(n[2])))
+
+    def sphere(self, center: ArrayLike, radius: float, *, name: str | None = None,
+               allow: Iterable[str] = ()) -> Environment:
+        """Add a ball of ``radius`` (m, >= 0) about ``center`` (3,) (m)."""
+        return self._add("sphere", name, allow, center=_vec3(center, "center"),
+                         radius=_length(radius, "radius"))
+
+    def capsule(self, a: ArrayLike, b: ArrayLike, radius: float, *, name: str | None = None,
+                allow: Iterable[str] = ()) -> Environment:
+        """Add every point within ``radius`` (m, >= 0) of the segment ``a``-``b`` (m)."""
+        return self._add("capsule", name, allow, a=_vec3(a, "a"), b=_vec3(b, "b"),
+                         radius=_length(radius, "radius"))
+
+    def box(self, T_b_box: ArrayLike, half_extents: ArrayLike, *, name: str | None = None,
+            allow: Iterable[str] = ()) -> Environment:
+        """Add a box (distances by coal).
+
+        Parameters
+        ----------
+        T_b_box : array-like, shape (4, 4) or (3,)
+            Pose of the box frame in the base frame, or only its centre (axes = base axes).
+        half_extents : array-like, shape (3,)
+            Half sizes along the box axes, m (> 0).
+        """
+        T = _pose(T_b_box, "T_b_box")
+        h = _vec3(half_extents, "half_extents")
+        if min(h) <= 0:
+            raise InvalidInputError(f"half_extents: expected positive half sizes (m), got "
+                                    f"{list(h)}")
+        return self._add("box", name, allow, T_b_o=T, half_extents=h)
+
+    def mesh(self, path: str | Path, *, T_b_mesh: ArrayLike | None = None, scale: float = 1.0,
+             convex: bool = False, name: str | None = None,
+             allow: Iterable[str] = ()) -> Environment:
+        """Add a triangle mesh read from an STL, OBJ or PLY file (trimesh; distances by coal).
+
+        Parameters
+        ----------
+        path : str or Path
+            The file.
+        T_b_mesh : array-like, shape (4, 4) or (3,), keyword-only, optional
+            Pose (or offset) of the mesh frame in the base frame; default identity.
+        scale : float, keyword-only
+            File units to metres (0.001 for millimetres). Default 1.
+        convex : bool, keyword-only
+            Use the convex hull: signed distances with penetration depth. Default False:
+            the triangle surface, whose distance is 0 once a body touches it.
+        name : str, keyword-only, optional
+            Default the file's stem.
+
+        Raises
+        ------
+        InvalidInputError
+            The file does not exist, is not STL/OBJ/PLY, does not load or holds no
+            triangles.
+        """
+        p = check_path(path, "path")
+        s = _length(scale, "scale", positive=True)
+        if not isinstance(convex, bool):
+            raise TypeError(f"convex: expected a bool, got {type(convex).__name__}")
+        T = np.eye(4) if T_b_mesh is None else _pose(T_b_mesh, "T_b_mesh")
+        V, F = _load_mesh(p, s, "path")
+        return self._add("mesh", p.stem if name is None else name, allow, T_b_o=T, path=str(path),
+                         scale=s, convex=convex, vertices=V, faces=F)
+
+    # --- TOML ---------------------------------------------------------------------------
+    def to_toml_table(self) -> dict[str, Any]:
+        """``{"obstacle": [table, ...]}``, the ``[[environment.obstacle]]`` array."""
+        return {"obstacle": [o.to_toml_table() for o in self.obstacles]}
+
+    def to_toml(self) -> str:
+        """TOML text with ``[[environment.obstacle]]`` tables that :meth:`from_toml` reads."""
+        import tomli_w
+
+        return tomli_w.dumps({"environment": self.to_toml_table()})
+
+    def write_toml(self, path: str | Path, *, overwrite: bool = False) -> Path:
+        """Write :meth:`to_toml` to ``path`` (refuses to replace a file unless ``overwrite``)."""
+        p = check_path(path, "path")
+        text = self.to_toml()
+        with open(p, "w" if overwrite else "x", encoding="utf-8") as fh:
+            fh.write(text)
+        return p
+
+    @classmethod
+    def from_mapping(cls, data: Mapping[str, Any], *,
+                     base_dir: str | Path | None = None) -> Environment:
+        """Read an ``environment`` table (``obstacle = [ {...}, ... ]``).
+
+        Mesh paths that are relative are taken relative to ``base_dir`` (the TOML
+        file's folder) when given.
+        """
+        if not isinstance(data, Mapping):
+            raise TypeError(f"environment: expected a table, got {type(data).__name__}")
+        unknown = sorted(set(data) - {"obstacle"})
+        if unknown:
+            raise InvalidInputError(f"environment: unknown key(s) {unknown}; expected "
+                                    f"'obstacle'")
+        items = data.get("obstacle", [])
+        if not isinstance(items, list):
+            raise InvalidInputError(f"environment.obstacle: expected an array of tables, got "
+                                    f"{type(items).__name__}")
+        env = cls()
+        keys = {"halfspace": ("point", "normal"), "sphere": ("center", "radius"),
+                "capsule": ("a", "b", "radius"), "box": ("T_b_box", "half_extents"),
+                "mesh": ("path", "T_b_mesh", "scale", "convex")}
+        for k, t in enumerate(items):
+            what = f"environment.obstacle[{k}]"
+            if not isinstance(t, Mapping):
+                raise InvalidInputError(f"{what}: expected a table, got {type(t).__name__}")
+            kind = t.get("kind")
+            if kind not in keys:
+                raise InvalidInputError(f"{what}.kind: expected one of {OBSTACLE_KINDS}, got "
+                                        f"{kind!r}")
+            allowed = {"kind", "name", "allow", *keys[kind]}
+            bad = sorted(set(t) - allowed)
+            if bad:
+                raise InvalidInputError(f"{what}: unknown key(s) {bad} for a {kind}; expected "
+                                        f"some of {sorted(allowed)}")
+            need = [x for x in keys[kind] if x not in t and kind != "mesh"] + (
+                ["path"] if kind == "mesh" and "path" not in t else [])
+            if need:
+                raise InvalidInputError(f"{what}: missing key(s) {need} of a {kind}")
+            kw = {x: t[x] for x in keys[kind] if x in t}
+            if kind == "mesh":
+                mp = Path(kw.pop("path"))
+                if base_dir is not None and not mp.is_absolute():
+                    kw_path: str | Path = Path(base_dir) / mp
+                else:
+                    kw_path = mp
+                try:
+                    env = env.mesh(kw_path, name=t.get("name"), allow=t.get("allow", ()), **kw)
+                except (InvalidInputError, TypeError) as exc:
+                    raise InvalidInputError(f"{what}: {exc}") from None
+                # keep the path as written in the file
+                obs = env.obstacles[:-1] + (dataclasses.replace(env.obstacles[-1],
+                                                                path=str(mp)),)
+                env = Environment(obs)
+                continue
+            try:
+                env = getattr(env, kind)(*kw.values(), name=t.get("name"),
+                                         allow=t.get("allow", ()))
+            except (InvalidInputError, TypeError) as exc:
+                raise InvalidInputError(f"{what}: {exc}") from None
+        return env
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> Environment:
+        """Read the ``[[environment.obstacle]]`` tables of a TOML file (empty if none).
+
+        Raises
+        ------
+        OSError
+            The file cannot be read.
+        InvalidInputError
+            Not TOML, or a bad obstacle; the message starts with the file name.
+        """
+        p = check_path(path, "path")
+        data = read_toml(p, what="environment file")
+        try:
+            return cls.from_mapping(data.get("environment", {}), base_dir=p.parent)
+        except (InvalidInputError, TypeError) as exc:
+            raise InvalidInputError(f"{path}: {exc}") from None

@@ -1,0 +1,267 @@
+"""Compiled capsule-capsule distances (numba), the batch path of ``athenakin.collision``.
+
+The same five candidates as the numpy reference
+(:func:`athenakin.collision._distance.segment_segment`): the four end-point-to-segment
+distances and Lumelsky's interior critical point where the segments are not parallel;
+the smallest wins. No tolerance decides a branch, so parallel, degenerate (zero-length),
+touching and crossing segments are exact. Witness points and the normal fallback
+(``d1 x d2``, a normal of ``d1``, ``+z``) follow the reference too.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+__all__ = ["capsule_pairs", "capsule_pairs_into", "capsule_distances", "capsule_distances_into",
+           "segment_distance"]
+
+#: ``contract``: fused multiply-adds (about 15 % faster, measured). No other fast-math flag:
+#: NaN rows must stay NaN, and the results stay within 1e-13 m of the numpy reference
+#: (tested); every candidate is still a true pair of points on the segments.
+_OPTS: dict[str, Any] = dict(error_model="numpy", cache=True, nogil=True,
+                             fastmath={"contract"})
+#: As :data:`athenakin.collision._distance.NOISE` (the layers keep one value each; a test
+#: checks they agree).
+NOISE = 1e-12
+
+
+@njit(inline="always", **_OPTS)
+def _point_seg(x0, x1, x2, a0, a1, a2, d0, d1, d2, inv_dd):
+    """Closest point a + t d of a segment to x: (squared distance, t).
+
+    ``inv_dd`` is ``1 / (d . d)``, or 0 for a zero-length segment (then ``t = 0``).
+    """
+    t = ((x0 - a0) * d0 + (x1 - a1) * d1 + (x2 - a2) * d2) * inv_dd
+    t = min(max(t, 0.0), 1.0)
+    e0 = x0 - (a0 + t * d0)
+    e1 = x1 - (a1 + t * d1)
+    e2 = x2 - (a2 + t * d2)
+    return e0 * e0 + e1 * e1 + e2 * e2, t
+
+
+@njit(**_OPTS)
+def segment_distance(S, out_c):
+    """Distance of the segments ``S[0]-S[1]`` and ``S[2]-S[3]``; closest points into ``out_c``.
+
+    Parameters
+    ----------
+    S : ndarray, shape (4, 3)
+        ``p1, q1, p2, q2``.
+    out_c : ndarray, shape (2, 3)
+        Receives the closest points on the first and on the second segment.
+    """
+    d, x0, x1, x2, y0, y1, y2 = _seg_seg(S[0, 0], S[0, 1], S[0, 2], S[1, 0], S[1, 1], S[1, 2],
+                                         S[2, 0], S[2, 1], S[2, 2], S[3, 0], S[3, 1], S[3, 2])
+    out_c[0, 0] = x0
+    out_c[0, 1] = x1
+    out_c[0, 2] = x2
+    out_c[1, 0] = y0
+    out_c[1, 1] = y1
+    out_c[1, 2] = y2
+    return d
+
+
+@njit(inline="always", **_OPTS)
+def _seg_seg(p10, p11, p12, q10, q11, q12, p20, p21, p22, q20, q21, q22):
+    """Segment-segment distance and closest points: (dist, x0, x1, x2, y0, y1, y2)."""
+    d10 = q10 - p10
+    d11 = q11 - p11
+    d12 = q12 - p12
+    d20 = q20 - p20
+    d21 = q21 - p21
+    d22 = q22 - p22
+    r0 = p10 - p20
+    r1 = p11 - p21
+    r2 = p12 - p22
+    a = d10 * d10 + d11 * d11 + d12 * d12
+    e = d20 * d20 + d21 * d21 + d22 * d22
+    b = d10 * d20 + d11 * d21 + d12 * d22
+    c = d10 * r0 + d11 * r1 + d12 * r2
+    f = d20 * r0 + d21 * r1 + d22 * r2
+    denom = a * e - b * b
+    inv_a = 1.0 / a if a > 0.0 else 0.0
+    inv_e = 1.0 / e if e > 0.0 else 0.0
+    # the candidates carry only their parameters (s on segment 1, t on segment 2)
+    # candidate 1: p2 against segment 1
+    best, sb = _point_seg(p20, p21, p22, p10, p11, p12, d10, d11, d12, inv_a)
+    tb = 0.0
+    # (selections written as one conditional expression per value: compiled to selects,
+    # not to branches that the varying winner would mispredict)
+    # candidate 2: q2 against segment 1
+    dist, u = _point_seg(q20, q21, q22, p10, p11, p12, d10, d11, d12, inv_a)
+    w = dist < best
+    best = dist if w else best
+    sb = u if w else sb
+    tb = 1.0 if w else tb
+    # candidate 3: p1 against segment 2
+    dist, u = _point_seg(p10, p11, p12, p20, p21, p22, d20, d21, d22, inv_e)
+    w = dist < best
+    best = dist if w else best
+    sb = 0.0 if w else sb
+    tb = u if w else tb
+    # candidate 4: q1 against segment 2
+    dist, u = _point_seg(q10, q11, q12, p20, p21, p22, d20, d21, d22, inv_e)
+    w = dist < best
+    best = dist if w else best
+    sb = 1.0 if w else sb
+    tb = u if w else tb
+    # candidate 5: the interior critical point (not parallel: denom > 0)
+    inv = 1.0 / denom if denom > 0.0 else 0.0
+    s = min(max((b * f - c * e) * inv, 0.0), 1.0)
+    t = min(max((a * f - b * c) * inv, 0.0), 1.0)
+    g0 = (p10 + s * d10) - (p20 + t * d20)
+    g1 = (p11 + s * d11) - (p21 + t * d21)
+    g2 = (p12 + s * d12) - (p22 + t * d22)
+    dist = g0 * g0 + g1 * g1 + g2 * g2
+    w = (denom > 0.0) and (dist < best)
+    best = dist if w else best
+    sb = s if w else sb
+    tb = t if w else tb
+    x0 = p10 + sb * d10
+    x1 = p11 + sb * d11
+    x2 = p12 + sb * d12
+    y0 = p20 + tb * d20
+    y1 = p21 + tb * d21
+    y2 = p22 + tb * d22
+    # candidates compared by squared distance (sqrt is monotonic): one sqrt, of the winner
+    return math.sqrt(best), x0, x1, x2, y0, y1, y2
+
+
+@njit(inline="always", **_OPTS)
+def _normal(n, x0, x1, x2, y0, y1, y2, d10, d11, d12, d20, d21, d22):
+    """Unit normal from x towards y (``n = |y - x|``), with the reference's fallbacks."""
+    tiny = 1e-300
+    v0 = y0 - x0
+    v1 = y1 - x1
+    v2 = y2 - x2
+    # fast path: above 1e-6 m the direction is far above the rounding noise of any
+    # coordinates within the 1e3 m that athenakin accepts
+    if n > 1e-6:
+        inv = 1.0 / n
+        return v0 * inv, v1 * inv, v2 * inv
+    noise = NOISE * (math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+                     + math.sqrt(d10 * d10 + d11 * d11 + d12 * d12)
+                     + math.sqrt(d20 * d20 + d21 * d21 + d22 * d22)) + tiny
+    if n > noise:
+        return v0 / n, v1 / n, v2 / n
+    x0 = d11 * d22 - d12 * d21
+    x1 = d12 * d20 - d10 * d22
+    x2 = d10 * d21 - d11 * d20
+    nx = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+    if nx > tiny and nx > NOISE * math.sqrt(d10 * d10 + d11 * d11 + d12 * d12) * math.sqrt(
+            d20 * d20 + d21 * d21 + d22 * d22):
+        return x0 / nx, x1 / nx, x2 / nx
+    b0, b1, b2 = d10, d11, d12
+    if not math.sqrt(d10 * d10 + d11 * d11 + d12 * d12) > 0.0:
+        b0, b1, b2 = d20, d21, d22
+    # cross with the axis of the smallest |component| (first on ties, as np.argmin)
+    a0, a1, a2 = abs(b0), abs(b1), abs(b2)
+    if a0 <= a1 and a0 <= a2:
+        y0, y1, y2 = 0.0, b2, -b1            # b x e_x
+    elif a1 <= a2:
+        y0, y1, y2 = -b2, 0.0, b0            # b x e_y
+    else:
+        y0, y1, y2 = b1, -b0, 0.0            # b x e_z
+    ny = math.sqrt(y0 * y0 + y1 * y1 + y2 * y2)
+    if ny > tiny:
+        return y0 / ny, y1 / ny, y2 / ny
+    return 0.0, 0.0, 1.0
+
+
+def capsule_pairs(solids, radii, ij):
+    """Signed distances and witness points of capsule pairs over a batch.
+
+    Parameters
+    ----------
+    solids : ndarray, shape (n, n_solids, 2, 3)
+        Segment end points of every solid, per item (C-contiguous float64).
+    radii : ndarray, shape (n_solids,)
+    ij : ndarray of intp, shape (n_pairs, 2)
+        The solids of each pair.
+
+    Returns
+    -------
+    dist : ndarray, shape (n, n_pairs)
+    witness : ndarray, shape (n, n_pairs, 2, 3)
+
+    Notes
+    -----
+    The outputs are allocated here, by numpy, and filled by the compiled loop: numpy
+    asks the kernel for huge pages on large arrays, numba's allocator does not, and
+    first touching 4 KiB pages cost as much as the distances themselves (measured).
+    """
+    n, P = solids.shape[0], ij.shape[0]
+    dist = np.empty((n, P))
+    wit = np.empty((n, P, 2, 3))
+    capsule_pairs_into(solids, radii, ij, dist, wit)
+    return dist, wit
+
+
+def capsule_distances(solids, radii, ij):
+    """Signed distances only (no witness points) of capsule pairs over a batch.
+
+    Same arguments and the same ``dist`` as :func:`capsule_pairs`, exactly; for callers
+    that need no witness points (planners, design studies).
+    """
+    dist = np.empty((solids.shape[0], ij.shape[0]))
+    capsule_distances_into(solids, radii, ij, dist)
+    return dist
+
+
+@njit(**_OPTS)
+def capsule_pairs_into(solids, radii, ij, dist, wit):
+    """Fill ``dist`` (n, P) and ``wit`` (n, P, 2, 3) (views allowed): see :func:`capsule_pairs`.
+
+    Rows with NaN end points give NaN (no exception).
+    """
+    n = solids.shape[0]
+    P = ij.shape[0]
+    for m in range(n):
+        for k in range(P):
+            i = ij[k, 0]
+            j = ij[k, 1]
+            p10 = solids[m, i, 0, 0]
+            p11 = solids[m, i, 0, 1]
+            p12 = solids[m, i, 0, 2]
+            q10 = solids[m, i, 1, 0]
+            q11 = solids[m, i, 1, 1]
+            q12 = solids[m, i, 1, 2]
+            p20 = solids[m, j, 0, 0]
+            p21 = solids[m, j, 0, 1]
+            p22 = solids[m, j, 0, 2]
+            q20 = solids[m, j, 1, 0]
+            q21 = solids[m, j, 1, 1]
+            q22 = solids[m, j, 1, 2]
+            d, x0, x1, x2, y0, y1, y2 = _seg_seg(p10, p11, p12, q10, q11, q12,
+                                                 p20, p21, p22, q20, q21, q22)
+            n0, n1, n2 = _normal(d, x0, x1, x2, y0, y1, y2, q10 - p10, q11 - p11,
+                                 q12 - p12, q20 - p20, q21 - p21, q22 - p22)
+            r1 = radii[i]
+            r2 = radii[j]
+            dist[m, k] = d - r1 - r2
+            wit[m, k, 0, 0] = x0 + r1 * n0
+            wit[m, k, 0, 1] = x1 + r1 * n1
+            wit[m, k, 0, 2] = x2 + r1 * n2
+            wit[m, k, 1, 0] = y0 - r2 * n0
+            wit[m, k, 1, 1] = y1 - r2 * n1
+            wit[m, k, 1, 2] = y2 - r2 * n2
+
+
+@njit(**_OPTS)
+def capsule_distances_into(solids, radii, ij, dist):
+    """Fill ``dist`` (n, P) (a view allowed): see :func:`capsule_distances`."""
+    n = solids.shape[0]
+    P = ij.shape[0]
+    for m in range(n):
+        for k in range(P):
+            i = ij[k, 0]
+            j = ij[k, 1]
+            d = _seg_seg(solids[m, i, 0, 0], solids[m, i, 0, 1], solids[m, i, 0, 2],
+                         solids[m, i, 1, 0], solids[m, i, 1, 1], solids[m, i, 1, 2],
+                         solids[m, j, 0, 0], solids[m, j, 0, 1], solids[m, j, 0, 2],
+                         solids[m, j, 1, 0], solids[m, j, 1, 1], solids[m, j, 1, 2])[0]
+            dist[m, k] = d - radii[i] - radii[j]
