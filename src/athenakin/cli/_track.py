@@ -144,7 +144,7 @@ def _track_recording(args: argparse.Namespace, outs: Outputs) -> int:
     design = load_design(args)
     T = load_rcm(args, design)
     opts = dict(slot=args.slot, jump_m=args.jump_mm * 1e-3, jump_rad=math.radians(args.jump_deg),
-                margins=parse_margins(args.margin))
+                margins=parse_margins(args.margin), **collision_options(args, design))
     if out is None or Path(out).suffix.lower() != ".mcap":
         js = ros.read_joint_states(args.path, topic=args.topic, joints=args.joint_names,
                                    scale=args.scale)

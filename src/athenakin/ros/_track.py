@@ -77,7 +77,23 @@ def tracked_batch(stamps_ns: NDArray[np.int64], log: TrackLog | dict[str, Any]) 
     return TrackedBatch(stamps_ns=np.asarray(stamps_ns, np.int64), q=g("q"),
                         valid=np.asarray(g("valid"), bool), p=g("p"), u=g("u"), O_s=g("O_s"),
                         mode=g("mode"), slot=g("slot"), flags=g("flags"), step=g("step"),
-                        half_chord=g("half_chord"), sin_u2=g("sin_u2"), sin_u4=g("sin_u4"))
+                        half_chord=g("half_chord"), sin_u2=g("sin_u2"), sin_u4=g("sin_u4"),
+                        **_clearance_fields(g))
+
+
+def _clearance_fields(g: Callable[[str], Any]) -> dict[str, Any]:
+    """``clearance_m`` and ``clearance_flags`` of the status topic, when the tracker checked."""
+    from ..motion import TrackFlag
+
+    try:
+        clearance = np.asarray(g("clearance"), float)
+    except (KeyError, AttributeError):
+        return {}
+    if not np.isfinite(clearance).any():
+        return {}
+    mask = int(TrackFlag.COLLISION | TrackFlag.NEAR_COLLISION)
+    return {"clearance_m": clearance,
+            "clearance_flags": np.asarray(g("flags"), np.int64) & mask}
 
 
 class _Stream:
@@ -127,7 +143,7 @@ def _columns(rows: list[Any], q: NDArray[np.float64]) -> dict[str, Any]:
         "O_s": np.full((n, 3), np.nan), "half_chord": np.full(n, np.nan),
         "sin_u2": np.full(n, np.nan), "sin_u4": np.full(n, np.nan),
         "step": np.full(n, np.inf), "flags": np.full(n, _LOST, np.int64),
-        "tip_e": np.full((n, 3), np.nan)}
+        "tip_e": np.full((n, 3), np.nan), "clearance": np.full(n, np.nan)}
     idx = [k for k, r in enumerate(rows) if r is not None]
     if idx:
         sub = [rows[k] for k in idx]
@@ -179,7 +195,8 @@ def _stream(chunks: Iterable[tuple[NDArray[np.int64], NDArray[np.float64]]],
 
 
 def _options(options: dict[str, Any]) -> dict[str, Any]:
-    allowed = {"slot", "jump_m", "jump_rad", "margins"}
+    allowed = {"slot", "jump_m", "jump_rad", "margins", "bodies", "environment",
+               "clearance_margin"}
     bad = set(options) - allowed
     if bad:
         raise TypeError(f"unexpected tracker option(s) {sorted(bad)}; expected some of "
