@@ -154,14 +154,16 @@ README_ROWS = {
 def render_readme_table(res: Results) -> str:
     """The README's table: the public calls, the raw entry, the peers."""
     return (f"Measured {res.stamp} with {res.command} (CPU time of one core; `x base` = "
-            f"how many times faster per pose than the group's pure-Python baseline, within the same run):\n\n"
+            f"how many times faster per pose than the group's pure-Python baseline, within "
+            f"the same run):\n\n"
             + _table(res, CORE_GROUPS, README_ROWS))
 
 
 def render_core_table(res: Results) -> str:
     """Every row of the four core groups."""
     return (f"Measured {res.stamp} with {res.command}. CPU time of this process "
-            f"(`--cpu-time`: on a shared machine the wall time counts other processes' time slices; the `parallel` rows "
+            f"(`--cpu-time`: on a shared machine the wall time counts other processes' time "
+            f"slices; the `parallel` rows "
             f"sum the CPU time of their threads, so they show no gain here). Per pose = time "
             f"per call / batch; `x base` = the group baseline's time per pose over the "
             f"case's:\n\n" + _table(res, CORE_GROUPS))
