@@ -33,7 +33,7 @@ def _ax(ax: Any) -> Any:
 
 #: Axis names of the metric and parameter columns, with units (plot boundary).
 LABELS: dict[str, str] = {
-    "size": "size: sum of link lengths and strokes (m)",
+    "size": "size: total link length and actuator travel (m)",
     "coverage": "coverage (fraction of the task reached)",
     "coverage_mode": "single-mode coverage (fraction of the task)",
     "coverage_plus": "coverage in mode +1 (fraction)",
@@ -100,17 +100,19 @@ def plot_pareto(table: Any, *, front: Any = None, reference: Any = None, x: str 
         clabel = f"log10 {label(color)}"
     else:
         clabel = label(color)
-    if len(X) > 1 and np.ptp(c[np.isfinite(c)], initial=0.0) > 0:
-        sc = ax.scatter(_um(x, X), _um(y, Y), c=c, s=14, cmap="viridis", **kwargs)
+    finite = c[np.isfinite(c)]
+    if len(X) > 1 and finite.size > 1 and finite.max() > finite.min():
+        sc = ax.scatter(_um(x, X), _um(y, Y), c=c, s=14, cmap="viridis", zorder=2, **kwargs)
         ax.figure.colorbar(sc, ax=ax, label=clabel)
     else:
-        ax.scatter(_um(x, X), _um(y, Y), s=14, color="tab:blue", label="design", **kwargs)
+        ax.scatter(_um(x, X), _um(y, Y), s=14, color="tab:blue", label="design", zorder=2,
+                   **kwargs)
     if len(X) > 1:
         sign = [1.0 if SENSE.get(k, "min") == "min" else -1.0 for k in (x, y)]
         on = pareto_mask(np.column_stack([sign[0] * X, sign[1] * Y]))
         order = np.argsort(X[on])
-        ax.plot(_um(x, X[on][order]), _um(y, Y[on][order]), "-o", color="crimson", lw=1.2,
-                ms=3, label=f"Pareto front of these two metrics ({int(on.sum())})")
+        ax.plot(_um(x, X[on][order]), _um(y, Y[on][order]), "-", color="crimson", lw=1.2,
+                zorder=1, label=f"Pareto front of these two metrics ({int(on.sum())})")
     if front is not None and len(front):
         ax.plot(_um(x, front[x]), _um(y, front[y]), "o", mfc="none", mec="0.2", ms=8,
                 label=f"front of the search over {_objectives(front)} ({len(front)})")
