@@ -451,7 +451,7 @@ def plot_instrument_cone(ic: InstrumentCone, *, ax: Any = None, frame: str = "ba
     ax.set_ylabel(f"y_{f} [mm]")
     ax.zaxis.set_rotate_label(False)
     ax.set_zlabel(f"z_{f} [mm]", rotation=90)
-    tidy_3d_axes(ax)
+    tidy_3d_axes(ax, nbins=3)
     ax.view_init(elev=20, azim=30)
     ax.set_box_aspect((1, 1, 1), zoom=0.8)     # room for the tick and axis labels
     ax.set_title("Instrument directions about the RCM")
