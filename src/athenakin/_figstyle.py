@@ -16,7 +16,7 @@ MICRO_M = "µm"
 
 
 def tidy_3d_axes(ax: Any, *, nbins: int = 4, labelsize: float = 7.0,
-                 labelpad: float = 4.0) -> Any:
+                 labelpad: float = 1.0) -> Any:
     """Few tick labels per 3-D axis, none at either end, so that no two labels touch.
 
     Matplotlib puts the last tick label of one 3-D axis and the first of the next one

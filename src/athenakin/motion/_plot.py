@@ -146,9 +146,9 @@ def plot_tip_path(traj: Trajectory, *, ax: Any = None, context: bool = True,
         ctr = 0.5 * (tip.max(axis=0) + tip.min(axis=0))
         ax.scatter(*ctr, s=700, facecolors="none", edgecolors="tab:red", lw=1.2,
                    depthshade=False)
-        ax.text2D(0.02, 0.02, "red ring: the tool-tip path, " + " x ".join(
-            f"{e:.0f}" for e in ext) + " mm (the tip-path view zooms on it)",
-            transform=ax.transAxes, fontsize=8, color="tab:red")
+        ax.text2D(0.98, 0.98, "red ring: the tool-tip path,\n" + " x ".join(
+            f"{e:.0f}" for e in ext) + " mm (the tip-path view\nzooms on it)",
+            transform=ax.transAxes, fontsize=8, color="tab:red", ha="right", va="top")
         ax.set_title("instrument about the RCM (frame E)")
     else:
         for text, w in waypoint_labels(wp):
