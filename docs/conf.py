@@ -92,9 +92,23 @@ def write_api_pages() -> list[str]:
            "The names every example calls, ``import athenakin as ak; ak.forward_kinematics(...)``:",
            "the compiled, dispatched functions (``backend=\"auto\"``), the design and set-up, the",
            "result types and the errors. Each subpackage has its own page.", "",
-           ".. automodule:: athenakin", "   :members:", ""]
-    lazy = [n for n in TOP_NAMES if n not in vars(athenakin) and _importable(n)]
-    top += [f".. autofunction:: athenakin.{n}" for n in lazy] + [""]
+           ".. automodule:: athenakin", "   :no-members:", ""]
+    # the functions first (what the examples call), then the data types, then the errors
+    objs = [(n, getattr(athenakin, n)) for n in TOP_NAMES
+            if not n.startswith("_") and _importable(n)]
+    funcs = [n for n, o in objs if callable(o) and not isinstance(o, type)]
+    errors = [n for n, o in objs if isinstance(o, type) and issubclass(o, BaseException)]
+    classes = [n for n, o in objs if isinstance(o, type) and n not in errors]
+    for heading, group, directive in (("Functions", funcs, "autofunction"),
+                                      ("Data types", classes, "autoclass"),
+                                      ("Errors", errors, "autoexception")):
+        if group:
+            top += [heading, "-" * len(heading), ""]
+            for n in group:
+                top += [f".. {directive}:: athenakin.{n}"]
+                if directive == "autoclass":
+                    top += ["   :members:"]
+                top += [""]
     (out / "athenakin.rst").write_text("\n".join(top))
     names.append("athenakin")
     import importlib
@@ -147,7 +161,7 @@ html_theme_options = {
     "navigation_with_keys": False,
     "show_toc_level": 2,
     "navbar_align": "left",
-    "header_links_before_dropdown": 6,
+    "header_links_before_dropdown": 4,
     "secondary_sidebar_items": ["page-toc"],
 }
 html_sidebars = {"**": ["sidebar-nav-bs"]}
