@@ -218,3 +218,27 @@ def test_path_plot_keeps_waypoint_labels_inside_and_sizes_the_tip_path(fresh) ->
             t.get_text()
     assert any("20 x 20 x 20 mm" in t.get_text() for t in ctx.texts)
     assert _overlaps(_boxes(_tick_labels_3d(zoom), r)) == []
+
+
+@pytest.mark.slow
+def test_regenerate_quick_writes_every_docs_figure(tmp_path) -> None:
+    """docs/figures/regenerate.py --quick writes every figure the pages show (CI)."""
+    import re
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    pytest.importorskip("pandas")
+    pytest.importorskip("ruckig")
+    root = Path(__file__).resolve().parents[1]
+    r = subprocess.run([sys.executable, str(root / "docs/figures/regenerate.py"), "--quick",
+                        "--out", str(tmp_path)], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-3000:]
+    shown = set()
+    for page in [root / "README.md", *sorted((root / "docs").glob("*.md"))]:
+        shown |= set(re.findall(r"\]\((?:docs/)?figures/([\w-]+\.png)\)", page.read_text()))
+    assert len(shown) >= 15, shown
+    screenshots = {"app_forward.png", "app_all_slots.png", "app_inverse.png"}   # optional
+    written = {p.name for p in tmp_path.glob("*.png")}
+    assert shown - screenshots <= written, sorted(shown - screenshots - written)
+    assert all((tmp_path / n).stat().st_size > 10_000 for n in written)
