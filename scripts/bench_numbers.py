@@ -34,10 +34,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 JSON = ROOT / "benchmarks" / "results.json"
 #: The benchmark modules whose rows the pages quote, and the options of the run.
-MODULES = ("cases_core", "cases_symbolic", "cases_calibration", "cases_fast_jacobians")
+MODULES = ("cases_core", "cases_symbolic", "cases_calibration", "cases_fast_jacobians",
+           "cases_motion", "cases_certified")
 RUN_OPTIONS = ("--cpu-time", "--min-time", "0.2", "--repeat", "3")
 #: The pages that may hold regions.
-PAGES = ("README.md", "docs/performance.md", "docs/calibration.md")
+PAGES = ("README.md", "docs/performance.md", "docs/calibration.md", "docs/motion.md",
+         "docs/certified.md")
 _REGION = re.compile(r"(<!-- bench:(?P<key>[\w-]+) -->\n)(?P<body>.*?)(<!-- /bench:(?P=key) -->)",
                      re.S)
 
@@ -259,7 +261,35 @@ def render_targets(res: Results) -> str:
     return "\n".join(lines)
 
 
+def render_motion(res: Results) -> str:
+    """The tracker and planner costs of docs/motion.md."""
+    lines = [f"Measured {res.stamp} (`python benchmarks/run.py --only motion-tracker "
+             f"motion-plan`, CPU time of one core):", "",
+             "| case | per call | per sample |", "| --- | ---: | ---: |"]
+    for g in ("motion-tracker", "motion-plan"):
+        for r in res.group(g):
+            t, n = float(r["seconds"]), int(r["batch"])
+            lines.append(f"| {r['name']} | {fmt_time(t)} | "
+                         f"{fmt_time(t / n) if n > 1 else fmt_time(t)} |")
+    return "\n".join(lines)
+
+
+def render_certified(res: Results) -> str:
+    """The cost of the certified FK against the float FK (docs/certified.md)."""
+    one = res.per_pose("fk-certified", "certified FK, one pose (16 boxes)")
+    batch = res.row("fk-certified", "certified FK, batch of seeded poses")
+    per = float(batch["seconds"]) / int(batch["batch"])
+    fk = res.per_pose("fk-certified", "ak.forward_kinematics, default args (compiled)")
+    return (f"Ball arithmetic runs in Python over python-flint: {fmt_time(one)} for one pose "
+            f"of 16 slots, {fmt_time(per)} per pose in a batch of {batch['batch']} seeded "
+            f"poses, {fmt_ratio(one / fk)}x the compiled float FK of one pose "
+            f"({fmt_time(fk)}); the float FK is the one for a control loop "
+            f"(`python benchmarks/run.py --only fk-certified`, measured {res.stamp}).")
+
+
 RENDER: dict[str, Callable[[Results], str]] = {
+    "motion": render_motion,
+    "certified": render_certified,
     "readme-table": render_readme_table,
     "core-table": render_core_table,
     "speed-summary": render_speed_summary,
