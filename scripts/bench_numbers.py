@@ -28,6 +28,7 @@ import json
 import re
 import subprocess
 import sys
+import textwrap
 from collections.abc import Callable
 from pathlib import Path
 
@@ -37,6 +38,8 @@ JSON = ROOT / "benchmarks" / "results.json"
 MODULES = ("cases_core", "cases_symbolic", "cases_calibration", "cases_fast_jacobians",
            "cases_motion", "cases_certified")
 RUN_OPTIONS = ("--cpu-time", "--min-time", "0.2", "--repeat", "3")
+#: Line width of the generated sentences (that of the pages).
+WIDTH = 96
 #: The pages that may hold regions.
 PAGES = ("README.md", "docs/performance.md", "docs/calibration.md", "docs/motion.md",
          "docs/certified.md")
@@ -310,7 +313,11 @@ def rewrite(text: str, res: Results) -> str:
         key = m.group("key")
         if key not in RENDER:
             raise KeyError(f"unknown benchmark region {key!r} (known: {sorted(RENDER)})")
-        return f"{m.group(1)}{RENDER[key](res)}\n{m.group(4)}"
+        text = RENDER[key](res)
+        if "\n" not in text:     # a sentence: wrapped as the pages are, tables as they are
+            text = textwrap.fill(text, width=WIDTH, break_long_words=False,
+                                 break_on_hyphens=False)
+        return f"{m.group(1)}{text}\n{m.group(4)}"
     return _REGION.sub(one, text)
 
 
