@@ -313,10 +313,12 @@ def rewrite(text: str, res: Results) -> str:
         key = m.group("key")
         if key not in RENDER:
             raise KeyError(f"unknown benchmark region {key!r} (known: {sorted(RENDER)})")
-        text = RENDER[key](res)
-        if "\n" not in text:     # a sentence: wrapped as the pages are, tables as they are
-            text = textwrap.fill(text, width=WIDTH, break_long_words=False,
-                                 break_on_hyphens=False)
+        # prose wrapped as the pages are; tables as they are
+        paragraphs = RENDER[key](res).split("\n\n")
+        text = "\n\n".join(
+            p if p.startswith("|") else textwrap.fill(p, width=WIDTH, break_long_words=False,
+                                                      break_on_hyphens=False)
+            for p in paragraphs)
         return f"{m.group(1)}{text}\n{m.group(4)}"
     return _REGION.sub(one, text)
 
