@@ -491,9 +491,9 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
     fig.legend(handles=legend_handles(show_frames=show_frames), loc="lower center", ncol=4,
                fontsize=10, frameon=False, bbox_to_anchor=(0.5, 0.03))
     fig.text(0.5, 0.004, "rows: assembly mode and sign of p; columns: U-joint branch (U-joint "
-             "+ / -: sign of sin u2, the fork at O_s points along +u2) and spherical-joint branch "
-             "(wrist + / -: sign of sin u4, the purple arcs at the RCM);\none scale in every "
-             f"panel (orthographic view; bar: {SCALE_BAR * MM:.0f} mm)",
+             "+ / -: sign of sin u2, the fork at O_s points along +u2)\nand spherical-joint "
+             "branch (wrist + / -: sign of sin u4, the purple arcs at the RCM); one scale in "
+             f"every panel (orthographic view; bar: {SCALE_BAR * MM:.0f} mm)",
              ha="center", fontsize=11)
     fig.subplots_adjust(left=0.0, right=1.0, bottom=0.09, top=0.925, wspace=0.0, hspace=0.22)
     return fig
