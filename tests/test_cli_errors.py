@@ -179,6 +179,10 @@ def test_a_closed_pipe_ends_quietly():
     err = p.stderr.read().decode()
     p.wait(timeout=120)
     p.stderr.close()
+    # the demo calls the compiled public functions: on a busy machine the first call may
+    # print the one-line notice that numba loads its kernels; nothing else may appear
+    err = "".join(line for line in err.splitlines(keepends=True)
+                  if not line.startswith("athenakin: compiling the numba kernels"))
     assert err == "" and p.returncode != 0
 
 

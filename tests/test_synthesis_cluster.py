@@ -133,11 +133,76 @@ def test_interrupted_study_resumes(where, cluster, task, designs, reference, tmp
 
 def test_unreachable_scheduler_is_a_named_one_line_error(task) -> None:
     t0 = time.monotonic()
-    with pytest.raises(SchedulerUnreachableError, match="no Dask scheduler answers") as exc:
+    with pytest.raises(SchedulerUnreachableError, match="cannot reach a Dask scheduler at") as exc:
         evaluate([ak.Design.default()], task, samples=100, scheduler="tcp://127.0.0.1:9",
                  connect_timeout=1.0, progress=False)
     assert "\n" not in str(exc.value)
     assert time.monotonic() - t0 < 20
+
+
+@pytest.fixture()
+def foreign_server():
+    """A plain TCP server on the loopback: ``talk`` answers nonsense, ``silent`` says nothing."""
+    import socket
+    import threading
+
+    servers = []
+
+    def start(talk: bytes | None) -> str:
+        srv = socket.socket()
+        srv.bind(("127.0.0.1", 0))
+        srv.listen(8)
+        servers.append(srv)
+
+        def serve() -> None:
+            conns = []
+            while True:
+                try:
+                    conn, _ = srv.accept()
+                except OSError:
+                    break
+                conns.append(conn)      # held open until the server closes
+                if talk is not None:
+                    try:
+                        conn.sendall(talk)
+                    except OSError:
+                        pass
+
+        threading.Thread(target=serve, daemon=True).start()
+        return f"tcp://127.0.0.1:{srv.getsockname()[1]}"
+
+    yield start
+    for srv in servers:
+        srv.close()
+
+
+@pytest.mark.parametrize("talk", [b"HTTP/1.1 400 Bad Request\r\n\r\nnonsense" * 8, None],
+                         ids=["nonsense", "silent"])
+def test_foreign_server_is_unreachable_not_a_memory_error(task, foreign_server, talk) -> None:
+    address = foreign_server(talk)
+    t0 = time.monotonic()
+    with pytest.raises(SchedulerUnreachableError,
+                       match=rf"cannot reach a Dask scheduler at '{address}' within 1 s") as exc:
+        evaluate([ak.Design.default()], task, samples=100, scheduler=address,
+                 connect_timeout=1.0, progress=False)
+    assert "\n" not in str(exc.value)
+    assert ("not a Dask scheduler" if talk else "no handshake") in str(exc.value)
+    assert time.monotonic() - t0 < 10
+
+
+def test_cli_foreign_server_one_line(foreign_server, capsys, tmp_path) -> None:
+    from pathlib import Path
+
+    from athenakin.cli import main
+
+    address = foreign_server(b"SSH-2.0-OpenSSH_9.6\r\n" * 4)
+    example = Path(__file__).parents[1] / "examples/synthesis/task_pancreas.toml"
+    rc = main(["synthesize", str(example), "--scheduler", address, "--connect-timeout", "1",
+               "-o", str(tmp_path / "o"), "--no-figures"])
+    err = capsys.readouterr().err.strip()
+    assert rc == 1 and "\n" not in err and "MemoryError" not in err
+    assert f"cannot reach a Dask scheduler at '{address}' within 1 s" in err
+    assert not (tmp_path / "o").exists()
 
 
 def test_cli_on_the_cluster_by_address(cluster, tmp_path, capsys) -> None:

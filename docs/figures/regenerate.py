@@ -1,12 +1,28 @@
-"""Write the figures of docs/figures that come from athenakin's plotting functions.
+"""Write every figure of docs/figures from athenakin's own plotting functions.
 
-Run from the repository root: ``python docs/figures/regenerate.py [NAME ...]``
-(default: all of them). Names: robot_reference, conditioning, instrument_cone,
-robot_solids, instrument_cone_collisions; ``collision_numbers`` prints the numbers of
-docs/motion.md section 7.
+Run from anywhere::
+
+    python docs/figures/regenerate.py                 # all figures, docs resolution
+    python docs/figures/regenerate.py instrument_cone synthesis_pareto
+    python docs/figures/regenerate.py --quick --out /tmp/figs   # coarse grids (CI: a minute)
+    python docs/figures/regenerate.py --list
+
+``app`` (the three screenshots of ``athenakin app``) needs playwright and a Chromium and is
+not part of the default set; it runs ``examples/_app_screenshots.py``. Every other figure
+needs only the ``plot``, ``analysis``, ``calibration``, ``motion`` and ``synthesis`` extras.
+With ``--quick`` the grids and sample counts are coarser (the figures look the same, a little
+blockier); the committed PNGs are written without it.
 """
 
+from __future__ import annotations
+
+import argparse
+import shutil
+import subprocess
 import sys
+import tempfile
+import time
+from collections.abc import Callable
 from pathlib import Path
 
 import matplotlib
@@ -16,60 +32,193 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 import athenakin as ak  # noqa: E402
-from athenakin.analysis import figures as F  # noqa: E402
 
-OUT = Path(__file__).resolve().parent
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
 D = ak.Design.default()
 T = ak.default_rcm_frame(D)
 
 
-def robot_reference() -> None:
-    """README: ``athenakin view -o robot.png`` (reference configuration, slot 0)."""
+class Settings:
+    """Where to write and how fine the grids are."""
+
+    def __init__(self, out: Path, quick: bool) -> None:
+        self.out = out
+        self.quick = quick
+
+    def res(self, full: int, quick: int) -> int:
+        """A grid resolution or sample count: ``full``, or ``quick`` with ``--quick``."""
+        return quick if self.quick else full
+
+
+def _save(fig: object, path: Path, dpi: int) -> None:
+    fig.savefig(path, dpi=dpi)  # type: ignore[attr-defined]
+    plt.close(fig)  # type: ignore[arg-type]
+
+
+def robot_reference(s: Settings) -> list[Path]:
+    """README: ``athenakin view`` (reference configuration, slot 0)."""
     from athenakin.plot import save_view
 
-    save_view(OUT / "robot_reference.png", dpi=120)
+    path = s.out / "robot_reference.png"
+    save_view(path, dpi=120)
+    return [path]
 
 
-def conditioning() -> None:
+def fk_solutions(s: Settings) -> list[Path]:
+    """docs/visualization.md: ``athenakin view --all`` (the 16 solutions side by side)."""
+    from athenakin.plot import plot_fk_solutions
+
+    path = s.out / "fk_solutions.png"
+    _save(plot_fk_solutions(), path, dpi=72)
+    return [path]
+
+
+def singularity_loci(s: Settings) -> list[Path]:
+    """docs/singularities.md, Figure 1."""
+    from athenakin.analysis import actuator_map
+    from athenakin.analysis import figures as F
+
+    path = s.out / "singularity_loci.png"
+    am = actuator_map(D, resolution=s.res(241, 61))
+    _save(F.figure_singularities(D, am=am), path, dpi=80)
+    return [path]
+
+
+def workspace_os(s: Settings) -> list[Path]:
+    """docs/singularities.md, Figure 2."""
+    from athenakin.analysis import figures as F
+    from athenakin.analysis import point_workspace
+
+    path = s.out / "workspace_os.png"
+    _save(F.figure_workspace(point_workspace(D, resolution=s.res(81, 31))), path, dpi=80)
+    return [path]
+
+
+def conditioning(s: Settings) -> list[Path]:
     """docs/singularities.md, Figure 3."""
     from athenakin.analysis import actuator_map, point_workspace, tool_tip_workspace
+    from athenakin.analysis import figures as F
 
-    fig = F.figure_conditioning(actuator_map(D, resolution=161),
-                                point_workspace(D, resolution=81),
-                                tool_tip_workspace(T, D, resolution=81))
-    fig.savefig(OUT / "conditioning.png", dpi=80)
-    plt.close(fig)
+    path = s.out / "conditioning.png"
+    fig = F.figure_conditioning(actuator_map(D, resolution=s.res(161, 51)),
+                                point_workspace(D, resolution=s.res(81, 31)),
+                                tool_tip_workspace(T, D, resolution=s.res(81, 31)))
+    _save(fig, path, dpi=80)
+    return [path]
 
 
-def instrument_cone() -> None:
+def instrument_cone(s: Settings) -> list[Path]:
     """docs/singularities.md, Figure 4."""
+    from athenakin.analysis import figures as F
     from athenakin.analysis import instrument_cone as cone
 
-    fig = F.figure_instrument_cone(cone(T, D), reference_q=ak.robot.REFERENCE_Q)
-    fig.savefig(OUT / "instrument_cone.png", dpi=80)
-    plt.close(fig)
+    path = s.out / "instrument_cone.png"
+    ic = cone(T, D, resolution=(37, 19, 24)) if s.quick else cone(T, D)
+    _save(F.figure_instrument_cone(ic, reference_q=ak.robot.REFERENCE_Q), path, dpi=80)
+    return [path]
 
 
-def robot_solids() -> None:
+def tool_tip(s: Settings) -> list[Path]:
+    """docs/singularities.md, Figure 5."""
+    from athenakin.analysis import figures as F
+    from athenakin.analysis import tool_tip_workspace
+
+    path = s.out / "tool_tip.png"
+    _save(F.figure_tool_tip(tool_tip_workspace(T, D, resolution=s.res(81, 31))), path, dpi=80)
+    return [path]
+
+
+def measure_scaling(s: Settings) -> list[Path]:
+    """docs/singularities.md, Figure 0."""
+    from athenakin.analysis import figures as F
+
+    path = s.out / "measure_scaling.png"
+    _save(F.figure_measure_scaling(D, n=s.res(45, 15)), path, dpi=80)
+    return [path]
+
+
+def calibration(s: Settings) -> list[Path]:
+    """docs/calibration.md: the report figures of the worked example."""
+    from athenakin.cli import main
+
+    with tempfile.TemporaryDirectory() as tmp:
+        rc = main(["calibrate", str(ROOT / "examples/calibration/measurements.csv"), "-o",
+                   str(Path(tmp) / "calibrated.toml"), "--params", "default", "offsets",
+                   "--loss", "soft_l1", "--encoder-resolution", "10e-6"])
+        if rc != 0:
+            raise RuntimeError(f"athenakin calibrate failed (exit {rc})")
+        out = []
+        for name in ("residuals", "parameters", "tip_error"):
+            dst = s.out / f"calibration_{name}.png"
+            shutil.copyfile(Path(tmp) / f"calibrated_report_{name}.png", dst)
+            out.append(dst)
+    return out
+
+
+def motion_path3d(s: Settings) -> list[Path]:
+    """docs/motion.md: ``athenakin plan examples/motion/tip_square.csv`` (3-D path)."""
+    from athenakin.cli import main
+
+    with tempfile.TemporaryDirectory() as tmp:
+        rc = main(["plan", str(ROOT / "examples/motion/tip_square.csv"), "-o",
+                   str(Path(tmp) / "square.csv"), "--j-max", "5"])
+        if rc != 0:
+            raise RuntimeError(f"athenakin plan failed (exit {rc})")
+        dst = s.out / "motion_path3d.png"
+        shutil.copyfile(Path(tmp) / "square_path3d.png", dst)
+    return [dst]
+
+
+def synthesis_pareto(s: Settings) -> list[Path]:
+    """docs/synthesis.md: the NSGA-II search of the example task, in two of its objectives."""
+    from athenakin.synthesis import Task, bounds_from_toml, example_task_path, optimize
+    from athenakin.synthesis.figures import plot_pareto
+
+    task = Task.from_toml(example_task_path())
+    res = optimize(task, bounds=bounds_from_toml(example_task_path()),
+                   samples=s.res(20_000, 2_000), population=s.res(24, 12),
+                   generations=s.res(8, 3), seed=0, progress=False)
+    fig, ax = plt.subplots(figsize=(7.2, 5.0), layout="constrained")
+    plot_pareto(res.table, front=res.front, reference=res.table.iloc[0], ax=ax)
+    path = s.out / "synthesis_pareto.png"
+    _save(fig, path, dpi=100)
+    return [path]
+
+
+def app(s: Settings) -> list[Path]:
+    """docs/visualization.md: screenshots of ``athenakin app`` (playwright, Chromium)."""
+    subprocess.run([sys.executable, str(ROOT / "examples/_app_screenshots.py")], check=True)
+    names = ("app_forward.png", "app_all_slots.png", "app_inverse.png")
+    if s.out != HERE:
+        for n in names:
+            shutil.copyfile(HERE / n, s.out / n)
+    return [s.out / n for n in names]
+
+
+def robot_solids(s: Settings) -> list[Path]:
     """docs/visualization.md: the bodies as capsules, the closest pair coloured (issue 20)."""
     from athenakin.plot import plot_robot
 
+    path = s.out / "robot_solids.png"
     ax = plot_robot(bodies=True)
-    ax.figure.savefig(OUT / "robot_solids.png", dpi=100)
-    plt.close(ax.figure)
+    _save(ax.figure, path, dpi=100)
+    return [path]
 
 
-def instrument_cone_collisions() -> None:
+def instrument_cone_collisions(s: Settings) -> list[Path]:
     """docs/motion.md, section 7: the cone with the directions a collision blocks."""
+    from athenakin.analysis import figures as F
     from athenakin.analysis import instrument_cone as cone
 
-    fig = F.figure_instrument_cone(cone(T, D, clearance_margin=0.0),
-                                   reference_q=ak.robot.REFERENCE_Q)
-    fig.savefig(OUT / "instrument_cone_collisions.png", dpi=80)
-    plt.close(fig)
+    path = s.out / "instrument_cone_collisions.png"
+    kw = {"resolution": (37, 19, 24)} if s.quick else {}
+    ic = cone(T, D, clearance_margin=0.0, **kw)
+    _save(F.figure_instrument_cone(ic, reference_q=ak.robot.REFERENCE_Q), path, dpi=80)
+    return [path]
 
 
-def collision_numbers() -> None:
+def collision_numbers(s: Settings) -> list[Path]:
     """docs/motion.md, section 7: the numbers quoted there (printed, no figure)."""
     import collections
 
@@ -94,12 +243,55 @@ def collision_numbers() -> None:
     print(f"colliding (direction, insertion) samples: {bad.sum()} of {ic.reachable.sum()}")
     for name, n in share.most_common(6):
         print(f"  closest pair {name}: {n}")
+    return []
+
+
+FIGURES: dict[str, Callable[[Settings], list[Path]]] = {
+    "robot_reference": robot_reference,
+    "fk_solutions": fk_solutions,
+    "measure_scaling": measure_scaling,
+    "singularity_loci": singularity_loci,
+    "workspace_os": workspace_os,
+    "conditioning": conditioning,
+    "instrument_cone": instrument_cone,
+    "tool_tip": tool_tip,
+    "calibration": calibration,
+    "motion_path3d": motion_path3d,
+    "synthesis_pareto": synthesis_pareto,
+    "robot_solids": robot_solids,
+    "instrument_cone_collisions": instrument_cone_collisions,
+}
+#: Figures written only when named (they need more than the extras).
+OPTIONAL = {"app": app, "collision_numbers": collision_numbers}
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Write the named figures (default: all but the optional ones)."""
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("names", nargs="*", metavar="NAME",
+                    help=f"figures to write (default: all of {', '.join(FIGURES)}; also "
+                         f"{', '.join(OPTIONAL)})")
+    ap.add_argument("--quick", action="store_true", help="coarse grids (CI)")
+    ap.add_argument("--out", type=Path, default=HERE, help="folder (default docs/figures)")
+    ap.add_argument("--list", action="store_true", help="list the figure names and stop")
+    args = ap.parse_args(argv)
+    known = {**FIGURES, **OPTIONAL}
+    if args.list:
+        for name, fn in known.items():
+            print(f"{name:18s} {(fn.__doc__ or '').splitlines()[0]}")
+        return 0
+    unknown = [n for n in args.names if n not in known]
+    if unknown:
+        ap.error(f"unknown figure(s) {unknown}; known: {sorted(known)}")
+    args.out.mkdir(parents=True, exist_ok=True)
+    settings = Settings(args.out, args.quick)
+    for name in args.names or list(FIGURES):
+        t0 = time.perf_counter()
+        paths = known[name](settings)
+        print(f"{name}: wrote {', '.join(p.name for p in paths)} "
+              f"({time.perf_counter() - t0:.1f} s)", flush=True)
+    return 0
 
 
 if __name__ == "__main__":
-    names = sys.argv[1:] or ["robot_reference", "conditioning", "instrument_cone",
-                             "robot_solids", "instrument_cone_collisions"]
-    for name in names:
-        globals()[name]()
-        if name != "collision_numbers":
-            print(f"wrote {OUT / name}.png")
+    sys.exit(main())

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._figstyle import tidy_3d_axes
 from ..design import Design, resolve_design
 from ._singularities import singularity_loci
 from ._workspace import ActuatorMap, InstrumentCone, PointWorkspace, ToolTipWorkspace
@@ -170,6 +171,7 @@ def plot_actuator_space_3d(design: Design | None = None, *, n: int = 41, ax: Any
     ax.set_xlabel("q1 [mm]")
     ax.set_ylabel("q2 [mm]")
     ax.set_zlabel("q3 [mm]")
+    tidy_3d_axes(ax)
     ax.set_title("Singular surfaces in the stroke box")
     from matplotlib.patches import Patch
 
@@ -306,6 +308,7 @@ def plot_workspace_3d(pw: PointWorkspace, *, ax: Any = None, max_points: int = 6
     ax.set_xlabel("x_b [mm]")
     ax.set_ylabel("y_b [mm]")
     ax.set_zlabel("z_b [mm]")
+    tidy_3d_axes(ax, nbins=3)
     ax.legend(loc="upper left", fontsize=7, markerscale=4)
     ax.set_title("Reachable O_s (boundary voxels)")
     try:
@@ -494,10 +497,7 @@ def plot_instrument_cone(ic: InstrumentCone, *, ax: Any = None, frame: str = "ba
     ax.set_ylabel(f"y_{f} [mm]")
     ax.zaxis.set_rotate_label(False)
     ax.set_zlabel(f"z_{f} [mm]", rotation=90)
-    from matplotlib.ticker import MaxNLocator
-
-    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
-        axis.set_major_locator(MaxNLocator(4))
+    tidy_3d_axes(ax, nbins=3)
     ax.view_init(elev=20, azim=30)
     ax.set_box_aspect((1, 1, 1), zoom=0.8)     # room for the tick and axis labels
     ax.set_title("Instrument directions about the RCM")

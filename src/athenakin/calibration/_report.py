@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from .._figstyle import MICRO_M
 from .._validation import check_axes, check_instance, check_path
 from ._accuracy import TipErrorMap, tip_error_map
 from ._model import PARAMETER_UNITS
@@ -38,7 +39,7 @@ def _axes(ax: Any, **kw: Any) -> Any:
 
 
 def plot_residuals(result: CalibrationResult, *, ax: Any = None) -> Any:
-    """Tip residual per row (norm, um) before and after calibration; outliers marked.
+    """Tip residual per row (norm, µm) before and after calibration; outliers marked.
 
     Returns
     -------
@@ -50,14 +51,16 @@ def plot_residuals(result: CalibrationResult, *, ax: Any = None) -> Any:
     rows = np.arange(result.excluded.size)
     b = np.linalg.norm(result.residuals_before[:, :3], axis=1) * _UM
     a = np.linalg.norm(result.residuals_after[:, :3], axis=1) * _UM
-    ax.plot(rows, b, "o", ms=3, color="0.6", label=f"before (RMS {result.rms_before * _UM:.1f} um)")
-    ax.plot(rows, a, "o", ms=3, color="C0", label=f"after (RMS {result.rms_after * _UM:.1f} um)")
+    ax.plot(rows, b, "o", ms=3, color="0.6",
+            label=f"before (RMS {result.rms_before * _UM:.1f} {MICRO_M})")
+    ax.plot(rows, a, "o", ms=3, color="C0",
+            label=f"after (RMS {result.rms_after * _UM:.1f} {MICRO_M})")
     if np.any(result.outliers):
         ax.plot(rows[result.outliers], a[result.outliers], "x", color="C3", ms=8,
                 label="flagged outlier")
     ax.set_yscale("log")
     ax.set_xlabel("measurement row")
-    ax.set_ylabel("|tip residual| (um)")
+    ax.set_ylabel(f"|tip residual| ({MICRO_M})")
     ax.set_title("Residuals before and after calibration")
     ax.legend(fontsize=8)
     return ax
@@ -66,7 +69,7 @@ def plot_residuals(result: CalibrationResult, *, ax: Any = None) -> Any:
 def plot_parameter_confidence(result: CalibrationResult, *, ax: Any = None) -> Any:
     """Change of each estimated parameter from nominal with its 3-sigma interval.
 
-    Lengths in um, registration angles in urad.
+    Lengths in µm, registration angles in µrad.
 
     Returns
     -------
@@ -81,16 +84,21 @@ def plot_parameter_confidence(result: CalibrationResult, *, ax: Any = None) -> A
     ax.errorbar(delta, y, xerr=err, fmt="o", color="C0", capsize=3)
     ax.axvline(0.0, color="0.5", lw=0.8)
     ax.set_yticks(y)
-    ax.set_yticklabels([f"{n} ({'urad' if PARAMETER_UNITS[n] == 'rad' else 'um'})"
+    ax.set_yticklabels([f"{n} ({'µrad' if PARAMETER_UNITS[n] == 'rad' else MICRO_M})"
                         for n in result.names], fontsize=8)
     ax.invert_yaxis()
-    ax.set_xlabel("estimate - nominal (um or urad), bars: +/- 3 sigma")
+    ax.set_xlabel(f"estimate − nominal ({MICRO_M} or µrad), bars: ±3σ")
     ax.set_title("Parameter estimates and confidence")
     return ax
 
 
 def plot_tip_error_map(m: TipErrorMap, *, ax: Any = None) -> Any:
-    """Expected RMS tip error (um) over the instrument cone (polar plot: azimuth, polar angle).
+    """Expected RMS tip error (µm) over the instrument cone, as a polar chart.
+
+    The angle of the chart is the azimuth of the instrument direction about ``z_e`` (deg),
+    its radius the polar angle of the direction from ``z_e`` (deg); both axes are named on
+    the chart. The title gives the tip depth and, when the map includes it, the encoder
+    resolution (a map without encoder noise says "calibration only").
 
     Returns
     -------
@@ -100,13 +108,25 @@ def plot_tip_error_map(m: TipErrorMap, *, ax: Any = None) -> Any:
     check_axes(ax)
     if ax is None:
         plt = _pyplot()
-        _, ax = plt.subplots(figsize=(6, 5), subplot_kw={"projection": "polar"})
+        _, ax = plt.subplots(figsize=(6.4, 5.6), subplot_kw={"projection": "polar"},
+                             layout="constrained")
     A, B = np.meshgrid(m.azimuth, np.degrees(m.polar), indexing="ij")
     pc = ax.pcolormesh(A, B, np.ma.masked_invalid(m.rms * _UM), shading="nearest",
                        cmap="viridis")
-    ax.figure.colorbar(pc, ax=ax, label="expected RMS tip error (um)")
-    ax.set_title(f"Tip error over the instrument cone (depth {m.depth * 1e3:.0f} mm, "
-                 f"encoder {m.encoder_resolution * _UM:.1f} um)", fontsize=9)
+    ax.figure.colorbar(pc, ax=ax, pad=0.12, label=f"expected RMS tip error ({MICRO_M})")
+    ax.set_xticks(np.radians(np.arange(0, 360, 45)))
+    ax.set_xticklabels([f"{a}°" for a in range(0, 360, 45)], fontsize=8)
+    ax.set_rlim(0.0, 180.0)
+    ax.set_rticks([45.0, 90.0, 135.0, 180.0])
+    ax.set_yticklabels(["45°", "90°", "135°", "180°"], fontsize=7, color="0.3")
+    ax.set_rlabel_position(247.5)
+    # the axis names: the angle is the azimuth, the radius the polar angle
+    ax.set_xlabel("angle: azimuth of the direction about z_e\n"
+                  "radius: polar angle of the direction from z_e", fontsize=8)
+    source = (f"encoders {m.encoder_resolution * _UM:g} {MICRO_M}"
+              if m.encoder_resolution > 0 else "calibration only, no encoder noise")
+    ax.set_title(f"Expected tip error over the instrument cone\n(tip {m.depth * 1e3:.0f} mm "
+                 f"beyond the RCM; {source})", fontsize=9)
     return ax
 
 
@@ -138,18 +158,18 @@ def write_report(result: CalibrationResult, path: str | Path, *, figures: bool =
              f"Measurements in the **{result.frame}** frame; "
              f"{int(result.excluded.size)} rows, {int(np.sum(result.excluded))} excluded, "
              f"{int(np.sum(result.outliers))} flagged as outliers.", "",
-             f"RMS tip residual: **{result.rms_before * _UM:.2f} um** before, "
-             f"**{result.rms_after * _UM:.2f} um** after; noise estimate sigma = "
-             f"{result.sigma * _UM:.2f} um per coordinate.", "",
+             f"RMS tip residual: **{result.rms_before * _UM:.2f} {MICRO_M}** before, "
+             f"**{result.rms_after * _UM:.2f} {MICRO_M}** after; noise estimate sigma = "
+             f"{result.sigma * _UM:.2f} {MICRO_M} per coordinate.", "",
              f"Identifiability: {len(result.names)} parameters, condition "
              f"{result.identifiability.condition:.3g} (scaled columns).", "",
              "| parameter | nominal | estimate | change | std (1 sigma) |",
              "|---|---:|---:|---:|---:|"]
     for n, a, b, s in zip(result.names, result.nominal, result.estimates, result.std, strict=True):
-        u, f = ("urad", 1e6) if PARAMETER_UNITS[n] == "rad" else ("um", 1e6)
+        u, f = ("µrad", 1e6) if PARAMETER_UNITS[n] == "rad" else (MICRO_M, 1e6)
         lines.append(f"| {n} | {a:.9g} | {b:.9g} | {(b - a) * f:+.2f} {u} | {s * f:.2f} {u} |")
     lines += ["", f"Actuator offsets (q_true = q_reading + offset): "
-              f"{np.array2string(result.q_offset * _UM, precision=2)} um.",
+              f"{np.array2string(result.q_offset * _UM, precision=2)} {MICRO_M}.",
               f"RCM point: {np.array2string(result.rcm, precision=6)} m."]
     if result.T_t_b is not None:
         lines.append("Tracker registration T_t_b: `" + np.array2string(
@@ -168,14 +188,16 @@ def write_report(result: CalibrationResult, path: str | Path, *, figures: bool =
                                result, encoder_resolution=encoder_resolution)))):
             ax = fn()
             fig = ax.figure
-            fig.tight_layout()
+            if fig.get_layout_engine() is None:
+                fig.tight_layout()
             png = Path(f"{stem}_{suffix}.png")
             fig.savefig(png, dpi=110)
             plt.close(fig)
             out.append(png)
             lines += ["", f"![{suffix}]({png.name})"]
     text = "\n".join(lines) + "\n"
-    path.write_text(_html(text, title) if path.suffix.lower() in (".html", ".htm") else text)
+    path.write_text(_html(text, title) if path.suffix.lower() in (".html", ".htm") else text,
+                    encoding="utf-8")
     return out
 
 

@@ -6,7 +6,8 @@ import argparse
 
 import numpy as np
 
-from ..robot import REFERENCE_Q, forward_kinematics, inverse_kinematics
+from .._dispatch import forward_kinematics, inverse_kinematics
+from ..robot import REFERENCE_Q
 from ._common import (
     add_design_option,
     add_json_option,

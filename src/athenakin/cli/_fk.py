@@ -6,10 +6,11 @@ import argparse
 
 import numpy as np
 
+from .._dispatch import forward_kinematics
 from ..certified import CertifiedFK, CertStatus
 from ..design import Design
 from ..errors import Reason
-from ..robot import FKSolution, forward_kinematics
+from ..robot import FKSolution
 from ._common import (
     add_design_option,
     add_json_option,
@@ -111,8 +112,8 @@ def run(args: argparse.Namespace) -> int:
     T = load_rcm(args, design)
     if args.certify:
         return _run_certified(args, design, T)
-    # one pose per process: the numpy reference answers in well under a millisecond, where
-    # the compiled default would first import numba and load its kernels (about a second)
+    # the public function (backend="auto", as every user's call): the CLI shows what the
+    # library gives; the first compiled call of a process loads the kernels from numba's cache
     sol = forward_kinematics(np.array(args.q), T, design)
     if args.json:
         print(dump_json({"q_m": args.q, "T_b_e": T, **fk_json(sol)}))

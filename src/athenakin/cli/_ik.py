@@ -6,7 +6,8 @@ import argparse
 
 import numpy as np
 
-from ..robot import direction_from_angles, inverse_kinematics, q_from_instrument, q_from_tool_tip
+from .._dispatch import inverse_kinematics, q_from_instrument, q_from_tool_tip
+from ..robot import direction_from_angles
 from ._common import (
     add_design_option,
     add_json_option,

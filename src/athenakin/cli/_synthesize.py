@@ -21,7 +21,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                     "directions, tip depths): the reference design alone, N random designs "
                     "within the [bounds] of the file (--designs), or an NSGA-II search "
                     "(--optimize). Writes the table as Parquet (resumable) and figures.")
-    p.add_argument("task", metavar="TASK.toml", help="task file ([task], optional [bounds])")
+    p.add_argument("task", metavar="TASK.toml", nargs="?", default=None,
+                   help="task file ([task], optional [bounds]); default: the example task "
+                        "shipped with athenakin (athenakin.synthesis.example_task_path())")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--designs", type=int, default=0, metavar="N",
                    help="N random designs within the bounds, after the reference design")
@@ -97,9 +99,11 @@ def _check_options(args: argparse.Namespace) -> None:
 def run(args: argparse.Namespace) -> int:
     """Execute ``synthesize``."""
     from .. import Design
-    from ..synthesis import Task, bounds_from_toml, default_bounds
+    from ..synthesis import Task, bounds_from_toml, default_bounds, example_task_path
 
     _check_options(args)
+    if args.task is None:
+        args.task = str(example_task_path())
     task = Task.from_toml(args.task)
     ref = Design.default()
     bounds = bounds_from_toml(args.task) or default_bounds(ref)

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from .._figstyle import tidy_3d_axes
 from .._validation import check_axes, check_count, check_instance, check_path
 from ._plan import Trajectory
 from ._safety import MEASURE_NAMES
@@ -140,18 +141,27 @@ def plot_tip_path(traj: Trajectory, *, ax: Any = None, context: bool = True,
         ax.plot(O_e[:, 0], O_e[:, 1], O_e[:, 2], color="tab:blue", lw=1.0, label="O_s")
         ax.scatter([0], [0], [0], color="tab:purple", s=60, marker="*", label="RCM")
         pts = np.concatenate([tip, O_e, np.zeros((1, 3))])
+        # at this scale the tip path is a few pixels: ring it and give its size
+        ext = np.ptp(tip, axis=0)
+        ctr = 0.5 * (tip.max(axis=0) + tip.min(axis=0))
+        ax.scatter(*ctr, s=700, facecolors="none", edgecolors="tab:red", lw=1.2,
+                   depthshade=False)
+        ax.text2D(0.98, 0.98, "red ring: the tool-tip path,\n" + " x ".join(
+            f"{e:.0f}" for e in ext) + " mm (the tip-path view\nzooms on it)",
+            transform=ax.transAxes, fontsize=8, color="tab:red", ha="right", va="top")
         ax.set_title("instrument about the RCM (frame E)")
     else:
         for text, w in waypoint_labels(wp):
             ax.text(w[0], w[1], w[2], f" {text}", fontsize=8)
         ax.set_title("tool-tip path (frame E; numbers: waypoints)")
+    # a cube around what is drawn, with a margin that keeps the labels of the outermost
+    # waypoints inside the box
     c, r = (pts.max(0) + pts.min(0)) / 2, max((pts.max(0) - pts.min(0)).max() / 2, 1e-3)
+    r *= 1.12
     for setter, ci in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), c, strict=True):
         setter(ci - r, ci + r)
-    from matplotlib.ticker import MaxNLocator
-
-    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
-        axis.set_major_locator(MaxNLocator(5))
+    ax.set_box_aspect((1, 1, 1))
+    tidy_3d_axes(ax, nbins=5, labelsize=8)
     ax.set_xlabel("x_e [mm]")
     ax.set_ylabel("y_e [mm]")
     ax.set_zlabel("z_e [mm]")

@@ -68,8 +68,13 @@ def _triad(ax: Axes, T: NDArray[np.float64], length: float) -> None:
         _line(ax, o, o + length * T[:3, i], color=COLORS[c], lw=1.6, solid_capstyle="round")
 
 
-def legend_handles(*, show_frames: bool = True, show_circles: bool = True) -> list[Any]:
-    """Proxy artists naming the colour of every part (for ``ax.legend(handles=...)``)."""
+def legend_handles(*, show_frames: bool = True, show_circles: bool = True,
+                   show_other_mode: bool = True) -> list[Any]:
+    """Proxy artists naming the colour of every part (for ``ax.legend(handles=...)``).
+
+    ``show_other_mode`` (with ``show_circles``) adds the open circle that marks ``O_i`` of
+    the other assembly mode (the second intersection of ``k1`` and ``k2``).
+    """
     from matplotlib.lines import Line2D
 
     h = [Line2D([], [], color=COLORS["rail"], lw=4, marker="s", ms=6,
@@ -84,6 +89,9 @@ def legend_handles(*, show_frames: bool = True, show_circles: bool = True) -> li
     if show_circles:
         h.append(Line2D([], [], color=COLORS["circle_k1"], lw=0.9, ls="--",
                         label="circles k1 (blue), k2 (orange)"))
+        if show_other_mode:
+            h.append(Line2D([], [], ls="none", marker="o", ms=5.5, mfc="none",
+                            mec=COLORS["joint"], label="O_i of the other assembly mode"))
     if show_frames:
         h += [Line2D([], [], color=COLORS[c], lw=1.6, label=f"frame axis {c}") for c in "xyz"]
     return h
@@ -403,8 +411,10 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     ax.set_title(title, fontsize=9)
     boxes = []
     if show_legend:
+        other = g.intersections[1 if g.mode > 0 else 0]
         leg = ax.legend(handles=legend_handles(show_frames=show_frames,
-                                               show_circles=show_circles)
+                                               show_circles=show_circles,
+                                               show_other_mode=bool(np.all(np.isfinite(other))))
                         + list(legend_extra or []),
                         loc="upper left", fontsize=6.5, framealpha=0.9, borderaxespad=0.2)
         ax.apply_aspect()
@@ -463,7 +473,7 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
     else:
         lo, hi = -np.ones(3), np.ones(3)
     if fig is None:
-        fig = plt.figure(figsize=(16, 16))
+        fig = plt.figure(figsize=(16, 17))
     for k in range(16):
         ax = fig.add_subplot(4, 4, k + 1, projection="3d")
         if k in geoms:
@@ -471,32 +481,69 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
             plot_robot(geometry=g, ax=ax, show_frames=show_frames, show_labels=False,
                        show_legend=False, limits=(lo, hi), view=view, title="",
                        frame_length=0.08, joint_scale=2.0)
+            ax.set_proj_type("ortho")           # one scale everywhere: the scale bar holds
             ax.set_box_aspect(tuple(hi - lo), zoom=1.45)
             ax.set_axis_off()                   # no panes: the robot fills the panel
-            ax.set_title(_panel_title(g), fontsize=10.5, y=0.99, va="top")
+            _scale_bar(ax, lo, hi, view, SCALE_BAR)
+            # the title sits above the drawing, on a white band that lines may pass behind
+            heading = ax.set_title(_panel_title(g), fontsize=GRID_TITLE_SIZE, y=1.02,
+                                   va="bottom", linespacing=1.15,
+                                   bbox={"facecolor": "white", "edgecolor": "none",
+                                         "alpha": 0.92, "pad": 1.5})
+            heading.set_zorder(1000)
         else:
             ax.set_axis_off()
             ax.text2D(0.5, 0.5, f"slot {k}\nno solution:\n{Reason(int(sol.reason[k])).name}",
                       ha="center", va="center", transform=ax.transAxes, fontsize=10)
     qmm = ", ".join(f"{MM * v:.0f}" for v in q)
     fig.suptitle(title or f"ATHENA: the {len(geoms)} forward-kinematics solutions of "
-                 f"q = ({qmm}) mm", fontsize=15)
+                 f"q = ({qmm}) mm", fontsize=18)
     fig.legend(handles=legend_handles(show_frames=show_frames), loc="lower center", ncol=4,
-               fontsize=10, frameon=False, bbox_to_anchor=(0.5, 0.022))
-    fig.text(0.5, 0.004, "rows: assembly mode and sign of p; columns: U-joint branch (sign of "
-             "sin u2: the fork at O_s points along +u2) and spherical-joint branch (sign of "
-             "sin u4: the purple arcs at the RCM); one axis box (mm) in every panel",
-             ha="center", fontsize=10)
-    fig.subplots_adjust(left=0.0, right=1.0, bottom=0.065, top=0.955, wspace=0.0, hspace=0.0)
+               fontsize=10, frameon=False, bbox_to_anchor=(0.5, 0.03))
+    fig.text(0.5, 0.004, "rows: assembly mode and sign of p; columns: U-joint branch (U-joint "
+             "+ / -: sign of sin u2, the fork at O_s points along +u2)\nand spherical-joint "
+             "branch (wrist + / -: sign of sin u4, the purple arcs at the RCM); one scale in "
+             f"every panel (orthographic view; bar: {SCALE_BAR * MM:.0f} mm)",
+             ha="center", fontsize=11)
+    fig.subplots_adjust(left=0.0, right=1.0, bottom=0.09, top=0.925, wspace=0.0, hspace=0.22)
     return fig
+
+
+#: Length of the scale bar of each panel of :func:`plot_fk_solutions`, m.
+SCALE_BAR = 0.1
+#: Font size of the panel titles of :func:`plot_fk_solutions`, pt.
+GRID_TITLE_SIZE = 14.0
+
+
+def _scale_bar(ax: Axes, lo: NDArray[np.float64], hi: NDArray[np.float64],
+               view: tuple[float, float], length: float) -> None:
+    """A bar of ``length`` m parallel to the screen, at the lower left of the axis box.
+
+    With an orthographic projection and an equal-scale box a segment perpendicular to
+    the line of sight shows at true scale, whatever the view.
+    """
+    elev, azim = np.radians(view[0]), np.radians(view[1])
+    right = np.array([-np.sin(azim), np.cos(azim), 0.0])
+    up = np.array([-np.sin(elev) * np.cos(azim), -np.sin(elev) * np.sin(azim), np.cos(elev)])
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                        for z in (lo[2], hi[2])])
+    c = 0.5 * (lo + hi)
+    r, u = (corners - c) @ right, (corners - c) @ up
+    start = c + (r.min() + 0.04 * np.ptp(r)) * right + (u.min() + 0.04 * np.ptp(u)) * up
+    end = start + length * right
+    ax.plot(*np.stack([start, end]).T, color="k", lw=2.5, solid_capstyle="butt", clip_on=False)
+    for p in (start, end):
+        tick = np.stack([p - 0.008 * up, p + 0.008 * up])
+        ax.plot(*tick.T, color="k", lw=1.2, clip_on=False)
+    mid = 0.5 * (start + end) + 0.012 * up
+    ax.text(*mid, f"{length * MM:.0f} mm", ha="center", va="bottom", fontsize=11)
 
 
 def _panel_title(g: RobotGeometry) -> str:
     """Two lines: slot, assembly mode and sign of p; the two branch signs in words."""
     sgn = {1: "+", -1: "-"}
     return (f"slot {g.slot}: mode {g.mode:+d}, p {'>' if g.p_sign > 0 else '<'} 0\n"
-            f"U-joint {sgn[g.ujoint]} (sin u2 {'>' if g.ujoint > 0 else '<'} 0), "
-            f"wrist {sgn[g.wrist]} (sin u4 {'>' if g.wrist > 0 else '<'} 0)")
+            f"U-joint {sgn[g.ujoint]}, wrist {sgn[g.wrist]}")
 
 
 def save_view(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,

@@ -44,7 +44,7 @@ from ._search import (
     random_designs,
 )
 from ._study import CHUNK_SIZE, LOCAL_SCHEDULERS, design_rows, evaluate, read_study
-from ._task import Task, TaskSamples, rcm_frame_from_axis, sample_task
+from ._task import Task, TaskSamples, example_task_path, rcm_frame_from_axis, sample_task
 
 __all__ = [
     "COLLISION_COLUMNS",
@@ -75,6 +75,7 @@ __all__ = [
     "design_rows",
     "evaluate",
     "evaluate_design",
+    "example_task_path",
     "reachability",
     "rcm_frame_from_axis",
     "read_study",

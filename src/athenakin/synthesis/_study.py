@@ -8,6 +8,9 @@ import json
 import math
 import os
 import re
+import socket
+import struct
+import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -40,6 +43,9 @@ CHUNK_SIZE = 8
 CONNECT_TIMEOUT = 5.0
 #: The form of a scheduler address: ``[protocol://]host:port``.
 _ADDRESS = re.compile(r"^([a-z][a-z0-9+.-]*://)?[^\s/]+:\d{1,5}$")
+#: Largest first message (bytes) a ``distributed`` scheduler sends on a new connection; its
+#: handshake is a few hundred bytes. A larger announced size means the peer is not a scheduler.
+MAX_HANDSHAKE_BYTES = 1 << 20
 #: Most task samples per design (each design evaluates them all, about 1 KB each).
 MAX_SAMPLES = 1_000_000
 #: Coarsest encoder resolution accepted, m (beyond it the tip error is meaningless).
@@ -192,6 +198,7 @@ def open_scheduler(scheduler: Any, *, connect_timeout: float = CONNECT_TIMEOUT
                 f"scheduler: expected one of {LOCAL_SCHEDULERS} or an address "
                 f"'tcp://host:port', got {scheduler!r}")
         distributed = _require("distributed")
+        _probe_scheduler(scheduler, connect_timeout)
         import logging
 
         logger = logging.getLogger("distributed")
@@ -200,11 +207,9 @@ def open_scheduler(scheduler: Any, *, connect_timeout: float = CONNECT_TIMEOUT
         try:
             client = distributed.Client(scheduler, timeout=connect_timeout,
                                         set_as_default=False)
-        except (OSError, TimeoutError, ValueError) as exc:
+        except (OSError, TimeoutError, ValueError, MemoryError, OverflowError) as exc:
             why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-            raise SchedulerUnreachableError(
-                f"no Dask scheduler answers at {scheduler!r} within {connect_timeout:g} s "
-                f"({why})") from None
+            raise _unreachable(scheduler, connect_timeout, why) from None
         finally:
             logger.setLevel(level)
         return "distributed", client, True
@@ -212,6 +217,66 @@ def open_scheduler(scheduler: Any, *, connect_timeout: float = CONNECT_TIMEOUT
         return "distributed", scheduler, False
     raise TypeError(f"scheduler: expected None, one of {LOCAL_SCHEDULERS}, an address string "
                     f"or a distributed.Client, got {type(scheduler).__name__}")
+
+
+def _unreachable(address: str, timeout: float, why: str) -> SchedulerUnreachableError:
+    return SchedulerUnreachableError(
+        f"cannot reach a Dask scheduler at {address!r} within {timeout:g} s ({why})")
+
+
+def _probe_scheduler(address: str, timeout: float) -> None:
+    """Check that a ``tcp://`` address (or a bare ``host:port``) speaks Dask's protocol.
+
+    A ``distributed`` scheduler writes its handshake first on every new connection: an
+    8-byte little-endian size, then that many bytes of msgpack. Read the size (within
+    ``timeout`` s) and require it to be a handshake's, before ``distributed.Client`` would
+    trust it and allocate whatever a foreign server's first bytes announce (3 EiB for an
+    HTTP reply). Other protocols (``tls://``, ``ucx://``, ...) are left to ``distributed``.
+
+    Raises
+    ------
+    SchedulerUnreachableError
+        If nothing accepts the connection, nothing is said within ``timeout`` s, or what is
+        said is not a Dask handshake.
+    """
+    protocol, sep, rest = address.rpartition("://")
+    if sep and protocol != "tcp":
+        return
+    host, _, port = rest.rpartition(":")
+    host = host.strip("[]")
+    deadline = time.monotonic() + timeout
+    try:
+        sock = socket.create_connection((host, int(port)), timeout=timeout)
+    except TimeoutError:
+        raise _unreachable(address, timeout, "nothing accepted the connection") from None
+    except (OSError, ValueError) as exc:
+        why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise _unreachable(address, timeout, why) from None
+    head = b""
+    with sock:
+        try:
+            while len(head) < 8:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise TimeoutError
+                sock.settimeout(left)
+                chunk = sock.recv(8 - len(head))
+                if not chunk:
+                    raise _unreachable(address, timeout,
+                                       "the peer closed the connection without a handshake")
+                head += chunk
+        except SchedulerUnreachableError:   # a ConnectionError, hence an OSError: as it is
+            raise
+        except TimeoutError:
+            raise _unreachable(address, timeout, "connected, but no handshake came") from None
+        except OSError as exc:
+            raise _unreachable(address, timeout, str(exc) or type(exc).__name__) from None
+    (size,) = struct.unpack("<Q", head)
+    if not 0 < size <= MAX_HANDSHAKE_BYTES:
+        raise _unreachable(address, timeout,
+                           f"something answers, but not a Dask scheduler: its first message "
+                           f"announces {size} bytes, a handshake is under "
+                           f"{MAX_HANDSHAKE_BYTES} bytes")
 
 
 def _is_client(obj: object) -> bool:

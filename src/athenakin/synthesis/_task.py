@@ -18,7 +18,8 @@ from ..design import LENGTH_RANGE
 from ..errors import InvalidInputError
 from ._errors import TaskFileError
 
-__all__ = ["Task", "TaskSamples", "rcm_frame_from_axis", "sample_task", "UNIT_TOL"]
+__all__ = ["Task", "TaskSamples", "rcm_frame_from_axis", "sample_task", "UNIT_TOL",
+           "example_task_path"]
 
 #: Tolerance on ``|axis| = 1`` (the axis must be given as a unit vector).
 UNIT_TOL = 1e-9
@@ -302,3 +303,24 @@ def sample_task(task: Task, n: int, *, seed: int = 0) -> TaskSamples:
     lo, hi = task.depth
     depth = lo + (hi - lo) * u[2]
     return TaskSamples(direction_e=d_e, depth=depth, theta=theta, phi=phi)
+
+
+def example_task_path() -> Path:
+    """The example task file shipped with the package, readable from any directory.
+
+    The same file as ``examples/synthesis/task_pancreas.toml`` of the repository: the
+    reference port of the pancreas set-up (a 25 deg cone, tip depths 0.20..0.30 m) and the
+    ``[bounds]`` of a design search.
+
+    Returns
+    -------
+    pathlib.Path
+        Absolute path of ``task_pancreas.toml`` inside the installed package.
+
+    Examples
+    --------
+    >>> from athenakin.synthesis import Task, example_task_path
+    >>> Task.from_toml(example_task_path()).name
+    'pancreas, reference port'
+    """
+    return Path(__file__).resolve().parent / "data" / "task_pancreas.toml"

@@ -16,7 +16,8 @@ from ..design import Design
 from ._metrics import reachability
 from ._task import Task
 
-__all__ = ["plot_pareto", "plot_parameter_coordinates", "plot_coverage_map"]
+__all__ = ["plot_pareto", "plot_parameter_coordinates", "plot_coverage_map", "label",
+           "LABELS", "SENSE"]
 
 
 def _ax(ax: Any) -> Any:
@@ -30,48 +31,106 @@ def _ax(ax: Any) -> Any:
     return ax
 
 
+#: Axis names of the metric and parameter columns, with units (plot boundary).
+LABELS: dict[str, str] = {
+    "size": "size: total link length and actuator travel (m)",
+    "coverage": "coverage (fraction of the task reached)",
+    "coverage_mode": "single-mode coverage (fraction of the task)",
+    "coverage_plus": "coverage in mode +1 (fraction)",
+    "coverage_minus": "coverage in mode -1 (fraction)",
+    "tip_error_max": "worst tip error from encoder resolution (µm)",
+    "tip_error_mean": "mean tip error from encoder resolution (µm)",
+    "margin_min": "smallest singularity margin",
+    "cond_tip_max": "worst tool-tip conditioning",
+    "cond_parallel_max": "worst parallel-module conditioning",
+}
+#: Whether a larger value of a metric is better (``max``) or worse (``min``).
+SENSE: dict[str, str] = {"size": "min", "coverage": "max", "coverage_mode": "max",
+                         "coverage_plus": "max", "coverage_minus": "max",
+                         "tip_error_max": "min", "tip_error_mean": "min", "margin_min": "max",
+                         "cond_tip_max": "min", "cond_parallel_max": "min"}
+
+
+def label(column: str) -> str:
+    """The axis name of a study column, with its unit (the column name if none is known)."""
+    return LABELS.get(column, column)
+
+
+def _um(column: str, values: Any) -> Any:
+    return values * 1e6 if column.startswith("tip_error") else values
+
+
 def plot_pareto(table: Any, *, front: Any = None, reference: Any = None, x: str = "size",
                 y: str = "coverage_mode", color: str = "tip_error_max", ax: Any = None,
                 **kwargs: Any) -> Any:
-    """Designs of a study in the plane of two metrics, the front and the reference marked.
+    """Designs of a study in the plane of two metrics, their front and the reference marked.
+
+    The line joins the Pareto front of the two metrics drawn (the designs that no other
+    drawn design beats in both, the better direction of each from :data:`SENSE`). The
+    front of a search over more objectives (``front=``, e.g. ``SearchResult.front`` over
+    size, single-mode coverage and tip error) holds designs that look dominated in any two
+    of them; they get their own marker and a legend entry saying so. With a single valid
+    design there is nothing to compare: no colour scale is drawn.
 
     Parameters
     ----------
     table : pandas.DataFrame
         Study table (:func:`~athenakin.synthesis.evaluate` or ``SearchResult.table``).
     front : pandas.DataFrame, optional
-        Rows to draw as the Pareto front (joined in order of ``x``).
+        Rows of the front of the search (all its objectives), marked with open circles.
     reference : pandas.Series, optional
         Row of the reference design (a star).
     x, y, color : str
-        Metric columns for the axes and the colour (log scale for ``tip_error*``).
+        Metric columns for the axes and the colour (log scale for ``tip_error*``, in µm).
     ax : matplotlib Axes, optional
 
     Returns
     -------
     matplotlib Axes
     """
+    from ._search import pareto_mask
+
     ax = _ax(ax)
-    ok = table["valid"].to_numpy(bool) & np.isfinite(table[y].to_numpy(float))
-    c = table[color].to_numpy(float)[ok]
+    ok = (table["valid"].to_numpy(bool) & np.isfinite(table[y].to_numpy(float))
+          & np.isfinite(table[x].to_numpy(float)))
+    X, Y = table[x].to_numpy(float)[ok], table[y].to_numpy(float)[ok]
+    c = _um(color, table[color].to_numpy(float)[ok])
     if color.startswith("tip_error"):
-        c = np.log10(c * 1e6)
-        label = f"log10 {color} (um)"
+        c = np.log10(c)
+        clabel = f"log10 {label(color)}"
     else:
-        label = color
-    sc = ax.scatter(table[x][ok], table[y][ok], c=c, s=14, cmap="viridis", **kwargs)
-    ax.figure.colorbar(sc, ax=ax, label=label)
+        clabel = label(color)
+    finite = c[np.isfinite(c)]
+    if len(X) > 1 and finite.size > 1 and finite.max() > finite.min():
+        sc = ax.scatter(_um(x, X), _um(y, Y), c=c, s=14, cmap="viridis", zorder=2, **kwargs)
+        ax.figure.colorbar(sc, ax=ax, label=clabel)
+    else:
+        ax.scatter(_um(x, X), _um(y, Y), s=14, color="tab:blue", label="design", zorder=2,
+                   **kwargs)
+    if len(X) > 1:
+        sign = [1.0 if SENSE.get(k, "min") == "min" else -1.0 for k in (x, y)]
+        on = pareto_mask(np.column_stack([sign[0] * X, sign[1] * Y]))
+        order = np.argsort(X[on])
+        ax.plot(_um(x, X[on][order]), _um(y, Y[on][order]), "-", color="crimson", lw=1.2,
+                zorder=1, label=f"Pareto front of these two metrics ({int(on.sum())})")
     if front is not None and len(front):
-        f = front.sort_values(x)
-        ax.plot(f[x], f[y], "o", mfc="none", mec="crimson", ms=8, label="Pareto front")
+        ax.plot(_um(x, front[x]), _um(y, front[y]), "o", mfc="none", mec="0.2", ms=8,
+                label=f"front of the search over {_objectives(front)} ({len(front)})")
     if reference is not None:
-        ax.plot([reference[x]], [reference[y]], "*", color="k", ms=16,
+        ax.plot([_um(x, reference[x])], [_um(y, reference[y])], "*", color="k", ms=16,
                 label=str(reference.get("name", "reference")) or "reference")
-    ax.set_xlabel(f"{x} (m)" if x in ("size",) or x.startswith("tip") else x)
-    ax.set_ylabel(y)
-    ax.legend(loc="lower right", fontsize=8)
-    ax.set_title("designs against the task")
+    ax.set_xlabel(label(x))
+    ax.set_ylabel(label(y))
+    ax.legend(loc="best", fontsize=7)
+    ax.set_title(f"{int(ok.sum())} design{'s' if ok.sum() != 1 else ''} against the task")
     return ax
+
+
+def _objectives(front: Any) -> str:
+    from ._search import DEFAULT_OBJECTIVES
+
+    names = [k for k in DEFAULT_OBJECTIVES if k in getattr(front, "columns", ())]
+    return f"{len(names)} objectives" if names else "its objectives"
 
 
 def plot_parameter_coordinates(table: Any, *, columns: Sequence[str] | None = None,
@@ -114,7 +173,7 @@ def plot_parameter_coordinates(table: Any, *, columns: Sequence[str] | None = No
     if highlight is not None and len(highlight):
         for row in (highlight[cols].to_numpy(float) - lo) / span:
             ax.plot(xs, row, color="k", lw=1.2)
-    ax.figure.colorbar(mpl.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label=color)
+    ax.figure.colorbar(mpl.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label=label(color))
     ax.set_xticks(xs, cols, rotation=45, ha="right")
     ax.set_ylabel("scaled to [min, max] of the valid designs")
     ax.set_title("design parameters")
@@ -153,8 +212,8 @@ def plot_coverage_map(design: Design, task: Task, *, samples: int = 20_000, seed
     t = np.linspace(0, 2 * math.pi, 200)
     ax.plot(a * np.cos(t), a * np.sin(t), "k-", lw=0.8)
     ax.set_aspect("equal")
-    ax.set_xlabel("theta cos(phi) (deg)")
-    ax.set_ylabel("theta sin(phi) (deg)")
+    ax.set_xlabel("θ cos φ (deg): angle from the cone axis")
+    ax.set_ylabel("θ sin φ (deg)")
     ax.set_title(design.name or "design", fontsize=9)
     ax.legend(loc="upper right", fontsize=7, markerscale=4)
     return ax

@@ -1,0 +1,32 @@
+"""The API site has a page per public subpackage, found from the package (docs/conf.py)."""
+
+from __future__ import annotations
+
+import pkgutil
+import runpy
+from pathlib import Path
+
+import athenakin
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_every_public_subpackage_gets_an_api_page() -> None:
+    conf = runpy.run_path(str(ROOT / "docs/conf.py"))
+    public = {m.name for m in pkgutil.iter_modules(athenakin.__path__)
+              if not m.name.startswith("_")} - conf["API_SKIP"]
+    assert set(conf["public_modules"]()) == public
+    pages = ROOT / "docs/_generated/api"
+    for name in public:
+        text = (pages / f"athenakin.{name}.rst").read_text()
+        assert f".. automodule:: athenakin.{name}" in text
+    toc = (pages / "toc.txt").read_text()
+    assert all(f"_generated/api/athenakin.{n}\n" in toc for n in public)
+    top = (pages / "athenakin.rst").read_text()
+    for name in ("forward_kinematics", "inverse_kinematics", "q_from_tool_tip", "Design"):
+        assert f":: athenakin.{name}" in top
+    # a re-exported top-level object is documented once, at the top level
+    robot = (pages / "athenakin.robot.rst").read_text()
+    excluded = robot.split(":exclude-members:")[1].splitlines()[0].replace(",", " ").split()
+    assert "Design" in excluded and "FKSolution" in excluded
+    assert "forward_kinematics" not in excluded    # the numpy reference is its own function
