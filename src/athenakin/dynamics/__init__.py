@@ -8,6 +8,10 @@
   the load on the RCM mount), :func:`inverse_dynamics`, :func:`mass_matrix`,
   :func:`forward_dynamics`, :func:`mechanical_energy`: exact to rounding by virtual
   power on the closed chain with second-order Taylor jets of the closed-form kinematics.
+* :mod:`._capability` - :func:`force_capability` (the polytope of tip forces resisted
+  within actuator force limits, its weakest direction), :func:`max_tip_force`.
+* :mod:`._simulate` - :func:`simulate` (fixed-step RK4; stops with
+  :class:`SimulationStoppedError` at a stroke limit or next to a singular set).
 
 Conventions: docs/conventions.md ("Forces"); findings: docs/dynamics.md.
 """
@@ -23,6 +27,7 @@ from ._api import (
     mechanical_energy,
     statics,
 )
+from ._capability import ForceCapability, force_capability, max_tip_force
 from ._model import (
     INERTIA_TOL,
     MASS_BODIES,
@@ -33,10 +38,13 @@ from ._model import (
     actuator_part_length,
     body_segment_in_frame,
 )
+from ._simulate import SINGULARITY_MARGINS, Simulation, SimulationStoppedError, simulate
 
 __all__ = [
     "MassModel", "MASS_BODIES", "MOVING_BODIES", "REFERENCE_MASSES", "INERTIA_TOL",
     "MAX_MASS", "actuator_part_length", "body_segment_in_frame",
     "Statics", "statics", "actuator_forces", "inverse_dynamics", "mass_matrix",
     "forward_dynamics", "mechanical_energy", "STANDARD_GRAVITY", "MAX_BATCH",
+    "ForceCapability", "force_capability", "max_tip_force",
+    "Simulation", "simulate", "SimulationStoppedError", "SINGULARITY_MARGINS",
 ]
