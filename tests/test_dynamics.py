@@ -321,3 +321,13 @@ def test_named_errors():
         force_capability(REFERENCE_Q, T, D, f_max=1.0, f_min=2.0)
     with pytest.raises(InvalidInputError, match="duration: expected a positive"):
         simulate(REFERENCE_Q, np.zeros(3), np.zeros(3), T, D, duration=0.0)
+
+
+def test_d_on_the_rail_is_a_named_singularity():
+    q = np.array([-0.28, 0.22, 0.45])                  # |q1 - q2| = 2 l3: D on the rail
+    from athenakin.errors import SingularConfigurationError
+    with pytest.raises(SingularConfigurationError, match="singular set of the dynamics"):
+        actuator_forces(q, T, D)
+    st = statics(np.stack([q, REFERENCE_Q]), T, D, errors="flag")
+    assert st.valid.tolist() == [False, True]
+    assert np.all(np.isnan(st.forces[0])) and np.all(np.isfinite(st.forces[1]))

@@ -98,6 +98,29 @@ def _prepare(arrays: dict[str, ArrayLike | None], T_b_e: ArrayLike | None, desig
     return _Prepared(batch, flat, Tf, d, m, k, valid, reason)
 
 
+def _singular(prep: _Prepared, errors: object, *results: Arr) -> _Prepared:
+    """Flag items whose results are not finite though the slot is valid.
+
+    That happens only on a singular set where a body's speed is unbounded for a finite
+    ``qd`` (D on the rail, ``|q1 - q2| = 2 l3``) or the mass matrix is singular.
+    """
+    finite = np.ones(prep.valid.shape, bool)
+    for r in results:
+        finite &= np.all(np.isfinite(r.reshape(r.shape[0], -1)), axis=-1)
+    bad = prep.valid & ~finite
+    if not np.any(bad):
+        return prep
+    i = int(np.argmax(bad))
+    if errors == "raise":
+        idx = np.unravel_index(i, prep.shape) if prep.shape else ()
+        raise SingularConfigurationError(
+            f"q: item {tuple(int(x) for x in idx)} (q = {prep.arrays['q'][i].tolist()} m) is on "
+            f"a singular set of the dynamics (a body's speed is unbounded there); pass "
+            f"errors='flag' for NaN results in a batch", Reason.IK_SINGULAR)
+    reason = np.where(bad, np.int8(Reason.IK_SINGULAR), prep.reason).astype(np.int8)
+    return dataclasses.replace(prep, valid=prep.valid & finite, reason=reason)
+
+
 def _finish(x: Arr, prep: _Prepared, tail: tuple[int, ...]) -> Arr:
     x = np.where(prep.valid.reshape((-1,) + (1,) * len(tail)), x, np.nan)
     return x.reshape(prep.shape + tail)
@@ -177,6 +200,7 @@ def statics(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None 
     forces = Q[:, 1:N_Q_DIRECTIONS]
     mount = -Q[:, N_Q_DIRECTIONS:]
     J = np.swapaxes(ev.v_tip[:, 1:N_Q_DIRECTIONS], -1, -2)
+    prep = _singular(prep, errors, Q, J)
     return Statics(forces=_finish(forces, prep, (3,)),
                    rcm_force=_finish(mount[:, :3], prep, (3,)),
                    rcm_moment=_finish(mount[:, 3:], prep, (3,)),
@@ -233,6 +257,7 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
     ev = evaluate(a["q"], a["qd"], a["qdd"], prep.T, prep.design, prep.masses, prep.slot)
     F, Nm = body_loads(ev, prep.masses, a["gravity"])
     Q = generalized_forces(ev, F, Nm, a["tip_force"])
+    prep = _singular(prep, errors, Q)
     return _finish(Q[:, 1:N_Q_DIRECTIONS], prep, (3,))
 
 
@@ -248,7 +273,9 @@ def mass_matrix(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | N
     qf = prep.arrays["q"]
     z = np.zeros_like(qf)
     ev = evaluate(qf, z, z, prep.T, prep.design, prep.masses, prep.slot)
-    return _finish(mass_matrix_from(ev, prep.masses), prep, (3, 3))
+    Mq = mass_matrix_from(ev, prep.masses)
+    prep = _singular(prep, errors, Mq)
+    return _finish(Mq, prep, (3, 3))
 
 
 def forward_dynamics(q: ArrayLike, qd: ArrayLike, forces: ArrayLike,
@@ -283,6 +310,7 @@ def forward_dynamics(q: ArrayLike, qd: ArrayLike, forces: ArrayLike,
     F, Nm = body_loads(ev, prep.masses, a["gravity"])
     h = generalized_forces(ev, F, Nm, a["tip_force"])[:, 1:N_Q_DIRECTIONS]
     M = mass_matrix_from(ev, prep.masses)
+    prep = _singular(prep, errors, M, h)
     rhs = a["forces"] - h
     ok = prep.valid
     M_safe = np.where(ok[:, None, None], M, np.eye(3))
@@ -310,6 +338,7 @@ def mechanical_energy(q: ArrayLike, qd: ArrayLike, T_b_e: ArrayLike | None = Non
     z = np.zeros_like(a["q"])
     ev = evaluate(a["q"], a["qd"], z, prep.T, prep.design, prep.masses, prep.slot)
     kin, pot = energies(ev, prep.masses, a["gravity"])
+    prep = _singular(prep, errors, kin, pot)
     return _finish(kin, prep, ()), _finish(pot, prep, ())
 
 

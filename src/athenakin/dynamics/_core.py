@@ -154,6 +154,13 @@ def evaluate(q: Arr, qd: Arr, qdd: Arr, T_b_e: Arr, design: Design, masses: Mass
            for i in range(3)]
     R_e: Mat = [[J2(np.broadcast_to(R0[:, None, i, j], shape).copy(), R1[..., i, j],
                     R2[..., i, j]) for j in range(3)] for i in range(3)]
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        return _evaluate(qj, rcm, R_e, design, masses, slot, shape)
+
+
+def _evaluate(qj: list[J2], rcm: list[J2], R_e: Mat, design: Design, masses: MassModel,
+              slot: int, shape: tuple[int, int]) -> Evaluation:
+    N, nd = shape
     bj = body_jets(qj, rcm, R_e, design, slot)
     names = [b for b in MASS_BODIES if b != "rail"]
     nb = len(MASS_BODIES)
