@@ -331,3 +331,16 @@ def test_d_on_the_rail_is_a_named_singularity():
     st = statics(np.stack([q, REFERENCE_Q]), T, D, errors="flag")
     assert st.valid.tolist() == [False, True]
     assert np.all(np.isnan(st.forces[0])) and np.all(np.isfinite(st.forces[1]))
+
+
+@pytest.mark.parametrize("slot", (0, 9, 14))
+def test_numba_kernel_equals_the_numpy_jets(states, slot):
+    pytest.importorskip("numba")
+    q, qd, qdd = states
+    kw = dict(masses=MF, slot=slot, tip_force=[0.3, -1.0, 2.0], gravity=[0.1, 0.2, -9.8])
+    ref = inverse_dynamics(q, qd, qdd, T, D, backend="numpy", **kw)
+    fast = inverse_dynamics(q, qd, qdd, T, D, backend="numba", **kw)
+    assert_allclose(fast, ref, rtol=0, atol=1e-12)
+    Tb = np.broadcast_to(T, (6, 4, 4))
+    assert_allclose(inverse_dynamics(q, qd, qdd, Tb, D, backend="numba", **kw), ref, rtol=0,
+                    atol=1e-12)

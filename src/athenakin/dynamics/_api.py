@@ -232,7 +232,8 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
                      T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                      masses: MassModel | None = None, gravity: ArrayLike = STANDARD_GRAVITY,
                      tip_force: ArrayLike | None = None, slot: int = 0,
-                     errors: Literal["raise", "flag"] = "raise") -> Arr:
+                     errors: Literal["raise", "flag"] = "raise",
+                     backend: Literal["auto", "numpy", "numba"] = "auto") -> Arr:
     """Actuator forces (N) that give the motion ``(q, qd, qdd)`` of the closed chain.
 
     ``tau = M(q) qdd + c(q, qd) + g(q) - J_tip^T f_tip`` by virtual power on the
@@ -245,20 +246,49 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
         Actuator positions (m), velocities (m/s), accelerations (m/s^2).
     T_b_e, design, masses, gravity, tip_force, slot, errors
         As :func:`statics`.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        ``"numba"``: the compiled kernel (extra ``fast``; the same formulas per state,
+        equal to the numpy path to rounding); ``"auto"``: numba where it imports.
 
     Returns
     -------
     ndarray, shape (..., 3)
         ``(f1, f2, f3)``, N, positive along increasing ``q``.
     """
+    check_choice(backend, "backend", ("auto", "numpy", "numba"))
     prep = _prepare({"q": q, "qd": qd, "qdd": qdd}, T_b_e, design, masses, slot, errors,
                     gravity=gravity, tip_force=tip_force)
     a = prep.arrays
+    kernel = None if backend == "numpy" else _kernel(required=backend == "numba")
+    if kernel is not None:
+        from ._kinematics import slot_signs
+
+        Q = np.empty((a["q"].shape[0], 3))
+        kernel(np.ascontiguousarray(a["q"]), np.ascontiguousarray(a["qd"]),
+               np.ascontiguousarray(a["qdd"]), np.ascontiguousarray(prep.T),
+               prep.design.lengths, float(prep.design.tool_length),
+               np.array(slot_signs(prep.slot)), prep.masses.mass, prep.masses.com,
+               prep.masses.inertia, np.ascontiguousarray(a["gravity"]),
+               np.ascontiguousarray(a["tip_force"]), Q)
+        prep = _singular(prep, errors, Q)
+        return _finish(Q, prep, (3,))
     ev = evaluate(a["q"], a["qd"], a["qdd"], prep.T, prep.design, prep.masses, prep.slot)
     F, Nm = body_loads(ev, prep.masses, a["gravity"])
     Q = generalized_forces(ev, F, Nm, a["tip_force"])
     prep = _singular(prep, errors, Q)
     return _finish(Q[:, 1:N_Q_DIRECTIONS], prep, (3,))
+
+
+def _kernel(*, required: bool) -> object:
+    """The compiled inverse-dynamics kernel, or None without numba (unless required)."""
+    try:
+        from ._kernel import inverse_dynamics_kernel
+    except ImportError:
+        if required:
+            raise ImportError("backend='numba' needs numba: pip install 'athenakin[fast]'"
+                              ) from None
+        return None
+    return inverse_dynamics_kernel
 
 
 def mass_matrix(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None = None,
