@@ -275,5 +275,5 @@ def inverse_dynamics_kernel_parallel(q, qd, qdd, T, lengths, L, signs, mass, com
     ng = grav.shape[0]
     nf = ftip.shape[0]
     for i in prange(n):
-        _one(q[i], qd[i], qdd[i], T[i if nT > 1 else 0], lengths, L, signs, mass, com,
-             inertia, grav[i if ng > 1 else 0], ftip[i if nf > 1 else 0], out[i])
+        _one(q[i], qd[i], qdd[i], T[i % nT], lengths, L, signs, mass, com,
+             inertia, grav[i % ng], ftip[i % nf], out[i])
