@@ -42,7 +42,7 @@ def _masses_with_full_inertias(seed=11):
     """The reference model plus general (non-axisymmetric) inertias and offset centres."""
     rng = np.random.default_rng(seed)
     data = M.to_mapping()
-    for name, entry in data.items():
+    for entry in data.values():
         R = np.linalg.qr(rng.normal(size=(3, 3)))[0]
         ev = np.sort(rng.uniform(1e-4, 2e-3, 3))
         ev[2] = min(ev[2], ev[0] + ev[1])

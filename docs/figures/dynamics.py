@@ -31,6 +31,7 @@ P_CONE = 0.20
 
 
 def cone_grid(n_az=91, n_pol=61):
+    """Directions on an (azimuth, polar) grid about z_e at insertion P_CONE, and their q."""
     az = np.linspace(-np.pi, np.pi, n_az)
     pol = np.radians(np.linspace(0.0, 180.0, n_pol))
     A, P = np.meshgrid(az, pol, indexing="ij")
@@ -58,6 +59,7 @@ def forces_in_cone(q, res):
 
 
 def main() -> None:
+    """Write the four figures and print the numbers."""
     print(f"mass model: MassModel.reference(), {M.total_mass:.2f} kg moving")
     # --- 1. gravity over the instrument cone ----------------------------------------
     az, pol, q, res = cone_grid()

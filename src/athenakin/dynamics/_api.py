@@ -10,6 +10,7 @@ robot exerts on the fixed mount of the spherical mechanism (S1, S2).
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from typing import Literal
 
 import numpy as np
@@ -279,7 +280,7 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
     return _finish(Q[:, 1:N_Q_DIRECTIONS], prep, (3,))
 
 
-def _kernel(*, required: bool) -> object:
+def _kernel(*, required: bool) -> Callable[..., None] | None:
     """The compiled inverse-dynamics kernel, or None without numba (unless required)."""
     try:
         from ._kernel import inverse_dynamics_kernel
@@ -351,7 +352,7 @@ def forward_dynamics(q: ArrayLike, qd: ArrayLike, forces: ArrayLike,
         raise SingularConfigurationError(
             "masses: the mass matrix is singular (a direction of q moves no mass); give the "
             "carriages or the links a mass") from None
-    return _finish(qdd, prep, (3,))
+    return _finish(np.asarray(qdd, dtype=np.float64), prep, (3,))
 
 
 def mechanical_energy(q: ArrayLike, qd: ArrayLike, T_b_e: ArrayLike | None = None,

@@ -119,14 +119,14 @@ def _rt(R, v):
 
 
 @njit(**_OPTS)
-def _iv(I, v):
-    return (I[0, 0] * v[0] + I[0, 1] * v[1] + I[0, 2] * v[2],
-            I[1, 0] * v[0] + I[1, 1] * v[1] + I[1, 2] * v[2],
-            I[2, 0] * v[0] + I[2, 1] * v[1] + I[2, 2] * v[2])
+def _iv(inertia_b, v):
+    return (inertia_b[0, 0] * v[0] + inertia_b[0, 1] * v[1] + inertia_b[0, 2] * v[2],
+            inertia_b[1, 0] * v[0] + inertia_b[1, 1] * v[1] + inertia_b[1, 2] * v[2],
+            inertia_b[2, 0] * v[0] + inertia_b[2, 1] * v[1] + inertia_b[2, 2] * v[2])
 
 
 @njit(**_OPTS)
-def _body_loads(o, R, m, c, I, gx, gy, gz, Q):
+def _body_loads(o, R, m, c, inertia_b, gx, gy, gz, Q):
     """Add one body's ``v_j . m (a - g) + w_j . (I alpha + w x I w)`` to ``Q[0..2]``."""
     p0 = _add(o[0], _add(_add(_sc(R[0], c[0]), _sc(R[1], c[1])), _sc(R[2], c[2])))
     p1 = _add(o[1], _add(_add(_sc(R[3], c[0]), _sc(R[4], c[1])), _sc(R[5], c[2])))
@@ -134,11 +134,11 @@ def _body_loads(o, R, m, c, I, gx, gy, gz, Q):
     F0 = m * (2.0 * p0[5] - gx)
     F1 = m * (2.0 * p1[5] - gy)
     F2 = m * (2.0 * p2[5] - gz)
-    # moment about the centre in body axes: N_b = I alpha_b + w_b x I w_b
+    # moment about the centre in body axes: N_b = inertia_b alpha_b + w_b x inertia_b w_b
     wb = _rt(R, _omega(R, 4))
     ab = _rt(R, _omega(R, 5))
-    Iw = _iv(I, wb)
-    Ia = _iv(I, ab)
+    Iw = _iv(inertia_b, wb)
+    Ia = _iv(inertia_b, ab)
     Nb = (Ia[0] + wb[1] * Iw[2] - wb[2] * Iw[1], Ia[1] + wb[2] * Iw[0] - wb[0] * Iw[2],
           Ia[2] + wb[0] * Iw[1] - wb[1] * Iw[0])
     for j in range(3):

@@ -164,14 +164,14 @@ class BodyJets:
     p: Arr
 
 
-def body_jets(q: list[J2], rcm: list[Entry], R_e: Mat, design: Design, slot: int) -> BodyJets:
+def body_jets(q: list[J2], rcm: list[J2], R_e: Mat, design: Design, slot: int) -> BodyJets:
     """Jets of every body frame of :data:`~athenakin.dynamics.MASS_BODIES`.
 
     Parameters
     ----------
     q : list of 3 J2
         Jets of ``q1, q2, q3`` (m).
-    rcm : list of 3 (J2 or float)
+    rcm : list of 3 J2
         Jets of the RCM position (translation of ``T_b_e``), m.
     R_e : 3x3 nested list of (J2 or float)
         Jets of the RCM frame's rotation.
@@ -223,13 +223,13 @@ def body_jets(q: list[J2], rcm: list[Entry], R_e: Mat, design: Design, slot: int
     sga = -((o_y - m_y) / q3)
     R_act = rot_x(cga, sga)
     # instrument: d = (RCM - O_s) / p, p = ps |RCM - O_s|
-    cvj = [rcm[i] - O_s[i] for i in range(3)]
+    cvj: list[J2] = [rcm[i] - O_s[i] for i in range(3)]  # type: ignore[operator, misc]
     p = (cvj[0].sq() + cvj[1].sq() + cvj[2].sq()).sqrt() * ps
     d = [v / p for v in cvj]
     # d in the platform frame: R_i^T d
-    ds0 = d[0]
-    ds1 = cth * d[1] + sth * d[2]
-    ds2 = cth * d[2] - sth * d[1]
+    ds0: J2 = d[0]
+    ds1: J2 = cth * d[1] + sth * d[2]
+    ds2: J2 = cth * d[2] - sth * d[1]
     c2 = -ds2
     s2 = (ds0.sq() + ds1.sq()).sqrt() * su2
     c1, s1 = ds0 / s2, ds1 / s2
@@ -246,12 +246,12 @@ def body_jets(q: list[J2], rcm: list[Entry], R_e: Mat, design: Design, slot: int
     c3, s3 = w02 / s4, w12 / s4
     R_s3 = matmul(R_3, rot_z(c3, s3))
     R_s4 = matmul(matmul(R_s3, _RX90), rot_z(c4, s4))
-    tip = [O_s[i] + d[i] * design.tool_length for i in range(3)]
+    tip: Vec = [O_s[i] + d[i] * design.tool_length for i in range(3)]
     origin: dict[str, Vec] = {
         "carriage_a": A, "carriage_b": B, "link_a": A, "link_b": B, "link_ad": A,
         "link_bd": B, "carrier": D, "slider_d": D, "actuator": C, "actuator_rod": O_i,
-        "platform": O_i, "instrument": O_s, "guide": list(rcm), "sphere_link_2": list(rcm),
-        "sphere_link_1": list(rcm),
+        "platform": O_i, "instrument": O_s, "guide": list[Entry](rcm),
+        "sphere_link_2": list[Entry](rcm), "sphere_link_1": list[Entry](rcm),
     }
     rotation: dict[str, Mat] = {
         "carriage_a": _EYE, "carriage_b": _EYE, "link_a": R_la, "link_b": R_lb,

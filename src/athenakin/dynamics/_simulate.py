@@ -148,7 +148,9 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
             return f_const
 
     lo, hi = d.stroke_min, d.stroke_max
-    ts, qs, vs, accs, fs = [0.0], [q.copy()], [v.copy()], [], []
+    ts, qs, vs = [0.0], [q.copy()], [v.copy()]
+    accs: list[Arr] = []
+    fs: list[Arr] = []
 
     def stop(msg: str, cause: type[Exception], t: float) -> SimulationStoppedError:
         nacc = len(accs)

@@ -345,8 +345,8 @@ def _apply_masses(root: ET.Element, masses: object, jv: object, *, gravity: bool
     groups: dict[str, list[str]] = {}
     for part, body in MASS_BODY_IN_MJCF.items():
         groups.setdefault(body, []).append(part)
-    for body in root.iter("body"):
-        name = body.get("name", "")
+    for el_body in root.iter("body"):
+        name = el_body.get("name", "")
         if name == "rcm_setup":
             continue
         m, com, inertia = _inertial_of(masses, groups.get(name, []))
@@ -359,7 +359,7 @@ def _apply_masses(root: ET.Element, masses: object, jv: object, *, gravity: bool
         full = (inertia[0, 0], inertia[1, 1], inertia[2, 2], inertia[0, 1], inertia[0, 2],
                 inertia[1, 2])
         el = ET.Element("inertial", {"pos": _vec(com), "mass": _f(m), "fullinertia": _vec(full)})
-        body.insert(0, el)
+        el_body.insert(0, el)
     for joint in root.iter("joint"):
         if joint.get("type") is not None:
             joint.set("damping", "0")
