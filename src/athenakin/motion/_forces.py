@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -58,12 +59,12 @@ def trajectory_forces(traj: object, masses: object, *, gravity: ArrayLike = (0.0
     """
     from ..dynamics import actuator_forces, inverse_dynamics
 
-    t = traj
+    t: Any = traj
+    m: Any = masses
     slot = _slot(t)
-    tau = inverse_dynamics(t.q, t.qd, t.qdd, t.T_b_e, t.design,  # type: ignore[attr-defined]
-                           masses=masses, gravity=gravity, slot=slot)  # type: ignore[arg-type]
-    tau_g = actuator_forces(t.q, t.T_b_e, t.design, masses=masses,  # type: ignore[attr-defined]
-                            gravity=gravity, slot=slot)  # type: ignore[arg-type]
+    tau = inverse_dynamics(t.q, t.qd, t.qdd, t.T_b_e, t.design, masses=m, gravity=gravity,
+                           slot=slot)
+    tau_g = actuator_forces(t.q, t.T_b_e, t.design, masses=m, gravity=gravity, slot=slot)
     return tau, tau_g
 
 

@@ -40,6 +40,7 @@ from ._errors import (
     TimingInfeasibleError,
     TrajectoryLimitError,
 )
+from ._forces import planned
 from ._path import (
     Segment,
     arc_segment,
@@ -49,7 +50,6 @@ from ._path import (
     reparametrised,
     tip_speed_factor,
 )
-from ._forces import planned
 from ._safety import MEASURE_NAMES, Margins, SingularityMeasures, singularity_measures
 from ._timing import (
     LamProfile,
