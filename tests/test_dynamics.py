@@ -344,3 +344,32 @@ def test_numba_kernel_equals_the_numpy_jets(states, slot):
     Tb = np.broadcast_to(T, (6, 4, 4))
     assert_allclose(inverse_dynamics(q, qd, qdd, Tb, D, backend="numba", **kw), ref, rtol=0,
                     atol=1e-12)
+
+
+def test_force_metrics_bound_every_tip_motion_within_speed_and_acceleration(states):
+    from athenakin.dynamics import force_metrics
+    from athenakin.dynamics._core import evaluate as ev_
+
+    q = states[0][:3]
+    v, a = 0.1, 1.0
+    peak, cap = force_metrics(q, T, D, slot=[0, 0, 0], masses=M, tip_speed=v,
+                              tip_acceleration=a, f_max=50.0)
+    assert_allclose(cap, force_capability(q, T, D, masses=M, f_max=50.0).min_force.min(),
+                    rtol=1e-12)
+    rng = np.random.default_rng(4)
+    J = statics(q, T, D, masses=M).tip_jacobian
+    worst = 0.0
+    for _ in range(20):
+        u = rng.normal(size=(3, 3))
+        u = v * u / np.linalg.norm(u, axis=-1, keepdims=True) * rng.uniform(0, 1, (3, 1))
+        w = rng.normal(size=(3, 3))
+        w = a * w / np.linalg.norm(w, axis=-1, keepdims=True) * rng.uniform(0, 1, (3, 1))
+        qd = np.linalg.solve(J, u[..., None])[..., 0]
+        a0 = ev_(q, qd, 0 * qd, np.broadcast_to(T, (3, 4, 4)), D, M, 0).a_tip
+        qdd = np.linalg.solve(J, (w - a0)[..., None])[..., 0]
+        # the tip really moves at u with acceleration w
+        ev = ev_(q, qd, qdd, np.broadcast_to(T, (3, 4, 4)), D, M, 0)
+        assert_allclose(ev.a_tip, w, rtol=0, atol=1e-10)
+        tau = inverse_dynamics(q, qd, qdd, T, D, masses=M)
+        worst = max(worst, float(np.abs(tau).max()))
+    assert worst <= peak

@@ -28,6 +28,12 @@ from ._api import (
     statics,
 )
 from ._capability import ForceCapability, force_capability, max_tip_force
+from ._metrics import (
+    STUDY_F_MAX,
+    STUDY_TIP_ACCELERATION,
+    STUDY_TIP_SPEED,
+    force_metrics,
+)
 from ._model import (
     INERTIA_TOL,
     MASS_BODIES,
@@ -46,5 +52,6 @@ __all__ = [
     "Statics", "statics", "actuator_forces", "inverse_dynamics", "mass_matrix",
     "forward_dynamics", "mechanical_energy", "STANDARD_GRAVITY", "MAX_BATCH",
     "ForceCapability", "force_capability", "max_tip_force",
+    "force_metrics", "STUDY_TIP_SPEED", "STUDY_TIP_ACCELERATION", "STUDY_F_MAX",
     "Simulation", "simulate", "SimulationStoppedError", "SINGULARITY_MARGINS",
 ]

@@ -164,7 +164,7 @@ def _gravity_tip(prep: _Prepared) -> tuple[Arr, Arr]:
 def statics(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None = None, *,
             masses: MassModel | None = None, gravity: ArrayLike = STANDARD_GRAVITY,
             tip_force: ArrayLike | None = None, slot: int = 0,
-            errors: Literal["raise", "flag"] = "raise") -> Statics:
+            errors: Literal["raise", "flag"] = "raise", rcm_load: bool = True) -> Statics:
     """Actuator forces holding ATHENA still against gravity and a tip force; RCM load.
 
     Parameters
@@ -185,6 +185,9 @@ def statics(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None 
     errors : {"raise", "flag"}, keyword-only
         ``"raise"``: an item where the slot holds no configuration raises
         :class:`~athenakin.errors.OutOfWorkspaceError`; ``"flag"``: NaN with ``valid``.
+    rcm_load : bool, keyword-only
+        Compute the load on the RCM mount (6 more jet directions); with False,
+        ``rcm_force`` and ``rcm_moment`` are NaN.
 
     Returns
     -------
@@ -194,12 +197,13 @@ def statics(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None 
                     tip_force=tip_force)
     qf = prep.arrays["q"]
     z = np.zeros_like(qf)
-    ev = evaluate(qf, z, z, prep.T, prep.design, prep.masses, prep.slot, rcm_directions=True)
+    ev = evaluate(qf, z, z, prep.T, prep.design, prep.masses, prep.slot,
+                  rcm_directions=bool(rcm_load))
     g, f = _gravity_tip(prep)
     F, Nm = body_loads(ev, prep.masses, g)
     Q = generalized_forces(ev, F, Nm, f)
     forces = Q[:, 1:N_Q_DIRECTIONS]
-    mount = -Q[:, N_Q_DIRECTIONS:]
+    mount = -Q[:, N_Q_DIRECTIONS:] if rcm_load else np.full((Q.shape[0], 6), np.nan)
     J = np.swapaxes(ev.v_tip[:, 1:N_Q_DIRECTIONS], -1, -2)
     prep = _singular(prep, errors, Q, J)
     return Statics(forces=_finish(forces, prep, (3,)),

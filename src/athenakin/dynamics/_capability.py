@@ -101,7 +101,8 @@ def force_capability(q: ArrayLike, T_b_e: ArrayLike | None = None,
     ForceCapability
     """
     lo, hi = _limits(f_max, f_min)
-    st = statics(q, T_b_e, design, masses=masses, gravity=gravity, slot=slot, errors=errors)
+    st = statics(q, T_b_e, design, masses=masses, gravity=gravity, slot=slot, errors=errors,
+                 rcm_load=False)
     J = st.tip_jacobian
     tg = st.forces
     Jt = np.swapaxes(J, -1, -2)                         # rows: columns of J

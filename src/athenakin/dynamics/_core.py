@@ -89,6 +89,8 @@ class Evaluation:
         Inertia about the centre of mass, base frame axes.
     v_tip : ndarray, shape (N, ndir, 3)
     tip : ndarray, shape (N, 3)
+    a_tip : ndarray, shape (N, 3)
+        Acceleration of the tool tip along direction 0, m/s^2.
     hc, sin_u2, sin_u4, p_ins : ndarray, shape (N,)
         Distances to the singular sets (half-chord of k1, k2 in m; sines; insertion p, m).
     """
@@ -101,6 +103,7 @@ class Evaluation:
     I_w: Arr
     v_tip: Arr
     tip: Arr
+    a_tip: Arr
     hc: Arr
     sin_u2: Arr
     sin_u4: Arr
@@ -183,8 +186,9 @@ def _evaluate(qj: list[J2], rcm: list[J2], R_e: Mat, design: Design, masses: Mas
         alpha[:, b] = _vee(2 * Rm2[:, 0] @ np.swapaxes(Rm0[:, 0], -1, -2))
         Rb = Rm0[:, 0]
         I_w[:, b] = Rb @ masses.inertia[b] @ np.swapaxes(Rb, -1, -2)
-    t0, t1, _ = _vec(bj.tip, shape)
+    t0, t1, t2 = _vec(bj.tip, shape)
     return Evaluation(v=v, w=w, a=a, alpha=alpha, p=p, I_w=I_w, v_tip=t1, tip=t0[:, 0],
+                      a_tip=2 * t2[:, 0],
                       hc=bj.hc[:, 0], sin_u2=bj.sin_u2[:, 0], sin_u4=bj.sin_u4[:, 0],
                       p_ins=bj.p[:, 0])
 

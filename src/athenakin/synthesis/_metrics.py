@@ -39,7 +39,11 @@ METRIC_COLUMNS = (("coverage", "coverage_mode", "mode", "coverage_plus", "covera
                   + tuple(f"margin_{c}" for c in _CONDITIONS)
                   + ("margin_min", "cond_tip_max", "cond_parallel_max", "stroke_use_q1",
                      "stroke_use_q2", "stroke_use_q3", "size", "tip_error_max",
-                     "tip_error_mean"))
+                     "tip_error_mean", "peak_actuator_force", "min_tip_force_capability"))
+#: Reachable task samples (evenly spread over them) on which the two force columns are
+#: computed (athenakin.dynamics.force_metrics: reference mass model of the design, tip
+#: speed 0.1 m/s, tip acceleration 1 m/s^2, actuator limit 50 N).
+FORCE_SAMPLES = 256
 
 #: Conditions whose value is a length (m); the others are dimensionless sines.
 _LENGTH_CONDITIONS = ("circles_tangent", "d_on_rail", "k1_degenerate", "ab_coincide",
@@ -188,7 +192,8 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
     if counts[0] == 0:
         out.update({f"margin_{c}": nan for c in _CONDITIONS})
         out.update(margin_min=nan, cond_tip_max=nan, cond_parallel_max=nan, stroke_use_q1=nan,
-                   stroke_use_q2=nan, stroke_use_q3=nan, tip_error_max=nan, tip_error_mean=nan)
+                   stroke_use_q2=nan, stroke_use_q3=nan, tip_error_max=nan, tip_error_mean=nan,
+                   peak_actuator_force=nan, min_tip_force_capability=nan)
     else:
         # the kernel picks the worst samples; the reported values are the analysis module's
         picks = np.unique(arg_margin)
@@ -205,10 +210,22 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
             out[f"stroke_use_q{i + 1}"] = float(use[i])
         out["tip_error_max"] = float(tip[0])
         out["tip_error_mean"] = float(tip[1] / counts[0])
+        out.update(_force_columns(qv, mv, T, design))
     stroke = float(np.sum(hi - lo))
     out["size"] = float(2 * design.l1 + 2 * design.l3 + design.l2 + design.l4 + design.l5
                         + stroke)
     return {k: float(out[k]) for k in METRIC_COLUMNS}
+
+
+def _force_columns(q: NDArray[np.float64], mode: NDArray[np.int64], T: NDArray[np.float64],
+                   design: Design) -> dict[str, float]:
+    """``peak_actuator_force`` and ``min_tip_force_capability`` on FORCE_SAMPLES samples."""
+    from ..dynamics import force_metrics
+
+    pick = np.unique(np.linspace(0, q.shape[0] - 1, min(FORCE_SAMPLES, q.shape[0])).astype(int))
+    slot = np.where(mode[pick] == 1, 0, 8)
+    peak, cap = force_metrics(q[pick], T, design, slot=slot)
+    return {"peak_actuator_force": peak, "min_tip_force_capability": cap}
 
 
 def metrics_or_reason(row: Mapping[str, Any], task: Task, *, samples: int, seed: int,
