@@ -104,10 +104,10 @@ def force_metrics(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: Array
         S = np.zeros((sel.shape[0], 3, 3, 3))          # (n, actuator, 3, 3)
         for j in range(3):
             S[:, :, j, j] = diag[j]
-        for j, l in _PAIRS:
-            off = 0.5 * (quad(E[j] + E[l]) - diag[j] - diag[l])
-            S[:, :, j, l] = off
-            S[:, :, l, j] = off
+        for j, jj in _PAIRS:
+            off = 0.5 * (quad(E[j] + E[jj]) - diag[j] - diag[jj])
+            S[:, :, j, jj] = off
+            S[:, :, jj, j] = off
         s_norm = np.abs(np.linalg.eigvalsh(S)).max(axis=-1)
         bound = np.abs(tg) + a * np.linalg.norm(MJ, axis=-1) + v * v * s_norm
         finite = np.all(np.isfinite(bound), axis=-1)
