@@ -126,8 +126,22 @@ def _iv(inertia_b, v):
 
 
 @njit(**_OPTS)
+def _point_loads(o, m, c, gx, gy, gz, Q):
+    """A body that only translates (rotation I): ``v_j . m (a - g)``."""
+    if m == 0.0:
+        return
+    F0 = m * (2.0 * o[0][5] - gx)
+    F1 = m * (2.0 * o[1][5] - gy)
+    F2 = m * (2.0 * o[2][5] - gz)
+    for j in range(3):
+        Q[j] += o[0][j + 1] * F0 + o[1][j + 1] * F1 + o[2][j + 1] * F2
+
+
+@njit(**_OPTS)
 def _body_loads(o, R, m, c, inertia_b, gx, gy, gz, Q):
     """Add one body's ``v_j . m (a - g) + w_j . (I alpha + w x I w)`` to ``Q[0..2]``."""
+    if m == 0.0:
+        return
     p0 = _add(o[0], _add(_add(_sc(R[0], c[0]), _sc(R[1], c[1])), _sc(R[2], c[2])))
     p1 = _add(o[1], _add(_add(_sc(R[3], c[0]), _sc(R[4], c[1])), _sc(R[5], c[2])))
     p2 = _add(o[2], _add(_add(_sc(R[6], c[0]), _sc(R[7], c[1])), _sc(R[8], c[2])))
@@ -195,7 +209,6 @@ def _one(q, qd, qdd, T, lengths, L, signs, mass, com, inertia, grav, ftip, out):
     cga = _div(_addc(o_z, -l5), q3)
     sga = _sc(_div(_sub(o_y, m_y), q3), -1.0)
     R_act = (one, zero, zero, zero, cga, _sc(sga, -1.0), zero, sga, cga)
-    EYE = (one, zero, zero, zero, one, zero, zero, zero, one)
     rcm = (_c(T[0, 3]), _c(T[1, 3]), _c(T[2, 3]))
     cv0 = _sub(rcm[0], O_s[0])
     cv1 = _sub(rcm[1], O_s[1])
@@ -233,19 +246,19 @@ def _one(q, qd, qdd, T, lengths, L, signs, mass, com, inertia, grav, ftip, out):
     Q[2] = 0.0
     gx, gy, gz = grav[0], grav[1], grav[2]
     # order of MASS_BODIES: rail (fixed) skipped
-    _body_loads(A, EYE, mass[1], com[1], inertia[1], gx, gy, gz, Q)       # carriage_a
-    _body_loads(B, EYE, mass[2], com[2], inertia[2], gx, gy, gz, Q)       # carriage_b
+    _point_loads(A, mass[1], com[1], gx, gy, gz, Q)                       # carriage_a
+    _point_loads(B, mass[2], com[2], gx, gy, gz, Q)                       # carriage_b
     _body_loads(A, R_la, mass[3], com[3], inertia[3], gx, gy, gz, Q)      # link_a
     _body_loads(B, R_lb, mass[4], com[4], inertia[4], gx, gy, gz, Q)      # link_b
     _body_loads(A, R_lad, mass[5], com[5], inertia[5], gx, gy, gz, Q)     # link_ad
     _body_loads(B, R_lbd, mass[6], com[6], inertia[6], gx, gy, gz, Q)     # link_bd
-    _body_loads(Dp, EYE, mass[7], com[7], inertia[7], gx, gy, gz, Q)      # carrier
+    _point_loads(Dp, mass[7], com[7], gx, gy, gz, Q)                      # carrier
     _body_loads(C, R_act, mass[8], com[8], inertia[8], gx, gy, gz, Q)     # actuator
     _body_loads(O_i, R_i, mass[9], com[9], inertia[9], gx, gy, gz, Q)     # platform
     _body_loads(O_s, R_3, mass[10], com[10], inertia[10], gx, gy, gz, Q)  # instrument
     _body_loads(rcm, R_s4, mass[11], com[11], inertia[11], gx, gy, gz, Q)  # sphere_link_1
     _body_loads(rcm, R_s3, mass[12], com[12], inertia[12], gx, gy, gz, Q)  # sphere_link_2
-    _body_loads(Dp, EYE, mass[13], com[13], inertia[13], gx, gy, gz, Q)   # slider_d
+    _point_loads(Dp, mass[13], com[13], gx, gy, gz, Q)                    # slider_d
     _body_loads(O_i, R_act, mass[14], com[14], inertia[14], gx, gy, gz, Q)  # actuator_rod
     _body_loads(rcm, R_3, mass[15], com[15], inertia[15], gx, gy, gz, Q)  # guide
     for j in range(3):
