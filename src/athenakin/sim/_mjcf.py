@@ -332,7 +332,9 @@ def _apply_masses(root: ET.Element, masses: object, jv: object, *, gravity: bool
 
     Each MJCF body gets an ``<inertial>`` (``fullinertia`` about its centre of mass, in
     the body frame, which is the mass model's frame of the same part); bodies with no
-    part of the mass model (the U-joint crosses) get :data:`TINY_INERTIA`, except
+    part of the mass model (the U-joint crosses) get :data:`TINY_INERTIA` (so does a
+    principal moment of 0), an inertia on the triangle boundary ``A + B = C`` gains
+    ``1e-9 C`` on every axis (MuJoCo refuses the boundary), except
     ``sph_5`` (:data:`FIXED_LINK_MASS`), which the weld holds fixed. Joints lose their damping and
     armature; the position servos become ``motor`` actuators (gear 1, N) whose keyframe
     controls are the static forces at ``home``.
@@ -356,6 +358,8 @@ def _apply_masses(root: ET.Element, masses: object, jv: object, *, gravity: bool
             m, com = TINY_INERTIA, np.zeros(3)
         if np.linalg.eigvalsh(inertia).min() < TINY_INERTIA:
             inertia = inertia + TINY_INERTIA * np.eye(3)
+        ev = np.linalg.eigvalsh(inertia)     # MuJoCo rejects A + B = C (a thin disc) exactly
+        inertia = inertia + max(0.0, ev[2] * (1 + 1e-9) - ev[0] - ev[1]) * np.eye(3)
         full = (inertia[0, 0], inertia[1, 1], inertia[2, 2], inertia[0, 1], inertia[0, 2],
                 inertia[1, 2])
         el = ET.Element("inertial", {"pos": _vec(com), "mass": _f(m), "fullinertia": _vec(full)})
