@@ -262,7 +262,7 @@ def test_power_balance_along_a_trajectory():
 def test_simulate_conserves_energy_and_follows_inverse_dynamics():
     q0 = REFERENCE_Q.copy()
     f0 = actuator_forces(q0, T, D, masses=M)
-    sim = simulate(q0, [0.05, -0.02, 0.03], f0, T, D, masses=M, duration=0.04, dt=1e-3)
+    sim = simulate(q0, [0.05, -0.02, 0.03], f0, T, D, masses=M, duration=0.2, dt=1e-3)
     # constant forces that hold the weight: E_mech - f0 . (q - q0) is conserved
     kin, pot = mechanical_energy(sim.q, sim.qd, T, D, masses=M)
     work = (sim.q - q0) @ f0
@@ -373,3 +373,16 @@ def test_force_metrics_bound_every_tip_motion_within_speed_and_acceleration(stat
         tau = inverse_dynamics(q, qd, qdd, T, D, masses=M)
         worst = max(worst, float(np.abs(tau).max()))
     assert worst <= peak
+
+
+def test_simulate_fast_stage_equals_forward_dynamics(states):
+    pytest.importorskip("numba")
+    from athenakin.dynamics._simulate import _fast_forward
+
+    q, qd, _ = states
+    fast = _fast_forward(D, T, MF, 9, np.array([0.0, 0.1, -9.8]), np.array([1.0, 0.0, -2.0]))
+    tau = np.array([3.0, -2.0, 1.0])
+    for i in range(3):
+        ref = forward_dynamics(q[i], qd[i], tau, T, D, masses=MF, slot=9,
+                               gravity=[0.0, 0.1, -9.8], tip_force=[1.0, 0.0, -2.0])
+        assert_allclose(fast(q[i], qd[i], tau), ref, rtol=0, atol=1e-11)

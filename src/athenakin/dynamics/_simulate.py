@@ -73,12 +73,55 @@ class Simulation:
 
 
 def _distances(q: Arr, T: Arr, design: Design, slot: int) -> dict[str, float]:
-    from ._core import evaluate
+    """Distances to the singular sets: the closed forms of ``body_jets`` on plain floats."""
+    from ._kinematics import J2, body_jets
 
-    z = np.zeros((1, 3))
-    ev = evaluate(q[None], z, z, T[None], design, MassModel.zeros(), slot)
-    return {"half_chord": float(ev.hc[0]), "sin_u2": abs(float(ev.sin_u2[0])),
-            "sin_u4": abs(float(ev.sin_u4[0])), "p": abs(float(ev.p_ins[0]))}
+    def c(x: float) -> J2:
+        return J2(float(x), 0.0, 0.0)  # type: ignore[arg-type]
+
+    with np.errstate(invalid="ignore", divide="ignore"):
+        bj = body_jets([c(x) for x in q], [c(T[i, 3]) for i in range(3)],
+                       [[c(T[i, j]) for j in range(3)] for i in range(3)], design, slot)
+    return {"half_chord": float(bj.hc), "sin_u2": abs(float(bj.sin_u2)),
+            "sin_u4": abs(float(bj.sin_u4)), "p": abs(float(bj.p))}
+
+
+def _fast_forward(design: Design, T: Arr, masses: MassModel, slot: int, g: Arr,
+                  f_tip: Arr | None) -> Callable[[Arr, Arr, Arr], Arr] | None:
+    """``qdd(q, qd, tau)`` from four rows of the compiled inverse dynamics, or None.
+
+    Row 0 gives ``h = tau(q, qd, 0)``, rows 1-3 (``qd = 0``, no gravity, ``qdd = e_j``)
+    the columns of ``M``; then ``qdd = M^-1 (tau - h)``.
+    """
+    from ._api import _kernel
+    from ._kinematics import slot_signs
+
+    kernel = _kernel(required=False)
+    if kernel is None:
+        return None
+    signs = np.array(slot_signs(slot))
+    grav = np.zeros((4, 3))
+    grav[0] = g
+    ftip = np.zeros((4, 3))
+    if f_tip is not None:
+        ftip[0] = f_tip
+    Tc = np.ascontiguousarray(T[None])
+    qdd_in = np.zeros((4, 3))
+    qdd_in[1:] = np.eye(3)
+    out = np.empty((4, 3))
+
+    def qdd(qq: Arr, vv: Arr, tau: Arr) -> Arr:
+        qs = np.ascontiguousarray(np.broadcast_to(qq, (4, 3)))
+        vs = np.zeros((4, 3))
+        vs[0] = vv
+        kernel(qs, vs, qdd_in, Tc, design.lengths, float(design.tool_length), signs,
+               masses.mass, masses.com, masses.inertia, grav, ftip, out)
+        if not np.all(np.isfinite(out)):
+            return np.full(3, np.nan)
+        M = out[1:].T
+        return np.asarray(np.linalg.solve(M, tau - out[0]), dtype=np.float64)
+
+    return qdd
 
 
 def simulate(q0: ArrayLike, qd0: ArrayLike,
@@ -89,7 +132,8 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
              slot: int = 0) -> Simulation:
     """Integrate the closed chain's equations of motion with fixed-step RK4.
 
-    Each stage solves :func:`forward_dynamics` (exact to rounding); the local error of
+    Each stage solves the forward dynamics (exact to rounding: the compiled inverse
+    dynamics where numba imports, else :func:`forward_dynamics`); the local error of
     the scheme is ``O(dt^5)``, so halving ``dt`` divides the global error by about 16.
 
     Parameters
@@ -148,6 +192,7 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
             return f_const
 
     lo, hi = d.stroke_min, d.stroke_max
+    fast = _fast_forward(d, T, m, k, g, f_tip)
     ts, qs, vs = [0.0], [q.copy()], [v.copy()]
     accs: list[Arr] = []
     fs: list[Arr] = []
@@ -171,8 +216,11 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
                            f"margin {margin:g} at t = {t:.6g} s (q = {qq.tolist()} m)",
                            SingularConfigurationError, t)
         tau = tau_of(t, qq, vv)
-        a = forward_dynamics(qq, vv, tau, T, d, masses=m, gravity=g, tip_force=f_tip, slot=k,
-                             errors="flag")
+        if fast is not None:
+            a = fast(qq, vv, tau)
+        else:
+            a = forward_dynamics(qq, vv, tau, T, d, masses=m, gravity=g, tip_force=f_tip,
+                                 slot=k, errors="flag")
         if not np.all(np.isfinite(a)):
             raise stop(f"simulate: slot {k} holds no configuration at t = {t:.6g} s "
                        f"(q = {qq.tolist()} m)", OutOfWorkspaceError, t)
