@@ -138,7 +138,7 @@ def _point_loads(o, m, c, gx, gy, gz, Q):
 
 
 @njit(**_OPTS)
-def _body_loads(o, R, m, c, inertia_b, gx, gy, gz, Q):
+def _body_loads(o, R, m, c, inertia_b, gx, gy, gz, qd, Q):
     """Add one body's ``v_j . m (a - g) + w_j . (I alpha + w x I w)`` to ``Q[0..2]``."""
     if m == 0.0:
         return
@@ -148,17 +148,22 @@ def _body_loads(o, R, m, c, inertia_b, gx, gy, gz, Q):
     F0 = m * (2.0 * p0[5] - gx)
     F1 = m * (2.0 * p1[5] - gy)
     F2 = m * (2.0 * p2[5] - gz)
-    # moment about the centre in body axes: N_b = inertia_b alpha_b + w_b x inertia_b w_b
-    wb = _rt(R, _omega(R, 4))
+    # moment about the centre in body axes: N_b = I alpha_b + w_b x I w_b; the angular
+    # velocity of the motion is sum_j qd_j w_j (the Jacobian columns)
+    w1 = _rt(R, _omega(R, 1))
+    w2 = _rt(R, _omega(R, 2))
+    w3 = _rt(R, _omega(R, 3))
+    wb = (qd[0] * w1[0] + qd[1] * w2[0] + qd[2] * w3[0],
+          qd[0] * w1[1] + qd[1] * w2[1] + qd[2] * w3[1],
+          qd[0] * w1[2] + qd[1] * w2[2] + qd[2] * w3[2])
     ab = _rt(R, _omega(R, 5))
     Iw = _iv(inertia_b, wb)
     Ia = _iv(inertia_b, ab)
     Nb = (Ia[0] + wb[1] * Iw[2] - wb[2] * Iw[1], Ia[1] + wb[2] * Iw[0] - wb[0] * Iw[2],
           Ia[2] + wb[0] * Iw[1] - wb[1] * Iw[0])
-    for j in range(3):
-        wj = _rt(R, _omega(R, j + 1))
-        Q[j] += (p0[j + 1] * F0 + p1[j + 1] * F1 + p2[j + 1] * F2
-                 + wj[0] * Nb[0] + wj[1] * Nb[1] + wj[2] * Nb[2])
+    Q[0] += p0[1] * F0 + p1[1] * F1 + p2[1] * F2 + w1[0] * Nb[0] + w1[1] * Nb[1] + w1[2] * Nb[2]
+    Q[1] += p0[2] * F0 + p1[2] * F1 + p2[2] * F2 + w2[0] * Nb[0] + w2[1] * Nb[1] + w2[2] * Nb[2]
+    Q[2] += p0[3] * F0 + p1[3] * F1 + p2[3] * F2 + w3[0] * Nb[0] + w3[1] * Nb[1] + w3[2] * Nb[2]
 
 
 @njit(**_OPTS)
@@ -248,19 +253,19 @@ def _one(q, qd, qdd, T, lengths, L, signs, mass, com, inertia, grav, ftip, out):
     # order of MASS_BODIES: rail (fixed) skipped
     _point_loads(A, mass[1], com[1], gx, gy, gz, Q)                       # carriage_a
     _point_loads(B, mass[2], com[2], gx, gy, gz, Q)                       # carriage_b
-    _body_loads(A, R_la, mass[3], com[3], inertia[3], gx, gy, gz, Q)      # link_a
-    _body_loads(B, R_lb, mass[4], com[4], inertia[4], gx, gy, gz, Q)      # link_b
-    _body_loads(A, R_lad, mass[5], com[5], inertia[5], gx, gy, gz, Q)     # link_ad
-    _body_loads(B, R_lbd, mass[6], com[6], inertia[6], gx, gy, gz, Q)     # link_bd
+    _body_loads(A, R_la, mass[3], com[3], inertia[3], gx, gy, gz, qd, Q)      # link_a
+    _body_loads(B, R_lb, mass[4], com[4], inertia[4], gx, gy, gz, qd, Q)      # link_b
+    _body_loads(A, R_lad, mass[5], com[5], inertia[5], gx, gy, gz, qd, Q)     # link_ad
+    _body_loads(B, R_lbd, mass[6], com[6], inertia[6], gx, gy, gz, qd, Q)     # link_bd
     _point_loads(Dp, mass[7], com[7], gx, gy, gz, Q)                      # carrier
-    _body_loads(C, R_act, mass[8], com[8], inertia[8], gx, gy, gz, Q)     # actuator
-    _body_loads(O_i, R_i, mass[9], com[9], inertia[9], gx, gy, gz, Q)     # platform
-    _body_loads(O_s, R_3, mass[10], com[10], inertia[10], gx, gy, gz, Q)  # instrument
-    _body_loads(rcm, R_s4, mass[11], com[11], inertia[11], gx, gy, gz, Q)  # sphere_link_1
-    _body_loads(rcm, R_s3, mass[12], com[12], inertia[12], gx, gy, gz, Q)  # sphere_link_2
+    _body_loads(C, R_act, mass[8], com[8], inertia[8], gx, gy, gz, qd, Q)     # actuator
+    _body_loads(O_i, R_i, mass[9], com[9], inertia[9], gx, gy, gz, qd, Q)     # platform
+    _body_loads(O_s, R_3, mass[10], com[10], inertia[10], gx, gy, gz, qd, Q)  # instrument
+    _body_loads(rcm, R_s4, mass[11], com[11], inertia[11], gx, gy, gz, qd, Q)  # sphere_link_1
+    _body_loads(rcm, R_s3, mass[12], com[12], inertia[12], gx, gy, gz, qd, Q)  # sphere_link_2
     _point_loads(Dp, mass[13], com[13], gx, gy, gz, Q)                    # slider_d
-    _body_loads(O_i, R_act, mass[14], com[14], inertia[14], gx, gy, gz, Q)  # actuator_rod
-    _body_loads(rcm, R_3, mass[15], com[15], inertia[15], gx, gy, gz, Q)  # guide
+    _body_loads(O_i, R_act, mass[14], com[14], inertia[14], gx, gy, gz, qd, Q)  # actuator_rod
+    _body_loads(rcm, R_3, mass[15], com[15], inertia[15], gx, gy, gz, qd, Q)  # guide
     for j in range(3):
         out[j] = Q[j] - (tip[0][j + 1] * ftip[0] + tip[1][j + 1] * ftip[1]
                          + tip[2][j + 1] * ftip[2])
