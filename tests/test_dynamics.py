@@ -386,3 +386,10 @@ def test_simulate_fast_stage_equals_forward_dynamics(states):
         ref = forward_dynamics(q[i], qd[i], tau, T, D, masses=MF, slot=9,
                                gravity=[0.0, 0.1, -9.8], tip_force=[1.0, 0.0, -2.0])
         assert_allclose(fast(q[i], qd[i], tau), ref, rtol=0, atol=1e-11)
+
+
+def test_empty_batches_and_broadcast_errors():
+    assert actuator_forces(np.zeros((0, 3)), T, D).shape == (0, 3)
+    assert mass_matrix(np.zeros((0, 3)), T, D).shape == (0, 3, 3)
+    with pytest.raises(InvalidInputError, match="do not broadcast"):
+        inverse_dynamics(np.tile(REFERENCE_Q, (2, 1)), np.zeros((3, 3)), np.zeros(3), T, D)

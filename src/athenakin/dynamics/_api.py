@@ -107,7 +107,8 @@ def _singular(prep: _Prepared, errors: object, *results: Arr) -> _Prepared:
     """
     finite = np.ones(prep.valid.shape, bool)
     for r in results:
-        finite &= np.all(np.isfinite(r.reshape(r.shape[0], -1)), axis=-1)
+        finite &= np.all(np.isfinite(r.reshape(r.shape[0], int(np.prod(r.shape[1:])))),
+                         axis=-1)
     bad = prep.valid & ~finite
     if not np.any(bad):
         return prep
