@@ -3,8 +3,10 @@
 The model is the spanning tree of :mod:`athenakin.sim._layout` with its loop
 closures as MuJoCo equality constraints (``connect`` and ``weld`` between sites,
 ``joint`` couplings), three position actuators on ``q1``, ``q2``, ``q3`` and a
-keyframe ``home``: the mechanism assembled in one forward-kinematics slot. Writing
-the file needs no MuJoCo; loading it does.
+keyframe ``home``: the mechanism assembled in one forward-kinematics slot. With
+``masses=`` (an :class:`athenakin.dynamics.MassModel`) the bodies carry its inertias
+and the actuators are force motors (:func:`_apply_masses`). Writing the file needs no
+MuJoCo; loading it does.
 """
 
 from __future__ import annotations
