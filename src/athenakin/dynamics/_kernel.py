@@ -100,29 +100,38 @@ def _rx90_right(A):
 
 
 @njit(**_OPTS)
-def _omega(R, k):
-    """``vee(R_k R_0^T)``: angular velocity along jet component ``k`` (2x for ``k = 5``)."""
-    # (R_k R0^T)[a, b] = sum_m R[3a+m][k] R[3b+m][0]
+def _omega_b(R, k):
+    """Body-frame ``vee(R_0^T R_k)``, the angular velocity along jet component ``k``.
+
+    In body axes; for ``k = 5`` (twice the coefficient) the angular acceleration.
+    """
     def e(a, b):
-        return (R[3 * a][k] * R[3 * b][0] + R[3 * a + 1][k] * R[3 * b + 1][0]
-                + R[3 * a + 2][k] * R[3 * b + 2][0])
+        # (R_0^T R_k)[a, b] = sum_m R_0[m, a] R_k[m, b]
+        return R[a][0] * R[b][k] + R[3 + a][0] * R[3 + b][k] + R[6 + a][0] * R[6 + b][k]
     s = 1.0 if k == 5 else 0.5
     return (s * (e(2, 1) - e(1, 2)), s * (e(0, 2) - e(2, 0)), s * (e(1, 0) - e(0, 1)))
 
 
 @njit(**_OPTS)
-def _rt(R, v):
-    """``R_0^T v``."""
-    return (R[0][0] * v[0] + R[3][0] * v[1] + R[6][0] * v[2],
-            R[1][0] * v[0] + R[4][0] * v[1] + R[7][0] * v[2],
-            R[2][0] * v[0] + R[5][0] * v[1] + R[8][0] * v[2])
+def _itup(inertia_b):
+    """An inertia tensor as a 9-tuple (row-major)."""
+    return (inertia_b[0, 0], inertia_b[0, 1], inertia_b[0, 2], inertia_b[1, 0], inertia_b[1, 1],
+            inertia_b[1, 2], inertia_b[2, 0], inertia_b[2, 1], inertia_b[2, 2])
 
 
 @njit(**_OPTS)
-def _iv(inertia_b, v):
-    return (inertia_b[0, 0] * v[0] + inertia_b[0, 1] * v[1] + inertia_b[0, 2] * v[2],
-            inertia_b[1, 0] * v[0] + inertia_b[1, 1] * v[1] + inertia_b[1, 2] * v[2],
-            inertia_b[2, 0] * v[0] + inertia_b[2, 1] * v[1] + inertia_b[2, 2] * v[2])
+def _itup2(a, b):
+    """The sum of two inertia tensors (bodies that share a rotation) as a 9-tuple."""
+    return (a[0, 0] + b[0, 0], a[0, 1] + b[0, 1], a[0, 2] + b[0, 2], a[1, 0] + b[1, 0],
+            a[1, 1] + b[1, 1], a[1, 2] + b[1, 2], a[2, 0] + b[2, 0], a[2, 1] + b[2, 1],
+            a[2, 2] + b[2, 2])
+
+
+@njit(**_OPTS)
+def _iv(It, v):
+    return (It[0] * v[0] + It[1] * v[1] + It[2] * v[2],
+            It[3] * v[0] + It[4] * v[1] + It[5] * v[2],
+            It[6] * v[0] + It[7] * v[1] + It[8] * v[2])
 
 
 @njit(**_OPTS)
@@ -138,8 +147,8 @@ def _point_loads(o, m, c, gx, gy, gz, Q):
 
 
 @njit(**_OPTS)
-def _body_loads(o, R, m, c, inertia_b, gx, gy, gz, qd, Q):
-    """Add one body's ``v_j . m (a - g) + w_j . (I alpha + w x I w)`` to ``Q[0..2]``."""
+def _trans_loads(o, R, m, c, gx, gy, gz, Q):
+    """Add ``v_j . m (a - g)`` of a body's centre of mass ``o + R c`` to ``Q[0..2]``."""
     if m == 0.0:
         return
     p0 = _add(o[0], _add(_add(_sc(R[0], c[0]), _sc(R[1], c[1])), _sc(R[2], c[2])))
@@ -148,22 +157,34 @@ def _body_loads(o, R, m, c, inertia_b, gx, gy, gz, qd, Q):
     F0 = m * (2.0 * p0[5] - gx)
     F1 = m * (2.0 * p1[5] - gy)
     F2 = m * (2.0 * p2[5] - gz)
-    # moment about the centre in body axes: N_b = I alpha_b + w_b x I w_b; the angular
-    # velocity of the motion is sum_j qd_j w_j (the Jacobian columns)
-    w1 = _rt(R, _omega(R, 1))
-    w2 = _rt(R, _omega(R, 2))
-    w3 = _rt(R, _omega(R, 3))
+    for j in range(3):
+        Q[j] += p0[j + 1] * F0 + p1[j + 1] * F1 + p2[j + 1] * F2
+
+
+@njit(**_OPTS)
+def _rot_loads(R, It, qd, Q):
+    """Add ``w_j . (I alpha + w x I w)`` (body axes, inertia about the centre) to ``Q``.
+
+    The rotational terms depend on the rotation and the inertia only, so bodies that
+    share a rotation pass the sum of their inertias.
+    """
+    if It[0] == 0.0 and It[4] == 0.0 and It[8] == 0.0:
+        return
+    w1 = _omega_b(R, 1)
+    w2 = _omega_b(R, 2)
+    w3 = _omega_b(R, 3)
     wb = (qd[0] * w1[0] + qd[1] * w2[0] + qd[2] * w3[0],
           qd[0] * w1[1] + qd[1] * w2[1] + qd[2] * w3[1],
           qd[0] * w1[2] + qd[1] * w2[2] + qd[2] * w3[2])
-    ab = _rt(R, _omega(R, 5))
-    Iw = _iv(inertia_b, wb)
-    Ia = _iv(inertia_b, ab)
-    Nb = (Ia[0] + wb[1] * Iw[2] - wb[2] * Iw[1], Ia[1] + wb[2] * Iw[0] - wb[0] * Iw[2],
-          Ia[2] + wb[0] * Iw[1] - wb[1] * Iw[0])
-    Q[0] += p0[1] * F0 + p1[1] * F1 + p2[1] * F2 + w1[0] * Nb[0] + w1[1] * Nb[1] + w1[2] * Nb[2]
-    Q[1] += p0[2] * F0 + p1[2] * F1 + p2[2] * F2 + w2[0] * Nb[0] + w2[1] * Nb[1] + w2[2] * Nb[2]
-    Q[2] += p0[3] * F0 + p1[3] * F1 + p2[3] * F2 + w3[0] * Nb[0] + w3[1] * Nb[1] + w3[2] * Nb[2]
+    ab = _omega_b(R, 5)
+    Iw = _iv(It, wb)
+    Ia = _iv(It, ab)
+    N0 = Ia[0] + wb[1] * Iw[2] - wb[2] * Iw[1]
+    N1 = Ia[1] + wb[2] * Iw[0] - wb[0] * Iw[2]
+    N2 = Ia[2] + wb[0] * Iw[1] - wb[1] * Iw[0]
+    Q[0] += w1[0] * N0 + w1[1] * N1 + w1[2] * N2
+    Q[1] += w2[0] * N0 + w2[1] * N1 + w2[2] * N2
+    Q[2] += w3[0] * N0 + w3[1] * N1 + w3[2] * N2
 
 
 @njit(**_OPTS)
@@ -251,21 +272,30 @@ def _one(q, qd, qdd, T, lengths, L, signs, mass, com, inertia, grav, ftip, out):
     Q[2] = 0.0
     gx, gy, gz = grav[0], grav[1], grav[2]
     # order of MASS_BODIES: rail (fixed) skipped
-    _point_loads(A, mass[1], com[1], gx, gy, gz, Q)                       # carriage_a
-    _point_loads(B, mass[2], com[2], gx, gy, gz, Q)                       # carriage_b
-    _body_loads(A, R_la, mass[3], com[3], inertia[3], gx, gy, gz, qd, Q)      # link_a
-    _body_loads(B, R_lb, mass[4], com[4], inertia[4], gx, gy, gz, qd, Q)      # link_b
-    _body_loads(A, R_lad, mass[5], com[5], inertia[5], gx, gy, gz, qd, Q)     # link_ad
-    _body_loads(B, R_lbd, mass[6], com[6], inertia[6], gx, gy, gz, qd, Q)     # link_bd
-    _point_loads(Dp, mass[7], com[7], gx, gy, gz, Q)                      # carrier
-    _body_loads(C, R_act, mass[8], com[8], inertia[8], gx, gy, gz, qd, Q)     # actuator
-    _body_loads(O_i, R_i, mass[9], com[9], inertia[9], gx, gy, gz, qd, Q)     # platform
-    _body_loads(O_s, R_3, mass[10], com[10], inertia[10], gx, gy, gz, qd, Q)  # instrument
-    _body_loads(rcm, R_s4, mass[11], com[11], inertia[11], gx, gy, gz, qd, Q)  # sphere_link_1
-    _body_loads(rcm, R_s3, mass[12], com[12], inertia[12], gx, gy, gz, qd, Q)  # sphere_link_2
-    _point_loads(Dp, mass[13], com[13], gx, gy, gz, Q)                    # slider_d
-    _body_loads(O_i, R_act, mass[14], com[14], inertia[14], gx, gy, gz, qd, Q)  # actuator_rod
-    _body_loads(rcm, R_3, mass[15], com[15], inertia[15], gx, gy, gz, qd, Q)  # guide
+    _point_loads(A, mass[1], com[1], gx, gy, gz, Q)              # carriage_a
+    _point_loads(B, mass[2], com[2], gx, gy, gz, Q)              # carriage_b
+    _point_loads(Dp, mass[7], com[7], gx, gy, gz, Q)             # carrier
+    _point_loads(Dp, mass[13], com[13], gx, gy, gz, Q)           # slider_d
+    _trans_loads(A, R_la, mass[3], com[3], gx, gy, gz, Q)        # link_a
+    _rot_loads(R_la, _itup(inertia[3]), qd, Q)
+    _trans_loads(B, R_lb, mass[4], com[4], gx, gy, gz, Q)        # link_b
+    _rot_loads(R_lb, _itup(inertia[4]), qd, Q)
+    _trans_loads(A, R_lad, mass[5], com[5], gx, gy, gz, Q)       # link_ad
+    _rot_loads(R_lad, _itup(inertia[5]), qd, Q)
+    _trans_loads(B, R_lbd, mass[6], com[6], gx, gy, gz, Q)       # link_bd
+    _rot_loads(R_lbd, _itup(inertia[6]), qd, Q)
+    _trans_loads(C, R_act, mass[8], com[8], gx, gy, gz, Q)       # actuator (cylinder)
+    _trans_loads(O_i, R_act, mass[14], com[14], gx, gy, gz, Q)   # actuator_rod
+    _rot_loads(R_act, _itup2(inertia[8], inertia[14]), qd, Q)    # same rotation
+    _trans_loads(O_i, R_i, mass[9], com[9], gx, gy, gz, Q)       # platform
+    _rot_loads(R_i, _itup(inertia[9]), qd, Q)
+    _trans_loads(O_s, R_3, mass[10], com[10], gx, gy, gz, Q)     # instrument
+    _trans_loads(rcm, R_3, mass[15], com[15], gx, gy, gz, Q)     # guide
+    _rot_loads(R_3, _itup2(inertia[10], inertia[15]), qd, Q)     # same rotation
+    _trans_loads(rcm, R_s4, mass[11], com[11], gx, gy, gz, Q)    # sphere_link_1
+    _rot_loads(R_s4, _itup(inertia[11]), qd, Q)
+    _trans_loads(rcm, R_s3, mass[12], com[12], gx, gy, gz, Q)    # sphere_link_2
+    _rot_loads(R_s3, _itup(inertia[12]), qd, Q)
     for j in range(3):
         out[j] = Q[j] - (tip[0][j + 1] * ftip[0] + tip[1][j + 1] * ftip[1]
                          + tip[2][j + 1] * ftip[2])
