@@ -85,7 +85,7 @@ def _prepare(arrays: dict[str, ArrayLike | None], T_b_e: ArrayLike | None, desig
         raise InvalidInputError(f"batch: expected at most {MAX_BATCH} states, got {n}")
     flat = {name: np.broadcast_to(a, batch + (3,)).reshape(n, 3) for name, a in arrs.items()}
     Tf = np.broadcast_to(T, batch + (4, 4)).reshape(n, 4, 4)
-    sol = forward_kinematics(flat["q"], Tf, d, errors="flag")
+    sol = forward_kinematics(flat["q"], Tf, d, errors="flag", fields=("valid", "reason"))
     valid = np.asarray(sol.valid[..., k]).reshape(n)
     reason = np.asarray(sol.reason[..., k]).reshape(n)
     if errors == "raise" and not valid.all():
@@ -271,11 +271,10 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
 
         Q = np.empty((a["q"].shape[0], 3))
         kernel(np.ascontiguousarray(a["q"]), np.ascontiguousarray(a["qd"]),
-               np.ascontiguousarray(a["qdd"]), np.ascontiguousarray(prep.T),
+               np.ascontiguousarray(a["qdd"]), _compact(prep.T),
                prep.design.lengths, float(prep.design.tool_length),
                np.array(slot_signs(prep.slot)), prep.masses.mass, prep.masses.com,
-               prep.masses.inertia, np.ascontiguousarray(a["gravity"]),
-               np.ascontiguousarray(a["tip_force"]), Q)
+               prep.masses.inertia, _compact(a["gravity"]), _compact(a["tip_force"]), Q)
         prep = _singular(prep, errors, Q)
         return _finish(Q, prep, (3,))
     ev = evaluate(a["q"], a["qd"], a["qdd"], prep.T, prep.design, prep.masses, prep.slot)
@@ -283,6 +282,13 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
     Q = generalized_forces(ev, F, Nm, a["tip_force"])
     prep = _singular(prep, errors, Q)
     return _finish(Q[:, 1:N_Q_DIRECTIONS], prep, (3,))
+
+
+def _compact(x: Arr) -> Arr:
+    """A broadcast (stride-0) batch as one row, else contiguous: the kernel broadcasts."""
+    if x.shape[0] > 1 and x.strides[0] == 0:
+        return np.ascontiguousarray(x[:1])
+    return np.ascontiguousarray(x)
 
 
 def _kernel(*, required: bool) -> Callable[..., None] | None:
