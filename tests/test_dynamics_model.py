@@ -142,3 +142,14 @@ def test_model_is_frozen_and_read_only():
         m.mass[0] = 1.0
     with pytest.raises(AttributeError):
         m.mass = np.zeros(len(MASS_BODIES))  # type: ignore[misc]
+
+
+def test_from_bodies_takes_the_geometry_of_the_bodies():
+    from athenakin._mechanism import BodyGeometry
+
+    g = BodyGeometry(sphere_radius=0.2)
+    bodies = types.SimpleNamespace(radius={"sphere_link_1": 0.005}, geometry=g)
+    m = MassModel.from_bodies(bodies, density=1000.0, design=D)
+    seg = body_segment_in_frame("sphere_link_1", D, g)
+    assert_allclose(np.linalg.norm(seg[1] - seg[0]), 0.2 * math.sqrt(2), rtol=1e-15)
+    assert_allclose(m.body("sphere_link_1")[1], seg.mean(axis=0), rtol=0, atol=1e-15)
