@@ -245,7 +245,9 @@ def trajectory_json_text(traj: Trajectory) -> str:
     lim = traj.limits
     obj = {
         "units": {"t_s": "s", "q_m": "m", "qd_m_s": "m/s", "qdd_m_s2": "m/s^2",
-                  "qddd_m_s3": "m/s^3", "tip_e_m": "m (RCM frame E)"},
+                  "qddd_m_s3": "m/s^3", "tip_e_m": "m (RCM frame E)",
+                  "forces_N": "N (actuators, positive along increasing q; null without "
+                              "masses)"},
         "rate_hz": traj.rate,
         "duration_s": traj.duration,
         "design": {f.name: getattr(traj.design, f.name)
