@@ -9,7 +9,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = [ROOT / "README.md", ROOT / "docs" / "conventions.md", ROOT / "docs" / "ros.md",
-        ROOT / "docs" / "certified.md"]
+        ROOT / "docs" / "certified.md", ROOT / "docs" / "dynamics.md"]
 EXAMPLES = sorted(p for p in (ROOT / "examples").rglob("*.py") if not p.name.startswith("_"))
 
 

@@ -34,6 +34,12 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--j-max", type=float, default=None,
                    help="actuator jerk limit, m/s^3 (default: none)")
     p.add_argument("--tip-speed", type=float, default=None, help="tool-tip speed limit, m/s")
+    p.add_argument("--masses", type=Path, default=None, metavar="FILE",
+                   help="TOML file with a [masses] table (e.g. the design file): the "
+                        "trajectory carries the actuator forces (f1_N, f2_N, f3_N)")
+    p.add_argument("--f-max", type=float, nargs="+", default=None, metavar="N",
+                   help="actuator force limit(s), N (one, or one per actuator; needs "
+                        "--masses): the motion is slowed down until the forces hold")
     p.add_argument("--max-duration", type=float, default=None, metavar="S",
                    help="refuse a trajectory longer than this, s (default: "
                         "athenakin.motion.MAX_DURATION, 3600)")
@@ -120,7 +126,8 @@ def run(args: argparse.Namespace) -> int:
         opts = dict(rate=args.rate, v_max=args.v_max, a_max=args.a_max, j_max=args.j_max,
                     tip_speed=args.tip_speed, times=spec.times, timing=args.timing,
                     margins=parse_margins(args.margin), max_duration=args.max_duration,
-                    max_samples=args.max_samples, **collision_options(args, design))
+                    max_samples=args.max_samples, **collision_options(args, design),
+                    **_force_options(args))
         if args.timing == "fixed" and spec.times is None:
             raise ValueError(f"--timing fixed: {args.path} has no t_s column")
         if spec.kind == "tip":
@@ -148,6 +155,22 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _force_options(args: argparse.Namespace) -> dict[str, object]:
+    """``masses=``, ``f_max=`` from ``--masses FILE`` and ``--f-max``."""
+    if args.masses is None:
+        if args.f_max is not None:
+            raise ValueError("--f-max: force limits need a mass model (--masses FILE)")
+        return {}
+    from ..dynamics import MassModel
+
+    f_max = None
+    if args.f_max is not None:
+        if len(args.f_max) not in (1, 3):
+            raise ValueError(f"--f-max: expected 1 or 3 force limits (N), got {len(args.f_max)}")
+        f_max = args.f_max[0] if len(args.f_max) == 1 else list(args.f_max)
+    return {"masses": MassModel.from_toml(args.masses), "f_max": f_max}
+
+
 def _summary(traj: object, written: list[Path]) -> None:
     t = traj  # Trajectory
     lim = t.limits  # type: ignore[attr-defined]
@@ -163,6 +186,10 @@ def _summary(traj: object, written: list[Path]) -> None:
         rows.append(("|qddd| max [m/s^3]", np.abs(t.qddd).max(0), lim.j_max))  # type: ignore[attr-defined]
     for name, v, bound in rows:
         print(f"{name:>20}: " + "  ".join(f"q{i + 1} {v[i]:.4f}/{bound[i]:g}" for i in range(3)))
+    forces = getattr(t, "forces", None)
+    if forces is not None:
+        print(f"{'|f| max [N]':>20}: " + "  ".join(
+            f"q{i + 1} {np.abs(forces[:, i]).max():.3f}" for i in range(3)))
     ratios = t.measures.ratio(t.margins)  # type: ignore[attr-defined]
     worst = min(ratios, key=lambda k: float(np.min(ratios[k])))
     print(f"closest to a singularity: {worst} at {float(np.min(ratios[worst])):.2f} x its margin")

@@ -222,7 +222,10 @@ def trajectory_columns(traj: Trajectory) -> list[str]:
             "qdd1_m_s2", "qdd2_m_s2", "qdd3_m_s2"]
     if traj.qddd is not None:
         cols += ["qddd1_m_s3", "qddd2_m_s3", "qddd3_m_s3"]
-    cols += ["tip_x_m", "tip_y_m", "tip_z_m", "segment"]
+    cols += ["tip_x_m", "tip_y_m", "tip_z_m"]
+    if getattr(traj, "forces", None) is not None:
+        cols += ["f1_N", "f2_N", "f3_N"]
+    cols += ["segment"]
     return cols + (CLEARANCE_COLUMNS if traj.clearance is not None else [])
 
 
@@ -232,6 +235,8 @@ def trajectory_csv_text(traj: Trajectory) -> str:
     if traj.qddd is not None:
         parts.append(traj.qddd)
     parts += [traj.tip_e]
+    if getattr(traj, "forces", None) is not None:
+        parts.append(traj.forces)  # type: ignore[arg-type]
     data = np.concatenate(parts, axis=1)
     buf = io.StringIO()
     buf.write(",".join(trajectory_columns(traj)) + "\n")
@@ -259,7 +264,9 @@ def trajectory_json_text(traj: Trajectory) -> str:
     lim = traj.limits
     obj = {
         "units": {"t_s": "s", "q_m": "m", "qd_m_s": "m/s", "qdd_m_s2": "m/s^2",
-                  "qddd_m_s3": "m/s^3", "tip_e_m": "m (RCM frame E)"},
+                  "qddd_m_s3": "m/s^3", "tip_e_m": "m (RCM frame E)",
+                  "forces_N": "N (actuators, positive along increasing q; null without "
+                              "masses)"},
         "rate_hz": traj.rate,
         "duration_s": traj.duration,
         "design": {f.name: getattr(traj.design, f.name)
@@ -273,6 +280,7 @@ def trajectory_json_text(traj: Trajectory) -> str:
         "stretched": traj.stretched,
         "t_s": traj.t, "q_m": traj.q, "qd_m_s": traj.qd, "qdd_m_s2": traj.qdd,
         "qddd_m_s3": traj.qddd, "tip_e_m": traj.tip_e, "segment": traj.segment,
+        "forces_N": getattr(traj, "forces", None),
         "measures": dataclasses.asdict(traj.measures),
     }
     if traj.clearance is not None:

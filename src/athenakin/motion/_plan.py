@@ -46,6 +46,7 @@ from ._errors import (
     TimingInfeasibleError,
     TrajectoryLimitError,
 )
+from ._forces import planned
 from ._path import (
     Segment,
     arc_segment,
@@ -172,6 +173,9 @@ class Trajectory:
         The two names (body, body or obstacle) of that clearance.
     clearance_margin : float or None
         The margin every sample keeps, m (None when not checked).
+    forces : ndarray, shape (N, 3) or None
+        Actuator forces along the motion, N (positive along increasing ``q``), when
+        planned with ``masses=`` (:mod:`athenakin.motion._forces`), else None.
     """
 
     t: NDArray[np.float64]
@@ -194,6 +198,7 @@ class Trajectory:
     clearance: NDArray[np.float64] | None = None
     closest_pair: NDArray[np.str_] | None = None
     clearance_margin: float | None = None
+    forces: NDArray[np.float64] | None = None
 
     @property
     def duration(self) -> float:
@@ -223,7 +228,8 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
          times: ArrayLike | None = None, timing: Timing = "stretch",
          margins: Margins | None = None, max_duration: float | None = None,
          max_samples: int | None = None, bodies: object = None, environment: object = None,
-         clearance_margin: float | None = None) -> Trajectory:
+         clearance_margin: float | None = None, masses: object = None,
+         f_max: ArrayLike | None = None) -> Trajectory:
     """Plan an actuator trajectory that moves the tool tip along straight segments.
 
     Parameters
@@ -271,13 +277,19 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
     clearance_margin : float, optional, keyword-only
         Least clearance of every sample, m (turns the check on); default 5 mm when
         the check is on, 0 to refuse only contact and penetration.
+    masses : athenakin.dynamics.MassModel, optional, keyword-only
+        Attach the actuator forces (:attr:`Trajectory.forces`, N) computed by
+        :func:`athenakin.dynamics.inverse_dynamics`.
+    f_max : float or array-like of shape (3,), optional, keyword-only
+        Actuator force limits, N (needs ``masses``): the trajectory is slowed down
+        uniformly until ``|forces| <= f_max`` (:mod:`athenakin.motion._forces`).
 
     Returns
     -------
     Trajectory
         Every sample is inside the workspace and the stroke limits, keeps the
         margins and respects the kinematic limits (relative tolerance
-        :data:`LIMIT_RTOL`).
+        :data:`LIMIT_RTOL`) and the force limits.
 
     Raises
     ------
@@ -320,10 +332,15 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
         raise ValueError(f"tips_e: expected shape (K, 3) with K >= 2 waypoints, "
                          f"got shape {tips.shape}")
     segs = [line_segment(tips[k], tips[k + 1]) for k in range(tips.shape[0] - 1)]
-    return _plan(segs, tips, T_b_e, design, rate=rate, v_max=v_max, a_max=a_max, j_max=j_max,
-                 tip_speed=tip_speed, times=times, timing=timing, margins=margins,
-                 max_duration=max_duration, max_samples=max_samples, bodies=bodies,
-                 environment=environment, clearance_margin=clearance_margin)
+
+    def run(**limits: object) -> Trajectory:
+        return _plan(segs, tips, T_b_e, design, rate=rate, times=times, timing=timing,
+                     margins=margins, max_duration=max_duration, max_samples=max_samples,
+                     bodies=bodies, environment=environment,
+                     clearance_margin=clearance_margin, **limits)  # type: ignore[arg-type]
+
+    return planned(run, v_max=v_max, a_max=a_max, j_max=j_max, tip_speed=tip_speed,  # type: ignore[return-value]
+                   masses=masses, f_max=f_max, fixed_times=timing == "fixed")
 
 
 def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_e: ArrayLike,
@@ -377,7 +394,17 @@ def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_
                          "circle between them is undefined")
     tips = dirs * dp[:, None]
     segs = [arc_segment(tips[k], tips[k + 1]) for k in range(tips.shape[0] - 1)]
-    return _plan(segs, tips, T_b_e, design, **options)  # type: ignore[arg-type]
+    opts = dict(options)
+    masses, f_max = opts.pop("masses", None), opts.pop("f_max", None)
+    lim = {k: opts.pop(k) for k in ("v_max", "a_max", "j_max", "tip_speed") if k in opts}
+
+    def run(**limits: object) -> Trajectory:
+        return _plan(segs, tips, T_b_e, design, **opts, **limits)  # type: ignore[arg-type]
+
+    return planned(run, v_max=lim.get("v_max", 0.05), a_max=lim.get("a_max", 0.5),  # type: ignore[return-value, arg-type]
+                   j_max=lim.get("j_max"), tip_speed=lim.get("tip_speed"),  # type: ignore[arg-type]
+                   masses=masses, f_max=f_max,  # type: ignore[arg-type]
+                   fixed_times=opts.get("timing") == "fixed")
 
 
 # --------------------------------------------------------------------------------------

@@ -3,8 +3,10 @@
 The model is the spanning tree of :mod:`athenakin.sim._layout` with its loop
 closures as MuJoCo equality constraints (``connect`` and ``weld`` between sites,
 ``joint`` couplings), three position actuators on ``q1``, ``q2``, ``q3`` and a
-keyframe ``home``: the mechanism assembled in one forward-kinematics slot. Writing
-the file needs no MuJoCo; loading it does.
+keyframe ``home``: the mechanism assembled in one forward-kinematics slot. With
+``masses=`` (an :class:`athenakin.dynamics.MassModel`) the bodies carry its inertias
+and the actuators are force motors (:func:`_apply_masses`). Writing the file needs no
+MuJoCo; loading it does.
 """
 
 from __future__ import annotations
@@ -158,7 +160,7 @@ def _collision_geoms(root: ET.Element, bodies: Bodies, segs: dict[str, tuple[
 def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
                      q: ArrayLike | None = None, slot: int = 0, gravity: bool = True,
                      model_name: str = "athena", bodies: Bodies | None = None,
-                     collision: bool | None = None) -> str:
+                     collision: bool | None = None, masses: object = None) -> str:
     """MJCF text of the closed-loop mechanism, assembled in a keyframe ``home``.
 
     Parameters
@@ -183,6 +185,12 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
         ``bodies`` is given, so that the plain export simulates as before, free of
         contacts (where the capsules overlap, MuJoCo's contacts push the mechanism off
         its forward kinematics).
+    masses : athenakin.dynamics.MassModel, keyword-only, optional
+        Export these inertias instead of the parts' geometric ones, with force
+        (``motor``) actuators on ``q1, q2, q3`` (ctrl in N, positive along increasing
+        ``q``; the keyframe ``home`` holds the static forces against gravity) and no
+        joint damping or armature, so that the model's dynamics are those of
+        :mod:`athenakin.dynamics` (:func:`_apply_masses`).
 
     Returns
     -------
@@ -355,11 +363,105 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     kf = ET.SubElement(root, "keyframe")
     ET.SubElement(kf, "key", {"name": "home", "qpos": _vec(qpos),
                               "ctrl": _vec([values[n] for n in ACTUATED])})
+    if masses is not None:
+        _apply_masses(root, masses, jv, gravity=gravity)
     ET.indent(root)
     header = (f"<!-- ATHENA closed-loop mechanism exported by athenakin: design "
               f"l1..l5 = {d.lengths.tolist()} m, keyframe 'home' = q {g.q.tolist()} m in "
               f"FK slot {g.slot}. Loop closures are equality constraints. -->\n")
     return header + ET.tostring(root, encoding="unicode") + "\n"
+
+
+#: MJCF body that carries each body of the mass model (frames coincide: see
+#: :mod:`athenakin.dynamics._model`); ``rail`` is fixed and left out.
+MASS_BODY_IN_MJCF = {
+    "carriage_a": "carriage_a", "carriage_b": "carriage_b", "link_a": "link_a1",
+    "link_b": "link_b1", "link_ad": "link_a3", "link_bd": "link_b3", "carrier": "carrier",
+    "slider_d": "carrier", "actuator": "k2_arm", "actuator_rod": "k2_rod",
+    "platform": "platform", "instrument": "instrument", "guide": "guide",
+    "sphere_link_2": "sph_3", "sphere_link_1": "sph_4",
+}
+#: Mass (kg) of ``sph_5``, the last link of the spherical joint, which the weld holds
+#: at E: it never moves, but MuJoCo wants inertia on the leaf of the ``u5`` joint.
+FIXED_LINK_MASS = 0.01
+#: MuJoCo rejects a moving body without mass or with a zero principal moment (a slender
+#: rod about its axis, a massless U-joint cross): those get this mass (kg) and this
+#: much isotropic inertia (kg m^2), 1e-10 of the reference model's, which changes its
+#: dynamics by about as much.
+TINY_INERTIA = 1e-12
+
+
+def _inertial_of(masses: object, names: list[str]) -> tuple[float, NDArray[np.float64],
+                                                            NDArray[np.float64]]:
+    """Combined mass, centre and inertia (about the centre) of bodies sharing a frame."""
+    total, first = 0.0, np.zeros(3)
+    parts = []
+    for n in names:
+        m, c, inertia = masses.body(n)  # type: ignore[attr-defined]
+        parts.append((m, c, inertia))
+        total += m
+        first += m * c
+    com = first / total if total > 0 else np.zeros(3)
+    out = np.zeros((3, 3))
+    for m, c, inertia in parts:
+        r = c - com
+        out += inertia + m * (float(r @ r) * np.eye(3) - np.outer(r, r))
+    return total, com, out
+
+
+def _apply_masses(root: ET.Element, masses: object, jv: object, *, gravity: bool) -> None:
+    """Give every body of the tree the inertia of the mass model; force actuators.
+
+    Each MJCF body gets an ``<inertial>`` (``fullinertia`` about its centre of mass, in
+    the body frame, which is the mass model's frame of the same part); bodies with no
+    part of the mass model (the U-joint crosses) get :data:`TINY_INERTIA` (so does a
+    principal moment of 0), an inertia on the triangle boundary ``A + B = C`` gains
+    ``1e-9 C`` on every axis (MuJoCo refuses the boundary), except
+    ``sph_5`` (:data:`FIXED_LINK_MASS`), which the weld holds fixed. Joints lose their damping and
+    armature; the position servos become ``motor`` actuators (gear 1, N) whose keyframe
+    controls are the static forces at ``home``.
+    """
+    from ..dynamics import MassModel, actuator_forces
+
+    if not isinstance(masses, MassModel):
+        raise TypeError(f"masses: expected an athenakin.dynamics.MassModel, got "
+                        f"{type(masses).__name__}")
+    groups: dict[str, list[str]] = {}
+    for part, body in MASS_BODY_IN_MJCF.items():
+        groups.setdefault(body, []).append(part)
+    for el_body in root.iter("body"):
+        name = el_body.get("name", "")
+        if name == "rcm_setup":
+            continue
+        m, com, inertia = _inertial_of(masses, groups.get(name, []))
+        if name == "sph_5":  # welded to E: it never moves, its inertia is immaterial
+            m, com, inertia = FIXED_LINK_MASS, np.zeros(3), FIXED_LINK_MASS * 1e-3 * np.eye(3)
+        if m <= 0:
+            m, com = TINY_INERTIA, np.zeros(3)
+        if np.linalg.eigvalsh(inertia).min() < TINY_INERTIA:
+            inertia = inertia + TINY_INERTIA * np.eye(3)
+        ev = np.linalg.eigvalsh(inertia)     # MuJoCo rejects A + B = C (a thin disc) exactly
+        inertia = inertia + max(0.0, ev[2] * (1 + 1e-9) - ev[0] - ev[1]) * np.eye(3)
+        full = (inertia[0, 0], inertia[1, 1], inertia[2, 2], inertia[0, 1], inertia[0, 2],
+                inertia[1, 2])
+        el = ET.Element("inertial", {"pos": _vec(com), "mass": _f(m), "fullinertia": _vec(full)})
+        el_body.insert(0, el)
+    for joint in root.iter("joint"):
+        if joint.get("type") is not None:
+            joint.set("damping", "0")
+            joint.set("armature", "0")
+    act = root.find("actuator")
+    assert act is not None
+    for el in list(act):
+        act.remove(el)
+    for name in ACTUATED:
+        ET.SubElement(act, "motor", {"name": name, "joint": name, "gear": "1"})
+    g = jv.geometry  # type: ignore[attr-defined]
+    f = actuator_forces(g.q, g.T_b_e, g.design, masses=masses, slot=g.slot,
+                        gravity=(0.0, 0.0, -9.81) if gravity else (0.0, 0.0, 0.0))
+    key = root.find("keyframe/key")
+    assert key is not None
+    key.set("ctrl", _vec(f))
 
 
 def write_mjcf(path: str | Path, design: Design | None = None, T_b_e: ArrayLike | None = None,

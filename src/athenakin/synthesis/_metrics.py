@@ -44,7 +44,8 @@ METRIC_COLUMNS = (("coverage", "coverage_mode", "mode", "coverage_plus", "covera
                   + tuple(f"margin_{c}" for c in _CONDITIONS)
                   + ("margin_min", "cond_tip_max", "cond_parallel_max", "stroke_use_q1",
                      "stroke_use_q2", "stroke_use_q3", "size", "tip_error_max",
-                     "tip_error_mean") + COLLISION_COLUMNS)
+                     "tip_error_mean", "peak_actuator_force", "min_tip_force_capability")
+                  + COLLISION_COLUMNS)
 
 #: Task samples per design whose clearance is checked unless told otherwise (the first
 #: ones of the task samples: a uniform subsample, the same for every design).
@@ -144,6 +145,10 @@ def _collision_metrics(spec: CollisionSpec, design: Design, T: NDArray[np.float6
     return {"collision_free_coverage": float(np.count_nonzero(free)) / k,
             "min_clearance": float(np.min(dist[seen])) if np.any(seen) else math.nan}
 
+#: Reachable task samples (evenly spread over them) on which the two force columns are
+#: computed (athenakin.dynamics.force_metrics: reference mass model of the design, tip
+#: speed 0.1 m/s, tip acceleration 1 m/s^2, actuator limit 50 N).
+FORCE_SAMPLES = 256
 
 #: Conditions whose value is a length (m); the others are dimensionless sines.
 _LENGTH_CONDITIONS = ("circles_tangent", "d_on_rail", "k1_degenerate", "ab_coincide",
@@ -300,7 +305,8 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
     if counts[0] == 0:
         out.update({f"margin_{c}": nan for c in _CONDITIONS})
         out.update(margin_min=nan, cond_tip_max=nan, cond_parallel_max=nan, stroke_use_q1=nan,
-                   stroke_use_q2=nan, stroke_use_q3=nan, tip_error_max=nan, tip_error_mean=nan)
+                   stroke_use_q2=nan, stroke_use_q3=nan, tip_error_max=nan, tip_error_mean=nan,
+                   peak_actuator_force=nan, min_tip_force_capability=nan)
     else:
         # the kernel picks the worst samples; the reported values are the analysis module's
         picks = np.unique(arg_margin)
@@ -317,6 +323,7 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
             out[f"stroke_use_q{i + 1}"] = float(use[i])
         out["tip_error_max"] = float(tip[0])
         out["tip_error_mean"] = float(tip[1] / counts[0])
+        out.update(_force_columns(qv, mv, T, design))
     if collision is None:
         out.update(dict.fromkeys(COLLISION_COLUMNS, nan))
     else:
@@ -326,6 +333,17 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
     out["size"] = float(2 * design.l1 + 2 * design.l3 + design.l2 + design.l4 + design.l5
                         + stroke)
     return {k: float(out[k]) for k in METRIC_COLUMNS}
+
+
+def _force_columns(q: NDArray[np.float64], mode: NDArray[np.int64], T: NDArray[np.float64],
+                   design: Design) -> dict[str, float]:
+    """``peak_actuator_force`` and ``min_tip_force_capability`` on FORCE_SAMPLES samples."""
+    from ..dynamics import force_metrics
+
+    pick = np.unique(np.linspace(0, q.shape[0] - 1, min(FORCE_SAMPLES, q.shape[0])).astype(int))
+    slot = np.where(mode[pick] == 1, 0, 8)
+    peak, cap = force_metrics(q[pick], T, design, slot=slot)
+    return {"peak_actuator_force": peak, "min_tip_force_capability": cap}
 
 
 def metrics_or_reason(row: Mapping[str, Any], task: Task, *, samples: int, seed: int,

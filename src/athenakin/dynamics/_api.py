@@ -1,0 +1,386 @@
+"""Statics and dynamics of ATHENA in actuator coordinates (public functions).
+
+Sign conventions (docs/conventions.md, "Forces"): actuator forces are positive along
+increasing ``q1, q2, q3`` (N); ``tau . qd`` is the power the actuators put in. Gravity
+and the tip force are in the base frame; the tip force is the force the environment
+applies to the tool tip. The RCM load is the force (and moment about the RCM) that the
+robot exerts on the fixed mount of the spherical mechanism (S1, S2).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._dispatch import forward_kinematics
+from .._validation import broadcast_batch, check_array, check_choice
+from ..design import Design, resolve_design
+from ..errors import InvalidInputError, OutOfWorkspaceError, Reason, SingularConfigurationError
+from ..robot._setup import resolve_rcm_frame
+from ._core import (
+    N_Q_DIRECTIONS,
+    body_loads,
+    energies,
+    evaluate,
+    generalized_forces,
+    mass_matrix_from,
+)
+from ._model import MassModel
+
+__all__ = ["Statics", "statics", "actuator_forces", "inverse_dynamics", "mass_matrix",
+           "forward_dynamics", "mechanical_energy", "STANDARD_GRAVITY", "MAX_BATCH"]
+
+Arr = NDArray[np.float64]
+#: Default gravity, base frame, m/s^2.
+STANDARD_GRAVITY = (0.0, 0.0, -9.81)
+#: Largest batch (number of states) of one call.
+MAX_BATCH = 50_000_000
+
+
+def _check_slot(slot: object) -> int:
+    if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 16:
+        raise InvalidInputError(f"slot: expected an integer in 0..15, got {slot!r}")
+    return int(slot)
+
+
+def _check_masses(masses: object, design: Design) -> MassModel:
+    if masses is None:
+        return MassModel.reference(design)
+    if not isinstance(masses, MassModel):
+        raise TypeError(f"masses: expected a MassModel, got {type(masses).__name__}")
+    return masses
+
+
+@dataclasses.dataclass(frozen=True)
+class _Prepared:
+    shape: tuple[int, ...]
+    arrays: dict[str, Arr]
+    T: Arr
+    design: Design
+    masses: MassModel
+    slot: int
+    valid: NDArray[np.bool_]
+    reason: NDArray[np.int8]
+
+
+def _prepare(arrays: dict[str, ArrayLike | None], T_b_e: ArrayLike | None, design: object,
+             masses: object, slot: object, errors: object, **vec3: ArrayLike | None
+             ) -> _Prepared:
+    check_choice(errors, "errors", ("raise", "flag"))
+    k = _check_slot(slot)
+    d = resolve_design(design)
+    m = _check_masses(masses, d)
+    arrs = {n: check_array(x if x is not None else np.zeros(3), n, (3,))
+            for n, x in {**arrays, **vec3}.items()}
+    T = resolve_rcm_frame(T_b_e, d, single=False)
+    shapes = {n: a.shape[:-1] for n, a in arrs.items()}
+    shapes["T_b_e"] = T.shape[:-2]
+    batch = broadcast_batch(**shapes)
+    n = int(np.prod(batch)) if batch else 1
+    if n > MAX_BATCH:
+        raise InvalidInputError(f"batch: expected at most {MAX_BATCH} states, got {n}")
+    flat = {name: np.broadcast_to(a, batch + (3,)).reshape(n, 3) for name, a in arrs.items()}
+    Tf = np.broadcast_to(T, batch + (4, 4)).reshape(n, 4, 4)
+    sol = forward_kinematics(flat["q"], Tf, d, errors="flag", fields=("valid", "reason"))
+    valid = np.asarray(sol.valid[..., k]).reshape(n)
+    reason = np.asarray(sol.reason[..., k]).reshape(n)
+    if errors == "raise" and not valid.all():
+        i = int(np.argmin(valid))
+        code = Reason(int(reason[i]))
+        idx = np.unravel_index(i, batch) if batch else ()
+        raise OutOfWorkspaceError(
+            f"q: FK slot {k} holds no valid configuration at item {tuple(int(x) for x in idx)} "
+            f"(q = {flat['q'][i].tolist()} m; reason {code.name}); pass errors='flag' for "
+            f"NaN results in a batch", code)
+    return _Prepared(batch, flat, Tf, d, m, k, valid, reason)
+
+
+def _singular(prep: _Prepared, errors: object, *results: Arr) -> _Prepared:
+    """Flag items whose results are not finite though the slot is valid.
+
+    That happens only on a singular set where a body's speed is unbounded for a finite
+    ``qd`` (D on the rail, ``|q1 - q2| = 2 l3``) or the mass matrix is singular.
+    """
+    finite = np.ones(prep.valid.shape, bool)
+    for r in results:
+        finite &= np.all(np.isfinite(r.reshape(r.shape[0], int(np.prod(r.shape[1:])))),
+                         axis=-1)
+    bad = prep.valid & ~finite
+    if not np.any(bad):
+        return prep
+    i = int(np.argmax(bad))
+    if errors == "raise":
+        idx = np.unravel_index(i, prep.shape) if prep.shape else ()
+        raise SingularConfigurationError(
+            f"q: item {tuple(int(x) for x in idx)} (q = {prep.arrays['q'][i].tolist()} m) is on "
+            f"a singular set of the dynamics (a body's speed is unbounded there); pass "
+            f"errors='flag' for NaN results in a batch", Reason.IK_SINGULAR)
+    reason = np.where(bad, np.int8(Reason.IK_SINGULAR), prep.reason).astype(np.int8)
+    return dataclasses.replace(prep, valid=prep.valid & finite, reason=reason)
+
+
+def _finish(x: Arr, prep: _Prepared, tail: tuple[int, ...]) -> Arr:
+    x = np.where(prep.valid.reshape((-1,) + (1,) * len(tail)), x, np.nan)
+    return x.reshape(prep.shape + tail)
+
+
+@dataclasses.dataclass(frozen=True)
+class Statics:
+    """Actuator forces that hold the robot still, and the load on the RCM mount.
+
+    Attributes
+    ----------
+    forces : ndarray, shape (..., 3)
+        Actuator forces ``(f1, f2, f3)``, N, positive along increasing ``q1, q2, q3``.
+    rcm_force : ndarray, shape (..., 3)
+        Force the robot exerts on the fixed mount of the spherical mechanism at the
+        RCM (base frame, N): the load the RCM mechanism carries.
+    rcm_moment : ndarray, shape (..., 3)
+        Moment about the RCM that the robot exerts on that mount (base frame, N m);
+        nonzero only through the weight of the spherical mechanism's own links.
+    tip_jacobian : ndarray, shape (..., 3, 3)
+        ``d tip / d q`` (base frame, m/m): ``forces = -J^T f_tip`` for a tip force alone.
+    valid : ndarray of bool, shape (...)
+        The FK slot holds the configuration (results are NaN where not).
+    reason : ndarray of int8, shape (...)
+        :class:`~athenakin.errors.Reason` of invalid items.
+    """
+
+    forces: Arr
+    rcm_force: Arr
+    rcm_moment: Arr
+    tip_jacobian: Arr
+    valid: NDArray[np.bool_]
+    reason: NDArray[np.int8]
+
+
+def _gravity_tip(prep: _Prepared) -> tuple[Arr, Arr]:
+    return prep.arrays["gravity"], prep.arrays["tip_force"]
+
+
+def statics(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None = None, *,
+            masses: MassModel | None = None, gravity: ArrayLike = STANDARD_GRAVITY,
+            tip_force: ArrayLike | None = None, slot: int = 0,
+            errors: Literal["raise", "flag"] = "raise", rcm_load: bool = True) -> Statics:
+    """Actuator forces holding ATHENA still against gravity and a tip force; RCM load.
+
+    Parameters
+    ----------
+    q : array-like, shape (..., 3)
+        Actuators, m.
+    T_b_e : array-like, shape (..., 4, 4), optional
+        RCM frame (default :func:`athenakin.default_rcm_frame`).
+    design : Design, optional
+    masses : MassModel, keyword-only, optional
+        Default :meth:`MassModel.reference` of ``design``.
+    gravity : array-like, shape (..., 3), keyword-only
+        Base frame, m/s^2 (default ``(0, 0, -9.81)``).
+    tip_force : array-like, shape (..., 3), keyword-only, optional
+        Force applied to the tool tip by the environment, base frame, N.
+    slot : int, keyword-only
+        Forward-kinematics slot (docs/conventions.md).
+    errors : {"raise", "flag"}, keyword-only
+        ``"raise"``: an item where the slot holds no configuration raises
+        :class:`~athenakin.errors.OutOfWorkspaceError`; ``"flag"``: NaN with ``valid``.
+    rcm_load : bool, keyword-only
+        Compute the load on the RCM mount (6 more jet directions); with False,
+        ``rcm_force`` and ``rcm_moment`` are NaN.
+
+    Returns
+    -------
+    Statics
+    """
+    prep = _prepare({"q": q}, T_b_e, design, masses, slot, errors, gravity=gravity,
+                    tip_force=tip_force)
+    qf = prep.arrays["q"]
+    z = np.zeros_like(qf)
+    ev = evaluate(qf, z, z, prep.T, prep.design, prep.masses, prep.slot,
+                  rcm_directions=bool(rcm_load))
+    g, f = _gravity_tip(prep)
+    F, Nm = body_loads(ev, prep.masses, g)
+    Q = generalized_forces(ev, F, Nm, f)
+    forces = Q[:, 1:N_Q_DIRECTIONS]
+    mount = -Q[:, N_Q_DIRECTIONS:] if rcm_load else np.full((Q.shape[0], 6), np.nan)
+    J = np.swapaxes(ev.v_tip[:, 1:N_Q_DIRECTIONS], -1, -2)
+    prep = _singular(prep, errors, Q, J)
+    return Statics(forces=_finish(forces, prep, (3,)),
+                   rcm_force=_finish(mount[:, :3], prep, (3,)),
+                   rcm_moment=_finish(mount[:, 3:], prep, (3,)),
+                   tip_jacobian=_finish(J, prep, (3, 3)),
+                   valid=prep.valid.reshape(prep.shape), reason=prep.reason.reshape(prep.shape))
+
+
+def actuator_forces(q: ArrayLike, T_b_e: ArrayLike | None = None,
+                    design: Design | None = None, *, masses: MassModel | None = None,
+                    gravity: ArrayLike = STANDARD_GRAVITY, tip_force: ArrayLike | None = None,
+                    slot: int = 0, errors: Literal["raise", "flag"] = "raise") -> Arr:
+    """Actuator forces (N) that hold the robot still: :attr:`statics(...).forces <Statics>`.
+
+    Parameters and conventions as :func:`statics`; returns shape (..., 3), positive
+    along increasing ``q1, q2, q3``.
+
+    Examples
+    --------
+    >>> import athenakin as ak
+    >>> f = ak.dynamics.actuator_forces([-0.10, 0.10, 0.45])
+    >>> f.shape
+    (3,)
+    """
+    return statics(q, T_b_e, design, masses=masses, gravity=gravity, tip_force=tip_force,
+                   slot=slot, errors=errors).forces
+
+
+def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
+                     T_b_e: ArrayLike | None = None, design: Design | None = None, *,
+                     masses: MassModel | None = None, gravity: ArrayLike = STANDARD_GRAVITY,
+                     tip_force: ArrayLike | None = None, slot: int = 0,
+                     errors: Literal["raise", "flag"] = "raise",
+                     backend: Literal["auto", "numpy", "numba"] = "auto") -> Arr:
+    """Actuator forces (N) that give the motion ``(q, qd, qdd)`` of the closed chain.
+
+    ``tau = M(q) qdd + c(q, qd) + g(q) - J_tip^T f_tip`` by virtual power on the
+    closed chain, exact to rounding (velocity and acceleration of every body from
+    second-order Taylor jets of the closed-form kinematics; no finite differences).
+
+    Parameters
+    ----------
+    q, qd, qdd : array-like, shape (..., 3)
+        Actuator positions (m), velocities (m/s), accelerations (m/s^2).
+    T_b_e, design, masses, gravity, tip_force, slot, errors
+        As :func:`statics`.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        ``"numba"``: the compiled kernel (extra ``fast``; the same formulas per state,
+        equal to the numpy path to rounding); ``"auto"``: numba where it imports.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``(f1, f2, f3)``, N, positive along increasing ``q``.
+    """
+    check_choice(backend, "backend", ("auto", "numpy", "numba"))
+    prep = _prepare({"q": q, "qd": qd, "qdd": qdd}, T_b_e, design, masses, slot, errors,
+                    gravity=gravity, tip_force=tip_force)
+    a = prep.arrays
+    kernel = None if backend == "numpy" else _kernel(required=backend == "numba")
+    if kernel is not None:
+        from ._kinematics import slot_signs
+
+        Q = np.empty((a["q"].shape[0], 3))
+        kernel(np.ascontiguousarray(a["q"]), np.ascontiguousarray(a["qd"]),
+               np.ascontiguousarray(a["qdd"]), _compact(prep.T),
+               prep.design.lengths, float(prep.design.tool_length),
+               np.array(slot_signs(prep.slot)), prep.masses.mass, prep.masses.com,
+               prep.masses.inertia, _compact(a["gravity"]), _compact(a["tip_force"]), Q)
+        prep = _singular(prep, errors, Q)
+        return _finish(Q, prep, (3,))
+    ev = evaluate(a["q"], a["qd"], a["qdd"], prep.T, prep.design, prep.masses, prep.slot)
+    F, Nm = body_loads(ev, prep.masses, a["gravity"])
+    Q = generalized_forces(ev, F, Nm, a["tip_force"])
+    prep = _singular(prep, errors, Q)
+    return _finish(Q[:, 1:N_Q_DIRECTIONS], prep, (3,))
+
+
+def _compact(x: Arr) -> Arr:
+    """A broadcast (stride-0) batch as one row, else contiguous: the kernel broadcasts."""
+    if x.shape[0] > 1 and x.strides[0] == 0:
+        return np.ascontiguousarray(x[:1])
+    return np.ascontiguousarray(x)
+
+
+def _kernel(*, required: bool) -> Callable[..., None] | None:
+    """The compiled inverse-dynamics kernel, or None without numba (unless required)."""
+    try:
+        from ._kernel import inverse_dynamics_kernel
+    except ImportError:
+        if required:
+            raise ImportError("backend='numba' needs numba: pip install 'athenakin[fast]'"
+                              ) from None
+        return None
+    return inverse_dynamics_kernel
+
+
+def mass_matrix(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None = None,
+                *, masses: MassModel | None = None, slot: int = 0,
+                errors: Literal["raise", "flag"] = "raise") -> Arr:
+    """Mass matrix of the closed chain in actuator coordinates, shape (..., 3, 3), kg.
+
+    ``E_kin = qd^T M(q) qd / 2``; symmetric, positive definite wherever the moving
+    parts have mass along every direction of ``q`` (the carriages alone make it so).
+    """
+    prep = _prepare({"q": q}, T_b_e, design, masses, slot, errors)
+    qf = prep.arrays["q"]
+    z = np.zeros_like(qf)
+    ev = evaluate(qf, z, z, prep.T, prep.design, prep.masses, prep.slot)
+    Mq = mass_matrix_from(ev, prep.masses)
+    prep = _singular(prep, errors, Mq)
+    return _finish(Mq, prep, (3, 3))
+
+
+def forward_dynamics(q: ArrayLike, qd: ArrayLike, forces: ArrayLike,
+                     T_b_e: ArrayLike | None = None, design: Design | None = None, *,
+                     masses: MassModel | None = None, gravity: ArrayLike = STANDARD_GRAVITY,
+                     tip_force: ArrayLike | None = None, slot: int = 0,
+                     errors: Literal["raise", "flag"] = "raise") -> Arr:
+    """Actuator accelerations (m/s^2) under the actuator ``forces`` (N): ``M^-1 (tau - h)``.
+
+    Parameters
+    ----------
+    q, qd : array-like, shape (..., 3)
+    forces : array-like, shape (..., 3)
+        Actuator forces, N, positive along increasing ``q``.
+    T_b_e, design, masses, gravity, tip_force, slot, errors
+        As :func:`statics`.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+
+    Raises
+    ------
+    SingularConfigurationError
+        The mass matrix is singular (a massless model).
+    """
+    prep = _prepare({"q": q, "qd": qd}, T_b_e, design, masses, slot, errors,
+                    gravity=gravity, tip_force=tip_force, forces=forces)
+    a = prep.arrays
+    z = np.zeros_like(a["q"])
+    ev = evaluate(a["q"], a["qd"], z, prep.T, prep.design, prep.masses, prep.slot)
+    F, Nm = body_loads(ev, prep.masses, a["gravity"])
+    h = generalized_forces(ev, F, Nm, a["tip_force"])[:, 1:N_Q_DIRECTIONS]
+    M = mass_matrix_from(ev, prep.masses)
+    prep = _singular(prep, errors, M, h)
+    rhs = a["forces"] - h
+    ok = prep.valid
+    M_safe = np.where(ok[:, None, None], M, np.eye(3))
+    rhs = np.where(ok[:, None], rhs, 0.0)
+    try:
+        qdd = np.linalg.solve(M_safe, rhs[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        raise SingularConfigurationError(
+            "masses: the mass matrix is singular (a direction of q moves no mass); give the "
+            "carriages or the links a mass") from None
+    return _finish(np.asarray(qdd, dtype=np.float64), prep, (3,))
+
+
+def mechanical_energy(q: ArrayLike, qd: ArrayLike, T_b_e: ArrayLike | None = None,
+                      design: Design | None = None, *, masses: MassModel | None = None,
+                      gravity: ArrayLike = STANDARD_GRAVITY, slot: int = 0,
+                      errors: Literal["raise", "flag"] = "raise") -> tuple[Arr, Arr]:
+    """Kinetic and potential energy of the moving bodies, J, shapes (...,) each.
+
+    The potential is ``-sum m g . p_com`` (zero at the base origin).
+    """
+    prep = _prepare({"q": q, "qd": qd}, T_b_e, design, masses, slot, errors,
+                    gravity=gravity)
+    a = prep.arrays
+    z = np.zeros_like(a["q"])
+    ev = evaluate(a["q"], a["qd"], z, prep.T, prep.design, prep.masses, prep.slot)
+    kin, pot = energies(ev, prep.masses, a["gravity"])
+    prep = _singular(prep, errors, kin, pot)
+    return _finish(kin, prep, ()), _finish(pot, prep, ())
+
+

@@ -1,0 +1,166 @@
+"""Force capability: the tip forces the robot can resist within actuator force limits.
+
+At rest the actuator forces are ``tau = tau_g - J^T f`` (:func:`statics`): ``tau_g``
+holds the weight, ``J = d tip / d q`` and ``f`` is the force applied to the tool tip.
+With limits ``f_min <= tau <= f_max`` the tip forces that can be resisted form the
+polytope
+
+    P = { f : tau_g - f_max <= J^T f <= tau_g - f_min },
+
+six halfspaces ``a_k . f <= b_k`` with ``a = (J_1, J_2, J_3, -J_1, -J_2, -J_3)`` (the
+columns of ``J``); where ``J`` is invertible ``P`` is a parallelepiped with the 8
+vertices ``J^-T (tau_g - corner)``. The largest force along a unit direction ``u`` is
+``min_k b_k / (a_k . u)`` over the ``k`` with ``a_k . u > 0``; the largest force the
+robot resists in every direction (the radius of the largest ball about 0 in ``P``) is
+``min_k b_k / |a_k|``, reached along ``a_k / |a_k|``: the weakest direction.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_array
+from ..design import Design
+from ..errors import InvalidInputError
+from ._api import STANDARD_GRAVITY, statics
+from ._model import MassModel
+
+__all__ = ["ForceCapability", "force_capability", "max_tip_force"]
+
+Arr = NDArray[np.float64]
+
+
+@dataclasses.dataclass(frozen=True)
+class ForceCapability:
+    """The polytope of tip forces the robot resists, per configuration.
+
+    Attributes
+    ----------
+    A : ndarray, shape (..., 6, 3)
+        Halfspace normals (``A f <= b``), m/m.
+    b : ndarray, shape (..., 6)
+        Halfspace offsets, N.
+    vertices : ndarray, shape (..., 8, 3)
+        Vertices of the parallelepiped, N (base frame), corner ``k`` taking ``f_max_i``
+        where bit ``i`` of ``k`` is set; NaN where ``J`` is singular.
+    min_force : ndarray, shape (...)
+        Largest tip force (N) resisted in every direction; negative where the
+        actuators cannot even hold the weight.
+    weakest_direction : ndarray, shape (..., 3)
+        Unit direction (base frame) along which ``min_force`` is reached.
+    gravity_forces : ndarray, shape (..., 3)
+        ``tau_g``, the actuator forces that hold the weight alone, N.
+    valid : ndarray of bool, shape (...)
+    """
+
+    A: Arr
+    b: Arr
+    vertices: Arr
+    min_force: Arr
+    weakest_direction: Arr
+    gravity_forces: Arr
+    valid: NDArray[np.bool_]
+
+
+def _limits(f_max: ArrayLike, f_min: ArrayLike | None) -> tuple[Arr, Arr]:
+    hi = check_array(np.broadcast_to(np.asarray(f_max, float), (3,)) if np.ndim(f_max) == 0
+                     else f_max, "f_max", (3,))
+    lo = -hi if f_min is None else check_array(
+        np.broadcast_to(np.asarray(f_min, float), (3,)) if np.ndim(f_min) == 0 else f_min,
+        "f_min", (3,))
+    if np.any(hi < lo):
+        raise InvalidInputError(f"f_min, f_max: expected f_min <= f_max, got {lo.tolist()} and "
+                                f"{hi.tolist()} N")
+    return lo, hi
+
+
+def force_capability(q: ArrayLike, T_b_e: ArrayLike | None = None,
+                     design: Design | None = None, *, f_max: ArrayLike,
+                     f_min: ArrayLike | None = None, masses: MassModel | None = None,
+                     gravity: ArrayLike = STANDARD_GRAVITY, slot: int = 0,
+                     errors: Literal["raise", "flag"] = "raise") -> ForceCapability:
+    """Tip forces the robot can resist at rest within actuator force limits.
+
+    Parameters
+    ----------
+    q : array-like, shape (..., 3)
+        Actuators, m.
+    T_b_e, design, masses, gravity, slot, errors
+        As :func:`athenakin.dynamics.statics`.
+    f_max : float or array-like, shape (..., 3), keyword-only
+        Upper actuator force limits, N.
+    f_min : float or array-like, shape (..., 3), keyword-only, optional
+        Lower limits, N (default ``-f_max``).
+
+    Returns
+    -------
+    ForceCapability
+    """
+    lo, hi = _limits(f_max, f_min)
+    st = statics(q, T_b_e, design, masses=masses, gravity=gravity, slot=slot, errors=errors,
+                 rcm_load=False)
+    J = st.tip_jacobian
+    tg = st.forces
+    Jt = np.swapaxes(J, -1, -2)                         # rows: columns of J
+    A = np.concatenate([Jt, -Jt], axis=-2)
+    b = np.concatenate([tg - lo, hi - tg], axis=-1)
+    norms = np.linalg.norm(A, axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(norms > 0, b / norms, np.inf)
+    k = np.argmin(np.where(np.isnan(ratio), np.inf, ratio), axis=-1)
+    min_force = np.take_along_axis(ratio, k[..., None], axis=-1)[..., 0]
+    a_k = np.take_along_axis(A, k[..., None, None], axis=-2)[..., 0, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        weakest = a_k / np.linalg.norm(a_k, axis=-1, keepdims=True)
+    corners = np.array([[hi[i] if (c >> i) & 1 else lo[i] for i in range(3)]
+                        for c in range(8)])             # (8, 3)
+    rhs = tg[..., None, :] - corners                    # (..., 8, 3)
+    det = np.linalg.det(np.where(np.isfinite(J), J, 0.0))
+    ok = np.abs(det) > 1e-12 * np.maximum(np.abs(J).max(axis=(-2, -1), initial=0.0) ** 3, 1e-300)
+    Jt_safe = np.where(ok[..., None, None], Jt, np.eye(3))
+    verts = np.linalg.solve(Jt_safe[..., None, :, :], rhs[..., None])[..., 0]
+    verts = np.where(ok[..., None, None], verts, np.nan)
+    valid = st.valid
+    min_force = np.where(valid, min_force, np.nan)
+    return ForceCapability(A=A, b=b, vertices=verts, min_force=min_force,
+                           weakest_direction=weakest, gravity_forces=tg, valid=valid)
+
+
+def max_tip_force(q: ArrayLike, direction: ArrayLike, T_b_e: ArrayLike | None = None,
+                  design: Design | None = None, *, f_max: ArrayLike,
+                  f_min: ArrayLike | None = None, masses: MassModel | None = None,
+                  gravity: ArrayLike = STANDARD_GRAVITY, slot: int = 0,
+                  errors: Literal["raise", "flag"] = "raise") -> Arr:
+    """Largest tip force (N) the robot resists along ``direction`` within the limits.
+
+    Parameters
+    ----------
+    q : array-like, shape (..., 3)
+    direction : array-like, shape (..., 3)
+        Direction of the force applied to the tip (base frame); normalised here.
+    T_b_e, design, f_max, f_min, masses, gravity, slot, errors
+        As :func:`force_capability`.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        ``max { s >= 0 : s u in P }``; ``inf`` along a direction the actuators do not
+        feel (a singular ``J``), ``-inf`` where the actuators cannot hold even the
+        weight (``f = 0`` outside ``P``).
+    """
+    u = check_array(direction, "direction", (3,))
+    n = np.linalg.norm(u, axis=-1, keepdims=True)
+    if np.any(n == 0):
+        raise InvalidInputError("direction: expected a nonzero vector")
+    u = u / n
+    cap = force_capability(q, T_b_e, design, f_max=f_max, f_min=f_min, masses=masses,
+                           gravity=gravity, slot=slot, errors=errors)
+    au = np.einsum("...ki,...i->...k", cap.A, u)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.where(au > 0, cap.b / au, np.inf)
+    out = np.where(np.any(cap.b < 0, axis=-1), -np.inf, s.min(axis=-1))
+    return np.where(cap.valid, out, np.nan)
