@@ -227,7 +227,15 @@ class Environment:
     obstacles: tuple[Obstacle, ...] = ()
 
     def __post_init__(self) -> None:
-        obs = tuple(self.obstacles)
+        if isinstance(self.obstacles, (str, bytes, Mapping)) or not isinstance(self.obstacles,
+                                                                            Iterable):
+            raise TypeError(f"obstacles: expected a tuple of Obstacle, got "
+                            f"{type(self.obstacles).__name__}")
+        try:
+            obs = tuple(self.obstacles)
+        except TypeError:
+            raise TypeError(f"obstacles: expected a tuple of Obstacle, got "
+                            f"{type(self.obstacles).__name__}") from None
         if len(obs) > MAX_OBSTACLES:
             raise InvalidInputError(f"environment: expected at most {MAX_OBSTACLES} obstacles, "
                                     f"got {len(obs)}")
