@@ -349,3 +349,12 @@ def test_witness_false_gives_the_same_distances(setup, backend):
     assert np.array_equal(b.closest_pair, a.closest_pair)
     with pytest.raises(TypeError, match="witness"):
         clearance(q, T, d, witness="no")
+
+
+def test_models_are_hashable_values():
+    env = Environment().sphere((0, 0, 0), 0.1, name="s").halfspace((0, 0, 0), (0, 0, 1))
+    same = Environment().sphere((0, 0, 0), 0.1, name="s").halfspace((0, 0, 0), (0, 0, 1))
+    assert env == same and hash(env) == hash(same)
+    assert env != Environment().sphere((0, 0, 0), 0.2, name="s")
+    assert hash(Bodies.default()) == hash(Bodies.default())
+    assert {Bodies.default(): 1}[Bodies.default()] == 1

@@ -141,7 +141,12 @@ class Obstacle:
                 return False
         return True
 
-    __hash__ = None  # type: ignore[assignment]
+    def __hash__(self) -> int:
+        # a subset of what __eq__ compares (the mesh arrays by shape): equal -> same hash
+        return hash((self.kind, self.name, self.allow, self.point, self.normal, self.center,
+                     self.radius, self.a, self.b, self.T_b_o.tobytes(), self.half_extents,
+                     self.path, self.scale, self.convex, self.vertices.shape,
+                     self.faces.shape))
 
     @property
     def is_primitive(self) -> bool:
