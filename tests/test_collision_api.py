@@ -358,3 +358,16 @@ def test_models_are_hashable_values():
     assert env != Environment().sphere((0, 0, 0), 0.2, name="s")
     assert hash(Bodies.default()) == hash(Bodies.default())
     assert {Bodies.default(): 1}[Bodies.default()] == 1
+
+
+def test_docs_state_the_pair_counts():
+    """docs/collision.md and conventions.md quote the counts of this table, not stale ones."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    b = Bodies.default()
+    text = (root / "docs" / "collision.md").read_text()
+    assert f"`bodies.excluded_pairs` ({len(adjacent_pairs())} pairs" in text
+    assert f"The\n{len(b.pairs)} other pairs" in text
+    assert f"{len(adjacent_pairs())} pairs)" in (root / "docs" / "conventions.md").read_text()
+    assert len(BODIES) == 13 and "Thirteen named bodies" in text
