@@ -371,3 +371,16 @@ def test_docs_state_the_pair_counts():
     assert f"The\n{len(b.pairs)} other pairs" in text
     assert f"{len(adjacent_pairs())} pairs)" in (root / "docs" / "conventions.md").read_text()
     assert len(BODIES) == 13 and "Thirteen named bodies" in text
+
+
+def test_example_scene_reads_and_runs():
+    from pathlib import Path
+
+    f = Path(__file__).resolve().parents[1] / "examples" / "collision" / "scene.toml"
+    d = ak.Design.from_toml(f)
+    b = Bodies.from_toml(f, design=d)
+    env = Environment.from_toml(f)
+    assert env.names == ("table", "drape", "camera") and env["drape"].allow == ("instrument",)
+    c = clearance(REFERENCE_Q, ak.default_rcm_frame(d), d, bodies=b, environment=env)
+    assert c.valid and np.isfinite(c.distances).all()
+    assert ("instrument", "drape") not in c.pairs and ("instrument", "table") in c.pairs
