@@ -79,7 +79,7 @@ from athenakin.errors import KinematicsError  # noqa: E402
 FINDINGS = ("raw", "hang", "nonfinite_valid", "wrong_valid", "mutated", "backend")
 CLASSES = ("result", "named", *FINDINGS)
 SUBPACKAGES = ("robot", "parallel", "chain", "study", "analysis", "motion", "fast",
-               "certified", "calibration", "synthesis", "sim", "symbolic")
+               "certified", "calibration", "synthesis", "sim", "symbolic", "collision")
 RTOL = 1e-9
 
 

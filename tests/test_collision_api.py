@@ -349,3 +349,38 @@ def test_witness_false_gives_the_same_distances(setup, backend):
     assert np.array_equal(b.closest_pair, a.closest_pair)
     with pytest.raises(TypeError, match="witness"):
         clearance(q, T, d, witness="no")
+
+
+def test_models_are_hashable_values():
+    env = Environment().sphere((0, 0, 0), 0.1, name="s").halfspace((0, 0, 0), (0, 0, 1))
+    same = Environment().sphere((0, 0, 0), 0.1, name="s").halfspace((0, 0, 0), (0, 0, 1))
+    assert env == same and hash(env) == hash(same)
+    assert env != Environment().sphere((0, 0, 0), 0.2, name="s")
+    assert hash(Bodies.default()) == hash(Bodies.default())
+    assert {Bodies.default(): 1}[Bodies.default()] == 1
+
+
+def test_docs_state_the_pair_counts():
+    """docs/collision.md and conventions.md quote the counts of this table, not stale ones."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    b = Bodies.default()
+    text = (root / "docs" / "collision.md").read_text()
+    assert f"`bodies.excluded_pairs` ({len(adjacent_pairs())} pairs" in text
+    assert f"The\n{len(b.pairs)} other pairs" in text
+    assert f"{len(adjacent_pairs())} pairs)" in (root / "docs" / "conventions.md").read_text()
+    assert len(BODIES) == 13 and "Thirteen named bodies" in text
+
+
+def test_example_scene_reads_and_runs():
+    from pathlib import Path
+
+    f = Path(__file__).resolve().parents[1] / "examples" / "collision" / "scene.toml"
+    d = ak.Design.from_toml(f)
+    b = Bodies.from_toml(f, design=d)
+    env = Environment.from_toml(f)
+    assert env.names == ("table", "drape", "camera") and env["drape"].allow == ("instrument",)
+    c = clearance(REFERENCE_Q, ak.default_rcm_frame(d), d, bodies=b, environment=env)
+    assert c.valid and np.isfinite(c.distances).all()
+    assert ("instrument", "drape") not in c.pairs and ("instrument", "table") in c.pairs

@@ -116,3 +116,82 @@ def test_urdf_collision_elements_placed_by_pinocchio():
         L = np.linalg.norm(seg[j, 1] - seg[j, 0])
         assert_allclose(2 * gm.geometryObjects[cyl].geometry.halfLength, L, rtol=0, atol=1e-12)
     assert "<collision" not in urdf_from_design(d, T, collision=False)
+
+
+def test_mujoco_sees_the_environment_as_clearance_does(tmp_path):
+    mujoco = pytest.importorskip("mujoco")
+    pytest.importorskip("coal")
+    from athenakin.collision import Environment
+
+    d, T, configs = _configurations(16, seed=9)
+    RCM = T[:3, 3]
+    env = (Environment()
+           .halfspace((0, 0, -0.05), (0.1, 0.0, 1.0), name="table")
+           .sphere(RCM + (0.0, 0.15, 0.1), 0.06, name="organ")
+           .capsule((-0.3, 0.25, 0.0), (0.3, 0.25, 0.1), 0.01, name="cable")
+           .box(RCM + (0.0, 0.1, -0.1), (0.08, 0.08, 0.08), name="drape",
+                allow=("instrument",)))
+    # (a chunky box: MuJoCo's capsule-box test misses a capsule that crosses a thin slab
+    # with both ends outside it, which coal and clearance report)
+    bodies = Bodies.default(d)
+    seen = set()
+    for q, slot in configs:
+        m = mujoco.MjModel.from_xml_string(mjcf_from_design(d, T, q=q, slot=slot,
+                                                             environment=env))
+        data = mujoco.MjData(m)
+        mujoco.mj_resetDataKeyframe(m, data, 0)
+        mujoco.mj_forward(m, data)
+        c = clearance(q, T, d, slot=slot, bodies=bodies, environment=env)
+        gid = {}
+        for name in list(BODIES) + list(env.names):
+            geom = collision_geom_name(name) if name in BODIES else f"obstacle_{name}"
+            gid[name] = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, geom)
+        name = {v: k for k, v in gid.items()}
+        contacts = set()
+        for i in range(data.ncon):
+            a, b = name[data.contact[i].geom1], name[data.contact[i].geom2]
+            contacts.add((a, b) if a in BODIES and (b not in BODIES or BODIES.index(a)
+                                                    < BODIES.index(b)) else (b, a))
+        # the fixed rail and the fixed obstacles are never paired by MuJoCo
+        checked = [(p, dist) for p, dist in zip(c.pairs, c.distances, strict=True)
+                   if not (p[0] == "rail" and p[1] in env.names)]
+        colliding = {p for p, dist in checked if dist < -1e-6}
+        borderline = {p for p, dist in checked if abs(dist) <= 1e-6}
+        assert colliding <= contacts <= colliding | borderline, (q, slot)
+        seen |= {p[1] for p in colliding if p[1] in env.names}
+        fromto = np.zeros(6)
+        for (a, b), dist in checked:
+            if b in env.names and (b != "drape" or dist > 0):
+                # (a box that a capsule crosses: MuJoCo's contact depth is a local
+                # estimate, coal's the penetration depth; only separations compare)
+                got = mujoco.mj_geomDistance(m, data, gid[a], gid[b], 10.0, fromto)
+                assert_allclose(got, dist, rtol=0, atol=1e-6 if b == "drape" else 1e-9)
+    assert seen >= {"table", "drape"}, seen      # obstacles were hit
+
+
+def test_mjcf_mesh_obstacle_is_its_convex_hull(tmp_path):
+    mujoco = pytest.importorskip("mujoco")
+    trimesh = pytest.importorskip("trimesh")
+    from athenakin.collision import Environment
+
+    d = ak.Design.default()
+    T = ak.default_rcm_frame(d)
+    stl = tmp_path / "block.stl"
+    trimesh.creation.icosphere(subdivisions=1, radius=0.05).export(stl)
+    Tm = np.eye(4)
+    Tm[:3, 3] = T[:3, 3] + (0.0, 0.2, 0.1)
+    env = Environment().mesh(stl, T_b_mesh=Tm, convex=True, name="block")
+    m = mujoco.MjModel.from_xml_string(mjcf_from_design(d, T, environment=env))
+    data = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, data, 0)
+    mujoco.mj_forward(m, data)
+    c = clearance(REFERENCE_Q, T, d, environment=env)
+    g2 = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "obstacle_block")
+    for b in BODIES[1:]:
+        g1 = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, collision_geom_name(b))
+        dist = c.distance(b, "block")
+        if dist > 0:
+            got = mujoco.mj_geomDistance(m, data, g1, g2, 10.0, np.zeros(6))
+            assert_allclose(got, dist, rtol=0, atol=1e-5)
+    with pytest.raises(ak.errors.InvalidInputError, match="collision=False"):
+        mjcf_from_design(d, T, environment=env, collision=False)

@@ -45,9 +45,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from ._dispatch import forward_kinematics
 from ._validation import check_array, check_scalar
-from .chain._ups import rotation_u_pair
 from .design import Design, resolve_design
 from .errors import InvalidInputError
+from .robot._fk import SLOT_MODE_INDEX
 from .robot._setup import resolve_rcm_frame
 
 __all__ = ["BODIES", "BODY_SEGMENTS", "BODY_JOINTS", "BodyGeometry", "MechanismPoints",
@@ -202,13 +202,17 @@ def mechanism_points(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = Non
         raise TypeError(f"geometry: expected a BodyGeometry, got {type(geometry).__name__}")
     q = check_array(q, "q", (3,), allow_nonfinite=True)
     T = resolve_rcm_frame(T_b_e, design, single=False)
-    sol = forward_kinematics(q, T, design, errors="flag")
+    sol = forward_kinematics(q, T, design, errors="flag",
+                             fields=("valid", "reason", "p", "u", "T_b_s"))
     sel = slice(None) if k is None else k
     valid = np.asarray(sol.valid[..., sel])
     reason = np.asarray(sol.reason[..., sel])
-    T_b_s = sol.T_b_s[..., sel, :, :]
+    # O_s's pose depends on the assembly mode only: take it from the per-mode store
+    T_mode = sol.T_b_s_mode
+    T_b_s = (T_mode[..., SLOT_MODE_INDEX[k], :, :] if k is not None
+             else np.take(T_mode, SLOT_MODE_INDEX, axis=-3))
     p = sol.p[..., sel]
-    u = sol.u[..., sel, :]
+    u = sol.u[..., sel, :3]
     batch = valid.shape
     # slot-independent points, broadcast to the batch (with a slot axis for "all")
     qq = np.broadcast_to(q if k is not None else q[..., None, :], batch + (3,))
@@ -217,52 +221,69 @@ def mechanism_points(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = Non
     q1, q2 = qq[..., 0], qq[..., 1]
     h = 0.5 * (q1 - q2)
     x_M = 0.5 * (q1 + q2)
-    zero = np.zeros(batch)
-    one = np.ones(batch)
-
-    def pt(x: ArrayLike, y: ArrayLike, z: ArrayLike) -> NDArray[np.float64]:
-        return np.stack(np.broadcast_arrays(x, y, z), axis=-1)
-
     with np.errstate(invalid="ignore"):
         y_D = np.sqrt(l3 * l3 - h * h)
-    A, B, M = pt(q1, zero, zero), pt(q2, zero, zero), pt(x_M, zero, zero)
-    D = pt(x_M, y_D, zero)
-    C_foot = pt(x_M, y_D + l2, zero)
-    C = pt(x_M, y_D + l2, l5 * one)
+    xyz = np.zeros(batch + (len(POINT_NAMES), 3))
+    at = {name: i for i, name in enumerate(POINT_NAMES)}
+
+    def put(name: str, x: ArrayLike, y: ArrayLike = 0.0, z: ArrayLike = 0.0) -> None:
+        i = at[name]
+        xyz[..., i, 0] = x
+        xyz[..., i, 1] = y
+        xyz[..., i, 2] = z
+
+    def put3(name: str, v: NDArray[np.float64]) -> None:
+        xyz[..., at[name], :] = v
+
+    half = 0.5 * geometry.carriage_length
+    put("A", q1)
+    put("B", q2)
+    put("M", x_M)
+    put("D", x_M, y_D)
+    put("C_foot", x_M, y_D + l2)
+    put("C", x_M, y_D + l2, l5)
+    put("A_lo", q1 - half)
+    put("A_hi", q1 + half)
+    put("B_lo", q2 - half)
+    put("B_hi", q2 + half)
+    R_s = T_b_s[..., :3, :3]
     O_s = T_b_s[..., :3, 3]
-    O_i = O_s - l4 * T_b_s[..., :3, 2]
+    put3("O_s", O_s)
+    put3("O_i", O_s - l4 * R_s[..., :, 2])
     c, s = np.cos(u), np.sin(u)
-    R_3 = T_b_s[..., :3, :3] @ rotation_u_pair(c[..., 0], s[..., 0], c[..., 1], s[..., 1])
-    d = R_3[..., :, 2]                                   # instrument axis, O_s -> RCM if p > 0
-    tip = O_s + design.tool_length * d
+    ca, sa, cb, sb, c3, s3 = c[..., 0], s[..., 0], c[..., 1], s[..., 1], c[..., 2], s[..., 2]
+
+    def rot(x: NDArray[np.float64], y: NDArray[np.float64],
+            z: NDArray[np.float64]) -> NDArray[np.float64]:
+        """R_s (x, y, z) for vectors given by components."""
+        return (R_s[..., :, 0] * x[..., None] + R_s[..., :, 1] * y[..., None]
+                + R_s[..., :, 2] * z[..., None])
+
+    # R_3 = R_s R(u1, u2) (chain._ups.rotation_u_pair, rows (ca cb, sa, ca sb),
+    # (sa cb, -ca, sa sb), (sb, 0, -cb)): its third column is the instrument axis
+    # (O_s -> RCM if p > 0), and R_3 (sin u3, -cos u3, 0) the axis of u4
+    d = rot(ca * sb, sa * sb, -cb)
+    a4 = rot(ca * cb * s3 - sa * c3, sa * cb * s3 + ca * c3, sb * s3)
+    put3("tip", O_s + design.tool_length * d)
     RCM = T_e[..., :3, 3]
-    # axis of u4: R_3 Rz(u3) Rx(pi/2) e_z = R_3 (sin u3, -cos u3, 0)
-    a4 = np.einsum("...ij,...j->...i", R_3, pt(s[..., 2], -c[..., 2], zero))
-    z_e = T_e[..., :3, 2]
+    put3("RCM", RCM)
     side = np.sign(p)[..., None]                         # O_s is on the side -p d of the RCM
     side = np.where(side == 0, 1.0, side)
-    out = -side * d                                      # from the RCM towards O_s
     rs = geometry.sphere_radius
-    S_3 = RCM + rs * out
-    # S_4 on the u4 axis as the chain orients it (R_3 Rz(u3) Rx(pi/2) e_z), S_5 on +z_e:
-    # u4 is perpendicular to the instrument, and at the home pose so is u5, so a side of
-    # O_s would flip them with the rounding of a zero dot product.
-    ze = z_e
-    S_4 = RCM + rs * a4
-    S_5 = RCM + rs * ze
+    put3("S_3", RCM + rs * (-side * d))                  # towards O_s
+    # S_4 on the u4 axis as the chain orients it, S_5 on +z_e: u4 is perpendicular to the
+    # instrument, and at the home pose so is u5, so a side of O_s would flip them with
+    # the rounding of a zero dot product.
+    put3("S_4", RCM + rs * a4)
+    put3("S_5", RCM + rs * T_e[..., :3, 2])
     lo = np.min(np.where(np.isfinite(design.stroke_min[:2]), design.stroke_min[:2], np.inf))
     hi = np.max(np.where(np.isfinite(design.stroke_max[:2]), design.stroke_max[:2], -np.inf))
     lo_b = np.minimum(np.minimum(q1, q2), lo) if np.isfinite(lo) else np.minimum(q1, q2)
     hi_b = np.maximum(np.maximum(q1, q2), hi) if np.isfinite(hi) else np.maximum(q1, q2)
     rm = geometry.rail_margin
-    half = 0.5 * geometry.carriage_length
-    ex = np.array([1.0, 0.0, 0.0])
-    pts = {"A": A, "B": B, "M": M, "D": D, "C_foot": C_foot, "C": C, "O_i": O_i, "O_s": O_s,
-           "RCM": RCM, "tip": tip, "rail_lo": pt(lo_b - rm, zero, zero),
-           "rail_hi": pt(hi_b + rm, zero, zero), "A_lo": A - half * ex, "A_hi": A + half * ex,
-           "B_lo": B - half * ex, "B_hi": B + half * ex, "S_3": S_3, "S_4": S_4, "S_5": S_5}
-    xyz = np.stack([np.broadcast_to(pts[n], batch + (3,)) for n in POINT_NAMES], axis=-2)
-    xyz = np.where(valid[..., None, None], xyz, np.nan)
+    put("rail_lo", lo_b - rm)
+    put("rail_hi", hi_b + rm)
+    xyz[~valid] = np.nan
     return MechanismPoints(xyz=xyz, valid=valid, reason=reason)
 
 

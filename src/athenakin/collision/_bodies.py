@@ -86,6 +86,9 @@ def _normalise_excluded(items: Iterable[object], what: str) -> tuple[tuple[str, 
     if isinstance(items, (str, bytes)) or not isinstance(items, Iterable):
         raise TypeError(f"{what}: expected a list of body pairs [a, b] or body names, got "
                         f"{type(items).__name__}")
+    if isinstance(items, np.ndarray) and items.ndim == 0:
+        raise TypeError(f"{what}: expected a list of body pairs [a, b] or body names, got a "
+                        f"0-d array")
     out: set[tuple[str, str]] = set()
     for k, item in enumerate(items):
         if isinstance(item, str):
@@ -147,7 +150,11 @@ class Bodies:
         if isinstance(radii, (str, bytes)) or not isinstance(radii, Iterable):
             raise TypeError(f"radii: expected {len(BODIES)} radii (m) in the order of "
                             f"BODIES, got {type(radii).__name__}")
-        radii = tuple(radii)
+        try:
+            radii = tuple(radii)
+        except TypeError:   # a 0-d array and the like
+            raise TypeError(f"radii: expected {len(BODIES)} radii (m) in the order of BODIES, "
+                            f"got {type(self.radii).__name__} {self.radii!r}") from None
         if len(radii) != len(BODIES):
             raise InvalidInputError(f"radii: expected {len(BODIES)} radii (one per body of "
                                     f"{BODIES}), got {len(radii)}")

@@ -23,7 +23,7 @@ __all__ = ["Clearance", "clearance", "segment_clearance", "MAX_MARGIN"]
 MAX_MARGIN = 10.0
 
 
-@dataclasses.dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True, eq=False)
 class Clearance:
     """Signed distances of the checked pairs, for a batch of configurations.
 

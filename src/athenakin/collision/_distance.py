@@ -13,7 +13,10 @@ the smallest of these five candidates, each a true pair of points on the segment
 it is exact for parallel (``a e - b^2 = 0``: the interior candidate is dropped),
 degenerate (zero length: the end-point candidates remain) and touching or crossing
 segments (distance 0), with no tolerance that decides a branch. The compiled kernel
-(:mod:`athenakin.fast._collision_kernels`) does the same operations in the same order.
+(:mod:`athenakin.fast._collision_kernels`) takes the same candidates (comparing squared
+distances, with fused multiply-adds) and agrees with this reference to 1e-13 m (tested);
+where the closest points are not unique (overlapping parallel segments) the two may
+return different, equally close, pairs of them.
 """
 
 from __future__ import annotations

@@ -141,7 +141,12 @@ class Obstacle:
                 return False
         return True
 
-    __hash__ = None  # type: ignore[assignment]
+    def __hash__(self) -> int:
+        # a subset of what __eq__ compares (the mesh arrays by shape): equal -> same hash
+        return hash((self.kind, self.name, self.allow, self.point, self.normal, self.center,
+                     self.radius, self.a, self.b, self.T_b_o.tobytes(), self.half_extents,
+                     self.path, self.scale, self.convex, self.vertices.shape,
+                     self.faces.shape))
 
     @property
     def is_primitive(self) -> bool:
@@ -227,7 +232,15 @@ class Environment:
     obstacles: tuple[Obstacle, ...] = ()
 
     def __post_init__(self) -> None:
-        obs = tuple(self.obstacles)
+        if isinstance(self.obstacles, (str, bytes, Mapping)) or not isinstance(self.obstacles,
+                                                                            Iterable):
+            raise TypeError(f"obstacles: expected a tuple of Obstacle, got "
+                            f"{type(self.obstacles).__name__}")
+        try:
+            obs = tuple(self.obstacles)
+        except TypeError:
+            raise TypeError(f"obstacles: expected a tuple of Obstacle, got "
+                            f"{type(self.obstacles).__name__}") from None
         if len(obs) > MAX_OBSTACLES:
             raise InvalidInputError(f"environment: expected at most {MAX_OBSTACLES} obstacles, "
                                     f"got {len(obs)}")

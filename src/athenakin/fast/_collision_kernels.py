@@ -5,7 +5,9 @@ The same five candidates as the numpy reference
 distances and Lumelsky's interior critical point where the segments are not parallel;
 the smallest wins. No tolerance decides a branch, so parallel, degenerate (zero-length),
 touching and crossing segments are exact. Witness points and the normal fallback
-(``d1 x d2``, a normal of ``d1``, ``+z``) follow the reference too.
+(``d1 x d2``, a normal of ``d1``, ``+z``) follow the reference too. Candidates are
+compared by squared distance and carry only their parameters ``(s, t)``; the closest
+points are formed once, from the winner.
 """
 
 from __future__ import annotations

@@ -21,7 +21,9 @@ from numpy.typing import ArrayLike, NDArray
 from .._mechanism import BODIES
 from .._validation import check_path
 from ..collision._bodies import Bodies
+from ..collision._environment import Environment
 from ..design import Design
+from ..errors import InvalidInputError
 from ..study import quaternion_from_rotation
 from ._layout import (
     ACTUATED,
@@ -130,8 +132,62 @@ def _arc(body: ET.Element, name: str, rgba: str, n: int = 4) -> None:
         _capsule(body, f"{name}_{k}", pts[k], pts[k + 1], rgba, radius=0.004)
 
 
+def _obstacle_bits(environment: Environment) -> dict[tuple[str, ...], int]:
+    """One contype bit (1..31) per distinct ``allow`` set of the obstacles."""
+    bits: dict[tuple[str, ...], int] = {}
+    for o in environment.obstacles:
+        if o.allow not in bits:
+            bits[o.allow] = 1 << (len(bits) + 1)
+    if len(bits) > 31:
+        raise InvalidInputError(f"environment: the MJCF export encodes each distinct allow= "
+                                f"set in a contact bit; expected at most 31 distinct sets, got "
+                                f"{len(bits)}")
+    return bits
+
+
+def _obstacle_geoms(root: ET.Element, environment: Environment,
+                    bits: dict[tuple[str, ...], int]) -> None:
+    """The obstacles as geoms of a static body ``environment`` (contype = their bit)."""
+    wb = root.find("worldbody")
+    assert wb is not None
+    env = ET.SubElement(wb, "body", {"name": "environment"})
+    asset = None
+    for o in environment.obstacles:
+        attrs = {"name": f"obstacle_{o.name}", "contype": str(bits[o.allow]),
+                 "conaffinity": "0", "group": str(COLLISION_GROUP), "mass": "0",
+                 "rgba": "0.2 0.6 0.9 0.3"}
+        if o.kind == "halfspace":
+            z = np.asarray(o.normal)
+            attrs.update(type="plane", size="0 0 1", pos=_vec(o.point),
+                         zaxis=_vec(z))
+        elif o.kind == "sphere":
+            attrs.update(type="sphere", size=_f(max(o.radius, _MIN_RADIUS)), pos=_vec(o.center))
+        elif o.kind == "capsule":
+            a, b = np.asarray(o.a), np.asarray(o.b)
+            if float(np.linalg.norm(b - a)) > 1e-9:
+                attrs.update(type="capsule", size=_f(max(o.radius, _MIN_RADIUS)),
+                             fromto=_vec(np.concatenate([a, b])))
+            else:
+                attrs.update(type="sphere", size=_f(max(o.radius, _MIN_RADIUS)), pos=_vec(a))
+        elif o.kind == "box":
+            attrs.update(type="box", size=_vec(o.half_extents), pos=_vec(o.T_b_o[:3, 3]),
+                         quat=_vec(quaternion_from_rotation(o.T_b_o[:3, :3])))
+        else:  # mesh: inline vertices and faces; MuJoCo collides with its convex hull
+            if asset is None:
+                asset = ET.Element("asset")
+                root.insert(3, asset)
+            ET.SubElement(asset, "mesh", {"name": f"mesh_{o.name}",
+                                          "vertex": _vec(o.vertices.ravel()),
+                                          "face": " ".join(str(int(i))
+                                                           for i in o.faces.ravel())})
+            attrs.update(type="mesh", mesh=f"mesh_{o.name}", pos=_vec(o.T_b_o[:3, 3]),
+                         quat=_vec(quaternion_from_rotation(o.T_b_o[:3, :3])))
+        ET.SubElement(env, "geom", attrs)
+
+
 def _collision_geoms(root: ET.Element, bodies: Bodies, segs: dict[str, tuple[
-        NDArray[np.float64], NDArray[np.float64]]]) -> None:
+        NDArray[np.float64], NDArray[np.float64]]],
+        bits: dict[tuple[str, ...], int] | None = None) -> None:
     """Capsules of ``bodies`` as collision geoms, and the excluded pairs as <exclude>."""
     by_name = {"world": root.find("worldbody")}
     for el in root.iter("body"):
@@ -141,8 +197,11 @@ def _collision_geoms(root: ET.Element, bodies: Bodies, segs: dict[str, tuple[
         assert parent is not None
         a, b = segs[body]
         r = max(bodies.radius[body], _MIN_RADIUS)
+        # bit 0: the bodies with each other; the bit of every obstacle set that does not
+        # allow this body: collide with those obstacles
+        affinity = 1 + sum(bit for allow, bit in (bits or {}).items() if body not in allow)
         attrs = {"name": collision_geom_name(body), "size": _f(r),
-                 "contype": "1", "conaffinity": "1", "group": str(COLLISION_GROUP),
+                 "contype": "1", "conaffinity": str(affinity), "group": str(COLLISION_GROUP),
                  "mass": "0", "rgba": "0.9 0.2 0.2 0.3"}
         if float(np.linalg.norm(b - a)) > 1e-9:
             attrs.update(type="capsule", fromto=_vec(np.concatenate([a, b])))
@@ -160,7 +219,8 @@ def _collision_geoms(root: ET.Element, bodies: Bodies, segs: dict[str, tuple[
 def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
                      q: ArrayLike | None = None, slot: int = 0, gravity: bool = True,
                      model_name: str = "athena", bodies: Bodies | None = None,
-                     collision: bool | None = None, masses: object = None) -> str:
+                     collision: bool | None = None,
+                     environment: Environment | None = None, masses: object = None) -> str:
     """MJCF text of the closed-loop mechanism, assembled in a keyframe ``home``.
 
     Parameters
@@ -185,6 +245,12 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
         ``bodies`` is given, so that the plain export simulates as before, free of
         contacts (where the capsules overlap, MuJoCo's contacts push the mechanism off
         its forward kinematics).
+    environment : athenakin.collision.Environment, keyword-only, optional
+        Obstacles exported as geoms of a static body ``environment`` (``obstacle_<name>``;
+        a halfspace is a plane, a mesh its inline triangles, whose convex hull MuJoCo
+        collides with); ``allow=`` becomes contact bits, so an obstacle touches exactly
+        the bodies it does not allow. Turns ``collision`` on. The rail and the obstacles
+        are all fixed: MuJoCo never pairs them (``clearance`` does).
     masses : athenakin.dynamics.MassModel, keyword-only, optional
         Export these inertias instead of the parts' geometric ones, with force
         (``motor``) actuators on ``q1, q2, q3`` (ctrl in N, positive along increasing
@@ -329,8 +395,14 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     _sphere(setup, "rcm_setup", 0.006, "setup")
     _site(setup, "rcm_setup_frame")
 
+    if environment is not None and not isinstance(environment, Environment):
+        raise TypeError(f"environment: expected athenakin.collision.Environment or None, got "
+                        f"{type(environment).__name__}")
     if collision is None:
-        collision = bodies is not None
+        collision = bodies is not None or environment is not None
+    if collision is False and environment is not None:
+        raise InvalidInputError("environment: given with collision=False; the obstacles are "
+                                "collision geoms")
     if not isinstance(collision, bool):
         raise TypeError(f"collision: expected a bool or None, got {type(collision).__name__}")
     if collision:
@@ -340,7 +412,10 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
             raise TypeError(f"bodies: expected athenakin.collision.Bodies or None, got "
                             f"{type(bodies).__name__}")
         rail_pts = rail_segment(g.q, T, d, slot=g.slot, bodies=bodies)
-        _collision_geoms(root, bodies, collision_segments(values, d, bodies, rail_pts))
+        bits = _obstacle_bits(environment) if environment is not None else None
+        _collision_geoms(root, bodies, collision_segments(values, d, bodies, rail_pts), bits)
+        if environment is not None and bits is not None:
+            _obstacle_geoms(root, environment, bits)
 
     eq = ET.SubElement(root, "equality")
     for c in LOOP_CLOSURES:
