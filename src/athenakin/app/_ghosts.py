@@ -20,7 +20,7 @@ from .._transforms import rot_x, rot_z
 from ..chain._ups import rotation_u_pair
 from ..design import Design
 from ..errors import InvalidInputError
-from ..plot._geometry import RobotGeometry
+from ..plot._geometry import ARC_PARALLEL_TOL, RobotGeometry
 from ..plot._mpl import ARC_RADIUS
 from ..robot import SLOT_MODE, FKSolution
 from ._scene import (
@@ -174,7 +174,9 @@ def arcs_points(centre: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[
     ang = np.arccos(np.clip(ab[..., 0], -1.0, 1.0))
     perp = b - ab * a
     norm = np.linalg.norm(perp, axis=-1, keepdims=True)
-    perp = np.divide(perp, norm, out=np.zeros_like(perp), where=norm != 0)
+    flat = norm <= ARC_PARALLEL_TOL                               # no plane: one point
+    perp = np.divide(perp, norm, out=np.zeros_like(perp), where=~flat)
+    ang = np.where(flat[..., 0], 0.0, ang)
     t = np.linspace(0.0, ang, n, axis=-1)[..., None]             # (..., n, 1)
     return centre + radius * (np.cos(t) * a[..., None, :] + np.sin(t) * perp[..., None, :])
 

@@ -45,6 +45,9 @@ ARC_RADIUS = 0.07
 VIEW = (20.0, -35.0)
 #: Millimetres per metre: every view shows lengths in mm (the plot boundary).
 MM = 1e3
+#: Below this sine of the angle between its end directions, an arc has no plane (parallel
+#: or antiparallel directions, up to rounding) and is drawn as one repeated point.
+ARC_PARALLEL_TOL = 1e-12
 #: Angle by which the drawn arc of ``k2`` extends beyond the intersections with ``k1``, rad.
 ARC_MARGIN = np.radians(25.0)
 
@@ -301,7 +304,7 @@ def arc_points(centre: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[n
     ang = float(np.arccos(np.clip(a @ b, -1.0, 1.0)))
     perp = b - (a @ b) * a
     norm = np.linalg.norm(perp)
-    if norm == 0:
+    if norm <= ARC_PARALLEL_TOL:                 # parallel or antiparallel: no plane
         return np.repeat((centre + radius * a)[None], n, axis=0)
     t = np.linspace(0.0, ang, n)[:, None]
     return centre + radius * (np.cos(t) * a + np.sin(t) * perp / norm)
