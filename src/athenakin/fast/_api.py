@@ -365,7 +365,7 @@ def _lean_array(x: object, shape: tuple[int, ...]) -> NDArray[np.float64] | None
         return None
     if (type(x) is list or type(x) is tuple) and len(shape) == 1 and len(x) == shape[0]:
         for v in x:
-            if type(v) is not float and type(v) is not int:
+            if type(v) is not float and type(v) is not int and type(v) is not np.float64:
                 return None
         return np.array(x, _F8)
     return None
