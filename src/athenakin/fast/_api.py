@@ -352,8 +352,8 @@ def _lean_array(x: object, shape: tuple[int, ...]) -> NDArray[np.float64] | None
     """``x`` as the single-item kernels take it, or None (the general path decides).
 
     A C-contiguous writable float64 array of exactly ``shape`` as it is (the lean
-    functions test that case inline first); a list or tuple of Python floats / ints of
-    a 1-D ``shape`` converted (``[q1, q2, q3]``).
+    functions test that case inline first); a list or tuple of Python floats / ints /
+    numpy float64 of a 1-D ``shape`` converted (``[q1, q2, q3]``).
     Anything else (other dtypes, shapes, bools, strings, read-only arrays) is None:
     the general path converts it or names what is wrong.
     """
