@@ -20,7 +20,8 @@ plain processes (``concurrent.futures.ProcessPoolExecutor``, the ceiling without
   client's CPU per chunk plus the per-task overhead) and the parallel part ``w`` (a
   worker's CPU per chunk); for a study of ``M`` chunks on ``N`` workers,
   ``T(N) = M s + ceil(M / N) w``, printed for ``M = 10 N`` (enough chunks to fill the
-  workers) as the speed-up ``T(1) / T(N)``, and the ceiling ``(s + w) / s``.
+  workers) as the speed-up ``T(1) / T(N)``, and the ceiling ``(s + w) / s``; and the chunk
+  size (designs) at which 100 or 1,000 workers would run at 50% efficiency.
 
 Every cluster is warmed first (imports, numba's cache) and every study uses a new seed, so
 nothing comes from a cache. Prints one line per measurement as it finishes.
@@ -162,6 +163,12 @@ def main(argv: list[str] | None = None) -> int:
           f"speed-up at 100 workers {amdahl(s, w, 100):.0f}x, at 1,000 workers "
           f"{amdahl(s, w, 1000):.0f}x (ceiling {(s + w) / s:.0f}x); chunks of "
           f"{n_designs // n_chunks} designs x {samples} samples", flush=True)
+    w1 = w / max(1, n_designs // n_chunks)                 # a worker's CPU per design
+    for n in (100, 1000):       # chunk size for half the workers' worth: f = 1 / (n - 1)
+        k = math.ceil(s * (n - 2) / w1)
+        print(f"for {n} workers at 50% efficiency (speed-up {n // 2}x), chunks of about {k} "
+              f"designs ({k * w1:.0f} s of a worker's CPU each), at least {n} chunks "
+              f"(Amdahl: serial fraction 1 / (n - 1))", flush=True)
     return 0
 
 

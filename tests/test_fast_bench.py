@@ -38,3 +38,17 @@ def test_baselines_agree_with_athenakin():
     finally:
         sys.path.pop(0)
     baselines.check_baselines(n=20)
+
+
+def test_dask_scaleout_amdahl_model():
+    """benchmarks/dask_scaleout.py's extrapolation: M = 10 N chunks, serial s, parallel w."""
+    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
+    try:
+        import dask_scaleout as ds
+    finally:
+        sys.path.pop(0)
+    assert ds.amdahl(0.0, 1.0, 100) == 100.0                       # no serial part: N
+    assert ds.amdahl(1.0, 0.0, 1000) == 1.0                        # all serial: none
+    s, w = 0.04, 0.2
+    assert abs(ds.amdahl(s, w, 100) - (s + w) / (s + w / 100)) < 1e-12   # Amdahl's law
+    assert ds.amdahl(s, w, 1000) < (s + w) / s                     # below the ceiling
