@@ -589,6 +589,7 @@ def test_cli_reports_bad_inputs_at_startup_and_serves(tmp_path):
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+        proc.stdout.close()
 
 
 @pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")

@@ -106,6 +106,7 @@ def app(tmp_path_factory, browser):
     if proc.poll() is None:
         proc.kill()
         proc.wait()
+    proc.stdout.close()
 
 
 def _drawn_screenshot(page, path=None):
