@@ -52,8 +52,10 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
-def load_cases(quick: bool, only: list[str] | None) -> tuple[list[dict], list[str]]:
-    """Import every cases_*.py next to this file and collect their cases."""
+def load_cases(quick: bool, only: list[str] | None, skip: list[str] | None = None
+               ) -> tuple[list[dict], list[str]]:
+    """Import every cases_*.py next to this file and collect their cases (``only`` those
+    groups or modules; not the ``skip`` ones)."""
     cases: list[dict] = []
     errors: list[str] = []
     if HERE not in sys.path:
@@ -69,6 +71,8 @@ def load_cases(quick: bool, only: list[str] | None) -> tuple[list[dict], list[st
                 if missing:
                     raise ValueError(f"case {c.get('name')!r} lacks {sorted(missing)}")
                 c = dict(c, module=mod_name)
+                if skip and (c["group"] in skip or mod_name in skip):
+                    continue
                 if only is None or c["group"] in only or mod_name in only:
                     cases.append(c)
         except Exception:
@@ -189,6 +193,8 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="small batches and short timings")
     ap.add_argument("--only", nargs="*", help="groups or cases_<area> module names to run")
+    ap.add_argument("--skip", nargs="*", help="groups or cases_<area> module names not to run "
+                                              "(named in the header line)")
     ap.add_argument("--min-time", type=float, default=None, help="seconds per timing")
     ap.add_argument("--repeat", type=int, default=None, help="timings per case (best kept)")
     ap.add_argument("--json", help="also write the results to this JSON file")
@@ -206,8 +212,9 @@ def main(argv: list[str] | None = None) -> int:
     except ImportError:
         numba, n_threads = None, 1
     print(f"# athenakin benchmarks{' (quick)' if args.quick else ''}"
-          f"{' (CPU time)' if args.cpu_time else ''}: {machine_line()}")
-    cases, errors = load_cases(args.quick, args.only)
+          f"{' (CPU time)' if args.cpu_time else ''}: {machine_line()}"
+          f"{'; skipped: ' + ', '.join(args.skip) if args.skip else ''}")
+    cases, errors = load_cases(args.quick, args.only, args.skip)
     print("| group | case | batch | per call | per pose | poses/s | x base | load | note |\n"
           "|---|---|---:|---:|---:|---:|---:|---:|---|", flush=True)
     rows = []
