@@ -2,9 +2,11 @@
 # Test athenakin on every declared Python version other than the main one (CI step).
 #
 # For each version: a venv .venv-X.Y made with pyenv's interpreter, athenakin installed with
-# only what the subset needs (the core with numba; the extras sim (yourdfpy, for the URDF)
-# and analysis (scipy); pytest and hypothesis at the test group's bounds, without the
-# group's playwright and toppra), then a portable core of the suite: the maths, the CLI, the
+# only what the subset needs (the core with numba; the extras sim (yourdfpy, for the URDF),
+# analysis (scipy), certified (python-flint, for the README's `fk --certify`) and motion
+# (ruckig, for the tracker's replay of a planned trajectory); pytest and hypothesis at the
+# test group's bounds, without the group's playwright and toppra), then a portable core of
+# the suite: the maths, the CLI, the
 # design files, the doctests, packaging, the URDF, the tracker, the Jacobians and the numba
 # kernels. A test of the subset that skips fails the step (a missing dependency must not
 # hide a capability). Each venv has its own numba cache (NUMBA_CACHE_DIR=.venv-X.Y/numba-cache):
@@ -19,7 +21,7 @@ cd "$(dirname "$0")/.."
 
 MAIN_PYTHON="3.11"
 VERSIONS="${ATHENAKIN_PYTHONS:-3.10.13 3.12.1 3.13.0}"
-EXTRAS="sim,analysis"
+EXTRAS="sim,analysis,certified,motion"
 SUBSET=(
     tests/test_study.py tests/test_chain.py tests/test_parallel.py tests/test_robot.py
     tests/test_design.py tests/test_cli.py tests/test_io_unified.py tests/test_packaging.py
