@@ -148,9 +148,9 @@ def test_summary(pw, ic, tw):
 
 
 def test_progress_bar_and_chunking(capsys, monkeypatch):
-    import athenakin.analysis._workspace as W
-
     import sys
+
+    import athenakin.analysis._workspace as W
 
     monkeypatch.setattr(W, "CHUNK", 1000)
     point_workspace(DESIGN, resolution=15, progress=True)

@@ -417,9 +417,10 @@ def lean_fk(q: object, T_b_e: object, design: Design | None, method: object = OP
     if type(q) is np.ndarray and q.dtype is _F8 and q.shape == (3,) and _cw(q.flags):
         qa = q
     else:
-        qa = _lean_array(q, (3,))
-        if qa is None:
+        lst = _lean_array(q, (3,))
+        if lst is None:
             return None
+        qa = lst
     if not (type(T_b_e) is np.ndarray and T_b_e.dtype is _F8 and T_b_e.shape == (4, 4)
             and _cw(T_b_e.flags)):
         return None
@@ -444,9 +445,10 @@ def lean_ik(T_b_e: object, u345: object, design: Design | None, errors: object =
             and _cw(u345.flags):
         Ua = u345
     else:
-        Ua = _lean_array(u345, (3,))
-        if Ua is None:
+        lst = _lean_array(u345, (3,))
+        if lst is None:
             return None
+        Ua = lst
     if not (type(T_b_e) is np.ndarray and T_b_e.dtype is _F8 and T_b_e.shape == (4, 4)
             and _cw(T_b_e.flags)):
         return None
@@ -472,9 +474,10 @@ def lean_line(T_b_e: object, v: object, p: object, design: Design | None,
     if type(v) is np.ndarray and v.dtype is _F8 and v.shape == (3,) and _cw(v.flags):
         Va = v
     else:
-        Va = _lean_array(v, (3,))
-        if Va is None:
+        lst = _lean_array(v, (3,))
+        if lst is None:
             return None
+        Va = lst
     if not (type(T_b_e) is np.ndarray and T_b_e.dtype is _F8 and T_b_e.shape == (4, 4)
             and _cw(T_b_e.flags)):
         return None
