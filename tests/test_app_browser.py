@@ -384,62 +384,70 @@ def _wait_settled(page, app):
     raise AssertionError(f"the page did not settle on the server's read-outs {last}")
 
 
-def test_dragging_the_tip_handle_with_the_mouse_drives_q(browser):
-    """A real drag of the handle's x arrow in Chromium: q follows the controller-form IK.
-
-    The app runs in this process (the same AthenaApp as the CLI) so that the test can
-    place the camera: looking at the tool tip from a known direction, the x arrow of the
-    handle lands at a known pixel, and the mouse drags it left by DRAG_PIXELS."""
+@pytest.fixture(scope="module")
+def local(browser):
+    """An AthenaApp in this process (the tests place and read the camera) and its page,
+    shared by the drag and the keys tests."""
     from athenakin.app import AthenaApp
 
     app = AthenaApp(port=_free_port(), backend="numpy")
     errors = []
     try:
         page = _open_page(browser, app.url, errors)
-        r0 = _wait_settled(page, app)
-        tip0, scale = r0.tip_b.copy(), float(app.tip_handle.scale)
-        cam = next(iter(app.server.get_clients().values())).camera
-        cam.position = tip0 + DRAG_CAMERA_DISTANCE * DRAG_CAMERA_FROM / np.linalg.norm(
-            DRAG_CAMERA_FROM)
-        cam.look_at = tip0                               # after the position (viser moves both)
-        box = page.locator("canvas").first.bounding_box()
-        x = np.array([1.0, 0.0, 0.0])
-        grab = _pixel(cam, box, tip0 + 0.6 * scale * x)  # on the arrow's shaft
-        out = _pixel(cam, box, tip0 + scale * x) - _pixel(cam, box, tip0)
-        assert out[0] < -0.5 * np.linalg.norm(out)       # the arrow points left
-        end = grab + DRAG_PIXELS * out / np.linalg.norm(out)
-        gx, gy = np.round(grab).astype(int)
-        t0 = time.monotonic()                            # the camera moved: the arrow is there
-        while True:
-            img = imageio.imread(page.screenshot())[gy - 2:gy + 3, gx - 2:gx + 3]
-            if _color_fraction(img, GIZMO_X_COLOR) > 0 or (
-                    time.monotonic() - t0 > UPDATE_TIMEOUT_MS / 1e3):
-                break
-            page.wait_for_timeout(200)
-        assert _color_fraction(img, GIZMO_X_COLOR) > 0, "the handle's x arrow is not drawn"
-        page.mouse.move(*grab)
-        page.mouse.down()
-        page.mouse.move(*end, steps=3)
-        page.mouse.up()
-        want = _along_axis(cam, box, end, tip0, x) - _along_axis(cam, box, grab, tip0, x)
-        t0 = time.monotonic()
-        while np.allclose(app.view.readouts.tip_b, tip0, rtol=0, atol=1e-9) and (
-                time.monotonic() - t0 < UPDATE_TIMEOUT_MS / 1e3):
-            page.wait_for_timeout(200)
-        r = _wait_settled(page, app)
-        moved = r.tip_b - tip0
-        assert moved[0] == pytest.approx(want, abs=2e-3)  # the handle followed the mouse
-        assert want > 0.01 and np.all(np.abs(moved[1:]) < 1e-9)    # along x only
-        q, res = ak.q_from_tool_tip(app.setup.T_b_e, r.tip_e)
-        assert res.valid
-        for i in range(3):                               # read-outs: the IK of the new tip
-            assert float(_ro(page, f"q{i + 1}")) == pytest.approx(q[i] * 1e3, abs=5e-3 + 1e-9)
-        assert np.max(np.abs(q - r0.q)) > 1e-3
-        assert page.get_attribute("[data-ro=status]", "data-level") == "ok"
-        assert errors == []
+        yield app, page, errors
         page.close()
     finally:
         app.stop()
+
+
+def test_dragging_the_tip_handle_with_the_mouse_drives_q(local):
+    """A real drag of the handle's x arrow in Chromium: q follows the controller-form IK.
+
+    The app runs in this process (the same AthenaApp as the CLI) so that the test can
+    place the camera: looking at the tool tip from a known direction, the x arrow of the
+    handle lands at a known pixel, and the mouse drags it left by DRAG_PIXELS."""
+    app, page, errors = local
+    r0 = _wait_settled(page, app)
+    tip0, scale = r0.tip_b.copy(), float(app.tip_handle.scale)
+    cam = next(iter(app.server.get_clients().values())).camera
+    cam.position = tip0 + DRAG_CAMERA_DISTANCE * DRAG_CAMERA_FROM / np.linalg.norm(
+        DRAG_CAMERA_FROM)
+    cam.look_at = tip0                               # after the position (viser moves both)
+    box = page.locator("canvas").first.bounding_box()
+    x = np.array([1.0, 0.0, 0.0])
+    grab = _pixel(cam, box, tip0 + 0.6 * scale * x)  # on the arrow's shaft
+    out = _pixel(cam, box, tip0 + scale * x) - _pixel(cam, box, tip0)
+    assert out[0] < -0.5 * np.linalg.norm(out)       # the arrow points left
+    end = grab + DRAG_PIXELS * out / np.linalg.norm(out)
+    gx, gy = np.round(grab).astype(int)
+    t0 = time.monotonic()                            # the camera moved: the arrow is there
+    while True:
+        img = imageio.imread(page.screenshot())[gy - 2:gy + 3, gx - 2:gx + 3]
+        if _color_fraction(img, GIZMO_X_COLOR) > 0 or (
+                time.monotonic() - t0 > UPDATE_TIMEOUT_MS / 1e3):
+            break
+        page.wait_for_timeout(200)
+    assert _color_fraction(img, GIZMO_X_COLOR) > 0, "the handle's x arrow is not drawn"
+    page.mouse.move(*grab)
+    page.mouse.down()
+    page.mouse.move(*end, steps=3)
+    page.mouse.up()
+    want = _along_axis(cam, box, end, tip0, x) - _along_axis(cam, box, grab, tip0, x)
+    t0 = time.monotonic()
+    while np.allclose(app.view.readouts.tip_b, tip0, rtol=0, atol=1e-9) and (
+            time.monotonic() - t0 < UPDATE_TIMEOUT_MS / 1e3):
+        page.wait_for_timeout(200)
+    r = _wait_settled(page, app)
+    moved = r.tip_b - tip0
+    assert moved[0] == pytest.approx(want, abs=2e-3)  # the handle followed the mouse
+    assert want > 0.01 and np.all(np.abs(moved[1:]) < 1e-9)    # along x only
+    q, res = ak.q_from_tool_tip(app.setup.T_b_e, r.tip_e)
+    assert res.valid
+    for i in range(3):                               # read-outs: the IK of the new tip
+        assert float(_ro(page, f"q{i + 1}")) == pytest.approx(q[i] * 1e3, abs=5e-3 + 1e-9)
+    assert np.max(np.abs(q - r0.q)) > 1e-3
+    assert page.get_attribute("[data-ro=status]", "data-level") == "ok"
+    assert errors == []
 
 
 PASSIVE_LISTENER_NOTE = ("console: Unable to preventDefault inside passive event listener "
@@ -461,69 +469,61 @@ def _grab_pixel_on_the_grip(cam, box, tip, scale):
     return c + 0.6 * radius_px * best
 
 
-def test_keys_drive_the_focused_slider_only_and_the_grip_drags_the_tip(browser):
+def test_keys_drive_the_focused_slider_only_and_the_grip_drags_the_tip(local):
     """Arrow keys held on a focused slider move the slider, not the camera (the canvas
     still takes them); a first drag of the tip grip moves the tip in the view plane and
     leaves the camera where it is. The app runs in this process to read the camera."""
-    from athenakin.app import AthenaApp
-
-    app = AthenaApp(port=_free_port(), backend="numpy")
-    errors = []
-    try:
-        page = _open_page(browser, app.url, errors)
-        r0 = _wait_settled(page, app)
-        cam = next(iter(app.server.get_clients().values())).camera
-        tip0 = r0.tip_b.copy()
-        cam.position = tip0 + DRAG_CAMERA_DISTANCE * DRAG_CAMERA_FROM / np.linalg.norm(
-            DRAG_CAMERA_FROM)
-        cam.look_at = tip0
-        page.wait_for_timeout(500)
-        pos0 = np.array(cam.position)
-        page.locator(SLIDERS).nth(0).focus()
-        page.keyboard.down("ArrowRight")                 # held: the camera would turn
-        page.wait_for_timeout(400)
-        page.keyboard.up("ArrowRight")
-        r1 = _wait_settled(page, app)
-        assert r1.q[0] > r0.q[0]                         # the slider moved ...
-        page.wait_for_timeout(300)
-        np.testing.assert_allclose(cam.position, pos0, rtol=0, atol=1e-9)   # ... not the view
-        # the grip: a drag from a point on it, first try
-        tip1 = r1.tip_b.copy()
-        box = page.locator("canvas").first.bounding_box()
-        grab = _grab_pixel_on_the_grip(cam, box, tip1, float(app.tip_handle.scale))
-        end = grab + np.array([0.0, -25.0])              # 25 px up the screen
-        P, f, rgt, up, t = _camera_basis(cam)
-        depth = (tip1 - P) @ f
-        page.mouse.move(*grab)
-        page.mouse.down()
-        page.mouse.move(*end, steps=5)
-        page.mouse.up()
-        t0 = time.monotonic()
-        while np.allclose(app.view.readouts.tip_b, tip1, rtol=0, atol=1e-9) and (
-                time.monotonic() - t0 < UPDATE_TIMEOUT_MS / 1e3):
-            page.wait_for_timeout(200)
-        r2 = _wait_settled(page, app)
-        moved = r2.tip_b - tip1
-        want_up = 25.0 * 2 * depth * t / box["height"]   # the pointer's travel at the tip, m
-        assert moved @ up == pytest.approx(want_up, rel=0.25)
-        assert abs(moved @ rgt) < 0.25 * want_up and abs(moved @ f) < 0.25 * want_up
-        np.testing.assert_allclose(cam.position, pos0, rtol=0, atol=1e-9)   # no orbit
-        # the canvas still turns the view on the arrow keys
-        page.mouse.click(box["x"] + 30, box["y"] + box["height"] - 30)
-        page.keyboard.down("ArrowRight")
-        page.wait_for_timeout(400)
-        page.keyboard.up("ArrowRight")
-        t0 = time.monotonic()
-        while np.allclose(cam.position, pos0, rtol=0, atol=1e-6) and (
-                time.monotonic() - t0 < UPDATE_TIMEOUT_MS / 1e3):
-            page.wait_for_timeout(200)
-        assert not np.allclose(cam.position, pos0, rtol=0, atol=1e-6)
-        # viser 1.1.1's scene-node drag (the grip) calls preventDefault in a passive pointer
-        # listener, which Chromium logs; the drag itself works (checked above)
-        assert [e for e in errors if e != PASSIVE_LISTENER_NOTE] == []
-        page.close()
-    finally:
-        app.stop()
+    app, page, errors = local
+    r0 = _wait_settled(page, app)
+    cam = next(iter(app.server.get_clients().values())).camera
+    tip0 = r0.tip_b.copy()
+    cam.position = tip0 + DRAG_CAMERA_DISTANCE * DRAG_CAMERA_FROM / np.linalg.norm(
+        DRAG_CAMERA_FROM)
+    cam.look_at = tip0
+    page.wait_for_timeout(500)
+    pos0 = np.array(cam.position)
+    page.locator(SLIDERS).nth(0).focus()
+    page.keyboard.down("ArrowRight")                 # held: the camera would turn
+    page.wait_for_timeout(400)
+    page.keyboard.up("ArrowRight")
+    r1 = _wait_settled(page, app)
+    assert r1.q[0] > r0.q[0]                         # the slider moved ...
+    page.wait_for_timeout(300)
+    np.testing.assert_allclose(cam.position, pos0, rtol=0, atol=1e-9)   # ... not the view
+    # the grip: a drag from a point on it, first try
+    tip1 = r1.tip_b.copy()
+    box = page.locator("canvas").first.bounding_box()
+    grab = _grab_pixel_on_the_grip(cam, box, tip1, float(app.tip_handle.scale))
+    end = grab + np.array([0.0, -25.0])              # 25 px up the screen
+    P, f, rgt, up, t = _camera_basis(cam)
+    depth = (tip1 - P) @ f
+    page.mouse.move(*grab)
+    page.mouse.down()
+    page.mouse.move(*end, steps=5)
+    page.mouse.up()
+    t0 = time.monotonic()
+    while np.allclose(app.view.readouts.tip_b, tip1, rtol=0, atol=1e-9) and (
+            time.monotonic() - t0 < UPDATE_TIMEOUT_MS / 1e3):
+        page.wait_for_timeout(200)
+    r2 = _wait_settled(page, app)
+    moved = r2.tip_b - tip1
+    want_up = 25.0 * 2 * depth * t / box["height"]   # the pointer's travel at the tip, m
+    assert moved @ up == pytest.approx(want_up, rel=0.25)
+    assert abs(moved @ rgt) < 0.25 * want_up and abs(moved @ f) < 0.25 * want_up
+    np.testing.assert_allclose(cam.position, pos0, rtol=0, atol=1e-9)   # no orbit
+    # the canvas still turns the view on the arrow keys
+    page.mouse.click(box["x"] + 30, box["y"] + box["height"] - 30)
+    page.keyboard.down("ArrowRight")
+    page.wait_for_timeout(400)
+    page.keyboard.up("ArrowRight")
+    t0 = time.monotonic()
+    while np.allclose(cam.position, pos0, rtol=0, atol=1e-6) and (
+            time.monotonic() - t0 < UPDATE_TIMEOUT_MS / 1e3):
+        page.wait_for_timeout(200)
+    assert not np.allclose(cam.position, pos0, rtol=0, atol=1e-6)
+    # viser 1.1.1's scene-node drag (the grip) calls preventDefault in a passive pointer
+    # listener, which Chromium logs; the drag itself works (checked above)
+    assert [e for e in errors if e != PASSIVE_LISTENER_NOTE] == []
 
 
 def test_no_page_errors(app):
