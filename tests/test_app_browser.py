@@ -223,6 +223,14 @@ def test_q1_slider_moves_the_robot_and_reads_out_fk(app):
 
 def test_every_read_out_can_be_scrolled_into_the_window(app):
     page = app["page"]
+    shown = page.evaluate(                         # the panel's scroll bar is always drawn
+        "() => { const r = [...document.querySelectorAll('.mantine-ScrollArea-root')]"
+        ".find(x => x.querySelector('[data-ro=banner]'));"
+        " const v = r.querySelector('.mantine-ScrollArea-viewport');"
+        " const bar = r.querySelector(':scope > .mantine-ScrollArea-scrollbar"
+        "[data-orientation=vertical]');"
+        " return [v.scrollHeight > v.clientHeight, getComputedStyle(bar).display]; }")
+    assert shown == [True, "flex"]
     for key in ("q1", "d_tip_at_rcm", "cond_tool_tip", "legend"):
         cell = page.locator(f"[data-ro={key}]")
         cell.scroll_into_view_if_needed()

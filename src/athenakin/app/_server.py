@@ -60,6 +60,12 @@ HANDLE_LINE_WIDTH = 4.0
 #: Radius of the tip grip: a sphere at the tool tip that drags the tip in the view plane, m.
 GRIP_RADIUS = 0.018
 GRIP_COLOR = (255, 190, 40)
+#: Style added to the page: the control panel's vertical scroll bar always visible.
+_PANEL_CSS = (".mantine-ScrollArea-root:has([data-ro='banner']) > "
+              ".mantine-ScrollArea-scrollbar[data-orientation='vertical']"
+              "{display:flex !important;opacity:1 !important;width:10px !important}"
+              ".mantine-ScrollArea-root:has([data-ro='banner']) .mantine-ScrollArea-thumb"
+              "{background-color:rgba(0,0,0,0.35) !important}")
 #: Keys of viser's camera (``event.code``): ignored while a control of the panel has focus.
 CAMERA_KEYS = ("ArrowLeft", "ArrowRight", "ArrowUp", "ArrowDown", "KeyW", "KeyA", "KeyS",
                "KeyD", "KeyQ", "KeyE")
@@ -207,7 +213,7 @@ class AthenaApp:
         return f"ATHENA - {name} - athenakin"
 
     def _send_page_script(self) -> None:
-        """Set the page title and keep the camera keys off the panel's controls.
+        """Set the page title, keep camera keys off the controls, show the scroll bar.
 
         viser's camera moves on the arrow keys (and W A S D Q E) wherever the focus is,
         except in text fields: a focused slider would move and rotate the view at once.
@@ -223,7 +229,10 @@ class AthenaApp:
             f" const keys = new Set({json.dumps(list(CAMERA_KEYS))});"
             " document.body.addEventListener('keydown', (e) => { const t = e.target;"
             " if (keys.has(e.code) && t instanceof Element && t !== document.body"
-            " && t.tagName !== 'CANVAS') { e.stopPropagation(); } }); }")
+            " && t.tagName !== 'CANVAS') { e.stopPropagation(); } });"
+            # the panel's scroll bar always shown: the read-outs continue below the window
+            " const st = document.createElement('style');"
+            f" st.textContent = {json.dumps(_PANEL_CSS)}; document.head.appendChild(st); }}")
         # viser's own channel for client scripts (as its plotly element); kept for new pages
         self.server.gui._websock_interface.queue_message(
             _messages.RunJavascriptMessage(source=script))
