@@ -12,7 +12,12 @@ Groups (ratios are per pose, against the group's baseline):
   map (the easier direction, one pose at a time from Python).
 * ``fk-single``: one pose per call from Python (latency).
 * ``ik-batch`` / ``ik-single``: the paper-form IK (``u3, u4, u5`` -> ``q``) and the
-  controller form ``q_from_tool_tip``; baseline: the pure-Python paper form.
+  controller form ``q_from_tool_tip``; baseline: the pure-Python paper form. In
+  ``ik-batch-frames`` every pose has its own RCM frame (a batch of ``T_b_e``), against
+  the same pure-Python loop over its frames (target >= 380x).
+* ``fk-loop`` / ``ik-loop``: the public single call (``ak.forward_kinematics(q, T, d)``,
+  ``ak.inverse_kinematics(T, u345, d)``) against ``fast.ControlLoop``'s (preallocated,
+  raw arrays); ``x base`` >= 0.5 is "within 2x of the control loop".
 """
 
 from __future__ import annotations
@@ -47,6 +52,7 @@ def cases(quick: bool) -> list[dict]:
     q_2e5 = rng.uniform(d.stroke_min, d.stroke_max, (n_2e5, 3))
     q_py = q[:n_py].tolist()
     q1 = np.array(ak.robot.REFERENCE_Q)
+    q1_list = q1.tolist()
     ref1 = ak.forward_kinematics(q1, T, d)
     rc = ak.testing.random_configurations(max(n, n_ls), d, rng=5)
     u345 = ak.forward_kinematics(q, T, d).u[:, 0, 2:]
@@ -63,6 +69,10 @@ def cases(quick: bool) -> list[dict]:
     xs = np.c_[rc.u[:n, :2], rc.p[:n], rc.u[:n, 2:]]
     ctl = fast.ControlLoop(T, d)
     out = fast.forward_kinematics(q, T, d)
+    # one RCM frame per pose: the frames and u345 of random valid configurations
+    T_each = np.ascontiguousarray(rc.T_b_e[:n])
+    u_each = np.ascontiguousarray(rc.u[:n, 2:])
+    each_py = [(T_each[i].tolist(), u_each[i].tolist()) for i in range(n_py)]
 
     def draw(a, b):
         return np.random.default_rng(a).uniform(d.stroke_min, d.stroke_max, (b - a, 3))
@@ -160,6 +170,28 @@ def cases(quick: bool) -> list[dict]:
          "batch": n, "call": lambda: fast.q_from_tool_tip(T, tips, d, errors="flag",
                                                           parallel=True),
          "note": "all cores"},
+        {"name": "pure Python per pose, paper form, its own frame", "group": "ik-batch-frames",
+         "batch": n_py, "baseline": True,
+         "call": loop(lambda x: bl.ik_python(x[0], x[1], dt), each_py)},
+        {"name": "ak.inverse_kinematics, one RCM frame per pose", "group": "ik-batch-frames",
+         "batch": n, "call": lambda: ak.inverse_kinematics(T_each, u_each, d),
+         "note": "target >= 380x"},
+        {"name": "athenakin numpy reference, one RCM frame per pose",
+         "group": "ik-batch-frames", "batch": n,
+         "call": lambda: ak.inverse_kinematics(T_each, u_each, d, backend="numpy")},
+        # --- single calls against the control loop ------------------------------------------
+        {"name": "athenakin.fast.ControlLoop.fk (raw arrays)", "group": "fk-loop", "batch": 1,
+         "baseline": True, "call": lambda: ctl.fk(q1)},
+        {"name": "ak.forward_kinematics(q, T, d)", "group": "fk-loop", "batch": 1,
+         "call": lambda: ak.forward_kinematics(q1, T, d),
+         "note": "target x base >= 0.5 (within 2x)"},
+        {"name": "ak.forward_kinematics(list q, T, d)", "group": "fk-loop", "batch": 1,
+         "call": lambda: ak.forward_kinematics(q1_list, T, d)},
+        {"name": "athenakin.fast.ControlLoop.ik (raw)", "group": "ik-loop", "batch": 1,
+         "baseline": True, "call": lambda: ctl.ik(u1)},
+        {"name": "ak.inverse_kinematics(T, u345, d)", "group": "ik-loop", "batch": 1,
+         "call": lambda: ak.inverse_kinematics(T, u1, d),
+         "note": "target x base >= 0.5 (within 2x)"},
         # --- IK, one item per call -------------------------------------------------------------
         {"name": "pure Python, paper form", "group": "ik-single", "batch": 1, "baseline": True,
          "call": lambda: bl.ik_python(Tl, u345_py[0], dt)},

@@ -13,8 +13,11 @@ reference) and ``note``. Every case is called once untimed (numba compiles, cach
 then timed with ``time.perf_counter`` over enough calls to last ``--min-time`` seconds,
 ``--repeat`` times; the best repeat is reported (the least disturbed by other processes).
 
-Columns: time per call, per pose, poses per second, and ``x base`` = the baseline's time
-per pose divided by the case's (how many times faster than the group's baseline).
+Columns: time per call, per pose, poses per second, ``x base`` = the baseline's time
+per pose divided by the case's (how many times faster than the group's baseline), and the
+machine's 1-minute load average when the row was measured (a ratio taken under load is a
+share of the CPU, not only of the work). Each row is printed as soon as it is measured
+(the baseline of a group is measured before the rest of its group).
 
 Single-core figures: the script limits BLAS to one thread and sets numba's thread count to
 1 for every case whose name does not say ``parallel``; those get all cores (OpenMP workers
@@ -49,8 +52,10 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
-def load_cases(quick: bool, only: list[str] | None) -> tuple[list[dict], list[str]]:
-    """Import every cases_*.py next to this file and collect their cases."""
+def load_cases(quick: bool, only: list[str] | None, skip: list[str] | None = None
+               ) -> tuple[list[dict], list[str]]:
+    """Import every cases_*.py next to this file and collect their cases (``only`` those
+    groups or modules; not the ``skip`` ones)."""
     cases: list[dict] = []
     errors: list[str] = []
     if HERE not in sys.path:
@@ -66,6 +71,8 @@ def load_cases(quick: bool, only: list[str] | None) -> tuple[list[dict], list[st
                 if missing:
                     raise ValueError(f"case {c.get('name')!r} lacks {sorted(missing)}")
                 c = dict(c, module=mod_name)
+                if skip and (c["group"] in skip or mod_name in skip):
+                    continue
                 if only is None or c["group"] in only or mod_name in only:
                     cases.append(c)
         except Exception:
@@ -142,10 +149,52 @@ def machine_line() -> str:
             f"{platform.python_version()}, numpy {numpy.__version__}, numba {nb}")
 
 
+def _load1() -> float | None:
+    try:
+        return os.getloadavg()[0]
+    except OSError:
+        return None
+
+
+def baseline_first(cases: list[dict]) -> list[dict]:
+    """The cases in their order, each group's baseline moved before the group's first case
+    (so that every row can be printed with its ratio as soon as it is measured)."""
+    first_base = {}
+    for c in cases:
+        if c.get("baseline"):
+            first_base.setdefault(c["group"], c)
+    out, seen = [], set()
+    for c in cases:
+        b = first_base.get(c["group"])
+        for x in (b, c):
+            if x is not None and id(x) not in seen:
+                seen.add(id(x))
+                out.append(x)
+    return out
+
+
+def format_row(r: dict, base_per_pose: float | None) -> str:
+    """One table row; sets ``r["ratio"]`` (None for the baseline or without one)."""
+    load = "" if r.get("load") is None else f"{r['load']:.1f}"
+    if r["error"] is not None:
+        r["ratio"] = None
+        return (f"| {r['group']} | {r['name']} | {r['batch']} | ERROR | | | | {load} | "
+                f"{r['error'][:80]} |")
+    per_pose = r["seconds"] / r["batch"]
+    b = base_per_pose
+    ratio = "base" if r.get("baseline") else (f"{b / per_pose:,.3g}" if b else "")
+    r["ratio"] = None if ratio in ("", "base") else b / per_pose
+    return (f"| {r['group']} | {r['name']} | {r['batch']} | {_fmt_time(r['seconds'])} | "
+            f"{_fmt_time(per_pose)} | {_fmt_rate(1.0 / per_pose)} | {ratio} | {load} | "
+            f"{r.get('note', '')} |")
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="small batches and short timings")
     ap.add_argument("--only", nargs="*", help="groups or cases_<area> module names to run")
+    ap.add_argument("--skip", nargs="*", help="groups or cases_<area> module names not to run "
+                                              "(named in the header line)")
     ap.add_argument("--min-time", type=float, default=None, help="seconds per timing")
     ap.add_argument("--repeat", type=int, default=None, help="timings per case (best kept)")
     ap.add_argument("--json", help="also write the results to this JSON file")
@@ -163,41 +212,29 @@ def main(argv: list[str] | None = None) -> int:
     except ImportError:
         numba, n_threads = None, 1
     print(f"# athenakin benchmarks{' (quick)' if args.quick else ''}"
-          f"{' (CPU time)' if args.cpu_time else ''}: {machine_line()}")
-    cases, errors = load_cases(args.quick, args.only)
+          f"{' (CPU time)' if args.cpu_time else ''}: {machine_line()}"
+          f"{'; skipped: ' + ', '.join(args.skip) if args.skip else ''}")
+    cases, errors = load_cases(args.quick, args.only, args.skip)
+    print("| group | case | batch | per call | per pose | poses/s | x base | load | note |\n"
+          "|---|---|---:|---:|---:|---:|---:|---:|---|", flush=True)
     rows = []
-    for c in cases:
+    base: dict[str, float] = {}
+    for c in baseline_first(cases):
         par = "parallel" in c["name"].lower()
         if numba is not None:
             numba.set_num_threads(n_threads if par else 1)
         try:
             t = measure(c["call"], min_time, repeat)
-            rows.append(dict(c, seconds=t, error=None))
+            r = dict(c, seconds=t, error=None, load=_load1())
         except Exception as exc:
-            rows.append(dict(c, seconds=float("nan"), error=f"{type(exc).__name__}: {exc}"))
+            r = dict(c, seconds=float("nan"), error=f"{type(exc).__name__}: {exc}", load=_load1())
             errors.append(f"{c['module']}/{c['name']}: {traceback.format_exc(limit=3)}")
-    if numba is not None:
-        numba.set_num_threads(n_threads)
-
-    base: dict[str, float] = {}
-    for r in rows:
         if r.get("baseline") and r["error"] is None:
             base[r["group"]] = r["seconds"] / r["batch"]
-    header = ("| group | case | batch | per call | per pose | poses/s | x base | note |\n"
-              "|---|---|---:|---:|---:|---:|---:|---|")
-    print(header)
-    for r in rows:
-        if r["error"] is not None:
-            print(f"| {r['group']} | {r['name']} | {r['batch']} | ERROR | | | | "
-                  f"{r['error'][:80]} |")
-            continue
-        per_pose = r["seconds"] / r["batch"]
-        b = base.get(r["group"])
-        ratio = "base" if r.get("baseline") else (f"{b / per_pose:,.3g}" if b else "")
-        r["ratio"] = None if ratio in ("", "base") else b / per_pose
-        print(f"| {r['group']} | {r['name']} | {r['batch']} | {_fmt_time(r['seconds'])} | "
-              f"{_fmt_time(per_pose)} | {_fmt_rate(1.0 / per_pose)} | {ratio} | "
-              f"{r.get('note', '')} |")
+        rows.append(r)
+        print(format_row(r, base.get(r["group"])), flush=True)
+    if numba is not None:
+        numba.set_num_threads(n_threads)
     if args.json:
         with open(args.json, "w") as fh:
             json.dump({"machine": machine_line(), "quick": args.quick,

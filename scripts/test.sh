@@ -15,4 +15,7 @@ if ! command -v chromium >/dev/null; then
     fi
     $SUDO apt-get update -qq && $SUDO apt-get install -y -qq chromium >/dev/null
 fi
+# this environment's own numba cache: no other venv (scripts/test_matrix.sh,
+# scripts/test_min_deps.sh, possibly running at the same time) rewrites its index
+export NUMBA_CACHE_DIR="${NUMBA_CACHE_DIR:-$PWD/.venv/numba-cache}"
 python -m pytest -q -p no:cacheprovider "$@"

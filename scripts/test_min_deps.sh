@@ -21,6 +21,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 venv=".venv-min"
+# its own numba cache: numba 0.59 here and the main venv's numba share Python 3.11, and would
+# otherwise rewrite each other's cache index in the source tree (a recompile each time)
+export NUMBA_CACHE_DIR="$PWD/$venv/numba-cache"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 

@@ -148,9 +148,14 @@ def test_summary(pw, ic, tw):
 
 
 def test_progress_bar_and_chunking(capsys, monkeypatch):
+    import sys
+
     import athenakin.analysis._workspace as W
 
     monkeypatch.setattr(W, "CHUNK", 1000)
+    point_workspace(DESIGN, resolution=15, progress=True)
+    assert "O_s workspace" not in capsys.readouterr().err    # not a terminal: no bar in logs
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
     a = point_workspace(DESIGN, resolution=15, progress=True)
     assert "O_s workspace" in capsys.readouterr().err
     monkeypatch.setattr(W, "CHUNK", 65536)

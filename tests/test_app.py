@@ -219,7 +219,32 @@ def test_near_a_singular_set_warns(setup):
     assert 'data-ro="d_ab_coincide" data-warn="1"' in text
     far = readouts_html(forward_view(setup, setup.q_home).readouts)
     assert 'data-ro="d_ab_coincide" data-warn' not in far
-    assert 'data-ro="q1" style="text-align:right;">-100.00<' in far
+    assert 'data-ro="q1" data-v="-0.1" style="text-align:right;">-100.00<' in far
+
+
+def test_singular_rows_have_plain_names_units_and_a_legend(setup):
+    from athenakin.analysis import CONDITIONS
+    from athenakin.app import SINGULAR_NAMES
+
+    assert set(SINGULAR_NAMES) == set(CONDITIONS)                 # every set has a plain name
+    q = np.array([0.0, 0.002, 0.45])
+    r = forward_view(setup, q).readouts
+    text = readouts_html(r)
+    assert 'data-ro="legend"' in text and "within 5 mm or 5 deg" in text
+    for d in r.distances:
+        name, shown = SINGULAR_NAMES[d.name]
+        assert f"<td>{name}</td>" in text and "_" not in name.replace("O_s", "").replace(
+            "z_e", "").replace("z_s", "")
+        cell = text.split(f'data-ro="d_{d.name}"')[1].split(">", 1)[1].split("<", 1)[0]
+        if np.isnan(d.value):
+            continue
+        if shown == "deg":                                       # a sine shown as its angle
+            assert cell == f"{np.degrees(np.arcsin(min(abs(d.value), 1.0))):.1f} deg"
+        else:
+            assert cell.endswith(" mm")
+            assert float(cell[:-3]) == pytest.approx(d.value * 1e3, abs=0.005 + 1e-9)
+    wrist = text.split('data-ro="d_wrist"')[0].rsplit("<tr", 1)[1]
+    assert "title=" in wrist and "instrument along z_e" in wrist   # hover: the meaning
 
 
 @pytest.mark.parametrize("slot", [-1, 16, 2.0, "some", True])
@@ -315,6 +340,50 @@ def test_inverse_step_holds_q_when_even_the_first_step_fails(setup):
         np.testing.assert_array_equal(s.q, r.q)
         assert "actuators held" in s.message
     assert st2.reason == Reason.INSERTION_RANGE
+
+
+@pytest.mark.parametrize("slot", [12, 15, 8, 11])                # p < 0 and p > L, mode -1
+def test_inverse_step_stays_on_the_slots_branch_of_p(setup, slot):
+    v = forward_view(setup, setup.q_home, slot=slot)
+    r = v.readouts
+    assert r.slot == slot and r.mode == -1 and not 0 < r.p < D.tool_length
+    rng = np.random.default_rng(slot)
+    for d in rng.normal(scale=0.005, size=(4, 3)):
+        st = inverse_step(setup, r.tip_e, r.tip_e + d, r.q, r.mode, p_from=r.p)
+        assert st.reached and st.message == "", st.message
+        w = forward_view(setup, st.q, slot=slot)                  # the same slot, moved
+        assert w.readouts.slot == slot
+        np.testing.assert_allclose(w.readouts.tip_e, r.tip_e + d, rtol=0, atol=1e-9)
+        assert (w.readouts.p < 0) == (r.p < 0)
+    # across the branch's end (p = 0, or the tip at the RCM): held, and says why
+    end = r.tip_e * (0.9 * D.tool_length / np.linalg.norm(r.tip_e) if r.p < 0 else 0.0)
+    st = inverse_step(setup, r.tip_e, end, r.q, r.mode, p_from=r.p, n=1)
+    assert not st.reached and "actuators held" in st.message
+    assert ("branch p < 0 ends" if r.p < 0 else "branch p > L") in st.message
+    np.testing.assert_array_equal(st.q, r.q)
+
+
+def test_inverse_step_rejects_a_bad_p_from(setup):
+    r = forward_view(setup, setup.q_home).readouts
+    with pytest.raises(InvalidInputError, match="p_from"):
+        inverse_step(setup, r.tip_e, r.tip_e, r.q, r.mode, p_from=np.nan)
+
+
+def test_solids_join_a_scene_with_unique_names():
+    from athenakin.app import Solid, with_solids
+
+    g = robot_geometry(ak.robot.REFERENCE_Q, slot=0)
+    sc = robot_scene(g)
+    assert sc.solids == ()
+    box = Solid("box", np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]]),
+                np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]), (10, 20, 30))
+    sc2 = with_solids(sc, (box,))
+    assert sc2.solids == (box,) and sc2.lines == sc.lines
+    np.testing.assert_array_equal(sc2.bounds()[1], np.maximum(sc.bounds()[1], 1.0))
+    with pytest.raises(InvalidInputError, match="unique"):
+        with_solids(sc2, (box,))
+    with pytest.raises(InvalidInputError, match="box2"):
+        with_solids(sc, (Solid("box2", np.zeros((3, 2)), np.zeros((1, 3), int), (0, 0, 0)),))
 
 
 def _csv(tmp_path, text, name="traj.csv"):
@@ -520,3 +589,60 @@ def test_cli_reports_bad_inputs_at_startup_and_serves(tmp_path):
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+        proc.stdout.close()
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_a_p_below_zero_slot_keeps_its_branch_across_tabs_in_process():
+    """The issue's state bug: pick slot 15 (mode -1, p < 0) in the Forward tab, then step
+    the azimuth in the Inverse tab: the sliders agree with the read-outs, and the IK stays
+    on slot 15; the title names the design; solids are drawn and updated."""
+    from types import SimpleNamespace
+
+    from athenakin.app import AthenaApp, Solid
+
+    def solids(view):
+        tip = view.readouts.tip_b
+        return (Solid("tip_box", tip + np.array([[0, 0, 0], [0.01, 0, 0], [0, 0.01, 0],
+                                                 [0, 0, 0.01]]),
+                      np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]), (200, 0, 0)),)
+
+    app = AthenaApp(port=0, backend="numpy", solids=solids)
+    try:
+        assert app.title == "ATHENA - athenakin reference design - athenakin"
+        mesh, _ = app._solid_handles["tip_box"]
+        np.testing.assert_allclose(mesh.vertices[0], app.view.readouts.tip_b, atol=1e-6)
+        app._slot_dd.value = app._slot_dd.options[1 + 15]
+        app._on_slot(None)
+        r = app.view.readouts
+        assert r.slot == 15 and r.p < 0
+        az, pol, depth = angles_from_tip(r.tip_e)
+        assert app._depth.value == pytest.approx(depth * 1e3, abs=0.01)   # 1151.6, not 449
+        assert app._depth.min <= app._depth.value <= app._depth.max
+        assert app._az.value == pytest.approx(np.degrees(az), abs=0.01)
+        app._az.value = app._az.value + 0.1                         # one azimuth step
+        app._on_angles(None)
+        r2 = app.view.readouts
+        assert r2.slot == 15 and app._status.content.count("held") == 0
+        assert np.max(np.abs(r2.q - r.q)) > 1e-5                     # it moved ...
+        sol = ak.forward_kinematics(r2.q, app.setup.T_b_e, D, errors="flag")
+        np.testing.assert_allclose(r2.tip_b, sol.tip[15], rtol=0, atol=1e-9)
+        np.testing.assert_allclose(r2.u, sol.u[15], rtol=0, atol=1e-9)   # ... on slot 15
+        a2, p2, d2 = angles_from_tip(r2.tip_e)
+        assert np.degrees(a2) == pytest.approx(app._az.value, abs=1e-6)
+        assert d2 * 1e3 == pytest.approx(app._depth.value, abs=1e-6)
+        mesh, _ = app._solid_handles["tip_box"]                      # the solid followed
+        np.testing.assert_allclose(mesh.vertices[0], r2.tip_b, atol=1e-6)
+        # the tip grip: a drag in the view plane moves the tip by the pointer's motion
+        tip0 = r2.tip_b.copy()
+        ev = SimpleNamespace(phase="start", start_position=tuple(tip0),
+                             end_position=tuple(tip0))
+        app._on_grip(ev)
+        for ph in ("update", "end"):
+            app._on_grip(SimpleNamespace(phase=ph, start_position=tuple(tip0),
+                                         end_position=tuple(tip0 + [0.0, 0.0, 0.004])))
+        np.testing.assert_allclose(app.view.readouts.tip_b, tip0 + [0, 0, 0.004], atol=1e-9)
+        assert app.view.readouts.slot == 15
+        np.testing.assert_allclose(app._grip.position, app.view.readouts.tip_b, atol=1e-6)
+    finally:
+        app.stop()

@@ -1,10 +1,14 @@
 """`athenakin app` in a real browser: headless Chromium (Debian's) driven by Playwright.
 
 One server (``python -m athenakin.cli app --host 127.0.0.1 --port N``) and one page serve
-the whole module, in order: the WebGL canvas renders, the q1 slider moves the robot and
-the read-outs show the forward kinematics, the IK sliders drive q, a trajectory plays
-back, a bad trajectory is reported in the page while the app keeps running, and SIGINT
-stops the server. The numpy backend keeps numba's first compilation out of the budget.
+the whole module, in order: the WebGL canvas renders under a title naming the design, the
+q1 slider moves the robot and the read-outs show the forward kinematics, a p < 0 slot
+picked in the Forward tab stays the IK's slot in the Inverse tab, a trajectory plays back,
+a bad trajectory is reported in the page while the app keeps running, another design is
+applied in the Set-up tab, and SIGINT stops the server. In every tab the read-outs are
+checked against ``ak.forward_kinematics`` for the slot drawn. Apps in this process check
+the camera: keys on a focused slider leave it, a drag of the tip grip or a handle arrow
+moves the tip. The numpy backend keeps numba's first compilation out of the budget.
 """
 
 import math
@@ -24,7 +28,7 @@ imageio = pytest.importorskip("imageio.v3")
 playwright = pytest.importorskip("playwright.sync_api")
 
 import athenakin as ak  # noqa: E402
-from athenakin.app import tip_from_angles  # noqa: E402
+from athenakin.app import angles_from_tip, tip_from_angles  # noqa: E402
 from athenakin.plot import COLORS, robot_geometry  # noqa: E402
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
@@ -102,6 +106,7 @@ def app(tmp_path_factory, browser):
     if proc.poll() is None:
         proc.kill()
         proc.wait()
+    proc.stdout.close()
 
 
 def _drawn_screenshot(page, path=None):
@@ -142,6 +147,41 @@ def _slider_values(page):
     return [float(s.nth(i).get_attribute("aria-valuenow")) for i in range(s.count())]
 
 
+def _readouts_are_fk(page, T_b_e=None, design=None, slot=None):
+    """The page's read-outs are ``ak.forward_kinematics`` of its q (``data-v``, exact) for
+    the slot drawn; returns ``(q, slot)``."""
+    design = design or ak.Design.default()
+    T = ak.default_rcm_frame(design) if T_b_e is None else T_b_e
+    q = np.array([float(page.get_attribute(f"[data-ro=q{i + 1}]", "data-v")) for i in range(3)])
+    drawn, mode = (int(x) for x in _ro(page, "mode").split("/"))
+    if slot is not None:
+        assert drawn == slot
+    sol = ak.forward_kinematics(q, T, design, errors="flag")
+    assert sol.valid[drawn] and ak.robot.SLOT_MODE[drawn] == mode
+    tip_b = sol.tip[drawn]
+    tip_e = T[:3, :3].T @ (tip_b - T[:3, 3])
+    want = {"p": sol.p[drawn] * 1e3, **{f"q{i + 1}": q[i] * 1e3 for i in range(3)},
+            **{f"u{i + 1}": math.degrees(sol.u[drawn, i]) for i in range(5)},
+            **{f"tip_b_{a}": tip_b[i] * 1e3 for i, a in enumerate("xyz")},
+            **{f"tip_e_{a}": tip_e[i] * 1e3 for i, a in enumerate("xyz")}}
+    for key, v in want.items():       # shown to 0.01 (mm or deg)
+        assert float(_ro(page, key)) == pytest.approx(v, abs=0.005 + 1e-6), key
+    return q, drawn
+
+
+def _pick_slot(page, k):
+    page.locator("input.mantine-Select-input >> visible=true").first.click()
+    page.get_by_role("option", name=f"slot {k}:").first.click()
+    _wait_ro(page, "mode", f"{k} / {int(ak.robot.SLOT_MODE[k]):+d}")
+
+
+def test_page_title_names_the_robot_and_the_design(app):
+    page = app["page"]
+    page.wait_for_function("() => document.title.startsWith('ATHENA')",
+                           timeout=UPDATE_TIMEOUT_MS)
+    assert page.title() == "ATHENA - athenakin reference design - athenakin"
+
+
 def test_canvas_renders_the_robot(app):
     page = app["page"]
     assert page.locator("canvas").count() >= 1
@@ -178,6 +218,25 @@ def test_q1_slider_moves_the_robot_and_reads_out_fk(app):
         assert _ro(page, f"u{i + 1}") == _fmt(math.degrees(g.u[i]), 1.0)
     for i, a in enumerate("xyz"):
         assert _ro(page, f"tip_b_{a}") == _fmt(g.points["tip"][i])
+    _readouts_are_fk(page, slot=0)                                # Forward tab
+
+
+def test_every_read_out_can_be_scrolled_into_the_window(app):
+    page = app["page"]
+    shown = page.evaluate(                         # the panel's scroll bar is always drawn
+        "() => { const r = [...document.querySelectorAll('.mantine-ScrollArea-root')]"
+        ".find(x => x.querySelector('[data-ro=banner]'));"
+        " const v = r.querySelector('.mantine-ScrollArea-viewport');"
+        " const bar = r.querySelector(':scope > .mantine-ScrollArea-scrollbar"
+        "[data-orientation=vertical]');"
+        " return [v.scrollHeight > v.clientHeight, getComputedStyle(bar).display]; }")
+    assert shown == [True, "flex"]
+    for key in ("q1", "d_tip_at_rcm", "cond_tool_tip", "legend"):
+        cell = page.locator(f"[data-ro={key}]")
+        cell.scroll_into_view_if_needed()
+        box = cell.bounding_box()
+        assert box is not None and 0 <= box["y"] and box["y"] + box["height"] <= 640, key
+    page.locator("[data-ro=q1]").scroll_into_view_if_needed()
 
 
 def test_ik_sliders_drive_q(app):
@@ -198,6 +257,38 @@ def test_ik_sliders_drive_q(app):
         _wait_ro(page, f"q{i + 1}", _fmt(q[i]))
     assert (_ro(page, "q1"), _ro(page, "q2"), _ro(page, "q3")) != q_before
     assert page.get_attribute("[data-ro=status]", "data-level") in ("ok", "warn")
+    _readouts_are_fk(page, slot=0)                                # Inverse tab
+
+
+def test_a_p_below_zero_slot_stays_the_iks_slot_across_tabs(app):
+    """The issue's state bug: slot 15 (mode -1, p < 0) picked in the Forward tab; in the
+    Inverse tab the sliders agree with the read-outs and an azimuth step keeps slot 15."""
+    page = app["page"]
+    _tab(page, "Forward")
+    _pick_slot(page, 15)
+    q0, _ = _readouts_are_fk(page, slot=15)                       # Forward tab, slot 15
+    assert float(_ro(page, "p")) < 0
+    _tab(page, "Inverse")
+    tip_e = np.array([float(page.get_attribute(f"[data-ro=tip_e_{a}]", "data-v"))
+                      for a in "xyz"])
+    az, pol, depth = _slider_values(page)
+    assert depth == pytest.approx(np.linalg.norm(tip_e) * 1e3, abs=0.01)   # not clipped at L
+    assert (az, pol) == pytest.approx(tuple(math.degrees(x) for x in
+                                            angles_from_tip(tip_e)[:2]), abs=0.01)
+    page.locator(SLIDERS).nth(0).focus()
+    page.keyboard.press("ArrowRight")                              # one azimuth step
+    page.wait_for_function(
+        "(q) => { const e = document.querySelector('[data-ro=q1]'); "
+        "return e && e.getAttribute('data-v') !== q; }", arg=repr(float(q0[0])),
+        timeout=UPDATE_TIMEOUT_MS)
+    page.wait_for_timeout(300)
+    _readouts_are_fk(page, slot=15)                                # still slot 15
+    assert page.get_attribute("[data-ro=status]", "data-level") == "ok", _ro(page, "status")
+    tip_e = np.array([float(page.get_attribute(f"[data-ro=tip_e_{a}]", "data-v"))
+                      for a in "xyz"])
+    az2, _, _ = _slider_values(page)
+    assert 0 < az2 - az <= 0.1 + 1e-6                                  # one step (0.1 deg grid)
+    assert math.degrees(angles_from_tip(tip_e)[0]) == pytest.approx(az2, abs=1e-6)
 
 
 def test_playback_and_a_bad_trajectory_in_the_page(app):
@@ -208,6 +299,7 @@ def test_playback_and_a_bad_trajectory_in_the_page(app):
     page.keyboard.press("End")                                     # the last sample
     for i, v in enumerate((-0.12, 0.08, 0.47)):
         _wait_ro(page, f"q{i + 1}", _fmt(v))
+    _readouts_are_fk(page)                                         # Playback tab
     box = page.locator("input.mantine-TextInput-input >> visible=true").first
     box.fill(str(app["dir"] / "bad.csv"))
     box.press("Enter")
@@ -222,6 +314,26 @@ def test_playback_and_a_bad_trajectory_in_the_page(app):
     page.keyboard.press("ArrowLeft")
     _wait_ro(page, "q3", "469.50")
     assert app["proc"].poll() is None
+
+
+def test_setup_tab_applies_another_design(app):
+    import dataclasses
+
+    from athenakin.app import app_setup
+
+    page = app["page"]
+    other = dataclasses.replace(ak.Design.default(), l5=0.42, name="long l5")
+    (app["dir"] / "other.toml").write_text(other.to_toml())
+    _tab(page, "Set-up")
+    box = page.locator("input.mantine-TextInput-input >> visible=true").first
+    box.fill(str(app["dir"] / "other.toml"))
+    box.press("Enter")
+    page.get_by_role("button", name="apply set-up").click()
+    page.wait_for_function("() => document.title.includes('long l5')",
+                           timeout=UPDATE_TIMEOUT_MS)
+    assert page.title() == "ATHENA - long l5 - athenakin"
+    page.wait_for_timeout(500)
+    _readouts_are_fk(page, app_setup(other, backend="numpy").T_b_e, other)   # Set-up tab
 
 
 #: The x arrow of the tip handle (viser's transform controls, drei's default axis colours).
@@ -280,62 +392,146 @@ def _wait_settled(page, app):
     raise AssertionError(f"the page did not settle on the server's read-outs {last}")
 
 
-def test_dragging_the_tip_handle_with_the_mouse_drives_q(browser):
-    """A real drag of the handle's x arrow in Chromium: q follows the controller-form IK.
-
-    The app runs in this process (the same AthenaApp as the CLI) so that the test can
-    place the camera: looking at the tool tip from a known direction, the x arrow of the
-    handle lands at a known pixel, and the mouse drags it left by DRAG_PIXELS."""
+@pytest.fixture(scope="module")
+def local(browser):
+    """An AthenaApp in this process (the tests place and read the camera) and its page,
+    shared by the drag and the keys tests."""
     from athenakin.app import AthenaApp
 
     app = AthenaApp(port=_free_port(), backend="numpy")
     errors = []
     try:
         page = _open_page(browser, app.url, errors)
-        r0 = _wait_settled(page, app)
-        tip0, scale = r0.tip_b.copy(), float(app.tip_handle.scale)
-        cam = next(iter(app.server.get_clients().values())).camera
-        cam.position = tip0 + DRAG_CAMERA_DISTANCE * DRAG_CAMERA_FROM / np.linalg.norm(
-            DRAG_CAMERA_FROM)
-        cam.look_at = tip0                               # after the position (viser moves both)
-        box = page.locator("canvas").first.bounding_box()
-        x = np.array([1.0, 0.0, 0.0])
-        grab = _pixel(cam, box, tip0 + 0.6 * scale * x)  # on the arrow's shaft
-        out = _pixel(cam, box, tip0 + scale * x) - _pixel(cam, box, tip0)
-        assert out[0] < -0.5 * np.linalg.norm(out)       # the arrow points left
-        end = grab + DRAG_PIXELS * out / np.linalg.norm(out)
-        gx, gy = np.round(grab).astype(int)
-        t0 = time.monotonic()                            # the camera moved: the arrow is there
-        while True:
-            img = imageio.imread(page.screenshot())[gy - 2:gy + 3, gx - 2:gx + 3]
-            if _color_fraction(img, GIZMO_X_COLOR) > 0 or (
-                    time.monotonic() - t0 > UPDATE_TIMEOUT_MS / 1e3):
-                break
-            page.wait_for_timeout(200)
-        assert _color_fraction(img, GIZMO_X_COLOR) > 0, "the handle's x arrow is not drawn"
-        page.mouse.move(*grab)
-        page.mouse.down()
-        page.mouse.move(*end, steps=3)
-        page.mouse.up()
-        want = _along_axis(cam, box, end, tip0, x) - _along_axis(cam, box, grab, tip0, x)
-        t0 = time.monotonic()
-        while np.allclose(app.view.readouts.tip_b, tip0, rtol=0, atol=1e-9) and (
-                time.monotonic() - t0 < UPDATE_TIMEOUT_MS / 1e3):
-            page.wait_for_timeout(200)
-        r = _wait_settled(page, app)
-        moved = r.tip_b - tip0
-        assert moved[0] == pytest.approx(want, abs=2e-3)  # the handle followed the mouse
-        assert want > 0.01 and np.all(np.abs(moved[1:]) < 1e-9)    # along x only
-        q, res = ak.q_from_tool_tip(app.setup.T_b_e, r.tip_e)
-        assert res.valid
-        for i in range(3):                               # read-outs: the IK of the new tip
-            assert float(_ro(page, f"q{i + 1}")) == pytest.approx(q[i] * 1e3, abs=5e-3 + 1e-9)
-        assert np.max(np.abs(q - r0.q)) > 1e-3
-        assert page.get_attribute("[data-ro=status]", "data-level") == "ok"
-        assert errors == []
+        yield app, page, errors
         page.close()
     finally:
         app.stop()
+
+
+def test_dragging_the_tip_handle_with_the_mouse_drives_q(local):
+    """A real drag of the handle's x arrow in Chromium: q follows the controller-form IK.
+
+    The app runs in this process (the same AthenaApp as the CLI) so that the test can
+    place the camera: looking at the tool tip from a known direction, the x arrow of the
+    handle lands at a known pixel, and the mouse drags it left by DRAG_PIXELS."""
+    app, page, errors = local
+    r0 = _wait_settled(page, app)
+    tip0, scale = r0.tip_b.copy(), float(app.tip_handle.scale)
+    cam = next(iter(app.server.get_clients().values())).camera
+    cam.position = tip0 + DRAG_CAMERA_DISTANCE * DRAG_CAMERA_FROM / np.linalg.norm(
+        DRAG_CAMERA_FROM)
+    cam.look_at = tip0                               # after the position (viser moves both)
+    box = page.locator("canvas").first.bounding_box()
+    x = np.array([1.0, 0.0, 0.0])
+    grab = _pixel(cam, box, tip0 + 0.6 * scale * x)  # on the arrow's shaft
+    out = _pixel(cam, box, tip0 + scale * x) - _pixel(cam, box, tip0)
+    assert out[0] < -0.5 * np.linalg.norm(out)       # the arrow points left
+    end = grab + DRAG_PIXELS * out / np.linalg.norm(out)
+    gx, gy = np.round(grab).astype(int)
+    t0 = time.monotonic()                            # the camera moved: the arrow is there
+    while True:
+        img = imageio.imread(page.screenshot())[gy - 2:gy + 3, gx - 2:gx + 3]
+        if _color_fraction(img, GIZMO_X_COLOR) > 0 or (
+                time.monotonic() - t0 > UPDATE_TIMEOUT_MS / 1e3):
+            break
+        page.wait_for_timeout(200)
+    assert _color_fraction(img, GIZMO_X_COLOR) > 0, "the handle's x arrow is not drawn"
+    page.mouse.move(*grab)
+    page.mouse.down()
+    page.mouse.move(*end, steps=3)
+    page.mouse.up()
+    want = _along_axis(cam, box, end, tip0, x) - _along_axis(cam, box, grab, tip0, x)
+    t0 = time.monotonic()
+    while np.allclose(app.view.readouts.tip_b, tip0, rtol=0, atol=1e-9) and (
+            time.monotonic() - t0 < UPDATE_TIMEOUT_MS / 1e3):
+        page.wait_for_timeout(200)
+    r = _wait_settled(page, app)
+    moved = r.tip_b - tip0
+    assert moved[0] == pytest.approx(want, abs=2e-3)  # the handle followed the mouse
+    assert want > 0.01 and np.all(np.abs(moved[1:]) < 1e-9)    # along x only
+    q, res = ak.q_from_tool_tip(app.setup.T_b_e, r.tip_e)
+    assert res.valid
+    for i in range(3):                               # read-outs: the IK of the new tip
+        assert float(_ro(page, f"q{i + 1}")) == pytest.approx(q[i] * 1e3, abs=5e-3 + 1e-9)
+    assert np.max(np.abs(q - r0.q)) > 1e-3
+    assert page.get_attribute("[data-ro=status]", "data-level") == "ok"
+    assert errors == []
+
+
+PASSIVE_LISTENER_NOTE = ("console: Unable to preventDefault inside passive event listener "
+                         "invocation.")
+
+
+def _grab_pixel_on_the_grip(cam, box, tip, scale):
+    """A pixel on the tip grip's sphere away from the handle's three arrows."""
+    from athenakin.app._server import GRIP_RADIUS
+
+    c = _pixel(cam, box, tip)
+    arrows = [_pixel(cam, box, tip + scale * e) - c for e in np.eye(3)]
+    arrows = [a / np.linalg.norm(a) for a in arrows]
+    best = max((np.array([math.cos(t), math.sin(t)]) for t in np.linspace(0, 2 * np.pi, 16,
+                                                                             endpoint=False)),
+               key=lambda d: min(np.arccos(np.clip(d @ a, -1, 1)) for a in arrows))
+    P, f, r, u, t = _camera_basis(cam)
+    radius_px = GRIP_RADIUS / (np.linalg.norm(tip - P) * t) * box["height"] / 2
+    return c + 0.6 * radius_px * best
+
+
+def test_keys_drive_the_focused_slider_only_and_the_grip_drags_the_tip(local):
+    """Arrow keys held on a focused slider move the slider, not the camera (the canvas
+    still takes them); a first drag of the tip grip moves the tip in the view plane and
+    leaves the camera where it is. The app runs in this process to read the camera."""
+    app, page, errors = local
+    r0 = _wait_settled(page, app)
+    cam = next(iter(app.server.get_clients().values())).camera
+    tip0 = r0.tip_b.copy()
+    cam.position = tip0 + DRAG_CAMERA_DISTANCE * DRAG_CAMERA_FROM / np.linalg.norm(
+        DRAG_CAMERA_FROM)
+    cam.look_at = tip0
+    page.wait_for_timeout(500)
+    pos0 = np.array(cam.position)
+    page.locator(SLIDERS).nth(0).focus()
+    page.keyboard.down("ArrowRight")                 # held: the camera would turn
+    page.wait_for_timeout(400)
+    page.keyboard.up("ArrowRight")
+    r1 = _wait_settled(page, app)
+    assert r1.q[0] > r0.q[0]                         # the slider moved ...
+    page.wait_for_timeout(300)
+    np.testing.assert_allclose(cam.position, pos0, rtol=0, atol=1e-9)   # ... not the view
+    # the grip: a drag from a point on it, first try
+    tip1 = r1.tip_b.copy()
+    box = page.locator("canvas").first.bounding_box()
+    grab = _grab_pixel_on_the_grip(cam, box, tip1, float(app.tip_handle.scale))
+    end = grab + np.array([0.0, -25.0])              # 25 px up the screen
+    P, f, rgt, up, t = _camera_basis(cam)
+    depth = (tip1 - P) @ f
+    page.mouse.move(*grab)
+    page.mouse.down()
+    page.mouse.move(*end, steps=5)
+    page.mouse.up()
+    t0 = time.monotonic()
+    while np.allclose(app.view.readouts.tip_b, tip1, rtol=0, atol=1e-9) and (
+            time.monotonic() - t0 < UPDATE_TIMEOUT_MS / 1e3):
+        page.wait_for_timeout(200)
+    r2 = _wait_settled(page, app)
+    moved = r2.tip_b - tip1
+    want_up = 25.0 * 2 * depth * t / box["height"]   # the pointer's travel at the tip, m
+    assert moved @ up == pytest.approx(want_up, rel=0.25)
+    assert abs(moved @ rgt) < 0.25 * want_up and abs(moved @ f) < 0.25 * want_up
+    np.testing.assert_allclose(cam.position, pos0, rtol=0, atol=1e-9)   # no orbit
+    # the canvas still turns the view on the arrow keys
+    page.mouse.click(box["x"] + 30, box["y"] + box["height"] - 30)
+    page.keyboard.down("ArrowRight")
+    page.wait_for_timeout(400)
+    page.keyboard.up("ArrowRight")
+    t0 = time.monotonic()
+    while np.allclose(cam.position, pos0, rtol=0, atol=1e-6) and (
+            time.monotonic() - t0 < UPDATE_TIMEOUT_MS / 1e3):
+        page.wait_for_timeout(200)
+    assert not np.allclose(cam.position, pos0, rtol=0, atol=1e-6)
+    # viser 1.1.1's scene-node drag (the grip) calls preventDefault in a passive pointer
+    # listener, which Chromium logs; the drag itself works (checked above)
+    assert [e for e in errors if e != PASSIVE_LISTENER_NOTE] == []
 
 
 def test_no_page_errors(app):

@@ -274,6 +274,14 @@ def test_cli_fk_certify_table_and_json(capsys):
     assert main(["fk", "-0.10", "0.10", "0.45", "--certify"]) == 0
     out = capsys.readouterr().out
     assert "exactly 16 real solutions (proven)" in out and out.count("CERTIFIED") == 16
+    assert main(["fk", "-0.10", "0.10", "0.45"]) == 0             # the angles in fk's range
+    plain = capsys.readouterr().out.splitlines()[3:19]
+    cert_rows = out.splitlines()[3:19]
+    for row, crow in zip(plain, cert_rows, strict=True):
+        u = [float(x) for x in row.split()[7:12]]
+        mids = [float(part.split()[-1]) for part in crow.split("+-")[1:6]]
+        assert all(-180 < m <= 180 for m in mids), crow
+        np.testing.assert_allclose(mids, u, rtol=0, atol=1e-3)
     assert main(["fk", "-0.10", "0.10", "0.45", "--certify", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)["certificate"]
     assert data["complete"] and data["n_certified"] == 16

@@ -157,3 +157,6 @@ def test_readme_demo_with_the_example_design_runs(capsys, monkeypatch):
     monkeypatch.chdir(Path(__file__).resolve().parent.parent / "examples")
     code, out, _ = run(capsys, "demo", "--design", "my_robot.toml")
     assert code == 0 and "16" in out
+    assert "reference design" not in out and "from my_robot.toml" in out   # says whose
+    code, out, _ = run(capsys, "demo")
+    assert out.startswith("athenakin demo: ATHENA reference design and set-up")

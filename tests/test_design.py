@@ -153,3 +153,19 @@ def test_toml_not_utf8_or_too_deep_is_invalid_input(tmp_path):
         ak.Design.from_toml(f)
     with pytest.raises(TaskFileError, match="nested too deeply"):
         Task.from_toml(f)
+
+
+def test_a_design_typed_in_millimetres_warns_naming_the_unit():
+    import warnings
+
+    from athenakin.design import LIKELY_MM_ABOVE, UnitWarning
+
+    with pytest.warns(UnitWarning, match=r"l1 = 300; .*millimetres \(divide by 1000\)"):
+        ak.Design(l1=300, l2=100, l3=250, l4=150, l5=400, tool_length=450, name="mm")
+    with pytest.warns(UnitWarning, match=r"q_max = \[100.0, 300.0, 700.0\]"):
+        ak.Design(l1=0.3, l2=0.1, l3=0.25, l4=0.15, l5=0.4, q_max=(100, 300, 700))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")                # metres, and unlimited strokes: silent
+        ak.Design.default()
+        ak.Design(l1=0.3, l2=0.1, l3=0.25, l4=0.15, l5=LIKELY_MM_ABOVE,
+                  q_min=(-np.inf, -1.0, 0.0), q_max=None)

@@ -383,3 +383,45 @@ def test_far_rcm_backends_agree(t):
         np.testing.assert_array_equal(fast.reason, ref.reason)
     near = ak.forward_kinematics(q, ak.default_rcm_frame(), backend="numpy")
     assert near.residual.max() < 1e-12     # the allowance is rounding, nothing near
+
+
+@needs_numba
+def test_list_q_and_numpy_scalar_tolerances_take_the_lean_path(monkeypatch):
+    """One guard (fast._api.lean_fk / lean_ik / lean_line): a list q, a numpy float64
+    tolerance, a float p reach the single-item kernel, never the general path, and give
+    the reference's results."""
+    from athenakin.fast import _api
+
+    ok = _single_items()[0]
+    ak.forward_kinematics(ok[2], T0, D)                   # warm the entry points
+    ak.inverse_kinematics(T0, ok[3], D)
+    ak.q_from_tool_tip(T0, ok[4], D)
+    depth = float(np.linalg.norm(ok[4]))
+    direction, p = ok[4] / depth, D.tool_length - depth
+    ak.q_from_instrument(T0, direction, p, D)
+
+    def general(*a, **k):
+        raise AssertionError("the general path was taken")
+
+    calls = [(ak.forward_kinematics, ak.robot.forward_kinematics, (ok[2].tolist(), T0),
+              {"tangent_tol": np.float64(2e-9), "closure_tol": 1e-9}),
+             (ak.forward_kinematics, ak.robot.forward_kinematics, (tuple(ok[2]), T0), {}),
+             (ak.inverse_kinematics, ak.robot.inverse_kinematics, (T0, ok[3].tolist()),
+              {"singular_tol": np.float64(1e-10)}),
+             (ak.q_from_tool_tip, ak.robot.q_from_tool_tip, (T0, ok[4].tolist()), {}),
+             (ak.q_from_instrument, ak.robot.q_from_instrument,
+              (T0, direction.tolist(), np.float64(p)), {})]
+    for name in ("forward_kinematics", "inverse_kinematics", "q_from_tool_tip",
+                 "q_from_instrument", "_fk_single"):
+        monkeypatch.setattr(_api, name, general)
+    for k, (fn, ref, args, kw) in enumerate(calls):
+        got = _outcome(fn, *args, D, **kw)
+        assert not isinstance(got, AssertionError), (k, got)
+        _assert_same_outcome(got, _outcome(ref, *args, D, **kw))
+    monkeypatch.undo()
+    # what the lean path refuses goes the general way, and is still the reference
+    for bad in ([True, 0.1, 0.45], ["-0.1", "0.1", "0.45"], [np.nan, 0.1, 0.45]):
+        _assert_same_outcome(_outcome(ak.forward_kinematics, bad, T0, D),
+                             _outcome(ak.robot.forward_kinematics, bad, T0, D))
+    with pytest.raises(ValueError, match="tangent_tol"):
+        ak.forward_kinematics(ok[2], T0, D, tangent_tol=np.float64(np.nan))

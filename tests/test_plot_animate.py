@@ -52,13 +52,18 @@ def test_frames_move_and_are_not_blank():
     assert min(diffs) > 0.05
 
 
-def test_gif(tmp_path, capsys):
+def test_gif(tmp_path, capsys, monkeypatch):
+    import sys
+
     q = instrument_cone_path(5)
     path = animate(tmp_path / "motion.gif", q, size=SMALL, fps=10)
     frames = iio.imread(path)
     assert frames.shape[:3] == (5, SMALL[1], SMALL[0])
     assert frames[0].std() > 15
-    assert "rendering" in capsys.readouterr().err          # the tqdm bar
+    assert "rendering" not in capsys.readouterr().err      # stderr not a terminal: no bar
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    animate(tmp_path / "again.gif", q[:2], size=SMALL, fps=10)
+    assert "rendering" in capsys.readouterr().err          # on a terminal: the tqdm bar
 
 
 def test_mp4(tmp_path):

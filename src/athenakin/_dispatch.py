@@ -34,7 +34,7 @@ from typing import Any, Literal, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._validation import OPTION_AUTO, OPTION_CLOSED, is_default, is_option, is_raising_policy
+from ._validation import OPTION_AUTO, is_option
 from .chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
 from .design import Design
 from .parallel._module import TANGENT_TOL
@@ -293,22 +293,12 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     16
     """
     if "fk" in _WARM and _STATE["numba"] and (backend is OPTION_AUTO or _compiled_choice(backend)):
-        api = _STATE["api"]
-        if (type(q) is np.ndarray and type(T_b_e) is np.ndarray and q.dtype is _F8
-                and T_b_e.dtype is _F8 and q.shape == (3,) and T_b_e.shape == (4, 4)
-                and fields is None and (method is OPTION_CLOSED or is_option(method, "closed"))
-                and (errors is OPTION_AUTO or is_raising_policy(errors))
-                and (tangent_tol is TANGENT_TOL or is_default(tangent_tol, TANGENT_TOL))
-                and (degenerate_tol is DEGENERATE_TOL or is_default(degenerate_tol, DEGENERATE_TOL))
-                and (p_zero_tol is P_ZERO_TOL or is_default(p_zero_tol, P_ZERO_TOL))
-                and (closure_tol is CLOSURE_TOL or is_default(closure_tol, CLOSURE_TOL))):
-            # the lean single call (control loops): straight to the packed kernel
-            fq, fT = q.flags, T_b_e.flags
-            if fq.c_contiguous and fq.writeable and fT.c_contiguous and fT.writeable:
-                sol = api._fk_one_plain(q, T_b_e, api.design_params(design))
-                if sol is not None:
-                    return sol  # type: ignore[no-any-return]
-        return api.forward_kinematics(  # type: ignore[no-any-return]
+        # the lean single call (control loops): fast._api's one guard, then the kernel
+        sol = _STATE["api"].lean_fk(q, T_b_e, design, method, errors, tangent_tol,
+                                    degenerate_tol, p_zero_tol, closure_tol, fields)
+        if sol is not None:
+            return sol  # type: ignore[no-any-return]
+        return _STATE["api"].forward_kinematics(  # type: ignore[no-any-return]
             q, T_b_e, design, method=method, errors=errors, tangent_tol=tangent_tol,
             degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol, closure_tol=closure_tol,
             fields=fields)
@@ -359,19 +349,11 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     True
     """
     if "ik" in _WARM and _STATE["numba"] and (backend is OPTION_AUTO or _compiled_choice(backend)):
-        api = _STATE["api"]
-        if (type(T_b_e) is np.ndarray and type(u345) is np.ndarray and T_b_e.dtype is _F8
-                and u345.dtype is _F8 and T_b_e.shape == (4, 4) and u345.shape == (3,)
-                and fields is None and (errors is OPTION_AUTO or is_raising_policy(errors))
-                and (singular_tol is IK_SINGULAR_TOL or is_default(singular_tol, IK_SINGULAR_TOL))
-                and (closure_tol is CLOSURE_TOL or is_default(closure_tol, CLOSURE_TOL))):
-            # the lean single call (control loops): straight to the packed kernel
-            fT, fu = T_b_e.flags, u345.flags
-            if fT.c_contiguous and fT.writeable and fu.c_contiguous and fu.writeable:
-                res = api._ik_one_plain(T_b_e, u345, api.design_params(design))
-                if res is not None:
-                    return res  # type: ignore[no-any-return]
-        return api.inverse_kinematics(  # type: ignore[no-any-return]
+        res = _STATE["api"].lean_ik(T_b_e, u345, design, errors, singular_tol, closure_tol,
+                                    fields)
+        if res is not None:            # the lean single call: fast._api's one guard
+            return res  # type: ignore[no-any-return]
+        return _STATE["api"].inverse_kinematics(  # type: ignore[no-any-return]
             T_b_e, u345, design, errors=errors, singular_tol=singular_tol,
             closure_tol=closure_tol, fields=fields)
     if resolve_backend(backend):
@@ -412,7 +394,11 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
     """
     if ("line" in _WARM and _STATE["numba"]
             and (backend is OPTION_AUTO or _compiled_choice(backend))):
-        return _STATE["api"].q_from_instrument(  # type: ignore[no-any-return]
+        api = _STATE["api"]
+        res = api.lean_line(T_b_e, direction_e, p, design, errors)
+        if res is not None:            # the lean single call: fast._api's one guard
+            return res  # type: ignore[no-any-return]
+        return api.q_from_instrument(  # type: ignore[no-any-return]
             T_b_e, direction_e, p, design, errors=errors)
     if resolve_backend(backend):
         api = _api()
@@ -448,14 +434,9 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
     if ("line" in _WARM and _STATE["numba"]
             and (backend is OPTION_AUTO or _compiled_choice(backend))):
         api = _STATE["api"]
-        if (type(T_b_e) is np.ndarray and type(tip_e) is np.ndarray and T_b_e.dtype is _F8
-                and tip_e.dtype is _F8 and T_b_e.shape == (4, 4) and tip_e.shape == (3,)
-                and (errors is OPTION_AUTO or is_raising_policy(errors))):
-            fT, ft = T_b_e.flags, tip_e.flags
-            if fT.c_contiguous and fT.writeable and ft.c_contiguous and ft.writeable:
-                res = api._line_one_plain(T_b_e, tip_e, 0.0, 1, api.design_params(design))
-                if res is not None:
-                    return res  # type: ignore[no-any-return]
+        res = api.lean_line(T_b_e, tip_e, None, design, errors)
+        if res is not None:            # the lean single call: fast._api's one guard
+            return res  # type: ignore[no-any-return]
         return api.q_from_tool_tip(  # type: ignore[no-any-return]
             T_b_e, tip_e, design, errors=errors)
     if resolve_backend(backend):

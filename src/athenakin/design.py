@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Literal
@@ -19,7 +20,7 @@ from ._toml import read_toml
 from ._validation import check_scalar
 from .errors import InvalidInputError
 
-__all__ = ["Design", "AB_ORDERS", "LENGTH_RANGE"]
+__all__ = ["Design", "AB_ORDERS", "LENGTH_RANGE", "LIKELY_MM_ABOVE", "UnitWarning"]
 
 #: Allowed values of :attr:`Design.ab_order`.
 AB_ORDERS = ("q1<q2", "q1>q2")
@@ -34,6 +35,13 @@ _OTHER_TABLES = ("bodies", "environment")
 #: lengths into overflow or lose every digit to rounding (issue 13); a robot of that size is
 #: a typing error (mm for m), reported as such.
 LENGTH_RANGE = (1e-6, 1e3)
+#: A length or finite stroke limit above this (m) is accepted with a :class:`UnitWarning`:
+#: an ATHENA's links are tenths of a metre, so 300 is most likely 300 mm typed for 0.3 m.
+LIKELY_MM_ABOVE = 10.0
+
+
+class UnitWarning(UserWarning):
+    """A design value looks like it was typed in millimetres instead of metres."""
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -118,6 +126,17 @@ class Design:
             raise InvalidInputError(f"ab_order: expected one of {AB_ORDERS}, got {self.ab_order!r}")
         if not isinstance(self.name, str):
             raise TypeError(f"name: expected str, got {type(self.name).__name__}")
+        big = [f"{k} = {getattr(self, k):g}" for k in (*_LENGTHS, "tool_length")
+               if getattr(self, k) > LIKELY_MM_ABOVE]
+        for k in ("q_min", "q_max"):
+            v = getattr(self, k)
+            if v is not None and any(math.isfinite(x) and abs(x) > LIKELY_MM_ABOVE for x in v):
+                big.append(f"{k} = {list(v)}")
+        if big:
+            warnings.warn(
+                f"design {self.name or '(unnamed)'}: {'; '.join(big)} (metres): lengths and "
+                f"strokes are in metres and an ATHENA's links are tenths of a metre; these "
+                f"look like millimetres (divide by 1000)", UnitWarning, stacklevel=3)
 
     # --- derived values ---------------------------------------------------------------
     @property

@@ -107,7 +107,8 @@ def _chunks(n: int, progress: bool | None, desc: str) -> Iterator[slice]:
         except ImportError:  # pragma: no cover - tqdm is in the analysis extra
             pass
         else:
-            it = tqdm(starts, total=(n + CHUNK - 1) // CHUNK, desc=desc, unit="chunk")
+            it = tqdm(starts, total=(n + CHUNK - 1) // CHUNK, desc=desc, unit="chunk",
+                      disable=None)
     for s in it:
         yield slice(s, min(s + CHUNK, n))
 

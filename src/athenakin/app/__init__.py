@@ -13,7 +13,8 @@ The app's logic is pure and testable without a browser (numpy only):
   through the controller-form IK and stop at the workspace boundary;
 * :func:`load_playback`, :func:`playback_q`: a trajectory CSV from ``athenakin plan``;
 * :func:`robot_scene`, :func:`ghost_scene`: the lines and points to draw, the ghosted
-  slots batched (:func:`slot_ghosts`);
+  slots batched (:func:`slot_ghosts`); shaded bodies (:class:`Solid`) join a scene
+  through :func:`with_solids`;
 * :func:`view_html`, :func:`readouts_html`, :func:`slots_html`: the read-outs as HTML.
 
 Only :class:`AthenaApp` and :func:`launch` import viser (``pip install 'athenakin[app]'``).
@@ -42,13 +43,14 @@ from ._model import (
     slot_statuses,
     tip_from_angles,
 )
-from ._scene import PART_STYLE, Label, LineSet, PointSet, Scene, robot_scene
-from ._text import message_html, readouts_html, slots_html, view_html
+from ._scene import PART_STYLE, Label, LineSet, PointSet, Scene, Solid, robot_scene, with_solids
+from ._text import SINGULAR_NAMES, message_html, readouts_html, slots_html, view_html
 
 __all__ = [
     "GHOST_BLEND",
     "INVERSE_STEPS",
     "PART_STYLE",
+    "SINGULAR_NAMES",
     "WARN_CONDITION",
     "WARN_DISTANCE_M",
     "WARN_SINE",
@@ -63,6 +65,7 @@ __all__ = [
     "PointSet",
     "Readouts",
     "Scene",
+    "Solid",
     "SlotGhosts",
     "SlotStatus",
     "angles_from_tip",
@@ -82,6 +85,7 @@ __all__ = [
     "slots_html",
     "tip_from_angles",
     "view_html",
+    "with_solids",
 ]
 
 

@@ -17,7 +17,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._dispatch import forward_kinematics, numba_available, q_from_tool_tip
+from .._dispatch import forward_kinematics, numba_available, q_from_instrument, q_from_tool_tip
 from .._validation import check_array
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, OutOfWorkspaceError, Reason
@@ -490,7 +490,8 @@ class InverseStep:
 
 
 def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from: ArrayLike,
-                 mode_from: int = 1, *, n: int = INVERSE_STEPS) -> InverseStep:
+                 mode_from: int = 1, *, n: int = INVERSE_STEPS,
+                 p_from: float | None = None) -> InverseStep:
     """Move the tool tip from where it is towards a target; the actuators follow, never jump.
 
     The straight segment ``tip_from -> tip_to`` (frame E) is sampled at ``n`` points
@@ -498,6 +499,11 @@ def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from
     actuators go to the last point before the first one that fails (out of the
     workspace, a stroke limit, the tip not beyond the RCM) or changes the assembly
     mode, so a target across the workspace boundary leaves the robot at the boundary.
+    The motion stays on the branch of ``p`` it starts on (``p_from``): the inserted
+    tool ``0 < p < L``, ``O_s`` beyond the RCM ``p < 0`` (the tip ``L - p > L`` from
+    the RCM) or the tip behind the RCM ``p > L``; the two others are solved by
+    :func:`~athenakin.q_from_instrument`, and the motion stops before ``p`` would reach
+    0 or ``L``.
 
     Parameters
     ----------
@@ -512,6 +518,9 @@ def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from
         Assembly mode now.
     n : int, keyword-only
         Samples on the segment.
+    p_from : float, keyword-only, optional
+        Passive prismatic joint now, m (the drawn slot's ``p``): picks the branch.
+        Default: the inserted tool, ``0 < p < L``.
 
     Returns
     -------
@@ -522,19 +531,41 @@ def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from
     q0 = check_array(q_from, "q_from", (3,))
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise InvalidInputError(f"n: expected a positive integer, got {n!r}")
+    L = setup.design.tool_length
+    p0 = 0.5 * L if p_from is None else float(check_array(p_from, "p_from", ()))
+    branch = 0 if 0.0 < p0 < L else (-1 if p0 <= 0.0 else 1)
     s = np.linspace(0.0, 1.0, int(n) + 1)[1:]
     tips = a + s[:, None] * (b - a)
-    q, res = q_from_tool_tip(setup.T_b_e, tips, setup.design, errors="flag",
-                             backend=setup.backend)
-    ok = np.asarray(res.valid) & (np.asarray(res.mode) == mode_from)
+    if branch == 0:
+        q, res = q_from_tool_tip(setup.T_b_e, tips, setup.design, errors="flag",
+                                 backend=setup.backend)
+        side = np.ones(len(tips), dtype=bool)
+    else:                 # tip_e = (L - p) d: p < 0 beyond L from the RCM, p > L behind it
+        depth = np.linalg.norm(tips, axis=-1)
+        unit = np.where((depth > 0)[:, None], tips / np.where(depth > 0, depth, 1.0)[:, None],
+                        np.array([0.0, 0.0, 1.0]))   # a tip at the RCM: off the branch anyway
+        side = depth > L if branch < 0 else depth > 0
+        p = np.where(side, L - depth, -1.0) if branch < 0 else L + depth
+        q, res = q_from_instrument(setup.T_b_e, unit if branch < 0 else -unit, p,
+                                   setup.design, errors="flag", backend=setup.backend)
+    ok = side & np.asarray(res.valid) & (np.asarray(res.mode) == mode_from)
     bad = np.flatnonzero(~ok)
     if bad.size == 0:
         return InverseStep(q=q[-1].copy(), tip_e=b.copy(), mode=int(mode_from), reached=True,
                            reason=0, message="")
     k = int(bad[0])
-    r = int(res.reason[k])
-    why = (f"{Reason(r).name}: {Reason(r).description}" if r else
-           f"the assembly mode would change from {mode_from:+d}")
+    r = int(res.reason[k]) if side[k] else int(
+        Reason.SERIAL_P_ZERO if branch < 0 else Reason.INSERTION_RANGE)
+    if not side[k] and branch < 0:
+        why = (f"the branch p < 0 ends where the tip is the tool length L = {L * 1e3:.1f} mm "
+               f"from the RCM (p = 0); pick a slot with p > 0 to come nearer")
+    elif not side[k]:
+        why = ("the branch p > L (tip behind the RCM) ends with the tip at the RCM; pick a "
+               "slot with p < L to insert the tool")
+    elif r:
+        why = f"{Reason(r).name}: {Reason(r).description}"
+    else:
+        why = f"the assembly mode would change from {mode_from:+d}"
     if k == 0:
         return InverseStep(q=q0.copy(), tip_e=a.copy(), mode=int(mode_from), reached=False,
                            reason=r, message=f"target out of reach ({why}); actuators held")

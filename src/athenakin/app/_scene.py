@@ -3,8 +3,10 @@
 The parts, colours and sizes are those of the static views (:mod:`athenakin.plot`):
 the positions come from :class:`~athenakin.plot.RobotGeometry`, the colours from
 :data:`athenakin.plot.COLORS`. A renderer draws each :class:`LineSet` as one node of
-line segments, each :class:`PointSet` as one point cloud, and each :class:`Label` as
-a text label; ghosts (the other valid slots) are the same parts, paler.
+line segments, each :class:`PointSet` as one point cloud, each :class:`Label` as a text
+label and each :class:`Solid` (a triangle mesh: link or collision bodies) as one shaded
+mesh; ghosts (the other valid slots) are the same parts, paler. :func:`robot_scene`
+draws no solids yet; a caller adds them with :func:`with_solids`.
 """
 
 from __future__ import annotations
@@ -17,7 +19,8 @@ from numpy.typing import NDArray
 from ..plot._geometry import RobotGeometry
 from ..plot._mpl import ARC_RADIUS, COLORS, FRAME_LENGTH, arc_points
 
-__all__ = ["LineSet", "PointSet", "Label", "Scene", "robot_scene", "rgb", "PART_STYLE"]
+__all__ = ["LineSet", "PointSet", "Label", "Solid", "Scene", "robot_scene", "with_solids", "rgb",
+           "PART_STYLE"]
 
 #: Colour (``"#rrggbb"``) and line width (pixels) of each drawn part (the static views').
 PART_STYLE: dict[str, tuple[str, float]] = {
@@ -93,6 +96,31 @@ class Label:
 
 
 @dataclasses.dataclass(frozen=True)
+class Solid:
+    """A body drawn as a shaded triangle mesh (a link, a collision body).
+
+    Attributes
+    ----------
+    name : str
+        Unique within a scene (the renderer's node name).
+    vertices : ndarray, shape (n, 3)
+        Base frame, m.
+    faces : ndarray of int, shape (m, 3)
+        Vertex indices of each triangle, counter-clockwise seen from outside.
+    color : tuple of 3 int
+        RGB, 0..255.
+    opacity : float
+        1: opaque, 0: invisible.
+    """
+
+    name: str
+    vertices: NDArray[np.float64]
+    faces: NDArray[np.int64]
+    color: tuple[int, int, int]
+    opacity: float = 1.0
+
+
+@dataclasses.dataclass(frozen=True)
 class Scene:
     """Everything drawn for one view.
 
@@ -101,16 +129,20 @@ class Scene:
     lines : tuple of LineSet
     points : tuple of PointSet
     labels : tuple of Label
+    solids : tuple of Solid
+        Shaded bodies (none by default).
     """
 
     lines: tuple[LineSet, ...]
     points: tuple[PointSet, ...]
     labels: tuple[Label, ...]
+    solids: tuple[Solid, ...] = ()
 
     def bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Axis-aligned box ``(lo, hi)`` (each shape (3,)) around every line and point."""
+        """Axis-aligned box ``(lo, hi)`` (each shape (3,)) around every line, point and solid."""
         pts = [ls.segments.reshape(-1, 3) for ls in self.lines]
         pts += [ps.points for ps in self.points]
+        pts += [so.vertices for so in self.solids]
         allp = np.concatenate(pts)
         allp = allp[np.all(np.isfinite(allp), axis=-1)]
         return allp.min(axis=0), allp.max(axis=0)
@@ -195,3 +227,24 @@ def robot_scene(g: RobotGeometry, *, frames: bool = True, labels: bool = True,
                                0.008))
     labs = tuple(Label(text, P[k].copy()) for k, text, _ in _POINTS) if labels else ()
     return Scene(lines=tuple(lines), points=tuple(points), labels=labs)
+
+
+def with_solids(scene: Scene, solids: tuple[Solid, ...]) -> Scene:
+    """``scene`` with ``solids`` added (names must stay unique).
+
+    Raises
+    ------
+    InvalidInputError
+        Two solids share a name, or a solid's arrays have the wrong shape.
+    """
+    from ..errors import InvalidInputError
+
+    names = [so.name for so in (*scene.solids, *solids)]
+    if len(set(names)) != len(names):
+        raise InvalidInputError(f"solids: names must be unique, got {names}")
+    for so in solids:
+        v, f = np.asarray(so.vertices), np.asarray(so.faces)
+        if v.ndim != 2 or v.shape[1] != 3 or f.ndim != 2 or f.shape[1] != 3:
+            raise InvalidInputError(f"solids[{so.name!r}]: expected vertices (n, 3) and faces "
+                                    f"(m, 3), got {v.shape} and {f.shape}")
+    return dataclasses.replace(scene, solids=scene.solids + tuple(solids))

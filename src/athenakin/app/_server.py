@@ -21,6 +21,7 @@ import math
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -43,16 +44,31 @@ from ._model import (
     playback_q,
     tip_from_angles,
 )
-from ._scene import Scene, robot_scene
+from ._scene import Scene, Solid, robot_scene, with_solids
 from ._text import ERROR_COLOR, message_html, view_html
 
-__all__ = ["AthenaApp", "launch", "DEFAULT_PORT"]
+__all__ = ["AthenaApp", "launch", "rcm_reach", "DEFAULT_PORT"]
 
 #: Port the app asks for when none is given (viser takes the next free one if busy).
 DEFAULT_PORT = 8080
 _ALL = "all valid slots (others ghosted)"
 #: A label is sent again when its point moved by more than this, m.
 LABEL_TOL_M = 1e-7
+#: Size of the tip handle's arrows (viser transform controls), m, and their line width, px.
+HANDLE_SCALE = 0.15
+HANDLE_LINE_WIDTH = 4.0
+#: Radius of the tip grip: a sphere at the tool tip that drags the tip in the view plane, m.
+GRIP_RADIUS = 0.018
+GRIP_COLOR = (255, 190, 40)
+#: Style added to the page: the control panel's vertical scroll bar always visible.
+_PANEL_CSS = (".mantine-ScrollArea-root:has([data-ro='banner']) > "
+              ".mantine-ScrollArea-scrollbar[data-orientation='vertical']"
+              "{display:flex !important;opacity:1 !important;width:10px !important}"
+              ".mantine-ScrollArea-root:has([data-ro='banner']) .mantine-ScrollArea-thumb"
+              "{background-color:rgba(0,0,0,0.35) !important}")
+#: Keys of viser's camera (``event.code``): ignored while a control of the panel has focus.
+CAMERA_KEYS = ("ArrowLeft", "ArrowRight", "ArrowUp", "ArrowDown", "KeyW", "KeyA", "KeyS",
+               "KeyD", "KeyQ", "KeyE")
 
 
 def _import_viser() -> Any:
@@ -101,6 +117,9 @@ class AthenaApp:
     backend : {"auto", "numba", "numpy"}, keyword-only
     verbose : bool, keyword-only
         viser's own log lines.
+    solids : callable, keyword-only, optional
+        ``solids(view) -> tuple of Solid``: shaded bodies drawn with the robot at each
+        update (e.g. collision bodies), from the :class:`~athenakin.app.AppView` drawn.
 
     Attributes
     ----------
@@ -113,8 +132,10 @@ class AthenaApp:
     def __init__(self, design: Design | str | Path | None = None,
                  T_b_e: ArrayLike | str | Path | None = None, *, host: str = "127.0.0.1",
                  port: int = DEFAULT_PORT, trajectory: str | Path | None = None,
-                 backend: str = "auto", verbose: bool = False) -> None:
+                 backend: str = "auto", verbose: bool = False,
+                 solids: Callable[[AppView], tuple[Solid, ...]] | None = None) -> None:
         viser = _import_viser()
+        self._solids_of = solids
         self._lock = threading.RLock()
         self._syncing = False
         self._backend = backend
@@ -133,6 +154,8 @@ class AthenaApp:
         self.view: AppView | None = None
         self.playback: Playback | None = None
         self._dragging = False
+        self._grab: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+        self._solid_handles: dict[str, tuple[Any, tuple[int, ...]]] = {}
         self._line_handles: dict[str, Any] = {}
         self._point_handles: dict[str, Any] = {}
         self._label_handles: dict[str, Any] = {}
@@ -140,6 +163,7 @@ class AthenaApp:
         self._label_texts: tuple[str, ...] = ()
         self._label_pos = np.zeros((0, 3))
         self._build_gui()
+        self._send_page_script()
         # bodies as solids, closest pair, clearance (issue 20): app/_bodies.py
         from ._bodies import BodiesLayer
 
@@ -187,6 +211,37 @@ class AthenaApp:
             return base
 
     @property
+    def title(self) -> str:
+        """The page's title: the robot, the design and the app."""
+        name = self.setup.design.name or "unnamed design"
+        return f"ATHENA - {name} - athenakin"
+
+    def _send_page_script(self) -> None:
+        """Set the page title, keep camera keys off the controls, show the scroll bar.
+
+        viser's camera moves on the arrow keys (and W A S D Q E) wherever the focus is,
+        except in text fields: a focused slider would move and rotate the view at once.
+        A listener on ``document.body`` (reached after the control's own handler, before
+        viser's on ``document``) stops those keys when the focus is on an element other
+        than the page or the 3-D canvas.
+        """
+        from viser import _messages
+
+        script = (
+            f"document.title = {json.dumps(self.title)};"
+            "if (!window.__athenakinKeys) { window.__athenakinKeys = true;"
+            f" const keys = new Set({json.dumps(list(CAMERA_KEYS))});"
+            " document.body.addEventListener('keydown', (e) => { const t = e.target;"
+            " if (keys.has(e.code) && t instanceof Element && t !== document.body"
+            " && t.tagName !== 'CANVAS') { e.stopPropagation(); } });"
+            # the panel's scroll bar always shown: the read-outs continue below the window
+            " const st = document.createElement('style');"
+            f" st.textContent = {json.dumps(_PANEL_CSS)}; document.head.appendChild(st); }}")
+        # viser's own channel for client scripts (as its plotly element); kept for new pages
+        self.server.gui._websock_interface.queue_message(
+            _messages.RunJavascriptMessage(source=script))
+
+    @property
     def tip_handle(self) -> Any:
         """The draggable tool-tip handle (viser's transform controls), e.g. to hide it."""
         return self._handle
@@ -218,17 +273,21 @@ class AthenaApp:
             self._slot_dd.on_update(self._on_slot)
         with tabs.add_tab("Inverse"):
             L = s.design.tool_length * 1e3
+            self._far = rcm_reach(s)
             self._az = gui.add_slider("azimuth [deg]", min=-180.0, max=180.0, step=0.1,
                                       initial_value=0.0, hint="instrument about z_e")
             self._pol = gui.add_slider("polar [deg]", min=0.0, max=180.0, step=0.1,
                                        initial_value=90.0, hint="angle from z_e")
-            self._depth = gui.add_slider("tip depth [mm]", min=1.0, max=float(L - 1.0),
+            self._depth = gui.add_slider("tip from RCM [mm]", min=1.0, max=float(L - 1.0),
                                          step=0.5, initial_value=min(250.0, L / 2),
-                                         hint="tool tip beyond the RCM")
+                                         hint="distance of the tool tip from the RCM: below "
+                                              "the tool length L when inserted (0 < p < L)")
             for sl in (self._az, self._pol, self._depth):
                 sl.on_update(self._on_angles)
-            self._handle_cb = gui.add_checkbox("tip handle", initial_value=True,
-                                               hint="drag the tool tip in the 3-D view")
+            self._handle_cb = gui.add_checkbox(
+                "tip handle", initial_value=True,
+                hint="drag the yellow ball at the tool tip (in the view plane) or an arrow "
+                     "(along one axis)")
             self._handle_cb.on_update(self._on_handle_visible)
         with tabs.add_tab("Playback"):
             self._traj_path = gui.add_text("trajectory CSV", initial_value="",
@@ -251,8 +310,13 @@ class AthenaApp:
         with gui.add_folder("Slots (16 FK solutions)", expand_by_default=False):
             self._slots_html = gui.add_html("")
         self._handle = self.server.scene.add_transform_controls(
-            "/tip_handle", scale=0.08, disable_rotations=True, depth_test=False)
+            "/tip_handle", scale=HANDLE_SCALE, line_width=HANDLE_LINE_WIDTH,
+            disable_rotations=True, depth_test=False)
         self._handle.on_update(self._on_handle)
+        self._grip = self.server.scene.add_icosphere(
+            "/tip_grip", radius=GRIP_RADIUS, color=GRIP_COLOR, opacity=0.6, subdivisions=2,
+            cast_shadow=False, receive_shadow=False)
+        self._grip.on_drag("left")(self._on_grip)
         self.server.scene.add_grid("/ground", width=1.2, height=1.2, cell_size=0.05,
                                    section_size=0.25, position=(0.0, 0.25, 0.0))
 
@@ -310,8 +374,29 @@ class AthenaApp:
         if phase == "end":
             self._place_handle()
 
+    def _on_grip(self, event: Any) -> None:
+        """A drag of the tip grip: the tip follows the pointer in the view plane."""
+        phase = event.phase
+        with self._lock:
+            v = self.view
+            if v is None or v.readouts is None:
+                return
+            if phase == "start" or self._grab is None:
+                self._dragging = True
+                self._grab = (np.asarray(event.start_position, dtype=float),
+                              v.readouts.tip_b.copy())
+            grab, tip0 = self._grab
+            if phase == "end":
+                self._dragging = False
+                self._grab = None
+        target_b = tip0 + (np.asarray(event.end_position, dtype=float) - grab)
+        T = self.setup.T_b_e
+        self._move_tip(T[:3, :3].T @ (target_b - T[:3, 3]), snap_angles=False)
+        if phase == "end":
+            self._place_handle()
+
     def _on_handle_visible(self, _: object) -> None:
-        self._handle.visible = bool(self._handle_cb.value)
+        self._handle.visible = self._grip.visible = bool(self._handle_cb.value)
 
     def _on_time(self, _: object) -> None:
         if self._syncing or self.playback is None:
@@ -331,12 +416,15 @@ class AthenaApp:
                 self._set_status("the tip cannot be moved: no valid configuration", "error")
                 return
             r = v.readouts
-            step = inverse_step(self.setup, r.tip_e, tip_e, r.q, r.mode)
-            slot = self.slot if self.slot == "all" else _inverse_slot(int(self.slot), step.mode)
-            if slot != self.slot:
-                self.slot = slot
+            step = inverse_step(self.setup, r.tip_e, tip_e, r.q, r.mode, p_from=r.p)
+            notes = [step.message] if step.message else []
+            if self.slot == "all":          # the IK follows the slot drawn solid
+                notes.append(f"the tip moves slot {r.slot} (drawn solid); pick 'all valid "
+                             f"slots' again to see the others")
+            self.slot = _inverse_slot(r.slot, step.mode)
+            level = "warn" if step.message else "ok"
             self._apply_q(step.q, sync_ik=not snap_angles or not step.reached,
-                          extra=(step.message, "warn") if step.message else None)
+                          extra=("; ".join(notes), level) if notes else None)
 
     def _apply_q(self, q: NDArray[np.float64], *, sync_ik: bool,
                  extra: tuple[str, str] | None = None) -> AppView:
@@ -382,6 +470,8 @@ class AthenaApp:
             want = opts[0] if self.slot == "all" else opts[1 + int(self.slot)]
             if self._slot_dd.value != want:
                 self._slot_dd.value = want
+            if view.readouts is not None:
+                self._set_depth_range(view.readouts.p)
             if sync_ik and view.readouts is not None:
                 az, pol, depth = angles_from_tip(view.readouts.tip_e)
                 self._az.value = float(np.clip(round(math.degrees(az), 2), -180, 180))
@@ -393,11 +483,35 @@ class AthenaApp:
         finally:
             self._syncing = False
 
+    def _set_depth_range(self, p: float) -> None:
+        """Make the depth slider span the drawn slot's branch of ``p``.
+
+        The slider is the tip's distance from the RCM, ``|L - p|``: below ``L`` for the
+        inserted tool (``0 < p < L``), beyond ``L`` for ``p < 0`` (``O_s`` beyond the
+        RCM), from 0 for ``p > L`` (the tip behind the RCM).
+        """
+        L, far = self.setup.design.tool_length * 1e3, self._far * 1e3
+        if 0 < p * 1e3 < L:
+            lo, hi = 1.0, L - 1.0
+        elif p <= 0:
+            lo, hi = L + 1.0, L + far
+        else:
+            lo, hi = 1.0, max(far - L, 2.0)
+        if (self._depth.min, self._depth.max) != (lo, hi):
+            if self._depth.min < hi:        # keep min < max at every step
+                self._depth.max, self._depth.min = hi, lo
+            else:
+                self._depth.min, self._depth.max = lo, hi
+            self._depth.value = float(np.clip(self._depth.value, lo, hi))
+
     def _place_handle(self) -> None:
         if self.view is not None and self.view.readouts is not None:
             prev, self._syncing = self._syncing, True
             try:
-                self._handle.position = tuple(float(x) for x in self.view.readouts.tip_b)
+                tip = tuple(float(x) for x in self.view.readouts.tip_b)
+                self._handle.position = tip
+                if self._grab is None:
+                    self._grip.position = tip
             finally:
                 self._syncing = prev
 
@@ -409,6 +523,8 @@ class AthenaApp:
         """
         assert view.geometry is not None
         solid = robot_scene(view.geometry)
+        if self._solids_of is not None:
+            solid = with_solids(solid, tuple(self._solids_of(view)))
         ghosts = (ghost_scene(view.ghosts, view.geometry) if view.ghosts is not None
                   else Scene((), (), ()))
         scene = self.server.scene
@@ -443,6 +559,7 @@ class AthenaApp:
                     point_shape="circle", precision="float32")
         for name in set(self._point_handles) - {ps.name for ps in solid.points}:
             self._point_handles.pop(name).remove()
+        self._draw_solids(solid.solids + ghosts.solids)
         texts = tuple(lab.text for lab in solid.labels)
         pos = np.array([lab.position for lab in solid.labels]).reshape(-1, 3)
         if texts != self._label_texts or len(self._label_handles) != len(texts):
@@ -458,6 +575,28 @@ class AthenaApp:
                 h.position = p
         self._label_texts, self._label_pos = texts, pos
         self.bodies.update(view.geometry)    # bodies as solids (issue 20): app/_bodies.py
+
+    def _draw_solids(self, solids: tuple[Solid, ...]) -> None:
+        """One mesh node per solid: new vertices where the mesh keeps its faces."""
+        scene, handles = self.server.scene, {}
+        for so in solids:
+            verts = np.asarray(so.vertices, dtype=np.float32)
+            faces = np.asarray(so.faces, dtype=np.uint32)
+            key = (*faces.shape, hash(faces.tobytes()), *so.color, hash(so.opacity))
+            old = self._solid_handles.pop(so.name, None)
+            if old is not None and old[1] == key:
+                old[0].vertices = verts
+                handles[so.name] = old
+                continue
+            if old is not None:
+                old[0].remove()
+            h = scene.add_mesh_simple(f"/robot/solids/{so.name}", verts, faces,
+                                      color=so.color, opacity=so.opacity,
+                                      flat_shading=True)
+            handles[so.name] = (h, key)
+        for h, _ in self._solid_handles.values():      # bodies not drawn any more
+            h.remove()
+        self._solid_handles = handles
 
     def _frame_camera(self) -> None:
         if self.view is None or self.view.geometry is None:
@@ -526,8 +665,10 @@ class AthenaApp:
             return
         with self._lock:
             self.setup = setup
+            self._far = rcm_reach(setup)
             self.errors = []
             self._banner.content = self._banner_html()
+            self._send_page_script()
             self._syncing = True
             try:
                 for i, sl in enumerate(self._q_sliders):
@@ -592,10 +733,26 @@ def _layout_colors(layout: _Layout) -> NDArray[np.uint8]:
 
 
 def _inverse_slot(slot: int, mode: int) -> int:
-    """The slot with the IK's mode and ``p > 0``, and the branches of ``slot``."""
-    from ..robot import SLOT_UJOINT, SLOT_WRIST, slot_index
+    """The slot with the IK's mode and the branches (sign of ``p``, U, S) of ``slot``."""
+    from ..robot import SLOT_P_SIGN, SLOT_UJOINT, SLOT_WRIST, slot_index
 
-    return slot_index(mode, 1, int(SLOT_UJOINT[slot]), int(SLOT_WRIST[slot]))
+    return slot_index(mode, int(SLOT_P_SIGN[slot]), int(SLOT_UJOINT[slot]),
+                      int(SLOT_WRIST[slot]))
+
+
+def rcm_reach(setup: AppSetup) -> float:
+    """Largest ``|p|`` (m): the farthest ``O_s`` from the RCM, for the depth slider's range.
+
+    Over a grid of the actuator ranges (both modes), rounded up to 10 mm.
+    """
+    from ..parallel import parallel_forward_kinematics
+
+    axes = [np.linspace(a, b, 9) for a, b in zip(setup.q_lo, setup.q_hi, strict=True)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    O_s = np.asarray(parallel_forward_kinematics(grid, setup.design).O_s)
+    dist = np.linalg.norm(O_s - setup.T_b_e[:3, 3], axis=-1)
+    far = float(np.nanmax(dist)) if np.any(np.isfinite(dist)) else 1.0
+    return math.ceil(far * 100.0) / 100.0
 
 
 def _escape(text: str) -> str:

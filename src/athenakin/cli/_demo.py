@@ -44,7 +44,11 @@ def run(args: argparse.Namespace) -> int:
                                  "valid": bool(pas.valid[i])} for i, k in enumerate(ok)]}))
         return 0
     np.set_printoptions(precision=6, suppress=True)
-    print("athenakin demo: ATHENA reference design and set-up")
+    if args.design is None:
+        print("athenakin demo: ATHENA reference design and set-up")
+    else:                 # the RCM frame is the reference set-up's recipe for this design
+        print(f"athenakin demo: design {design.name or '(unnamed)'} from {args.design}, "
+              f"RCM frame by the reference set-up's recipe (default_rcm_frame)")
     print(f"design: l1..l5 = {design.lengths.tolist()} m, tool length {design.tool_length} m")
     print(f"RCM frame T_b_e =\n{T}")
     print(f"\nforward kinematics of q = {q.tolist()} m: {int(sol.n_solutions)} solutions")

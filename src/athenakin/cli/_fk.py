@@ -70,13 +70,18 @@ def fk_json(sol: FKSolution) -> dict:  # type: ignore[type-arg]
 def certified_rows(cert: CertifiedFK) -> list[list[str]]:
     """Table rows of a certificate, one per slot: status, then midpoint +- half-width.
 
-    ``p`` in m, angles in degrees; the half-width is rounded up so that the printed
-    interval contains the certified box.
+    ``p`` in m, angles in degrees in ``fk``'s range (-180, 180]: a box that reaches
+    -180 deg is shown about +180 deg (the same angles); the half-width is rounded up so
+    that the printed interval contains the certified box.
     """
-    def box(lo: float, hi: float, scale: float = 1.0) -> str:
+    def box(lo: float, hi: float, scale: float = 1.0, angle: bool = False) -> str:
         if not np.isfinite(lo):
             return "-"
         mid, half = 0.5 * (lo + hi) * scale, 0.5 * (hi - lo) * scale
+        if angle and mid - half <= -180.0:    # the box reaches -180 deg: show it about 180
+            mid += 360.0
+        elif angle and mid - half > 180.0:
+            mid -= 360.0
         return f"{mid:.12f} +- {np.nextafter(half * (1 + 1e-15), np.inf):.1e}"
 
     rows = []
@@ -85,7 +90,8 @@ def certified_rows(cert: CertifiedFK) -> list[list[str]]:
         if cert.status[k] not in (CertStatus.CERTIFIED, CertStatus.NONFINITE_INPUT):
             status += f" ({Reason(int(cert.reason[k])).name})"
         rows.append([str(k), status, box(cert.p_lo[k], cert.p_hi[k])]
-                    + [box(cert.u_lo[k, j], cert.u_hi[k, j], 180.0 / np.pi) for j in range(5)])
+                    + [box(cert.u_lo[k, j], cert.u_hi[k, j], 180.0 / np.pi, angle=True)
+                       for j in range(5)])
     return rows
 
 

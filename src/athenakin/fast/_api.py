@@ -68,6 +68,9 @@ from ._threads import parallel_guard
 
 __all__ = [
     "design_params",
+    "lean_fk",
+    "lean_ik",
+    "lean_line",
     "forward_kinematics",
     "inverse_kinematics",
     "q_from_instrument",
@@ -128,13 +131,13 @@ def design_params(design: Design | None) -> NDArray[np.float64]:
     TypeError
         If ``design`` is not a :class:`~athenakin.Design`.
     """
+    hit = _PARAMS.get(id(design))
+    if hit is not None and hit[0] is design:     # the common case first
+        return hit[1]
     if design is None:
         if not _DEFAULT:
             _DEFAULT.append(_make_params(Design.default()))
         return _DEFAULT[0]
-    hit = _PARAMS.get(id(design))
-    if hit is not None and hit[0] is design:
-        return hit[1]
     if not isinstance(design, Design):
         raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
     if len(_PARAMS) >= _MAX_CACHE:
@@ -240,21 +243,11 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     >>> int(sol.n_solutions)
     16
     """
-    if (type(q) is np.ndarray and type(T_b_e) is np.ndarray and q.dtype is _F8
-            and T_b_e.dtype is _F8 and q.shape == (3,) and T_b_e.shape == (4, 4)
-            and out is None and fields is None and not parallel
-            and (method is OPTION_CLOSED or is_option(method, "closed"))
-            and (errors is OPTION_AUTO or is_raising_policy(errors))
-            and (tangent_tol is TANGENT_TOL or is_default(tangent_tol, TANGENT_TOL))
-            and (degenerate_tol is DEGENERATE_TOL or is_default(degenerate_tol, DEGENERATE_TOL))
-            and (p_zero_tol is P_ZERO_TOL or is_default(p_zero_tol, P_ZERO_TOL))
-            and (closure_tol is CLOSURE_TOL or is_default(closure_tol, CLOSURE_TOL))):
-        # the common single call (control loops): no closure, no option handling
-        fq, fT = q.flags, T_b_e.flags
-        if fq.c_contiguous and fq.writeable and fT.c_contiguous and fT.writeable:
-            sol = _fk_one_plain(q, T_b_e, design_params(design))
-            if sol is not None:
-                return sol
+    if out is None and not parallel:   # the common single call (control loops)
+        sol = lean_fk(q, T_b_e, design, method, errors, tangent_tol, degenerate_tol,
+                      p_zero_tol, closure_tol, fields)
+        if sol is not None:
+            return sol
 
     def reference() -> FKSolution:
         return _ref_fk.forward_kinematics(
@@ -354,6 +347,143 @@ _I8 = np.int8
 _BOOL = np.bool_
 
 
+# --- the lean single call: one guard for every entry point --------------------------------
+def _lean_array(x: object, shape: tuple[int, ...]) -> NDArray[np.float64] | None:
+    """``x`` as the single-item kernels take it, or None (the general path decides).
+
+    A C-contiguous writable float64 array of exactly ``shape`` as it is (the lean
+    functions test that case inline first); a list or tuple of Python floats / ints /
+    numpy float64 of a 1-D ``shape`` converted (``[q1, q2, q3]``).
+    Anything else (other dtypes, shapes, bools, strings, read-only arrays) is None:
+    the general path converts it or names what is wrong.
+    """
+    if type(x) is np.ndarray:
+        if x.dtype is _F8 and x.shape == shape:
+            f = x.flags
+            if f.c_contiguous and f.writeable:
+                return x
+        return None
+    if (type(x) is list or type(x) is tuple) and len(shape) == 1 and len(x) == shape[0]:
+        for v in x:
+            if type(v) is not float and type(v) is not int and type(v) is not np.float64:
+                return None
+        return np.array(x, _F8)
+    return None
+
+
+def _cw(flags: Any) -> bool:
+    """C-contiguous and writable (what the kernels take without a copy)."""
+    return flags.c_contiguous and flags.writeable  # type: ignore[no-any-return]
+
+
+def _lean_tol(x: object) -> float | None:
+    """A tolerance given as a float or numpy float64 >= 0 (inf too), else None (NaN, ...)."""
+    if (type(x) is float or type(x) is np.float64) and x >= 0:  # type: ignore[operator]
+        return float(x)   # type: ignore[arg-type]
+    return None
+
+
+def _lean_errors(errors: object) -> bool:
+    """``errors`` raises on failure (``"auto"`` / ``"raise"``): the lean paths' policy."""
+    return errors is OPTION_AUTO or is_raising_policy(errors)
+
+
+def lean_fk(q: object, T_b_e: object, design: Design | None, method: object = OPTION_CLOSED,
+            errors: object = OPTION_AUTO, tangent_tol: object = TANGENT_TOL,
+            degenerate_tol: object = DEGENERATE_TOL, p_zero_tol: object = P_ZERO_TOL,
+            closure_tol: object = CLOSURE_TOL, fields: object = None) -> FKSolution | None:
+    """The single-pose FK of a plain call, or None: the general path then decides.
+
+    The one lean-path guard of the FK (the dispatch and :func:`forward_kinematics`
+    call it): one pose (``q`` an array or list of 3, ``T_b_e`` an array (4, 4)), the
+    closed form, tolerances given as floats or numpy float64 (>= 0), ``errors``
+    raising, all fields. None also when the pose has no valid slot or the
+    kernel flags an input (the general path raises the reference's error).
+    """
+    if fields is not None or not (method is OPTION_CLOSED or is_option(method, "closed")):
+        return None
+    if not (errors is OPTION_AUTO or is_raising_policy(errors)):
+        return None
+    if (tangent_tol is TANGENT_TOL and degenerate_tol is DEGENERATE_TOL
+            and p_zero_tol is P_ZERO_TOL and closure_tol is CLOSURE_TOL):
+        tol = _FK_TOL_DEFAULT
+    else:
+        t = (_lean_tol(tangent_tol), _lean_tol(degenerate_tol), _lean_tol(p_zero_tol),
+             _lean_tol(closure_tol))
+        if t[0] is None or t[1] is None or t[2] is None or t[3] is None:
+            return None
+        tol = np.array(t)
+    # the array checks inline (the common case, a call less each); lists via _lean_array
+    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == (3,) and _cw(q.flags):
+        qa = q
+    else:
+        lst = _lean_array(q, (3,))
+        if lst is None:
+            return None
+        qa = lst
+    if not (type(T_b_e) is np.ndarray and T_b_e.dtype is _F8 and T_b_e.shape == (4, 4)
+            and _cw(T_b_e.flags)):
+        return None
+    return _fk_one_plain(qa, T_b_e, _DEFAULT[0] if design is None and _DEFAULT
+                         else design_params(design), tol)
+
+
+def lean_ik(T_b_e: object, u345: object, design: Design | None, errors: object = OPTION_AUTO,
+            singular_tol: object = IK_SINGULAR_TOL, closure_tol: object = CLOSURE_TOL,
+            fields: object = None) -> tuple[NDArray[np.float64], PassiveJoints] | None:
+    """The single-item paper-form IK of a plain call, or None (as :func:`lean_fk`)."""
+    if fields is not None or not (errors is OPTION_AUTO or is_raising_policy(errors)):
+        return None
+    if singular_tol is IK_SINGULAR_TOL and closure_tol is CLOSURE_TOL:
+        stol, ctol = IK_SINGULAR_TOL, CLOSURE_TOL
+    else:
+        st, ct = _lean_tol(singular_tol), _lean_tol(closure_tol)
+        if st is None or ct is None:
+            return None
+        stol, ctol = st, ct
+    if type(u345) is np.ndarray and u345.dtype is _F8 and u345.shape == (3,) \
+            and _cw(u345.flags):
+        Ua = u345
+    else:
+        lst = _lean_array(u345, (3,))
+        if lst is None:
+            return None
+        Ua = lst
+    if not (type(T_b_e) is np.ndarray and T_b_e.dtype is _F8 and T_b_e.shape == (4, 4)
+            and _cw(T_b_e.flags)):
+        return None
+    return _ik_one_plain(T_b_e, Ua, _DEFAULT[0] if design is None and _DEFAULT
+                         else design_params(design), stol, ctol)
+
+
+def lean_line(T_b_e: object, v: object, p: object, design: Design | None,
+              errors: object = OPTION_AUTO) -> tuple[NDArray[np.float64], InstrumentIK] | None:
+    """The single-item controller-form IK of a plain call, or None (as :func:`lean_fk`).
+
+    ``p`` None: :func:`q_from_tool_tip` (``v`` the tip); a float: :func:`q_from_instrument`
+    (``v`` the direction).
+    """
+    if not _lean_errors(errors):
+        return None
+    if p is None:
+        kind, pf = 1, 0.0
+    elif type(p) is float or type(p) is np.float64:
+        kind, pf = 0, float(p)   # type: ignore[arg-type]
+    else:
+        return None
+    if type(v) is np.ndarray and v.dtype is _F8 and v.shape == (3,) and _cw(v.flags):
+        Va = v
+    else:
+        lst = _lean_array(v, (3,))
+        if lst is None:
+            return None
+        Va = lst
+    if not (type(T_b_e) is np.ndarray and T_b_e.dtype is _F8 and T_b_e.shape == (4, 4)
+            and _cw(T_b_e.flags)):
+        return None
+    return _line_one_plain(T_b_e, Va, pf, kind, design_params(design))
+
+
 def _fk_one(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.float64],
             tol: NDArray[np.float64]) -> tuple[int, FKSolution]:
     """One pose into the result's own arrays: ``(flags, result)`` (flags as the kernels')."""
@@ -374,18 +504,30 @@ def _fk_one(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.floa
     return flags, obj
 
 
-def _fk_one_plain(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.float64]
-                  ) -> FKSolution | None:
+def _fk_one_plain(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.float64],
+                  tol: NDArray[np.float64] = _FK_TOL_DEFAULT) -> FKSolution | None:
     """One pose, default tolerances, errors raised: the result, or None if anything is off.
 
     None (the kernel flagged the input, or the pose has no valid slot) sends the
     caller down the general path, which raises the reference's error or, for a
     false rigidity alarm, returns the same result.
     """
-    flags, sol = _fk_one(qa, Ta, P, _FK_TOL_DEFAULT)
-    if flags or sol.item_reason:
+    # _fk_one inline: one frame less; the checks on the kernel's outputs before the object
+    reason = _empty(16, _I8)
+    valid = _empty(16, _BOOL)
+    p = _empty(16)
+    u = _empty((16, 5))
+    Tbs = _empty((2, 4, 4))
+    res = _empty(16)
+    item = _empty(1, _I8)
+    if _fz.fk_one_arrays(qa, Ta, P, tol, ROTATION_TOL, reason, valid, p, u, Tbs, res, item) \
+            or item[0]:
         return None
-    return sol
+    obj = _object_new(FKSolution)
+    _object_setattr(obj, "__dict__", {"valid": valid, "reason": reason, "p": p, "u": u,
+                                      "T_b_s_mode": Tbs, "residual": res,
+                                      "item_reason": item[0, ...], "tool_length": P.item(12)})
+    return obj
 
 
 def _fk_single(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.float64],
@@ -510,7 +652,8 @@ def _ik_want(names: tuple[str, ...]) -> int:
 _I64 = np.int64
 
 
-def _ik_one_plain(Ta: NDArray[np.float64], Ua: NDArray[np.float64], P: NDArray[np.float64]
+def _ik_one_plain(Ta: NDArray[np.float64], Ua: NDArray[np.float64], P: NDArray[np.float64],
+                  stol: float = IK_SINGULAR_TOL, ctol: float = CLOSURE_TOL
                   ) -> tuple[NDArray[np.float64], PassiveJoints] | None:
     """One item, default tolerances: the result, or None if anything is off (lean path).
 
@@ -520,14 +663,17 @@ def _ik_one_plain(Ta: NDArray[np.float64], Ua: NDArray[np.float64], P: NDArray[n
     """
     fbuf = _empty(_ik.ONE_F)
     ibuf = _empty(3, _I64)
-    if _ik.ik_paper_one(Ta, Ua, P, IK_SINGULAR_TOL, CLOSURE_TOL, ROTATION_TOL, fbuf, ibuf) \
-            or ibuf[2]:
+    if _ik.ik_paper_one(Ta, Ua, P, stol, ctol, ROTATION_TOL, fbuf, ibuf) or ibuf[2]:
         return None
-    return fbuf[_ik.ONE_Q:_ik.ONE_P], _new(
-        PassiveJoints, p=fbuf[_ik.ONE_P], u=fbuf[_ik.ONE_U:_ik.ONE_T],
-        mode=ibuf[0:1].reshape(()), T_b_s=fbuf[_ik.ONE_T:_ik.ONE_RES].reshape(4, 4),
-        residual=fbuf[_ik.ONE_RES], valid=ibuf[1] != 0,
-        reason=ibuf[2:3].astype(np.int8).reshape(()), q_error=fbuf[_ik.ONE_QE])
+    obj = _object_new(PassiveJoints)
+    # the instance __dict__ the frozen dataclass's __init__ would leave (0-d arrays as
+    # ``a[k, ...]``: a view, as ``a[k:k+1].reshape(())`` but cheaper)
+    _object_setattr(obj, "__dict__", {
+        "p": fbuf[_ik.ONE_P], "u": fbuf[_ik.ONE_U:_ik.ONE_T], "mode": ibuf[0, ...],
+        "T_b_s": fbuf[_ik.ONE_T:_ik.ONE_RES].reshape(4, 4), "residual": fbuf[_ik.ONE_RES],
+        "valid": ibuf[1] != 0, "reason": ibuf[2, ...].astype(_I8),
+        "q_error": fbuf[_ik.ONE_QE]})
+    return fbuf[_ik.ONE_Q:_ik.ONE_P], obj
 
 
 def _line_one_plain(Ta: NDArray[np.float64], Va: NDArray[np.float64], p: float, kind: int,

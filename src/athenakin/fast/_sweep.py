@@ -142,7 +142,8 @@ def sweep_fk(q: QSource, T_b_e: ArrayLike, design: Design | None = None, *,
     if progress:
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=total, unit="pose", unit_scale=True, desc="sweep_fk")
+        bar = tqdm(total=total, unit="pose", unit_scale=True, desc="sweep_fk",
+                   disable=None)
     buf: FKSolution | None = None
     count = _fk.fk_counts_parallel if parallel else _fk.fk_counts
     t0 = time.perf_counter()

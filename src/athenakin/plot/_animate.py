@@ -221,7 +221,7 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
     if progress:
         from tqdm import tqdm
 
-        it = tqdm(it, desc="rendering", unit="frame")
+        it = tqdm(it, desc="rendering", unit="frame", disable=None)
     frames: list[NDArray[np.uint8]] = []
     fig = Figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
     canvas = FigureCanvasAgg(fig)

@@ -271,7 +271,7 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
     if progress:
         from tqdm import tqdm
 
-        it = tqdm(it, desc="MuJoCo check", unit="config")
+        it = tqdm(it, desc="MuJoCo check", unit="config", disable=None)
     for n in it:
         mujoco.mj_resetDataKeyframe(model, data, 0)
         if perturb > 0:

@@ -486,7 +486,8 @@ def _bar(total: int, initial: int, show: bool) -> Any:
         from tqdm.auto import tqdm
     except ModuleNotFoundError:
         return None
-    return tqdm(total=total, initial=initial, desc="designs (chunks)", unit="chunk")
+    return tqdm(total=total, initial=initial, desc="designs (chunks)", unit="chunk",
+                disable=None)
 
 
 def _run_local(name: str, chunks: Sequence[list[dict[str, Any]]], todo: list[int], size: int,
