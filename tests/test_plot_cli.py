@@ -39,7 +39,7 @@ def test_view_configuration_design_and_slot(tmp_path):
 def test_view_all_solutions(tmp_path):
     out = tmp_path / "grid.png"
     assert main(["view", "--all", "--dpi", "30", "-o", str(out)]) == 0
-    assert iio.imread(out).shape[0] == 16 * 30
+    assert iio.imread(out).shape[:2] == (17 * 30, 16 * 30)   # the 16 x 17 in grid at 30 dpi
 
 
 def test_view_all_solutions_html(tmp_path, capsys):

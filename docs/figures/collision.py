@@ -11,6 +11,7 @@ collision_cone.png and collision_finding.json, and rewrites the block between th
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -26,13 +27,18 @@ from athenakin._mechanism import BODIES, body_segments, mechanism_points  # noqa
 from athenakin.collision import Bodies, clearance  # noqa: E402
 from athenakin.robot import REFERENCE_Q  # noqa: E402
 
-OUT = Path(__file__).resolve().parent
-DOC = OUT.parent / "collision.md"
+HERE = Path(__file__).resolve().parent
+#: Where the figures go: docs/figures, or ATHENAKIN_FIGURES_OUT (regenerate.py --out); the
+#: page docs/collision.md is rewritten only when they go to docs/figures.
+OUT = Path(os.environ.get("ATHENAKIN_FIGURES_OUT", HERE))
+DOC = HERE.parent / "collision.md"
+#: Coarser grids with ATHENAKIN_FIGURES_QUICK=1 (regenerate.py --quick, CI).
+QUICK = os.environ.get("ATHENAKIN_FIGURES_QUICK") == "1"
 D = ak.Design.default()
 T = ak.default_rcm_frame(D)
 BODIES_DEFAULT = Bodies.default(D)
-GRID = 31                       # samples per stroke (31^3 configurations)
-CONE = (72, 36, 24)             # azimuth, polar, insertion samples of the instrument cone
+GRID = 11 if QUICK else 31      # samples per stroke (31^3 configurations)
+CONE = (24, 12, 8) if QUICK else (72, 36, 24)   # azimuth, polar, insertion samples of the cone
 COLOURS = {"rail": "#555555", "carriage_a": "#777777", "carriage_b": "#777777",
            "link_a": "#1f4fbf", "link_b": "#1f4fbf", "link_ad": "#4f7fdf", "link_bd": "#4f7fdf",
            "carrier": "#2f9f5f", "actuator": "#f28e0f", "platform": "#8f3fbf",
@@ -219,7 +225,8 @@ def finding() -> dict:
     fig.savefig(OUT / "collision_cone.png", dpi=80)
     plt.close(fig)
     (OUT / "collision_finding.json").write_text(json.dumps(res, indent=1) + "\n")
-    _write_doc(res)
+    if OUT == HERE:
+        _write_doc(res)
     return res
 
 

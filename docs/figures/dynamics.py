@@ -6,6 +6,7 @@ Run from the repository root: ``python docs/figures/dynamics.py``. Writes
 that docs/dynamics.md quotes.
 """
 
+import os
 import sys
 from pathlib import Path
 
@@ -19,8 +20,10 @@ import numpy as np  # noqa: E402
 import athenakin as ak  # noqa: E402
 from athenakin import dynamics as dy  # noqa: E402
 
-OUT = Path(__file__).resolve().parent
-EXAMPLES = OUT.parent.parent / "examples" / "motion"
+HERE = Path(__file__).resolve().parent
+#: Where the figures go: docs/figures, or ATHENAKIN_FIGURES_OUT (regenerate.py --out).
+OUT = Path(os.environ.get("ATHENAKIN_FIGURES_OUT", HERE))
+EXAMPLES = HERE.parent.parent / "examples" / "motion"
 D = ak.Design.default()
 T = ak.default_rcm_frame(D)
 M = dy.MassModel.reference(D)

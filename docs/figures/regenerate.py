@@ -246,6 +246,28 @@ def collision_numbers(s: Settings) -> list[Path]:
     return []
 
 
+def _script(name: str, s: Settings, written: tuple[str, ...]) -> list[Path]:
+    """Run docs/figures/NAME.py (its own figures and numbers) into ``s.out``."""
+    import os
+
+    env = dict(os.environ, ATHENAKIN_FIGURES_OUT=str(s.out),
+               ATHENAKIN_FIGURES_QUICK="1" if s.quick else "0")
+    subprocess.run([sys.executable, str(HERE / f"{name}.py")], check=True, env=env)
+    return [s.out / w for w in written]
+
+
+def collision(s: Settings) -> list[Path]:
+    """docs/collision.md: the bodies, and the collision-free strokes and cone (the finding)."""
+    return _script("collision", s, ("collision_bodies.png", "collision_workspace.png",
+                                    "collision_cone.png"))
+
+
+def dynamics(s: Settings) -> list[Path]:
+    """docs/dynamics.md: gravity forces, force capability and the example motion's forces."""
+    return _script("dynamics", s, ("dynamics_gravity_cone.png", "dynamics_gravity_plane.png",
+                                   "dynamics_capability.png", "dynamics_motion.png"))
+
+
 FIGURES: dict[str, Callable[[Settings], list[Path]]] = {
     "robot_reference": robot_reference,
     "fk_solutions": fk_solutions,
@@ -260,6 +282,8 @@ FIGURES: dict[str, Callable[[Settings], list[Path]]] = {
     "synthesis_pareto": synthesis_pareto,
     "robot_solids": robot_solids,
     "instrument_cone_collisions": instrument_cone_collisions,
+    "collision": collision,
+    "dynamics": dynamics,
 }
 #: Figures written only when named (they need more than the extras).
 OPTIONAL = {"app": app, "collision_numbers": collision_numbers}
