@@ -16,6 +16,7 @@ from ..design import Design, resolve_design
 from ..errors import InvalidInputError, KinematicsError
 from ..motion import Tracker, TrackFlag, TrackLog, track
 from ..motion._plan import Trajectory
+from ..motion._tracker import track_batch
 from ..robot._setup import resolve_rcm_frame
 from ._read import CHUNK, iter_joint_states
 from ._write import McapOutput, TrackedBatch
@@ -129,10 +130,11 @@ class _Stream:
                     break
             rows.append(None)
             i += 1
-        if self.tracker is not None:
-            up = self.tracker.update
-            rows.extend(up(r) for r in qs[i:])
-        return _columns(rows, q)
+        out = _columns(rows, q[:i])
+        if self.tracker is not None and i < len(qs):
+            rest = track_batch(self.tracker, q[i:])
+            out = {k: np.concatenate([v, rest[k]]) for k, v in out.items()}
+        return out
 
 
 def _columns(rows: list[Any], q: NDArray[np.float64]) -> dict[str, Any]:
