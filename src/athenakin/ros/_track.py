@@ -130,11 +130,13 @@ class _Stream:
                     break
             rows.append(None)
             i += 1
+        if self.tracker is None or i == len(qs):
+            return _columns(rows, q)
+        rest = track_batch(self.tracker, q[i:])
+        if i == 0:
+            return rest
         out = _columns(rows, q[:i])
-        if self.tracker is not None and i < len(qs):
-            rest = track_batch(self.tracker, q[i:])
-            out = {k: np.concatenate([v, rest[k]]) for k, v in out.items()}
-        return out
+        return {k: np.concatenate([v, rest[k]]) for k, v in out.items()}
 
 
 def _columns(rows: list[Any], q: NDArray[np.float64]) -> dict[str, Any]:
