@@ -21,13 +21,14 @@ from __future__ import annotations
 
 import math
 import sys
+from typing import Any
 
 import numpy as np
 from numba import njit
 
 __all__ = ["NCAND", "NGEO", "track_stream", "py_hypot", "F_LOST", "F_REACQUIRED"]
 
-_OPTS = dict(error_model="numpy", cache=True, nogil=True)
+_OPTS: dict[str, Any] = dict(error_model="numpy", cache=True, nogil=True)
 
 #: Doubles per candidate row.
 NCAND = 20

@@ -88,7 +88,7 @@ class McapFile:
         self._write(MAGIC)
         self._write(_record("header", _s(profile) + _s(library)))
 
-    def _write(self, data: bytes) -> None:
+    def _write(self, data: bytes | memoryview) -> None:
         self._fh.write(data)
         self._crc = zlib.crc32(data, self._crc)
         self._pos += len(data)
@@ -153,7 +153,7 @@ class McapFile:
         index : dict of channel id -> (log times, offsets of the records in ``records``)
         """
         # a contiguous array is read in place (buffer protocol): no copy of the chunk
-        raw: bytes | memoryview = (memoryview(np.ascontiguousarray(records)).cast("B")
+        raw: bytes | memoryview = (memoryview(np.ascontiguousarray(records)).cast("B")  # type: ignore[arg-type]
                                    if isinstance(records, np.ndarray) else bytes(records))
         if not len(raw):
             return

@@ -100,7 +100,10 @@ def _clearance_fields(g: Callable[[str], Any]) -> dict[str, Any]:
 class _Stream:
     """A :class:`~athenakin.motion.Tracker` over chunks.
 
-    It starts at the first reading that assembles (readings before it are ``LOST``).
+    It starts at the first reading that assembles (readings before it are ``LOST``);
+    each chunk is tracked at once by :func:`athenakin.motion._tracker.track_batch`
+    (compiled; bit for bit :meth:`~athenakin.motion.Tracker.update`), the tracker's
+    state carried from chunk to chunk.
     """
 
     def __init__(self, T_b_e: NDArray[np.float64], design: Design,
