@@ -780,10 +780,7 @@ def _pose_columns(poses: list[TrackedPose]) -> dict[str, Any]:
 
 def _join(a: dict[str, Any], b: dict[str, Any]) -> dict[str, Any]:
     """Rows of ``b`` after those of ``a``."""
-    out = {k: np.concatenate([a[k], b[k]]) for k in a if k != "closest_pair"}
-    out["closest_pair"] = np.array(a["closest_pair"].tolist() + b["closest_pair"].tolist()
-                                   ).reshape(-1, 2)
-    return out
+    return {k: np.concatenate([a[k], b[k]]) for k in a}
 
 
 def pose_at(cols: dict[str, Any], i: int) -> TrackedPose:
