@@ -112,7 +112,10 @@ def cases(quick: bool) -> list[dict]:
         "decode": "read_joint_states of an MCAP file",
         "track": "motion.track alone (the compiled batched tracker)",
         "update": "Tracker.update once per reading (the live API, Python)",
-        "encode": "write_track_log: every topic encoded and written"}.items()}
+        "encode": "write_track_log: every topic encoded and written",
+        "zstd": "zstd level 1 of the output's bytes in 4 MB pieces, as the writer's chunks"
+        }.items()}
+    raw = _raw_output(tmp, stamps, log, T, d)
     return [
         {"name": "CSV in, track, CSV out", "group": "ros-track", "batch": n, "baseline": True,
          "call": _timed(notes["csv"], csv_path), "note": notes["csv"]},
@@ -131,4 +134,25 @@ def cases(quick: bool) -> list[dict]:
          "note": notes["encode"],
          "call": _timed(notes["encode"], lambda: ak.ros._track.write_track_log(
              tmp / "o2.mcap", stamps, log, T, d))},
+        {"name": "compress only (zstd level 1 of the output)", "group": "ros-track",
+         "batch": n, "note": notes["zstd"], "call": _timed(notes["zstd"], lambda: _zstd(raw))},
     ]
+
+
+def _raw_output(tmp: Path, stamps: np.ndarray, log, T: np.ndarray, d: ak.Design) -> list[bytes]:
+    """The bytes of the MCAP output written without compression, in 4 MB pieces."""
+    from athenakin.ros._track import _FIELDS, tracked_batch
+    from athenakin.ros._write import McapOutput
+
+    with McapOutput(tmp / "raw.mcap", d, T, compression="none") as w:
+        w.write_tracked(tracked_batch(stamps, {f: getattr(log, f) for f in _FIELDS}))
+    data = (tmp / "raw.mcap").read_bytes()
+    return [data[k:k + 4 * 2**20] for k in range(0, len(data), 4 * 2**20)]
+
+
+def _zstd(raw: list[bytes]) -> None:
+    import zstandard
+
+    c = zstandard.ZstdCompressor(level=1)
+    for piece in raw:
+        c.compress(piece)
