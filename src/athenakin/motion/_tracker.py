@@ -845,7 +845,17 @@ def track_batch(tr: Tracker, q: NDArray[np.float64]) -> dict[str, Any]:
     valid = np.empty(n, bool)
     fast = np.empty(n, bool)
     if n:
-        track_stream(q, _kernel_geometry(tr), prev, lost, c, step, flags, valid, fast)
+        from .._dispatch import _WARM, _first
+
+        geo = _kernel_geometry(tr)
+
+        def run() -> None:
+            track_stream(q, geo, prev, lost, c, step, flags, valid, fast)
+
+        if "track_stream" in _WARM:
+            run()
+        else:                          # the first call may compile: a notice on stderr
+            _first("track_stream", run)
     g = tr._g
     mode = c[:, 0].astype(np.int64)
     r, b, w = (c[:, k].astype(np.int64) for k in (1, 2, 3))
