@@ -53,8 +53,9 @@ _NEAR_P_ZERO = 4096
 _TWO_PI = 2.0 * math.pi
 _T27 = 134217729.0            # 2**27 + 1: Veltkamp's splitter
 _DBL_MIN = sys.float_info.min
-# CPython 3.12 rewrote math.hypot's compensated sum (fused multiply-add products); both
-# algorithms are exact to within rounding of the same correction, this one is 3.10/3.11's.
+# CPython 3.12 rewrote math.hypot's compensated sum (exact products by fused multiply-add):
+# _norm2_311 is the algorithm of 3.10/3.11 (tested here, on 3.11), _norm2_312 that of 3.12+
+# (its exact products by Dekker's method, which gives what fma gives; not run here).
 _PY311_HYPOT = sys.version_info[:2] <= (3, 11)
 
 
@@ -151,7 +152,7 @@ def py_hypot(x, y):
     mx = a if a > b else b
     if mx == 0.0:
         return mx
-    if math.frexp(mx)[1] < -1021:          # subnormal: CPython scales by DBL_MIN first
+    if math.frexp(mx)[1] < -1023:          # deep subnormal: CPython scales by DBL_MIN first
         a /= _DBL_MIN
         b /= _DBL_MIN
         mx /= _DBL_MIN
