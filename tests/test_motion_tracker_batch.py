@@ -193,6 +193,10 @@ def test_ros_stream_chunks_equal_one_tracker():
         assert not got["valid"][:4].any() and (got["flags"][:4] == int(TrackFlag.LOST)).all()
 
 
+def test_kernel_geometry_has_the_kernels_size():
+    assert M._kernel_geometry(Tracker(T, D, q0=Q_REF)).shape == (K.NGEO,)
+
+
 def test_kernel_flag_bits_are_trackflags():
     assert K.F_LOST == TrackFlag.LOST and K.F_REACQUIRED == TrackFlag.REACQUIRED
     for name in ("JUMP", "MODE_SWITCH", "BRANCH_SWITCH", "AMBIGUOUS", "OUT_OF_STROKE",

@@ -10,8 +10,9 @@ while within the jump thresholds, else the nearest, flags ``AMBIGUOUS``, ``JUMP`
 handling. The results are bit for bit those of the Python tracker (tested on seeded
 streams with jumps, NaN readings, mode switches, stroke violations and serial
 singularities): ``sqrt``, ``atan2``, ``cos`` and ``sin`` are the same correctly rounded
-or libm operations, and :func:`py_hypot` reproduces CPython's ``math.hypot`` (which is
-not libm's ``hypot``: it differs in the last bit for about one pair in 700).
+or libm operations, ``x ** 2`` of the step is libm's ``pow`` as in CPython (not always
+``x * x``), and :func:`py_hypot` reproduces CPython's ``math.hypot`` (which is not
+libm's ``hypot``: it differs in the last bit for about one pair in 700).
 
 A candidate is a row of :data:`NCAND` doubles, the tuple of ``_candidate``:
 ``mode, r, b, w, p, u1..u5, O_s (3), direction_b (3), half_chord, |h|, sin_u2, sin_u4``.
