@@ -7,8 +7,9 @@ Group ``ros-track`` (batch = readings; "poses/s" is readings per second):
 * ``track_recording``: MCAP of ``sensor_msgs/JointState`` in, MCAP of the ROS 2 topics out
   (decode, track, encode every topic, write), the path of ``athenakin track REC -o OUT.mcap``
   (target of issue 22: >= 200k readings/s on one core);
-* its parts: decoding alone (``read_joint_states``), tracking alone (``motion.track``),
-  encoding and writing alone (``write_track_log``).
+* its parts: decoding alone (``read_joint_states``), tracking alone (``motion.track``, the
+  compiled batched tracker; beside it ``Tracker.update`` called once per reading, the
+  live API), encoding and writing alone (``write_track_log``).
 
 Every note ends with the load average measured when the case last ran (a shared machine
 slows everything; compare ratios within one run).
@@ -76,6 +77,13 @@ def _recording(path: Path, q: np.ndarray, stamps: np.ndarray) -> None:
         w.finish()
 
 
+def _update_loop(q: np.ndarray, T: np.ndarray, d: ak.Design) -> None:
+    tr = ak.motion.Tracker(T, d, q0=q[0])
+    up = tr.update
+    for row in q[1:].tolist():
+        up(row)
+
+
 def cases(quick: bool) -> list[dict]:
     d = ak.Design.default()
     T = ak.default_rcm_frame(d)
@@ -102,8 +110,12 @@ def cases(quick: bool) -> list[dict]:
         "csv": "athenakin track STREAM.csv -o OUT.csv: read, track, write",
         "mcap": "decode + track + encode + write; target >= 200k readings/s",
         "decode": "read_joint_states of an MCAP file",
-        "track": "motion.track alone (the Python tracker)",
-        "encode": "write_track_log: every topic encoded and written"}.items()}
+        "track": "motion.track alone (the compiled batched tracker)",
+        "update": "Tracker.update once per reading (the live API, Python)",
+        "encode": "write_track_log: every topic encoded and written",
+        "zstd": "zstd level 1 of the output's bytes in 4 MB pieces, as the writer's chunks"
+        }.items()}
+    raw = _raw_output(tmp, stamps, log, T, d)
     return [
         {"name": "CSV in, track, CSV out", "group": "ros-track", "batch": n, "baseline": True,
          "call": _timed(notes["csv"], csv_path), "note": notes["csv"]},
@@ -116,8 +128,31 @@ def cases(quick: bool) -> list[dict]:
          "call": _timed(notes["decode"], lambda: ak.ros.read_joint_states(rec))},
         {"name": "track only (motion.track)", "group": "ros-track", "batch": n,
          "note": notes["track"], "call": _timed(notes["track"], lambda: track(q, T, d))},
+        {"name": "track only, Tracker.update per reading", "group": "ros-track", "batch": n,
+         "note": notes["update"], "call": _timed(notes["update"], lambda: _update_loop(q, T, d))},
         {"name": "encode + write only (write_track_log)", "group": "ros-track", "batch": n,
          "note": notes["encode"],
          "call": _timed(notes["encode"], lambda: ak.ros._track.write_track_log(
              tmp / "o2.mcap", stamps, log, T, d))},
+        {"name": "compress only (zstd level 1 of the output)", "group": "ros-track",
+         "batch": n, "note": notes["zstd"], "call": _timed(notes["zstd"], lambda: _zstd(raw))},
     ]
+
+
+def _raw_output(tmp: Path, stamps: np.ndarray, log, T: np.ndarray, d: ak.Design) -> list[bytes]:
+    """The bytes of the MCAP output written without compression, in 4 MB pieces."""
+    from athenakin.ros._track import _FIELDS, tracked_batch
+    from athenakin.ros._write import McapOutput
+
+    with McapOutput(tmp / "raw.mcap", d, T, compression="none") as w:
+        w.write_tracked(tracked_batch(stamps, {f: getattr(log, f) for f in _FIELDS}))
+    data = (tmp / "raw.mcap").read_bytes()
+    return [data[k:k + 4 * 2**20] for k in range(0, len(data), 4 * 2**20)]
+
+
+def _zstd(raw: list[bytes]) -> None:
+    import zstandard
+
+    c = zstandard.ZstdCompressor(level=1)
+    for piece in raw:
+        c.compress(piece)

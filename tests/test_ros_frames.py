@@ -78,3 +78,26 @@ def test_quaternions_against_scipy_and_round_trip():
     np.testing.assert_allclose(np.linalg.norm(quat, axis=1), 1.0, rtol=0, atol=1e-14)
     back = Rotation.from_quat(quat).as_matrix()
     np.testing.assert_allclose(back, mats, rtol=0, atol=1e-12)
+
+
+def test_compiled_quaternions_are_the_numpy_ones_bit_for_bit():
+    from scipy.spatial.transform import Rotation
+
+    from athenakin import _dispatch
+    from athenakin.ros._frames import _quaternion_xyzw_numpy, quaternion_xyzw
+
+    R = Rotation.random(20000, random_state=2211).as_matrix()
+    R[:10] = np.eye(3)                      # every branch of Shepperd's choice, ties,
+    R[10:20] = np.diag([1.0, -1.0, -1.0])   # rounded entries, zeros, NaN
+    R[20:30] = np.diag([-1.0, 1.0, -1.0])
+    R[30:40] = np.diag([-1.0, -1.0, 1.0])
+    R[40] = np.nan
+    R[41, 0, 0] = np.nan
+    R[42, 2, 2] = np.nan
+    R[43] = -0.0
+    R[44:2000] = np.round(R[44:2000], 1)
+    if not _dispatch.numba_available():
+        pytest.skip("the compiled quaternions need numba")
+    got, want = quaternion_xyzw(R), _quaternion_xyzw_numpy(R)
+    assert np.array_equal(got, want, equal_nan=True)
+    assert np.array_equal(np.signbit(got), np.signbit(want))

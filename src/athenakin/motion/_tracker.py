@@ -18,6 +18,9 @@ Cost. Away from the singularities only the candidate with the previous labels is
 computed, in closed form with scalar arithmetic (no numpy in the loop): a few
 microseconds per sample. Near a singularity (any measure below its margin), after
 a large step, or when that candidate is not valid, all 16 are computed.
+:func:`track` (a recorded stream) runs the same algorithm compiled, reading after
+reading in one loop (:mod:`athenakin.fast._track_kernels`, :func:`track_batch`): the
+same poses, steps and flags bit for bit, about a microsecond per reading.
 
 Collisions. Asked for with ``bodies=``, ``environment=`` or ``clearance_margin=``
 (:mod:`athenakin.collision`, imported then), every valid sample also gets the least
@@ -36,7 +39,7 @@ import dataclasses
 import enum
 import math
 from collections.abc import Sequence
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -681,6 +684,10 @@ def track(q_stream: ArrayLike, T_b_e: ArrayLike, design: Design | None = None,
           **options: object) -> TrackLog:
     """Run a :class:`Tracker` over a recorded stream; the first reading is ``q0``.
 
+    The readings after the first go through :func:`track_batch`: the compiled tracker
+    where numba runs (bit for bit :meth:`Tracker.update`, tested), else
+    :meth:`Tracker.update` itself.
+
     Parameters
     ----------
     q_stream : array-like, shape (N, 3)
@@ -702,16 +709,15 @@ def track(q_stream: ArrayLike, T_b_e: ArrayLike, design: Design | None = None,
     coll: dict[str, object] = {k: options.pop(k) for k in
                                ("bodies", "environment", "clearance_margin") if k in options}
     if any(v is not None for v in coll.values()):
-        poses = _track_checked(qs, T_b_e, design, coll, options)
+        cols = _track_checked(qs, T_b_e, design, coll, options)
     else:
         tr = Tracker(T_b_e, design, q0=qs[0], **options)  # type: ignore[arg-type]
-        poses = [tr.pose] + [tr.update(row) for row in qs[1:].tolist()]
-    fields = [f.name for f in dataclasses.fields(TrackLog)]
-    return TrackLog(**{k: np.array([getattr(ps, k) for ps in poses]) for k in fields})
+        cols = _join(_pose_columns([tr.pose]), track_batch(tr, qs[1:]))
+    return TrackLog(**{k: cols[k] for k in _LOG_FIELDS})
 
 
 def _track_checked(qs: NDArray[np.float64], T_b_e: ArrayLike, design: Design | None,
-                   coll: dict[str, object], options: dict[str, object]) -> list[TrackedPose]:
+                   coll: dict[str, object], options: dict[str, object]) -> dict[str, Any]:
     """:func:`track` with the collision check: the stream first, then all clearances at once.
 
     The same poses and flags as a :class:`Tracker` checking every sample (the check
@@ -724,24 +730,194 @@ def _track_checked(qs: NDArray[np.float64], T_b_e: ArrayLike, design: Design | N
     check = clearance_check(tr.design, coll.get("bodies"), coll.get("environment"),
                             coll.get("clearance_margin"))
     assert check is not None
-    poses = [tr.pose] + [tr.update(row) for row in qs[1:].tolist()]
-    ok = np.array([ps.valid for ps in poses])
-    idx = np.flatnonzero(ok)
-    dist, pair = sample_clearance(check, np.array([poses[i].q for i in idx]).reshape(-1, 3),
-                                  tr.T_b_e, tr.design, np.array([poses[i].mode for i in idx]),
-                                  np.array([poses[i].p_sign for i in idx]),
-                                  np.array([poses[i].wrist for i in idx]))
-    for j, i in enumerate(idx):
-        d = float(dist[j])
-        flags = int(poses[i].flags)
+    cols = _join(_pose_columns([tr.pose]), track_batch(tr, qs[1:]))
+    idx = np.flatnonzero(cols["valid"])
+    dist, pair = sample_clearance(check, cols["q"][idx].reshape(-1, 3), tr.T_b_e, tr.design,
+                                  cols["mode"][idx], cols["p_sign"][idx], cols["wrist"][idx])
+    dist = np.asarray(dist, dtype=float)
+    cols["clearance"][idx] = dist
+    cols["closest_pair"] = _pairs(len(qs), idx, pair)
+    near = np.zeros(len(qs), bool)
+    near[idx] = dist < check.margin
+    coll_bits = np.zeros(len(qs), np.int64)
+    coll_bits[idx] = np.where(dist < 0.0, _B["COLLISION"], 0)
+    cols["flags"] = cols["flags"] | np.where(near, _B["NEAR_COLLISION"] | coll_bits, 0)
+    hit = np.flatnonzero(cols["flags"][1:] & raise_bits)
+    if hit.size:
+        ps = pose_at(cols, int(hit[0]) + 1)
+        what = "" if ps.valid else " no forward-kinematics solution:"
+        raise TrackingError(f"sample {ps.sample} (q = {list(ps.q)} m):{what} "
+                            f"{ps.flags!r}" + _clearance_text(ps), ps)
+    return cols
+
+
+# ---------------------------------------------------------------------- the batched tracker
+_LOG_FIELDS = tuple(f.name for f in dataclasses.fields(TrackLog))
+_FLOAT_FIELDS = ("p", "half_chord", "h", "sin_u2", "sin_u4", "step", "clearance")
+_VEC_FIELDS = {"q": 3, "u": 5, "O_s": 3, "direction_b": 3, "tip_b": 3, "tip_e": 3}
+_INT_FIELDS = ("slot", "mode", "p_sign", "ujoint", "wrist", "flags")
+
+
+def _pairs(n: int, idx: NDArray[np.intp], pair: NDArray[np.str_]) -> NDArray[np.str_]:
+    """The ``closest_pair`` column: ``pair`` at rows ``idx``, ``("", "")`` elsewhere."""
+    out = [("", "")] * n
+    for j, i in enumerate(idx.tolist()):
+        out[i] = (str(pair[j, 0]), str(pair[j, 1]))
+    return np.array(out).reshape(n, 2)
+
+
+def _pose_columns(poses: list[TrackedPose]) -> dict[str, Any]:
+    """Columns of :class:`TrackLog` (and ``sample``) from tracked poses."""
+    cols: dict[str, Any] = {k: np.array([getattr(ps, k) for ps in poses])
+                            for k in (*_LOG_FIELDS, "sample")}
+    for k, m in _VEC_FIELDS.items():
+        cols[k] = cols[k].reshape(len(poses), m).astype(float)
+    cols["closest_pair"] = cols["closest_pair"].reshape(len(poses), 2)
+    for k in _INT_FIELDS:
+        cols[k] = cols[k].astype(np.int64)
+    return cols
+
+
+def _join(a: dict[str, Any], b: dict[str, Any]) -> dict[str, Any]:
+    """Rows of ``b`` after those of ``a``."""
+    return {k: np.concatenate([a[k], b[k]]) for k in a}
+
+
+def pose_at(cols: dict[str, Any], i: int) -> TrackedPose:
+    """Row ``i`` of columns (:func:`track_batch`) as a :class:`TrackedPose`."""
+    f = int(cols["flags"][i])
+    kw: dict[str, Any] = {k: float(cols[k][i]) for k in _FLOAT_FIELDS}
+    kw.update({k: tuple(cols[k][i].tolist()) for k in _VEC_FIELDS})
+    kw.update({k: int(cols[k][i]) for k in _INT_FIELDS})
+    a, b = cols["closest_pair"][i].tolist()
+    return TrackedPose(**kw | {"sample": int(cols["sample"][i]), "valid": bool(cols["valid"][i]),
+                               "flags": TrackFlag(f) if f else _FLAG_NONE,
+                               "closest_pair": (str(a), str(b))})
+
+
+def _kernel_geometry(tr: Tracker) -> NDArray[np.float64]:
+    """The geometry vector of :func:`athenakin.fast._track_kernels.track_stream`."""
+    g = tr._g
+    return np.array([g.l1, g.l2, g.l3, g.l4, g.l5, g.h_sign, *g.c, *g.ex, *g.ez, *g.lo, *g.hi,
+                     tr.jump_m, tr.jump_rad, *tr._watch, tr.margins.half_chord, TANGENT_TOL,
+                     P_ZERO_TOL, DEGENERATE_TOL, 2.0], dtype=float)
+
+
+def _cand_row(c: tuple) -> list[float]:
+    return [*c[:5], *c[5], *c[6], *c[7], *c[8:]]
+
+
+def _cand_tuple(row: list[float]) -> tuple:
+    return (int(row[0]), int(row[1]), int(row[2]), int(row[3]), row[4], tuple(row[5:10]),
+            tuple(row[10:13]), tuple(row[13:16]), row[16], row[17], row[18], row[19])
+
+
+def track_batch(tr: Tracker, q: NDArray[np.float64]) -> dict[str, Any]:
+    """:meth:`Tracker.update` of every reading of ``q`` (n, 3), as columns; advances ``tr``.
+
+    The compiled loop of :mod:`athenakin.fast._track_kernels` (bit for bit the poses,
+    steps and flags of :meth:`Tracker.update`, tested) where numba runs, else
+    :meth:`Tracker.update` itself. The collision check of a tracker that has one is
+    :meth:`Tracker.update`'s too (the same scalar placement and kernel per valid
+    reading). ``raise_on`` raises :class:`TrackingError` at the first reading that
+    carries one of its bits, with the message and the pose of :meth:`Tracker.update`
+    (the tracker is then past the stream, not at that reading).
+
+    Returns
+    -------
+    dict of str -> ndarray
+        The fields of :class:`TrackLog` and ``sample``, one row per reading.
+    """
+    from .._dispatch import numba_available
+
+    q = np.ascontiguousarray(q, dtype=float).reshape(-1, 3)
+    n = len(q)
+    if not numba_available():
+        poses = [tr.update(row) for row in q.tolist()]
+        return _pose_columns(poses) if poses else _empty_columns()
+    from ..fast._track_kernels import NCAND, track_stream
+
+    prev = np.array(_cand_row(tr._prev), dtype=float)
+    lost = np.array([1 if tr._lost else 0], dtype=np.int64)
+    c = np.empty((n, NCAND))
+    step = np.empty(n)
+    flags = np.empty(n, np.int64)
+    valid = np.empty(n, bool)
+    fast = np.empty(n, bool)
+    if n:
+        from .._dispatch import _WARM, _first
+
+        geo = _kernel_geometry(tr)
+
+        def run() -> None:
+            track_stream(q, geo, prev, lost, c, step, flags, valid, fast)
+
+        if "track_stream" in _WARM:
+            run()
+        else:                          # the first call may compile: a notice on stderr
+            _first("track_stream", run)
+    g = tr._g
+    mode = c[:, 0].astype(np.int64)
+    r, b, w = (c[:, k].astype(np.int64) for k in (1, 2, 3))
+    o, dz = c[:, 10:13], c[:, 13:16]
+    L = g.L
+    tb = np.empty((n, 3))
+    for k in range(3):
+        tb[:, k] = o[:, k] + L * dz[:, k]
+    v = [tb[:, k] - g.c[k] for k in range(3)]
+    R = g.R
+    te = np.empty((n, 3))
+    for k in range(3):
+        te[:, k] = R[0][k] * v[0] + R[1][k] * v[1] + R[2][k] * v[2]
+    cols: dict[str, Any] = {
+        "sample": tr._index + 1 + np.arange(n), "q": q.copy(), "valid": valid,
+        "slot": 8 * (mode == -1) + 4 * (r == -1) + 2 * (b == -1) + (w == -1),
+        "mode": mode, "p_sign": r, "ujoint": b, "wrist": w, "p": c[:, 4].copy(),
+        "u": c[:, 5:10].copy(), "O_s": o.copy(), "direction_b": dz.copy(), "tip_b": tb,
+        "tip_e": te, "half_chord": c[:, 16].copy(), "h": c[:, 17].copy(),
+        "sin_u2": c[:, 18].copy(), "sin_u4": c[:, 19].copy(), "step": step, "flags": flags,
+        "clearance": np.full(n, math.nan), "closest_pair": np.full((n, 2), "")}
+    if tr._check is not None and n:
+        _collide_rows(tr, cols)
+    tr._index += n
+    tr._prev = _cand_tuple(prev.tolist())
+    tr._lost = bool(lost[0])
+    if n:
+        tr.pose = pose_at(cols, n - 1)
+    hit = np.flatnonzero(cols["flags"] & tr._raise_bits)
+    if hit.size:
+        i = int(hit[0])
+        ps = pose_at(cols, i)
+        qt = list(ps.q)
+        if not ps.valid:
+            raise TrackingError(f"sample {ps.sample} (q = {qt} m): no forward-"
+                                f"kinematics solution: {ps.flags!r}", ps)
+        what = "" if fast[i] else f" (q = {qt} m)"
+        raise TrackingError(f"sample {ps.sample}{what}: {ps.flags!r}" + _clearance_text(ps), ps)
+    return cols
+
+
+def _empty_columns() -> dict[str, Any]:
+    cols: dict[str, Any] = {k: np.empty((0, _VEC_FIELDS[k])) for k in _VEC_FIELDS}
+    cols.update({k: np.empty(0) for k in _FLOAT_FIELDS})
+    cols.update({k: np.empty(0, np.int64) for k in (*_INT_FIELDS, "sample")})
+    cols["valid"] = np.empty(0, bool)
+    cols["closest_pair"] = np.empty((0, 2), "<U1")
+    return cols
+
+
+def _collide_rows(tr: Tracker, cols: dict[str, Any]) -> None:
+    """:meth:`Tracker._collide` of every valid row (the same call per row)."""
+    check, pc = tr._check, tr._pose_clearance
+    assert check is not None and pc is not None
+    pairs: list[tuple[str, str]] = [("", "")] * len(cols["q"])
+    q, p, u, o, dz = (cols[k].tolist() for k in ("q", "p", "u", "O_s", "direction_b"))
+    flags = cols["flags"]
+    for i in np.flatnonzero(cols["valid"]).tolist():
+        d, names = pc(tuple(q[i]), p[i], tuple(u[i]), tuple(o[i]), tuple(dz[i]))
+        pair = np.array([names])
+        cols["clearance"][i] = d
+        pairs[i] = (str(pair[0, 0]), str(pair[0, 1]))
         if d < check.margin:
-            flags |= _B["NEAR_COLLISION"] | (_B["COLLISION"] if d < 0.0 else 0)
-        poses[i] = poses[i]._replace(clearance=d, closest_pair=(str(pair[j, 0]),
-                                                                 str(pair[j, 1])),
-                                     flags=TrackFlag(flags) if flags else _FLAG_NONE)
-    for ps in poses[1:]:
-        if int(ps.flags) & raise_bits:
-            what = "" if ps.valid else " no forward-kinematics solution:"
-            raise TrackingError(f"sample {ps.sample} (q = {list(ps.q)} m):{what} "
-                                f"{ps.flags!r}" + _clearance_text(ps), ps)
-    return poses
+            flags[i] |= _B["NEAR_COLLISION"] | (_B["COLLISION"] if d < 0.0 else 0)
+    cols["closest_pair"] = np.array(pairs).reshape(-1, 2)

@@ -18,6 +18,7 @@ and mcap-ros2-support).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import struct
 
 import numpy as np
@@ -140,10 +141,48 @@ class Template:
         if out is None:
             out = np.empty((n, self.size), dtype=np.uint8)
         out[:] = np.frombuffer(self.data, dtype=np.uint8)
-        rec = out.view(self.dtype()).reshape(n)
-        for k, v in values.items():
+        names: list[str] = []
+        formats: list[object] = []
+        offsets: list[int] = []
+        cols: list[ArrayLike] = []
+        for run in _runs(self):
+            if len(run) > 1 and all(f[0] in values for f in run):
+                # numbers side by side (a translation, a quaternion, a float64[]): one
+                # strided copy of an (n, m) block instead of m copies of a column
+                block = np.empty((n, len(run)), dtype="<" + run[0][2])
+                for j, f in enumerate(run):
+                    block[:, j] = values[f[0]]
+                names.append(run[0][0])
+                formats.append(("<" + run[0][2], (len(run),)))
+                offsets.append(run[0][1])
+                cols.append(block)
+                continue
+            for f in run:
+                if f[0] in values:
+                    names.append(f[0])
+                    formats.append("<" + f[2].replace("b1", "?"))
+                    offsets.append(f[1])
+                    cols.append(values[f[0]])
+        rec = out.view(np.dtype({"names": names, "formats": formats, "offsets": offsets,
+                                 "itemsize": self.size})).reshape(n)
+        for k, v in zip(names, cols, strict=True):
             rec[k] = v
         return out
+
+
+@functools.lru_cache(maxsize=64)
+def _runs(t: Template) -> tuple[tuple[tuple[str, int, str], ...], ...]:
+    """The named numbers of ``t`` in runs of one kind that follow each other in memory."""
+    runs: list[list[tuple[str, int, str]]] = []
+    size = {"f8": 8, "i4": 4, "u4": 4, "u1": 1, "i1": 1, "b1": 1}
+    for f in t.fields:
+        last = runs[-1][-1] if runs else None
+        if (last is not None and f[2] == last[2] and f[2] == "f8"
+                and f[1] == last[1] + size[last[2]]):
+            runs[-1].append(f)
+        else:
+            runs.append([f])
+    return tuple(tuple(r) for r in runs)
 
 
 def split_stamps(stamps_ns: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:

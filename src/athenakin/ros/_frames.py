@@ -239,8 +239,22 @@ def quaternion_xyzw(R: NDArray[np.float64]) -> NDArray[np.float64]:
     """Unit quaternions ``(x, y, z, w)`` (ROS order, ``w >= 0``) of rotations (N, 3, 3).
 
     Shepperd's method: the largest of the four squared components picks the formula,
-    so no division by a small number.
+    so no division by a small number. Compiled where numba runs (the same numbers, bit
+    for bit: :mod:`athenakin.fast._frame_kernels`).
     """
+    from .._dispatch import numba_available
+
+    if numba_available() and R.ndim == 3 and len(R):
+        from ..fast._frame_kernels import quaternion_xyzw_into
+
+        res = np.empty((len(R), 4))
+        quaternion_xyzw_into(np.asarray(R, dtype=float), res)
+        return res
+    return _quaternion_xyzw_numpy(R)
+
+
+def _quaternion_xyzw_numpy(R: NDArray[np.float64]) -> NDArray[np.float64]:
+    """:func:`quaternion_xyzw` in numpy (the reference of the compiled kernel)."""
     m00, m11, m22 = R[:, 0, 0], R[:, 1, 1], R[:, 2, 2]
     tr = m00 + m11 + m22
     cand = np.stack([tr, m00, m11, m22], axis=-1)

@@ -88,7 +88,7 @@ class McapFile:
         self._write(MAGIC)
         self._write(_record("header", _s(profile) + _s(library)))
 
-    def _write(self, data: bytes) -> None:
+    def _write(self, data: bytes | memoryview) -> None:
         self._fh.write(data)
         self._crc = zlib.crc32(data, self._crc)
         self._pos += len(data)
@@ -152,8 +152,10 @@ class McapFile:
             The chunk's records, one after the other, in log-time order.
         index : dict of channel id -> (log times, offsets of the records in ``records``)
         """
-        raw = records.tobytes() if isinstance(records, np.ndarray) else bytes(records)
-        if not raw:
+        # a contiguous array is read in place (buffer protocol): no copy of the chunk
+        raw: bytes | memoryview = (memoryview(np.ascontiguousarray(records)).cast("B")  # type: ignore[arg-type]
+                                   if isinstance(records, np.ndarray) else bytes(records))
+        if not len(raw):
             return
         start = min(int(t.min()) for t, _ in index.values() if len(t))
         end = max(int(t.max()) for t, _ in index.values() if len(t))

@@ -242,7 +242,7 @@ def _ros1_decoder() -> Callable[[bytes], tuple[int, int, tuple[str, ...], tuple[
 
 
 # ---------------------------------------------------------------------------- sources
-def _raw_messages(path: Path, kind: str, topic: str) -> Iterator[tuple[int, bytes, str]]:
+def _raw_messages(path: Path, kind: str, topic: str) -> Iterator[tuple[Any, Any, str]]:
     """``(log_time_ns, raw, encoding)`` of ``topic``, after checking topic and type."""
     if kind == "mcap":
         yield from _mcap_messages(path, topic)
@@ -279,8 +279,12 @@ def _check_type(path: Path, topic: str, msgtype: str) -> None:
                              f"sensor_msgs/msg/JointState")
 
 
-def _mcap_messages(path: Path, topic: str) -> Iterator[tuple[int, bytes, str]]:
-    """Messages of ``topic`` in file order (the summary, when present, checks the topic)."""
+def _mcap_messages(path: Path, topic: str) -> Iterator[tuple[Any, Any, str]]:
+    """Messages of ``topic`` in file order (the summary, when present, checks the topic).
+
+    ``(log time, data, encoding)``, or for a run of messages read at once
+    ``(log times, _Bulk, encoding)``.
+    """
     try:
         from mcap.reader import make_reader
     except ModuleNotFoundError as exc:  # pragma: no cover
@@ -353,8 +357,12 @@ class _McapStream:
             enc, _ = self._str(body, o)
             self.channels[cid] = (t, sid, enc)
 
-    def messages(self) -> Iterator[tuple[int, int, bytes]]:
-        """``(channel id, log time, data)`` of every Message record, in file order."""
+    def messages(self) -> Iterator[tuple[int, Any, Any]]:
+        """``(channel id, log time, data)`` of every Message record, in file order.
+
+        Runs of Messages of one channel in a chunk come as one item (channel id, log
+        times, :class:`_Bulk`) where :func:`_scan` can read the chunk at once.
+        """
         fh = self.fh
         if fh.read(8) != _MCAP_MAGIC:
             raise ValueError("no MCAP magic")
@@ -388,7 +396,7 @@ class _McapStream:
             elif op in (0x03, 0x04):
                 self._definition(op, body)
 
-    def _chunk(self, body: bytes) -> Iterator[tuple[int, int, bytes]]:
+    def _chunk(self, body: bytes) -> Iterator[tuple[int, Any, Any]]:
         _, _, usize, _ = struct.unpack_from("<QQQI", body, 0)
         comp, o = self._str(body, 28)
         (n,) = struct.unpack_from("<Q", body, o)
@@ -411,6 +419,10 @@ class _McapStream:
             raise ValueError(f"unknown chunk compression {comp!r}")
         if len(raw) != usize:
             raise ValueError("chunk does not decompress to its stated size")
+        bulk = _scan(raw)
+        if bulk is not None:
+            yield from bulk
+            return
         head, msg = self._HEAD, self._MSG
         o, end = 0, len(raw)
         while o < end:
@@ -424,6 +436,51 @@ class _McapStream:
             elif op in (0x03, 0x04):
                 self._definition(op, raw[o:o + length])
             o += length
+
+
+class _Bulk:
+    """Messages of one channel in a chunk, message ``i`` at ``data[offsets[i]:][:sizes[i]]``."""
+
+    def __init__(self, data: NDArray[np.uint8], offsets: NDArray[np.int64],
+                 sizes: NDArray[np.int64]) -> None:
+        self.data, self.offsets, self.sizes = data, offsets, sizes
+
+    def __len__(self) -> int:
+        return len(self.offsets)
+
+    def message(self, i: int) -> bytes:
+        o = int(self.offsets[i])
+        return self.data[o:o + int(self.sizes[i])].tobytes()
+
+
+def _scan(raw: bytes) -> list[tuple[int, NDArray[np.int64], _Bulk]] | None:
+    """The Messages of a decompressed chunk as runs of one channel, or None.
+
+    None (the record-by-record path) without numba, when the chunk defines schemas or
+    channels, or when :func:`athenakin.fast._mcap_kernels.scan_records` finds anything
+    unusual.
+    """
+    from .._dispatch import numba_available
+
+    if not numba_available() or not raw:
+        return None
+    from ..fast._mcap_kernels import scan_records
+
+    data = np.frombuffer(raw, dtype=np.uint8)
+    cap = len(raw) // 9 + 1
+    ops, starts, lengths, cids, times = (np.empty(cap, np.int64) for _ in range(5))
+    n = scan_records(data, ops, starts, lengths, cids, times)
+    if n < 0:
+        return None
+    ops = ops[:n]
+    if ((ops == 0x03) | (ops == 0x04)).any():
+        return None
+    msg = np.flatnonzero(ops == 0x05)
+    cid, t = cids[msg], times[msg]
+    off, size = starts[msg] + 22, lengths[msg] - 22
+    cut = [0, *(np.flatnonzero(np.diff(cid)) + 1).tolist(), len(msg)]
+    return [(int(cid[a]), t[a:b], _Bulk(data, off[a:b], size[a:b]))
+            for a, b in zip(cut[:-1], cut[1:], strict=True) if b > a]
 
 
 # ---------------------------------------------------------------------------- public
@@ -485,10 +542,8 @@ def _iterate(p: Path, kind: str, source: str, topic: str, names: tuple[str, ...]
     logt = np.empty(chunk, np.int64)
     q = np.empty((chunk, 3))
     qd = np.empty((chunk, 3))
-    has_vel = False
-    k = 0
-    index = 0
-    last = -(2 ** 63)
+    stamped = np.zeros(chunk, bool)
+    st: dict[str, Any] = {"k": 0, "index": 0, "last": -(2 ** 63), "vel": False}
     nan3 = (math.nan, math.nan, math.nan)
 
     def emit(n: int, vel: bool) -> JointStates:
@@ -497,61 +552,160 @@ def _iterate(p: Path, kind: str, source: str, topic: str, names: tuple[str, ...]
                            log_time_ns=logt[:n].copy(), header_stamped=stamped[:n].copy(),
                            topic=topic, joints=names, source=source)  # type: ignore[arg-type]
 
-    stamped = np.zeros(chunk, bool)
+    def actuators(mnames: tuple[str, ...]) -> list[int]:
+        ent = lookup.get(id(mnames))
+        if ent is None or ent[0] is not mnames:
+            idx = []
+            for j in names:
+                if j not in mnames:
+                    raise RecordingError(
+                        f"{p}: topic {topic!r}, message {st['index']}: no joint named {j!r}; "
+                        f"names present: {list(mnames)} (choose with joints=... / "
+                        f"--joints)")
+                idx.append(mnames.index(j))
+            lookup[id(mnames)] = ent = (mnames, idx)
+        return ent[1]
+
+    def backwards(t: int, last: int) -> RecordingError:
+        return RecordingError(f"{p}: topic {topic!r}: stamps go backwards at message "
+                              f"{st['index']}: {t} ns after {last} ns")
+
+    def one(t_log: int, raw: bytes, enc: str) -> bool:
+        """Store one message; True when the chunk is full."""
+        nonlocal ros1
+        if enc == "cdr":
+            sec, nsec, mnames, pos, vel = cdr.decode(raw)
+        else:
+            if ros1 is None:
+                ros1 = _ros1_decoder()
+            sec, nsec, mnames, pos, vel = ros1(raw)
+        i0, i1, i2 = actuators(mnames)
+        k = st["k"]
+        t = sec * 1_000_000_000 + nsec
+        stamped[k] = t != 0
+        if t == 0:
+            t = t_log
+        if t < st["last"]:
+            raise backwards(t, st["last"])
+        st["last"] = t
+        stamps[k] = t
+        logt[k] = t_log
+        if len(pos) > max(i0, i1, i2):
+            q[k] = (pos[i0] * s, pos[i1] * s, pos[i2] * s)
+        else:
+            q[k] = nan3
+        if len(vel) == len(mnames):
+            qd[k] = (vel[i0] * s, vel[i1] * s, vel[i2] * s)
+            st["vel"] = True
+        else:
+            qd[k] = nan3
+        st["k"] = k + 1
+        st["index"] += 1
+        return k + 1 == chunk
+
+    def full() -> JointStates:
+        out = emit(st["k"], st["vel"])
+        st["k"] = 0
+        st["vel"] = False
+        return out
+
+    def bulk(t_log: NDArray[np.int64], b: _Bulk, enc: str) -> Iterator[JointStates]:
+        """Messages of one channel: those of the decoder's layout at once, others one by one."""
+        j, m = 0, len(b)
+        while j < m:
+            e, rows = _same_layout(cdr, b, j) if enc == "cdr" else (j, None)
+            if rows is None:
+                if one(int(t_log[j]), b.message(j), enc):
+                    yield full()
+                j += 1
+                continue
+            yield from many(t_log[j:e], rows)
+            j = e
+
+    def many(t_log: NDArray[np.int64], rows: NDArray[np.uint8]) -> Iterator[JointStates]:
+        """Messages of the layout of the decoder (rows of their bytes), vectorised."""
+        i0, i1, i2 = actuators(cdr._names)
+        t = (rows[:, 4:8].copy().view("<i4")[:, 0].astype(np.int64) * 1_000_000_000
+             + rows[:, 8:12].copy().view("<u4")[:, 0])
+        has = t != 0
+        t = np.where(has, t, t_log)
+        prev = np.concatenate([[st["last"]], t[:-1]])
+        bad = np.flatnonzero(t < prev)
+        n = int(bad[0]) if bad.size else len(t)
+        npos, nvel = cdr._pos.size // 8, cdr._nvel  # type: ignore[union-attr]
+        if npos > max(i0, i1, i2):
+            o = cdr._off_pos
+            pos = rows[:, o:o + 8 * npos].copy().view("<f8")
+            qv = np.stack([pos[:, i0] * s, pos[:, i1] * s, pos[:, i2] * s], axis=-1)
+        else:
+            qv = np.full((len(t), 3), math.nan)
+        hv = nvel == len(cdr._names)
+        if hv:
+            o = cdr._off_vel
+            vel = rows[:, o:o + 8 * nvel].copy().view("<f8")
+            qdv = np.stack([vel[:, i0] * s, vel[:, i1] * s, vel[:, i2] * s], axis=-1)
+        else:
+            qdv = np.full((len(t), 3), math.nan)
+        a = 0
+        while a < n:
+            k = st["k"]
+            take = min(chunk - k, n - a)
+            stamps[k:k + take] = t[a:a + take]
+            logt[k:k + take] = t_log[a:a + take]
+            stamped[k:k + take] = has[a:a + take]
+            q[k:k + take] = qv[a:a + take]
+            qd[k:k + take] = qdv[a:a + take]
+            a += take
+            st["k"] = k + take
+            st["index"] += take
+            st["last"] = int(t[a - 1])
+            st["vel"] = st["vel"] or hv
+            if st["k"] == chunk:
+                yield full()
+        if bad.size:
+            raise backwards(int(t[n]), int(prev[n]))
+
     try:
         for t_log, raw, enc in _raw_messages(p, kind, topic):
-            if enc == "cdr":
-                sec, nsec, mnames, pos, vel = cdr.decode(raw)
-            else:
-                if ros1 is None:
-                    ros1 = _ros1_decoder()
-                sec, nsec, mnames, pos, vel = ros1(raw)
-            ent = lookup.get(id(mnames))
-            if ent is None or ent[0] is not mnames:
-                idx = []
-                for j in names:
-                    if j not in mnames:
-                        raise RecordingError(
-                            f"{p}: topic {topic!r}, message {index}: no joint named {j!r}; "
-                            f"names present: {list(mnames)} (choose with joints=... / "
-                            f"--joints)")
-                    idx.append(mnames.index(j))
-                lookup[id(mnames)] = ent = (mnames, idx)
-            i0, i1, i2 = ent[1]
-            t = sec * 1_000_000_000 + nsec
-            stamped[k] = t != 0
-            if t == 0:
-                t = t_log
-            if t < last:
-                raise RecordingError(
-                    f"{p}: topic {topic!r}: stamps go backwards at message {index}: {t} ns "
-                    f"after {last} ns")
-            last = t
-            stamps[k] = t
-            logt[k] = t_log
-            if len(pos) > max(i0, i1, i2):
-                q[k] = (pos[i0] * s, pos[i1] * s, pos[i2] * s)
-            else:
-                q[k] = nan3
-            if len(vel) == len(mnames):
-                qd[k] = (vel[i0] * s, vel[i1] * s, vel[i2] * s)
-                has_vel = True
-            else:
-                qd[k] = nan3
-            k += 1
-            index += 1
-            if k == chunk:
-                yield emit(k, has_vel)
-                k = 0
-                has_vel = False
-        if k:
-            yield emit(k, has_vel)
+            if isinstance(raw, _Bulk):
+                yield from bulk(t_log, raw, enc)
+            elif one(t_log, raw, enc):
+                yield full()
+        if st["k"]:
+            yield full()
     except (RecordingError, ModuleNotFoundError, GeneratorExit):
         raise
     except Exception as exc:    # rosbags, mcap, struct, zstd, sqlite: a damaged file
         msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise RecordingError(f"{p}: truncated or corrupt recording at message {index} of "
-                             f"{topic!r} ({type(exc).__name__}: {msg})") from None
+        raise RecordingError(f"{p}: truncated or corrupt recording at message {st['index']} "
+                             f"of {topic!r} ({type(exc).__name__}: {msg})") from None
+
+
+def _same_layout(cdr: _CdrJointState, b: _Bulk, j: int
+                 ) -> tuple[int, NDArray[np.uint8] | None]:
+    """The run of messages from ``j`` with the decoder's last layout, and their bytes.
+
+    ``(e, rows)``: messages ``j .. e-1`` have the size, the bytes between the stamp and
+    the positions (frame, names, counts) and the velocity count of the decoder's last
+    message, ``rows`` (e - j, size) their bytes; ``(j, None)`` when message ``j`` does not
+    (or no layout is known yet): it is decoded alone.
+    """
+    size = cdr._size
+    if size < 0:
+        return j, None
+    ok = b.sizes[j:] == size
+    e = j + (int(np.argmin(ok)) if not ok.all() else len(ok))
+    if e == j:
+        return j, None
+    rows = b.data[b.offsets[j:e, None] + np.arange(size)]
+    prefix = np.frombuffer(cdr._prefix, dtype=np.uint8)
+    o = cdr._off_vcount
+    good = ((rows[:, 12:12 + len(prefix)] == prefix).all(axis=1)
+            & (rows[:, o:o + 4].copy().view("<u4")[:, 0] == cdr._nvel))
+    if not good.all():
+        e = j + int(np.argmin(good))
+        rows = rows[:e - j]
+    return (e, rows) if e > j else (j, None)
 
 
 def read_joint_states(path: str | Path, *, topic: str = "/joint_states",

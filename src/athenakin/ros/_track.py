@@ -16,6 +16,7 @@ from ..design import Design, resolve_design
 from ..errors import InvalidInputError, KinematicsError
 from ..motion import Tracker, TrackFlag, TrackLog, track
 from ..motion._plan import Trajectory
+from ..motion._tracker import track_batch
 from ..robot._setup import resolve_rcm_frame
 from ._read import CHUNK, iter_joint_states
 from ._write import McapOutput, TrackedBatch
@@ -99,7 +100,10 @@ def _clearance_fields(g: Callable[[str], Any]) -> dict[str, Any]:
 class _Stream:
     """A :class:`~athenakin.motion.Tracker` over chunks.
 
-    It starts at the first reading that assembles (readings before it are ``LOST``).
+    It starts at the first reading that assembles (readings before it are ``LOST``);
+    each chunk is tracked at once by :func:`athenakin.motion._tracker.track_batch`
+    (compiled; bit for bit :meth:`~athenakin.motion.Tracker.update`), the tracker's
+    state carried from chunk to chunk.
     """
 
     def __init__(self, T_b_e: NDArray[np.float64], design: Design,
@@ -129,10 +133,13 @@ class _Stream:
                     break
             rows.append(None)
             i += 1
-        if self.tracker is not None:
-            up = self.tracker.update
-            rows.extend(up(r) for r in qs[i:])
-        return _columns(rows, q)
+        if self.tracker is None or i == len(qs):
+            return _columns(rows, q)
+        rest = track_batch(self.tracker, q[i:])
+        if i == 0:
+            return rest
+        out = _columns(rows, q[:i])
+        return {k: np.concatenate([v, rest[k]]) for k, v in out.items()}
 
 
 def _columns(rows: list[Any], q: NDArray[np.float64]) -> dict[str, Any]:

@@ -1,0 +1,460 @@
+"""Compiled continuity tracker over a recorded stream (private): :class:`~athenakin.motion.Tracker`.
+
+:meth:`athenakin.motion.Tracker.update` applied reading after reading, in one compiled
+loop: the same closed form (``_parallel`` and ``_candidate`` of
+:mod:`athenakin.motion._tracker`, operation by operation and in the same order of the
+floating-point operations), the same fast path (the candidate with the previous labels,
+far from every singularity), the same slow path (all 16 candidates, the labels kept
+while within the jump thresholds, else the nearest, flags ``AMBIGUOUS``, ``JUMP``,
+``MODE_SWITCH``, ``BRANCH_SWITCH``, ``NEAR_*``) and the same ``LOST`` / ``REACQUIRED``
+handling. The results are bit for bit those of the Python tracker (tested on seeded
+streams with jumps, NaN readings, mode switches, stroke violations and serial
+singularities): ``sqrt``, ``atan2``, ``cos`` and ``sin`` are the same correctly rounded
+or libm operations, ``x ** 2`` of the step is libm's ``pow`` as in CPython (not always
+``x * x``), and :func:`py_hypot` reproduces CPython's ``math.hypot`` (which is not
+libm's ``hypot``: it differs in the last bit for about one pair in 700).
+
+A candidate is a row of :data:`NCAND` doubles, the tuple of ``_candidate``:
+``mode, r, b, w, p, u1..u5, O_s (3), direction_b (3), half_chord, |h|, sin_u2, sin_u4``.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+__all__ = ["NCAND", "NGEO", "track_stream", "py_hypot", "F_LOST", "F_REACQUIRED"]
+
+_OPTS: dict[str, Any] = dict(error_model="numpy", cache=True, nogil=True)
+
+#: Doubles per candidate row.
+NCAND = 20
+#: Doubles of the geometry vector (see :func:`athenakin.motion._tracker._kernel_geometry`).
+NGEO = 34
+
+# TrackFlag bits (a test checks they equal athenakin.motion.TrackFlag's)
+F_LOST = 1
+F_REACQUIRED = 2
+_JUMP = 4
+_MODE_SWITCH = 8
+_BRANCH_SWITCH = 16
+_AMBIGUOUS = 32
+_OUT_OF_STROKE = 64
+_NEAR_MODE_BOUNDARY = 128
+_NEAR_H_ZERO = 256
+_NEAR_LINK_LIMIT = 512
+_NEAR_UJOINT = 1024
+_NEAR_WRIST = 2048
+_NEAR_P_ZERO = 4096
+
+_TWO_PI = 2.0 * math.pi
+_T27 = 134217729.0            # 2**27 + 1: Veltkamp's splitter
+_DBL_MIN = sys.float_info.min
+# CPython 3.12 rewrote math.hypot's compensated sum (exact products by fused multiply-add):
+# _norm2_311 is the algorithm of 3.10/3.11 (tested here, on 3.11), _norm2_312 that of 3.12+
+# (its exact products by Dekker's method, which gives what fma gives; not run here).
+_PY311_HYPOT = sys.version_info[:2] <= (3, 11)
+
+
+@njit(inline="always", **_OPTS)
+def _split(x):
+    t = x * _T27
+    hi = t - (t - x)
+    return hi, x - hi
+
+
+@njit(**_OPTS)
+def _norm2_311(a, b, mx):
+    """CPython 3.10/3.11 ``vector_norm`` of two non-negative finite values, max ``mx > 0``."""
+    e = math.frexp(mx)[1]
+    scale = math.ldexp(1.0, -e)
+    csum = 1.0
+    frac1 = 0.0
+    frac2 = 0.0
+    frac3 = 0.0
+    for k in range(2):
+        x = (a if k == 0 else b) * scale
+        hi, lo = _split(x)
+        x = hi * hi
+        old = csum
+        csum += x
+        frac1 += (old - csum) + x
+        x = 2.0 * hi * lo
+        old = csum
+        csum += x
+        frac2 += (old - csum) + x
+        frac3 += lo * lo
+    h = math.sqrt(csum - 1.0 + (frac1 + frac2 + frac3))
+    hi, lo = _split(h)
+    x = -hi * hi
+    old = csum
+    csum += x
+    frac1 += (old - csum) + x
+    x = -2.0 * hi * lo
+    old = csum
+    csum += x
+    frac2 += (old - csum) + x
+    x = -lo * lo
+    old = csum
+    csum += x
+    frac3 += (old - csum) + x
+    x = csum - 1.0 + (frac1 + frac2 + frac3)
+    return (h + x / (2.0 * h)) / scale
+
+
+@njit(inline="always", **_OPTS)
+def _two_prod(x, y):
+    """``x * y`` and its exact rounding error (Dekker; what ``fma(x, y, -x*y)`` gives)."""
+    p = x * y
+    xh, xl = _split(x)
+    yh, yl = _split(y)
+    return p, ((xh * yh - p) + xh * yl + xl * yh) + xl * yl
+
+
+@njit(**_OPTS)
+def _norm2_312(a, b, mx):
+    """CPython >= 3.12 ``vector_norm`` of two non-negative finite values, max ``mx > 0``."""
+    e = math.frexp(mx)[1]
+    scale = math.ldexp(1.0, -e)
+    csum = 1.0
+    frac1 = 0.0
+    frac2 = 0.0
+    for k in range(2):
+        x = (a if k == 0 else b) * scale
+        phi, plo = _two_prod(x, x)
+        hi = csum + phi
+        frac2 += (csum - hi) + phi
+        csum = hi
+        frac1 += plo
+    h = math.sqrt(csum - 1.0 + (frac1 + frac2))
+    phi, plo = _two_prod(-h, h)
+    hi = csum + phi
+    frac2 += (csum - hi) + phi
+    csum = hi
+    frac1 += plo
+    x = csum - 1.0 + (frac1 + frac2)
+    h += x / (2.0 * h)
+    return h / scale
+
+
+@njit(**_OPTS)
+def py_hypot(x, y):
+    """``math.hypot(x, y)`` as CPython computes it (not libm's ``hypot``)."""
+    a = abs(x)
+    b = abs(y)
+    if math.isinf(a) or math.isinf(b):
+        return math.inf
+    if math.isnan(a) or math.isnan(b):
+        return math.nan
+    mx = a if a > b else b
+    if mx == 0.0:
+        return mx
+    if math.frexp(mx)[1] < -1023:          # deep subnormal: CPython scales by DBL_MIN first
+        a /= _DBL_MIN
+        b /= _DBL_MIN
+        mx /= _DBL_MIN
+        if _PY311_HYPOT:
+            return _DBL_MIN * _norm2_311(a, b, mx)
+        return _DBL_MIN * _norm2_312(a, b, mx)
+    if _PY311_HYPOT:
+        return _norm2_311(a, b, mx)
+    return _norm2_312(a, b, mx)
+
+
+# ------------------------------------------------------------------------------ geometry
+# g: 0-4 l1..l5, 5 h_sign, 6-8 c (RCM origin), 9-11 ex, 12-14 ez (RCM axes), 15-17 stroke
+#    min, 18-20 stroke max, 21 jump_m, 22 jump_rad, 23-28 the fast path's thresholds
+#    (half_chord, h, link, sin_u2, sin_u4, p), 29 margins.half_chord, 30 TANGENT_TOL,
+#    31 P_ZERO_TOL, 32 DEGENERATE_TOL, 33 the number 2.0 (see _step)
+@njit(**_OPTS)
+def _parallel(g, q1, q2, q3, par):
+    """``_parallel`` of the tracker into ``par`` (h, r1, m_y, d, a); False: no assembly."""
+    l1, l2, l3, l5 = g[0], g[1], g[2], g[4]
+    h = 0.5 * (q1 - q2)
+    hh = h * h
+    if hh >= l1 * l1 or hh > l3 * l3 or g[5] * h < 0 or q3 < 0.0:
+        return False
+    r1 = math.sqrt(l1 * l1 - hh)
+    m_y = math.sqrt(l3 * l3 - hh) + l2
+    d2 = m_y * m_y + l5 * l5
+    d = math.sqrt(d2)
+    k = (r1 + q3 - d) * (r1 + q3 + d) * (d - r1 + q3) * (d + r1 - q3)
+    if k < 0.0:
+        a = -math.sqrt(-k) / (2.0 * d)
+        if a < -g[30]:
+            return False
+        a = 0.0
+    else:
+        a = math.sqrt(k) / (2.0 * d)
+    par[0] = h
+    par[1] = r1
+    par[2] = m_y
+    par[3] = d
+    par[4] = a
+    return True
+
+
+@njit(**_OPTS)
+def _candidate(g, q1, q2, q3, par, mode, r, b, w, hint, has_hint, out):
+    """``_candidate`` of the tracker into ``out`` (NCAND); False where it returns None."""
+    h, r1, m_y, d, a = par[0], par[1], par[2], par[3], par[4]
+    tang, pzero, degen = g[30], g[31], g[32]
+    if mode == -1.0 and a <= tang:
+        return False
+    l4, l5 = g[3], g[4]
+    H = d * d + r1 * r1 - q3 * q3
+    f = H / (2.0 * d * d)
+    sa = mode * a / d
+    y = f * m_y - sa * l5
+    z = f * l5 + sa * m_y
+    cy = y / r1
+    cz = z / r1
+    Ox = 0.5 * (q1 + q2)
+    Oy = y + l4 * cy
+    Oz = z + l4 * cz
+    bx = g[6] - Ox
+    by = g[7] - Oy
+    bz = g[8] - Oz
+    cx = bx
+    cys = cz * by - cy * bz
+    czs = cy * by + cz * bz
+    n = math.sqrt(cx * cx + cys * cys + czs * czs)
+    if n <= pzero:
+        return False
+    p = r * n
+    zx = cx / p
+    zy = cys / p
+    zz = czs / p
+    rho = py_hypot(zx, zy)
+    if rho > degen:
+        c1 = b * zx / rho
+        s1 = b * zy / rho
+        c2 = -zz
+        s2 = b * rho
+    elif not has_hint:
+        return False
+    else:
+        c1 = math.cos(hint[0])
+        s1 = math.sin(hint[0])
+        c2 = -zz
+        s2 = 0.0
+    ex0, ex1, ex2 = g[9], g[10], g[11]
+    ez0, ez1, ez2 = g[12], g[13], g[14]
+    Ex0 = ex0
+    Ex1 = cz * ex1 - cy * ex2
+    Ex2 = cy * ex1 + cz * ex2
+    Ez0 = ez0
+    Ez1 = cz * ez1 - cy * ez2
+    Ez2 = cy * ez1 + cz * ez2
+    x10 = c1 * c2
+    x11 = s1 * c2
+    x12 = s2
+    z10 = c1 * s2
+    z11 = s1 * s2
+    z12 = c2 * -1.0
+    W00 = x10 * Ex0 + x11 * Ex1 + x12 * Ex2
+    W10 = s1 * Ex0 - c1 * Ex1
+    W20 = z10 * Ex0 + z11 * Ex1 + z12 * Ex2
+    W02 = x10 * Ez0 + x11 * Ez1 + x12 * Ez2
+    W12 = s1 * Ez0 - c1 * Ez1
+    W22 = z10 * Ez0 + z11 * Ez1 + z12 * Ez2
+    rho4 = py_hypot(W02, W12)
+    if rho4 > degen:
+        c3 = w * W02 / rho4
+        s3 = w * W12 / rho4
+        c4 = -W22
+        s4 = w * rho4
+    elif not has_hint:
+        return False
+    else:
+        c3 = math.cos(hint[2])
+        s3 = math.sin(hint[2])
+        c4 = -W22
+        s4 = 0.0
+    u1 = math.atan2(s1, c1)
+    u2 = math.atan2(s2, c2)
+    u3 = math.atan2(s3, c3)
+    u4 = math.atan2(s4, c4)
+    u5 = math.atan2(s3 * W00 - c3 * W10, c3 * c4 * W00 + s3 * c4 * W10 + s4 * W20)
+    if not math.isfinite(Ox + Oy + Oz + p + u1 + u2 + u3 + u4 + u5 + bx + by + bz):
+        return False
+    out[0] = mode
+    out[1] = r
+    out[2] = b
+    out[3] = w
+    out[4] = p
+    out[5] = u1
+    out[6] = u2
+    out[7] = u3
+    out[8] = u4
+    out[9] = u5
+    out[10] = Ox
+    out[11] = Oy
+    out[12] = Oz
+    out[13] = bx / p
+    out[14] = by / p
+    out[15] = bz / p
+    out[16] = a
+    out[17] = abs(h)
+    out[18] = rho
+    out[19] = rho4
+    return True
+
+
+@njit(inline="always", **_OPTS)
+def _adiff(a, b):
+    d = abs(a - b)
+    return d if d <= math.pi else _TWO_PI - d
+
+
+@njit(**_OPTS)
+def _step(g, c, prev):
+    """The tracker's ``_step``; ``x ** 2`` there is libm's ``pow``, not always ``x * x``."""
+    d0 = c[10] - prev[10]
+    d1 = c[11] - prev[11]
+    d2 = c[12] - prev[12]
+    two = g[33]                # 2.0 read at run time: LLVM would turn pow(x, 2.0) into x * x
+    dO = math.sqrt(math.pow(d0, two) + math.pow(d1, two) + math.pow(d2, two))
+    du = _adiff(c[5], prev[5])
+    for k in range(6, 10):
+        v = _adiff(c[k], prev[k])
+        if v > du:                 # Python's max keeps the first of equal values
+            du = v
+    s0 = dO / g[21]
+    s1 = du / g[22]
+    return s1 if s1 > s0 else s0
+
+
+@njit(**_OPTS)
+def _near(g, c):
+    f = 0
+    if c[16] < g[29]:
+        f |= _NEAR_MODE_BOUNDARY
+    if c[17] < g[24]:
+        f |= _NEAR_H_ZERO
+    if min(g[0], g[2]) - c[17] < g[25]:
+        f |= _NEAR_LINK_LIMIT
+    if c[18] < g[26]:
+        f |= _NEAR_UJOINT
+    if c[19] < g[27]:
+        f |= _NEAR_WRIST
+    if abs(c[4]) < g[28]:
+        f |= _NEAR_P_ZERO
+    return f
+
+
+@njit(inline="always", **_OPTS)
+def _same_labels(a, b):
+    return a[0] == b[0] and a[1] == b[1] and a[2] == b[2] and a[3] == b[3]
+
+
+@njit(**_OPTS)
+def track_stream(q, g, prev, lost, out_c, out_step, out_flags, out_valid, out_fast):
+    """Track the readings ``q`` (n, 3) from the state ``prev`` (NCAND), ``lost[0]``.
+
+    Parameters
+    ----------
+    q : ndarray, shape (n, 3)
+        Readings, m (non-finite: ``LOST``).
+    g : ndarray, shape (NGEO,)
+        Design, set-up and thresholds (:func:`athenakin.motion._tracker._kernel_geometry`).
+    prev : ndarray, shape (NCAND,)
+        The previous candidate; updated in place to the last valid one.
+    lost : ndarray of int64, shape (1,)
+        1 when the previous reading was ``LOST``; updated in place.
+    out_c : ndarray, shape (n, NCAND)
+        The candidate of each reading (the previous valid one where ``LOST``).
+    out_step, out_flags, out_valid, out_fast : ndarray, shape (n,)
+        Step (``inf`` where ``LOST``), TrackFlag bits, validity, and whether the
+        fast path (the previous labels, no flag but ``OUT_OF_STROKE``) decided.
+    """
+    par = np.empty(5)
+    cands = np.empty((16, NCAND))
+    steps = np.empty(16)
+    c = np.empty(NCAND)
+    hc, hw, lk, s2m, s4m, pp = g[23], g[24], g[25], g[26], g[27], g[28]
+    link = min(g[0], g[2])
+    for i in range(q.shape[0]):
+        q1 = q[i, 0]
+        q2 = q[i, 1]
+        q3 = q[i, 2]
+        flags = 0
+        finite = math.isfinite(q1) and math.isfinite(q2) and math.isfinite(q3)
+        if finite and not (g[15] <= q1 <= g[18] and g[16] <= q2 <= g[19]
+                           and g[17] <= q3 <= g[20]):
+            flags |= _OUT_OF_STROKE
+        ok = finite and _parallel(g, q1, q2, q3, par)
+        out_fast[i] = False
+        if not ok:
+            flags |= F_LOST
+            lost[0] = 1
+            out_c[i, :] = prev
+            out_step[i] = math.inf
+            out_flags[i] = flags
+            out_valid[i] = False
+            continue
+        was_lost = lost[0] != 0
+        if was_lost:
+            flags |= F_REACQUIRED
+        hint = prev[5:10]
+        if _candidate(g, q1, q2, q3, par, prev[0], prev[1], prev[2], prev[3], hint, True, c) \
+                and not was_lost:
+            step = _step(g, c, prev)
+            if (step <= 1.0 and c[16] >= hc and c[17] >= hw and c[18] >= s2m and c[19] >= s4m
+                    and abs(c[4]) >= pp and link - c[17] >= lk):
+                prev[:] = c
+                out_c[i, :] = c
+                out_step[i] = step
+                out_flags[i] = flags
+                out_valid[i] = True
+                out_fast[i] = True
+                continue
+        m = 0
+        for mode in (1.0, -1.0):
+            for r in (1.0, -1.0):
+                for b in (1.0, -1.0):
+                    for w in (1.0, -1.0):
+                        if _candidate(g, q1, q2, q3, par, mode, r, b, w, hint, True, cands[m]):
+                            steps[m] = _step(g, cands[m], prev)
+                            m += 1
+        if m == 0:
+            flags |= F_LOST
+            lost[0] = 1
+            out_c[i, :] = prev
+            out_step[i] = math.inf
+            out_flags[i] = flags
+            out_valid[i] = False
+            continue
+        k = -1
+        for j in range(m):
+            if _same_labels(cands[j], prev):
+                if steps[j] <= 1.0:
+                    k = j
+                break
+        if k < 0:
+            k = 0
+            for j in range(1, m):
+                if steps[j] < steps[k]:
+                    k = j
+        step = steps[k]
+        for j in range(m):
+            if steps[j] <= 1.0 and not _same_labels(cands[j], cands[k]):
+                flags |= _AMBIGUOUS
+                break
+        if step > 1.0:
+            flags |= _JUMP
+        if cands[k, 0] != prev[0]:
+            flags |= _MODE_SWITCH
+        if cands[k, 1] != prev[1] or cands[k, 2] != prev[2] or cands[k, 3] != prev[3]:
+            flags |= _BRANCH_SWITCH
+        flags |= _near(g, cands[k])
+        prev[:] = cands[k]
+        lost[0] = 0
+        out_c[i, :] = prev
+        out_step[i] = step
+        out_flags[i] = flags
+        out_valid[i] = True
