@@ -159,16 +159,34 @@ def broadcast_batch(**shapes: tuple[int, ...]) -> tuple[int, ...]:
             f"must broadcast against each other, as numpy arrays do)") from None
 
 
-def check_tolerance(x: object, name: str) -> float:
-    """Coerce a tolerance keyword: a non-negative real number (``inf`` accepts everything).
+#: Largest value accepted for the kinematics tolerances (their documented ranges are
+#: ``[0, maximum]``). Beyond these a tolerance no longer tells a solution from a
+#: non-solution: a ``tangent_tol`` of 0.5 m calls circles 0.4 m apart tangent, a
+#: ``closure_tol`` of 1 accepts any orientation.
+TOLERANCE_MAXIMA: dict[str, float] = {
+    "tangent_tol": 1e-3,      # m, half-chord of k1 ∩ k2
+    "degenerate_tol": 1.0,    # |sin u2|, |sin u4| (at most 1)
+    "p_zero_tol": 1.0,        # m
+    "closure_tol": 1e-3,      # rotation entries and m
+    "singular_tol": 1.0,      # |cos u1|, |sin u1 sin u2| (at most 1)
+}
+
+
+def check_tolerance(x: object, name: str, *, maximum: float | None = None) -> float:
+    """Coerce a tolerance keyword: a real number in ``[0, maximum]``.
+
+    ``maximum`` defaults to :data:`TOLERANCE_MAXIMA` for the kinematics tolerances
+    named there, to ``inf`` (accepts everything) for the rest.
 
     Raises
     ------
     TypeError
         If ``x`` is not a real number (``None``, a string, ...).
     InvalidInputError
-        If ``x`` is NaN or negative.
+        If ``x`` is NaN, negative or above ``maximum``.
     """
+    if maximum is None:
+        maximum = TOLERANCE_MAXIMA.get(name, math.inf)
     if isinstance(x, bool) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
         raise TypeError(f"{name}: expected a non-negative real number (a tolerance), "
                         f"got {type(x).__name__}")
@@ -179,6 +197,8 @@ def check_tolerance(x: object, name: str) -> float:
                                 f"too large for a float") from None
     if not v >= 0:
         raise InvalidInputError(f"{name}: expected a non-negative tolerance, got {v}")
+    if v > maximum:
+        raise InvalidInputError(f"{name}: expected a tolerance in [0, {maximum:g}], got {v:g}")
     return v
 
 

@@ -204,7 +204,8 @@ def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
     tangent_tol : float, keyword-only
         Half-chord (m) at or below which ``k1`` and ``k2`` count as tangent
         (paper's ``w = 0``): mode -1 is then reported as merged into mode +1
-        (``Reason.CIRCLES_TANGENT``).
+        (``Reason.CIRCLES_TANGENT``). Range ``[0, 1e-3]`` m
+        (:data:`athenakin._validation.TOLERANCE_MAXIMA`).
 
     Returns
     -------
