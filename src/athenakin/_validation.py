@@ -299,6 +299,44 @@ def check_count(x: object, name: str, *, minimum: int = 1, maximum: int | None =
     return v
 
 
+#: Longest name accepted for a model, robot or body name written into a file.
+MAX_NAME_LENGTH = 256
+
+
+def check_text(x: object, name: str, *, max_length: int = MAX_NAME_LENGTH,
+               allow_empty: bool = False, allow_newlines: bool = False) -> str:
+    """Check a string written into a file (an XML attribute, a CSV header, a title).
+
+    Control characters (Unicode category Cc: ``\\x00``-``\\x1f``, ``\\x7f``-``\\x9f``;
+    tab and newlines too unless ``allow_newlines``), lone surrogates and the
+    non-characters ``U+FFFE``/``U+FFFF`` are refused: XML 1.0 cannot hold most of them
+    and a reader of the others would see a different name.
+
+    Raises
+    ------
+    TypeError
+        ``x`` is not a str.
+    InvalidInputError
+        ``x`` is empty (unless allowed), longer than ``max_length`` or holds a
+        refused character (the message gives its position and code point).
+    """
+    if not isinstance(x, str):
+        raise TypeError(f"{name}: expected str, got {type(x).__name__}")
+    if not x and not allow_empty:
+        raise InvalidInputError(f"{name}: expected a non-empty string")
+    if len(x) > max_length:
+        raise InvalidInputError(f"{name}: expected at most {max_length} characters, got "
+                                f"{len(x)}")
+    for i, ch in enumerate(x):
+        c = ord(ch)
+        if allow_newlines and ch in "\t\n\r":
+            continue
+        if c < 0x20 or 0x7F <= c <= 0x9F or 0xD800 <= c <= 0xDFFF or c in (0xFFFE, 0xFFFF):
+            raise InvalidInputError(f"{name}: expected printable text, got the control "
+                                    f"character U+{c:04X} at position {i}")
+    return x
+
+
 def check_instance(x: object, name: str, cls: type | tuple[type, ...]) -> None:
     """Refuse ``x`` unless it is an instance of ``cls`` (a result object, a model...).
 

@@ -424,7 +424,8 @@ def _instrument_measures(q: NDArray[np.float64], g: dict[str, NDArray[np.float64
     ok = np.all(np.isfinite(T_s_e), axis=(-2, -1))
     with np.errstate(invalid="ignore", divide="ignore"):
         ser = ups_solutions(np.where(ok[..., None, None], T_s_e, np.eye(4)),
-                            degenerate_tol=0.0, p_zero_tol=0.0, closure_tol=np.inf, scale=0.0)
+                            degenerate_tol=0.0, p_zero_tol=0.0, closure_tol=np.inf, scale=0.0,
+                            _checked=True)
     p = np.where(ok, ser.p[..., 0], np.nan)
     u = np.where(ok[..., None], ser.u[..., 0, :], np.nan)
     Js = serial_jacobian(np.nan_to_num(p), np.nan_to_num(u), frame="s")

@@ -21,6 +21,7 @@ Slot ``k = 4 * r + 2 * b + w`` holds root ``r`` (0: ``p > 0``), U-joint branch
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -241,7 +242,7 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     p_zero_tol : float, keyword-only
         ``|p|`` (m) at or below which all 8 slots get ``SERIAL_P_ZERO``.
     closure_tol : float, keyword-only
-        Largest residual of a valid solution.
+        Largest residual of a valid solution, in ``[0, 1e-3]``.
     scale : array-like, shape (...), optional, keyword-only
         Size (m) of the coordinates ``T_s_e``'s translation was computed from (e.g.
         ``|t_b_e| + |O_s|``): its rounding, about ``eps * scale``, tilts the instrument
@@ -257,7 +258,9 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     T = T_s_e if _checked else check_transform(T_s_e, "T_s_e", allow_nonfinite=True)
     degenerate_tol = check_tolerance(degenerate_tol, "degenerate_tol")
     p_zero_tol = check_tolerance(p_zero_tol, "p_zero_tol")
-    closure_tol = check_tolerance(closure_tol, "closure_tol")
+    # internal callers (``_checked``) may ask for every slot whatever its closure (inf)
+    closure_tol = check_tolerance(closure_tol, "closure_tol",
+                                  maximum=math.inf if _checked else None)
     finite = np.all(np.isfinite(T), axis=(-2, -1))
     T = np.where(finite[..., None, None], T, np.eye(4))
     c = T[..., :3, 3]
