@@ -307,7 +307,7 @@ def check_text(x: object, name: str, *, max_length: int = MAX_NAME_LENGTH,
                allow_empty: bool = False, allow_newlines: bool = False) -> str:
     """Check a string written into a file (an XML attribute, a CSV header, a title).
 
-    Control characters (Unicode category Cc: ``\\x00``-``\\x1f``, ``\\x7f``-``\\x9f``;
+    Control characters (Unicode category Cc: U+0000 to U+001F, U+007F to U+009F;
     tab and newlines too unless ``allow_newlines``), lone surrogates and the
     non-characters ``U+FFFE``/``U+FFFF`` are refused: XML 1.0 cannot hold most of them
     and a reader of the others would see a different name.

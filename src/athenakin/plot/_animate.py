@@ -17,10 +17,16 @@ from ._geometry import VIEW, RobotGeometry, cube_limits, robot_geometry
 from ._mpl import plot_robot
 
 __all__ = ["instrument_cone_path", "render_frames", "animate", "draw_motion_frame",
-           "ANIMATION_SIZE", "TRACE_COLOR"]
+           "ANIMATION_SIZE", "TRACE_COLOR", "MAX_PATH_SAMPLES", "MAX_TURNS"]
 
 #: Default frame size (width, height) in pixels; multiples of 16 suit video codecs.
 ANIMATION_SIZE = (800, 640)
+
+
+#: Most samples of :func:`instrument_cone_path` (checked before anything is allocated).
+MAX_PATH_SAMPLES = 100_000
+#: Most turns of :func:`instrument_cone_path` about the cone axis.
+MAX_TURNS = 1000.0
 
 
 def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
@@ -41,7 +47,8 @@ def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
     Parameters
     ----------
     n : int
-        Number of samples (the last one is not the first again).
+        Number of samples (the last one is not the first again), 2 to
+        :data:`MAX_PATH_SAMPLES`.
     T_b_e : array-like, shape (4, 4), optional
         RCM frame (default :func:`athenakin.default_rcm_frame`, whose reference
         instrument direction is ``x_e``).
@@ -49,10 +56,11 @@ def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
     axis_e : array-like, shape (3,), keyword-only
         Axis of the cone in frame E.
     cone_angle : float, keyword-only
-        Half-angle of the cone, rad.
+        Half-angle of the cone, rad, in ``[0, pi]``.
     p : array-like, shape () or (n,), keyword-only, optional
         Insertion, m (default :data:`athenakin.robot.REFERENCE_P`).
     turns : float, keyword-only
+        Turns about the axis, in ``[-MAX_TURNS, MAX_TURNS]``.
     lead : int, keyword-only
         Samples (of the ``n``) that tilt out from the axis at the start, and as many
         that tilt back at the end; 0 (default): every sample is on the cone.
@@ -69,17 +77,31 @@ def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
     KinematicsError
         A sample is out of the workspace (the message names the first).
     """
+    from .._validation import check_count, check_scalar
     from ..errors import InvalidInputError
     from ..robot import REFERENCE_P
 
+    n = check_count(n, "n", minimum=2, maximum=MAX_PATH_SAMPLES)
     if isinstance(lead, bool) or not isinstance(lead, (int, np.integer)) or lead < 0 \
             or n - 2 * lead < 2:
         raise InvalidInputError(f"lead: expected an integer in 0..{(n - 2) // 2} for n = {n} "
                                 f"samples (2 lead + at least 2 on the cone), got {lead!r}")
+    cone_angle = check_scalar(cone_angle, "cone_angle", nonnegative=True)
+    if not cone_angle <= np.pi:
+        raise InvalidInputError(f"cone_angle: expected a half-angle in [0, pi] rad, got "
+                                f"{cone_angle}")
+    turns = check_scalar(turns, "turns")
+    if not abs(turns) <= MAX_TURNS:
+        raise InvalidInputError(f"turns: expected a number in [-{MAX_TURNS}, {MAX_TURNS}], got "
+                                f"{turns}")
 
     design = resolve_design(design)
     T = resolve_rcm_frame(T_b_e, design)
     a = check_array(axis_e, "axis_e", (3,))
+    if a.shape != (3,) or not np.any(a):
+        raise InvalidInputError(f"axis_e: expected a non-zero direction of shape (3,), got "
+                                f"{a.tolist()}")
+    a = a / np.abs(a).max()
     a = a / np.linalg.norm(a)
     helper = np.array([0.0, 0.0, 1.0]) if abs(a[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
     e1 = np.cross(helper, a)
@@ -94,7 +116,10 @@ def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
         tilt = np.concatenate([ramp, tilt, cone_angle * np.arange(lead - 1, -1, -1) / lead])
     d = (np.cos(tilt)[:, None] * a + np.sin(tilt)[:, None] * (np.cos(t)[:, None] * e1
                                                                + np.sin(t)[:, None] * e2))
-    pp = np.broadcast_to(np.asarray(REFERENCE_P if p is None else p, dtype=float), (n,))
+    pa = check_array(REFERENCE_P if p is None else p, "p", ())
+    if pa.shape not in ((), (n,)):
+        raise InvalidInputError(f"p: expected shape () or ({n},), got shape {pa.shape}")
+    pp = np.broadcast_to(pa, (n,))
     q, res = q_from_instrument(T, d, pp, design, errors="flag")
     if not np.all(res.valid):
         from ..errors import error_for_reason

@@ -489,6 +489,10 @@ def _panel_title(g: RobotGeometry) -> str:
             f"wrist {sgn[g.wrist]} (sin u4 {'>' if g.wrist > 0 else '<'} 0)")
 
 
+#: Largest ``dpi`` of :func:`save_view` (a 6.4 x 4.8 in figure is then 7680 x 5760 px).
+MAX_DPI = 1200
+
+
 def save_view(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
               design: Design | None = None, *, slot: int = 0, all_solutions: bool = False,
               dpi: int = 120, **kwargs: Any) -> Path:
@@ -507,7 +511,7 @@ def save_view(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | N
         The 16-solution grid (static) or, in HTML, every solution at once with one
         legend entry per slot (without it the page has a menu over the solutions).
     dpi : int, keyword-only
-        Resolution of raster output.
+        Resolution of raster output, 1 to :data:`MAX_DPI`.
     **kwargs
         Passed to the drawing function.
 
@@ -522,7 +526,11 @@ def save_view(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | N
     """
     import matplotlib.pyplot as plt
 
-    path = Path(path)
+    from .._output import check_output_path, naming_path
+    from .._validation import check_count
+
+    path = check_output_path(path)
+    dpi = check_count(dpi, "dpi", minimum=1, maximum=MAX_DPI)
     suffix = path.suffix.lower()
     if suffix == ".html":
         from ._html import write_html
@@ -537,7 +545,8 @@ def save_view(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | N
         ax = plot_robot(q, T_b_e, design, slot=slot, **kwargs)
         fig = ax.figure
     try:
-        fig.savefig(path, dpi=dpi)
+        with naming_path(path):
+            fig.savefig(path, dpi=dpi)
     finally:
         plt.close(fig)
     return path

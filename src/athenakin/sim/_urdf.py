@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._transforms import rot_x, rot_y, rot_z
 from .._output import check_output_path, write_text_atomic
+from .._transforms import rot_x, rot_y, rot_z
 from .._validation import check_text
 from ..design import Design, resolve_design
 from ..robot._setup import resolve_rcm_frame
