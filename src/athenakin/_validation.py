@@ -131,6 +131,21 @@ def check_transform(T: ArrayLike, name: str, *, allow_nonfinite: bool = False,
     return arr
 
 
+def check_frame(T: ArrayLike, name: str) -> NDArray[np.float64]:
+    """:func:`check_transform` of exactly one transform, shape (4, 4).
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        As :func:`check_transform`, or the shape is not (4, 4) (a batch, an empty one).
+    """
+    arr = check_transform(T, name)
+    if arr.shape != (4, 4):
+        raise InvalidInputError(f"{name}: expected one transform of shape (4, 4), got shape "
+                                f"{arr.shape}")
+    return arr
+
+
 def broadcast_batch(**shapes: tuple[int, ...]) -> tuple[int, ...]:
     """Broadcast the batch (leading) shapes of named arguments.
 

@@ -602,9 +602,9 @@ def near_singular_configurations(name: str, distances: ArrayLike, design: Design
 
     design = resolve_design(design)
     e = check_array(distances, "distances", ()).reshape(-1)
-    n = e.size
+    n = check_count(e.size, "distances (size)", minimum=0, maximum=MAX_SAMPLES)
     T0 = _rcm(None, design)
-    if name not in MEASURE_OF:
+    if not isinstance(name, str) or name not in MEASURE_OF:
         raise InvalidInputError(f"name: expected one of {list(MEASURE_OF)}, got {name!r}")
     hh = -0.9 * min(design.l1, design.l3) if h is None else check_scalar(h, "h")
     if name == "ab_coincide":

@@ -14,6 +14,7 @@ from .._validation import (
     check_array,
     check_choice,
     check_count,
+    check_frame,
     check_scalar,
     check_tolerance,
     check_transform,
@@ -241,7 +242,7 @@ def check_measurements(q: ArrayLike, design: Design | None, T_b_e: ArrayLike, *,
     design = resolve_design(design)
     qa = _rows(q, "q")
     n = qa.shape[0]
-    T = check_transform(T_b_e, "T_b_e")
+    T = check_frame(T_b_e, "T_b_e")
     m = _mode_array(mode, n)
     off = np.zeros(3) if q_offset is None else check_array(q_offset, "q_offset", (3,))
     finite = np.all(np.isfinite(qa), axis=-1)
@@ -326,7 +327,7 @@ def _setup(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | Non
     n = qa.shape[0]
     ta = _rows(tips, "tips", n)
     aa = None if axes is None else _rows(axes, "axes", n)
-    T = check_transform(T_b_e, "T_b_e")
+    T = check_frame(T_b_e, "T_b_e")
     if T.shape != (4, 4):
         raise InvalidInputError(f"T_b_e: expected shape (4, 4), got shape {T.shape}")
     if bad_rows not in ("exclude", "raise"):
@@ -423,7 +424,7 @@ def identifiability(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None
     check_choice(frame, "frame", ("base", "tracker"))
     qa = _rows(q, "q")
     design = resolve_design(design)
-    T = check_transform(T_b_e, "T_b_e")
+    T = check_frame(T_b_e, "T_b_e")
     tips = predict(parameter_vector(design, T[:3, 3]), np.nan_to_num(qa),
                    _mode_array(mode, qa.shape[0]))
     _, prob, names, _, _, _ = _setup(

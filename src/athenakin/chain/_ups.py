@@ -143,7 +143,8 @@ def ups_transform(p: ArrayLike, u: ArrayLike) -> NDArray[np.float64]:
     """
     p = check_array(p, "p", ())
     u = check_array(u, "u", (5,))
-    return _ups_transform(p, u)
+    batch = broadcast_batch(p=p.shape, u=u.shape[:-1])
+    return _ups_transform(np.broadcast_to(p, batch), np.broadcast_to(u, batch + (5,)))
 
 
 def _ups_transform(p: NDArray[np.float64], u: NDArray[np.float64]) -> NDArray[np.float64]:
