@@ -172,14 +172,16 @@ def test_python_dash_m_athenakin_runs():
 
 
 def test_a_closed_pipe_ends_quietly():
-    """``athenakin demo | head -1``: no 'BrokenPipeError' on stderr."""
+    """``athenakin demo | head -1``: no 'BrokenPipeError' on stderr, and exit 0 (issue 23:
+    whether the output fitted the pipe before the reader left is a race; the exit code
+    must not depend on it)."""
     p = subprocess.Popen([sys.executable, "-m", "athenakin", "demo"], stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE)
     p.stdout.close()                      # the reader is gone before anything is written
     err = p.stderr.read().decode()
     p.wait(timeout=120)
     p.stderr.close()
-    assert err == "" and p.returncode != 0
+    assert err == "" and p.returncode == 0
 
 
 # --- findings of the CLI audit (scripts/audit_cli.py, issue 13) ---------------------------

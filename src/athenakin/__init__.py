@@ -9,7 +9,7 @@ Subpackages: :mod:`athenakin.study` (Study parameters, dual quaternions),
 serial UPS chain), :mod:`athenakin.robot` (whole robot), :mod:`athenakin.testing`.
 """
 
-from . import chain, parallel, robot, study
+from . import _interrupt, chain, parallel, robot, study  # noqa: F401 (_interrupt: CLI hook)
 from ._dispatch import (
     forward_kinematics,
     inverse_kinematics,
