@@ -357,4 +357,5 @@ def test_ctrl_c_is_one_line_exit_130_and_leaves_no_file(tmp_path, monkeypatch, c
     out = tmp_path / "d.toml"
     assert main(["design", "--write", str(out)]) == 130
     err = capsys.readouterr().err
-    assert err == "athenakin design: interrupted (no output written)\n" and not list(tmp_path.iterdir())
+    assert err == "athenakin design: interrupted (no output written)\n"
+    assert not list(tmp_path.iterdir())
