@@ -265,8 +265,13 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     finite = np.all(np.isfinite(T), axis=(-2, -1))
     T = np.where(finite[..., None, None], T, np.eye(4))
     c = T[..., :3, 3]
+    # The quantities that decide validity (|p|, |sin u2|, |sin u4|) are computed with the
+    # very operations, in the same order, as the compiled kernel (fast/_fk_kernels.py,
+    # _serial_stage), so both backends classify every input alike, even one that sits on
+    # a threshold to the last bit (issue 23).
+    c0, c1_, c2_ = c[..., 0], c[..., 1], c[..., 2]
     with np.errstate(over="ignore"):
-        n = np.linalg.norm(c, axis=-1)      # inf beyond 1e154 m: no solution there (below)
+        n = np.sqrt((c0 * c0 + c1_ * c1_) + c2_ * c2_)   # inf beyond 1e154 m: no solution
     base_reason = np.where(finite, 0, Reason.NONFINITE_INPUT)
     base_reason = np.where((base_reason == 0) & (n <= p_zero_tol), Reason.SERIAL_P_ZERO,
                            base_reason)
@@ -283,7 +288,19 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     psign = np.array([1.0, -1.0])
     p = nn[..., None] * psign                           # (..., 2)
     z3 = c[..., None, :] / p[..., None]                 # (..., 2, 3)
-    rho = np.hypot(z3[..., 0], z3[..., 1])              # (..., 2), |sin u2|
+    zx, zy, zz = c0 / nn, c1_ / nn, c2_ / nn            # slot p > 0 (kernel: zx, zy, zz)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        rho_k = np.sqrt(zx * zx + zy * zy)              # |sin u2| (kernel: hypot)
+        rr = np.where(rho_k > 0.0, rho_k, 1.0)
+        A1, B1 = zx / rr, zy / rr
+        rho2 = A1 * zx + B1 * zy
+        n2 = np.sqrt(rho2 * rho2 + zz * zz)
+        cc2, ss2 = -zz / n2, rho2 / n2
+        e02, e12, e22 = T[..., 0, 2], T[..., 1, 2], T[..., 2, 2]
+        W02k = ((A1 * cc2) * e02 + (B1 * cc2) * e12) + ss2 * e22
+        W12k = B1 * e02 - A1 * e12
+        rho4_k = np.sqrt(W02k * W02k + W12k * W12k)     # |sin u4| (kernel: rho4)
+    rho = np.broadcast_to(rho_k[..., None], p.shape)    # (..., 2): the same for both signs
     # Each angle pair is solved sequentially so that closure holds to rounding even
     # where the first angle is ill-conditioned (near sin u2 = 0 or sin u4 = 0): the
     # first angle from the direction, the second from the projection onto the
@@ -311,7 +328,8 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     u5 = np.arctan2(y5, x5)
     n5 = np.hypot(x5, y5)
     c5, s5 = x5 / n5, y5 / n5      # = cos, sin of the reported u5 to 1 ulp
-    wr_deg = np.broadcast_to((rho4 <= dtol[..., None, None])[..., None], u3.shape)
+    del rho4                        # per-slot |sin u4| rounds differently: decide once
+    wr_deg = np.broadcast_to((rho4_k <= dtol)[..., None, None, None], u3.shape)
 
     full = u3.shape  # (..., 2, 2, 2)
     batch = full[:-3]

@@ -11,7 +11,6 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._transforms import invert_transform
 from .._validation import (
     broadcast_batch,
     check_array,
@@ -349,7 +348,7 @@ def _serial_closed_form(par: ParallelSolution, T: NDArray[np.float64], *, degene
                                    NDArray[np.float64]]:
     """The serial step: 8 solutions per assembly mode, shape (..., 2, 8)."""
     Ts = np.where(par.valid[..., None, None], par.T_b_s, np.eye(4))   # (..., 2, 4, 4)
-    T_s_e = invert_transform(Ts) @ T[..., None, :, :]
+    T_s_e = _s_e_as_kernel(Ts, T[..., None, :, :])
     T_s_e = np.where(np.all(np.isfinite(T), axis=(-2, -1))[..., None, None, None], T_s_e,
                      np.nan)
     scale = (np.abs(T[..., None, :3, 3]).max(axis=-1)
@@ -357,6 +356,29 @@ def _serial_closed_form(par: ParallelSolution, T: NDArray[np.float64], *, degene
     ser = ups_solutions(T_s_e, degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
                         closure_tol=closure_tol, scale=scale, _checked=True)
     return ser.p, ser.u, ser.reason, ser.residual
+
+
+def _s_e_as_kernel(Ts: NDArray[np.float64], T: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``T_b_s^-1 @ T_b_e`` with the compiled kernel's operations, in its order.
+
+    ``T_b_s = [[1, 0, 0, xm], [0, cz, cy, ys], [0, -cy, cz, zs], [0, 0, 0, 1]]`` (the
+    parallel module's frame, :func:`athenakin.parallel.parallel_forward_kinematics`);
+    the entries of ``T_s_e`` then decide validity (``|p|``, ``|sin u2|``, ``|sin u4|``)
+    bit for bit as ``fast/_fk_kernels.py:_serial_stage`` does, so both backends agree
+    at every threshold (issue 23). Shapes broadcast: ``Ts`` (..., 4, 4), ``T`` (..., 4, 4).
+    """
+    xm, cz, cy = Ts[..., 0, 3], Ts[..., 1, 1], Ts[..., 1, 2]
+    ys, zs = Ts[..., 1, 3], Ts[..., 2, 3]
+    ti0 = -xm
+    ti1 = -(cz * ys - cy * zs)
+    ti2 = -(cy * ys + cz * zs)
+    t0, t1, t2, t3 = (T[..., r, :] for r in range(4))             # rows, each (..., 4)
+    out = np.empty(np.broadcast_shapes(Ts.shape, T.shape))
+    out[..., 0, :] = t0 + ti0[..., None] * t3
+    out[..., 1, :] = (cz[..., None] * t1 - cy[..., None] * t2) + ti1[..., None] * t3
+    out[..., 2, :] = (cy[..., None] * t1 + cz[..., None] * t2) + ti2[..., None] * t3
+    out[..., 3, :] = t3
+    return out
 
 
 def _assemble(par: ParallelSolution, p: NDArray[np.float64], u: NDArray[np.float64],
