@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._output import check_output_path, naming_path
-from .._validation import check_array, check_frame, check_path
+from .._validation import check_array, check_path, check_transform
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..parallel import parallel_ik_from_position
@@ -418,7 +418,7 @@ def instrument_cone(T_b_e: ArrayLike | None = None, design: Design | None = None
     InstrumentCone
     """
     design = resolve_design(design)
-    T = default_rcm_frame(design) if T_b_e is None else check_frame(T_b_e, "T_b_e")
+    T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
     if T.shape != (4, 4):
         raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
     na, npol, npp = _resolution(resolution, 3)
@@ -515,7 +515,7 @@ def tool_tip_workspace(T_b_e: ArrayLike | None = None, design: Design | None = N
     ToolTipWorkspace
     """
     design = resolve_design(design)
-    T = default_rcm_frame(design) if T_b_e is None else check_frame(T_b_e, "T_b_e")
+    T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
     if T.shape != (4, 4):
         raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
     allowed = _modes_arg(modes)

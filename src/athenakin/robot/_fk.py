@@ -30,6 +30,7 @@ from ..chain._ups import (
     ups_solutions,
 )
 from ..design import Design
+from ..errors import Reason
 from ..parallel._module import MODES, TANGENT_TOL, ParallelSolution, parallel_forward_kinematics
 from ._common import (
     ErrorPolicy,
@@ -319,7 +320,8 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
         from ..symbolic._solver import serial_step_algebraic as step
     p, u, sreason, residual = step(par, T, degenerate_tol=degenerate_tol,
                                    p_zero_tol=p_zero_tol, closure_tol=closure_tol)
-    return _assemble(par, p, u, sreason, residual, q, batch, raise_now, design, names)
+    return _assemble(par, p, u, sreason, residual, q, batch, raise_now, design, names,
+                     closure_tol=closure_tol)
 
 
 SerialStep = Callable[..., tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int8],
@@ -384,11 +386,21 @@ def _s_e_as_kernel(Ts: NDArray[np.float64], T: NDArray[np.float64]) -> NDArray[n
 def _assemble(par: ParallelSolution, p: NDArray[np.float64], u: NDArray[np.float64],
               sreason: NDArray[np.int8], residual: NDArray[np.float64], q: NDArray[np.float64],
               batch: tuple[int, ...], raise_now: bool, design: Design,
-              fields: tuple[str, ...] | None = None) -> FKSolution:
-    """Combine the parallel module's 2 modes with the serial step's (..., 2, 8) slots."""
+              fields: tuple[str, ...] | None = None, *,
+              closure_tol: float = CLOSURE_TOL) -> FKSolution:
+    """Combine the parallel module's 2 modes with the serial step's (..., 2, 8) slots.
+
+    A slot whose ``O_s`` is not known within ``closure_tol`` (the parallel module's
+    residual: a merged mode near tangency, or a distinct one so close to it that the
+    rounding of ``k`` moves it further) is ``CIRCLES_TANGENT``: valid means a residual
+    within ``closure_tol`` (issue 23), as in the compiled kernel.
+    """
     preason = np.broadcast_to(par.reason[..., None], sreason.shape)
     residual = np.maximum(residual, par.residual[..., None])   # merged modes (issue 13)
-    reason = np.where(preason != 0, preason, sreason).astype(np.int8).reshape(batch + (16,))
+    reason = np.where(preason != 0, preason, sreason)
+    reason = np.where((reason == 0) & (par.residual[..., None] > closure_tol),
+                      np.int8(Reason.CIRCLES_TANGENT), reason)
+    reason = reason.astype(np.int8).reshape(batch + (16,))
     valid = reason == 0
     nan = np.where(valid, 1.0, np.nan)
     item = item_reason_from_slots(valid, reason)
