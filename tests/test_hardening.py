@@ -285,3 +285,72 @@ def test_ctrl_c_in_synthesize_names_the_resumable_folder(tmp_path, monkeypatch, 
     assert main(["synthesize", str(task), "-o", str(out), "--no-figures"]) == 130
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "interrupted" in err and str(out) in err and "resume" in err
+
+
+# --- the correctness audit: near tangency, degeneracy thresholds, both backends --------------
+
+def _backends():
+    from athenakin._dispatch import numba_available
+
+    return ["numpy", "numba"] if numba_available() else ["numpy"]
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_near_tangent_slots_are_within_their_bound_or_flagged(backend):
+    if backend not in _backends():
+        pytest.skip("numba not installed")
+    g = ak.parallel.circle_geometry(np.array([-0.1, 0.1, 0.3]), D)
+    q3_t = float(g["d"] - g["r1"])                     # inner tangency
+    offsets = np.array([0.0, 1e-16, -1e-16, 1e-15, -1e-15, 1e-14, 1e-13, 1e-12, 1e-11, 1e-10])
+    q = np.stack([np.full(offsets.size, -0.1), np.full(offsets.size, 0.1), q3_t + offsets], -1)
+    for closure_tol in (1e-9, 1e-7, 1e-6):
+        sol = ak.forward_kinematics(q, T, D, errors="flag", backend=backend,
+                                    closure_tol=closure_tol)
+        assert np.all(sol.residual[sol.valid] <= closure_tol)      # valid: within the bound
+        bad = ~sol.valid & (sol.reason != 0)
+        assert np.all(bad == ~sol.valid)
+    sol = ak.forward_kinematics(q, T, D, errors="flag", backend=backend)
+    assert np.all(sol.reason[:3] == ak.Reason.CIRCLES_TANGENT)     # at tangency to 1e-16 m
+    assert np.all(sol.valid[-1])                                   # 1e-10 m away: 16 solutions
+
+
+def test_near_tangent_residual_bounds_the_true_offset():
+    # mode +1 merged at the default tangent_tol against the true intersection (tol 0)
+    g = ak.parallel.circle_geometry(np.array([-0.1, 0.1, 0.3]), D)
+    q3 = float(g["d"] - g["r1"]) + np.array([1e-16, 1e-15, 1e-14, 1e-13])
+    q = np.stack([np.full(4, -0.1), np.full(4, 0.1), q3], axis=-1)
+    merged = ak.parallel.parallel_forward_kinematics(q, D)
+    true = ak.parallel.parallel_forward_kinematics(q, D, tangent_tol=0.0)
+    ok = true.valid[:, 0]
+    off = np.linalg.norm(merged.O_s[ok, 0] - true.O_s[ok, 0], axis=-1)
+    assert np.all(off <= merged.residual[ok, 0])
+
+
+@pytest.mark.parametrize("kind", ["u2", "u4", "p"])
+@pytest.mark.parametrize("spread", [1e-3, 1e-6, 1e-9])
+@pytest.mark.parametrize("tol", [None, 1e-6])
+def test_backends_classify_alike_at_the_degeneracy_thresholds(kind, spread, tol):
+    """|sin u2|, |sin u4| or |p| within ``spread`` (relative) of the threshold: numba and
+    numpy flag exactly the same slots (they once disagreed on up to half the items)."""
+    if "numba" not in _backends():
+        pytest.skip("numba not installed")
+    thr = 1e-12 if tol is None else tol
+    rc = ak.testing.random_configurations(200, D, rng=5)
+    rng = np.random.default_rng(1)
+    f = thr * (1.0 + rng.uniform(-spread, spread, 200))
+    u, p = rc.u.copy(), rc.p.copy()
+    if kind == "u2":
+        u[:, 1] = np.arcsin(f) * np.sign(np.sin(u[:, 1]))
+    elif kind == "u4":
+        u[:, 3] = np.arcsin(f)
+    else:
+        p = f * np.sign(p)
+    T_b_e = rc.T_b_s @ ak.chain.ups_transform(p, u)
+    kw = {} if tol is None else ({"p_zero_tol": tol} if kind == "p" else {"degenerate_tol": tol})
+    a = ak.forward_kinematics(rc.q, T_b_e, D, errors="flag", backend="numpy", **kw)
+    b = ak.forward_kinematics(rc.q, T_b_e, D, errors="flag", backend="numba", **kw)
+    np.testing.assert_array_equal(a.reason, b.reason)
+    np.testing.assert_array_equal(a.item_reason, b.item_reason)
+    flagged = {"u2": ak.Reason.UJOINT_SINGULAR, "u4": ak.Reason.WRIST_SINGULAR,
+               "p": ak.Reason.SERIAL_P_ZERO}[kind]
+    assert np.any(a.reason == flagged) and np.any(a.valid)     # both sides of the threshold
