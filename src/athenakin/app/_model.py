@@ -142,7 +142,7 @@ def app_setup(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
         design cannot assemble).
     """
     design = resolve_design(design)
-    if backend not in ("auto", "numba", "numpy"):
+    if not isinstance(backend, str) or backend not in ("auto", "numba", "numpy"):
         raise InvalidInputError(f"backend: expected 'auto', 'numba' or 'numpy', got {backend!r}")
     chosen: Literal["numba", "numpy"] = (
         ("numba" if numba_available() else "numpy") if backend == "auto" else backend)
@@ -371,7 +371,7 @@ class AppView:
 
 
 def _check_slot(slot: object) -> Slot:
-    if slot == "all":
+    if isinstance(slot, str) and slot == "all":
         return "all"
     if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 16:
         raise InvalidInputError(f"slot: expected an integer in 0..15 or 'all', got {slot!r}")
@@ -559,7 +559,8 @@ def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from
     for name, v in (("tip_from", a), ("tip_to", b), ("q_from", q0)):
         if v.shape != (3,):
             raise InvalidInputError(f"{name}: expected shape (3,), got shape {v.shape}")
-    if isinstance(mode_from, bool) or mode_from not in (1, -1):
+    if isinstance(mode_from, bool) or not isinstance(mode_from, (int, np.integer)) \
+            or mode_from not in (1, -1):
         raise InvalidInputError(f"mode_from: expected +1 or -1, got {mode_from!r}")
     mode_from = int(mode_from)
     n = check_count(n, "n", minimum=1, maximum=MAX_INVERSE_STEPS)

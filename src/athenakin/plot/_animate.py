@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array
+from .._validation import check_array, check_scalar
 from ..design import Design, resolve_design
 from ..errors import KinematicsError
 from ..robot import q_from_instrument
@@ -27,6 +27,10 @@ ANIMATION_SIZE = (800, 640)
 MAX_PATH_SAMPLES = 100_000
 #: Most turns of :func:`instrument_cone_path` about the cone axis.
 MAX_TURNS = 1000.0
+
+
+#: Largest width or height of a rendered frame, px (:func:`render_frames`).
+MAX_FRAME_PIXELS = 8192
 
 
 def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
@@ -234,8 +238,20 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
+    from .._validation import check_count
+    from ..errors import InvalidInputError
     from ..robot import REFERENCE_Q
+    from ._geometry import check_view
 
+    sz = check_array(size, "size", (2,))
+    if sz.shape != (2,) or not np.all((sz >= 16) & (sz <= MAX_FRAME_PIXELS)) \
+            or not np.all(sz == np.round(sz)):
+        raise InvalidInputError(f"size: expected (width, height), integers in 16.."
+                                f"{MAX_FRAME_PIXELS} px, got {sz.tolist()}")
+    size = (int(sz[0]), int(sz[1]))
+    dpi = check_count(dpi, "dpi", minimum=1, maximum=1200)
+    view = check_view(view)
+    orbit = check_scalar(orbit, "orbit")
     design = resolve_design(design)
     T = resolve_rcm_frame(T_b_e, design)
     qs = check_array(REFERENCE_Q if q is None else q, "q", (3,)).reshape(-1, 3)
@@ -298,7 +314,12 @@ def animate(path: str | Path, q: ArrayLike, T_b_e: ArrayLike | None = None,
     """
     import imageio.v3 as iio
 
-    path = Path(path)
+    from .._output import check_output_path
+
+    path = check_output_path(path)
+    fps = check_scalar(fps, "fps", positive=True)
+    if not fps <= 120.0:
+        raise ValueError(f"fps: expected frames per second in (0, 120], got {fps:g}")
     suffix = path.suffix.lower()
     if suffix not in (".gif", ".mp4"):
         raise ValueError(f"path: expected a .gif or .mp4 file, got {path.name!r}")

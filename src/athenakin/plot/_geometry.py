@@ -25,7 +25,7 @@ from ..robot import FKSolution, forward_kinematics
 from ..robot._setup import resolve_rcm_frame
 
 __all__ = ["RobotGeometry", "robot_geometry", "circle_points", "N_CIRCLE", "MAX_CURVE_POINTS",
-           "ARC_MARGIN",
+           "ARC_MARGIN", "check_view", "check_length",
            "COLORS", "FRAME_LENGTH", "ARC_RADIUS", "VIEW", "MM", "arc_points", "slot_label",
            "cube_limits"]
 
@@ -144,6 +144,35 @@ class RobotGeometry:
         return pts.min(axis=0), pts.max(axis=0)
 
 
+def check_view(view: object, name: str = "view") -> tuple[float, float]:
+    """``(elevation, azimuth)`` in degrees: two finite numbers.
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        Naming ``name``.
+    """
+    v = check_array(view, name, (2,))
+    if v.shape != (2,):
+        raise InvalidInputError(f"{name}: expected (elevation, azimuth) in degrees, got shape "
+                                f"{v.shape}")
+    return float(v[0]), float(v[1])
+
+
+def check_length(x: object, name: str, *, maximum: float = 10.0) -> float:
+    """A drawing length or scale: a number in ``(0, maximum]``.
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        Naming ``name``.
+    """
+    v = check_scalar(x, name, positive=True)
+    if not v <= maximum:
+        raise InvalidInputError(f"{name}: expected a number in (0, {maximum:g}], got {v:g}")
+    return v
+
+
 def circle_points(centre: NDArray[np.float64], radius: float, n: int = N_CIRCLE
                   ) -> NDArray[np.float64]:
     """Points of a circle in the plane ``x = centre[0]``, shape (n, 3).
@@ -248,6 +277,8 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     from ..robot import REFERENCE_Q
 
     design = resolve_design(design)
+    if fk is not None:
+        check_instance(fk, "fk", FKSolution)
     q = check_array(REFERENCE_Q if q is None else q, "q", (3,)).copy()
     if q.shape != (3,):
         raise InvalidInputError(f"q: expected shape (3,), got shape {q.shape}")

@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array
 from ..design import Design, resolve_design
-from ..errors import Reason
+from ..errors import InvalidInputError, Reason
 from ..robot import forward_kinematics
 from ..robot._setup import resolve_rcm_frame
 from ._geometry import (
@@ -377,6 +377,23 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     """
     import matplotlib.pyplot as plt
 
+    from .._validation import check_axes, check_instance
+    from ._geometry import RobotGeometry, check_length, check_view
+
+    if geometry is not None:
+        check_instance(geometry, "geometry", RobotGeometry)
+    check_axes(ax, "ax")
+    frame_length = check_length(frame_length, "frame_length")
+    joint_scale = check_length(joint_scale, "joint_scale")
+    view = check_view(view)
+    if limits is not None:
+        lims = check_array(limits, "limits", (3,))
+        if lims.shape != (2, 3) or not np.all(lims[0] < lims[1]):
+            raise InvalidInputError(f"limits: expected (lo, hi), two points (m) with lo < hi, "
+                                    f"got {lims.tolist()}")
+    if legend_extra is not None and not isinstance(legend_extra, (list, tuple)):
+        raise TypeError(f"legend_extra: expected a list of matplotlib artists or None, got "
+                        f"{type(legend_extra).__name__}")
     g = geometry if geometry is not None else robot_geometry(q, T_b_e, design, slot=slot)
     if ax is None:
         fig = plt.figure(figsize=(7.0, 6.6))
@@ -438,7 +455,11 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
     import matplotlib.pyplot as plt
 
     from ..robot import REFERENCE_Q
+    from ._geometry import check_view
 
+    view = check_view(view)
+    if fig is not None and not callable(getattr(fig, "add_subplot", None)):
+        raise TypeError(f"fig: expected a matplotlib Figure or None, got {type(fig).__name__}")
     design = resolve_design(design)
     q = check_array(REFERENCE_Q if q is None else q, "q", (3,))
     T = resolve_rcm_frame(T_b_e, design)
