@@ -354,3 +354,25 @@ def test_backends_classify_alike_at_the_degeneracy_thresholds(kind, spread, tol)
     flagged = {"u2": ak.Reason.UJOINT_SINGULAR, "u4": ak.Reason.WRIST_SINGULAR,
                "p": ak.Reason.SERIAL_P_ZERO}[kind]
     assert np.any(a.reason == flagged) and np.any(a.valid)     # both sides of the threshold
+
+
+# --- the skip policy of tests/conftest.py ----------------------------------------------------
+
+@pytest.mark.parametrize(("reason", "expected_unexpected"), [
+    ("because I felt like it", True),
+    ("could not import 'athenakin_no_such_module': No module named ...", False),
+    ("could not import 'numpy': numpy is broken", True),         # numpy imports here
+    ("needs the 'app' extra (athenakin_no_such_module)", False),
+    ("no FIFOs on this platform", hasattr(os, "mkfifo")),
+    ("no /dev devices on this platform", os.path.exists("/dev/zero")),
+])
+def test_the_skip_allow_list(reason, expected_unexpected):
+    from conftest import unexpected
+
+    assert unexpected(reason) is expected_unexpected
+
+
+def test_a_numba_skip_is_unexpected_where_numba_runs():
+    from conftest import unexpected
+
+    assert unexpected("numba not available here") is ("numba" in _backends())
