@@ -21,7 +21,7 @@ from .._validation import check_array, check_count, check_scalar, check_transfor
 from ..chain._ups import rotation_u_pair
 from ..design import Design
 from ..errors import InvalidInputError
-from ..plot._geometry import RobotGeometry
+from ..plot._geometry import PARALLEL_TOL, RobotGeometry
 from ..plot._mpl import ARC_RADIUS
 from ..robot import SLOT_MODE, FKSolution
 from ._scene import (
@@ -213,13 +213,18 @@ def arcs_points(centre: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[
     b = b / _extreme_scale(b)
     a = a / np.linalg.norm(a, axis=-1, keepdims=True)
     b = b / np.linalg.norm(b, axis=-1, keepdims=True)
+    # the operations of athenakin.plot.arc_points, batched (the same points to rounding)
     ab = np.sum(a * b, axis=-1, keepdims=True)
-    ang = np.arccos(np.clip(ab[..., 0], -1.0, 1.0))
     perp = b - ab * a
-    norm = np.linalg.norm(perp, axis=-1, keepdims=True)
-    perp = np.divide(perp, norm, out=np.zeros_like(perp), where=norm != 0)
+    norm = np.sqrt(np.sum(perp * perp, axis=-1, keepdims=True))
+    plane = norm > PARALLEL_TOL
+    ang = np.where(plane[..., 0], np.arctan2(norm[..., 0], ab[..., 0]), 0.0)
+    e = np.divide(perp, norm, out=np.zeros_like(perp), where=plane)
+    e = e - np.sum(e * a, axis=-1, keepdims=True) * a
+    en = np.sqrt(np.sum(e * e, axis=-1, keepdims=True))
+    e = np.divide(e, en, out=np.zeros_like(e), where=plane & (en > 0))
     t = np.linspace(0.0, ang, n, axis=-1)[..., None]             # (..., n, 1)
-    return centre + radius * (np.cos(t) * a[..., None, :] + np.sin(t) * perp[..., None, :])
+    return centre + radius * (np.cos(t) * a[..., None, :] + np.sin(t) * e[..., None, :])
 
 
 def _polylines(pts: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -31,6 +31,9 @@ __all__ = ["RobotGeometry", "robot_geometry", "circle_points", "N_CIRCLE", "MAX_
 
 #: Number of points on each drawn circle (k1, k2).
 N_CIRCLE = 121
+#: ``|b - (a.b) a|`` of unit directions at or below which :func:`arc_points` takes them as
+#: parallel (no plane; the arc is then at most 1e-12 of its radius long, or undefined).
+PARALLEL_TOL = 1e-12
 #: Most points of one curve (:func:`circle_points`, :func:`arc_points`), checked before
 #: anything is allocated.
 MAX_CURVE_POINTS = 100_000
@@ -395,13 +398,17 @@ def arc_points(centre: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[n
         b = b / mb
     a = a / np.linalg.norm(a)
     b = b / np.linalg.norm(b)
-    ang = float(np.arccos(np.clip(a @ b, -1.0, 1.0)))
-    perp = b - (a @ b) * a
-    norm = np.linalg.norm(perp)
-    if norm == 0:
+    ab = float(np.sum(a * b))
+    perp = b - ab * a
+    norm = float(np.sqrt(np.sum(perp * perp)))
+    if norm <= PARALLEL_TOL:        # (anti)parallel: no plane (or an arc shorter than 1e-12 r)
         return np.repeat((centre + radius * a)[None], n, axis=0)
+    ang = float(np.arctan2(norm, ab))     # well conditioned, unlike arccos near 0 and pi
+    e = perp / norm
+    e = e - float(np.sum(e * a)) * a      # exactly in the plane, orthogonal to a
+    e = e / np.sqrt(np.sum(e * e))
     t = np.linspace(0.0, ang, n)[:, None]
-    return centre + radius * (np.cos(t) * a + np.sin(t) * perp / norm)
+    return centre + radius * (np.cos(t) * a + np.sin(t) * e)
 
 
 def cube_limits(lo: NDArray[np.float64], hi: NDArray[np.float64], pad: float = 0.05
