@@ -155,7 +155,7 @@ def check_view(view: object, name: str = "view") -> tuple[float, float]:
     TypeError, InvalidInputError
         Naming ``name``.
     """
-    v = check_array(view, name, (2,))
+    v = check_array(view, name, (2,))  # type: ignore[arg-type]
     if v.shape != (2,):
         raise InvalidInputError(f"{name}: expected (elevation, azimuth) in degrees, got shape "
                                 f"{v.shape}")

@@ -387,7 +387,7 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     joint_scale = check_length(joint_scale, "joint_scale")
     view = check_view(view)
     if limits is not None:
-        lims = check_array(limits, "limits", (3,))
+        lims = check_array(limits, "limits", (3,))  # type: ignore[arg-type]
         if lims.shape != (2, 3) or not np.all(lims[0] < lims[1]):
             raise InvalidInputError(f"limits: expected (lo, hi), two points (m) with lo < hi, "
                                     f"got {lims.tolist()}")
