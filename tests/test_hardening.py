@@ -84,6 +84,8 @@ RAISES = [
      InvalidInputError, r"^samples: "),
     ("evaluate_design_samples", lambda: ak.synthesis.evaluate_design(D, _task(), samples=10**7),
      InvalidInputError, r"^samples: "),
+    ("certified_batch", lambda: ak.certified_forward_kinematics(
+        np.zeros((200_000, 3)), T, D), InvalidInputError, r"^q, T_b_e: a batch of 200,000"),
     # --- raw exceptions ----------------------------------------------------------------
     ("from_toml_int", lambda: ak.Design.from_toml(3), TypeError, r"^path: "),
     ("from_toml_none", lambda: ak.Design.from_toml(None), TypeError, r"^path: "),
