@@ -378,3 +378,25 @@ def test_a_numba_skip_is_unexpected_where_numba_runs():
     from conftest import unexpected
 
     assert unexpected("numba not available here") is ("numba" in _backends())
+
+
+@pytest.mark.parametrize("errors", ["flag", "raise"])
+def test_numpy_fk_in_blocks_equals_one_block(monkeypatch, errors):
+    """A large batch is computed in blocks of FK_BLOCK poses (bounded memory), same result."""
+    from athenakin.robot import _fk
+
+    rc = ak.testing.random_configurations(50, D, rng=3)
+    q = rc.q.reshape(5, 10, 3)
+    Tb = rc.T_b_e.reshape(5, 10, 4, 4)
+    whole = ak.forward_kinematics(q, Tb, D, backend="numpy", errors=errors)
+    monkeypatch.setattr(_fk, "FK_BLOCK", 7)
+    blocks = ak.forward_kinematics(q, Tb, D, backend="numpy", errors=errors)
+    for k, v in vars(whole).items():
+        if isinstance(v, np.ndarray):
+            np.testing.assert_array_equal(vars(blocks)[k], v, err_msg=k)
+    bad = q.copy()
+    bad[3, 4] = [-0.1, 0.1, 0.2]                       # circles apart
+    with pytest.raises(ak.OutOfWorkspaceError, match=r"\(3, 4\)"):
+        ak.forward_kinematics(bad, Tb, D, backend="numpy", errors="raise")
+    sub = ak.forward_kinematics(q, Tb, D, backend="numpy", fields=("valid",))
+    np.testing.assert_array_equal(sub.valid, whole.valid)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 import numbers
 from collections.abc import Callable
 from typing import Any, Literal
@@ -313,15 +314,49 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
         errors, tangent_tol=tangent_tol, degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
         closure_tol=closure_tol)
     design, q, T, batch, raise_now = _prepare(q, T_b_e, design, errors)
-    par = parallel_forward_kinematics(q, design, tangent_tol=tangent_tol)
+    tols = dict(tangent_tol=tangent_tol, degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
+                closure_tol=closure_tol)
+    n = math.prod(batch)
+    if n <= FK_BLOCK:
+        return _fk_block(q, T, design, method, tols, batch, raise_now, names)
+    # blocks of FK_BLOCK poses: the intermediates of the numpy reference (about 10 kB a
+    # pose) stay bounded; the result is the same, pose for pose (issue 23)
+    qf, Tf = q.reshape(n, 3), T.reshape(n, 4, 4)
+    parts = [_fk_block(qf[i:i + FK_BLOCK], Tf[i:i + FK_BLOCK], design, method, tols,
+                       (min(FK_BLOCK, n - i),), False, names) for i in range(0, n, FK_BLOCK)]
+    arrays = {}
+    for k, v in vars(parts[0]).items():
+        if isinstance(v, np.ndarray):
+            whole = np.concatenate([vars(part)[k] for part in parts])
+            arrays[k] = whole.reshape(batch + whole.shape[1:])
+        else:
+            arrays[k] = v
+    if raise_now:
+        raise_first_failure(arrays["item_reason"], "forward kinematics", {"q": q},
+                            design=design, q_of=lambda idx: q[idx])
+    return fk_solution(names, **arrays)
+
+
+#: Poses the numpy forward kinematics computes at once: a larger batch is done in blocks, so
+#: that its intermediates stay near 100 MB however large the batch (the result itself is
+#: about 1.3 kB a pose).
+FK_BLOCK = 8192
+
+
+def _fk_block(q: NDArray[np.float64], T: NDArray[np.float64], design: Design, method: str,
+              tols: dict[str, float], batch: tuple[int, ...], raise_now: bool,
+              names: tuple[str, ...] | None) -> FKSolution:
+    """Forward kinematics of one block of (already checked and broadcast) poses."""
+    par = parallel_forward_kinematics(q, design, tangent_tol=tols["tangent_tol"])
     if method == "closed":
         step = _serial_closed_form
     else:
         from ..symbolic._solver import serial_step_algebraic as step
-    p, u, sreason, residual = step(par, T, degenerate_tol=degenerate_tol,
-                                   p_zero_tol=p_zero_tol, closure_tol=closure_tol)
+    p, u, sreason, residual = step(par, T, degenerate_tol=tols["degenerate_tol"],
+                                   p_zero_tol=tols["p_zero_tol"],
+                                   closure_tol=tols["closure_tol"])
     return _assemble(par, p, u, sreason, residual, q, batch, raise_now, design, names,
-                     closure_tol=closure_tol)
+                     closure_tol=tols["closure_tol"])
 
 
 SerialStep = Callable[..., tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int8],
