@@ -479,7 +479,14 @@ def singularity_loci(design: Design | None = None, *, n: int = 801,
     """
     design = resolve_design(design)
     hmax = min(design.l1, design.l3)
-    lo, hi = h_range if h_range is not None else (-hmax, hmax)
+    if h_range is None:
+        lo, hi = -hmax, hmax
+    else:
+        hr = check_array(h_range, "h_range", (2,))
+        if hr.shape != (2,) or not hr[0] < hr[1]:
+            raise InvalidInputError(f"h_range: expected (h_min, h_max) with h_min < h_max, m, "
+                                    f"got {hr.tolist()}")
+        lo, hi = float(hr[0]), float(hr[1])
     h = np.linspace(lo, hi, check_count(n, "n", minimum=2, maximum=MAX_SAMPLES))
     with np.errstate(invalid="ignore"):
         r1 = np.sqrt(design.l1 ** 2 - h * h)

@@ -207,7 +207,11 @@ def _rows(x: ArrayLike, name: str, n: int | None = None) -> NDArray[np.float64]:
 
 
 def _mode_array(mode: object, n: int) -> NDArray[np.float64]:
-    m = np.asarray(mode)
+    try:
+        m = np.asarray(mode)
+    except (ValueError, TypeError):         # ragged lists and the like
+        raise InvalidInputError(f"mode: expected +1 or -1 (assembly mode) per row, got "
+                                f"{mode!r}") from None
     if m.dtype.kind not in "biuf" or not np.all(np.isin(m, (1, -1))):
         raise InvalidInputError(f"mode: expected +1 or -1 (assembly mode) per row, got {mode!r}")
     if m.ndim > 1 or (m.ndim == 1 and m.shape[0] != n):

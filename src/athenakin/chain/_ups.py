@@ -221,6 +221,7 @@ def closure_residual(T: NDArray[np.float64], T_target: NDArray[np.float64]
     """
     T = check_array(T, "T", (4, 4), allow_nonfinite=True)
     T_target = check_array(T_target, "T_target", (4, 4), allow_nonfinite=True)
+    broadcast_batch(T=T.shape[:-2], T_target=T_target.shape[:-2])
     dR = np.abs(T[..., :3, :3] - T_target[..., :3, :3]).max(axis=(-2, -1))
     dt = np.abs(T[..., :3, 3] - T_target[..., :3, 3]).max(axis=-1)
     return np.maximum(dR, dt)

@@ -391,7 +391,8 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
         if lims.shape != (2, 3) or not np.all(lims[0] < lims[1]):
             raise InvalidInputError(f"limits: expected (lo, hi), two points (m) with lo < hi, "
                                     f"got {lims.tolist()}")
-    if legend_extra is not None and not isinstance(legend_extra, (list, tuple)):
+    if legend_extra is not None and (not isinstance(legend_extra, (list, tuple)) or not all(
+            callable(getattr(a, "get_label", None)) for a in legend_extra)):
         raise TypeError(f"legend_extra: expected a list of matplotlib artists or None, got "
                         f"{type(legend_extra).__name__}")
     g = geometry if geometry is not None else robot_geometry(q, T_b_e, design, slot=slot)

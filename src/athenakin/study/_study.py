@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_tolerance, check_transform
+from .._validation import broadcast_batch, check_array, check_tolerance, check_transform
 from ..errors import InvalidInputError, NotOnStudyQuadricError
 
 __all__ = [
@@ -60,7 +60,10 @@ def quaternion_multiply(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
     ndarray, shape (..., 4)
         ``a * b``.
     """
-    return _qmul(check_array(a, "a", (4,)), check_array(b, "b", (4,)))
+    a = check_array(a, "a", (4,))
+    b = check_array(b, "b", (4,))
+    broadcast_batch(a=a.shape[:-1], b=b.shape[:-1])
+    return _qmul(a, b)
 
 
 def _qmul(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -94,6 +97,7 @@ def dq_multiply(X1: ArrayLike, X2: ArrayLike) -> NDArray[np.float64]:
     """
     X1 = check_array(X1, "X1", (8,))
     X2 = check_array(X2, "X2", (8,))
+    broadcast_batch(X1=X1.shape[:-1], X2=X2.shape[:-1])
     x1, y1 = X1[..., :4], X1[..., 4:]
     x2, y2 = X2[..., :4], X2[..., 4:]
     x = _qmul(x1, x2)
@@ -286,6 +290,7 @@ def study_equal(X1: ArrayLike, X2: ArrayLike, *, atol: float = 1e-12) -> NDArray
     """
     X1 = check_array(X1, "X1", (8,))
     X2 = check_array(X2, "X2", (8,))
+    broadcast_batch(X1=X1.shape[:-1], X2=X2.shape[:-1])
     atol = check_tolerance(atol, "atol")
     n1 = X1 / np.linalg.norm(X1, axis=-1, keepdims=True)
     n2 = X2 / np.linalg.norm(X2, axis=-1, keepdims=True)

@@ -86,10 +86,29 @@ def implicit_sets() -> tuple[tuple[sp.Expr, ...], tuple[sp.Expr, ...]]:
 
 def _values(vec: Sequence[sp.Expr] | None, default: Sequence[sp.Expr], name: str
             ) -> tuple[sp.Expr, ...]:
-    vec = tuple(default if vec is None else vec)
+    if isinstance(vec, (str, bytes)):
+        raise TypeError(f"{name}: expected a Study vector of 8 numbers or sympy expressions, "
+                        f"got {type(vec).__name__}")
+    try:
+        vec = tuple(default if vec is None else vec)  # type: ignore[arg-type]
+    except TypeError:
+        raise TypeError(f"{name}: expected a Study vector of 8 numbers or sympy expressions, "
+                        f"got {type(vec).__name__}") from None
     if len(vec) != 8:
         raise ValueError(f"{name}: expected a Study vector of 8 entries, got {len(vec)}")
-    return tuple(sp.nsimplify(v) if isinstance(v, float) else sp.sympify(v) for v in vec)
+    out = []
+    for v in vec:
+        if isinstance(v, float) and not np.isfinite(v):
+            raise ValueError(f"{name}: expected finite entries, got {v}")
+        try:
+            x = sp.nsimplify(v) if isinstance(v, float) else sp.sympify(v, strict=True)
+        except (sp.SympifyError, TypeError, ValueError):
+            raise TypeError(f"{name}: expected numbers or sympy expressions, got "
+                            f"{type(v).__name__}") from None
+        if not isinstance(x, sp.Expr):
+            raise TypeError(f"{name}: expected numbers or sympy expressions, got {v!r}")
+        out.append(x)
+    return tuple(out)
 
 
 def assign(exprs: Sequence[sp.Expr], *, b: Sequence[sp.Expr] | None = IDENTITY,
