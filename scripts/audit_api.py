@@ -180,6 +180,31 @@ def _view() -> Any:
 SETUP, FK1, GEOM, VIEW = _lazy(_setup), _lazy(_fk1), _lazy(_geom), _lazy(_view)
 
 
+def _sym() -> dict[str, Any]:
+    """Base values of the computer-algebra functions (athenakin.symbolic): Section 3.2 run
+    on one numeric E (a translation along z), as the package's own tests do."""
+    import sympy as sp
+
+    S = ak.symbolic
+    t = sp.Symbol("t")
+    e_num = (1, 0, 0, 0, 0, 0, 0, -1)
+    sl0, sr0 = S.implicit_sets()
+    sl = S.assign(sl0, e=e_num)
+    sr = S.assign(sr0, e=e_num)
+    ysol = S.solve_y_from_sl(sl)
+    K = S.sr_in_x(sr, ysol)
+    steps = S.elimination_steps(e=e_num)
+    root = sp.solve(steps.quadratic.as_expr(), S.P_SYMBOL)[0]
+    st4 = sp.symbols("s_a t_a s_b t_b")
+    return dict(t=t, conic=[1 - t**2, 2 * t, 1 + t**2], sl0=sl0, sl=sl, sr=sr, ysol=ysol, K=K,
+                xsol=S.solve_x_from_sr(K)[0], root=root, e_num=e_num,
+                quadric=S.study_quadric(S.left_chain()), st=st4, segre=S.segre_map(*st4),
+                dh=sp.symbols("a d al"), bilinear=sl[0])
+
+
+SYM = _lazy(_sym)
+
+
 def _files(tmp: Path) -> dict[str, Path]:
     """Input files the readers get as their base argument."""
     out = {}
@@ -321,6 +346,23 @@ OVERRIDES: dict[str, Callable[[dict[str, Path]], tuple[tuple, dict]]] = {
     "sim.write_urdf": lambda f: ((f["tmp"] / "m.urdf", D, T0), {}),
     "symbolic.forward_kinematics_algebraic": lambda f: ((Q0, T0, D), {}),
     "symbolic.serial_solutions_algebraic": lambda f: ((REF["X"],), {}),
+    "robot.Design": lambda f: OVERRIDES["Design"](f),
+    "symbolic.assign": lambda f: ((SYM()["sl0"],), {}),
+    "symbolic.back_substitute": lambda f: ((SYM()["K"], SYM()["xsol"], 0), {}),
+    "symbolic.bilinear_coefficients": lambda f: ((SYM()["bilinear"],), {}),
+    "symbolic.compare_vectors": lambda f: ((ak.symbolic.left_chain(),
+                                            ak.symbolic.printed_eq13()), {}),
+    "symbolic.dq_product": lambda f: (([ak.symbolic.B_SYMBOLS, ak.symbolic.E_SYMBOLS],), {}),
+    "symbolic.groebner_remaining": lambda f: ((SYM()["root"],), dict(e=SYM()["e_num"])),
+    "symbolic.implicitization_matrix": lambda f: ((SYM()["conic"], [SYM()["t"]], 2), {}),
+    "symbolic.implicitize": lambda f: ((SYM()["conic"], [SYM()["t"]], 2), {}),
+    "symbolic.reduce_study": lambda f: ((SYM()["quadric"], ak.symbolic.B_SYMBOLS), {}),
+    "symbolic.segre_inverse": lambda f: ((SYM()["segre"],), {}),
+    "symbolic.segre_map": lambda f: (SYM()["st"], {}),
+    "symbolic.solve_x_from_sr": lambda f: ((SYM()["K"],), {}),
+    "symbolic.solve_y_from_sl": lambda f: ((SYM()["sl"],), {}),
+    "symbolic.sr_in_x": lambda f: ((SYM()["sr"], SYM()["ysol"]), {}),
+    "symbolic.study_G": lambda f: (SYM()["dh"], {}),
     "plot.animate": lambda f: ((f["tmp"] / "a.gif", np.array([Q0, Q0 + 1e-3]), T0, D),
                                dict(progress=False, size=(64, 48), dpi=20)),
     "plot.arc_points": lambda f: ((np.zeros(3), np.array([1.0, 0, 0]), np.array([0, 1.0, 0]),
@@ -891,6 +933,8 @@ def _selected(key: str, only: str) -> bool:
 
 def _is_result_class(o: Any) -> bool:
     """A frozen data holder the library returns (constructed from real results instead)."""
+    if isinstance(o, type) and issubclass(o, tuple) and hasattr(o, "_fields"):
+        return True       # a NamedTuple result (motion.TrackedPose)
     return (isinstance(o, type) and dataclasses.is_dataclass(o)
             and "__post_init__" not in vars(o))
 

@@ -25,6 +25,8 @@ from ._algebra import (
     E_SYMBOLS,
     P_SYMBOL,
     V_SYMBOLS,
+    _expr,
+    checked_symbolic,
     dq_conj_quaternion,
     dq_product,
     study_G,
@@ -70,9 +72,7 @@ def joint_factors(v: Sequence[sp.Expr] = V_SYMBOLS,
         v = list(v)
         if len(v) != len(DH_PARAMETERS):
             raise ValueError
-        p = sp.sympify(p, strict=True)
-        if not isinstance(p, sp.Expr) or isinstance(p, sp.logic.boolalg.BooleanAtom):
-            raise TypeError
+        p = _expr(p, "p")
     except (TypeError, ValueError, sp.SympifyError):
         raise TypeError(f"v, p: expected {len(DH_PARAMETERS)} half-tangents and one sympy "
                         f"expression, got {type(v).__name__} and {type(p).__name__}") from None
@@ -196,6 +196,7 @@ class ChainComparison:
         return not self.differing
 
 
+@checked_symbolic(derived="exprs", printed="exprs")
 def compare_vectors(derived: Sequence[sp.Expr], printed: Sequence[sp.Expr]) -> ChainComparison:
     """Compare a derived and a printed vector projectively, entry by entry.
 

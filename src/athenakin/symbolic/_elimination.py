@@ -38,7 +38,15 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import sympy as sp
 
-from ._algebra import B_SYMBOLS, E_SYMBOLS, F_SYMBOLS, P_SYMBOL, V_SYMBOLS, X_SYMBOLS
+from ._algebra import (
+    B_SYMBOLS,
+    E_SYMBOLS,
+    F_SYMBOLS,
+    P_SYMBOL,
+    V_SYMBOLS,
+    X_SYMBOLS,
+    checked_symbolic,
+)
 from ._chain import left_chain, right_chain
 from ._lia import implicitize
 
@@ -111,6 +119,7 @@ def _values(vec: Sequence[sp.Expr] | None, default: Sequence[sp.Expr], name: str
     return tuple(out)
 
 
+@checked_symbolic(exprs="exprs")
 def assign(exprs: Sequence[sp.Expr], *, b: Sequence[sp.Expr] | None = IDENTITY,
            e: Sequence[sp.Expr] | None = F_SYMBOLS) -> tuple[sp.Expr, ...]:
     """Assign values (numbers or symbols) to the Study parameters of ``B`` and ``E``.
@@ -129,6 +138,7 @@ def assign(exprs: Sequence[sp.Expr], *, b: Sequence[sp.Expr] | None = IDENTITY,
     return tuple(sp.expand(sp.sympify(x).xreplace(sub)) for x in exprs)
 
 
+@checked_symbolic(sl="exprs")
 def solve_y_from_sl(sl: Sequence[sp.Expr]) -> dict[sp.Symbol, sp.Expr]:
     """Step 3: solve the four equations of ``sl`` linearly for ``y0..y3``.
 
@@ -150,6 +160,7 @@ def solve_y_from_sl(sl: Sequence[sp.Expr]) -> dict[sp.Symbol, sp.Expr]:
     return {y: sp.cancel(s) for y, s in zip(_Y, sol, strict=True)}
 
 
+@checked_symbolic(sr="exprs", y_solution="mapping")
 def sr_in_x(sr: Sequence[sp.Expr], y_solution: Mapping[sp.Symbol, sp.Expr]) -> sp.Matrix:
     """Step 4: substitute ``y`` into ``sr``; the coefficient matrix ``M`` of ``M x = 0``.
 
@@ -167,6 +178,7 @@ def sr_in_x(sr: Sequence[sp.Expr], y_solution: Mapping[sp.Symbol, sp.Expr]) -> s
     return M
 
 
+@checked_symbolic(expr="expr", vectors="exprs8")
 def reduce_study(expr: sp.Expr, *vectors: Sequence[sp.Expr]) -> sp.Expr:
     """Normal form of ``expr`` modulo the Study quadrics of the given symbolic vectors.
 
@@ -190,6 +202,7 @@ def reduce_study(expr: sp.Expr, *vectors: Sequence[sp.Expr]) -> sp.Expr:
     return sp.expand(r)
 
 
+@checked_symbolic(M="matrix", unknowns="indices3", equations="indices3")
 def solve_x_from_sr(M: sp.Matrix, *, unknowns: Sequence[int] = (0, 1, 2),
                     equations: Sequence[int] = (1, 2, 3)
                     ) -> tuple[dict[sp.Symbol, sp.Expr], sp.Expr]:
@@ -237,6 +250,7 @@ def solve_x_from_sr(M: sp.Matrix, *, unknowns: Sequence[int] = (0, 1, 2),
     return sol, D
 
 
+@checked_symbolic(M="matrix", x_solution="mapping", equation="index4")
 def back_substitute(M: sp.Matrix, x_solution: Mapping[sp.Symbol, sp.Expr], equation: int
                     ) -> sp.Expr:
     """Step 7: substitute the ``x_i`` into the remaining equation; its numerator.
@@ -442,6 +456,7 @@ class GroebnerStep:
     solutions: tuple[dict[sp.Symbol, sp.Expr], ...]
 
 
+@checked_symbolic(p="expr", e="exprs8")
 def groebner_remaining(p: sp.Expr, *, b: Sequence[sp.Expr] | None = IDENTITY,
                        e: Sequence[sp.Expr]) -> GroebnerStep:
     """Section 3.2, last step: the joints ``v1..v5`` for a root ``p`` by a Groebner basis.

@@ -107,7 +107,11 @@ class Task:
             raise InvalidInputError(f"half_angle: expected a value in (0, pi/2] rad, got {a!r}")
         object.__setattr__(self, "half_angle", a)
         d = self.depth
-        if isinstance(d, (str, bytes)) or np.ndim(d) != 1 or len(d) != 2:
+        try:
+            ndim = -1 if isinstance(d, (str, bytes)) else np.ndim(d)
+        except (ValueError, TypeError):         # ragged lists
+            ndim = -1
+        if ndim != 1 or len(d) != 2:
             raise InvalidInputError(f"depth: expected (d_min, d_max) in m, got {d!r}")
         lo = check_scalar(d[0], "depth[0]")
         hi = check_scalar(d[1], "depth[1]")
