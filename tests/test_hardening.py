@@ -400,3 +400,39 @@ def test_numpy_fk_in_blocks_equals_one_block(monkeypatch, errors):
         ak.forward_kinematics(bad, Tb, D, backend="numpy", errors="raise")
     sub = ak.forward_kinematics(q, Tb, D, backend="numpy", fields=("valid",))
     np.testing.assert_array_equal(sub.valid, whole.valid)
+
+
+# --- the audit cannot overstate ---------------------------------------------------------------
+
+def _audit_module():
+    import importlib.util
+
+    if "audit_api" in sys.modules:
+        return sys.modules["audit_api"]
+    spec = importlib.util.spec_from_file_location("audit_api", REPO / "scripts" / "audit_api.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules["audit_api"] = mod              # dataclasses look their module up
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.mark.parametrize(("msg", "names", "named"), [
+    ("math domain error in sqrt", ("q",), False),                  # 'q' inside 'sqrt'
+    ("operands could not be broadcast together with shapes (2,) (3,)", ("shape",), False),
+    ("q: expected shape (..., 3), got shape (2,)", ("q",), True),
+    ("p, u: batch shapes p (0,), u (20,)", ("u",), True),
+    ("tangent_tol: expected a tolerance in [0, 0.001]", ("tol",), False),
+    ("tangent_tol: expected a tolerance in [0, 0.001]", ("tangent_tol",), True),
+])
+def test_the_audit_matches_argument_names_as_whole_tokens(msg, names, named):
+    assert _audit_module().names_argument(msg, names) is named
+
+
+def test_the_audit_has_no_time_budget_and_requires_generators():
+    import inspect
+
+    audit = _audit_module()
+    assert "budget_s" not in inspect.signature(audit.fuzz_function).parameters
+    assert "no_generator" in audit.FINDINGS
+    for sub in ("plot", "app", "testing", "calibration", "synthesis"):
+        assert sub in audit.SUBPACKAGES
