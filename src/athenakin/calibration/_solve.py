@@ -62,6 +62,9 @@ OUTLIER_THRESHOLD = 4.5
 #: positions: 0.1 m makes 0.2 mrad of axis error count like 20 um of tip error.
 DEFAULT_AXIS_WEIGHT = 0.1
 #: Largest share of rows that may be flagged bad and excluded before the data set is refused.
+#: Machine epsilon: the least-squares tolerances must exceed it.
+_EPS = float(np.finfo(float).eps)
+
 MAX_BAD_FRACTION = 0.1
 #: Floor (m) of the residual standard deviation used to flag outliers: noise-free data
 #: leave residuals of rounding size (1e-16 m), which are no outliers.
@@ -509,7 +512,7 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
         What to do when the identifiability analysis finds inseparable combinations.
     identifiability_tol : float, keyword-only
     tol : float, keyword-only
-        ``ftol``, ``xtol`` and ``gtol`` of the solver.
+        ``ftol``, ``xtol`` and ``gtol`` of the solver, in ``(eps, 1]`` (machine epsilon).
     max_nfev : int, keyword-only
 
     Returns
@@ -556,6 +559,8 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
         raise InvalidInputError(f"sigma: expected a standard deviation (m) of at most "
                                 f"{LENGTH_RANGE[1]:g}, got {sigma!r}")
     tol = check_tolerance(tol, "tol")
+    if not _EPS < tol <= 1.0:                # scipy's least_squares needs more than eps
+        raise InvalidInputError(f"tol: expected a tolerance in ({_EPS:.3g}, 1], got {tol:g}")
     if max_nfev is not None:
         max_nfev = check_count(max_nfev, "max_nfev", minimum=1)
     design, prob, names, chk, m_all, T = _setup(
