@@ -21,7 +21,7 @@ from athenakin import InvalidInputError
 
 D = ak.Design.default()
 T0 = ak.default_rcm_frame(D)
-SETTINGS = settings(max_examples=40, derandomize=True, deadline=None,
+SETTINGS = settings(max_examples=150, derandomize=True, deadline=None,
                     suppress_health_check=[HealthCheck.too_slow])
 
 finite = st.floats(min_value=-1e3, max_value=1e3, allow_nan=False, allow_infinity=False)
