@@ -12,7 +12,7 @@ process with a time limit (``--timeout``, 20 s) and a memory limit (RLIMIT_AS,
 * input files (design TOML, RCM JSON, path CSV, q stream CSV, trajectory CSV,
   measurement CSV, task TOML): nonexistent, unreadable, a directory, empty,
   binary, UTF-8 with BOM, CRLF, UTF-16, a huge row, a NaN row, unsorted times,
-  endless (``/dev/zero``), and per format values that are NaN, inf, huge,
+  endless (``/dev/zero``), a FIFO without a writer, and per format values that are NaN, inf, huge,
   negative, zero, of the wrong type, deeply nested;
 * outputs: an existing file (without and with ``--force``), the command's own
   input, a nonexistent folder, a read-only folder, an unknown extension, a folder,
@@ -669,6 +669,7 @@ class Fixtures:
         if full:
             v["unreadable"] = ("unreadable", good)
             v["endless (/dev/zero)"] = ("link", "/dev/zero")
+            v["a FIFO (no writer: a reader that opens it blocks)"] = ("fifo",)
             v["utf16"] = text.encode("utf-16")
             v["nul_byte"] = good[: len(good) // 2] + b"\x00" + good[len(good) // 2:]
         if kind in ("design", "task"):

@@ -172,7 +172,9 @@ def test_python_dash_m_athenakin_runs():
 
 
 def test_a_closed_pipe_ends_quietly():
-    """``athenakin demo | head -1``: no 'BrokenPipeError' on stderr."""
+    """``athenakin demo | head -1``: no 'BrokenPipeError' on stderr, and exit 0 (issue 23:
+    whether the output fitted the pipe before the reader left is a race; the exit code
+    must not depend on it)."""
     p = subprocess.Popen([sys.executable, "-m", "athenakin", "demo"], stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE)
     p.stdout.close()                      # the reader is gone before anything is written
@@ -183,7 +185,7 @@ def test_a_closed_pipe_ends_quietly():
     # print the one-line notice that numba loads its kernels; nothing else may appear
     err = "".join(line for line in err.splitlines(keepends=True)
                   if not line.startswith("athenakin: compiling the numba kernels"))
-    assert err == "" and p.returncode != 0
+    assert err == "" and p.returncode == 0
 
 
 # --- findings of the CLI audit (scripts/audit_cli.py, issue 13) ---------------------------
@@ -359,4 +361,5 @@ def test_ctrl_c_is_one_line_exit_130_and_leaves_no_file(tmp_path, monkeypatch, c
     out = tmp_path / "d.toml"
     assert main(["design", "--write", str(out)]) == 130
     err = capsys.readouterr().err
-    assert err == "athenakin design: interrupted\n" and not list(tmp_path.iterdir())
+    assert err == "athenakin design: interrupted (no output written)\n"
+    assert not list(tmp_path.iterdir())

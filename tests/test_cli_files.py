@@ -252,11 +252,10 @@ def test_force_never_replaces_a_fifo_or_device(wp, tmp_path, capsys, argv):
     ["track", "/dev/zero"],
 ])
 def test_an_endless_input_file_is_refused_quickly(tmp_path, capsys, argv):
-    # /dev/zero was read until memory ran out (a MemoryError after seconds under a limit,
-    # the machine's memory without one)
+    # /dev/zero was read until memory ran out; now a device is refused before any read (issue 23)
     if not os.path.exists("/dev/zero"):
         pytest.skip("no /dev/zero")
     code = main([a.format(tmp=tmp_path) for a in argv])
     err = capsys.readouterr().err
-    assert code == 1 and "larger than" in err and err.count("\n") == 1, err
+    assert code == 1 and "is a device; expected a regular file" in err and err.count("\n") == 1, err
     assert not list(tmp_path.iterdir())

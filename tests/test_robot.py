@@ -257,15 +257,23 @@ def test_link_too_short_named():
         ak.forward_kinematics([-0.3, 0.3, 0.5], ak.default_rcm_frame(D), free)
 
 
-def test_tangent_configuration_gives_eight():
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_tangent_configuration_gives_eight_within_a_loose_closure(backend):
+    """Tangent circles: the merged mode +1 is valid only where its residual, a bound on
+    the position error from the rounding of k (about 2e-8 m here), is within closure_tol;
+    at the default 1e-9 every slot is CIRCLES_TANGENT (issue 23)."""
     h = -0.1
     r1 = np.sqrt(D.l1**2 - h**2)
     my = np.sqrt(D.l3**2 - h**2) + D.l2
     q = np.array([h, -h, np.hypot(my, D.l5) - r1])
-    sol = ak.forward_kinematics(q, ak.default_rcm_frame(D), D)
-    assert int(sol.n_solutions) == 8
-    assert np.all(sol.reason[8:] == Reason.CIRCLES_TANGENT)
-    assert sol.valid[:8].all()
+    T = ak.default_rcm_frame(D)
+    sol = ak.forward_kinematics(q, T, D, errors="flag", backend=backend)
+    assert int(sol.n_solutions) == 0 and np.all(sol.reason == Reason.CIRCLES_TANGENT)
+    loose = ak.forward_kinematics(q, T, D, closure_tol=1e-6, backend=backend)
+    assert int(loose.n_solutions) == 8
+    assert np.all(loose.reason[8:] == Reason.CIRCLES_TANGENT)
+    assert loose.valid[:8].all() and np.all(loose.residual[:8] <= 1e-6)
+    assert np.all(loose.residual[:8] >= 1e-9)         # the bound is not the rounding alone
 
 
 def test_serial_degenerate_raises_named_error():

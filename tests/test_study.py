@@ -157,7 +157,7 @@ def test_normalize_and_projective_comparison():
 def test_quadric_residual_and_check_study_messages():
     X = np.array([1.0, 0, 0, 0, 0.5, 0, 0, 0])
     assert study_quadric_residual(X) == 0.5
-    with pytest.raises(ak.NotOnStudyQuadricError, match="item \\(\\) has x"):
+    with pytest.raises(ak.NotOnStudyQuadricError, match="item \\(\\), scaled"):
         check_study(X)
     with pytest.raises(ak.NotOnStudyQuadricError, match="x != 0"):
         check_study(np.zeros(8))

@@ -9,7 +9,7 @@ Subpackages: :mod:`athenakin.study` (Study parameters, dual quaternions),
 serial UPS chain), :mod:`athenakin.robot` (whole robot), :mod:`athenakin.testing`.
 """
 
-from . import chain, parallel, robot, study
+from . import _interrupt, chain, parallel, robot, study  # noqa: F401 (_interrupt: CLI hook)
 from ._dispatch import (
     forward_kinematics,
     inverse_kinematics,
@@ -40,7 +40,8 @@ __version__ = "0.1.0"
 
 #: Subpackages imported on first attribute access (optional heavy dependencies).
 _LAZY_SUBPACKAGES = ("analysis", "symbolic", "plot", "sim", "motion", "fast", "certified",
-                     "calibration", "app", "ros", "dynamics")
+                     "calibration", "app", "ros", "dynamics", "synthesis",
+                     "testing")
 #: Public functions of lazily imported subpackages, reachable as ``ak.<name>``.
 _LAZY_FUNCTIONS = {"certified_forward_kinematics": "certified"}
 

@@ -131,6 +131,21 @@ def check_transform(T: ArrayLike, name: str, *, allow_nonfinite: bool = False,
     return arr
 
 
+def check_frame(T: ArrayLike, name: str) -> NDArray[np.float64]:
+    """:func:`check_transform` of exactly one transform, shape (4, 4).
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        As :func:`check_transform`, or the shape is not (4, 4) (a batch, an empty one).
+    """
+    arr = check_transform(T, name)
+    if arr.shape != (4, 4):
+        raise InvalidInputError(f"{name}: expected one transform of shape (4, 4), got shape "
+                                f"{arr.shape}")
+    return arr
+
+
 def broadcast_batch(**shapes: tuple[int, ...]) -> tuple[int, ...]:
     """Broadcast the batch (leading) shapes of named arguments.
 
@@ -159,16 +174,34 @@ def broadcast_batch(**shapes: tuple[int, ...]) -> tuple[int, ...]:
             f"must broadcast against each other, as numpy arrays do)") from None
 
 
-def check_tolerance(x: object, name: str) -> float:
-    """Coerce a tolerance keyword: a non-negative real number (``inf`` accepts everything).
+#: Largest value accepted for the kinematics tolerances (their documented ranges are
+#: ``[0, maximum]``). Beyond these a tolerance no longer tells a solution from a
+#: non-solution: a ``tangent_tol`` of 0.5 m calls circles 0.4 m apart tangent, a
+#: ``closure_tol`` of 1 accepts any orientation.
+TOLERANCE_MAXIMA: dict[str, float] = {
+    "tangent_tol": 1e-3,      # m, half-chord of k1 ∩ k2
+    "degenerate_tol": 1.0,    # |sin u2|, |sin u4| (at most 1)
+    "p_zero_tol": 1.0,        # m
+    "closure_tol": 1e-3,      # rotation entries and m
+    "singular_tol": 1.0,      # |cos u1|, |sin u1 sin u2| (at most 1)
+}
+
+
+def check_tolerance(x: object, name: str, *, maximum: float | None = None) -> float:
+    """Coerce a tolerance keyword: a real number in ``[0, maximum]``.
+
+    ``maximum`` defaults to :data:`TOLERANCE_MAXIMA` for the kinematics tolerances
+    named there, to ``inf`` (accepts everything) for the rest.
 
     Raises
     ------
     TypeError
         If ``x`` is not a real number (``None``, a string, ...).
     InvalidInputError
-        If ``x`` is NaN or negative.
+        If ``x`` is NaN, negative or above ``maximum``.
     """
+    if maximum is None:
+        maximum = TOLERANCE_MAXIMA.get(name, math.inf)
     if isinstance(x, bool) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
         raise TypeError(f"{name}: expected a non-negative real number (a tolerance), "
                         f"got {type(x).__name__}")
@@ -179,6 +212,8 @@ def check_tolerance(x: object, name: str) -> float:
                                 f"too large for a float") from None
     if not v >= 0:
         raise InvalidInputError(f"{name}: expected a non-negative tolerance, got {v}")
+    if v > maximum:
+        raise InvalidInputError(f"{name}: expected a tolerance in [0, {maximum:g}], got {v:g}")
     return v
 
 
@@ -277,6 +312,44 @@ def check_count(x: object, name: str, *, minimum: int = 1, maximum: int | None =
                  else f"an integer of about {int(abs(v).bit_length() * 0.30103)} digits")
         raise InvalidInputError(f"{name}: expected an integer >= {minimum}{hi}, got {shown}")
     return v
+
+
+#: Longest name accepted for a model, robot or body name written into a file.
+MAX_NAME_LENGTH = 256
+
+
+def check_text(x: object, name: str, *, max_length: int = MAX_NAME_LENGTH,
+               allow_empty: bool = False, allow_newlines: bool = False) -> str:
+    """Check a string written into a file (an XML attribute, a CSV header, a title).
+
+    Control characters (Unicode category Cc: U+0000 to U+001F, U+007F to U+009F;
+    tab and newlines too unless ``allow_newlines``), lone surrogates and the
+    non-characters ``U+FFFE``/``U+FFFF`` are refused: XML 1.0 cannot hold most of them
+    and a reader of the others would see a different name.
+
+    Raises
+    ------
+    TypeError
+        ``x`` is not a str.
+    InvalidInputError
+        ``x`` is empty (unless allowed), longer than ``max_length`` or holds a
+        refused character (the message gives its position and code point).
+    """
+    if not isinstance(x, str):
+        raise TypeError(f"{name}: expected str, got {type(x).__name__}")
+    if not x and not allow_empty:
+        raise InvalidInputError(f"{name}: expected a non-empty string")
+    if len(x) > max_length:
+        raise InvalidInputError(f"{name}: expected at most {max_length} characters, got "
+                                f"{len(x)}")
+    for i, ch in enumerate(x):
+        c = ord(ch)
+        if allow_newlines and ch in "\t\n\r":
+            continue
+        if c < 0x20 or 0x7F <= c <= 0x9F or 0xD800 <= c <= 0xDFFF or c in (0xFFFE, 0xFFFF):
+            raise InvalidInputError(f"{name}: expected printable text, got the control "
+                                    f"character U+{c:04X} at position {i}")
+    return x
 
 
 def check_instance(x: object, name: str, cls: type | tuple[type, ...]) -> None:

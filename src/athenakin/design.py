@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._toml import read_toml
-from ._validation import check_scalar
+from ._validation import check_scalar, check_text
 from .errors import InvalidInputError
 
 __all__ = ["Design", "AB_ORDERS", "LENGTH_RANGE", "LIKELY_MM_ABOVE", "UnitWarning"]
@@ -99,7 +99,11 @@ class Design:
             v = getattr(self, k)
             if v is None:
                 continue
-            if isinstance(v, (str, bytes)) or np.ndim(v) != 1 or len(v) != 3:
+            try:
+                ndim = -1 if isinstance(v, (str, bytes)) else np.ndim(v)
+            except (ValueError, TypeError):      # ragged ([[0, 0], [0]]) or not an array
+                ndim = -1
+            if ndim != 1 or len(v) != 3:
                 raise InvalidInputError(f"{k}: expected 3 numbers (q1, q2, q3) or None, got {v!r}")
             vals = []
             for i, x in enumerate(v):
@@ -124,8 +128,7 @@ class Design:
                                     f"{lo.tolist()}, q_max = {hi.tolist()}")
         if self.ab_order not in AB_ORDERS:
             raise InvalidInputError(f"ab_order: expected one of {AB_ORDERS}, got {self.ab_order!r}")
-        if not isinstance(self.name, str):
-            raise TypeError(f"name: expected str, got {type(self.name).__name__}")
+        check_text(self.name, "name", allow_empty=True, allow_newlines=True)
         big = [f"{k} = {getattr(self, k):g}" for k in (*_LENGTHS, "tool_length")
                if getattr(self, k) > LIKELY_MM_ABOVE]
         for k in ("q_min", "q_max"):

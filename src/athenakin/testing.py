@@ -11,13 +11,22 @@ import dataclasses
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._validation import check_array, check_count, check_rng, check_scalar, check_tolerance
 from .chain import ups_transform
 from .design import Design, resolve_design
+from .errors import InvalidInputError
 from .parallel import parallel_forward_kinematics
 from .study import study_normalize
 
 __all__ = ["assert_study_equal", "assert_dq_equal", "assert_transform_equal",
-           "assert_angles_equal", "RandomConfigurations", "random_configurations"]
+           "assert_angles_equal", "RandomConfigurations", "random_configurations",
+           "MAX_CONFIGURATIONS"]
+
+#: Most configurations :func:`random_configurations` draws in one call (checked
+#: before anything is allocated; candidates are drawn in rounds of at most
+#: :data:`_ROUND` so memory stays bounded whatever ``n``).
+MAX_CONFIGURATIONS = 1_000_000
+_ROUND = 1 << 16
 
 
 def assert_study_equal(X1: ArrayLike, X2: ArrayLike, *, atol: float = 1e-12) -> None:
@@ -36,8 +45,10 @@ def assert_study_equal(X1: ArrayLike, X2: ArrayLike, *, atol: float = 1e-12) -> 
     AssertionError
         With the largest difference and its index.
     """
-    n1 = study_normalize(X1)
-    n2 = study_normalize(X2)
+    atol = check_tolerance(atol, "atol")
+    n1 = study_normalize(check_array(X1, "X1", (8,)))
+    n2 = study_normalize(check_array(X2, "X2", (8,)))
+    _broadcast(n1, n2, "X1", "X2", 1)
     n1, n2 = np.broadcast_arrays(n1, n2)
     diff = np.minimum(np.abs(n1 - n2).max(axis=-1), np.abs(n1 + n2).max(axis=-1))
     worst = float(np.max(diff)) if diff.size else 0.0
@@ -53,7 +64,9 @@ assert_dq_equal = assert_study_equal
 
 def assert_transform_equal(T1: ArrayLike, T2: ArrayLike, *, atol: float = 1e-12) -> None:
     """Assert that homogeneous transforms (..., 4, 4) agree entry-wise within ``atol``."""
-    a, b = np.broadcast_arrays(np.asarray(T1, float), np.asarray(T2, float))
+    atol = check_tolerance(atol, "atol")
+    a, b = _broadcast(check_array(T1, "T1", (4, 4), allow_nonfinite=True),
+                      check_array(T2, "T2", (4, 4), allow_nonfinite=True), "T1", "T2", 2)
     d = np.abs(a - b)
     worst = float(np.max(d)) if d.size else 0.0
     if not worst <= atol:
@@ -63,11 +76,25 @@ def assert_transform_equal(T1: ArrayLike, T2: ArrayLike, *, atol: float = 1e-12)
 
 def assert_angles_equal(a1: ArrayLike, a2: ArrayLike, *, atol: float = 1e-12) -> None:
     """Assert that angles agree modulo ``2 pi`` within ``atol`` (radians)."""
-    d = np.abs(np.angle(np.exp(1j * (np.asarray(a1, float) - np.asarray(a2, float)))))
+    atol = check_tolerance(atol, "atol")
+    x1, x2 = _broadcast(check_array(a1, "a1", (), allow_nonfinite=True),
+                        check_array(a2, "a2", (), allow_nonfinite=True), "a1", "a2", 0)
+    d = np.abs(np.angle(np.exp(1j * (x1 - x2))))
     worst = float(np.max(d)) if d.size else 0.0
     if not worst <= atol:
         idx = np.unravel_index(int(np.argmax(d)), d.shape) if d.ndim else ()
         raise AssertionError(f"angles differ by {worst:.3e} rad > {atol:g} at {idx}")
+
+
+def _broadcast(a: NDArray[np.float64], b: NDArray[np.float64], na: str, nb: str,
+               tail: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``np.broadcast_arrays(a, b)`` with an error naming both arguments."""
+    try:
+        x, y = np.broadcast_arrays(a, b)
+    except ValueError:
+        raise InvalidInputError(f"{na}, {nb}: shapes {a.shape} and {b.shape} do not "
+                                f"broadcast") from None
+    return x, y
 
 
 @dataclasses.dataclass(frozen=True)
@@ -112,31 +139,53 @@ def random_configurations(n: int, design: Design | None = None, *,
     Parameters
     ----------
     n : int
+        Number of configurations, 0 to :data:`MAX_CONFIGURATIONS`.
     design : Design, optional
     rng : int or numpy Generator, keyword-only
     margin : float, keyword-only
+        In ``[0, 1)`` (a bound on sines and cosines).
     length_margin : float, keyword-only
+        Non-negative, m.
     p_range : (float, float), keyword-only
+        ``0 <= p_min < p_max``, m.
 
     Returns
     -------
     RandomConfigurations
+
+    Raises
+    ------
+    InvalidInputError
+        A bad argument (named), or fewer than ``n`` configurations found after
+        1000 rounds (the workspace is too small for the margins).
     """
+    n = check_count(n, "n", minimum=0, maximum=MAX_CONFIGURATIONS)
     design = resolve_design(design)
-    gen = np.random.default_rng(rng)
+    gen = check_rng(rng, "rng")
+    margin = check_scalar(margin, "margin", nonnegative=True)
+    if not margin < 1.0:
+        raise InvalidInputError(f"margin: expected a number in [0, 1), got {margin}")
+    length_margin = check_scalar(length_margin, "length_margin", nonnegative=True)
+    pr = check_array(p_range, "p_range", (2,))
+    if pr.shape != (2,) or not 0.0 <= pr[0] < pr[1]:
+        raise InvalidInputError(f"p_range: expected (p_min, p_max) with 0 <= p_min < p_max, "
+                                f"got {pr.tolist()}")
+    p_lo, p_hi = float(pr[0]), float(pr[1])
     lo = np.where(np.isfinite(design.stroke_min), design.stroke_min, [-0.5, -0.5, 0.0])
     hi = np.where(np.isfinite(design.stroke_max), design.stroke_max, [0.5, 0.5, 1.0])
-    out: dict[str, list[NDArray[np.generic]]] = {k: [] for k in ("q", "m", "p", "u", "Ts")}
+    out: dict[str, list[NDArray[np.generic]]] = {
+        "q": [np.zeros((0, 3))], "m": [np.zeros(0, np.int64)], "p": [np.zeros(0)],
+        "u": [np.zeros((0, 5))], "Ts": [np.zeros((0, 4, 4))]}
     have = 0
     for _ in range(1000):
         if have >= n:
             break
-        N = max(4 * (n - have), 64)
+        N = min(max(4 * (n - have), 64), _ROUND)
         q = gen.uniform(lo, hi, (N, 3))
         par = parallel_forward_kinematics(q, design)
         m = gen.integers(0, 2, N)
         h = 0.5 * np.abs(q[:, 0] - q[:, 1])
-        p = gen.uniform(*p_range, N) * gen.choice([-1.0, 1.0], N)
+        p = gen.uniform(p_lo, p_hi, N) * gen.choice([-1.0, 1.0], N)
         u = gen.uniform(-np.pi, np.pi, (N, 5))
         s, c = np.sin(u), np.cos(u)
         ok = (par.valid[np.arange(N), m] & (h > length_margin)
@@ -151,8 +200,9 @@ def random_configurations(n: int, design: Design | None = None, *,
         out["Ts"].append(par.T_b_s[idx, m[idx]])
         have += len(idx)
     if have < n:
-        raise RuntimeError(f"random_configurations: found only {have} of {n} configurations; "
-                           f"the design's workspace is too small for the margins")
+        raise InvalidInputError(f"margin, length_margin: found only {have} of {n} "
+                                f"configurations; the design's workspace is too small for "
+                                f"the margins")
     q = np.concatenate(out["q"])
     mi = np.concatenate(out["m"])
     p = np.concatenate(out["p"])

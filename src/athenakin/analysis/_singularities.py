@@ -424,7 +424,8 @@ def _instrument_measures(q: NDArray[np.float64], g: dict[str, NDArray[np.float64
     ok = np.all(np.isfinite(T_s_e), axis=(-2, -1))
     with np.errstate(invalid="ignore", divide="ignore"):
         ser = ups_solutions(np.where(ok[..., None, None], T_s_e, np.eye(4)),
-                            degenerate_tol=0.0, p_zero_tol=0.0, closure_tol=np.inf, scale=0.0)
+                            degenerate_tol=0.0, p_zero_tol=0.0, closure_tol=np.inf, scale=0.0,
+                            _checked=True)
     p = np.where(ok, ser.p[..., 0], np.nan)
     u = np.where(ok[..., None], ser.u[..., 0, :], np.nan)
     Js = serial_jacobian(np.nan_to_num(p), np.nan_to_num(u), frame="s")
@@ -478,7 +479,14 @@ def singularity_loci(design: Design | None = None, *, n: int = 801,
     """
     design = resolve_design(design)
     hmax = min(design.l1, design.l3)
-    lo, hi = h_range if h_range is not None else (-hmax, hmax)
+    if h_range is None:
+        lo, hi = -hmax, hmax
+    else:
+        hr = check_array(h_range, "h_range", (2,))
+        if hr.shape != (2,) or not hr[0] < hr[1]:
+            raise InvalidInputError(f"h_range: expected (h_min, h_max) with h_min < h_max, m, "
+                                    f"got {hr.tolist()}")
+        lo, hi = float(hr[0]), float(hr[1])
     h = np.linspace(lo, hi, check_count(n, "n", minimum=2, maximum=MAX_SAMPLES))
     with np.errstate(invalid="ignore"):
         r1 = np.sqrt(design.l1 ** 2 - h * h)
@@ -601,9 +609,9 @@ def near_singular_configurations(name: str, distances: ArrayLike, design: Design
 
     design = resolve_design(design)
     e = check_array(distances, "distances", ()).reshape(-1)
-    n = e.size
+    n = check_count(e.size, "distances (size)", minimum=0, maximum=MAX_SAMPLES)
     T0 = _rcm(None, design)
-    if name not in MEASURE_OF:
+    if not isinstance(name, str) or name not in MEASURE_OF:
         raise InvalidInputError(f"name: expected one of {list(MEASURE_OF)}, got {name!r}")
     hh = -0.9 * min(design.l1, design.l3) if h is None else check_scalar(h, "h")
     if name == "ab_coincide":

@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._output import check_output_path, naming_path
 from .._validation import check_array, check_path, check_transform
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
@@ -704,7 +705,7 @@ def save_npz(path: str | Path, result: object, *, design: Design | None = None,
     """
     from .. import __version__
 
-    path = check_path(path)
+    path = check_output_path(path)
     if design is not None and not isinstance(design, Design):
         raise TypeError(f"design: expected athenakin.Design or None, got {type(design).__name__}")
     name = type(result).__name__
@@ -715,7 +716,8 @@ def save_npz(path: str | Path, result: object, *, design: Design | None = None,
     info = {"type": name, "athenakin_version": __version__,
             "design_toml": design.to_toml() if design is not None else None, **meta}
     saver: Any = np.savez_compressed if compressed else np.savez
-    saver(path, meta=np.array(json.dumps(info)), **arrays)
+    with naming_path(path):
+        saver(path, meta=np.array(json.dumps(info)), **arrays)
     return path if path.suffix == ".npz" else path.with_name(path.name + ".npz")
 
 
@@ -727,13 +729,30 @@ def load_npz(path: str | Path) -> tuple[object, dict[str, Any]]:
     result : ActuatorMap, PointWorkspace, InstrumentCone or ToolTipWorkspace
     meta : dict
     """
-    with np.load(check_path(path), allow_pickle=False) as f:
-        meta = json.loads(str(f["meta"]))
-        cls = _RESULTS.get(meta.get("type", ""))
-        if cls is None:
-            raise InvalidInputError(f"{path}: not an athenakin grid result (meta.type = "
-                                    f"{meta.get('type')!r})")
-        kw = {fl.name: f[fl.name] for fl in dataclasses.fields(cls) if fl.name in f.files}
+    import zipfile
+
+    from .._input import open_regular
+
+    path = check_path(path)
+    with open_regular(path, error=InvalidInputError, what="grid result file") as fh:
+        try:
+            with np.load(fh, allow_pickle=False) as f:
+                if not hasattr(f, "files") or "meta" not in f.files:
+                    raise InvalidInputError("no 'meta' entry")
+                meta = json.loads(str(f["meta"]))
+                if not isinstance(meta, dict):
+                    raise InvalidInputError("'meta' is not a JSON object")
+                cls = _RESULTS.get(meta.get("type", ""))
+                if cls is None:
+                    raise InvalidInputError(f"meta.type = {meta.get('type')!r}")
+                missing = [fl.name for fl in dataclasses.fields(cls) if fl.name not in f.files]
+                if missing:
+                    raise InvalidInputError(f"arrays {missing} missing")
+                kw = {fl.name: f[fl.name] for fl in dataclasses.fields(cls)}
+        except (InvalidInputError, ValueError, EOFError, KeyError, zipfile.BadZipFile,
+                json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise InvalidInputError(f"path: {path} is not an athenakin grid result written by "
+                                    f"save_npz ({exc})") from None
     return cls(**kw), meta
 
 

@@ -17,10 +17,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import rot_x, rot_z
+from .._validation import check_array, check_count, check_scalar, check_transform
 from ..chain._ups import rotation_u_pair
 from ..design import Design
 from ..errors import InvalidInputError
-from ..plot._geometry import ARC_PARALLEL_TOL, RobotGeometry
+from ..plot._geometry import PARALLEL_TOL, RobotGeometry
 from ..plot._mpl import ARC_RADIUS
 from ..robot import SLOT_MODE, FKSolution
 from ._scene import (
@@ -134,7 +135,10 @@ def slot_ghosts(fk: FKSolution, q: ArrayLike, T_b_e: ArrayLike, design: Design,
     if np.shape(fk.valid) != (16,):
         raise InvalidInputError(f"fk: expected the solution of one q (valid of shape (16,)), "
                                 f"got valid of shape {np.shape(fk.valid)}")
-    k = np.asarray(slots, dtype=np.int64).reshape(-1)
+    ka = check_array(slots, "slots", ())
+    if ka.ndim > 1 or not np.all(ka == np.round(ka)):
+        raise InvalidInputError(f"slots: expected integers in 0..15, got {ka.tolist()}")
+    k = ka.astype(np.int64).reshape(-1)
     if np.any((k < 0) | (k > 15)) or not np.all(fk.valid[np.clip(k, 0, 15)]):
         raise InvalidInputError(f"slots: expected valid slots in 0..15, got {k.tolist()} "
                                 f"(valid: {np.flatnonzero(fk.valid).tolist()})")
@@ -149,15 +153,30 @@ def slot_ghosts(fk: FKSolution, q: ArrayLike, T_b_e: ArrayLike, design: Design,
     wrist_axes = np.stack([R_b_3[:, :, 2], R_4[:, :, 2], R_5[:, :, 2]], axis=1)
     R_u2 = R_b_s @ rot_z(u[:, 0]) @ _RX90                         # before u2
     ujoint_axes = np.stack([R_b_s[:, :, 2], R_u2[:, :, 2]], axis=1)
-    T = np.asarray(T_b_e, dtype=float)
+    T = check_transform(T_b_e, "T_b_e")
+    if T.shape != (4, 4):
+        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got shape {T.shape}")
+    qa = check_array(q, "q", (3,))
+    if qa.shape != (3,):
+        raise InvalidInputError(f"q: expected shape (3,), got shape {qa.shape}")
     l4 = design.lengths[3]
     O_s_mode = fk.T_b_s_mode[:, :3, 3]
     return SlotGhosts(
-        q=np.asarray(q, dtype=float).copy(), slot=k, mode=mode, p=fk.p[k].copy(),
+        q=qa.copy(), slot=k, mode=mode, p=fk.p[k].copy(),
         tip=O_s + design.tool_length * R_b_3[:, :, 2], ujoint_axes=ujoint_axes,
         wrist_axes=wrist_axes, rcm=T[:3, 3].copy(),
         O_i_mode=O_s_mode - l4 * fk.T_b_s_mode[:, :3, 2], O_s_mode=O_s_mode.copy(),
         tool_length=float(design.tool_length))
+
+
+def _extreme_scale(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``max |v_i|`` where the norm of ``v`` would overflow or underflow, else 1 (exact)."""
+    m = np.abs(v).max(axis=-1, keepdims=True)
+    return np.where((m > 1e150) | (m < 1e-150), m, 1.0)
+
+
+#: Most points of one arc of :func:`arcs_points`.
+MAX_ARC_SAMPLES = 10_000
 
 
 def arcs_points(centre: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64],
@@ -167,18 +186,45 @@ def arcs_points(centre: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[
     :func:`athenakin.plot.arc_points` over leading axes: ``a``, ``b`` of shape (..., 3)
     give points of shape (..., n, 3); where ``a`` and ``b`` are parallel, ``n`` copies
     of ``centre + radius a``.
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        A bad argument (named): ``n`` must be 2 to :data:`MAX_ARC_SAMPLES`, ``a`` and
+        ``b`` non-zero.
     """
+    n = check_count(n, "n", minimum=2, maximum=MAX_ARC_SAMPLES)
+    radius = check_scalar(radius, "radius", nonnegative=True)
+    centre = check_array(centre, "centre", (3,))
+    a = check_array(a, "a", (3,))
+    b = check_array(b, "b", (3,))
+    for name, v in (("a", a), ("b", b)):
+        if np.any(np.all(v == 0.0, axis=-1)):
+            raise InvalidInputError(f"{name}: expected non-zero directions, got a zero vector")
+    try:
+        np.broadcast_shapes(centre.shape[:-1], a.shape[:-1], b.shape[:-1])
+    except ValueError:
+        raise InvalidInputError(f"centre, a, b: batch shapes {centre.shape[:-1]}, "
+                                f"{a.shape[:-1]}, {b.shape[:-1]} do not broadcast") from None
+    if a.size // 3 * n > MAX_ARC_SAMPLES * 64:
+        raise InvalidInputError(f"n: {a.size // 3} arcs of {n} points exceed "
+                                f"{MAX_ARC_SAMPLES * 64:,} points")
+    a = a / _extreme_scale(a)
+    b = b / _extreme_scale(b)
     a = a / np.linalg.norm(a, axis=-1, keepdims=True)
     b = b / np.linalg.norm(b, axis=-1, keepdims=True)
+    # the operations of athenakin.plot.arc_points, batched (the same points to rounding)
     ab = np.sum(a * b, axis=-1, keepdims=True)
-    ang = np.arccos(np.clip(ab[..., 0], -1.0, 1.0))
     perp = b - ab * a
-    norm = np.linalg.norm(perp, axis=-1, keepdims=True)
-    flat = norm <= ARC_PARALLEL_TOL                               # no plane: one point
-    perp = np.divide(perp, norm, out=np.zeros_like(perp), where=~flat)
-    ang = np.where(flat[..., 0], 0.0, ang)
+    norm = np.sqrt(np.sum(perp * perp, axis=-1, keepdims=True))
+    plane = norm > PARALLEL_TOL
+    ang = np.where(plane[..., 0], np.arctan2(norm[..., 0], ab[..., 0]), 0.0)
+    e = np.divide(perp, norm, out=np.zeros_like(perp), where=plane)
+    e = e - np.sum(e * a, axis=-1, keepdims=True) * a
+    en = np.sqrt(np.sum(e * e, axis=-1, keepdims=True))
+    e = np.divide(e, en, out=np.zeros_like(e), where=plane & (en > 0))
     t = np.linspace(0.0, ang, n, axis=-1)[..., None]             # (..., n, 1)
-    return centre + radius * (np.cos(t) * a[..., None, :] + np.sin(t) * perp[..., None, :])
+    return centre + radius * (np.cos(t) * a[..., None, :] + np.sin(t) * e[..., None, :])
 
 
 def _polylines(pts: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._dispatch import forward_kinematics, numba_available, q_from_instrument, q_from_tool_tip
-from .._validation import check_array
+from .._validation import check_array, check_count, check_instance, check_scalar
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, OutOfWorkspaceError, Reason
 from ..parallel import parallel_forward_kinematics
@@ -142,7 +142,7 @@ def app_setup(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
         design cannot assemble).
     """
     design = resolve_design(design)
-    if backend not in ("auto", "numba", "numpy"):
+    if not isinstance(backend, str) or backend not in ("auto", "numba", "numpy"):
         raise InvalidInputError(f"backend: expected 'auto', 'numba' or 'numpy', got {backend!r}")
     chosen: Literal["numba", "numpy"] = (
         ("numba" if numba_available() else "numpy") if backend == "auto" else backend)
@@ -198,9 +198,24 @@ def _label(k: int) -> str:
 
 
 def slot_statuses(valid: ArrayLike, reason: ArrayLike) -> tuple[SlotStatus, ...]:
-    """The 16 slots from an FK result's ``valid`` and ``reason`` (each shape (16,))."""
+    """The 16 slots from an FK result's ``valid`` and ``reason`` (each shape (16,)).
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        ``valid`` is not 16 booleans or ``reason`` not 16 :class:`Reason` codes.
+    """
+    va = check_array(valid, "valid", (16,))
+    if va.shape != (16,) or not np.all((va == 0) | (va == 1)):
+        raise InvalidInputError(f"valid: expected 16 booleans (an FK result's valid), got "
+                                f"shape {va.shape}")
+    ra = check_array(reason, "reason", (16,))
+    codes = {int(r) for r in Reason}
+    if ra.shape != (16,) or not all(float(r).is_integer() and int(r) in codes for r in ra):
+        raise InvalidInputError(f"reason: expected 16 Reason codes (an FK result's reason), "
+                                f"got {ra.tolist() if ra.size <= 16 else ra.shape}")
     out = []
-    for k, (v, r) in enumerate(zip(np.asarray(valid).tolist(), np.asarray(reason).tolist(),
+    for k, (v, r) in enumerate(zip(va.astype(bool).tolist(), ra.astype(int).tolist(),
                                    strict=True)):
         why = "" if v else f"{Reason(r).name}: {Reason(r).description}"
         out.append(SlotStatus(slot=k, valid=bool(v), reason=int(r), label=_label(k), why=why))
@@ -297,6 +312,8 @@ def readouts(setup: AppSetup, g: RobotGeometry) -> Readouts:
         tool_tip_jacobian,
     )
 
+    check_instance(setup, "setup", AppSetup)
+    check_instance(g, "g", RobotGeometry)
     rep = singularities(g.q, setup.T_b_e, setup.design, mode=g.mode, jacobians=False)
     dist = []
     for name, c in rep.conditions.items():
@@ -354,7 +371,7 @@ class AppView:
 
 
 def _check_slot(slot: object) -> Slot:
-    if slot == "all":
+    if isinstance(slot, str) and slot == "all":
         return "all"
     if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 16:
         raise InvalidInputError(f"slot: expected an integer in 0..15 or 'all', got {slot!r}")
@@ -393,6 +410,7 @@ def forward_view(setup: AppSetup, q: ArrayLike, *, slot: Slot = 0) -> AppView:
     InvalidInputError
         ``q`` is not 3 finite numbers, or ``slot`` is not in 0..15 or ``"all"``.
     """
+    check_instance(setup, "setup", AppSetup)
     q = check_array(q, "q", (3,)).copy()
     if q.shape != (3,):
         raise InvalidInputError(f"q: expected shape (3,), got shape {q.shape}")
@@ -441,10 +459,18 @@ def tip_from_angles(azimuth: float, polar: float, depth: float) -> NDArray[np.fl
     Returns
     -------
     ndarray, shape (3,)
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        An angle is not a finite number, or ``depth`` is negative.
     """
     from ..robot import direction_from_angles
 
-    return float(depth) * direction_from_angles(azimuth, polar)
+    az = check_scalar(azimuth, "azimuth")
+    pol = check_scalar(polar, "polar")
+    dep = check_scalar(depth, "depth", nonnegative=True)
+    return dep * direction_from_angles(az, pol)
 
 
 def angles_from_tip(tip_e: ArrayLike) -> tuple[float, float, float]:
@@ -455,7 +481,12 @@ def angles_from_tip(tip_e: ArrayLike) -> tuple[float, float, float]:
     from ..robot import angles_from_direction
 
     tip = check_array(tip_e, "tip_e", (3,))
+    if tip.shape != (3,):
+        raise InvalidInputError(f"tip_e: expected shape (3,), got shape {tip.shape}")
     depth = float(np.linalg.norm(tip))
+    if not math.isfinite(depth):
+        raise InvalidInputError(f"tip_e: expected a tip within the float range, got "
+                                f"{tip.tolist()}")
     if depth == 0:
         return 0.0, 0.0, 0.0
     az, pol = angles_from_direction(tip)
@@ -489,6 +520,10 @@ class InverseStep:
     message: str
 
 
+#: Most samples of :func:`inverse_step` (checked before anything is allocated).
+MAX_INVERSE_STEPS = 10_000
+
+
 def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from: ArrayLike,
                  mode_from: int = 1, *, n: int = INVERSE_STEPS,
                  p_from: float | None = None) -> InverseStep:
@@ -515,9 +550,9 @@ def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from
     q_from : array-like, shape (3,)
         Actuators now, m (returned unchanged if even the first step fails).
     mode_from : int
-        Assembly mode now.
+        Assembly mode now (+1 or -1).
     n : int, keyword-only
-        Samples on the segment.
+        Samples on the segment, 1 to :data:`MAX_INVERSE_STEPS`.
     p_from : float, keyword-only, optional
         Passive prismatic joint now, m (the drawn slot's ``p``): picks the branch.
         Default: the inserted tool, ``0 < p < L``.
@@ -526,11 +561,18 @@ def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from
     -------
     InverseStep
     """
+    check_instance(setup, "setup", AppSetup)
     a = check_array(tip_from, "tip_from", (3,))
     b = check_array(tip_to, "tip_to", (3,))
     q0 = check_array(q_from, "q_from", (3,))
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise InvalidInputError(f"n: expected a positive integer, got {n!r}")
+    for name, v in (("tip_from", a), ("tip_to", b), ("q_from", q0)):
+        if v.shape != (3,):
+            raise InvalidInputError(f"{name}: expected shape (3,), got shape {v.shape}")
+    if isinstance(mode_from, bool) or not isinstance(mode_from, (int, np.integer)) \
+            or mode_from not in (1, -1):
+        raise InvalidInputError(f"mode_from: expected +1 or -1, got {mode_from!r}")
+    mode_from = int(mode_from)
+    n = check_count(n, "n", minimum=1, maximum=MAX_INVERSE_STEPS)
     L = setup.design.tool_length
     p0 = 0.5 * L if p_from is None else float(check_array(p_from, "p_from", ()))
     branch = 0 if 0.0 < p0 < L else (-1 if p0 <= 0.0 else 1)
@@ -633,6 +675,9 @@ def load_playback(path: str | Path) -> Playback:
         raise PathFileError(f"{path}: data row {k + 2}: t_s = {t[k + 1]} does not increase "
                             f"(previous {t[k]})")
     q = q.copy()
+    if len(q) and not np.all(np.isfinite(q[0])):
+        raise PathFileError(f"{path}: data row 1: q is missing or not finite (a playback "
+                            f"starts from a full reading)")
     for i in range(1, len(q)):                      # hold the last reading where one is missing
         if not np.all(np.isfinite(q[i])):
             q[i] = q[i - 1]
@@ -648,5 +693,7 @@ def playback_q(pb: Playback, t: float) -> tuple[NDArray[np.float64], int]:
     index : int
         Sample index (clipped to the recording).
     """
-    k = int(np.clip(np.searchsorted(pb.t, float(t), side="right") - 1, 0, len(pb.t) - 1))
+    check_instance(pb, "pb", Playback)
+    t = check_scalar(t, "t")
+    k = int(np.clip(np.searchsorted(pb.t, t, side="right") - 1, 0, len(pb.t) - 1))
     return pb.q[k].copy(), k

@@ -11,6 +11,9 @@ from __future__ import annotations
 import html
 import math
 
+import numpy as np
+
+from .._validation import check_choice, check_instance
 from ._model import WARN_DISTANCE_M, WARN_SINE, AppView, Readouts, SlotStatus
 
 __all__ = ["WARN_COLOR", "ERROR_COLOR", "SINGULAR_NAMES", "readouts_html", "slots_html",
@@ -103,6 +106,7 @@ def readouts_html(r: Readouts) -> str:
     -------
     str
     """
+    check_instance(r, "r", Readouts)
     deg = math.degrees
     mode = f'<td colspan="2" data-ro="mode" style="text-align:right">{r.slot} / {r.mode:+d}</td>'
     rows = [
@@ -136,7 +140,17 @@ def readouts_html(r: Readouts) -> str:
 
 
 def slots_html(slots: tuple[SlotStatus, ...], shown: int | None) -> str:
-    """The 16 slots: valid ones plain (the one drawn in bold), invalid ones greyed with why."""
+    """The 16 slots: valid ones plain (the one drawn in bold), invalid ones greyed with why.
+
+    Raises
+    ------
+    TypeError
+        ``slots`` is not a sequence of :class:`SlotStatus`, or ``shown`` not an int or None.
+    """
+    if not isinstance(slots, (tuple, list)) or not all(isinstance(x, SlotStatus) for x in slots):
+        raise TypeError(f"slots: expected a tuple of SlotStatus, got {type(slots).__name__}")
+    if shown is not None and (isinstance(shown, bool) or not isinstance(shown, (int, np.integer))):
+        raise TypeError(f"shown: expected an int or None, got {type(shown).__name__}")
     out = [_TABLE]
     for s in slots:
         if s.valid:
@@ -152,7 +166,18 @@ def slots_html(slots: tuple[SlotStatus, ...], shown: int | None) -> str:
 
 
 def message_html(text: str, level: str) -> str:
-    """A status line: ``level`` ``"ok"`` (plain), ``"warn"`` or ``"error"`` (coloured)."""
+    """A status line: ``level`` ``"ok"`` (plain), ``"warn"`` or ``"error"`` (coloured).
+
+    Raises
+    ------
+    TypeError
+        ``text`` is not a str.
+    ValueError
+        ``level`` is not ``"ok"``, ``"warn"`` or ``"error"``.
+    """
+    if not isinstance(text, str):
+        raise TypeError(f"text: expected str, got {type(text).__name__}")
+    check_choice(level, "level", ("ok", "warn", "error"))
     color = {"warn": WARN_COLOR, "error": ERROR_COLOR}.get(level)
     style = f' style="color:{color};font-weight:bold"' if color else ""
     return f'<div data-ro="status" data-level="{level}"{style}>{html.escape(text) or "ok"}</div>'
@@ -160,6 +185,7 @@ def message_html(text: str, level: str) -> str:
 
 def view_html(view: AppView) -> tuple[str, str, str]:
     """``(status, read-outs, slots)`` HTML of a view (read-outs empty without a solution)."""
+    check_instance(view, "view", AppView)
     ro = readouts_html(view.readouts) if view.readouts is not None else ""
     shown = view.geometry.slot if view.geometry is not None else None
     return message_html(view.message, view.level), ro, slots_html(view.slots, shown)

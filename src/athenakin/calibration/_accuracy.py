@@ -144,6 +144,10 @@ def tip_error_monte_carlo(result: CalibrationResult, q: ArrayLike, *,
     return np.einsum("sni,snj->nij", dev, dev) / (n_samples - 1)
 
 
+#: Most directions of one :func:`tip_error_map` (checked before anything is allocated).
+MAX_MAP_POINTS = 4_000_000
+
+
 def tip_error_map(result: CalibrationResult, *, depth: float | None = None,
                   resolution: tuple[int, int] = (72, 37), encoder_resolution: float = 0.0,
                   mode: int = 1) -> TipErrorMap:
@@ -175,6 +179,11 @@ def tip_error_map(result: CalibrationResult, *, depth: float | None = None,
     except (TypeError, ValueError) as exc:
         raise InvalidInputError(f"resolution: expected (n_azimuth, n_polar), two integers in "
                                 f"2..100000, got {resolution!r} ({exc})") from None
+    if na * npol > MAX_MAP_POINTS:
+        raise InvalidInputError(f"resolution: {na} x {npol} directions, more than "
+                                f"{MAX_MAP_POINTS:,}; expected a coarser map")
+    if isinstance(mode, bool) or not isinstance(mode, (int, np.integer)) or mode not in (1, -1):
+        raise InvalidInputError(f"mode: expected +1 or -1 (assembly mode), got {mode!r}")
     az = np.linspace(-np.pi, np.pi, na, endpoint=False) + 2 * np.pi / na
     pol = np.linspace(0.0, np.pi, npol)
     A, B = np.meshgrid(az, pol, indexing="ij")

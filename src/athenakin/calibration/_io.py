@@ -139,9 +139,11 @@ def _fmt_rows(a: NDArray[np.float64]) -> list[str]:
 
 
 def _comment(comment: object) -> str:
-    if not isinstance(comment, str):
-        raise TypeError(f"comment: expected str, got {type(comment).__name__}")
-    return comment
+    """A comment for ``#`` lines: text (newlines allowed; other control characters not)."""
+    from .._validation import check_text
+
+    return check_text(comment, "comment", allow_empty=True, allow_newlines=True,
+                      max_length=100_000)
 
 
 def measurements_csv_text(q: NDArray[np.float64], tips: NDArray[np.float64],

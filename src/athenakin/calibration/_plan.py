@@ -8,7 +8,7 @@ from collections.abc import Iterable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_transform
+from .._validation import check_array, check_count, check_frame
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ._identify import IdentifiabilityReport, analyse_jacobian, d_optimal_subset
@@ -21,7 +21,7 @@ from ._model import (
     resolve_parameters,
 )
 from ._solve import DEFAULT_AXIS_WEIGHT, check_measurements
-from ._synthetic import random_poses
+from ._synthetic import MAX_POSES, random_poses
 
 __all__ = ["PosePlan", "plan_poses"]
 
@@ -66,7 +66,7 @@ def plan_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *,
     Parameters
     ----------
     n : int
-        Poses to plan; more than ``len(params) / 3``.
+        Poses to plan; more than ``len(params) / 3``, at most :data:`MAX_POSES` (1e6).
     T_b_e : array-like, shape (4, 4)
         Nominal RCM frame.
     design : Design, optional
@@ -75,7 +75,7 @@ def plan_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *,
     candidates : array-like, shape (K, 3), keyword-only
         Candidate readings (rows the nominal robot cannot use are dropped).
     n_candidates : int, keyword-only
-        Random candidates when none are given.
+        Random candidates when none are given, 1 to :data:`MAX_POSES` (1e6).
     margin : float, keyword-only
         m, see :func:`random_poses`.
     rng : seed or Generator, keyword-only
@@ -90,9 +90,11 @@ def plan_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *,
         ``n`` too small or larger than the usable candidates.
     """
     design = resolve_design(design)
-    T = check_transform(T_b_e, "T_b_e")
+    T = check_frame(T_b_e, "T_b_e")
     names = resolve_parameters(params, frame)
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or 3 * n <= len(names):
+    n = check_count(n, "n", minimum=1, maximum=MAX_POSES)
+    n_candidates = check_count(n_candidates, "n_candidates", minimum=1, maximum=MAX_POSES)
+    if 3 * n <= len(names):
         raise InvalidInputError(f"n: expected an integer with 3 n > {len(names)} (the number "
                                 f"of parameters {list(names)}), got {n!r}")
     if candidates is None:

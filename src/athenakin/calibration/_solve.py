@@ -14,6 +14,7 @@ from .._validation import (
     check_array,
     check_choice,
     check_count,
+    check_frame,
     check_scalar,
     check_tolerance,
     check_transform,
@@ -61,6 +62,9 @@ OUTLIER_THRESHOLD = 4.5
 #: positions: 0.1 m makes 0.2 mrad of axis error count like 20 um of tip error.
 DEFAULT_AXIS_WEIGHT = 0.1
 #: Largest share of rows that may be flagged bad and excluded before the data set is refused.
+#: Machine epsilon: the least-squares tolerances must exceed it.
+_EPS = float(np.finfo(float).eps)
+
 MAX_BAD_FRACTION = 0.1
 #: Floor (m) of the residual standard deviation used to flag outliers: noise-free data
 #: leave residuals of rounding size (1e-16 m), which are no outliers.
@@ -206,7 +210,11 @@ def _rows(x: ArrayLike, name: str, n: int | None = None) -> NDArray[np.float64]:
 
 
 def _mode_array(mode: object, n: int) -> NDArray[np.float64]:
-    m = np.asarray(mode)
+    try:
+        m = np.asarray(mode)
+    except (ValueError, TypeError):         # ragged lists and the like
+        raise InvalidInputError(f"mode: expected +1 or -1 (assembly mode) per row, got "
+                                f"{mode!r}") from None
     if m.dtype.kind not in "biuf" or not np.all(np.isin(m, (1, -1))):
         raise InvalidInputError(f"mode: expected +1 or -1 (assembly mode) per row, got {mode!r}")
     if m.ndim > 1 or (m.ndim == 1 and m.shape[0] != n):
@@ -241,7 +249,7 @@ def check_measurements(q: ArrayLike, design: Design | None, T_b_e: ArrayLike, *,
     design = resolve_design(design)
     qa = _rows(q, "q")
     n = qa.shape[0]
-    T = check_transform(T_b_e, "T_b_e")
+    T = check_frame(T_b_e, "T_b_e")
     m = _mode_array(mode, n)
     off = np.zeros(3) if q_offset is None else check_array(q_offset, "q_offset", (3,))
     finite = np.all(np.isfinite(qa), axis=-1)
@@ -326,7 +334,7 @@ def _setup(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | Non
     n = qa.shape[0]
     ta = _rows(tips, "tips", n)
     aa = None if axes is None else _rows(axes, "axes", n)
-    T = check_transform(T_b_e, "T_b_e")
+    T = check_frame(T_b_e, "T_b_e")
     if T.shape != (4, 4):
         raise InvalidInputError(f"T_b_e: expected shape (4, 4), got shape {T.shape}")
     if bad_rows not in ("exclude", "raise"):
@@ -423,7 +431,7 @@ def identifiability(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None
     check_choice(frame, "frame", ("base", "tracker"))
     qa = _rows(q, "q")
     design = resolve_design(design)
-    T = check_transform(T_b_e, "T_b_e")
+    T = check_frame(T_b_e, "T_b_e")
     tips = predict(parameter_vector(design, T[:3, 3]), np.nan_to_num(qa),
                    _mode_array(mode, qa.shape[0]))
     _, prob, names, _, _, _ = _setup(
@@ -504,7 +512,7 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
         What to do when the identifiability analysis finds inseparable combinations.
     identifiability_tol : float, keyword-only
     tol : float, keyword-only
-        ``ftol``, ``xtol`` and ``gtol`` of the solver.
+        ``ftol``, ``xtol`` and ``gtol`` of the solver, in ``(eps, 1]`` (machine epsilon).
     max_nfev : int, keyword-only
 
     Returns
@@ -551,6 +559,8 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
         raise InvalidInputError(f"sigma: expected a standard deviation (m) of at most "
                                 f"{LENGTH_RANGE[1]:g}, got {sigma!r}")
     tol = check_tolerance(tol, "tol")
+    if not _EPS < tol <= 1.0:                # scipy's least_squares needs more than eps
+        raise InvalidInputError(f"tol: expected a tolerance in ({_EPS:.3g}, 1], got {tol:g}")
     if max_nfev is not None:
         max_nfev = check_count(max_nfev, "max_nfev", minimum=1)
     design, prob, names, chk, m_all, T = _setup(

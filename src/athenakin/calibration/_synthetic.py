@@ -25,7 +25,15 @@ from collections.abc import Mapping
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_choice, check_rng, check_scalar, check_transform
+from .._validation import (
+    check_array,
+    check_choice,
+    check_count,
+    check_frame,
+    check_rng,
+    check_scalar,
+    check_transform,
+)
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ._model import (
@@ -81,6 +89,13 @@ def _check_mode(mode: object) -> int:
     return int(mode)
 
 
+#: Most poses :func:`random_poses` (and the ``n`` of :func:`synthetic_measurements`,
+#: the ``n`` and ``n_candidates`` of :func:`~athenakin.calibration.plan_poses`) draws,
+#: checked before anything is allocated.
+MAX_POSES = 1_000_000
+_ROUND = 1 << 20
+
+
 def random_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *, mode: int = 1,
                  margin: float = 5e-3, rng: Seed = None) -> NDArray[np.float64]:
     """``n`` random readings (N, 3) within the strokes that the nominal robot reaches.
@@ -90,15 +105,22 @@ def random_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *, mode
     (away from the links' stretched limits) and the tip beyond the RCM by at least
     ``margin`` (``margin < p < L - margin``).
 
+    ``n`` is 1 to :data:`MAX_POSES`; candidates are drawn in rounds of at most
+    ``2**20``, so memory stays bounded.
+
     Raises
     ------
     InvalidInputError
-        If a stroke is unlimited, or too few samples fall in the workspace.
+        If ``n`` is out of range, a stroke is unlimited, or too few samples fall in
+        the workspace.
     """
     from ..parallel import parallel_forward_kinematics
 
+    n = check_count(n, "n", minimum=1, maximum=MAX_POSES)
     design = resolve_design(design)
-    T = check_transform(T_b_e, "T_b_e")
+    T = check_frame(T_b_e, "T_b_e")
+    if T.shape != (4, 4):
+        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got shape {T.shape}")
     _check_mode(mode)
     margin = check_scalar(margin, "margin", nonnegative=True)
     lo, hi = design.stroke_min, design.stroke_max
@@ -108,8 +130,8 @@ def random_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *, mode
     gen = check_rng(rng)
     theta = parameter_vector(design, T[:3, 3])
     out = np.zeros((0, 3))
-    for _ in range(50):
-        cand = lo + (hi - lo) * gen.random((max(4 * n, 256), 3))
+    for _ in range(50 + 4 * n // _ROUND):
+        cand = lo + (hi - lo) * gen.random((min(max(4 * n, 256), _ROUND), 3))
         par = parallel_forward_kinematics(cand, design)
         slot = 0 if mode == 1 else 1
         ok = par.valid[:, slot] & (par.half_chord >= margin)
@@ -143,7 +165,7 @@ def synthetic_measurements(design: Design | None, T_b_e: ArrayLike, *, n: int = 
     T_b_e : array-like, shape (4, 4)
         Nominal RCM frame (its origin the nominal RCM point).
     n : int, keyword-only
-        Number of random poses (ignored when ``q`` is given).
+        Number of random poses, 1 to :data:`MAX_POSES` (ignored when ``q`` is given).
     q : array-like, shape (N, 3), keyword-only
         Readings to measure at.
     noise : float, keyword-only
@@ -172,7 +194,11 @@ def synthetic_measurements(design: Design | None, T_b_e: ArrayLike, *, n: int = 
     SyntheticData
     """
     design = resolve_design(design)
-    T = check_transform(T_b_e, "T_b_e")
+    T = check_frame(T_b_e, "T_b_e")
+    if T.shape != (4, 4):
+        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got shape {T.shape}")
+    if q is None:
+        n = check_count(n, "n", minimum=1, maximum=MAX_POSES)
     check_choice(frame, "frame", ("base", "tracker"))
     for name, v in (("noise", noise), ("perturbation", perturbation), ("offset_std", offset_std),
                     ("rcm_std", rcm_std), ("axis_noise", axis_noise),

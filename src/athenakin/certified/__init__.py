@@ -9,6 +9,7 @@ that it could not decide; the argument is in ``docs/certified.md``. Needs python
 from ._fk import (
     DEFAULT_INPUT_TOL,
     DEFAULT_PREC,
+    MAX_CERTIFIED_ITEMS,
     MAX_PREC,
     OUTPUT_ULPS,
     CertifiedFK,
@@ -17,4 +18,4 @@ from ._fk import (
 )
 
 __all__ = ["CertStatus", "CertifiedFK", "certified_forward_kinematics", "DEFAULT_INPUT_TOL",
-           "DEFAULT_PREC", "MAX_PREC", "OUTPUT_ULPS"]
+           "DEFAULT_PREC", "MAX_PREC", "OUTPUT_ULPS", "MAX_CERTIFIED_ITEMS"]

@@ -21,6 +21,7 @@ Slot ``k = 4 * r + 2 * b + w`` holds root ``r`` (0: ``p > 0``), U-joint branch
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -142,7 +143,8 @@ def ups_transform(p: ArrayLike, u: ArrayLike) -> NDArray[np.float64]:
     """
     p = check_array(p, "p", ())
     u = check_array(u, "u", (5,))
-    return _ups_transform(p, u)
+    batch = broadcast_batch(p=p.shape, u=u.shape[:-1])
+    return _ups_transform(np.broadcast_to(p, batch), np.broadcast_to(u, batch + (5,)))
 
 
 def _ups_transform(p: NDArray[np.float64], u: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -219,6 +221,7 @@ def closure_residual(T: NDArray[np.float64], T_target: NDArray[np.float64]
     """
     T = check_array(T, "T", (4, 4), allow_nonfinite=True)
     T_target = check_array(T_target, "T_target", (4, 4), allow_nonfinite=True)
+    broadcast_batch(T=T.shape[:-2], T_target=T_target.shape[:-2])
     dR = np.abs(T[..., :3, :3] - T_target[..., :3, :3]).max(axis=(-2, -1))
     dt = np.abs(T[..., :3, 3] - T_target[..., :3, 3]).max(axis=-1)
     return np.maximum(dR, dt)
@@ -241,7 +244,7 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     p_zero_tol : float, keyword-only
         ``|p|`` (m) at or below which all 8 slots get ``SERIAL_P_ZERO``.
     closure_tol : float, keyword-only
-        Largest residual of a valid solution.
+        Largest residual of a valid solution, in ``[0, 1e-3]``.
     scale : array-like, shape (...), optional, keyword-only
         Size (m) of the coordinates ``T_s_e``'s translation was computed from (e.g.
         ``|t_b_e| + |O_s|``): its rounding, about ``eps * scale``, tilts the instrument
@@ -257,12 +260,19 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     T = T_s_e if _checked else check_transform(T_s_e, "T_s_e", allow_nonfinite=True)
     degenerate_tol = check_tolerance(degenerate_tol, "degenerate_tol")
     p_zero_tol = check_tolerance(p_zero_tol, "p_zero_tol")
-    closure_tol = check_tolerance(closure_tol, "closure_tol")
+    # internal callers (``_checked``) may ask for every slot whatever its closure (inf)
+    closure_tol = check_tolerance(closure_tol, "closure_tol",
+                                  maximum=math.inf if _checked else None)
     finite = np.all(np.isfinite(T), axis=(-2, -1))
     T = np.where(finite[..., None, None], T, np.eye(4))
     c = T[..., :3, 3]
+    # The quantities that decide validity (|p|, |sin u2|, |sin u4|) are computed with the
+    # very operations, in the same order, as the compiled kernel (fast/_fk_kernels.py,
+    # _serial_stage), so both backends classify every input alike, even one that sits on
+    # a threshold to the last bit (issue 23).
+    c0, c1_, c2_ = c[..., 0], c[..., 1], c[..., 2]
     with np.errstate(over="ignore"):
-        n = np.linalg.norm(c, axis=-1)      # inf beyond 1e154 m: no solution there (below)
+        n = np.sqrt((c0 * c0 + c1_ * c1_) + c2_ * c2_)   # inf beyond 1e154 m: no solution
     base_reason = np.where(finite, 0, Reason.NONFINITE_INPUT)
     base_reason = np.where((base_reason == 0) & (n <= p_zero_tol), Reason.SERIAL_P_ZERO,
                            base_reason)
@@ -279,7 +289,19 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     psign = np.array([1.0, -1.0])
     p = nn[..., None] * psign                           # (..., 2)
     z3 = c[..., None, :] / p[..., None]                 # (..., 2, 3)
-    rho = np.hypot(z3[..., 0], z3[..., 1])              # (..., 2), |sin u2|
+    zx, zy, zz = c0 / nn, c1_ / nn, c2_ / nn            # slot p > 0 (kernel: zx, zy, zz)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        rho_k = np.sqrt(zx * zx + zy * zy)              # |sin u2| (kernel: hypot)
+        rr = np.where(rho_k > 0.0, rho_k, 1.0)
+        A1, B1 = zx / rr, zy / rr
+        rho2 = A1 * zx + B1 * zy
+        n2 = np.sqrt(rho2 * rho2 + zz * zz)
+        cc2, ss2 = -zz / n2, rho2 / n2
+        e02, e12, e22 = T[..., 0, 2], T[..., 1, 2], T[..., 2, 2]
+        W02k = ((A1 * cc2) * e02 + (B1 * cc2) * e12) + ss2 * e22
+        W12k = B1 * e02 - A1 * e12
+        rho4_k = np.sqrt(W02k * W02k + W12k * W12k)     # |sin u4| (kernel: rho4)
+    rho = np.broadcast_to(rho_k[..., None], p.shape)    # (..., 2): the same for both signs
     # Each angle pair is solved sequentially so that closure holds to rounding even
     # where the first angle is ill-conditioned (near sin u2 = 0 or sin u4 = 0): the
     # first angle from the direction, the second from the projection onto the
@@ -307,7 +329,8 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     u5 = np.arctan2(y5, x5)
     n5 = np.hypot(x5, y5)
     c5, s5 = x5 / n5, y5 / n5      # = cos, sin of the reported u5 to 1 ulp
-    wr_deg = np.broadcast_to((rho4 <= dtol[..., None, None])[..., None], u3.shape)
+    del rho4                        # per-slot |sin u4| rounds differently: decide once
+    wr_deg = np.broadcast_to((rho4_k <= dtol)[..., None, None, None], u3.shape)
 
     full = u3.shape  # (..., 2, 2, 2)
     batch = full[:-3]

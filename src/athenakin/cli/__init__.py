@@ -69,7 +69,10 @@ def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the process exit code.
 
     0: success; 1: an error (a bad input, a kinematics error, a failed check:
-    one line on standard error that names it, nothing written); 2: a usage error
+    one line on standard error that names it, nothing written); 0 too when the
+    reader of standard output stops early (``athenakin fk ... | head -1``: whether the
+    output fitted the pipe before the reader left is a race, so a closed pipe is not
+    an error); 2: a usage error
     (argparse); 70: an internal error (a bug: please report it with the
     traceback that ``--debug`` shows); 130: interrupted (Ctrl-C; no output file is
     left half-written). With ``--debug`` or ``ATHENAKIN_DEBUG=1``,
@@ -86,13 +89,13 @@ def main(argv: list[str] | None = None) -> int:
             warnings.simplefilter("ignore", RuntimeWarning)
         try:
             return int(args.func(args) or 0)
-        except BrokenPipeError:
+        except BrokenPipeError:     # the reader stopped (| head): its choice, not a failure
             _silence_stdout()
-            return 1
+            return 0
         except KeyboardInterrupt:   # Ctrl-C: outputs are discarded (Outputs), no traceback
             if debug:
                 raise
-            print(f"{name}: interrupted", file=sys.stderr)
+            print(f"{name}: interrupted{_resume_hint(args)}", file=sys.stderr)
             return 130
         except ModuleNotFoundError as exc:
             if debug:
@@ -112,6 +115,15 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{name}: internal error: {_one_line(exc)} (a bug: rerun with --debug for "
                   f"the traceback and report it)", file=sys.stderr)
             return 70
+
+
+def _resume_hint(args: argparse.Namespace) -> str:
+    """Where a resumable command left its state (``synthesize``: the Parquet folder)."""
+    out = getattr(args, "out", None)
+    if args.command == "synthesize" and out:
+        return (f"; the finished chunks are kept in {out}: run the same command again to "
+                f"resume")
+    return " (no output written)"
 
 
 def _one_line(exc: BaseException) -> str:
@@ -146,8 +158,9 @@ def entry_point() -> None:
         sys.stdout.flush()
     except BrokenPipeError:
         _silence_stdout()
-        code = 1
+        code = 0
     except KeyboardInterrupt:   # Ctrl-C before the command ran (importing, parsing)
+        print("athenakin: interrupted (no output written)", file=sys.stderr)
         code = 130
     sys.exit(code)
 

@@ -30,6 +30,7 @@ from .._validation import (
     OPTION_AUTO,
     OPTION_CLOSED,
     ROTATION_TOL,
+    TOLERANCE_MAXIMA,
     broadcast_batch,
     check_options,
     check_tolerance,
@@ -543,6 +544,11 @@ def _fk_single(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.f
 
 
 # --- whole robot: inverse kinematics, paper form -----------------------------------------
+#: The ranges of check_options (TOLERANCE_MAXIMA), for the fast path's brief check.
+_SINGULAR_TOL_MAX = TOLERANCE_MAXIMA["singular_tol"]
+_CLOSURE_TOL_MAX = TOLERANCE_MAXIMA["closure_tol"]
+
+
 def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None = None, *,
                        errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
                        closure_tol: float = CLOSURE_TOL, fields: tuple[str, ...] | None = None,
@@ -564,7 +570,8 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
 
     names = check_ik_fields(fields)
     if (type(errors) is str and errors in _POLICY_SET and type(singular_tol) is float
-            and type(closure_tol) is float and singular_tol >= 0 and closure_tol >= 0):
+            and type(closure_tol) is float and 0 <= singular_tol <= _SINGULAR_TOL_MAX
+            and 0 <= closure_tol <= _CLOSURE_TOL_MAX):
         stol, ctol = singular_tol, closure_tol      # plain options: the check in brief
     else:
         stol, ctol = check_options(errors, singular_tol=singular_tol, closure_tol=closure_tol)

@@ -31,7 +31,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ._scalar import atan2_from_q1, atan_q1, finite_sum, hypot, nanmax2
+from ._scalar import atan2_from_q1, atan_q1, finite_sum, hypot, nanmax2, parallel_residual
 
 __all__ = ["CHUNK", "scratch", "fk_chunk", "gather", "fk_full", "fk_full_parallel", "fk_counts",
            "rigid_flags", "FLAG_NONRIGID", "FLAG_Q_NONFINITE", "FLAG_T_NONFINITE"]
@@ -152,9 +152,9 @@ def _parallel_stage(G, P, tol, SH, S0, S1, n):
         ez = m_y / d
         SH[_XM * CHUNK + ii] = 0.5 * (q1 + q2) + nan
         SH[_R1 * CHUNK + ii] = r1 + nan
-        # parallel._module: the merged O_i is up to the half-chord off the true intersections
-        SH[_PRES * CHUNK + ii] = ((math.sqrt(abs(k)) / (2.0 * d)) * ((r1 + l4) / r1)
-                                  if tangent else 0.0)
+        # parallel._module.parallel_residual: the error of O_s from the rounding of k (a
+        # merged mode: up to the half-chord off the true intersections)
+        SH[_PRES * CHUNK + ii] = parallel_residual(r1, q3, d, k, l1, l4, tangent)
         S0[_PR * CHUNK + ii] = pr
         S1[_PR * CHUNK + ii] = _TANGENT if tangent else pr
         S0[_Y * CHUNK + ii] = by + a * ey
@@ -266,8 +266,10 @@ def _serial_stage(G, P, tol, SH, Sm, n):
         sc = (max(abs(t03), max(abs(t13), abs(t23))) + max(abs(xm), max(abs(ys), abs(zs))))
         dt = max(dtol, _DEG_ROUND * sc / nn)
         ct = ctol + _CLOSE_ROUND * sc        # closure allows the rounding of a far pose
+        # robot._fk._assemble: a slot whose O_s is not known within closure_tol is tangent
         ser = (_NONFINITE if not fin else _P_ZERO if pz else _UJOINT if rho <= dt
-               else _WRIST if rho4 <= dt else _CLOSURE if not (res <= ct) else 0.0)
+               else _WRIST if rho4 <= dt else _CLOSURE if not (res <= ct)
+               else _TANGENT if SH[_PRES * CHUNK + ii] > ctol else 0.0)
         Sm[(_R) * CHUNK + ii] = pr if pr != 0.0 else ser
         Sm[(_NN) * CHUNK + ii] = nn
         Sm[(_RES) * CHUNK + ii] = res
@@ -427,6 +429,20 @@ def _store_mode(Sm, ii, i, k0, xm, pres, reason, valid, p, u, Tbs, res):
 
 
 @njit(**_OPTS)
+def _item_reason(R0, R1):
+    """Per-item reason (robot._common.item_reason_from_slots) from the two modes' codes.
+
+    0 if a mode has valid slots, else the first code in slot order that is not
+    CIRCLES_TANGENT, else CIRCLES_TANGENT.
+    """
+    if (R0 == 0.0) | (R1 == 0.0):
+        return 0.0
+    if R0 != _TANGENT:
+        return R0
+    return R1
+
+
+@njit(**_OPTS)
 def _store_full(SH, S0, S1, n, c0, reason, valid, p, u, Tbs, res, item):
     """Expand scratch columns into the 16 slots of FKSolution's arrays (rows c0..c0+n-1)."""
     for ii in range(n):
@@ -435,7 +451,7 @@ def _store_full(SH, S0, S1, n, c0, reason, valid, p, u, Tbs, res, item):
         pres = SH[_PRES * CHUNK + ii]
         R0 = S0[_R * CHUNK + ii]
         R1 = S1[_R * CHUNK + ii]
-        item[i] = np.int8(0 if (R0 == 0.0) | (R1 == 0.0) else R0)
+        item[i] = np.int8(_item_reason(R0, R1))
         _store_mode(S0, ii, i, 0, xm, pres, reason, valid, p, u, Tbs, res)
         _store_mode(S1, ii, i, 8, xm, pres, reason, valid, p, u, Tbs, res)
 

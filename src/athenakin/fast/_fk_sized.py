@@ -11,6 +11,9 @@ same values bit for bit); only the stores differ:
   pose instead of 1185. The arrays of the fields not asked for may have 0 rows.
 """
 
+# numba's cache does not follow the kernels this module inlines from _fk_kernels and
+# _scalar: a change there must change this file too (revision 2, issue 23).
+
 from __future__ import annotations
 
 import math
@@ -28,6 +31,7 @@ from ._fk_kernels import (
     CHUNK,
     _chunk_full,
     _input_flags,
+    _item_reason,
     _store_T_b_s_mode,
     _store_u_mode,
     fk_chunk,
@@ -94,7 +98,7 @@ def fk_select(q, T, P, tol, rot_tol, want, reason, valid, p, u, Tbs, res, item):
             pres = SH[_PRES * CHUNK + ii]
             R0 = S0[_R * CHUNK + ii]
             R1 = S1[_R * CHUNK + ii]
-            item[i] = np.int8(0 if (R0 == 0.0) | (R1 == 0.0) else R0)
+            item[i] = np.int8(_item_reason(R0, R1))
             _store_mode_select(S0, ii, i, 0, 0, xm, pres, want, reason, valid, p, u, Tbs, res)
             _store_mode_select(S1, ii, i, 8, 1, xm, pres, want, reason, valid, p, u, Tbs, res)
     return _input_flags(q, T, rot_tol)

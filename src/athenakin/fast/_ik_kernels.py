@@ -21,7 +21,16 @@ import numpy as np
 from numba import njit, prange
 
 from ._fk_kernels import CHUNK, FLAG_T_NONFINITE, rigid_flags
-from ._scalar import atan2, finite_sum, hypot, nanmax2, sincos, wrap_mod, wrap_pi
+from ._scalar import (
+    atan2,
+    finite_sum,
+    hypot,
+    nanmax2,
+    parallel_residual,
+    sincos,
+    wrap_mod,
+    wrap_pi,
+)
 
 __all__ = ["ik_paper", "ik_paper_parallel", "ik_line", "ik_line_parallel",
            "parallel_ik_position", "parallel_fk", "FLAG_SLOW", "FLAG_V_NONFINITE",
@@ -652,7 +661,7 @@ def parallel_fk(q, P, ttol, valid, reason, T_b_i, T_b_s, theta, r1o, myo, wo, ha
         ez = m_y / d
         xm = 0.5 * (q1 + q2) + nan
         r1n = r1 + nan
-        pres = (math.sqrt(abs(k)) / (2.0 * d)) * ((r1n + l4) / r1n) if tangent else 0.0
+        pres = parallel_residual(r1, q3, d, k, l1, l4, tangent) + nan
         for m in range(2):
             sr = pr if m == 0 else (_TANGENT if tangent else pr)
             reason[i, m] = np.int8(sr)

@@ -6,6 +6,9 @@ only the store differs: ``want`` (a bit mask of ``WANT_*``) selects the arrays o
 that needs ``q`` and ``valid`` writes 25 bytes per pose instead of 218.
 """
 
+# numba's cache does not follow the kernels this module inlines from _fk_kernels and
+# _scalar: a change there must change this file too (revision 2, issue 23).
+
 from __future__ import annotations
 
 import math

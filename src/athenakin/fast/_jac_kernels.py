@@ -23,6 +23,9 @@ slower), a last pass scatters the results. The rigidity test of the frames runs
 in the same chunks, vectorised too.
 """
 
+# numba's cache does not follow the kernels this module inlines from _fk_kernels and
+# _scalar: a change there must change this file too (revision 2, issue 23).
+
 from __future__ import annotations
 
 import math

@@ -165,3 +165,32 @@ def nanmax2(r: float, d: float) -> float:
 def finite_sum(x: float) -> float:
     """0.0 for a finite ``x``, NaN for inf / NaN (sum these to test many values at once)."""
     return x - x
+
+
+#: 4 machine epsilons: the rounding allowance of each factor of ``k`` (Eq. 8) per unit of
+#: the lengths it is made of (:func:`athenakin.parallel._module.parallel_residual`).
+K_ROUND = 4.0 * 2.220446049250313e-16
+
+
+@njit(**_OPTS)
+def parallel_residual(r1: float, q3: float, d: float, k: float, l1: float, l4: float,
+                      tangent: bool) -> float:
+    """Bound on the position error of ``O_s`` from the rounding of ``k`` (m).
+
+    The same operations, in the same order, as the reference
+    :func:`athenakin.parallel._module.parallel_residual`: both backends decide the
+    validity of a near-tangent slot from the same bits.
+    """
+    a1 = (r1 + q3) - d
+    a2 = (r1 + q3) + d
+    a3 = (d - r1) + q3
+    a4 = (d + r1) - q3
+    s = ((r1 + abs(q3)) + d) + (l1 * l1) / r1
+    dk = (K_ROUND * s) * (((abs((a2 * a3) * a4) + abs((a1 * a3) * a4))
+                           + abs((a1 * a2) * a4)) + abs((a1 * a2) * a3))
+    two_d = 2.0 * d
+    hi = math.sqrt(abs(k) + dk) / two_d
+    kl = k - dk
+    lo = math.sqrt(kl if kl > 0.0 else 0.0) / two_d
+    err = hi if tangent else hi - lo
+    return err * ((r1 + l4) / r1)

@@ -63,7 +63,8 @@ def _chunk_source(q: QSource, n: int | None) -> tuple[Callable[[int, int], Array
         if n is None:
             raise TypeError("n: required when q is a callable q(start, stop)")
         return q, check_count(n, "n", minimum=0)
-    arr = q if isinstance(q, np.ndarray) else check_array(q, "q", (3,), allow_nonfinite=True)
+    arr = (q if isinstance(q, np.ndarray) and q.dtype.kind in "biuf"   # a memmap: not copied
+           else check_array(q, "q", (3,), allow_nonfinite=True))
     if arr.ndim != 2 or arr.shape[1] != 3:
         raise InvalidInputError(f"q: expected shape (N, 3) or a callable, got shape {arr.shape}")
     total = arr.shape[0] if n is None else check_count(n, "n", minimum=0)
@@ -123,6 +124,9 @@ def sweep_fk(q: QSource, T_b_e: ArrayLike, design: Design | None = None, *,
     10000
     """
     P = design_params(design)
+    if reduce is not None and not callable(reduce):
+        raise TypeError(f"reduce: expected a callable reduce(start, q_chunk, sol) or None, "
+                        f"got {type(reduce).__name__}")
     T = check_transform(T_b_e, "T_b_e")
     if T.shape != (4, 4):
         raise InvalidInputError(f"T_b_e: expected one transform of shape (4, 4), got {T.shape}")

@@ -12,15 +12,13 @@ from __future__ import annotations
 import dataclasses
 import io
 import math
-import os
-import stat
-import tempfile
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .._csv import Q_COLUMNS, TIP_COLUMNS, read_table
+from .._output import write_text_atomic
 from .._serialize import json_text
 from .._validation import check_instance, check_path
 from ._errors import PathFileError
@@ -318,32 +316,6 @@ def track_csv_text(log: TrackLog, t: NDArray[np.float64] | None = None) -> str:
                 repr(float(log.step[i])), str(int(log.flags[i])), names]
         buf.write(",".join(vals) + extra[i] + "\n")
     return buf.getvalue()
-
-
-def write_text_atomic(path: str | Path, text: str | bytes) -> None:
-    """Write a file through a temporary file in the same folder and a rename.
-
-    The file gets the permissions a new file would get (``0o666 & ~umask``) or,
-    when it replaces a file, that file's permissions; a symbolic link is
-    followed (its target is replaced, the link stays a link).
-    """
-    path = Path(os.path.realpath(check_path(path)))
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(text.encode("utf-8") if isinstance(text, str) else text)
-        try:
-            mode = stat.S_IMODE(os.stat(path).st_mode)
-        except FileNotFoundError:
-            mask = os.umask(0o022)
-            os.umask(mask)
-            mode = 0o666 & ~mask
-        os.chmod(tmp, mode)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def save_trajectory(traj: Trajectory, path: str | Path) -> Path:

@@ -190,6 +190,46 @@ def _frames(x_M: NDArray[np.float64], y: NDArray[np.float64], z: NDArray[np.floa
     return T, Ts
 
 
+#: 4 machine epsilons: the rounding allowance of each factor of ``k`` (Eq. 8) per unit of
+#: the lengths it is made of.
+K_ROUND = 4.0 * 2.220446049250313e-16
+
+
+def parallel_residual(r1: NDArray[np.float64], q3: NDArray[np.float64], d: NDArray[np.float64],
+                      k: NDArray[np.float64], l1: float, l4: float,
+                      tangent: NDArray[np.bool_]) -> NDArray[np.float64]:
+    """Bound on the position error of ``O_s`` caused by the rounding of ``k`` (m).
+
+    ``k = 4 d^2 a^2`` (Eq. 8, ``a`` the half-chord) is a product of four factors; near
+    tangency one of them is a difference of nearly equal lengths and its rounding,
+    about ``eps`` times the lengths, dominates: ``|dk| <= dk = 4 eps S sum_i |prod_{j != i}
+    f_j|`` with ``S = r1 + |q3| + d + l1^2 / r1`` (the last term: the rounding of
+    ``r1 = sqrt(l1^2 - h^2)``). The true half-chord then lies in
+    ``[sqrt(max(k - dk, 0)), sqrt(|k| + dk)] / (2 d)``; a merged (``tangent``) mode,
+    drawn at half-chord 0, is off by up to the upper end, a distinct mode by the width
+    of the interval. ``O_s`` is ``(r1 + l4) / r1`` times as far from the axis as ``O_i``.
+
+    The operations, and their order, are those of the compiled kernel
+    (``athenakin.fast._scalar.parallel_residual``): both backends decide the validity
+    of a near-tangent slot (:func:`athenakin.forward_kinematics`: residual at most
+    ``closure_tol``, else ``CIRCLES_TANGENT``) from the same bits.
+    """
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        a1 = (r1 + q3) - d
+        a2 = (r1 + q3) + d
+        a3 = (d - r1) + q3
+        a4 = (d + r1) - q3
+        s = ((r1 + np.abs(q3)) + d) + (l1 * l1) / r1
+        dk = (K_ROUND * s) * (((np.abs((a2 * a3) * a4) + np.abs((a1 * a3) * a4))
+                               + np.abs((a1 * a2) * a4)) + np.abs((a1 * a2) * a3))
+        two_d = 2.0 * d
+        hi = np.sqrt(np.abs(k) + dk) / two_d
+        kl = k - dk
+        lo = np.sqrt(np.where(kl > 0.0, kl, 0.0)) / two_d
+        err = np.where(tangent, hi, hi - lo)
+        return err * ((r1 + l4) / r1)
+
+
 def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
                                 tangent_tol: float = TANGENT_TOL) -> ParallelSolution:
     """Forward kinematics of the parallel module: both intersections of ``k1`` and ``k2``.
@@ -204,7 +244,8 @@ def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
     tangent_tol : float, keyword-only
         Half-chord (m) at or below which ``k1`` and ``k2`` count as tangent
         (paper's ``w = 0``): mode -1 is then reported as merged into mode +1
-        (``Reason.CIRCLES_TANGENT``).
+        (``Reason.CIRCLES_TANGENT``). Range ``[0, 1e-3]`` m
+        (:data:`athenakin._validation.TOLERANCE_MAXIMA`).
 
     Returns
     -------
@@ -252,9 +293,8 @@ def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
     T_b_i = T_b_i * nanmask[..., None, None]
     T_b_s = T_b_s * nanmask[..., None, None]
     theta = wrap_angle(np.arctan2(-y / r1[..., None], z / r1[..., None])) * nanmask
-    with np.errstate(invalid="ignore", divide="ignore"):
-        pres = np.where(tangent, np.sqrt(np.abs(k)) / (2 * g["d"]) * ((r1 + design.l4) / r1),
-                        0.0)
+    pres = parallel_residual(g["r1"], qs[..., 2], g["d"], k, design.l1, design.l4,
+                             tangent) * safe
     return ParallelSolution(
         valid=valid, reason=slot_reason, mode=MODES.copy(),
         O_i=T_b_i[..., :3, 3], O_s=T_b_s[..., :3, 3], T_b_i=T_b_i, T_b_s=T_b_s, theta=theta,

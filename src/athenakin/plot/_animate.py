@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array
+from .._validation import check_array, check_scalar
 from ..design import Design, resolve_design
 from ..errors import KinematicsError
 from ..robot import q_from_instrument
@@ -17,10 +17,20 @@ from ._geometry import VIEW, RobotGeometry, cube_limits, robot_geometry
 from ._mpl import plot_robot
 
 __all__ = ["instrument_cone_path", "render_frames", "animate", "draw_motion_frame",
-           "ANIMATION_SIZE", "TRACE_COLOR"]
+           "ANIMATION_SIZE", "TRACE_COLOR", "MAX_PATH_SAMPLES", "MAX_TURNS"]
 
 #: Default frame size (width, height) in pixels; multiples of 16 suit video codecs.
 ANIMATION_SIZE = (800, 640)
+
+
+#: Most samples of :func:`instrument_cone_path` (checked before anything is allocated).
+MAX_PATH_SAMPLES = 100_000
+#: Most turns of :func:`instrument_cone_path` about the cone axis.
+MAX_TURNS = 1000.0
+
+
+#: Largest width or height of a rendered frame, px (:func:`render_frames`).
+MAX_FRAME_PIXELS = 8192
 
 
 def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
@@ -41,7 +51,8 @@ def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
     Parameters
     ----------
     n : int
-        Number of samples (the last one is not the first again).
+        Number of samples (the last one is not the first again), 2 to
+        :data:`MAX_PATH_SAMPLES`.
     T_b_e : array-like, shape (4, 4), optional
         RCM frame (default :func:`athenakin.default_rcm_frame`, whose reference
         instrument direction is ``x_e``).
@@ -49,10 +60,11 @@ def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
     axis_e : array-like, shape (3,), keyword-only
         Axis of the cone in frame E.
     cone_angle : float, keyword-only
-        Half-angle of the cone, rad.
+        Half-angle of the cone, rad, in ``[0, pi]``.
     p : array-like, shape () or (n,), keyword-only, optional
         Insertion, m (default :data:`athenakin.robot.REFERENCE_P`).
     turns : float, keyword-only
+        Turns about the axis, in ``[-MAX_TURNS, MAX_TURNS]``.
     lead : int, keyword-only
         Samples (of the ``n``) that tilt out from the axis at the start, and as many
         that tilt back at the end; 0 (default): every sample is on the cone.
@@ -69,17 +81,31 @@ def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
     KinematicsError
         A sample is out of the workspace (the message names the first).
     """
+    from .._validation import check_count, check_scalar
     from ..errors import InvalidInputError
     from ..robot import REFERENCE_P
 
+    n = check_count(n, "n", minimum=2, maximum=MAX_PATH_SAMPLES)
     if isinstance(lead, bool) or not isinstance(lead, (int, np.integer)) or lead < 0 \
             or n - 2 * lead < 2:
         raise InvalidInputError(f"lead: expected an integer in 0..{(n - 2) // 2} for n = {n} "
                                 f"samples (2 lead + at least 2 on the cone), got {lead!r}")
+    cone_angle = check_scalar(cone_angle, "cone_angle", nonnegative=True)
+    if not cone_angle <= np.pi:
+        raise InvalidInputError(f"cone_angle: expected a half-angle in [0, pi] rad, got "
+                                f"{cone_angle}")
+    turns = check_scalar(turns, "turns")
+    if not abs(turns) <= MAX_TURNS:
+        raise InvalidInputError(f"turns: expected a number in [-{MAX_TURNS}, {MAX_TURNS}], got "
+                                f"{turns}")
 
     design = resolve_design(design)
     T = resolve_rcm_frame(T_b_e, design)
     a = check_array(axis_e, "axis_e", (3,))
+    if a.shape != (3,) or not np.any(a):
+        raise InvalidInputError(f"axis_e: expected a non-zero direction of shape (3,), got "
+                                f"{a.tolist()}")
+    a = a / np.abs(a).max()
     a = a / np.linalg.norm(a)
     helper = np.array([0.0, 0.0, 1.0]) if abs(a[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
     e1 = np.cross(helper, a)
@@ -94,7 +120,10 @@ def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
         tilt = np.concatenate([ramp, tilt, cone_angle * np.arange(lead - 1, -1, -1) / lead])
     d = (np.cos(tilt)[:, None] * a + np.sin(tilt)[:, None] * (np.cos(t)[:, None] * e1
                                                                + np.sin(t)[:, None] * e2))
-    pp = np.broadcast_to(np.asarray(REFERENCE_P if p is None else p, dtype=float), (n,))
+    pa = check_array(REFERENCE_P if p is None else p, "p", ())
+    if pa.shape not in ((), (n,)):
+        raise InvalidInputError(f"p: expected shape () or ({n},), got shape {pa.shape}")
+    pp = np.broadcast_to(pa, (n,))
     q, res = q_from_instrument(T, d, pp, design, errors="flag")
     if not np.all(res.valid):
         from ..errors import error_for_reason
@@ -209,8 +238,20 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
+    from .._validation import check_count
+    from ..errors import InvalidInputError
     from ..robot import REFERENCE_Q
+    from ._geometry import check_view
 
+    sz = check_array(size, "size", (2,))
+    if sz.shape != (2,) or not np.all((sz >= 16) & (sz <= MAX_FRAME_PIXELS)) \
+            or not np.all(sz == np.round(sz)):
+        raise InvalidInputError(f"size: expected (width, height), integers in 16.."
+                                f"{MAX_FRAME_PIXELS} px, got {sz.tolist()}")
+    size = (int(sz[0]), int(sz[1]))
+    dpi = check_count(dpi, "dpi", minimum=1, maximum=1200)
+    view = check_view(view)
+    orbit = check_scalar(orbit, "orbit")
     design = resolve_design(design)
     T = resolve_rcm_frame(T_b_e, design)
     qs = check_array(REFERENCE_Q if q is None else q, "q", (3,)).reshape(-1, 3)
@@ -273,7 +314,12 @@ def animate(path: str | Path, q: ArrayLike, T_b_e: ArrayLike | None = None,
     """
     import imageio.v3 as iio
 
-    path = Path(path)
+    from .._output import check_output_path
+
+    path = check_output_path(path)
+    fps = check_scalar(fps, "fps", positive=True)
+    if not fps <= 120.0:
+        raise ValueError(f"fps: expected frames per second in (0, 120], got {fps:g}")
     suffix = path.suffix.lower()
     if suffix not in (".gif", ".mp4"):
         raise ValueError(f"path: expected a .gif or .mp4 file, got {path.name!r}")

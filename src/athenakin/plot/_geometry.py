@@ -16,20 +16,27 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import rot_x, rot_z
-from .._validation import check_array
+from .._validation import check_array, check_count, check_instance, check_scalar
 from ..chain._ups import rotation_u_pair
 from ..design import Design, resolve_design
-from ..errors import Reason, error_for_reason
+from ..errors import InvalidInputError, Reason, error_for_reason
 from ..parallel import parallel_forward_kinematics
 from ..robot import FKSolution, forward_kinematics
 from ..robot._setup import resolve_rcm_frame
 
-__all__ = ["RobotGeometry", "robot_geometry", "circle_points", "N_CIRCLE", "ARC_MARGIN",
+__all__ = ["RobotGeometry", "robot_geometry", "circle_points", "N_CIRCLE", "MAX_CURVE_POINTS",
+           "ARC_MARGIN", "check_view", "check_length",
            "COLORS", "FRAME_LENGTH", "ARC_RADIUS", "VIEW", "MM", "arc_points", "slot_label",
            "cube_limits"]
 
 #: Number of points on each drawn circle (k1, k2).
 N_CIRCLE = 121
+#: ``|b - (a.b) a|`` of unit directions at or below which :func:`arc_points` takes them as
+#: parallel (no plane; the arc is then at most 1e-12 of its radius long, or undefined).
+PARALLEL_TOL = 1e-12
+#: Most points of one curve (:func:`circle_points`, :func:`arc_points`), checked before
+#: anything is allocated.
+MAX_CURVE_POINTS = 100_000
 #: Colours of the parts (paper Fig. 2: parallel module blue, serial part red), shared by
 #: the matplotlib and the HTML views.
 COLORS = {
@@ -143,9 +150,58 @@ class RobotGeometry:
         return pts.min(axis=0), pts.max(axis=0)
 
 
+def check_view(view: object, name: str = "view") -> tuple[float, float]:
+    """``(elevation, azimuth)`` in degrees: two finite numbers.
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        Naming ``name``.
+    """
+    v = check_array(view, name, (2,))  # type: ignore[arg-type]
+    if v.shape != (2,):
+        raise InvalidInputError(f"{name}: expected (elevation, azimuth) in degrees, got shape "
+                                f"{v.shape}")
+    return float(v[0]), float(v[1])
+
+
+def check_length(x: object, name: str, *, maximum: float = 10.0) -> float:
+    """A drawing length or scale: a number in ``(0, maximum]``.
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        Naming ``name``.
+    """
+    v = check_scalar(x, name, positive=True)
+    if not v <= maximum:
+        raise InvalidInputError(f"{name}: expected a number in (0, {maximum:g}], got {v:g}")
+    return v
+
+
 def circle_points(centre: NDArray[np.float64], radius: float, n: int = N_CIRCLE
                   ) -> NDArray[np.float64]:
-    """Points of a circle in the plane ``x = centre[0]``, shape (n, 3)."""
+    """Points of a circle in the plane ``x = centre[0]``, shape (n, 3).
+
+    Parameters
+    ----------
+    centre : array-like, shape (3,)
+        Centre, m.
+    radius : float
+        Non-negative, m.
+    n : int
+        Number of points, 2 to :data:`MAX_CURVE_POINTS` (the last repeats the first).
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        A bad argument (named).
+    """
+    n = check_count(n, "n", minimum=2, maximum=MAX_CURVE_POINTS)
+    centre = check_array(centre, "centre", (3,))
+    if centre.shape != (3,):
+        raise InvalidInputError(f"centre: expected shape (3,), got shape {centre.shape}")
+    radius = check_scalar(radius, "radius", nonnegative=True)
     t = np.linspace(0.0, 2 * np.pi, n)
     return np.stack([np.full(n, centre[0]), centre[1] + radius * np.cos(t),
                      centre[2] + radius * np.sin(t)], axis=-1)
@@ -227,6 +283,8 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     from ..robot import REFERENCE_Q
 
     design = resolve_design(design)
+    if fk is not None:
+        check_instance(fk, "fk", FKSolution)
     q = check_array(REFERENCE_Q if q is None else q, "q", (3,)).copy()
     if q.shape != (3,):
         raise InvalidInputError(f"q: expected shape (3,), got shape {q.shape}")
@@ -291,23 +349,69 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
 
 
 def slot_label(g: RobotGeometry) -> str:
-    """Short text of a slot: ``slot 3: mode +1, p>0, U-, S-``."""
+    """Short text of a slot: ``slot 3: mode +1, p>0, U-, S-``.
+
+    Raises
+    ------
+    TypeError
+        ``g`` is not a :class:`RobotGeometry`.
+    """
+    check_instance(g, "g", RobotGeometry)
     return (f"slot {g.slot}: mode {g.mode:+d}, p{'>' if g.p_sign > 0 else '<'}0, "
             f"U{'+' if g.ujoint > 0 else '-'}, S{'+' if g.wrist > 0 else '-'}")
 
 
 def arc_points(centre: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64],
                radius: float, n: int = 16) -> NDArray[np.float64]:
-    """Great-circle arc of ``radius`` about ``centre`` from direction a to direction b, (n, 3)."""
+    """Great-circle arc of ``radius`` about ``centre`` from direction a to direction b, (n, 3).
+
+    Parameters
+    ----------
+    centre : array-like, shape (3,)
+        m.
+    a, b : array-like, shape (3,)
+        Non-zero directions (any length).
+    radius : float
+        Non-negative, m.
+    n : int
+        Number of points, 2 to :data:`MAX_CURVE_POINTS`.
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        A bad argument (named).
+    """
+    n = check_count(n, "n", minimum=2, maximum=MAX_CURVE_POINTS)
+    radius = check_scalar(radius, "radius", nonnegative=True)
+    vecs = []
+    for name, v in (("centre", centre), ("a", a), ("b", b)):
+        arr = check_array(v, name, (3,))
+        if arr.shape != (3,):
+            raise InvalidInputError(f"{name}: expected shape (3,), got shape {arr.shape}")
+        vecs.append(arr)
+    centre, a, b = vecs
+    for name, v in (("a", a), ("b", b)):
+        big = float(np.abs(v).max())
+        if big == 0.0:
+            raise InvalidInputError(f"{name}: expected a non-zero direction, got (0, 0, 0)")
+    ma, mb = float(np.abs(a).max()), float(np.abs(b).max())
+    if not 1e-150 <= ma <= 1e150:       # the norm would overflow or underflow: scale first
+        a = a / ma
+    if not 1e-150 <= mb <= 1e150:
+        b = b / mb
     a = a / np.linalg.norm(a)
     b = b / np.linalg.norm(b)
-    ang = float(np.arccos(np.clip(a @ b, -1.0, 1.0)))
-    perp = b - (a @ b) * a
-    norm = np.linalg.norm(perp)
-    if norm <= ARC_PARALLEL_TOL:                 # parallel or antiparallel: no plane
+    ab = float(np.sum(a * b))
+    perp = b - ab * a
+    norm = float(np.sqrt(np.sum(perp * perp)))
+    if norm <= PARALLEL_TOL:        # (anti)parallel: no plane (or an arc shorter than 1e-12 r)
         return np.repeat((centre + radius * a)[None], n, axis=0)
+    ang = float(np.arctan2(norm, ab))     # well conditioned, unlike arccos near 0 and pi
+    e = perp / norm
+    e = e - float(np.sum(e * a)) * a      # exactly in the plane, orthogonal to a
+    e = e / np.sqrt(np.sum(e * e))
     t = np.linspace(0.0, ang, n)[:, None]
-    return centre + radius * (np.cos(t) * a + np.sin(t) * perp / norm)
+    return centre + radius * (np.cos(t) * a + np.sin(t) * e)
 
 
 def cube_limits(lo: NDArray[np.float64], hi: NDArray[np.float64], pad: float = 0.05

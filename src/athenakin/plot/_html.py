@@ -273,7 +273,9 @@ def robot_figure(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     import plotly.graph_objects as go
 
     from ..robot import REFERENCE_Q
+    from ._geometry import check_length
 
+    frame_length = check_length(frame_length, "frame_length")
     design = resolve_design(design)
     q = check_array(REFERENCE_Q if q is None else q, "q", (3,))
     T = resolve_rcm_frame(T_b_e, design)
@@ -363,7 +365,9 @@ def write_html(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | 
     """
     import html
 
-    path = Path(path)
+    from .._output import check_output_path
+
+    path = check_output_path(path)
     fig = robot_figure(q, T_b_e, design, slot=slot, **kwargs)
     text = fig.to_html(include_plotlyjs=include_plotlyjs, full_html=True, div_id=HTML_DIV_ID,
                        config={"displaylogo": False, "responsive": True})

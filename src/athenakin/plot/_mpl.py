@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array
 from ..design import Design, resolve_design
-from ..errors import Reason
+from ..errors import InvalidInputError, Reason
 from ..robot import forward_kinematics
 from ..robot._setup import resolve_rcm_frame
 from ._geometry import (
@@ -390,6 +390,24 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     """
     import matplotlib.pyplot as plt
 
+    from .._validation import check_axes, check_instance
+    from ._geometry import RobotGeometry, check_length, check_view
+
+    if geometry is not None:
+        check_instance(geometry, "geometry", RobotGeometry)
+    check_axes(ax, "ax")
+    frame_length = check_length(frame_length, "frame_length")
+    joint_scale = check_length(joint_scale, "joint_scale")
+    view = check_view(view)
+    if limits is not None:
+        lims = check_array(limits, "limits", (3,))  # type: ignore[arg-type]
+        if lims.shape != (2, 3) or not np.all(lims[0] < lims[1]):
+            raise InvalidInputError(f"limits: expected (lo, hi), two points (m) with lo < hi, "
+                                    f"got {lims.tolist()}")
+    if legend_extra is not None and (not isinstance(legend_extra, (list, tuple)) or not all(
+            callable(getattr(a, "get_label", None)) for a in legend_extra)):
+        raise TypeError(f"legend_extra: expected a list of matplotlib artists or None, got "
+                        f"{type(legend_extra).__name__}")
     g = geometry if geometry is not None else robot_geometry(q, T_b_e, design, slot=slot)
     if ax is None:
         fig = plt.figure(figsize=(7.0, 6.6))
@@ -458,7 +476,11 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
     import matplotlib.pyplot as plt
 
     from ..robot import REFERENCE_Q
+    from ._geometry import check_view
 
+    view = check_view(view)
+    if fig is not None and not callable(getattr(fig, "add_subplot", None)):
+        raise TypeError(f"fig: expected a matplotlib Figure or None, got {type(fig).__name__}")
     design = resolve_design(design)
     q = check_array(REFERENCE_Q if q is None else q, "q", (3,))
     T = resolve_rcm_frame(T_b_e, design)
@@ -546,6 +568,10 @@ def _panel_title(g: RobotGeometry) -> str:
             f"U-joint {sgn[g.ujoint]}, wrist {sgn[g.wrist]}")
 
 
+#: Largest ``dpi`` of :func:`save_view` (a 6.4 x 4.8 in figure is then 7680 x 5760 px).
+MAX_DPI = 1200
+
+
 def save_view(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
               design: Design | None = None, *, slot: int = 0, all_solutions: bool = False,
               dpi: int = 120, **kwargs: Any) -> Path:
@@ -564,7 +590,7 @@ def save_view(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | N
         The 16-solution grid (static) or, in HTML, every solution at once with one
         legend entry per slot (without it the page has a menu over the solutions).
     dpi : int, keyword-only
-        Resolution of raster output.
+        Resolution of raster output, 1 to :data:`MAX_DPI`.
     **kwargs
         Passed to the drawing function.
 
@@ -579,7 +605,11 @@ def save_view(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | N
     """
     import matplotlib.pyplot as plt
 
-    path = Path(path)
+    from .._output import check_output_path, naming_path
+    from .._validation import check_count
+
+    path = check_output_path(path)
+    dpi = check_count(dpi, "dpi", minimum=1, maximum=MAX_DPI)
     suffix = path.suffix.lower()
     if suffix == ".html":
         from ._html import write_html
@@ -594,7 +624,8 @@ def save_view(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | N
         ax = plot_robot(q, T_b_e, design, slot=slot, **kwargs)
         fig = ax.figure
     try:
-        fig.savefig(path, dpi=dpi)
+        with naming_path(path):
+            fig.savefig(path, dpi=dpi)
     finally:
         plt.close(fig)
     return path

@@ -102,9 +102,11 @@ def item_reason_from_slots(valid: NDArray[np.bool_], reason: NDArray[np.int8]
     """Per-item reason: 0 if any slot is valid, else the most specific slot reason.
 
     The most specific is the first non-OK slot code in slot order, preferring
-    codes that are not ``CIRCLES_TANGENT`` (which only says a slot was merged).
+    codes that are not ``CIRCLES_TANGENT`` (which only says a slot was merged);
+    ``CIRCLES_TANGENT`` where it is the only one (both modes near tangency, issue 23).
     """
     anyvalid = np.any(valid, axis=-1)
     r = np.where(reason == Reason.CIRCLES_TANGENT, 0, reason)
     first = np.take_along_axis(r, np.argmax(r != 0, axis=-1)[..., None], axis=-1)[..., 0]
+    first = np.where(first == 0, Reason.CIRCLES_TANGENT, first)
     return np.where(anyvalid, 0, first).astype(np.int8)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 import numbers
 from collections.abc import Callable
 from typing import Any, Literal
@@ -11,7 +12,6 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._transforms import invert_transform
 from .._validation import (
     broadcast_batch,
     check_array,
@@ -31,6 +31,7 @@ from ..chain._ups import (
     ups_solutions,
 )
 from ..design import Design
+from ..errors import Reason
 from ..parallel._module import MODES, TANGENT_TOL, ParallelSolution, parallel_forward_kinematics
 from ._common import (
     ErrorPolicy,
@@ -313,14 +314,49 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
         errors, tangent_tol=tangent_tol, degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
         closure_tol=closure_tol)
     design, q, T, batch, raise_now = _prepare(q, T_b_e, design, errors)
-    par = parallel_forward_kinematics(q, design, tangent_tol=tangent_tol)
+    tols = dict(tangent_tol=tangent_tol, degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
+                closure_tol=closure_tol)
+    n = math.prod(batch)
+    if n <= FK_BLOCK:
+        return _fk_block(q, T, design, method, tols, batch, raise_now, names)
+    # blocks of FK_BLOCK poses: the intermediates of the numpy reference (about 10 kB a
+    # pose) stay bounded; the result is the same, pose for pose (issue 23)
+    qf, Tf = q.reshape(n, 3), T.reshape(n, 4, 4)
+    parts = [_fk_block(qf[i:i + FK_BLOCK], Tf[i:i + FK_BLOCK], design, method, tols,
+                       (min(FK_BLOCK, n - i),), False, names) for i in range(0, n, FK_BLOCK)]
+    arrays = {}
+    for k, v in vars(parts[0]).items():
+        if isinstance(v, np.ndarray):
+            whole = np.concatenate([vars(part)[k] for part in parts])
+            arrays[k] = whole.reshape(batch + whole.shape[1:])
+        else:
+            arrays[k] = v
+    if raise_now:
+        raise_first_failure(arrays["item_reason"], "forward kinematics", {"q": q},
+                            design=design, q_of=lambda idx: q[idx])
+    return fk_solution(names, **arrays)
+
+
+#: Poses the numpy forward kinematics computes at once: a larger batch is done in blocks, so
+#: that its intermediates stay near 100 MB however large the batch (the result itself is
+#: about 1.3 kB a pose).
+FK_BLOCK = 8192
+
+
+def _fk_block(q: NDArray[np.float64], T: NDArray[np.float64], design: Design, method: str,
+              tols: dict[str, float], batch: tuple[int, ...], raise_now: bool,
+              names: tuple[str, ...] | None) -> FKSolution:
+    """Forward kinematics of one block of (already checked and broadcast) poses."""
+    par = parallel_forward_kinematics(q, design, tangent_tol=tols["tangent_tol"])
     if method == "closed":
         step = _serial_closed_form
     else:
         from ..symbolic._solver import serial_step_algebraic as step
-    p, u, sreason, residual = step(par, T, degenerate_tol=degenerate_tol,
-                                   p_zero_tol=p_zero_tol, closure_tol=closure_tol)
-    return _assemble(par, p, u, sreason, residual, q, batch, raise_now, design, names)
+    p, u, sreason, residual = step(par, T, degenerate_tol=tols["degenerate_tol"],
+                                   p_zero_tol=tols["p_zero_tol"],
+                                   closure_tol=tols["closure_tol"])
+    return _assemble(par, p, u, sreason, residual, q, batch, raise_now, design, names,
+                     closure_tol=tols["closure_tol"])
 
 
 SerialStep = Callable[..., tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int8],
@@ -349,7 +385,7 @@ def _serial_closed_form(par: ParallelSolution, T: NDArray[np.float64], *, degene
                                    NDArray[np.float64]]:
     """The serial step: 8 solutions per assembly mode, shape (..., 2, 8)."""
     Ts = np.where(par.valid[..., None, None], par.T_b_s, np.eye(4))   # (..., 2, 4, 4)
-    T_s_e = invert_transform(Ts) @ T[..., None, :, :]
+    T_s_e = _s_e_as_kernel(Ts, T[..., None, :, :])
     T_s_e = np.where(np.all(np.isfinite(T), axis=(-2, -1))[..., None, None, None], T_s_e,
                      np.nan)
     scale = (np.abs(T[..., None, :3, 3]).max(axis=-1)
@@ -359,14 +395,47 @@ def _serial_closed_form(par: ParallelSolution, T: NDArray[np.float64], *, degene
     return ser.p, ser.u, ser.reason, ser.residual
 
 
+def _s_e_as_kernel(Ts: NDArray[np.float64], T: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``T_b_s^-1 @ T_b_e`` with the compiled kernel's operations, in its order.
+
+    ``T_b_s = [[1, 0, 0, xm], [0, cz, cy, ys], [0, -cy, cz, zs], [0, 0, 0, 1]]`` (the
+    parallel module's frame, :func:`athenakin.parallel.parallel_forward_kinematics`);
+    the entries of ``T_s_e`` then decide validity (``|p|``, ``|sin u2|``, ``|sin u4|``)
+    bit for bit as ``fast/_fk_kernels.py:_serial_stage`` does, so both backends agree
+    at every threshold (issue 23). Shapes broadcast: ``Ts`` (..., 4, 4), ``T`` (..., 4, 4).
+    """
+    xm, cz, cy = Ts[..., 0, 3], Ts[..., 1, 1], Ts[..., 1, 2]
+    ys, zs = Ts[..., 1, 3], Ts[..., 2, 3]
+    ti0 = -xm
+    ti1 = -(cz * ys - cy * zs)
+    ti2 = -(cy * ys + cz * zs)
+    t0, t1, t2, t3 = (T[..., r, :] for r in range(4))             # rows, each (..., 4)
+    out = np.empty(np.broadcast_shapes(Ts.shape, T.shape))
+    out[..., 0, :] = t0 + ti0[..., None] * t3
+    out[..., 1, :] = (cz[..., None] * t1 - cy[..., None] * t2) + ti1[..., None] * t3
+    out[..., 2, :] = (cy[..., None] * t1 + cz[..., None] * t2) + ti2[..., None] * t3
+    out[..., 3, :] = t3
+    return out
+
+
 def _assemble(par: ParallelSolution, p: NDArray[np.float64], u: NDArray[np.float64],
               sreason: NDArray[np.int8], residual: NDArray[np.float64], q: NDArray[np.float64],
               batch: tuple[int, ...], raise_now: bool, design: Design,
-              fields: tuple[str, ...] | None = None) -> FKSolution:
-    """Combine the parallel module's 2 modes with the serial step's (..., 2, 8) slots."""
+              fields: tuple[str, ...] | None = None, *,
+              closure_tol: float = CLOSURE_TOL) -> FKSolution:
+    """Combine the parallel module's 2 modes with the serial step's (..., 2, 8) slots.
+
+    A slot whose ``O_s`` is not known within ``closure_tol`` (the parallel module's
+    residual: a merged mode near tangency, or a distinct one so close to it that the
+    rounding of ``k`` moves it further) is ``CIRCLES_TANGENT``: valid means a residual
+    within ``closure_tol`` (issue 23), as in the compiled kernel.
+    """
     preason = np.broadcast_to(par.reason[..., None], sreason.shape)
     residual = np.maximum(residual, par.residual[..., None])   # merged modes (issue 13)
-    reason = np.where(preason != 0, preason, sreason).astype(np.int8).reshape(batch + (16,))
+    reason = np.where(preason != 0, preason, sreason)
+    reason = np.where((reason == 0) & (par.residual[..., None] > closure_tol),
+                      np.int8(Reason.CIRCLES_TANGENT), reason)
+    reason = reason.astype(np.int8).reshape(batch + (16,))
     valid = reason == 0
     nan = np.where(valid, 1.0, np.nan)
     item = item_reason_from_slots(valid, reason)

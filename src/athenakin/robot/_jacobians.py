@@ -55,7 +55,11 @@ _FRAMES = ("base", "rcm")
 # argument handling
 # --------------------------------------------------------------------------------------
 def _mode(mode: ArrayLike) -> NDArray[np.float64]:
-    m = np.asarray(mode)
+    try:
+        m = np.asarray(mode)
+    except (ValueError, TypeError):         # ragged lists and the like
+        raise InvalidInputError(f"mode: expected +1 or -1 (assembly mode), got {mode!r}") \
+            from None
     if m.dtype.kind not in "biuf" or not np.all(np.isin(m, (1, -1))):
         raise InvalidInputError(f"mode: expected +1 or -1 (assembly mode), got {mode!r}")
     return m.astype(float)
@@ -319,10 +323,12 @@ def serial_jacobian(p: ArrayLike, u: ArrayLike, *, frame: Literal["s", "e"] = "s
     ndarray, shape (..., 6, 6)
         Rows ``(v, omega)`` of E; columns ``u1, u2, p, u3, u4, u5``.
     """
-    if frame not in ("s", "e"):
+    if not isinstance(frame, str) or frame not in ("s", "e"):
         raise InvalidInputError(f"frame: expected 's' or 'e', got {frame!r}")
     p = check_array(p, "p", ())
     u = check_array(u, "u", (5,))
+    batch = broadcast_batch(p=p.shape, u=u.shape[:-1])
+    p, u = np.broadcast_to(p, batch), np.broadcast_to(u, batch + (5,))
     c, s = np.cos(u), np.sin(u)
     R1 = rotation_u_pair(c[..., 0], s[..., 0], c[..., 1], s[..., 1])
     R2 = rotation_u_pair(c[..., 2], s[..., 2], c[..., 3], s[..., 3])
@@ -385,6 +391,9 @@ def passive_jacobian(q: ArrayLike, p: ArrayLike, u: ArrayLike, design: Design | 
     design, g = _state(q, design, mode)
     p = check_array(p, "p", ())
     u = check_array(u, "u", (5,))
+    if broadcast_batch(q=g["h"].shape, p=p.shape, u=u.shape[:-1]) != g["h"].shape:
+        raise InvalidInputError(f"p, u: batch shapes p {p.shape}, u {u.shape[:-1]} must "
+                                f"broadcast to the batch of q and mode {g['h'].shape}")
     Jtw = np.zeros(g["h"].shape + (6, 3))
     Jtw[..., :3, :] = _parallel_jacobian(g)
     Jtw[..., 3, :] = _dphi_dq(g)

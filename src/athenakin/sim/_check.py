@@ -169,6 +169,8 @@ def settle(model: Any, data: Any, q: ArrayLike, *, ramp_time: float = RAMP_TIME,
     check_instance(model, "model", mujoco.MjModel)
     check_instance(data, "data", mujoco.MjData)
     q = check_array(q, "q", (3,))
+    if q.shape != (3,):
+        raise InvalidInputError(f"q: expected one q of shape (3,), got shape {q.shape}")
     ramp_time = check_scalar(ramp_time, "ramp_time", nonnegative=True)
     settle_time = check_scalar(settle_time, "settle_time", nonnegative=True)
     speed_tol = check_tolerance(speed_tol, "speed_tol")
@@ -331,7 +333,7 @@ def sample_reachable_q(n: int, design: Design | None = None, T_b_e: ArrayLike | 
     Parameters
     ----------
     n : int
-        Number of targets.
+        Number of targets, 0 to 100,000.
     design : Design, optional
     T_b_e : array-like, shape (4, 4), optional
     slot : int, keyword-only
@@ -358,10 +360,7 @@ def sample_reachable_q(n: int, design: Design | None = None, T_b_e: ArrayLike | 
     """
     from ..robot import REFERENCE_Q
 
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
-        raise TypeError(f"n: expected an int, got {type(n).__name__}")
-    if n < 0:
-        raise InvalidInputError(f"n: expected a non-negative int, got {n}")
+    n = check_count(n, "n", minimum=0, maximum=100_000)
     design = resolve_design(design)
     T = resolve_rcm_frame(T_b_e, design)
     home = check_array(REFERENCE_Q if home_q is None else home_q, "home_q", (3,))

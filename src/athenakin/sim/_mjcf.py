@@ -19,7 +19,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._mechanism import BODIES
-from .._validation import check_path
+from .._output import check_output_path, write_text_atomic
+from .._validation import check_path, check_text
 from ..collision._bodies import Bodies
 from ..collision._environment import Environment
 from ..design import Design
@@ -293,8 +294,7 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     T = g.T_b_e
     lo, hi = d.stroke_min, d.stroke_max
 
-    if not isinstance(model_name, str):
-        raise TypeError(f"model_name: expected str, got {type(model_name).__name__}")
+    check_text(model_name, "model_name")
     root = ET.Element("mujoco", {"model": model_name})
     ET.SubElement(root, "compiler", {"angle": "radian", "autolimits": "true"})
     ET.SubElement(root, "option", {
@@ -548,6 +548,6 @@ def write_mjcf(path: str | Path, design: Design | None = None, T_b_e: ArrayLike 
     Path
         The path written.
     """
-    path = check_path(path)
-    path.write_text(mjcf_from_design(design, T_b_e, **kwargs))  # type: ignore[arg-type]
+    path = check_output_path(path)
+    write_text_atomic(path, mjcf_from_design(design, T_b_e, **kwargs))  # type: ignore[arg-type]
     return path

@@ -24,8 +24,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._mechanism import BODIES
+from .._output import check_output_path, write_text_atomic
 from .._transforms import rot_x, rot_y, rot_z
-from .._validation import check_path
+from .._validation import check_path, check_text
 from ..collision._bodies import Bodies
 from ..design import Design, resolve_design
 from ..robot._setup import resolve_rcm_frame
@@ -203,8 +204,7 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     d = design
     zero = urdf_joint_zero(T, d, q_zero=q_zero, zero_slot=zero_slot)
     lo, hi = d.stroke_min, d.stroke_max
-    if not isinstance(robot_name, str):
-        raise TypeError(f"robot_name: expected str, got {type(robot_name).__name__}")
+    check_text(robot_name, "robot_name")
     robot = ET.Element("robot", {"name": robot_name})
     for name, rgba in (("parallel", "0.2 0.4 0.8 1"), ("serial", "0.8 0.2 0.2 1"),
                        ("actuator", "0.95 0.6 0.1 1"), ("joint", "0.55 0.55 0.55 1"),
@@ -370,6 +370,6 @@ def write_urdf(path: str | Path, design: Design | None = None, T_b_e: ArrayLike 
     -------
     Path
     """
-    path = check_path(path)
-    path.write_text(urdf_from_design(design, T_b_e, **kwargs))  # type: ignore[arg-type]
+    path = check_output_path(path)
+    write_text_atomic(path, urdf_from_design(design, T_b_e, **kwargs))  # type: ignore[arg-type]
     return path

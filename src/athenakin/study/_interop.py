@@ -125,7 +125,7 @@ def scipy_rotation_from_quaternion(x: ArrayLike) -> Any:
     >>> r.as_quat().round(12).tolist()
     [0.0, 0.0, 1.0, 0.0]
     """
-    q = quaternion_xyzw_from_wxyz(x)
+    q = quaternion_xyzw_from_wxyz(check_array(x, "x", (4,)))
     zero = ~(np.linalg.norm(q, axis=-1) > 0)
     if np.any(zero):
         idx = tuple(np.argwhere(zero)[0]) if zero.ndim else ()

@@ -16,8 +16,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_tolerance, check_transform
-from ..errors import NotOnStudyQuadricError
+from .._validation import broadcast_batch, check_array, check_tolerance, check_transform
+from ..errors import InvalidInputError, NotOnStudyQuadricError
 
 __all__ = [
     "STUDY_QUADRIC_TOL",
@@ -60,7 +60,10 @@ def quaternion_multiply(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
     ndarray, shape (..., 4)
         ``a * b``.
     """
-    return _qmul(check_array(a, "a", (4,)), check_array(b, "b", (4,)))
+    a = check_array(a, "a", (4,))
+    b = check_array(b, "b", (4,))
+    broadcast_batch(a=a.shape[:-1], b=b.shape[:-1])
+    return _qmul(a, b)
 
 
 def _qmul(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -94,6 +97,7 @@ def dq_multiply(X1: ArrayLike, X2: ArrayLike) -> NDArray[np.float64]:
     """
     X1 = check_array(X1, "X1", (8,))
     X2 = check_array(X2, "X2", (8,))
+    broadcast_batch(X1=X1.shape[:-1], X2=X2.shape[:-1])
     x1, y1 = X1[..., :4], X1[..., 4:]
     x2, y2 = X2[..., :4], X2[..., 4:]
     x = _qmul(x1, x2)
@@ -207,7 +211,7 @@ def is_on_study_quadric(X: ArrayLike, *, tol: float = STUDY_QUADRIC_TOL) -> NDAr
     -------
     ndarray of bool, shape (...)
     """
-    X = check_array(X, "X", (8,))
+    X = _scaled(check_array(X, "X", (8,)), slice(None))
     tol = check_tolerance(tol, "tol")
     nx = np.linalg.norm(X[..., :4], axis=-1)
     nX = np.linalg.norm(X, axis=-1)
@@ -232,11 +236,11 @@ def check_study(X: ArrayLike, name: str = "X", *,
     ok = is_on_study_quadric(X, tol=tol)
     if not np.all(ok):
         idx = tuple(np.argwhere(~ok)[0]) if X.ndim > 1 else ()
-        bad = X[idx]
+        bad = _scaled(X[idx], slice(None))
         raise NotOnStudyQuadricError(
             f"{name}: expected a Study vector with x0*y0 + x1*y1 + x2*y2 + x3*y3 = 0 and "
-            f"x != 0 (relative tolerance {tol:g}); item {idx} has x = {bad[:4].tolist()}, "
-            f"x.y = {float(np.dot(bad[:4], bad[4:])):.3g}")
+            f"x != 0 (relative tolerance {tol:g}); item {idx}, scaled to max |X_i| = 1, has "
+            f"x = {bad[:4].tolist()}, x.y = {float(np.dot(bad[:4], bad[4:])):.3g}")
     return X
 
 
@@ -286,6 +290,7 @@ def study_equal(X1: ArrayLike, X2: ArrayLike, *, atol: float = 1e-12) -> NDArray
     """
     X1 = check_array(X1, "X1", (8,))
     X2 = check_array(X2, "X2", (8,))
+    broadcast_batch(X1=X1.shape[:-1], X2=X2.shape[:-1])
     atol = check_tolerance(atol, "atol")
     n1 = X1 / np.linalg.norm(X1, axis=-1, keepdims=True)
     n2 = X2 / np.linalg.norm(X2, axis=-1, keepdims=True)
@@ -308,12 +313,29 @@ def rotation_from_quaternion(x: ArrayLike) -> NDArray[np.float64]:
     Raises
     ------
     InvalidInputError
-        If the shape is not (..., 4) or a value is not finite.
+        If the shape is not (..., 4), a value is not finite or a quaternion is zero.
     """
-    return _rotation_from_quaternion(check_array(x, "x", (4,)))
+    x = check_array(x, "x", (4,))
+    zero = np.all(x == 0.0, axis=-1)
+    if np.any(zero):
+        idx = tuple(int(i) for i in np.argwhere(zero)[0]) if x.ndim > 1 else ()
+        raise InvalidInputError(f"x: expected a non-zero quaternion (x0, x1, x2, x3), "
+                                f"item {idx} is (0, 0, 0, 0)")
+    return _rotation_from_quaternion(x)
+
+
+def _scaled(X: NDArray[np.float64], part: slice) -> NDArray[np.float64]:
+    """``X`` divided by the largest magnitude of ``X[..., part]`` (where non-zero).
+
+    A homogeneous (projective) argument keeps its meaning; the products of
+    Eq. 3-4 then neither overflow (entries near 1e160 and above) nor underflow.
+    """
+    m = np.abs(X[..., part]).max(axis=-1, keepdims=True)
+    return X / np.where(m > 0.0, m, 1.0)
 
 
 def _rotation_from_quaternion(x: NDArray[np.float64]) -> NDArray[np.float64]:
+    x = _scaled(x, slice(None))
     x0, x1, x2, x3 = np.moveaxis(x, -1, 0)
     D = x0 * x0 + x1 * x1 + x2 * x2 + x3 * x3
     R = np.stack([
@@ -390,13 +412,28 @@ def study_from_transform(T: ArrayLike) -> NDArray[np.float64]:
 
 
 def _eq3_parts(X: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Rotation block and translation ``(p, q, r) / Delta`` of Eq. 3-4, literally."""
+    """Rotation block and translation ``(p, q, r) / Delta`` of Eq. 3-4, literally.
+
+    ``X`` is first scaled so that ``max |x_i| = 1`` (the same displacement).
+
+    Raises
+    ------
+    InvalidInputError
+        The translation ``|y| / |x|`` overflows a float.
+    """
+    X = _scaled(X, slice(0, 4))
     x0, x1, x2, x3, y0, y1, y2, y3 = np.moveaxis(X, -1, 0)
     D = x0 * x0 + x1 * x1 + x2 * x2 + x3 * x3
     p = 2 * (-x0 * y1 + x1 * y0 - x2 * y3 + x3 * y2)
     q = 2 * (-x0 * y2 + x1 * y3 + x2 * y0 - x3 * y1)
     r = 2 * (-x0 * y3 - x1 * y2 + x2 * y1 + x3 * y0)
-    return _rotation_from_quaternion(X[..., :4]), np.stack([p, q, r], axis=-1) / D[..., None]
+    t = np.stack([p, q, r], axis=-1) / D[..., None]
+    bad = ~np.all(np.isfinite(t), axis=-1)
+    if np.any(bad):
+        idx = tuple(int(i) for i in np.argwhere(bad)[0]) if X.ndim > 1 else ()
+        raise InvalidInputError(f"X: item {idx} has a translation |y| / |x| beyond the float "
+                                f"range; expected a finite displacement")
+    return _rotation_from_quaternion(X[..., :4]), t
 
 
 def transform_from_study(X: ArrayLike, *, tol: float = STUDY_QUADRIC_TOL) -> NDArray[np.float64]:
@@ -418,6 +455,8 @@ def transform_from_study(X: ArrayLike, *, tol: float = STUDY_QUADRIC_TOL) -> NDA
     ------
     NotOnStudyQuadricError
         If an item is off the quadric or has ``x = 0``: Eq. 3 is then not a displacement.
+    InvalidInputError
+        If the translation ``|y| / |x|`` of an item overflows a float.
     """
     X = check_study(X, "X", tol=tol)
     R, t = _eq3_parts(X)

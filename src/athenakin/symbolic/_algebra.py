@@ -22,6 +22,121 @@ from collections.abc import Sequence
 
 import sympy as sp
 
+
+def _expr(x: object, name: str) -> sp.Expr:
+    """``x`` as a sympy expression (numbers allowed), or a TypeError naming ``name``."""
+    if isinstance(x, (str, bytes, bool)) or x is None:
+        raise TypeError(f"{name}: expected a sympy expression or a number, got "
+                        f"{type(x).__name__}")
+    try:
+        e = sp.sympify(x, strict=True)
+    except (sp.SympifyError, TypeError, ValueError, AttributeError):
+        raise TypeError(f"{name}: expected a sympy expression or a number, got "
+                        f"{type(x).__name__}") from None
+    if not isinstance(e, sp.Expr) or isinstance(e, sp.logic.boolalg.BooleanAtom) \
+            or e.has(sp.nan, sp.zoo, sp.oo, -sp.oo):
+        raise TypeError(f"{name}: expected a finite sympy expression or number, got {x!r}")
+    return e
+
+
+def _show(v: object) -> str:
+    """A short text of a value for a message (no 400-digit integers)."""
+    if isinstance(v, int) and abs(v) >= 10**6:
+        return f"an integer of {len(str(abs(v)))} digits"
+    return repr(v) if isinstance(v, (int, float)) else type(v).__name__
+
+
+#: Largest degree of an implicitisation (the monomial basis grows as the degree to the
+#: number of coordinates).
+MAX_DEGREE = 12
+
+
+def checked_symbolic(**kinds: str):  # type: ignore[no-untyped-def]  # noqa: C901
+    """Check arguments of a computer-algebra function by kind, naming each.
+
+    Kinds: ``"expr"`` (one expression), ``"exprs"`` (a sequence of them), ``"exprs8"``
+    (exactly 8), ``"symbols"`` (a non-empty sequence of sympy Symbols), ``"matrix"``
+    (a sympy Matrix), ``"mapping"`` (Symbol -> expression), ``"int"`` (a non-negative int).
+    """
+    import functools
+    import inspect
+    from collections.abc import Mapping
+
+    def check(kind: str, name: str, v: object) -> None:
+        if kind == "expr":
+            _expr(v, name)
+        elif kind in ("exprs", "exprs8"):
+            if isinstance(v, (str, bytes, Mapping)) or not isinstance(v, (Sequence, sp.MatrixBase)):
+                raise TypeError(f"{name}: expected a sequence of sympy expressions, got "
+                                f"{type(v).__name__}")
+            items = list(v)
+            if kind == "exprs8" and len(items) != 8:
+                raise ValueError(f"{name}: expected 8 entries (a Study vector), got {len(items)}")
+            for i, x in enumerate(items):
+                _expr(x, f"{name}[{i}]")
+        elif kind == "vectors8":
+            if isinstance(v, (str, bytes)) or not isinstance(v, Sequence) or not v:
+                raise TypeError(f"{name}: expected a non-empty sequence of Study vectors, got "
+                                f"{type(v).__name__}")
+            for i, x in enumerate(v):
+                check("exprs8", f"{name}[{i}]", x)
+        elif kind == "symbols":
+            if isinstance(v, Sequence) and not isinstance(v, (str, bytes)) and len(v) == 0:
+                raise ValueError(f"{name}: expected at least one sympy Symbol, got none")
+            if isinstance(v, (str, bytes)) or not isinstance(v, Sequence) \
+                    or not all(isinstance(x, sp.Symbol) for x in v):
+                raise TypeError(f"{name}: expected a non-empty sequence of sympy Symbols, got "
+                                f"{v!r}")
+        elif kind == "symbols_or_none":
+            if v is not None:
+                check("symbols", name, v)
+        elif kind == "matrix":
+            if not isinstance(v, sp.MatrixBase):
+                raise TypeError(f"{name}: expected a sympy Matrix, got {type(v).__name__}")
+        elif kind == "mapping":
+            if not isinstance(v, Mapping) or not all(isinstance(k, sp.Symbol) for k in v):
+                raise TypeError(f"{name}: expected a mapping sympy Symbol -> expression, got "
+                                f"{type(v).__name__}")
+            for k, x in v.items():
+                _expr(x, f"{name}[{k}]")
+        elif kind == "degree":
+            if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= MAX_DEGREE:
+                raise ValueError(f"{name}: expected a degree in 0..{MAX_DEGREE}, got {_show(v)}")
+        elif kind == "index4":
+            if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v < 4:
+                raise ValueError(f"{name}: expected an index in 0..3, got {_show(v)}")
+        elif kind == "indices3":
+            if isinstance(v, (str, bytes)) or not isinstance(v, Sequence) or len(v) != 3 \
+                    or not all(isinstance(i, int) and not isinstance(i, bool) and 0 <= i < 4
+                               for i in v):
+                raise ValueError(f"{name}: expected 3 indices in 0..3, got {v!r}")
+        elif kind == "int":
+            if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+                raise TypeError(f"{name}: expected a non-negative int, got {v!r}")
+
+    def wrap(f):  # type: ignore[no-untyped-def]
+        sig = inspect.signature(f)
+
+        @functools.wraps(f)
+        def inner(*args, **kwargs):  # type: ignore[no-untyped-def]
+            try:
+                bound = sig.bind(*args, **kwargs)
+            except TypeError as exc:
+                raise TypeError(f"{f.__name__}: {exc}") from None
+            for name, kind in kinds.items():
+                if name in bound.arguments:
+                    v = bound.arguments[name]
+                    if sig.parameters[name].kind is inspect.Parameter.VAR_POSITIONAL:
+                        for j, x in enumerate(v):
+                            check(kind, f"{name}[{j}]", x)
+                    else:
+                        check(kind, name, v)
+            return f(*args, **kwargs)
+
+        return inner
+
+    return wrap
+
 __all__ = [
     "B_SYMBOLS",
     "E_SYMBOLS",
@@ -110,6 +225,7 @@ def dq_multiply(X1: Sequence[sp.Expr], X2: Sequence[sp.Expr]) -> sp.ImmutableMat
     return study_vector([sp.expand(c) for c in x + y])
 
 
+@checked_symbolic(factors="vectors8")
 def dq_product(factors: Sequence[Sequence[sp.Expr]]) -> sp.ImmutableMatrix:
     """Product ``F1 * F2 * ... * Fn`` of dual quaternions, left to right, expanded."""
     factors = list(factors)
@@ -132,6 +248,7 @@ def study_M(v: sp.Expr) -> sp.ImmutableMatrix:
     return study_vector([1, 0, 0, v, 0, 0, 0, 0], "v")
 
 
+@checked_symbolic(a="expr", d="expr", al="expr")
 def study_G(a: sp.Expr, d: sp.Expr, al: sp.Expr) -> sp.ImmutableMatrix:
     """``G_i`` of Eq. 6 in the half-tangent ``al = tan(alpha/2)``.
 

@@ -25,6 +25,8 @@ from ._algebra import (
     E_SYMBOLS,
     P_SYMBOL,
     V_SYMBOLS,
+    _expr,
+    checked_symbolic,
     dq_conj_quaternion,
     dq_product,
     study_G,
@@ -70,7 +72,7 @@ def joint_factors(v: Sequence[sp.Expr] = V_SYMBOLS,
         v = list(v)
         if len(v) != len(DH_PARAMETERS):
             raise ValueError
-        p = sp.sympify(p, strict=True)
+        p = _expr(p, "p")
     except (TypeError, ValueError, sp.SympifyError):
         raise TypeError(f"v, p: expected {len(DH_PARAMETERS)} half-tangents and one sympy "
                         f"expression, got {type(v).__name__} and {type(p).__name__}") from None
@@ -147,6 +149,17 @@ def ik_product(*, printed: bool = False, e: Sequence[sp.Expr] = E_SYMBOLS
     """
     from ._printed import printed_eq15_factors
 
+    if not isinstance(printed, bool):
+        raise TypeError(f"printed: expected a bool, got {type(printed).__name__}")
+    try:
+        if isinstance(e, (str, bytes)):
+            raise TypeError
+        e = [sp.sympify(x, strict=True) for x in e]
+        if len(e) != 8 or not all(isinstance(x, sp.Expr) for x in e):
+            raise TypeError
+    except (TypeError, ValueError, sp.SympifyError):
+        raise TypeError(f"e: expected a Study vector of 8 sympy expressions, got "
+                        f"{type(e).__name__}") from None
     fac = joint_factors()
     names = printed_eq15_factors() if printed else (
         "G5", "M5", "G4", "M4", "G3", "M3", "G2", "M2", "G1", "M1")
@@ -183,6 +196,7 @@ class ChainComparison:
         return not self.differing
 
 
+@checked_symbolic(derived="exprs", printed="exprs")
 def compare_vectors(derived: Sequence[sp.Expr], printed: Sequence[sp.Expr]) -> ChainComparison:
     """Compare a derived and a printed vector projectively, entry by entry.
 

@@ -38,7 +38,15 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import sympy as sp
 
-from ._algebra import B_SYMBOLS, E_SYMBOLS, F_SYMBOLS, P_SYMBOL, V_SYMBOLS, X_SYMBOLS
+from ._algebra import (
+    B_SYMBOLS,
+    E_SYMBOLS,
+    F_SYMBOLS,
+    P_SYMBOL,
+    V_SYMBOLS,
+    X_SYMBOLS,
+    checked_symbolic,
+)
 from ._chain import left_chain, right_chain
 from ._lia import implicitize
 
@@ -86,12 +94,32 @@ def implicit_sets() -> tuple[tuple[sp.Expr, ...], tuple[sp.Expr, ...]]:
 
 def _values(vec: Sequence[sp.Expr] | None, default: Sequence[sp.Expr], name: str
             ) -> tuple[sp.Expr, ...]:
-    vec = tuple(default if vec is None else vec)
+    if isinstance(vec, (str, bytes)):
+        raise TypeError(f"{name}: expected a Study vector of 8 numbers or sympy expressions, "
+                        f"got {type(vec).__name__}")
+    try:
+        vec = tuple(default if vec is None else vec)  # type: ignore[arg-type]
+    except TypeError:
+        raise TypeError(f"{name}: expected a Study vector of 8 numbers or sympy expressions, "
+                        f"got {type(vec).__name__}") from None
     if len(vec) != 8:
         raise ValueError(f"{name}: expected a Study vector of 8 entries, got {len(vec)}")
-    return tuple(sp.nsimplify(v) if isinstance(v, float) else sp.sympify(v) for v in vec)
+    out = []
+    for v in vec:
+        if isinstance(v, float) and not np.isfinite(v):
+            raise ValueError(f"{name}: expected finite entries, got {v}")
+        try:
+            x = sp.nsimplify(v) if isinstance(v, float) else sp.sympify(v, strict=True)
+        except (sp.SympifyError, TypeError, ValueError):
+            raise TypeError(f"{name}: expected numbers or sympy expressions, got "
+                            f"{type(v).__name__}") from None
+        if not isinstance(x, sp.Expr):
+            raise TypeError(f"{name}: expected numbers or sympy expressions, got {v!r}")
+        out.append(x)
+    return tuple(out)
 
 
+@checked_symbolic(exprs="exprs")
 def assign(exprs: Sequence[sp.Expr], *, b: Sequence[sp.Expr] | None = IDENTITY,
            e: Sequence[sp.Expr] | None = F_SYMBOLS) -> tuple[sp.Expr, ...]:
     """Assign values (numbers or symbols) to the Study parameters of ``B`` and ``E``.
@@ -110,6 +138,7 @@ def assign(exprs: Sequence[sp.Expr], *, b: Sequence[sp.Expr] | None = IDENTITY,
     return tuple(sp.expand(sp.sympify(x).xreplace(sub)) for x in exprs)
 
 
+@checked_symbolic(sl="exprs")
 def solve_y_from_sl(sl: Sequence[sp.Expr]) -> dict[sp.Symbol, sp.Expr]:
     """Step 3: solve the four equations of ``sl`` linearly for ``y0..y3``.
 
@@ -131,6 +160,7 @@ def solve_y_from_sl(sl: Sequence[sp.Expr]) -> dict[sp.Symbol, sp.Expr]:
     return {y: sp.cancel(s) for y, s in zip(_Y, sol, strict=True)}
 
 
+@checked_symbolic(sr="exprs", y_solution="mapping")
 def sr_in_x(sr: Sequence[sp.Expr], y_solution: Mapping[sp.Symbol, sp.Expr]) -> sp.Matrix:
     """Step 4: substitute ``y`` into ``sr``; the coefficient matrix ``M`` of ``M x = 0``.
 
@@ -148,6 +178,7 @@ def sr_in_x(sr: Sequence[sp.Expr], y_solution: Mapping[sp.Symbol, sp.Expr]) -> s
     return M
 
 
+@checked_symbolic(expr="expr", vectors="exprs8")
 def reduce_study(expr: sp.Expr, *vectors: Sequence[sp.Expr]) -> sp.Expr:
     """Normal form of ``expr`` modulo the Study quadrics of the given symbolic vectors.
 
@@ -171,6 +202,7 @@ def reduce_study(expr: sp.Expr, *vectors: Sequence[sp.Expr]) -> sp.Expr:
     return sp.expand(r)
 
 
+@checked_symbolic(M="matrix", unknowns="indices3", equations="indices3")
 def solve_x_from_sr(M: sp.Matrix, *, unknowns: Sequence[int] = (0, 1, 2),
                     equations: Sequence[int] = (1, 2, 3)
                     ) -> tuple[dict[sp.Symbol, sp.Expr], sp.Expr]:
@@ -218,6 +250,7 @@ def solve_x_from_sr(M: sp.Matrix, *, unknowns: Sequence[int] = (0, 1, 2),
     return sol, D
 
 
+@checked_symbolic(M="matrix", x_solution="mapping", equation="index4")
 def back_substitute(M: sp.Matrix, x_solution: Mapping[sp.Symbol, sp.Expr], equation: int
                     ) -> sp.Expr:
     """Step 7: substitute the ``x_i`` into the remaining equation; its numerator.
@@ -423,6 +456,7 @@ class GroebnerStep:
     solutions: tuple[dict[sp.Symbol, sp.Expr], ...]
 
 
+@checked_symbolic(p="expr", e="exprs8")
 def groebner_remaining(p: sp.Expr, *, b: Sequence[sp.Expr] | None = IDENTITY,
                        e: Sequence[sp.Expr]) -> GroebnerStep:
     """Section 3.2, last step: the joints ``v1..v5`` for a root ``p`` by a Groebner basis.

@@ -14,7 +14,7 @@ import functools
 
 import sympy as sp
 
-from ._algebra import V_SYMBOLS
+from ._algebra import V_SYMBOLS, checked_symbolic
 from ._chain import ChainComparison, compare_vectors, ik_product
 
 __all__ = ["ik_bilinear_equations", "compare_eq16", "bilinear_coefficients"]
@@ -39,6 +39,7 @@ def ik_bilinear_equations() -> tuple[sp.Expr, sp.Expr]:
     return _primitive(sp.expand(R[2])), _primitive(sp.expand(R[3]))
 
 
+@checked_symbolic(eq="expr")
 def bilinear_coefficients(eq: sp.Expr) -> tuple[sp.Expr, sp.Expr, sp.Expr, sp.Expr]:
     """Coefficients ``(c11, c1, c2, c0)`` of ``c11 v1 v2 + c1 v1 + c2 v2 + c0``.
 

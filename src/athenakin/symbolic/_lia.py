@@ -42,7 +42,7 @@ from collections.abc import Sequence
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
-from ._algebra import X_SYMBOLS
+from ._algebra import X_SYMBOLS, checked_symbolic
 
 __all__ = ["implicitize", "implicitization_matrix"]
 
@@ -59,6 +59,7 @@ def _coordinates(n: int, coordinates: Sequence[sp.Symbol] | None) -> tuple[sp.Sy
     return coordinates
 
 
+@checked_symbolic(parametrization="exprs", parameters="symbols", degree="degree")
 def implicitization_matrix(parametrization: Sequence[sp.Expr], parameters: Sequence[sp.Symbol],
                            degree: int
                            ) -> tuple[sp.Matrix, list[tuple[int, ...]]]:
@@ -124,6 +125,8 @@ def _primitive(vec: list[sp.Expr]) -> list[sp.Expr]:
     return [-c for c in out] if lc < 0 else out
 
 
+@checked_symbolic(parametrization="exprs", parameters="symbols", degree="degree",
+                  coordinates="symbols_or_none")
 def implicitize(parametrization: Sequence[sp.Expr], parameters: Sequence[sp.Symbol],
                 degree: int = 1, *, coordinates: Sequence[sp.Symbol] | None = None
                 ) -> list[sp.Expr]:

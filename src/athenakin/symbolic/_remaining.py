@@ -28,7 +28,15 @@ import functools
 
 import sympy as sp
 
-from ._algebra import V_SYMBOLS, X_SYMBOLS, dq_product, quaternion_multiply, study_G, study_M
+from ._algebra import (
+    V_SYMBOLS,
+    X_SYMBOLS,
+    checked_symbolic,
+    dq_product,
+    quaternion_multiply,
+    study_G,
+    study_M,
+)
 from ._chain import left_chain
 from ._elimination import IDENTITY, assign
 from ._lia import implicitize
@@ -103,6 +111,7 @@ def wrist_quadratic() -> tuple[sp.Expr, sp.Expr, sp.Expr]:
     return (P.coeff_monomial(s5**2), P.coeff_monomial(s5 * t5), P.coeff_monomial(t5**2))
 
 
+@checked_symbolic(s_a="expr", t_a="expr", s_b="expr", t_b="expr")
 def segre_map(s_a: sp.Expr, t_a: sp.Expr, s_b: sp.Expr, t_b: sp.Expr) -> tuple[sp.Expr, ...]:
     """``(-s_a s_b, t_a t_b, s_a t_b, t_a s_b)``: two-axis quaternion, homogeneous half-tangents.
 
@@ -112,6 +121,7 @@ def segre_map(s_a: sp.Expr, t_a: sp.Expr, s_b: sp.Expr, t_b: sp.Expr) -> tuple[s
     return (-s_a * s_b, t_a * t_b, s_a * t_b, t_a * s_b)
 
 
+@checked_symbolic(r="exprs")
 def segre_inverse(r: tuple[sp.Expr, ...]
                   ) -> tuple[tuple[tuple[sp.Expr, sp.Expr], tuple[sp.Expr, sp.Expr]],
                              tuple[tuple[sp.Expr, sp.Expr], tuple[sp.Expr, sp.Expr]]]:

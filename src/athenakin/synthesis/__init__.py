@@ -44,7 +44,8 @@ from ._search import (
     random_designs,
 )
 from ._study import CHUNK_SIZE, LOCAL_SCHEDULERS, design_rows, evaluate, read_study
-from ._task import Task, TaskSamples, example_task_path, rcm_frame_from_axis, sample_task
+from ._task import (MAX_TASK_SAMPLES, Task, TaskSamples, example_task_path,
+                    rcm_frame_from_axis, sample_task)
 
 __all__ = [
     "COLLISION_COLUMNS",
@@ -63,6 +64,7 @@ __all__ = [
     "DEFAULT_ENCODER_RESOLUTION",
     "DEFAULT_SAMPLES",
     "LOCAL_SCHEDULERS",
+    "MAX_TASK_SAMPLES",
     "METRIC_COLUMNS",
     "PARAMETER_COLUMNS",
     "SchedulerUnreachableError",

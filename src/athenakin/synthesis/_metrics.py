@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 from .._validation import check_count, check_instance, check_scalar
 from ..design import Design
 from ..errors import InvalidInputError
+from ._task import MAX_TASK_SAMPLES as _TASK_MAX
 from ._task import Task, TaskSamples, sample_task
 
 __all__ = ["METRIC_COLUMNS", "PARAMETER_COLUMNS", "DEFAULT_SAMPLES",
@@ -192,8 +193,9 @@ def design_from_row(row: Mapping[str, Any]) -> Design:
     return Design(**kw)
 
 
-#: Most task samples of one evaluation (each keeps about a hundred bytes per sample).
-MAX_TASK_SAMPLES = 100_000_000
+#: Most task samples of one evaluation (:data:`athenakin.synthesis.MAX_TASK_SAMPLES`,
+#: checked before anything is allocated; an evaluation keeps about 1 KiB per sample).
+MAX_TASK_SAMPLES = _TASK_MAX
 
 
 @functools.lru_cache(maxsize=4)

@@ -12,7 +12,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._toml import read_toml
-from .._validation import check_array, check_count, check_instance, check_path, check_scalar
+from .._validation import (
+    check_array,
+    check_count,
+    check_instance,
+    check_path,
+    check_rng,
+    check_scalar,
+)
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ._errors import TaskFileError
@@ -119,6 +126,10 @@ def bounds_from_toml(path: str | Path) -> dict[str, tuple[float, float]] | None:
         raise TaskFileError(f"{path}: {exc}") from None
 
 
+#: Most rows :func:`random_designs` draws (checked before anything is allocated).
+MAX_RANDOM_DESIGNS = 1_000_000
+
+
 def random_designs(n: int, bounds: Mapping[str, Any], *, seed: int = 0,
                    base: Design | None = None) -> list[dict[str, Any]]:
     """``n`` parameter rows drawn uniformly within ``bounds`` (seeded).
@@ -128,10 +139,11 @@ def random_designs(n: int, bounds: Mapping[str, Any], *, seed: int = 0,
     are kept: :func:`~athenakin.synthesis.evaluate` flags them.
     """
     b = check_bounds(bounds)
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise InvalidInputError(f"n: expected a positive integer, got {n!r}")
+    n = check_count(n, "n", minimum=1, maximum=MAX_RANDOM_DESIGNS)
+    if base is not None:
+        check_instance(base, "base", Design)
     base = resolve_design(base)
-    rng = np.random.default_rng(seed)
+    rng = check_rng(seed, "seed")
     lo = np.array([b[k][0] for k in SEARCH_VARIABLES])
     hi = np.array([b[k][1] for k in SEARCH_VARIABLES])
     X = lo + (hi - lo) * rng.random((int(n), len(SEARCH_VARIABLES)))

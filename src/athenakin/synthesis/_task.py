@@ -13,13 +13,18 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._toml import read_toml
 from .._transforms import transform_from_rotation_translation
-from .._validation import check_scalar
+from .._validation import check_count, check_rng, check_scalar
 from ..design import LENGTH_RANGE
 from ..errors import InvalidInputError
 from ._errors import TaskFileError
 
 __all__ = ["Task", "TaskSamples", "rcm_frame_from_axis", "sample_task", "UNIT_TOL",
-           "example_task_path"]
+           "example_task_path", "MAX_TASK_SAMPLES"]
+
+#: Most task samples drawn at once (:func:`sample_task`, and the ``samples=`` of
+#: :func:`~athenakin.synthesis.reachability` / :func:`~athenakin.synthesis.evaluate_design`),
+#: checked before anything is allocated. Draw more in several calls with other seeds.
+MAX_TASK_SAMPLES = 1_000_000
 
 #: Tolerance on ``|axis| = 1`` (the axis must be given as a unit vector).
 UNIT_TOL = 1e-9
@@ -102,7 +107,11 @@ class Task:
             raise InvalidInputError(f"half_angle: expected a value in (0, pi/2] rad, got {a!r}")
         object.__setattr__(self, "half_angle", a)
         d = self.depth
-        if isinstance(d, (str, bytes)) or np.ndim(d) != 1 or len(d) != 2:
+        try:
+            ndim = -1 if isinstance(d, (str, bytes)) else np.ndim(d)
+        except (ValueError, TypeError):         # ragged lists
+            ndim = -1
+        if ndim != 1 or len(d) != 2:
             raise InvalidInputError(f"depth: expected (d_min, d_max) in m, got {d!r}")
         lo = check_scalar(d[0], "depth[0]")
         hi = check_scalar(d[1], "depth[1]")
@@ -236,8 +245,17 @@ def rcm_frame_from_axis(rcm: ArrayLike, axis: ArrayLike) -> NDArray[np.float64]:
     Returns
     -------
     ndarray, shape (4, 4)
+
+    Raises
+    ------
+    InvalidInputError
+        ``rcm`` or ``axis`` is not 3 finite numbers, or ``axis`` is zero.
     """
     x_e = _vec3(axis, "axis")
+    big = float(np.abs(x_e).max())
+    if big == 0.0:
+        raise InvalidInputError("axis: expected a non-zero direction, got (0, 0, 0)")
+    x_e = x_e / big                 # scaled first: |axis| of 1e300 entries would overflow
     x_e = x_e / np.linalg.norm(x_e)
     ref = np.array([1.0, 0.0, 0.0])
     if np.linalg.norm(np.cross(ref, x_e)) < 1e-6:
@@ -282,8 +300,9 @@ def sample_task(task: Task, n: int, *, seed: int = 0) -> TaskSamples:
     ----------
     task : Task
     n : int
-        Number of samples (>= 1).
-    seed : int, keyword-only
+        Number of samples, 1 to :data:`MAX_TASK_SAMPLES`.
+    seed : int or numpy Generator, keyword-only
+        Seed (non-negative int) of ``numpy.random.default_rng``.
 
     Returns
     -------
@@ -291,9 +310,8 @@ def sample_task(task: Task, n: int, *, seed: int = 0) -> TaskSamples:
     """
     if not isinstance(task, Task):
         raise TypeError(f"task: expected athenakin.synthesis.Task, got {type(task).__name__}")
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise InvalidInputError(f"samples: expected a positive integer, got {n!r}")
-    rng = np.random.default_rng(seed)
+    n = check_count(n, "n", minimum=1, maximum=MAX_TASK_SAMPLES)
+    rng = check_rng(seed, "seed")
     u = rng.random((3, int(n)))
     cos_t = 1.0 - u[0] * (1.0 - math.cos(task.half_angle))
     theta = np.arccos(cos_t)
