@@ -374,6 +374,7 @@ class ForcesLayer:
         self._syncing = False
         self._dragging = False
         self._arrow: Any = None
+        self._last_key: tuple[object, ...] | None = None
         gui = server.gui
         with gui.add_folder("Actuator forces"):
             self.checkbox = gui.add_checkbox(
@@ -472,20 +473,32 @@ class ForcesLayer:
             if self.handle.visible:
                 self._show_handle()
             return None
-        try:
-            fv = forces_view(g, masses=self.masses, tip_force=self.tip_force, f_max=self.f_max)
-        except (ValueError, TypeError, KinematicsError) as exc:
-            self.message = f"{type(exc).__name__}: {exc}"
-            self.readout.content = _message(self.message)
-            self.view = None
-            return None
+        # the same drawn solution and tip force as last time (a redraw of the read-outs,
+        # an IK move held at the boundary): the statics are not computed again
+        key = (np.asarray(g.q, float).tobytes(), int(g.slot), id(g.design),
+               np.asarray(g.T_b_e, float).tobytes(), self.tip_force.tobytes())
+        if key == self._last_key and self.view is not None:
+            fv = self.view
+        else:
+            try:
+                fv = forces_view(g, masses=self.masses, tip_force=self.tip_force,
+                                 f_max=self.f_max)
+            except (ValueError, TypeError, KinematicsError) as exc:
+                self.message = f"{type(exc).__name__}: {exc}"
+                self.readout.content = _message(self.message)
+                self.view = None
+                self._last_key = None
+                return None
+            self._last_key = key
         self.message = ""
         self._draw_arrow(g.points["tip"], fv.tip_force)
         if place_handle:
             self._place_handle()
         if bool(self.drag_checkbox.value) != bool(self.handle.visible):
             self._show_handle()
-        self.readout.content = forces_html(fv)
+        text = forces_html(fv)
+        if self.readout.content != text:
+            self.readout.content = text
         self.view = fv
         return fv
 
