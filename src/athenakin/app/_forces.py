@@ -39,9 +39,9 @@ __all__ = ["ForcesView", "forces_view", "forces_html", "tip_force_from_handle",
            "ForcesLayer", "FORCE_SCALE_M_PER_N", "MAX_TIP_FORCE_N", "WARN_SHARE",
            "TIP_FORCE_COLOR"]
 
-#: Length of the drawn tip-force arrow per newton, m/N (10 N: 40 mm). Dragging the
+#: Length of the drawn tip-force arrow per newton, m/N (10 N: 50 mm). Dragging the
 #: handle by ``d`` metres changes the tip force by ``d / FORCE_SCALE_M_PER_N`` newtons.
-FORCE_SCALE_M_PER_N = 0.004
+FORCE_SCALE_M_PER_N = 0.005
 #: Largest tip force the app takes (from the handle or the numeric input), N. A handle
 #: dragged further gives a force of this size in the direction dragged.
 MAX_TIP_FORCE_N = 500.0
@@ -50,7 +50,7 @@ WARN_SHARE = 0.8
 #: Colour of the tip-force arrow and of the bars within their limits.
 TIP_FORCE_COLOR = "#16a085"
 #: Scale of the tip-force handle's gizmo (the tip handle's is 0.08).
-HANDLE_SCALE = 0.05
+HANDLE_SCALE = 0.06
 
 
 @dataclasses.dataclass(frozen=True)
@@ -314,17 +314,16 @@ def forces_html(fv: ForcesView) -> str:
             f"{_fmt(f)}</td><td style='text-align:right'>{bound}</td>"
             f"<td style='width:45%'>{_bar(f, float(lim[i]) if lim is not None else ref, color)}"
             f"</td><td style='text-align:right'>{share}</td></tr>")
+    p = '<p data-force="status" data-level="{}" style="margin:0;font-size:0.85em;{}">{}</p>'
     if lim is None:
-        status = ('<p data-force="status" data-level="ok" style="margin:0">no force limits '
-                  "given (--f-max)</p>")
+        status = p.format("ok", "", "no force limits given (--f-max)")
     elif fv.exceeded:
         names = ", ".join(f"f{i + 1} ({_fmt(float(fv.forces[i]))} N, limit {float(lim[i]):g} N)"
                           for i in np.flatnonzero(fv.over))
-        status = (f'<p data-force="status" data-level="error" style="margin:0;'
-                  f'color:{ERROR_COLOR}"><b>over the limit</b>: {html.escape(names)}</p>')
+        status = p.format("error", f"color:{ERROR_COLOR}",
+                          f"<b>over the limit</b>: {html.escape(names)}")
     else:
-        status = ('<p data-force="status" data-level="ok" style="margin:0">within the '
-                  "limits</p>")
+        status = p.format("ok", "", "within the limits")
     t, r = fv.tip_force, fv.rcm_force
     tip = ", ".join(_fmt(float(x), 1) for x in t)
     rcm = ", ".join(_fmt(float(x), 1) for x in r)
@@ -515,11 +514,11 @@ class ForcesLayer:
         if self._arrow is None:
             self._arrow = self.server.scene.add_arrows(
                 "/forces/tip_force", points=pts, colors=rgb(TIP_FORCE_COLOR),
-                shaft_radius=0.002, head_radius=0.006, head_length=0.015)
+                shaft_radius=0.003, head_radius=0.009, head_length=0.02)
         else:
             self._arrow.points = pts
 
 
 def _message(text: str) -> str:
-    return (f'<p data-force="status" data-level="error" style="margin:0;color:{ERROR_COLOR}">'
-            f"actuator forces: {html.escape(text)}</p>")
+    return (f'<p data-force="status" data-level="error" style="margin:0;font-size:0.85em;'
+            f'color:{ERROR_COLOR}">actuator forces: {html.escape(text)}</p>')
