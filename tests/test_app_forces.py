@@ -243,6 +243,21 @@ def test_app_layer_shows_the_forces_of_the_drawn_slot_and_follows_a_drag(app, tm
     assert layer.update(app.view.geometry) is None and layer.readout.content == ""
 
 
+def test_force_handle_dragged_too_far_sets_the_largest_force_and_snaps_to_it(app):
+    layer = app.forces
+    layer.drag_checkbox.value = True
+    layer._show_handle()
+    tip = app.view.geometry.points["tip"]
+    layer._on_handle(SimpleNamespace(phase="start"))
+    layer.handle.position = tuple(tip + [10.0, 0.0, 0.0])               # 2000 N: too far
+    layer._on_handle(SimpleNamespace(phase="end"))                       # the end first ...
+    layer._on_handle(SimpleNamespace(phase="update"))                    # ... then the update
+    np.testing.assert_allclose(layer.tip_force, [MAX_TIP_FORCE_N, 0.0, 0.0], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(layer.handle.position,
+                               tip + [FORCE_SCALE_M_PER_N * MAX_TIP_FORCE_N, 0.0, 0.0],
+                               rtol=0, atol=1e-6)
+
+
 def test_app_refuses_bad_force_options_before_serving(tmp_path):
     pytest.importorskip("viser", reason="needs the 'app' extra (viser)")
     from athenakin.app import AthenaApp

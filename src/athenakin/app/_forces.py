@@ -442,7 +442,9 @@ class ForcesLayer:
             return
         f = tip_force_from_handle(np.asarray(self.handle.position, dtype=float),
                                   g.points["tip"])
-        self.set_tip_force(f, place_handle=phase == "end")
+        # snap the handle to the force set (cut at MAX_TIP_FORCE_N) once no drag is on, also
+        # when the end of a drag is handled before its last update
+        self.set_tip_force(f, place_handle=phase == "end" or not self._dragging)
 
     def _show_handle(self) -> None:
         with self._lock:
