@@ -258,6 +258,35 @@ def test_force_handle_dragged_too_far_sets_the_largest_force_and_snaps_to_it(app
                                rtol=0, atol=1e-6)
 
 
+def test_app_default_masses_follow_a_new_design(tmp_path):
+    """Without --masses the forces are those of the reference model of the design drawn,
+    also after the Set-up tab loads another design."""
+    pytest.importorskip("viser", reason="needs the 'app' extra (viser)")
+    import dataclasses
+
+    from athenakin.app import AthenaApp
+
+    app = AthenaApp(port=0, backend="numpy")
+    try:
+        g = app.view.geometry
+        np.testing.assert_allclose(app.forces.view.forces,
+                                   ak.dynamics.actuator_forces(g.q, g.T_b_e, g.design, slot=0),
+                                   rtol=0, atol=ATOL_SAME_N)
+        d2 = dataclasses.replace(ak.Design.default(), l4=0.17)
+        (tmp_path / "d2.toml").write_text(d2.to_toml())
+        app._design_path.value = str(tmp_path / "d2.toml")
+        app._change_setup()
+        g2 = app.view.geometry
+        assert g2.design.l4 == pytest.approx(0.17, abs=0)
+        want = ak.dynamics.actuator_forces(g2.q, g2.T_b_e, g2.design, slot=g2.slot)
+        np.testing.assert_allclose(app.forces.view.forces, want, rtol=0, atol=ATOL_SAME_N)
+        before = ak.dynamics.actuator_forces(g2.q, g2.T_b_e, g2.design, slot=g2.slot,
+                                             masses=ak.dynamics.MassModel.reference())
+        assert np.max(np.abs(want - before)) > 1e-6        # the model did change with l4
+    finally:
+        app.stop()
+
+
 def test_app_refuses_bad_force_options_before_serving(tmp_path):
     pytest.importorskip("viser", reason="needs the 'app' extra (viser)")
     from athenakin.app import AthenaApp

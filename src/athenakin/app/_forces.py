@@ -374,6 +374,7 @@ class ForcesLayer:
         self._dragging = False
         self._arrow: Any = None
         self._last_key: tuple[object, ...] | None = None
+        self._reference: tuple[Any, Any] | None = None
         gui = server.gui
         with gui.add_folder("Actuator forces"):
             self.checkbox = gui.add_checkbox(
@@ -482,7 +483,7 @@ class ForcesLayer:
             fv = self.view
         else:
             try:
-                fv = forces_view(g, masses=self.masses, tip_force=self.tip_force,
+                fv = forces_view(g, masses=self._masses_of(g.design), tip_force=self.tip_force,
                                  f_max=self.f_max)
             except (ValueError, TypeError, KinematicsError) as exc:
                 self.message = f"{type(exc).__name__}: {exc}"
@@ -502,6 +503,16 @@ class ForcesLayer:
             self.readout.content = text
         self.view = fv
         return fv
+
+    def _masses_of(self, design: Any) -> Any:
+        """The given model, or the reference model of ``design`` (built once per design)."""
+        if self.masses is not None:
+            return self.masses
+        if self._reference is None or self._reference[0] is not design:
+            from ..dynamics import MassModel
+
+            self._reference = (design, MassModel.reference(design))
+        return self._reference[1]
 
     def _remove_arrow(self) -> None:
         if self._arrow is not None:
