@@ -7,8 +7,9 @@ Run from anywhere::
     python docs/figures/regenerate.py --quick --out /tmp/figs   # coarse grids (CI: a minute)
     python docs/figures/regenerate.py --list
 
-``app`` (the three screenshots of ``athenakin app``) needs playwright and a Chromium and is
-not part of the default set; it runs ``examples/_app_screenshots.py``. Every other figure
+``app`` (the screenshots of ``athenakin app``) needs playwright and a Chromium and is
+not part of the default set; it runs ``examples/_app_screenshots.py`` and
+``examples/_app_forces_screenshot.py``. Every other figure
 needs only the ``plot``, ``analysis``, ``calibration``, ``motion`` and ``synthesis`` extras.
 With ``--quick`` the grids and sample counts are coarser (the figures look the same, a little
 blockier); the committed PNGs are written without it.
@@ -189,7 +190,9 @@ def synthesis_pareto(s: Settings) -> list[Path]:
 def app(s: Settings) -> list[Path]:
     """docs/visualization.md: screenshots of ``athenakin app`` (playwright, Chromium)."""
     subprocess.run([sys.executable, str(ROOT / "examples/_app_screenshots.py")], check=True)
-    names = ("app_forward.png", "app_all_slots.png", "app_inverse.png")
+    subprocess.run([sys.executable, str(ROOT / "examples/_app_forces_screenshot.py")],
+                   check=True)                                      # issue 21: app forces
+    names = ("app_forward.png", "app_all_slots.png", "app_inverse.png", "app_forces.png")
     if s.out != HERE:
         for n in names:
             shutil.copyfile(HERE / n, s.out / n)

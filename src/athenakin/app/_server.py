@@ -120,6 +120,11 @@ class AthenaApp:
     solids : callable, keyword-only, optional
         ``solids(view) -> tuple of Solid``: shaded bodies drawn with the robot at each
         update (e.g. collision bodies), from the :class:`~athenakin.app.AppView` drawn.
+    masses : MassModel, str or Path, keyword-only, optional
+        Mass model of the force read-out, or a TOML file with a ``[masses]`` table
+        (default :meth:`~athenakin.dynamics.MassModel.reference`; app/_forces.py).
+    f_max : float or array-like, shape (3,), keyword-only, optional
+        Actuator force limits shown and checked, N.
 
     Attributes
     ----------
@@ -133,9 +138,14 @@ class AthenaApp:
                  T_b_e: ArrayLike | str | Path | None = None, *, host: str = "127.0.0.1",
                  port: int = DEFAULT_PORT, trajectory: str | Path | None = None,
                  backend: str = "auto", verbose: bool = False,
-                 solids: Callable[[AppView], tuple[Solid, ...]] | None = None) -> None:
+                 solids: Callable[[AppView], tuple[Solid, ...]] | None = None,
+                 masses: Any = None, f_max: Any = None) -> None:  # forces: app/_forces.py
         viser = _import_viser()
         self._solids_of = solids
+        # actuator forces (issue 21): app/_forces.py; bad options raise before the server starts
+        from ._forces import ForcesLayer, check_f_max, check_masses
+
+        masses, f_max = check_masses(masses), check_f_max(f_max)
         self._lock = threading.RLock()
         self._syncing = False
         self._backend = backend
@@ -168,6 +178,8 @@ class AthenaApp:
         from ._bodies import BodiesLayer
 
         self.bodies = BodiesLayer(self.server)
+        self.forces = ForcesLayer(self.server, masses=masses, f_max=f_max,  # issue 21 forces
+                                  tip_handle=self._handle)
         if trajectory is not None:
             self._load_trajectory(str(trajectory))
         self._apply_q(self.q, sync_ik=True)
@@ -575,6 +587,7 @@ class AthenaApp:
                 h.position = p
         self._label_texts, self._label_pos = texts, pos
         self.bodies.update(view.geometry)    # bodies as solids (issue 20): app/_bodies.py
+        self.forces.update(view.geometry)    # actuator forces (issue 21): app/_forces.py
 
     def _draw_solids(self, solids: tuple[Solid, ...]) -> None:
         """One mesh node per solid: new vertices where the mesh keeps its faces."""
@@ -763,12 +776,13 @@ def _escape(text: str) -> str:
 
 def launch(design: Design | str | Path | None = None, T_b_e: ArrayLike | str | Path | None = None,
            *, host: str = "127.0.0.1", port: int = DEFAULT_PORT,
-           trajectory: str | Path | None = None, backend: str = "auto") -> AthenaApp:
+           trajectory: str | Path | None = None, backend: str = "auto",
+           masses: Any = None, f_max: Any = None) -> AthenaApp:  # forces: app/_forces.py
     """Start the app in the background (e.g. from a notebook) and print its address.
 
     Parameters
     ----------
-    design, T_b_e, host, port, trajectory, backend
+    design, T_b_e, host, port, trajectory, backend, masses, f_max
         As in :class:`AthenaApp`.
 
     Returns
@@ -777,7 +791,7 @@ def launch(design: Design | str | Path | None = None, T_b_e: ArrayLike | str | P
         Call :meth:`AthenaApp.stop` to end it.
     """
     app = AthenaApp(design, T_b_e, host=host, port=port, trajectory=trajectory,
-                    backend=backend)
+                    backend=backend, masses=masses, f_max=f_max)
     for e in app.errors:
         print(f"athenakin app: {e}", file=sys.stderr)
     print(f"athenakin app: ATHENA at {app.url}")

@@ -24,7 +24,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                     "ghosted), a draggable tool tip and azimuth / polar / depth sliders "
                     "driving the controller-form IK, read-outs of q, p, u1..u5, the tip, the "
                     "assembly mode, the distances to the singular sets and the Jacobians' "
-                    "conditioning, and playback of a trajectory CSV from 'athenakin plan'. "
+                    "conditioning, playback of a trajectory CSV from 'athenakin plan', and the "
+                    "actuator forces f1, f2, f3 that hold the robot against gravity and a "
+                    "tip force dragged at the tool tip (--masses, --f-max). "
                     "Prints the URL; Ctrl-C stops it. A design, RCM frame or trajectory that "
                     "cannot be used is reported at start-up and in the page, and the app runs "
                     "on the reference set-up instead.")
@@ -42,6 +44,13 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--foxglove", nargs="?", type=int, const=8765, default=None, metavar="PORT",
                    help="also serve the live robot to Foxglove over its WebSocket protocol on "
                         "--host (port 8765; extra 'ros'; topics: docs/ros.md)")
+    # actuator forces (issue 21): app/_forces.py
+    p.add_argument("--masses", type=Path, default=None, metavar="FILE",
+                   help="TOML file with a [masses] table (e.g. the design file) for the "
+                        "actuator-force read-out (default: the reference mass model)")
+    p.add_argument("--f-max", type=float, nargs="+", default=None, metavar="N",
+                   help="actuator force limits in N, one for all or one per actuator: shown "
+                        "with the forces, which turn red beyond them")
     p.set_defaults(func=run)
 
 
@@ -84,6 +93,7 @@ def run(args: argparse.Namespace) -> int:
     if args.foxglove is not None and not 0 <= args.foxglove <= 65535:
         raise ValueError(f"--foxglove: expected a port 0..65535, got {args.foxglove}")
     check_host(args.host)
+    masses, f_max = _force_options(args)    # actuator forces (issue 21): app/_forces.py
     rcm: Any = args.rcm_file
     if args.rcm:
         from ..design import Design
@@ -103,7 +113,8 @@ def run(args: argparse.Namespace) -> int:
             print("athenakin app: starting (a first start compiles the numba kernels: up to "
                   "a minute)", flush=True)
         app = _server.AthenaApp(args.design, rcm, host=args.host, port=args.port,
-                                trajectory=args.trajectory, backend=args.backend)
+                                trajectory=args.trajectory, backend=args.backend,
+                                masses=masses, f_max=f_max)
         for e in app.errors:
             print(f"athenakin app: warning: {e}", file=sys.stderr)
         if args.foxglove is not None:
@@ -123,3 +134,22 @@ def run(args: argparse.Namespace) -> int:
             app.stop()
     print("athenakin app: stopped", flush=True)
     return 0
+
+
+def _force_options(args: argparse.Namespace) -> tuple[Any, Any]:
+    """``masses``, ``f_max`` of ``--masses FILE`` and ``--f-max``, checked before the start."""
+    from ..app._forces import check_f_max, check_masses
+    from ..errors import InvalidInputError
+
+    try:
+        masses = check_masses(args.masses)
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"--masses: {exc}") from None
+    if args.f_max is not None and len(args.f_max) not in (1, 3):
+        raise InvalidInputError(f"--f-max: expected 1 or 3 force limits (N), got "
+                                f"{len(args.f_max)}")
+    try:
+        f_max = check_f_max(args.f_max)
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"--f-max: {exc}") from None
+    return masses, f_max

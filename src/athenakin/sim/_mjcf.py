@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._mechanism import BODIES
 from .._output import check_output_path, write_text_atomic
-from .._validation import check_path, check_text
+from .._validation import check_text
 from ..collision._bodies import Bodies
 from ..collision._environment import Environment
 from ..design import Design

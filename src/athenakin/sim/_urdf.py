@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._mechanism import BODIES
 from .._output import check_output_path, write_text_atomic
 from .._transforms import rot_x, rot_y, rot_z
-from .._validation import check_path, check_text
+from .._validation import check_text
 from ..collision._bodies import Bodies
 from ..design import Design, resolve_design
 from ..robot._setup import resolve_rcm_frame

@@ -44,8 +44,14 @@ from ._search import (
     random_designs,
 )
 from ._study import CHUNK_SIZE, LOCAL_SCHEDULERS, design_rows, evaluate, read_study
-from ._task import (MAX_TASK_SAMPLES, Task, TaskSamples, example_task_path,
-                    rcm_frame_from_axis, sample_task)
+from ._task import (
+    MAX_TASK_SAMPLES,
+    Task,
+    TaskSamples,
+    example_task_path,
+    rcm_frame_from_axis,
+    sample_task,
+)
 
 __all__ = [
     "COLLISION_COLUMNS",
