@@ -138,3 +138,20 @@ def test_sphinx_tree_lists_every_page_once():
     mods = re.findall(r"^\.\. automodule:: (\S+)$", (ROOT / "docs" / "api.md").read_text(),
                       flags=re.M)
     assert len(mods) == len(set(mods))
+
+
+def test_every_public_subpackage_is_an_attribute_of_the_package():
+    """``import athenakin as ak; ak.<sub>`` works for every public subpackage (issue 23)."""
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1] / "src" / "athenakin"
+    subs = sorted(p.name for p in root.iterdir()
+                  if p.is_dir() and not p.name.startswith("_") and (p / "__init__.py").exists()
+                  and p.name != "cli")                   # the command line, not an API
+    subs += ["testing"]
+    code = ("import athenakin as ak\n"
+            f"for s in {subs!r}:\n"
+            "    assert getattr(ak, s).__name__ == 'athenakin.' + s, s\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
