@@ -213,7 +213,9 @@ def test_a_fifo_is_refused_without_blocking(tmp_path, reader):
     lambda p: ak.sim.write_urdf(p, D, T),
     lambda p: ak.sim.write_mjcf(p, D, T),
     lambda p: ak.analysis.save_npz(p, ak.analysis.actuator_map(D, resolution=3)),
-], ids=["urdf", "mjcf", "npz"])
+    lambda p: ak.plot.write_html(p, include_plotlyjs=False),
+    lambda p: ak.plot.save_view(p, dpi=20),
+], ids=["urdf", "mjcf", "npz", "html", "png"])
 def test_a_writer_refuses_a_fifo(tmp_path, writer):
     fifo = tmp_path / "out.fifo"
     os.mkfifo(fifo)
