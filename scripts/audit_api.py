@@ -181,8 +181,10 @@ SETUP, FK1, GEOM, VIEW = _lazy(_setup), _lazy(_fk1), _lazy(_geom), _lazy(_view)
 
 
 def _sym() -> dict[str, Any]:
-    """Base values of the computer-algebra functions (athenakin.symbolic): Section 3.2 run
-    on one numeric E (a translation along z), as the package's own tests do."""
+    """Base values of the computer-algebra functions (athenakin.symbolic).
+
+    Section 3.2 run on one numeric E (a translation along z), as the package's tests do.
+    """
     import sympy as sp
 
     S = ak.symbolic
