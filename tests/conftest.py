@@ -15,6 +15,7 @@ from __future__ import annotations
 import importlib.util
 import os
 import re
+import sys
 from collections.abc import Callable
 
 import pytest
@@ -26,6 +27,20 @@ def _missing(module: str) -> bool:
         return importlib.util.find_spec(module) is None
     except (ImportError, ValueError):
         return True
+
+
+def _has_gpu() -> bool:
+    """An NVIDIA GPU is visible (its driver's tool is on the PATH and lists one)."""
+    import shutil
+    import subprocess
+
+    if shutil.which("nvidia-smi") is None:
+        return False
+    try:
+        out = subprocess.run(["nvidia-smi", "-L"], capture_output=True, text=True, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return False
+    return out.returncode == 0 and "GPU" in out.stdout
 
 
 def _numba_missing() -> bool:
@@ -46,6 +61,11 @@ ALLOWED_SKIPS: list[tuple[str, Callable[[re.Match[str]], bool], str]] = [
      "a platform without /dev devices"),
     (r"no FIFOs on this platform", lambda m: not hasattr(os, "mkfifo"),
      "a platform without named pipes"),
+    (r"(needs|requires) an? (NVIDIA )?GPU|no (CUDA|GPU)", lambda m: not _has_gpu(),
+     "a GPU check on a machine without one"),
+    (r"(needs|requires) Python >= ?(\d+)\.(\d+)",
+     lambda m: sys.version_info[:2] < (int(m.group(2)), int(m.group(3))),
+     "a feature of a newer Python than this one"),
 ]
 
 _skips: list[tuple[str, str]] = []
