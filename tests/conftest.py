@@ -3,7 +3,8 @@
 A skip hides a test; CI must not pass because a check silently stopped running (issue 23).
 Each entry of :data:`ALLOWED_SKIPS` is a pattern of the skip's reason and the condition
 under which that reason is true on this machine: an optional dependency that is really not
-importable, a platform without FIFOs or ``/dev`` devices. A skip whose reason matches no
+importable, a platform without FIFOs or ``/dev`` devices, a machine without a GPU, an older
+Python than a feature needs. A skip whose reason matches no
 entry, or whose condition does not hold (``numba not available`` where numba imports),
 turns the session's exit status to 1 and is listed at the end.
 
