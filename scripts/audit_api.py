@@ -10,7 +10,8 @@ one, and classifies each call:
 ``named``
     a named error: a :class:`~athenakin.KinematicsError` subclass (every error class of
     athenakin derives from it), or a ``TypeError`` / ``ValueError`` whose message names
-    one of the function's arguments;
+    one of the function's arguments as a whole token (``q`` is not found in ``sqrt``,
+    issue 23);
 ``raw``
     any other exception (a numpy / numba / stdlib error from inside, ``OverflowError``,
     ``MemoryError``, ``SystemExit``, an unnamed ``ValueError`` ...);
@@ -25,7 +26,16 @@ one, and classifies each call:
     an input array changed by the call;
 ``backend``
     the numpy and numba backends disagree (a different error type, different reason
-    codes, or values differing beyond 1e-9 relative where both say valid).
+    codes, or values differing beyond 1e-9 relative where both say valid);
+``no_generator``
+    a public function the audit has no base arguments for (:data:`OVERRIDES`,
+    :data:`BY_NAME`): it cannot be audited, so the audit fails (:data:`SKIPPED` names
+    the few that are not called, and why).
+
+Every function gets the same fixed pool of calls on every machine (no time budget:
+a slow machine audits the same inputs, only later); sizes of 10**9 and 2**40 are
+tried on every size argument, under an address-space limit (``--memory-gib``) so that
+an unbounded allocation is a ``MemoryError`` (raw), not a swapping machine.
 
 The inputs: every argument in turn replaced by each value of a hostile pool (NaN,
 +/-inf, 1e308, 1e-308, -0.0, 10**400, bools, None, strings, lists, ragged lists, 0-d
@@ -38,13 +48,13 @@ then a seeded set of configurations at the singular sets and edges of the kinema
 
 Usage::
 
-    python scripts/audit_api.py                 # full run, summary on stdout (< 10 min)
+    python scripts/audit_api.py                 # full run, summary on stdout (~3 min)
     python scripts/audit_api.py --json out.json # every finding, machine-readable
     python scripts/audit_api.py --only robot    # functions whose qualified name matches
     python scripts/audit_api.py --quick         # a smaller pool (about a minute)
 
 Exit status 0 when no finding (raw, hang, nonfinite_valid, wrong_valid, mutated,
-backend), 1 otherwise.
+backend, no_generator), 1 otherwise.
 """
 
 from __future__ import annotations
@@ -183,7 +193,7 @@ SETUP, FK1, GEOM, VIEW = _lazy(_setup), _lazy(_fk1), _lazy(_geom), _lazy(_view)
 def _sym() -> dict[str, Any]:
     """Base values of the computer-algebra functions (athenakin.symbolic).
 
-    Section 3.2 run on one numeric E (a translation along z), as the package's own tests do.
+    Section 3.2 run on one numeric E (a translation along z), as the package's tests do.
     """
     import sympy as sp
 

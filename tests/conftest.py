@@ -3,7 +3,8 @@
 A skip hides a test; CI must not pass because a check silently stopped running (issue 23).
 Each entry of :data:`ALLOWED_SKIPS` is a pattern of the skip's reason and the condition
 under which that reason is true on this machine: an optional dependency that is really not
-importable, a platform without FIFOs or ``/dev`` devices. A skip whose reason matches no
+importable, a platform without FIFOs or ``/dev`` devices, a machine without a GPU, an older
+Python than a feature needs. A skip whose reason matches no
 entry, or whose condition does not hold (``numba not available`` where numba imports),
 turns the session's exit status to 1 and is listed at the end.
 
@@ -15,6 +16,7 @@ from __future__ import annotations
 import importlib.util
 import os
 import re
+import sys
 from collections.abc import Callable
 
 import pytest
@@ -26,6 +28,20 @@ def _missing(module: str) -> bool:
         return importlib.util.find_spec(module) is None
     except (ImportError, ValueError):
         return True
+
+
+def _has_gpu() -> bool:
+    """An NVIDIA GPU is visible (its driver's tool is on the PATH and lists one)."""
+    import shutil
+    import subprocess
+
+    if shutil.which("nvidia-smi") is None:
+        return False
+    try:
+        out = subprocess.run(["nvidia-smi", "-L"], capture_output=True, text=True, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return False
+    return out.returncode == 0 and "GPU" in out.stdout
 
 
 def _numba_missing() -> bool:
@@ -46,6 +62,11 @@ ALLOWED_SKIPS: list[tuple[str, Callable[[re.Match[str]], bool], str]] = [
      "a platform without /dev devices"),
     (r"no FIFOs on this platform", lambda m: not hasattr(os, "mkfifo"),
      "a platform without named pipes"),
+    (r"(needs|requires) an? (NVIDIA )?GPU|no (CUDA|GPU)", lambda m: not _has_gpu(),
+     "a GPU check on a machine without one"),
+    (r"(needs|requires) Python >= ?(\d+)\.(\d+)",
+     lambda m: sys.version_info[:2] < (int(m.group(2)), int(m.group(3))),
+     "a feature of a newer Python than this one"),
 ]
 
 _skips: list[tuple[str, str]] = []

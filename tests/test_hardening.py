@@ -213,7 +213,9 @@ def test_a_fifo_is_refused_without_blocking(tmp_path, reader):
     lambda p: ak.sim.write_urdf(p, D, T),
     lambda p: ak.sim.write_mjcf(p, D, T),
     lambda p: ak.analysis.save_npz(p, ak.analysis.actuator_map(D, resolution=3)),
-], ids=["urdf", "mjcf", "npz"])
+    lambda p: ak.plot.write_html(p, include_plotlyjs=False),
+    lambda p: ak.plot.save_view(p, dpi=20),
+], ids=["urdf", "mjcf", "npz", "html", "png"])
 def test_a_writer_refuses_a_fifo(tmp_path, writer):
     fifo = tmp_path / "out.fifo"
     os.mkfifo(fifo)
@@ -367,11 +369,19 @@ def test_backends_classify_alike_at_the_degeneracy_thresholds(kind, spread, tol)
     ("needs the 'app' extra (athenakin_no_such_module)", False),
     ("no FIFOs on this platform", hasattr(os, "mkfifo")),
     ("no /dev devices on this platform", os.path.exists("/dev/zero")),
+    ("needs Python >= 3.0", True),                                   # this Python is newer
+    ("needs Python >= 99.0", False),
 ])
 def test_the_skip_allow_list(reason, expected_unexpected):
     from conftest import unexpected
 
     assert unexpected(reason) is expected_unexpected
+
+
+def test_a_gpu_skip_is_allowed_only_without_a_gpu():
+    from conftest import _has_gpu, unexpected
+
+    assert unexpected("needs a GPU") is _has_gpu()
 
 
 def test_a_numba_skip_is_unexpected_where_numba_runs():

@@ -8,7 +8,8 @@ from typing import Any
 import numpy as np
 
 from .._figstyle import MICRO_M
-from .._validation import check_axes, check_instance, check_path
+from .._output import check_output_path, write_text_atomic
+from .._validation import check_axes, check_instance, check_text
 from ._accuracy import TipErrorMap, tip_error_map
 from ._model import PARAMETER_UNITS
 from ._solve import CalibrationResult
@@ -152,7 +153,8 @@ def write_report(result: CalibrationResult, path: str | Path, *, figures: bool =
         The files written (report first).
     """
     check_instance(result, "result", CalibrationResult)
-    path = check_path(path)
+    path = check_output_path(path)
+    check_text(title, "title", max_length=1000)
     out = [path]
     lines = [f"# {title}", "",
              f"Measurements in the **{result.frame}** frame; "
@@ -196,8 +198,8 @@ def write_report(result: CalibrationResult, path: str | Path, *, figures: bool =
             out.append(png)
             lines += ["", f"![{suffix}]({png.name})"]
     text = "\n".join(lines) + "\n"
-    path.write_text(_html(text, title) if path.suffix.lower() in (".html", ".htm") else text,
-                    encoding="utf-8")
+    write_text_atomic(path, _html(text, title) if path.suffix.lower() in (".html", ".htm")
+                      else text)
     return out
 
 

@@ -72,10 +72,12 @@ class ParallelSolution:
         Radius of ``k1``, y of C, the paper's ``w`` (Eq. 8) and the half-chord
         ``a = sqrt(max(w, 0)) / (2 m_y d)`` of the two intersections (m).
     residual : ndarray, shape (..., 2)
-        How far (m) the reported ``O_s`` may be from the true mechanism's: 0 for an
-        isolated intersection; where the modes merge (half-chord ``<= tangent_tol``)
-        ``O_i`` is put at the chord midpoint, up to the half-chord ``a`` off the true
-        intersections, and ``O_s`` up to ``a (r1 + l4) / r1``. NaN in invalid slots.
+        How far (m) the reported ``O_s`` may be from the true mechanism's, from the
+        rounding of ``k`` (:func:`parallel_residual`; about 1e-15 m for an isolated
+        intersection, growing like ``1 / a`` towards tangency); where the modes merge
+        (half-chord ``<= tangent_tol``) ``O_i`` is put at the chord midpoint, up to the
+        half-chord ``a`` off the true intersections, and ``O_s`` up to
+        ``a (r1 + l4) / r1``, plus that rounding. NaN in invalid slots.
         :func:`~athenakin.forward_kinematics` adds it to every slot's ``residual``.
     """
 

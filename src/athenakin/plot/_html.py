@@ -365,7 +365,7 @@ def write_html(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | 
     """
     import html
 
-    from .._output import check_output_path
+    from .._output import check_output_path, write_text_atomic
 
     path = check_output_path(path)
     fig = robot_figure(q, T_b_e, design, slot=slot, **kwargs)
@@ -373,5 +373,5 @@ def write_html(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | 
                        config={"displaylogo": False, "responsive": True})
     page_title = html.escape(fig.layout.title.text or "ATHENA")
     text = text.replace("<head>", f"<head>\n<title>{page_title}</title>", 1)
-    path.write_text(text, encoding="utf-8")
+    write_text_atomic(path, text)
     return path

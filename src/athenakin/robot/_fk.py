@@ -103,7 +103,11 @@ class FKSolution:
         NaN where the parallel module cannot take that mode).
     residual : ndarray, shape (..., 16)
         Closure residual ``max(max|R - R*|, max|t - t*| / 1 m)`` of the chain
-        ``T_s_e(p, u)`` against the target ``T_b_s^-1 @ T_b_e``, both in the frame ``O_s``.
+        ``T_s_e(p, u)`` against the target ``T_b_s^-1 @ T_b_e``, both in the frame ``O_s``,
+        and at least the parallel module's bound on the error of ``O_s``
+        (:attr:`athenakin.parallel.ParallelSolution.residual`). A valid slot has a
+        residual of at most ``closure_tol`` (plus the rounding of a far pose); near
+        tangency a slot beyond it is ``CIRCLES_TANGENT``.
     item_reason : ndarray of int8, shape (...)
         0 where the item has at least one valid slot, else why it has none.
     tool_length : float
