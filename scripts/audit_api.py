@@ -402,6 +402,8 @@ OVERRIDES: dict[str, Callable[[dict[str, Path]], tuple[tuple, dict]]] = {
     "app.message_html": lambda f: (("ok", "warn"), {}),
     "app.readouts_html": lambda f: ((VIEW().readouts,), {}),
     "app.robot_scene": lambda f: ((GEOM(),), {}),
+    "app.with_solids": lambda f: ((ak.app.robot_scene(GEOM()), (ak.app.Solid(
+        "tri", np.eye(3) * 0.01, np.array([[0, 1, 2]]), (200, 40, 40)),)), {}),
     "app.slot_ghosts": lambda f: ((FK1(), Q0, T0, D, np.flatnonzero(FK1().valid)[1:3]), {}),
     "app.slot_statuses": lambda f: ((FK1().valid, FK1().reason), {}),
     "app.slots_html": lambda f: ((VIEW().slots, 0), {}),
@@ -523,8 +525,11 @@ def _designs() -> list[tuple[str, Any]]:
         "design point strokes": dict(l1=0.3, l2=0.1, l3=0.25, l4=0.15, l5=0.4,
                                      q_min=(-0.1, 0.1, 0.45), q_max=(-0.1, 0.1, 0.45)),
     }
-    for k, kw in rows.items():
-        with contextlib.suppress(Exception):
+    from athenakin.design import UnitWarning
+
+    for k, kw in rows.items():                 # border designs on purpose: no unit warning
+        with contextlib.suppress(Exception), warnings.catch_warnings():
+            warnings.simplefilter("ignore", UnitWarning)
             out.append((k, ak.Design(**kw)))
     return out
 

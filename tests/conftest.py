@@ -67,6 +67,9 @@ ALLOWED_SKIPS: list[tuple[str, Callable[[re.Match[str]], bool], str]] = [
     (r"(needs|requires) Python >= ?(\d+)\.(\d+)",
      lambda m: sys.version_info[:2] < (int(m.group(2)), int(m.group(3))),
      "a feature of a newer Python than this one"),
+    (r"^marked in the page: \S", lambda m: True,
+     "a README/docs block its page marks '# not run: REASON' (an install, a server that runs "
+     "until Ctrl-C, minutes of benchmarks); tests/test_readme_blocks.py prints the reason"),
 ]
 
 _skips: list[tuple[str, str]] = []

@@ -16,7 +16,8 @@ import dataclasses
 import numpy as np
 from numpy.typing import NDArray
 
-from ..plot._geometry import RobotGeometry
+from .._validation import check_instance
+from ..plot._geometry import RobotGeometry, check_length
 from ..plot._mpl import ARC_RADIUS, COLORS, FRAME_LENGTH, arc_points
 
 __all__ = ["LineSet", "PointSet", "Label", "Solid", "Scene", "robot_scene", "with_solids", "rgb",
@@ -185,6 +186,11 @@ def robot_scene(g: RobotGeometry, *, frames: bool = True, labels: bool = True,
         shaft), ``spherical_joint`` and ``frame_x``/``_y``/``_z``; one point set
         ``joints``.
     """
+    check_instance(g, "g", RobotGeometry)
+    frame_length = check_length(frame_length, "frame_length")
+    for name, flag in (("frames", frames), ("labels", labels)):
+        if not isinstance(flag, (bool, np.bool_)):
+            raise TypeError(f"{name}: expected a bool, got {type(flag).__name__}")
     P, seg = g.points, g.segments()
     c = {k: rgb(v) for k, v in COLORS.items()}
 
@@ -239,6 +245,27 @@ def with_solids(scene: Scene, solids: tuple[Solid, ...]) -> Scene:
     """
     from ..errors import InvalidInputError
 
+    check_instance(scene, "scene", Scene)
+    if not isinstance(solids, (tuple, list)) or not all(isinstance(so, Solid) for so in solids):
+        raise TypeError(f"solids: expected a tuple of Solid, got {type(solids).__name__}")
+    solids = tuple(solids)
+    for so in solids:
+        if not isinstance(so.name, str):
+            raise TypeError(f"solids: names must be str, got {type(so.name).__name__}")
+        try:
+            v = np.asarray(so.vertices, dtype=float)
+            f = np.asarray(so.faces)
+        except (TypeError, ValueError):
+            raise InvalidInputError(f"solids[{so.name!r}]: vertices and faces must be numeric "
+                                    f"arrays") from None
+        if v.ndim != 2 or v.shape[1:] != (3,) or f.ndim != 2 or f.shape[1:] != (3,):
+            raise InvalidInputError(f"solids[{so.name!r}]: expected vertices (n, 3) and faces "
+                                    f"(m, 3), got {v.shape} and {f.shape}")
+        if not np.isfinite(v).all():
+            raise InvalidInputError(f"solids[{so.name!r}]: vertices must be finite")
+        if f.size and (f.dtype.kind not in "iu" or f.min() < 0 or f.max() >= v.shape[0]):
+            raise InvalidInputError(f"solids[{so.name!r}]: faces must be integer indices into "
+                                    f"the {v.shape[0]} vertices")
     names = [so.name for so in (*scene.solids, *solids)]
     if len(set(names)) != len(names):
         raise InvalidInputError(f"solids: names must be unique, got {names}")
