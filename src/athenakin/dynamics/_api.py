@@ -194,6 +194,8 @@ def statics(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None 
     -------
     Statics
     """
+    if not isinstance(rcm_load, (bool, np.bool_)):
+        raise TypeError(f"rcm_load: expected True or False, got {rcm_load!r:.80}")
     prep = _prepare({"q": q}, T_b_e, design, masses, slot, errors, gravity=gravity,
                     tip_force=tip_force)
     qf = prep.arrays["q"]

@@ -170,7 +170,11 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
     T = resolve_rcm_frame(T_b_e, d, single=True)
     T_dur = check_scalar(duration, "duration", positive=True)
     h = check_scalar(dt, "dt", positive=True)
-    n = int(np.ceil(T_dur / h - 1e-9))
+    ratio = T_dur / h
+    if not ratio <= MAX_STEPS + 1:     # inf when duration / dt overflows
+        raise InvalidInputError(f"duration / dt: expected at most {MAX_STEPS} steps, got "
+                                f"{ratio:.3g}")
+    n = int(np.ceil(ratio - 1e-9))
     if n > MAX_STEPS:
         raise InvalidInputError(f"duration / dt: expected at most {MAX_STEPS} steps, got {n}")
     g = check_array(gravity, "gravity", (3,))
