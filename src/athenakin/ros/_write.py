@@ -35,6 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_path
 from ..design import Design
+from ..robot._setup import resolve_rcm_frame
 from ..sim import JOINTS
 from ._cdr import CdrBuilder, Template, split_stamps
 from ._errors import ros_extra_missing
@@ -343,6 +344,14 @@ class McapOutput:
             raise ValueError(f"compression: expected one of {COMPRESSIONS}, got "
                              f"{compression!r}")
         self.path = check_path(path)
+        if not isinstance(design, Design):
+            raise TypeError(f"design: expected a Design, got {type(design).__name__}")
+        if T_b_e is None:
+            raise TypeError("T_b_e: expected the RCM frame, a rigid transform of shape (4, 4), "
+                            "got None")
+        T_b_e = resolve_rcm_frame(T_b_e, design)
+        if target is not None:
+            target = check_path(target, "target")
         if os.path.exists(self.path) and not stat.S_ISREG(os.stat(self.path).st_mode):
             raise ValueError(f"path: {str(self.path)!r} is not a regular file (a device, FIFO "
                              f"or socket)")
