@@ -23,7 +23,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array
+from .._validation import broadcast_batch, check_array
 from ..design import Design
 from ..errors import InvalidInputError
 from ._api import STANDARD_GRAVITY, statics
@@ -182,6 +182,8 @@ def max_tip_force(q: ArrayLike, direction: ArrayLike, T_b_e: ArrayLike | None = 
     u = u / n
     cap = force_capability(q, T_b_e, design, f_max=f_max, f_min=f_min, masses=masses,
                            gravity=gravity, slot=slot, errors=errors)
+    # direction against the batch of the other arguments (q, T_b_e, gravity)
+    broadcast_batch(direction=u.shape[:-1], q=cap.valid.shape)
     au = np.einsum("...ki,...i->...k", cap.A, u)
     with np.errstate(divide="ignore", invalid="ignore"):
         s = np.where(au > 0, cap.b / au, np.inf)
