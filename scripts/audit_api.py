@@ -1289,9 +1289,10 @@ def dr_method_targets() -> list[tuple[str, Callable[..., Any]]]:
         finally:
             s.set_setup(D, T0)
 
-    return [("dynamics.MassModel.from_mapping", from_mapping), ("dynamics.MassModel.from_toml", from_toml),
-            ("dynamics.MassModel.slender_rods", slender_rods), ("dynamics.MassModel.from_bodies", from_bodies),
-            ("dynamics.MassModel.reference", reference), ("dynamics.MassModel.body", body),
+    m = "dynamics.MassModel."
+    return [(m + "from_mapping", from_mapping), (m + "from_toml", from_toml),
+            (m + "slender_rods", slender_rods), (m + "from_bodies", from_bodies),
+            (m + "reference", reference), (m + "body", body),
             ("ros.FoxgloveStream.publish", publish), ("ros.FoxgloveStream.set_setup", set_setup)]
 
 
@@ -1312,7 +1313,8 @@ METHOD_BASES.update({
 #: Method bases that need a file or a lazily built value.
 DR_METHOD_FILE_BASES: dict[str, Callable[[dict[str, Path]], tuple[tuple, dict]]] = {
     "dynamics.MassModel.from_toml": lambda f: ((f["masses_toml"],), {}),
-    "dynamics.MassModel.from_bodies": lambda f: ((_dr_bodies(),), dict(density=2700.0, design=D)),
+    "dynamics.MassModel.from_bodies": lambda f: ((_dr_bodies(),),
+                                                 dict(density=2700.0, design=D)),
 }
 
 

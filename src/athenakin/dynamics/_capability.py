@@ -71,7 +71,7 @@ class ForceCapability:
 MAX_FORCE_LIMIT = 1e9
 
 
-def _limit(x: object, name: str) -> Arr:
+def _limit(x: ArrayLike, name: str) -> Arr:
     """One force limit: a real scalar or shape (3,), finite, |x| <= MAX_FORCE_LIMIT."""
     if isinstance(x, bool):
         raise TypeError(f"{name}: expected a real number or 3 numbers (N), got bool")
