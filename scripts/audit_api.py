@@ -1329,6 +1329,18 @@ def dr_methods(audit: Audit, files: dict[str, Path], only: str | None, quick: bo
             args, kw = METHOD_BASES[key]
             OVERRIDES[key] = lambda _f, a=args, k=kw: (a, k)
         fuzz_function(audit, key, f, files, quick)
+# The distance primitives of athenakin.collision (added here only where no other block
+# gives a base: setdefault).
+_DR_A, _DR_B = np.array([0.0, 0.0, 0.0]), np.array([0.0, 0.0, 0.1])
+_DR_C, _DR_E = np.array([0.05, 0.0, 0.0]), np.array([0.05, 0.1, 0.05])
+for _k, _v in {
+    "collision.segment_segment": lambda f: ((_DR_A, _DR_B, _DR_C, _DR_E), {}),
+    "collision.point_segment": lambda f: ((_DR_C, _DR_A, _DR_B), {}),
+    "collision.capsule_capsule": lambda f: ((_DR_A, _DR_B, 0.01, _DR_C, _DR_E, 0.01), {}),
+    "collision.capsule_halfspace": lambda f: ((_DR_A, _DR_B, 0.01, np.array([0, 0, -0.05]),
+                                               np.array([0.0, 0.0, 1.0])), {}),
+}.items():
+    OVERRIDES.setdefault(_k, _v)
 # --- end of the dynamics and ros block -------------------------------------------------------
 
 
