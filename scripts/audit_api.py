@@ -1143,8 +1143,17 @@ def _dr_masses() -> Any:
 
 
 def _dr_files(tmp: Path) -> dict[str, Path]:
-    """A 5-reading rosbag2 (sqlite3) of /joint_states and a [masses] TOML file."""
+    """A 5-reading rosbag2 (sqlite3) of /joint_states and a [masses] TOML file.
+
+    Also compiles the dynamics kernel (numba) here, outside any per-call alarm: compile
+    time is not a hang.
+    """
     out: dict[str, Path] = {}
+    if ak._dispatch.numba_available():
+        with contextlib.suppress(Exception):
+            import athenakin.dynamics as dyn
+
+            dyn.inverse_dynamics(Q0, np.zeros(3), np.zeros(3), T0, D, backend="numba")
     with contextlib.suppress(Exception):
         import athenakin.dynamics as dyn
 

@@ -232,3 +232,25 @@ def test_publish_bad_argument_is_named(live, kw, exc, match):
 def test_live_server_binds_loopback_port_zero():
     with ros.FoxgloveStream(T, D, port=0) as s:
         assert s.host == "127.0.0.1" and s.port > 0
+
+
+def test_kernel_compiles_one_specialization_for_readonly_and_batched_inputs():
+    # the audit's read-only / batched / float32 inputs once compiled a new kernel each
+    # (about 2-13 s apiece on a cold cache)
+    pytest.importorskip("numba")
+    from athenakin.dynamics._kernel import inverse_dynamics_kernel as kernel
+
+    ro_q = Q.copy()
+    ro_q.setflags(write=False)
+    ro_T = T.copy()
+    ro_T.setflags(write=False)
+    z = np.zeros(3)
+    dyn.inverse_dynamics(Q, z, z, T, D, backend="numba")
+    n = len(kernel.signatures)
+    for q, TT in ((ro_q, ro_T), (np.stack([Q, Q]), T), (Q.astype(np.float32), ro_T)):
+        got = dyn.inverse_dynamics(q, z, z, TT, D, backend="numba")
+        ref = dyn.inverse_dynamics(q, z, z, TT, D, backend="numpy")
+        np.testing.assert_allclose(got, ref, rtol=0, atol=1e-9)
+        assert got.shape == ref.shape
+    dyn.simulate(Q, z, np.array([0.0, 0.0, 5.0]), T, D, duration=0.002)
+    assert len(kernel.signatures) == n
