@@ -1298,8 +1298,20 @@ def dr_method_targets() -> list[tuple[str, Callable[..., Any]]]:
         finally:
             s.set_setup(D, T0)
 
+    def follow(state: Any, *, rate: Any = 30.0) -> Any:
+        with ros.FoxgloveStream(T0, D, port=0) as s:
+            s.follow(state, rate=rate)
+            return s.port
+
+    def write_static(stamp_ns: Any) -> Any:
+        with tempfile.TemporaryDirectory(prefix="athenakin-audit-mcap-") as d:
+            with ros.McapOutput(Path(d) / "s.mcap", D, T0) as out:
+                out.write_static(stamp_ns)
+            return dict(out.counts)
+
     m = "dynamics.MassModel."
-    return [(m + "from_mapping", from_mapping), (m + "from_toml", from_toml),
+    return [("ros.FoxgloveStream.follow", follow), ("ros.McapOutput.write_static", write_static),
+            (m + "from_mapping", from_mapping), (m + "from_toml", from_toml),
             (m + "slender_rods", slender_rods), (m + "from_bodies", from_bodies),
             (m + "reference", reference), (m + "body", body),
             ("ros.FoxgloveStream.publish", publish), ("ros.FoxgloveStream.set_setup", set_setup)]
@@ -1318,6 +1330,8 @@ METHOD_BASES.update({
     "dynamics.MassModel.body": (("link_a",), {}),
     "ros.FoxgloveStream.publish": ((Q0,), dict(slot=0, flags=0, stamp_ns=1)),
     "ros.FoxgloveStream.set_setup": ((D, T0), {}),
+    "ros.FoxgloveStream.follow": ((lambda: (Q0, None),), dict(rate=30.0)),
+    "ros.McapOutput.write_static": ((1_700_000_000_000_000_000,), {}),
 })
 #: Method bases that need a file or a lazily built value.
 DR_METHOD_FILE_BASES: dict[str, Callable[[dict[str, Path]], tuple[tuple, dict]]] = {

@@ -254,3 +254,16 @@ def test_kernel_compiles_one_specialization_for_readonly_and_batched_inputs():
         assert got.shape == ref.shape
     dyn.simulate(Q, z, np.array([0.0, 0.0, 5.0]), T, D, duration=0.002)
     assert len(kernel.signatures) == n
+
+
+@pytest.mark.parametrize("stamp, exc", [(None, TypeError), (np.nan, TypeError), ("1", TypeError),
+                                        (-1, InvalidInputError), (2**63, InvalidInputError)],
+                         ids=["none", "nan", "str", "negative", "2_63"])
+def test_mcap_write_static_stamp_is_named(tmp_path, stamp, exc):
+    out = ros.McapOutput(tmp_path / "s.mcap", D, T)
+    try:
+        with pytest.raises(exc, match=r"^stamp_ns: "):
+            out.write_static(stamp)
+    finally:
+        out.discard()
+    assert not list(tmp_path.iterdir())

@@ -28,7 +28,7 @@ from ..errors import InvalidInputError
 from ..robot import forward_kinematics
 from ..robot._setup import resolve_rcm_frame
 from ._errors import ros_extra_missing
-from ._write import _MSG_TYPES, TOPICS, RosEncoder, TrackedBatch, msgdef
+from ._write import _MSG_TYPES, TOPICS, RosEncoder, TrackedBatch, check_uint, msgdef
 
 __all__ = ["FoxgloveStream", "DEFAULT_PORT", "serve_app"]
 
@@ -37,15 +37,6 @@ DEFAULT_PORT = 8765
 #: Most poses per second the polling thread of :meth:`FoxgloveStream.follow` publishes.
 MAX_RATE = 1000.0
 _STATIC = ("robot_description", "tf_static")
-
-
-def _check_uint(x: object, name: str, bound: int) -> int:
-    """An integer in ``[0, bound)`` (a uint32 field, a stamp in ns)."""
-    if isinstance(x, bool) or not isinstance(x, (int, np.integer)):
-        raise TypeError(f"{name}: expected an integer, got {type(x).__name__}")
-    if not 0 <= int(x) < bound:
-        raise InvalidInputError(f"{name}: expected an integer from 0 to {bound - 1}, got {x!r:.40}")
-    return int(x)
 
 
 class FoxgloveStream:
@@ -170,9 +161,9 @@ class FoxgloveStream:
         qa = check_array(q, "q", (3,), allow_nonfinite=True)
         if qa.shape != (3,):
             raise InvalidInputError(f"q: expected shape (3,), got {qa.shape}")
-        _check_uint(flags, "flags", 2**32)
+        check_uint(flags, "flags", 2**32)
         if stamp_ns is not None:
-            _check_uint(stamp_ns, "stamp_ns", 2**63)
+            check_uint(stamp_ns, "stamp_ns", 2**63)
         stamp = time.time_ns() if stamp_ns is None else int(stamp_ns)
         self._flush_resend(stamp)
         sol = forward_kinematics(qa, self.T_b_e, self.design, errors="flag")

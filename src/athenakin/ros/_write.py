@@ -35,6 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_path
 from ..design import Design
+from ..errors import InvalidInputError
 from ..robot._setup import resolve_rcm_frame
 from ..sim import JOINTS
 from ._cdr import CdrBuilder, Template, split_stamps
@@ -231,6 +232,15 @@ class TrackedBatch:
     clearance_flags: NDArray[np.int64] | None = None
 
 
+def check_uint(x: object, name: str, bound: int) -> int:
+    """An integer in ``[0, bound)`` (a uint32 field, a stamp in ns)."""
+    if isinstance(x, bool) or not isinstance(x, (int, np.integer)):
+        raise TypeError(f"{name}: expected an integer, got {type(x).__name__}")
+    if not 0 <= int(x) < bound:
+        raise InvalidInputError(f"{name}: expected an integer from 0 to {bound - 1}, got {x!r:.40}")
+    return int(x)
+
+
 class RosEncoder:
     """The CDR messages of ATHENA's topics for one design and set-up (no file).
 
@@ -402,7 +412,11 @@ class McapOutput:
         self.counts[TOPICS[key]] += 1
 
     def write_static(self, stamp_ns: int) -> None:
-        """``/robot_description`` (the URDF) and ``/tf_static`` (fixed frames), once."""
+        """``/robot_description`` (the URDF) and ``/tf_static`` (fixed frames), once.
+
+        ``stamp_ns``: int, ns, 0 to 2**63 - 1.
+        """
+        check_uint(stamp_ns, "stamp_ns", 2**63)
         if self._static_done:
             return
         self._static_done = True
