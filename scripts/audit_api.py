@@ -91,7 +91,7 @@ FINDINGS = ("raw", "hang", "nonfinite_valid", "wrong_valid", "mutated", "backend
 CLASSES = ("result", "named", *FINDINGS)
 SUBPACKAGES = ("robot", "parallel", "chain", "study", "analysis", "motion", "fast",
                "certified", "calibration", "synthesis", "sim", "symbolic", "collision", "plot",
-               "app", "testing")
+               "app", "testing", "dynamics", "ros")
 RTOL = 1e-9
 
 
@@ -1146,6 +1146,242 @@ METHOD_BASES: dict[str, tuple[tuple, dict]] = {
 }
 
 
+# --- dynamics and ros (issue 23): base values, wrappers and methods ------------------------
+# Kept in one block (the other subpackages' generators are above). The readers get a small
+# rosbag2 recording written here with rosbags (independent of athenakin.ros); the
+# FoxgloveStream server binds 127.0.0.1 port 0 and is stopped after each call; McapOutput
+# is closed; iter_joint_states is consumed (its checks run as the chunks are read).
+def _dr_masses() -> Any:
+    import athenakin.dynamics as dyn
+
+    return dyn.MassModel.reference(D)
+
+
+def _dr_files(tmp: Path) -> dict[str, Path]:
+    """A 5-reading rosbag2 (sqlite3) of /joint_states and a [masses] TOML file.
+
+    Also compiles the dynamics kernel (numba) here, outside any per-call alarm: compile
+    time is not a hang.
+    """
+    out: dict[str, Path] = {}
+    if ak._dispatch.numba_available():
+        with contextlib.suppress(Exception):
+            import athenakin.dynamics as dyn
+
+            dyn.inverse_dynamics(Q0, np.zeros(3), np.zeros(3), T0, D, backend="numba")
+    with contextlib.suppress(Exception):
+        import athenakin.dynamics as dyn
+
+        t = tmp / "masses.toml"
+        t.write_text(dyn.MassModel.reference(D).to_toml())
+        out["masses_toml"] = t
+    bag = tmp / "js_bag"
+    with contextlib.suppress(Exception):
+        from rosbags.rosbag2 import Writer
+        from rosbags.typesys import Stores, get_typestore
+
+        store = get_typestore(Stores.ROS2_HUMBLE)
+        T = store.types
+        with Writer(bag, version=9) as w:
+            c = w.add_connection("/joint_states", "sensor_msgs/msg/JointState",
+                                 typestore=store)
+            for i in range(5):
+                st = 1_700_000_000_000_000_000 + i * 1_000_000
+                m = T["sensor_msgs/msg/JointState"](
+                    header=T["std_msgs/msg/Header"](
+                        stamp=T["builtin_interfaces/msg/Time"](sec=st // 10**9,
+                                                                nanosec=st % 10**9),
+                        frame_id=""),
+                    name=["q1", "q2", "q3"], position=Q0 + 1e-4 * i, velocity=np.zeros(0),
+                    effort=np.zeros(0))
+                w.write(c, st, store.serialize_cdr(m, "sensor_msgs/msg/JointState"))
+    out["js_bag"] = bag
+    return out
+
+
+DR_MASSES = _lazy(_dr_masses)
+DR_STAMPS = 1_700_000_000_000_000_000 + 1_000_000 * np.arange(3, dtype=np.int64)
+DR_QS = np.array([Q0, Q0 + 1e-4, Q0 + 2e-4])
+DR_FMAX = np.array([60.0, 60.0, 60.0])
+OVERRIDES.update({
+    "dynamics.MassModel": lambda f: ((DR_MASSES().mass, DR_MASSES().com,
+                                      DR_MASSES().inertia), {}),
+    "dynamics.actuator_part_length": lambda f: ((D,), {}),
+    "dynamics.body_segment_in_frame": lambda f: (("link_a", D), {}),
+    "dynamics.statics": lambda f: ((Q0, T0, D), dict(masses=DR_MASSES(),
+                                                     tip_force=np.array([1.0, 0, 0]))),
+    "dynamics.actuator_forces": lambda f: ((Q0, T0, D), dict(masses=DR_MASSES(),
+                                                             tip_force=np.array([1.0, 0, 0]))),
+    "dynamics.inverse_dynamics": lambda f: ((Q0, np.array([0.01, -0.01, 0.02]),
+                                             np.array([0.1, 0.1, -0.1]), T0, D),
+                                            dict(masses=DR_MASSES())),
+    "dynamics.mass_matrix": lambda f: ((Q0, T0, D), dict(masses=DR_MASSES())),
+    "dynamics.forward_dynamics": lambda f: ((Q0, np.array([0.01, -0.01, 0.02]),
+                                             np.array([1.0, -1.0, 5.0]), T0, D),
+                                            dict(masses=DR_MASSES())),
+    "dynamics.mechanical_energy": lambda f: ((Q0, np.array([0.01, -0.01, 0.02]), T0, D),
+                                             dict(masses=DR_MASSES())),
+    "dynamics.force_capability": lambda f: ((Q0, T0, D), dict(f_max=DR_FMAX,
+                                                              masses=DR_MASSES())),
+    "dynamics.max_tip_force": lambda f: ((Q0, np.array([0.0, 0.0, -1.0]), T0, D),
+                                         dict(f_max=DR_FMAX, masses=DR_MASSES())),
+    "dynamics.force_metrics": lambda f: ((Q0, T0, D), dict(slot=0, masses=DR_MASSES())),
+    "dynamics.simulate": lambda f: ((Q0, np.zeros(3), np.array([0.0, 0.0, 5.0]), T0, D),
+                                    dict(duration=0.005, dt=0.001, masses=DR_MASSES())),
+    "ros.FoxgloveStream": lambda f: ((T0, D), dict(port=0)),
+    "ros.McapOutput": lambda f: ((f["tmp"] / "out.mcap", D, T0), {}),
+    "ros.iter_joint_states": lambda f: ((f["js_bag"],), dict(chunk_size=2)),
+    "ros.read_joint_states": lambda f: ((f["js_bag"],), {}),
+    "ros.recording_format": lambda f: ((f["js_bag"],), {}),
+    "ros.track_recording": lambda f: ((f["js_bag"], f["tmp"] / "track.mcap", T0, D),
+                                      dict(chunk_size=2)),
+    "ros.track_to_mcap": lambda f: ((DR_STAMPS, DR_QS, f["tmp"] / "t2m.mcap", T0, D), {}),
+    "ros.write_trajectory": lambda f: ((f["tmp"] / "traj.mcap", TRAJ()), {}),
+})
+
+
+def _dr_stop(s: Any) -> Any:
+    s.stop()
+    return s.port
+
+
+#: Public names called through a wrapper with their signature: the wrapper finishes what the
+#: call starts (a server stopped, a file closed, an iterator consumed).
+DR_POST: dict[str, Callable[[Any], Any]] = {
+    "ros.FoxgloveStream": _dr_stop,
+    "ros.McapOutput": lambda m: m.close(),
+    "ros.iter_joint_states": list,
+}
+
+
+def dr_wrapped(key: str, f: Any) -> Any:
+    """``f``, or a wrapper of it (same signature) that finishes its result (:data:`DR_POST`)."""
+    post = DR_POST.get(key)
+    if post is None:
+        return f
+
+    def call(*a: Any, **k: Any) -> Any:
+        return post(f(*a, **k))
+
+    call.__signature__ = inspect.signature(f)  # type: ignore[attr-defined]
+    return call
+
+
+_DR_LIVE: list[Any] = []
+
+
+def dr_method_targets() -> list[tuple[str, Callable[..., Any]]]:
+    """The public methods and constructors of dynamics.MassModel and ros.FoxgloveStream."""
+    import atexit
+
+    import athenakin.dynamics as dyn
+    import athenakin.ros as ros
+
+    def live() -> Any:
+        if not _DR_LIVE:
+            _DR_LIVE.append(ros.FoxgloveStream(T0, D, port=0))
+            atexit.register(_DR_LIVE[0].stop)
+        return _DR_LIVE[0]
+
+    def from_mapping(data: Any) -> Any:
+        return dyn.MassModel.from_mapping(data)
+
+    def from_toml(path: Any) -> Any:
+        return dyn.MassModel.from_toml(path)
+
+    def slender_rods(masses: Any, design: Any = None, *, geometry: Any = None) -> Any:
+        return dyn.MassModel.slender_rods(masses, design, geometry=geometry)
+
+    def from_bodies(bodies: Any, *, density: Any, design: Any = None,
+                    geometry: Any = None) -> Any:
+        return dyn.MassModel.from_bodies(bodies, density=density, design=design,
+                                         geometry=geometry)
+
+    def reference(design: Any = None) -> Any:
+        return dyn.MassModel.reference(design)
+
+    def body(name: Any) -> Any:
+        return DR_MASSES().body(name)
+
+    def publish(q: Any, *, slot: Any = None, flags: Any = 0, stamp_ns: Any = None) -> Any:
+        return live().publish(q, slot=slot, flags=flags, stamp_ns=stamp_ns)
+
+    def set_setup(design: Any, T_b_e: Any) -> Any:
+        s = live()
+        try:
+            return s.set_setup(design, T_b_e)
+        finally:
+            s.set_setup(D, T0)
+
+    def follow(state: Any, *, rate: Any = 30.0) -> Any:
+        with ros.FoxgloveStream(T0, D, port=0) as s:
+            s.follow(state, rate=rate)
+            return s.port
+
+    def write_static(stamp_ns: Any) -> Any:
+        with tempfile.TemporaryDirectory(prefix="athenakin-audit-mcap-") as d:
+            with ros.McapOutput(Path(d) / "s.mcap", D, T0) as out:
+                out.write_static(stamp_ns)
+            return dict(out.counts)
+
+    m = "dynamics.MassModel."
+    return [("ros.FoxgloveStream.follow", follow), ("ros.McapOutput.write_static", write_static),
+            (m + "from_mapping", from_mapping), (m + "from_toml", from_toml),
+            (m + "slender_rods", slender_rods), (m + "from_bodies", from_bodies),
+            (m + "reference", reference), (m + "body", body),
+            ("ros.FoxgloveStream.publish", publish), ("ros.FoxgloveStream.set_setup", set_setup)]
+
+
+def _dr_bodies() -> Any:
+    import athenakin.collision as col
+
+    return col.Bodies()
+
+
+METHOD_BASES.update({
+    "dynamics.MassModel.from_mapping": (({"link_a": {"mass": 0.2, "com": [0, 0, 0.05]}},), {}),
+    "dynamics.MassModel.slender_rods": (({"link_a": 0.2, "platform": 0.5}, D), {}),
+    "dynamics.MassModel.reference": ((D,), {}),
+    "dynamics.MassModel.body": (("link_a",), {}),
+    "ros.FoxgloveStream.publish": ((Q0,), dict(slot=0, flags=0, stamp_ns=1)),
+    "ros.FoxgloveStream.set_setup": ((D, T0), {}),
+    "ros.FoxgloveStream.follow": ((lambda: (Q0, None),), dict(rate=30.0)),
+    "ros.McapOutput.write_static": ((1_700_000_000_000_000_000,), {}),
+})
+#: Method bases that need a file or a lazily built value.
+DR_METHOD_FILE_BASES: dict[str, Callable[[dict[str, Path]], tuple[tuple, dict]]] = {
+    "dynamics.MassModel.from_toml": lambda f: ((f["masses_toml"],), {}),
+    "dynamics.MassModel.from_bodies": lambda f: ((_dr_bodies(),),
+                                                 dict(density=2700.0, design=D)),
+}
+
+
+def dr_methods(audit: Audit, files: dict[str, Path], only: str | None, quick: bool) -> None:
+    """Fuzz the methods of :func:`dr_method_targets` (as main does the other methods)."""
+    for key, f in dr_method_targets():
+        if only and not _selected(key, only):
+            continue
+        if key in DR_METHOD_FILE_BASES:
+            OVERRIDES[key] = DR_METHOD_FILE_BASES[key]
+        else:
+            args, kw = METHOD_BASES[key]
+            OVERRIDES[key] = lambda _f, a=args, k=kw: (a, k)
+        fuzz_function(audit, key, f, files, quick)
+# The distance primitives of athenakin.collision (added here only where no other block
+# gives a base: setdefault).
+_DR_A, _DR_B = np.array([0.0, 0.0, 0.0]), np.array([0.0, 0.0, 0.1])
+_DR_C, _DR_E = np.array([0.05, 0.0, 0.0]), np.array([0.05, 0.1, 0.05])
+for _k, _v in {
+    "collision.segment_segment": lambda f: ((_DR_A, _DR_B, _DR_C, _DR_E), {}),
+    "collision.point_segment": lambda f: ((_DR_C, _DR_A, _DR_B), {}),
+    "collision.capsule_capsule": lambda f: ((_DR_A, _DR_B, 0.01, _DR_C, _DR_E, 0.01), {}),
+    "collision.capsule_halfspace": lambda f: ((_DR_A, _DR_B, 0.01, np.array([0, 0, -0.05]),
+                                               np.array([0.0, 0.0, 1.0])), {}),
+}.items():
+    OVERRIDES.setdefault(_k, _v)
+# --- end of the dynamics and ros block -------------------------------------------------------
+
+
 # --- kinematic edges, checked by round trips ----------------------------------------------
 def _w_zero_q3(h: float, design: Any, which: int) -> float | None:
     """q3 at a tangency of k1 and k2 for half-offset h (bisection on w), or None."""
@@ -1376,6 +1612,7 @@ def main(argv: list[str] | None = None) -> int:
         try:
             files = _files(tmp)
             files["tmp"] = tmp
+            files.update(_dr_files(tmp))     # dynamics and ros block
             targets = public_callables(ns.only)
             for key, f in targets:
                 if key in SKIPPED:
@@ -1389,7 +1626,7 @@ def main(argv: list[str] | None = None) -> int:
                                        f"returns; exercised through its producers)")
                     continue
                 t1 = time.perf_counter()
-                fuzz_function(audit, key, f, files, ns.quick)
+                fuzz_function(audit, key, dr_wrapped(key, f), files, ns.quick)
                 if ns.verbose:
                     print(f"  {key}: {time.perf_counter() - t1:.1f} s "
                           f"{dict(audit.per_func.get(key, {}))}", file=sys.stderr)
@@ -1399,6 +1636,7 @@ def main(argv: list[str] | None = None) -> int:
                 args, kw = METHOD_BASES[key]
                 OVERRIDES[key] = lambda _f, a=args, k=kw: (a, k)
                 fuzz_function(audit, key, f, files, ns.quick)
+            dr_methods(audit, files, ns.only, ns.quick)      # dynamics and ros block
             if not ns.no_edges and (not ns.only or _selected("edges", ns.only)):
                 edges(audit, ns.seed)
         finally:

@@ -194,6 +194,8 @@ def statics(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None 
     -------
     Statics
     """
+    if not isinstance(rcm_load, (bool, np.bool_)):
+        raise TypeError(f"rcm_load: expected True or False, got {rcm_load!r:.80}")
     prep = _prepare({"q": q}, T_b_e, design, masses, slot, errors, gravity=gravity,
                     tip_force=tip_force)
     qf = prep.arrays["q"]
@@ -270,8 +272,8 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
         from ._kinematics import slot_signs
 
         Q = np.empty((a["q"].shape[0], 3))
-        kernel(np.ascontiguousarray(a["q"]), np.ascontiguousarray(a["qd"]),
-               np.ascontiguousarray(a["qdd"]), _compact(prep.T),
+        kernel(_kernel_array(a["q"]), _kernel_array(a["qd"]),
+               _kernel_array(a["qdd"]), _compact(prep.T),
                prep.design.lengths, float(prep.design.tool_length),
                np.array(slot_signs(prep.slot)), prep.masses.mass, prep.masses.com,
                prep.masses.inertia, _compact(a["gravity"]), _compact(a["tip_force"]), Q)
@@ -284,11 +286,20 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
     return _finish(Q[:, 1:N_Q_DIRECTIONS], prep, (3,))
 
 
+def _kernel_array(x: Arr) -> Arr:
+    """``x`` as a C-contiguous, writable float64 array (a copy only where needed).
+
+    Numba compiles one specialization per array type, read-only arrays included: with
+    this, every call of the kernel has the same types (one compile).
+    """
+    return np.require(x, np.float64, ("C", "W"))
+
+
 def _compact(x: Arr) -> Arr:
     """A broadcast (stride-0) batch as one row, else contiguous: the kernel broadcasts."""
     if x.shape[0] > 1 and x.strides[0] == 0:
-        return np.ascontiguousarray(x[:1])
-    return np.ascontiguousarray(x)
+        return _kernel_array(x[:1])
+    return _kernel_array(x)
 
 
 def _kernel(*, required: bool) -> Callable[..., None] | None:

@@ -23,7 +23,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array
+from .._validation import broadcast_batch, check_array
 from ..design import Design
 from ..errors import InvalidInputError
 from ._api import STANDARD_GRAVITY, statics
@@ -66,12 +66,33 @@ class ForceCapability:
     valid: NDArray[np.bool_]
 
 
+#: Largest actuator force limit accepted (``f_max``, ``-f_min``), N: far above any actuator of
+#: a surgical robot, small enough that the polytope's vertices stay finite.
+MAX_FORCE_LIMIT = 1e9
+
+
+def _limit(x: ArrayLike, name: str) -> Arr:
+    """One force limit: a real scalar or shape (3,), finite, |x| <= MAX_FORCE_LIMIT."""
+    if isinstance(x, bool):
+        raise TypeError(f"{name}: expected a real number or 3 numbers (N), got bool")
+    if isinstance(x, int) and not isinstance(x, bool) and abs(x) > MAX_FORCE_LIMIT:
+        raise InvalidInputError(f"{name}: expected |{name}| <= {MAX_FORCE_LIMIT:g} N, got "
+                                f"an integer of {len(str(abs(x)))} digits")
+    a = check_array(x, name, ())
+    if a.ndim == 0:
+        a = np.broadcast_to(a, (3,))
+    if a.shape != (3,):
+        raise InvalidInputError(f"{name}: expected a number or shape (3,) (one limit per "
+                                f"actuator, N), got shape {a.shape}")
+    if np.any(np.abs(a) > MAX_FORCE_LIMIT):
+        raise InvalidInputError(f"{name}: expected |{name}| <= {MAX_FORCE_LIMIT:g} N, got "
+                                f"{a.tolist()}")
+    return np.array(a, dtype=float)
+
+
 def _limits(f_max: ArrayLike, f_min: ArrayLike | None) -> tuple[Arr, Arr]:
-    hi = check_array(np.broadcast_to(np.asarray(f_max, float), (3,)) if np.ndim(f_max) == 0
-                     else f_max, "f_max", (3,))
-    lo = -hi if f_min is None else check_array(
-        np.broadcast_to(np.asarray(f_min, float), (3,)) if np.ndim(f_min) == 0 else f_min,
-        "f_min", (3,))
+    hi = _limit(f_max, "f_max")
+    lo = -hi if f_min is None else _limit(f_min, "f_min")
     if np.any(hi < lo):
         raise InvalidInputError(f"f_min, f_max: expected f_min <= f_max, got {lo.tolist()} and "
                                 f"{hi.tolist()} N")
@@ -91,10 +112,12 @@ def force_capability(q: ArrayLike, T_b_e: ArrayLike | None = None,
         Actuators, m.
     T_b_e, design, masses, gravity, slot, errors
         As :func:`athenakin.dynamics.statics`.
-    f_max : float or array-like, shape (..., 3), keyword-only
-        Upper actuator force limits, N.
-    f_min : float or array-like, shape (..., 3), keyword-only, optional
-        Lower limits, N (default ``-f_max``).
+    f_max : float or array-like, shape (3,), keyword-only
+        Upper actuator force limits, N, one per actuator (the same for every item
+        of the batch); at most :data:`MAX_FORCE_LIMIT` in magnitude.
+    f_min : float or array-like, shape (3,), keyword-only, optional
+        Lower limits, N (default ``-f_max``); at most :data:`MAX_FORCE_LIMIT` in
+        magnitude.
 
     Returns
     -------
@@ -159,6 +182,8 @@ def max_tip_force(q: ArrayLike, direction: ArrayLike, T_b_e: ArrayLike | None = 
     u = u / n
     cap = force_capability(q, T_b_e, design, f_max=f_max, f_min=f_min, masses=masses,
                            gravity=gravity, slot=slot, errors=errors)
+    # direction against the batch of the other arguments (q, T_b_e, gravity)
+    broadcast_batch(direction=u.shape[:-1], q=cap.valid.shape)
     au = np.einsum("...ki,...i->...k", cap.A, u)
     with np.errstate(divide="ignore", invalid="ignore"):
         s = np.where(au > 0, cap.b / au, np.inf)

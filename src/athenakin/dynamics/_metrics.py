@@ -25,7 +25,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_scalar
 from ..design import Design
-from ._api import inverse_dynamics, mass_matrix
+from ..errors import InvalidInputError
+from ..robot._setup import resolve_rcm_frame
+from ._api import _check_masses, inverse_dynamics, mass_matrix
 from ._capability import force_capability
 from ._core import evaluate
 from ._model import MassModel
@@ -41,6 +43,25 @@ STUDY_F_MAX = 50.0
 _PAIRS = ((0, 1), (0, 2), (1, 2))
 
 
+def _check_slots(slot: object, n: int) -> NDArray[np.int64]:
+    """``slot``: one FK slot (0..15) or one per configuration, shape (n,)."""
+    try:
+        arr = np.asarray(slot)
+    except Exception:   # noqa: BLE001 - a ragged list and the like
+        arr = np.asarray(None)
+    if arr.dtype.kind not in "iu" or arr.ndim > 1:
+        raise TypeError(f"slot: expected an integer or an integer array of shape ({n},), got "
+                        f"{slot!r:.80}")
+    if np.any((arr < 0) | (arr > 15)):
+        raise InvalidInputError(f"slot: expected FK slots in 0..15, got {slot!r:.80}")
+    if arr.ndim == 0:
+        arr = np.full(n, int(arr))
+    if arr.shape != (n,):
+        raise InvalidInputError(f"slot: expected one slot per configuration, shape ({n},), "
+                                f"got shape {arr.shape}")
+    return arr.astype(np.int64)
+
+
 def force_metrics(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: ArrayLike,
                   masses: MassModel | None = None, tip_speed: float = STUDY_TIP_SPEED,
                   tip_acceleration: float = STUDY_TIP_ACCELERATION,
@@ -53,8 +74,8 @@ def force_metrics(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: Array
         Configurations, m.
     T_b_e : array-like, shape (4, 4)
     design : Design
-    slot : array-like of int, shape (n,)
-        Forward-kinematics slot of each configuration.
+    slot : int or array-like of int, shape (n,)
+        Forward-kinematics slot (0..15) of each configuration (one for all).
     masses : MassModel, optional
         Default :meth:`MassModel.reference` of ``design``.
     tip_speed, tip_acceleration, f_max : float, keyword-only
@@ -67,10 +88,14 @@ def force_metrics(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: Array
         left out.
     """
     qa = check_array(q, "q", (3,)).reshape(-1, 3)
-    slots = np.asarray(slot, dtype=int).reshape(-1)
+    slots = _check_slots(slot, qa.shape[0])
+    if not isinstance(design, Design):
+        raise TypeError(f"design: expected a Design, got {type(design).__name__}")
+    T_b_e = resolve_rcm_frame(T_b_e, design)
     v = check_scalar(tip_speed, "tip_speed", nonnegative=True)
     a = check_scalar(tip_acceleration, "tip_acceleration", nonnegative=True)
-    m = MassModel.reference(design) if masses is None else masses
+    check_scalar(f_max, "f_max", positive=True)
+    m = _check_masses(masses, design)
     peak, cap_min = -np.inf, np.inf
     for k in np.unique(slots):
         sel = qa[slots == k]

@@ -102,6 +102,9 @@ def body_segment_in_frame(name: str, design: Design | None = None,
     ndarray, shape (2, 3)
         Start and end point; equal for the point bodies ``slider_d`` and ``guide``.
     """
+    if not isinstance(name, str):
+        raise TypeError(f"name: expected a body name (str), one of {MASS_BODIES}, got "
+                        f"{type(name).__name__}")
     d = resolve_design(design)
     g = BodyGeometry() if geometry is None else geometry
     if not isinstance(g, BodyGeometry):
@@ -242,8 +245,8 @@ class MassModel:
             An unknown body or key, a missing ``mass``, a bad value.
         """
         if not isinstance(data, Mapping):
-            raise TypeError(f"masses: expected a mapping body -> table, got "
-                            f"{type(data).__name__}")
+            raise TypeError(f"data: expected the [masses] table, a mapping body -> table, "
+                            f"got {type(data).__name__}")
         n = len(MASS_BODIES)
         mass, com, inertia = np.zeros(n), np.zeros((n, 3)), np.zeros((n, 3, 3))
         for name, entry in data.items():

@@ -93,7 +93,7 @@ def _fast_forward(design: Design, T: Arr, masses: MassModel, slot: int, g: Arr,
     Row 0 gives ``h = tau(q, qd, 0)``, rows 1-3 (``qd = 0``, no gravity, ``qdd = e_j``)
     the columns of ``M``; then ``qdd = M^-1 (tau - h)``.
     """
-    from ._api import _kernel
+    from ._api import _kernel, _kernel_array
     from ._kinematics import slot_signs
 
     kernel = _kernel(required=False)
@@ -105,13 +105,13 @@ def _fast_forward(design: Design, T: Arr, masses: MassModel, slot: int, g: Arr,
     ftip = np.zeros((4, 3))
     if f_tip is not None:
         ftip[0] = f_tip
-    Tc = np.ascontiguousarray(T[None])
+    Tc = _kernel_array(T[None])
     qdd_in = np.zeros((4, 3))
     qdd_in[1:] = np.eye(3)
     out = np.empty((4, 3))
 
     def qdd(qq: Arr, vv: Arr, tau: Arr) -> Arr:
-        qs = np.ascontiguousarray(np.broadcast_to(qq, (4, 3)))
+        qs = _kernel_array(np.broadcast_to(qq, (4, 3)))
         vs = np.zeros((4, 3))
         vs[0] = vv
         kernel(qs, vs, qdd_in, Tc, design.lengths, float(design.tool_length), signs,
@@ -170,7 +170,11 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
     T = resolve_rcm_frame(T_b_e, d, single=True)
     T_dur = check_scalar(duration, "duration", positive=True)
     h = check_scalar(dt, "dt", positive=True)
-    n = int(np.ceil(T_dur / h - 1e-9))
+    ratio = T_dur / h
+    if not ratio <= MAX_STEPS + 1:     # inf when duration / dt overflows
+        raise InvalidInputError(f"duration / dt: expected at most {MAX_STEPS} steps, got "
+                                f"{ratio:.3g}")
+    n = int(np.ceil(ratio - 1e-9))
     if n > MAX_STEPS:
         raise InvalidInputError(f"duration / dt: expected at most {MAX_STEPS} steps, got {n}")
     g = check_array(gravity, "gravity", (3,))

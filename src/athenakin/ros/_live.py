@@ -13,6 +13,7 @@ the current pose whenever a client subscribes to anything.
 from __future__ import annotations
 
 import math
+import socket
 import threading
 import time
 from collections.abc import Callable
@@ -21,13 +22,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validation import check_array
+from .._validation import check_array, check_text
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..robot import forward_kinematics
 from ..robot._setup import resolve_rcm_frame
 from ._errors import ros_extra_missing
-from ._write import _MSG_TYPES, TOPICS, RosEncoder, TrackedBatch, msgdef
+from ._write import _MSG_TYPES, TOPICS, RosEncoder, TrackedBatch, check_uint, msgdef
 
 __all__ = ["FoxgloveStream", "DEFAULT_PORT", "serve_app"]
 
@@ -47,7 +48,8 @@ class FoxgloveStream:
         RCM frame (default :func:`athenakin.default_rcm_frame`).
     design : Design, optional
     host : str, keyword-only
-        Interface to bind (default ``127.0.0.1``: this machine only).
+        Interface to bind (default ``127.0.0.1``: this machine only); a name that does
+        not resolve raises :class:`~athenakin.errors.InvalidInputError`.
     port : int, keyword-only
         Port (default 8765; 0: any free port, see :attr:`port`).
     name : str, keyword-only
@@ -74,6 +76,14 @@ class FoxgloveStream:
         if isinstance(port, bool) or not isinstance(port, (int, np.integer)) \
                 or not 0 <= port <= 65535:
             raise InvalidInputError(f"port: expected an integer from 0 to 65535, got {port!r}")
+        check_text(host, "host")
+        check_text(name, "name")
+        try:
+            socket.getaddrinfo(host, None, type=socket.SOCK_STREAM)
+        except (OSError, UnicodeError) as exc:
+            raise InvalidInputError(f"host: expected an address or name of this machine's "
+                                    f"interface (default 127.0.0.1), got {host!r} ({exc})"
+                                    ) from None
         self.design = resolve_design(design)
         self.T_b_e = resolve_rcm_frame(T_b_e, self.design)
         self.encoder = RosEncoder(self.design, self.T_b_e)
@@ -137,9 +147,10 @@ class FoxgloveStream:
         slot : int, keyword-only, optional
             Forward-kinematics slot (default: the first valid one, mode +1 first).
         flags : int, keyword-only
-            :class:`~athenakin.motion.TrackFlag` bits for ``/athena/status``.
+            :class:`~athenakin.motion.TrackFlag` bits for ``/athena/status`` (a uint32,
+            0 to 2**32 - 1).
         stamp_ns : int, keyword-only, optional
-            Stamp (default: now).
+            Stamp, ns, 0 to 2**63 - 1 (default: now).
 
         Returns
         -------
@@ -150,6 +161,9 @@ class FoxgloveStream:
         qa = check_array(q, "q", (3,), allow_nonfinite=True)
         if qa.shape != (3,):
             raise InvalidInputError(f"q: expected shape (3,), got {qa.shape}")
+        check_uint(flags, "flags", 2**32)
+        if stamp_ns is not None:
+            check_uint(stamp_ns, "stamp_ns", 2**63)
         stamp = time.time_ns() if stamp_ns is None else int(stamp_ns)
         self._flush_resend(stamp)
         sol = forward_kinematics(qa, self.T_b_e, self.design, errors="flag")

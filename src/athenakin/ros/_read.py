@@ -111,7 +111,7 @@ def recording_format(path: str | Path) -> str:
         No such file, not a regular file or folder (a FIFO, a device), or none of
         these formats.
     """
-    p = Path(path)
+    p = check_path(path)
     try:
         st = os.stat(p)
     except OSError as exc:
@@ -496,7 +496,10 @@ def _check_options(topic: object, joints: object, scale: object) -> tuple[str, t
         raise InvalidInputError(f"joints: expected 3 different names, got {joints!r}")
     if isinstance(scale, bool) or not isinstance(scale, (int, float, np.integer, np.floating)):
         raise TypeError(f"scale: expected a number (0.001 for mm), got {type(scale).__name__}")
-    s = float(scale)
+    try:
+        s = float(scale)
+    except OverflowError:
+        s = math.inf
     if not (math.isfinite(s) and 0.0 < abs(s) <= MAX_SCALE):
         raise InvalidInputError(f"scale: expected a finite nonzero factor of magnitude at most "
                                 f"{MAX_SCALE:g} (0.001 for mm), got {scale!r}")
@@ -510,7 +513,8 @@ def iter_joint_states(path: str | Path, *, topic: str = "/joint_states",
 
     Parameters are those of :func:`read_joint_states`, plus ``chunk_size``
     (readings per chunk, 1 to 10 000 000). Every chunk but the last holds
-    ``chunk_size`` readings; an empty topic yields nothing. The checks run as the
+    ``chunk_size`` readings; an empty topic yields nothing. The arguments and the
+    recording's format are checked when the function is called; the messages as the
     chunks are read: a chunk may come before the error of a later message.
 
     Yields
@@ -524,7 +528,9 @@ def iter_joint_states(path: str | Path, *, topic: str = "/joint_states",
                                 f"{chunk_size!r}")
     p = check_path(path)
     kind = recording_format(p)
-    yield from _iterate(p, kind, _source(p, kind), topic, names, s, int(chunk_size))
+    # the arguments and the file's format are checked here, at the call; the messages as
+    # the chunks are read
+    return _iterate(p, kind, _source(p, kind), topic, names, s, int(chunk_size))
 
 
 def _source(p: Path, kind: str) -> str:

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_instance
+from .._validation import check_array, check_instance, check_path
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, KinematicsError
 from ..motion import Tracker, TrackFlag, TrackLog, track
@@ -211,6 +211,15 @@ def _options(options: dict[str, Any]) -> dict[str, Any]:
     return options
 
 
+def _stamps_array(stamps_ns: object) -> NDArray[Any]:
+    """``stamps_ns`` as an array (its dtype and shape are checked by the caller)."""
+    try:
+        return np.asarray(stamps_ns)
+    except (ValueError, TypeError, OverflowError) as exc:   # a ragged list and the like
+        raise TypeError(f"stamps_ns: expected integers (ns), got an object numpy cannot "
+                        f"convert ({exc})") from None
+
+
 def _check_events(max_events: object) -> int:
     if isinstance(max_events, bool) or not isinstance(max_events, (int, np.integer)) \
             or not 0 <= max_events <= 10**6:
@@ -264,6 +273,10 @@ def track_recording(recording: str | Path, out: str | Path, T_b_e: ArrayLike | N
     RecordingError
         See :func:`read_joint_states`; nothing is written.
     """
+    check_path(recording, "recording")
+    check_path(out, "out")
+    if progress is not None and not callable(progress):
+        raise TypeError(f"progress: expected a callable or None, got {type(progress).__name__}")
     design = resolve_design(design)
     T = resolve_rcm_frame(T_b_e, design)
     opts = _options(tracker_options)
@@ -294,12 +307,13 @@ def track_to_mcap(stamps_ns: ArrayLike, q: ArrayLike, out: str | Path,
     -------
     TrackingSummary
     """
+    check_path(out, "out")
     design = resolve_design(design)
     T = resolve_rcm_frame(T_b_e, design)
     qa = check_array(q, "q", (3,), allow_nonfinite=True)
     if qa.ndim != 2:
         raise InvalidInputError(f"q: expected shape (N, 3), got {qa.shape}")
-    s = np.asarray(stamps_ns)
+    s = _stamps_array(stamps_ns)
     if s.shape != (len(qa),) or not np.issubdtype(s.dtype, np.integer):
         raise InvalidInputError(f"stamps_ns: expected {len(qa)} integers (ns), got "
                                 f"{s.dtype} of shape {s.shape}")
@@ -387,7 +401,7 @@ def write_track_log(path: str | Path, stamps_ns: ArrayLike, log: TrackLog,
     check_instance(log, "log", TrackLog)
     design = resolve_design(design)
     T = resolve_rcm_frame(T_b_e, design)
-    s = np.asarray(stamps_ns)
+    s = _stamps_array(stamps_ns)
     if s.shape != (len(log.q),) or not np.issubdtype(s.dtype, np.integer):
         raise InvalidInputError(f"stamps_ns: expected {len(log.q)} integers (ns), got "
                                 f"{s.dtype} of shape {s.shape}")

@@ -35,6 +35,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_path
 from ..design import Design
+from ..errors import InvalidInputError
+from ..robot._setup import resolve_rcm_frame
 from ..sim import JOINTS
 from ._cdr import CdrBuilder, Template, split_stamps
 from ._errors import ros_extra_missing
@@ -230,6 +232,15 @@ class TrackedBatch:
     clearance_flags: NDArray[np.int64] | None = None
 
 
+def check_uint(x: object, name: str, bound: int) -> int:
+    """An integer in ``[0, bound)`` (a uint32 field, a stamp in ns)."""
+    if isinstance(x, bool) or not isinstance(x, (int, np.integer)):
+        raise TypeError(f"{name}: expected an integer, got {type(x).__name__}")
+    if not 0 <= int(x) < bound:
+        raise InvalidInputError(f"{name}: expected an integer from 0 to {bound - 1}, got {x!r:.40}")
+    return int(x)
+
+
 class RosEncoder:
     """The CDR messages of ATHENA's topics for one design and set-up (no file).
 
@@ -343,6 +354,14 @@ class McapOutput:
             raise ValueError(f"compression: expected one of {COMPRESSIONS}, got "
                              f"{compression!r}")
         self.path = check_path(path)
+        if not isinstance(design, Design):
+            raise TypeError(f"design: expected a Design, got {type(design).__name__}")
+        if T_b_e is None:
+            raise TypeError("T_b_e: expected the RCM frame, a rigid transform of shape (4, 4), "
+                            "got None")
+        T_b_e = resolve_rcm_frame(T_b_e, design)
+        if target is not None:
+            target = check_path(target, "target")
         if os.path.exists(self.path) and not stat.S_ISREG(os.stat(self.path).st_mode):
             raise ValueError(f"path: {str(self.path)!r} is not a regular file (a device, FIFO "
                              f"or socket)")
@@ -393,7 +412,11 @@ class McapOutput:
         self.counts[TOPICS[key]] += 1
 
     def write_static(self, stamp_ns: int) -> None:
-        """``/robot_description`` (the URDF) and ``/tf_static`` (fixed frames), once."""
+        """``/robot_description`` (the URDF) and ``/tf_static`` (fixed frames), once.
+
+        ``stamp_ns``: int, ns, 0 to 2**63 - 1.
+        """
+        check_uint(stamp_ns, "stamp_ns", 2**63)
         if self._static_done:
             return
         self._static_done = True
