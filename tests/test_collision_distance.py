@@ -290,3 +290,29 @@ def test_halfspace_closed_form_against_coal():
     e, _ = point_segment(w[:, 0], p, q)
     assert_allclose(e, r, rtol=0, atol=1e-12)
     assert_allclose((w[:, 1] - point) @ normal, 0.0, rtol=0, atol=1e-12)
+
+
+# --- the public entries check their arguments by name (issue 23) -------------------------
+_P, _Q = np.zeros(3), np.array([1.0, 0.0, 0.0])
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: segment_segment([np.nan, 0, 0], _Q, _P, _Q), "p1"),
+    (lambda: segment_segment(_P, _Q, [1e300, 0, 0], _Q), "p2"),
+    (lambda: segment_segment(_P, _Q, np.zeros((2, 3)), np.zeros((3, 3))), "p1, q1, p2, q2"),
+    (lambda: point_segment("x", _P, _Q), "x"),
+    (lambda: capsule_capsule(_P, _Q, -0.1, _P, _Q, 0.1), "r1"),
+    (lambda: capsule_capsule(_P, _Q, 0.1, _P, _Q, [np.inf]), "r2"),
+    (lambda: capsule_halfspace(_P, _Q, 0.1, _P, [0, 0, 0]), "normal"),
+    (lambda: capsule_halfspace(_P, _Q, 0.1, _P, [0, 0, 1, 0]), "normal"),
+])
+def test_public_distances_name_a_bad_argument(call, match):
+    with pytest.raises((TypeError, ValueError), match=match):
+        call()
+
+
+def test_public_distances_broadcast_radii_and_normalise_the_normal():
+    d, w = capsule_capsule(_P, _Q, [], _P + [0, 1, 0], _Q + [0, 1, 0], 0.1)
+    assert d.shape == (0,) and w.shape == (0, 2, 3)
+    d, _ = capsule_halfspace([0, 0, 1.0], [1, 0, 1.0], 0.25, [0, 0, 0], [0, 0, 5.0])
+    assert_allclose(d, 0.75, rtol=0, atol=1e-15)

@@ -14,7 +14,7 @@ from .._validation import check_scalar
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ._bodies import Bodies
-from ._distance import capsule_capsule, capsule_halfspace
+from ._distance import _capsule_capsule, _capsule_halfspace
 from ._environment import Environment, Obstacle
 
 __all__ = ["Clearance", "clearance", "segment_clearance", "MAX_MARGIN"]
@@ -220,13 +220,13 @@ def segment_clearance(segments: NDArray[np.float64], valid: NDArray[np.bool_],
             A = solids[:, ij[:, 0]]
             B = solids[:, ij[:, 1]]
             with np.errstate(invalid="ignore"):
-                d, w = capsule_capsule(A[..., 0, :], A[..., 1, :], radii[ij[:, 0]],
+                d, w = _capsule_capsule(A[..., 0, :], A[..., 1, :], radii[ij[:, 0]],
                                        B[..., 0, :], B[..., 1, :], radii[ij[:, 1]])
             dist[:, cap_cols] = d
             if wit is not None:
                 wit[:, cap_cols] = w
     for c, i, o in half_rows:
-        d, w = capsule_halfspace(seg[:, i, 0], seg[:, i, 1], rad[i], np.array(o.point),
+        d, w = _capsule_halfspace(seg[:, i, 0], seg[:, i, 1], rad[i], np.array(o.point),
                                  np.array(o.normal))
         dist[:, c] = d
         if wit is not None:

@@ -22,12 +22,20 @@ return different, equally close, pairs of them.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_array
+from ..errors import InvalidInputError
 
 __all__ = ["point_segment", "segment_segment", "capsule_capsule", "capsule_halfspace",
            "separation_normal"]
 
 F = NDArray[np.float64]
+
+#: Largest coordinate or radius (m) the public distance functions accept: their squared
+#: distances stay far from overflow. The clearance of the robot calls the unchecked
+#: implementations (``_segment_segment`` ...) on points it made itself.
+MAX_COORDINATE = 1e6
 
 #: Relative size below which ``c2 - c1`` is rounding noise (:func:`separation_normal`).
 NOISE = 1e-12
@@ -37,7 +45,7 @@ def _dot(x: F, y: F) -> F:
     return np.einsum("...i,...i->...", x, y)
 
 
-def point_segment(x: F, a: F, b: F) -> tuple[F, F]:
+def _point_segment(x: F, a: F, b: F) -> tuple[F, F]:
     """Closest point of the segment ``a``-``b`` to ``x`` and its distance.
 
     Parameters
@@ -60,7 +68,7 @@ def point_segment(x: F, a: F, b: F) -> tuple[F, F]:
     return np.linalg.norm(x - c, axis=-1), c
 
 
-def segment_segment(p1: F, q1: F, p2: F, q2: F) -> tuple[F, F, F]:
+def _segment_segment(p1: F, q1: F, p2: F, q2: F) -> tuple[F, F, F]:
     """Distance of the segments ``p1``-``q1`` and ``p2``-``q2``, and their closest points.
 
     Parameters
@@ -88,11 +96,11 @@ def segment_segment(p1: F, q1: F, p2: F, q2: F) -> tuple[F, F, F]:
     f = _dot(d2, r)
     denom = a * e - b * b
     # candidates 1-4: an end point against the other segment
-    best, c1 = point_segment(p2, p1, q1)
+    best, c1 = _point_segment(p2, p1, q1)
     c2 = p2.copy()
     for x, on_first, seg in ((q2, True, (p1, q1)), (p1, False, (p2, q2)),
                              (q1, False, (p2, q2))):
-        dist, cc = point_segment(x, *seg)
+        dist, cc = _point_segment(x, *seg)
         better = dist < best
         best = np.where(better, dist, best)
         if on_first:
@@ -151,7 +159,7 @@ def separation_normal(c1: F, c2: F, d1: F, d2: F) -> F:
     return out  # type: ignore[no-any-return]
 
 
-def capsule_capsule(p1: F, q1: F, r1: F | float, p2: F, q2: F,
+def _capsule_capsule(p1: F, q1: F, r1: F | float, p2: F, q2: F,
                     r2: F | float) -> tuple[F, F]:
     """Signed distance of two capsules and their witness points.
 
@@ -170,7 +178,7 @@ def capsule_capsule(p1: F, q1: F, r1: F | float, p2: F, q2: F,
         The point of each capsule's surface nearest the other (deepest point when they
         overlap), ``c1 + r1 n`` and ``c2 - r2 n`` with ``n`` from :func:`separation_normal`.
     """
-    dist, c1, c2 = segment_segment(p1, q1, p2, q2)
+    dist, c1, c2 = _segment_segment(p1, q1, p2, q2)
     n = separation_normal(c1, c2, np.broadcast_to(q1 - p1, c1.shape),
                           np.broadcast_to(q2 - p2, c2.shape))
     r1a = np.asarray(r1, dtype=np.float64)
@@ -179,7 +187,7 @@ def capsule_capsule(p1: F, q1: F, r1: F | float, p2: F, q2: F,
     return dist - r1a - r2a, w
 
 
-def capsule_halfspace(p: F, q: F, r: F | float, point: F, normal: F) -> tuple[F, F]:
+def _capsule_halfspace(p: F, q: F, r: F | float, point: F, normal: F) -> tuple[F, F]:
     """Signed distance of a capsule to the solid ``{x : normal . (x - point) <= 0}``.
 
     ``normal`` is a unit vector. Returns ``(distance, witness)`` as :func:`capsule_capsule`
@@ -194,3 +202,157 @@ def capsule_halfspace(p: F, q: F, r: F | float, point: F, normal: F) -> tuple[F,
     w = np.stack(np.broadcast_arrays(e - ra[..., None] * normal, e - h[..., None] * normal),
                  axis=-2)
     return h - ra, w
+
+
+# --------------------------------------------------------------------------------------
+# public, checked entries (the clearance of the robot uses the private ones above)
+def _points(**named: ArrayLike) -> list[F]:
+    """Each argument as a finite float array of shape (..., 3), within MAX_COORDINATE."""
+    out = []
+    for name, v in named.items():
+        a = check_array(v, name, (3,))
+        if a.size and np.max(np.abs(a)) > MAX_COORDINATE:
+            raise InvalidInputError(f"{name}: expected coordinates within +/-{MAX_COORDINATE:g} "
+                                    f"m, got {np.max(np.abs(a)):g}")
+        out.append(a)
+    try:
+        np.broadcast_shapes(*(a.shape for a in out))
+    except ValueError:
+        raise InvalidInputError(
+            f"{', '.join(named)}: expected broadcastable batches, got shapes "
+            f"{[a.shape for a in out]}") from None
+    return out
+
+
+def _radius(r: ArrayLike, name: str) -> F:
+    a = check_array(r, name, ())
+    if a.size and (np.min(a) < 0 or np.max(a) > MAX_COORDINATE):
+        raise InvalidInputError(f"{name}: expected radii in [0, {MAX_COORDINATE:g}] m, got "
+                                f"{a.min():g} .. {a.max():g}")
+    return a
+
+
+def _batch(points: list[F], radii: list[F], names: str) -> tuple[list[F], list[F]]:
+    """Points broadcast to (batch, 3) and radii to (batch), the batch of all of them."""
+    try:
+        batch = np.broadcast_shapes(*(p.shape[:-1] for p in points), *(r.shape for r in radii))
+    except ValueError:
+        raise InvalidInputError(f"{names}: expected broadcastable batches, got shapes "
+                                f"{[p.shape for p in points] + [r.shape for r in radii]}"
+                                ) from None
+    return ([np.broadcast_to(p, batch + (3,)) for p in points],
+            [np.broadcast_to(r, batch) for r in radii])
+
+
+def point_segment(x: ArrayLike, a: ArrayLike, b: ArrayLike) -> tuple[F, F]:
+    """Closest point of the segment ``a``-``b`` to ``x`` and its distance.
+
+    Parameters
+    ----------
+    x, a, b : array-like, shape (..., 3)
+        Broadcast together; ``a == b`` is a point. Finite, within
+        :data:`MAX_COORDINATE` m.
+
+    Returns
+    -------
+    dist : ndarray, shape (...)
+    c : ndarray, shape (..., 3)
+        Closest point on the segment.
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        A bad argument, named.
+    """
+    xx, aa, bb = _points(x=x, a=a, b=b)
+    return _point_segment(xx, aa, bb)
+
+
+def segment_segment(p1: ArrayLike, q1: ArrayLike, p2: ArrayLike, q2: ArrayLike
+                    ) -> tuple[F, F, F]:
+    """Distance of the segments ``p1``-``q1`` and ``p2``-``q2``, and their closest points.
+
+    Parameters
+    ----------
+    p1, q1, p2, q2 : array-like, shape (..., 3)
+        End points, m; broadcast together. Zero-length segments are points. Finite,
+        within :data:`MAX_COORDINATE` m.
+
+    Returns
+    -------
+    dist : ndarray, shape (...)
+        Euclidean distance (>= 0), m.
+    c1, c2 : ndarray, shape (..., 3)
+        Closest points on the first and on the second segment (``|c1 - c2| = dist``);
+        where the closest pair is not unique (parallel overlapping segments), one of them.
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        A bad argument, named.
+    """
+    return _segment_segment(*_points(p1=p1, q1=q1, p2=p2, q2=q2))
+
+
+def capsule_capsule(p1: ArrayLike, q1: ArrayLike, r1: ArrayLike, p2: ArrayLike, q2: ArrayLike,
+                    r2: ArrayLike) -> tuple[F, F]:
+    """Signed distance of two capsules and their witness points.
+
+    Parameters
+    ----------
+    p1, q1, p2, q2 : array-like, shape (..., 3)
+        Segment end points, m (finite, within :data:`MAX_COORDINATE`).
+    r1, r2 : float or array-like, shape (...)
+        Radii, m, in ``[0, MAX_COORDINATE]``.
+
+    Returns
+    -------
+    distance : ndarray, shape (...)
+        ``|c1 - c2| - r1 - r2``; negative is the penetration depth, m.
+    witness : ndarray, shape (..., 2, 3)
+        The point of each capsule's surface nearest the other (deepest point when they
+        overlap), ``c1 + r1 n`` and ``c2 - r2 n`` with ``n`` from :func:`separation_normal`.
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        A bad argument, named.
+    """
+    pts = _points(p1=p1, q1=q1, p2=p2, q2=q2)
+    ra, rb = _radius(r1, "r1"), _radius(r2, "r2")
+    pts, (ra, rb) = _batch(pts, [ra, rb], "p1, q1, r1, p2, q2, r2")
+    return _capsule_capsule(pts[0], pts[1], ra, pts[2], pts[3], rb)
+
+
+def capsule_halfspace(p: ArrayLike, q: ArrayLike, r: ArrayLike, point: ArrayLike,
+                      normal: ArrayLike) -> tuple[F, F]:
+    """Signed distance of a capsule to the solid ``{x : normal . (x - point) <= 0}``.
+
+    Parameters
+    ----------
+    p, q : array-like, shape (..., 3)
+        The capsule's segment, m.
+    r : float or array-like, shape (...)
+        Its radius, m, in ``[0, MAX_COORDINATE]``.
+    point, normal : array-like, shape (..., 3)
+        A point of the plane and its normal (any non-zero length; pointing to the free
+        side).
+
+    Returns
+    -------
+    distance, witness
+        As :func:`capsule_capsule`, the witness on the capsule first and on the plane
+        second.
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        A bad argument, named (a zero normal among them).
+    """
+    pp, qq, pt, nn = _points(p=p, q=q, point=point, normal=normal)
+    ra = _radius(r, "r")
+    (pp, qq, pt, nn), (ra,) = _batch([pp, qq, pt, nn], [ra], "p, q, r, point, normal")
+    norm = np.linalg.norm(nn, axis=-1, keepdims=True)
+    if np.any(norm <= 1e-12):
+        raise InvalidInputError("normal: expected a non-zero vector, got a zero normal")
+    return _capsule_halfspace(pp, qq, ra, pt, nn / norm)
