@@ -745,10 +745,12 @@ def load_npz(path: str | Path) -> tuple[object, dict[str, Any]]:
                 cls = _RESULTS.get(meta.get("type", ""))
                 if cls is None:
                     raise InvalidInputError(f"meta.type = {meta.get('type')!r}")
-                missing = [fl.name for fl in dataclasses.fields(cls) if fl.name not in f.files]
+                # the optional layers (default None, e.g. the collision layers) may be absent
+                missing = [fl.name for fl in dataclasses.fields(cls) if fl.name not in f.files
+                           and fl.default is not None]
                 if missing:
                     raise InvalidInputError(f"arrays {missing} missing")
-                kw = {fl.name: f[fl.name] for fl in dataclasses.fields(cls)}
+                kw = {fl.name: f[fl.name] for fl in dataclasses.fields(cls) if fl.name in f.files}
         except (InvalidInputError, ValueError, EOFError, KeyError, zipfile.BadZipFile,
                 json.JSONDecodeError, UnicodeDecodeError) as exc:
             raise InvalidInputError(f"path: {path} is not an athenakin grid result written by "

@@ -377,9 +377,14 @@ def _cw(flags: Any) -> bool:
     return flags.c_contiguous and flags.writeable  # type: ignore[no-any-return]
 
 
-def _lean_tol(x: object) -> float | None:
-    """A tolerance given as a float or numpy float64 >= 0 (inf too), else None (NaN, ...)."""
-    if (type(x) is float or type(x) is np.float64) and x >= 0:  # type: ignore[operator]
+def _lean_tol(x: object, name: str) -> float | None:
+    """A tolerance given as a float or numpy float64 in its documented range, else None.
+
+    None (NaN, out of :data:`~athenakin._validation.TOLERANCE_MAXIMA`, another type): the
+    general path then raises the named error.
+    """
+    if (type(x) is float or type(x) is np.float64) \
+            and 0 <= x <= TOLERANCE_MAXIMA.get(name, math.inf):  # type: ignore[operator]
         return float(x)   # type: ignore[arg-type]
     return None
 
@@ -409,8 +414,8 @@ def lean_fk(q: object, T_b_e: object, design: Design | None, method: object = OP
             and p_zero_tol is P_ZERO_TOL and closure_tol is CLOSURE_TOL):
         tol = _FK_TOL_DEFAULT
     else:
-        t = (_lean_tol(tangent_tol), _lean_tol(degenerate_tol), _lean_tol(p_zero_tol),
-             _lean_tol(closure_tol))
+        t = (_lean_tol(tangent_tol, "tangent_tol"), _lean_tol(degenerate_tol, "degenerate_tol"),
+             _lean_tol(p_zero_tol, "p_zero_tol"), _lean_tol(closure_tol, "closure_tol"))
         if t[0] is None or t[1] is None or t[2] is None or t[3] is None:
             return None
         tol = np.array(t)
@@ -438,7 +443,7 @@ def lean_ik(T_b_e: object, u345: object, design: Design | None, errors: object =
     if singular_tol is IK_SINGULAR_TOL and closure_tol is CLOSURE_TOL:
         stol, ctol = IK_SINGULAR_TOL, CLOSURE_TOL
     else:
-        st, ct = _lean_tol(singular_tol), _lean_tol(closure_tol)
+        st, ct = _lean_tol(singular_tol, "singular_tol"), _lean_tol(closure_tol, "closure_tol")
         if st is None or ct is None:
             return None
         stol, ctol = st, ct
