@@ -262,6 +262,13 @@ def _J() -> Any:
     return ak.analysis.parallel_jacobian(Q0, D)
 
 
+def _axes_3d() -> Any:
+    """A fresh 3-D matplotlib axes, outside pyplot's global figure list."""
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(3, 3)).add_subplot(projection="3d")
+
+
 #: Base arguments of one function (qualified name -> (args, kwargs)).
 OVERRIDES: dict[str, Callable[[dict[str, Path]], tuple[tuple, dict]]] = {
     "Design": lambda f: ((), dict(l1=0.3, l2=0.1, l3=0.25, l4=0.15, l5=0.4,
@@ -383,6 +390,10 @@ OVERRIDES: dict[str, Callable[[dict[str, Path]], tuple[tuple, dict]]] = {
     "plot.instrument_cone_path": lambda f: ((8, T0, D), {}),
     "plot.plot_fk_solutions": lambda f: ((Q0, T0, D), {}),
     "plot.plot_robot": lambda f: ((Q0, T0, D), {}),
+    "plot.capsule_surface": lambda f: (([0.0, 0.0, 0.0], [0.1, 0.0, 0.0], 0.01),
+                                       dict(n_around=6, n_cap=2)),
+    "plot.draw_bodies": lambda f: ((_axes_3d(), Q0, T0, D), dict(n_around=6)),
+    "synthesis.check_constraints": lambda f: (({"min_clearance": (">=", 0.002)},), {}),
     "plot.render_frames": lambda f: ((np.array([Q0]), T0, D),
                                      dict(size=(64, 48), dpi=20, progress=False)),
     "plot.robot_figure": lambda f: ((Q0, T0, D), {}),

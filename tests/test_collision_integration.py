@@ -60,7 +60,7 @@ def _reference(q: np.ndarray, slots: np.ndarray, **kw: object) -> tuple[np.ndarr
 # --------------------------------------------------------------------------------------
 def test_tracker_default_checks_nothing() -> None:
     log = track(_closing_stream(), T, D)
-    assert np.all(np.isnan(log.clearance)) and np.all(log.closest_pair == "")
+    assert log.clearance is None and log.closest_pair is None
     bits = TrackFlag.COLLISION | TrackFlag.NEAR_COLLISION
     assert not np.any(log.flags & int(bits))
     tr = Tracker(T, D, q0=Q0)

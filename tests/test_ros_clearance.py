@@ -50,3 +50,18 @@ def test_status_without_bodies_has_no_clearance(tmp_path):
     ros.track_to_mcap(np.arange(5, dtype=np.int64), q, tmp_path / "o.mcap", T, d)
     st = _status(tmp_path / "o.mcap")
     assert all(np.isnan(m.clearance_m) and m.clearance_flags == 0 for m in st)
+
+
+@pytest.mark.parametrize("args, option", [(["--scale", "nan"], "--scale"),
+                                          (["--scale", "-1"], "--scale"),
+                                          (["--topic", "nan"], "--topic"),
+                                          (["--topic", "/a b"], "--topic")])
+def test_track_refuses_a_bad_topic_or_scale_for_any_input(tmp_path, capsys, args, option):
+    from athenakin.cli import main
+
+    csv = tmp_path / "stream.csv"
+    csv.write_text("q1_m,q2_m,q3_m\n" + "".join(f"{q[0]},{q[1]},{q[2]}\n"
+                                                for q in np.tile(REFERENCE_Q, (3, 1))))
+    assert main(["track", str(csv), *args]) != 0
+    err = capsys.readouterr().err
+    assert option in err and len(err.strip().splitlines()) == 1

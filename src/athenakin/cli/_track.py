@@ -17,6 +17,7 @@ from ._common import (
     add_design_option,
     add_setup_options,
     check_count,
+    check_finite,
     fmt,
     load_design,
     load_rcm,
@@ -87,6 +88,11 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--joints: expected 3 comma-separated names (J1,J2,J3), got "
                          f"{args.joints!r}")
     args.joint_names = joints
+    check_finite(args.scale, "--scale", positive=True)
+    if not args.topic.startswith("/") or any(c.isspace() or not c.isprintable()
+                                             for c in args.topic):
+        raise ValueError(f"--topic: expected an absolute ROS topic name such as "
+                         f"/joint_states, got {args.topic!r}")
     with outputs(args) as outs:   # checked before any work: never over an input or, without
         if out is not None:       # --force, an existing file; written only at the end
             outs.add(out)
@@ -227,7 +233,7 @@ def _track(args: argparse.Namespace, outs: Outputs, *, q: np.ndarray | None = No
               f", mode {int(log.mode[i]):+d}, slot {int(log.slot[i])}")
     if len(events) > args.max_events:
         print(f"  ... {len(events) - args.max_events} more (see -o)")
-    if coll and np.any(np.isfinite(log.clearance)):
+    if coll and log.clearance is not None and np.any(np.isfinite(log.clearance)):
         i = int(np.nanargmin(log.clearance))
         a, b = log.closest_pair[i]
         print(f"least clearance: {fmt(float(log.clearance[i]))} m between {a} and {b} at "

@@ -301,8 +301,8 @@ def track_csv_text(log: TrackLog, t: NDArray[np.float64] | None = None) -> str:
     """
     n = log.q.shape[0]
     tt = np.full(n, np.nan) if t is None else np.asarray(t, float)
-    checked = bool(np.any(~np.isnan(log.clearance)))
-    extra = _clearance_cells(log.clearance if checked else None, log.closest_pair, n)
+    checked = log.clearance is not None
+    extra = _clearance_cells(log.clearance, log.closest_pair, n)
     buf = io.StringIO()
     buf.write(",".join(TRACK_COLUMNS + (CLEARANCE_COLUMNS if checked else [])) + "\n")
     u = np.degrees(log.u)

@@ -647,9 +647,10 @@ class TrackLog:
     O_s, direction_b, tip_b, tip_e : ndarray, shape (N, 3)
     flags : ndarray of int, shape (N,)
         :class:`TrackFlag` bits.
-    clearance : ndarray, shape (N,)
-        Least clearance of the bodies, m (NaN when collisions are not checked).
-    closest_pair : ndarray of str, shape (N, 2)
+    clearance : ndarray, shape (N,), or None
+        Least clearance of the bodies, m; None when collisions are not checked (NaN only
+        at invalid samples).
+    closest_pair : ndarray of str, shape (N, 2), or None
         Its two names ("" when NaN).
     """
 
@@ -672,8 +673,8 @@ class TrackLog:
     sin_u4: NDArray[np.float64]
     step: NDArray[np.float64]
     flags: NDArray[np.int64]
-    clearance: NDArray[np.float64]
-    closest_pair: NDArray[np.str_]
+    clearance: NDArray[np.float64] | None
+    closest_pair: NDArray[np.str_] | None
 
     def events(self) -> list[tuple[int, TrackFlag]]:
         """``(sample, flags)`` of every flagged sample."""
@@ -713,6 +714,7 @@ def track(q_stream: ArrayLike, T_b_e: ArrayLike, design: Design | None = None,
     else:
         tr = Tracker(T_b_e, design, q0=qs[0], **options)  # type: ignore[arg-type]
         cols = _join(_pose_columns([tr.pose]), track_batch(tr, qs[1:]))
+        cols["clearance"] = cols["closest_pair"] = None   # not checked: no value, not NaN
     return TrackLog(**{k: cols[k] for k in _LOG_FIELDS})
 
 

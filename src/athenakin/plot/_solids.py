@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._validation import check_array, check_axes, check_frame, check_scalar
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 
@@ -34,6 +35,10 @@ CLOSEST_COLOR = "#e7298a"
 COLLIDING_COLOR = "#ff0000"
 #: Most points around and along a capsule (each surface has ``n_around x n_along`` points).
 MAX_RESOLUTION = 256
+
+
+#: Largest coordinate or radius (m) that :func:`capsule_surface` draws.
+MAX_DRAWN_LENGTH = 1e3
 
 
 def capsule_surface(a: ArrayLike, b: ArrayLike, radius: float, *, n_around: int = 16,
@@ -58,12 +63,16 @@ def capsule_surface(a: ArrayLike, b: ArrayLike, radius: float, *, n_around: int 
         Every point lies at distance ``radius`` from the segment (the tube between the
         end rings, the caps beyond them).
     """
-    a = np.asarray(a, dtype=float).reshape(3)
-    b = np.asarray(b, dtype=float).reshape(3)
-    r = float(radius)
-    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b)) and np.isfinite(r) and r >= 0):
-        raise InvalidInputError(f"capsule: expected finite end points and a radius >= 0, got "
-                                f"a={a.tolist()}, b={b.tolist()}, radius={radius!r}")
+    a = check_array(a, "a", (3,))
+    b = check_array(b, "b", (3,))
+    for name, v in (("a", a), ("b", b)):
+        if v.shape != (3,):
+            raise InvalidInputError(f"{name}: expected one point of shape (3,), got {v.shape}")
+    r = check_scalar(radius, "radius")
+    if not 0 <= r <= MAX_DRAWN_LENGTH or np.max(np.abs(np.r_[a, b])) > MAX_DRAWN_LENGTH:
+        raise InvalidInputError(f"radius, a, b: expected a radius in [0, {MAX_DRAWN_LENGTH:g}] m "
+                                f"and coordinates within +/-{MAX_DRAWN_LENGTH:g} m, got "
+                                f"radius {r!r}, a={a.tolist()}, b={b.tolist()}")
     for name, v, lo in (("n_around", n_around, 3), ("n_cap", n_cap, 1)):
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) \
                 or not lo <= v <= MAX_RESOLUTION:
@@ -130,6 +139,13 @@ def draw_bodies(ax: Any, q: ArrayLike, T_b_e: ArrayLike, design: Design | None =
     from ..collision import Bodies, clearance
     from ..errors import KinematicsError
 
+    check_axes(ax, "ax")
+    if getattr(ax, "name", "") != "3d":
+        raise TypeError(f"ax: expected a 3-D matplotlib Axes (projection='3d'), got "
+                        f"{type(ax).__name__}")
+    for name, flag in (("show_closest", show_closest), ("show_clearance", show_clearance)):
+        if not isinstance(flag, (bool, np.bool_)):
+            raise TypeError(f"{name}: expected a bool, got {type(flag).__name__}")
     design = resolve_design(design)
     if bodies is None:
         bodies = Bodies.default(design)
@@ -138,7 +154,8 @@ def draw_bodies(ax: Any, q: ArrayLike, T_b_e: ArrayLike, design: Design | None =
                         f"{type(bodies).__name__}")
     if isinstance(alpha, bool) or not isinstance(alpha, (int, float)) or not 0 < alpha <= 1:
         raise InvalidInputError(f"alpha: expected an opacity in (0, 1], got {alpha!r}")
-    q = np.asarray(q, dtype=float)
+    T_b_e = check_frame(T_b_e, "T_b_e")
+    q = check_array(q, "q", (3,))
     if q.shape != (3,):
         raise InvalidInputError(f"q: expected shape (3,) (one configuration), got {q.shape}")
     from .._mechanism import body_segments, mechanism_points
