@@ -233,7 +233,8 @@ def _track(args: argparse.Namespace, outs: Outputs, *, q: np.ndarray | None = No
               f", mode {int(log.mode[i]):+d}, slot {int(log.slot[i])}")
     if len(events) > args.max_events:
         print(f"  ... {len(events) - args.max_events} more (see -o)")
-    if coll and log.clearance is not None and np.any(np.isfinite(log.clearance)):
+    if coll and log.clearance is not None and log.closest_pair is not None \
+            and np.any(np.isfinite(log.clearance)):
         i = int(np.nanargmin(log.clearance))
         a, b = log.closest_pair[i]
         print(f"least clearance: {fmt(float(log.clearance[i]))} m between {a} and {b} at "

@@ -65,9 +65,9 @@ def capsule_surface(a: ArrayLike, b: ArrayLike, radius: float, *, n_around: int 
     """
     a = check_array(a, "a", (3,))
     b = check_array(b, "b", (3,))
-    for name, v in (("a", a), ("b", b)):
-        if v.shape != (3,):
-            raise InvalidInputError(f"{name}: expected one point of shape (3,), got {v.shape}")
+    for name, pt in (("a", a), ("b", b)):
+        if pt.shape != (3,):
+            raise InvalidInputError(f"{name}: expected one point of shape (3,), got {pt.shape}")
     r = check_scalar(radius, "radius")
     if not 0 <= r <= MAX_DRAWN_LENGTH or np.max(np.abs(np.r_[a, b])) > MAX_DRAWN_LENGTH:
         raise InvalidInputError(f"radius, a, b: expected a radius in [0, {MAX_DRAWN_LENGTH:g}] m "
