@@ -358,3 +358,22 @@ class Bodies:
             return cls.from_mapping(table, design=design)
         except (InvalidInputError, TypeError) as exc:
             raise InvalidInputError(f"{path}: {exc}") from None
+
+
+def resolve_bodies(bodies: object, design: Design) -> Bodies:
+    """``bodies`` checked, or :meth:`Bodies.default` of ``design`` for None.
+
+    The one check of a ``bodies=`` argument (clearance, exports, solid views), as
+    :func:`~athenakin.design.resolve_design` is of ``design=``.
+
+    Raises
+    ------
+    TypeError
+        ``bodies`` is neither None nor a :class:`Bodies`.
+    """
+    if bodies is None:
+        return Bodies.default(design)
+    if not isinstance(bodies, Bodies):
+        raise TypeError(f"bodies: expected athenakin.collision.Bodies or None, got "
+                        f"{type(bodies).__name__}")
+    return bodies

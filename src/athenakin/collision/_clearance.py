@@ -13,7 +13,7 @@ from .._mechanism import BODIES, body_segments, mechanism_points
 from .._validation import check_scalar
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
-from ._bodies import Bodies
+from ._bodies import Bodies, resolve_bodies
 from ._distance import _capsule_capsule, _capsule_halfspace
 from ._environment import Environment, Obstacle
 
@@ -85,15 +85,6 @@ class Clearance:
             k = int(self.closest_pair[idx])
             out[idx] = self.pairs[k] if k >= 0 else None
         return out
-
-
-def _check_bodies(bodies: object, design: Design) -> Bodies:
-    if bodies is None:
-        return Bodies.default(design)
-    if not isinstance(bodies, Bodies):
-        raise TypeError(f"bodies: expected athenakin.collision.Bodies or None, got "
-                        f"{type(bodies).__name__}")
-    return bodies
 
 
 def _check_environment(environment: object) -> Environment:
@@ -305,7 +296,7 @@ def clearance(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
     True
     """
     design = resolve_design(design)
-    bodies = _check_bodies(bodies, design)
+    bodies = resolve_bodies(bodies, design)
     environment = _check_environment(environment)
     m = _check_margin(margin)
     if not isinstance(witness, bool):

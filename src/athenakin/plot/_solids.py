@@ -136,7 +136,8 @@ def draw_bodies(ax: Any, q: ArrayLike, T_b_e: ArrayLike, design: Design | None =
     KinematicsError
         The slot holds no solution (nothing to draw).
     """
-    from ..collision import Bodies, clearance
+    from ..collision import clearance
+    from ..collision._bodies import resolve_bodies
     from ..errors import KinematicsError
 
     check_axes(ax, "ax")
@@ -147,11 +148,7 @@ def draw_bodies(ax: Any, q: ArrayLike, T_b_e: ArrayLike, design: Design | None =
         if not isinstance(flag, (bool, np.bool_)):
             raise TypeError(f"{name}: expected a bool, got {type(flag).__name__}")
     design = resolve_design(design)
-    if bodies is None:
-        bodies = Bodies.default(design)
-    elif not isinstance(bodies, Bodies):
-        raise TypeError(f"bodies: expected athenakin.collision.Bodies or None, got "
-                        f"{type(bodies).__name__}")
+    bodies = resolve_bodies(bodies, design)
     if isinstance(alpha, bool) or not isinstance(alpha, (int, float)) or not 0 < alpha <= 1:
         raise InvalidInputError(f"alpha: expected an opacity in (0, 1], got {alpha!r}")
     T_b_e = check_frame(T_b_e, "T_b_e")

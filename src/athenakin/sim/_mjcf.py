@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._mechanism import BODIES
 from .._output import check_output_path, write_text_atomic
 from .._validation import check_text
-from ..collision._bodies import Bodies
+from ..collision._bodies import Bodies, resolve_bodies
 from ..collision._environment import Environment
 from ..design import Design
 from ..errors import InvalidInputError
@@ -406,11 +406,7 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     if not isinstance(collision, bool):
         raise TypeError(f"collision: expected a bool or None, got {type(collision).__name__}")
     if collision:
-        if bodies is None:
-            bodies = Bodies.default(d)
-        elif not isinstance(bodies, Bodies):
-            raise TypeError(f"bodies: expected athenakin.collision.Bodies or None, got "
-                            f"{type(bodies).__name__}")
+        bodies = resolve_bodies(bodies, d)
         rail_pts = rail_segment(g.q, T, d, slot=g.slot, bodies=bodies)
         bits = _obstacle_bits(environment) if environment is not None else None
         _collision_geoms(root, bodies, collision_segments(values, d, bodies, rail_pts), bits)

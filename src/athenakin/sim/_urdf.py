@@ -27,7 +27,7 @@ from .._mechanism import BODIES
 from .._output import check_output_path, write_text_atomic
 from .._transforms import rot_x, rot_y, rot_z
 from .._validation import check_text
-from ..collision._bodies import Bodies
+from ..collision._bodies import Bodies, resolve_bodies
 from ..design import Design, resolve_design
 from ..robot._setup import resolve_rcm_frame
 from ._layout import (
@@ -245,11 +245,7 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     if not isinstance(collision, bool):
         raise TypeError(f"collision: expected a bool, got {type(collision).__name__}")
     if collision:
-        if bodies is None:
-            bodies = Bodies.default(d)
-        elif not isinstance(bodies, Bodies):
-            raise TypeError(f"bodies: expected athenakin.collision.Bodies or None, got "
-                            f"{type(bodies).__name__}")
+        bodies = resolve_bodies(bodies, d)
         links = {el.get("name"): el for el in robot.iter("link")}
         rail = rail_segment((zero["q1"], zero["q2"], zero["q3"]), T, d, slot=zero_slot,
                             bodies=bodies)
