@@ -14,21 +14,11 @@ header prints the machine load, os.getloadavg):
 """
 
 import numpy as np
+from cases_motion import SQUARE, _replay  # the same path and replay as the motion group
 
 import athenakin as ak
 from athenakin.analysis import instrument_cone
 from athenakin.motion import Tracker, plan, track
-
-SQUARE = np.array([[0.25, 0.0, 0.0], [0.27, -0.02, 0.0], [0.27, -0.02, 0.02],
-                   [0.25, 0.0, 0.02], [0.25, 0.0, 0.0]])
-
-
-def _replay(tracker, q0, stream):
-    def call():
-        tracker.reset(q0)
-        for q in stream:
-            tracker.update(q)
-    return call
 
 
 def cases(quick: bool) -> list[dict]:

@@ -46,19 +46,7 @@ def _dot(x: F, y: F) -> F:
 
 
 def _point_segment(x: F, a: F, b: F) -> tuple[F, F]:
-    """Closest point of the segment ``a``-``b`` to ``x`` and its distance.
-
-    Parameters
-    ----------
-    x, a, b : ndarray, shape (..., 3)
-        Broadcast together; ``a == b`` is a point.
-
-    Returns
-    -------
-    dist : ndarray, shape (...)
-    c : ndarray, shape (..., 3)
-        Closest point on the segment.
-    """
+    """Unchecked :func:`point_segment` (float arrays (..., 3), broadcast together)."""
     d = b - a
     dd = _dot(d, d)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -69,21 +57,7 @@ def _point_segment(x: F, a: F, b: F) -> tuple[F, F]:
 
 
 def _segment_segment(p1: F, q1: F, p2: F, q2: F) -> tuple[F, F, F]:
-    """Distance of the segments ``p1``-``q1`` and ``p2``-``q2``, and their closest points.
-
-    Parameters
-    ----------
-    p1, q1, p2, q2 : ndarray, shape (..., 3)
-        End points; broadcast together. Zero-length segments are points.
-
-    Returns
-    -------
-    dist : ndarray, shape (...)
-        Euclidean distance (>= 0), m.
-    c1, c2 : ndarray, shape (..., 3)
-        Closest points on the first and on the second segment (``|c1 - c2| = dist``);
-        where the closest pair is not unique (parallel overlapping segments), one of them.
-    """
+    """Unchecked :func:`segment_segment` (float arrays (..., 3), broadcast together)."""
     p1, q1, p2, q2 = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64)
                                             for v in (p1, q1, p2, q2)))
     d1 = q1 - p1
@@ -161,23 +135,7 @@ def separation_normal(c1: F, c2: F, d1: F, d2: F) -> F:
 
 def _capsule_capsule(p1: F, q1: F, r1: F | float, p2: F, q2: F,
                     r2: F | float) -> tuple[F, F]:
-    """Signed distance of two capsules and their witness points.
-
-    Parameters
-    ----------
-    p1, q1, p2, q2 : ndarray, shape (..., 3)
-        Segment end points, m.
-    r1, r2 : float or ndarray, shape (...)
-        Radii, m.
-
-    Returns
-    -------
-    distance : ndarray, shape (...)
-        ``|c1 - c2| - r1 - r2``; negative is the penetration depth, m.
-    witness : ndarray, shape (..., 2, 3)
-        The point of each capsule's surface nearest the other (deepest point when they
-        overlap), ``c1 + r1 n`` and ``c2 - r2 n`` with ``n`` from :func:`separation_normal`.
-    """
+    """Unchecked :func:`capsule_capsule` (what :func:`~athenakin.collision.clearance` calls)."""
     dist, c1, c2 = _segment_segment(p1, q1, p2, q2)
     n = separation_normal(c1, c2, np.broadcast_to(q1 - p1, c1.shape),
                           np.broadcast_to(q2 - p2, c2.shape))
@@ -188,11 +146,7 @@ def _capsule_capsule(p1: F, q1: F, r1: F | float, p2: F, q2: F,
 
 
 def _capsule_halfspace(p: F, q: F, r: F | float, point: F, normal: F) -> tuple[F, F]:
-    """Signed distance of a capsule to the solid ``{x : normal . (x - point) <= 0}``.
-
-    ``normal`` is a unit vector. Returns ``(distance, witness)`` as :func:`capsule_capsule`
-    does, the witness on the capsule first and on the plane second.
-    """
+    """Unchecked :func:`capsule_halfspace` with a unit ``normal``."""
     hp = _dot(p - point, normal)
     hq = _dot(q - point, normal)
     use_q = hq < hp
