@@ -47,7 +47,8 @@ few minutes on one core; ``--fresh`` starts ``python -m athenakin`` for every ru
 instead (slower, the black-box way). As root, the children drop CAP_DAC_OVERRIDE so
 that unreadable files and read-only folders are what they say.
 ``app`` runs as a real process: bad start-up inputs, and it must bind 127.0.0.1 only
-(it is stopped after 5 s of serving).
+(it is stopped after 1.5 s of serving: the listening sockets are read 0.5 s after it
+says it serves).
 
 Usage::
 
@@ -1244,7 +1245,7 @@ def main(argv: list[str] | None = None) -> int:
             before = snapshot(root)
             if case.cmd == "app":
                 t0 = time.perf_counter()
-                k, d, code, so, se = run_app(case, root, env, serve_s=5.0,
+                k, d, code, so, se = run_app(case, root, env, serve_s=1.5,
                                              start_s=args.timeout)
                 dt = time.perf_counter() - t0
                 if not k:

@@ -40,7 +40,7 @@ for full in $VERSIONS; do
     echo "== Python $full ($py)"
     start=$SECONDS
     [ -x "$venv/bin/python" ] || "$py" -m venv "$venv"
-    "$venv/bin/python" -m pip install --quiet --upgrade "pip>=25.1"
+    "$venv/bin/python" -m pip install --quiet "uv>=0.9"   # the installer (see scripts/test.sh)
     # the test group's pytest and hypothesis requirements, read from pyproject.toml
     mapfile -t test_reqs < <("$venv/bin/python" - <<'PY'
 import re
@@ -51,7 +51,7 @@ for req in re.findall(r'"([^"]+)"', group):
         print(req)
 PY
 )
-    "$venv/bin/python" -m pip install --quiet -e ".[$EXTRAS]" "${test_reqs[@]}"
+    "$venv/bin/uv" pip install --python "$venv/bin/python" --quiet -e ".[$EXTRAS]" "${test_reqs[@]}"
     "$venv/bin/python" -c "import sys, athenakin; print('athenakin', athenakin.__version__, 'on', sys.version.split()[0])"
     log="$(mktemp)"
     NUMBA_CACHE_DIR="$PWD/$venv/numba-cache" "$venv/bin/python" -m pytest -q -p no:cacheprovider \

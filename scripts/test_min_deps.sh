@@ -68,23 +68,24 @@ PINS
 
 start=$SECONDS
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
-"$venv/bin/python" -m pip install --quiet --upgrade "pip>=25.1"
-"$venv/bin/python" -m pip install --quiet -c "$work/stage1.txt" -e ".[analysis,symbolic,fast]" \
+"$venv/bin/python" -m pip install --quiet "uv>=0.9"   # the installer (see scripts/test.sh)
+install() { "$venv/bin/uv" pip install --python "$venv/bin/python" --quiet "$@"; }
+install -c "$work/stage1.txt" -e ".[analysis,symbolic,fast]" \
     pytest hypothesis
-"$venv/bin/python" -m pip freeze | grep -iE "^(numpy|scipy|sympy|numba|tomli.w|tqdm)=="
+"$venv/bin/uv" pip freeze --python "$venv/bin/python" | grep -iE "^(numpy|scipy|sympy|numba|tomli.w|tqdm)=="
 echo "== stage 1: core, analysis, symbolic, fast at their lower bounds"
 "$venv/bin/python" -m pytest -q -p no:cacheprovider tests/test_study.py tests/test_chain.py \
     tests/test_parallel.py tests/test_robot.py tests/test_design.py tests/test_io_unified.py \
     tests/test_analysis_jacobians.py tests/test_analysis_singularities.py \
     tests/test_symbolic_errata.py tests/test_fast_exactness.py "$@"
-"$venv/bin/python" -m pip install --quiet -c "$work/stage2.txt" -e ".[analysis,symbolic,fast,motion]"
-"$venv/bin/python" -m pip freeze | grep -iE "^(scipy|ruckig)=="
+install -c "$work/stage2.txt" -e ".[analysis,symbolic,fast,motion]"
+"$venv/bin/uv" pip freeze --python "$venv/bin/python" | grep -iE "^(scipy|ruckig)=="
 echo "== stage 2: motion at its lower bounds"
 "$venv/bin/python" -m pytest -q -p no:cacheprovider tests/test_motion_tracker.py \
     tests/test_motion_plan.py -k "not time_optimal" "$@"
-"$venv/bin/python" -m pip install --quiet -c "$work/stage3.txt" \
+install -c "$work/stage3.txt" \
     -e ".[analysis,symbolic,fast,motion,certified,calibration,synthesis,plot,sim,app]"
-"$venv/bin/python" -m pip freeze | grep -iE "^(python-flint|matplotlib|dask|distributed|pandas|pyarrow|pymoo|plotly|imageio|imageio-ffmpeg|mujoco|yourdfpy|viser)=="
+"$venv/bin/uv" pip freeze --python "$venv/bin/python" | grep -iE "^(python-flint|matplotlib|dask|distributed|pandas|pyarrow|pymoo|plotly|imageio|imageio-ffmpeg|mujoco|yourdfpy|viser)=="
 echo "== stage 3: the extras certified, calibration, synthesis, plot, sim, app at their lower bounds"
 "$venv/bin/python" -m pytest -q -p no:cacheprovider tests/test_certified.py \
     tests/test_calibration.py tests/test_synthesis.py tests/test_synthesis_cluster.py \
