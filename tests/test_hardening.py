@@ -256,6 +256,10 @@ def test_fk_into_a_closed_pipe_exits_0_every_time():
         p.stdout.close()                  # head -1
         err = p.stderr.read().decode()
         p.stderr.close()
+        # on a loaded machine, loading the kernels from the cache may take long enough for
+        # the dispatch's notice (its only line on stderr); anything else is a fault
+        err = "".join(ln for ln in err.splitlines(keepends=True)
+                      if not ln.startswith("athenakin: compiling the numba kernels"))
         assert p.wait(timeout=120) == 0 and err == ""
 
 
