@@ -114,10 +114,9 @@ class _Stream:
 
     def run(self, q: NDArray[np.float64]) -> dict[str, Any]:
         rows: list[Any] = []
-        qs = q.tolist()
         i = 0
-        while self.tracker is None and i < len(qs):
-            row = qs[i]
+        while self.tracker is None and i < len(q):
+            row = q[i].tolist()     # row by row: the tracker most often starts at the first
             if all(math.isfinite(v) for v in row):
                 try:
                     self.tracker = Tracker(self.T, self.design, q0=row, **self.options)
@@ -133,7 +132,7 @@ class _Stream:
                     break
             rows.append(None)
             i += 1
-        if self.tracker is None or i == len(qs):
+        if self.tracker is None or i == len(q):
             return _columns(rows, q)
         rest = track_batch(self.tracker, q[i:])
         if i == 0:

@@ -47,7 +47,7 @@ from ._frames import (
     TOOL_TIP_FRAME,
     UrdfModel,
     joint_values,
-    link_poses,
+    link_frames,
     quaternion_xyzw,
     urdf_model,
 )
@@ -187,6 +187,15 @@ def _stamp_fields(values: dict[str, Any], stamps_ns: NDArray[np.int64], names: l
         values[f"{n}.nanosec"] = nsec
 
 
+def _put_frame(values: dict[str, Any], f: NDArray[np.float64], tname: str, rname: str
+               ) -> None:
+    """The numbers of a translation and a quaternion from ``f`` (N, 7) (:func:`link_frames`)."""
+    for i, c in enumerate("xyz"):
+        values[f"{tname}.{c}"] = f[:, i]
+    for i, c in enumerate("xyzw"):
+        values[f"{rname}.{c}"] = f[:, 3 + i]
+
+
 def _put_pose(values: dict[str, Any], T: NDArray[np.float64], tname: str, rname: str) -> None:
     for i, c in enumerate("xyz"):
         values[f"{tname}.{c}"] = T[:, i, 3]
@@ -256,6 +265,8 @@ class RosEncoder:
         self.templates = {"tool_tip": _pose_template(), "tf": _tf_template(self.tf_pairs),
                           "joint_states": _joint_state_template(tuple(JOINTS)),
                           "status": _status_template()}
+        rcm = self.model.T_b_e[None]
+        self._rcm = np.concatenate([rcm[0, :3, 3], quaternion_xyzw(rcm[:, :3, :3])[0]])
 
     def robot_description(self) -> bytes:
         """``std_msgs/msg/String`` holding the URDF."""
@@ -276,20 +287,26 @@ class RosEncoder:
                     p: NDArray[np.float64], u: NDArray[np.float64], O_s: NDArray[np.float64]
                     ) -> dict[str, dict[str, Any]]:
         """The numbers of the ``tool_tip``, ``tf`` and ``joint_states`` messages of N poses."""
-        n = len(stamps_ns)
         jv = joint_values(self.model, q, p, u, O_s)
-        poses = link_poses(self.model, jv, links=(*MOVING_LINKS, TOOL_TIP_FRAME))
-        poses[RCM_FRAME] = np.broadcast_to(self.model.T_b_e, (n, 4, 4))
+        frames = self.frames(jv)
         sec, nsec = split_stamps(stamps_ns)
         tip: dict[str, Any] = {"stamp.sec": sec, "stamp.nanosec": nsec}
-        _put_pose(tip, poses[TOOL_TIP_FRAME], "p", "o")
+        _put_frame(tip, frames[:, TF_FRAMES.index(TOOL_TIP_FRAME)], "p", "o")
         tf: dict[str, Any] = {}
-        for k, (_, child) in enumerate(self.tf_pairs):
+        for k in range(len(self.tf_pairs)):
             tf[f"stamp{k}.sec"], tf[f"stamp{k}.nanosec"] = sec, nsec
-            _put_pose(tf, poses[child], f"t{k}", f"r{k}")
+            _put_frame(tf, frames[:, k], f"t{k}", f"r{k}")
         js: dict[str, Any] = {f"pos.{i}": jv[name] for i, name in enumerate(JOINTS)}
         js["stamp.sec"], js["stamp.nanosec"] = sec, nsec
         return {"tool_tip": tip, "tf": tf, "joint_states": js}
+
+    def frames(self, jv: dict[str, NDArray[np.float64]]) -> NDArray[np.float64]:
+        """Translation and quaternion of every ``/tf`` child (:data:`TF_FRAMES`), (N, K, 7)."""
+        moving = link_frames(self.model, jv, TF_FRAMES[:-1])
+        frames = np.empty((moving.shape[0], len(TF_FRAMES), 7))
+        frames[:, :-1] = moving
+        frames[:, -1] = self._rcm
+        return frames
 
     def poses(self, stamps_ns: NDArray[np.int64], q: NDArray[np.float64],
               p: NDArray[np.float64], u: NDArray[np.float64], O_s: NDArray[np.float64]
