@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import struct
 import zlib
+from collections.abc import Callable
 from typing import IO
 
 import numpy as np
@@ -33,6 +34,22 @@ _MSG_DTYPE = np.dtype({"names": ["op", "length", "channel", "sequence", "log_tim
                        "formats": ["u1", "<u8", "<u2", "<u4", "<u8", "<u8"],
                        "offsets": [0, 1, 9, 11, 15, 23], "itemsize": MESSAGE_HEADER})
 _INDEX_DTYPE = np.dtype([("log_time", "<u8"), ("offset", "<u8")])
+
+
+def _crc32_function() -> Callable[..., int]:
+    """CRC-32 (the zlib polynomial MCAP uses): ISA-L's where installed, else zlib's.
+
+    The same numbers; ISA-L's is several times faster (a tracked reading makes about
+    2.5 kB of records, each checked once uncompressed in its chunk).
+    """
+    try:
+        from isal.isal_zlib import crc32
+    except ImportError:
+        return zlib.crc32
+    return crc32  # type: ignore[no-any-return]
+
+
+_crc32 = _crc32_function()
 
 
 def _s(text: str) -> bytes:
@@ -90,7 +107,7 @@ class McapFile:
 
     def _write(self, data: bytes | memoryview) -> None:
         self._fh.write(data)
-        self._crc = zlib.crc32(data, self._crc)
+        self._crc = _crc32(data, self._crc)
         self._pos += len(data)
 
     # ------------------------------------------------------------------ definitions
@@ -159,7 +176,7 @@ class McapFile:
             return
         start = min(int(t.min()) for t, _ in index.values() if len(t))
         end = max(int(t.max()) for t, _ in index.values() if len(t))
-        crc = zlib.crc32(raw)
+        crc = _crc32(raw)
         packed = raw if self._compression == "none" else self._compress(raw)
         comp = "" if self._compression == "none" else self._compression
         body = (struct.pack("<QQQI", start, end, len(raw), crc) + _s(comp)
@@ -224,5 +241,5 @@ class McapFile:
             self._write(_record("summary_offset", struct.pack("<BQQ", _OP[op], g0, glen)))
         head = struct.pack("<BQQQ", _OP["footer"], 8 + 8 + 4, summary_start,
                            summary_offset_start)
-        crc = zlib.crc32(head, self._crc)
+        crc = _crc32(head, self._crc)
         self._fh.write(head + struct.pack("<I", crc) + MAGIC)

@@ -355,9 +355,11 @@ class _RecordPlan:
     ``status_tpl``: the status record (header and CDR message); ``pose_tpl``: the tool
     tip, ``/tf`` and joint-state records one after the other (``record_at[j]``: where
     record ``j`` of ``keys`` starts in it, ``record_at[0] = 0`` for the status). Field
-    ``f`` of each part: ``size[f]`` bytes at ``off[f]`` holding the number ``names[f]``
-    (``"@stamp"``, ``"@seq.status"``, ``"@seq.pose"`` or ``"key:field"``), a float64 where
-    ``is_float[f]``.
+    ``f`` of each part: ``size[f]`` bytes at ``off[f]`` holding column ``col[f]`` of the
+    words of :meth:`words`, laid out as: the ``/tf`` frames (``K x 7`` float64, as
+    :meth:`RosEncoder.frames`), the joint values (``JOINTS`` order), the status floats
+    (``status_float``), then integers: stamp, status sequence, pose sequence, stamp
+    seconds, stamp nanoseconds, the status integers (``status_int``).
     """
 
     status_tpl: NDArray[np.uint8]
@@ -365,18 +367,45 @@ class _RecordPlan:
     record_at: tuple[int, ...]
     s_off: NDArray[np.int64]
     s_size: NDArray[np.int64]
-    s_names: tuple[str, ...]
-    s_float: tuple[bool, ...]
+    s_col: NDArray[np.int64]
     p_off: NDArray[np.int64]
     p_size: NDArray[np.int64]
-    p_names: tuple[str, ...]
-    p_float: tuple[bool, ...]
+    p_col: NDArray[np.int64]
+    status_float: tuple[str, ...]
+    status_int: tuple[str, ...]
+    n_frames: int
 
     @staticmethod
     def of(templates: dict[str, Template], keys: tuple[str, ...], cids: list[int]
            ) -> _RecordPlan:
         sizes = {"f8": 8, "i4": 4, "u4": 4, "u1": 1, "i1": 1, "b1": 1}
-        parts: list[tuple[bytes, list[tuple[int, int, str, bool]]]] = [(b"", []), (b"", [])]
+        nf = 7 * len(TF_FRAMES)
+        tip = 7 * TF_FRAMES.index(TOOL_TIP_FRAME)
+        status = templates["status"].fields
+        s_float = tuple(nm for nm, _, kd in status if kd == "f8")
+        s_int = tuple(nm for nm, _, kd in status if kd != "f8" and not nm.startswith("stamp"))
+        base_int = nf + len(JOINTS) + len(s_float)
+        special = {"@stamp": base_int, "@seq.status": base_int + 1, "@seq.pose": base_int + 2}
+        comp = {c: i for i, c in enumerate("xyz")}
+
+        def column(key: str, name: str) -> int:
+            if name.endswith(".sec") and "stamp" in name:
+                return base_int + 3
+            if name.endswith(".nanosec") and "stamp" in name:
+                return base_int + 4
+            head, _, tail = name.partition(".")
+            if key == "tool_tip":
+                return tip + (comp[tail] if head == "p" else 3 + "xyzw".index(tail))
+            if key == "tf":
+                k = int(head[1:])
+                return 7 * k + (comp[tail] if head[0] == "t" else 3 + "xyzw".index(tail))
+            if key == "joint_states":
+                return nf + int(tail)
+            if name in s_float:
+                return nf + len(JOINTS) + s_float.index(name)
+            return base_int + 5 + s_int.index(name)
+
+        parts: list[tuple[bytes, list[tuple[int, int, int]]]] = [(b"", []), (b"", [])]
         record_at = [0]
         for j, key in enumerate(keys):
             tpl = templates[key]
@@ -387,10 +416,10 @@ class _RecordPlan:
             at = len(data)
             if j:
                 record_at.append(at)
-            seq = "@seq.status" if j == 0 else "@seq.pose"
-            fields += [(at + 11, 4, seq, False), (at + 15, 8, "@stamp", False),
-                       (at + 23, 8, "@stamp", False)]
-            fields += [(at + MESSAGE_HEADER + off, sizes[kind], f"{key}:{name}", kind == "f8")
+            seq = special["@seq.status" if j == 0 else "@seq.pose"]
+            fields += [(at + 11, 4, seq), (at + 15, 8, special["@stamp"]),
+                       (at + 23, 8, special["@stamp"])]
+            fields += [(at + MESSAGE_HEADER + off, sizes[kind], column(key, name))
                        for name, off, kind in tpl.fields]
             parts[side] = (data + head.tobytes() + tpl.data, fields)
         (sd, sf), (pd, pf) = parts
@@ -398,44 +427,43 @@ class _RecordPlan:
             status_tpl=np.frombuffer(sd, np.uint8), pose_tpl=np.frombuffer(pd, np.uint8),
             record_at=tuple(record_at),
             s_off=np.array([f[0] for f in sf], np.int64),
-            s_size=np.array([f[1] for f in sf], np.int64), s_names=tuple(f[2] for f in sf),
-            s_float=tuple(f[3] for f in sf),
+            s_size=np.array([f[1] for f in sf], np.int64),
+            s_col=np.array([f[2] for f in sf], np.int64),
             p_off=np.array([f[0] for f in pf], np.int64),
-            p_size=np.array([f[1] for f in pf], np.int64), p_names=tuple(f[2] for f in pf),
-            p_float=tuple(f[3] for f in pf))
+            p_size=np.array([f[1] for f in pf], np.int64),
+            p_col=np.array([f[2] for f in pf], np.int64),
+            status_float=s_float, status_int=s_int, n_frames=len(TF_FRAMES))
 
-    def words(self, vals: dict[str, Any], m: int, poses: bool
-              ) -> tuple[NDArray[np.uint64], NDArray[np.int64], NDArray[np.int64]]:
-        """The numbers of ``m`` readings as 8-byte words, one column per distinct array.
+    def words(self, stamps: NDArray[np.int64], seq_status: NDArray[np.int64],
+              seq_pose: NDArray[np.int64], status: dict[str, Any],
+              frames: NDArray[np.float64] | None,
+              jv: dict[str, NDArray[np.float64]] | None) -> NDArray[np.uint64]:
+        """The numbers of ``m`` readings as 8-byte words (m, C), in the plan's columns.
 
-        Returns ``(words (m, C), status columns, pose columns)``; without ``poses`` the
-        pose columns are all 0 (the pose records are not written).
+        ``frames`` (m, K, 7) and ``jv`` are None where no reading has a pose (their
+        columns are then left unset: the pose records are not written).
         """
-        cols: dict[tuple[Any, bool], int] = {}
-        sources: list[tuple[Any, bool]] = []
-
-        def column(name: str, is_float: bool) -> int:
-            x = vals[name]
-            key = (id(x) if isinstance(x, np.ndarray) else repr(x), is_float)
-            c = cols.get(key)
-            if c is None:
-                c = cols[key] = len(sources)
-                sources.append((x, is_float))
-            return c
-
-        s_col = np.array([column(k, f) for k, f in zip(self.s_names, self.s_float,
-                                                        strict=True)], np.int64)
-        p_col = (np.array([column(k, f) for k, f in zip(self.p_names, self.p_float,
-                                                         strict=True)], np.int64)
-                 if poses else np.zeros(len(self.p_names), np.int64))
-        words = np.empty((m, len(sources)), dtype=np.uint64)
+        m = len(stamps)
+        nf = 7 * self.n_frames
+        nj = len(JOINTS)
+        ns = len(self.status_float)
+        base = nf + nj + ns
+        words = np.empty((m, base + 5 + len(self.status_int)), dtype=np.uint64)
         as_float, as_int = words.view(np.float64), words.view(np.int64)
-        for c, (x, is_float) in enumerate(sources):
-            if is_float:
-                as_float[:, c] = x
-            else:
-                as_int[:, c] = x
-        return words, s_col, p_col
+        if frames is not None and jv is not None:
+            as_float[:, :nf] = frames.reshape(m, nf)
+            for i, name in enumerate(JOINTS):
+                as_float[:, nf + i] = jv[name]
+        for i, name in enumerate(self.status_float):
+            as_float[:, nf + nj + i] = status[name]
+        as_int[:, base] = stamps
+        as_int[:, base + 1] = seq_status
+        as_int[:, base + 2] = seq_pose
+        as_int[:, base + 3] = status["stamp.sec"]
+        as_int[:, base + 4] = status["stamp.nanosec"]
+        for i, name in enumerate(self.status_int):
+            as_int[:, base + 5 + i] = status[name]
+        return words
 
 
 class McapOutput:
@@ -641,22 +669,18 @@ class McapOutput:
                                              else getattr(b, f.name)[a:e])
                                     for f in dataclasses.fields(TrackedBatch)}
             sub = TrackedBatch(**part)
-            vals: dict[str, Any] = {"@stamp": st,
-                                    "@seq.status": self._seq["status"] + np.arange(m),
-                                    "@seq.pose": self._seq["tool_tip"] + np.cumsum(v) - 1}
-            for k, x in self.encoder.status_values(sub, self._seq["status"]).items():
-                vals[f"status:{k}"] = x
+            status = self.encoder.status_values(sub, self._seq["status"])
+            frames = jv = None
             if v.any():
                 with np.errstate(invalid="ignore", divide="ignore"):
-                    pv = self.encoder.pose_values(st, sub.q, sub.p, sub.u, sub.O_s)
-                for key, d in pv.items():
-                    for k, x in d.items():
-                        vals[f"{key}:{k}"] = x
-            words, s_col, p_col = plan.words(vals, m, bool(v.any()))
+                    jv = joint_values(self.model, sub.q, sub.p, sub.u, sub.O_s)
+                    frames = self.encoder.frames(jv)
+            words = plan.words(st, self._seq["status"] + np.arange(m),
+                               self._seq["tool_tip"] + np.cumsum(v) - 1, status, frames, jv)
             starts = np.empty(m, dtype=np.int64)
             size = fill_records(self._buf, plan.status_tpl, plan.pose_tpl, words,
-                                plan.s_off, plan.s_size, s_col, plan.p_off, plan.p_size,
-                                p_col, v, starts)
+                                plan.s_off, plan.s_size, plan.s_col, plan.p_off,
+                                plan.p_size, plan.p_col, v, starts)
             if size < 0:   # pragma: no cover - the plan is built to fit
                 raise RuntimeError("internal error: the records do not fit their buffer")
             index = {cids[0]: (st, starts)}
