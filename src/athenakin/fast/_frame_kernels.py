@@ -68,7 +68,7 @@ def quaternion_xyzw_into(R, out):
             R[i, 2, 0], R[i, 2, 1], R[i, 2, 2])
 
 
-@njit(error_model="numpy", cache=True, nogil=True)
+@njit(error_model="numpy", cache=True, nogil=True, boundscheck=False)
 def urdf_frames_into(values, parent, origin, kind, axis, column, wanted, out):
     """Translation and quaternion of links of a URDF tree for each reading.
 
@@ -92,61 +92,75 @@ def urdf_frames_into(values, parent, origin, kind, axis, column, wanted, out):
         ``tx, ty, tz, qx, qy, qz, qw`` of each wanted link in the root frame (m).
     """
     L = parent.shape[0]
-    T = np.empty((L, 3, 4))
-    A = np.empty((3, 4))
-    M = np.empty((3, 4))
+    T = np.empty((L, 12))           # rows of each link's pose: r00 r01 r02 t0 r10 ... t2
     for i in range(values.shape[0]):
         for li in range(L):
             pa = parent[li]
-            Og = origin[li]
-            # A = T[parent] @ origin (rows of a rigid transform; the root is the identity)
+            # A = T[parent] @ origin (the root is the identity): 12 scalars
+            o00, o01, o02, o03 = origin[li, 0, 0], origin[li, 0, 1], origin[li, 0, 2], \
+                origin[li, 0, 3]
+            o10, o11, o12, o13 = origin[li, 1, 0], origin[li, 1, 1], origin[li, 1, 2], \
+                origin[li, 1, 3]
+            o20, o21, o22, o23 = origin[li, 2, 0], origin[li, 2, 1], origin[li, 2, 2], \
+                origin[li, 2, 3]
             if pa < 0:
-                for r in range(3):
-                    for c in range(4):
-                        A[r, c] = Og[r, c]
+                a00, a01, a02, a03 = o00, o01, o02, o03
+                a10, a11, a12, a13 = o10, o11, o12, o13
+                a20, a21, a22, a23 = o20, o21, o22, o23
             else:
-                P = T[pa]
-                for r in range(3):
-                    for c in range(4):
-                        acc = P[r, 0] * Og[0, c] + P[r, 1] * Og[1, c] + P[r, 2] * Og[2, c]
-                        if c == 3:
-                            acc += P[r, 3]
-                        A[r, c] = acc
+                p00, p01, p02, p03 = T[pa, 0], T[pa, 1], T[pa, 2], T[pa, 3]
+                p10, p11, p12, p13 = T[pa, 4], T[pa, 5], T[pa, 6], T[pa, 7]
+                p20, p21, p22, p23 = T[pa, 8], T[pa, 9], T[pa, 10], T[pa, 11]
+                a00 = p00 * o00 + p01 * o10 + p02 * o20
+                a01 = p00 * o01 + p01 * o11 + p02 * o21
+                a02 = p00 * o02 + p01 * o12 + p02 * o22
+                a03 = p00 * o03 + p01 * o13 + p02 * o23 + p03
+                a10 = p10 * o00 + p11 * o10 + p12 * o20
+                a11 = p10 * o01 + p11 * o11 + p12 * o21
+                a12 = p10 * o02 + p11 * o12 + p12 * o22
+                a13 = p10 * o03 + p11 * o13 + p12 * o23 + p13
+                a20 = p20 * o00 + p21 * o10 + p22 * o20
+                a21 = p20 * o01 + p21 * o11 + p22 * o21
+                a22 = p20 * o02 + p21 * o12 + p22 * o22
+                a23 = p20 * o03 + p21 * o13 + p22 * o23 + p23
             kd = kind[li]
-            if kd == 0:
-                for r in range(3):
-                    for c in range(4):
-                        T[li, r, c] = A[r, c]
-                continue
-            v = values[i, column[li]]
-            x, y, z = axis[li, 0], axis[li, 1], axis[li, 2]
-            if kd == 1:
-                for r in range(3):
-                    for c in range(3):
-                        T[li, r, c] = A[r, c]
-                    T[li, r, 3] = A[r, 0] * (v * x) + A[r, 1] * (v * y) + A[r, 2] * (v * z) \
-                        + A[r, 3]
-                continue
-            co, si = math.cos(v), math.sin(v)
-            C = 1.0 - co
-            M[0, 0] = co + x * x * C
-            M[0, 1] = x * y * C - z * si
-            M[0, 2] = x * z * C + y * si
-            M[1, 0] = y * x * C + z * si
-            M[1, 1] = co + y * y * C
-            M[1, 2] = y * z * C - x * si
-            M[2, 0] = z * x * C - y * si
-            M[2, 1] = z * y * C + x * si
-            M[2, 2] = co + z * z * C
-            for r in range(3):
-                for c in range(3):
-                    T[li, r, c] = A[r, 0] * M[0, c] + A[r, 1] * M[1, c] + A[r, 2] * M[2, c]
-                T[li, r, 3] = A[r, 3]
+            if kd == 1:                 # prismatic: translate by v * axis (joint frame)
+                v = values[i, column[li]]
+                x, y, z = v * axis[li, 0], v * axis[li, 1], v * axis[li, 2]
+                a03 = a00 * x + a01 * y + a02 * z + a03
+                a13 = a10 * x + a11 * y + a12 * z + a13
+                a23 = a20 * x + a21 * y + a22 * z + a23
+            elif kd == 2:               # hinge: rotate by v about axis (Rodrigues)
+                v = values[i, column[li]]
+                x, y, z = axis[li, 0], axis[li, 1], axis[li, 2]
+                co, si = math.cos(v), math.sin(v)
+                C = 1.0 - co
+                m00 = co + x * x * C
+                m01 = x * y * C - z * si
+                m02 = x * z * C + y * si
+                m10 = y * x * C + z * si
+                m11 = co + y * y * C
+                m12 = y * z * C - x * si
+                m20 = z * x * C - y * si
+                m21 = z * y * C + x * si
+                m22 = co + z * z * C
+                a00, a01, a02 = (a00 * m00 + a01 * m10 + a02 * m20,
+                                 a00 * m01 + a01 * m11 + a02 * m21,
+                                 a00 * m02 + a01 * m12 + a02 * m22)
+                a10, a11, a12 = (a10 * m00 + a11 * m10 + a12 * m20,
+                                 a10 * m01 + a11 * m11 + a12 * m21,
+                                 a10 * m02 + a11 * m12 + a12 * m22)
+                a20, a21, a22 = (a20 * m00 + a21 * m10 + a22 * m20,
+                                 a20 * m01 + a21 * m11 + a22 * m21,
+                                 a20 * m02 + a21 * m12 + a22 * m22)
+            T[li, 0], T[li, 1], T[li, 2], T[li, 3] = a00, a01, a02, a03
+            T[li, 4], T[li, 5], T[li, 6], T[li, 7] = a10, a11, a12, a13
+            T[li, 8], T[li, 9], T[li, 10], T[li, 11] = a20, a21, a22, a23
         for k in range(wanted.shape[0]):
-            W = T[wanted[k]]
-            out[i, k, 0] = W[0, 3]
-            out[i, k, 1] = W[1, 3]
-            out[i, k, 2] = W[2, 3]
+            w = wanted[k]
+            out[i, k, 0] = T[w, 3]
+            out[i, k, 1] = T[w, 7]
+            out[i, k, 2] = T[w, 11]
             out[i, k, 3], out[i, k, 4], out[i, k, 5], out[i, k, 6] = _quat(
-                W[0, 0], W[0, 1], W[0, 2], W[1, 0], W[1, 1], W[1, 2], W[2, 0], W[2, 1],
-                W[2, 2])
+                T[w, 0], T[w, 1], T[w, 2], T[w, 4], T[w, 5], T[w, 6], T[w, 8], T[w, 9],
+                T[w, 10])
