@@ -715,7 +715,7 @@ def _same_layout(cdr: _CdrJointState, b: _Bulk, j: int
     e = j + (int(np.argmin(ok)) if not ok.all() else len(ok))
     if e == j:
         return j, None
-    rows = b.data[b.offsets[j:e, None] + np.arange(size)]
+    rows = _rows(b.data, b.offsets[j:e], size)
     prefix = np.frombuffer(cdr._prefix, dtype=np.uint8)
     o = cdr._off_vcount
     good = ((rows[:, 12:12 + len(prefix)] == prefix).all(axis=1)
@@ -724,6 +724,22 @@ def _same_layout(cdr: _CdrJointState, b: _Bulk, j: int
         e = j + int(np.argmin(good))
         rows = rows[:e - j]
     return (e, rows) if e > j else (j, None)
+
+
+def _rows(data: NDArray[np.uint8], offsets: NDArray[np.int64], size: int) -> NDArray[np.uint8]:
+    """``data[offsets[i]:offsets[i] + size]`` as rows (n, size), read-only.
+
+    Records of one size one after the other (a single topic) are evenly spaced: a
+    strided view of ``data``, no copy; otherwise a gather.
+    """
+    n = len(offsets)
+    step = int(offsets[1] - offsets[0]) if n > 1 else size
+    if n and step > 0 and (n == 1 or (np.diff(offsets) == step).all()) \
+            and int(offsets[0]) + (n - 1) * step + size <= len(data):
+        view = np.lib.stride_tricks.as_strided(data[int(offsets[0]):], shape=(n, size),
+                                               strides=(step, 1), writeable=False)
+        return view
+    return data[offsets[:, None] + np.arange(size)]
 
 
 def read_joint_states(path: str | Path, *, topic: str = "/joint_states",
