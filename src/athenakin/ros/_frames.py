@@ -238,7 +238,8 @@ def link_poses(model: UrdfModel, values: dict[str, NDArray[np.float64]],
 
 
 def link_frames(model: UrdfModel, values: dict[str, NDArray[np.float64]],
-                links: tuple[str, ...]) -> NDArray[np.float64]:
+                links: tuple[str, ...], *, out: NDArray[np.float64] | None = None
+                ) -> NDArray[np.float64]:
     """Translation and quaternion of links, per reading: what ``/tf`` carries.
 
     :func:`link_poses` then :func:`quaternion_xyzw` of each link, compiled in one pass
@@ -251,6 +252,8 @@ def link_frames(model: UrdfModel, values: dict[str, NDArray[np.float64]],
         Joint values (:func:`joint_values`).
     links : tuple of str
         The links wanted.
+    out : ndarray, shape (N, len(links), 7), keyword-only, optional
+        Where to write (may be a strided view).
 
     Returns
     -------
@@ -260,9 +263,10 @@ def link_frames(model: UrdfModel, values: dict[str, NDArray[np.float64]],
     from .._dispatch import numba_available
 
     n = len(next(iter(values.values())))
+    if out is None:
+        out = np.empty((n, len(links), 7))
     if not numba_available():
         poses = link_poses(model, values, links=links)
-        out = np.empty((n, len(links), 7))
         for k, name in enumerate(links):
             out[:, k, :3] = poses[name][:, :3, 3]
             out[:, k, 3:] = quaternion_xyzw(poses[name][:, :3, :3])
@@ -274,7 +278,6 @@ def link_frames(model: UrdfModel, values: dict[str, NDArray[np.float64]],
     vals = np.empty((n, max(1, len(names))))
     for c, name in enumerate(names):
         vals[:, c] = values[name]
-    out = np.empty((n, len(links), 7))
     urdf_frames_into(vals, *plan[1:], out)
     return out
 

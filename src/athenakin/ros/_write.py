@@ -300,13 +300,17 @@ class RosEncoder:
         js["stamp.sec"], js["stamp.nanosec"] = sec, nsec
         return {"tool_tip": tip, "tf": tf, "joint_states": js}
 
-    def frames(self, jv: dict[str, NDArray[np.float64]]) -> NDArray[np.float64]:
-        """Translation and quaternion of every ``/tf`` child (:data:`TF_FRAMES`), (N, K, 7)."""
-        moving = link_frames(self.model, jv, TF_FRAMES[:-1])
-        frames = np.empty((moving.shape[0], len(TF_FRAMES), 7))
-        frames[:, :-1] = moving
-        frames[:, -1] = self._rcm
-        return frames
+    def frames(self, jv: dict[str, NDArray[np.float64]], *,
+               out: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+        """Translation and quaternion of every ``/tf`` child (:data:`TF_FRAMES`), (N, K, 7).
+
+        ``out``: where to write (a view, e.g. columns of the writer's words).
+        """
+        if out is None:
+            out = np.empty((len(next(iter(jv.values()))), len(TF_FRAMES), 7))
+        link_frames(self.model, jv, TF_FRAMES[:-1], out=out[:, :-1])
+        out[:, -1] = self._rcm
+        return out
 
     def poses(self, stamps_ns: NDArray[np.int64], q: NDArray[np.float64],
               p: NDArray[np.float64], u: NDArray[np.float64], O_s: NDArray[np.float64]
@@ -434,26 +438,28 @@ class _RecordPlan:
             p_col=np.array([f[2] for f in pf], np.int64),
             status_float=s_float, status_int=s_int, n_frames=len(TF_FRAMES))
 
-    def words(self, stamps: NDArray[np.int64], seq_status: NDArray[np.int64],
-              seq_pose: NDArray[np.int64], status: dict[str, Any],
-              frames: NDArray[np.float64] | None,
-              jv: dict[str, NDArray[np.float64]] | None) -> NDArray[np.uint64]:
+    @property
+    def n_words(self) -> int:
+        """Columns of :meth:`words`."""
+        return 7 * self.n_frames + len(JOINTS) + len(self.status_float) + 5 \
+            + len(self.status_int)
+
+    def words(self, buf: NDArray[np.uint64], stamps: NDArray[np.int64],
+              seq_status: NDArray[np.int64], seq_pose: NDArray[np.int64],
+              status: dict[str, Any]) -> NDArray[np.uint64]:
         """The numbers of ``m`` readings as 8-byte words (m, C), in the plan's columns.
 
-        ``frames`` (m, K, 7) and ``jv`` are None where no reading has a pose (their
-        columns are then left unset: the pose records are not written).
+        Written into ``buf[:m]`` (at least ``m`` rows of :attr:`n_words`); the pose
+        columns are left for :meth:`pose_columns` (unset where no reading has a pose:
+        the pose records are then not written).
         """
         m = len(stamps)
         nf = 7 * self.n_frames
         nj = len(JOINTS)
         ns = len(self.status_float)
         base = nf + nj + ns
-        words = np.empty((m, base + 5 + len(self.status_int)), dtype=np.uint64)
+        words = buf[:m]
         as_float, as_int = words.view(np.float64), words.view(np.int64)
-        if frames is not None and jv is not None:
-            as_float[:, :nf] = frames.reshape(m, nf)
-            for i, name in enumerate(JOINTS):
-                as_float[:, nf + i] = jv[name]
         for i, name in enumerate(self.status_float):
             as_float[:, nf + nj + i] = status[name]
         as_int[:, base] = stamps
@@ -464,6 +470,15 @@ class _RecordPlan:
         for i, name in enumerate(self.status_int):
             as_int[:, base + 5 + i] = status[name]
         return words
+
+    def pose_columns(self, words: NDArray[np.uint64]
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Views of ``words`` as the ``/tf`` frames (m, K, 7) and the joints (m, J), float64."""
+        m = words.shape[0]
+        nf = 7 * self.n_frames
+        as_float = words.view(np.float64)
+        return (as_float[:, :nf].reshape(m, self.n_frames, 7),
+                as_float[:, nf:nf + len(JOINTS)])
 
 
 class McapOutput:
@@ -530,6 +545,7 @@ class McapOutput:
         self._closed = False
         self._plan: _RecordPlan | None = None
         self._buf: NDArray[np.uint8] | None = None
+        self._words: NDArray[np.uint64] | None = None
         self.counts: dict[str, int] = {}
 
     # ------------------------------------------------------------------ channels
@@ -660,6 +676,8 @@ class McapOutput:
         cap = min(n, per) * (rs + rp)
         if self._buf is None or len(self._buf) < cap:
             self._buf = np.empty(cap, dtype=np.uint8)
+        if self._words is None or len(self._words) < min(n, per):
+            self._words = np.empty((min(n, per), plan.n_words), dtype=np.uint64)
         for a in range(0, n, per):
             e = min(n, a + per)
             m = e - a
@@ -670,13 +688,15 @@ class McapOutput:
                                     for f in dataclasses.fields(TrackedBatch)}
             sub = TrackedBatch(**part)
             status = self.encoder.status_values(sub, self._seq["status"])
-            frames = jv = None
+            words = plan.words(self._words, st, self._seq["status"] + np.arange(m),
+                               self._seq["tool_tip"] + np.cumsum(v) - 1, status)
             if v.any():
+                frames, joints = plan.pose_columns(words)
                 with np.errstate(invalid="ignore", divide="ignore"):
                     jv = joint_values(self.model, sub.q, sub.p, sub.u, sub.O_s)
-                    frames = self.encoder.frames(jv)
-            words = plan.words(st, self._seq["status"] + np.arange(m),
-                               self._seq["tool_tip"] + np.cumsum(v) - 1, status, frames, jv)
+                    self.encoder.frames(jv, out=frames)
+                for i, name in enumerate(JOINTS):
+                    joints[:, i] = jv[name]
             starts = np.empty(m, dtype=np.int64)
             size = fill_records(self._buf, plan.status_tpl, plan.pose_tpl, words,
                                 plan.s_off, plan.s_size, plan.s_col, plan.p_off,
