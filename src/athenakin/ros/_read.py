@@ -727,10 +727,10 @@ def _same_layout(cdr: _CdrJointState, b: _Bulk, j: int
 
 
 def _rows(data: NDArray[np.uint8], offsets: NDArray[np.int64], size: int) -> NDArray[np.uint8]:
-    """``data[offsets[i]:offsets[i] + size]`` as rows (n, size), read-only.
+    """``data[offsets[i]:offsets[i] + size]`` as rows (n, size).
 
     Records of one size one after the other (a single topic) are evenly spaced: a
-    strided view of ``data``, no copy; otherwise a gather.
+    read-only strided view of ``data``, no copy; otherwise a gather (a copy).
     """
     n = len(offsets)
     step = int(offsets[1] - offsets[0]) if n > 1 else size
