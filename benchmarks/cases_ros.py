@@ -39,10 +39,12 @@ class _Note:
     def __init__(self, text: str) -> None:
         self.text = text
         self.load = None
+        self.size = None        # bytes per reading of the file written, where one is
 
     def __str__(self) -> str:
         load = "n/a" if self.load is None else ", ".join(f"{x:.2f}" for x in self.load)
-        return f"{self.text}; load {load}"
+        size = "" if self.size is None else f"; {self.size:.0f} B per reading"
+        return f"{self.text}{size}; load {load}"
 
 
 def _timed(note: _Note, fn):
@@ -144,23 +146,27 @@ def cases(quick: bool) -> list[dict]:
         }.items()}
     raw = _raw_output(tmp, stamps, log, T, d)
 
-    def mcap(**kw):
-        return lambda: ak.ros.track_recording(rec, out_mcap(), T, d, **kw)
+    def mcap(note: _Note, **kw):
+        def call():
+            path = out_mcap()
+            ak.ros.track_recording(rec, path, T, d, **kw)
+            note.size = path.stat().st_size / n
+        return call
 
     return [
         {"name": "CSV in, track, CSV out", "group": "ros-track", "batch": n, "baseline": True,
          "call": _timed(notes["csv"], csv_path), "note": notes["csv"]},
         {"name": "MCAP in, track, MCAP out (track_recording)", "group": "ros-track",
-         "batch": n, "note": notes["mcap"], "call": _timed(notes["mcap"], mcap())},
+         "batch": n, "note": notes["mcap"], "call": _timed(notes["mcap"], mcap(notes["mcap"]))},
         {"name": "MCAP in, track, MCAP out, zstd level 1", "group": "ros-track",
          "batch": n, "note": notes["mcap-zstd1"],
-         "call": _timed(notes["mcap-zstd1"], mcap(compression_level=1))},
+         "call": _timed(notes["mcap-zstd1"], mcap(notes["mcap-zstd1"], compression_level=1))},
         {"name": "MCAP in, track, MCAP out, lz4", "group": "ros-track",
          "batch": n, "note": notes["mcap-lz4"],
-         "call": _timed(notes["mcap-lz4"], mcap(compression="lz4"))},
+         "call": _timed(notes["mcap-lz4"], mcap(notes["mcap-lz4"], compression="lz4"))},
         {"name": "MCAP in, track, MCAP out, not compressed", "group": "ros-track",
          "batch": n, "note": notes["mcap-none"],
-         "call": _timed(notes["mcap-none"], mcap(compression="none"))},
+         "call": _timed(notes["mcap-none"], mcap(notes["mcap-none"], compression="none"))},
         {"name": "decode only (read_joint_states)", "group": "ros-track", "batch": n,
          "note": notes["decode"],
          "call": _timed(notes["decode"], lambda: ak.ros.read_joint_states(rec))},
