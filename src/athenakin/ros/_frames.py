@@ -273,12 +273,11 @@ def link_frames(model: UrdfModel, values: dict[str, NDArray[np.float64]],
         return out
     from ..fast._frame_kernels import urdf_frames_into
 
-    plan = _frames_plan(model, links)
-    names = plan[0]
+    names, parent, origin, kind, axis, column, wanted = _frames_plan(model, links)
     vals = np.empty((n, max(1, len(names))))
     for c, name in enumerate(names):
         vals[:, c] = values[name]
-    urdf_frames_into(vals, *plan[1:], out)
+    urdf_frames_into(vals, parent, origin, kind, axis, column, wanted, out)
     return out
 
 

@@ -123,7 +123,8 @@ class McapFile:
         if compression == "zstd":
             import zstandard
 
-            self._compress = zstandard.ZstdCompressor(level=level).compress
+            self._compress = zstandard.ZstdCompressor(
+                level=ZSTD_LEVEL if level is None else level).compress
         elif compression == "lz4":
             import functools
 
