@@ -27,6 +27,7 @@ from athenakin.ros._frames import (  # noqa: E402
     MOVING_LINKS,
     TOOL_TIP_FRAME,
     joint_values,
+    kernel_plan,
     link_frames,
     link_poses,
     urdf_model,
@@ -46,12 +47,31 @@ def _stream(n, seed, lost=()):
     return stamps(n), q
 
 
+def _kernel_joint_values(model, q, p, u, O_s):
+    """:func:`joint_values` through the compiled writer's kernel (as a dict)."""
+    from athenakin.fast._frame_kernels import joint_values_into
+    from athenakin.sim import JOINTS
+
+    jv_args, _ = kernel_plan(model, (*MOVING_LINKS, TOOL_TIP_FRAME))
+    out = np.full((len(q), len(JOINTS)), np.nan)
+    joint_values_into(np.asarray(q, float), np.asarray(p, float), np.asarray(u, float),
+                      np.asarray(O_s, float), np.ones(len(q), bool), *jv_args, out)
+    return {name: out[:, i] for i, name in enumerate(JOINTS)}
+
+
+def _numpy_writer(monkeypatch):
+    """The numpy writer, given the compiled joint values (libm and numpy's SIMD atan2 may
+    differ in the last bit): the encoders compared on the same numbers."""
+    monkeypatch.setattr(_write, "_compiled", lambda: False)
+    monkeypatch.setattr(_write, "joint_values", _kernel_joint_values)
+
+
 def _both_writers(tmp_path, monkeypatch, name, st, q, **kw):
     """The same stream written by the compiled writer and by the numpy writer."""
     fast = tmp_path / f"{name}_fast.mcap"
     slow = tmp_path / f"{name}_numpy.mcap"
     ak.ros.track_to_mcap(st, q, fast, T, D, **kw)
-    monkeypatch.setattr(_write, "_compiled", lambda: False)
+    _numpy_writer(monkeypatch)
     ak.ros.track_to_mcap(st, q, slow, T, D, **kw)
     monkeypatch.undo()
     return fast, slow
@@ -87,8 +107,9 @@ def test_compiled_writer_with_clearance_fields(tmp_path, monkeypatch):
     cols["flags"] = cols["flags"] | np.where(np.arange(len(q)) % 7 == 0,
                                              int(ak.motion.TrackFlag.NEAR_COLLISION), 0)
     out = {}
-    for name, compiled in (("fast", True), ("slow", False)):
-        monkeypatch.setattr(_write, "_compiled", lambda c=compiled: c)
+    for name in ("fast", "slow"):
+        if name == "slow":
+            _numpy_writer(monkeypatch)
         path = tmp_path / f"{name}.mcap"
         with _write.McapOutput(path, D, T, compression="none") as w:
             w.write_tracked(tracked_batch(st, cols))
@@ -182,6 +203,34 @@ def test_fill_records_refuses_a_short_buffer_or_a_field_outside():
     np.testing.assert_array_equal(first[2:10], [8, 7, 6, 5, 4, 3, 2, 1])   # little endian
     assert first[10 + 19] == 7 and first[10] == 0                # pose part, 1 byte
     assert out[30 + 2] == 8 and out[40 + 10 + 19] == 7
+
+
+@needs_numba
+@pytest.mark.parametrize("seed", [20, 21])
+def test_compiled_joint_values_equal_joint_values(seed):
+    """Every joint in every FK slot (both modes, hinges wrapped near +-pi), to rounding."""
+    rng = np.random.default_rng(seed)
+    q = np.array(ak.robot.REFERENCE_Q) + rng.uniform(-0.04, 0.04, (60, 3))
+    sol = ak.forward_kinematics(q, T, D)
+    rows, slots = np.nonzero(sol.valid)
+    assert len(set(slots.tolist())) > 4
+    model = urdf_model(D, T)
+    args = (q[rows], sol.p[rows, slots], sol.u[rows, slots], sol.T_b_s[rows, slots, :3, 3])
+    want = joint_values(model, *args)
+    got = _kernel_joint_values(model, *args)
+    assert got.keys() == want.keys()
+    for name in want:
+        d = np.abs(np.angle(np.exp(1j * (got[name] - want[name]))))   # modulo 2 pi
+        assert d.max() <= 4e-15, name
+        assert (np.abs(got[name]) <= np.pi).all()
+    # rows not valid are left as they are
+    from athenakin.fast._frame_kernels import joint_values_into
+
+    jv_args, _ = kernel_plan(model, (*MOVING_LINKS, TOOL_TIP_FRAME))
+    out = np.full((len(rows), len(want)), -7.0)
+    valid = np.arange(len(rows)) % 3 == 0
+    joint_values_into(*(np.asarray(a, float) for a in args), valid, *jv_args, out)
+    assert (out[~valid] == -7.0).all() and (out[valid] != -7.0).any()
 
 
 @needs_numba

@@ -23,7 +23,7 @@ from .._transforms import rot_x, rot_y, rot_z
 from ..design import Design
 from ..sim import JOINTS, urdf_from_design, urdf_joint_zero
 
-__all__ = ["UrdfModel", "urdf_model", "joint_values", "link_poses", "link_frames",
+__all__ = ["UrdfModel", "urdf_model", "joint_values", "link_poses", "link_frames", "kernel_plan",
            "quaternion_xyzw",
            "MOVING_LINKS", "BASE_FRAME", "RCM_FRAME", "TOOL_TIP_FRAME"]
 
@@ -279,6 +279,28 @@ def link_frames(model: UrdfModel, values: dict[str, NDArray[np.float64]],
         vals[:, c] = values[name]
     urdf_frames_into(vals, parent, origin, kind, axis, column, wanted, out)
     return out
+
+
+def kernel_plan(model: UrdfModel, links: tuple[str, ...]) -> tuple[Any, ...]:
+    """Arguments of the compiled joint values and link frames, values in ``JOINTS`` order.
+
+    ``(jv_args, frames_args)``: :func:`athenakin.fast._frame_kernels.joint_values_into`'s
+    ``lengths, zero, code, hinge`` and :func:`~athenakin.fast._frame_kernels.urdf_frames_into`'s
+    ``parent, origin, kind, axis, column, wanted`` where ``column`` indexes
+    :data:`~athenakin.sim.JOINTS` (the writer keeps the joint values in that order).
+    """
+    from ..fast._frame_kernels import JOINT_CODES
+
+    d = model.design
+    names = tuple(JOINTS)
+    jv_args = (np.array([d.l1 ** 2, d.l2, d.l3 ** 2, d.l4, d.l5, 0.0, 0.0]),
+               np.array([model.zero[n] for n in names], float),
+               np.array([JOINT_CODES[n] for n in names], np.int64),
+               np.array([JOINTS[n][0] == "hinge" for n in names], bool))
+    _, parent, origin, kind, axis, column, wanted = _frames_plan(model, links)
+    plan_names = _frames_plan(model, links)[0]
+    column = np.array([names.index(plan_names[c]) for c in column], np.int64)
+    return jv_args, (parent, origin, kind, axis, column, wanted)
 
 
 def _frames_plan(model: UrdfModel, links: tuple[str, ...]) -> tuple[Any, ...]:

@@ -47,6 +47,7 @@ from ._frames import (
     TOOL_TIP_FRAME,
     UrdfModel,
     joint_values,
+    kernel_plan,
     link_frames,
     quaternion_xyzw,
     urdf_model,
@@ -266,7 +267,16 @@ class RosEncoder:
                           "joint_states": _joint_state_template(tuple(JOINTS)),
                           "status": _status_template()}
         rcm = self.model.T_b_e[None]
-        self._rcm = np.concatenate([rcm[0, :3, 3], quaternion_xyzw(rcm[:, :3, :3])[0]])
+        #: ``/tf``'s ``rcm`` frame: translation and quaternion of ``T_b_e`` (fixed).
+        self.rcm_frame = np.concatenate([rcm[0, :3, 3], quaternion_xyzw(rcm[:, :3, :3])[0]])
+        self._kernel_plan: tuple[Any, ...] | None = None
+
+    @property
+    def kernel_plan(self) -> tuple[Any, ...]:
+        """The compiled joint values' and ``/tf`` frames' arguments (:func:`kernel_plan`)."""
+        if self._kernel_plan is None:
+            self._kernel_plan = kernel_plan(self.model, TF_FRAMES[:-1])
+        return self._kernel_plan
 
     def robot_description(self) -> bytes:
         """``std_msgs/msg/String`` holding the URDF."""
@@ -309,7 +319,7 @@ class RosEncoder:
         if out is None:
             out = np.empty((len(next(iter(jv.values()))), len(TF_FRAMES), 7))
         link_frames(self.model, jv, TF_FRAMES[:-1], out=out[:, :-1])
-        out[:, -1] = self._rcm
+        out[:, -1] = self.rcm_frame
         return out
 
     def poses(self, stamps_ns: NDArray[np.int64], q: NDArray[np.float64],
@@ -670,9 +680,11 @@ class McapOutput:
         numbers of :meth:`RosEncoder.status_values` and :meth:`RosEncoder.pose_values`
         written at their offsets, the readings without a pose keeping only their status.
         """
+        from ..fast._frame_kernels import joint_values_into, urdf_frames_into
         from ..fast._mcap_kernels import fill_records
 
         plan = self._record_plan(keys, cids)
+        jv_args, frames_args = self.encoder.kernel_plan
         n = len(stamps)
         rs, rp = len(plan.status_tpl), len(plan.pose_tpl)
         cap = min(n, per) * (rs + rp)
@@ -693,12 +705,14 @@ class McapOutput:
             words = plan.words(self._words, st, self._seq["status"] + np.arange(m),
                                self._seq["tool_tip"] + np.cumsum(v) - 1, status)
             if v.any():
+                # joint values (JOINTS order) then the /tf frames, compiled, straight into
+                # the words (the rows without a pose are skipped or never written)
                 frames, joints = plan.pose_columns(words)
-                with np.errstate(invalid="ignore", divide="ignore"):
-                    jv = joint_values(self.model, sub.q, sub.p, sub.u, sub.O_s)
-                    self.encoder.frames(jv, out=frames)
-                for i, name in enumerate(JOINTS):
-                    joints[:, i] = jv[name]
+                joint_values_into(np.asarray(sub.q, float), np.asarray(sub.p, float),
+                                  np.asarray(sub.u, float), np.asarray(sub.O_s, float), v,
+                                  *jv_args, joints)
+                urdf_frames_into(joints, *frames_args, frames[:, :-1])
+                frames[:, -1] = self.encoder.rcm_frame
             starts = np.empty(m, dtype=np.int64)
             size = fill_records(self._buf, plan.status_tpl, plan.pose_tpl, words,
                                 plan.s_off, plan.s_size, plan.s_col, plan.p_off,
