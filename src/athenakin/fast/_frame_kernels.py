@@ -1,4 +1,4 @@
-"""Compiled link frames and unit quaternions of many readings (private; the MCAP writer's ``/tf``).
+"""Compiled joint values, link frames and quaternions of many readings (private; ``/tf``).
 
 :func:`quaternion_xyzw_into` is :func:`athenakin.ros._frames.quaternion_xyzw` element by
 element: Shepperd's choice of the largest component (``argmax``, NaN first as numpy does),
@@ -7,11 +7,11 @@ for bit the numpy function's (tested), in one pass without its temporaries.
 
 :func:`joint_values_into` is :func:`athenakin.ros._frames.joint_values` reading by
 reading (the same expressions; libm's ``atan2`` where numpy may use its own SIMD one, so
-equal to the last bit or so, tested). :func:`urdf_frames_into` is :func:`athenakin.ros._frames.link_poses`
-followed by
-:func:`quaternion_xyzw` of the links asked for, reading by reading (the URDF's forward
-kinematics, parent before child), without the (N, 4, 4) temporaries of every link; it
-agrees with them to rounding (tested to 1e-12).
+equal to the last bit or so, tested). :func:`urdf_frames_into` is
+:func:`athenakin.ros._frames.link_poses` followed by :func:`quaternion_xyzw` of the links
+asked for, reading by reading (the URDF's forward kinematics, parent before child),
+without the (N, 4, 4) temporaries of every link; it agrees with them to rounding (tested
+to 1e-12).
 """
 
 from __future__ import annotations

@@ -684,7 +684,8 @@ class McapOutput:
         from ..fast._mcap_kernels import fill_records
 
         plan = self._record_plan(keys, cids)
-        jv_args, frames_args = self.encoder.kernel_plan
+        (lengths, zero, code, hinge), (parent, origin, kind, axis, column, wanted) = \
+            self.encoder.kernel_plan
         n = len(stamps)
         rs, rp = len(plan.status_tpl), len(plan.pose_tpl)
         cap = min(n, per) * (rs + rp)
@@ -710,8 +711,9 @@ class McapOutput:
                 frames, joints = plan.pose_columns(words)
                 joint_values_into(np.asarray(sub.q, float), np.asarray(sub.p, float),
                                   np.asarray(sub.u, float), np.asarray(sub.O_s, float), v,
-                                  *jv_args, joints)
-                urdf_frames_into(joints, *frames_args, frames[:, :-1])
+                                  lengths, zero, code, hinge, joints)
+                urdf_frames_into(joints, parent, origin, kind, axis, column, wanted,
+                                 frames[:, :-1])
                 frames[:, -1] = self.encoder.rcm_frame
             starts = np.empty(m, dtype=np.int64)
             size = fill_records(self._buf, plan.status_tpl, plan.pose_tpl, words,
