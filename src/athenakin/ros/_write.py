@@ -3,8 +3,10 @@
 One :class:`McapOutput` writes one file through a temporary file in the same
 folder, renamed into place only when everything is written: a failure (or
 Ctrl-C) leaves nothing, never a partial file. Messages are encoded by
-:mod:`._cdr` (vectorised over readings) and written with the mcap library,
-chunked and zstd-compressed; the schemas are the ROS 2 message definitions
+:mod:`._cdr` (vectorised over readings; where numba runs, the records of a chunk
+are filled by :func:`athenakin.fast._mcap_kernels.fill_records`, the same bytes)
+and written by :mod:`._mcap`, chunked and compressed (zstd level -3 unless told);
+the schemas are the ROS 2 message definitions
 (from rosbags' type store), so Foxglove, rosbags, mcap-ros2-support and
 ``ros2 bag`` read the file as it is.
 
