@@ -7,12 +7,18 @@ Group ``ros-track`` (batch = readings; "poses/s" is readings per second):
 * ``track_recording``: MCAP of ``sensor_msgs/JointState`` in, MCAP of the ROS 2 topics out
   (decode, track, encode every topic, write), the path of ``athenakin track REC -o OUT.mcap``
   (target of issue 22: >= 200k readings/s on one core);
+* the same with the other chunk compressions: zstd level 1 (the default before
+  issue 22's speed work), lz4;
 * its parts: decoding alone (``read_joint_states``), tracking alone (``motion.track``, the
   compiled batched tracker; beside it ``Tracker.update`` called once per reading, the
-  live API), encoding and writing alone (``write_track_log``).
+  live API), encoding and writing alone (``write_track_log``), compressing the output's
+  bytes alone (zstd at the default level and at level 1).
 
-Every note ends with the load average measured when the case last ran (a shared machine
-slows everything; compare ratios within one run).
+Each call writes a new file (as ``athenakin track REC -o NEW.mcap`` does), up to 64 per
+case: replacing an earlier call's output would add the file system's cost of freeing it
+(about 15 ms for 13 MB here), which is not tracking. Every note ends with the load
+average measured when the case last ran (a shared machine slows everything; compare ratios
+within one run).
 """
 
 import atexit
@@ -34,10 +40,12 @@ class _Note:
     def __init__(self, text: str) -> None:
         self.text = text
         self.load = None
+        self.size = None        # bytes per reading of the file written, where one is
 
     def __str__(self) -> str:
         load = "n/a" if self.load is None else ", ".join(f"{x:.2f}" for x in self.load)
-        return f"{self.text}; load {load}"
+        size = "" if self.size is None else f"; {self.size:.0f} B per reading"
+        return f"{self.text}{size}; load {load}"
 
 
 def _timed(note: _Note, fn):
@@ -84,6 +92,18 @@ def _update_loop(q: np.ndarray, T: np.ndarray, d: ak.Design) -> None:
         up(row)
 
 
+class _Fresh:
+    """A new output path for each call, in the run's temporary folder (at most ``keep``
+    names, then reused)."""
+
+    def __init__(self, folder: Path, stem: str, suffix: str, keep: int = 64) -> None:
+        self.folder, self.stem, self.suffix, self.keep, self.k = folder, stem, suffix, keep, 0
+
+    def __call__(self) -> Path:
+        self.k += 1
+        return self.folder / f"{self.stem}{self.k % self.keep}{self.suffix}"
+
+
 def cases(quick: bool) -> list[dict]:
     d = ak.Design.default()
     T = ak.default_rcm_frame(d)
@@ -102,27 +122,54 @@ def cases(quick: bool) -> list[dict]:
                                                              strict=True)))
     log = track(q, T, d)
 
+    out_csv = _Fresh(tmp, "out", ".csv")
+
     def csv_path():
         qq, tt = read_q_stream_csv(csv)
-        write_text_atomic(tmp / "out.csv", track_csv_text(track(qq, T, d), tt))
+        write_text_atomic(out_csv(), track_csv_text(track(qq, T, d), tt))
 
+    level = ak.ros._mcap.ZSTD_LEVEL
     notes = {k: _Note(v) for k, v in {
         "csv": "athenakin track STREAM.csv -o OUT.csv: read, track, write",
-        "mcap": "decode + track + encode + write; target >= 200k readings/s",
+        "mcap": f"decode + track + encode + write, zstd level {level} (the default); target "
+                f">= 200k readings/s",
+        "mcap-zstd1": "the same, zstd level 1 (the default before the speed work)",
+        "mcap-lz4": "the same, lz4 chunks",
         "decode": "read_joint_states of an MCAP file",
         "track": "motion.track alone (the compiled batched tracker)",
         "update": "Tracker.update once per reading (the live API, Python)",
-        "encode": "write_track_log: every topic encoded and written",
-        "zstd": "zstd level 1 of the output's bytes in 4 MB pieces, as the writer's chunks"
+        "encode": f"write_track_log: every topic encoded and written (zstd level {level})",
+        "zstd": f"zstd level {level} of the output's bytes (not compressed) in 4 MB pieces, "
+                f"as the writer's chunks",
+        "zstd1": "zstd level 1 of the output's bytes (not compressed) in 4 MB pieces",
         }.items()}
     raw = _raw_output(tmp, stamps, log, T, d)
+    notes["zstd"].size = notes["zstd1"].size = sum(len(x) for x in raw) / n
+
+    def mcap(note: _Note, stem: str, **kw):
+        out = _Fresh(tmp, stem, ".mcap")
+
+        def call():
+            path = out()
+            ak.ros.track_recording(rec, path, T, d, **kw)
+            note.size = path.stat().st_size / n
+        return call
+
+    out_log = _Fresh(tmp, "log", ".mcap")
+
     return [
         {"name": "CSV in, track, CSV out", "group": "ros-track", "batch": n, "baseline": True,
          "call": _timed(notes["csv"], csv_path), "note": notes["csv"]},
         {"name": "MCAP in, track, MCAP out (track_recording)", "group": "ros-track",
          "batch": n, "note": notes["mcap"],
-         "call": _timed(notes["mcap"], lambda: ak.ros.track_recording(rec, tmp / "o.mcap",
-                                                                      T, d))},
+         "call": _timed(notes["mcap"], mcap(notes["mcap"], "zstd_default"))},
+        {"name": "MCAP in, track, MCAP out, zstd level 1", "group": "ros-track",
+         "batch": n, "note": notes["mcap-zstd1"],
+         "call": _timed(notes["mcap-zstd1"], mcap(notes["mcap-zstd1"], "zstd1_",
+                                                     compression_level=1))},
+        {"name": "MCAP in, track, MCAP out, lz4", "group": "ros-track",
+         "batch": n, "note": notes["mcap-lz4"],
+         "call": _timed(notes["mcap-lz4"], mcap(notes["mcap-lz4"], "lz4_", compression="lz4"))},
         {"name": "decode only (read_joint_states)", "group": "ros-track", "batch": n,
          "note": notes["decode"],
          "call": _timed(notes["decode"], lambda: ak.ros.read_joint_states(rec))},
@@ -133,9 +180,13 @@ def cases(quick: bool) -> list[dict]:
         {"name": "encode + write only (write_track_log)", "group": "ros-track", "batch": n,
          "note": notes["encode"],
          "call": _timed(notes["encode"], lambda: ak.ros._track.write_track_log(
-             tmp / "o2.mcap", stamps, log, T, d))},
+             out_log(), stamps, log, T, d))},
+        {"name": f"compress only (zstd level {level} of the output)", "group": "ros-track",
+         "batch": n, "note": notes["zstd"],
+         "call": _timed(notes["zstd"], lambda: _zstd(raw, level))},
         {"name": "compress only (zstd level 1 of the output)", "group": "ros-track",
-         "batch": n, "note": notes["zstd"], "call": _timed(notes["zstd"], lambda: _zstd(raw))},
+         "batch": n, "note": notes["zstd1"],
+         "call": _timed(notes["zstd1"], lambda: _zstd(raw, 1))},
     ]
 
 
@@ -150,9 +201,9 @@ def _raw_output(tmp: Path, stamps: np.ndarray, log, T: np.ndarray, d: ak.Design)
     return [data[k:k + 4 * 2**20] for k in range(0, len(data), 4 * 2**20)]
 
 
-def _zstd(raw: list[bytes]) -> None:
+def _zstd(raw: list[bytes], level: int) -> None:
     import zstandard
 
-    c = zstandard.ZstdCompressor(level=1)
+    c = zstandard.ZstdCompressor(level=level)
     for piece in raw:
         c.compress(piece)

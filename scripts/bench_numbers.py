@@ -7,8 +7,10 @@ Usage (from the repository root)::
     python scripts/bench_numbers.py --check   # exit 1 if a page differs from the JSON
 
 The JSON is ``benchmarks/results.json``: what ``benchmarks/run.py --json`` writes, plus
-``date`` (UTC) and ``command``, which this script adds. Every quoted figure lives in a marked
-region of a page::
+``date`` (UTC) and ``command``, which this script adds. Groups in :data:`OWN_RUNS` are
+measured in a run of their own, written to their own JSON (``python
+scripts/bench_numbers.py --run-own ros`` reruns only that one) and quoted from it. Every
+quoted figure lives in a marked region of a page::
 
     <!-- bench:KEY -->
     ... generated text, never edited by hand ...
@@ -38,11 +40,18 @@ JSON = ROOT / "benchmarks" / "results.json"
 MODULES = ("cases_core", "cases_symbolic", "cases_calibration", "cases_fast_jacobians",
            "cases_motion", "cases_certified")
 RUN_OPTIONS = ("--cpu-time", "--min-time", "0.2", "--repeat", "3")
+#: Runs of their own: key -> (JSON, benchmark modules, options). The ROS pipeline's cases
+#: take a tenth of a second each, write files and move with the machine's load: more
+#: repeats (the best is kept), and its page quotes only them.
+OWN_RUNS = {
+    "ros": (ROOT / "benchmarks" / "results_ros.json", ("cases_ros",),
+            ("--cpu-time", "--min-time", "0.3", "--repeat", "7")),
+}
 #: Line width of the generated sentences (that of the pages).
 WIDTH = 96
 #: The pages that may hold regions.
 PAGES = ("README.md", "docs/performance.md", "docs/calibration.md", "docs/motion.md",
-         "docs/certified.md")
+         "docs/certified.md", "docs/ros.md")
 _REGION = re.compile(r"(<!-- bench:(?P<key>[\w-]+) -->\n)(?P<body>.*?)(<!-- /bench:(?P=key) -->)",
                      re.S)
 
@@ -50,9 +59,18 @@ _REGION = re.compile(r"(<!-- bench:(?P<key>[\w-]+) -->\n)(?P<body>.*?)(<!-- /ben
 class Results:
     """The rows of one run, looked up by group and case name."""
 
-    def __init__(self, data: dict) -> None:
+    def __init__(self, data: dict, own: dict[str, Results] | None = None) -> None:
         self.data = data
         self.rows = [r for r in data["rows"] if r.get("error") is None]
+        #: The runs of :data:`OWN_RUNS` found, by key.
+        self.own = own or {}
+
+    def of(self, key: str) -> Results:
+        """The results of the run of its own ``key``."""
+        if key not in self.own:
+            raise KeyError(f"no {OWN_RUNS[key][0].name}: run python scripts/bench_numbers.py "
+                           f"--run-own {key}")
+        return self.own[key]
 
     def row(self, group: str, name: str) -> dict:
         """The row of case ``name`` in ``group``."""
@@ -290,6 +308,64 @@ def render_certified(res: Results) -> str:
             f"(`python benchmarks/run.py --only fk-certified`, measured {res.stamp}).")
 
 
+#: The ROS pipeline's rows quoted in docs/ros.md, with the words of the table.
+ROS_ROWS = (
+    ("CSV in, track, CSV out", "CSV in, track, CSV out (`athenakin track S.csv -o O.csv`)"),
+    ("MCAP in, track, MCAP out (track_recording)",
+     "MCAP in, track, MCAP out (`athenakin track R.mcap -o O.mcap`), zstd level {level}"),
+    ("MCAP in, track, MCAP out, zstd level 1", "the same, zstd level 1"),
+    ("MCAP in, track, MCAP out, lz4", "the same, lz4"),
+    ("decode only (read_joint_states)", "decoding only (`read_joint_states`)"),
+    ("track only (motion.track)", "tracking only (`motion.track`, compiled)"),
+    ("track only, Tracker.update per reading",
+     "tracking with `Tracker.update` once per reading (the live API)"),
+    ("encode + write only (write_track_log)",
+     "encoding and writing only (every topic, zstd level {level})"),
+    ("compress only (zstd level {level} of the output)", "zstd level {level} of the output alone"),
+    ("compress only (zstd level 1 of the output)", "zstd level 1 of the output alone"),
+)
+#: Issue 22's target: readings per second end to end, one core.
+ROS_TARGET = 200e3
+
+
+def render_ros_speed(res: Results) -> str:
+    """docs/ros.md: the pipeline end to end and its parts, and issue 22's target."""
+    r = res.of("ros")
+    group = "ros-track"
+    level = int(re.search(r"zstd level (-?\d+) \(the default\)",
+                          r.row(group, ROS_ROWS[1][0])["note"]).group(1))
+    base = r.baseline(group)
+    lines = [f"Measured {r.stamp} with {r.command} (CPU time of one core, "
+             f"{r.row(group, ROS_ROWS[0][0])['batch']:,} readings; `bytes` = bytes per reading "
+             f"of the MCAP written, or compressed in the `alone` rows; `load` = the 1-minute "
+             f"load average when the row was measured):", "",
+             "| case | readings/s | per reading | vs CSV | bytes | load |",
+             "|---|---:|---:|---:|---:|---:|"]
+    for name, words in ROS_ROWS:
+        row = r.row(group, name.format(level=level))
+        per = float(row["seconds"]) / int(row["batch"])
+        ratio = "1" if row.get("baseline") else fmt_ratio(base / per)
+        load = "n/a" if row.get("load") is None else f"{float(row['load']):.1f}"
+        size = re.search(r"; (\d+) B per reading", row.get("note", ""))
+        lines.append(f"| {words.format(level=level)} | {fmt_rate(1 / per).replace('/s', '')} | "
+                     f"{fmt_time(per)} | {ratio} | {size.group(1) + ' B' if size else ''} | "
+                     f"{load} |")
+    end = r.per_pose(group, ROS_ROWS[1][0])
+    old = r.per_pose(group, ROS_ROWS[2][0])
+    met = 1 / end >= ROS_TARGET
+    def rate(per: float) -> str:
+        return fmt_rate(1 / per).replace("/s", " readings/s")
+
+    before = "also above" if 1 / old >= ROS_TARGET else "below"
+    lines += ["", f"Issue 22's target, at least {rate(1 / ROS_TARGET)} end to end on one core: "
+              f"**{'met' if met else 'not met'}** in this run, {rate(end)} with the default "
+              f"zstd level {level} ({fmt_ratio(base / end)} times the CSV path); {rate(old)} at "
+              f"zstd level 1, the level before ({before} the target). On this shared machine the "
+              f"figures move from run to run with the other processes' load; the ratios within "
+              f"one run are the ones to compare."]
+    return "\n".join(lines)
+
+
 RENDER: dict[str, Callable[[Results], str]] = {
     "motion": render_motion,
     "certified": render_certified,
@@ -299,12 +375,22 @@ RENDER: dict[str, Callable[[Results], str]] = {
     "algebraic": render_algebraic,
     "calibration": render_calibration,
     "targets": render_targets,
+    "ros-speed": render_ros_speed,
 }
+#: Regions quoted from a run of its own (:data:`OWN_RUNS`), by region key.
+REGION_RUN = {"ros-speed": "ros"}
 
 
 def load(path: Path = JSON) -> Results:
-    """The committed benchmark JSON."""
-    return Results(json.loads(path.read_text()))
+    """The committed benchmark JSON, with the runs of their own found beside it."""
+    own = {k: Results(json.loads(p.read_text())) for k, (p, _, _) in OWN_RUNS.items()
+           if p.exists()}
+    return Results(json.loads(path.read_text()), own)
+
+
+def source(key: str, res: Results) -> Results:
+    """The results region ``key`` quotes."""
+    return res.of(REGION_RUN[key]) if key in REGION_RUN else res
 
 
 def rewrite(text: str, res: Results) -> str:
@@ -328,10 +414,11 @@ def regions(text: str) -> dict[str, str]:
     return {m.group("key"): m.group("body") for m in _REGION.finditer(text)}
 
 
-def run_benchmarks(path: Path = JSON) -> None:
-    """Run ``benchmarks/run.py`` on :data:`MODULES`; add the date and the command."""
+def run_benchmarks(path: Path = JSON, modules: tuple[str, ...] = MODULES,
+                   options: tuple[str, ...] = RUN_OPTIONS) -> None:
+    """Run ``benchmarks/run.py`` on ``modules``; add the date and the command."""
     date = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    args = ["benchmarks/run.py", "--only", *MODULES, *RUN_OPTIONS, "--json", str(path)]
+    args = ["benchmarks/run.py", "--only", *modules, *options, "--json", str(path)]
     subprocess.run([sys.executable, *args], cwd=ROOT, check=True)
     add_stamp(path, date, "python " + " ".join(args[:-2]))
 
@@ -346,13 +433,19 @@ def add_stamp(path: Path, date: str, command: str) -> None:
 def main(argv: list[str] | None = None) -> int:
     """Rewrite (or check) the regions; run the benchmarks first with ``--run``."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--run", action="store_true", help="run the benchmarks first (minutes)")
+    ap.add_argument("--run", action="store_true",
+                    help="run the benchmarks first, the main run and the runs of their own "
+                         "(minutes)")
+    ap.add_argument("--run-own", nargs="+", choices=sorted(OWN_RUNS), default=[],
+                    help="run only these runs of their own first")
     ap.add_argument("--check", action="store_true",
                     help="write nothing; exit 1 if a page differs from the JSON")
     ap.add_argument("--json", type=Path, default=JSON, help=f"default {JSON.relative_to(ROOT)}")
     args = ap.parse_args(argv)
     if args.run:
         run_benchmarks(args.json)
+    for key in sorted(OWN_RUNS) if args.run else args.run_own:
+        run_benchmarks(*OWN_RUNS[key])
     res = load(args.json)
     stale = []
     for page in PAGES:

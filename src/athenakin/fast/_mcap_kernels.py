@@ -1,17 +1,24 @@
-"""Compiled scan of the records of a decompressed MCAP chunk (private; the ROS reader).
+"""Compiled scan and fill of the records of MCAP chunks (private; the ROS reader and writer).
 
 :func:`scan_records` walks the records of a chunk as :class:`athenakin.ros._read._McapStream`
 does record by record in Python, and returns where each one lies; the reader then reads
 every message of a fixed CDR layout at once with numpy. Anything unusual (a record past
 the end, a Message shorter than its header, a log time beyond ``2**63``) returns -1 and
 the reader takes its record-by-record path, which raises its own error.
+
+:func:`fill_records` is the writer's side: the Message records of a chunk of tracked
+readings (fixed-size CDR messages: template bytes and numbers at fixed offsets) written
+into one buffer in a single pass, the readings without a pose keeping only their status.
 """
 
 from __future__ import annotations
 
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.core import cgutils
+from numba.extending import intrinsic
 
-__all__ = ["scan_records"]
+__all__ = ["scan_records", "fill_records"]
 
 
 @njit(cache=True, nogil=True)
@@ -50,3 +57,120 @@ def scan_records(raw, ops, starts, lengths, cids, times):
         n += 1
         o += length
     return n
+
+
+@intrinsic
+def _store_low(typingctx, arr, at, word, size):
+    """Store the ``size`` low bytes of ``word`` at byte ``at`` of ``arr``, unaligned.
+
+    ``size``: 1, 4 or 8, a compile-time literal; ``word``: uint64 (little endian);
+    ``arr``: uint8, contiguous.
+    One store instruction where a loop over bytes takes eight (the fields of a CDR
+    message behind a 31-byte record header are rarely aligned). No bounds check: the
+    caller sizes ``arr``.
+    """
+    if not isinstance(size, types.IntegerLiteral):
+        return None
+    bits = 8 * size.literal_value
+    sig = types.void(arr, at, word, size)
+
+    def codegen(context, builder, signature, args):
+        ary = context.make_array(signature.args[0])(context, builder, args[0])
+        ptr = builder.gep(ary.data, [args[1]])
+        value = args[2]
+        if bits < 64:
+            value = builder.trunc(value, ir.IntType(bits))
+        builder.store(value, builder.bitcast(ptr, ir.IntType(bits).as_pointer()), align=1)
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
+@intrinsic
+def _copy_into(typingctx, dst, at, src):
+    """``dst[at:at + src.size] = src`` (uint8, contiguous) as one ``memcpy``.
+
+    Numba copies a slice element by element (it cannot rule out overlap); the
+    templates are copied thousands of times per chunk. No bounds check: the caller
+    sizes ``dst``.
+    """
+    sig = types.void(dst, at, src)
+
+    def codegen(context, builder, signature, args):
+        d = context.make_array(signature.args[0])(context, builder, args[0])
+        s = context.make_array(signature.args[2])(context, builder, args[2])
+        cgutils.raw_memcpy(builder, builder.gep(d.data, [args[1]]), s.data, s.nitems, 1)
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _fill(out, o, words, i, off, size, col):
+    for f in range(off.size):
+        w = words[i, col[f]]
+        at = o + off[f]
+        z = size[f]
+        if z == 8:
+            _store_low(out, at, w, 8)
+        elif z == 4:
+            _store_low(out, at, w, 4)
+        else:
+            _store_low(out, at, w, 1)
+
+
+@njit(cache=True, nogil=True, boundscheck=False)
+def fill_records(out, status_tpl, pose_tpl, words, s_off, s_size, s_col, p_off, p_size, p_col,
+                 valid, starts):
+    """Message records of tracked readings, built in place (the MCAP writer's chunks).
+
+    For each reading ``i``: the bytes of ``status_tpl`` then, where ``valid[i]``, those of
+    ``pose_tpl``, one after the other in ``out``; then the numbers: field ``f`` of the
+    status part gets the ``s_size[f]`` (1, 4 or 8) low bytes (little endian) of
+    ``words[i, s_col[f]]`` at ``s_off[f]`` of its copy, and likewise the pose part.
+
+    Parameters
+    ----------
+    out : (cap,) uint8
+        At least ``n * len(status_tpl) + sum(valid) * len(pose_tpl)`` bytes (checked:
+        -1 when too small).
+    status_tpl, pose_tpl : uint8
+    words : (n, C) uint64
+        The numbers of each reading as 8-byte words (float64 bit patterns, two's
+        complement integers).
+    s_off, s_size, s_col, p_off, p_size, p_col : int64
+        Offsets within the template (each field inside it), sizes, columns of ``words``.
+    valid : (n,) bool
+    starts : (n,) int64
+        Filled: where the records of each reading start in ``out``.
+
+    Returns
+    -------
+    int
+        Bytes written, or -1 (nothing written) when ``out`` is too small or a field lies
+        outside its template.
+    """
+    rs = status_tpl.size
+    rp = pose_tpl.size
+    need = 0
+    for i in range(valid.size):
+        need += rs + (rp if valid[i] else 0)
+    if need > out.size:
+        return -1
+    for f in range(s_off.size):
+        if s_off[f] < 0 or s_off[f] + s_size[f] > rs or s_col[f] >= words.shape[1]:
+            return -1
+    for f in range(p_off.size):
+        if p_off[f] < 0 or p_off[f] + p_size[f] > rp or p_col[f] >= words.shape[1]:
+            return -1
+    o = 0
+    for i in range(valid.size):
+        starts[i] = o
+        _copy_into(out, o, status_tpl)
+        _fill(out, o, words, i, s_off, s_size, s_col)
+        o += rs
+        if valid[i]:
+            _copy_into(out, o, pose_tpl)
+            _fill(out, o, words, i, p_off, p_size, p_col)
+            o += rp
+    return o

@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import xml.etree.ElementTree as ET
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -22,7 +23,8 @@ from .._transforms import rot_x, rot_y, rot_z
 from ..design import Design
 from ..sim import JOINTS, urdf_from_design, urdf_joint_zero
 
-__all__ = ["UrdfModel", "urdf_model", "joint_values", "link_poses", "quaternion_xyzw",
+__all__ = ["UrdfModel", "urdf_model", "joint_values", "link_poses", "link_frames", "kernel_plan",
+           "quaternion_xyzw",
            "MOVING_LINKS", "BASE_FRAME", "RCM_FRAME", "TOOL_TIP_FRAME"]
 
 #: Frame of the base (the URDF's root link).
@@ -233,6 +235,94 @@ def link_poses(model: UrdfModel, values: dict[str, NDArray[np.float64]],
         poses[j.child] = T
     del poses[BASE_FRAME]
     return poses if links is None else {k: poses[k] for k in links}
+
+
+def link_frames(model: UrdfModel, values: dict[str, NDArray[np.float64]],
+                links: tuple[str, ...], *, out: NDArray[np.float64] | None = None
+                ) -> NDArray[np.float64]:
+    """Translation and quaternion of links, per reading: what ``/tf`` carries.
+
+    :func:`link_poses` then :func:`quaternion_xyzw` of each link, compiled in one pass
+    where numba runs (equal to rounding, tested), else exactly those two.
+
+    Parameters
+    ----------
+    model : UrdfModel
+    values : dict of str -> ndarray, shape (N,)
+        Joint values (:func:`joint_values`).
+    links : tuple of str
+        The links wanted.
+    out : ndarray, shape (N, len(links), 7), keyword-only, optional
+        Where to write (may be a strided view).
+
+    Returns
+    -------
+    ndarray, shape (N, len(links), 7)
+        ``tx, ty, tz`` (m, base frame) and ``qx, qy, qz, qw`` (``w >= 0``) of each link.
+    """
+    from .._dispatch import numba_available
+
+    n = len(next(iter(values.values())))
+    if out is None:
+        out = np.empty((n, len(links), 7))
+    if not numba_available():
+        poses = link_poses(model, values, links=links)
+        for k, name in enumerate(links):
+            out[:, k, :3] = poses[name][:, :3, 3]
+            out[:, k, 3:] = quaternion_xyzw(poses[name][:, :3, :3])
+        return out
+    from ..fast._frame_kernels import urdf_frames_into
+
+    names, parent, origin, kind, axis, column, wanted = _frames_plan(model, links)
+    vals = np.empty((n, max(1, len(names))))
+    for c, name in enumerate(names):
+        vals[:, c] = values[name]
+    urdf_frames_into(vals, parent, origin, kind, axis, column, wanted, out)
+    return out
+
+
+def kernel_plan(model: UrdfModel, links: tuple[str, ...]) -> tuple[Any, ...]:
+    """Arguments of the compiled joint values and link frames, values in ``JOINTS`` order.
+
+    ``(jv_args, frames_args)``: :func:`athenakin.fast._frame_kernels.joint_values_into`'s
+    ``lengths, zero, code, hinge`` and :func:`~athenakin.fast._frame_kernels.urdf_frames_into`'s
+    ``parent, origin, kind, axis, column, wanted`` where ``column`` indexes
+    :data:`~athenakin.sim.JOINTS` (the writer keeps the joint values in that order).
+    """
+    from ..fast._frame_kernels import JOINT_CODES
+
+    d = model.design
+    names = tuple(JOINTS)
+    jv_args = (np.array([d.l1 ** 2, d.l2, d.l3 ** 2, d.l4, d.l5, 0.0, 0.0]),
+               np.array([model.zero[n] for n in names], float),
+               np.array([JOINT_CODES[n] for n in names], np.int64),
+               np.array([JOINTS[n][0] == "hinge" for n in names], bool))
+    _, parent, origin, kind, axis, column, wanted = _frames_plan(model, links)
+    plan_names = _frames_plan(model, links)[0]
+    column = np.array([names.index(plan_names[c]) for c in column], np.int64)
+    return jv_args, (parent, origin, kind, axis, column, wanted)
+
+
+def _frames_plan(model: UrdfModel, links: tuple[str, ...]) -> tuple[Any, ...]:
+    """The arrays of :func:`athenakin.fast._frame_kernels.urdf_frames_into` for ``links``."""
+    parent = {j.child: j.parent for j in model.joints}
+    need: set[str] = set()
+    for name in links:
+        while name != BASE_FRAME and name not in need:
+            need.add(name)
+            name = parent[name]
+    joints = [j for j in model.joints if j.child in need]
+    index = {j.child: k for k, j in enumerate(joints)}
+    names = tuple(dict.fromkeys(j.name for j in joints if j.kind != "fixed"))
+    col = {name: c for c, name in enumerate(names)}
+    kinds = {"fixed": 0, "prismatic": 1}
+    return (names,
+            np.array([index.get(j.parent, -1) for j in joints], np.int64),
+            np.array([j.origin for j in joints], float).reshape(-1, 4, 4),
+            np.array([kinds.get(j.kind, 2) for j in joints], np.int64),
+            np.array([j.axis for j in joints], float).reshape(-1, 3),
+            np.array([col.get(j.name, 0) for j in joints], np.int64),
+            np.array([index[name] for name in links], np.int64))
 
 
 def quaternion_xyzw(R: NDArray[np.float64]) -> NDArray[np.float64]:

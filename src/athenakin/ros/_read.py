@@ -421,7 +421,11 @@ class _McapStream:
             raise ValueError("chunk does not decompress to its stated size")
         bulk = _scan(raw)
         if bulk is not None:
-            yield from bulk
+            for item in bulk:
+                if len(item) == 2:                 # (-opcode, body): a definition
+                    self._definition(-item[0], item[1])
+                else:
+                    yield item
             return
         head, msg = self._HEAD, self._MSG
         o, end = 0, len(raw)
@@ -453,12 +457,13 @@ class _Bulk:
         return self.data[o:o + int(self.sizes[i])].tobytes()
 
 
-def _scan(raw: bytes) -> list[tuple[int, NDArray[np.int64], _Bulk]] | None:
+def _scan(raw: bytes) -> list[Any] | None:
     """The Messages of a decompressed chunk as runs of one channel, or None.
 
-    None (the record-by-record path) without numba, when the chunk defines schemas or
-    channels, or when :func:`athenakin.fast._mcap_kernels.scan_records` finds anything
-    unusual.
+    Items in record order: ``(channel id, log times, _Bulk)`` for a run of Messages of
+    one channel, ``(-opcode, body)`` for a Schema or Channel record. None (the
+    record-by-record path) without numba, or when
+    :func:`athenakin.fast._mcap_kernels.scan_records` finds anything unusual.
     """
     from .._dispatch import numba_available
 
@@ -473,14 +478,21 @@ def _scan(raw: bytes) -> list[tuple[int, NDArray[np.int64], _Bulk]] | None:
     if n < 0:
         return None
     ops = ops[:n]
-    if ((ops == 0x03) | (ops == 0x04)).any():
-        return None
-    msg = np.flatnonzero(ops == 0x05)
-    cid, t = cids[msg], times[msg]
-    off, size = starts[msg] + 22, lengths[msg] - 22
-    cut = [0, *(np.flatnonzero(np.diff(cid)) + 1).tolist(), len(msg)]
-    return [(int(cid[a]), t[a:b], _Bulk(data, off[a:b], size[a:b]))
-            for a, b in zip(cut[:-1], cut[1:], strict=True) if b > a]
+    items: list[Any] = []
+    # Schema and Channel records (rosbag2 writes them in the first chunk) cut the chunk:
+    # each is handed over in its place, before the messages that follow it
+    defs = np.flatnonzero((ops == 0x03) | (ops == 0x04)).tolist()
+    for a, b in zip([0, *(d + 1 for d in defs)], [*defs, n], strict=True):
+        msg = a + np.flatnonzero(ops[a:b] == 0x05)
+        cid, t = cids[msg], times[msg]
+        off, size = starts[msg] + 22, lengths[msg] - 22
+        cut = [0, *(np.flatnonzero(np.diff(cid)) + 1).tolist(), len(msg)]
+        items += [(int(cid[i]), t[i:j], _Bulk(data, off[i:j], size[i:j]))
+                  for i, j in zip(cut[:-1], cut[1:], strict=True) if j > i]
+        if b < n:
+            o = int(starts[b])
+            items.append((-int(ops[b]), raw[o:o + int(lengths[b])]))
+    return items
 
 
 # ---------------------------------------------------------------------------- public
@@ -703,7 +715,7 @@ def _same_layout(cdr: _CdrJointState, b: _Bulk, j: int
     e = j + (int(np.argmin(ok)) if not ok.all() else len(ok))
     if e == j:
         return j, None
-    rows = b.data[b.offsets[j:e, None] + np.arange(size)]
+    rows = _rows(b.data, b.offsets[j:e], size)
     prefix = np.frombuffer(cdr._prefix, dtype=np.uint8)
     o = cdr._off_vcount
     good = ((rows[:, 12:12 + len(prefix)] == prefix).all(axis=1)
@@ -712,6 +724,22 @@ def _same_layout(cdr: _CdrJointState, b: _Bulk, j: int
         e = j + int(np.argmin(good))
         rows = rows[:e - j]
     return (e, rows) if e > j else (j, None)
+
+
+def _rows(data: NDArray[np.uint8], offsets: NDArray[np.int64], size: int) -> NDArray[np.uint8]:
+    """``data[offsets[i]:offsets[i] + size]`` as rows (n, size).
+
+    Records of one size one after the other (a single topic) are evenly spaced: a
+    read-only strided view of ``data``, no copy; otherwise a gather (a copy).
+    """
+    n = len(offsets)
+    step = int(offsets[1] - offsets[0]) if n > 1 else size
+    if n and step > 0 and (n == 1 or (np.diff(offsets) == step).all()) \
+            and int(offsets[0]) + (n - 1) * step + size <= len(data):
+        view = np.lib.stride_tricks.as_strided(data[int(offsets[0]):], shape=(n, size),
+                                               strides=(step, 1), writeable=False)
+        return view
+    return data[offsets[:, None] + np.arange(size)]
 
 
 def read_joint_states(path: str | Path, *, topic: str = "/joint_states",

@@ -114,10 +114,9 @@ class _Stream:
 
     def run(self, q: NDArray[np.float64]) -> dict[str, Any]:
         rows: list[Any] = []
-        qs = q.tolist()
         i = 0
-        while self.tracker is None and i < len(qs):
-            row = qs[i]
+        while self.tracker is None and i < len(q):
+            row = q[i].tolist()     # row by row: the tracker most often starts at the first
             if all(math.isfinite(v) for v in row):
                 try:
                     self.tracker = Tracker(self.T, self.design, q0=row, **self.options)
@@ -133,7 +132,7 @@ class _Stream:
                     break
             rows.append(None)
             i += 1
-        if self.tracker is None or i == len(qs):
+        if self.tracker is None or i == len(q):
             return _columns(rows, q)
         rest = track_batch(self.tracker, q[i:])
         if i == 0:
@@ -234,6 +233,7 @@ def track_recording(recording: str | Path, out: str | Path, T_b_e: ArrayLike | N
                     scale: float = 1.0, chunk_size: int = CHUNK, max_events: int = 20,
                     target: str | Path | None = None,
                     progress: Callable[[int], None] | None = None,
+                    compression: str = "zstd", compression_level: int | None = None,
                     **tracker_options: Any) -> TrackingSummary:
     """Track the actuator readings of a recording and write the poses to an MCAP file.
 
@@ -259,6 +259,9 @@ def track_recording(recording: str | Path, out: str | Path, T_b_e: ArrayLike | N
         Write there and do not rename (for a caller that renames, the CLI).
     progress : callable, keyword-only, optional
         Called with the number of readings done after each chunk.
+    compression, compression_level : keyword-only
+        Chunk compression of the output (:class:`McapOutput`: zstd at level -3 unless
+        told; ``"lz4"``, ``"none"``).
     **tracker_options
         ``slot``, ``jump_m``, ``jump_rad``, ``margins`` of
         :class:`~athenakin.motion.Tracker` (``slot`` is that of the first reading that
@@ -284,13 +287,15 @@ def track_recording(recording: str | Path, out: str | Path, T_b_e: ArrayLike | N
     chunks = ((js.stamps_ns, js.q) for js in
               iter_joint_states(recording, topic=topic, joints=joints, scale=scale,
                                 chunk_size=chunk_size))
-    with McapOutput(out, design, T, target=target) as w:
+    with McapOutput(out, design, T, target=target, compression=compression,
+                    compression_level=compression_level) as w:
         return _stream(chunks, w, T, design, opts, nmax, progress)
 
 
 def track_to_mcap(stamps_ns: ArrayLike, q: ArrayLike, out: str | Path,
                   T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                   max_events: int = 20, target: str | Path | None = None,
+                  compression: str = "zstd", compression_level: int | None = None,
                   **tracker_options: Any) -> TrackingSummary:
     """Track readings given as arrays (e.g. a CSV stream) and write the poses to MCAP.
 
@@ -300,7 +305,7 @@ def track_to_mcap(stamps_ns: ArrayLike, q: ArrayLike, out: str | Path,
         Time of each reading, ns, never decreasing.
     q : array-like, shape (N, 3)
         Readings, m (NaN: a missing reading, flagged ``LOST``).
-    out, T_b_e, design, max_events, target, **tracker_options
+    out, T_b_e, design, max_events, target, compression, compression_level, **tracker_options
         As :func:`track_recording`.
 
     Returns
@@ -329,12 +334,14 @@ def track_to_mcap(stamps_ns: ArrayLike, q: ArrayLike, out: str | Path,
         for k in range(0, len(qa), CHUNK):
             yield s[k:k + CHUNK], qa[k:k + CHUNK]
 
-    with McapOutput(out, design, T, target=target) as w:
+    with McapOutput(out, design, T, target=target, compression=compression,
+                    compression_level=compression_level) as w:
         return _stream(chunks(), w, T, design, opts, nmax, None)
 
 
 def write_trajectory(path: str | Path, traj: Trajectory, *, start_ns: int = 0,
-                     target: str | Path | None = None) -> Path:
+                     target: str | Path | None = None, compression: str = "zstd",
+                     compression_level: int | None = None) -> Path:
     """Write a planned trajectory as MCAP: the plan and what the robot will show.
 
     Topics: ``/athena/trajectory`` (one ``trajectory_msgs/msg/JointTrajectory``,
@@ -354,6 +361,8 @@ def write_trajectory(path: str | Path, traj: Trajectory, *, start_ns: int = 0,
         Stamp of the first sample, ns since the epoch (default 0).
     target : str or Path, keyword-only, optional
         Write there and do not rename (for a caller that renames).
+    compression, compression_level : keyword-only
+        As :func:`track_recording`.
 
     Returns
     -------
@@ -367,7 +376,8 @@ def write_trajectory(path: str | Path, traj: Trajectory, *, start_ns: int = 0,
     t = np.asarray(traj.t, dtype=float)
     stamps = int(start_ns) + np.rint((t - t[0]) * 1e9).astype(np.int64)
     log = track(traj.q, traj.T_b_e, traj.design)
-    with McapOutput(path, traj.design, traj.T_b_e, target=target) as w:
+    with McapOutput(path, traj.design, traj.T_b_e, target=target, compression=compression,
+                    compression_level=compression_level) as w:
         w.write_static(int(stamps[0]))
         w.write_trajectory_message(int(stamps[0]), t, traj.q, traj.qd, traj.qdd)
         for k in range(0, len(t), CHUNK):
@@ -379,7 +389,8 @@ def write_trajectory(path: str | Path, traj: Trajectory, *, start_ns: int = 0,
 
 def write_track_log(path: str | Path, stamps_ns: ArrayLike, log: TrackLog,
                     T_b_e: ArrayLike | None = None, design: Design | None = None, *,
-                    target: str | Path | None = None) -> Path:
+                    target: str | Path | None = None, compression: str = "zstd",
+                    compression_level: int | None = None) -> Path:
     """Write an already tracked stream (a :class:`~athenakin.motion.TrackLog`) as MCAP.
 
     Parameters
@@ -393,6 +404,8 @@ def write_track_log(path: str | Path, stamps_ns: ArrayLike, log: TrackLog,
     T_b_e, design
         The set-up the log was tracked with.
     target : str or Path, keyword-only, optional
+    compression, compression_level : keyword-only
+        As :func:`track_recording`.
 
     Returns
     -------
@@ -405,7 +418,8 @@ def write_track_log(path: str | Path, stamps_ns: ArrayLike, log: TrackLog,
     if s.shape != (len(log.q),) or not np.issubdtype(s.dtype, np.integer):
         raise InvalidInputError(f"stamps_ns: expected {len(log.q)} integers (ns), got "
                                 f"{s.dtype} of shape {s.shape}")
-    with McapOutput(path, design, T, target=target) as w:
+    with McapOutput(path, design, T, target=target, compression=compression,
+                    compression_level=compression_level) as w:
         for k in range(0, len(s), CHUNK):
             sl = slice(k, k + CHUNK)
             cols = {f: getattr(log, f)[sl] for f in _FIELDS}

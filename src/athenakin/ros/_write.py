@@ -3,8 +3,10 @@
 One :class:`McapOutput` writes one file through a temporary file in the same
 folder, renamed into place only when everything is written: a failure (or
 Ctrl-C) leaves nothing, never a partial file. Messages are encoded by
-:mod:`._cdr` (vectorised over readings) and written with the mcap library,
-chunked and zstd-compressed; the schemas are the ROS 2 message definitions
+:mod:`._cdr` (vectorised over readings; where numba runs, the records of a chunk
+are filled by :func:`athenakin.fast._mcap_kernels.fill_records`, the same bytes)
+and written by :mod:`._mcap`, chunked and compressed (zstd level -3 unless told);
+the schemas are the ROS 2 message definitions
 (from rosbags' type store), so Foxglove, rosbags, mcap-ros2-support and
 ``ros2 bag`` read the file as it is.
 
@@ -47,11 +49,12 @@ from ._frames import (
     TOOL_TIP_FRAME,
     UrdfModel,
     joint_values,
-    link_poses,
+    kernel_plan,
+    link_frames,
     quaternion_xyzw,
     urdf_model,
 )
-from ._mcap import COMPRESSIONS, MESSAGE_HEADER, McapFile
+from ._mcap import MESSAGE_HEADER, McapFile, check_compression
 
 __all__ = ["McapOutput", "RosEncoder", "TrackedBatch", "TOPICS", "STATUS_TYPE",
            "STATUS_MSGDEF", "TF_FRAMES", "STATUS_FLAG_FIELDS"]
@@ -187,6 +190,15 @@ def _stamp_fields(values: dict[str, Any], stamps_ns: NDArray[np.int64], names: l
         values[f"{n}.nanosec"] = nsec
 
 
+def _put_frame(values: dict[str, Any], f: NDArray[np.float64], tname: str, rname: str
+               ) -> None:
+    """The numbers of a translation and a quaternion from ``f`` (N, 7) (:func:`link_frames`)."""
+    for i, c in enumerate("xyz"):
+        values[f"{tname}.{c}"] = f[:, i]
+    for i, c in enumerate("xyzw"):
+        values[f"{rname}.{c}"] = f[:, 3 + i]
+
+
 def _put_pose(values: dict[str, Any], T: NDArray[np.float64], tname: str, rname: str) -> None:
     for i, c in enumerate("xyz"):
         values[f"{tname}.{c}"] = T[:, i, 3]
@@ -256,6 +268,17 @@ class RosEncoder:
         self.templates = {"tool_tip": _pose_template(), "tf": _tf_template(self.tf_pairs),
                           "joint_states": _joint_state_template(tuple(JOINTS)),
                           "status": _status_template()}
+        rcm = self.model.T_b_e[None]
+        #: ``/tf``'s ``rcm`` frame: translation and quaternion of ``T_b_e`` (fixed).
+        self.rcm_frame = np.concatenate([rcm[0, :3, 3], quaternion_xyzw(rcm[:, :3, :3])[0]])
+        self._kernel_plan: tuple[Any, ...] | None = None
+
+    @property
+    def kernel_plan(self) -> tuple[Any, ...]:
+        """The compiled joint values' and ``/tf`` frames' arguments (:func:`kernel_plan`)."""
+        if self._kernel_plan is None:
+            self._kernel_plan = kernel_plan(self.model, TF_FRAMES[:-1])
+        return self._kernel_plan
 
     def robot_description(self) -> bytes:
         """``std_msgs/msg/String`` holding the URDF."""
@@ -276,20 +299,30 @@ class RosEncoder:
                     p: NDArray[np.float64], u: NDArray[np.float64], O_s: NDArray[np.float64]
                     ) -> dict[str, dict[str, Any]]:
         """The numbers of the ``tool_tip``, ``tf`` and ``joint_states`` messages of N poses."""
-        n = len(stamps_ns)
         jv = joint_values(self.model, q, p, u, O_s)
-        poses = link_poses(self.model, jv, links=(*MOVING_LINKS, TOOL_TIP_FRAME))
-        poses[RCM_FRAME] = np.broadcast_to(self.model.T_b_e, (n, 4, 4))
+        frames = self.frames(jv)
         sec, nsec = split_stamps(stamps_ns)
         tip: dict[str, Any] = {"stamp.sec": sec, "stamp.nanosec": nsec}
-        _put_pose(tip, poses[TOOL_TIP_FRAME], "p", "o")
+        _put_frame(tip, frames[:, TF_FRAMES.index(TOOL_TIP_FRAME)], "p", "o")
         tf: dict[str, Any] = {}
-        for k, (_, child) in enumerate(self.tf_pairs):
+        for k in range(len(self.tf_pairs)):
             tf[f"stamp{k}.sec"], tf[f"stamp{k}.nanosec"] = sec, nsec
-            _put_pose(tf, poses[child], f"t{k}", f"r{k}")
+            _put_frame(tf, frames[:, k], f"t{k}", f"r{k}")
         js: dict[str, Any] = {f"pos.{i}": jv[name] for i, name in enumerate(JOINTS)}
         js["stamp.sec"], js["stamp.nanosec"] = sec, nsec
         return {"tool_tip": tip, "tf": tf, "joint_states": js}
+
+    def frames(self, jv: dict[str, NDArray[np.float64]], *,
+               out: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+        """Translation and quaternion of every ``/tf`` child (:data:`TF_FRAMES`), (N, K, 7).
+
+        ``out``: where to write (a view, e.g. columns of the writer's words).
+        """
+        if out is None:
+            out = np.empty((len(next(iter(jv.values()))), len(TF_FRAMES), 7))
+        link_frames(self.model, jv, TF_FRAMES[:-1], out=out[:, :-1])
+        out[:, -1] = self.rcm_frame
+        return out
 
     def poses(self, stamps_ns: NDArray[np.int64], q: NDArray[np.float64],
               p: NDArray[np.float64], u: NDArray[np.float64], O_s: NDArray[np.float64]
@@ -324,6 +357,142 @@ class RosEncoder:
                                                self.status_values(b, first_sample))
 
 
+def _compiled() -> bool:
+    """Whether :meth:`McapOutput.write_tracked` fills its records with the compiled kernel."""
+    from .._dispatch import numba_available
+
+    return numba_available()
+
+
+@dataclasses.dataclass(frozen=True)
+class _RecordPlan:
+    """The Message records of one tracked reading as templates and numbers at offsets.
+
+    ``status_tpl``: the status record (header and CDR message); ``pose_tpl``: the tool
+    tip, ``/tf`` and joint-state records one after the other (``record_at[j]``: where
+    record ``j`` of ``keys`` starts in it, ``record_at[0] = 0`` for the status). Field
+    ``f`` of each part: ``size[f]`` bytes at ``off[f]`` holding column ``col[f]`` of the
+    words of :meth:`words`, laid out as: the ``/tf`` frames (``K x 7`` float64, as
+    :meth:`RosEncoder.frames`), the joint values (``JOINTS`` order), the status floats
+    (``status_float``), then integers: stamp, status sequence, pose sequence, stamp
+    seconds, stamp nanoseconds, the status integers (``status_int``).
+    """
+
+    status_tpl: NDArray[np.uint8]
+    pose_tpl: NDArray[np.uint8]
+    record_at: tuple[int, ...]
+    s_off: NDArray[np.int64]
+    s_size: NDArray[np.int64]
+    s_col: NDArray[np.int64]
+    p_off: NDArray[np.int64]
+    p_size: NDArray[np.int64]
+    p_col: NDArray[np.int64]
+    status_float: tuple[str, ...]
+    status_int: tuple[str, ...]
+    n_frames: int
+
+    @staticmethod
+    def of(templates: dict[str, Template], keys: tuple[str, ...], cids: list[int]
+           ) -> _RecordPlan:
+        sizes = {"f8": 8, "i4": 4, "u4": 4, "u1": 1, "i1": 1, "b1": 1}
+        nf = 7 * len(TF_FRAMES)
+        tip = 7 * TF_FRAMES.index(TOOL_TIP_FRAME)
+        status = templates["status"].fields
+        s_float = tuple(nm for nm, _, kd in status if kd == "f8")
+        s_int = tuple(nm for nm, _, kd in status if kd != "f8" and not nm.startswith("stamp"))
+        base_int = nf + len(JOINTS) + len(s_float)
+        special = {"@stamp": base_int, "@seq.status": base_int + 1, "@seq.pose": base_int + 2}
+        comp = {c: i for i, c in enumerate("xyz")}
+
+        def column(key: str, name: str) -> int:
+            if name.endswith(".sec") and "stamp" in name:
+                return base_int + 3
+            if name.endswith(".nanosec") and "stamp" in name:
+                return base_int + 4
+            head, _, tail = name.partition(".")
+            if key == "tool_tip":
+                return tip + (comp[tail] if head == "p" else 3 + "xyzw".index(tail))
+            if key == "tf":
+                k = int(head[1:])
+                return 7 * k + (comp[tail] if head[0] == "t" else 3 + "xyzw".index(tail))
+            if key == "joint_states":
+                return nf + int(tail)
+            if name in s_float:
+                return nf + len(JOINTS) + s_float.index(name)
+            return base_int + 5 + s_int.index(name)
+
+        parts: list[tuple[bytes, list[tuple[int, int, int]]]] = [(b"", []), (b"", [])]
+        record_at = [0]
+        for j, key in enumerate(keys):
+            tpl = templates[key]
+            head = np.zeros((1, MESSAGE_HEADER), dtype=np.uint8)
+            McapFile.message_headers(head, cids[j], [0], [0], tpl.size)
+            side = 0 if j == 0 else 1
+            data, fields = parts[side]
+            at = len(data)
+            if j:
+                record_at.append(at)
+            seq = special["@seq.status" if j == 0 else "@seq.pose"]
+            fields += [(at + 11, 4, seq), (at + 15, 8, special["@stamp"]),
+                       (at + 23, 8, special["@stamp"])]
+            fields += [(at + MESSAGE_HEADER + off, sizes[kind], column(key, name))
+                       for name, off, kind in tpl.fields]
+            parts[side] = (data + head.tobytes() + tpl.data, fields)
+        (sd, sf), (pd, pf) = parts
+        return _RecordPlan(
+            status_tpl=np.frombuffer(sd, np.uint8), pose_tpl=np.frombuffer(pd, np.uint8),
+            record_at=tuple(record_at),
+            s_off=np.array([f[0] for f in sf], np.int64),
+            s_size=np.array([f[1] for f in sf], np.int64),
+            s_col=np.array([f[2] for f in sf], np.int64),
+            p_off=np.array([f[0] for f in pf], np.int64),
+            p_size=np.array([f[1] for f in pf], np.int64),
+            p_col=np.array([f[2] for f in pf], np.int64),
+            status_float=s_float, status_int=s_int, n_frames=len(TF_FRAMES))
+
+    @property
+    def n_words(self) -> int:
+        """Columns of :meth:`words`."""
+        return 7 * self.n_frames + len(JOINTS) + len(self.status_float) + 5 \
+            + len(self.status_int)
+
+    def words(self, buf: NDArray[np.uint64], stamps: NDArray[np.int64],
+              seq_status: NDArray[np.int64], seq_pose: NDArray[np.int64],
+              status: dict[str, Any]) -> NDArray[np.uint64]:
+        """The numbers of ``m`` readings as 8-byte words (m, C), in the plan's columns.
+
+        Written into ``buf[:m]`` (at least ``m`` rows of :attr:`n_words`); the pose
+        columns are left for :meth:`pose_columns` (unset where no reading has a pose:
+        the pose records are then not written).
+        """
+        m = len(stamps)
+        nf = 7 * self.n_frames
+        nj = len(JOINTS)
+        ns = len(self.status_float)
+        base = nf + nj + ns
+        words = buf[:m]
+        as_float, as_int = words.view(np.float64), words.view(np.int64)
+        for i, name in enumerate(self.status_float):
+            as_float[:, nf + nj + i] = status[name]
+        as_int[:, base] = stamps
+        as_int[:, base + 1] = seq_status
+        as_int[:, base + 2] = seq_pose
+        as_int[:, base + 3] = status["stamp.sec"]
+        as_int[:, base + 4] = status["stamp.nanosec"]
+        for i, name in enumerate(self.status_int):
+            as_int[:, base + 5 + i] = status[name]
+        return words
+
+    def pose_columns(self, words: NDArray[np.uint64]
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Views of ``words`` as the ``/tf`` frames (m, K, 7) and the joints (m, J), float64."""
+        m = words.shape[0]
+        nf = 7 * self.n_frames
+        as_float = words.view(np.float64)
+        return (as_float[:, :nf].reshape(m, self.n_frames, 7),
+                as_float[:, nf:nf + len(JOINTS)])
+
+
 class McapOutput:
     """An MCAP file of ATHENA's ROS 2 topics, written atomically.
 
@@ -335,7 +504,10 @@ class McapOutput:
     design : Design
     T_b_e : ndarray, shape (4, 4)
     compression : {"zstd", "lz4", "none"}, keyword-only
-        Chunk compression (default zstd).
+        Chunk compression (default zstd; all three are MCAP's and Foxglove reads them).
+    compression_level : int, keyword-only, optional
+        zstd -7..22 (default -3: a fast level, about 10% larger files than level 1 and
+        a quarter less time; docs/ros.md), lz4 0..16 (default 0).
     target : str or Path, keyword-only, optional
         Write this file instead of a temporary one and do no rename (the caller
         renames it: the CLI's own output manager).
@@ -349,10 +521,9 @@ class McapOutput:
     """
 
     def __init__(self, path: str | Path, design: Design, T_b_e: ArrayLike, *,
-                 compression: str = "zstd", target: str | Path | None = None) -> None:
-        if compression not in COMPRESSIONS:
-            raise ValueError(f"compression: expected one of {COMPRESSIONS}, got "
-                             f"{compression!r}")
+                 compression: str = "zstd", compression_level: int | None = None,
+                 target: str | Path | None = None) -> None:
+        compression, compression_level = check_compression(compression, compression_level)
         self.path = check_path(path)
         if not isinstance(design, Design):
             raise TypeError(f"design: expected a Design, got {type(design).__name__}")
@@ -377,7 +548,7 @@ class McapOutput:
             self._tmp = Path(target)
             self._fh = open(self._tmp, "wb")   # noqa: SIM115 - closed in close/discard
         try:
-            self._file = McapFile(self._fh, compression=compression)
+            self._file = McapFile(self._fh, compression=compression, level=compression_level)
         except BaseException:
             self.discard()
             raise
@@ -386,6 +557,9 @@ class McapOutput:
         self._seq: dict[str, int] = {}
         self._static_done = False
         self._closed = False
+        self._plan: _RecordPlan | None = None
+        self._buf: NDArray[np.uint8] | None = None
+        self._words: NDArray[np.uint64] | None = None
         self.counts: dict[str, int] = {}
 
     # ------------------------------------------------------------------ channels
@@ -443,6 +617,9 @@ class McapOutput:
         rs = int(cols[1])
         per = max(1, _CHUNK_BYTES // row)
         valid = np.asarray(b.valid, bool)
+        if _compiled():
+            self._write_tracked_compiled(b, stamps, valid, keys, cids, per)
+            return
         for a in range(0, n, per):
             e = min(n, a + per)
             m = e - a
@@ -483,6 +660,74 @@ class McapOutput:
                 for j in range(1, 4):
                     index[cids[j]] = (st[v], row_off[v] + int(cols[j]))
             self._file.chunk(rec, index)
+            nv = int(v.sum())
+            self._seq["status"] += m
+            self.counts[TOPICS["status"]] += m
+            for k in keys[1:]:
+                self._seq[k] += nv
+                self.counts[TOPICS[k]] += nv
+
+    def _record_plan(self, keys: tuple[str, ...], cids: list[int]) -> _RecordPlan:
+        """Templates and field tables of a reading's records (:func:`fill_records`)."""
+        if self._plan is None:
+            self._plan = _RecordPlan.of(self.encoder.templates, keys, cids)
+        return self._plan
+
+    def _write_tracked_compiled(self, b: TrackedBatch, stamps: NDArray[np.int64],
+                                valid: NDArray[np.bool_], keys: tuple[str, ...],
+                                cids: list[int], per: int) -> None:
+        """:meth:`write_tracked` with the records of each chunk filled by a compiled kernel.
+
+        The same bytes as the numpy path (tested): the template of each record, the
+        numbers of :meth:`RosEncoder.status_values` and :meth:`RosEncoder.pose_values`
+        written at their offsets, the readings without a pose keeping only their status.
+        """
+        from ..fast._frame_kernels import joint_values_into, urdf_frames_into
+        from ..fast._mcap_kernels import fill_records
+
+        plan = self._record_plan(keys, cids)
+        (lengths, zero, code, hinge), (parent, origin, kind, axis, column, wanted) = \
+            self.encoder.kernel_plan
+        n = len(stamps)
+        rs, rp = len(plan.status_tpl), len(plan.pose_tpl)
+        cap = min(n, per) * (rs + rp)
+        if self._buf is None or len(self._buf) < cap:
+            self._buf = np.empty(cap, dtype=np.uint8)
+        if self._words is None or len(self._words) < min(n, per):
+            self._words = np.empty((min(n, per), plan.n_words), dtype=np.uint64)
+        for a in range(0, n, per):
+            e = min(n, a + per)
+            m = e - a
+            v = valid[a:e]
+            st = stamps[a:e]
+            part: dict[str, Any] = {f.name: (None if getattr(b, f.name) is None
+                                             else getattr(b, f.name)[a:e])
+                                    for f in dataclasses.fields(TrackedBatch)}
+            sub = TrackedBatch(**part)
+            status = self.encoder.status_values(sub, self._seq["status"])
+            words = plan.words(self._words, st, self._seq["status"] + np.arange(m),
+                               self._seq["tool_tip"] + np.cumsum(v) - 1, status)
+            if v.any():
+                # joint values (JOINTS order) then the /tf frames, compiled, straight into
+                # the words (the rows without a pose are skipped or never written)
+                frames, joints = plan.pose_columns(words)
+                joint_values_into(np.asarray(sub.q, float), np.asarray(sub.p, float),
+                                  np.asarray(sub.u, float), np.asarray(sub.O_s, float), v,
+                                  lengths, zero, code, hinge, joints)
+                urdf_frames_into(joints, parent, origin, kind, axis, column, wanted,
+                                 frames[:, :-1])
+                frames[:, -1] = self.encoder.rcm_frame
+            starts = np.empty(m, dtype=np.int64)
+            size = fill_records(self._buf, plan.status_tpl, plan.pose_tpl, words,
+                                plan.s_off, plan.s_size, plan.s_col, plan.p_off,
+                                plan.p_size, plan.p_col, v, starts)
+            if size < 0:   # pragma: no cover - the plan is built to fit
+                raise RuntimeError("internal error: the records do not fit their buffer")
+            index = {cids[0]: (st, starts)}
+            if v.any():
+                for j in range(1, len(keys)):
+                    index[cids[j]] = (st[v], starts[v] + rs + plan.record_at[j])
+            self._file.chunk(self._buf[:size], index)
             nv = int(v.sum())
             self._seq["status"] += m
             self.counts[TOPICS["status"]] += m
