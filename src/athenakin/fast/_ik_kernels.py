@@ -721,6 +721,24 @@ def ik_paper_one(T, U, P, stol, ctol, rot_tol, fbuf, ibuf):
     return _paper_flags(T2, U2, rot_tol)
 
 
+#: Bit of :func:`ik_paper_lean`'s result: the item has no solution (``reason != 0``).
+FLAG_NO_SOLUTION = 256
+
+
+@njit(**_OPTS)
+def ik_paper_lean(T, U, P, stol, ctol, rot_tol, fbuf, mode):
+    """:func:`ik_paper_one` for the lean single call: ``mode`` (1,) int64 instead of ``ibuf``.
+
+    Returns the FLAG_* bits, plus :data:`FLAG_NO_SOLUTION` when the item has no
+    solution: 0 means a valid result (``valid`` True, ``reason`` 0) in ``fbuf``
+    and ``mode``; anything else sends the caller down the general path.
+    """
+    ibuf = np.empty(3, np.int64)
+    flags = ik_paper_one(T, U, P, stol, ctol, rot_tol, fbuf, ibuf)
+    mode[0] = ibuf[0]
+    return flags | (FLAG_NO_SOLUTION if ibuf[2] != 0 else 0)
+
+
 @njit(**_OPTS)
 def ik_line_one(T, V, pv, P, kind, q):
     """Controller-form IK of one item (no input checks): writes q (3,), returns the reason.
