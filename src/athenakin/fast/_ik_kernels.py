@@ -726,16 +726,22 @@ FLAG_NO_SOLUTION = 256
 
 
 @njit(**_OPTS)
-def ik_paper_lean(T, U, P, stol, ctol, rot_tol, fbuf, mode):
-    """:func:`ik_paper_one` for the lean single call: ``mode`` (1,) int64 instead of ``ibuf``.
+def ik_paper_lean(T, U, P, stol, ctol, rot_tol, fbuf, Tbs, mode):
+    """:func:`ik_paper_one` for the lean single call, into the result's own arrays.
 
-    Returns the FLAG_* bits, plus :data:`FLAG_NO_SOLUTION` when the item has no
-    solution: 0 means a valid result (``valid`` True, ``reason`` 0) in ``fbuf``
-    and ``mode``; anything else sends the caller down the general path.
+    ``fbuf`` (27,) as :func:`ik_paper_one`'s (its ``T_b_s`` part is scratch here),
+    ``Tbs`` (4, 4) and ``mode`` (0-d int64) receive ``T_b_s`` and the mode (no
+    views to make in Python). Returns the FLAG_* bits, plus
+    :data:`FLAG_NO_SOLUTION` when the item has no solution: 0 means a valid
+    result (``valid`` True, ``reason`` 0); anything else sends the caller down
+    the general path.
     """
     ibuf = np.empty(3, np.int64)
     flags = ik_paper_one(T, U, P, stol, ctol, rot_tol, fbuf, ibuf)
-    mode[0] = ibuf[0]
+    for r in range(4):
+        for c in range(4):
+            Tbs[r, c] = fbuf[ONE_T + 4 * r + c]
+    mode[()] = ibuf[0]
     return flags | (FLAG_NO_SOLUTION if ibuf[2] != 0 else 0)
 
 
