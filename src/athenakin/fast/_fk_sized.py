@@ -40,7 +40,10 @@ from ._fk_kernels import (
 from ._scalar import nanmax2
 
 __all__ = ["WANT_VALID", "WANT_REASON", "WANT_P", "WANT_U", "WANT_T", "WANT_RES", "WANT_ALL",
-           "fk_select", "fk_one_arrays"]
+           "fk_select", "fk_one_arrays", "fk_one_lean", "FLAG_NO_SOLUTION"]
+
+#: Bit of :func:`fk_one_lean`'s result: the pose has no valid slot (``item_reason != 0``).
+FLAG_NO_SOLUTION = 256
 
 #: Bits of ``want`` in :func:`fk_select`.
 WANT_VALID, WANT_REASON, WANT_P, WANT_U, WANT_T, WANT_RES = 1, 2, 4, 8, 16, 32
@@ -118,3 +121,20 @@ def fk_one_arrays(q, T, P, tol, rot_tol, reason, valid, p, u, Tbs, res, item):
                 valid.reshape((1, 16)), p.reshape((1, 16)), u.reshape((1, 16, 5)),
                 Tbs.reshape((1, 2, 4, 4)), res.reshape((1, 16)), item)
     return _input_flags(q2, T2, rot_tol)
+
+
+@njit(**_OPTS)
+def fk_one_lean(q, T, PT, reason, valid, p, u, Tbs, res):
+    """:func:`fk_one_arrays` for the lean single call: options packed, no ``item`` array.
+
+    ``PT`` (18,): the design's parameter vector (13), the four tolerances of
+    :func:`._fk_kernels.fk_full`'s ``tol`` and ``rot_tol``, as one array (each
+    argument costs the dispatch about 50 ns). Returns the FLAG_* bits, plus
+    :data:`FLAG_NO_SOLUTION` when the pose has no valid slot: 0 means a result to
+    return as it is (``item_reason`` 0), anything else sends the caller down the
+    general path.
+    """
+    item = np.empty(1, np.int8)
+    flags = fk_one_arrays(q, T, PT[:13], PT[13:17], PT[17], reason, valid, p, u, Tbs, res,
+                          item)
+    return flags | (FLAG_NO_SOLUTION if item[0] != 0 else 0)

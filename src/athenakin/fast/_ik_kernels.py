@@ -721,6 +721,34 @@ def ik_paper_one(T, U, P, stol, ctol, rot_tol, fbuf, ibuf):
     return _paper_flags(T2, U2, rot_tol)
 
 
+#: Bit of :func:`ik_paper_lean`'s result: the item has no solution (``reason != 0``).
+FLAG_NO_SOLUTION = 256
+
+
+@njit(**_OPTS)
+def ik_paper_lean(T, U, P, stol, ctol, rot_tol, fbuf, Tbs, mode):
+    """:func:`ik_paper_one` for the lean single call, into the result's own arrays.
+
+    ``fbuf`` (27,) as :func:`ik_paper_one`'s (its ``T_b_s`` part unused here),
+    ``Tbs`` (4, 4) and ``mode`` (0-d int64) receive ``T_b_s`` and the mode (no
+    views to make in Python); the same stages as :func:`ik_paper_one`. Returns the FLAG_* bits, plus
+    :data:`FLAG_NO_SOLUTION` when the item has no solution: 0 means a valid
+    result (``valid`` True, ``reason`` 0); anything else sends the caller down
+    the general path.
+    """
+    T2 = T.reshape((1, 4, 4))
+    U2 = U.reshape((1, 3))
+    G = np.empty(_NGP2 * CHUNK)
+    K = np.empty(NK * CHUNK)
+    valid = np.empty(1, np.bool_)
+    reason = np.empty(1, np.int8)
+    _paper_chunk(T2, U2, P, stol, ctol, G, K, 0, 1, fbuf[ONE_Q:ONE_P].reshape((1, 3)),
+                 fbuf[ONE_P:ONE_U], fbuf[ONE_U:ONE_T].reshape((1, 5)), mode.reshape((1,)),
+                 Tbs.reshape((1, 4, 4)), fbuf[ONE_RES:ONE_QE], valid, reason,
+                 fbuf[ONE_QE:ONE_F])
+    return _paper_flags(T2, U2, rot_tol) | (FLAG_NO_SOLUTION if reason[0] != 0 else 0)
+
+
 @njit(**_OPTS)
 def ik_line_one(T, V, pv, P, kind, q):
     """Controller-form IK of one item (no input checks): writes q (3,), returns the reason.
