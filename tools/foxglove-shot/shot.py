@@ -132,7 +132,7 @@ def make_recording(workdir: Path) -> Path:
 
 
 def screenshot(mcap: Path, layout: Path, out: Path, *, at: float, width: int, height: int,
-               timeout_s: float) -> None:
+               timeout_s: float, settle_s: float) -> None:
     from playwright.sync_api import sync_playwright
 
     bundle = HERE / "node_modules/@foxglove/studio-base/assets/index.js"
@@ -182,7 +182,7 @@ def screenshot(mcap: Path, layout: Path, out: Path, *, at: float, width: int, he
             page.mouse.click(box["x"] + at * box["width"], box["y"] + box["height"] / 2)
             page.mouse.move(box["x"] + box["width"] / 2, box["y"] - 200)
             # Let the 3D panel load the URDF and the plots fill, then take the picture.
-            time.sleep(5.0)
+            time.sleep(settle_s)
             if errors:
                 raise SystemExit("Foxglove reported: " + "; ".join(errors))
             out.parent.mkdir(parents=True, exist_ok=True)
@@ -202,13 +202,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--size", type=int, nargs=2, default=(1600, 900),
                         metavar=("WIDTH", "HEIGHT"))
     parser.add_argument("--timeout", type=float, default=60.0, help="per step, s (60)")
+    parser.add_argument("--settle", type=float, default=20.0,
+                        help="wait after the seek before the screenshot (the plots load the file in blocks), s (20)")
     args = parser.parse_args(argv)
     if not 0.0 <= args.at <= 1.0:
         parser.error(f"--at must lie in [0, 1], got {args.at}")
     with tempfile.TemporaryDirectory() as tmp:
         mcap = args.mcap if args.mcap is not None else make_recording(Path(tmp))
         screenshot(mcap, args.layout, args.out, at=args.at, width=args.size[0],
-                   height=args.size[1], timeout_s=args.timeout)
+                   height=args.size[1], timeout_s=args.timeout, settle_s=args.settle)
     print(f"wrote {args.out}")
     return 0
 
