@@ -66,7 +66,7 @@ const appConfiguration = new MemoryAppConfiguration({
   [S.TELEMETRY_ENABLED]: false,
   [S.CRASH_REPORTING_ENABLED]: false,
   [S.HIDE_SIGN_IN_PROMPT]: true,
-  [S.SHOW_OPEN_DIALOG_ON_STARTUP]: false,
+  [S.SHOW_OPEN_DIALOG_ON_STARTUP]: true,
   [S.UPDATES_ENABLED]: false,
 });
 
