@@ -74,6 +74,7 @@ const dataSources = [
   new window.McapLocalDataSourceFactory(),
   new window.Ros2LocalBagDataSourceFactory(),
   new window.RemoteDataSourceFactory(),
+  new window.FoxgloveWebSocketDataSourceFactory(),
 ];
 
 async function main() {
