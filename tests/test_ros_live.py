@@ -94,6 +94,26 @@ def test_live_stream_decodes_with_an_independent_client():
     assert got["/robot_description"][1].data == ak.sim.urdf_from_design(D, T)
 
 
+def test_subprotocol_names_the_server_accepts():
+    """foxglove-sdk 0.30 accepts foxglove.sdk.v1 and refuses the old foxglove.websocket.v1.
+
+    docs/ros.md says so: Foxglove Studio 1.x (it offers foxglove.websocket.v1 only; checked
+    with Studio 1.48 in tools/foxglove-shot) cannot connect to FoxgloveStream.
+    """
+    from websockets.exceptions import InvalidStatus
+
+    with FoxgloveStream(T, D, port=0) as live:
+        with ws_client.connect(live.url, subprotocols=["foxglove.sdk.v1"],
+                               open_timeout=DEADLINE_S) as ws:
+            assert ws.subprotocol == "foxglove.sdk.v1"
+            hello = json.loads(ws.recv(timeout=DEADLINE_S))
+            assert hello["op"] == "serverInfo" and hello["name"] == "athenakin"
+        with pytest.raises(InvalidStatus) as refused:
+            ws_client.connect(live.url, subprotocols=["foxglove.websocket.v1"],
+                              open_timeout=DEADLINE_S)
+        assert refused.value.response.status_code == 400
+
+
 def test_out_of_reach_publishes_an_invalid_status_only():
     with FoxgloveStream(T, D, port=0) as live:
         assert live.publish([0.3, -0.3, 0.45]) is False   # A/B order broken

@@ -282,6 +282,41 @@ def test_foxglove_layout_names_written_topics_and_fields():
             assert field.startswith("pose.position.") or field.startswith("pose.orientation.")
 
 
+def test_foxglove_layout_is_what_foxglove_1_48_reads():
+    """The layout's panels and values are ones Foxglove Studio 1.48 accepts and draws sanely.
+
+    Found by opening the file in Foxglove (tools/foxglove-shot/shot.py): every panel of the
+    tree has its config; the 3D panel reads a pose's ``axisScale`` as the axis length in m
+    (0.5 hid the robot, whose links are ~0.2-0.5 m); a plot legend is one of Foxglove's three
+    placements.
+    """
+    import json
+
+    layout = json.loads((Path(__file__).resolve().parents[1] / "docs" /
+                         "foxglove_layout.json").read_text())
+
+    def leaves(node):
+        if isinstance(node, str):
+            return [node]
+        assert set(node) >= {"first", "second", "direction"}, node
+        assert node["direction"] in ("row", "column")
+        return leaves(node["first"]) + leaves(node["second"])
+
+    panel_ids = leaves(layout["layout"])
+    assert sorted(panel_ids) == sorted(layout["configById"])
+    assert {i.split("!")[0] for i in panel_ids} == {"3D", "Plot", "RawMessages"}
+    for panel_id, config in layout["configById"].items():
+        kind = panel_id.split("!")[0]
+        if kind == "Plot":
+            assert config["legendDisplay"] in ("floating", "top", "left"), panel_id
+            assert config["xAxisVal"] == "timestamp"
+        if kind == "3D":
+            assert config["followTf"] == "base"
+            for topic, settings in config["topics"].items():
+                if settings.get("type") == "axis":
+                    assert 0.0 < settings["axisScale"] <= 0.1, topic
+
+
 def test_stream_starting_with_unusable_readings(tmp_path):
     """Readings before the first that assembles are LOST; tracking starts there."""
     from rosbags.highlevel import AnyReader  # noqa: F401  (the extra is present)

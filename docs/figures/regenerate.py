@@ -9,7 +9,9 @@ Run from anywhere::
 
 ``app`` (the screenshots of ``athenakin app``) needs playwright and a Chromium and is
 not part of the default set; it runs ``examples/_app_screenshots.py`` and
-``examples/_app_forces_screenshot.py``. Every other figure
+``examples/_app_forces_screenshot.py``. ``foxglove`` (the Foxglove Studio screenshot of
+docs/ros.md) runs ``tools/foxglove-shot/shot.py`` and needs, besides playwright and
+Chromium, ``npm ci`` in tools/foxglove-shot. Every other figure
 needs only the ``plot``, ``analysis``, ``calibration``, ``motion`` and ``synthesis`` extras.
 With ``--quick`` the grids and sample counts are coarser (the figures look the same, a little
 blockier); the committed PNGs are written without it.
@@ -199,6 +201,14 @@ def app(s: Settings) -> list[Path]:
     return [s.out / n for n in names]
 
 
+def foxglove(s: Settings) -> list[Path]:
+    """docs/ros.md: Foxglove Studio 1.48 with a tracked MCAP (tools/foxglove-shot, npm ci)."""
+    path = s.out / "foxglove_track.png"
+    subprocess.run([sys.executable, str(ROOT / "tools/foxglove-shot/shot.py"), "--out",
+                    str(path)], check=True)
+    return [path]
+
+
 def robot_solids(s: Settings) -> list[Path]:
     """docs/visualization.md: the bodies as capsules, the closest pair coloured (issue 20)."""
     from athenakin.plot import plot_robot
@@ -289,7 +299,7 @@ FIGURES: dict[str, Callable[[Settings], list[Path]]] = {
     "dynamics": dynamics,
 }
 #: Figures written only when named (they need more than the extras).
-OPTIONAL = {"app": app, "collision_numbers": collision_numbers}
+OPTIONAL = {"app": app, "foxglove": foxglove, "collision_numbers": collision_numbers}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,0 +1,258 @@
+"""Screenshot of Foxglove Studio showing a tracked athenakin MCAP file with our layout.
+
+Foxglove Studio v1.48, the last open-source release (MPL-2.0), ships its app compiled in the
+npm package ``@foxglove/studio-base`` (a UMD bundle, ``assets/index.js``, whose only externals
+are React 17 and ReactDOM 17). ``index.html`` + ``main.js`` here mount its ``App`` with the
+local-file and remote-file data sources; this script serves them and the MCAP file on
+127.0.0.1, opens the page in headless Chromium (Playwright, Debian's /usr/bin/chromium), and
+does what a user does:
+
+1. *Open local file* on the start dialog (``--source local``, the default; the browser's file
+   picker is answered with the MCAP file), or Foxglove's deep link
+   ``?ds=remote-file&ds.url=...`` (``--source remote``: HTTP Range requests, served here);
+2. *Layouts* > *Import layout* with docs/foxglove_layout.json (the picker again);
+3. checks that Foxglove's *Problems* list of the data source is empty and that the page
+   raised no error; closes the sidebar, seeks to ``--at`` of the recording, waits for the
+   plots to load, and takes the screenshot.
+
+Nothing is reached outside 127.0.0.1. Run from the repository root (extra ``ros`` and
+Playwright in the Python environment; node + npm only for the install)::
+
+    (cd tools/foxglove-shot && npm ci)
+    python tools/foxglove-shot/shot.py             # -> docs/figures/foxglove_track.png
+
+With no ``--mcap``, the recording is made here: ``athenakin plan`` of
+examples/motion/tip_square.csv at 50 Hz, then ``athenakin track`` of that plan into MCAP.
+Exit status 1, with Foxglove's words, if Foxglove reports a problem with the file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import http.server
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parent.parent
+CHROMIUM = "/usr/bin/chromium"
+CHROMIUM_FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                  "--disable-background-networking", "--disable-component-update",
+                  "--disable-sync"]
+#: The name the imported layout gets in Foxglove (Foxglove names it after the file).
+LAYOUT_NAME = "athenakin"
+#: Where the server exposes the recording.
+MCAP_URL_PATH = "/recording.mcap"
+
+
+class _Handler(http.server.SimpleHTTPRequestHandler):
+    """Static files, plus ``extra`` URL paths mapped to files, with HTTP Range requests."""
+
+    extra: dict[str, str] = {}
+
+    def log_message(self, format, *args):  # noqa: A002  (the base class's signature)
+        pass
+
+    def translate_path(self, path):
+        clean = path.split("?", 1)[0].split("#", 1)[0]
+        if clean in self.extra:
+            return self.extra[clean]
+        return super().translate_path(path)
+
+    def send_head(self):
+        path = self.translate_path(self.path)
+        byte_range = self.headers.get("Range")
+        if byte_range is None or not os.path.isfile(path):
+            return super().send_head()
+        size = os.path.getsize(path)
+        m = re.fullmatch(r"bytes=(\d*)-(\d*)", byte_range.strip())
+        if m is None or m.group(0) == "bytes=-":
+            self.send_error(416)
+            return None
+        if m.group(1) == "":                                   # the last N bytes
+            start, end = max(0, size - int(m.group(2))), size - 1
+        else:
+            start = int(m.group(1))
+            end = min(size - 1, int(m.group(2))) if m.group(2) else size - 1
+        if start > end:
+            self.send_response(416)
+            self.send_header("Content-Range", f"bytes */{size}")
+            self.end_headers()
+            return None
+        f = open(path, "rb")  # noqa: SIM115  (closed by the base class after copyfile)
+        f.seek(start)
+        self.send_response(206)
+        self.send_header("Content-Type", self.guess_type(path))
+        self.send_header("Content-Range", f"bytes {start}-{end}/{size}")
+        self.send_header("Content-Length", str(end - start + 1))
+        self.end_headers()
+        self._remaining = end - start + 1
+        return f
+
+    def copyfile(self, source, outputfile):
+        remaining = getattr(self, "_remaining", None)
+        if remaining is None:
+            super().copyfile(source, outputfile)
+            return
+        while remaining > 0:
+            chunk = source.read(min(remaining, 1 << 16))
+            if not chunk:
+                break
+            outputfile.write(chunk)
+            remaining -= len(chunk)
+        self._remaining = None
+
+    def end_headers(self):
+        self.send_header("Accept-Ranges", "bytes")
+        self.send_header("Cache-Control", "no-store")
+        super().end_headers()
+
+
+def serve(root: Path, extra: dict[str, str]) -> tuple[http.server.ThreadingHTTPServer, int]:
+    """Serve ``root`` and the ``extra`` URL paths on 127.0.0.1 (a free port) in a thread."""
+    handler = type("Handler", (_Handler,), {"extra": dict(extra)})
+    httpd = http.server.ThreadingHTTPServer(
+        ("127.0.0.1", 0), functools.partial(handler, directory=str(root)))
+    threading.Thread(target=httpd.serve_forever, daemon=True).start()
+    return httpd, httpd.server_address[1]
+
+
+def make_recording(workdir: Path) -> Path:
+    """Plan examples/motion/tip_square.csv at 50 Hz and track the plan into an MCAP file."""
+    env = dict(os.environ, PYTHONPATH=str(REPO / "src"))
+    plan = workdir / "tip_square_plan.csv"
+    mcap = workdir / "tip_square_track.mcap"
+    subprocess.run([sys.executable, "-m", "athenakin", "plan",
+                    str(REPO / "examples/motion/tip_square.csv"), "-o", str(plan),
+                    "--rate", "50", "--no-plots"], check=True, env=env)
+    subprocess.run([sys.executable, "-m", "athenakin", "track", str(plan), "-o", str(mcap)],
+                   check=True, env=env)
+    return mcap
+
+
+def _file_picker_script(layout_text: str, mcap_name: str) -> str:
+    """Replace ``window.showOpenFilePicker``: the layout for .json, the MCAP file otherwise."""
+    layout_name = json.dumps(LAYOUT_NAME + ".json")
+    return f"""
+window.showOpenFilePicker = async (options) => {{
+  const accepts = JSON.stringify(options?.types ?? []);
+  if (accepts.includes(".json")) {{
+    return [{{kind: "file", name: {layout_name}, getFile: async () =>
+      new File([{json.dumps(layout_text)}], {layout_name}, {{type: "application/json"}})}}];
+  }}
+  const blob = await (await fetch({json.dumps(MCAP_URL_PATH)})).blob();
+  return [{{kind: "file", name: {json.dumps(mcap_name)}, queryPermission: async () => "granted",
+    getFile: async () => new File([blob], {json.dumps(mcap_name)})}}];
+}};
+"""
+
+
+def screenshot(mcap: Path, layout: Path, out: Path, *, source: str = "local", at: float = 0.45,
+               width: int = 1600, height: int = 900, timeout_s: float = 60.0,
+               settle_s: float = 20.0) -> None:
+    """Open ``mcap`` in Foxglove Studio with ``layout``, seek to ``at``, screenshot to ``out``.
+
+    Raises SystemExit with Foxglove's words if the page reports an error or the data source
+    has problems.
+    """
+    from playwright.sync_api import sync_playwright
+
+    bundle = HERE / "node_modules/@foxglove/studio-base/assets/index.js"
+    if not bundle.is_file():
+        raise SystemExit(f"{bundle} is missing: run 'npm ci' in {HERE}")
+    layout_text = layout.read_text()
+    json.loads(layout_text)  # a clear error here rather than a snackbar in the page
+    httpd, port = serve(HERE, {MCAP_URL_PATH: str(mcap)})
+    base = f"http://127.0.0.1:{port}"
+    url = f"{base}/index.html"
+    if source == "remote":
+        url += f"?ds=remote-file&ds.url={base}{MCAP_URL_PATH}"
+    errors: list[str] = []
+    try:
+        with sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_FLAGS)
+            context = browser.new_context(viewport={"width": width, "height": height})
+            context.add_init_script(_file_picker_script(layout_text, mcap.name))
+            page = context.new_page()
+            page.set_default_timeout(timeout_s * 1000)
+            page.on("pageerror", lambda e: errors.append(f"page error: {e}"))
+            page.goto(url)
+            if source == "local":
+                page.get_by_text("Open local file", exact=True).click()
+            # The file is open when its topics are listed in the data-source sidebar (open
+            # at start). Foxglove then logs a DataCloneError: it cannot keep the picker's
+            # stand-in file handle among its recent files (IndexedDB); that is all it costs.
+            page.get_by_text("/robot_description", exact=True).first.wait_for()
+            # Foxglove's own list of problems with the data source must be empty.
+            page.get_by_role("tab", name="Problems").click()
+            problems = page.get_by_text("No problems found")
+            try:
+                problems.wait_for(timeout=5000)
+            except Exception:  # noqa: BLE001  (the sidebar's text says what is wrong)
+                errors.append("Foxglove's Problems list: "
+                              + page.locator("body").inner_text()[:2000])
+            # Import the layout: Layouts sidebar > Import layout.
+            page.get_by_title("Layouts", exact=True).first.click()
+            page.get_by_label("Import layout").click()
+            page.get_by_text(LAYOUT_NAME, exact=True).first.wait_for()
+            page.get_by_text("tool tip (base frame, m)").first.wait_for()
+            # Close the sidebar (a second click on its icon), dismiss the 3D panel's tip.
+            page.get_by_title("Layouts", exact=True).first.click()
+            dismiss = page.get_by_label("Dismiss")
+            if dismiss.count():
+                dismiss.first.click()
+            # Seek: a click on the playback scrubber at the fraction `at` of the recording.
+            scrubber = page.locator('div[style*="height: 32px"]').last
+            box = scrubber.bounding_box()
+            if box is None:
+                raise SystemExit("Foxglove's playback scrubber was not found")
+            page.mouse.click(box["x"] + at * box["width"], box["y"] + box["height"] / 2)
+            page.mouse.move(box["x"] + box["width"] / 2, box["y"] - 200)
+            # Let the 3D panel load the URDF and the plots load the file, then the picture.
+            time.sleep(settle_s)
+            if errors:
+                raise SystemExit("Foxglove reported:\n" + "\n".join(errors))
+            out.parent.mkdir(parents=True, exist_ok=True)
+            page.screenshot(path=str(out))
+            browser.close()
+    finally:
+        httpd.shutdown()
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line: see the module docstring."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--mcap", type=Path, help="tracked MCAP (default: made here)")
+    parser.add_argument("--layout", type=Path, default=REPO / "docs/foxglove_layout.json")
+    parser.add_argument("--out", type=Path, default=REPO / "docs/figures/foxglove_track.png")
+    parser.add_argument("--source", choices=("local", "remote"), default="local",
+                        help="Open local file (default) or the remote-file deep link")
+    parser.add_argument("--at", type=float, default=0.45,
+                        help="where to seek, as a fraction of the recording (0.45)")
+    parser.add_argument("--size", type=int, nargs=2, default=(1600, 900),
+                        metavar=("WIDTH", "HEIGHT"))
+    parser.add_argument("--timeout", type=float, default=60.0, help="per step, s (60)")
+    parser.add_argument("--settle", type=float, default=20.0,
+                        help="wait after the seek, s (20: the plots load the file in blocks)")
+    args = parser.parse_args(argv)
+    if not 0.0 <= args.at <= 1.0:
+        parser.error(f"--at must lie in [0, 1], got {args.at}")
+    with tempfile.TemporaryDirectory() as tmp:
+        mcap = args.mcap if args.mcap is not None else make_recording(Path(tmp))
+        screenshot(mcap, args.layout, args.out, source=args.source, at=args.at,
+                   width=args.size[0], height=args.size[1], timeout_s=args.timeout,
+                   settle_s=args.settle)
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
