@@ -14,6 +14,11 @@
 # cache index in the shared source tree. The main version (MAIN_PYTHON, the one of .venv and
 # scripts/test.sh) runs the whole suite with every extra.
 #
+# The middle version (NUMPY_ONLY, 3.12) runs the subset on the numpy reference
+# (ATHENAKIN_BACKEND=numpy, without tests/test_fast_exactness.py and the tests named for numba):
+# compiling the kernels costs about a minute of CPU per environment, and the compiled path is
+# checked on the versions around it (3.10, 3.13) and on the main one; CI fits in its time that way.
+#
 # Usage: bash scripts/test_matrix.sh [PYTEST_ARGS...]
 #        ATHENAKIN_PYTHONS="3.10.13" bash scripts/test_matrix.sh   # one version
 set -euo pipefail
@@ -21,6 +26,7 @@ cd "$(dirname "$0")/.."
 
 MAIN_PYTHON="3.11"
 VERSIONS="${ATHENAKIN_PYTHONS:-3.10.13 3.12.1 3.13.0}"
+NUMPY_ONLY="${ATHENAKIN_NUMPY_ONLY-3.12}"   # short versions run on the numpy reference
 EXTRAS="sim,analysis,certified,motion"
 SUBSET=(
     tests/test_study.py tests/test_chain.py tests/test_parallel.py tests/test_robot.py
@@ -54,8 +60,19 @@ PY
     "$venv/bin/uv" pip install --python "$venv/bin/python" --quiet -e ".[$EXTRAS]" "${test_reqs[@]}"
     "$venv/bin/python" -c "import sys, athenakin; print('athenakin', athenakin.__version__, 'on', sys.version.split()[0])"
     log="$(mktemp)"
-    NUMBA_CACHE_DIR="$PWD/$venv/numba-cache" "$venv/bin/python" -m pytest -q -p no:cacheprovider \
-        -rs "${SUBSET[@]}" "$@" | tee "$log"
+    tests=("${SUBSET[@]}")
+    backend=""
+    if [[ " $NUMPY_ONLY " == *" $short "* ]]; then
+        tests=()
+        for t in "${SUBSET[@]}"; do
+            [ "$t" = tests/test_fast_exactness.py ] || tests+=("$t")
+        done
+        tests+=(-k "not numba")
+        backend="numpy"
+        echo "== Python $full: the numpy reference (ATHENAKIN_BACKEND=numpy)"
+    fi
+    ATHENAKIN_BACKEND="$backend" NUMBA_CACHE_DIR="$PWD/$venv/numba-cache" \
+        "$venv/bin/python" -m pytest -q -p no:cacheprovider -rs "${tests[@]}" "$@" | tee "$log"
     if grep -qE "^[0-9]+ (passed|failed).* [0-9]+ skipped|^[0-9]+ skipped" "$log"; then
         echo "== Python $full: tests of the subset were skipped (listed above): install what" \
              "they need (EXTRAS in scripts/test_matrix.sh)" >&2
