@@ -11,6 +11,8 @@ need the ``mujoco`` package (extra ``sim``).
   is the assembled reference configuration, with a ``tool_tip`` link.
 * :func:`mechanism_joint_values`: every joint of the tree in one FK slot, in the
   model's convention and relative to the URDF's joint zero (docs/ros.md).
+* :func:`actuator_drawn_lengths`: the housing and rod the exports draw for the q3
+  actuator, telescoping without a gap over the stroke of q3.
 * :func:`check_fk_with_mujoco`: drive MuJoCo to ``q``, let it close the loops,
   compare with :func:`athenakin.forward_kinematics`.
 """
@@ -28,10 +30,13 @@ from ._check import (
 )
 from ._layout import (
     ACTUATED,
+    ACTUATOR_OVERLAP,
+    ACTUATOR_ROD_FALLBACK,
     JOINTS,
     LOOP_CLOSURES,
     LoopClosure,
     MechanismJointValues,
+    actuator_drawn_lengths,
     mechanism_joint_values,
     urdf_joint_zero,
 )
@@ -40,6 +45,8 @@ from ._urdf import CLOSURE_PAIRS, MIMIC, urdf_from_design, write_urdf
 
 __all__ = [
     "ACTUATED",
+    "ACTUATOR_OVERLAP",
+    "ACTUATOR_ROD_FALLBACK",
     "CLOSURE_PAIRS",
     "JOINTS",
     "LOOP_CLOSURES",
@@ -51,6 +58,7 @@ __all__ = [
     "LoopClosure",
     "MechanismJointValues",
     "MujocoCheck",
+    "actuator_drawn_lengths",
     "check_fk_with_mujoco",
     "load_model",
     "mechanism_joint_values",

@@ -36,6 +36,7 @@ The instrument roll (a fourth actuator) does not change the kinematics and is le
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -43,12 +44,12 @@ from numpy.typing import ArrayLike, NDArray
 from .._mechanism import mechanism_points
 from .._validation import check_array
 from ..collision._bodies import Bodies
-from ..design import Design
+from ..design import Design, resolve_design
 from ..plot._geometry import RobotGeometry, robot_geometry
 
 __all__ = ["JOINTS", "ACTUATED", "LOOP_CLOSURES", "LoopClosure", "MechanismJointValues",
            "mechanism_joint_values", "urdf_joint_zero", "COLLISION_BODY", "collision_segments",
-           "rail_segment"]
+           "rail_segment", "actuator_drawn_lengths", "ACTUATOR_ROD_FALLBACK", "ACTUATOR_OVERLAP"]
 
 #: Joints of the spanning tree in MJCF order: name -> (kind, parent body, child body).
 JOINTS: dict[str, tuple[str, str, str]] = {
@@ -246,6 +247,55 @@ def mechanism_joint_values(q: ArrayLike | None = None, T_b_e: ArrayLike | None =
             x = float(-np.remainder(-x + np.pi, 2 * np.pi) + np.pi)
         rel[name] = x
     return MechanismJointValues(values=values, urdf=rel, zero=zero, geometry=g)
+
+
+#: Length of the drawn rod of the q3 actuator where the stroke of q3 has no positive
+#: lower limit, m.
+ACTUATOR_ROD_FALLBACK = 0.1
+#: Overlap of the drawn housing and rod at full extension, as a share of the rod's length.
+ACTUATOR_OVERLAP = 0.1
+
+
+def actuator_drawn_lengths(design: Design | None = None) -> tuple[float, float]:
+    """Lengths of the two drawn parts of the q3 actuator in the exports, m.
+
+    The URDF and MJCF draw the q3 actuator as a real telescoping actuator: a housing
+    (on the link ``k2_arm``, at C) from C along the actuator axis ``C -> O_i``, and a
+    thinner rod (on the link ``k2_rod``) ending at ``O_i``. Neither can stretch, so
+    their lengths are chosen from the stroke ``[q3_min, q3_max]`` of q3 such that,
+    over the whole stroke, the two overlap along the axis (no gap) and the rod's far
+    end never passes behind C::
+
+        rod     b = q3_min                                 (b <= q3_min)
+        housing a = q3_max - b + ACTUATOR_OVERLAP * b      (a + b >= q3_max)
+
+    Parameters
+    ----------
+    design : Design, optional
+        Defaults to :meth:`Design.default`.
+
+    Returns
+    -------
+    housing, rod : float
+        ``a`` and ``b``, m. Where ``q3_min`` is 0 (unlimited) the rod is
+        :data:`ACTUATOR_ROD_FALLBACK` long; where ``q3_max`` is unlimited the housing
+        covers ``q3`` up to ``3 b``. Outside those the drawing cannot hold both
+        conditions (a rigid rod longer than ``q3`` pokes behind C). When
+        ``q3_max > 2 q3_min`` the housing reaches past ``O_i`` at the short end of the
+        stroke (``q3 < a``), as an inline actuator of that stroke would have to.
+
+    Notes
+    -----
+    These are drawing lengths only: the mass model's two rigid parts
+    (:func:`athenakin.dynamics.actuator_part_length`) and the collision capsule of the
+    ``actuator`` body are defined on their own (docs/dynamics.md, docs/collision.md).
+    """
+    d = resolve_design(design)
+    lo, hi = float(d.stroke_min[2]), float(d.stroke_max[2])
+    rod = lo if math.isfinite(lo) and lo > 0 else ACTUATOR_ROD_FALLBACK
+    reach = hi if math.isfinite(hi) else 3.0 * rod
+    housing = max(reach - rod, 0.0) + ACTUATOR_OVERLAP * rod
+    return housing, rod
 
 
 #: athenakin body (:data:`athenakin._mechanism.BODIES`) -> the MJCF body / URDF link that

@@ -31,6 +31,7 @@ from ._layout import (
     COLLISION_BODY,
     JOINTS,
     LOOP_CLOSURES,
+    actuator_drawn_lengths,
     collision_segments,
     mechanism_joint_values,
     rail_segment,
@@ -111,6 +112,14 @@ def _joint(body: ET.Element, name: str, axis: ArrayLike, *, damping: float = PAS
 def _capsule(body: ET.Element, name: str, a: ArrayLike, b: ArrayLike, rgba: str,
              radius: float = BAR_RADIUS) -> None:
     ET.SubElement(body, "geom", {"name": name, "type": "capsule", "fromto": _vec(
+        np.concatenate([np.asarray(a, float), np.asarray(b, float)])), "size": _f(radius),
+        "rgba": _RGBA[rgba]})
+
+
+def _cylinder(body: ET.Element, name: str, a: ArrayLike, b: ArrayLike, rgba: str,
+              radius: float = BAR_RADIUS) -> None:
+    """Flat-ended cylinder from a to b (the parts of the q3 actuator: no caps past the ends)."""
+    ET.SubElement(body, "geom", {"name": name, "type": "cylinder", "fromto": _vec(
         np.concatenate([np.asarray(a, float), np.asarray(b, float)])), "size": _f(radius),
         "rgba": _RGBA[rgba]})
 
@@ -366,11 +375,11 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     _site(car, "carrier_d")
     arm = _body(car, "k2_arm", pos=(0, d.l2, d.l5))
     _joint(arm, "k2_x", (1, 0, 0))
-    housing = 0.5 * lo[2] if math.isfinite(lo[2]) and lo[2] > 0 else 0.1
-    _capsule(arm, "k2_housing", (0, 0, 0), (0, 0, housing), "actuator", radius=0.012)
+    housing, rod_length = actuator_drawn_lengths(d)    # telescoping: no gap over the stroke
+    _cylinder(arm, "k2_housing", (0, 0, 0), (0, 0, housing), "actuator", radius=0.012)
     rod = _body(arm, "k2_rod")
     _joint(rod, "q3", (0, 0, 1), damping=1.0, rng=(lo[2], hi[2]))
-    _capsule(rod, "k2_rod", (0, 0, -housing), (0, 0, 0), "actuator")
+    _cylinder(rod, "k2_rod", (0, 0, -rod_length), (0, 0, 0), "actuator")
     _site(rod, "k2_rod_tip")
 
     # --- carriage B: bar to O_i, bar to D -------------------------------------------

@@ -34,6 +34,7 @@ from ._layout import (
     COLLISION_BODY,
     JOINTS,
     LOOP_CLOSURES,
+    actuator_drawn_lengths,
     collision_segments,
     rail_segment,
     urdf_joint_zero,
@@ -213,6 +214,7 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
         ET.SubElement(material, "color", {"rgba": rgba})
 
     r = BAR_RADIUS
+    housing, rod = actuator_drawn_lengths(d)     # telescoping: no gap over the stroke
     # link geometry: (a, b, radius, material) in the link frame
     shapes: dict[str, tuple[tuple[float, ...], tuple[float, ...], float, str]] = {
         "base": ((-0.5, 0, -0.02), (0.5, 0, -0.02), 0.01, "rail"),
@@ -232,8 +234,8 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
         "link_a3": ((0, 0, 0), (d.l3, 0, 0), r, "parallel"),
         "link_b3": ((0, 0, 0), (d.l3, 0, 0), r, "parallel"),
         "carrier": ((0, 0, 0), (0, d.l2, d.l5), r, "parallel"),
-        "k2_arm": ((0, 0, 0), (0, 0, 0.1), 0.012, "actuator"),
-        "k2_rod": ((0, 0, -0.1), (0, 0, 0), r, "actuator"),
+        "k2_arm": ((0, 0, 0), (0, 0, housing), 0.012, "actuator"),
+        "k2_rod": ((0, 0, -rod), (0, 0, 0), r, "actuator"),
     }
     for name in ["base"] + [c for _, _, c in JOINTS.values()]:
         link = ET.SubElement(robot, "link", {"name": name})
