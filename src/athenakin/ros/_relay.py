@@ -125,6 +125,9 @@ class SubprotocolRelay:
         from websockets.asyncio.client import connect
 
         name = client.subprotocol
+        offered = ", ".join(client.request.headers.get_all("Sec-WebSocket-Protocol"))
+        LOGGER.info("client %s offered %s: accepted %s, relayed as %s",
+                    client.remote_address, offered, name, _UPSTREAM.get(name, name))
         try:
             upstream = await connect(self._upstream_url,
                                      subprotocols=[_UPSTREAM.get(name, name)],
