@@ -132,18 +132,21 @@ class SubprotocolRelay:
             upstream = await connect(self._upstream_url,
                                      subprotocols=[_UPSTREAM.get(name, name)],
                                      compression=None, max_size=None, ping_interval=None,
-                                     open_timeout=_TIMEOUT_S, logger=LOGGER)
+                                     open_timeout=_TIMEOUT_S, close_timeout=2.0,
+                                     logger=LOGGER)
         except Exception:   # noqa: BLE001 - the server is stopping or gone: tell the client
             await client.close(1011, "the Foxglove server is not available")
             return
-        async with upstream:
+        try:
             tasks = {asyncio.create_task(_pipe(client, upstream)),
                      asyncio.create_task(_pipe(upstream, client))}
             _, pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
             for task in pending:
                 task.cancel()
             await asyncio.gather(*pending, return_exceptions=True)
-        await client.close()
+        finally:   # the client first: it must not wait on the SDK's side of the close
+            await client.close()
+            await upstream.close()
 
     def stop(self) -> None:
         """Close every client and the listening socket; join the thread (idempotent)."""
