@@ -15,6 +15,15 @@ does what a user does:
    raised no error; closes the sidebar, seeks to ``--at`` of the recording, waits for the
    plots to load, and takes the screenshot.
 
+``--source live`` opens no file: the script starts an ``athenakin.ros.FoxgloveStream`` on a
+free port whose tool tip circles, and Foxglove opens it through its deep link
+``?ds=foxglove-websocket&ds.url=ws://127.0.0.1:PORT`` (Studio 1.48 offers only the
+subprotocol ``foxglove.websocket.v1``; the stream's relay logs what each client offered, and
+the script fails unless that name was offered and accepted). Steps 2 and 3 follow, without
+the seek::
+
+    python tools/foxglove-shot/shot.py --source live --out docs/figures/foxglove_live.png
+
 Nothing is reached outside 127.0.0.1. Run from the repository root (extra ``ros`` and
 Playwright in the Python environment; node + npm only for the install)::
 
