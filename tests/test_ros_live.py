@@ -155,6 +155,18 @@ def test_stop_closes_clients_and_leaves_no_thread():
         ws_client.connect(live.url, subprotocols=OFFERS["legacy"], open_timeout=2.0)
 
 
+def test_relay_closes_a_client_when_the_sdk_server_is_gone():
+    from websockets.exceptions import ConnectionClosed
+
+    with FoxgloveStream(T, D, port=0) as live:
+        live._server.stop()                           # the SDK server behind the relay
+        with ws_client.connect(live.url, subprotocols=OFFERS["legacy"],
+                               open_timeout=DEADLINE_S) as ws:
+            with pytest.raises(ConnectionClosed) as closed:
+                ws.recv(timeout=DEADLINE_S)
+        assert closed.value.rcvd is not None and closed.value.rcvd.code == 1011
+
+
 def test_port_in_use_raises_oserror_naming_the_address():
     with FoxgloveStream(T, D, port=0) as live:
         with pytest.raises(OSError, match=f"cannot serve Foxglove on 127.0.0.1:{live.port}"):
