@@ -17,7 +17,9 @@ from athenakin.ros import FoxgloveStream  # noqa: E402
 D = ak.Design.default()
 T = ak.default_rcm_frame(D)
 DEADLINE_S = 20.0
-SUBPROTOCOLS = ["foxglove.sdk.v1", "foxglove.websocket.v1"]
+#: The Foxglove WebSocket protocol v1 under its new name (foxglove-sdk, Foxglove 2.x) and its
+#: old one (Foxglove Studio 1.x, Lichtblick): a client offering either alone must connect.
+OFFERS = {"sdk": ["foxglove.sdk.v1"], "legacy": ["foxglove.websocket.v1"]}
 TOPICS = {"/athena/tool_tip": "geometry_msgs/msg/PoseStamped",
           "/tf": "tf2_msgs/msg/TFMessage",
           "/athena/joint_states": "sensor_msgs/msg/JointState",
@@ -37,7 +39,8 @@ def _advertised(ws, deadline):
     return chans
 
 
-def test_live_stream_decodes_with_an_independent_client():
+@pytest.mark.parametrize("offer", OFFERS.values(), ids=OFFERS.keys())
+def test_live_stream_decodes_with_an_independent_client(offer):
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     store = get_typestore(Stores.ROS2_HUMBLE)
@@ -46,11 +49,9 @@ def test_live_stream_decodes_with_an_independent_client():
     with FoxgloveStream(T, D, port=0) as live:
         assert live.host == "127.0.0.1" and live.port > 0
         deadline = time.monotonic() + DEADLINE_S
-        # foxglove-sdk 0.30 speaks the protocol under the name "foxglove.sdk.v1" (the
-        # Foxglove WebSocket protocol v1, formerly "foxglove.websocket.v1"); offer both
-        with ws_client.connect(live.url, subprotocols=SUBPROTOCOLS,
+        with ws_client.connect(live.url, subprotocols=offer,
                                open_timeout=DEADLINE_S) as ws:
-            assert ws.subprotocol in SUBPROTOCOLS
+            assert ws.subprotocol == offer[0]
             chans = _advertised(ws, deadline)
             assert {t: c["schemaName"] for t, c in chans.items() if t in TOPICS} == TOPICS
             assert all(chans[t]["encoding"] == "cdr" and chans[t]["schemaEncoding"] ==
@@ -94,24 +95,82 @@ def test_live_stream_decodes_with_an_independent_client():
     assert got["/robot_description"][1].data == ak.sim.urdf_from_design(D, T)
 
 
-def test_subprotocol_names_the_server_accepts():
-    """foxglove-sdk 0.30 accepts foxglove.sdk.v1 and refuses the old foxglove.websocket.v1.
+@pytest.mark.parametrize("offer, answer", [
+    (["foxglove.websocket.v1"], "foxglove.websocket.v1"),      # Foxglove Studio 1.x, Lichtblick
+    (["foxglove.sdk.v1"], "foxglove.sdk.v1"),
+    (["foxglove.sdk.v1.1"], "foxglove.sdk.v1.1"),
+    (["foxglove.websocket.v1", "foxglove.sdk.v1"], "foxglove.sdk.v1"),   # the new name first
+    (["chat", "foxglove.websocket.v1"], "foxglove.websocket.v1")])
+def test_subprotocol_names_the_stream_accepts(offer, answer):
+    """Old and new names of the protocol connect through the relay to the SDK server.
 
-    docs/ros.md says so: Foxglove Studio 1.x (it offers foxglove.websocket.v1 only; checked
-    with Studio 1.48 in tools/foxglove-shot) cannot connect to FoxgloveStream.
+    foxglove-sdk 0.30 itself accepts only foxglove.sdk.v1(.1); the relay in front of it
+    (athenakin.ros._relay) also accepts foxglove.websocket.v1, which Foxglove Studio 1.48
+    offers alone (checked with tools/foxglove-shot --source live).
     """
+    with FoxgloveStream(T, D, port=0) as live:
+        with ws_client.connect(live.url, subprotocols=offer, open_timeout=DEADLINE_S) as ws:
+            assert ws.subprotocol == answer
+            hello = json.loads(ws.recv(timeout=DEADLINE_S))
+            assert hello["op"] == "serverInfo" and hello["name"] == "athenakin"
+
+
+@pytest.mark.parametrize("offer", [["foxglove.websocket.v2"], ["chat"], None],
+                         ids=["unknown-version", "other", "none"])
+def test_other_subprotocols_are_refused(offer):
     from websockets.exceptions import InvalidStatus
 
     with FoxgloveStream(T, D, port=0) as live:
-        with ws_client.connect(live.url, subprotocols=["foxglove.sdk.v1"],
-                               open_timeout=DEADLINE_S) as ws:
-            assert ws.subprotocol == "foxglove.sdk.v1"
-            hello = json.loads(ws.recv(timeout=DEADLINE_S))
-            assert hello["op"] == "serverInfo" and hello["name"] == "athenakin"
         with pytest.raises(InvalidStatus) as refused:
-            ws_client.connect(live.url, subprotocols=["foxglove.websocket.v1"],
-                              open_timeout=DEADLINE_S)
+            ws_client.connect(live.url, subprotocols=offer, open_timeout=DEADLINE_S)
         assert refused.value.response.status_code == 400
+        assert b"foxglove.websocket.v1" in refused.value.response.body
+        # the stream still serves after a refusal
+        with ws_client.connect(live.url, subprotocols=OFFERS["legacy"],
+                               open_timeout=DEADLINE_S) as ws:
+            assert json.loads(ws.recv(timeout=DEADLINE_S))["op"] == "serverInfo"
+
+
+def test_stop_closes_clients_and_leaves_no_thread():
+    import threading
+
+    from websockets.exceptions import ConnectionClosed
+
+    before = set(threading.enumerate())
+    live = FoxgloveStream(T, D, port=0)
+    clients = [ws_client.connect(live.url, subprotocols=o, open_timeout=DEADLINE_S)
+               for o in OFFERS.values()]
+    for ws in clients:
+        assert json.loads(ws.recv(timeout=DEADLINE_S))["op"] == "serverInfo"
+    live.stop()
+    live.stop()                                       # idempotent
+    for ws in clients:
+        with pytest.raises(ConnectionClosed) as closed:
+            while True:                               # drain what was sent before the stop
+                ws.recv(timeout=DEADLINE_S)
+        assert closed.value.rcvd is not None and closed.value.rcvd.code == 1001
+        ws.close()
+    assert set(threading.enumerate()) <= before
+    with pytest.raises(OSError):                     # the public port is closed
+        ws_client.connect(live.url, subprotocols=OFFERS["legacy"], open_timeout=2.0)
+
+
+def test_relay_closes_a_client_when_the_sdk_server_is_gone():
+    from websockets.exceptions import ConnectionClosed
+
+    with FoxgloveStream(T, D, port=0) as live:
+        live._server.stop()                           # the SDK server behind the relay
+        with ws_client.connect(live.url, subprotocols=OFFERS["legacy"],
+                               open_timeout=DEADLINE_S) as ws:
+            with pytest.raises(ConnectionClosed) as closed:
+                ws.recv(timeout=DEADLINE_S)
+        assert closed.value.rcvd is not None and closed.value.rcvd.code == 1011
+
+
+def test_port_in_use_raises_oserror_naming_the_address():
+    with FoxgloveStream(T, D, port=0) as live:
+        with pytest.raises(OSError, match=f"cannot serve Foxglove on 127.0.0.1:{live.port}"):
+            FoxgloveStream(T, D, port=live.port)
 
 
 def test_out_of_reach_publishes_an_invalid_status_only():
@@ -121,7 +180,8 @@ def test_out_of_reach_publishes_an_invalid_status_only():
 
 
 @pytest.mark.parametrize("kw, match", [({"port": 70000}, "port: expected"),
-                                       ({"port": -1}, "port: expected")])
+                                       ({"port": -1}, "port: expected"),
+                                       ({"host": "no-such-host.invalid"}, "host: expected")])
 def test_bad_port(kw, match):
     with pytest.raises(ak.InvalidInputError, match=match):
         FoxgloveStream(T, D, **kw)

@@ -9,9 +9,9 @@ Run from anywhere::
 
 ``app`` (the screenshots of ``athenakin app``) needs playwright and a Chromium and is
 not part of the default set; it runs ``examples/_app_screenshots.py`` and
-``examples/_app_forces_screenshot.py``. ``foxglove`` (the Foxglove Studio screenshot of
-docs/ros.md) runs ``tools/foxglove-shot/shot.py`` and needs, besides playwright and
-Chromium, ``npm ci`` in tools/foxglove-shot. Every other figure
+``examples/_app_forces_screenshot.py``. ``foxglove`` (the Foxglove Studio screenshots of
+docs/ros.md, a file and the live stream) runs ``tools/foxglove-shot/shot.py`` and needs,
+besides playwright and Chromium, ``npm ci`` in tools/foxglove-shot. Every other figure
 needs only the ``plot``, ``analysis``, ``calibration``, ``motion`` and ``synthesis`` extras.
 With ``--quick`` the grids and sample counts are coarser (the figures look the same, a little
 blockier); the committed PNGs are written without it.
@@ -202,11 +202,14 @@ def app(s: Settings) -> list[Path]:
 
 
 def foxglove(s: Settings) -> list[Path]:
-    """docs/ros.md: Foxglove Studio 1.48 with a tracked MCAP (tools/foxglove-shot, npm ci)."""
+    """docs/ros.md: Foxglove Studio 1.48 with a tracked MCAP, and live (tools/foxglove-shot)."""
     path = s.out / "foxglove_track.png"
     subprocess.run([sys.executable, str(ROOT / "tools/foxglove-shot/shot.py"), "--out",
                     str(path)], check=True)
-    return [path]
+    live = s.out / "foxglove_live.png"
+    subprocess.run([sys.executable, str(ROOT / "tools/foxglove-shot/shot.py"), "--source",
+                    "live", "--settle", "12", "--out", str(live)], check=True)
+    return [path, live]
 
 
 def robot_solids(s: Settings) -> list[Path]:

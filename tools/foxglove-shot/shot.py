@@ -15,6 +15,15 @@ does what a user does:
    raised no error; closes the sidebar, seeks to ``--at`` of the recording, waits for the
    plots to load, and takes the screenshot.
 
+``--source live`` opens no file: the script starts an ``athenakin.ros.FoxgloveStream`` on a
+free port whose tool tip circles, and Foxglove opens it through its deep link
+``?ds=foxglove-websocket&ds.url=ws://127.0.0.1:PORT`` (Studio 1.48 offers only the
+subprotocol ``foxglove.websocket.v1``; the stream's relay logs what each client offered, and
+the script fails unless that name was offered and accepted). Steps 2 and 3 follow, without
+the seek::
+
+    python tools/foxglove-shot/shot.py --source live --out docs/figures/foxglove_live.png
+
 Nothing is reached outside 127.0.0.1. Run from the repository root (extra ``ros`` and
 Playwright in the Python environment; node + npm only for the install)::
 
@@ -32,6 +41,7 @@ import argparse
 import functools
 import http.server
 import json
+import logging
 import os
 import re
 import subprocess
@@ -155,11 +165,45 @@ window.showOpenFilePicker = async (options) => {{
 """
 
 
-def screenshot(mcap: Path, layout: Path, out: Path, *, source: str = "local", at: float = 0.45,
+class _Records(logging.Handler):
+    """Keep the log records (the relay's: which subprotocol each client offered)."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.INFO)
+        self.records: list[logging.LogRecord] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.records.append(record)
+
+
+def live_stream(rate: float = 30.0):
+    """A FoxgloveStream on a free port of 127.0.0.1 whose tool tip circles (period 4 s)."""
+    import numpy as np
+
+    sys.path.insert(0, str(REPO / "src"))
+    from athenakin.ros import FoxgloveStream
+
+    q0 = np.array([-0.10, 0.10, 0.45])
+    t0 = time.monotonic()
+
+    def state():
+        phase = 2 * np.pi * (time.monotonic() - t0) / 4.0
+        return q0 + 0.012 * np.array([np.cos(phase), np.sin(phase), 0.5 * np.sin(phase)]), 0
+
+    live = FoxgloveStream(port=0)
+    live.follow(state, rate=rate)
+    return live
+
+
+def screenshot(mcap: Path | None, layout: Path, out: Path, *, source: str = "local",
+               at: float = 0.45,
                width: int = 1600, height: int = 900, timeout_s: float = 60.0,
                settle_s: float = 20.0) -> None:
     """Open ``mcap`` in Foxglove Studio with ``layout``, seek to ``at``, screenshot to ``out``.
 
+    ``source="live"``: no file; Foxglove opens a Foxglove WebSocket connection to a
+    :class:`athenakin.ros.FoxgloveStream` publishing a moving pose (:func:`live_stream`), and
+    the screenshot is taken ``settle_s`` after the layout is loaded (no seek).
     Raises SystemExit with Foxglove's words if the page reports an error or the data source
     has problems.
     """
@@ -170,17 +214,27 @@ def screenshot(mcap: Path, layout: Path, out: Path, *, source: str = "local", at
         raise SystemExit(f"{bundle} is missing: run 'npm ci' in {HERE}")
     layout_text = layout.read_text()
     json.loads(layout_text)  # a clear error here rather than a snackbar in the page
-    httpd, port = serve(HERE, {MCAP_URL_PATH: str(mcap)})
+    if (mcap is None) != (source == "live"):
+        raise ValueError("screenshot: an MCAP file for sources local and remote, none for live")
+    httpd, port = serve(HERE, {MCAP_URL_PATH: str(mcap)} if mcap is not None else {})
     base = f"http://127.0.0.1:{port}"
     url = f"{base}/index.html"
+    live = None
+    relay_log = _Records()
     if source == "remote":
         url += f"?ds=remote-file&ds.url={base}{MCAP_URL_PATH}"
+    elif source == "live":
+        live = live_stream()
+        logging.getLogger("athenakin.ros.foxglove_relay").addHandler(relay_log)
+        logging.getLogger("athenakin.ros.foxglove_relay").setLevel(logging.INFO)
+        url += f"?ds=foxglove-websocket&ds.url={live.url}"
     errors: list[str] = []
     try:
         with sync_playwright() as pw:
             browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_FLAGS)
             context = browser.new_context(viewport={"width": width, "height": height})
-            context.add_init_script(_file_picker_script(layout_text, mcap.name))
+            context.add_init_script(_file_picker_script(layout_text,
+                                                        mcap.name if mcap else "none"))
             page = context.new_page()
             page.set_default_timeout(timeout_s * 1000)
             page.on("pageerror", lambda e: errors.append(f"page error: {e}"))
@@ -209,13 +263,21 @@ def screenshot(mcap: Path, layout: Path, out: Path, *, source: str = "local", at
             dismiss = page.get_by_label("Dismiss")
             if dismiss.count():
                 dismiss.first.click()
-            # Seek: a click on the playback scrubber at the fraction `at` of the recording.
-            scrubber = page.locator('div[style*="height: 32px"]').last
-            box = scrubber.bounding_box()
-            if box is None:
-                raise SystemExit("Foxglove's playback scrubber was not found")
-            page.mouse.click(box["x"] + at * box["width"], box["y"] + box["height"] / 2)
-            page.mouse.move(box["x"] + box["width"] / 2, box["y"] - 200)
+            if live is None:
+                # Seek: a click on the playback scrubber at the fraction `at` of the recording.
+                scrubber = page.locator('div[style*="height: 32px"]').last
+                box = scrubber.bounding_box()
+                if box is None:
+                    raise SystemExit("Foxglove's playback scrubber was not found")
+                page.mouse.click(box["x"] + at * box["width"], box["y"] + box["height"] / 2)
+                page.mouse.move(box["x"] + box["width"] / 2, box["y"] - 200)
+            else:
+                for record in relay_log.records:
+                    print(f"FoxgloveStream relay: {record.getMessage()}")
+                if not any("offered foxglove.websocket.v1:" in r.getMessage()
+                           for r in relay_log.records):
+                    errors.append("Foxglove Studio did not connect offering only "
+                                  "foxglove.websocket.v1")
             # Let the 3D panel load the URDF and the plots load the file, then the picture.
             time.sleep(settle_s)
             if errors:
@@ -225,6 +287,8 @@ def screenshot(mcap: Path, layout: Path, out: Path, *, source: str = "local", at
             browser.close()
     finally:
         httpd.shutdown()
+        if live is not None:
+            live.stop()
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -233,8 +297,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--mcap", type=Path, help="tracked MCAP (default: made here)")
     parser.add_argument("--layout", type=Path, default=REPO / "docs/foxglove_layout.json")
     parser.add_argument("--out", type=Path, default=REPO / "docs/figures/foxglove_track.png")
-    parser.add_argument("--source", choices=("local", "remote"), default="local",
-                        help="Open local file (default) or the remote-file deep link")
+    parser.add_argument("--source", choices=("local", "remote", "live"), default="local",
+                        help="Open local file (default), the remote-file deep link, or a "
+                             "Foxglove WebSocket connection to a live FoxgloveStream")
     parser.add_argument("--at", type=float, default=0.45,
                         help="where to seek, as a fraction of the recording (0.45)")
     parser.add_argument("--size", type=int, nargs=2, default=(1600, 900),
@@ -245,8 +310,11 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if not 0.0 <= args.at <= 1.0:
         parser.error(f"--at must lie in [0, 1], got {args.at}")
+    if args.source == "live" and args.mcap is not None:
+        parser.error("--mcap is for the sources local and remote")
     with tempfile.TemporaryDirectory() as tmp:
-        mcap = args.mcap if args.mcap is not None else make_recording(Path(tmp))
+        mcap = (None if args.source == "live" else
+                args.mcap if args.mcap is not None else make_recording(Path(tmp)))
         screenshot(mcap, args.layout, args.out, source=args.source, at=args.at,
                    width=args.size[0], height=args.size[1], timeout_s=args.timeout,
                    settle_s=args.settle)

@@ -5,9 +5,12 @@ same topics and the same CDR messages as the MCAP files of :mod:`._write`:
 ``/tf``, ``/tf_static``, ``/athena/joint_states``, ``/athena/tool_tip``,
 ``/athena/status`` and ``/robot_description``. Foxglove connects to
 ``ws://127.0.0.1:PORT`` ("Open connection", Foxglove WebSocket) and decodes
-them with their ROS 2 schemas. WebSocket messages are not latched, so the URDF
-and the fixed frames are sent again whenever a client subscribes to them, and
-the current pose whenever a client subscribes to anything.
+them with their ROS 2 schemas. The foxglove-sdk server listens on a free port of
+127.0.0.1; the public port is a relay (:mod:`._relay`) that also accepts the old
+subprotocol name ``foxglove.websocket.v1`` of Foxglove Studio 1.x and Lichtblick.
+WebSocket messages are not latched, so the URDF and the fixed frames are sent
+again whenever a client subscribes to them, and the current pose whenever a
+client subscribes to anything.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ from ..errors import InvalidInputError
 from ..robot import forward_kinematics
 from ..robot._setup import resolve_rcm_frame
 from ._errors import ros_extra_missing
+from ._relay import SubprotocolRelay, bind_socket
 from ._write import _MSG_TYPES, TOPICS, RosEncoder, TrackedBatch, check_uint, msgdef
 
 __all__ = ["FoxgloveStream", "DEFAULT_PORT", "serve_app"]
@@ -51,7 +55,10 @@ class FoxgloveStream:
         Interface to bind (default ``127.0.0.1``: this machine only); a name that does
         not resolve raises :class:`~athenakin.errors.InvalidInputError`.
     port : int, keyword-only
-        Port (default 8765; 0: any free port, see :attr:`port`).
+        Port (default 8765; 0: any free port, see :attr:`port`). Clients offering the
+        WebSocket subprotocol ``foxglove.sdk.v1``, ``foxglove.sdk.v1.1`` or the older
+        ``foxglove.websocket.v1`` (Foxglove Studio 1.x, Lichtblick) connect; others get
+        HTTP 400. A port in use raises :class:`OSError` naming the address.
     name : str, keyword-only
         Server name shown by Foxglove.
 
@@ -70,6 +77,7 @@ class FoxgloveStream:
                  name: str = "athenakin") -> None:
         try:
             import foxglove
+            import websockets.asyncio.server  # noqa: F401
             from foxglove.websocket import Capability  # noqa: F401
         except ModuleNotFoundError as exc:  # pragma: no cover
             raise ros_extra_missing(exc) from None
@@ -105,18 +113,29 @@ class FoxgloveStream:
         self._stop = threading.Event()
         listener = _Listener(self)
         try:
-            self._server = foxglove.start_server(name=name, host=host, port=int(port),
+            sock = bind_socket(host, int(port))
+        except OSError as exc:
+            raise OSError(f"cannot serve Foxglove on {host}:{port} ({exc})") from None
+        try:   # the SDK server, on a free port of the loopback, behind the relay
+            self._server = foxglove.start_server(name=name, host="127.0.0.1", port=0,
                                                  context=self._context,
                                                  server_listener=listener)  # type: ignore[arg-type]
         except Exception as exc:   # the SDK raises its own RuntimeError: name the address
+            sock.close()
+            raise OSError(f"cannot serve Foxglove on 127.0.0.1 ({exc})") from None
+        try:
+            self._relay = SubprotocolRelay(sock, f"ws://127.0.0.1:{int(self._server.port)}")
+        except OSError as exc:
+            self._server.stop()
             raise OSError(f"cannot serve Foxglove on {host}:{port} ({exc})") from None
         self.host = host
-        self.port = int(self._server.port)
+        self.port = self._relay.port
 
     @property
     def url(self) -> str:
         """``ws://host:port``, what Foxglove opens."""
-        return f"ws://{self.host}:{self.port}"
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        return f"ws://{host}:{self.port}"
 
     # ------------------------------------------------------------------ publishing
     def _subscribed(self, channel_id: int) -> None:
@@ -259,10 +278,11 @@ class FoxgloveStream:
         self._flush_resend(time.time_ns())
 
     def stop(self) -> None:
-        """Stop the thread and the server."""
+        """Stop the thread, close every client and stop the server (idempotent)."""
         self._stop.set()
         if self._thread is not None:
             self._thread.join(timeout=5.0)
+        self._relay.stop()
         self._server.stop()
 
     def __enter__(self) -> FoxgloveStream:
