@@ -298,3 +298,37 @@ def test_design_switching(api):
                                    atol=1e-12, equal_nan=True)
     with pytest.raises(TypeError, match="design"):
         api.lean_fk(q, T0, "not a design")
+
+
+def test_threads_with_two_designs_each_get_their_own(api):
+    """Threads calling with different designs each get their own design's results.
+
+    The last-design shortcut (``_LAST``) is read once per call. CPython 3.11 switches
+    threads only at calls and backward jumps, so the window of the former two reads
+    was not hit here; the property is what this holds (a cache read across a call
+    would fail it)."""
+    import sys
+    import threading
+
+    q = np.array([-0.1, 0.1, 0.45])
+    ref = {id(d): ak.robot.forward_kinematics(q, T0, d).tip for d in (D, D2)}
+    bad: list[str] = []
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)         # switch threads as often as the interpreter can
+
+    def work(design):
+        for _ in range(400):
+            tip = api.lean_fk(q, T0, design).tip
+            if not np.allclose(tip, ref[id(design)], rtol=0, atol=1e-12, equal_nan=True):
+                bad.append("D2" if design is D2 else "D")
+                return
+
+    try:
+        threads = [threading.Thread(target=work, args=(d,)) for d in (D, D2, D, D2)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+    finally:
+        sys.setswitchinterval(old)
+    assert not bad, f"a thread computed with another thread's design: {bad}"

@@ -501,7 +501,9 @@ def lean_fk(q: object, T_b_e: object, design: Design | None, method: object = OP
     if not (type(T_b_e) is _ndarray and T_b_e.dtype is _F8 and T_b_e.shape == (4, 4)
             and T_b_e.flags.carray):    # _lean_frame, inline
         return None
-    hit = _LAST if _LAST[0] is design else _lean_entry(design)
+    hit = _LAST     # read once: another thread may set _LAST between two reads
+    if hit[0] is not design:
+        hit = _lean_entry(design)
     PT = hit[2] if tol is _FK_TOL_DEFAULT else np.concatenate((hit[1], tol, [ROTATION_TOL]))
     # the result's own arrays, filled by the kernel (no views to make afterwards)
     reason = _empty(16, _I8)
@@ -545,7 +547,8 @@ def lean_ik(T_b_e: object, u345: object, design: Design | None, errors: object =
     if not (type(T_b_e) is _ndarray and T_b_e.dtype is _F8 and T_b_e.shape == (4, 4)
             and T_b_e.flags.carray):    # _lean_frame, inline
         return None
-    P = (_LAST if _LAST[0] is design else _lean_entry(design))[1]
+    hit = _LAST     # read once (threads)
+    P = (hit if hit[0] is design else _lean_entry(design))[1]
     fbuf = _empty(_ik.ONE_F)
     Tbs = _empty((4, 4))
     mode = _empty((), _I64)
@@ -579,8 +582,9 @@ def lean_line(T_b_e: object, v: object, p: object, design: Design | None,
     Va = _lean_vector(v)
     if Va is None or not _lean_frame(T_b_e):
         return None
+    hit = _LAST     # read once (threads)
     return _line_one_plain(T_b_e, Va, pf, kind,
-                           (_LAST if _LAST[0] is design else _lean_entry(design))[1])
+                           (hit if hit[0] is design else _lean_entry(design))[1])
 
 
 def _fk_one(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.float64],
