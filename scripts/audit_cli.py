@@ -191,6 +191,8 @@ class Runner:
 
         build_parser()
         _dispatch.warmup(None)
+        with contextlib.suppress(Exception):
+            Runner._warm_outer_kernels()
         for mod in ("athenakin.analysis", "athenakin.analysis.figures", "athenakin.motion",
                     "athenakin.motion._plot", "athenakin.plot", "athenakin.sim",
                     "athenakin.calibration", "athenakin.synthesis", "athenakin.certified",
@@ -198,6 +200,29 @@ class Runner:
                     "pandas", "pyarrow", "dask", "tqdm"):
             with contextlib.suppress(Exception):
                 __import__(mod)
+
+    @staticmethod
+    def _warm_outer_kernels() -> None:
+        """Load the kernels of the tracker, collisions, dynamics, synthesis and the MCAP writer.
+
+        Without this, every forked child that tracks, plans or synthesizes loads them from
+        numba's cache again (a fraction of a second each, hundreds of runs).
+        """
+        import numpy as np
+
+        import athenakin as ak
+        from athenakin.synthesis import Task, evaluate_design, example_task_path
+
+        d = ak.Design.default()
+        T = ak.default_rcm_frame(d)
+        q = np.array([[-0.10, 0.10, 0.45], [-0.10, 0.10, 0.451], [-0.10, 0.10, 0.452]])
+        ak.motion.track(q, T, d)
+        ak.motion.track(q, T, d, bodies=ak.collision.Bodies.default(d))
+        ak.collision.clearance(q, T, d)
+        ak.dynamics.inverse_dynamics(q, np.zeros_like(q), np.zeros_like(q), T, d)
+        evaluate_design(d, Task.from_toml(example_task_path()), samples=64)
+        with tempfile.TemporaryDirectory() as tmp:
+            ak.ros.track_to_mcap(np.arange(3) * 1_000_000, q, Path(tmp) / "w.mcap", T, d)
 
     def _limits(self) -> None:
         # Ctrl-C as in a terminal: a harness started in the background (nohup, &) ignores

@@ -5,9 +5,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 python3 -m venv .venv
 . .venv/bin/activate
-# uv installs what pip's resolver would (same versions), in a quarter of the time
+# uv installs what pip's resolver would (same versions), in a quarter of the time; compiled to
+# bytecode at install as pip does (else a dependency's first import warns, e.g. toppra's escapes)
 python -m pip install --quiet "uv>=0.9"
-uv pip install --quiet -e ".[all]" --group test
+uv pip install --quiet --compile-bytecode -e ".[all]" --group test
 # headless Chromium (Debian package) for the interactive-view test; never a downloaded browser
 if ! command -v chromium >/dev/null; then
     if [ "$(id -u)" = 0 ]; then SUDO=""; elif command -v sudo >/dev/null; then SUDO="sudo"; else
