@@ -267,3 +267,31 @@ def test_mcap_write_static_stamp_is_named(tmp_path, stamp, exc):
     finally:
         out.discard()
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("kind", ["folder", "fifo"])
+def test_mcap_output_onto_a_folder_or_fifo_is_named(tmp_path, kind):
+    """An output path that is a folder or a FIFO: InvalidInputError naming the argument.
+
+    (The split API audit of CI, --part 1/3, met ``track_to_mcap(out="abc")`` where an
+    earlier call had made the folder ``abc``: a plain ValueError then.)
+    """
+    import os
+
+    ros = pytest.importorskip("athenakin.ros")
+    p = tmp_path / "abc"
+    if kind == "folder":
+        p.mkdir()
+    else:
+        if not hasattr(os, "mkfifo"):
+            pytest.skip("no FIFOs here")
+        os.mkfifo(p)
+    d = ak.Design.default()
+    T = ak.default_rcm_frame(d)
+    q = np.array([[-0.1, 0.1, 0.45]] * 2)
+    what = "a folder" if kind == "folder" else "a FIFO"
+    with pytest.raises(InvalidInputError, match=rf"^out: .*abc is {what}"):
+        ros.track_to_mcap(np.arange(2), q, p, T, d)
+    with pytest.raises(InvalidInputError, match=rf"^path: .*abc is {what}"):
+        ros.McapOutput(p, d, T)
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["abc"]     # nothing left behind

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._output import check_output_path
 from .._validation import check_array, check_instance, check_path
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, KinematicsError
@@ -277,7 +278,7 @@ def track_recording(recording: str | Path, out: str | Path, T_b_e: ArrayLike | N
         See :func:`read_joint_states`; nothing is written.
     """
     check_path(recording, "recording")
-    check_path(out, "out")
+    check_output_path(out, "out")
     if progress is not None and not callable(progress):
         raise TypeError(f"progress: expected a callable or None, got {type(progress).__name__}")
     design = resolve_design(design)
@@ -312,7 +313,7 @@ def track_to_mcap(stamps_ns: ArrayLike, q: ArrayLike, out: str | Path,
     -------
     TrackingSummary
     """
-    check_path(out, "out")
+    check_output_path(out, "out")
     design = resolve_design(design)
     T = resolve_rcm_frame(T_b_e, design)
     qa = check_array(q, "q", (3,), allow_nonfinite=True)

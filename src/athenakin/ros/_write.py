@@ -35,6 +35,7 @@ from typing import IO, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._output import check_output_path
 from .._validation import check_path
 from ..design import Design
 from ..errors import InvalidInputError
@@ -524,7 +525,7 @@ class McapOutput:
                  compression: str = "zstd", compression_level: int | None = None,
                  target: str | Path | None = None) -> None:
         compression, compression_level = check_compression(compression, compression_level)
-        self.path = check_path(path)
+        self.path = check_output_path(path)    # a folder, FIFO or device: named error
         if not isinstance(design, Design):
             raise TypeError(f"design: expected a Design, got {type(design).__name__}")
         if T_b_e is None:
@@ -533,9 +534,6 @@ class McapOutput:
         T_b_e = resolve_rcm_frame(T_b_e, design)
         if target is not None:
             target = check_path(target, "target")
-        if os.path.exists(self.path) and not stat.S_ISREG(os.stat(self.path).st_mode):
-            raise ValueError(f"path: {str(self.path)!r} is not a regular file (a device, FIFO "
-                             f"or socket)")
         self.encoder = RosEncoder(design, T_b_e)
         self.model = self.encoder.model
         self._rename = target is None
@@ -659,13 +657,22 @@ class McapOutput:
             if v.any():
                 for j in range(1, 4):
                     index[cids[j]] = (st[v], row_off[v] + int(cols[j]))
-            self._file.chunk(rec, index)
-            nv = int(v.sum())
-            self._seq["status"] += m
-            self.counts[TOPICS["status"]] += m
-            for k in keys[1:]:
-                self._seq[k] += nv
-                self.counts[TOPICS[k]] += nv
+            self._write_chunk(rec, index, keys, v, m)
+
+    def _write_chunk(self, data: Any, index: dict[int, Any], keys: tuple[str, ...],
+                     v: NDArray[np.bool_], m: int) -> None:
+        """Write one chunk of ``m`` readings (``v``: the valid ones) and count its messages.
+
+        ``/athena/status`` has a message for every reading, the other topics of ``keys``
+        one for every valid reading.
+        """
+        self._file.chunk(data, index)
+        nv = int(v.sum())
+        self._seq["status"] += m
+        self.counts[TOPICS["status"]] += m
+        for k in keys[1:]:
+            self._seq[k] += nv
+            self.counts[TOPICS[k]] += nv
 
     def _record_plan(self, keys: tuple[str, ...], cids: list[int]) -> _RecordPlan:
         """Templates and field tables of a reading's records (:func:`fill_records`)."""
@@ -727,13 +734,7 @@ class McapOutput:
             if v.any():
                 for j in range(1, len(keys)):
                     index[cids[j]] = (st[v], starts[v] + rs + plan.record_at[j])
-            self._file.chunk(self._buf[:size], index)
-            nv = int(v.sum())
-            self._seq["status"] += m
-            self.counts[TOPICS["status"]] += m
-            for k in keys[1:]:
-                self._seq[k] += nv
-                self.counts[TOPICS[k]] += nv
+            self._write_chunk(self._buf[:size], index, keys, v, m)
 
     def write_trajectory_message(self, stamp_ns: int, t_s: NDArray[np.float64],
                                  q: NDArray[np.float64], qd: NDArray[np.float64] | None,
