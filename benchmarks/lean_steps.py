@@ -31,13 +31,13 @@ from athenakin.fast import _api
 FK_STEPS = [("entry (a call with 10 arguments)", "if fields is not None or not (method"),
             ("option checks", "qa: NDArray"),
             ("q check", "if not (type(T_b_e) is _ndarray"),
-            ("T_b_e check", "hit = _LAST if"),
+            ("T_b_e check", "hit = _LAST     # read once"),
             ("design look-up", "# the result's own arrays"),
             ("6 result arrays", "if _fk_one_lean("),
             ("kernel (compiled entry point)", "obj = _object_new(FKSolution)")]
 IK_STEPS = [("entry (a call with 7 arguments)", "if fields is not None or not (errors"),
             ("option checks", "Ua: NDArray"),
-            ("u345 and T_b_e checks", "P = (_LAST if"),
+            ("u345 and T_b_e checks", "hit = _LAST     # read once"),
             ("design look-up", "fbuf = _empty(_ik.ONE_F)"),
             ("3 result buffers", "if _ik_paper_lean("),
             ("kernel (compiled entry point)", "obj = _object_new(PassiveJoints)")]
