@@ -1103,9 +1103,11 @@ def interrupt_cases(fx: Fixtures) -> list[Case]:
     """Ctrl-C (SIGINT) in the middle of long runs: one line, exit 130, no file left."""
     zigzag = ("x_m,y_m,z_m\n" + "".join(f"{0.25 + 0.003 * (i % 2)},{0.002 * (i % 2)},0\n"
                                           for i in range(600))).encode()
-    many_q = fx.qstream + b"".join(fx.qstream.splitlines(keepends=True)[-1:] * 100_000)
+    # each run lasts several times the 2 s before the SIGINT (workspace 61 and 100k readings
+    # took 2.9 and 3.6 s: a loaded CI machine could reach their last steps at 2 s)
+    many_q = fx.qstream + b"".join(fx.qstream.splitlines(keepends=True)[-1:] * 300_000)
     specs = [("plan", ["plan", "zig.csv", "-o", "t.csv"], {"zig.csv": zigzag}),
-             ("workspace", ["workspace", "--resolution", "61", "--out", "ws"], {}),
+             ("workspace", ["workspace", "--resolution", "121", "--out", "ws"], {}),
              ("animate", ["animate", "-o", "a.gif", "--frames", "300", "--no-progress"], {}),
              ("export", ["export", "-o", "m.xml", "--check", "200"], {}),
              ("track", ["track", "q.csv", "-o", "t.csv"], {"q.csv": many_q})]

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
 import warnings
 from typing import NoReturn
@@ -152,16 +153,27 @@ def _silence_stdout() -> None:
 
 
 def entry_point() -> None:
-    """Console-script entry point: :func:`main`, exiting quietly on a closed pipe."""
+    """Console-script entry point: :func:`main`, exiting quietly on a closed pipe.
+
+    A Ctrl-C once :func:`main` has returned (its outputs written or discarded) changes
+    nothing: SIGINT is ignored from there to the exit, so a late one never prints a
+    traceback.
+    """
+    code = 130                      # kept if a Ctrl-C lands before main's code is known
     try:
-        code = main()
-        sys.stdout.flush()
-    except BrokenPipeError:
-        _silence_stdout()
-        code = 0
-    except KeyboardInterrupt:   # Ctrl-C before the command ran (importing, parsing)
-        print("athenakin: interrupted (no output written)", file=sys.stderr)
-        code = 130
+        try:
+            code = main()
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+            sys.stdout.flush()
+        except BrokenPipeError:
+            _silence_stdout()
+            code = 0
+        except KeyboardInterrupt:   # Ctrl-C before the command ran (importing, parsing)
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+            print("athenakin: interrupted (no output written)", file=sys.stderr)
+            code = 130
+    except KeyboardInterrupt:       # in the few steps before SIGINT is ignored: main's code
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
     sys.exit(code)
 
 
