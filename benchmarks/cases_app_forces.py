@@ -12,22 +12,12 @@ import atexit
 import importlib.util
 
 import numpy as np
+from cases_app import Q_A, Q_B, _alternate  # the same two poses, alternated, as the app group
 
 from athenakin.app import app_setup, forward_view
 from athenakin.app._forces import forces_view
 
-Q_A = np.array([-0.100, 0.100, 0.450])
-Q_B = np.array([-0.105, 0.098, 0.452])
 TIP_FORCE_N = np.array([6.0, 0.0, -8.0])
-
-
-def _alternate(f):
-    state = {"k": 0}
-
-    def call():
-        state["k"] ^= 1
-        return f(Q_B if state["k"] else Q_A)
-    return call
 
 
 def cases(quick: bool) -> list[dict]:

@@ -10,6 +10,7 @@ Finite-difference tolerances: central differences with step ``h`` err by about
 
 import numpy as np
 import pytest
+from _dynamics_models import with_full_inertias
 from numpy.testing import assert_allclose
 
 import athenakin as ak
@@ -38,20 +39,7 @@ M = MassModel.reference(D)
 SLOTS = (0, 3, 5, 9, 14)
 
 
-def _masses_with_full_inertias(seed=11):
-    """The reference model plus general (non-axisymmetric) inertias and offset centres."""
-    rng = np.random.default_rng(seed)
-    data = M.to_mapping()
-    for entry in data.values():
-        R = np.linalg.qr(rng.normal(size=(3, 3)))[0]
-        ev = np.sort(rng.uniform(1e-4, 2e-3, 3))
-        ev[2] = min(ev[2], ev[0] + ev[1])
-        entry["inertia"] = (R @ np.diag(ev) @ R.T).tolist()
-        entry["com"] = (np.asarray(entry["com"]) + rng.normal(scale=0.01, size=3)).tolist()
-    return MassModel.from_mapping(data)
-
-
-MF = _masses_with_full_inertias()
+MF = with_full_inertias(M, seed=11)   # general inertias, offset centres
 
 
 @pytest.fixture(scope="module")

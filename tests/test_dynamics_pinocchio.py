@@ -16,6 +16,7 @@ athenakin's dynamics enters.
 import mujoco
 import numpy as np
 import pytest
+from _dynamics_models import with_full_inertias
 from numpy.testing import assert_allclose
 
 import athenakin as ak
@@ -29,20 +30,7 @@ D = ak.Design.default()
 T = ak.default_rcm_frame(D)
 
 
-def _masses():
-    """The reference model with general inertias and offset centres (seeded)."""
-    rng = np.random.default_rng(17)
-    data = MassModel.reference(D).to_mapping()
-    for entry in data.values():
-        R = np.linalg.qr(rng.normal(size=(3, 3)))[0]
-        ev = np.sort(rng.uniform(1e-4, 2e-3, 3))
-        ev[2] = min(ev[2], ev[0] + ev[1])
-        entry["inertia"] = (R @ np.diag(ev) @ R.T).tolist()
-        entry["com"] = (np.asarray(entry["com"]) + rng.normal(scale=0.01, size=3)).tolist()
-    return MassModel.from_mapping(data)
-
-
-M = _masses()
+M = with_full_inertias(MassModel.reference(D), seed=17)   # general inertias, offset centres
 
 
 def _quat_R(qw):
