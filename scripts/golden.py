@@ -1,8 +1,8 @@
 #!/usr/bin/env python
 """Write or check the golden outputs of tests/_golden.py (tests/data/golden/).
 
-    python scripts/golden.py --check   # compare this checkout with the stored values
-    python scripts/golden.py --write   # store this checkout's values (only at a known-good commit)
+python scripts/golden.py --check   # compare this checkout with the stored values
+python scripts/golden.py --write   # store this checkout's values (only at a known-good commit)
 """
 
 from __future__ import annotations

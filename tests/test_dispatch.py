@@ -7,7 +7,6 @@ Both paths are tested: ``backend="auto"`` with numba (compiled) and without it
 
 from __future__ import annotations
 
-import ast
 import pathlib
 import sys
 import threading
@@ -312,33 +311,6 @@ def test_tip_frame_is_rigid_and_nan_where_invalid(rc):
     assert np.isnan(bad.tip[0]).all() and np.isfinite(bad.tip[1][bad.valid[1]]).all()
     ref = ak.robot.forward_kinematics(rc.q[:50], rc.T_b_e[:50], D)
     np.testing.assert_allclose(sol.T_b_tip, ref.T_b_tip, rtol=0, atol=1e-12, equal_nan=True)
-
-
-# --- the layers import one way --------------------------------------------------------------
-def _imports(path):
-    tree = ast.parse(path.read_text(encoding="utf-8"))
-    pkg = ".".join(("athenakin",) + path.relative_to(SRC).parent.parts)
-    for node in ast.walk(tree):
-        if isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level:
-                up = pkg.split(".")[: len(pkg.split(".")) - node.level + 1]
-                base = ".".join(up + ([base] if base else []))
-            yield from [base] + [f"{base}.{a.name}" for a in node.names]
-        elif isinstance(node, ast.Import):
-            yield from (a.name for a in node.names)
-
-
-@pytest.mark.parametrize("layer, forbidden", [
-    ("robot", ("athenakin.fast", "athenakin._dispatch", "athenakin.analysis")),
-    ("parallel", ("athenakin.fast", "athenakin._dispatch", "athenakin.analysis")),
-    ("chain", ("athenakin.fast", "athenakin._dispatch", "athenakin.analysis")),
-    ("fast", ("athenakin._dispatch", "athenakin.analysis", "athenakin.plot", "athenakin.cli")),
-])
-def test_layers_import_downwards_only(layer, forbidden):
-    for path in sorted((SRC / layer).rglob("*.py")):
-        for name in _imports(path):
-            assert not name.startswith(forbidden), f"{path.name} imports {name}"
 
 
 # --- the audit of issue 13 (scripts/audit_api.py) -------------------------------------------

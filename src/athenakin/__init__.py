@@ -4,9 +4,25 @@ The conventions (frames, component orders, units) are those of
 ``docs/conventions.md``; equation numbers refer to the paper "Kinematics of
 ATHENA, a Robot for Pancreas Surgery".
 
-Subpackages: :mod:`athenakin.study` (Study parameters, dual quaternions),
-:mod:`athenakin.parallel` (the parallel module), :mod:`athenakin.chain` (the
-serial UPS chain), :mod:`athenakin.robot` (whole robot), :mod:`athenakin.testing`.
+Subpackages, by layer (bottom first; docs/architecture.md, enforced by tests/test_layers.py):
+
+* maths core: :mod:`athenakin.study` (Study parameters, dual quaternions, Eq. 1-4),
+  :mod:`athenakin.chain` (the serial UPS chain), :mod:`athenakin.parallel` (the parallel
+  module), :mod:`athenakin.testing` (``assert_*`` helpers);
+* numpy reference: :mod:`athenakin.robot` (whole-robot FK, IK, set-up),
+  :mod:`athenakin.symbolic` (the paper's derivation in sympy, the algebraic FK);
+* compiled kernels: :mod:`athenakin.fast` (numba kinematics kernels);
+* areas: :mod:`athenakin.analysis` (Jacobians, singularities, workspace),
+  :mod:`athenakin.calibration`, :mod:`athenakin.certified` (certified FK),
+  :mod:`athenakin.collision` (bodies, clearance), :mod:`athenakin.dynamics` (statics,
+  dynamics), :mod:`athenakin.motion` (paths, trajectories, tracking),
+  :mod:`athenakin.synthesis` (design studies);
+* systems: :mod:`athenakin.teleop` (teleoperation), :mod:`athenakin.sim` (MuJoCo/URDF),
+  :mod:`athenakin.ros` (ROS 2 recordings, MCAP, Foxglove);
+* views: :mod:`athenakin.plot` (figures), :mod:`athenakin.app` (the live app);
+* command line: :mod:`athenakin.cli`.
+
+Everything but the maths core and ``robot`` is imported on first use (``ak.dynamics``).
 """
 
 from . import _interrupt, chain, parallel, robot, study  # noqa: F401 (_interrupt: CLI hook)
@@ -35,6 +51,9 @@ from .robot import (
     default_rcm_frame,
     direction_from_angles,
 )
+
+# registers forward_kinematics(method="algebraic") with robot (which never imports symbolic)
+from .symbolic import _solver as _algebraic_solver  # noqa: F401
 
 __version__ = "0.1.0"
 
