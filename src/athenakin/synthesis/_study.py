@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import concurrent.futures
-
 import dataclasses
 import hashlib
 import json
@@ -523,10 +522,12 @@ def _run_local(name: str, chunks: Sequence[list[dict[str, Any]]], todo: list[int
 def _run_executor(executor: concurrent.futures.Executor, chunks: Sequence[list[dict[str, Any]]],
                   todo: list[int], size: int, args: tuple[Any, ...],
                   finished: Callable[[int, Any], None]) -> None:
-    """Any ``concurrent.futures.Executor`` (a process or thread pool, Ray's, submitit's, a
-    SLURM pool); results are collected (and written) as they complete. A chunk that raises
-    cancels the chunks not yet started and raises here (the executor's own retry policy, if
-    it has one, applies before that)."""
+    """Run the chunks on any ``concurrent.futures.Executor``, collected as they complete.
+
+    A process or thread pool, Ray's, submitit's or a SLURM pool. A chunk that raises
+    cancels the chunks not yet started and raises here (the executor's own retry policy,
+    if it has one, applies before that).
+    """
     futures = {executor.submit(_chunk_frame, chunks[i], i * size, *args): i for i in todo}
     try:
         for fut in concurrent.futures.as_completed(futures):
