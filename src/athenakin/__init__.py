@@ -22,7 +22,9 @@ Subpackages, by layer (bottom first; docs/architecture.md, enforced by tests/tes
 * views: :mod:`athenakin.plot` (figures), :mod:`athenakin.app` (the live app);
 * command line: :mod:`athenakin.cli`.
 
-Everything but the maths core and ``robot`` is imported on first use (``ak.dynamics``).
+:class:`athenakin.Robot` bundles a design, its RCM frame, bodies and masses; its methods
+are one-line calls of the functions above. Everything but the maths core and ``robot`` is
+imported on first use (``ak.dynamics``, ``ak.Robot``).
 """
 
 from . import _interrupt, chain, parallel, robot, study  # noqa: F401 (_interrupt: CLI hook)
@@ -62,7 +64,7 @@ _LAZY_SUBPACKAGES = ("analysis", "symbolic", "plot", "sim", "motion", "fast", "c
                      "calibration", "app", "collision", "ros", "dynamics", "synthesis",
                      "testing")
 #: Public functions of lazily imported subpackages, reachable as ``ak.<name>``.
-_LAZY_FUNCTIONS = {"certified_forward_kinematics": "certified"}
+_LAZY_FUNCTIONS = {"certified_forward_kinematics": "certified", "Robot": "_robot_model"}
 
 
 def __getattr__(name: str) -> object:
@@ -84,6 +86,7 @@ __all__ = [
     "robot",
     "study",
     "Design",
+    "Robot",
     "DegenerateChainError",
     "FKSolution",
     "InstrumentIK",
