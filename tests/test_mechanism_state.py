@@ -117,7 +117,7 @@ def test_urdf_link_frames_equal_mechanism_state(tmp_path):
     for q, k in configs:
         st = mechanism_state(q, T, d, slot=k)
         jv = mechanism_joint_values(q, T, d, slot=k)
-        assert_allclose([jv.values[n] for n in JOINTS], st.joints, rtol=0, atol=0)
+        assert_allclose([jv.values[n] for n in JOINTS], st.joints, rtol=0, atol=TOL)
         robot.update_cfg({n: jv.urdf[n] for n in robot.actuated_joint_names})
         for link in TREE_LINKS + ("tool_tip", "rcm_setup"):
             assert_allclose(robot.get_transform(link, "base"), st.frame(link), rtol=0,

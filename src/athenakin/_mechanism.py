@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -484,6 +484,18 @@ def _state(q: ArrayLike, T_b_e: ArrayLike, design: Design | None, slot: object,
     T = resolve_rcm_frame(T_b_e, design, single=False)
     sol = forward_kinematics(q, T, design, errors="flag",
                              fields=("valid", "reason", "p", "u", "T_b_s"))
+    return state_from_fk(sol, q, T, design, k, geometry, frames=frames)
+
+
+def state_from_fk(sol: Any, q: NDArray[np.float64], T: NDArray[np.float64], design: Design,
+                  k: int | None, geometry: BodyGeometry, *, frames: bool = True
+                  ) -> MechanismState:
+    """:func:`mechanism_state` from a forward-kinematics solution already at hand.
+
+    For a caller that holds ``forward_kinematics(q, T, design, errors="flag")`` (all 16
+    slots, e.g. from the compiled backend) and checked its arguments: ``q`` (..., 3) and
+    ``T`` (..., 4, 4) as validated arrays, ``k`` a slot or None for all 16.
+    """
     sel = slice(None) if k is None else k
     valid = np.asarray(sol.valid[..., sel])
     reason = np.asarray(sol.reason[..., sel])

@@ -257,7 +257,8 @@ def mechanism_joint_values(q: ArrayLike | None = None, T_b_e: ArrayLike | None =
     (0.45, True)
     """
     g = robot_geometry(q, T_b_e, design, slot=slot)
-    st = single_state(g.q, g.T_b_e, g.design, slot=slot)
+    st = g.state
+    assert st is not None
     values = _joint_dict(st)
     zero = urdf_joint_zero(g.T_b_e, g.design, q_zero=q_zero, zero_slot=zero_slot)
     rel = {}
