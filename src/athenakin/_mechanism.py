@@ -647,17 +647,8 @@ def mechanism_points(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = Non
 
     Parameters
     ----------
-    q : array-like, shape (..., 3)
-        Actuators ``(q1, q2, q3)``, m.
-    T_b_e : array-like, shape (..., 4, 4)
-        RCM frame (set-up); broadcasts with ``q``.
-    design : Design, optional
-        Defaults to :meth:`Design.default`.
-    slot : int or "all", keyword-only
-        Forward-kinematics slot 0..15 (docs/conventions.md), or ``"all"`` for an extra
-        trailing batch axis of 16 slots.
-    geometry : BodyGeometry, keyword-only, optional
-        Carriage length, spherical-mechanism radius and rail margin.
+    q, T_b_e, design, slot, geometry
+        As for :func:`mechanism_state`.
 
     Returns
     -------

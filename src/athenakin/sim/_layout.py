@@ -148,14 +148,11 @@ def single_state(q: ArrayLike | None, T_b_e: ArrayLike | None, design: Design | 
 
     Parameters
     ----------
-    q : array-like, shape (3,), optional
-        Actuators, m (default :data:`athenakin.robot.REFERENCE_Q`).
-    T_b_e : array-like, shape (4, 4), optional
-        RCM frame (default :func:`athenakin.default_rcm_frame`).
-    design : Design, optional
-    slot : int, keyword-only
-        Forward-kinematics slot 0..15.
+    q, T_b_e, design, slot
+        As for :func:`mechanism_joint_values` (``q`` of shape (3,), ``slot`` an int).
     geometry : BodyGeometry, keyword-only, optional
+        Carriage length, spherical-mechanism radius, rail margin (default
+        :class:`~athenakin._mechanism.BodyGeometry`).
 
     Returns
     -------

@@ -126,6 +126,16 @@ def _tree_body(parent: ET.Element, joint: str, origins: dict[str, NDArray[np.flo
     return el
 
 
+def _carriage(world: ET.Element, joint: str, origins: dict[str, NDArray[np.float64]],
+              half: float, rng: tuple[float, float]) -> ET.Element:
+    """A carriage on the rail (``half`` of its length along x), driven by ``joint``."""
+    el = _tree_body(world, joint, origins, damping=1.0, rng=rng)
+    ET.SubElement(el, "geom", {"name": TREE[joint].child, "type": "box",
+                               "size": _vec((half, 0.02, 0.015)), "pos": "0 0 -0.02",
+                               "rgba": _RGBA["rail"]})
+    return el
+
+
 def _capsule(body: ET.Element, name: str, a: ArrayLike, b: ArrayLike, rgba: str,
              radius: float = BAR_RADIUS) -> None:
     ET.SubElement(body, "geom", {"name": name, "type": "capsule", "fromto": _vec(
@@ -350,10 +360,7 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     _capsule(wb, "rail", rail[0] - [0, 0, 0.02], rail[1] - [0, 0, 0.02], "rail", radius=0.01)
 
     # --- carriage A: U-joint to the platform, bar to D --------------------------------
-    ca = _tree_body(wb, "q1", origins, damping=1.0, rng=(lo[0], hi[0]))
-    ET.SubElement(ca, "geom", {"name": "carriage_a", "type": "box",
-                               "size": _vec((half, 0.02, 0.015)), "pos": "0 0 -0.02",
-                               "rgba": _RGBA["rail"]})
+    ca = _carriage(wb, "q1", origins, half, (lo[0], hi[0]))
     ac = _tree_body(ca, "a_ujoint_x", origins)
     _sphere(ac, "a_cross", 0.012, "joint")
     la1 = _tree_body(ac, "a_ujoint_y", origins)
@@ -395,10 +402,7 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     _site(rod, "k2_rod_tip")
 
     # --- carriage B: bar to O_i, bar to D -------------------------------------------
-    cb = _tree_body(wb, "q2", origins, damping=1.0, rng=(lo[1], hi[1]))
-    ET.SubElement(cb, "geom", {"name": "carriage_b", "type": "box",
-                               "size": _vec((half, 0.02, 0.015)), "pos": "0 0 -0.02",
-                               "rgba": _RGBA["rail"]})
+    cb = _carriage(wb, "q2", origins, half, (lo[1], hi[1]))
     bc = _tree_body(cb, "b_ujoint_x", origins)
     _sphere(bc, "b_cross", 0.012, "joint")
     lb1 = _tree_body(bc, "b_ujoint_y", origins)
