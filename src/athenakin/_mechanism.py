@@ -1,29 +1,32 @@
-"""The one vocabulary of ATHENA's bodies, and where their end points are (batched).
+"""The one model of ATHENA's mechanism: its bodies, the exports' tree, and where it all is.
 
 Collision (``athenakin.collision``), dynamics (``athenakin.dynamics``), the exports
-(``athenakin.sim``), the app and the ROS frames all name the parts of the robot with
-the names of :data:`BODIES`; this table is the only place that defines them.
+(``athenakin.sim``), the app, the views and the ROS frames all name the parts of the
+robot with the names of :data:`BODIES` and the links of :data:`LINKS`; this module is
+the only place that defines them, and :func:`mechanism_state` the one place that places
+them (points, link frames, the tree's joint values; batched).
 
-Every body is a segment between two named points of the mechanism
-(docs/conventions.md, "The mechanism"):
+Every body (:data:`BODY_TABLE`) is a segment between two named points of the mechanism
+(docs/conventions.md, "The mechanism"), carried by one link of the exported tree (URDF
+link, MJCF body, ``/tf`` frame), made of one or more parts of the mass model:
 
-==================  =================  ==========================================
-body                from -> to         what it is
-==================  =================  ==========================================
-``rail``            rail_lo -> rail_hi  the base rail (x axis) over the strokes of A, B
-``carriage_a``      A_lo -> A_hi       the carriage of q1, centred on A, along x
-``carriage_b``      B_lo -> B_hi       the carriage of q2, centred on B, along x
-``link_a``          A -> O_i           bar of length ``l1``
-``link_b``          B -> O_i           bar of length ``l1``
-``link_ad``         A -> D             bar of length ``l3``
-``link_bd``         B -> D             bar of length ``l3``
-``carrier``         D -> C             the carrier of the q3 actuator (``C = D + (0, l2, l5)``)
-``actuator``        C -> O_i           the q3 actuator (variable length ``q3``)
-``platform``        O_i -> O_s         the offset ``l4`` along ``z_i``
-``instrument``      O_s -> tip         the instrument, length ``tool_length``
-``sphere_link_1``   S_5 -> S_4         spherical mechanism: from the fixed ``u5`` axis
-``sphere_link_2``   S_4 -> S_3         ... to the ``u4`` axis, to the instrument guide
-==================  =================  ==========================================
+==================  ==================  ============  ======================================
+body                from -> to          link          what it is
+==================  ==================  ============  ======================================
+``rail``            rail_lo -> rail_hi  ``base``      the base rail (x axis) over the strokes
+``carriage_a``      A_lo -> A_hi        carriage_a    the carriage of q1, centred on A
+``carriage_b``      B_lo -> B_hi        carriage_b    the carriage of q2, centred on B
+``link_a``          A -> O_i            link_a1       bar of length ``l1``
+``link_b``          B -> O_i            link_b1       bar of length ``l1``
+``link_ad``         A -> D              link_a3       bar of length ``l3``
+``link_bd``         B -> D              link_b3       bar of length ``l3``
+``carrier``         D -> C              carrier       carrier of q3 (``C = D + (0, l2, l5)``)
+``actuator``        C -> O_i            k2_arm        the q3 actuator (variable length ``q3``)
+``platform``        O_i -> O_s          platform      the offset ``l4`` along ``z_i``
+``instrument``      O_s -> tip          instrument    the instrument, length ``tool_length``
+``sphere_link_1``   S_5 -> S_4          sph_4         spherical mechanism: fixed ``u5`` axis
+``sphere_link_2``   S_4 -> S_3          sph_3         ... ``u4`` axis to the instrument guide
+==================  ==================  ============  ======================================
 
 The spherical joint at the RCM (the passive spherical five-bar of the paper's Fig. 3,
 whose dimensions the paper does not give) is modelled by its kinematic equivalent,
@@ -33,6 +36,9 @@ on the axis of ``u4`` in the direction the chain gives it (``R_3 Rz(u3) Rx(pi/2)
 and ``S_5`` on the fixed axis ``u5`` at ``+z_e``. The ``u4`` axis is perpendicular to the
 instrument, and so is ``u5`` at the home pose: a "side of ``O_s``" would flip ``S_4``
 and ``S_5`` with the rounding of a zero, so their sides are fixed by the chain instead.
+Where that ``S_3`` would lie off the instrument's segment (``O_s`` nearer the RCM than
+``sphere_radius``), it is the segment's nearest point: the guide holds the instrument,
+so ``instrument`` and ``sphere_link_2`` touch in every configuration.
 """
 
 from __future__ import annotations
@@ -45,6 +51,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._dispatch import forward_kinematics
+from ._mechanism_formulas import FORMULA_JOINTS, tree_joint_formula
 from ._validation import check_array, check_scalar
 from .design import Design, resolve_design
 from .errors import InvalidInputError
@@ -191,6 +198,7 @@ TREE: dict[str, TreeJoint] = {
 }
 #: Joints of the spanning tree in MJCF order: name -> (kind, parent link, child link).
 JOINTS: dict[str, tuple[str, str, str]] = {n: (j.kind, j.parent, j.child) for n, j in TREE.items()}
+assert tuple(JOINTS) == FORMULA_JOINTS      # the order of tree_joint_formula's values
 #: Links of :class:`MechanismState`'s ``frames``: the tree's moving links in the order of
 #: :data:`JOINTS`, then ``tool_tip`` (the instrument frame moved to the tip) and
 #: ``rcm_setup`` (the RCM frame ``T_b_e``).
@@ -222,46 +230,6 @@ def tree_origins(design: Design) -> dict[str, NDArray[np.float64]]:
         T[:3, 3] = [float(getattr(design, v)) if isinstance(v, str) else v for v in j.xyz]
         out[name] = T
     return out
-
-
-def tree_joint_formula(q1, q2, q3, p, u1, u2, u3, u4, u5, oy, oz,  # type: ignore[no-untyped-def]
-                       l1sq, l2, l3sq, l4, l5):
-    """Every joint of :data:`TREE` (model convention) from the forward kinematics.
-
-    The one formula of the tree's joint values: numpy evaluates it on arrays
-    (:func:`mechanism_state`, :func:`athenakin.ros._frames.joint_values`) and numba
-    compiles it for the ``/tf`` writer (:mod:`athenakin.fast._frame_kernels`), so it uses
-    only arithmetic and the ``np`` functions both support.
-
-    Parameters
-    ----------
-    q1, q2, q3, p, u1, u2, u3, u4, u5 : float or ndarray
-        Actuators (m), ``p`` (m) and ``u1..u5`` (rad) of the configuration.
-    oy, oz : float or ndarray
-        ``y`` and ``z`` of ``O_s`` in the base frame, m.
-    l1sq, l2, l3sq, l4, l5 : float
-        ``l1**2``, ``l2``, ``l3**2``, ``l4``, ``l5`` of the design.
-
-    Returns
-    -------
-    tuple of 18
-        The values in the order of :data:`JOINTS` (m for slides, rad for hinges):
-        ``R_b_i = Rx(theta)`` with ``z_i`` from M to ``O_i`` (``theta`` from ``O_s``),
-        the bars ``l1`` tilted by ``phi = atan2(-h, r1)``, the bars ``l3`` at
-        ``atan2(sqrt(l3^2 - h^2), -+h)``, the q3 actuator at ``gamma`` about ``x_b``.
-    """
-    h = 0.5 * (q1 - q2)
-    r1 = np.sqrt(l1sq - h * h)
-    s3 = np.sqrt(l3sq - h * h)
-    theta = np.arctan2(-oy, oz)
-    rad = np.hypot(oy, oz)
-    oi_y = oy - l4 * oy / rad
-    oi_z = oz - l4 * oz / rad
-    gamma = np.arctan2(-(oi_y - (s3 + l2)), oi_z - l5)
-    phi_a = np.arctan2(-h, r1)
-    ang_a3 = np.arctan2(s3, -h)
-    return (q1, theta, phi_a, -phi_a, u1, u2, p, u3, u4, u5, ang_a3, -ang_a3, gamma, q3, q2,
-            theta, -phi_a, np.arctan2(s3, h))
 
 
 def rail_extent(design: Design, geometry: BodyGeometry | None = None) -> tuple[float, float]:

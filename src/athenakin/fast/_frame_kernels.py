@@ -6,8 +6,8 @@ the same expressions in the same order, the sign flip to ``w >= 0``; the results
 for bit the numpy function's (tested), in one pass without its temporaries.
 
 :func:`joint_values_into` is :func:`athenakin.ros._frames.joint_values` reading by
-reading: both evaluate :func:`athenakin._mechanism.tree_joint_formula` (compiled here;
-libm's ``atan2`` where numpy may use its own SIMD one, so equal to the last bit or so,
+reading: both evaluate :func:`athenakin._mechanism_formulas.tree_joint_formula` (compiled
+here; libm's ``atan2`` where numpy may use its own SIMD one, so equal to the last bit or so,
 tested). :func:`urdf_frames_into` is
 :func:`athenakin.ros._frames.link_poses` followed by :func:`quaternion_xyzw` of the links
 asked for, reading by reading (the URDF's forward kinematics, parent before child),
@@ -22,7 +22,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .._mechanism import JOINTS, tree_joint_formula
+from .._mechanism_formulas import FORMULA_JOINTS, tree_joint_formula
 
 __all__ = ["quaternion_xyzw_into", "urdf_frames_into", "joint_values_into", "JOINT_CODES"]
 
@@ -173,8 +173,9 @@ def urdf_frames_into(values, parent, origin, kind, axis, column, wanted, out):
 
 
 #: What each joint of :data:`athenakin.sim.JOINTS` measures, as :func:`joint_values_into`'s
-#: codes: its index in the result of :func:`athenakin._mechanism.tree_joint_formula`.
-JOINT_CODES = {name: k for k, name in enumerate(JOINTS)}
+#: codes: its index in the result of
+#: :func:`athenakin._mechanism_formulas.tree_joint_formula`.
+JOINT_CODES = {name: k for k, name in enumerate(FORMULA_JOINTS)}
 
 #: The one formula of the tree's joint values, compiled (numpy evaluates the same source).
 _tree_joint_formula = njit(error_model="numpy", cache=True, nogil=True,
@@ -185,8 +186,8 @@ _tree_joint_formula = njit(error_model="numpy", cache=True, nogil=True,
 def joint_values_into(q, p, u, O_s, valid, lengths, zero, code, hinge, out):
     """:func:`athenakin.ros._frames.joint_values` of the valid readings, into ``out``.
 
-    :func:`athenakin._mechanism.tree_joint_formula` compiled, element by element (the
-    remainder of ``np.remainder``; libm's ``atan2`` and ``hypot``, which may differ from
+    :func:`athenakin._mechanism_formulas.tree_joint_formula` compiled, element by element
+    (the remainder of ``np.remainder``; libm's ``atan2`` and ``hypot``, which may differ from
     numpy's SIMD ones in the last bit: equal to 4e-15 rad, tested).
 
     Parameters
