@@ -47,12 +47,13 @@ from .._mechanism import (
     BodyGeometry,
     MechanismState,
     link_segments,
-    mechanism_state,
+    state_from_fk,
 )
 from .._validation import check_array
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, Reason, error_for_reason
 from ..plot._geometry import RobotGeometry, robot_geometry
+from ..robot import forward_kinematics as reference_forward_kinematics
 from ..robot._setup import resolve_rcm_frame
 
 __all__ = ["JOINTS", "ACTUATED", "LOOP_CLOSURES", "LoopClosure", "MechanismJointValues",
@@ -146,6 +147,10 @@ def single_state(q: ArrayLike | None, T_b_e: ArrayLike | None, design: Design | 
                  slot: int, geometry: BodyGeometry | None = None) -> MechanismState:
     """:func:`~athenakin._mechanism.mechanism_state` of one configuration that must assemble.
 
+    Solved with the numpy reference forward kinematics (as
+    :func:`~athenakin.plot.robot_geometry`), so that the exports are the same text
+    whichever backend runs.
+
     Parameters
     ----------
     q, T_b_e, design, slot
@@ -174,8 +179,12 @@ def single_state(q: ArrayLike | None, T_b_e: ArrayLike | None, design: Design | 
         raise InvalidInputError(f"q: expected shape (3,), got shape {q.shape}")
     if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 16:
         raise InvalidInputError(f"slot: expected an integer in 0..15, got {slot!r}")
-    st = mechanism_state(q, resolve_rcm_frame(T_b_e, design), design, slot=int(slot),
-                         geometry=geometry)
+    T = resolve_rcm_frame(T_b_e, design)
+    # the numpy reference FK, as robot_geometry: an export's numbers never depend on the
+    # backend
+    sol = reference_forward_kinematics(q, T, design, errors="flag")
+    st = state_from_fk(sol, q, T, design, int(slot),
+                       BodyGeometry() if geometry is None else geometry)
     if not st.valid:
         why = Reason(int(st.reason)).name
         raise error_for_reason(int(st.reason), f"slot {slot} of q = {q.tolist()} m ({why})")
