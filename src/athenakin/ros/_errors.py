@@ -18,5 +18,6 @@ class RecordingError(InvalidInputError):
 
 def ros_extra_missing(exc: ModuleNotFoundError) -> ModuleNotFoundError:
     """The error to raise when a package of the ``ros`` extra is not installed."""
-    return ModuleNotFoundError(f"athenakin.ros needs the package {exc.name!r}: install the "
-                               f"extra with  pip install 'athenakin[ros]'")
+    name = (exc.name or "").split(".")[0] or None
+    return ModuleNotFoundError(f"athenakin.ros needs the package {name!r}: install the "
+                               f"extra with  pip install 'athenakin[ros]'", name=name)
