@@ -40,10 +40,10 @@ from athenakin.ros import (  # noqa: E402
     RecordingError,
     RecordingWarning,
     ServeError,
+    _read,
     read_joint_states,
     track_recording,
 )
-from athenakin.ros import _read  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src"
@@ -217,7 +217,7 @@ def test_extras_table_matches_pyproject():
 
 
 def test_debug_is_accepted_after_the_subcommand(tmp_path, capsys):
-    with pytest.raises(Exception):      # --debug: the error propagates (no exit code)
+    with pytest.raises(OSError):        # --debug: the error propagates (no exit code)
         main(["track", str(tmp_path / "missing.csv"), "--debug"])
     code, _, err = _cli(["track", str(tmp_path / "missing.csv")], capsys)
     assert code == 1 and "--debug" not in err

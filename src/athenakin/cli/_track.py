@@ -209,35 +209,19 @@ def no_pose_message(path: Path, n: int, max_abs_q: float, design: Design, *,
             f"the workspace){hint}; check the units{scale}, --joints and --design")
 
 
-def first_pose(q: np.ndarray, T: np.ndarray, design: Design, slot: int | None,
-               opts: dict) -> int:  # type: ignore[type-arg]
+def first_pose(q: np.ndarray, T: np.ndarray, design: Design, opts: dict  # type: ignore[type-arg]
+               ) -> int:
     """Index of the first reading the tracker can start from (-1: none).
 
-    The library's stream (:func:`athenakin.ros.track_recording`) starts at the same
-    reading: the first that assembles (in ``slot``, when given); the readings before
-    it are ``LOST``.
+    The rule of the library's stream (:func:`athenakin.ros._track.first_tracker`, used
+    by :func:`athenakin.ros.track_recording`): the first reading that assembles, the
+    readings before it ``LOST``, whatever the output.
     """
-    from .._dispatch import forward_kinematics
-    from ..errors import InvalidInputError, KinematicsError
-    from ..motion import Tracker
+    from ..ros._track import first_tracker
 
     tracker_opts = {k: v for k, v in opts.items()
                     if k in ("slot", "jump_m", "jump_rad", "margins")}
-    finite = np.flatnonzero(np.isfinite(q).all(axis=1))
-    for a in range(0, len(finite), 4096):         # FK in blocks: usually the first row
-        rows = finite[a:a + 4096]
-        valid = forward_kinematics(q[rows], T, design, errors="flag").valid
-        ok = valid[:, slot] if slot is not None and 0 <= slot < valid.shape[1] \
-            else valid.any(axis=1)
-        for i in rows[ok].tolist():
-            try:
-                Tracker(T, design, q0=q[i], **tracker_opts)
-            except InvalidInputError:
-                raise
-            except KinematicsError:
-                continue
-            return int(i)
-    return -1
+    return first_tracker(q, T, design, tracker_opts)[0]
 
 
 def lost_before(log: TrackLog, q_head: np.ndarray) -> TrackLog:
@@ -307,7 +291,7 @@ def _track(args: argparse.Namespace, outs: Outputs, *, q: np.ndarray | None = No
     coll = collision_options(args, design)
     opts = dict(slot=args.slot, jump_m=args.jump_mm * 1e-3, jump_rad=math.radians(args.jump_deg),
                 margins=parse_margins(args.margin), **coll)
-    first = first_pose(q, T, design, args.slot, opts)
+    first = first_pose(q, T, design, opts)
     if first < 0:
         raise ValueError(no_pose_message(args.path, len(q), _max_abs(q), design,
                                          recording=not is_csv(args.path)))

@@ -24,7 +24,7 @@ from ._read import CHUNK, MAX_CHUNK, iter_joint_states
 from ._write import McapOutput, TrackedBatch
 
 __all__ = ["TrackingSummary", "track_recording", "track_to_mcap", "write_trajectory",
-           "write_track_log", "tracked_batch"]
+           "write_track_log", "tracked_batch", "first_tracker", "empty_topic_error"]
 
 _LOST = int(TrackFlag.LOST)
 #: Smallest ``chunk_size`` of :func:`track_recording`: each chunk costs a tracker call and
@@ -126,34 +126,75 @@ class _Stream:
         self.T, self.design, self.options = T_b_e, design, options
         self.tracker: Tracker | None = None
         self.first: tuple[int, int] = (-1, 0)
+        self.seen = 0
 
     def run(self, q: NDArray[np.float64]) -> dict[str, Any]:
-        rows: list[Any] = []
         i = 0
-        while self.tracker is None and i < len(q):
-            row = q[i].tolist()     # row by row: the tracker most often starts at the first
-            if all(math.isfinite(v) for v in row):
-                try:
-                    self.tracker = Tracker(self.T, self.design, q0=row, **self.options)
-                except InvalidInputError:
-                    raise                      # a slot that is not valid there, a bad option
-                except KinematicsError:
-                    pass                       # does not assemble: LOST, try the next one
-                else:
-                    pose = self.tracker.pose
-                    self.first = (pose.slot, pose.mode)
-                    rows.append(pose)
-                    i += 1
-                    break
-            rows.append(None)
+        if self.tracker is None:
+            i, self.tracker = first_tracker(q, self.T, self.design, self.options,
+                                            first=self.seen)
+            if self.tracker is None:
+                self.seen += len(q)
+                return _columns([None] * len(q), q)
+            pose = self.tracker.pose
+            self.first = (pose.slot, pose.mode)
+            rows: list[Any] = [None] * i + [pose]
             i += 1
-        if self.tracker is None or i == len(q):
-            return _columns(rows, q)
-        rest = track_batch(self.tracker, q[i:])
-        if i == 0:
-            return rest
-        out = _columns(rows, q[:i])
-        return {k: np.concatenate([v, rest[k]]) for k, v in out.items()}
+            self.seen += len(q)
+            if i == len(q):
+                return _columns(rows, q)
+            rest = track_batch(self.tracker, q[i:])
+            out = _columns(rows, q[:i])
+            return {k: np.concatenate([v, rest[k]]) for k, v in out.items()}
+        self.seen += len(q)
+        return track_batch(self.tracker, q)
+
+
+def first_tracker(q: NDArray[np.float64], T_b_e: NDArray[np.float64], design: Design,
+                  options: dict[str, Any], *, first: int = 0) -> tuple[int, Tracker | None]:
+    """The tracker started at the first reading of ``q`` that assembles.
+
+    One rule for every entry point (:func:`track_recording`, ``athenakin track`` with any
+    output): the stream starts at the first reading with a forward-kinematics solution;
+    the readings before it are ``LOST``. A ``slot`` option that is not a solution there is
+    an error naming that reading.
+
+    Parameters
+    ----------
+    q : ndarray, shape (N, 3)
+        Readings, m.
+    T_b_e, design
+    options : dict
+        Keyword options of :class:`~athenakin.motion.Tracker`.
+    first : int, keyword-only
+        Index of ``q[0]`` in the whole stream (for messages).
+
+    Returns
+    -------
+    (int, Tracker) or (-1, None)
+        The reading's index in ``q`` and the tracker, or none assembles.
+
+    Raises
+    ------
+    InvalidInputError
+        ``slot`` is not a solution at the first reading that assembles, or a bad option.
+    """
+    from ..robot import forward_kinematics
+
+    finite = np.flatnonzero(np.isfinite(q).all(axis=1))
+    for a in range(0, len(finite), 4096):     # a batch FK skips the readings without a pose
+        rows = finite[a:a + 4096]
+        with np.errstate(all="ignore"):
+            ok = forward_kinematics(q[rows], T_b_e, design, errors="flag").valid.any(axis=1)
+        for i in rows[ok].tolist():
+            try:
+                return i, Tracker(T_b_e, design, q0=q[i].tolist(), **options)
+            except InvalidInputError as exc:   # a slot that is not valid there, a bad option
+                raise InvalidInputError(str(exc).replace(
+                    "q0 = ", f"reading {first + i} (the first with a pose), q = ")) from None
+            except KinematicsError:
+                continue                        # does not assemble after all: LOST
+    return -1, None
 
 
 def _columns(rows: list[Any], q: NDArray[np.float64]) -> dict[str, Any]:
