@@ -258,6 +258,19 @@ def test_truncated_mcap_is_read_to_its_last_complete_chunk(tmp_path):
     np.testing.assert_array_equal(part.stamps_ns, full.stamps_ns[:len(part)])
 
 
+
+def test_truncated_mcap_in_the_cli_is_one_warning_line(tmp_path, capsys):
+    src = _mcap_chunked(tmp_path / "a.mcap", positions(q_stream(3000)), stamps(3000))
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(src.read_bytes()[:src.stat().st_size // 2])
+    for extra in ([], ["-o", tmp_path / "o.mcap"]):
+        code, out, err = _cli(["track", cut, *extra], capsys)
+        assert code == 0 and "tracked" in out
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("athenakin track: warning: ")
+        assert "truncated MCAP file" in lines[0] and "% of the file" in lines[0]
+
+
 def test_truncated_before_any_chunk_is_refused(tmp_path):
     src = write_mcap(tmp_path / "a.mcap", positions(q_stream(400)), stamps(400))
     cut = tmp_path / "cut.mcap"

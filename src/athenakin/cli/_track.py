@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import stat
 import sys
-from collections.abc import Callable
+import warnings
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -163,17 +165,19 @@ def _track_recording(args: argparse.Namespace, outs: Outputs) -> int:
     opts = dict(slot=args.slot, jump_m=args.jump_mm * 1e-3, jump_rad=math.radians(args.jump_deg),
                 margins=parse_margins(args.margin), **collision_options(args, design))
     if out is None or Path(out).suffix.lower() != ".mcap":
-        js = ros.read_joint_states(args.path, topic=args.topic, joints=args.joint_names,
-                                   scale=args.scale)
+        with _recording_warnings(ros.RecordingWarning):
+            js = ros.read_joint_states(args.path, topic=args.topic, joints=args.joint_names,
+                                       scale=args.scale)
         if len(js) == 0:
             raise empty_topic_error(args.path, args.topic)
         t = (js.stamps_ns - js.stamps_ns[0]) * 1e-9
         return _track(args, outs, q=js.q, t=t)
     progress = _progress() if sys.stderr.isatty() else None
-    s = ros.track_recording(args.path, out, T, design, topic=args.topic,
-                            joints=args.joint_names, scale=args.scale,
-                            max_events=args.max_events, target=outs.temp(out),
-                            progress=progress, **opts)
+    with _recording_warnings(ros.RecordingWarning):
+        s = ros.track_recording(args.path, out, T, design, topic=args.topic,
+                                joints=args.joint_names, scale=args.scale,
+                                max_events=args.max_events, target=outs.temp(out),
+                                progress=progress, **opts)
     if progress is not None:
         print(file=sys.stderr)
     if s.n_valid == 0:
@@ -256,6 +260,26 @@ def lost_before(log: TrackLog, q_head: np.ndarray) -> TrackLog:
             head = np.zeros(shape, v.dtype)
         cols[f.name] = np.concatenate([head, v])
     return dataclasses.replace(log, **cols)
+
+
+@contextlib.contextmanager
+def _recording_warnings(category: type[Warning]) -> Iterator[None]:
+    """Print a warning of ``category`` (a truncated recording) as one line on stderr.
+
+    Other warnings go on as they came.
+    """
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", category)
+        try:
+            yield
+        finally:
+            seen = list(caught)
+    for w in seen:
+        if issubclass(w.category, category):
+            print(f"athenakin track: warning: {' '.join(str(w.message).split())}",
+                  file=sys.stderr)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
 def _progress() -> Callable[[int], None]:

@@ -364,10 +364,11 @@ def _mcap_messages(path: Path, topic: str, *, in_bag: bool = False
                                      f"{stream.size} ({why})")
             warnings.warn(RecordingWarning(
                 f"{path}: truncated MCAP file (a recorder stopped mid-run?): read "
-                f"{stream.read} messages of {topic!r} up to the last complete chunk, "
-                f"ending at byte {good}; the last {stream.size - good} of {stream.size} "
-                f"bytes ({100.0 * (stream.size - good) / max(stream.size, 1):.1f} %) could "
-                f"not be read ({why})"), stacklevel=4)
+                f"{stream.read} messages of {topic!r}, up to the last complete chunk "
+                f"(byte {good} of {stream.size}); the rest, {stream.size - good} bytes "
+                f"({100.0 * (stream.size - good) / max(stream.size, 1):.1f} % of the file), "
+                f"could not be read ({why}); what the recorder never wrote is not known"),
+                stacklevel=2)
         if not wanted and summary is None and not in_bag:
             present = {t: stream.schemas.get(sid, "?") for t, sid, _ in
                        stream.channels.values()}
@@ -532,8 +533,13 @@ class _McapStream:
 
 
 def _why(exc: BaseException) -> str:
+    """Why the records stopped: a cut record, or what the mcap library says."""
+    from mcap.exceptions import EndOfFile
+
+    if isinstance(exc, (EndOfFile, EOFError, struct.error)):
+        return "the file ends inside a record"
     text = " ".join(str(exc).split())
-    return f"{type(exc).__name__}: {text}" if text else f"{type(exc).__name__}: the file ends"
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
 _HEAD = struct.Struct("<BQ")
