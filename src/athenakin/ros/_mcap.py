@@ -54,6 +54,8 @@ def _crc32_function() -> Callable[..., int]:
 
 
 _crc32 = _crc32_function()
+#: CRC-32 of MCAP (public within the package: the reader checks chunks with it).
+crc32 = _crc32
 
 
 def _s(text: str) -> bytes:
