@@ -52,7 +52,6 @@ from .._mechanism import (
 from .._validation import check_array
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, Reason, error_for_reason
-from ..plot._geometry import RobotGeometry, robot_geometry
 from ..robot import forward_kinematics as reference_forward_kinematics
 from ..robot._setup import resolve_rcm_frame
 
@@ -129,26 +128,35 @@ class MechanismJointValues:
     zero : dict of str -> float
         The URDF's joint zero in the model's convention: the joint values of the
         assembled zero configuration (``q_zero``, ``zero_slot``).
-    geometry : RobotGeometry
-        The configuration the values realise (points and frames, base frame).
     state : MechanismState
-        The same configuration as :func:`athenakin._mechanism.mechanism_state` gives it
-        (every link's frame; ``values`` are its joint values).
+        The configuration the values realise, as :func:`athenakin._mechanism.mechanism_state`
+        gives it: every point (``state["tip"]``) and link frame (``state.frame("instrument")``)
+        in the base frame; ``values`` are its joint values.
+    q : ndarray, shape (3,)
+        The actuators, m.
+    T_b_e : ndarray, shape (4, 4)
+        The RCM frame.
+    design : Design
+    slot : int
+        The forward-kinematics slot (0..15).
     """
 
     values: dict[str, float]
     urdf: dict[str, float]
     zero: dict[str, float]
-    geometry: RobotGeometry
     state: MechanismState
+    q: NDArray[np.float64]
+    T_b_e: NDArray[np.float64]
+    design: Design
+    slot: int
 
 
 def single_state(q: ArrayLike | None, T_b_e: ArrayLike | None, design: Design | None, *,
                  slot: int, geometry: BodyGeometry | None = None) -> MechanismState:
     """:func:`~athenakin._mechanism.mechanism_state` of one configuration that must assemble.
 
-    Solved with the numpy reference forward kinematics (as
-    :func:`~athenakin.plot.robot_geometry`), so that the exports are the same text
+    Solved with the numpy reference forward kinematics (as the views
+    draw it), so that the exports are the same text
     whichever backend runs.
 
     Parameters
@@ -248,7 +256,8 @@ def mechanism_joint_values(q: ArrayLike | None = None, T_b_e: ArrayLike | None =
     -------
     MechanismJointValues
         ``.values`` (model / MJCF convention), ``.urdf`` (relative to the URDF
-        zero, for ROS), ``.zero``, ``.geometry`` and ``.state``.
+        zero, for ROS), ``.zero``, ``.state`` and the configuration's ``q``, ``T_b_e``,
+        ``design``, ``slot``.
 
     Raises
     ------
@@ -262,18 +271,22 @@ def mechanism_joint_values(q: ArrayLike | None = None, T_b_e: ArrayLike | None =
     >>> round(jv.values["q3"], 3), abs(jv.urdf["q3"]) < 1e-15   # URDF zero = reference
     (0.45, True)
     """
-    g = robot_geometry(q, T_b_e, design, slot=slot)
-    st = g.state
-    assert st is not None
+    from ..robot import REFERENCE_Q
+
+    design = resolve_design(design)
+    T = resolve_rcm_frame(T_b_e, design)
+    q = check_array(REFERENCE_Q if q is None else q, "q", (3,))
+    st = single_state(q, T, design, slot=slot)
     values = _joint_dict(st)
-    zero = urdf_joint_zero(g.T_b_e, g.design, q_zero=q_zero, zero_slot=zero_slot)
+    zero = urdf_joint_zero(T, design, q_zero=q_zero, zero_slot=zero_slot)
     rel = {}
     for name, v in values.items():
         x = v - zero[name]
         if JOINTS[name][0] == "hinge":
             x = float(-np.remainder(-x + np.pi, 2 * np.pi) + np.pi)
         rel[name] = x
-    return MechanismJointValues(values=values, urdf=rel, zero=zero, geometry=g, state=st)
+    return MechanismJointValues(values=values, urdf=rel, zero=zero, state=st, q=q, T_b_e=T,
+                                design=design, slot=int(slot))
 
 
 #: Length of the drawn rod of the q3 actuator where the stroke of q3 has no positive

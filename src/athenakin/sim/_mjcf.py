@@ -31,6 +31,7 @@ from ._layout import (
     COLLISION_BODY,
     JOINTS,
     LOOP_CLOSURES,
+    MechanismJointValues,
     actuator_drawn_lengths,
     collision_segments,
     mechanism_joint_values,
@@ -327,15 +328,15 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     ``bodies.geometry.carriage_length`` long.
     """
     jv = mechanism_joint_values(q, T_b_e, design, slot=slot)
-    values, g = jv.values, jv.geometry
-    d = g.design
-    T = g.T_b_e
+    values = jv.values
+    d = jv.design
+    T = jv.T_b_e
     lo, hi = d.stroke_min, d.stroke_max
     if bodies is not None and not isinstance(bodies, Bodies):
         bodies = resolve_bodies(bodies, d)          # raises the named TypeError
     geo = bodies.geometry if bodies is not None else BodyGeometry()
     half = 0.5 * geo.carriage_length
-    st = jv.state if bodies is None else single_state(g.q, T, d, slot=g.slot, geometry=geo)
+    st = jv.state if bodies is None else single_state(jv.q, T, d, slot=jv.slot, geometry=geo)
 
     check_text(model_name, "model_name")
     root = ET.Element("mujoco", {"model": model_name})
@@ -459,8 +460,8 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
         _apply_masses(root, masses, jv, gravity=gravity)
     ET.indent(root)
     header = (f"<!-- ATHENA closed-loop mechanism exported by athenakin: design "
-              f"l1..l5 = {d.lengths.tolist()} m, keyframe 'home' = q {g.q.tolist()} m in "
-              f"FK slot {g.slot}. Loop closures are equality constraints. -->\n")
+              f"l1..l5 = {d.lengths.tolist()} m, keyframe 'home' = q {jv.q.tolist()} m in "
+              f"FK slot {jv.slot}. Loop closures are equality constraints. -->\n")
     return header + ET.tostring(root, encoding="unicode") + "\n"
 
 
@@ -495,7 +496,8 @@ def _inertial_of(masses: object, names: list[str]) -> tuple[float, NDArray[np.fl
     return total, com, out
 
 
-def _apply_masses(root: ET.Element, masses: object, jv: object, *, gravity: bool) -> None:
+def _apply_masses(root: ET.Element, masses: object, jv: MechanismJointValues, *,
+                  gravity: bool) -> None:
     """Give every body of the tree the inertia of the mass model; force actuators.
 
     Each MJCF body gets an ``<inertial>`` (``fullinertia`` about its centre of mass, in
@@ -542,8 +544,7 @@ def _apply_masses(root: ET.Element, masses: object, jv: object, *, gravity: bool
         act.remove(el)
     for name in ACTUATED:
         ET.SubElement(act, "motor", {"name": name, "joint": name, "gear": "1"})
-    g = jv.geometry  # type: ignore[attr-defined]
-    f = actuator_forces(g.q, g.T_b_e, g.design, masses=masses, slot=g.slot,
+    f = actuator_forces(jv.q, jv.T_b_e, jv.design, masses=masses, slot=jv.slot,
                         gravity=(0.0, 0.0, -9.81) if gravity else (0.0, 0.0, 0.0))
     key = root.find("keyframe/key")
     assert key is not None
