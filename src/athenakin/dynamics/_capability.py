@@ -29,7 +29,8 @@ from ..errors import InvalidInputError
 from ._api import STANDARD_GRAVITY, statics
 from ._model import MassModel
 
-__all__ = ["ForceCapability", "force_capability", "max_tip_force"]
+__all__ = ["ForceCapability", "force_capability", "max_tip_force", "jacobian_invertible",
+           "SINGULAR_DET", "MAX_FORCE_LIMIT"]
 
 Arr = NDArray[np.float64]
 
@@ -71,6 +72,25 @@ class ForceCapability:
 MAX_FORCE_LIMIT = 1e9
 
 
+#: Relative determinant below which ``J = d tip / d q`` counts as singular to rounding:
+#: ``|det J| <= SINGULAR_DET max|J_ij|^3`` (``q1 = q2`` makes two columns of ``J`` equal).
+SINGULAR_DET = 1e-12
+
+
+def jacobian_invertible(J: Arr) -> NDArray[np.bool_]:
+    """Whether each tip Jacobian ``J`` (shape (..., 3, 3)) is invertible beyond rounding.
+
+    The one test of the force functions: where it fails, the polytope's vertices
+    (:func:`force_capability`) are NaN and :func:`force_metrics` leaves the
+    configuration out of the peak force. Non-finite ``J`` is not invertible.
+    """
+    finite = np.all(np.isfinite(J), axis=(-2, -1))
+    Jf = np.where(finite[..., None, None], J, 0.0)
+    det = np.linalg.det(Jf)
+    scale = np.abs(Jf).max(axis=(-2, -1), initial=0.0) ** 3
+    return finite & (np.abs(det) > SINGULAR_DET * np.maximum(scale, 1e-300))
+
+
 def _limit(x: ArrayLike, name: str) -> Arr:
     """One force limit: a real scalar or shape (3,), finite, |x| <= MAX_FORCE_LIMIT."""
     if isinstance(x, bool):
@@ -103,7 +123,7 @@ def force_capability(q: ArrayLike, T_b_e: ArrayLike | None = None,
                      design: Design | None = None, *, f_max: ArrayLike,
                      f_min: ArrayLike | None = None, masses: MassModel | None = None,
                      gravity: ArrayLike = STANDARD_GRAVITY, slot: int = 0,
-                     errors: Literal["raise", "flag"] = "raise") -> ForceCapability:
+                     errors: Literal["auto", "raise", "flag"] = "auto") -> ForceCapability:
     """Tip forces the robot can resist at rest within actuator force limits.
 
     Parameters
@@ -142,8 +162,7 @@ def force_capability(q: ArrayLike, T_b_e: ArrayLike | None = None,
     corners = np.array([[hi[i] if (c >> i) & 1 else lo[i] for i in range(3)]
                         for c in range(8)])             # (8, 3)
     rhs = tg[..., None, :] - corners                    # (..., 8, 3)
-    det = np.linalg.det(np.where(np.isfinite(J), J, 0.0))
-    ok = np.abs(det) > 1e-12 * np.maximum(np.abs(J).max(axis=(-2, -1), initial=0.0) ** 3, 1e-300)
+    ok = jacobian_invertible(J)
     Jt_safe = np.where(ok[..., None, None], Jt, np.eye(3))
     verts = np.linalg.solve(Jt_safe[..., None, :, :], rhs[..., None])[..., 0]
     verts = np.where(ok[..., None, None], verts, np.nan)
@@ -157,7 +176,7 @@ def max_tip_force(q: ArrayLike, direction: ArrayLike, T_b_e: ArrayLike | None = 
                   design: Design | None = None, *, f_max: ArrayLike,
                   f_min: ArrayLike | None = None, masses: MassModel | None = None,
                   gravity: ArrayLike = STANDARD_GRAVITY, slot: int = 0,
-                  errors: Literal["raise", "flag"] = "raise") -> Arr:
+                  errors: Literal["auto", "raise", "flag"] = "auto") -> Arr:
     """Largest tip force (N) the robot resists along ``direction`` within the limits.
 
     Parameters
@@ -176,10 +195,13 @@ def max_tip_force(q: ArrayLike, direction: ArrayLike, T_b_e: ArrayLike | None = 
         weight (``f = 0`` outside ``P``).
     """
     u = check_array(direction, "direction", (3,))
-    n = np.linalg.norm(u, axis=-1, keepdims=True)
-    if np.any(n == 0):
+    # scale by the largest component first: the squares of a tiny direction (1e-160)
+    # underflow, those of a huge one overflow
+    big = np.max(np.abs(u), axis=-1, keepdims=True)
+    if np.any(big == 0):
         raise InvalidInputError("direction: expected a nonzero vector")
-    u = u / n
+    u = u / big
+    u = u / np.linalg.norm(u, axis=-1, keepdims=True)
     cap = force_capability(q, T_b_e, design, f_max=f_max, f_min=f_min, masses=masses,
                            gravity=gravity, slot=slot, errors=errors)
     # direction against the batch of the other arguments (q, T_b_e, gravity)
