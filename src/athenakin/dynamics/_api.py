@@ -46,6 +46,11 @@ CHUNK = 4096
 MAX_BATCH = 2_000_000
 
 
+#: Message of a singular mass matrix (forward dynamics, simulation).
+MASSLESS = ("masses: the mass matrix is singular (a direction of q moves no mass); give the "
+            "carriages or the links a mass")
+
+
 def _check_slot(slot: object) -> int:
     if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 16:
         raise InvalidInputError(f"slot: expected an integer in 0..15, got {slot!r}")
@@ -431,9 +436,7 @@ def forward_dynamics(q: ArrayLike, qd: ArrayLike, forces: ArrayLike,
     try:
         qdd = np.linalg.solve(M_safe, rhs[..., None])[..., 0]
     except np.linalg.LinAlgError:
-        raise SingularConfigurationError(
-            "masses: the mass matrix is singular (a direction of q moves no mass); give the "
-            "carriages or the links a mass") from None
+        raise SingularConfigurationError(MASSLESS) from None
     return _finish(np.asarray(qdd, dtype=np.float64), prep, (3,))
 
 
