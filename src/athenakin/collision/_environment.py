@@ -62,6 +62,19 @@ def _length(x: object, name: str, *, positive: bool = False) -> float:
     return v
 
 
+def _unit(x: ArrayLike, name: str) -> tuple[float, float, float]:
+    """A non-zero finite vector of 3 as a unit vector (kept as is when already unit)."""
+    n = np.array(check_array(x, name, (3,)), dtype=float).reshape(-1)
+    if n.shape != (3,):
+        raise InvalidInputError(f"{name}: expected 3 numbers, got shape {n.shape}")
+    norm = float(np.linalg.norm(n))
+    if not norm > 1e-12 or not math.isfinite(norm):
+        raise InvalidInputError(f"{name}: expected a non-zero vector, got {n.tolist()}")
+    if abs(norm - 1.0) > 1e-15:
+        n = n / norm
+    return (float(n[0]), float(n[1]), float(n[2]))
+
+
 def _allow(allow: object, name: str) -> tuple[str, ...]:
     if isinstance(allow, str):
         allow = (allow,)
@@ -128,6 +141,39 @@ class Obstacle:
         default_factory=lambda: np.zeros((0, 3)))
     faces: NDArray[np.int64] = dataclasses.field(
         default_factory=lambda: np.zeros((0, 3), dtype=np.int64))
+
+    def __post_init__(self) -> None:
+        # the checks of the Environment builders, so that an Obstacle made directly is as
+        # safe as one they make (a NaN or negative radius, a bad kind, an empty mesh)
+        if not isinstance(self.kind, str) or self.kind not in OBSTACLE_KINDS:
+            raise InvalidInputError(f"kind: expected one of {OBSTACLE_KINDS}, got "
+                                    f"{self.kind!r:.80}")
+        if not isinstance(self.name, str):
+            raise TypeError(f"name: expected a str, got {type(self.name).__name__}")
+        if not self.name.strip():
+            raise InvalidInputError("name: expected a non-empty obstacle name")
+        put = object.__setattr__
+        put(self, "allow", _allow(self.allow, "allow"))
+        for f in ("point", "center", "a", "b"):
+            put(self, f, _vec3(getattr(self, f), f))
+        put(self, "normal", _unit(self.normal, "normal"))
+        put(self, "radius", _length(self.radius, "radius"))
+        T = _pose(self.T_b_o, "T_b_o")
+        put(self, "T_b_o", T)
+        h = _vec3(self.half_extents, "half_extents")
+        if self.kind == "box" and min(h) <= 0:
+            raise InvalidInputError(f"half_extents: expected positive half sizes (m), got "
+                                    f"{list(h)}")
+        put(self, "half_extents", h)
+        if not isinstance(self.path, str):
+            raise TypeError(f"path: expected a str, got {type(self.path).__name__}")
+        put(self, "scale", _length(self.scale, "scale", positive=True))
+        if not isinstance(self.convex, bool):
+            raise TypeError(f"convex: expected a bool, got {type(self.convex).__name__}")
+        if self.kind == "mesh":
+            V, F = _check_triangles(self.vertices, self.faces, f"mesh {self.name!r}")
+            put(self, "vertices", V)
+            put(self, "faces", F)
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Obstacle):
@@ -204,19 +250,42 @@ def _load_mesh(path: Path, scale: float, name: str) -> tuple[NDArray[np.float64]
     except Exception as exc:  # trimesh raises many kinds on a bad file
         raise InvalidInputError(f"{name}: mesh file {str(path)!r} does not load "
                                 f"({type(exc).__name__}: {exc})") from None
-    V = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=np.float64)
-    F = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64)
-    if V.ndim != 2 or V.shape[1:] != (3,) or F.ndim != 2 or F.shape[1:] != (3,) or len(F) == 0:
-        raise InvalidInputError(f"{name}: mesh file {str(path)!r} holds no triangles")
-    if len(F) > MAX_MESH_FACES:
-        raise InvalidInputError(f"{name}: mesh file {str(path)!r} has {len(F)} triangles; "
-                                f"expected at most {MAX_MESH_FACES}")
-    if not np.all(np.isfinite(V)):
-        raise InvalidInputError(f"{name}: mesh file {str(path)!r} has non-finite vertices")
-    if F.min() < 0 or F.max() >= len(V):
-        raise InvalidInputError(f"{name}: mesh file {str(path)!r} has faces that index "
-                                f"missing vertices")
+    V, F = _check_triangles(getattr(mesh, "vertices", np.zeros((0, 3))),
+                            getattr(mesh, "faces", np.zeros((0, 3))),
+                            f"mesh file {str(path)!r}", name=name)
     return V * scale, F
+
+
+def _check_triangles(vertices: object, faces: object, what: str, *, name: str | None = None
+                     ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Vertices (n, 3), finite, and faces (m, 3), 0 < m <= MAX_MESH_FACES, indexing them.
+
+    ``name`` (the parameter) starts the messages when given, else ``vertices`` /
+    ``faces``; ``what`` says which mesh.
+    """
+    vn, fn = (name, name) if name else ("vertices", "faces")
+    try:
+        V = np.asarray(vertices, dtype=np.float64)
+        F = np.asarray(faces)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{vn}: {what}: expected numeric arrays of vertices (n, 3) and "
+                                f"faces (m, 3)") from None
+    if F.dtype.kind not in "iu" and F.size:
+        if F.dtype.kind != "f" or not np.all(np.isfinite(F)) or np.any(F != np.round(F)):
+            raise InvalidInputError(f"{fn}: {what}: expected integer vertex indices")
+    if V.ndim != 2 or V.shape[1:] != (3,) or F.ndim != 2 or F.shape[1:] != (3,) or len(F) == 0:
+        raise InvalidInputError(f"{fn}: {what} holds no triangles (expected vertices of shape "
+                                f"(n, 3) and faces of shape (m, 3), m > 0; got {V.shape} and "
+                                f"{F.shape})")
+    if len(F) > MAX_MESH_FACES:
+        raise InvalidInputError(f"{fn}: {what} has {len(F)} triangles; expected at most "
+                                f"{MAX_MESH_FACES}")
+    if not np.all(np.isfinite(V)):
+        raise InvalidInputError(f"{vn}: {what} has non-finite vertices")
+    F = F.astype(np.int64)
+    if F.min() < 0 or F.max() >= len(V):
+        raise InvalidInputError(f"{fn}: {what} has faces that index missing vertices")
+    return V, F
 
 
 @dataclasses.dataclass(frozen=True)
@@ -310,8 +379,7 @@ class Environment:
         if not norm > 1e-12 or not math.isfinite(norm):
             raise InvalidInputError(f"normal: expected a non-zero vector, got {n.tolist()}")
         n = n / norm
-        return self._add("halfspace", name, allow, point=p,
-                         normal=(float(n[0]), float(n[1]), float(n[2])))
+        return self._add("halfspace", name, allow, point=p, normal=_unit(n, "normal"))
 
     def sphere(self, center: ArrayLike, radius: float, *, name: str | None = None,
                allow: Iterable[str] = ()) -> Environment:

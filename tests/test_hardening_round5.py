@@ -1,0 +1,224 @@
+"""Regression tests of issue 30 (fourth round of fuzzing and audit): collision, dynamics, motion.
+
+Each test names the finding it holds (section of the issue): bounded memory of the
+dynamics batches, force metrics at singular configurations, obstacles that validate,
+a bounded simulation, witnesses on the capsules' surfaces, a tiny force direction,
+named errors for malformed arguments, and the inside of closed meshes.
+"""
+
+from __future__ import annotations
+
+import tracemalloc
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+import athenakin as ak
+from athenakin import collision as C
+from athenakin import dynamics as D
+from athenakin.errors import InvalidInputError, SingularConfigurationError
+
+DES = ak.Design.default()
+T = ak.default_rcm_frame(DES)
+Q = np.array([-0.10, 0.10, 0.45])
+
+
+# --- 1.1 dynamics memory -----------------------------------------------------------------
+@pytest.mark.parametrize("call", [
+    lambda q: D.statics(q, T, DES),
+    lambda q: D.mass_matrix(q, T, DES),
+    lambda q: D.inverse_dynamics(q, 0 * q, 0 * q, T, DES, backend="numpy"),
+    lambda q: D.forward_dynamics(q, 0 * q, 0 * q, T, DES),
+    lambda q: D.mechanical_energy(q, 0 * q, T, DES),
+], ids=["statics", "mass_matrix", "inverse_dynamics", "forward_dynamics", "energy"])
+def test_dynamics_batches_work_in_bounded_chunks(monkeypatch, call):
+    """1.1: the temporaries are those of one chunk, whatever the batch.
+
+    With chunks of 256 states a batch of 8 chunks peaks below one chunk's jets
+    (about 35 KiB a state) plus 1 KiB a state of inputs and results; the unchunked
+    code took 33 KiB a state of the whole batch (66 MiB here, 7 GiB for 200,000).
+    Scaled to the real CHUNK (4096) and 200,000 states this bound is under 1 GiB.
+    """
+    from athenakin.dynamics import _api
+
+    chunk, n = 256, 8 * 256
+    monkeypatch.setattr(_api, "CHUNK", chunk)
+    q = np.tile(Q, (n, 1))
+    call(q[:2])                      # imports and caches outside the measurement
+    tracemalloc.start()
+    try:
+        call(q)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    per_chunk_state, per_state = 45 * 2**10, 2**10
+    assert peak < per_chunk_state * chunk + per_state * n
+    assert per_chunk_state * D.CHUNK + per_state * 200_000 < 2**30
+    assert per_state * D.MAX_BATCH < 2.5 * 2**30
+
+
+def test_chunked_results_equal_one_chunk(monkeypatch):
+    """1.1: chunking changes no result (the same formulas per state)."""
+    from athenakin.dynamics import _api
+
+    rng = np.random.default_rng(30)
+    q = Q + rng.uniform(-0.01, 0.01, (37, 3))
+    qd = rng.normal(size=(37, 3))
+    full = D.statics(q, T, DES)
+    ref_id = D.inverse_dynamics(q, qd, qd, T, DES, backend="numpy")
+    monkeypatch.setattr(_api, "CHUNK", 5)
+    part = D.statics(q, T, DES)
+    for f in ("forces", "rcm_force", "rcm_moment", "tip_jacobian"):
+        assert_allclose(getattr(part, f), getattr(full, f), rtol=0, atol=0)
+    assert_allclose(D.inverse_dynamics(q, qd, qd, T, DES, backend="numpy"), ref_id,
+                    rtol=0, atol=0)
+
+
+def test_dynamics_batch_limit_is_named():
+    q = np.broadcast_to(Q, (D.MAX_BATCH + 1, 3))
+    with pytest.raises(InvalidInputError, match=r"^batch: expected at most 2000000"):
+        D.mass_matrix(q, T, DES)
+
+
+# --- 1.4 / issue 28: one bad row of a batch is flagged, not raised --------------------------
+def test_dynamics_batch_flags_a_bad_row_as_fk_does():
+    bad = [-0.10, 0.10, 5.0]                        # beyond the stroke
+    q = np.array([bad, Q])
+    st = D.statics(q, T, DES)
+    assert st.valid.tolist() == [False, True]
+    assert np.all(np.isnan(st.forces[0])) and np.all(np.isfinite(st.forces[1]))
+    assert ak.forward_kinematics(q, T, DES).valid[:, 0].tolist() == [False, True]
+    f = D.actuator_forces(q, T, DES)
+    assert_allclose(f[1], D.actuator_forces(Q, T, DES), rtol=0, atol=0)
+    with pytest.raises(ak.errors.OutOfWorkspaceError, match="slot 0 holds no valid"):
+        D.actuator_forces(q, T, DES, errors="raise")
+    with pytest.raises(ak.errors.OutOfWorkspaceError, match="slot 0 holds no valid"):
+        D.actuator_forces(bad, T, DES)              # a single state raises ("auto")
+    rail = np.array([-0.28, 0.22, 0.45])            # D on the rail: singular dynamics
+    m = D.mass_matrix(np.stack([rail, Q]), T, DES)
+    assert np.all(np.isnan(m[0])) and np.all(np.isfinite(m[1]))
+    with pytest.raises(SingularConfigurationError):
+        D.mass_matrix(rail, T, DES)
+
+
+# --- 1.2 force metrics at singular configurations ------------------------------------------
+@pytest.mark.parametrize("q", [[0.01, 0.01, 0.3], [0.0, 0.0, 0.35]])
+def test_force_metrics_leave_singular_jacobians_out(q):
+    """1.2: ``q1 = q2`` makes J singular: no 5.77e49 N, no LinAlgError; counted."""
+    fm = D.force_metrics(np.array([q]), T, DES, slot=np.zeros(1, int))
+    assert np.isnan(fm.peak_actuator_force)
+    assert np.isfinite(fm.min_tip_force_capability)
+    assert (fm.n_configurations, fm.n_valid, fm.n_peak) == (1, 1, 0)
+    both = D.force_metrics(np.array([q, Q]), T, DES, slot=0)
+    alone = D.force_metrics(Q, T, DES, slot=0)
+    assert both.peak_actuator_force == alone.peak_actuator_force
+    assert 0 < both.peak_actuator_force < 1e3
+    assert (both.n_valid, both.n_peak) == (2, 1)
+
+
+def test_force_metrics_tell_no_valid_configuration_from_an_empty_set():
+    empty = D.force_metrics(np.zeros((0, 3)), T, DES, slot=0)
+    none = D.force_metrics(np.array([[-0.10, 0.10, 5.0]]), T, DES, slot=0)
+    for fm in (empty, none):
+        assert np.isnan(fm.peak_actuator_force) and np.isnan(fm.min_tip_force_capability)
+    assert (empty.n_configurations, empty.n_valid) == (0, 0)
+    assert (none.n_configurations, none.n_valid) == (1, 0)
+
+
+def test_force_capability_and_metrics_share_the_singular_test():
+    st = D.statics(np.array([[0.01, 0.01, 0.3], Q]), T, DES)
+    from athenakin.dynamics._capability import jacobian_invertible
+
+    assert jacobian_invertible(st.tip_jacobian).tolist() == [False, True]
+    cap = D.force_capability(np.array([[0.01, 0.01, 0.3], Q]), T, DES, f_max=50.0)
+    assert np.all(np.isnan(cap.vertices[0])) and np.all(np.isfinite(cap.vertices[1]))
+
+
+# --- 1.6 a tiny direction ---------------------------------------------------------------
+@pytest.mark.parametrize("scale", [1e-160, 1e-300, 1e150, 1e300])
+def test_max_tip_force_direction_of_any_size(scale):
+    ref = D.max_tip_force(Q, [1.0, 0.0, 0.0], T, DES, f_max=50.0)
+    got = D.max_tip_force(Q, [scale, 0.0, 0.0], T, DES, f_max=50.0)
+    assert_allclose(got, ref, rtol=1e-15, atol=0)
+    ref2 = D.max_tip_force(Q, [1.0, -2.0, 0.5], T, DES, f_max=50.0)
+    got2 = D.max_tip_force(Q, [scale, -2 * scale, 0.5 * scale], T, DES, f_max=50.0)
+    assert_allclose(got2, ref2, rtol=1e-14, atol=0)
+
+
+# --- 1.4 a bounded simulation --------------------------------------------------------------
+def test_simulate_refuses_too_many_steps_at_once():
+    f = D.actuator_forces(Q, T, DES)
+    with pytest.raises(InvalidInputError, match=r"^duration / dt: expected at most 100000"):
+        D.simulate(Q, np.zeros(3), f, T, DES, duration=0.005, dt=1e-9)
+    assert D._simulate.MAX_STEPS * 13 * 8 < 2**24      # stored states under 16 MiB
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(gravity=np.zeros((2, 3))), r"^gravity: expected shape \(3,\)"),
+    (dict(tip_force=np.zeros((2, 3))), r"^tip_force: expected shape \(3,\)"),
+])
+def test_simulate_batch_of_gravity_or_tip_force_is_named(kw, match):
+    with pytest.raises(InvalidInputError, match=match):
+        D.simulate(Q, np.zeros(3), np.zeros(3), T, DES, duration=0.01, **kw)
+
+
+def test_simulate_massless_model_is_named():
+    with pytest.raises(SingularConfigurationError, match=r"^masses: the mass matrix is singular"):
+        D.simulate(Q, np.zeros(3), np.zeros(3), T, DES, duration=0.002,
+                   masses=D.MassModel.zeros())
+    with pytest.raises(SingularConfigurationError, match=r"^masses: the mass matrix is singular"):
+        D.forward_dynamics(Q, np.zeros(3), np.zeros(3), T, DES, masses=D.MassModel.zeros())
+
+
+def test_simulate_states_unchanged_by_preallocation():
+    f = D.actuator_forces(Q, T, DES)
+    sim = D.simulate(Q, [0.01, -0.01, 0.0], f, T, DES, duration=0.0035, dt=1e-3)
+    assert sim.t.shape == (5,) and sim.q.shape == (5, 3) and sim.qdd.shape == (5, 3)
+    assert_allclose(sim.t, [0.0, 1e-3, 2e-3, 3e-3, 3.5e-3], rtol=0, atol=1e-15)
+    assert np.all(np.isfinite(sim.forces))
+
+
+# --- 1.3 an Obstacle validates like the builders --------------------------------------------
+@pytest.mark.parametrize("kw, exc, match", [
+    (dict(kind="sphere", name="s", radius=float("nan")), InvalidInputError, r"^radius: "),
+    (dict(kind="sphere", name="s", radius=-1.0), InvalidInputError, r"^radius: "),
+    (dict(kind="capsule", name="c", radius=float("inf")), InvalidInputError, r"^radius: "),
+    (dict(kind="blob", name="s"), InvalidInputError, r"^kind: expected one of"),
+    (dict(kind="mesh", name="m"), InvalidInputError, r"^faces: .*holds no triangles"),
+    (dict(kind="mesh", name="m", vertices=np.zeros((3, 3)), faces=np.array([[0, 1, 5]])),
+     InvalidInputError, r"^faces: .*missing vertices"),
+    (dict(kind="mesh", name="m", vertices=np.full((3, 3), np.nan),
+          faces=np.array([[0, 1, 2]])), InvalidInputError, r"^vertices: .*non-finite"),
+    (dict(kind="halfspace", name="h", normal=(0.0, 0.0, 0.0)), InvalidInputError,
+     r"^normal: "),
+    (dict(kind="box", name="b"), InvalidInputError, r"^half_extents: "),
+    (dict(kind="sphere", name="s", center=(np.nan, 0.0, 0.0)), InvalidInputError,
+     r"^center: "),
+    (dict(kind="sphere", name=3), TypeError, r"^name: "),
+    (dict(kind="sphere", name="s", allow=("wing",)), InvalidInputError, r"^allow\[0\]: "),
+    (dict(kind="box", name="b", half_extents=(0.1, 0.1, 0.1), T_b_o=np.full((4, 4), np.nan)),
+     InvalidInputError, r"^T_b_o: "),
+    (dict(kind="mesh", name="m", vertices=np.eye(3), faces=np.array([[0, 1, 2]]),
+          convex=1), TypeError, r"^convex: "),
+])
+def test_obstacle_validates_like_the_builders(kw, exc, match):
+    with pytest.raises(exc, match=match):
+        C.Obstacle(**kw)
+
+
+def test_obstacle_from_builder_unchanged():
+    env = (C.Environment().halfspace((0, 0, -0.2), (0, 0, 3.0), name="table")
+           .sphere((0, 0, 0.3), 0.1, name="ball", allow=("instrument",)))
+    assert env["table"].normal == (0.0, 0.0, 1.0)
+    direct = C.Obstacle(kind="sphere", name="ball", center=[0, 0, 0.3], radius=0.1,
+                        allow=["instrument"])
+    assert direct == env["ball"]
+
+
+# --- 1.7 field-level messages name the parameter -------------------------------------------
+def test_radius_messages_name_radii():
+    with pytest.raises(InvalidInputError, match=r"^radii\['rail'\]: "):
+        C.Bodies.default().with_radius({"rail": -1.0})
+    with pytest.raises(InvalidInputError, match=r"^radii\['rail'\]: "):
+        C.Bodies(radii={**dict(C.Bodies.default().radius), "rail": float("nan")})
