@@ -222,3 +222,56 @@ def test_radius_messages_name_radii():
         C.Bodies.default().with_radius({"rail": -1.0})
     with pytest.raises(InvalidInputError, match=r"^radii\['rail'\]: "):
         C.Bodies(radii={**dict(C.Bodies.default().radius), "rail": float("nan")})
+
+
+# --- 1.5 witnesses on the surface for near-crossing segments -------------------------------
+def _crossing_pairs(n, gap, seed):
+    """Segments crossing (axes ``gap`` apart) at angles from 1e-7 to pi/2 rad; truth known."""
+    rng = np.random.default_rng(seed)
+    c = rng.uniform(-0.5, 0.5, (n, 3)) * 10 ** rng.uniform(-3, 0, (n, 1))
+    u = rng.normal(size=(n, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    w = rng.normal(size=(n, 3))
+    w -= np.sum(w * u, axis=1, keepdims=True) * u
+    w /= np.linalg.norm(w, axis=1, keepdims=True)
+    ang = 10 ** rng.uniform(-7, 0, (n, 1)) * np.pi / 2
+    v = np.cos(ang) * u + np.sin(ang) * w
+    off = gap * np.cross(u, w)
+    s1, s2 = 10 ** rng.uniform(-3, 0, (2, n, 1))
+    a1, a2 = rng.uniform(0.02, 0.98, (2, n, 1))
+    return (c - a1 * s1 * u, c + (1 - a1) * s1 * u, c + off - a2 * s2 * v,
+            c + off + (1 - a2) * s2 * v)
+
+
+@pytest.mark.parametrize("gap", [0.0, 3.5e-12, 1e-9, 1e-6])
+def test_capsule_witnesses_lie_on_the_surfaces_of_near_crossing_capsules(gap):
+    """1.5: a witness was 4.2e-5 m from its axis instead of r = 0.01 m (crossing at
+    3.5e-12 m); nearly parallel crossing segments also had distances 1e-6 m too large.
+    """
+    p1, q1, p2, q2 = _crossing_pairs(4000, gap, seed=35)
+    r1, r2 = 0.01, 0.004
+    dist, wit = C.capsule_capsule(p1, q1, r1, p2, q2, r2)
+    assert_allclose(dist, gap - r1 - r2, rtol=0, atol=1e-15)
+    on1 = C.point_segment(wit[:, 0], p1, q1)[0]
+    on2 = C.point_segment(wit[:, 1], p2, q2)[0]
+    assert_allclose(on1, r1, rtol=0, atol=1e-15)
+    assert_allclose(on2, r2, rtol=0, atol=1e-15)
+    d, c1, c2 = C.segment_segment(p1, q1, p2, q2)
+    assert_allclose(d, gap, rtol=0, atol=1e-15)
+    assert_allclose(np.linalg.norm(c2 - c1, axis=-1), d, rtol=0, atol=1e-16)
+
+
+def test_capsule_witness_of_the_fuzz_reproducer():
+    """1.5: two segments of the fuzz campaign crossing at 3.5e-12 m (angle 6.3e-5 rad)."""
+    u = np.array([0.6, 0.0, 0.8])
+    w = np.array([0.0, 1.0, 0.0])
+    ang = 6.3e-5
+    v = np.cos(ang) * u + np.sin(ang) * w
+    gap = 3.5e-12 * np.cross(u, w)
+    c = np.array([0.012, -0.034, 0.2])
+    p1, q1 = c - 0.04 * u, c + 0.11 * u
+    p2, q2 = c + gap - 0.09 * v, c + gap + 0.02 * v
+    dist, wit = C.capsule_capsule(p1, q1, 0.01, p2, q2, 0.01)
+    assert_allclose(dist, 3.5e-12 - 0.02, rtol=0, atol=1e-15)
+    assert_allclose(C.point_segment(wit[0], p1, q1)[0], 0.01, rtol=0, atol=1e-15)
+    assert_allclose(C.point_segment(wit[1], p2, q2)[0], 0.01, rtol=0, atol=1e-15)
