@@ -275,3 +275,83 @@ def test_capsule_witness_of_the_fuzz_reproducer():
     assert_allclose(dist, 3.5e-12 - 0.02, rtol=0, atol=1e-15)
     assert_allclose(C.point_segment(wit[0], p1, q1)[0], 0.01, rtol=0, atol=1e-15)
     assert_allclose(C.point_segment(wit[1], p2, q2)[0], 0.01, rtol=0, atol=1e-15)
+
+
+# --- 1.7 malformed arguments, file errors -----------------------------------------------------
+@pytest.mark.parametrize("f_max, exc", [("x", TypeError), ([[1.0, 2.0], [3.0]], TypeError),
+                                        ({"a": 1}, TypeError), ([1.0, 2.0], InvalidInputError),
+                                        (-1.0, InvalidInputError),
+                                        (np.nan, InvalidInputError)])
+def test_plan_f_max_malformed_is_named(f_max, exc):
+    from athenakin.motion import plan
+
+    tips = [[0.25, 0.0, 0.0], [0.27, -0.02, 0.0]]
+    with pytest.raises(exc, match=r"^f_max: "):
+        plan(tips, T, DES, masses=D.MassModel.reference(DES), f_max=f_max)
+
+
+@pytest.mark.parametrize("pose, exc", [
+    ([[1, 0, 0, 0], [0, 1, 0], [0, 0, 1, 0], [0, 0, 0, 1]], TypeError),
+    ([[1.0, 2.0], [3.0]], TypeError), ("abc", TypeError), (None, TypeError),
+    (np.zeros((2, 2)), InvalidInputError), (np.full((4, 4), np.nan), InvalidInputError)])
+def test_environment_box_ragged_pose_is_named(pose, exc):
+    with pytest.raises(exc, match=r"^T_b_box: "):
+        C.Environment().box(pose, [0.1, 0.1, 0.1])
+
+
+class _FailingFile:
+    """A file whose read fails with EIO (a failing disk), as an open file object."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+    def read(self, n=-1):
+        import errno
+
+        raise OSError(errno.EIO, "Input/output error")
+
+
+@pytest.mark.parametrize("reader", [
+    lambda p: ak.Design.from_toml(p),
+    lambda p: C.Environment.from_toml(p),
+    lambda p: D.MassModel.from_toml(p),
+    lambda p: C.Bodies.from_toml(p),
+], ids=["design", "environment", "masses", "bodies"])
+def test_toml_readers_name_the_file_on_eio(tmp_path, monkeypatch, reader):
+    import errno
+
+    from athenakin import _input
+
+    path = tmp_path / "robot.toml"
+    path.write_text("[design]\n")
+    monkeypatch.setattr(_input, "open_regular", lambda *a, **k: _FailingFile())
+    with pytest.raises(OSError) as info:
+        reader(path)
+    assert info.value.errno == errno.EIO
+    assert info.value.filename == str(path)
+    assert "robot.toml" in str(info.value)
+
+
+def test_task_reader_names_the_file_on_eio(tmp_path, monkeypatch):
+    from athenakin import _input
+    from athenakin.synthesis import Task
+
+    path = tmp_path / "task.toml"
+    path.write_text("[task]\n")
+    monkeypatch.setattr(_input, "open_regular", lambda *a, **k: _FailingFile())
+    with pytest.raises(Exception, match=r"task\.toml.*Input/output error"):
+        Task.from_toml(path)
+
+
+@pytest.mark.skipif(not __import__("os").path.exists("/dev/full"), reason="needs /dev/full")
+def test_environment_write_toml_names_the_file_on_enospc():
+    import errno
+
+    env = C.Environment().sphere((0, 0, 0.3), 0.1, name="ball")
+    with pytest.raises(OSError) as info:
+        env.write_toml("/dev/full", overwrite=True)
+    assert info.value.errno == errno.ENOSPC
+    assert info.value.filename == "/dev/full"

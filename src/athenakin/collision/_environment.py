@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._mechanism import BODIES
+from .._output import naming_path
 from .._toml import read_toml
 from .._validation import check_array, check_path, check_scalar, check_transform
 from ..errors import InvalidInputError
@@ -219,18 +220,19 @@ class Obstacle:
 
 
 def _pose(T_or_center: ArrayLike, name: str) -> NDArray[np.float64]:
-    arr = np.asarray(T_or_center) if not isinstance(T_or_center, (str, bytes)) else None
-    if arr is not None and arr.shape == (4, 4):
+    # check_array first: a ragged list, a str, an object is a named TypeError
+    arr = check_array(T_or_center, name, (), allow_nonfinite=True)
+    if arr.shape == (4, 4):
         T = check_transform(arr, name)
         if np.any(np.abs(T[:3, 3]) > _MAX_COORD):
             raise InvalidInputError(f"{name}: expected a position within +/-{_MAX_COORD:g} m")
         return np.array(T, dtype=np.float64)
-    if arr is not None and arr.shape == (3,):
+    if arr.shape == (3,):
         T = np.eye(4)
         T[:3, 3] = _vec3(arr, name)
         return T
-    raise InvalidInputError(f"{name}: expected a centre (3,) or a pose (4, 4), got "
-                            f"{'a ' + type(T_or_center).__name__ if arr is None else arr.shape}")
+    raise InvalidInputError(f"{name}: expected a centre (3,) or a pose (4, 4), got shape "
+                            f"{arr.shape}")
 
 
 def _load_mesh(path: Path, scale: float, name: str) -> tuple[NDArray[np.float64],
@@ -460,8 +462,8 @@ class Environment:
         """Write :meth:`to_toml` to ``path`` (refuses to replace a file unless ``overwrite``)."""
         p = check_path(path, "path")
         text = self.to_toml()
-        with open(p, "w" if overwrite else "x", encoding="utf-8") as fh:
-            fh.write(text)
+        with naming_path(p), open(p, "w" if overwrite else "x", encoding="utf-8") as fh:
+            fh.write(text)                 # ENOSPC on write / close names the file
         return p
 
     @classmethod
