@@ -8,6 +8,7 @@ named errors for malformed arguments, and the inside of closed meshes.
 
 from __future__ import annotations
 
+import dataclasses
 import tracemalloc
 
 import numpy as np
@@ -355,3 +356,79 @@ def test_environment_write_toml_names_the_file_on_enospc():
         env.write_toml("/dev/full", overwrite=True)
     assert info.value.errno == errno.ENOSPC
     assert info.value.filename == "/dev/full"
+
+
+# --- 2.2 closed meshes are solids --------------------------------------------------------------
+@pytest.fixture
+def ball_stl(tmp_path):
+    trimesh = pytest.importorskip("trimesh")
+    pytest.importorskip("coal")
+    path = tmp_path / "ball.stl"
+    trimesh.creation.icosphere(subdivisions=3, radius=0.1).export(path)
+    return path
+
+
+def test_a_body_inside_a_closed_mesh_collides(ball_stl):
+    """2.2: a capsule wholly inside a closed mesh was reported clear (+69.7 mm here)."""
+    from athenakin.collision._coal import capsule_obstacle_distances
+
+    env = C.Environment().mesh(ball_stl, T_b_mesh=[0.0, 0.0, 0.3], name="ball")
+    ob = env["ball"]
+    assert ob.closed
+    r = 0.01
+    seg = np.array([[[0.0, 0.0, 0.3], [0.02, 0.0, 0.3]],      # wholly inside
+                    [[0.0, 0.0, 0.3], [0.2, 0.0, 0.3]],       # crosses the surface
+                    [[0.3, 0.0, 0.3], [0.4, 0.0, 0.3]]])      # outside
+    d, w = capsule_obstacle_distances(seg, r, ob)
+    assert d[0] < -0.08 and d[1] <= 0 and d[2] > 0.18
+    # the witness on the capsule is its deepest point, on its surface, -d below the
+    # nearest point of the triangles along the line of the nearest points
+    assert_allclose(C.point_segment(w[0, 0], seg[0, 0], seg[0, 1])[0], r, rtol=0, atol=1e-12)
+    d_surface, w_surface = capsule_obstacle_distances(seg[:1], r, dataclasses.replace(
+        ob, faces=ob.faces[:, ::-1]))               # reversed triangles: still closed
+    assert_allclose(d_surface, d[:1], rtol=0, atol=1e-12)
+    assert d[0] <= -(0.0697 + 2 * r)
+    # the hull (a convex solid: coal's penetration depth) agrees on the sign
+    hull = C.Environment().mesh(ball_stl, T_b_mesh=[0.0, 0.0, 0.3], convex=True)["ball"]
+    dh, _ = capsule_obstacle_distances(seg, r, hull)
+    assert np.all(np.sign(dh) == np.sign(d))
+    assert_allclose(dh[0], d[0], rtol=0.1)
+
+
+def test_clearance_of_a_robot_inside_a_closed_mesh(ball_stl):
+    """2.2: the clearance of bodies wholly inside a closed mesh is negative."""
+    centre = T[:3, 3]                                  # the RCM, among the bodies
+    env = C.Environment().mesh(ball_stl, scale=20.0, T_b_mesh=centre, name="organ")  # 2 m
+    c = C.clearance(Q, T, DES, environment=env, backend="numpy")
+    cols = [i for i, p in enumerate(c.pairs) if p[1] == "organ"]
+    assert len(cols) > 0
+    assert np.all(c.distances[..., cols] < 0)
+    assert bool(c.colliding)
+
+
+def test_open_mesh_warns(tmp_path):
+    trimesh = pytest.importorskip("trimesh")
+    m = trimesh.creation.icosphere(subdivisions=2, radius=0.1)
+    half = trimesh.Trimesh(m.vertices, m.faces[m.triangles_center[:, 2] > 0])
+    path = tmp_path / "cap.stl"
+    half.export(path)
+    with pytest.warns(C.OpenMeshWarning, match=r"mesh 'cap' .*is open"):
+        env = C.Environment().mesh(path)
+    assert not env["cap"].closed
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        C.Environment().mesh(path, convex=True)            # the hull is a solid: no warning
+
+
+def test_winding_numbers_and_closed_surface():
+    from athenakin.collision._environment import closed_surface, winding_numbers
+
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])       # outward tetrahedron
+    assert closed_surface(V, F)
+    assert not closed_surface(V, F[:3])                                # open
+    assert not closed_surface(V, F[[0, 1, 2, 2]])                      # an edge used twice
+    w = winding_numbers(np.array([[0.1, 0.1, 0.1], [1.0, 1.0, 1.0], [-0.1, 0.2, 0.2]]), V, F)
+    assert_allclose(np.abs(w), [1.0, 0.0, 0.0], rtol=0, atol=1e-12)

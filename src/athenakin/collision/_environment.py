@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any, Literal
@@ -33,7 +34,8 @@ from .._toml import read_toml
 from .._validation import check_array, check_path, check_scalar, check_transform
 from ..errors import InvalidInputError
 
-__all__ = ["Environment", "Obstacle", "OBSTACLE_KINDS", "MAX_OBSTACLES", "MAX_MESH_FACES"]
+__all__ = ["Environment", "Obstacle", "OBSTACLE_KINDS", "MAX_OBSTACLES", "MAX_MESH_FACES",
+           "OpenMeshWarning", "closed_surface", "winding_numbers"]
 
 #: Kinds of obstacle.
 OBSTACLE_KINDS = ("halfspace", "sphere", "capsule", "box", "mesh")
@@ -119,9 +121,14 @@ class Obstacle:
         ``mesh``: factor from file units to metres (0.001 for a file in mm).
     convex : bool
         ``mesh``: use the convex hull (signed distance, penetration depth) instead of the
-        triangle surface (a BVH; distance 0 once a body touches or crosses the surface).
+        triangles (a BVH; distance <= 0 once a body touches them; a body wholly inside a
+        ``closed`` mesh is negative too).
     vertices, faces : ndarray
         ``mesh``: the loaded triangles (in the shape frame, m).
+    closed : bool
+        ``mesh``: the triangles close a solid (every edge between exactly two
+        triangles, consistently oriented: :func:`closed_surface`). A body wholly
+        inside a closed mesh is colliding (negative distance); set from ``faces``.
     """
 
     kind: ObstacleKind
@@ -142,6 +149,7 @@ class Obstacle:
         default_factory=lambda: np.zeros((0, 3)))
     faces: NDArray[np.int64] = dataclasses.field(
         default_factory=lambda: np.zeros((0, 3), dtype=np.int64))
+    closed: bool = dataclasses.field(init=False, default=False, compare=False)
 
     def __post_init__(self) -> None:
         # the checks of the Environment builders, so that an Obstacle made directly is as
@@ -175,6 +183,7 @@ class Obstacle:
             V, F = _check_triangles(self.vertices, self.faces, f"mesh {self.name!r}")
             put(self, "vertices", V)
             put(self, "faces", F)
+        put(self, "closed", self.kind == "mesh" and closed_surface(self.vertices, self.faces))
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Obstacle):
@@ -288,6 +297,83 @@ def _check_triangles(vertices: object, faces: object, what: str, *, name: str | 
     if F.min() < 0 or F.max() >= len(V):
         raise InvalidInputError(f"{fn}: {what} has faces that index missing vertices")
     return V, F
+
+
+def closed_surface(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> bool:
+    """Whether triangles close a solid: each directed edge once, its reverse once.
+
+    That is a watertight, consistently oriented surface (trimesh's ``is_watertight``
+    and ``is_winding_consistent`` together), the condition for an inside: the winding
+    number (:func:`winding_numbers`) is then an integer off the surface. Vertices at
+    the same coordinates are one vertex (an STL file repeats them per triangle).
+    """
+    F = np.asarray(faces, dtype=np.int64)
+    if F.ndim != 2 or F.shape[1:] != (3,) or len(F) == 0:
+        return False
+    _, merged = np.unique(np.asarray(vertices, dtype=np.float64), axis=0,
+                          return_inverse=True)
+    F = merged.reshape(-1)[F]
+    e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    if np.any(e[:, 0] == e[:, 1]):
+        return False                       # a degenerate triangle
+    n = int(max(F.max(), 0)) + 1
+    key = e[:, 0] * n + e[:, 1]
+    rev = e[:, 1] * n + e[:, 0]
+    ks = np.sort(key)
+    if np.any(ks[1:] == ks[:-1]):
+        return False                       # a directed edge twice: inconsistent / non-manifold
+    return bool(np.array_equal(ks, np.sort(rev)))
+
+
+#: Triangle-point pairs evaluated together by :func:`winding_numbers` (memory bound).
+_WINDING_BLOCK = 1 << 18
+
+
+def winding_numbers(points: NDArray[np.float64], vertices: NDArray[np.float64],
+                    faces: NDArray[np.int64]) -> NDArray[np.float64]:
+    """Generalized winding numbers of points about a triangle surface.
+
+    ``w(x) = sum Omega_f(x) / (4 pi)`` over the triangles, ``Omega_f`` the signed solid
+    angle of triangle ``f`` seen from ``x`` (Van Oosterom and Strackee's formula,
+    ``tan(Omega / 2) = a . (b x c) / (|a||b||c| + (a.b)|c| + (b.c)|a| + (c.a)|b|)`` with
+    ``a, b, c`` the corners relative to ``x``). For a closed surface it is +-1 inside
+    (the sign of the orientation) and 0 outside, to rounding, off the surface.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3)
+        In the mesh frame, m.
+    vertices : ndarray, shape (m, 3)
+    faces : ndarray of int, shape (k, 3)
+
+    Returns
+    -------
+    ndarray, shape (n,)
+
+    Notes
+    -----
+    ``O(n k)`` work, in blocks of about ``2**18`` point-triangle pairs (bounded memory).
+    """
+    P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    tri = np.asarray(vertices, dtype=np.float64)[np.asarray(faces, dtype=np.int64)]
+    out = np.zeros(P.shape[0])
+    fstep = max(1, min(len(tri), _WINDING_BLOCK))
+    pstep = max(1, _WINDING_BLOCK // fstep)
+    for f0 in range(0, len(tri), fstep):
+        T3 = tri[f0:f0 + fstep]
+        for p0 in range(0, P.shape[0], pstep):
+            x = P[p0:p0 + pstep, None, None, :]
+            a, b, c = (T3[None, :, k] - x[:, :, 0] for k in range(3))
+            la, lb, lc = (np.linalg.norm(v, axis=-1) for v in (a, b, c))
+            num = np.einsum("pfi,pfi->pf", a, np.cross(b, c))
+            den = (la * lb * lc + np.einsum("pfi,pfi->pf", a, b) * lc
+                   + np.einsum("pfi,pfi->pf", b, c) * la + np.einsum("pfi,pfi->pf", c, a) * lb)
+            out[p0:p0 + pstep] += np.arctan2(num, den).sum(axis=-1)
+    return out / (2.0 * np.pi)
+
+
+class OpenMeshWarning(UserWarning):
+    """A mesh obstacle does not close a solid: only its surface is an obstacle."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -428,7 +514,12 @@ class Environment:
             File units to metres (0.001 for millimetres). Default 1.
         convex : bool, keyword-only
             Use the convex hull: signed distances with penetration depth. Default False:
-            the triangle surface, whose distance is 0 once a body touches it.
+            the triangles. A closed mesh (:attr:`Obstacle.closed`) is then a solid: a
+            body that touches its triangles is at distance <= 0, a body wholly inside
+            it at minus the depth of its deepest point below the nearest point of the
+            triangles (at least ``d + 2 r``, ``d`` from its surface to the triangles,
+            ``r`` its radius). An open mesh is a surface only, with an
+            :class:`OpenMeshWarning`.
         name : str, keyword-only, optional
             Default the file's stem.
 
@@ -444,8 +535,16 @@ class Environment:
             raise TypeError(f"convex: expected a bool, got {type(convex).__name__}")
         T = np.eye(4) if T_b_mesh is None else _pose(T_b_mesh, "T_b_mesh")
         V, F = _load_mesh(p, s, "path")
-        return self._add("mesh", p.stem if name is None else name, allow, T_b_o=T, path=str(path),
-                         scale=s, convex=convex, vertices=V, faces=F)
+        env = self._add("mesh", p.stem if name is None else name, allow, T_b_o=T,
+                        path=str(path), scale=s, convex=convex, vertices=V, faces=F)
+        ob = env.obstacles[-1]
+        if not convex and not ob.closed:
+            warnings.warn(f"mesh {ob.name!r} ({str(path)!r}) is open (not every edge joins "
+                          f"two consistently oriented triangles): a body wholly inside it "
+                          f"is not detected, only a body that touches its triangles; close "
+                          f"it, or pass convex=True for its convex hull", OpenMeshWarning,
+                          stacklevel=2)
+        return env
 
     # --- TOML ---------------------------------------------------------------------------
     def to_toml_table(self) -> dict[str, Any]:
