@@ -432,3 +432,26 @@ def test_winding_numbers_and_closed_surface():
     assert not closed_surface(V, F[[0, 1, 2, 2]])                      # an edge used twice
     w = winding_numbers(np.array([[0.1, 0.1, 0.1], [1.0, 1.0, 1.0], [-0.1, 0.2, 0.2]]), V, F)
     assert_allclose(np.abs(w), [1.0, 0.0, 0.0], rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("gap", [0.0, 3.5e-12, 1e-6])
+def test_compiled_capsule_pairs_match_on_near_crossing_segments(gap):
+    """1.5: the compiled kernel of the clearance takes the same candidates and witnesses."""
+    pytest.importorskip("numba")
+    from athenakin.fast._collision_kernels import capsule_distances, capsule_pairs
+
+    p1, q1, p2, q2 = _crossing_pairs(2000, gap, seed=36)
+    solids = np.ascontiguousarray(np.stack([np.stack([p1, q1], 1), np.stack([p2, q2], 1)], 1))
+    radii = np.array([0.01, 0.004])
+    ij = np.array([[0, 1]], dtype=np.intp)
+    dist, wit = capsule_pairs(solids, radii, ij)
+    assert_allclose(dist[:, 0], gap - 0.014, rtol=0, atol=1e-15)
+    assert_allclose(capsule_distances(solids, radii, ij), dist, rtol=0, atol=0)
+    assert_allclose(C.point_segment(wit[:, 0, 0], p1, q1)[0], 0.01, rtol=0, atol=1e-15)
+    assert_allclose(C.point_segment(wit[:, 0, 1], p2, q2)[0], 0.004, rtol=0, atol=1e-15)
+    ref_d, ref_w = C.capsule_capsule(p1, q1, 0.01, p2, q2, 0.004)
+    assert_allclose(dist[:, 0], ref_d, rtol=0, atol=1e-15)
+    if gap >= 1e-6:
+        # below, the direction of the gap is known only to rounding / gap (1e-5 rad at
+        # 3.5e-12 m): each engine's witnesses are on the surfaces, not the same points
+        assert_allclose(wit[:, 0], ref_w, rtol=0, atol=1e-9)

@@ -19,11 +19,10 @@ a true pair of points on the segments, so it is exact for parallel (``n = 0``: t
 interior candidate is dropped), degenerate (zero length: the end-point candidates
 remain) and touching or crossing segments (distance 0), with no tolerance that
 decides a branch. The compiled kernel (:mod:`athenakin.fast._collision_kernels`)
-takes the same candidates (comparing squared distances, with fused multiply-adds,
-and Lumelsky's form of the interior point) and agrees with this reference to 1e-13 m
-away from nearly parallel crossing segments (tested); where the closest points are
-not unique (overlapping parallel segments) the two may return different, equally
-close, pairs of them.
+takes the same candidates and witnesses (comparing squared distances, with fused
+multiply-adds) and agrees with this reference to 1e-13 m (tested); where the closest
+points are not unique (overlapping parallel segments) the two may return different,
+equally close, pairs of them.
 """
 
 from __future__ import annotations
