@@ -455,3 +455,30 @@ def test_compiled_capsule_pairs_match_on_near_crossing_segments(gap):
         # below, the direction of the gap is known only to rounding / gap (1e-5 rad at
         # 3.5e-12 m): each engine's witnesses are on the surfaces, not the same points
         assert_allclose(wit[:, 0], ref_w, rtol=0, atol=1e-9)
+
+
+def test_numpy_clearance_works_in_chunks(monkeypatch):
+    """1.1 (collision): the numpy capsule path keeps one chunk's temporaries."""
+    from athenakin.collision import _clearance
+
+    rng = np.random.default_rng(37)
+    q = Q + rng.uniform(-0.02, 0.02, (23, 3))
+    env = C.Environment().sphere((0.0, 0.3, 0.1), 0.05, name="ball")
+    full = C.clearance(q, T, DES, environment=env, backend="numpy")
+    monkeypatch.setattr(_clearance, "_NUMPY_PAIRS_PER_CHUNK", 200)   # 2 rows a chunk
+    part = C.clearance(q, T, DES, environment=env, backend="numpy")
+    assert_allclose(part.distances, full.distances, rtol=0, atol=0)
+    assert_allclose(part.witness_points, full.witness_points, rtol=0, atol=0)
+    # chunks of 2**14 pairs (about 5 MiB of temporaries) and what the results and the
+    # mechanism's points hold (under 14 KiB a configuration); unchunked: 31 KiB each
+    monkeypatch.setattr(_clearance, "_NUMPY_PAIRS_PER_CHUNK", 1 << 14)
+    n = 4000
+    qn = np.tile(Q, (n, 1))
+    C.clearance(qn[:2], T, DES, backend="numpy")
+    tracemalloc.start()
+    try:
+        C.clearance(qn, T, DES, backend="numpy")
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 10 * 2**20 + 14 * 2**10 * n
