@@ -348,12 +348,13 @@ def test_task_reader_names_the_file_on_eio(tmp_path, monkeypatch):
 
 
 @pytest.mark.skipif(not __import__("os").path.exists("/dev/full"), reason="needs /dev/full")
-def test_environment_write_toml_names_the_file_on_enospc():
+@pytest.mark.parametrize("obj", [C.Environment().sphere((0, 0, 0.3), 0.1, name="ball"), DES],
+                         ids=["environment", "design"])
+def test_toml_writers_name_the_file_on_enospc(obj):
     import errno
 
-    env = C.Environment().sphere((0, 0, 0.3), 0.1, name="ball")
     with pytest.raises(OSError) as info:
-        env.write_toml("/dev/full", overwrite=True)
+        obj.write_toml("/dev/full", overwrite=True)
     assert info.value.errno == errno.ENOSPC
     assert info.value.filename == "/dev/full"
 
