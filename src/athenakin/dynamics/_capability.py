@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import broadcast_batch, check_array
 from ..design import Design
 from ..errors import InvalidInputError
-from ._api import STANDARD_GRAVITY, statics
+from ._api import STANDARD_GRAVITY, _chunked, statics
 from ._model import MassModel
 
 __all__ = ["ForceCapability", "force_capability", "max_tip_force", "jacobian_invertible",
@@ -146,30 +146,41 @@ def force_capability(q: ArrayLike, T_b_e: ArrayLike | None = None,
     lo, hi = _limits(f_max, f_min)
     st = statics(q, T_b_e, design, masses=masses, gravity=gravity, slot=slot, errors=errors,
                  rcm_load=False)
-    J = st.tip_jacobian
-    tg = st.forces
-    Jt = np.swapaxes(J, -1, -2)                         # rows: columns of J
-    A = np.concatenate([Jt, -Jt], axis=-2)
-    b = np.concatenate([tg - lo, hi - tg], axis=-1)
-    norms = np.linalg.norm(A, axis=-1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(norms > 0, b / norms, np.inf)
-    k = np.argmin(np.where(np.isnan(ratio), np.inf, ratio), axis=-1)
-    min_force = np.take_along_axis(ratio, k[..., None], axis=-1)[..., 0]
-    a_k = np.take_along_axis(A, k[..., None, None], axis=-2)[..., 0, :]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        weakest = a_k / np.linalg.norm(a_k, axis=-1, keepdims=True)
+    batch = st.valid.shape
+    n = int(np.prod(batch)) if batch else 1
     corners = np.array([[hi[i] if (c >> i) & 1 else lo[i] for i in range(3)]
                         for c in range(8)])             # (8, 3)
-    rhs = tg[..., None, :] - corners                    # (..., 8, 3)
-    ok = jacobian_invertible(J)
-    Jt_safe = np.where(ok[..., None, None], Jt, np.eye(3))
-    verts = np.linalg.solve(Jt_safe[..., None, :, :], rhs[..., None])[..., 0]
-    verts = np.where(ok[..., None, None], verts, np.nan)
+    J_all = st.tip_jacobian.reshape(n, 3, 3)
+    tg_all = st.forces.reshape(n, 3)
+
+    def part(sl: slice) -> tuple[Arr, ...]:
+        # per state, in chunks: the temporaries (broadcast solves) of one chunk only
+        J, tg = J_all[sl], tg_all[sl]
+        Jt = np.swapaxes(J, -1, -2)                     # rows: columns of J
+        A = np.concatenate([Jt, -Jt], axis=-2)
+        b = np.concatenate([tg - lo, hi - tg], axis=-1)
+        norms = np.linalg.norm(A, axis=-1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = np.where(norms > 0, b / norms, np.inf)
+        k = np.argmin(np.where(np.isnan(ratio), np.inf, ratio), axis=-1)
+        min_force = np.take_along_axis(ratio, k[..., None], axis=-1)[..., 0]
+        a_k = np.take_along_axis(A, k[..., None, None], axis=-2)[..., 0, :]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            weakest = a_k / np.linalg.norm(a_k, axis=-1, keepdims=True)
+        rhs = tg[..., None, :] - corners                # (m, 8, 3)
+        ok = jacobian_invertible(J)
+        Jt_safe = np.where(ok[..., None, None], Jt, np.eye(3))
+        verts = np.linalg.solve(Jt_safe[..., None, :, :], rhs[..., None])[..., 0]
+        verts = np.where(ok[..., None, None], verts, np.nan)
+        return A, b, verts, min_force, weakest
+
+    A, b, verts, min_force, weakest = _chunked(n, part)
     valid = st.valid
-    min_force = np.where(valid, min_force, np.nan)
-    return ForceCapability(A=A, b=b, vertices=verts, min_force=min_force,
-                           weakest_direction=weakest, gravity_forces=tg, valid=valid)
+    min_force = np.where(valid, min_force.reshape(batch), np.nan)
+    return ForceCapability(A=A.reshape(batch + (6, 3)), b=b.reshape(batch + (6,)),
+                           vertices=verts.reshape(batch + (8, 3)), min_force=min_force,
+                           weakest_direction=weakest.reshape(batch + (3,)),
+                           gravity_forces=st.forces, valid=valid)
 
 
 def max_tip_force(q: ArrayLike, direction: ArrayLike, T_b_e: ArrayLike | None = None,
