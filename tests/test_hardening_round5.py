@@ -32,7 +32,9 @@ Q = np.array([-0.10, 0.10, 0.45])
     lambda q: D.inverse_dynamics(q, 0 * q, 0 * q, T, DES, backend="numpy"),
     lambda q: D.forward_dynamics(q, 0 * q, 0 * q, T, DES),
     lambda q: D.mechanical_energy(q, 0 * q, T, DES),
-], ids=["statics", "mass_matrix", "inverse_dynamics", "forward_dynamics", "energy"])
+    lambda q: D.force_capability(q, T, DES, f_max=50.0),
+], ids=["statics", "mass_matrix", "inverse_dynamics", "forward_dynamics", "energy",
+        "force_capability"])
 def test_dynamics_batches_work_in_bounded_chunks(monkeypatch, call):
     """1.1: the temporaries are those of one chunk, whatever the batch.
 
