@@ -13,7 +13,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from athenakin.collision import capsule_capsule, capsule_halfspace, point_segment, segment_segment
-from athenakin.fast._collision_kernels import capsule_pairs
+from athenakin.collision._kernels import capsule_pairs
 
 N = 12_000
 

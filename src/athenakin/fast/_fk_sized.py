@@ -19,8 +19,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from .._backend import njit
 from ._fk_kernels import (
     _NN,
     _PR,

@@ -19,7 +19,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from .._backend import njit
 
 __all__ = ["quaternion_xyzw_into", "urdf_frames_into", "joint_values_into", "JOINT_CODES"]
 

@@ -360,7 +360,7 @@ class RosEncoder:
 
 def _compiled() -> bool:
     """Whether :meth:`McapOutput.write_tracked` fills its records with the compiled kernel."""
-    from .._dispatch import numba_available
+    from .._backend import numba_available
 
     return numba_available()
 
@@ -690,7 +690,7 @@ class McapOutput:
         written at their offsets, the readings without a pose keeping only their status.
         """
         from ..fast._frame_kernels import joint_values_into, urdf_frames_into
-        from ..fast._mcap_kernels import fill_records
+        from ._kernels import fill_records
 
         plan = self._record_plan(keys, cids)
         (lengths, zero, code, hinge), (parent, origin, kind, axis, column, wanted) = \

@@ -11,7 +11,8 @@ require both to agree to rounding. Imported only when numba is.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+
+from .._backend import njit, prange
 
 _OPTS = dict(error_model="numpy", cache=True, nogil=True, fastmath=False)
 

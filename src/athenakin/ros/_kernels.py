@@ -13,10 +13,9 @@ into one buffer in a single pass, the readings without a pose keeping only their
 
 from __future__ import annotations
 
-from llvmlite import ir
-from numba import njit, types
-from numba.core import cgutils
-from numba.extending import intrinsic
+import numpy as np
+
+from .._backend import njit
 
 __all__ = ["scan_records", "fill_records"]
 
@@ -59,54 +58,26 @@ def scan_records(raw, ops, starts, lengths, cids, times):
     return n
 
 
-@intrinsic
-def _store_low(typingctx, arr, at, word, size):
-    """Store the ``size`` low bytes of ``word`` at byte ``at`` of ``arr``, unaligned.
+@njit(cache=True, nogil=True, inline="always")
+def _copy_into(dst, at, src):
+    """``dst[at:at + src.size] = src`` (uint8), byte by byte; the caller sizes ``dst``."""
+    for k in range(src.size):
+        dst[at + k] = src[k]
 
-    ``size``: 1, 4 or 8, a compile-time literal; ``word``: uint64 (little endian);
-    ``arr``: uint8, contiguous.
-    One store instruction where a loop over bytes takes eight (the fields of a CDR
-    message behind a 31-byte record header are rarely aligned). No bounds check: the
-    caller sizes ``arr``.
+
+@njit(cache=True, nogil=True, inline="always")
+def _store_low(out, at, w, size):
+    """The ``size`` low bytes of the uint64 ``w`` at ``out[at:]``, little endian (unaligned).
+
+    A loop of a constant count per size, which LLVM merges into one store.
     """
-    if not isinstance(size, types.IntegerLiteral):
-        return None
-    bits = 8 * size.literal_value
-    sig = types.void(arr, at, word, size)
-
-    def codegen(context, builder, signature, args):
-        ary = context.make_array(signature.args[0])(context, builder, args[0])
-        ptr = builder.gep(ary.data, [args[1]])
-        value = args[2]
-        if bits < 64:
-            value = builder.trunc(value, ir.IntType(bits))
-        builder.store(value, builder.bitcast(ptr, ir.IntType(bits).as_pointer()), align=1)
-        return context.get_dummy_value()
-
-    return sig, codegen
-
-
-@intrinsic
-def _copy_into(typingctx, dst, at, src):
-    """``dst[at:at + src.size] = src`` (uint8, contiguous) as one ``memcpy``.
-
-    Numba copies a slice element by element (it cannot rule out overlap); the
-    templates are copied thousands of times per chunk. No bounds check: the caller
-    sizes ``dst``.
-    """
-    sig = types.void(dst, at, src)
-
-    def codegen(context, builder, signature, args):
-        d = context.make_array(signature.args[0])(context, builder, args[0])
-        s = context.make_array(signature.args[2])(context, builder, args[2])
-        cgutils.raw_memcpy(builder, builder.gep(d.data, [args[1]]), s.data, s.nitems, 1)
-        return context.get_dummy_value()
-
-    return sig, codegen
+    for b in range(size):
+        out[at + b] = np.uint8((w >> np.uint64(8 * b)) & np.uint64(0xFF))
 
 
 @njit(cache=True, nogil=True, inline="always")
 def _fill(out, o, words, i, off, size, col):
+    """Field ``f``: the ``size[f]`` low bytes of ``words[i, col[f]]`` at ``o + off[f]``."""
     for f in range(off.size):
         w = words[i, col[f]]
         at = o + off[f]
