@@ -248,6 +248,7 @@ def test_ik_fields_hold_the_full_results_values(rc, backend, fields):
         ak.inverse_kinematics(rc.T_b_e, u, D, fields=("q",), backend=backend)
 
 
+@needs_numba
 def test_fields_and_out_are_checked():
     with pytest.raises(ValueError, match=r"fields: expected names among"):
         ak.forward_kinematics([-0.1, 0.1, 0.45], T0, D, fields=("p", "tip"))
@@ -270,6 +271,7 @@ def test_T_b_s_is_stored_once_per_mode_and_expands_per_slot(rc):
     assert sol.mode.shape == (7, 16) and list(sol.mode[0]) == [1] * 8 + [-1] * 8
 
 
+@needs_numba
 def test_out_drops_stale_expansions(rc):
     out = ak.fast.forward_kinematics(rc.q[:4], rc.T_b_e[:4], D)
     stale = out.tip.copy()

@@ -11,11 +11,12 @@ import numpy as np
 import pytest
 
 import athenakin as ak
+from athenakin import _backend
 from athenakin.collision import Bodies
 from athenakin.motion import Tracker, TrackFlag, TrackingError, track
-from athenakin.motion import _kernels as K
 from athenakin.motion import _tracker as M
 
+needs_numba = pytest.mark.skipif(not _backend.numba_available(), reason="numba not available here")
 SEED = 22_2026
 D = ak.Design.default()
 T = ak.default_rcm_frame(D)
@@ -194,8 +195,6 @@ def test_collision_check_per_reading_matches():
 
 
 def test_without_numba_the_python_loop_gives_the_same(monkeypatch):
-    from athenakin import _backend
-
     qs = hard_stream(np.random.default_rng(SEED + 10), 200)
     fast, _ = batch(qs)
     monkeypatch.setitem(_backend._STATE, "numba", False)
@@ -216,11 +215,17 @@ def test_ros_stream_chunks_equal_one_tracker():
     assert not got["valid"][:4].any() and (got["flags"][:4] == int(TrackFlag.LOST)).all()
 
 
+@needs_numba
 def test_kernel_geometry_has_the_kernels_size():
+    from athenakin.motion import _kernels as K
+
     assert M._kernel_geometry(Tracker(T, D, q0=Q_REF)).shape == (K.NGEO,)
 
 
+@needs_numba
 def test_kernel_flag_bits_are_trackflags():
+    from athenakin.motion import _kernels as K
+
     assert K.F_LOST == TrackFlag.LOST and K.F_REACQUIRED == TrackFlag.REACQUIRED
     for name in ("JUMP", "MODE_SWITCH", "BRANCH_SWITCH", "AMBIGUOUS", "OUT_OF_STROKE",
                  "NEAR_MODE_BOUNDARY", "NEAR_H_ZERO", "NEAR_LINK_LIMIT", "NEAR_UJOINT",

@@ -20,7 +20,7 @@ pytest.importorskip("mcap")
 from _ros_recordings import NAMES, _js, _ros2_store, positions, q_stream, stamps  # noqa: E402, I001
 
 import athenakin as ak  # noqa: E402
-from athenakin import _backend, _dispatch  # noqa: E402
+from athenakin import _backend  # noqa: E402
 from athenakin.errors import InvalidInputError  # noqa: E402
 from athenakin.ros import _mcap, _read, _write  # noqa: E402
 from athenakin.ros._frames import (  # noqa: E402
@@ -35,8 +35,8 @@ from athenakin.ros._frames import (  # noqa: E402
 
 D = ak.Design.default()
 T = ak.default_rcm_frame(D)
-needs_numba = pytest.mark.skipif(not _dispatch.numba_available(),
-                                 reason="the compiled paths need numba")
+needs_numba = pytest.mark.skipif(not _backend.numba_available(),
+                                 reason="numba not available here: the compiled paths need it")
 
 
 def _stream(n, seed, lost=()):
