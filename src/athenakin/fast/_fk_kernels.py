@@ -37,7 +37,8 @@ from ..errors import Reason
 from ._scalar import atan2_from_q1, atan_q1, finite_sum, hypot, nanmax2, parallel_residual
 
 __all__ = ["CHUNK", "scratch", "fk_chunk", "gather", "fk_full", "fk_full_parallel", "fk_counts",
-           "rigid_flags", "FLAG_NONRIGID", "FLAG_Q_NONFINITE", "FLAG_T_NONFINITE"]
+           "rigid_flags", "FLAG_NONRIGID", "FLAG_Q_NONFINITE", "FLAG_T_NONFINITE",
+           "FLAG_NO_SOLUTION"]
 
 #: Poses per chunk of the two-pass loop (the scratch holds 74 doubles per pose).
 CHUNK = 64
@@ -58,6 +59,9 @@ _CLOSE_ROUND = CLOSURE_ULPS * sys.float_info.epsilon
 FLAG_NONRIGID = 1        # some T_b_e is not rigid within half the tolerance: re-check exactly
 FLAG_Q_NONFINITE = 2     # some q holds NaN / inf
 FLAG_T_NONFINITE = 4     # some T_b_e holds NaN / inf
+#: Bit of the lean single calls' results (``fast._fk_sized.fk_one_lean``,
+#: ``fast._ik_kernels.ik_paper_lean``): the item has no valid solution (reason != 0).
+FLAG_NO_SOLUTION = 256
 
 # Scratch rows per mode (offset MS * m) and shared rows.
 _R, _PR, _NN, _RES = 0, 1, 2, 3

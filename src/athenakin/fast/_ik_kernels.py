@@ -25,7 +25,7 @@ from ..chain._ups import P_ZERO_TOL
 from ..errors import Reason
 from ..parallel._module import IK_ROUNDING_ULPS
 from ..robot._ik import IK_Q_ERROR_MAX
-from ._fk_kernels import CHUNK, FLAG_T_NONFINITE, rigid_flags
+from ._fk_kernels import CHUNK, FLAG_NO_SOLUTION, FLAG_T_NONFINITE, rigid_flags
 from ._scalar import (
     atan2,
     finite_sum,
@@ -729,8 +729,6 @@ def ik_paper_one(T, U, P, stol, ctol, rot_tol, fbuf, ibuf):
     return _paper_flags(T2, U2, rot_tol)
 
 
-#: Bit of :func:`ik_paper_lean`'s result: the item has no solution (``reason != 0``).
-FLAG_NO_SOLUTION = 256
 
 
 @njit(**_OPTS)
