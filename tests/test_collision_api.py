@@ -213,6 +213,7 @@ def test_clearance_all_slots_and_invalid_items(setup):
         assert_allclose(ck.distances, c.distances[:, k], rtol=0, atol=0, equal_nan=True)
 
 
+@pytest.mark.skipif(not ak._backend.numba_available(), reason="numba not available here")
 def test_clearance_compiled_equals_numpy(setup):
     d, T, q = setup
     env = Environment().capsule((0, 0.2, 0.0), (0.1, 0.3, 0.2), 0.02, name="cap").sphere(
@@ -335,7 +336,8 @@ def test_malformed_files_are_one_named_error(tmp_path, text):
         reader(f)
 
 
-@pytest.mark.parametrize("backend", ["numba", "numpy"])
+@pytest.mark.parametrize("backend", [pytest.param("numba", marks=pytest.mark.skipif(
+    not ak._backend.numba_available(), reason="numba not available here")), "numpy"])
 def test_witness_false_gives_the_same_distances(setup, backend):
     d, T, q = setup
     env = Environment().halfspace((0, 0, -0.05), (0, 0, 1), name="table").sphere(

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import athenakin as ak
-from athenakin import _dispatch
+from athenakin import _backend, _dispatch
 from athenakin.robot import _jacobians as ref_jac
 from athenakin.testing import random_configurations
 
@@ -37,7 +37,7 @@ def rc():
 @pytest.fixture
 def no_numba(monkeypatch):
     """As on a platform without numba: the availability check says False."""
-    monkeypatch.setitem(_dispatch._STATE, "numba", False)
+    monkeypatch.setitem(_backend._STATE, "numba", False)
 
 
 def assert_same_fk(a, b, atol=1e-12):
@@ -53,7 +53,7 @@ def assert_same_fk(a, b, atol=1e-12):
 @needs_numba
 def test_auto_is_compiled_and_matches_the_reference(rc):
     got = ak.forward_kinematics(rc.q, rc.T_b_e, D)
-    assert "fk" in _dispatch._WARM and _dispatch._STATE["numba"] is True
+    assert "fk" in _dispatch._WARM and _backend._STATE["numba"] is True
     assert_same_fk(got, ak.robot.forward_kinematics(rc.q, rc.T_b_e, D))
     one = ak.forward_kinematics(rc.q[0], rc.T_b_e[0], D)       # the lean single-pose path
     assert_same_fk(one, ak.robot.forward_kinematics(rc.q[0], rc.T_b_e[0], D))
@@ -141,7 +141,7 @@ def test_without_numba_every_public_function_is_the_reference(rc, no_numba):
 
 def test_environment_variable_forces_the_reference(monkeypatch):
     monkeypatch.setenv("ATHENAKIN_BACKEND", "numpy")
-    monkeypatch.delitem(_dispatch._STATE, "numba", raising=False)
+    monkeypatch.delitem(_backend._STATE, "numba", raising=False)
     assert _dispatch.numba_available() is False
     assert _dispatch.resolve_backend("auto") is False
 
@@ -168,14 +168,14 @@ def test_numba_cache_falls_back_to_the_user_cache_dir(monkeypatch, tmp_path):
     monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     monkeypatch.delitem(sys.modules, "numba", raising=False)  # as before numba's first import
-    monkeypatch.setattr(_dispatch.os, "access", lambda path, mode: True)
-    _dispatch._configure_numba_cache()
-    assert "NUMBA_CACHE_DIR" not in _dispatch.os.environ      # writable: numba's default
-    monkeypatch.setattr(_dispatch.os, "access", lambda path, mode: False)
-    _dispatch._configure_numba_cache()
+    monkeypatch.setattr(_backend.os, "access", lambda path, mode: True)
+    _backend._configure_numba_cache()
+    assert "NUMBA_CACHE_DIR" not in _backend.os.environ      # writable: numba's default
+    monkeypatch.setattr(_backend.os, "access", lambda path, mode: False)
+    _backend._configure_numba_cache()
     if sys.platform.startswith("linux"):
-        assert _dispatch.os.environ["NUMBA_CACHE_DIR"] == str(tmp_path / "athenakin" / "numba")
-    assert _dispatch.os.environ["NUMBA_CACHE_DIR"] == _dispatch.user_cache_dir()
+        assert _backend.os.environ["NUMBA_CACHE_DIR"] == str(tmp_path / "athenakin" / "numba")
+    assert _backend.os.environ["NUMBA_CACHE_DIR"] == _backend.user_cache_dir()
 
 
 def test_a_long_first_call_says_so_on_stderr(monkeypatch, capsys):
@@ -203,7 +203,7 @@ def test_warmup_command(capsys, monkeypatch):
 
     assert main(["warmup"]) == 0
     assert "11 entry points ready" in capsys.readouterr().out
-    monkeypatch.setitem(_dispatch._STATE, "numba", False)
+    monkeypatch.setitem(_backend._STATE, "numba", False)
     assert main(["warmup"]) == 0
     assert "nothing to compile" in capsys.readouterr().out
 
@@ -247,6 +247,7 @@ def test_ik_fields_hold_the_full_results_values(rc, backend, fields):
         ak.inverse_kinematics(rc.T_b_e, u, D, fields=("q",), backend=backend)
 
 
+@needs_numba
 def test_fields_and_out_are_checked():
     with pytest.raises(ValueError, match=r"fields: expected names among"):
         ak.forward_kinematics([-0.1, 0.1, 0.45], T0, D, fields=("p", "tip"))
@@ -269,6 +270,7 @@ def test_T_b_s_is_stored_once_per_mode_and_expands_per_slot(rc):
     assert sol.mode.shape == (7, 16) and list(sol.mode[0]) == [1] * 8 + [-1] * 8
 
 
+@needs_numba
 def test_out_drops_stale_expansions(rc):
     out = ak.fast.forward_kinematics(rc.q[:4], rc.T_b_e[:4], D)
     stale = out.tip.copy()

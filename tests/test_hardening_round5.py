@@ -441,7 +441,7 @@ def test_winding_numbers_and_closed_surface():
 def test_compiled_capsule_pairs_match_on_near_crossing_segments(gap):
     """1.5: the compiled kernel of the clearance takes the same candidates and witnesses."""
     pytest.importorskip("numba")
-    from athenakin.fast._collision_kernels import capsule_distances, capsule_pairs
+    from athenakin.collision._kernels import capsule_distances, capsule_pairs
 
     p1, q1, p2, q2 = _crossing_pairs(2000, gap, seed=36)
     solids = np.ascontiguousarray(np.stack([np.stack([p1, q1], 1), np.stack([p2, q2], 1)], 1))

@@ -18,7 +18,7 @@ the two errors along the common axis to the distance (1e-6 m at 1e-7 rad; now
 a true pair of points on the segments, so it is exact for parallel (``n = 0``: the
 interior candidate is dropped), degenerate (zero length: the end-point candidates
 remain) and touching or crossing segments (distance 0), with no tolerance that
-decides a branch. The compiled kernel (:mod:`athenakin.fast._collision_kernels`)
+decides a branch. The compiled kernel (:mod:`athenakin.collision._kernels`)
 takes the same candidates and witnesses (comparing squared distances, with fused
 multiply-adds) and agrees with this reference to 1e-13 m (tested); where the closest
 points are not unique (overlapping parallel segments) the two may return different,

@@ -16,6 +16,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._backend import resolve_backend
 from .._dispatch import forward_kinematics
 from .._validation import broadcast_batch, check_array, check_choice
 from ..design import Design, resolve_design
@@ -359,14 +360,14 @@ def _compact(x: Arr) -> Arr:
 
 
 def _kernel(*, required: bool) -> Callable[..., None] | None:
-    """The compiled inverse-dynamics kernel, or None without numba (unless required)."""
-    try:
-        from ._kernel import inverse_dynamics_kernel
-    except ImportError:
-        if required:
-            raise ImportError("backend='numba' needs numba: pip install 'athenakin[fast]'"
-                              ) from None
+    """The compiled inverse-dynamics kernel where :mod:`athenakin._backend` says so, else None.
+
+    ``required``: ``backend="numba"`` (ImportError where numba is off), else ``"auto"``.
+    """
+    if not resolve_backend("numba" if required else "auto"):
         return None
+    from ._kernels import inverse_dynamics_kernel
+
     return inverse_dynamics_kernel
 
 

@@ -20,7 +20,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from .._backend import njit
 
 from .._mechanism_formulas import FORMULA_JOINTS, tree_joint_formula
 

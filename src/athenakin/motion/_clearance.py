@@ -177,7 +177,7 @@ class PoseClearance:
         """Least clearance (m; ``inf`` with no pair) and its pair for one tracked pose."""
         seg = self.points(q, p, u, O_s, d)[self.index]
         if self.environment is not None:
-            from .._dispatch import resolve_backend
+            from .._backend import resolve_backend
             from ..collision._clearance import segment_clearance
 
             pairs, dd, _ = segment_clearance(seg[None], np.ones(1, dtype=bool), self.bodies,
@@ -185,7 +185,7 @@ class PoseClearance:
                                              compiled=resolve_backend("auto"), witness=False)
             dist = dd[0]
         else:
-            from ..fast._collision_kernels import capsule_distances
+            from ..collision._clearance import capsule_distances
 
             pairs = self.pairs
             dist = capsule_distances(seg[None], self.radii, self.ij)[0]

@@ -248,7 +248,7 @@ def link_frames(model: UrdfModel, values: dict[str, NDArray[np.float64]],
     ndarray, shape (N, len(links), 7)
         ``tx, ty, tz`` (m, base frame) and ``qx, qy, qz, qw`` (``w >= 0``) of each link.
     """
-    from .._dispatch import numba_available
+    from .._backend import numba_available
 
     n = len(next(iter(values.values())))
     if out is None:
@@ -320,7 +320,7 @@ def quaternion_xyzw(R: NDArray[np.float64]) -> NDArray[np.float64]:
     so no division by a small number. Compiled where numba runs (the same numbers, bit
     for bit: :mod:`athenakin.fast._frame_kernels`).
     """
-    from .._dispatch import numba_available
+    from .._backend import numba_available
 
     if numba_available() and R.ndim == 3 and len(R):
         from ..fast._frame_kernels import quaternion_xyzw_into

@@ -574,13 +574,13 @@ def _scan(raw: bytes) -> list[Any] | None:
     Items in record order: ``(channel ids, log times, data, offsets, sizes)`` of the
     Messages between two definitions, ``(-opcode, body)`` for a Schema or Channel
     record. None (the record-by-record path) without numba, or when
-    :func:`athenakin.fast._mcap_kernels.scan_records` finds anything unusual.
+    :func:`athenakin.ros._kernels.scan_records` finds anything unusual.
     """
-    from .._dispatch import numba_available
+    from .._backend import numba_available
 
     if not numba_available() or not raw:
         return None
-    from ..fast._mcap_kernels import scan_records
+    from ._kernels import scan_records
 
     data = np.frombuffer(raw, dtype=np.uint8)
     cap = len(raw) // 9 + 1

@@ -4,7 +4,7 @@ One :class:`McapOutput` writes one file through a temporary file in the same
 folder, renamed into place only when everything is written: a failure (or
 Ctrl-C) leaves nothing, never a partial file. Messages are encoded by
 :mod:`._cdr` (vectorised over readings; where numba runs, the records of a chunk
-are filled by :func:`athenakin.fast._mcap_kernels.fill_records`, the same bytes)
+are filled by :func:`athenakin.ros._kernels.fill_records`, the same bytes)
 and written by :mod:`._mcap`, chunked and compressed (zstd level -3 unless told);
 the schemas are the ROS 2 message definitions
 (from rosbags' type store), so Foxglove, rosbags, mcap-ros2-support and
@@ -358,7 +358,7 @@ class RosEncoder:
 
 def _compiled() -> bool:
     """Whether :meth:`McapOutput.write_tracked` fills its records with the compiled kernel."""
-    from .._dispatch import numba_available
+    from .._backend import numba_available
 
     return numba_available()
 
@@ -696,7 +696,7 @@ class McapOutput:
         written at their offsets, the readings without a pose keeping only their status.
         """
         from ..fast._frame_kernels import joint_values_into, urdf_frames_into
-        from ..fast._mcap_kernels import fill_records
+        from ._kernels import fill_records
 
         plan = self._record_plan(keys, cids)
         (lengths, zero, code, hinge), (parent, origin, kind, axis, column, wanted) = \

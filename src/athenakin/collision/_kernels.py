@@ -18,7 +18,9 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import njit
+
+from .._backend import njit
+from ._distance import NOISE
 
 __all__ = ["capsule_pairs", "capsule_pairs_into", "capsule_distances", "capsule_distances_into",
            "segment_distance"]
@@ -28,9 +30,6 @@ __all__ = ["capsule_pairs", "capsule_pairs_into", "capsule_distances", "capsule_
 #: (tested); every candidate is still a true pair of points on the segments.
 _OPTS: dict[str, Any] = dict(error_model="numpy", cache=True, nogil=True,
                              fastmath={"contract"})
-#: As :data:`athenakin.collision._distance.NOISE` (the layers keep one value each; a test
-#: checks they agree).
-NOISE = 1e-12
 
 
 @njit(inline="always", **_OPTS)
