@@ -156,7 +156,7 @@ def _traj() -> Any:
 
 def _calib() -> Any:
     cal = ak.calibration
-    data = cal.synthetic_measurements(D, T0, n=24, rng=1)
+    data = cal.synthetic_measurements(T0, D, n=24, rng=1)
     return cal.calibrate(data.q, data.tips, T0, D)
 
 
@@ -230,7 +230,7 @@ def _files(tmp: Path) -> dict[str, Path]:
     out["q_csv"] = s
     m = tmp / "meas.csv"
     with contextlib.suppress(Exception):
-        data = ak.calibration.synthetic_measurements(D, T0, n=8, rng=2)
+        data = ak.calibration.synthetic_measurements(T0, D, n=8, rng=2)
         m.write_text(ak.calibration.measurements_csv_text(data.q, data.tips))
     out["meas_csv"] = m
     n = tmp / "ws.npz"
@@ -331,10 +331,10 @@ OVERRIDES: dict[str, Callable[[dict[str, Path]], tuple[tuple, dict]]] = {
     "calibration.analyse_jacobian": lambda f: ((np.eye(3), ("a", "b", "c")), {}),
     "calibration.resolve_parameters": lambda f: ((None, "base"), {}),
     "calibration.calibrate": lambda f: _calib_args(),
-    "calibration.check_measurements": lambda f: ((np.array([Q0]), D, T0), {}),
+    "calibration.check_measurements": lambda f: ((np.array([Q0]), T0, D), {}),
     "calibration.identifiability": lambda f: ((_calib_args()[0][0], T0, D), {}),
     "calibration.random_poses": lambda f: ((5, T0, D), dict(rng=1)),
-    "calibration.synthetic_measurements": lambda f: ((D, T0), dict(n=8, rng=1)),
+    "calibration.synthetic_measurements": lambda f: ((T0, D), dict(n=8, rng=1)),
     "synthesis.bounds_from_toml": lambda f: ((f["bounds"],), {}),
     "synthesis.check_bounds": lambda f: ((ak.synthesis.default_bounds(D),), {}),
     "synthesis.default_bounds": lambda f: ((D,), {}),
@@ -443,7 +443,7 @@ def _scipy_rot() -> Any:
 
 
 def _calib_args() -> tuple[tuple, dict]:
-    data = ak.calibration.synthetic_measurements(D, T0, n=24, rng=1)
+    data = ak.calibration.synthetic_measurements(T0, D, n=24, rng=1)
     return (data.q, data.tips, T0, D), {}
 
 

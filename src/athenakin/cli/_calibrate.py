@@ -125,7 +125,7 @@ def _run(args: argparse.Namespace, out: Path, outs: Outputs) -> int:
         res = cal.calibrate(data.q, data.tips, T, design, params=args.params, frame=args.frame,
                             axes=data.axes,
                             mode=_mode(args.mode) if data.mode is None else data.mode,
-                            loss=args.loss)
+                            options=cal.CalibrationOptions(loss=args.loss))
     for w in caught:
         print(f"warning: {w.message}")
     rows = [[n, f"{a:.9g}", f"{b:.9g}", f"{(b - a) * 1e6:+.2f}", f"{s * 1e6:.2f}"]

@@ -1,0 +1,148 @@
+"""The options objects of the public API (issue 28 item 3): frozen, every field checked at
+construction (a named error), a TOML round trip, and the defaults give the results the
+functions gave before the options existed."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import athenakin as ak
+from athenakin import calibration as cal
+from athenakin.errors import InvalidInputError
+
+D = ak.Design.default()
+T = ak.default_rcm_frame(D)
+
+
+def roundtrip(opts, tmp_path):
+    """to_toml -> file -> from_toml, and to_mapping -> from_mapping."""
+    f = tmp_path / "opts.toml"
+    f.write_text(D.to_toml() + opts.to_toml())       # beside other tables of the file
+    back = type(opts).from_toml(f)
+    assert back == opts
+    assert type(opts).from_mapping(opts.to_mapping()) == opts
+    return back
+
+
+# ------------------------------------------------------------------------------ calibration
+@pytest.mark.parametrize("opts", [
+    cal.CalibrationOptions(),
+    cal.CalibrationOptions(loss="soft_l1", f_scale=4e-5, sigma=2e-5, outlier_threshold=3.0,
+                           bad_rows="raise", max_bad_fraction=0.5, on_unidentifiable="warn",
+                           identifiability_tol=1e-6, tol=1e-12, max_nfev=50, axis_weight=0.2),
+])
+def test_calibration_options_toml_roundtrip(opts, tmp_path):
+    back = roundtrip(opts, tmp_path)
+    assert back.f_scale == opts.f_scale and back.sigma == opts.sigma   # None left out
+    assert cal.CalibrationOptions.from_toml(tmp_path / "opts.toml").to_toml() == opts.to_toml()
+
+
+def test_calibration_options_file_without_the_table_gives_defaults(tmp_path):
+    f = tmp_path / "d.toml"
+    f.write_text(D.to_toml())
+    assert cal.CalibrationOptions.from_toml(f) == cal.CalibrationOptions()
+
+
+@pytest.mark.parametrize("kw, exc, match", [
+    ({"axis_weight": 0.0}, InvalidInputError, "^axis_weight: "),
+    ({"axis_weight": None}, TypeError, "^axis_weight: "),
+    ({"loss": "l2"}, ValueError, "^loss: "),
+    ({"f_scale": -1.0}, InvalidInputError, "^f_scale: "),
+    ({"sigma": float("nan")}, InvalidInputError, "^sigma: "),
+    ({"sigma": 1e308}, InvalidInputError, "^sigma: "),
+    ({"outlier_threshold": None}, TypeError, "^outlier_threshold: "),
+    ({"bad_rows": "drop"}, ValueError, "^bad_rows: "),
+    ({"max_bad_fraction": 1.5}, InvalidInputError, "^max_bad_fraction: "),
+    ({"on_unidentifiable": "ignore"}, ValueError, "^on_unidentifiable: "),
+    ({"identifiability_tol": -1.0}, InvalidInputError, "^identifiability_tol: "),
+    ({"tol": 0.0}, InvalidInputError, "^tol: "),
+    ({"tol": "x"}, TypeError, "^tol: "),
+    ({"max_nfev": 0}, InvalidInputError, "^max_nfev: "),
+    ({"max_nfev": 2.5}, InvalidInputError, "^max_nfev: "),
+])
+def test_calibration_options_bad_field_named(kw, exc, match):
+    with pytest.raises(exc, match=match):
+        cal.CalibrationOptions(**kw)
+
+
+def test_calibration_options_bad_table_named(tmp_path):
+    f = tmp_path / "o.toml"
+    f.write_text('[calibration]\nloss = "soft_l1"\nsigmaa = 1e-5\n')
+    with pytest.raises(InvalidInputError, match=r"o\.toml: calibration: unknown key.*sigmaa"):
+        cal.CalibrationOptions.from_toml(f)
+    f.write_text('[calibration]\nmax_nfev = "many"\n')
+    with pytest.raises(InvalidInputError, match=r"o\.toml: calibration\.max_nfev: "):
+        cal.CalibrationOptions.from_toml(f)
+    with pytest.raises(TypeError, match="^options: expected CalibrationOptions"):
+        data = cal.synthetic_measurements(T, D, n=8, rng=1)
+        cal.calibrate(data.q, data.tips, T, D, options={"loss": "soft_l1"})
+
+
+def test_calibration_options_frozen():
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        cal.CalibrationOptions().loss = "huber"
+
+
+def test_calibrate_default_options_same_result():
+    """options=None, CalibrationOptions() and the values written out give one result."""
+    data = cal.synthetic_measurements(T, D, n=30, rng=4)
+    a = cal.calibrate(data.q, data.tips, T, D)
+    b = cal.calibrate(data.q, data.tips, T, D, options=cal.CalibrationOptions())
+    c = cal.calibrate(data.q, data.tips, T, D, options=cal.CalibrationOptions(
+        axis_weight=cal.DEFAULT_AXIS_WEIGHT, loss="linear", outlier_threshold=4.5,
+        bad_rows="exclude", max_bad_fraction=0.1, on_unidentifiable="raise",
+        identifiability_tol=cal.IDENTIFIABILITY_TOL, tol=1e-15, max_nfev=200))
+    for r in (b, c):
+        np.testing.assert_array_equal(r.estimates, a.estimates)
+        np.testing.assert_array_equal(r.covariance, a.covariance)
+
+
+# ------------------------------------------------------------------------------ synthetic
+def test_synthetic_options_toml_roundtrip(tmp_path):
+    for opts in (cal.SyntheticOptions(), cal.SyntheticOptions(
+            noise=1e-5, perturbation=1e-4, offset_std=2e-4, rcm_std=1e-3,
+            true={"l1": 0.3001, "q2_offset": 1e-4}, axis_noise=1e-4, encoder_resolution=1e-6,
+            outlier_fraction=0.1, outlier_size=1e-3)):
+        roundtrip(opts, tmp_path)
+        assert hash(opts) == hash(type(opts).from_mapping(opts.to_mapping()))
+
+
+@pytest.mark.parametrize("kw, exc, match", [
+    ({"noise": -1e-6}, InvalidInputError, "^noise: "),
+    ({"noise": 10**400}, InvalidInputError, "^noise: "),
+    ({"perturbation": "x"}, TypeError, "^perturbation: "),
+    ({"offset_std": float("inf")}, InvalidInputError, "^offset_std: "),
+    ({"rcm_std": -1.0}, InvalidInputError, "^rcm_std: "),
+    ({"true": 1.0}, TypeError, "^true: "),
+    ({"true": {"l7": 0.1}}, ValueError, "^true: unknown parameter 'l7'"),
+    ({"true": {"reg_rx": 0.1}}, ValueError, "^true: unknown parameter 'reg_rx'"),
+    ({"true": {"l1": float("nan")}}, InvalidInputError, r"^true\['l1'\]: "),
+    ({"axis_noise": -1.0}, InvalidInputError, "^axis_noise: "),
+    ({"encoder_resolution": -1.0}, InvalidInputError, "^encoder_resolution: "),
+    ({"outlier_fraction": 1.5}, InvalidInputError, "^outlier_fraction: "),
+    ({"outlier_size": None}, TypeError, "^outlier_size: "),
+])
+def test_synthetic_options_bad_field_named(kw, exc, match):
+    with pytest.raises(exc, match=match):
+        cal.SyntheticOptions(**kw)
+
+
+def test_synthetic_default_options_same_data():
+    a = cal.synthetic_measurements(T, D, n=20, rng=9)
+    b = cal.synthetic_measurements(T, D, n=20, rng=9, options=cal.SyntheticOptions(
+        noise=20e-6, perturbation=5e-4))
+    np.testing.assert_array_equal(a.tips, b.tips)
+    np.testing.assert_array_equal(a.q, b.q)
+
+
+# ------------------------------------------------------------------------------ argument order
+def test_design_comes_after_the_rcm_frame():
+    """(q..., T_b_e, design): a design given where T_b_e goes is a named error."""
+    q = cal.random_poses(5, T, D, rng=1)
+    assert np.all(cal.check_measurements(q, T, D).usable)
+    assert np.all(cal.check_measurements(q, T).usable)       # design defaults
+    with pytest.raises((TypeError, InvalidInputError), match="T_b_e|design"):
+        cal.check_measurements(q, D, T)
+    with pytest.raises((TypeError, InvalidInputError), match="T_b_e|design"):
+        cal.synthetic_measurements(D, T, n=4, rng=1)
