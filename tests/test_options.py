@@ -146,3 +146,178 @@ def test_design_comes_after_the_rcm_frame():
         cal.check_measurements(q, D, T)
     with pytest.raises((TypeError, InvalidInputError), match="T_b_e|design"):
         cal.synthetic_measurements(D, T, n=4, rng=1)
+
+
+# ------------------------------------------------------------------------------ synthesis
+def _collision_specs():
+    from athenakin.collision import Bodies, Environment
+    from athenakin.synthesis import CollisionSpec
+
+    env = Environment().halfspace([0, 0, -0.05], [0, 0, 1], name="table")
+    return [CollisionSpec(), CollisionSpec(bodies="scaled", margin=0.002, samples=500),
+            CollisionSpec(bodies=Bodies.default(D), environment=env)]
+
+
+def test_study_options_toml_roundtrip(tmp_path):
+    from athenakin.synthesis import StudyOptions
+
+    for opts in [StudyOptions(), StudyOptions(encoder_resolution=2e-6, chunk_size=64,
+                                              connect_timeout=2.0, retries=0, progress=False)]:
+        roundtrip(opts, tmp_path)
+    for spec in _collision_specs():
+        opts = StudyOptions(collision=spec)
+        f = tmp_path / "study.toml"
+        f.write_text(opts.to_toml())
+        back = StudyOptions.from_toml(f)
+        assert back.to_mapping() == opts.to_mapping()      # Bodies, Environment: same tables
+        assert back.collision.fingerprint() == spec.fingerprint()
+        if isinstance(spec.bodies, str) and spec.environment is None:
+            assert back == opts
+    assert "[study.collision]" in StudyOptions(collision=_collision_specs()[0]).to_toml()
+
+
+@pytest.mark.parametrize("kw, exc, match", [
+    ({"encoder_resolution": 0.0}, InvalidInputError, "^encoder_resolution: "),
+    ({"encoder_resolution": 1.0}, InvalidInputError, "^encoder_resolution: expected at most"),
+    ({"chunk_size": 0}, InvalidInputError, "^chunk_size: "),
+    ({"chunk_size": True}, TypeError, "^chunk_size: "),
+    ({"connect_timeout": float("nan")}, InvalidInputError, "^connect_timeout: "),
+    ({"retries": -1}, InvalidInputError, "^retries: "),
+    ({"progress": "yes"}, TypeError, "^progress: "),
+    ({"collision": "default"}, TypeError, "^collision: "),
+])
+def test_study_options_bad_field_named(kw, exc, match):
+    from athenakin.synthesis import StudyOptions
+
+    with pytest.raises(exc, match=match):
+        StudyOptions(**kw)
+
+
+@pytest.mark.parametrize("kw, exc, match", [
+    ({"bodies": "huge"}, InvalidInputError, "^bodies: "),
+    ({"bodies": None}, TypeError, "^bodies: "),
+    ({"bodies": 3}, TypeError, "^bodies: "),
+    ({"environment": "floor"}, TypeError, "^environment: "),
+    ({"margin": -1e-3}, InvalidInputError, "^margin: "),
+    ({"margin": 5.0}, InvalidInputError, "^margin: "),
+    ({"samples": 0}, InvalidInputError, "^samples: "),
+    ({"samples": 10**9}, InvalidInputError, "^samples: "),
+])
+def test_collision_spec_bad_field_named(kw, exc, match):
+    from athenakin.synthesis import CollisionSpec
+
+    with pytest.raises(exc, match=match):
+        CollisionSpec(**kw)
+
+
+def test_study_options_bad_table_named(tmp_path):
+    from athenakin.synthesis import StudyOptions
+
+    f = tmp_path / "s.toml"
+    f.write_text("[study]\nchunk_size = 8\nchunks = 3\n")
+    with pytest.raises(InvalidInputError, match=r"s\.toml: study: unknown key.*chunks"):
+        StudyOptions.from_toml(f)
+    f.write_text("[study.collision]\nmargin = -1.0\n")
+    with pytest.raises(InvalidInputError, match=r"s\.toml: margin: "):
+        StudyOptions.from_toml(f)
+    f.write_text("[study.collision]\nbodies = { capsules = 3 }\n")
+    with pytest.raises(InvalidInputError, match=r"s\.toml: collision\.bodies"):
+        StudyOptions.from_toml(f)
+
+
+def test_evaluate_default_options_same_table():
+    pytest.importorskip("dask")
+    pytest.importorskip("pandas")
+    import pandas as pd
+
+    from athenakin.synthesis import (
+        CollisionSpec,
+        StudyOptions,
+        Task,
+        default_bounds,
+        evaluate,
+        evaluate_design,
+        example_task_path,
+        random_designs,
+    )
+
+    task = Task.from_toml(example_task_path())
+    designs = [D, *random_designs(2, default_bounds(D), seed=3)]
+    kw = dict(samples=300, seed=2, scheduler="synchronous")
+    a = evaluate(designs, task, **kw)
+    b = evaluate(designs, task, **kw, options=StudyOptions(progress=False, chunk_size=8,
+                                                           encoder_resolution=1e-6))
+    pd.testing.assert_frame_equal(a, b, check_exact=True)
+    row = evaluate_design(D, task, samples=300, seed=2)
+    assert row["coverage"] == a.loc[0, "coverage"] and np.isnan(a.loc[0, "min_clearance"])
+    c = evaluate(designs[:1], task, **kw, options=StudyOptions(collision=CollisionSpec(
+        samples=200)))
+    from athenakin.synthesis import collision_spec
+
+    ref = evaluate_design(D, task, samples=300, seed=2,
+                          collision=collision_spec(collision_samples=200))
+    assert c.loc[0, "min_clearance"] == ref["min_clearance"]
+    with pytest.raises(TypeError, match="^options: expected StudyOptions"):
+        evaluate(designs, task, **kw, options={"chunk_size": 8})
+
+
+# ------------------------------------------------------------------------------ plot
+def test_plot_options_toml_roundtrip(tmp_path):
+    from athenakin.plot import PlotOptions
+
+    for opts in (PlotOptions(), PlotOptions(show_frames=False, show_labels=False,
+                                            show_circles=False, show_legend=False,
+                                            frame_length=0.05, view=(30, 45),
+                                            limits=([-0.5, -0.5, 0], [0.5, 0.5, 1]),
+                                            joint_scale=2.0)):
+        back = roundtrip(opts, tmp_path)
+        assert back.view == opts.view and back.limits == opts.limits
+
+
+@pytest.mark.parametrize("kw, exc, match", [
+    ({"show_frames": 1}, TypeError, "^show_frames: "),
+    ({"show_labels": "no"}, TypeError, "^show_labels: "),
+    ({"frame_length": 0.0}, InvalidInputError, "^frame_length: "),
+    ({"frame_length": 100.0}, InvalidInputError, "^frame_length: "),
+    ({"view": (1.0, 2.0, 3.0)}, InvalidInputError, "^view: "),
+    ({"view": (float("nan"), 0.0)}, InvalidInputError, "^view: "),
+    ({"limits": ([0, 0, 0], [0, 1, 1])}, InvalidInputError, "^limits: "),
+    ({"limits": [0, 0, 0]}, InvalidInputError, "^limits: "),
+    ({"joint_scale": -1.0}, InvalidInputError, "^joint_scale: "),
+])
+def test_plot_options_bad_field_named(kw, exc, match):
+    from athenakin.plot import PlotOptions
+
+    with pytest.raises(exc, match=match):
+        PlotOptions(**kw)
+
+
+def test_plot_robot_default_options_same_picture():
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from athenakin.plot import PlotOptions, plot_robot
+
+    def png(**kw):
+        ax = plot_robot(**kw)
+        ax.figure.canvas.draw()
+        img = np.asarray(ax.figure.canvas.buffer_rgba()).copy()
+        plt.close(ax.figure)
+        return img
+
+    a = png()
+    b = png(options=PlotOptions(show_frames=True, show_labels=True, show_circles=True,
+                                show_legend=True, frame_length=0.08, view=(20.0, -35.0),
+                                joint_scale=1.0))
+    np.testing.assert_array_equal(a, b)
+    with pytest.raises(TypeError, match="^options: expected PlotOptions"):
+        plot_robot(options={"view": (1, 2)})
+
+
+def test_point_workspace_takes_t_b_e_first():
+    pw = ak.analysis.point_workspace(T, D, resolution=5, progress=False)
+    again = ak.analysis.point_workspace(design=D, resolution=5, progress=False)
+    np.testing.assert_array_equal(pw.mode, again.mode)
+    with pytest.raises(TypeError, match=r"^T_b_e: .*point_workspace\(T_b_e, design\)"):
+        ak.analysis.point_workspace(D, resolution=5)

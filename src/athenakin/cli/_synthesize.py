@@ -140,13 +140,20 @@ def _collision_options(args: argparse.Namespace) -> dict[str, Any]:
 
 def _run(args: argparse.Namespace, task: Any, ref: Any, bounds: Any, out: Path,
          outs: Outputs, figs: dict[str, Path]) -> int:
-    from ..synthesis import evaluate, optimize, random_designs, row_from_design
+    from ..synthesis import (
+        StudyOptions,
+        collision_spec,
+        evaluate,
+        optimize,
+        random_designs,
+        row_from_design,
+    )
 
+    opts = StudyOptions(encoder_resolution=args.encoder_resolution,
+                        connect_timeout=args.connect_timeout, progress=not args.json,
+                        collision=collision_spec(**_collision_options(args)))
     common: dict[str, Any] = dict(samples=args.samples, seed=args.seed,
-                                  scheduler=args.scheduler,
-                                  encoder_resolution=args.encoder_resolution,
-                                  connect_timeout=args.connect_timeout,
-                                  **_collision_options(args))
+                                  scheduler=args.scheduler, options=opts)
     result: Any = None
     if args.min_clearance is not None and not args.optimize:
         raise ValueError("--min-clearance: a constraint of the search; use it with --optimize")
@@ -158,7 +165,7 @@ def _run(args: argparse.Namespace, task: Any, ref: Any, bounds: Any, out: Path,
             raise FileExistsError(f"{out}: exists and is not an empty folder; a search writes "
                                   f"a new one (-o)")
         result = optimize(task, bounds=bounds, reference=ref, population=args.population,
-                          generations=args.generations, progress=not args.json, **common)
+                          generations=args.generations, **common)
         df = result.table
         out.mkdir(parents=True, exist_ok=True)
         df.to_parquet(out / "part-000000.parquet", index=False)
@@ -166,7 +173,7 @@ def _run(args: argparse.Namespace, task: Any, ref: Any, bounds: Any, out: Path,
         rows = [row_from_design(ref) | {"name": ref.name}]
         if args.designs:
             rows += random_designs(args.designs, bounds, seed=args.seed, base=ref)
-        df = evaluate(rows, task, out=out, progress=not args.json, **common)
+        df = evaluate(rows, task, out=out, **common)
     files = [str(out)]
     if figs:
         _figures(df, result, task, ref, figs, args, outs)
