@@ -68,11 +68,12 @@ def test_calibration_options_bad_field_named(kw, exc, match):
 
 def test_calibration_options_bad_table_named(tmp_path):
     f = tmp_path / "o.toml"
-    f.write_text('[calibration]\nloss = "soft_l1"\nsigmaa = 1e-5\n')
-    with pytest.raises(InvalidInputError, match=r"o\.toml: calibration: unknown key.*sigmaa"):
+    f.write_text('[calibration_options]\nloss = "soft_l1"\nsigmaa = 1e-5\n')
+    with pytest.raises(InvalidInputError,
+                       match=r"o\.toml: calibration_options: unknown key.*sigmaa"):
         cal.CalibrationOptions.from_toml(f)
-    f.write_text('[calibration]\nmax_nfev = "many"\n')
-    with pytest.raises(InvalidInputError, match=r"o\.toml: calibration\.max_nfev: "):
+    f.write_text('[calibration_options]\nmax_nfev = "many"\n')
+    with pytest.raises(InvalidInputError, match=r"o\.toml: calibration_options\.max_nfev: "):
         cal.CalibrationOptions.from_toml(f)
     with pytest.raises(TypeError, match="^options: expected CalibrationOptions"):
         data = cal.synthetic_measurements(T, D, n=8, rng=1)
@@ -321,3 +322,62 @@ def test_point_workspace_takes_t_b_e_first():
     np.testing.assert_array_equal(pw.mode, again.mode)
     with pytest.raises(TypeError, match=r"^T_b_e: .*point_workspace\(T_b_e, design\)"):
         ak.analysis.point_workspace(D, resolution=5)
+
+
+# ------------------------------------------------------------------------------ the CLI reads them
+def test_cli_calibrate_reads_its_options_file(tmp_path, capsys):
+    """--options FILE: the [calibration_options] table; --loss overrides its loss."""
+    from pathlib import Path
+
+    from athenakin._compat import tomllib
+    from athenakin.cli import main
+
+    meas = Path(__file__).resolve().parents[1] / "examples" / "calibration" / "measurements.csv"
+    opts = tmp_path / "solver.toml"
+    opts.write_text(cal.CalibrationOptions(loss="soft_l1", outlier_threshold=4.0).to_toml())
+
+    def calibrated(name, *extra):
+        out = tmp_path / name
+        assert main(["calibrate", str(meas), "-o", str(out), "--no-report", *extra]) == 0
+        return tomllib.loads(out.read_text())["calibration"]
+
+    by_file = calibrated("a.toml", "--options", str(opts))
+    data = cal.read_measurements_csv(meas)
+    with pytest.warns(cal.CalibrationWarning):
+        direct = cal.calibrate(data.q, data.tips, T, D, options=cal.CalibrationOptions(
+            loss="soft_l1", outlier_threshold=4.0))
+    assert by_file["rows_outliers"] == int(direct.outliers.sum())
+    assert by_file["sigma"] == pytest.approx(direct.sigma, rel=1e-12)
+    linear = calibrated("b.toml", "--options", str(opts), "--loss", "linear")
+    assert linear["rows_outliers"] == calibrated("c.toml")["rows_outliers"]
+    opts.write_text('[calibration_options]\nloss = "l2"\n')
+    assert main(["calibrate", str(meas), "-o", str(tmp_path / "d.toml"), "--no-report",
+                 "--options", str(opts)]) != 0
+    assert "loss" in capsys.readouterr().err and not (tmp_path / "d.toml").exists()
+
+
+def test_cli_synthesize_reads_its_options_file(tmp_path, monkeypatch, capsys):
+    """--options FILE: the [study] table (and [study.collision]); flags override it."""
+    pytest.importorskip("dask")
+    pytest.importorskip("pandas")
+    pytest.importorskip("pyarrow")
+    import json
+
+    from athenakin.cli import main
+    from athenakin.synthesis import CollisionSpec, StudyOptions, read_study
+
+    monkeypatch.chdir(tmp_path)
+    f = tmp_path / "study.toml"
+    f.write_text(StudyOptions(chunk_size=2, encoder_resolution=2e-6,
+                              collision=CollisionSpec(samples=50)).to_toml())
+    argv = ["synthesize", "--samples", "200", "--designs", "3", "--no-figures", "--json"]
+    assert main([*argv, "-o", "a", "--options", str(f)]) == 0
+    capsys.readouterr()
+    meta = json.loads((tmp_path / "a" / "_study.json").read_text())
+    assert meta["chunk_size"] == 2 and meta["encoder_resolution"] == 2e-6
+    assert meta["collision"]["samples"] == 50 and read_study("a")["min_clearance"].notna().any()
+    assert main([*argv, "-o", "b", "--options", str(f), "--encoder-resolution", "1e-6",
+                 "--collision-samples", "40"]) == 0
+    meta = json.loads((tmp_path / "b" / "_study.json").read_text())
+    assert meta["encoder_resolution"] == 1e-6 and meta["collision"]["samples"] == 40
+    assert meta["chunk_size"] == 2

@@ -90,7 +90,7 @@ class CalibrationOptions(TomlOptions):
 
     Every field is checked here, at construction (a named error); the defaults give
     the results :func:`calibrate` gave before the options object existed. The
-    ``[calibration]`` table of a TOML file holds them (:meth:`to_toml`,
+    ``[calibration_options]`` table of a TOML file holds them (:meth:`to_toml`,
     :meth:`from_toml`; ``athenakin calibrate --options FILE``).
 
     Attributes
@@ -130,10 +130,10 @@ class CalibrationOptions(TomlOptions):
     >>> from athenakin.calibration import CalibrationOptions
     >>> o = CalibrationOptions(loss="soft_l1", sigma=2e-5)
     >>> print(o.to_toml().splitlines()[0:3])
-    ['[calibration]', 'axis_weight = 0.1', 'loss = "soft_l1"']
+    ['[calibration_options]', 'axis_weight = 0.1', 'loss = "soft_l1"']
     """
 
-    TOML_TABLE: ClassVar[str] = "calibration"
+    TOML_TABLE: ClassVar[str] = "calibration_options"   # [calibration]: a result's
 
     axis_weight: float = DEFAULT_AXIS_WEIGHT
     loss: Loss = "linear"
