@@ -340,8 +340,10 @@ def test_force_metrics_bound_every_tip_motion_within_speed_and_acceleration(stat
 
     q = states[0][:3]
     v, a = 0.1, 1.0
-    peak, cap = force_metrics(q, T, D, slot=[0, 0, 0], masses=M, tip_speed=v,
-                              tip_acceleration=a, f_max=50.0)
+    fm = force_metrics(q, T, D, slot=[0, 0, 0], masses=M, tip_speed=v,
+                       tip_acceleration=a, f_max=50.0)
+    peak, cap = fm.peak_actuator_force, fm.min_tip_force_capability
+    assert (fm.n_configurations, fm.n_valid, fm.n_peak) == (3, 3, 3)
     assert_allclose(cap, force_capability(q, T, D, masses=M, f_max=50.0).min_force.min(),
                     rtol=1e-12)
     rng = np.random.default_rng(4)

@@ -23,7 +23,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
     "foundation": ("errors", "_validation", "_compat", "_input", "_toml", "_csv", "_output",
                    "_serialize", "_transforms", "_figstyle", "_interrupt", "_backend",
                    "design"),
-    "maths core": ("study", "chain", "parallel", "testing"),
+    "maths core": ("study", "chain", "parallel", "testing", "_mechanism_formulas"),
     "numpy reference": ("robot", "symbolic"),
     "compiled kernels": ("fast",),
     "dispatch": ("_dispatch",),
@@ -38,9 +38,9 @@ LEVEL = {unit: i for i, units in enumerate(LAYERS.values()) for unit in units}
 #: Imports that the layer order allows but the design forbids (issue 28: robot finds the
 #: algebraic FK through a registry, athenakin/__init__.py imports symbolic for it).
 FORBIDDEN = {("robot", "symbolic")}
-#: Upward imports still to remove (issue 28, item 1: sim takes the export joint values from
-#: plot._geometry until both read the one mechanism model); this set only ever shrinks.
-KNOWN_UPWARD = {("sim", "plot")}
+#: Upward imports still to remove; this set only ever shrinks (sim's import of plot went
+#: with the one mechanism model, issue 28 item 1).
+KNOWN_UPWARD: set[tuple[str, str]] = set()
 
 
 def _unit(path: Path) -> str:

@@ -9,7 +9,7 @@ import numpy as np
 from .._dispatch import forward_kinematics
 from ..certified import CertifiedFK, CertStatus
 from ..design import Design
-from ..errors import Reason
+from ..errors import KinematicsError, Reason
 from ..robot import FKSolution
 from ._common import (
     add_design_option,
@@ -19,7 +19,9 @@ from ._common import (
     fmt,
     load_design,
     load_rcm,
+    mm_hint,
     table,
+    with_hint,
 )
 
 
@@ -120,7 +122,10 @@ def run(args: argparse.Namespace) -> int:
         return _run_certified(args, design, T)
     # the public function (backend="auto", as every user's call): the CLI shows what the
     # library gives; the first compiled call of a process loads the kernels from numba's cache
-    sol = forward_kinematics(np.array(args.q), T, design)
+    try:
+        sol = forward_kinematics(np.array(args.q), T, design)
+    except KinematicsError as exc:
+        raise with_hint(exc, mm_hint(args.q, design, "max |q|")) from None
     if args.json:
         print(dump_json({"q_m": args.q, "T_b_e": T, **fk_json(sol)}))
     else:

@@ -398,8 +398,9 @@ def _force_columns(q: NDArray[np.float64], mode: NDArray[np.int64], T: NDArray[n
 
     pick = np.unique(np.linspace(0, q.shape[0] - 1, min(FORCE_SAMPLES, q.shape[0])).astype(int))
     slot = np.where(mode[pick] == 1, 0, 8)
-    peak, cap = force_metrics(q[pick], T, design, slot=slot)
-    return {"peak_actuator_force": peak, "min_tip_force_capability": cap}
+    fm = force_metrics(q[pick], T, design, slot=slot)
+    return {"peak_actuator_force": fm.peak_actuator_force,
+            "min_tip_force_capability": fm.min_tip_force_capability}
 
 
 def metrics_or_reason(row: Mapping[str, Any], task: Task, *, samples: int, seed: int,

@@ -7,7 +7,6 @@ import dataclasses
 import hashlib
 import json
 import math
-import os
 import re
 import socket
 import struct
@@ -18,6 +17,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from .._output import atomic_path
 from .._toml import TomlOptions
 from .._validation import check_count, check_instance, check_path, check_scalar
 from ..design import Design
@@ -381,9 +381,8 @@ def _part_path(out: Path, i: int) -> Path:
 
 
 def _write_part(out: Path, i: int, df: Any) -> None:
-    tmp = out / f".part-{i:06d}.parquet.tmp"
-    df.to_parquet(tmp, index=False)
-    os.replace(tmp, _part_path(out, i))
+    with atomic_path(_part_path(out, i)) as tmp:   # the package's one atomic writer
+        df.to_parquet(tmp, index=False)
 
 
 def _prepare_out(out: Path, fingerprint: str, n_chunks: int, meta: dict[str, Any]
