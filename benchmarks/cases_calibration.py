@@ -36,11 +36,13 @@ def cases(quick: bool) -> list[dict]:
     d = ak.Design.default()
     T = ak.default_rcm_frame(d)
     n = 200
-    plain = cal.synthetic_measurements(d, T, n=n, noise=20e-6, rng=1)
-    base = cal.synthetic_measurements(d, T, n=n, noise=20e-6, offset_std=3e-4, rng=1)
-    tracker = cal.synthetic_measurements(d, T, n=n, noise=20e-6, offset_std=3e-4,
-                                         frame="tracker", true={"q1_offset": 0.0,
-                                                                "q2_offset": 0.0}, rng=2)
+    noise = cal.SyntheticOptions(noise=20e-6)
+    offsets = cal.SyntheticOptions(noise=20e-6, offset_std=3e-4)
+    plain = cal.synthetic_measurements(T, d, n=n, rng=1, options=noise)
+    base = cal.synthetic_measurements(T, d, n=n, rng=1, options=offsets)
+    tracker = cal.synthetic_measurements(
+        T, d, n=n, frame="tracker", rng=2, options=cal.SyntheticOptions(
+            noise=20e-6, offset_std=3e-4, true={"q1_offset": 0.0, "q2_offset": 0.0}))
     off = ["default", "offsets"]
     m = 300 if quick else 2000
     return [
@@ -63,7 +65,8 @@ def cases(quick: bool) -> list[dict]:
                                        params=["default", "q3_offset"])},
         {"name": "calibrate, soft_l1 robust loss (l1..l5, L, offsets)",
          "group": "calibration-solve", "batch": n,
-         "call": lambda: cal.calibrate(base.q, base.tips, T, d, params=off, loss="soft_l1")},
+         "call": lambda: cal.calibrate(base.q, base.tips, T, d, params=off,
+                                       options=cal.CalibrationOptions(loss="soft_l1"))},
         {"name": "plan_poses 30 of the candidates (l1..l5, L, offsets)",
          "group": "calibration-plan", "batch": m, "baseline": True,
          "call": lambda: cal.plan_poses(30, T, d, params=off, n_candidates=m, rng=3)},

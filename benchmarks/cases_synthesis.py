@@ -25,7 +25,7 @@ import itertools
 import numpy as np
 
 import athenakin as ak
-from athenakin.synthesis import Task, evaluate, evaluate_design, sample_task
+from athenakin.synthesis import StudyOptions, Task, evaluate, evaluate_design, sample_task
 
 _CLUSTERS: dict[int, object] = {}
 _SEEDS = itertools.count(1)
@@ -66,16 +66,16 @@ def _designs(n: int) -> list:
 
 def _study(n_workers: int, designs: list, task: Task, samples: int):
     def call():
-        evaluate(designs, task, samples=samples, seed=next(_SEEDS),
-                 scheduler=_client(n_workers), progress=False,
-                 chunk_size=max(1, len(designs) // 8))    # 8 chunks: 4 per worker of 2
+        evaluate(designs, task, samples=samples, seed=next(_SEEDS), scheduler=_client(n_workers),
+                 options=StudyOptions(progress=False,   # 8 chunks: 4 per worker of 2
+                                      chunk_size=max(1, len(designs) // 8)))
     return call
 
 
 def _local(scheduler, designs: list, task: Task, samples: int):
     def call():
         evaluate(designs, task, samples=samples, seed=next(_SEEDS), scheduler=scheduler,
-                 progress=False, chunk_size=max(1, len(designs) // 8))
+                 options=StudyOptions(progress=False, chunk_size=max(1, len(designs) // 8)))
     return call
 
 

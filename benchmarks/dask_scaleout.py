@@ -39,7 +39,7 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 import athenakin as ak
-from athenakin.synthesis import Task, evaluate, evaluate_design
+from athenakin.synthesis import StudyOptions, Task, evaluate, evaluate_design
 
 
 def _task() -> Task:
@@ -89,8 +89,8 @@ def run_cluster(n_workers: int, designs: list, samples: int, n_chunks: int,
     try:
         client.wait_for_workers(n_workers)
         client.run(_warm)
-        evaluate(designs[:2], _task(), samples=100, seed=0, scheduler=client, progress=False,
-                 chunk_size=1)                                   # the client's path, warm
+        evaluate(designs[:2], _task(), samples=100, seed=0, scheduler=client,
+                 options=StudyOptions(progress=False, chunk_size=1))   # the client's path, warm
         n_noop = 200
         client.gather(client.map(_noop, range(20), pure=False))          # warm the path
         t0 = time.perf_counter()
@@ -99,7 +99,7 @@ def run_cluster(n_workers: int, designs: list, samples: int, n_chunks: int,
         cpu0 = client.run(_cpu)
         c0, t0 = _cpu(), time.perf_counter()
         evaluate(designs, _task(), samples=samples, seed=seed, scheduler=client,
-                 progress=False, chunk_size=max(1, len(designs) // n_chunks))
+                 options=StudyOptions(progress=False, chunk_size=max(1, len(designs) // n_chunks)))
         wall, client_cpu = time.perf_counter() - t0, _cpu() - c0
         cpu1 = client.run(_cpu)
         worker_cpu = [cpu1[k] - cpu0[k] for k in cpu0]

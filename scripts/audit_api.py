@@ -156,12 +156,12 @@ def _traj() -> Any:
 
 def _calib() -> Any:
     cal = ak.calibration
-    data = cal.synthetic_measurements(D, T0, n=24, rng=1)
+    data = cal.synthetic_measurements(T0, D, n=24, rng=1)
     return cal.calibrate(data.q, data.tips, T0, D)
 
 
 def _point_ws() -> Any:
-    return ak.analysis.point_workspace(D, resolution=5)
+    return ak.analysis.point_workspace(design=D, resolution=5)
 
 
 def _task() -> Any:
@@ -230,7 +230,7 @@ def _files(tmp: Path) -> dict[str, Path]:
     out["q_csv"] = s
     m = tmp / "meas.csv"
     with contextlib.suppress(Exception):
-        data = ak.calibration.synthetic_measurements(D, T0, n=8, rng=2)
+        data = ak.calibration.synthetic_measurements(T0, D, n=8, rng=2)
         m.write_text(ak.calibration.measurements_csv_text(data.q, data.tips))
     out["meas_csv"] = m
     n = tmp / "ws.npz"
@@ -287,7 +287,7 @@ OVERRIDES: dict[str, Callable[[dict[str, Path]], tuple[tuple, dict]]] = {
     "analysis.singularity_loci": lambda f: ((D,), dict(n=21)),
     "analysis.singular_sets_within_strokes": lambda f: ((D,), dict(n=41)),
     "analysis.actuator_map": lambda f: ((D,), dict(resolution=5, progress=False)),
-    "analysis.point_workspace": lambda f: ((D,), dict(resolution=4, progress=False)),
+    "analysis.point_workspace": lambda f: ((T0, D), dict(resolution=4, progress=False)),
     "analysis.instrument_cone": lambda f: ((T0, D), dict(resolution=(5, 4, 4),
                                                          progress=False)),
     "analysis.tool_tip_workspace": lambda f: ((T0, D), dict(resolution=4, progress=False)),
@@ -331,21 +331,27 @@ OVERRIDES: dict[str, Callable[[dict[str, Path]], tuple[tuple, dict]]] = {
     "calibration.analyse_jacobian": lambda f: ((np.eye(3), ("a", "b", "c")), {}),
     "calibration.resolve_parameters": lambda f: ((None, "base"), {}),
     "calibration.calibrate": lambda f: _calib_args(),
-    "calibration.check_measurements": lambda f: ((np.array([Q0]), D, T0), {}),
+    "calibration.CalibrationOptions": lambda f: ((), dict(loss="soft_l1", sigma=2e-5)),
+    "calibration.SyntheticOptions": lambda f: ((), dict(noise=1e-5, true={"l1": 0.3})),
+    "calibration.check_measurements": lambda f: ((np.array([Q0]), T0, D), {}),
     "calibration.identifiability": lambda f: ((_calib_args()[0][0], T0, D), {}),
     "calibration.random_poses": lambda f: ((5, T0, D), dict(rng=1)),
-    "calibration.synthetic_measurements": lambda f: ((D, T0), dict(n=8, rng=1)),
+    "calibration.synthetic_measurements": lambda f: ((T0, D), dict(n=8, rng=1)),
     "synthesis.bounds_from_toml": lambda f: ((f["bounds"],), {}),
     "synthesis.check_bounds": lambda f: ((ak.synthesis.default_bounds(D),), {}),
     "synthesis.default_bounds": lambda f: ((D,), {}),
-    "synthesis.optimize": lambda f: ((TASK(),), dict(population=4, generations=1, samples=50,
-                                                     progress=False)),
+    "synthesis.optimize": lambda f: ((TASK(),), dict(
+        population=4, generations=1, samples=50,
+        options=ak.synthesis.StudyOptions(progress=False))),
     "synthesis.random_designs": lambda f: ((2, ak.synthesis.default_bounds(D)), {}),
     "synthesis.Task": lambda f: ((), dict(rcm=T0[:3, 3].copy(), axis=np.array([0, 0, -1.0]),
                                           half_angle=0.3, depth=(0.05, 0.1))),
+    "synthesis.StudyOptions": lambda f: ((), dict(chunk_size=4, progress=False)),
+    "synthesis.CollisionSpec": lambda f: ((), dict(margin=0.0, samples=10)),
     "synthesis.design_from_row": lambda f: ((ak.synthesis.row_from_design(D),), {}),
     "synthesis.design_rows": lambda f: (([D],), {}),
-    "synthesis.evaluate": lambda f: (([D], TASK()), dict(samples=50, progress=False)),
+    "synthesis.evaluate": lambda f: (([D], TASK()), dict(
+        samples=50, options=ak.synthesis.StudyOptions(progress=False))),
     "synthesis.evaluate_design": lambda f: ((D, TASK()), dict(samples=50)),
     "synthesis.reachability": lambda f: ((D, TASK()), dict(samples=50)),
     "synthesis.rcm_frame_from_axis": lambda f: ((T0[:3, 3].copy(), np.array([0, 0, -1.0])),
@@ -391,6 +397,7 @@ OVERRIDES: dict[str, Callable[[dict[str, Path]], tuple[tuple, dict]]] = {
     "plot.instrument_cone_path": lambda f: ((8, T0, D), {}),
     "plot.plot_fk_solutions": lambda f: ((Q0, T0, D), {}),
     "plot.plot_robot": lambda f: ((Q0, T0, D), {}),
+    "plot.PlotOptions": lambda f: ((), dict(show_labels=False, view=(30.0, 45.0))),
     "plot.capsule_surface": lambda f: (([0.0, 0.0, 0.0], [0.1, 0.0, 0.0], 0.01),
                                        dict(n_around=6, n_cap=2)),
     "plot.draw_bodies": lambda f: ((_axes_3d(), Q0, T0, D), dict(n_around=6)),
@@ -443,7 +450,7 @@ def _scipy_rot() -> Any:
 
 
 def _calib_args() -> tuple[tuple, dict]:
-    data = ak.calibration.synthetic_measurements(D, T0, n=24, rng=1)
+    data = ak.calibration.synthetic_measurements(T0, D, n=24, rng=1)
     return (data.q, data.tips, T0, D), {}
 
 

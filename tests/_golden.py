@@ -92,7 +92,7 @@ def compute() -> dict[str, Any]:
     # calibration: synthetic measurements, then the fit
     from athenakin import calibration
 
-    data = calibration.synthetic_measurements(d, T, n=40, rng=7)
+    data = calibration.synthetic_measurements(T, d, n=40, rng=7)
     out["cal.q"] = data.q
     out["cal.tips"] = data.tips
     res = calibration.calibrate(data.q, data.tips, T, d)

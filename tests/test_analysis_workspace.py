@@ -28,7 +28,7 @@ T_REF = ak.default_rcm_frame(DESIGN)
 
 @pytest.fixture(scope="module")
 def pw():
-    return point_workspace(DESIGN, resolution=(9, 25, 25))
+    return point_workspace(design=DESIGN, resolution=(9, 25, 25))
 
 
 @pytest.fixture(scope="module")
@@ -153,20 +153,20 @@ def test_progress_bar_and_chunking(capsys, monkeypatch):
     import athenakin.analysis._workspace as W
 
     monkeypatch.setattr(W, "CHUNK", 1000)
-    point_workspace(DESIGN, resolution=15, progress=True)
+    point_workspace(design=DESIGN, resolution=15, progress=True)
     assert "O_s workspace" not in capsys.readouterr().err    # not a terminal: no bar in logs
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
-    a = point_workspace(DESIGN, resolution=15, progress=True)
+    a = point_workspace(design=DESIGN, resolution=15, progress=True)
     assert "O_s workspace" in capsys.readouterr().err
     monkeypatch.setattr(W, "CHUNK", 65536)
-    b = point_workspace(DESIGN, resolution=15, progress=False)
+    b = point_workspace(design=DESIGN, resolution=15, progress=False)
     for f in ("mode", "reachable", "q", "condition"):
         np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
 
 
 @pytest.mark.parametrize("call, match", [
-    (lambda: point_workspace(DESIGN, resolution=1), "resolution: expected"),
-    (lambda: point_workspace(DESIGN, resolution=(5, 5)), "resolution: expected"),
+    (lambda: point_workspace(design=DESIGN, resolution=1), "resolution: expected"),
+    (lambda: point_workspace(design=DESIGN, resolution=(5, 5)), "resolution: expected"),
     (lambda: instrument_cone(T_REF, DESIGN, modes=(2,)), "modes: expected"),
     (lambda: tool_tip_workspace(np.stack([T_REF, T_REF]), DESIGN), r"T_b_e: expected shape"),
 ])

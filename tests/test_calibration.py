@@ -100,8 +100,10 @@ def test_model_reading_jacobian_is_the_package_tool_tip_jacobian():
     (["default", "offsets"], "base", {"offset_std": 3e-4, "axes": True}),
 ])
 def test_noise_free_data_recover_parameters_to_1e_9(params, frame, kw):
-    data = cal.synthetic_measurements(D, T, n=40, noise=0.0, axis_noise=0.0, frame=frame,
-                                      rng=20, **kw)
+    axes = kw.pop("axes", False)
+    data = cal.synthetic_measurements(T, D, n=40, frame=frame, axes=axes, rng=20,
+                                      options=cal.SyntheticOptions(noise=0.0, axis_noise=0.0,
+                                                                   **kw))
     res = cal.calibrate(data.q, data.tips, T, D, params=params, frame=frame, axes=data.axes)
     robot = [n for n in res.names if n in TRUTH_KEYS]
     est = np.array([res.parameters[n] for n in robot])
@@ -114,7 +116,7 @@ def test_noise_free_data_recover_parameters_to_1e_9(params, frame, kw):
 
 
 def test_interface_of_the_checks_default_parameters_and_design():
-    data = cal.synthetic_measurements(D, T, n=30, noise=0.0, rng=21)
+    data = cal.synthetic_measurements(T, D, n=30, rng=21, options=cal.SyntheticOptions(noise=0.0))
     res = cal.calibrate(data.q, data.tips, T, D)
     assert res.names == cal.DEFAULT_PARAMETERS
     assert isinstance(res.design, ak.Design)
@@ -127,11 +129,10 @@ def test_interface_of_the_checks_default_parameters_and_design():
 
 
 def test_mode_auto_picks_each_rows_assembly_mode():
-    a = cal.synthetic_measurements(D, T, n=10, noise=0.0, mode=-1, rng=23, perturbation=0.0,
-                                   true={"l1": 0.3003, "l4": 0.1498})
+    exact = cal.SyntheticOptions(noise=0.0, perturbation=0.0, true={"l1": 0.3003, "l4": 0.1498})
+    a = cal.synthetic_measurements(T, D, n=10, mode=-1, rng=23, options=exact)
     q = np.concatenate([a.q, cal.random_poses(20, T, D, rng=24)])
-    b = cal.synthetic_measurements(D, T, q=q[10:], noise=0.0, rng=23, perturbation=0.0,
-                                   true={"l1": 0.3003, "l4": 0.1498})
+    b = cal.synthetic_measurements(T, D, q=q[10:], rng=23, options=exact)
     tips = np.concatenate([a.tips, b.tips])
     res = cal.calibrate(q, tips, T, D, mode="auto")
     assert res.mode.tolist() == [-1] * 10 + [1] * 20
@@ -141,13 +142,15 @@ def test_mode_auto_picks_each_rows_assembly_mode():
 
 
 def test_mode_minus_one_is_followed():
-    data = cal.synthetic_measurements(D, T, n=12, noise=0.0, mode=-1, rng=22)
+    data = cal.synthetic_measurements(T, D, n=12, mode=-1, rng=22,
+                                      options=cal.SyntheticOptions(noise=0.0))
     res = cal.calibrate(data.q, data.tips, T, D, mode=-1)
     assert_allclose(res.estimates, truth(data, res.names), rtol=0, atol=1e-9)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", cal.CalibrationWarning)
         try:
-            wrong = cal.calibrate(data.q, data.tips, T, D, mode=1, max_bad_fraction=1.0)
+            wrong = cal.calibrate(data.q, data.tips, T, D, mode=1,
+                                  options=cal.CalibrationOptions(max_bad_fraction=1.0))
         except cal.CalibrationError as exc:
             assert "assembly mode" in str(exc)
         else:   # the other assembly mode does not explain the data
@@ -160,7 +163,8 @@ def test_mode_minus_one_is_followed():
 def test_tracker_frame_names_the_rail_shift_combination():
     q = cal.random_poses(30, T, D, rng=30)
     with pytest.raises(cal.NotIdentifiableError, match="q1_offset.*q2_offset") as ei:
-        data = cal.synthetic_measurements(D, T, q=q, noise=0.0, frame="tracker", rng=30)
+        data = cal.synthetic_measurements(T, D, q=q, frame="tracker", rng=30,
+                                          options=cal.SyntheticOptions(noise=0.0))
         cal.calibrate(data.q, data.tips, T, D, params=["default", "offsets", "rcm"],
                       frame="tracker")
     (combo,) = ei.value.combinations
@@ -184,7 +188,7 @@ def test_too_few_poses_is_a_named_error_with_combinations():
     q = cal.random_poses(2, T, D, rng=32)
     rep = cal.identifiability(q, T, D, params=["default", "offsets"])
     assert not rep.identifiable and len(rep.combinations) == 3   # 9 parameters, 6 rows
-    data = cal.synthetic_measurements(D, T, q=q, noise=0.0, rng=32)
+    data = cal.synthetic_measurements(T, D, q=q, rng=32, options=cal.SyntheticOptions(noise=0.0))
     with pytest.raises(cal.NotIdentifiableError, match="too few poses"):
         cal.calibrate(data.q, data.tips, T, D, params=["default", "offsets"])
 
@@ -195,13 +199,14 @@ def test_poses_that_cannot_separate_are_refused_or_warned():
     base = cal.random_poses(1, T, D, rng=33)[0]
     s = rng.uniform(-0.02, 0.02, 25)
     q = np.stack([base[0] + s, base[1] + s, base[2] + rng.uniform(-0.03, 0.03, 25)], axis=1)
-    data = cal.synthetic_measurements(D, T, q=q, noise=0.0, rng=33)
+    data = cal.synthetic_measurements(T, D, q=q, rng=33, options=cal.SyntheticOptions(noise=0.0))
     with pytest.raises(cal.NotIdentifiableError, match="inseparable") as ei:
         cal.calibrate(data.q, data.tips, T, D)
     assert any("l2" in c and "l3" in c for c in ei.value.combinations)
     assert isinstance(ei.value, KinematicsError)
     with pytest.warns(cal.CalibrationWarning, match="not identifiable"):
-        cal.calibrate(data.q, data.tips, T, D, on_unidentifiable="warn")
+        cal.calibrate(data.q, data.tips, T, D,
+                      options=cal.CalibrationOptions(on_unidentifiable="warn"))
 
 
 def test_parameter_without_effect_is_named():
@@ -219,7 +224,7 @@ def test_d_optimal_plan_beats_random_poses():
     params = ["default", "offsets"]
     plan = cal.plan_poses(20, T, D, params=params, n_candidates=600, rng=40)
     assert plan.q.shape == (20, 3) and len(np.unique(plan.q, axis=0)) == 20
-    assert np.all(cal.check_measurements(plan.q, D, T).usable)
+    assert np.all(cal.check_measurements(plan.q, T, D).usable)
     def logdet(q):
         rep = cal.identifiability(q, T, D, params=params)
         Jn = rep.singular_values
@@ -238,7 +243,7 @@ def test_plan_rejects_too_few_poses():
 # bad input
 # --------------------------------------------------------------------------------------
 def test_mismatched_lengths_and_shapes():
-    data = cal.synthetic_measurements(D, T, n=20, rng=50)
+    data = cal.synthetic_measurements(T, D, n=20, rng=50)
     with pytest.raises(InvalidInputError, match="mismatched lengths"):
         cal.calibrate(data.q, data.tips[:-1], T, D)
     with pytest.raises(InvalidInputError, match=r"expected shape \(N, 3\)"):
@@ -250,15 +255,15 @@ def test_mismatched_lengths_and_shapes():
     with pytest.raises(ValueError, match="frame='tracker'"):
         cal.calibrate(data.q, data.tips, T, D, params=["reg_tx"])
     with pytest.raises(InvalidInputError, match="sigma: expected a positive number"):
-        cal.calibrate(data.q, data.tips, T, D, sigma=-1.0)
+        cal.calibrate(data.q, data.tips, T, D, options=cal.CalibrationOptions(sigma=-1.0))
     with pytest.raises(ValueError, match="loss"):
-        cal.calibrate(data.q, data.tips, T, D, loss="l2")
+        cal.calibrate(data.q, data.tips, T, D, options=cal.CalibrationOptions(loss="l2"))
     with pytest.raises(TypeError, match="expected athenakin.Design"):
         cal.calibrate(data.q, data.tips, T, "design")
 
 
 def test_a_few_bad_rows_are_flagged_and_excluded():
-    data = cal.synthetic_measurements(D, T, n=40, noise=0.0, rng=51)
+    data = cal.synthetic_measurements(T, D, n=40, rng=51, options=cal.SyntheticOptions(noise=0.0))
     q, tips = data.q.copy(), data.tips.copy()
     tips[3, 1] = np.nan
     q[7, 0] = np.inf
@@ -271,11 +276,11 @@ def test_a_few_bad_rows_are_flagged_and_excluded():
     assert np.all(np.isnan(res.residuals_after[[3, 7, 9]]))
     assert_allclose(res.estimates, truth(data, res.names), rtol=0, atol=1e-9)
     with pytest.raises(InvalidInputError, match="3 of 40 rows cannot be used"):
-        cal.calibrate(q, tips, T, D, bad_rows="raise")
+        cal.calibrate(q, tips, T, D, options=cal.CalibrationOptions(bad_rows="raise"))
 
 
 def test_many_bad_rows_are_refused():
-    data = cal.synthetic_measurements(D, T, n=20, rng=52)
+    data = cal.synthetic_measurements(T, D, n=20, rng=52)
     tips = data.tips.copy()
     tips[:5] = np.nan
     with pytest.raises(InvalidInputError, match="more than 10%"):
@@ -283,10 +288,11 @@ def test_many_bad_rows_are_refused():
 
 
 def test_robust_loss_flags_the_outliers_and_matches_the_clean_fit():
-    data = cal.synthetic_measurements(D, T, n=80, noise=20e-6, outlier_fraction=0.05,
-                                      rng=53)
+    data = cal.synthetic_measurements(T, D, n=80, rng=53, options=cal.SyntheticOptions(
+        noise=20e-6, outlier_fraction=0.05))
     with pytest.warns(cal.CalibrationWarning, match="outliers"):
-        res = cal.calibrate(data.q, data.tips, T, D, loss="soft_l1")
+        res = cal.calibrate(data.q, data.tips, T, D,
+                            options=cal.CalibrationOptions(loss="soft_l1"))
     assert np.array_equal(res.outliers, data.outliers)
     clean = cal.calibrate(data.q[~data.outliers], data.tips[~data.outliers], T, D)
     assert_allclose(res.estimates, clean.estimates, rtol=0, atol=1e-12)
@@ -299,14 +305,17 @@ def test_robust_loss_flags_the_outliers_and_matches_the_clean_fit():
 def test_audit_options_named():
     """Audit of issue 13: options of the calibration reached numpy or float() unchecked
     (frame arrays, axis_weight=None, sigma=1e308 squared to inf, tol=None, mode=10**400)."""
-    data = cal.synthetic_measurements(D, T, n=12, rng=3)
+    data = cal.synthetic_measurements(T, D, n=12, rng=3)
     bad = [({"frame": np.array(["base", "base"])}, "frame"), ({"axis_weight": None}, "axis_weight"),
            ({"sigma": 1e308}, "sigma"), ({"outlier_threshold": None}, "outlier_threshold"),
            ({"identifiability_tol": 10**400}, "tol"), ({"tol": "x"}, "tol"),
            ({"max_nfev": float("nan")}, "max_nfev")]
     for kw, match in bad:
         with pytest.raises((TypeError, ValueError), match=match):
-            cal.calibrate(data.q, data.tips, T, D, **kw)
+            if "frame" in kw:
+                cal.calibrate(data.q, data.tips, T, D, **kw)
+            else:
+                cal.calibrate(data.q, data.tips, T, D, options=cal.CalibrationOptions(**kw))
     with pytest.raises(InvalidInputError, match="mode"):
         cal.random_poses(3, T, D, mode=10**400)
     with pytest.raises(TypeError, match="margin"):
@@ -316,7 +325,7 @@ def test_audit_options_named():
     for kw, match in (({"noise": 10**400}, "noise"), ({"true": 1.0}, "true"),
                       ({"outlier_fraction": float("inf")}, "outlier_fraction")):
         with pytest.raises((TypeError, ValueError), match=match):
-            cal.synthetic_measurements(D, T, n=4, rng=1, **kw)
+            cal.synthetic_measurements(T, D, n=4, rng=1, options=cal.SyntheticOptions(**kw))
     with pytest.raises((TypeError, ValueError), match="J"):
         cal.analyse_jacobian(None, ("a",))
 
@@ -347,7 +356,7 @@ def test_audit_identifiability_arguments_named():
     depth reached the internals unchecked."""
     with pytest.raises(ValueError, match="names"):
         cal.analyse_jacobian(np.zeros((3, 3)), ("a", "b", "c"))
-    data = cal.synthetic_measurements(D, T, n=12, rng=3)
+    data = cal.synthetic_measurements(T, D, n=12, rng=3)
     with pytest.raises(ValueError, match="frame"):
         cal.identifiability(data.q, T, D, frame=np.array(["base", "base"]))
     res = cal.calibrate(data.q, data.tips, T, D)

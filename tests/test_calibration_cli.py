@@ -29,7 +29,7 @@ def run(capsys, *argv):
 
 
 def test_measurement_csv_round_trip(tmp_path):
-    data = cal.synthetic_measurements(D, T, n=10, axes=True, rng=1)
+    data = cal.synthetic_measurements(T, D, n=10, axes=True, rng=1)
     path = tmp_path / "m.csv"
     path.write_text(cal.measurements_csv_text(data.q, data.tips, data.axes))
     back = cal.read_measurements_csv(path)
@@ -55,7 +55,8 @@ def test_malformed_csv_is_a_named_error(tmp_path, text, match):
 
 
 def test_mode_column_is_read_per_row(tmp_path, capsys):
-    data = cal.synthetic_measurements(D, T, n=12, noise=0.0, mode=-1, rng=6)
+    data = cal.synthetic_measurements(T, D, n=12, mode=-1, rng=6,
+                                      options=cal.SyntheticOptions(noise=0.0))
     text = cal.measurements_csv_text(data.q, data.tips).splitlines()
     head = next(i for i, ln in enumerate(text) if ln.startswith("q1_m"))
     text[head] += ",mode"
@@ -72,7 +73,7 @@ def test_mode_column_is_read_per_row(tmp_path, capsys):
 
 
 def test_tips_in_millimetres_are_caught(tmp_path):
-    data = cal.synthetic_measurements(D, T, n=30, noise=0.0, rng=7)
+    data = cal.synthetic_measurements(T, D, n=30, rng=7, options=cal.SyntheticOptions(noise=0.0))
     with pytest.warns(cal.CalibrationWarning, match="check the units"), \
             pytest.raises(cal.CalibrationError):
         cal.calibrate(data.q, data.tips * 1000, T, D)
@@ -124,7 +125,7 @@ def test_cli_report_is_checked_first_and_written_with_the_toml(tmp_path, capsys)
 
 
 def test_html_report(tmp_path):
-    data = cal.synthetic_measurements(D, T, n=20, rng=5)
+    data = cal.synthetic_measurements(T, D, n=20, rng=5)
     res = cal.calibrate(data.q, data.tips, T, D)
     files = cal.write_report(res, tmp_path / "r.html", figures=False)
     text = files[0].read_text()
@@ -133,7 +134,7 @@ def test_html_report(tmp_path):
 
 
 def test_cli_tracker_frame_without_report(tmp_path, capsys):
-    data = cal.synthetic_measurements(D, T, n=30, frame="tracker", rng=3)
+    data = cal.synthetic_measurements(T, D, n=30, frame="tracker", rng=3)
     src = tmp_path / "m.csv"
     src.write_text(cal.measurements_csv_text(data.q, data.tips, frame="tracker"))
     out = tmp_path / "c.toml"
@@ -154,7 +155,7 @@ def test_cli_plan_writes_poses_that_read_back(tmp_path, capsys):
     assert "wrote 15 poses" in text
     plan = cal.read_measurements_csv(out, require_tips=False)
     assert plan.q.shape == (15, 3) and plan.tips is None
-    assert np.all(cal.check_measurements(plan.q, D, T).usable)
+    assert np.all(cal.check_measurements(plan.q, T, D).usable)
 
 
 @pytest.mark.parametrize("args, match", [
@@ -170,7 +171,8 @@ def test_cli_errors(tmp_path, capsys, args, match):
 
 def test_cli_unidentifiable_data_is_refused(tmp_path, capsys):
     q = cal.random_poses(30, T, D, rng=4)
-    data = cal.synthetic_measurements(D, T, q=q, noise=0.0, frame="tracker", rng=4)
+    data = cal.synthetic_measurements(T, D, q=q, frame="tracker", rng=4,
+                                      options=cal.SyntheticOptions(noise=0.0))
     src = tmp_path / "m.csv"
     src.write_text(cal.measurements_csv_text(data.q, data.tips))
     code, _, err = run(capsys, "calibrate", src, "-o", tmp_path / "c.toml", "--frame",

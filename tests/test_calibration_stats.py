@@ -25,7 +25,9 @@ def test_z_scores_over_30_seeds_are_standard_normal(params, kw):
     """20 um noise, 80 poses: (estimate - truth) / std ~ N(0, 1) pooled over 30 seeds."""
     z = []
     for seed in range(30):
-        data = cal.synthetic_measurements(D, T, n=80, noise=NOISE, rng=1000 + seed, **kw)
+        data = cal.synthetic_measurements(
+            T, D, n=80, rng=1000 + seed, frame=kw.get("frame", "base"),
+            options=cal.SyntheticOptions(noise=NOISE, offset_std=kw.get("offset_std", 0.0)))
         res = cal.calibrate(data.q, data.tips, T, D, params=params,
                             frame=kw.get("frame", "base"))
         robot = [i for i, n in enumerate(res.names) if not n.startswith("reg_")]
@@ -49,8 +51,9 @@ def test_reported_covariance_matches_monte_carlo_over_noise():
     q = cal.random_poses(80, T, D, rng=7)
     est, covs = [], []
     for seed in range(150):
-        data = cal.synthetic_measurements(D, T, q=q, noise=NOISE, rng=np.random.default_rng(
-            [7, seed]), perturbation=0.0, true=TRUE)
+        data = cal.synthetic_measurements(T, D, q=q, rng=np.random.default_rng([7, seed]),
+                                          options=cal.SyntheticOptions(
+                                              noise=NOISE, perturbation=0.0, true=TRUE))
         res = cal.calibrate(data.q, data.tips, T, D, params=["default", "offsets"])
         est.append(res.estimates)
         covs.append(res.covariance)
@@ -67,7 +70,8 @@ def test_reported_covariance_matches_monte_carlo_over_noise():
 
 
 def test_first_order_tip_error_matches_monte_carlo():
-    data = cal.synthetic_measurements(D, T, n=40, noise=NOISE, offset_std=3e-4, rng=8)
+    data = cal.synthetic_measurements(T, D, n=40, rng=8,
+                                      options=cal.SyntheticOptions(noise=NOISE, offset_std=3e-4))
     res = cal.calibrate(data.q, data.tips, T, D, params=["default", "offsets"])
     q = cal.random_poses(6, T, D, rng=9)
     for resolution in (0.0, 20e-6):
@@ -84,7 +88,8 @@ def test_first_order_tip_error_matches_monte_carlo():
 
 
 def test_tip_error_map_over_the_cone():
-    data = cal.synthetic_measurements(D, T, n=40, noise=NOISE, rng=11)
+    data = cal.synthetic_measurements(T, D, n=40, rng=11,
+                                      options=cal.SyntheticOptions(noise=NOISE))
     res = cal.calibrate(data.q, data.tips, T, D)
     m = cal.tip_error_map(res, resolution=(24, 13), encoder_resolution=10e-6)
     assert m.rms.shape == (24, 13) and m.q.shape == (24, 13, 3)
@@ -106,10 +111,10 @@ def test_d_optimal_plan_gives_smaller_standard_deviations():
     params = ["default", "offsets"]
     plan = cal.plan_poses(30, T, D, params=params, n_candidates=800, rng=12)
     rnd = cal.random_poses(30, T, D, rng=13)
-    kw = dict(noise=NOISE, offset_std=3e-4, true={"l2": 0.1003})
+    noise = cal.SyntheticOptions(noise=NOISE, offset_std=3e-4, true={"l2": 0.1003})
     res_p = cal.calibrate(*(lambda d: (d.q, d.tips))(cal.synthetic_measurements(
-        D, T, q=plan.q, rng=14, **kw)), T, D, params=params)
+        T, D, q=plan.q, rng=14, options=noise)), T, D, params=params)
     res_r = cal.calibrate(*(lambda d: (d.q, d.tips))(cal.synthetic_measurements(
-        D, T, q=rnd, rng=14, **kw)), T, D, params=params)
+        T, D, q=rnd, rng=14, options=noise)), T, D, params=params)
     # the determinant (product of the std devs, roughly) is what the plan optimises
     assert np.sum(np.log(res_p.std)) < np.sum(np.log(res_r.std))

@@ -437,32 +437,39 @@ def test_evaluate_design_scaled_bodies_follow_l1() -> None:
 def test_synthesis_bad_collision_options_are_named(kw: dict, err: type, match: str) -> None:
     pytest.importorskip("dask")
     pytest.importorskip("pandas")
-    from athenakin.synthesis import evaluate
+    from athenakin.synthesis import StudyOptions, collision_spec, evaluate
 
     with pytest.raises(err, match=match):
-        evaluate([D], _task(), samples=100, scheduler="synchronous", **kw)  # type: ignore[arg-type]
+        evaluate([D], _task(), samples=100, scheduler="synchronous",  # type: ignore[arg-type]
+                 options=StudyOptions(collision=collision_spec(**kw)))
 
 
 def test_evaluate_study_with_collisions(tmp_path) -> None:
     pytest.importorskip("dask")
     pytest.importorskip("pandas")
-    from athenakin.synthesis import StudyMismatchError, evaluate, evaluate_design
+    from athenakin.synthesis import (
+        CollisionSpec,
+        StudyMismatchError,
+        StudyOptions,
+        evaluate,
+        evaluate_design,
+    )
     from athenakin.synthesis._metrics import collision_spec
 
     task = _task()
     designs = [D, ak.Design(l1=0.35, l2=0.1, l3=0.25, l4=0.15, l5=0.4, q_min=D.q_min,
                             q_max=D.q_max)]
     out = tmp_path / "study"
-    df = evaluate(designs, task, samples=800, scheduler="synchronous", out=out,  # type: ignore[arg-type]
-                  bodies="scaled", collision_samples=500)
+    df = evaluate(designs, task, samples=800, scheduler="synchronous", out=out,
+                  options=StudyOptions(collision=CollisionSpec(bodies="scaled", samples=500)))
     for i, d in enumerate(designs):
         m = evaluate_design(d, task, samples=800,  # type: ignore[arg-type]
                             collision=collision_spec(bodies="scaled", collision_samples=500))
         assert df["collision_free_coverage"].iloc[i] == m["collision_free_coverage"]
         assert df["min_clearance"].iloc[i] == m["min_clearance"]
     # resuming the same study reads it back; the same folder without the check is another study
-    again = evaluate(designs, task, samples=800, scheduler="synchronous", out=out,  # type: ignore[arg-type]
-                     bodies="scaled", collision_samples=500)
+    again = evaluate(designs, task, samples=800, scheduler="synchronous", out=out,
+                     options=StudyOptions(collision=CollisionSpec(bodies="scaled", samples=500)))
     assert again["min_clearance"].tolist() == df["min_clearance"].tolist()
     with pytest.raises(StudyMismatchError):
         evaluate(designs, task, samples=800, scheduler="synchronous", out=out)  # type: ignore[arg-type]
@@ -555,7 +562,7 @@ def test_tool_tip_and_point_workspace_collision_layers(tmp_path) -> None:
                               res.mode, T, bodies=BODIES, environment=env)
     assert_allclose(tw.clearance.ravel(), ref, rtol=0, atol=1e-12)
     np.testing.assert_array_equal(tw.collision_free, tw.reachable & (tw.clearance >= 0))
-    pw = point_workspace(D, resolution=7, bodies=BODIES, clearance_margin=0.0)
+    pw = point_workspace(design=D, resolution=7, bodies=BODIES, clearance_margin=0.0)
     P = np.stack(np.meshgrid(pw.x, pw.y, pw.z, indexing="ij"), -1).reshape(-1, 3)
     r = pw.reachable.ravel()
     ref = _labelled_reference(pw.q.reshape(-1, 3), r, np.zeros(len(P), bool),
@@ -578,11 +585,11 @@ def test_workspace_bad_collision_options_are_named() -> None:
     with pytest.raises(TypeError, match="bodies"):
         instrument_cone(T, D, resolution=4, bodies={"link_a": 0.1})
     with pytest.raises(TypeError, match="environment"):
-        point_workspace(D, resolution=4, environment="floor")
+        point_workspace(design=D, resolution=4, environment="floor")
     with pytest.raises(InvalidInputError, match="T_b_e"):
-        point_workspace(D, resolution=4, clearance_margin=0.0, T_b_e=np.eye(4)[:3])
-    with pytest.raises(InvalidInputError, match="collision check only"):
-        point_workspace(D, resolution=4, T_b_e=T)
+        point_workspace(design=D, resolution=4, clearance_margin=0.0, T_b_e=np.eye(4)[:3])
+    with pytest.raises(InvalidInputError, match="T_b_e"):      # checked even without the check
+        point_workspace(np.eye(4)[:3], D, resolution=4)
 
 
 def test_workspace_figures_show_the_collision_layers() -> None:
@@ -665,13 +672,13 @@ def test_plot_robot_draws_the_bodies_and_the_closest_pair() -> None:
     import matplotlib.pyplot as plt
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-    from athenakin.plot import plot_robot
+    from athenakin.plot import PlotOptions, plot_robot
     from athenakin.plot._solids import BODY_COLORS, CLOSEST_COLOR, COLLIDING_COLOR, draw_bodies
 
     sticks = plot_robot(Q0, T, D)
     n0 = sum(isinstance(c, Poly3DCollection) for c in sticks.collections)
     plt.close(sticks.figure)
-    ax = plot_robot(Q0, T, D, bodies=True, show_labels=False)
+    ax = plot_robot(Q0, T, D, bodies=True, options=PlotOptions(show_labels=False))
     solids = [c for c in ax.collections if isinstance(c, Poly3DCollection)]
     assert len(solids) - n0 == len(BODIES.names)
     texts = [t.get_text() for t in ax.texts]

@@ -44,7 +44,7 @@ def test_3d_tick_labels_of_the_analysis_figures_do_not_touch(fresh) -> None:
 
     figs = [F.figure_instrument_cone(instrument_cone(T, D, resolution=(25, 13, 16)),
                                      reference_q=ak.robot.REFERENCE_Q),
-            F.figure_workspace(point_workspace(D, resolution=25)),
+            F.figure_workspace(point_workspace(design=D, resolution=25)),
             F.figure_singularities(D, am=actuator_map(D, resolution=41))]
     n3d = 0
     for fig in figs:
@@ -77,7 +77,7 @@ def test_tidy_3d_axes_prunes_the_corner_ticks(fresh) -> None:
 def calibration_result():
     cal = pytest.importorskip("athenakin.calibration")
     pytest.importorskip("scipy")
-    data = cal.synthetic_measurements(D, T, n=40, noise=20e-6, rng=3)
+    data = cal.synthetic_measurements(T, D, n=40, rng=3)   # 20 um tracker noise (default)
     return cal.calibrate(data.q, data.tips, T, D)
 
 
@@ -188,9 +188,9 @@ def test_fk_grid_titles_sit_above_the_drawing_and_are_legible(fresh) -> None:
 
 
 def test_robot_view_legend_names_the_other_mode_marker(fresh) -> None:
-    from athenakin.plot import plot_robot
+    from athenakin.plot import PlotOptions, plot_robot
 
-    ax = plot_robot(show_labels=False)
+    ax = plot_robot(options=PlotOptions(show_labels=False))
     texts = [t.get_text() for t in ax.get_legend().get_texts()]
     assert "O_i of the other assembly mode" in texts
 

@@ -74,7 +74,7 @@ RAISES = [
      InvalidInputError, r"^n: "),
     ("plan_poses_candidates", lambda: ak.calibration.plan_poses(10, T, D, n_candidates=10**9),
      InvalidInputError, r"^n_candidates: "),
-    ("synthetic_n", lambda: ak.calibration.synthetic_measurements(D, T, n=10**9),
+    ("synthetic_n", lambda: ak.calibration.synthetic_measurements(T, D, n=10**9),
      InvalidInputError, r"^n: "),
     ("random_configurations_n", lambda: ak.testing.random_configurations(10**9, D, rng=0),
      InvalidInputError, r"^n: "),
@@ -103,7 +103,7 @@ RAISES = [
     ("near_singular_list_name", lambda: ak.analysis.near_singular_configurations(
         ["auto"], [0.1], D), InvalidInputError, r"^name: "),
     ("check_measurements_empty_frame", lambda: ak.calibration.check_measurements(
-        np.zeros((5, 3)), D, np.zeros((0, 4, 4))), InvalidInputError, r"^T_b_e: .*\(4, 4\)"),
+        np.zeros((5, 3)), np.zeros((0, 4, 4)), D), InvalidInputError, r"^T_b_e: .*\(4, 4\)"),
     ("calibrate_nan_frame", lambda: ak.calibration.calibrate(
         np.tile(ak.robot.REFERENCE_Q, (10, 1)), np.zeros((10, 3)), _bad_frame(), D),
      InvalidInputError, r"^T_b_e: "),

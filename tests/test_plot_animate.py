@@ -125,7 +125,8 @@ def test_every_frame_shows_the_whole_sweep():
     lo, hi = cube_limits(*geoms[0].bounds())
     fig = plt.figure(figsize=(6.4, 6.0), dpi=100)
     ax = fig.add_subplot(projection="3d")
-    draw_motion_frame(ax, geoms, 0, limits=(lo, hi), show_labels=False)
+    draw_motion_frame(ax, geoms, 0, limits=(lo, hi),
+                      options=ak.plot.PlotOptions(show_labels=False))
     fig.canvas.draw()
     img = np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(float)
     target = 255 * np.array(to_rgb(TRACE_COLOR))

@@ -108,7 +108,7 @@ def test_instrument_cone_figure_labels_inside_and_in_mm(cone):
 
 def test_conditioning_modes_share_one_colour_range_and_bar():
     am = actuator_map(D, resolution=31)
-    pw = point_workspace(D, resolution=9)
+    pw = point_workspace(design=D, resolution=9)
     fig = F.figure_conditioning(am, pw)
     fig.set_dpi(40)
     panels = [a for a in fig.axes if a.get_title().startswith("dO_s/dq, mode")]

@@ -13,6 +13,7 @@ from mpl_toolkits.mplot3d import proj3d  # noqa: E402
 import athenakin as ak  # noqa: E402
 from athenakin.plot import (  # noqa: E402
     COLORS,
+    PlotOptions,
     plot_fk_solutions,
     plot_robot,
     robot_geometry,
@@ -99,7 +100,8 @@ def test_parts_are_where_they_project_over_seeded_configurations():
     for qi, slot in picks:
         ax.cla()
         g = robot_geometry(qi, T, d, slot=slot)
-        plot_robot(geometry=g, ax=ax, show_frames=False, show_labels=False)
+        plot_robot(geometry=g, ax=ax,
+                   options=PlotOptions(show_frames=False, show_labels=False))
         img = render(ax)
         seen = parts_seen(ax, img, g)
         assert min(seen.values()) >= 0.6, (qi, slot, seen)
@@ -110,7 +112,8 @@ def test_parts_are_where_they_project_over_seeded_configurations():
 def test_a_part_is_not_where_another_configuration_puts_it(fresh_axes):
     """Slot 0 draws the instrument downwards; slot 4's (upwards) instrument is not in the image."""
     g0, g4 = robot_geometry(slot=0), robot_geometry(slot=4)
-    ax = plot_robot(geometry=g0, ax=fresh_axes, show_frames=False, show_labels=False)
+    ax = plot_robot(geometry=g0, ax=fresh_axes,
+                    options=PlotOptions(show_frames=False, show_labels=False))
     img = render(ax)
     a, b = g4.segments()["instrument"]
     far = [a + t * (b - a) for t in (0.6, 0.7, 0.8, 0.9)]
@@ -122,7 +125,7 @@ def test_views_differ_by_configuration_and_camera(fresh_axes):
     fresh_axes.cla()
     img4 = render(plot_robot(ax=fresh_axes, slot=4))
     fresh_axes.cla()
-    img_cam = render(plot_robot(ax=fresh_axes, slot=0, view=(60.0, 30.0)))
+    img_cam = render(plot_robot(ax=fresh_axes, slot=0, options=PlotOptions(view=(60.0, 30.0))))
     assert np.mean(np.abs(img0 - img4)) > 1.0
     assert np.mean(np.abs(img0 - img_cam)) > 1.0
 

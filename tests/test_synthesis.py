@@ -13,6 +13,7 @@ import athenakin as ak
 from athenakin.errors import InvalidInputError
 from athenakin.synthesis import (
     METRIC_COLUMNS,
+    StudyOptions,
     Task,
     TaskFileError,
     evaluate_design,
@@ -205,7 +206,8 @@ def test_invalid_designs_are_flagged_rows_not_an_abort() -> None:
     good = row_from_design(REF)
     rows = [REF, dict(good, l3=-0.25), dict(good, q1_min=0.2),
             dict(good, q3_min=0.01, q3_max=0.02), dict(good, l1="long")]
-    df = evaluate(rows, _task(), samples=400, seed=0, scheduler="synchronous", progress=False)
+    df = evaluate(rows, _task(), samples=400, seed=0, scheduler="synchronous",
+                  options=StudyOptions(progress=False))
     assert isinstance(df, pd.DataFrame) and list(df["design"]) == [0, 1, 2, 3, 4]
     assert df["valid"].tolist() == [True, False, False, False, False]
     assert "l3: expected a positive number" in df["reason"][1]
@@ -314,7 +316,8 @@ def test_mapping_without_strokes_is_an_unlimited_design_in_the_table() -> None:
     from athenakin.synthesis import evaluate
 
     row = {"l1": 0.3, "l2": 0.1, "l3": 0.25, "l4": 0.15, "l5": 0.4, "name": math.nan}
-    df = evaluate([row], _task(), samples=300, seed=0, scheduler="synchronous", progress=False)
+    df = evaluate([row], _task(), samples=300, seed=0, scheduler="synchronous",
+                  options=StudyOptions(progress=False))
     r = df.iloc[0]
     assert r["valid"] and r["name"] == "" and r["tool_length"] == REF.tool_length
     assert r["q1_min"] == -math.inf and r["q3_max"] == math.inf and r["size"] == math.inf

@@ -23,6 +23,7 @@ from athenakin.synthesis import (  # noqa: E402
     CHUNK_SIZE,
     SchedulerUnreachableError,
     StudyMismatchError,
+    StudyOptions,
     Task,
     evaluate,
     read_study,
@@ -75,7 +76,7 @@ def designs() -> list[object]:
 @pytest.fixture(scope="module")
 def reference(task: Task, designs: list[object]) -> object:
     return evaluate(designs, task, samples=SAMPLES, seed=SEED, scheduler="synchronous",
-                    progress=False)
+                    options=StudyOptions(progress=False))
 
 
 @pytest.fixture(scope="module")
@@ -88,7 +89,7 @@ def cluster(reference: object) -> object:   # after the reference: numba's cache
 
 def test_cluster_by_address_identical_to_local(cluster, task, designs, reference) -> None:
     df = evaluate(designs, task, samples=SAMPLES, seed=SEED, scheduler=cluster.scheduler_address,
-                  progress=False)
+                  options=StudyOptions(progress=False))
     _assert_same_study(df, reference)
     assert list(df["design"]) == list(range(len(designs)))
     assert not df["valid"].iloc[-1] and "l2" in df["reason"].iloc[-1]
@@ -108,7 +109,7 @@ def test_killed_worker_is_survived(cluster, task, designs, reference) -> None:
                 killed.append((done, total))
 
         df = evaluate(designs, task, samples=SAMPLES, seed=SEED, scheduler=client,
-                      on_chunk=kill_one, progress=False)
+                      on_chunk=kill_one, options=StudyOptions(progress=False))
         assert killed and killed[0][0] < killed[0][1]   # the kill happened mid-study
         deadline = time.monotonic() + 30
         while len(client.scheduler_info()["workers"]) < 2 and time.monotonic() < deadline:
@@ -133,26 +134,27 @@ def test_interrupted_study_resumes(where, cluster, task, designs, reference, tmp
     sched = "threads" if where == "local" else cluster.scheduler_address
     with pytest.raises(_Interrupt):
         evaluate(designs, task, samples=SAMPLES, seed=SEED, scheduler=sched, out=out,
-                 on_chunk=_interrupt_after(1), progress=False)
+                 on_chunk=_interrupt_after(1), options=StudyOptions(progress=False))
     parts = sorted(out.glob("part-*.parquet"))
     assert 1 <= len(parts) < 4
     stamps = {p.name: p.stat().st_mtime_ns for p in parts}
     calls = []
     df = evaluate(designs, task, samples=SAMPLES, seed=SEED, scheduler="synchronous", out=out,
-                  on_chunk=lambda d, t: calls.append(d), progress=False)
+                  on_chunk=lambda d, t: calls.append(d), options=StudyOptions(progress=False))
     assert calls == list(range(len(parts) + 1, 5))                  # only the missing chunks
     assert {p.name: p.stat().st_mtime_ns for p in parts} == stamps  # kept, not rewritten
     _assert_same_study(df, reference)
     _assert_same_study(read_study(out), reference)
     with pytest.raises(StudyMismatchError, match="another study"):
-        evaluate(designs, task, samples=SAMPLES, seed=SEED + 1, out=out, progress=False)
+        evaluate(designs, task, samples=SAMPLES, seed=SEED + 1, out=out,
+                 options=StudyOptions(progress=False))
 
 
 def test_unreachable_scheduler_is_a_named_one_line_error(task) -> None:
     t0 = time.monotonic()
     with pytest.raises(SchedulerUnreachableError, match="cannot reach a Dask scheduler at") as exc:
         evaluate([ak.Design.default()], task, samples=100, scheduler="tcp://127.0.0.1:9",
-                 connect_timeout=1.0, progress=False)
+                 options=StudyOptions(connect_timeout=1.0, progress=False))
     assert "\n" not in str(exc.value)
     assert time.monotonic() - t0 < 20
 
@@ -201,7 +203,7 @@ def test_foreign_server_is_unreachable_not_a_memory_error(task, foreign_server, 
     with pytest.raises(SchedulerUnreachableError,
                        match=rf"cannot reach a Dask scheduler at '{address}' within 1 s") as exc:
         evaluate([ak.Design.default()], task, samples=100, scheduler=address,
-                 connect_timeout=1.0, progress=False)
+                 options=StudyOptions(connect_timeout=1.0, progress=False))
     assert "\n" not in str(exc.value)
     assert ("not a Dask scheduler" if talk else "no handshake") in str(exc.value)
     assert time.monotonic() - t0 < 10

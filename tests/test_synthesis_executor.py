@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 import athenakin as ak
-from athenakin.synthesis import Task, evaluate, random_designs
+from athenakin.synthesis import StudyOptions, Task, evaluate, random_designs
 
 REF = ak.Design.default()
 
@@ -31,17 +31,18 @@ def _designs() -> list:
 def test_executor_gives_the_dask_table(pool, tmp_path):
     designs = _designs()
     ref = evaluate(designs, _task(), samples=300, seed=1, scheduler="synchronous",
-                   progress=False, chunk_size=2)
+                   options=StudyOptions(progress=False, chunk_size=2))
     with pool(max_workers=2) as ex:
-        got = evaluate(designs, _task(), samples=300, seed=1, scheduler=ex, progress=False,
-                       chunk_size=2, out=tmp_path / "study")
+        got = evaluate(designs, _task(), samples=300, seed=1, scheduler=ex, out=tmp_path / "study",
+                       options=StudyOptions(progress=False, chunk_size=2))
         # the executor is the caller's: still open after the study
         assert ex.submit(int, "7").result() == 7
     pd.testing.assert_frame_equal(got, ref)
     # the study folder resumes like any other: every chunk is read back, none recomputed
     again = evaluate(designs, _task(), samples=300, seed=1, scheduler="synchronous",
-                     progress=False, chunk_size=2, out=tmp_path / "study",
-                     on_chunk=lambda done, total: pytest.fail("a chunk was recomputed"))
+                     out=tmp_path / "study",
+                     on_chunk=lambda done, total: pytest.fail("a chunk was recomputed"),
+                     options=StudyOptions(progress=False, chunk_size=2))
     pd.testing.assert_frame_equal(again, ref)
 
 
@@ -63,19 +64,20 @@ class _FailingExecutor(concurrent.futures.ThreadPoolExecutor):
 
 def test_executor_failure_propagates_and_keeps_finished_chunks(tmp_path):
     with _FailingExecutor() as ex, pytest.raises(RuntimeError, match="worker lost"):
-        evaluate(_designs(), _task(), samples=200, seed=0, scheduler=ex, progress=False,
-                 chunk_size=2, out=tmp_path / "study")
+        evaluate(_designs(), _task(), samples=200, seed=0, scheduler=ex, out=tmp_path / "study",
+                 options=StudyOptions(progress=False, chunk_size=2))
     # the chunks that finished were written; a rerun computes only the rest
     parts = sorted((tmp_path / "study").glob("part-*.parquet"))
     assert 0 < len(parts) < 3
     done = []
     table = evaluate(_designs(), _task(), samples=200, seed=0, scheduler="synchronous",
-                     progress=False, chunk_size=2, out=tmp_path / "study",
-                     on_chunk=lambda d, t: done.append(d))
+                     out=tmp_path / "study", on_chunk=lambda d, t: done.append(d),
+                     options=StudyOptions(progress=False, chunk_size=2))
     assert len(done) == 3 - len(parts)
     assert len(table) == 5 and np.isfinite(table["coverage"]).all()
 
 
 def test_scheduler_of_the_wrong_type_is_named():
     with pytest.raises(TypeError, match="concurrent.futures.Executor"):
-        evaluate(_designs(), _task(), samples=100, scheduler=3.0, progress=False)
+        evaluate(_designs(), _task(), samples=100, scheduler=3.0,
+                 options=StudyOptions(progress=False))

@@ -94,7 +94,7 @@ def workspace_os(s: Settings) -> list[Path]:
     from athenakin.analysis import point_workspace
 
     path = s.out / "workspace_os.png"
-    _save(F.figure_workspace(point_workspace(D, resolution=s.res(81, 31))), path, dpi=80)
+    _save(F.figure_workspace(point_workspace(design=D, resolution=s.res(81, 31))), path, dpi=80)
     return [path]
 
 
@@ -105,7 +105,7 @@ def conditioning(s: Settings) -> list[Path]:
 
     path = s.out / "conditioning.png"
     fig = F.figure_conditioning(actuator_map(D, resolution=s.res(161, 51)),
-                                point_workspace(D, resolution=s.res(81, 31)),
+                                point_workspace(design=D, resolution=s.res(81, 31)),
                                 tool_tip_workspace(T, D, resolution=s.res(81, 31)))
     _save(fig, path, dpi=80)
     return [path]
@@ -175,13 +175,19 @@ def motion_path3d(s: Settings) -> list[Path]:
 
 def synthesis_pareto(s: Settings) -> list[Path]:
     """docs/synthesis.md: the NSGA-II search of the example task, in two of its objectives."""
-    from athenakin.synthesis import Task, bounds_from_toml, example_task_path, optimize
+    from athenakin.synthesis import (
+        StudyOptions,
+        Task,
+        bounds_from_toml,
+        example_task_path,
+        optimize,
+    )
     from athenakin.synthesis.figures import plot_pareto
 
     task = Task.from_toml(example_task_path())
     res = optimize(task, bounds=bounds_from_toml(example_task_path()),
-                   samples=s.res(20_000, 2_000), population=s.res(24, 12),
-                   generations=s.res(8, 3), seed=0, progress=False)
+                   samples=s.res(20_000, 2_000), population=s.res(24, 12), generations=s.res(8, 3),
+                   seed=0, options=StudyOptions(progress=False))
     fig, ax = plt.subplots(figsize=(7.2, 5.0), layout="constrained")
     plot_pareto(res.table, front=res.front, reference=res.table.iloc[0], ax=ax)
     path = s.out / "synthesis_pareto.png"

@@ -18,8 +18,8 @@ HERE = Path(__file__).resolve().parent
 d = ak.Design.default()
 T = ak.default_rcm_frame(d)
 plan = cal.plan_poses(80, T, d, params=["default", "offsets"], rng=0)
-data = cal.synthetic_measurements(d, T, q=plan.q, noise=20e-6, offset_std=3e-4,
-                                  outlier_fraction=2 / 80, outlier_size=2e-3, rng=2026)
+data = cal.synthetic_measurements(T, d, q=plan.q, rng=2026, options=cal.SyntheticOptions(
+    noise=20e-6, offset_std=3e-4, outlier_fraction=2 / 80, outlier_size=2e-3))
 tips = data.tips.copy()
 tips[17] = np.nan   # the tracker lost the marker on this pose
 (HERE / "measurements.csv").write_text(cal.measurements_csv_text(

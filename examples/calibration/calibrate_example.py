@@ -39,7 +39,7 @@ print(report.summary())
 with warnings.catch_warnings(record=True) as caught:
     warnings.simplefilter("always", cal.CalibrationWarning)
     res = cal.calibrate(data.q, data.tips, T_b_e, design, params=["default", "offsets"],
-                        loss="soft_l1")
+                        options=cal.CalibrationOptions(loss="soft_l1"))
 for w in caught:
     print("warning:", w.message)
 

@@ -8,7 +8,7 @@ The same from the shell: ``athenakin synthesize examples/synthesis/task_pancreas
 from pathlib import Path
 
 import athenakin as ak
-from athenakin.synthesis import Task, bounds_from_toml, evaluate, random_designs
+from athenakin.synthesis import StudyOptions, Task, bounds_from_toml, evaluate, random_designs
 
 HERE = Path(__file__).resolve().parent
 
@@ -17,6 +17,6 @@ bounds = bounds_from_toml(HERE / "task_pancreas.toml")
 designs = [ak.Design.default(), *random_designs(5, bounds, seed=1)]
 
 # Dask's local scheduler; pass scheduler="tcp://host:8786" to run on a cluster
-df = evaluate(designs, task, samples=5_000, seed=0, progress=False)
+df = evaluate(designs, task, samples=5_000, seed=0, options=StudyOptions(progress=False))
 cols = ["design", "valid", "coverage", "coverage_mode", "size", "tip_error_max", "margin_min"]
 print(df[cols].to_string(index=False, float_format=lambda x: f"{x:.4g}"))

@@ -1,5 +1,9 @@
 """The package's one TOML file reader (private): design files, task files, bounds.
 
+It also holds :class:`TomlOptions`, the TOML round trip of the frozen options objects
+(``CalibrationOptions``, ``StudyOptions``, ``RobotStyle``, ...): one table per object,
+written with tomli-w like every other writer of the package, read with :func:`read_toml`.
+
 Every TOML reader of athenakin goes through :func:`read_toml`, so that a file that is
 not UTF-8, not TOML, or nested too deeply for the parser's recursion is one named
 error that says which file and what is wrong, never a raw ``UnicodeDecodeError`` or
@@ -8,15 +12,19 @@ error that says which file and what is wrong, never a raw ``UnicodeDecodeError``
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar, TypeVar
 
 from ._compat import tomllib
 from ._input import MAX_CONFIG_BYTES, read_bytes
 from ._output import naming_path
 from .errors import InvalidInputError
 
-__all__ = ["read_toml"]
+__all__ = ["read_toml", "TomlOptions"]
+
+_T = TypeVar("_T", bound="TomlOptions")
 
 
 def read_toml(path: str | Path, *, error: type[Exception] = InvalidInputError,
@@ -72,3 +80,89 @@ def read_toml(path: str | Path, *, error: type[Exception] = InvalidInputError,
     except ValueError as exc:  # an integer beyond sys.get_int_max_str_digits()
         raise error(f"{path}: {what}: a number that cannot be read "
                     f"({' '.join(str(exc).split())[:120]})") from None
+
+
+class TomlOptions:
+    """Mixin of a frozen options dataclass: ``to_mapping`` / ``from_mapping``, TOML round trip.
+
+    The subclass names its table (``TOML_TABLE``, e.g. ``"calibration"``) and validates
+    every field in ``__post_init__`` (so that :meth:`from_mapping`, :meth:`from_toml` and
+    the constructor refuse the same values with the same named errors). Fields that are
+    None are left out of the TOML text (TOML has no null); a field whose default is not
+    None must therefore not take None. Tuples are written as arrays and read back as
+    tuples. A subclass with a field that is no TOML value (a nested object) overrides
+    :meth:`to_mapping` and :meth:`from_mapping`.
+    """
+
+    TOML_TABLE: ClassVar[str]
+
+    def to_mapping(self) -> dict[str, Any]:
+        """The fields as a dict of TOML values (None left out, tuples as lists)."""
+        out: dict[str, Any] = {}
+        for f in dataclasses.fields(self):  # type: ignore[arg-type]
+            v = getattr(self, f.name)
+            if v is None:
+                continue
+            out[f.name] = _plain(v)
+        return out
+
+    @classmethod
+    def from_mapping(cls: type[_T], data: Mapping[str, Any]) -> _T:
+        """Build from a mapping of field names (e.g. a parsed TOML table).
+
+        Raises
+        ------
+        TypeError
+            ``data`` is not a mapping.
+        InvalidInputError
+            An unknown key (named, with the known ones), or a bad value (named by the
+            field's own check; a wrong type read from a file is bad input too).
+        """
+        if not isinstance(data, Mapping):
+            raise TypeError(f"{cls.TOML_TABLE}: expected a table (mapping), got "
+                            f"{type(data).__name__}")
+        names = [f.name for f in dataclasses.fields(cls)]  # type: ignore[arg-type]
+        unknown = sorted(set(data) - set(names))
+        if unknown:
+            raise InvalidInputError(f"{cls.TOML_TABLE}: unknown key(s) {unknown}; expected "
+                                    f"some of {names}")
+        kw = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items()}
+        try:
+            return cls(**kw)
+        except TypeError as exc:     # a value of the wrong type, read from a table
+            raise InvalidInputError(f"{cls.TOML_TABLE}.{exc}") from None
+
+    def to_toml(self) -> str:
+        """TOML text, one ``[TOML_TABLE]`` table, that :meth:`from_toml` reads back equal."""
+        import tomli_w
+
+        return tomli_w.dumps({self.TOML_TABLE: self.to_mapping()})
+
+    @classmethod
+    def from_toml(cls: type[_T], path: str | Path) -> _T:
+        """Read the ``[TOML_TABLE]`` table of a TOML file (defaults when it has none).
+
+        Other tables of the file (``[design]``, ``[task]``, ...) are left to their readers.
+
+        Raises
+        ------
+        OSError
+            The file cannot be read.
+        InvalidInputError
+            Not UTF-8 TOML, or a bad table; the message starts with the file name.
+        """
+        data = read_toml(path, what=f"{cls.TOML_TABLE} options file")
+        table = data.get(cls.TOML_TABLE, {})
+        try:
+            return cls.from_mapping(table)
+        except (InvalidInputError, TypeError, ValueError) as exc:
+            raise InvalidInputError(f"{path}: {exc}") from None
+
+
+def _plain(v: Any) -> Any:
+    """A TOML value: tuples (nested too) as lists, mappings as tables."""
+    if isinstance(v, tuple | list):
+        return [_plain(x) for x in v]
+    if isinstance(v, Mapping):
+        return {str(k): _plain(x) for k, x in v.items()}
+    return v

@@ -322,11 +322,12 @@ def _default_bounds(design: Design) -> tuple[tuple[float, float], ...]:
     return ((xm[0], xm[1]), (-R, R), (-R, R))
 
 
-def point_workspace(design: Design | None = None, *, resolution: int | tuple[int, int, int] = 41,
+def point_workspace(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
+                    resolution: int | tuple[int, int, int] = 41,
                     bounds: tuple[tuple[float, float], ...] | None = None,
                     progress: bool | None = None, bodies: object = None,
-                    environment: object = None, clearance_margin: float | None = None,
-                    T_b_e: ArrayLike | None = None) -> PointWorkspace:
+                    environment: object = None, clearance_margin: float | None = None
+                    ) -> PointWorkspace:
     """Reachable set of ``O_s`` with its assembly-mode regions and conditioning.
 
     Uses the closed-form IK of the parallel module (paper Section 4), so
@@ -334,6 +335,10 @@ def point_workspace(design: Design | None = None, *, resolution: int | tuple[int
 
     Parameters
     ----------
+    T_b_e : array-like, shape (4, 4), optional
+        RCM frame that places the serial chain and the instrument for the collision
+        check (default :func:`~athenakin.default_rcm_frame`). Checked, but not used
+        without the check: the ``O_s`` workspace does not depend on it.
     design : Design, optional
     resolution : int or (int, int, int), keyword-only
         Grid points along x, y, z.
@@ -348,25 +353,19 @@ def point_workspace(design: Design | None = None, *, resolution: int | tuple[int
         Obstacles (base frame).
     clearance_margin : float, optional, keyword-only
         Least clearance of a collision-free point, m (default 0: no overlap).
-    T_b_e : array-like, shape (4, 4), optional, keyword-only
-        RCM frame that places the serial chain and the instrument for the check
-        (default :func:`~athenakin.default_rcm_frame`); not used without it.
 
     Returns
     -------
     PointWorkspace
     """
+    if isinstance(T_b_e, Design):          # the order of every function: (..., T_b_e, design)
+        raise TypeError("T_b_e: expected a (4, 4) RCM frame or None, got a Design (the order "
+                        "is point_workspace(T_b_e, design); give design=...)")
     design = resolve_design(design)
     check = _collision_check(design, bodies, environment, clearance_margin)
-    T = None
-    if check is None and T_b_e is not None:
-        raise InvalidInputError("T_b_e: places the serial chain for the collision check only; "
-                                "pass bodies=, environment= or clearance_margin= too (the O_s "
-                                "workspace itself does not depend on it)")
-    if check is not None:
-        T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
-        if T.shape != (4, 4):
-            raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
+    T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
+    if T.shape != (4, 4):
+        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
     n = _resolution(resolution, 3)
     b = _box(bounds) or _default_bounds(design)
     axes = [np.linspace(lo, hi, k) for (lo, hi), k in zip(b, n, strict=True)]

@@ -4,9 +4,11 @@
   with its analytic identification Jacobian;
 * :mod:`._identify` - identifiability (singular values, inseparable combinations) and
   D-optimal experiment design;
-* :mod:`._solve` - :func:`calibrate` (scipy's trust-region least squares) and its result;
+* :mod:`._solve` - :func:`calibrate` (scipy's trust-region least squares), its solver
+  settings (:class:`CalibrationOptions`) and its result;
 * :mod:`._accuracy` - tool-tip error from parameter covariance and encoder resolution;
-* :mod:`._synthetic` - synthetic data with a documented noise model;
+* :mod:`._synthetic` - synthetic data with a documented noise model
+  (:class:`SyntheticOptions`);
 * :mod:`._io` - measurement / plan CSV files, calibrated TOML, report.
 
 Needs scipy (extra ``[calibration]``). See docs/calibration.md.
@@ -58,13 +60,14 @@ from ._report import (
 from ._solve import (
     DEFAULT_AXIS_WEIGHT,
     OUTLIER_THRESHOLD,
+    CalibrationOptions,
     CalibrationResult,
     MeasurementCheck,
     calibrate,
     check_measurements,
     identifiability,
 )
-from ._synthetic import SyntheticData, random_poses, synthetic_measurements
+from ._synthetic import SyntheticData, SyntheticOptions, random_poses, synthetic_measurements
 
 __all__ = [
     "TipError",
@@ -101,12 +104,14 @@ __all__ = [
     "resolve_parameters",
     "DEFAULT_AXIS_WEIGHT",
     "OUTLIER_THRESHOLD",
+    "CalibrationOptions",
     "CalibrationResult",
     "MeasurementCheck",
     "calibrate",
     "check_measurements",
     "identifiability",
     "SyntheticData",
+    "SyntheticOptions",
     "random_poses",
     "synthetic_measurements",
 ]

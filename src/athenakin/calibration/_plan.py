@@ -103,7 +103,7 @@ def plan_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *,
         cand = check_array(candidates, "candidates", (3,))
         if cand.ndim != 2:
             raise InvalidInputError(f"candidates: expected shape (K, 3), got {cand.shape}")
-        cand = cand[check_measurements(cand, design, T, mode=mode).usable]
+        cand = cand[check_measurements(cand, T, design, mode=mode).usable]
     if len(cand) < n:
         raise InvalidInputError(f"n: only {len(cand)} usable candidates for {n} poses")
     theta = parameter_vector(design, T[:3, 3])

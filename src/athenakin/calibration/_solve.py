@@ -5,16 +5,18 @@ from __future__ import annotations
 import dataclasses
 import warnings
 from collections.abc import Iterable
-from typing import Literal
+from typing import ClassVar, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._toml import TomlOptions
 from .._validation import (
     check_array,
     check_choice,
     check_count,
     check_frame,
+    check_instance,
     check_scalar,
     check_tolerance,
     check_transform,
@@ -41,6 +43,7 @@ from ._model import (
 )
 
 __all__ = [
+    "CalibrationOptions",
     "CalibrationResult",
     "Loss",
     "OUTLIER_THRESHOLD",
@@ -61,11 +64,14 @@ OUTLIER_THRESHOLD = 4.5
 #: Weight (m per unit of direction error) of measured instrument axes against tip
 #: positions: 0.1 m makes 0.2 mrad of axis error count like 20 um of tip error.
 DEFAULT_AXIS_WEIGHT = 0.1
-#: Largest share of rows that may be flagged bad and excluded before the data set is refused.
 #: Machine epsilon: the least-squares tolerances must exceed it.
 _EPS = float(np.finfo(float).eps)
-
+#: Largest share of rows that may be flagged bad and excluded before the data set is refused.
 MAX_BAD_FRACTION = 0.1
+#: Default ``ftol``, ``xtol`` and ``gtol`` of the least-squares solver.
+SOLVER_TOL = 1e-15
+#: Default most residual evaluations of one least-squares solve.
+MAX_NFEV = 200
 #: Floor (m) of the residual standard deviation used to flag outliers: noise-free data
 #: leave residuals of rounding size (1e-16 m), which are no outliers.
 RESIDUAL_FLOOR = 1e-12
@@ -76,6 +82,97 @@ UNITS_WARNING = 0.05
 INSERTION_MARGIN = 1e-3
 
 _REG = PARAMETERS.index("reg_rx")
+
+
+@dataclasses.dataclass(frozen=True)
+class CalibrationOptions(TomlOptions):
+    """Solver settings of :func:`calibrate` (the data and the model are its arguments).
+
+    Every field is checked here, at construction (a named error); the defaults give
+    the results :func:`calibrate` gave before the options object existed. The
+    ``[calibration_options]`` table of a TOML file holds them (:meth:`to_toml`,
+    :meth:`from_toml`; ``athenakin calibrate --options FILE``).
+
+    Attributes
+    ----------
+    axis_weight : float
+        Metres of residual per unit of axis error (:data:`DEFAULT_AXIS_WEIGHT`), > 0.
+    loss : {"linear", "soft_l1", "huber", "cauchy", "arctan"}
+        Robust loss of :func:`scipy.optimize.least_squares`. With a robust loss the rows
+        flagged as outliers are dropped and the inliers refitted with the linear loss
+        (so the covariance is that of least squares on the inliers).
+    f_scale : float or None
+        Residual (m) at which the robust loss bends, > 0; None: ``2 * sigma`` from a
+        first linear fit (median absolute deviation).
+    sigma : float or None
+        Known standard deviation (m) of one measured coordinate, in ``(0, 10]``; None:
+        estimated from the residuals.
+    outlier_threshold : float
+        Rows with ``|residual| > outlier_threshold * sigma`` are flagged, > 0
+        (:data:`OUTLIER_THRESHOLD`).
+    bad_rows : {"exclude", "raise"}
+        Rows with NaN/inf or outside the nominal workspace: excluded with a
+        :class:`CalibrationWarning` (at most ``max_bad_fraction`` of them), or raise.
+    max_bad_fraction : float
+        Largest share of rows excluded, in ``[0, 1]`` (:data:`MAX_BAD_FRACTION`).
+    on_unidentifiable : {"raise", "warn"}
+        What to do when the identifiability analysis finds inseparable combinations.
+    identifiability_tol : float
+        Relative singular value below which a direction is not identifiable, >= 0
+        (:data:`~athenakin.calibration.IDENTIFIABILITY_TOL`).
+    tol : float
+        ``ftol``, ``xtol`` and ``gtol`` of the solver, in ``(eps, 1]`` (machine epsilon).
+    max_nfev : int
+        Most residual evaluations of one least-squares solve, >= 1.
+
+    Examples
+    --------
+    >>> from athenakin.calibration import CalibrationOptions
+    >>> o = CalibrationOptions(loss="soft_l1", sigma=2e-5)
+    >>> print(o.to_toml().splitlines()[0:3])
+    ['[calibration_options]', 'axis_weight = 0.1', 'loss = "soft_l1"']
+    """
+
+    TOML_TABLE: ClassVar[str] = "calibration_options"   # [calibration]: a result's
+
+    axis_weight: float = DEFAULT_AXIS_WEIGHT
+    loss: Loss = "linear"
+    f_scale: float | None = None
+    sigma: float | None = None
+    outlier_threshold: float = OUTLIER_THRESHOLD
+    bad_rows: Literal["exclude", "raise"] = "exclude"
+    max_bad_fraction: float = MAX_BAD_FRACTION
+    on_unidentifiable: Literal["raise", "warn"] = "raise"
+    identifiability_tol: float = IDENTIFIABILITY_TOL
+    tol: float = SOLVER_TOL
+    max_nfev: int = MAX_NFEV
+
+    def __post_init__(self) -> None:
+        put = object.__setattr__
+        put(self, "axis_weight", check_scalar(self.axis_weight, "axis_weight", positive=True))
+        check_choice(self.loss, "loss", _LOSSES)
+        for name in ("f_scale", "sigma"):
+            v = getattr(self, name)
+            if v is not None:
+                put(self, name, check_scalar(v, name, positive=True))
+        if self.sigma is not None and self.sigma > LENGTH_RANGE[1]:  # squared: no overflow
+            raise InvalidInputError(f"sigma: expected a standard deviation (m) of at most "
+                                    f"{LENGTH_RANGE[1]:g}, got {self.sigma!r}")
+        put(self, "outlier_threshold",
+            check_scalar(self.outlier_threshold, "outlier_threshold", positive=True))
+        check_choice(self.bad_rows, "bad_rows", ("exclude", "raise"))
+        f = check_scalar(self.max_bad_fraction, "max_bad_fraction", nonnegative=True)
+        if f > 1.0:
+            raise InvalidInputError(f"max_bad_fraction: expected a fraction in [0, 1], got {f:g}")
+        put(self, "max_bad_fraction", f)
+        check_choice(self.on_unidentifiable, "on_unidentifiable", ("raise", "warn"))
+        put(self, "identifiability_tol",
+            check_tolerance(self.identifiability_tol, "identifiability_tol"))
+        tol = check_tolerance(self.tol, "tol")
+        if not _EPS < tol <= 1.0:                # scipy's least_squares needs more than eps
+            raise InvalidInputError(f"tol: expected a tolerance in ({_EPS:.3g}, 1], got {tol:g}")
+        put(self, "tol", tol)
+        put(self, "max_nfev", check_count(self.max_nfev, "max_nfev", minimum=1))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -222,7 +319,7 @@ def _mode_array(mode: object, n: int) -> NDArray[np.float64]:
     return np.broadcast_to(m.astype(float), (n,)).copy()
 
 
-def check_measurements(q: ArrayLike, design: Design | None, T_b_e: ArrayLike, *,
+def check_measurements(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
                        mode: object = 1, tips: ArrayLike | None = None,
                        axes: ArrayLike | None = None, q_offset: ArrayLike | None = None
                        ) -> MeasurementCheck:
@@ -232,10 +329,10 @@ def check_measurements(q: ArrayLike, design: Design | None, T_b_e: ArrayLike, *,
     ----------
     q : array-like, shape (N, 3)
         Actuator readings, m.
-    design : Design or None
-        The nominal design (None: :meth:`Design.default`).
     T_b_e : array-like, shape (4, 4)
         The RCM frame (its origin is the RCM point).
+    design : Design or None
+        The nominal design (None: :meth:`Design.default`).
     mode : {1, -1} or array-like of them, shape (N,), keyword-only
     tips, axes : array-like, shape (N, 3), optional, keyword-only
         Only checked for NaN / inf.
@@ -350,7 +447,7 @@ def _setup(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | Non
         m = _nearest_mode(qa, ta, design, T, off)
     else:
         m = _mode_array(mode, n)
-    chk = check_measurements(qa, design, T, mode=m, tips=ta, axes=aa, q_offset=off)
+    chk = check_measurements(qa, T, design, mode=m, tips=ta, axes=aa, q_offset=off)
     nbad = int(np.sum(~chk.usable))
     if nbad:
         if bad_rows == "raise":
@@ -415,8 +512,10 @@ def identifiability(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None
     frame : {"base", "tracker"}, keyword-only
     axes : bool, keyword-only
         Whether instrument axes are measured too.
-    mode, q_offset, axis_weight
+    mode, q_offset
         As in :func:`calibrate`.
+    axis_weight : float, keyword-only
+        As in :class:`CalibrationOptions`.
     tol : float, keyword-only
 
     Returns
@@ -444,15 +543,9 @@ def identifiability(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None
 
 def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
               params: Iterable[str] | str | None = None, frame: MeasurementFrame = "base",
-              axes: ArrayLike | None = None, axis_weight: float = DEFAULT_AXIS_WEIGHT,
-              mode: object = 1, q_offset: ArrayLike | None = None,
-              registration: ArrayLike | None = None, loss: Loss = "linear",
-              f_scale: float | None = None, sigma: float | None = None,
-              outlier_threshold: float = OUTLIER_THRESHOLD, bad_rows: str = "exclude",
-              max_bad_fraction: float = MAX_BAD_FRACTION,
-              on_unidentifiable: Literal["raise", "warn"] = "raise",
-              identifiability_tol: float = IDENTIFIABILITY_TOL, tol: float = 1e-15,
-              max_nfev: int = 200) -> CalibrationResult:
+              axes: ArrayLike | None = None, mode: object = 1, q_offset: ArrayLike | None = None,
+              registration: ArrayLike | None = None,
+              options: CalibrationOptions | None = None) -> CalibrationResult:
     """Identify the geometry of a real ATHENA from measured tool tips.
 
     Minimises ``sum_i rho(|tip_model(q_i; theta) - tip_i|^2)`` over the estimated
@@ -482,8 +575,6 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
     axes : array-like, shape (N, 3), optional, keyword-only
         Measured instrument directions (unit, from ``O_s`` towards the RCM), in the frame
         of ``tips``: measurement model (c), full instrument poses.
-    axis_weight : float, keyword-only
-        Metres of residual per unit of axis error (:data:`DEFAULT_AXIS_WEIGHT`).
     mode : {1, -1}, array-like of them, shape (N,), or "auto", keyword-only
         Assembly mode of each row, kept while the parameters change. ``"auto"`` (base
         frame only): per row, the mode whose nominal forward-kinematics tip is nearer the
@@ -492,28 +583,10 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
         Starting (or fixed) actuator zero offsets, m.
     registration : array-like, shape (4, 4), keyword-only
         Starting ``T_t_b`` for ``frame="tracker"`` (default: fitted to the nominal tips).
-    loss : {"linear", "soft_l1", "huber", "cauchy", "arctan"}, keyword-only
-        Robust loss of :func:`scipy.optimize.least_squares`. With a robust loss the rows
-        flagged as outliers are dropped and the inliers refitted with the linear loss
-        (so the covariance is that of least squares on the inliers).
-    f_scale : float, keyword-only
-        Residual (m) at which the robust loss bends; default ``2 * sigma`` from a first
-        linear fit (median absolute deviation).
-    sigma : float, keyword-only
-        Known standard deviation (m) of one measured coordinate; default: estimated from
-        the residuals.
-    outlier_threshold : float, keyword-only
-        Rows with ``|residual| > outlier_threshold * sigma`` are flagged.
-    bad_rows : {"exclude", "raise"}, keyword-only
-        Rows with NaN/inf or outside the nominal workspace: excluded with a
-        :class:`CalibrationWarning` (at most ``max_bad_fraction`` of them), or raise.
-    max_bad_fraction : float, keyword-only
-    on_unidentifiable : {"raise", "warn"}, keyword-only
-        What to do when the identifiability analysis finds inseparable combinations.
-    identifiability_tol : float, keyword-only
-    tol : float, keyword-only
-        ``ftol``, ``xtol`` and ``gtol`` of the solver, in ``(eps, 1]`` (machine epsilon).
-    max_nfev : int, keyword-only
+    options : CalibrationOptions, optional, keyword-only
+        Solver settings: axis weight, robust loss and its scale, known ``sigma``,
+        outlier threshold, what to do with bad rows and unidentifiable parameters,
+        tolerances (:class:`CalibrationOptions`; default ``CalibrationOptions()``).
 
     Returns
     -------
@@ -523,7 +596,7 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
     ------
     InvalidInputError
         Wrong shapes, mismatched lengths, too many bad rows (or any, with
-        ``bad_rows="raise"``).
+        ``CalibrationOptions(bad_rows="raise")``).
     NotIdentifiableError
         Too few poses for the parameters, or poses that cannot separate them (the message
         names the inseparable combinations).
@@ -535,7 +608,8 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
     >>> import athenakin as ak
     >>> from athenakin import calibration as cal
     >>> d = ak.Design.default(); T = ak.default_rcm_frame(d)
-    >>> data = cal.synthetic_measurements(d, T, n=40, noise=0.0, rng=1)
+    >>> data = cal.synthetic_measurements(T, d, n=40, rng=1,
+    ...                                   options=cal.SyntheticOptions(noise=0.0))
     >>> res = cal.calibrate(data.q, data.tips, T, d)
     >>> abs(res.design.l1 - data.true_design.l1) < 1e-9
     True
@@ -546,27 +620,14 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
         raise ModuleNotFoundError("calibrate needs scipy: pip install 'athenakin[calibration]'",
                                   name="scipy") from exc
 
-    if loss not in _LOSSES:
-        raise ValueError(f"loss: expected one of {_LOSSES}, got {loss!r}")
-    if on_unidentifiable not in ("raise", "warn"):
-        raise ValueError(f"on_unidentifiable: expected 'raise' or 'warn', got "
-                         f"{on_unidentifiable!r}")
-    for name, v in (("sigma", sigma), ("f_scale", f_scale),
-                    ("outlier_threshold", outlier_threshold)):
-        if v is not None or name == "outlier_threshold":    # sigma, f_scale may be None
-            check_scalar(v, name, positive=True)
-    if sigma is not None and sigma > LENGTH_RANGE[1]:     # squared below: no overflow
-        raise InvalidInputError(f"sigma: expected a standard deviation (m) of at most "
-                                f"{LENGTH_RANGE[1]:g}, got {sigma!r}")
-    tol = check_tolerance(tol, "tol")
-    if not _EPS < tol <= 1.0:                # scipy's least_squares needs more than eps
-        raise InvalidInputError(f"tol: expected a tolerance in ({_EPS:.3g}, 1], got {tol:g}")
-    if max_nfev is not None:
-        max_nfev = check_count(max_nfev, "max_nfev", minimum=1)
+    opts = CalibrationOptions() if options is None else options
+    check_instance(opts, "options", CalibrationOptions)
+    loss, f_scale, sigma = opts.loss, opts.f_scale, opts.sigma
+    outlier_threshold, tol, max_nfev = opts.outlier_threshold, opts.tol, opts.max_nfev
     design, prob, names, chk, m_all, T = _setup(
         q, tips, T_b_e, design, params=params, frame=frame, axes=axes, mode=mode,
-        q_offset=q_offset, registration=registration, axis_weight=axis_weight,
-        bad_rows=bad_rows, max_bad_fraction=max_bad_fraction)
+        q_offset=q_offset, registration=registration, axis_weight=opts.axis_weight,
+        bad_rows=opts.bad_rows, max_bad_fraction=opts.max_bad_fraction)
     n_used = prob.q.shape[0]
     rows_per = 3 if prob.axes is None else 6
     if rows_per * n_used <= len(names):
@@ -575,9 +636,9 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
             f"{len(names)} parameters {list(names)}; measure more than "
             f"{len(names) // rows_per} poses (and more than that for a useful estimate)")
     J0 = prob.jac_full(prob.theta0)[:, prob.free]
-    report = analyse_jacobian(J0, names, tol=identifiability_tol)
+    report = analyse_jacobian(J0, names, tol=opts.identifiability_tol)
     if not report.identifiable:
-        if on_unidentifiable == "raise":
+        if opts.on_unidentifiable == "raise":
             raise_if_not_identifiable(report, n_used)
         warnings.warn(f"calibration: not identifiable: {'; '.join(report.combinations)}",
                       CalibrationWarning, stacklevel=2)
@@ -593,10 +654,10 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
     x0 = prob.theta0[prob.free]
     x_scale = 1.0 / np.where(report.column_norms > 0, report.column_norms, 1.0)
     x_scale = x_scale / np.max(x_scale)
-    opts = dict(method="trf", x_scale=x_scale, ftol=tol, xtol=tol, gtol=tol,
-                max_nfev=max_nfev)
+    solver = dict(method="trf", x_scale=x_scale, ftol=tol, xtol=tol, gtol=tol,
+                  max_nfev=max_nfev)
     sol = least_squares(prob.residual, x0, jac=prob.jacobian, loss="linear",
-                        **opts)  # type: ignore[arg-type]
+                        **solver)  # type: ignore[arg-type]
     use = np.ones(n_used, bool)
     r_rows = sol.fun.reshape(n_used, rows_per)
     if loss != "linear":
@@ -604,7 +665,7 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
         if not np.isfinite(scale) or scale <= 0:
             scale = RESIDUAL_FLOOR
         sol = least_squares(prob.residual, sol.x, jac=prob.jacobian, loss=loss, f_scale=scale,
-                            **opts)  # type: ignore[arg-type]
+                            **solver)  # type: ignore[arg-type]
         r_rows = sol.fun.reshape(n_used, rows_per)
         s_rob = sigma if sigma is not None else _robust_sigma(r_rows)
         use = np.linalg.norm(r_rows, axis=1) <= outlier_threshold * max(s_rob, RESIDUAL_FLOOR)
@@ -612,7 +673,7 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
                                   axes=None if prob.axes is None else prob.axes[use],
                                   mode=prob.mode[use])
         sol = least_squares(sub.residual, sol.x, jac=sub.jacobian, loss="linear",
-                            **opts)  # type: ignore[arg-type]
+                            **solver)  # type: ignore[arg-type]
     theta = prob.full(sol.x)
     _, r_after = prob.evaluate(theta, False)
     if np.any(theta[:6] <= 0) or not np.all(np.isfinite(r_after)):

@@ -21,15 +21,18 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._toml import TomlOptions
 from .._validation import (
     check_array,
     check_choice,
     check_count,
     check_frame,
+    check_instance,
     check_rng,
     check_scalar,
     check_transform,
@@ -45,7 +48,7 @@ from ._model import (
     rotation_from_vector,
 )
 
-__all__ = ["SyntheticData", "synthetic_measurements", "random_poses"]
+__all__ = ["SyntheticData", "SyntheticOptions", "synthetic_measurements", "random_poses"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -80,6 +83,82 @@ class SyntheticData:
     T_t_b: NDArray[np.float64] | None
     outliers: NDArray[np.bool_]
     frame: str
+
+
+@dataclasses.dataclass(frozen=True)
+class SyntheticOptions(TomlOptions):
+    """The noise model of :func:`synthetic_measurements` (module docstring), one field each.
+
+    Every field is checked at construction (a named error). The ``[synthetic]`` table of
+    a TOML file holds them (:meth:`to_toml`, :meth:`from_toml`).
+
+    Attributes
+    ----------
+    noise : float
+        Tracker noise, standard deviation per coordinate, m (>= 0).
+    perturbation, offset_std, rcm_std : float
+        Standard deviations (m, >= 0) of the true lengths / tool length, actuator offsets
+        and RCM point about the nominal values.
+    true : mapping str -> float or None
+        Explicit true values of some :data:`~athenakin.calibration.PARAMETERS`
+        (registration entries excepted); they override the random ones.
+    axis_noise : float
+        Standard deviation of each measured axis component (>= 0).
+    encoder_resolution : float
+        Quantum of the actuator readings, m (>= 0; uniform error).
+    outlier_fraction : float
+        Share of rows with a gross error, in [0, 1].
+    outlier_size : float
+        Size of that error, m (>= 0), in a random direction.
+
+    Examples
+    --------
+    >>> from athenakin.calibration import SyntheticOptions
+    >>> SyntheticOptions(noise=0.0, true={"l1": 0.301}).true
+    {'l1': 0.301}
+    """
+
+    TOML_TABLE: ClassVar[str] = "synthetic"
+
+    noise: float = 20e-6
+    perturbation: float = 5e-4
+    offset_std: float = 0.0
+    rcm_std: float = 0.0
+    true: Mapping[str, float] | None = None
+    axis_noise: float = 2e-4
+    encoder_resolution: float = 0.0
+    outlier_fraction: float = 0.0
+    outlier_size: float = 2e-3
+
+    def __post_init__(self) -> None:
+        put = object.__setattr__
+        for name in ("noise", "perturbation", "offset_std", "rcm_std", "axis_noise",
+                     "encoder_resolution", "outlier_size"):
+            put(self, name, check_scalar(getattr(self, name), name, nonnegative=True))
+        f = check_scalar(self.outlier_fraction, "outlier_fraction")
+        if not 0.0 <= f <= 1.0:
+            raise InvalidInputError(f"outlier_fraction: expected a fraction in [0, 1], got "
+                                    f"{self.outlier_fraction!r}")
+        put(self, "outlier_fraction", f)
+        if self.true is not None:
+            put(self, "true", _check_true(self.true))
+
+    def __hash__(self) -> int:  # ``true`` is a dict
+        return hash(tuple(v if k != "true" else tuple(sorted((v or {}).items()))
+                          for k, v in self.to_mapping().items()))
+
+
+def _check_true(true: object) -> dict[str, float]:
+    if not isinstance(true, Mapping):
+        raise TypeError(f"true: expected a mapping parameter name -> value, got "
+                        f"{type(true).__name__}")
+    out = {}
+    for name, v in true.items():
+        if name not in PARAMETERS[:12]:
+            raise ValueError(f"true: unknown parameter {name!r}; expected some of "
+                             f"{list(PARAMETERS[:12])}")
+        out[name] = check_scalar(v, f"true[{name!r}]")
+    return out
 
 
 def _check_mode(mode: object) -> int:
@@ -147,52 +226,42 @@ def random_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *, mode
                             "workspace; widen the strokes or lower the margin")
 
 
-def synthetic_measurements(design: Design | None, T_b_e: ArrayLike, *, n: int = 80,
-                           q: ArrayLike | None = None, noise: float = 20e-6,
-                           perturbation: float = 5e-4, offset_std: float = 0.0,
-                           rcm_std: float = 0.0, true: Mapping[str, float] | None = None,
-                           frame: str = "base", T_t_b: ArrayLike | None = None,
-                           axes: bool = False, axis_noise: float = 2e-4,
-                           encoder_resolution: float = 0.0, outlier_fraction: float = 0.0,
-                           outlier_size: float = 2e-3, mode: int = 1, rng: Seed = None
+def synthetic_measurements(T_b_e: ArrayLike, design: Design | None = None, *,
+                           q: ArrayLike | None = None, n: int = 80, frame: str = "base",
+                           T_t_b: ArrayLike | None = None, axes: bool = False, mode: int = 1,
+                           rng: Seed = None, options: SyntheticOptions | None = None
                            ) -> SyntheticData:
     """Measurements of a perturbed robot under the noise model of this module.
 
     Parameters
     ----------
-    design : Design or None
-        Nominal design.
     T_b_e : array-like, shape (4, 4)
         Nominal RCM frame (its origin the nominal RCM point).
+    design : Design or None
+        Nominal design (None: :meth:`Design.default`).
+    q : array-like, shape (N, 3), keyword-only
+        Readings to measure at (default: ``n`` random poses both the nominal and the true
+        robot reach).
     n : int, keyword-only
         Number of random poses, 1 to :data:`MAX_POSES` (ignored when ``q`` is given).
-    q : array-like, shape (N, 3), keyword-only
-        Readings to measure at.
-    noise : float, keyword-only
-        Tracker noise, standard deviation per coordinate, m.
-    perturbation, offset_std, rcm_std : float, keyword-only
-        Standard deviations (m) of the true lengths/tool length, offsets and RCM about
-        the nominal values.
-    true : mapping, keyword-only
-        Explicit true values of some :data:`~athenakin.calibration.PARAMETERS`
-        (registration entries excepted); override the random ones.
     frame : {"base", "tracker"}, keyword-only
     T_t_b : array-like, shape (4, 4), keyword-only
         True registration (default: random rotation, translation about 1 m).
     axes : bool, keyword-only
         Also measure instrument axes.
-    axis_noise : float, keyword-only
-        Standard deviation of each axis component.
-    encoder_resolution : float, keyword-only
-        Quantum of the actuator readings, m (uniform error).
-    outlier_fraction, outlier_size : float, keyword-only
     mode : {1, -1}, keyword-only
     rng : seed or Generator, keyword-only
+    options : SyntheticOptions, optional, keyword-only
+        The noise model: tracker and axis noise, perturbation of the true robot, encoder
+        quantum, outliers (default ``SyntheticOptions()``: 20 um tracker noise, 0.5 mm
+        perturbation of the lengths).
 
     Returns
     -------
     SyntheticData
     """
+    o = SyntheticOptions() if options is None else options
+    check_instance(o, "options", SyntheticOptions)
     design = resolve_design(design)
     T = check_frame(T_b_e, "T_b_e")
     if T.shape != (4, 4):
@@ -200,26 +269,13 @@ def synthetic_measurements(design: Design | None, T_b_e: ArrayLike, *, n: int = 
     if q is None:
         n = check_count(n, "n", minimum=1, maximum=MAX_POSES)
     check_choice(frame, "frame", ("base", "tracker"))
-    for name, v in (("noise", noise), ("perturbation", perturbation), ("offset_std", offset_std),
-                    ("rcm_std", rcm_std), ("axis_noise", axis_noise),
-                    ("encoder_resolution", encoder_resolution), ("outlier_size", outlier_size)):
-        check_scalar(v, name, nonnegative=True)
-    if not 0.0 <= check_scalar(outlier_fraction, "outlier_fraction") <= 1.0:
-        raise InvalidInputError(f"outlier_fraction: expected a fraction in [0, 1], got "
-                                f"{outlier_fraction!r}")
-    if true is not None and not isinstance(true, Mapping):
-        raise TypeError(f"true: expected a mapping parameter name -> value, got "
-                        f"{type(true).__name__}")
     _check_mode(mode)
     gen = check_rng(rng)
     theta = parameter_vector(design, T[:3, 3])
-    theta[:6] += perturbation * gen.standard_normal(6)
-    theta[6:9] += offset_std * gen.standard_normal(3)
-    theta[9:12] += rcm_std * gen.standard_normal(3)
-    for name, v in (true or {}).items():
-        if name not in PARAMETERS[:12]:
-            raise ValueError(f"true: unknown parameter {name!r}; expected some of "
-                             f"{list(PARAMETERS[:12])}")
+    theta[:6] += o.perturbation * gen.standard_normal(6)
+    theta[6:9] += o.offset_std * gen.standard_normal(3)
+    theta[9:12] += o.rcm_std * gen.standard_normal(3)
+    for name, v in (o.true or {}).items():
         theta[PARAMETERS.index(name)] = float(v)
     if q is None:   # random poses that both the nominal and the true robot reach
         qa = random_poses(n + max(4, n // 2), T, design, mode=mode, rng=gen)
@@ -234,23 +290,23 @@ def synthetic_measurements(design: Design | None, T_b_e: ArrayLike, *, n: int = 
         qa = check_array(q, "q", (3,))
     nq = qa.shape[0]
     q_true_read = qa.copy()
-    if encoder_resolution > 0:
-        q_true_read = qa + encoder_resolution * (gen.random(qa.shape) - 0.5)
+    if o.encoder_resolution > 0:
+        q_true_read = qa + o.encoder_resolution * (gen.random(qa.shape) - 0.5)
     pr = predict(theta, q_true_read, np.full(nq, float(mode)))
     if not np.all(np.isfinite(pr.tip_base)):
         raise InvalidInputError("synthetic_measurements: the perturbed robot cannot reach "
                                 "every pose; lower the perturbation")
-    tips = pr.tip_base + noise * gen.standard_normal((nq, 3))
+    tips = pr.tip_base + o.noise * gen.standard_normal((nq, 3))
     ax = None
     if axes:
-        ax = pr.axis + axis_noise * gen.standard_normal((nq, 3))
+        ax = pr.axis + o.axis_noise * gen.standard_normal((nq, 3))
         ax /= np.linalg.norm(ax, axis=1, keepdims=True)
     outl = np.zeros(nq, bool)
-    if outlier_fraction > 0:
-        k = max(1, int(round(outlier_fraction * nq)))
+    if o.outlier_fraction > 0:
+        k = max(1, int(round(o.outlier_fraction * nq)))
         idx = gen.choice(nq, size=k, replace=False)
         dirs = gen.standard_normal((k, 3))
-        tips[idx] += outlier_size * dirs / np.linalg.norm(dirs, axis=1, keepdims=True)
+        tips[idx] += o.outlier_size * dirs / np.linalg.norm(dirs, axis=1, keepdims=True)
         outl[idx] = True
     Ttb = None
     if frame == "tracker":

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import tempfile
 import warnings
 from pathlib import Path
@@ -46,7 +47,13 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                         "mode whose nominal tip is nearer the measured one; base frame); a "
                         "'mode' column in the file overrides it per row")
     p.add_argument("--loss", choices=("linear", "soft_l1", "huber", "cauchy", "arctan"),
-                   default="linear", help="robust loss against outliers (default linear)")
+                   default=None, help="robust loss against outliers (default linear, or the "
+                                      "loss of --options)")
+    p.add_argument("--options", type=Path, default=None, metavar="FILE.toml",
+                   help="solver settings: the [calibration_options] table of a TOML file "
+                        "(athenakin.calibration.CalibrationOptions: loss, sigma, "
+                        "outlier_threshold, bad_rows, max_bad_fraction, tol, ...); --loss "
+                        "overrides its loss")
     p.add_argument("--encoder-resolution", type=float, default=0.0, metavar="M",
                    help="encoder quantum (m) for the tip-error map of the report")
     p.add_argument("--report", type=Path, metavar="REPORT",
@@ -118,6 +125,10 @@ def _run(args: argparse.Namespace, out: Path, outs: Outputs) -> int:
         return 0
     if args.measurements is None:
         raise ValueError("expected a measurement file (or --plan N)")
+    opts = (cal.CalibrationOptions() if args.options is None
+            else cal.CalibrationOptions.from_toml(args.options))
+    if args.loss is not None:
+        opts = dataclasses.replace(opts, loss=args.loss)
     data = cal.read_measurements_csv(args.measurements)
     assert data.tips is not None
     with warnings.catch_warnings(record=True) as caught:
@@ -125,7 +136,7 @@ def _run(args: argparse.Namespace, out: Path, outs: Outputs) -> int:
         res = cal.calibrate(data.q, data.tips, T, design, params=args.params, frame=args.frame,
                             axes=data.axes,
                             mode=_mode(args.mode) if data.mode is None else data.mode,
-                            loss=args.loss)
+                            options=opts)
     for w in caught:
         print(f"warning: {w.message}")
     rows = [[n, f"{a:.9g}", f"{b:.9g}", f"{(b - a) * 1e6:+.2f}", f"{s * 1e6:.2f}"]

@@ -33,7 +33,7 @@ from .._output import AtomicFile
 __all__ = ["Outputs", "outputs", "add_force_option", "input_paths", "INPUT_ATTRIBUTES"]
 
 #: Attributes of the parsed arguments that name input files.
-INPUT_ATTRIBUTES = ("path", "design", "rcm_file", "q_file", "measurements")
+INPUT_ATTRIBUTES = ("path", "design", "rcm_file", "q_file", "measurements", "options")
 
 
 def add_force_option(p: argparse.ArgumentParser) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 from pathlib import Path
 from typing import Any
@@ -39,14 +40,20 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--seed", type=int, default=0, help="seed of samples and search")
     p.add_argument("--population", type=int, default=24, help="NSGA-II population (24)")
     p.add_argument("--generations", type=int, default=8, help="NSGA-II generations (8)")
-    p.add_argument("--encoder-resolution", type=float, default=1e-6, metavar="M",
-                   help="actuator encoder resolution for the tip error, m (default 1e-6)")
+    p.add_argument("--encoder-resolution", type=float, default=None, metavar="M",
+                   help="actuator encoder resolution for the tip error, m (default 1e-6, or "
+                        "that of --options)")
     p.add_argument("--figures", default=None, metavar="DIR",
                    help="folder for figures (default: next to the output, <out>-figures)")
     p.add_argument("--no-figures", action="store_true", help="write no figures")
     p.add_argument("--top", type=int, default=5, help="designs listed (default 5)")
-    p.add_argument("--connect-timeout", type=float, default=5.0, metavar="S",
-                   help="seconds to wait for the scheduler (default 5)")
+    p.add_argument("--connect-timeout", type=float, default=None, metavar="S",
+                   help="seconds to wait for the scheduler (default 5, or that of --options)")
+    p.add_argument("--options", type=Path, default=None, metavar="FILE.toml",
+                   help="study settings: the [study] table of a TOML file "
+                        "(athenakin.synthesis.StudyOptions: encoder_resolution, chunk_size, "
+                        "connect_timeout, retries and a [study.collision] check); the options "
+                        "given here override it")
     p.add_argument("--force", action="store_true",
                    help="replace existing figures (the results folder -o is resumed, "
                         "never replaced)")
@@ -85,8 +92,10 @@ def _check_options(args: argparse.Namespace) -> None:
     check_count(args.generations, "--generations", 1, MAX_GENERATIONS, "generations")
     check_count(args.top, "--top", 0, MAX_DESIGNS, "designs listed")
     check_count(args.seed, "--seed", 0, 2**63 - 1, "(a seed)")
-    check_finite(args.connect_timeout, "--connect-timeout", positive=True)
-    check_finite(args.encoder_resolution, "--encoder-resolution", positive=True)
+    if args.connect_timeout is not None:
+        check_finite(args.connect_timeout, "--connect-timeout", positive=True)
+    if args.encoder_resolution is not None:
+        check_finite(args.encoder_resolution, "--encoder-resolution", positive=True)
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise ValueError(f"-o: {str(out)!r} is a file; expected a results folder (new, or "
@@ -108,7 +117,8 @@ def run(args: argparse.Namespace) -> int:
     ref = Design.default()
     bounds = bounds_from_toml(args.task) or default_bounds(ref)
     out = Path(args.out)
-    with Outputs(force=args.force, inputs=[Path(args.task)], option="--figures") as outs:
+    inputs = [Path(args.task)] + ([] if args.options is None else [Path(args.options)])
+    with Outputs(force=args.force, inputs=inputs, option="--figures") as outs:
         figs: dict[str, Path] = {}
         if not args.no_figures:   # checked before any work: never replaced without --force
             folder = Path(args.figures or f"{out}-figures")
@@ -140,13 +150,28 @@ def _collision_options(args: argparse.Namespace) -> dict[str, Any]:
 
 def _run(args: argparse.Namespace, task: Any, ref: Any, bounds: Any, out: Path,
          outs: Outputs, figs: dict[str, Path]) -> int:
-    from ..synthesis import evaluate, optimize, random_designs, row_from_design
+    from ..synthesis import (
+        StudyOptions,
+        collision_spec,
+        evaluate,
+        optimize,
+        random_designs,
+        row_from_design,
+    )
 
+    opts = StudyOptions() if args.options is None else StudyOptions.from_toml(args.options)
+    given = {k: v for k, v in (("encoder_resolution", args.encoder_resolution),
+                               ("connect_timeout", args.connect_timeout)) if v is not None}
+    coll = _collision_options(args)
+    if coll and opts.collision is not None:    # the flags given replace those of the file
+        names = {"clearance_margin": "margin", "collision_samples": "samples"}
+        given["collision"] = dataclasses.replace(
+            opts.collision, **{names.get(k, k): v for k, v in coll.items()})
+    elif coll:
+        given["collision"] = collision_spec(**coll)
+    opts = dataclasses.replace(opts, progress=not args.json, **given)
     common: dict[str, Any] = dict(samples=args.samples, seed=args.seed,
-                                  scheduler=args.scheduler,
-                                  encoder_resolution=args.encoder_resolution,
-                                  connect_timeout=args.connect_timeout,
-                                  **_collision_options(args))
+                                  scheduler=args.scheduler, options=opts)
     result: Any = None
     if args.min_clearance is not None and not args.optimize:
         raise ValueError("--min-clearance: a constraint of the search; use it with --optimize")
@@ -158,7 +183,7 @@ def _run(args: argparse.Namespace, task: Any, ref: Any, bounds: Any, out: Path,
             raise FileExistsError(f"{out}: exists and is not an empty folder; a search writes "
                                   f"a new one (-o)")
         result = optimize(task, bounds=bounds, reference=ref, population=args.population,
-                          generations=args.generations, progress=not args.json, **common)
+                          generations=args.generations, **common)
         df = result.table
         out.mkdir(parents=True, exist_ok=True)
         df.to_parquet(out / "part-000000.parquet", index=False)
@@ -166,7 +191,7 @@ def _run(args: argparse.Namespace, task: Any, ref: Any, bounds: Any, out: Path,
         rows = [row_from_design(ref) | {"name": ref.name}]
         if args.designs:
             rows += random_designs(args.designs, bounds, seed=args.seed, base=ref)
-        df = evaluate(rows, task, out=out, progress=not args.json, **common)
+        df = evaluate(rows, task, out=out, **common)
     files = [str(out)]
     if figs:
         _figures(df, result, task, ref, figs, args, outs)

@@ -100,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _render(args: argparse.Namespace, out: Path, q: np.ndarray | None, T: np.ndarray,
             design: Design) -> None:
-    from ..plot import save_view
+    from ..plot import PlotOptions, save_view
 
     kw: dict = {"show_frames": not args.no_frames}  # type: ignore[type-arg]
     if out.suffix.lower() != ".html":
@@ -112,8 +112,10 @@ def _render(args: argparse.Namespace, out: Path, q: np.ndarray | None, T: np.nda
                             else Bodies.default(design))
         if args.view:
             kw["view"] = tuple(args.view)
-        if not args.all:
-            kw["show_labels"] = not args.no_labels
+        if not args.all:                  # plot_robot: the drawing options in one object
+            kw["options"] = PlotOptions(show_frames=kw.pop("show_frames"),
+                                        show_labels=not args.no_labels,
+                                        **({"view": kw.pop("view")} if "view" in kw else {}))
         kw["dpi"] = args.dpi
     else:
         kw["all_slots"] = True

@@ -125,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
         prog = True if args.progress else None
         modes = tuple(args.modes)
         coll = collision_options(args, design)
-        pw = point_workspace(design, resolution=args.resolution, progress=prog,
+        pw = point_workspace(design=design, resolution=args.resolution, progress=prog,
                              **({**coll, "T_b_e": T} if coll else {}))
         ic = instrument_cone(T, design, resolution=tuple(args.cone_resolution), modes=modes,
                              progress=prog, **coll)

@@ -4,7 +4,8 @@ matplotlib, plotly, imageio and tqdm (extra ``plot``) are imported only when a
 function that needs them runs.
 
 * :func:`robot_geometry`: where every part is in one FK solution (numpy only).
-* :func:`plot_robot`, :func:`plot_fk_solutions`, :func:`save_view`: matplotlib.
+* :func:`plot_robot` (its drawing options :class:`PlotOptions`), :func:`plot_fk_solutions`,
+  :func:`save_view`: matplotlib.
 * :func:`robot_figure`, :func:`write_html`: interactive plotly page.
 * :func:`animate`, :func:`instrument_cone_path`: GIF / MP4 of a motion.
 * :func:`draw_bodies`, :func:`capsule_surface`: the bodies as shaded capsules, the
@@ -22,12 +23,13 @@ from ._geometry import (
     slot_label,
 )
 from ._html import robot_figure, write_html
-from ._mpl import plot_fk_solutions, plot_robot, save_view
+from ._mpl import PlotOptions, plot_fk_solutions, plot_robot, save_view
 from ._solids import capsule_surface, draw_bodies
 
 __all__ = [
     "COLORS",
     "N_CIRCLE",
+    "PlotOptions",
     "RobotGeometry",
     "animate",
     "arc_points",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Any
 
@@ -14,7 +15,7 @@ from ..errors import KinematicsError
 from ..robot import q_from_instrument
 from ..robot._setup import resolve_rcm_frame
 from ._geometry import VIEW, RobotGeometry, cube_limits, robot_geometry
-from ._mpl import plot_robot
+from ._mpl import PlotOptions, plot_robot
 
 __all__ = ["instrument_cone_path", "render_frames", "animate", "draw_motion_frame",
            "ANIMATION_SIZE", "TRACE_COLOR", "MAX_PATH_SAMPLES", "MAX_TURNS"]
@@ -174,7 +175,8 @@ def draw_motion_frame(ax: Any, geoms: list[RobotGeometry], k: int, *,
     view : (float, float), keyword-only
     trace : bool, keyword-only
     **kwargs
-        Passed to :func:`~athenakin.plot.plot_robot`.
+        Passed to :func:`~athenakin.plot.plot_robot`; the ``limits`` and ``view`` of
+        its ``options`` (:class:`~athenakin.plot.PlotOptions`) are those given here.
 
     Returns
     -------
@@ -191,7 +193,10 @@ def draw_motion_frame(ax: Any, geoms: list[RobotGeometry], k: int, *,
         for j in np.unique(np.linspace(0, len(geoms) - 1, TRACE_LINES).astype(int)):
             a, b = geoms[j].points["O_s"], geoms[j].points["tip"]
             ax.plot(*np.stack([a, b]).T, color=TRACE_COLOR, lw=0.9, alpha=0.45)
-    return plot_robot(geometry=geoms[k], ax=ax, limits=limits, view=view, **kwargs)
+    base = kwargs.pop("options", None)
+    opts = dataclasses.replace(PlotOptions() if base is None else base, limits=limits,
+                               view=view)
+    return plot_robot(geometry=geoms[k], ax=ax, options=opts, **kwargs)
 
 
 def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None = None,

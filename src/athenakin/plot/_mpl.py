@@ -6,12 +6,14 @@ stays light.
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._toml import TomlOptions
 from .._validation import check_array
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, Reason
@@ -34,7 +36,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
     from mpl_toolkits.mplot3d.axes3d import Axes3D as Axes
 
-__all__ = ["plot_robot", "plot_fk_solutions", "save_view", "place_labels", "legend_handles"]
+__all__ = ["plot_robot", "PlotOptions", "plot_fk_solutions", "save_view", "place_labels",
+           "legend_handles"]
 
 #: Font size of the point labels, pt.
 LABEL_SIZE = 8.5
@@ -326,15 +329,72 @@ def _style(ax: Axes, lo: NDArray[np.float64], hi: NDArray[np.float64],
     ax.view_init(elev=view[0], azim=view[1])
 
 
+@dataclasses.dataclass(frozen=True)
+class PlotOptions(TomlOptions):
+    """How :func:`plot_robot` draws: what is shown, sizes, camera and axis box.
+
+    Every field is checked at construction (a named error). A ``[plot]`` table of a
+    TOML file holds them (:meth:`to_toml`, :meth:`from_toml`).
+
+    Attributes
+    ----------
+    show_frames, show_labels, show_circles, show_legend : bool
+        Frame triads (x red, y green, z blue), text labels, circles ``k1``/``k2``, the
+        legend of the colours.
+    frame_length : float
+        Length of the drawn frame axes, m, in (0, 10].
+    view : (float, float)
+        Elevation and azimuth, degrees.
+    limits : ((float, float, float), (float, float, float)) or None
+        Axis box ``(lo, hi)``, m, ``lo < hi``; None: a cube around the robot.
+    joint_scale : float
+        Size factor of the U-joint fork and the spherical-joint arcs (the branch cues),
+        in (0, 10].
+
+    Examples
+    --------
+    >>> from athenakin.plot import PlotOptions
+    >>> PlotOptions(show_labels=False, view=(30, 45)).view
+    (30.0, 45.0)
+    """
+
+    TOML_TABLE: ClassVar[str] = "plot"
+
+    show_frames: bool = True
+    show_labels: bool = True
+    show_circles: bool = True
+    show_legend: bool = True
+    frame_length: float = FRAME_LENGTH
+    view: tuple[float, float] = VIEW
+    limits: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None
+    joint_scale: float = 1.0
+
+    def __post_init__(self) -> None:
+        from ._geometry import check_length, check_view
+
+        put = object.__setattr__
+        for name in ("show_frames", "show_labels", "show_circles", "show_legend"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise TypeError(f"{name}: expected True or False, got "
+                                f"{type(getattr(self, name)).__name__}")
+            put(self, name, bool(getattr(self, name)))
+        put(self, "frame_length", check_length(self.frame_length, "frame_length"))
+        put(self, "joint_scale", check_length(self.joint_scale, "joint_scale"))
+        put(self, "view", check_view(self.view))
+        if self.limits is not None:
+            lims = check_array(self.limits, "limits", (3,))  # type: ignore[arg-type]
+            if lims.shape != (2, 3) or not np.all(lims[0] < lims[1]):
+                raise InvalidInputError(f"limits: expected (lo, hi), two points (m) with lo < "
+                                        f"hi, got {lims.tolist()}")
+            put(self, "limits", (tuple(map(float, lims[0])), tuple(map(float, lims[1]))))
+
+
 def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
                design: Design | None = None, *, slot: int = 0,
                geometry: RobotGeometry | None = None, ax: Axes | None = None,
-               show_frames: bool = True, show_labels: bool = True, show_circles: bool = True,
-               show_legend: bool = True, frame_length: float = FRAME_LENGTH,
-               view: tuple[float, float] = VIEW,
-               limits: tuple[ArrayLike, ArrayLike] | None = None, title: str | None = None,
-               joint_scale: float = 1.0, legend_extra: list[Any] | None = None,
-               bodies: Any = None) -> Axes:
+               bodies: Any = None, title: str | None = None,
+               legend_extra: list[Any] | None = None,
+               options: PlotOptions | None = None) -> Axes:
     """Draw the robot in one forward-kinematics solution on a 3-D matplotlib axes.
 
     Shows the base rail with carriages A and B, the bars of the parallel module
@@ -359,25 +419,17 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
         Draw this instead of computing it from ``q``, ``T_b_e``, ``design``, ``slot``.
     ax : mpl_toolkits.mplot3d.Axes3D, keyword-only, optional
         Axes to draw on (a new figure otherwise).
-    show_frames, show_labels, show_circles, show_legend : bool, keyword-only
-        Frame triads (x red, y green, z blue), text labels, circles ``k1``/``k2``,
-        the legend of the colours.
-    frame_length : float, keyword-only
-        Length of the drawn frame axes, m.
-    view : (float, float), keyword-only
-        Elevation and azimuth, degrees.
-    limits : (array-like, array-like), keyword-only, optional
-        Axis box ``(lo, hi)`` (each shape (3,), m); default: a cube around the robot.
-    title : str, keyword-only, optional
-        Default: ``q`` and the slot's labels.
-    joint_scale : float, keyword-only
-        Size factor of the U-joint fork and the spherical-joint arcs (the branch cues).
-    legend_extra : list of matplotlib artists, keyword-only, optional
-        More legend handles (e.g. what the caller drew before).
     bodies : athenakin.collision.Bodies or True, keyword-only, optional
         Also draw the bodies as solids (shaded capsules), the pair with the least
         clearance coloured and the clearance written
         (:func:`~athenakin.plot.draw_bodies`); ``True``: the default bodies.
+    title : str, keyword-only, optional
+        Default: ``q`` and the slot's labels.
+    legend_extra : list of matplotlib artists, keyword-only, optional
+        More legend handles (e.g. what the caller drew before).
+    options : PlotOptions, keyword-only, optional
+        What is shown (frames, labels, circles, legend), the frame length, the camera,
+        the axis box and the size of the branch cues (default ``PlotOptions()``).
 
     Returns
     -------
@@ -391,19 +443,17 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     import matplotlib.pyplot as plt
 
     from .._validation import check_axes, check_instance
-    from ._geometry import RobotGeometry, check_length, check_view
+    from ._geometry import RobotGeometry
 
+    opts = PlotOptions() if options is None else options
+    check_instance(opts, "options", PlotOptions)
+    show_frames, show_labels = opts.show_frames, opts.show_labels
+    show_circles, show_legend = opts.show_circles, opts.show_legend
+    frame_length, joint_scale, view, limits = (opts.frame_length, opts.joint_scale, opts.view,
+                                               opts.limits)
     if geometry is not None:
         check_instance(geometry, "geometry", RobotGeometry)
     check_axes(ax, "ax")
-    frame_length = check_length(frame_length, "frame_length")
-    joint_scale = check_length(joint_scale, "joint_scale")
-    view = check_view(view)
-    if limits is not None:
-        lims = check_array(limits, "limits", (3,))  # type: ignore[arg-type]
-        if lims.shape != (2, 3) or not np.all(lims[0] < lims[1]):
-            raise InvalidInputError(f"limits: expected (lo, hi), two points (m) with lo < hi, "
-                                    f"got {lims.tolist()}")
     if legend_extra is not None and (not isinstance(legend_extra, (list, tuple)) or not all(
             callable(getattr(a, "get_label", None)) for a in legend_extra)):
         raise TypeError(f"legend_extra: expected a list of matplotlib artists or None, got "
@@ -494,15 +544,15 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
         lo, hi = np.min(los, axis=0) - pad, np.max(his, axis=0) + pad
     else:
         lo, hi = -np.ones(3), np.ones(3)
+    panel = PlotOptions(show_frames=show_frames, show_labels=False, show_legend=False,
+                        limits=(lo, hi), view=view, frame_length=0.08, joint_scale=2.0)
     if fig is None:
         fig = plt.figure(figsize=(16, 17))
     for k in range(16):
         ax = fig.add_subplot(4, 4, k + 1, projection="3d")
         if k in geoms:
             g = geoms[k]
-            plot_robot(geometry=g, ax=ax, show_frames=show_frames, show_labels=False,
-                       show_legend=False, limits=(lo, hi), view=view, title="",
-                       frame_length=0.08, joint_scale=2.0)
+            plot_robot(geometry=g, ax=ax, title="", options=panel)
             ax.set_proj_type("ortho")           # one scale everywhere: the scale bar holds
             ax.set_box_aspect(tuple(hi - lo), zoom=1.45)
             ax.set_axis_off()                   # no panes: the robot fills the panel
@@ -592,7 +642,8 @@ def save_view(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | N
     dpi : int, keyword-only
         Resolution of raster output, 1 to :data:`MAX_DPI`.
     **kwargs
-        Passed to the drawing function.
+        Passed to the drawing function (for :func:`plot_robot`: ``bodies``, ``title``,
+        ``options``, a :class:`PlotOptions`).
 
     Returns
     -------

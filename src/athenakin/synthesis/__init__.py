@@ -7,8 +7,9 @@
   asked, the collision-free coverage and least clearance of the robot's bodies,
   :mod:`athenakin.collision` imported then);
 * :mod:`._study` - :func:`evaluate`: a batch of designs on Dask (local scheduler
-  by default, a ``distributed`` cluster by address or client), Parquet chunks,
-  resume, retries;
+  by default, a ``distributed`` cluster by address or client, or any
+  ``concurrent.futures.Executor``), Parquet chunks, resume, retries; its run settings
+  :class:`StudyOptions` (with the collision check :class:`CollisionSpec`);
 * :mod:`._search` - :func:`optimize`: NSGA-II (pymoo) over ``l1..l5`` and the
   strokes, the Pareto front and the reference design on it;
 * :mod:`.figures` - Pareto front, parameter coordinates, coverage maps (matplotlib).
@@ -26,6 +27,8 @@ from ._metrics import (
     DEFAULT_SAMPLES,
     METRIC_COLUMNS,
     PARAMETER_COLUMNS,
+    CollisionSpec,
+    collision_spec,
     design_from_row,
     evaluate_design,
     reachability,
@@ -43,7 +46,7 @@ from ._search import (
     pareto_mask,
     random_designs,
 )
-from ._study import CHUNK_SIZE, LOCAL_SCHEDULERS, design_rows, evaluate, read_study
+from ._study import CHUNK_SIZE, LOCAL_SCHEDULERS, StudyOptions, design_rows, evaluate, read_study
 from ._task import (
     MAX_TASK_SAMPLES,
     Task,
@@ -54,6 +57,9 @@ from ._task import (
 )
 
 __all__ = [
+    "CollisionSpec",
+    "StudyOptions",
+    "collision_spec",
     "COLLISION_COLUMNS",
     "DEFAULT_COLLISION_SAMPLES",
     "check_constraints",

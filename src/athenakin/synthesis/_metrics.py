@@ -6,11 +6,12 @@ import dataclasses
 import functools
 import math
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
 
+from .._toml import TomlOptions
 from .._validation import check_count, check_instance, check_scalar
 from ..design import Design
 from ..errors import InvalidInputError
@@ -56,8 +57,13 @@ _BODIES_MODES = ("default", "scaled")
 
 
 @dataclasses.dataclass(frozen=True)
-class CollisionSpec:
+class CollisionSpec(TomlOptions):
     """How a study checks the clearance of the robot's bodies (:func:`collision_spec`).
+
+    ``CollisionSpec()`` turns the check on with its defaults; every field is checked at
+    construction (a named error). A ``[collision]`` table of a TOML file holds it
+    (``bodies`` a name or a ``[collision.bodies]`` table, ``environment`` a
+    ``[[collision.environment.obstacle]]`` array).
 
     Attributes
     ----------
@@ -69,15 +75,63 @@ class CollisionSpec:
     environment : athenakin.collision.Environment or None
         Obstacles, in the base frame.
     margin : float
-        A sample is collision-free when its clearance is at least this, m.
+        A sample is collision-free when its clearance is at least this, m (default 0:
+        no contact).
     samples : int
-        How many of the task samples are checked (the first ones).
+        How many of the task samples are checked (the first ones), 1 to
+        :data:`MAX_COLLISION_SAMPLES` (default :data:`DEFAULT_COLLISION_SAMPLES`).
     """
 
-    bodies: Any
-    environment: Any
-    margin: float
-    samples: int
+    TOML_TABLE: ClassVar[str] = "collision"
+
+    bodies: Any = "default"
+    environment: Any = None
+    margin: float = 0.0
+    samples: int = DEFAULT_COLLISION_SAMPLES
+
+    def __post_init__(self) -> None:
+        from ..analysis._collision import MAX_CLEARANCE_MARGIN, collision_options
+
+        if self.bodies is None:
+            raise TypeError("bodies: expected athenakin.collision.Bodies or one of "
+                            f"{_BODIES_MODES}, got None")
+        opts = collision_options(Design.default(), self.bodies, self.environment,
+                                 None, default_margin=0.0, bodies_modes=_BODIES_MODES)
+        assert opts is not None
+        margin = check_scalar(self.margin, "margin", nonnegative=True)
+        if not margin <= MAX_CLEARANCE_MARGIN:
+            raise InvalidInputError(f"margin: expected a distance in [0, "
+                                    f"{MAX_CLEARANCE_MARGIN:g}] m, got {margin!r}")
+        object.__setattr__(self, "margin", margin)
+        object.__setattr__(self, "samples", check_count(
+            self.samples, "samples", minimum=1, maximum=MAX_COLLISION_SAMPLES))
+
+    def to_mapping(self) -> dict[str, Any]:
+        """A TOML table: ``bodies`` a name or a table, ``environment`` a table (if any)."""
+        out: dict[str, Any] = {"bodies": self.bodies if isinstance(self.bodies, str)
+                               else self.bodies.to_toml_table()}
+        if self.environment is not None:
+            out["environment"] = self.environment.to_toml_table()
+        out["margin"] = self.margin
+        out["samples"] = self.samples
+        return out
+
+    @classmethod
+    def from_mapping(cls, data: Mapping[str, Any]) -> CollisionSpec:
+        """Read a ``collision`` table (:meth:`to_mapping`); unknown keys are refused by name."""
+        if not isinstance(data, Mapping):
+            raise TypeError(f"collision: expected a table (mapping), got {type(data).__name__}")
+        from ..collision import Bodies, Environment
+
+        kw = dict(data)
+        try:
+            if isinstance(kw.get("bodies"), Mapping):
+                kw["bodies"] = Bodies.from_mapping(kw["bodies"])
+            if isinstance(kw.get("environment"), Mapping):
+                kw["environment"] = Environment.from_mapping(kw["environment"])
+        except (InvalidInputError, TypeError) as exc:
+            raise InvalidInputError(f"collision.{exc}") from None
+        return super().from_mapping(kw)
 
     def bodies_for(self, design: Design) -> Any:
         """The bodies of ``design``."""

@@ -25,12 +25,11 @@ from ..errors import InvalidInputError
 from ._errors import TaskFileError
 from ._metrics import (
     COLLISION_COLUMNS,
-    DEFAULT_ENCODER_RESOLUTION,
     METRIC_COLUMNS,
-    collision_spec,
+    CollisionSpec,
     row_from_design,
 )
-from ._study import CONNECT_TIMEOUT, _require, evaluate, open_scheduler
+from ._study import StudyOptions, _require, evaluate, open_scheduler
 from ._task import Task
 
 __all__ = ["SEARCH_VARIABLES", "DEFAULT_OBJECTIVES", "SearchResult", "default_bounds",
@@ -268,14 +267,10 @@ class SearchResult:
 
 def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
              reference: Design | None = None,
-             objectives: Mapping[str, str] | None = None, population: int = 24,
+             objectives: Mapping[str, str] | None = None,
+             constraints: Mapping[str, tuple[str, float]] | None = None, population: int = 24,
              generations: int = 8, samples: int = 20_000, seed: int = 0,
-             scheduler: Any = None, encoder_resolution: float = DEFAULT_ENCODER_RESOLUTION,
-             connect_timeout: float = CONNECT_TIMEOUT, progress: bool = False,
-             constraints: Mapping[str, tuple[str, float]] | None = None,
-             bodies: Any = None, environment: Any = None,
-             clearance_margin: float | None = None, collision_samples: int | None = None
-             ) -> SearchResult:
+             scheduler: Any = None, options: StudyOptions | None = None) -> SearchResult:
     """NSGA-II over ``l1..l5`` and the strokes within ``bounds``, evaluated on Dask.
 
     Each generation is one :func:`~athenakin.synthesis.evaluate` call on the same
@@ -294,25 +289,22 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
         gives ``tool_length`` and ``ab_order`` to every candidate.
     objectives : mapping metric -> {"max", "min"}, optional, keyword-only
         Default :data:`DEFAULT_OBJECTIVES`.
+    constraints : mapping metric -> (">=" | "<=", bound), optional, keyword-only
+        Inequality constraints on metric columns (:func:`check_constraints`), e.g.
+        ``{"min_clearance": (">=", 0.0)}``: designs whose bodies collide somewhere in
+        the task are infeasible. A NaN metric breaks its constraint. The front holds
+        only designs that keep every constraint.
     population, generations : int, keyword-only
         NSGA-II population size and number of generations.
     samples, seed : int, keyword-only
         Task samples per design and their seed; ``seed`` also seeds NSGA-II.
     scheduler : None, str, distributed.Client or concurrent.futures.Executor, keyword-only
         As for :func:`~athenakin.synthesis.evaluate`.
-    encoder_resolution : float, keyword-only
-    connect_timeout : float, keyword-only
-    progress : bool, keyword-only
-        Print one line per generation (pymoo's verbose output).
-    constraints : mapping metric -> (">=" | "<=", bound), optional, keyword-only
-        Inequality constraints on metric columns (:func:`check_constraints`), e.g.
-        ``{"min_clearance": (">=", 0.0)}``: designs whose bodies collide somewhere in
-        the task are infeasible. A NaN metric breaks its constraint. The front holds
-        only designs that keep every constraint.
-    bodies, environment, clearance_margin, collision_samples : keyword-only
-        The collision check of :func:`~athenakin.synthesis.evaluate`. When an objective
-        or a constraint uses ``collision_free_coverage`` or ``min_clearance`` and none
-        of these is given, the check runs with ``bodies="default"``.
+    options : StudyOptions, optional, keyword-only
+        As for :func:`~athenakin.synthesis.evaluate`; ``progress`` prints one line per
+        generation (pymoo's verbose output; None: off). When an objective or a
+        constraint uses ``collision_free_coverage`` or ``min_clearance`` and
+        ``options.collision`` is None, the check runs with ``CollisionSpec()``.
 
     Returns
     -------
@@ -339,12 +331,12 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
             raise InvalidInputError(f"objectives: expected metric -> 'max'|'min' with a metric "
                                     f"of {list(METRIC_COLUMNS)}, got {k!r}: {sense!r}")
     cons = check_constraints(constraints)
+    opts = StudyOptions() if options is None else options
+    check_instance(opts, "options", StudyOptions)
     uses_collision = any(k in COLLISION_COLUMNS for k in (*obj, *cons))
-    if uses_collision and bodies is None and environment is None and clearance_margin is None \
-            and collision_samples is None:
-        bodies = "default"
-    collision_spec(bodies, environment, clearance_margin, collision_samples)  # check early
-    kind, handle, owned = open_scheduler(scheduler, connect_timeout=connect_timeout)
+    run_opts = dataclasses.replace(opts, progress=False, collision=CollisionSpec() if (
+        uses_collision and opts.collision is None) else opts.collision)
+    kind, handle, owned = open_scheduler(scheduler, connect_timeout=opts.connect_timeout)
     sched = handle
     tables: list[Any] = []
     lo = np.array([b[k][0] for k in SEARCH_VARIABLES])
@@ -352,9 +344,7 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
 
     def run(rows: list[dict[str, Any]], generation: int) -> Any:
         df = evaluate(rows, task, samples=samples, seed=seed, scheduler=sched,
-                      encoder_resolution=encoder_resolution, progress=False, bodies=bodies,
-                      environment=environment, clearance_margin=clearance_margin,
-                      collision_samples=collision_samples)
+                      options=run_opts)
         df.insert(1, "generation", generation)
         tables.append(df)
         return df
@@ -381,7 +371,7 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
     try:
         run([dict(row_from_design(ref), name=ref.name or "reference")], -1)
         minimize(_Problem(), NSGA2(pop_size=int(population)), ("n_gen", int(generations)),
-                 seed=int(seed), verbose=bool(progress))
+                 seed=int(seed), verbose=bool(opts.progress))
     finally:
         if owned:
             handle.close()

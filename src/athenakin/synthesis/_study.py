@@ -13,12 +13,13 @@ import struct
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from .._output import atomic_path
-from .._validation import check_path, check_scalar
+from .._toml import TomlOptions
+from .._validation import check_count, check_instance, check_path, check_scalar
 from ..design import Design
 from ..errors import InvalidInputError
 from ._errors import SchedulerUnreachableError, StudyMismatchError
@@ -27,14 +28,14 @@ from ._metrics import (
     DEFAULT_SAMPLES,
     PARAMETER_COLUMNS,
     CollisionSpec,
-    collision_spec,
     metrics_or_reason,
     row_from_design,
 )
 from ._task import Task
 
-__all__ = ["evaluate", "design_rows", "open_scheduler", "LOCAL_SCHEDULERS", "CHUNK_SIZE",
-           "CONNECT_TIMEOUT", "RETRIES", "read_study", "MAX_SAMPLES", "MAX_ENCODER_RESOLUTION"]
+__all__ = ["evaluate", "StudyOptions", "design_rows", "open_scheduler", "LOCAL_SCHEDULERS",
+           "CHUNK_SIZE", "CONNECT_TIMEOUT", "RETRIES", "read_study", "MAX_SAMPLES",
+           "MAX_ENCODER_RESOLUTION"]
 
 #: Names of Dask's local schedulers accepted by ``scheduler=``.
 LOCAL_SCHEDULERS = ("threads", "processes", "synchronous", "sync", "single-threaded")
@@ -55,6 +56,90 @@ MAX_ENCODER_RESOLUTION = 1e-2
 RETRIES = 3
 _FORMAT = "athenakin-synthesis-1"
 _MANIFEST = "_study.json"
+
+
+@dataclasses.dataclass(frozen=True)
+class StudyOptions(TomlOptions):
+    """How a design study runs (:func:`evaluate`, :func:`~athenakin.synthesis.optimize`).
+
+    The study itself (designs, task, ``samples``, ``seed``) and where it runs
+    (``scheduler``, ``out``) are arguments of the functions; these are the settings a
+    user keeps from one study to the next. Every field is checked at construction (a
+    named error); the defaults give the results the functions gave before the options
+    object existed. A ``[study]`` table of a TOML file holds them (:meth:`to_toml`,
+    :meth:`from_toml`; the collision check as ``[study.collision]``).
+
+    Attributes
+    ----------
+    encoder_resolution : float
+        Actuator encoder resolution, m (tip-error metrics), in ``(0,``
+        :data:`MAX_ENCODER_RESOLUTION` ``]``. Part of the study's identity.
+    chunk_size : int
+        Designs per Dask task and per Parquet file, >= 1 (part of the study's identity:
+        resume with the same value). Larger chunks for very large studies keep the
+        scheduler's per-task overhead small (docs/synthesis.md).
+    connect_timeout : float
+        Seconds to wait for a scheduler given by address, > 0.
+    retries : int
+        Retries of a failed chunk on a ``distributed`` cluster, >= 0 (a worker that
+        dies mid-study is also survived by the scheduler's own rescheduling).
+    progress : bool or None
+        :func:`evaluate`: a tqdm progress bar over chunks (None: when there is more
+        than one chunk to compute and tqdm is installed); :func:`optimize`: one line per
+        generation (pymoo's verbose output; None: off).
+    collision : CollisionSpec or None
+        Check the clearance of the robot's bodies (columns ``collision_free_coverage``
+        and ``min_clearance``; NaN without it). ``CollisionSpec()``: the default bodies
+        of each design, no obstacles, margin 0.
+
+    Examples
+    --------
+    >>> from athenakin.synthesis import CollisionSpec, StudyOptions
+    >>> o = StudyOptions(chunk_size=64, collision=CollisionSpec(margin=0.002))
+    >>> StudyOptions.from_mapping(o.to_mapping()) == o
+    True
+    """
+
+    TOML_TABLE: ClassVar[str] = "study"
+
+    encoder_resolution: float = DEFAULT_ENCODER_RESOLUTION
+    chunk_size: int = CHUNK_SIZE
+    connect_timeout: float = CONNECT_TIMEOUT
+    retries: int = RETRIES
+    progress: bool | None = None
+    collision: CollisionSpec | None = None
+
+    def __post_init__(self) -> None:
+        put = object.__setattr__
+        res = check_scalar(self.encoder_resolution, "encoder_resolution", positive=True)
+        if not res <= MAX_ENCODER_RESOLUTION:
+            raise InvalidInputError(f"encoder_resolution: expected at most "
+                                    f"{MAX_ENCODER_RESOLUTION:g} m, got {res:g}")
+        put(self, "encoder_resolution", res)
+        put(self, "chunk_size", check_count(self.chunk_size, "chunk_size", minimum=1))
+        put(self, "connect_timeout",
+            check_scalar(self.connect_timeout, "connect_timeout", positive=True))
+        put(self, "retries", check_count(self.retries, "retries", minimum=0))
+        if self.progress is not None and not isinstance(self.progress, bool):
+            raise TypeError(f"progress: expected True, False or None, got "
+                            f"{type(self.progress).__name__}")
+        if self.collision is not None:
+            check_instance(self.collision, "collision", CollisionSpec)
+
+    def to_mapping(self) -> dict[str, Any]:
+        """A TOML table; the collision check as a ``collision`` sub-table."""
+        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
+               if f.name != "collision" and getattr(self, f.name) is not None}
+        if self.collision is not None:
+            out["collision"] = self.collision.to_mapping()
+        return out
+
+    @classmethod
+    def from_mapping(cls, data: Mapping[str, Any]) -> StudyOptions:
+        """Read a ``study`` table (:meth:`to_mapping`); unknown keys are refused by name."""
+        if isinstance(data, Mapping) and isinstance(data.get("collision"), Mapping):
+            data = dict(data, collision=CollisionSpec.from_mapping(data["collision"]))
+        return super().from_mapping(data)
 
 
 def _extra() -> str:
@@ -336,13 +421,8 @@ def read_study(out: str | Path) -> Any:
 
 def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: int = 0,
              scheduler: Any = None, out: str | Path | None = None,
-             encoder_resolution: float = DEFAULT_ENCODER_RESOLUTION,
-             progress: bool | None = None,
              on_chunk: Callable[[int, int], None] | None = None,
-             connect_timeout: float = CONNECT_TIMEOUT, retries: int = RETRIES,
-             chunk_size: int = CHUNK_SIZE, bodies: Any = None, environment: Any = None,
-             clearance_margin: float | None = None, collision_samples: int | None = None
-             ) -> Any:
+             options: StudyOptions | None = None) -> Any:
     """Evaluate a batch of designs against a task, on this machine or a Dask cluster.
 
     Parameters
@@ -369,37 +449,13 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
         ``chunk_size`` designs, written as each finishes, plus ``_study.json``).
         If the folder already holds chunks of the same study they are read, not
         recomputed: an interrupted study resumes.
-    encoder_resolution : float, keyword-only
-        Actuator encoder resolution, m (tip-error metrics).
-    progress : bool, optional, keyword-only
-        tqdm progress bar over chunks (default: when there is more than one chunk to
-        compute and tqdm is installed).
     on_chunk : callable ``(done, total)``, optional, keyword-only
         Called after each chunk is finished (and written).
-    connect_timeout : float, keyword-only
-        Seconds to wait for a scheduler given by address.
-    retries : int, keyword-only
-        Retries of a failed chunk on a ``distributed`` cluster (a worker that dies
-        mid-study is also survived by the scheduler's own rescheduling).
-    chunk_size : int, keyword-only
-        Designs per Dask task and per Parquet file (part of the study's identity:
-        resume with the same value). Larger chunks for very large studies keep the
-        scheduler's per-task overhead small (docs/synthesis.md).
-    bodies : athenakin.collision.Bodies or {"default", "scaled"}, optional, keyword-only
-        Check the clearance of the robot's bodies: the given capsules for every
-        design (radii in m), or per design ``Bodies.default(design)`` with the radii
-        of a bench-top ATHENA (``"default"``) or scaled with the design's ``l1``
-        (``"scaled"``). Any of ``bodies``, ``environment``, ``clearance_margin``,
-        ``collision_samples`` turns the check on (``bodies`` then defaults to
-        ``"default"``); without it ``collision_free_coverage`` and ``min_clearance``
-        are NaN. Needs the ``collision`` extra only for boxes and meshes.
-    environment : athenakin.collision.Environment, optional, keyword-only
-        Obstacles in the base frame.
-    clearance_margin : float, optional, keyword-only
-        A sample is collision-free when its clearance is at least this (m, default 0).
-    collision_samples : int, optional, keyword-only
-        How many task samples are checked, the first ones (a uniform subsample;
-        default :data:`~athenakin.synthesis.DEFAULT_COLLISION_SAMPLES`).
+    options : StudyOptions, optional, keyword-only
+        Encoder resolution, chunk size, connection timeout, retries, progress bar and
+        the collision check of the robot's bodies (:class:`StudyOptions`; default
+        ``StudyOptions()``: no collision check, ``collision_free_coverage`` and
+        ``min_clearance`` NaN).
 
     Returns
     -------
@@ -417,6 +473,8 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
     """
     pd = _require("pandas")
     _require("dask")
+    opts = StudyOptions() if options is None else options
+    check_instance(opts, "options", StudyOptions)
     if not isinstance(task, Task):
         raise TypeError(f"task: expected athenakin.synthesis.Task, got {type(task).__name__}")
     if (isinstance(samples, bool) or not isinstance(samples, (int, np.integer))
@@ -425,16 +483,10 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
                                 f"{samples!r}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InvalidInputError(f"seed: expected a non-negative integer, got {seed!r}")
-    resolution = check_scalar(encoder_resolution, "encoder_resolution", positive=True)
-    if not resolution <= MAX_ENCODER_RESOLUTION:
-        raise InvalidInputError(f"encoder_resolution: expected at most "
-                                f"{MAX_ENCODER_RESOLUTION:g} m, got {resolution:g}")
-    if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) or (
-            chunk_size < 1):
-        raise InvalidInputError(f"chunk_size: expected a positive integer, got {chunk_size!r}")
-    collision = collision_spec(bodies, environment, clearance_margin, collision_samples)
+    resolution, chunk_size, collision = opts.encoder_resolution, opts.chunk_size, opts.collision
+    progress = opts.progress
     rows = design_rows(designs)
-    samples, seed, chunk_size = int(samples), int(seed), int(chunk_size)
+    samples, seed = int(samples), int(seed)
     chunks = [rows[i:i + chunk_size] for i in range(0, len(rows), chunk_size)]
     task_map = task.to_mapping()
     done: dict[int, Any] = {}
@@ -443,7 +495,7 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
         raise TypeError(f"on_chunk: expected a callable (done, total) or None, got "
                         f"{type(on_chunk).__name__}")
     # the scheduler first: an address that does not answer leaves no results folder behind
-    kind, handle, owned = open_scheduler(scheduler, connect_timeout=connect_timeout)
+    kind, handle, owned = open_scheduler(scheduler, connect_timeout=opts.connect_timeout)
     if out_path is not None:
         fp = _fingerprint(rows, task, samples, seed, resolution, chunk_size, collision)
         meta = {"format": _FORMAT, "designs": len(rows), "chunk_size": chunk_size,
@@ -477,7 +529,7 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
         elif todo and kind == "executor":
             _run_executor(handle, chunks, todo, chunk_size, args, finished)
         elif todo:
-            _run_distributed(handle, chunks, todo, chunk_size, args, finished, retries)
+            _run_distributed(handle, chunks, todo, chunk_size, args, finished, opts.retries)
     finally:
         if bar is not None:
             bar.close()
