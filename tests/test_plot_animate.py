@@ -154,6 +154,7 @@ class _LosesCtrlC:
         signal.raise_signal(signal.SIGINT)
 
 
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")  # the lost one
 def test_animate_keeps_a_ctrl_c_lost_inside_a_callback(tmp_path, capsys, monkeypatch):
     """``athenakin animate`` ran to the end and exited 0 after a Ctrl-C that matplotlib
     swallowed (1 run in 11); now it stops at the next frame with 130 and writes nothing."""
