@@ -21,6 +21,7 @@ from ._common import (
     load_rcm,
     table,
 )
+from ._warmup import one_shot_backend
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -118,9 +119,9 @@ def run(args: argparse.Namespace) -> int:
     T = load_rcm(args, design)
     if args.certify:
         return _run_certified(args, design, T)
-    # the public function (backend="auto", as every user's call): the CLI shows what the
-    # library gives; the first compiled call of a process loads the kernels from numba's cache
-    sol = forward_kinematics(np.array(args.q), T, design)
+    # the public function: the CLI shows what the library gives; one pose in a fresh process
+    # runs the numpy reference, not numba's ~1 s of loading (cli/_warmup.one_shot_backend)
+    sol = forward_kinematics(np.array(args.q), T, design, backend=one_shot_backend())
     if args.json:
         print(dump_json({"q_m": args.q, "T_b_e": T, **fk_json(sol)}))
     else:

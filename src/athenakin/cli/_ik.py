@@ -17,6 +17,7 @@ from ._common import (
     load_design,
     load_rcm,
 )
+from ._warmup import one_shot_backend
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -50,7 +51,8 @@ def run(args: argparse.Namespace) -> int:
     T = load_rcm(args, design)
     out: dict = {}  # type: ignore[type-arg]
     if args.u345 is not None:
-        q, pas = inverse_kinematics(T, np.radians(args.u345), design)
+        q, pas = inverse_kinematics(T, np.radians(args.u345), design,
+                                    backend=one_shot_backend())
         out = {"form": "paper (u3, u4, u5)", "q_m": q, "mode": int(pas.mode), "p_m": pas.p,
                "u_deg": np.degrees(pas.u), "residual": pas.residual}
     else:
@@ -58,10 +60,10 @@ def run(args: argparse.Namespace) -> int:
             if args.p is None:
                 raise ValueError("--direction needs --p (distance O_s -> RCM, m)")
             d_e = direction_from_angles(*np.radians(args.direction))
-            q, res = q_from_instrument(T, d_e, args.p, design)
+            q, res = q_from_instrument(T, d_e, args.p, design, backend=one_shot_backend())
             form = "instrument direction + p"
         else:
-            q, res = q_from_tool_tip(T, np.array(args.tip), design)
+            q, res = q_from_tool_tip(T, np.array(args.tip), design, backend=one_shot_backend())
             form = "tool tip"
         out = {"form": form, "q_m": q, "mode": int(res.mode), "p_m": res.p,
                "direction_b": res.direction_b, "O_s_m": res.O_s}
