@@ -19,7 +19,7 @@ from athenakin._mechanism import body_segments, mechanism_points
 from athenakin.collision import Bodies, Environment, clearance
 from athenakin.collision._clearance import segment_clearance
 from athenakin.collision._coal import capsule_transform, import_coal
-from athenakin.fast._collision_kernels import (
+from athenakin.collision._kernels import (
     capsule_distances,
     capsule_pairs,
     capsule_pairs_into,

@@ -71,7 +71,7 @@ def cases(quick: bool) -> list[dict]:
          "call": lambda: dy.inverse_dynamics(qs, qds, qdds, T, D, masses=M, backend="numpy")},
     ]
     try:
-        from athenakin.dynamics._kernel import (
+        from athenakin.dynamics._kernels import (
             inverse_dynamics_kernel,
             inverse_dynamics_kernel_parallel,
         )

@@ -1389,6 +1389,9 @@ for _k, _v in {
     "collision.capsule_capsule": lambda f: ((_DR_A, _DR_B, 0.01, _DR_C, _DR_E, 0.01), {}),
     "collision.capsule_halfspace": lambda f: ((_DR_A, _DR_B, 0.01, np.array([0, 0, -0.05]),
                                                np.array([0.0, 0.0, 1.0])), {}),
+    # an Obstacle made directly validates as the Environment builders do (issue 30)
+    "collision.Obstacle": lambda f: ((), dict(kind="capsule", name="cable", a=_DR_A, b=_DR_B,
+                                              radius=0.01, allow=("instrument",))),
 }.items():
     OVERRIDES.setdefault(_k, _v)
 # --- end of the dynamics and ros block -------------------------------------------------------

@@ -11,9 +11,9 @@
 #      (python-flint, matplotlib, dask, distributed, pandas, pyarrow, pymoo, plotly, imageio,
 #      mujoco, yourdfpy, viser), numpy still at its minimum. This stage found mujoco 3.2.0-3.2.2
 #      rejecting the exported MJCF (site-based equality constraints): the bound is 3.2.3.
-# Not run here: the bench extra (pin, pytest-benchmark): the oldest pin in the registry, 3.3.1,
+# Not run here: the bench and test groups' pin: the oldest pin in the registry, 3.3.1,
 # needs numpy 2, so it cannot share this venv; benchmarks/baselines.py was checked with pin 3.3.1
-# and pytest-benchmark 4.0.0 by hand (tests/test_fast_bench.py::test_baselines_agree_with_athenakin).
+# by hand (tests/test_fast_bench.py::test_baselines_agree_with_athenakin).
 # tests/test_packaging.py checks that the pins below equal pyproject's lower bounds.
 #
 # Usage: bash scripts/test_min_deps.sh [PYTEST_ARGS...]

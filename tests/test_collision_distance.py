@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
+from athenakin import _backend
 from athenakin.collision import capsule_capsule, capsule_halfspace, point_segment, segment_segment
-from athenakin.fast._collision_kernels import capsule_pairs
 
 N = 12_000
 
@@ -129,7 +129,10 @@ def test_symmetric_and_reversal_invariant(pairs):
         assert_allclose(d, P["dist"], rtol=0, atol=1e-13)
 
 
+@pytest.mark.skipif(not _backend.numba_available(), reason="numba not available here")
 def test_compiled_kernel_equals_reference(pairs):
+    from athenakin.collision._kernels import capsule_pairs
+
     P = pairs
     n = len(P["dist"])
     solids = np.stack([np.stack([P["p1"], P["q1"]], 1), np.stack([P["p2"], P["q2"]], 1)], 1)

@@ -8,11 +8,18 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_fast_exactness import DESIGN, UNLIMITED, assert_same
+
+from athenakin import _backend
+
+if not _backend.numba_available():
+    pytest.skip("numba not available here (or ATHENAKIN_BACKEND=numpy): fast is compiled only",
+                allow_module_level=True)
+
+from test_fast_exactness import DESIGN, UNLIMITED, assert_same  # noqa: E402, I001
 
 import athenakin as ak
 import athenakin.testing as akt
-from athenakin import fast
+from athenakin import fast  # noqa: E402
 from athenakin.chain import ups_transform
 from athenakin.errors import Reason
 

@@ -17,9 +17,15 @@ import dataclasses
 import numpy as np
 import pytest
 
+from athenakin import _backend
+
+if not _backend.numba_available():
+    pytest.skip("numba not available here (or ATHENAKIN_BACKEND=numpy): fast is compiled only",
+                allow_module_level=True)
+
 import athenakin as ak
 import athenakin.testing as akt
-from athenakin import fast
+from athenakin import fast  # noqa: E402
 from athenakin._transforms import transform_from_rotation_translation as _transforms
 from athenakin.study import rotation_from_quaternion
 

@@ -15,8 +15,14 @@ import doctest
 import numpy as np
 import pytest
 
+from athenakin import _backend
+
+if not _backend.numba_available():
+    pytest.skip("numba not available here (or ATHENAKIN_BACKEND=numpy): fast is compiled only",
+                allow_module_level=True)
+
 import athenakin as ak
-from athenakin import analysis, fast
+from athenakin import analysis, fast  # noqa: E402
 from athenakin._transforms import transform_from_rotation_translation as _transforms
 from athenakin.robot import _jacobians as _ref_jac
 from athenakin.study import rotation_from_quaternion

@@ -7,8 +7,14 @@ import tracemalloc
 import numpy as np
 import pytest
 
+from athenakin import _backend
+
+if not _backend.numba_available():
+    pytest.skip("numba not available here (or ATHENAKIN_BACKEND=numpy): fast is compiled only",
+                allow_module_level=True)
+
 import athenakin as ak
-from athenakin import fast
+from athenakin import fast  # noqa: E402
 from athenakin.errors import InvalidInputError
 
 DESIGN = ak.Design.default()

@@ -1,16 +1,22 @@
-"""The compiled, batched tracker (motion.track, ros streams) against Tracker.update, bit for bit."""
+"""The compiled, batched tracker (motion.track, ros streams) against Tracker.update.
 
-import math
+The poses and steps agree to 1e-12 and every integer, flag and label is equal. Not bit
+for bit (issue 28): the compiled loop takes libm's ``hypot``, which differs from CPython's
+own ``math.hypot`` in the last bit for about one pair in 700, instead of re-implementing
+CPython's algorithm for each Python version.
+"""
+
 
 import numpy as np
 import pytest
 
 import athenakin as ak
+from athenakin import _backend
 from athenakin.collision import Bodies
-from athenakin.fast import _track_kernels as K
 from athenakin.motion import Tracker, TrackFlag, TrackingError, track
 from athenakin.motion import _tracker as M
 
+needs_numba = pytest.mark.skipif(not _backend.numba_available(), reason="numba not available here")
 SEED = 22_2026
 D = ak.Design.default()
 T = ak.default_rcm_frame(D)
@@ -59,12 +65,26 @@ def reference(qs, **opts):
     return M._pose_columns([tr.pose] + [tr.update(r) for r in qs[1:].tolist()])
 
 
-def assert_same(a, b):
-    for k in FIELDS:
+def assert_same(a, b, fields=FIELDS):
+    """Equal columns: floats to 1e-12 (NaN and inf where the other has them), the rest exactly."""
+    for k in fields:
         x, y = np.asarray(a[k]), np.asarray(b[k])
         assert x.dtype == y.dtype and x.shape == y.shape, k
-        eq = np.array_equal(x, y, equal_nan=x.dtype.kind == "f")
+        if x.dtype.kind == "f":
+            np.testing.assert_allclose(x, y, rtol=0, atol=1e-12, equal_nan=True, err_msg=k)
+            continue
+        eq = np.array_equal(x, y)
         assert eq, (k, np.flatnonzero(np.any((x != y).reshape(len(x), -1), axis=1))[:5])
+
+
+def assert_pose_close(a, b):
+    """Two TrackedPose: numbers to 1e-12, labels, flags and pairs equal."""
+    for name in a._fields:
+        x, y = getattr(a, name), getattr(b, name)
+        if isinstance(x, float) or (isinstance(x, tuple) and x and isinstance(x[0], float)):
+            np.testing.assert_allclose(x, y, rtol=0, atol=1e-12, equal_nan=True, err_msg=name)
+        else:
+            assert x == y, name
 
 
 def batch(qs, **opts):
@@ -73,7 +93,7 @@ def batch(qs, **opts):
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_batch_equals_update_bit_for_bit_on_hard_streams(seed):
+def test_batch_equals_update_on_hard_streams(seed):
     rng = np.random.default_rng(SEED + seed)
     qs = hard_stream(rng)
     opts = {} if seed % 2 == 0 else {"jump_m": 0.02, "margins": ak.motion.Margins(sin_u2=0.05)}
@@ -118,7 +138,10 @@ def test_tracker_state_after_a_batch_continues_as_update():
         cols = M.track_batch(a, qs[lo:hi])
         ref = M._pose_columns([b.update(r) for r in qs[lo:hi].tolist()])
         assert_same(cols, ref)
-        assert repr(a.pose) == repr(b.pose) and a._prev == b._prev and a._lost == b._lost
+        assert_pose_close(a.pose, b.pose)
+        np.testing.assert_allclose(np.array(M._cand_row(a._prev)),
+                                   np.array(M._cand_row(b._prev)), rtol=0, atol=1e-12)
+        assert a._prev[:4] == b._prev[:4] and a._lost == b._lost
     assert M.track_batch(a, np.empty((0, 3)))["q"].shape == (0, 3)
 
 
@@ -132,7 +155,8 @@ def test_track_uses_the_batch_and_keeps_dtypes():
         if k in ("clearance", "closest_pair"):
             continue
         x = getattr(log, k)
-        assert x.dtype == ref[k].dtype and np.array_equal(x, ref[k], equal_nan=x.dtype.kind == "f")
+        assert x.dtype == ref[k].dtype, k
+        assert_same({k: x}, {k: ref[k]}, fields=(k,))
 
 
 @pytest.mark.parametrize("bits", [TrackFlag.JUMP, TrackFlag.LOST, TrackFlag.OUT_OF_STROKE,
@@ -171,11 +195,9 @@ def test_collision_check_per_reading_matches():
 
 
 def test_without_numba_the_python_loop_gives_the_same(monkeypatch):
-    from athenakin import _dispatch
-
     qs = hard_stream(np.random.default_rng(SEED + 10), 200)
     fast, _ = batch(qs)
-    monkeypatch.setitem(_dispatch._STATE, "numba", False)
+    monkeypatch.setitem(_backend._STATE, "numba", False)
     assert_same(batch(qs)[0], fast)
 
 
@@ -188,32 +210,24 @@ def test_ros_stream_chunks_equal_one_tracker():
     parts = [st.run(qs[a:b]) for a, b in ((0, 2), (2, 90), (90, 91), (91, len(qs)))]
     got = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
     ref = reference(qs[4:])
-    for k in got:
-        if k == "q":
-            continue
-        x = got[k]
-        assert np.array_equal(x[4:], ref[k].astype(x.dtype), equal_nan=x.dtype.kind == "f"), k
-        assert not got["valid"][:4].any() and (got["flags"][:4] == int(TrackFlag.LOST)).all()
+    tail = {k: got[k][4:] for k in got if k != "q"}
+    assert_same(tail, {k: ref[k].astype(tail[k].dtype) for k in tail}, fields=tuple(tail))
+    assert not got["valid"][:4].any() and (got["flags"][:4] == int(TrackFlag.LOST)).all()
 
 
+@needs_numba
 def test_kernel_geometry_has_the_kernels_size():
+    from athenakin.motion import _kernels as K
+
     assert M._kernel_geometry(Tracker(T, D, q0=Q_REF)).shape == (K.NGEO,)
 
 
+@needs_numba
 def test_kernel_flag_bits_are_trackflags():
+    from athenakin.motion import _kernels as K
+
     assert K.F_LOST == TrackFlag.LOST and K.F_REACQUIRED == TrackFlag.REACQUIRED
     for name in ("JUMP", "MODE_SWITCH", "BRANCH_SWITCH", "AMBIGUOUS", "OUT_OF_STROKE",
                  "NEAR_MODE_BOUNDARY", "NEAR_H_ZERO", "NEAR_LINK_LIMIT", "NEAR_UJOINT",
                  "NEAR_WRIST", "NEAR_P_ZERO"):
         assert getattr(K, "_" + name) == int(TrackFlag[name])
-
-
-def test_py_hypot_is_cpythons_math_hypot():
-    rng = np.random.default_rng(SEED + 12)
-    x = rng.normal(size=20000) * rng.choice([1e-300, 1e-8, 1.0, 1e8, 1e300], 20000)
-    y = rng.normal(size=20000) * rng.choice([1e-320, 1e-9, 1.0, 1e3], 20000)
-    x[:6] = [0.0, -0.0, np.inf, np.nan, 5e-324, 3.0]
-    y[:6] = [0.0, 1.0, np.nan, 1.0, 5e-324, -4.0]
-    got = np.array([K.py_hypot(a, b) for a, b in zip(x, y, strict=True)])
-    want = np.array([math.hypot(a, b) for a, b in zip(x.tolist(), y.tolist(), strict=True)])
-    assert np.array_equal(got, want, equal_nan=True)

@@ -257,7 +257,8 @@ def test_link_too_short_named():
         ak.forward_kinematics([-0.3, 0.3, 0.5], ak.default_rcm_frame(D), free)
 
 
-@pytest.mark.parametrize("backend", ["numpy", "numba"])
+@pytest.mark.parametrize("backend", ["numpy", pytest.param("numba", marks=pytest.mark.skipif(
+    not ak._backend.numba_available(), reason="numba not available here"))])
 def test_tangent_configuration_gives_eight_within_a_loose_closure(backend):
     """Tangent circles: the merged mode +1 is valid only where its residual, a bound on
     the position error from the rounding of k (about 2e-8 m here), is within closure_tol;

@@ -1,6 +1,6 @@
 """athenakin.ros' compiled paths equal their numpy references, and their files stay valid.
 
-The writer fills the records of a chunk with a compiled kernel (``fast._mcap_kernels.
+The writer fills the records of a chunk with a compiled kernel (``ros._kernels.
 fill_records``) and computes the ``/tf`` frames compiled (``fast._frame_kernels.
 urdf_frames_into``); the reader reads chunks that define channels in bulk and evenly
 spaced messages as a strided view. Each against the path it replaces, byte for byte
@@ -20,7 +20,7 @@ pytest.importorskip("mcap")
 from _ros_recordings import NAMES, _js, _ros2_store, positions, q_stream, stamps  # noqa: E402, I001
 
 import athenakin as ak  # noqa: E402
-from athenakin import _dispatch  # noqa: E402
+from athenakin import _backend  # noqa: E402
 from athenakin.errors import InvalidInputError  # noqa: E402
 from athenakin.ros import _mcap, _read, _write  # noqa: E402
 from athenakin.ros._frames import (  # noqa: E402
@@ -35,8 +35,8 @@ from athenakin.ros._frames import (  # noqa: E402
 
 D = ak.Design.default()
 T = ak.default_rcm_frame(D)
-needs_numba = pytest.mark.skipif(not _dispatch.numba_available(),
-                                 reason="the compiled paths need numba")
+needs_numba = pytest.mark.skipif(not _backend.numba_available(),
+                                 reason="numba not available here: the compiled paths need it")
 
 
 def _stream(n, seed, lost=()):
@@ -183,7 +183,7 @@ def test_crc_functions_agree_and_either_writes_the_same_file(tmp_path, monkeypat
 
 @needs_numba
 def test_fill_records_refuses_a_short_buffer_or_a_field_outside():
-    from athenakin.fast._mcap_kernels import fill_records
+    from athenakin.ros._kernels import fill_records
 
     st_t, po_t = np.arange(10, dtype=np.uint8), np.arange(20, dtype=np.uint8)
     words = np.array([[0x0102030405060708, 7]] * 3, dtype=np.uint64)
@@ -246,7 +246,7 @@ def test_compiled_link_frames_equal_link_poses(monkeypatch):
     out = np.full((len(rows), len(links) + 2, 9), np.nan)[:, 1:-1, 1:-1]   # a strided view
     got = link_frames(model, jv, links, out=out)
     assert got is out and np.isfinite(out).all()
-    monkeypatch.setitem(_dispatch._STATE, "numba", False)
+    monkeypatch.setitem(_backend._STATE, "numba", False)
     ref = link_frames(model, jv, links)
     monkeypatch.undo()
     poses = link_poses(model, jv, links=links)
@@ -310,7 +310,7 @@ def test_chunks_that_define_channels_are_read_in_bulk(tmp_path, monkeypatch):
     monkeypatch.undo()
     for topic in ("/joint_states", "/late"):
         fast = ak.ros.read_joint_states(path, topic=topic)
-        monkeypatch.setitem(_dispatch._STATE, "numba", False)
+        monkeypatch.setitem(_backend._STATE, "numba", False)
         slow = ak.ros.read_joint_states(path, topic=topic)
         monkeypatch.undo()
         for f in ("stamps_ns", "q", "log_time_ns", "header_stamped"):

@@ -97,7 +97,7 @@ def test_compiled_quaternions_are_the_numpy_ones_bit_for_bit():
     R[43] = -0.0
     R[44:2000] = np.round(R[44:2000], 1)
     if not _dispatch.numba_available():
-        pytest.skip("the compiled quaternions need numba")
+        pytest.skip("numba not available here: the compiled quaternions need it")
     got, want = quaternion_xyzw(R), _quaternion_xyzw_numpy(R)
     assert np.array_equal(got, want, equal_nan=True)
     assert np.array_equal(np.signbit(got), np.signbit(want))

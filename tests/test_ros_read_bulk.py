@@ -5,8 +5,11 @@ import pytest
 from _ros_recordings import NAMES, _js, _ros2_store, positions, q_stream, stamps
 
 import athenakin as ak
-from athenakin import _dispatch
+from athenakin import _backend
 from athenakin.ros import RecordingError
+
+needs_numba = pytest.mark.skipif(not _backend.numba_available(),
+                                 reason="numba not available here: the vectorised path needs it")
 
 SEED = 2211
 
@@ -60,11 +63,11 @@ def mixed(n, rng, *, backwards_at=None):
 
 def both(monkeypatch, fn):
     fast = fn()
-    monkeypatch.setitem(_dispatch._STATE, "numba", False)
+    monkeypatch.setitem(_backend._STATE, "numba", False)
     try:
         slow = fn()
     finally:
-        monkeypatch.setitem(_dispatch._STATE, "numba", True)
+        monkeypatch.setitem(_backend._STATE, "numba", True)
     return fast, slow
 
 
@@ -77,7 +80,7 @@ def assert_same(a, b):
         assert x.dtype == y.dtype and np.array_equal(x, y, equal_nan=True), f
 
 
-@pytest.mark.skipif(not _dispatch.numba_available(), reason="the vectorised path needs numba")
+@needs_numba
 @pytest.mark.parametrize("chunk", [37, 1000, 65536])
 def test_vectorised_read_equals_message_by_message(tmp_path, monkeypatch, chunk):
     rng = np.random.default_rng(SEED)
@@ -90,7 +93,7 @@ def test_vectorised_read_equals_message_by_message(tmp_path, monkeypatch, chunk)
     assert any(c.qd is not None for c in fast) and not fast[0].header_stamped.all()
 
 
-@pytest.mark.skipif(not _dispatch.numba_available(), reason="the vectorised path needs numba")
+@needs_numba
 @pytest.mark.parametrize("chunk", [64, 65536])
 def test_vectorised_read_raises_where_the_stamps_go_back(tmp_path, monkeypatch, chunk):
     rng = np.random.default_rng(SEED + 1)
@@ -110,7 +113,7 @@ def test_vectorised_read_raises_where_the_stamps_go_back(tmp_path, monkeypatch, 
         assert_same(a, b)
 
 
-@pytest.mark.skipif(not _dispatch.numba_available(), reason="the vectorised path needs numba")
+@needs_numba
 def test_vectorised_read_missing_joint_named(tmp_path, monkeypatch):
     rng = np.random.default_rng(SEED + 2)
     path = write(tmp_path / "m.mcap", mixed(300, rng))

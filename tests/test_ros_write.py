@@ -188,19 +188,19 @@ def test_no_partial_output_on_a_corrupt_recording(tmp_path):
     out_dir = tmp_path / "out"
     out_dir.mkdir()
     with pytest.raises(RecordingError):
-        track_recording(cut, out_dir / "o.mcap", T, D, chunk_size=16)
+        track_recording(cut, out_dir / "o.mcap", T, D, chunk_size=1024)
     assert list(out_dir.iterdir()) == []
 
 
 def test_no_partial_output_when_stamps_go_backwards(tmp_path):
-    st = stamps(300)
-    st[250] = st[10]
-    src = write_mcap(tmp_path / "a.mcap", positions(q_stream(300)), st,
-                     log_ns=stamps(300) + 17)
+    st = stamps(3000)
+    st[2500] = st[10]
+    src = write_mcap(tmp_path / "a.mcap", positions(q_stream(3000)), st,
+                     log_ns=stamps(3000) + 17)
     out_dir = tmp_path / "out"
     out_dir.mkdir()
-    with pytest.raises(RecordingError, match="backwards at message 250"):
-        track_recording(src, out_dir / "o.mcap", T, D, chunk_size=32)
+    with pytest.raises(RecordingError, match="backwards at message 2500"):
+        track_recording(src, out_dir / "o.mcap", T, D, chunk_size=1024)
     assert list(out_dir.iterdir()) == []
 
 
@@ -334,14 +334,14 @@ def test_stream_starting_with_unusable_readings(tmp_path):
 
 def test_ctrl_c_leaves_nothing(tmp_path):
     """A KeyboardInterrupt half way (here from the progress callback) leaves no file."""
-    src = write_mcap(tmp_path / "a.mcap", positions(q_stream(200)), stamps(200))
+    src = write_mcap(tmp_path / "a.mcap", positions(q_stream(3000)), stamps(3000))
     out_dir = tmp_path / "out"
     out_dir.mkdir()
 
     def interrupt(n):
-        if n >= 64:
+        if n >= 2048:
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        track_recording(src, out_dir / "o.mcap", T, D, chunk_size=32, progress=interrupt)
+        track_recording(src, out_dir / "o.mcap", T, D, chunk_size=1024, progress=interrupt)
     assert list(out_dir.iterdir()) == []

@@ -88,15 +88,16 @@ def test_keyframe_of_every_slot_is_assembled(slot):
     mujoco.mj_resetDataKeyframe(m, d, 0)
     mujoco.mj_forward(m, d)
     assert equality_residual(d) < 1e-13
-    g = mechanism_joint_values(slot=slot).geometry
+    jv = mechanism_joint_values(slot=slot)
+    st = jv.state
     T = np.eye(4)
     T[:3, :3] = d.body("instrument").xmat.reshape(3, 3)
     T[:3, 3] = d.body("instrument").xpos
-    np.testing.assert_allclose(T, g.frames["instrument"], rtol=0, atol=1e-13)
-    np.testing.assert_allclose(d.body("sph_5").xmat.reshape(3, 3), g.T_b_e[:3, :3], atol=1e-13)
-    np.testing.assert_allclose(d.site("tool_tip").xpos, g.points["tip"], atol=1e-13)
-    np.testing.assert_allclose(d.site("platform_oi").xpos, g.points["O_i"], atol=1e-13)
-    np.testing.assert_allclose(d.body("k2_arm").xpos, g.points["C"], atol=1e-13)
+    np.testing.assert_allclose(T, st.frame("instrument"), rtol=0, atol=1e-13)
+    np.testing.assert_allclose(d.body("sph_5").xmat.reshape(3, 3), jv.T_b_e[:3, :3], atol=1e-13)
+    np.testing.assert_allclose(d.site("tool_tip").xpos, st["tip"], atol=1e-13)
+    np.testing.assert_allclose(d.site("platform_oi").xpos, st["O_i"], atol=1e-13)
+    np.testing.assert_allclose(d.body("k2_arm").xpos, st["C"], atol=1e-13)
 
 
 def test_mujoco_settles_on_fk_many_configurations():
@@ -216,10 +217,10 @@ def test_check_detects_a_micrometre_error():
     settle(m, data, q)
     mujoco.mj_forward(m, data)
     tip = data.site("tool_tip").xpos
-    good = mechanism_joint_values(q, design=d).geometry.points["tip"]
+    good = mechanism_joint_values(q, design=d).state["tip"]
     wrong_design = ak.Design(l1=d.l1, l2=d.l2, l3=d.l3, l4=d.l4 + 1e-6, l5=d.l5,
                              q_min=d.q_min, q_max=d.q_max, tool_length=d.tool_length)
-    wrong = mechanism_joint_values(q, ak.default_rcm_frame(d), wrong_design).geometry.points["tip"]
+    wrong = mechanism_joint_values(q, ak.default_rcm_frame(d), wrong_design).state["tip"]
     assert np.linalg.norm(tip - good) < TOL
     assert np.linalg.norm(tip - wrong) > 100 * TOL
 

@@ -64,12 +64,12 @@ def test_header_documents_every_loop_closure():
 def test_closures_hold_in_every_slot(tmp_path, slot):
     robot = load(tmp_path)
     jv = mechanism_joint_values(slot=slot)
-    values, g = jv.urdf, jv.geometry
-    assert closure_errors(robot, values, g.T_b_e).max() < 1e-13
+    values = jv.urdf
+    assert closure_errors(robot, values, jv.T_b_e).max() < 1e-13
     np.testing.assert_allclose(robot.get_transform("instrument", "base"),
-                               g.frames["instrument"], rtol=0, atol=1e-13)
-    np.testing.assert_allclose(robot.get_transform("platform", "base"), g.frames["i"],
-                               rtol=0, atol=1e-13)
+                               jv.state.frame("instrument"), rtol=0, atol=1e-13)
+    np.testing.assert_allclose(robot.get_transform("platform", "base"),
+                               jv.state.frame("platform"), rtol=0, atol=1e-13)
 
 
 def test_closures_hold_over_seeded_configurations(tmp_path):
@@ -91,9 +91,9 @@ def test_closures_hold_over_seeded_configurations(tmp_path):
 def test_a_wrong_joint_value_opens_a_loop(tmp_path):
     robot = load(tmp_path)
     jv = mechanism_joint_values()
-    values, g = jv.urdf, jv.geometry
+    values = jv.urdf
     values["b_ujoint_x"] += 1e-6
-    assert closure_errors(robot, values, g.T_b_e).max() > 1e-7
+    assert closure_errors(robot, values, jv.T_b_e).max() > 1e-7
 
 
 def test_other_design_and_setup(tmp_path):
@@ -193,8 +193,8 @@ def test_zero_configuration_can_be_chosen(tmp_path):
     path.write_text(urdf_from_design(d, T, q_zero=qz, zero_slot=9))
     robot = yourdfpy.URDF.load(str(path), build_scene_graph=True, load_meshes=False)
     robot.update_cfg(dict.fromkeys(robot.actuated_joint_names, 0.0))
-    g = mechanism_joint_values(qz, T, d, slot=9).geometry
-    np.testing.assert_allclose(robot.get_transform("tool_tip", "base")[:3, 3], g.points["tip"],
+    st = mechanism_joint_values(qz, T, d, slot=9).state
+    np.testing.assert_allclose(robot.get_transform("tool_tip", "base")[:3, 3], st["tip"],
                                rtol=0, atol=1e-12)
     jv = mechanism_joint_values(ak.robot.REFERENCE_Q, T, d, q_zero=qz, zero_slot=9)
     assert closure_errors(robot, jv.urdf, T).max() < 1e-12

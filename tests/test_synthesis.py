@@ -180,6 +180,7 @@ def test_metrics_match_the_analysis_module(brute: dict[str, object]) -> None:
                                       abs=1e-12)
 
 
+@pytest.mark.skipif(not ak._backend.numba_available(), reason="numba not available here")
 def test_metrics_numba_and_numpy_ik_agree(brute: dict[str, object]) -> None:
     t = brute["task"]
     _, q1, m1, r1 = reachability(REF, t, samples=3000, seed=4, backend="numba")

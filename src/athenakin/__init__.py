@@ -4,9 +4,27 @@ The conventions (frames, component orders, units) are those of
 ``docs/conventions.md``; equation numbers refer to the paper "Kinematics of
 ATHENA, a Robot for Pancreas Surgery".
 
-Subpackages: :mod:`athenakin.study` (Study parameters, dual quaternions),
-:mod:`athenakin.parallel` (the parallel module), :mod:`athenakin.chain` (the
-serial UPS chain), :mod:`athenakin.robot` (whole robot), :mod:`athenakin.testing`.
+Subpackages, by layer (bottom first; docs/architecture.md, enforced by tests/test_layers.py):
+
+* maths core: :mod:`athenakin.study` (Study parameters, dual quaternions, Eq. 1-4),
+  :mod:`athenakin.chain` (the serial UPS chain), :mod:`athenakin.parallel` (the parallel
+  module), :mod:`athenakin.testing` (``assert_*`` helpers);
+* numpy reference: :mod:`athenakin.robot` (whole-robot FK, IK, set-up),
+  :mod:`athenakin.symbolic` (the paper's derivation in sympy, the algebraic FK);
+* compiled kernels: :mod:`athenakin.fast` (numba kinematics kernels);
+* areas: :mod:`athenakin.analysis` (Jacobians, singularities, workspace),
+  :mod:`athenakin.calibration`, :mod:`athenakin.certified` (certified FK),
+  :mod:`athenakin.collision` (bodies, clearance), :mod:`athenakin.dynamics` (statics,
+  dynamics), :mod:`athenakin.motion` (paths, trajectories, tracking),
+  :mod:`athenakin.synthesis` (design studies);
+* systems: :mod:`athenakin.teleop` (teleoperation), :mod:`athenakin.sim` (MuJoCo/URDF),
+  :mod:`athenakin.ros` (ROS 2 recordings, MCAP, Foxglove);
+* views: :mod:`athenakin.plot` (figures), :mod:`athenakin.app` (the live app);
+* command line: :mod:`athenakin.cli`.
+
+:class:`athenakin.Robot` bundles a design, its RCM frame, bodies and masses; its methods
+are one-line calls of the functions above. Everything but the maths core and ``robot`` is
+imported on first use (``ak.dynamics``, ``ak.Robot``).
 """
 
 from . import _interrupt, chain, parallel, robot, study  # noqa: F401 (_interrupt: CLI hook)
@@ -36,6 +54,9 @@ from .robot import (
     direction_from_angles,
 )
 
+# registers forward_kinematics(method="algebraic") with robot (which never imports symbolic)
+from .symbolic import _solver as _algebraic_solver  # noqa: F401
+
 __version__ = "0.1.0"
 
 #: Subpackages imported on first attribute access (optional heavy dependencies).
@@ -43,7 +64,7 @@ _LAZY_SUBPACKAGES = ("analysis", "symbolic", "plot", "sim", "motion", "fast", "c
                      "calibration", "app", "collision", "ros", "dynamics", "synthesis",
                      "testing")
 #: Public functions of lazily imported subpackages, reachable as ``ak.<name>``.
-_LAZY_FUNCTIONS = {"certified_forward_kinematics": "certified"}
+_LAZY_FUNCTIONS = {"certified_forward_kinematics": "certified", "Robot": "_robot_model"}
 
 
 def __getattr__(name: str) -> object:
@@ -65,6 +86,7 @@ __all__ = [
     "robot",
     "study",
     "Design",
+    "Robot",
     "DegenerateChainError",
     "FKSolution",
     "InstrumentIK",

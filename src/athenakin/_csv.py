@@ -50,6 +50,10 @@ def read_table(path: str | Path, *, header_row: bool = True, error: type[Excepti
         text = raw.decode("utf-8-sig")  # a byte-order mark is not a column
     except UnicodeDecodeError as exc:
         raise error(f"{path}: not a UTF-8 text file ({exc.reason})") from None
+    nul = text.find("\x00")
+    if nul >= 0:   # a binary file: never echo its bytes (a header of 4096 NULs) in a message
+        raise error(f"{path}, line {text.count(chr(10), 0, nul) + 1}: not a text file (a NUL "
+                    f"byte); expected a CSV table")
     rows = []
     header: list[str] | None = None
     for lineno, line in enumerate(text.splitlines(), start=1):

@@ -12,8 +12,9 @@ Layers, each importing only those below it::
 
 ``backend="auto"`` (the default) runs the compiled kernels of :mod:`athenakin.fast`
 where numba imports, and the numpy reference otherwise (a platform without numba
-wheels, or ``ATHENAKIN_BACKEND=numpy`` in the environment). Both return the same
-values to 1e-12, the same reason codes and raise the same errors (tested).
+wheels, or ``ATHENAKIN_BACKEND=numpy`` in the environment): :mod:`athenakin._backend`
+decides, for this module as for every compiled path. Both return the same values to
+1e-12, the same reason codes and raise the same errors (tested).
 
 The compiled kernels are cached on disk (numba ``cache=True``) next to their
 sources, or under the user cache directory (``~/.cache/athenakin/numba``) when the
@@ -29,11 +30,19 @@ import sys
 import threading
 from collections.abc import Callable
 from types import ModuleType
-from typing import Any, Literal, TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._backend import _STATE as _BACKEND
+from ._backend import (
+    BACKENDS,
+    Backend,
+    numba_available,
+    resolve_backend,
+    user_cache_dir,
+)
 from ._validation import OPTION_AUTO, is_option
 from .chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
 from .design import Design
@@ -66,99 +75,16 @@ __all__ = [
     "tool_tip_inverse_jacobian",
 ]
 
-#: ``"auto"``: compiled where numba imports, else numpy; ``"numpy"``: the reference;
-#: ``"numba"``: the compiled kernels (ImportError without numba).
-Backend = Literal["auto", "numpy", "numba"]
-BACKENDS = ("auto", "numpy", "numba")
-
 #: Seconds a first (compiling) call may take before the one-line notice is printed.
 NOTICE_AFTER_S = 1.0
 
 _F8 = np.dtype(np.float64)
-_STATE: dict[str, Any] = {}     # "numba": bool, "api": fast._api, "jac": fast._jac_api
+_STATE: dict[str, Any] = {}     # "api": fast._api, "jac": fast._jac_api, "noticed": bool
 _WARM: set[str] = set()         # entry points whose first compiled call has returned
 _R = TypeVar("_R")
 
 
-# --- backend resolution -----------------------------------------------------------------
-def user_cache_dir() -> str:
-    """The per-user cache directory of athenakin's compiled kernels.
-
-    ``$XDG_CACHE_HOME/athenakin/numba`` (default ``~/.cache/athenakin/numba``) on Linux,
-    ``~/Library/Caches/athenakin/numba`` on macOS, ``%LOCALAPPDATA%/athenakin/numba``
-    on Windows.
-    """
-    if sys.platform == "win32":
-        base = os.environ.get("LOCALAPPDATA") or os.path.expanduser("~")
-    elif sys.platform == "darwin":
-        base = os.path.expanduser("~/Library/Caches")
-    else:
-        base = os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache")
-    return os.path.join(base, "athenakin", "numba")
-
-
-def _configure_numba_cache() -> None:
-    """Point numba's cache at the user cache directory if the package one is read-only.
-
-    Only before numba is imported and only when ``NUMBA_CACHE_DIR`` is unset: a
-    site-packages that the user cannot write (system install, container image) then
-    caches the kernels under :func:`user_cache_dir` instead of recompiling each time.
-    """
-    if "NUMBA_CACHE_DIR" in os.environ or "numba" in sys.modules:
-        return
-    here = os.path.join(os.path.dirname(os.path.abspath(__file__)), "fast")
-    pyc = os.path.join(here, "__pycache__")
-    if os.access(pyc if os.path.isdir(pyc) else here, os.W_OK):
-        return
-    os.environ["NUMBA_CACHE_DIR"] = user_cache_dir()
-
-
-def numba_available() -> bool:
-    """Whether the compiled kernels can run here (numba imports; cached per process).
-
-    ``ATHENAKIN_BACKEND=numpy`` in the environment makes it False (the numpy
-    reference everywhere, e.g. to compare or on a platform where numba misbehaves).
-    """
-    ok = _STATE.get("numba")
-    if ok is None:
-        if os.environ.get("ATHENAKIN_BACKEND", "").strip().lower() == "numpy":
-            ok = False
-        else:
-            _configure_numba_cache()
-            try:
-                import numba  # noqa: F401
-                ok = True
-            except ImportError:
-                ok = False
-        _STATE["numba"] = ok
-    return bool(ok)
-
-
-def resolve_backend(backend: str) -> bool:
-    """True when ``backend`` runs the compiled kernels here, False for the numpy reference.
-
-    Raises
-    ------
-    ValueError
-        ``backend`` is not one of :data:`BACKENDS`.
-    ImportError
-        ``backend="numba"`` where numba cannot be imported.
-    """
-    if not isinstance(backend, str):
-        raise ValueError(f"backend: expected one of {BACKENDS}, got {backend!r}")
-    if backend == "auto":
-        return numba_available()
-    if backend == "numpy":
-        return False
-    if backend == "numba":
-        if not numba_available():
-            raise ImportError("backend='numba': numba cannot be imported here (or "
-                              "ATHENAKIN_BACKEND=numpy is set); install numba (a dependency of "
-                              "athenakin) or use backend='auto' / 'numpy'")
-        return True
-    raise ValueError(f"backend: expected one of {BACKENDS}, got {backend!r}")
-
-
+# --- backend resolution: athenakin._backend decides ----------------------------------------
 def _compiled_choice(backend: object) -> bool:
     """``backend`` is "auto" or "numba" (a str; False for any other object: it is checked later)."""
     return is_option(backend, "auto") or is_option(backend, "numba")
@@ -292,7 +218,8 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     >>> int(sol.n_solutions)
     16
     """
-    if "fk" in _WARM and _STATE["numba"] and (backend is OPTION_AUTO or _compiled_choice(backend)):
+    if ("fk" in _WARM and _BACKEND["numba"]
+            and (backend is OPTION_AUTO or _compiled_choice(backend))):
         # the lean single call (control loops): fast._api's one guard, then the kernel
         sol = _STATE["api"].lean_fk(q, T_b_e, design, method, errors, tangent_tol,
                                     degenerate_tol, p_zero_tol, closure_tol, fields)
@@ -348,7 +275,8 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     >>> np.allclose(q, [-0.10, 0.10, 0.45], atol=1e-12)
     True
     """
-    if "ik" in _WARM and _STATE["numba"] and (backend is OPTION_AUTO or _compiled_choice(backend)):
+    if ("ik" in _WARM and _BACKEND["numba"]
+            and (backend is OPTION_AUTO or _compiled_choice(backend))):
         res = _STATE["api"].lean_ik(T_b_e, u345, design, errors, singular_tol, closure_tol,
                                     fields)
         if res is not None:            # the lean single call: fast._api's one guard
@@ -392,7 +320,7 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
     --------
     athenakin.robot.q_from_instrument : the numpy reference, with the details.
     """
-    if ("line" in _WARM and _STATE["numba"]
+    if ("line" in _WARM and _BACKEND["numba"]
             and (backend is OPTION_AUTO or _compiled_choice(backend))):
         api = _STATE["api"]
         res = api.lean_line(T_b_e, direction_e, p, design, errors)
@@ -431,7 +359,7 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
     --------
     athenakin.robot.q_from_tool_tip : the numpy reference, with the details.
     """
-    if ("line" in _WARM and _STATE["numba"]
+    if ("line" in _WARM and _BACKEND["numba"]
             and (backend is OPTION_AUTO or _compiled_choice(backend))):
         api = _STATE["api"]
         res = api.lean_line(T_b_e, tip_e, None, design, errors)

@@ -1,29 +1,32 @@
-"""The one vocabulary of ATHENA's bodies, and where their end points are (batched).
+"""The one model of ATHENA's mechanism: its bodies, the exports' tree, and where it all is.
 
 Collision (``athenakin.collision``), dynamics (``athenakin.dynamics``), the exports
-(``athenakin.sim``), the app and the ROS frames all name the parts of the robot with
-the names of :data:`BODIES`; this table is the only place that defines them.
+(``athenakin.sim``), the app, the views and the ROS frames all name the parts of the
+robot with the names of :data:`BODIES` and the links of :data:`LINKS`; this module is
+the only place that defines them, and :func:`mechanism_state` the one place that places
+them (points, link frames, the tree's joint values; batched).
 
-Every body is a segment between two named points of the mechanism
-(docs/conventions.md, "The mechanism"):
+Every body (:data:`BODY_TABLE`) is a segment between two named points of the mechanism
+(docs/conventions.md, "The mechanism"), carried by one link of the exported tree (URDF
+link, MJCF body, ``/tf`` frame), made of one or more parts of the mass model:
 
-==================  =================  ==========================================
-body                from -> to         what it is
-==================  =================  ==========================================
-``rail``            rail_lo -> rail_hi  the base rail (x axis) over the strokes of A, B
-``carriage_a``      A_lo -> A_hi       the carriage of q1, centred on A, along x
-``carriage_b``      B_lo -> B_hi       the carriage of q2, centred on B, along x
-``link_a``          A -> O_i           bar of length ``l1``
-``link_b``          B -> O_i           bar of length ``l1``
-``link_ad``         A -> D             bar of length ``l3``
-``link_bd``         B -> D             bar of length ``l3``
-``carrier``         D -> C             the carrier of the q3 actuator (``C = D + (0, l2, l5)``)
-``actuator``        C -> O_i           the q3 actuator (variable length ``q3``)
-``platform``        O_i -> O_s         the offset ``l4`` along ``z_i``
-``instrument``      O_s -> tip         the instrument, length ``tool_length``
-``sphere_link_1``   S_5 -> S_4         spherical mechanism: from the fixed ``u5`` axis
-``sphere_link_2``   S_4 -> S_3         ... to the ``u4`` axis, to the instrument guide
-==================  =================  ==========================================
+==================  ==================  ============  ======================================
+body                from -> to          link          what it is
+==================  ==================  ============  ======================================
+``rail``            rail_lo -> rail_hi  ``base``      the base rail (x axis) over the strokes
+``carriage_a``      A_lo -> A_hi        carriage_a    the carriage of q1, centred on A
+``carriage_b``      B_lo -> B_hi        carriage_b    the carriage of q2, centred on B
+``link_a``          A -> O_i            link_a1       bar of length ``l1``
+``link_b``          B -> O_i            link_b1       bar of length ``l1``
+``link_ad``         A -> D              link_a3       bar of length ``l3``
+``link_bd``         B -> D              link_b3       bar of length ``l3``
+``carrier``         D -> C              carrier       carrier of q3 (``C = D + (0, l2, l5)``)
+``actuator``        C -> O_i            k2_arm        the q3 actuator (variable length ``q3``)
+``platform``        O_i -> O_s          platform      the offset ``l4`` along ``z_i``
+``instrument``      O_s -> tip          instrument    the instrument, length ``tool_length``
+``sphere_link_1``   S_5 -> S_4          sph_4         spherical mechanism: fixed ``u5`` axis
+``sphere_link_2``   S_4 -> S_3          sph_3         ... ``u4`` axis to the instrument guide
+==================  ==================  ============  ======================================
 
 The spherical joint at the RCM (the passive spherical five-bar of the paper's Fig. 3,
 whose dimensions the paper does not give) is modelled by its kinematic equivalent,
@@ -33,48 +36,99 @@ on the axis of ``u4`` in the direction the chain gives it (``R_3 Rz(u3) Rx(pi/2)
 and ``S_5`` on the fixed axis ``u5`` at ``+z_e``. The ``u4`` axis is perpendicular to the
 instrument, and so is ``u5`` at the home pose: a "side of ``O_s``" would flip ``S_4``
 and ``S_5`` with the rounding of a zero, so their sides are fixed by the chain instead.
+Where that ``S_3`` would lie off the instrument's segment (``O_s`` nearer the RCM than
+``sphere_radius``), it is the segment's nearest point: the guide holds the instrument,
+so ``instrument`` and ``sphere_link_2`` touch in every configuration.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from typing import Literal
+import math
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._dispatch import forward_kinematics
+from ._mechanism_formulas import FORMULA_JOINTS, tree_joint_formula
 from ._validation import check_array, check_scalar
 from .design import Design, resolve_design
 from .errors import InvalidInputError
 from .robot._fk import SLOT_MODE_INDEX
 from .robot._setup import resolve_rcm_frame
 
-__all__ = ["BODIES", "BODY_SEGMENTS", "BODY_JOINTS", "BodyGeometry", "MechanismPoints",
-           "mechanism_points", "body_segments", "adjacent_pairs", "POINT_NAMES"]
+__all__ = ["BODIES", "BODY_SEGMENTS", "BODY_JOINTS", "BODY_TABLE", "Body", "BodyGeometry",
+           "MechanismPoints", "MechanismState", "mechanism_points", "mechanism_state",
+           "body_segments", "adjacent_pairs", "POINT_NAMES", "JOINTS", "TREE", "TreeJoint",
+           "LINKS", "MASS_PART_LINK", "rail_extent", "tree_joint_formula", "tree_origins",
+           "link_segments"]
 
-#: Body name -> (start point, end point); the order of this table is the order of every
-#: per-body axis in athenakin (collision pairs, masses, exports).
-BODY_SEGMENTS: dict[str, tuple[str, str]] = {
-    "rail": ("rail_lo", "rail_hi"),
-    "carriage_a": ("A_lo", "A_hi"),
-    "carriage_b": ("B_lo", "B_hi"),
-    "link_a": ("A", "O_i"),
-    "link_b": ("B", "O_i"),
-    "link_ad": ("A", "D"),
-    "link_bd": ("B", "D"),
-    "carrier": ("D", "C"),
-    "actuator": ("C", "O_i"),
-    "platform": ("O_i", "O_s"),
-    "instrument": ("O_s", "tip"),
-    "sphere_link_1": ("S_5", "S_4"),
-    "sphere_link_2": ("S_4", "S_3"),
-}
+
+@dataclasses.dataclass(frozen=True)
+class Body:
+    """One body of the mechanism: where it is, which exported link carries it, its parts.
+
+    Attributes
+    ----------
+    name : str
+        athenakin's name of the body (collision, mass model, views).
+    start, end : str
+        Its segment's end points (names of :data:`POINT_NAMES`): the axis of its
+        collision capsule and of its drawing.
+    link : str
+        The link of the exported tree (URDF link, MJCF body, ``/tf`` frame; ``base`` is
+        the URDF's root and MJCF's world body) that carries the body: its collision
+        capsule is the segment in that link's frame at the export's configuration.
+    mass_parts : tuple of (str, str)
+        The parts of the mass model (:data:`athenakin.dynamics.MASS_BODIES`) that make up
+        the body, each with the link whose frame is its body frame.
+    drawing : str
+        Colour group of the views and exports (``rail``, ``parallel``, ``actuator``,
+        ``serial``, ``sphere``).
+    """
+
+    name: str
+    start: str
+    end: str
+    link: str
+    mass_parts: tuple[tuple[str, str], ...]
+    drawing: str
+
+
+#: The one table of ATHENA's bodies; its order is the order of every per-body axis in
+#: athenakin (collision pairs, masses, exports). ``actuator`` (C -> O_i) is carried by
+#: ``k2_arm``, the housing at C whose frame (origin C, ``z`` towards ``O_i``) is the
+#: actuator's body frame in the mass model and the dynamics; the rod (mass part
+#: ``actuator_rod``) rides on ``k2_rod``.
+BODY_TABLE: tuple[Body, ...] = (
+    Body("rail", "rail_lo", "rail_hi", "base", (("rail", "base"),), "rail"),
+    Body("carriage_a", "A_lo", "A_hi", "carriage_a", (("carriage_a", "carriage_a"),), "rail"),
+    Body("carriage_b", "B_lo", "B_hi", "carriage_b", (("carriage_b", "carriage_b"),), "rail"),
+    Body("link_a", "A", "O_i", "link_a1", (("link_a", "link_a1"),), "parallel"),
+    Body("link_b", "B", "O_i", "link_b1", (("link_b", "link_b1"),), "parallel"),
+    Body("link_ad", "A", "D", "link_a3", (("link_ad", "link_a3"),), "parallel"),
+    Body("link_bd", "B", "D", "link_b3", (("link_bd", "link_b3"),), "parallel"),
+    Body("carrier", "D", "C", "carrier", (("carrier", "carrier"), ("slider_d", "carrier")),
+         "parallel"),
+    Body("actuator", "C", "O_i", "k2_arm", (("actuator", "k2_arm"), ("actuator_rod", "k2_rod")),
+         "actuator"),
+    Body("platform", "O_i", "O_s", "platform", (("platform", "platform"),), "parallel"),
+    Body("instrument", "O_s", "tip", "instrument", (("instrument", "instrument"),), "serial"),
+    Body("sphere_link_1", "S_5", "S_4", "sph_4", (("sphere_link_1", "sph_4"),), "sphere"),
+    Body("sphere_link_2", "S_4", "S_3", "sph_3", (("sphere_link_2", "sph_3"), ("guide", "guide")),
+         "sphere"),
+)
+#: Body name -> (start point, end point), from :data:`BODY_TABLE`.
+BODY_SEGMENTS: dict[str, tuple[str, str]] = {b.name: (b.start, b.end) for b in BODY_TABLE}
 #: Body names in table order.
 BODIES: tuple[str, ...] = tuple(BODY_SEGMENTS)
+#: Part of the mass model -> the exported link whose frame is its body frame.
+MASS_PART_LINK: dict[str, str] = {part: link for b in BODY_TABLE for part, link in b.mass_parts}
 
 #: Joint -> the bodies it connects. Two bodies that share a joint touch by construction
-#: and are never paired in a clearance check (:func:`adjacent_pairs`).
+#: and are never paired in a clearance check (:func:`adjacent_pairs`). ``S_3`` is on the
+#: instrument's segment in every configuration (:func:`mechanism_points`).
 BODY_JOINTS: dict[str, tuple[str, ...]] = {
     "A": ("rail", "carriage_a", "link_a", "link_ad"),
     "B": ("rail", "carriage_b", "link_b", "link_bd"),
@@ -90,6 +144,117 @@ BODY_JOINTS: dict[str, tuple[str, ...]] = {
 POINT_NAMES: tuple[str, ...] = (
     "A", "B", "M", "D", "C_foot", "C", "O_i", "O_s", "RCM", "tip",
     "rail_lo", "rail_hi", "A_lo", "A_hi", "B_lo", "B_hi", "S_3", "S_4", "S_5")
+
+
+@dataclasses.dataclass(frozen=True)
+class TreeJoint:
+    """One joint of the exports' spanning tree (MJCF and URDF alike).
+
+    Attributes
+    ----------
+    kind : {"slide", "hinge"}
+    parent, child : str
+        Links (MJCF bodies).
+    xyz : tuple of 3 (float or str)
+        Origin of the joint frame in the parent's frame; a string names a length of the
+        design (``"l1"``), resolved by :func:`tree_origins`.
+    roll : float
+        Rotation of the joint frame about the parent's ``x`` axis (0, pi/2 or pi), rad.
+    axis : tuple of 3 float
+        Joint axis in the joint frame.
+    """
+
+    kind: str
+    parent: str
+    child: str
+    xyz: tuple[float | str, float | str, float | str]
+    roll: float
+    axis: tuple[float, float, float]
+
+
+_X, _Y, _Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
+_O = (0.0, 0.0, 0.0)
+#: The spanning tree of the exports, joint name -> :class:`TreeJoint`, in MJCF order
+#: (parents before children); docs in :mod:`athenakin.sim._layout`.
+TREE: dict[str, TreeJoint] = {
+    "q1": TreeJoint("slide", "base", "carriage_a", _O, 0.0, _X),
+    "a_ujoint_x": TreeJoint("hinge", "carriage_a", "a_cross", _O, 0.0, _X),
+    "a_ujoint_y": TreeJoint("hinge", "a_cross", "link_a1", _O, 0.0, _Y),
+    "platform_y": TreeJoint("hinge", "link_a1", "platform", (0.0, 0.0, "l1"), 0.0, _Y),
+    "u1": TreeJoint("hinge", "platform", "ujoint_cross", (0.0, 0.0, "l4"), 0.0, _Z),
+    "u2": TreeJoint("hinge", "ujoint_cross", "instrument", _O, math.pi, _Y),
+    "p": TreeJoint("slide", "instrument", "guide", _O, 0.0, _Z),
+    "u3": TreeJoint("hinge", "guide", "sph_3", _O, 0.0, _Z),
+    "u4": TreeJoint("hinge", "sph_3", "sph_4", _O, 0.5 * math.pi, _Z),
+    "u5": TreeJoint("hinge", "sph_4", "sph_5", _O, 0.5 * math.pi, _Z),
+    "a_base_z": TreeJoint("hinge", "carriage_a", "link_a3", _O, 0.0, _Z),
+    "carrier_z": TreeJoint("hinge", "link_a3", "carrier", ("l3", 0.0, 0.0), 0.0, _Z),
+    "k2_x": TreeJoint("hinge", "carrier", "k2_arm", (0.0, "l2", "l5"), 0.0, _X),
+    "q3": TreeJoint("slide", "k2_arm", "k2_rod", _O, 0.0, _Z),
+    "q2": TreeJoint("slide", "base", "carriage_b", _O, 0.0, _X),
+    "b_ujoint_x": TreeJoint("hinge", "carriage_b", "b_cross", _O, 0.0, _X),
+    "b_ujoint_y": TreeJoint("hinge", "b_cross", "link_b1", _O, 0.0, _Y),
+    "b_base_z": TreeJoint("hinge", "carriage_b", "link_b3", _O, 0.0, _Z),
+}
+#: Joints of the spanning tree in MJCF order: name -> (kind, parent link, child link).
+JOINTS: dict[str, tuple[str, str, str]] = {n: (j.kind, j.parent, j.child) for n, j in TREE.items()}
+assert tuple(JOINTS) == FORMULA_JOINTS      # the order of tree_joint_formula's values
+#: Links of :class:`MechanismState`'s ``frames``: the tree's moving links in the order of
+#: :data:`JOINTS`, then ``tool_tip`` (the instrument frame moved to the tip) and
+#: ``rcm_setup`` (the RCM frame ``T_b_e``).
+LINKS: tuple[str, ...] = tuple(j.child for j in TREE.values()) + ("tool_tip", "rcm_setup")
+
+
+def _rot_x(a: float) -> NDArray[np.float64]:
+    """``Rx(a)`` with the exact entries of the quarter turns used by :data:`TREE`."""
+    c, s = {0.0: (1.0, 0.0), 0.5 * math.pi: (0.0, 1.0), math.pi: (-1.0, 0.0)}.get(
+        a, (math.cos(a), math.sin(a)))
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def tree_origins(design: Design) -> dict[str, NDArray[np.float64]]:
+    """Origin (4x4, in the parent link's frame) of every joint of :data:`TREE`.
+
+    Parameters
+    ----------
+    design : Design
+
+    Returns
+    -------
+    dict of str -> ndarray, shape (4, 4)
+    """
+    out = {}
+    for name, j in TREE.items():
+        T = np.eye(4)
+        T[:3, :3] = _rot_x(j.roll)
+        T[:3, 3] = [float(getattr(design, v)) if isinstance(v, str) else v for v in j.xyz]
+        out[name] = T
+    return out
+
+
+def rail_extent(design: Design, geometry: BodyGeometry | None = None) -> tuple[float, float]:
+    """The rail's ``x`` extent, without the carriages: the finite strokes of q1, q2 +- margin.
+
+    One policy for the rail (the mass model's fixed rail; :func:`mechanism_points` extends
+    it to cover the carriages): the finite stroke limits of q1 and q2 widened by
+    ``geometry.rail_margin``; an infinite limit is left out, and where both lower (upper)
+    limits are infinite the rail starts (ends) at the base origin ``x = 0``.
+
+    Parameters
+    ----------
+    design : Design
+    geometry : BodyGeometry, optional
+
+    Returns
+    -------
+    lo, hi : float
+        m, in the base frame.
+    """
+    g = BodyGeometry() if geometry is None else geometry
+    smin, smax = design.stroke_min[:2], design.stroke_max[:2]
+    lo = float(smin[np.isfinite(smin)].min()) if np.isfinite(smin).any() else 0.0
+    hi = float(smax[np.isfinite(smax)].max()) if np.isfinite(smax).any() else 0.0
+    return lo - g.rail_margin, hi + g.rail_margin
 
 
 def adjacent_pairs() -> tuple[tuple[str, str], ...]:
@@ -164,6 +329,72 @@ class MechanismPoints:
             raise InvalidInputError(f"name: expected one of {POINT_NAMES}, got {name!r}") from None
 
 
+@dataclasses.dataclass(frozen=True)
+class MechanismState:
+    """Where every part of the mechanism is, for a batch of configurations (base frame).
+
+    The one place that places the mechanism: the views, the collision bodies, the
+    exports' keyframes, ``/tf`` and the tracker's clearance read it.
+
+    Attributes
+    ----------
+    xyz : ndarray, shape (..., n_points, 3)
+        The named points of :data:`POINT_NAMES`, m.
+    frames : ndarray, shape (..., n_links, 4, 4)
+        Pose ``T_base_link`` of every link of :data:`LINKS` (the URDF's link frames and
+        MJCF's body frames: each body's frame is that of :attr:`Body.link`), m.
+    joints : ndarray, shape (..., n_joints)
+        Every joint of :data:`JOINTS` in the model's convention (MJCF ``qpos``; m for
+        slides, rad for hinges), from :func:`tree_joint_formula`.
+    valid : ndarray of bool, shape (...)
+        Whether the slot holds a valid FK solution; everything else of an invalid item
+        is NaN.
+    reason : ndarray of int8, shape (...)
+        :class:`~athenakin.errors.Reason` of the slot (0 where valid).
+
+    With ``slot="all"`` the batch shape ``...`` ends with an axis of 16 slots.
+    """
+
+    xyz: NDArray[np.float64]
+    frames: NDArray[np.float64]
+    joints: NDArray[np.float64]
+    valid: NDArray[np.bool_]
+    reason: NDArray[np.int8]
+
+    def __getitem__(self, name: str) -> NDArray[np.float64]:
+        """The point ``name`` (one of :data:`POINT_NAMES`), shape (..., 3)."""
+        return _pick(self.xyz, POINT_NAMES, name, "name")
+
+    def frame(self, link: str) -> NDArray[np.float64]:
+        """The pose of ``link`` (one of :data:`LINKS`), shape (..., 4, 4)."""
+        return _pick(self.frames, LINKS, link, "link", tail=2)
+
+    def joint(self, name: str) -> NDArray[np.float64]:
+        """The value of joint ``name`` (one of :data:`JOINTS`), shape (...)."""
+        return _pick(self.joints, tuple(JOINTS), name, "name", tail=0)
+
+    @property
+    def points(self) -> MechanismPoints:
+        """The points as :class:`MechanismPoints`."""
+        return MechanismPoints(xyz=self.xyz, valid=self.valid, reason=self.reason)
+
+    def segments(self) -> NDArray[np.float64]:
+        """End points of every body of :data:`BODIES`, shape (..., n_bodies, 2, 3), m."""
+        return self.xyz[..., _SEGMENT_INDEX, :]
+
+
+def _pick(arr: NDArray[np.float64], names: tuple[str, ...], name: object, what: str,
+          tail: int = 1) -> NDArray[np.float64]:
+    if not isinstance(name, str) or name not in names:
+        raise InvalidInputError(f"{what}: expected one of {names}, got {name!r}")
+    i = names.index(name)
+    return arr[(..., i) + (slice(None),) * tail]
+
+
+_SEGMENT_INDEX = np.array([[POINT_NAMES.index(a), POINT_NAMES.index(b)]
+                           for a, b in BODY_SEGMENTS.values()])
+
+
 def _check_slot(slot: object) -> int | None:
     if isinstance(slot, str) and slot == "all":
         return None
@@ -172,29 +403,46 @@ def _check_slot(slot: object) -> int | None:
     return int(slot)
 
 
-def mechanism_points(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
-                     slot: int | Literal["all"] = 0,
-                     geometry: BodyGeometry | None = None) -> MechanismPoints:
-    """Every named point of the mechanism in one FK slot, or in all 16.
+def _motion(kind: str, axis: tuple[float, float, float],
+            v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Transforms (..., 4, 4) of a joint along / about a coordinate axis moved by ``v``."""
+    M = np.zeros(v.shape + (4, 4))
+    M[..., 3, 3] = 1.0
+    k = axis.index(1.0)
+    if kind == "slide":
+        M[..., 0, 0] = M[..., 1, 1] = M[..., 2, 2] = 1.0
+        M[..., k, 3] = v
+        return M
+    c, s = np.cos(v), np.sin(v)
+    i, j = (k + 1) % 3, (k + 2) % 3
+    M[..., k, k] = 1.0
+    M[..., i, i] = c
+    M[..., j, j] = c
+    M[..., i, j] = -s
+    M[..., j, i] = s
+    return M
 
-    Parameters
-    ----------
-    q : array-like, shape (..., 3)
-        Actuators ``(q1, q2, q3)``, m.
-    T_b_e : array-like, shape (..., 4, 4)
-        RCM frame (set-up); broadcasts with ``q``.
-    design : Design, optional
-        Defaults to :meth:`Design.default`.
-    slot : int or "all", keyword-only
-        Forward-kinematics slot 0..15 (docs/conventions.md), or ``"all"`` for an extra
-        trailing batch axis of 16 slots.
-    geometry : BodyGeometry, keyword-only, optional
-        Carriage length, spherical-mechanism radius and rail margin.
 
-    Returns
-    -------
-    MechanismPoints
-    """
+def _tree_frames(joints: NDArray[np.float64], T_e: NDArray[np.float64],
+                 design: Design) -> NDArray[np.float64]:
+    """Frames of :data:`LINKS` from the joint values (the exports' tree, parent first)."""
+    batch = joints.shape[:-1]
+    origins = tree_origins(design)
+    index = {link: k for k, link in enumerate(LINKS)}
+    out = np.empty(batch + (len(LINKS), 4, 4))
+    for k, (name, j) in enumerate(TREE.items()):
+        A = (origins[name] if j.parent == "base"
+             else np.matmul(out[..., index[j.parent], :, :], origins[name]))
+        out[..., k, :, :] = np.matmul(A, _motion(j.kind, j.axis, joints[..., k]))
+    tip = np.eye(4)
+    tip[2, 3] = design.tool_length
+    out[..., index["tool_tip"], :, :] = np.matmul(out[..., index["instrument"], :, :], tip)
+    out[..., index["rcm_setup"], :, :] = T_e
+    return out
+
+
+def _state(q: ArrayLike, T_b_e: ArrayLike, design: Design | None, slot: object,
+           geometry: BodyGeometry | None, *, frames: bool) -> MechanismState:
     design = resolve_design(design)
     k = _check_slot(slot)
     geometry = BodyGeometry() if geometry is None else geometry
@@ -204,6 +452,18 @@ def mechanism_points(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = Non
     T = resolve_rcm_frame(T_b_e, design, single=False)
     sol = forward_kinematics(q, T, design, errors="flag",
                              fields=("valid", "reason", "p", "u", "T_b_s"))
+    return state_from_fk(sol, q, T, design, k, geometry, frames=frames)
+
+
+def state_from_fk(sol: Any, q: NDArray[np.float64], T: NDArray[np.float64], design: Design,
+                  k: int | None, geometry: BodyGeometry, *, frames: bool = True
+                  ) -> MechanismState:
+    """:func:`mechanism_state` from a forward-kinematics solution already at hand.
+
+    For a caller that holds ``forward_kinematics(q, T, design, errors="flag")`` (all 16
+    slots, e.g. from the compiled backend) and checked its arguments: ``q`` (..., 3) and
+    ``T`` (..., 4, 4) as validated arrays, ``k`` a slot or None for all 16.
+    """
     sel = slice(None) if k is None else k
     valid = np.asarray(sol.valid[..., sel])
     reason = np.asarray(sol.reason[..., sel])
@@ -212,7 +472,8 @@ def mechanism_points(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = Non
     T_b_s = (T_mode[..., SLOT_MODE_INDEX[k], :, :] if k is not None
              else np.take(T_mode, SLOT_MODE_INDEX, axis=-3))
     p = sol.p[..., sel]
-    u = sol.u[..., sel, :3]
+    u5 = sol.u[..., sel, :5]
+    u = u5[..., :3]
     batch = valid.shape
     # slot-independent points, broadcast to the batch (with a slot axis for "all")
     qq = np.broadcast_to(q if k is not None else q[..., None, :], batch + (3,))
@@ -264,27 +525,104 @@ def mechanism_points(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = Non
     # (O_s -> RCM if p > 0), and R_3 (sin u3, -cos u3, 0) the axis of u4
     d = rot(ca * sb, sa * sb, -cb)
     a4 = rot(ca * cb * s3 - sa * c3, sa * cb * s3 + ca * c3, sb * s3)
-    put3("tip", O_s + design.tool_length * d)
+    L = design.tool_length
+    put3("tip", O_s + L * d)
     RCM = T_e[..., :3, 3]
     put3("RCM", RCM)
     side = np.sign(p)[..., None]                         # O_s is on the side -p d of the RCM
     side = np.where(side == 0, 1.0, side)
     rs = geometry.sphere_radius
-    put3("S_3", RCM + rs * (-side * d))                  # towards O_s
+    # S_3: the instrument guide, rs from the RCM towards O_s (O_s + t d, t = p -+ rs); where
+    # that is off the instrument (|p| < rs: O_s is nearer the RCM than the guide), the guide
+    # holds the instrument at its nearest point, so the instrument and sphere_link_2 touch
+    t = p[..., None] - side * rs
+    on = (t >= 0.0) & (t <= L)
+    put3("S_3", np.where(on, RCM + rs * (-side * d), O_s + np.clip(t, 0.0, L) * d))
     # S_4 on the u4 axis as the chain orients it, S_5 on +z_e: u4 is perpendicular to the
     # instrument, and at the home pose so is u5, so a side of O_s would flip them with
     # the rounding of a zero dot product.
     put3("S_4", RCM + rs * a4)
     put3("S_5", RCM + rs * T_e[..., :3, 2])
-    lo = np.min(np.where(np.isfinite(design.stroke_min[:2]), design.stroke_min[:2], np.inf))
-    hi = np.max(np.where(np.isfinite(design.stroke_max[:2]), design.stroke_max[:2], -np.inf))
-    lo_b = np.minimum(np.minimum(q1, q2), lo) if np.isfinite(lo) else np.minimum(q1, q2)
-    hi_b = np.maximum(np.maximum(q1, q2), hi) if np.isfinite(hi) else np.maximum(q1, q2)
+    lo, hi = rail_extent(design, geometry)
     rm = geometry.rail_margin
-    put("rail_lo", lo_b - rm)
-    put("rail_hi", hi_b + rm)
+    put("rail_lo", np.minimum(np.minimum(q1, q2) - rm, lo))
+    put("rail_hi", np.maximum(np.maximum(q1, q2) + rm, hi))
     xyz[~valid] = np.nan
-    return MechanismPoints(xyz=xyz, valid=valid, reason=reason)
+    if not frames:
+        empty = np.empty(batch + (0,))
+        return MechanismState(xyz=xyz, frames=empty, joints=empty, valid=valid, reason=reason)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        jv = tree_joint_formula(qq[..., 0], qq[..., 1], qq[..., 2], p, u5[..., 0], u5[..., 1],
+                                u5[..., 2], u5[..., 3], u5[..., 4], O_s[..., 1], O_s[..., 2],
+                                l1 * l1, l2, l3 * l3, l4, l5)
+    joints = np.stack([np.broadcast_to(v, batch) for v in jv], axis=-1).astype(float)
+    joints[~valid] = np.nan
+    fr = _tree_frames(joints, np.asarray(T_e, dtype=float), design)
+    fr[~valid] = np.nan
+    return MechanismState(xyz=xyz, frames=fr, joints=joints, valid=valid, reason=reason)
+
+
+def mechanism_state(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
+                    slot: int | Literal["all"] = 0,
+                    geometry: BodyGeometry | None = None) -> MechanismState:
+    """The points, the link frames and the tree's joint values of the mechanism (batched).
+
+    Parameters
+    ----------
+    q : array-like, shape (..., 3)
+        Actuators ``(q1, q2, q3)``, m.
+    T_b_e : array-like, shape (..., 4, 4)
+        RCM frame (set-up); broadcasts with ``q``.
+    design : Design, optional
+        Defaults to :meth:`Design.default`.
+    slot : int or "all", keyword-only
+        Forward-kinematics slot 0..15 (docs/conventions.md), or ``"all"`` for an extra
+        trailing batch axis of 16 slots.
+    geometry : BodyGeometry, keyword-only, optional
+        Carriage length, spherical-mechanism radius and rail margin.
+
+    Returns
+    -------
+    MechanismState
+        Points (:data:`POINT_NAMES`), frames (:data:`LINKS`) and joint values
+        (:data:`JOINTS`); NaN where the slot holds no solution (``valid`` False).
+
+    Raises
+    ------
+    InvalidInputError
+        ``q`` or ``T_b_e`` of a wrong shape, ``slot`` not in 0..15 or ``"all"``.
+    TypeError
+        ``geometry`` is not a :class:`BodyGeometry`.
+
+    Examples
+    --------
+    >>> import athenakin as ak
+    >>> from athenakin._mechanism import mechanism_state
+    >>> from athenakin.robot import REFERENCE_Q
+    >>> st = mechanism_state(REFERENCE_Q, ak.default_rcm_frame())
+    >>> bool(abs(st.frame("platform")[:3, 3] - st["O_i"]).max() < 1e-14)
+    True
+    """
+    return _state(q, T_b_e, design, slot, geometry, frames=True)
+
+
+def mechanism_points(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
+                     slot: int | Literal["all"] = 0,
+                     geometry: BodyGeometry | None = None) -> MechanismPoints:
+    """Every named point of the mechanism in one FK slot, or in all 16.
+
+    The points of :func:`mechanism_state`, without its frames and joint values.
+
+    Parameters
+    ----------
+    q, T_b_e, design, slot, geometry
+        As for :func:`mechanism_state`.
+
+    Returns
+    -------
+    MechanismPoints
+    """
+    return _state(q, T_b_e, design, slot, geometry, frames=False).points
 
 
 def body_segments(points: MechanismPoints) -> NDArray[np.float64]:
@@ -297,6 +635,59 @@ def body_segments(points: MechanismPoints) -> NDArray[np.float64]:
     """
     if not isinstance(points, MechanismPoints):
         raise TypeError(f"points: expected MechanismPoints, got {type(points).__name__}")
-    idx = np.array([[POINT_NAMES.index(a), POINT_NAMES.index(b)]
-                    for a, b in BODY_SEGMENTS.values()])
-    return points.xyz[..., idx, :]
+    return points.xyz[..., _SEGMENT_INDEX, :]
+
+
+def link_segments(state: MechanismState, design: Design | None = None,
+                  geometry: BodyGeometry | None = None) -> NDArray[np.float64]:
+    """Every body's segment in the frame of the link that carries it (its capsule's axis).
+
+    What the exports attach to :attr:`Body.link`: ``frame(link) @ a`` is the segment's start
+    and ``frame(link) @ b`` its end (tested to 1e-12). Every body is rigid in its link but
+    the ``actuator`` (C -> O_i on ``k2_arm``: its end moves with q3) and ``sphere_link_2``
+    (its end ``S_3`` slides with ``p`` while ``|p| < sphere_radius``); the rail lies in the
+    base frame and grows with the carriages where they leave the strokes.
+
+    Parameters
+    ----------
+    state : MechanismState
+        From :func:`mechanism_state` (``frames`` included).
+    design : Design, optional
+        The design of ``state``.
+    geometry : BodyGeometry, optional
+        The geometry of ``state``.
+
+    Returns
+    -------
+    ndarray, shape (..., n_bodies, 2, 3)
+        Start and end of every body of :data:`BODIES` in its link's frame, m.
+    """
+    if not isinstance(state, MechanismState) or state.joints.shape[-1] != len(JOINTS):
+        raise TypeError("state: expected a MechanismState from mechanism_state")
+    d = resolve_design(design)
+    g = BodyGeometry() if geometry is None else geometry
+    batch = state.valid.shape
+    out = np.zeros(batch + (len(BODIES), 2, 3))
+    at = {b: i for i, b in enumerate(BODIES)}
+    half, rs, L = 0.5 * g.carriage_length, g.sphere_radius, d.tool_length
+    p, q3 = state.joint("p"), state.joint("q3")
+    side = np.where(p >= 0, 1.0, -1.0)
+    t = p - side * rs
+    z3 = np.where((t >= 0.0) & (t <= L), -side * rs, np.clip(t, 0.0, L) - p)
+    ends = {
+        "carriage_a": ((-half, 0, 0), (half, 0, 0)), "carriage_b": ((-half, 0, 0), (half, 0, 0)),
+        "link_a": (_O, (0, 0, d.l1)), "link_b": (_O, (0, 0, d.l1)),
+        "link_ad": (_O, (d.l3, 0, 0)), "link_bd": (_O, (d.l3, 0, 0)),
+        "carrier": (_O, (0, d.l2, d.l5)), "platform": (_O, (0, 0, d.l4)),
+        "instrument": (_O, (0, 0, L)), "sphere_link_1": ((0, -rs, 0), (0, 0, rs)),
+    }
+    for name, (a, b) in ends.items():
+        out[..., at[name], 0, :] = a
+        out[..., at[name], 1, :] = b
+    out[..., at["rail"], 0, :] = state["rail_lo"]
+    out[..., at["rail"], 1, :] = state["rail_hi"]
+    out[..., at["actuator"], 1, 2] = q3                   # C -> O_i along z of k2_arm
+    out[..., at["sphere_link_2"], 0, 1] = -rs             # S_4 -> S_3 in sph_3
+    out[..., at["sphere_link_2"], 1, 2] = z3
+    out[~state.valid] = np.nan
+    return out

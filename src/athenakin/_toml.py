@@ -13,6 +13,7 @@ from typing import Any
 
 from ._compat import tomllib
 from ._input import MAX_CONFIG_BYTES, read_bytes
+from ._output import naming_path
 from .errors import InvalidInputError
 
 __all__ = ["read_toml"]
@@ -40,7 +41,8 @@ def read_toml(path: str | Path, *, error: type[Exception] = InvalidInputError,
     Raises
     ------
     OSError
-        The file cannot be opened or read (left to the caller, which knows the option).
+        The file cannot be opened or read (left to the caller, which knows the option);
+        its ``filename`` is always ``path`` (a failed read, EIO, names it too).
     error
         Not UTF-8, not valid TOML, tables / arrays nested too deeply, or an integer
         of more digits than Python converts.
@@ -53,7 +55,10 @@ def read_toml(path: str | Path, *, error: type[Exception] = InvalidInputError,
     >>> read_toml(f)
     {'l1': 0.3}
     """
-    raw = read_bytes(path, limit=MAX_CONFIG_BYTES, error=error, what=what)
+    # a read that fails on an open file (EIO on a failing disk or a network share)
+    # carries no file name: naming_path gives it the file's, same class and errno
+    with naming_path(path):
+        raw = read_bytes(path, limit=MAX_CONFIG_BYTES, error=error, what=what)
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:

@@ -16,6 +16,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from ._output import naming_path
 from ._toml import read_toml
 from ._validation import check_scalar, check_text
 from .errors import InvalidInputError
@@ -325,8 +326,8 @@ class Design:
         """
         path = Path(path)
         text = self.to_toml()
-        with open(path, "w" if overwrite else "x", encoding="utf-8") as fh:
-            fh.write(text)
+        with naming_path(path), open(path, "w" if overwrite else "x", encoding="utf-8") as fh:
+            fh.write(text)                 # ENOSPC on write / close names the file
         return path
 
 

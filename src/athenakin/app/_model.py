@@ -18,7 +18,8 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._dispatch import forward_kinematics, numba_available, q_from_instrument, q_from_tool_tip
+from .._backend import resolve_backend
+from .._dispatch import forward_kinematics, q_from_instrument, q_from_tool_tip
 from .._validation import check_array, check_count, check_instance, check_scalar
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, OutOfWorkspaceError, Reason
@@ -138,6 +139,8 @@ def app_setup(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
     ------
     InvalidInputError
         ``T_b_e`` is not a rigid transform of shape (4, 4), or ``backend`` is unknown.
+    ImportError
+        ``backend="numba"`` where numba is off (:mod:`athenakin._backend`).
     OutOfWorkspaceError
         The parallel module assembles nowhere on a grid over the stroke ranges (the
         design cannot assemble).
@@ -145,8 +148,7 @@ def app_setup(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
     design = resolve_design(design)
     if not isinstance(backend, str) or backend not in ("auto", "numba", "numpy"):
         raise InvalidInputError(f"backend: expected 'auto', 'numba' or 'numpy', got {backend!r}")
-    chosen: Literal["numba", "numpy"] = (
-        ("numba" if numba_available() else "numpy") if backend == "auto" else backend)
+    chosen: Literal["numba", "numpy"] = "numba" if resolve_backend(backend) else "numpy"
     lo, hi = design.stroke_min.copy(), design.stroke_max.copy()
     ref = np.clip(REFERENCE_Q, lo, hi)
     lo = np.where(np.isfinite(lo), lo, ref - UNLIMITED_HALF_RANGE)

@@ -8,6 +8,7 @@ holds no kinematics: angles are degrees here and radians everywhere else.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import os
 import signal
@@ -17,13 +18,45 @@ from typing import NoReturn
 
 from ..errors import KinematicsError
 
-__all__ = ["main", "entry_point", "COMMANDS"]
+__all__ = ["main", "entry_point", "COMMANDS", "EXTRAS", "COMMAND_EXTRAS", "extra_of"]
 
-#: Optional third-party packages and the extra that installs each.
-_EXTRA_OF = {"sympy": "symbolic", "matplotlib": "plot", "plotly": "plot", "imageio": "plot",
-             "mujoco": "sim", "yourdfpy": "sim", "numba": "fast", "tqdm": "progress",
-             "scipy": "analysis", "ruckig": "motion", "pinocchio": "bench",
-             "flint": "certified"}
+#: The extras of pyproject.toml and the modules each installs, in pyproject's order
+#: (tests/test_ros_round5.py checks this table against pyproject.toml).
+EXTRAS = {
+    "symbolic": ("sympy",),
+    "plot": ("matplotlib", "plotly", "imageio", "imageio_ffmpeg", "tqdm"),
+    "fast": ("numba", "tqdm"),
+    "progress": ("tqdm",),
+    "analysis": ("scipy", "tqdm"),
+    "sim": ("mujoco", "yourdfpy", "tqdm"),
+    "motion": ("ruckig", "scipy"),
+    "calibration": ("scipy", "matplotlib"),
+    "synthesis": ("dask", "distributed", "pandas", "pyarrow", "pymoo", "tqdm"),
+    "certified": ("flint",),
+    "app": ("viser",),
+    "collision": ("coal", "trimesh"),
+    "dynamics": ("scipy",),
+    "ros": ("rosbags", "mcap", "mcap_ros2", "foxglove", "isal", "websockets", "zstandard",
+            "lz4"),
+}
+#: The extra of each command's own optional packages: a package of several extras is
+#: named by the command's (``plan`` needs scipy of [motion], not of [analysis]).
+COMMAND_EXTRAS = {"plan": "motion", "track": "ros", "synthesize": "synthesis",
+                  "calibrate": "calibration", "view": "plot", "animate": "plot",
+                  "export": "sim", "derive": "symbolic", "app": "app",
+                  "workspace": "analysis", "singularities": "analysis"}
+
+
+def extra_of(module: str | None, command: str | None = None) -> str:
+    """The extra that installs ``module`` (a top-level name), the command's first.
+
+    ``"all"`` for a module of no extra (then every extra installs it, or none does).
+    """
+    top = (module or "").split(".")[0]
+    own = COMMAND_EXTRAS.get(command or "")
+    if own is not None and top in EXTRAS[own]:
+        return own
+    return next((e for e, mods in EXTRAS.items() if top in mods), "all")
 
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
 COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
@@ -55,6 +88,10 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
     for name in COMMANDS:
         importlib.import_module(f"athenakin.cli._{name}").register(sub)
+    for p in sub.choices.values():   # also after the subcommand, where the hint puts it
+        with contextlib.suppress(argparse.ArgumentError):   # a command with its own
+            p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                           help="on an error, show the Python traceback and warnings")
     return parser
 
 
@@ -101,9 +138,8 @@ def main(argv: list[str] | None = None) -> int:
         except ModuleNotFoundError as exc:
             if debug:
                 raise
-            extra = _EXTRA_OF.get((exc.name or "").split(".")[0], "all")
-            print(f"{name}: error: this command needs the optional package "
-                  f"{exc.name!r}: pip install 'athenakin[{extra}]'", file=sys.stderr)
+            print(f"{name}: error: {missing_extra_message(exc, args.command)}",
+                  file=sys.stderr)
             return 1
         except _INPUT_ERRORS as exc:
             if debug:
@@ -116,6 +152,21 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{name}: internal error: {_one_line(exc)} (a bug: rerun with --debug for "
                   f"the traceback and report it)", file=sys.stderr)
             return 70
+
+
+def missing_extra_message(exc: ModuleNotFoundError, command: str | None = None) -> str:
+    """The message of a missing optional package: its name and the extra to install."""
+    module = exc.name
+    if not module:   # raised without a name: the quoted one of the message, if any
+        import re
+
+        m = re.search(r"No module named '([^']+)'|package '([^']+)'", str(exc))
+        module = next((g for g in m.groups() if g), None) if m else None
+    if not module:
+        return f"this command needs an optional package ({_one_line(exc)})"
+    top = module.split(".")[0]
+    return (f"this command needs the optional package {top!r}: pip install "
+            f"'athenakin[{extra_of(top, command)}]'")
 
 
 def _resume_hint(args: argparse.Namespace) -> str:

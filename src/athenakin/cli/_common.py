@@ -170,3 +170,29 @@ def fmt(x: float, nd: int = 6) -> str:
 def dump_json(obj: Any) -> str:
     """JSON text of ``obj``, indented (see :func:`athenakin._serialize.to_jsonable`)."""
     return json_text(obj, indent=2)
+
+
+def mm_hint(values: Any, design: Design, what: str) -> str:
+    """The millimetre hint of ``plan`` and :class:`~athenakin.Design`, or "".
+
+    ``"; {what} = ... m is far beyond the robot's reach: lengths are in metres
+    (millimetres typed?)"`` when the largest finite magnitude of ``values`` (m) exceeds
+    four times the robot's longest length (its links or tool), the bound of
+    ``athenakin plan``.
+    """
+    a = np.abs(np.asarray(values, dtype=float))
+    a = a[np.isfinite(a)]
+    if a.size == 0:
+        return ""
+    r = float(a.max())
+    if r > 4.0 * max(design.tool_length, float(np.max(design.lengths))):
+        return (f"; {what} = {r:.6g} m is far beyond the robot's reach: lengths are in "
+                f"metres (millimetres typed?)")
+    return ""
+
+
+def with_hint(exc: BaseException, hint: str) -> BaseException:
+    """``exc`` with ``hint`` appended to its message (its class and fields kept)."""
+    if hint and exc.args and isinstance(exc.args[0], str):
+        exc.args = (exc.args[0] + hint, *exc.args[1:])
+    return exc

@@ -9,7 +9,7 @@ import numpy as np
 from .._dispatch import forward_kinematics
 from ..certified import CertifiedFK, CertStatus
 from ..design import Design
-from ..errors import Reason
+from ..errors import KinematicsError, Reason
 from ..robot import FKSolution
 from ._common import (
     add_design_option,
@@ -19,7 +19,9 @@ from ._common import (
     fmt,
     load_design,
     load_rcm,
+    mm_hint,
     table,
+    with_hint,
 )
 from ._warmup import one_shot_backend
 
@@ -121,7 +123,10 @@ def run(args: argparse.Namespace) -> int:
         return _run_certified(args, design, T)
     # the public function: the CLI shows what the library gives; one pose in a fresh process
     # runs the numpy reference, not numba's ~1 s of loading (cli/_warmup.one_shot_backend)
-    sol = forward_kinematics(np.array(args.q), T, design, backend=one_shot_backend())
+    try:
+        sol = forward_kinematics(np.array(args.q), T, design, backend=one_shot_backend())
+    except KinematicsError as exc:
+        raise with_hint(exc, mm_hint(args.q, design, "max |q|")) from None
     if args.json:
         print(dump_json({"q_m": args.q, "T_b_e": T, **fk_json(sol)}))
     else:

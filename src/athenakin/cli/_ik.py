@@ -7,6 +7,8 @@ import argparse
 import numpy as np
 
 from .._dispatch import inverse_kinematics, q_from_instrument, q_from_tool_tip
+from ..design import Design
+from ..errors import KinematicsError
 from ..robot import direction_from_angles
 from ._common import (
     add_design_option,
@@ -16,6 +18,8 @@ from ._common import (
     fmt,
     load_design,
     load_rcm,
+    mm_hint,
+    with_hint,
 )
 from ._warmup import one_shot_backend
 
@@ -49,7 +53,16 @@ def run(args: argparse.Namespace) -> int:
                          f"(drop --p)")
     design = load_design(args)
     T = load_rcm(args, design)
-    out: dict = {}  # type: ignore[type-arg]
+    try:
+        out = _solve(args, design, T)
+    except KinematicsError as exc:
+        hint = (mm_hint(np.linalg.norm(args.tip), design, "|tip|") if args.tip is not None
+                else mm_hint(args.p, design, "p") if args.p is not None else "")
+        raise with_hint(exc, hint) from None
+    return _print(args, out)
+
+
+def _solve(args: argparse.Namespace, design: Design, T: np.ndarray) -> dict:  # type: ignore[type-arg]
     if args.u345 is not None:
         q, pas = inverse_kinematics(T, np.radians(args.u345), design,
                                     backend=one_shot_backend())
@@ -67,6 +80,10 @@ def run(args: argparse.Namespace) -> int:
             form = "tool tip"
         out = {"form": form, "q_m": q, "mode": int(res.mode), "p_m": res.p,
                "direction_b": res.direction_b, "O_s_m": res.O_s}
+    return out
+
+
+def _print(args: argparse.Namespace, out: dict) -> int:  # type: ignore[type-arg]
     if args.json:
         print(dump_json(out))
         return 0

@@ -2,9 +2,10 @@
 
 Every command that writes files declares them to an :class:`Outputs` before it
 computes anything, renders each one into a temporary file in its destination
-folder, and only when everything has succeeded moves them all into place
-(``os.replace``, atomic per file). A failure anywhere leaves no output and no
-temporary file behind. The rules:
+folder, and only when everything has succeeded moves them all into place (each
+one an :class:`athenakin._output.AtomicFile`, the package's one atomic writer:
+``fsync``, then a rename). A failure anywhere leaves no output and no temporary
+file behind. The rules:
 
 * an output never replaces one of the command's inputs (``plan wp.csv -o wp.csv``);
 * an output never replaces an existing file unless ``--force`` is given;
@@ -27,8 +28,9 @@ from collections.abc import Iterator
 from pathlib import Path
 from types import TracebackType
 
-__all__ = ["Outputs", "outputs", "add_force_option", "input_paths", "umask",
-           "INPUT_ATTRIBUTES"]
+from .._output import AtomicFile
+
+__all__ = ["Outputs", "outputs", "add_force_option", "input_paths", "INPUT_ATTRIBUTES"]
 
 #: Attributes of the parsed arguments that name input files.
 INPUT_ATTRIBUTES = ("path", "design", "rcm_file", "q_file", "measurements")
@@ -44,13 +46,6 @@ def input_paths(args: argparse.Namespace) -> list[Path]:
     """The input files named by the parsed arguments (see :data:`INPUT_ATTRIBUTES`)."""
     return [Path(v) for a in INPUT_ATTRIBUTES if isinstance(v := getattr(args, a, None),
                                                              (str, Path))]
-
-
-def umask() -> int:
-    """The process's file-mode creation mask."""
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
 
 
 def _same_file(a: Path, b: Path) -> bool:
@@ -88,7 +83,7 @@ class Outputs:
         self.option = option
         self.inputs = [Path(p) for p in inputs or []]
         self._targets: list[Path] = []
-        self._temps: dict[Path, Path] = {}
+        self._temps: dict[Path, AtomicFile] = {}
         self._staging: Path | None = None
         self._committed = False
 
@@ -154,7 +149,7 @@ class Outputs:
             self._targets.remove(path)
         tmp = self._temps.pop(path, None)
         if tmp is not None:
-            tmp.unlink(missing_ok=True)
+            tmp.discard()
 
     # ---------------------------------------------------------------------- render
     def temp(self, path: Path) -> Path:
@@ -168,13 +163,12 @@ class Outputs:
             raise ValueError(f"{str(path)!r} was not declared with Outputs.add")
         old = self._temps.pop(path, None)
         if old is not None:
-            old.unlink(missing_ok=True)
-        folder = path.parent if path.parent.is_dir() else self._staging_dir(path)
-        fd, name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix,
-                                    dir=folder)
-        os.close(fd)
-        self._temps[path] = Path(name)
-        return Path(name)
+            old.discard()
+        folder = None if path.parent.is_dir() else self._staging_dir(path)
+        f = AtomicFile(path, suffix=path.suffix, folder=folder)
+        f.close_handle()
+        self._temps[path] = f
+        return f.temp
 
     def write(self, path: Path, data: str | bytes) -> None:
         """Render ``data`` (text is UTF-8 encoded) as the future content of ``path``."""
@@ -200,20 +194,12 @@ class Outputs:
         missing = [str(p) for p in self._targets if p not in self._temps]
         if missing:
             raise ValueError(f"outputs not rendered: {missing}")
-        new_mode = 0o666 & ~umask()
         for path in self._targets:
-            tmp = self._temps[path]
             dest = Path(os.path.realpath(path))  # through a symlink: write its target
             if os.path.lexists(dest) and not self.force:
                 raise FileExistsError(f"{self.option}: {str(path)!r} appeared while the "
                                       f"command ran; use --force to replace it")
-            try:
-                mode = stat.S_IMODE(os.stat(dest).st_mode)
-            except FileNotFoundError:
-                mode = new_mode
-            os.chmod(tmp, mode)
-            dest.parent.mkdir(parents=True, exist_ok=True)
-            os.replace(tmp, dest)
+            self._temps[path].commit()           # fsync, the old file's mode, rename
             del self._temps[path]
         self._committed = True
         self.discard()
@@ -222,8 +208,7 @@ class Outputs:
     def discard(self) -> None:
         """Remove every temporary file (nothing is written)."""
         for tmp in self._temps.values():
-            with contextlib.suppress(OSError):
-                tmp.unlink()
+            tmp.discard()
         self._temps.clear()
         if self._staging is not None:
             shutil.rmtree(self._staging, ignore_errors=True)

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import stat
 import sys
-from collections.abc import Callable
+import warnings
+from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -21,8 +24,13 @@ from ._common import (
     fmt,
     load_design,
     load_rcm,
+    mm_hint,
 )
 from ._output import Outputs, add_force_option, outputs
+
+if TYPE_CHECKING:
+    from ..design import Design
+    from ..motion import TrackLog
 
 #: Smallest jump threshold (mm or deg): below it, the threshold in SI units underflows.
 JUMP_MIN = 1e-6
@@ -93,10 +101,15 @@ def run(args: argparse.Namespace) -> int:
                                              for c in args.topic):
         raise ValueError(f"--topic: expected an absolute ROS topic name such as "
                          f"/joint_states, got {args.topic!r}")
+    csv = is_csv(args.path)
+    if not csv or (out is not None and Path(out).suffix.lower() == ".mcap"):
+        from ..ros._errors import READ_MODULES, WRITE_MODULES, require_ros
+
+        require_ros(WRITE_MODULES if csv else READ_MODULES)   # a missing extra, up front
     with outputs(args) as outs:   # checked before any work: never over an input or, without
         if out is not None:       # --force, an existing file; written only at the end
             outs.add(out)
-        if not is_csv(args.path):
+        if not csv:
             return _track_recording(args, outs)
         return _track(args, outs)
 
@@ -104,18 +117,22 @@ def run(args: argparse.Namespace) -> int:
 def is_csv(path: Path) -> bool:
     """True for a CSV stream (by its name, ``.csv``, or by not being a ROS recording).
 
-    A folder is a rosbag2 recording. A FIFO or device named like a recording (``.mcap``,
-    ``.bag``, ``.db3``) goes to the recording reader, which refuses it; any other goes to
-    the CSV reader, which reads a bounded amount (``/dev/zero`` is "larger than" its limit).
+    A folder is a rosbag2 recording, and so is a file named like a recording (``.mcap``,
+    ``.bag``, ``.db3``) whatever it holds: the recording reader names what it is not
+    (a ``.mcap`` file that is not MCAP is never read as a CSV). Any other file is a
+    recording when it starts like one, else a CSV (the CSV reader reads a bounded
+    amount: ``/dev/zero`` is "larger than" its limit).
     """
     if Path(path).suffix.lower() == ".csv":
         return True
+    if Path(path).suffix.lower() in (".mcap", ".bag", ".db3"):
+        return False
     try:
         mode = os.stat(path).st_mode
         if stat.S_ISDIR(mode):
             return False
         if not stat.S_ISREG(mode):
-            return Path(path).suffix.lower() not in (".mcap", ".bag", ".db3")
+            return True
         with open(path, "rb") as fh:
             head = fh.read(16)
     except OSError:
@@ -138,35 +155,33 @@ def _print_summary(n: int, first_slot: int, first_mode: int, counts: dict[str, i
 
 def _track_recording(args: argparse.Namespace, outs: Outputs) -> int:
     """A ROS recording: streamed into an MCAP file, or read whole for CSV / JSON / no output."""
+    from .. import ros
     from ..motion import TrackFlag
+    from ..ros._track import empty_topic_error
     from ._plan import parse_margins
-
-    try:
-        from .. import ros
-    except ModuleNotFoundError as exc:
-        raise ValueError(f"{args.path}: reading ROS recordings needs the extra 'ros' "
-                         f"(pip install 'athenakin[ros]'): {exc}") from None
     out = args.output
     design = load_design(args)
     T = load_rcm(args, design)
     opts = dict(slot=args.slot, jump_m=args.jump_mm * 1e-3, jump_rad=math.radians(args.jump_deg),
                 margins=parse_margins(args.margin), **collision_options(args, design))
     if out is None or Path(out).suffix.lower() != ".mcap":
-        js = ros.read_joint_states(args.path, topic=args.topic, joints=args.joint_names,
-                                   scale=args.scale)
+        with _recording_warnings(ros.RecordingWarning):
+            js = ros.read_joint_states(args.path, topic=args.topic, joints=args.joint_names,
+                                       scale=args.scale)
         if len(js) == 0:
-            raise ValueError(f"{args.path}: topic {args.topic!r} holds no message")
+            raise empty_topic_error(args.path, args.topic)
         t = (js.stamps_ns - js.stamps_ns[0]) * 1e-9
         return _track(args, outs, q=js.q, t=t)
     progress = _progress() if sys.stderr.isatty() else None
-    s = ros.track_recording(args.path, out, T, design, topic=args.topic,
-                            joints=args.joint_names, scale=args.scale,
-                            max_events=args.max_events, target=outs.temp(out),
-                            progress=progress, **opts)
+    with _recording_warnings(ros.RecordingWarning):
+        s = ros.track_recording(args.path, out, T, design, topic=args.topic,
+                                joints=args.joint_names, scale=args.scale,
+                                max_events=args.max_events, target=outs.temp(out),
+                                progress=progress, **opts)
     if progress is not None:
         print(file=sys.stderr)
-    if s.n == 0:
-        raise ValueError(f"{args.path}: topic {args.topic!r} holds no message")
+    if s.n_valid == 0:
+        raise ValueError(no_pose_message(args.path, s.n, s.max_abs_q, design, recording=True))
     lines = [f"  sample {i} (stamp {st} ns, q = {np.round(q, 6).tolist()} m): "
              f"{TrackFlag(f).name or f}, mode {m:+d}, slot {k}"
              for i, st, q, f, m, k in s.events]
@@ -181,6 +196,90 @@ def _track_recording(args: argparse.Namespace, outs: Outputs) -> int:
         print(f"athenakin track: --strict: flagged {bad}")
         return 1
     return 0
+
+
+def _max_abs(q: np.ndarray) -> float:
+    a = np.abs(q[np.isfinite(q)])
+    return float(a.max()) if a.size else math.nan
+
+
+def no_pose_message(path: Path, n: int, max_abs_q: float, design: Design, *,
+                    recording: bool) -> str:
+    """The error of a stream in which no reading has a pose (every one ``LOST``)."""
+    hint = mm_hint(max_abs_q, design, "max |q|") if math.isfinite(max_abs_q) else ""
+    scale = (" (a recording in mm: --scale 0.001)" if recording else
+             " (readings are in m: divide mm by 1000)")
+    return (f"{path}: none of the {n} readings has a pose (all LOST: outside the strokes or "
+            f"the workspace){hint}; check the units{scale}, --joints and --design")
+
+
+def first_pose(q: np.ndarray, T: np.ndarray, design: Design, opts: dict  # type: ignore[type-arg]
+               ) -> int:
+    """Index of the first reading the tracker can start from (-1: none).
+
+    The rule of the library's stream (:func:`athenakin.ros._track.first_tracker`, used
+    by :func:`athenakin.ros.track_recording`): the first reading that assembles, the
+    readings before it ``LOST``, whatever the output.
+    """
+    from ..ros._track import first_tracker
+
+    tracker_opts = {k: v for k, v in opts.items()
+                    if k in ("slot", "jump_m", "jump_rad", "margins")}
+    return first_tracker(q, T, design, tracker_opts)[0]
+
+
+def lost_before(log: TrackLog, q_head: np.ndarray) -> TrackLog:
+    """``log`` with the readings ``q_head`` before it prepended as ``LOST`` rows.
+
+    The rows of the stream's readings without a pose (:func:`first_pose`): the values
+    of a ``LOST`` reading of the tracker (no pose: NaN, invalid, infinite step).
+    """
+    import dataclasses
+
+    from ..motion import TrackFlag
+
+    k = len(q_head)
+    cols = {}
+    for f in dataclasses.fields(log):
+        v = getattr(log, f.name)
+        if v is None:
+            cols[f.name] = None
+            continue
+        shape = (k, *v.shape[1:])
+        if f.name == "q":
+            head = q_head
+        elif f.name == "flags":
+            head = np.full(shape, int(TrackFlag.LOST), v.dtype)
+        elif f.name == "step":
+            head = np.full(shape, np.inf)
+        elif v.dtype.kind == "f":
+            head = np.full(shape, np.nan)
+        elif v.dtype.kind in "US":
+            head = np.full(shape, "", v.dtype)
+        else:
+            head = np.zeros(shape, v.dtype)
+        cols[f.name] = np.concatenate([head, v])
+    return dataclasses.replace(log, **cols)
+
+
+@contextlib.contextmanager
+def _recording_warnings(category: type[Warning]) -> Iterator[None]:
+    """Print a warning of ``category`` (a truncated recording) as one line on stderr.
+
+    Other warnings go on as they came.
+    """
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", category)
+        try:
+            yield
+        finally:
+            seen = list(caught)
+    for w in seen:
+        if issubclass(w.category, category):
+            print(f"athenakin track: warning: {' '.join(str(w.message).split())}",
+                  file=sys.stderr)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
 def _progress() -> Callable[[int], None]:
@@ -214,9 +313,17 @@ def _track(args: argparse.Namespace, outs: Outputs, *, q: np.ndarray | None = No
             raise ValueError(f"{args.path}: t_s must not decrease, got t_s = {t[j]:g} s at "
                              f"sample {j} after {t[i]:g} s at sample {i}")
     coll = collision_options(args, design)
-    log = track(q, T, design, slot=args.slot, jump_m=args.jump_mm * 1e-3,
-                jump_rad=math.radians(args.jump_deg), margins=parse_margins(args.margin),
-                **coll)
+    opts = dict(slot=args.slot, jump_m=args.jump_mm * 1e-3, jump_rad=math.radians(args.jump_deg),
+                margins=parse_margins(args.margin), **coll)
+    first = first_pose(q, T, design, opts)
+    if first < 0:
+        raise ValueError(no_pose_message(args.path, len(q), _max_abs(q), design,
+                                         recording=not is_csv(args.path)))
+    log = track(q[first:], T, design, **opts)
+    if first:
+        log = lost_before(log, q[:first])
+        print(f"readings 0 to {first - 1} have no pose (LOST): the tracker starts at reading "
+              f"{first}, the first that assembles")
     events = log.events()
     counts: dict[str, int] = {}
     for _, f in events:

@@ -18,7 +18,14 @@ from .._mechanism import BODIES, BODY_SEGMENTS, BodyGeometry, adjacent_pairs
 from ._bodies import DEFAULT_RADII, MAX_RADIUS, Bodies
 from ._clearance import MAX_MARGIN, Clearance, clearance
 from ._distance import capsule_capsule, capsule_halfspace, point_segment, segment_segment
-from ._environment import MAX_MESH_FACES, MAX_OBSTACLES, OBSTACLE_KINDS, Environment, Obstacle
+from ._environment import (
+    MAX_MESH_FACES,
+    MAX_OBSTACLES,
+    OBSTACLE_KINDS,
+    Environment,
+    Obstacle,
+    OpenMeshWarning,
+)
 
 __all__ = [
     "BODIES",
@@ -30,6 +37,7 @@ __all__ = [
     "MAX_RADIUS",
     "Environment",
     "Obstacle",
+    "OpenMeshWarning",
     "OBSTACLE_KINDS",
     "MAX_OBSTACLES",
     "MAX_MESH_FACES",

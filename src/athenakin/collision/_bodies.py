@@ -55,14 +55,14 @@ _INSTRUMENT_BODIES = ("instrument",)
 
 def _check_radius(name: str, r: object) -> float:
     if isinstance(r, bool) or not isinstance(r, (int, float, np.integer, np.floating)):
-        raise TypeError(f"radius[{name!r}]: expected a real number (m), got {type(r).__name__}")
+        raise TypeError(f"radii[{name!r}]: expected a real number (m), got {type(r).__name__}")
     try:
         v = float(r)
     except OverflowError:
-        raise InvalidInputError(f"radius[{name!r}]: expected a radius in [0, {MAX_RADIUS:g}] m, "
+        raise InvalidInputError(f"radii[{name!r}]: expected a radius in [0, {MAX_RADIUS:g}] m, "
                                 f"got an integer too large for a float") from None
     if not (0.0 <= v <= MAX_RADIUS):   # also refuses NaN
-        raise InvalidInputError(f"radius[{name!r}]: expected a radius in [0, {MAX_RADIUS:g}] m, "
+        raise InvalidInputError(f"radii[{name!r}]: expected a radius in [0, {MAX_RADIUS:g}] m, "
                                 f"got {v!r}")
     return v
 

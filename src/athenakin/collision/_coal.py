@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._environment import Obstacle
+from ._environment import Obstacle, winding_numbers
 
 __all__ = ["import_coal", "coal_shape", "capsule_transform", "capsule_obstacle_distances"]
 
@@ -103,4 +103,36 @@ def capsule_obstacle_distances(seg: NDArray[np.float64], radius: float,
         dist[i] = d
         wit[i, 0] = res.getNearestPoint1()
         wit[i, 1] = res.getNearestPoint2()
+    if obstacle.kind == "mesh" and obstacle.closed and not obstacle.convex:
+        _inside_closed_mesh(seg, radius, obstacle, dist, wit)
     return dist, wit
+
+
+def _inside_closed_mesh(seg: NDArray[np.float64], radius: float, obstacle: Obstacle,
+                        dist: NDArray[np.float64], wit: NDArray[np.float64]) -> None:
+    """Make the distance of capsules wholly inside a closed mesh negative, in place.
+
+    A capsule clear of the triangles (``d > 0``) lies wholly on one side of them: its
+    first end point tells which (winding number, :func:`winding_numbers`). Inside, the
+    distance becomes minus the depth of the capsule's deepest point below the nearest
+    point of the triangles, along the line of the two nearest points (``u``, into the
+    solid): the end point ``e`` farthest along ``u`` plus ``r u``, a point of the
+    capsule's surface, is its witness; ``-(d + 2 r)`` for a ball, more for a capsule
+    along ``u``.
+    """
+    clear = np.flatnonzero(np.isfinite(dist) & (dist > 0))
+    if clear.size == 0:
+        return
+    R, t = obstacle.T_b_o[:3, :3], obstacle.T_b_o[:3, 3]
+    x = (seg[clear, 0] - t) @ R                  # R^T (x - t), the mesh frame
+    inside = np.abs(winding_numbers(x, obstacle.vertices, obstacle.faces)) > 0.5
+    rows = clear[inside]
+    if rows.size == 0:
+        return
+    v = wit[rows, 0] - wit[rows, 1]             # from the triangles into the solid
+    u = v / np.linalg.norm(v, axis=-1, keepdims=True)
+    p, q = seg[rows, 0], seg[rows, 1]
+    far_q = np.einsum("ni,ni->n", q - p, u) > 0
+    deep = np.where(far_q[:, None], q, p) + radius * u
+    wit[rows, 0] = deep
+    dist[rows] = -np.einsum("ni,ni->n", deep - wit[rows, 1], u)

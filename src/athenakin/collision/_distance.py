@@ -6,17 +6,23 @@ shortest translation that separates them; two crossing segments separate by an
 arbitrarily small move, so they add nothing to it).
 
 Segment to segment (:func:`segment_segment`): the minimum of a convex quadratic over
-the unit square ``(s, t)`` lies either at its interior critical point (Lumelsky's
-``s = (b f - c e) / (a e - b^2)``, ``t = (a f - b c) / (a e - b^2)``) or on an edge,
-where it is the distance of an end point to the other segment. The reference takes
-the smallest of these five candidates, each a true pair of points on the segments, so
-it is exact for parallel (``a e - b^2 = 0``: the interior candidate is dropped),
-degenerate (zero length: the end-point candidates remain) and touching or crossing
-segments (distance 0), with no tolerance that decides a branch. The compiled kernel
-(:mod:`athenakin.fast._collision_kernels`) takes the same candidates (comparing squared
-distances, with fused multiply-adds) and agrees with this reference to 1e-13 m (tested);
-where the closest points are not unique (overlapping parallel segments) the two may
-return different, equally close, pairs of them.
+the unit square ``(s, t)`` lies either at its interior critical point or on an edge,
+where it is the distance of an end point to the other segment. The interior point
+has ``s = ((p2 - p1) x d2) . n / |n|^2`` with ``n = d1 x d2`` (Lumelsky's
+``(b f - c e) / (a e - b^2)`` in cross products: ``a e - b^2`` cancels to a relative
+error ``eps / sin^2`` of the angle between the segments, ``|n|^2`` to ``eps / sin``),
+paired with the point of the second segment nearest ``p1 + s d1``: for nearly
+parallel segments a second, independently rounded ``t`` would add the difference of
+the two errors along the common axis to the distance (1e-6 m at 1e-7 rad; now
+1e-16 m, issue 30). The reference takes the smallest of these five candidates, each
+a true pair of points on the segments, so it is exact for parallel (``n = 0``: the
+interior candidate is dropped), degenerate (zero length: the end-point candidates
+remain) and touching or crossing segments (distance 0), with no tolerance that
+decides a branch. The compiled kernel (:mod:`athenakin.collision._kernels`)
+takes the same candidates and witnesses (comparing squared distances, with fused
+multiply-adds) and agrees with this reference to 1e-13 m (tested); where the closest
+points are not unique (overlapping parallel segments) the two may return different,
+equally close, pairs of them.
 """
 
 from __future__ import annotations
@@ -62,13 +68,6 @@ def _segment_segment(p1: F, q1: F, p2: F, q2: F) -> tuple[F, F, F]:
                                             for v in (p1, q1, p2, q2)))
     d1 = q1 - p1
     d2 = q2 - p2
-    r = p1 - p2
-    a = _dot(d1, d1)
-    e = _dot(d2, d2)
-    b = _dot(d1, d2)
-    c = _dot(d1, r)
-    f = _dot(d2, r)
-    denom = a * e - b * b
     # candidates 1-4: an end point against the other segment
     best, c1 = _point_segment(p2, p1, q1)
     c2 = p2.copy()
@@ -83,15 +82,19 @@ def _segment_segment(p1: F, q1: F, p2: F, q2: F) -> tuple[F, F, F]:
         else:
             c1 = np.where(better[..., None], x, c1)
             c2 = np.where(better[..., None], cc, c2)
-    # candidate 5: the interior critical point, where the segments are not parallel
+    # candidate 5: the interior critical point, where the segments are not parallel.
+    # s from cross products (|d1 x d2|^2 instead of a e - b^2, which cancels to a
+    # relative error eps / sin^2 of the angle), and the point of the second segment
+    # nearest p1 + s d1 (not p2 + t d2 with a second rounded t: for nearly parallel
+    # segments, two independent errors along the common axis would add their difference
+    # to the distance, 1e-6 m at 1e-7 rad)
+    nrm = np.cross(d1, d2)
+    denom = _dot(nrm, nrm)
     ok = denom > 0
     with np.errstate(invalid="ignore", divide="ignore"):
-        safe = np.where(ok, denom, 1.0)
-        s = np.clip((b * f - c * e) / safe, 0.0, 1.0)
-        t = np.clip((a * f - b * c) / safe, 0.0, 1.0)
+        s = np.clip(_dot(np.cross(p2 - p1, d2), nrm) / np.where(ok, denom, 1.0), 0.0, 1.0)
     i1 = p1 + s[..., None] * d1
-    i2 = p2 + t[..., None] * d2
-    di = np.linalg.norm(i1 - i2, axis=-1)
+    di, i2 = _point_segment(i1, p2, q2)
     better = ok & (di < best)
     best = np.where(better, di, best)
     c1 = np.where(better[..., None], i1, c1)
@@ -133,15 +136,47 @@ def separation_normal(c1: F, c2: F, d1: F, d2: F) -> F:
     return out  # type: ignore[no-any-return]
 
 
+def _across(n: F, x: F, d: F) -> F:
+    """``n`` without its component along ``d`` where ``x`` projects inside the segment.
+
+    ``x`` is the point relative to the segment's start, ``d`` its direction. Inside
+    (``0 < x . d < d . d``, the projection's parameter not clipped) the direction from
+    the segment's nearest point is normal to ``d``; taking the rounding of a tiny
+    ``c2 - b1`` out of it keeps the witness at the radius to rounding. The end caps and
+    degenerate segments keep ``n``.
+    """
+    dd = _dot(d, d)
+    xd = _dot(x, d)
+    nd = _dot(n, d)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        m = n - (nd / np.where(dd > 0, dd, 1.0))[..., None] * d
+        mm = np.linalg.norm(m, axis=-1)
+        inside = (xd > 0) & (xd < dd) & (mm > 0.5)
+        out = np.where(inside[..., None], m / np.where(inside, mm, 1.0)[..., None], n)
+    return out  # type: ignore[no-any-return]
+
+
 def _capsule_capsule(p1: F, q1: F, r1: F | float, p2: F, q2: F,
                     r2: F | float) -> tuple[F, F]:
     """Unchecked :func:`capsule_capsule` (what :func:`~athenakin.collision.clearance` calls)."""
     dist, c1, c2 = _segment_segment(p1, q1, p2, q2)
-    n = separation_normal(c1, c2, np.broadcast_to(q1 - p1, c1.shape),
-                          np.broadcast_to(q2 - p2, c2.shape))
+    d1 = np.broadcast_to(q1 - p1, c1.shape)
+    d2 = np.broadcast_to(q2 - p2, c2.shape)
+    # Each witness starts from the point of its own segment nearest the other closest
+    # point (b1 nearest c2, b2 nearest c1) and goes along b1 -> c2 (c1 -> b2): every
+    # point of that ray has b1 as its nearest point of segment 1, so the witness lies at
+    # exactly r1 from segment 1, on the surface. Taking c1 + r1 n with n along c2 - c1
+    # instead puts it off the surface where c1 and c2 carry rounding along the axes that
+    # is not small against |c2 - c1| (segments crossing at 3.5e-12 m: 4.2e-5 m from the
+    # axis instead of r1 = 0.01 m). Where b1 and c2 coincide (crossing, touching) the
+    # direction is separation_normal's fallback, d1 x d2, the same for both witnesses.
+    _, b1 = _point_segment(c2, p1, q1)
+    _, b2 = _point_segment(c1, p2, q2)
+    n1 = _across(separation_normal(b1, c2, d1, d2), c2 - p1, d1)
+    n2 = _across(separation_normal(c1, b2, d1, d2), c1 - p2, d2)
     r1a = np.asarray(r1, dtype=np.float64)
     r2a = np.asarray(r2, dtype=np.float64)
-    w = np.stack([c1 + r1a[..., None] * n, c2 - r2a[..., None] * n], axis=-2)
+    w = np.stack([b1 + r1a[..., None] * n1, b2 - r2a[..., None] * n2], axis=-2)
     return dist - r1a - r2a, w
 
 

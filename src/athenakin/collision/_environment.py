@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any, Literal
@@ -28,11 +29,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._mechanism import BODIES
+from .._output import naming_path
 from .._toml import read_toml
 from .._validation import check_array, check_path, check_scalar, check_transform
 from ..errors import InvalidInputError
 
-__all__ = ["Environment", "Obstacle", "OBSTACLE_KINDS", "MAX_OBSTACLES", "MAX_MESH_FACES"]
+__all__ = ["Environment", "Obstacle", "OBSTACLE_KINDS", "MAX_OBSTACLES", "MAX_MESH_FACES",
+           "OpenMeshWarning", "closed_surface", "winding_numbers"]
 
 #: Kinds of obstacle.
 OBSTACLE_KINDS = ("halfspace", "sphere", "capsule", "box", "mesh")
@@ -60,6 +63,19 @@ def _length(x: object, name: str, *, positive: bool = False) -> float:
     if v > _MAX_COORD:
         raise InvalidInputError(f"{name}: expected a length within {_MAX_COORD:g} m, got {v:g}")
     return v
+
+
+def _unit(x: ArrayLike, name: str) -> tuple[float, float, float]:
+    """A non-zero finite vector of 3 as a unit vector (kept as is when already unit)."""
+    n = np.array(check_array(x, name, (3,)), dtype=float).reshape(-1)
+    if n.shape != (3,):
+        raise InvalidInputError(f"{name}: expected 3 numbers, got shape {n.shape}")
+    norm = float(np.linalg.norm(n))
+    if not norm > 1e-12 or not math.isfinite(norm):
+        raise InvalidInputError(f"{name}: expected a non-zero vector, got {n.tolist()}")
+    if abs(norm - 1.0) > 1e-15:
+        n = n / norm
+    return (float(n[0]), float(n[1]), float(n[2]))
 
 
 def _allow(allow: object, name: str) -> tuple[str, ...]:
@@ -105,9 +121,14 @@ class Obstacle:
         ``mesh``: factor from file units to metres (0.001 for a file in mm).
     convex : bool
         ``mesh``: use the convex hull (signed distance, penetration depth) instead of the
-        triangle surface (a BVH; distance 0 once a body touches or crosses the surface).
+        triangles (a BVH; distance <= 0 once a body touches them; a body wholly inside a
+        ``closed`` mesh is negative too).
     vertices, faces : ndarray
         ``mesh``: the loaded triangles (in the shape frame, m).
+    closed : bool
+        ``mesh``: the triangles close a solid (every edge between exactly two
+        triangles, consistently oriented: :func:`closed_surface`). A body wholly
+        inside a closed mesh is colliding (negative distance); set from ``faces``.
     """
 
     kind: ObstacleKind
@@ -128,6 +149,41 @@ class Obstacle:
         default_factory=lambda: np.zeros((0, 3)))
     faces: NDArray[np.int64] = dataclasses.field(
         default_factory=lambda: np.zeros((0, 3), dtype=np.int64))
+    closed: bool = dataclasses.field(init=False, default=False, compare=False)
+
+    def __post_init__(self) -> None:
+        # the checks of the Environment builders, so that an Obstacle made directly is as
+        # safe as one they make (a NaN or negative radius, a bad kind, an empty mesh)
+        if not isinstance(self.kind, str) or self.kind not in OBSTACLE_KINDS:
+            raise InvalidInputError(f"kind: expected one of {OBSTACLE_KINDS}, got "
+                                    f"{self.kind!r:.80}")
+        if not isinstance(self.name, str):
+            raise TypeError(f"name: expected a str, got {type(self.name).__name__}")
+        if not self.name.strip():
+            raise InvalidInputError("name: expected a non-empty obstacle name")
+        put = object.__setattr__
+        put(self, "allow", _allow(self.allow, "allow"))
+        for f in ("point", "center", "a", "b"):
+            put(self, f, _vec3(getattr(self, f), f))
+        put(self, "normal", _unit(self.normal, "normal"))
+        put(self, "radius", _length(self.radius, "radius"))
+        T = _pose(self.T_b_o, "T_b_o")
+        put(self, "T_b_o", T)
+        h = _vec3(self.half_extents, "half_extents")
+        if self.kind == "box" and min(h) <= 0:
+            raise InvalidInputError(f"half_extents: expected positive half sizes (m), got "
+                                    f"{list(h)}")
+        put(self, "half_extents", h)
+        if not isinstance(self.path, str):
+            raise TypeError(f"path: expected a str, got {type(self.path).__name__}")
+        put(self, "scale", _length(self.scale, "scale", positive=True))
+        if not isinstance(self.convex, bool):
+            raise TypeError(f"convex: expected a bool, got {type(self.convex).__name__}")
+        if self.kind == "mesh":
+            V, F = _check_triangles(self.vertices, self.faces, f"mesh {self.name!r}")
+            put(self, "vertices", V)
+            put(self, "faces", F)
+        put(self, "closed", self.kind == "mesh" and closed_surface(self.vertices, self.faces))
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Obstacle):
@@ -173,18 +229,19 @@ class Obstacle:
 
 
 def _pose(T_or_center: ArrayLike, name: str) -> NDArray[np.float64]:
-    arr = np.asarray(T_or_center) if not isinstance(T_or_center, (str, bytes)) else None
-    if arr is not None and arr.shape == (4, 4):
+    # check_array first: a ragged list, a str, an object is a named TypeError
+    arr = check_array(T_or_center, name, (), allow_nonfinite=True)
+    if arr.shape == (4, 4):
         T = check_transform(arr, name)
         if np.any(np.abs(T[:3, 3]) > _MAX_COORD):
             raise InvalidInputError(f"{name}: expected a position within +/-{_MAX_COORD:g} m")
         return np.array(T, dtype=np.float64)
-    if arr is not None and arr.shape == (3,):
+    if arr.shape == (3,):
         T = np.eye(4)
         T[:3, 3] = _vec3(arr, name)
         return T
-    raise InvalidInputError(f"{name}: expected a centre (3,) or a pose (4, 4), got "
-                            f"{'a ' + type(T_or_center).__name__ if arr is None else arr.shape}")
+    raise InvalidInputError(f"{name}: expected a centre (3,) or a pose (4, 4), got shape "
+                            f"{arr.shape}")
 
 
 def _load_mesh(path: Path, scale: float, name: str) -> tuple[NDArray[np.float64],
@@ -204,19 +261,119 @@ def _load_mesh(path: Path, scale: float, name: str) -> tuple[NDArray[np.float64]
     except Exception as exc:  # trimesh raises many kinds on a bad file
         raise InvalidInputError(f"{name}: mesh file {str(path)!r} does not load "
                                 f"({type(exc).__name__}: {exc})") from None
-    V = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=np.float64)
-    F = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64)
-    if V.ndim != 2 or V.shape[1:] != (3,) or F.ndim != 2 or F.shape[1:] != (3,) or len(F) == 0:
-        raise InvalidInputError(f"{name}: mesh file {str(path)!r} holds no triangles")
-    if len(F) > MAX_MESH_FACES:
-        raise InvalidInputError(f"{name}: mesh file {str(path)!r} has {len(F)} triangles; "
-                                f"expected at most {MAX_MESH_FACES}")
-    if not np.all(np.isfinite(V)):
-        raise InvalidInputError(f"{name}: mesh file {str(path)!r} has non-finite vertices")
-    if F.min() < 0 or F.max() >= len(V):
-        raise InvalidInputError(f"{name}: mesh file {str(path)!r} has faces that index "
-                                f"missing vertices")
+    V, F = _check_triangles(getattr(mesh, "vertices", np.zeros((0, 3))),
+                            getattr(mesh, "faces", np.zeros((0, 3))),
+                            f"mesh file {str(path)!r}", name=name)
     return V * scale, F
+
+
+def _check_triangles(vertices: object, faces: object, what: str, *, name: str | None = None
+                     ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Vertices (n, 3), finite, and faces (m, 3), 0 < m <= MAX_MESH_FACES, indexing them.
+
+    ``name`` (the parameter) starts the messages when given, else ``vertices`` /
+    ``faces``; ``what`` says which mesh.
+    """
+    vn, fn = (name, name) if name else ("vertices", "faces")
+    try:
+        V = np.asarray(vertices, dtype=np.float64)
+        F = np.asarray(faces)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{vn}: {what}: expected numeric arrays of vertices (n, 3) and "
+                                f"faces (m, 3)") from None
+    if F.dtype.kind not in "iu" and F.size:
+        if F.dtype.kind != "f" or not np.all(np.isfinite(F)) or np.any(F != np.round(F)):
+            raise InvalidInputError(f"{fn}: {what}: expected integer vertex indices")
+    if V.ndim != 2 or V.shape[1:] != (3,) or F.ndim != 2 or F.shape[1:] != (3,) or len(F) == 0:
+        raise InvalidInputError(f"{fn}: {what} holds no triangles (expected vertices of shape "
+                                f"(n, 3) and faces of shape (m, 3), m > 0; got {V.shape} and "
+                                f"{F.shape})")
+    if len(F) > MAX_MESH_FACES:
+        raise InvalidInputError(f"{fn}: {what} has {len(F)} triangles; expected at most "
+                                f"{MAX_MESH_FACES}")
+    if not np.all(np.isfinite(V)):
+        raise InvalidInputError(f"{vn}: {what} has non-finite vertices")
+    F = F.astype(np.int64)
+    if F.min() < 0 or F.max() >= len(V):
+        raise InvalidInputError(f"{fn}: {what} has faces that index missing vertices")
+    return V, F
+
+
+def closed_surface(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> bool:
+    """Whether triangles close a solid: each directed edge once, its reverse once.
+
+    That is a watertight, consistently oriented surface (trimesh's ``is_watertight``
+    and ``is_winding_consistent`` together), the condition for an inside: the winding
+    number (:func:`winding_numbers`) is then an integer off the surface. Vertices at
+    the same coordinates are one vertex (an STL file repeats them per triangle).
+    """
+    F = np.asarray(faces, dtype=np.int64)
+    if F.ndim != 2 or F.shape[1:] != (3,) or len(F) == 0:
+        return False
+    _, merged = np.unique(np.asarray(vertices, dtype=np.float64), axis=0,
+                          return_inverse=True)
+    F = merged.reshape(-1)[F]
+    e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    if np.any(e[:, 0] == e[:, 1]):
+        return False                       # a degenerate triangle
+    n = int(max(F.max(), 0)) + 1
+    key = e[:, 0] * n + e[:, 1]
+    rev = e[:, 1] * n + e[:, 0]
+    ks = np.sort(key)
+    if np.any(ks[1:] == ks[:-1]):
+        return False                       # a directed edge twice: inconsistent / non-manifold
+    return bool(np.array_equal(ks, np.sort(rev)))
+
+
+#: Triangle-point pairs evaluated together by :func:`winding_numbers` (memory bound).
+_WINDING_BLOCK = 1 << 18
+
+
+def winding_numbers(points: NDArray[np.float64], vertices: NDArray[np.float64],
+                    faces: NDArray[np.int64]) -> NDArray[np.float64]:
+    """Generalized winding numbers of points about a triangle surface.
+
+    ``w(x) = sum Omega_f(x) / (4 pi)`` over the triangles, ``Omega_f`` the signed solid
+    angle of triangle ``f`` seen from ``x`` (Van Oosterom and Strackee's formula,
+    ``tan(Omega / 2) = a . (b x c) / (|a||b||c| + (a.b)|c| + (b.c)|a| + (c.a)|b|)`` with
+    ``a, b, c`` the corners relative to ``x``). For a closed surface it is +-1 inside
+    (the sign of the orientation) and 0 outside, to rounding, off the surface.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3)
+        In the mesh frame, m.
+    vertices : ndarray, shape (m, 3)
+    faces : ndarray of int, shape (k, 3)
+
+    Returns
+    -------
+    ndarray, shape (n,)
+
+    Notes
+    -----
+    ``O(n k)`` work, in blocks of about ``2**18`` point-triangle pairs (bounded memory).
+    """
+    P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    tri = np.asarray(vertices, dtype=np.float64)[np.asarray(faces, dtype=np.int64)]
+    out = np.zeros(P.shape[0])
+    fstep = max(1, min(len(tri), _WINDING_BLOCK))
+    pstep = max(1, _WINDING_BLOCK // fstep)
+    for f0 in range(0, len(tri), fstep):
+        T3 = tri[f0:f0 + fstep]
+        for p0 in range(0, P.shape[0], pstep):
+            x = P[p0:p0 + pstep, None, None, :]
+            a, b, c = (T3[None, :, k] - x[:, :, 0] for k in range(3))
+            la, lb, lc = (np.linalg.norm(v, axis=-1) for v in (a, b, c))
+            num = np.einsum("pfi,pfi->pf", a, np.cross(b, c))
+            den = (la * lb * lc + np.einsum("pfi,pfi->pf", a, b) * lc
+                   + np.einsum("pfi,pfi->pf", b, c) * la + np.einsum("pfi,pfi->pf", c, a) * lb)
+            out[p0:p0 + pstep] += np.arctan2(num, den).sum(axis=-1)
+    return out / (2.0 * np.pi)
+
+
+class OpenMeshWarning(UserWarning):
+    """A mesh obstacle does not close a solid: only its surface is an obstacle."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -310,8 +467,7 @@ class Environment:
         if not norm > 1e-12 or not math.isfinite(norm):
             raise InvalidInputError(f"normal: expected a non-zero vector, got {n.tolist()}")
         n = n / norm
-        return self._add("halfspace", name, allow, point=p,
-                         normal=(float(n[0]), float(n[1]), float(n[2])))
+        return self._add("halfspace", name, allow, point=p, normal=_unit(n, "normal"))
 
     def sphere(self, center: ArrayLike, radius: float, *, name: str | None = None,
                allow: Iterable[str] = ()) -> Environment:
@@ -358,7 +514,12 @@ class Environment:
             File units to metres (0.001 for millimetres). Default 1.
         convex : bool, keyword-only
             Use the convex hull: signed distances with penetration depth. Default False:
-            the triangle surface, whose distance is 0 once a body touches it.
+            the triangles. A closed mesh (:attr:`Obstacle.closed`) is then a solid: a
+            body that touches its triangles is at distance <= 0, a body wholly inside
+            it at minus the depth of its deepest point below the nearest point of the
+            triangles (at least ``d + 2 r``, ``d`` from its surface to the triangles,
+            ``r`` its radius). An open mesh is a surface only, with an
+            :class:`OpenMeshWarning`.
         name : str, keyword-only, optional
             Default the file's stem.
 
@@ -374,8 +535,16 @@ class Environment:
             raise TypeError(f"convex: expected a bool, got {type(convex).__name__}")
         T = np.eye(4) if T_b_mesh is None else _pose(T_b_mesh, "T_b_mesh")
         V, F = _load_mesh(p, s, "path")
-        return self._add("mesh", p.stem if name is None else name, allow, T_b_o=T, path=str(path),
-                         scale=s, convex=convex, vertices=V, faces=F)
+        env = self._add("mesh", p.stem if name is None else name, allow, T_b_o=T,
+                        path=str(path), scale=s, convex=convex, vertices=V, faces=F)
+        ob = env.obstacles[-1]
+        if not convex and not ob.closed:
+            warnings.warn(f"mesh {ob.name!r} ({str(path)!r}) is open (not every edge joins "
+                          f"two consistently oriented triangles): a body wholly inside it "
+                          f"is not detected, only a body that touches its triangles; close "
+                          f"it, or pass convex=True for its convex hull", OpenMeshWarning,
+                          stacklevel=2)
+        return env
 
     # --- TOML ---------------------------------------------------------------------------
     def to_toml_table(self) -> dict[str, Any]:
@@ -392,8 +561,8 @@ class Environment:
         """Write :meth:`to_toml` to ``path`` (refuses to replace a file unless ``overwrite``)."""
         p = check_path(path, "path")
         text = self.to_toml()
-        with open(p, "w" if overwrite else "x", encoding="utf-8") as fh:
-            fh.write(text)
+        with naming_path(p), open(p, "w" if overwrite else "x", encoding="utf-8") as fh:
+            fh.write(text)                 # ENOSPC on write / close names the file
         return p
 
     @classmethod

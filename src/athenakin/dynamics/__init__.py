@@ -17,6 +17,7 @@ Conventions: docs/conventions.md ("Forces"); findings: docs/dynamics.md.
 """
 
 from ._api import (
+    CHUNK,
     MAX_BATCH,
     STANDARD_GRAVITY,
     Statics,
@@ -32,6 +33,7 @@ from ._metrics import (
     STUDY_F_MAX,
     STUDY_TIP_ACCELERATION,
     STUDY_TIP_SPEED,
+    ForceMetrics,
     force_metrics,
 )
 from ._model import (
@@ -50,8 +52,8 @@ __all__ = [
     "MassModel", "MASS_BODIES", "MOVING_BODIES", "REFERENCE_MASSES", "INERTIA_TOL",
     "MAX_MASS", "actuator_part_length", "body_segment_in_frame",
     "Statics", "statics", "actuator_forces", "inverse_dynamics", "mass_matrix",
-    "forward_dynamics", "mechanical_energy", "STANDARD_GRAVITY", "MAX_BATCH",
+    "forward_dynamics", "mechanical_energy", "STANDARD_GRAVITY", "MAX_BATCH", "CHUNK",
     "ForceCapability", "force_capability", "max_tip_force",
-    "force_metrics", "STUDY_TIP_SPEED", "STUDY_TIP_ACCELERATION", "STUDY_F_MAX",
+    "ForceMetrics", "force_metrics", "STUDY_TIP_SPEED", "STUDY_TIP_ACCELERATION", "STUDY_F_MAX",
     "Simulation", "simulate", "SimulationStoppedError", "SINGULARITY_MARGINS",
 ]

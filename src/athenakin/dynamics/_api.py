@@ -16,6 +16,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._backend import resolve_backend
 from .._dispatch import forward_kinematics
 from .._validation import broadcast_batch, check_array, check_choice
 from ..design import Design, resolve_design
@@ -32,13 +33,23 @@ from ._core import (
 from ._model import MassModel
 
 __all__ = ["Statics", "statics", "actuator_forces", "inverse_dynamics", "mass_matrix",
-           "forward_dynamics", "mechanical_energy", "STANDARD_GRAVITY", "MAX_BATCH"]
+           "forward_dynamics", "mechanical_energy", "STANDARD_GRAVITY", "MAX_BATCH", "CHUNK"]
 
 Arr = NDArray[np.float64]
 #: Default gravity, base frame, m/s^2.
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)
-#: Largest batch (number of states) of one call.
-MAX_BATCH = 50_000_000
+#: States evaluated together on the numpy path: the jets take about 35 KiB per state,
+#: so one chunk holds about 140 MiB of temporaries whatever the size of the batch.
+CHUNK = 4096
+#: Largest batch (number of states) of one call. What stays for the whole batch is the
+#: inputs, the flags and the results, at most about 0.6 KiB per state (the full
+#: :class:`Statics`): about 1.2 GiB at this limit, besides one chunk's temporaries.
+MAX_BATCH = 2_000_000
+
+
+#: Message of a singular mass matrix (forward dynamics, simulation).
+MASSLESS = ("masses: the mass matrix is singular (a direction of q moves no mass); give the "
+            "carriages or the links a mass")
 
 
 def _check_slot(slot: object) -> int:
@@ -67,10 +78,39 @@ class _Prepared:
     reason: NDArray[np.int8]
 
 
+def _chunks(n: int) -> list[slice]:
+    """Consecutive slices of at most :data:`CHUNK` states covering ``range(n)``."""
+    return [slice(i, min(i + CHUNK, n)) for i in range(0, n, CHUNK)]
+
+
+def _chunked(n: int, part: Callable[[slice], tuple[Arr, ...]]) -> tuple[Arr, ...]:
+    """``part`` over every chunk of ``n`` states, the pieces joined along axis 0.
+
+    ``part(sl)`` returns arrays with leading axis ``sl.stop - sl.start``; the joined
+    results are allocated once, so the memory of the temporaries is that of one chunk.
+    """
+    out: list[Arr] | None = None
+    for sl in _chunks(n):
+        pieces = part(sl)
+        if out is None:
+            out = [np.empty((n,) + p.shape[1:], dtype=p.dtype) for p in pieces]
+        for o, p in zip(out, pieces, strict=True):
+            o[sl] = p
+    if out is None:                     # an empty batch: the shapes of one chunk of 0
+        return part(slice(0, 0))
+    return tuple(out)
+
+
+def _raises(errors: object, batch: tuple[int, ...]) -> bool:
+    """True when a failing item raises (``"raise"``, or ``"auto"`` on a single state)."""
+    check_choice(errors, "errors", ("auto", "raise", "flag"))
+    return errors == "raise" or (errors == "auto" and batch == ())
+
+
 def _prepare(arrays: dict[str, ArrayLike | None], T_b_e: ArrayLike | None, design: object,
              masses: object, slot: object, errors: object, **vec3: ArrayLike | None
              ) -> _Prepared:
-    check_choice(errors, "errors", ("raise", "flag"))
+    check_choice(errors, "errors", ("auto", "raise", "flag"))
     k = _check_slot(slot)
     d = resolve_design(design)
     m = _check_masses(masses, d)
@@ -82,13 +122,18 @@ def _prepare(arrays: dict[str, ArrayLike | None], T_b_e: ArrayLike | None, desig
     batch = broadcast_batch(**shapes)
     n = int(np.prod(batch)) if batch else 1
     if n > MAX_BATCH:
-        raise InvalidInputError(f"batch: expected at most {MAX_BATCH} states, got {n}")
+        raise InvalidInputError(f"batch: expected at most {MAX_BATCH} states, got {n}; "
+                                f"split it into several calls")
     flat = {name: np.broadcast_to(a, batch + (3,)).reshape(n, 3) for name, a in arrs.items()}
     Tf = np.broadcast_to(T, batch + (4, 4)).reshape(n, 4, 4)
-    sol = forward_kinematics(flat["q"], Tf, d, errors="flag", fields=("valid", "reason"))
-    valid = np.asarray(sol.valid[..., k]).reshape(n)
-    reason = np.asarray(sol.reason[..., k]).reshape(n)
-    if errors == "raise" and not valid.all():
+    valid = np.empty(n, dtype=bool)
+    reason = np.empty(n, dtype=np.int8)
+    for sl in _chunks(n):
+        sol = forward_kinematics(flat["q"][sl], Tf[sl], d, errors="flag",
+                                 fields=("valid", "reason"))
+        valid[sl] = np.asarray(sol.valid[..., k]).reshape(-1)
+        reason[sl] = np.asarray(sol.reason[..., k]).reshape(-1)
+    if _raises(errors, batch) and not valid.all():
         i = int(np.argmin(valid))
         code = Reason(int(reason[i]))
         idx = np.unravel_index(i, batch) if batch else ()
@@ -113,7 +158,7 @@ def _singular(prep: _Prepared, errors: object, *results: Arr) -> _Prepared:
     if not np.any(bad):
         return prep
     i = int(np.argmax(bad))
-    if errors == "raise":
+    if _raises(errors, prep.shape):
         idx = np.unravel_index(i, prep.shape) if prep.shape else ()
         raise SingularConfigurationError(
             f"q: item {tuple(int(x) for x in idx)} (q = {prep.arrays['q'][i].tolist()} m) is on "
@@ -165,7 +210,7 @@ def _gravity_tip(prep: _Prepared) -> tuple[Arr, Arr]:
 def statics(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None = None, *,
             masses: MassModel | None = None, gravity: ArrayLike = STANDARD_GRAVITY,
             tip_force: ArrayLike | None = None, slot: int = 0,
-            errors: Literal["raise", "flag"] = "raise", rcm_load: bool = True) -> Statics:
+            errors: Literal["auto", "raise", "flag"] = "auto", rcm_load: bool = True) -> Statics:
     """Actuator forces holding ATHENA still against gravity and a tip force; RCM load.
 
     Parameters
@@ -183,9 +228,12 @@ def statics(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None 
         Force applied to the tool tip by the environment, base frame, N.
     slot : int, keyword-only
         Forward-kinematics slot (docs/conventions.md).
-    errors : {"raise", "flag"}, keyword-only
+    errors : {"auto", "raise", "flag"}, keyword-only
         ``"raise"``: an item where the slot holds no configuration raises
-        :class:`~athenakin.errors.OutOfWorkspaceError`; ``"flag"``: NaN with ``valid``.
+        :class:`~athenakin.errors.OutOfWorkspaceError` (on a singular set of the
+        dynamics :class:`~athenakin.errors.SingularConfigurationError`); ``"flag"``:
+        NaN with ``valid``; ``"auto"`` (default): raise for a single state, flag in a
+        batch, as :func:`athenakin.forward_kinematics` does.
     rcm_load : bool, keyword-only
         Compute the load on the RCM mount (6 more jet directions); with False,
         ``rcm_force`` and ``rcm_moment`` are NaN.
@@ -198,16 +246,20 @@ def statics(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None 
         raise TypeError(f"rcm_load: expected True or False, got {rcm_load!r:.80}")
     prep = _prepare({"q": q}, T_b_e, design, masses, slot, errors, gravity=gravity,
                     tip_force=tip_force)
-    qf = prep.arrays["q"]
-    z = np.zeros_like(qf)
-    ev = evaluate(qf, z, z, prep.T, prep.design, prep.masses, prep.slot,
-                  rcm_directions=bool(rcm_load))
     g, f = _gravity_tip(prep)
-    F, Nm = body_loads(ev, prep.masses, g)
-    Q = generalized_forces(ev, F, Nm, f)
+
+    def part(sl: slice) -> tuple[Arr, Arr]:
+        qf = prep.arrays["q"][sl]
+        z = np.zeros_like(qf)
+        ev = evaluate(qf, z, z, prep.T[sl], prep.design, prep.masses, prep.slot,
+                      rcm_directions=bool(rcm_load))
+        F, Nm = body_loads(ev, prep.masses, g[sl])
+        return (generalized_forces(ev, F, Nm, f[sl]),
+                np.swapaxes(ev.v_tip[:, 1:N_Q_DIRECTIONS], -1, -2))
+
+    Q, J = _chunked(prep.valid.shape[0], part)
     forces = Q[:, 1:N_Q_DIRECTIONS]
     mount = -Q[:, N_Q_DIRECTIONS:] if rcm_load else np.full((Q.shape[0], 6), np.nan)
-    J = np.swapaxes(ev.v_tip[:, 1:N_Q_DIRECTIONS], -1, -2)
     prep = _singular(prep, errors, Q, J)
     return Statics(forces=_finish(forces, prep, (3,)),
                    rcm_force=_finish(mount[:, :3], prep, (3,)),
@@ -219,7 +271,7 @@ def statics(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None 
 def actuator_forces(q: ArrayLike, T_b_e: ArrayLike | None = None,
                     design: Design | None = None, *, masses: MassModel | None = None,
                     gravity: ArrayLike = STANDARD_GRAVITY, tip_force: ArrayLike | None = None,
-                    slot: int = 0, errors: Literal["raise", "flag"] = "raise") -> Arr:
+                    slot: int = 0, errors: Literal["auto", "raise", "flag"] = "auto") -> Arr:
     """Actuator forces (N) that hold the robot still: :attr:`statics(...).forces <Statics>`.
 
     Parameters and conventions as :func:`statics`; returns shape (..., 3), positive
@@ -240,7 +292,7 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
                      T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                      masses: MassModel | None = None, gravity: ArrayLike = STANDARD_GRAVITY,
                      tip_force: ArrayLike | None = None, slot: int = 0,
-                     errors: Literal["raise", "flag"] = "raise",
+                     errors: Literal["auto", "raise", "flag"] = "auto",
                      backend: Literal["auto", "numpy", "numba"] = "auto") -> Arr:
     """Actuator forces (N) that give the motion ``(q, qd, qdd)`` of the closed chain.
 
@@ -279,9 +331,14 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
                prep.masses.inertia, _compact(a["gravity"]), _compact(a["tip_force"]), Q)
         prep = _singular(prep, errors, Q)
         return _finish(Q, prep, (3,))
-    ev = evaluate(a["q"], a["qd"], a["qdd"], prep.T, prep.design, prep.masses, prep.slot)
-    F, Nm = body_loads(ev, prep.masses, a["gravity"])
-    Q = generalized_forces(ev, F, Nm, a["tip_force"])
+
+    def part(sl: slice) -> tuple[Arr]:
+        ev = evaluate(a["q"][sl], a["qd"][sl], a["qdd"][sl], prep.T[sl], prep.design,
+                      prep.masses, prep.slot)
+        F, Nm = body_loads(ev, prep.masses, a["gravity"][sl])
+        return (generalized_forces(ev, F, Nm, a["tip_force"][sl]),)
+
+    (Q,) = _chunked(prep.valid.shape[0], part)
     prep = _singular(prep, errors, Q)
     return _finish(Q[:, 1:N_Q_DIRECTIONS], prep, (3,))
 
@@ -303,30 +360,34 @@ def _compact(x: Arr) -> Arr:
 
 
 def _kernel(*, required: bool) -> Callable[..., None] | None:
-    """The compiled inverse-dynamics kernel, or None without numba (unless required)."""
-    try:
-        from ._kernel import inverse_dynamics_kernel
-    except ImportError:
-        if required:
-            raise ImportError("backend='numba' needs numba: pip install 'athenakin[fast]'"
-                              ) from None
+    """The compiled inverse-dynamics kernel where :mod:`athenakin._backend` says so, else None.
+
+    ``required``: ``backend="numba"`` (ImportError where numba is off), else ``"auto"``.
+    """
+    if not resolve_backend("numba" if required else "auto"):
         return None
+    from ._kernels import inverse_dynamics_kernel
+
     return inverse_dynamics_kernel
 
 
 def mass_matrix(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None = None,
                 *, masses: MassModel | None = None, slot: int = 0,
-                errors: Literal["raise", "flag"] = "raise") -> Arr:
+                errors: Literal["auto", "raise", "flag"] = "auto") -> Arr:
     """Mass matrix of the closed chain in actuator coordinates, shape (..., 3, 3), kg.
 
     ``E_kin = qd^T M(q) qd / 2``; symmetric, positive definite wherever the moving
     parts have mass along every direction of ``q`` (the carriages alone make it so).
     """
     prep = _prepare({"q": q}, T_b_e, design, masses, slot, errors)
-    qf = prep.arrays["q"]
-    z = np.zeros_like(qf)
-    ev = evaluate(qf, z, z, prep.T, prep.design, prep.masses, prep.slot)
-    Mq = mass_matrix_from(ev, prep.masses)
+
+    def part(sl: slice) -> tuple[Arr]:
+        qf = prep.arrays["q"][sl]
+        z = np.zeros_like(qf)
+        ev = evaluate(qf, z, z, prep.T[sl], prep.design, prep.masses, prep.slot)
+        return (mass_matrix_from(ev, prep.masses),)
+
+    (Mq,) = _chunked(prep.valid.shape[0], part)
     prep = _singular(prep, errors, Mq)
     return _finish(Mq, prep, (3, 3))
 
@@ -335,7 +396,7 @@ def forward_dynamics(q: ArrayLike, qd: ArrayLike, forces: ArrayLike,
                      T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                      masses: MassModel | None = None, gravity: ArrayLike = STANDARD_GRAVITY,
                      tip_force: ArrayLike | None = None, slot: int = 0,
-                     errors: Literal["raise", "flag"] = "raise") -> Arr:
+                     errors: Literal["auto", "raise", "flag"] = "auto") -> Arr:
     """Actuator accelerations (m/s^2) under the actuator ``forces`` (N): ``M^-1 (tau - h)``.
 
     Parameters
@@ -358,11 +419,16 @@ def forward_dynamics(q: ArrayLike, qd: ArrayLike, forces: ArrayLike,
     prep = _prepare({"q": q, "qd": qd}, T_b_e, design, masses, slot, errors,
                     gravity=gravity, tip_force=tip_force, forces=forces)
     a = prep.arrays
-    z = np.zeros_like(a["q"])
-    ev = evaluate(a["q"], a["qd"], z, prep.T, prep.design, prep.masses, prep.slot)
-    F, Nm = body_loads(ev, prep.masses, a["gravity"])
-    h = generalized_forces(ev, F, Nm, a["tip_force"])[:, 1:N_Q_DIRECTIONS]
-    M = mass_matrix_from(ev, prep.masses)
+
+    def part(sl: slice) -> tuple[Arr, Arr]:
+        z = np.zeros_like(a["q"][sl])
+        ev = evaluate(a["q"][sl], a["qd"][sl], z, prep.T[sl], prep.design, prep.masses,
+                      prep.slot)
+        F, Nm = body_loads(ev, prep.masses, a["gravity"][sl])
+        return (generalized_forces(ev, F, Nm, a["tip_force"][sl])[:, 1:N_Q_DIRECTIONS],
+                mass_matrix_from(ev, prep.masses))
+
+    h, M = _chunked(prep.valid.shape[0], part)
     prep = _singular(prep, errors, M, h)
     rhs = a["forces"] - h
     ok = prep.valid
@@ -371,16 +437,14 @@ def forward_dynamics(q: ArrayLike, qd: ArrayLike, forces: ArrayLike,
     try:
         qdd = np.linalg.solve(M_safe, rhs[..., None])[..., 0]
     except np.linalg.LinAlgError:
-        raise SingularConfigurationError(
-            "masses: the mass matrix is singular (a direction of q moves no mass); give the "
-            "carriages or the links a mass") from None
+        raise SingularConfigurationError(MASSLESS) from None
     return _finish(np.asarray(qdd, dtype=np.float64), prep, (3,))
 
 
 def mechanical_energy(q: ArrayLike, qd: ArrayLike, T_b_e: ArrayLike | None = None,
                       design: Design | None = None, *, masses: MassModel | None = None,
                       gravity: ArrayLike = STANDARD_GRAVITY, slot: int = 0,
-                      errors: Literal["raise", "flag"] = "raise") -> tuple[Arr, Arr]:
+                      errors: Literal["auto", "raise", "flag"] = "auto") -> tuple[Arr, Arr]:
     """Kinetic and potential energy of the moving bodies, J, shapes (...,) each.
 
     The potential is ``-sum m g . p_com`` (zero at the base origin).
@@ -388,9 +452,14 @@ def mechanical_energy(q: ArrayLike, qd: ArrayLike, T_b_e: ArrayLike | None = Non
     prep = _prepare({"q": q, "qd": qd}, T_b_e, design, masses, slot, errors,
                     gravity=gravity)
     a = prep.arrays
-    z = np.zeros_like(a["q"])
-    ev = evaluate(a["q"], a["qd"], z, prep.T, prep.design, prep.masses, prep.slot)
-    kin, pot = energies(ev, prep.masses, a["gravity"])
+
+    def part(sl: slice) -> tuple[Arr, Arr]:
+        z = np.zeros_like(a["q"][sl])
+        ev = evaluate(a["q"][sl], a["qd"][sl], z, prep.T[sl], prep.design, prep.masses,
+                      prep.slot)
+        return energies(ev, prep.masses, a["gravity"][sl])
+
+    kin, pot = _chunked(prep.valid.shape[0], part)
     prep = _singular(prep, errors, kin, pot)
     return _finish(kin, prep, ()), _finish(pot, prep, ())
 

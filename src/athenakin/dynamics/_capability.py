@@ -26,10 +26,11 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import broadcast_batch, check_array
 from ..design import Design
 from ..errors import InvalidInputError
-from ._api import STANDARD_GRAVITY, statics
+from ._api import STANDARD_GRAVITY, _chunked, statics
 from ._model import MassModel
 
-__all__ = ["ForceCapability", "force_capability", "max_tip_force"]
+__all__ = ["ForceCapability", "force_capability", "max_tip_force", "jacobian_invertible",
+           "SINGULAR_DET", "MAX_FORCE_LIMIT"]
 
 Arr = NDArray[np.float64]
 
@@ -71,6 +72,25 @@ class ForceCapability:
 MAX_FORCE_LIMIT = 1e9
 
 
+#: Relative determinant below which ``J = d tip / d q`` counts as singular to rounding:
+#: ``|det J| <= SINGULAR_DET max|J_ij|^3`` (``q1 = q2`` makes two columns of ``J`` equal).
+SINGULAR_DET = 1e-12
+
+
+def jacobian_invertible(J: Arr) -> NDArray[np.bool_]:
+    """Whether each tip Jacobian ``J`` (shape (..., 3, 3)) is invertible beyond rounding.
+
+    The one test of the force functions: where it fails, the polytope's vertices
+    (:func:`force_capability`) are NaN and :func:`force_metrics` leaves the
+    configuration out of the peak force. Non-finite ``J`` is not invertible.
+    """
+    finite = np.all(np.isfinite(J), axis=(-2, -1))
+    Jf = np.where(finite[..., None, None], J, 0.0)
+    det = np.linalg.det(Jf)
+    scale = np.abs(Jf).max(axis=(-2, -1), initial=0.0) ** 3
+    return finite & (np.abs(det) > SINGULAR_DET * np.maximum(scale, 1e-300))
+
+
 def _limit(x: ArrayLike, name: str) -> Arr:
     """One force limit: a real scalar or shape (3,), finite, |x| <= MAX_FORCE_LIMIT."""
     if isinstance(x, bool):
@@ -103,7 +123,7 @@ def force_capability(q: ArrayLike, T_b_e: ArrayLike | None = None,
                      design: Design | None = None, *, f_max: ArrayLike,
                      f_min: ArrayLike | None = None, masses: MassModel | None = None,
                      gravity: ArrayLike = STANDARD_GRAVITY, slot: int = 0,
-                     errors: Literal["raise", "flag"] = "raise") -> ForceCapability:
+                     errors: Literal["auto", "raise", "flag"] = "auto") -> ForceCapability:
     """Tip forces the robot can resist at rest within actuator force limits.
 
     Parameters
@@ -126,38 +146,48 @@ def force_capability(q: ArrayLike, T_b_e: ArrayLike | None = None,
     lo, hi = _limits(f_max, f_min)
     st = statics(q, T_b_e, design, masses=masses, gravity=gravity, slot=slot, errors=errors,
                  rcm_load=False)
-    J = st.tip_jacobian
-    tg = st.forces
-    Jt = np.swapaxes(J, -1, -2)                         # rows: columns of J
-    A = np.concatenate([Jt, -Jt], axis=-2)
-    b = np.concatenate([tg - lo, hi - tg], axis=-1)
-    norms = np.linalg.norm(A, axis=-1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(norms > 0, b / norms, np.inf)
-    k = np.argmin(np.where(np.isnan(ratio), np.inf, ratio), axis=-1)
-    min_force = np.take_along_axis(ratio, k[..., None], axis=-1)[..., 0]
-    a_k = np.take_along_axis(A, k[..., None, None], axis=-2)[..., 0, :]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        weakest = a_k / np.linalg.norm(a_k, axis=-1, keepdims=True)
+    batch = st.valid.shape
+    n = int(np.prod(batch)) if batch else 1
     corners = np.array([[hi[i] if (c >> i) & 1 else lo[i] for i in range(3)]
                         for c in range(8)])             # (8, 3)
-    rhs = tg[..., None, :] - corners                    # (..., 8, 3)
-    det = np.linalg.det(np.where(np.isfinite(J), J, 0.0))
-    ok = np.abs(det) > 1e-12 * np.maximum(np.abs(J).max(axis=(-2, -1), initial=0.0) ** 3, 1e-300)
-    Jt_safe = np.where(ok[..., None, None], Jt, np.eye(3))
-    verts = np.linalg.solve(Jt_safe[..., None, :, :], rhs[..., None])[..., 0]
-    verts = np.where(ok[..., None, None], verts, np.nan)
+    J_all = st.tip_jacobian.reshape(n, 3, 3)
+    tg_all = st.forces.reshape(n, 3)
+
+    def part(sl: slice) -> tuple[Arr, ...]:
+        # per state, in chunks: the temporaries (broadcast solves) of one chunk only
+        J, tg = J_all[sl], tg_all[sl]
+        Jt = np.swapaxes(J, -1, -2)                     # rows: columns of J
+        A = np.concatenate([Jt, -Jt], axis=-2)
+        b = np.concatenate([tg - lo, hi - tg], axis=-1)
+        norms = np.linalg.norm(A, axis=-1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = np.where(norms > 0, b / norms, np.inf)
+        k = np.argmin(np.where(np.isnan(ratio), np.inf, ratio), axis=-1)
+        min_force = np.take_along_axis(ratio, k[..., None], axis=-1)[..., 0]
+        a_k = np.take_along_axis(A, k[..., None, None], axis=-2)[..., 0, :]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            weakest = a_k / np.linalg.norm(a_k, axis=-1, keepdims=True)
+        rhs = tg[..., None, :] - corners                # (m, 8, 3)
+        ok = jacobian_invertible(J)
+        Jt_safe = np.where(ok[..., None, None], Jt, np.eye(3))
+        verts = np.linalg.solve(Jt_safe[..., None, :, :], rhs[..., None])[..., 0]
+        verts = np.where(ok[..., None, None], verts, np.nan)
+        return A, b, verts, min_force, weakest
+
+    A, b, verts, min_force, weakest = _chunked(n, part)
     valid = st.valid
-    min_force = np.where(valid, min_force, np.nan)
-    return ForceCapability(A=A, b=b, vertices=verts, min_force=min_force,
-                           weakest_direction=weakest, gravity_forces=tg, valid=valid)
+    min_force = np.where(valid, min_force.reshape(batch), np.nan)
+    return ForceCapability(A=A.reshape(batch + (6, 3)), b=b.reshape(batch + (6,)),
+                           vertices=verts.reshape(batch + (8, 3)), min_force=min_force,
+                           weakest_direction=weakest.reshape(batch + (3,)),
+                           gravity_forces=st.forces, valid=valid)
 
 
 def max_tip_force(q: ArrayLike, direction: ArrayLike, T_b_e: ArrayLike | None = None,
                   design: Design | None = None, *, f_max: ArrayLike,
                   f_min: ArrayLike | None = None, masses: MassModel | None = None,
                   gravity: ArrayLike = STANDARD_GRAVITY, slot: int = 0,
-                  errors: Literal["raise", "flag"] = "raise") -> Arr:
+                  errors: Literal["auto", "raise", "flag"] = "auto") -> Arr:
     """Largest tip force (N) the robot resists along ``direction`` within the limits.
 
     Parameters
@@ -176,10 +206,13 @@ def max_tip_force(q: ArrayLike, direction: ArrayLike, T_b_e: ArrayLike | None = 
         weight (``f = 0`` outside ``P``).
     """
     u = check_array(direction, "direction", (3,))
-    n = np.linalg.norm(u, axis=-1, keepdims=True)
-    if np.any(n == 0):
+    # scale by the largest component first: the squares of a tiny direction (1e-160)
+    # underflow, those of a huge one overflow
+    big = np.max(np.abs(u), axis=-1, keepdims=True)
+    if np.any(big == 0):
         raise InvalidInputError("direction: expected a nonzero vector")
-    u = u / n
+    u = u / big
+    u = u / np.linalg.norm(u, axis=-1, keepdims=True)
     cap = force_capability(q, T_b_e, design, f_max=f_max, f_min=f_min, masses=masses,
                            gravity=gravity, slot=slot, errors=errors)
     # direction against the batch of the other arguments (q, T_b_e, gravity)

@@ -14,11 +14,17 @@ inverse-dynamics evaluations). It bounds the worst combination of directions, so
 is an upper bound of the force of any tip motion within ``v`` and ``a`` from that
 configuration.
 
+Configurations where ``J`` is singular (:func:`jacobian_invertible`; ``q1 = q2`` among
+them) have no finite bound (the force to accelerate the tip there is unbounded): they
+are left out of the peak and counted.
+
 ``min_tip_force_capability``: the smallest, over the set, of the tip force the robot
 resists in every direction within ``|tau_i| <= f_max`` (:func:`force_capability`).
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -27,12 +33,13 @@ from .._validation import check_array, check_scalar
 from ..design import Design
 from ..errors import InvalidInputError
 from ..robot._setup import resolve_rcm_frame
-from ._api import _check_masses, inverse_dynamics, mass_matrix
-from ._capability import force_capability
+from ._api import _check_masses, _chunks, inverse_dynamics, mass_matrix
+from ._capability import force_capability, jacobian_invertible
 from ._core import evaluate
 from ._model import MassModel
 
-__all__ = ["force_metrics", "STUDY_TIP_SPEED", "STUDY_TIP_ACCELERATION", "STUDY_F_MAX"]
+__all__ = ["ForceMetrics", "force_metrics", "STUDY_TIP_SPEED", "STUDY_TIP_ACCELERATION",
+           "STUDY_F_MAX"]
 
 #: Tip speed (m/s), tip acceleration (m/s^2) and actuator force limit (N) of the study
 #: columns ``peak_actuator_force`` and ``min_tip_force_capability``.
@@ -62,11 +69,72 @@ def _check_slots(slot: object, n: int) -> NDArray[np.int64]:
     return arr.astype(np.int64)
 
 
+@dataclasses.dataclass(frozen=True)
+class ForceMetrics:
+    """Force metrics of a set of configurations (:func:`force_metrics`).
+
+    Attributes
+    ----------
+    peak_actuator_force : float
+        Largest actuator force bound over the configurations that count, N; NaN when
+        none counts (``n_peak == 0``).
+    min_tip_force_capability : float
+        Smallest tip force resisted in every direction over the valid configurations,
+        N; NaN when none is valid (``n_valid == 0``).
+    n_configurations : int
+        Configurations given (0: an empty set).
+    n_valid : int
+        Those the forward-kinematics slot holds, off the singular sets of the dynamics
+        (the set of ``min_tip_force_capability``).
+    n_peak : int
+        Those of ``n_valid`` whose tip Jacobian is invertible (the set of
+        ``peak_actuator_force``); ``n_valid - n_peak`` were left out as singular.
+    """
+
+    peak_actuator_force: float
+    min_tip_force_capability: float
+    n_configurations: int
+    n_valid: int
+    n_peak: int
+
+
+def _peak_bound(sel: NDArray[np.float64], J: NDArray[np.float64], tg: NDArray[np.float64],
+                T_b_e: NDArray[np.float64], design: Design, m: MassModel, k: int,
+                v: float, a: float) -> NDArray[np.float64]:
+    """Per configuration and actuator, the force bound of the module docstring, N."""
+    Jinv = np.linalg.inv(J)
+    Mq = mass_matrix(sel, T_b_e, design, masses=m, slot=k, errors="flag")
+    MJ = Mq @ Jinv                                      # tau_i per unit tip acceleration
+    z = np.zeros_like(sel)
+    g0 = np.zeros(3)
+    Tn = np.broadcast_to(np.asarray(T_b_e, float), (sel.shape[0], 4, 4))
+
+    def quad(u: NDArray[np.float64]) -> NDArray[np.float64]:
+        # tip velocity u, tip acceleration 0: qd = J^-1 u, qdd = -J^-1 (J' qd)
+        qd = np.einsum("nij,j->ni", Jinv, u)
+        a0 = evaluate(sel, qd, z, Tn, design, m, k).a_tip
+        qdd = -np.einsum("nij,nj->ni", Jinv, a0)
+        return inverse_dynamics(sel, qd, qdd, T_b_e, design, masses=m, gravity=g0, slot=k,
+                                errors="flag")
+
+    E = np.eye(3)
+    diag = [quad(E[j]) for j in range(3)]
+    S = np.zeros((sel.shape[0], 3, 3, 3))              # (n, actuator, 3, 3)
+    for j in range(3):
+        S[:, :, j, j] = diag[j]
+    for j, jj in _PAIRS:
+        off = 0.5 * (quad(E[j] + E[jj]) - diag[j] - diag[jj])
+        S[:, :, j, jj] = off
+        S[:, :, jj, j] = off
+    s_norm = np.abs(np.linalg.eigvalsh(S)).max(axis=-1)
+    return np.abs(tg) + a * np.linalg.norm(MJ, axis=-1) + v * v * s_norm  # type: ignore
+
+
 def force_metrics(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: ArrayLike,
                   masses: MassModel | None = None, tip_speed: float = STUDY_TIP_SPEED,
                   tip_acceleration: float = STUDY_TIP_ACCELERATION,
-                  f_max: float = STUDY_F_MAX) -> tuple[float, float]:
-    """``(peak_actuator_force, min_tip_force_capability)`` over configurations, N.
+                  f_max: float = STUDY_F_MAX) -> ForceMetrics:
+    """Peak actuator force and least tip-force capability over configurations, N.
 
     Parameters
     ----------
@@ -83,9 +151,13 @@ def force_metrics(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: Array
 
     Returns
     -------
-    (float, float)
-        NaN for an empty set; configurations on a singular set of the dynamics are
-        left out.
+    ForceMetrics
+        ``peak_actuator_force`` and ``min_tip_force_capability`` with the counts that
+        tell an empty set (``n_configurations == 0``) from a set with no valid
+        configuration (``n_valid == 0``). Configurations the slot does not hold or on
+        a singular set of the dynamics are left out of both; those with a singular tip
+        Jacobian are left out of the peak. Works in chunks of
+        :data:`athenakin.dynamics.CHUNK` configurations (bounded memory).
     """
     qa = check_array(q, "q", (3,)).reshape(-1, 3)
     slots = _check_slots(slot, qa.shape[0])
@@ -97,49 +169,29 @@ def force_metrics(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: Array
     check_scalar(f_max, "f_max", positive=True)
     m = _check_masses(masses, design)
     peak, cap_min = -np.inf, np.inf
+    n_valid = n_peak = 0
     for k in np.unique(slots):
-        sel = qa[slots == k]
-        if sel.shape[0] == 0:
-            continue
-        cap = force_capability(sel, T_b_e, design, masses=m, f_max=f_max, slot=int(k),
-                               errors="flag")
-        ok = cap.valid
-        if not np.any(ok):
-            continue
-        sel = sel[ok]
-        tg = cap.gravity_forces[ok]
-        J = np.swapaxes(cap.A[ok][:, :3], -1, -2)      # A[:3] = J^T, so this is J
-        Jinv = np.linalg.inv(J)
-        Mq = mass_matrix(sel, T_b_e, design, masses=m, slot=int(k), errors="flag")
-        MJ = Mq @ Jinv                                  # tau_i per unit tip acceleration
-        z = np.zeros_like(sel)
-        g0 = np.zeros(3)
-
-        def quad(u: NDArray[np.float64], sel=sel, Jinv=Jinv, k=k, z=z, g0=g0) -> NDArray:
-            # tip velocity u, tip acceleration 0: qd = J^-1 u, qdd = -J^-1 (J' qd)
-            qd = np.einsum("nij,j->ni", Jinv, u)
-            Tn = np.broadcast_to(np.asarray(T_b_e, float), (sel.shape[0], 4, 4))
-            a0 = evaluate(sel, qd, z, Tn, design, m, int(k)).a_tip
-            qdd = -np.einsum("nij,nj->ni", Jinv, a0)
-            return inverse_dynamics(sel, qd, qdd, T_b_e, design, masses=m, gravity=g0,
-                                    slot=int(k), errors="flag")
-
-        E = np.eye(3)
-        diag = [quad(E[j]) for j in range(3)]
-        S = np.zeros((sel.shape[0], 3, 3, 3))          # (n, actuator, 3, 3)
-        for j in range(3):
-            S[:, :, j, j] = diag[j]
-        for j, jj in _PAIRS:
-            off = 0.5 * (quad(E[j] + E[jj]) - diag[j] - diag[jj])
-            S[:, :, j, jj] = off
-            S[:, :, jj, j] = off
-        s_norm = np.abs(np.linalg.eigvalsh(S)).max(axis=-1)
-        bound = np.abs(tg) + a * np.linalg.norm(MJ, axis=-1) + v * v * s_norm
-        finite = np.all(np.isfinite(bound), axis=-1)
-        if np.any(finite):
-            peak = max(peak, float(bound[finite].max()))
-        cm = cap.min_force[ok]
-        if np.any(np.isfinite(cm)):
-            cap_min = min(cap_min, float(np.nanmin(cm)))
-    return (peak if np.isfinite(peak) else float("nan"),
-            cap_min if np.isfinite(cap_min) else float("nan"))
+        sel_k = qa[slots == k]
+        for sl in _chunks(sel_k.shape[0]):
+            sel = sel_k[sl]
+            cap = force_capability(sel, T_b_e, design, masses=m, f_max=f_max, slot=int(k),
+                                   errors="flag")
+            ok = cap.valid
+            n_valid += int(np.count_nonzero(ok))
+            cm = cap.min_force[ok]
+            if np.any(np.isfinite(cm)):
+                cap_min = min(cap_min, float(np.nanmin(cm)))
+            J = np.swapaxes(cap.A[:, :3], -1, -2)       # A[:3] = J^T, so this is J
+            use = ok & jacobian_invertible(J)
+            n_peak += int(np.count_nonzero(use))
+            if not np.any(use):
+                continue
+            bound = _peak_bound(sel[use], J[use], cap.gravity_forces[use], T_b_e, design, m,
+                                int(k), v, a)
+            finite = np.all(np.isfinite(bound), axis=-1)
+            if np.any(finite):
+                peak = max(peak, float(bound[finite].max()))
+    return ForceMetrics(peak_actuator_force=peak if np.isfinite(peak) else float("nan"),
+                        min_tip_force_capability=cap_min if np.isfinite(cap_min)
+                        else float("nan"),
+                        n_configurations=int(qa.shape[0]), n_valid=n_valid, n_peak=n_peak)

@@ -51,7 +51,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .._mechanism import BODIES, BodyGeometry
+from .._mechanism import BODIES, BodyGeometry, rail_extent
 from .._toml import read_toml
 from .._validation import check_array, check_scalar
 from ..design import Design, resolve_design
@@ -114,10 +114,9 @@ def body_segment_in_frame(name: str, design: Design | None = None,
     a = actuator_part_length(d)
     s = g.sphere_radius
     half = 0.5 * g.carriage_length
-    lo = np.where(np.isfinite(d.stroke_min[:2]), d.stroke_min[:2], 0.0).min()
-    hi = np.where(np.isfinite(d.stroke_max[:2]), d.stroke_max[:2], 0.0).max()
+    lo, hi = rail_extent(d, g)
     table = {
-        "rail": ((lo - g.rail_margin, 0, 0), (hi + g.rail_margin, 0, 0)),
+        "rail": ((lo, 0, 0), (hi, 0, 0)),
         "carriage_a": ((-half, 0, 0), (half, 0, 0)),
         "carriage_b": ((-half, 0, 0), (half, 0, 0)),
         "link_a": ((0, 0, 0), (0, 0, d.l1)),

@@ -17,15 +17,18 @@ from ..errors import (
     StrokeLimitError,
 )
 from ..robot._setup import resolve_rcm_frame
-from ._api import STANDARD_GRAVITY, _check_masses, _check_slot, forward_dynamics
+from ._api import MASSLESS, STANDARD_GRAVITY, _check_masses, _check_slot, forward_dynamics
 from ._model import MassModel
 
 __all__ = ["Simulation", "simulate", "SimulationStoppedError", "MAX_STEPS",
            "SINGULARITY_MARGINS"]
 
 Arr = NDArray[np.float64]
-#: Largest number of integration steps of one call.
-MAX_STEPS = 10_000_000
+#: Largest number of integration steps of one call: 100 s of motion at the default 1 ms
+#: step. Each step costs four forward-dynamics solves (about 1 ms of Python with the
+#: compiled kernel, 10-20 ms on the numpy path) and stores 13 floats (104 bytes): at
+#: most about 10 MiB of states and minutes, not hours, of computing.
+MAX_STEPS = 100_000
 #: The simulation stops before the mechanism comes closer than this to a singular set:
 #: half-chord of ``k1 ∩ k2`` (m; assembly modes merge), ``|sin u2|``, ``|sin u4|``
 #: (U-joint, spherical joint) and ``|p|`` (m; O_s at the RCM).
@@ -70,6 +73,15 @@ class Simulation:
     qd: Arr
     qdd: Arr
     forces: Arr
+
+
+def _single(x: ArrayLike, name: str) -> Arr:
+    """One vector of 3 (gravity, tip force): a batch is refused, named."""
+    a = check_array(x, name, (3,))
+    if a.shape != (3,):
+        raise InvalidInputError(f"{name}: expected shape (3,) (one value for the whole "
+                                f"motion), got shape {a.shape}")
+    return a
 
 
 def _distances(q: Arr, T: Arr, design: Design, slot: int) -> dict[str, float]:
@@ -119,7 +131,10 @@ def _fast_forward(design: Design, T: Arr, masses: MassModel, slot: int, g: Arr,
         if not np.all(np.isfinite(out)):
             return np.full(3, np.nan)
         M = out[1:].T
-        return np.asarray(np.linalg.solve(M, tau - out[0]), dtype=np.float64)
+        try:
+            return np.asarray(np.linalg.solve(M, tau - out[0]), dtype=np.float64)
+        except np.linalg.LinAlgError:
+            raise SingularConfigurationError(MASSLESS) from None
 
     return qdd
 
@@ -147,7 +162,8 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
     duration : float, keyword-only
         s, > 0.
     dt : float, keyword-only
-        Step, s (default 1 ms); ``duration / dt`` at most :data:`MAX_STEPS`.
+        Step, s (default 1 ms); ``duration / dt`` at most :data:`MAX_STEPS`
+        (a finer step for a long motion is refused before any work is done).
 
     Returns
     -------
@@ -155,6 +171,11 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
 
     Raises
     ------
+    InvalidInputError
+        A bad argument, named (more than :data:`MAX_STEPS` steps, a batch of
+        ``gravity`` or ``tip_force``: one motion takes one of each).
+    SingularConfigurationError
+        The mass matrix is singular (a massless model), as in :func:`forward_dynamics`.
     SimulationStoppedError
         The motion left the strokes (``cause`` StrokeLimitError) or came within
         :data:`SINGULARITY_MARGINS` of a singular set (``cause``
@@ -177,8 +198,8 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
     n = int(np.ceil(ratio - 1e-9))
     if n > MAX_STEPS:
         raise InvalidInputError(f"duration / dt: expected at most {MAX_STEPS} steps, got {n}")
-    g = check_array(gravity, "gravity", (3,))
-    f_tip = None if tip_force is None else check_array(tip_force, "tip_force", (3,))
+    g = _single(gravity, "gravity")
+    f_tip = None if tip_force is None else _single(tip_force, "tip_force")
     if callable(forces):
         force_fn = forces
 
@@ -197,15 +218,19 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
 
     lo, hi = d.stroke_min, d.stroke_max
     fast = _fast_forward(d, T, m, k, g, f_tip)
-    ts, qs, vs = [0.0], [q.copy()], [v.copy()]
-    accs: list[Arr] = []
-    fs: list[Arr] = []
+    # the states, preallocated (n + 1 of each; 104 bytes a step): row i is filled when
+    # the acceleration of state i is known, so rows < nacc are complete
+    ts = np.empty(n + 1)
+    qs = np.empty((n + 1, 3))
+    vs = np.empty((n + 1, 3))
+    accs = np.empty((n + 1, 3))
+    fs = np.empty((n + 1, 3))
+    ts[0], qs[0], vs[0] = 0.0, q, v
+    nacc = 0
 
     def stop(msg: str, cause: type[Exception], t: float) -> SimulationStoppedError:
-        nacc = len(accs)
-        part = Simulation(np.array(ts[:nacc]), np.array(qs[:nacc]).reshape(-1, 3),
-                          np.array(vs[:nacc]).reshape(-1, 3), np.array(accs).reshape(-1, 3),
-                          np.array(fs).reshape(-1, 3))
+        part = Simulation(ts[:nacc].copy(), qs[:nacc].copy(), vs[:nacc].copy(),
+                          accs[:nacc].copy(), fs[:nacc].copy())
         return SimulationStoppedError(msg, t, part, cause)
 
     def acc(t: float, qq: Arr, vv: Arr) -> tuple[Arr, Arr]:
@@ -233,8 +258,8 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
     t = 0.0
     for step in range(n):
         a1, tau = acc(t, q, v)
-        accs.append(a1)
-        fs.append(tau)
+        accs[step], fs[step] = a1, tau
+        nacc = step + 1
         hh = min(h, T_dur - t) if step == n - 1 else h
         k1q, k1v = v, a1
         k2q, k2v = v + 0.5 * hh * k1v, acc(t + 0.5 * hh, q + 0.5 * hh * k1q, v + 0.5 * hh * k1v)[0]
@@ -243,10 +268,6 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
         q = q + hh / 6 * (k1q + 2 * k2q + 2 * k3q + k4q)
         v = v + hh / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
         t = t + hh
-        ts.append(t)
-        qs.append(q.copy())
-        vs.append(v.copy())
-    a_end, tau_end = acc(t, q, v)
-    accs.append(a_end)
-    fs.append(tau_end)
-    return Simulation(np.array(ts), np.array(qs), np.array(vs), np.array(accs), np.array(fs))
+        ts[step + 1], qs[step + 1], vs[step + 1] = t, q, v
+    accs[n], fs[n] = acc(t, q, v)
+    return Simulation(ts, qs, vs, accs, fs)

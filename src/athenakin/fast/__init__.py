@@ -22,7 +22,9 @@ answers single poses in a microsecond or two; for sweeps over millions of
 poses, :func:`sweep_fk` streams chunks in bounded memory. See
 ``docs/performance.md`` for the measurements and how they were taken.
 
-Importing this subpackage imports numba; ``import athenakin`` does not.
+Importing this subpackage imports numba (through :mod:`athenakin._backend`: an
+:class:`ImportError` where numba is missing or ``ATHENAKIN_BACKEND=numpy``);
+``import athenakin`` does not. Where kernels live: docs/architecture.md, "Compiled kernels".
 """
 
 from ._api import (

@@ -369,7 +369,7 @@ def _entry_point(kernel: Any, args: tuple[Any, ...]) -> Callable[..., int]:
     the dispatcher when numba's internals do not have that shape.
     """
     try:
-        from numba import typeof
+        from .._backend import typeof
 
         entry = kernel.overloads[tuple(typeof(a) for a in args)].entry_point
     except Exception:     # another numba version's internals: the dispatcher

@@ -27,30 +27,41 @@ structure-of-arrays scratch, a second pass expands them into the 16 slots.
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
-from numba import njit, prange
 
+from .._backend import njit, prange
+from ..chain._ups import CLOSURE_ULPS, DEGENERATE_ULPS
+from ..errors import Reason
 from ._scalar import atan2_from_q1, atan_q1, finite_sum, hypot, nanmax2, parallel_residual
 
 __all__ = ["CHUNK", "scratch", "fk_chunk", "gather", "fk_full", "fk_full_parallel", "fk_counts",
-           "rigid_flags", "FLAG_NONRIGID", "FLAG_Q_NONFINITE", "FLAG_T_NONFINITE"]
+           "rigid_flags", "FLAG_NONRIGID", "FLAG_Q_NONFINITE", "FLAG_T_NONFINITE",
+           "FLAG_NO_SOLUTION"]
 
 #: Poses per chunk of the two-pass loop (the scratch holds 74 doubles per pose).
 CHUNK = 64
 
 # Reason codes (athenakin.errors.Reason), as floats in the scratch.
-_NONFINITE, _STROKE, _AB_ORDER, _LINK, _DISJOINT, _TANGENT = 1.0, 2.0, 3.0, 4.0, 5.0, 6.0
-_P_ZERO, _UJOINT, _WRIST, _CLOSURE = 7.0, 8.0, 9.0, 10.0
+_NONFINITE, _STROKE, _AB_ORDER = (float(Reason.NONFINITE_INPUT), float(Reason.STROKE_LIMIT),
+                                  float(Reason.AB_ORDER))
+_LINK, _DISJOINT, _TANGENT = (float(Reason.LINK_TOO_SHORT), float(Reason.CIRCLES_DISJOINT),
+                              float(Reason.CIRCLES_TANGENT))
+_P_ZERO, _UJOINT = float(Reason.SERIAL_P_ZERO), float(Reason.UJOINT_SINGULAR)
+_WRIST, _CLOSURE = float(Reason.WRIST_SINGULAR), float(Reason.CLOSURE_FAILED)
 #: chain.DEGENERATE_ULPS times the machine epsilon.
-_DEG_ROUND = 64.0 * 2.220446049250313e-16
+_DEG_ROUND = DEGENERATE_ULPS * sys.float_info.epsilon
 #: chain.CLOSURE_ULPS times the machine epsilon: the closure test's rounding allowance.
-_CLOSE_ROUND = 16.0 * 2.220446049250313e-16
+_CLOSE_ROUND = CLOSURE_ULPS * sys.float_info.epsilon
 
 #: Bits of the flags the kernels return.
 FLAG_NONRIGID = 1        # some T_b_e is not rigid within half the tolerance: re-check exactly
 FLAG_Q_NONFINITE = 2     # some q holds NaN / inf
 FLAG_T_NONFINITE = 4     # some T_b_e holds NaN / inf
+#: Bit of the lean single calls' results (``fast._fk_sized.fk_one_lean``,
+#: ``fast._ik_kernels.ik_paper_lean``): the item has no valid solution (reason != 0).
+FLAG_NO_SOLUTION = 256
 
 # Scratch rows per mode (offset MS * m) and shared rows.
 _R, _PR, _NN, _RES = 0, 1, 2, 3

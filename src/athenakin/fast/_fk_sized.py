@@ -19,8 +19,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from .._backend import njit
 from ._fk_kernels import (
     _NN,
     _PR,
@@ -29,6 +29,7 @@ from ._fk_kernels import (
     _RES,
     _XM,
     CHUNK,
+    FLAG_NO_SOLUTION,
     _chunk_full,
     _input_flags,
     _item_reason,
@@ -42,8 +43,6 @@ from ._scalar import nanmax2
 __all__ = ["WANT_VALID", "WANT_REASON", "WANT_P", "WANT_U", "WANT_T", "WANT_RES", "WANT_ALL",
            "fk_select", "fk_one_arrays", "fk_one_lean", "FLAG_NO_SOLUTION"]
 
-#: Bit of :func:`fk_one_lean`'s result: the pose has no valid slot (``item_reason != 0``).
-FLAG_NO_SOLUTION = 256
 
 #: Bits of ``want`` in :func:`fk_select`.
 WANT_VALID, WANT_REASON, WANT_P, WANT_U, WANT_T, WANT_RES = 1, 2, 4, 8, 16, 32

@@ -6,8 +6,9 @@ the same expressions in the same order, the sign flip to ``w >= 0``; the results
 for bit the numpy function's (tested), in one pass without its temporaries.
 
 :func:`joint_values_into` is :func:`athenakin.ros._frames.joint_values` reading by
-reading (the same expressions; libm's ``atan2`` where numpy may use its own SIMD one, so
-equal to the last bit or so, tested). :func:`urdf_frames_into` is
+reading: both evaluate :func:`athenakin._mechanism_formulas.tree_joint_formula` (compiled
+here; libm's ``atan2`` where numpy may use its own SIMD one, so equal to the last bit or so,
+tested). :func:`urdf_frames_into` is
 :func:`athenakin.ros._frames.link_poses` followed by :func:`quaternion_xyzw` of the links
 asked for, reading by reading (the URDF's forward kinematics, parent before child),
 without the (N, 4, 4) temporaries of every link; it agrees with them to rounding (tested
@@ -19,7 +20,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from .._backend import njit
+
+from .._mechanism_formulas import FORMULA_JOINTS, tree_joint_formula
 
 __all__ = ["quaternion_xyzw_into", "urdf_frames_into", "joint_values_into", "JOINT_CODES"]
 
@@ -170,19 +174,22 @@ def urdf_frames_into(values, parent, origin, kind, axis, column, wanted, out):
 
 
 #: What each joint of :data:`athenakin.sim.JOINTS` measures, as :func:`joint_values_into`'s
-#: codes (the order of ``absolute`` in :func:`athenakin.ros._frames.joint_values`).
-JOINT_CODES = {"q1": 0, "a_ujoint_x": 1, "a_ujoint_y": 2, "platform_y": 3, "u1": 4, "u2": 5,
-               "p": 6, "u3": 7, "u4": 8, "u5": 9, "a_base_z": 10, "carrier_z": 11, "k2_x": 12,
-               "q3": 13, "q2": 14, "b_ujoint_x": 1, "b_ujoint_y": 3, "b_base_z": 15}
+#: codes: its index in the result of
+#: :func:`athenakin._mechanism_formulas.tree_joint_formula`.
+JOINT_CODES = {name: k for k, name in enumerate(FORMULA_JOINTS)}
+
+#: The one formula of the tree's joint values, compiled (numpy evaluates the same source).
+_tree_joint_formula = njit(error_model="numpy", cache=True, nogil=True,
+                           inline="always")(tree_joint_formula)
 
 
 @njit(error_model="numpy", cache=True, nogil=True, boundscheck=False)
 def joint_values_into(q, p, u, O_s, valid, lengths, zero, code, hinge, out):
     """:func:`athenakin.ros._frames.joint_values` of the valid readings, into ``out``.
 
-    The same expressions in the same order, element by element (the remainder of
-    ``np.remainder``; libm's ``atan2`` and ``hypot``, which may differ from numpy's SIMD
-    ones in the last bit: equal to 4e-15 rad, tested).
+    :func:`athenakin._mechanism_formulas.tree_joint_formula` compiled, element by element
+    (the remainder of ``np.remainder``; libm's ``atan2`` and ``hypot``, which may differ from
+    numpy's SIMD ones in the last bit: equal to 4e-15 rad, tested).
 
     Parameters
     ----------
@@ -202,26 +209,11 @@ def joint_values_into(q, p, u, O_s, valid, lengths, zero, code, hinge, out):
     """
     l1sq, l2, l3sq, l4, l5 = lengths[0], lengths[1], lengths[2], lengths[3], lengths[4]
     two_pi = 2 * math.pi
-    a = np.empty(16)
     for i in range(q.shape[0]):
         if not valid[i]:
             continue
-        q1, q2, q3 = q[i, 0], q[i, 1], q[i, 2]
-        h = 0.5 * (q1 - q2)
-        r1 = math.sqrt(l1sq - h * h)
-        s3 = math.sqrt(l3sq - h * h)
-        y, z = O_s[i, 1], O_s[i, 2]
-        theta = math.atan2(-y, z)
-        rad = math.hypot(y, z)
-        oi_y = y - l4 * y / rad
-        oi_z = z - l4 * z / rad
-        gamma = math.atan2(-(oi_y - (s3 + l2)), oi_z - l5)
-        phi_a = math.atan2(-h, r1)
-        ang_a3 = math.atan2(s3, -h)
-        a[0], a[1], a[2], a[3] = q1, theta, phi_a, -phi_a
-        a[4], a[5], a[6], a[7], a[8], a[9] = u[i, 0], u[i, 1], p[i], u[i, 2], u[i, 3], u[i, 4]
-        a[10], a[11], a[12], a[13], a[14] = ang_a3, -ang_a3, gamma, q3, q2
-        a[15] = math.atan2(s3, h)
+        a = _tree_joint_formula(q[i, 0], q[i, 1], q[i, 2], p[i], u[i, 0], u[i, 1], u[i, 2],
+                                u[i, 3], u[i, 4], O_s[i, 1], O_s[i, 2], l1sq, l2, l3sq, l4, l5)
         for j in range(code.shape[0]):
             x = a[code[j]] - zero[j]
             if hinge[j]:

@@ -16,11 +16,16 @@ position of ``O_s`` without any angle (``cos theta = z / hypot(y, z)``).
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
-from numba import njit, prange
 
-from ._fk_kernels import CHUNK, FLAG_T_NONFINITE, rigid_flags
+from .._backend import njit, prange
+from ..chain._ups import P_ZERO_TOL
+from ..errors import Reason
+from ..parallel._module import IK_ROUNDING_ULPS
+from ..robot._ik import IK_Q_ERROR_MAX
+from ._fk_kernels import CHUNK, FLAG_NO_SOLUTION, FLAG_T_NONFINITE, rigid_flags
 from ._scalar import (
     atan2,
     finite_sum,
@@ -37,14 +42,17 @@ __all__ = ["ik_paper", "ik_paper_parallel", "ik_line", "ik_line_parallel",
            "FLAG_P_NONFINITE", "FLAG_ZERO_DIRECTION", "WRAP_EXACT_MAX"]
 
 # Reason codes (athenakin.errors.Reason) as floats.
-_NONFINITE, _STROKE, _AB_ORDER, _LINK = 1.0, 2.0, 3.0, 4.0
-_DISJOINT, _TANGENT, _CLOSURE = 5.0, 6.0, 10.0
-_NOT_IMAGE, _IK_SINGULAR, _INSERTION = 11.0, 12.0, 13.0
-_P_ZERO = 7.0
+_NONFINITE, _STROKE, _AB_ORDER = (float(Reason.NONFINITE_INPUT), float(Reason.STROKE_LIMIT),
+                                  float(Reason.AB_ORDER))
+_LINK, _DISJOINT, _TANGENT = (float(Reason.LINK_TOO_SHORT), float(Reason.CIRCLES_DISJOINT),
+                              float(Reason.CIRCLES_TANGENT))
+_CLOSURE, _NOT_IMAGE = float(Reason.CLOSURE_FAILED), float(Reason.NOT_IN_MODULE_IMAGE)
+_IK_SINGULAR, _INSERTION = float(Reason.IK_SINGULAR), float(Reason.INSERTION_RANGE)
+_P_ZERO = float(Reason.SERIAL_P_ZERO)
 #: athenakin.robot.IK_Q_ERROR_MAX (m).
-_QE_MAX = 1e-5
+_QE_MAX = IK_Q_ERROR_MAX
 #: athenakin.chain.P_ZERO_TOL (m): |p| at or below which the instrument axis is undefined.
-_P_ZERO_TOL = 1e-12
+_P_ZERO_TOL = P_ZERO_TOL
 
 #: Flags returned by the IK kernels (FLAG_NONRIGID = 1 and FLAG_T_NONFINITE = 4 as in FK).
 FLAG_SLOW = 8              # some |u| > WRAP_EXACT_MAX: recompute those items in numpy
@@ -66,7 +74,7 @@ _DX, _DY, _DZ = 19, 20, 21
 _DO, _QE = 22, 23                        # error already in O_s (in); q_error (out)
 NK = 24
 #: parallel._module.IK_ROUNDING_ULPS times the machine epsilon.
-_ROUND = 64.0 * 2.220446049250313e-16
+_ROUND = IK_ROUNDING_ULPS * sys.float_info.epsilon
 
 
 @njit(**_OPTS)
@@ -721,8 +729,6 @@ def ik_paper_one(T, U, P, stol, ctol, rot_tol, fbuf, ibuf):
     return _paper_flags(T2, U2, rot_tol)
 
 
-#: Bit of :func:`ik_paper_lean`'s result: the item has no solution (``reason != 0``).
-FLAG_NO_SOLUTION = 256
 
 
 @njit(**_OPTS)

@@ -14,8 +14,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from .._backend import njit
 from ._fk_kernels import CHUNK
 from ._ik_kernels import (
     _MODE,

@@ -31,8 +31,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from .._backend import njit
 from ._fk_kernels import FLAG_NONRIGID, FLAG_T_NONFINITE
 from ._scalar import atan2, finite_sum, hypot, sincos
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from .._backend import njit
 
 __all__ = ["PI", "TWO_PI", "SINCOS_MAX", "atan_q1", "atan2_from_q1", "atan2", "sincos",
            "wrap_pi", "wrap_mod", "hypot", "nanmax2", "finite_sum"]

@@ -38,10 +38,10 @@ def parallel_guard(parallel: bool) -> AbstractContextManager[object]:
     """
     if not parallel:
         return _NULL
-    try:
-        import numba
+    from .._backend import threading_layer
 
-        layer = numba.threading_layer()
+    try:
+        layer = threading_layer()
     except ValueError:        # no parallel kernel has run yet: the layer is not chosen
         return _LOCK
     return _NULL if layer in THREADSAFE_LAYERS else _LOCK

@@ -111,16 +111,13 @@ class PoseClearance:
 
     def __init__(self, design: Design, T_b_e: NDArray[np.float64], bodies: Any,
                  environment: Any = None) -> None:
-        from .._mechanism import BODY_SEGMENTS, POINT_NAMES
+        from .._mechanism import BODY_SEGMENTS, POINT_NAMES, rail_extent
 
         self.l1, self.l3, self.l2, self.l4, self.l5 = (design.l1, design.l3, design.l2,
                                                        design.l4, design.l5)
         self.L = design.tool_length
-        smin, smax = design.stroke_min[:2], design.stroke_max[:2]
-        lo = float(np.min(np.where(np.isfinite(smin), smin, np.inf)))
-        hi = float(np.max(np.where(np.isfinite(smax), smax, -np.inf)))
-        self.lo, self.hi = lo, hi
         geo = bodies.geometry
+        self.lo, self.hi = rail_extent(design, geo)      # the rail's ends, margin included
         self.rm, self.half, self.rs = (geo.rail_margin, 0.5 * geo.carriage_length,
                                        geo.sphere_radius)
         self.rcm = tuple(float(v) for v in T_b_e[:3, 3])
@@ -156,16 +153,21 @@ class PoseClearance:
         a4 = (v0, cz * v1 + cy * v2, -cy * v1 + cz * v2)
         side = -1.0 if p < 0 else 1.0
         rc, ze, rs = self.rcm, self.ze, self.rs
-        lo_b = min(q1, q2, self.lo) if math.isfinite(self.lo) else min(q1, q2)
-        hi_b = max(q1, q2, self.hi) if math.isfinite(self.hi) else max(q1, q2)
+        t = p - side * rs
+        if 0.0 <= t <= L:
+            s_3 = (rc[0] - side * rs * d[0], rc[1] - side * rs * d[1], rc[2] - side * rs * d[2])
+        else:                               # the guide holds the instrument's nearest point
+            t = min(max(t, 0.0), L)
+            s_3 = (ox + t * d[0], oy + t * d[1], oz + t * d[2])
         half = self.half
         return np.array([
             (q1, 0.0, 0.0), (q2, 0.0, 0.0), (xm, 0.0, 0.0), (xm, yd, 0.0),
             (xm, yd + self.l2, 0.0), (xm, yd + self.l2, self.l5), oi, O_s, rc, tip,
-            (lo_b - self.rm, 0.0, 0.0), (hi_b + self.rm, 0.0, 0.0),
+            (min(min(q1, q2) - self.rm, self.lo), 0.0, 0.0),
+            (max(max(q1, q2) + self.rm, self.hi), 0.0, 0.0),
             (q1 - half, 0.0, 0.0), (q1 + half, 0.0, 0.0),
             (q2 - half, 0.0, 0.0), (q2 + half, 0.0, 0.0),
-            (rc[0] - side * rs * d[0], rc[1] - side * rs * d[1], rc[2] - side * rs * d[2]),
+            s_3,
             (rc[0] + rs * a4[0], rc[1] + rs * a4[1], rc[2] + rs * a4[2]),
             (rc[0] + rs * ze[0], rc[1] + rs * ze[1], rc[2] + rs * ze[2])])
 
@@ -175,7 +177,7 @@ class PoseClearance:
         """Least clearance (m; ``inf`` with no pair) and its pair for one tracked pose."""
         seg = self.points(q, p, u, O_s, d)[self.index]
         if self.environment is not None:
-            from .._dispatch import resolve_backend
+            from .._backend import resolve_backend
             from ..collision._clearance import segment_clearance
 
             pairs, dd, _ = segment_clearance(seg[None], np.ones(1, dtype=bool), self.bodies,
@@ -183,7 +185,7 @@ class PoseClearance:
                                              compiled=resolve_backend("auto"), witness=False)
             dist = dd[0]
         else:
-            from ..fast._collision_kernels import capsule_distances
+            from ..collision._clearance import capsule_distances
 
             pairs = self.pairs
             dist = capsule_distances(seg[None], self.radii, self.ij)[0]

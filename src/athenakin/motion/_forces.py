@@ -62,15 +62,18 @@ def trajectory_forces(traj: object, masses: object, *, gravity: ArrayLike = (0.0
     t: Any = traj
     m: Any = masses
     slot = _slot(t)
+    # errors="raise": a sample off the slot is an error of the plan, never a NaN force
+    # that no limit would catch
     tau = inverse_dynamics(t.q, t.qd, t.qdd, t.T_b_e, t.design, masses=m, gravity=gravity,
-                           slot=slot)
-    tau_g = actuator_forces(t.q, t.T_b_e, t.design, masses=m, gravity=gravity, slot=slot)
+                           slot=slot, errors="raise")
+    tau_g = actuator_forces(t.q, t.T_b_e, t.design, masses=m, gravity=gravity, slot=slot,
+                            errors="raise")
     return tau, tau_g
 
 
 def _check_f_max(f_max: ArrayLike) -> NDArray[np.float64]:
-    f = np.broadcast_to(np.asarray(f_max, dtype=float), (3,)) if np.ndim(f_max) == 0 else f_max
-    out = check_array(f, "f_max", (3,))
+    a = check_array(f_max, "f_max", ())         # a str, a ragged list: named TypeError
+    out = np.broadcast_to(a, (3,)) if a.ndim == 0 else a
     if out.shape != (3,) or np.any(out <= 0):
         raise InvalidInputError(f"f_max: expected 3 positive force limits (N), got "
                                 f"{np.asarray(f_max).tolist()}")

@@ -19,8 +19,8 @@ computed, in closed form with scalar arithmetic (no numpy in the loop): a few
 microseconds per sample. Near a singularity (any measure below its margin), after
 a large step, or when that candidate is not valid, all 16 are computed.
 :func:`track` (a recorded stream) runs the same algorithm compiled, reading after
-reading in one loop (:mod:`athenakin.fast._track_kernels`, :func:`track_batch`): the
-same poses, steps and flags bit for bit, about a microsecond per reading.
+reading in one loop (:mod:`athenakin.motion._kernels`, :func:`track_batch`): the
+same poses and steps to 1e-12 and the same flags, about a microsecond per reading.
 
 Collisions. Asked for with ``bodies=``, ``environment=`` or ``clearance_margin=``
 (:mod:`athenakin.collision`, imported then), every valid sample also gets the least
@@ -36,7 +36,6 @@ recorded stream in one batch of :func:`athenakin.collision.clearance`.
 from __future__ import annotations
 
 import dataclasses
-import enum
 import math
 from collections.abc import Sequence
 from typing import Any, NamedTuple
@@ -52,6 +51,7 @@ from ..parallel import TANGENT_TOL
 from ..robot import forward_kinematics
 from ._clearance import PoseClearance, clearance_check, sample_clearance
 from ._errors import TrackingError
+from ._flags import TrackFlag
 from ._safety import Margins
 
 __all__ = ["TrackFlag", "TrackedPose", "Tracker", "TrackLog", "track", "JUMP_M", "JUMP_RAD"]
@@ -62,71 +62,6 @@ JUMP_M = 0.005
 JUMP_RAD = 0.1
 
 _TWO_PI = 2.0 * math.pi
-
-
-class TrackFlag(enum.IntFlag):
-    """Why a tracked sample deserves attention (bits; ``NONE`` when all is well).
-
-    Attributes
-    ----------
-    LOST
-        No forward-kinematics solution (outside the workspace, A/B order broken,
-        non-finite reading); the pose is that of the last valid sample, ``valid`` False.
-    REACQUIRED
-        First valid sample after ``LOST``: continuity with the pose before the loss
-        is not guaranteed.
-    JUMP
-        The returned solution moved more than the jump thresholds since the previous sample.
-    MODE_SWITCH
-        The assembly mode differs from the previous sample's.
-    BRANCH_SWITCH
-        A serial label (sign of ``p``, U-joint or spherical-joint branch) differs
-        from the previous sample's: expected when crossing ``sin u2 = 0`` or
-        ``sin u4 = 0``, where the continuous solution changes label.
-    AMBIGUOUS
-        Another solution is also within the jump thresholds of the previous pose:
-        the readings cannot tell which one the robot is in (e.g. next to the mode
-        boundary, where both assembly modes meet).
-    OUT_OF_STROKE
-        A reading lies outside the design's stroke limits (the pose is still computed).
-    NEAR_MODE_BOUNDARY, NEAR_H_ZERO, NEAR_LINK_LIMIT, NEAR_UJOINT, NEAR_WRIST, NEAR_P_ZERO
-        A singularity measure is below its margin (:class:`Margins`: ``half_chord``,
-        ``h``, ``link``, ``sin_u2``, ``sin_u4``, ``p``).
-    COLLISION
-        Two bodies, or a body and an obstacle, overlap (clearance < 0, as
-        :attr:`athenakin.collision.Clearance.colliding`); only
-        when the tracker checks collisions (``bodies=``, ``environment=`` or
-        ``clearance_margin=``).
-    NEAR_COLLISION
-        The clearance is below ``clearance_margin`` (set on collisions too, so that
-        ``raise_on="NEAR_COLLISION"`` stops at both).
-    """
-
-    NONE = 0
-    LOST = 1
-    REACQUIRED = 2
-    JUMP = 4
-    MODE_SWITCH = 8
-    BRANCH_SWITCH = 16
-    AMBIGUOUS = 32
-    OUT_OF_STROKE = 64
-    NEAR_MODE_BOUNDARY = 128
-    NEAR_H_ZERO = 256
-    NEAR_LINK_LIMIT = 512
-    NEAR_UJOINT = 1024
-    NEAR_WRIST = 2048
-    NEAR_P_ZERO = 4096
-    COLLISION = 8192
-    NEAR_COLLISION = 16384
-
-    @property
-    def near_singular(self) -> bool:
-        """True when any ``NEAR_*`` bit is set."""
-        return bool(self & _NEAR_ANY)
-
-
-_NEAR_ANY = (TrackFlag.NEAR_MODE_BOUNDARY | TrackFlag.NEAR_H_ZERO | TrackFlag.NEAR_LINK_LIMIT
-             | TrackFlag.NEAR_UJOINT | TrackFlag.NEAR_WRIST | TrackFlag.NEAR_P_ZERO)
 
 
 class TrackedPose(NamedTuple):
@@ -686,7 +621,7 @@ def track(q_stream: ArrayLike, T_b_e: ArrayLike, design: Design | None = None,
     """Run a :class:`Tracker` over a recorded stream; the first reading is ``q0``.
 
     The readings after the first go through :func:`track_batch`: the compiled tracker
-    where numba runs (bit for bit :meth:`Tracker.update`, tested), else
+    where numba runs (:meth:`Tracker.update`'s poses to 1e-12, its flags, tested), else
     :meth:`Tracker.update` itself.
 
     Parameters
@@ -798,11 +733,11 @@ def pose_at(cols: dict[str, Any], i: int) -> TrackedPose:
 
 
 def _kernel_geometry(tr: Tracker) -> NDArray[np.float64]:
-    """The geometry vector of :func:`athenakin.fast._track_kernels.track_stream`."""
+    """The geometry vector of :func:`athenakin.motion._kernels.track_stream`."""
     g = tr._g
     return np.array([g.l1, g.l2, g.l3, g.l4, g.l5, g.h_sign, *g.c, *g.ex, *g.ez, *g.lo, *g.hi,
                      tr.jump_m, tr.jump_rad, *tr._watch, tr.margins.half_chord, TANGENT_TOL,
-                     P_ZERO_TOL, DEGENERATE_TOL, 2.0], dtype=float)
+                     P_ZERO_TOL, DEGENERATE_TOL], dtype=float)
 
 
 def _cand_row(c: tuple) -> list[float]:
@@ -817,8 +752,8 @@ def _cand_tuple(row: list[float]) -> tuple:
 def track_batch(tr: Tracker, q: NDArray[np.float64]) -> dict[str, Any]:
     """:meth:`Tracker.update` of every reading of ``q`` (n, 3), as columns; advances ``tr``.
 
-    The compiled loop of :mod:`athenakin.fast._track_kernels` (bit for bit the poses,
-    steps and flags of :meth:`Tracker.update`, tested) where numba runs, else
+    The compiled loop of :mod:`athenakin.motion._kernels` (the poses and steps of
+    :meth:`Tracker.update` to 1e-12, the same flags, tested) where numba runs, else
     :meth:`Tracker.update` itself. The collision check of a tracker that has one is
     :meth:`Tracker.update`'s too (the same scalar placement and kernel per valid
     reading). ``raise_on`` raises :class:`TrackingError` at the first reading that
@@ -830,14 +765,14 @@ def track_batch(tr: Tracker, q: NDArray[np.float64]) -> dict[str, Any]:
     dict of str -> ndarray
         The fields of :class:`TrackLog` and ``sample``, one row per reading.
     """
-    from .._dispatch import numba_available
+    from .._backend import numba_available
 
     q = np.ascontiguousarray(q, dtype=float).reshape(-1, 3)
     n = len(q)
     if not numba_available():
         poses = [tr.update(row) for row in q.tolist()]
         return _pose_columns(poses) if poses else _empty_columns()
-    from ..fast._track_kernels import NCAND, track_stream
+    from ._kernels import NCAND, track_stream
 
     prev = np.array(_cand_row(tr._prev), dtype=float)
     lost = np.array([1 if tr._lost else 0], dtype=np.int64)

@@ -5,7 +5,8 @@ The points follow docs/conventions.md: ``A = (q1, 0, 0)``, ``B = (q2, 0, 0)``, m
 ``O_s = O_i + l4 z_i`` (Eq. 8-10), and the serial chain of Eq. 11-12 from ``O_s`` to
 the RCM frame E. The spherical joint at the RCM (the kinematic equivalent of the
 passive spherical five-bar, Fig. 3) is described by the axes of ``u3``, ``u4``,
-``u5``, which all pass through the RCM.
+``u5``, which all pass through the RCM. Points, frames and the rail are those of
+:func:`athenakin._mechanism.mechanism_state` (the one place that places the mechanism).
 """
 
 from __future__ import annotations
@@ -15,9 +16,8 @@ import dataclasses
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._transforms import rot_x, rot_z
+from .._mechanism import BodyGeometry, MechanismState, state_from_fk
 from .._validation import check_array, check_count, check_instance, check_scalar
-from ..chain._ups import rotation_u_pair
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, Reason, error_for_reason
 from ..parallel import parallel_forward_kinematics
@@ -97,9 +97,14 @@ class RobotGeometry:
     intersections : ndarray, shape (2, 3)
         ``k1 ∩ k2``: ``O_i`` of assembly mode +1 and -1 (NaN where absent).
     rail : ndarray, shape (2, 3)
-        End points of the drawn base rail (x axis) covering the strokes of A and B.
+        End points of the base rail (x axis), the ``rail`` body of
+        :func:`athenakin._mechanism.mechanism_state` (the strokes of A and B and the
+        carriages, widened by the default ``BodyGeometry.rail_margin``).
     design : Design
     T_b_e : ndarray, shape (4, 4)
+    state : MechanismState
+        The configuration as :func:`athenakin._mechanism.mechanism_state` gives it
+        (batch shape ``()``), from which the points and frames here are taken.
     """
 
     q: NDArray[np.float64]
@@ -121,6 +126,7 @@ class RobotGeometry:
     rail: NDArray[np.float64]
     design: Design
     T_b_e: NDArray[np.float64]
+    state: MechanismState | None = None
 
     def segments(self) -> dict[str, tuple[NDArray[np.float64], NDArray[np.float64]]]:
         """The bars of the mechanism as named segments ``(start, end)``.
@@ -220,24 +226,6 @@ def _k2_arc(C: NDArray[np.float64], radius: float, M: NDArray[np.float64],
                     axis=-1)
 
 
-def _tz(d: float) -> NDArray[np.float64]:
-    T = np.eye(4)
-    T[2, 3] = d
-    return T
-
-
-def _rot4(R: NDArray[np.float64]) -> NDArray[np.float64]:
-    T = np.eye(4)
-    T[:3, :3] = R
-    return T
-
-
-def _rz_rx90(angle: float) -> NDArray[np.float64]:
-    """``Rz(angle) Rx(pi/2)`` as a 4x4 transform."""
-    R: NDArray[np.float64] = np.matmul(rot_z(np.asarray(angle)), rot_x(np.asarray(np.pi / 2)))
-    return _rot4(R)
-
-
 def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
                    design: Design | None = None, *, slot: int = 0,
                    fk: FKSolution | None = None) -> RobotGeometry:
@@ -302,50 +290,31 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     if not sol.valid[slot]:
         why = Reason(int(sol.reason[slot])).name
         raise error_for_reason(int(sol.reason[slot]), f"slot {slot} of q = {q.tolist()} m ({why})")
+    st = state_from_fk(sol, q, T, design, slot, BodyGeometry())
+    F = {link: st.frame(link) for link in ("platform", "instrument", "guide", "sph_4", "sph_5")}
     T_b_s = sol.T_b_s[slot]
     p = float(sol.p[slot])
     u = sol.u[slot].copy()
-    l1, l2, l3, l4, l5 = design.lengths
-    q1, q2, q3 = q
-    h = 0.5 * (q1 - q2)
-    x_M = 0.5 * (q1 + q2)
-    A, B, M = np.array([q1, 0.0, 0.0]), np.array([q2, 0.0, 0.0]), np.array([x_M, 0.0, 0.0])
-    D = np.array([x_M, np.sqrt(l3 * l3 - h * h), 0.0])
-    C_foot = D + np.array([0.0, l2, 0.0])
-    C = C_foot + np.array([0.0, 0.0, l5])
-    O_s = T_b_s[:3, 3].copy()
-    O_i = O_s - l4 * T_b_s[:3, 2]
-    T_b_i = T_b_s.copy()
-    T_b_i[:3, 3] = O_i
-    c, s = np.cos(u), np.sin(u)
-    T_b_3 = T_b_s @ _rot4(rotation_u_pair(c[0], s[0], c[1], s[1]))
-    T_rcm = T_b_3 @ _tz(p)                       # at the RCM, before u3
-    T_4 = T_rcm @ _rz_rx90(u[2])                 # before u4
-    T_5 = T_4 @ _rz_rx90(u[3])                   # before u5
-    wrist_axes = np.stack([T_rcm[:3, 2], T_4[:3, 2], T_5[:3, 2]])
-    T_u2 = T_b_s @ _rz_rx90(u[0])                # before u2
-    ujoint_axes = np.stack([T_b_s[:3, 2], T_u2[:3, 2]])
+    l1 = design.l1
+    h = 0.5 * (q[0] - q[1])
+    names = ("A", "B", "M", "D", "C_foot", "C", "O_i", "O_s", "RCM", "tip")
+    points = {name: st[name].copy() for name in names}
+    M, C = points["M"], points["C"]
+    # the axes of the spherical joint (u3, u4, u5) through the RCM and of the U-joint at O_s
+    wrist_axes = np.stack([F["guide"][:3, 2], F["sph_4"][:3, 2], F["sph_5"][:3, 2]])
+    ujoint_axes = np.stack([F["platform"][:3, 2], F["instrument"][:3, 1]])
     par = parallel_forward_kinematics(q, design)
     intersections = par.O_i.copy()
-    tip = O_s + design.tool_length * T_b_3[:3, 2]
     r1 = np.sqrt(l1 * l1 - h * h)
-    lo = np.minimum(design.stroke_min[:2], q[:2]).min()
-    hi = np.maximum(design.stroke_max[:2], q[:2]).max()
-    if not np.isfinite(lo):
-        lo = min(q1, q2) - 0.1
-    if not np.isfinite(hi):
-        hi = max(q1, q2) + 0.1
-    points = {"A": A, "B": B, "M": M, "D": D, "C_foot": C_foot, "C": C, "O_i": O_i,
-              "O_s": O_s, "RCM": T[:3, 3].copy(), "tip": tip}
-    frames = {"b": np.eye(4), "i": T_b_i, "s": T_b_s, "instrument": T_b_3, "e": T.copy()}
+    frames = {"b": np.eye(4), "i": F["platform"].copy(), "s": T_b_s.copy(),
+              "instrument": F["instrument"].copy(), "e": T.copy()}
     return RobotGeometry(
         q=q, slot=slot, mode=int(sol.mode[slot]), p_sign=int(sol.p_sign[slot]),
         ujoint=int(sol.ujoint[slot]), wrist=int(sol.wrist[slot]), p=p, u=u, points=points,
         frames=frames, wrist_axes=wrist_axes, ujoint_axes=ujoint_axes, k1=circle_points(M, r1),
-        k2=circle_points(C, q3), k2_arc=_k2_arc(C, q3, M, intersections),
-        intersections=intersections,
-        rail=np.array([[lo - 0.05, 0.0, 0.0], [hi + 0.05, 0.0, 0.0]]), design=design,
-        T_b_e=T.copy())
+        k2=circle_points(C, q[2]), k2_arc=_k2_arc(C, q[2], M, intersections),
+        intersections=intersections, rail=np.stack([st["rail_lo"], st["rail_hi"]]),
+        design=design, T_b_e=T.copy(), state=st)
 
 
 def slot_label(g: RobotGeometry) -> str:

@@ -352,10 +352,7 @@ def _fk_block(q: NDArray[np.float64], T: NDArray[np.float64], design: Design, me
               names: tuple[str, ...] | None) -> FKSolution:
     """Forward kinematics of one block of (already checked and broadcast) poses."""
     par = parallel_forward_kinematics(q, design, tangent_tol=tols["tangent_tol"])
-    if method == "closed":
-        step = _serial_closed_form
-    else:
-        from ..symbolic._solver import serial_step_algebraic as step
+    step = _serial_step(method)
     p, u, sreason, residual = step(par, T, degenerate_tol=tols["degenerate_tol"],
                                    p_zero_tol=tols["p_zero_tol"],
                                    closure_tol=tols["closure_tol"])
@@ -365,6 +362,39 @@ def _fk_block(q: NDArray[np.float64], T: NDArray[np.float64], design: Design, me
 
 SerialStep = Callable[..., tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int8],
                                  NDArray[np.float64]]]
+
+#: The serial step of each FK method other than ``"closed"``, registered from above by the
+#: package that implements it (:mod:`athenakin.symbolic` registers ``"algebraic"``, imported
+#: by ``athenakin/__init__.py``): ``robot`` never imports ``symbolic``.
+_SERIAL_STEPS: dict[str, SerialStep] = {}
+
+
+def register_serial_step(method: str, step: SerialStep) -> None:
+    """Register the serial step of an FK method (``forward_kinematics(..., method=method)``).
+
+    Parameters
+    ----------
+    method : str
+        One of the names in ``FKMethod`` other than ``"closed"``.
+    step : callable
+        ``step(par, T, *, degenerate_tol, p_zero_tol, closure_tol) -> (p, u, reason,
+        residual)``, the serial chain's solutions for a batch of parallel-module solutions
+        ``par`` and RCM frames ``T`` (shapes as :func:`_serial_closed_form` returns them).
+    """
+    if method not in _METHODS or method == "closed":
+        raise ValueError(f"method: expected one of {_METHODS[1:]}, got {method!r}")
+    _SERIAL_STEPS[method] = step
+
+
+def _serial_step(method: str) -> SerialStep:
+    """The serial step of ``method`` (``"closed"``, or one registered from above)."""
+    if method == "closed":
+        return _serial_closed_form
+    try:
+        return _SERIAL_STEPS[method]
+    except KeyError:
+        raise ValueError(f"method={method!r}: its solver is not registered (import "
+                         "athenakin, whose __init__ registers it)") from None
 
 
 def _prepare(q: ArrayLike, T_b_e: ArrayLike, design: Design | None, errors: str

@@ -14,7 +14,7 @@ mcap-ros2-support, foxglove-sdk). Names, frames, units and topics: docs/ros.md.
 * :class:`FoxgloveStream`: serve the live robot over the Foxglove WebSocket protocol.
 """
 
-from ._errors import RecordingError
+from ._errors import RecordingError, RecordingWarning, ServeError
 from ._frames import BASE_FRAME, MOVING_LINKS, RCM_FRAME, TOOL_TIP_FRAME
 from ._live import FoxgloveStream
 from ._read import (
@@ -45,6 +45,8 @@ __all__ = [
     "JointStates",
     "McapOutput",
     "RecordingError",
+    "RecordingWarning",
+    "ServeError",
     "TrackedBatch",
     "TrackingSummary",
     "iter_joint_states",

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._mechanism import tree_joint_formula
 from .._transforms import rot_x, rot_y, rot_z
 from ..design import Design
 from ..sim import JOINTS, urdf_from_design, urdf_joint_zero
@@ -148,23 +149,10 @@ def joint_values(model: UrdfModel, q: NDArray[np.float64], p: NDArray[np.float64
         prismatic joints, rad in ``(-pi, pi]`` for hinges), in the order of ``JOINTS``.
     """
     d = model.design
-    q1, q2, q3 = q[:, 0], q[:, 1], q[:, 2]
-    h = 0.5 * (q1 - q2)
-    r1 = np.sqrt(d.l1 ** 2 - h * h)
-    s3 = np.sqrt(d.l3 ** 2 - h * h)
-    y, z = O_s[:, 1], O_s[:, 2]
-    theta = np.arctan2(-y, z)                 # R_b_i = Rx(theta), z_i radial from M to O_i
-    rad = np.hypot(y, z)
-    Oi_y, Oi_z = y - d.l4 * y / rad, z - d.l4 * z / rad
-    gamma = np.arctan2(-(Oi_y - (s3 + d.l2)), Oi_z - d.l5)
-    phi_a = np.arctan2(-h, r1)
-    ang_a3 = np.arctan2(s3, -h)
-    absolute = {
-        "q1": q1, "a_ujoint_x": theta, "a_ujoint_y": phi_a, "platform_y": -phi_a,
-        "u1": u[:, 0], "u2": u[:, 1], "p": p, "u3": u[:, 2], "u4": u[:, 3], "u5": u[:, 4],
-        "a_base_z": ang_a3, "carrier_z": -ang_a3, "k2_x": gamma, "q3": q3, "q2": q2,
-        "b_ujoint_x": theta, "b_ujoint_y": -phi_a, "b_base_z": np.arctan2(s3, h),
-    }
+    values = tree_joint_formula(q[:, 0], q[:, 1], q[:, 2], p, u[:, 0], u[:, 1], u[:, 2],
+                                u[:, 3], u[:, 4], O_s[:, 1], O_s[:, 2], d.l1 ** 2, d.l2,
+                                d.l3 ** 2, d.l4, d.l5)
+    absolute = dict(zip(JOINTS, values, strict=True))
     out = {}
     for name, (kind, _, _) in JOINTS.items():
         x = absolute[name] - model.zero[name]
@@ -260,7 +248,7 @@ def link_frames(model: UrdfModel, values: dict[str, NDArray[np.float64]],
     ndarray, shape (N, len(links), 7)
         ``tx, ty, tz`` (m, base frame) and ``qx, qy, qz, qw`` (``w >= 0``) of each link.
     """
-    from .._dispatch import numba_available
+    from .._backend import numba_available
 
     n = len(next(iter(values.values())))
     if out is None:
@@ -332,7 +320,7 @@ def quaternion_xyzw(R: NDArray[np.float64]) -> NDArray[np.float64]:
     so no division by a small number. Compiled where numba runs (the same numbers, bit
     for bit: :mod:`athenakin.fast._frame_kernels`).
     """
-    from .._dispatch import numba_available
+    from .._backend import numba_available
 
     if numba_available() and R.ndim == 3 and len(R):
         from ..fast._frame_kernels import quaternion_xyzw_into

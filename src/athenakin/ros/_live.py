@@ -15,6 +15,7 @@ client subscribes to anything.
 
 from __future__ import annotations
 
+import errno
 import math
 import socket
 import threading
@@ -30,7 +31,7 @@ from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..robot import forward_kinematics
 from ..robot._setup import resolve_rcm_frame
-from ._errors import ros_extra_missing
+from ._errors import ServeError, ros_extra_missing
 from ._relay import SubprotocolRelay, bind_socket
 from ._write import _MSG_TYPES, TOPICS, RosEncoder, TrackedBatch, check_uint, msgdef
 
@@ -58,7 +59,7 @@ class FoxgloveStream:
         Port (default 8765; 0: any free port, see :attr:`port`). Clients offering the
         WebSocket subprotocol ``foxglove.sdk.v1``, ``foxglove.sdk.v1.1`` or the older
         ``foxglove.websocket.v1`` (Foxglove Studio 1.x, Lichtblick) connect; others get
-        HTTP 400. A port in use raises :class:`OSError` naming the address.
+        HTTP 400. A port in use raises :class:`ServeError` (an ``OSError``) naming the address.
     name : str, keyword-only
         Server name shown by Foxglove.
 
@@ -115,19 +116,25 @@ class FoxgloveStream:
         try:
             sock = bind_socket(host, int(port))
         except OSError as exc:
-            raise OSError(f"cannot serve Foxglove on {host}:{port} ({exc})") from None
+            busy = exc.errno == errno.EADDRINUSE
+            raise ServeError(exc.errno, f"cannot serve Foxglove on {host}:{port}: "
+                             + ("the port is in use (another server, or an earlier stream "
+                                "not stopped); choose another with port=... / --port, or 0 "
+                                "for a free one" if busy else
+                                f"{exc.strerror or exc}")) from None
         try:   # the SDK server, on a free port of the loopback, behind the relay
             self._server = foxglove.start_server(name=name, host="127.0.0.1", port=0,
                                                  context=self._context,
                                                  server_listener=listener)  # type: ignore[arg-type]
         except Exception as exc:   # the SDK raises its own RuntimeError: name the address
             sock.close()
-            raise OSError(f"cannot serve Foxglove on 127.0.0.1 ({exc})") from None
+            raise ServeError(None, f"cannot serve Foxglove on 127.0.0.1 ({exc})") from None
         try:
             self._relay = SubprotocolRelay(sock, f"ws://127.0.0.1:{int(self._server.port)}")
         except OSError as exc:
             self._server.stop()
-            raise OSError(f"cannot serve Foxglove on {host}:{port} ({exc})") from None
+            raise ServeError(exc.errno, f"cannot serve Foxglove on {host}:{port} "
+                             f"({exc.strerror or exc})") from None
         self.host = host
         self.port = self._relay.port
 

@@ -14,12 +14,16 @@ from __future__ import annotations
 import struct
 import zlib
 from collections.abc import Callable
-from typing import IO
+from typing import IO, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["McapFile", "MESSAGE_HEADER", "COMPRESSIONS", "ZSTD_LEVEL", "check_compression"]
+from ._errors import ros_extra_missing
+
+__all__ = ["McapFile", "MESSAGE_HEADER", "COMPRESSIONS", "ZSTD_LEVEL", "check_compression",
+           "compressor_module"]
+
 
 MAGIC = b"\x89MCAP0\r\n"
 #: Bytes of a Message record before its data: opcode, length, channel, sequence, two times.
@@ -50,6 +54,8 @@ def _crc32_function() -> Callable[..., int]:
 
 
 _crc32 = _crc32_function()
+#: CRC-32 of MCAP (public within the package: the reader checks chunks with it).
+crc32 = _crc32
 
 
 def _s(text: str) -> bytes:
@@ -100,6 +106,29 @@ def check_compression(compression: object, level: object) -> tuple[str, int | No
     return compression, int(level)
 
 
+def compressor_module(compression: str) -> Any:
+    """The module of a chunk compression: ``zstandard``, ``lz4.frame``, or None for "none".
+
+    Raises
+    ------
+    ModuleNotFoundError
+        The package is not installed (the ``ros`` extra); ``name`` is the package's,
+        the message says which extra installs it.
+    """
+    try:
+        if compression == "zstd":
+            import zstandard
+
+            return zstandard
+        if compression == "lz4":
+            import lz4.frame
+
+            return lz4.frame
+    except ModuleNotFoundError as exc:
+        raise ros_extra_missing(exc) from None
+    return None
+
+
 class McapFile:
     """Write an MCAP file: schemas, channels, then chunks of messages, then the summary.
 
@@ -121,16 +150,13 @@ class McapFile:
         self._fh = fh
         self._compression = compression
         if compression == "zstd":
-            import zstandard
-
-            self._compress = zstandard.ZstdCompressor(
+            self._compress = compressor_module("zstd").ZstdCompressor(
                 level=ZSTD_LEVEL if level is None else level).compress
         elif compression == "lz4":
             import functools
 
-            import lz4.frame
-
-            self._compress = functools.partial(lz4.frame.compress, compression_level=level)
+            self._compress = functools.partial(compressor_module("lz4").compress,
+                                               compression_level=level)
         self._pos = 0
         self._crc = 0
         self._schemas: list[bytes] = []

@@ -3,8 +3,12 @@
 Formats, told apart by their content (not their name):
 
 * a rosbag2 folder (``metadata.yaml`` and its storage files, sqlite3 or MCAP),
-  read with rosbags;
-* a single MCAP file (magic ``0x89 MCAP0``), read with the mcap library;
+  checked with rosbags; MCAP storage files are then read as single MCAP files (the
+  same fast path), sqlite3 storage message by message by rosbags;
+* a single MCAP file (magic ``0x89 MCAP0``), read with the mcap library's record
+  reader (chunk CRCs checked; a file cut short is read up to its last complete chunk,
+  with a :class:`RecordingWarning` saying how much was lost), the Message records of
+  each decompressed chunk decoded at once;
 * a single rosbag2 sqlite3 file (``.db3``), read with rosbags;
 * a ROS 1 bag (``#ROSBAG V2.0``), read with rosbags.
 
@@ -18,10 +22,13 @@ generic decoder; ROS 1 messages through rosbags' deserializer.
 from __future__ import annotations
 
 import dataclasses
+import io
 import math
 import os
+import re
 import stat
 import struct
+import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -31,7 +38,7 @@ from numpy.typing import NDArray
 
 from .._validation import check_path
 from ..errors import InvalidInputError
-from ._errors import RecordingError, ros_extra_missing
+from ._errors import RecordingError, RecordingWarning, ros_extra_missing
 
 __all__ = ["JointStates", "read_joint_states", "iter_joint_states", "recording_format",
            "MAX_READINGS", "CHUNK", "JOINT_STATE_TYPES"]
@@ -262,9 +269,39 @@ def _raw_messages(path: Path, kind: str, topic: str) -> Iterator[tuple[Any, Any,
             _missing_topic(path, topic, {c.topic: c.msgtype for c in reader.connections})
         for c in conns:
             _check_type(path, topic, c.msgtype)
-        enc = "ros1" if kind == "rosbag1" else "cdr"
-        for _conn, t, raw in reader.messages(connections=conns):
-            yield int(t), raw, enc
+        files = _mcap_storage(path, reader) if kind == "rosbag2" else None
+        if files is None:
+            enc = "ros1" if kind == "rosbag1" else "cdr"
+            for _conn, t, raw in reader.messages(connections=conns):
+                yield int(t), raw, enc
+            return
+    for f in files:        # MCAP storage: each file through the MCAP fast path, in order
+        yield from _mcap_messages(f, topic, in_bag=True)
+
+
+def _mcap_storage(path: Path, reader: Any) -> list[Path] | None:
+    """The MCAP storage files of a rosbag2 folder, in recording order, or None.
+
+    None (rosbags reads it, message by message) for sqlite3 storage or compressed
+    files or messages (``compression_mode`` set). The files are those of the folder
+    named in its ``metadata.yaml``, ordered by their split index (``bag_0.mcap``,
+    ``bag_1.mcap``, ..., ``bag_10.mcap``).
+    """
+    if getattr(reader, "compression_mode", None):
+        return None
+    try:
+        listed = (path / "metadata.yaml").read_text(encoding="utf-8")
+    except (OSError, UnicodeError):
+        return None
+    files = [f for f in path.iterdir() if f.suffix == ".mcap" and f.name in listed]
+    if not files:
+        return None
+    for f in files:
+        with open(f, "rb") as fh:
+            if fh.read(8) != _MCAP_MAGIC:
+                return None
+    return sorted(files, key=lambda f: [int(t) if t.isdigit() else t
+                                        for t in re.split(r"(\d+)", f.name)])
 
 
 def _missing_topic(path: Path, topic: str, present: dict[str, str]) -> None:
@@ -279,26 +316,31 @@ def _check_type(path: Path, topic: str, msgtype: str) -> None:
                              f"sensor_msgs/msg/JointState")
 
 
-def _mcap_messages(path: Path, topic: str) -> Iterator[tuple[Any, Any, str]]:
+def _mcap_messages(path: Path, topic: str, *, in_bag: bool = False
+                   ) -> Iterator[tuple[Any, Any, str]]:
     """Messages of ``topic`` in file order (the summary, when present, checks the topic).
 
     ``(log time, data, encoding)``, or for a run of messages read at once
-    ``(log times, _Bulk, encoding)``.
+    ``(log times, _Bulk, encoding)``. ``in_bag``: a storage file of a rosbag2 folder
+    (the folder's metadata checked the topic; a file may hold none of its messages).
     """
     try:
         from mcap.reader import make_reader
     except ModuleNotFoundError as exc:  # pragma: no cover
         raise ros_extra_missing(exc) from None
     with open(path, "rb") as fh:
-        summary = make_reader(fh).get_summary()
-        if summary is not None:
+        try:
+            summary = make_reader(fh).get_summary()
+        except Exception:          # no footer (a truncated file): read it from the start
+            summary = None
+        if summary is not None and not in_bag:
             chans = {c.topic: summary.schemas.get(c.schema_id) for c in
                      summary.channels.values()}
             if topic not in chans:
                 _missing_topic(path, topic, {k: (s.name if s else "?") for k, s in
                                              chans.items()})
         fh.seek(0)
-        stream = _McapStream(fh, os.fstat(fh.fileno()).st_size)
+        stream = _McapStream(fh, os.fstat(fh.fileno()).st_size, summary, topic)
         wanted: dict[int, str] = {}
         for cid, log_time, data in stream.messages():
             enc = wanted.get(cid)
@@ -312,8 +354,22 @@ def _mcap_messages(path: Path, topic: str) -> Iterator[tuple[Any, Any, str]]:
                     raise RecordingError(f"{path}: topic {topic!r} is encoded as {ch[2]!r}, "
                                          f"expected cdr or ros1")
                 wanted[cid] = enc = ch[2]
+            stream.read += len(log_time) if isinstance(data, _Bulk) else 1
             yield log_time, data, enc
-        if not wanted and summary is None:
+        if stream.lost is not None:
+            good, why = stream.lost
+            if not stream.read:
+                raise RecordingError(f"{path}: truncated or corrupt MCAP file: no complete "
+                                     f"chunk of {topic!r} before byte {good} of "
+                                     f"{stream.size} ({why})")
+            warnings.warn(RecordingWarning(
+                f"{path}: truncated MCAP file (a recorder stopped mid-run?): read "
+                f"{stream.read} messages of {topic!r}, up to the last complete chunk "
+                f"(byte {good} of {stream.size}); the rest, {stream.size - good} bytes "
+                f"({100.0 * (stream.size - good) / max(stream.size, 1):.1f} % of the file), "
+                f"could not be read ({why}); what the recorder never wrote is not known"),
+                stacklevel=2)
+        if not wanted and summary is None and not in_bag:
             present = {t: stream.schemas.get(sid, "?") for t, sid, _ in
                        stream.channels.values()}
             if topic not in present:
@@ -321,113 +377,123 @@ def _mcap_messages(path: Path, topic: str) -> Iterator[tuple[Any, Any, str]]:
 
 
 class _McapStream:
-    """Read the records of an MCAP file in order (spec: https://mcap.dev/spec).
+    """The Message records of an MCAP file in file order, read with the mcap library.
 
-    The mcap library's reader costs about 20 us per message in Python (record objects,
-    a heap for log-time order); a recording of joint states needs only the Message
-    records' channel, log time and data, read here with ``struct`` from each
-    decompressed chunk. Every length is checked against what is left of the file or
-    chunk: a truncated or corrupt file raises ``ValueError``.
+    The mcap library reads the file's records (:class:`mcap.stream_reader.StreamReader`)
+    and decompresses each chunk, checking its CRC (a mismatch raises
+    :class:`~athenakin.ros.RecordingError`). With a summary, the chunks are read from
+    its chunk indexes (the per-message index records, which the library parses one
+    entry at a time in Python, are skipped); without one (a file cut short), the
+    records are read from the start, the data section's CRC checked, and a file that
+    ends mid-record stops at the last complete chunk (:attr:`lost`). Only the Message
+    records of a decompressed chunk are decoded here, at once (:func:`_scan`): the
+    library's reader costs about 20 us per message in Python (a record object each).
     """
 
-    _HEAD = struct.Struct("<BQ")
-    _MSG = struct.Struct("<HIQQ")
-
-    def __init__(self, fh: Any, size: int) -> None:
+    def __init__(self, fh: Any, size: int, summary: Any = None, topic: str | None = None
+                 ) -> None:
         self.fh = fh
         self.size = size
+        self.summary = summary
+        self.topic = topic
         self.channels: dict[int, tuple[str, int, str]] = {}
         self.schemas: dict[int, str] = {}
+        #: ``(byte, reason)``: where a truncated file stopped being readable, else None.
+        self.lost: tuple[int, str] | None = None
+        #: Messages of the topic handed out.
+        self.read = 0
+        if summary is not None:
+            for sid, s in summary.schemas.items():
+                self.schemas[sid] = s.name
+            for cid, c in summary.channels.items():
+                self.channels[cid] = (c.topic, c.schema_id, c.message_encoding)
 
-    @staticmethod
-    def _str(buf: bytes, o: int) -> tuple[str, int]:
-        (n,) = _U32.unpack_from(buf, o)
-        if o + 4 + n > len(buf):
-            raise ValueError("string past the end of its record")
-        return buf[o + 4:o + 4 + n].decode("utf-8"), o + 4 + n
+    def _keep(self, cid: int) -> bool:
+        ch = self.channels.get(cid)
+        return self.topic is None or ch is None or ch[0] == self.topic
 
-    def _definition(self, op: int, body: bytes) -> None:
-        if op == 0x03:                                     # Schema
-            (sid,) = struct.unpack_from("<H", body, 0)
-            name, _ = self._str(body, 2)
-            self.schemas[sid] = name
-        elif op == 0x04:                                   # Channel
-            cid, sid = struct.unpack_from("<HH", body, 0)
-            t, o = self._str(body, 4)
-            enc, _ = self._str(body, o)
-            self.channels[cid] = (t, sid, enc)
+    def _definition(self, rec: Any) -> None:
+        from mcap.records import Channel, Schema
+
+        if isinstance(rec, Schema):
+            self.schemas[rec.id] = rec.name
+        elif isinstance(rec, Channel):
+            self.channels[rec.id] = (rec.topic, rec.schema_id, rec.message_encoding)
 
     def messages(self) -> Iterator[tuple[int, Any, Any]]:
-        """``(channel id, log time, data)`` of every Message record, in file order.
+        """``(channel id, log time, data)`` of the Message records, in file order.
 
-        Runs of Messages of one channel in a chunk come as one item (channel id, log
-        times, :class:`_Bulk`) where :func:`_scan` can read the chunk at once.
+        Runs of Messages of the topic's channel in a chunk come as one item (channel
+        id, log times, :class:`_Bulk`) where :func:`_scan` can read the chunk at once.
         """
-        fh = self.fh
-        if fh.read(8) != _MCAP_MAGIC:
-            raise ValueError("no MCAP magic")
-        pos = 8
-        head = self._HEAD
+        from mcap.exceptions import McapError
+        from mcap.records import Chunk, Footer, Message
+        from mcap.stream_reader import StreamReader
+
+        if self.summary is not None and self.summary.chunk_indexes:
+            for ci in sorted(self.summary.chunk_indexes, key=lambda c: c.chunk_start_offset):
+                self.fh.seek(ci.chunk_start_offset)
+                rec = next(iter(StreamReader(self.fh, skip_magic=True, emit_chunks=True,
+                                             record_size_limit=MAX_CHUNK_BYTES).records))
+                if not isinstance(rec, Chunk):
+                    raise ValueError(f"no chunk at byte {ci.chunk_start_offset} where the "
+                                     f"summary's index puts one")
+                yield from self._chunk(rec, ci.chunk_start_offset)
+            return
+        reader = StreamReader(self.fh, emit_chunks=True, validate_crcs=True,
+                              record_size_limit=MAX_CHUNK_BYTES)
+        records = iter(reader.records)
+        good = 8
         while True:
-            h = fh.read(9)
-            if len(h) < 9:
-                raise ValueError("file ends before its footer")
-            op, length = head.unpack(h)
-            pos += 9
-            if length > self.size - pos:
-                raise ValueError(f"record of {length} bytes past the end of the file")
-            if op == 0x02:                                 # Footer: done
+            try:
+                rec = next(records)
+            except StopIteration:
                 return
-            if op not in (0x03, 0x04, 0x05, 0x06):         # attachments, indexes, ...: skip
-                fh.seek(length, 1)
-                pos += length
-                continue
-            if length > MAX_CHUNK_BYTES:
-                raise ValueError(f"record of {length} bytes (at most {MAX_CHUNK_BYTES})")
-            body = fh.read(length)
-            pos += length
-            if len(body) != length:
-                raise ValueError("file ends inside a record")
-            if op == 0x06:                                 # Chunk
-                yield from self._chunk(body)
-            elif op == 0x05:
-                cid, _, log_time, _ = self._MSG.unpack_from(body, 0)
-                yield cid, log_time, body[22:]
-            elif op in (0x03, 0x04):
-                self._definition(op, body)
+            except (McapError, struct.error, EOFError, UnicodeDecodeError) as exc:
+                self.lost = (good, _why(exc))   # the file ends inside a record
+                return
+            if isinstance(rec, Chunk):
+                yield from self._chunk(rec, good)
+            elif isinstance(rec, Message):
+                if self._keep(rec.channel_id):
+                    yield rec.channel_id, rec.log_time, rec.data
+            elif isinstance(rec, Footer):
+                return
+            else:
+                self._definition(rec)
+            good = self.fh.tell()
 
-    def _chunk(self, body: bytes) -> Iterator[tuple[int, Any, Any]]:
-        _, _, usize, _ = struct.unpack_from("<QQQI", body, 0)
-        comp, o = self._str(body, 28)
-        (n,) = struct.unpack_from("<Q", body, o)
-        data = body[o + 8:o + 8 + n]
-        if len(data) != n:
-            raise ValueError("chunk shorter than its length")
-        if usize > MAX_CHUNK_BYTES:
-            raise ValueError(f"chunk of {usize} bytes uncompressed (at most {MAX_CHUNK_BYTES})")
-        if comp == "zstd":
-            import zstandard
+    def _chunk(self, chunk: Any, at: int) -> Iterator[tuple[int, Any, Any]]:
+        """The Messages of one chunk (decompressed and CRC-checked by the mcap library)."""
+        from mcap.stream_reader import get_chunk_data_stream
 
-            raw = zstandard.ZstdDecompressor().decompress(data, max_output_size=usize)
-        elif comp == "lz4":
-            import lz4.frame
+        from ._mcap import crc32
 
-            raw = lz4.frame.decompress(data)
-        elif comp == "":
-            raw = data
-        else:
-            raise ValueError(f"unknown chunk compression {comp!r}")
-        if len(raw) != usize:
+        if chunk.uncompressed_size > MAX_CHUNK_BYTES:
+            raise ValueError(f"chunk of {chunk.uncompressed_size} bytes uncompressed (at most "
+                             f"{MAX_CHUNK_BYTES})")
+        if chunk.compression not in ("", "zstd", "lz4"):
+            raise ValueError(f"unknown chunk compression {chunk.compression!r}")
+        data, n = get_chunk_data_stream(chunk)          # decompressed by the library
+        raw = data.read(n) if n else b""
+        if len(raw) != chunk.uncompressed_size:
             raise ValueError("chunk does not decompress to its stated size")
+        if chunk.uncompressed_crc != 0:   # the check of the library's validate_crc=True,
+            crc = crc32(raw)              # with ISA-L's CRC-32 where installed (5x zlib's)
+            if crc != chunk.uncompressed_crc:
+                raise RecordingError(
+                    f"{self.fh.name}: corrupt MCAP file: the chunk at byte {at} fails its "
+                    f"CRC check (stored {chunk.uncompressed_crc:#010x}, computed "
+                    f"{crc:#010x})")
         bulk = _scan(raw)
         if bulk is not None:
             for item in bulk:
                 if len(item) == 2:                 # (-opcode, body): a definition
-                    self._definition(-item[0], item[1])
-                else:
-                    yield item
+                    self._raw_definition(-item[0], item[1])
+                    continue
+                yield from self._runs(*item)
             return
-        head, msg = self._HEAD, self._MSG
+        head, msg = _HEAD, _MSG
         o, end = 0, len(raw)
         while o < end:
             op, length = head.unpack_from(raw, o)
@@ -436,10 +502,55 @@ class _McapStream:
                 raise ValueError("record past the end of its chunk")
             if op == 0x05:
                 cid, _, log_time, _ = msg.unpack_from(raw, o)
-                yield cid, log_time, raw[o + 22:o + length]
+                if self._keep(cid):
+                    yield cid, log_time, raw[o + 22:o + length]
             elif op in (0x03, 0x04):
-                self._definition(op, raw[o:o + length])
+                self._raw_definition(op, raw[o:o + length])
             o += length
+
+    def _runs(self, cid: NDArray[np.int64], t: NDArray[np.int64], data: NDArray[np.uint8],
+              off: NDArray[np.int64], size: NDArray[np.int64]
+              ) -> Iterator[tuple[int, Any, Any]]:
+        """The messages of the topic among those of a chunk, as runs of one channel.
+
+        The other channels' messages are dropped at once: a tracked file interleaves
+        four topics reading by reading, and the topic's messages of a chunk then make
+        one run (a strided view of the chunk, :func:`_rows`), not one run each.
+        """
+        if not len(cid):
+            return
+        c0 = int(cid[0])
+        ids = [c0] if (cid == c0).all() else np.unique(cid).tolist()
+        keep = [c for c in ids if self._keep(c)]
+        if len(keep) < len(ids):
+            sel = np.isin(cid, keep)
+            cid, t, off, size = cid[sel], t[sel], off[sel], size[sel]
+        cut = [0, *(np.flatnonzero(np.diff(cid)) + 1).tolist(), len(cid)]
+        for i, j in zip(cut[:-1], cut[1:], strict=True):
+            if j > i:
+                yield int(cid[i]), t[i:j], _Bulk(data, off[i:j], size[i:j])
+
+    def _raw_definition(self, op: int, body: bytes) -> None:
+        """A Schema or Channel record of a chunk, from its bytes (spec: mcap.dev/spec)."""
+        from mcap.data_stream import ReadDataStream
+        from mcap.records import Channel, Schema
+
+        stream = ReadDataStream(io.BytesIO(body))
+        self._definition(Schema.read(stream) if op == 0x03 else Channel.read(stream))
+
+
+def _why(exc: BaseException) -> str:
+    """Why the records stopped: a cut record, or what the mcap library says."""
+    from mcap.exceptions import EndOfFile
+
+    if isinstance(exc, (EndOfFile, EOFError, struct.error)):
+        return "the file ends inside a record"
+    text = " ".join(str(exc).split())
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+_HEAD = struct.Struct("<BQ")
+_MSG = struct.Struct("<HIQQ")
 
 
 class _Bulk:
@@ -458,18 +569,18 @@ class _Bulk:
 
 
 def _scan(raw: bytes) -> list[Any] | None:
-    """The Messages of a decompressed chunk as runs of one channel, or None.
+    """The Messages of a decompressed chunk, between its definitions, or None.
 
-    Items in record order: ``(channel id, log times, _Bulk)`` for a run of Messages of
-    one channel, ``(-opcode, body)`` for a Schema or Channel record. None (the
-    record-by-record path) without numba, or when
-    :func:`athenakin.fast._mcap_kernels.scan_records` finds anything unusual.
+    Items in record order: ``(channel ids, log times, data, offsets, sizes)`` of the
+    Messages between two definitions, ``(-opcode, body)`` for a Schema or Channel
+    record. None (the record-by-record path) without numba, or when
+    :func:`athenakin.ros._kernels.scan_records` finds anything unusual.
     """
-    from .._dispatch import numba_available
+    from .._backend import numba_available
 
     if not numba_available() or not raw:
         return None
-    from ..fast._mcap_kernels import scan_records
+    from ._kernels import scan_records
 
     data = np.frombuffer(raw, dtype=np.uint8)
     cap = len(raw) // 9 + 1
@@ -484,11 +595,8 @@ def _scan(raw: bytes) -> list[Any] | None:
     defs = np.flatnonzero((ops == 0x03) | (ops == 0x04)).tolist()
     for a, b in zip([0, *(d + 1 for d in defs)], [*defs, n], strict=True):
         msg = a + np.flatnonzero(ops[a:b] == 0x05)
-        cid, t = cids[msg], times[msg]
-        off, size = starts[msg] + 22, lengths[msg] - 22
-        cut = [0, *(np.flatnonzero(np.diff(cid)) + 1).tolist(), len(msg)]
-        items += [(int(cid[i]), t[i:j], _Bulk(data, off[i:j], size[i:j]))
-                  for i, j in zip(cut[:-1], cut[1:], strict=True) if j > i]
+        if msg.size:
+            items.append((cids[msg], times[msg], data, starts[msg] + 22, lengths[msg] - 22))
         if b < n:
             o = int(starts[b])
             items.append((-int(ops[b]), raw[o:o + int(lengths[b])]))

@@ -4,7 +4,7 @@ One :class:`McapOutput` writes one file through a temporary file in the same
 folder, renamed into place only when everything is written: a failure (or
 Ctrl-C) leaves nothing, never a partial file. Messages are encoded by
 :mod:`._cdr` (vectorised over readings; where numba runs, the records of a chunk
-are filled by :func:`athenakin.fast._mcap_kernels.fill_records`, the same bytes)
+are filled by :func:`athenakin.ros._kernels.fill_records`, the same bytes)
 and written by :mod:`._mcap`, chunked and compressed (zstd level -3 unless told);
 the schemas are the ROS 2 message definitions
 (from rosbags' type store), so Foxglove, rosbags, mcap-ros2-support and
@@ -23,11 +23,9 @@ Topics (docs/ros.md):
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
-import os
-import stat
-import tempfile
 from pathlib import Path
 from types import TracebackType
 from typing import IO, Any
@@ -35,7 +33,7 @@ from typing import IO, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._output import check_output_path
+from .._output import AtomicFile, check_output_path, naming_path
 from .._validation import check_path
 from ..design import Design
 from ..errors import InvalidInputError
@@ -55,7 +53,7 @@ from ._frames import (
     quaternion_xyzw,
     urdf_model,
 )
-from ._mcap import MESSAGE_HEADER, McapFile, check_compression
+from ._mcap import MESSAGE_HEADER, McapFile, check_compression, compressor_module
 
 __all__ = ["McapOutput", "RosEncoder", "TrackedBatch", "TOPICS", "STATUS_TYPE",
            "STATUS_MSGDEF", "TF_FRAMES", "STATUS_FLAG_FIELDS"]
@@ -360,7 +358,7 @@ class RosEncoder:
 
 def _compiled() -> bool:
     """Whether :meth:`McapOutput.write_tracked` fills its records with the compiled kernel."""
-    from .._dispatch import numba_available
+    from .._backend import numba_available
 
     return numba_available()
 
@@ -525,6 +523,7 @@ class McapOutput:
                  compression: str = "zstd", compression_level: int | None = None,
                  target: str | Path | None = None) -> None:
         compression, compression_level = check_compression(compression, compression_level)
+        self._closed = True                    # nothing to close until the file is open
         self.path = check_output_path(path)    # a folder, FIFO or device: named error
         if not isinstance(design, Design):
             raise TypeError(f"design: expected a Design, got {type(design).__name__}")
@@ -534,19 +533,24 @@ class McapOutput:
         T_b_e = resolve_rcm_frame(T_b_e, design)
         if target is not None:
             target = check_path(target, "target")
+        compressor_module(compression)         # a missing extra: named, before any file
+        msgdef(_MSG_TYPES["tool_tip"])         # rosbags (the schemas): likewise
         self.encoder = RosEncoder(design, T_b_e)
         self.model = self.encoder.model
-        self._rename = target is None
+        self._atomic: AtomicFile | None = None
         if target is None:
-            real = Path(os.path.realpath(self.path))
-            fd, tmp = tempfile.mkstemp(prefix=f".{real.name}.", suffix=".mcap", dir=real.parent)
-            self._tmp = Path(tmp)
-            self._fh: IO[bytes] = os.fdopen(fd, "wb")
+            self._atomic = AtomicFile(self.path, suffix=".mcap")
+            self._tmp = self._atomic.temp
+            self._fh: IO[bytes] = self._atomic.fh
         else:
             self._tmp = Path(target)
-            self._fh = open(self._tmp, "wb")   # noqa: SIM115 - closed in close/discard
+            with naming_path(self.path):
+                self._fh = open(self._tmp, "wb")   # noqa: SIM115 - closed in close/discard
+        self._closed = False
         try:
-            self._file = McapFile(self._fh, compression=compression, level=compression_level)
+            with naming_path(self.path):
+                self._file = McapFile(self._fh, compression=compression,
+                                      level=compression_level)
         except BaseException:
             self.discard()
             raise
@@ -579,7 +583,8 @@ class McapOutput:
 
     def _add(self, key: str, stamp: int, data: bytes) -> None:
         cid = self._channel(key)
-        self._file.single(cid, self._seq[key], stamp, data)
+        with naming_path(self.path):          # a full disk, an I/O error: name the file
+            self._file.single(cid, self._seq[key], stamp, data)
         self._seq[key] += 1
         self.counts[TOPICS[key]] += 1
 
@@ -666,7 +671,8 @@ class McapOutput:
         ``/athena/status`` has a message for every reading, the other topics of ``keys``
         one for every valid reading.
         """
-        self._file.chunk(data, index)
+        with naming_path(self.path):          # a full disk, an I/O error: name the file
+            self._file.chunk(data, index)
         nv = int(v.sum())
         self._seq["status"] += m
         self.counts[TOPICS["status"]] += m
@@ -690,7 +696,7 @@ class McapOutput:
         written at their offsets, the readings without a pose keeping only their status.
         """
         from ..fast._frame_kernels import joint_values_into, urdf_frames_into
-        from ..fast._mcap_kernels import fill_records
+        from ._kernels import fill_records
 
         plan = self._record_plan(keys, cids)
         (lengths, zero, code, hinge), (parent, origin, kind, axis, column, wanted) = \
@@ -746,31 +752,38 @@ class McapOutput:
 
     # ------------------------------------------------------------------ finish
     def close(self) -> Path:
-        """Finish the file and move it into place; returns its path."""
+        """Finish the file and move it into place; returns its path.
+
+        Raises
+        ------
+        OSError
+            The file cannot be written (a full disk, an I/O error): the error names
+            :attr:`path`; nothing is left behind.
+        """
         if self._closed:
             return self.path
-        self._file.close()
-        self._fh.close()
+        try:
+            with naming_path(self.path):
+                self._file.close()
+                if self._atomic is None:
+                    self._fh.close()
+        except BaseException:
+            self.discard()
+            raise
         self._closed = True
-        if self._rename:
-            real = Path(os.path.realpath(self.path))
-            try:
-                mode = stat.S_IMODE(os.stat(real).st_mode)
-            except FileNotFoundError:
-                mask = os.umask(0o022)
-                os.umask(mask)
-                mode = 0o666 & ~mask
-            os.chmod(self._tmp, mode)
-            os.replace(self._tmp, real)
+        if self._atomic is not None:
+            self._atomic.commit()               # fsync, rename; names the path
         return self.path
 
     def discard(self) -> None:
         """Drop the file (nothing is written)."""
         if not self._closed:
             self._closed = True
-            self._fh.close()
-        if self._rename:
-            self._tmp.unlink(missing_ok=True)
+            if self._atomic is None:
+                with contextlib.suppress(OSError):
+                    self._fh.close()
+        if self._atomic is not None:
+            self._atomic.discard()
 
     def __enter__(self) -> McapOutput:
         return self

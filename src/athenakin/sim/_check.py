@@ -294,7 +294,7 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
         geoms = {}
         for j in map(int, np.flatnonzero(sol.valid)):
             jv = mechanism_joint_values(q_now, T, design, slot=j)
-            vals, geoms[j] = jv.values, jv.geometry
+            vals, geoms[j] = jv.values, jv.state
             diff = data.qpos[adr] - np.array([vals[nm] for nm in names])
             joint_err[j] = np.abs(np.where(hinge, wrap_angle(diff), diff)).max()
         out["q_reached"].append(q_now)
@@ -302,12 +302,13 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
         out["nearest_slot"].append(int(np.argmin(joint_err)) if sol.valid.any() else -1)
         out["hold_time"].append(hold)
         if sol.valid[k]:
-            g = geoms[k]
-            z_ref = g.frames["instrument"][:3, 2]
-            out["tip_error"].append(float(np.linalg.norm(tip - g.points["tip"])))
+            st = geoms[k]
+            T_ref = st.frame("instrument")
+            z_ref = T_ref[:3, 2]
+            out["tip_error"].append(float(np.linalg.norm(tip - st["tip"])))
             out["axis_error"].append(float(np.arctan2(np.linalg.norm(np.cross(T_ins[:3, 2], z_ref)),
                                                       T_ins[:3, 2] @ z_ref)))
-            out["pose_error"].append(float(closure_residual(T_ins, g.frames["instrument"])))
+            out["pose_error"].append(float(closure_residual(T_ins, T_ref)))
             out["joint_error"].append(float(joint_err[k]))
         else:
             for key in ("tip_error", "axis_error", "pose_error", "joint_error"):

@@ -41,37 +41,26 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._mechanism import mechanism_points
+from .._mechanism import (
+    BODY_TABLE,
+    JOINTS,
+    BodyGeometry,
+    MechanismState,
+    link_segments,
+    state_from_fk,
+)
 from .._validation import check_array
-from ..collision._bodies import Bodies
 from ..design import Design, resolve_design
-from ..plot._geometry import RobotGeometry, robot_geometry
+from ..errors import InvalidInputError, Reason, error_for_reason
+from ..robot import forward_kinematics as reference_forward_kinematics
+from ..robot._setup import resolve_rcm_frame
 
 __all__ = ["JOINTS", "ACTUATED", "LOOP_CLOSURES", "LoopClosure", "MechanismJointValues",
            "mechanism_joint_values", "urdf_joint_zero", "COLLISION_BODY", "collision_segments",
-           "rail_segment", "actuator_drawn_lengths", "ACTUATOR_ROD_FALLBACK", "ACTUATOR_OVERLAP"]
+           "single_state", "actuator_drawn_lengths", "ACTUATOR_ROD_FALLBACK", "ACTUATOR_OVERLAP"]
 
-#: Joints of the spanning tree in MJCF order: name -> (kind, parent body, child body).
-JOINTS: dict[str, tuple[str, str, str]] = {
-    "q1": ("slide", "base", "carriage_a"),
-    "a_ujoint_x": ("hinge", "carriage_a", "a_cross"),
-    "a_ujoint_y": ("hinge", "a_cross", "link_a1"),
-    "platform_y": ("hinge", "link_a1", "platform"),
-    "u1": ("hinge", "platform", "ujoint_cross"),
-    "u2": ("hinge", "ujoint_cross", "instrument"),
-    "p": ("slide", "instrument", "guide"),
-    "u3": ("hinge", "guide", "sph_3"),
-    "u4": ("hinge", "sph_3", "sph_4"),
-    "u5": ("hinge", "sph_4", "sph_5"),
-    "a_base_z": ("hinge", "carriage_a", "link_a3"),
-    "carrier_z": ("hinge", "link_a3", "carrier"),
-    "k2_x": ("hinge", "carrier", "k2_arm"),
-    "q3": ("slide", "k2_arm", "k2_rod"),
-    "q2": ("slide", "base", "carriage_b"),
-    "b_ujoint_x": ("hinge", "carriage_b", "b_cross"),
-    "b_ujoint_y": ("hinge", "b_cross", "link_b1"),
-    "b_base_z": ("hinge", "carriage_b", "link_b3"),
-}
+#: Joints of the spanning tree in MJCF order: name -> (kind, parent body, child body); the
+#: tree itself (origins, axes) is :data:`athenakin._mechanism.TREE`.
 
 #: The three actuated joints, in the order of ``q``.
 ACTUATED = ("q1", "q2", "q3")
@@ -139,35 +128,79 @@ class MechanismJointValues:
     zero : dict of str -> float
         The URDF's joint zero in the model's convention: the joint values of the
         assembled zero configuration (``q_zero``, ``zero_slot``).
-    geometry : RobotGeometry
-        The configuration the values realise (points and frames, base frame).
+    state : MechanismState
+        The configuration the values realise, as :func:`athenakin._mechanism.mechanism_state`
+        gives it: every point (``state["tip"]``) and link frame (``state.frame("instrument")``)
+        in the base frame; ``values`` are its joint values.
+    q : ndarray, shape (3,)
+        The actuators, m.
+    T_b_e : ndarray, shape (4, 4)
+        The RCM frame.
+    design : Design
+    slot : int
+        The forward-kinematics slot (0..15).
     """
 
     values: dict[str, float]
     urdf: dict[str, float]
     zero: dict[str, float]
-    geometry: RobotGeometry
+    state: MechanismState
+    q: NDArray[np.float64]
+    T_b_e: NDArray[np.float64]
+    design: Design
+    slot: int
 
 
-def _absolute_joint_values(g: RobotGeometry) -> dict[str, float]:
-    d = g.design
-    q1, q2, q3 = g.q
-    h = 0.5 * (q1 - q2)
-    r1 = np.sqrt(d.l1 ** 2 - h * h)
-    R_b_i = g.frames["i"][:3, :3]
-    theta = float(np.arctan2(R_b_i[2, 1], R_b_i[1, 1]))
-    phi_a = float(np.arctan2(-h, r1))
-    ang_a3 = float(np.arctan2(np.sqrt(d.l3 ** 2 - h * h), -h))
-    ang_b3 = float(np.arctan2(np.sqrt(d.l3 ** 2 - h * h), h))
-    arm = g.points["O_i"] - g.points["C"]
-    gamma = float(np.arctan2(-arm[1], arm[2]))
-    return {
-        "q1": float(q1), "a_ujoint_x": theta, "a_ujoint_y": phi_a, "platform_y": -phi_a,
-        "u1": float(g.u[0]), "u2": float(g.u[1]), "p": g.p, "u3": float(g.u[2]),
-        "u4": float(g.u[3]), "u5": float(g.u[4]),
-        "a_base_z": ang_a3, "carrier_z": -ang_a3, "k2_x": gamma, "q3": float(q3),
-        "q2": float(q2), "b_ujoint_x": theta, "b_ujoint_y": -phi_a, "b_base_z": ang_b3,
-    }
+def single_state(q: ArrayLike | None, T_b_e: ArrayLike | None, design: Design | None, *,
+                 slot: int, geometry: BodyGeometry | None = None) -> MechanismState:
+    """:func:`~athenakin._mechanism.mechanism_state` of one configuration that must assemble.
+
+    Solved with the numpy reference forward kinematics (as the views
+    draw it), so that the exports are the same text
+    whichever backend runs.
+
+    Parameters
+    ----------
+    q, T_b_e, design, slot
+        As for :func:`mechanism_joint_values` (``q`` of shape (3,), ``slot`` an int).
+    geometry : BodyGeometry, keyword-only, optional
+        Carriage length, spherical-mechanism radius, rail margin (default
+        :class:`~athenakin._mechanism.BodyGeometry`).
+
+    Returns
+    -------
+    MechanismState
+        Batch shape ``()``.
+
+    Raises
+    ------
+    InvalidInputError
+        ``q`` not of shape (3,), ``slot`` not in 0..15.
+    KinematicsError
+        The slot holds no valid solution (the subclass of its reason).
+    """
+    from ..robot import REFERENCE_Q
+
+    design = resolve_design(design)
+    q = check_array(REFERENCE_Q if q is None else q, "q", (3,))
+    if q.shape != (3,):
+        raise InvalidInputError(f"q: expected shape (3,), got shape {q.shape}")
+    if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 16:
+        raise InvalidInputError(f"slot: expected an integer in 0..15, got {slot!r}")
+    T = resolve_rcm_frame(T_b_e, design)
+    # the numpy reference FK, as robot_geometry: an export's numbers never depend on the
+    # backend
+    sol = reference_forward_kinematics(q, T, design, errors="flag")
+    st = state_from_fk(sol, q, T, design, int(slot),
+                       BodyGeometry() if geometry is None else geometry)
+    if not st.valid:
+        why = Reason(int(st.reason)).name
+        raise error_for_reason(int(st.reason), f"slot {slot} of q = {q.tolist()} m ({why})")
+    return st
+
+
+def _joint_dict(st: MechanismState) -> dict[str, float]:
+    return dict(zip(JOINTS, (float(v) for v in st.joints), strict=True))
 
 
 def urdf_joint_zero(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
@@ -197,7 +230,7 @@ def urdf_joint_zero(T_b_e: ArrayLike | None = None, design: Design | None = None
     """
     if q_zero is not None:
         q_zero = check_array(q_zero, "q_zero", (3,))
-    return _absolute_joint_values(robot_geometry(q_zero, T_b_e, design, slot=zero_slot))
+    return _joint_dict(single_state(q_zero, T_b_e, design, slot=zero_slot))
 
 
 def mechanism_joint_values(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
@@ -223,7 +256,8 @@ def mechanism_joint_values(q: ArrayLike | None = None, T_b_e: ArrayLike | None =
     -------
     MechanismJointValues
         ``.values`` (model / MJCF convention), ``.urdf`` (relative to the URDF
-        zero, for ROS), ``.zero`` and ``.geometry``.
+        zero, for ROS), ``.zero``, ``.state`` and the configuration's ``q``, ``T_b_e``,
+        ``design``, ``slot``.
 
     Raises
     ------
@@ -237,16 +271,22 @@ def mechanism_joint_values(q: ArrayLike | None = None, T_b_e: ArrayLike | None =
     >>> round(jv.values["q3"], 3), abs(jv.urdf["q3"]) < 1e-15   # URDF zero = reference
     (0.45, True)
     """
-    g = robot_geometry(q, T_b_e, design, slot=slot)
-    values = _absolute_joint_values(g)
-    zero = urdf_joint_zero(g.T_b_e, g.design, q_zero=q_zero, zero_slot=zero_slot)
+    from ..robot import REFERENCE_Q
+
+    design = resolve_design(design)
+    T = resolve_rcm_frame(T_b_e, design)
+    q = check_array(REFERENCE_Q if q is None else q, "q", (3,))
+    st = single_state(q, T, design, slot=slot)
+    values = _joint_dict(st)
+    zero = urdf_joint_zero(T, design, q_zero=q_zero, zero_slot=zero_slot)
     rel = {}
     for name, v in values.items():
         x = v - zero[name]
         if JOINTS[name][0] == "hinge":
             x = float(-np.remainder(-x + np.pi, 2 * np.pi) + np.pi)
         rel[name] = x
-    return MechanismJointValues(values=values, urdf=rel, zero=zero, geometry=g)
+    return MechanismJointValues(values=values, urdf=rel, zero=zero, state=st, q=q, T_b_e=T,
+                                design=design, slot=int(slot))
 
 
 #: Length of the drawn rod of the q3 actuator where the stroke of q3 has no positive
@@ -298,61 +338,27 @@ def actuator_drawn_lengths(design: Design | None = None) -> tuple[float, float]:
     return housing, rod
 
 
-#: athenakin body (:data:`athenakin._mechanism.BODIES`) -> the MJCF body / URDF link that
-#: carries its collision capsule ("world" for the rail: the URDF's ``base``).
-COLLISION_BODY: dict[str, str] = {
-    "rail": "world", "carriage_a": "carriage_a", "carriage_b": "carriage_b",
-    "link_a": "link_a1", "link_b": "link_b1", "link_ad": "link_a3", "link_bd": "link_b3",
-    "carrier": "carrier", "actuator": "k2_rod", "platform": "platform",
-    "instrument": "instrument", "sphere_link_1": "sph_4", "sphere_link_2": "sph_3"}
-
-def rail_segment(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: int,
-                 bodies: Bodies) -> NDArray[np.float64]:
-    """End points of the rail (base frame) in a configuration, shape (2, 3)."""
-    mp = mechanism_points(q, T_b_e, design, slot=slot, geometry=bodies.geometry)
-    return np.stack([mp["rail_lo"], mp["rail_hi"]])
+#: athenakin body -> the MJCF body / URDF link that carries it (``base``: MJCF's world
+#: body), as :data:`athenakin._mechanism.BODY_TABLE` says.
+COLLISION_BODY: dict[str, str] = {b.name: b.link for b in BODY_TABLE}
 
 
-def collision_segments(values: dict[str, float], design: Design, bodies: Bodies,
-                       rail: NDArray[np.float64]) -> dict[str, tuple[NDArray[np.float64],
-                                                                      NDArray[np.float64]]]:
-    """End points of every body's capsule in the frame of the body (link) that carries it.
+def collision_segments(state: MechanismState, design: Design, geometry: BodyGeometry
+                       ) -> dict[str, tuple[NDArray[np.float64], NDArray[np.float64]]]:
+    """End points of every body's capsule in the frame of the link that carries it.
 
     Parameters
     ----------
-    values : dict
-        Joint values of the configuration the export is assembled in (``p`` and ``q3``
-        are used: the side of the guide, the actuator rod's length).
+    state : MechanismState
+        The configuration the export is assembled in (:func:`single_state`).
     design : Design
-    bodies : Bodies
-    rail : ndarray, shape (2, 3)
-        The rail's end points in the base frame (:func:`rail_segment`).
+    geometry : BodyGeometry
 
     Returns
     -------
     dict
-        Body name -> (a, b), each shape (3,), in the frame of ``COLLISION_BODY[body]``.
+        Body name -> (a, b), each shape (3,), in the frame of ``COLLISION_BODY[body]``
+        (:func:`athenakin._mechanism.link_segments`).
     """
-    d = design
-    half = 0.5 * bodies.geometry.carriage_length
-    rs = bodies.geometry.sphere_radius
-    side = 1.0 if values["p"] >= 0 else -1.0       # O_s on the -z side of the RCM if p > 0
-    z = np.zeros(3)
-
-    def v(*x: float) -> NDArray[np.float64]:
-        return np.array(x, dtype=float)
-
-    return {
-        "rail": (rail[0], rail[1]),
-        "carriage_a": (v(-half, 0, 0), v(half, 0, 0)),
-        "carriage_b": (v(-half, 0, 0), v(half, 0, 0)),
-        "link_a": (z, v(0, 0, d.l1)), "link_b": (z, v(0, 0, d.l1)),
-        "link_ad": (z, v(d.l3, 0, 0)), "link_bd": (z, v(d.l3, 0, 0)),
-        "carrier": (z, v(0, d.l2, d.l5)),
-        # the rod of the q3 actuator at its keyframe length, sliding with q3 through C
-        "actuator": (v(0, 0, -values["q3"]), z),
-        "platform": (z, v(0, 0, d.l4)),
-        "instrument": (z, v(0, 0, d.tool_length)),
-        "sphere_link_2": (v(0, -rs, 0), v(0, 0, -side * rs)),    # S_4 -> S_3 in sph_3
-        "sphere_link_1": (v(0, -rs, 0), v(0, 0, rs)),            # S_5 -> S_4 in sph_4
-    }
+    segs = link_segments(state, design, geometry)
+    return {b.name: (segs[j, 0], segs[j, 1]) for j, b in enumerate(BODY_TABLE)}

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._mechanism import BODIES
+from .._mechanism import BODIES, MASS_PART_LINK, TREE, BodyGeometry, tree_origins
 from .._output import check_output_path, write_text_atomic
 from .._validation import check_text
 from ..collision._bodies import Bodies, resolve_bodies
@@ -31,10 +31,11 @@ from ._layout import (
     COLLISION_BODY,
     JOINTS,
     LOOP_CLOSURES,
+    MechanismJointValues,
     actuator_drawn_lengths,
     collision_segments,
     mechanism_joint_values,
-    rail_segment,
+    single_state,
 )
 
 __all__ = ["mjcf_from_design", "write_mjcf", "MJCF_TIMESTEP", "ACTUATOR_KP", "ACTUATOR_KV",
@@ -66,6 +67,10 @@ SPHERE_RADIUS = 0.06
 COLLISION_GROUP = 3
 #: Smallest radius of an exported capsule (MuJoCo needs a positive size), m.
 _MIN_RADIUS = 1e-6
+
+
+#: MJCF's name of a link of the tree where it differs (the root link is MuJoCo's world).
+_MJCF_BODY = {"base": "world"}
 
 
 def collision_geom_name(body: str) -> str:
@@ -107,6 +112,29 @@ def _joint(body: ET.Element, name: str, axis: ArrayLike, *, damping: float = PAS
         attrs["range"] = _vec(rng)
         attrs["limited"] = "true"
     ET.SubElement(body, "joint", attrs)
+
+
+#: MJCF quaternion of the roll of a joint origin (:attr:`athenakin._mechanism.TreeJoint.roll`).
+_ROLL_QUAT = {0.0: None, 0.5 * math.pi: _RX90, math.pi: _RX180}
+
+
+def _tree_body(parent: ET.Element, joint: str, origins: dict[str, NDArray[np.float64]],
+               **kwargs: object) -> ET.Element:
+    """The child body of a joint of :data:`athenakin._mechanism.TREE`, with the joint."""
+    j = TREE[joint]
+    el = _body(parent, j.child, pos=origins[joint][:3, 3], quat=_ROLL_QUAT[j.roll])
+    _joint(el, joint, j.axis, **kwargs)  # type: ignore[arg-type]
+    return el
+
+
+def _carriage(world: ET.Element, joint: str, origins: dict[str, NDArray[np.float64]],
+              half: float, rng: tuple[float, float]) -> ET.Element:
+    """A carriage on the rail (``half`` of its length along x), driven by ``joint``."""
+    el = _tree_body(world, joint, origins, damping=1.0, rng=rng)
+    ET.SubElement(el, "geom", {"name": TREE[joint].child, "type": "box",
+                               "size": _vec((half, 0.02, 0.015)), "pos": "0 0 -0.02",
+                               "rgba": _RGBA["rail"]})
+    return el
 
 
 def _capsule(body: ET.Element, name: str, a: ArrayLike, b: ArrayLike, rgba: str,
@@ -199,7 +227,7 @@ def _collision_geoms(root: ET.Element, bodies: Bodies, segs: dict[str, tuple[
         NDArray[np.float64], NDArray[np.float64]]],
         bits: dict[tuple[str, ...], int] | None = None) -> None:
     """Capsules of ``bodies`` as collision geoms, and the excluded pairs as <exclude>."""
-    by_name = {"world": root.find("worldbody")}
+    by_name = {"base": root.find("worldbody")}
     for el in root.iter("body"):
         by_name[el.get("name", "")] = el
     for body in BODIES:
@@ -220,7 +248,7 @@ def _collision_geoms(root: ET.Element, bodies: Bodies, segs: dict[str, tuple[
         ET.SubElement(parent, "geom", attrs)
     contact = ET.SubElement(root, "contact")
     for x, y in bodies.excluded_pairs:
-        bx, by = COLLISION_BODY[x], COLLISION_BODY[y]
+        bx, by = (_MJCF_BODY.get(COLLISION_BODY[v], COLLISION_BODY[v]) for v in (x, y))
         if bx != by:
             ET.SubElement(contact, "exclude", {"name": f"exclude_{x}_{y}", "body1": bx,
                                                "body2": by})
@@ -294,14 +322,21 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     ``bodies.excluded_pairs`` (those that share a joint, and the user's) is a
     ``<contact><exclude>``: MuJoCo's own collision detection then reports contacts
     between the pairs that :func:`athenakin.collision.clearance` checks, with the same
-    distances at the keyframe (tested). The actuator's capsule is its rod at the
-    keyframe length, sliding with ``q3``.
+    distances at the keyframe (tested). The actuator's capsule rides on
+    ``k2_arm`` (the housing, whose frame is the actuator's in the mass model): it starts
+    at C and has the keyframe's length ``q3``. The carriages are
+    ``bodies.geometry.carriage_length`` long.
     """
     jv = mechanism_joint_values(q, T_b_e, design, slot=slot)
-    values, g = jv.values, jv.geometry
-    d = g.design
-    T = g.T_b_e
+    values = jv.values
+    d = jv.design
+    T = jv.T_b_e
     lo, hi = d.stroke_min, d.stroke_max
+    if bodies is not None and not isinstance(bodies, Bodies):
+        bodies = resolve_bodies(bodies, d)          # raises the named TypeError
+    geo = bodies.geometry if bodies is not None else BodyGeometry()
+    half = 0.5 * geo.carriage_length
+    st = jv.state if bodies is None else single_state(jv.q, T, d, slot=jv.slot, geometry=geo)
 
     check_text(model_name, "model_name")
     root = ET.Element("mujoco", {"model": model_name})
@@ -319,83 +354,62 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     ET.SubElement(visual, "global", {"offwidth": "1280", "offheight": "960"})
     ET.SubElement(visual, "scale", {"framelength": "0.08", "framewidth": "0.004"})
 
+    origins = tree_origins(d)
     wb = ET.SubElement(root, "worldbody")
     ET.SubElement(wb, "light", {"pos": "0 0 2", "dir": "0 0 -1", "directional": "true"})
-    rail = g.rail
+    rail = np.stack([st["rail_lo"], st["rail_hi"]])
     _capsule(wb, "rail", rail[0] - [0, 0, 0.02], rail[1] - [0, 0, 0.02], "rail", radius=0.01)
 
     # --- carriage A: U-joint to the platform, bar to D --------------------------------
-    ca = _body(wb, "carriage_a")
-    _joint(ca, "q1", (1, 0, 0), damping=1.0, rng=(lo[0], hi[0]))
-    ET.SubElement(ca, "geom", {"name": "carriage_a", "type": "box", "size": "0.03 0.02 0.015",
-                               "pos": "0 0 -0.02", "rgba": _RGBA["rail"]})
-    ac = _body(ca, "a_cross")
-    _joint(ac, "a_ujoint_x", (1, 0, 0))
+    ca = _carriage(wb, "q1", origins, half, (lo[0], hi[0]))
+    ac = _tree_body(ca, "a_ujoint_x", origins)
     _sphere(ac, "a_cross", 0.012, "joint")
-    la1 = _body(ac, "link_a1")
-    _joint(la1, "a_ujoint_y", (0, 1, 0))
+    la1 = _tree_body(ac, "a_ujoint_y", origins)
     _capsule(la1, "link_a1", (0, 0, 0), (0, 0, d.l1), "parallel")
-    plat = _body(la1, "platform", pos=(0, 0, d.l1))
-    _joint(plat, "platform_y", (0, 1, 0))
+    plat = _tree_body(la1, "platform_y", origins)
     _sphere(plat, "platform_oi", 0.015, "joint")
     _capsule(plat, "offset_l4", (0, 0, 0), (0, 0, d.l4), "parallel")
     _site(plat, "platform_oi")
-    uc = _body(plat, "ujoint_cross", pos=(0, 0, d.l4))
-    _joint(uc, "u1", (0, 0, 1))
+    uc = _tree_body(plat, "u1", origins)
     _sphere(uc, "ujoint_cross", 0.012, "joint")
     _site(uc, "O_s")
-    ins = _body(uc, "instrument", quat=_RX180)
-    _joint(ins, "u2", (0, 1, 0))
+    ins = _tree_body(uc, "u2", origins)
     p0 = min(0.0, values["p"]) - 0.05
     _capsule(ins, "instrument", (0, 0, p0), (0, 0, d.tool_length), "serial", radius=0.004)
     _site(ins, "tool_tip", (0, 0, d.tool_length))
-    guide = _body(ins, "guide")
-    _joint(guide, "p", (0, 0, 1))
+    guide = _tree_body(ins, "p", origins)
     ET.SubElement(guide, "geom", {"name": "guide", "type": "cylinder", "size": "0.008 0.02",
                                   "rgba": _RGBA["sphere"]})
     _site(guide, "rcm")
-    s3 = _body(guide, "sph_3")
-    _joint(s3, "u3", (0, 0, 1))
+    s3 = _tree_body(guide, "u3", origins)
     _arc(s3, "arc_3", "sphere")
-    s4 = _body(s3, "sph_4", quat=_RX90)
-    _joint(s4, "u4", (0, 0, 1))
+    s4 = _tree_body(s3, "u4", origins)
     _arc(s4, "arc_4", "sphere")
-    s5 = _body(s4, "sph_5", quat=_RX90)
-    _joint(s5, "u5", (0, 0, 1))
+    s5 = _tree_body(s4, "u5", origins)
     _sphere(s5, "sph_5", 0.01, "sphere")
     _site(s5, "sph_5_frame")
 
-    la3 = _body(ca, "link_a3")
-    _joint(la3, "a_base_z", (0, 0, 1))
+    la3 = _tree_body(ca, "a_base_z", origins)
     _capsule(la3, "link_a3", (0, 0, 0), (d.l3, 0, 0), "parallel")
-    car = _body(la3, "carrier", pos=(d.l3, 0, 0))
-    _joint(car, "carrier_z", (0, 0, 1))
+    car = _tree_body(la3, "carrier_z", origins)
     _capsule(car, "carrier_y", (0, 0, 0), (0, d.l2, 0), "parallel")
     _capsule(car, "carrier_z", (0, d.l2, 0), (0, d.l2, d.l5), "parallel")
     _site(car, "carrier_d")
-    arm = _body(car, "k2_arm", pos=(0, d.l2, d.l5))
-    _joint(arm, "k2_x", (1, 0, 0))
+    arm = _tree_body(car, "k2_x", origins)
     housing, rod_length = actuator_drawn_lengths(d)    # telescoping: no gap over the stroke
     _cylinder(arm, "k2_housing", (0, 0, 0), (0, 0, housing), "actuator", radius=0.012)
-    rod = _body(arm, "k2_rod")
-    _joint(rod, "q3", (0, 0, 1), damping=1.0, rng=(lo[2], hi[2]))
+    rod = _tree_body(arm, "q3", origins, damping=1.0, rng=(lo[2], hi[2]))
     _cylinder(rod, "k2_rod", (0, 0, -rod_length), (0, 0, 0), "actuator")
     _site(rod, "k2_rod_tip")
 
     # --- carriage B: bar to O_i, bar to D -------------------------------------------
-    cb = _body(wb, "carriage_b")
-    _joint(cb, "q2", (1, 0, 0), damping=1.0, rng=(lo[1], hi[1]))
-    ET.SubElement(cb, "geom", {"name": "carriage_b", "type": "box", "size": "0.03 0.02 0.015",
-                               "pos": "0 0 -0.02", "rgba": _RGBA["rail"]})
-    bc = _body(cb, "b_cross")
-    _joint(bc, "b_ujoint_x", (1, 0, 0))
+    cb = _carriage(wb, "q2", origins, half, (lo[1], hi[1]))
+    bc = _tree_body(cb, "b_ujoint_x", origins)
     _sphere(bc, "b_cross", 0.012, "joint")
-    lb1 = _body(bc, "link_b1")
-    _joint(lb1, "b_ujoint_y", (0, 1, 0))
+    lb1 = _tree_body(bc, "b_ujoint_y", origins)
     _capsule(lb1, "link_b1", (0, 0, 0), (0, 0, d.l1), "parallel")
     _site(lb1, "link_b1_tip", (0, 0, d.l1))
-    lb3 = _body(cb, "link_b3")
-    _joint(lb3, "b_base_z", (0, 0, 1))
+    lb3 = _tree_body(cb, "b_base_z", origins)
     _capsule(lb3, "link_b3", (0, 0, 0), (d.l3, 0, 0), "parallel")
     _site(lb3, "link_b3_tip", (d.l3, 0, 0))
 
@@ -416,9 +430,8 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
         raise TypeError(f"collision: expected a bool or None, got {type(collision).__name__}")
     if collision:
         bodies = resolve_bodies(bodies, d)
-        rail_pts = rail_segment(g.q, T, d, slot=g.slot, bodies=bodies)
         bits = _obstacle_bits(environment) if environment is not None else None
-        _collision_geoms(root, bodies, collision_segments(values, d, bodies, rail_pts), bits)
+        _collision_geoms(root, bodies, collision_segments(st, d, bodies.geometry), bits)
         if environment is not None and bits is not None:
             _obstacle_geoms(root, environment, bits)
 
@@ -447,20 +460,14 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
         _apply_masses(root, masses, jv, gravity=gravity)
     ET.indent(root)
     header = (f"<!-- ATHENA closed-loop mechanism exported by athenakin: design "
-              f"l1..l5 = {d.lengths.tolist()} m, keyframe 'home' = q {g.q.tolist()} m in "
-              f"FK slot {g.slot}. Loop closures are equality constraints. -->\n")
+              f"l1..l5 = {d.lengths.tolist()} m, keyframe 'home' = q {jv.q.tolist()} m in "
+              f"FK slot {jv.slot}. Loop closures are equality constraints. -->\n")
     return header + ET.tostring(root, encoding="unicode") + "\n"
 
 
-#: MJCF body that carries each body of the mass model (frames coincide: see
-#: :mod:`athenakin.dynamics._model`); ``rail`` is fixed and left out.
-MASS_BODY_IN_MJCF = {
-    "carriage_a": "carriage_a", "carriage_b": "carriage_b", "link_a": "link_a1",
-    "link_b": "link_b1", "link_ad": "link_a3", "link_bd": "link_b3", "carrier": "carrier",
-    "slider_d": "carrier", "actuator": "k2_arm", "actuator_rod": "k2_rod",
-    "platform": "platform", "instrument": "instrument", "guide": "guide",
-    "sphere_link_2": "sph_3", "sphere_link_1": "sph_4",
-}
+#: MJCF body that carries each part of the mass model (frames coincide), from
+#: :data:`athenakin._mechanism.MASS_PART_LINK`; ``rail`` is fixed and left out.
+MASS_BODY_IN_MJCF = {part: link for part, link in MASS_PART_LINK.items() if part != "rail"}
 #: Mass (kg) of ``sph_5``, the last link of the spherical joint, which the weld holds
 #: at E: it never moves, but MuJoCo wants inertia on the leaf of the ``u5`` joint.
 FIXED_LINK_MASS = 0.01
@@ -489,7 +496,8 @@ def _inertial_of(masses: object, names: list[str]) -> tuple[float, NDArray[np.fl
     return total, com, out
 
 
-def _apply_masses(root: ET.Element, masses: object, jv: object, *, gravity: bool) -> None:
+def _apply_masses(root: ET.Element, masses: object, jv: MechanismJointValues, *,
+                  gravity: bool) -> None:
     """Give every body of the tree the inertia of the mass model; force actuators.
 
     Each MJCF body gets an ``<inertial>`` (``fullinertia`` about its centre of mass, in
@@ -536,8 +544,7 @@ def _apply_masses(root: ET.Element, masses: object, jv: object, *, gravity: bool
         act.remove(el)
     for name in ACTUATED:
         ET.SubElement(act, "motor", {"name": name, "joint": name, "gear": "1"})
-    g = jv.geometry  # type: ignore[attr-defined]
-    f = actuator_forces(g.q, g.T_b_e, g.design, masses=masses, slot=g.slot,
+    f = actuator_forces(jv.q, jv.T_b_e, jv.design, masses=masses, slot=jv.slot,
                         gravity=(0.0, 0.0, -9.81) if gravity else (0.0, 0.0, 0.0))
     key = root.find("keyframe/key")
     assert key is not None

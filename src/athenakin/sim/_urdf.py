@@ -23,10 +23,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._mechanism import BODIES
+from .._mechanism import BODIES, TREE, BodyGeometry, tree_origins
 from .._output import check_output_path, write_text_atomic
 from .._transforms import rot_x, rot_y, rot_z
-from .._validation import check_text
+from .._validation import check_array, check_text
 from ..collision._bodies import Bodies, resolve_bodies
 from ..design import Design, resolve_design
 from ..robot._setup import resolve_rcm_frame
@@ -36,8 +36,7 @@ from ._layout import (
     LOOP_CLOSURES,
     actuator_drawn_lengths,
     collision_segments,
-    rail_segment,
-    urdf_joint_zero,
+    single_state,
 )
 from ._mjcf import BAR_RADIUS, DENSITY
 
@@ -203,7 +202,15 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     design = resolve_design(design)
     T = resolve_rcm_frame(T_b_e, design)
     d = design
-    zero = urdf_joint_zero(T, d, q_zero=q_zero, zero_slot=zero_slot)
+    if bodies is not None and not isinstance(bodies, Bodies):
+        bodies = resolve_bodies(bodies, d)          # raises the named TypeError
+    geo = bodies.geometry if bodies is not None else BodyGeometry()
+    if q_zero is not None:
+        q_zero = check_array(q_zero, "q_zero", (3,))
+    st = single_state(q_zero, T, d, slot=zero_slot, geometry=geo)
+    zero = dict(zip(JOINTS, (float(v) for v in st.joints), strict=True))
+    half = 0.5 * geo.carriage_length
+    rail = np.stack([st["rail_lo"], st["rail_hi"]])
     lo, hi = d.stroke_min, d.stroke_max
     check_text(robot_name, "robot_name")
     robot = ET.Element("robot", {"name": robot_name})
@@ -217,9 +224,9 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     housing, rod = actuator_drawn_lengths(d)     # telescoping: no gap over the stroke
     # link geometry: (a, b, radius, material) in the link frame
     shapes: dict[str, tuple[tuple[float, ...], tuple[float, ...], float, str]] = {
-        "base": ((-0.5, 0, -0.02), (0.5, 0, -0.02), 0.01, "rail"),
-        "carriage_a": ((-0.03, 0, -0.02), (0.03, 0, -0.02), 0.015, "rail"),
-        "carriage_b": ((-0.03, 0, -0.02), (0.03, 0, -0.02), 0.015, "rail"),
+        "base": (tuple(rail[0] - (0, 0, 0.02)), tuple(rail[1] - (0, 0, 0.02)), 0.01, "rail"),
+        "carriage_a": ((-half, 0, -0.02), (half, 0, -0.02), 0.015, "rail"),
+        "carriage_b": ((-half, 0, -0.02), (half, 0, -0.02), 0.015, "rail"),
         "a_cross": ((-0.01, 0, 0), (0.01, 0, 0), 0.01, "joint"),
         "b_cross": ((-0.01, 0, 0), (0.01, 0, 0), 0.01, "joint"),
         "link_a1": ((0, 0, 0), (0, 0, d.l1), r, "parallel"),
@@ -249,40 +256,16 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     if collision:
         bodies = resolve_bodies(bodies, d)
         links = {el.get("name"): el for el in robot.iter("link")}
-        rail = rail_segment((zero["q1"], zero["q2"], zero["q3"]), T, d, slot=zero_slot,
-                            bodies=bodies)
-        segs = collision_segments(zero, d, bodies, rail)
+        segs = collision_segments(st, d, bodies.geometry)
         for body in BODIES:
-            owner = COLLISION_BODY[body]
             end_a, end_b = segs[body]
-            _collision(links["base" if owner == "world" else owner], f"collision_{body}",
-                       end_a, end_b, bodies.radius[body])
+            _collision(links[COLLISION_BODY[body]], f"collision_{body}", end_a, end_b,
+                       bodies.radius[body])
 
-    rx90, rx180 = (math.pi / 2, 0, 0), (math.pi, 0, 0)
-    # joint -> (origin xyz in parent, origin rpy, axis, limits)
-    origins: dict[str, tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]] = {
-        "q1": ((0, 0, 0), (0, 0, 0), (1, 0, 0)),
-        "a_ujoint_x": ((0, 0, 0), (0, 0, 0), (1, 0, 0)),
-        "a_ujoint_y": ((0, 0, 0), (0, 0, 0), (0, 1, 0)),
-        "platform_y": ((0, 0, d.l1), (0, 0, 0), (0, 1, 0)),
-        "u1": ((0, 0, d.l4), (0, 0, 0), (0, 0, 1)),
-        "u2": ((0, 0, 0), rx180, (0, 1, 0)),
-        "p": ((0, 0, 0), (0, 0, 0), (0, 0, 1)),
-        "u3": ((0, 0, 0), (0, 0, 0), (0, 0, 1)),
-        "u4": ((0, 0, 0), rx90, (0, 0, 1)),
-        "u5": ((0, 0, 0), rx90, (0, 0, 1)),
-        "a_base_z": ((0, 0, 0), (0, 0, 0), (0, 0, 1)),
-        "carrier_z": ((d.l3, 0, 0), (0, 0, 0), (0, 0, 1)),
-        "k2_x": ((0, d.l2, d.l5), (0, 0, 0), (1, 0, 0)),
-        "q3": ((0, 0, 0), (0, 0, 0), (0, 0, 1)),
-        "q2": ((0, 0, 0), (0, 0, 0), (1, 0, 0)),
-        "b_ujoint_x": ((0, 0, 0), (0, 0, 0), (1, 0, 0)),
-        "b_ujoint_y": ((0, 0, 0), (0, 0, 0), (0, 1, 0)),
-        "b_base_z": ((0, 0, 0), (0, 0, 0), (0, 0, 1)),
-    }
+    origins = tree_origins(d)
     stroke = {"q1": 0, "q2": 1, "q3": 2}
     for name, (kind, parent, child) in JOINTS.items():
-        xyz, rpy, axis = origins[name]
+        xyz, rpy, axis = tuple(origins[name][:3, 3]), (TREE[name].roll, 0.0, 0.0), TREE[name].axis
         # move the origin by the joint's value in the zero configuration
         R0, ax = _matrix_from_rpy(rpy), np.asarray(axis, float)
         if kind == "slide":

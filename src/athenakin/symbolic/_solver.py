@@ -34,6 +34,7 @@ from .._validation import check_array, check_tolerance
 from ..chain import DEGENERATE_TOL, P_ZERO_TOL, closure_residual, ups_transform
 from ..errors import Reason
 from ..parallel import ParallelSolution
+from ..robot._fk import register_serial_step
 from ..study import dq_conj_quaternion, dq_multiply, study_from_transform
 from ..study._study import _qmul
 
@@ -281,3 +282,7 @@ def serial_step_algebraic(par: ParallelSolution, T: NDArray[np.float64], *,
     sreason = np.where((sreason == 0) & ~(res <= closure_tol), np.int8(Reason.CLOSURE_FAILED),
                        sreason)
     return p, u, sreason.astype(np.int8), res
+
+
+# the whole-robot FK's method="algebraic" (robot never imports symbolic: registered from here)
+register_serial_step("algebraic", serial_step_algebraic)

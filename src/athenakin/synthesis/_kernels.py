@@ -1,12 +1,9 @@
 """Compiled per-sample reduction of a design's metrics over the task samples (numba).
 
-One pass over the reachable samples: the closed-form singularity values of
-``docs/singularities.md`` (the same expressions as
-:func:`athenakin.analysis.singularities`), the condition numbers of the
-Jacobians from the eigenvalues of ``J^T J`` (closed form for 3 x 3), the
-worst-case tip error of an encoder box and the actuator ranges. The kernel only
-*selects* the worst samples; :mod:`._metrics` re-evaluates the reported margins
-and condition numbers there with :mod:`athenakin.analysis` (exact SVD).
+The kernel of :func:`athenakin.synthesis._reduce.reduce_samples`: the same formulas as
+its numpy reference :func:`~athenakin.synthesis._reduce.reduce_samples_numpy`, sample by
+sample in one pass (to 1e-12, tested), with the same outputs in the same order
+(:data:`~athenakin.synthesis._reduce.CONDITION_ORDER`).
 """
 
 from __future__ import annotations
@@ -14,13 +11,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-#: Singularity conditions in the order of the kernel's ``margin`` output.
-CONDITION_ORDER = ("circles_tangent", "d_on_rail", "k1_degenerate", "ab_coincide",
-                   "k2_degenerate", "stroke_limit", "p_zero", "ujoint", "wrist", "ik_cos_u1",
-                   "ik_sin_u1_sin_u2", "tip_at_rcm")
-
+from .._backend import njit
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 from .._validation import check_count, check_instance, check_scalar
 from ..design import Design
 from ..errors import InvalidInputError
+from ._reduce import CONDITION_ORDER, reduce_samples
 from ._task import MAX_TASK_SAMPLES as _TASK_MAX
 from ._task import Task, TaskSamples, sample_task
 
@@ -33,9 +34,7 @@ ASSEMBLY_GRID = 15
 PARAMETER_COLUMNS = ("l1", "l2", "l3", "l4", "l5", "q1_min", "q2_min", "q3_min", "q1_max",
                      "q2_max", "q3_max", "tool_length", "ab_order")
 
-_CONDITIONS = ("circles_tangent", "d_on_rail", "k1_degenerate", "ab_coincide", "k2_degenerate",
-               "stroke_limit", "p_zero", "ujoint", "wrist", "ik_cos_u1", "ik_sin_u1_sin_u2",
-               "tip_at_rcm")
+_CONDITIONS = CONDITION_ORDER
 
 #: Metric columns of the collision check (NaN when collisions are not checked).
 COLLISION_COLUMNS = ("collision_free_coverage", "min_clearance")
@@ -216,7 +215,7 @@ def _assembles(design: Design) -> bool:
 
 
 def reachability(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: int = 0,
-                 backend: str = "numba") -> tuple[TaskSamples, NDArray[np.float64],
+                 backend: str = "auto") -> tuple[TaskSamples, NDArray[np.float64],
                                                   NDArray[np.int64], NDArray[np.int8]]:
     """Which task samples a design reaches, and in which assembly mode.
 
@@ -226,8 +225,9 @@ def reachability(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLES, 
     task : Task
     samples : int, keyword-only
     seed : int, keyword-only
-    backend : {"numba", "numpy"}, keyword-only
-        Backend of :func:`athenakin.q_from_instrument` (the compiled kernel by default).
+    backend : {"auto", "numba", "numpy"}, keyword-only
+        Backend of :func:`athenakin.q_from_instrument` (``"auto"``: as
+        :mod:`athenakin._backend` decides).
 
     Returns
     -------
@@ -281,7 +281,6 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
         also where no checked sample is reached).
     """
     from ..analysis import condition_number, parallel_jacobian, singularities, tool_tip_jacobian
-    from ._kernels import CONDITION_ORDER, reduce_samples
 
     encoder_resolution = check_scalar(encoder_resolution, "encoder_resolution", nonnegative=True)
     s, q, mode, _ = reachability(design, task, samples=samples, seed=seed)
@@ -290,8 +289,8 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
     valid = mode != 0
     idx = np.flatnonzero(valid)
     qv, mv = q[idx], mode[idx]
-    J_tip = tool_tip_jacobian(qv, T, design, mode=mv, backend="numba")
-    J_par = parallel_jacobian(qv, design, mode=mv, backend="numba")
+    J_tip = tool_tip_jacobian(qv, T, design, mode=mv)
+    J_par = parallel_jacobian(qv, design, mode=mv)
     lo, hi = design.stroke_min, design.stroke_max
     counts, margin, arg_margin, cond, arg_cond, q_lo, q_hi, tip = reduce_samples(
         idx, qv, mv, np.ascontiguousarray(T[:3, :3]), T[:3, 3].copy(), s.direction_e, s.depth,
@@ -344,8 +343,9 @@ def _force_columns(q: NDArray[np.float64], mode: NDArray[np.int64], T: NDArray[n
 
     pick = np.unique(np.linspace(0, q.shape[0] - 1, min(FORCE_SAMPLES, q.shape[0])).astype(int))
     slot = np.where(mode[pick] == 1, 0, 8)
-    peak, cap = force_metrics(q[pick], T, design, slot=slot)
-    return {"peak_actuator_force": peak, "min_tip_force_capability": cap}
+    fm = force_metrics(q[pick], T, design, slot=slot)
+    return {"peak_actuator_force": fm.peak_actuator_force,
+            "min_tip_force_capability": fm.min_tip_force_capability}
 
 
 def metrics_or_reason(row: Mapping[str, Any], task: Task, *, samples: int, seed: int,

@@ -298,7 +298,7 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
         NSGA-II population size and number of generations.
     samples, seed : int, keyword-only
         Task samples per design and their seed; ``seed`` also seeds NSGA-II.
-    scheduler : None, str or distributed.Client, keyword-only
+    scheduler : None, str, distributed.Client or concurrent.futures.Executor, keyword-only
         As for :func:`~athenakin.synthesis.evaluate`.
     encoder_resolution : float, keyword-only
     connect_timeout : float, keyword-only

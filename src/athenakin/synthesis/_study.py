@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
+import concurrent.futures
 import dataclasses
 import hashlib
 import json
 import math
-import os
 import re
 import socket
 import struct
@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from .._output import atomic_path
 from .._validation import check_path, check_scalar
 from ..design import Design
 from ..errors import InvalidInputError
@@ -215,8 +216,11 @@ def open_scheduler(scheduler: Any, *, connect_timeout: float = CONNECT_TIMEOUT
         return "distributed", client, True
     if _is_client(scheduler):
         return "distributed", scheduler, False
-    raise TypeError(f"scheduler: expected None, one of {LOCAL_SCHEDULERS}, an address string "
-                    f"or a distributed.Client, got {type(scheduler).__name__}")
+    if isinstance(scheduler, concurrent.futures.Executor):
+        return "executor", scheduler, False
+    raise TypeError(f"scheduler: expected None, one of {LOCAL_SCHEDULERS}, an address string, "
+                    f"a distributed.Client or a concurrent.futures.Executor, got "
+                    f"{type(scheduler).__name__}")
 
 
 def _unreachable(address: str, timeout: float, why: str) -> SchedulerUnreachableError:
@@ -292,9 +296,8 @@ def _part_path(out: Path, i: int) -> Path:
 
 
 def _write_part(out: Path, i: int, df: Any) -> None:
-    tmp = out / f".part-{i:06d}.parquet.tmp"
-    df.to_parquet(tmp, index=False)
-    os.replace(tmp, _part_path(out, i))
+    with atomic_path(_part_path(out, i)) as tmp:   # the package's one atomic writer
+        df.to_parquet(tmp, index=False)
 
 
 def _prepare_out(out: Path, fingerprint: str, n_chunks: int, meta: dict[str, Any]
@@ -354,10 +357,13 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
     seed : int, keyword-only
         Seed of the task samples. Given the seed, the table is identical bit for bit
         whatever the scheduler and the number of workers.
-    scheduler : None, str or distributed.Client, keyword-only
+    scheduler : None, str, distributed.Client or concurrent.futures.Executor, keyword-only
         ``None``: Dask's local threaded scheduler; ``"processes"``, ``"synchronous"``:
         another local scheduler; ``"tcp://host:8786"``: a ``distributed`` scheduler at
-        that address; a ``distributed.Client``: that cluster.
+        that address; a ``distributed.Client``: that cluster; any
+        ``concurrent.futures.Executor`` (``ProcessPoolExecutor``, Ray's, submitit's, a SLURM
+        pool): chunks are submitted to it and collected as they complete (the executor is
+        not shut down; ``retries`` applies to ``distributed`` only).
     out : path, optional, keyword-only
         Folder of the study as Parquet (``part-NNNNNN.parquet``, one per chunk of
         ``chunk_size`` designs, written as each finishes, plus ``_study.json``).
@@ -468,6 +474,8 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
     try:
         if todo and kind == "local":
             _run_local(handle, chunks, todo, chunk_size, args, finished)
+        elif todo and kind == "executor":
+            _run_executor(handle, chunks, todo, chunk_size, args, finished)
         elif todo:
             _run_distributed(handle, chunks, todo, chunk_size, args, finished, retries)
     finally:
@@ -508,6 +516,24 @@ def _run_local(name: str, chunks: Sequence[list[dict[str, Any]]], todo: list[int
 
     with _Done():
         dask.compute(*[d for _, d in tasks.values()], scheduler=name)
+
+
+def _run_executor(executor: concurrent.futures.Executor, chunks: Sequence[list[dict[str, Any]]],
+                  todo: list[int], size: int, args: tuple[Any, ...],
+                  finished: Callable[[int, Any], None]) -> None:
+    """Run the chunks on any ``concurrent.futures.Executor``, collected as they complete.
+
+    A process or thread pool, Ray's, submitit's or a SLURM pool. A chunk that raises
+    cancels the chunks not yet started and raises here (the executor's own retry policy,
+    if it has one, applies before that).
+    """
+    futures = {executor.submit(_chunk_frame, chunks[i], i * size, *args): i for i in todo}
+    try:
+        for fut in concurrent.futures.as_completed(futures):
+            finished(futures[fut], fut.result())
+    finally:
+        for fut in futures:
+            fut.cancel()
 
 
 def _run_distributed(client: Any, chunks: Sequence[list[dict[str, Any]]], todo: list[int],

@@ -2,10 +2,12 @@
 
 The same five candidates as the numpy reference
 (:func:`athenakin.collision._distance.segment_segment`): the four end-point-to-segment
-distances and Lumelsky's interior critical point where the segments are not parallel;
-the smallest wins. No tolerance decides a branch, so parallel, degenerate (zero-length),
-touching and crossing segments are exact. Witness points and the normal fallback
-(``d1 x d2``, a normal of ``d1``, ``+z``) follow the reference too. Candidates are
+distances and the interior critical point where the segments are not parallel (``s``
+from cross products, paired with the nearest point of the second segment: exact for
+nearly parallel crossing segments too); the smallest wins. No tolerance decides a
+branch, so parallel, degenerate (zero-length), touching and crossing segments are exact.
+Witness points and the normal fallback (``d1 x d2``, a normal of ``d1``, ``+z``) follow
+the reference too (one normal above 1e-6 m, where the two forms agree to 1e-13 m). Candidates are
 compared by squared distance and carry only their parameters ``(s, t)``; the closest
 points are formed once, from the winner.
 """
@@ -16,7 +18,9 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import njit
+
+from .._backend import njit
+from ._distance import NOISE
 
 __all__ = ["capsule_pairs", "capsule_pairs_into", "capsule_distances", "capsule_distances_into",
            "segment_distance"]
@@ -26,9 +30,6 @@ __all__ = ["capsule_pairs", "capsule_pairs_into", "capsule_distances", "capsule_
 #: (tested); every candidate is still a true pair of points on the segments.
 _OPTS: dict[str, Any] = dict(error_model="numpy", cache=True, nogil=True,
                              fastmath={"contract"})
-#: As :data:`athenakin.collision._distance.NOISE` (the layers keep one value each; a test
-#: checks they agree).
-NOISE = 1e-12
 
 
 @njit(inline="always", **_OPTS)
@@ -76,15 +77,8 @@ def _seg_seg(p10, p11, p12, q10, q11, q12, p20, p21, p22, q20, q21, q22):
     d20 = q20 - p20
     d21 = q21 - p21
     d22 = q22 - p22
-    r0 = p10 - p20
-    r1 = p11 - p21
-    r2 = p12 - p22
     a = d10 * d10 + d11 * d11 + d12 * d12
     e = d20 * d20 + d21 * d21 + d22 * d22
-    b = d10 * d20 + d11 * d21 + d12 * d22
-    c = d10 * r0 + d11 * r1 + d12 * r2
-    f = d20 * r0 + d21 * r1 + d22 * r2
-    denom = a * e - b * b
     inv_a = 1.0 / a if a > 0.0 else 0.0
     inv_e = 1.0 / e if e > 0.0 else 0.0
     # the candidates carry only their parameters (s on segment 1, t on segment 2)
@@ -111,15 +105,23 @@ def _seg_seg(p10, p11, p12, q10, q11, q12, p20, p21, p22, q20, q21, q22):
     best = dist if w else best
     sb = 1.0 if w else sb
     tb = u if w else tb
-    # candidate 5: the interior critical point (not parallel: denom > 0)
-    inv = 1.0 / denom if denom > 0.0 else 0.0
-    s = min(max((b * f - c * e) * inv, 0.0), 1.0)
-    t = min(max((a * f - b * c) * inv, 0.0), 1.0)
-    g0 = (p10 + s * d10) - (p20 + t * d20)
-    g1 = (p11 + s * d11) - (p21 + t * d21)
-    g2 = (p12 + s * d12) - (p22 + t * d22)
-    dist = g0 * g0 + g1 * g1 + g2 * g2
-    w = (denom > 0.0) and (dist < best)
+    # candidate 5: the interior critical point (not parallel: n = d1 x d2 != 0), as the
+    # reference: s from cross products, t of the point of segment 2 nearest p1 + s d1
+    n0 = d11 * d22 - d12 * d21
+    n1 = d12 * d20 - d10 * d22
+    n2 = d10 * d21 - d11 * d20
+    nn = n0 * n0 + n1 * n1 + n2 * n2
+    w0 = p20 - p10
+    w1 = p21 - p11
+    w2 = p22 - p12
+    k0 = w1 * d22 - w2 * d21
+    k1 = w2 * d20 - w0 * d22
+    k2 = w0 * d21 - w1 * d20
+    inv = 1.0 / nn if nn > 0.0 else 0.0
+    s = min(max((k0 * n0 + k1 * n1 + k2 * n2) * inv, 0.0), 1.0)
+    dist, t = _point_seg(p10 + s * d10, p11 + s * d11, p12 + s * d12, p20, p21, p22,
+                         d20, d21, d22, inv_e)
+    w = (nn > 0.0) and (dist < best)
     best = dist if w else best
     sb = s if w else sb
     tb = t if w else tb
@@ -172,6 +174,64 @@ def _normal(n, x0, x1, x2, y0, y1, y2, d10, d11, d12, d20, d21, d22):
     if ny > tiny:
         return y0 / ny, y1 / ny, y2 / ny
     return 0.0, 0.0, 1.0
+
+
+@njit(inline="always", **_OPTS)
+def _across(n0, n1, n2, x0, x1, x2, d0, d1, d2):
+    """``n`` without its component along ``d`` where ``x`` projects inside the segment.
+
+    As :func:`athenakin.collision._distance._across` (``x`` relative to the start).
+    """
+    dd = d0 * d0 + d1 * d1 + d2 * d2
+    xd = x0 * d0 + x1 * d1 + x2 * d2
+    if dd > 0.0 and xd > 0.0 and xd < dd:
+        c = (n0 * d0 + n1 * d1 + n2 * d2) / dd
+        m0 = n0 - c * d0
+        m1 = n1 - c * d1
+        m2 = n2 - c * d2
+        mm = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
+        if mm > 0.5:
+            return m0 / mm, m1 / mm, m2 / mm
+    return n0, n1, n2
+
+
+@njit(inline="always", **_OPTS)
+def _witnesses(out, p10, p11, p12, d10, d11, d12, r1, p20, p21, p22, d20, d21, d22, r2,
+               x0, x1, x2, y0, y1, y2):
+    """Witness points of two capsules into ``out`` (2, 3), as the reference.
+
+    Each from the point of its own segment nearest the other closest point (``b1``
+    nearest ``y``, ``b2`` nearest ``x``), along ``b1 -> y`` (``x -> b2``), normal to the
+    axis inside the segment: on the surface (:func:`athenakin.collision.capsule_capsule`).
+    """
+    a = d10 * d10 + d11 * d11 + d12 * d12
+    e = d20 * d20 + d21 * d21 + d22 * d22
+    _, s = _point_seg(y0, y1, y2, p10, p11, p12, d10, d11, d12, 1.0 / a if a > 0.0 else 0.0)
+    _, t = _point_seg(x0, x1, x2, p20, p21, p22, d20, d21, d22, 1.0 / e if e > 0.0 else 0.0)
+    b10 = p10 + s * d10
+    b11 = p11 + s * d11
+    b12 = p12 + s * d12
+    b20 = p20 + t * d20
+    b21 = p21 + t * d21
+    b22 = p22 + t * d22
+    g0 = y0 - b10
+    g1 = y1 - b11
+    g2 = y2 - b12
+    n0, n1, n2 = _normal(math.sqrt(g0 * g0 + g1 * g1 + g2 * g2), b10, b11, b12, y0, y1, y2,
+                         d10, d11, d12, d20, d21, d22)
+    n0, n1, n2 = _across(n0, n1, n2, y0 - p10, y1 - p11, y2 - p12, d10, d11, d12)
+    out[0, 0] = b10 + r1 * n0
+    out[0, 1] = b11 + r1 * n1
+    out[0, 2] = b12 + r1 * n2
+    g0 = b20 - x0
+    g1 = b21 - x1
+    g2 = b22 - x2
+    n0, n1, n2 = _normal(math.sqrt(g0 * g0 + g1 * g1 + g2 * g2), x0, x1, x2, b20, b21, b22,
+                         d10, d11, d12, d20, d21, d22)
+    n0, n1, n2 = _across(n0, n1, n2, x0 - p20, x1 - p21, x2 - p22, d20, d21, d22)
+    out[1, 0] = b20 - r2 * n0
+    out[1, 1] = b21 - r2 * n1
+    out[1, 2] = b22 - r2 * n2
 
 
 def capsule_pairs(solids, radii, ij):
@@ -240,17 +300,27 @@ def capsule_pairs_into(solids, radii, ij, dist, wit):
             q22 = solids[m, j, 1, 2]
             d, x0, x1, x2, y0, y1, y2 = _seg_seg(p10, p11, p12, q10, q11, q12,
                                                  p20, p21, p22, q20, q21, q22)
-            n0, n1, n2 = _normal(d, x0, x1, x2, y0, y1, y2, q10 - p10, q11 - p11,
-                                 q12 - p12, q20 - p20, q21 - p21, q22 - p22)
             r1 = radii[i]
             r2 = radii[j]
             dist[m, k] = d - r1 - r2
-            wit[m, k, 0, 0] = x0 + r1 * n0
-            wit[m, k, 0, 1] = x1 + r1 * n1
-            wit[m, k, 0, 2] = x2 + r1 * n2
-            wit[m, k, 1, 0] = y0 - r2 * n0
-            wit[m, k, 1, 1] = y1 - r2 * n1
-            wit[m, k, 1, 2] = y2 - r2 * n2
+            if d > 1e-6:
+                # fast path, as _normal's: y - x is normal to both axes to rounding (y is
+                # the point of segment 2 nearest x), far above the noise; the same points
+                # as _witnesses to 1e-13 m
+                inv = 1.0 / d
+                n0 = (y0 - x0) * inv
+                n1 = (y1 - x1) * inv
+                n2 = (y2 - x2) * inv
+                wit[m, k, 0, 0] = x0 + r1 * n0
+                wit[m, k, 0, 1] = x1 + r1 * n1
+                wit[m, k, 0, 2] = x2 + r1 * n2
+                wit[m, k, 1, 0] = y0 - r2 * n0
+                wit[m, k, 1, 1] = y1 - r2 * n1
+                wit[m, k, 1, 2] = y2 - r2 * n2
+            else:
+                _witnesses(wit[m, k], p10, p11, p12, q10 - p10, q11 - p11, q12 - p12, r1,
+                           p20, p21, p22, q20 - p20, q21 - p21, q22 - p22, r2,
+                           x0, x1, x2, y0, y1, y2)
 
 
 @njit(**_OPTS)

@@ -2,17 +2,14 @@
 
 :meth:`athenakin.motion.Tracker.update` applied reading after reading, in one compiled
 loop: the same closed form (``_parallel`` and ``_candidate`` of
-:mod:`athenakin.motion._tracker`, operation by operation and in the same order of the
-floating-point operations), the same fast path (the candidate with the previous labels,
-far from every singularity), the same slow path (all 16 candidates, the labels kept
-while within the jump thresholds, else the nearest, flags ``AMBIGUOUS``, ``JUMP``,
-``MODE_SWITCH``, ``BRANCH_SWITCH``, ``NEAR_*``) and the same ``LOST`` / ``REACQUIRED``
-handling. The results are bit for bit those of the Python tracker (tested on seeded
-streams with jumps, NaN readings, mode switches, stroke violations and serial
-singularities): ``sqrt``, ``atan2``, ``cos`` and ``sin`` are the same correctly rounded
-or libm operations, ``x ** 2`` of the step is libm's ``pow`` as in CPython (not always
-``x * x``), and :func:`py_hypot` reproduces CPython's ``math.hypot`` (which is not
-libm's ``hypot``: it differs in the last bit for about one pair in 700).
+:mod:`athenakin.motion._tracker`, operation by operation), the same fast path (the
+candidate with the previous labels, far from every singularity), the same slow path (all
+16 candidates, the labels kept while within the jump thresholds, else the nearest, flags
+``AMBIGUOUS``, ``JUMP``, ``MODE_SWITCH``, ``BRANCH_SWITCH``, ``NEAR_*``) and the same
+``LOST`` / ``REACQUIRED`` handling. The poses and steps agree with the Python tracker to
+1e-12 and the flags are the same (tested on seeded streams with jumps, NaN readings, mode
+switches, stroke violations and serial singularities). Not bit for bit: ``math.hypot``
+here is libm's, which differs from CPython's own in the last bit for about one pair in 700.
 
 A candidate is a row of :data:`NCAND` doubles, the tuple of ``_candidate``:
 ``mode, r, b, w, p, u1..u5, O_s (3), direction_b (3), half_chord, |h|, sin_u2, sin_u4``.
@@ -21,155 +18,45 @@ A candidate is a row of :data:`NCAND` doubles, the tuple of ``_candidate``:
 from __future__ import annotations
 
 import math
-import sys
 from typing import Any
 
 import numpy as np
-from numba import njit
 
-__all__ = ["NCAND", "NGEO", "track_stream", "py_hypot", "F_LOST", "F_REACQUIRED"]
+from .._backend import njit
+from ._flags import TrackFlag
+
+__all__ = ["NCAND", "NGEO", "track_stream", "F_LOST", "F_REACQUIRED"]
 
 _OPTS: dict[str, Any] = dict(error_model="numpy", cache=True, nogil=True)
 
 #: Doubles per candidate row.
 NCAND = 20
 #: Doubles of the geometry vector (see :func:`athenakin.motion._tracker._kernel_geometry`).
-NGEO = 34
+NGEO = 33
 
-# TrackFlag bits (a test checks they equal athenakin.motion.TrackFlag's)
-F_LOST = 1
-F_REACQUIRED = 2
-_JUMP = 4
-_MODE_SWITCH = 8
-_BRANCH_SWITCH = 16
-_AMBIGUOUS = 32
-_OUT_OF_STROKE = 64
-_NEAR_MODE_BOUNDARY = 128
-_NEAR_H_ZERO = 256
-_NEAR_LINK_LIMIT = 512
-_NEAR_UJOINT = 1024
-_NEAR_WRIST = 2048
-_NEAR_P_ZERO = 4096
+# TrackFlag bits, as plain ints (compile-time constants of the kernel)
+F_LOST = int(TrackFlag.LOST)
+F_REACQUIRED = int(TrackFlag.REACQUIRED)
+_JUMP = int(TrackFlag.JUMP)
+_MODE_SWITCH = int(TrackFlag.MODE_SWITCH)
+_BRANCH_SWITCH = int(TrackFlag.BRANCH_SWITCH)
+_AMBIGUOUS = int(TrackFlag.AMBIGUOUS)
+_OUT_OF_STROKE = int(TrackFlag.OUT_OF_STROKE)
+_NEAR_MODE_BOUNDARY = int(TrackFlag.NEAR_MODE_BOUNDARY)
+_NEAR_H_ZERO = int(TrackFlag.NEAR_H_ZERO)
+_NEAR_LINK_LIMIT = int(TrackFlag.NEAR_LINK_LIMIT)
+_NEAR_UJOINT = int(TrackFlag.NEAR_UJOINT)
+_NEAR_WRIST = int(TrackFlag.NEAR_WRIST)
+_NEAR_P_ZERO = int(TrackFlag.NEAR_P_ZERO)
 
 _TWO_PI = 2.0 * math.pi
-_T27 = 134217729.0            # 2**27 + 1: Veltkamp's splitter
-_DBL_MIN = sys.float_info.min
-# CPython 3.12 rewrote math.hypot's compensated sum (exact products by fused multiply-add):
-# _norm2_311 is the algorithm of 3.10/3.11 (tested here, on 3.11), _norm2_312 that of 3.12+
-# (its exact products by Dekker's method, which gives what fma gives; not run here).
-_PY311_HYPOT = sys.version_info[:2] <= (3, 11)
-
-
-@njit(inline="always", **_OPTS)
-def _split(x):
-    t = x * _T27
-    hi = t - (t - x)
-    return hi, x - hi
-
-
-@njit(**_OPTS)
-def _norm2_311(a, b, mx):
-    """CPython 3.10/3.11 ``vector_norm`` of two non-negative finite values, max ``mx > 0``."""
-    e = math.frexp(mx)[1]
-    scale = math.ldexp(1.0, -e)
-    csum = 1.0
-    frac1 = 0.0
-    frac2 = 0.0
-    frac3 = 0.0
-    for k in range(2):
-        x = (a if k == 0 else b) * scale
-        hi, lo = _split(x)
-        x = hi * hi
-        old = csum
-        csum += x
-        frac1 += (old - csum) + x
-        x = 2.0 * hi * lo
-        old = csum
-        csum += x
-        frac2 += (old - csum) + x
-        frac3 += lo * lo
-    h = math.sqrt(csum - 1.0 + (frac1 + frac2 + frac3))
-    hi, lo = _split(h)
-    x = -hi * hi
-    old = csum
-    csum += x
-    frac1 += (old - csum) + x
-    x = -2.0 * hi * lo
-    old = csum
-    csum += x
-    frac2 += (old - csum) + x
-    x = -lo * lo
-    old = csum
-    csum += x
-    frac3 += (old - csum) + x
-    x = csum - 1.0 + (frac1 + frac2 + frac3)
-    return (h + x / (2.0 * h)) / scale
-
-
-@njit(inline="always", **_OPTS)
-def _two_prod(x, y):
-    """``x * y`` and its exact rounding error (Dekker; what ``fma(x, y, -x*y)`` gives)."""
-    p = x * y
-    xh, xl = _split(x)
-    yh, yl = _split(y)
-    return p, ((xh * yh - p) + xh * yl + xl * yh) + xl * yl
-
-
-@njit(**_OPTS)
-def _norm2_312(a, b, mx):
-    """CPython >= 3.12 ``vector_norm`` of two non-negative finite values, max ``mx > 0``."""
-    e = math.frexp(mx)[1]
-    scale = math.ldexp(1.0, -e)
-    csum = 1.0
-    frac1 = 0.0
-    frac2 = 0.0
-    for k in range(2):
-        x = (a if k == 0 else b) * scale
-        phi, plo = _two_prod(x, x)
-        hi = csum + phi
-        frac2 += (csum - hi) + phi
-        csum = hi
-        frac1 += plo
-    h = math.sqrt(csum - 1.0 + (frac1 + frac2))
-    phi, plo = _two_prod(-h, h)
-    hi = csum + phi
-    frac2 += (csum - hi) + phi
-    csum = hi
-    frac1 += plo
-    x = csum - 1.0 + (frac1 + frac2)
-    h += x / (2.0 * h)
-    return h / scale
-
-
-@njit(**_OPTS)
-def py_hypot(x, y):
-    """``math.hypot(x, y)`` as CPython computes it (not libm's ``hypot``)."""
-    a = abs(x)
-    b = abs(y)
-    if math.isinf(a) or math.isinf(b):
-        return math.inf
-    if math.isnan(a) or math.isnan(b):
-        return math.nan
-    mx = a if a > b else b
-    if mx == 0.0:
-        return mx
-    if math.frexp(mx)[1] < -1023:          # deep subnormal: CPython scales by DBL_MIN first
-        a /= _DBL_MIN
-        b /= _DBL_MIN
-        mx /= _DBL_MIN
-        if _PY311_HYPOT:
-            return _DBL_MIN * _norm2_311(a, b, mx)
-        return _DBL_MIN * _norm2_312(a, b, mx)
-    if _PY311_HYPOT:
-        return _norm2_311(a, b, mx)
-    return _norm2_312(a, b, mx)
 
 
 # ------------------------------------------------------------------------------ geometry
 # g: 0-4 l1..l5, 5 h_sign, 6-8 c (RCM origin), 9-11 ex, 12-14 ez (RCM axes), 15-17 stroke
 #    min, 18-20 stroke max, 21 jump_m, 22 jump_rad, 23-28 the fast path's thresholds
 #    (half_chord, h, link, sin_u2, sin_u4, p), 29 margins.half_chord, 30 TANGENT_TOL,
-#    31 P_ZERO_TOL, 32 DEGENERATE_TOL, 33 the number 2.0 (see _step)
+#    31 P_ZERO_TOL, 32 DEGENERATE_TOL
 @njit(**_OPTS)
 def _parallel(g, q1, q2, q3, par):
     """``_parallel`` of the tracker into ``par`` (h, r1, m_y, d, a); False: no assembly."""
@@ -229,7 +116,7 @@ def _candidate(g, q1, q2, q3, par, mode, r, b, w, hint, has_hint, out):
     zx = cx / p
     zy = cys / p
     zz = czs / p
-    rho = py_hypot(zx, zy)
+    rho = math.hypot(zx, zy)
     if rho > degen:
         c1 = b * zx / rho
         s1 = b * zy / rho
@@ -262,7 +149,7 @@ def _candidate(g, q1, q2, q3, par, mode, r, b, w, hint, has_hint, out):
     W02 = x10 * Ez0 + x11 * Ez1 + x12 * Ez2
     W12 = s1 * Ez0 - c1 * Ez1
     W22 = z10 * Ez0 + z11 * Ez1 + z12 * Ez2
-    rho4 = py_hypot(W02, W12)
+    rho4 = math.hypot(W02, W12)
     if rho4 > degen:
         c3 = w * W02 / rho4
         s3 = w * W12 / rho4
@@ -313,12 +200,11 @@ def _adiff(a, b):
 
 @njit(**_OPTS)
 def _step(g, c, prev):
-    """The tracker's ``_step``; ``x ** 2`` there is libm's ``pow``, not always ``x * x``."""
+    """The tracker's ``_step``."""
     d0 = c[10] - prev[10]
     d1 = c[11] - prev[11]
     d2 = c[12] - prev[12]
-    two = g[33]                # 2.0 read at run time: LLVM would turn pow(x, 2.0) into x * x
-    dO = math.sqrt(math.pow(d0, two) + math.pow(d1, two) + math.pow(d2, two))
+    dO = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
     du = _adiff(c[5], prev[5])
     for k in range(6, 10):
         v = _adiff(c[k], prev[k])

@@ -13,10 +13,9 @@ into one buffer in a single pass, the readings without a pose keeping only their
 
 from __future__ import annotations
 
-from llvmlite import ir
-from numba import njit, types
-from numba.core import cgutils
-from numba.extending import intrinsic
+import numpy as np
+
+from .._backend import njit
 
 __all__ = ["scan_records", "fill_records"]
 
@@ -59,64 +58,43 @@ def scan_records(raw, ops, starts, lengths, cids, times):
     return n
 
 
-@intrinsic
-def _store_low(typingctx, arr, at, word, size):
-    """Store the ``size`` low bytes of ``word`` at byte ``at`` of ``arr``, unaligned.
-
-    ``size``: 1, 4 or 8, a compile-time literal; ``word``: uint64 (little endian);
-    ``arr``: uint8, contiguous.
-    One store instruction where a loop over bytes takes eight (the fields of a CDR
-    message behind a 31-byte record header are rarely aligned). No bounds check: the
-    caller sizes ``arr``.
-    """
-    if not isinstance(size, types.IntegerLiteral):
-        return None
-    bits = 8 * size.literal_value
-    sig = types.void(arr, at, word, size)
-
-    def codegen(context, builder, signature, args):
-        ary = context.make_array(signature.args[0])(context, builder, args[0])
-        ptr = builder.gep(ary.data, [args[1]])
-        value = args[2]
-        if bits < 64:
-            value = builder.trunc(value, ir.IntType(bits))
-        builder.store(value, builder.bitcast(ptr, ir.IntType(bits).as_pointer()), align=1)
-        return context.get_dummy_value()
-
-    return sig, codegen
+# Byte offsets are unsigned (uint64) below: an unsigned index needs no negative-index
+# wraparound, so LLVM vectorises the template copy and merges the stores of a number's bytes
+# (measured: about 15x faster than signed int64 offsets, within 2x of memcpy and one store).
+_U8, _U16, _U24, _U32 = np.uint64(8), np.uint64(16), np.uint64(24), np.uint64(32)
+_U40, _U48, _U56, _MASK = np.uint64(40), np.uint64(48), np.uint64(56), np.uint64(0xFF)
 
 
-@intrinsic
-def _copy_into(typingctx, dst, at, src):
-    """``dst[at:at + src.size] = src`` (uint8, contiguous) as one ``memcpy``.
-
-    Numba copies a slice element by element (it cannot rule out overlap); the
-    templates are copied thousands of times per chunk. No bounds check: the caller
-    sizes ``dst``.
-    """
-    sig = types.void(dst, at, src)
-
-    def codegen(context, builder, signature, args):
-        d = context.make_array(signature.args[0])(context, builder, args[0])
-        s = context.make_array(signature.args[2])(context, builder, args[2])
-        cgutils.raw_memcpy(builder, builder.gep(d.data, [args[1]]), s.data, s.nitems, 1)
-        return context.get_dummy_value()
-
-    return sig, codegen
+@njit(cache=True, nogil=True, inline="always")
+def _copy_into(dst, at, src):
+    """``dst[at:at + src.size] = src`` (uint8, ``at`` uint64); the caller sizes ``dst``."""
+    n = np.uint64(src.size)
+    k = np.uint64(0)
+    while k < n:
+        dst[at + k] = src[k]
+        k += np.uint64(1)
 
 
 @njit(cache=True, nogil=True, inline="always")
 def _fill(out, o, words, i, off, size, col):
+    """Field ``f``: the ``size[f]`` (1, 4, 8) low bytes of ``words[i, col[f]]`` at ``o + off[f]``.
+
+    Little endian, unaligned; ``o`` uint64.
+    """
     for f in range(off.size):
         w = words[i, col[f]]
-        at = o + off[f]
+        at = o + np.uint64(off[f])
         z = size[f]
-        if z == 8:
-            _store_low(out, at, w, 8)
-        elif z == 4:
-            _store_low(out, at, w, 4)
-        else:
-            _store_low(out, at, w, 1)
+        out[at] = np.uint8(w & _MASK)
+        if z >= 4:
+            out[at + np.uint64(1)] = np.uint8((w >> _U8) & _MASK)
+            out[at + np.uint64(2)] = np.uint8((w >> _U16) & _MASK)
+            out[at + np.uint64(3)] = np.uint8((w >> _U24) & _MASK)
+            if z == 8:
+                out[at + np.uint64(4)] = np.uint8((w >> _U32) & _MASK)
+                out[at + np.uint64(5)] = np.uint8((w >> _U40) & _MASK)
+                out[at + np.uint64(6)] = np.uint8((w >> _U48) & _MASK)
+                out[at + np.uint64(7)] = np.uint8((w >> _U56) & _MASK)
 
 
 @njit(cache=True, nogil=True, boundscheck=False)
@@ -163,14 +141,15 @@ def fill_records(out, status_tpl, pose_tpl, words, s_off, s_size, s_col, p_off, 
     for f in range(p_off.size):
         if p_off[f] < 0 or p_off[f] + p_size[f] > rp or p_col[f] >= words.shape[1]:
             return -1
-    o = 0
+    o = np.uint64(0)
+    us, up = np.uint64(rs), np.uint64(rp)
     for i in range(valid.size):
         starts[i] = o
         _copy_into(out, o, status_tpl)
         _fill(out, o, words, i, s_off, s_size, s_col)
-        o += rs
+        o += us
         if valid[i]:
             _copy_into(out, o, pose_tpl)
             _fill(out, o, words, i, p_off, p_size, p_col)
-            o += rp
-    return o
+            o += up
+    return np.int64(o)

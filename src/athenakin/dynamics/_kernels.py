@@ -11,9 +11,28 @@ require both to agree to rounding. Imported only when numba is.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+
+from .._backend import njit, prange
+from ._model import MASS_BODIES
 
 _OPTS = dict(error_model="numpy", cache=True, nogil=True, fastmath=False)
+
+# rows of the mass model's arrays (MASS_BODIES order), by name: no literal copies
+_CARRIAGE_A = MASS_BODIES.index("carriage_a")
+_CARRIAGE_B = MASS_BODIES.index("carriage_b")
+_LINK_A = MASS_BODIES.index("link_a")
+_LINK_B = MASS_BODIES.index("link_b")
+_LINK_AD = MASS_BODIES.index("link_ad")
+_LINK_BD = MASS_BODIES.index("link_bd")
+_CARRIER = MASS_BODIES.index("carrier")
+_ACTUATOR = MASS_BODIES.index("actuator")
+_PLATFORM = MASS_BODIES.index("platform")
+_INSTRUMENT = MASS_BODIES.index("instrument")
+_SPHERE_LINK_1 = MASS_BODIES.index("sphere_link_1")
+_SPHERE_LINK_2 = MASS_BODIES.index("sphere_link_2")
+_SLIDER_D = MASS_BODIES.index("slider_d")
+_ACTUATOR_ROD = MASS_BODIES.index("actuator_rod")
+_GUIDE = MASS_BODIES.index("guide")
 
 
 @njit(**_OPTS)
@@ -271,31 +290,31 @@ def _one(q, qd, qdd, T, lengths, L, signs, mass, com, inertia, grav, ftip, out):
     Q[1] = 0.0
     Q[2] = 0.0
     gx, gy, gz = grav[0], grav[1], grav[2]
-    # order of MASS_BODIES: rail (fixed) skipped
-    _point_loads(A, mass[1], com[1], gx, gy, gz, Q)              # carriage_a
-    _point_loads(B, mass[2], com[2], gx, gy, gz, Q)              # carriage_b
-    _point_loads(Dp, mass[7], com[7], gx, gy, gz, Q)             # carrier
-    _point_loads(Dp, mass[13], com[13], gx, gy, gz, Q)           # slider_d
-    _trans_loads(A, R_la, mass[3], com[3], gx, gy, gz, Q)        # link_a
-    _rot_loads(R_la, _itup(inertia[3]), qd, Q)
-    _trans_loads(B, R_lb, mass[4], com[4], gx, gy, gz, Q)        # link_b
-    _rot_loads(R_lb, _itup(inertia[4]), qd, Q)
-    _trans_loads(A, R_lad, mass[5], com[5], gx, gy, gz, Q)       # link_ad
-    _rot_loads(R_lad, _itup(inertia[5]), qd, Q)
-    _trans_loads(B, R_lbd, mass[6], com[6], gx, gy, gz, Q)       # link_bd
-    _rot_loads(R_lbd, _itup(inertia[6]), qd, Q)
-    _trans_loads(C, R_act, mass[8], com[8], gx, gy, gz, Q)       # actuator (cylinder)
-    _trans_loads(O_i, R_act, mass[14], com[14], gx, gy, gz, Q)   # actuator_rod
-    _rot_loads(R_act, _itup2(inertia[8], inertia[14]), qd, Q)    # same rotation
-    _trans_loads(O_i, R_i, mass[9], com[9], gx, gy, gz, Q)       # platform
-    _rot_loads(R_i, _itup(inertia[9]), qd, Q)
-    _trans_loads(O_s, R_3, mass[10], com[10], gx, gy, gz, Q)     # instrument
-    _trans_loads(rcm, R_3, mass[15], com[15], gx, gy, gz, Q)     # guide
-    _rot_loads(R_3, _itup2(inertia[10], inertia[15]), qd, Q)     # same rotation
-    _trans_loads(rcm, R_s4, mass[11], com[11], gx, gy, gz, Q)    # sphere_link_1
-    _rot_loads(R_s4, _itup(inertia[11]), qd, Q)
-    _trans_loads(rcm, R_s3, mass[12], com[12], gx, gy, gz, Q)    # sphere_link_2
-    _rot_loads(R_s3, _itup(inertia[12]), qd, Q)
+    # every moving body of MASS_BODIES (the rail is fixed); the actuator is its cylinder
+    _point_loads(A, mass[_CARRIAGE_A], com[_CARRIAGE_A], gx, gy, gz, Q)
+    _point_loads(B, mass[_CARRIAGE_B], com[_CARRIAGE_B], gx, gy, gz, Q)
+    _point_loads(Dp, mass[_CARRIER], com[_CARRIER], gx, gy, gz, Q)
+    _point_loads(Dp, mass[_SLIDER_D], com[_SLIDER_D], gx, gy, gz, Q)
+    _trans_loads(A, R_la, mass[_LINK_A], com[_LINK_A], gx, gy, gz, Q)
+    _rot_loads(R_la, _itup(inertia[_LINK_A]), qd, Q)
+    _trans_loads(B, R_lb, mass[_LINK_B], com[_LINK_B], gx, gy, gz, Q)
+    _rot_loads(R_lb, _itup(inertia[_LINK_B]), qd, Q)
+    _trans_loads(A, R_lad, mass[_LINK_AD], com[_LINK_AD], gx, gy, gz, Q)
+    _rot_loads(R_lad, _itup(inertia[_LINK_AD]), qd, Q)
+    _trans_loads(B, R_lbd, mass[_LINK_BD], com[_LINK_BD], gx, gy, gz, Q)
+    _rot_loads(R_lbd, _itup(inertia[_LINK_BD]), qd, Q)
+    _trans_loads(C, R_act, mass[_ACTUATOR], com[_ACTUATOR], gx, gy, gz, Q)
+    _trans_loads(O_i, R_act, mass[_ACTUATOR_ROD], com[_ACTUATOR_ROD], gx, gy, gz, Q)
+    _rot_loads(R_act, _itup2(inertia[_ACTUATOR], inertia[_ACTUATOR_ROD]), qd, Q)
+    _trans_loads(O_i, R_i, mass[_PLATFORM], com[_PLATFORM], gx, gy, gz, Q)
+    _rot_loads(R_i, _itup(inertia[_PLATFORM]), qd, Q)
+    _trans_loads(O_s, R_3, mass[_INSTRUMENT], com[_INSTRUMENT], gx, gy, gz, Q)
+    _trans_loads(rcm, R_3, mass[_GUIDE], com[_GUIDE], gx, gy, gz, Q)
+    _rot_loads(R_3, _itup2(inertia[_INSTRUMENT], inertia[_GUIDE]), qd, Q)
+    _trans_loads(rcm, R_s4, mass[_SPHERE_LINK_1], com[_SPHERE_LINK_1], gx, gy, gz, Q)
+    _rot_loads(R_s4, _itup(inertia[_SPHERE_LINK_1]), qd, Q)
+    _trans_loads(rcm, R_s3, mass[_SPHERE_LINK_2], com[_SPHERE_LINK_2], gx, gy, gz, Q)
+    _rot_loads(R_s3, _itup(inertia[_SPHERE_LINK_2]), qd, Q)
     for j in range(3):
         out[j] = Q[j] - (tip[0][j + 1] * ftip[0] + tip[1][j + 1] * ftip[1]
                          + tip[2][j + 1] * ftip[2])

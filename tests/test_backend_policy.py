@@ -1,0 +1,187 @@
+"""One backend policy (issue 28): every subpackage runs without numba and agrees with the kernels.
+
+* A subprocess with ``ATHENAKIN_BACKEND=numpy`` and numba made unimportable (a meta-path
+  blocker in a ``sitecustomize`` on ``PYTHONPATH``) calls every subpackage that has a
+  compiled path (tests/_backend_calls.py: the kinematics' public faces and Jacobians,
+  dynamics, synthesis, collision, the tracker and its clearance, ``/tf`` frames, MCAP written
+  and read back). numba must never be imported there, and the results must equal those of
+  the compiled kernels here to 1e-12.
+* :mod:`athenakin._backend` is the one module that reads ``ATHENAKIN_BACKEND`` or imports
+  numba (the source is searched); no module uses numba's or llvmlite's private API.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import athenakin
+from athenakin import _backend
+
+HERE = Path(__file__).resolve().parent
+SRC = Path(athenakin.__file__).resolve().parent
+
+BLOCKER = '''\
+import importlib.abc
+import sys
+
+
+class _NoNumba(importlib.abc.MetaPathFinder):
+    """numba and llvmlite cannot be imported (tests/test_backend_policy.py)."""
+
+    def find_spec(self, name, path=None, target=None):
+        if name.partition(".")[0] in ("numba", "llvmlite"):
+            raise ImportError(f"{name} is blocked here (tests/test_backend_policy.py)")
+        return None
+
+
+sys.meta_path.insert(0, _NoNumba())
+'''
+
+
+def _run_without_numba(tmp_path: Path, code: list[str]) -> subprocess.CompletedProcess[str]:
+    site = tmp_path / "site"
+    site.mkdir(exist_ok=True)
+    (site / "sitecustomize.py").write_text(BLOCKER)
+    env = dict(os.environ)
+    env["ATHENAKIN_BACKEND"] = "numpy"
+    env["PYTHONPATH"] = os.pathsep.join([str(site), str(SRC.parent), str(HERE),
+                                         env.get("PYTHONPATH", "")])
+    return subprocess.run([sys.executable, *code], cwd=tmp_path, env=env, capture_output=True,
+                          text=True, check=False)
+
+
+@pytest.fixture(scope="module")
+def without_numba(tmp_path_factory: pytest.TempPathFactory) -> dict[str, np.ndarray]:
+    tmp = tmp_path_factory.mktemp("no_numba")
+    res = _run_without_numba(tmp, [str(HERE / "_backend_calls.py"), str(tmp / "out.npz")])
+    assert res.returncode == 0, res.stderr[-4000:]
+    with np.load(tmp / "out.npz") as z:
+        return {k: z[k] for k in z.files}
+
+
+def test_the_blocker_blocks(tmp_path):
+    res = _run_without_numba(tmp_path, ["-c", "import numba"])
+    assert res.returncode != 0 and "blocked here" in res.stderr
+
+
+def test_every_subpackage_runs_without_numba(without_numba):
+    assert without_numba["__loaded__"].size == 0, without_numba["__loaded__"][:5]
+    names = {k.partition(".")[0] for k in without_numba if k != "__loaded__"}
+    assert {"fk", "ik", "jac", "dynamics", "synthesis", "collision", "motion", "ros",
+            "mcap"} <= names
+    for k, v in without_numba.items():
+        if k != "__loaded__":
+            assert v.size and np.isfinite(v).any(), k
+
+
+def test_compiled_kernels_are_refused_without_numba(tmp_path):
+    code = ("import athenakin as ak\n"
+            "for b in ('numba',):\n"
+            "    try:\n"
+            "        ak.forward_kinematics([-0.1, 0.1, 0.45], ak.default_rcm_frame(), backend=b)\n"
+            "    except ImportError as e:\n"
+            "        print('refused:', e)\n"
+            "try:\n"
+            "    import athenakin.fast\n"
+            "except ImportError as e:\n"
+            "    print('fast:', e)\n")
+    res = _run_without_numba(tmp_path, ["-c", code])
+    assert res.returncode == 0, res.stderr
+    assert "refused: backend='numba'" in res.stdout and "fast:" in res.stdout
+
+
+@pytest.mark.skipif(not _backend.numba_available(), reason="numba not available here")
+def test_numpy_paths_equal_the_compiled_kernels(without_numba, tmp_path):
+    sys.path.insert(0, str(HERE))
+    try:
+        from _backend_calls import compute
+    finally:
+        sys.path.remove(str(HERE))
+    compiled = compute(tmp_path)
+    assert set(compiled) == set(without_numba) - {"__loaded__"}
+    for k, want in compiled.items():
+        got = without_numba[k]
+        assert got.shape == want.shape, k
+        # log times, stamps, sequence numbers and flags are integers held as floats: exact
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12, equal_nan=True, err_msg=k)
+
+
+@pytest.mark.parametrize("value", ["numpy", "NumPy ", "auto", "", "numba"])
+def test_environment_values(monkeypatch, value):
+    monkeypatch.setenv("ATHENAKIN_BACKEND", value)
+    assert _backend.environment_backend() == (value.strip().lower() or "auto")
+
+
+def test_an_unknown_environment_value_is_named(monkeypatch):
+    monkeypatch.setenv("ATHENAKIN_BACKEND", "cuda")
+    monkeypatch.delitem(_backend._STATE, "numba", raising=False)
+    with pytest.raises(ValueError, match="ATHENAKIN_BACKEND='cuda'"):
+        _backend.numba_available()
+
+
+def _sources() -> list[Path]:
+    return sorted(SRC.rglob("*.py"))
+
+
+def test_backend_is_the_one_module_that_decides():
+    reads_env = re.compile(r"(environ\b[^\n]*|getenv\([^\n]*)[\"']ATHENAKIN_BACKEND")
+    imports_numba = re.compile(r"^\s*(import numba\b|from numba\b|import llvmlite\b|"
+                               r"from llvmlite\b)", re.M)
+    offenders = []
+    for path in _sources():
+        if path == SRC / "_backend.py":
+            continue
+        text = path.read_text(encoding="utf-8")
+        if reads_env.search(text) or imports_numba.search(text):
+            offenders.append(str(path.relative_to(SRC)))
+    assert not offenders, offenders
+
+
+def test_no_private_numba_or_llvmlite_api():
+    private = re.compile(r"numba\.core|numba\.extending|llvmlite|\bintrinsic\b|cgutils")
+    offenders = [str(p.relative_to(SRC)) for p in _sources()
+                 if private.search(re.sub(r'""".*?"""', "", p.read_text(encoding="utf-8"),
+                                          flags=re.S))]
+    assert not offenders, offenders
+
+
+def test_kernels_live_where_the_rule_says():
+    """docs/architecture.md, "Compiled kernels": ``<subpackage>/_kernels.py``; ``fast/``
+    holds the kinematics kernels; every kernel takes numba from athenakin._backend."""
+    njit_users = [p for p in _sources()
+                  if re.search(r"^from \.\._backend import .*\bnjit\b", p.read_text(), re.M)]
+    assert njit_users
+    for p in njit_users:
+        rel = p.relative_to(SRC)
+        assert rel.parts[0] == "fast" or rel.name == "_kernels.py", rel
+
+
+@pytest.mark.skipif(not _backend.numba_available(), reason="numba not available here")
+def test_design_reduction_numpy_reference_equals_the_kernel():
+    """synthesis._reduce.reduce_samples_numpy against the kernel: every output to 1e-12."""
+    import athenakin as ak
+    from athenakin.synthesis import _reduce
+    from athenakin.synthesis._kernels import reduce_samples as kernel
+
+    d = ak.Design.default()
+    task = ak.synthesis.Task.from_toml(ak.synthesis.example_task_path())
+    s, q, mode, _ = ak.synthesis.reachability(d, task, samples=4000, seed=3)
+    idx = np.flatnonzero(mode != 0)
+    T = task.T_b_e
+    args = (idx, q[idx], mode[idx], np.ascontiguousarray(T[:3, :3]), T[:3, 3].copy(),
+            s.direction_e, s.depth,
+            ak.analysis.tool_tip_jacobian(q[idx], T, d, mode=mode[idx]),
+            ak.analysis.parallel_jacobian(q[idx], d, mode=mode[idx]), d.lengths, d.tool_length,
+            d.stroke_min, d.stroke_max, 1e-6)
+    for sub in (slice(None), slice(0, 0), slice(0, 1)):
+        a = (args[0][sub], args[1][sub], args[2][sub], *args[3:7], args[7][sub], args[8][sub],
+             *args[9:])
+        for x, y in zip(_reduce.reduce_samples_numpy(*a), kernel(*a), strict=True):
+            np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-12)
