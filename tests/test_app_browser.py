@@ -316,7 +316,10 @@ def test_a_p_below_zero_slot_stays_the_iks_slot_across_tabs(app):
         "return e && e.getAttribute('data-v') !== q; }", arg=repr(float(q0[0])),
         timeout=UPDATE_TIMEOUT_MS)
     _readouts_are_fk(page, slot=15)                                # still slot 15
-    assert page.get_attribute("[data-ro=status]", "data-level") == "ok", _ro(page, "status")
+    status = _ro(page, "status")                                   # the step was not held;
+    assert "held" not in status and "stopped" not in status, status  # with p < 0 the bodies
+    assert page.get_attribute("[data-ro=status]", "data-level") == "ok" or (  # may overlap,
+        status.startswith("colliding: ")), status                  # said at the top
     tip_e = np.array([float(page.get_attribute(f"[data-ro=tip_e_{a}]", "data-v"))
                       for a in "xyz"])
     az2, _, _ = _slider_values(page)
