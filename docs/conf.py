@@ -6,6 +6,8 @@ docs/_build/html``). The notebook ``examples/tutorial.ipynb`` is copied to
 a cell fails the build.
 """
 
+import logging
+import re
 import shutil
 import sys
 from pathlib import Path
@@ -59,11 +61,15 @@ def public_modules() -> list[str]:
             + sorted(n for n in found if n not in API_ORDER))
 
 
+#: A reference to the project's own issue tracker ("(issue 20)"): not for a page title.
+_ISSUE_REF = re.compile(r"\s*\(issues? \d+(?:(?:,| and) \d+)*\)")
+
+
 def _title(module: str) -> str:
     import importlib
 
     doc = (importlib.import_module(module).__doc__ or "").strip()
-    first = doc.splitlines()[0].rstrip(".") if doc else module
+    first = _ISSUE_REF.sub("", doc.splitlines()[0]).rstrip(".") if doc else module
     return f"``{module}``: {first}"
 
 
@@ -147,6 +153,23 @@ autodoc_typehints = "none"
 autodoc_default_options = {"members": True, "show-inheritance": False}
 
 # MyST
+
+
+class _NoConfigDump(logging.Filter):
+    """Drop the configuration dump of myst-parser and myst-nb from the build log.
+
+    Both log their whole configuration (``MdParserConfig(...)``, a screenful) at every
+    build; the rest of the log stays.
+    """
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not any(type(a).__name__ in ("MdParserConfig", "NbParserConfig")
+                       for a in (record.args if isinstance(record.args, tuple) else ()))
+
+
+for _name in ("sphinx.myst_parser.sphinx_ext.main", "sphinx.myst_nb.sphinx_ext"):
+    logging.getLogger(_name).addFilter(_NoConfigDump())
+
 myst_enable_extensions = ["dollarmath"]
 myst_heading_anchors = 3
 nb_execution_mode = "force"

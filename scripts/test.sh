@@ -20,4 +20,6 @@ fi
 # this environment's own numba cache: no other venv (scripts/test_matrix.sh,
 # scripts/test_min_deps.sh, possibly running at the same time) rewrites its index
 export NUMBA_CACHE_DIR="${NUMBA_CACHE_DIR:-$PWD/.venv/numba-cache}"
-python -m pytest -q -p no:cacheprovider "$@"
+# the 25 slowest tests (set-up, call, tear-down apart) in the log: what to look at when CI
+# grows; numba's compile time is out of them (tests/conftest.py warms the kernels up first)
+python -m pytest -q -p no:cacheprovider --durations=25 "$@"

@@ -9,6 +9,10 @@ entry, or whose condition does not hold (``numba not available`` where numba imp
 turns the session's exit status to 1 and is listed at the end.
 
 ``ATHENAKIN_ALLOW_SKIPS=1`` turns the policy off (a local run on a partial install).
+
+A session fixture compiles (first run) or loads from numba's cache (later runs) the
+compiled kernels once, before the first test, so that no test's duration carries numba's
+compile time (``pytest --durations``: it shows as the first test's set-up).
 """
 
 from __future__ import annotations
@@ -50,6 +54,35 @@ def _numba_missing() -> bool:
     return not numba_available()
 
 
+@pytest.fixture(scope="session", autouse=True)
+def numba_warm_up() -> None:
+    """Compile or load the numba kernels once per session (none where numba is off).
+
+    The entry points of the backend dispatch (FK, IK, Jacobians: ``athenakin warmup``),
+    then the collision and dynamics kernels through a call of each.
+    """
+    if os.environ.get("ATHENAKIN_BACKEND", "").strip().lower() == "numpy" or _numba_missing():
+        return
+    import numpy as np
+
+    import athenakin as ak
+    from athenakin._dispatch import warmup
+
+    warmup()
+    q = np.array([[-0.10, 0.10, 0.45], [-0.11, 0.09, 0.46]])
+    T = ak.default_rcm_frame()
+    if not _missing("athenakin.collision"):
+        from athenakin import collision
+
+        collision.clearance(q, T)
+        collision.clearance(q, T, witness=False)
+    if not _missing("athenakin.dynamics"):
+        from athenakin import dynamics
+
+        dynamics.statics(q, T)
+        dynamics.mass_matrix(q, T)
+
+
 #: (reason pattern, condition that makes the skip legitimate, why). The first match decides.
 ALLOWED_SKIPS: list[tuple[str, Callable[[re.Match[str]], bool], str]] = [
     (r"numba not (available|installed)", lambda m: _numba_missing(),
@@ -68,7 +101,7 @@ ALLOWED_SKIPS: list[tuple[str, Callable[[re.Match[str]], bool], str]] = [
      lambda m: sys.version_info[:2] < (int(m.group(2)), int(m.group(3))),
      "a feature of a newer Python than this one"),
     (r"^marked in the page: \S", lambda m: True,
-     "a README/docs block its page marks '# not run: REASON' (an install, a server that runs "
+     "a README/docs block its page marks '# run by hand: REASON' (an install, a server that runs "
      "until Ctrl-C, minutes of benchmarks); tests/test_readme_blocks.py prints the reason"),
 ]
 

@@ -487,8 +487,10 @@ def test_app_tip_handle_and_slot_menu_in_process():
         far = T[:3, :3] @ (r.tip_e * 5.0) + T[:3, 3]                    # beyond the tool
         app._handle.position = tuple(far)
         app._on_handle(SimpleNamespace(phase="end"))
-        assert "stopped at the workspace boundary" in app._status.content
-        assert app.view.geometry is not None                               # held, drawn
+        # the straight path out crosses an overlap of the bodies before the workspace
+        # boundary (issue 30): it stops there (pure: the inverse_step tests)
+        assert "stopped before a collision" in app._status.content
+        assert app.view.geometry is not None and not app.bodies.view.colliding  # held, drawn
         _, ok = ak.q_from_tool_tip(T, app.view.readouts.tip_e, D, errors="flag")
         assert ok.valid
         # the slot menu: invalid slots are marked with their reason
@@ -644,5 +646,138 @@ def test_a_p_below_zero_slot_keeps_its_branch_across_tabs_in_process():
         np.testing.assert_allclose(app.view.readouts.tip_b, tip0 + [0, 0, 0.004], atol=1e-9)
         assert app.view.readouts.slot == 15
         np.testing.assert_allclose(app._grip.position, app.view.readouts.tip_b, atol=1e-6)
+    finally:
+        app.stop()
+
+
+def _clearance_fn(setup, slot=0):
+    from athenakin.collision import clearance
+
+    return lambda q: clearance(q, setup.T_b_e, setup.design, slot=slot).min_distance
+
+
+def test_inverse_step_stops_before_a_collision(setup):
+    """Issue 30: an IK move drove the carriages 50 mm into each other. With ``clearance``
+    the motion stops before the bodies overlap; out of an overlap it goes on."""
+    clear = _clearance_fn(setup)
+    r = forward_view(setup, setup.q_home, slot=0).readouts
+    target = tip_from_angles(np.radians(-180.0), np.radians(5.0), 0.25)
+    blind = inverse_step(setup, r.tip_e, target, r.q, r.mode, p_from=r.p)
+    assert clear(blind.q[None])[0] < -0.04                     # the bug, without the check
+    step = inverse_step(setup, r.tip_e, target, r.q, r.mode, p_from=r.p, clearance=clear)
+    assert step.collision and not step.reached and step.reason == 0
+    assert "collision" in step.message
+    assert 0 <= clear(step.q[None])[0] < 0.02                  # stopped close, not inside
+    np.testing.assert_allclose(forward_view(setup, step.q, slot=0).readouts.tip_e,
+                               step.tip_e, rtol=0, atol=1e-9)
+    # from an overlap (placed by the q sliders) a motion that separates the bodies goes on
+    v = forward_view(setup, np.array([-0.03, 0.03, 0.45]), slot=0).readouts
+    assert clear(v.q[None])[0] < 0
+    out = inverse_step(setup, v.tip_e, r.tip_e, v.q, v.mode, p_from=v.p, clearance=clear)
+    assert out.reached and not out.collision
+    assert inverse_step(setup, r.tip_e, r.tip_e + 0.001, r.q, r.mode, p_from=r.p,
+                        clearance=clear).reached                # clear motions: unchanged
+
+
+def test_inverse_step_rejects_a_bad_clearance(setup):
+    r = forward_view(setup, setup.q_home, slot=0).readouts
+    with pytest.raises(InvalidInputError, match="clearance: expected a function"):
+        inverse_step(setup, r.tip_e, r.tip_e, r.q, clearance=0.01)
+    with pytest.raises(InvalidInputError, match=r"clearance: expected shape \(49,\)"):
+        inverse_step(setup, r.tip_e, r.tip_e, r.q, clearance=lambda q: np.zeros(3))
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_app_stops_an_ik_move_before_a_collision_and_says_colliding_at_the_top():
+    from athenakin.app import AthenaApp
+
+    app = AthenaApp(port=0, backend="numpy")
+    clear = _clearance_fn(app.setup)
+    try:
+        with app._echo():                    # the browser's values, then their callback
+            app._az.value, app._pol.value = -180.0, 5.0
+        app._on_angles(None)
+        assert clear(app.q[None])[0] >= 0 and not app.bodies.view.colliding
+        assert 'data-level="warn"' in app._status.content
+        assert "stopped before a collision" in app._status.content
+        app.set_q([-0.03, 0.03, 0.45])       # the q sliders may place an overlap: said so
+        assert 'data-level="error"' in app._status.content
+        assert "colliding: carriage_a and carriage_b overlap by 50.0 mm" in app._status.content
+        app.bodies.checkbox.value = False    # solids hidden: still checked and said
+        app.set_q([-0.03, 0.032, 0.45])
+        assert "colliding: carriage_a and carriage_b overlap by 48.0 mm" in app._status.content
+        app.set_q(app.setup.q_home)
+        assert 'data-level="ok"' in app._status.content
+    finally:
+        app.stop()
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_a_key_press_that_arrives_during_an_update_is_not_undone(monkeypatch):
+    """Issue 30's lost key press. viser stores the browser's value, then runs its callback
+    on a thread pool. An update that wrote its own (older) value back to the slider undid
+    a key press that arrived meanwhile, and the next callback read the old value."""
+    from athenakin.app import AthenaApp, _server
+
+    app = AthenaApp(port=0, backend="numpy")
+    sl = app._q_sliders[0]
+    real = _server.forward_view
+
+    def next_key_arrives(*args, **kwargs):
+        monkeypatch.setattr(_server, "forward_view", real)
+        with app._echo():
+            sl.value = -99.0                 # the next key press, during this update
+        return real(*args, **kwargs)
+
+    try:
+        with app._echo():
+            sl.value = -99.5                 # a key press ...
+        monkeypatch.setattr(_server, "forward_view", next_key_arrives)
+        app._on_q(None)                      # ... and its callback
+        assert sl.value == -99.0             # the newer value is kept
+        app._on_q(None)                      # the next key press's callback
+        assert app.q[0] == pytest.approx(-0.099, abs=1e-12)
+    finally:
+        app.stop()
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_a_browser_update_is_not_dropped_while_another_thread_writes_the_gui(monkeypatch):
+    """The other half of the lost key press: the flag that ignores the app's own writes was
+    shared by every thread, so a callback of the browser on another thread saw it and
+    returned. The flag is per thread, and the callback waits for the update in progress."""
+    import threading
+    import time
+
+    from athenakin.app import AthenaApp
+    from athenakin.app._sync import Echo
+
+    echo, seen = Echo(), []
+    with echo():
+        t = threading.Thread(target=lambda: seen.append(bool(echo)))
+        t.start()
+        t.join()
+        assert echo
+    assert seen == [False] and not echo
+    app = AthenaApp(port=0, backend="numpy")
+    sl, threads = app._q_sliders[0], []
+    place = app._place_handle
+
+    def meanwhile():                          # inside the first update's GUI writes
+        if not threads:
+            with app._echo():
+                sl.value = -99.0              # the browser's next value; its callback runs
+            threads.append(threading.Thread(target=app._on_q, args=(None,)))
+            threads[0].start()
+            time.sleep(0.2)                   # (it must wait, whenever it gets here)
+        place()
+
+    try:
+        monkeypatch.setattr(app, "_place_handle", meanwhile)
+        with app._echo():
+            sl.value = -99.5
+        app._on_q(None)
+        threads[0].join()
+        assert app.q[0] == pytest.approx(-0.099, abs=1e-12) and sl.value == -99.0
     finally:
         app.stop()

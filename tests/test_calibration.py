@@ -1,5 +1,6 @@
 """athenakin.calibration: measurement model, identifiability, solver, bad input."""
 
+import dataclasses
 import warnings
 
 import numpy as np
@@ -126,6 +127,10 @@ def test_interface_of_the_checks_default_parameters_and_design():
     assert res.residuals_before.shape == (30, 3) and res.rms_before > 1e-4
     lazy = ak.calibration.calibrate(data.q, data.tips, T, D)   # the lazy attribute works
     assert lazy.design == res.design
+    # a name of its own, derived from the reference's (issue 30: it kept the reference's)
+    assert res.design.name == f"{D.name}, calibrated" != D.name
+    unnamed = cal.calibrate(data.q, data.tips, T, dataclasses.replace(D, name=""))
+    assert unnamed.design.name == "calibrated design"
 
 
 def test_mode_auto_picks_each_rows_assembly_mode():

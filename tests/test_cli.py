@@ -133,6 +133,39 @@ def test_import_athenakin_stays_light():
     assert out == "[]"
 
 
+@pytest.mark.parametrize("argv", [["fk", "-0.1", "0.1", "0.45"], ["ik", "--tip", "0.25", "0", "0"],
+                                  ["ik", "--u345", "-70.143", "90", "0"],
+                                  ["ik", "--direction", "0", "90", "--p", "0.2"]])
+def test_a_one_shot_command_does_not_load_numba(argv):
+    """Issue 30: a one-pose fk loaded numba and every kernel (1.1 s of CPU, and the
+    kernel-cache line on stderr) for a millisecond's work. It runs the numpy reference and
+    prints what the compiled kernels print (ATHENAKIN_BACKEND set: the library's choice)."""
+    import os
+    import subprocess
+    import sys
+
+    from athenakin._dispatch import numba_available
+
+    code = ("import sys; from athenakin.cli import main; rc = main(sys.argv[1:]); "
+            "print('numba loaded:', 'numba' in sys.modules, file=sys.stderr); sys.exit(rc)")
+    env = {k: v for k, v in os.environ.items() if k != "ATHENAKIN_BACKEND"}
+    fresh = subprocess.run([sys.executable, "-c", code, *argv], capture_output=True, text=True,
+                           env=env, timeout=600)
+    assert fresh.returncode == 0 and fresh.stderr == "numba loaded: False\n", fresh.stderr
+    if numba_available():
+        compiled = subprocess.run([sys.executable, "-c", code, *argv], capture_output=True,
+                                  text=True, env={**env, "ATHENAKIN_BACKEND": "auto"},
+                                  timeout=600)
+        assert compiled.returncode == 0 and "numba loaded: True" in compiled.stderr
+        a, b = compiled.stdout.replace(",", " ").split(), fresh.stdout.replace(",", " ").split()
+        assert len(a) == len(b)
+        for x, y in zip(a, b, strict=True):      # the same to the digits shown (a closure
+            try:                                 # residual of 1e-16 is rounding noise)
+                assert float(x.strip("()")) == pytest.approx(float(y.strip("()")), abs=1e-9)
+            except ValueError:
+                assert x == y
+
+
 # --- athenakin design: print / write the design ------------------------------------------
 def test_design_prints_and_writes_and_refuses_to_overwrite(tmp_path, capsys):
     code, out, _ = run(capsys, "design")

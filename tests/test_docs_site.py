@@ -30,3 +30,28 @@ def test_every_public_subpackage_gets_an_api_page() -> None:
     excluded = robot.split(":exclude-members:")[1].splitlines()[0].replace(",", " ").split()
     assert "Design" in excluded and "FKSolution" in excluded
     assert "forward_kinematics" not in excluded    # the numpy reference is its own function
+
+
+def test_api_page_titles_carry_no_issue_numbers_and_the_build_log_no_config_dump() -> None:
+    """Issue 30: "(issue 20)" in page titles; myst's MdParserConfig(...) in the build log."""
+    import logging
+
+    conf = runpy.run_path(str(ROOT / "docs/conf.py"))
+    for name in conf["public_modules"]():
+        title = (ROOT / f"docs/_generated/api/athenakin.{name}.rst").read_text().splitlines()[0]
+        assert "(issue" not in title, title
+
+    class Config:                      # stands for myst's MdParserConfig in a log record
+        pass
+
+    Config.__name__ = "MdParserConfig"
+    logger, seen = logging.getLogger("sphinx.myst_parser.sphinx_ext.main"), []
+    handler = logging.Handler()
+    handler.emit = lambda record: seen.append(record.getMessage())  # type: ignore[method-assign]
+    logger.addHandler(handler)
+    try:
+        logger.warning("myst v%s: %s", "4", Config())
+        logger.warning("another line")
+    finally:
+        logger.removeHandler(handler)
+    assert seen == ["another line"]

@@ -142,3 +142,45 @@ def test_every_frame_shows_the_whole_sweep():
     assert "motion: instrument sweep, tip path" in [t.get_text()
                                                     for t in ax.get_legend().get_texts()]
     plt.close(fig)
+
+
+class _LosesCtrlC:
+    """Drops out of scope inside a drawing step and raises SIGINT in its ``__del__``: the
+    handler runs there, and Python prints the KeyboardInterrupt as "Exception ignored"
+    instead of raising it, as with matplotlib's weakref callbacks (issue 30)."""
+
+    def __del__(self):
+        import signal
+
+        signal.raise_signal(signal.SIGINT)
+
+
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")  # the lost one
+def test_animate_keeps_a_ctrl_c_lost_inside_a_callback(tmp_path, capsys, monkeypatch):
+    """``athenakin animate`` ran to the end and exited 0 after a Ctrl-C that matplotlib
+    swallowed (1 run in 11); now it stops at the next frame with 130 and writes nothing."""
+    import signal
+
+    from athenakin.cli import main
+    from athenakin.plot import _animate
+
+    if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        pytest.skip("needs Python's default SIGINT handler (pytest's is the default)")
+    real, drawn = _animate.draw_motion_frame, []
+
+    def draw(ax, geoms, k, **kw):
+        drawn.append(k)
+        if k == 1:
+            _LosesCtrlC()                     # made and dropped: its __del__ runs here
+        return real(ax, geoms, k, **kw)
+
+    monkeypatch.setattr(_animate, "draw_motion_frame", draw)
+    out = tmp_path / "motion.gif"
+    assert main(["animate", "-o", str(out), "--frames", "6", "--no-progress"]) == 130
+    err = capsys.readouterr().err
+    assert "interrupted" in err and not out.exists() and drawn == [0, 1]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # restored
+    drawn.clear()                             # and without a Ctrl-C, nothing changes
+    monkeypatch.setattr(_animate, "draw_motion_frame", real)
+    assert main(["animate", "-o", str(out), "--frames", "2", "--no-progress"]) == 0
+    assert out.exists()

@@ -248,6 +248,17 @@ def test_coincident_points_share_one_label(fresh_axes):
     assert "M, $O_b$" in texts and "M" not in texts and "$O_b$" not in texts
 
 
+def test_close_carriages_keep_their_labels_apart(fresh_axes):
+    """Issue 30: with the carriages 30 mm apart, A, M and B merged into one label. A and B
+    keep a label each, apart; M, between them, is left out."""
+    ax = plot_robot([-0.015, 0.015, 0.45], ax=fresh_axes)
+    fresh_axes.figure.canvas.draw()
+    texts = {t.get_text(): t for t in ax.texts if t.get_text()}
+    a = next(t for k, t in texts.items() if k.split(", ")[0] == "A")
+    assert "B" in texts and not any("M" in k.split(", ") for k in texts)
+    assert not _overlaps(*_boxes(fresh_axes.figure, [a, texts["B"]]))
+
+
 def test_axes_are_in_mm_and_a_legend_names_the_colours(fresh_axes):
     ax = plot_robot(ax=fresh_axes)
     fresh_axes.figure.canvas.draw()

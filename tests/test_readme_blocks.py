@@ -4,8 +4,9 @@ Every ```bash and ```python block of README.md and of the docs pages (in the ord
 table of contents of docs/index.md, then any other page) runs in one temporary ``git clone``
 of this repository, one block after the other, so that a block sees the files the blocks
 before it wrote, exactly as a reader who types them in order. A block whose first line is
-``# not run: REASON`` is skipped with that reason (installs, servers, runs of minutes); the
-reason is visible in the page.
+``# run by hand: REASON`` (or the older ``# not run: REASON``) is skipped with that reason
+(installs, servers, runs of minutes); the reason is visible in the page, and the marker
+reads as what it is, a command for the reader to run, not one this test runs.
 
 The command ``athenakin`` is this checkout's (``python -m athenakin`` with ``src`` first on
 the path), so that the numba cache of the checkout is used and the clone compiles nothing.
@@ -25,7 +26,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 #: First line of a block that is not run, with its reason.
-NOT_RUN = re.compile(r"^#\s*not run:\s*(\S.*)$")
+NOT_RUN = re.compile(r"^#\s*(?:run by hand|not run):\s*(\S.*)$")
 #: Seconds any one block may take.
 BLOCK_TIMEOUT = 240
 _FENCE = re.compile(r"^```(\w+)?\s*$")

@@ -267,6 +267,7 @@ def test_cli_synthesize_locally_with_figures(tmp_path, capsys) -> None:
                "--scheduler", "synchronous"])
     text = capsys.readouterr().out
     assert rc == 0 and "4 designs" in text and "cov. 1 mode" in text
+    assert "design 0: the reference design" in text             # the table's caption
     for name in ("pareto.png", "parameters.png", "coverage.png"):
         assert (tmp_path / "r.parquet-figures" / name).stat().st_size > 1000
     from athenakin.synthesis import read_study

@@ -64,18 +64,29 @@ def _capsule_surface(ax, a, b, r, colour, n=14):
         ax.plot_surface(S[..., 0], S[..., 1], S[..., 2], color=colour, alpha=0.55, linewidth=0)
 
 
+def _mm_ticks(ax, names=("x", "y", "z")) -> None:
+    """Tick labels in mm (the data stay in m), axis labels that say so: as every figure."""
+    from matplotlib.ticker import FuncFormatter, MaxNLocator
+
+    fmt = FuncFormatter(lambda v, _pos: f"{v * 1e3:.0f}")
+    axes = (ax.xaxis, ax.yaxis, ax.zaxis) if hasattr(ax, "zaxis") else (ax.xaxis, ax.yaxis)
+    for axis, name in zip(axes, names, strict=False):
+        axis.set_major_locator(MaxNLocator(5))
+        axis.set_major_formatter(fmt)
+        axis.set_label_text(f"{name} [mm]")
+
+
 def bodies() -> None:
     """collision_bodies.png: the 13 capsules at the reference configuration, slot 0."""
+    from athenakin.plot._mpl import place_labels
+
     seg = body_segments(mechanism_points(REFERENCE_Q, T, D, slot=0,
                                          geometry=BODIES_DEFAULT.geometry))
     fig = plt.figure(figsize=(8.5, 6.5))
     ax = fig.add_subplot(projection="3d")
     for j, name in enumerate(BODIES):
         a, b = seg[j]
-        r = BODIES_DEFAULT.radius[name]
-        _capsule_surface(ax, a, b, r, COLOURS[name])
-        m = 0.5 * (a + b)
-        ax.text(m[0], m[1], m[2] + 0.02, name, fontsize=7)
+        _capsule_surface(ax, a, b, BODIES_DEFAULT.radius[name], COLOURS[name])
     allp = seg.reshape(-1, 3)
     c = 0.5 * (allp.min(0) + allp.max(0))
     h = 0.5 * (allp.max(0) - allp.min(0)).max()
@@ -83,13 +94,16 @@ def bodies() -> None:
     ax.set_ylim(c[1] - h, c[1] + h)
     ax.set_zlim(c[2] - h, c[2] + h)
     ax.set_box_aspect((1, 1, 1))
-    ax.set_xlabel("x_b (m)")
-    ax.set_ylabel("y_b (m)")
-    ax.set_zlabel("z_b (m)")
+    _mm_ticks(ax, ("x$_b$", "y$_b$", "z$_b$"))
     ax.view_init(elev=22, azim=-60)
-    ax.set_title(f"Default bodies (Bodies.default), reference design, q = {REFERENCE_Q.tolist()} m,"
-                 " FK slot 0", fontsize=9)
-    fig.tight_layout()
+    q_mm = ", ".join(f"{1e3 * x:.0f}" for x in REFERENCE_Q)
+    ax.set_title(f"Default bodies (Bodies.default), reference design, q = ({q_mm}) mm, "
+                 "FK slot 0", fontsize=9)
+    fig.subplots_adjust(left=0.0, right=0.95, bottom=0.04, top=0.94)
+    # one label per body at its middle, placed apart (leader lines where it is crowded)
+    items = [(name, 0.5 * (seg[j, 0] + seg[j, 1]), "#111111")
+             for j, name in enumerate(BODIES)]
+    place_labels(ax, items, lines=[s_ for s_ in seg], fontsize=7.5)
     fig.savefig(OUT / "collision_bodies.png", dpi=90)
     plt.close(fig)
 
@@ -156,19 +170,22 @@ def finding() -> dict:
     col = c.colliding[v0, 0]
     fig, axs = plt.subplots(1, 3, figsize=(13, 4.2))
     for ax, (i, j, lab) in zip(axs[:2], ((0, 1, "x_b, y_b"), (0, 2, "x_b, z_b")), strict=True):
-        ax.scatter(Os[~col, i], Os[~col, j], s=2, c="#2f9f5f", label="collision-free")
-        ax.scatter(Os[col, i], Os[col, j], s=2, c="#d62728", label="colliding", alpha=0.5)
-        ax.set_xlabel(f"{lab.split(',')[0]} (m)")
-        ax.set_ylabel(f"{lab.split(',')[1].strip()} (m)")
+        ax.scatter(1e3 * Os[~col, i], 1e3 * Os[~col, j], s=2, c="#2f9f5f",
+                   label="collision-free")
+        ax.scatter(1e3 * Os[col, i], 1e3 * Os[col, j], s=2, c="#d62728", label="colliding",
+                   alpha=0.5)
+        ax.set_xlabel(f"{lab.split(',')[0]} (mm)")
+        ax.set_ylabel(f"{lab.split(',')[1].strip()} (mm)")
         ax.set_aspect("equal")
         ax.set_title(f"O_s over the strokes ({lab}), slot 0", fontsize=9)
-    axs[0].legend(markerscale=5, fontsize=8)
+    fig.legend(*axs[0].get_legend_handles_labels(), markerscale=5, fontsize=8,
+               loc="upper left", ncols=2, frameon=False)   # above the panels, off the data
     top = res["slot0_pairs_that_collide"][:10]
     axs[2].barh([f"{p['pair'][0]} / {p['pair'][1]}" for p in top][::-1],
                 [100 * p["fraction"] for p in top][::-1], color="#d62728")
     axs[2].set_xlabel("% of slot-0 configurations where the pair collides")
     axs[2].tick_params(axis="y", labelsize=7)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0, 1, 0.93))
     fig.savefig(OUT / "collision_workspace.png", dpi=80)
     plt.close(fig)
     # --- the instrument cone (mode +1, p > 0: FK slot 0) -------------------------------------
@@ -213,9 +230,15 @@ def finding() -> dict:
     res["cone_only_collisions"] = [f"{a}-{b}" for i, (a, b) in enumerate(pairs)
                                    if dmin_all[i] < 0 and (a, b) not in dmin_grid]
     frac = np.where(reach3.sum(-1) > 0, free3.sum(-1) / np.maximum(reach3.sum(-1), 1), np.nan)
+    # the chart of every cone figure (figure_instrument_cone): the azimuths in one piece
+    # across +-180 deg from the widest unreachable gap, polar downwards
+    from athenakin.analysis.figures import wrapped_azimuth
+
+    az_w, order = wrapped_azimuth(np.degrees(az), dirs_reach.any(axis=1))
     fig, ax = plt.subplots(figsize=(8, 4.5))
-    im = ax.pcolormesh(np.degrees(az), np.degrees(pol), frac.T, cmap="RdYlGn", vmin=0, vmax=1,
-                       shading="nearest")
+    im = ax.pcolormesh(az_w[order], np.degrees(pol), frac[order].T, cmap="RdYlGn", vmin=0,
+                       vmax=1, shading="nearest")
+    ax.set_ylim(180, 0)
     fig.colorbar(im, ax=ax, label="collision-free share of the reachable insertions")
     ax.set_xlabel("azimuth about z_e (deg)")
     ax.set_ylabel("polar angle from z_e (deg)")

@@ -43,6 +43,19 @@ def cone_grid(n_az=91, n_pol=61):
     return az, pol, q, res
 
 
+def cone_chart(az, values, occupied):
+    """Azimuths (deg) and values on the chart of every cone figure of the docs.
+
+    As :func:`athenakin.analysis.figures.figure_instrument_cone`: the azimuth axis starts in
+    the widest gap of unreachable azimuths (one piece across +-180 deg), polar downwards.
+    The grid's last azimuth (+180 deg, the first one again) is dropped.
+    """
+    from athenakin.analysis.figures import wrapped_azimuth
+
+    a, order = wrapped_azimuth(np.degrees(az[:-1]), occupied[:-1])
+    return a[order], [v[:-1][order] for v in values]
+
+
 def forces_in_cone(q, res):
     """Static forces per item in its assembly mode (slot 0 or 8), NaN where unreachable."""
     f = np.full(q.shape, np.nan)
@@ -75,13 +88,15 @@ def main() -> None:
         print(f"  gravity f{i + 1}: {fi.min():+.2f} .. {fi.max():+.2f} N; 5/50/95 % "
               f"{p5:+.2f} / {p50:+.2f} / {p95:+.2f} N")
     lim = np.nanpercentile(np.abs(f), 95)
+    az_w, (f_w, cap_w) = cone_chart(az, [f, cap_min], ok.any(axis=1))
     fig, axs = plt.subplots(1, 3, figsize=(14, 3.6))
     for i, ax in enumerate(axs):
-        m = ax.pcolormesh(np.degrees(az), np.degrees(pol), f[..., i].T, shading="auto",
+        m = ax.pcolormesh(az_w, np.degrees(pol), f_w[..., i].T, shading="auto",
                           cmap="coolwarm", vmin=-lim, vmax=lim)
         ax.set_title(f"f{i + 1} (N) holding the weight", fontsize=10)
         ax.set_xlabel("azimuth about z_e (deg)")
         ax.set_ylabel("polar from z_e (deg)")
+        ax.set_ylim(180, 0)
         fig.colorbar(m, ax=ax)
     fig.suptitle("Actuator forces under gravity over the instrument cone "
                  f"(p = {P_CONE} m; white: unreachable; colour clipped at the 95th "
@@ -108,12 +123,12 @@ def main() -> None:
             np.linalg.norm(st.rcm_force, axis=-1)]
     titles = ["f1 (N)", "f2 (N)", "f3 (N)", "|RCM mount load| (N)"]
     for ax, z, title in zip(axs, data, titles, strict=True):
-        m = ax.pcolormesh(q1, q2, z.T, shading="auto", cmap="viridis")
-        ax.set_xlabel("q1 (m)")
-        ax.set_ylabel("q2 (m)")
+        m = ax.pcolormesh(q1 * 1e3, q2 * 1e3, z.T, shading="auto", cmap="viridis")
+        ax.set_xlabel("q1 (mm)")
+        ax.set_ylabel("q2 (mm)")
         ax.set_title(title, fontsize=10)
         fig.colorbar(m, ax=ax)
-    fig.suptitle("Gravity over the actuator plane, q3 = 0.45 m, FK slot 0 "
+    fig.suptitle("Gravity over the actuator plane, q3 = 450 mm, FK slot 0 "
                  "(white: no configuration)", fontsize=10)
     fig.tight_layout()
     fig.savefig(OUT / "dynamics_gravity_plane.png", dpi=80)
@@ -147,10 +162,11 @@ def main() -> None:
     print(f"  weakest direction's |z_b| component: median {np.median(wz):.2f}")
     fig = plt.figure(figsize=(11, 4.2))
     ax = fig.add_subplot(1, 2, 1)
-    m = ax.pcolormesh(np.degrees(az), np.degrees(pol), np.maximum(cap_min, 0).T,
+    m = ax.pcolormesh(az_w, np.degrees(pol), np.maximum(cap_w, 0).T,
                       shading="auto", cmap="magma")
     ax.set_xlabel("azimuth about z_e (deg)")
     ax.set_ylabel("polar from z_e (deg)")
+    ax.set_ylim(180, 0)
     ax.set_title(f"tip force resisted in every direction (N), |f_i| <= {F_MAX:g} N",
                  fontsize=9)
     fig.colorbar(m, ax=ax)
@@ -159,11 +175,17 @@ def main() -> None:
     edges = [(a, b) for a in range(8) for b in range(a + 1, 8) if bin(a ^ b).count("1") == 1]
     for a, b in edges:
         ax3.plot(*np.stack([V[a], V[b]]).T, color="C0")
-    ax3.quiver(0, 0, 0, *(cap.min_force * w), color="C3")
+    # the weakest direction as a line through the polytope (an arrow min_force long is a
+    # few pixels beside vertices hundreds of newtons out), its boundary point marked
+    reach = np.max(np.abs(V))
+    ax3.plot(*np.stack([-reach * w, reach * w]).T, color="C3", lw=1.2, ls="--")
+    ax3.plot(*np.stack([np.zeros(3), cap.min_force * w]).T, color="C3", lw=3.0)
+    ax3.scatter(*(cap.min_force * w), color="C3", s=25, depthshade=False)
     ax3.set_xlabel("f_x (N)")
     ax3.set_ylabel("f_y (N)")
     ax3.set_zlabel("f_z (N)")
-    ax3.set_title("polytope at REFERENCE_Q, red: weakest direction", fontsize=9)
+    ax3.set_title(f"polytope at REFERENCE_Q; red: weakest direction (dashed), "
+                  f"{cap.min_force:.1f} N resisted along it (solid)", fontsize=9)
     fig.tight_layout()
     fig.savefig(OUT / "dynamics_capability.png", dpi=80)
     plt.close(fig)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import html
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -23,7 +24,7 @@ from ..plot._solids import BODY_COLORS, CLOSEST_COLOR, COLLIDING_COLOR, capsule_
 from ._scene import rgb
 
 __all__ = ["BodyMesh", "BodiesView", "bodies_view", "capsule_mesh", "clearance_html",
-           "BodiesLayer", "BODY_OPACITY"]
+           "collision_note", "BodiesLayer", "BODY_OPACITY"]
 
 #: Opacity of the solids in the app (the sticks stay visible through them).
 BODY_OPACITY = 0.45
@@ -169,6 +170,14 @@ def clearance_html(bv: BodiesView) -> str:
             f"<b>{word}</b> {bv.clearance * 1e3:.1f} mm: {a} &ndash; {b}</p>")
 
 
+def collision_note(bv: BodiesView) -> str:
+    """The app's status line for overlapping bodies (``""`` when they are clear)."""
+    if not bv.colliding:
+        return ""
+    return (f"colliding: {bv.pair[0]} and {bv.pair[1]} overlap by "
+            f"{-bv.clearance * 1e3:.1f} mm")
+
+
 class BodiesLayer:
     """The solids in a viser scene: one mesh node per body, the witness segment, a read-out.
 
@@ -237,3 +246,40 @@ class BodiesLayer:
         self.readout.content = clearance_html(bv)
         self.view = bv
         return bv
+
+    def clearance_of(self, g: RobotGeometry) -> BodiesView:
+        """The least clearance of ``g``, whether the solids are drawn or not.
+
+        The view drawn last if it is ``g``'s; the app checks collisions with the solids
+        hidden too.
+        """
+        if self.view is not None and self._geometry is g:
+            return self.view
+        from ..collision import Bodies, clearance
+
+        bodies = self.bodies if self.bodies is not None else Bodies.default(g.design)
+        c = clearance(g.q, g.T_b_e, g.design, slot=g.slot, bodies=bodies,
+                      environment=self.environment)
+        k = int(c.closest_pair)
+        return BodiesView(meshes=(), clearance=float(c.min_distance),
+                          pair=(str(c.pairs[k][0]), str(c.pairs[k][1])) if k >= 0 else ("", ""),
+                          witness=np.asarray(c.witness_points[k]) if k >= 0
+                          else np.full((2, 3), np.nan), colliding=bool(c.colliding))
+
+    def clearance_along(self, T_b_e: NDArray[np.float64], design: Any,
+                        slot: int) -> Callable[[NDArray[np.float64]], NDArray[np.float64]]:
+        """``clearance(q)``: least clearance of configurations ``q`` (k, 3) in ``slot``.
+
+        The least signed distance between the bodies and to the obstacles, m, shape (k,);
+        :func:`athenakin.app.inverse_step` stops before a collision with it.
+        """
+        from ..collision import Bodies, clearance
+
+        bodies = self.bodies if self.bodies is not None else Bodies.default(design)
+
+        def along(q: NDArray[np.float64]) -> NDArray[np.float64]:
+            c = clearance(q, T_b_e, design, slot=slot, bodies=bodies,
+                          environment=self.environment)
+            return np.asarray(c.min_distance, dtype=float)
+
+        return along

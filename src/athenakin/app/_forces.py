@@ -32,6 +32,7 @@ from .._validation import check_array
 from ..errors import InvalidInputError, KinematicsError
 from ..plot._geometry import RobotGeometry
 from ._scene import rgb
+from ._sync import Echo
 from ._text import ERROR_COLOR, WARN_COLOR
 
 __all__ = ["ForcesView", "forces_view", "forces_html", "tip_force_from_handle",
@@ -370,7 +371,7 @@ class ForcesLayer:
         self._tip_handle_was_visible = True
         self._geometry: RobotGeometry | None = None
         self._lock = threading.RLock()
-        self._syncing = False
+        self._echo = Echo()   # this thread writes the GUI's values (app/_sync.py)
         self._dragging = False
         self._arrow: Any = None
         self._last_key: tuple[object, ...] | None = None
@@ -410,13 +411,10 @@ class ForcesLayer:
             return
         with self._lock, self.server.atomic():
             self.tip_force = f
-            self._syncing = True
-            try:
+            with self._echo():
                 v = tuple(round(float(x), 3) for x in f)
                 if tuple(self.force_input.value) != v:
                     self.force_input.value = v
-            finally:
-                self._syncing = False
             self._redraw(place_handle=place_handle)
 
     def update(self, g: RobotGeometry | None) -> ForcesView | None:
@@ -427,9 +425,10 @@ class ForcesLayer:
 
     # ------------------------------------------------------------------ callbacks
     def _on_input(self, _: object) -> None:
-        if self._syncing:
-            return
-        self.set_tip_force(np.asarray(self.force_input.value, dtype=float))
+        with self._lock:        # then read: the last of quick updates reads the newest value
+            if self._echo:
+                return
+            self.set_tip_force(np.asarray(self.force_input.value, dtype=float))
 
     def _on_handle(self, event: Any) -> None:
         # viser runs these on a thread pool: only a start or an end says whether a drag

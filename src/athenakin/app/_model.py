@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Literal
 
@@ -510,8 +511,12 @@ class InverseStep:
     reached : bool
         The target itself was reached.
     reason : int
-        :class:`~athenakin.errors.Reason` that stopped the motion (0 if reached).
+        :class:`~athenakin.errors.Reason` that stopped the motion (0 if reached or
+        stopped by a collision).
     message : str
+    collision : bool
+        The motion stopped before the bodies would collide (``clearance`` of
+        :func:`inverse_step`).
     """
 
     q: NDArray[np.float64]
@@ -520,6 +525,7 @@ class InverseStep:
     reached: bool
     reason: int
     message: str
+    collision: bool = False
 
 
 #: Most samples of :func:`inverse_step` (checked before anything is allocated).
@@ -528,7 +534,9 @@ MAX_INVERSE_STEPS = 10_000
 
 def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from: ArrayLike,
                  mode_from: int = 1, *, n: int = INVERSE_STEPS,
-                 p_from: float | None = None) -> InverseStep:
+                 p_from: float | None = None,
+                 clearance: Callable[[NDArray[np.float64]], ArrayLike] | None = None
+                 ) -> InverseStep:
     """Move the tool tip from where it is towards a target; the actuators follow, never jump.
 
     The straight segment ``tip_from -> tip_to`` (frame E) is sampled at ``n`` points
@@ -540,7 +548,7 @@ def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from
     tool ``0 < p < L``, ``O_s`` beyond the RCM ``p < 0`` (the tip ``L - p > L`` from
     the RCM) or the tip behind the RCM ``p > L``; the two others are solved by
     :func:`~athenakin.q_from_instrument`, and the motion stops before ``p`` would reach
-    0 or ``L``.
+    0 or ``L``. With ``clearance``, it also stops before the bodies collide.
 
     Parameters
     ----------
@@ -558,6 +566,12 @@ def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from
     p_from : float, keyword-only, optional
         Passive prismatic joint now, m (the drawn slot's ``p``): picks the branch.
         Default: the inserted tool, ``0 < p < L``.
+    clearance : callable, keyword-only, optional
+        ``clearance(q)``: least signed distance between the bodies (m, negative when
+        they overlap) of configurations ``q`` of shape (k, 3) in the slot moved, shape
+        (k,); e.g. the ``min_distance`` of :func:`athenakin.collision.clearance`. The
+        motion stops before the first sample whose clearance is below 0 and below that
+        of ``q_from``: a motion into a collision stops, one out of it goes on.
 
     Returns
     -------
@@ -575,6 +589,9 @@ def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from
         raise InvalidInputError(f"mode_from: expected +1 or -1, got {mode_from!r}")
     mode_from = int(mode_from)
     n = check_count(n, "n", minimum=1, maximum=MAX_INVERSE_STEPS)
+    if clearance is not None and not callable(clearance):
+        raise InvalidInputError(f"clearance: expected a function of q or None, got "
+                                f"{type(clearance).__name__}")
     L = setup.design.tool_length
     p0 = 0.5 * L if p_from is None else float(check_array(p_from, "p_from", ()))
     branch = 0 if 0.0 < p0 < L else (-1 if p0 <= 0.0 else 1)
@@ -593,11 +610,21 @@ def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from
         q, res = q_from_instrument(setup.T_b_e, unit if branch < 0 else -unit, p,
                                    setup.design, errors="flag", backend=setup.backend)
     ok = side & np.asarray(res.valid) & (np.asarray(res.mode) == mode_from)
-    bad = np.flatnonzero(~ok)
+    hit = _collisions(clearance, q0, q, ok) if clearance is not None else np.zeros_like(ok)
+    bad = np.flatnonzero(~ok | hit)
     if bad.size == 0:
         return InverseStep(q=q[-1].copy(), tip_e=b.copy(), mode=int(mode_from), reached=True,
                            reason=0, message="")
     k = int(bad[0])
+    if hit[k]:
+        if k == 0:
+            return InverseStep(q=q0.copy(), tip_e=a.copy(), mode=int(mode_from),
+                               reached=False, reason=0, collision=True,
+                               message="target out of reach (the bodies would collide); "
+                                       "actuators held")
+        return InverseStep(q=q[k - 1].copy(), tip_e=tips[k - 1].copy(), mode=int(mode_from),
+                           reached=False, reason=0, collision=True,
+                           message="stopped before a collision of the bodies")
     r = int(res.reason[k]) if side[k] else int(
         Reason.SERIAL_P_ZERO if branch < 0 else Reason.INSERTION_RANGE)
     if not side[k] and branch < 0:
@@ -616,6 +643,22 @@ def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from
     return InverseStep(q=q[k - 1].copy(), tip_e=tips[k - 1].copy(), mode=int(mode_from),
                        reached=False, reason=r,
                        message=f"stopped at the workspace boundary ({why})")
+
+
+def _collisions(clearance: Callable[[NDArray[np.float64]], ArrayLike],
+                q0: NDArray[np.float64], q: NDArray[np.float64],
+                ok: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """Samples that ``clearance`` puts in a collision deeper than at ``q0``, shape (n,).
+
+    Only samples solved (``ok``) count.
+    """
+    qs = np.concatenate([q0[None], np.where(ok[:, None], q, q0)])
+    d = np.asarray(clearance(qs), dtype=float)
+    if d.shape != (len(qs),):
+        raise InvalidInputError(f"clearance: expected shape ({len(qs)},) for q of shape "
+                                f"{qs.shape}, got shape {d.shape}")
+    floor = min(0.0, float(d[0])) if np.isfinite(d[0]) else 0.0
+    return ok & ~(d[1:] >= floor)
 
 
 @dataclasses.dataclass(frozen=True)

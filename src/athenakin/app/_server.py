@@ -31,6 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._input import MAX_CONFIG_BYTES, read_bytes
 from ..design import Design
 from ..errors import KinematicsError
+from ._bodies import collision_note
 from ._ghosts import ghost_scene
 from ._model import (
     AppSetup,
@@ -45,6 +46,7 @@ from ._model import (
     tip_from_angles,
 )
 from ._scene import Scene, Solid, robot_scene, with_solids
+from ._sync import Echo
 from ._text import ERROR_COLOR, message_html, view_html
 
 __all__ = ["AthenaApp", "launch", "rcm_reach", "DEFAULT_PORT"]
@@ -147,7 +149,7 @@ class AthenaApp:
 
         masses, f_max = check_masses(masses), check_f_max(f_max)
         self._lock = threading.RLock()
-        self._syncing = False
+        self._echo = Echo()      # this thread is writing GUI values (app/_sync.py)
         self._backend = backend
         self.errors: list[str] = []
         self.setup = self._make_setup(design, T_b_e)
@@ -348,31 +350,38 @@ class AthenaApp:
                          f"{s.why.split(':')[0]}" for s in view.slots]
 
     # ------------------------------------------------------------------ callbacks
+    # viser runs the browser's updates on a thread pool, several at once after quick key
+    # presses. Each callback takes the lock *before* it reads the values: the last one to
+    # take it then reads the newest values, whatever order the threads ran in (reading
+    # first, a callback could apply an older value after a newer one: a lost key press).
     def _on_q(self, _: object) -> None:
-        if self._syncing:
-            return
-        q = np.array([sl.value for sl in self._q_sliders], dtype=float) * 1e-3
-        self._apply_q(q, sync_ik=True)
+        with self._lock:
+            if self._echo:
+                return
+            read = tuple((sl, float(sl.value)) for sl in self._q_sliders)
+            q = np.array([v for _, v in read]) * 1e-3
+            self._apply_q(q, sync_ik=True, read=read)
 
     def _on_slot(self, _: object) -> None:
-        if self._syncing:
-            return
-        v = self._slot_dd.value
         with self._lock:
+            if self._echo:
+                return
+            v = self._slot_dd.value
             self.slot = "all" if v == _ALL else int(v.split(":")[0].split()[1])
-        self._apply_q(self.q, sync_ik=True)
+            self._apply_q(self.q, sync_ik=True)
 
     def _on_angles(self, _: object) -> None:
-        if self._syncing:
-            return
-        tip = tip_from_angles(math.radians(self._az.value), math.radians(self._pol.value),
-                              self._depth.value * 1e-3)
-        self._move_tip(tip, snap_angles=True)
+        with self._lock:
+            if self._echo:
+                return
+            read = tuple((sl, float(sl.value)) for sl in (self._az, self._pol, self._depth))
+            az, pol, depth = (v for _, v in read)
+            tip = tip_from_angles(math.radians(az), math.radians(pol), depth * 1e-3)
+            self._move_tip(tip, snap_angles=True, read=read)
 
     def _on_handle(self, event: Any) -> None:
         # Only the browser fires the handle's events (setting its position here fires
-        # none), so there is no ``_syncing`` check: another thread's sync must not drop
-        # a drag.
+        # none), so there is no echo to ignore.
         phase = getattr(event, "phase", "update")
         # viser runs these callbacks on a thread pool, so the end of a drag may be handled
         # before its last update: only a start or an end says whether a drag is on. Every
@@ -411,24 +420,31 @@ class AthenaApp:
         self._handle.visible = self._grip.visible = bool(self._handle_cb.value)
 
     def _on_time(self, _: object) -> None:
-        if self._syncing or self.playback is None:
-            return
-        q, _k = playback_q(self.playback, self.playback.t[0] + self._time.value)
-        self._apply_q(q, sync_ik=True)
+        with self._lock:
+            if self._echo or self.playback is None:
+                return
+            q, _k = playback_q(self.playback, self.playback.t[0] + self._time.value)
+            self._apply_q(q, sync_ik=True)
 
     # ------------------------------------------------------------------ actions
     def set_q(self, q: ArrayLike) -> AppView:
         """Move the actuators (m) as the sliders would; returns the new view."""
         return self._apply_q(np.asarray(q, dtype=float), sync_ik=True)
 
-    def _move_tip(self, tip_e: NDArray[np.float64], *, snap_angles: bool) -> None:
+    def _move_tip(self, tip_e: NDArray[np.float64], *, snap_angles: bool,
+                  read: _Read = ()) -> None:
         with self._lock:
             v = self.view
             if v is None or v.readouts is None:
                 self._set_status("the tip cannot be moved: no valid configuration", "error")
                 return
             r = v.readouts
-            step = inverse_step(self.setup, r.tip_e, tip_e, r.q, r.mode, p_from=r.p)
+            # the motion stops before the bodies collide (issue 30: it drove the carriages
+            # 50 mm into each other and said "ok")
+            clear = self.bodies.clearance_along(self.setup.T_b_e, self.setup.design,
+                                                _inverse_slot(r.slot, r.mode))
+            step = inverse_step(self.setup, r.tip_e, tip_e, r.q, r.mode, p_from=r.p,
+                                clearance=clear)
             notes = [step.message] if step.message else []
             if self.slot == "all":          # the IK follows the slot drawn solid
                 notes.append(f"the tip moves slot {r.slot} (drawn solid); pick 'all valid "
@@ -436,10 +452,10 @@ class AthenaApp:
             self.slot = _inverse_slot(r.slot, step.mode)
             level = "warn" if step.message else "ok"
             self._apply_q(step.q, sync_ik=not snap_angles or not step.reached,
-                          extra=("; ".join(notes), level) if notes else None)
+                          extra=("; ".join(notes), level) if notes else None, read=read)
 
     def _apply_q(self, q: NDArray[np.float64], *, sync_ik: bool,
-                 extra: tuple[str, str] | None = None) -> AppView:
+                 extra: tuple[str, str] | None = None, read: _Read = ()) -> AppView:
         # One atomic block: the scene, the sliders and the read-outs of this q reach the
         # page together, and the event loop is woken once, not once per message.
         with self._lock, self.server.atomic():
@@ -453,11 +469,15 @@ class AthenaApp:
             if view.geometry is not None:
                 self.view = view
                 self._draw(view)
-            self._sync_gui(view, sync_ik=sync_ik)
+            self._sync_gui(view, sync_ik=sync_ik, read=read)
             msg, level = view.message, str(view.level)
             if extra is not None:
                 msg = extra[0] + ("; " + msg if msg else "")
                 level = "error" if view.level == "error" else extra[1]
+            if view.geometry is not None:       # overlapping bodies: said at the top
+                note = collision_note(self.bodies.clearance_of(view.geometry))
+                if note:
+                    msg, level = note + ("; " + msg if msg else ""), "error"
             _, ro, slots = view_html(view)
             self._status.content = message_html(msg, level)
             if ro:
@@ -469,13 +489,14 @@ class AthenaApp:
     def _set_status(self, text: str, level: str) -> None:
         self._status.content = message_html(text, level)
 
-    def _sync_gui(self, view: AppView, *, sync_ik: bool) -> None:
-        self._syncing = True
-        try:
+    def _sync_gui(self, view: AppView, *, sync_ik: bool, read: _Read = ()) -> None:
+        """Show ``view`` in the GUI's inputs.
+
+        ``read``: the inputs that this update came from, with the values it read.
+        """
+        with self._echo():
             for i, sl in enumerate(self._q_sliders):
-                v = float(np.clip(round(view.q[i] * 1e3, 3), sl.min, sl.max))
-                if abs(sl.value - v) > 1e-9:
-                    sl.value = v
+                _write(sl, float(np.clip(round(view.q[i] * 1e3, 3), sl.min, sl.max)), read)
             opts = self._slot_options(view)
             if tuple(opts) != tuple(self._slot_dd.options):
                 self._slot_dd.options = opts
@@ -486,14 +507,12 @@ class AthenaApp:
                 self._set_depth_range(view.readouts.p)
             if sync_ik and view.readouts is not None:
                 az, pol, depth = angles_from_tip(view.readouts.tip_e)
-                self._az.value = float(np.clip(round(math.degrees(az), 2), -180, 180))
-                self._pol.value = float(np.clip(round(math.degrees(pol), 2), 0, 180))
-                self._depth.value = float(np.clip(round(depth * 1e3, 2), self._depth.min,
-                                                  self._depth.max))
+                _write(self._az, float(np.clip(round(math.degrees(az), 2), -180, 180)), read)
+                _write(self._pol, float(np.clip(round(math.degrees(pol), 2), 0, 180)), read)
+                _write(self._depth, float(np.clip(round(depth * 1e3, 2), self._depth.min,
+                                                  self._depth.max)), read)
             if not self._dragging:
                 self._place_handle()
-        finally:
-            self._syncing = False
 
     def _set_depth_range(self, p: float) -> None:
         """Make the depth slider span the drawn slot's branch of ``p``.
@@ -518,14 +537,11 @@ class AthenaApp:
 
     def _place_handle(self) -> None:
         if self.view is not None and self.view.readouts is not None:
-            prev, self._syncing = self._syncing, True
-            try:
+            with self._echo():
                 tip = tuple(float(x) for x in self.view.readouts.tip_b)
                 self._handle.position = tip
                 if self._grab is None:
                     self._grip.position = tip
-            finally:
-                self._syncing = prev
 
     def _draw(self, view: AppView) -> None:
         """Send the scene of ``view`` (inside the caller's atomic block).
@@ -633,16 +649,13 @@ class AthenaApp:
             return
         with self._lock:
             self.playback = pb
-            self._syncing = True
-            try:
+            with self._echo():
                 self._traj_path.value = path
                 self._time.max = max(pb.duration, 1e-3)
                 self._time.step = float(np.min(np.diff(pb.t))) if len(pb.t) > 1 else 1e-3
                 self._time.value = 0.0
                 self._time.disabled = False
                 self._play.disabled = False
-            finally:
-                self._syncing = False
         self._apply_q(pb.q[0], sync_ik=True,
                       extra=(f"trajectory {Path(pb.source).name}: {len(pb.t)} samples, "
                              f"{pb.duration:.3f} s", "ok"))
@@ -682,12 +695,9 @@ class AthenaApp:
             self.errors = []
             self._banner.content = self._banner_html()
             self._send_page_script()
-            self._syncing = True
-            try:
+            with self._echo():
                 for i, sl in enumerate(self._q_sliders):
                     sl.min, sl.max = float(setup.q_lo[i] * 1e3), float(setup.q_hi[i] * 1e3)
-            finally:
-                self._syncing = False
             self._apply_q(setup.q_home, sync_ik=True)
 
     # ------------------------------------------------------------------ life cycle
@@ -743,6 +753,25 @@ def _by_width(scene: Scene, prefix: str) -> dict[str, tuple[NDArray[np.float32],
 def _layout_colors(layout: _Layout) -> NDArray[np.uint8]:
     """Per-vertex colours (n, 2, 3) of a node's layout."""
     return np.concatenate([np.broadcast_to(_vertex_color(c), (n, 2, 3)) for c, n in layout])
+
+
+#: The GUI inputs an update read, with the values it read: ``((handle, value), ...)``.
+_Read = tuple[tuple[Any, float], ...]
+
+
+def _write(handle: Any, value: float, read: _Read) -> None:
+    """Show ``value`` in a GUI input, unless the browser moved it on since it was read.
+
+    viser stores a value from the browser before the callback that reads it runs. If the
+    input no longer holds what this update read, a newer value is waiting for its own
+    callback: writing this update's value back would undo it (and the browser's slider
+    would jump back, so that the next key press starts from the old value).
+    """
+    for h, v in read:
+        if h is handle and handle.value != v:
+            return
+    if abs(handle.value - value) > 1e-9:
+        handle.value = value
 
 
 def _inverse_slot(slot: int, mode: int) -> int:

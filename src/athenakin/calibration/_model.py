@@ -46,6 +46,7 @@ __all__ = [
     "Seed",
     "resolve_parameters",
     "parameter_vector",
+    "calibrated_name",
     "design_from_parameters",
     "rotation_from_vector",
     "predict",
@@ -143,6 +144,15 @@ def parameter_vector(design: Design, rcm: NDArray[np.float64], *,
     if registration is not None:
         theta[_REG] = registration
     return theta
+
+
+def calibrated_name(name: str) -> str:
+    """The name of a design calibrated from the design ``name``: told apart from it.
+
+    ``"athenakin reference design"`` -> ``"athenakin reference design, calibrated"``; an
+    unnamed design gives ``"calibrated design"``.
+    """
+    return f"{name}, calibrated" if name else "calibrated design"
 
 
 def design_from_parameters(theta: NDArray[np.float64], design: Design) -> Design:

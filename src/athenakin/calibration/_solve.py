@@ -35,6 +35,7 @@ from ._model import (
     PARAMETERS,
     MeasurementFrame,
     Prediction,
+    calibrated_name,
     design_from_parameters,
     parameter_vector,
     predict,
@@ -732,7 +733,9 @@ def _result(design: Design, names: tuple[str, ...], prob: _Problem, theta: NDArr
     rms = [float(np.sqrt(np.mean(np.sum(r[use][:, :3] ** 2, axis=1))))
            for r in (r_before, r_after)]
     return CalibrationResult(
-        design=design_from_parameters(theta, design), names=names, estimates=theta[prob.free],
+        design=dataclasses.replace(design_from_parameters(theta, design),
+                                   name=calibrated_name(design.name)),
+        names=names, estimates=theta[prob.free],
         nominal=prob.theta0[prob.free], std=np.sqrt(np.clip(np.diag(cov), 0.0, None)),
         covariance=cov, parameters={n: float(v) for n, v in zip(PARAMETERS, theta, strict=True)},
         q_offset=theta[6:9].copy(), rcm=theta[9:12].copy(), T_b_e=T_new, T_t_b=T_t_b,

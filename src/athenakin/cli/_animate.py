@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._interrupt import remembered_interrupt
 from ._common import (
     add_design_option,
     add_setup_options,
@@ -144,8 +145,10 @@ def run(args: argparse.Namespace) -> int:
             q = instrument_cone_path(n, T, design, cone_angle=cone, p=args.p, lead=n // 6)
             what = (f"instrument cone of half-angle {np.degrees(cone):.1f} deg about the RCM"
                     + (", starting and ending on the cone axis x_e" if n // 6 else ""))
-        animate(outs.temp(out), q, T, design, slot=args.slot, fps=fps, orbit=args.orbit,
-                progress=not args.no_progress)
+        # a Ctrl-C that matplotlib's callbacks swallow is raised again (issue 30)
+        with remembered_interrupt():
+            animate(outs.temp(out), q, T, design, slot=args.slot, fps=fps, orbit=args.orbit,
+                    progress=not args.no_progress)
         outs.commit()
     print(f"wrote {out}: {len(q)} frames, {what}, solution {args.slot}{note}")
     return 0

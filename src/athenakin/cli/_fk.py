@@ -23,6 +23,7 @@ from ._common import (
     table,
     with_hint,
 )
+from ._warmup import one_shot_backend
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -120,10 +121,10 @@ def run(args: argparse.Namespace) -> int:
     T = load_rcm(args, design)
     if args.certify:
         return _run_certified(args, design, T)
-    # the public function (backend="auto", as every user's call): the CLI shows what the
-    # library gives; the first compiled call of a process loads the kernels from numba's cache
+    # the public function: the CLI shows what the library gives; one pose in a fresh process
+    # runs the numpy reference, not numba's ~1 s of loading (cli/_warmup.one_shot_backend)
     try:
-        sol = forward_kinematics(np.array(args.q), T, design)
+        sol = forward_kinematics(np.array(args.q), T, design, backend=one_shot_backend())
     except KinematicsError as exc:
         raise with_hint(exc, mm_hint(args.q, design, "max |q|")) from None
     if args.json:

@@ -21,6 +21,7 @@ from ._common import (
     mm_hint,
     with_hint,
 )
+from ._warmup import one_shot_backend
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -63,7 +64,8 @@ def run(args: argparse.Namespace) -> int:
 
 def _solve(args: argparse.Namespace, design: Design, T: np.ndarray) -> dict:  # type: ignore[type-arg]
     if args.u345 is not None:
-        q, pas = inverse_kinematics(T, np.radians(args.u345), design)
+        q, pas = inverse_kinematics(T, np.radians(args.u345), design,
+                                    backend=one_shot_backend())
         out = {"form": "paper (u3, u4, u5)", "q_m": q, "mode": int(pas.mode), "p_m": pas.p,
                "u_deg": np.degrees(pas.u), "residual": pas.residual}
     else:
@@ -71,10 +73,10 @@ def _solve(args: argparse.Namespace, design: Design, T: np.ndarray) -> dict:  # 
             if args.p is None:
                 raise ValueError("--direction needs --p (distance O_s -> RCM, m)")
             d_e = direction_from_angles(*np.radians(args.direction))
-            q, res = q_from_instrument(T, d_e, args.p, design)
+            q, res = q_from_instrument(T, d_e, args.p, design, backend=one_shot_backend())
             form = "instrument direction + p"
         else:
-            q, res = q_from_tool_tip(T, np.array(args.tip), design)
+            q, res = q_from_tool_tip(T, np.array(args.tip), design, backend=one_shot_backend())
             form = "tool tip"
         out = {"form": form, "q_m": q, "mode": int(res.mode), "p_m": res.p,
                "direction_b": res.direction_b, "O_s_m": res.O_s}

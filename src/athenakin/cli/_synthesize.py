@@ -285,8 +285,11 @@ def _print(task: Any, rep: dict[str, Any], files: list[str], search: bool) -> No
                 fmt(r["size"], 3), fmt(r["tip_error_max"] * 1e6, 2), fmt(r["margin_min"], 4),
                 fmt(r["cond_tip_max"], 1)] + extra
 
-    print(table(headers, [line(rep["reference"])] + [line(r) for r in rep["best"]
-                                                     if r["design"] != 0]))
+    rows = [r for r in rep["best"] if r["design"] != 0]
+    print(table(headers, [line(rep["reference"])] + [line(r) for r in rows]))
+    print("design 0: the reference design" + (
+        f"; below it the {len(rows)} valid design{'' if len(rows) == 1 else 's'} of highest "
+        f"coverage in one assembly mode ('cov. 1 mode')" if rows else ""))
     for r in rep["invalid"]:
         print(f"design {r['design']} invalid: {r['reason']}")
     if search:

@@ -243,6 +243,7 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
+    from .._interrupt import check_interrupt
     from .._validation import check_count
     from ..errors import InvalidInputError
     from ..robot import REFERENCE_Q
@@ -275,6 +276,7 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
     fig.subplots_adjust(left=0, right=1, bottom=0, top=0.93)
     n = len(geoms)
     for k in it:
+        check_interrupt()    # a Ctrl-C lost inside matplotlib's callbacks (_interrupt.py)
         ax.cla()
         frac = k / max(n - 1, 1)
         draw_motion_frame(ax, geoms, k, limits=(lo, hi),

@@ -49,6 +49,11 @@ MARKER_HALF = 4.0
 _SHIFT = {"left": 0.0, "bottom": 0.0, "center": 0.5, "right": 1.0, "top": 1.0}
 #: Points that project closer than this (px at 100 dpi) share one label.
 MERGE_PX = 6.0
+#: Labels never merged with each other: the two carriages, labelled apart however close.
+KEEP_APART = frozenset({"A", "B"})
+#: Labels left out where they would share one with :data:`KEEP_APART` (M, the midpoint of
+#: A and B, lies between them; give it after them).
+LEFT_OUT_NEAR_APART = frozenset({"M"})
 
 
 def _point(ax: Axes, p: ArrayLike, **kw: Any) -> None:
@@ -140,7 +145,9 @@ def place_labels(ax: Axes, items: list[tuple[str, NDArray[np.float64], str]], *,
                  fontsize: float = LABEL_SIZE) -> list[Any]:
     """Label 3-D points so that no two labels overlap and every label lies in the axes.
 
-    Points that project to nearly the same pixel share one label (``"M, O_b"``).
+    Points that project to nearly the same pixel share one label (``"M, O_b"``), but for
+    the carriages A and B (:data:`KEEP_APART`: two labels, placed apart) and M between
+    them (:data:`LEFT_OUT_NEAR_APART`: left out when it would join A or B).
     Each label is tried at 8 directions around its point at growing distances
     (:data:`LABEL_RADII`) and goes to the place of least cost: overlap with labels
     placed before it and with ``boxes`` (weight 100), with the labelled points
@@ -172,9 +179,15 @@ def place_labels(ax: Axes, items: list[tuple[str, NDArray[np.float64], str]], *,
     merged: list[tuple[str, NDArray[np.float64], NDArray[np.float64], str]] = []
     for (text, p, color), xy in zip(items, anchors, strict=True):
         for k, (t0, p0, xy0, c0) in enumerate(merged):
-            if np.hypot(*(xy - xy0)) < MERGE_PX * scale:
-                merged[k] = (f"{t0}, {text}", p0, xy0, c0)
-                break
+            if np.hypot(*(xy - xy0)) >= MERGE_PX * scale:
+                continue
+            names = set(t0.split(", "))
+            if text in LEFT_OUT_NEAR_APART and names & KEEP_APART:
+                break                                    # M between close carriages
+            if text in KEEP_APART and names & KEEP_APART:
+                continue                                 # A and B: each its own label
+            merged[k] = (f"{t0}, {text}", p0, xy0, c0)
+            break
         else:
             merged.append((text, p, xy, color))
     half = MARKER_HALF * scale
