@@ -16,6 +16,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 import athenakin as ak
+from athenakin import _backend
 from athenakin import collision as C
 from athenakin import dynamics as D
 from athenakin.errors import InvalidInputError, SingularConfigurationError
@@ -440,7 +441,8 @@ def test_winding_numbers_and_closed_surface():
 @pytest.mark.parametrize("gap", [0.0, 3.5e-12, 1e-6])
 def test_compiled_capsule_pairs_match_on_near_crossing_segments(gap):
     """1.5: the compiled kernel of the clearance takes the same candidates and witnesses."""
-    pytest.importorskip("numba")
+    if not _backend.numba_available():
+        pytest.skip("numba not available here")
     from athenakin.collision._kernels import capsule_distances, capsule_pairs
 
     p1, q1, p2, q2 = _crossing_pairs(2000, gap, seed=36)

@@ -13,6 +13,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 import athenakin as ak
+from athenakin import _backend
 from athenakin._mechanism import (
     BODIES,
     BODY_TABLE,
@@ -156,7 +157,8 @@ def test_tf_frames_equal_mechanism_state():
 
 
 def test_compiled_joint_values_use_the_one_formula():
-    pytest.importorskip("numba")
+    if not _backend.numba_available():
+        pytest.skip("numba not available here")
     from athenakin.fast._frame_kernels import JOINT_CODES, joint_values_into
     from athenakin.ros._frames import kernel_plan, urdf_model
 

@@ -3,28 +3,20 @@
 from __future__ import annotations
 
 import argparse
-import os
-import sys
 import time
 
-from .. import _dispatch
+from .. import _backend, _dispatch
 from ._common import add_design_option, load_design
 
 
 def one_shot_backend() -> str:
     """The backend of a command that computes one pose (``fk``, ``ik``) and exits.
 
-    The numpy reference (``"numpy"``: the same results to 1e-12, tested) unless numba is
-    loaded in this process already or ``ATHENAKIN_BACKEND`` says otherwise (then
-    ``"auto"``, the library's choice). Loading numba and the compiled kernels costs about
-    1 s of CPU in a fresh process, and prints the kernel-cache line, for a call that the
-    reference answers in a millisecond (issue 30: a one-pose ``fk`` took 1.1 s of CPU
-    against 0.2 s). Only the commands that call it choose this; the backend selection
-    itself (``athenakin._dispatch``) is unchanged.
+    :func:`athenakin._backend.single_call_backend`: the numpy reference unless numba is
+    loaded already or ``ATHENAKIN_BACKEND`` is set (issue 30: a one-pose ``fk`` took 1.1 s
+    of CPU against 0.2 s, and printed the kernel-cache line).
     """
-    if os.environ.get("ATHENAKIN_BACKEND", "").strip() or "numba" in sys.modules:
-        return "auto"
-    return "numpy"
+    return _backend.single_call_backend()
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
