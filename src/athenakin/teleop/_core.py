@@ -227,7 +227,8 @@ class Teleop:
         if pose.p_sign != 1:
             raise InvalidInputError(f"slot: slot {pose.slot} has the instrument behind the RCM "
                                     f"(p < 0); teleoperation needs p > 0")
-        if not all(lo <= v <= hi for lo, v, hi in zip(self._hard_lo, pose.q, self._hard_hi)):
+        if not all(lo <= v <= hi for lo, v, hi in
+                   zip(self._hard_lo, pose.q, self._hard_hi, strict=True)):
             raise InvalidInputError(f"q0: {list(pose.q)} is outside the stroke limits")
         d, _, i = self._fixtures.nearest(self._to_base(pose.tip_e))
         if d < 0.0:
@@ -495,8 +496,9 @@ class Teleop:
         closed = clutch is True or (clutch is not False and bool(clutch))
         if p is not None:
             last = self._last_p
-            if last is not None and math.sqrt((p[0] - last[0]) ** 2 + (p[1] - last[1]) ** 2
-                                              + (p[2] - last[2]) ** 2) > self.options.max_master_jump:
+            if last is not None and math.sqrt(
+                    (p[0] - last[0]) ** 2 + (p[1] - last[1]) ** 2 + (p[2] - last[2]) ** 2
+            ) > self.options.max_master_jump:
                 flags |= _B["JUMP"]
                 self._engaged = False
             if last is None or flags & _B["JUMP"]:
@@ -635,7 +637,7 @@ class Teleop:
             q = (q0[0] + qd[0] * self.dt, q0[1] + qd[1] * self.dt, q0[2] + qd[2] * self.dt)
             pose = self._probe(q)
             ok = pose.valid and all(lo <= x <= hi for lo, x, hi in
-                                    zip(self._hard_lo, q, self._hard_hi))
+                                    zip(self._hard_lo, q, self._hard_hi, strict=True))
             if ok and len(self._fixtures):
                 ok = self._fixtures.nearest(self._to_base(pose.tip_e))[0] >= 0.0
             if ok and self._clear_floor > -math.inf:

@@ -121,7 +121,7 @@ class TremorFilter:
         """Set the state to the steady state of the constant input ``(x, y, z)``."""
         nb = len(self._c)
         for axis, v in enumerate((x, y, z)):
-            for k, (b0, b1, b2, a1, a2) in enumerate(self._c):
+            for k, (_b0, b1, b2, a1, a2) in enumerate(self._c):
                 st = self._s[axis * nb + k]
                 # unit DC gain: output v for input v; s2 = b2 v - a2 v, s1 = s2 + b1 v - a1 v
                 st[1] = (b2 - a2) * v

@@ -190,5 +190,5 @@ class TeleopOptions:
 
     def stopping_distance(self, v_max: tuple[float, ...], a_max: tuple[float, ...]) -> float:
         """Largest joint travel while braking from ``v_max`` at ``a_max``, m."""
-        t = max(v / a for v, a in zip(v_max, a_max))          # all joints stop together
+        t = max(v / a for v, a in zip(v_max, a_max, strict=True))   # joints stop together
         return max(0.5 * v * t for v in v_max) if math.isfinite(t) else math.inf
