@@ -54,6 +54,10 @@ PROBE_M = 1e-6
 BRANCH_TOL = 1e-9
 #: Bisections of a step that fails a constraint before the robot brakes.
 BISECTIONS = 12
+#: Secant refinements of a step whose exact IK breaks a limit the linear model kept.
+SECANTS = 4
+#: Largest master coordinate taken as a sample (beyond: ``INVALID``), m.
+MAX_MASTER_M = 100.0
 _STROKE_REASONS = (int(Reason.STROKE_LIMIT), int(Reason.AB_ORDER), int(Reason.INSERTION_RANGE))
 
 
@@ -234,6 +238,10 @@ class Teleop:
         if d < 0.0:
             raise InvalidInputError(f"q0: the tool tip is inside the forbidden region "
                                     f"{self._fixtures.names[i]!r} ({-d:.4g} m deep)")
+        if check and not pose.clearance >= opts.clearance_margin:
+            a, b = pose.closest_pair
+            raise InvalidInputError(f"q0: clearance {pose.clearance:.4g} m between {a!r} and "
+                                    f"{b!r} is below clearance_margin {opts.clearance_margin} m")
         self._masses = None
         if opts.feedforward:
             from ..dynamics import MassModel
@@ -242,7 +250,11 @@ class Teleop:
             if not isinstance(self._masses, MassModel):
                 raise TypeError(f"masses: expected athenakin.dynamics.MassModel, got "
                                 f"{type(self._masses).__name__}")
-        self._gravity = np.array(opts.gravity)
+        if opts.feedforward:
+            from ..dynamics import STANDARD_GRAVITY
+
+            self._gravity = np.array(STANDARD_GRAVITY if opts.gravity is None else opts.gravity,
+                                     dtype=float)
         self.fault: BaseException | None = None
         self._reset_state(pose)
 
@@ -363,10 +375,9 @@ class Teleop:
                 return self._tip, flags | f2
         return g, flags
 
-    def _soft(self, pose: Any, tip: _V3) -> int:
-        """Flags of the soft constraints that ``pose`` breaks *and* worsens (0: acceptable)."""
-        cur = self._pose
-        q, qc = pose.q, cur.q
+    def _soft_q(self, q: _V3, tip: _V3) -> int:
+        """Stroke and fixture flags that ``q`` / ``tip`` break *and* worsen (0: acceptable)."""
+        qc = self._q
         flags = 0
         for i in range(3):
             lo, hi = self._lo[i], self._hi[i]
@@ -374,6 +385,17 @@ class Teleop:
                 flags |= _B["STROKE"]
             elif (q[i] < lo and q[i] < qc[i]) or (q[i] > hi and q[i] > qc[i]):
                 flags |= _B["STROKE"]
+        if len(self._fixtures):
+            d, _, _ = self._fixtures.nearest(self._to_base(tip))
+            dc, _, _ = self._fixtures.nearest(self._to_base(self._tip))
+            if d < 0.0 or (d < self.options.fixture_margin and d < dc):
+                flags |= _B["FIXTURE"]
+        return flags
+
+    def _soft(self, pose: Any) -> int:
+        """Singular-set and clearance flags that ``pose`` breaks *and* worsens (0: acceptable)."""
+        cur = self._pose
+        flags = 0
         mg = self.margins
         g = self.design
         link_max = min(g.l1, g.l3)
@@ -387,11 +409,6 @@ class Teleop:
             c = pose.clearance
             if not c >= self._clear_floor and not c >= cur.clearance:   # NaN: reject
                 flags |= _B["CLEARANCE"]
-        if len(self._fixtures):
-            d, _, _ = self._fixtures.nearest(self._to_base(tip))
-            dc, _, _ = self._fixtures.nearest(self._to_base(self._tip))
-            if d < 0.0 or (d < self.options.fixture_margin and d < dc):
-                flags |= _B["FIXTURE"]
         return flags
 
     def _probe(self, q: _V3) -> Any:
@@ -410,13 +427,16 @@ class Teleop:
         x, y, z, r = self._ik(tip[0], tip[1], tip[2])
         if r != 0:
             return None, _B["STROKE"] if r in _STROKE_REASONS else _B["SINGULAR"]
+        f = self._soft_q((x, y, z), tip)
+        if f:
+            return None, f
         pose = self._probe((x, y, z))
         te = pose.tip_e
         if (not pose.valid or pose.flags & _BRANCH_FLAGS
                 or abs(te[0] - tip[0]) + abs(te[1] - tip[1]) + abs(te[2] - tip[2]) > BRANCH_TOL):
             self._revert()
             return None, _B["SINGULAR"]
-        f = self._soft(pose, tip)
+        f = self._soft(pose)
         if f:
             self._revert()
             return None, f
@@ -483,8 +503,8 @@ class Teleop:
                 raise ValueError
         except (TypeError, ValueError, LookupError, OverflowError):
             return tt, None, flags | _B["INVALID"]
-        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
-            return tt, None, flags | _B["INVALID"]
+        if not (abs(x) <= MAX_MASTER_M and abs(y) <= MAX_MASTER_M and abs(z) <= MAX_MASTER_M):
+            return tt, None, flags | _B["INVALID"]          # NaN, inf, or beyond any master
         R = self._R
         p = (R[0][0] * x + R[0][1] * y + R[0][2] * z, R[1][0] * x + R[1][1] * y + R[1][2] * z,
              R[2][0] * x + R[2][1] * y + R[2][2] * z)
@@ -496,9 +516,7 @@ class Teleop:
         closed = clutch is True or (clutch is not False and bool(clutch))
         if p is not None:
             last = self._last_p
-            if last is not None and math.sqrt(
-                    (p[0] - last[0]) ** 2 + (p[1] - last[1]) ** 2 + (p[2] - last[2]) ** 2
-            ) > self.options.max_master_jump:
+            if last is not None and math.dist(p, last) > self.options.max_master_jump:
                 flags |= _B["JUMP"]
                 self._engaged = False
             if last is None or flags & _B["JUMP"]:
@@ -539,8 +557,7 @@ class Teleop:
 
     def _advance(self, g: _V3, flags: int, tt: float) -> TeleopCommand:
         """The longest safe step from the current tip toward ``g``, or a brake."""
-        c, q, v = self._tip, self._q, self._qd
-        dt = self.dt
+        c, q = self._tip, self._q
         dx = (g[0] - c[0], g[1] - c[1], g[2] - c[2])
         ell = math.sqrt(dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2])
         if ell == 0.0:
@@ -554,13 +571,50 @@ class Teleop:
                 return self._brake(flags | (_B["STROKE"] if r in _STROKE_REASONS
                                             else _B["SINGULAR"]), tt)
             J = ((x1 - q[0]) / h, (x2 - q[1]) / h, (x3 - q[2]) / h)
-        # feasible step lengths s in [lo, hi] (linear in s along u)
-        lo, hi = 0.0, ell
-        bind = 0
-        k = 1.0 - LIMIT_SLACK
         gp = self._goal
         vg = max(0.0, (g[0] - gp[0]) * u[0] + (g[1] - gp[1]) * u[1] + (g[2] - gp[2]) * u[2])
         self._goal = g
+        lo, hi, bind = self._bounds(J, ell, vg)
+        if lo > hi:
+            return self._brake(flags | _B["ACCELERATION"], tt)
+        if hi < ell:
+            flags |= bind
+        if hi <= 0.0:                          # no step: stop here (|v_i| <= a_max_i dt)
+            return self._stay(flags, tt)
+        s = hi
+        reject = 0
+        secants = 0
+        for _ in range(BISECTIONS):
+            tip = (c[0] + s * u[0], c[1] + s * u[1], c[2] + s * u[2])
+            pose, f = self._try(tip)
+            if pose is not None:
+                if self._kin_ok(pose.q):
+                    return self._accept(pose, tip, flags | reject, tt)
+                self._revert()                 # curvature: the secant of this step
+                pq = pose.q
+                Js = ((pq[0] - q[0]) / s, (pq[1] - q[1]) / s, (pq[2] - q[2]) / s)
+                lo2, hi2, _b = self._bounds(Js, ell, vg)
+                if secants < SECANTS and lo2 <= hi2 and 0.0 < hi2 < s:
+                    secants += 1
+                    s = hi2
+                    continue
+                f = bind or _B["VELOCITY"]
+            reject |= f
+            s = lo + 0.5 * (s - lo)
+        return self._brake(flags | reject, tt)
+
+    def _bounds(self, J: _V3, ell: float, vg: float) -> tuple[float, float, int]:
+        """Step lengths ``s`` (m along the tip's direction) within the limits, linear in ``J``.
+
+        ``J``: joint metres per tip metre along the direction; ``ell``: distance to the
+        target; ``vg``: the target's advance along the direction this cycle (m).
+        Returns ``(lo, hi, the flag of the binding limit)``; ``lo > hi``: none.
+        """
+        dt = self.dt
+        v = self._qd
+        lo, hi = 0.0, ell
+        bind = 0
+        k = 1.0 - LIMIT_SLACK
         for i in range(3):
             Ji = J[i]
             vm, am = self.v_max[i] * k, self.a_max[i] * k
@@ -575,8 +629,8 @@ class Teleop:
                 sa = vg + w * dt / aJ
                 if sa < hi:
                     hi, bind = sa, _B["ACCELERATION"]
-                s1 = (v[i] - am * dt) * dt / Ji
-                s2 = (v[i] + am * dt) * dt / Ji
+                s1 = (v[i] - adt) * dt / Ji
+                s2 = (v[i] + adt) * dt / Ji
                 a, b = (s1, s2) if s1 <= s2 else (s2, s1)
                 if b < hi:
                     hi, bind = b, _B["ACCELERATION"]
@@ -584,25 +638,7 @@ class Teleop:
                     lo = a
             elif abs(v[i]) > am * dt:
                 lo = math.inf
-        if lo > hi:
-            return self._brake(flags | _B["ACCELERATION"], tt)
-        if hi < ell:
-            flags |= bind
-        if hi <= 0.0:                          # no step: stop here (|v_i| <= a_max_i dt)
-            return self._stay(flags, tt)
-        s = hi
-        reject = 0
-        for _ in range(BISECTIONS):
-            tip = (c[0] + s * u[0], c[1] + s * u[1], c[2] + s * u[2])
-            pose, f = self._try(tip)
-            if pose is not None and self._kin_ok(pose.q):
-                return self._accept(pose, tip, flags | reject, tt)
-            if pose is not None:               # curvature: shorten, retry
-                self._revert()
-                f = bind or _B["VELOCITY"]
-            reject |= f
-            s = lo + 0.5 * (s - lo)
-        return self._brake(flags | reject, tt)
+        return lo, hi, bind
 
     def _accept(self, pose: Any, tip: _V3, flags: int, tt: float) -> TeleopCommand:
         rate = self.rate

@@ -2,7 +2,8 @@
 
 A point's signed distance to each primitive shape in closed form (halfspace, sphere,
 capsule, box; base frame, m, negative inside) with the outward unit normal, on plain
-floats (no allocation, no numpy in the loop). A mesh obstacle is not a tip fixture:
+floats (no allocation, no numpy in the loop). An obstacle that allows the
+``instrument`` body (``allow=``) is no fixture for its tip. A mesh obstacle is not a tip fixture:
 it enters through the bodies' clearance (:mod:`athenakin.collision`), which covers
 the instrument's capsule and so its tip.
 """
@@ -44,6 +45,8 @@ class TipFixtures:
         shapes: list[tuple] = []
         names: list[str] = []
         for o in () if environment is None else environment.obstacles:  # type: ignore[attr-defined]
+            if "instrument" in o.allow:      # the instrument (and its tip) may cross it
+                continue
             if o.kind == "halfspace":
                 shapes.append((0, tuple(o.point), tuple(o.normal)))
             elif o.kind == "sphere":

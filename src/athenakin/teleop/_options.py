@@ -128,8 +128,8 @@ class TeleopOptions:
         braking robot never crosses ``clearance_margin``.
     masses : athenakin.dynamics.MassModel, optional
         Masses for the feed-forward forces; default ``MassModel.reference(design)``.
-    gravity : array-like, shape (3,)
-        Gravity in the base frame, m/s^2 (default standard gravity along ``-z_b``).
+    gravity : array-like, shape (3,), optional
+        Gravity in the base frame, m/s^2; default :data:`athenakin.dynamics.STANDARD_GRAVITY`.
     feedforward : bool
         Compute the actuator forces every cycle (default True; False leaves
         ``forces`` NaN and saves the inverse dynamics' cost).
@@ -148,7 +148,7 @@ class TeleopOptions:
     clearance_margin: float = 0.005
     clearance_buffer: float = 0.003
     masses: Any = None
-    gravity: Any = (0.0, 0.0, -9.80665)
+    gravity: Any = None
     feedforward: bool = True
     backend: str = "auto"
 
@@ -182,8 +182,8 @@ class TeleopOptions:
             if not isinstance(self.margins, Margins):
                 raise TypeError(f"margins: expected athenakin.motion.Margins, got "
                                 f"{type(self.margins).__name__}")
-        g = _three(self.gravity, "gravity", positive=False)
-        object.__setattr__(self, "gravity", g)
+        if self.gravity is not None:
+            object.__setattr__(self, "gravity", _three(self.gravity, "gravity", positive=False))
         if not isinstance(self.feedforward, bool):
             raise TypeError(f"feedforward: expected a bool, got {type(self.feedforward).__name__}")
         check_choice(self.backend, "backend", ("auto", "numpy", "numba"))
