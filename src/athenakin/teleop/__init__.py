@@ -18,11 +18,18 @@ rotation; tips in E (m) unless a name says ``_b`` (base frame); actuators in m, 
 m/s^2, N. docs/teleop.md has the measurements.
 """
 
+from ._arm import OPERATING_STATES, ArmBackend, JointState, MujocoBackend, ServoGains, SimulatedArm
 from ._core import Teleop, TeleopCommand
 from ._filter import TREMOR_FILTERS, TREMOR_NOTCH, TremorFilter, filter_response
 from ._options import TeleopOptions, TeleopStatus
 
 __all__ = [
+    "OPERATING_STATES",
+    "ArmBackend",
+    "JointState",
+    "MujocoBackend",
+    "ServoGains",
+    "SimulatedArm",
     "TREMOR_FILTERS",
     "TREMOR_NOTCH",
     "Teleop",
