@@ -22,8 +22,24 @@ from ._arm import OPERATING_STATES, ArmBackend, JointState, MujocoBackend, Servo
 from ._core import Teleop, TeleopCommand
 from ._filter import TREMOR_FILTERS, TREMOR_NOTCH, TremorFilter, filter_response
 from ._options import TeleopOptions, TeleopStatus
+from ._session import (
+    CRTK_TOPICS,
+    TELEOP_STATUS_MSGDEF,
+    TELEOP_STATUS_TYPE,
+    SessionLog,
+    read_master,
+    run_session,
+    write_session_mcap,
+)
 
 __all__ = [
+    "CRTK_TOPICS",
+    "TELEOP_STATUS_MSGDEF",
+    "TELEOP_STATUS_TYPE",
+    "SessionLog",
+    "read_master",
+    "run_session",
+    "write_session_mcap",
     "OPERATING_STATES",
     "ArmBackend",
     "JointState",
