@@ -179,3 +179,19 @@ def test_recorded_master_to_crtk_topics(tmp_path):
                 assert msg.flags == 0 or msg.names
     assert seen == {k: v for k, v in counts.items() if v}
     assert not list(tmp_path.glob(".session*"))          # no temporary file left
+
+
+def test_cli_replays_a_recorded_master(tmp_path, capsys):
+    from athenakin.cli import main
+
+    rec = tmp_path / "rec.mcap"
+    _write_master(rec, seconds=0.6)
+    out = tmp_path / "session.mcap"
+    assert main(["teleop", "--master", str(rec), "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "tip tracking error" in text and "wrote" in text and out.exists()
+    assert main(["teleop", "--master", str(rec), "-o", str(out)]) == 1      # exists, no --force
+    assert main(["teleop", "--master", str(rec), "-o", str(rec), "--force"]) == 1   # the input
+    assert "holds no PoseStamped" in (main(["teleop", "--master", str(rec), "--pose-topic",
+                                             "/nothing", "--no-arm"]) == 1
+                                       and capsys.readouterr().err)

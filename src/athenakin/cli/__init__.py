@@ -27,7 +27,8 @@ _EXTRA_OF = {"sympy": "symbolic", "matplotlib": "plot", "plotly": "plot", "image
 
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
 COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
-            "animate", "export", "derive", "design", "calibrate", "synthesize", "app", "warmup"]
+            "animate", "export", "derive", "design", "calibrate", "synthesize", "teleop", "app",
+            "warmup"]
 
 
 class _Parser(argparse.ArgumentParser):
