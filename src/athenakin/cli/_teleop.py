@@ -49,8 +49,14 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``teleop``."""
-    from ..teleop import SimulatedArm, Teleop, TeleopOptions, read_master, run_session
-    from ..teleop import write_session_mcap
+    from ..teleop import (
+        SimulatedArm,
+        Teleop,
+        TeleopOptions,
+        read_master,
+        run_session,
+        write_session_mcap,
+    )
 
     out = args.output
     if out is not None and Path(out).suffix.lower() != ".mcap":
