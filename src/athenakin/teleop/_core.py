@@ -219,13 +219,15 @@ class Teleop:
         self._Tr = tuple(tuple(float(v) for v in row) for row in T[:3, :4])
         self._filter = TremorFilter(opts.filter, self.rate)
         self._fixtures = TipFixtures(environment)
-        check = bodies is not None or environment is not None
+        check = (bodies is not None or environment is not None) if opts.check_clearance is None \
+            else opts.check_clearance
         self._clear_floor = opts.clearance_margin + opts.clearance_buffer if check else -math.inf
         q = check_array(q0, "q0", (3,))
         if q.shape != (3,):
             raise InvalidInputError(f"q0: expected shape (3,), got {q.shape}")
         self._tracker = Tracker(self.T_b_e, design, q0=q, slot=slot, margins=self.margins,
-                                bodies=bodies, environment=environment,
+                                bodies=bodies if check else None,
+                                environment=environment if check else None,
                                 clearance_margin=opts.clearance_margin if check else None)
         pose = self._tracker.pose
         if pose.p_sign != 1:
