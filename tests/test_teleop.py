@@ -364,3 +364,11 @@ def test_feedforward_forces_are_the_inverse_dynamics():
     for c in cmds[::20]:
         ref = inverse_dynamics(c.q, c.qd, c.qdd, T, D, slot=c.slot)
         np.testing.assert_allclose(c.forces, ref, rtol=0, atol=1e-9)
+
+
+def test_docstring_examples():
+    import doctest
+    import importlib
+
+    mod = importlib.import_module("athenakin.teleop._core")
+    assert doctest.testmod(mod, optionflags=doctest.ELLIPSIS).failed == 0

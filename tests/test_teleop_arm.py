@@ -195,3 +195,11 @@ def test_cli_replays_a_recorded_master(tmp_path, capsys):
     assert "holds no PoseStamped" in (main(["teleop", "--master", str(rec), "--pose-topic",
                                              "/nothing", "--no-arm"]) == 1
                                        and capsys.readouterr().err)
+
+
+def test_docstring_examples():
+    import doctest
+    import importlib
+
+    mod = importlib.import_module("athenakin.teleop._arm")
+    assert doctest.testmod(mod, optionflags=doctest.ELLIPSIS).failed == 0

@@ -206,7 +206,7 @@ class SimulatedArm:
     >>> arm.operating_state
     'ENABLED'
     >>> arm.step(5)
-    >>> abs(arm.measured_js().position - [-0.1, 0.1, 0.45]).max() < 1e-4
+    >>> bool(abs(arm.measured_js().position - [-0.1, 0.1, 0.45]).max() < 1e-4)
     True
     """
 
