@@ -287,15 +287,23 @@ def test_hostile_streams_with_fixtures_and_clearance(seed):
 def test_a_target_into_a_fixture_slides_on_it_and_never_enters():
     env = Environment().sphere(_tip_b(TIP0) + np.array([0.0, 0.0, -0.03]), 0.01, name="vessel")
     fx = TipFixtures(env)
-    tele = Teleop(T, D, q0=Q0, environment=env, options=NOFF)
-    # the master pushes the tip straight down (base -z) through the vessel, 8 cm of tip travel
+    tele = Teleop(T, D, q0=Q0, environment=env,
+                  options=TeleopOptions(feedforward=False, check_clearance=False))
+    # the master pushes the tip straight down (base -z) through the vessel to a target 2 cm
+    # beyond it: the tip meets the vessel and slides around it, never into it
     down_e = T[:3, :3].T @ np.array([0.0, 0.0, -1.0])
-    cmds = [tele.step(k / RATE, 0.4 * down_e * min(k, 800) / 800, True)
-            for k in range(1200)]
-    _check_commands(tele, cmds, fixtures=fx)
+    side_e = T[:3, :3].T @ np.array([1.0, 0.0, 0.0])
+    cmds = [tele.step(k / RATE, 0.4 * down_e * min(k, 800) / 800, True) for k in range(1200)]
+    d = [fx.nearest(tuple(_tip_b(c.tip)))[0] for c in cmds]
+    assert 0.0 <= min(d) <= tele.options.fixture_margin + 1e-3        # in contact, outside
     assert any(c.status & TeleopStatus.FIXTURE for c in cmds)
-    d = fx.nearest(tuple(_tip_b(cmds[-1].tip)))[0]
-    assert d >= tele.options.fixture_margin - 1e-9
+    # then sideways: the tip follows, never into the vessel
+    rest = cmds[-1].tip
+    for k in range(1200, 2400):
+        m = 0.4 * down_e + 0.15 * side_e * min(k - 1200, 800) / 800
+        cmds.append(tele.step(k / RATE, m, True))
+    assert np.linalg.norm(np.subtract(cmds[-1].tip, rest)) > 0.005
+    _check_commands(tele, cmds, fixtures=fx)
 
 
 def test_targets_across_the_singular_set_and_out_of_the_workspace_are_limited():
@@ -305,8 +313,8 @@ def test_targets_across_the_singular_set_and_out_of_the_workspace_are_limited():
     k = 0
     for direction in ([0, 0, 1], [1, 0, 0], [0, -1, 0], [-1, 1, -1]):
         d = np.asarray(direction, float)
-        for j in range(1500):
-            cmds.append(tele.step(k / RATE, 2.0 * d * min(j, 1000) / 1000))
+        for j in range(1000):
+            cmds.append(tele.step(k / RATE, 2.0 * d * min(j, 700) / 700))
             k += 1
         cmds.append(tele.step(k / RATE, None, clutch=False))      # re-centre the master
         k += 1

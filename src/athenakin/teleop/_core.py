@@ -58,6 +58,8 @@ BISECTIONS = 12
 SECANTS = 4
 #: Largest master coordinate taken as a sample (beyond: ``INVALID``), m.
 MAX_MASTER_M = 100.0
+#: Distance beyond ``fixture_margin`` within which steps into a fixture slide along it, m.
+SLIDE_BAND_M = 0.002
 _STROKE_REASONS = (int(Reason.STROKE_LIMIT), int(Reason.AB_ORDER), int(Reason.INSERTION_RANGE))
 
 
@@ -555,7 +557,28 @@ class Teleop:
         flags |= f
         g, f = self._fixture(g)
         flags |= f
+        if len(self._fixtures):
+            g, f = self._slide(g)
+            flags |= f
         return self._advance(g, flags, tt)
+
+    def _slide(self, g: _V3) -> tuple[_V3, int]:
+        """Near a forbidden region, drop the step's component into it (the tip slides)."""
+        c = self._tip
+        d, n, _ = self._fixtures.nearest(self._to_base(c))
+        if not d < self.options.fixture_margin + SLIDE_BAND_M:
+            return g, 0
+        T = self._Tr                          # n in E: R^T n
+        ne = (T[0][0] * n[0] + T[1][0] * n[1] + T[2][0] * n[2],
+              T[0][1] * n[0] + T[1][1] * n[1] + T[2][1] * n[2],
+              T[0][2] * n[0] + T[1][2] * n[1] + T[2][2] * n[2])
+        dx = (g[0] - c[0], g[1] - c[1], g[2] - c[2])
+        k = dx[0] * ne[0] + dx[1] * ne[1] + dx[2] * ne[2]
+        if k >= 0.0:
+            return g, 0
+        g2 = (g[0] - k * ne[0], g[1] - k * ne[1], g[2] - k * ne[2])
+        g2, f = self._depth(g2)
+        return g2, _B["FIXTURE"] | f
 
     def _advance(self, g: _V3, flags: int, tt: float) -> TeleopCommand:
         """The longest safe step from the current tip toward ``g``, or a brake."""
