@@ -12,7 +12,8 @@ goes (each stage timed alone over the same states). ``hostile``: streams of jump
 dropouts, far targets, clutch chatter into fixtures and the singular set; counts every
 stroke, velocity, acceleration, fixture, clearance and NaN violation (all must be 0).
 ``session``: 20 s of master motion at 1 kHz with gravity through the chain and the MuJoCo
-arm, with feed-forward and PD only: tip tracking error, loop-closure drift; the figure of
+arm (the clutch open from 45 % to 50 % of the run, the master silent for 60 ms at 75 %),
+with feed-forward and PD only: tip tracking error, loop-closure drift; the figure of
 docs/teleop.md.
 """
 
@@ -172,7 +173,8 @@ def session(seconds: float, figure: str | None) -> None:
 
     def stream():
         for k in range(n):
-            yield k / RATE, master(k), not (0.45 * n <= k < 0.5 * n)   # a clutch in the middle
+            silent = 0.75 * n <= k < 0.75 * n + 0.06 * RATE        # 60 ms without the master
+            yield k / RATE, None if silent else master(k), not (0.45 * n <= k < 0.5 * n)
 
     logs = {}
     for ff in (True, False):

@@ -369,7 +369,10 @@ def test_feedforward_forces_are_the_inverse_dynamics():
 
     tele = Teleop(T, D, q0=Q0)
     cmds = [tele.step(k / RATE, _moving(k)) for k in range(60)]
-    for c in cmds[::20]:
+    cmds += [tele.step((60 + k) / RATE, None if k > 40 else _moving(60), clutch=False)
+             for k in range(200)]                       # brake, then held at rest (cached)
+    assert cmds[-1].qd == (0.0, 0.0, 0.0) and cmds[-2].qd == (0.0, 0.0, 0.0)
+    for c in cmds[::20] + cmds[-3:]:
         ref = inverse_dynamics(c.q, c.qd, c.qdd, T, D, slot=c.slot)
         np.testing.assert_allclose(c.forces, ref, rtol=0, atol=1e-9)
 

@@ -279,6 +279,8 @@ class Teleop:
         self._estop = False
         self._hold = False             # watchdog hold: re-engage on the next sample
         self._y: _V3 = z
+        self._ff_key: tuple | None = None
+        self._ff: _V3 = _NAN3
 
     # --- public state ---------------------------------------------------------------
     @property
@@ -720,13 +722,19 @@ class Teleop:
     def _forces(self) -> _V3:
         from ..dynamics import inverse_dynamics
 
+        key = (self._q, self._qd, self._qdd, self._slot)
+        if key == self._ff_key:                # at rest or held: the same state, same forces
+            return self._ff
+        self._ff_key = key
+        self._ff = _NAN3
         try:
             f = inverse_dynamics(self._q, self._qd, self._qdd, self.T_b_e, self.design,
                                  masses=self._masses, gravity=self._gravity, slot=self._slot,
                                  errors="flag", backend=self._backend)
         except Exception:   # a singular state of the dynamics: no feed-forward this cycle
             return _NAN3
-        return float(f[0]), float(f[1]), float(f[2])
+        self._ff = (float(f[0]), float(f[1]), float(f[2]))
+        return self._ff
 
 
 _NAN3 = (math.nan, math.nan, math.nan)
