@@ -336,15 +336,17 @@ _sample = st.one_of(
 @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(st.tuples(_sample, st.booleans(), st.integers(1, 30)), min_size=1, max_size=8))
 def test_hypothesis_streams_never_violate(events):
-    """Piecewise-constant hostile master streams (a value held for 1-40 cycles)."""
-    tele = Teleop(T, D, q0=Q0, options=NOFF)
+    """Piecewise-constant hostile master streams (a value held for 1-30 cycles), fixtures on."""
+    env = _env()
+    tele = Teleop(T, D, q0=Q0, environment=env,
+                  options=TeleopOptions(feedforward=False, check_clearance=False))
     cmds = []
     k = 0
     for m, clutch, n in events:
         for _ in range(n):
             cmds.append(tele.step(k / RATE, m, clutch))
             k += 1
-    _check_commands(tele, cmds)
+    _check_commands(tele, cmds, fixtures=TipFixtures(env))
 
 
 # --- construction -------------------------------------------------------------------------
