@@ -123,6 +123,7 @@ def hostile(cycles: int, seed: int, *, with_clearance: bool) -> dict[str, int]:
     bad = dict(stroke=0, velocity=0, acceleration=0, fixture=0, clearance=0, nan=0, fault=0)
     flags = 0
     m = np.zeros(3)
+    drift = np.zeros(3)
     t0 = time.perf_counter()
     down = R.T @ np.array([0.0, 0.0, -1.0])
     for k in range(cycles):
@@ -141,8 +142,11 @@ def hostile(cycles: int, seed: int, *, with_clearance: bool) -> dict[str, int]:
                 m = m + rng.normal(scale=0.0005, size=3)        # wander (0.5 m/s)
             elif phase == 1:
                 m = m + 0.0002 * down                           # into the fixtures
-            else:
-                m = m + 0.0003 * rng.choice([-1.0, 1.0]) * np.array([0.0, 0.0, 1.0])
+            else:                                               # far out, across the
+                if k % 3000 == 0:                               # singular set, back
+                    drift = rng.normal(size=3)
+                    drift *= 0.0005 / np.linalg.norm(drift)
+                m = m + drift
             sample = m
         cmd = tele.step(k / RATE, sample, clutch)
         flags |= int(cmd.status)
