@@ -60,6 +60,8 @@ SECANTS = 4
 MAX_MASTER_M = 100.0
 #: Distance beyond ``fixture_margin`` within which steps into a fixture slide along it, m.
 SLIDE_BAND_M = 0.002
+#: Bound on a body point's travel per metre of joint travel, for the clearance's braking room.
+CLEARANCE_GAIN = 4.0
 _STROKE_REASONS = (int(Reason.STROKE_LIMIT), int(Reason.AB_ORDER), int(Reason.INSERTION_RANGE))
 
 
@@ -412,10 +414,23 @@ class Teleop:
             if a < m and a < b:
                 flags |= _B["SINGULAR"]
         if self._clear_floor > -math.inf:
+            # keep room to brake: the distance to stop from this step's speed, times a bound
+            # on how much faster than the joints a body point moves (NaN clearance: reject)
+            room = CLEARANCE_GAIN * self._stopping(pose.q)
             c = pose.clearance
-            if not c >= self._clear_floor and not c >= cur.clearance:   # NaN: reject
+            if not (c >= self._clear_floor + room
+                    or (c >= cur.clearance and c >= self.options.clearance_margin + room)):
                 flags |= _B["CLEARANCE"]
         return flags
+
+    def _stopping(self, q: _V3) -> float:
+        """Largest joint travel to brake at ``a_max`` from the step to ``q``, m."""
+        rate = self.rate
+        v = (abs(q[0] - self._q[0]) * rate, abs(q[1] - self._q[1]) * rate,
+             abs(q[2] - self._q[2]) * rate)
+        a = self.a_max
+        t = max(v[0] / a[0], v[1] / a[1], v[2] / a[2])
+        return 0.5 * t * max(v[0], v[1], v[2])
 
     def _probe(self, q: _V3) -> Any:
         """The tracked pose of ``q`` (the tracker advances; :meth:`_revert` undoes it)."""

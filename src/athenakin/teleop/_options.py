@@ -128,8 +128,9 @@ class TeleopOptions:
         microseconds for the bodies alone, 0.5-1 ms with obstacles). Default: when
         ``bodies`` or ``environment`` is given. False keeps the tip fixtures only.
     clearance_buffer : float
-        Extra distance the guard keeps above ``clearance_margin`` (0.003 m), so that a
-        braking robot never crosses ``clearance_margin``.
+        Extra distance the guard keeps above ``clearance_margin`` (0.003 m), plus four
+        times the current stopping distance, so that a braking robot never crosses
+        ``clearance_margin``.
     masses : athenakin.dynamics.MassModel, optional
         Masses for the feed-forward forces; default ``MassModel.reference(design)``.
     gravity : array-like, shape (3,), optional
