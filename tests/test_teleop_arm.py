@@ -195,6 +195,12 @@ def test_cli_replays_a_recorded_master(tmp_path, capsys):
     assert "holds no PoseStamped" in (main(["teleop", "--master", str(rec), "--pose-topic",
                                              "/nothing", "--no-arm"]) == 1
                                        and capsys.readouterr().err)
+    junk = tmp_path / "junk.mcap"
+    junk.write_text("not a recording")
+    for bad in (junk, tmp_path):
+        assert main(["teleop", "--master", str(bad), "--no-arm"]) == 1
+        err = capsys.readouterr().err
+        assert "expected an MCAP file or a rosbag2 folder" in err and err.count("\n") == 1
 
 
 def test_docstring_examples():

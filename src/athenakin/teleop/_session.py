@@ -189,7 +189,21 @@ def run_session(tele: Any, arm: Any, master: Iterable[tuple[float, Any, bool]], 
 
 # ------------------------------------------------------------------ recorded masters
 def _messages(path: Path, topics: tuple[str, ...]) -> Iterator[tuple[str, int, Any]]:
-    """``(topic, stamp ns, message)`` of an MCAP file or a rosbag2 folder, in time order."""
+    """``(topic, stamp ns, message)`` of an MCAP file or a rosbag2 folder, in time order.
+
+    A file or folder the readers cannot parse raises :class:`InvalidInputError` naming it.
+    """
+    try:
+        yield from _raw_messages(path, topics)
+    except (InvalidInputError, MemoryError):
+        raise
+    except Exception as exc:             # mcap's, rosbags' and the OS's errors: one named error
+        raise InvalidInputError(f"{path}: expected an MCAP file or a rosbag2 folder of "
+                                f"PoseStamped / Joy messages, could not read it "
+                                f"({type(exc).__name__}: {exc})") from exc
+
+
+def _raw_messages(path: Path, topics: tuple[str, ...]) -> Iterator[tuple[str, int, Any]]:
     if path.is_dir():
         from rosbags.highlevel import AnyReader
 
