@@ -179,6 +179,12 @@ def test_recorded_master_to_crtk_topics(tmp_path):
                 assert msg.flags == 0 or msg.names
     assert seen == {k: v for k, v in counts.items() if v}
     assert not list(tmp_path.glob(".session*"))          # no temporary file left
+    with pytest.raises(TypeError, match="master"):
+        run_session(tele, None, [(0.0, (0.0, 0.0))])
+    with pytest.raises(TypeError, match="tele"):
+        run_session(object(), None, samples)
+    with pytest.raises(TypeError, match="log"):
+        write_session_mcap({}, out)
 
 
 def test_cli_replays_a_recorded_master(tmp_path, capsys):

@@ -140,6 +140,14 @@ def run_session(tele: Any, arm: Any, master: Iterable[tuple[float, Any, bool]], 
     -------
     SessionLog
     """
+    from ._arm import SimulatedArm
+    from ._core import Teleop
+
+    if not isinstance(tele, Teleop):
+        raise TypeError(f"tele: expected an athenakin.teleop.Teleop, got {type(tele).__name__}")
+    if arm is not None and not isinstance(arm, SimulatedArm):
+        raise TypeError(f"arm: expected an athenakin.teleop.SimulatedArm or None, got "
+                        f"{type(arm).__name__}")
     T = tele.T_b_e
     R, c = T[:3, :3], T[:3, 3]
     rows: list[tuple] = []
@@ -147,7 +155,11 @@ def run_session(tele: Any, arm: Any, master: Iterable[tuple[float, Any, bool]], 
     for k, item in enumerate(master):
         if max_cycles is not None and k >= max_cycles:
             break
-        t, pos, clutch = item
+        try:
+            t, pos, clutch = item
+        except (TypeError, ValueError):
+            raise TypeError(f"master: expected items (t, position, clutch), got {item!r:.80}"
+                            ) from None
         cmd = tele.step(t, pos, clutch)
         if arm is not None:
             effort = cmd.forces if all(math.isfinite(f) for f in cmd.forces) else None
@@ -344,6 +356,8 @@ def write_session_mcap(log: SessionLog, path: str | Path, *, start_ns: int = 0,
     """
     from mcap_ros2.writer import Writer
 
+    if not isinstance(log, SessionLog):
+        raise TypeError(f"log: expected a SessionLog, got {type(log).__name__}")
     path = Path(path)
     if target is None:
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".mcap",
