@@ -62,7 +62,7 @@ __version__ = "0.1.0"
 #: Subpackages imported on first attribute access (optional heavy dependencies).
 _LAZY_SUBPACKAGES = ("analysis", "symbolic", "plot", "sim", "motion", "fast", "certified",
                      "calibration", "app", "collision", "ros", "dynamics", "synthesis",
-                     "testing")
+                     "testing", "teleop")
 #: Public functions of lazily imported subpackages, reachable as ``ak.<name>``.
 _LAZY_FUNCTIONS = {"certified_forward_kinematics": "certified", "Robot": "_robot_model"}
 

@@ -60,7 +60,8 @@ def extra_of(module: str | None, command: str | None = None) -> str:
 
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
 COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
-            "animate", "export", "derive", "design", "calibrate", "synthesize", "app", "warmup"]
+            "animate", "export", "derive", "design", "calibrate", "synthesize", "teleop", "app",
+            "warmup"]
 
 
 class _Parser(argparse.ArgumentParser):

@@ -1,0 +1,261 @@
+"""Teleoperation benchmarks (issue 29): latency, hostile streams, the closed loop in MuJoCo.
+
+Run from the repository root (each prints the machine's load beside its numbers)::
+
+    python benchmarks/bench_teleop.py latency [--cycles 1000000]
+    python benchmarks/bench_teleop.py hostile [--cycles 1000000] [--seed 0]
+    python benchmarks/bench_teleop.py session [--seconds 20] [--figure FILE.png]
+
+``latency``: the whole chain per cycle (mapping, filter, IK, safety, feed-forward) on a
+smooth master, p50 / p99 / max, with and without the feed-forward, and where the time
+goes (each stage timed alone over the same states). ``hostile``: streams of jumps, NaN,
+dropouts, far targets, clutch chatter into fixtures and the singular set; counts every
+stroke, velocity, acceleration, fixture, clearance and NaN violation (all must be 0).
+``session``: 20 s of master motion at 1 kHz with gravity through the chain and the MuJoCo
+arm (the clutch open from 45 % to 50 % of the run, the master silent for 60 ms at 75 %),
+with feed-forward and PD only: tip tracking error, loop-closure drift; the figure of
+docs/teleop.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import time
+
+import numpy as np
+
+import athenakin as ak
+from athenakin.collision import Bodies, Environment
+from athenakin.teleop import Teleop, TeleopOptions, TeleopStatus
+from athenakin.teleop._fixtures import TipFixtures
+
+D = ak.Design.default()
+T = ak.default_rcm_frame(D)
+Q0 = (-0.1, 0.1, 0.45)
+RATE = 1000.0
+
+
+def _load() -> str:
+    return "load " + " ".join(open("/proc/loadavg").read().split()[:3]) + \
+        f" on {os.cpu_count()} cores"
+
+
+def master(k: int) -> tuple[float, float, float]:
+    """A surgeon-like motion: a few cm at 0.2-0.5 Hz (master frame, m) plus 10 Hz tremor."""
+    s = k / RATE
+    return (0.05 * math.sin(2 * math.pi * 0.5 * s) + 0.0005 * math.sin(2 * math.pi * 10 * s),
+            0.03 * math.sin(2 * math.pi * 0.3 * s), 0.02 * (1 - math.cos(2 * math.pi * 0.2 * s)))
+
+
+def _percentiles(dt: np.ndarray) -> str:
+    us = dt * 1e6
+    return (f"p50 {np.percentile(us, 50):7.1f} us  p99 {np.percentile(us, 99):7.1f} us  "
+            f"max {us.max():8.1f} us")
+
+
+def latency(cycles: int) -> None:
+    print(f"latency over {cycles} cycles ({_load()})")
+    clock = time.perf_counter
+    for ff in (False, True):
+        n = cycles if not ff else max(1000, cycles // 10)
+        tele = Teleop(T, D, q0=Q0, options=TeleopOptions(feedforward=ff))
+        for k in range(2000):                       # warm up (compile, caches)
+            tele.step(k / RATE, master(k))
+        tele = Teleop(T, D, q0=Q0, options=TeleopOptions(feedforward=ff))
+        samples = [master(k) for k in range(n)]
+        dt = np.empty(n)
+        for k in range(n):
+            m = samples[k]
+            t0 = clock()
+            tele.step(k / RATE, m)
+            dt[k] = clock() - t0
+        print(f"  feed-forward {'on ' if ff else 'off'} ({n} cycles, backend {tele.backend}): "
+              f"{_percentiles(dt)}")
+    # where the time goes: each stage alone, over the states of a run
+    tele = Teleop(T, D, q0=Q0, options=TeleopOptions(feedforward=False))
+    cmds = [tele.step(k / RATE, master(k)) for k in range(5000)]
+    from athenakin.dynamics import MassModel, inverse_dynamics
+    from athenakin.motion import Tracker
+    from athenakin.teleop._core import _IK
+    from athenakin.teleop._filter import TremorFilter
+
+    filt = TremorFilter("notch8-12", RATE)
+    filt.reset(0.0, 0.0, 0.0)
+    ik = _IK(np.asarray(T), D, tele.backend == "numba")
+    tr = Tracker(T, D, q0=Q0)
+    masses = MassModel.reference(D)
+    stages = {
+        "filter (3 axes)": lambda c, k: filt(*master(k)),
+        "IK q_from_tool_tip (x2 per cycle)": lambda c, k: ik(*c.tip),
+        "tracker update (x1)": lambda c, k: tr.update(c.q),
+        "inverse_dynamics (public)": lambda c, k: inverse_dynamics(
+            c.q, c.qd, c.qdd, T, D, masses=masses, slot=0, errors="flag"),
+    }
+    for name, fn in stages.items():
+        m = len(cmds) if "dynamics" not in name else 1000
+        dt = np.empty(m)
+        for k in range(m):
+            c = cmds[k]
+            t0 = clock()
+            fn(c, k)
+            dt[k] = clock() - t0
+        print(f"  stage {name:36s} {_percentiles(dt)}")
+
+
+def _env() -> Environment:
+    tb = T[:3, :3] @ np.array([0.25, 0.0, 0.0]) + T[:3, 3]
+    return (Environment().sphere(tb + np.array([0.0, 0.0, -0.03]), 0.01, name="vessel")
+            .halfspace(tb + np.array([0.0, 0.0, -0.06]), [0.0, 0.0, 1.0], name="floor"))
+
+
+def hostile(cycles: int, seed: int, *, with_clearance: bool) -> dict[str, int]:
+    env = _env()
+    fx = TipFixtures(env)
+    opts = TeleopOptions(feedforward=False, check_clearance=with_clearance)
+    tele = Teleop(T, D, q0=Q0, options=opts, environment=env,
+                  bodies=Bodies.default(D) if with_clearance else None)
+    rng = np.random.default_rng(seed)
+    lo, hi = np.asarray(D.stroke_min), np.asarray(D.stroke_max)
+    vmax, amax = np.asarray(tele.v_max), np.asarray(tele.a_max)
+    R, c0 = T[:3, :3], T[:3, 3]
+    bad = dict(stroke=0, velocity=0, acceleration=0, fixture=0, clearance=0, nan=0, fault=0)
+    flags = 0
+    m = np.zeros(3)
+    drift = np.zeros(3)
+    t0 = time.perf_counter()
+    down = R.T @ np.array([0.0, 0.0, -1.0])
+    for k in range(cycles):
+        r = rng.random()
+        clutch = bool(rng.random() > 0.02) if (k // 5000) % 4 == 3 else True   # chatter phases
+        if r < 0.001:
+            m = m + rng.normal(scale=1.0, size=3)               # a metre
+            sample = m
+        elif r < 0.002:
+            sample = (math.nan, rng.random(), math.inf)
+        elif r < 0.004:
+            sample = None
+        else:
+            phase = (k // 3000) % 3
+            if phase == 0:
+                m = m + rng.normal(scale=0.0005, size=3)        # wander (0.5 m/s)
+            elif phase == 1:
+                m = m + 0.0002 * down                           # into the fixtures
+            else:                                               # far out, across the
+                if k % 3000 == 0:                               # singular set, back
+                    drift = rng.normal(size=3)
+                    drift *= 0.0005 / np.linalg.norm(drift)
+                m = m + drift
+            sample = m
+        cmd = tele.step(k / RATE, sample, clutch)
+        flags |= int(cmd.status)
+        q, qd, qdd = np.asarray(cmd.q), np.asarray(cmd.qd), np.asarray(cmd.qdd)
+        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd)) and np.all(np.isfinite(qdd))
+                and all(math.isfinite(x) for x in cmd.tip)):
+            bad["nan"] += 1
+        bad["stroke"] += int(np.any(q < lo) or np.any(q > hi))
+        bad["velocity"] += int(np.any(np.abs(qd) > vmax * (1 + 1e-9)))
+        bad["acceleration"] += int(np.any(np.abs(qdd) > amax * (1 + 1e-9)))
+        if fx.nearest(tuple(R @ np.asarray(cmd.tip) + c0))[0] < 0.0:
+            bad["fixture"] += 1
+        if with_clearance and not cmd.clearance >= opts.clearance_margin:
+            bad["clearance"] += 1
+        bad["fault"] += int(bool(cmd.status & TeleopStatus.FAULT))
+    el = time.perf_counter() - t0
+    print(f"hostile streams: {cycles} cycles, seed {seed}, clearance "
+          f"{'on' if with_clearance else 'off'}, {el:.1f} s ({_load()})")
+    print(f"  flags seen: {TeleopStatus(flags)!r}")
+    print(f"  violations: {bad}")
+    return bad
+
+
+def session(seconds: float, figure: str | None) -> None:
+    from athenakin.teleop import SimulatedArm, run_session
+
+    n = int(seconds * RATE)
+
+    def stream():
+        for k in range(n):
+            silent = 0.75 * n <= k < 0.75 * n + 0.06 * RATE        # 60 ms without the master
+            yield k / RATE, None if silent else master(k), not (0.45 * n <= k < 0.5 * n)
+
+    logs = {}
+    for ff in (True, False):
+        t0 = time.perf_counter()
+        tele = Teleop(T, D, q0=Q0, options=TeleopOptions(feedforward=ff))
+        arm = SimulatedArm(T, D, q0=Q0, feedforward=ff)
+        log = run_session(tele, arm, stream())
+        err = log.tip_error
+        logs[ff] = log
+        print(f"session {seconds:g} s at {RATE:g} Hz with gravity, "
+              f"{'PD + feed-forward' if ff else 'PD only'}: tip error "
+              f"{np.sqrt(np.mean(err ** 2)) * 1e3:.4f} mm RMS, {err.max() * 1e3:.4f} mm max; "
+              f"loop closure {np.nanmax(log.closure_error):.2e} m max; "
+              f"{time.perf_counter() - t0:.1f} s ({_load()})")
+    if figure:
+        _figure(logs[True], logs[False], figure)
+        print(f"wrote {figure}")
+
+
+def _figure(log, log_pd, path: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = log.t
+    fig, ax = plt.subplots(4, 1, figsize=(9, 10), sharex=True,
+                           gridspec_kw={"height_ratios": [2, 2, 2, 1.3]})
+    for i, c in enumerate("xyz"):
+        ax[0].plot(t, log.master[:, i] * 1e3, lw=0.8, label=f"master {c}")
+    ax[0].set_ylabel("master [mm]\n(master frame)")
+    ax[0].legend(loc="upper right", ncol=3, fontsize=8)
+    for i, c in enumerate("xyz"):
+        ax[1].plot(t, (log.tip_b[:, i] - log.tip_b[0, i]) * 1e3, lw=1.2, label=f"command {c}")
+        ax[1].plot(t, (log.measured_tip_b[:, i] - log.tip_b[0, i]) * 1e3, "k:", lw=0.8)
+    ax[1].plot([], [], "k:", label="MuJoCo tip")
+    ax[1].set_ylabel("tip - start [mm]\n(base frame)")
+    ax[1].legend(loc="upper right", ncol=4, fontsize=8)
+    ax[2].semilogy(t, np.maximum(log.tip_error, 1e-9) * 1e3, lw=0.8, label="PD + feed-forward")
+    ax[2].semilogy(t, np.maximum(log_pd.tip_error, 1e-9) * 1e3, lw=0.8, label="PD only")
+    ax[2].set_ylabel("|MuJoCo tip -\ncommand| [mm]")
+    ax[2].legend(loc="upper right", fontsize=8)
+    names = [f for f in TeleopStatus if f]
+    for j, f in enumerate(names):
+        on = (log.status & int(f)) != 0
+        if np.any(on):
+            ax[3].fill_between(t, j - 0.4, j + 0.4, where=on, step="mid", lw=0)
+    ax[3].set_yticks(range(len(names)), [f.name for f in names], fontsize=7)
+    ax[3].set_xlabel("t [s]")
+    ax[3].set_title("status flags", fontsize=9)
+    fig.suptitle("athenakin.teleop: a recorded-style master, the command and MuJoCo's tip")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    sub = p.add_subparsers(dest="what", required=True)
+    a = sub.add_parser("latency")
+    a.add_argument("--cycles", type=int, default=1_000_000)
+    b = sub.add_parser("hostile")
+    b.add_argument("--cycles", type=int, default=1_000_000)
+    b.add_argument("--seed", type=int, default=0)
+    b.add_argument("--clearance", action="store_true",
+                   help="also check the bodies' clearance (about 0.5-1 ms per cycle)")
+    c = sub.add_parser("session")
+    c.add_argument("--seconds", type=float, default=20.0)
+    c.add_argument("--figure", default=None)
+    args = p.parse_args()
+    if args.what == "latency":
+        latency(args.cycles)
+    elif args.what == "hostile":
+        bad = hostile(args.cycles, args.seed, with_clearance=args.clearance)
+        raise SystemExit(1 if any(bad.values()) else 0)
+    else:
+        session(args.seconds, args.figure)
+
+
+if __name__ == "__main__":
+    main()
