@@ -59,7 +59,7 @@ def latency(cycles: int) -> None:
     print(f"latency over {cycles} cycles ({_load()})")
     clock = time.perf_counter
     for ff in (False, True):
-        n = cycles if not ff else max(1000, cycles // 10)
+        n = cycles
         tele = Teleop(T, D, q0=Q0, options=TeleopOptions(feedforward=ff))
         for k in range(2000):                       # warm up (compile, caches)
             tele.step(k / RATE, master(k))
@@ -76,7 +76,7 @@ def latency(cycles: int) -> None:
     # where the time goes: each stage alone, over the states of a run
     tele = Teleop(T, D, q0=Q0, options=TeleopOptions(feedforward=False))
     cmds = [tele.step(k / RATE, master(k)) for k in range(5000)]
-    from athenakin.dynamics import MassModel, inverse_dynamics
+    from athenakin.dynamics import InverseDynamicsLoop, MassModel, inverse_dynamics
     from athenakin.motion import Tracker
     from athenakin.teleop._core import _IK
     from athenakin.teleop._filter import TremorFilter
@@ -86,15 +86,17 @@ def latency(cycles: int) -> None:
     ik = _IK(np.asarray(T), D, tele.backend == "numba")
     tr = Tracker(T, D, q0=Q0)
     masses = MassModel.reference(D)
+    ff = InverseDynamicsLoop(T, D, masses=masses, slot=0)
     stages = {
         "filter (3 axes)": lambda c, k: filt(*master(k)),
         "IK q_from_tool_tip (x2 per cycle)": lambda c, k: ik(*c.tip),
         "tracker update (x1)": lambda c, k: tr.update(c.q),
-        "inverse_dynamics (public)": lambda c, k: inverse_dynamics(
+        "feed-forward (InverseDynamicsLoop)": lambda c, k: ff(c.q, c.qd, c.qdd),
+        "inverse_dynamics (public, for scale)": lambda c, k: inverse_dynamics(
             c.q, c.qd, c.qdd, T, D, masses=masses, slot=0, errors="flag"),
     }
     for name, fn in stages.items():
-        m = len(cmds) if "dynamics" not in name else 1000
+        m = len(cmds) if "public" not in name else 1000
         dt = np.empty(m)
         for k in range(m):
             c = cmds[k]

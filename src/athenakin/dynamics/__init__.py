@@ -29,6 +29,7 @@ from ._api import (
     statics,
 )
 from ._capability import ForceCapability, force_capability, max_tip_force
+from ._loop import InverseDynamicsLoop
 from ._metrics import (
     STUDY_F_MAX,
     STUDY_TIP_ACCELERATION,
@@ -49,6 +50,7 @@ from ._model import (
 from ._simulate import SINGULARITY_MARGINS, Simulation, SimulationStoppedError, simulate
 
 __all__ = [
+    "InverseDynamicsLoop",
     "MassModel", "MASS_BODIES", "MOVING_BODIES", "REFERENCE_MASSES", "INERTIA_TOL",
     "MAX_MASS", "actuator_part_length", "body_segment_in_frame",
     "Statics", "statics", "actuator_forces", "inverse_dynamics", "mass_matrix",

@@ -261,6 +261,9 @@ class Teleop:
 
             self._gravity = np.array(STANDARD_GRAVITY if opts.gravity is None else opts.gravity,
                                      dtype=float)
+        # the feed-forward of each FK slot the robot takes: the dynamics' loop object
+        # (checked once, the compiled kernel on preallocated buffers, never raises)
+        self._ff_loops: dict[int, Any] = {}
         self.fault: BaseException | None = None
         self._reset_state(pose)
 
@@ -735,19 +738,18 @@ class Teleop:
                              st, self._slot, self._pose.clearance)
 
     def _forces(self) -> _V3:
-        from ..dynamics import inverse_dynamics
-
         key = (self._q, self._qd, self._qdd, self._slot)
         if key == self._ff_key:                # at rest or held: the same state, same forces
             return self._ff
         self._ff_key = key
-        self._ff = _NAN3
-        try:
-            f = inverse_dynamics(self._q, self._qd, self._qdd, self.T_b_e, self.design,
-                                 masses=self._masses, gravity=self._gravity, slot=self._slot,
-                                 errors="flag", backend=self._backend)
-        except Exception:   # a singular state of the dynamics: no feed-forward this cycle
-            return _NAN3
+        loop = self._ff_loops.get(self._slot)
+        if loop is None:
+            from ..dynamics import InverseDynamicsLoop
+
+            loop = self._ff_loops[self._slot] = InverseDynamicsLoop(
+                self.T_b_e, self.design, masses=self._masses, gravity=self._gravity,
+                slot=self._slot, backend=self._backend)
+        f = loop(self._q, self._qd, self._qdd)  # NaN on a singular set: no feed-forward
         self._ff = (float(f[0]), float(f[1]), float(f[2]))
         return self._ff
 

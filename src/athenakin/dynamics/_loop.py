@@ -1,0 +1,127 @@
+"""Inverse dynamics of one state at a time, for a control loop (teleoperation, a servo).
+
+:func:`~athenakin.dynamics.inverse_dynamics` checks its arguments and the assembly of
+every state (a forward-kinematics call) on each call: about 140 µs for one state, where
+the compiled kernel takes about 2 µs. A control loop that commands states it produced
+itself (from the exact IK, on one FK slot) needs only the kernel. :class:`InverseDynamicsLoop`
+checks the design, the RCM frame, the mass model, gravity and the slot once, keeps the
+kernel's inputs in preallocated buffers, and returns the forces of one state per call:
+the same numbers as :func:`~athenakin.dynamics.inverse_dynamics` (the same kernel on the
+same inputs; the numpy reference where the backend policy says numpy). It never raises
+for a state: one that does not assemble in the slot, or lies on a singular set of the
+dynamics, gives NaN forces, which the caller flags (``athenakin.teleop`` holds its
+last command then).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._backend import resolve_backend
+from .._validation import check_array, check_choice
+from ..design import Design, resolve_design
+from ..robot._setup import resolve_rcm_frame
+from ._api import STANDARD_GRAVITY, _check_masses, _check_slot
+from ._core import N_Q_DIRECTIONS, body_loads, evaluate, generalized_forces
+from ._kinematics import slot_signs
+from ._model import MassModel
+
+__all__ = ["InverseDynamicsLoop"]
+
+
+class InverseDynamicsLoop:
+    """Actuator forces of single states for one robot set-up, in about two microseconds.
+
+    Parameters
+    ----------
+    T_b_e : array-like, shape (4, 4)
+        RCM frame in the base frame (default :func:`athenakin.default_rcm_frame`).
+    design : Design, optional
+        Default :meth:`athenakin.Design.default`.
+    masses : MassModel, keyword-only, optional
+        Default :meth:`MassModel.reference` of ``design``.
+    gravity : array-like, shape (3,), keyword-only
+        Gravity in the base frame, m/s^2.
+    slot : int, keyword-only
+        The FK slot (0..15) whose configuration the states take.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        As for :func:`~athenakin.dynamics.inverse_dynamics`.
+
+    Examples
+    --------
+    >>> import numpy as np, athenakin as ak
+    >>> from athenakin import dynamics
+    >>> loop = dynamics.InverseDynamicsLoop(ak.default_rcm_frame())
+    >>> q, qd, qdd = np.array([-0.1, 0.1, 0.45]), np.zeros(3), np.array([0.0, 0.0, 1.0])
+    >>> f = loop(q, qd, qdd)
+    >>> bool(np.allclose(f, dynamics.inverse_dynamics(q, qd, qdd), rtol=0, atol=1e-12))
+    True
+    """
+
+    def __init__(self, T_b_e: ArrayLike | None = None, design: Design | None = None, *,
+                 masses: MassModel | None = None, gravity: ArrayLike = STANDARD_GRAVITY,
+                 slot: int = 0, backend: str = "auto") -> None:
+        check_choice(backend, "backend", ("auto", "numpy", "numba"))
+        self.slot = _check_slot(slot)
+        self.design = resolve_design(design)
+        self.masses = _check_masses(masses, self.design)
+        T = resolve_rcm_frame(T_b_e, self.design)
+        if T.shape != (4, 4):
+            raise ValueError(f"T_b_e: expected one transform of shape (4, 4), got {T.shape}")
+        self.T_b_e = np.array(T, dtype=np.float64, order="C")
+        g = check_array(gravity, "gravity", (3,))
+        if g.shape != (3,):
+            raise ValueError(f"gravity: expected shape (3,), got {g.shape}")
+        self.gravity = np.array(g, dtype=np.float64)
+        self._kernel = None
+        if resolve_backend(backend):
+            from ._kernels import inverse_dynamics_kernel
+
+            self._kernel = inverse_dynamics_kernel
+        # the kernel's inputs, in the types of every call (one compiled specialization)
+        self._T = np.ascontiguousarray(self.T_b_e[None])
+        # as inverse_dynamics passes them (the same array types: no second compile)
+        self._lengths = self.design.lengths
+        self._L = float(self.design.tool_length)
+        self._signs = np.array(slot_signs(self.slot))
+        self._mass, self._com, self._inertia = (self.masses.mass, self.masses.com,
+                                                self.masses.inertia)
+        self._grav = np.ascontiguousarray(self.gravity[None])
+        self._ftip = np.zeros((1, 3))
+        self._x = np.zeros((3, 1, 3))        # q, qd, qdd of the state
+        self._out = np.zeros((1, 3))
+
+    @property
+    def compiled(self) -> bool:
+        """Whether the compiled kernel runs (else the numpy reference)."""
+        return self._kernel is not None
+
+    def __call__(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> NDArray[np.float64]:
+        """Actuator forces ``(f1, f2, f3)`` (N) of one state, positive along increasing ``q``.
+
+        Parameters
+        ----------
+        q, qd, qdd : array-like, shape (3,)
+            Actuator positions (m), velocities (m/s), accelerations (m/s^2) of a state
+            that assembles in :attr:`slot` (not checked: NaN forces where it does not).
+
+        Returns
+        -------
+        ndarray, shape (3,)
+            A view of an internal buffer that the next call overwrites (copy it to keep
+            it). NaN where the state does not assemble or is singular for the dynamics.
+        """
+        x = self._x
+        x[0, 0] = q
+        x[1, 0] = qd
+        x[2, 0] = qdd
+        if self._kernel is not None:
+            self._kernel(x[0], x[1], x[2], self._T, self._lengths, self._L, self._signs,
+                         self._mass, self._com, self._inertia, self._grav, self._ftip,
+                         self._out)
+        else:
+            ev = evaluate(x[0], x[1], x[2], self._T, self.design, self.masses, self.slot)
+            F, Nm = body_loads(ev, self.masses, self._grav)
+            self._out[:] = generalized_forces(ev, F, Nm, self._ftip)[:, 1:N_Q_DIRECTIONS]
+        return self._out[0]

@@ -1,0 +1,63 @@
+"""InverseDynamicsLoop: the numbers of inverse_dynamics, one state at a time, never raising."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import athenakin as ak
+from athenakin import _backend, dynamics, sim
+from athenakin.errors import InvalidInputError
+
+D = ak.Design.default()
+T = ak.default_rcm_frame(D)
+RNG = np.random.default_rng(29)
+BACKENDS = ["numpy", pytest.param("numba", marks=pytest.mark.skipif(
+    not _backend.numba_available(), reason="numba not available here"))]
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("slot", [0, 3, 9])
+def test_loop_equals_inverse_dynamics(backend, slot):
+    q = sim.sample_reachable_q(20, D, T, slot=slot, rng=RNG)
+    qd = RNG.normal(0, 0.05, q.shape)
+    qdd = RNG.normal(0, 0.5, q.shape)
+    masses = dynamics.MassModel.reference(D)
+    g = (0.3, -0.2, -9.7)
+    loop = dynamics.InverseDynamicsLoop(T, D, masses=masses, gravity=g, slot=slot,
+                                        backend=backend)
+    assert loop.compiled == (backend == "numba")
+    want = dynamics.inverse_dynamics(q, qd, qdd, T, D, masses=masses, gravity=g, slot=slot,
+                                     backend=backend)
+    got = np.array([loop(a, b, c).copy() for a, b, c in zip(q, qd, qdd, strict=True)])
+    np.testing.assert_array_equal(got, want)       # the same kernel on the same inputs
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_state_that_does_not_assemble_gives_nan_not_an_error(backend):
+    loop = dynamics.InverseDynamicsLoop(T, D, backend=backend)
+    f = loop([0.5, -0.5, 0.45], np.zeros(3), np.zeros(3))   # A and B swapped: no assembly
+    assert np.isnan(f).all()
+    f = loop([np.nan, 0.1, 0.45], np.zeros(3), np.zeros(3))
+    assert np.isnan(f).all()
+    # and the loop goes on afterwards
+    ok = loop([-0.1, 0.1, 0.45], np.zeros(3), np.zeros(3))
+    np.testing.assert_allclose(ok, dynamics.inverse_dynamics([-0.1, 0.1, 0.45], np.zeros(3),
+                                                             np.zeros(3)), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("kw, err, match", [
+    ({"slot": 16}, InvalidInputError, "slot"),
+    ({"gravity": (0.0, np.nan, -9.8)}, InvalidInputError, "gravity"),
+    ({"gravity": np.zeros((2, 3))}, ValueError, "gravity"),
+    ({"masses": "reference"}, TypeError, "masses"),
+    ({"backend": "gpu"}, ValueError, "backend"),
+])
+def test_bad_set_up_is_named_once(kw, err, match):
+    with pytest.raises(err, match=match):
+        dynamics.InverseDynamicsLoop(T, D, **kw)
+
+
+def test_batch_of_frames_is_refused():
+    with pytest.raises((ValueError, InvalidInputError), match="T_b_e"):
+        dynamics.InverseDynamicsLoop(np.stack([T, T]), D)
