@@ -450,7 +450,7 @@ def check_output_file(p: Path) -> tuple[str, str]:
     if not data and suf not in (".md",):
         return "BAD_OUTPUT", f"{p.name}: empty"
     magic = {".png": b"\x89PNG", ".gif": b"GIF8", ".pdf": b"%PDF", ".npz": b"PK",
-             ".mp4": None, ".parquet": b"PAR1"}
+             ".mp4": None, ".parquet": b"PAR1", ".mcap": b"\x89MCAP0\r\n"}
     if suf in magic:
         m = magic[suf]
         if m is not None and not data.startswith(m):
@@ -639,6 +639,30 @@ def discover(python: list[str], env: dict[str, str]) -> dict[str, tuple[list[Opt
 
 
 # ------------------------------------------------------------------------------ fixtures
+def _master_recording(path: Path, *, rate_hz: float = 50.0, seconds: float = 0.3) -> bytes:
+    """A short recorded master (PoseStamped + a Joy clutch) for ``athenakin teleop``."""
+    from mcap_ros2.writer import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    with open(path, "wb") as fh:
+        w = Writer(fh)
+        defs = {n: w.register_msgdef(n, store.generate_msgdef(n, ros_version=2)[0])
+                for n in ("geometry_msgs/msg/PoseStamped", "sensor_msgs/msg/Joy")}
+        t0 = 1_700_000_000 * 10**9
+        for k in range(int(seconds * rate_hz)):
+            ns = t0 + int(k * 1e9 / rate_hz)
+            head = {"stamp": {"sec": ns // 10**9, "nanosec": ns % 10**9}, "frame_id": "master"}
+            w.write_message("/master/pose", defs["geometry_msgs/msg/PoseStamped"], {
+                "header": head, "pose": {
+                    "position": {"x": 0.01 * math.sin(k / rate_hz), "y": 0.0, "z": 0.0},
+                    "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}}, log_time=ns)
+            w.write_message("/master/joy", defs["sensor_msgs/msg/Joy"],
+                            {"header": head, "axes": [], "buttons": [0]}, log_time=ns)
+        w.finish()
+    return path.read_bytes()
+
+
 class Fixtures:
     """Valid input files (from the CLI itself and the examples) and their bad variants."""
 
@@ -671,17 +695,19 @@ class Fixtures:
         rows = [ln for ln in meas if ln and not ln.startswith(("#", "q1_m"))]
         self.meas = ("\n".join(head + rows[:24]) + "\n").encode()
         self.task = (REPO / "examples/synthesis/task_pancreas.toml").read_bytes()
+        self.master = _master_recording(work / "master.mcap")
 
     def valid(self, kind: str) -> bytes:
         """The valid content of a file kind."""
         return {"design": self.design, "rcm": self.rcm, "path": self.path,
                 "qstream": self.qstream, "traj": self.traj, "meas": self.meas,
-                "task": self.task}[kind]
+                "task": self.task, "master": self.master}[kind]
 
     @staticmethod
     def ext(kind: str) -> str:
         """File extension of a kind."""
-        return {"design": ".toml", "task": ".toml", "rcm": ".json"}.get(kind, ".csv")
+        return {"design": ".toml", "task": ".toml", "rcm": ".json",
+                "master": ".mcap"}.get(kind, ".csv")
 
     def variants(self, kind: str, full: bool) -> dict[str, Any]:
         """Bad (and oddly encoded good) contents: name -> bytes | 'missing' | 'dir' | spec."""
@@ -702,6 +728,9 @@ class Fixtures:
             v.update(self._toml_variants(text, kind, full))
         elif kind == "rcm":
             v.update(self._json_variants(full))
+        elif kind == "master":    # a binary recording: cut short, a CSV in its place
+            v.update({"truncated": good[: len(good) // 2],
+                      "csv": b"t_s,x_m,y_m,z_m\n0,0.1,0,0\n"})
         else:
             v.update(self._csv_variants(text, kind, full))
         return v
@@ -862,14 +891,15 @@ def baselines(fx: Fixtures) -> dict[str, list[list[str]]]:
                         "--samples", "50", "--no-figures", "-o", "opt.parquet", "--json"]],
         "app": [["--port", "0"]],
         "warmup": [[]],
+        "teleop": [["--master", "master.mcap", "-o", "s.mcap"], ["--master", "master.mcap"]],
     }
 
 
 #: Files each baseline needs: name in argv -> kind.
 BASE_FILES = {"path.csv": "path", "timed.csv": "timed", "stream.csv": "qstream",
-              "meas.csv": "meas", "task.toml": "task"}
+              "meas.csv": "meas", "task.toml": "task", "master.mcap": "master"}
 #: Commands whose runs are slow: fewer numeric values, and output tests only on baseline 0.
-SLOW = {"workspace", "view", "animate", "export", "calibrate", "synthesize"}
+SLOW = {"workspace", "view", "animate", "export", "calibrate", "synthesize", "teleop"}
 
 
 def _base_case(cmd: str, argv: list[str], fx: Fixtures, label: str) -> Case:

@@ -79,11 +79,13 @@ run calibrate --plan 3 -o c.toml
 run synthesize --designs 2 -o syn
 run app
 run warmup
+run teleop --master r.mcap -o s.mcap
 # a command added later must be listed above
 "$py" - <<'CHECK'
 from athenakin.cli import COMMANDS
 listed = {"fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view", "animate",
-          "export", "derive", "design", "calibrate", "synthesize", "app", "warmup"}
+          "export", "derive", "design", "calibrate", "synthesize", "app", "warmup",
+          "teleop"}
 missing = sorted(set(COMMANDS) - listed)
 if missing:
     raise SystemExit(f"scripts/test_core_only.sh: add a run line for {missing}")

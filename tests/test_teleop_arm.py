@@ -13,6 +13,7 @@ import athenakin as ak
 
 pytest.importorskip("mujoco")
 
+from athenakin.errors import InvalidInputError  # noqa: E402
 from athenakin.teleop import (  # noqa: E402
     CRTK_TOPICS,
     SimulatedArm,
@@ -198,9 +199,13 @@ def test_cli_replays_a_recorded_master(tmp_path, capsys):
     assert "tip tracking error" in text and "wrote" in text and out.exists()
     assert main(["teleop", "--master", str(rec), "-o", str(out)]) == 1      # exists, no --force
     assert main(["teleop", "--master", str(rec), "-o", str(rec), "--force"]) == 1   # the input
-    assert "holds no PoseStamped" in (main(["teleop", "--master", str(rec), "--pose-topic",
-                                             "/nothing", "--no-arm"]) == 1
-                                       and capsys.readouterr().err)
+    capsys.readouterr()
+    for flag in ("--pose-topic", "--clutch-topic"):      # a topic the recording lacks: named
+        assert main(["teleop", "--master", str(rec), flag, "/nothing", "--no-arm"]) == 1
+        err = capsys.readouterr().err
+        assert "no topic '/nothing'" in err and "/master/pose" in err, err
+    with pytest.raises(InvalidInputError, match="no topic 'nan'"):
+        list(read_master(rec, clutch_topic="nan"))
     junk = tmp_path / "junk.mcap"
     junk.write_text("not a recording")
     for bad in (junk, tmp_path):

@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import check_array, check_choice, check_scalar, check_transform
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, KinematicsError
+from ._filter import check_rate
 
 __all__ = ["ArmBackend", "JointState", "MujocoBackend", "ServoGains", "SimulatedArm",
            "OPERATING_STATES"]
@@ -119,9 +120,9 @@ class MujocoBackend:
                  gravity: bool = True) -> None:
         try:
             import mujoco
-        except ImportError:  # pragma: no cover - the sim extra
-            raise ImportError("SimulatedArm's MuJoCo backend needs mujoco: pip install "
-                              "'athenakin[sim]'") from None
+        except ModuleNotFoundError as exc:  # the sim extra
+            raise ModuleNotFoundError("SimulatedArm's MuJoCo backend needs mujoco: pip "
+                                      "install 'athenakin[sim]'", name="mujoco") from exc
         from ..sim import ACTUATED, LOOP_CLOSURES, mjcf_from_design
 
         self._mj = mujoco
@@ -224,7 +225,7 @@ class SimulatedArm:
         if T.shape != (4, 4):
             raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
         self.design, self.T_b_e = design, np.array(T)
-        self.rate = check_scalar(rate, "rate", positive=True)
+        self.rate = check_rate(rate)
         self.dt = 1.0 / self.rate
         q = np.array(check_array(REFERENCE_Q if q0 is None else q0, "q0", (3,)), dtype=float)
         if q.shape != (3,):

@@ -37,7 +37,7 @@ from numpy.typing import ArrayLike
 from .._validation import check_array, check_scalar, check_transform
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, Reason
-from ._filter import MIN_FILTER_RATE, TremorFilter
+from ._filter import MIN_FILTER_RATE, TremorFilter, check_rate
 from ._fixtures import TipFixtures
 from ._options import TeleopOptions, TeleopStatus, _three
 
@@ -194,7 +194,7 @@ class Teleop:
         self.options = opts
         self.design, self.T_b_e = design, np.array(T)
         self.T_b_e.setflags(write=False)
-        self.rate = check_scalar(rate, "rate", positive=True)
+        self.rate = check_rate(rate)
         if opts.filter != "none" and self.rate < MIN_FILTER_RATE:
             raise InvalidInputError(f"rate: the tremor filter needs rate >= {MIN_FILTER_RATE} Hz,"
                                     f" got {self.rate}")

@@ -52,6 +52,28 @@ TREMOR_FILTERS: dict[str, tuple[tuple[float, float, float, float], ...]] = {
 PREWARP_HZ = 10.0
 #: Least rate for a filter with a stop band at 12 Hz (Nyquist well above it), Hz.
 MIN_FILTER_RATE = 100.0
+#: Highest cycle rate (Hz) of the teleoperation loop and the simulated arm: 100 kHz, far
+#: above any servo (the dVRK's arms run at 1.5 kHz); a higher one is a typing error (its
+#: cycle of under 10 µs would make every difference quotient rounding noise).
+MAX_RATE = 100_000.0
+
+
+def check_rate(rate: object, name: str = "rate") -> float:
+    """A cycle rate (Hz) in ``(0, MAX_RATE]``, as a float; else a named error.
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        Not a real number, not finite, not positive, or above :data:`MAX_RATE`.
+    """
+    from .._validation import check_scalar
+    from ..errors import InvalidInputError
+
+    r = check_scalar(rate, name, positive=True)
+    if r > MAX_RATE:
+        raise InvalidInputError(f"{name}: expected a cycle rate of at most {MAX_RATE:g} Hz, "
+                                f"got {r:g}")
+    return r
 
 
 def _digital(name: str, rate: float) -> tuple[tuple[float, float, float, float, float], ...]:

@@ -102,6 +102,7 @@ class TipFixtures:
              R[0][1] * v[0] + R[1][1] * v[1] + R[2][1] * v[2],
              R[0][2] * v[0] + R[1][2] * v[1] + R[2][2] * v[2])
         q = (abs(p[0]) - h[0], abs(p[1]) - h[1], abs(p[2]) - h[2])
+        nl: tuple[float, ...]
         if q[0] > 0.0 or q[1] > 0.0 or q[2] > 0.0:      # outside: distance to the surface
             e = tuple(math.copysign(max(qi, 0.0), pi) for qi, pi in zip(q, p, strict=True))
             d = math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])

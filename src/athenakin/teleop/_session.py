@@ -166,9 +166,11 @@ def run_session(tele: Any, arm: Any, master: Iterable[tuple[float, Any, bool]], 
             arm.servo_jp(cmd.q, velocity=cmd.qd, effort=effort)
             arm.step(1)
             js = arm.measured_js()
-            mq, mqd = js.position, js.velocity
-            if sim:
-                mtip, ce = arm.backend.tip_b(), arm.backend.closure_error()
+            mq: Any = js.position
+            mqd: Any = js.velocity
+            if sim:     # the MuJoCo backend's own read-outs (not in the ArmBackend protocol)
+                backend: Any = arm.backend
+                mtip, ce = backend.tip_b(), backend.closure_error()
             else:
                 mtip, ce = arm.measured_cp()[:3, 3], math.nan
         else:
@@ -219,19 +221,32 @@ def _raw_messages(path: Path, topics: tuple[str, ...]) -> Iterator[tuple[str, in
     if path.is_dir():
         from rosbags.highlevel import AnyReader
 
-        with AnyReader([path]) as reader:
-            conns = [c for c in reader.connections if c.topic in topics]
-            for conn, stamp, raw in reader.messages(connections=conns):
-                yield conn.topic, int(stamp), reader.deserialize(raw, conn.msgtype)
+        with AnyReader([path]) as bag:
+            _check_topics(path, topics, {c.topic for c in bag.connections})
+            conns = [c for c in bag.connections if c.topic in topics]
+            for conn, stamp, raw in bag.messages(connections=conns):
+                yield conn.topic, int(stamp), bag.deserialize(raw, conn.msgtype)
         return
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
 
     with open(path, "rb") as fh:
         reader = make_reader(fh, decoder_factories=[DecoderFactory()])
+        summary = reader.get_summary()
+        if summary is not None:
+            _check_topics(path, topics, {c.topic for c in summary.channels.values()})
         for _schema, channel, message, msg in reader.iter_decoded_messages(
                 topics=list(topics), log_time_order=True):
             yield channel.topic, int(message.log_time), msg
+
+
+def _check_topics(path: Path, wanted: tuple[str, ...], present: set[str]) -> None:
+    """Each wanted topic is in the recording, else a named error listing what is there."""
+    missing = [t for t in wanted if t not in present]
+    if missing:
+        raise InvalidInputError(f"{path}: no topic {missing[0]!r} in the recording (it has "
+                                f"{sorted(present)}); name the pose and clutch topics with "
+                                f"--pose-topic / --clutch-topic (clutch_topic=None: no clutch)")
 
 
 def _stamp(msg: Any, fallback: int) -> int:
