@@ -92,7 +92,7 @@ FINDINGS = ("raw", "hang", "nonfinite_valid", "wrong_valid", "mutated", "backend
 CLASSES = ("result", "named", *FINDINGS)
 SUBPACKAGES = ("robot", "parallel", "chain", "study", "analysis", "motion", "fast",
                "certified", "calibration", "synthesis", "sim", "symbolic", "collision", "plot",
-               "app", "testing", "dynamics", "ros")
+               "app", "testing", "dynamics", "ros", "teleop")
 RTOL = 1e-9
 
 
@@ -929,6 +929,10 @@ class Audit:
         return "result"
 
 
+#: Public callables that are no API to call, and why.
+NOT_CALLED = {"teleop.ArmBackend": "a Protocol: the interface a lab's driver implements"}
+
+
 def public_callables(only: str | None) -> list[tuple[str, Any]]:
     """Every public function and class of athenakin and its subpackages' ``__all__``."""
     seen: set[int] = set()
@@ -950,6 +954,8 @@ def public_callables(only: str | None) -> list[tuple[str, Any]]:
             if not isinstance(o, type) and not inspect.isroutine(o):
                 continue          # a typing alias (analysis.Frame), not a callable API
             key = prefix + n
+            if key in NOT_CALLED:
+                continue
             if id(o) in seen and not (key.startswith("fast.") or key.startswith("robot.")):
                 continue
             seen.add(id(o))
@@ -1147,7 +1153,18 @@ def method_targets() -> list[tuple[str, Callable[..., Any]]]:
         return (s.tip, s.T_b_tip, s.T_b_s, s.mode, s.p_sign, s.ujoint, s.wrist,
                 s.n_solutions, repr(s))
 
+    from athenakin.teleop import Teleop
+
+    tele = Teleop(T0, D, q0=Q0)
+
+    def teleop_step(t: Any, master_position: Any, clutch: Any = True) -> Any:
+        cmd = tele.step(t, master_position, clutch)
+        if not all(np.isfinite(cmd.q)):     # the loop's contract: never a NaN command
+            raise AssertionError(f"Teleop.step returned a NaN command: {cmd}")
+        return cmd
+
     return [("Tracker.update", tracker_update), ("Tracker.reset", tracker_reset),
+            ("Teleop.step", teleop_step),
             ("ControlLoop.fk", control_fk), ("ControlLoop.ik", control_ik),
             ("ControlLoop.q_from_instrument", control_q_from_instrument),
             ("ControlLoop.q_from_tool_tip", control_q_from_tool_tip),
@@ -1157,6 +1174,7 @@ def method_targets() -> list[tuple[str, Callable[..., Any]]]:
 
 METHOD_BASES: dict[str, tuple[tuple, dict]] = {
     "Tracker.update": ((Q0 + 1e-4,), {}), "Tracker.reset": ((Q0,), {}),
+    "Teleop.step": ((0.0, np.zeros(3)), {}),
     "ControlLoop.fk": ((Q0,), {}), "ControlLoop.ik": ((REF["u345"],), {}),
     "ControlLoop.q_from_instrument": ((REF["direction_e"], REF["p_ik"]), {}),
     "ControlLoop.q_from_tool_tip": ((REF["tip_e"],), {}),
@@ -1259,6 +1277,41 @@ OVERRIDES.update({
 })
 
 
+# --- teleop (issue 29): the loop object, the arm, recorded masters ---------------------------
+def _tp_master(f: dict[str, Path]) -> Path:
+    """A short recorded master (PoseStamped + Joy), written once (scripts/audit_cli.py's)."""
+    path = f["tmp"] / "master.mcap"
+    if not path.exists():
+        from audit_cli import _master_recording
+
+        _master_recording(path)
+    return path
+
+
+def _tp_log() -> Any:
+    from athenakin.teleop import Teleop, run_session
+
+    tele = Teleop(T0, D, q0=Q0)
+    return run_session(tele, None, [(0.0, (0.0, 0.0, 0.0), True),
+                                    (0.001, (0.001, 0.0, 0.0), True)])
+
+
+TP_LOG = _lazy(_tp_log)
+OVERRIDES.update({
+    "teleop.Teleop": lambda f: ((T0, D), dict(q0=Q0)),
+    "teleop.TeleopOptions": lambda f: ((), {}),
+    "teleop.ServoGains": lambda f: ((), {}),
+    "teleop.SimulatedArm": lambda f: ((T0, D), dict(q0=Q0)),
+    "teleop.MujocoBackend": lambda f: ((T0, D, Q0, 0, None, 1000.0), {}),
+    "teleop.TremorFilter": lambda f: (("notch8-12", 1000.0), {}),
+    "teleop.filter_response": lambda f: (("notch8-12", 1000.0, np.array([1.0, 10.0])), {}),
+    "teleop.read_master": lambda f: ((_tp_master(f),), {}),
+    "teleop.run_session": lambda f: ((ak.teleop.Teleop(T0, D, q0=Q0), None,
+                                      [(0.0, (0.0, 0.0, 0.0), True)]), {}),
+    "teleop.write_session_mcap": lambda f: ((TP_LOG(), f["tmp"] / "session.mcap"), {}),
+})
+
+
 def _dr_stop(s: Any) -> Any:
     s.stop()
     return s.port
@@ -1270,6 +1323,7 @@ DR_POST: dict[str, Callable[[Any], Any]] = {
     "ros.FoxgloveStream": _dr_stop,
     "ros.McapOutput": lambda m: m.close(),
     "ros.iter_joint_states": list,
+    "teleop.read_master": list,
 }
 
 

@@ -24,7 +24,7 @@ from typing import Any, Literal, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_choice, check_scalar, check_transform
+from .._validation import check_array, check_choice, check_count, check_scalar, check_transform
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, KinematicsError
 from ._filter import check_rate
@@ -125,6 +125,11 @@ class MujocoBackend:
                                       "install 'athenakin[sim]'", name="mujoco") from exc
         from ..sim import ACTUATED, LOOP_CLOSURES, mjcf_from_design
 
+        q0 = check_array(q0, "q0", (3,))
+        if q0.shape != (3,):
+            raise InvalidInputError(f"q0: expected shape (3,), got {q0.shape}")
+        rate = check_rate(rate)
+        substeps = check_count(substeps, "substeps", minimum=1, maximum=1000)
         self._mj = mujoco
         xml = mjcf_from_design(design, T_b_e, q=q0, masses=masses, slot=slot, gravity=gravity)
         m = mujoco.MjModel.from_xml_string(xml)

@@ -76,6 +76,13 @@ def check_rate(rate: object, name: str = "rate") -> float:
     return r
 
 
+def _check_name(name: object) -> str:
+    """A key of :data:`TREMOR_FILTERS`, else a named error."""
+    from .._validation import check_choice
+
+    return check_choice(name, "name", tuple(TREMOR_FILTERS))
+
+
 def _digital(name: str, rate: float) -> tuple[tuple[float, float, float, float, float], ...]:
     """``(b0, b1, b2, a1, a2)`` per biquad (``a0 = 1``) of filter ``name`` at ``rate`` Hz."""
     wc = 2.0 * math.pi * PREWARP_HZ
@@ -115,7 +122,17 @@ def filter_response(name: str, rate: float, f_hz: ArrayLike) -> NDArray[np.compl
     ndarray of complex, shape (...)
         ``H(exp(j 2 pi f / rate))``; gain ``abs``, phase delay ``-angle / (2 pi f)`` (s).
     """
-    z1 = np.exp(-2j * np.pi * np.asarray(f_hz, dtype=float) / rate)   # z^-1
+    name = _check_name(name)
+    rate = check_rate(rate)
+    from .._validation import check_array
+
+    f = check_array(f_hz, "f_hz", ())
+    if np.any((f < 0) | (f >= 0.5 * rate)):
+        from ..errors import InvalidInputError
+
+        raise InvalidInputError(f"f_hz: expected frequencies in [0, rate / 2) = [0, "
+                                f"{0.5 * rate:g}) Hz")
+    z1 = np.exp(-2j * np.pi * f / rate)   # z^-1
     h = np.ones_like(z1)
     for b0, b1, b2, a1, a2 in _digital(name, rate):
         h = h * (b0 + b1 * z1 + b2 * z1 * z1) / (1.0 + a1 * z1 + a2 * z1 * z1)
@@ -134,8 +151,8 @@ class TremorFilter:
     """
 
     def __init__(self, name: str, rate: float) -> None:
-        self.name = name
-        self.rate = rate
+        self.name = _check_name(name)
+        self.rate = check_rate(rate)
         self._c = _digital(name, rate)
         self._s = [[0.0, 0.0] for _ in range(3 * len(self._c))]   # two states per biquad
 

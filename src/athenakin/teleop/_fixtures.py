@@ -42,6 +42,12 @@ class TipFixtures:
     """
 
     def __init__(self, environment: object) -> None:
+        if environment is not None:
+            from ..collision import Environment
+
+            if not isinstance(environment, Environment):
+                raise TypeError(f"environment: expected athenakin.collision.Environment or "
+                                f"None, got {type(environment).__name__}")
         shapes: list[tuple] = []
         names: list[str] = []
         for o in () if environment is None else environment.obstacles:  # type: ignore[attr-defined]
@@ -52,7 +58,8 @@ class TipFixtures:
             elif o.kind == "sphere":
                 shapes.append((1, tuple(o.center), float(o.radius)))
             elif o.kind == "capsule":
-                a, b = tuple(o.a), tuple(o.b)
+                a = (float(o.a[0]), float(o.a[1]), float(o.a[2]))
+                b = (float(o.b[0]), float(o.b[1]), float(o.b[2]))
                 ab = _sub(b, a)
                 shapes.append((2, a, ab, _dot(ab, ab), float(o.radius)))
             elif o.kind == "box":

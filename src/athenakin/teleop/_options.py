@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import check_choice, check_scalar
+from .._validation import check_array, check_choice, check_scalar
 from ..errors import InvalidInputError
 from ._filter import TREMOR_FILTERS
 
@@ -83,11 +83,11 @@ class TeleopStatus(enum.IntFlag):
     FAULT = 8192
 
 
-def _three(x: object, name: str, *, positive: bool = True) -> tuple[float, float, float]:
+def _three(x: Any, name: str, *, positive: bool = True) -> tuple[float, float, float]:
     """A scalar or three values, each finite (and positive)."""
-    a = np.asarray(x, dtype=float) if not isinstance(x, (str, bytes)) else None
-    if a is None or a.shape not in ((), (3,)):
-        raise InvalidInputError(f"{name}: expected a number or 3 numbers, got {x!r}")
+    a = check_array(x, name, ())        # named errors for strings, ragged, complex, huge
+    if a.shape not in ((), (3,)):
+        raise InvalidInputError(f"{name}: expected a number or 3 numbers, got shape {a.shape}")
     a = np.broadcast_to(a, (3,))
     return tuple(check_scalar(float(v), name, positive=positive) for v in a)  # type: ignore[return-value]
 
@@ -159,8 +159,8 @@ class TeleopOptions:
     backend: str = "auto"
 
     def __post_init__(self) -> None:
-        R = np.eye(3) if self.registration is None else np.asarray(self.registration,
-                                                                     dtype=float)
+        R = np.eye(3) if self.registration is None else check_array(self.registration,
+                                                                      "registration", (3, 3))
         if R.shape != (3, 3) or not np.all(np.isfinite(R)):
             raise InvalidInputError(f"registration: expected a finite rotation of shape (3, 3), "
                                     f"got shape {R.shape}")
@@ -177,7 +177,10 @@ class TeleopOptions:
         for name in ("stroke_margin", "fixture_margin", "clearance_margin", "clearance_buffer"):
             check_scalar(getattr(self, name), name, nonnegative=True)
         if self.depth is not None:
-            lo, hi = (check_scalar(v, "depth", positive=True) for v in self.depth)
+            d = check_array(self.depth, "depth", (2,))
+            if d.shape != (2,):
+                raise InvalidInputError(f"depth: expected (min, max) in m, got shape {d.shape}")
+            lo, hi = (check_scalar(float(v), "depth", positive=True) for v in d)
             if not lo < hi:
                 raise InvalidInputError(f"depth: expected (min, max) with min < max, got "
                                         f"{self.depth!r}")

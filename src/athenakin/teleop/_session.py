@@ -15,10 +15,9 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
-import os
-import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
@@ -26,8 +25,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .._validation import check_scalar
+from .._output import atomic_write
+from .._validation import check_count, check_path
 from ..errors import InvalidInputError
+from ._filter import check_rate
 from ._options import TeleopStatus
 
 __all__ = ["SessionLog", "run_session", "read_master", "write_session_mcap", "CRTK_TOPICS",
@@ -152,7 +153,14 @@ def run_session(tele: Any, arm: Any, master: Iterable[tuple[float, Any, bool]], 
     R, c = T[:3, :3], T[:3, 3]
     rows: list[tuple] = []
     sim = arm is not None and hasattr(arm.backend, "tip_b")
-    for k, item in enumerate(master):
+    if max_cycles is not None:
+        max_cycles = check_count(max_cycles, "max_cycles", minimum=0)
+    try:
+        items = iter(master)
+    except TypeError:
+        raise TypeError(f"master: expected an iterable of (t, position, clutch), got "
+                        f"{type(master).__name__}") from None
+    for k, item in enumerate(items):
         if max_cycles is not None and k >= max_cycles:
             break
         try:
@@ -276,23 +284,51 @@ def read_master(path: str | Path, *, rate: float = 1000.0, pose_topic: str = "/m
     clutch_button : int, keyword-only
         The Joy button of the clutch pedal: held (1) = pressed = the master decoupled.
 
-    Yields
+    Returns
+    -------
+    iterator of tuple
+        ``(t s, (x, y, z) m or None, clutch)`` per cycle: the latest pose received in the
+        cycle (None when none arrived), ``clutch`` True while the tip follows. The
+        arguments, the file and its topics are checked when ``read_master`` is called.
+
+    Raises
     ------
-    tuple
-        ``(t s, (x, y, z) m or None, clutch)``: the latest pose received in the cycle
-        (None when none arrived), ``clutch`` True while the tip follows.
+    InvalidInputError
+        No such file, not an MCAP file or rosbag2 folder, a topic it lacks, a bad rate or
+        button (a recording with no pose: when the iterator is consumed).
     """
-    p = Path(path)
+    p = check_path(path, "path")
     if not p.exists():
-        raise InvalidInputError(f"{path}: no such file or folder")
-    rate = check_scalar(rate, "rate", positive=True)
+        raise InvalidInputError(f"path: {path}: no such file or folder")
+    rate = check_rate(rate)
+    for name, topic in (("pose_topic", pose_topic), ("clutch_topic", clutch_topic)):
+        if topic is not None and not (isinstance(topic, str) and topic):
+            raise TypeError(f"{name}: expected a topic name (str), got {topic!r:.80}")
+    if isinstance(clutch_button, bool) or not isinstance(clutch_button, (int, np.integer)) \
+            or clutch_button < 0:
+        raise InvalidInputError(f"clutch_button: expected a button index >= 0, got "
+                                f"{clutch_button!r:.80}")
     topics = (pose_topic,) + ((clutch_topic,) if clutch_topic else ())
+    messages = _messages(p, topics)
+    first = next(messages, None)        # opens and checks the recording now, not on iteration
+    return _master_cycles(p, first, messages, rate, pose_topic, clutch_topic,
+                          int(clutch_button))
+
+
+def _master_cycles(path: Path, first: tuple[str, int, Any] | None,
+                   messages: Iterator[tuple[str, int, Any]], rate: float, pose_topic: str,
+                   clutch_topic: str | None, clutch_button: int
+                   ) -> Iterator[tuple[float, tuple[float, float, float] | None, bool]]:
+    """The cycles of :func:`read_master` from its messages (``first`` already read)."""
+    import itertools
+
     t0: int | None = None
     follow = True
     pending: tuple[float, float, float] | None = None
     k = 0
     seen_pose = False
-    for topic, log_ns, msg in _messages(p, topics):
+    stream = itertools.chain([first], messages) if first is not None else iter(())
+    for topic, log_ns, msg in stream:
         ns = _stamp(msg, log_ns)
         if topic == clutch_topic:
             b = list(getattr(msg, "buttons", []))
@@ -369,61 +405,61 @@ def write_session_mcap(log: SessionLog, path: str | Path, *, start_ns: int = 0,
     dict
         Messages per topic.
     """
-    from mcap_ros2.writer import Writer
-
     if not isinstance(log, SessionLog):
         raise TypeError(f"log: expected a SessionLog, got {type(log).__name__}")
-    path = Path(path)
-    if target is None:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".mcap",
-                                   dir=path.resolve().parent)
-        fh = os.fdopen(fd, "wb")
-    else:
-        tmp = str(target)
-        fh = open(tmp, "wb")   # noqa: SIM115 - closed below
+    path = check_path(path, "path")
+    start_ns = check_count(start_ns, "start_ns", minimum=0, maximum=_MAX_START_NS)
+    with contextlib.ExitStack() as stack:
+        if target is None:      # the package's one atomic writer (fsync, rename)
+            fh = stack.enter_context(atomic_write(path))
+        else:                   # the caller stages the file itself (the CLI's outputs)
+            fh = stack.enter_context(open(check_path(target, "target"), "wb"))
+        return _write_session(fh, log, start_ns)
+
+
+#: Latest ``start_ns`` of :func:`write_session_mcap`: a session of a day still stamps
+#: within the signed 64-bit nanoseconds of an MCAP log time.
+_MAX_START_NS = 2**63 - 1 - 86_400 * 10**9
+
+
+def _write_session(fh: Any, log: SessionLog, start_ns: int) -> dict[str, int]:
+    """The messages of :func:`write_session_mcap` into the open binary file ``fh``."""
+    from mcap_ros2.writer import Writer
+
     counts = {v: 0 for v in CRTK_TOPICS.values()}
-    try:
-        w = Writer(fh)
-        sch = {k: w.register_msgdef(k, _msgdef(k)) for k in (
-            "sensor_msgs/msg/JointState", "geometry_msgs/msg/PoseStamped",
-            "geometry_msgs/msg/PointStamped", TELEOP_STATUS_TYPE)}
-        js, ps = sch["sensor_msgs/msg/JointState"], sch["geometry_msgs/msg/PoseStamped"]
-        err = log.tip_error
-        for i in range(len(log)):
-            ns = int(start_ns + round(float(log.t[i]) * 1e9))
-            st = int(log.status[i])
-            msgs = [
-                ("measured_js", js, _js(ns, log.measured_q[i], log.measured_qd[i],
-                                        log.forces[i])),
-                ("setpoint_js", js, _js(ns, log.q[i], log.qd[i], log.forces[i])),
-                ("measured_cp", ps, _pose(ns, log.measured_tip_b[i])),
-                ("servo_cp", ps, _pose(ns, log.tip_b[i])),
-                ("status", sch[TELEOP_STATUS_TYPE], {
-                    "header": _header(ns, "base"), "flags": st,
-                    "names": TeleopStatus(st).name or "" if st else "",
-                    "clutched": bool(st & TeleopStatus.CLUTCHED),
-                    "limited": bool(st & _LIMITED), "hold": bool(st & TeleopStatus.HOLD),
-                    "watchdog": bool(st & TeleopStatus.WATCHDOG),
-                    "estop": bool(st & TeleopStatus.ESTOP),
-                    "clearance_m": math.nan, "tip_error_m": float(err[i])}),
-            ]
-            if np.all(np.isfinite(log.master[i])):
-                m = log.master[i]
-                msgs.append(("master", sch["geometry_msgs/msg/PointStamped"], {
-                    "header": _header(ns, "master"),
-                    "point": {"x": float(m[0]), "y": float(m[1]), "z": float(m[2])}}))
-            for key, schema, msg in msgs:
-                topic = CRTK_TOPICS[key]
-                w.write_message(topic, schema, msg, log_time=ns, publish_time=ns,
-                                sequence=counts[topic])
-                counts[topic] += 1
-        w.finish()
-        fh.close()
-        if target is None:
-            os.replace(tmp, path)
-    except BaseException:
-        fh.close()
-        if target is None:
-            Path(tmp).unlink(missing_ok=True)
-        raise
+    w = Writer(fh)
+    sch = {k: w.register_msgdef(k, _msgdef(k)) for k in (
+        "sensor_msgs/msg/JointState", "geometry_msgs/msg/PoseStamped",
+        "geometry_msgs/msg/PointStamped", TELEOP_STATUS_TYPE)}
+    js, ps = sch["sensor_msgs/msg/JointState"], sch["geometry_msgs/msg/PoseStamped"]
+    err = log.tip_error
+    for i in range(len(log)):
+        ns = int(start_ns + round(float(log.t[i]) * 1e9))
+        st = int(log.status[i])
+        msgs = [
+            ("measured_js", js, _js(ns, log.measured_q[i], log.measured_qd[i],
+                                    log.forces[i])),
+            ("setpoint_js", js, _js(ns, log.q[i], log.qd[i], log.forces[i])),
+            ("measured_cp", ps, _pose(ns, log.measured_tip_b[i])),
+            ("servo_cp", ps, _pose(ns, log.tip_b[i])),
+            ("status", sch[TELEOP_STATUS_TYPE], {
+                "header": _header(ns, "base"), "flags": st,
+                "names": TeleopStatus(st).name or "" if st else "",
+                "clutched": bool(st & TeleopStatus.CLUTCHED),
+                "limited": bool(st & _LIMITED), "hold": bool(st & TeleopStatus.HOLD),
+                "watchdog": bool(st & TeleopStatus.WATCHDOG),
+                "estop": bool(st & TeleopStatus.ESTOP),
+                "clearance_m": math.nan, "tip_error_m": float(err[i])}),
+        ]
+        if np.all(np.isfinite(log.master[i])):
+            m = log.master[i]
+            msgs.append(("master", sch["geometry_msgs/msg/PointStamped"], {
+                "header": _header(ns, "master"),
+                "point": {"x": float(m[0]), "y": float(m[1]), "z": float(m[2])}}))
+        for key, schema, msg in msgs:
+            topic = CRTK_TOPICS[key]
+            w.write_message(topic, schema, msg, log_time=ns, publish_time=ns,
+                            sequence=counts[topic])
+            counts[topic] += 1
+    w.finish()
     return counts
