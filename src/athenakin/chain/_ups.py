@@ -227,6 +227,11 @@ def closure_residual(T: NDArray[np.float64], T_target: NDArray[np.float64]
     return np.maximum(dR, dt)
 
 
+#: The two signs of a slot choice (p, sigma, tau), read only.
+_PLUS_MINUS = np.array([1.0, -1.0])
+_PLUS_MINUS.flags.writeable = False
+
+
 def _check_scale(scale: ArrayLike, batch: tuple[int, ...]) -> NDArray[np.float64]:
     """``scale`` of :func:`ups_solutions`: an array that broadcasts to the batch."""
     sc = check_array(scale, "scale", (), allow_nonfinite=True)
@@ -333,8 +338,7 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     sc = n if scale is None else _check_scale(scale, n.shape)
     with np.errstate(invalid="ignore", over="ignore"):
         dtol = np.maximum(degenerate_tol, DEGENERATE_ULPS * _EPS * sc / nn)   # (...)
-    psign = np.array([1.0, -1.0])
-    p = nn[..., None] * psign                           # (..., 2)
+    p = nn[..., None] * _PLUS_MINUS                     # (..., 2)
     z3 = c[..., None, :] / p[..., None]                 # (..., 2, 3)
     rho_k, rho4_k = _sines_as_kernel(T, c0 / nn, c1_ / nn, c2_ / nn)
     rho = np.broadcast_to(rho_k[..., None], p.shape)    # (..., 2): the same for both signs
@@ -342,7 +346,7 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     # where the first angle is ill-conditioned (near sin u2 = 0 or sin u4 = 0): the
     # first angle from the direction, the second from the projection onto the
     # plane it fixes, the last rotation from the remaining matrix.
-    sig = np.array([1.0, -1.0])
+    sig = tau = _PLUS_MINUS
     u1 = np.arctan2(sig * z3[..., 1, None], sig * z3[..., 0, None])   # (..., 2, 2)
     c1, s1 = np.cos(u1), np.sin(u1)
     u2 = np.arctan2(c1 * z3[..., 0, None] + s1 * z3[..., 1, None],
@@ -353,7 +357,6 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     Rse = T[..., None, None, :3, :3]
     W = np.swapaxes(R1, -1, -2) @ Rse
     rho4 = np.hypot(W[..., 0, 2], W[..., 1, 2])         # |sin u4|
-    tau = np.array([1.0, -1.0])
     u3 = np.arctan2(tau * W[..., 1, 2, None], tau * W[..., 0, 2, None])  # (..., 2, 2, 2)
     c3, s3 = np.cos(u3), np.sin(u3)
     u4 = np.arctan2(c3 * W[..., 0, 2, None] + s3 * W[..., 1, 2, None],

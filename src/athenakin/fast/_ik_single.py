@@ -28,11 +28,29 @@ from ._parallel_kernels import _Q1, _REASON, NK, _pik_stage
 __all__ = ["ik_paper_one", "ik_paper_lean", "ik_line_one", "ik_line_one_packed"]
 
 _OPTS = dict(error_model="numpy", cache=True, nogil=True)
+_INLINE = dict(_OPTS, inline="always")
 
 
 #: Layout of the packed single-item buffer of :func:`ik_paper_one`:
 #: q (3), p (1), u (5), T_b_s (16), residual (1), q_error (1); ints: mode, valid, reason.
 ONE_Q, ONE_P, ONE_U, ONE_T, ONE_RES, ONE_QE, ONE_F = 0, 3, 4, 9, 25, 26, 27
+
+
+@njit(**_INLINE)
+def _paper_item(T2, U2, P, stol, ctol, fbuf, mode, Tbs):
+    """One paper-form item through the chunk kernel: ``(valid, reason)``.
+
+    ``fbuf`` (27,) receives q, p, u, residual and q_error (layout ``ONE_*``); ``mode``
+    (1,) and ``Tbs`` (1, 4, 4) the mode and ``T_b_s`` (views of the caller's arrays).
+    """
+    G = np.empty(_NGP2 * CHUNK)
+    K = np.empty(NK * CHUNK)
+    valid = np.empty(1, np.bool_)
+    reason = np.empty(1, np.int8)
+    _paper_chunk(T2, U2, P, stol, ctol, G, K, 0, 1, fbuf[ONE_Q:ONE_P].reshape((1, 3)),
+                 fbuf[ONE_P:ONE_U], fbuf[ONE_U:ONE_T].reshape((1, 5)), mode, Tbs,
+                 fbuf[ONE_RES:ONE_QE], valid, reason, fbuf[ONE_QE:ONE_F])
+    return valid[0], reason[0]
 
 
 @njit(**_OPTS)
@@ -45,19 +63,9 @@ def ik_paper_one(T, U, P, stol, ctol, rot_tol, fbuf, ibuf):
     """
     T2 = T.reshape((1, 4, 4))
     U2 = U.reshape((1, 3))
-    G = np.empty(_NGP2 * CHUNK)
-    K = np.empty(NK * CHUNK)
-    valid = np.empty(1, np.bool_)
-    reason = np.empty(1, np.int8)
-    _paper_chunk(T2, U2, P, stol, ctol, G, K, 0, 1, fbuf[ONE_Q:ONE_P].reshape((1, 3)),
-                 fbuf[ONE_P:ONE_U], fbuf[ONE_U:ONE_T].reshape((1, 5)), ibuf[0:1],
-                 fbuf[ONE_T:ONE_RES].reshape((1, 4, 4)), fbuf[ONE_RES:ONE_QE], valid, reason,
-                 fbuf[ONE_QE:ONE_F])
-    ibuf[1] = valid[0]
-    ibuf[2] = reason[0]
+    ibuf[1], ibuf[2] = _paper_item(T2, U2, P, stol, ctol, fbuf, ibuf[0:1],
+                                   fbuf[ONE_T:ONE_RES].reshape((1, 4, 4)))
     return _paper_flags(T2, U2, rot_tol)
-
-
 
 
 @njit(**_OPTS)
@@ -66,22 +74,16 @@ def ik_paper_lean(T, U, P, stol, ctol, rot_tol, fbuf, Tbs, mode):
 
     ``fbuf`` (27,) as :func:`ik_paper_one`'s (its ``T_b_s`` part unused here),
     ``Tbs`` (4, 4) and ``mode`` (0-d int64) receive ``T_b_s`` and the mode (no
-    views to make in Python); the same stages as :func:`ik_paper_one`. Returns the FLAG_* bits, plus
-    :data:`FLAG_NO_SOLUTION` when the item has no solution: 0 means a valid
-    result (``valid`` True, ``reason`` 0); anything else sends the caller down
+    views to make in Python); the same stages as :func:`ik_paper_one`. Returns the
+    FLAG_* bits, plus :data:`FLAG_NO_SOLUTION` when the item has no solution: 0 means
+    a valid result (``valid`` True, ``reason`` 0); anything else sends the caller down
     the general path.
     """
     T2 = T.reshape((1, 4, 4))
     U2 = U.reshape((1, 3))
-    G = np.empty(_NGP2 * CHUNK)
-    K = np.empty(NK * CHUNK)
-    valid = np.empty(1, np.bool_)
-    reason = np.empty(1, np.int8)
-    _paper_chunk(T2, U2, P, stol, ctol, G, K, 0, 1, fbuf[ONE_Q:ONE_P].reshape((1, 3)),
-                 fbuf[ONE_P:ONE_U], fbuf[ONE_U:ONE_T].reshape((1, 5)), mode.reshape((1,)),
-                 Tbs.reshape((1, 4, 4)), fbuf[ONE_RES:ONE_QE], valid, reason,
-                 fbuf[ONE_QE:ONE_F])
-    return _paper_flags(T2, U2, rot_tol) | (FLAG_NO_SOLUTION if reason[0] != 0 else 0)
+    reason = _paper_item(T2, U2, P, stol, ctol, fbuf, mode.reshape((1,)),
+                         Tbs.reshape((1, 4, 4)))[1]
+    return _paper_flags(T2, U2, rot_tol) | (FLAG_NO_SOLUTION if reason != 0 else 0)
 
 
 @njit(**_OPTS)
