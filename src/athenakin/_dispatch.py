@@ -339,18 +339,21 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
         Distance from ``O_s`` to the RCM along the direction, m.
     design : Design, optional
     errors : {"auto", "raise", "flag"}, keyword-only
+        Failure policy, as in :func:`forward_kinematics`.
     backend : {"auto", "numpy", "numba"}, keyword-only
         As in :func:`forward_kinematics`.
 
     Returns
     -------
     q : ndarray, shape (..., 3)
+        ``(q1, q2, q3)``, m; NaN where ``result.valid`` is False.
     result : InstrumentIK
+        ``p``, the direction in the base frame, ``O_s``, assembly mode, validity,
+        reason and the bound on the error of ``q``.
     """
     if ("line" in _WARM and _BACKEND["numba"]
             and (backend is OPTION_AUTO or _compiled_choice(backend))):
-        api = _STATE["api"]
-        res = api.lean_line(T_b_e, direction_e, p, design, errors)
+        res = _STATE["api"].lean_line(T_b_e, direction_e, p, design, errors)
         if res is not None:            # the lean single call: fast._api's one guard
             return res  # type: ignore[no-any-return]
     return _line(T_b_e, direction_e, p, design, errors, backend)
@@ -370,22 +373,21 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
     Parameters
     ----------
     T_b_e : array-like, shape (..., 4, 4)
+        RCM frame E in the base frame.
     tip_e : array-like, shape (..., 3)
         Tool-tip position in the RCM frame E, m.
     design : Design, optional
-    errors : {"auto", "raise", "flag"}, keyword-only
-    backend : {"auto", "numpy", "numba"}, keyword-only
-        As in :func:`forward_kinematics`.
+    errors, backend : keyword-only
+        As in :func:`q_from_instrument`.
 
     Returns
     -------
-    q : ndarray, shape (..., 3)
-    result : InstrumentIK
+    q, result : ndarray (..., 3), InstrumentIK
+        As in :func:`q_from_instrument`, with ``result.p = L - |tip|``.
     """
     if ("line" in _WARM and _BACKEND["numba"]
             and (backend is OPTION_AUTO or _compiled_choice(backend))):
-        api = _STATE["api"]
-        res = api.lean_line(T_b_e, tip_e, None, design, errors)
+        res = _STATE["api"].lean_line(T_b_e, tip_e, None, design, errors)
         if res is not None:            # the lean single call: fast._api's one guard
             return res  # type: ignore[no-any-return]
     return _line(T_b_e, tip_e, None, design, errors, backend)
