@@ -38,7 +38,7 @@ FK_STEPS = [("entry (a call with 10 arguments)", "if fields is not None or not (
 IK_STEPS = [("entry (a call with 7 arguments)", "if fields is not None or not (errors"),
             ("option checks", "Ua: NDArray"),
             ("u345 and T_b_e checks", "hit = _LAST     # read once"),
-            ("design look-up", "fbuf = _empty(_ik.ONE_F)"),
+            ("design look-up", "fbuf = _empty(_one.ONE_F)"),
             ("3 result buffers", "if _ik_paper_lean("),
             ("kernel (compiled entry point)", "obj = _object_new(PassiveJoints)")]
 
@@ -52,7 +52,7 @@ def cuts(fn, steps):
         if not idx:
             raise SystemExit(f"lean_steps: {fn.__name__} has no line {first!r} any more; "
                              "update FK_STEPS / IK_STEPS")
-        ns = dict(vars(_api))
+        ns = dict(fn.__globals__)
         src = "\n".join(lines[:idx[0]] + ["    return None"])
         exec(src.replace(f"def {fn.__name__}(", "def _cut("), ns)  # noqa: S102 (own source)
         out.append((label, ns["_cut"]))

@@ -269,7 +269,9 @@ def test_entry_points(api):
     """After the first call the lean kernels are bound once (to their compiled functions
     where numba's internals allow, else the dispatcher), and give the dispatcher's bits;
     types the guard would never pass get the dispatcher itself."""
-    from athenakin.fast import _fk_sized, _ik_kernels
+    from athenakin.fast import _fk_sized
+    from athenakin.fast import _ik_single as _ik_kernels  # the single-item IK kernels
+    from athenakin.fast import _lean as api  # the lean kernels' entry points live there
 
     assert api._fk_one_lean.__name__ == "fk_one_lean"          # no longer the first-call shim
     assert api._ik_paper_lean.__name__ == "ik_paper_lean"

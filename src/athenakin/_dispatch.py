@@ -184,15 +184,28 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     q : array-like, shape (..., 3)
         Actuators ``(q1, q2, q3)``, m.
     T_b_e : array-like, shape (..., 4, 4)
-        RCM frame E in the base frame. Broadcasts with ``q``.
+        RCM frame E in the base frame (set-up, fixed by the surgeon). Broadcasts with ``q``.
     design : Design, optional
-        Defaults to :meth:`Design.default`.
-    method, errors, tangent_tol, degenerate_tol, p_zero_tol, closure_tol : keyword-only
-        As in the reference :func:`athenakin.robot.forward_kinematics`.
+        Defaults to :meth:`~athenakin.Design.default`.
+    method : {"closed", "algebraic"}, keyword-only
+        How the serial chain is solved: ``"closed"`` (default) by the closed form of
+        :func:`athenakin.chain.ups_solutions`; ``"algebraic"`` the paper's way (Section
+        3.2: the quadratic in ``p`` and the remaining joints from the cached
+        derivation, :func:`athenakin.symbolic.forward_kinematics_algebraic`). Both
+        return the same slots; the parallel module is shared.
+    errors : {"auto", "raise", "flag"}, keyword-only
+        ``"raise"``: an item with no valid slot raises the matching
+        :class:`~athenakin.errors.KinematicsError`; ``"flag"``: never raise for
+        a domain failure, report it in ``valid``/``reason``; ``"auto"``
+        (default): raise for a single item, flag in a batch.
+    tangent_tol, degenerate_tol, p_zero_tol, closure_tol : float, keyword-only
+        See :data:`~athenakin.parallel.TANGENT_TOL`, :data:`~athenakin.chain.DEGENERATE_TOL`,
+        :data:`~athenakin.chain.P_ZERO_TOL`, :data:`~athenakin.chain.CLOSURE_TOL`.
     fields : tuple of str, optional, keyword-only
-        Compute and store only these arrays (names in :data:`athenakin.robot.FK_FIELDS`;
-        e.g. ``("p", "u", "valid")`` for sweeps, a third less memory written); the
-        result always holds ``item_reason``. ``None`` (default): all.
+        Compute and return only these arrays (names in :data:`athenakin.robot.FK_FIELDS`, e.g.
+        ``("p", "u", "valid")`` for a sweep); ``None`` (default): all. The result
+        always holds ``item_reason``; reading an array left out raises
+        ``AttributeError``.
     backend : {"auto", "numpy", "numba"}, keyword-only
         ``"auto"`` (default): the compiled kernels of :mod:`athenakin.fast` where
         numba imports, else the numpy reference; ``"numba"``: compiled (ImportError
@@ -212,7 +225,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
 
     Examples
     --------
-    >>> import athenakin as ak
+    >>> import numpy as np, athenakin as ak
     >>> d = ak.Design.default()
     >>> sol = ak.forward_kinematics([-0.10, 0.10, 0.45], ak.default_rcm_frame(d), d)
     >>> int(sol.n_solutions)
@@ -251,11 +264,15 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     u345 : array-like, shape (..., 3)
         ``(u3, u4, u5)`` of the spherical joint, radians. Broadcasts with ``T_b_e``.
     design : Design, optional
-    errors, singular_tol, closure_tol : keyword-only
-        As in the reference :func:`athenakin.robot.inverse_kinematics`.
+    errors : {"auto", "raise", "flag"}, keyword-only
+        Failure policy, as in :func:`forward_kinematics`.
+    singular_tol : float, keyword-only
+        See :data:`athenakin.robot.IK_SINGULAR_TOL`.
+    closure_tol : float, keyword-only
+        Largest closure residual accepted.
     fields : tuple of str, optional, keyword-only
-        Compute and store only these arrays of ``passive`` (names in
-        :data:`athenakin.robot.IK_FIELDS`; ``q`` is always returned). ``None``: all.
+        Compute and return only these arrays of ``passive`` (names in
+        :data:`athenakin.robot.IK_FIELDS`; ``q`` is always returned); ``None`` (default): all.
     backend : {"auto", "numpy", "numba"}, keyword-only
         As in :func:`forward_kinematics`.
 
@@ -264,6 +281,14 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     q : ndarray, shape (..., 3)
         ``(q1, q2, q3)``, m; NaN where ``passive.valid`` is False.
     passive : PassiveJoints
+        ``p``, ``u1..u5``, assembly mode, ``T_b_s``, residual, validity and reason.
+
+    Raises
+    ------
+    SingularConfigurationError
+        ``IK_SINGULAR``: a continuum of ``q`` (``cos u1 = 0`` or ``sin u1 sin u2 = 0``).
+    OutOfWorkspaceError, StrokeLimitError
+        The pose needs ``O_s`` where the parallel module cannot put it.
 
     Examples
     --------
@@ -299,40 +324,39 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
                       backend: Backend = "auto") -> tuple[NDArray[np.float64], InstrumentIK]:
     """Actuator values for an instrument direction about the RCM and an insertion ``p``.
 
+    ``O_s = RCM - p * d`` with ``d`` the instrument direction; the parallel
+    module's IK then gives the unique ``q`` (the passive joints have 4
+    solutions; :func:`~athenakin.forward_kinematics` lists them).
+
     Parameters
     ----------
     T_b_e : array-like, shape (..., 4, 4)
+        RCM frame.
     direction_e : array-like, shape (..., 3)
-        Instrument direction in frame E (normalised here).
+        Instrument direction in frame E (pointing from ``O_s`` through the RCM
+        into the patient); normalised here. See :func:`athenakin.robot.direction_from_angles`.
     p : array-like, shape (...)
         Distance from ``O_s`` to the RCM along the direction, m.
     design : Design, optional
     errors : {"auto", "raise", "flag"}, keyword-only
+        Failure policy, as in :func:`forward_kinematics`.
     backend : {"auto", "numpy", "numba"}, keyword-only
         As in :func:`forward_kinematics`.
 
     Returns
     -------
     q : ndarray, shape (..., 3)
+        ``(q1, q2, q3)``, m; NaN where ``result.valid`` is False.
     result : InstrumentIK
-
-    See Also
-    --------
-    athenakin.robot.q_from_instrument : the numpy reference, with the details.
+        ``p``, the direction in the base frame, ``O_s``, assembly mode, validity,
+        reason and the bound on the error of ``q``.
     """
     if ("line" in _WARM and _BACKEND["numba"]
             and (backend is OPTION_AUTO or _compiled_choice(backend))):
-        api = _STATE["api"]
-        res = api.lean_line(T_b_e, direction_e, p, design, errors)
+        res = _STATE["api"].lean_line(T_b_e, direction_e, p, design, errors)
         if res is not None:            # the lean single call: fast._api's one guard
             return res  # type: ignore[no-any-return]
-        return api.q_from_instrument(  # type: ignore[no-any-return]
-            T_b_e, direction_e, p, design, errors=errors)
-    if resolve_backend(backend):
-        api = _api()
-        return _first("line", lambda: api.q_from_instrument(T_b_e, direction_e, p, design,
-                                                            errors=errors))
-    return _ref_ik.q_from_instrument(T_b_e, direction_e, p, design, errors=errors)
+    return _line(T_b_e, direction_e, p, design, errors, backend)
 
 
 def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = None, *,
@@ -340,37 +364,55 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
                     ) -> tuple[NDArray[np.float64], InstrumentIK]:
     """Actuator values that put the tool tip at a point, the instrument through the RCM.
 
+    The tip is at ``O_s + L d`` (``L = design.tool_length``) and the instrument
+    passes through the RCM, so ``d = tip / |tip|`` and ``p = L - |tip|`` (tip in
+    frame E). The tip must be beyond the RCM (inserted), ``0 < |tip| < L``;
+    otherwise the reason is ``INSERTION_RANGE`` (a tip exactly at the RCM leaves
+    the direction undefined: ``IK_SINGULAR``).
+
     Parameters
     ----------
     T_b_e : array-like, shape (..., 4, 4)
+        RCM frame E in the base frame.
     tip_e : array-like, shape (..., 3)
         Tool-tip position in the RCM frame E, m.
     design : Design, optional
-    errors : {"auto", "raise", "flag"}, keyword-only
-    backend : {"auto", "numpy", "numba"}, keyword-only
-        As in :func:`forward_kinematics`.
+    errors, backend : keyword-only
+        As in :func:`q_from_instrument`.
 
     Returns
     -------
-    q : ndarray, shape (..., 3)
-    result : InstrumentIK
-
-    See Also
-    --------
-    athenakin.robot.q_from_tool_tip : the numpy reference, with the details.
+    q, result : ndarray (..., 3), InstrumentIK
+        As in :func:`q_from_instrument`, with ``result.p = L - |tip|``.
     """
     if ("line" in _WARM and _BACKEND["numba"]
             and (backend is OPTION_AUTO or _compiled_choice(backend))):
-        api = _STATE["api"]
-        res = api.lean_line(T_b_e, tip_e, None, design, errors)
+        res = _STATE["api"].lean_line(T_b_e, tip_e, None, design, errors)
         if res is not None:            # the lean single call: fast._api's one guard
             return res  # type: ignore[no-any-return]
-        return api.q_from_tool_tip(  # type: ignore[no-any-return]
-            T_b_e, tip_e, design, errors=errors)
+    return _line(T_b_e, tip_e, None, design, errors, backend)
+
+
+def _line(T_b_e: ArrayLike, v: ArrayLike, p: ArrayLike | None, design: Design | None,
+          errors: ErrorPolicy, backend: Backend) -> tuple[NDArray[np.float64], InstrumentIK]:
+    """The controller forms on the chosen backend, after the lean single call.
+
+    :func:`q_from_instrument` where ``p`` is given, :func:`q_from_tool_tip` where None.
+    """
+    def call(mod: Any) -> tuple[NDArray[np.float64], InstrumentIK]:
+        if p is None:
+            return mod.q_from_tool_tip(  # type: ignore[no-any-return]
+                T_b_e, v, design, errors=errors)
+        return mod.q_from_instrument(  # type: ignore[no-any-return]
+            T_b_e, v, p, design, errors=errors)
+
+    if ("line" in _WARM and _BACKEND["numba"]
+            and (backend is OPTION_AUTO or _compiled_choice(backend))):
+        return call(_STATE["api"])
     if resolve_backend(backend):
         api = _api()
-        return _first("line", lambda: api.q_from_tool_tip(T_b_e, tip_e, design, errors=errors))
-    return _ref_ik.q_from_tool_tip(T_b_e, tip_e, design, errors=errors)
+        return _first("line", lambda: call(api))
+    return call(_ref_ik)
 
 
 # --- Jacobians -------------------------------------------------------------------------------

@@ -28,6 +28,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -350,46 +351,15 @@ def _solve(arb: Any, qf: NDArray[np.float64], Tf: NDArray[np.float64], design: D
     L = B(design.tool_length)
 
     # ---- parallel module (Eq. 7-8)
-    h = (q1 - q2) / 2
-    r1sq = l1 * l1 - h * h
-    m3 = l3 * l3 - h * h
-    s_r1, s_m3 = sign(r1sq), sign(m3)
-    if s_r1 < 0 or s_m3 < 0 or (s_r1 == 0 and r1sq.is_zero()):
-        status[:] = CertStatus.ABSENT
-        reason[:] = Reason.LINK_TOO_SHORT
+    why, absent, module = _module_balls(arb, q1, q2, q3, l1, l2, l3, l5)
+    if why:
+        if absent:
+            status[:] = CertStatus.ABSENT
+        reason[:] = why
         return status, reason, mid, rad
-    if s_r1 == 0 or (s_m3 == 0 and not m3.is_zero()):
-        reason[:] = Reason.LINK_TOO_SHORT
-        return status, reason, mid, rad
-    r1 = r1sq.sqrt()
-    m_y = (m3.sqrt() if s_m3 else arb(0)) + l2
-    d2 = m_y * m_y + l5 * l5
-    d = d2.sqrt()
-    k = (r1 + q3 - d) * (r1 + q3 + d) * (d - r1 + q3) * (d + r1 - q3)
-    s_k = sign(k)
-    if s_k < 0:
-        status[:] = CertStatus.ABSENT
-        reason[:] = Reason.CIRCLES_DISJOINT
-        return status, reason, mid, rad
-    if s_k == 0:
-        reason[:] = Reason.CIRCLES_TANGENT
-        return status, reason, mid, rad
-    a = k.sqrt() / (2 * d)
-    H = d2 + r1sq - q3 * q3
-    by, bz = H * m_y / (2 * d2), H * l5 / (2 * d2)
-    ey, ez = -l5 / d, m_y / d
-    x_M = (q1 + q2) / 2
+    r1, a, by, bz, ey, ez, x_M = module
 
-    # ---- RCM frame: translation and Gram-Schmidt rotation (columns x_e, z_e)
-    t_e = [B(Tf[i, 3]) for i in range(3)]
-    zc = [B(Tf[i, 2]) for i in range(3)]
-    zn = (zc[0] * zc[0] + zc[1] * zc[1] + zc[2] * zc[2]).sqrt()
-    z_e = [v / zn for v in zc]
-    xc = [B(Tf[i, 0]) for i in range(3)]
-    dot = xc[0] * z_e[0] + xc[1] * z_e[1] + xc[2] * z_e[2]
-    xo = [xc[i] - dot * z_e[i] for i in range(3)]
-    xn = (xo[0] * xo[0] + xo[1] * xo[1] + xo[2] * xo[2]).sqrt()
-    x_e = [v / xn for v in xo]
+    t_e, x_e, z_e = _rcm_axes(B, Tf)
 
     for m, s in enumerate((1, -1)):
         y = by + s * a * ey
@@ -440,36 +410,97 @@ def _solve(arb: Any, qf: NDArray[np.float64], Tf: NDArray[np.float64], design: D
         if delta is None or zeta is None or gamma is None:
             reason[slots] = Reason.WRIST_SINGULAR
             continue
-        # the eight solutions from the base angles (exact identities, module docstring):
-        # each distinct value is enclosed and converted once, the slots index into them
-        cand: dict[str, dict[Any, Any]] = {
-            "u1": {1: alpha, -1: alpha + pi},                                 # by eps
-            "u2": {(1, 1): beta, (-1, 1): -beta, (1, -1): pi - beta,
-                   (-1, -1): beta - pi},                                      # by (sigma, r)
-            "u3": {(1, 1): delta, (-1, -1): delta + pi, (1, -1): -delta,
-                   (-1, 1): pi - delta},                                      # by tau (sigma, eps)
-            "u4": {(1, 1): zeta, (-1, 1): -zeta, (1, -1): pi - zeta,
-                   (-1, -1): zeta - pi},                                      # by (tau, r)
-            "u5": {1: gamma, -1: gamma + pi},                                 # by tau r
-        }
-        num = {name: {key: _mid_rad(wrap(b, pi)) for key, b in d.items()}
-               for name, d in cand.items()}
-        step = [(L / n) * v[i] for i in range(3)]
-        p_mr = {1: _mid_rad(n), -1: _mid_rad(-n)}
-        tip_mr = {r: [_mid_rad(O_s[i] + step[i] if r > 0 else O_s[i] - step[i])
-                      for i in range(3)] for r in (1, -1)}
-        for k_s in range(8):
-            r, sg, tau = int(SERIAL_P_SIGN[k_s]), int(SERIAL_UJOINT[k_s]), int(SERIAL_WRIST[k_s])
-            eps = sg * r
-            row = 8 * m + k_s
-            vals = [p_mr[r], num["u1"][eps], num["u2"][(sg, r)],
-                    num["u3"][(tau * sg, tau * eps)], num["u4"][(tau, r)], num["u5"][tau * r],
-                    *tip_mr[r]]
-            cols = [0, 1, 2, 3, 4, 5, 9, 10, 11]
-            mid[row, cols] = [x[0] for x in vals]
-            rad[row, cols] = [x[1] for x in vals]
-            status[row] = _CERTIFIED
+        _store_eight(mid, rad, status, m, pi, (alpha, beta, delta, zeta, gamma),
+                     _mid_rad(n), [(L / n) * v[i] for i in range(3)], O_s)
     return status, reason, mid, rad
+
+
+def _module_balls(arb: Any, q1: Any, q2: Any, q3: Any, l1: Any, l2: Any, l3: Any,
+                  l5: Any) -> tuple[int, bool, tuple[Any, ...]]:
+    """The parallel module in balls: ``(reason, absent, (r1, a, by, bz, ey, ez, x_M))``.
+
+    ``reason`` is nonzero where no slot can be certified (the values are then ``()``):
+    ``absent`` True where the module is certainly not assembled, False where the balls
+    cannot decide.
+    """
+    h = (q1 - q2) / 2
+    r1sq = l1 * l1 - h * h
+    m3 = l3 * l3 - h * h
+    s_r1, s_m3 = sign(r1sq), sign(m3)
+    if s_r1 < 0 or s_m3 < 0 or (s_r1 == 0 and r1sq.is_zero()):
+        return Reason.LINK_TOO_SHORT, True, ()
+    if s_r1 == 0 or (s_m3 == 0 and not m3.is_zero()):
+        return Reason.LINK_TOO_SHORT, False, ()
+    r1 = r1sq.sqrt()
+    m_y = (m3.sqrt() if s_m3 else arb(0)) + l2
+    d2 = m_y * m_y + l5 * l5
+    d = d2.sqrt()
+    k = (r1 + q3 - d) * (r1 + q3 + d) * (d - r1 + q3) * (d + r1 - q3)
+    s_k = sign(k)
+    if s_k < 0:
+        return Reason.CIRCLES_DISJOINT, True, ()
+    if s_k == 0:
+        return Reason.CIRCLES_TANGENT, False, ()
+    a = k.sqrt() / (2 * d)
+    H = d2 + r1sq - q3 * q3
+    by, bz = H * m_y / (2 * d2), H * l5 / (2 * d2)
+    ey, ez = -l5 / d, m_y / d
+    x_M = (q1 + q2) / 2
+    return 0, False, (r1, a, by, bz, ey, ez, x_M)
+
+
+def _rcm_axes(B: Callable[[float], Any], Tf: NDArray[np.float64]
+              ) -> tuple[list[Any], list[Any], list[Any]]:
+    """RCM frame in balls: translation and Gram-Schmidt rotation (columns ``x_e``, ``z_e``)."""
+    t_e = [B(Tf[i, 3]) for i in range(3)]
+    zc = [B(Tf[i, 2]) for i in range(3)]
+    zn = (zc[0] * zc[0] + zc[1] * zc[1] + zc[2] * zc[2]).sqrt()
+    z_e = [v / zn for v in zc]
+    xc = [B(Tf[i, 0]) for i in range(3)]
+    dot = xc[0] * z_e[0] + xc[1] * z_e[1] + xc[2] * z_e[2]
+    xo = [xc[i] - dot * z_e[i] for i in range(3)]
+    xn = (xo[0] * xo[0] + xo[1] * xo[1] + xo[2] * xo[2]).sqrt()
+    x_e = [v / xn for v in xo]
+    return t_e, x_e, z_e
+
+
+def _store_eight(mid: NDArray[np.float64], rad: NDArray[np.float64], status: NDArray[np.int8],
+                 m: int, pi: Any, base: tuple[Any, ...], n_mr: tuple[float, float],
+                 step: list[Any], O_s: list[Any]) -> None:
+    """The eight serial solutions of mode ``m`` from the base angles, into its rows.
+
+    ``base`` is ``(alpha, beta, delta, zeta, gamma)``, ``n_mr`` the midpoint and radius
+    of ``|p|``, ``step`` the tool vector (balls).
+    """
+    alpha, beta, delta, zeta, gamma = base
+    # the eight solutions from the base angles (exact identities, module docstring):
+    # each distinct value is enclosed and converted once, the slots index into them
+    cand: dict[str, dict[Any, Any]] = {
+        "u1": {1: alpha, -1: alpha + pi},                                 # by eps
+        "u2": {(1, 1): beta, (-1, 1): -beta, (1, -1): pi - beta,
+               (-1, -1): beta - pi},                                      # by (sigma, r)
+        "u3": {(1, 1): delta, (-1, -1): delta + pi, (1, -1): -delta,
+               (-1, 1): pi - delta},                                      # by tau (sigma, eps)
+        "u4": {(1, 1): zeta, (-1, 1): -zeta, (1, -1): pi - zeta,
+               (-1, -1): zeta - pi},                                      # by (tau, r)
+        "u5": {1: gamma, -1: gamma + pi},                                 # by tau r
+    }
+    num = {name: {key: _mid_rad(wrap(b, pi)) for key, b in d.items()}
+           for name, d in cand.items()}
+    p_mr = {1: n_mr, -1: (-n_mr[0], n_mr[1])}
+    tip_mr = {r: [_mid_rad(O_s[i] + step[i] if r > 0 else O_s[i] - step[i])
+                  for i in range(3)] for r in (1, -1)}
+    for k_s in range(8):
+        r, sg, tau = int(SERIAL_P_SIGN[k_s]), int(SERIAL_UJOINT[k_s]), int(SERIAL_WRIST[k_s])
+        eps = sg * r
+        row = 8 * m + k_s
+        vals = [p_mr[r], num["u1"][eps], num["u2"][(sg, r)],
+                num["u3"][(tau * sg, tau * eps)], num["u4"][(tau, r)], num["u5"][tau * r],
+                *tip_mr[r]]
+        cols = [0, 1, 2, 3, 4, 5, 9, 10, 11]
+        mid[row, cols] = [x[0] for x in vals]
+        rad[row, cols] = [x[1] for x in vals]
+        status[row] = _CERTIFIED
 
 
 def _mid_rad(x: Any) -> tuple[float, float]:
@@ -479,15 +510,15 @@ def _mid_rad(x: Any) -> tuple[float, float]:
 
 def _float_boxes(mid: NDArray[np.float64], rad: NDArray[np.float64]
                  ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    scale = np.full(_N_FIELDS, np.pi)
-    lengths = np.abs(mid[:, _LENGTH_COLS])
-    scale[_LENGTH_COLS] = np.max(lengths, initial=0.0, where=np.isfinite(lengths))
     """Float intervals that contain the balls ``[mid +- rad]`` (rounded outward).
 
     ``mid`` and ``rad`` are the balls' midpoints and radii rounded to nearest, so each
     is within half an ulp of the exact value; the margin covers both, the rounding of
     the subtraction/addition itself and :data:`OUTPUT_ULPS`.
     """
+    scale = np.full(_N_FIELDS, np.pi)
+    lengths = np.abs(mid[:, _LENGTH_COLS])
+    scale[_LENGTH_COLS] = np.max(lengths, initial=0.0, where=np.isfinite(lengths))
     with np.errstate(invalid="ignore"):
         margin = (rad * (1.0 + 2.0 ** -50) + 2.0 * np.spacing(np.abs(mid))
                   + OUTPUT_ULPS * np.spacing(np.maximum(np.abs(mid), scale)) + 1e-300)

@@ -227,6 +227,64 @@ def closure_residual(T: NDArray[np.float64], T_target: NDArray[np.float64]
     return np.maximum(dR, dt)
 
 
+#: The two signs of a slot choice (p, sigma, tau), read only.
+_PLUS_MINUS = np.array([1.0, -1.0])
+_PLUS_MINUS.flags.writeable = False
+
+
+def _check_scale(scale: ArrayLike, batch: tuple[int, ...]) -> NDArray[np.float64]:
+    """``scale`` of :func:`ups_solutions`: an array that broadcasts to the batch."""
+    sc = check_array(scale, "scale", (), allow_nonfinite=True)
+    if broadcast_batch(T_s_e=batch, scale=sc.shape) != batch:
+        raise InvalidInputError(f"scale: expected a shape that broadcasts to the batch of "
+                                f"T_s_e {batch}, got {sc.shape}")
+    return sc
+
+
+def _sines_as_kernel(T: NDArray[np.float64], zx: NDArray[np.float64], zy: NDArray[np.float64],
+                     zz: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``|sin u2|`` and ``|sin u4|`` of the slot p > 0, in the compiled kernel's operations.
+
+    ``(zx, zy, zz)`` is the unit instrument direction (the kernel's names); the
+    kernel is ``fast/_fk_kernels.py``, ``_serial_stage`` (issue 23: both backends
+    classify an input on a threshold alike, to the last bit).
+    """
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        rho_k = np.sqrt(zx * zx + zy * zy)              # |sin u2| (kernel: hypot)
+        rr = np.where(rho_k > 0.0, rho_k, 1.0)
+        A1, B1 = zx / rr, zy / rr
+        rho2 = A1 * zx + B1 * zy
+        n2 = np.sqrt(rho2 * rho2 + zz * zz)
+        cc2, ss2 = -zz / n2, rho2 / n2
+        e02, e12, e22 = T[..., 0, 2], T[..., 1, 2], T[..., 2, 2]
+        W02k = ((A1 * cc2) * e02 + (B1 * cc2) * e12) + ss2 * e22
+        W12k = B1 * e02 - A1 * e12
+        rho4_k = np.sqrt(W02k * W02k + W12k * W12k)     # |sin u4| (kernel: rho4)
+    return rho_k, rho4_k
+
+
+def _slot_reasons(base_reason: NDArray[np.int_], deg_u: NDArray[np.bool_],
+                  deg_w: NDArray[np.bool_], res: NDArray[np.float64], pp: NDArray[np.float64],
+                  ctol: NDArray[np.float64]) -> NDArray[np.int8]:
+    """Reason code of each of the 8 slots (..., 8): the first failed check wins.
+
+    ``deg_u``, ``deg_w`` (..., 2, 2, 2): the U-joint and wrist degeneracies; ``ctol``
+    (..., 1): the closure tolerance with the rounding of a far pose (a NaN scale, of an
+    unassembled mode, allows nothing); ``pp`` (..., 8): ``p``, infinite where ``|t|^2``
+    overflowed (no solution, as the kernels flag it).
+    """
+    batch = res.shape[:-1]
+    reason = np.broadcast_to(base_reason[..., None], batch + (8,)).astype(np.int8)
+    reason = np.where((reason == 0) & deg_u.reshape(batch + (8,)),
+                      np.int8(Reason.UJOINT_SINGULAR), reason)
+    reason = np.where((reason == 0) & deg_w.reshape(batch + (8,)),
+                      np.int8(Reason.WRIST_SINGULAR), reason)
+    reason = np.where((reason == 0) & ~(res <= ctol), np.int8(Reason.CLOSURE_FAILED),
+                      reason).astype(np.int8)
+    return np.where((reason == 0) & ~np.isfinite(pp), np.int8(Reason.CLOSURE_FAILED),
+                    reason).astype(np.int8)
+
+
 def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
                   p_zero_tol: float = P_ZERO_TOL, closure_tol: float = CLOSURE_TOL,
                   scale: ArrayLike | None = None, _checked: bool = False) -> UPSSolution:
@@ -277,36 +335,18 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     base_reason = np.where((base_reason == 0) & (n <= p_zero_tol), Reason.SERIAL_P_ZERO,
                            base_reason)
     nn = np.where(n > p_zero_tol, n, 1.0)
-    if scale is None:
-        sc = n
-    else:
-        sc = check_array(scale, "scale", (), allow_nonfinite=True)
-        if broadcast_batch(T_s_e=n.shape, scale=sc.shape) != n.shape:
-            raise InvalidInputError(f"scale: expected a shape that broadcasts to the batch of "
-                                    f"T_s_e {n.shape}, got {sc.shape}")
+    sc = n if scale is None else _check_scale(scale, n.shape)
     with np.errstate(invalid="ignore", over="ignore"):
         dtol = np.maximum(degenerate_tol, DEGENERATE_ULPS * _EPS * sc / nn)   # (...)
-    psign = np.array([1.0, -1.0])
-    p = nn[..., None] * psign                           # (..., 2)
+    p = nn[..., None] * _PLUS_MINUS                     # (..., 2)
     z3 = c[..., None, :] / p[..., None]                 # (..., 2, 3)
-    zx, zy, zz = c0 / nn, c1_ / nn, c2_ / nn            # slot p > 0 (kernel: zx, zy, zz)
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        rho_k = np.sqrt(zx * zx + zy * zy)              # |sin u2| (kernel: hypot)
-        rr = np.where(rho_k > 0.0, rho_k, 1.0)
-        A1, B1 = zx / rr, zy / rr
-        rho2 = A1 * zx + B1 * zy
-        n2 = np.sqrt(rho2 * rho2 + zz * zz)
-        cc2, ss2 = -zz / n2, rho2 / n2
-        e02, e12, e22 = T[..., 0, 2], T[..., 1, 2], T[..., 2, 2]
-        W02k = ((A1 * cc2) * e02 + (B1 * cc2) * e12) + ss2 * e22
-        W12k = B1 * e02 - A1 * e12
-        rho4_k = np.sqrt(W02k * W02k + W12k * W12k)     # |sin u4| (kernel: rho4)
+    rho_k, rho4_k = _sines_as_kernel(T, c0 / nn, c1_ / nn, c2_ / nn)
     rho = np.broadcast_to(rho_k[..., None], p.shape)    # (..., 2): the same for both signs
     # Each angle pair is solved sequentially so that closure holds to rounding even
     # where the first angle is ill-conditioned (near sin u2 = 0 or sin u4 = 0): the
     # first angle from the direction, the second from the projection onto the
     # plane it fixes, the last rotation from the remaining matrix.
-    sig = np.array([1.0, -1.0])
+    sig = tau = _PLUS_MINUS
     u1 = np.arctan2(sig * z3[..., 1, None], sig * z3[..., 0, None])   # (..., 2, 2)
     c1, s1 = np.cos(u1), np.sin(u1)
     u2 = np.arctan2(c1 * z3[..., 0, None] + s1 * z3[..., 1, None],
@@ -317,7 +357,6 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     Rse = T[..., None, None, :3, :3]
     W = np.swapaxes(R1, -1, -2) @ Rse
     rho4 = np.hypot(W[..., 0, 2], W[..., 1, 2])         # |sin u4|
-    tau = np.array([1.0, -1.0])
     u3 = np.arctan2(tau * W[..., 1, 2, None], tau * W[..., 0, 2, None])  # (..., 2, 2, 2)
     c3, s3 = np.cos(u3), np.sin(u3)
     u4 = np.arctan2(c3 * W[..., 0, 2, None] + s3 * W[..., 1, 2, None],
@@ -347,18 +386,8 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     u = u.reshape(batch + (8, 5))
     pp = pp.reshape(batch + (8,))
 
-    reason = np.broadcast_to(base_reason[..., None], batch + (8,)).astype(np.int8)
-    deg_u = np.broadcast_to(uj_deg[..., None], full).reshape(batch + (8,))
-    deg_w = wr_deg.reshape(batch + (8,))
-    reason = np.where((reason == 0) & deg_u, np.int8(Reason.UJOINT_SINGULAR), reason)
-    reason = np.where((reason == 0) & deg_w, np.int8(Reason.WRIST_SINGULAR), reason)
-    # rounding of a far pose (a NaN scale, of an unassembled mode, allows nothing)
-    ctol = closure_tol + CLOSURE_ULPS * _EPS * np.fmax(sc, 0.0)[..., None]
-    reason = np.where((reason == 0) & ~(res <= ctol), np.int8(Reason.CLOSURE_FAILED),
-                      reason).astype(np.int8)
-    # |t|^2 overflowed (|t| > 1e154 m): p = inf is no solution (the kernels flag it too)
-    reason = np.where((reason == 0) & ~np.isfinite(pp), np.int8(Reason.CLOSURE_FAILED),
-                      reason).astype(np.int8)
+    reason = _slot_reasons(base_reason, np.broadcast_to(uj_deg[..., None], full), wr_deg, res,
+                           pp, closure_tol + CLOSURE_ULPS * _EPS * np.fmax(sc, 0.0)[..., None])
     valid = reason == 0
     nan = np.where(valid, 1.0, np.nan)
     return UPSSolution(valid=valid, reason=reason, p=pp * nan, u=u * nan[..., None],

@@ -12,22 +12,26 @@ handed to the reference implementation, which raises the very same exception
 
 Extra keyword-only options (not in the reference): ``parallel=True`` spreads
 the batch over numba's threads; ``out=`` (FK) reuses the arrays of an earlier
-result of the same shape instead of allocating.
+result of the same shape instead of allocating. The documented public face of each
+function is the dispatched one (:func:`athenakin.forward_kinematics`, ...).
+
+Examples
+--------
+>>> import athenakin as ak
+>>> d = ak.Design.default()
+>>> int(ak.fast.forward_kinematics([-0.10, 0.10, 0.45], ak.default_rcm_frame(d), d).n_solutions)
+16
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Callable
-from typing import Any, TypeGuard, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import (
-    ERROR_POLICIES,
-    OPTION_AUTO,
     OPTION_CLOSED,
     ROTATION_TOL,
     TOLERANCE_MAXIMA,
@@ -37,7 +41,6 @@ from .._validation import (
     check_transform,
     is_default,
     is_option,
-    is_raising_policy,
 )
 from ..chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
 from ..design import Design
@@ -64,7 +67,20 @@ from ..robot._ik import (
 from . import _fk_kernels as _fk
 from . import _fk_sized as _fz
 from . import _ik_kernels as _ik
+from . import _ik_single as _one
 from . import _ik_sized as _iz
+from . import _parallel_kernels as _pk
+from ._lean import (
+    _F8,
+    _FK_TOL_DEFAULT,
+    _POLICY_SET,
+    _line_result,
+    _new,
+    design_params,
+    lean_fk,
+    lean_ik,
+    lean_line,
+)
 from ._threads import parallel_guard
 
 __all__ = [
@@ -81,81 +97,8 @@ __all__ = [
     "parallel_inverse_kinematics",
 ]
 
-_F8 = np.dtype(np.float64)
-_FK_TOL_DEFAULT = np.array([TANGENT_TOL, DEGENERATE_TOL, P_ZERO_TOL, CLOSURE_TOL])
-#: id(design) -> (design, parameter vector P (13,), P with the default FK tolerances and
-#: ROTATION_TOL (18,: the lean FK kernel's one option array), tool length as a float).
-_PARAMS: dict[int, tuple[Design | None, NDArray[np.float64], NDArray[np.float64], float]] = {}
-_DEFAULT: list[NDArray[np.float64]] = []
-_MAX_CACHE = 64
-_PLAIN = {c for c in (FKSolution, PassiveJoints, InstrumentIK)
-          if dataclasses.is_dataclass(c) and not hasattr(c, "__post_init__")
-          and "__slots__" not in c.__dict__
-          and {f.name for f in dataclasses.fields(c)} == set(c.__annotations__)}
-
-
-_R = TypeVar("_R")
-_POLICY_SET = frozenset(ERROR_POLICIES)
-
-
-def _new(cls: type[_R], **fields: Any) -> _R:
-    """Instance of a frozen result dataclass without its per-field ``object.__setattr__``.
-
-    Equivalent to ``cls(**fields)`` for these plain dataclasses (no ``__post_init__``,
-    no slots); saves about 0.7 us per result, a sixth of a single FK call.
-    """
-    if cls in _PLAIN:
-        obj = object.__new__(cls)
-        obj.__dict__.update(fields)
-        return obj
-    return cls(**fields)
-
-
 class _Delegate(Exception):
     """Internal: hand the call to the reference implementation."""
-
-
-def design_params(design: Design | None) -> NDArray[np.float64]:
-    """The design as the kernels' parameter vector (cached per design object).
-
-    Parameters
-    ----------
-    design : Design or None
-        ``None`` means :meth:`Design.default`.
-
-    Returns
-    -------
-    ndarray, shape (13,)
-        ``l1..l5``, ``q_min`` (3), ``q_max`` (3), ``h_sign``, ``tool_length``
-        (shared by all calls: do not modify).
-
-    Raises
-    ------
-    TypeError
-        If ``design`` is not a :class:`~athenakin.Design`.
-    """
-    hit = _PARAMS.get(id(design))
-    if hit is not None and hit[0] is design:     # the common case first
-        return hit[1]
-    if design is None:
-        if not _DEFAULT:
-            _DEFAULT.append(_make_params(Design.default()))
-        P = _DEFAULT[0]
-    elif not isinstance(design, Design):
-        raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
-    else:
-        P = _make_params(design)
-    if len(_PARAMS) >= _MAX_CACHE:
-        _PARAMS.clear()
-    # None too: the lean paths look the design up once, in this table
-    _PARAMS[id(design)] = (design, P, np.concatenate((P, _FK_TOL_DEFAULT, [ROTATION_TOL])),
-                           P.item(12))
-    return P
-
-
-def _make_params(d: Design) -> NDArray[np.float64]:
-    return np.array([d.l1, d.l2, d.l3, d.l4, d.l5, *d.stroke_min, *d.stroke_max, d.h_sign,
-                     d.tool_length])
 
 
 def _arr(x: object, tail: tuple[int, ...]) -> NDArray[np.float64]:
@@ -224,30 +167,9 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
                        degenerate_tol: float = DEGENERATE_TOL, p_zero_tol: float = P_ZERO_TOL,
                        closure_tol: float = CLOSURE_TOL, fields: tuple[str, ...] | None = None,
                        parallel: bool = False, out: FKSolution | None = None) -> FKSolution:
-    """All 16 configurations for actuators ``q``: compiled :func:`~athenakin.forward_kinematics`.
+    """See :func:`athenakin.forward_kinematics` (compiled; ``parallel=`` threads, ``out=`` reuses).
 
-    Same parameters, result and errors as the reference (``method="closed"`` is
-    compiled; any other ``method`` is the reference's own computation), plus:
-
-    Parameters
-    ----------
-    parallel : bool, keyword-only
-        Spread the batch over numba's threads (``numba.set_num_threads``).
-    out : FKSolution, optional, keyword-only
-        An earlier (full) result of the same batch shape whose arrays are
-        overwritten (no allocation) and returned.
-
-    Returns
-    -------
-    FKSolution
-
-    Examples
-    --------
-    >>> import athenakin as ak
-    >>> d = ak.Design.default()
-    >>> sol = ak.fast.forward_kinematics([-0.10, 0.10, 0.45], ak.default_rcm_frame(d), d)
-    >>> int(sol.n_solutions)
-    16
+    ``out`` is an earlier full result of the same batch shape whose arrays are overwritten.
     """
     if out is None and not parallel:   # the common single call (control loops)
         sol = lean_fk(q, T_b_e, design, method, errors, tangent_tol, degenerate_tol,
@@ -290,22 +212,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     raise_now = resolve_policy(errors, batch)
     N = math.prod(batch)
     want = _fz.WANT_ALL if names is None else _want(names)
-    if out is not None:
-        if names is not None:
-            raise ValueError("out: not with fields (out= reuses the arrays of a full result)")
-        reason, valid, p, u, Tbs, res, item = (
-            a.reshape((N,) + a.shape[len(batch):]) for a in _check_out(out, batch))
-    else:
-        def alloc(bit: int, tail: tuple[int, ...], dtype: type = np.float64) -> NDArray:
-            return np.empty(((N if want & bit else 0),) + tail, dtype)
-
-        reason = alloc(_fz.WANT_REASON, (16,), np.int8)
-        valid = alloc(_fz.WANT_VALID, (16,), np.bool_)
-        p = alloc(_fz.WANT_P, (16,))
-        u = alloc(_fz.WANT_U, (16, 5))
-        Tbs = alloc(_fz.WANT_T, (2, 4, 4))
-        res = alloc(_fz.WANT_RES, (16,))
-        item = np.empty(N, np.int8)
+    reason, valid, p, u, Tbs, res, item = _fk_buffers(out, names, batch, N, want)
     qf, Tf = _flat(qa, bq, batch, N, (3,)), _flat(Ta, bT, batch, N, (4, 4))
     if want != _fz.WANT_ALL:
         flags = _fz.fk_select(qf, Tf, P, tol, ROTATION_TOL, want, reason, valid, p, u, Tbs, res,
@@ -334,6 +241,25 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
 _CACHED = ("T_b_s", "tip", "T_b_tip")
 
 
+def _fk_buffers(out: FKSolution | None, names: tuple[str, ...] | None, batch: tuple[int, ...],
+                N: int, want: int) -> tuple[NDArray, ...]:
+    """The kernel's seven output arrays, flat over the batch: ``out``'s, or new.
+
+    A new array is empty where its field is not wanted.
+    """
+    if out is not None:
+        if names is not None:
+            raise ValueError("out: not with fields (out= reuses the arrays of a full result)")
+        return tuple(a.reshape((N,) + a.shape[len(batch):]) for a in _check_out(out, batch))
+
+    def alloc(bit: int, tail: tuple[int, ...], dtype: type = np.float64) -> NDArray:
+        return np.empty(((N if want & bit else 0),) + tail, dtype)
+
+    return (alloc(_fz.WANT_REASON, (16,), np.int8), alloc(_fz.WANT_VALID, (16,), np.bool_),
+            alloc(_fz.WANT_P, (16,)), alloc(_fz.WANT_U, (16, 5)), alloc(_fz.WANT_T, (2, 4, 4)),
+            alloc(_fz.WANT_RES, (16,)), np.empty(N, np.int8))
+
+
 def _want(names: tuple[str, ...]) -> int:
     """``WANT_*`` bits of the field names."""
     bits = {"valid": _fz.WANT_VALID, "reason": _fz.WANT_REASON, "p": _fz.WANT_P,
@@ -344,259 +270,11 @@ def _want(names: tuple[str, ...]) -> int:
     return w
 
 
-_object_new = object.__new__
-_object_setattr = object.__setattr__
-
-
 _empty = np.empty
 _I8 = np.int8
 _BOOL = np.bool_
-
-
-# --- the lean single call: one guard for every entry point --------------------------------
-_ndarray = np.ndarray
-_PARAMS_get = _PARAMS.get
-
-
-def _entry_point(kernel: Any, args: tuple[Any, ...]) -> Callable[..., int]:
-    """``kernel``'s compiled function for exactly the types of ``args``, else ``kernel``.
-
-    Numba's dispatcher types every argument at each call (about 20 ns an array);
-    the lean paths' guard already admits only the exact types the kernels were
-    compiled for (float64 arrays of fixed shapes, C-contiguous, aligned, writable,
-    the buffers they allocate themselves), so they may call the compiled
-    function directly: the same machine code, about 0.15 us less. Falls back to
-    the dispatcher when numba's internals do not have that shape.
-    """
-    try:
-        from .._backend import typeof
-
-        entry = kernel.overloads[tuple(typeof(a) for a in args)].entry_point
-    except Exception:     # another numba version's internals: the dispatcher
-        return kernel     # type: ignore[no-any-return]
-    return entry if callable(entry) else kernel  # type: ignore[no-any-return]
-
-
-def _direct(name: str, kernel: Any) -> Callable[..., int]:
-    """The first call of a lean kernel, then :func:`_entry_point` under the module name ``name``.
-
-    The first call goes through numba's dispatcher (which compiles or loads the
-    kernel); the later ones call the compiled function that it chose.
-    """
-    def first(*args: Any) -> int:
-        flags: int = kernel(*args)
-        globals()[name] = _entry_point(kernel, args)
-        return flags
-    return first
-
-
-_fk_one_lean = _direct("_fk_one_lean", _fz.fk_one_lean)
-_ik_paper_lean = _direct("_ik_paper_lean", _ik.ik_paper_lean)
-_I64 = np.int64
-_TRUE = np.True_
-#: ``item_reason`` / ``reason`` of a lean result (always 0 there), copied for each result.
-_ZERO_I8 = np.zeros((), np.int8)
-_IK_P, _IK_U, _IK_T, _IK_RES, _IK_QE = _ik.ONE_P, _ik.ONE_U, _ik.ONE_T, _ik.ONE_RES, _ik.ONE_QE
-
-
-#: The entry of :data:`_PARAMS` of the last lean call (a design is mostly the same from one
-#: call to the next: one identity test instead of a table look-up).
-_LAST: tuple[Any, NDArray[np.float64], NDArray[np.float64], float] = (
-    object(), np.empty(0), np.empty(0), 0.0)
-
-
-def _lean_entry(design: Design | None) -> tuple[Any, NDArray[np.float64], NDArray[np.float64],
-                                                float]:
-    """The :data:`_PARAMS` entry of ``design`` (made if need be), kept as :data:`_LAST`."""
-    global _LAST
-    hit = _PARAMS_get(id(design))
-    if hit is None or hit[0] is not design:
-        design_params(design)     # checks the type, fills the table
-        hit = _PARAMS[id(design)]
-    _LAST = hit
-    return hit
-
-
-def _lean_vector(x: object) -> NDArray[np.float64] | None:
-    """A vector of 3 as the single-item kernels take it, or None (the general path decides).
-
-    A float64 array of shape (3,) that is C-contiguous, aligned and writable as it
-    is; a list or tuple of three Python floats / ints / numpy float64 converted
-    (``[q1, q2, q3]``). Anything else (other dtypes, shapes, bools, strings,
-    read-only or strided arrays) is None: the general path converts it or names
-    what is wrong.
-    """
-    if type(x) is _ndarray:
-        if x.dtype is _F8 and x.shape == (3,) and x.flags.carray:
-            return x
-        return None
-    if (type(x) is list or type(x) is tuple) and len(x) == 3:
-        for v in x:
-            if type(v) is not float and type(v) is not int and type(v) is not np.float64:
-                return None
-        return np.array(x, _F8)
-    return None
-
-
-def _lean_frame(T: object) -> TypeGuard[NDArray[np.float64]]:
-    """``T`` is a float64 array (4, 4), C-contiguous, aligned and writable (the kernels' frame).
-
-    False for anything else, which the general path converts or names (lists
-    included: a frame is rarely a list in a loop).
-    """
-    return (type(T) is _ndarray and T.dtype is _F8  # type: ignore[union-attr]
-            and T.shape == (4, 4) and T.flags.carray)  # type: ignore[union-attr]
-
-
-def _lean_tol(x: object, name: str) -> float | None:
-    """A tolerance given as a float or numpy float64 in its documented range, else None.
-
-    None (NaN, out of :data:`~athenakin._validation.TOLERANCE_MAXIMA`, another type): the
-    general path then raises the named error.
-    """
-    if (type(x) is float or type(x) is np.float64) \
-            and 0 <= x <= TOLERANCE_MAXIMA.get(name, math.inf):  # type: ignore[operator]
-        return float(x)   # type: ignore[arg-type]
-    return None
-
-
-def _lean_errors(errors: object) -> bool:
-    """``errors`` raises on failure (``"auto"`` / ``"raise"``): the lean paths' policy."""
-    return errors is OPTION_AUTO or is_raising_policy(errors)
-
-
-def lean_fk(q: object, T_b_e: object, design: Design | None, method: object = OPTION_CLOSED,
-            errors: object = OPTION_AUTO, tangent_tol: object = TANGENT_TOL,
-            degenerate_tol: object = DEGENERATE_TOL, p_zero_tol: object = P_ZERO_TOL,
-            closure_tol: object = CLOSURE_TOL, fields: object = None) -> FKSolution | None:
-    """The single-pose FK of a plain call, or None: the general path then decides.
-
-    The one lean-path guard of the FK (the dispatch and :func:`forward_kinematics`
-    call it): one pose (``q`` an array or list of 3, ``T_b_e`` an array (4, 4)), the
-    closed form, tolerances given as floats or numpy float64 (>= 0), ``errors``
-    raising, all fields. None also when the pose has no valid slot or the
-    kernel flags an input (the general path raises the reference's error, or for
-    a false rigidity alarm returns the same result).
-    """
-    if fields is not None or not (method is OPTION_CLOSED or is_option(method, "closed")):
-        return None
-    if not (errors is OPTION_AUTO or is_raising_policy(errors)):
-        return None
-    if (tangent_tol is TANGENT_TOL and degenerate_tol is DEGENERATE_TOL
-            and p_zero_tol is P_ZERO_TOL and closure_tol is CLOSURE_TOL):
-        tol = _FK_TOL_DEFAULT
-    else:
-        t = (_lean_tol(tangent_tol, "tangent_tol"), _lean_tol(degenerate_tol, "degenerate_tol"),
-             _lean_tol(p_zero_tol, "p_zero_tol"), _lean_tol(closure_tol, "closure_tol"))
-        if t[0] is None or t[1] is None or t[2] is None or t[3] is None:
-            return None
-        tol = np.array(t)
-    qa: NDArray[np.float64] | None
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == (3,) and q.flags.carray:
-        qa = q                          # _lean_vector's first test, inline (0.1 us less)
-    else:
-        qa = _lean_vector(q)
-        if qa is None:
-            return None
-    if not (type(T_b_e) is _ndarray and T_b_e.dtype is _F8 and T_b_e.shape == (4, 4)
-            and T_b_e.flags.carray):    # _lean_frame, inline
-        return None
-    hit = _LAST     # read once: another thread may set _LAST between two reads
-    if hit[0] is not design:
-        hit = _lean_entry(design)
-    PT = hit[2] if tol is _FK_TOL_DEFAULT else np.concatenate((hit[1], tol, [ROTATION_TOL]))
-    # the result's own arrays, filled by the kernel (no views to make afterwards)
-    reason = _empty(16, _I8)
-    valid = _empty(16, _BOOL)
-    p = _empty(16)
-    u = _empty((16, 5))
-    Tbs = _empty((2, 4, 4))
-    res = _empty(16)
-    if _fk_one_lean(qa, T_b_e, PT, reason, valid, p, u, Tbs, res):
-        return None     # an input flag, or no valid slot
-    obj = _object_new(FKSolution)
-    # the instance __dict__ the frozen dataclass's __init__ would leave (about 1 us less)
-    # the instance dict filled key by key, in the dataclass's field order (about 70 ns less
-    # than a dict literal set through object.__setattr__)
-    d = obj.__dict__
-    d["valid"] = valid
-    d["reason"] = reason
-    d["p"] = p
-    d["u"] = u
-    d["T_b_s_mode"] = Tbs
-    d["residual"] = res
-    d["item_reason"] = _ZERO_I8.copy()
-    d["tool_length"] = hit[3]
-    return obj
-
-
-def lean_ik(T_b_e: object, u345: object, design: Design | None, errors: object = OPTION_AUTO,
-            singular_tol: object = IK_SINGULAR_TOL, closure_tol: object = CLOSURE_TOL,
-            fields: object = None) -> tuple[NDArray[np.float64], PassiveJoints] | None:
-    """The single-item paper-form IK of a plain call, or None (as :func:`lean_fk`)."""
-    if fields is not None or not (errors is OPTION_AUTO or is_raising_policy(errors)):
-        return None
-    if singular_tol is IK_SINGULAR_TOL and closure_tol is CLOSURE_TOL:
-        stol, ctol = IK_SINGULAR_TOL, CLOSURE_TOL
-    else:
-        st, ct = _lean_tol(singular_tol, "singular_tol"), _lean_tol(closure_tol, "closure_tol")
-        if st is None or ct is None:
-            return None
-        stol, ctol = st, ct
-    Ua: NDArray[np.float64] | None
-    if type(u345) is _ndarray and u345.dtype is _F8 and u345.shape == (3,) \
-            and u345.flags.carray:      # _lean_vector's first test, inline (0.1 us less)
-        Ua = u345
-    else:
-        Ua = _lean_vector(u345)
-        if Ua is None:
-            return None
-    if not (type(T_b_e) is _ndarray and T_b_e.dtype is _F8 and T_b_e.shape == (4, 4)
-            and T_b_e.flags.carray):    # _lean_frame, inline
-        return None
-    hit = _LAST     # read once (threads)
-    P = (hit if hit[0] is design else _lean_entry(design))[1]
-    fbuf = _empty(_ik.ONE_F)
-    Tbs = _empty((4, 4))
-    mode = _empty((), _I64)
-    if _ik_paper_lean(T_b_e, Ua, P, stol, ctol, ROTATION_TOL, fbuf, Tbs, mode):
-        return None     # an input flag, |u| beyond the exact range, or no solution
-    obj = _object_new(PassiveJoints)
-    # the instance __dict__ the frozen dataclass's __init__ would leave; a valid item
-    # (the kernel's flag is 0): valid True, reason 0
-    d = obj.__dict__     # filled key by key in field order, as lean_fk's
-    d["p"] = fbuf[_IK_P]
-    d["u"] = fbuf[_IK_U:_IK_T]
-    d["mode"] = mode
-    d["T_b_s"] = Tbs
-    d["residual"] = fbuf[_IK_RES]
-    d["valid"] = _TRUE
-    d["reason"] = _ZERO_I8.copy()
-    d["q_error"] = fbuf[_IK_QE]
-    return fbuf[:_IK_P], obj
-
-
-def lean_line(T_b_e: object, v: object, p: object, design: Design | None,
-              errors: object = OPTION_AUTO) -> tuple[NDArray[np.float64], InstrumentIK] | None:
-    """The single-item controller-form IK of a plain call, or None (as :func:`lean_fk`).
-
-    ``p`` None: :func:`q_from_tool_tip` (``v`` the tip); a float: :func:`q_from_instrument`
-    (``v`` the direction).
-    """
-    if not _lean_errors(errors):
-        return None
-    if p is None:
-        kind, pf = 1, 0.0
-    elif type(p) is float or type(p) is np.float64:
-        kind, pf = 0, float(p)   # type: ignore[arg-type]
-    else:
-        return None
-    Va = _lean_vector(v)
-    if Va is None or not _lean_frame(T_b_e):
-        return None
-    hit = _LAST     # read once (threads)
-    return _line_one_plain(T_b_e, Va, pf, kind,
-                           (hit if hit[0] is design else _lean_entry(design))[1])
+_object_new = object.__new__
+_object_setattr = object.__setattr__
 
 
 def _fk_one(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.float64],
@@ -637,20 +315,31 @@ _SINGULAR_TOL_MAX = TOLERANCE_MAXIMA["singular_tol"]
 _CLOSURE_TOL_MAX = TOLERANCE_MAXIMA["closure_tol"]
 
 
+def _ik_single(Ta: NDArray[np.float64], Ua: NDArray[np.float64], P: NDArray[np.float64],
+               stol: float, ctol: float, raise_now: bool
+               ) -> tuple[NDArray[np.float64], PassiveJoints] | None:
+    """One paper-form item through the single-item kernel; None: the reference decides."""
+    fbuf = np.empty(_one.ONE_F)
+    ibuf = np.empty(3, np.int64)
+    flags = _one.ik_paper_one(Ta, Ua, P, stol, ctol, ROTATION_TOL, fbuf, ibuf)
+    if flags & _fk.FLAG_NONRIGID:
+        check_transform(Ta, "T_b_e", allow_nonfinite=True)
+    if flags & _ik.FLAG_SLOW or (raise_now and (
+            flags & (_fk.FLAG_T_NONFINITE | _ik.FLAG_V_NONFINITE) or ibuf[2] != 0)):
+        return None
+    return fbuf[_one.ONE_Q:_one.ONE_P], _new(
+        PassiveJoints,
+        p=fbuf[_one.ONE_P], u=fbuf[_one.ONE_U:_one.ONE_T],
+        mode=ibuf[0:1].reshape(()), T_b_s=fbuf[_one.ONE_T:_one.ONE_RES].reshape(4, 4),
+        residual=fbuf[_one.ONE_RES], valid=ibuf[1] != 0,
+        reason=ibuf[2:3].astype(np.int8).reshape(()), q_error=fbuf[_one.ONE_QE])
+
+
 def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None = None, *,
                        errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
                        closure_tol: float = CLOSURE_TOL, fields: tuple[str, ...] | None = None,
                        parallel: bool = False) -> tuple[NDArray[np.float64], PassiveJoints]:
-    """Actuators for a frame E and ``u3, u4, u5``: compiled :func:`~athenakin.inverse_kinematics`.
-
-    Same parameters, results and errors as the reference; ``parallel=True``
-    spreads the batch over numba's threads.
-
-    Returns
-    -------
-    q : ndarray, shape (..., 3)
-    passive : PassiveJoints
-    """
+    """See :func:`athenakin.inverse_kinematics` (compiled; ``parallel=`` threads)."""
     def reference() -> tuple[NDArray[np.float64], PassiveJoints]:
         return _ref_ik.inverse_kinematics(T_b_e, u345, design, errors=errors,
                                           singular_tol=singular_tol, closure_tol=closure_tol,
@@ -674,20 +363,8 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     raise_now = resolve_policy(errors, batch)
     N = math.prod(batch)
     if not batch and not parallel and names is None:
-        fbuf = np.empty(_ik.ONE_F)
-        ibuf = np.empty(3, np.int64)
-        flags = _ik.ik_paper_one(Ta, Ua, P, stol, ctol, ROTATION_TOL, fbuf, ibuf)
-        if flags & _fk.FLAG_NONRIGID:
-            check_transform(Ta, "T_b_e", allow_nonfinite=True)
-        if flags & _ik.FLAG_SLOW or (raise_now and (
-                flags & (_fk.FLAG_T_NONFINITE | _ik.FLAG_V_NONFINITE) or ibuf[2] != 0)):
-            return reference()
-        return fbuf[_ik.ONE_Q:_ik.ONE_P], _new(
-            PassiveJoints,
-            p=fbuf[_ik.ONE_P], u=fbuf[_ik.ONE_U:_ik.ONE_T],
-            mode=ibuf[0:1].reshape(()), T_b_s=fbuf[_ik.ONE_T:_ik.ONE_RES].reshape(4, 4),
-            residual=fbuf[_ik.ONE_RES], valid=ibuf[1] != 0,
-            reason=ibuf[2:3].astype(np.int8).reshape(()), q_error=fbuf[_ik.ONE_QE])
+        one = _ik_single(Ta, Ua, P, stol, ctol, raise_now)
+        return reference() if one is None else one
     want = _iz.WANT_ALL if names is None else _ik_want(names)
 
     def alloc(bit: int, tail: tuple[int, ...], dtype: type = np.float64) -> NDArray:
@@ -745,24 +422,6 @@ def _ik_want(names: tuple[str, ...]) -> int:
 
 
 
-def _line_one_plain(Ta: NDArray[np.float64], Va: NDArray[np.float64], p: float, kind: int,
-                    P: NDArray[np.float64]) -> tuple[NDArray[np.float64], InstrumentIK] | None:
-    """One controller-form item (``kind`` 0: direction and ``p``, 1: tool tip), lean path.
-
-    None when an input flag is set or the item has no solution (the general path
-    then raises the reference's error).
-    """
-    fbuf = _empty(_ik.LINE_F)
-    ibuf = _empty(3, _I64)
-    if _ik.ik_line_one_packed(Ta, Va, p, P, kind, ROTATION_TOL, fbuf, ibuf) or ibuf[2]:
-        return None
-    return fbuf[_ik.LINE_Q:_ik.LINE_P], _new(
-        InstrumentIK, p=fbuf[_ik.LINE_P],
-        direction_b=fbuf[_ik.LINE_D:_ik.LINE_O], O_s=fbuf[_ik.LINE_O:_ik.LINE_QE],
-        mode=ibuf[0:1].reshape(()), valid=ibuf[1] != 0,
-        reason=ibuf[2:3].astype(np.int8).reshape(()), q_error=fbuf[_ik.LINE_QE])
-
-
 # --- whole robot: controller forms -------------------------------------------------------
 def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors: str,
           kind: int, parallel: bool) -> tuple[NDArray[np.float64], InstrumentIK]:
@@ -778,17 +437,13 @@ def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors:
         _batch(T_b_e=bT, direction_e=bV, p=bP) if kind == 0 else _batch(T_b_e=bT, tip_e=bV))
     raise_now = resolve_policy(errors, batch)
     if not batch and not parallel:
-        fbuf = np.empty(_ik.LINE_F)
+        fbuf = np.empty(_one.LINE_F)
         ibuf = np.empty(3, np.int64)
-        flags = _ik.ik_line_one_packed(Ta, Va, float(Pa) if kind == 0 else 0.0, P, kind,
+        flags = _one.ik_line_one_packed(Ta, Va, float(Pa) if kind == 0 else 0.0, P, kind,
                                        ROTATION_TOL, fbuf, ibuf)
         if flags or (raise_now and ibuf[2] != 0):
             raise _Delegate
-        return fbuf[_ik.LINE_Q:_ik.LINE_P], _new(
-            InstrumentIK, p=fbuf[_ik.LINE_P],
-            direction_b=fbuf[_ik.LINE_D:_ik.LINE_O], O_s=fbuf[_ik.LINE_O:_ik.LINE_QE],
-            mode=ibuf[0:1].reshape(()), valid=ibuf[1] != 0,
-            reason=ibuf[2:3].astype(np.int8).reshape(()), q_error=fbuf[_ik.LINE_QE])
+        return _line_result(fbuf, ibuf)
     N = math.prod(batch)
     q = np.empty((N, 3))
     p = np.empty(N)
@@ -862,7 +517,7 @@ def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
     r1, m_y, w, half = np.empty(N), np.empty(N), np.empty(N), np.empty(N)
     pres = np.empty((N, 2))
     ttol = check_tolerance(tangent_tol, "tangent_tol")
-    _ik.parallel_fk(qa.reshape(N, 3), P, ttol, valid, reason, T_b_i, T_b_s, theta, r1, m_y, w,
+    _pk.parallel_fk(qa.reshape(N, 3), P, ttol, valid, reason, T_b_i, T_b_s, theta, r1, m_y, w,
                     half, pres)
     valid, reason, T_b_i, T_b_s, theta, pres = (  # type: ignore[assignment]
         a.reshape(batch + a.shape[1:]) for a in (valid, reason, T_b_i, T_b_s, theta, pres))
@@ -888,7 +543,7 @@ def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> P
     valid = np.empty(N, np.bool_)
     reason = np.empty(N, np.int8)
     qe = np.empty(N)
-    _ik.parallel_ik_position(Oa.reshape(N, 3), P, q, mode, theta, valid, reason, qe)
+    _pk.parallel_ik_position(Oa.reshape(N, 3), P, q, mode, theta, valid, reason, qe)
     return ParallelIK(q=q.reshape(batch + (3,)), mode=mode.reshape(batch),
                       theta=theta.reshape(batch), valid=valid.reshape(batch)[()],
                       reason=reason.reshape(batch), q_error=qe.reshape(batch))

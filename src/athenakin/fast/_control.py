@@ -13,7 +13,8 @@ from ..design import Design
 from ..robot._ik import IK_SINGULAR_TOL
 from . import _fk_kernels as _fk
 from . import _ik_kernels as _ik
-from ._api import _FK_TOL_DEFAULT, design_params
+from . import _ik_single as _one
+from ._lean import _FK_TOL_DEFAULT, design_params
 
 __all__ = ["ControlLoop"]
 
@@ -89,9 +90,9 @@ class ControlLoop:
         self._reason = self._ibuf[_fk.ONE_REASON:_fk.ONE_VALID]
         self._p = self._fbuf[_fk.ONE_P:_fk.ONE_U]
         self._u = self._fbuf[_fk.ONE_U:_fk.ONE_T].reshape(16, 5)
-        self._kfbuf = np.empty(_ik.ONE_F)
+        self._kfbuf = np.empty(_one.ONE_F)
         self._kibuf = np.empty(3, np.int64)
-        self._kq = self._kfbuf[_ik.ONE_Q:_ik.ONE_P]
+        self._kq = self._kfbuf[_one.ONE_Q:_one.ONE_P]
         self._q = np.empty(3)
         self._tol = _FK_TOL_DEFAULT
         self._inf = float("inf")
@@ -138,7 +139,7 @@ class ControlLoop:
             As :attr:`PassiveJoints.reason` of :func:`athenakin.inverse_kinematics`.
         """
         u = _vec3(u345, "u345")
-        flags = _ik.ik_paper_one(self._T, u, self._P, IK_SINGULAR_TOL, CLOSURE_TOL, self._inf,
+        flags = _one.ik_paper_one(self._T, u, self._P, IK_SINGULAR_TOL, CLOSURE_TOL, self._inf,
                                  self._kfbuf, self._kibuf)
         if flags & _ik.FLAG_SLOW:   # |u| beyond the kernels' exact range: numpy reference
             from ..robot import inverse_kinematics
@@ -157,7 +158,7 @@ class ControlLoop:
         raising.
         """
         d = _vec3(direction_e, "direction_e")
-        r = _ik.ik_line_one(self._T, d, _real(p, "p"), self._P, 0, self._q)
+        r = _one.ik_line_one(self._T, d, _real(p, "p"), self._P, 0, self._q)
         return self._q, r
 
     def q_from_tool_tip(self, tip_e: ArrayLike) -> tuple[NDArray[np.float64], int]:
@@ -166,5 +167,5 @@ class ControlLoop:
         Returns ``(q (3,), reason)`` as :func:`athenakin.q_from_tool_tip`; a
         non-finite tip gives ``NONFINITE_INPUT`` here instead of raising.
         """
-        r = _ik.ik_line_one(self._T, _vec3(tip_e, "tip_e"), 0.0, self._P, 1, self._q)
+        r = _one.ik_line_one(self._T, _vec3(tip_e, "tip_e"), 0.0, self._P, 1, self._q)
         return self._q, r

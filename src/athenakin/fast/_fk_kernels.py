@@ -34,6 +34,7 @@ import numpy as np
 from .._backend import njit, prange
 from ..chain._ups import CLOSURE_ULPS, DEGENERATE_ULPS
 from ..errors import Reason
+from ._module_form import module_closed_form
 from ._scalar import atan2_from_q1, atan_q1, finite_sum, hypot, nanmax2, parallel_residual
 
 __all__ = ["CHUNK", "scratch", "fk_chunk", "gather", "fk_full", "fk_full_parallel", "fk_counts",
@@ -44,10 +45,7 @@ __all__ = ["CHUNK", "scratch", "fk_chunk", "gather", "fk_full", "fk_full_paralle
 CHUNK = 64
 
 # Reason codes (athenakin.errors.Reason), as floats in the scratch.
-_NONFINITE, _STROKE, _AB_ORDER = (float(Reason.NONFINITE_INPUT), float(Reason.STROKE_LIMIT),
-                                  float(Reason.AB_ORDER))
-_LINK, _DISJOINT, _TANGENT = (float(Reason.LINK_TOO_SHORT), float(Reason.CIRCLES_DISJOINT),
-                              float(Reason.CIRCLES_TANGENT))
+_NONFINITE, _TANGENT = float(Reason.NONFINITE_INPUT), float(Reason.CIRCLES_TANGENT)
 _P_ZERO, _UJOINT = float(Reason.SERIAL_P_ZERO), float(Reason.UJOINT_SINGULAR)
 _WRIST, _CLOSURE = float(Reason.WRIST_SINGULAR), float(Reason.CLOSURE_FAILED)
 #: chain.DEGENERATE_ULPS times the machine epsilon.
@@ -82,6 +80,8 @@ NG = 20
 # constant: LLVM then proves that rows do not overlap and vectorises the pose loops.
 
 _OPTS = dict(error_model="numpy", cache=True, nogil=True)
+#: The helpers of the stages, inlined into them (named steps, the same machine code).
+_INLINE = dict(_OPTS, inline="always")
 
 
 @njit(**_OPTS)
@@ -125,43 +125,15 @@ def gather(q, T, c0, n, G):
 @njit(**_OPTS)
 def _parallel_stage(G, P, tol, SH, S0, S1, n):
     """Parallel module, both assembly modes (parallel_forward_kinematics) for n columns."""
-    l1, l2, l3, l4, l5 = P[0], P[1], P[2], P[3], P[4]
-    lo0, lo1, lo2, hi0, hi1, hi2, hs = P[5], P[6], P[7], P[8], P[9], P[10], P[11]
+    l1, l4 = P[0], P[3]
     ttol = tol[0]
     for ii in range(n):
         q1, q2, q3 = G[(_GQ) * CHUNK + ii], G[(_GQ + 1) * CHUNK + ii], G[(_GQ + 2) * CHUNK + ii]
-        # parallel._module._actuator_checks
-        fin_q = (finite_sum(q1) + finite_sum(q2) + finite_sum(q3)) == 0.0
-        stroke = (q1 < lo0) | (q1 > hi0) | (q2 < lo1) | (q2 > hi1) | (q3 < lo2) | (q3 > hi2)
-        order = hs * (q1 - q2) < 0.0
-        pr = _NONFINITE if not fin_q else _STROKE if stroke else _AB_ORDER if order else 0.0
-        q1 = q1 if fin_q else 0.0
-        q2 = q2 if fin_q else 0.0
-        q3 = q3 if fin_q else 0.0
-        # parallel._module.circle_geometry
-        h = 0.5 * (q1 - q2)
-        r1 = math.sqrt(l1 * l1 - h * h)
-        m_y = math.sqrt(l3 * l3 - h * h) + l2
-        d2 = m_y * m_y + l5 * l5
-        d = math.sqrt(d2)
-        H = (d2 + r1 * r1) - q3 * q3
-        k = (((r1 + q3) - d) * ((r1 + q3) + d)) * ((d - r1) + q3) * ((d + r1) - q3)
-        half = math.sqrt(k if not (k < 0.0) else 0.0) / (2.0 * d)
-        ah = abs(h)
-        link = (ah >= l1) | (ah > l3)
-        pr = _LINK if (pr == 0.0) & link else pr
-        disjoint = (not link) & (k < 0.0) & (math.sqrt(abs(k)) / (2.0 * d) > ttol)
-        pr = _DISJOINT if (pr == 0.0) & disjoint else pr
-        ok = pr == 0.0
-        tangent = ok & (half <= ttol)
-        nan = 0.0 if ok else math.nan
+        pr, tangent, xm, q3, r1, _, d, k, half, by, bz, ey, ez = module_closed_form(
+            q1, q2, q3, P, ttol)
+        nan = 0.0 if pr == 0.0 else math.nan
         a = (0.0 if tangent else half) + nan
-        dd = (2.0 * d) * d
-        by = (H * m_y) / dd
-        bz = (H * l5) / dd
-        ey = (-l5) / d
-        ez = m_y / d
-        SH[_XM * CHUNK + ii] = 0.5 * (q1 + q2) + nan
+        SH[_XM * CHUNK + ii] = xm + nan
         SH[_R1 * CHUNK + ii] = r1 + nan
         # parallel._module.parallel_residual: the error of O_s from the rounding of k (a
         # merged mode: up to the half-chord off the true intersections)
@@ -174,6 +146,89 @@ def _parallel_stage(G, P, tol, SH, S0, S1, n):
         S1[_Z * CHUNK + ii] = bz + (-a) * ez
 
 
+@njit(**_INLINE)
+def _s_e(G, ii, xm, cy, cz, ys, zs):
+    """The upper 3 rows of T_s_e = T_b_s^-1 @ T_b_e of column ``ii`` (T_b_e gathered in ``G``).
+
+    T_b_s = [[1, 0, 0, xm], [0, cz, cy, ys], [0, -cy, cz, zs]].
+    """
+    t00, t01 = G[_GT * CHUNK + ii], G[(_GT + 1) * CHUNK + ii]
+    t02, t03 = G[(_GT + 2) * CHUNK + ii], G[(_GT + 3) * CHUNK + ii]
+    t10, t11 = G[(_GT + 4) * CHUNK + ii], G[(_GT + 5) * CHUNK + ii]
+    t12, t13 = G[(_GT + 6) * CHUNK + ii], G[(_GT + 7) * CHUNK + ii]
+    t20, t21 = G[(_GT + 8) * CHUNK + ii], G[(_GT + 9) * CHUNK + ii]
+    t22, t23 = G[(_GT + 10) * CHUNK + ii], G[(_GT + 11) * CHUNK + ii]
+    t30, t31 = G[(_GT + 12) * CHUNK + ii], G[(_GT + 13) * CHUNK + ii]
+    t32, t33 = G[(_GT + 14) * CHUNK + ii], G[(_GT + 15) * CHUNK + ii]
+    ti0 = -xm
+    ti1 = -(cz * ys - cy * zs)
+    ti2 = -(cy * ys + cz * zs)
+    e00 = t00 + ti0 * t30
+    e01 = t01 + ti0 * t31
+    e02 = t02 + ti0 * t32
+    e03 = t03 + ti0 * t33
+    e10 = (cz * t10 - cy * t20) + ti1 * t30
+    e11 = (cz * t11 - cy * t21) + ti1 * t31
+    e12 = (cz * t12 - cy * t22) + ti1 * t32
+    e13 = (cz * t13 - cy * t23) + ti1 * t33
+    e20 = (cy * t10 + cz * t20) + ti2 * t30
+    e21 = (cy * t11 + cz * t21) + ti2 * t31
+    e22 = (cy * t12 + cz * t22) + ti2 * t32
+    e23 = (cy * t13 + cz * t23) + ti2 * t33
+    return e00, e01, e02, e03, e10, e11, e12, e13, e20, e21, e22, e23
+
+
+@njit(**_INLINE)
+def _closure_residual(A1, B1, c2, s2, A3, B3, c4, s4, c5, s5, nn, e00, e01, e02, e03, e10,
+                      e11, e12, e13, e20, e21, e22, e23):
+    """Largest deviation of the chain of the angle pairs (scaled by ``nn``) from T_s_e."""
+    a00, a01, a02, a10, a11, a12, a20, a21, a22 = _rot_pair(A1, B1, c2, s2)
+    bx0, bx1, bx2 = A3 * c4, B3 * c4, s4
+    by0, by1 = B3, -A3
+    bz0, bz1, bz2 = A3 * s4, B3 * s4, -c4
+    w00, w10, w20 = c5 * bx0 + s5 * by0, c5 * bx1 + s5 * by1, c5 * bx2
+    w01, w11, w21 = c5 * by0 - s5 * bx0, c5 * by1 - s5 * bx1, -(s5 * bx2)
+    res = abs(((a00 * w00 + a01 * w10) + a02 * w20) - e00)
+    res = nanmax2(res, abs(((a00 * w01 + a01 * w11) + a02 * w21) - e01))
+    res = nanmax2(res, abs(((a00 * bz0 + a01 * bz1) + a02 * bz2) - e02))
+    res = nanmax2(res, abs(((a10 * w00 + a11 * w10) + a12 * w20) - e10))
+    res = nanmax2(res, abs(((a10 * w01 + a11 * w11) + a12 * w21) - e11))
+    res = nanmax2(res, abs(((a10 * bz0 + a11 * bz1) + a12 * bz2) - e12))
+    res = nanmax2(res, abs(((a20 * w00 + a21 * w10) + a22 * w20) - e20))
+    res = nanmax2(res, abs(((a20 * w01 + a21 * w11) + a22 * w21) - e21))
+    res = nanmax2(res, abs(((a20 * bz0 + a21 * bz1) + a22 * bz2) - e22))
+    res = nanmax2(res, abs(nn * a02 - e03))
+    res = nanmax2(res, abs(nn * a12 - e13))
+    res = nanmax2(res, abs(nn * a22 - e23))
+    return res
+
+
+@njit(**_INLINE)
+def _store_angles(Sm, ii, A1, B1, rho2, zz, A3, B3, rho4b, W22, y5, x5):
+    """The 16 distinct angles of a mode (first-quadrant atan, then sign patterns) into ``Sm``."""
+    a1 = atan_q1(abs(B1), abs(A1))
+    Sm[(_V1) * CHUNK + ii] = atan2_from_q1(a1, B1, A1)
+    Sm[(_V1 + 1) * CHUNK + ii] = atan2_from_q1(a1, -B1, -A1)
+    a2 = atan_q1(abs(rho2), abs(zz))
+    Sm[(_V2) * CHUNK + ii] = atan2_from_q1(a2, rho2, -zz)
+    Sm[(_V2 + 1) * CHUNK + ii] = atan2_from_q1(a2, rho2, zz)
+    Sm[(_V2 + 2) * CHUNK + ii] = atan2_from_q1(a2, -rho2, -zz)
+    Sm[(_V2 + 3) * CHUNK + ii] = atan2_from_q1(a2, -rho2, zz)
+    a3 = atan_q1(abs(B3), abs(A3))
+    Sm[(_V3) * CHUNK + ii] = atan2_from_q1(a3, B3, A3)
+    Sm[(_V3 + 1) * CHUNK + ii] = atan2_from_q1(a3, -B3, A3)
+    Sm[(_V3 + 2) * CHUNK + ii] = atan2_from_q1(a3, -B3, -A3)
+    Sm[(_V3 + 3) * CHUNK + ii] = atan2_from_q1(a3, B3, -A3)
+    a4 = atan_q1(abs(rho4b), abs(W22))
+    Sm[(_V4) * CHUNK + ii] = atan2_from_q1(a4, rho4b, -W22)
+    Sm[(_V4 + 1) * CHUNK + ii] = atan2_from_q1(a4, rho4b, W22)
+    Sm[(_V4 + 2) * CHUNK + ii] = atan2_from_q1(a4, -rho4b, -W22)
+    Sm[(_V4 + 3) * CHUNK + ii] = atan2_from_q1(a4, -rho4b, W22)
+    a5 = atan_q1(abs(y5), abs(x5))
+    Sm[(_V5) * CHUNK + ii] = atan2_from_q1(a5, y5, x5)
+    Sm[(_V5 + 1) * CHUNK + ii] = atan2_from_q1(a5, -y5, -x5)
+
+
 @njit(**_OPTS)
 def _serial_stage(G, P, tol, SH, Sm, n):
     """Serial chain (ups_solutions) of one assembly mode, scratch ``Sm``."""
@@ -182,34 +237,12 @@ def _serial_stage(G, P, tol, SH, Sm, n):
     for ii in range(n):
         xm, r1 = SH[_XM * CHUNK + ii], SH[_R1 * CHUNK + ii]
         y, z, pr = Sm[_Y * CHUNK + ii], Sm[_Z * CHUNK + ii], Sm[_PR * CHUNK + ii]
-        t00, t01 = G[_GT * CHUNK + ii], G[(_GT + 1) * CHUNK + ii]
-        t02, t03 = G[(_GT + 2) * CHUNK + ii], G[(_GT + 3) * CHUNK + ii]
-        t10, t11 = G[(_GT + 4) * CHUNK + ii], G[(_GT + 5) * CHUNK + ii]
-        t12, t13 = G[(_GT + 6) * CHUNK + ii], G[(_GT + 7) * CHUNK + ii]
-        t20, t21 = G[(_GT + 8) * CHUNK + ii], G[(_GT + 9) * CHUNK + ii]
-        t22, t23 = G[(_GT + 10) * CHUNK + ii], G[(_GT + 11) * CHUNK + ii]
-        t30, t31 = G[(_GT + 12) * CHUNK + ii], G[(_GT + 13) * CHUNK + ii]
-        t32, t33 = G[(_GT + 14) * CHUNK + ii], G[(_GT + 15) * CHUNK + ii]
         cy = y / r1
         cz = z / r1
         ys = y + l4 * cy
         zs = z + l4 * cz
-        # T_s_e = T_b_s^-1 @ T_b_e, T_b_s = [[1, 0, 0, xm], [0, cz, cy, ys], [0, -cy, cz, zs]]
-        ti0 = -xm
-        ti1 = -(cz * ys - cy * zs)
-        ti2 = -(cy * ys + cz * zs)
-        e00 = t00 + ti0 * t30
-        e01 = t01 + ti0 * t31
-        e02 = t02 + ti0 * t32
-        e03 = t03 + ti0 * t33
-        e10 = (cz * t10 - cy * t20) + ti1 * t30
-        e11 = (cz * t11 - cy * t21) + ti1 * t31
-        e12 = (cz * t12 - cy * t22) + ti1 * t32
-        e13 = (cz * t13 - cy * t23) + ti1 * t33
-        e20 = (cy * t10 + cz * t20) + ti2 * t30
-        e21 = (cy * t11 + cz * t21) + ti2 * t31
-        e22 = (cy * t12 + cz * t22) + ti2 * t32
-        e23 = (cy * t13 + cz * t23) + ti2 * t33
+        e00, e01, e02, e03, e10, e11, e12, e13, e20, e21, e22, e23 = _s_e(
+            G, ii, xm, cy, cz, ys, zs)
         fin = (finite_sum(e00) + finite_sum(e01) + finite_sum(e02) + finite_sum(e03)
                + finite_sum(e10) + finite_sum(e11) + finite_sum(e12) + finite_sum(e13)
                + finite_sum(e20) + finite_sum(e21) + finite_sum(e22) + finite_sum(e23)) == 0.0
@@ -255,25 +288,11 @@ def _serial_stage(G, P, tol, SH, Sm, n):
         c5 = x5 / n5
         s5 = y5 / n5
         # closure residual (identical for the 8 slots: they are sign flips of each other)
-        a00, a01, a02, a10, a11, a12, a20, a21, a22 = _rot_pair(A1, B1, c2, s2)
-        bx0, bx1, bx2 = A3 * c4, B3 * c4, s4
-        by0, by1 = B3, -A3
-        bz0, bz1, bz2 = A3 * s4, B3 * s4, -c4
-        w00, w10, w20 = c5 * bx0 + s5 * by0, c5 * bx1 + s5 * by1, c5 * bx2
-        w01, w11, w21 = c5 * by0 - s5 * bx0, c5 * by1 - s5 * bx1, -(s5 * bx2)
-        res = abs(((a00 * w00 + a01 * w10) + a02 * w20) - e00)
-        res = nanmax2(res, abs(((a00 * w01 + a01 * w11) + a02 * w21) - e01))
-        res = nanmax2(res, abs(((a00 * bz0 + a01 * bz1) + a02 * bz2) - e02))
-        res = nanmax2(res, abs(((a10 * w00 + a11 * w10) + a12 * w20) - e10))
-        res = nanmax2(res, abs(((a10 * w01 + a11 * w11) + a12 * w21) - e11))
-        res = nanmax2(res, abs(((a10 * bz0 + a11 * bz1) + a12 * bz2) - e12))
-        res = nanmax2(res, abs(((a20 * w00 + a21 * w10) + a22 * w20) - e20))
-        res = nanmax2(res, abs(((a20 * w01 + a21 * w11) + a22 * w21) - e21))
-        res = nanmax2(res, abs(((a20 * bz0 + a21 * bz1) + a22 * bz2) - e22))
-        res = nanmax2(res, abs(nn * a02 - e03))
-        res = nanmax2(res, abs(nn * a12 - e13))
-        res = nanmax2(res, abs(nn * a22 - e23))
+        res = _closure_residual(A1, B1, c2, s2, A3, B3, c4, s4, c5, s5, nn, e00, e01, e02, e03,
+                                e10, e11, e12, e13, e20, e21, e22, e23)
         # degeneracy relative to the direction's rounding, ~eps * (|t_b_e| + |O_s|) / p
+        t03, t13, t23 = G[(_GT + 3) * CHUNK + ii], G[(_GT + 7) * CHUNK + ii], \
+            G[(_GT + 11) * CHUNK + ii]
         sc = (max(abs(t03), max(abs(t13), abs(t23))) + max(abs(xm), max(abs(ys), abs(zs))))
         dt = max(dtol, _DEG_ROUND * sc / nn)
         ct = ctol + _CLOSE_ROUND * sc        # closure allows the rounding of a far pose
@@ -284,28 +303,7 @@ def _serial_stage(G, P, tol, SH, Sm, n):
         Sm[(_R) * CHUNK + ii] = pr if pr != 0.0 else ser
         Sm[(_NN) * CHUNK + ii] = nn
         Sm[(_RES) * CHUNK + ii] = res
-        # the 16 distinct angles of the mode (first-quadrant atan, then sign patterns)
-        a1 = atan_q1(abs(B1), abs(A1))
-        Sm[(_V1) * CHUNK + ii] = atan2_from_q1(a1, B1, A1)
-        Sm[(_V1 + 1) * CHUNK + ii] = atan2_from_q1(a1, -B1, -A1)
-        a2 = atan_q1(abs(rho2), abs(zz))
-        Sm[(_V2) * CHUNK + ii] = atan2_from_q1(a2, rho2, -zz)
-        Sm[(_V2 + 1) * CHUNK + ii] = atan2_from_q1(a2, rho2, zz)
-        Sm[(_V2 + 2) * CHUNK + ii] = atan2_from_q1(a2, -rho2, -zz)
-        Sm[(_V2 + 3) * CHUNK + ii] = atan2_from_q1(a2, -rho2, zz)
-        a3 = atan_q1(abs(B3), abs(A3))
-        Sm[(_V3) * CHUNK + ii] = atan2_from_q1(a3, B3, A3)
-        Sm[(_V3 + 1) * CHUNK + ii] = atan2_from_q1(a3, -B3, A3)
-        Sm[(_V3 + 2) * CHUNK + ii] = atan2_from_q1(a3, -B3, -A3)
-        Sm[(_V3 + 3) * CHUNK + ii] = atan2_from_q1(a3, B3, -A3)
-        a4 = atan_q1(abs(rho4b), abs(W22))
-        Sm[(_V4) * CHUNK + ii] = atan2_from_q1(a4, rho4b, -W22)
-        Sm[(_V4 + 1) * CHUNK + ii] = atan2_from_q1(a4, rho4b, W22)
-        Sm[(_V4 + 2) * CHUNK + ii] = atan2_from_q1(a4, -rho4b, -W22)
-        Sm[(_V4 + 3) * CHUNK + ii] = atan2_from_q1(a4, -rho4b, W22)
-        a5 = atan_q1(abs(y5), abs(x5))
-        Sm[(_V5) * CHUNK + ii] = atan2_from_q1(a5, y5, x5)
-        Sm[(_V5 + 1) * CHUNK + ii] = atan2_from_q1(a5, -y5, -x5)
+        _store_angles(Sm, ii, A1, B1, rho2, zz, A3, B3, rho4b, W22, y5, x5)
         Sm[(_YS) * CHUNK + ii] = ys
         Sm[(_ZS) * CHUNK + ii] = zs
         Sm[(_CY) * CHUNK + ii] = cy

@@ -22,7 +22,6 @@ import math
 import numpy as np
 
 from .._backend import njit
-
 from .._mechanism_formulas import FORMULA_JOINTS, tree_joint_formula
 
 __all__ = ["quaternion_xyzw_into", "urdf_frames_into", "joint_values_into", "JOINT_CODES"]

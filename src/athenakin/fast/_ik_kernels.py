@@ -1,7 +1,7 @@
-"""Compiled inverse kinematics and parallel-module kernels (private).
+"""Compiled inverse kinematics kernels of the whole robot (private).
 
 Mirrors of :func:`athenakin.inverse_kinematics`, :func:`athenakin.q_from_instrument`,
-:func:`athenakin.q_from_tool_tip` and :mod:`athenakin.parallel` (same formulas,
+:func:`athenakin.q_from_tool_tip` (same formulas,
 same reason codes, same NaN policy). As in :mod:`._fk_kernels` the pose loop
 runs in chunks: a gather pass copies the inputs into a flat structure-of-arrays
 scratch, a vectorised pass computes, a last pass writes the caller's arrays.
@@ -16,37 +16,57 @@ position of ``O_s`` without any angle (``cos theta = z / hypot(y, z)``).
 from __future__ import annotations
 
 import math
-import sys
 
 import numpy as np
 
 from .._backend import njit, prange
 from ..chain._ups import P_ZERO_TOL
 from ..errors import Reason
-from ..parallel._module import IK_ROUNDING_ULPS
 from ..robot._ik import IK_Q_ERROR_MAX
-from ._fk_kernels import CHUNK, FLAG_NO_SOLUTION, FLAG_T_NONFINITE, rigid_flags
+from ._fk_kernels import CHUNK, FLAG_T_NONFINITE, rigid_flags
+from ._parallel_kernels import (
+    _CT,
+    _DO,
+    _DX,
+    _DY,
+    _DZ,
+    _MODE,
+    _OX,
+    _OY,
+    _OZ,
+    _P,
+    _PRE,
+    _Q1,
+    _Q2,
+    _Q3,
+    _QE,
+    _REASON,
+    _RES,
+    _ROUND,
+    _ST,
+    _U1,
+    _U2,
+    _U3,
+    _U4,
+    _U5,
+    NK,
+    _pik_stage,
+)
 from ._scalar import (
     atan2,
     finite_sum,
     hypot,
     nanmax2,
-    parallel_residual,
     sincos,
     wrap_mod,
-    wrap_pi,
 )
 
-__all__ = ["ik_paper", "ik_paper_parallel", "ik_line", "ik_line_parallel",
-           "parallel_ik_position", "parallel_fk", "FLAG_SLOW", "FLAG_V_NONFINITE",
-           "FLAG_P_NONFINITE", "FLAG_ZERO_DIRECTION", "WRAP_EXACT_MAX"]
+__all__ = ["ik_paper", "ik_paper_parallel", "ik_line", "ik_line_parallel", "FLAG_SLOW",
+           "FLAG_V_NONFINITE", "FLAG_P_NONFINITE", "FLAG_ZERO_DIRECTION", "WRAP_EXACT_MAX"]
 
 # Reason codes (athenakin.errors.Reason) as floats.
-_NONFINITE, _STROKE, _AB_ORDER = (float(Reason.NONFINITE_INPUT), float(Reason.STROKE_LIMIT),
-                                  float(Reason.AB_ORDER))
-_LINK, _DISJOINT, _TANGENT = (float(Reason.LINK_TOO_SHORT), float(Reason.CIRCLES_DISJOINT),
-                              float(Reason.CIRCLES_TANGENT))
-_CLOSURE, _NOT_IMAGE = float(Reason.CLOSURE_FAILED), float(Reason.NOT_IN_MODULE_IMAGE)
+_NONFINITE, _TANGENT = float(Reason.NONFINITE_INPUT), float(Reason.CIRCLES_TANGENT)
+_CLOSURE = float(Reason.CLOSURE_FAILED)
 _IK_SINGULAR, _INSERTION = float(Reason.IK_SINGULAR), float(Reason.INSERTION_RANGE)
 _P_ZERO = float(Reason.SERIAL_P_ZERO)
 #: athenakin.robot.IK_Q_ERROR_MAX (m).
@@ -64,126 +84,7 @@ FLAG_ZERO_DIRECTION = 64   # a direction vector is zero
 WRAP_EXACT_MAX = 1.0e3
 
 _OPTS = dict(error_model="numpy", cache=True, nogil=True)
-
-# --- parallel module IK (parallel_ik_from_position) --------------------------------------
-# Rows of the IK scratch (flat, row * CHUNK + column).
-_OX, _OY, _OZ, _PRE = 0, 1, 2, 3          # inputs of the parallel IK (O_s, earlier reason)
-_Q1, _Q2, _Q3, _MODE, _REASON, _CT, _ST, _TH = 4, 5, 6, 7, 8, 9, 10, 11
-_P, _U1, _U2, _U3, _U4, _U5, _RES = 12, 13, 14, 15, 16, 17, 18
-_DX, _DY, _DZ = 19, 20, 21
-_DO, _QE = 22, 23                        # error already in O_s (in); q_error (out)
-NK = 24
-#: parallel._module.IK_ROUNDING_ULPS times the machine epsilon.
-_ROUND = IK_ROUNDING_ULPS * sys.float_info.epsilon
-
-
-@njit(**_OPTS)
-def _pik_stage(K, P, n):
-    """parallel_ik_from_position for n columns (rows _OX.._PRE in, _Q1.._TH out)."""
-    l1, l2, l3, l4, l5 = P[0], P[1], P[2], P[3], P[4]
-    lo0, lo1, lo2, hi0, hi1, hi2, hs = P[5], P[6], P[7], P[8], P[9], P[10], P[11]
-    for ii in range(n):
-        pre = K[_PRE * CHUNK + ii]
-        nanin = 0.0 if pre == 0.0 else math.nan
-        ox = K[_OX * CHUNK + ii] + nanin
-        oy = K[_OY * CHUNK + ii] + nanin
-        oz = K[_OZ * CHUNK + ii] + nanin
-        fin = (finite_sum(ox) + finite_sum(oy) + finite_sum(oz)) == 0.0
-        px = ox if fin else 0.0
-        py = oy if fin else 0.0
-        pz = oz if fin else 0.0
-        rho = hypot(py, pz)
-        reason = _NONFINITE if not fin else _NOT_IMAGE if rho <= l4 else 0.0
-        scale = max(abs(py), abs(pz))
-        dr = _ROUND * ((scale + l1) + l4) + K[_DO * CHUNK + ii]
-        r1 = rho - l4
-        r1 = l1 if (r1 > l1) & (r1 - l1 <= dr) else r1
-        h_abs = math.sqrt((l1 - r1) * (l1 + r1))
-        # within rounding of |h| = l3: on it (parallel._module.position_ik)
-        h_abs = l3 if (h_abs > l3) & (h_abs - l3 <= _h_error(r1, h_abs, dr)) else h_abs
-        bad = (r1 > l1) | (h_abs > l3)
-        reason = _LINK if (reason == 0.0) & bad else reason
-        h_abs = 0.0 if h_abs * h_abs <= 2.0 * r1 * dr else h_abs
-        ok = reason == 0.0
-        mask = 0.0 if ok else math.nan
-        h = hs * h_abs + mask
-        xm = px + mask
-        f = r1 / rho
-        y = py * f + mask
-        z = pz * f + mask
-        m_y = math.sqrt(l3 * l3 - h * h) + l2
-        q3 = hypot(y - m_y, z - l5)
-        cross = m_y * z - l5 * y
-        q1 = xm + h
-        q2 = xm - h
-        qe = _q_error(r1, h_abs, dr, l3) + _ROUND * abs(px)
-        # within the error bound of a stroke limit: on it (parallel._module.position_ik)
-        q1 = lo0 if (q1 < lo0) & (q1 >= lo0 - qe) else hi0 if (q1 > hi0) & (q1 <= hi0 + qe) else q1
-        q2 = lo1 if (q2 < lo1) & (q2 >= lo1 - qe) else hi1 if (q2 > hi1) & (q2 <= hi1 + qe) else q2
-        q3 = lo2 if (q3 < lo2) & (q3 >= lo2 - qe) else hi2 if (q3 > hi2) & (q3 <= hi2 + qe) else q3
-        # parallel._module._actuator_checks on q (items that passed so far)
-        finq = (finite_sum(q1) + finite_sum(q2) + finite_sum(q3)) == 0.0
-        stroke = (q1 < lo0) | (q1 > hi0) | (q2 < lo1) | (q2 > hi1) | (q3 < lo2) | (q3 > hi2)
-        order = hs * (q1 - q2) < 0.0
-        act = _NONFINITE if not finq else _STROKE if stroke else _AB_ORDER if order else 0.0
-        reason = act if ok & (act != 0.0) else reason
-        reason = pre if pre != 0.0 else reason
-        vmask = 0.0 if reason == 0.0 else math.nan
-        hh = hypot(y, z)
-        K[_Q1 * CHUNK + ii] = q1 + vmask
-        K[_Q2 * CHUNK + ii] = q2 + vmask
-        K[_Q3 * CHUNK + ii] = q3 + vmask
-        K[_MODE * CHUNK + ii] = 1.0 if cross >= 0.0 else -1.0
-        K[_REASON * CHUNK + ii] = reason
-        K[_CT * CHUNK + ii] = z / hh + vmask
-        K[_ST * CHUNK + ii] = -y / hh + vmask
-        K[_TH * CHUNK + ii] = atan2(-y, z) + vmask
-        K[_QE * CHUNK + ii] = qe + vmask
-
-
-@njit(**_OPTS)
-def _q_error(r1, h_abs, dr, l3):
-    """parallel._module._q_error: bound on the error of q for an error dr of r1."""
-    dh = _h_error(r1, h_abs, dr)
-    hd = h_abs + dh
-    s3 = l3 * l3 - hd * hd
-    s3 = math.sqrt(s3) if s3 > 0.0 else 0.0
-    near = math.sqrt((2.0 * h_abs + dh) * dh)
-    dmy = min(hd * dh / s3, near) if s3 > 0.0 else near
-    return (2.0 * dr + dh) + dmy
-
-
-@njit(**_OPTS)
-def _h_error(r1, h_abs, dr):
-    """parallel._module._h_error: bound on the error of |h| for an error dr of r1."""
-    r1p = r1 if r1 > 0.0 else 0.0
-    return 2.0 * r1p * dr / (math.sqrt(h_abs * h_abs + 2.0 * r1p * dr) + h_abs) + dr
-
-
-@njit(**_OPTS)
-def parallel_ik_position(Os, P, q, mode, theta, valid, reason, qe):
-    """:func:`athenakin.parallel.parallel_ik_from_position` for O (N, 3)."""
-    N = Os.shape[0]
-    K = np.empty(NK * CHUNK)
-    for c0 in range(0, N, CHUNK):
-        n = min(CHUNK, N - c0)
-        for ii in range(n):
-            for c in range(3):
-                K[(_OX + c) * CHUNK + ii] = Os[c0 + ii, c]
-            K[_PRE * CHUNK + ii] = 0.0
-            K[_DO * CHUNK + ii] = 0.0
-        _pik_stage(K, P, n)
-        for ii in range(n):
-            i = c0 + ii
-            for c in range(3):
-                q[i, c] = K[(_Q1 + c) * CHUNK + ii]
-            r = K[_REASON * CHUNK + ii]
-            mode[i] = np.int64(K[_MODE * CHUNK + ii]) if r == 0.0 else 0
-            theta[i] = K[_TH * CHUNK + ii]
-            qe[i] = K[_QE * CHUNK + ii]
-            reason[i] = np.int8(r)
-            valid[i] = r == 0.0
-
+_INLINE = dict(_OPTS, inline="always")
 
 # --- controller forms (q_from_instrument, q_from_tool_tip) ------------------------------
 @njit(**_OPTS)
@@ -351,6 +252,28 @@ def _paper_gather(T, U, c0, n, G):
         G[19 * CHUNK + ii] = 1.0 if s == 0.0 else 0.0
 
 
+@njit(**_INLINE)
+def _wrist(u3, u4, u5):
+    """Rows of ``W = R(u3, u4) Rz(u5)``, the wrist's rotation."""
+    s3, c3 = sincos(u3)
+    s4, c4 = sincos(u4)
+    s5, c5 = sincos(u5)
+    return (c3 * c4 * c5 + s3 * s5, c3 * c4 * (-s5) + s3 * c5, c3 * s4,
+            s3 * c4 * c5 + (-c3) * s5, s3 * c4 * (-s5) + (-c3) * c5, s3 * s4,
+            s4 * c5, s4 * (-s5), -c4)
+
+
+@njit(**_INLINE)
+def _times_transpose(e00, e01, e02, e10, e11, e12, e20, e21, e22,
+                     w00, w01, w02, w10, w11, w12, w20, w21, w22):
+    """Rows of ``E W^T`` (``R_b_w = R_b_e W^T``)."""
+    return ((e00 * w00 + e01 * w01) + e02 * w02, (e00 * w10 + e01 * w11) + e02 * w12,
+            (e00 * w20 + e01 * w21) + e02 * w22, (e10 * w00 + e11 * w01) + e12 * w02,
+            (e10 * w10 + e11 * w11) + e12 * w12, (e10 * w20 + e11 * w21) + e12 * w22,
+            (e20 * w00 + e21 * w01) + e22 * w02, (e20 * w10 + e21 * w11) + e22 * w12,
+            (e20 * w20 + e21 * w21) + e22 * w22)
+
+
 @njit(**_OPTS)
 def _paper_stage1(G, K, stol, n):
     """From T_b_e and u345 to O_s (rows _OX.._PRE), p, the wrapped u3..u5 and R_b_w."""
@@ -371,29 +294,10 @@ def _paper_stage1(G, K, stol, n):
         u3 = G[16 * CHUNK + ii] if fin else 0.0
         u4 = G[17 * CHUNK + ii] if fin else 0.0
         u5 = G[18 * CHUNK + ii] if fin else 0.0
-        s3, c3 = sincos(u3)
-        s4, c4 = sincos(u4)
-        s5, c5 = sincos(u5)
-        # W = R(u3, u4) Rz(u5)
-        w00 = c3 * c4 * c5 + s3 * s5
-        w01 = c3 * c4 * (-s5) + s3 * c5
-        w02 = c3 * s4
-        w10 = s3 * c4 * c5 + (-c3) * s5
-        w11 = s3 * c4 * (-s5) + (-c3) * c5
-        w12 = s3 * s4
-        w20 = s4 * c5
-        w21 = s4 * (-s5)
-        w22 = -c4
-        # R_b_w = R_b_e W^T
-        b00 = (e00 * w00 + e01 * w01) + e02 * w02
-        b01 = (e00 * w10 + e01 * w11) + e02 * w12
-        b02 = (e00 * w20 + e01 * w21) + e02 * w22
-        b10 = (e10 * w00 + e11 * w01) + e12 * w02
-        b11 = (e10 * w10 + e11 * w11) + e12 * w12
-        b12 = (e10 * w20 + e11 * w21) + e12 * w22
-        b20 = (e20 * w00 + e21 * w01) + e22 * w02
-        b21 = (e20 * w10 + e21 * w11) + e22 * w12
-        b22 = (e20 * w20 + e21 * w21) + e22 * w22
+        w00, w01, w02, w10, w11, w12, w20, w21, w22 = _wrist(u3, u4, u5)
+        b00, b01, b02, b10, b11, b12, b20, b21, b22 = _times_transpose(
+            e00, e01, e02, e10, e11, e12, e20, e21, e22,
+            w00, w01, w02, w10, w11, w12, w20, w21, w22)
         ny = hypot(b11, b21)
         nd = ny if ny > 0.0 else 1.0
         n0 = b11 / nd
@@ -624,185 +528,3 @@ def ik_paper_parallel(T, U, P, stol, ctol, rot_tol, q, p, u, mode, Tbs, res, val
         _paper_chunk(T, U, P, stol, ctol, G, K, c0, min(CHUNK, N - c0), q, p, u, mode, Tbs,
                      res, valid, reason, qe)
     return _paper_flags(T, U, rot_tol)
-
-
-# --- parallel module FK (parallel_forward_kinematics) ------------------------------------
-@njit(**_OPTS)
-def parallel_fk(q, P, ttol, valid, reason, T_b_i, T_b_s, theta, r1o, myo, wo, halfo, reso):
-    """:func:`athenakin.parallel.parallel_forward_kinematics` for q (N, 3)."""
-    l1, l2, l3, l4, l5 = P[0], P[1], P[2], P[3], P[4]
-    lo0, lo1, lo2, hi0, hi1, hi2, hs = P[5], P[6], P[7], P[8], P[9], P[10], P[11]
-    for i in range(q.shape[0]):
-        q1, q2, q3 = q[i, 0], q[i, 1], q[i, 2]
-        fin_q = (finite_sum(q1) + finite_sum(q2) + finite_sum(q3)) == 0.0
-        stroke = (q1 < lo0) | (q1 > hi0) | (q2 < lo1) | (q2 > hi1) | (q3 < lo2) | (q3 > hi2)
-        order = hs * (q1 - q2) < 0.0
-        pr = _NONFINITE if not fin_q else _STROKE if stroke else _AB_ORDER if order else 0.0
-        q1 = q1 if fin_q else 0.0
-        q2 = q2 if fin_q else 0.0
-        q3 = q3 if fin_q else 0.0
-        h = 0.5 * (q1 - q2)
-        r1 = math.sqrt(l1 * l1 - h * h)
-        m_y = math.sqrt(l3 * l3 - h * h) + l2
-        d2 = m_y * m_y + l5 * l5
-        d = math.sqrt(d2)
-        H = (d2 + r1 * r1) - q3 * q3
-        k = (((r1 + q3) - d) * ((r1 + q3) + d)) * ((d - r1) + q3) * ((d + r1) - q3)
-        half = math.sqrt(k if not (k < 0.0) else 0.0) / (2.0 * d)
-        ah = abs(h)
-        link = (ah >= l1) | (ah > l3)
-        pr = _LINK if (pr == 0.0) & link else pr
-        disjoint = (not link) & (k < 0.0) & (math.sqrt(abs(k)) / (2.0 * d) > ttol)
-        pr = _DISJOINT if (pr == 0.0) & disjoint else pr
-        ok = pr == 0.0
-        tangent = ok & (half <= ttol)
-        r1o[i] = r1
-        myo[i] = m_y
-        wo[i] = m_y * m_y * k
-        halfo[i] = half
-        nan = 0.0 if ok else math.nan
-        a = (0.0 if tangent else half) + nan
-        dd = (2.0 * d) * d
-        by = (H * m_y) / dd
-        bz = (H * l5) / dd
-        ey = (-l5) / d
-        ez = m_y / d
-        xm = 0.5 * (q1 + q2) + nan
-        r1n = r1 + nan
-        pres = parallel_residual(r1, q3, d, k, l1, l4, tangent) + nan
-        for m in range(2):
-            sr = pr if m == 0 else (_TANGENT if tangent else pr)
-            reason[i, m] = np.int8(sr)
-            valid[i, m] = sr == 0.0
-            mask = 0.0 if sr == 0.0 else math.nan
-            reso[i, m] = pres + mask
-            sa = a if m == 0 else -a
-            y = by + sa * ey
-            z = bz + sa * ez
-            cy = y / r1n
-            cz = z / r1n
-            theta[i, m] = wrap_pi(atan2(-cy, cz)) + mask
-            for F, off in ((T_b_i, 0.0), (T_b_s, l4)):
-                F[i, m, 0, 0] = 1.0 + mask
-                F[i, m, 0, 1] = mask
-                F[i, m, 0, 2] = mask
-                F[i, m, 0, 3] = xm + mask
-                F[i, m, 1, 0] = mask
-                F[i, m, 1, 1] = cz + mask
-                F[i, m, 1, 2] = cy + mask
-                F[i, m, 1, 3] = (y + off * cy if off != 0.0 else y) + mask
-                F[i, m, 2, 0] = mask
-                F[i, m, 2, 1] = -cy + mask
-                F[i, m, 2, 2] = cz + mask
-                F[i, m, 2, 3] = (z + off * cz if off != 0.0 else z) + mask
-                F[i, m, 3, 0] = mask
-                F[i, m, 3, 1] = mask
-                F[i, m, 3, 2] = mask
-                F[i, m, 3, 3] = 1.0 + mask
-
-
-#: Layout of the packed single-item buffer of :func:`ik_paper_one`:
-#: q (3), p (1), u (5), T_b_s (16), residual (1), q_error (1); ints: mode, valid, reason.
-ONE_Q, ONE_P, ONE_U, ONE_T, ONE_RES, ONE_QE, ONE_F = 0, 3, 4, 9, 25, 26, 27
-
-
-@njit(**_OPTS)
-def ik_paper_one(T, U, P, stol, ctol, rot_tol, fbuf, ibuf):
-    """Paper-form IK of one item, T (4, 4) and U (3,), into packed buffers.
-
-    ``fbuf`` (27,): q, p, u, T_b_s, residual, q_error; ``ibuf`` (3,) int64: mode, valid,
-    reason.
-    Returns the FLAG_* bits.
-    """
-    T2 = T.reshape((1, 4, 4))
-    U2 = U.reshape((1, 3))
-    G = np.empty(_NGP2 * CHUNK)
-    K = np.empty(NK * CHUNK)
-    valid = np.empty(1, np.bool_)
-    reason = np.empty(1, np.int8)
-    _paper_chunk(T2, U2, P, stol, ctol, G, K, 0, 1, fbuf[ONE_Q:ONE_P].reshape((1, 3)),
-                 fbuf[ONE_P:ONE_U], fbuf[ONE_U:ONE_T].reshape((1, 5)), ibuf[0:1],
-                 fbuf[ONE_T:ONE_RES].reshape((1, 4, 4)), fbuf[ONE_RES:ONE_QE], valid, reason,
-                 fbuf[ONE_QE:ONE_F])
-    ibuf[1] = valid[0]
-    ibuf[2] = reason[0]
-    return _paper_flags(T2, U2, rot_tol)
-
-
-
-
-@njit(**_OPTS)
-def ik_paper_lean(T, U, P, stol, ctol, rot_tol, fbuf, Tbs, mode):
-    """:func:`ik_paper_one` for the lean single call, into the result's own arrays.
-
-    ``fbuf`` (27,) as :func:`ik_paper_one`'s (its ``T_b_s`` part unused here),
-    ``Tbs`` (4, 4) and ``mode`` (0-d int64) receive ``T_b_s`` and the mode (no
-    views to make in Python); the same stages as :func:`ik_paper_one`. Returns the FLAG_* bits, plus
-    :data:`FLAG_NO_SOLUTION` when the item has no solution: 0 means a valid
-    result (``valid`` True, ``reason`` 0); anything else sends the caller down
-    the general path.
-    """
-    T2 = T.reshape((1, 4, 4))
-    U2 = U.reshape((1, 3))
-    G = np.empty(_NGP2 * CHUNK)
-    K = np.empty(NK * CHUNK)
-    valid = np.empty(1, np.bool_)
-    reason = np.empty(1, np.int8)
-    _paper_chunk(T2, U2, P, stol, ctol, G, K, 0, 1, fbuf[ONE_Q:ONE_P].reshape((1, 3)),
-                 fbuf[ONE_P:ONE_U], fbuf[ONE_U:ONE_T].reshape((1, 5)), mode.reshape((1,)),
-                 Tbs.reshape((1, 4, 4)), fbuf[ONE_RES:ONE_QE], valid, reason,
-                 fbuf[ONE_QE:ONE_F])
-    return _paper_flags(T2, U2, rot_tol) | (FLAG_NO_SOLUTION if reason[0] != 0 else 0)
-
-
-@njit(**_OPTS)
-def ik_line_one(T, V, pv, P, kind, q):
-    """Controller-form IK of one item (no input checks): writes q (3,), returns the reason.
-
-    ``kind`` 0: V is the direction in E and ``pv`` the insertion; 1: V is the tool tip.
-    """
-    G = np.empty(16 * CHUNK)
-    K = np.empty(NK * CHUNK)
-    for r in range(3):
-        for c in range(4):
-            G[(4 * r + c) * CHUNK] = T[r, c]
-    for c in range(3):
-        G[(12 + c) * CHUNK] = V[c]
-    G[15 * CHUNK] = pv if kind == 0 else P[12]
-    _line_stage(G, K, kind, 1)
-    _pik_stage(K, P, 1)
-    for c in range(3):
-        q[c] = K[(_Q1 + c) * CHUNK]
-    return int(K[_REASON * CHUNK])
-
-
-#: Packed single-item output of :func:`ik_line_one_packed`: q (3), p, d_b (3), O_s (3),
-#: q_error.
-LINE_Q, LINE_P, LINE_D, LINE_O, LINE_QE, LINE_F = 0, 3, 4, 7, 10, 11
-
-
-@njit(**_OPTS)
-def ik_line_one_packed(T, V, pv, P, kind, rot_tol, fbuf, ibuf):
-    """Controller-form IK of one item with input flags: fbuf (11,), ibuf (3,) int64.
-
-    ``ibuf`` receives mode, valid, reason. Returns the FLAG_* bits (nothing computed
-    when an input is non-finite or a direction is zero: the caller raises).
-    """
-    T2 = T.reshape((1, 4, 4))
-    V2 = V.reshape((1, 3))
-    Pp = np.empty(1)
-    Pp[0] = pv
-    flags = _line_flags(T2, V2, Pp, kind, rot_tol)
-    if flags & (FLAG_T_NONFINITE | FLAG_V_NONFINITE | FLAG_P_NONFINITE | FLAG_ZERO_DIRECTION):
-        return flags
-    G = np.empty(16 * CHUNK)
-    K = np.empty(NK * CHUNK)
-    valid = np.empty(1, np.bool_)
-    reason = np.empty(1, np.int8)
-    _line_chunk(T2, V2, Pp, P, kind, G, K, 0, 1, fbuf[LINE_Q:LINE_P].reshape((1, 3)),
-                fbuf[LINE_P:LINE_D], fbuf[LINE_D:LINE_O].reshape((1, 3)),
-                fbuf[LINE_O:LINE_QE].reshape((1, 3)), ibuf[0:1], valid, reason,
-                fbuf[LINE_QE:LINE_F])
-    ibuf[1] = valid[0]
-    ibuf[2] = reason[0]
-    return flags

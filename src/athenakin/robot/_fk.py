@@ -258,58 +258,9 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
                        p_zero_tol: float = P_ZERO_TOL, closure_tol: float = CLOSURE_TOL,
                        fields: tuple[str, ...] | None = None,
                        backend: ReferenceBackend = "numpy") -> FKSolution:
-    """All (up to) 16 configurations of the robot for actuator values ``q`` (Section 3).
+    """The numpy reference of :func:`athenakin.forward_kinematics` (the compiled kernels' oracle).
 
-    Parameters
-    ----------
-    q : array-like, shape (..., 3)
-        Actuators ``(q1, q2, q3)``, m.
-    T_b_e : array-like, shape (..., 4, 4)
-        RCM frame E in the base frame (set-up, fixed by the surgeon). Broadcasts with ``q``.
-    design : Design, optional
-        Defaults to :meth:`Design.default`.
-    method : {"closed", "algebraic"}, keyword-only
-        How the serial chain is solved: ``"closed"`` (default) by the closed form of
-        :func:`athenakin.chain.ups_solutions`; ``"algebraic"`` the paper's way (Section
-        3.2: the quadratic in ``p`` and the remaining joints from the cached
-        derivation, :func:`athenakin.symbolic.forward_kinematics_algebraic`). Both
-        return the same slots; the parallel module is shared.
-    errors : {"auto", "raise", "flag"}, keyword-only
-        ``"raise"``: an item with no valid slot raises the matching
-        :class:`~athenakin.errors.KinematicsError`; ``"flag"``: never raise for
-        a domain failure, report it in ``valid``/``reason``; ``"auto"``
-        (default): raise for a single item, flag in a batch.
-    tangent_tol, degenerate_tol, p_zero_tol, closure_tol : float, keyword-only
-        See :data:`~athenakin.parallel.TANGENT_TOL`, :data:`~athenakin.chain.DEGENERATE_TOL`,
-        :data:`~athenakin.chain.P_ZERO_TOL`, :data:`~athenakin.chain.CLOSURE_TOL`.
-    fields : tuple of str, optional, keyword-only
-        Compute and return only these arrays (names in :data:`FK_FIELDS`, e.g.
-        ``("p", "u", "valid")`` for a sweep); ``None`` (default): all. The result
-        always holds ``item_reason``; reading an array left out raises
-        ``AttributeError``.
-    backend : {"numpy"}, keyword-only
-        This is the numpy reference (the oracle of the compiled kernels); the public
-        function of the same name in :mod:`athenakin` chooses the backend
-        (``backend="auto"``: compiled where numba imports).
-
-    Returns
-    -------
-    FKSolution
-
-    Raises
-    ------
-    TypeError, InvalidInputError
-        Wrong type/shape, or NaN/inf input with ``errors`` resolving to raise.
-    StrokeLimitError, OutOfWorkspaceError, DegenerateChainError, SingularConfigurationError
-        With ``errors`` resolving to raise, when an item has no valid slot.
-
-    Examples
-    --------
-    >>> import numpy as np, athenakin as ak
-    >>> d = ak.Design.default()
-    >>> sol = ak.forward_kinematics([-0.10, 0.10, 0.45], ak.default_rcm_frame(d), d)
-    >>> int(sol.n_solutions)
-    16
+    See :func:`athenakin.forward_kinematics`; ``backend`` takes only ``"numpy"``.
     """
     check_choice(method, "method", _METHODS)
     check_reference_backend(backend, "forward_kinematics")

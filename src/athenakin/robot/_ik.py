@@ -191,52 +191,9 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
                        closure_tol: float = CLOSURE_TOL, fields: tuple[str, ...] | None = None,
                        backend: ReferenceBackend = "numpy"
                        ) -> tuple[NDArray[np.float64], PassiveJoints]:
-    """Actuator values for a given RCM frame and spherical-joint angles (paper Section 4).
+    """The numpy reference of :func:`athenakin.inverse_kinematics` (the compiled kernels' oracle).
 
-    Parameters
-    ----------
-    T_b_e : array-like, shape (..., 4, 4)
-        RCM frame E in the base frame.
-    u345 : array-like, shape (..., 3)
-        ``(u3, u4, u5)`` of the spherical joint, radians. Broadcasts with ``T_b_e``.
-    design : Design, optional
-    errors : {"auto", "raise", "flag"}, keyword-only
-        Failure policy, as in :func:`~athenakin.forward_kinematics`.
-    singular_tol : float, keyword-only
-        See :data:`IK_SINGULAR_TOL`.
-    closure_tol : float, keyword-only
-        Largest closure residual accepted.
-    fields : tuple of str, optional, keyword-only
-        Compute and return only these arrays of ``passive`` (names in
-        :data:`IK_FIELDS`; ``q`` is always returned); ``None`` (default): all.
-    backend : {"numpy"}, keyword-only
-        This is the numpy reference (the oracle of the compiled kernels); the public
-        function of the same name in :mod:`athenakin` chooses the backend
-        (``backend="auto"``: compiled where numba imports).
-
-    Returns
-    -------
-    q : ndarray, shape (..., 3)
-        ``(q1, q2, q3)``, m; NaN where ``passive.valid`` is False.
-    passive : PassiveJoints
-        ``p``, ``u1..u5``, assembly mode, ``T_b_s``, residual, validity and reason.
-
-    Raises
-    ------
-    SingularConfigurationError
-        ``IK_SINGULAR``: a continuum of ``q`` (``cos u1 = 0`` or ``sin u1 sin u2 = 0``).
-    OutOfWorkspaceError, StrokeLimitError
-        The pose needs ``O_s`` where the parallel module cannot put it.
-
-    Examples
-    --------
-    >>> import numpy as np, athenakin as ak
-    >>> d = ak.Design.default()
-    >>> T = ak.default_rcm_frame(d)
-    >>> sol = ak.forward_kinematics([-0.10, 0.10, 0.45], T, d)
-    >>> q, passive = ak.inverse_kinematics(T, sol.u[0, 2:], d)
-    >>> np.allclose(q, [-0.10, 0.10, 0.45], atol=1e-12)
-    True
+    See :func:`athenakin.inverse_kinematics`; ``backend`` takes only ``"numpy"``.
     """
     check_reference_backend(backend, "inverse_kinematics")
     names = check_ik_fields(fields)
@@ -413,32 +370,9 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
                       design: Design | None = None, *, errors: ErrorPolicy = "auto",
                       backend: ReferenceBackend = "numpy"
                       ) -> tuple[NDArray[np.float64], InstrumentIK]:
-    """Actuator values for an instrument direction about the RCM and an insertion ``p``.
+    """The numpy reference of :func:`athenakin.q_from_instrument` (the compiled kernels' oracle).
 
-    ``O_s = RCM - p * d`` with ``d`` the instrument direction; the parallel
-    module's IK then gives the unique ``q`` (the passive joints have 4
-    solutions; :func:`~athenakin.forward_kinematics` lists them).
-
-    Parameters
-    ----------
-    T_b_e : array-like, shape (..., 4, 4)
-        RCM frame.
-    direction_e : array-like, shape (..., 3)
-        Instrument direction in frame E (pointing from ``O_s`` through the RCM
-        into the patient); normalised here. See :func:`direction_from_angles`.
-    p : array-like, shape (...)
-        Distance from ``O_s`` to the RCM along the direction, m.
-    design : Design, optional
-    errors : {"auto", "raise", "flag"}, keyword-only
-    backend : {"numpy"}, keyword-only
-        This is the numpy reference (the oracle of the compiled kernels); the public
-        function of the same name in :mod:`athenakin` chooses the backend
-        (``backend="auto"``: compiled where numba imports).
-
-    Returns
-    -------
-    q : ndarray, shape (..., 3)
-    result : InstrumentIK
+    See :func:`athenakin.q_from_instrument`; ``backend`` takes only ``"numpy"``.
     """
     check_reference_backend(backend, "q_from_instrument")
     check_options(errors)
@@ -459,30 +393,9 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
 def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = None, *,
                     errors: ErrorPolicy = "auto", backend: ReferenceBackend = "numpy"
                     ) -> tuple[NDArray[np.float64], InstrumentIK]:
-    """Actuator values that put the tool tip at a point, the instrument through the RCM.
+    """The numpy reference of :func:`athenakin.q_from_tool_tip` (the compiled kernels' oracle).
 
-    The tip is at ``O_s + L d`` (``L = design.tool_length``) and the instrument
-    passes through the RCM, so ``d = tip / |tip|`` and ``p = L - |tip|`` (tip in
-    frame E). The tip must be beyond the RCM (inserted), ``0 < |tip| < L``;
-    otherwise the reason is ``INSERTION_RANGE`` (a tip exactly at the RCM leaves
-    the direction undefined: ``IK_SINGULAR``).
-
-    Parameters
-    ----------
-    T_b_e : array-like, shape (..., 4, 4)
-    tip_e : array-like, shape (..., 3)
-        Tool-tip position in the RCM frame E, m.
-    design : Design, optional
-    errors : {"auto", "raise", "flag"}, keyword-only
-    backend : {"numpy"}, keyword-only
-        This is the numpy reference (the oracle of the compiled kernels); the public
-        function of the same name in :mod:`athenakin` chooses the backend
-        (``backend="auto"``: compiled where numba imports).
-
-    Returns
-    -------
-    q : ndarray, shape (..., 3)
-    result : InstrumentIK
+    See :func:`athenakin.q_from_tool_tip`; ``backend`` takes only ``"numpy"``.
     """
     check_reference_backend(backend, "q_from_tool_tip")
     check_options(errors)
