@@ -29,7 +29,8 @@ from ._metrics import (
     CollisionSpec,
     row_from_design,
 )
-from ._study import StudyOptions, _require, evaluate, open_scheduler
+from ._scheduler import _require, open_scheduler
+from ._study import StudyOptions, evaluate
 from ._task import Task
 
 __all__ = ["SEARCH_VARIABLES", "DEFAULT_OBJECTIVES", "SearchResult", "default_bounds",
