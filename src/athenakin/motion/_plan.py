@@ -367,18 +367,7 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
     T = check_transform(T_b_e, "T_b_e")
     if T.shape != (4, 4):
         raise ValueError(f"T_b_e: expected one transform of shape (4, 4), got shape {T.shape}")
-    rate = check_scalar(rate, "rate", positive=True)
-    if not rate >= MIN_RATE:
-        raise ValueError(f"rate: expected at least {MIN_RATE:g} sample per second (Hz), "
-                         f"got {rate:g}")
-    max_duration = MAX_DURATION if max_duration is None else check_scalar(
-        max_duration, "max_duration", positive=True)
-    if max_samples is None:
-        max_samples = MAX_SAMPLES
-    elif (isinstance(max_samples, bool) or not isinstance(max_samples, (int, np.integer))
-          or max_samples < 2):
-        raise ValueError(f"max_samples: expected an integer >= 2, got {max_samples!r}")
-    max_samples = int(max_samples)
+    rate, max_duration, max_samples = _budget(rate, max_duration, max_samples)
     limits = Limits.build(v_max, a_max, j_max, tip_speed)
     margins = Margins() if margins is None else margins
     if not isinstance(margins, Margins):
@@ -391,19 +380,7 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
     if K > MAX_WAYPOINTS:
         raise ValueError(f"waypoints: expected at most {MAX_WAYPOINTS}, got {K} (plan the path "
                          f"in parts)")
-    req: NDArray[np.float64] | None = None
-    t0 = 0.0
-    if times is not None:
-        tt = check_array(times, "times", ())
-        if tt.shape != (K,):
-            raise ValueError(f"times: expected shape ({K},) (one per waypoint), got {tt.shape}")
-        req = np.diff(tt)
-        if np.any(req < 0):
-            raise ValueError(f"times: expected non-decreasing arrival times, got {tt.tolist()}")
-        t0 = float(tt[0])
-        _check_budget(float(tt[-1] - tt[0]), rate, max_duration, max_samples, None)
-    elif timing == "fixed":
-        raise ValueError("timing='fixed' needs times (the arrival time of each waypoint)")
+    req, t0 = _requested(times, K, timing, rate, max_duration, max_samples)
 
     # the path first: waypoints, then each segment on a grid (no timing can fix these)
     _check_waypoints(tips, T, design)
@@ -439,6 +416,43 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
         ratio = bad["bound"] / bad["value"] if bad["value"] > 0 else 0.5
         sp.tighten *= min(0.98, ratio ** (1 / 3) * 0.98)
     return _trajectory(samples, plans, tips, limits, margins, T, design, rate, t0, check)
+
+
+
+def _budget(rate: object, max_duration: object, max_samples: object) -> tuple[float, float, int]:
+    """The checked sample rate (Hz), longest duration (s) and most samples of a plan."""
+    rate = check_scalar(rate, "rate", positive=True)
+    if not rate >= MIN_RATE:
+        raise ValueError(f"rate: expected at least {MIN_RATE:g} sample per second (Hz), "
+                         f"got {rate:g}")
+    max_duration = MAX_DURATION if max_duration is None else check_scalar(
+        max_duration, "max_duration", positive=True)
+    if max_samples is None:
+        max_samples = MAX_SAMPLES
+    elif (isinstance(max_samples, bool) or not isinstance(max_samples, (int, np.integer))
+          or max_samples < 2):
+        raise ValueError(f"max_samples: expected an integer >= 2, got {max_samples!r}")
+    max_samples = int(max_samples)
+    return rate, max_duration, max_samples
+
+
+def _requested(times: ArrayLike | None, K: int, timing: str, rate: float, max_duration: float,
+               max_samples: int) -> tuple[NDArray[np.float64] | None, float]:
+    """The requested duration of each segment (None: as fast as the limits allow), the start."""
+    req: NDArray[np.float64] | None = None
+    t0 = 0.0
+    if times is not None:
+        tt = check_array(times, "times", ())
+        if tt.shape != (K,):
+            raise ValueError(f"times: expected shape ({K},) (one per waypoint), got {tt.shape}")
+        req = np.diff(tt)
+        if np.any(req < 0):
+            raise ValueError(f"times: expected non-decreasing arrival times, got {tt.tolist()}")
+        t0 = float(tt[0])
+        _check_budget(float(tt[-1] - tt[0]), rate, max_duration, max_samples, None)
+    elif timing == "fixed":
+        raise ValueError("timing='fixed' needs times (the arrival time of each waypoint)")
+    return req, t0
 
 
 def _sample_checked(plans: list[_SegmentPlan], T: NDArray[np.float64], design: Design,
