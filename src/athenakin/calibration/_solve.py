@@ -420,27 +420,7 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
         bad_rows=opts.bad_rows, max_bad_fraction=opts.max_bad_fraction)
     n_used = prob.q.shape[0]
     rows_per = 3 if prob.axes is None else 6
-    if rows_per * n_used <= len(names):
-        raise NotIdentifiableError(
-            f"too few poses: {n_used} usable poses give {rows_per * n_used} equations for "
-            f"{len(names)} parameters {list(names)}; measure more than "
-            f"{len(names) // rows_per} poses (and more than that for a useful estimate)")
-    J0 = prob.jac_full(prob.theta0)[:, prob.free]
-    report = analyse_jacobian(J0, names, tol=opts.identifiability_tol)
-    if not report.identifiable:
-        if opts.on_unidentifiable == "raise":
-            raise_if_not_identifiable(report, n_used)
-        warnings.warn(f"calibration: not identifiable: {'; '.join(report.combinations)}",
-                      CalibrationWarning, stacklevel=2)
-    elif report.weak:
-        warnings.warn(f"calibration: weakly identifiable (condition {report.condition:.3g}); "
-                      "the standard deviations will be large", CalibrationWarning, stacklevel=2)
-    rms0 = float(np.sqrt(np.mean(np.sum(prob.evaluate(prob.theta0, False)[1][:, :3] ** 2,
-                                        axis=1))))
-    if rms0 > UNITS_WARNING:
-        warnings.warn(f"calibration: the measured tips are {rms0:.3g} m (RMS) from the nominal "
-                      "model; check the units (m), the frame and T_b_e", CalibrationWarning,
-                      stacklevel=2)
+    report = _check_problem(prob, names, opts, n_used, rows_per)
     x0 = prob.theta0[prob.free]
     x_scale = 1.0 / np.where(report.column_norms > 0, report.column_norms, 1.0)
     x_scale = x_scale / np.max(x_scale)
@@ -488,6 +468,34 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
                       f"{outlier_threshold * s_hat:.3g} m)", CalibrationWarning, stacklevel=2)
     return _result(design, names, prob, theta, cov, chk, m_all, T, r_before, r_after, use,
                    outl, s_hat, report, sol, rows_per)
+
+
+
+def _check_problem(prob: _Problem, names: tuple[str, ...], opts: CalibrationOptions, n_used: int,
+                   rows_per: int) -> IdentifiabilityReport:
+    """Enough equations, the identifiability of the parameters, plausible units (warnings)."""
+    if rows_per * n_used <= len(names):
+        raise NotIdentifiableError(
+            f"too few poses: {n_used} usable poses give {rows_per * n_used} equations for "
+            f"{len(names)} parameters {list(names)}; measure more than "
+            f"{len(names) // rows_per} poses (and more than that for a useful estimate)")
+    J0 = prob.jac_full(prob.theta0)[:, prob.free]
+    report = analyse_jacobian(J0, names, tol=opts.identifiability_tol)
+    if not report.identifiable:
+        if opts.on_unidentifiable == "raise":
+            raise_if_not_identifiable(report, n_used)
+        warnings.warn(f"calibration: not identifiable: {'; '.join(report.combinations)}",
+                      CalibrationWarning, stacklevel=3)
+    elif report.weak:
+        warnings.warn(f"calibration: weakly identifiable (condition {report.condition:.3g}); "
+                      "the standard deviations will be large", CalibrationWarning, stacklevel=3)
+    rms0 = float(np.sqrt(np.mean(np.sum(prob.evaluate(prob.theta0, False)[1][:, :3] ** 2,
+                                        axis=1))))
+    if rms0 > UNITS_WARNING:
+        warnings.warn(f"calibration: the measured tips are {rms0:.3g} m (RMS) from the nominal "
+                      "model; check the units (m), the frame and T_b_e", CalibrationWarning,
+                      stacklevel=3)
+    return report
 
 
 def _robust_sigma(r: NDArray[np.float64]) -> float:
