@@ -8,17 +8,17 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_transform
-from ..design import Design, resolve_design
+from .._validation import check_array
+from ..design import Design
 from ..errors import InvalidInputError
-from ..robot import default_rcm_frame, direction_from_angles, q_from_instrument
+from ..robot import direction_from_angles, q_from_instrument
 from ._jacobians import _parallel_jacobian, _state, _tip_matrices
 from ._workspace_grid import (
     _clearance,
-    _collision_check,
     _cond,
     _free,
     _map_chunks,
+    _map_setup,
     _quiet,
     _resolution,
 )
@@ -139,11 +139,7 @@ def instrument_cone(T_b_e: ArrayLike | None = None, design: Design | None = None
     -------
     InstrumentCone
     """
-    design = resolve_design(design)
-    check = _collision_check(design, bodies, environment, clearance_margin)
-    T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
-    if T.shape != (4, 4):
-        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
+    design, check, T = _map_setup(T_b_e, design, bodies, environment, clearance_margin)
     na, npol, npp = _resolution(resolution, 3)
     allowed = _modes_arg(modes)
     L = design.tool_length

@@ -39,21 +39,21 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._output import check_output_path, naming_path
-from .._validation import check_path, check_transform
+from .._validation import check_path
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..parallel import parallel_ik_from_position
-from ..robot import default_rcm_frame, q_from_tool_tip
+from ..robot import q_from_tool_tip
 from ._cone import InstrumentCone, _box, _interval, _modes_arg, instrument_cone
 from ._jacobians import _parallel_jacobian, _state, _tip_matrices
 from ._singularities import _svd
 from ._workspace_grid import (
     CHUNK,
     _clearance,
-    _collision_check,
     _cond,
     _free,
     _map_chunks,
+    _map_setup,
     _quiet,
     _resolution,
     _unlimited,
@@ -263,11 +263,7 @@ def point_workspace(T_b_e: ArrayLike | None = None, design: Design | None = None
     if isinstance(T_b_e, Design):          # the order of every function: (..., T_b_e, design)
         raise TypeError("T_b_e: expected a (4, 4) RCM frame or None, got a Design (the order "
                         "is point_workspace(T_b_e, design); give design=...)")
-    design = resolve_design(design)
-    check = _collision_check(design, bodies, environment, clearance_margin)
-    T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
-    if T.shape != (4, 4):
-        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
+    design, check, T = _map_setup(T_b_e, design, bodies, environment, clearance_margin)
     n = _resolution(resolution, 3)
     b = _box(bounds) or _default_bounds(design)
     axes = [np.linspace(lo, hi, k) for (lo, hi), k in zip(b, n, strict=True)]
@@ -366,11 +362,7 @@ def tool_tip_workspace(T_b_e: ArrayLike | None = None, design: Design | None = N
     -------
     ToolTipWorkspace
     """
-    design = resolve_design(design)
-    check = _collision_check(design, bodies, environment, clearance_margin)
-    T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
-    if T.shape != (4, 4):
-        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
+    design, check, T = _map_setup(T_b_e, design, bodies, environment, clearance_margin)
     allowed = _modes_arg(modes)
     n = _resolution(resolution, 3)
     L = design.tool_length

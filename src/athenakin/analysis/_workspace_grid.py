@@ -10,10 +10,12 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
-from ..design import Design
+from .._validation import check_transform
+from ..design import Design, resolve_design
 from ..errors import InvalidInputError
+from ..robot import default_rcm_frame
 from ._singularities import _svd
 
 #: Grid points per vectorised chunk (bounds memory; the progress bar advances per chunk).
@@ -98,6 +100,18 @@ def _collision_check(design: Design, bodies: object, environment: object,
 
     opts = collision_options(design, bodies, environment, clearance_margin, default_margin=0.0)
     return None if opts is None else _Check(*opts)
+
+
+
+def _map_setup(T_b_e: ArrayLike | None, design: Design | None, bodies: object, environment: object,
+               clearance_margin: object) -> tuple[Design, _Check | None, NDArray[np.float64]]:
+    """The design, the collision check and the RCM frame (shape (4, 4)) of a workspace map."""
+    design = resolve_design(design)
+    check = _collision_check(design, bodies, environment, clearance_margin)
+    T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
+    if T.shape != (4, 4):
+        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
+    return design, check, T
 
 
 def _clearance(check: _Check, q: NDArray[np.float64], T: NDArray[np.float64], design: Design,
