@@ -60,7 +60,7 @@ def _readers() -> list[tuple[str, Callable[[Path], object]]]:
         ("direction", read_path_csv), ("stream", read_q_stream_csv),
         ("measurements", read_measurements_csv)]
     # appended, never inserted: a finding's first byte keeps naming its reader
-    from athenakin.app._model import load_playback
+    from athenakin.app._playback import load_playback
     from athenakin.synthesis import Task
     from athenakin.synthesis._search import bounds_from_toml
 

@@ -22,7 +22,7 @@ from _ros_recordings import NAMES, _js, _ros2_store, positions, q_stream, stamps
 import athenakin as ak  # noqa: E402
 from athenakin import _backend  # noqa: E402
 from athenakin.errors import InvalidInputError  # noqa: E402
-from athenakin.ros import _mcap, _read, _write  # noqa: E402
+from athenakin.ros import _mcap, _mcap_stream, _write  # noqa: E402
 from athenakin.ros._frames import (  # noqa: E402
     MOVING_LINKS,
     TOOL_TIP_FRAME,
@@ -292,20 +292,20 @@ def test_chunks_that_define_channels_are_read_in_bulk(tmp_path, monkeypatch):
     with open(path, "rb") as fh:
         n_messages = sum(1 for _ in make_reader(fh).iter_messages())
     calls = []
-    real = _read._scan
+    real = _mcap_stream._scan
 
     def spy(data):
         calls.append(real(data))
         return calls[-1]
 
-    monkeypatch.setattr(_read, "_scan", spy)
+    monkeypatch.setattr(_mcap_stream, "_scan", spy)
     with open(path, "rb") as fh:
-        stream = _read._McapStream(fh, path.stat().st_size)
+        stream = _mcap_stream._McapStream(fh, path.stat().st_size)
         items = list(stream.messages())
     assert calls and all(c is not None for c in calls)         # never record by record
     assert any(len(it) == 2 for c in calls for it in c)        # definitions in their place
     assert {ch[0] for ch in stream.channels.values()} == {"/joint_states", "/late"}
-    assert all(isinstance(b, _read._Bulk) for _, _, b in items)
+    assert all(isinstance(b, _mcap_stream._Bulk) for _, _, b in items)
     assert sum(len(t) for _, t, _ in items) == n_messages
     monkeypatch.undo()
     for topic in ("/joint_states", "/late"):
@@ -324,11 +324,11 @@ def test_rows_strided_view_equals_the_gather():
     for offsets, even in ((np.arange(10, 900, 37), True), (np.array([5]), True),
                           (np.array([0, 37, 70, 111]), False),
                           (np.array([3, 50, 97, 144, 191]), True)):
-        got = _read._rows(data, offsets.astype(np.int64), 30)
+        got = _mcap_stream._rows(data, offsets.astype(np.int64), 30)
         want = data[offsets[:, None] + np.arange(30)]
         np.testing.assert_array_equal(got, want)
         assert np.shares_memory(got, data) == even                # a view, or a gather
         assert got.flags.writeable != even                        # the view is read-only
     # past the end of the data: the gather raises as before, never a view past the end
     with pytest.raises(IndexError):
-        _read._rows(data, np.array([900, 950, 1000 - 20], np.int64), 30)
+        _mcap_stream._rows(data, np.array([900, 950, 1000 - 20], np.int64), 30)

@@ -12,6 +12,7 @@
 Derivations and the findings for the default design: ``docs/singularities.md``.
 """
 
+from ._cone import InstrumentCone, instrument_cone
 from ._jacobians import (
     Frame,
     instrument_inverse_jacobian,
@@ -25,33 +26,33 @@ from ._jacobians import (
     tool_tip_inverse_jacobian,
     tool_tip_jacobian,
 )
+from ._loci import (
+    MEASURE_OF,
+    near_singular_configurations,
+    singular_sets_within_strokes,
+    singularity_loci,
+)
 from ._singularities import (
     CONDITIONS,
     DEFAULT_TOL,
-    MEASURE_OF,
     Condition,
     SingularityReport,
     condition_number,
-    near_singular_configurations,
     sigma_min,
-    singular_sets_within_strokes,
     singularities,
-    singularity_loci,
 )
 from ._workspace import (
-    CHUNK,
     ActuatorMap,
-    InstrumentCone,
     PointWorkspace,
     ToolTipWorkspace,
     actuator_map,
-    instrument_cone,
     load_npz,
     point_workspace,
     save_npz,
     tool_tip_workspace,
     workspace_summary,
 )
+from ._workspace_grid import CHUNK
 
 __all__ = [
     "Frame",

@@ -30,12 +30,8 @@ field name plus a JSON ``meta`` entry) and read with :func:`load_npz`.
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import json
-import math
-import warnings
-from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -43,13 +39,26 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._output import check_output_path, naming_path
-from .._validation import check_array, check_path, check_transform
+from .._validation import check_path
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..parallel import parallel_ik_from_position
-from ..robot import default_rcm_frame, direction_from_angles, q_from_instrument, q_from_tool_tip
+from ..robot import q_from_tool_tip
+from ._cone import InstrumentCone, _box, _interval, _modes_arg, instrument_cone
 from ._jacobians import _parallel_jacobian, _state, _tip_matrices
 from ._singularities import _svd
+from ._workspace_grid import (
+    CHUNK,
+    _clearance,
+    _cond,
+    _free,
+    _map_chunks,
+    _map_setup,
+    _quiet,
+    _resolution,
+    _unlimited,
+    _within,
+)
 
 __all__ = [
     "ActuatorMap",
@@ -65,113 +74,6 @@ __all__ = [
     "CHUNK",
     "workspace_summary",
 ]
-
-#: Grid points per vectorised chunk (bounds memory; the progress bar advances per chunk).
-CHUNK = 65536
-#: Grids with more points than this show a progress bar when ``progress=None``.
-PROGRESS_THRESHOLD = 500_000
-
-
-# --------------------------------------------------------------------------------------
-# helpers
-# --------------------------------------------------------------------------------------
-#: Most grid points a workspace function evaluates: each point keeps a few hundred bytes
-#: of results, so a larger grid is a memory error in the making, refused up front.
-MAX_GRID_POINTS = 50_000_000
-
-
-def _resolution(res: int | tuple[int, ...], n: int, name: str = "resolution") -> tuple[int, ...]:
-    try:
-        scalar = np.ndim(res) == 0
-        r: tuple[Any, ...] = (res,) * n if scalar else tuple(res)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise InvalidInputError(f"{name}: expected an int >= 2 or {n} of them, got "
-                                f"{res!r}") from None
-    if len(r) != n or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool)
-                              and v >= 2 for v in r):
-        raise InvalidInputError(f"{name}: expected an int >= 2 or {n} of them, got {res!r}")
-    out = tuple(int(v) for v in r)
-    if math.prod(out) > MAX_GRID_POINTS:
-        raise InvalidInputError(f"{name}: {' x '.join(map(str, out))} grid points exceed the "
-                                f"limit of {MAX_GRID_POINTS:,} (MAX_GRID_POINTS)")
-    return out
-
-
-def _chunks(n: int, progress: bool | None, desc: str) -> Iterator[slice]:
-    """Slices of ``range(n)`` in chunks of :data:`CHUNK`, with a tqdm bar if asked."""
-    starts = range(0, n, CHUNK)
-    show = n > PROGRESS_THRESHOLD if progress is None else bool(progress)
-    it: Any = starts
-    if show:
-        try:
-            from tqdm.auto import tqdm
-        except ImportError:  # pragma: no cover - tqdm is in the analysis extra
-            pass
-        else:
-            it = tqdm(starts, total=(n + CHUNK - 1) // CHUNK, desc=desc, unit="chunk",
-                      disable=None)
-    for s in it:
-        yield slice(s, min(s + CHUNK, n))
-
-
-def _map_chunks(fn: Callable[[NDArray[np.float64]], dict[str, NDArray[Any]]],
-                pts: NDArray[np.float64], progress: bool | None, desc: str
-                ) -> dict[str, NDArray[Any]]:
-    """Apply ``fn`` to chunks of the rows of ``pts`` (n, k) and concatenate."""
-    parts: dict[str, list[NDArray[Any]]] = {}
-    for sl in _chunks(len(pts), progress, desc):
-        for k, v in fn(pts[sl]).items():
-            parts.setdefault(k, []).append(v)
-    return {k: np.concatenate(v) for k, v in parts.items()}
-
-
-def _cond(J: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    s = _svd(J)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        c = np.where(s[..., -1] > 0, s[..., 0] / s[..., -1], np.inf)
-    return s[..., -1], np.where(np.isnan(s[..., 0]), np.nan, c)
-
-
-@dataclasses.dataclass(frozen=True)
-class _Check:
-    bodies: Any
-    environment: Any
-    margin: float
-
-
-def _collision_check(design: Design, bodies: object, environment: object,
-                     clearance_margin: object) -> _Check | None:
-    """The collision check asked for (None: none); bodies default to ``Bodies.default``."""
-    from ._collision import collision_options
-
-    opts = collision_options(design, bodies, environment, clearance_margin, default_margin=0.0)
-    return None if opts is None else _Check(*opts)
-
-
-def _clearance(check: _Check, q: NDArray[np.float64], T: NDArray[np.float64], design: Design,
-               mode: NDArray[Any], p_negative: NDArray[np.bool_]) -> NDArray[np.float64]:
-    """Least clearance of each reachable point (``mode != 0``), NaN elsewhere."""
-    from ._collision import labelled_clearance
-
-    dist, _ = labelled_clearance(np.where(np.isfinite(q), q, 0.0), T, design,
-                                 np.asarray(mode, dtype=np.int64), p_negative,
-                                 bodies=check.bodies, environment=check.environment)
-    return dist
-
-
-def _free(reachable: NDArray[np.bool_], clearance: NDArray[np.float64], margin: float
-          ) -> NDArray[np.bool_]:
-    with np.errstate(invalid="ignore"):
-        return reachable & (clearance >= margin)
-
-
-def _unlimited(design: Design) -> Design:
-    return dataclasses.replace(design, q_min=None, q_max=None)
-
-
-def _within(q: NDArray[np.float64], design: Design) -> NDArray[np.bool_]:
-    with np.errstate(invalid="ignore"):
-        return np.all((q >= design.stroke_min) & (q <= design.stroke_max), axis=-1)
 
 
 # --------------------------------------------------------------------------------------
@@ -361,11 +263,7 @@ def point_workspace(T_b_e: ArrayLike | None = None, design: Design | None = None
     if isinstance(T_b_e, Design):          # the order of every function: (..., T_b_e, design)
         raise TypeError("T_b_e: expected a (4, 4) RCM frame or None, got a Design (the order "
                         "is point_workspace(T_b_e, design); give design=...)")
-    design = resolve_design(design)
-    check = _collision_check(design, bodies, environment, clearance_margin)
-    T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
-    if T.shape != (4, 4):
-        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
+    design, check, T = _map_setup(T_b_e, design, bodies, environment, clearance_margin)
     n = _resolution(resolution, 3)
     b = _box(bounds) or _default_bounds(design)
     axes = [np.linspace(lo, hi, k) for (lo, hi), k in zip(b, n, strict=True)]
@@ -398,175 +296,6 @@ def point_workspace(T_b_e: ArrayLike | None = None, design: Design | None = None
                           condition=r["c"].reshape(sh), clearance=cl,
                           collision_free=None if check is None or cl is None
                           else _free(reach, cl, check.margin))
-
-
-# --------------------------------------------------------------------------------------
-# instrument cone
-# --------------------------------------------------------------------------------------
-@dataclasses.dataclass(frozen=True)
-class InstrumentCone:
-    """Instrument directions about the RCM and the insertion range along each.
-
-    Attributes
-    ----------
-    azimuth : ndarray, shape (na,)
-        rad, about ``z_e`` (:func:`~athenakin.direction_from_angles`).
-    polar : ndarray, shape (npol,)
-        rad, from ``z_e``.
-    p : ndarray, shape (np,)
-        Insertions (distance ``O_s`` -> RCM), m.
-    T_b_e : ndarray, shape (4, 4)
-    mode : ndarray of int8, shape (na, npol, np)
-        Assembly mode of the configuration (0: not reachable within strokes).
-    reachable : ndarray of bool, shape (na, npol, np)
-        Reachable within the strokes in an allowed mode (see ``modes`` argument).
-    p_min, p_max : ndarray, shape (na, npol)
-        Smallest / largest reachable insertion along the direction (NaN: none).
-    n_intervals : ndarray of int, shape (na, npol)
-        Number of separate reachable insertion intervals (0: direction not in the cone).
-    condition : ndarray, shape (na, npol, np)
-        Condition number of the tool-tip Jacobian (NaN where unreachable).
-    clearance : ndarray, shape (na, npol, np), or None
-        Least clearance of the bodies, m (NaN where unreachable); None without the
-        collision check.
-    collision_free : ndarray of bool, shape (na, npol, np), or None
-        Reachable with a clearance of at least the margin.
-    blocked : ndarray of bool, shape (na, npol), or None
-        Directions in the cone (some insertion reachable) that a collision blocks:
-        no reachable insertion along them is collision-free.
-    """
-
-    azimuth: NDArray[np.float64]
-    polar: NDArray[np.float64]
-    p: NDArray[np.float64]
-    T_b_e: NDArray[np.float64]
-    mode: NDArray[np.int8]
-    reachable: NDArray[np.bool_]
-    p_min: NDArray[np.float64]
-    p_max: NDArray[np.float64]
-    n_intervals: NDArray[np.int64]
-    condition: NDArray[np.float64]
-    clearance: NDArray[np.float64] | None = None
-    collision_free: NDArray[np.bool_] | None = None
-    blocked: NDArray[np.bool_] | None = None
-
-
-def _interval(x: object, name: str) -> tuple[float, float] | None:
-    """None, or ``(lo, hi)``: two finite numbers with ``lo <= hi`` (a named error otherwise)."""
-    if x is None:
-        return None
-    a = check_array(x, name, (2,))  # type: ignore[arg-type]
-    if a.shape != (2,) or not a[0] <= a[1]:
-        raise InvalidInputError(f"{name}: expected (lo, hi) with lo <= hi, got {x!r}")
-    return float(a[0]), float(a[1])
-
-
-def _box(bounds: object) -> tuple[tuple[float, float], ...] | None:
-    """None, or three intervals ``((x_lo, x_hi), (y_lo, y_hi), (z_lo, z_hi))``."""
-    if bounds is None:
-        return None
-    a = check_array(bounds, "bounds", (2,))  # type: ignore[arg-type]
-    if a.shape != (3, 2) or not np.all(a[:, 0] <= a[:, 1]):
-        raise InvalidInputError(f"bounds: expected ((x_lo, x_hi), (y_lo, y_hi), (z_lo, z_hi)) "
-                                f"with lo <= hi, got {bounds!r}")
-    return tuple((float(lo), float(hi)) for lo, hi in a)
-
-
-def _modes_arg(modes: tuple[int, ...]) -> tuple[int, ...]:
-    try:
-        m = tuple(int(v) for v in modes)
-    except (TypeError, ValueError, OverflowError):
-        raise InvalidInputError(f"modes: expected a non-empty tuple of +1 / -1, got "
-                                f"{modes!r}") from None
-    if not m or any(v not in (1, -1) for v in m):
-        raise InvalidInputError(f"modes: expected a non-empty tuple of +1 / -1, got {modes!r}")
-    return m
-
-
-def instrument_cone(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
-                    resolution: int | tuple[int, int, int] = (73, 37, 46),
-                    p_range: tuple[float, float] | None = None, modes: tuple[int, ...] = (1,),
-                    progress: bool | None = None, bodies: object = None,
-                    environment: object = None, clearance_margin: float | None = None
-                    ) -> InstrumentCone:
-    """The cone of instrument directions about the RCM with its insertion ranges.
-
-    For each direction ``d`` (spherical angles in E) and insertion ``p`` the
-    parallel module's IK puts ``O_s = c - p d`` (:func:`~athenakin.q_from_instrument`).
-
-    Parameters
-    ----------
-    T_b_e : array-like, shape (4, 4), optional
-        RCM frame; default :func:`~athenakin.default_rcm_frame`.
-    design : Design, optional
-    resolution : int or (int, int, int), keyword-only
-        Samples of azimuth over (-pi, pi], polar over [0, pi] and ``p``.
-    p_range : (float, float), keyword-only
-        Insertions; default ``(0.01 L, L)`` with ``L`` the tool length (the
-        instrument must pass the RCM).
-    modes : tuple of {1, -1}, keyword-only
-        Assembly modes counted as reachable (default: the working mode +1).
-    progress : bool, keyword-only
-    bodies, environment, clearance_margin : keyword-only
-        The collision check (see :func:`point_workspace`): layers ``clearance``,
-        ``collision_free`` and the directions a collision ``blocked``.
-
-    Returns
-    -------
-    InstrumentCone
-    """
-    design = resolve_design(design)
-    check = _collision_check(design, bodies, environment, clearance_margin)
-    T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
-    if T.shape != (4, 4):
-        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
-    na, npol, npp = _resolution(resolution, 3)
-    allowed = _modes_arg(modes)
-    L = design.tool_length
-    pr = _interval(p_range, "p_range") or (0.01 * L, L)
-    az = np.linspace(-np.pi, np.pi, na, endpoint=False) + 2 * np.pi / na
-    pol = np.linspace(0.0, np.pi, npol)
-    p = np.linspace(pr[0], pr[1], npp)
-    A, B, Pp = np.meshgrid(az, pol, p, indexing="ij")
-    pts = np.stack([A.ravel(), B.ravel(), Pp.ravel()], axis=-1)
-
-    def fn(x: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
-        d_e = direction_from_angles(x[:, 0], x[:, 1])
-        q, res = q_from_instrument(T, d_e, x[:, 2], design, errors="flag")
-        ok = res.valid & np.isin(res.mode, allowed)
-        m = np.where(ok, res.mode, 0)
-        _, g = _state(np.nan_to_num(q), design, np.where(m == 0, 1, m))
-        N, _, _ = _tip_matrices(g, T, L)
-        _, cond = _cond(N @ _parallel_jacobian(g))
-        out = {"m": m.astype(np.int8), "r": ok, "c": np.where(ok, cond, np.nan)}
-        if check is not None:
-            out["cl"] = _clearance(check, q, T, design, m, x[:, 2] < 0)
-        return out
-
-    r = _map_chunks(fn, pts, progress, "instrument cone")
-    sh = (na, npol, npp)
-    reach = r["r"].reshape(sh)
-    pm = np.where(reach, p, np.nan)
-    with np.errstate(invalid="ignore"), _quiet():
-        p_min, p_max = np.nanmin(pm, axis=-1), np.nanmax(pm, axis=-1)
-    starts = reach & ~np.concatenate([np.zeros(sh[:-1] + (1,), bool), reach[..., :-1]], axis=-1)
-    cl = free = blocked = None
-    if check is not None:
-        cl = r["cl"].reshape(sh)
-        free = _free(reach, cl, check.margin)
-        blocked = np.asarray(reach.any(axis=-1) & ~free.any(axis=-1), dtype=bool)
-    return InstrumentCone(azimuth=az, polar=pol, p=p, T_b_e=T, mode=r["m"].reshape(sh),
-                          reachable=reach, p_min=p_min, p_max=p_max,
-                          n_intervals=starts.sum(axis=-1), condition=r["c"].reshape(sh),
-                          clearance=cl, collision_free=free, blocked=blocked)
-
-
-@contextlib.contextmanager
-def _quiet() -> Iterator[None]:
-    """Silence numpy's 'All-NaN slice' RuntimeWarning in a with-block."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        yield
 
 
 # --------------------------------------------------------------------------------------
@@ -633,11 +362,7 @@ def tool_tip_workspace(T_b_e: ArrayLike | None = None, design: Design | None = N
     -------
     ToolTipWorkspace
     """
-    design = resolve_design(design)
-    check = _collision_check(design, bodies, environment, clearance_margin)
-    T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
-    if T.shape != (4, 4):
-        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
+    design, check, T = _map_setup(T_b_e, design, bodies, environment, clearance_margin)
     allowed = _modes_arg(modes)
     n = _resolution(resolution, 3)
     L = design.tool_length

@@ -21,6 +21,7 @@ Only :class:`AthenaApp` and :func:`launch` import viser (``pip install 'athenaki
 """
 
 from ._ghosts import GHOST_BLEND, SlotGhosts, ghost_scene, slot_ghosts
+from ._inverse import InverseStep, angles_from_tip, inverse_step, tip_from_angles
 from ._model import (
     INVERSE_STEPS,
     WARN_CONDITION,
@@ -29,20 +30,14 @@ from ._model import (
     AppSetup,
     AppView,
     Distance,
-    InverseStep,
-    Playback,
     Readouts,
     SlotStatus,
-    angles_from_tip,
     app_setup,
     forward_view,
-    inverse_step,
-    load_playback,
-    playback_q,
     readouts,
     slot_statuses,
-    tip_from_angles,
 )
+from ._playback import Playback, load_playback, playback_q
 from ._scene import PART_STYLE, Label, LineSet, PointSet, Scene, Solid, robot_scene, with_solids
 from ._text import SINGULAR_NAMES, message_html, readouts_html, slots_html, view_html
 

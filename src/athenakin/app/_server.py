@@ -33,18 +33,14 @@ from ..design import Design
 from ..errors import KinematicsError
 from ._bodies import collision_note
 from ._ghosts import ghost_scene
+from ._inverse import angles_from_tip, inverse_step, tip_from_angles
 from ._model import (
     AppSetup,
     AppView,
-    Playback,
-    angles_from_tip,
     app_setup,
     forward_view,
-    inverse_step,
-    load_playback,
-    playback_q,
-    tip_from_angles,
 )
+from ._playback import Playback, load_playback, playback_q
 from ._scene import Scene, Solid, robot_scene, with_solids
 from ._sync import Echo
 from ._text import ERROR_COLOR, message_html, view_html

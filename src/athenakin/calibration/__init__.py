@@ -43,6 +43,7 @@ from ._io import (
     plan_csv_text,
     read_measurements_csv,
 )
+from ._measurements import MeasurementCheck, check_measurements
 from ._model import (
     DEFAULT_PARAMETERS,
     PARAMETER_GROUPS,
@@ -50,6 +51,7 @@ from ._model import (
     PARAMETERS,
     resolve_parameters,
 )
+from ._options import DEFAULT_AXIS_WEIGHT, OUTLIER_THRESHOLD, CalibrationOptions
 from ._plan import PosePlan, plan_poses
 from ._report import (
     plot_parameter_confidence,
@@ -57,16 +59,7 @@ from ._report import (
     plot_tip_error_map,
     write_report,
 )
-from ._solve import (
-    DEFAULT_AXIS_WEIGHT,
-    OUTLIER_THRESHOLD,
-    CalibrationOptions,
-    CalibrationResult,
-    MeasurementCheck,
-    calibrate,
-    check_measurements,
-    identifiability,
-)
+from ._solve import CalibrationResult, calibrate, identifiability
 from ._synthetic import SyntheticData, SyntheticOptions, random_poses, synthetic_measurements
 
 __all__ = [

@@ -12,6 +12,7 @@ from .._validation import check_array, check_count, check_frame
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ._identify import IdentifiabilityReport, analyse_jacobian, d_optimal_subset
+from ._measurements import check_measurements
 from ._model import (
     PARAMETERS,
     MeasurementFrame,
@@ -20,7 +21,7 @@ from ._model import (
     predict,
     resolve_parameters,
 )
-from ._solve import DEFAULT_AXIS_WEIGHT, check_measurements
+from ._options import DEFAULT_AXIS_WEIGHT
 from ._synthetic import MAX_POSES, random_poses
 
 __all__ = ["PosePlan", "plan_poses"]

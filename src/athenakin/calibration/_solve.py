@@ -5,25 +5,20 @@ from __future__ import annotations
 import dataclasses
 import warnings
 from collections.abc import Iterable
-from typing import ClassVar, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._toml import TomlOptions
 from .._validation import (
     check_array,
     check_choice,
-    check_count,
     check_frame,
     check_instance,
     check_scalar,
-    check_tolerance,
     check_transform,
 )
-from ..design import LENGTH_RANGE, Design, resolve_design
-from ..errors import InvalidInputError, Reason
-from ..parallel import parallel_forward_kinematics
+from ..design import Design, resolve_design
+from ..errors import InvalidInputError
 from ._errors import CalibrationError, CalibrationWarning, NotIdentifiableError
 from ._identify import (
     IDENTIFIABILITY_TOL,
@@ -31,6 +26,7 @@ from ._identify import (
     analyse_jacobian,
     raise_if_not_identifiable,
 )
+from ._measurements import MeasurementCheck, _mode_array, _rows, check_measurements
 from ._model import (
     PARAMETERS,
     MeasurementFrame,
@@ -41,6 +37,14 @@ from ._model import (
     predict,
     resolve_parameters,
     rotation_from_vector,
+)
+from ._options import (
+    DEFAULT_AXIS_WEIGHT,
+    OUTLIER_THRESHOLD,
+    RESIDUAL_FLOOR,
+    UNITS_WARNING,
+    CalibrationOptions,
+    Loss,
 )
 
 __all__ = [
@@ -55,150 +59,8 @@ __all__ = [
     "MeasurementCheck",
 ]
 
-Loss = Literal["linear", "soft_l1", "huber", "cauchy", "arctan"]
-_LOSSES = ("linear", "soft_l1", "huber", "cauchy", "arctan")
-
-#: A row is flagged as an outlier when its residual norm exceeds this many robust standard
-#: deviations of one component (for isotropic Gaussian noise ``|r|^2 / sigma^2`` is
-#: chi-square with 3 degrees of freedom: ``P(|r| > 4.5 sigma) = 2.6e-4``).
-OUTLIER_THRESHOLD = 4.5
-#: Weight (m per unit of direction error) of measured instrument axes against tip
-#: positions: 0.1 m makes 0.2 mrad of axis error count like 20 um of tip error.
-DEFAULT_AXIS_WEIGHT = 0.1
-#: Machine epsilon: the least-squares tolerances must exceed it.
-_EPS = float(np.finfo(float).eps)
-#: Largest share of rows that may be flagged bad and excluded before the data set is refused.
-MAX_BAD_FRACTION = 0.1
-#: Default ``ftol``, ``xtol`` and ``gtol`` of the least-squares solver.
-SOLVER_TOL = 1e-15
-#: Default most residual evaluations of one least-squares solve.
-MAX_NFEV = 200
-#: Floor (m) of the residual standard deviation used to flag outliers: noise-free data
-#: leave residuals of rounding size (1e-16 m), which are no outliers.
-RESIDUAL_FLOOR = 1e-12
-#: RMS distance (m) of the measured tips from the nominal model above which a warning asks
-#: to check units, frame and set-up (a calibration corrects millimetres, not decimetres).
-UNITS_WARNING = 0.05
-#: Margin (m) of the insertion range: a pose needs ``margin < p < L - margin``.
-INSERTION_MARGIN = 1e-3
 
 _REG = PARAMETERS.index("reg_rx")
-
-
-@dataclasses.dataclass(frozen=True)
-class CalibrationOptions(TomlOptions):
-    """Solver settings of :func:`calibrate` (the data and the model are its arguments).
-
-    Every field is checked here, at construction (a named error); the defaults give
-    the results :func:`calibrate` gave before the options object existed. The
-    ``[calibration_options]`` table of a TOML file holds them (:meth:`to_toml`,
-    :meth:`from_toml`; ``athenakin calibrate --options FILE``).
-
-    Attributes
-    ----------
-    axis_weight : float
-        Metres of residual per unit of axis error (:data:`DEFAULT_AXIS_WEIGHT`), > 0.
-    loss : {"linear", "soft_l1", "huber", "cauchy", "arctan"}
-        Robust loss of :func:`scipy.optimize.least_squares`. With a robust loss the rows
-        flagged as outliers are dropped and the inliers refitted with the linear loss
-        (so the covariance is that of least squares on the inliers).
-    f_scale : float or None
-        Residual (m) at which the robust loss bends, > 0; None: ``2 * sigma`` from a
-        first linear fit (median absolute deviation).
-    sigma : float or None
-        Known standard deviation (m) of one measured coordinate, in ``(0, 10]``; None:
-        estimated from the residuals.
-    outlier_threshold : float
-        Rows with ``|residual| > outlier_threshold * sigma`` are flagged, > 0
-        (:data:`OUTLIER_THRESHOLD`).
-    bad_rows : {"exclude", "raise"}
-        Rows with NaN/inf or outside the nominal workspace: excluded with a
-        :class:`CalibrationWarning` (at most ``max_bad_fraction`` of them), or raise.
-    max_bad_fraction : float
-        Largest share of rows excluded, in ``[0, 1]`` (:data:`MAX_BAD_FRACTION`).
-    on_unidentifiable : {"raise", "warn"}
-        What to do when the identifiability analysis finds inseparable combinations.
-    identifiability_tol : float
-        Relative singular value below which a direction is not identifiable, >= 0
-        (:data:`~athenakin.calibration.IDENTIFIABILITY_TOL`).
-    tol : float
-        ``ftol``, ``xtol`` and ``gtol`` of the solver, in ``(eps, 1]`` (machine epsilon).
-    max_nfev : int
-        Most residual evaluations of one least-squares solve, >= 1.
-
-    Examples
-    --------
-    >>> from athenakin.calibration import CalibrationOptions
-    >>> o = CalibrationOptions(loss="soft_l1", sigma=2e-5)
-    >>> print(o.to_toml().splitlines()[0:3])
-    ['[calibration_options]', 'axis_weight = 0.1', 'loss = "soft_l1"']
-    """
-
-    TOML_TABLE: ClassVar[str] = "calibration_options"   # [calibration]: a result's
-
-    axis_weight: float = DEFAULT_AXIS_WEIGHT
-    loss: Loss = "linear"
-    f_scale: float | None = None
-    sigma: float | None = None
-    outlier_threshold: float = OUTLIER_THRESHOLD
-    bad_rows: Literal["exclude", "raise"] = "exclude"
-    max_bad_fraction: float = MAX_BAD_FRACTION
-    on_unidentifiable: Literal["raise", "warn"] = "raise"
-    identifiability_tol: float = IDENTIFIABILITY_TOL
-    tol: float = SOLVER_TOL
-    max_nfev: int = MAX_NFEV
-
-    def __post_init__(self) -> None:
-        put = object.__setattr__
-        put(self, "axis_weight", check_scalar(self.axis_weight, "axis_weight", positive=True))
-        check_choice(self.loss, "loss", _LOSSES)
-        for name in ("f_scale", "sigma"):
-            v = getattr(self, name)
-            if v is not None:
-                put(self, name, check_scalar(v, name, positive=True))
-        if self.sigma is not None and self.sigma > LENGTH_RANGE[1]:  # squared: no overflow
-            raise InvalidInputError(f"sigma: expected a standard deviation (m) of at most "
-                                    f"{LENGTH_RANGE[1]:g}, got {self.sigma!r}")
-        put(self, "outlier_threshold",
-            check_scalar(self.outlier_threshold, "outlier_threshold", positive=True))
-        check_choice(self.bad_rows, "bad_rows", ("exclude", "raise"))
-        f = check_scalar(self.max_bad_fraction, "max_bad_fraction", nonnegative=True)
-        if f > 1.0:
-            raise InvalidInputError(f"max_bad_fraction: expected a fraction in [0, 1], got {f:g}")
-        put(self, "max_bad_fraction", f)
-        check_choice(self.on_unidentifiable, "on_unidentifiable", ("raise", "warn"))
-        put(self, "identifiability_tol",
-            check_tolerance(self.identifiability_tol, "identifiability_tol"))
-        tol = check_tolerance(self.tol, "tol")
-        if not _EPS < tol <= 1.0:                # scipy's least_squares needs more than eps
-            raise InvalidInputError(f"tol: expected a tolerance in ({_EPS:.3g}, 1], got {tol:g}")
-        put(self, "tol", tol)
-        put(self, "max_nfev", check_count(self.max_nfev, "max_nfev", minimum=1))
-
-
-@dataclasses.dataclass(frozen=True)
-class MeasurementCheck:
-    """Rows of a data set that cannot be used, and why.
-
-    Attributes
-    ----------
-    reason : ndarray of int8, shape (N,)
-        :class:`~athenakin.errors.Reason` per row (0 where usable): ``NONFINITE_INPUT``,
-        ``STROKE_LIMIT``, ``AB_ORDER``, ``LINK_TOO_SHORT``, ``CIRCLES_DISJOINT``,
-        ``CIRCLES_TANGENT`` (the row's assembly mode does not exist for the nominal
-        design), ``INSERTION_RANGE`` (the tip is not beyond the RCM within the tool).
-    usable : ndarray of bool, shape (N,)
-    """
-
-    reason: NDArray[np.int8]
-    usable: NDArray[np.bool_]
-
-    def describe(self, limit: int = 5) -> str:
-        """``"row 3: input holds NaN or inf; row 7: ..."`` for the first ``limit`` bad rows."""
-        bad = np.flatnonzero(~self.usable)
-        parts = [f"row {i}: {Reason(int(self.reason[i])).description}" for i in bad[:limit]]
-        more = f" (and {len(bad) - limit} more)" if len(bad) > limit else ""
-        return "; ".join(parts) + more
 
 
 @dataclasses.dataclass(frozen=True)
@@ -292,79 +154,6 @@ class CalibrationResult:
         return [(n, float(a), float(b), float(c))
                 for n, a, b, c in zip(self.names, self.nominal, self.estimates, self.std,
                                       strict=True)]
-
-
-# --------------------------------------------------------------------------------------
-# input checks
-# --------------------------------------------------------------------------------------
-def _rows(x: ArrayLike, name: str, n: int | None = None) -> NDArray[np.float64]:
-    a = check_array(x, name, (3,), allow_nonfinite=True)
-    if a.ndim != 2:
-        raise InvalidInputError(f"{name}: expected shape (N, 3), got shape {a.shape}")
-    if n is not None and a.shape[0] != n:
-        raise InvalidInputError(f"{name}: expected {n} rows (one per row of q), got "
-                                f"{a.shape[0]} (mismatched lengths)")
-    return a
-
-
-def _mode_array(mode: object, n: int) -> NDArray[np.float64]:
-    try:
-        m = np.asarray(mode)
-    except (ValueError, TypeError):         # ragged lists and the like
-        raise InvalidInputError(f"mode: expected +1 or -1 (assembly mode) per row, got "
-                                f"{mode!r}") from None
-    if m.dtype.kind not in "biuf" or not np.all(np.isin(m, (1, -1))):
-        raise InvalidInputError(f"mode: expected +1 or -1 (assembly mode) per row, got {mode!r}")
-    if m.ndim > 1 or (m.ndim == 1 and m.shape[0] != n):
-        raise InvalidInputError(f"mode: expected a scalar or shape ({n},), got shape {m.shape}")
-    return np.broadcast_to(m.astype(float), (n,)).copy()
-
-
-def check_measurements(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
-                       mode: object = 1, tips: ArrayLike | None = None,
-                       axes: ArrayLike | None = None, q_offset: ArrayLike | None = None
-                       ) -> MeasurementCheck:
-    """Which rows of a data set the nominal model can use (finite, assembled, inserted).
-
-    Parameters
-    ----------
-    q : array-like, shape (N, 3)
-        Actuator readings, m.
-    T_b_e : array-like, shape (4, 4)
-        The RCM frame (its origin is the RCM point).
-    design : Design or None
-        The nominal design (None: :meth:`Design.default`).
-    mode : {1, -1} or array-like of them, shape (N,), keyword-only
-    tips, axes : array-like, shape (N, 3), optional, keyword-only
-        Only checked for NaN / inf.
-    q_offset : array-like, shape (3,), optional, keyword-only
-        Starting actuator offsets (``q_true = q + q_offset``).
-
-    Returns
-    -------
-    MeasurementCheck
-    """
-    design = resolve_design(design)
-    qa = _rows(q, "q")
-    n = qa.shape[0]
-    T = check_frame(T_b_e, "T_b_e")
-    m = _mode_array(mode, n)
-    off = np.zeros(3) if q_offset is None else check_array(q_offset, "q_offset", (3,))
-    finite = np.all(np.isfinite(qa), axis=-1)
-    for a, nm in ((tips, "tips"), (axes, "axes")):
-        if a is not None:
-            finite &= np.all(np.isfinite(_rows(a, nm, n)), axis=-1)
-    par = parallel_forward_kinematics(np.where(finite[:, None], qa + off, 0.0), design)
-    slot = np.where(m > 0, 0, 1)
-    reason = np.take_along_axis(par.reason, slot[:, None], axis=1)[:, 0].astype(np.int8)
-    theta = parameter_vector(design, T[:3, 3], q_offset=off)
-    with np.errstate(invalid="ignore"):
-        pr = predict(theta, np.where(finite[:, None], qa, 0.0), m)
-        L = design.tool_length
-        inserted = (pr.rho > INSERTION_MARGIN) & (pr.rho < L - INSERTION_MARGIN)
-    reason = np.where((reason == 0) & ~inserted, np.int8(Reason.INSERTION_RANGE), reason)
-    reason = np.where(~finite, np.int8(Reason.NONFINITE_INPUT), reason).astype(np.int8)
-    return MeasurementCheck(reason=reason, usable=reason == 0)
 
 
 # --------------------------------------------------------------------------------------
@@ -631,27 +420,7 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
         bad_rows=opts.bad_rows, max_bad_fraction=opts.max_bad_fraction)
     n_used = prob.q.shape[0]
     rows_per = 3 if prob.axes is None else 6
-    if rows_per * n_used <= len(names):
-        raise NotIdentifiableError(
-            f"too few poses: {n_used} usable poses give {rows_per * n_used} equations for "
-            f"{len(names)} parameters {list(names)}; measure more than "
-            f"{len(names) // rows_per} poses (and more than that for a useful estimate)")
-    J0 = prob.jac_full(prob.theta0)[:, prob.free]
-    report = analyse_jacobian(J0, names, tol=opts.identifiability_tol)
-    if not report.identifiable:
-        if opts.on_unidentifiable == "raise":
-            raise_if_not_identifiable(report, n_used)
-        warnings.warn(f"calibration: not identifiable: {'; '.join(report.combinations)}",
-                      CalibrationWarning, stacklevel=2)
-    elif report.weak:
-        warnings.warn(f"calibration: weakly identifiable (condition {report.condition:.3g}); "
-                      "the standard deviations will be large", CalibrationWarning, stacklevel=2)
-    rms0 = float(np.sqrt(np.mean(np.sum(prob.evaluate(prob.theta0, False)[1][:, :3] ** 2,
-                                        axis=1))))
-    if rms0 > UNITS_WARNING:
-        warnings.warn(f"calibration: the measured tips are {rms0:.3g} m (RMS) from the nominal "
-                      "model; check the units (m), the frame and T_b_e", CalibrationWarning,
-                      stacklevel=2)
+    report = _check_problem(prob, names, opts, n_used, rows_per)
     x0 = prob.theta0[prob.free]
     x_scale = 1.0 / np.where(report.column_norms > 0, report.column_norms, 1.0)
     x_scale = x_scale / np.max(x_scale)
@@ -699,6 +468,34 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
                       f"{outlier_threshold * s_hat:.3g} m)", CalibrationWarning, stacklevel=2)
     return _result(design, names, prob, theta, cov, chk, m_all, T, r_before, r_after, use,
                    outl, s_hat, report, sol, rows_per)
+
+
+
+def _check_problem(prob: _Problem, names: tuple[str, ...], opts: CalibrationOptions, n_used: int,
+                   rows_per: int) -> IdentifiabilityReport:
+    """Enough equations, the identifiability of the parameters, plausible units (warnings)."""
+    if rows_per * n_used <= len(names):
+        raise NotIdentifiableError(
+            f"too few poses: {n_used} usable poses give {rows_per * n_used} equations for "
+            f"{len(names)} parameters {list(names)}; measure more than "
+            f"{len(names) // rows_per} poses (and more than that for a useful estimate)")
+    J0 = prob.jac_full(prob.theta0)[:, prob.free]
+    report = analyse_jacobian(J0, names, tol=opts.identifiability_tol)
+    if not report.identifiable:
+        if opts.on_unidentifiable == "raise":
+            raise_if_not_identifiable(report, n_used)
+        warnings.warn(f"calibration: not identifiable: {'; '.join(report.combinations)}",
+                      CalibrationWarning, stacklevel=3)
+    elif report.weak:
+        warnings.warn(f"calibration: weakly identifiable (condition {report.condition:.3g}); "
+                      "the standard deviations will be large", CalibrationWarning, stacklevel=3)
+    rms0 = float(np.sqrt(np.mean(np.sum(prob.evaluate(prob.theta0, False)[1][:, :3] ** 2,
+                                        axis=1))))
+    if rms0 > UNITS_WARNING:
+        warnings.warn(f"calibration: the measured tips are {rms0:.3g} m (RMS) from the nominal "
+                      "model; check the units (m), the frame and T_b_e", CalibrationWarning,
+                      stacklevel=3)
+    return report
 
 
 def _robust_sigma(r: NDArray[np.float64]) -> float:

@@ -19,13 +19,13 @@ from ._bodies import DEFAULT_RADII, MAX_RADIUS, Bodies
 from ._clearance import MAX_MARGIN, Clearance, clearance
 from ._distance import capsule_capsule, capsule_halfspace, point_segment, segment_segment
 from ._environment import (
-    MAX_MESH_FACES,
     MAX_OBSTACLES,
     OBSTACLE_KINDS,
     Environment,
     Obstacle,
     OpenMeshWarning,
 )
+from ._mesh import MAX_MESH_FACES
 
 __all__ = [
     "BODIES",

@@ -11,7 +11,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._environment import Obstacle, winding_numbers
+from ._environment import Obstacle
+from ._mesh import winding_numbers
 
 __all__ = ["import_coal", "coal_shape", "capsule_transform", "capsule_obstacle_distances"]
 

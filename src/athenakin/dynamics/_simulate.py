@@ -139,6 +139,42 @@ def _fast_forward(design: Design, T: Arr, masses: MassModel, slot: int, g: Arr,
     return qdd
 
 
+def _steps(duration: object, dt: object) -> tuple[float, float, int]:
+    """The checked duration (s), time step (s) and number of steps of a simulation."""
+    T_dur = check_scalar(duration, "duration", positive=True)
+    h = check_scalar(dt, "dt", positive=True)
+    ratio = T_dur / h
+    if not ratio <= MAX_STEPS + 1:     # inf when duration / dt overflows
+        raise InvalidInputError(f"duration / dt: expected at most {MAX_STEPS} steps, got "
+                                f"{ratio:.3g}")
+    n = int(np.ceil(ratio - 1e-9))
+    if n > MAX_STEPS:
+        raise InvalidInputError(f"duration / dt: expected at most {MAX_STEPS} steps, got {n}")
+    return T_dur, h, n
+
+
+def _force_function(forces: ArrayLike | Callable[[float, Arr, Arr], ArrayLike]
+                    ) -> Callable[[float, Arr, Arr], Arr]:
+    """The actuator forces (N) as a checked function of ``(t, q, qd)``."""
+    if callable(forces):
+        force_fn = forces
+
+        def tau_of(t: float, qq: Arr, vv: Arr) -> Arr:
+            out = check_array(force_fn(t, qq, vv), "forces(t, q, qd)", (3,))
+            if out.shape != (3,):
+                raise InvalidInputError(f"forces(t, q, qd): expected shape (3,), got {out.shape}")
+            return out
+    else:
+        f_const = check_array(forces, "forces", (3,))
+        if f_const.shape != (3,):
+            raise InvalidInputError(f"forces: expected shape (3,), got {f_const.shape}")
+
+        def tau_of(t: float, qq: Arr, vv: Arr) -> Arr:
+            return f_const
+    return tau_of
+
+
+
 def simulate(q0: ArrayLike, qd0: ArrayLike,
              forces: ArrayLike | Callable[[float, Arr, Arr], ArrayLike],
              T_b_e: ArrayLike | None = None, design: Design | None = None, *,
@@ -189,33 +225,10 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
     if q.shape != (3,) or v.shape != (3,):
         raise InvalidInputError(f"q0, qd0: expected shape (3,), got {q.shape}, {v.shape}")
     T = resolve_rcm_frame(T_b_e, d, single=True)
-    T_dur = check_scalar(duration, "duration", positive=True)
-    h = check_scalar(dt, "dt", positive=True)
-    ratio = T_dur / h
-    if not ratio <= MAX_STEPS + 1:     # inf when duration / dt overflows
-        raise InvalidInputError(f"duration / dt: expected at most {MAX_STEPS} steps, got "
-                                f"{ratio:.3g}")
-    n = int(np.ceil(ratio - 1e-9))
-    if n > MAX_STEPS:
-        raise InvalidInputError(f"duration / dt: expected at most {MAX_STEPS} steps, got {n}")
+    T_dur, h, n = _steps(duration, dt)
     g = _single(gravity, "gravity")
     f_tip = None if tip_force is None else _single(tip_force, "tip_force")
-    if callable(forces):
-        force_fn = forces
-
-        def tau_of(t: float, qq: Arr, vv: Arr) -> Arr:
-            out = check_array(force_fn(t, qq, vv), "forces(t, q, qd)", (3,))
-            if out.shape != (3,):
-                raise InvalidInputError(f"forces(t, q, qd): expected shape (3,), got {out.shape}")
-            return out
-    else:
-        f_const = check_array(forces, "forces", (3,))
-        if f_const.shape != (3,):
-            raise InvalidInputError(f"forces: expected shape (3,), got {f_const.shape}")
-
-        def tau_of(t: float, qq: Arr, vv: Arr) -> Arr:
-            return f_const
-
+    tau_of = _force_function(forces)
     lo, hi = d.stroke_min, d.stroke_max
     fast = _fast_forward(d, T, m, k, g, f_tip)
     # the states, preallocated (n + 1 of each; 104 bytes a step): row i is filled when

@@ -20,6 +20,7 @@
 Needs the ``motion`` extra (``ruckig``) for planning; the tracker needs only numpy.
 """
 
+from ._check import check_samples
 from ._errors import (
     CollisionError,
     MotionError,
@@ -29,7 +30,8 @@ from ._errors import (
     TrackingError,
 )
 from ._io import PathSpec, read_path_csv, read_q_stream_csv, save_trajectory
-from ._plan import Limits, Trajectory, check_samples, plan, plan_directions
+from ._limits import Limits
+from ._plan import Trajectory, plan, plan_directions
 from ._plot import plot_actuators, plot_singularity_distance, plot_tip_path, save_plots
 from ._safety import MEASURE_NAMES, Margins, SingularityMeasures, singularity_measures
 from ._tracker import JUMP_M, JUMP_RAD, TrackedPose, Tracker, TrackFlag, TrackLog, track

@@ -34,19 +34,13 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_instance, check_scalar, check_transform
+from .._validation import check_array, check_scalar, check_transform
 from ..design import Design, resolve_design
-from ..errors import InvalidInputError, Reason
 from ..robot import direction_from_angles
-from ._clearance import ClearanceCheck, clearance_check, sample_clearance
-from ._errors import (
-    CollisionError,
-    PathInfeasibleError,
-    SafetyViolationError,
-    TimingInfeasibleError,
-    TrajectoryLimitError,
-)
+from ._check import _check_clearance, _collision, _timing_error, _violation, check_samples
+from ._clearance import ClearanceCheck, clearance_check
 from ._forces import planned
+from ._limits import LIMIT_RTOL, Limits, _SegmentPlan
 from ._path import (
     Segment,
     arc_segment,
@@ -56,26 +50,21 @@ from ._path import (
     reparametrised,
     tip_speed_factor,
 )
-from ._safety import MEASURE_NAMES, Margins, SingularityMeasures, singularity_measures
-from ._timing import (
-    LamProfile,
-    TimeLawError,
-    dwell,
-    lam_profile,
-    parameter_limits,
-    squeezed,
+from ._safety import Margins, SingularityMeasures
+from ._segments import (
+    BOUND_GRID,
+    BOUND_SAFETY,
+    _check_budget,
+    _check_segment,
+    _check_waypoints,
+    _segment_bounds,
+    _time_segment,
 )
 
 __all__ = ["Limits", "Trajectory", "plan", "plan_directions", "check_samples",
            "LIMIT_RTOL", "BOUND_GRID", "BOUND_SAFETY", "MAX_DURATION", "MAX_SAMPLES",
            "MIN_RATE", "MAX_WAYPOINTS"]
 
-#: Relative tolerance of the velocity / acceleration / jerk / tip-speed checks.
-LIMIT_RTOL = 1e-6
-#: Grid points per segment on which the derivative bounds of ``q(lam)`` are taken.
-BOUND_GRID = 129
-#: Factor applied to the grid bounds (the maxima may fall between grid points).
-BOUND_SAFETY = 1.05
 #: Replanning rounds when a sample still exceeds a kinematic limit.
 MAX_REPLANS = 4
 #: Default longest trajectory :func:`plan` accepts, s (``max_duration``).
@@ -93,45 +82,6 @@ MAX_WAYPOINTS = 1000
 CHECK_CHUNK = 20_000
 
 Timing = Literal["stretch", "fixed"]
-
-
-@dataclasses.dataclass(frozen=True, kw_only=True)
-class Limits:
-    """Kinematic limits of a trajectory (stroke limits come from the design).
-
-    Attributes
-    ----------
-    v_max, a_max : ndarray, shape (3,)
-        Actuator speed (m/s) and acceleration (m/s^2) limits.
-    j_max : ndarray, shape (3,) or None
-        Actuator jerk limits (m/s^3); None: not limited (acceleration-limited
-        profile, whose acceleration steps).
-    tip_speed : float or None
-        Tool-tip speed limit (m/s).
-    """
-
-    v_max: NDArray[np.float64]
-    a_max: NDArray[np.float64]
-    j_max: NDArray[np.float64] | None = None
-    tip_speed: float | None = None
-
-    @classmethod
-    def build(cls, v_max: ArrayLike, a_max: ArrayLike, j_max: ArrayLike | None,
-              tip_speed: float | None) -> Limits:
-        """Validate scalars or (3,) arrays of positive limits."""
-        def vec(x: ArrayLike, name: str) -> NDArray[np.float64]:
-            a = check_array(x, name, ())
-            if a.ndim not in (0, 1) or (a.ndim == 1 and a.shape != (3,)):
-                raise ValueError(f"{name}: expected a number or 3 numbers (q1, q2, q3), "
-                                 f"got shape {a.shape}")
-            if np.any(a <= 0):
-                raise ValueError(f"{name}: expected positive limits, got {a.tolist()}")
-            return np.broadcast_to(a, (3,)).astype(float)
-
-        return cls(v_max=vec(v_max, "v_max"), a_max=vec(a_max, "a_max"),
-                   j_max=None if j_max is None else vec(j_max, "j_max"),
-                   tip_speed=None if tip_speed is None
-                   else check_scalar(tip_speed, "tip_speed", positive=True))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -407,99 +357,6 @@ def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_
                    fixed_times=opts.get("timing") == "fixed")
 
 
-# --------------------------------------------------------------------------------------
-@dataclasses.dataclass
-class _SegmentPlan:
-    seg: Segment
-    K: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
-    tip_factor: float
-    tighten: float = 1.0        # extra factor (< 1) on all limits after a failed check
-    profile: LamProfile | None = None
-    requested: float | None = None
-
-
-def _segment_bounds(seg: Segment, T: NDArray[np.float64], design: Design
-                    ) -> tuple[tuple[NDArray[np.float64], ...], float, dict[str, Any]]:
-    lam = np.linspace(0.0, 1.0, BOUND_GRID)
-    q0, d1, d2, d3 = q_derivatives(seg, lam, T, design)
-    with np.errstate(invalid="ignore"):
-        K = tuple(BOUND_SAFETY * np.nan_to_num(np.nanmax(np.abs(d), axis=0), nan=0.0)
-                  if np.any(np.isfinite(d)) else np.zeros(3) for d in (d1, d2, d3))
-    tf = float(np.max(tip_speed_factor(seg, lam))) * BOUND_SAFETY
-    tips = seg.tips(lam)
-    _, reason, mode = q_on_tips(tips, T, design)
-    grid = {"lam": lam, "q": q0, "tip_e": tips, "reason": reason, "mode": mode}
-    return K, tf, grid  # type: ignore[return-value]
-
-
-def _mm_hint(tip: NDArray[np.float64], design: Design) -> str:
-    r = float(np.linalg.norm(tip))
-    if r > 4.0 * max(design.tool_length, float(np.max(design.lengths))):
-        return (f"; |tip_e| = {r:.6g} m is far beyond the robot's reach: lengths are in "
-                f"metres (millimetres typed?)")
-    return ""
-
-
-def _check_waypoints(tips: NDArray[np.float64], T: NDArray[np.float64], design: Design) -> None:
-    """Each waypoint inside the workspace and the strokes, one assembly mode (before timing)."""
-    q, reason, mode = q_on_tips(tips, T, design)
-    for k in range(tips.shape[0]):
-        tip = np.array2string(tips[k], precision=6)
-        if reason[k] != 0:
-            r = Reason(int(reason[k]))
-            raise PathInfeasibleError(
-                f"waypoint {k} (tip_e = {tip} m) is outside the workspace ({r.name}: "
-                f"{r.description}){_mm_hint(tips[k], design)}", waypoint=k, limit="workspace",
-                value=float(reason[k]), bound=0.0)
-        _check_stroke(q[k], f"waypoint {k} (tip_e = {tip} m)", design, waypoint=k)
-        if mode[k] != mode[0]:
-            raise PathInfeasibleError(
-                f"waypoint {k} (tip_e = {tip} m) is reached in assembly mode {int(mode[k]):+d}, "
-                f"waypoint 0 in mode {int(mode[0]):+d}: the path would switch the parallel "
-                f"module's assembly mode", waypoint=k, limit="assembly_mode",
-                value=float(mode[k]), bound=float(mode[0]))
-
-
-def _check_stroke(q: NDArray[np.float64], what: str, design: Design, *,
-                  waypoint: int | None = None, segment: int | None = None) -> None:
-    lo, hi = design.stroke_min, design.stroke_max
-    for i in range(3):
-        if q[i] < lo[i] or q[i] > hi[i]:
-            b = float(lo[i] if q[i] < lo[i] else hi[i])
-            raise PathInfeasibleError(
-                f"{what} exceeds the stroke limit of q{i + 1}: {q[i]:.6g} m (limit {b:.6g} m)",
-                waypoint=waypoint, segment=segment, limit="stroke", value=float(q[i]),
-                bound=b, actuator=i)
-
-
-def _check_segment(k: int, grid: dict[str, Any], mode0: int, design: Design) -> None:
-    """Every grid point of segment ``k`` inside the workspace and strokes, in mode ``mode0``."""
-    out = np.flatnonzero(grid["reason"] != 0)
-    where = f"segment {k} (waypoint {k} -> {k + 1})"
-    if out.size:
-        j = int(out[0])
-        r = Reason(int(grid["reason"][j]))
-        raise PathInfeasibleError(
-            f"{where} leaves the workspace at lam = {grid['lam'][j]:.4g} (tip_e = "
-            f"{np.array2string(grid['tip_e'][j], precision=6)} m; {r.name}: {r.description})",
-            segment=k, limit="workspace", value=float(r), bound=0.0)
-    lo, hi = design.stroke_min, design.stroke_max
-    bad = np.flatnonzero(np.any((grid["q"] < lo) | (grid["q"] > hi), axis=-1))
-    if bad.size:
-        j = int(bad[0])
-        _check_stroke(grid["q"][j], f"{where} at lam = {grid['lam'][j]:.4g} (tip_e = "
-                      f"{np.array2string(grid['tip_e'][j], precision=6)} m)", design,
-                      segment=k)
-    sw = np.flatnonzero(grid["mode"] != mode0)
-    if sw.size:
-        j = int(sw[0])
-        raise PathInfeasibleError(
-            f"{where} switches the parallel module's assembly mode from {mode0:+d} to "
-            f"{int(grid['mode'][j]):+d} at lam = {grid['lam'][j]:.4g} (tip_e = "
-            f"{np.array2string(grid['tip_e'][j], precision=6)} m)", segment=k,
-            limit="assembly_mode", value=float(grid["mode"][j]), bound=float(mode0))
-
-
 def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, design: Design, *,
           rate: float = 1000.0, v_max: ArrayLike = 0.05, a_max: ArrayLike = 0.5,
           j_max: ArrayLike | None = None, tip_speed: float | None = None,
@@ -510,18 +367,7 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
     T = check_transform(T_b_e, "T_b_e")
     if T.shape != (4, 4):
         raise ValueError(f"T_b_e: expected one transform of shape (4, 4), got shape {T.shape}")
-    rate = check_scalar(rate, "rate", positive=True)
-    if not rate >= MIN_RATE:
-        raise ValueError(f"rate: expected at least {MIN_RATE:g} sample per second (Hz), "
-                         f"got {rate:g}")
-    max_duration = MAX_DURATION if max_duration is None else check_scalar(
-        max_duration, "max_duration", positive=True)
-    if max_samples is None:
-        max_samples = MAX_SAMPLES
-    elif (isinstance(max_samples, bool) or not isinstance(max_samples, (int, np.integer))
-          or max_samples < 2):
-        raise ValueError(f"max_samples: expected an integer >= 2, got {max_samples!r}")
-    max_samples = int(max_samples)
+    rate, max_duration, max_samples = _budget(rate, max_duration, max_samples)
     limits = Limits.build(v_max, a_max, j_max, tip_speed)
     margins = Margins() if margins is None else margins
     if not isinstance(margins, Margins):
@@ -534,19 +380,7 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
     if K > MAX_WAYPOINTS:
         raise ValueError(f"waypoints: expected at most {MAX_WAYPOINTS}, got {K} (plan the path "
                          f"in parts)")
-    req: NDArray[np.float64] | None = None
-    t0 = 0.0
-    if times is not None:
-        tt = check_array(times, "times", ())
-        if tt.shape != (K,):
-            raise ValueError(f"times: expected shape ({K},) (one per waypoint), got {tt.shape}")
-        req = np.diff(tt)
-        if np.any(req < 0):
-            raise ValueError(f"times: expected non-decreasing arrival times, got {tt.tolist()}")
-        t0 = float(tt[0])
-        _check_budget(float(tt[-1] - tt[0]), rate, max_duration, max_samples, None)
-    elif timing == "fixed":
-        raise ValueError("timing='fixed' needs times (the arrival time of each waypoint)")
+    req, t0 = _requested(times, K, timing, rate, max_duration, max_samples)
 
     # the path first: waypoints, then each segment on a grid (no timing can fix these)
     _check_waypoints(tips, T, design)
@@ -584,72 +418,41 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
     return _trajectory(samples, plans, tips, limits, margins, T, design, rate, t0, check)
 
 
-def _check_budget(duration: float, rate: float, max_duration: float, max_samples: int,
-                  segment: int | None) -> None:
-    """Duration and sample count within their bounds (before any sample is made)."""
-    which = "" if segment is None else f" (the longest segment: {segment})"
-    if not duration <= max_duration:
-        raise TrajectoryLimitError(
-            f"the trajectory would last {duration:.6g} s{which}, longer than max_duration = "
-            f"{max_duration:g} s (slow near a singularity or the workspace border? raise "
-            f"max_duration to accept it)", limit="max_duration", value=duration,
-            bound=max_duration, segment=segment)
-    n = duration * rate + 2
-    if not n <= max_samples:
-        raise TrajectoryLimitError(
-            f"the trajectory would need {n:.6g} samples ({duration:.6g} s at {rate:g} Hz), "
-            f"more than max_samples = {max_samples}: lower the rate or raise max_samples",
-            limit="max_samples", value=n, bound=float(max_samples), segment=segment)
+
+def _budget(rate: object, max_duration: object, max_samples: object) -> tuple[float, float, int]:
+    """The checked sample rate (Hz), longest duration (s) and most samples of a plan."""
+    rate = check_scalar(rate, "rate", positive=True)
+    if not rate >= MIN_RATE:
+        raise ValueError(f"rate: expected at least {MIN_RATE:g} sample per second (Hz), "
+                         f"got {rate:g}")
+    max_duration = MAX_DURATION if max_duration is None else check_scalar(
+        max_duration, "max_duration", positive=True)
+    if max_samples is None:
+        max_samples = MAX_SAMPLES
+    elif (isinstance(max_samples, bool) or not isinstance(max_samples, (int, np.integer))
+          or max_samples < 2):
+        raise ValueError(f"max_samples: expected an integer >= 2, got {max_samples!r}")
+    max_samples = int(max_samples)
+    return rate, max_duration, max_samples
 
 
-def _time_segment(sp: _SegmentPlan, limits: Limits, dt: float, timing: str, k: int,
-                  max_duration: float) -> None:
-    if sp.seg.scale == 0.0:
-        sp.profile = dwell(sp.requested or 0.0)
-        return
-    f = sp.tighten
-    vmax, amax = limits.v_max * f, limits.a_max * f
-    jmax = None if limits.j_max is None else limits.j_max * f
-    K1, K2, K3 = sp.K
-    where = f"segment {k} (waypoint {k} -> {k + 1}, {_seg_name(sp)})"
-    try:
-        lim = parameter_limits(K1, K2, K3, v_max=vmax, a_max=amax, j_max=jmax,
-                               tip_factor=sp.tip_factor,
-                               tip_speed=None if limits.tip_speed is None
-                               else limits.tip_speed * f)
-    except ValueError as exc:
-        raise TrajectoryLimitError(f"{where}: {exc}", limit="time_law", value=math.nan,
-                                   bound=math.nan, segment=k) from None
-    # a rest-to-rest motion over lam in [0, 1] takes at least max(1 / v, 2 / sqrt(a))
-    t_low = max(1.0 / lim.v if lim.v > 0 else math.inf, 2.0 / math.sqrt(lim.a)
-                if lim.a > 0 else math.inf)
-    if not t_low <= max_duration:
-        raise TrajectoryLimitError(
-            f"{where} would take at least {t_low:.6g} s within the actuator limits, longer "
-            f"than max_duration = {max_duration:g} s (the actuators move fast along the path "
-            f"there: near a singularity or the workspace border?)", limit="max_duration",
-            value=t_low, bound=max_duration, segment=k)
-    try:
-        if sp.requested is None:
-            sp.profile = lam_profile(lim, dt=dt)
-            return
-        prof = lam_profile(lim, minimum_duration=sp.requested)
-    except TimeLawError as exc:
-        raise TrajectoryLimitError(f"{where}: {exc}", limit="time_law", value=math.nan,
-                                   bound=math.nan, segment=k) from None
-    if prof.duration > sp.requested * (1 + 1e-12) + 1e-12 and timing == "fixed":
-        if sp.requested <= 0:
-            raise TimingInfeasibleError(
-                f"timing='fixed': segment {_seg_name(sp)} has zero duration but moves the tip "
-                f"{sp.seg.scale:.6g} m", segment=-1, required=prof.duration, requested=0.0,
-                time=math.nan, index=-1, limit="velocity", value=math.inf,
-                bound=float(limits.v_max.min()))
-        prof = squeezed(prof, sp.requested)
-    sp.profile = prof
-
-
-def _seg_name(sp: _SegmentPlan) -> str:
-    return f"{sp.seg.start.tolist()} -> {sp.seg.end.tolist()}"
+def _requested(times: ArrayLike | None, K: int, timing: str, rate: float, max_duration: float,
+               max_samples: int) -> tuple[NDArray[np.float64] | None, float]:
+    """The requested duration of each segment (None: as fast as the limits allow), the start."""
+    req: NDArray[np.float64] | None = None
+    t0 = 0.0
+    if times is not None:
+        tt = check_array(times, "times", ())
+        if tt.shape != (K,):
+            raise ValueError(f"times: expected shape ({K},) (one per waypoint), got {tt.shape}")
+        req = np.diff(tt)
+        if np.any(req < 0):
+            raise ValueError(f"times: expected non-decreasing arrival times, got {tt.tolist()}")
+        t0 = float(tt[0])
+        _check_budget(float(tt[-1] - tt[0]), rate, max_duration, max_samples, None)
+    elif timing == "fixed":
+        raise ValueError("timing='fixed' needs times (the arrival time of each waypoint)")
+    return req, t0
 
 
 def _sample_checked(plans: list[_SegmentPlan], T: NDArray[np.float64], design: Design,
@@ -685,54 +488,6 @@ def _sample_checked(plans: list[_SegmentPlan], T: NDArray[np.float64], design: D
             bad["index"] += i0
             break
     return _concat(chunks), bad
-
-
-_KINEMATIC = ("velocity", "acceleration", "jerk", "tip_speed")
-
-
-def _check_clearance(c: dict[str, Any], bad: dict | None,  # type: ignore[type-arg]
-                     check: ClearanceCheck, T: NDArray[np.float64], design: Design
-                     ) -> dict | None:  # type: ignore[type-arg]
-    """Add the clearance of the samples ``c``; the first violation, geometric ones first.
-
-    A sample closer than the margin is a geometric violation, like leaving the
-    workspace: it comes before every kinematic one, and before a later geometric one.
-    """
-    n = c["q"].shape[0]
-    ok = c["reason"] == 0
-    dist = np.full(n, np.nan)
-    pair = np.full((n, 2), "", dtype="<U64")
-    if np.any(ok):
-        idx = np.flatnonzero(ok)
-        p_sign = np.where(design.tool_length - np.linalg.norm(c["tip_e"][idx], axis=-1) < 0,
-                          -1, 1)
-        dist[idx], pair[idx] = sample_clearance(check, c["q"][idx], T, design, c["mode"][idx],
-                                                p_sign)
-    c["clearance"] = dist
-    c["closest_pair"] = pair
-    with np.errstate(invalid="ignore"):
-        close = np.flatnonzero(dist < check.margin)
-    if close.size == 0:
-        return bad
-    i = int(close[0])
-    if bad is None or bad["limit"] in _KINEMATIC or i < bad["index"]:
-        return {"index": i, "limit": "clearance", "value": float(dist[i]),
-                "bound": check.margin, "actuator": None, "pair": tuple(str(x) for x in pair[i])}
-    return bad
-
-
-def _collision(bad: dict, samples: dict, check: ClearanceCheck  # type: ignore[type-arg]
-               ) -> CollisionError:
-    i = bad["index"]
-    a, b = bad["pair"]
-    what = ("makes {a!r} and {b!r} overlap" if bad["value"] < 0 else
-            "brings {a!r} and {b!r} closer than the clearance margin").format(a=a, b=b)
-    msg = (f"trajectory sample {i} at t = {float(samples['t'][i]):.4f} s (segment "
-           f"{int(samples['segment'][i])}, tip_e = "
-           f"{np.array2string(samples['tip_e'][i], precision=5)} m) {what}: clearance "
-           f"{bad['value']:.6g} m < {check.margin:.6g} m")
-    return CollisionError(msg, time=float(samples["t"][i]), index=i, value=bad["value"],
-                          bound=check.margin, pair=(a, b))
 
 
 def _concat(chunks: list[dict[str, Any]]) -> dict[str, Any]:
@@ -785,186 +540,6 @@ def _sample(plans: list[_SegmentPlan], T: NDArray[np.float64], design: Design, r
     return {"t": t0 + tl, "q": q, "qd": qd, "qdd": qdd,
             "qddd": None if limits.j_max is None else qddd, "tip_e": tips,
             "segment": k, "reason": reason, "mode": mode, "tip_speed": tipf * lam[1]}
-
-
-_SAMPLE_KEYS = {"t": (), "q": (3,), "qd": (3,), "qdd": (3,), "tip_e": (3,), "reason": (),
-                "mode": (), "tip_speed": ()}
-
-
-def _check_sample_arguments(samples: object, T_b_e: object, design: object, limits: object,
-                            margins: object, mode0: object) -> None:
-    """The boundary checks of :func:`check_samples` (named errors, nothing computed)."""
-    if not isinstance(samples, dict):
-        raise TypeError(f"samples: expected a dict of sample arrays, got {type(samples).__name__}")
-    missing = sorted(set(_SAMPLE_KEYS) - set(samples))
-    if missing:
-        raise InvalidInputError(f"samples: missing {missing}; expected the keys "
-                                f"{sorted(_SAMPLE_KEYS)} (and qddd)")
-    n = None
-    for k, tail in _SAMPLE_KEYS.items():
-        a = samples[k]
-        if not isinstance(a, np.ndarray) or a.ndim != 1 + len(tail) or a.shape[1:] != tail \
-                or (n is not None and a.shape[0] != n):
-            raise InvalidInputError(f"samples[{k!r}]: expected an array of shape "
-                                    f"({'N' if n is None else n}{''.join(f', {t}' for t in tail)})"
-                                    f", got {getattr(a, 'shape', type(a).__name__)}")
-        n = a.shape[0]
-    check_transform(T_b_e, "T_b_e")  # type: ignore[arg-type]
-    check_instance(design, "design", Design)
-    check_instance(limits, "limits", Limits)
-    check_instance(margins, "margins", Margins)
-    if mode0 is not None and (isinstance(mode0, bool) or not isinstance(mode0, (int, np.integer))
-                              or mode0 not in (1, -1)):
-        raise InvalidInputError(f"mode0: expected +1, -1 or None, got {mode0!r}")
-
-
-def check_samples(samples: dict[str, Any], T_b_e: NDArray[np.float64],
-                  design: Design, limits: Limits, margins: Margins, *,
-                  mode0: int | None = None) -> dict | None:  # type: ignore[type-arg]
-    """First sample that breaks a limit, or None.
-
-    Parameters
-    ----------
-    samples : dict
-        ``t (N,)``, ``q, qd, qdd (N, 3)``, ``qddd (N, 3) or None``, ``tip_e (N, 3)``,
-        ``reason (N,)`` (inverse-kinematics reason without stroke limits), ``mode (N,)``,
-        ``tip_speed (N,)``.
-    T_b_e : ndarray, shape (4, 4)
-    design : Design
-    limits : Limits
-    margins : Margins
-    mode0 : int, optional, keyword-only
-        Assembly mode the samples must keep (default: that of the first sample).
-
-    Returns
-    -------
-    dict or None
-        ``index, limit, value, bound, actuator`` of the first violation of a
-        geometric limit (workspace, stroke, assembly mode, margins of
-        :data:`MEASURE_NAMES`, in this order at one sample), or if there is none, of
-        the first violation of a kinematic limit (velocity, acceleration, jerk, tip
-        speed). Geometric limits come first because no timing can fix them.
-        The samples' :class:`SingularityMeasures` are stored under
-        ``samples["measures"]``.
-    """
-    _check_sample_arguments(samples, T_b_e, design, limits, margins, mode0)
-    q = samples["q"]
-    n = q.shape[0]
-    # (name, bad (n,) or (n, 3) per actuator, value, bound)
-    checks: list[tuple[str, NDArray[np.bool_], NDArray[np.float64], object]] = []
-    reason = samples["reason"]
-    ok = reason == 0
-    checks.append(("workspace", ~ok, reason.astype(float), 0.0))
-    lo, hi = design.stroke_min, design.stroke_max
-    with np.errstate(invalid="ignore"):
-        under, over = q < lo, q > hi
-    checks.append(("stroke", (under | over) & ok[:, None], q,
-                   np.where(under, lo, hi)))
-    mode = samples["mode"]
-    m0 = int(mode[0]) if mode0 is None else int(mode0)
-    checks.append(("assembly_mode", (mode != m0) & ok, mode.astype(float), float(m0)))
-    # samples outside the workspace (mode 0, q NaN) are reported by the workspace check;
-    # measure them as mode +1 at q = 0 only to keep the arrays whole
-    meas = singularity_measures(np.where(np.isfinite(q), q, 0.0), samples["tip_e"], T_b_e,
-                                design, mode=np.where(ok, mode, 1))
-    samples["measures"] = meas
-    for name in MEASURE_NAMES:
-        m = getattr(margins, name)
-        v = getattr(meas, name)
-        with np.errstate(invalid="ignore"):
-            bad = (v > m) if margins.is_upper(name) else (v < m)
-        checks.append((name, bad & ok, v, m))
-    tol = 1 + LIMIT_RTOL
-    for name, arr, lim in (("velocity", samples["qd"], limits.v_max),
-                           ("acceleration", samples["qdd"], limits.a_max),
-                           ("jerk", samples["qddd"], limits.j_max)):
-        if arr is None or lim is None:
-            continue
-        with np.errstate(invalid="ignore"):
-            bad = np.abs(arr) > lim * tol
-        checks.append((name, bad & ok[:, None], arr, np.broadcast_to(lim, arr.shape)))
-    if limits.tip_speed is not None:
-        v = samples["tip_speed"]
-        with np.errstate(invalid="ignore"):
-            bad = np.abs(v) > limits.tip_speed * tol
-        checks.append(("tip_speed", bad & ok, v, limits.tip_speed))
-    # geometric limits first: no timing can fix them (and next to the workspace boundary a
-    # path may break a kinematic limit before it leaves)
-    n_geo = 3 + len(MEASURE_NAMES)
-    first = n
-    for group in (checks[:n_geo], checks[n_geo:]):
-        for _, bad, *_ in group:
-            idx = np.flatnonzero(bad if bad.ndim == 1 else np.any(bad, axis=-1))
-            if idx.size:
-                first = min(first, int(idx[0]))
-        if first < n:
-            checks = group
-            break
-    if first == n:
-        return None
-    for name, bad, val, bnd in checks:
-        row = bad[first]
-        if not np.any(row):
-            continue
-        if bad.ndim == 2:
-            b = np.asarray(bnd)[first]
-            excess = np.where(row, np.abs(val[first] - np.sign(val[first]) * np.abs(b))
-                              if name != "stroke" else np.abs(val[first] - b), -np.inf)
-            act = int(np.argmax(excess))
-            return {"index": first, "limit": name, "value": float(val[first, act]),
-                    "bound": float(b[act]), "actuator": act}
-        return {"index": first, "limit": name, "value": float(val[first]),
-                "bound": float(bnd), "actuator": None}  # type: ignore[arg-type]
-    raise AssertionError("unreachable")  # pragma: no cover
-
-
-def _describe(bad: dict, samples: dict) -> str:  # type: ignore[type-arg]
-    i = bad["index"]
-    t = float(samples["t"][i])
-    tip = np.array2string(samples["tip_e"][i], precision=5)
-    lim = bad["limit"]
-    who = f" of q{bad['actuator'] + 1}" if bad["actuator"] is not None else ""
-    if lim == "workspace":
-        r = Reason(int(bad["value"]))
-        what = f"leaves the workspace ({r.name}: {r.description})"
-    elif lim == "assembly_mode":
-        what = (f"switches the parallel module's assembly mode from {bad['bound']:+.0f} to "
-                f"{bad['value']:+.0f}")
-    elif lim in ("cond",):
-        what = (f"exceeds the singularity margin 'cond': condition number of d tip / d q = "
-                f"{bad['value']:.6g} > {bad['bound']:.6g}")
-    elif lim in MEASURE_NAMES:
-        what = (f"crosses the singularity margin '{lim}': {bad['value']:.6g} < "
-                f"{bad['bound']:.6g}")
-    elif lim == "stroke":
-        what = f"exceeds the stroke limit{who}: {bad['value']:.6g} m (limit {bad['bound']:.6g} m)"
-    else:
-        unit = {"velocity": "m/s", "acceleration": "m/s^2", "jerk": "m/s^3",
-                "tip_speed": "m/s"}[lim]
-        what = (f"exceeds the {lim.replace('_', ' ')} limit{who}: |{bad['value']:.6g}| > "
-                f"{bad['bound']:.6g} {unit}")
-    return (f"trajectory sample {i} at t = {t:.4f} s (segment {int(samples['segment'][i])}, "
-            f"tip_e = {tip} m) {what}")
-
-
-def _violation(bad: dict, samples: dict) -> SafetyViolationError:  # type: ignore[type-arg]
-    i = bad["index"]
-    return SafetyViolationError(_describe(bad, samples), time=float(samples["t"][i]), index=i,
-                                limit=bad["limit"], value=bad["value"], bound=bad["bound"],
-                                actuator=bad["actuator"])
-
-
-def _timing_error(bad: dict, samples: dict, k: int,  # type: ignore[type-arg]
-                  sp: _SegmentPlan) -> TimingInfeasibleError:
-    i = bad["index"]
-    prof = sp.profile
-    assert prof is not None and sp.requested is not None
-    msg = (f"timing='fixed': segment {k} ({_seg_name(sp)}) is given {sp.requested:.6g} s but "
-           f"needs {prof.min_duration:.6g} s within the limits; " + _describe(bad, samples))
-    return TimingInfeasibleError(msg, segment=k, required=prof.min_duration,
-                                 requested=sp.requested, time=float(samples["t"][i]), index=i,
-                                 limit=bad["limit"], value=bad["value"], bound=bad["bound"],
-                                 actuator=bad["actuator"])
 
 
 def _trajectory(samples: dict, plans: list[_SegmentPlan], tips: NDArray[np.float64],  # type: ignore[type-arg]

@@ -178,6 +178,29 @@ def _traces(g: RobotGeometry, *, show_frames: bool, frame_length: float,
     sph = [np.stack([c - 0.4 * ARC_RADIUS * a, c + 0.4 * ARC_RADIUS * a]) for a in ax_]
     sph += [arc_points(c, ax_[k], ax_[k + 1], ARC_RADIUS) for k in range(2)]
     out.append(lines("spherical joint at the RCM (u3, u4, u5)", sph, COLORS["sphere"], 5))
+    out.append(_point_trace(g, show_frames=show_frames, box=box))
+    other = g.intersections[1 if g.mode > 0 else 0]
+    if np.all(np.isfinite(other)):
+        x, y, z = (other * MM).tolist()
+        out.append({"type": "scatter3d", "mode": "markers",
+                    "name": "O_i of the other assembly mode", "x": [x], "y": [y], "z": [z],
+                    "marker": {"size": 5, "color": COLORS["joint"], "symbol": "circle-open"},
+                    "hovertemplate": _hover("O_i of the other assembly mode")})
+    if show_frames:
+        frames = [("O_b", g.frames["b"], 1.5), ("O_i", g.frames["i"], 1.0),
+                  ("O_s", g.frames["s"], 1.0), ("O_e (RCM)", g.frames["e"], 1.0)]
+        for i, axis in enumerate("xyz"):
+            segs = [np.stack([T[:3, 3], T[:3, 3] + s * frame_length * T[:3, i]])
+                    for _, T, s in frames]
+            out.append(lines(f"frame axes {axis} (O_b, O_i, O_s, O_e)", segs, COLORS[axis], 5))
+    return out
+
+
+
+def _point_trace(g: RobotGeometry, *, show_frames: bool,
+                 box: tuple[NDArray[np.float64], NDArray[np.float64]] | None) -> dict[str, Any]:
+    """The labelled points of one solution (one label where points coincide on screen)."""
+    P = g.points
     keys, labels, names = (list(t) for t in zip(*POINT_LABELS, strict=True))
     pts = np.stack([P[k] for k in keys])
     if show_frames:                         # the base frame's origin, labelled with M
@@ -206,28 +229,13 @@ def _traces(g: RobotGeometry, *, show_frames: bool, frame_length: float,
                "tip": COLORS["serial"], "O_b": "#222222"}
     symbols = {"A": "square", "B": "square", "RCM": "diamond"}
     sizes = {"A": 7, "B": 7, "M": 3, "O_i": 5, "O_s": 6, "RCM": 7, "tip": 3, "O_b": 3}
-    out.append({"type": "scatter3d", "mode": "markers+text", "name": "points (hover: mm)",
-                "x": (pts[:, 0] * MM).tolist(), "y": (pts[:, 1] * MM).tolist(),
-                "z": (pts[:, 2] * MM).tolist(), "text": text, "textposition": positions,
-                "hovertext": hover, "hoverinfo": "text",
-                "marker": {"size": [sizes.get(k, 4) for k in keys],
-                           "color": [palette.get(k, COLORS["joint"]) for k in keys],
-                           "symbol": [symbols.get(k, "circle") for k in keys]}})
-    other = g.intersections[1 if g.mode > 0 else 0]
-    if np.all(np.isfinite(other)):
-        x, y, z = (other * MM).tolist()
-        out.append({"type": "scatter3d", "mode": "markers",
-                    "name": "O_i of the other assembly mode", "x": [x], "y": [y], "z": [z],
-                    "marker": {"size": 5, "color": COLORS["joint"], "symbol": "circle-open"},
-                    "hovertemplate": _hover("O_i of the other assembly mode")})
-    if show_frames:
-        frames = [("O_b", g.frames["b"], 1.5), ("O_i", g.frames["i"], 1.0),
-                  ("O_s", g.frames["s"], 1.0), ("O_e (RCM)", g.frames["e"], 1.0)]
-        for i, axis in enumerate("xyz"):
-            segs = [np.stack([T[:3, 3], T[:3, 3] + s * frame_length * T[:3, i]])
-                    for _, T, s in frames]
-            out.append(lines(f"frame axes {axis} (O_b, O_i, O_s, O_e)", segs, COLORS[axis], 5))
-    return out
+    return {"type": "scatter3d", "mode": "markers+text", "name": "points (hover: mm)",
+            "x": (pts[:, 0] * MM).tolist(), "y": (pts[:, 1] * MM).tolist(),
+            "z": (pts[:, 2] * MM).tolist(), "text": text, "textposition": positions,
+            "hovertext": hover, "hoverinfo": "text",
+            "marker": {"size": [sizes.get(k, 4) for k in keys],
+                       "color": [palette.get(k, COLORS["joint"]) for k in keys],
+                       "symbol": [symbols.get(k, "circle") for k in keys]}}
 
 
 def robot_figure(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,

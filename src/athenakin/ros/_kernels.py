@@ -1,6 +1,6 @@
 """Compiled scan and fill of the records of MCAP chunks (private; the ROS reader and writer).
 
-:func:`scan_records` walks the records of a chunk as :class:`athenakin.ros._read._McapStream`
+:func:`scan_records` walks the records of a chunk as :class:`athenakin.ros._mcap_stream._McapStream`
 does record by record in Python, and returns where each one lies; the reader then reads
 every message of a fixed CDR layout at once with numpy. Anything unusual (a record past
 the end, a Message shorter than its header, a log time beyond ``2**63``) returns -1 and

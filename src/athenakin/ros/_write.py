@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import functools
 from pathlib import Path
 from types import TracebackType
 from typing import IO, Any
@@ -40,11 +39,8 @@ from ..errors import InvalidInputError
 from ..robot._setup import resolve_rcm_frame
 from ..sim import JOINTS
 from ._cdr import CdrBuilder, Template, split_stamps
-from ._errors import ros_extra_missing
 from ._frames import (
     BASE_FRAME,
-    MOVING_LINKS,
-    RCM_FRAME,
     TOOL_TIP_FRAME,
     UrdfModel,
     joint_values,
@@ -54,6 +50,21 @@ from ._frames import (
     urdf_model,
 )
 from ._mcap import MESSAGE_HEADER, McapFile, check_compression, compressor_module
+from ._messages import (
+    STATUS_FLAG_FIELDS,
+    STATUS_MSGDEF,
+    STATUS_TYPE,
+    _joint_state_template,
+    _pose_template,
+    _put_frame,
+    _put_pose,
+    _stamp_fields,
+    _status_template,
+    _string_message,
+    _tf_template,
+    msgdef,
+)
+from ._record_plan import TF_FRAMES, _RecordPlan
 
 __all__ = ["McapOutput", "RosEncoder", "TrackedBatch", "TOPICS", "STATUS_TYPE",
            "STATUS_MSGDEF", "TF_FRAMES", "STATUS_FLAG_FIELDS"]
@@ -68,43 +79,12 @@ TOPICS = {
     "robot_description": "/robot_description",
     "trajectory": "/athena/trajectory",
 }
-#: Child frames of ``/tf`` (parent ``base``), in message order.
-TF_FRAMES = (*MOVING_LINKS, TOOL_TIP_FRAME, RCM_FRAME)
-#: Type of ``/athena/status``.
-STATUS_TYPE = "athenakin_msgs/msg/TrackStatus"
-#: Its definition (ROS 2 .msg syntax).
-STATUS_MSGDEF = """\
-# The continuity tracker's verdict on one actuator reading (athenakin.motion.TrackFlag).
-std_msgs/Header header
-uint32 sample              # index of the reading in the stream
-bool valid                 # false: no forward-kinematics solution (LOST); no pose published
-int8 mode                  # assembly mode, +1 / -1 (0 when not valid)
-uint8 slot                 # forward-kinematics slot 8 m + 4 r + 2 b + w
-uint32 flags               # athenakin.motion.TrackFlag bits
-bool lost
-bool mode_switch
-bool branch_switch
-bool jump
-bool ambiguous
-bool out_of_stroke
-bool near_singular         # any NEAR_* bit
-float64 step               # distance to the previous pose, in units of the jump thresholds
-float64 half_chord         # m: distance to the assembly-mode boundary
-float64 sin_u2
-float64 sin_u4
-float64 clearance_m        # smallest distance between bodies, m; NaN: not computed
-uint32 clearance_flags     # collision flags; 0: none or not computed
-"""
-#: Boolean fields of the status and the TrackFlag bits they report.
-STATUS_FLAG_FIELDS = {"lost": 1, "mode_switch": 8, "branch_switch": 16, "jump": 4,
-                      "ambiguous": 32, "out_of_stroke": 64}
 _NEAR_BITS = 128 | 256 | 512 | 1024 | 2048 | 4096
 _MSG_TYPES = {"tool_tip": "geometry_msgs/msg/PoseStamped", "tf": "tf2_msgs/msg/TFMessage",
               "tf_static": "tf2_msgs/msg/TFMessage",
               "joint_states": "sensor_msgs/msg/JointState", "status": STATUS_TYPE,
               "robot_description": "std_msgs/msg/String",
               "trajectory": "trajectory_msgs/msg/JointTrajectory"}
-_SEP = "=" * 80 + "\n"
 #: Uncompressed bytes per MCAP chunk (about).
 _CHUNK_BYTES = 4 * 2**20
 #: QoS of a latched topic as rosbag2 records it (durability 1: transient local).
@@ -113,97 +93,6 @@ _LATCHED_QOS = ("- history: 3\n  depth: 0\n  reliability: 1\n  durability: 1\n"
                 "  lifespan:\n    sec: 2147483647\n    nsec: 4294967295\n"
                 "  liveliness: 1\n  liveliness_lease_duration:\n    sec: 2147483647\n"
                 "    nsec: 4294967295\n  avoid_ros_namespace_conventions: false\n")
-
-
-@functools.lru_cache(maxsize=32)
-def msgdef(typename: str) -> str:
-    """The ROS 2 message definition of ``typename`` with its dependencies (MCAP ``ros2msg``)."""
-    try:
-        from rosbags.typesys import Stores, get_typestore
-    except ModuleNotFoundError as exc:  # pragma: no cover
-        raise ros_extra_missing(exc) from None
-    store = get_typestore(Stores.ROS2_HUMBLE)
-    if typename == STATUS_TYPE:
-        head = store.generate_msgdef("std_msgs/msg/Header", ros_version=2)[0]
-        return STATUS_MSGDEF + _SEP + "MSG: std_msgs/Header\n" + head
-    return store.generate_msgdef(typename, ros_version=2)[0]
-
-
-# ---------------------------------------------------------------------------- templates
-def _pose_template() -> Template:
-    b = CdrBuilder()
-    b.header(BASE_FRAME)
-    b.vec3("p")
-    b.quat("o")
-    return b.template()
-
-
-def _tf_template(pairs: tuple[tuple[str, str], ...]) -> Template:
-    b = CdrBuilder()
-    b.num("u4", len(pairs))
-    for k, (parent, child) in enumerate(pairs):
-        b.header(parent, name=f"stamp{k}")
-        b.string(child)
-        b.vec3(f"t{k}")
-        b.quat(f"r{k}")
-    return b.template()
-
-
-def _joint_state_template(names: tuple[str, ...]) -> Template:
-    b = CdrBuilder()
-    b.header("")
-    b.strings(names)
-    b.f8_seq("pos", len(names))
-    b.num("u4", 0)      # velocity[]
-    b.num("u4", 0)      # effort[]
-    return b.template()
-
-
-def _status_template() -> Template:
-    b = CdrBuilder()
-    b.header(BASE_FRAME)
-    b.num("u4", 0, "sample")
-    b.num("b1", False, "valid")
-    b.num("i1", 0, "mode")
-    b.num("u1", 0, "slot")
-    b.num("u4", 0, "flags")
-    for name in (*STATUS_FLAG_FIELDS, "near_singular"):
-        b.num("b1", False, name)
-    for name in ("step", "half_chord", "sin_u2", "sin_u4", "clearance_m"):
-        b.num("f8", 0.0, name)
-    b.num("u4", 0, "clearance_flags")
-    return b.template()
-
-
-def _string_message(text: str) -> bytes:
-    b = CdrBuilder()
-    b.string(text)
-    return bytes(b.buf)
-
-
-def _stamp_fields(values: dict[str, Any], stamps_ns: NDArray[np.int64], names: list[str]
-                  ) -> None:
-    sec, nsec = split_stamps(stamps_ns)
-    for n in names:
-        values[f"{n}.sec"] = sec
-        values[f"{n}.nanosec"] = nsec
-
-
-def _put_frame(values: dict[str, Any], f: NDArray[np.float64], tname: str, rname: str
-               ) -> None:
-    """The numbers of a translation and a quaternion from ``f`` (N, 7) (:func:`link_frames`)."""
-    for i, c in enumerate("xyz"):
-        values[f"{tname}.{c}"] = f[:, i]
-    for i, c in enumerate("xyzw"):
-        values[f"{rname}.{c}"] = f[:, 3 + i]
-
-
-def _put_pose(values: dict[str, Any], T: NDArray[np.float64], tname: str, rname: str) -> None:
-    for i, c in enumerate("xyz"):
-        values[f"{tname}.{c}"] = T[:, i, 3]
-    quat = quaternion_xyzw(T[:, :3, :3])
-    for i, c in enumerate("xyzw"):
-        values[f"{rname}.{c}"] = quat[:, i]
 
 
 # ---------------------------------------------------------------------------- the file
@@ -361,135 +250,6 @@ def _compiled() -> bool:
     from .._backend import numba_available
 
     return numba_available()
-
-
-@dataclasses.dataclass(frozen=True)
-class _RecordPlan:
-    """The Message records of one tracked reading as templates and numbers at offsets.
-
-    ``status_tpl``: the status record (header and CDR message); ``pose_tpl``: the tool
-    tip, ``/tf`` and joint-state records one after the other (``record_at[j]``: where
-    record ``j`` of ``keys`` starts in it, ``record_at[0] = 0`` for the status). Field
-    ``f`` of each part: ``size[f]`` bytes at ``off[f]`` holding column ``col[f]`` of the
-    words of :meth:`words`, laid out as: the ``/tf`` frames (``K x 7`` float64, as
-    :meth:`RosEncoder.frames`), the joint values (``JOINTS`` order), the status floats
-    (``status_float``), then integers: stamp, status sequence, pose sequence, stamp
-    seconds, stamp nanoseconds, the status integers (``status_int``).
-    """
-
-    status_tpl: NDArray[np.uint8]
-    pose_tpl: NDArray[np.uint8]
-    record_at: tuple[int, ...]
-    s_off: NDArray[np.int64]
-    s_size: NDArray[np.int64]
-    s_col: NDArray[np.int64]
-    p_off: NDArray[np.int64]
-    p_size: NDArray[np.int64]
-    p_col: NDArray[np.int64]
-    status_float: tuple[str, ...]
-    status_int: tuple[str, ...]
-    n_frames: int
-
-    @staticmethod
-    def of(templates: dict[str, Template], keys: tuple[str, ...], cids: list[int]
-           ) -> _RecordPlan:
-        sizes = {"f8": 8, "i4": 4, "u4": 4, "u1": 1, "i1": 1, "b1": 1}
-        nf = 7 * len(TF_FRAMES)
-        tip = 7 * TF_FRAMES.index(TOOL_TIP_FRAME)
-        status = templates["status"].fields
-        s_float = tuple(nm for nm, _, kd in status if kd == "f8")
-        s_int = tuple(nm for nm, _, kd in status if kd != "f8" and not nm.startswith("stamp"))
-        base_int = nf + len(JOINTS) + len(s_float)
-        special = {"@stamp": base_int, "@seq.status": base_int + 1, "@seq.pose": base_int + 2}
-        comp = {c: i for i, c in enumerate("xyz")}
-
-        def column(key: str, name: str) -> int:
-            if name.endswith(".sec") and "stamp" in name:
-                return base_int + 3
-            if name.endswith(".nanosec") and "stamp" in name:
-                return base_int + 4
-            head, _, tail = name.partition(".")
-            if key == "tool_tip":
-                return tip + (comp[tail] if head == "p" else 3 + "xyzw".index(tail))
-            if key == "tf":
-                k = int(head[1:])
-                return 7 * k + (comp[tail] if head[0] == "t" else 3 + "xyzw".index(tail))
-            if key == "joint_states":
-                return nf + int(tail)
-            if name in s_float:
-                return nf + len(JOINTS) + s_float.index(name)
-            return base_int + 5 + s_int.index(name)
-
-        parts: list[tuple[bytes, list[tuple[int, int, int]]]] = [(b"", []), (b"", [])]
-        record_at = [0]
-        for j, key in enumerate(keys):
-            tpl = templates[key]
-            head = np.zeros((1, MESSAGE_HEADER), dtype=np.uint8)
-            McapFile.message_headers(head, cids[j], [0], [0], tpl.size)
-            side = 0 if j == 0 else 1
-            data, fields = parts[side]
-            at = len(data)
-            if j:
-                record_at.append(at)
-            seq = special["@seq.status" if j == 0 else "@seq.pose"]
-            fields += [(at + 11, 4, seq), (at + 15, 8, special["@stamp"]),
-                       (at + 23, 8, special["@stamp"])]
-            fields += [(at + MESSAGE_HEADER + off, sizes[kind], column(key, name))
-                       for name, off, kind in tpl.fields]
-            parts[side] = (data + head.tobytes() + tpl.data, fields)
-        (sd, sf), (pd, pf) = parts
-        return _RecordPlan(
-            status_tpl=np.frombuffer(sd, np.uint8), pose_tpl=np.frombuffer(pd, np.uint8),
-            record_at=tuple(record_at),
-            s_off=np.array([f[0] for f in sf], np.int64),
-            s_size=np.array([f[1] for f in sf], np.int64),
-            s_col=np.array([f[2] for f in sf], np.int64),
-            p_off=np.array([f[0] for f in pf], np.int64),
-            p_size=np.array([f[1] for f in pf], np.int64),
-            p_col=np.array([f[2] for f in pf], np.int64),
-            status_float=s_float, status_int=s_int, n_frames=len(TF_FRAMES))
-
-    @property
-    def n_words(self) -> int:
-        """Columns of :meth:`words`."""
-        return 7 * self.n_frames + len(JOINTS) + len(self.status_float) + 5 \
-            + len(self.status_int)
-
-    def words(self, buf: NDArray[np.uint64], stamps: NDArray[np.int64],
-              seq_status: NDArray[np.int64], seq_pose: NDArray[np.int64],
-              status: dict[str, Any]) -> NDArray[np.uint64]:
-        """The numbers of ``m`` readings as 8-byte words (m, C), in the plan's columns.
-
-        Written into ``buf[:m]`` (at least ``m`` rows of :attr:`n_words`); the pose
-        columns are left for :meth:`pose_columns` (unset where no reading has a pose:
-        the pose records are then not written).
-        """
-        m = len(stamps)
-        nf = 7 * self.n_frames
-        nj = len(JOINTS)
-        ns = len(self.status_float)
-        base = nf + nj + ns
-        words = buf[:m]
-        as_float, as_int = words.view(np.float64), words.view(np.int64)
-        for i, name in enumerate(self.status_float):
-            as_float[:, nf + nj + i] = status[name]
-        as_int[:, base] = stamps
-        as_int[:, base + 1] = seq_status
-        as_int[:, base + 2] = seq_pose
-        as_int[:, base + 3] = status["stamp.sec"]
-        as_int[:, base + 4] = status["stamp.nanosec"]
-        for i, name in enumerate(self.status_int):
-            as_int[:, base + 5 + i] = status[name]
-        return words
-
-    def pose_columns(self, words: NDArray[np.uint64]
-                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Views of ``words`` as the ``/tf`` frames (m, K, 7) and the joints (m, J), float64."""
-        m = words.shape[0]
-        nf = 7 * self.n_frames
-        as_float = words.view(np.float64)
-        return (as_float[:, :nf].reshape(m, self.n_frames, 7),
-                as_float[:, nf:nf + len(JOINTS)])
 
 
 class McapOutput:

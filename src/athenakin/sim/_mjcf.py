@@ -340,6 +340,64 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
 
     check_text(model_name, "model_name")
     root = ET.Element("mujoco", {"model": model_name})
+    _add_options(root, gravity=gravity)
+
+    origins = tree_origins(d)
+    wb = ET.SubElement(root, "worldbody")
+    ET.SubElement(wb, "light", {"pos": "0 0 2", "dir": "0 0 -1", "directional": "true"})
+    rail = np.stack([st["rail_lo"], st["rail_hi"]])
+    _capsule(wb, "rail", rail[0] - [0, 0, 0.02], rail[1] - [0, 0, 0.02], "rail", radius=0.01)
+
+    _add_carriage_a(wb, origins, d, half, lo, hi, values)
+    _add_carriage_b(wb, origins, d, half, lo, hi)
+
+    # --- the set-up: frame E, where S1 and S2 hold the spherical five-bar -------------
+    setup = _body(wb, "rcm_setup", pos=T[:3, 3], quat=quaternion_from_rotation(T[:3, :3]))
+    _sphere(setup, "rcm_setup", 0.006, "setup")
+    _site(setup, "rcm_setup_frame")
+
+    collision = _collision_flag(collision, bodies, environment)
+    if collision:
+        bodies = resolve_bodies(bodies, d)
+        bits = _obstacle_bits(environment) if environment is not None else None
+        _collision_geoms(root, bodies, collision_segments(st, d, bodies.geometry), bits)
+        if environment is not None and bits is not None:
+            _obstacle_geoms(root, environment, bits)
+
+    _add_equalities(root)
+    _add_actuators(root, lo, hi)
+
+    qpos = [values[name] for name in JOINTS]
+    kf = ET.SubElement(root, "keyframe")
+    ET.SubElement(kf, "key", {"name": "home", "qpos": _vec(qpos),
+                              "ctrl": _vec([values[n] for n in ACTUATED])})
+    if masses is not None:
+        _apply_masses(root, masses, jv, gravity=gravity)
+    ET.indent(root)
+    header = (f"<!-- ATHENA closed-loop mechanism exported by athenakin: design "
+              f"l1..l5 = {d.lengths.tolist()} m, keyframe 'home' = q {jv.q.tolist()} m in "
+              f"FK slot {jv.slot}. Loop closures are equality constraints. -->\n")
+    return header + ET.tostring(root, encoding="unicode") + "\n"
+
+
+
+def _collision_flag(collision: object, bodies: object, environment: object) -> bool:
+    """Whether to export collision geoms (None: when bodies or obstacles are given)."""
+    if environment is not None and not isinstance(environment, Environment):
+        raise TypeError(f"environment: expected athenakin.collision.Environment or None, got "
+                        f"{type(environment).__name__}")
+    if collision is None:
+        collision = bodies is not None or environment is not None
+    if collision is False and environment is not None:
+        raise InvalidInputError("environment: given with collision=False; the obstacles are "
+                                "collision geoms")
+    if not isinstance(collision, bool):
+        raise TypeError(f"collision: expected a bool or None, got {type(collision).__name__}")
+    return collision
+
+
+def _add_options(root: ET.Element, *, gravity: bool) -> None:
+    """Add the compiler, the solver options, the defaults and the visual settings."""
     ET.SubElement(root, "compiler", {"angle": "radian", "autolimits": "true"})
     ET.SubElement(root, "option", {
         "timestep": _f(MJCF_TIMESTEP), "integrator": "implicitfast", "solver": "Newton",
@@ -354,12 +412,11 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     ET.SubElement(visual, "global", {"offwidth": "1280", "offheight": "960"})
     ET.SubElement(visual, "scale", {"framelength": "0.08", "framewidth": "0.004"})
 
-    origins = tree_origins(d)
-    wb = ET.SubElement(root, "worldbody")
-    ET.SubElement(wb, "light", {"pos": "0 0 2", "dir": "0 0 -1", "directional": "true"})
-    rail = np.stack([st["rail_lo"], st["rail_hi"]])
-    _capsule(wb, "rail", rail[0] - [0, 0, 0.02], rail[1] - [0, 0, 0.02], "rail", radius=0.01)
 
+def _add_carriage_a(wb: ET.Element, origins: dict[str, NDArray[np.float64]], d: Design,
+                    half: float, lo: NDArray[np.float64], hi: NDArray[np.float64],
+                    values: dict[str, float]) -> None:
+    """Add carriage A's subtree: the U-joint to the platform, the serial chain, the bar to D."""
     # --- carriage A: U-joint to the platform, bar to D --------------------------------
     ca = _carriage(wb, "q1", origins, half, (lo[0], hi[0]))
     ac = _tree_body(ca, "a_ujoint_x", origins)
@@ -402,6 +459,10 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     _cylinder(rod, "k2_rod", (0, 0, -rod_length), (0, 0, 0), "actuator")
     _site(rod, "k2_rod_tip")
 
+
+def _add_carriage_b(wb: ET.Element, origins: dict[str, NDArray[np.float64]], d: Design,
+                    half: float, lo: NDArray[np.float64], hi: NDArray[np.float64]) -> None:
+    """Add carriage B's subtree: the bars to O_i and to D."""
     # --- carriage B: bar to O_i, bar to D -------------------------------------------
     cb = _carriage(wb, "q2", origins, half, (lo[1], hi[1]))
     bc = _tree_body(cb, "b_ujoint_x", origins)
@@ -413,28 +474,9 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     _capsule(lb3, "link_b3", (0, 0, 0), (d.l3, 0, 0), "parallel")
     _site(lb3, "link_b3_tip", (d.l3, 0, 0))
 
-    # --- the set-up: frame E, where S1 and S2 hold the spherical five-bar -------------
-    setup = _body(wb, "rcm_setup", pos=T[:3, 3], quat=quaternion_from_rotation(T[:3, :3]))
-    _sphere(setup, "rcm_setup", 0.006, "setup")
-    _site(setup, "rcm_setup_frame")
 
-    if environment is not None and not isinstance(environment, Environment):
-        raise TypeError(f"environment: expected athenakin.collision.Environment or None, got "
-                        f"{type(environment).__name__}")
-    if collision is None:
-        collision = bodies is not None or environment is not None
-    if collision is False and environment is not None:
-        raise InvalidInputError("environment: given with collision=False; the obstacles are "
-                                "collision geoms")
-    if not isinstance(collision, bool):
-        raise TypeError(f"collision: expected a bool or None, got {type(collision).__name__}")
-    if collision:
-        bodies = resolve_bodies(bodies, d)
-        bits = _obstacle_bits(environment) if environment is not None else None
-        _collision_geoms(root, bodies, collision_segments(st, d, bodies.geometry), bits)
-        if environment is not None and bits is not None:
-            _obstacle_geoms(root, environment, bits)
-
+def _add_equalities(root: ET.Element) -> None:
+    """Add the loop closures as equality constraints."""
     eq = ET.SubElement(root, "equality")
     for c in LOOP_CLOSURES:
         if c.kind == "point":
@@ -445,25 +487,15 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
             ET.SubElement(eq, "joint", {"name": c.name, "joint1": c.a, "joint2": c.b,
                                         "polycoef": "0 -1 0 0 0"})
 
+
+def _add_actuators(root: ET.Element, lo: NDArray[np.float64], hi: NDArray[np.float64]) -> None:
+    """Add the position actuators of q1, q2, q3 (control ranges where the strokes are finite)."""
     act = ET.SubElement(root, "actuator")
     for i, name in enumerate(ACTUATED):
         attrs = {"name": name, "joint": name, "kp": _f(ACTUATOR_KP), "kv": _f(ACTUATOR_KV)}
         if math.isfinite(lo[i]) and math.isfinite(hi[i]):
             attrs["ctrlrange"] = _vec((lo[i], hi[i]))
         ET.SubElement(act, "position", attrs)
-
-    qpos = [values[name] for name in JOINTS]
-    kf = ET.SubElement(root, "keyframe")
-    ET.SubElement(kf, "key", {"name": "home", "qpos": _vec(qpos),
-                              "ctrl": _vec([values[n] for n in ACTUATED])})
-    if masses is not None:
-        _apply_masses(root, masses, jv, gravity=gravity)
-    ET.indent(root)
-    header = (f"<!-- ATHENA closed-loop mechanism exported by athenakin: design "
-              f"l1..l5 = {d.lengths.tolist()} m, keyframe 'home' = q {jv.q.tolist()} m in "
-              f"FK slot {jv.slot}. Loop closures are equality constraints. -->\n")
-    return header + ET.tostring(root, encoding="unicode") + "\n"
-
 
 #: MJCF body that carries each part of the mass model (frames coincide), from
 #: :data:`athenakin._mechanism.MASS_PART_LINK`; ``rail`` is fixed and left out.

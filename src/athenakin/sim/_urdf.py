@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._mechanism import BODIES, TREE, BodyGeometry, tree_origins
+from .._mechanism import BODIES, TREE, BodyGeometry, MechanismState, tree_origins
 from .._output import check_output_path, write_text_atomic
 from .._transforms import rot_x, rot_y, rot_z
 from .._validation import check_array, check_text
@@ -211,9 +211,22 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     zero = dict(zip(JOINTS, (float(v) for v in st.joints), strict=True))
     half = 0.5 * geo.carriage_length
     rail = np.stack([st["rail_lo"], st["rail_hi"]])
-    lo, hi = d.stroke_min, d.stroke_max
     check_text(robot_name, "robot_name")
     robot = ET.Element("robot", {"name": robot_name})
+    _add_links(robot, d, rail, half)
+    if not isinstance(collision, bool):
+        raise TypeError(f"collision: expected a bool, got {type(collision).__name__}")
+    if collision:
+        _add_collisions(robot, st, d, resolve_bodies(bodies, d))
+    _add_joints(robot, d, zero)
+    _add_fixed_frames(robot, T, d)
+    ET.indent(robot)
+    lines = _header(d, zero, zero_slot)
+    return "\n".join(lines) + "\n" + ET.tostring(robot, encoding="unicode") + "\n"
+
+
+def _add_links(robot: ET.Element, d: Design, rail: NDArray[np.float64], half: float) -> None:
+    """Add the materials and every link of the tree with its inertia and drawn cylinder."""
     for name, rgba in (("parallel", "0.2 0.4 0.8 1"), ("serial", "0.8 0.2 0.2 1"),
                        ("actuator", "0.95 0.6 0.1 1"), ("joint", "0.55 0.55 0.55 1"),
                        ("rail", "0.35 0.35 0.38 1")):
@@ -251,17 +264,20 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
             _inertial(link, a, b, rad)
         _cylinder(link, a, b, rad, mat)
 
-    if not isinstance(collision, bool):
-        raise TypeError(f"collision: expected a bool, got {type(collision).__name__}")
-    if collision:
-        bodies = resolve_bodies(bodies, d)
-        links = {el.get("name"): el for el in robot.iter("link")}
-        segs = collision_segments(st, d, bodies.geometry)
-        for body in BODIES:
-            end_a, end_b = segs[body]
-            _collision(links[COLLISION_BODY[body]], f"collision_{body}", end_a, end_b,
-                       bodies.radius[body])
 
+def _add_collisions(robot: ET.Element, st: MechanismState, d: Design, bodies: Bodies) -> None:
+    """Add each body's capsule as ``<collision>`` elements of the link that carries it."""
+    links = {el.get("name"): el for el in robot.iter("link")}
+    segs = collision_segments(st, d, bodies.geometry)
+    for body in BODIES:
+        end_a, end_b = segs[body]
+        _collision(links[COLLISION_BODY[body]], f"collision_{body}", end_a, end_b,
+                   bodies.radius[body])
+
+
+def _add_joints(robot: ET.Element, d: Design, zero: dict[str, float]) -> None:
+    """Add the tree's joints, each origin moved by its value in the zero configuration."""
+    lo, hi = d.stroke_min, d.stroke_max
     origins = tree_origins(d)
     stroke = {"q1": 0, "q2": 1, "q3": 2}
     for name, (kind, parent, child) in JOINTS.items():
@@ -289,6 +305,9 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
             master, mult = MIMIC[name]
             ET.SubElement(j, "mimic", {"joint": master, "multiplier": _f(mult), "offset": "0"})
 
+
+def _add_fixed_frames(robot: ET.Element, T: NDArray[np.float64], d: Design) -> None:
+    """Add the fixed links: the RCM frame of the set-up, the tool tip, the closure frames."""
     # rcm_setup: fixed at T_b_e (the base of the spherical five-bar, set by S1, S2)
     ET.SubElement(robot, "link", {"name": "rcm_setup"})
     j = ET.SubElement(robot, "joint", {"name": "rcm_setup_fixed", "type": "fixed"})
@@ -315,7 +334,9 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
         ET.SubElement(j, "child", {"link": name})
         ET.SubElement(j, "origin", {"xyz": _vec(xyz), "rpy": "0 0 0"})
 
-    ET.indent(robot)
+
+def _header(d: Design, zero: dict[str, float], zero_slot: int) -> list[str]:
+    """The XML declaration and the header comment listing the loop closures."""
     lines = [
         "<?xml version=\"1.0\"?>",
         "<!--",
@@ -340,7 +361,7 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
         "  The MJCF export encodes the same closures as MuJoCo equality constraints.",
         "-->",
     ]
-    return "\n".join(lines) + "\n" + ET.tostring(robot, encoding="unicode") + "\n"
+    return lines
 
 
 def write_urdf(path: str | Path, design: Design | None = None, T_b_e: ArrayLike | None = None,

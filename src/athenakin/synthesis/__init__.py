@@ -34,6 +34,7 @@ from ._metrics import (
     reachability,
     row_from_design,
 )
+from ._scheduler import LOCAL_SCHEDULERS
 from ._search import (
     DEFAULT_OBJECTIVES,
     SEARCH_VARIABLES,
@@ -46,7 +47,7 @@ from ._search import (
     pareto_mask,
     random_designs,
 )
-from ._study import CHUNK_SIZE, LOCAL_SCHEDULERS, StudyOptions, design_rows, evaluate, read_study
+from ._study import CHUNK_SIZE, StudyOptions, design_rows, evaluate, read_study
 from ._task import (
     MAX_TASK_SAMPLES,
     Task,

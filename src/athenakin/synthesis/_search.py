@@ -29,7 +29,8 @@ from ._metrics import (
     CollisionSpec,
     row_from_design,
 )
-from ._study import StudyOptions, _require, evaluate, open_scheduler
+from ._scheduler import _require, open_scheduler
+from ._study import StudyOptions, evaluate
 from ._task import Task
 
 __all__ = ["SEARCH_VARIABLES", "DEFAULT_OBJECTIVES", "SearchResult", "default_bounds",
@@ -265,6 +266,60 @@ class SearchResult:
     constraints: dict[str, tuple[str, float]] = dataclasses.field(default_factory=dict)
 
 
+def _check_objectives(objectives: object) -> dict[str, str]:
+    """The objectives, metric -> 'max' | 'min' (default :data:`DEFAULT_OBJECTIVES`)."""
+    if objectives is not None and not isinstance(objectives, Mapping):
+        raise TypeError(f"objectives: expected a mapping metric -> 'max' | 'min', got "
+                        f"{type(objectives).__name__}")
+    obj = dict(objectives or DEFAULT_OBJECTIVES)
+    for k, sense in obj.items():
+        if k not in METRIC_COLUMNS or sense not in ("max", "min"):
+            raise InvalidInputError(f"objectives: expected metric -> 'max'|'min' with a metric "
+                                    f"of {list(METRIC_COLUMNS)}, got {k!r}: {sense!r}")
+    return obj
+
+
+def _gains(F_use: NDArray[np.float64], f_ref: NDArray[np.float64], dom: NDArray[np.bool_],
+           front: Any, ref_row: Any, obj: dict[str, str]
+           ) -> tuple[dict[str, float], dict[str, dict[str, float]]]:
+    """The best gain of each objective over the reference, and each objective's best design."""
+    gains = {}
+    if np.all(np.isfinite(f_ref)) and np.any(dom):
+        for j, k in enumerate(obj):
+            gains[k] = float(np.max(f_ref[j] - F_use[dom, j]))
+    trade_offs: dict[str, dict[str, float]] = {}
+    for k, sense in obj.items():
+        if len(front):
+            best = front.loc[front[k].idxmax() if sense == "max" else front[k].idxmin()]
+            trade_offs[k] = {"design": float(best["design"]),
+                             **{m: float(best[m] - ref_row[m]) for m in obj}}
+    return gains, trade_offs
+
+
+
+def _search_result(table: Any, obj: dict[str, str], cons: Any) -> SearchResult:
+    """The search's result from the table of every evaluated design (reference first)."""
+    table["design"] = np.arange(len(table))
+    F = _objective_matrix(table, obj)
+    usable = table["valid"].to_numpy() & (table["coverage"].to_numpy() > 0) & np.all(
+        _constraint_matrix(table, cons) <= 0, axis=1)
+    F_use = np.where(usable[:, None], F, np.nan)
+    mask = pareto_mask(F_use)
+    first = next(iter(obj))
+    front = table[mask].sort_values(first, ascending=obj[first] == "min")
+    ref_row = table.iloc[0]
+    f_ref = F_use[0]
+    dom = np.all(F_use <= f_ref, axis=1) & np.any(F_use < f_ref, axis=1) & mask
+    gains, trade_offs = _gains(F_use, f_ref, dom, front, ref_row, obj)
+    return SearchResult(table=table, front=front, reference=ref_row, objectives=obj,
+                        constraints=cons,
+                        trade_offs=trade_offs,
+                        reference_on_front=not bool(np.any(
+                            np.all(F_use <= f_ref, axis=1) & np.any(F_use < f_ref, axis=1))),
+                        dominating=int(np.count_nonzero(dom)), gains=gains)
+
+
+
 def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
              reference: Design | None = None,
              objectives: Mapping[str, str] | None = None,
@@ -322,14 +377,7 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
     population = check_count(population, "population", minimum=2, maximum=100_000)
     generations = check_count(generations, "generations", minimum=1, maximum=100_000)
     b = check_bounds(bounds if bounds is not None else default_bounds(ref))
-    if objectives is not None and not isinstance(objectives, Mapping):
-        raise TypeError(f"objectives: expected a mapping metric -> 'max' | 'min', got "
-                        f"{type(objectives).__name__}")
-    obj = dict(objectives or DEFAULT_OBJECTIVES)
-    for k, sense in obj.items():
-        if k not in METRIC_COLUMNS or sense not in ("max", "min"):
-            raise InvalidInputError(f"objectives: expected metric -> 'max'|'min' with a metric "
-                                    f"of {list(METRIC_COLUMNS)}, got {k!r}: {sense!r}")
+    obj = _check_objectives(objectives)
     cons = check_constraints(constraints)
     opts = StudyOptions() if options is None else options
     check_instance(opts, "options", StudyOptions)
@@ -375,31 +423,4 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
     finally:
         if owned:
             handle.close()
-    table = pd.concat(tables, ignore_index=True)
-    table["design"] = np.arange(len(table))
-    F = _objective_matrix(table, obj)
-    usable = table["valid"].to_numpy() & (table["coverage"].to_numpy() > 0) & np.all(
-        _constraint_matrix(table, cons) <= 0, axis=1)
-    F_use = np.where(usable[:, None], F, np.nan)
-    mask = pareto_mask(F_use)
-    first = next(iter(obj))
-    front = table[mask].sort_values(first, ascending=obj[first] == "min")
-    ref_row = table.iloc[0]
-    f_ref = F_use[0]
-    dom = np.all(F_use <= f_ref, axis=1) & np.any(F_use < f_ref, axis=1) & mask
-    gains = {}
-    if np.all(np.isfinite(f_ref)) and np.any(dom):
-        for j, k in enumerate(obj):
-            gains[k] = float(np.max(f_ref[j] - F_use[dom, j]))
-    trade_offs: dict[str, dict[str, float]] = {}
-    for k, sense in obj.items():
-        if len(front):
-            best = front.loc[front[k].idxmax() if sense == "max" else front[k].idxmin()]
-            trade_offs[k] = {"design": float(best["design"]),
-                             **{m: float(best[m] - ref_row[m]) for m in obj}}
-    return SearchResult(table=table, front=front, reference=ref_row, objectives=obj,
-                        constraints=cons,
-                        trade_offs=trade_offs,
-                        reference_on_front=not bool(np.any(
-                            np.all(F_use <= f_ref, axis=1) & np.any(F_use < f_ref, axis=1))),
-                        dominating=int(np.count_nonzero(dom)), gains=gains)
+    return _search_result(pd.concat(tables, ignore_index=True), obj, cons)

@@ -1,0 +1,331 @@
+"""One tracked pose, the branch candidates of a reading, a stream's poses as columns."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..chain import DEGENERATE_TOL, P_ZERO_TOL
+from ..design import Design
+from ..parallel import TANGENT_TOL
+from ._flags import TrackFlag
+
+_TWO_PI = 2.0 * math.pi
+
+
+class TrackedPose(NamedTuple):
+    """The tracked configuration of one sample (an immutable named tuple of plain floats).
+
+    A named tuple rather than a frozen dataclass: building a frozen dataclass of 20
+    fields costs about 4 us in CPython, a fifth of the per-sample budget.
+    Wrap the vector fields with ``np.asarray`` for array maths.
+
+    Attributes
+    ----------
+    sample : int
+        Sample number (0 for the initial configuration).
+    q : tuple of 3 float
+        The reading, m.
+    valid : bool
+        False when the sample is ``LOST`` (then the fields below are those of the last
+        valid sample).
+    slot : int
+        Forward-kinematics slot ``8 m + 4 r + 2 b + w`` (as in
+        :class:`~athenakin.FKSolution`).
+    mode, p_sign, ujoint, wrist : int
+        Its labels (+1 / -1).
+    p : float
+        Signed distance from ``O_s`` to the RCM, m.
+    u : tuple of 5 float
+        Passive angles ``u1..u5``, radians in (-pi, pi].
+    O_s : tuple of 3 float
+        Origin of the serial chain, base frame, m.
+    direction_b : tuple of 3 float
+        Unit instrument axis ``z3`` (from ``O_s`` towards the RCM when ``p > 0``), base frame.
+    tip_b, tip_e : tuple of 3 float
+        Tool tip ``O_s + L z3`` in the base frame and in the RCM frame, m.
+    half_chord, h, sin_u2, sin_u4 : float
+        Singularity measures (see :class:`~athenakin.motion.SingularityMeasures`).
+    step : float
+        Distance to the previous pose in units of the jump thresholds (0 for the first).
+    flags : TrackFlag
+    clearance : float
+        Least signed distance between the bodies and to the obstacles, m (negative:
+        penetration); NaN when collisions are not checked or the sample is ``LOST``.
+    closest_pair : tuple of 2 str
+        The two names (body, body or obstacle) of ``clearance``; ``("", "")`` when NaN.
+    """
+
+    sample: int
+    q: tuple[float, float, float]
+    valid: bool
+    slot: int
+    mode: int
+    p_sign: int
+    ujoint: int
+    wrist: int
+    p: float
+    u: tuple[float, float, float, float, float]
+    O_s: tuple[float, float, float]
+    direction_b: tuple[float, float, float]
+    tip_b: tuple[float, float, float]
+    tip_e: tuple[float, float, float]
+    half_chord: float
+    h: float
+    sin_u2: float
+    sin_u4: float
+    step: float
+    flags: TrackFlag
+    clearance: float = math.nan
+    closest_pair: tuple[str, str] = ("", "")
+
+
+def _adiff(a: float, b: float) -> float:
+    """``|wrap(a - b)|`` for angles in (-pi, pi]."""
+    d = abs(a - b)
+    return d if d <= math.pi else _TWO_PI - d
+
+
+_FLAG_NONE = TrackFlag.NONE
+
+
+# plain-int bits for the per-sample loop (IntFlag arithmetic costs about 1 us per operation)
+_B = {f.name: int(f) for f in TrackFlag if f}
+
+
+class _Geometry:
+    """Design constants and the RCM frame as Python floats (for the scalar fast path)."""
+
+    def __init__(self, T: NDArray[np.float64], design: Design) -> None:
+        self.l1, self.l2, self.l3 = design.l1, design.l2, design.l3
+        self.l4, self.l5 = design.l4, design.l5
+        self.L = design.tool_length
+        self.lo = tuple(float(v) for v in design.stroke_min)
+        self.hi = tuple(float(v) for v in design.stroke_max)
+        self.h_sign = design.h_sign
+        self.c = tuple(float(v) for v in T[:3, 3])
+        self.ex = tuple(float(v) for v in T[:3, 0])
+        self.ez = tuple(float(v) for v in T[:3, 2])
+        self.R = tuple(tuple(float(v) for v in row) for row in T[:3, :3])
+
+
+def _parallel(g: _Geometry, q1: float, q2: float, q3: float
+              ) -> tuple[float, float, float, float, float] | None:
+    """Circle geometry: ``(x_M, h, r1, a, ...)``; None when the module cannot assemble."""
+    h = 0.5 * (q1 - q2)
+    hh = h * h
+    if hh >= g.l1 * g.l1 or hh > g.l3 * g.l3 or g.h_sign * h < 0 or q3 < 0.0:
+        return None                      # q3 is a length: negative is no configuration
+    r1 = math.sqrt(g.l1 * g.l1 - hh)
+    m_y = math.sqrt(g.l3 * g.l3 - hh) + g.l2
+    d2 = m_y * m_y + g.l5 * g.l5
+    d = math.sqrt(d2)
+    k = (r1 + q3 - d) * (r1 + q3 + d) * (d - r1 + q3) * (d + r1 - q3)
+    if k < 0.0:
+        a = -math.sqrt(-k) / (2.0 * d)
+        if a < -TANGENT_TOL:
+            return None
+        a = 0.0
+    else:
+        a = math.sqrt(k) / (2.0 * d)
+    return h, r1, m_y, d, a
+
+
+def _candidate(g: _Geometry, q1: float, q2: float, q3: float, par: tuple, mode: int,
+               r: int, b: int, w: int, hint: tuple | None) -> tuple | None:
+    """The forward-kinematics solution with the given labels.
+
+    At a serial singularity (``sin u2 = 0`` or ``sin u4 = 0``: a continuum of
+    solutions) the free angle is taken from ``hint`` (the previous ``u1..u5``), the
+    continuous choice; without a hint, or at ``p = 0`` or a merged assembly mode,
+    None.
+    """
+    h, r1, m_y, d, a = par
+    if mode == -1 and a <= TANGENT_TOL:
+        return None                      # merged into mode +1 at tangency
+    H = d * d + r1 * r1 - q3 * q3
+    f = H / (2.0 * d * d)
+    sa = mode * a / d
+    y = f * m_y - sa * g.l5
+    z = f * g.l5 + sa * m_y
+    cy, cz = y / r1, z / r1
+    Ox, Oy, Oz = 0.5 * (q1 + q2), y + g.l4 * cy, z + g.l4 * cz
+    # RCM seen from O_s in frame s: R_b_s^T (c - O_s), R_b_s = [[1,0,0],[0,cz,cy],[0,-cy,cz]]
+    bx, by, bz = g.c[0] - Ox, g.c[1] - Oy, g.c[2] - Oz
+    cx, cys, czs = bx, cz * by - cy * bz, cy * by + cz * bz
+    n = math.sqrt(cx * cx + cys * cys + czs * czs)
+    if n <= P_ZERO_TOL:
+        return None
+    p = r * n
+    zx, zy, zz = cx / p, cys / p, czs / p
+    rho = math.hypot(zx, zy)
+    if rho > DEGENERATE_TOL:
+        c1, s1 = b * zx / rho, b * zy / rho
+        c2, s2 = -zz, b * rho
+    elif hint is None:
+        return None
+    else:                                # U-joint axes aligned: keep u1
+        c1, s1 = math.cos(hint[0]), math.sin(hint[0])
+        c2, s2 = -zz, 0.0
+    # R_s_e columns x and z: R_b_s^T e
+    ex, ez = g.ex, g.ez
+    Ex = (ex[0], cz * ex[1] - cy * ex[2], cy * ex[1] + cz * ex[2])
+    Ez = (ez[0], cz * ez[1] - cy * ez[2], cy * ez[1] + cz * ez[2])
+    # W = R(u1, u2)^T R_s_e; rows x1, y1, z1 of R(u1, u2)^T
+    x1 = (c1 * c2, s1 * c2, s2)
+    z1 = (c1 * s2, s1 * s2, c2 * -1.0)
+    W00 = x1[0] * Ex[0] + x1[1] * Ex[1] + x1[2] * Ex[2]
+    W10 = s1 * Ex[0] - c1 * Ex[1]
+    W20 = z1[0] * Ex[0] + z1[1] * Ex[1] + z1[2] * Ex[2]
+    W02 = x1[0] * Ez[0] + x1[1] * Ez[1] + x1[2] * Ez[2]
+    W12 = s1 * Ez[0] - c1 * Ez[1]
+    W22 = z1[0] * Ez[0] + z1[1] * Ez[1] + z1[2] * Ez[2]
+    rho4 = math.hypot(W02, W12)
+    if rho4 > DEGENERATE_TOL:
+        c3, s3 = w * W02 / rho4, w * W12 / rho4
+        c4, s4 = -W22, w * rho4
+    elif hint is None:
+        return None
+    else:                                # spherical-joint axes aligned: keep u3
+        c3, s3 = math.cos(hint[2]), math.sin(hint[2])
+        c4, s4 = -W22, 0.0
+    u1 = math.atan2(s1, c1)
+    u2 = math.atan2(s2, c2)
+    u3 = math.atan2(s3, c3)
+    u4 = math.atan2(s4, c4)
+    u5 = math.atan2(s3 * W00 - c3 * W10, c3 * c4 * W00 + s3 * c4 * W10 + s4 * W20)
+    if not math.isfinite(Ox + Oy + Oz + p + u1 + u2 + u3 + u4 + u5 + bx + by + bz):
+        return None                      # overflow (readings near 1e308): no valid pose
+    # instrument axis in the base frame: (c - O_s) / p
+    return (mode, r, b, w, p, (u1, u2, u3, u4, u5), (Ox, Oy, Oz), (bx / p, by / p, bz / p),
+            a, abs(h), rho, rho4)
+
+
+def _clearance_text(pose: TrackedPose) -> str:
+    if math.isnan(pose.clearance) or not pose.flags & _NEAR_COLLISION:
+        return ""
+    a, b = pose.closest_pair
+    return f"; clearance {pose.clearance:.6g} m between {a!r} and {b!r}"
+
+
+_NEAR_COLLISION = int(TrackFlag.NEAR_COLLISION)
+
+
+@dataclasses.dataclass(frozen=True)
+class TrackLog:
+    """The poses of a whole stream as arrays (see :class:`TrackedPose` for the fields).
+
+    Attributes
+    ----------
+    q : ndarray, shape (N, 3)
+    valid : ndarray of bool, shape (N,)
+    slot, mode, p_sign, ujoint, wrist : ndarray of int, shape (N,)
+    p, half_chord, h, sin_u2, sin_u4, step : ndarray, shape (N,)
+    u : ndarray, shape (N, 5)
+    O_s, direction_b, tip_b, tip_e : ndarray, shape (N, 3)
+    flags : ndarray of int, shape (N,)
+        :class:`TrackFlag` bits.
+    clearance : ndarray, shape (N,), or None
+        Least clearance of the bodies, m; None when collisions are not checked (NaN only
+        at invalid samples).
+    closest_pair : ndarray of str, shape (N, 2), or None
+        Its two names ("" when NaN).
+    """
+
+    q: NDArray[np.float64]
+    valid: NDArray[np.bool_]
+    slot: NDArray[np.int64]
+    mode: NDArray[np.int64]
+    p_sign: NDArray[np.int64]
+    ujoint: NDArray[np.int64]
+    wrist: NDArray[np.int64]
+    p: NDArray[np.float64]
+    u: NDArray[np.float64]
+    O_s: NDArray[np.float64]
+    direction_b: NDArray[np.float64]
+    tip_b: NDArray[np.float64]
+    tip_e: NDArray[np.float64]
+    half_chord: NDArray[np.float64]
+    h: NDArray[np.float64]
+    sin_u2: NDArray[np.float64]
+    sin_u4: NDArray[np.float64]
+    step: NDArray[np.float64]
+    flags: NDArray[np.int64]
+    clearance: NDArray[np.float64] | None
+    closest_pair: NDArray[np.str_] | None
+
+    def events(self) -> list[tuple[int, TrackFlag]]:
+        """``(sample, flags)`` of every flagged sample."""
+        return [(int(i), TrackFlag(int(self.flags[i]))) for i in np.flatnonzero(self.flags)]
+
+
+# ---------------------------------------------------------------------- the batched tracker
+_LOG_FIELDS = tuple(f.name for f in dataclasses.fields(TrackLog))
+
+
+_FLOAT_FIELDS = ("p", "half_chord", "h", "sin_u2", "sin_u4", "step", "clearance")
+
+
+_VEC_FIELDS = {"q": 3, "u": 5, "O_s": 3, "direction_b": 3, "tip_b": 3, "tip_e": 3}
+
+
+_INT_FIELDS = ("slot", "mode", "p_sign", "ujoint", "wrist", "flags")
+
+
+def _pairs(n: int, idx: NDArray[np.intp], pair: NDArray[np.str_]) -> NDArray[np.str_]:
+    """The ``closest_pair`` column: ``pair`` at rows ``idx``, ``("", "")`` elsewhere."""
+    out = [("", "")] * n
+    for j, i in enumerate(idx.tolist()):
+        out[i] = (str(pair[j, 0]), str(pair[j, 1]))
+    return np.array(out).reshape(n, 2)
+
+
+def _pose_columns(poses: list[TrackedPose]) -> dict[str, Any]:
+    """Columns of :class:`TrackLog` (and ``sample``) from tracked poses."""
+    cols: dict[str, Any] = {k: np.array([getattr(ps, k) for ps in poses])
+                            for k in (*_LOG_FIELDS, "sample")}
+    for k, m in _VEC_FIELDS.items():
+        cols[k] = cols[k].reshape(len(poses), m).astype(float)
+    cols["closest_pair"] = cols["closest_pair"].reshape(len(poses), 2)
+    for k in _INT_FIELDS:
+        cols[k] = cols[k].astype(np.int64)
+    return cols
+
+
+def _join(a: dict[str, Any], b: dict[str, Any]) -> dict[str, Any]:
+    """Rows of ``b`` after those of ``a``."""
+    return {k: np.concatenate([a[k], b[k]]) for k in a}
+
+
+def pose_at(cols: dict[str, Any], i: int) -> TrackedPose:
+    """Row ``i`` of columns (:func:`track_batch`) as a :class:`TrackedPose`."""
+    f = int(cols["flags"][i])
+    kw: dict[str, Any] = {k: float(cols[k][i]) for k in _FLOAT_FIELDS}
+    kw.update({k: tuple(cols[k][i].tolist()) for k in _VEC_FIELDS})
+    kw.update({k: int(cols[k][i]) for k in _INT_FIELDS})
+    a, b = cols["closest_pair"][i].tolist()
+    return TrackedPose(**kw | {"sample": int(cols["sample"][i]), "valid": bool(cols["valid"][i]),
+                               "flags": TrackFlag(f) if f else _FLAG_NONE,
+                               "closest_pair": (str(a), str(b))})
+
+
+def _cand_row(c: tuple) -> list[float]:
+    return [*c[:5], *c[5], *c[6], *c[7], *c[8:]]
+
+
+def _cand_tuple(row: list[float]) -> tuple:
+    return (int(row[0]), int(row[1]), int(row[2]), int(row[3]), row[4], tuple(row[5:10]),
+            tuple(row[10:13]), tuple(row[13:16]), row[16], row[17], row[18], row[19])
+
+
+def _empty_columns() -> dict[str, Any]:
+    cols: dict[str, Any] = {k: np.empty((0, _VEC_FIELDS[k])) for k in _VEC_FIELDS}
+    cols.update({k: np.empty(0) for k in _FLOAT_FIELDS})
+    cols.update({k: np.empty(0, np.int64) for k in (*_INT_FIELDS, "sample")})
+    cols["valid"] = np.empty(0, bool)
+    cols["closest_pair"] = np.empty((0, 2), "<U1")
+    return cols
