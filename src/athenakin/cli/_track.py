@@ -11,7 +11,7 @@ import sys
 import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -239,7 +239,7 @@ def lost_before(log: TrackLog, q_head: np.ndarray) -> TrackLog:
     from ..motion import TrackFlag
 
     k = len(q_head)
-    cols = {}
+    cols: dict[str, Any] = {}
     for f in dataclasses.fields(log):
         v = getattr(log, f.name)
         if v is None:

@@ -6,10 +6,11 @@ import argparse
 import time
 
 from .. import _backend, _dispatch
+from .._backend import Backend
 from ._common import add_design_option, load_design
 
 
-def one_shot_backend() -> str:
+def one_shot_backend() -> Backend:
     """The backend of a command that computes one pose (``fk``, ``ik``) and exits.
 
     :func:`athenakin._backend.single_call_backend`: the numpy reference unless numba is
