@@ -10,8 +10,9 @@ Run from anywhere::
 ``app`` (the screenshots of ``athenakin app``) needs playwright and a Chromium and is
 not part of the default set; it runs ``examples/_app_screenshots.py`` and
 ``examples/_app_forces_screenshot.py``. ``foxglove`` (the Foxglove Studio screenshots of
-docs/ros.md, a file and the live stream) runs ``tools/foxglove-shot/shot.py`` and needs,
-besides playwright and Chromium, ``npm ci`` in tools/foxglove-shot. Every other figure
+docs/ros.md, a file and the live stream, and of docs/teleop.md, a replayed session) runs
+``tools/foxglove-shot/shot.py`` and needs, besides playwright and Chromium, ``npm ci`` in
+tools/foxglove-shot (and the ``sim`` extra for the session). Every other figure
 needs only the ``plot``, ``analysis``, ``calibration``, ``motion`` and ``synthesis`` extras.
 With ``--quick`` the grids and sample counts are coarser (the figures look the same, a little
 blockier); the committed PNGs are written without it.
@@ -208,14 +209,17 @@ def app(s: Settings) -> list[Path]:
 
 
 def foxglove(s: Settings) -> list[Path]:
-    """docs/ros.md: Foxglove Studio 1.48 with a tracked MCAP, and live (tools/foxglove-shot)."""
+    """docs/ros.md, teleop.md: Foxglove Studio 1.48: a tracked MCAP, live, a teleop session."""
     path = s.out / "foxglove_track.png"
     subprocess.run([sys.executable, str(ROOT / "tools/foxglove-shot/shot.py"), "--out",
                     str(path)], check=True)
     live = s.out / "foxglove_live.png"
     subprocess.run([sys.executable, str(ROOT / "tools/foxglove-shot/shot.py"), "--source",
                     "live", "--settle", "12", "--out", str(live)], check=True)
-    return [path, live]
+    teleop = s.out / "foxglove_teleop.png"                      # docs/teleop.md
+    subprocess.run([sys.executable, str(ROOT / "tools/foxglove-shot/shot.py"), "--recording",
+                    "teleop", "--at", "0.95", "--out", str(teleop)], check=True)
+    return [path, live, teleop]
 
 
 def robot_solids(s: Settings) -> list[Path]:
