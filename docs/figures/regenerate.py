@@ -10,9 +10,12 @@ Run from anywhere::
 ``app`` (the screenshots of ``athenakin app``) needs playwright and a Chromium and is
 not part of the default set; it runs ``examples/_app_screenshots.py`` and
 ``examples/_app_forces_screenshot.py``. ``foxglove`` (the Foxglove Studio screenshots of
-docs/ros.md, a file and the live stream) runs ``tools/foxglove-shot/shot.py`` and needs,
-besides playwright and Chromium, ``npm ci`` in tools/foxglove-shot. Every other figure
-needs only the ``plot``, ``analysis``, ``calibration``, ``motion`` and ``synthesis`` extras.
+docs/ros.md, a file and the live stream, and of docs/teleop.md, a replayed session) runs
+``tools/foxglove-shot/shot.py`` and needs, besides playwright and Chromium, ``npm ci`` in
+tools/foxglove-shot (and the ``sim`` extra for the session). ``teleop`` (the 20 s session
+of docs/teleop.md, two runs in MuJoCo: minutes) runs ``benchmarks/bench_teleop.py session``
+and needs the ``sim`` extra. Every other figure needs only the ``plot``, ``analysis``,
+``calibration``, ``motion`` and ``synthesis`` extras.
 With ``--quick`` the grids and sample counts are coarser (the figures look the same, a little
 blockier); the committed PNGs are written without it.
 """
@@ -208,14 +211,25 @@ def app(s: Settings) -> list[Path]:
 
 
 def foxglove(s: Settings) -> list[Path]:
-    """docs/ros.md: Foxglove Studio 1.48 with a tracked MCAP, and live (tools/foxglove-shot)."""
+    """docs/ros.md, teleop.md: Foxglove Studio 1.48: a tracked MCAP, live, a teleop session."""
     path = s.out / "foxglove_track.png"
     subprocess.run([sys.executable, str(ROOT / "tools/foxglove-shot/shot.py"), "--out",
                     str(path)], check=True)
     live = s.out / "foxglove_live.png"
     subprocess.run([sys.executable, str(ROOT / "tools/foxglove-shot/shot.py"), "--source",
                     "live", "--settle", "12", "--out", str(live)], check=True)
-    return [path, live]
+    teleop = s.out / "foxglove_teleop.png"                      # docs/teleop.md
+    subprocess.run([sys.executable, str(ROOT / "tools/foxglove-shot/shot.py"), "--recording",
+                    "teleop", "--at", "0.95", "--out", str(teleop)], check=True)
+    return [path, live, teleop]
+
+
+def teleop(s: Settings) -> list[Path]:
+    """docs/teleop.md: a 20 s teleop session in MuJoCo (benchmarks/bench_teleop.py session)."""
+    path = s.out / "teleop_session.png"
+    subprocess.run([sys.executable, str(ROOT / "benchmarks/bench_teleop.py"), "session",
+                    "--seconds", "20", "--figure", str(path)], check=True)
+    return [path]
 
 
 def robot_solids(s: Settings) -> list[Path]:
@@ -308,7 +322,8 @@ FIGURES: dict[str, Callable[[Settings], list[Path]]] = {
     "dynamics": dynamics,
 }
 #: Figures written only when named (they need more than the extras).
-OPTIONAL = {"app": app, "foxglove": foxglove, "collision_numbers": collision_numbers}
+OPTIONAL = {"app": app, "foxglove": foxglove, "teleop": teleop,
+            "collision_numbers": collision_numbers}
 
 
 def main(argv: list[str] | None = None) -> int:

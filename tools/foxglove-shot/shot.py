@@ -24,6 +24,15 @@ the seek::
 
     python tools/foxglove-shot/shot.py --source live --out docs/figures/foxglove_live.png
 
+``--recording teleop`` shows a replayed teleoperation session instead (docs/teleop.md): with
+no ``--mcap``, the script writes an 8 s recorded master here (``geometry_msgs/PoseStamped``
+at 1 kHz and a ``sensor_msgs/Joy`` clutch pedal: the pedal held from 3 to 4 s, the master
+silent from 5.5 to 5.6 s, a 0.3 m jump of the handle from 6.5 to 7 s), replays it with
+``athenakin teleop --master REC.mcap -o session.mcap`` (the simulated MuJoCo arm in the loop)
+and opens the session's CRTK topics with docs/foxglove_teleop_layout.json::
+
+    python tools/foxglove-shot/shot.py --recording teleop   # -> docs/figures/foxglove_teleop.png
+
 Nothing is reached outside 127.0.0.1. Run from the repository root (extra ``ros`` and
 Playwright in the Python environment; node + npm only for the install)::
 
@@ -61,6 +70,14 @@ CHROMIUM_FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first
 LAYOUT_NAME = "athenakin"
 #: Where the server exposes the recording.
 MCAP_URL_PATH = "/recording.mcap"
+#: Per recording kind: the default layout, the default picture, and a topic whose name in
+#: the data-source sidebar says that Foxglove has opened the file.
+RECORDINGS = {
+    "track": ("docs/foxglove_layout.json", "docs/figures/foxglove_track.png",
+              "/robot_description"),
+    "teleop": ("docs/foxglove_teleop_layout.json", "docs/figures/foxglove_teleop.png",
+               "/athena/teleop/status"),
+}
 
 
 class _Handler(http.server.SimpleHTTPRequestHandler):
@@ -148,6 +165,66 @@ def make_recording(workdir: Path) -> Path:
     return mcap
 
 
+def write_master(path: Path, *, seconds: float = 8.0, rate_hz: float = 1000.0) -> None:
+    """A recorded master handle: ``/master/pose`` (PoseStamped, m) and ``/master/joy`` (Joy).
+
+    The handle draws a slow Lissajous figure (5, 4 and 3 cm); the clutch pedal (button 0) is
+    held from 3 to 4 s; no pose arrives from 5.5 to 5.6 s (the watchdog holds the robot);
+    the handle jumps by 0.3 m in x from 6.5 to 7 s (the velocity and acceleration limits).
+    """
+    import math
+
+    from mcap_ros2.writer import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+
+    def msgdef(name: str) -> str:
+        return store.generate_msgdef(name, ros_version=2)[0]
+
+    with open(path, "wb") as fh:
+        w = Writer(fh)
+        pose = w.register_msgdef("geometry_msgs/msg/PoseStamped",
+                                 msgdef("geometry_msgs/msg/PoseStamped"))
+        joy = w.register_msgdef("sensor_msgs/msg/Joy", msgdef("sensor_msgs/msg/Joy"))
+        t0 = 1_700_000_000 * 10**9
+        for k in range(int(seconds * rate_hz)):
+            s = k / rate_hz
+            if 5.5 <= s < 5.6:                                  # the master falls silent
+                continue
+            ns = t0 + round(k * 1e9 / rate_hz)
+            head = {"stamp": {"sec": ns // 10**9, "nanosec": ns % 10**9}, "frame_id": "master"}
+            x = 0.05 * math.sin(2 * math.pi * 0.25 * s) + (0.3 if 6.5 <= s < 7.0 else 0.0)
+            y = 0.04 * math.sin(2 * math.pi * 0.5 * s)
+            z = 0.03 * (1.0 - math.cos(2 * math.pi * 0.125 * s))
+            w.write_message("/master/pose", pose, {"header": head, "pose": {
+                "position": {"x": x, "y": y, "z": z},
+                "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}}, log_time=ns)
+            if k % round(rate_hz / 20) == 0:                    # the pedal at 20 Hz
+                w.write_message("/master/joy", joy, {"header": head, "axes": [], "buttons": [
+                    1 if 3.0 <= s < 4.0 else 0]}, log_time=ns)
+        w.finish()
+
+
+def make_teleop_session(workdir: Path) -> Path:
+    """Write a recorded master (:func:`write_master`) and replay it: ``athenakin teleop``."""
+    env = dict(os.environ, PYTHONPATH=str(REPO / "src"))
+    master = workdir / "master.mcap"
+    session = workdir / "teleop_session.mcap"
+    write_master(master)
+    subprocess.run([sys.executable, "-m", "athenakin", "teleop", "--master", str(master),
+                    "-o", str(session)], check=True, env=env)
+    return session
+
+
+def _first_title(layout: dict) -> str:
+    """The first panel title of a layout: its text on the page says the layout is loaded."""
+    for config in layout.get("configById", {}).values():
+        if config.get("title"):
+            return str(config["title"])
+    raise SystemExit("the layout has no panel with a title (the script waits for one)")
+
+
 def _file_picker_script(layout_text: str, mcap_name: str) -> str:
     """Replace ``window.showOpenFilePicker``: the layout for .json, the MCAP file otherwise."""
     layout_name = json.dumps(LAYOUT_NAME + ".json")
@@ -196,7 +273,7 @@ def live_stream(rate: float = 30.0):
 
 
 def screenshot(mcap: Path | None, layout: Path, out: Path, *, source: str = "local",
-               at: float = 0.45,
+               at: float = 0.45, ready_topic: str = "/robot_description",
                width: int = 1600, height: int = 900, timeout_s: float = 60.0,
                settle_s: float = 20.0) -> None:
     """Open ``mcap`` in Foxglove Studio with ``layout``, seek to ``at``, screenshot to ``out``.
@@ -204,6 +281,8 @@ def screenshot(mcap: Path | None, layout: Path, out: Path, *, source: str = "loc
     ``source="live"``: no file; Foxglove opens a Foxglove WebSocket connection to a
     :class:`athenakin.ros.FoxgloveStream` publishing a moving pose (:func:`live_stream`), and
     the screenshot is taken ``settle_s`` after the layout is loaded (no seek).
+    ``ready_topic``: a topic of the file (listed in Foxglove's data-source sidebar once it is
+    open); the layout is loaded when its first panel title appears.
     Raises SystemExit with Foxglove's words if the page reports an error or the data source
     has problems.
     """
@@ -213,7 +292,8 @@ def screenshot(mcap: Path | None, layout: Path, out: Path, *, source: str = "loc
     if not bundle.is_file():
         raise SystemExit(f"{bundle} is missing: run 'npm ci' in {HERE}")
     layout_text = layout.read_text()
-    json.loads(layout_text)  # a clear error here rather than a snackbar in the page
+    # A clear error here rather than a snackbar in the page.
+    ready_title = _first_title(json.loads(layout_text))
     if (mcap is None) != (source == "live"):
         raise ValueError("screenshot: an MCAP file for sources local and remote, none for live")
     httpd, port = serve(HERE, {MCAP_URL_PATH: str(mcap)} if mcap is not None else {})
@@ -244,7 +324,7 @@ def screenshot(mcap: Path | None, layout: Path, out: Path, *, source: str = "loc
             # The file is open when its topics are listed in the data-source sidebar (open
             # at start). Foxglove then logs a DataCloneError: it cannot keep the picker's
             # stand-in file handle among its recent files (IndexedDB); that is all it costs.
-            page.get_by_text("/robot_description", exact=True).first.wait_for()
+            page.get_by_text(ready_topic, exact=True).first.wait_for()
             # Foxglove's own list of problems with the data source must be empty.
             page.get_by_role("tab", name="Problems").click()
             problems = page.get_by_text("No problems found")
@@ -257,7 +337,7 @@ def screenshot(mcap: Path | None, layout: Path, out: Path, *, source: str = "loc
             page.get_by_title("Layouts", exact=True).first.click()
             page.get_by_label("Import layout").click()
             page.get_by_text(LAYOUT_NAME, exact=True).first.wait_for()
-            page.get_by_text("tool tip (base frame, m)").first.wait_for()
+            page.get_by_text(ready_title).first.wait_for()
             # Close the sidebar (a second click on its icon), dismiss the 3D panel's tip.
             page.get_by_title("Layouts", exact=True).first.click()
             dismiss = page.get_by_label("Dismiss")
@@ -294,9 +374,17 @@ def screenshot(mcap: Path | None, layout: Path, out: Path, *, source: str = "loc
 def main(argv: list[str] | None = None) -> int:
     """Command line: see the module docstring."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--mcap", type=Path, help="tracked MCAP (default: made here)")
-    parser.add_argument("--layout", type=Path, default=REPO / "docs/foxglove_layout.json")
-    parser.add_argument("--out", type=Path, default=REPO / "docs/figures/foxglove_track.png")
+    parser.add_argument("--recording", choices=tuple(RECORDINGS), default="track",
+                        help="what the file is: a tracked motion (default) or a replayed "
+                             "teleop session; sets the defaults of --layout and --out")
+    parser.add_argument("--mcap", type=Path,
+                        help="the MCAP file (default: made here, see --recording)")
+    parser.add_argument("--layout", type=Path,
+                        help="Foxglove layout (default: docs/foxglove_layout.json, or "
+                             "docs/foxglove_teleop_layout.json for --recording teleop)")
+    parser.add_argument("--out", type=Path,
+                        help="the PNG (default: docs/figures/foxglove_track.png, or "
+                             "docs/figures/foxglove_teleop.png for --recording teleop)")
     parser.add_argument("--source", choices=("local", "remote", "live"), default="local",
                         help="Open local file (default), the remote-file deep link, or a "
                              "Foxglove WebSocket connection to a live FoxgloveStream")
@@ -312,10 +400,17 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--at must lie in [0, 1], got {args.at}")
     if args.source == "live" and args.mcap is not None:
         parser.error("--mcap is for the sources local and remote")
+    if args.source == "live" and args.recording != "track":
+        parser.error("--source live streams a tracked pose: no --recording teleop")
+    layout, out, ready_topic = RECORDINGS[args.recording]
+    args.layout = args.layout if args.layout is not None else REPO / layout
+    args.out = args.out if args.out is not None else REPO / out
+    make = make_teleop_session if args.recording == "teleop" else make_recording
     with tempfile.TemporaryDirectory() as tmp:
         mcap = (None if args.source == "live" else
-                args.mcap if args.mcap is not None else make_recording(Path(tmp)))
+                args.mcap if args.mcap is not None else make(Path(tmp)))
         screenshot(mcap, args.layout, args.out, source=args.source, at=args.at,
+                   ready_topic=ready_topic,
                    width=args.size[0], height=args.size[1], timeout_s=args.timeout,
                    settle_s=args.settle)
     print(f"wrote {args.out}")
