@@ -172,7 +172,7 @@ def check_frame(T: ArrayLike, name: str) -> NDArray[np.float64]:
     """
     arr = check_transform(T, name)
     if arr.shape != (4, 4):
-        raise InvalidInputError(f"{name}: expected one transform of shape (4, 4), got shape "
+        raise InvalidInputError(f"{name}: expected shape (4, 4) (one transform), got shape "
                                 f"{arr.shape}")
     return arr
 
