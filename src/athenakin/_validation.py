@@ -97,13 +97,12 @@ def real_number(x: object, name: str, *, expected: str = "a finite number",
     Returns
     -------
     float
+        ``float(x)``, possibly NaN or infinite.
 
     Raises
     ------
-    TypeError
-        If ``x`` is not a real number.
-    InvalidInputError
-        If ``x`` is an integer too large for a float.
+    TypeError, InvalidInputError
+        ``x`` is not a real number; an integer too large for a float.
     """
     if isinstance(x, bool) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
         raise TypeError(f"{name}: expected a real number{unit}, got {type(x).__name__}")
