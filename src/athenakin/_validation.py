@@ -77,6 +77,42 @@ def check_array(
     return arr
 
 
+def real_number(x: object, name: str, *, expected: str = "a finite number",
+                unit: str = "") -> float:
+    """``x`` as a float: the one type and overflow policy of every real-number option.
+
+    Range, sign and finiteness are the caller's to check.
+
+    Parameters
+    ----------
+    x : object
+        A real number (``int``, ``float``, a numpy scalar; ``bool`` is refused).
+    name : str
+        How the error messages name ``x``.
+    expected : str, keyword-only
+        What the overflow message says was expected (``"a finite number"``).
+    unit : str, keyword-only
+        Appended to "expected a real number" in the type message (``" (m)"``).
+
+    Returns
+    -------
+    float
+        ``float(x)``, possibly NaN or infinite.
+
+    Raises
+    ------
+    TypeError, InvalidInputError
+        ``x`` is not a real number; an integer too large for a float.
+    """
+    if isinstance(x, bool) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
+        raise TypeError(f"{name}: expected a real number{unit}, got {type(x).__name__}")
+    try:
+        return float(x)
+    except OverflowError:
+        raise InvalidInputError(f"{name}: expected {expected}, got an integer too large "
+                                f"for a float") from None
+
+
 def check_scalar(x: object, name: str, *, positive: bool = False,
                  nonnegative: bool = False) -> float:
     """Coerce a real scalar, rejecting NaN/inf and (optionally) signs.
@@ -88,13 +124,7 @@ def check_scalar(x: object, name: str, *, positive: bool = False,
     InvalidInputError
         If ``x`` is not finite or violates the sign requirement.
     """
-    if isinstance(x, bool) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
-        raise TypeError(f"{name}: expected a real number, got {type(x).__name__}")
-    try:
-        v = float(x)
-    except OverflowError:
-        raise InvalidInputError(f"{name}: expected a finite number, got an integer too large "
-                                f"for a float") from None
+    v = real_number(x, name)
     if not np.isfinite(v):
         raise InvalidInputError(f"{name}: expected a finite number, got {v}")
     if positive and not v > 0:
@@ -141,7 +171,7 @@ def check_frame(T: ArrayLike, name: str) -> NDArray[np.float64]:
     """
     arr = check_transform(T, name)
     if arr.shape != (4, 4):
-        raise InvalidInputError(f"{name}: expected one transform of shape (4, 4), got shape "
+        raise InvalidInputError(f"{name}: expected shape (4, 4) (one transform), got shape "
                                 f"{arr.shape}")
     return arr
 

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from ._output import naming_path
 from ._toml import read_toml
-from ._validation import check_scalar, check_text
+from ._validation import check_scalar, check_text, real_number
 from .errors import InvalidInputError
 
 __all__ = ["Design", "AB_ORDERS", "LENGTH_RANGE", "LIKELY_MM_ABOVE", "UnitWarning"]
@@ -108,13 +108,7 @@ class Design:
                 raise InvalidInputError(f"{k}: expected 3 numbers (q1, q2, q3) or None, got {v!r}")
             vals = []
             for i, x in enumerate(v):
-                if isinstance(x, bool) or not isinstance(x, (int, float, np.integer, np.floating)):
-                    raise TypeError(f"{k}[{i}]: expected a real number, got {type(x).__name__}")
-                try:
-                    fx = float(x)
-                except OverflowError:
-                    raise InvalidInputError(f"{k}[{i}]: expected a number or +/-inf, got an "
-                                            f"integer too large for a float") from None
+                fx = real_number(x, f"{k}[{i}]", expected="a number or +/-inf")
                 if math.isnan(fx):
                     raise InvalidInputError(f"{k}[{i}]: expected a number or +/-inf, got nan")
                 if math.isfinite(fx) and abs(fx) > LENGTH_RANGE[1]:

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_transform
+from .._validation import check_frame
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..robot import default_rcm_frame
@@ -108,9 +108,7 @@ def _map_setup(T_b_e: ArrayLike | None, design: Design | None, bodies: object, e
     """The design, the collision check and the RCM frame (shape (4, 4)) of a workspace map."""
     design = resolve_design(design)
     check = _collision_check(design, bodies, environment, clearance_margin)
-    T = default_rcm_frame(design) if T_b_e is None else check_transform(T_b_e, "T_b_e")
-    if T.shape != (4, 4):
-        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
+    T = default_rcm_frame(design) if T_b_e is None else check_frame(T_b_e, "T_b_e")
     return design, check, T
 
 

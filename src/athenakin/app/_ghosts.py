@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._transforms import rot_x, rot_z
-from .._validation import check_array, check_count, check_scalar, check_transform
+from .._validation import check_array, check_count, check_frame, check_scalar
 from ..chain._ups import rotation_u_pair
 from ..design import Design
 from ..errors import InvalidInputError
@@ -153,9 +153,7 @@ def slot_ghosts(fk: FKSolution, q: ArrayLike, T_b_e: ArrayLike, design: Design,
     wrist_axes = np.stack([R_b_3[:, :, 2], R_4[:, :, 2], R_5[:, :, 2]], axis=1)
     R_u2 = R_b_s @ rot_z(u[:, 0]) @ _RX90                         # before u2
     ujoint_axes = np.stack([R_b_s[:, :, 2], R_u2[:, :, 2]], axis=1)
-    T = check_transform(T_b_e, "T_b_e")
-    if T.shape != (4, 4):
-        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got shape {T.shape}")
+    T = check_frame(T_b_e, "T_b_e")
     qa = check_array(q, "q", (3,))
     if qa.shape != (3,):
         raise InvalidInputError(f"q: expected shape (3,), got shape {qa.shape}")

@@ -31,11 +31,13 @@ def _pyplot() -> Any:
     return plt
 
 
-def _axes(ax: Any, **kw: Any) -> Any:
+def _axes(ax: Any, *, figsize: tuple[float, float] = (7, 4), **kw: Any) -> Any:
+    """``ax`` checked (None or an Axes), or a new figure's axes (``plt.subplots`` keywords)."""
+    check_axes(ax)
     if ax is not None:
         return ax
     plt = _pyplot()
-    _, ax = plt.subplots(figsize=(7, 4), **kw)
+    _, ax = plt.subplots(figsize=figsize, **kw)
     return ax
 
 
@@ -47,7 +49,6 @@ def plot_residuals(result: CalibrationResult, *, ax: Any = None) -> Any:
     matplotlib.axes.Axes
     """
     check_instance(result, "result", CalibrationResult)
-    check_axes(ax)
     ax = _axes(ax)
     rows = np.arange(result.excluded.size)
     b = np.linalg.norm(result.residuals_before[:, :3], axis=1) * _UM
@@ -77,7 +78,6 @@ def plot_parameter_confidence(result: CalibrationResult, *, ax: Any = None) -> A
     matplotlib.axes.Axes
     """
     check_instance(result, "result", CalibrationResult)
-    check_axes(ax)
     ax = _axes(ax)
     delta = (result.estimates - result.nominal) * _UM
     err = 3 * result.std * _UM
@@ -106,11 +106,8 @@ def plot_tip_error_map(m: TipErrorMap, *, ax: Any = None) -> Any:
     matplotlib.axes.Axes
     """
     check_instance(m, "m", TipErrorMap)
-    check_axes(ax)
-    if ax is None:
-        plt = _pyplot()
-        _, ax = plt.subplots(figsize=(6.4, 5.6), subplot_kw={"projection": "polar"},
-                             layout="constrained")
+    ax = _axes(ax, figsize=(6.4, 5.6), subplot_kw={"projection": "polar"},
+               layout="constrained")
     A, B = np.meshgrid(m.azimuth, np.degrees(m.polar), indexing="ij")
     pc = ax.pcolormesh(A, B, np.ma.masked_invalid(m.rms * _UM), shading="nearest",
                        cmap="viridis")

@@ -222,8 +222,6 @@ def _setup(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | Non
     ta = _rows(tips, "tips", n)
     aa = None if axes is None else _rows(axes, "axes", n)
     T = check_frame(T_b_e, "T_b_e")
-    if T.shape != (4, 4):
-        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got shape {T.shape}")
     if bad_rows not in ("exclude", "raise"):
         raise ValueError(f"bad_rows: expected 'exclude' or 'raise', got {bad_rows!r}")
     axis_weight = check_scalar(axis_weight, "axis_weight", positive=True)

@@ -198,8 +198,6 @@ def random_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *, mode
     n = check_count(n, "n", minimum=1, maximum=MAX_POSES)
     design = resolve_design(design)
     T = check_frame(T_b_e, "T_b_e")
-    if T.shape != (4, 4):
-        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got shape {T.shape}")
     _check_mode(mode)
     margin = check_scalar(margin, "margin", nonnegative=True)
     lo, hi = design.stroke_min, design.stroke_max
@@ -264,8 +262,6 @@ def synthetic_measurements(T_b_e: ArrayLike, design: Design | None = None, *,
     check_instance(o, "options", SyntheticOptions)
     design = resolve_design(design)
     T = check_frame(T_b_e, "T_b_e")
-    if T.shape != (4, 4):
-        raise InvalidInputError(f"T_b_e: expected shape (4, 4), got shape {T.shape}")
     if q is None:
         n = check_count(n, "n", minimum=1, maximum=MAX_POSES)
     check_choice(frame, "frame", ("base", "tracker"))

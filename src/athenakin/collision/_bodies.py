@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 
 from .._mechanism import BODIES, BodyGeometry, adjacent_pairs
 from .._toml import read_toml
+from .._validation import real_number
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 
@@ -54,13 +55,8 @@ _INSTRUMENT_BODIES = ("instrument",)
 
 
 def _check_radius(name: str, r: object) -> float:
-    if isinstance(r, bool) or not isinstance(r, (int, float, np.integer, np.floating)):
-        raise TypeError(f"radii[{name!r}]: expected a real number (m), got {type(r).__name__}")
-    try:
-        v = float(r)
-    except OverflowError:
-        raise InvalidInputError(f"radii[{name!r}]: expected a radius in [0, {MAX_RADIUS:g}] m, "
-                                f"got an integer too large for a float") from None
+    v = real_number(r, f"radii[{name!r}]", unit=" (m)",
+                    expected=f"a radius in [0, {MAX_RADIUS:g}] m")
     if not (0.0 <= v <= MAX_RADIUS):   # also refuses NaN
         raise InvalidInputError(f"radii[{name!r}]: expected a radius in [0, {MAX_RADIUS:g}] m, "
                                 f"got {v!r}")

@@ -7,7 +7,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_transform
+from .._validation import check_array, check_frame
 from ..chain._ups import CLOSURE_TOL
 from ..design import Design
 from ..robot._ik import IK_SINGULAR_TOL
@@ -79,9 +79,7 @@ class ControlLoop:
     """
 
     def __init__(self, T_b_e: ArrayLike, design: Design | None = None) -> None:
-        T = check_transform(T_b_e, "T_b_e")
-        if T.shape != (4, 4):
-            raise ValueError(f"T_b_e: expected one transform of shape (4, 4), got {T.shape}")
+        T = check_frame(T_b_e, "T_b_e")
         self._T = np.array(T, dtype=np.float64, order="C")
         self._P = design_params(design)
         self._design = Design.default() if design is None else design

@@ -9,7 +9,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_count, check_tolerance, check_transform
+from .._validation import check_array, check_count, check_frame, check_tolerance
 from ..chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
 from ..design import Design
 from ..errors import InvalidInputError, Reason
@@ -127,9 +127,7 @@ def sweep_fk(q: QSource, T_b_e: ArrayLike, design: Design | None = None, *,
     if reduce is not None and not callable(reduce):
         raise TypeError(f"reduce: expected a callable reduce(start, q_chunk, sol) or None, "
                         f"got {type(reduce).__name__}")
-    T = check_transform(T_b_e, "T_b_e")
-    if T.shape != (4, 4):
-        raise InvalidInputError(f"T_b_e: expected one transform of shape (4, 4), got {T.shape}")
+    T = check_frame(T_b_e, "T_b_e")
     if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) \
             or chunk_size < 1:
         raise InvalidInputError(f"chunk_size: expected a positive integer, got {chunk_size!r}")

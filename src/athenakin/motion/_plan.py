@@ -34,7 +34,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_scalar, check_transform
+from .._validation import check_array, check_frame, check_scalar
 from ..design import Design, resolve_design
 from ..robot import direction_from_angles
 from ._check import _check_clearance, _collision, _timing_error, _violation, check_samples
@@ -364,9 +364,7 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
           margins: Margins | None = None, max_duration: float | None = None,
           max_samples: int | None = None, bodies: object = None, environment: object = None,
           clearance_margin: float | None = None) -> Trajectory:
-    T = check_transform(T_b_e, "T_b_e")
-    if T.shape != (4, 4):
-        raise ValueError(f"T_b_e: expected one transform of shape (4, 4), got shape {T.shape}")
+    T = check_frame(T_b_e, "T_b_e")
     rate, max_duration, max_samples = _budget(rate, max_duration, max_samples)
     limits = Limits.build(v_max, a_max, j_max, tip_speed)
     margins = Margins() if margins is None else margins

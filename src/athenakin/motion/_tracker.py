@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_scalar, check_transform
+from .._validation import check_array, check_frame, check_scalar
 from ..chain import DEGENERATE_TOL, P_ZERO_TOL
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
@@ -168,9 +168,7 @@ class Tracker:
                  raise_on: TrackFlag = TrackFlag.NONE, bodies: object = None,
                  environment: object = None, clearance_margin: float | None = None) -> None:
         design = resolve_design(design)
-        T = check_transform(T_b_e, "T_b_e")
-        if T.shape != (4, 4):
-            raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
+        T = check_frame(T_b_e, "T_b_e")
         margins = Margins() if margins is None else margins
         if not isinstance(margins, Margins):
             raise TypeError(f"margins: expected athenakin.motion.Margins, got "

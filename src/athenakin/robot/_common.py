@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Literal
+from collections.abc import Callable, Container, Mapping
+from typing import Any, Literal, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -20,7 +20,10 @@ _POLICIES = ("auto", "raise", "flag")
 ReferenceBackend = Literal["numpy"]
 
 __all__ = ["ErrorPolicy", "ReferenceBackend", "check_reference_backend", "resolve_design",
-           "resolve_policy", "raise_first_failure", "item_reason_from_slots"]
+           "resolve_policy", "raise_first_failure", "item_reason_from_slots",
+           "partial_result", "missing_field"]
+
+_R = TypeVar("_R")
 
 
 def check_reference_backend(backend: str, name: str) -> None:
@@ -110,3 +113,56 @@ def item_reason_from_slots(valid: NDArray[np.bool_], reason: NDArray[np.int8]
     first = np.take_along_axis(r, np.argmax(r != 0, axis=-1)[..., None], axis=-1)[..., 0]
     first = np.where(first == 0, Reason.CIRCLES_TANGENT, first)
     return np.where(anyvalid, 0, first).astype(np.int8)
+
+
+def partial_result(cls: type[_R], arrays: Mapping[str, Any], keep: Container[str]) -> _R:
+    """The result of a ``fields=(...)`` call: a ``cls`` holding only the ``keep`` arrays.
+
+    Parameters
+    ----------
+    cls : type
+        A frozen result dataclass (:class:`FKSolution`, :class:`PassiveJoints`).
+    arrays : mapping of str -> ndarray
+        Every field, by attribute name.
+    keep : container of str
+        The attribute names to hold; reading another raises (:func:`missing_field`).
+
+    Returns
+    -------
+    cls
+    """
+    obj = object.__new__(cls)
+    object.__setattr__(obj, "__dict__", {k: v for k, v in arrays.items() if k in keep})
+    return obj
+
+
+def missing_field(obj: object, name: str, fields: tuple[str, ...], attrs: Mapping[str, str],
+                  call: str) -> AttributeError:
+    """The error of reading ``name`` from a result (``__getattr__``; raise what it returns).
+
+    Parameters
+    ----------
+    obj : object
+        The result (a :func:`partial_result` or a full one).
+    name : str
+        The attribute read.
+    fields : tuple of str
+        The ``fields=`` names of the function, in order.
+    attrs : mapping of str -> str
+        Field or attribute name -> the attribute that holds it; a ``name`` among its keys
+        is a field that the ``fields=(...)`` call left out.
+    call : str
+        The function that computes the result (``"forward_kinematics"``).
+
+    Returns
+    -------
+    AttributeError
+        Naming the fields computed, for a left-out field; the usual message otherwise.
+    """
+    cls = type(obj).__name__
+    if name in attrs:
+        have = tuple(f for f in fields if attrs[f] in obj.__dict__)
+        return AttributeError(
+            f"{cls}.{name} was not computed: this result was asked for with fields={have}; "
+            f"call {call}(..., fields=None) (all) or add {name!r}")
+    return AttributeError(f"'{cls}' object has no attribute {name!r}")

@@ -38,6 +38,8 @@ from ._common import (
     ReferenceBackend,
     check_reference_backend,
     item_reason_from_slots,
+    missing_field,
+    partial_result,
     raise_first_failure,
     resolve_design,
     resolve_policy,
@@ -129,12 +131,7 @@ class FKSolution:
 
     def __getattr__(self, name: str) -> Any:
         # only reached for a field that a fields=(...) call left out
-        if name in _FIELD_ATTRS:
-            raise AttributeError(
-                f"FKSolution.{name} was not computed: this result was asked for with "
-                f"fields={tuple(f for f in FK_FIELDS if _FIELD_ATTRS[f] in self.__dict__)}; "
-                f"call forward_kinematics(..., fields=None) (all) or add {name!r}")
-        raise AttributeError(f"'FKSolution' object has no attribute {name!r}")
+        raise missing_field(self, name, FK_FIELDS, _FIELD_ATTRS, "forward_kinematics")
 
     def __repr__(self) -> str:
         have = []
@@ -241,10 +238,7 @@ def fk_solution(fields: tuple[str, ...] | None, **arrays: Any) -> FKSolution:
     """An :class:`FKSolution` of ``arrays``, or of only ``fields`` of them and ``item_reason``."""
     if fields is not None:
         keep = {_FIELD_ATTRS[f] for f in fields} | {"item_reason", "tool_length"}
-        arrays = {k: v for k, v in arrays.items() if k in keep}
-        obj = object.__new__(FKSolution)
-        object.__setattr__(obj, "__dict__", arrays)
-        return obj
+        return partial_result(FKSolution, arrays, keep)
     return FKSolution(**arrays)
 
 

@@ -39,6 +39,8 @@ from ._common import (
     ErrorPolicy,
     ReferenceBackend,
     check_reference_backend,
+    missing_field,
+    partial_result,
     raise_first_failure,
     resolve_design,
     resolve_policy,
@@ -72,6 +74,8 @@ IK_Q_ERROR_MAX = 1e-5
 
 #: The arrays a :class:`PassiveJoints` can hold, for ``inverse_kinematics(..., fields=...)``.
 IK_FIELDS = ("p", "u", "mode", "T_b_s", "residual", "valid", "reason")
+#: Each field is the attribute of its name (:func:`missing_field`).
+_IK_ATTRS = {f: f for f in IK_FIELDS}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -114,12 +118,7 @@ class PassiveJoints:
 
     def __getattr__(self, name: str) -> Any:
         # only reached for a field that a fields=(...) call left out
-        if name in IK_FIELDS:
-            raise AttributeError(
-                f"PassiveJoints.{name} was not computed: this result was asked for with "
-                f"fields={tuple(f for f in IK_FIELDS if f in self.__dict__)}; call "
-                f"inverse_kinematics(..., fields=None) (all) or add {name!r}")
-        raise AttributeError(f"'PassiveJoints' object has no attribute {name!r}")
+        raise missing_field(self, name, IK_FIELDS, _IK_ATTRS, "inverse_kinematics")
 
     @property
     def u1(self) -> NDArray[np.float64]:
@@ -149,9 +148,7 @@ def check_ik_fields(fields: str | tuple[str, ...] | list[str] | None
 def passive_joints(fields: tuple[str, ...] | None, **arrays: Any) -> PassiveJoints:
     """A :class:`PassiveJoints` of ``arrays``, or of only ``fields`` of them."""
     if fields is not None:
-        obj = object.__new__(PassiveJoints)
-        object.__setattr__(obj, "__dict__", {k: v for k, v in arrays.items() if k in fields})
-        return obj
+        return partial_result(PassiveJoints, arrays, fields)
     return PassiveJoints(**arrays)
 
 

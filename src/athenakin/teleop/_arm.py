@@ -24,7 +24,7 @@ from typing import Any, Literal, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_choice, check_count, check_scalar, check_transform
+from .._validation import check_array, check_choice, check_count, check_frame, check_scalar
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, KinematicsError
 from ._filter import check_rate
@@ -226,9 +226,7 @@ class SimulatedArm:
         from ..robot import REFERENCE_Q
 
         design = resolve_design(design)
-        T = check_transform(T_b_e, "T_b_e")
-        if T.shape != (4, 4):
-            raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
+        T = check_frame(T_b_e, "T_b_e")
         self.design, self.T_b_e = design, np.array(T)
         self.rate = check_rate(rate)
         self.dt = 1.0 / self.rate

@@ -34,7 +34,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validation import check_array, check_scalar, check_transform
+from .._validation import check_array, check_frame, check_scalar
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, Reason
 from ._filter import MIN_FILTER_RATE, TremorFilter, check_rate
@@ -185,9 +185,7 @@ class Teleop:
         from ..motion import Margins, Tracker
 
         design = resolve_design(design)
-        T = check_transform(T_b_e, "T_b_e")
-        if T.shape != (4, 4):
-            raise InvalidInputError(f"T_b_e: expected shape (4, 4), got {T.shape}")
+        T = check_frame(T_b_e, "T_b_e")
         opts = TeleopOptions() if options is None else options
         if not isinstance(opts, TeleopOptions):
             raise TypeError(f"options: expected TeleopOptions, got {type(opts).__name__}")
