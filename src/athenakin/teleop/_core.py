@@ -277,6 +277,8 @@ class Teleop:
         self._offset = self._tip
         self._engaged = False          # the next valid sample (re-)engages
         self._last_p: _V3 | None = None
+        self._step_p: _V3 = z          # the master's last step between two samples, m
+        self._dt_p = 0.0               # and its interval, s
         self._t_sample = -math.inf
         self._t = -math.inf
         self._estop = False
@@ -543,14 +545,23 @@ class Teleop:
                 self._engaged = False
             if last is None or flags & _B["JUMP"]:
                 self._filter.reset(*p)
+                self._step_p = (0.0, 0.0, 0.0)
+                self._dt_p = 0.0
+            else:              # the master's last step and its interval
+                self._step_p = (p[0] - last[0], p[1] - last[1], p[2] - last[2])
+                self._dt_p = tt - self._t_sample
             self._last_p = p
             self._t_sample = tt
             self._hold = False
-            self._y = self._filter(*p)
+            self._y = self._filter(*self._master_now(tt))
         elif tt - self._t_sample >= self.options.watchdog:
             flags |= _B["WATCHDOG"]
             self._hold = True
             self._engaged = False
+        elif self._last_p is not None:
+            # no sample this cycle (a master slower than the loop): the filter runs every
+            # cycle on the master interpolated between its samples (_master_now)
+            self._y = self._filter(*self._master_now(tt))
         if self._estop:
             flags |= _B["ESTOP"]
             self._engaged = False
@@ -579,6 +590,23 @@ class Teleop:
             g, f = self._slide(g)
             flags |= f
         return self._advance(g, flags, tt)
+
+    def _master_now(self, tt: float) -> _V3:
+        """The master's position that the filter takes at cycle time ``tt``.
+
+        A master sampled every cycle: its latest sample. A slower one (samples more than
+        1.5 cycles apart, 100 Hz on a 1 kHz loop): the straight line between its last two
+        samples, one sample interval late, so that the filter sees a continuous, piecewise
+        linear motion instead of a staircase whose every step would be a velocity jump of
+        the command (the acceleration limit would then hold the robot at each sample).
+        The delay is the master's own interval, and only where it exceeds the cycle.
+        """
+        lp, sp, dt = self._last_p, self._step_p, self._dt_p
+        assert lp is not None
+        if not dt > 1.5 * self.dt:
+            return lp
+        k = min(tt - self._t_sample, dt) / dt - 1.0        # in [-1, 0]: one interval late
+        return (lp[0] + k * sp[0], lp[1] + k * sp[1], lp[2] + k * sp[2])
 
     def _slide(self, g: _V3) -> tuple[_V3, int]:
         """Near a forbidden region, drop the step's component into it (the tip slides)."""
