@@ -52,7 +52,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ._dispatch import forward_kinematics
 from ._mechanism_formulas import FORMULA_JOINTS, tree_joint_formula
-from ._validation import check_array, check_scalar
+from ._validation import check_array, check_scalar, check_slot
 from .design import Design, resolve_design
 from .errors import InvalidInputError
 from .robot._fk import SLOT_MODE_INDEX
@@ -396,11 +396,9 @@ _SEGMENT_INDEX = np.array([[POINT_NAMES.index(a), POINT_NAMES.index(b)]
 
 
 def _check_slot(slot: object) -> int | None:
-    if isinstance(slot, str) and slot == "all":
-        return None
-    if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 16:
-        raise InvalidInputError(f"slot: expected an integer in 0..15 or 'all', got {slot!r}")
-    return int(slot)
+    """:func:`~athenakin._validation.check_slot` with ``"all"`` as None (every slot)."""
+    k = check_slot(slot, allow_all=True)
+    return None if k == "all" else int(k)
 
 
 def _motion(kind: str, axis: tuple[float, float, float],

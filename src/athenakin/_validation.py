@@ -12,6 +12,7 @@ import numbers
 import os
 from collections.abc import Iterable, Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -462,3 +463,37 @@ def check_options(errors: object, **tolerances: object) -> tuple[float, ...]:
 def _fmt(tail: tuple[int, ...]) -> str:
     """``(..., 3)``-style shape text without its parentheses; ``...`` for scalars."""
     return ", ".join(["..."] + [str(t) for t in tail])
+
+
+#: The number of forward-kinematics slots (``k = 8 m + 4 r + 2 b + w``).
+N_SLOTS = 16
+
+
+def check_slot(slot: object, name: str = "slot", *, allow_all: bool = False) -> Any:
+    """An FK slot: an integer in 0..15 (numpy integers too, bool refused), as an ``int``.
+
+    Parameters
+    ----------
+    slot : object
+        The argument.
+    name : str
+        Its name, used in error messages.
+    allow_all : bool, keyword-only
+        Also accept the string ``"all"`` (returned as it is), where a function offers it.
+
+    Returns
+    -------
+    int or "all"
+
+    Raises
+    ------
+    InvalidInputError
+        Anything else.
+    """
+    if allow_all and isinstance(slot, str) and slot == "all":
+        return "all"
+    if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) \
+            or not 0 <= slot < N_SLOTS:
+        also = " or 'all'" if allow_all else ""
+        raise InvalidInputError(f"{name}: expected an integer in 0..15{also}, got {slot!r}")
+    return int(slot)

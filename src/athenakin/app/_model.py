@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._backend import resolve_backend
 from .._dispatch import forward_kinematics
-from .._validation import check_array, check_instance
+from .._validation import check_array, check_instance, check_slot
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, OutOfWorkspaceError, Reason
 from ..parallel import parallel_forward_kinematics
@@ -365,11 +365,7 @@ class AppView:
 
 
 def _check_slot(slot: object) -> Slot:
-    if isinstance(slot, str) and slot == "all":
-        return "all"
-    if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 16:
-        raise InvalidInputError(f"slot: expected an integer in 0..15 or 'all', got {slot!r}")
-    return int(slot)
+    return check_slot(slot, allow_all=True)  # type: ignore[no-any-return]
 
 
 def _nearest_valid(k: int, valid: NDArray[np.bool_]) -> int:

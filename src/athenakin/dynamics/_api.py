@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._backend import resolve_backend
 from .._dispatch import forward_kinematics
-from .._validation import broadcast_batch, check_array, check_choice
+from .._validation import broadcast_batch, check_array, check_choice, check_slot
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, OutOfWorkspaceError, Reason, SingularConfigurationError
 from ..robot._setup import resolve_rcm_frame
@@ -53,9 +53,7 @@ MASSLESS = ("masses: the mass matrix is singular (a direction of q moves no mass
 
 
 def _check_slot(slot: object) -> int:
-    if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 16:
-        raise InvalidInputError(f"slot: expected an integer in 0..15, got {slot!r}")
-    return int(slot)
+    return int(check_slot(slot))
 
 
 def _check_masses(masses: object, design: Design) -> MassModel:

@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_frame, check_scalar
+from .._validation import check_array, check_frame, check_scalar, check_slot
 from ..chain import DEGENERATE_TOL, P_ZERO_TOL
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
@@ -201,10 +201,7 @@ class Tracker:
             order = sorted(range(16), key=lambda k: (sol.mode[k] != 1, sol.p_sign[k] != 1,
                                                      sol.ujoint[k] != 1, sol.wrist[k] != 1))
             slot = next(k for k in order if sol.valid[k])
-        elif not (isinstance(slot, (int, np.integer)) and not isinstance(slot, bool)
-                  and 0 <= slot < 16):
-            raise InvalidInputError(f"slot: expected an integer in 0..15, got {slot!r}")
-        elif not sol.valid[slot]:
+        elif not sol.valid[check_slot(slot)]:
             raise InvalidInputError(f"slot: slot {slot} is not a valid solution for q0 = "
                                     f"{q.tolist()} (valid slots: "
                                     f"{np.flatnonzero(sol.valid).tolist()})")

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._mechanism import BodyGeometry, MechanismState, state_from_fk
-from .._validation import check_array, check_count, check_instance, check_scalar
+from .._validation import check_array, check_count, check_instance, check_scalar, check_slot
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, Reason, error_for_reason
 from ..parallel import parallel_forward_kinematics
@@ -276,9 +276,7 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     q = check_array(REFERENCE_Q if q is None else q, "q", (3,)).copy()
     if q.shape != (3,):
         raise InvalidInputError(f"q: expected shape (3,), got shape {q.shape}")
-    if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 16:
-        raise InvalidInputError(f"slot: expected an integer in 0..15, got {slot!r}")
-    slot = int(slot)
+    slot = check_slot(slot)
     T = resolve_rcm_frame(T_b_e, design)
     if fk is None:
         sol = forward_kinematics(q, T, design, errors="flag")

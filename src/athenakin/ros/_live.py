@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validation import check_array, check_text
+from .._validation import check_array, check_slot, check_text
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..robot import forward_kinematics
@@ -194,9 +194,8 @@ class FoxgloveStream:
         self._flush_resend(stamp)
         sol = forward_kinematics(qa, self.T_b_e, self.design, errors="flag")
         valid = np.flatnonzero(sol.valid)
-        if slot is not None and not (isinstance(slot, (int, np.integer))
-                                     and not isinstance(slot, bool) and 0 <= slot < 16):
-            raise InvalidInputError(f"slot: expected an integer in 0..15, got {slot!r}")
+        if slot is not None:
+            slot = check_slot(slot)
         k = int(slot) if slot is not None and sol.valid[slot] else \
             (int(valid[0]) if valid.size else -1)
         state = (qa.copy(), k, int(flags), sol)

@@ -24,6 +24,7 @@ from .._validation import (
     check_instance,
     check_rng,
     check_scalar,
+    check_slot,
     check_tolerance,
 )
 from ..chain import closure_residual
@@ -139,9 +140,7 @@ MAX_SIM_TIME = 3600.0
 
 
 def _check_slot(slot: object) -> int:
-    if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 16:
-        raise InvalidInputError(f"slot: expected an integer in 0..15, got {slot!r}")
-    return int(slot)
+    return int(check_slot(slot))
 
 
 def settle(model: Any, data: Any, q: ArrayLike, *, ramp_time: float = RAMP_TIME,

@@ -49,7 +49,7 @@ from .._mechanism import (
     link_segments,
     state_from_fk,
 )
-from .._validation import check_array
+from .._validation import check_array, check_slot
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, Reason, error_for_reason
 from ..robot import forward_kinematics as reference_forward_kinematics
@@ -185,8 +185,7 @@ def single_state(q: ArrayLike | None, T_b_e: ArrayLike | None, design: Design | 
     q = check_array(REFERENCE_Q if q is None else q, "q", (3,))
     if q.shape != (3,):
         raise InvalidInputError(f"q: expected shape (3,), got shape {q.shape}")
-    if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 16:
-        raise InvalidInputError(f"slot: expected an integer in 0..15, got {slot!r}")
+    slot = check_slot(slot)
     T = resolve_rcm_frame(T_b_e, design)
     # the numpy reference FK, as robot_geometry: an export's numbers never depend on the
     # backend
