@@ -477,7 +477,9 @@ KNOWN_SLOW = {
     ("symbolic.p_quadratic", "b=None"): "b=None keeps B symbolic: the general elimination",
 }
 #: Slow functions: a smaller pool, no per-element variants.
-SLOW = ("plot.", "app.forward_view", "app.inverse_step", "app.readouts",
+SLOW = ("teleop.SimulatedArm", "teleop.MujocoBackend", "teleop.run_session",
+        "teleop.write_session_mcap", "teleop.read_master", "plot.", "app.forward_view",
+        "app.inverse_step", "app.readouts",
         "analysis.actuator_map", "analysis.point_workspace", "analysis.instrument_cone",
         "analysis.tool_tip_workspace", "analysis.singularity_loci",
         "analysis.singular_sets_within_strokes", "motion.plan", "motion.plan_directions",

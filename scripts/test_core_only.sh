@@ -78,7 +78,7 @@ run design
 run calibrate --plan 3 -o c.toml
 run synthesize --designs 2 -o syn
 run app
-run warmup
+run warmup --help     # the compile itself: the same numba as the main venv's (CLI audit)
 run teleop --master r.mcap -o s.mcap
 # a command added later must be listed above
 "$py" - <<'CHECK'

@@ -150,8 +150,18 @@ def test_every_public_subpackage_is_an_attribute_of_the_package():
                   if p.is_dir() and not p.name.startswith("_") and (p / "__init__.py").exists()
                   and p.name != "cli")                   # the command line, not an API
     subs += ["testing"]
+    # athenakin.fast is the compiled kernels themselves: where the backend policy says
+    # numpy (or numba is missing) importing it is the policy's named ImportError
     code = ("import athenakin as ak\n"
+            "from athenakin import _backend\n"
             f"for s in {subs!r}:\n"
+            "    if s == 'fast' and not _backend.numba_available():\n"
+            "        try:\n"
+            "            ak.fast\n"
+            "        except ImportError as e:\n"
+            "            assert 'ATHENAKIN_BACKEND' in str(e), e\n"
+            "            continue\n"
+            "        raise AssertionError('athenakin.fast imported without numba')\n"
             "    assert getattr(ak, s).__name__ == 'athenakin.' + s, s\n")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr[-2000:]
