@@ -75,7 +75,7 @@ def _title(module: str) -> str:
 
 #: The top-level names: ``__all__`` and the functions of optional subpackages that
 #: ``athenakin`` resolves on first use (``ak.certified_forward_kinematics``).
-TOP_NAMES = [*athenakin.__all__, *getattr(athenakin, "_LAZY_FUNCTIONS", {})]
+TOP_NAMES = list(dict.fromkeys([*athenakin.__all__, *getattr(athenakin, "_LAZY_FUNCTIONS", {})]))
 
 
 def _importable(name: str) -> bool:
