@@ -38,6 +38,7 @@ Q0 = np.array([-0.1, 0.1, 0.45])
      "gravity"),
     (lambda: TremorFilter(None, 1000.0), (TypeError, ValueError), "name"),
     (lambda: TremorFilter("notch8-12", None), TypeError, "rate"),
+    (lambda: TremorFilter("notch8-12", 1e-308), InvalidInputError, "rate"),  # was tan's error
     (lambda: filter_response("notch8-12", float("inf"), [1.0]), InvalidInputError, "rate"),
     (lambda: filter_response("notch8-12", 1000.0, [600.0]), InvalidInputError, "f_hz"),
     (lambda: read_master(None), TypeError, "path"),
@@ -74,3 +75,7 @@ def test_session_file_is_written_atomically(tmp_path):
         write_session_mcap(_log(), out, start_ns=-1)
     assert out.read_bytes() == before                     # untouched by a refused call
     assert [p.name for p in tmp_path.iterdir()] == ["s.mcap"]   # no temporary file left
+
+
+def test_the_pass_through_filter_takes_any_rate():
+    assert TremorFilter("none", 1e-308)(1.0, 2.0, 3.0) == (1.0, 2.0, 3.0)

@@ -83,8 +83,25 @@ def _check_name(name: object) -> str:
     return check_choice(name, "name", tuple(TREMOR_FILTERS))
 
 
+def _check_filter_rate(name: str, rate: object) -> float:
+    """The sample rate of filter ``name``, checked.
+
+    :func:`check_rate`, and at least :data:`MIN_FILTER_RATE` for a filter with a stop band
+    (the tremor band below Nyquist).
+    """
+    r = check_rate(rate)
+    if TREMOR_FILTERS[name] and r < MIN_FILTER_RATE:
+        from ..errors import InvalidInputError
+
+        raise InvalidInputError(f"rate: the tremor filter {name!r} needs rate >= "
+                                f"{MIN_FILTER_RATE:g} Hz, got {r:g}")
+    return r
+
+
 def _digital(name: str, rate: float) -> tuple[tuple[float, float, float, float, float], ...]:
     """``(b0, b1, b2, a1, a2)`` per biquad (``a0 = 1``) of filter ``name`` at ``rate`` Hz."""
+    if not TREMOR_FILTERS[name]:        # "none": no biquad, any rate
+        return ()
     wc = 2.0 * math.pi * PREWARP_HZ
     K = wc / math.tan(wc / (2.0 * rate))
     out = []
@@ -123,7 +140,7 @@ def filter_response(name: str, rate: float, f_hz: ArrayLike) -> NDArray[np.compl
         ``H(exp(j 2 pi f / rate))``; gain ``abs``, phase delay ``-angle / (2 pi f)`` (s).
     """
     name = _check_name(name)
-    rate = check_rate(rate)
+    rate = _check_filter_rate(name, rate)
     from .._validation import check_array
 
     f = check_array(f_hz, "f_hz", ())
@@ -152,7 +169,7 @@ class TremorFilter:
 
     def __init__(self, name: str, rate: float) -> None:
         self.name = _check_name(name)
-        self.rate = check_rate(rate)
+        self.rate = _check_filter_rate(self.name, rate)
         self._c = _digital(name, rate)
         self._s = [[0.0, 0.0] for _ in range(3 * len(self._c))]   # two states per biquad
 
