@@ -179,13 +179,16 @@ def first_tracker(q: NDArray[np.float64], T_b_e: NDArray[np.float64], design: De
     InvalidInputError
         ``slot`` is not a solution at the first reading that assembles, or a bad option.
     """
-    from ..robot import forward_kinematics
+    from .._dispatch import forward_kinematics
 
     finite = np.flatnonzero(np.isfinite(q).all(axis=1))
-    for a in range(0, len(finite), 4096):     # a batch FK skips the readings without a pose
-        rows = finite[a:a + 4096]
+    a, size = 0, 16          # the first reading usually assembles: a small batch first
+    while a < len(finite):   # a batch FK (the backend's) skips the readings without a pose
+        rows = finite[a:a + size]
+        a, size = a + size, 4096
         with np.errstate(all="ignore"):
-            ok = forward_kinematics(q[rows], T_b_e, design, errors="flag").valid.any(axis=1)
+            ok = forward_kinematics(q[rows], T_b_e, design, errors="flag",
+                                    fields=("valid",)).valid.any(axis=1)
         for i in rows[ok].tolist():
             try:
                 return i, Tracker(T_b_e, design, q0=q[i].tolist(), **options)
