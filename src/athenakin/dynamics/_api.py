@@ -52,10 +52,6 @@ MASSLESS = ("masses: the mass matrix is singular (a direction of q moves no mass
             "carriages or the links a mass")
 
 
-def _check_slot(slot: object) -> int:
-    return int(check_slot(slot))
-
-
 def _check_masses(masses: object, design: Design) -> MassModel:
     if masses is None:
         return MassModel.reference(design)
@@ -109,7 +105,7 @@ def _prepare(arrays: dict[str, ArrayLike | None], T_b_e: ArrayLike | None, desig
              masses: object, slot: object, errors: object, **vec3: ArrayLike | None
              ) -> _Prepared:
     check_choice(errors, "errors", ("auto", "raise", "flag"))
-    k = _check_slot(slot)
+    k = check_slot(slot)
     d = resolve_design(design)
     m = _check_masses(masses, d)
     arrs = {n: check_array(x if x is not None else np.zeros(3), n, (3,))

@@ -19,10 +19,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._backend import resolve_backend
-from .._validation import check_array, check_choice
+from .._validation import check_array, check_choice, check_slot
 from ..design import Design, resolve_design
 from ..robot._setup import resolve_rcm_frame
-from ._api import STANDARD_GRAVITY, _check_masses, _check_slot
+from ._api import STANDARD_GRAVITY, _check_masses
 from ._core import N_Q_DIRECTIONS, body_loads, evaluate, generalized_forces
 from ._kinematics import slot_signs
 from ._model import MassModel
@@ -63,7 +63,7 @@ class InverseDynamicsLoop:
                  masses: MassModel | None = None, gravity: ArrayLike = STANDARD_GRAVITY,
                  slot: int = 0, backend: str = "auto") -> None:
         check_choice(backend, "backend", ("auto", "numpy", "numba"))
-        self.slot = _check_slot(slot)
+        self.slot = check_slot(slot)
         self.design = resolve_design(design)
         self.masses = _check_masses(masses, self.design)
         T = resolve_rcm_frame(T_b_e, self.design)

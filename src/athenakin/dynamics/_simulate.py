@@ -8,7 +8,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_scalar
+from .._validation import check_array, check_scalar, check_slot
 from ..design import Design, resolve_design
 from ..errors import (
     InvalidInputError,
@@ -17,7 +17,7 @@ from ..errors import (
     StrokeLimitError,
 )
 from ..robot._setup import resolve_rcm_frame
-from ._api import MASSLESS, STANDARD_GRAVITY, _check_masses, _check_slot, forward_dynamics
+from ._api import MASSLESS, STANDARD_GRAVITY, _check_masses, forward_dynamics
 from ._model import MassModel
 
 __all__ = ["Simulation", "simulate", "SimulationStoppedError", "MAX_STEPS",
@@ -218,7 +218,7 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
         SingularConfigurationError); ``partial`` holds the states before.
     """
     d = resolve_design(design)
-    k = _check_slot(slot)
+    k = check_slot(slot)
     m = _check_masses(masses, d)
     q = check_array(q0, "q0", (3,))
     v = check_array(qd0, "qd0", (3,))

@@ -139,10 +139,6 @@ def _smoothstep(s: float) -> float:
 MAX_SIM_TIME = 3600.0
 
 
-def _check_slot(slot: object) -> int:
-    return int(check_slot(slot))
-
-
 def settle(model: Any, data: Any, q: ArrayLike, *, ramp_time: float = RAMP_TIME,
            settle_time: float = SETTLE_TIME, speed_tol: float = SPEED_TOL) -> float:
     """Move the actuator targets smoothly from ``data.ctrl`` to ``q``, then hold them.
@@ -364,7 +360,7 @@ def sample_reachable_q(n: int, design: Design | None = None, T_b_e: ArrayLike | 
     design = resolve_design(design)
     T = resolve_rcm_frame(T_b_e, design)
     home = check_array(REFERENCE_Q if home_q is None else home_q, "home_q", (3,))
-    slot = _check_slot(slot)
+    slot = check_slot(slot)
     radius = check_scalar(radius, "radius", positive=True)
     if radius > LENGTH_RANGE[1]:
         raise InvalidInputError(f"radius: expected at most {LENGTH_RANGE[1]:g} m, got {radius:g}")
