@@ -35,7 +35,8 @@ def _states(n, seed=0):
 def _fd_lagrange(q, qd, qdd, h=1e-5, dt=1e-5):
     """tau = d/dt dL/dqd - dL/dq by central differences (batched)."""
     def L(qq, vv):
-        k, v = dy.mechanical_energy(qq, vv, T, D, masses=M)
+        e = dy.mechanical_energy(qq, vv, T, D, masses=M)
+        k, v = e.kinetic, e.potential
         return k - v
 
     E = np.eye(3)

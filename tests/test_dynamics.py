@@ -115,7 +115,8 @@ def test_jet_velocities_and_accelerations_match_finite_differences(states, slot)
 def _lagrangian_forces(q, qd, qdd, masses, slot, f_tip=None, h=1e-5):
     """tau = d/dt dL/dqd - dL/dq by central differences of the energies alone."""
     def L(qq, vv):
-        k, v = mechanical_energy(qq, vv, T, D, masses=masses, slot=slot)
+        e = mechanical_energy(qq, vv, T, D, masses=masses, slot=slot)
+        k, v = e.kinetic, e.potential
         return k - v
 
     E = np.eye(3)
@@ -146,8 +147,8 @@ def test_statics_is_the_gradient_of_the_potential(states, slot):
     q = states[0][:3]
     f = actuator_forces(q, T, D, masses=MF, slot=slot)
     h = 1e-6
-    grad = np.stack([(mechanical_energy(q + h * e, 0 * q, T, D, masses=MF, slot=slot)[1]
-                      - mechanical_energy(q - h * e, 0 * q, T, D, masses=MF, slot=slot)[1])
+    grad = np.stack([(mechanical_energy(q + h * e, 0 * q, T, D, masses=MF, slot=slot).potential
+                      - mechanical_energy(q - h * e, 0 * q, T, D, masses=MF, slot=slot).potential)
                      / (2 * h) for e in np.eye(3)], -1)
     assert_allclose(f, grad, rtol=0, atol=1e-7)
 
@@ -169,7 +170,7 @@ def test_rcm_load_is_the_gradient_of_the_potential_in_the_rcm(states):
     st = statics(q, T, D, masses=MF)
 
     def V(Tx):
-        return mechanical_energy(q, 0 * q, Tx, D, masses=MF)[1]
+        return mechanical_energy(q, 0 * q, Tx, D, masses=MF).potential
 
     h = 1e-6
     grad_c, grad_w = [], []
@@ -208,7 +209,7 @@ def test_mass_matrix_spd_and_kinetic_energy(states):
     Mq = mass_matrix(q, T, D, masses=MF)
     assert_allclose(Mq, np.swapaxes(Mq, -1, -2), rtol=0, atol=1e-14)
     assert np.all(np.linalg.eigvalsh(Mq) > 0.1)
-    kin, _ = mechanical_energy(q, qd, T, D, masses=MF)
+    kin = mechanical_energy(q, qd, T, D, masses=MF).kinetic
     assert_allclose(kin, 0.5 * np.einsum("ni,nij,nj->n", qd, Mq, qd), rtol=1e-13, atol=0)
 
 
@@ -240,8 +241,7 @@ def test_power_balance_along_a_trajectory():
 
     def E(s):
         qs = REFERENCE_Q + A * (1 - np.cos(w * s[:, None]))
-        kin, pot = mechanical_energy(qs, A * w * np.sin(w * s[:, None]), T, D, masses=MF)
-        return kin + pot
+        return mechanical_energy(qs, A * w * np.sin(w * s[:, None]), T, D, masses=MF).total
 
     dE = (E(tt + h) - E(tt - h)) / (2 * h)
     assert_allclose(power, dE, rtol=0, atol=1e-6 * np.abs(power).max())
@@ -252,7 +252,8 @@ def test_simulate_conserves_energy_and_follows_inverse_dynamics():
     f0 = actuator_forces(q0, T, D, masses=M)
     sim = simulate(q0, [0.05, -0.02, 0.03], f0, T, D, masses=M, duration=0.2, dt=1e-3)
     # constant forces that hold the weight: E_mech - f0 . (q - q0) is conserved
-    kin, pot = mechanical_energy(sim.q, sim.qd, T, D, masses=M)
+    e = mechanical_energy(sim.q, sim.qd, T, D, masses=M)
+    kin, pot = e.kinetic, e.potential
     work = (sim.q - q0) @ f0
     e = kin + pot - work
     assert_allclose(e, e[0], rtol=0, atol=1e-9)

@@ -487,3 +487,19 @@ def test_numpy_clearance_works_in_chunks(monkeypatch):
     finally:
         tracemalloc.stop()
     assert peak < 10 * 2**20 + 14 * 2**10 * n
+
+
+# --- issue 28 item 3: several quantities come back as a result object ----------------------
+def test_mechanical_energy_is_a_result_object_that_flags_a_bad_row():
+    bad = [-0.10, 0.10, 5.0]
+    qd = np.array([0.01, -0.02, 0.03])
+    e = D.mechanical_energy(np.array([bad, Q]), np.array([qd, qd]), T, DES)
+    assert isinstance(e, D.MechanicalEnergy)
+    assert e.valid.tolist() == [False, True] and e.reason[0] != 0
+    assert np.isnan(e.kinetic[0]) and np.isnan(e.potential[0])
+    one = D.mechanical_energy(Q, qd, T, DES)
+    assert one.kinetic.shape == () and one.valid.shape == ()
+    assert_allclose(one.total, one.kinetic + one.potential, rtol=0, atol=0)
+    assert_allclose(e.kinetic[1], one.kinetic, rtol=0, atol=0)
+    M = D.mass_matrix(Q, T, DES)
+    assert_allclose(one.kinetic, qd @ M @ qd / 2, rtol=1e-12, atol=0)

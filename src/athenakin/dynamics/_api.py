@@ -33,7 +33,7 @@ from ._core import (
 from ._model import MassModel
 
 __all__ = ["Statics", "statics", "actuator_forces", "inverse_dynamics", "mass_matrix",
-           "forward_dynamics", "mechanical_energy", "STANDARD_GRAVITY", "MAX_BATCH", "CHUNK"]
+           "forward_dynamics", "mechanical_energy", "MechanicalEnergy", "STANDARD_GRAVITY", "MAX_BATCH", "CHUNK"]
 
 Arr = NDArray[np.float64]
 #: Default gravity, base frame, m/s^2.
@@ -435,13 +435,54 @@ def forward_dynamics(q: ArrayLike, qd: ArrayLike, forces: ArrayLike,
     return _finish(np.asarray(qdd, dtype=np.float64), prep, (3,))
 
 
+@dataclasses.dataclass(frozen=True)
+class MechanicalEnergy:
+    """Kinetic and potential energy of the moving bodies (:func:`mechanical_energy`).
+
+    Attributes
+    ----------
+    kinetic : ndarray, shape (...)
+        ``qd^T M(q) qd / 2``, J.
+    potential : ndarray, shape (...)
+        ``-sum m g . p_com`` over the moving bodies, J (zero at the base origin).
+    valid : ndarray of bool, shape (...)
+        The FK slot holds the configuration (energies are NaN where not).
+    reason : ndarray of int8, shape (...)
+        :class:`~athenakin.errors.Reason` of invalid items.
+    """
+
+    kinetic: Arr
+    potential: Arr
+    valid: NDArray[np.bool_]
+    reason: NDArray[np.int8]
+
+    @property
+    def total(self) -> Arr:
+        """``kinetic + potential``, J, shape (...)."""
+        return self.kinetic + self.potential
+
+
 def mechanical_energy(q: ArrayLike, qd: ArrayLike, T_b_e: ArrayLike | None = None,
                       design: Design | None = None, *, masses: MassModel | None = None,
                       gravity: ArrayLike = STANDARD_GRAVITY, slot: int = 0,
-                      errors: Literal["auto", "raise", "flag"] = "auto") -> tuple[Arr, Arr]:
-    """Kinetic and potential energy of the moving bodies, J, shapes (...,) each.
+                      errors: Literal["auto", "raise", "flag"] = "auto") -> MechanicalEnergy:
+    """Kinetic and potential energy of the moving bodies.
 
-    The potential is ``-sum m g . p_com`` (zero at the base origin).
+    Two quantities, so a result object (the package's rule: a function returns one
+    quantity as a bare array, NaN where a batch item is invalid; several quantities,
+    with ``valid``/``reason``, as a frozen dataclass).
+
+    Parameters
+    ----------
+    q, qd : array-like, shape (..., 3)
+        Actuator positions (m) and velocities (m/s).
+    T_b_e, design, masses, gravity, slot, errors
+        As :func:`statics`.
+
+    Returns
+    -------
+    MechanicalEnergy
+        ``kinetic`` and ``potential`` (J, shape (...)), ``total``, ``valid``, ``reason``.
     """
     prep = _prepare({"q": q, "qd": qd}, T_b_e, design, masses, slot, errors,
                     gravity=gravity)
@@ -455,6 +496,5 @@ def mechanical_energy(q: ArrayLike, qd: ArrayLike, T_b_e: ArrayLike | None = Non
 
     kin, pot = _chunked(prep.valid.shape[0], part)
     prep = _singular(prep, errors, kin, pot)
-    return _finish(kin, prep, ()), _finish(pot, prep, ())
-
-
+    return MechanicalEnergy(_finish(kin, prep, ()), _finish(pot, prep, ()),
+                            prep.valid.reshape(prep.shape), prep.reason.reshape(prep.shape))
