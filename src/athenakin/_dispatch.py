@@ -28,6 +28,7 @@ from __future__ import annotations
 import os
 import sys
 import threading
+import time
 from collections.abc import Callable
 from types import ModuleType
 from typing import Any, TypeVar
@@ -75,8 +76,12 @@ __all__ = [
     "tool_tip_inverse_jacobian",
 ]
 
-#: Seconds a first (compiling) call may take before the one-line notice is printed.
-NOTICE_AFTER_S = 1.0
+#: CPU seconds (of the whole process) a first call may spend before the one-line notice is
+#: printed. CPU time, not wall time: loading cached kernels costs well under a CPU second
+#: however busy the machine is (quiet when cached, issue 30), compiling costs tens.
+NOTICE_AFTER_S = 3.0
+#: How often the watcher of a first call reads the process's CPU time, s.
+NOTICE_POLL_S = 0.1
 
 _F8 = np.dtype(np.float64)
 _STATE: dict[str, Any] = {}     # "api": fast._api, "jac": fast._jac_api, "noticed": bool
@@ -115,14 +120,27 @@ def _notice() -> None:
 
 
 def _first(name: str, call: Callable[[], _R]) -> _R:
-    """The first compiled call of an entry point: a notice on stderr if it compiles long."""
-    timer = threading.Timer(NOTICE_AFTER_S, _notice)
-    timer.daemon = True
-    timer.start()
+    """The first compiled call of an entry point: a notice on stderr if it compiles long.
+
+    A watcher thread prints :func:`_notice` once the process has spent
+    :data:`NOTICE_AFTER_S` CPU seconds since the call began (compiling), never when the
+    kernels load from numba's cache, whatever the wall time on a loaded machine.
+    """
+    done = threading.Event()
+    start = time.process_time()
+
+    def watch() -> None:
+        while not done.wait(NOTICE_POLL_S):
+            if time.process_time() - start >= NOTICE_AFTER_S:
+                _notice()
+                return
+
+    watcher = threading.Thread(target=watch, name="athenakin-compile-notice", daemon=True)
+    watcher.start()
     try:
         return call()
     finally:
-        timer.cancel()
+        done.set()
         _WARM.add(name)
 
 
