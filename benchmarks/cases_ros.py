@@ -142,6 +142,8 @@ def cases(quick: bool) -> list[dict]:
         "zstd": f"zstd level {level} of the output's bytes (not compressed) in 4 MB pieces, "
                 f"as the writer's chunks",
         "zstd1": "zstd level 1 of the output's bytes (not compressed) in 4 MB pieces",
+        "fsync": "write + fsync of a file of the tracked MCAP's size: the part of the end-to-end "
+                 "time that durability costs (absent at 6c198b4)",
         }.items()}
     raw = _raw_output(tmp, stamps, log, T, d)
     notes["zstd"].size = notes["zstd1"].size = sum(len(x) for x in raw) / n
@@ -156,6 +158,7 @@ def cases(quick: bool) -> list[dict]:
         return call
 
     out_log = _Fresh(tmp, "log", ".mcap")
+    out_sync = _Fresh(tmp, "sync", ".bin")
 
     return [
         {"name": "CSV in, track, CSV out", "group": "ros-track", "batch": n, "baseline": True,
@@ -187,7 +190,19 @@ def cases(quick: bool) -> list[dict]:
         {"name": "compress only (zstd level 1 of the output)", "group": "ros-track",
          "batch": n, "note": notes["zstd1"],
          "call": _timed(notes["zstd1"], lambda: _zstd(raw, 1))},
+        {"name": "fsync only (the output's size, as the atomic writer does)", "group": "ros-track",
+         "batch": n, "note": notes["fsync"], "call": _timed(notes["fsync"], lambda: _fsync(
+             out_sync(), notes["mcap"].size or 100.0, n))},
     ]
+
+
+def _fsync(path: Path, bytes_per_reading: float, n: int) -> None:
+    """Write and fsync a file of the tracked MCAP's size: the durability cost that
+    ``athenakin._output.AtomicFile`` adds to every written file (issue 28, item 4)."""
+    with open(path, "wb") as fh:
+        fh.write(bytes(int(bytes_per_reading * n)))
+        fh.flush()
+        os.fsync(fh.fileno())
 
 
 def _raw_output(tmp: Path, stamps: np.ndarray, log, T: np.ndarray, d: ak.Design) -> list[bytes]:
