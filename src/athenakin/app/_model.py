@@ -107,17 +107,17 @@ def _rcm_frame_at(q: NDArray[np.float64], design: Design) -> NDArray[np.float64]
     return transform_from_rotation_translation(R, O_s + REFERENCE_P * x_e)
 
 
-def app_setup(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
+def app_setup(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
               backend: Literal["auto", "numba", "numpy"] = "auto") -> AppSetup:
     """Check a design and an RCM frame for the app and find where it starts.
 
     Parameters
     ----------
-    design : Design, optional
-        Defaults to :meth:`Design.default`.
     T_b_e : array-like, shape (4, 4), optional
         RCM frame; default: the reference set-up (:func:`~athenakin.default_rcm_frame`),
         built at the start configuration when the reference ``q`` does not assemble.
+    design : Design, optional
+        Defaults to :meth:`Design.default`.
     backend : {"auto", "numba", "numpy"}, keyword-only
         ``"auto"``: the compiled kernels where numba imports, else the numpy reference
         (:func:`athenakin.forward_kinematics`).

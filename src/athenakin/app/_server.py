@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._input import MAX_CONFIG_BYTES, read_bytes
+from .._validation import check_argument_order
 from ..design import Design
 from ..errors import KinematicsError
 from ._bodies import collision_note
@@ -99,13 +100,13 @@ class AthenaApp:
 
     Parameters
     ----------
+    T_b_e : array-like, shape (4, 4), str or Path, optional
+        RCM frame, or a JSON file ``{"T_b_e": ...}``. A frame that is not rigid is
+        reported in the page (and in :attr:`errors`); the reference set-up is used instead.
     design : Design, str or Path, optional
         The design, or a TOML file to load it from. A file that cannot be read, or a
         design that cannot assemble, leaves the app running on the reference design
-        with the message shown in the page (and in :attr:`errors`).
-    T_b_e : array-like, shape (4, 4), str or Path, optional
-        RCM frame, or a JSON file ``{"T_b_e": ...}``. A frame that is not rigid is
-        reported the same way (the reference set-up is used instead).
+        with the message shown the same way.
     host : str, keyword-only
         Interface to bind; ``"127.0.0.1"`` (default) serves this machine only.
     port : int, keyword-only
@@ -132,8 +133,8 @@ class AthenaApp:
         Start-up problems shown in the page (bad design, frame or trajectory).
     """
 
-    def __init__(self, design: Design | str | Path | None = None,
-                 T_b_e: ArrayLike | str | Path | None = None, *, host: str = "127.0.0.1",
+    def __init__(self, T_b_e: ArrayLike | str | Path | None = None,
+                 design: Design | str | Path | None = None, *, host: str = "127.0.0.1",
                  port: int = DEFAULT_PORT, trajectory: str | Path | None = None,
                  backend: str = "auto", verbose: bool = False,
                  solids: Callable[[AppView], tuple[Solid, ...]] | None = None,
@@ -144,11 +145,14 @@ class AthenaApp:
         from ._forces import ForcesLayer, check_f_max, check_masses
 
         masses, f_max = check_masses(masses), check_f_max(f_max)
+        # a call in the old order (design, T_b_e) is a mistake to raise, not a page message
+        check_argument_order(T_b_e, "T_b_e", given_for="frame")
+        check_argument_order(design, "design", given_for="design")
         self._lock = threading.RLock()
         self._echo = Echo()      # this thread is writing GUI values (app/_sync.py)
         self._backend = backend
         self.errors: list[str] = []
-        self.setup = self._make_setup(design, T_b_e)
+        self.setup = self._make_setup(T_b_e, design)
         self._verbose = verbose
         if verbose:
             self.server = viser.ViserServer(host=host, port=port, verbose=verbose)
@@ -184,8 +188,8 @@ class AthenaApp:
         self._frame_camera()
 
     # ------------------------------------------------------------------ set-up
-    def _make_setup(self, design: Design | str | Path | None,
-                    T_b_e: ArrayLike | str | Path | None) -> AppSetup:
+    def _make_setup(self, T_b_e: ArrayLike | str | Path | None,
+                    design: Design | str | Path | None) -> AppSetup:
         d: Design | None = None
         if isinstance(design, (str, Path)):
             try:
@@ -204,7 +208,7 @@ class AthenaApp:
         else:
             T = T_b_e
         try:
-            base = app_setup(d, None, backend=self._backend)  # type: ignore[arg-type]
+            base = app_setup(None, d, backend=self._backend)  # type: ignore[arg-type]
         except (ValueError, TypeError, KinematicsError) as exc:
             self.errors.append(f"design: {_error_text(exc)}; showing the reference design "
                                f"instead")
@@ -213,7 +217,7 @@ class AthenaApp:
         if T is None:
             return base
         try:
-            return app_setup(d, T, backend=self._backend)  # type: ignore[arg-type]
+            return app_setup(T, d, backend=self._backend)  # type: ignore[arg-type]
         except (ValueError, TypeError, KinematicsError) as exc:
             where = f"RCM file {T_b_e}" if isinstance(T_b_e, (str, Path)) else "RCM frame"
             self.errors.append(f"{where}: {_error_text(exc)}; using the reference set-up "
@@ -679,7 +683,7 @@ class AthenaApp:
         design = self._design_path.value.strip() or None
         rcm = self._rcm_path.value.strip() or None
         before = len(self.errors)
-        setup = self._make_setup(design, rcm)
+        setup = self._make_setup(rcm, design)
         problems = self.errors[before:]
         del self.errors[before:]
         if problems:
@@ -799,7 +803,7 @@ def _escape(text: str) -> str:
     return html.escape(text)
 
 
-def launch(design: Design | str | Path | None = None, T_b_e: ArrayLike | str | Path | None = None,
+def launch(T_b_e: ArrayLike | str | Path | None = None, design: Design | str | Path | None = None,
            *, host: str = "127.0.0.1", port: int = DEFAULT_PORT,
            trajectory: str | Path | None = None, backend: str = "auto",
            masses: Any = None, f_max: Any = None) -> AthenaApp:  # forces: app/_forces.py
@@ -807,7 +811,7 @@ def launch(design: Design | str | Path | None = None, T_b_e: ArrayLike | str | P
 
     Parameters
     ----------
-    design, T_b_e, host, port, trajectory, backend, masses, f_max
+    T_b_e, design, host, port, trajectory, backend, masses, f_max
         As in :class:`AthenaApp`.
 
     Returns
@@ -815,7 +819,7 @@ def launch(design: Design | str | Path | None = None, T_b_e: ArrayLike | str | P
     AthenaApp
         Call :meth:`AthenaApp.stop` to end it.
     """
-    app = AthenaApp(design, T_b_e, host=host, port=port, trajectory=trajectory,
+    app = AthenaApp(T_b_e, design, host=host, port=port, trajectory=trajectory,
                     backend=backend, masses=masses, f_max=f_max)
     for e in app.errors:
         print(f"athenakin app: {e}", file=sys.stderr)

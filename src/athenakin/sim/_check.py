@@ -116,7 +116,7 @@ class MujocoCheck:
                 f"(hold up to {np.max(self.hold_time):.2f} s)")
 
 
-def load_model(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
+def load_model(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                q: ArrayLike | None = None, slot: int = 0, gravity: bool = False) -> Any:
     """Compile :func:`~athenakin.sim.mjcf_from_design` with MuJoCo.
 
@@ -127,7 +127,7 @@ def load_model(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
     import mujoco
 
     return mujoco.MjModel.from_xml_string(
-        mjcf_from_design(design, T_b_e, q=q, slot=slot, gravity=gravity))
+        mjcf_from_design(T_b_e, design, q=q, slot=slot, gravity=gravity))
 
 
 def _smoothstep(s: float) -> float:
@@ -200,8 +200,8 @@ def _labels(model: Any, data: Any) -> tuple[int, int, int, int]:
     return mode, sgn[0], sgn[1], sgn[2]
 
 
-def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
-                         T_b_e: ArrayLike | None = None, *, start_slot: int = 0,
+def check_fk_with_mujoco(q: ArrayLike, T_b_e: ArrayLike | None = None,
+                         design: Design | None = None, *, start_slot: int = 0,
                          home_q: ArrayLike | None = None, perturb: float = 0.0,
                          rng: int | np.random.Generator | None = None,
                          ramp_time: float = RAMP_TIME, settle_time: float = SETTLE_TIME,
@@ -220,8 +220,8 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
         Actuator targets, m. The straight path from ``home_q`` must stay away from
         singularities in ``start_slot`` (see :func:`sample_reachable_q`), or
         MuJoCo may end in another branch (which the result then reports).
-    design : Design, optional
     T_b_e : array-like, shape (4, 4), optional
+    design : Design, optional
     start_slot : int, keyword-only
         FK slot of the keyframe.
     home_q : array-like, shape (3,), keyword-only, optional
@@ -253,7 +253,7 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
         raise InvalidInputError(f"perturb: expected at most {LENGTH_RANGE[1]:g} (m or rad), "
                                 f"got {perturb:g}")
     rng = check_rng(rng)
-    model = load_model(design, T, q=home_q, slot=start_slot, gravity=gravity)
+    model = load_model(T, design, q=home_q, slot=start_slot, gravity=gravity)
     data = mujoco.MjData(model)
     names = list(JOINTS)
     adr = np.array([model.jnt_qposadr[model.joint(n).id] for n in names])
@@ -314,7 +314,7 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
     return MujocoCheck(q=qs, **{k: np.asarray(v) for k, v in out.items()})
 
 
-def sample_reachable_q(n: int, design: Design | None = None, T_b_e: ArrayLike | None = None,
+def sample_reachable_q(n: int, T_b_e: ArrayLike | None = None, design: Design | None = None,
                        *, slot: int = 0, home_q: ArrayLike | None = None,
                        radius: float = 0.12, n_path: int = 24,
                        rng: int | np.random.Generator | None = None,
@@ -330,8 +330,8 @@ def sample_reachable_q(n: int, design: Design | None = None, T_b_e: ArrayLike | 
     ----------
     n : int
         Number of targets, 0 to 100,000.
-    design : Design, optional
     T_b_e : array-like, shape (4, 4), optional
+    design : Design, optional
     slot : int, keyword-only
     home_q : array-like, shape (3,), keyword-only, optional
         Default :data:`athenakin.robot.REFERENCE_Q`.

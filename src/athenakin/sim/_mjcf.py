@@ -254,7 +254,7 @@ def _collision_geoms(root: ET.Element, bodies: Bodies, segs: dict[str, tuple[
                                                "body2": by})
 
 
-def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
+def mjcf_from_design(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                      q: ArrayLike | None = None, slot: int = 0, gravity: bool = True,
                      model_name: str = "athena", bodies: Bodies | None = None,
                      collision: bool | None = None,
@@ -263,11 +263,11 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
 
     Parameters
     ----------
-    design : Design, optional
-        Defaults to :meth:`Design.default`.
     T_b_e : array-like, shape (4, 4), optional
         RCM frame of the set-up (where the spherical five-bar holds the RCM);
         defaults to :func:`athenakin.default_rcm_frame`.
+    design : Design, optional
+        Defaults to :meth:`Design.default`.
     q : array-like, shape (3,), keyword-only, optional
         Actuators of the keyframe ``home`` (default :data:`athenakin.robot.REFERENCE_Q`).
     slot : int, keyword-only
@@ -583,7 +583,7 @@ def _apply_masses(root: ET.Element, masses: object, jv: MechanismJointValues, *,
     key.set("ctrl", _vec(f))
 
 
-def write_mjcf(path: str | Path, design: Design | None = None, T_b_e: ArrayLike | None = None,
+def write_mjcf(path: str | Path, T_b_e: ArrayLike | None = None, design: Design | None = None,
                **kwargs: object) -> Path:
     """Write :func:`mjcf_from_design` to ``path``; keyword arguments are passed on.
 
@@ -593,5 +593,5 @@ def write_mjcf(path: str | Path, design: Design | None = None, T_b_e: ArrayLike 
         The path written.
     """
     path = check_output_path(path)
-    write_text_atomic(path, mjcf_from_design(design, T_b_e, **kwargs))  # type: ignore[arg-type]
+    write_text_atomic(path, mjcf_from_design(T_b_e, design, **kwargs))  # type: ignore[arg-type]
     return path
