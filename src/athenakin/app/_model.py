@@ -24,15 +24,13 @@ from ..errors import InvalidInputError, OutOfWorkspaceError, Reason
 from ..parallel import parallel_forward_kinematics
 from ..plot._geometry import RobotGeometry, robot_geometry
 from ..robot import (
-    REFERENCE_DIRECTION_B,
-    REFERENCE_P,
     REFERENCE_Q,
     SLOT_MODE,
     SLOT_P_SIGN,
     SLOT_UJOINT,
     SLOT_WRIST,
 )
-from ..robot._setup import resolve_rcm_frame
+from ..robot._setup import reference_rcm_frame, resolve_rcm_frame
 from ._ghosts import SlotGhosts, slot_ghosts
 
 __all__ = [
@@ -95,18 +93,6 @@ class AppSetup:
     backend: Literal["numba", "numpy"]
 
 
-def _rcm_frame_at(q: NDArray[np.float64], design: Design) -> NDArray[np.float64]:
-    """The reference set-up's recipe (:func:`~athenakin.default_rcm_frame`) at another ``q``."""
-    from .._transforms import transform_from_rotation_translation
-
-    O_s = parallel_forward_kinematics(q, design).O_s[0]
-    x_e = REFERENCE_DIRECTION_B / np.linalg.norm(REFERENCE_DIRECTION_B)
-    z_e = np.array([1.0, 0.0, 0.0]) - x_e[0] * x_e
-    z_e /= np.linalg.norm(z_e)
-    R = np.stack([x_e, np.cross(z_e, x_e), z_e], axis=-1)
-    return transform_from_rotation_translation(R, O_s + REFERENCE_P * x_e)
-
-
 def app_setup(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
               backend: Literal["auto", "numba", "numpy"] = "auto") -> AppSetup:
     """Check a design and an RCM frame for the app and find where it starts.
@@ -158,7 +144,8 @@ def app_setup(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                 f"the link lengths l1..l5 and the strokes", Reason.CIRCLES_DISJOINT)
         cand = grid[ok]
         home = cand[np.argmin(np.linalg.norm(cand - ref, axis=-1))]
-    T = _rcm_frame_at(home, design) if T_b_e is None else resolve_rcm_frame(T_b_e, design)
+    T = (reference_rcm_frame(parallel_forward_kinematics(home, design).O_s[0]) if T_b_e is None
+         else resolve_rcm_frame(T_b_e, design))
     return AppSetup(design=design, T_b_e=T, q_lo=lo, q_hi=hi, q_home=home.copy(),
                     backend=chosen)
 

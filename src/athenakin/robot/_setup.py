@@ -49,12 +49,26 @@ def default_rcm_frame(design: Design | None = None) -> NDArray[np.float64]:
         raise OutOfWorkspaceError(
             f"default_rcm_frame: the reference configuration q = {REFERENCE_Q.tolist()} m is not "
             f"assembled in mode +1 for this design; build T_b_e for your set-up explicitly")
+    return reference_rcm_frame(par.O_s[0])
+
+
+def reference_rcm_frame(O_s: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The reference set-up's RCM frame for the instrument's U-joint at ``O_s``.
+
+    The recipe of :func:`default_rcm_frame` at any ``O_s`` (base frame, m, shape (3,)):
+    ``x_e`` along :data:`REFERENCE_DIRECTION_B`, ``z_e`` the rail axis made perpendicular
+    to it, ``y_e = z_e x x_e``, the RCM :data:`REFERENCE_P` from ``O_s`` along ``x_e``.
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+    """
     x_e = REFERENCE_DIRECTION_B / np.linalg.norm(REFERENCE_DIRECTION_B)
     z_e = np.array([1.0, 0.0, 0.0]) - x_e[0] * x_e
     z_e /= np.linalg.norm(z_e)
     y_e = np.cross(z_e, x_e)
     R = np.stack([x_e, y_e, z_e], axis=-1)
-    return transform_from_rotation_translation(R, par.O_s[0] + REFERENCE_P * x_e)
+    return transform_from_rotation_translation(R, O_s + REFERENCE_P * x_e)
 
 
 def resolve_rcm_frame(T_b_e: ArrayLike | None, design: Design, *, single: bool = True
