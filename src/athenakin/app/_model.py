@@ -60,7 +60,8 @@ WARN_CONDITION = 100.0
 INVERSE_STEPS = 48
 #: Half-width of the slider range of an actuator without stroke limits, m.
 UNLIMITED_HALF_RANGE = 0.3
-#: Points per actuator of the grid on which :func:`app_setup` looks for an assembled pose.
+#: Points per actuator of the app's grid of the actuator ranges (:func:`actuator_grid`), on
+#: which :func:`app_setup` looks for an assembled pose.
 SEARCH_GRID = 9
 
 Slot = int | Literal["all"]
@@ -91,6 +92,16 @@ class AppSetup:
     q_hi: NDArray[np.float64]
     q_home: NDArray[np.float64]
     backend: Literal["numba", "numpy"]
+
+
+def actuator_grid(q_lo: NDArray[np.float64], q_hi: NDArray[np.float64]) -> NDArray[np.float64]:
+    """:data:`SEARCH_GRID` points per actuator over the box ``q_lo..q_hi`` (m), shape (n, 3).
+
+    The app's one grid of the actuator ranges (:func:`app_setup`'s start search, the depth
+    slider's reach), ``q1`` slowest.
+    """
+    axes = [np.linspace(a, b, SEARCH_GRID) for a, b in zip(q_lo, q_hi, strict=True)]
+    return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
 
 
 def app_setup(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
@@ -133,8 +144,7 @@ def app_setup(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
     if parallel_forward_kinematics(ref, design).valid[0]:
         home = ref
     else:
-        axes = [np.linspace(a, b, SEARCH_GRID) for a, b in zip(lo, hi, strict=True)]
-        grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+        grid = actuator_grid(lo, hi)
         ok = parallel_forward_kinematics(grid, design).valid[:, 0]
         if not np.any(ok):
             raise OutOfWorkspaceError(

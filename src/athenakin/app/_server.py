@@ -28,16 +28,17 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._input import MAX_CONFIG_BYTES, read_bytes
 from .._validation import check_argument_order
 from ..design import Design
 from ..errors import KinematicsError
+from ..robot._setup import read_rcm_json
 from ._bodies import collision_note
 from ._ghosts import ghost_scene
 from ._inverse import angles_from_tip, inverse_step, tip_from_angles
 from ._model import (
     AppSetup,
     AppView,
+    actuator_grid,
     app_setup,
     forward_view,
 )
@@ -78,17 +79,6 @@ def _import_viser() -> Any:
             "athenakin.app needs the optional package 'viser': pip install 'athenakin[app]'",
             name="viser") from exc
     return viser
-
-
-def _load_rcm_file(path: str | Path) -> NDArray[np.float64]:
-    """``T_b_e`` from a JSON file ``{"T_b_e": 4x4 nested list}`` (as ``--rcm-file``)."""
-    try:
-        data = json.loads(read_bytes(path, limit=MAX_CONFIG_BYTES, what="RCM file"))
-    except (OSError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{path}: cannot read the RCM frame ({exc})") from exc
-    if not isinstance(data, dict) or "T_b_e" not in data:
-        raise ValueError(f"{path}: expected a JSON object with key 'T_b_e'")
-    return np.asarray(data["T_b_e"], dtype=float)
 
 
 def _error_text(exc: BaseException) -> str:
@@ -202,9 +192,12 @@ class AthenaApp:
         T: ArrayLike | None = None
         if isinstance(T_b_e, (str, Path)):
             try:
-                T = _load_rcm_file(T_b_e)
-            except ValueError as exc:
-                self.errors.append(f"RCM file: {exc}; using the reference set-up")
+                T = read_rcm_json(T_b_e, option="RCM file")
+            except OSError as exc:
+                self.errors.append(f"RCM file {T_b_e}: cannot read it ({exc}); using the "
+                                   f"reference set-up")
+            except ValueError as exc:               # names the file
+                self.errors.append(f"{exc}; using the reference set-up")
         else:
             T = T_b_e
         try:
@@ -785,12 +778,12 @@ def _inverse_slot(slot: int, mode: int) -> int:
 def rcm_reach(setup: AppSetup) -> float:
     """Largest ``|p|`` (m): the farthest ``O_s`` from the RCM, for the depth slider's range.
 
-    Over a grid of the actuator ranges (both modes), rounded up to 10 mm.
+    Over the grid of the actuator ranges (:func:`~athenakin.app._model.actuator_grid`,
+    both modes), rounded up to 10 mm.
     """
     from ..parallel import parallel_forward_kinematics
 
-    axes = [np.linspace(a, b, 9) for a, b in zip(setup.q_lo, setup.q_hi, strict=True)]
-    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    grid = actuator_grid(setup.q_lo, setup.q_hi)
     O_s = np.asarray(parallel_forward_kinematics(grid, setup.design).O_s)
     dist = np.linalg.norm(O_s - setup.T_b_e[:3, 3], axis=-1)
     far = float(np.nanmax(dist)) if np.any(np.isfinite(dist)) else 1.0

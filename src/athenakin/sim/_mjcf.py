@@ -44,6 +44,8 @@ from ._layout import (
     mechanism_joint_values,
     single_state,
 )
+from ._layout import xml_float as _f
+from ._layout import xml_floats as _vec
 
 __all__ = ["mjcf_from_design", "write_mjcf", "MJCF_TIMESTEP", "ACTUATOR_KP", "ACTUATOR_KV",
            "EQUALITY_SOLREF", "COLLISION_GROUP", "collision_geom_name"]
@@ -92,14 +94,6 @@ _RGBA = {"rail": "0.35 0.35 0.38 1", "parallel": "0.20 0.40 0.80 1",
          "joint": "0.55 0.55 0.55 1", "serial": "0.80 0.20 0.20 1",
          "actuator": "0.95 0.60 0.10 1", "sphere": "0.60 0.30 0.70 1",
          "setup": "0.20 0.70 0.30 0.6"}
-
-
-def _f(x: float) -> str:
-    return repr(float(x))
-
-
-def _vec(v: ArrayLike) -> str:
-    return " ".join(_f(x) for x in np.asarray(v, dtype=float).ravel())
 
 
 def _body(parent: ET.Element, name: str, pos: ArrayLike = (0, 0, 0),

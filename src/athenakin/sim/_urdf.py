@@ -38,6 +38,8 @@ from ._layout import (
     collision_segments,
     single_state,
 )
+from ._layout import xml_float as _f
+from ._layout import xml_floats as _vec
 from ._mjcf import BAR_RADIUS, DENSITY
 
 __all__ = ["urdf_from_design", "write_urdf", "CLOSURE_FRAMES", "CLOSURE_PAIRS", "MIMIC"]
@@ -54,14 +56,6 @@ CLOSURE_PAIRS = (("link_b1_tip", "platform_oi"), ("link_b3_tip", "carrier_d"),
 MIMIC = {"platform_y": ("a_ujoint_y", -1.0), "carrier_z": ("a_base_z", -1.0)}
 #: Joint limit used where the design has none (m), and for ``p``.
 _FREE_SLIDE = 2.0
-
-
-def _f(x: float) -> str:
-    return repr(float(x))
-
-
-def _vec(v: ArrayLike) -> str:
-    return " ".join(_f(x) for x in np.asarray(v, dtype=float).ravel())
 
 
 def _rpy_from_matrix(R: NDArray[np.float64]) -> NDArray[np.float64]:
