@@ -200,10 +200,8 @@ def check_argument_order(x: object, name: str, *, given_for: Literal["frame", "d
 
     Parameters
     ----------
-    x : object
-        The argument.
-    name : str
-        Its name, used in the message.
+    x, name : object, str
+        The argument and how the message names it.
     given_for : {"frame", "design"}, keyword-only
         The argument's place: a transform (refused: a dataclass instance such as a
         ``Design``, or a path ending in ``.toml``) or the design (refused: an array of
