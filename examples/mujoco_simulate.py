@@ -13,7 +13,7 @@ design = ak.Design.default()
 T_b_e = ak.default_rcm_frame(design)
 
 # 1. the model file: closed loops as equality constraints, keyframe 'home' at REFERENCE_Q
-path = write_mjcf("athena.xml", design, T_b_e, gravity=False)
+path = write_mjcf("athena.xml", T_b_e, design, gravity=False)
 model = mujoco.MjModel.from_xml_path(str(path))
 data = mujoco.MjData(model)
 print(f"wrote {path}: {model.njnt} joints, {model.nu} actuators, {model.neq} loop closures")
@@ -30,6 +30,6 @@ print(f"q = {q_target} m: tool tip in MuJoCo {np.round(tip_mujoco, 6)} m, "
 
 # 3. the systematic check: seeded targets in two solutions, joints disturbed at the start
 for slot in (0, 9):
-    q = sample_reachable_q(10, design, T_b_e, slot=slot, rng=slot)
-    res = check_fk_with_mujoco(q, design, T_b_e, start_slot=slot, perturb=0.02, rng=slot)
+    q = sample_reachable_q(10, T_b_e, design, slot=slot, rng=slot)
+    res = check_fk_with_mujoco(q, T_b_e, design, start_slot=slot, perturb=0.02, rng=slot)
     print(f"slot {slot}: {res.summary()}")

@@ -173,7 +173,7 @@ TRAJ, CALIB, PW, TASK = _lazy(_traj), _lazy(_calib), _lazy(_point_ws), _lazy(_ta
 
 
 def _setup() -> Any:
-    return ak.app.app_setup(D, T0, backend="numpy")
+    return ak.app.app_setup(T0, D, backend="numpy")
 
 
 def _fk1() -> Any:
@@ -360,16 +360,16 @@ OVERRIDES: dict[str, Callable[[dict[str, Path]], tuple[tuple, dict]]] = {
     "synthesis.row_from_design": lambda f: ((D,), {}),
     "synthesis.sample_task": lambda f: ((TASK(), 5), {}),
     "synthesis.pareto_mask": lambda f: ((np.array([[1.0, 2.0], [2.0, 1.0]]),), {}),
-    "sim.check_fk_with_mujoco": lambda f: ((Q0, D, T0), dict(settle_time=0.2, ramp_time=0.1)),
-    "sim.load_model": lambda f: ((D, T0), {}),
+    "sim.check_fk_with_mujoco": lambda f: ((Q0, T0, D), dict(settle_time=0.2, ramp_time=0.1)),
+    "sim.load_model": lambda f: ((T0, D), {}),
     "sim.mechanism_joint_values": lambda f: ((Q0, T0, D), {}),
-    "sim.mjcf_from_design": lambda f: ((D, T0), {}),
-    "sim.sample_reachable_q": lambda f: ((2, D, T0), dict(rng=1)),
+    "sim.mjcf_from_design": lambda f: ((T0, D), {}),
+    "sim.sample_reachable_q": lambda f: ((2, T0, D), dict(rng=1)),
     "sim.settle": lambda f: _settle_args(),
-    "sim.urdf_from_design": lambda f: ((D, T0), {}),
+    "sim.urdf_from_design": lambda f: ((T0, D), {}),
     "sim.urdf_joint_zero": lambda f: ((T0, D), {}),
-    "sim.write_mjcf": lambda f: ((f["tmp"] / "m.xml", D, T0), {}),
-    "sim.write_urdf": lambda f: ((f["tmp"] / "m.urdf", D, T0), {}),
+    "sim.write_mjcf": lambda f: ((f["tmp"] / "m.xml", T0, D), {}),
+    "sim.write_urdf": lambda f: ((f["tmp"] / "m.urdf", T0, D), {}),
     "symbolic.forward_kinematics_algebraic": lambda f: ((Q0, T0, D), {}),
     "symbolic.serial_solutions_algebraic": lambda f: ((REF["X"],), {}),
     "robot.Design": lambda f: OVERRIDES["Design"](f),
@@ -410,7 +410,7 @@ OVERRIDES: dict[str, Callable[[dict[str, Path]], tuple[tuple, dict]]] = {
     "plot.slot_label": lambda f: ((GEOM(),), {}),
     "plot.write_html": lambda f: ((f["tmp"] / "v.html", Q0, T0, D),
                                   dict(include_plotlyjs=False)),
-    "app.app_setup": lambda f: ((D, T0), dict(backend="numpy")),
+    "app.app_setup": lambda f: ((T0, D), dict(backend="numpy")),
     "app.forward_view": lambda f: ((SETUP(), Q0), {}),
     "app.ghost_scene": lambda f: ((VIEW().ghosts, GEOM()), {}),
     "app.inverse_step": lambda f: ((SETUP(), REF["tip_e"], REF["tip_e"] + [0.002, 0, 0], Q0),
@@ -455,7 +455,7 @@ def _calib_args() -> tuple[tuple, dict]:
 
 
 def _settle_args() -> tuple[tuple, dict]:
-    model = ak.sim.load_model(D, T0, q=Q0)
+    model = ak.sim.load_model(T0, D, q=Q0)
     import mujoco
 
     return (model, mujoco.MjData(model), Q0), dict(ramp_time=0.05, settle_time=0.1)

@@ -55,7 +55,7 @@ def compute() -> dict[str, Any]:
     q = _q_samples(64, 1)
     fk = ak.forward_kinematics(q, T, d, errors="flag")
     _fields("fk", fk, out)
-    qr = sim.sample_reachable_q(16, d, T, rng=3)
+    qr = sim.sample_reachable_q(16, T, d, rng=3)
     out["q_reachable"] = qr
     fk0 = ak.forward_kinematics(qr, T, d)
     _fields("fk_reachable", fk0, out)
@@ -108,8 +108,8 @@ def compute() -> dict[str, Any]:
         out[f"study.{name}"] = np.asarray(value, dtype=float)
 
     # exports: text, compared exactly
-    out["urdf"] = sim.urdf_from_design(d, T)
-    out["mjcf"] = sim.mjcf_from_design(d, T)
+    out["urdf"] = sim.urdf_from_design(T, d)
+    out["mjcf"] = sim.mjcf_from_design(T, d)
 
     # an MCAP file of a tracked stream: every decoded message, numbers and texts
     from athenakin import ros

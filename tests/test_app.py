@@ -38,7 +38,7 @@ HAS_VISER = importlib.util.find_spec("viser") is not None
 
 @pytest.fixture(scope="module")
 def setup():
-    return app_setup(D, backend="numpy")
+    return app_setup(design=D, backend="numpy")
 
 
 def _random_q(rng, n, setup):
@@ -57,13 +57,13 @@ def test_setup_of_a_design_that_cannot_assemble_is_a_named_error():
     bad = dataclasses.replace(D, l5=5.0, name="broken")     # k2 never reaches k1
     with pytest.raises(OutOfWorkspaceError, match="broken: the parallel module assembles "
                                                   "nowhere"):
-        app_setup(bad, backend="numpy")
+        app_setup(design=bad, backend="numpy")
 
 
 def test_setup_starts_where_the_design_assembles():
     # the reference q is beyond these strokes: the start is the nearest assembled grid point
     d = dataclasses.replace(D, q_min=(-0.30, 0.15, 0.20), q_max=(-0.15, 0.30, 0.70))
-    s = app_setup(d, backend="numpy")
+    s = app_setup(design=d, backend="numpy")
     assert np.all((s.q_home >= s.q_lo) & (s.q_home <= s.q_hi))
     assert ak.parallel.parallel_forward_kinematics(s.q_home, d).valid[0]
     v = forward_view(s, s.q_home)
@@ -76,7 +76,7 @@ def test_setup_starts_where_the_design_assembles():
 ])
 def test_setup_rejects_a_non_rigid_rcm_frame(T, match):
     with pytest.raises(InvalidInputError, match=match):
-        app_setup(D, T, backend="numpy")
+        app_setup(T, D, backend="numpy")
 
 
 def test_forward_view_reads_out_the_fk_values(setup):
@@ -155,7 +155,7 @@ def test_batched_ghosts_draw_what_one_slot_at_a_time_draws(design):
         d = dataclasses.replace(D, l4=D.l4 * 1.3, tool_length=D.tool_length * 0.8)
         T = ak.default_rcm_frame(d) @ transform_from_rotation_translation(
             rot_x(np.asarray(0.2)), np.array([0.01, -0.02, 0.03]))
-    s = app_setup(d, T, backend="numpy")
+    s = app_setup(T, d, backend="numpy")
     checked = 0
     for q in _random_q(rng, 12, s):
         sol = ak.forward_kinematics(q, s.T_b_e, d, errors="flag")
@@ -438,7 +438,7 @@ def test_app_keeps_running_on_bad_inputs(tmp_path):
     rcm = _csv(tmp_path, '{"T_b_e": [[1, 0, 0, 0], [0, 2, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}',
                "rcm.json")
     traj = _csv(tmp_path, "t_s,q1_m,q2_m,q3_m\n0,-0.1,0.1,0.45\n1,x,0.1,0.45\n")
-    app = AthenaApp(bad_design, rcm, port=0, trajectory=traj, backend="numpy")
+    app = AthenaApp(rcm, bad_design, port=0, trajectory=traj, backend="numpy")
     try:
         text = " | ".join(app.errors)
         assert "bad.toml" in text or "design" in text

@@ -365,7 +365,7 @@ def test_setup_tab_applies_another_design(app):
     page.wait_for_function("() => document.title.includes('long l5')",
                            timeout=UPDATE_TIMEOUT_MS)
     assert page.title() == "ATHENA - long l5 - athenakin"
-    setup = app_setup(other, backend="numpy")
+    setup = app_setup(design=other, backend="numpy")
     for i in range(3):                                             # the new design's home
         _wait_ro(page, f"q{i + 1}", _fmt(setup.q_home[i]))
     _readouts_are_fk(page, setup.T_b_e, other)                     # Set-up tab

@@ -346,7 +346,7 @@ def test_app_warning_about_a_bad_rcm_file_names_the_file(bad):
     from athenakin.app._server import AthenaApp
 
     fake = SimpleNamespace(errors=[], _backend="numpy")
-    AthenaApp._make_setup(fake, None, bad / "nan.json")   # type: ignore[arg-type]
+    AthenaApp._make_setup(fake, bad / "nan.json", None)   # type: ignore[arg-type]
     assert len(fake.errors) == 1 and "nan.json" in fake.errors[0], fake.errors
 
 

@@ -39,7 +39,7 @@ def test_mujoco_contacts_and_geom_distances_agree_with_clearance():
     bodies = Bodies.default(d)
     n_hit = 0
     for q, slot in configs:
-        m = mujoco.MjModel.from_xml_string(mjcf_from_design(d, T, q=q, slot=slot,
+        m = mujoco.MjModel.from_xml_string(mjcf_from_design(T, d, q=q, slot=slot,
                                                              bodies=bodies))
         data = mujoco.MjData(m)
         mujoco.mj_resetDataKeyframe(m, data, 0)
@@ -100,7 +100,7 @@ def test_urdf_collision_elements_placed_by_pinocchio():
     d = ak.Design.default()
     T = ak.default_rcm_frame(d)
     b = Bodies.default().with_radius(instrument=0.003)
-    xml = urdf_from_design(d, T, bodies=b)
+    xml = urdf_from_design(T, d, bodies=b)
     model = pin.buildModelFromXML(xml)
     gm = pin.buildGeomFromUrdfString(model, xml, pin.GeometryType.COLLISION)
     data = model.createData()
@@ -117,7 +117,7 @@ def test_urdf_collision_elements_placed_by_pinocchio():
         assert_allclose(gm.geometryObjects[sa].geometry.radius, b.radius[body], rtol=0, atol=0)
         L = np.linalg.norm(seg[j, 1] - seg[j, 0])
         assert_allclose(2 * gm.geometryObjects[cyl].geometry.halfLength, L, rtol=0, atol=1e-12)
-    assert "<collision" not in urdf_from_design(d, T, collision=False)
+    assert "<collision" not in urdf_from_design(T, d, collision=False)
 
 
 def test_mujoco_sees_the_environment_as_clearance_does(tmp_path):
@@ -138,7 +138,7 @@ def test_mujoco_sees_the_environment_as_clearance_does(tmp_path):
     bodies = Bodies.default(d)
     seen = set()
     for q, slot in configs:
-        m = mujoco.MjModel.from_xml_string(mjcf_from_design(d, T, q=q, slot=slot,
+        m = mujoco.MjModel.from_xml_string(mjcf_from_design(T, d, q=q, slot=slot,
                                                              environment=env))
         data = mujoco.MjData(m)
         mujoco.mj_resetDataKeyframe(m, data, 0)
@@ -189,7 +189,7 @@ def test_mjcf_mesh_obstacle_is_its_convex_hull(tmp_path):
     Tm = np.eye(4)
     Tm[:3, 3] = T[:3, 3] + (0.0, 0.2, 0.1)
     env = Environment().mesh(stl, T_b_mesh=Tm, convex=True, name="block")
-    m = mujoco.MjModel.from_xml_string(mjcf_from_design(d, T, environment=env))
+    m = mujoco.MjModel.from_xml_string(mjcf_from_design(T, d, environment=env))
     data = mujoco.MjData(m)
     mujoco.mj_resetDataKeyframe(m, data, 0)
     mujoco.mj_forward(m, data)
@@ -202,4 +202,4 @@ def test_mjcf_mesh_obstacle_is_its_convex_hull(tmp_path):
             got = mujoco.mj_geomDistance(m, data, g1, g2, 10.0, np.zeros(6))
             assert_allclose(got, dist, rtol=0, atol=1e-5)
     with pytest.raises(ak.errors.InvalidInputError, match="collision=False"):
-        mjcf_from_design(d, T, environment=env, collision=False)
+        mjcf_from_design(T, d, environment=env, collision=False)

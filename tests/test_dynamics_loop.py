@@ -19,7 +19,7 @@ BACKENDS = ["numpy", pytest.param("numba", marks=pytest.mark.skipif(
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("slot", [0, 3, 9])
 def test_loop_equals_inverse_dynamics(backend, slot):
-    q = sim.sample_reachable_q(20, D, T, slot=slot, rng=RNG)
+    q = sim.sample_reachable_q(20, T, D, slot=slot, rng=RNG)
     qd = RNG.normal(0, 0.05, q.shape)
     qdd = RNG.normal(0, 0.5, q.shape)
     masses = dynamics.MassModel.reference(D)

@@ -51,7 +51,7 @@ def _tight(model, dt=1e-4):
 
 
 def _model(q=REFERENCE_Q, masses=M, slot=0):
-    xml = mjcf_from_design(D, T, q=q, masses=masses, slot=slot)
+    xml = mjcf_from_design(T, D, q=q, masses=masses, slot=slot)
     model = _tight(mujoco.MjModel.from_xml_string(xml))
     data = mujoco.MjData(model)
     mujoco.mj_resetDataKeyframe(model, data, 0)
@@ -85,7 +85,7 @@ def _velocity_map(model, data):
 
 
 def test_export_is_backward_compatible_and_carries_the_masses():
-    plain = mujoco.MjModel.from_xml_string(mjcf_from_design(D, T))
+    plain = mujoco.MjModel.from_xml_string(mjcf_from_design(T, D))
     assert [plain.actuator(i).name for i in range(plain.nu)] == list(ACTUATED)
     assert plain.actuator_gaintype[0] == mujoco.mjtGain.mjGAIN_FIXED
     assert plain.actuator_biastype[0] == mujoco.mjtBias.mjBIAS_AFFINE   # position servos

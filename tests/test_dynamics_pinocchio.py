@@ -41,7 +41,7 @@ def _quat_R(qw):
 
 @pytest.fixture(scope="module")
 def engine():
-    mj = mujoco.MjModel.from_xml_string(mjcf_from_design(D, T, masses=M))
+    mj = mujoco.MjModel.from_xml_string(mjcf_from_design(T, D, masses=M))
     model = pin.Model()
     pin_joint_of_body = {0: 0}
     for b in range(1, mj.nbody):

@@ -46,9 +46,9 @@ RAISES = [
         [-0.1, 0.1, 0.45], T, D, tangent_tol=np.inf), InvalidInputError, r"^tangent_tol"),
     ("closure_tol_huge", lambda: ak.forward_kinematics(
         [-0.1, 0.1, 0.45], T, D, closure_tol=1.0), InvalidInputError, r"^closure_tol"),
-    ("mjcf_nul_name", lambda: ak.sim.mjcf_from_design(D, T, model_name="\x00"),
+    ("mjcf_nul_name", lambda: ak.sim.mjcf_from_design(T, D, model_name="\x00"),
      InvalidInputError, r"^model_name: .*U\+0000"),
-    ("urdf_nul_name", lambda: ak.sim.urdf_from_design(D, T, robot_name="a\x1bb"),
+    ("urdf_nul_name", lambda: ak.sim.urdf_from_design(T, D, robot_name="a\x1bb"),
      InvalidInputError, r"^robot_name: .*U\+001B at position 1"),
     # --- NaN returned without an error -------------------------------------------------
     ("rcm_axis_zero", lambda: ak.synthesis.rcm_frame_from_axis([0, 0, 0], [0, 0, 0]),
@@ -66,7 +66,7 @@ RAISES = [
      InvalidInputError, r"^n: "),
     ("cone_path_n", lambda: ak.plot.instrument_cone_path(10**9, T),
      InvalidInputError, r"^n: "),
-    ("inverse_step_n", lambda: ak.app.inverse_step(ak.app.app_setup(D, T, backend="numpy"),
+    ("inverse_step_n", lambda: ak.app.inverse_step(ak.app.app_setup(T, D, backend="numpy"),
                                                    [0.1, 0, 0], [0.1, 0, 0],
                                                    ak.robot.REFERENCE_Q, n=10**9),
      InvalidInputError, r"^n: "),
@@ -129,7 +129,7 @@ RAISES = [
     ("slot_label_dict", lambda: ak.plot.slot_label({}), TypeError, r"^g: "),
     ("tip_from_angles_str", lambda: ak.app.tip_from_angles("a", 0.0, 0.1), TypeError,
      r"^azimuth: "),
-    ("write_urdf_dev_full", lambda: ak.sim.write_urdf("/dev/full", D, T), InvalidInputError,
+    ("write_urdf_dev_full", lambda: ak.sim.write_urdf("/dev/full", T, D), InvalidInputError,
      r"^path: /dev/full is a device"),
     ("random_configurations_margin", lambda: ak.testing.random_configurations(
         3, D, rng=0, margin=1.5), InvalidInputError, r"^margin: "),
@@ -185,8 +185,8 @@ def test_empty_batches_of_the_serial_chain():
 
 def test_xml_names_escape_markup_and_parse():
     for name in ['a<b>&"c\'', "ünï 設計"]:
-        ET.fromstring(ak.sim.urdf_from_design(D, T, robot_name=name).split("-->", 1)[-1])
-        root = ET.fromstring(ak.sim.mjcf_from_design(D, T, model_name=name).split("-->", 1)[-1])
+        ET.fromstring(ak.sim.urdf_from_design(T, D, robot_name=name).split("-->", 1)[-1])
+        root = ET.fromstring(ak.sim.mjcf_from_design(T, D, model_name=name).split("-->", 1)[-1])
         assert root.get("model") == name
 
 
@@ -210,8 +210,8 @@ def test_a_fifo_is_refused_without_blocking(tmp_path, reader):
 
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this platform")
 @pytest.mark.parametrize("writer", [
-    lambda p: ak.sim.write_urdf(p, D, T),
-    lambda p: ak.sim.write_mjcf(p, D, T),
+    lambda p: ak.sim.write_urdf(p, T, D),
+    lambda p: ak.sim.write_mjcf(p, T, D),
     lambda p: ak.analysis.save_npz(p, ak.analysis.actuator_map(D, resolution=3)),
     lambda p: ak.plot.write_html(p, include_plotlyjs=False),
     lambda p: ak.plot.save_view(p, dpi=20),

@@ -90,7 +90,7 @@ def test_mujoco_body_frames_and_collision_geoms_equal_mechanism_state():
     d, T, configs = _valid_per_slot(2)
     for q, k in configs:
         st = mechanism_state(q, T, d, slot=k)
-        m = mujoco.MjModel.from_xml_string(mjcf_from_design(d, T, q=q, slot=k,
+        m = mujoco.MjModel.from_xml_string(mjcf_from_design(T, d, q=q, slot=k,
                                                              collision=True))
         data = mujoco.MjData(m)
         mujoco.mj_resetDataKeyframe(m, data, 0)
@@ -113,7 +113,7 @@ def test_urdf_link_frames_equal_mechanism_state(tmp_path):
     from athenakin.sim import mechanism_joint_values, write_urdf
 
     d, T, configs = _valid_per_slot(2)
-    path = write_urdf(tmp_path / "athena.urdf", d, T)
+    path = write_urdf(tmp_path / "athena.urdf", T, d)
     robot = yourdfpy.URDF.load(str(path), build_scene_graph=True, load_meshes=False)
     for q, k in configs:
         st = mechanism_state(q, T, d, slot=k)

@@ -178,9 +178,9 @@ printable = st.text(st.characters(blacklist_categories=("Cc", "Cs"),
 @settings(max_examples=15, derandomize=True, deadline=None)
 @given(name=printable)
 def test_any_printable_name_round_trips_through_urdf_and_mjcf(name):
-    urdf = ak.sim.urdf_from_design(D, T0, robot_name=name)
+    urdf = ak.sim.urdf_from_design(T0, D, robot_name=name)
     assert ET.fromstring(urdf.split("-->", 1)[-1]).get("name") == name
-    mjcf = ak.sim.mjcf_from_design(D, T0, model_name=name)
+    mjcf = ak.sim.mjcf_from_design(T0, D, model_name=name)
     assert ET.fromstring(mjcf.split("-->", 1)[-1]).get("model") == name
 
 
@@ -190,7 +190,7 @@ def test_any_printable_name_round_trips_through_urdf_and_mjcf(name):
 def test_a_control_character_in_a_name_is_refused(prefix, ctrl):
     name = prefix + ctrl
     with pytest.raises(InvalidInputError, match=r"^robot_name: "):
-        ak.sim.urdf_from_design(D, T0, robot_name=name)
+        ak.sim.urdf_from_design(T0, D, robot_name=name)
 
 
 # --- calibration files ------------------------------------------------------------------------

@@ -14,7 +14,7 @@ from athenakin.errors import InvalidInputError
 D = ak.Design.default()
 T = ak.default_rcm_frame(D)
 RNG = np.random.default_rng(28)
-Q = sim.sample_reachable_q(6, D, T, rng=RNG)
+Q = sim.sample_reachable_q(6, T, D, rng=RNG)
 
 
 def _same(a, b):
@@ -47,8 +47,8 @@ def test_default_is_the_reference_setup():
                                     r.inverse_dynamics(Q, 0.1 * Q, Q))),
     ("mass_matrix", lambda r: (dynamics.mass_matrix(Q, T, D), r.mass_matrix(Q))),
     ("statics", lambda r: (dynamics.statics(Q, T, D), r.statics(Q))),
-    ("mjcf", lambda r: (sim.mjcf_from_design(D, T), r.mjcf())),
-    ("urdf", lambda r: (sim.urdf_from_design(D, T), r.urdf())),
+    ("mjcf", lambda r: (sim.mjcf_from_design(T, D), r.mjcf())),
+    ("urdf", lambda r: (sim.urdf_from_design(T, D), r.urdf())),
 ])
 def test_methods_are_the_functions(method, call):
     want, got = call(ak.Robot.default())

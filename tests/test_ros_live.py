@@ -92,7 +92,7 @@ def test_live_stream_decodes_with_an_independent_client(offer):
     np.testing.assert_allclose(js.position, [ref[n] for n in js.name], rtol=0, atol=1e-12)
     st = got["/athena/status"][1]
     assert st.valid and st.mode == 1 and st.slot == 0
-    assert got["/robot_description"][1].data == ak.sim.urdf_from_design(D, T)
+    assert got["/robot_description"][1].data == ak.sim.urdf_from_design(T, D)
 
 
 @pytest.mark.parametrize("offer, answer", [

@@ -117,7 +117,7 @@ def test_tool_tips_match_forward_kinematics(tracked):
 def test_tf_frames_and_joint_states_match_the_urdf(tracked):
     q, out, _ = tracked
     msgs = _mcap_ros2_read(out)                              # the other decoder
-    assert msgs["/robot_description"][0][1].data == urdf_from_design(D, T)
+    assert msgs["/robot_description"][0][1].data == urdf_from_design(T, D)
     static = msgs["/tf_static"][0][1]
     assert {t.child_frame_id for t in static.transforms} >= {"rcm_setup", "platform_oi"}
     ok = np.delete(np.arange(N), 10)

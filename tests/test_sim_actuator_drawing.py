@@ -98,7 +98,7 @@ def test_drawn_lengths_fallbacks_for_unlimited_strokes():
 @pytest.mark.parametrize("i", range(N_DESIGNS))
 def test_urdf_actuator_has_no_gap_over_the_stroke(tmp_path, i):
     d = DESIGNS[i]
-    path = write_urdf(tmp_path / "a.urdf", d, collision=False)
+    path = write_urdf(tmp_path / "a.urdf", design=d, collision=False)
     robot = yourdfpy.URDF.load(str(path), build_scene_graph=True, load_meshes=False)
     zero_q3 = mechanism_joint_values(None, None, d).zero["q3"]
     parts = {}
@@ -124,7 +124,7 @@ def test_urdf_actuator_has_no_gap_over_the_stroke(tmp_path, i):
 def test_mjcf_actuator_has_no_gap_over_the_stroke(i):
     mujoco = pytest.importorskip("mujoco")
     d = DESIGNS[i]
-    model = mujoco.MjModel.from_xml_string(mjcf_from_design(d))
+    model = mujoco.MjModel.from_xml_string(mjcf_from_design(design=d))
     data = mujoco.MjData(model)
     mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
     adr = model.jnt_qposadr[model.joint("q3").id]

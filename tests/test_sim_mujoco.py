@@ -126,8 +126,8 @@ def test_other_design_and_setup():
     T = np.eye(4)
     T[:3, :3] = np.stack([x_e, np.cross(z_e, x_e), z_e], axis=-1)
     T[:3, 3] = par.O_s[0] + 0.18 * x_e
-    q = sample_reachable_q(12, d, T, home_q=home, radius=0.06, rng=SEED)
-    res = check_fk_with_mujoco(q, d, T, home_q=home, perturb=0.02, rng=SEED)
+    q = sample_reachable_q(12, T, d, home_q=home, radius=0.06, rng=SEED)
+    res = check_fk_with_mujoco(q, T, d, home_q=home, perturb=0.02, rng=SEED)
     assert_agrees(res, 0)
 
 
@@ -211,7 +211,7 @@ def test_check_detects_a_micrometre_error():
     """The comparison is sharp: FK of a design whose l4 is 1 um longer misses by about 1 um."""
     d = ak.Design.default()
     q = sample_reachable_q(1, rng=SEED)[0]
-    m = load_model(d)
+    m = load_model(design=d)
     data = mujoco.MjData(m)
     mujoco.mj_resetDataKeyframe(m, data, 0)
     settle(m, data, q)
@@ -230,7 +230,7 @@ def test_audit_arguments_named():
     unreachable sample were AttributeError / TypeError / IndexError / RuntimeError."""
     d = ak.Design.default()
     T = ak.default_rcm_frame(d)
-    model = ak.sim.load_model(d, T)
+    model = ak.sim.load_model(T, d)
     data = mujoco.MjData(model)
     with pytest.raises(TypeError, match="model"):
         ak.sim.settle(None, data, REFERENCE_Q)
@@ -239,14 +239,14 @@ def test_audit_arguments_named():
     with pytest.raises(ak.InvalidInputError, match="ramp_time"):
         ak.sim.settle(model, data, REFERENCE_Q, ramp_time=1e200)
     with pytest.raises(TypeError, match="perturb"):
-        ak.sim.check_fk_with_mujoco(REFERENCE_Q, d, T, perturb=None)
+        ak.sim.check_fk_with_mujoco(REFERENCE_Q, T, d, perturb=None)
     with pytest.raises(ak.InvalidInputError, match="slot"):
-        ak.sim.sample_reachable_q(2, d, T, slot=float("nan"))
+        ak.sim.sample_reachable_q(2, T, d, slot=float("nan"))
     with pytest.raises(ak.InvalidInputError, match="radius"):
-        ak.sim.sample_reachable_q(2, d, T, radius=float("nan"))
+        ak.sim.sample_reachable_q(2, T, d, radius=float("nan"))
     with pytest.raises(ak.OutOfWorkspaceError, match="reachable"):
-        ak.sim.sample_reachable_q(2, d, np.eye(4), rng=1, max_tries=2)
+        ak.sim.sample_reachable_q(2, np.eye(4), d, rng=1, max_tries=2)
     with pytest.raises(TypeError, match="model_name"):
-        ak.sim.mjcf_from_design(d, T, model_name=None)
+        ak.sim.mjcf_from_design(T, d, model_name=None)
     with pytest.raises(TypeError, match="rng"):
-        ak.sim.sample_reachable_q(2, d, T, rng=[[1.0, 2.0, 3.0], [4.0]])
+        ak.sim.sample_reachable_q(2, T, d, rng=[[1.0, 2.0, 3.0], [4.0]])

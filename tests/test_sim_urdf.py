@@ -19,7 +19,7 @@ SEED = 77
 
 
 def load(tmp_path, design=None, T=None):
-    path = write_urdf(tmp_path / "athena.urdf", design, T)
+    path = write_urdf(tmp_path / "athena.urdf", T, design)
     return yourdfpy.URDF.load(str(path), build_scene_graph=True, load_meshes=False)
 
 
@@ -190,7 +190,7 @@ def test_zero_configuration_can_be_chosen(tmp_path):
     T = ak.default_rcm_frame(d)
     qz = np.array([-0.12, 0.08, 0.47])
     path = tmp_path / "z.urdf"
-    path.write_text(urdf_from_design(d, T, q_zero=qz, zero_slot=9))
+    path.write_text(urdf_from_design(T, d, q_zero=qz, zero_slot=9))
     robot = yourdfpy.URDF.load(str(path), build_scene_graph=True, load_meshes=False)
     robot.update_cfg(dict.fromkeys(robot.actuated_joint_names, 0.0))
     st = mechanism_joint_values(qz, T, d, slot=9).state
@@ -222,8 +222,8 @@ def test_audit_arguments_named():
     d = ak.Design.default()
     T = ak.default_rcm_frame(d)
     with pytest.raises(TypeError, match="robot_name"):
-        ak.sim.urdf_from_design(d, T, robot_name=None)
+        ak.sim.urdf_from_design(T, d, robot_name=None)
     with pytest.raises(TypeError, match="q_zero"):
         ak.sim.urdf_joint_zero(T, d, q_zero=[10**400, 0, 0])
     with pytest.raises(TypeError, match="path"):
-        ak.sim.write_urdf(1, d, T)
+        ak.sim.write_urdf(1, T, d)

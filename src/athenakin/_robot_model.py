@@ -204,14 +204,14 @@ class Robot:
         """:func:`athenakin.sim.mjcf_from_design`: the MJCF text, with bodies and masses."""
         from .sim import mjcf_from_design
 
-        return mjcf_from_design(self.design, self.T_b_e,
+        return mjcf_from_design(self.T_b_e, self.design,
                                 **self._parts(options, "bodies", "environment", "masses"))
 
     def urdf(self, **options: Any) -> str:
         """:func:`athenakin.sim.urdf_from_design`: the URDF text, with the bodies."""
         from .sim import urdf_from_design
 
-        return urdf_from_design(self.design, self.T_b_e, **self._parts(options, "bodies"))
+        return urdf_from_design(self.T_b_e, self.design, **self._parts(options, "bodies"))
 
     def _parts(self, options: dict[str, Any], *names: str) -> dict[str, Any]:
         """``options`` with this robot's parts filled in where the caller gave none."""

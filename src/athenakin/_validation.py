@@ -7,12 +7,13 @@ with the argument's name, what was expected and what was received.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import numbers
 import os
 from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -143,8 +144,11 @@ def check_transform(T: ArrayLike, name: str, *, allow_nonfinite: bool = False,
     ------
     InvalidInputError
         If the shape is wrong, a value is not finite, the last row is not
-        ``(0, 0, 0, 1)`` or ``R`` is not a proper rotation within ``tol``.
+        ``(0, 0, 0, 1)`` or ``R`` is not a proper rotation within ``tol``; or ``T`` is a
+        design (:func:`check_argument_order`).
     """
+    if not isinstance(T, np.ndarray):
+        check_argument_order(T, name, given_for="frame")
     arr = check_array(T, name, (4, 4), allow_nonfinite=allow_nonfinite)
     finite = np.all(np.isfinite(arr), axis=(-2, -1))
     R = np.where(finite[..., None, None], arr[..., :3, :3], np.eye(3))
@@ -160,6 +164,61 @@ def check_transform(T: ArrayLike, name: str, *, allow_nonfinite: bool = False,
             f"{np.asarray(orth)[idx]:.3g}, det R = {np.asarray(det)[idx]:.6g}, "
             f"last row {arr[idx][3].tolist()}")
     return arr
+
+
+#: What a call that gives the design before the RCM frame is told: every public function
+#: takes ``(q..., T_b_e, design, *, options)`` (issue 28, item 3).
+ARGUMENT_ORDER = "T_b_e comes before design: f(T_b_e, design)"
+
+
+def _looks_like_design(x: object) -> bool:
+    """A value object (``Design``, ``Robot``, any dataclass instance) or a design TOML path."""
+    if dataclasses.is_dataclass(x) and not isinstance(x, type):
+        return True
+    return isinstance(x, (str, os.PathLike)) and str(x).lower().endswith(".toml")
+
+
+def _looks_like_frame(x: object) -> bool:
+    """An array or nested sequence whose trailing shape is (4, 4)."""
+    if not isinstance(x, (np.ndarray, list, tuple)):
+        return False
+    try:
+        shape = np.shape(x)
+    except ValueError:                     # a ragged sequence
+        return False
+    return len(shape) >= 2 and shape[-2:] == (4, 4)
+
+
+def check_argument_order(x: object, name: str, *, given_for: Literal["frame", "design"]
+                         ) -> None:
+    """Refuse a design given where the RCM frame goes, or a frame where the design goes.
+
+    The one check of the argument order, made by the boundary check of each of the two
+    arguments (:func:`check_transform`, :func:`athenakin.design.resolve_design`), so
+    that a call in the old order ``f(design, T_b_e)`` is told so whichever argument a
+    function checks first.
+
+    Parameters
+    ----------
+    x, name : object, str
+        The argument and how the message names it.
+    given_for : {"frame", "design"}, keyword-only
+        The argument's place: a transform (refused: a dataclass instance such as a
+        ``Design``, or a path ending in ``.toml``) or the design (refused: an array of
+        trailing shape (4, 4)).
+
+    Raises
+    ------
+    InvalidInputError
+        Naming the argument, what it expected and :data:`ARGUMENT_ORDER`.
+    """
+    if given_for == "frame" and _looks_like_design(x):
+        got = f"the file {x}" if isinstance(x, (str, os.PathLike)) else f"a {type(x).__name__}"
+        raise InvalidInputError(f"{name}: expected a rigid transform of shape (4, 4), got "
+                                f"{got}; {ARGUMENT_ORDER}")
+    if given_for == "design" and _looks_like_frame(x):
+        raise InvalidInputError(f"{name}: expected athenakin.Design, got an array of shape "
+                                f"{np.shape(x)}; {ARGUMENT_ORDER}")
 
 
 def check_frame(T: ArrayLike, name: str) -> NDArray[np.float64]:

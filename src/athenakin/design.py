@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from ._output import naming_path
 from ._toml import read_toml
-from ._validation import check_scalar, check_text, real_number
+from ._validation import check_argument_order, check_scalar, check_text, real_number
 from .errors import InvalidInputError
 
 __all__ = ["Design", "AB_ORDERS", "LENGTH_RANGE", "LIKELY_MM_ABOVE", "UnitWarning"]
@@ -332,9 +332,13 @@ def resolve_design(design: object) -> Design:
     ------
     TypeError
         If ``design`` is neither None nor a :class:`Design`.
+    InvalidInputError
+        If ``design`` is an RCM frame (a call in the old order ``f(design, T_b_e)``;
+        :func:`~athenakin._validation.check_argument_order`).
     """
     if design is None:
         return Design.default()
     if not isinstance(design, Design):
+        check_argument_order(design, "design", given_for="design")
         raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
     return design

@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..plot._geometry import RobotGeometry
 from ..plot._solids import BODY_COLORS, CLOSEST_COLOR, COLLIDING_COLOR, capsule_surface
-from ._scene import rgb
+from ._scene import Solid, rgb
 
 __all__ = ["BodyMesh", "BodiesView", "bodies_view", "capsule_mesh", "clearance_html",
            "collision_note", "BodiesLayer", "BODY_OPACITY"]
@@ -34,28 +34,20 @@ N_CAP = 3
 
 
 @dataclasses.dataclass(frozen=True)
-class BodyMesh:
-    """One body as a triangle mesh.
+class BodyMesh(Solid):
+    """One body as a triangle mesh: a :class:`~athenakin.app.Solid` that knows its pair.
 
     Attributes
     ----------
-    name : str
-        Body name (:data:`athenakin.collision.BODIES`).
-    vertices : ndarray of float32, shape (n, 3)
-        Base frame, m.
-    faces : ndarray of uint32, shape (m, 3)
-        Vertex indices of each triangle (outward normals, counter-clockwise).
-    color : tuple of 3 int
-        RGB, 0..255.
+    name, vertices, faces, color, opacity
+        As for :class:`~athenakin.app.Solid`: the body's name
+        (:data:`athenakin.collision.BODIES`), vertices (float32, base frame, m), faces
+        (uint32, counter-clockwise seen from outside), RGB and :data:`BODY_OPACITY`.
     closest : bool
         One of the pair with the least clearance.
     """
 
-    name: str
-    vertices: NDArray[np.float32]
-    faces: NDArray[np.uint32]
-    color: tuple[int, int, int]
-    closest: bool
+    closest: bool = False
 
 
 @dataclasses.dataclass(frozen=True)
@@ -139,8 +131,7 @@ def bodies_view(g: RobotGeometry, *, bodies: Any = None, environment: Any = None
     pts = mechanism_points(g.q, g.T_b_e, g.design, slot=g.slot, geometry=bodies.geometry)
     seg = body_segments(pts)
     c = clearance(g.q, g.T_b_e, g.design, slot=g.slot, bodies=bodies, environment=environment)
-    k = int(c.closest_pair)
-    pair = tuple(c.pairs[k]) if k >= 0 else ("", "")
+    pair, witness = _closest(c)
     colliding = bool(c.colliding)
     hot = rgb(COLLIDING_COLOR if colliding else CLOSEST_COLOR)
     meshes = []
@@ -150,13 +141,26 @@ def bodies_view(g: RobotGeometry, *, bodies: Any = None, environment: Any = None
             continue
         v, f = capsule_mesh(seg[i, 0], seg[i, 1], r, n_around=n_around, n_cap=n_cap)
         close = name in pair
-        meshes.append(BodyMesh(name, v, f, hot if close else rgb(BODY_COLORS.get(name,
-                                                                                "#808080")),
-                               close))
-    witness = c.witness_points[k] if k >= 0 else np.full((2, 3), np.nan)
-    return BodiesView(meshes=tuple(meshes), clearance=float(c.min_distance),
-                      pair=(str(pair[0]), str(pair[1])), witness=np.asarray(witness),
-                      colliding=colliding)
+        color = hot if close else rgb(BODY_COLORS.get(name, "#808080"))
+        meshes.append(BodyMesh(name, v, f, color, opacity=BODY_OPACITY, closest=close))
+    return BodiesView(meshes=tuple(meshes), clearance=float(c.min_distance), pair=pair,
+                      witness=witness, colliding=colliding)
+
+
+def _closest(c: Any) -> tuple[tuple[str, str], NDArray[np.float64]]:
+    """The pair of a :class:`~athenakin.collision.Clearance` with the least clearance.
+
+    Returns
+    -------
+    pair : tuple of 2 str
+        The two names (``("", "")`` when no pair is checked).
+    witness : ndarray, shape (2, 3)
+        Their nearest points, base frame, m (NaN when no pair is checked).
+    """
+    k = int(c.closest_pair)
+    if k < 0:
+        return ("", ""), np.full((2, 3), np.nan)
+    return (str(c.pairs[k][0]), str(c.pairs[k][1])), np.asarray(c.witness_points[k])
 
 
 def clearance_html(bv: BodiesView) -> str:
@@ -226,7 +230,7 @@ class BodiesLayer:
             if h is None:
                 self._meshes[m.name] = scene.add_mesh_simple(
                     f"/bodies/{m.name}", m.vertices, m.faces, color=m.color,
-                    opacity=BODY_OPACITY, cast_shadow=False, receive_shadow=False)
+                    opacity=m.opacity, cast_shadow=False, receive_shadow=False)
             else:
                 h.vertices = m.vertices
                 if tuple(h.color) != m.color:
@@ -260,11 +264,9 @@ class BodiesLayer:
         bodies = self.bodies if self.bodies is not None else Bodies.default(g.design)
         c = clearance(g.q, g.T_b_e, g.design, slot=g.slot, bodies=bodies,
                       environment=self.environment)
-        k = int(c.closest_pair)
-        return BodiesView(meshes=(), clearance=float(c.min_distance),
-                          pair=(str(c.pairs[k][0]), str(c.pairs[k][1])) if k >= 0 else ("", ""),
-                          witness=np.asarray(c.witness_points[k]) if k >= 0
-                          else np.full((2, 3), np.nan), colliding=bool(c.colliding))
+        pair, witness = _closest(c)
+        return BodiesView(meshes=(), clearance=float(c.min_distance), pair=pair,
+                          witness=witness, colliding=bool(c.colliding))
 
     def clearance_along(self, T_b_e: NDArray[np.float64], design: Any,
                         slot: int) -> Callable[[NDArray[np.float64]], NDArray[np.float64]]:

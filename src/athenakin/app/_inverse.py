@@ -12,6 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._dispatch import q_from_instrument, q_from_tool_tip
 from .._validation import check_array, check_count, check_instance, check_scalar
 from ..errors import InvalidInputError, Reason
+from ..robot import InstrumentIK
 from ._model import INVERSE_STEPS, AppSetup
 
 
@@ -163,18 +164,7 @@ def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from
     branch = 0 if 0.0 < p0 < L else (-1 if p0 <= 0.0 else 1)
     s = np.linspace(0.0, 1.0, int(n) + 1)[1:]
     tips = a + s[:, None] * (b - a)
-    if branch == 0:
-        q, res = q_from_tool_tip(setup.T_b_e, tips, setup.design, errors="flag",
-                                 backend=setup.backend)
-        side = np.ones(len(tips), dtype=bool)
-    else:                 # tip_e = (L - p) d: p < 0 beyond L from the RCM, p > L behind it
-        depth = np.linalg.norm(tips, axis=-1)
-        unit = np.where((depth > 0)[:, None], tips / np.where(depth > 0, depth, 1.0)[:, None],
-                        np.array([0.0, 0.0, 1.0]))   # a tip at the RCM: off the branch anyway
-        side = depth > L if branch < 0 else depth > 0
-        p = np.where(side, L - depth, -1.0) if branch < 0 else L + depth
-        q, res = q_from_instrument(setup.T_b_e, unit if branch < 0 else -unit, p,
-                                   setup.design, errors="flag", backend=setup.backend)
+    q, res, side = _solve_on_branch(setup, tips, branch)
     ok = side & np.asarray(res.valid) & (np.asarray(res.mode) == mode_from)
     hit = _collisions(clearance, q0, q, ok) if clearance is not None else np.zeros_like(ok)
     bad = np.flatnonzero(~ok | hit)
@@ -183,14 +173,44 @@ def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from
                            reason=0, message="")
     k = int(bad[0])
     if hit[k]:
-        if k == 0:
-            return InverseStep(q=q0.copy(), tip_e=a.copy(), mode=int(mode_from),
-                               reached=False, reason=0, collision=True,
-                               message="target out of reach (the bodies would collide); "
-                                       "actuators held")
-        return InverseStep(q=q[k - 1].copy(), tip_e=tips[k - 1].copy(), mode=int(mode_from),
-                           reached=False, reason=0, collision=True,
-                           message="stopped before a collision of the bodies")
+        return _stop_before(k, (q0, a), (q, tips), mode_from, 0, "the bodies would collide",
+                            collision=True)
+    r, why = _why_stopped(res, side, k, branch, L, mode_from)
+    return _stop_before(k, (q0, a), (q, tips), mode_from, r, why)
+
+
+def _solve_on_branch(setup: AppSetup, tips: NDArray[np.float64], branch: int
+                     ) -> tuple[NDArray[np.float64], InstrumentIK, NDArray[np.bool_]]:
+    """Actuators of the tips (frame E, shape (n, 3)) on one branch of ``p``.
+
+    Returns
+    -------
+    q : ndarray, shape (n, 3)
+    res : InstrumentIK
+        The flagged solve (``valid``, ``mode``, ``reason``).
+    side : ndarray of bool, shape (n,)
+        The tip lies on the branch (``branch`` 0: the inserted tool ``0 < p < L``, always;
+        -1: ``p < 0``, the tip farther than ``L`` from the RCM; +1: ``p > L``, the tip
+        behind the RCM).
+    """
+    if branch == 0:
+        q, res = q_from_tool_tip(setup.T_b_e, tips, setup.design, errors="flag",
+                                 backend=setup.backend)
+        return q, res, np.ones(len(tips), dtype=bool)
+    L = setup.design.tool_length          # tip_e = (L - p) d
+    depth = np.linalg.norm(tips, axis=-1)
+    unit = np.where((depth > 0)[:, None], tips / np.where(depth > 0, depth, 1.0)[:, None],
+                    np.array([0.0, 0.0, 1.0]))   # a tip at the RCM: off the branch anyway
+    side = depth > L if branch < 0 else depth > 0
+    p = np.where(side, L - depth, -1.0) if branch < 0 else L + depth
+    q, res = q_from_instrument(setup.T_b_e, unit if branch < 0 else -unit, p,
+                               setup.design, errors="flag", backend=setup.backend)
+    return q, res, side
+
+
+def _why_stopped(res: InstrumentIK, side: NDArray[np.bool_], k: int, branch: int, L: float,
+                 mode_from: int) -> tuple[int, str]:
+    """The :class:`~athenakin.errors.Reason` code and the words for the failed sample ``k``."""
     r = int(res.reason[k]) if side[k] else int(
         Reason.SERIAL_P_ZERO if branch < 0 else Reason.INSERTION_RANGE)
     if not side[k] and branch < 0:
@@ -203,12 +223,25 @@ def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from
         why = f"{Reason(r).name}: {Reason(r).description}"
     else:
         why = f"the assembly mode would change from {mode_from:+d}"
+    return r, why
+
+
+def _stop_before(k: int, start: tuple[NDArray[np.float64], NDArray[np.float64]],
+                 samples: tuple[NDArray[np.float64], NDArray[np.float64]], mode: int,
+                 reason: int, why: str, *, collision: bool = False) -> InverseStep:
+    """The step that ends on the sample before ``k``; at ``k = 0`` the actuators are held.
+
+    ``start`` is ``(q_from, tip_from)``, ``samples`` the solved ``(q, tips)`` of the segment.
+    """
     if k == 0:
-        return InverseStep(q=q0.copy(), tip_e=a.copy(), mode=int(mode_from), reached=False,
-                           reason=r, message=f"target out of reach ({why}); actuators held")
-    return InverseStep(q=q[k - 1].copy(), tip_e=tips[k - 1].copy(), mode=int(mode_from),
-                       reached=False, reason=r,
-                       message=f"stopped at the workspace boundary ({why})")
+        return InverseStep(q=start[0].copy(), tip_e=start[1].copy(), mode=int(mode),
+                           reached=False, reason=reason, collision=collision,
+                           message=f"target out of reach ({why}); actuators held")
+    message = ("stopped before a collision of the bodies" if collision
+               else f"stopped at the workspace boundary ({why})")
+    return InverseStep(q=samples[0][k - 1].copy(), tip_e=samples[1][k - 1].copy(),
+                       mode=int(mode), reached=False, reason=reason, collision=collision,
+                       message=message)
 
 
 def _collisions(clearance: Callable[[NDArray[np.float64]], ArrayLike],

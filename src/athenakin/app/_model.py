@@ -24,15 +24,13 @@ from ..errors import InvalidInputError, OutOfWorkspaceError, Reason
 from ..parallel import parallel_forward_kinematics
 from ..plot._geometry import RobotGeometry, robot_geometry
 from ..robot import (
-    REFERENCE_DIRECTION_B,
-    REFERENCE_P,
     REFERENCE_Q,
     SLOT_MODE,
     SLOT_P_SIGN,
     SLOT_UJOINT,
     SLOT_WRIST,
 )
-from ..robot._setup import resolve_rcm_frame
+from ..robot._setup import reference_rcm_frame, resolve_rcm_frame
 from ._ghosts import SlotGhosts, slot_ghosts
 
 __all__ = [
@@ -62,7 +60,8 @@ WARN_CONDITION = 100.0
 INVERSE_STEPS = 48
 #: Half-width of the slider range of an actuator without stroke limits, m.
 UNLIMITED_HALF_RANGE = 0.3
-#: Points per actuator of the grid on which :func:`app_setup` looks for an assembled pose.
+#: Points per actuator of the app's grid of the actuator ranges (:func:`actuator_grid`), on
+#: which :func:`app_setup` looks for an assembled pose.
 SEARCH_GRID = 9
 
 Slot = int | Literal["all"]
@@ -95,29 +94,27 @@ class AppSetup:
     backend: Literal["numba", "numpy"]
 
 
-def _rcm_frame_at(q: NDArray[np.float64], design: Design) -> NDArray[np.float64]:
-    """The reference set-up's recipe (:func:`~athenakin.default_rcm_frame`) at another ``q``."""
-    from .._transforms import transform_from_rotation_translation
+def actuator_grid(q_lo: NDArray[np.float64], q_hi: NDArray[np.float64]) -> NDArray[np.float64]:
+    """:data:`SEARCH_GRID` points per actuator over the box ``q_lo..q_hi`` (m), shape (n, 3).
 
-    O_s = parallel_forward_kinematics(q, design).O_s[0]
-    x_e = REFERENCE_DIRECTION_B / np.linalg.norm(REFERENCE_DIRECTION_B)
-    z_e = np.array([1.0, 0.0, 0.0]) - x_e[0] * x_e
-    z_e /= np.linalg.norm(z_e)
-    R = np.stack([x_e, np.cross(z_e, x_e), z_e], axis=-1)
-    return transform_from_rotation_translation(R, O_s + REFERENCE_P * x_e)
+    The app's one grid of the actuator ranges (:func:`app_setup`'s start search, the depth
+    slider's reach), ``q1`` slowest.
+    """
+    axes = [np.linspace(a, b, SEARCH_GRID) for a, b in zip(q_lo, q_hi, strict=True)]
+    return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
 
 
-def app_setup(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
+def app_setup(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
               backend: Literal["auto", "numba", "numpy"] = "auto") -> AppSetup:
     """Check a design and an RCM frame for the app and find where it starts.
 
     Parameters
     ----------
-    design : Design, optional
-        Defaults to :meth:`Design.default`.
     T_b_e : array-like, shape (4, 4), optional
         RCM frame; default: the reference set-up (:func:`~athenakin.default_rcm_frame`),
         built at the start configuration when the reference ``q`` does not assemble.
+    design : Design, optional
+        Defaults to :meth:`Design.default`.
     backend : {"auto", "numba", "numpy"}, keyword-only
         ``"auto"``: the compiled kernels where numba imports, else the numpy reference
         (:func:`athenakin.forward_kinematics`).
@@ -147,8 +144,7 @@ def app_setup(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
     if parallel_forward_kinematics(ref, design).valid[0]:
         home = ref
     else:
-        axes = [np.linspace(a, b, SEARCH_GRID) for a, b in zip(lo, hi, strict=True)]
-        grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+        grid = actuator_grid(lo, hi)
         ok = parallel_forward_kinematics(grid, design).valid[:, 0]
         if not np.any(ok):
             raise OutOfWorkspaceError(
@@ -158,7 +154,8 @@ def app_setup(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
                 f"the link lengths l1..l5 and the strokes", Reason.CIRCLES_DISJOINT)
         cand = grid[ok]
         home = cand[np.argmin(np.linalg.norm(cand - ref, axis=-1))]
-    T = _rcm_frame_at(home, design) if T_b_e is None else resolve_rcm_frame(T_b_e, design)
+    T = (reference_rcm_frame(parallel_forward_kinematics(home, design).O_s[0]) if T_b_e is None
+         else resolve_rcm_frame(T_b_e, design))
     return AppSetup(design=design, T_b_e=T, q_lo=lo, q_hi=hi, q_home=home.copy(),
                     backend=chosen)
 

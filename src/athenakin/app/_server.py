@@ -28,15 +28,17 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._input import MAX_CONFIG_BYTES, read_bytes
+from .._validation import check_argument_order
 from ..design import Design
 from ..errors import KinematicsError
+from ..robot._setup import read_rcm_json
 from ._bodies import collision_note
 from ._ghosts import ghost_scene
 from ._inverse import angles_from_tip, inverse_step, tip_from_angles
 from ._model import (
     AppSetup,
     AppView,
+    actuator_grid,
     app_setup,
     forward_view,
 )
@@ -79,17 +81,6 @@ def _import_viser() -> Any:
     return viser
 
 
-def _load_rcm_file(path: str | Path) -> NDArray[np.float64]:
-    """``T_b_e`` from a JSON file ``{"T_b_e": 4x4 nested list}`` (as ``--rcm-file``)."""
-    try:
-        data = json.loads(read_bytes(path, limit=MAX_CONFIG_BYTES, what="RCM file"))
-    except (OSError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{path}: cannot read the RCM frame ({exc})") from exc
-    if not isinstance(data, dict) or "T_b_e" not in data:
-        raise ValueError(f"{path}: expected a JSON object with key 'T_b_e'")
-    return np.asarray(data["T_b_e"], dtype=float)
-
-
 def _error_text(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
 
@@ -99,13 +90,13 @@ class AthenaApp:
 
     Parameters
     ----------
+    T_b_e : array-like, shape (4, 4), str or Path, optional
+        RCM frame, or a JSON file ``{"T_b_e": ...}``. A frame that is not rigid is
+        reported in the page (and in :attr:`errors`); the reference set-up is used instead.
     design : Design, str or Path, optional
         The design, or a TOML file to load it from. A file that cannot be read, or a
         design that cannot assemble, leaves the app running on the reference design
-        with the message shown in the page (and in :attr:`errors`).
-    T_b_e : array-like, shape (4, 4), str or Path, optional
-        RCM frame, or a JSON file ``{"T_b_e": ...}``. A frame that is not rigid is
-        reported the same way (the reference set-up is used instead).
+        with the message shown the same way.
     host : str, keyword-only
         Interface to bind; ``"127.0.0.1"`` (default) serves this machine only.
     port : int, keyword-only
@@ -132,8 +123,8 @@ class AthenaApp:
         Start-up problems shown in the page (bad design, frame or trajectory).
     """
 
-    def __init__(self, design: Design | str | Path | None = None,
-                 T_b_e: ArrayLike | str | Path | None = None, *, host: str = "127.0.0.1",
+    def __init__(self, T_b_e: ArrayLike | str | Path | None = None,
+                 design: Design | str | Path | None = None, *, host: str = "127.0.0.1",
                  port: int = DEFAULT_PORT, trajectory: str | Path | None = None,
                  backend: str = "auto", verbose: bool = False,
                  solids: Callable[[AppView], tuple[Solid, ...]] | None = None,
@@ -144,11 +135,14 @@ class AthenaApp:
         from ._forces import ForcesLayer, check_f_max, check_masses
 
         masses, f_max = check_masses(masses), check_f_max(f_max)
+        # a call in the old order (design, T_b_e) is a mistake to raise, not a page message
+        check_argument_order(T_b_e, "T_b_e", given_for="frame")
+        check_argument_order(design, "design", given_for="design")
         self._lock = threading.RLock()
         self._echo = Echo()      # this thread is writing GUI values (app/_sync.py)
         self._backend = backend
         self.errors: list[str] = []
-        self.setup = self._make_setup(design, T_b_e)
+        self.setup = self._make_setup(T_b_e, design)
         self._verbose = verbose
         if verbose:
             self.server = viser.ViserServer(host=host, port=port, verbose=verbose)
@@ -184,8 +178,8 @@ class AthenaApp:
         self._frame_camera()
 
     # ------------------------------------------------------------------ set-up
-    def _make_setup(self, design: Design | str | Path | None,
-                    T_b_e: ArrayLike | str | Path | None) -> AppSetup:
+    def _make_setup(self, T_b_e: ArrayLike | str | Path | None,
+                    design: Design | str | Path | None) -> AppSetup:
         d: Design | None = None
         if isinstance(design, (str, Path)):
             try:
@@ -198,13 +192,16 @@ class AthenaApp:
         T: ArrayLike | None = None
         if isinstance(T_b_e, (str, Path)):
             try:
-                T = _load_rcm_file(T_b_e)
-            except ValueError as exc:
-                self.errors.append(f"RCM file: {exc}; using the reference set-up")
+                T = read_rcm_json(T_b_e, option="RCM file")
+            except OSError as exc:
+                self.errors.append(f"RCM file {T_b_e}: cannot read it ({exc}); using the "
+                                   f"reference set-up")
+            except ValueError as exc:               # names the file
+                self.errors.append(f"{exc}; using the reference set-up")
         else:
             T = T_b_e
         try:
-            base = app_setup(d, None, backend=self._backend)  # type: ignore[arg-type]
+            base = app_setup(None, d, backend=self._backend)  # type: ignore[arg-type]
         except (ValueError, TypeError, KinematicsError) as exc:
             self.errors.append(f"design: {_error_text(exc)}; showing the reference design "
                                f"instead")
@@ -213,7 +210,7 @@ class AthenaApp:
         if T is None:
             return base
         try:
-            return app_setup(d, T, backend=self._backend)  # type: ignore[arg-type]
+            return app_setup(T, d, backend=self._backend)  # type: ignore[arg-type]
         except (ValueError, TypeError, KinematicsError) as exc:
             where = f"RCM file {T_b_e}" if isinstance(T_b_e, (str, Path)) else "RCM frame"
             self.errors.append(f"{where}: {_error_text(exc)}; using the reference set-up "
@@ -679,7 +676,7 @@ class AthenaApp:
         design = self._design_path.value.strip() or None
         rcm = self._rcm_path.value.strip() or None
         before = len(self.errors)
-        setup = self._make_setup(design, rcm)
+        setup = self._make_setup(rcm, design)
         problems = self.errors[before:]
         del self.errors[before:]
         if problems:
@@ -781,12 +778,12 @@ def _inverse_slot(slot: int, mode: int) -> int:
 def rcm_reach(setup: AppSetup) -> float:
     """Largest ``|p|`` (m): the farthest ``O_s`` from the RCM, for the depth slider's range.
 
-    Over a grid of the actuator ranges (both modes), rounded up to 10 mm.
+    Over the grid of the actuator ranges (:func:`~athenakin.app._model.actuator_grid`,
+    both modes), rounded up to 10 mm.
     """
     from ..parallel import parallel_forward_kinematics
 
-    axes = [np.linspace(a, b, 9) for a, b in zip(setup.q_lo, setup.q_hi, strict=True)]
-    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    grid = actuator_grid(setup.q_lo, setup.q_hi)
     O_s = np.asarray(parallel_forward_kinematics(grid, setup.design).O_s)
     dist = np.linalg.norm(O_s - setup.T_b_e[:3, 3], axis=-1)
     far = float(np.nanmax(dist)) if np.any(np.isfinite(dist)) else 1.0
@@ -799,7 +796,7 @@ def _escape(text: str) -> str:
     return html.escape(text)
 
 
-def launch(design: Design | str | Path | None = None, T_b_e: ArrayLike | str | Path | None = None,
+def launch(T_b_e: ArrayLike | str | Path | None = None, design: Design | str | Path | None = None,
            *, host: str = "127.0.0.1", port: int = DEFAULT_PORT,
            trajectory: str | Path | None = None, backend: str = "auto",
            masses: Any = None, f_max: Any = None) -> AthenaApp:  # forces: app/_forces.py
@@ -807,7 +804,7 @@ def launch(design: Design | str | Path | None = None, T_b_e: ArrayLike | str | P
 
     Parameters
     ----------
-    design, T_b_e, host, port, trajectory, backend, masses, f_max
+    T_b_e, design, host, port, trajectory, backend, masses, f_max
         As in :class:`AthenaApp`.
 
     Returns
@@ -815,7 +812,7 @@ def launch(design: Design | str | Path | None = None, T_b_e: ArrayLike | str | P
     AthenaApp
         Call :meth:`AthenaApp.stop` to end it.
     """
-    app = AthenaApp(design, T_b_e, host=host, port=port, trajectory=trajectory,
+    app = AthenaApp(T_b_e, design, host=host, port=port, trajectory=trajectory,
                     backend=backend, masses=masses, f_max=f_max)
     for e in app.errors:
         print(f"athenakin app: {e}", file=sys.stderr)

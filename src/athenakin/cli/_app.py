@@ -112,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
         if args.backend != "numpy":
             print("athenakin app: starting (a first start compiles the numba kernels: up to "
                   "a minute)", flush=True)
-        app = _server.AthenaApp(args.design, rcm, host=args.host, port=args.port,
+        app = _server.AthenaApp(rcm, args.design, host=args.host, port=args.port,
                                 trajectory=args.trajectory, backend=args.backend,
                                 masses=masses, f_max=f_max)
         for e in app.errors:

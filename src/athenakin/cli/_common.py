@@ -3,19 +3,17 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .._input import MAX_CONFIG_BYTES, read_bytes
 from .._serialize import json_text, to_jsonable  # noqa: F401  (re-exported)
 from .._transforms import rot_x, rot_y, rot_z, transform_from_rotation_translation
-from ..design import LENGTH_RANGE, Design
-from ..errors import InvalidInputError
+from ..design import Design
 from ..robot import default_rcm_frame
+from ..robot._setup import check_rcm_position, read_rcm_json  # noqa: F401  (re-exported)
 
 
 def add_design_option(p: argparse.ArgumentParser) -> None:
@@ -89,63 +87,6 @@ def check_finite(values: Any, option: str, *, positive: bool = False) -> None:
         kind = "finite positive" if positive else "finite"
         shown = a.tolist() if a.size > 1 else float(a[0])
         raise ValueError(f"{option}: expected {kind} numbers, got {shown}")
-
-
-def read_rcm_json(path: str | Path) -> NDArray[np.float64]:
-    """The RCM frame from a JSON file ``{"T_b_e": 4x4 nested list}``.
-
-    Raises
-    ------
-    ValueError
-        Not UTF-8 JSON, nested too deeply, no key ``T_b_e``, not a 4x4 array of
-        finite numbers (the message names the file).
-    OSError
-        The file cannot be read.
-    """
-    from .._validation import check_transform
-
-    raw = read_bytes(path, limit=MAX_CONFIG_BYTES, what="--rcm-file")
-    try:
-        data = json.loads(raw.decode("utf-8-sig"))
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"--rcm-file {path}: not a UTF-8 text file ({exc.reason})") from None
-    except RecursionError:
-        raise ValueError(f"--rcm-file {path}: JSON nested too deeply") from None
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"--rcm-file {path}: not JSON ({exc})") from None
-    except ValueError as exc:  # an integer beyond sys.get_int_max_str_digits()
-        raise ValueError(f"--rcm-file {path}: a number that cannot be read "
-                         f"({' '.join(str(exc).split())[:120]})") from None
-    if not isinstance(data, dict) or "T_b_e" not in data:
-        raise ValueError(f"--rcm-file {path}: expected a JSON object with key 'T_b_e'")
-    try:
-        T = np.asarray(data["T_b_e"], dtype=float)
-    except (TypeError, ValueError, OverflowError, RecursionError):
-        raise ValueError(f"--rcm-file {path}: T_b_e: expected a 4x4 nested list of "
-                         f"numbers") from None
-    if T.shape != (4, 4):
-        raise ValueError(f"--rcm-file {path}: T_b_e: expected shape (4, 4), got {T.shape}")
-    try:
-        return check_rcm_position(check_transform(T, "T_b_e"), f"--rcm-file {path}: T_b_e")
-    except InvalidInputError as exc:
-        msg = str(exc)
-        raise InvalidInputError(msg if msg.startswith("--rcm-file") else
-                                f"--rcm-file {path}: {msg}") from None
-
-
-def check_rcm_position(T: NDArray[np.float64], option: str) -> NDArray[np.float64]:
-    """``T`` if its origin is within :data:`~athenakin.design.LENGTH_RANGE` of the base.
-
-    An RCM kilometres away is a unit mistake (mm for m) or a typo; far beyond the
-    longest link, the kinematics would only report rounding errors as singularities.
-    """
-    reach = LENGTH_RANGE[1]
-    t = T[:3, 3]
-    if not float(np.max(np.abs(t))) <= reach:
-        raise InvalidInputError(f"{option}: the RCM at {np.array2string(t, precision=6)} m is "
-                                f"too far; expected coordinates within +/-{reach:g} m "
-                                f"(positions are in m)")
-    return T
 
 
 def table(headers: list[str], rows: list[list[Any]]) -> str:

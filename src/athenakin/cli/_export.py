@@ -72,12 +72,12 @@ def run(args: argparse.Namespace) -> int:
         T = load_rcm(args, design)
         q = q_from_args(args)
         if fmt == "mjcf":
-            outs.write(out, mjcf_from_design(design, T, q=q, slot=args.slot,
+            outs.write(out, mjcf_from_design(T, design, q=q, slot=args.slot,
                                              gravity=not args.no_gravity))
             what = (f"MJCF of the closed-loop mechanism, keyframe 'home' in solution "
                     f"{args.slot}")
         else:
-            outs.write(out, urdf_from_design(design, T))
+            outs.write(out, urdf_from_design(T, design))
             what = "URDF of the kinematic tree (loop closures listed in its header)"
         ok = True
         if args.check:
@@ -97,10 +97,10 @@ def _check(args: argparse.Namespace, design: Design, T: np.ndarray, q: np.ndarra
     from ..sim import check_fk_with_mujoco, sample_reachable_q
 
     home = REFERENCE_Q if q is None else q
-    targets = np.vstack([home, sample_reachable_q(args.check - 1, design, T, slot=args.slot,
+    targets = np.vstack([home, sample_reachable_q(args.check - 1, T, design, slot=args.slot,
                                                   home_q=home, rng=args.seed)]
                         if args.check > 1 else [home])
-    res = check_fk_with_mujoco(targets, design, T, start_slot=args.slot, home_q=home,
+    res = check_fk_with_mujoco(targets, T, design, start_slot=args.slot, home_q=home,
                                perturb=0.02, rng=args.seed, progress=True)
     print("MuJoCo check (no gravity): " + res.summary())
     worst = max(float(np.max(res.pose_error)), float(np.max(res.joint_error)))

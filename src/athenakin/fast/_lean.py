@@ -27,7 +27,7 @@ from .._validation import (
     is_raising_policy,
 )
 from ..chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
-from ..design import Design
+from ..design import Design, resolve_design
 from ..parallel._module import TANGENT_TOL
 from ..robot._fk import FKSolution
 from ..robot._ik import IK_SINGULAR_TOL, InstrumentIK, PassiveJoints
@@ -83,8 +83,8 @@ def design_params(design: Design | None) -> NDArray[np.float64]:
 
     Raises
     ------
-    TypeError
-        If ``design`` is not a :class:`~athenakin.Design`.
+    TypeError, InvalidInputError
+        ``design`` is not a :class:`~athenakin.Design` (:func:`~athenakin.design.resolve_design`).
     """
     hit = _PARAMS.get(id(design))
     if hit is not None and hit[0] is design:     # the common case first
@@ -93,10 +93,8 @@ def design_params(design: Design | None) -> NDArray[np.float64]:
         if not _DEFAULT:
             _DEFAULT.append(_make_params(Design.default()))
         P = _DEFAULT[0]
-    elif not isinstance(design, Design):
-        raise TypeError(f"design: expected athenakin.Design, got {type(design).__name__}")
-    else:
-        P = _make_params(design)
+    else:                   # resolve_design: the one check (a named error for anything else)
+        P = _make_params(resolve_design(design))
     if len(_PARAMS) >= _MAX_CACHE:
         _PARAMS.clear()
     # None too: the lean paths look the design up once, in this table

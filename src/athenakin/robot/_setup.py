@@ -1,13 +1,17 @@
-"""The reference set-up (RCM frame) used by the demo, the CLI and the docs."""
+"""The reference set-up (RCM frame) used by the demo, the CLI and the docs; the RCM JSON file."""
 
 from __future__ import annotations
+
+import json
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._input import MAX_CONFIG_BYTES, read_bytes
 from .._transforms import transform_from_rotation_translation
 from .._validation import check_transform
-from ..design import Design, resolve_design
+from ..design import LENGTH_RANGE, Design, resolve_design
 from ..errors import InvalidInputError
 from ..parallel._module import parallel_forward_kinematics
 
@@ -49,12 +53,26 @@ def default_rcm_frame(design: Design | None = None) -> NDArray[np.float64]:
         raise OutOfWorkspaceError(
             f"default_rcm_frame: the reference configuration q = {REFERENCE_Q.tolist()} m is not "
             f"assembled in mode +1 for this design; build T_b_e for your set-up explicitly")
+    return reference_rcm_frame(par.O_s[0])
+
+
+def reference_rcm_frame(O_s: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The reference set-up's RCM frame for the instrument's U-joint at ``O_s``.
+
+    The recipe of :func:`default_rcm_frame` at any ``O_s`` (base frame, m, shape (3,)):
+    ``x_e`` along :data:`REFERENCE_DIRECTION_B`, ``z_e`` the rail axis made perpendicular
+    to it, ``y_e = z_e x x_e``, the RCM :data:`REFERENCE_P` from ``O_s`` along ``x_e``.
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+    """
     x_e = REFERENCE_DIRECTION_B / np.linalg.norm(REFERENCE_DIRECTION_B)
     z_e = np.array([1.0, 0.0, 0.0]) - x_e[0] * x_e
     z_e /= np.linalg.norm(z_e)
     y_e = np.cross(z_e, x_e)
     R = np.stack([x_e, y_e, z_e], axis=-1)
-    return transform_from_rotation_translation(R, par.O_s[0] + REFERENCE_P * x_e)
+    return transform_from_rotation_translation(R, O_s + REFERENCE_P * x_e)
 
 
 def resolve_rcm_frame(T_b_e: ArrayLike | None, design: Design, *, single: bool = True
@@ -74,3 +92,70 @@ def resolve_rcm_frame(T_b_e: ArrayLike | None, design: Design, *, single: bool =
     if single and T.shape != (4, 4):
         raise InvalidInputError(f"T_b_e: expected shape (4, 4), got shape {T.shape}")
     return T
+
+
+def check_rcm_position(T: NDArray[np.float64], option: str) -> NDArray[np.float64]:
+    """``T`` if its origin is within :data:`~athenakin.design.LENGTH_RANGE` of the base.
+
+    An RCM kilometres away is a unit mistake (mm for m) or a typo; far beyond the
+    longest link, the kinematics would only report rounding errors as singularities.
+    """
+    reach = LENGTH_RANGE[1]
+    t = T[:3, 3]
+    if not float(np.max(np.abs(t))) <= reach:
+        raise InvalidInputError(f"{option}: the RCM at {np.array2string(t, precision=6)} m is "
+                                f"too far; expected coordinates within +/-{reach:g} m "
+                                f"(positions are in m)")
+    return T
+
+
+def read_rcm_json(path: str | Path, *, option: str = "--rcm-file") -> NDArray[np.float64]:
+    """The RCM frame from a JSON file ``{"T_b_e": 4x4 nested list}``: the one reader.
+
+    ``athenakin ... --rcm-file`` and the app's set-up read the file through it.
+
+    Parameters
+    ----------
+    path : str or Path
+    option : str, keyword-only
+        What the file is, first in every message (``"--rcm-file"``: "--rcm-file PATH: ...").
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+        A rigid transform whose origin passes :func:`check_rcm_position`.
+
+    Raises
+    ------
+    ValueError
+        Not UTF-8 JSON, nested too deeply, no key ``T_b_e``, not a 4x4 array of
+        finite numbers (the message names the file).
+    OSError
+        The file cannot be read.
+    """
+    where = f"{option} {path}"
+    raw = read_bytes(path, limit=MAX_CONFIG_BYTES, what=option)
+    try:
+        data = json.loads(raw.decode("utf-8-sig"))
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{where}: not a UTF-8 text file ({exc.reason})") from None
+    except RecursionError:
+        raise ValueError(f"{where}: JSON nested too deeply") from None
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{where}: not JSON ({exc})") from None
+    except ValueError as exc:  # an integer beyond sys.get_int_max_str_digits()
+        raise ValueError(f"{where}: a number that cannot be read "
+                         f"({' '.join(str(exc).split())[:120]})") from None
+    if not isinstance(data, dict) or "T_b_e" not in data:
+        raise ValueError(f"{where}: expected a JSON object with key 'T_b_e'")
+    try:
+        T = np.asarray(data["T_b_e"], dtype=float)
+    except (TypeError, ValueError, OverflowError, RecursionError):
+        raise ValueError(f"{where}: T_b_e: expected a 4x4 nested list of numbers") from None
+    if T.shape != (4, 4):
+        raise ValueError(f"{where}: T_b_e: expected shape (4, 4), got {T.shape}")
+    try:
+        return check_rcm_position(check_transform(T, "T_b_e"), f"{where}: T_b_e")
+    except InvalidInputError as exc:
+        msg = str(exc)
+        raise InvalidInputError(msg if msg.startswith(option) else f"{where}: {msg}") from None

@@ -101,7 +101,7 @@ def urdf_model(design: Design, T_b_e: NDArray[np.float64]) -> UrdfModel:
 @functools.lru_cache(maxsize=8)
 def _urdf_model(design: Design, T_bytes: bytes) -> UrdfModel:
     T_b_e = np.frombuffer(T_bytes, dtype=float).reshape(4, 4).copy()
-    text = urdf_from_design(design, T_b_e)
+    text = urdf_from_design(T_b_e, design)
     root = ET.fromstring(text)
     joints: dict[str, _Joint] = {}
     for el in root.iter("joint"):

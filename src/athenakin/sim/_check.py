@@ -116,7 +116,7 @@ class MujocoCheck:
                 f"(hold up to {np.max(self.hold_time):.2f} s)")
 
 
-def load_model(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
+def load_model(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                q: ArrayLike | None = None, slot: int = 0, gravity: bool = False) -> Any:
     """Compile :func:`~athenakin.sim.mjcf_from_design` with MuJoCo.
 
@@ -127,7 +127,7 @@ def load_model(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
     import mujoco
 
     return mujoco.MjModel.from_xml_string(
-        mjcf_from_design(design, T_b_e, q=q, slot=slot, gravity=gravity))
+        mjcf_from_design(T_b_e, design, q=q, slot=slot, gravity=gravity))
 
 
 def _smoothstep(s: float) -> float:
@@ -200,8 +200,8 @@ def _labels(model: Any, data: Any) -> tuple[int, int, int, int]:
     return mode, sgn[0], sgn[1], sgn[2]
 
 
-def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
-                         T_b_e: ArrayLike | None = None, *, start_slot: int = 0,
+def check_fk_with_mujoco(q: ArrayLike, T_b_e: ArrayLike | None = None,
+                         design: Design | None = None, *, start_slot: int = 0,
                          home_q: ArrayLike | None = None, perturb: float = 0.0,
                          rng: int | np.random.Generator | None = None,
                          ramp_time: float = RAMP_TIME, settle_time: float = SETTLE_TIME,
@@ -220,8 +220,8 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
         Actuator targets, m. The straight path from ``home_q`` must stay away from
         singularities in ``start_slot`` (see :func:`sample_reachable_q`), or
         MuJoCo may end in another branch (which the result then reports).
-    design : Design, optional
     T_b_e : array-like, shape (4, 4), optional
+    design : Design, optional
     start_slot : int, keyword-only
         FK slot of the keyframe.
     home_q : array-like, shape (3,), keyword-only, optional
@@ -253,22 +253,15 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
         raise InvalidInputError(f"perturb: expected at most {LENGTH_RANGE[1]:g} (m or rad), "
                                 f"got {perturb:g}")
     rng = check_rng(rng)
-    model = load_model(design, T, q=home_q, slot=start_slot, gravity=gravity)
+    model = load_model(T, design, q=home_q, slot=start_slot, gravity=gravity)
     data = mujoco.MjData(model)
-    names = list(JOINTS)
-    adr = np.array([model.jnt_qposadr[model.joint(n).id] for n in names])
-    hinge = np.array([JOINTS[n][0] == "hinge" for n in names])
-    act_adr = [model.jnt_qposadr[model.joint(n).id] for n in ACTUATED]
-    eq_rows = mujoco.mjtConstraint.mjCNSTR_EQUALITY
-
-    out: dict[str, list[Any]] = {k: [] for k in (
-        "q_reached", "slot", "nearest_slot", "tip_error", "axis_error", "pose_error",
-        "joint_error", "constraint_residual", "speed", "hold_time")}
+    layout = _qpos_layout(model)
     it = range(len(qs))
     if progress:
         from tqdm import tqdm
 
         it = tqdm(it, desc="MuJoCo check", unit="config", disable=None)
+    rows = []
     for n in it:
         mujoco.mj_resetDataKeyframe(model, data, 0)
         if perturb > 0:
@@ -278,43 +271,79 @@ def check_fk_with_mujoco(q: ArrayLike, design: Design | None = None,
         hold = settle(model, data, qs[n], ramp_time=ramp_time, settle_time=settle_time,
                       speed_tol=speed_tol)
         mujoco.mj_forward(model, data)
-        k = slot_index(*_labels(model, data))
-        T_ins = np.eye(4)
-        T_ins[:3, :3] = data.body("instrument").xmat.reshape(3, 3)
-        T_ins[:3, 3] = data.body("instrument").xpos
-        tip = data.site("tool_tip").xpos.copy()
-        q_now = data.qpos[act_adr].copy()
-        sol = forward_kinematics(q_now, T, design, errors="flag")
-        joint_err = np.full(16, np.inf)
-        geoms = {}
-        for j in map(int, np.flatnonzero(sol.valid)):
-            jv = mechanism_joint_values(q_now, T, design, slot=j)
-            vals, geoms[j] = jv.values, jv.state
-            diff = data.qpos[adr] - np.array([vals[nm] for nm in names])
-            joint_err[j] = np.abs(np.where(hinge, wrap_angle(diff), diff)).max()
-        out["q_reached"].append(q_now)
-        out["slot"].append(k)
-        out["nearest_slot"].append(int(np.argmin(joint_err)) if sol.valid.any() else -1)
-        out["hold_time"].append(hold)
-        if sol.valid[k]:
-            st = geoms[k]
-            T_ref = st.frame("instrument")
-            z_ref = T_ref[:3, 2]
-            out["tip_error"].append(float(np.linalg.norm(tip - st["tip"])))
-            out["axis_error"].append(float(np.arctan2(np.linalg.norm(np.cross(T_ins[:3, 2], z_ref)),
-                                                      T_ins[:3, 2] @ z_ref)))
-            out["pose_error"].append(float(closure_residual(T_ins, T_ref)))
-            out["joint_error"].append(float(joint_err[k]))
-        else:
-            for key in ("tip_error", "axis_error", "pose_error", "joint_error"):
-                out[key].append(np.inf)
-        rows = data.efc_type[:data.nefc] == eq_rows
-        out["constraint_residual"].append(float(np.abs(data.efc_pos[:data.nefc][rows]).max()))
-        out["speed"].append(float(np.abs(data.qvel).max()))
-    return MujocoCheck(q=qs, **{k: np.asarray(v) for k, v in out.items()})
+        rows.append({"hold_time": hold, **_compare_settled(model, data, layout, T, design)})
+    fields = [f.name for f in dataclasses.fields(MujocoCheck) if f.name != "q"]
+    return MujocoCheck(q=qs, **{k: np.asarray([r[k] for r in rows]) for k in fields})
 
 
-def sample_reachable_q(n: int, design: Design | None = None, T_b_e: ArrayLike | None = None,
+def _qpos_layout(model: Any) -> tuple[NDArray[np.int64], NDArray[np.bool_], NDArray[np.int64]]:
+    """Where the joints of the tree are in MuJoCo's ``qpos``.
+
+    Returns
+    -------
+    adr : ndarray of int, shape (18,)
+        ``qpos`` index of each joint of :data:`JOINTS`, in its order.
+    hinge : ndarray of bool, shape (18,)
+        The joint is a hinge (its errors are wrapped to ``(-pi, pi]``).
+    act_adr : ndarray of int, shape (3,)
+        ``qpos`` index of ``q1, q2, q3``.
+    """
+    adr = np.array([model.jnt_qposadr[model.joint(n).id] for n in JOINTS])
+    hinge = np.array([JOINTS[n][0] == "hinge" for n in JOINTS])
+    act_adr = np.array([model.jnt_qposadr[model.joint(n).id] for n in ACTUATED])
+    return adr, hinge, act_adr
+
+
+def _compare_settled(model: Any, data: Any, layout: tuple[NDArray[np.int64], NDArray[np.bool_],
+                                                          NDArray[np.int64]],
+                     T: NDArray[np.float64], design: Design) -> dict[str, Any]:
+    """One settled MuJoCo state against the FK at the actuator values it reached.
+
+    Returns
+    -------
+    dict
+        The fields of :class:`MujocoCheck` for this state but ``q`` and ``hold_time``:
+        the FK slot of MuJoCo's labels, the valid slot nearest in joint values, the
+        errors of the instrument (inf where the labelled slot is not valid), the largest
+        violated equality constraint and the largest joint speed.
+    """
+    import mujoco
+
+    adr, hinge, act_adr = layout
+    k = slot_index(*_labels(model, data))
+    T_ins = np.eye(4)
+    T_ins[:3, :3] = data.body("instrument").xmat.reshape(3, 3)
+    T_ins[:3, 3] = data.body("instrument").xpos
+    tip = data.site("tool_tip").xpos.copy()
+    q_now = data.qpos[act_adr].copy()
+    sol = forward_kinematics(q_now, T, design, errors="flag")
+    joint_err = np.full(16, np.inf)
+    geoms = {}
+    for j in map(int, np.flatnonzero(sol.valid)):
+        jv = mechanism_joint_values(q_now, T, design, slot=j)
+        vals, geoms[j] = jv.values, jv.state
+        diff = data.qpos[adr] - np.array([vals[nm] for nm in JOINTS])
+        joint_err[j] = np.abs(np.where(hinge, wrap_angle(diff), diff)).max()
+    row: dict[str, Any] = {
+        "q_reached": q_now, "slot": k,
+        "nearest_slot": int(np.argmin(joint_err)) if sol.valid.any() else -1,
+        "tip_error": np.inf, "axis_error": np.inf, "pose_error": np.inf, "joint_error": np.inf}
+    if sol.valid[k]:
+        st = geoms[k]
+        T_ref = st.frame("instrument")
+        z_ref = T_ref[:3, 2]
+        row["tip_error"] = float(np.linalg.norm(tip - st["tip"]))
+        row["axis_error"] = float(np.arctan2(np.linalg.norm(np.cross(T_ins[:3, 2], z_ref)),
+                                             T_ins[:3, 2] @ z_ref))
+        row["pose_error"] = float(closure_residual(T_ins, T_ref))
+        row["joint_error"] = float(joint_err[k])
+    rows = data.efc_type[:data.nefc] == mujoco.mjtConstraint.mjCNSTR_EQUALITY
+    row["constraint_residual"] = float(np.abs(data.efc_pos[:data.nefc][rows]).max())
+    row["speed"] = float(np.abs(data.qvel).max())
+    return row
+
+
+def sample_reachable_q(n: int, T_b_e: ArrayLike | None = None, design: Design | None = None,
                        *, slot: int = 0, home_q: ArrayLike | None = None,
                        radius: float = 0.12, n_path: int = 24,
                        rng: int | np.random.Generator | None = None,
@@ -330,8 +359,8 @@ def sample_reachable_q(n: int, design: Design | None = None, T_b_e: ArrayLike | 
     ----------
     n : int
         Number of targets, 0 to 100,000.
-    design : Design, optional
     T_b_e : array-like, shape (4, 4), optional
+    design : Design, optional
     slot : int, keyword-only
     home_q : array-like, shape (3,), keyword-only, optional
         Default :data:`athenakin.robot.REFERENCE_Q`.

@@ -58,7 +58,8 @@ from ..robot._setup import resolve_rcm_frame
 
 __all__ = ["JOINTS", "ACTUATED", "LOOP_CLOSURES", "LoopClosure", "MechanismJointValues",
            "mechanism_joint_values", "urdf_joint_zero", "COLLISION_BODY", "collision_segments",
-           "single_state", "actuator_drawn_lengths", "ACTUATOR_ROD_FALLBACK", "ACTUATOR_OVERLAP"]
+           "single_state", "actuator_drawn_lengths", "ACTUATOR_ROD_FALLBACK", "ACTUATOR_OVERLAP",
+           "xml_float", "xml_floats"]
 
 #: Joints of the spanning tree in MJCF order: name -> (kind, parent body, child body); the
 #: tree itself (origins, axes) is :data:`athenakin._mechanism.TREE`.
@@ -354,6 +355,16 @@ def actuator_drawn_lengths(design: Design | None = None) -> tuple[float, float]:
     reach = hi if math.isfinite(hi) else 3.0 * rod
     housing = max(reach - rod, 0.0) + ACTUATOR_OVERLAP * rod
     return housing, rod
+
+
+def xml_float(x: float) -> str:
+    """A number as both exports write it: ``repr(float(x))``, which reads back to the same float."""
+    return repr(float(x))
+
+
+def xml_floats(v: ArrayLike) -> str:
+    """Numbers (any shape, flattened) as both exports write them, separated by spaces."""
+    return " ".join(xml_float(x) for x in np.asarray(v, dtype=float).ravel())
 
 
 #: athenakin body -> the MJCF body / URDF link that carries it (``base``: MJCF's world

@@ -18,7 +18,14 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._mechanism import BODIES, MASS_PART_LINK, TREE, BodyGeometry, tree_origins
+from .._mechanism import (
+    BODIES,
+    MASS_PART_LINK,
+    TREE,
+    BodyGeometry,
+    MechanismState,
+    tree_origins,
+)
 from .._output import check_output_path, write_text_atomic
 from .._validation import check_text
 from ..collision._bodies import Bodies, resolve_bodies
@@ -37,6 +44,8 @@ from ._layout import (
     mechanism_joint_values,
     single_state,
 )
+from ._layout import xml_float as _f
+from ._layout import xml_floats as _vec
 
 __all__ = ["mjcf_from_design", "write_mjcf", "MJCF_TIMESTEP", "ACTUATOR_KP", "ACTUATOR_KV",
            "EQUALITY_SOLREF", "COLLISION_GROUP", "collision_geom_name"]
@@ -85,14 +94,6 @@ _RGBA = {"rail": "0.35 0.35 0.38 1", "parallel": "0.20 0.40 0.80 1",
          "joint": "0.55 0.55 0.55 1", "serial": "0.80 0.20 0.20 1",
          "actuator": "0.95 0.60 0.10 1", "sphere": "0.60 0.30 0.70 1",
          "setup": "0.20 0.70 0.30 0.6"}
-
-
-def _f(x: float) -> str:
-    return repr(float(x))
-
-
-def _vec(v: ArrayLike) -> str:
-    return " ".join(_f(x) for x in np.asarray(v, dtype=float).ravel())
 
 
 def _body(parent: ET.Element, name: str, pos: ArrayLike = (0, 0, 0),
@@ -254,7 +255,7 @@ def _collision_geoms(root: ET.Element, bodies: Bodies, segs: dict[str, tuple[
                                                "body2": by})
 
 
-def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
+def mjcf_from_design(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                      q: ArrayLike | None = None, slot: int = 0, gravity: bool = True,
                      model_name: str = "athena", bodies: Bodies | None = None,
                      collision: bool | None = None,
@@ -263,11 +264,11 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
 
     Parameters
     ----------
-    design : Design, optional
-        Defaults to :meth:`Design.default`.
     T_b_e : array-like, shape (4, 4), optional
         RCM frame of the set-up (where the spherical five-bar holds the RCM);
         defaults to :func:`athenakin.default_rcm_frame`.
+    design : Design, optional
+        Defaults to :meth:`Design.default`.
     q : array-like, shape (3,), keyword-only, optional
         Actuators of the keyframe ``home`` (default :data:`athenakin.robot.REFERENCE_Q`).
     slot : int, keyword-only
@@ -278,22 +279,19 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
     bodies : athenakin.collision.Bodies, keyword-only, optional
         The capsules exported as collision geoms; giving them turns ``collision`` on.
     collision : bool, keyword-only, optional
-        Export collision geoms (of ``bodies``, default
-        :meth:`~athenakin.collision.Bodies.default` of the design). Default: only when
-        ``bodies`` is given, so that the plain export simulates as before, free of
-        contacts (where the capsules overlap, MuJoCo's contacts push the mechanism off
-        its forward kinematics).
+        Export collision geoms (of ``bodies``, default the design's
+        :meth:`~athenakin.collision.Bodies.default`). Default: only with ``bodies`` or
+        ``environment``, so the plain export simulates free of contacts (overlapping
+        capsules' contacts would push the mechanism off its forward kinematics).
     environment : athenakin.collision.Environment, keyword-only, optional
-        Obstacles exported as geoms of a static body ``environment`` (``obstacle_<name>``;
-        a halfspace is a plane, a mesh its inline triangles, whose convex hull MuJoCo
-        collides with); ``allow=`` becomes contact bits, so an obstacle touches exactly
-        the bodies it does not allow. Turns ``collision`` on. The rail and the obstacles
-        are all fixed: MuJoCo never pairs them (``clearance`` does).
+        Obstacles as geoms ``obstacle_<name>`` of a static body ``environment`` (a
+        halfspace a plane, a mesh its triangles, whose convex hull MuJoCo collides with);
+        ``allow=`` becomes contact bits. Turns ``collision`` on. The rail and the obstacles
+        are fixed: MuJoCo never pairs them (``clearance`` does).
     masses : athenakin.dynamics.MassModel, keyword-only, optional
-        Export these inertias instead of the parts' geometric ones, with force
-        (``motor``) actuators on ``q1, q2, q3`` (ctrl in N, positive along increasing
-        ``q``; the keyframe ``home`` holds the static forces against gravity) and no
-        joint damping or armature, so that the model's dynamics are those of
+        Its inertias instead of the parts' geometric ones, force (``motor``) actuators on
+        ``q1, q2, q3`` (N, along increasing ``q``; the keyframe's ctrl holds the static
+        forces against gravity), no joint damping or armature: the dynamics of
         :mod:`athenakin.dynamics` (:func:`_apply_masses`).
 
     Returns
@@ -310,67 +308,26 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
 
     Notes
     -----
-    Bodies, joints and loop closures are those of :mod:`athenakin.sim._layout`:
-    18 joints, 15 independent constraint equations (3 ``connect`` whose rows are
-    partly redundant, 1 ``weld``, 2 ``joint`` couplings), 3 degrees of freedom.
-    Stroke limits become joint ranges and control ranges.
-
-    The drawn parts never collide (``contype = conaffinity = 0``). With ``collision``,
-    the capsules of ``bodies`` are collision geoms ``collision_<body>``
-    (:func:`collision_geom_name`, group :data:`COLLISION_GROUP`, massless) on the MJCF
-    bodies of :data:`~athenakin.sim._layout.COLLISION_BODY`, and every pair of
-    ``bodies.excluded_pairs`` (those that share a joint, and the user's) is a
-    ``<contact><exclude>``: MuJoCo's own collision detection then reports contacts
-    between the pairs that :func:`athenakin.collision.clearance` checks, with the same
-    distances at the keyframe (tested). The actuator's capsule rides on
-    ``k2_arm`` (the housing, whose frame is the actuator's in the mass model): it starts
-    at C and has the keyframe's length ``q3``. The carriages are
-    ``bodies.geometry.carriage_length`` long.
+    The tree and loop closures of :mod:`athenakin.sim._layout`: 18 joints, 15 independent
+    constraint equations (3 ``connect``, 1 ``weld``, 2 ``joint`` couplings), 3 degrees of
+    freedom; strokes are joint and control ranges. Drawn parts never collide. Each capsule
+    of ``bodies`` is a massless geom ``collision_<body>`` (:func:`collision_geom_name`,
+    group :data:`COLLISION_GROUP`) on its :data:`~athenakin.sim._layout.COLLISION_BODY`
+    (the actuator's on ``k2_arm``, ``q3`` long), each of ``bodies.excluded_pairs`` a
+    ``<contact><exclude>``: MuJoCo's contacts are between the pairs that
+    :func:`athenakin.collision.clearance` checks, at the same distances (docs/collision.md).
     """
-    jv = mechanism_joint_values(q, T_b_e, design, slot=slot)
-    values = jv.values
+    jv, bodies, st = _home_state(T_b_e, design, q, slot, bodies)
     d = jv.design
-    T = jv.T_b_e
-    lo, hi = d.stroke_min, d.stroke_max
-    if bodies is not None and not isinstance(bodies, Bodies):
-        bodies = resolve_bodies(bodies, d)          # raises the named TypeError
-    geo = bodies.geometry if bodies is not None else BodyGeometry()
-    half = 0.5 * geo.carriage_length
-    st = jv.state if bodies is None else single_state(jv.q, T, d, slot=jv.slot, geometry=geo)
-
     check_text(model_name, "model_name")
     root = ET.Element("mujoco", {"model": model_name})
     _add_options(root, gravity=gravity)
-
-    origins = tree_origins(d)
-    wb = ET.SubElement(root, "worldbody")
-    ET.SubElement(wb, "light", {"pos": "0 0 2", "dir": "0 0 -1", "directional": "true"})
-    rail = np.stack([st["rail_lo"], st["rail_hi"]])
-    _capsule(wb, "rail", rail[0] - [0, 0, 0.02], rail[1] - [0, 0, 0.02], "rail", radius=0.01)
-
-    _add_carriage_a(wb, origins, d, half, lo, hi, values)
-    _add_carriage_b(wb, origins, d, half, lo, hi)
-
-    # --- the set-up: frame E, where S1 and S2 hold the spherical five-bar -------------
-    setup = _body(wb, "rcm_setup", pos=T[:3, 3], quat=quaternion_from_rotation(T[:3, :3]))
-    _sphere(setup, "rcm_setup", 0.006, "setup")
-    _site(setup, "rcm_setup_frame")
-
-    collision = _collision_flag(collision, bodies, environment)
-    if collision:
-        bodies = resolve_bodies(bodies, d)
-        bits = _obstacle_bits(environment) if environment is not None else None
-        _collision_geoms(root, bodies, collision_segments(st, d, bodies.geometry), bits)
-        if environment is not None and bits is not None:
-            _obstacle_geoms(root, environment, bits)
-
+    _add_worldbody(root, jv, st, bodies.geometry if bodies is not None else BodyGeometry())
+    if _collision_flag(collision, bodies, environment):
+        _add_collision(root, resolve_bodies(bodies, d), environment, st, d)
     _add_equalities(root)
-    _add_actuators(root, lo, hi)
-
-    qpos = [values[name] for name in JOINTS]
-    kf = ET.SubElement(root, "keyframe")
-    ET.SubElement(kf, "key", {"name": "home", "qpos": _vec(qpos),
-                              "ctrl": _vec([values[n] for n in ACTUATED])})
+    _add_actuators(root, d.stroke_min, d.stroke_max)
+    _add_keyframe(root, jv.values)
     if masses is not None:
         _apply_masses(root, masses, jv, gravity=gravity)
     ET.indent(root)
@@ -379,6 +336,56 @@ def mjcf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
               f"FK slot {jv.slot}. Loop closures are equality constraints. -->\n")
     return header + ET.tostring(root, encoding="unicode") + "\n"
 
+
+def _add_keyframe(root: ET.Element, values: dict[str, float]) -> None:
+    """Add the keyframe ``home``: every joint's value, the servos' targets at ``q``."""
+    kf = ET.SubElement(root, "keyframe")
+    ET.SubElement(kf, "key", {"name": "home", "qpos": _vec([values[n] for n in JOINTS]),
+                              "ctrl": _vec([values[n] for n in ACTUATED])})
+
+
+def _add_collision(root: ET.Element, bodies: Bodies, environment: Environment | None,
+                   st: MechanismState, design: Design) -> None:
+    """Add the capsules of ``bodies`` (placed as in ``st``) and the obstacles as geoms."""
+    bits = _obstacle_bits(environment) if environment is not None else None
+    _collision_geoms(root, bodies, collision_segments(st, design, bodies.geometry), bits)
+    if environment is not None and bits is not None:
+        _obstacle_geoms(root, environment, bits)
+
+
+def _home_state(T_b_e: ArrayLike | None, design: Design | None, q: ArrayLike | None, slot: int,
+                bodies: object) -> tuple[MechanismJointValues, Bodies | None, MechanismState]:
+    """The keyframe's configuration, checked: joint values, the bodies, the state drawn.
+
+    The state is solved with the bodies' geometry (carriage length, ...) when bodies are
+    given, else it is that of the joint values (the default geometry).
+    """
+    jv = mechanism_joint_values(q, T_b_e, design, slot=slot)
+    if bodies is not None and not isinstance(bodies, Bodies):
+        bodies = resolve_bodies(bodies, jv.design)          # raises the named TypeError
+    if bodies is None:
+        return jv, None, jv.state
+    return jv, bodies, single_state(jv.q, jv.T_b_e, jv.design, slot=jv.slot,
+                                    geometry=bodies.geometry)
+
+
+def _add_worldbody(root: ET.Element, jv: MechanismJointValues, st: MechanismState,
+                   geometry: BodyGeometry) -> None:
+    """Add the world body: a light, the rail, the two carriages' trees and the set-up frame E."""
+    d, T = jv.design, jv.T_b_e
+    lo, hi = d.stroke_min, d.stroke_max
+    half = 0.5 * geometry.carriage_length
+    origins = tree_origins(d)
+    wb = ET.SubElement(root, "worldbody")
+    ET.SubElement(wb, "light", {"pos": "0 0 2", "dir": "0 0 -1", "directional": "true"})
+    rail = np.stack([st["rail_lo"], st["rail_hi"]])
+    _capsule(wb, "rail", rail[0] - [0, 0, 0.02], rail[1] - [0, 0, 0.02], "rail", radius=0.01)
+    _add_carriage_a(wb, origins, d, half, lo, hi, jv.values)
+    _add_carriage_b(wb, origins, d, half, lo, hi)
+    # the set-up: frame E, where S1 and S2 hold the spherical five-bar
+    setup = _body(wb, "rcm_setup", pos=T[:3, 3], quat=quaternion_from_rotation(T[:3, :3]))
+    _sphere(setup, "rcm_setup", 0.006, "setup")
+    _site(setup, "rcm_setup_frame")
 
 
 def _collision_flag(collision: object, bodies: object, environment: object) -> bool:
@@ -583,7 +590,7 @@ def _apply_masses(root: ET.Element, masses: object, jv: MechanismJointValues, *,
     key.set("ctrl", _vec(f))
 
 
-def write_mjcf(path: str | Path, design: Design | None = None, T_b_e: ArrayLike | None = None,
+def write_mjcf(path: str | Path, T_b_e: ArrayLike | None = None, design: Design | None = None,
                **kwargs: object) -> Path:
     """Write :func:`mjcf_from_design` to ``path``; keyword arguments are passed on.
 
@@ -593,5 +600,5 @@ def write_mjcf(path: str | Path, design: Design | None = None, T_b_e: ArrayLike 
         The path written.
     """
     path = check_output_path(path)
-    write_text_atomic(path, mjcf_from_design(design, T_b_e, **kwargs))  # type: ignore[arg-type]
+    write_text_atomic(path, mjcf_from_design(T_b_e, design, **kwargs))  # type: ignore[arg-type]
     return path

@@ -38,6 +38,8 @@ from ._layout import (
     collision_segments,
     single_state,
 )
+from ._layout import xml_float as _f
+from ._layout import xml_floats as _vec
 from ._mjcf import BAR_RADIUS, DENSITY
 
 __all__ = ["urdf_from_design", "write_urdf", "CLOSURE_FRAMES", "CLOSURE_PAIRS", "MIMIC"]
@@ -54,14 +56,6 @@ CLOSURE_PAIRS = (("link_b1_tip", "platform_oi"), ("link_b3_tip", "carrier_d"),
 MIMIC = {"platform_y": ("a_ujoint_y", -1.0), "carrier_z": ("a_base_z", -1.0)}
 #: Joint limit used where the design has none (m), and for ``p``.
 _FREE_SLIDE = 2.0
-
-
-def _f(x: float) -> str:
-    return repr(float(x))
-
-
-def _vec(v: ArrayLike) -> str:
-    return " ".join(_f(x) for x in np.asarray(v, dtype=float).ravel())
 
 
 def _rpy_from_matrix(R: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -151,7 +145,7 @@ def _collision(link: ET.Element, name: str, a: NDArray[np.float64], b: NDArray[n
         ET.SubElement(geo, "sphere", {"radius": _f(radius)})
 
 
-def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = None, *,
+def urdf_from_design(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                      robot_name: str = "athena", q_zero: ArrayLike | None = None,
                      zero_slot: int = 0, bodies: Bodies | None = None,
                      collision: bool = True) -> str:
@@ -159,11 +153,11 @@ def urdf_from_design(design: Design | None = None, T_b_e: ArrayLike | None = Non
 
     Parameters
     ----------
-    design : Design, optional
-        Defaults to :meth:`Design.default`.
     T_b_e : array-like, shape (4, 4), optional
         RCM frame of the set-up, placed as the fixed link ``rcm_setup``; defaults to
         :func:`athenakin.default_rcm_frame`.
+    design : Design, optional
+        Defaults to :meth:`Design.default`.
     robot_name : str, keyword-only
     q_zero : array-like, shape (3,), keyword-only, optional
         Actuators of the configuration taken as joint zero, m (default
@@ -364,7 +358,7 @@ def _header(d: Design, zero: dict[str, float], zero_slot: int) -> list[str]:
     return lines
 
 
-def write_urdf(path: str | Path, design: Design | None = None, T_b_e: ArrayLike | None = None,
+def write_urdf(path: str | Path, T_b_e: ArrayLike | None = None, design: Design | None = None,
                **kwargs: object) -> Path:
     """Write :func:`urdf_from_design` to ``path``; keyword arguments are passed on.
 
@@ -373,5 +367,5 @@ def write_urdf(path: str | Path, design: Design | None = None, T_b_e: ArrayLike 
     Path
     """
     path = check_output_path(path)
-    write_text_atomic(path, urdf_from_design(design, T_b_e, **kwargs))  # type: ignore[arg-type]
+    write_text_atomic(path, urdf_from_design(T_b_e, design, **kwargs))  # type: ignore[arg-type]
     return path

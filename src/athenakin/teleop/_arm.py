@@ -131,7 +131,7 @@ class MujocoBackend:
         rate = check_rate(rate)
         substeps = check_count(substeps, "substeps", minimum=1, maximum=1000)
         self._mj = mujoco
-        xml = mjcf_from_design(design, T_b_e, q=q0, masses=masses, slot=slot, gravity=gravity)
+        xml = mjcf_from_design(T_b_e, design, q=q0, masses=masses, slot=slot, gravity=gravity)
         m = mujoco.MjModel.from_xml_string(xml)
         dt = 1.0 / (rate * substeps)
         m.opt.timestep = dt
