@@ -151,7 +151,7 @@ class _Missing:
 
 def _traj() -> Any:
     tips = np.array([REF["tip_e"], REF["tip_e"] + [0.004, 0.0, 0.0]])
-    return ak.motion.plan(tips, T0, D, rate=200.0)
+    return ak.motion.plan(tips, T0, D, options=ak.motion.PlanOptions(rate=200.0))
 
 
 def _calib() -> Any:

@@ -9,7 +9,7 @@ from numpy.testing import assert_allclose
 
 import athenakin as ak
 from athenakin.cli import main
-from athenakin.motion import PathFileError, plan, plan_directions
+from athenakin.motion import PathFileError, PlanOptions, plan, plan_directions
 from athenakin.motion._io import read_path_csv, read_q_stream_csv
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -40,7 +40,7 @@ def test_plan_csv_round_trip(tmp_path, capsys):
     assert header == ["t_s", "q1_m", "q2_m", "q3_m", "qd1_m_s", "qd2_m_s", "qd3_m_s",
                       "qdd1_m_s2", "qdd2_m_s2", "qdd3_m_s2", "qddd1_m_s3", "qddd2_m_s3",
                       "qddd3_m_s3", "tip_x_m", "tip_y_m", "tip_z_m", "segment"]
-    traj = plan(read_path_csv(src).tips_e, T, D, j_max=5.0)
+    traj = plan(read_path_csv(src).tips_e, T, D, options=PlanOptions(j_max=5.0))
     assert_allclose(data[:, 0], traj.t, atol=0)
     assert_allclose(data[:, 1:4], traj.q, atol=0)        # repr(): exact round trip
     assert_allclose(data[:, 4:7], traj.qd, atol=0)

@@ -4,12 +4,16 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ._collision import add_collision_options, collision_options
 from ._common import add_design_option, add_setup_options, load_design, load_rcm
 from ._output import add_force_option, outputs
+
+if TYPE_CHECKING:
+    from ..design import Design
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -97,7 +101,7 @@ def check_limits(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``plan``."""
-    from ..motion import plan, plan_directions, read_path_csv
+    from ..motion import read_path_csv
     from ..motion._plan import MAX_WAYPOINTS
 
     check_limits(args)
@@ -123,18 +127,9 @@ def run(args: argparse.Namespace) -> int:
         if n > MAX_WAYPOINTS:
             raise ValueError(f"{args.path}: {n} waypoints; expected at most {MAX_WAYPOINTS} "
                              f"(plan the path in parts)")
-        opts = dict(rate=args.rate, v_max=args.v_max, a_max=args.a_max, j_max=args.j_max,
-                    tip_speed=args.tip_speed, times=spec.times, timing=args.timing,
-                    margins=parse_margins(args.margin), max_duration=args.max_duration,
-                    max_samples=args.max_samples, **collision_options(args, design),
-                    **_force_options(args))
         if args.timing == "fixed" and spec.times is None:
             raise ValueError(f"--timing fixed: {args.path} has no t_s column")
-        if spec.kind == "tip":
-            traj = plan(spec.tips_e, T, design, **opts)  # type: ignore[arg-type]
-        else:
-            traj = plan_directions(spec.azimuth, spec.polar, spec.depth, T,  # type: ignore[arg-type]
-                                   design, **opts)
+        traj = _plan(spec, T, design, args)
         from ..motion._io import trajectory_csv_text, trajectory_json_text
 
         if out.suffix.lower() == ".mcap":
@@ -155,20 +150,38 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _force_options(args: argparse.Namespace) -> dict[str, object]:
-    """``masses=``, ``f_max=`` from ``--masses FILE`` and ``--f-max``."""
+def _plan(spec: Any, T: np.ndarray, design: Design, args: argparse.Namespace) -> Any:
+    """The trajectory of the path file ``spec`` with the options of the flags."""
+    from ..motion import PlanOptions, plan, plan_directions
+
+    models = collision_options(args, design)
+    margin = models.pop("clearance_margin", None)
+    masses, f_max = _force_options(args)
+    opts = PlanOptions(rate=args.rate, v_max=args.v_max, a_max=args.a_max, j_max=args.j_max,
+                       tip_speed=args.tip_speed, timing=args.timing,
+                       margins=parse_margins(args.margin), max_duration=args.max_duration,
+                       max_samples=args.max_samples, clearance_margin=margin, f_max=f_max)
+    if spec.kind == "tip":
+        return plan(spec.tips_e, T, design, times=spec.times, masses=masses, options=opts,
+                    **models)
+    return plan_directions(spec.azimuth, spec.polar, spec.depth, T, design, times=spec.times,
+                           masses=masses, options=opts, **models)
+
+
+def _force_options(args: argparse.Namespace) -> tuple[object, object]:
+    """``masses``, ``f_max`` from ``--masses FILE`` and ``--f-max``."""
     if args.masses is None:
         if args.f_max is not None:
             raise ValueError("--f-max: force limits need a mass model (--masses FILE)")
-        return {}
+        return None, None
     from ..dynamics import MassModel
 
     f_max = None
     if args.f_max is not None:
         if len(args.f_max) not in (1, 3):
             raise ValueError(f"--f-max: expected 1 or 3 force limits (N), got {len(args.f_max)}")
-        f_max = args.f_max[0] if len(args.f_max) == 1 else list(args.f_max)
-    return {"masses": MassModel.from_toml(args.masses), "f_max": f_max}
+        f_max = args.f_max[0] if len(args.f_max) == 1 else tuple(args.f_max)
+    return MassModel.from_toml(args.masses), f_max
 
 
 def _summary(traj: object, written: list[Path]) -> None:
