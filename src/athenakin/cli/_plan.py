@@ -9,7 +9,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ._collision import add_collision_options, collision_options
-from ._common import add_design_option, add_setup_options, load_design, load_rcm
+from ._common import (
+    add_design_option,
+    add_setup_options,
+    force_limits,
+    load_design,
+    load_rcm,
+)
 from ._output import add_force_option, outputs
 
 if TYPE_CHECKING:
@@ -176,11 +182,7 @@ def _force_options(args: argparse.Namespace) -> tuple[object, object]:
         return None, None
     from ..dynamics import MassModel
 
-    f_max = None
-    if args.f_max is not None:
-        if len(args.f_max) not in (1, 3):
-            raise ValueError(f"--f-max: expected 1 or 3 force limits (N), got {len(args.f_max)}")
-        f_max = args.f_max[0] if len(args.f_max) == 1 else tuple(args.f_max)
+    f_max = force_limits(args)
     return MassModel.from_toml(args.masses), f_max
 
 
