@@ -49,6 +49,31 @@ def test_plan_csv_round_trip(tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["path.csv", "traj.csv"]
 
 
+def test_plan_reads_its_options_file_and_the_flags_given_override_it(tmp_path, capsys):
+    """--options FILE: the [plan] table of a TOML file (PlanOptions.to_toml); a flag given
+    replaces its value, --margin the named margins only."""
+    src = write(tmp_path, "path.csv", SQUARE)
+    file_opts = PlanOptions(rate=200.0, j_max=5.0, margins=ak.motion.Margins(h=0.004))
+    opts = write(tmp_path, "plan.toml", D.to_toml() + file_opts.to_toml())
+    out = tmp_path / "a.csv"
+    assert main(["plan", str(src), "-o", str(out), "--no-plots", "--options", str(opts)]) == 0
+    tips = read_path_csv(src).tips_e
+    _, data = read_csv(out)
+    assert_allclose(data[:, 1:4], plan(tips, T, D, options=file_opts).q, atol=0)
+    out2 = tmp_path / "b.csv"
+    assert main(["plan", str(src), "-o", str(out2), "--no-plots", "--options", str(opts),
+                 "--rate", "100", "--margin", "p=0.01"]) == 0
+    want = PlanOptions(rate=100.0, j_max=5.0, margins=ak.motion.Margins(h=0.004, p=0.01))
+    _, data = read_csv(out2)
+    assert_allclose(data[:, 1:4], plan(tips, T, D, options=want).q, atol=0)
+    assert opts.read_text() == D.to_toml() + file_opts.to_toml()     # an input, kept
+    write(tmp_path, "bad.toml", "[plan]\nrate = 0.5\n")
+    assert main(["plan", str(src), "-o", str(tmp_path / "c.csv"), "--no-plots",
+                 "--options", str(tmp_path / "bad.toml")]) == 1
+    assert "bad.toml: rate: expected at least 1" in capsys.readouterr().err
+    assert not (tmp_path / "c.csv").exists()
+
+
 def test_plan_json_and_plots(tmp_path):
     src = EXAMPLES / "tip_square.csv"
     out = tmp_path / "traj.json"
