@@ -96,7 +96,7 @@ def parse_margins(items: list[str], base: object = None) -> object:
             kw[name.strip()] = float(value)
         except ValueError:
             raise ValueError(f"--margin {name}: expected a number, got {value!r}") from None
-    return Margins(**kw) if base is None else dataclasses.replace(base, **kw)
+    return Margins(**kw) if base is None else dataclasses.replace(base, **kw)  # type: ignore[type-var]
 
 
 #: Plausible ranges of the actuator limits (beyond them the time law has no meaning).
