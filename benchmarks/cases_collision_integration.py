@@ -18,7 +18,7 @@ from cases_motion import SQUARE, _replay  # the same path and replay as the moti
 
 import athenakin as ak
 from athenakin.analysis import instrument_cone
-from athenakin.motion import Tracker, plan, track
+from athenakin.motion import PlanOptions, Tracker, plan, track
 
 
 def cases(quick: bool) -> list[dict]:
@@ -43,7 +43,7 @@ def cases(quick: bool) -> list[dict]:
          "baseline": True, "call": lambda: plan(SQUARE, T, d)},
         {"name": "plan 20 mm square, 1 kHz, clearance of every sample",
          "group": "collision-plan", "batch": n_plan,
-         "call": lambda: plan(SQUARE, T, d, clearance_margin=0.0)},
+         "call": lambda: plan(SQUARE, T, d, options=PlanOptions(clearance_margin=0.0))},
         {"name": "instrument_cone", "group": "collision-cone", "batch": n_cone,
          "baseline": True, "call": lambda: instrument_cone(T, d, resolution=res)},
         {"name": "instrument_cone with the collision-free layer", "group": "collision-cone",

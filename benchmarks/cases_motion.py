@@ -13,7 +13,7 @@ Groups:
 import numpy as np
 
 import athenakin as ak
-from athenakin.motion import Tracker, plan
+from athenakin.motion import PlanOptions, Tracker, plan
 
 SQUARE = np.array([[0.25, 0.0, 0.0], [0.27, -0.02, 0.0], [0.27, -0.02, 0.02],
                    [0.25, 0.0, 0.02], [0.25, 0.0, 0.0]])
@@ -30,7 +30,7 @@ def _replay(tracker, q0, stream):
 def cases(quick: bool) -> list[dict]:
     d = ak.Design.default()
     T = ak.default_rcm_frame(d)
-    traj = plan(SQUARE, T, d, j_max=5.0)
+    traj = plan(SQUARE, T, d, options=PlanOptions(j_max=5.0))
     n = 1000 if quick else len(traj.q)
     smooth = [tuple(r) for r in traj.q[:n].tolist()]
     g = ak.parallel.circle_geometry(np.array([-0.1, 0.1, 0.3]), d)
@@ -50,7 +50,7 @@ def cases(quick: bool) -> list[dict]:
          "call": lambda: ak.forward_kinematics(q_one, T, d)},
         {"name": "plan 20 mm square, 1 kHz, jerk-limited", "group": "motion-plan",
          "batch": len(traj.t), "baseline": True,
-         "call": lambda: plan(SQUARE, T, d, j_max=5.0)},
+         "call": lambda: plan(SQUARE, T, d, options=PlanOptions(j_max=5.0))},
         {"name": "plan 20 mm square, 1 kHz, acceleration-limited", "group": "motion-plan",
          "batch": len(traj.t), "call": lambda: plan(SQUARE, T, d)},
     ]

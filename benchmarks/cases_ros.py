@@ -153,7 +153,7 @@ def cases(quick: bool) -> list[dict]:
 
         def call():
             path = out()
-            ak.ros.track_recording(rec, path, T, d, **kw)
+            ak.ros.track_recording(rec, path, T, d, options=ak.ros.TrackOptions(**kw))
             note.size = path.stat().st_size / n
         return call
 

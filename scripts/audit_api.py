@@ -151,7 +151,7 @@ class _Missing:
 
 def _traj() -> Any:
     tips = np.array([REF["tip_e"], REF["tip_e"] + [0.004, 0.0, 0.0]])
-    return ak.motion.plan(tips, T0, D, rate=200.0)
+    return ak.motion.plan(tips, T0, D, options=ak.motion.PlanOptions(rate=200.0))
 
 
 def _calib() -> Any:
@@ -301,9 +301,11 @@ OVERRIDES: dict[str, Callable[[dict[str, Path]], tuple[tuple, dict]]] = {
     "motion.Limits": lambda f: ((), dict(v_max=np.full(3, 0.05), a_max=np.full(3, 0.5))),
     "motion.Margins": lambda f: ((), {}),
     "motion.PathSpec": lambda f: (("tips",), dict(tips_e=BY_NAME["tips_e"])),
-    "motion.plan": lambda f: ((BY_NAME["tips_e"], T0, D), dict(rate=200.0)),
+    "motion.plan": lambda f: ((BY_NAME["tips_e"], T0, D),
+                              dict(options=ak.motion.PlanOptions(rate=200.0))),
     "motion.plan_directions": lambda f: (([0.3, 0.35], [0.2, 0.2], [0.08, 0.08], T0, D),
-                                         dict(rate=200.0)),
+                                         dict(options=ak.motion.PlanOptions(rate=200.0))),
+    "motion.PlanOptions": lambda f: ((), dict(rate=200.0, j_max=5.0)),
     "motion.check_samples": lambda f: _samples_args(),
     "motion.read_path_csv": lambda f: ((f["path_csv"],), {}),
     "motion.read_q_stream_csv": lambda f: ((f["q_csv"],), {}),
@@ -1273,7 +1275,8 @@ OVERRIDES.update({
     "ros.read_joint_states": lambda f: ((f["js_bag"],), {}),
     "ros.recording_format": lambda f: ((f["js_bag"],), {}),
     "ros.track_recording": lambda f: ((f["js_bag"], f["tmp"] / "track.mcap", T0, D),
-                                      dict(chunk_size=2)),
+                                      dict(options=ak.ros.TrackOptions(chunk_size=1024))),
+    "ros.TrackOptions": lambda f: ((), dict(chunk_size=1024, max_events=5)),
     "ros.track_to_mcap": lambda f: ((DR_STAMPS, DR_QS, f["tmp"] / "t2m.mcap", T0, D), {}),
     "ros.write_trajectory": lambda f: ((f["tmp"] / "traj.mcap", TRAJ()), {}),
 })

@@ -20,6 +20,7 @@ from athenakin.errors import InvalidInputError
 from athenakin.motion import (
     CollisionError,
     Margins,
+    PlanOptions,
     SafetyViolationError,
     Tracker,
     TrackFlag,
@@ -225,7 +226,8 @@ def test_plan_without_check_is_unchanged() -> None:
 
 
 def test_plan_records_the_clearance_of_every_sample() -> None:
-    traj = plan(SQUARE[:3], T, D, rate=100.0, bodies=BODIES, clearance_margin=0.0)
+    traj = plan(SQUARE[:3], T, D, bodies=BODIES,
+                options=PlanOptions(rate=100.0, clearance_margin=0.0))
     assert traj.clearance_margin == 0.0 and traj.clearance is not None
     ref, pairs = _reference(traj.q, _slots(traj), bodies=BODIES)
     assert_allclose(traj.clearance, ref, rtol=0, atol=1e-12)
@@ -239,12 +241,12 @@ def test_plan_refuses_the_first_sample_too_close() -> None:
     centre = (T @ np.append(mid, 1.0))[:3]            # on the path, in the base frame
     env = Environment().sphere(centre, 0.004, name="tumour")
     margin = 0.003
-    free = plan(SQUARE[:2], T, D, rate=200.0)
+    free = plan(SQUARE[:2], T, D, options=PlanOptions(rate=200.0))
     ref, pairs = _reference(free.q, _slots(free), bodies=BODIES, environment=env)
     first = int(np.flatnonzero(ref < margin)[0])
     with pytest.raises(CollisionError) as ei:
-        plan(SQUARE[:2], T, D, rate=200.0, bodies=BODIES, environment=env,
-             clearance_margin=margin)
+        plan(SQUARE[:2], T, D, bodies=BODIES, environment=env,
+             options=PlanOptions(rate=200.0, clearance_margin=margin))
     e = ei.value
     assert isinstance(e, SafetyViolationError) and e.limit == "clearance"
     assert e.index == first and e.time == pytest.approx(free.t[first], abs=1e-12)
@@ -257,35 +259,36 @@ def test_plan_refuses_the_first_sample_too_close() -> None:
 def test_plan_collision_comes_before_a_kinematic_limit_but_after_an_earlier_geometric_one(
 ) -> None:
     """The carriages: a margin larger than their clearance everywhere refuses sample 0."""
-    traj = plan(SQUARE[:2], T, D, rate=100.0, bodies=BODIES, clearance_margin=0.0)
+    traj = plan(SQUARE[:2], T, D, bodies=BODIES,
+                options=PlanOptions(rate=100.0, clearance_margin=0.0))
     big = float(np.max(traj.clearance)) + 0.001
     with pytest.raises(CollisionError) as ei:
-        plan(SQUARE[:2], T, D, rate=100.0, bodies=BODIES, clearance_margin=big)
+        plan(SQUARE[:2], T, D, bodies=BODIES, options=PlanOptions(rate=100.0, clearance_margin=big))
     assert ei.value.index == 0
     # a singularity margin broken at sample 0 too: the existing check reports it first
     with pytest.raises(SafetyViolationError) as ei2:
-        plan(SQUARE[:2], T, D, rate=100.0, bodies=BODIES, clearance_margin=big,
-             margins=Margins(p=10.0))
+        plan(SQUARE[:2], T, D, bodies=BODIES,
+             options=PlanOptions(rate=100.0, clearance_margin=big, margins=Margins(p=10.0)))
     assert ei2.value.limit == "p" and not isinstance(ei2.value, CollisionError)
 
 
 def test_plan_directions_checks_collisions_too() -> None:
-    from athenakin.motion import plan_directions
+    from athenakin.motion import PlanOptions, plan_directions
 
-    kw = dict(rate=100.0, bodies=BODIES)
-    free = plan_directions([0.0, 0.1], [1.5, 1.45], [0.25, 0.25], T, D, clearance_margin=0.0,
-                           **kw)
+    az, po, depth = [0.0, 0.1], [1.5, 1.45], [0.25, 0.25]
+    free = plan_directions(az, po, depth, T, D, bodies=BODIES,
+                           options=PlanOptions(rate=100.0, clearance_margin=0.0))
     ref, _ = _reference(free.q, _slots(free), bodies=BODIES)
     assert_allclose(free.clearance, ref, rtol=0, atol=1e-12)
     with pytest.raises(CollisionError) as ei:
-        plan_directions([0.0, 0.1], [1.5, 1.45], [0.25, 0.25], T, D,
-                        clearance_margin=float(np.min(ref)) + 1e-4, **kw)
+        plan_directions(az, po, depth, T, D, bodies=BODIES, options=PlanOptions(
+            rate=100.0, clearance_margin=float(np.min(ref)) + 1e-4))
     assert ei.value.index == int(np.flatnonzero(ref < np.min(ref) + 1e-4)[0])
 
 
 def test_plan_bad_collision_options_are_named() -> None:
     with pytest.raises(InvalidInputError, match="clearance_margin"):
-        plan(SQUARE[:2], T, D, clearance_margin=-1.0)
+        plan(SQUARE[:2], T, D, options=PlanOptions(clearance_margin=-1.0))
     with pytest.raises(TypeError, match="bodies"):
         plan(SQUARE[:2], T, D, bodies={"link_a": 0.01})
 

@@ -197,12 +197,12 @@ def test_robot_view_legend_names_the_other_mode_marker(fresh) -> None:
 
 def test_path_plot_keeps_waypoint_labels_inside_and_sizes_the_tip_path(fresh) -> None:
     pytest.importorskip("ruckig")
-    from athenakin.motion import plan
+    from athenakin.motion import PlanOptions, plan
     from athenakin.motion._plot import plot_tip_path
 
     tips = [[0.25, 0.0, 0.0], [0.27, -0.02, 0.0], [0.27, -0.02, 0.02], [0.25, 0.0, 0.02],
             [0.25, 0.0, 0.0]]
-    traj = plan(tips, T, D, j_max=5.0)
+    traj = plan(tips, T, D, options=PlanOptions(j_max=5.0))
     fig = plt.figure(figsize=(13, 6), layout="constrained")
     ctx = plot_tip_path(traj, ax=fig.add_subplot(1, 2, 1, projection="3d"), context=True)
     zoom = plot_tip_path(traj, ax=fig.add_subplot(1, 2, 2, projection="3d"), context=False)

@@ -139,7 +139,8 @@ def _traj():
     tips = ak.forward_kinematics(Q, T, D).tip
     k = int(np.argmax(ak.forward_kinematics(Q, T, D).valid))
     tip_e = (np.linalg.inv(T) @ np.append(tips[k], 1.0))[:3]
-    return ak.motion.plan(np.array([tip_e, tip_e + [0.004, 0, 0]]), T, D, rate=200.0)
+    return ak.motion.plan(np.array([tip_e, tip_e + [0.004, 0, 0]]), T, D,
+                          options=ak.motion.PlanOptions(rate=200.0))
 
 
 STAMPS = np.array([0, 1_000_000, 2_000_000], dtype=np.int64)

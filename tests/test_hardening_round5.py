@@ -287,11 +287,11 @@ def test_capsule_witness_of_the_fuzz_reproducer():
                                         (-1.0, InvalidInputError),
                                         (np.nan, InvalidInputError)])
 def test_plan_f_max_malformed_is_named(f_max, exc):
-    from athenakin.motion import plan
+    from athenakin.motion import PlanOptions, plan
 
     tips = [[0.25, 0.0, 0.0], [0.27, -0.02, 0.0]]
     with pytest.raises(exc, match=r"^f_max: "):
-        plan(tips, T, DES, masses=D.MassModel.reference(DES), f_max=f_max)
+        plan(tips, T, DES, masses=D.MassModel.reference(DES), options=PlanOptions(f_max=f_max))
 
 
 @pytest.mark.parametrize("pose, exc", [

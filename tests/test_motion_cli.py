@@ -9,7 +9,7 @@ from numpy.testing import assert_allclose
 
 import athenakin as ak
 from athenakin.cli import main
-from athenakin.motion import PathFileError, plan, plan_directions
+from athenakin.motion import PathFileError, PlanOptions, plan, plan_directions
 from athenakin.motion._io import read_path_csv, read_q_stream_csv
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -40,13 +40,38 @@ def test_plan_csv_round_trip(tmp_path, capsys):
     assert header == ["t_s", "q1_m", "q2_m", "q3_m", "qd1_m_s", "qd2_m_s", "qd3_m_s",
                       "qdd1_m_s2", "qdd2_m_s2", "qdd3_m_s2", "qddd1_m_s3", "qddd2_m_s3",
                       "qddd3_m_s3", "tip_x_m", "tip_y_m", "tip_z_m", "segment"]
-    traj = plan(read_path_csv(src).tips_e, T, D, j_max=5.0)
+    traj = plan(read_path_csv(src).tips_e, T, D, options=PlanOptions(j_max=5.0))
     assert_allclose(data[:, 0], traj.t, atol=0)
     assert_allclose(data[:, 1:4], traj.q, atol=0)        # repr(): exact round trip
     assert_allclose(data[:, 4:7], traj.qd, atol=0)
     assert_allclose(data[:, 13:16], traj.tip_e, atol=0)
     assert_allclose(data[:, 16], traj.segment)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["path.csv", "traj.csv"]
+
+
+def test_plan_reads_its_options_file_and_the_flags_given_override_it(tmp_path, capsys):
+    """--options FILE: the [plan] table of a TOML file (PlanOptions.to_toml); a flag given
+    replaces its value, --margin the named margins only."""
+    src = write(tmp_path, "path.csv", SQUARE)
+    file_opts = PlanOptions(rate=200.0, j_max=5.0, margins=ak.motion.Margins(h=0.004))
+    opts = write(tmp_path, "plan.toml", D.to_toml() + file_opts.to_toml())
+    out = tmp_path / "a.csv"
+    assert main(["plan", str(src), "-o", str(out), "--no-plots", "--options", str(opts)]) == 0
+    tips = read_path_csv(src).tips_e
+    _, data = read_csv(out)
+    assert_allclose(data[:, 1:4], plan(tips, T, D, options=file_opts).q, atol=0)
+    out2 = tmp_path / "b.csv"
+    assert main(["plan", str(src), "-o", str(out2), "--no-plots", "--options", str(opts),
+                 "--rate", "100", "--margin", "p=0.01"]) == 0
+    want = PlanOptions(rate=100.0, j_max=5.0, margins=ak.motion.Margins(h=0.004, p=0.01))
+    _, data = read_csv(out2)
+    assert_allclose(data[:, 1:4], plan(tips, T, D, options=want).q, atol=0)
+    assert opts.read_text() == D.to_toml() + file_opts.to_toml()     # an input, kept
+    write(tmp_path, "bad.toml", "[plan]\nrate = 0.5\n")
+    assert main(["plan", str(src), "-o", str(tmp_path / "c.csv"), "--no-plots",
+                 "--options", str(tmp_path / "bad.toml")]) == 1
+    assert "bad.toml: rate: expected at least 1" in capsys.readouterr().err
+    assert not (tmp_path / "c.csv").exists()
 
 
 def test_plan_json_and_plots(tmp_path):

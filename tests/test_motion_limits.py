@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import athenakin as ak
-from athenakin.motion import Margins, plan, plan_directions
+from athenakin.motion import Margins, PlanOptions, plan, plan_directions
 from athenakin.motion import _plan as plan_module
 from athenakin.motion._errors import (
     MotionError,
@@ -53,7 +53,7 @@ def test_waypoint_typed_in_mm_names_the_waypoint_and_the_unit():
 def test_waypoint_outside_the_workspace_says_so_not_parameter_limits():
     tips = [TIP0, TIP0 + 1.01 * (TOWARD_H0 - TIP0), TIP0]
     with pytest.raises(PathInfeasibleError, match="waypoint 1 .*outside the workspace") as ei:
-        plan(tips, T, D, margins=OFF)
+        plan(tips, T, D, options=PlanOptions(margins=OFF))
     assert "parameter_limits" not in str(ei.value) and ei.value.waypoint == 1
 
 
@@ -74,7 +74,7 @@ def test_segment_leaving_the_workspace_between_inside_waypoints_names_the_segmen
     assert not outside[0] and not outside[-1] and outside.any()
     with pytest.raises(PathInfeasibleError, match=r"segment 1 \(waypoint 1 -> 2\) leaves the "
                                                   r"workspace") as ei:
-        plan([a + [0.0, 0.0, 0.005], a, b], T, D, margins=OFF)
+        plan([a + [0.0, 0.0, 0.005], a, b], T, D, options=PlanOptions(margins=OFF))
     assert ei.value.segment == 1 and ei.value.waypoint is None
 
 
@@ -82,7 +82,7 @@ def test_segment_leaving_the_workspace_between_inside_waypoints_names_the_segmen
 def test_segment_ending_at_the_border_is_refused_by_duration(eps):
     end = TIP0 + BORDER * (1 - eps) * (TOWARD_H0 - TIP0)
     with pytest.raises(TrajectoryLimitError, match=r"segment 0 .*max_duration") as ei:
-        plan([TIP0, end], T, D, margins=OFF)
+        plan([TIP0, end], T, D, options=PlanOptions(margins=OFF))
     e = ei.value
     assert e.limit == "max_duration" and e.segment == 0 and e.value > e.bound == 3600.0
 
@@ -92,31 +92,32 @@ def test_ruckig_failure_is_a_named_one_line_error():
     # "ValueError: -101 is not a valid Result")
     end = TIP0 + BORDER * (1 - 1e-9) * (TOWARD_H0 - TIP0)
     with pytest.raises(TrajectoryLimitError, match=r"segment 0 .*Ruckig") as ei:
-        plan([TIP0, end], T, D, margins=OFF, max_duration=1e9)
+        plan([TIP0, end], T, D, options=PlanOptions(margins=OFF, max_duration=1e9))
     assert ei.value.limit == "time_law" and "\n" not in str(ei.value)
 
 
 def test_rate_1e9_is_a_named_error_naming_the_sample_bound():
     with pytest.raises(TrajectoryLimitError, match="max_samples") as ei:
-        plan([TIP0, [0.27, -0.02, 0.0]], T, D, rate=1e9)
+        plan([TIP0, [0.27, -0.02, 0.0]], T, D, options=PlanOptions(rate=1e9))
     assert ei.value.limit == "max_samples" and ei.value.value > 1e8
 
 
 def test_max_duration_and_max_samples_are_keywords_with_checked_values():
     tips = [TIP0, [0.27, -0.02, 0.0]]
     with pytest.raises(TrajectoryLimitError, match="max_duration = 0.1 s"):
-        plan(tips, T, D, max_duration=0.1)
+        plan(tips, T, D, options=PlanOptions(max_duration=0.1))
     with pytest.raises(TrajectoryLimitError, match="max_samples = 10"):
-        plan(tips, T, D, max_samples=10)
+        plan(tips, T, D, options=PlanOptions(max_samples=10))
     with pytest.raises(ValueError, match="max_samples"):
-        plan(tips, T, D, max_samples=1.5)
+        plan(tips, T, D, options=PlanOptions(max_samples=1.5))
     with pytest.raises(ValueError, match="max_duration"):
-        plan(tips, T, D, max_duration=-1.0)
+        plan(tips, T, D, options=PlanOptions(max_duration=-1.0))
     # fixed times are checked against the bounds before anything else
     with pytest.raises(TrajectoryLimitError, match="max_duration"):
         plan(tips, T, D, times=[0.0, 1e6])
     with pytest.raises(TrajectoryLimitError, match="max_duration"):
-        plan_directions([0.0, 0.1], [1.4, 1.4], [0.25, 0.25], T, D, max_duration=1e-3)
+        plan_directions([0.0, 0.1], [1.4, 1.4], [0.25, 0.25], T, D,
+                        options=PlanOptions(max_duration=1e-3))
 
 
 def test_chunked_checks_stop_at_the_first_violating_chunk(monkeypatch):
@@ -125,7 +126,7 @@ def test_chunked_checks_stop_at_the_first_violating_chunk(monkeypatch):
     tips = [TIP0, [0.27, -0.02, 0.0], [0.27, -0.02, 0.02]]
     tight = Margins(link=0.12)   # crossed about halfway
     with pytest.raises(SafetyViolationError) as whole:
-        plan(tips, T, D, margins=tight)
+        plan(tips, T, D, options=PlanOptions(margins=tight))
     calls = []
     orig = plan_module._sample
 
@@ -136,7 +137,7 @@ def test_chunked_checks_stop_at_the_first_violating_chunk(monkeypatch):
     monkeypatch.setattr(plan_module, "CHECK_CHUNK", 50)
     monkeypatch.setattr(plan_module, "_sample", counting)
     with pytest.raises(SafetyViolationError) as chunked:
-        plan(tips, T, D, margins=tight)
+        plan(tips, T, D, options=PlanOptions(margins=tight))
     assert chunked.value.index == whole.value.index > 0
     assert chunked.value.limit == whole.value.limit
     assert chunked.value.time == whole.value.time

@@ -9,6 +9,7 @@ from numpy.testing import assert_allclose
 import athenakin as ak
 from athenakin.motion import (
     Margins,
+    PlanOptions,
     SafetyViolationError,
     TimingInfeasibleError,
     plan,
@@ -70,7 +71,7 @@ def dist_to_segments(tips, traj):
 # --- round trips, RCM, path --------------------------------------------------------------
 @pytest.mark.parametrize("j_max", [None, 5.0])
 def test_round_trip_square(j_max):
-    traj = plan(SQUARE, T, D, rate=1000.0, v_max=0.05, a_max=0.5, j_max=j_max)
+    traj = plan(SQUARE, T, D, options=PlanOptions(rate=1000.0, v_max=0.05, a_max=0.5, j_max=j_max))
     tip_e, dist, _ = fk_tip_and_axis(traj.q, traj.mode)
     assert_allclose(tip_e, traj.tip_e, rtol=0, atol=1e-12)          # FK of q = planned tip
     assert dist.max() <= 1e-12                                       # axis through the RCM
@@ -91,7 +92,7 @@ def test_round_trip_seeded_paths():
     for tips in random_paths(25, rng):
         rate = float(rng.choice([250.0, 500.0, 1000.0]))
         v, a, j = rng.uniform(0.02, 0.1), rng.uniform(0.2, 1.0), rng.uniform(2.0, 20.0)
-        traj = plan(tips, T, D, rate=rate, v_max=v, a_max=a, j_max=j)
+        traj = plan(tips, T, D, options=PlanOptions(rate=rate, v_max=v, a_max=a, j_max=j))
         tip_e, dist, _ = fk_tip_and_axis(traj.q, traj.mode)
         assert_allclose(tip_e, traj.tip_e, rtol=0, atol=1e-12)
         assert dist.max() <= 1e-12
@@ -118,7 +119,7 @@ def test_round_trip_seeded_direction_paths():
         if np.any(q_on_tips(tips, T, D)[1] != 0):
             continue
         try:
-            traj = plan_directions(az, po, depth, T, D, j_max=5.0)
+            traj = plan_directions(az, po, depth, T, D, options=PlanOptions(j_max=5.0))
         except SafetyViolationError:
             continue          # a great circle may leave the workspace between valid ends
         done += 1
@@ -131,7 +132,7 @@ def test_round_trip_seeded_direction_paths():
 
 
 def test_derivatives_match_finite_differences_of_samples():
-    traj = plan(SQUARE, T, D, j_max=5.0)
+    traj = plan(SQUARE, T, D, options=PlanOptions(j_max=5.0))
     dt = 1.0 / traj.rate
     qd_fd = (traj.q[2:] - traj.q[:-2]) / (2 * dt)
     qdd_fd = (traj.qd[2:] - traj.qd[:-2]) / (2 * dt)
@@ -187,7 +188,7 @@ def test_plan_directions_great_circle_and_linear_depth():
     az = np.radians([0.0, -3.0, -3.0, 0.0])
     po = np.radians([90.0, 90.0, 86.0, 86.0])
     depth = np.array([0.25, 0.26, 0.26, 0.25])
-    traj = plan_directions(az, po, depth, T, D, j_max=5.0)
+    traj = plan_directions(az, po, depth, T, D, options=PlanOptions(j_max=5.0))
     dirs = ak.direction_from_angles(az, po)
     k = traj.segment
     n = np.cross(dirs[k], dirs[k + 1])
@@ -209,7 +210,8 @@ def test_plan_directions_great_circle_and_linear_depth():
 def test_limits_respected_per_actuator_and_tip_speed():
     v = np.array([0.03, 0.05, 0.02])
     a = np.array([0.3, 0.5, 0.2])
-    traj = plan(SQUARE, T, D, v_max=v, a_max=a, j_max=[3.0, 5.0, 2.0], tip_speed=0.01)
+    traj = plan(SQUARE, T, D,
+                options=PlanOptions(v_max=v, a_max=a, j_max=[3.0, 5.0, 2.0], tip_speed=0.01))
     assert np.all(np.abs(traj.qd) <= v * (1 + 1e-6))
     assert np.all(np.abs(traj.qdd) <= a * (1 + 1e-6))
     assert np.all(np.abs(traj.qddd) <= np.array([3.0, 5.0, 2.0]) * (1 + 1e-6))
@@ -219,7 +221,8 @@ def test_limits_respected_per_actuator_and_tip_speed():
 
 
 def test_tighter_limits_take_longer():
-    durations = [plan(SQUARE, T, D, v_max=v, a_max=0.5).duration for v in (0.08, 0.04, 0.02)]
+    durations = [plan(SQUARE, T, D, options=PlanOptions(v_max=v, a_max=0.5)).duration
+                 for v in (0.08, 0.04, 0.02)]
     assert durations[0] < durations[1] < durations[2]
 
 
@@ -229,7 +232,7 @@ def test_close_to_time_optimal_without_jerk_limit():
     import toppra.algorithm as algo
     import toppra.constraint as constraint
 
-    traj = plan(SQUARE, T, D, v_max=0.05, a_max=0.5)
+    traj = plan(SQUARE, T, D, options=PlanOptions(v_max=0.05, a_max=0.5))
     optimal = 0.0
     for k in range(len(SQUARE) - 1):
         seg = line_segment(SQUARE[k], SQUARE[k + 1])
@@ -247,7 +250,7 @@ def test_close_to_time_optimal_without_jerk_limit():
 def test_requested_times_are_kept_when_feasible():
     times = np.array([1.0, 4.0, 5.5, 8.0, 10.0])
     for timing in ("stretch", "fixed"):
-        traj = plan(SQUARE, T, D, times=times, timing=timing, j_max=5.0)
+        traj = plan(SQUARE, T, D, times=times, options=PlanOptions(timing=timing, j_max=5.0))
         assert_allclose(traj.waypoint_times, times, atol=1e-9)
         assert traj.t[0] == 1.0 and traj.t[-1] >= 10.0 - 1e-12
         assert not traj.stretched.any()
@@ -268,7 +271,7 @@ def test_too_fast_times_are_stretched():
 def test_too_fast_fixed_times_raise_with_where_and_which_limit():
     times = np.array([0.0, 2.5, 2.8, 5.0, 6.5])
     with pytest.raises(TimingInfeasibleError, match="segment 1") as ei:
-        plan(SQUARE, T, D, times=times, timing="fixed")
+        plan(SQUARE, T, D, times=times, options=PlanOptions(timing="fixed"))
     e = ei.value
     assert isinstance(e, SafetyViolationError) and isinstance(e, ak.KinematicsError)
     assert e.segment == 1 and e.requested == pytest.approx(0.3)
@@ -281,7 +284,7 @@ def test_too_fast_fixed_times_raise_with_where_and_which_limit():
 
 def test_dwell_on_a_repeated_waypoint():
     tips = np.array([TIP0, TIP0 + [0.01, -0.01, 0.0], TIP0 + [0.01, -0.01, 0.0], TIP0])
-    traj = plan(tips, T, D, times=[0.0, 2.0, 3.0, 5.0], timing="fixed")
+    traj = plan(tips, T, D, times=[0.0, 2.0, 3.0, 5.0], options=PlanOptions(timing="fixed"))
     hold = (traj.t > 2.0 + 1e-9) & (traj.t < 3.0 - 1e-9)
     assert hold.sum() > 900
     assert_allclose(traj.q[hold], np.broadcast_to(traj.q[hold][0], traj.q[hold].shape),
@@ -294,11 +297,12 @@ def test_near_singular_path_honours_the_margin():
     """A path ending 10 mm from the h = 0 singularity: refused with h >= 12 mm, kept with 5 mm."""
     end = TIP0 + 0.99 * (TOWARD_H0 - TIP0)
     with pytest.raises(SafetyViolationError, match="singularity margin 'h'") as ei:
-        plan([TIP0, end], T, D, margins=dataclasses.replace(OFF, h=0.012))
+        plan([TIP0, end], T, D, options=PlanOptions(margins=dataclasses.replace(OFF, h=0.012)))
     e = ei.value
     assert e.limit == "h" and e.value < 0.012 and e.bound == 0.012 and e.actuator is None
     assert e.time == pytest.approx(e.index / 1000.0)
-    traj = plan([TIP0, end], T, D, margins=dataclasses.replace(OFF, h=0.005), j_max=5.0)
+    traj = plan([TIP0, end], T, D,
+                options=PlanOptions(margins=dataclasses.replace(OFF, h=0.005), j_max=5.0))
     assert traj.measures.h.min() >= 0.005
     assert traj.measures.h.min() < 0.012                      # it did go near
     # the measure is the truth: |h| = |q1 - q2| / 2 on every sample
@@ -320,12 +324,13 @@ def test_each_margin_is_checked(name, value):
     """Each measure's margin stops a path that crosses it (and only when crossed)."""
     az, po = np.radians([0.0, 0.0]), np.radians([90.0, 75.0])
     depth = [0.25, 0.26]
-    traj = plan_directions(az, po, depth, T, D, margins=OFF)
+    traj = plan_directions(az, po, depth, T, D, options=PlanOptions(margins=OFF))
     meas = getattr(traj.measures, name)
     crossed = meas.max() > value if name == "cond" else meas.min() < value
     assert crossed, f"test path does not cross {name} = {value}"
     with pytest.raises(SafetyViolationError) as ei:
-        plan_directions(az, po, depth, T, D, margins=dataclasses.replace(OFF, **{name: value}))
+        plan_directions(az, po, depth, T, D,
+                        options=PlanOptions(margins=dataclasses.replace(OFF, **{name: value})))
     e = ei.value
     assert e.limit == name
     i = e.index
@@ -336,7 +341,7 @@ def test_each_margin_is_checked(name, value):
 
 def test_sin_u4_is_the_sine_of_the_polar_angle():
     az, po = np.radians([0.0, 10.0]), np.radians([90.0, 75.0])
-    traj = plan_directions(az, po, [0.25, 0.25], T, D, margins=OFF)
+    traj = plan_directions(az, po, [0.25, 0.25], T, D, options=PlanOptions(margins=OFF))
     _, polar = ak.angles_from_direction(traj.direction_e)
     assert_allclose(traj.measures.sin_u4, np.sin(polar), atol=1e-12)
     # and equals |sin u4| of the core FK
@@ -349,7 +354,7 @@ def test_leaving_the_workspace_raises_workspace():
     # the end waypoint is outside: found before any timing, naming the waypoint (issue 13.6)
     end = TIP0 + 1.02 * (TOWARD_H0 - TIP0)
     with pytest.raises(SafetyViolationError, match="waypoint 1 .* outside the workspace") as ei:
-        plan([TIP0, end], T, D, margins=OFF)
+        plan([TIP0, end], T, D, options=PlanOptions(margins=OFF))
     assert ei.value.limit == "workspace"
     assert ei.value.waypoint == 1 and ei.value.index == -1
 
@@ -389,8 +394,10 @@ def test_ambient_checks_do_not_fire_on_a_safe_path():
 def test_bad_arguments(kwargs, exc, match):
     args = {"tips_e": SQUARE, "T_b_e": T, "design": D}
     args.update(kwargs)
+    names = {f.name for f in dataclasses.fields(PlanOptions)}
     with pytest.raises(exc, match=match):
-        plan(args.pop("tips_e"), args.pop("T_b_e"), args.pop("design"), **args)
+        opts = PlanOptions(**{k: args.pop(k) for k in list(args) if k in names})
+        plan(args.pop("tips_e"), args.pop("T_b_e"), args.pop("design"), **args, options=opts)
 
 
 def test_bad_direction_arguments():

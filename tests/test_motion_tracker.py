@@ -10,6 +10,7 @@ from numpy.testing import assert_allclose
 import athenakin as ak
 from athenakin.motion import (
     Margins,
+    PlanOptions,
     TrackedPose,
     Tracker,
     TrackFlag,
@@ -119,7 +120,7 @@ def test_default_slot_prefers_mode_plus_and_positive_p():
 # --- continuity -------------------------------------------------------------------------------
 def test_replays_a_planned_trajectory_without_flags():
     tips = np.array([[0.25, 0.0, 0.0], [0.27, -0.02, 0.0], [0.27, -0.02, 0.02], [0.25, 0, 0]])
-    traj = plan(tips, T, D, j_max=5.0)
+    traj = plan(tips, T, D, options=PlanOptions(j_max=5.0))
     log = track(traj.q, T, D)
     assert not log.flags.any()
     assert_allclose(log.tip_e, traj.tip_e, atol=1e-12)

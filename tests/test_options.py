@@ -381,3 +381,112 @@ def test_cli_synthesize_reads_its_options_file(tmp_path, monkeypatch, capsys):
     meta = json.loads((tmp_path / "b" / "_study.json").read_text())
     assert meta["encoder_resolution"] == 1e-6 and meta["collision"]["samples"] == 40
     assert meta["chunk_size"] == 2
+
+
+# ------------------------------------------------------------------------------ plan
+PLAN_TIPS = [[0.25, 0.0, 0.0], [0.27, -0.02, 0.0]]
+
+
+@pytest.mark.parametrize("opts", [
+    ak.motion.PlanOptions(),
+    ak.motion.PlanOptions(rate=250.0, v_max=(0.04, 0.05, 0.06), a_max=0.4, j_max=5.0,
+                          tip_speed=0.02, timing="fixed",
+                          margins=ak.motion.Margins(h=0.01, cond=float("inf")),
+                          max_duration=60.0, max_samples=10_000, clearance_margin=0.002,
+                          f_max=(30.0, 30.0, 40.0)),
+])
+def test_plan_options_toml_roundtrip(opts, tmp_path):
+    back = roundtrip(opts, tmp_path)
+    assert back.margins == opts.margins and back.v_max == opts.v_max
+    assert "[plan.margins]" in opts.to_toml()
+
+
+def test_plan_options_normalise_limits():
+    o = ak.motion.PlanOptions(v_max=np.array([0.04, 0.05, 0.06]), a_max=1, f_max=[1, 2, 3])
+    assert o.v_max == (0.04, 0.05, 0.06) and o.a_max == 1.0 and o.f_max == (1.0, 2.0, 3.0)
+    assert hash(o) == hash(ak.motion.PlanOptions.from_mapping(o.to_mapping()))
+
+
+@pytest.mark.parametrize("kw, exc, match", [
+    ({"rate": 0.5}, ValueError, "^rate: "),
+    ({"rate": float("nan")}, InvalidInputError, "^rate: "),
+    ({"v_max": -1.0}, ValueError, "^v_max: "),
+    ({"a_max": [0.5, 0.5]}, ValueError, "^a_max: "),
+    ({"j_max": "x"}, TypeError, "^j_max"),
+    ({"tip_speed": 0.0}, InvalidInputError, "^tip_speed: "),
+    ({"timing": "exact"}, ValueError, "^timing: "),
+    ({"margins": {"h": 0.01}}, TypeError, "^margins: "),
+    ({"max_duration": -1.0}, InvalidInputError, "^max_duration: "),
+    ({"max_samples": 1.5}, ValueError, "^max_samples: "),
+    ({"max_samples": 1}, ValueError, "^max_samples: "),
+    ({"clearance_margin": -1.0}, InvalidInputError, "^clearance_margin: "),
+    ({"clearance_margin": 2.0}, InvalidInputError, "^clearance_margin: "),
+    ({"f_max": [1.0, -1.0, 1.0]}, InvalidInputError, "^f_max: "),
+])
+def test_plan_options_bad_field_named(kw, exc, match):
+    with pytest.raises(exc, match=match):
+        ak.motion.PlanOptions(**kw)
+
+
+def test_plan_options_bad_table_named(tmp_path):
+    f = tmp_path / "o.toml"
+    f.write_text("[plan]\nrate = 500.0\nratee = 1\n")
+    with pytest.raises(InvalidInputError, match=r"o\.toml: plan: unknown key.*ratee"):
+        ak.motion.PlanOptions.from_toml(f)
+    f.write_text("[plan]\nrate = 500.0\n[plan.margins]\nhh = 0.01\n")
+    with pytest.raises(InvalidInputError, match=r"o\.toml: plan\.margins: unknown key.*hh"):
+        ak.motion.PlanOptions.from_toml(f)
+    f.write_text('[plan]\nmax_samples = "many"\n')
+    with pytest.raises(InvalidInputError, match=r"o\.toml: .*max_samples"):
+        ak.motion.PlanOptions.from_toml(f)
+    with pytest.raises(TypeError, match="^options: expected PlanOptions"):
+        ak.motion.plan(PLAN_TIPS, T, D, options={"rate": 200.0})
+
+
+def test_plan_options_frozen():
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        ak.motion.PlanOptions().rate = 10.0
+
+
+def test_plan_default_options_same_result():
+    """options=None, PlanOptions() and the defaults written out give one trajectory."""
+    a = ak.motion.plan(PLAN_TIPS, T, D)
+    b = ak.motion.plan(PLAN_TIPS, T, D, options=ak.motion.PlanOptions())
+    c = ak.motion.plan(PLAN_TIPS, T, D, options=ak.motion.PlanOptions(
+        rate=1000.0, v_max=0.05, a_max=0.5, j_max=None, tip_speed=None, timing="stretch",
+        margins=ak.motion.Margins(), max_duration=3600.0, max_samples=2_000_000))
+    for r in (b, c):
+        np.testing.assert_array_equal(r.q, a.q)
+        np.testing.assert_array_equal(r.qd, a.qd)
+        np.testing.assert_array_equal(r.limits.v_max, a.limits.v_max)
+
+
+# ------------------------------------------------------------------------------ track
+@pytest.mark.parametrize("opts", [
+    ak.ros.TrackOptions(),
+    ak.ros.TrackOptions(chunk_size=4096, max_events=0, compression="lz4", compression_level=3),
+    ak.ros.TrackOptions(compression="none"),
+])
+def test_track_options_toml_roundtrip(opts, tmp_path):
+    roundtrip(opts, tmp_path)
+
+
+@pytest.mark.parametrize("kw, match", [
+    ({"chunk_size": 7}, "^chunk_size: "),
+    ({"chunk_size": 2.5}, "^chunk_size: "),
+    ({"max_events": -1}, "^max_events: "),
+    ({"max_events": 10**7}, "^max_events: "),
+    ({"compression": "gzip"}, "^compression: "),
+    ({"compression": "zstd", "compression_level": 23}, "^compression_level: "),
+    ({"compression": "none", "compression_level": 1}, "^compression_level: "),
+])
+def test_track_options_bad_field_named(kw, match):
+    with pytest.raises(InvalidInputError, match=match):
+        ak.ros.TrackOptions(**kw)
+
+
+def test_track_options_checked_by_the_functions(tmp_path):
+    with pytest.raises(TypeError, match="^options: expected TrackOptions"):
+        ak.ros.track_to_mcap(np.arange(2), np.zeros((2, 3)), tmp_path / "o.mcap", T, D,
+                             options={"max_events": 3})
+    assert not (tmp_path / "o.mcap").exists()

@@ -9,7 +9,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 import athenakin as ak  # noqa: E402
-from athenakin.motion import plan  # noqa: E402
+from athenakin.motion import PlanOptions, plan  # noqa: E402
 from athenakin.motion._plot import plot_actuators, plot_tip_path, waypoint_labels  # noqa: E402
 
 SEED = 1214
@@ -22,7 +22,7 @@ SQUARE = np.array([[0.25, 0, 0], [0.27, -0.02, 0], [0.27, -0.02, 0.02], [0.25, 0
 
 @pytest.fixture(scope="module")
 def traj():
-    return plan(SQUARE, T, D, j_max=5.0, rate=100.0)
+    return plan(SQUARE, T, D, options=PlanOptions(j_max=5.0, rate=100.0))
 
 
 def test_closed_path_waypoints_share_one_label(traj):

@@ -159,3 +159,21 @@ def test_track_refuses_a_fifo_without_blocking(tmp_path, capsys):
     os.mkfifo(fifo)
     assert main(["track", str(fifo), "-o", str(tmp_path / "o.mcap")]) == 1
     assert "not a regular file" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("tty, flags, shown", [
+    (True, [], True), (True, ["--no-progress"], False), (False, [], False)])
+def test_track_progress_is_a_tqdm_bar_on_a_terminal_only(tmp_path, capsys, monkeypatch,
+                                                         tty, flags, shown):
+    """A tqdm bar of the readings on stderr when it is a terminal, unless --no-progress;
+    stdout (the summary) is the same either way."""
+    import sys
+
+    pytest.importorskip("tqdm")
+    src = write_mcap(tmp_path / "a.mcap", positions(q_stream(40)), stamps(40))
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: tty)
+    assert main(["track", str(src), "-o", str(tmp_path / "o.mcap"), *flags]) == 0
+    cap = capsys.readouterr()
+    assert "tracked 40 samples" in cap.out and "readings" not in cap.out
+    assert bool(re.search(r"track: 40(\.0)? readings \[", cap.err)) == shown
+    assert "\r  40 readings" not in cap.err          # the hand-written counter is gone

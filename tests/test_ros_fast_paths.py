@@ -82,7 +82,8 @@ def _both_writers(tmp_path, monkeypatch, name, st, q, **kw):
                          ids=["all-valid", "some-lost", "every-other-lost"])
 def test_compiled_writer_writes_the_numpy_writers_bytes(tmp_path, monkeypatch, lost):
     st, q = _stream(300, 11, lost)
-    fast, slow = _both_writers(tmp_path, monkeypatch, "w", st, q, compression="none")
+    fast, slow = _both_writers(tmp_path, monkeypatch, "w", st, q,
+                               options=ak.ros.TrackOptions(compression="none"))
     assert fast.read_bytes() == slow.read_bytes()
 
 
@@ -138,8 +139,8 @@ def test_files_pass_the_crc_checking_readers_and_rosbags(tmp_path, compression, 
     n = 2500
     st, q = _stream(n, 14, lost=(3, 1999))
     path = tmp_path / "o.mcap"
-    summary = ak.ros.track_to_mcap(st, q, path, T, D, compression=compression,
-                                   compression_level=level)
+    summary = ak.ros.track_to_mcap(st, q, path, T, D, options=ak.ros.TrackOptions(
+        compression=compression, compression_level=level))
     msgs = _validated_messages(path)
     counts = {}
     for topic, _ in msgs:
@@ -165,7 +166,8 @@ def test_compression_is_checked(tmp_path):
                      ({"compression": "lz4", "compression_level": -1}, "compression_level"),
                      ({"compression": "none", "compression_level": 1}, "compression_level")):
         with pytest.raises(InvalidInputError, match=word):
-            ak.ros.track_to_mcap(st, q, tmp_path / "x.mcap", T, D, **kw)
+            ak.ros.track_to_mcap(st, q, tmp_path / "x.mcap", T, D,
+                                 options=ak.ros.TrackOptions(**kw))
     assert not (tmp_path / "x.mcap").exists()
 
 

@@ -15,6 +15,7 @@ from athenakin.ros import (  # noqa: E402
     RecordingError,
     TF_FRAMES,
     TOPICS,
+    TrackOptions,
     track_recording,
     track_to_mcap,
     write_trajectory,
@@ -188,7 +189,7 @@ def test_no_partial_output_on_a_corrupt_recording(tmp_path):
     out_dir = tmp_path / "out"
     out_dir.mkdir()
     with pytest.raises(RecordingError):
-        track_recording(cut, out_dir / "o.mcap", T, D, chunk_size=1024)
+        track_recording(cut, out_dir / "o.mcap", T, D, options=TrackOptions(chunk_size=1024))
     assert list(out_dir.iterdir()) == []
 
 
@@ -200,15 +201,15 @@ def test_no_partial_output_when_stamps_go_backwards(tmp_path):
     out_dir = tmp_path / "out"
     out_dir.mkdir()
     with pytest.raises(RecordingError, match="backwards at message 2500"):
-        track_recording(src, out_dir / "o.mcap", T, D, chunk_size=1024)
+        track_recording(src, out_dir / "o.mcap", T, D, options=TrackOptions(chunk_size=1024))
     assert list(out_dir.iterdir()) == []
 
 
 def test_write_trajectory_round_trip(tmp_path):
-    from athenakin.motion import plan
+    from athenakin.motion import PlanOptions, plan
 
     tips = np.array([[0.25, 0.0, 0.0], [0.26, -0.01, 0.005], [0.25, 0.0, 0.01]])
-    traj = plan(tips, T, D, rate=200.0)
+    traj = plan(tips, T, D, options=PlanOptions(rate=200.0))
     start = 1_700_000_000_000_000_001
     path = write_trajectory(tmp_path / "traj.mcap", traj, start_ns=start)
     msgs, types = _rosbags_read(path)
@@ -343,5 +344,6 @@ def test_ctrl_c_leaves_nothing(tmp_path):
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        track_recording(src, out_dir / "o.mcap", T, D, chunk_size=1024, progress=interrupt)
+        track_recording(src, out_dir / "o.mcap", T, D, progress=interrupt,
+                        options=TrackOptions(chunk_size=1024))
     assert list(out_dir.iterdir()) == []

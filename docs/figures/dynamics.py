@@ -191,10 +191,11 @@ def main() -> None:
     plt.close(fig)
 
     # --- 4. the example motion ---------------------------------------------------------
-    from athenakin.motion import plan, read_path_csv
+    from athenakin.motion import PlanOptions, plan, read_path_csv
 
     spec = read_path_csv(EXAMPLES / "tip_square.csv")
-    traj = plan(spec.tips_e, T, D, rate=1000.0, v_max=0.05, a_max=0.5, j_max=5.0)
+    traj = plan(spec.tips_e, T, D,
+                options=PlanOptions(rate=1000.0, v_max=0.05, a_max=0.5, j_max=5.0))
     slot = np.where(traj.mode == 1, 0, 8)
     assert np.all(slot == slot[0])
     tau = dy.inverse_dynamics(traj.q, traj.qd, traj.qdd, T, D, masses=M, slot=int(slot[0]))

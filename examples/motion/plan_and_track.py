@@ -9,7 +9,15 @@ from pathlib import Path
 import numpy as np
 
 import athenakin as ak
-from athenakin.motion import Margins, SafetyViolationError, TrackFlag, plan, read_path_csv, track
+from athenakin.motion import (
+    Margins,
+    PlanOptions,
+    SafetyViolationError,
+    TrackFlag,
+    plan,
+    read_path_csv,
+    track,
+)
 
 HERE = Path(__file__).resolve().parent
 design = ak.Design.default()
@@ -17,7 +25,8 @@ T_b_e = ak.default_rcm_frame(design)           # the surgeon's set-up (here: the
 
 # 1. a tool-tip path in the RCM frame E (metres), from a CSV file -> 1 kHz actuator trajectory
 spec = read_path_csv(HERE / "tip_square.csv")
-traj = plan(spec.tips_e, T_b_e, design, rate=1000.0, v_max=0.05, a_max=0.5, j_max=5.0)
+traj = plan(spec.tips_e, T_b_e, design,
+            options=PlanOptions(rate=1000.0, v_max=0.05, a_max=0.5, j_max=5.0))
 print(f"{len(traj.t)} samples, {traj.duration:.3f} s; waypoints at "
       + ", ".join(f"{t:.3f}" for t in traj.waypoint_times) + " s")
 print("peak |qd| [m/s]:", np.abs(traj.qd).max(axis=0).round(4),
@@ -28,7 +37,8 @@ print("closest singularity:", min(ratios, key=lambda k: ratios[k].min()),
 
 # 2. a path that runs into the h = 0 singularity is refused, with where and why
 try:
-    plan([[0.25, 0.0, 0.0], [0.22, 0.0, 0.02]], T_b_e, design, margins=Margins(h=0.01))
+    plan([[0.25, 0.0, 0.0], [0.22, 0.0, 0.02]], T_b_e, design,
+         options=PlanOptions(margins=Margins(h=0.01)))
 except SafetyViolationError as exc:
     print(f"refused: {exc.limit} at t = {exc.time:.3f} s (sample {exc.index})")
 

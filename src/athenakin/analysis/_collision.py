@@ -24,7 +24,8 @@ from .._validation import check_scalar
 from ..design import Design
 from ..errors import InvalidInputError
 
-__all__ = ["labelled_clearance", "collision_options", "MAX_CLEARANCE_MARGIN"]
+__all__ = ["labelled_clearance", "collision_options", "check_clearance_margin",
+           "MAX_CLEARANCE_MARGIN"]
 
 #: Largest clearance margin accepted, m (a margin of a metre or more is a unit mistake).
 MAX_CLEARANCE_MARGIN = 1.0
@@ -66,12 +67,26 @@ def collision_options(design: Design, bodies: object, environment: object,
     if environment is not None and not isinstance(environment, Environment):
         raise TypeError(f"environment: expected athenakin.collision.Environment or None, got "
                         f"{type(environment).__name__}")
-    margin = default_margin if clearance_margin is None else check_scalar(
-        clearance_margin, "clearance_margin", nonnegative=True)
+    margin = default_margin if clearance_margin is None else check_clearance_margin(
+        clearance_margin)
+    return bodies, environment, float(margin)
+
+
+def check_clearance_margin(clearance_margin: object) -> float:
+    """A clearance margin, m, in ``[0,`` :data:`MAX_CLEARANCE_MARGIN` ``]`` (a named error).
+
+    Raises
+    ------
+    TypeError
+        Not a real number.
+    InvalidInputError
+        Negative, NaN, infinite or above :data:`MAX_CLEARANCE_MARGIN`.
+    """
+    margin = check_scalar(clearance_margin, "clearance_margin", nonnegative=True)
     if not margin <= MAX_CLEARANCE_MARGIN:
         raise InvalidInputError(f"clearance_margin: expected a distance in [0, "
                                 f"{MAX_CLEARANCE_MARGIN:g}] m, got {margin!r}")
-    return bodies, environment, float(margin)
+    return margin
 
 
 def labelled_clearance(q: NDArray[np.float64], T_b_e: NDArray[np.float64], design: Design,

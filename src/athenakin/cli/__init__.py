@@ -37,7 +37,7 @@ EXTRAS = {
     "collision": ("coal", "trimesh"),
     "dynamics": ("scipy",),
     "ros": ("rosbags", "mcap", "mcap_ros2", "foxglove", "isal", "websockets", "zstandard",
-            "lz4"),
+            "lz4", "tqdm"),
 }
 #: The extra of each command's own optional packages: a package of several extras is
 #: named by the command's (``plan`` needs scipy of [motion], not of [analysis]).

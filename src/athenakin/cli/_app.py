@@ -9,7 +9,7 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from ._common import add_design_option, add_setup_options
+from ._common import add_design_option, add_setup_options, force_limits
 
 #: Interface the app binds unless told otherwise (this machine only).
 DEFAULT_HOST = "127.0.0.1"
@@ -145,11 +145,9 @@ def _force_options(args: argparse.Namespace) -> tuple[Any, Any]:
         masses = check_masses(args.masses)
     except InvalidInputError as exc:
         raise InvalidInputError(f"--masses: {exc}") from None
-    if args.f_max is not None and len(args.f_max) not in (1, 3):
-        raise InvalidInputError(f"--f-max: expected 1 or 3 force limits (N), got "
-                                f"{len(args.f_max)}")
+    limits = force_limits(args)
     try:
-        f_max = check_f_max(args.f_max)
+        f_max = check_f_max(limits)
     except InvalidInputError as exc:
         raise InvalidInputError(f"--f-max: {exc}") from None
     return masses, f_max

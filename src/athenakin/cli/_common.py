@@ -80,6 +80,19 @@ def check_count(value: int, option: str, lo: int, hi: int, what: str = "") -> in
     return value
 
 
+def force_limits(args: argparse.Namespace) -> float | tuple[float, ...] | None:
+    """``--f-max``: one force limit (N) for the three actuators or one each, None when absent.
+
+    The count is checked here (1 or 3, a named error); the values by the library.
+    """
+    f_max = getattr(args, "f_max", None)
+    if f_max is None:
+        return None
+    if len(f_max) not in (1, 3):
+        raise InvalidInputError(f"--f-max: expected 1 or 3 force limits (N), got {len(f_max)}")
+    return f_max[0] if len(f_max) == 1 else tuple(f_max)
+
+
 def check_finite(values: Any, option: str, *, positive: bool = False) -> None:
     """Every number of an option finite (and positive), else ``ValueError``."""
     a = np.atleast_1d(np.asarray(values, dtype=float))

@@ -4,12 +4,22 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ._collision import add_collision_options, collision_options
-from ._common import add_design_option, add_setup_options, load_design, load_rcm
+from ._common import (
+    add_design_option,
+    add_setup_options,
+    force_limits,
+    load_design,
+    load_rcm,
+)
 from ._output import add_force_option, outputs
+
+if TYPE_CHECKING:
+    from ..design import Design
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -26,11 +36,12 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
                    help="trajectory file, .csv, .json or .mcap (trajectory_msgs/JointTrajectory "
                         "and the robot's topics, docs/ros.md)")
-    p.add_argument("--rate", type=float, default=1000.0,
-                   help="samples per second, at least 1 (1000)")
-    p.add_argument("--v-max", type=float, default=0.05, help="actuator speed limit, m/s (0.05)")
-    p.add_argument("--a-max", type=float, default=0.5,
-                   help="actuator acceleration limit, m/s^2 (0.5)")
+    p.add_argument("--rate", type=float, default=None,
+                   help="samples per second, at least 1 (1000, or that of --options)")
+    p.add_argument("--v-max", type=float, default=None,
+                   help="actuator speed limit, m/s (0.05, or that of --options)")
+    p.add_argument("--a-max", type=float, default=None,
+                   help="actuator acceleration limit, m/s^2 (0.5, or that of --options)")
     p.add_argument("--j-max", type=float, default=None,
                    help="actuator jerk limit, m/s^3 (default: none)")
     p.add_argument("--tip-speed", type=float, default=None, help="tool-tip speed limit, m/s")
@@ -46,12 +57,17 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--max-samples", type=int, default=None, metavar="N",
                    help="refuse a trajectory of more samples than this (default: "
                         "athenakin.motion.MAX_SAMPLES, 2000000)")
-    p.add_argument("--timing", choices=("stretch", "fixed"), default="stretch",
+    p.add_argument("--timing", choices=("stretch", "fixed"), default=None,
                    help="with t_s in the file: lengthen segments that break a limit (stretch, "
                         "default) or fail (fixed)")
     p.add_argument("--margin", action="append", default=[], metavar="NAME=VALUE",
                    help="singularity margin, e.g. --margin sin_u4=0.2 (names: half_chord, h, "
                         "link, p, depth in m; sin_u2, sin_u4; cond, an upper bound)")
+    p.add_argument("--options", type=Path, default=None, metavar="FILE.toml",
+                   help="planner settings: the [plan] table of a TOML file "
+                        "(athenakin.motion.PlanOptions: rate, v_max, a_max, j_max, tip_speed, "
+                        "timing, max_duration, max_samples, clearance_margin, f_max and a "
+                        "[plan.margins] table); the options given here override it")
     add_collision_options(p, what="a trajectory with a sample closer than this is refused")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--plots", type=Path, metavar="PREFIX",
@@ -63,8 +79,10 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.set_defaults(func=run)
 
 
-def parse_margins(items: list[str]) -> object:
-    """``NAME=VALUE`` strings -> :class:`athenakin.motion.Margins`."""
+def parse_margins(items: list[str], base: object = None) -> object:
+    """``NAME=VALUE`` strings -> :class:`athenakin.motion.Margins` (those of ``base`` else)."""
+    import dataclasses
+
     from ..motion import Margins
 
     kw = {}
@@ -78,7 +96,7 @@ def parse_margins(items: list[str]) -> object:
             kw[name.strip()] = float(value)
         except ValueError:
             raise ValueError(f"--margin {name}: expected a number, got {value!r}") from None
-    return Margins(**kw)
+    return Margins(**kw) if base is None else dataclasses.replace(base, **kw)  # type: ignore[type-var]
 
 
 #: Plausible ranges of the actuator limits (beyond them the time law has no meaning).
@@ -97,7 +115,7 @@ def check_limits(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``plan``."""
-    from ..motion import plan, plan_directions, read_path_csv
+    from ..motion import read_path_csv
     from ..motion._plan import MAX_WAYPOINTS
 
     check_limits(args)
@@ -123,18 +141,7 @@ def run(args: argparse.Namespace) -> int:
         if n > MAX_WAYPOINTS:
             raise ValueError(f"{args.path}: {n} waypoints; expected at most {MAX_WAYPOINTS} "
                              f"(plan the path in parts)")
-        opts = dict(rate=args.rate, v_max=args.v_max, a_max=args.a_max, j_max=args.j_max,
-                    tip_speed=args.tip_speed, times=spec.times, timing=args.timing,
-                    margins=parse_margins(args.margin), max_duration=args.max_duration,
-                    max_samples=args.max_samples, **collision_options(args, design),
-                    **_force_options(args))
-        if args.timing == "fixed" and spec.times is None:
-            raise ValueError(f"--timing fixed: {args.path} has no t_s column")
-        if spec.kind == "tip":
-            traj = plan(spec.tips_e, T, design, **opts)  # type: ignore[arg-type]
-        else:
-            traj = plan_directions(spec.azimuth, spec.polar, spec.depth, T,  # type: ignore[arg-type]
-                                   design, **opts)
+        traj = _plan(spec, T, design, args)
         from ..motion._io import trajectory_csv_text, trajectory_json_text
 
         if out.suffix.lower() == ".mcap":
@@ -155,20 +162,49 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _force_options(args: argparse.Namespace) -> dict[str, object]:
-    """``masses=``, ``f_max=`` from ``--masses FILE`` and ``--f-max``."""
+def _plan(spec: Any, T: np.ndarray, design: Design, args: argparse.Namespace) -> Any:
+    """The trajectory of the path file ``spec`` with the options of the file and the flags."""
+    from ..motion import plan, plan_directions
+
+    models = collision_options(args, design)
+    margin = models.pop("clearance_margin", None)
+    masses, f_max = _force_options(args)
+    opts = _plan_options(args, clearance_margin=margin, f_max=f_max)
+    if opts.timing == "fixed" and spec.times is None:
+        raise ValueError(f"--timing fixed: {args.path} has no t_s column")
+    if spec.kind == "tip":
+        return plan(spec.tips_e, T, design, times=spec.times, masses=masses, options=opts,
+                    **models)
+    return plan_directions(spec.azimuth, spec.polar, spec.depth, T, design, times=spec.times,
+                           masses=masses, options=opts, **models)
+
+
+def _plan_options(args: argparse.Namespace, **given: object) -> Any:
+    """The :class:`~athenakin.motion.PlanOptions` of ``--options FILE``, the flags given on top."""
+    import dataclasses
+
+    from ..motion import PlanOptions
+
+    base = PlanOptions() if args.options is None else PlanOptions.from_toml(args.options)
+    flags = {"rate": args.rate, "v_max": args.v_max, "a_max": args.a_max, "j_max": args.j_max,
+             "tip_speed": args.tip_speed, "timing": args.timing,
+             "max_duration": args.max_duration, "max_samples": args.max_samples, **given}
+    kw = {k: v for k, v in flags.items() if v is not None}
+    if args.margin:
+        kw["margins"] = parse_margins(args.margin, base.margins)
+    return dataclasses.replace(base, **kw)
+
+
+def _force_options(args: argparse.Namespace) -> tuple[object, object]:
+    """``masses``, ``f_max`` from ``--masses FILE`` and ``--f-max``."""
     if args.masses is None:
         if args.f_max is not None:
             raise ValueError("--f-max: force limits need a mass model (--masses FILE)")
-        return {}
+        return None, None
     from ..dynamics import MassModel
 
-    f_max = None
-    if args.f_max is not None:
-        if len(args.f_max) not in (1, 3):
-            raise ValueError(f"--f-max: expected 1 or 3 force limits (N), got {len(args.f_max)}")
-        f_max = args.f_max[0] if len(args.f_max) == 1 else list(args.f_max)
-    return {"masses": MassModel.from_toml(args.masses), "f_max": f_max}
+    f_max = force_limits(args)
+    return MassModel.from_toml(args.masses), f_max
 
 
 def _summary(traj: object, written: list[Path]) -> None:

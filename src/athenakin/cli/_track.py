@@ -73,6 +73,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--strict", action="store_true",
                    help=f"exit with status 1 if any sample is flagged {', '.join(STRICT_FLAGS)}")
     p.add_argument("--max-events", type=int, default=20, help="events listed (20)")
+    p.add_argument("--no-progress", action="store_true",
+                   help="no progress bar (a ROS recording tracked into an MCAP file shows "
+                        "one on a terminal)")
     add_collision_options(p, what="closer samples are flagged NEAR_COLLISION, overlapping "
                                    "ones COLLISION")
     add_force_option(p)
@@ -158,12 +161,10 @@ def _track_recording(args: argparse.Namespace, outs: Outputs) -> int:
     from .. import ros
     from ..motion import TrackFlag
     from ..ros._track import empty_topic_error
-    from ._plan import parse_margins
     out = args.output
     design = load_design(args)
     T = load_rcm(args, design)
-    opts = dict(slot=args.slot, jump_m=args.jump_mm * 1e-3, jump_rad=math.radians(args.jump_deg),
-                margins=parse_margins(args.margin), **collision_options(args, design))
+    opts = _tracker_options(args, design)
     if out is None or Path(out).suffix.lower() != ".mcap":
         with _recording_warnings(ros.RecordingWarning):
             js = ros.read_joint_states(args.path, topic=args.topic, joints=args.joint_names,
@@ -172,14 +173,11 @@ def _track_recording(args: argparse.Namespace, outs: Outputs) -> int:
             raise empty_topic_error(args.path, args.topic)
         t = (js.stamps_ns - js.stamps_ns[0]) * 1e-9
         return _track(args, outs, q=js.q, t=t)
-    progress = _progress() if sys.stderr.isatty() else None
-    with _recording_warnings(ros.RecordingWarning):
+    with _recording_warnings(ros.RecordingWarning), _progress_bar(args) as progress:
         s = ros.track_recording(args.path, out, T, design, topic=args.topic,
                                 joints=args.joint_names, scale=args.scale,
-                                max_events=args.max_events, target=outs.temp(out),
-                                progress=progress, **opts)
-    if progress is not None:
-        print(file=sys.stderr)
+                                target=outs.temp(out), progress=progress,
+                                options=ros.TrackOptions(max_events=args.max_events), **opts)
     if s.n_valid == 0:
         raise ValueError(no_pose_message(args.path, s.n, s.max_abs_q, design, recording=True))
     lines = [f"  sample {i} (stamp {st} ns, q = {np.round(q, 6).tolist()} m): "
@@ -191,8 +189,21 @@ def _track_recording(args: argparse.Namespace, outs: Outputs) -> int:
                    s.n_flagged, last)
     outs.commit()
     print(f"wrote {out} ({', '.join(f'{k}: {v}' for k, v in s.messages.items())} messages)")
-    if args.strict and any(s.counts.get(n) for n in STRICT_FLAGS):
-        bad = ", ".join(n for n in STRICT_FLAGS if s.counts.get(n))
+    return _strict_status(args, s.counts)
+
+
+def _tracker_options(args: argparse.Namespace, design: Design) -> dict[str, Any]:
+    """The keyword options of :class:`~athenakin.motion.Tracker` given by the flags."""
+    from ._plan import parse_margins
+
+    return dict(slot=args.slot, jump_m=args.jump_mm * 1e-3, jump_rad=math.radians(args.jump_deg),
+                margins=parse_margins(args.margin), **collision_options(args, design))
+
+
+def _strict_status(args: argparse.Namespace, counts: dict[str, int]) -> int:
+    """The exit status: 1 with ``--strict`` when a reading carries a flag of STRICT_FLAGS."""
+    if args.strict and any(counts.get(n) for n in STRICT_FLAGS):
+        bad = ", ".join(n for n in STRICT_FLAGS if counts.get(n))
         print(f"athenakin track: --strict: flagged {bad}")
         return 1
     return 0
@@ -282,39 +293,45 @@ def _recording_warnings(category: type[Warning]) -> Iterator[None]:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
-def _progress() -> Callable[[int], None]:
+@contextlib.contextmanager
+def _progress_bar(args: argparse.Namespace) -> Iterator[Callable[[int], None] | None]:
+    """A tqdm bar of the readings done, on stderr, or None.
+
+    None (no bar) with ``--no-progress``, when stderr is no terminal (a pipe, a file, a
+    test) or without tqdm (extra ``ros``). The callable takes the readings done so far.
+    """
+    if args.no_progress or not sys.stderr.isatty():
+        yield None
+        return
+    try:
+        from tqdm import tqdm
+    except ImportError:              # pragma: no cover - tqdm is in the extra 'ros'
+        yield None
+        return
+    bar = tqdm(desc="track", unit=" readings", unit_scale=True, file=sys.stderr)
+
     def show(n: int) -> None:
-        print(f"\r  {n} readings", end="", file=sys.stderr, flush=True)
-    return show
+        bar.update(n - bar.n)
+
+    try:
+        yield show
+    finally:
+        bar.close()
 
 
 def _track(args: argparse.Namespace, outs: Outputs, *, q: np.ndarray | None = None,
            t: np.ndarray | None = None) -> int:
-    from .._serialize import json_text
-    from ..motion import TrackFlag, track
-    from ..motion._io import read_q_stream_csv, track_csv_text
-    from ._plan import parse_margins
+    """A stream of readings (a CSV, or a recording read whole): tracked, reported, written."""
+    from ..motion import track
+    from ..motion._io import read_q_stream_csv
 
-    out = args.output
     design = load_design(args)
     T = load_rcm(args, design)
     if q is None:
         q, t = read_q_stream_csv(args.path)
     if t is not None:
-        t = np.asarray(t, dtype=float)
-        inf = np.flatnonzero(np.isinf(t))
-        if inf.size:
-            raise ValueError(f"{args.path}: t_s must be finite (or empty), got {t[inf[0]]} at "
-                             f"sample {int(inf[0])}")
-        seen = np.flatnonzero(np.isfinite(t))       # empty cells (NaN) are missing readings
-        dec = np.flatnonzero(np.diff(t[seen]) < 0)
-        if dec.size:
-            i, j = int(seen[dec[0]]), int(seen[dec[0] + 1])
-            raise ValueError(f"{args.path}: t_s must not decrease, got t_s = {t[j]:g} s at "
-                             f"sample {j} after {t[i]:g} s at sample {i}")
-    coll = collision_options(args, design)
-    opts = dict(slot=args.slot, jump_m=args.jump_mm * 1e-3, jump_rad=math.radians(args.jump_deg),
-                margins=parse_margins(args.margin), **coll)
+        t = _checked_times(args.path, t)
+    opts = _tracker_options(args, design)
     first = first_pose(q, T, design, opts)
     if first < 0:
         raise ValueError(no_pose_message(args.path, len(q), _max_abs(q), design,
@@ -324,53 +341,82 @@ def _track(args: argparse.Namespace, outs: Outputs, *, q: np.ndarray | None = No
         log = lost_before(log, q[:first])
         print(f"readings 0 to {first - 1} have no pose (LOST): the tracker starts at reading "
               f"{first}, the first that assembles")
+    counts = _report(log, q, t, args.max_events, checked="bodies" in opts)
+    if args.output is not None:
+        _write_log(Path(args.output), outs, log, t, T, design)
+        outs.commit()
+        print(f"wrote {args.output}")
+    return _strict_status(args, counts)
+
+
+def _checked_times(path: Path, t: np.ndarray) -> np.ndarray:
+    """The stream's times ``t_s`` (NaN: missing): finite, never decreasing."""
+    t = np.asarray(t, dtype=float)
+    inf = np.flatnonzero(np.isinf(t))
+    if inf.size:
+        raise ValueError(f"{path}: t_s must be finite (or empty), got {t[inf[0]]} at "
+                         f"sample {int(inf[0])}")
+    seen = np.flatnonzero(np.isfinite(t))       # empty cells (NaN) are missing readings
+    dec = np.flatnonzero(np.diff(t[seen]) < 0)
+    if dec.size:
+        i, j = int(seen[dec[0]]), int(seen[dec[0] + 1])
+        raise ValueError(f"{path}: t_s must not decrease, got t_s = {t[j]:g} s at "
+                         f"sample {j} after {t[i]:g} s at sample {i}")
+    return t
+
+
+def _report(log: TrackLog, q: np.ndarray, t: np.ndarray | None, max_events: int, *,
+            checked: bool) -> dict[str, int]:
+    """Print the summary of a tracked stream; the readings carrying each flag, by name."""
+    from ..motion import TrackFlag
+
     events = log.events()
     counts: dict[str, int] = {}
     for _, f in events:
         for bit in TrackFlag:
             if bit and bit in f:
                 counts[str(bit.name)] = counts.get(str(bit.name), 0) + 1
-    print(f"tracked {len(q)} samples from slot {int(log.slot[0])} (mode {int(log.mode[0]):+d}); "
-          f"{len(events)} flagged")
-    for name, c in sorted(counts.items()):
-        print(f"  {name}: {c} samples")
-    for i, f in events[:args.max_events]:
+    lines = []
+    for i, f in events[:max_events]:
         ts = "" if t is None else "t missing, " if np.isnan(t[i]) else f"t = {t[i]:.6g} s, "
-        print(f"  sample {i} ({ts}q = {np.round(q[i], 6).tolist()} m): {f.name or int(f)}"
-              f", mode {int(log.mode[i]):+d}, slot {int(log.slot[i])}")
-    if len(events) > args.max_events:
-        print(f"  ... {len(events) - args.max_events} more (see -o)")
-    if coll and log.clearance is not None and log.closest_pair is not None \
+        lines.append(f"  sample {i} ({ts}q = {np.round(q[i], 6).tolist()} m): "
+                     f"{f.name or int(f)}, mode {int(log.mode[i]):+d}, slot {int(log.slot[i])}")
+    tail = []
+    if checked and log.clearance is not None and log.closest_pair is not None \
             and np.any(np.isfinite(log.clearance)):
         i = int(np.nanargmin(log.clearance))
         a, b = log.closest_pair[i]
-        print(f"least clearance: {fmt(float(log.clearance[i]))} m between {a} and {b} at "
-              f"sample {i}")
+        tail.append(f"least clearance: {fmt(float(log.clearance[i]))} m between {a} and {b} "
+                    f"at sample {i}")
     last = len(q) - 1
-    print(f"last pose: tip_e = {np.round(log.tip_e[last], 6).tolist()} m, "
-          f"p = {fmt(float(log.p[last]))} m, valid = {bool(log.valid[last])}")
-    if out is not None:
-        if Path(out).suffix.lower() == ".mcap":
-            from ..ros._track import write_track_log
+    tail.append(f"last pose: tip_e = {np.round(log.tip_e[last], 6).tolist()} m, "
+                f"p = {fmt(float(log.p[last]))} m, valid = {bool(log.valid[last])}")
+    _print_summary(len(q), int(log.slot[0]), int(log.mode[0]), counts, lines, max_events,
+                   len(events), "\n".join(tail))
+    return counts
 
-            if t is None or not np.isfinite(t).all():
-                stamps = np.arange(len(q), dtype=np.int64) * 1_000_000   # 1 kHz
-            else:
-                stamps = np.rint(np.asarray(t) * 1e9).astype(np.int64)
-            write_track_log(outs.temp(out), stamps, log, T, design)
-        elif Path(out).suffix.lower() == ".json":
-            import dataclasses
 
-            obj = {k: getattr(log, k) for k in (f.name for f in dataclasses.fields(log))}
-            obj["t_s"] = t
-            obj["flag_bits"] = {b.name: int(b) for b in TrackFlag if b}
-            outs.write(out, json_text(obj))
+def _write_log(out: Path, outs: Outputs, log: TrackLog, t: np.ndarray | None,
+               T: np.ndarray, design: Design) -> None:
+    """Write the tracked stream to ``out``: MCAP (ROS 2 topics), JSON or CSV."""
+    from .._serialize import json_text
+    from ..motion import TrackFlag
+    from ..motion._io import track_csv_text
+
+    if out.suffix.lower() == ".mcap":
+        from ..ros._track import write_track_log
+
+        if t is None or not np.isfinite(t).all():
+            stamps = np.arange(len(log.q), dtype=np.int64) * 1_000_000   # 1 kHz
         else:
-            outs.write(out, track_csv_text(log, t))
-        outs.commit()
-        print(f"wrote {out}")
-    if args.strict and any(counts.get(n) for n in STRICT_FLAGS):
-        bad = ", ".join(n for n in STRICT_FLAGS if counts.get(n))
-        print(f"athenakin track: --strict: flagged {bad}")
-        return 1
-    return 0
+            stamps = np.rint(np.asarray(t) * 1e9).astype(np.int64)
+        write_track_log(outs.temp(out), stamps, log, T, design)
+    elif out.suffix.lower() == ".json":
+        import dataclasses
+
+        obj = {k: getattr(log, k) for k in (f.name for f in dataclasses.fields(log))}
+        obj["t_s"] = t
+        obj["flag_bits"] = {b.name: int(b) for b in TrackFlag if b}
+        outs.write(out, json_text(obj))
+    else:
+        outs.write(out, track_csv_text(log, t))

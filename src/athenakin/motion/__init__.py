@@ -2,7 +2,8 @@
 
 * :func:`plan`, :func:`plan_directions`: a tool-tip path (straight segments in the
   RCM frame) or a direction + insertion path -> a checked actuator trajectory
-  sampled at a uniform rate (Ruckig time law; docs/motion.md).
+  sampled at a uniform rate (Ruckig time law; docs/motion.md); its settings (rate,
+  limits, margins) in a :class:`PlanOptions`.
 * :class:`Tracker`: actuator readings, one sample at a time -> the instrument pose
   of the forward-kinematics solution continuous with the previous one, with flags
   for mode / branch switches, jumps and the approach to singularities.
@@ -15,7 +16,7 @@
   :class:`MotionError`, a :class:`~athenakin.errors.KinematicsError`).
 * Collisions (:mod:`athenakin.collision`, imported only when asked): the tracker's
   ``COLLISION`` / ``NEAR_COLLISION`` flags and the planner's clearance check, both
-  switched on by ``bodies=``, ``environment=`` or ``clearance_margin=``.
+  switched on by ``bodies=``, ``environment=`` or a clearance margin.
 
 Needs the ``motion`` extra (``ruckig``) for planning; the tracker needs only numpy.
 """
@@ -31,6 +32,7 @@ from ._errors import (
 )
 from ._io import PathSpec, read_path_csv, read_q_stream_csv, save_trajectory
 from ._limits import Limits
+from ._options import PlanOptions
 from ._plan import Trajectory, plan, plan_directions
 from ._plot import plot_actuators, plot_singularity_distance, plot_tip_path, save_plots
 from ._safety import MEASURE_NAMES, Margins, SingularityMeasures, singularity_measures
@@ -51,6 +53,7 @@ __all__ = [
     "MotionError",
     "PathFileError",
     "PathSpec",
+    "PlanOptions",
     "SafetyViolationError",
     "SingularityMeasures",
     "TimingInfeasibleError",

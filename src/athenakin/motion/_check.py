@@ -128,13 +128,23 @@ def check_samples(samples: dict[str, Any], T_b_e: NDArray[np.float64],
         ``samples["measures"]``.
     """
     _check_sample_arguments(samples, T_b_e, design, limits, margins, mode0)
+    ok = samples["reason"] == 0
+    geometric = _geometric_checks(samples, T_b_e, design, margins, mode0, ok)
+    return _first_violation((geometric, _kinematic_checks(samples, limits, ok)),
+                            samples["q"].shape[0])
+
+
+#: One check of :func:`check_samples`: name, bad (n,) or (n, 3) per actuator, value, bound.
+_Check = tuple[str, NDArray[np.bool_], NDArray[np.float64], object]
+
+
+def _geometric_checks(samples: dict[str, Any], T_b_e: NDArray[np.float64], design: Design,
+                      margins: Margins, mode0: int | None, ok: NDArray[np.bool_]
+                      ) -> list[_Check]:
+    """Workspace, stroke, assembly mode and singularity margins; stores the measures."""
     q = samples["q"]
-    n = q.shape[0]
-    # (name, bad (n,) or (n, 3) per actuator, value, bound)
-    checks: list[tuple[str, NDArray[np.bool_], NDArray[np.float64], object]] = []
     reason = samples["reason"]
-    ok = reason == 0
-    checks.append(("workspace", ~ok, reason.astype(float), 0.0))
+    checks: list[_Check] = [("workspace", ~ok, reason.astype(float), 0.0)]
     lo, hi = design.stroke_min, design.stroke_max
     with np.errstate(invalid="ignore"):
         under, over = q < lo, q > hi
@@ -154,6 +164,13 @@ def check_samples(samples: dict[str, Any], T_b_e: NDArray[np.float64],
         with np.errstate(invalid="ignore"):
             bad = (v > m) if margins.is_upper(name) else (v < m)
         checks.append((name, bad & ok, v, m))
+    return checks
+
+
+def _kinematic_checks(samples: dict[str, Any], limits: Limits, ok: NDArray[np.bool_]
+                      ) -> list[_Check]:
+    """Velocity, acceleration, jerk and tip speed, to the relative tolerance LIMIT_RTOL."""
+    checks: list[_Check] = []
     tol = 1 + LIMIT_RTOL
     for name, arr, lim in (("velocity", samples["qd"], limits.v_max),
                            ("acceleration", samples["qdd"], limits.a_max),
@@ -168,11 +185,18 @@ def check_samples(samples: dict[str, Any], T_b_e: NDArray[np.float64],
         with np.errstate(invalid="ignore"):
             bad = np.abs(v) > limits.tip_speed * tol
         checks.append(("tip_speed", bad & ok, v, limits.tip_speed))
-    # geometric limits first: no timing can fix them (and next to the workspace boundary a
-    # path may break a kinematic limit before it leaves)
-    n_geo = 3 + len(MEASURE_NAMES)
+    return checks
+
+
+def _first_violation(groups: tuple[list[_Check], ...], n: int) -> dict | None:  # type: ignore[type-arg]
+    """The first sample of the first group that has a violation, and its first check.
+
+    Geometric limits come first: no timing can fix them (and next to the workspace
+    boundary a path may break a kinematic limit before it leaves).
+    """
     first = n
-    for group in (checks[:n_geo], checks[n_geo:]):
+    checks: list[_Check] = []
+    for group in groups:
         for _, bad, *_ in group:
             idx = np.flatnonzero(bad if bad.ndim == 1 else np.any(bad, axis=-1))
             if idx.size:

@@ -29,18 +29,19 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_frame, check_scalar
+from .._validation import check_array, check_frame
 from ..design import Design, resolve_design
 from ..robot import direction_from_angles
 from ._check import _check_clearance, _collision, _timing_error, _violation, check_samples
 from ._clearance import ClearanceCheck, clearance_check
 from ._forces import planned
 from ._limits import LIMIT_RTOL, Limits, _SegmentPlan
+from ._options import MAX_DURATION, MAX_SAMPLES, MIN_RATE, PlanOptions, Timing, plan_options
 from ._path import (
     Segment,
     arc_segment,
@@ -61,27 +62,17 @@ from ._segments import (
     _time_segment,
 )
 
-__all__ = ["Limits", "Trajectory", "plan", "plan_directions", "check_samples",
+__all__ = ["Limits", "PlanOptions", "Trajectory", "plan", "plan_directions", "check_samples",
            "LIMIT_RTOL", "BOUND_GRID", "BOUND_SAFETY", "MAX_DURATION", "MAX_SAMPLES",
            "MIN_RATE", "MAX_WAYPOINTS"]
 
 #: Replanning rounds when a sample still exceeds a kinematic limit.
 MAX_REPLANS = 4
-#: Default longest trajectory :func:`plan` accepts, s (``max_duration``).
-MAX_DURATION = 3600.0
-#: Default largest number of samples :func:`plan` accepts (``max_samples``); each
-#: sample holds about 60 floats while it is checked, about 1 GB at this bound.
-MAX_SAMPLES = 2_000_000
-#: Lowest sampling rate :func:`plan` accepts, Hz: a sample period longer than a second
-#: is no controller's, and a rate of 1e-300 Hz would make the period infinite.
-MIN_RATE = 1.0
 #: Most waypoints :func:`plan` accepts (each segment is bounded, timed and checked on
 #: its own, about 10 ms): a path of 100,000 waypoints ran for a quarter of an hour.
 MAX_WAYPOINTS = 1000
 #: Samples checked at a time: a violation stops the sampling there.
 CHECK_CHUNK = 20_000
-
-Timing = Literal["stretch", "fixed"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -173,13 +164,8 @@ class Trajectory:
 
 # --------------------------------------------------------------------------------------
 def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
-         rate: float = 1000.0, v_max: ArrayLike = 0.05, a_max: ArrayLike = 0.5,
-         j_max: ArrayLike | None = None, tip_speed: float | None = None,
-         times: ArrayLike | None = None, timing: Timing = "stretch",
-         margins: Margins | None = None, max_duration: float | None = None,
-         max_samples: int | None = None, bodies: object = None, environment: object = None,
-         clearance_margin: float | None = None, masses: object = None,
-         f_max: ArrayLike | None = None) -> Trajectory:
+         times: ArrayLike | None = None, bodies: object = None, environment: object = None,
+         masses: object = None, options: PlanOptions | None = None) -> Trajectory:
     """Plan an actuator trajectory that moves the tool tip along straight segments.
 
     Parameters
@@ -193,46 +179,22 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
     design : Design, optional
         Defaults to :meth:`Design.default`; ``design.tool_length`` is ``L`` in
         ``tip = O_s + L d``.
-    rate : float, keyword-only
-        Samples per second (default 1 kHz), at least :data:`MIN_RATE` (1 Hz).
-    v_max, a_max : float or array-like of shape (3,), keyword-only
-        Actuator velocity (m/s) and acceleration (m/s^2) limits.
-    j_max : float or array-like of shape (3,), optional, keyword-only
-        Actuator jerk limit (m/s^3). Without it the profile is acceleration-limited
-        (its acceleration steps) and :attr:`Trajectory.qddd` is None.
-    tip_speed : float, optional, keyword-only
-        Tool-tip speed limit (m/s).
     times : array-like, shape (K,), optional, keyword-only
         Requested arrival time at each waypoint (s, non-decreasing). Without it
         every segment takes the shortest time the limits allow.
-    timing : {"stretch", "fixed"}, keyword-only
-        What to do when ``times`` ask for more than the limits allow:
-        ``"stretch"`` (default) lengthens those segments (see
-        :attr:`Trajectory.stretched`); ``"fixed"`` keeps the times and raises
-        :class:`TimingInfeasibleError` at the first sample that breaks a limit.
-    margins : Margins, optional, keyword-only
-        Least distances to the singularities (default :class:`Margins`).
-    max_duration : float, optional, keyword-only
-        Longest trajectory accepted, s (default :data:`MAX_DURATION`).
-    max_samples : int, optional, keyword-only
-        Largest number of samples accepted (default :data:`MAX_SAMPLES`); bounds
-        the memory and time of the planning.
     bodies : athenakin.collision.Bodies, optional, keyword-only
         Check that every sample keeps these bodies ``clearance_margin`` apart (and
         from the obstacles). Default: no collision check, unless ``environment`` or
-        ``clearance_margin`` is given, then :meth:`Bodies.default(design)
+        ``options.clearance_margin`` is given, then :meth:`Bodies.default(design)
         <athenakin.collision.Bodies.default>`.
     environment : athenakin.collision.Environment, optional, keyword-only
         Obstacles every sample's bodies must keep clear of (turns the check on).
-    clearance_margin : float, optional, keyword-only
-        Least clearance of every sample, m (turns the check on); default 5 mm when
-        the check is on, 0 to refuse only contact and penetration.
     masses : athenakin.dynamics.MassModel, optional, keyword-only
         Attach the actuator forces (:attr:`Trajectory.forces`, N) computed by
-        :func:`athenakin.dynamics.inverse_dynamics`.
-    f_max : float or array-like of shape (3,), optional, keyword-only
-        Actuator force limits, N (needs ``masses``): the trajectory is slowed down
-        uniformly until ``|forces| <= f_max`` (:mod:`athenakin.motion._forces`).
+        :func:`athenakin.dynamics.inverse_dynamics` (and hold ``options.f_max``).
+    options : PlanOptions, optional, keyword-only
+        Sample rate, kinematic and force limits, timing policy, singularity and
+        clearance margins, duration and sample bounds (default ``PlanOptions()``).
 
     Returns
     -------
@@ -244,25 +206,20 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
     Raises
     ------
     PathInfeasibleError
-        Checked first, before any timing: a waypoint, or a point of a segment
-        (on a grid of :data:`BOUND_GRID` points), is outside the workspace or the
-        stroke limits, or the path changes the assembly mode. The message names
-        the waypoint or segment (and hints at millimetres typed for metres).
+        Checked first, before any timing: a waypoint, or a point of a segment (on a
+        grid of :data:`BOUND_GRID` points), is outside the workspace or the stroke
+        limits, or the path changes the assembly mode (the message names it).
     TrajectoryLimitError
-        Checked before sampling: the trajectory would last longer than
-        ``max_duration`` or need more than ``max_samples`` samples, or a segment's
-        time law cannot be computed within its limits (named in the message).
+        Checked before sampling: longer than ``max_duration``, more than
+        ``max_samples`` samples, or a segment's time law cannot be computed.
     SafetyViolationError
-        The first sample (time, index) that leaves the workspace or the stroke
-        limits, crosses a singularity margin, or (after replanning) a kinematic limit.
-        Samples are checked in chunks as they are made, so that the first
-        violation stops the planning.
+        The first sample (time, index) that leaves the workspace or the stroke limits,
+        crosses a singularity margin, or (after replanning) a kinematic limit.
     TimingInfeasibleError
         ``timing="fixed"`` and the requested times break a limit.
     CollisionError
         (A :class:`SafetyViolationError`.) The first sample whose clearance is below
-        ``clearance_margin``: its time, index and the pair of bodies (or body and
-        obstacle) in the message and the attributes.
+        the margin: its time, index and the pair of bodies in the message.
     TypeError, ValueError
         Malformed arguments (named in the message).
 
@@ -272,7 +229,8 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
     >>> d = ak.Design.default()
     >>> T = ak.default_rcm_frame(d)
     >>> tips = [[0.25, 0.0, 0.0], [0.27, -0.02, 0.0], [0.27, -0.02, 0.02]]
-    >>> traj = ak.motion.plan(tips, T, d, rate=1000.0, v_max=0.05, a_max=0.5)
+    >>> opts = ak.motion.PlanOptions(rate=1000.0, v_max=0.05, a_max=0.5)
+    >>> traj = ak.motion.plan(tips, T, d, options=opts)
     >>> bool(np.all(np.abs(traj.qd) <= 0.05 * (1 + 1e-6)))
     True
     """
@@ -282,19 +240,13 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
         raise ValueError(f"tips_e: expected shape (K, 3) with K >= 2 waypoints, "
                          f"got shape {tips.shape}")
     segs = [line_segment(tips[k], tips[k + 1]) for k in range(tips.shape[0] - 1)]
-
-    def run(**limits: object) -> Trajectory:
-        return _plan(segs, tips, T_b_e, design, rate=rate, times=times, timing=timing,
-                     margins=margins, max_duration=max_duration, max_samples=max_samples,
-                     bodies=bodies, environment=environment,
-                     clearance_margin=clearance_margin, **limits)  # type: ignore[arg-type]
-
-    return planned(run, v_max=v_max, a_max=a_max, j_max=j_max, tip_speed=tip_speed,  # type: ignore[return-value]
-                   masses=masses, f_max=f_max, fixed_times=timing == "fixed")
+    return _planned(segs, tips, T_b_e, design, times, bodies, environment, masses, options)
 
 
 def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_e: ArrayLike,
-                    design: Design | None = None, **options: object) -> Trajectory:
+                    design: Design | None = None, *, times: ArrayLike | None = None,
+                    bodies: object = None, environment: object = None, masses: object = None,
+                    options: PlanOptions | None = None) -> Trajectory:
     """Plan a trajectory through instrument-direction + insertion waypoints.
 
     Between waypoints the instrument direction turns on the great circle (about
@@ -310,11 +262,8 @@ def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_
         Insertion: depth of the tool tip beyond the RCM, m (``p = L - depth``).
     T_b_e : array-like, shape (4, 4)
     design : Design, optional
-    **options
-        The keyword-only options of :func:`plan` (``rate``, ``v_max``, ``a_max``,
-        ``j_max``, ``tip_speed``, ``times``, ``timing``, ``margins``,
-        ``max_duration``, ``max_samples``, ``bodies``, ``environment``,
-        ``clearance_margin``).
+    times, bodies, environment, masses, options : keyword-only
+        As :func:`plan`.
 
     Returns
     -------
@@ -344,35 +293,34 @@ def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_
                          "circle between them is undefined")
     tips = dirs * dp[:, None]
     segs = [arc_segment(tips[k], tips[k + 1]) for k in range(tips.shape[0] - 1)]
-    opts = dict(options)
-    masses, f_max = opts.pop("masses", None), opts.pop("f_max", None)
-    lim = {k: opts.pop(k) for k in ("v_max", "a_max", "j_max", "tip_speed") if k in opts}
+    return _planned(segs, tips, T_b_e, design, times, bodies, environment, masses, options)
+
+
+def _planned(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, design: Design,
+             times: ArrayLike | None, bodies: object, environment: object, masses: object,
+             options: PlanOptions | None) -> Trajectory:
+    """:func:`_plan` with the options' limits, and with the forces when ``masses`` is given."""
+    o = plan_options(options)
 
     def run(**limits: object) -> Trajectory:
-        return _plan(segs, tips, T_b_e, design, **opts, **limits)  # type: ignore[arg-type]
+        return _plan(segs, tips, T_b_e, design, rate=o.rate, times=times, timing=o.timing,
+                     margins=o.margins, max_duration=o.max_duration,
+                     max_samples=o.max_samples, bodies=bodies, environment=environment,
+                     clearance_margin=o.clearance_margin, **limits)  # type: ignore[arg-type]
 
-    return planned(run, v_max=lim.get("v_max", 0.05), a_max=lim.get("a_max", 0.5),  # type: ignore[return-value, arg-type]
-                   j_max=lim.get("j_max"), tip_speed=lim.get("tip_speed"),  # type: ignore[arg-type]
-                   masses=masses, f_max=f_max,  # type: ignore[arg-type]
-                   fixed_times=opts.get("timing") == "fixed")
+    return planned(run, v_max=o.v_max, a_max=o.a_max, j_max=o.j_max,  # type: ignore[return-value]
+                   tip_speed=o.tip_speed, masses=masses, f_max=o.f_max,
+                   fixed_times=o.timing == "fixed")
 
 
 def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, design: Design, *,
-          rate: float = 1000.0, v_max: ArrayLike = 0.05, a_max: ArrayLike = 0.5,
-          j_max: ArrayLike | None = None, tip_speed: float | None = None,
-          times: ArrayLike | None = None, timing: Timing = "stretch",
-          margins: Margins | None = None, max_duration: float | None = None,
-          max_samples: int | None = None, bodies: object = None, environment: object = None,
-          clearance_margin: float | None = None) -> Trajectory:
+          rate: float, v_max: ArrayLike, a_max: ArrayLike, j_max: ArrayLike | None,
+          tip_speed: float | None, times: ArrayLike | None, timing: Timing, margins: Margins,
+          max_duration: float, max_samples: int, bodies: object, environment: object,
+          clearance_margin: float | None) -> Trajectory:
+    """Plan the segments with checked settings (those of a :class:`PlanOptions`)."""
     T = check_frame(T_b_e, "T_b_e")
-    rate, max_duration, max_samples = _budget(rate, max_duration, max_samples)
     limits = Limits.build(v_max, a_max, j_max, tip_speed)
-    margins = Margins() if margins is None else margins
-    if not isinstance(margins, Margins):
-        raise TypeError(f"margins: expected athenakin.motion.Margins, got "
-                        f"{type(margins).__name__}")
-    if timing not in ("stretch", "fixed"):
-        raise ValueError(f"timing: expected 'stretch' or 'fixed', got {timing!r}")
     check = clearance_check(design, bodies, environment, clearance_margin)
     K = tips.shape[0]
     if K > MAX_WAYPOINTS:
@@ -414,24 +362,6 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
         ratio = bad["bound"] / bad["value"] if bad["value"] > 0 else 0.5
         sp.tighten *= min(0.98, ratio ** (1 / 3) * 0.98)
     return _trajectory(samples, plans, tips, limits, margins, T, design, rate, t0, check)
-
-
-
-def _budget(rate: object, max_duration: object, max_samples: object) -> tuple[float, float, int]:
-    """The checked sample rate (Hz), longest duration (s) and most samples of a plan."""
-    rate = check_scalar(rate, "rate", positive=True)
-    if not rate >= MIN_RATE:
-        raise ValueError(f"rate: expected at least {MIN_RATE:g} sample per second (Hz), "
-                         f"got {rate:g}")
-    max_duration = MAX_DURATION if max_duration is None else check_scalar(
-        max_duration, "max_duration", positive=True)
-    if max_samples is None:
-        max_samples = MAX_SAMPLES
-    elif (isinstance(max_samples, bool) or not isinstance(max_samples, (int, np.integer))
-          or max_samples < 2):
-        raise ValueError(f"max_samples: expected an integer >= 2, got {max_samples!r}")
-    max_samples = int(max_samples)
-    return rate, max_duration, max_samples
 
 
 def _requested(times: ArrayLike | None, K: int, timing: str, rate: float, max_duration: float,

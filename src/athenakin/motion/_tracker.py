@@ -507,6 +507,23 @@ def track_batch(tr: Tracker, q: NDArray[np.float64]) -> dict[str, Any]:
             run()
         else:                          # the first call may compile: a notice on stderr
             _first("track_stream", run)
+    cols = _kernel_columns(tr, q, c, step, flags, valid)
+    if tr._check is not None and n:
+        _collide_rows(tr, cols)
+    tr._index += n
+    tr._prev = _cand_tuple(prev.tolist())
+    tr._lost = bool(lost[0])
+    if n:
+        tr.pose = pose_at(cols, n - 1)
+    _raise_on(tr, cols, fast)
+    return cols
+
+
+def _kernel_columns(tr: Tracker, q: NDArray[np.float64], c: NDArray[np.float64],
+                    step: NDArray[np.float64], flags: NDArray[np.int64],
+                    valid: NDArray[np.bool_]) -> dict[str, Any]:
+    """The columns of :func:`track_batch` from the kernel's candidate rows ``c`` (n, NCAND)."""
+    n = len(q)
     g = tr._g
     mode = c[:, 0].astype(np.int64)
     r, b, w = (c[:, k].astype(np.int64) for k in (1, 2, 3))
@@ -520,7 +537,7 @@ def track_batch(tr: Tracker, q: NDArray[np.float64]) -> dict[str, Any]:
     te = np.empty((n, 3))
     for k in range(3):
         te[:, k] = R[0][k] * v[0] + R[1][k] * v[1] + R[2][k] * v[2]
-    cols: dict[str, Any] = {
+    return {
         "sample": tr._index + 1 + np.arange(n), "q": q.copy(), "valid": valid,
         "slot": 8 * (mode == -1) + 4 * (r == -1) + 2 * (b == -1) + (w == -1),
         "mode": mode, "p_sign": r, "ujoint": b, "wrist": w, "p": c[:, 4].copy(),
@@ -528,13 +545,10 @@ def track_batch(tr: Tracker, q: NDArray[np.float64]) -> dict[str, Any]:
         "tip_e": te, "half_chord": c[:, 16].copy(), "h": c[:, 17].copy(),
         "sin_u2": c[:, 18].copy(), "sin_u4": c[:, 19].copy(), "step": step, "flags": flags,
         "clearance": np.full(n, math.nan), "closest_pair": np.full((n, 2), "")}
-    if tr._check is not None and n:
-        _collide_rows(tr, cols)
-    tr._index += n
-    tr._prev = _cand_tuple(prev.tolist())
-    tr._lost = bool(lost[0])
-    if n:
-        tr.pose = pose_at(cols, n - 1)
+
+
+def _raise_on(tr: Tracker, cols: dict[str, Any], fast: NDArray[np.bool_]) -> None:
+    """:class:`TrackingError` at the first row whose flags carry a bit of ``raise_on``."""
     hit = np.flatnonzero(cols["flags"] & tr._raise_bits)
     if hit.size:
         i = int(hit[0])
@@ -545,7 +559,6 @@ def track_batch(tr: Tracker, q: NDArray[np.float64]) -> dict[str, Any]:
                                 f"kinematics solution: {ps.flags!r}", ps)
         what = "" if fast[i] else f" (q = {qt} m)"
         raise TrackingError(f"sample {ps.sample}{what}: {ps.flags!r}" + _clearance_text(ps), ps)
-    return cols
 
 
 def _collide_rows(tr: Tracker, cols: dict[str, Any]) -> None:

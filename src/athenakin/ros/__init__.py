@@ -8,7 +8,8 @@ mcap-ros2-support, foxglove-sdk). Names, frames, units and topics: docs/ros.md.
   ``sensor_msgs/JointState``, header stamps to the nanosecond.
 * :func:`track_recording` / :func:`track_to_mcap`: run the continuity tracker on a
   stream and write the tool tip, the frames (``/tf``), every joint of the URDF,
-  the tracker's status and the URDF itself to an MCAP file that Foxglove opens.
+  the tracker's status and the URDF itself to an MCAP file that Foxglove opens
+  (chunk size, events listed, compression: :class:`TrackOptions`).
 * :func:`write_trajectory`: a planned trajectory as ``trajectory_msgs/JointTrajectory``
   plus the same visualisation topics.
 * :class:`FoxgloveStream`: serve the live robot over the Foxglove WebSocket protocol.
@@ -26,7 +27,13 @@ from ._read import (
     read_joint_states,
     recording_format,
 )
-from ._track import TrackingSummary, track_recording, track_to_mcap, write_trajectory
+from ._track import (
+    TrackingSummary,
+    TrackOptions,
+    track_recording,
+    track_to_mcap,
+    write_trajectory,
+)
 from ._write import STATUS_MSGDEF, STATUS_TYPE, TF_FRAMES, TOPICS, McapOutput, TrackedBatch
 
 __all__ = [
@@ -47,6 +54,7 @@ __all__ = [
     "RecordingError",
     "RecordingWarning",
     "ServeError",
+    "TrackOptions",
     "TrackedBatch",
     "TrackingSummary",
     "iter_joint_states",

@@ -341,151 +341,179 @@ def _source(p: Path, kind: str) -> str:
     return {"db3": "rosbag2/sqlite3", "mcap": "mcap", "rosbag1": "rosbag1"}[kind]
 
 
-def _iterate(p: Path, kind: str, source: str, topic: str, names: tuple[str, ...], s: float,
-             chunk: int) -> Iterator[JointStates]:
-    cdr = _CdrJointState()
-    ros1: Callable[[bytes], tuple] | None = None
-    lookup: dict[int, tuple[tuple[str, ...], list[int]]] = {}
-    stamps = np.empty(chunk, np.int64)
-    logt = np.empty(chunk, np.int64)
-    q = np.empty((chunk, 3))
-    qd = np.empty((chunk, 3))
-    stamped = np.zeros(chunk, bool)
-    st: dict[str, Any] = {"k": 0, "index": 0, "last": -(2 ** 63), "vel": False}
-    nan3 = (math.nan, math.nan, math.nan)
+class _Chunks:
+    """The readings of one topic gathered into chunks of ``chunk`` readings (:func:`_iterate`).
 
-    def emit(n: int, vel: bool) -> JointStates:
-        return JointStates(stamps_ns=stamps[:n].copy(), q=q[:n].copy(),
-                           qd=qd[:n].copy() if vel else None,
-                           log_time_ns=logt[:n].copy(), header_stamped=stamped[:n].copy(),
-                           topic=topic, joints=names, source=source)  # type: ignore[arg-type]
+    Holds the chunk being filled (stamps, log times, ``q``, ``qd``, header-stamped flags),
+    the message count and the last stamp (stamps must never go backwards), and the
+    decoders: the CDR decoder of ``sensor_msgs/JointState`` (whose layout the vectorised
+    path reads) and the ROS 1 decoder, made on the first ROS 1 message.
+    """
 
-    def actuators(mnames: tuple[str, ...]) -> list[int]:
-        ent = lookup.get(id(mnames))
-        if ent is None or ent[0] is not mnames:
-            idx = []
-            for j in names:
-                if j not in mnames:
-                    raise RecordingError(
-                        f"{p}: topic {topic!r}, message {st['index']}: no joint named {j!r}; "
-                        f"names present: {list(mnames)} (choose with joints=... / "
-                        f"--joints)")
-                idx.append(mnames.index(j))
-            lookup[id(mnames)] = ent = (mnames, idx)
-        return ent[1]
+    def __init__(self, p: Path, source: str, topic: str, names: tuple[str, ...], s: float,
+                 chunk: int) -> None:
+        self.p, self.source, self.topic, self.names, self.s = p, source, topic, names, s
+        self.chunk = chunk
+        self.cdr = _CdrJointState()
+        self.ros1: Callable[[bytes], tuple] | None = None  # type: ignore[type-arg]
+        self.lookup: dict[int, tuple[tuple[str, ...], list[int]]] = {}
+        self.stamps = np.empty(chunk, np.int64)
+        self.logt = np.empty(chunk, np.int64)
+        self.q = np.empty((chunk, 3))
+        self.qd = np.empty((chunk, 3))
+        self.stamped = np.zeros(chunk, bool)
+        self.k = 0                  # readings in the chunk
+        self.index = 0              # messages read
+        self.last = -(2 ** 63)      # the last stamp, ns
+        self.vel = False            # a message of the chunk has velocities
 
-    def backwards(t: int, last: int) -> RecordingError:
-        return RecordingError(f"{p}: topic {topic!r}: stamps go backwards at message "
-                              f"{st['index']}: {t} ns after {last} ns")
-
-    def one(t_log: int, raw: bytes, enc: str) -> bool:
-        """Store one message; True when the chunk is full."""
-        nonlocal ros1
-        if enc == "cdr":
-            sec, nsec, mnames, pos, vel = cdr.decode(raw)
-        else:
-            if ros1 is None:
-                ros1 = _ros1_decoder()
-            sec, nsec, mnames, pos, vel = ros1(raw)
-        i0, i1, i2 = actuators(mnames)
-        k = st["k"]
-        t = sec * 1_000_000_000 + nsec
-        stamped[k] = t != 0
-        if t == 0:
-            t = t_log
-        if t < st["last"]:
-            raise backwards(t, st["last"])
-        st["last"] = t
-        stamps[k] = t
-        logt[k] = t_log
-        if len(pos) > max(i0, i1, i2):
-            q[k] = (pos[i0] * s, pos[i1] * s, pos[i2] * s)
-        else:
-            q[k] = nan3
-        if len(vel) == len(mnames):
-            qd[k] = (vel[i0] * s, vel[i1] * s, vel[i2] * s)
-            st["vel"] = True
-        else:
-            qd[k] = nan3
-        st["k"] = k + 1
-        st["index"] += 1
-        return k + 1 == chunk
-
-    def full() -> JointStates:
-        out = emit(st["k"], st["vel"])
-        st["k"] = 0
-        st["vel"] = False
+    def full(self) -> JointStates:
+        """The readings of the chunk (a copy); the chunk starts again empty."""
+        n = self.k
+        out = JointStates(stamps_ns=self.stamps[:n].copy(), q=self.q[:n].copy(),
+                          qd=self.qd[:n].copy() if self.vel else None,
+                          log_time_ns=self.logt[:n].copy(),
+                          header_stamped=self.stamped[:n].copy(), topic=self.topic,
+                          joints=self.names, source=self.source)  # type: ignore[arg-type]
+        self.k = 0
+        self.vel = False
         return out
 
-    def bulk(t_log: NDArray[np.int64], b: _Bulk, enc: str) -> Iterator[JointStates]:
+    def actuators(self, mnames: tuple[str, ...]) -> list[int]:
+        """Indices of the three joints in a message's names (cached per names tuple)."""
+        ent = self.lookup.get(id(mnames))
+        if ent is None or ent[0] is not mnames:
+            idx = []
+            for j in self.names:
+                if j not in mnames:
+                    raise RecordingError(
+                        f"{self.p}: topic {self.topic!r}, message {self.index}: no joint "
+                        f"named {j!r}; names present: {list(mnames)} (choose with "
+                        f"joints=... / --joints)")
+                idx.append(mnames.index(j))
+            self.lookup[id(mnames)] = ent = (mnames, idx)
+        return ent[1]
+
+    def backwards(self, t: int, last: int) -> RecordingError:
+        return RecordingError(f"{self.p}: topic {self.topic!r}: stamps go backwards at message "
+                              f"{self.index}: {t} ns after {last} ns")
+
+    def one(self, t_log: int, raw: bytes, enc: str) -> bool:
+        """Store one message; True when the chunk is full."""
+        if enc == "cdr":
+            sec, nsec, mnames, pos, vel = self.cdr.decode(raw)
+        else:
+            if self.ros1 is None:
+                self.ros1 = _ros1_decoder()
+            sec, nsec, mnames, pos, vel = self.ros1(raw)
+        i0, i1, i2 = self.actuators(mnames)
+        k, s = self.k, self.s
+        t = sec * 1_000_000_000 + nsec
+        self.stamped[k] = t != 0
+        if t == 0:
+            t = t_log
+        if t < self.last:
+            raise self.backwards(t, self.last)
+        self.last = t
+        self.stamps[k] = t
+        self.logt[k] = t_log
+        if len(pos) > max(i0, i1, i2):
+            self.q[k] = (pos[i0] * s, pos[i1] * s, pos[i2] * s)
+        else:
+            self.q[k] = _NAN3
+        if len(vel) == len(mnames):
+            self.qd[k] = (vel[i0] * s, vel[i1] * s, vel[i2] * s)
+            self.vel = True
+        else:
+            self.qd[k] = _NAN3
+        self.k = k + 1
+        self.index += 1
+        return k + 1 == self.chunk
+
+    def bulk(self, t_log: NDArray[np.int64], b: _Bulk, enc: str) -> Iterator[JointStates]:
         """Messages of one channel: those of the decoder's layout at once, others one by one."""
         j, m = 0, len(b)
         while j < m:
-            e, rows = _same_layout(cdr, b, j) if enc == "cdr" else (j, None)
+            e, rows = _same_layout(self.cdr, b, j) if enc == "cdr" else (j, None)
             if rows is None:
-                if one(int(t_log[j]), b.message(j), enc):
-                    yield full()
+                if self.one(int(t_log[j]), b.message(j), enc):
+                    yield self.full()
                 j += 1
                 continue
-            yield from many(t_log[j:e], rows)
+            yield from self.many(t_log[j:e], rows)
             j = e
 
-    def many(t_log: NDArray[np.int64], rows: NDArray[np.uint8]) -> Iterator[JointStates]:
+    def many(self, t_log: NDArray[np.int64], rows: NDArray[np.uint8]) -> Iterator[JointStates]:
         """Messages of the layout of the decoder (rows of their bytes), vectorised."""
-        i0, i1, i2 = actuators(cdr._names)
         t = (rows[:, 4:8].copy().view("<i4")[:, 0].astype(np.int64) * 1_000_000_000
              + rows[:, 8:12].copy().view("<u4")[:, 0])
         has = t != 0
         t = np.where(has, t, t_log)
-        prev = np.concatenate([[st["last"]], t[:-1]])
+        prev = np.concatenate([[self.last], t[:-1]])
         bad = np.flatnonzero(t < prev)
         n = int(bad[0]) if bad.size else len(t)
+        qv, qdv, hv = self._values(rows)
+        a = 0
+        while a < n:
+            k = self.k
+            take = min(self.chunk - k, n - a)
+            self.stamps[k:k + take] = t[a:a + take]
+            self.logt[k:k + take] = t_log[a:a + take]
+            self.stamped[k:k + take] = has[a:a + take]
+            self.q[k:k + take] = qv[a:a + take]
+            self.qd[k:k + take] = qdv[a:a + take]
+            a += take
+            self.k = k + take
+            self.index += take
+            self.last = int(t[a - 1])
+            self.vel = self.vel or hv
+            if self.k == self.chunk:
+                yield self.full()
+        if bad.size:
+            raise self.backwards(int(t[n]), int(prev[n]))
+
+    def _values(self, rows: NDArray[np.uint8]
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64], bool]:
+        """``q``, ``qd`` (NaN where absent) of rows of the decoder's layout; True with ``qd``."""
+        cdr, s = self.cdr, self.s
+        i0, i1, i2 = self.actuators(cdr._names)
         npos, nvel = cdr._pos.size // 8, cdr._nvel  # type: ignore[union-attr]
         if npos > max(i0, i1, i2):
             o = cdr._off_pos
             pos = rows[:, o:o + 8 * npos].copy().view("<f8")
             qv = np.stack([pos[:, i0] * s, pos[:, i1] * s, pos[:, i2] * s], axis=-1)
         else:
-            qv = np.full((len(t), 3), math.nan)
+            qv = np.full((len(rows), 3), math.nan)
         hv = nvel == len(cdr._names)
         if hv:
             o = cdr._off_vel
             vel = rows[:, o:o + 8 * nvel].copy().view("<f8")
             qdv = np.stack([vel[:, i0] * s, vel[:, i1] * s, vel[:, i2] * s], axis=-1)
         else:
-            qdv = np.full((len(t), 3), math.nan)
-        a = 0
-        while a < n:
-            k = st["k"]
-            take = min(chunk - k, n - a)
-            stamps[k:k + take] = t[a:a + take]
-            logt[k:k + take] = t_log[a:a + take]
-            stamped[k:k + take] = has[a:a + take]
-            q[k:k + take] = qv[a:a + take]
-            qd[k:k + take] = qdv[a:a + take]
-            a += take
-            st["k"] = k + take
-            st["index"] += take
-            st["last"] = int(t[a - 1])
-            st["vel"] = st["vel"] or hv
-            if st["k"] == chunk:
-                yield full()
-        if bad.size:
-            raise backwards(int(t[n]), int(prev[n]))
+            qdv = np.full((len(rows), 3), math.nan)
+        return qv, qdv, hv
 
+
+_NAN3 = (math.nan, math.nan, math.nan)
+
+
+def _iterate(p: Path, kind: str, source: str, topic: str, names: tuple[str, ...], s: float,
+             chunk: int) -> Iterator[JointStates]:
+    """The chunks of the topic's readings; a damaged file is a :class:`RecordingError`."""
+    c = _Chunks(p, source, topic, names, s, chunk)
     try:
         for t_log, raw, enc in _raw_messages(p, kind, topic):
             if isinstance(raw, _Bulk):
-                yield from bulk(t_log, raw, enc)
-            elif one(t_log, raw, enc):
-                yield full()
-        if st["k"]:
-            yield full()
+                yield from c.bulk(t_log, raw, enc)
+            elif c.one(t_log, raw, enc):
+                yield c.full()
+        if c.k:
+            yield c.full()
     except (RecordingError, ModuleNotFoundError, GeneratorExit):
         raise
     except Exception as exc:    # rosbags, mcap, struct, zstd, sqlite: a damaged file
         msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise RecordingError(f"{p}: truncated or corrupt recording at message {st['index']} "
+        raise RecordingError(f"{p}: truncated or corrupt recording at message {c.index} "
                              f"of {topic!r} ({type(exc).__name__}: {msg})") from None
 
 

@@ -6,12 +6,13 @@ import dataclasses
 import math
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._output import check_output_path
+from .._toml import TomlOptions
 from .._validation import check_array, check_instance, check_path
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, KinematicsError
@@ -20,10 +21,12 @@ from ..motion._plan import Trajectory
 from ..motion._tracker import track_batch
 from ..robot._setup import resolve_rcm_frame
 from ._errors import RecordingError
+from ._mcap import check_compression
 from ._read import CHUNK, MAX_CHUNK, iter_joint_states
 from ._write import McapOutput, TrackedBatch
 
-__all__ = ["TrackingSummary", "track_recording", "track_to_mcap", "write_trajectory",
+__all__ = ["TrackOptions", "TrackingSummary", "track_recording", "track_to_mcap",
+           "write_trajectory",
            "write_track_log", "tracked_batch", "first_tracker", "empty_topic_error"]
 
 _LOST = int(TrackFlag.LOST)
@@ -32,6 +35,68 @@ _LOST = int(TrackFlag.LOST)
 MIN_TRACK_CHUNK = 1024
 _FIELDS = ("q", "valid", "slot", "mode", "p", "u", "O_s", "half_chord", "sin_u2", "sin_u4",
            "step", "flags")
+#: Most flagged readings a summary lists (``max_events``).
+MAX_EVENTS = 10**6
+
+
+@dataclasses.dataclass(frozen=True)
+class TrackOptions(TomlOptions):
+    """How :func:`track_recording` and :func:`track_to_mcap` run and write.
+
+    The recording, its topic and joints, the set-up and the tracker's keyword options
+    (``slot``, ``jump_m``, ...) are arguments of the functions; these are the settings of
+    the run and of its output. Every field is checked here, at construction (a named
+    error); the defaults give the files the functions wrote before the options object
+    existed. A ``[track]`` table of a TOML file holds them (:meth:`to_toml`,
+    :meth:`from_toml`).
+
+    Attributes
+    ----------
+    chunk_size : int
+        Readings read, tracked and written at a time, :data:`MIN_TRACK_CHUNK` (1024) to
+        10 000 000 (default :data:`~athenakin.ros.CHUNK`, 65 536): the memory bound.
+    max_events : int
+        Flagged readings listed in the summary, 0 to 1 000 000 (default 20).
+    compression : {"zstd", "lz4", "none"}
+        Chunk compression of the output (:class:`McapOutput`).
+    compression_level : int or None
+        Its level (zstd -7..22, lz4 0..16; None: zstd -3, lz4 0).
+
+    Examples
+    --------
+    >>> from athenakin.ros import TrackOptions
+    >>> o = TrackOptions(max_events=100, compression="lz4")
+    >>> TrackOptions.from_mapping(o.to_mapping()) == o
+    True
+    """
+
+    TOML_TABLE: ClassVar[str] = "track"
+
+    chunk_size: int = CHUNK
+    max_events: int = 20
+    compression: str = "zstd"
+    compression_level: int | None = None
+
+    def __post_init__(self) -> None:
+        n = self.chunk_size
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) \
+                or not MIN_TRACK_CHUNK <= n <= MAX_CHUNK:
+            raise InvalidInputError(f"chunk_size: expected an integer from {MIN_TRACK_CHUNK} "
+                                    f"to {MAX_CHUNK} (readings per chunk; default {CHUNK}), "
+                                    f"got {n!r}")
+        object.__setattr__(self, "chunk_size", int(n))
+        object.__setattr__(self, "max_events", _check_events(self.max_events))
+        check_compression(self.compression, self.compression_level)
+        if self.compression_level is not None:
+            object.__setattr__(self, "compression_level", int(self.compression_level))
+
+
+def _track_options(options: object) -> TrackOptions:
+    """``options`` of :func:`track_recording` checked (None: the defaults)."""
+    if options is None:
+        return TrackOptions()
+    check_instance(options, "options", TrackOptions)
+    return options  # type: ignore[return-value]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -284,8 +349,8 @@ def _stamps_array(stamps_ns: object) -> NDArray[Any]:
 
 def _check_events(max_events: object) -> int:
     if isinstance(max_events, bool) or not isinstance(max_events, (int, np.integer)) \
-            or not 0 <= max_events <= 10**6:
-        raise InvalidInputError(f"max_events: expected an integer from 0 to 1000000, got "
+            or not 0 <= max_events <= MAX_EVENTS:
+        raise InvalidInputError(f"max_events: expected an integer from 0 to {MAX_EVENTS}, got "
                                 f"{max_events!r}")
     return int(max_events)
 
@@ -293,14 +358,13 @@ def _check_events(max_events: object) -> int:
 def track_recording(recording: str | Path, out: str | Path, T_b_e: ArrayLike | None = None,
                     design: Design | None = None, *, topic: str = "/joint_states",
                     joints: tuple[str, str, str] | list[str] = ("q1", "q2", "q3"),
-                    scale: float = 1.0, chunk_size: int = CHUNK, max_events: int = 20,
-                    target: str | Path | None = None,
+                    scale: float = 1.0, target: str | Path | None = None,
                     progress: Callable[[int], None] | None = None,
-                    compression: str = "zstd", compression_level: int | None = None,
+                    options: TrackOptions | None = None,
                     **tracker_options: Any) -> TrackingSummary:
     """Track the actuator readings of a recording and write the poses to an MCAP file.
 
-    The recording is read, tracked and written in chunks of ``chunk_size``
+    The recording is read, tracked and written in chunks of ``options.chunk_size``
     readings (bounded memory). The output (topics in docs/ros.md) appears only
     when everything succeeded.
 
@@ -315,22 +379,17 @@ def track_recording(recording: str | Path, out: str | Path, T_b_e: ArrayLike | N
     design : Design, optional
     topic, joints, scale : keyword-only
         The input (:func:`read_joint_states`).
-    chunk_size : int, keyword-only
-        Readings per chunk, :data:`MIN_TRACK_CHUNK` (1024) to 10 000 000 (default
-        65 536).
-    max_events : int, keyword-only
-        Flagged readings listed in the summary.
     target : str or Path, keyword-only, optional
         Write there and do not rename (for a caller that renames, the CLI).
     progress : callable, keyword-only, optional
         Called with the number of readings done after each chunk.
-    compression, compression_level : keyword-only
-        Chunk compression of the output (:class:`McapOutput`: zstd at level -3 unless
-        told; ``"lz4"``, ``"none"``).
+    options : TrackOptions, keyword-only, optional
+        Chunk size, events listed, the output's compression (default ``TrackOptions()``).
     **tracker_options
         ``slot``, ``jump_m``, ``jump_rad``, ``margins`` of
         :class:`~athenakin.motion.Tracker` (``slot`` is that of the first reading that
-        assembles).
+        assembles), and its collision check (``bodies``, ``environment``,
+        ``clearance_margin``).
 
     Returns
     -------
@@ -349,18 +408,13 @@ def track_recording(recording: str | Path, out: str | Path, T_b_e: ArrayLike | N
     design = resolve_design(design)
     T = resolve_rcm_frame(T_b_e, design)
     opts = _options(tracker_options)
-    nmax = _check_events(max_events)
+    o = _track_options(options)
     chunks = ((js.stamps_ns, js.q) for js in
               iter_joint_states(recording, topic=topic, joints=joints, scale=scale,
-                                chunk_size=chunk_size))
-    if isinstance(chunk_size, (int, np.integer)) and not isinstance(chunk_size, bool) \
-            and not MIN_TRACK_CHUNK <= chunk_size <= MAX_CHUNK:
-        raise InvalidInputError(f"chunk_size: expected an integer from {MIN_TRACK_CHUNK} to "
-                                f"{MAX_CHUNK} (readings per chunk; default {CHUNK}), got "
-                                f"{chunk_size!r}")
-    with McapOutput(out, design, T, target=target, compression=compression,
-                    compression_level=compression_level) as w:
-        summary = _stream(chunks, w, T, design, opts, nmax, progress)
+                                chunk_size=o.chunk_size))
+    with McapOutput(out, design, T, target=target, compression=o.compression,
+                    compression_level=o.compression_level) as w:
+        summary = _stream(chunks, w, T, design, opts, o.max_events, progress)
         if summary.n == 0:
             raise empty_topic_error(recording, topic)
         return summary
@@ -368,8 +422,7 @@ def track_recording(recording: str | Path, out: str | Path, T_b_e: ArrayLike | N
 
 def track_to_mcap(stamps_ns: ArrayLike, q: ArrayLike, out: str | Path,
                   T_b_e: ArrayLike | None = None, design: Design | None = None, *,
-                  max_events: int = 20, target: str | Path | None = None,
-                  compression: str = "zstd", compression_level: int | None = None,
+                  target: str | Path | None = None, options: TrackOptions | None = None,
                   **tracker_options: Any) -> TrackingSummary:
     """Track readings given as arrays (e.g. a CSV stream) and write the poses to MCAP.
 
@@ -379,7 +432,7 @@ def track_to_mcap(stamps_ns: ArrayLike, q: ArrayLike, out: str | Path,
         Time of each reading, ns, never decreasing.
     q : array-like, shape (N, 3)
         Readings, m (NaN: a missing reading, flagged ``LOST``).
-    out, T_b_e, design, max_events, target, compression, compression_level, **tracker_options
+    out, T_b_e, design, target, options, **tracker_options
         As :func:`track_recording`.
 
     Returns
@@ -402,15 +455,16 @@ def track_to_mcap(stamps_ns: ArrayLike, q: ArrayLike, out: str | Path,
         raise InvalidInputError(f"stamps_ns: stamps go backwards at reading {dec[0] + 1}: "
                                 f"{s[dec[0] + 1]} ns after {s[dec[0]]} ns")
     opts = _options(tracker_options)
-    nmax = _check_events(max_events)
+    o = _track_options(options)
+    size = o.chunk_size
 
     def chunks() -> Iterator[tuple[NDArray[np.int64], NDArray[np.float64]]]:
-        for k in range(0, len(qa), CHUNK):
-            yield s[k:k + CHUNK], qa[k:k + CHUNK]
+        for k in range(0, len(qa), size):
+            yield s[k:k + size], qa[k:k + size]
 
-    with McapOutput(out, design, T, target=target, compression=compression,
-                    compression_level=compression_level) as w:
-        return _stream(chunks(), w, T, design, opts, nmax, None)
+    with McapOutput(out, design, T, target=target, compression=o.compression,
+                    compression_level=o.compression_level) as w:
+        return _stream(chunks(), w, T, design, opts, o.max_events, None)
 
 
 def write_trajectory(path: str | Path, traj: Trajectory, *, start_ns: int = 0,
@@ -436,7 +490,7 @@ def write_trajectory(path: str | Path, traj: Trajectory, *, start_ns: int = 0,
     target : str or Path, keyword-only, optional
         Write there and do not rename (for a caller that renames).
     compression, compression_level : keyword-only
-        As :func:`track_recording`.
+        As :class:`TrackOptions`.
 
     Returns
     -------
@@ -479,7 +533,7 @@ def write_track_log(path: str | Path, stamps_ns: ArrayLike, log: TrackLog,
         The set-up the log was tracked with.
     target : str or Path, keyword-only, optional
     compression, compression_level : keyword-only
-        As :func:`track_recording`.
+        As :class:`TrackOptions`.
 
     Returns
     -------
