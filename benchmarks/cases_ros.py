@@ -210,7 +210,7 @@ def _raw_output(tmp: Path, stamps: np.ndarray, log, T: np.ndarray, d: ak.Design)
     from athenakin.ros._track import _FIELDS, tracked_batch
     from athenakin.ros._write import McapOutput
 
-    with McapOutput(tmp / "raw.mcap", d, T, compression="none") as w:
+    with McapOutput(tmp / "raw.mcap", T, d, compression="none") as w:
         w.write_tracked(tracked_batch(stamps, {f: getattr(log, f) for f in _FIELDS}))
     data = (tmp / "raw.mcap").read_bytes()
     return [data[k:k + 4 * 2**20] for k in range(0, len(data), 4 * 2**20)]

@@ -1398,7 +1398,7 @@ def dr_method_targets() -> list[tuple[str, Callable[..., Any]]]:
 
     def write_static(stamp_ns: Any) -> Any:
         with tempfile.TemporaryDirectory(prefix="athenakin-audit-mcap-") as d:
-            with ros.McapOutput(Path(d) / "s.mcap", D, T0) as out:
+            with ros.McapOutput(Path(d) / "s.mcap", T0, D) as out:
                 out.write_static(stamp_ns)
             return dict(out.counts)
 

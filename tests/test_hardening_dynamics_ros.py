@@ -156,14 +156,14 @@ ROS = [
      ros.RecordingError, r"missing"),
     ("format_path_none", lambda t: ros.recording_format(None), TypeError, r"^path: "),
     ("format_path_int", lambda t: ros.recording_format(0), TypeError, r"^path: "),
-    ("mcap_design_list", lambda t: ros.McapOutput(t / "o.mcap", [], T), TypeError,
+    ("mcap_design_list", lambda t: ros.McapOutput(t / "o.mcap", T, []), TypeError,
      r"^design: "),
-    ("mcap_T_none", lambda t: ros.McapOutput(t / "o.mcap", D, None), TypeError, r"^T_b_e: "),
-    ("mcap_T_3x3", lambda t: ros.McapOutput(t / "o.mcap", D, np.eye(3)), InvalidInputError,
+    ("mcap_T_none", lambda t: ros.McapOutput(t / "o.mcap", None, D), TypeError, r"^T_b_e: "),
+    ("mcap_T_3x3", lambda t: ros.McapOutput(t / "o.mcap", np.eye(3), D), InvalidInputError,
      r"^T_b_e"),
-    ("mcap_T_10e400", lambda t: ros.McapOutput(t / "o.mcap", D, 10**400),
+    ("mcap_T_10e400", lambda t: ros.McapOutput(t / "o.mcap", 10**400, D),
      (TypeError, InvalidInputError), r"^T_b_e"),
-    ("mcap_target_nan", lambda t: ros.McapOutput(t / "o.mcap", D, T, target=np.nan),
+    ("mcap_target_nan", lambda t: ros.McapOutput(t / "o.mcap", T, D, target=np.nan),
      TypeError, r"^target: "),
     ("track_recording_none", lambda t: ros.track_recording(None, t / "o.mcap", T, D),
      TypeError, r"^recording: "),
@@ -262,7 +262,7 @@ def test_kernel_compiles_one_specialization_for_readonly_and_batched_inputs():
                                         (-1, InvalidInputError), (2**63, InvalidInputError)],
                          ids=["none", "nan", "str", "negative", "2_63"])
 def test_mcap_write_static_stamp_is_named(tmp_path, stamp, exc):
-    out = ros.McapOutput(tmp_path / "s.mcap", D, T)
+    out = ros.McapOutput(tmp_path / "s.mcap", T, D)
     try:
         with pytest.raises(exc, match=r"^stamp_ns: "):
             out.write_static(stamp)
@@ -295,5 +295,5 @@ def test_mcap_output_onto_a_folder_or_fifo_is_named(tmp_path, kind):
     with pytest.raises(InvalidInputError, match=rf"^out: .*abc is {what}"):
         ros.track_to_mcap(np.arange(2), q, p, T, d)
     with pytest.raises(InvalidInputError, match=rf"^path: .*abc is {what}"):
-        ros.McapOutput(p, d, T)
+        ros.McapOutput(p, T, d)
     assert sorted(x.name for x in tmp_path.iterdir()) == ["abc"]     # nothing left behind

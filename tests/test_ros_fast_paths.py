@@ -112,7 +112,7 @@ def test_compiled_writer_with_clearance_fields(tmp_path, monkeypatch):
         if name == "slow":
             _numpy_writer(monkeypatch)
         path = tmp_path / f"{name}.mcap"
-        with _write.McapOutput(path, D, T, compression="none") as w:
+        with _write.McapOutput(path, T, D, compression="none") as w:
             w.write_tracked(tracked_batch(st, cols))
         out[name] = path.read_bytes()
     assert out["fast"] == out["slow"]

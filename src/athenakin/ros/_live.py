@@ -95,7 +95,7 @@ class FoxgloveStream:
                                     ) from None
         self.design = resolve_design(design)
         self.T_b_e = resolve_rcm_frame(T_b_e, self.design)
-        self.encoder = RosEncoder(self.design, self.T_b_e)
+        self.encoder = RosEncoder(self.T_b_e, self.design)
         self._lock = threading.RLock()
         self._context = foxglove.Context()
         self._channels: dict[str, Any] = {}
@@ -230,7 +230,7 @@ class FoxgloveStream:
         """Change the design and RCM frame; the URDF and fixed frames are sent again."""
         design = resolve_design(design)
         T = resolve_rcm_frame(T_b_e, design)
-        encoder = RosEncoder(design, T)
+        encoder = RosEncoder(T, design)
         with self._lock:
             self.design, self.T_b_e, self.encoder = design, T, encoder
             self._last = None

@@ -412,7 +412,7 @@ def track_recording(recording: str | Path, out: str | Path, T_b_e: ArrayLike | N
     chunks = ((js.stamps_ns, js.q) for js in
               iter_joint_states(recording, topic=topic, joints=joints, scale=scale,
                                 chunk_size=o.chunk_size))
-    with McapOutput(out, design, T, target=target, compression=o.compression,
+    with McapOutput(out, T, design, target=target, compression=o.compression,
                     compression_level=o.compression_level) as w:
         summary = _stream(chunks, w, T, design, opts, o.max_events, progress)
         if summary.n == 0:
@@ -462,7 +462,7 @@ def track_to_mcap(stamps_ns: ArrayLike, q: ArrayLike, out: str | Path,
         for k in range(0, len(qa), size):
             yield s[k:k + size], qa[k:k + size]
 
-    with McapOutput(out, design, T, target=target, compression=o.compression,
+    with McapOutput(out, T, design, target=target, compression=o.compression,
                     compression_level=o.compression_level) as w:
         return _stream(chunks(), w, T, design, opts, o.max_events, None)
 
@@ -504,7 +504,7 @@ def write_trajectory(path: str | Path, traj: Trajectory, *, start_ns: int = 0,
     t = np.asarray(traj.t, dtype=float)
     stamps = int(start_ns) + np.rint((t - t[0]) * 1e9).astype(np.int64)
     log = track(traj.q, traj.T_b_e, traj.design)
-    with McapOutput(path, traj.design, traj.T_b_e, target=target, compression=compression,
+    with McapOutput(path, traj.T_b_e, traj.design, target=target, compression=compression,
                     compression_level=compression_level) as w:
         w.write_static(int(stamps[0]))
         w.write_trajectory_message(int(stamps[0]), t, traj.q, traj.qd, traj.qdd)
@@ -546,7 +546,7 @@ def write_track_log(path: str | Path, stamps_ns: ArrayLike, log: TrackLog,
     if s.shape != (len(log.q),) or not np.issubdtype(s.dtype, np.integer):
         raise InvalidInputError(f"stamps_ns: expected {len(log.q)} integers (ns), got "
                                 f"{s.dtype} of shape {s.shape}")
-    with McapOutput(path, design, T, target=target, compression=compression,
+    with McapOutput(path, T, design, target=target, compression=compression,
                     compression_level=compression_level) as w:
         for k in range(0, len(s), CHUNK):
             sl = slice(k, k + CHUNK)

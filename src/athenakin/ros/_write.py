@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._output import AtomicFile, check_output_path, naming_path
-from .._validation import check_path
+from .._validation import check_argument_order, check_path
 from ..design import Design
 from ..errors import InvalidInputError
 from ..robot._setup import resolve_rcm_frame
@@ -146,11 +146,12 @@ class RosEncoder:
 
     Parameters
     ----------
-    design : Design
     T_b_e : ndarray, shape (4, 4)
+        The RCM frame in the base frame (m).
+    design : Design
     """
 
-    def __init__(self, design: Design, T_b_e: ArrayLike) -> None:
+    def __init__(self, T_b_e: ArrayLike, design: Design) -> None:
         self.model: UrdfModel = urdf_model(design, np.asarray(T_b_e, dtype=float))
         self.tf_pairs = tuple((BASE_FRAME, c) for c in TF_FRAMES)
         self.templates = {"tool_tip": _pose_template(), "tf": _tf_template(self.tf_pairs),
@@ -260,8 +261,9 @@ class McapOutput:
     path : str or Path
         The file to write (``.mcap``). It appears only when :meth:`close` succeeds;
         the context manager closes it on success and discards it on an exception.
-    design : Design
     T_b_e : ndarray, shape (4, 4)
+        The RCM frame in the base frame (m).
+    design : Design
     compression : {"zstd", "lz4", "none"}, keyword-only
         Chunk compression (default zstd; all three are MCAP's and Foxglove reads them).
     compression_level : int, keyword-only, optional
@@ -275,16 +277,18 @@ class McapOutput:
     --------
     ::
 
-        with McapOutput("run.mcap", design, T_b_e) as out:
+        with McapOutput("run.mcap", T_b_e, design) as out:
             out.write_tracked(batch)
     """
 
-    def __init__(self, path: str | Path, design: Design, T_b_e: ArrayLike, *,
+    def __init__(self, path: str | Path, T_b_e: ArrayLike, design: Design, *,
                  compression: str = "zstd", compression_level: int | None = None,
                  target: str | Path | None = None) -> None:
         compression, compression_level = check_compression(compression, compression_level)
         self._closed = True                    # nothing to close until the file is open
         self.path = check_output_path(path)    # a folder, FIFO or device: named error
+        check_argument_order(T_b_e, "T_b_e", given_for="frame")
+        check_argument_order(design, "design", given_for="design")
         if not isinstance(design, Design):
             raise TypeError(f"design: expected a Design, got {type(design).__name__}")
         if T_b_e is None:
@@ -295,7 +299,7 @@ class McapOutput:
             target = check_path(target, "target")
         compressor_module(compression)         # a missing extra: named, before any file
         msgdef(_MSG_TYPES["tool_tip"])         # rosbags (the schemas): likewise
-        self.encoder = RosEncoder(design, T_b_e)
+        self.encoder = RosEncoder(T_b_e, design)
         self.model = self.encoder.model
         self._atomic: AtomicFile | None = None
         if target is None:
