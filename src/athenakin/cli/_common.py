@@ -12,6 +12,7 @@ from numpy.typing import NDArray
 from .._serialize import json_text, to_jsonable  # noqa: F401  (re-exported)
 from .._transforms import rot_x, rot_y, rot_z, transform_from_rotation_translation
 from ..design import Design
+from ..errors import InvalidInputError
 from ..robot import default_rcm_frame
 from ..robot._setup import check_rcm_position, read_rcm_json  # noqa: F401  (re-exported)
 

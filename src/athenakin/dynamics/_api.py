@@ -33,7 +33,8 @@ from ._core import (
 from ._model import MassModel
 
 __all__ = ["Statics", "statics", "actuator_forces", "inverse_dynamics", "mass_matrix",
-           "forward_dynamics", "mechanical_energy", "MechanicalEnergy", "STANDARD_GRAVITY", "MAX_BATCH", "CHUNK"]
+           "forward_dynamics", "mechanical_energy", "MechanicalEnergy", "STANDARD_GRAVITY",
+           "MAX_BATCH", "CHUNK"]
 
 Arr = NDArray[np.float64]
 #: Default gravity, base frame, m/s^2.
