@@ -201,11 +201,14 @@ class TeleopTab:
         view = app.view
         if self.running or view is None or view.geometry is None:
             return
-        env = app.bodies.environment
-        try:
-            tele, master = start_teleop(app.setup, view.q, slot=view.geometry.slot,
-                                        scale=float(self.scale.value), environment=env,
-                                        bodies=app.bodies.bodies)
+        from ..collision import Bodies
+
+        env, bodies = app.bodies.environment, app.bodies.bodies   # as the Inverse tab's
+        try:                                                        # collision stop
+            tele, master = start_teleop(
+                app.setup, view.q, slot=view.geometry.slot, scale=float(self.scale.value),
+                environment=env,
+                bodies=bodies if bodies is not None else Bodies.default(app.setup.design))
         except (ValueError, TypeError, KinematicsError) as exc:
             self.readout.content = teleop_html(None, note=f"cannot start: {exc}")
             return
