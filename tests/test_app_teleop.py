@@ -269,3 +269,35 @@ def test_start_refuses_a_tip_inside_a_fixture_with_a_named_error(setup):
         _start(setup, environment=env)
     with pytest.raises(TypeError, match="options"):
         _start(setup, options={"scale": 1})
+
+
+def test_the_tab_in_process_starts_at_the_tip_and_stops_without_a_page():
+    """The viser layer without a browser: start puts the master at the tip and hides the IK
+    handle; with no page connected the loop stops at once (no master: no teleoperation)
+    and says so; a tip inside a fixture is refused with the reason in the read-out."""
+    pytest.importorskip("viser")
+    import socket
+    import time
+
+    from athenakin.app import AthenaApp
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    app = AthenaApp(port=port, backend="numpy")
+    try:
+        tab = app.teleop
+        assert not tab.running and 'data-ro="teleop_state">off' in tab.readout.content
+        tip = app.view.readouts.tip_b.copy()
+        tab.start()
+        t0 = time.monotonic()
+        while tab.running and time.monotonic() - t0 < 60:
+            time.sleep(0.05)
+        assert not tab.running and "stopped: the page closed" in tab.readout.content
+        assert app.tip_handle.visible and tab.master is None
+        app.bodies.environment = Environment().sphere(tip, 0.01, name="blob")
+        tab.start()
+        assert not tab.running and "cannot start" in tab.readout.content
+        assert "blob" in tab.readout.content
+    finally:
+        app.stop()

@@ -291,8 +291,8 @@ def _obstacle_mesh(o: Any) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
 
     if o.kind in ("sphere", "capsule"):
         a, b = (o.center, o.center) if o.kind == "sphere" else (o.a, o.b)
-        v, f = capsule_mesh(a, b, o.radius)
-        return v.astype(float), f.astype(np.int64)
+        vc, fc = capsule_mesh(a, b, o.radius)
+        return vc.astype(np.float64), fc.astype(np.int64)
     if o.kind == "halfspace":
         n = np.asarray(o.normal, dtype=float)
         e1 = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])

@@ -254,10 +254,11 @@ class TeleopTab:
                           else "stopped: the page closed")
                 return
             with self._lock:
-                if self._run is not token:
+                master = self.master
+                if self._run is not token or master is None:
                     return
-                cmd, t_last = teleop_cycles(self.tele, self.master, t_last, self._now())
-                frame = None if cmd is None else teleop_frame(self.tele, self.master, cmd)
+                cmd, t_last = teleop_cycles(self.tele, master, t_last, self._now())
+                frame = None if cmd is None else teleop_frame(self.tele, master, cmd)
                 self.frame = frame or self.frame
             if frame is not None:
                 if np.max(np.abs(np.asarray(self.app.q) - drawn)) > MOVED_TOL_M:
