@@ -291,8 +291,8 @@ def test_the_tab_in_process_starts_at_the_tip_and_stops_without_a_page():
         tip = app.view.readouts.tip_b.copy()
         tab.start()
         t0 = time.monotonic()
-        while tab.running and time.monotonic() - t0 < 60:
-            time.sleep(0.05)
+        while "stopped" not in tab.readout.content and time.monotonic() - t0 < 60:
+            time.sleep(0.05)                          # the note is the last thing stop sets
         assert not tab.running and "stopped: the page closed" in tab.readout.content
         assert app.tip_handle.visible and tab.master is None
         app.bodies.environment = Environment().sphere(tip, 0.01, name="blob")

@@ -94,6 +94,8 @@ class TeleopTab:
         The last cycle shown (None while off).
     tele : athenakin.teleop.Teleop or None
     master : Master or None
+    error : Exception or None
+        An unexpected error that stopped the loop (also said in the tab).
     """
 
     def __init__(self, app: Any) -> None:
@@ -106,6 +108,7 @@ class TeleopTab:
         self._t0 = time.perf_counter()
         self._nodes: dict[str, Any] = {}
         self._tip_visible = True
+        self.error: BaseException | None = None   # what stopped the loop, if not a user
         self._build()
         from viser import _messages  # the app's channel for page scripts
 
@@ -229,29 +232,43 @@ class TeleopTab:
 
     def stop(self, note: str = "") -> None:
         """Stop teleoperation (the robot stays where it is)."""
-        with self._lock:
+        with self._lock:                         # not while the loop sends a frame
             self._run = None
             self.tele = self.master = self.frame = None
-        self._handle.visible = False
-        self.app.tip_handle.visible = self._tip_visible
-        for b in (self.clutch_btn, self.hold_btn, self.handle_mm, self.estop_btn,
-                  self.release_btn):
-            b.disabled = True
-        self.clutch_btn.label = "clutch: closed (click to open)"
-        self.start_btn.label = "start teleop"
-        self._draw_fixtures(())
-        for name in [n for n in self._nodes if not n.startswith("fixture_")]:
-            self._nodes.pop(name).remove()
-        self.readout.content = teleop_html(None, note=note)
+            self._handle.visible = False
+            self.app.tip_handle.visible = self._tip_visible
+            for b in (self.clutch_btn, self.hold_btn, self.handle_mm, self.estop_btn,
+                      self.release_btn):
+                b.disabled = True
+            self.clutch_btn.label = "clutch: closed (click to open)"
+            self.start_btn.label = "start teleop"
+            self._draw_fixtures(())
+            for name in [n for n in self._nodes if not n.startswith("fixture_")]:
+                self._nodes.pop(name).remove()
+            self.readout.content = teleop_html(None, note=note)
 
     def _loop(self, token: object, setup: Any) -> None:
-        """The cycles on the app's clock; the robot redrawn at most DRAW_HZ times a second."""
+        """The cycles on the app's clock; an unexpected error stops them, said in the tab."""
+        try:
+            self._cycles(token, setup)
+        except Exception as exc:                 # a GUI thread: report, never die silently
+            self.error = exc
+            self._stop_run(token, f"stopped: {type(exc).__name__}: {exc}")
+
+    def _stop_run(self, token: object, note: str) -> None:
+        """Stop the run of ``token`` (not one started since)."""
+        with self._lock:
+            if self._run is token:
+                self.stop(note)
+
+    def _cycles(self, token: object, setup: Any) -> None:
+        """Run the cycles due, redraw the robot at most DRAW_HZ times a second."""
         dt, t_last, t_draw, shown = 1.0 / TELEOP_RATE, self._now(), -1.0, ""
         drawn = np.asarray(self.app.q, dtype=float)
         while self._run is token:
             if self.app.setup is not setup or not self.server.get_clients():
-                self.stop("stopped: the set-up changed" if self.app.setup is not setup
-                          else "stopped: the page closed")
+                self._stop_run(token, "stopped: the set-up changed"
+                               if self.app.setup is not setup else "stopped: the page closed")
                 return
             with self._lock:
                 master = self.master
@@ -262,13 +279,16 @@ class TeleopTab:
                 self.frame = frame or self.frame
             if frame is not None:
                 if np.max(np.abs(np.asarray(self.app.q) - drawn)) > MOVED_TOL_M:
-                    self.stop("stopped: the robot was moved from another tab")
+                    self._stop_run(token, "stopped: the robot was moved from another tab")
                     return
                 if (np.max(np.abs(frame.q - drawn)) > 0 and self._now() - t_draw
                         >= 1.0 / DRAW_HZ):
                     self.app.slot = frame.slot
                     drawn, t_draw = np.asarray(self.app.set_q(frame.q).q), self._now()
-                shown = self._show(frame, shown)
+                with self._lock:
+                    if self._run is not token:
+                        return
+                    shown = self._show(frame, shown)
             time.sleep(max(0.0, t_last + dt - self._now()))
 
     def _show(self, frame: TeleopFrame, shown: str) -> str:
