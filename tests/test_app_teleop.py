@@ -269,6 +269,13 @@ def test_start_refuses_a_tip_inside_a_fixture_with_a_named_error(setup):
         _start(setup, environment=env)
     with pytest.raises(TypeError, match="options"):
         _start(setup, options={"scale": 1})
+    tele, m = _start(setup)
+    with pytest.raises(TypeError, match="tele"):
+        teleop_cycles(object(), m, 0.0, 1.0)
+    with pytest.raises(TypeError, match="master"):
+        teleop_cycles(tele, (0.0, 0.0, 0.0), 0.0, 1.0)
+    with pytest.raises(ak.errors.InvalidInputError, match="t_now"):
+        teleop_cycles(tele, m, 0.0, math.nan)
 
 
 def test_the_tab_in_process_starts_at_the_tip_and_stops_without_a_page():

@@ -203,6 +203,9 @@ def teleop_cycles(tele: Any, master: Master, t_last: float, t_now: float
     t_last : float
         Time of the last cycle run, s.
     """
+    from ..teleop import Teleop
+
+    check_instance(tele, "tele", Teleop)
     check_instance(master, "master", Master)
     dt = 1.0 / tele.rate
     t_last, t_now = check_scalar(t_last, "t_last"), check_scalar(t_now, "t_now")
@@ -219,8 +222,9 @@ def teleop_cycles(tele: Any, master: Master, t_last: float, t_now: float
 
 def teleop_frame(tele: Any, master: Master, cmd: Any) -> TeleopFrame:
     """What the command ``cmd`` of ``tele`` draws and shows (see :class:`TeleopFrame`)."""
-    from ..teleop import TeleopStatus
+    from ..teleop import Teleop, TeleopStatus
 
+    check_instance(tele, "tele", Teleop)
     check_instance(master, "master", Master)
     st = TeleopStatus(cmd.status)
     flags = tuple(n for n in SHOWN_FLAGS if st & TeleopStatus[n])
