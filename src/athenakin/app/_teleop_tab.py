@@ -32,7 +32,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import KinematicsError
+from .._validation import check_array
+from ..errors import InvalidInputError, KinematicsError
 from ._teleop import (
     SCALE_RANGE,
     TELEOP_RATE,
@@ -168,18 +169,26 @@ class TeleopTab:
         if m is not None:
             self._update_master(clutched=not m.clutched)
 
-    def set_handle(self, handle_b: Any) -> None:
-        """Move the master handle to ``handle_b`` (base frame, m), as a drag would."""
-        h = tuple(float(x) for x in np.asarray(handle_b, dtype=float).reshape(3))
+    def set_handle(self, handle_b: Any, *, drawn: bool = False) -> None:
+        """Move the master handle to ``handle_b`` (base frame, m), as a drag would.
+
+        ``drawn``: the browser has put the handle there already (a drag): only the master
+        and the numeric field follow (writing the position back could undo a newer one).
+        """
+        p = check_array(handle_b, "handle_b", (3,), allow_nonfinite=True)
+        if p.shape != (3,):
+            raise InvalidInputError(f"handle_b: expected shape (3,), got shape {p.shape}")
+        h = (float(p[0]), float(p[1]), float(p[2]))
         self._update_master(handle_b=h)
         if np.all(np.isfinite(h)):
-            self._handle.position = h
+            if not drawn:
+                self._handle.position = h
             mm = tuple(round(x * 1e3, 3) for x in h)
             if tuple(self.handle_mm.value) != mm:
                 self.handle_mm.value = mm
 
     def _on_handle(self) -> None:
-        self.set_handle(self._handle.position)
+        self.set_handle(self._handle.position, drawn=True)
 
     def _on_handle_mm(self) -> None:
         h = np.asarray(self.handle_mm.value, dtype=float) * 1e-3
@@ -215,6 +224,7 @@ class TeleopTab:
         except (ValueError, TypeError, KinematicsError) as exc:
             self.readout.content = teleop_html(None, note=f"cannot start: {exc}")
             return
+        master = dataclasses.replace(master, paused=bool(self.pause.value))
         with self._lock:
             self.tele, self.master, self.frame = tele, master, None
             self._run = token = object()
