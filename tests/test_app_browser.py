@@ -48,7 +48,7 @@ COLOR_TOL = 45
 #: The sliders of the open tab (Mantine keeps visited tabs mounted, hidden).
 SLIDERS = "[role=slider] >> visible=true"
 #: How many sliders each tab shows.
-TAB_SLIDERS = {"Forward": 3, "Inverse": 3, "Playback": 1, "Set-up": 0}
+TAB_SLIDERS = {"Forward": 3, "Inverse": 3, "Playback": 1, "Teleop": 1, "Set-up": 0}
 TRAJECTORY = ("t_s,q1_m,q2_m,q3_m\n0.0,-0.10,0.10,0.45\n0.5,-0.11,0.09,0.46\n"
               "1.0,-0.12,0.08,0.47\n")
 BAD_TRAJECTORY = "t_s,q1_m,q2_m,q3_m\n0.0,-0.10,0.10,0.45\n0.5,-0.11,oops,0.46\n"
@@ -577,6 +577,63 @@ def test_keys_drive_the_focused_slider_only_and_the_grip_drags_the_tip(local):
     assert not np.allclose(cam.position, pos0, rtol=0, atol=1e-6)
     # viser 1.1.1's scene-node drag (the grip) calls preventDefault in a passive pointer
     # listener, which Chromium logs; the drag itself works (checked above)
+    assert [e for e in errors if e != PASSIVE_LISTENER_NOTE] == []
+
+
+def _wait_teleop(page, state):
+    page.wait_for_function(
+        "(w) => { const e = document.querySelector('[data-ro=teleop_state]');"
+        " return e && e.textContent.trim() === w; }", arg=state, timeout=UPDATE_TIMEOUT_MS)
+
+
+def test_teleop_tab_handle_field_drives_the_robot_and_the_held_key_clutches(local):
+    """The Teleop tab in Chromium: start, step the handle's x field up 10 mm with the
+    keyboard, the robot follows 0.2 x 10 mm (read-outs and the commanded tip); the key C
+    held opens the clutch, released closes it; pausing the master trips the watchdog."""
+    app, page, errors = local
+    r0 = _wait_settled(page, app)
+    _tab(page, "Teleop")
+    page.get_by_role("button", name="start teleop").click()
+    _wait_teleop(page, "following")
+    tip0 = np.array([float(page.get_attribute(f"[data-ro=teleop_tip_b_{a}]", "data-v"))
+                     for a in "xyz"])
+    np.testing.assert_allclose(tip0, r0.tip_b, rtol=0, atol=1e-9)
+    h0 = np.array(app.teleop.master.handle_b)
+    field = page.get_by_label("handle [mm]")               # x of the master handle
+    x0 = float(field.input_value())                        # shown to the field's step (1 mm)
+    field.focus()
+    for _ in range(10):                                    # 10 steps of 1 mm
+        page.keyboard.press("ArrowUp")
+    page.wait_for_function(
+        "([e, w]) => Math.abs(parseFloat(e.value) - w) < 0.5 + 1e-9",
+        arg=[field.element_handle(), x0 + 10.0], timeout=UPDATE_TIMEOUT_MS)
+    t0 = time.monotonic()                                  # the server has the last value
+    while app.teleop.master.handle_b[0] - h0[0] < 0.010 - 2e-6 and (
+            time.monotonic() - t0 < UPDATE_TIMEOUT_MS / 1e3):
+        page.wait_for_timeout(100)
+    h1 = np.array(app.teleop.master.handle_b)              # to the field's 1e-3 mm
+    np.testing.assert_allclose(h1 - h0, [0.010, 0.0, 0.0], rtol=0, atol=2e-6)
+    want = tip0 + 0.2 * (h1 - h0)                          # the motion scale, base frame
+    page.wait_for_function(                                # the commanded tip arrives
+        "(w) => { const e = document.querySelector('[data-ro=teleop_tip_b_x]');"
+        " return e && Math.abs(parseFloat(e.dataset.v) - w) < 1e-9; }", arg=float(want[0]),
+        timeout=UPDATE_TIMEOUT_MS)
+    r = _wait_settled(page, app)                           # ... and the robot's read-outs
+    np.testing.assert_allclose(r.tip_b, want, rtol=0, atol=1e-9)
+    _readouts_are_fk(page, slot=r.slot)
+    assert np.max(np.abs(r.q - r0.q)) > 1e-4
+    page.evaluate("() => document.activeElement.blur()")   # focus off the field
+    page.keyboard.down("c")                                # the held key opens the clutch
+    _wait_teleop(page, "clutched")
+    page.keyboard.up("c")
+    _wait_teleop(page, "following")
+    page.get_by_text("pause master").click()
+    _wait_teleop(page, "WATCHDOG")
+    assert page.get_attribute("[data-flag=WATCHDOG]", "data-on") == "1"
+    page.get_by_text("pause master").click()
+    _wait_teleop(page, "following")
+    page.get_by_role("button", name="stop teleop").click()
+    _wait_teleop(page, "off")
     assert [e for e in errors if e != PASSIVE_LISTENER_NOTE] == []
 
 

@@ -239,7 +239,7 @@ def test_regenerate_quick_writes_every_docs_figure(tmp_path) -> None:
         shown |= set(re.findall(r"\]\((?:docs/)?figures/([\w-]+\.png)\)", page.read_text()))
     assert len(shown) >= 15, shown
     screenshots = {"app_forward.png", "app_all_slots.png", "app_inverse.png",   # optional
-                   "app_forces.png", "foxglove_track.png", "foxglove_live.png",
+                   "app_forces.png", "app_teleop.png", "foxglove_track.png", "foxglove_live.png",
                    "foxglove_teleop.png", "teleop_session.png"}
     written = {p.name for p in tmp_path.glob("*.png")}
     assert shown - screenshots <= written, sorted(shown - screenshots - written)

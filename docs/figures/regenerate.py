@@ -7,15 +7,16 @@ Run from anywhere::
     python docs/figures/regenerate.py --quick --out /tmp/figs   # coarse grids (CI: a minute)
     python docs/figures/regenerate.py --list
 
-``app`` (the screenshots of ``athenakin app``) needs playwright and a Chromium and is
-not part of the default set; it runs ``examples/_app_screenshots.py`` and
-``examples/_app_forces_screenshot.py``. ``foxglove`` (the Foxglove Studio screenshots of
-docs/ros.md, a file and the live stream, and of docs/teleop.md, a replayed session) runs
-``tools/foxglove-shot/shot.py`` and needs, besides playwright and Chromium, ``npm ci`` in
-tools/foxglove-shot (and the ``sim`` extra for the session). ``teleop`` (the 20 s session
-of docs/teleop.md, two runs in MuJoCo: minutes) runs ``benchmarks/bench_teleop.py session``
-and needs the ``sim`` extra. Every other figure needs only the ``plot``, ``analysis``,
-``calibration``, ``motion`` and ``synthesis`` extras.
+``app`` (the screenshots of ``athenakin app``) needs playwright and a Chromium and is not
+part of the default set; it runs ``examples/_app_screenshots.py``,
+``examples/_app_forces_screenshot.py`` and ``examples/_app_teleop_screenshot.py``.
+``foxglove`` (the Foxglove Studio screenshots of docs/ros.md, a file and the live stream,
+and of docs/teleop.md, a replayed session) runs ``tools/foxglove-shot/shot.py`` and needs,
+besides playwright and Chromium, ``npm ci`` in tools/foxglove-shot (and the ``sim`` extra
+for the session). ``teleop`` (the 20 s session of docs/teleop.md, two runs in MuJoCo:
+minutes) runs ``benchmarks/bench_teleop.py session`` and needs the ``sim`` extra. Every
+other figure needs only the ``plot``, ``analysis``, ``calibration``, ``motion`` and
+``synthesis`` extras.
 With ``--quick`` the grids and sample counts are coarser (the figures look the same, a little
 blockier); the committed PNGs are written without it.
 """
@@ -203,7 +204,10 @@ def app(s: Settings) -> list[Path]:
     subprocess.run([sys.executable, str(ROOT / "examples/_app_screenshots.py")], check=True)
     subprocess.run([sys.executable, str(ROOT / "examples/_app_forces_screenshot.py")],
                    check=True)                                      # issue 21: app forces
-    names = ("app_forward.png", "app_all_slots.png", "app_inverse.png", "app_forces.png")
+    subprocess.run([sys.executable, str(ROOT / "examples/_app_teleop_screenshot.py")],
+                   check=True)                                      # issue 29: Teleop tab
+    names = ("app_forward.png", "app_all_slots.png", "app_inverse.png", "app_forces.png",
+             "app_teleop.png")
     if s.out != HERE:
         for n in names:
             shutil.copyfile(HERE / n, s.out / n)

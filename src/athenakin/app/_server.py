@@ -306,6 +306,10 @@ class AthenaApp:
             self._time.on_update(self._on_time)
             self._play = gui.add_button("play", disabled=True)
             self._play.on_click(lambda _: self._start_playing())
+        with tabs.add_tab("Teleop"):     # a virtual master (issue 29): app/_teleop_tab.py
+            from ._teleop_tab import TeleopTab
+
+            self.teleop = TeleopTab(self)
         with tabs.add_tab("Set-up"):
             self._design_path = gui.add_text("design TOML", initial_value="")
             self._rcm_path = gui.add_text("RCM frame JSON", initial_value="",
