@@ -171,19 +171,16 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
 
     Parameters
     ----------
-    q, T_b_e, design, method, errors, fields : as in :func:`athenakin.forward_kinematics`
-    tangent_tol, degenerate_tol, p_zero_tol, closure_tol : float, keyword-only
+    q, T_b_e, design, method, errors, tangent_tol, degenerate_tol, p_zero_tol, closure_tol, fields
         As in :func:`athenakin.forward_kinematics`.
     parallel : bool, keyword-only
-        Spread the batch over numba's threads (default False).
+        Spread the batch over numba's threads.
     out : FKSolution, optional, keyword-only
-        An earlier full result (no ``fields``) of the same batch shape whose arrays are
-        overwritten and which is returned.
+        An earlier full result of the same batch shape, overwritten and returned.
 
     Returns
     -------
     FKSolution
-        As :func:`athenakin.forward_kinematics` (``out`` itself where given).
     """
     if out is None and not parallel:   # the common single call (control loops)
         sol = lean_fk(q, T_b_e, design, method, errors, tangent_tol, degenerate_tol,
@@ -357,18 +354,15 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
 
     Parameters
     ----------
-    T_b_e, u345, design, errors, fields : as in :func:`athenakin.inverse_kinematics`
-    singular_tol, closure_tol : float, keyword-only
+    T_b_e, u345, design, errors, singular_tol, closure_tol, fields
         As in :func:`athenakin.inverse_kinematics`.
     parallel : bool, keyword-only
-        Spread the batch over numba's threads (default False).
+        Spread the batch over numba's threads.
 
     Returns
     -------
-    q : ndarray, shape (..., 3)
-        ``(q1, q2, q3)``, m; NaN where ``passive.valid`` is False.
-    passive : PassiveJoints
-        As :func:`athenakin.inverse_kinematics`.
+    q, passive : ndarray (..., 3), PassiveJoints
+        As :func:`athenakin.inverse_kinematics` (``q`` in m).
     """
     def reference() -> tuple[NDArray[np.float64], PassiveJoints]:
         return _ref_ik.inverse_kinematics(T_b_e, u345, design, errors=errors,

@@ -274,11 +274,10 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
 
     Parameters
     ----------
-    q, T_b_e, design, method, errors, fields : as in :func:`athenakin.forward_kinematics`
-    tangent_tol, degenerate_tol, p_zero_tol, closure_tol : float, keyword-only
+    q, T_b_e, design, method, errors, tangent_tol, degenerate_tol, p_zero_tol, closure_tol, fields
         As in :func:`athenakin.forward_kinematics`.
     backend : {"numpy"}, keyword-only
-        Only ``"numpy"`` (the reference); :func:`athenakin.forward_kinematics` chooses the backend.
+        Only the reference; :func:`athenakin.forward_kinematics` chooses the backend.
 
     Returns
     -------

@@ -192,18 +192,15 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
 
     Parameters
     ----------
-    T_b_e, u345, design, errors, fields : as in :func:`athenakin.inverse_kinematics`
-    singular_tol, closure_tol : float, keyword-only
+    T_b_e, u345, design, errors, singular_tol, closure_tol, fields
         As in :func:`athenakin.inverse_kinematics`.
     backend : {"numpy"}, keyword-only
-        Only ``"numpy"`` (the reference); :func:`athenakin.inverse_kinematics` chooses the backend.
+        Only the reference; :func:`athenakin.inverse_kinematics` chooses the backend.
 
     Returns
     -------
-    q : ndarray, shape (..., 3)
-        ``(q1, q2, q3)``, m; NaN where ``passive.valid`` is False.
-    passive : PassiveJoints
-        As :func:`athenakin.inverse_kinematics`.
+    q, passive : ndarray (..., 3), PassiveJoints
+        As :func:`athenakin.inverse_kinematics` (``q`` in m).
     """
     check_reference_backend(backend, "inverse_kinematics")
     names = check_ik_fields(fields)
@@ -386,7 +383,7 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
     ----------
     T_b_e, direction_e, p, design, errors : as in :func:`athenakin.q_from_instrument`
     backend : {"numpy"}, keyword-only
-        Only ``"numpy"`` (the reference); :func:`athenakin.q_from_instrument` chooses the backend.
+        Only the reference; :func:`athenakin.q_from_instrument` chooses the backend.
 
     Returns
     -------
@@ -420,7 +417,7 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
     ----------
     T_b_e, tip_e, design, errors : as in :func:`athenakin.q_from_tool_tip`
     backend : {"numpy"}, keyword-only
-        Only ``"numpy"`` (the reference); :func:`athenakin.q_from_tool_tip` chooses the backend.
+        Only the reference; :func:`athenakin.q_from_tool_tip` chooses the backend.
 
     Returns
     -------
