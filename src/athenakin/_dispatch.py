@@ -482,8 +482,17 @@ def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None, mode: 
                               *, backend: Backend = "auto") -> NDArray[np.float64]:
     """Inverse Jacobian of the parallel module, ``d q / d O_s``, shape (..., 3, 3).
 
-    Parameters as :func:`parallel_jacobian`; the numpy reference is
-    :func:`athenakin.robot._jacobians.parallel_inverse_jacobian`.
+    The numpy reference is :func:`athenakin.robot._jacobians.parallel_inverse_jacobian`
+    (finite at the forward singularity ``w = 0``, infinite at ``h = 0``).
+
+    Parameters
+    ----------
+    q, design, mode, backend : as in :func:`parallel_jacobian`
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Rows ``q1, q2, q3``; columns x, y, z of ``O_s`` (base frame); m/m.
     """
     return _jacobian("parallel_inverse_jacobian", backend, (q, design, mode), {})
 
@@ -492,8 +501,18 @@ def parallel_twist_jacobian(q: ArrayLike, design: Design | None = None, mode: Ar
                             *, backend: Backend = "auto") -> NDArray[np.float64]:
     """Twist ``(v, omega)`` of the frame ``O_s`` per actuator velocity, shape (..., 6, 3).
 
-    Parameters as :func:`parallel_jacobian`; the numpy reference is
-    :func:`athenakin.robot._jacobians.parallel_twist_jacobian`.
+    The numpy reference is :func:`athenakin.robot._jacobians.parallel_twist_jacobian`.
+
+    Parameters
+    ----------
+    q, design, mode, backend : as in :func:`parallel_jacobian`
+
+    Returns
+    -------
+    ndarray, shape (..., 6, 3)
+        Rows 0-2: velocity of ``O_s``, base frame, m/m (= :func:`parallel_jacobian`);
+        rows 3-5: angular velocity ``(dtheta/dq, 0, 0)`` of ``R_b_s = Rx(theta)``, rad/m.
+        Columns ``q1, q2, q3``.
     """
     return _jacobian("parallel_twist_jacobian", backend, (q, design, mode), {})
 
@@ -506,17 +525,21 @@ def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
     Parameters
     ----------
     q : array-like, shape (..., 3)
+        Actuators ``(q1, q2, q3)``, m.
     T_b_e : array-like, shape (..., 4, 4), optional
         RCM frame (default: the reference set-up of the design).
     design : Design, optional
     mode : {1, -1} or array-like of them, keyword-only
+        Assembly mode of the parallel module.
     frame : {"rcm", "base"}, keyword-only
+        Frame whose z-axis the direction angles are measured about.
     backend : {"auto", "numpy", "numba"}, keyword-only
         As in :func:`parallel_jacobian`.
 
     Returns
     -------
     ndarray, shape (..., 3, 3)
+        Rows ``azimuth`` (rad/m), ``polar`` (rad/m), ``p`` (m/m); columns ``q1, q2, q3``.
 
     See Also
     --------
@@ -530,7 +553,17 @@ def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                                 design: Design | None = None, *, mode: ArrayLike = 1,
                                 frame: Frame = "rcm", backend: Backend = "auto"
                                 ) -> NDArray[np.float64]:
-    """Inverse of :func:`instrument_jacobian`, shape (..., 3, 3) (same parameters)."""
+    """Inverse of :func:`instrument_jacobian`: actuator rates per ``(azimuth, polar, p)`` rate.
+
+    Parameters
+    ----------
+    q, T_b_e, design, mode, frame, backend : as in :func:`instrument_jacobian`
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Rows ``q1, q2, q3``; columns ``azimuth``, ``polar`` (m/rad), ``p`` (m/m).
+    """
     return _jacobian("instrument_inverse_jacobian", backend, (q, T_b_e, design),
                      {"mode": mode, "frame": frame})
 
@@ -540,8 +573,19 @@ def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                       frame: Frame = "base", backend: Backend = "auto") -> NDArray[np.float64]:
     """Tool-tip velocity per actuator velocity, shape (..., 3, 3).
 
-    Parameters as :func:`instrument_jacobian` (``frame`` defaults to ``"base"``);
-    the numpy reference is :func:`athenakin.robot._jacobians.tool_tip_jacobian`.
+    The numpy reference is :func:`athenakin.robot._jacobians.tool_tip_jacobian`
+    (singular at ``p = L``, tip at the RCM; infinite at ``p = 0``).
+
+    Parameters
+    ----------
+    q, T_b_e, design, mode, backend : as in :func:`instrument_jacobian`
+    frame : {"base", "rcm"}, keyword-only
+        Frame the tip velocity is expressed in (default ``"base"``).
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Rows: x, y, z of the tip velocity in ``frame``; columns ``q1, q2, q3``; m/m.
     """
     return _jacobian("tool_tip_jacobian", backend, (q, T_b_e, design),
                      {"mode": mode, "frame": frame})
@@ -551,6 +595,16 @@ def tool_tip_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                               design: Design | None = None, *, mode: ArrayLike = 1,
                               frame: Frame = "base", backend: Backend = "auto"
                               ) -> NDArray[np.float64]:
-    """Inverse of :func:`tool_tip_jacobian`, shape (..., 3, 3) (same parameters)."""
+    """Inverse of :func:`tool_tip_jacobian`: actuator rates per tool-tip velocity.
+
+    Parameters
+    ----------
+    q, T_b_e, design, mode, frame, backend : as in :func:`tool_tip_jacobian`
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Rows ``q1, q2, q3``; columns: x, y, z of the tip velocity in ``frame``; m/m.
+    """
     return _jacobian("tool_tip_inverse_jacobian", backend, (q, T_b_e, design),
                      {"mode": mode, "frame": frame})

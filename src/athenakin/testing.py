@@ -63,7 +63,21 @@ assert_dq_equal = assert_study_equal
 
 
 def assert_transform_equal(T1: ArrayLike, T2: ArrayLike, *, atol: float = 1e-12) -> None:
-    """Assert that homogeneous transforms (..., 4, 4) agree entry-wise within ``atol``."""
+    """Assert that homogeneous transforms (..., 4, 4) agree entry-wise within ``atol``.
+
+    Parameters
+    ----------
+    T1, T2 : array-like, shape (..., 4, 4)
+        Transforms (translation in m); the batch shapes broadcast.
+    atol : float, keyword-only
+        Largest absolute difference of an entry (m for the translation).
+
+    Raises
+    ------
+    AssertionError
+        The largest difference exceeds ``atol`` or is NaN (a NaN entry); the message
+        gives it and its entry.
+    """
     atol = check_tolerance(atol, "atol")
     a, b = _broadcast(check_array(T1, "T1", (4, 4), allow_nonfinite=True),
                       check_array(T2, "T2", (4, 4), allow_nonfinite=True), "T1", "T2", 2)
@@ -75,7 +89,20 @@ def assert_transform_equal(T1: ArrayLike, T2: ArrayLike, *, atol: float = 1e-12)
 
 
 def assert_angles_equal(a1: ArrayLike, a2: ArrayLike, *, atol: float = 1e-12) -> None:
-    """Assert that angles agree modulo ``2 pi`` within ``atol`` (radians)."""
+    """Assert that angles agree modulo ``2 pi`` within ``atol`` (radians).
+
+    Parameters
+    ----------
+    a1, a2 : array-like, shape (...)
+        Angles, rad; the shapes broadcast.
+    atol : float, keyword-only
+        Largest difference modulo ``2 pi``, rad.
+
+    Raises
+    ------
+    AssertionError
+        The largest difference exceeds ``atol`` or is NaN; the message gives it and where.
+    """
     atol = check_tolerance(atol, "atol")
     x1, x2 = _broadcast(check_array(a1, "a1", (), allow_nonfinite=True),
                         check_array(a2, "a2", (), allow_nonfinite=True), "a1", "a2", 0)

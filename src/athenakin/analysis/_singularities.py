@@ -219,12 +219,35 @@ class SingularityReport:
 
 
 def sigma_min(J: ArrayLike) -> NDArray[np.float64]:
-    """Smallest singular value of a batch of matrices (..., m, n); NaN where not finite."""
+    """Smallest singular value of a batch of matrices (..., m, n); NaN where not finite.
+
+    Parameters
+    ----------
+    J : array-like, shape (..., m, n)
+        Real matrices (e.g. a Jacobian), m, n >= 1; NaN / inf entries allowed.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        In the units of ``J``; NaN where ``J`` holds a NaN or inf entry.
+    """
     return _svd(J)[..., -1]
 
 
 def condition_number(J: ArrayLike) -> NDArray[np.float64]:
-    """2-norm condition number ``sigma_max / sigma_min`` (..., m, n); inf where singular."""
+    """2-norm condition number ``sigma_max / sigma_min`` (..., m, n); inf where singular.
+
+    Parameters
+    ----------
+    J : array-like, shape (..., m, n)
+        As in :func:`sigma_min`.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Dimensionless, >= 1; inf where ``sigma_min = 0`` or an entry of ``J`` is inf
+        (and none NaN); NaN where an entry is NaN.
+    """
     s = _svd(J)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(s[..., -1] > 0, s[..., 0] / s[..., -1], np.inf) * np.where(

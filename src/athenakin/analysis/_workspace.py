@@ -448,6 +448,11 @@ def save_npz(path: str | Path, result: object, *, design: Design | None = None,
 def load_npz(path: str | Path) -> tuple[object, dict[str, Any]]:
     """Read a file written by :func:`save_npz`.
 
+    Parameters
+    ----------
+    path : str or Path
+        The ``.npz`` archive.
+
     Returns
     -------
     result : ActuatorMap, PointWorkspace, InstrumentCone or ToolTipWorkspace
@@ -493,9 +498,20 @@ def workspace_summary(pw: PointWorkspace | None = None, ic: InstrumentCone | Non
     Volumes are voxel counts times the voxel volume (m^3), so they converge
     with the grid resolution at the rate of the boundary's voxelisation.
 
+    Parameters
+    ----------
+    pw : PointWorkspace, optional
+        From :func:`point_workspace`: reachable volume of ``O_s`` (m^3), per mode.
+    ic : InstrumentCone, optional
+        From :func:`instrument_cone`: solid angle (sr), insertion range (m).
+    tw : ToolTipWorkspace, optional
+        From :func:`tool_tip_workspace`: reachable tool-tip volume (m^3).
+
     Returns
     -------
     dict of str -> float or int
+        Keyed by description with the unit in brackets, e.g.
+        ``"O_s reachable volume [m^3]"``; only the figures of the results given.
     """
     for name, arg, cls in (("pw", pw, PointWorkspace), ("ic", ic, InstrumentCone),
                            ("tw", tw, ToolTipWorkspace)):

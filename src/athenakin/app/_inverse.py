@@ -47,6 +47,18 @@ def angles_from_tip(tip_e: ArrayLike) -> tuple[float, float, float]:
     """``(azimuth, polar, depth)`` of a tool tip in frame E (rad, rad, m).
 
     The inverse of :func:`tip_from_angles` (azimuth 0 on the poles, all 0 at the RCM).
+
+    Parameters
+    ----------
+    tip_e : array-like, shape (3,)
+        Tool tip in the RCM frame E, m; finite.
+
+    Returns
+    -------
+    azimuth, polar : float
+        Radians (:func:`~athenakin.robot.angles_from_direction`).
+    depth : float
+        ``|tip_e|``, m.
     """
     from ..robot import angles_from_direction
 

@@ -191,6 +191,18 @@ def _label(k: int) -> str:
 def slot_statuses(valid: ArrayLike, reason: ArrayLike) -> tuple[SlotStatus, ...]:
     """The 16 slots from an FK result's ``valid`` and ``reason`` (each shape (16,)).
 
+    Parameters
+    ----------
+    valid : array-like of bool, shape (16,)
+        :attr:`FKSolution.valid <athenakin.robot.FKSolution>` of one item.
+    reason : array-like of int, shape (16,)
+        :class:`~athenakin.errors.Reason` codes of the same item.
+
+    Returns
+    -------
+    tuple of 16 SlotStatus
+        In slot order, each with its label and, where invalid, why.
+
     Raises
     ------
     TypeError, InvalidInputError

@@ -82,9 +82,16 @@ def load_playback(path: str | Path) -> Playback:
 def playback_q(pb: Playback, t: float) -> tuple[NDArray[np.float64], int]:
     """Actuators at time ``t`` of a playback: the last sample at or before ``t``.
 
+    Parameters
+    ----------
+    pb : Playback
+    t : float
+        Time, s (before the first sample: the first one).
+
     Returns
     -------
     q : ndarray, shape (3,)
+        Actuators ``(q1, q2, q3)``, m (a copy).
     index : int
         Sample index (clipped to the recording).
     """

@@ -238,6 +238,17 @@ def robot_scene(g: RobotGeometry, *, frames: bool = True, labels: bool = True,
 def with_solids(scene: Scene, solids: tuple[Solid, ...]) -> Scene:
     """``scene`` with ``solids`` added (names must stay unique).
 
+    Parameters
+    ----------
+    scene : Scene
+    solids : tuple of Solid
+        Meshes in the base frame, m; names not in ``scene``.
+
+    Returns
+    -------
+    Scene
+        A new scene; ``scene`` is unchanged.
+
     Raises
     ------
     InvalidInputError

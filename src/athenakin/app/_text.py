@@ -142,6 +142,18 @@ def readouts_html(r: Readouts) -> str:
 def slots_html(slots: tuple[SlotStatus, ...], shown: int | None) -> str:
     """The 16 slots: valid ones plain (the one drawn in bold), invalid ones greyed with why.
 
+    Parameters
+    ----------
+    slots : tuple of SlotStatus
+        From :func:`slot_statuses`.
+    shown : int or None
+        Slot drawn in the 3-D view (bold), None for none.
+
+    Returns
+    -------
+    str
+        An HTML ``<table>``, one row per slot.
+
     Raises
     ------
     TypeError
@@ -168,6 +180,17 @@ def slots_html(slots: tuple[SlotStatus, ...], shown: int | None) -> str:
 def message_html(text: str, level: str) -> str:
     """A status line: ``level`` ``"ok"`` (plain), ``"warn"`` or ``"error"`` (coloured).
 
+    Parameters
+    ----------
+    text : str
+        The message (HTML-escaped; empty shows ``"ok"``).
+    level : {"ok", "warn", "error"}
+
+    Returns
+    -------
+    str
+        One ``<div data-ro="status">`` element.
+
     Raises
     ------
     TypeError
@@ -184,7 +207,18 @@ def message_html(text: str, level: str) -> str:
 
 
 def view_html(view: AppView) -> tuple[str, str, str]:
-    """``(status, read-outs, slots)`` HTML of a view (read-outs empty without a solution)."""
+    """``(status, read-outs, slots)`` HTML of a view (read-outs empty without a solution).
+
+    Parameters
+    ----------
+    view : AppView
+
+    Returns
+    -------
+    status, readouts, slots : str
+        :func:`message_html`, :func:`readouts_html` (``""`` without a solution) and
+        :func:`slots_html` of the view.
+    """
     check_instance(view, "view", AppView)
     ro = readouts_html(view.readouts) if view.readouts is not None else ""
     shown = view.geometry.slot if view.geometry is not None else None

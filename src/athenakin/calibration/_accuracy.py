@@ -126,6 +126,25 @@ def tip_error_monte_carlo(result: CalibrationResult, q: ArrayLike, *,
 
     Parameters are drawn from ``N(estimates, covariance)``, encoder errors uniformly in
     ``[-res/2, res/2]``, and the tip is computed with the nonlinear model.
+
+    Parameters
+    ----------
+    result : CalibrationResult
+    q : array-like, shape (N, 3)
+        Readings ``(q1, q2, q3)``, m.
+    encoder_resolution : float, keyword-only
+        Encoder quantum, m (0: no encoder error).
+    n_samples : int, keyword-only
+        Parameter draws.
+    mode : {1, -1}, keyword-only
+        Assembly mode.
+    rng : seed or Generator, keyword-only
+
+    Returns
+    -------
+    ndarray, shape (N, 3, 3)
+        Sample covariance of the tip in the base frame, m^2 (cf. the linearised
+        :func:`tip_error`).
     """
     check_instance(result, "result", CalibrationResult)
     qa = _readings(q)

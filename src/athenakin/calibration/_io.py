@@ -149,7 +149,26 @@ def _comment(comment: object) -> str:
 def measurements_csv_text(q: NDArray[np.float64], tips: NDArray[np.float64],
                           axes: NDArray[np.float64] | None = None, *, frame: str = "base",
                           comment: str = "") -> str:
-    """CSV text of a measurement set that :func:`read_measurements_csv` reads back."""
+    """CSV text of a measurement set that :func:`read_measurements_csv` reads back.
+
+    Parameters
+    ----------
+    q : ndarray, shape (n, 3)
+        Actuator readings, m.
+    tips : ndarray, shape (n, 3)
+        Measured tool tips in ``frame``, m.
+    axes : ndarray, shape (n, 3), optional
+        Measured instrument axes (unit vectors, ``O_s`` towards the RCM).
+    frame : {"base", "tracker"}, keyword-only
+        Frame of ``tips`` and ``axes``, written in the header.
+    comment : str, keyword-only
+        Written as ``#`` lines after the header.
+
+    Returns
+    -------
+    str
+        Columns ``q1_m, q2_m, q3_m, x_m, y_m, z_m`` (and ``dx, dy, dz`` with ``axes``).
+    """
     cols = Q_COLUMNS + TIP_COLUMNS + (AXIS_COLUMNS if axes is not None else ())
     check_choice(frame, "frame", ("base", "tracker"))
     parts = [check_array(q, "q", (3,), allow_nonfinite=True)]
@@ -171,7 +190,19 @@ def measurements_csv_text(q: NDArray[np.float64], tips: NDArray[np.float64],
 
 
 def plan_csv_text(q: NDArray[np.float64], *, comment: str = "") -> str:
-    """CSV text of a measurement plan: ``pose, q1_m, q2_m, q3_m`` (readings to command)."""
+    """CSV text of a measurement plan: ``pose, q1_m, q2_m, q3_m`` (readings to command).
+
+    Parameters
+    ----------
+    q : ndarray, shape (n, 3)
+        Actuator values to command, m.
+    comment : str, keyword-only
+        Written as ``#`` lines after the header.
+
+    Returns
+    -------
+    str
+    """
     lines = ["# athenakin calibration plan: command these actuator values (m), measure the "
              "tool tip at each", *[f"# {c}" for c in _comment(comment).splitlines() if c],
              "pose," + ",".join(Q_COLUMNS)]
@@ -187,6 +218,15 @@ def calibration_toml(result: CalibrationResult) -> str:
 
     The ``[design]`` table is read back by :meth:`Design.from_toml`; ``[calibration]``
     holds the offsets, RCM, registration, noise, residuals and standard deviations.
+
+    Parameters
+    ----------
+    result : CalibrationResult
+
+    Returns
+    -------
+    str
+        TOML text (lengths in m, angles in rad).
     """
     check_instance(result, "result", CalibrationResult)
     import tomli_w

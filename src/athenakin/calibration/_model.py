@@ -88,6 +88,11 @@ def resolve_parameters(params: object, frame: str) -> tuple[str, ...]:
     frame : {"base", "tracker"}
         With ``"tracker"`` the six registration parameters are always estimated.
 
+    Returns
+    -------
+    tuple of str
+        Names in :data:`PARAMETERS`, in that order, without repeats.
+
     Raises
     ------
     TypeError, ValueError

@@ -44,6 +44,12 @@ def _axes(ax: Any, *, figsize: tuple[float, float] = (7, 4), **kw: Any) -> Any:
 def plot_residuals(result: CalibrationResult, *, ax: Any = None) -> Any:
     """Tip residual per row (norm, µm) before and after calibration; outliers marked.
 
+    Parameters
+    ----------
+    result : CalibrationResult
+    ax : matplotlib.axes.Axes, optional, keyword-only
+        Axes to draw into (default: a new figure).
+
     Returns
     -------
     matplotlib.axes.Axes
@@ -73,6 +79,12 @@ def plot_parameter_confidence(result: CalibrationResult, *, ax: Any = None) -> A
 
     Lengths in µm, registration angles in µrad.
 
+    Parameters
+    ----------
+    result : CalibrationResult
+    ax : matplotlib.axes.Axes, optional, keyword-only
+        Axes to draw into (default: a new figure).
+
     Returns
     -------
     matplotlib.axes.Axes
@@ -100,6 +112,13 @@ def plot_tip_error_map(m: TipErrorMap, *, ax: Any = None) -> Any:
     its radius the polar angle of the direction from ``z_e`` (deg); both axes are named on
     the chart. The title gives the tip depth and, when the map includes it, the encoder
     resolution (a map without encoder noise says "calibration only").
+
+    Parameters
+    ----------
+    m : TipErrorMap
+        From :func:`tip_error_map`.
+    ax : matplotlib.axes.Axes, optional, keyword-only
+        Polar axes to draw into (default: a new figure with polar axes).
 
     Returns
     -------

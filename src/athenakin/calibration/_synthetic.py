@@ -187,6 +187,25 @@ def random_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *, mode
     ``n`` is 1 to :data:`MAX_POSES`; candidates are drawn in rounds of at most
     ``2**20``, so memory stays bounded.
 
+    Parameters
+    ----------
+    n : int
+        Number of poses, 1 to :data:`MAX_POSES`.
+    T_b_e : array-like, shape (4, 4)
+        RCM frame, translation in m.
+    design : Design, optional
+        The nominal robot.
+    mode : {1, -1}, keyword-only
+        Assembly mode.
+    margin : float, keyword-only
+        m (see above).
+    rng : seed or Generator, keyword-only
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        Readings ``(q1, q2, q3)``, m.
+
     Raises
     ------
     InvalidInputError

@@ -51,6 +51,19 @@ def extra_of(module: str | None, command: str | None = None) -> str:
     """The extra that installs ``module`` (a top-level name), the command's first.
 
     ``"all"`` for a module of no extra (then every extra installs it, or none does).
+
+    Parameters
+    ----------
+    module : str or None
+        A module name (its top-level package counts), e.g. the ``name`` of a
+        ``ModuleNotFoundError``.
+    command : str, optional
+        CLI subcommand; its extra (:data:`COMMAND_EXTRAS`) wins where it installs ``module``.
+
+    Returns
+    -------
+    str
+        A key of :data:`EXTRAS` (``pip install athenakin[<extra>]``), or ``"all"``.
     """
     top = (module or "").split(".")[0]
     own = COMMAND_EXTRAS.get(command or "")
@@ -116,6 +129,16 @@ def main(argv: list[str] | None = None) -> int:
     traceback that ``--debug`` shows); 130: interrupted (Ctrl-C; no output file is
     left half-written). With ``--debug`` or ``ATHENAKIN_DEBUG=1``,
     errors propagate with their traceback and warnings are shown.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments after the program name (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        The exit code above (a usage error exits through ``SystemExit(2)``).
     """
     parser = build_parser()
     args = parser.parse_args(_protect_negative_numbers(argv))

@@ -269,8 +269,14 @@ def actuator_forces(q: ArrayLike, T_b_e: ArrayLike | None = None,
                     slot: int = 0, errors: Literal["auto", "raise", "flag"] = "auto") -> Arr:
     """Actuator forces (N) that hold the robot still: :attr:`statics(...).forces <Statics>`.
 
-    Parameters and conventions as :func:`statics`; returns shape (..., 3), positive
-    along increasing ``q1, q2, q3``.
+    Parameters
+    ----------
+    q, T_b_e, design, masses, gravity, tip_force, slot, errors : as in :func:`statics`
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``(f1, f2, f3)``, N, positive along increasing ``q1, q2, q3``.
 
     Examples
     --------
@@ -373,6 +379,17 @@ def mass_matrix(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | N
 
     ``E_kin = qd^T M(q) qd / 2``; symmetric, positive definite wherever the moving
     parts have mass along every direction of ``q`` (the carriages alone make it so).
+
+    Parameters
+    ----------
+    q : array-like, shape (..., 3)
+        Actuators, m.
+    T_b_e, design, masses, slot, errors : as in :func:`statics`
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        kg; rows and columns ``q1, q2, q3``.
     """
     prep = _prepare({"q": q}, T_b_e, design, masses, slot, errors)
 

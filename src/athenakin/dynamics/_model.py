@@ -82,6 +82,16 @@ def actuator_part_length(design: Design | None = None) -> float:
     (This was once the MJCF export's drawn housing; the exports now draw the actuator
     telescoping, :func:`athenakin.sim.actuator_drawn_lengths`, and the mass model keeps
     this length.)
+
+    Parameters
+    ----------
+    design : Design, optional
+        Defaults to :meth:`~athenakin.Design.default`.
+
+    Returns
+    -------
+    float
+        m.
     """
     d = resolve_design(design)
     lo = float(d.stroke_min[2])

@@ -169,7 +169,18 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
                        parallel: bool = False, out: FKSolution | None = None) -> FKSolution:
     """See :func:`athenakin.forward_kinematics` (compiled; ``parallel=`` threads, ``out=`` reuses).
 
-    ``out`` is an earlier full result of the same batch shape whose arrays are overwritten.
+    Parameters
+    ----------
+    q, T_b_e, design, method, errors, tangent_tol, degenerate_tol, p_zero_tol, closure_tol, fields
+        As in :func:`athenakin.forward_kinematics`.
+    parallel : bool, keyword-only
+        Spread the batch over numba's threads.
+    out : FKSolution, optional, keyword-only
+        An earlier full result of the same batch shape, overwritten and returned.
+
+    Returns
+    -------
+    FKSolution
     """
     if out is None and not parallel:   # the common single call (control loops)
         sol = lean_fk(q, T_b_e, design, method, errors, tangent_tol, degenerate_tol,
@@ -339,7 +350,20 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
                        errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
                        closure_tol: float = CLOSURE_TOL, fields: tuple[str, ...] | None = None,
                        parallel: bool = False) -> tuple[NDArray[np.float64], PassiveJoints]:
-    """See :func:`athenakin.inverse_kinematics` (compiled; ``parallel=`` threads)."""
+    """See :func:`athenakin.inverse_kinematics` (compiled; ``parallel=`` threads).
+
+    Parameters
+    ----------
+    T_b_e, u345, design, errors, singular_tol, closure_tol, fields
+        As in :func:`athenakin.inverse_kinematics`.
+    parallel : bool, keyword-only
+        Spread the batch over numba's threads.
+
+    Returns
+    -------
+    q, passive : ndarray (..., 3), PassiveJoints
+        As :func:`athenakin.inverse_kinematics` (``q`` in m).
+    """
     def reference() -> tuple[NDArray[np.float64], PassiveJoints]:
         return _ref_ik.inverse_kinematics(T_b_e, u345, design, errors=errors,
                                           singular_tol=singular_tol, closure_tol=closure_tol,
@@ -475,8 +499,20 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
                       parallel: bool = False) -> tuple[NDArray[np.float64], InstrumentIK]:
     """Actuators for a direction and insertion: compiled :func:`~athenakin.q_from_instrument`.
 
-    Same parameters, results and errors as the reference; ``parallel=True``
-    spreads the batch over numba's threads.
+    Same results and errors as the reference.
+
+    Parameters
+    ----------
+    T_b_e, direction_e, p, design, errors : as in :func:`athenakin.q_from_instrument`
+    parallel : bool, keyword-only
+        Spread the batch over numba's threads (default False).
+
+    Returns
+    -------
+    q : ndarray, shape (..., 3)
+        ``(q1, q2, q3)``, m; NaN where ``result.valid`` is False.
+    result : InstrumentIK
+        As :func:`athenakin.q_from_instrument`.
     """
     try:
         return _line(T_b_e, direction_e, p, design, errors, 0, parallel)
@@ -489,8 +525,18 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
                     ) -> tuple[NDArray[np.float64], InstrumentIK]:
     """Actuators that put the tool tip at a point: compiled :func:`athenakin.q_from_tool_tip`.
 
-    Same parameters, results and errors as the reference; ``parallel=True``
-    spreads the batch over numba's threads.
+    Same results and errors as the reference.
+
+    Parameters
+    ----------
+    T_b_e, tip_e, design, errors : as in :func:`athenakin.q_from_tool_tip`
+    parallel : bool, keyword-only
+        Spread the batch over numba's threads (default False).
+
+    Returns
+    -------
+    q, result : ndarray (..., 3), InstrumentIK
+        As :func:`athenakin.q_from_tool_tip`: actuators (m) and the line's details.
     """
     try:
         return _line(T_b_e, tip_e, None, design, errors, 1, parallel)
@@ -501,7 +547,18 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
 # --- the parallel module ------------------------------------------------------------------
 def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
                                 tangent_tol: float = TANGENT_TOL) -> ParallelSolution:
-    """Both assembly modes: compiled :func:`~athenakin.parallel.parallel_forward_kinematics`."""
+    """Both assembly modes: compiled :func:`~athenakin.parallel.parallel_forward_kinematics`.
+
+    Parameters
+    ----------
+    q, design, tangent_tol : as in :func:`athenakin.parallel.parallel_forward_kinematics`
+        (``q``: actuators, shape (..., 3), m; ``tangent_tol``: half-chord, m).
+
+    Returns
+    -------
+    ParallelSolution
+        Both modes of the module, as the reference.
+    """
     P = design_params(design)
     try:
         qa = _arr(q, (3,))
@@ -529,7 +586,19 @@ def parallel_forward_kinematics(q: ArrayLike, design: Design | None = None, *,
 
 
 def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> ParallelIK:
-    """Actuators for ``O_s``: compiled :func:`~athenakin.parallel.parallel_ik_from_position`."""
+    """Actuators for ``O_s``: compiled :func:`~athenakin.parallel.parallel_ik_from_position`.
+
+    Parameters
+    ----------
+    O_s : array-like, shape (..., 3)
+        Position of the serial base frame, base coordinates, m.
+    design : Design, optional
+
+    Returns
+    -------
+    ParallelIK
+        As the reference (invalid items carry a reason).
+    """
     P = design_params(design)
     try:
         Oa = _arr(O_s, (3,))
@@ -554,6 +623,19 @@ def parallel_inverse_kinematics(T_b_s: ArrayLike, design: Design | None = None, 
     """Module IK from a pose: :func:`~athenakin.parallel.parallel_inverse_kinematics`.
 
     The position part runs compiled; the orientation test is the reference's numpy code.
+
+    Parameters
+    ----------
+    T_b_s : array-like, shape (..., 4, 4)
+        Pose of the serial base frame in the base frame (translation in m).
+    design : Design, optional
+    tol : float, keyword-only
+        Tolerance of the orientation test, as in the reference.
+
+    Returns
+    -------
+    ParallelIK
+        Items whose orientation is not that of the module get ``NOT_IN_MODULE_IMAGE``.
     """
     design_params(design)
     T = check_transform(T_b_s, "T_b_s", allow_nonfinite=True)

@@ -147,8 +147,20 @@ def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLik
                       ) -> NDArray[np.float64]:
     """Compiled :func:`~athenakin.analysis.parallel_jacobian`.
 
-    Same parameters, result (shape (..., 3, 3), NaN / inf entries) and errors as
-    the reference.
+    Same result (NaN / inf entries) and errors as the reference.
+
+    Parameters
+    ----------
+    q : array-like, shape (..., 3)
+        Actuators ``(q1, q2, q3)``, m.
+    design : Design, optional
+    mode : {1, -1} or array-like of them
+        Assembly mode.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Rows: x, y, z of ``O_s`` (base frame); columns ``q1, q2, q3``; m/m.
 
     Examples
     --------
@@ -165,7 +177,17 @@ def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLik
 
 def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1
                               ) -> NDArray[np.float64]:
-    """Compiled :func:`~athenakin.analysis.parallel_inverse_jacobian`."""
+    """Compiled :func:`~athenakin.analysis.parallel_inverse_jacobian`.
+
+    Parameters
+    ----------
+    q, design, mode : as in :func:`parallel_jacobian`
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Rows ``q1, q2, q3``; columns x, y, z of ``O_s`` (base frame); m/m.
+    """
     try:
         return _parallel(q, design, mode, _jk.PAR_INV)
     except _Delegate:
@@ -174,7 +196,18 @@ def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None, mode: 
 
 def parallel_twist_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1
                             ) -> NDArray[np.float64]:
-    """Compiled :func:`~athenakin.analysis.parallel_twist_jacobian`."""
+    """Compiled :func:`~athenakin.analysis.parallel_twist_jacobian`.
+
+    Parameters
+    ----------
+    q, design, mode : as in :func:`parallel_jacobian`
+
+    Returns
+    -------
+    ndarray, shape (..., 6, 3)
+        Rows 0-2: velocity of ``O_s`` (m/m), rows 3-5: angular velocity of the
+        module (rad/m), base frame; columns ``q1, q2, q3``.
+    """
     try:
         return _parallel(q, design, mode, _jk.PAR_TWIST)
     except _Delegate:
@@ -187,7 +220,23 @@ def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                         frame: Frame = "rcm") -> NDArray[np.float64]:
     """Compiled :func:`~athenakin.analysis.instrument_jacobian`.
 
-    Same parameters, result and errors as the reference.
+    Same result and errors as the reference.
+
+    Parameters
+    ----------
+    q : array-like, shape (..., 3)
+        Actuators, m.
+    T_b_e : array-like, shape (..., 4, 4), optional
+        RCM frame (default: the reference set-up of the design).
+    design : Design, optional
+    mode : {1, -1} or array-like of them, keyword-only
+    frame : {"rcm", "base"}, keyword-only
+        Frame whose z-axis the direction angles are measured about.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Rows ``azimuth`` (rad/m), ``polar`` (rad/m), ``p`` (m/m); columns ``q1, q2, q3``.
 
     Examples
     --------
@@ -206,7 +255,17 @@ def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
 def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                                 design: Design | None = None, *, mode: ArrayLike = 1,
                                 frame: Frame = "rcm") -> NDArray[np.float64]:
-    """Compiled :func:`~athenakin.analysis.instrument_inverse_jacobian`."""
+    """Compiled :func:`~athenakin.analysis.instrument_inverse_jacobian`.
+
+    Parameters
+    ----------
+    q, T_b_e, design, mode, frame : as in :func:`instrument_jacobian`
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Rows ``q1, q2, q3``; columns ``azimuth``, ``polar`` (m/rad), ``p`` (m/m).
+    """
     try:
         return _robot(q, T_b_e, design, mode, frame, _jk.INSTR_INV)
     except _Delegate:
@@ -216,7 +275,19 @@ def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
 def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                       design: Design | None = None, *, mode: ArrayLike = 1,
                       frame: Frame = "base") -> NDArray[np.float64]:
-    """Compiled :func:`~athenakin.analysis.tool_tip_jacobian`."""
+    """Compiled :func:`~athenakin.analysis.tool_tip_jacobian`.
+
+    Parameters
+    ----------
+    q, T_b_e, design, mode : as in :func:`instrument_jacobian`
+    frame : {"base", "rcm"}, keyword-only
+        Frame the tip velocity is expressed in (default ``"base"``).
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Rows: x, y, z of the tip velocity in ``frame``; columns ``q1, q2, q3``; m/m.
+    """
     try:
         return _robot(q, T_b_e, design, mode, frame, _jk.TIP_JAC)
     except _Delegate:
@@ -226,7 +297,17 @@ def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
 def tool_tip_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                               design: Design | None = None, *, mode: ArrayLike = 1,
                               frame: Frame = "base") -> NDArray[np.float64]:
-    """Compiled :func:`~athenakin.analysis.tool_tip_inverse_jacobian`."""
+    """Compiled :func:`~athenakin.analysis.tool_tip_inverse_jacobian`.
+
+    Parameters
+    ----------
+    q, T_b_e, design, mode, frame : as in :func:`tool_tip_jacobian`
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Rows ``q1, q2, q3``; columns: x, y, z of the tip velocity in ``frame``; m/m.
+    """
     try:
         return _robot(q, T_b_e, design, mode, frame, _jk.TIP_INV)
     except _Delegate:

@@ -262,6 +262,15 @@ def plot_paths(prefix: str | Path) -> dict[str, Path]:
 def save_plots(traj: Trajectory, prefix: str | Path, *, dpi: int = 120) -> list[Path]:
     """Write the three figures as ``<prefix>_actuators.png``, ``_path3d.png``, ``_singularity.png``.
 
+    Parameters
+    ----------
+    traj : Trajectory
+        From :func:`plan`.
+    prefix : str or Path
+        Path prefix of the three files.
+    dpi : int, keyword-only
+        Resolution of the PNGs, 1 to 1200.
+
     Returns
     -------
     list of Path

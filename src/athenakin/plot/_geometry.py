@@ -198,6 +198,11 @@ def circle_points(centre: NDArray[np.float64], radius: float, n: int = N_CIRCLE
     n : int
         Number of points, 2 to :data:`MAX_CURVE_POINTS` (the last repeats the first).
 
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        m, evenly in angle from ``centre + (0, radius, 0)``, counter-clockwise about +x.
+
     Raises
     ------
     TypeError, InvalidInputError
@@ -318,6 +323,15 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
 def slot_label(g: RobotGeometry) -> str:
     """Short text of a slot: ``slot 3: mode +1, p>0, U-, S-``.
 
+    Parameters
+    ----------
+    g : RobotGeometry
+        From :func:`robot_geometry`.
+
+    Returns
+    -------
+    str
+
     Raises
     ------
     TypeError
@@ -342,6 +356,12 @@ def arc_points(centre: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[n
         Non-negative, m.
     n : int
         Number of points, 2 to :data:`MAX_CURVE_POINTS`.
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        From ``centre + radius a/|a|`` to ``centre + radius b/|b|``, m, evenly in
+        angle; all at the first where ``a`` and ``b`` are (anti)parallel.
 
     Raises
     ------

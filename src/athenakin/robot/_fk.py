@@ -57,7 +57,25 @@ SLOT_WRIST = np.tile(SERIAL_WRIST, 2)
 
 
 def slot_index(mode: int, p_sign: int, ujoint: int, wrist: int) -> int:
-    """Slot (0..15) of the solution with the given labels (each +1 or -1)."""
+    """Slot (0..15) of the solution with the given labels (each +1 or -1).
+
+    Parameters
+    ----------
+    mode : {1, -1}
+        Assembly mode of the parallel module (+1: larger z).
+    p_sign : {1, -1}
+        Sign of the insertion ``p``.
+    ujoint : {1, -1}
+        Sign of ``sin u2`` (universal joint branch).
+    wrist : {1, -1}
+        Sign of ``sin u4`` (spherical joint branch).
+
+    Returns
+    -------
+    int
+        ``8 [mode = -1] + 4 [p_sign = -1] + 2 [ujoint = -1] + [wrist = -1]``
+        (docs/conventions.md).
+    """
     for name, v in (("mode", mode), ("p_sign", p_sign), ("ujoint", ujoint), ("wrist", wrist)):
         # a number, not an array (whose ``in`` has no truth value)
         if not isinstance(v, (numbers.Real, np.number)) or v not in (1, -1):
@@ -254,7 +272,17 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
                        backend: ReferenceBackend = "numpy") -> FKSolution:
     """The numpy reference of :func:`athenakin.forward_kinematics` (the compiled kernels' oracle).
 
-    See :func:`athenakin.forward_kinematics`; ``backend`` takes only ``"numpy"``.
+    Parameters
+    ----------
+    q, T_b_e, design, method, errors, tangent_tol, degenerate_tol, p_zero_tol, closure_tol, fields
+        As in :func:`athenakin.forward_kinematics`.
+    backend : {"numpy"}, keyword-only
+        Only the reference; :func:`athenakin.forward_kinematics` chooses the backend.
+
+    Returns
+    -------
+    FKSolution
+        As :func:`athenakin.forward_kinematics`.
     """
     check_choice(method, "method", _METHODS)
     check_reference_backend(backend, "forward_kinematics")

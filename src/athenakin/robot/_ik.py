@@ -190,7 +190,17 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
                        ) -> tuple[NDArray[np.float64], PassiveJoints]:
     """The numpy reference of :func:`athenakin.inverse_kinematics` (the compiled kernels' oracle).
 
-    See :func:`athenakin.inverse_kinematics`; ``backend`` takes only ``"numpy"``.
+    Parameters
+    ----------
+    T_b_e, u345, design, errors, singular_tol, closure_tol, fields
+        As in :func:`athenakin.inverse_kinematics`.
+    backend : {"numpy"}, keyword-only
+        Only the reference; :func:`athenakin.inverse_kinematics` chooses the backend.
+
+    Returns
+    -------
+    q, passive : ndarray (..., 3), PassiveJoints
+        As :func:`athenakin.inverse_kinematics` (``q`` in m).
     """
     check_reference_backend(backend, "inverse_kinematics")
     names = check_ik_fields(fields)
@@ -369,7 +379,18 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
                       ) -> tuple[NDArray[np.float64], InstrumentIK]:
     """The numpy reference of :func:`athenakin.q_from_instrument` (the compiled kernels' oracle).
 
-    See :func:`athenakin.q_from_instrument`; ``backend`` takes only ``"numpy"``.
+    Parameters
+    ----------
+    T_b_e, direction_e, p, design, errors : as in :func:`athenakin.q_from_instrument`
+    backend : {"numpy"}, keyword-only
+        Only the reference; :func:`athenakin.q_from_instrument` chooses the backend.
+
+    Returns
+    -------
+    q : ndarray, shape (..., 3)
+        ``(q1, q2, q3)``, m; NaN where ``result.valid`` is False.
+    result : InstrumentIK
+        As :func:`athenakin.q_from_instrument`.
     """
     check_reference_backend(backend, "q_from_instrument")
     check_options(errors)
@@ -392,7 +413,16 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
                     ) -> tuple[NDArray[np.float64], InstrumentIK]:
     """The numpy reference of :func:`athenakin.q_from_tool_tip` (the compiled kernels' oracle).
 
-    See :func:`athenakin.q_from_tool_tip`; ``backend`` takes only ``"numpy"``.
+    Parameters
+    ----------
+    T_b_e, tip_e, design, errors : as in :func:`athenakin.q_from_tool_tip`
+    backend : {"numpy"}, keyword-only
+        Only the reference; :func:`athenakin.q_from_tool_tip` chooses the backend.
+
+    Returns
+    -------
+    q, result : ndarray (..., 3), InstrumentIK
+        As :func:`athenakin.q_from_tool_tip`: actuators (m) and the line's details.
     """
     check_reference_backend(backend, "q_from_tool_tip")
     check_options(errors)

@@ -107,6 +107,17 @@ class JointStates:
 def recording_format(path: str | Path) -> str:
     """The format of a recording: ``"rosbag2"``, ``"mcap"``, ``"db3"`` or ``"rosbag1"``.
 
+    Parameters
+    ----------
+    path : str or Path
+        A rosbag2 folder, an MCAP file, a ``.db3`` file or a ROS 1 bag.
+
+    Returns
+    -------
+    str
+        ``"rosbag2"`` (a folder), ``"mcap"``, ``"db3"`` or ``"rosbag1"``, told apart by
+        the content, not the name.
+
     Raises
     ------
     RecordingError
@@ -313,11 +324,16 @@ def iter_joint_states(path: str | Path, *, topic: str = "/joint_states",
                       scale: float = 1.0, chunk_size: int = CHUNK) -> Iterator[JointStates]:
     """Read the actuator readings of a recording in chunks (bounded memory).
 
-    Parameters are those of :func:`read_joint_states`, plus ``chunk_size``
-    (readings per chunk, 1 to 10 000 000). Every chunk but the last holds
-    ``chunk_size`` readings; an empty topic yields nothing. The arguments and the
-    recording's format are checked when the function is called; the messages as the
-    chunks are read: a chunk may come before the error of a later message.
+    Every chunk but the last holds ``chunk_size`` readings; an empty topic yields
+    nothing. The arguments and the recording's format are checked when the function
+    is called; the messages as the chunks are read: a chunk may come before the error
+    of a later message.
+
+    Parameters
+    ----------
+    path, topic, joints, scale : as in :func:`read_joint_states`
+    chunk_size : int, keyword-only
+        Readings per chunk, 1 to 10 000 000.
 
     Yields
     ------

@@ -223,6 +223,20 @@ def check_study(X: ArrayLike, name: str = "X", *,
                 tol: float = STUDY_QUADRIC_TOL) -> NDArray[np.float64]:
     """Validate Study vectors and return them as a float array.
 
+    Parameters
+    ----------
+    X : array-like, shape (..., 8)
+        ``(x0, x1, x2, x3, y0, y1, y2, y3)`` (docs/conventions.md).
+    name : str
+        Name of ``X`` in the error messages.
+    tol : float, keyword-only
+        Relative tolerance of the quadric test, as in :func:`is_on_study_quadric`.
+
+    Returns
+    -------
+    ndarray, shape (..., 8)
+        ``X`` as float64, unchanged.
+
     Raises
     ------
     InvalidInputError
@@ -474,6 +488,8 @@ def paper_matrix_from_study(X: ArrayLike, *, tol: float = STUDY_QUADRIC_TOL
     Parameters
     ----------
     X : array-like, shape (..., 8)
+    tol : float, keyword-only
+        Relative tolerance of the quadric test, as in :func:`is_on_study_quadric`.
 
     Returns
     -------

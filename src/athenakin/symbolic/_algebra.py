@@ -227,7 +227,17 @@ def dq_multiply(X1: Sequence[sp.Expr], X2: Sequence[sp.Expr]) -> sp.ImmutableMat
 
 @checked_symbolic(factors="vectors8")
 def dq_product(factors: Sequence[Sequence[sp.Expr]]) -> sp.ImmutableMatrix:
-    """Product ``F1 * F2 * ... * Fn`` of dual quaternions, left to right, expanded."""
+    """Product ``F1 * F2 * ... * Fn`` of dual quaternions, left to right, expanded.
+
+    Parameters
+    ----------
+    factors : sequence of 8-vectors of sympy expressions
+        At least one, each ``(x0..x3, y0..y3)`` (e.g. the chain of Eq. 5 / 11).
+
+    Returns
+    -------
+    sympy.ImmutableMatrix, shape (8, 1)
+    """
     factors = list(factors)
     if not factors:
         raise ValueError("factors: expected at least one dual quaternion, got none")
@@ -238,13 +248,34 @@ def dq_product(factors: Sequence[Sequence[sp.Expr]]) -> sp.ImmutableMatrix:
 
 
 def dq_conj_quaternion(X: Sequence[sp.Expr]) -> sp.ImmutableMatrix:
-    """``conj(x) + eps conj(y)``: for a Study vector, the inverse displacement (up to scale)."""
+    """``conj(x) + eps conj(y)``: for a Study vector, the inverse displacement (up to scale).
+
+    Parameters
+    ----------
+    X : sequence of 8 sympy expressions
+        ``(x0, x1, x2, x3, y0, y1, y2, y3)``.
+
+    Returns
+    -------
+    sympy.ImmutableMatrix, shape (8, 1)
+        ``(x0, -x1, -x2, -x3, y0, -y1, -y2, -y3)``.
+    """
     X = list(study_vector(X, "X"))
     return study_vector([X[0], -X[1], -X[2], -X[3], X[4], -X[5], -X[6], -X[7]])
 
 
 def study_M(v: sp.Expr) -> sp.ImmutableMatrix:
-    """``M_i`` of Eq. 6 in the half-tangent ``v = tan(u/2)``: ``(1, 0, 0, v, 0, 0, 0, 0)``."""
+    """``M_i`` of Eq. 6 in the half-tangent ``v = tan(u/2)``: ``(1, 0, 0, v, 0, 0, 0, 0)``.
+
+    Parameters
+    ----------
+    v : sympy expression
+        ``tan(u_i / 2)``.
+
+    Returns
+    -------
+    sympy.ImmutableMatrix, shape (8, 1)
+    """
     return study_vector([1, 0, 0, v, 0, 0, 0, 0], "v")
 
 
@@ -254,13 +285,34 @@ def study_G(a: sp.Expr, d: sp.Expr, al: sp.Expr) -> sp.ImmutableMatrix:
 
     ``(1, al, 0, 0, a*al/2, -a/2, -d*al/2, -d/2)``: translation by ``(a, 0, d)``
     followed by the rotation about x by ``alpha``.
+
+    Parameters
+    ----------
+    a, d : sympy expression
+        DH lengths ``a_i``, ``d_i`` (Eq. 12).
+    al : sympy expression
+        ``tan(alpha_i / 2)`` (``al_i`` of Eq. 12).
+
+    Returns
+    -------
+    sympy.ImmutableMatrix, shape (8, 1)
     """
     a, d, al = sp.sympify(a), sp.sympify(d), sp.sympify(al)
     return study_vector([1, al, 0, 0, a * al / 2, -a / 2, -d * al / 2, -d / 2], "a, d, al")
 
 
 def study_quadric(X: Sequence[sp.Expr]) -> sp.Expr:
-    """The Study quadric ``x0*y0 + x1*y1 + x2*y2 + x3*y3`` of an 8-vector, expanded."""
+    """The Study quadric ``x0*y0 + x1*y1 + x2*y2 + x3*y3`` of an 8-vector, expanded.
+
+    Parameters
+    ----------
+    X : sequence of 8 sympy expressions
+        ``(x0, x1, x2, x3, y0, y1, y2, y3)``.
+
+    Returns
+    -------
+    sympy.Expr
+    """
     X = list(study_vector(X, "X"))
     return sp.expand(sum(X[i] * X[i + 4] for i in range(4)))
 
@@ -280,8 +332,16 @@ def _eq3_parts(X: Sequence[sp.Expr]) -> tuple[sp.Matrix, sp.Matrix, sp.Expr]:
 def paper_matrix(X: Sequence[sp.Expr]) -> sp.Matrix:
     """Eq. 3-4 literally: the 4x4 matrix in the paper's layout (homogenising coordinate first).
 
-    Returns ``Delta * T`` (no division): ``[[Delta, 0], [(p, q, r), Delta * R]]``,
-    a polynomial matrix in the Study parameters.
+    Parameters
+    ----------
+    X : sequence of 8 sympy expressions
+        ``(x0, x1, x2, x3, y0, y1, y2, y3)``.
+
+    Returns
+    -------
+    sympy.Matrix, shape (4, 4)
+        ``Delta * T`` (no division): ``[[Delta, 0], [(p, q, r), Delta * R]]``, a
+        polynomial matrix in the Study parameters.
     """
     R, t, D = _eq3_parts(X)
     M = sp.zeros(4, 4)
@@ -292,7 +352,18 @@ def paper_matrix(X: Sequence[sp.Expr]) -> sp.Matrix:
 
 
 def transform_matrix(X: Sequence[sp.Expr]) -> sp.Matrix:
-    """The displacement of Eq. 3-4 as ``[[R, t], [0, 1]]`` (ecosystem layout, divided by Delta)."""
+    """The displacement of Eq. 3-4 as ``[[R, t], [0, 1]]`` (ecosystem layout, divided by Delta).
+
+    Parameters
+    ----------
+    X : sequence of 8 sympy expressions
+        ``(x0, x1, x2, x3, y0, y1, y2, y3)``.
+
+    Returns
+    -------
+    sympy.Matrix, shape (4, 4)
+        Rational in the Study parameters.
+    """
     R, t, D = _eq3_parts(X)
     M = sp.eye(4)
     M[:3, :3] = R / D

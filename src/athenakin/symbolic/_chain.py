@@ -65,6 +65,11 @@ def joint_factors(v: Sequence[sp.Expr] = V_SYMBOLS,
         Half-tangents ``v1..v5``.
     p : sympy expression
         The prismatic joint ``d3``.
+
+    Returns
+    -------
+    list of 5 (sympy.ImmutableMatrix, sympy.ImmutableMatrix)
+        Study vectors (8,) of ``M_i`` (:func:`study_M`) and ``G_i`` (:func:`study_G`).
     """
     try:
         if isinstance(v, (str, bytes)):
@@ -203,6 +208,16 @@ def compare_vectors(derived: Sequence[sp.Expr], printed: Sequence[sp.Expr]) -> C
     The scale is taken as the ratio of the first entry pair whose ratio is a
     constant (free of symbols); each entry is then checked by expanding
     ``derived - scale * printed``.
+
+    Parameters
+    ----------
+    derived, printed : sequence of sympy expressions
+        Same length (e.g. the 8 entries of Eq. 13 or 14, derived and as printed).
+
+    Returns
+    -------
+    ChainComparison
+        The scale (1 where no entry pair has a constant ratio) and the differing entries.
     """
     derived, printed = list(derived), list(printed)
     if len(derived) != len(printed):

@@ -150,6 +150,16 @@ def cached_hash(path: Path = CACHE_FILE) -> str:
 def load_derivation(path: Path = CACHE_FILE) -> dict[str, sp.Basic]:
     """Read the cached derivation and check its hash.
 
+    Parameters
+    ----------
+    path : Path
+        The cache file (default the package's ``_cache/derivation.json``).
+
+    Returns
+    -------
+    dict of str -> sympy object
+        The results of :func:`derive`, by name.
+
     Raises
     ------
     FileNotFoundError
@@ -242,7 +252,20 @@ def numeric_source(results: dict[str, sp.Basic], sha256: str) -> str:
 
 def write_cache(results: dict[str, sp.Basic] | None = None, *,
                 log: Callable[[str], None] | None = None) -> str:
-    """Derive (unless given), write ``derivation.json`` and ``_numeric.py``; return the hash."""
+    """Derive (unless given), write ``derivation.json`` and ``_numeric.py``; return the hash.
+
+    Parameters
+    ----------
+    results : dict of str -> sympy object, optional
+        The results of :func:`derive` (default: derive afresh).
+    log : callable, keyword-only, optional
+        As in :func:`derive`.
+
+    Returns
+    -------
+    str
+        SHA-256 hex digest of the stored results.
+    """
     results = derive(fresh=True, log=log) if results is None else results
     payload = payload_from_results(results)
     h = payload_hash(payload)

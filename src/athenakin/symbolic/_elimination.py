@@ -131,6 +131,11 @@ def assign(exprs: Sequence[sp.Expr], *, b: Sequence[sp.Expr] | None = IDENTITY,
     b, e : sequence of 8 values, keyword-only
         Default ``B = 1`` and ``E = (f0..f7)`` (the RCM frame seen from ``O_s``).
         ``None`` keeps the symbols. Floats are converted to exact rationals.
+
+    Returns
+    -------
+    tuple of sympy expressions
+        ``exprs`` with the values substituted, expanded.
     """
     bv = _values(b, B_SYMBOLS, "b")
     ev = _values(e, E_SYMBOLS, "e")
@@ -141,6 +146,12 @@ def assign(exprs: Sequence[sp.Expr], *, b: Sequence[sp.Expr] | None = IDENTITY,
 @checked_symbolic(sl="exprs")
 def solve_y_from_sl(sl: Sequence[sp.Expr]) -> dict[sp.Symbol, sp.Expr]:
     """Step 3: solve the four equations of ``sl`` linearly for ``y0..y3``.
+
+    Parameters
+    ----------
+    sl : sequence of 4 sympy expressions
+        The left chain's implicit equations (:func:`implicit_sets`, after :func:`assign`),
+        linear in ``y0..y3``.
 
     Returns
     -------
@@ -166,6 +177,13 @@ def sr_in_x(sr: Sequence[sp.Expr], y_solution: Mapping[sp.Symbol, sp.Expr]) -> s
 
     Each equation is made polynomial (numerator of the substituted equation).
 
+    Parameters
+    ----------
+    sr : sequence of 4 sympy expressions
+        The right chain's implicit equations (:func:`implicit_sets`, after :func:`assign`).
+    y_solution : mapping of sympy.Symbol to sympy.Expr
+        ``{y_i: ...}`` from :func:`solve_y_from_sl`.
+
     Returns
     -------
     sympy.Matrix, shape (4, 4)
@@ -186,6 +204,18 @@ def reduce_study(expr: sp.Expr, *vectors: Sequence[sp.Expr]) -> sp.Expr:
     leading monomial ``x0*y0`` (grevlex), i.e. ``x0*y0 -> -(x1*y1 + x2*y2 + x3*y3)``.
     Vectors without symbols (assigned numbers) are skipped: they either are on
     the quadric, or the caller's values are wrong.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+        A polynomial.
+    *vectors : sequence of 8 sympy expressions
+        Study vectors ``(x0..x3, y0..y3)`` whose quadrics are zero (e.g. ``B_SYMBOLS``).
+
+    Returns
+    -------
+    sympy.Expr
+        The remainder, expanded (``expr`` itself when no vector has symbols).
     """
     rules = []
     gens: list[sp.Symbol] = []
@@ -258,6 +288,21 @@ def back_substitute(M: sp.Matrix, x_solution: Mapping[sp.Symbol, sp.Expr], equat
     The remaining unknown ``x_k`` factors out. The substituted equation is
     ``(sum_j M[equation, j] N_j + M[equation, k] D) x_k / D``; returned is the
     numerator of this fraction after cancelling common factors with ``D``.
+
+    Parameters
+    ----------
+    M : sympy.Matrix, shape (4, 4)
+        Coefficient matrix of ``M x = 0`` (:func:`sr_in_x`).
+    x_solution : mapping of sympy.Symbol to sympy.Expr
+        Three ``x_i`` in terms of the fourth (:func:`solve_x_from_sr`).
+    equation : int
+        Row of ``M`` not used by ``x_solution`` (0..3).
+
+    Returns
+    -------
+    sympy.Expr
+        Polynomial in ``p`` and the assigned parameters; with the defaults, ``Pf(K(p))``
+        (the quadratic in ``p`` of Section 3.2) times factors free of ``p``.
     """
     eq = sum(M[equation, j] * _X[j] for j in range(4))
     free = [s for s in _X if s not in x_solution]

@@ -43,6 +43,16 @@ def ik_bilinear_equations() -> tuple[sp.Expr, sp.Expr]:
 def bilinear_coefficients(eq: sp.Expr) -> tuple[sp.Expr, sp.Expr, sp.Expr, sp.Expr]:
     """Coefficients ``(c11, c1, c2, c0)`` of ``c11 v1 v2 + c1 v1 + c2 v2 + c0``.
 
+    Parameters
+    ----------
+    eq : sympy.Expr
+        Polynomial of degree at most 1 in each of ``v1, v2`` (e.g. Eq. 16).
+
+    Returns
+    -------
+    tuple of 4 sympy.Expr
+        ``(c11, c1, c2, c0)``, free of ``v1, v2``.
+
     Raises
     ------
     ValueError

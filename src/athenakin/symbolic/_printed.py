@@ -93,7 +93,14 @@ def printed_eq16() -> sp.Expr:
 
 
 def printed_eq15_factors() -> tuple[str, ...]:
-    """The factors of Eq. 15 as printed, each inverted: ``B = E * G5^-1 M5^-1 G5^-1 M4^-1 ...``."""
+    """The factors of Eq. 15 as printed, each inverted: ``B = E * G5^-1 M5^-1 G5^-1 M4^-1 ...``.
+
+    Returns
+    -------
+    tuple of str
+        ``("G5", "M5", "G5", "M4", ...)``, left to right (the printed second ``G5``,
+        where ``G4`` is meant: docs/errata.md).
+    """
     return _EQ15
 
 
@@ -135,13 +142,35 @@ def printed_eq8(*, hmy: str = "h*my") -> tuple[sp.Expr, sp.Expr, sp.Expr]:
 
 
 def printed_eq9(*, hmy: str = "h*my") -> sp.Matrix:
-    """Eq. 9 as printed (paper layout, homogenising coordinate first): ``A`` of ``O_i``."""
+    """Eq. 9 as printed (paper layout, homogenising coordinate first): ``A`` of ``O_i``.
+
+    Parameters
+    ----------
+    hmy : {"h*my", "h*my**2"}, keyword-only
+        As in :func:`printed_eq8`.
+
+    Returns
+    -------
+    sympy.Matrix, shape (4, 4)
+        In ``q1, q2, q3`` and the design lengths.
+    """
     x, y, z = printed_eq8(hmy=hmy)
     return sp.Matrix([[1, 0, 0, 0], [x, 1, 0, 0], [y, 0, z, y], [z, 0, -y, z]])
 
 
 def printed_eq10(*, hmy: str = "h*my") -> sp.Matrix:
-    """Eq. 10 as printed (paper layout): ``B`` of ``O_s``."""
+    """Eq. 10 as printed (paper layout): ``B`` of ``O_s``.
+
+    Parameters
+    ----------
+    hmy : {"h*my", "h*my**2"}, keyword-only
+        As in :func:`printed_eq8`.
+
+    Returns
+    -------
+    sympy.Matrix, shape (4, 4)
+        In ``q1, q2, q3`` and the design lengths.
+    """
     x, y, z = printed_eq8(hmy=hmy)
     l4 = PARALLEL_SYMBOLS["l4"]
     return sp.Matrix([[1, 0, 0, 0], [x, 1, 0, 0], [y, 0, z, y * l4], [z, 0, -y, z * l4]])

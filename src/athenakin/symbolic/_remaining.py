@@ -117,6 +117,18 @@ def segre_map(s_a: sp.Expr, t_a: sp.Expr, s_b: sp.Expr, t_b: sp.Expr) -> tuple[s
 
     Projectively equal to the quaternion parts of ``M(v_a) G(0, 0, 1) M(v_b) G(0, 0, 1)``
     (and of the left chain with ``B = 1``) for ``v_a = s_a / t_a``, ``v_b = s_b / t_b``.
+
+    Parameters
+    ----------
+    s_a, t_a : sympy expression
+        Homogeneous half-tangent of the first joint, ``v_a = s_a / t_a``.
+    s_b, t_b : sympy expression
+        Same for the second joint.
+
+    Returns
+    -------
+    tuple of 4 sympy.Expr
+        ``(-s_a s_b, t_a t_b, s_a t_b, t_a s_b)``.
     """
     return (-s_a * s_b, t_a * t_b, s_a * t_b, t_a * s_b)
 
@@ -130,6 +142,16 @@ def segre_inverse(r: tuple[sp.Expr, ...]
     For ``r = segre_map(s_a, t_a, s_b, t_b)``: ``(s_a : t_a) = (r2 : r1) = (-r0 : r3)``
     (the first is ``t_b`` times it, the second ``s_b`` times it) and
     ``(s_b : t_b) = (r3 : r1) = (-r0 : r2)``. A solver takes the larger of each pair.
+
+    Parameters
+    ----------
+    r : tuple of 4 sympy expressions
+        A point ``(r0, r1, r2, r3)`` of the quadric ``r0 r1 + r2 r3 = 0``.
+
+    Returns
+    -------
+    ((s_a, t_a), (s_a, t_a)), ((s_b, t_b), (s_b, t_b))
+        The two representatives of each half-tangent pair, as above.
     """
     r0, r1, r2, r3 = r
     return ((r2, r1), (-r0, r3)), ((r3, r1), (-r0, r2))

@@ -157,6 +157,22 @@ def collision_spec(bodies: object = None, environment: object = None,
     obstacles, a margin of 0 (collision-free means no contact), and
     :data:`DEFAULT_COLLISION_SAMPLES` samples.
 
+    Parameters
+    ----------
+    bodies : athenakin.collision.Bodies or {"default", "scaled"}, optional
+        As :attr:`CollisionSpec.bodies`.
+    environment : athenakin.collision.Environment, optional
+        Obstacles, base frame.
+    clearance_margin : float, optional
+        Least clearance of a collision-free sample, m (>= 0).
+    collision_samples : int, optional
+        Task samples checked (the first ones), 1 to 1 000 000.
+
+    Returns
+    -------
+    CollisionSpec or None
+        None when all four are None.
+
     Raises
     ------
     TypeError, InvalidInputError
@@ -210,7 +226,18 @@ _LENGTH_CONDITIONS = ("circles_tangent", "d_on_rail", "k1_degenerate", "ab_coinc
 
 
 def row_from_design(design: Design) -> dict[str, Any]:
-    """The parameter columns of a design (a plain dict of floats and one str)."""
+    """The parameter columns of a design (a plain dict of floats and one str).
+
+    Parameters
+    ----------
+    design : Design
+
+    Returns
+    -------
+    dict of str
+        ``l1..l5``, ``q1_min..q3_max``, ``tool_length`` (floats, m) and ``ab_order`` (str);
+        :func:`design_from_row` reads it back.
+    """
     check_instance(design, "design", Design)
     lo, hi = design.stroke_min, design.stroke_max
     row: dict[str, Any] = {f"l{i + 1}": float(x) for i, x in enumerate(design.lengths)}
@@ -223,6 +250,17 @@ def row_from_design(design: Design) -> dict[str, Any]:
 
 def design_from_row(row: Mapping[str, Any]) -> Design:
     """Build a :class:`~athenakin.Design` from the parameter columns of a row.
+
+    Parameters
+    ----------
+    row : mapping of str
+        :data:`PARAMETER_COLUMNS` (``l1..l5``, m, required; strokes ``q1_min..q3_max``, m,
+        default unlimited; ``tool_length``, ``ab_order``), e.g. a study table row; other
+        keys are ignored.
+
+    Returns
+    -------
+    Design
 
     Raises
     ------

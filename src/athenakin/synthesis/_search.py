@@ -79,6 +79,16 @@ def default_bounds(design: Design | None = None, *, spread: float = 0.25
 def check_bounds(bounds: Mapping[str, Any]) -> dict[str, tuple[float, float]]:
     """Validate search bounds: every variable of :data:`SEARCH_VARIABLES`, ``lo <= hi`` finite.
 
+    Parameters
+    ----------
+    bounds : mapping of str -> (lo, hi)
+        Exactly the variables of :data:`SEARCH_VARIABLES`, m.
+
+    Returns
+    -------
+    dict of str -> (float, float)
+        ``(lo, hi)`` of each of :data:`SEARCH_VARIABLES`, m.
+
     Raises
     ------
     InvalidInputError
@@ -109,6 +119,16 @@ def check_bounds(bounds: Mapping[str, Any]) -> dict[str, tuple[float, float]]:
 def bounds_from_toml(path: str | Path) -> dict[str, tuple[float, float]] | None:
     """The ``[bounds]`` table of a task file (None when it has none).
 
+    Parameters
+    ----------
+    path : str or Path
+        A task TOML file.
+
+    Returns
+    -------
+    dict of str -> (float, float), or None
+        ``(lo, hi)`` of each of :data:`SEARCH_VARIABLES`, m; None without a table.
+
     Raises
     ------
     TaskFileError
@@ -137,6 +157,21 @@ def random_designs(n: int, bounds: Mapping[str, Any], *, seed: int = 0,
     ``tool_length`` and ``ab_order`` come from ``base`` (default
     :meth:`~athenakin.Design.default`). Rows whose strokes cross (``q_min > q_max``)
     are kept: :func:`~athenakin.synthesis.evaluate` flags them.
+
+    Parameters
+    ----------
+    n : int
+        Rows, 1 to 1 000 000.
+    bounds : mapping of str -> (lo, hi)
+        As in :func:`check_bounds`, m.
+    seed : int, keyword-only
+        Seed of the generator.
+    base : Design, optional, keyword-only
+
+    Returns
+    -------
+    list of dict
+        Parameter rows (:func:`design_from_row` columns) named ``"random <i>"``.
     """
     b = check_bounds(bounds)
     n = check_count(n, "n", minimum=1, maximum=MAX_RANDOM_DESIGNS)
@@ -174,6 +209,16 @@ def check_constraints(constraints: object) -> dict[str, tuple[str, float]]:
     Examples: ``{"min_clearance": (">=", 0.002)}`` (every reached sample keeps 2 mm
     between the bodies), ``{"collision_free_coverage": (">=", 0.9)}``.
 
+    Parameters
+    ----------
+    constraints : mapping of str -> (str, float), or None
+        Keys in :data:`METRIC_COLUMNS`; the bound in the metric's unit.
+
+    Returns
+    -------
+    dict of str -> (str, float)
+        Checked copy (empty for None).
+
     Raises
     ------
     TypeError, InvalidInputError
@@ -210,7 +255,19 @@ def _constraint_matrix(df: Any, constraints: Mapping[str, tuple[str, float]]
 
 
 def pareto_mask(F: NDArray[np.float64]) -> NDArray[np.bool_]:
-    """Non-dominated rows of an objective matrix ``(n, k)`` to minimise (NaN rows excluded)."""
+    """Non-dominated rows of an objective matrix ``(n, k)`` to minimise (NaN rows excluded).
+
+    Parameters
+    ----------
+    F : array-like, shape (n, k)
+        Objectives, each to minimise; rows with a NaN or inf are never in the front.
+
+    Returns
+    -------
+    ndarray of bool, shape (n,)
+        True where no other finite row is at most as large in every objective and
+        smaller in one.
+    """
     F = check_array(F, "F", (), allow_nonfinite=True)
     if F.ndim != 2:
         raise InvalidInputError(f"F: expected an objective matrix of shape (n, k), got shape "

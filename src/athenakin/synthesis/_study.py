@@ -266,7 +266,18 @@ def _prepare_out(out: Path, fingerprint: str, n_chunks: int, meta: dict[str, Any
 
 
 def read_study(out: str | Path) -> Any:
-    """Read a study folder written by :func:`evaluate` (every chunk so far, in design order)."""
+    """Read a study folder written by :func:`evaluate` (every chunk so far, in design order).
+
+    Parameters
+    ----------
+    out : str or Path
+        The folder (``out=`` of :func:`evaluate`), holding ``part-*.parquet`` chunks.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per design evaluated, the study table of :func:`evaluate`.
+    """
     pd = _require("pandas")
     out = check_path(out, "out")
     parts = sorted(out.glob("part-*.parquet"))
