@@ -68,7 +68,7 @@ def _signature_parameters(func):
 
 
 # signatures changing in another branch; documented after that merge
-PENDING = {"athenakin.sim.load_model", "athenakin.sim.write_mjcf", "athenakin.sim.write_urdf"}
+PENDING: set[str] = set()
 
 FUNCTIONS = [(n, f) for n, f in _public_functions() if n not in PENDING]
 

@@ -120,9 +120,16 @@ def load_model(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                q: ArrayLike | None = None, slot: int = 0, gravity: bool = False) -> Any:
     """Compile :func:`~athenakin.sim.mjcf_from_design` with MuJoCo.
 
+    Parameters
+    ----------
+    T_b_e, design, q, slot, gravity
+        As :func:`~athenakin.sim.mjcf_from_design` (the RCM frame, m; the design; the
+        configuration (m) and FK slot the model is assembled in; MuJoCo's gravity on).
+
     Returns
     -------
     mujoco.MjModel
+        The compiled model (extra ``sim``).
     """
     import mujoco
 

@@ -592,7 +592,16 @@ def _apply_masses(root: ET.Element, masses: object, jv: MechanismJointValues, *,
 
 def write_mjcf(path: str | Path, T_b_e: ArrayLike | None = None, design: Design | None = None,
                **kwargs: object) -> Path:
-    """Write :func:`mjcf_from_design` to ``path``; keyword arguments are passed on.
+    """Write :func:`mjcf_from_design` to ``path`` atomically.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.xml`` file to write (replaced whole, or not at all).
+    T_b_e, design
+        As :func:`mjcf_from_design`.
+    **kwargs
+        Passed on to :func:`mjcf_from_design` (``q``, ``slot``, ``gravity``, ...).
 
     Returns
     -------

@@ -360,11 +360,21 @@ def _header(d: Design, zero: dict[str, float], zero_slot: int) -> list[str]:
 
 def write_urdf(path: str | Path, T_b_e: ArrayLike | None = None, design: Design | None = None,
                **kwargs: object) -> Path:
-    """Write :func:`urdf_from_design` to ``path``; keyword arguments are passed on.
+    """Write :func:`urdf_from_design` to ``path`` atomically.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.urdf`` file to write (replaced whole, or not at all).
+    T_b_e, design
+        As :func:`urdf_from_design`.
+    **kwargs
+        Passed on to :func:`urdf_from_design`.
 
     Returns
     -------
     Path
+        The path written.
     """
     path = check_output_path(path)
     write_text_atomic(path, urdf_from_design(T_b_e, design, **kwargs))  # type: ignore[arg-type]
