@@ -195,7 +195,7 @@ def random_configurations(n: int, design: Design | None = None, *,
                                 T_b_e=Ts @ ups_transform(p, u), slot=slot.astype(np.int64))
 
 
-def _check_p_range(p_range: object) -> tuple[float, float]:
+def _check_p_range(p_range: ArrayLike) -> tuple[float, float]:
     """``(p_min, p_max)`` with ``0 <= p_min < p_max``, m."""
     pr = check_array(p_range, "p_range", (2,))
     if pr.shape != (2,) or not 0.0 <= pr[0] < pr[1]:

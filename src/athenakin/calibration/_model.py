@@ -36,6 +36,7 @@ from numpy.typing import NDArray
 
 from .._validation import check_choice
 from ..design import Design
+from ..parallel._module import circle_terms
 
 __all__ = [
     "PARAMETERS",
@@ -245,10 +246,7 @@ def predict(theta: NDArray[np.float64], q: NDArray[np.float64], mode: NDArray[np
         r1 = np.sqrt(l1 * l1 - h * h)
         s3 = np.sqrt(l3 * l3 - h * h)
         m_y = s3 + l2
-        d2 = m_y * m_y + l5 * l5
-        d = np.sqrt(d2)
-        H = d2 + r1 * r1 - q3 * q3
-        k = (r1 + q3 - d) * (r1 + q3 + d) * (d - r1 + q3) * (d + r1 - q3)
+        d2, d, H, k = circle_terms(r1, m_y, l5, q3)
         a = np.sqrt(k) / (2 * d)
         Py = H * m_y / (2 * d2) - mode * a * l5 / d
         Pz = H * l5 / (2 * d2) + mode * a * m_y / d

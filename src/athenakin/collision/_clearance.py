@@ -162,7 +162,7 @@ class _Columns:
     ``coal`` lists ``(first column, obstacle, its bodies)`` of the meshes and boxes.
     """
 
-    fixed: list[tuple[tuple[float, ...], tuple[float, ...]]]
+    fixed: list[tuple[tuple[float, float, float], tuple[float, float, float]]]
     radii: list[float]
     capsules: list[tuple[int, int]]
     capsule_cols: list[int]
