@@ -174,7 +174,6 @@ def _force_function(forces: ArrayLike | Callable[[float, Arr, Arr], ArrayLike]
     return tau_of
 
 
-
 def simulate(q0: ArrayLike, qd0: ArrayLike,
              forces: ArrayLike | Callable[[float, Arr, Arr], ArrayLike],
              T_b_e: ArrayLike | None = None, design: Design | None = None, *,

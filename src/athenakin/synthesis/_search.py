@@ -296,7 +296,6 @@ def _gains(F_use: NDArray[np.float64], f_ref: NDArray[np.float64], dom: NDArray[
     return gains, trade_offs
 
 
-
 def _search_result(table: Any, obj: dict[str, str], cons: Any) -> SearchResult:
     """The search's result from the table of every evaluated design (reference first)."""
     table["design"] = np.arange(len(table))
@@ -317,7 +316,6 @@ def _search_result(table: Any, obj: dict[str, str], cons: Any) -> SearchResult:
                         reference_on_front=not bool(np.any(
                             np.all(F_use <= f_ref, axis=1) & np.any(F_use < f_ref, axis=1))),
                         dominating=int(np.count_nonzero(dom)), gains=gains)
-
 
 
 def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
