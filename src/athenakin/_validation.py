@@ -455,6 +455,34 @@ def check_instance(x: object, name: str, cls: type | tuple[type, ...]) -> None:
         raise TypeError(f"{name}: expected {want}, got {type(x).__name__}")
 
 
+def check_keys(data: Mapping[Any, object], name: str, allowed: Iterable[str], *,
+               what: str = "key", error: type[Exception] = InvalidInputError) -> None:
+    """Refuse the keys of a table (a mapping, a TOML table) that are not in ``allowed``.
+
+    Parameters
+    ----------
+    data : Mapping
+    name : str
+        The table's name in the message.
+    allowed : iterable of str
+        The known keys, in the order the message lists them.
+    what : str, keyword-only
+        What a key is, in the message (``"key"``, ``"body name"``).
+    error : exception class, keyword-only
+        Raised for unknown keys (a file reader's own error, say).
+
+    Raises
+    ------
+    error
+        ``"<name>: unknown <what>(s) [...]; expected some of [...]"``, the unknown keys
+        sorted.
+    """
+    known = list(allowed)
+    unknown = sorted(set(data) - set(known), key=str)
+    if unknown:
+        raise error(f"{name}: unknown {what}(s) {unknown}; expected some of {known}")
+
+
 def check_axes(ax: object, name: str = "ax") -> None:
     """Refuse an ``ax`` that is not None and not a matplotlib Axes (anything with ``plot``)."""
     if ax is not None and not callable(getattr(ax, "plot", None)):

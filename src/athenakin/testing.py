@@ -193,11 +193,7 @@ def random_configurations(n: int, design: Design | None = None, *,
     if not margin < 1.0:
         raise InvalidInputError(f"margin: expected a number in [0, 1), got {margin}")
     length_margin = check_scalar(length_margin, "length_margin", nonnegative=True)
-    pr = check_array(p_range, "p_range", (2,))
-    if pr.shape != (2,) or not 0.0 <= pr[0] < pr[1]:
-        raise InvalidInputError(f"p_range: expected (p_min, p_max) with 0 <= p_min < p_max, "
-                                f"got {pr.tolist()}")
-    p_lo, p_hi = float(pr[0]), float(pr[1])
+    p_lo, p_hi = _check_p_range(p_range)
     lo = np.where(np.isfinite(design.stroke_min), design.stroke_min, [-0.5, -0.5, 0.0])
     hi = np.where(np.isfinite(design.stroke_max), design.stroke_max, [0.5, 0.5, 1.0])
     out: dict[str, list[NDArray[np.generic]]] = {
@@ -207,25 +203,11 @@ def random_configurations(n: int, design: Design | None = None, *,
     for _ in range(1000):
         if have >= n:
             break
-        N = min(max(4 * (n - have), 64), _ROUND)
-        q = gen.uniform(lo, hi, (N, 3))
-        par = parallel_forward_kinematics(q, design)
-        m = gen.integers(0, 2, N)
-        h = 0.5 * np.abs(q[:, 0] - q[:, 1])
-        p = gen.uniform(p_lo, p_hi, N) * gen.choice([-1.0, 1.0], N)
-        u = gen.uniform(-np.pi, np.pi, (N, 5))
-        s, c = np.sin(u), np.cos(u)
-        ok = (par.valid[np.arange(N), m] & (h > length_margin)
-              & (h < design.l3 - length_margin) & (par.half_chord > length_margin)
-              & (np.abs(s[:, 1]) > margin) & (np.abs(s[:, 3]) > margin)
-              & (np.abs(c[:, 0]) > margin) & (np.abs(s[:, 0] * s[:, 1]) > margin))
-        idx = np.flatnonzero(ok)[: n - have]
-        out["q"].append(q[idx])
-        out["m"].append(m[idx])
-        out["p"].append(p[idx])
-        out["u"].append(u[idx])
-        out["Ts"].append(par.T_b_s[idx, m[idx]])
-        have += len(idx)
+        kept = _draw_round(gen, min(max(4 * (n - have), 64), _ROUND), n - have, design,
+                           (lo, hi), (p_lo, p_hi), margin, length_margin)
+        for key, a in kept.items():
+            out[key].append(a)
+        have += len(kept["q"])
     if have < n:
         raise InvalidInputError(f"margin, length_margin: found only {have} of {n} "
                                 f"configurations; the design's workspace is too small for "
@@ -238,3 +220,34 @@ def random_configurations(n: int, design: Design | None = None, *,
     slot = 8 * mi + 4 * (p < 0) + 2 * (np.sin(u[:, 1]) < 0) + (np.sin(u[:, 3]) < 0)
     return RandomConfigurations(q=q, mode=np.where(mi == 0, 1, -1), p=p, u=u, T_b_s=Ts,
                                 T_b_e=Ts @ ups_transform(p, u), slot=slot.astype(np.int64))
+
+
+def _check_p_range(p_range: ArrayLike) -> tuple[float, float]:
+    """``(p_min, p_max)`` with ``0 <= p_min < p_max``, m."""
+    pr = check_array(p_range, "p_range", (2,))
+    if pr.shape != (2,) or not 0.0 <= pr[0] < pr[1]:
+        raise InvalidInputError(f"p_range: expected (p_min, p_max) with 0 <= p_min < p_max, "
+                                f"got {pr.tolist()}")
+    return float(pr[0]), float(pr[1])
+
+
+def _draw_round(gen: np.random.Generator, N: int, most: int, design: Design,
+                strokes: tuple[NDArray[np.float64], NDArray[np.float64]],
+                p_range: tuple[float, float], margin: float, length_margin: float
+                ) -> dict[str, NDArray[np.generic]]:
+    """One round of ``N`` candidates; the first ``most`` kept, by key ``q, m, p, u, Ts``."""
+    lo, hi = strokes
+    q = gen.uniform(lo, hi, (N, 3))
+    par = parallel_forward_kinematics(q, design)
+    m = gen.integers(0, 2, N)
+    h = 0.5 * np.abs(q[:, 0] - q[:, 1])
+    p = gen.uniform(p_range[0], p_range[1], N) * gen.choice([-1.0, 1.0], N)
+    u = gen.uniform(-np.pi, np.pi, (N, 5))
+    s, c = np.sin(u), np.cos(u)
+    ok = (par.valid[np.arange(N), m] & (h > length_margin)
+          & (h < design.l3 - length_margin) & (par.half_chord > length_margin)
+          & (np.abs(s[:, 1]) > margin) & (np.abs(s[:, 3]) > margin)
+          & (np.abs(c[:, 0]) > margin) & (np.abs(s[:, 0] * s[:, 1]) > margin))
+    idx = np.flatnonzero(ok)[:most]
+    return {"q": q[idx], "m": m[idx], "p": p[idx], "u": u[idx],
+            "Ts": par.T_b_s[idx, m[idx]]}

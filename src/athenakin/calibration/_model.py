@@ -36,6 +36,7 @@ from numpy.typing import NDArray
 
 from .._validation import check_choice
 from ..design import Design
+from ..parallel._module import circle_terms
 
 __all__ = [
     "PARAMETERS",
@@ -250,10 +251,7 @@ def predict(theta: NDArray[np.float64], q: NDArray[np.float64], mode: NDArray[np
         r1 = np.sqrt(l1 * l1 - h * h)
         s3 = np.sqrt(l3 * l3 - h * h)
         m_y = s3 + l2
-        d2 = m_y * m_y + l5 * l5
-        d = np.sqrt(d2)
-        H = d2 + r1 * r1 - q3 * q3
-        k = (r1 + q3 - d) * (r1 + q3 + d) * (d - r1 + q3) * (d + r1 - q3)
+        d2, d, H, k = circle_terms(r1, m_y, l5, q3)
         a = np.sqrt(k) / (2 * d)
         Py = H * m_y / (2 * d2) - mode * a * l5 / d
         Pz = H * l5 / (2 * d2) + mode * a * m_y / d
@@ -264,17 +262,27 @@ def predict(theta: NDArray[np.float64], q: NDArray[np.float64], mode: NDArray[np
         u = v / rho[:, None]
     tip_b = O_s + L * u
     det = Pz * m_y - Py * l5
-    if R0 is None:
-        R = np.eye(3)
-        tip, axis = tip_b, u
-    else:
-        R = rotation_from_vector(theta[12:15]) @ R0
-        tip = tip_b @ R.T + theta[15:18]
-        axis = u @ R.T
+    R = None if R0 is None else rotation_from_vector(theta[12:15]) @ R0
+    tip, axis = (tip_b, u) if R is None else (tip_b @ R.T + theta[15:18], u @ R.T)
     if not jacobian:
         return Prediction(tip=tip, axis=axis, tip_base=tip_b, O_s=O_s, det=det, rho=rho)
+    dOs_dz = _dOs_dz(theta[:6], h, q3, r1, s3, m_y, Py, Pz, det, kk)
+    J_tip, J_axis, J_q = _parameter_jacobians(dOs_dz, u, rho, L, theta, R, tip_b, axis)
+    return Prediction(tip=tip, axis=axis, tip_base=tip_b, O_s=O_s, det=det, rho=rho,
+                      J_tip=J_tip, J_axis=J_axis, J_q=J_q)
 
-    n = q.shape[0]
+
+def _dOs_dz(lengths: NDArray[np.float64], h: NDArray[np.float64], q3: NDArray[np.float64],
+            r1: NDArray[np.float64], s3: NDArray[np.float64], m_y: NDArray[np.float64],
+            Py: NDArray[np.float64], Pz: NDArray[np.float64], det: NDArray[np.float64],
+            kk: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``d O_s / d z``, shape (n, 3, 8), ``z = (q1, q2, q3, l1..l5)`` (true ``q``).
+
+    Implicit differentiation of the two circle equations (module docstring), then the
+    chain rule through ``r1``, ``m_y``, ``h`` and ``O_s = (x_M, (1 + l4 / r1) P)``.
+    """
+    l1, _, l3, l4, l5 = lengths[:5]
+    n = h.shape[0]
     with np.errstate(invalid="ignore", divide="ignore"):
         # dP/d(r1, m_y, l5, q3) = -A^-1 F_theta with A = [[Py, Pz], [Py - m_y, Pz - l5]]
         # and F_theta = [[-r1, 0, 0, 0], [0, -(Py - m_y), -(Pz - l5), -q3]] (sparse: by hand)
@@ -305,6 +313,22 @@ def predict(theta: NDArray[np.float64], q: NDArray[np.float64], mode: NDArray[np
         dOs_dz = np.zeros((n, 3, 8))
         dOs_dz[:, 0, 0] = dOs_dz[:, 0, 1] = 0.5
         dOs_dz[:, 1:, :] = kk[:, None, None] * dP_dz + P[:, :, None] * dk_dz[:, None, :]
+    return dOs_dz
+
+
+def _parameter_jacobians(dOs_dz: NDArray[np.float64], u: NDArray[np.float64],
+                         rho: NDArray[np.float64], L: float, theta: NDArray[np.float64],
+                         R: NDArray[np.float64] | None, tip_b: NDArray[np.float64],
+                         axis: NDArray[np.float64]
+                         ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """``J_tip``, ``J_axis`` (n, 3, 18) and ``J_q`` (n, 3, 3) from ``d O_s / d z``.
+
+    ``dt = (I - L G) dO_s + L G dc + u dL`` with ``G = (I - u u^T) / rho``; with a
+    registration ``R`` (None: the base frame) the rows are rotated into the tracker
+    frame and the columns of ``reg_*`` filled.
+    """
+    n = dOs_dz.shape[0]
+    with np.errstate(invalid="ignore", divide="ignore"):
         Pm = np.eye(3) - u[:, :, None] * u[:, None, :]
         G = Pm / rho[:, None, None]                        # du/dc = -du/dO_s
         # G @ dOs_dz without a batched 3x3 matmul (slow for tiny matrices)
@@ -321,11 +345,10 @@ def predict(theta: NDArray[np.float64], q: NDArray[np.float64], mode: NDArray[np
     J_tip[:, :, 9:12] = L * G
     J_axis[:, :, 9:12] = G
     J_q = Jt_z[:, :, 0:3]
-    if R0 is not None:
+    if R is not None:
         J_tip, J_axis, J_q = (_rotate(R, J) for J in (J_tip, J_axis, J_q))
         Jl = _left_jacobian(theta[12:15])
         J_tip[:, :, 12:15] = -(_skew(tip_b @ R.T).reshape(-1, 3) @ Jl).reshape(n, 3, 3)
         J_tip[:, :, 15:18] = np.eye(3)
         J_axis[:, :, 12:15] = -(_skew(axis).reshape(-1, 3) @ Jl).reshape(n, 3, 3)
-    return Prediction(tip=tip, axis=axis, tip_base=tip_b, O_s=O_s, det=det, rho=rho,
-                      J_tip=J_tip, J_axis=J_axis, J_q=J_q)
+    return J_tip, J_axis, J_q

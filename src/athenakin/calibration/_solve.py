@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import warnings
 from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -169,6 +170,11 @@ class _Problem:
     theta0: NDArray[np.float64]
     free: NDArray[np.int64]
     axis_weight: float
+
+    @property
+    def rows_per(self) -> int:
+        """Residual components per pose: the tip (3), and the weighted axis error (6)."""
+        return 3 if self.axes is None else 6
 
     def full(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
         th = self.theta0.copy()
@@ -345,14 +351,12 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
     Parameters
     ----------
     q : array-like, shape (N, 3)
-        Actuator readings ``(q1, q2, q3)``, m. The true actuator values are
-        ``q + q_offset``.
+        Actuator readings ``(q1, q2, q3)``, m; the true values are ``q + q_offset``.
     tips : array-like, shape (N, 3)
         Measured tool tips, m: in the base frame (``frame="base"``) or in the tracker's
         own frame (``frame="tracker"``, registration estimated).
     T_b_e : array-like, shape (4, 4)
-        Nominal RCM frame; its origin is the RCM point (estimated with ``params``
-        ``rcm``/``rcm_x``.., else fixed).
+        Nominal RCM frame; its origin is the RCM point (estimated with ``params`` ``rcm``..).
     design : Design, optional
         Nominal design (starting values; strokes and A/B order are kept).
     params : iterable of str or str, keyword-only
@@ -364,17 +368,14 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
         Measured instrument directions (unit, from ``O_s`` towards the RCM), in the frame
         of ``tips``: measurement model (c), full instrument poses.
     mode : {1, -1}, array-like of them, shape (N,), or "auto", keyword-only
-        Assembly mode of each row, kept while the parameters change. ``"auto"`` (base
-        frame only): per row, the mode whose nominal forward-kinematics tip is nearer the
-        measured tip.
+        Assembly mode of each row, kept while the parameters change; ``"auto"`` (base
+        frame only): per row, the mode whose nominal tip is nearer the measured tip.
     q_offset : array-like, shape (3,), keyword-only
         Starting (or fixed) actuator zero offsets, m.
     registration : array-like, shape (4, 4), keyword-only
         Starting ``T_t_b`` for ``frame="tracker"`` (default: fitted to the nominal tips).
     options : CalibrationOptions, optional, keyword-only
-        Solver settings: axis weight, robust loss and its scale, known ``sigma``,
-        outlier threshold, what to do with bad rows and unidentifiable parameters,
-        tolerances (:class:`CalibrationOptions`; default ``CalibrationOptions()``).
+        Solver settings: see the fields of :class:`CalibrationOptions` (default: all defaults).
 
     Returns
     -------
@@ -383,11 +384,9 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
     Raises
     ------
     InvalidInputError
-        Wrong shapes, mismatched lengths, too many bad rows (or any, with
-        ``CalibrationOptions(bad_rows="raise")``).
+        Wrong shapes, mismatched lengths, too many bad rows (any, with ``bad_rows="raise"``).
     NotIdentifiableError
-        Too few poses for the parameters, or poses that cannot separate them (the message
-        names the inseparable combinations).
+        Too few poses, or poses that cannot separate the parameters (combinations named).
     CalibrationError
         The fit diverged to a non-physical design (wrong assembly mode, frame or units).
 
@@ -402,76 +401,108 @@ def calibrate(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | 
     >>> abs(res.design.l1 - data.true_design.l1) < 1e-9
     True
     """
+    least_squares = _least_squares()
+    opts = CalibrationOptions() if options is None else options
+    check_instance(opts, "options", CalibrationOptions)
+    design, prob, names, chk, m_all, T = _setup(
+        q, tips, T_b_e, design, params=params, frame=frame, axes=axes, mode=mode,
+        q_offset=q_offset, registration=registration, axis_weight=opts.axis_weight,
+        bad_rows=opts.bad_rows, max_bad_fraction=opts.max_bad_fraction)
+    report = _check_problem(prob, names, opts)
+    sol, use = _fit(least_squares, prob, report, opts)
+    theta = prob.full(sol.x)
+    r_after = _physical_residuals(prob, theta, sol)
+    cov, s_hat, outl = _covariance(prob, theta, r_after, use, opts)
+    return _result(design, names, prob, theta, cov, chk, m_all, T, r_after, use, outl, s_hat,
+                   report, sol)
+
+
+def _least_squares() -> Any:
+    """:func:`scipy.optimize.least_squares`, with a message naming the extra to install."""
     try:
         from scipy.optimize import least_squares
     except ModuleNotFoundError as exc:  # pragma: no cover - depends on the install
         raise ModuleNotFoundError("calibrate needs scipy: pip install 'athenakin[calibration]'",
                                   name="scipy") from exc
+    return least_squares
 
-    opts = CalibrationOptions() if options is None else options
-    check_instance(opts, "options", CalibrationOptions)
-    loss, f_scale, sigma = opts.loss, opts.f_scale, opts.sigma
-    outlier_threshold, tol, max_nfev = opts.outlier_threshold, opts.tol, opts.max_nfev
-    design, prob, names, chk, m_all, T = _setup(
-        q, tips, T_b_e, design, params=params, frame=frame, axes=axes, mode=mode,
-        q_offset=q_offset, registration=registration, axis_weight=opts.axis_weight,
-        bad_rows=opts.bad_rows, max_bad_fraction=opts.max_bad_fraction)
-    n_used = prob.q.shape[0]
-    rows_per = 3 if prob.axes is None else 6
-    report = _check_problem(prob, names, opts, n_used, rows_per)
+
+def _fit(least_squares: Any, prob: _Problem, report: IdentifiabilityReport,
+         opts: CalibrationOptions) -> tuple[Any, NDArray[np.bool_]]:
+    """The solver's stages; the solution and the rows kept in the final fit.
+
+    A linear least-squares fit; with a robust loss, a robust fit from it (scale
+    ``f_scale`` or twice the MAD sigma of the first residuals), then a linear refit
+    without the rows beyond ``outlier_threshold`` robust sigmas.
+    """
+    n_used, rows_per = prob.q.shape[0], prob.rows_per
     x0 = prob.theta0[prob.free]
     x_scale = 1.0 / np.where(report.column_norms > 0, report.column_norms, 1.0)
     x_scale = x_scale / np.max(x_scale)
-    solver = dict(method="trf", x_scale=x_scale, ftol=tol, xtol=tol, gtol=tol,
-                  max_nfev=max_nfev)
-    sol = least_squares(prob.residual, x0, jac=prob.jacobian, loss="linear",
-                        **solver)  # type: ignore[arg-type]
+    solver = dict(method="trf", x_scale=x_scale, ftol=opts.tol, xtol=opts.tol, gtol=opts.tol,
+                  max_nfev=opts.max_nfev)
+    sol = least_squares(prob.residual, x0, jac=prob.jacobian, loss="linear", **solver)
     use = np.ones(n_used, bool)
+    if opts.loss == "linear":
+        return sol, use
     r_rows = sol.fun.reshape(n_used, rows_per)
-    if loss != "linear":
-        scale = f_scale if f_scale is not None else 2.0 * _robust_sigma(r_rows)
-        if not np.isfinite(scale) or scale <= 0:
-            scale = RESIDUAL_FLOOR
-        sol = least_squares(prob.residual, sol.x, jac=prob.jacobian, loss=loss, f_scale=scale,
-                            **solver)  # type: ignore[arg-type]
-        r_rows = sol.fun.reshape(n_used, rows_per)
-        s_rob = sigma if sigma is not None else _robust_sigma(r_rows)
-        use = np.linalg.norm(r_rows, axis=1) <= outlier_threshold * max(s_rob, RESIDUAL_FLOOR)
-        sub = dataclasses.replace(prob, q=prob.q[use], tips=prob.tips[use],
-                                  axes=None if prob.axes is None else prob.axes[use],
-                                  mode=prob.mode[use])
-        sol = least_squares(sub.residual, sol.x, jac=sub.jacobian, loss="linear",
-                            **solver)  # type: ignore[arg-type]
-    theta = prob.full(sol.x)
+    scale = opts.f_scale if opts.f_scale is not None else 2.0 * _robust_sigma(r_rows)
+    if not np.isfinite(scale) or scale <= 0:
+        scale = RESIDUAL_FLOOR
+    sol = least_squares(prob.residual, sol.x, jac=prob.jacobian, loss=opts.loss, f_scale=scale,
+                        **solver)
+    r_rows = sol.fun.reshape(n_used, rows_per)
+    s_rob = opts.sigma if opts.sigma is not None else _robust_sigma(r_rows)
+    use = np.linalg.norm(r_rows, axis=1) <= opts.outlier_threshold * max(s_rob, RESIDUAL_FLOOR)
+    sub = dataclasses.replace(prob, q=prob.q[use], tips=prob.tips[use],
+                              axes=None if prob.axes is None else prob.axes[use],
+                              mode=prob.mode[use])
+    sol = least_squares(sub.residual, sol.x, jac=sub.jacobian, loss="linear", **solver)
+    return sol, use
+
+
+def _physical_residuals(prob: _Problem, theta: NDArray[np.float64], sol: Any
+                        ) -> NDArray[np.float64]:
+    """Residuals at the solution; refuse a non-positive length or a pose it cannot assemble."""
     _, r_after = prob.evaluate(theta, False)
     if np.any(theta[:6] <= 0) or not np.all(np.isfinite(r_after)):
         raise CalibrationError(
             f"calibration diverged ({sol.message}): the fit leaves a non-physical design "
             f"(l1..l5, tool_length = {np.array2string(theta[:6], precision=6)} m) or poses "
             "the model cannot assemble; check the assembly mode, the frame and the units (m)")
-    _, r_before = prob.evaluate(prob.theta0, False)
-    J = prob.jac_full(theta)[:, prob.free].reshape(n_used, rows_per, -1)[use].reshape(
-        -1, len(names))
+    return r_after
+
+
+def _covariance(prob: _Problem, theta: NDArray[np.float64], r_after: NDArray[np.float64],
+                use: NDArray[np.bool_], opts: CalibrationOptions
+                ) -> tuple[NDArray[np.float64], float, NDArray[np.bool_]]:
+    """Covariance ``sigma^2 (J^T J)^+`` over the rows used, ``sigma``, and the outlier rows.
+
+    ``sigma`` is the one given, else ``sqrt(SSR / (m - n))``; outliers are the rows left
+    out by a robust fit, else those beyond ``outlier_threshold * sigma`` (a warning).
+    """
+    J = prob.jac_full(theta)[:, prob.free].reshape(prob.q.shape[0], prob.rows_per, -1)[use].reshape(
+        -1, prob.free.shape[0])
     dof = J.shape[0] - J.shape[1]
     ssr = float(np.sum(r_after[use] ** 2))
+    sigma, threshold = opts.sigma, opts.outlier_threshold
     s_hat = float(sigma) if sigma is not None else float(np.sqrt(ssr / max(dof, 1)))
     cov = np.asarray(s_hat ** 2 * np.linalg.pinv(J.T @ J, rcond=1e-15, hermitian=True),
                      dtype=np.float64)
-    outl = np.linalg.norm(r_after, axis=1) > outlier_threshold * max(s_hat, RESIDUAL_FLOOR)
-    if loss != "linear":
+    outl = np.linalg.norm(r_after, axis=1) > threshold * max(s_hat, RESIDUAL_FLOOR)
+    if opts.loss != "linear":
         outl = ~use
     if np.any(outl):
         warnings.warn(f"calibration: {int(np.sum(outl))} row(s) flagged as outliers "
-                      f"(residual above {outlier_threshold} sigma = "
-                      f"{outlier_threshold * s_hat:.3g} m)", CalibrationWarning, stacklevel=2)
-    return _result(design, names, prob, theta, cov, chk, m_all, T, r_before, r_after, use,
-                   outl, s_hat, report, sol, rows_per)
+                      f"(residual above {threshold} sigma = "
+                      f"{threshold * s_hat:.3g} m)", CalibrationWarning, stacklevel=3)
+    return cov, s_hat, outl
 
 
-
-def _check_problem(prob: _Problem, names: tuple[str, ...], opts: CalibrationOptions, n_used: int,
-                   rows_per: int) -> IdentifiabilityReport:
+def _check_problem(prob: _Problem, names: tuple[str, ...], opts: CalibrationOptions
+                   ) -> IdentifiabilityReport:
     """Enough equations, the identifiability of the parameters, plausible units (warnings)."""
+    n_used, rows_per = prob.q.shape[0], prob.rows_per
     if rows_per * n_used <= len(names):
         raise NotIdentifiableError(
             f"too few poses: {n_used} usable poses give {rows_per * n_used} equations for "
@@ -503,10 +534,12 @@ def _robust_sigma(r: NDArray[np.float64]) -> float:
 
 def _result(design: Design, names: tuple[str, ...], prob: _Problem, theta: NDArray[np.float64],
             cov: NDArray[np.float64], chk: MeasurementCheck, m_all: NDArray[np.float64],
-            T: NDArray[np.float64], r_before: NDArray[np.float64], r_after: NDArray[np.float64],
-            use: NDArray[np.bool_], outl: NDArray[np.bool_], s_hat: float,
-            report: IdentifiabilityReport, sol: object, rows_per: int) -> CalibrationResult:
-    n_all = chk.usable.shape[0]
+            T: NDArray[np.float64], r_after: NDArray[np.float64], use: NDArray[np.bool_],
+            outl: NDArray[np.bool_], s_hat: float, report: IdentifiabilityReport, sol: object
+            ) -> CalibrationResult:
+    """The result: residuals before (nominal) and after, spread back over every row."""
+    n_all, rows_per = chk.usable.shape[0], prob.rows_per
+    _, r_before = prob.evaluate(prob.theta0, False)
 
     def spread(a: NDArray[np.float64]) -> NDArray[np.float64]:
         out = np.full((n_all, rows_per), np.nan)

@@ -286,23 +286,54 @@ def synthetic_measurements(T_b_e: ArrayLike, design: Design | None = None, *,
     check_choice(frame, "frame", ("base", "tracker"))
     _check_mode(mode)
     gen = check_rng(rng)
+    theta = _true_parameters(design, T, o, gen)
+    if q is None:
+        qa = _poses_reached(n, T, design, theta, mode, gen)
+    else:
+        qa = check_array(q, "q", (3,))
+    tips, ax, outl = _measure(theta, qa, mode, axes, o, gen)
+    Ttb = None
+    if frame == "tracker":
+        tips, ax, Ttb = _in_tracker_frame(tips, ax, T_t_b, gen)
+    params = {k: float(v) for k, v in zip(PARAMETERS, theta, strict=True)}
+    return SyntheticData(q=qa, tips=tips, axes=ax, true_design=design_from_parameters(theta,
+                         design), true_parameters=params, T_t_b=Ttb, outliers=outl,
+                         frame=frame)
+
+
+def _true_parameters(design: Design, T: NDArray[np.float64], o: SyntheticOptions,
+                     gen: np.random.Generator) -> NDArray[np.float64]:
+    """The true robot: the nominal parameters perturbed, then the values ``o.true`` set."""
     theta = parameter_vector(design, T[:3, 3])
     theta[:6] += o.perturbation * gen.standard_normal(6)
     theta[6:9] += o.offset_std * gen.standard_normal(3)
     theta[9:12] += o.rcm_std * gen.standard_normal(3)
     for name, v in (o.true or {}).items():
         theta[PARAMETERS.index(name)] = float(v)
-    if q is None:   # random poses that both the nominal and the true robot reach
-        qa = random_poses(n + max(4, n // 2), T, design, mode=mode, rng=gen)
-        with np.errstate(invalid="ignore"):
-            pr = predict(theta, qa, np.full(len(qa), float(mode)))
-            ok = np.isfinite(pr.rho) & (pr.rho > 1e-3) & (pr.rho < theta[5] - 1e-3)
-        if np.sum(ok) < n:
-            raise InvalidInputError("synthetic_measurements: the perturbed robot reaches too "
-                                    "few random poses; lower the perturbation")
-        qa = qa[ok][:n]
-    else:
-        qa = check_array(q, "q", (3,))
+    return theta
+
+
+def _poses_reached(n: int, T: NDArray[np.float64], design: Design, theta: NDArray[np.float64],
+                   mode: int, gen: np.random.Generator) -> NDArray[np.float64]:
+    """``n`` random poses that both the nominal and the true robot reach."""
+    qa = random_poses(n + max(4, n // 2), T, design, mode=mode, rng=gen)
+    with np.errstate(invalid="ignore"):
+        pr = predict(theta, qa, np.full(len(qa), float(mode)))
+        ok = np.isfinite(pr.rho) & (pr.rho > 1e-3) & (pr.rho < theta[5] - 1e-3)
+    if np.sum(ok) < n:
+        raise InvalidInputError("synthetic_measurements: the perturbed robot reaches too "
+                                "few random poses; lower the perturbation")
+    return qa[ok][:n]
+
+
+def _measure(theta: NDArray[np.float64], qa: NDArray[np.float64], mode: int, axes: bool,
+             o: SyntheticOptions, gen: np.random.Generator
+             ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None, NDArray[np.bool_]]:
+    """Measured tips (and axes) in the base frame, and which rows are outliers.
+
+    The true robot at the readings plus the encoder quantum, tracker (axis) noise, then
+    ``outlier_fraction`` of the tips moved by ``outlier_size`` in random directions.
+    """
     nq = qa.shape[0]
     q_true_read = qa.copy()
     if o.encoder_resolution > 0:
@@ -323,18 +354,21 @@ def synthetic_measurements(T_b_e: ArrayLike, design: Design | None = None, *,
         dirs = gen.standard_normal((k, 3))
         tips[idx] += o.outlier_size * dirs / np.linalg.norm(dirs, axis=1, keepdims=True)
         outl[idx] = True
-    Ttb = None
-    if frame == "tracker":
-        if T_t_b is None:
-            Ttb = np.eye(4)
-            Ttb[:3, :3] = rotation_from_vector(gen.standard_normal(3))
-            Ttb[:3, 3] = gen.standard_normal(3) * 0.6
-        else:
-            Ttb = check_transform(T_t_b, "T_t_b")
-        tips = tips @ Ttb[:3, :3].T + Ttb[:3, 3]
-        if ax is not None:
-            ax = ax @ Ttb[:3, :3].T
-    params = {k: float(v) for k, v in zip(PARAMETERS, theta, strict=True)}
-    return SyntheticData(q=qa, tips=tips, axes=ax, true_design=design_from_parameters(theta,
-                         design), true_parameters=params, T_t_b=Ttb, outliers=outl,
-                         frame=frame)
+    return tips, ax, outl
+
+
+def _in_tracker_frame(tips: NDArray[np.float64], ax: NDArray[np.float64] | None,
+                      T_t_b: ArrayLike | None, gen: np.random.Generator
+                      ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None,
+                                 NDArray[np.float64]]:
+    """Tips and axes in the tracker frame of ``T_t_b`` (default: a random registration)."""
+    if T_t_b is None:
+        Ttb = np.eye(4)
+        Ttb[:3, :3] = rotation_from_vector(gen.standard_normal(3))
+        Ttb[:3, 3] = gen.standard_normal(3) * 0.6
+    else:
+        Ttb = check_transform(T_t_b, "T_t_b")
+    tips = tips @ Ttb[:3, :3].T + Ttb[:3, 3]
+    if ax is not None:
+        ax = ax @ Ttb[:3, :3].T
+    return tips, ax, Ttb

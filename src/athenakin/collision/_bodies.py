@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 
 from .._mechanism import BODIES, BodyGeometry, adjacent_pairs
 from .._toml import read_toml
-from .._validation import real_number
+from .._validation import check_keys, real_number
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 
@@ -135,10 +135,7 @@ class Bodies:
     def __post_init__(self) -> None:
         radii = self.radii
         if isinstance(radii, Mapping):
-            unknown = [k for k in radii if k not in BODIES]
-            if unknown:
-                raise InvalidInputError(f"radii: unknown body name(s) {unknown}; expected "
-                                        f"names among {BODIES}")
+            check_keys(radii, "radii", BODIES, what="body name")
             missing = [b for b in BODIES if b not in radii]
             if missing:
                 raise InvalidInputError(f"radii: missing the radius of {missing}")
@@ -307,22 +304,15 @@ class Bodies:
         """
         if not isinstance(data, Mapping):
             raise TypeError(f"bodies: expected a table, got {type(data).__name__}")
-        keys = {"radius", "exclude", "geometry", "scale_with_design"}
-        unknown = sorted(set(data) - keys)
-        if unknown:
-            raise InvalidInputError(f"bodies: unknown key(s) {unknown}; expected some of "
-                                    f"{sorted(keys)}")
+        check_keys(data, "bodies", ("exclude", "geometry", "radius", "scale_with_design"))
         geo_data = data.get("geometry", None)
         geo = None
         if geo_data is not None:
             if not isinstance(geo_data, Mapping):
                 raise InvalidInputError(f"bodies.geometry: expected a table, got "
                                         f"{type(geo_data).__name__}")
-            fields = {f.name for f in dataclasses.fields(BodyGeometry)}
-            bad = sorted(set(geo_data) - fields)
-            if bad:
-                raise InvalidInputError(f"bodies.geometry: unknown key(s) {bad}; expected "
-                                        f"some of {sorted(fields)}")
+            check_keys(geo_data, "bodies.geometry",
+                       sorted(f.name for f in dataclasses.fields(BodyGeometry)))
             geo = BodyGeometry(**geo_data)
         scale = data.get("scale_with_design", False)
         base = cls.default(design, scale_with_design=scale, geometry=geo)

@@ -152,38 +152,26 @@ def capsule_distances(solids: NDArray[np.float64], radii: NDArray[np.float64],
     return np.asarray(d, dtype=np.float64)
 
 
-def segment_clearance(segments: NDArray[np.float64], valid: NDArray[np.bool_],
-                      bodies: Bodies, environment: Environment, *, compiled: bool,
-                      witness: bool = True) -> tuple[tuple[tuple[str, str], ...],
-                                                     NDArray[np.float64],
-                                                     NDArray[np.float64] | None]:
-    """Distances and witness points from body segments (the core of :func:`clearance`).
+@dataclasses.dataclass(frozen=True)
+class _Columns:
+    """Which engine computes each column of the distance table (private).
 
-    Parameters
-    ----------
-    segments : ndarray, shape (n, n_bodies, 2, 3)
-        Flat batch of body segments (``body_segments``), m.
-    valid : ndarray of bool, shape (n,)
-    bodies, environment
-    compiled : bool
-        Use the numba kernel for the capsule pairs (else the numpy reference).
-    witness : bool
-        Also compute the witness points (else None is returned for them).
-
-    Returns
-    -------
-    pairs, distances (n, n_pairs), witness_points (n, n_pairs, 2, 3) or None
+    Capsule-like solids are the bodies, then the sphere and capsule obstacles (``fixed``
+    segments and ``radii``); ``capsules`` pairs them (indices over bodies + obstacles) for
+    the columns ``capsule_cols``; ``halfspace`` lists ``(column, body, obstacle)``;
+    ``coal`` lists ``(first column, obstacle, its bodies)`` of the meshes and boxes.
     """
-    names, bb, obs = _pair_tables(bodies, environment)
-    n = segments.shape[0]
-    P = len(names)
-    # every row is computed (invalid rows hold NaN segments and give NaN), then invalid
-    # rows are set to NaN: no gather / scatter copies of the large witness array
-    dist = np.empty((n, P))
-    wit = np.empty((n, P, 2, 3)) if witness else None
-    rad = bodies.radius_array
-    seg = segments
-    # segments of every capsule-like solid: bodies, then sphere/capsule obstacles
+
+    fixed: list[tuple[tuple[float, float, float], tuple[float, float, float]]]
+    radii: list[float]
+    capsules: list[tuple[int, int]]
+    capsule_cols: list[int]
+    halfspace: list[tuple[int, int, Obstacle]]
+    coal: list[tuple[int, Obstacle, NDArray[np.intp]]]
+
+
+def _columns(bb: NDArray[np.intp], obs: list[tuple[Obstacle, NDArray[np.intp]]]) -> _Columns:
+    """The columns of the body-body pairs ``bb``, then of every obstacle's bodies in order."""
     prim_seg = []
     prim_rad = []
     for o, _ in obs:
@@ -215,71 +203,122 @@ def segment_clearance(segments: NDArray[np.float64], valid: NDArray[np.bool_],
         else:
             coal_rows.append((col, o, idx))
             col += len(idx)
-    if prim_seg:
-        fixed = np.broadcast_to(np.array(prim_seg, dtype=np.float64), (n, len(prim_seg), 2, 3))
-        solids = np.concatenate([seg, fixed], axis=1)
-    else:
-        solids = seg
-    radii = np.concatenate([rad, np.array(prim_rad, dtype=np.float64)])
-    if cap_pairs:
-        ij = np.array(cap_pairs, dtype=np.intp).reshape(-1, 2)
-        c0, c1 = cap_cols[0], cap_cols[-1] + 1
-        contiguous = cap_cols == list(range(c0, c1))
-        if compiled:
-            from ._kernels import capsule_distances_into, capsule_pairs_into
-            solids = np.ascontiguousarray(solids)
-            if wit is None:
-                if contiguous:
-                    capsule_distances_into(solids, radii, ij, dist[:, c0:c1])
-                else:
-                    d = np.empty((n, len(ij)))
-                    capsule_distances_into(solids, radii, ij, d)
-                    dist[:, cap_cols] = d
-            elif contiguous:
-                capsule_pairs_into(solids, radii, ij, dist[:, c0:c1], wit[:, c0:c1])
-            else:
-                d = np.empty((n, len(ij)))
-                w = np.empty((n, len(ij), 2, 3))
-                capsule_pairs_into(solids, radii, ij, d, w)
-                dist[:, cap_cols] = d
-                wit[:, cap_cols] = w
+    return _Columns(prim_seg, prim_rad, cap_pairs, cap_cols, half_rows, coal_rows)
+
+
+def segment_clearance(segments: NDArray[np.float64], valid: NDArray[np.bool_],
+                      bodies: Bodies, environment: Environment, *, compiled: bool,
+                      witness: bool = True) -> tuple[tuple[tuple[str, str], ...],
+                                                     NDArray[np.float64],
+                                                     NDArray[np.float64] | None]:
+    """Distances and witness points from body segments (the core of :func:`clearance`).
+
+    Parameters
+    ----------
+    segments : ndarray, shape (n, n_bodies, 2, 3)
+        Flat batch of body segments (``body_segments``), m.
+    valid : ndarray of bool, shape (n,)
+    bodies, environment
+    compiled : bool
+        Use the numba kernel for the capsule pairs (else the numpy reference).
+    witness : bool
+        Also compute the witness points (else None is returned for them).
+
+    Returns
+    -------
+    pairs, distances (n, n_pairs), witness_points (n, n_pairs, 2, 3) or None
+    """
+    names, bb, obs = _pair_tables(bodies, environment)
+    n = segments.shape[0]
+    P = len(names)
+    # every row is computed (invalid rows hold NaN segments and give NaN), then invalid
+    # rows are set to NaN: no gather / scatter copies of the large witness array
+    dist = np.empty((n, P))
+    wit = np.empty((n, P, 2, 3)) if witness else None
+    rad = bodies.radius_array
+    seg = segments
+    cols = _columns(bb, obs)
+    if cols.capsules:
+        if cols.fixed:
+            fixed = np.broadcast_to(np.array(cols.fixed, dtype=np.float64),
+                                    (n, len(cols.fixed), 2, 3))
+            solids = np.concatenate([seg, fixed], axis=1)
         else:
-            # the numpy reference in chunks of rows: its temporaries (about 0.3 KiB a
-            # pair) stay those of one chunk, whatever the batch
-            step = max(1, _NUMPY_PAIRS_PER_CHUNK // len(ij))
-            for r0 in range(0, n, step):
-                rows = slice(r0, min(r0 + step, n))
-                A = solids[rows][:, ij[:, 0]]
-                B = solids[rows][:, ij[:, 1]]
-                with np.errstate(invalid="ignore"):
-                    d, w = _capsule_capsule(A[..., 0, :], A[..., 1, :], radii[ij[:, 0]],
-                                           B[..., 0, :], B[..., 1, :], radii[ij[:, 1]])
-                dist[rows, cap_cols] = d
-                if wit is not None:
-                    wit[rows, cap_cols] = w
-    for c, i, o in half_rows:
+            solids = seg
+        radii = np.concatenate([rad, np.array(cols.radii, dtype=np.float64)])
+        ij = np.array(cols.capsules, dtype=np.intp).reshape(-1, 2)
+        _capsule_columns(solids, radii, ij, cols.capsule_cols, dist, wit, compiled)
+    for c, i, o in cols.halfspace:
         d, w = _capsule_halfspace(seg[:, i, 0], seg[:, i, 1], rad[i], np.array(o.point),
                                  np.array(o.normal))
         dist[:, c] = d
         if wit is not None:
             wit[:, c] = w
-    if coal_rows:
-        from ._coal import capsule_obstacle_distances, coal_shape
-        iv = np.flatnonzero(valid)
-        for c, o, idx in coal_rows:
-            shape = coal_shape(o)
-            for j, i in enumerate(idx):
-                d, w = capsule_obstacle_distances(seg[iv, i], float(rad[i]), o, shape)
-                dist[:, c + j] = np.nan
-                dist[iv, c + j] = d
-                if wit is not None:
-                    wit[:, c + j] = np.nan
-                    wit[iv, c + j] = w
+    if cols.coal:
+        _coal_columns(seg, rad, valid, cols.coal, dist, wit)
     if not np.all(valid):
         dist[~valid] = np.nan
         if wit is not None:
             wit[~valid] = np.nan
     return names, dist, wit
+
+
+def _capsule_columns(solids: NDArray[np.float64], radii: NDArray[np.float64],
+                     ij: NDArray[np.intp], cap_cols: list[int], dist: NDArray[np.float64],
+                     wit: NDArray[np.float64] | None, compiled: bool) -> None:
+    """Fill the capsule-capsule columns ``cap_cols`` of ``dist`` (and ``wit``) in place."""
+    n = solids.shape[0]
+    c0, c1 = cap_cols[0], cap_cols[-1] + 1
+    contiguous = cap_cols == list(range(c0, c1))
+    if compiled:
+        from ._kernels import capsule_distances_into, capsule_pairs_into
+        solids = np.ascontiguousarray(solids)
+        if wit is None:
+            if contiguous:
+                capsule_distances_into(solids, radii, ij, dist[:, c0:c1])
+            else:
+                d = np.empty((n, len(ij)))
+                capsule_distances_into(solids, radii, ij, d)
+                dist[:, cap_cols] = d
+        elif contiguous:
+            capsule_pairs_into(solids, radii, ij, dist[:, c0:c1], wit[:, c0:c1])
+        else:
+            d = np.empty((n, len(ij)))
+            w = np.empty((n, len(ij), 2, 3))
+            capsule_pairs_into(solids, radii, ij, d, w)
+            dist[:, cap_cols] = d
+            wit[:, cap_cols] = w
+        return
+    # the numpy reference in chunks of rows: its temporaries (about 0.3 KiB a
+    # pair) stay those of one chunk, whatever the batch
+    step = max(1, _NUMPY_PAIRS_PER_CHUNK // len(ij))
+    for r0 in range(0, n, step):
+        rows = slice(r0, min(r0 + step, n))
+        A = solids[rows][:, ij[:, 0]]
+        B = solids[rows][:, ij[:, 1]]
+        with np.errstate(invalid="ignore"):
+            d, w = _capsule_capsule(A[..., 0, :], A[..., 1, :], radii[ij[:, 0]],
+                                   B[..., 0, :], B[..., 1, :], radii[ij[:, 1]])
+        dist[rows, cap_cols] = d
+        if wit is not None:
+            wit[rows, cap_cols] = w
+
+
+def _coal_columns(seg: NDArray[np.float64], rad: NDArray[np.float64], valid: NDArray[np.bool_],
+                  coal_rows: list[tuple[int, Obstacle, NDArray[np.intp]]],
+                  dist: NDArray[np.float64], wit: NDArray[np.float64] | None) -> None:
+    """Fill the columns of the coal obstacles (boxes, meshes) in place, valid rows only."""
+    from ._coal import capsule_obstacle_distances, coal_shape
+    iv = np.flatnonzero(valid)
+    for c, o, idx in coal_rows:
+        shape = coal_shape(o)
+        for j, i in enumerate(idx):
+            d, w = capsule_obstacle_distances(seg[iv, i], float(rad[i]), o, shape)
+            dist[:, c + j] = np.nan
+            dist[iv, c + j] = d
+            if wit is not None:
+                wit[:, c + j] = np.nan
+                wit[iv, c + j] = w
 
 
 def clearance(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,

@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._mechanism import BODIES
 from .._output import naming_path
 from .._toml import read_toml
-from .._validation import check_array, check_path, check_scalar, check_transform
+from .._validation import check_array, check_keys, check_path, check_scalar, check_transform
 from ..errors import InvalidInputError
 from ._mesh import MAX_MESH_FACES, _check_triangles, _load_mesh, closed_surface, winding_numbers
 
@@ -446,10 +446,7 @@ class Environment:
         """
         if not isinstance(data, Mapping):
             raise TypeError(f"environment: expected a table, got {type(data).__name__}")
-        unknown = sorted(set(data) - {"obstacle"})
-        if unknown:
-            raise InvalidInputError(f"environment: unknown key(s) {unknown}; expected "
-                                    f"'obstacle'")
+        check_keys(data, "environment", ("obstacle",))
         items = data.get("obstacle", [])
         if not isinstance(items, list):
             raise InvalidInputError(f"environment.obstacle: expected an array of tables, got "
@@ -466,11 +463,7 @@ class Environment:
             if kind not in keys:
                 raise InvalidInputError(f"{what}.kind: expected one of {OBSTACLE_KINDS}, got "
                                         f"{kind!r}")
-            allowed = {"kind", "name", "allow", *keys[kind]}
-            bad = sorted(set(t) - allowed)
-            if bad:
-                raise InvalidInputError(f"{what}: unknown key(s) {bad} for a {kind}; expected "
-                                        f"some of {sorted(allowed)}")
+            check_keys(t, f"{what} (a {kind})", sorted({"kind", "name", "allow", *keys[kind]}))
             need = [x for x in keys[kind] if x not in t and kind != "mesh"] + (
                 ["path"] if kind == "mesh" and "path" not in t else [])
             if need:

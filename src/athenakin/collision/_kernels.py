@@ -69,6 +69,22 @@ def segment_distance(S, out_c):
 
 
 @njit(inline="always", **_OPTS)
+def _along(a0, a1, a2, d0, d1, d2, t):
+    """The point ``a + t d`` of a segment."""
+    return a0 + t * d0, a1 + t * d1, a2 + t * d2
+
+
+@njit(inline="always", **_OPTS)
+def _nearer(w, dist, s, t, best, sb, tb):
+    """``(dist, s, t)`` where ``w`` (the candidate is nearer), else ``(best, sb, tb)``.
+
+    One conditional expression per value: compiled to selects, not to branches that the
+    varying winner would mispredict.
+    """
+    return (dist if w else best), (s if w else sb), (t if w else tb)
+
+
+@njit(inline="always", **_OPTS)
 def _seg_seg(p10, p11, p12, q10, q11, q12, p20, p21, p22, q20, q21, q22):
     """Segment-segment distance and closest points: (dist, x0, x1, x2, y0, y1, y2)."""
     d10 = q10 - p10
@@ -85,26 +101,15 @@ def _seg_seg(p10, p11, p12, q10, q11, q12, p20, p21, p22, q20, q21, q22):
     # candidate 1: p2 against segment 1
     best, sb = _point_seg(p20, p21, p22, p10, p11, p12, d10, d11, d12, inv_a)
     tb = 0.0
-    # (selections written as one conditional expression per value: compiled to selects,
-    # not to branches that the varying winner would mispredict)
     # candidate 2: q2 against segment 1
     dist, u = _point_seg(q20, q21, q22, p10, p11, p12, d10, d11, d12, inv_a)
-    w = dist < best
-    best = dist if w else best
-    sb = u if w else sb
-    tb = 1.0 if w else tb
+    best, sb, tb = _nearer(dist < best, dist, u, 1.0, best, sb, tb)
     # candidate 3: p1 against segment 2
     dist, u = _point_seg(p10, p11, p12, p20, p21, p22, d20, d21, d22, inv_e)
-    w = dist < best
-    best = dist if w else best
-    sb = 0.0 if w else sb
-    tb = u if w else tb
+    best, sb, tb = _nearer(dist < best, dist, 0.0, u, best, sb, tb)
     # candidate 4: q1 against segment 2
     dist, u = _point_seg(q10, q11, q12, p20, p21, p22, d20, d21, d22, inv_e)
-    w = dist < best
-    best = dist if w else best
-    sb = 1.0 if w else sb
-    tb = u if w else tb
+    best, sb, tb = _nearer(dist < best, dist, 1.0, u, best, sb, tb)
     # candidate 5: the interior critical point (not parallel: n = d1 x d2 != 0), as the
     # reference: s from cross products, t of the point of segment 2 nearest p1 + s d1
     n0 = d11 * d22 - d12 * d21
@@ -121,16 +126,9 @@ def _seg_seg(p10, p11, p12, q10, q11, q12, p20, p21, p22, q20, q21, q22):
     s = min(max((k0 * n0 + k1 * n1 + k2 * n2) * inv, 0.0), 1.0)
     dist, t = _point_seg(p10 + s * d10, p11 + s * d11, p12 + s * d12, p20, p21, p22,
                          d20, d21, d22, inv_e)
-    w = (nn > 0.0) and (dist < best)
-    best = dist if w else best
-    sb = s if w else sb
-    tb = t if w else tb
-    x0 = p10 + sb * d10
-    x1 = p11 + sb * d11
-    x2 = p12 + sb * d12
-    y0 = p20 + tb * d20
-    y1 = p21 + tb * d21
-    y2 = p22 + tb * d22
+    best, sb, tb = _nearer((nn > 0.0) and (dist < best), dist, s, t, best, sb, tb)
+    x0, x1, x2 = _along(p10, p11, p12, d10, d11, d12, sb)
+    y0, y1, y2 = _along(p20, p21, p22, d20, d21, d22, tb)
     # candidates compared by squared distance (sqrt is monotonic): one sqrt, of the winner
     return math.sqrt(best), x0, x1, x2, y0, y1, y2
 
@@ -196,6 +194,26 @@ def _across(n0, n1, n2, x0, x1, x2, d0, d1, d2):
 
 
 @njit(inline="always", **_OPTS)
+def _surface_point(out, row, c0, c1, c2, r, f0, f1, f2, t0, t1, t2, e0, e1, e2, a0, a1, a2,
+                   d10, d11, d12, d20, d21, d22):
+    """``c + r n`` into ``out[row]``: one witness point, on its capsule's surface.
+
+    ``n`` is the unit normal from ``f`` towards ``t`` (:func:`_normal` of the axes ``d1``,
+    ``d2``), made normal to the capsule's own axis ``a`` where ``e`` (relative to the
+    axis' start) projects inside the segment (:func:`_across`).
+    """
+    g0 = t0 - f0
+    g1 = t1 - f1
+    g2 = t2 - f2
+    n0, n1, n2 = _normal(math.sqrt(g0 * g0 + g1 * g1 + g2 * g2), f0, f1, f2, t0, t1, t2,
+                         d10, d11, d12, d20, d21, d22)
+    n0, n1, n2 = _across(n0, n1, n2, e0, e1, e2, a0, a1, a2)
+    out[row, 0] = c0 + r * n0
+    out[row, 1] = c1 + r * n1
+    out[row, 2] = c2 + r * n2
+
+
+@njit(inline="always", **_OPTS)
 def _witnesses(out, p10, p11, p12, d10, d11, d12, r1, p20, p21, p22, d20, d21, d22, r2,
                x0, x1, x2, y0, y1, y2):
     """Witness points of two capsules into ``out`` (2, 3), as the reference.
@@ -208,30 +226,13 @@ def _witnesses(out, p10, p11, p12, d10, d11, d12, r1, p20, p21, p22, d20, d21, d
     e = d20 * d20 + d21 * d21 + d22 * d22
     _, s = _point_seg(y0, y1, y2, p10, p11, p12, d10, d11, d12, 1.0 / a if a > 0.0 else 0.0)
     _, t = _point_seg(x0, x1, x2, p20, p21, p22, d20, d21, d22, 1.0 / e if e > 0.0 else 0.0)
-    b10 = p10 + s * d10
-    b11 = p11 + s * d11
-    b12 = p12 + s * d12
-    b20 = p20 + t * d20
-    b21 = p21 + t * d21
-    b22 = p22 + t * d22
-    g0 = y0 - b10
-    g1 = y1 - b11
-    g2 = y2 - b12
-    n0, n1, n2 = _normal(math.sqrt(g0 * g0 + g1 * g1 + g2 * g2), b10, b11, b12, y0, y1, y2,
-                         d10, d11, d12, d20, d21, d22)
-    n0, n1, n2 = _across(n0, n1, n2, y0 - p10, y1 - p11, y2 - p12, d10, d11, d12)
-    out[0, 0] = b10 + r1 * n0
-    out[0, 1] = b11 + r1 * n1
-    out[0, 2] = b12 + r1 * n2
-    g0 = b20 - x0
-    g1 = b21 - x1
-    g2 = b22 - x2
-    n0, n1, n2 = _normal(math.sqrt(g0 * g0 + g1 * g1 + g2 * g2), x0, x1, x2, b20, b21, b22,
-                         d10, d11, d12, d20, d21, d22)
-    n0, n1, n2 = _across(n0, n1, n2, x0 - p20, x1 - p21, x2 - p22, d20, d21, d22)
-    out[1, 0] = b20 - r2 * n0
-    out[1, 1] = b21 - r2 * n1
-    out[1, 2] = b22 - r2 * n2
+    b10, b11, b12 = _along(p10, p11, p12, d10, d11, d12, s)
+    b20, b21, b22 = _along(p20, p21, p22, d20, d21, d22, t)
+    # b1 + r1 n along b1 -> y, and b2 - r2 n along x -> b2
+    _surface_point(out, 0, b10, b11, b12, r1, b10, b11, b12, y0, y1, y2,
+                   y0 - p10, y1 - p11, y2 - p12, d10, d11, d12, d10, d11, d12, d20, d21, d22)
+    _surface_point(out, 1, b20, b21, b22, -r2, x0, x1, x2, b20, b21, b22,
+                   x0 - p20, x1 - p21, x2 - p22, d20, d21, d22, d10, d11, d12, d20, d21, d22)
 
 
 def capsule_pairs(solids, radii, ij):

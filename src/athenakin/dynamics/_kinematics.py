@@ -186,6 +186,49 @@ def body_jets(q: list[J2], rcm: list[J2], R_e: Mat, design: Design, slot: int) -
         no solution.
     """
     mode, ps, su2, su4 = slot_signs(slot)
+    origin, rotation, cth, sth, hc = _module_jets(q, design, mode)
+    O_s, R_i = origin["instrument"], rotation["platform"]
+    # instrument: d = (RCM - O_s) / p, p = ps |RCM - O_s|
+    cvj: list[J2] = [rcm[i] - O_s[i] for i in range(3)]  # type: ignore[operator, misc]
+    p = (cvj[0].sq() + cvj[1].sq() + cvj[2].sq()).sqrt() * ps
+    d = [v / p for v in cvj]
+    # d in the platform frame: R_i^T d
+    ds0: J2 = d[0]
+    ds1: J2 = cth * d[1] + sth * d[2]
+    ds2: J2 = cth * d[2] - sth * d[1]
+    c2 = -ds2
+    s2 = (ds0.sq() + ds1.sq()).sqrt() * su2
+    c1, s1 = ds0 / s2, ds1 / s2
+    # Rz(u1) Rx(pi/2) Rz(u2) Rx(pi/2)
+    Q: Mat = [[c1 * c2, s1, c1 * s2], [s1 * c2, -c1, s1 * s2], [s2, 0.0, -c2]]
+    R_3 = matmul(R_i, Q)
+    # spherical joint: W = R_3^T R_e = Rz(u3) Rx(pi/2) Rz(u4) Rx(pi/2) Rz(u5)
+    R_3T = [[R_3[j][i] for j in range(3)] for i in range(3)]
+    W = matmul(R_3T, R_e)
+    w02, w12, w22 = W[0][2], W[1][2], W[2][2]
+    assert isinstance(w02, J2) and isinstance(w12, J2) and isinstance(w22, J2)
+    c4 = -w22
+    s4 = (w02.sq() + w12.sq()).sqrt() * su4
+    c3, s3 = w02 / s4, w12 / s4
+    R_s3 = matmul(R_3, rot_z(c3, s3))
+    R_s4 = matmul(matmul(R_s3, _RX90), rot_z(c4, s4))
+    tip: Vec = [O_s[i] + d[i] * design.tool_length for i in range(3)]
+    origin.update({"guide": list[Entry](rcm), "sphere_link_2": list[Entry](rcm),
+                   "sphere_link_1": list[Entry](rcm)})
+    rotation.update({"instrument": R_3, "guide": R_3, "sphere_link_2": R_s3,
+                     "sphere_link_1": R_s4})
+    return BodyJets(origin=origin, rotation=rotation, tip=tip, hc=hc.c0, sin_u2=s2.c0,
+                    sin_u4=s4.c0, p=p.c0)
+
+
+def _module_jets(q: list[J2], design: Design, mode: float
+                 ) -> tuple[dict[str, Vec], dict[str, Mat], J2, J2, J2]:
+    """Frames of the parallel module's bodies (Eq. 7-10), in one assembly mode.
+
+    Returns the origins (with ``"instrument"``: ``O_s``) and rotations (up to
+    ``"platform"``: ``R_i = Rx(theta)``) by body name, ``cos theta``, ``sin theta`` and
+    the half-chord of ``k1 ∩ k2``.
+    """
     l1, l2, l3, l4, l5 = (float(x) for x in design.lengths)
     q1, q2, q3 = q
     h = (q1 - q2) * 0.5
@@ -222,42 +265,14 @@ def body_jets(q: list[J2], rcm: list[J2], R_e: Mat, design: Design, slot: int) -
     cga = (o_z - l5) / q3
     sga = -((o_y - m_y) / q3)
     R_act = rot_x(cga, sga)
-    # instrument: d = (RCM - O_s) / p, p = ps |RCM - O_s|
-    cvj: list[J2] = [rcm[i] - O_s[i] for i in range(3)]  # type: ignore[operator, misc]
-    p = (cvj[0].sq() + cvj[1].sq() + cvj[2].sq()).sqrt() * ps
-    d = [v / p for v in cvj]
-    # d in the platform frame: R_i^T d
-    ds0: J2 = d[0]
-    ds1: J2 = cth * d[1] + sth * d[2]
-    ds2: J2 = cth * d[2] - sth * d[1]
-    c2 = -ds2
-    s2 = (ds0.sq() + ds1.sq()).sqrt() * su2
-    c1, s1 = ds0 / s2, ds1 / s2
-    # Rz(u1) Rx(pi/2) Rz(u2) Rx(pi/2)
-    Q: Mat = [[c1 * c2, s1, c1 * s2], [s1 * c2, -c1, s1 * s2], [s2, 0.0, -c2]]
-    R_3 = matmul(R_i, Q)
-    # spherical joint: W = R_3^T R_e = Rz(u3) Rx(pi/2) Rz(u4) Rx(pi/2) Rz(u5)
-    R_3T = [[R_3[j][i] for j in range(3)] for i in range(3)]
-    W = matmul(R_3T, R_e)
-    w02, w12, w22 = W[0][2], W[1][2], W[2][2]
-    assert isinstance(w02, J2) and isinstance(w12, J2) and isinstance(w22, J2)
-    c4 = -w22
-    s4 = (w02.sq() + w12.sq()).sqrt() * su4
-    c3, s3 = w02 / s4, w12 / s4
-    R_s3 = matmul(R_3, rot_z(c3, s3))
-    R_s4 = matmul(matmul(R_s3, _RX90), rot_z(c4, s4))
-    tip: Vec = [O_s[i] + d[i] * design.tool_length for i in range(3)]
     origin: dict[str, Vec] = {
         "carriage_a": A, "carriage_b": B, "link_a": A, "link_b": B, "link_ad": A,
         "link_bd": B, "carrier": D, "slider_d": D, "actuator": C, "actuator_rod": O_i,
-        "platform": O_i, "instrument": O_s, "guide": list[Entry](rcm),
-        "sphere_link_2": list[Entry](rcm), "sphere_link_1": list[Entry](rcm),
+        "platform": O_i, "instrument": O_s,
     }
     rotation: dict[str, Mat] = {
         "carriage_a": _EYE, "carriage_b": _EYE, "link_a": R_la, "link_b": R_lb,
         "link_ad": R_lad, "link_bd": R_lbd, "carrier": _EYE, "slider_d": _EYE,
-        "actuator": R_act, "actuator_rod": R_act, "platform": R_i, "instrument": R_3,
-        "guide": R_3, "sphere_link_2": R_s3, "sphere_link_1": R_s4,
+        "actuator": R_act, "actuator_rod": R_act, "platform": R_i,
     }
-    return BodyJets(origin=origin, rotation=rotation, tip=tip, hc=hc.c0, sin_u2=s2.c0,
-                    sin_u4=s4.c0, p=p.c0)
+    return origin, rotation, cth, sth, hc

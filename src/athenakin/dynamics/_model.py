@@ -53,7 +53,7 @@ from numpy.typing import NDArray
 
 from .._mechanism import BODIES, BodyGeometry, rail_extent
 from .._toml import read_toml
-from .._validation import check_array, check_scalar
+from .._validation import check_array, check_keys, check_scalar
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 
@@ -189,6 +189,12 @@ def _check_name(name: object, what: str) -> str:
     return name
 
 
+def _massless_tables() -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """``mass`` (n,), ``com`` (n, 3), ``inertia`` (n, 3, 3) of :data:`MASS_BODIES`, all zero."""
+    n = len(MASS_BODIES)
+    return np.zeros(n), np.zeros((n, 3)), np.zeros((n, 3, 3))
+
+
 @dataclasses.dataclass(frozen=True)
 class MassModel:
     """Mass, centre of mass and inertia of every body of :data:`MASS_BODIES`.
@@ -239,8 +245,7 @@ class MassModel:
     @classmethod
     def zeros(cls) -> MassModel:
         """Every body massless."""
-        n = len(MASS_BODIES)
-        return cls(np.zeros(n), np.zeros((n, 3)), np.zeros((n, 3, 3)))
+        return cls(*_massless_tables())
 
     @classmethod
     def from_mapping(cls, data: Mapping[str, Any]) -> MassModel:
@@ -258,17 +263,13 @@ class MassModel:
         if not isinstance(data, Mapping):
             raise TypeError(f"data: expected the [masses] table, a mapping body -> table, "
                             f"got {type(data).__name__}")
-        n = len(MASS_BODIES)
-        mass, com, inertia = np.zeros(n), np.zeros((n, 3)), np.zeros((n, 3, 3))
+        mass, com, inertia = _massless_tables()
         for name, entry in data.items():
             _check_name(name, "masses")
             if not isinstance(entry, Mapping):
                 raise InvalidInputError(f"masses.{name}: expected a table with mass, com, "
                                         f"inertia, got {type(entry).__name__}")
-            unknown = set(entry) - {"mass", "com", "inertia"}
-            if unknown:
-                raise InvalidInputError(f"masses.{name}: unknown key(s) {sorted(unknown)}; "
-                                        f"expected mass, com, inertia")
+            check_keys(entry, f"masses.{name}", ("mass", "com", "inertia"))
             if "mass" not in entry:
                 raise InvalidInputError(f"masses.{name}: missing 'mass' (kg)")
             i = MASS_BODIES.index(name)
@@ -321,8 +322,7 @@ class MassModel:
             raise TypeError(f"masses: expected a mapping body -> kg, got "
                             f"{type(masses).__name__}")
         d = resolve_design(design)
-        n = len(MASS_BODIES)
-        mass, com, inertia = np.zeros(n), np.zeros((n, 3)), np.zeros((n, 3, 3))
+        mass, com, inertia = _massless_tables()
         for name, m in masses.items():
             _check_name(name, "masses")
             m = check_scalar(m, f"masses[{name!r}]")
@@ -365,8 +365,7 @@ class MassModel:
         if geometry is None and isinstance(getattr(bodies, "geometry", None), BodyGeometry):
             geometry = bodies.geometry  # type: ignore[attr-defined]
         d = resolve_design(design)
-        n = len(MASS_BODIES)
-        mass, com, inertia = np.zeros(n), np.zeros((n, 3)), np.zeros((n, 3, 3))
+        mass, com, inertia = _massless_tables()
         for name, r in radius.items():
             _check_name(name, "bodies.radius")
             r = check_scalar(r, f"bodies.radius[{name!r}]")

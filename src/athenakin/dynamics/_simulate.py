@@ -174,7 +174,6 @@ def _force_function(forces: ArrayLike | Callable[[float, Arr, Arr], ArrayLike]
     return tau_of
 
 
-
 def simulate(q0: ArrayLike, qd0: ArrayLike,
              forces: ArrayLike | Callable[[float, Arr, Arr], ArrayLike],
              T_b_e: ArrayLike | None = None, design: Design | None = None, *,
@@ -229,22 +228,56 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
     g = _single(gravity, "gravity")
     f_tip = None if tip_force is None else _single(tip_force, "tip_force")
     tau_of = _force_function(forces)
-    lo, hi = d.stroke_min, d.stroke_max
     fast = _fast_forward(d, T, m, k, g, f_tip)
-    # the states, preallocated (n + 1 of each; 104 bytes a step): row i is filled when
-    # the acceleration of state i is known, so rows < nacc are complete
-    ts = np.empty(n + 1)
-    qs = np.empty((n + 1, 3))
-    vs = np.empty((n + 1, 3))
-    accs = np.empty((n + 1, 3))
-    fs = np.empty((n + 1, 3))
-    ts[0], qs[0], vs[0] = 0.0, q, v
-    nacc = 0
+    states = _States(n, q, v)
+    acc = _accelerations(d, T, m, k, g, f_tip, tau_of, fast, states.stop)
+    t = 0.0
+    for step in range(n):
+        a1, tau = acc(t, q, v)
+        states.qdd[step], states.forces[step] = a1, tau
+        states.nacc = step + 1
+        hh = min(h, T_dur - t) if step == n - 1 else h
+        q, v = _rk4_step(acc, t, q, v, a1, hh)
+        t = t + hh
+        states.t[step + 1], states.q[step + 1], states.qd[step + 1] = t, q, v
+    states.qdd[n], states.forces[n] = acc(t, q, v)
+    return Simulation(states.t, states.q, states.qd, states.qdd, states.forces)
 
-    def stop(msg: str, cause: type[Exception], t: float) -> SimulationStoppedError:
-        part = Simulation(ts[:nacc].copy(), qs[:nacc].copy(), vs[:nacc].copy(),
-                          accs[:nacc].copy(), fs[:nacc].copy())
+
+class _States:
+    """The states of one simulation, preallocated (private; n + 1 of each, 104 bytes a step).
+
+    Row ``i`` is complete once the acceleration of state ``i`` is known: rows ``< nacc``.
+    """
+
+    def __init__(self, n: int, q0: Arr, qd0: Arr) -> None:
+        self.t = np.empty(n + 1)
+        self.q = np.empty((n + 1, 3))
+        self.qd = np.empty((n + 1, 3))
+        self.qdd = np.empty((n + 1, 3))
+        self.forces = np.empty((n + 1, 3))
+        self.t[0], self.q[0], self.qd[0] = 0.0, q0, qd0
+        self.nacc = 0
+
+    def stop(self, msg: str, cause: type[Exception], t: float) -> SimulationStoppedError:
+        """The error that stops the simulation at ``t``, with the complete states so far."""
+        k = self.nacc
+        part = Simulation(self.t[:k].copy(), self.q[:k].copy(), self.qd[:k].copy(),
+                          self.qdd[:k].copy(), self.forces[:k].copy())
         return SimulationStoppedError(msg, t, part, cause)
+
+
+def _accelerations(d: Design, T: Arr, m: MassModel, k: int, g: Arr, f_tip: Arr | None,
+                   tau_of: Callable[[float, Arr, Arr], Arr],
+                   fast: Callable[[Arr, Arr, Arr], Arr] | None,
+                   stop: Callable[[str, type[Exception], float], SimulationStoppedError]
+                   ) -> Callable[[float, Arr, Arr], tuple[Arr, Arr]]:
+    """``acc(t, q, qd) -> (qdd, tau)``, checked at every stage.
+
+    It raises ``stop(...)`` at a stroke limit, within :data:`SINGULARITY_MARGINS` of a
+    singular set, or where slot ``k`` holds no configuration.
+    """
+    lo, hi = d.stroke_min, d.stroke_max
 
     def acc(t: float, qq: Arr, vv: Arr) -> tuple[Arr, Arr]:
         if np.any(qq < lo) or np.any(qq > hi):
@@ -268,19 +301,15 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
                        f"(q = {qq.tolist()} m)", OutOfWorkspaceError, t)
         return a, tau
 
-    t = 0.0
-    for step in range(n):
-        a1, tau = acc(t, q, v)
-        accs[step], fs[step] = a1, tau
-        nacc = step + 1
-        hh = min(h, T_dur - t) if step == n - 1 else h
-        k1q, k1v = v, a1
-        k2q, k2v = v + 0.5 * hh * k1v, acc(t + 0.5 * hh, q + 0.5 * hh * k1q, v + 0.5 * hh * k1v)[0]
-        k3q, k3v = v + 0.5 * hh * k2v, acc(t + 0.5 * hh, q + 0.5 * hh * k2q, v + 0.5 * hh * k2v)[0]
-        k4q, k4v = v + hh * k3v, acc(t + hh, q + hh * k3q, v + hh * k3v)[0]
-        q = q + hh / 6 * (k1q + 2 * k2q + 2 * k3q + k4q)
-        v = v + hh / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
-        t = t + hh
-        ts[step + 1], qs[step + 1], vs[step + 1] = t, q, v
-    accs[n], fs[n] = acc(t, q, v)
-    return Simulation(ts, qs, vs, accs, fs)
+    return acc
+
+
+def _rk4_step(acc: Callable[[float, Arr, Arr], tuple[Arr, Arr]], t: float, q: Arr, v: Arr,
+              a1: Arr, hh: float) -> tuple[Arr, Arr]:
+    """One classical Runge-Kutta step of length ``hh`` from ``(q, v)``, ``a1 = qdd(t, q, v)``."""
+    k1q, k1v = v, a1
+    k2q, k2v = v + 0.5 * hh * k1v, acc(t + 0.5 * hh, q + 0.5 * hh * k1q, v + 0.5 * hh * k1v)[0]
+    k3q, k3v = v + 0.5 * hh * k2v, acc(t + 0.5 * hh, q + 0.5 * hh * k2q, v + 0.5 * hh * k2v)[0]
+    k4q, k4v = v + hh * k3v, acc(t + hh, q + hh * k3q, v + hh * k3v)[0]
+    return (q + hh / 6 * (k1q + 2 * k2q + 2 * k3q + k4q),
+            v + hh / 6 * (k1v + 2 * k2v + 2 * k3v + k4v))

@@ -139,6 +139,34 @@ def _actuator_checks(q: NDArray[np.float64], design: Design) -> NDArray[np.int8]
     return reason.astype(np.int8)
 
 
+def circle_terms(r1: NDArray[np.float64], m_y: NDArray[np.float64], l5: float,
+                 q3: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+    """The terms of Eq. 8 that meet the circles ``k1`` (radius ``r1`` about ``M``) and ``k2``.
+
+    ``k2`` has radius ``q3`` about ``C = M + (m_y, l5)`` in the plane ``x = x_M``.
+    Unchecked and without tolerances (callers decide what a negative ``k`` means).
+
+    Parameters
+    ----------
+    r1, m_y, q3 : ndarray, shape (...)
+        m (NaN propagates).
+    l5 : float
+        m.
+
+    Returns
+    -------
+    d2, d, H, k : ndarray, shape (...)
+        ``d^2 = |C - M|^2``, ``d``, ``H = d^2 + r1^2 - q3^2`` (the paper's ``h``) and
+        ``k = (r1 + q3 - d)(r1 + q3 + d)(d - r1 + q3)(d + r1 - q3) = 4 d^2 a^2``
+        (``a`` the half-chord; ``k < 0``: the circles do not meet).
+    """
+    d2 = m_y * m_y + l5 * l5
+    d = np.sqrt(d2)
+    H = d2 + r1 * r1 - q3 * q3
+    k = (r1 + q3 - d) * (r1 + q3 + d) * (d - r1 + q3) * (d + r1 - q3)
+    return d2, d, H, k
+
+
 def circle_geometry(q: ArrayLike, design: Design) -> dict[str, NDArray[np.float64]]:
     """The quantities of Eq. 7-8 for a batch of ``q``.
 
@@ -162,10 +190,7 @@ def circle_geometry(q: ArrayLike, design: Design) -> dict[str, NDArray[np.float6
     with np.errstate(invalid="ignore"):
         r1 = np.sqrt(design.l1 ** 2 - h * h)
         m_y = np.sqrt(design.l3 ** 2 - h * h) + design.l2
-        d2 = m_y * m_y + design.l5 ** 2
-        d = np.sqrt(d2)
-        H = d2 + r1 * r1 - q3 * q3
-        k = (r1 + q3 - d) * (r1 + q3 + d) * (d - r1 + q3) * (d + r1 - q3)
+        d2, d, H, k = circle_terms(r1, m_y, design.l5, q3)
         half = np.sqrt(np.maximum(k, 0.0)) / (2 * d)
     return {"x_M": 0.5 * (q1 + q2), "h": h, "r1": r1, "m_y": m_y, "d": d, "H": H,
             "k": k, "w": m_y * m_y * k, "half_chord": half}

@@ -41,7 +41,7 @@ def quaternion_xyzw_from_wxyz(q_wxyz: ArrayLike) -> NDArray[np.float64]:
     Raises
     ------
     InvalidInputError
-        If the shape is not (..., 4) or a value is not finite.
+        If ``q_wxyz`` is not of shape (..., 4) or holds a non-finite value.
 
     See Also
     --------
@@ -72,7 +72,7 @@ def quaternion_wxyz_from_xyzw(q_xyzw: ArrayLike) -> NDArray[np.float64]:
     Raises
     ------
     InvalidInputError
-        If the shape is not (..., 4) or a value is not finite.
+        If ``q_xyzw`` is not of shape (..., 4) or holds a non-finite value.
 
     See Also
     --------

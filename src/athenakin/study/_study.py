@@ -78,8 +78,16 @@ def _qmul(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]
     ], axis=-1)
 
 
+#: Signs of the conjugates of a dual quaternion ``x + eps*y``: ``conj(x) + eps*conj(y)``,
+#: ``x - eps*y`` and ``conj(x) - eps*conj(y)``.
+_SIGNS_QUATERNION_CONJ = np.array([1.0, -1.0, -1.0, -1.0, 1.0, -1.0, -1.0, -1.0])
+_SIGNS_DUAL_CONJ = np.array([1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0])
+_SIGNS_FULL_CONJ = np.array([1.0, -1.0, -1.0, -1.0, -1.0, 1.0, 1.0, 1.0])
+
+
 def _qconj(q: NDArray[np.float64]) -> NDArray[np.float64]:
-    return q * np.array([1.0, -1.0, -1.0, -1.0])
+    """Quaternion conjugate of checked (..., 4) arrays."""
+    return q * _SIGNS_QUATERNION_CONJ[:4]
 
 
 def dq_multiply(X1: ArrayLike, X2: ArrayLike) -> NDArray[np.float64]:
@@ -113,13 +121,14 @@ def dq_conj_quaternion(X: ArrayLike) -> NDArray[np.float64]:
     Parameters
     ----------
     X : array-like, shape (..., 8)
+        Dual quaternions ``(x0..x3, y0..y3)``, ``x0``, ``y0`` the scalar parts.
 
     Returns
     -------
     ndarray, shape (..., 8)
+        ``(x0, -x1, -x2, -x3, y0, -y1, -y2, -y3)``.
     """
-    X = check_array(X, "X", (8,))
-    return X * np.array([1.0, -1.0, -1.0, -1.0, 1.0, -1.0, -1.0, -1.0])
+    return check_array(X, "X", (8,)) * _SIGNS_QUATERNION_CONJ
 
 
 def dq_conj_dual(X: ArrayLike) -> NDArray[np.float64]:
@@ -128,13 +137,14 @@ def dq_conj_dual(X: ArrayLike) -> NDArray[np.float64]:
     Parameters
     ----------
     X : array-like, shape (..., 8)
+        Dual quaternions ``x + eps*y``, ``(x0..x3, y0..y3)``.
 
     Returns
     -------
     ndarray, shape (..., 8)
+        ``(x0, x1, x2, x3, -y0, -y1, -y2, -y3)``.
     """
-    X = check_array(X, "X", (8,))
-    return X * np.array([1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0])
+    return check_array(X, "X", (8,)) * _SIGNS_DUAL_CONJ
 
 
 def dq_conj_full(X: ArrayLike) -> NDArray[np.float64]:
@@ -143,13 +153,14 @@ def dq_conj_full(X: ArrayLike) -> NDArray[np.float64]:
     Parameters
     ----------
     X : array-like, shape (..., 8)
+        Dual quaternions ``x + eps*y``, ``(x0..x3, y0..y3)``, scalar parts first.
 
     Returns
     -------
     ndarray, shape (..., 8)
+        ``(x0, -x1, -x2, -x3, -y0, y1, y2, y3)``.
     """
-    X = check_array(X, "X", (8,))
-    return X * np.array([1.0, -1.0, -1.0, -1.0, -1.0, 1.0, 1.0, 1.0])
+    return check_array(X, "X", (8,)) * _SIGNS_FULL_CONJ
 
 
 def dq_inverse(X: ArrayLike) -> NDArray[np.float64]:
@@ -187,10 +198,12 @@ def study_quadric_residual(X: ArrayLike) -> NDArray[np.float64]:
     Parameters
     ----------
     X : array-like, shape (..., 8)
+        Study vectors ``(x0, x1, x2, x3, y0, y1, y2, y3)``, not scaled.
 
     Returns
     -------
     ndarray, shape (...)
+        The quadric's value (zero on the quadric; it scales with ``X^2``).
     """
     X = check_array(X, "X", (8,))
     return np.sum(X[..., :4] * X[..., 4:], axis=-1)
@@ -264,10 +277,12 @@ def study_normalize(X: ArrayLike) -> NDArray[np.float64]:
     Parameters
     ----------
     X : array-like, shape (..., 8)
+        Study vectors ``(x0, x1, x2, x3, y0, y1, y2, y3)``, any non-zero scale.
 
     Returns
     -------
     ndarray, shape (..., 8)
+        ``X / (s |x|)``, ``s`` the sign of the first ``|x_i| > 1e-12 |x|``.
 
     Raises
     ------

@@ -372,7 +372,7 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
         reachable samples are NaN exactly where ``coverage == 0`` (``min_clearance``
         also where no checked sample is reached).
     """
-    from ..analysis import condition_number, parallel_jacobian, singularities, tool_tip_jacobian
+    from ..analysis import parallel_jacobian, tool_tip_jacobian
 
     encoder_resolution = check_scalar(encoder_resolution, "encoder_resolution", nonnegative=True)
     s, q, mode, _ = reachability(design, task, samples=samples, seed=seed)
@@ -401,15 +401,7 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
                    stroke_use_q2=nan, stroke_use_q3=nan, tip_error_max=nan, tip_error_mean=nan,
                    peak_actuator_force=nan, min_tip_force_capability=nan)
     else:
-        # the kernel picks the worst samples; the reported values are the analysis module's
-        picks = np.unique(arg_margin)
-        rep = singularities(qv[picks], T, design, mode=mv[picks], jacobians=False)
-        for c, k in zip(CONDITION_ORDER, arg_margin, strict=True):
-            out[f"margin_{c}"] = float(rep.conditions[c].value[np.searchsorted(picks, k)])
-        length_margins = [out[f"margin_{c}"] for c in _LENGTH_CONDITIONS if c != "stroke_limit"]
-        out["margin_min"] = float(min(length_margins))
-        out["cond_tip_max"] = float(condition_number(J_tip[arg_cond[0]]))
-        out["cond_parallel_max"] = float(condition_number(J_par[arg_cond[1]]))
+        out.update(_reached_metrics(design, T, qv, mv, J_tip, J_par, arg_margin, arg_cond))
         with np.errstate(divide="ignore", invalid="ignore"):
             use = (q_hi - q_lo) / (hi - lo)
         for i in range(3):
@@ -426,6 +418,30 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
     out["size"] = float(2 * design.l1 + 2 * design.l3 + design.l2 + design.l4 + design.l5
                         + stroke)
     return {k: float(out[k]) for k in METRIC_COLUMNS}
+
+
+def _reached_metrics(design: Design, T: NDArray[np.float64], q: NDArray[np.float64],
+                     mode: NDArray[np.int64], J_tip: NDArray[np.float64],
+                     J_par: NDArray[np.float64], arg_margin: NDArray[np.int64],
+                     arg_cond: NDArray[np.int64]) -> dict[str, float]:
+    """Margins and condition numbers at the worst samples the reduction picked.
+
+    The reduction only selects the samples; the reported values are those of
+    :func:`athenakin.analysis.singularities` and :func:`~athenakin.analysis.condition_number`
+    there (exact SVD).
+    """
+    from ..analysis import condition_number, singularities
+
+    out: dict[str, float] = {}
+    picks = np.unique(arg_margin)
+    rep = singularities(q[picks], T, design, mode=mode[picks], jacobians=False)
+    for c, k in zip(CONDITION_ORDER, arg_margin, strict=True):
+        out[f"margin_{c}"] = float(rep.conditions[c].value[np.searchsorted(picks, k)])
+    length_margins = [out[f"margin_{c}"] for c in _LENGTH_CONDITIONS if c != "stroke_limit"]
+    out["margin_min"] = float(min(length_margins))
+    out["cond_tip_max"] = float(condition_number(J_tip[arg_cond[0]]))
+    out["cond_parallel_max"] = float(condition_number(J_par[arg_cond[1]]))
+    return out
 
 
 def _force_columns(q: NDArray[np.float64], mode: NDArray[np.int64], T: NDArray[np.float64],

@@ -86,6 +86,78 @@ def _first_min(v: Arr) -> tuple[float, int]:
     return (float(w[k]), k) if w[k] < np.inf else (np.inf, -1)
 
 
+def _condition_values(idx: NDArray[np.int64], q: Arr, R: Arr, rcm: Arr, d_e: Arr, depth: Arr,
+                      lengths: Arr, L: float, lo: Arr, hi: Arr) -> Arr:
+    """The value of each condition of :data:`CONDITION_ORDER` per reached sample, (12, n)."""
+    l1, l2, l3, l5 = lengths[0], lengths[1], lengths[2], lengths[4]
+    q1, q2, q3 = q[:, 0], q[:, 1], q[:, 2]
+    h = 0.5 * (q1 - q2)
+    ah = np.abs(h)
+    r1 = np.sqrt(np.maximum(l1 * l1 - h * h, 0.0))
+    s3 = np.sqrt(np.maximum(l3 * l3 - h * h, 0.0))
+    dv = np.sqrt((s3 + l2) ** 2 + l5 * l5)
+    v = np.empty((12, q.shape[0]))
+    v[0] = np.minimum(np.abs(q3 - np.abs(dv - r1)), np.abs(q3 - (dv + r1)))
+    v[1] = l3 - ah
+    v[2] = l1 - ah
+    v[3] = ah
+    v[4] = np.abs(q3)
+    v[5] = np.min(np.minimum(q - lo, hi - q), axis=1)
+    # O_s = rcm - (L - depth) d_b; the instrument line in the frame of O_s,
+    # R_b_s = Rx(theta) with z_s radial from M (docs/singularities.md)
+    de0, de1, de2 = d_e[idx, 0], d_e[idx, 1], d_e[idx, 2]
+    pp = L - depth[idx]
+    rbx = pp * (R[0, 0] * de0 + R[0, 1] * de1 + R[0, 2] * de2)
+    rby = pp * (R[1, 0] * de0 + R[1, 1] * de1 + R[1, 2] * de2)
+    rbz = pp * (R[2, 0] * de0 + R[2, 1] * de1 + R[2, 2] * de2)
+    oy, oz = rcm[1] - rby, rcm[2] - rbz
+    rr = np.sqrt(oy * oy + oz * oz)
+    ey, ez = oy / rr, oz / rr
+    rs0, rs1, rs2 = rbx, ez * rby - ey * rbz, ey * rby + ez * rbz
+    p = np.sqrt(rs0 * rs0 + rs1 * rs1 + rs2 * rs2)
+    ds0, ds1 = rs0 / p, rs1 / p
+    sxy = np.sqrt(ds0 * ds0 + ds1 * ds1)
+    v[6] = p
+    v[7] = sxy
+    v[8] = np.sqrt(de0 * de0 + de1 * de1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        v[9] = np.where(sxy > 0.0, np.abs(ds0) / np.where(sxy > 0.0, sxy, 1.0), 0.0)
+    v[10] = np.abs(ds1)
+    v[11] = np.abs(p - L)
+    return v
+
+
+def _largest_conditions(J_tip: Arr, J_par: Arr) -> tuple[Arr, NDArray[np.int64]]:
+    """Largest 2-norm condition number of each Jacobian stack (tip, parallel) and its row."""
+    cond = np.full(2, -np.inf)
+    arg_cond = np.full(2, -1, np.int64)
+    # exact 2-norm condition numbers only where kappa_F^2 >= max(kappa_F^2) / 9
+    for m, J in enumerate((J_tip, J_par)):
+        kf = _kappa_f2(J)
+        floor = max(0.0, float(np.max(kf))) / 9.0
+        pick = np.flatnonzero((kf >= floor) | ~np.isfinite(kf))
+        if pick.size:
+            c2 = _cond3(J[pick])
+            c2 = np.where(np.isnan(c2), -np.inf, c2)
+            k = int(np.argmax(c2))
+            if c2[k] > -np.inf:
+                cond[m], arg_cond[m] = c2[k], pick[k]
+    return cond, arg_cond
+
+
+def _tip_errors(J_tip: Arr, resolution: float) -> Arr:
+    """Max and sum over the samples of the worst-case tip error of an encoder box, m."""
+    # worst case |J dq| over the box |dq_i| <= resolution: a vertex (convexity)
+    worst = np.zeros(J_tip.shape[0])
+    for s1 in (1.0, -1.0):
+        for s2 in (1.0, -1.0):
+            e = J_tip[:, :, 0] + s1 * J_tip[:, :, 1] + s2 * J_tip[:, :, 2]
+            worst = np.maximum(worst, e[:, 0] * e[:, 0] + e[:, 1] * e[:, 1] + e[:, 2] * e[:, 2])
+    err = resolution * np.sqrt(worst)
+    tip = np.array([max(0.0, float(np.max(err))), float(np.sum(err))])
+    return tip
+
+
 def reduce_samples_numpy(idx: NDArray[np.int64], q: Arr, mode: NDArray[np.int64], R: Arr,
                          rcm: Arr, d_e: Arr, depth: Arr, J_tip: Arr, J_par: Arr, lengths: Arr,
                          L: float, lo: Arr, hi: Arr, resolution: float) -> tuple[Any, ...]:
@@ -128,71 +200,18 @@ def reduce_samples_numpy(idx: NDArray[np.int64], q: Arr, mode: NDArray[np.int64]
     tip : ndarray, shape (2,)
         Max and sum of the worst-case tip error, m.
     """
-    l1, l2, l3, l5 = lengths[0], lengths[1], lengths[2], lengths[4]
     n = idx.shape[0]
     counts = np.array([n, np.count_nonzero(mode > 0), np.count_nonzero(mode <= 0)], np.int64)
     margin = np.full(12, np.inf)
     arg_margin = np.full(12, -1, np.int64)
-    cond = np.full(2, -np.inf)
-    arg_cond = np.full(2, -1, np.int64)
     if n == 0:
-        return (counts, margin, arg_margin, cond, arg_cond, np.full(3, np.inf),
-                np.full(3, -np.inf), np.zeros(2))
-    q1, q2, q3 = q[:, 0], q[:, 1], q[:, 2]
-    h = 0.5 * (q1 - q2)
-    ah = np.abs(h)
-    r1 = np.sqrt(np.maximum(l1 * l1 - h * h, 0.0))
-    s3 = np.sqrt(np.maximum(l3 * l3 - h * h, 0.0))
-    dv = np.sqrt((s3 + l2) ** 2 + l5 * l5)
-    v = np.empty((12, n))
-    v[0] = np.minimum(np.abs(q3 - np.abs(dv - r1)), np.abs(q3 - (dv + r1)))
-    v[1] = l3 - ah
-    v[2] = l1 - ah
-    v[3] = ah
-    v[4] = np.abs(q3)
-    v[5] = np.min(np.minimum(q - lo, hi - q), axis=1)
-    # O_s = rcm - (L - depth) d_b; the instrument line in the frame of O_s,
-    # R_b_s = Rx(theta) with z_s radial from M (docs/singularities.md)
-    de0, de1, de2 = d_e[idx, 0], d_e[idx, 1], d_e[idx, 2]
-    pp = L - depth[idx]
-    rbx = pp * (R[0, 0] * de0 + R[0, 1] * de1 + R[0, 2] * de2)
-    rby = pp * (R[1, 0] * de0 + R[1, 1] * de1 + R[1, 2] * de2)
-    rbz = pp * (R[2, 0] * de0 + R[2, 1] * de1 + R[2, 2] * de2)
-    oy, oz = rcm[1] - rby, rcm[2] - rbz
-    rr = np.sqrt(oy * oy + oz * oz)
-    ey, ez = oy / rr, oz / rr
-    rs0, rs1, rs2 = rbx, ez * rby - ey * rbz, ey * rby + ez * rbz
-    p = np.sqrt(rs0 * rs0 + rs1 * rs1 + rs2 * rs2)
-    ds0, ds1 = rs0 / p, rs1 / p
-    sxy = np.sqrt(ds0 * ds0 + ds1 * ds1)
-    v[6] = p
-    v[7] = sxy
-    v[8] = np.sqrt(de0 * de0 + de1 * de1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        v[9] = np.where(sxy > 0.0, np.abs(ds0) / np.where(sxy > 0.0, sxy, 1.0), 0.0)
-    v[10] = np.abs(ds1)
-    v[11] = np.abs(p - L)
+        return (counts, margin, arg_margin, np.full(2, -np.inf), np.full(2, -1, np.int64),
+                np.full(3, np.inf), np.full(3, -np.inf), np.zeros(2))
+    v = _condition_values(idx, q, R, rcm, d_e, depth, lengths, L, lo, hi)
     for c in range(12):
         margin[c], arg_margin[c] = _first_min(v[c])
-    # exact 2-norm condition numbers only where kappa_F^2 >= max(kappa_F^2) / 9
-    for m, J in enumerate((J_tip, J_par)):
-        kf = _kappa_f2(J)
-        floor = max(0.0, float(np.max(kf))) / 9.0
-        pick = np.flatnonzero((kf >= floor) | ~np.isfinite(kf))
-        if pick.size:
-            c2 = _cond3(J[pick])
-            c2 = np.where(np.isnan(c2), -np.inf, c2)
-            k = int(np.argmax(c2))
-            if c2[k] > -np.inf:
-                cond[m], arg_cond[m] = c2[k], pick[k]
-    # worst case |J dq| over the box |dq_i| <= resolution: a vertex (convexity)
-    worst = np.zeros(n)
-    for s1 in (1.0, -1.0):
-        for s2 in (1.0, -1.0):
-            e = J_tip[:, :, 0] + s1 * J_tip[:, :, 1] + s2 * J_tip[:, :, 2]
-            worst = np.maximum(worst, e[:, 0] * e[:, 0] + e[:, 1] * e[:, 1] + e[:, 2] * e[:, 2])
-    err = resolution * np.sqrt(worst)
-    tip = np.array([max(0.0, float(np.max(err))), float(np.sum(err))])
+    cond, arg_cond = _largest_conditions(J_tip, J_par)
+    tip = _tip_errors(J_tip, resolution)
     return counts, margin, arg_margin, cond, arg_cond, q.min(axis=0), q.max(axis=0), tip
 
 

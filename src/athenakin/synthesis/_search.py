@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -353,7 +353,6 @@ def _gains(F_use: NDArray[np.float64], f_ref: NDArray[np.float64], dom: NDArray[
     return gains, trade_offs
 
 
-
 def _search_result(table: Any, obj: dict[str, str], cons: Any) -> SearchResult:
     """The search's result from the table of every evaluated design (reference first)."""
     table["design"] = np.arange(len(table))
@@ -374,7 +373,6 @@ def _search_result(table: Any, obj: dict[str, str], cons: Any) -> SearchResult:
                         reference_on_front=not bool(np.any(
                             np.all(F_use <= f_ref, axis=1) & np.any(F_use < f_ref, axis=1))),
                         dominating=int(np.count_nonzero(dom)), gains=gains)
-
 
 
 def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
@@ -425,7 +423,6 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
     pd = _require("pandas")
     _require("pymoo")
     from pymoo.algorithms.moo.nsga2 import NSGA2
-    from pymoo.core.problem import Problem
     from pymoo.optimize import minimize
 
     if reference is not None:
@@ -438,21 +435,49 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
     cons = check_constraints(constraints)
     opts = StudyOptions() if options is None else options
     check_instance(opts, "options", StudyOptions)
-    uses_collision = any(k in COLLISION_COLUMNS for k in (*obj, *cons))
-    run_opts = dataclasses.replace(opts, progress=False, collision=CollisionSpec() if (
-        uses_collision and opts.collision is None) else opts.collision)
+    run_opts = _generation_options(opts, obj, cons)
     kind, handle, owned = open_scheduler(scheduler, connect_timeout=opts.connect_timeout)
-    sched = handle
     tables: list[Any] = []
-    lo = np.array([b[k][0] for k in SEARCH_VARIABLES])
-    hi = np.array([b[k][1] for k in SEARCH_VARIABLES])
 
     def run(rows: list[dict[str, Any]], generation: int) -> Any:
-        df = evaluate(rows, task, samples=samples, seed=seed, scheduler=sched,
+        df = evaluate(rows, task, samples=samples, seed=seed, scheduler=handle,
                       options=run_opts)
         df.insert(1, "generation", generation)
         tables.append(df)
         return df
+
+    try:
+        run([dict(row_from_design(ref), name=ref.name or "reference")], -1)
+        minimize(_nsga2_problem(run, ref, obj, cons, b), NSGA2(pop_size=int(population)),
+                 ("n_gen", int(generations)), seed=int(seed), verbose=bool(opts.progress))
+    finally:
+        if owned:
+            handle.close()
+    return _search_result(pd.concat(tables, ignore_index=True), obj, cons)
+
+
+def _generation_options(opts: StudyOptions, obj: dict[str, str], cons: Any) -> StudyOptions:
+    """Options of each generation's study (no progress bar of its own).
+
+    The collision check runs (``CollisionSpec()`` unless given) when an objective or a
+    constraint uses one of its columns.
+    """
+    uses_collision = any(k in COLLISION_COLUMNS for k in (*obj, *cons))
+    return dataclasses.replace(opts, progress=False, collision=CollisionSpec() if (
+        uses_collision and opts.collision is None) else opts.collision)
+
+
+def _nsga2_problem(run: Callable[[list[dict[str, Any]], int], Any], ref: Design,
+                   obj: dict[str, str], cons: Any, bounds: Mapping[str, Any]) -> Any:
+    """The pymoo problem: each generation one study (``run``), infeasible rows penalised.
+
+    A design that is invalid, reaches no task sample or has a non-finite objective is
+    infeasible (the first constraint, and ``F = 1e9``); each of ``cons`` is one more.
+    """
+    from pymoo.core.problem import Problem
+
+    lo = np.array([bounds[k][0] for k in SEARCH_VARIABLES])
+    hi = np.array([bounds[k][1] for k in SEARCH_VARIABLES])
 
     class _Problem(Problem):  # type: ignore[misc]
         def __init__(self) -> None:
@@ -473,11 +498,4 @@ def optimize(task: Task, *, bounds: Mapping[str, Any] | None = None,
             out["G"] = np.concatenate([np.where(feasible, -1.0, 1.0)[:, None],
                                        np.where(feasible[:, None], G, 1.0)], axis=1)
 
-    try:
-        run([dict(row_from_design(ref), name=ref.name or "reference")], -1)
-        minimize(_Problem(), NSGA2(pop_size=int(population)), ("n_gen", int(generations)),
-                 seed=int(seed), verbose=bool(opts.progress))
-    finally:
-        if owned:
-            handle.close()
-    return _search_result(pd.concat(tables, ignore_index=True), obj, cons)
+    return _Problem()

@@ -342,6 +342,55 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
     _require("dask")
     opts = StudyOptions() if options is None else options
     check_instance(opts, "options", StudyOptions)
+    samples, seed = _check_study(task, samples, seed, on_chunk)
+    rows = design_rows(designs)
+    chunks = [rows[i:i + opts.chunk_size] for i in range(0, len(rows), opts.chunk_size)]
+    out_path = None if out is None else check_path(out, "out")
+    # the scheduler first: an address that does not answer leaves no results folder behind
+    kind, handle, owned = open_scheduler(scheduler, connect_timeout=opts.connect_timeout)
+    try:
+        done = {} if out_path is None else _open_study(out_path, rows, task, samples, seed,
+                                                       opts, len(chunks))
+        _run_missing(kind, handle, chunks, done, out_path, on_chunk,
+                     (task.to_mapping(), samples, seed, opts.encoder_resolution, opts.collision),
+                     opts)
+    finally:
+        if owned:
+            handle.close()
+    return pd.concat([done[i] for i in range(len(chunks))], ignore_index=True)
+
+
+def _run_missing(kind: str, handle: Any, chunks: Sequence[list[dict[str, Any]]],
+                 done: dict[int, Any], out: Path | None,
+                 on_chunk: Callable[[int, int], None] | None, args: tuple[Any, ...],
+                 opts: StudyOptions) -> None:
+    """Compute the chunks not in ``done``; each one is written and added as it finishes."""
+    todo = [i for i in range(len(chunks)) if i not in done]
+    progress = opts.progress
+    bar = _bar(len(chunks), len(done), progress and len(todo) > 0 if progress is not None
+               else len(todo) > 1)
+
+    def finished(i: int, df: Any) -> None:
+        if out is not None:
+            _write_part(out, i, df)
+        done[i] = df
+        if bar is not None:
+            bar.update(1)
+        if on_chunk is not None:
+            on_chunk(len(done), len(chunks))
+
+    try:
+        if todo:
+            _run_chunks(kind, handle, chunks, todo, opts.chunk_size, args, finished,
+                        opts.retries)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def _check_study(task: Task, samples: object, seed: object, on_chunk: object
+                 ) -> tuple[int, int]:
+    """Check the task, ``samples`` (1 to :data:`MAX_SAMPLES`), ``seed`` and ``on_chunk``."""
     if not isinstance(task, Task):
         raise TypeError(f"task: expected athenakin.synthesis.Task, got {type(task).__name__}")
     if (isinstance(samples, bool) or not isinstance(samples, (int, np.integer))
@@ -350,60 +399,35 @@ def evaluate(designs: Any, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: 
                                 f"{samples!r}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InvalidInputError(f"seed: expected a non-negative integer, got {seed!r}")
-    resolution, chunk_size, collision = opts.encoder_resolution, opts.chunk_size, opts.collision
-    progress = opts.progress
-    rows = design_rows(designs)
-    samples, seed = int(samples), int(seed)
-    chunks = [rows[i:i + chunk_size] for i in range(0, len(rows), chunk_size)]
-    task_map = task.to_mapping()
-    done: dict[int, Any] = {}
-    out_path = None if out is None else check_path(out, "out")
     if on_chunk is not None and not callable(on_chunk):
         raise TypeError(f"on_chunk: expected a callable (done, total) or None, got "
                         f"{type(on_chunk).__name__}")
-    # the scheduler first: an address that does not answer leaves no results folder behind
-    kind, handle, owned = open_scheduler(scheduler, connect_timeout=opts.connect_timeout)
-    if out_path is not None:
-        fp = _fingerprint(rows, task, samples, seed, resolution, chunk_size, collision)
-        meta = {"format": _FORMAT, "designs": len(rows), "chunk_size": chunk_size,
-                "task": task_map, "samples": samples, "seed": seed,
-                "encoder_resolution": resolution}
-        if collision is not None:
-            meta["collision"] = collision.fingerprint()
-        try:
-            done = _prepare_out(out_path, fp, len(chunks), meta)
-        except BaseException:
-            if owned:
-                handle.close()
-            raise
-    todo = [i for i in range(len(chunks)) if i not in done]
-    bar = _bar(len(chunks), len(done), progress and len(todo) > 0 if progress is not None
-               else len(todo) > 1)
+    return int(samples), int(seed)
 
-    def finished(i: int, df: Any) -> None:
-        if out_path is not None:
-            _write_part(out_path, i, df)
-        done[i] = df
-        if bar is not None:
-            bar.update(1)
-        if on_chunk is not None:
-            on_chunk(len(done), len(chunks))
 
-    args = (task_map, samples, seed, resolution, collision)
-    try:
-        if todo and kind == "local":
-            _run_local(handle, chunks, todo, chunk_size, args, finished)
-        elif todo and kind == "executor":
-            _run_executor(handle, chunks, todo, chunk_size, args, finished)
-        elif todo:
-            _run_distributed(handle, chunks, todo, chunk_size, args, finished, opts.retries)
-    finally:
-        if bar is not None:
-            bar.close()
-        if owned:
-            handle.close()
-    table = pd.concat([done[i] for i in range(len(chunks))], ignore_index=True)
-    return table
+def _open_study(out: Path, rows: list[dict[str, Any]], task: Task, samples: int, seed: int,
+                opts: StudyOptions, n_chunks: int) -> dict[int, Any]:
+    """Create or check the study folder ``out`` (its manifest); the chunks already written."""
+    resolution, chunk_size, collision = opts.encoder_resolution, opts.chunk_size, opts.collision
+    fp = _fingerprint(rows, task, samples, seed, resolution, chunk_size, collision)
+    meta = {"format": _FORMAT, "designs": len(rows), "chunk_size": chunk_size,
+            "task": task.to_mapping(), "samples": samples, "seed": seed,
+            "encoder_resolution": resolution}
+    if collision is not None:
+        meta["collision"] = collision.fingerprint()
+    return _prepare_out(out, fp, n_chunks, meta)
+
+
+def _run_chunks(kind: str, handle: Any, chunks: Sequence[list[dict[str, Any]]], todo: list[int],
+                size: int, args: tuple[Any, ...], finished: Callable[[int, Any], None],
+                retries: int) -> None:
+    """Compute the chunks ``todo`` on the scheduler of ``kind`` (local, executor, distributed)."""
+    if kind == "local":
+        _run_local(handle, chunks, todo, size, args, finished)
+    elif kind == "executor":
+        _run_executor(handle, chunks, todo, size, args, finished)
+    else:
+        _run_distributed(handle, chunks, todo, size, args, finished, retries)
 
 
 def _bar(total: int, initial: int, show: bool) -> Any:

@@ -13,7 +13,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._toml import read_toml
 from .._transforms import transform_from_rotation_translation
-from .._validation import check_count, check_rng, check_scalar
+from .._validation import check_count, check_keys, check_rng, check_scalar
 from ..design import LENGTH_RANGE
 from ..errors import InvalidInputError
 from ._errors import TaskFileError
@@ -173,10 +173,7 @@ class Task:
         """
         if not isinstance(data, Mapping):
             raise TaskFileError(f"task: expected a table, got {type(data).__name__}")
-        unknown = sorted(set(data) - set(_KEYS))
-        if unknown:
-            raise TaskFileError(f"task: unknown key(s) {unknown}; expected some of "
-                                f"{list(_KEYS)}")
+        check_keys(data, "task", _KEYS, error=TaskFileError)
         missing = [k for k in ("rcm", "axis", "depth") if k not in data]
         if ("half_angle" in data) == ("half_angle_deg" in data):
             missing.append("half_angle (rad) or half_angle_deg (exactly one)")
