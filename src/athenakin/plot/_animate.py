@@ -14,7 +14,7 @@ from ..design import Design, resolve_design
 from ..errors import KinematicsError
 from ..robot import q_from_instrument
 from ..robot._setup import resolve_rcm_frame
-from ._geometry import VIEW, RobotGeometry, cube_limits, robot_geometry, union_bounds
+from ._geometry import VIEW, RobotGeometry, cube_around, robot_geometry
 from ._mpl import PlotOptions, plot_robot
 
 __all__ = ["instrument_cone_path", "render_frames", "animate", "draw_motion_frame",
@@ -277,7 +277,7 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
     T = resolve_rcm_frame(T_b_e, design)
     qs = check_array(REFERENCE_Q if q is None else q, "q", (3,)).reshape(-1, 3)
     geoms = _geometries(qs, T, design, slot)
-    lo, hi = cube_limits(*union_bounds(geoms))
+    lo, hi = cube_around(geoms)
     frames: list[NDArray[np.uint8]] = []
     fig = Figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
     canvas = FigureCanvasAgg(fig)

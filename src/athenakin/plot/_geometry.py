@@ -28,7 +28,7 @@ from ..robot._setup import resolve_rcm_frame
 __all__ = ["RobotGeometry", "robot_geometry", "circle_points", "N_CIRCLE", "MAX_CURVE_POINTS",
            "ARC_MARGIN", "check_view", "check_length",
            "COLORS", "FRAME_LENGTH", "ARC_RADIUS", "VIEW", "MM", "arc_points", "slot_label",
-           "cube_limits"]
+           "cube_limits", "cube_around", "union_bounds"]
 
 #: Number of points on each drawn circle (k1, k2).
 N_CIRCLE = 121
@@ -399,6 +399,15 @@ def union_bounds(geoms: Iterable[RobotGeometry]
     """
     los, his = zip(*(g.bounds() for g in geoms), strict=True)
     return np.min(los, axis=0), np.max(his, axis=0)
+
+
+def cube_around(geoms: Iterable[RobotGeometry], pad: float = 0.05
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The axis box ``(lo, hi)`` (m) of a view of several solutions or frames.
+
+    A cube around all of them (:func:`union_bounds`) with a margin ``pad`` (m).
+    """
+    return cube_limits(*union_bounds(geoms), pad)
 
 
 def cube_limits(lo: NDArray[np.float64], hi: NDArray[np.float64], pad: float = 0.05

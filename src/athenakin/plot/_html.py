@@ -30,10 +30,9 @@ from ._geometry import (
     MM,
     RobotGeometry,
     arc_points,
-    cube_limits,
+    cube_around,
     robot_geometry,
     slot_label,
-    union_bounds,
 )
 
 __all__ = ["robot_figure", "write_html", "HTML_DIV_ID", "screen_points", "label_boxes",
@@ -292,7 +291,7 @@ def robot_figure(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     first = robot_geometry(q, T, design, slot=slot)
     geoms = _solution_geometries(q, T, design, first, every=all_slots or all_solutions)
     slots = list(geoms)
-    box = cube_limits(*union_bounds(geoms.values()))
+    box = cube_around(geoms.values())
     fig = go.Figure()
     owner = _add_solution_traces(fig, geoms, first.slot, all_solutions=all_solutions,
                                  show_frames=show_frames, frame_length=frame_length, box=box)
