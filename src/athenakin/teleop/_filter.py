@@ -218,24 +218,17 @@ class TremorFilter:
         c = self._c
         if not c:
             return x, y, z
-        s = self._s
-        i = 0
-        for b0, b1, b2, a1, a2 in c:
-            w = b0 * x + s[i]
-            s[i] = b1 * x - a1 * w + s[i + 1]
-            s[i + 1] = b2 * x - a2 * w
-            x = w
-            i += 2
-        for b0, b1, b2, a1, a2 in c:
-            w = b0 * y + s[i]
-            s[i] = b1 * y - a1 * w + s[i + 1]
-            s[i + 1] = b2 * y - a2 * w
-            y = w
-            i += 2
-        for b0, b1, b2, a1, a2 in c:
-            w = b0 * z + s[i]
-            s[i] = b1 * z - a1 * w + s[i + 1]
-            s[i + 1] = b2 * z - a2 * w
-            z = w
-            i += 2
-        return x, y, z
+        s, n = self._s, 2 * len(c)
+        return _cascade(c, s, 0, x), _cascade(c, s, n, y), _cascade(c, s, 2 * n, z)
+
+
+def _cascade(c: tuple[tuple[float, float, float, float, float], ...], s: list[float], i: int,
+             v: float) -> float:
+    """One axis through the biquads ``c``, states ``s[i:i + 2 len(c)]`` (updated); the output."""
+    for b0, b1, b2, a1, a2 in c:
+        w = b0 * v + s[i]
+        s[i] = b1 * v - a1 * w + s[i + 1]
+        s[i + 1] = b2 * v - a2 * w
+        v = w
+        i += 2
+    return v
