@@ -461,7 +461,7 @@ class Teleop:
             return None, f
         pose = self._probe((x, y, z))
         te = pose.tip_e
-        if (not pose.valid or pose.flags & _BRANCH_FLAGS
+        if (not pose.valid or int(pose.flags) & _BRANCH_FLAGS        # int: IntFlag's & is slow
                 or abs(te[0] - tip[0]) + abs(te[1] - tip[1]) + abs(te[2] - tip[2]) > BRANCH_TOL):
             self._revert()
             return None, _SINGULAR
