@@ -284,8 +284,8 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     legend_extra : list of matplotlib artists, keyword-only, optional
         More legend handles (e.g. what the caller drew before).
     options : PlotOptions, keyword-only, optional
-        What is shown (frames, labels, circles, legend), the frame length, the camera,
-        the axis box and the size of the branch cues (default ``PlotOptions()``).
+        What is shown and how (every field: :class:`PlotOptions`); default
+        ``PlotOptions()``.
 
     Returns
     -------
