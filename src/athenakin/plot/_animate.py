@@ -341,6 +341,7 @@ def animate(path: str | Path, q: ArrayLike, T_b_e: ArrayLike | None = None,
     Returns
     -------
     Path
+        ``path``, written (a looping GIF or an H.264 MP4).
 
     Raises
     ------

@@ -517,6 +517,7 @@ def save_view(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | N
     Returns
     -------
     Path
+        ``path``, written as a PNG, SVG, PDF or HTML file.
 
     Raises
     ------
