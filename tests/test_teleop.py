@@ -91,7 +91,47 @@ def test_tremor_filter_frequency_response():
     f_all = np.logspace(-2, np.log10(RATE / 2 * 0.99), 3000)
     assert 20 * np.log10(np.abs(filter_response("notch8-12", RATE, f_all)).max()) < 1.5
     assert np.all(filter_response("none", RATE, f_all) == 1.0)
-    assert set(TREMOR_FILTERS) == {"notch8-12", "none"}
+    assert set(TREMOR_FILTERS) == {"notch8-12", "notch8-12-lp15", "none"}
+
+
+#: Frequency step of the central difference for the group delay, Hz.
+GROUP_DF = 1e-4
+
+
+def _delays(name, f):
+    """Phase delay and group delay (s) of filter ``name`` at ``f`` Hz (central difference)."""
+    h = filter_response(name, RATE, f)
+    hm, hp = filter_response(name, RATE, f - GROUP_DF), filter_response(name, RATE, f + GROUP_DF)
+    return -np.angle(h) / (2 * np.pi * f), -np.angle(hp / hm) / (2 * np.pi * 2 * GROUP_DF)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(15.0, RATE / 2 * 0.999), st.floats(0.01, 1.0), st.floats(8.0, 12.0))
+def test_lowpass_filter_rolls_off_above_the_band_without_delaying_slow_motion(f_hi, f_lo, f_band):
+    """``notch8-12-lp15``: >= 20 dB over 8-12 Hz, >= 12 dB from 15 Hz and >= 20 dB from
+    30 Hz up, and below 1 Hz a phase and a group delay in [0, 10 ms], gain within 3 %."""
+    name = "notch8-12-lp15"
+    att = -20 * np.log10(np.abs(filter_response(name, RATE, [f_band, f_hi])))
+    assert att[0] >= 20.0
+    assert att[1] >= (20.0 if f_hi >= 30.0 else 12.0), (f_hi, att[1])
+    phase, group = _delays(name, f_lo)
+    assert 0.0 <= phase <= 0.010 and -1e-4 <= group <= 0.010, (f_lo, phase, group)
+    assert abs(abs(filter_response(name, RATE, f_lo)) - 1.0) <= 0.03
+
+
+def test_lowpass_filter_frequency_response_on_a_grid():
+    """The same bounds on dense grids (the property test draws points; this sweeps), and
+    the notch's high band for contrast: it passes what lies above 15 Hz."""
+    name = "notch8-12-lp15"
+    f_hi = np.geomspace(15.0, RATE / 2 * 0.999, 2000)
+    gain_db = 20 * np.log10(np.abs(filter_response(name, RATE, f_hi)))
+    assert gain_db.max() <= -12.0 and gain_db[f_hi >= 30.0].max() <= -20.0
+    assert 20 * np.log10(np.abs(filter_response("notch8-12", RATE, f_hi)).max()) > 0.0
+    f_lo = np.geomspace(0.01, 1.0, 200)
+    phase, group = _delays(name, f_lo)
+    assert phase.max() <= 0.0085 and group.max() <= 0.0085 and group.min() >= -1e-4
+    f_all = np.geomspace(0.01, RATE / 2 * 0.999, 3000)
+    assert 20 * np.log10(np.abs(filter_response(name, RATE, f_all)).max()) < 3.0
 
 
 def _fit(x, t, f):
@@ -101,9 +141,10 @@ def _fit(x, t, f):
     return math.hypot(c[0], c[1]), math.atan2(c[1], c[0])
 
 
-def test_tremor_is_attenuated_at_the_tip_command_and_slow_motion_is_not_delayed():
+@pytest.mark.parametrize("filt", ["notch8-12", "notch8-12-lp15"])
+def test_tremor_is_attenuated_at_the_tip_command_and_slow_motion_is_not_delayed(filt):
     """10 Hz, 0.5 mm tremor on a 0.5 Hz motion of the master, through the whole chain."""
-    tele = Teleop(T, D, q0=Q0, options=NOFF)
+    tele = Teleop(T, D, q0=Q0, options=TeleopOptions(filter=filt, feedforward=False))
     n = 6000
     t = np.arange(n) / RATE
     motion = 0.02 * np.sin(2 * np.pi * 0.5 * t)
@@ -164,7 +205,7 @@ def test_reclutch_does_not_move_the_tip():
     _check_commands(tele, cmds)
 
 
-@pytest.mark.parametrize("filt", ["none", "notch8-12"])
+@pytest.mark.parametrize("filt", ["none", "notch8-12", "notch8-12-lp15"])
 def test_scale_change_does_not_move_the_target(filt):
     """The target after a scale change: the old target plus the new scale times the
     filtered master's advance (with the filter off and a master at rest: unchanged)."""

@@ -14,7 +14,7 @@ from ..design import Design, resolve_design
 from ..errors import KinematicsError
 from ..robot import q_from_instrument
 from ..robot._setup import resolve_rcm_frame
-from ._geometry import VIEW, RobotGeometry, cube_limits, robot_geometry
+from ._geometry import VIEW, RobotGeometry, cube_around, robot_geometry
 from ._mpl import PlotOptions, plot_robot
 
 __all__ = ["instrument_cone_path", "render_frames", "animate", "draw_motion_frame",
@@ -82,9 +82,33 @@ def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
     KinematicsError
         A sample is out of the workspace (the message names the first).
     """
-    from .._validation import check_count, check_scalar
     from ..errors import InvalidInputError
     from ..robot import REFERENCE_P
+
+    n, lead, cone_angle, turns = _check_cone(n, lead, cone_angle, turns)
+    design = resolve_design(design)
+    T = resolve_rcm_frame(T_b_e, design)
+    d = _cone_directions(axis_e, n, lead, cone_angle, turns)
+    pa = check_array(REFERENCE_P if p is None else p, "p", ())
+    if pa.shape not in ((), (n,)):
+        raise InvalidInputError(f"p: expected shape () or ({n},), got shape {pa.shape}")
+    pp = np.broadcast_to(pa, (n,))
+    q, res = q_from_instrument(T, d, pp, design, errors="flag")
+    if not np.all(res.valid):
+        from ..errors import error_for_reason
+
+        k = int(np.flatnonzero(~res.valid)[0])
+        raise error_for_reason(int(res.reason[k]),
+                               f"instrument path sample {k} (direction_e = "
+                               f"{np.round(d[k], 4).tolist()}, p = {pp[k]} m)")
+    return q
+
+
+def _check_cone(n: object, lead: object, cone_angle: object, turns: object
+                ) -> tuple[int, int, float, float]:
+    """``n``, ``lead``, ``cone_angle``, ``turns`` of :func:`instrument_cone_path`, checked."""
+    from .._validation import check_count
+    from ..errors import InvalidInputError
 
     n = check_count(n, "n", minimum=2, maximum=MAX_PATH_SAMPLES)
     if isinstance(lead, bool) or not isinstance(lead, (int, np.integer)) or lead < 0 \
@@ -99,9 +123,19 @@ def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
     if not abs(turns) <= MAX_TURNS:
         raise InvalidInputError(f"turns: expected a number in [-{MAX_TURNS}, {MAX_TURNS}], got "
                                 f"{turns}")
+    return n, int(lead), cone_angle, turns
 
-    design = resolve_design(design)
-    T = resolve_rcm_frame(T_b_e, design)
+
+def _cone_directions(axis_e: ArrayLike, n: int, lead: int, cone_angle: float,
+                     turns: float) -> NDArray[np.float64]:
+    """Unit instrument directions (n, 3) in frame E of :func:`instrument_cone_path`.
+
+    ``turns`` turns at the half-angle ``cone_angle`` about ``axis_e`` over ``n - 2 lead``
+    samples, after ``lead`` samples that tilt out from the axis and before ``lead`` that
+    tilt back.
+    """
+    from ..errors import InvalidInputError
+
     a = check_array(axis_e, "axis_e", (3,))
     if a.shape != (3,) or not np.any(a):
         raise InvalidInputError(f"axis_e: expected a non-zero direction of shape (3,), got "
@@ -119,21 +153,8 @@ def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
         ramp = cone_angle * np.arange(lead) / lead             # 0 (on the axis) .. < cone
         t = np.concatenate([np.zeros(lead), t, np.full(lead, t[-1])])
         tilt = np.concatenate([ramp, tilt, cone_angle * np.arange(lead - 1, -1, -1) / lead])
-    d = (np.cos(tilt)[:, None] * a + np.sin(tilt)[:, None] * (np.cos(t)[:, None] * e1
-                                                               + np.sin(t)[:, None] * e2))
-    pa = check_array(REFERENCE_P if p is None else p, "p", ())
-    if pa.shape not in ((), (n,)):
-        raise InvalidInputError(f"p: expected shape () or ({n},), got shape {pa.shape}")
-    pp = np.broadcast_to(pa, (n,))
-    q, res = q_from_instrument(T, d, pp, design, errors="flag")
-    if not np.all(res.valid):
-        from ..errors import error_for_reason
-
-        k = int(np.flatnonzero(~res.valid)[0])
-        raise error_for_reason(int(res.reason[k]),
-                               f"instrument path sample {k} (direction_e = "
-                               f"{np.round(d[k], 4).tolist()}, p = {pp[k]} m)")
-    return q
+    return (np.cos(tilt)[:, None] * a + np.sin(tilt)[:, None] * (np.cos(t)[:, None] * e1
+                                                                  + np.sin(t)[:, None] * e2))
 
 
 def _geometries(qs: NDArray[np.float64], T: NDArray[np.float64], design: Design,
@@ -245,16 +266,10 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
 
     from .._interrupt import check_interrupt
     from .._validation import check_count
-    from ..errors import InvalidInputError
     from ..robot import REFERENCE_Q
     from ._geometry import check_view
 
-    sz = check_array(size, "size", (2,))
-    if sz.shape != (2,) or not np.all((sz >= 16) & (sz <= MAX_FRAME_PIXELS)) \
-            or not np.all(sz == np.round(sz)):
-        raise InvalidInputError(f"size: expected (width, height), integers in 16.."
-                                f"{MAX_FRAME_PIXELS} px, got {sz.tolist()}")
-    size = (int(sz[0]), int(sz[1]))
+    size = _check_frame_size(size)
     dpi = check_count(dpi, "dpi", minimum=1, maximum=1200)
     view = check_view(view)
     orbit = check_scalar(orbit, "orbit")
@@ -262,20 +277,14 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
     T = resolve_rcm_frame(T_b_e, design)
     qs = check_array(REFERENCE_Q if q is None else q, "q", (3,)).reshape(-1, 3)
     geoms = _geometries(qs, T, design, slot)
-    los, his = zip(*(g.bounds() for g in geoms), strict=True)
-    lo, hi = cube_limits(np.min(los, axis=0), np.max(his, axis=0))
-    it: Any = range(len(geoms))
-    if progress:
-        from tqdm import tqdm
-
-        it = tqdm(it, desc="rendering", unit="frame", disable=None)
+    lo, hi = cube_around(geoms)
     frames: list[NDArray[np.uint8]] = []
     fig = Figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
     canvas = FigureCanvasAgg(fig)
     ax = fig.add_subplot(projection="3d")
     fig.subplots_adjust(left=0, right=1, bottom=0, top=0.93)
     n = len(geoms)
-    for k in it:
+    for k in _progress(range(n), progress, desc="rendering", unit="frame"):
         check_interrupt()    # a Ctrl-C lost inside matplotlib's callbacks (_interrupt.py)
         ax.cla()
         frac = k / max(n - 1, 1)
@@ -285,6 +294,27 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
         rgba = np.asarray(canvas.buffer_rgba())
         frames.append(rgba[..., :3].copy())
     return frames
+
+
+def _check_frame_size(size: object) -> tuple[int, int]:
+    """``(width, height)`` of a frame, integers in 16..:data:`MAX_FRAME_PIXELS` px."""
+    from ..errors import InvalidInputError
+
+    sz = check_array(size, "size", (2,))
+    if sz.shape != (2,) or not np.all((sz >= 16) & (sz <= MAX_FRAME_PIXELS)) \
+            or not np.all(sz == np.round(sz)):
+        raise InvalidInputError(f"size: expected (width, height), integers in 16.."
+                                f"{MAX_FRAME_PIXELS} px, got {sz.tolist()}")
+    return int(sz[0]), int(sz[1])
+
+
+def _progress(it: Any, show: bool, **kwargs: Any) -> Any:
+    """``it``, wrapped in a tqdm progress bar (on a terminal only) where ``show``."""
+    if not show:
+        return it
+    from tqdm import tqdm
+
+    return tqdm(it, disable=None, **kwargs)
 
 
 def animate(path: str | Path, q: ArrayLike, T_b_e: ArrayLike | None = None,
@@ -311,11 +341,12 @@ def animate(path: str | Path, q: ArrayLike, T_b_e: ArrayLike | None = None,
     Returns
     -------
     Path
+        ``path``, written (a looping GIF or an H.264 MP4).
 
     Raises
     ------
     ValueError
-        Unknown suffix.
+        A suffix other than ``.gif`` or ``.mp4``, or ``fps`` above 120.
     KinematicsError
         A sample has no solution in ``slot``.
     """

@@ -12,6 +12,7 @@ passive spherical five-bar, Fig. 3) is described by the axes of ``u3``, ``u4``,
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -27,7 +28,7 @@ from ..robot._setup import resolve_rcm_frame
 __all__ = ["RobotGeometry", "robot_geometry", "circle_points", "N_CIRCLE", "MAX_CURVE_POINTS",
            "ARC_MARGIN", "check_view", "check_length",
            "COLORS", "FRAME_LENGTH", "ARC_RADIUS", "VIEW", "MM", "arc_points", "slot_label",
-           "cube_limits"]
+           "cube_limits", "cube_around", "union_bounds"]
 
 #: Number of points on each drawn circle (k1, k2).
 N_CIRCLE = 121
@@ -272,7 +273,6 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     >>> bool(abs(g.points["O_s"] - g.frames["s"][:3, 3]).max() < 1e-15)
     True
     """
-    from ..errors import InvalidInputError
     from ..robot import REFERENCE_Q
 
     design = resolve_design(design)
@@ -283,16 +283,7 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
         raise InvalidInputError(f"q: expected shape (3,), got shape {q.shape}")
     slot = check_slot(slot)
     T = resolve_rcm_frame(T_b_e, design)
-    if fk is None:
-        sol = forward_kinematics(q, T, design, errors="flag")
-    elif np.shape(fk.valid) != (16,):
-        raise InvalidInputError(f"fk: expected the solution of one q (valid of shape (16,)), "
-                                f"got valid of shape {np.shape(fk.valid)}")
-    else:
-        sol = fk
-    if not sol.valid[slot]:
-        why = Reason(int(sol.reason[slot])).name
-        raise error_for_reason(int(sol.reason[slot]), f"slot {slot} of q = {q.tolist()} m ({why})")
+    sol = _solved_slot(q, T, design, slot, fk)
     st = state_from_fk(sol, q, T, design, slot, BodyGeometry())
     F = {link: st.frame(link) for link in ("platform", "instrument", "guide", "sph_4", "sph_5")}
     T_b_s = sol.T_b_s[slot]
@@ -318,6 +309,25 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
         k2=circle_points(C, q[2]), k2_arc=_k2_arc(C, q[2], M, intersections),
         intersections=intersections, rail=np.stack([st["rail_lo"], st["rail_hi"]]),
         design=design, T_b_e=T.copy(), state=st)
+
+
+def _solved_slot(q: NDArray[np.float64], T: NDArray[np.float64], design: Design, slot: int,
+                 fk: FKSolution | None) -> FKSolution:
+    """The forward kinematics of one ``q`` (``fk``, or solved here) with ``slot`` valid.
+
+    Raises the :class:`KinematicsError` of the slot's reason where it holds no solution.
+    """
+    if fk is None:
+        sol = forward_kinematics(q, T, design, errors="flag")
+    elif np.shape(fk.valid) != (16,):
+        raise InvalidInputError(f"fk: expected the solution of one q (valid of shape (16,)), "
+                                f"got valid of shape {np.shape(fk.valid)}")
+    else:
+        sol = fk
+    if not sol.valid[slot]:
+        why = Reason(int(sol.reason[slot])).name
+        raise error_for_reason(int(sol.reason[slot]), f"slot {slot} of q = {q.tolist()} m ({why})")
+    return sol
 
 
 def slot_label(g: RobotGeometry) -> str:
@@ -399,6 +409,25 @@ def arc_points(centre: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[n
     e = e / np.sqrt(np.sum(e * e))
     t = np.linspace(0.0, ang, n)[:, None]
     return centre + radius * (np.cos(t) * a + np.sin(t) * e)
+
+
+def union_bounds(geoms: Iterable[RobotGeometry]
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Axis-aligned box ``(lo, hi)`` (m) around every geometry's :meth:`~RobotGeometry.bounds`.
+
+    ``geoms`` holds at least one geometry.
+    """
+    los, his = zip(*(g.bounds() for g in geoms), strict=True)
+    return np.min(los, axis=0), np.max(his, axis=0)
+
+
+def cube_around(geoms: Iterable[RobotGeometry], pad: float = 0.05
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The axis box ``(lo, hi)`` (m) of a view of several solutions or frames.
+
+    A cube around all of them (:func:`union_bounds`) with a margin ``pad`` (m).
+    """
+    return cube_limits(*union_bounds(geoms), pad)
 
 
 def cube_limits(lo: NDArray[np.float64], hi: NDArray[np.float64], pad: float = 0.05

@@ -30,6 +30,7 @@ from ._geometry import (
     MM,
     RobotGeometry,
     arc_points,
+    cube_around,
     robot_geometry,
     slot_label,
 )
@@ -288,18 +289,47 @@ def robot_figure(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     q = check_array(REFERENCE_Q if q is None else q, "q", (3,))
     T = resolve_rcm_frame(T_b_e, design)
     first = robot_geometry(q, T, design, slot=slot)
-    if all_slots or all_solutions:
-        sol = forward_kinematics(q, T, design, errors="flag")
-        slots = [int(k) for k in np.flatnonzero(sol.valid)]
-    else:
-        slots = [first.slot]
-    geoms = {k: (first if k == first.slot else robot_geometry(q, T, design, slot=k))
-             for k in slots}
-    los, his = zip(*(g.bounds() for g in geoms.values()), strict=True)
-    lo, hi = np.min(los, axis=0), np.max(his, axis=0)
-    centre, half = 0.5 * (lo + hi), 0.5 * float(np.max(hi - lo)) + 0.05
-    box = (centre - half, centre + half)
+    geoms = _solution_geometries(q, T, design, first, every=all_slots or all_solutions)
+    slots = list(geoms)
+    box = cube_around(geoms.values())
     fig = go.Figure()
+    owner = _add_solution_traces(fig, geoms, first.slot, all_solutions=all_solutions,
+                                 show_frames=show_frames, frame_length=frame_length, box=box)
+    qmm = ", ".join(f"{MM * v:.0f}" for v in q)
+    head = (f"ATHENA, q = ({qmm}) mm: all {len(slots)} solutions" if all_solutions
+            else f"ATHENA, q = ({qmm}) mm: {slot_label(first)}")
+    fig.update_layout(title={"text": title or head, "x": 0.02}, scene=_scene(*box),
+                      legend={"x": 0.75, "y": 0.5, "yanchor": "middle", "font": {"size": 11}},
+                      margin={"l": 0, "r": 0, "t": 50, "b": 0}, paper_bgcolor="white",
+                      hoverlabel={"align": "left"})
+    if len(slots) > 1:
+        buttons = _solution_buttons(geoms, owner, qmm, head if all_solutions else None)
+        active = 0 if all_solutions else slots.index(first.slot)
+        fig.update_layout(updatemenus=[{
+            "buttons": buttons, "direction": "down", "x": 0.99, "xanchor": "right", "y": 0.99,
+            "yanchor": "top", "active": active, "showactive": True}])
+    return fig
+
+
+def _solution_geometries(q: NDArray[np.float64], T: NDArray[np.float64], design: Design,
+                         first: RobotGeometry, *, every: bool) -> dict[int, RobotGeometry]:
+    """Geometry of each solution shown, by slot: every valid one (``every``) or ``first``."""
+    if not every:
+        return {first.slot: first}
+    sol = forward_kinematics(q, T, design, errors="flag")
+    return {k: (first if k == first.slot else robot_geometry(q, T, design, slot=k))
+            for k in (int(k) for k in np.flatnonzero(sol.valid))}
+
+
+def _add_solution_traces(fig: Any, geoms: dict[int, RobotGeometry], shown: int, *,
+                         all_solutions: bool, show_frames: bool, frame_length: float,
+                         box: tuple[NDArray[np.float64], NDArray[np.float64]]) -> list[int]:
+    """Add the traces of every solution to ``fig``; returns the slot of each trace.
+
+    ``all_solutions``: all visible, one legend group (and entry) per slot, text labels on
+    the first slot only; otherwise only slot ``shown`` is visible.
+    """
+    slots = list(geoms)
     owner: list[int] = []
     for k in slots:
         for tr in _traces(geoms[k], show_frames=show_frames, frame_length=frame_length,
@@ -313,41 +343,34 @@ def robot_figure(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
                 if tr["mode"] == "markers+text" and k != slots[0]:
                     tr["mode"] = "markers"      # one set of labels; hover names the rest
             else:
-                tr["visible"] = k == first.slot
+                tr["visible"] = k == shown
                 tr["legendgroup"] = tr["name"]
             fig.add_trace(tr)
             owner.append(k)
+    return owner
+
+
+def _scene(lo: NDArray[np.float64], hi: NDArray[np.float64]) -> dict[str, Any]:
+    """The plotly scene: the axis box ``(lo, hi)`` (m, a cube), axes in mm."""
     axis = {"showbackground": True, "backgroundcolor": "#f4f4f6", "gridcolor": "#cccccc"}
-    qmm = ", ".join(f"{MM * v:.0f}" for v in q)
-    head = (f"ATHENA, q = ({qmm}) mm: all {len(slots)} solutions" if all_solutions
-            else f"ATHENA, q = ({qmm}) mm: {slot_label(first)}")
-    fig.update_layout(
-        title={"text": title or head, "x": 0.02},
-        scene={"xaxis": {**axis, "title": "x_b [mm]",
-                         "range": [MM * (centre[0] - half), MM * (centre[0] + half)]},
-               "yaxis": {**axis, "title": "y_b [mm]",
-                         "range": [MM * (centre[1] - half), MM * (centre[1] + half)]},
-               "zaxis": {**axis, "title": "z_b [mm]",
-                         "range": [MM * (centre[2] - half), MM * (centre[2] + half)]},
-               "aspectmode": "cube", "domain": {"x": [0.0, 0.74], "y": [0.0, 1.0]},
-               "camera": {"eye": dict(CAMERA_EYE), "center": {"x": 0.0, "y": 0.0, "z": -0.15}}},
-        legend={"x": 0.75, "y": 0.5, "yanchor": "middle", "font": {"size": 11}},
-        margin={"l": 0, "r": 0, "t": 50, "b": 0}, paper_bgcolor="white",
-        hoverlabel={"align": "left"})
+    return {**{f"{c}axis": {**axis, "title": f"{c}_b [mm]", "range": [MM * lo[i], MM * hi[i]]}
+               for i, c in enumerate("xyz")},
+            "aspectmode": "cube", "domain": {"x": [0.0, 0.74], "y": [0.0, 1.0]},
+            "camera": {"eye": dict(CAMERA_EYE), "center": {"x": 0.0, "y": 0.0, "z": -0.15}}}
+
+
+def _solution_buttons(geoms: dict[int, RobotGeometry], owner: list[int], qmm: str,
+                      all_head: str | None) -> list[dict[str, Any]]:
+    """Menu entries: "all solutions" (where ``all_head`` is the title), then each slot."""
     buttons = []
-    if all_solutions:
-        buttons.append({"label": f"all {len(slots)} solutions", "method": "update",
-                        "args": [{"visible": [True] * len(owner)}, {"title.text": head}]})
-    if len(slots) > 1:
-        buttons += [{"label": slot_label(geoms[k]), "method": "update",
-                     "args": [{"visible": [o == k for o in owner]},
-                              {"title.text": f"ATHENA, q = ({qmm}) mm: {slot_label(geoms[k])}"}]}
-                    for k in slots]
-        active = 0 if all_solutions else slots.index(first.slot)
-        fig.update_layout(updatemenus=[{
-            "buttons": buttons, "direction": "down", "x": 0.99, "xanchor": "right", "y": 0.99,
-            "yanchor": "top", "active": active, "showactive": True}])
-    return fig
+    if all_head is not None:
+        buttons.append({"label": f"all {len(geoms)} solutions", "method": "update",
+                        "args": [{"visible": [True] * len(owner)}, {"title.text": all_head}]})
+    buttons += [{"label": slot_label(g), "method": "update",
+                 "args": [{"visible": [o == k for o in owner]},
+                          {"title.text": f"ATHENA, q = ({qmm}) mm: {slot_label(g)}"}]}
+                for k, g in geoms.items()]
+    return buttons
 
 
 def write_html(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,

@@ -104,60 +104,20 @@ def place_labels(ax: Axes, items: list[tuple[str, NDArray[np.float64], str]], *,
     renderer = _renderer(fig)
     scale = fig.dpi / 100.0
     anchors = _project(ax, np.stack([p for _, p, _ in items])) if items else np.zeros((0, 2))
-    merged: list[tuple[str, NDArray[np.float64], NDArray[np.float64], str]] = []
-    for (text, p, color), xy in zip(items, anchors, strict=True):
-        for k, (t0, p0, xy0, c0) in enumerate(merged):
-            if np.hypot(*(xy - xy0)) >= MERGE_PX * scale:
-                continue
-            names = set(t0.split(", "))
-            if text in LEFT_OUT_NEAR_APART and names & KEEP_APART:
-                break                                    # M between close carriages
-            if text in KEEP_APART and names & KEEP_APART:
-                continue                                 # A and B: each its own label
-            merged[k] = (f"{t0}, {text}", p0, xy0, c0)
-            break
-        else:
-            merged.append((text, p, xy, color))
+    merged = _merge_labels(items, anchors, MERGE_PX * scale)
     half = MARKER_HALF * scale
     marks = np.array([[x - half, y - half, x + half, y + half] for _, _, (x, y), _ in merged])
     hard = [np.asarray(b, dtype=float).reshape(4) for b in boxes or []]
-    soft = np.zeros((0, 4))
-    if lines:
-        pts = np.concatenate([_sample(_project(ax, np.asarray(ln, dtype=float)), 3.0 * scale)
-                              for ln in lines])
-        lw = 1.5 * scale
-        soft = np.column_stack([pts - lw, pts + lw])
-    frame = ax.bbox.extents
+    soft = _line_boxes(ax, lines, scale)
     inv = ax.transData.inverted()
     out = []
-    dirs = [(1, 1), (1, -1), (-1, 1), (-1, -1), (1, 0), (-1, 0), (0, 1), (0, -1)]
     for text, _, xy, color in merged:
         x2, y2 = inv.transform(xy)
         ann = ax.annotate(text, xy=(x2, y2), xycoords="data", xytext=(0, 0),
                           textcoords="offset points", fontsize=fontsize, color=color,
                           ha="left", va="bottom", annotation_clip=False, zorder=20)
         ext = ann.get_window_extent(renderer)          # measured once; boxes follow
-        w, h = ext.width, ext.height
-        x0, y0 = ext.x0, ext.y0                        # the box's corner at offset 0
-        best: tuple[float, Any, str, str, NDArray[np.float64]] | None = None
-        for r in LABEL_RADII:
-            for dx, dy in dirs:
-                ha = "left" if dx > 0 else "right" if dx < 0 else "center"
-                va = "bottom" if dy > 0 else "top" if dy < 0 else "center"
-                off = (r * dx / np.hypot(dx, dy), r * dy / np.hypot(dx, dy))
-                bx = x0 + off[0] * fig.dpi / 72.0 - _SHIFT[ha] * w
-                by = y0 + off[1] * fig.dpi / 72.0 - _SHIFT[va] * h
-                box = np.array([bx, by, bx + w, by + h])
-                cost = (100.0 * float(sum(_overlap(box, b).sum() for b in hard))
-                        + 10.0 * float(_overlap(box, marks).sum())
-                        + float(_overlap(box, soft).sum()) + 0.5 * r)
-                inside = (box[0] >= frame[0] and box[1] >= frame[1] and box[2] <= frame[2]
-                          and box[3] <= frame[3])
-                cost += 0.0 if inside else 1e12
-                if best is None or cost < best[0]:
-                    best = (cost, off, ha, va, box)
-        assert best is not None
-        _, off, ha, va, box = best
+        off, ha, va, box = _best_place(ext, fig.dpi, ax.bbox.extents, hard, marks, soft)
         ann.set(ha=ha, va=va)
         ann.xyann = off
         if np.hypot(*off) > LABEL_RADII[1] + 1:         # far from its point: a leader line
@@ -170,3 +130,74 @@ def place_labels(ax: Axes, items: list[tuple[str, NDArray[np.float64], str]], *,
         hard.append(box)
         out.append(ann)
     return out
+
+
+def _merge_labels(items: list[tuple[str, NDArray[np.float64], str]],
+                  anchors: NDArray[np.float64], merge_px: float
+                  ) -> list[tuple[str, NDArray[np.float64], NDArray[np.float64], str]]:
+    """``(text, point, pixel, colour)`` per label, where close points share one label.
+
+    Points closer than ``merge_px`` on the screen share one label, but for
+    :data:`KEEP_APART` and :data:`LEFT_OUT_NEAR_APART`.
+    """
+    merged: list[tuple[str, NDArray[np.float64], NDArray[np.float64], str]] = []
+    for (text, p, color), xy in zip(items, anchors, strict=True):
+        for k, (t0, p0, xy0, c0) in enumerate(merged):
+            if np.hypot(*(xy - xy0)) >= merge_px:
+                continue
+            names = set(t0.split(", "))
+            if text in LEFT_OUT_NEAR_APART and names & KEEP_APART:
+                break                                    # M between close carriages
+            if text in KEEP_APART and names & KEEP_APART:
+                continue                                 # A and B: each its own label
+            merged[k] = (f"{t0}, {text}", p0, xy0, c0)
+            break
+        else:
+            merged.append((text, p, xy, color))
+    return merged
+
+
+def _line_boxes(ax: Axes, lines: list[NDArray[np.float64]] | None,
+                scale: float) -> NDArray[np.float64]:
+    """Small display boxes (n, 4) (px) along the drawn ``lines``: what labels should avoid."""
+    if not lines:
+        return np.zeros((0, 4))
+    pts = np.concatenate([_sample(_project(ax, np.asarray(ln, dtype=float)), 3.0 * scale)
+                          for ln in lines])
+    lw = 1.5 * scale
+    return np.column_stack([pts - lw, pts + lw])
+
+
+#: The 8 directions (screen x, y) tried around a point, in order of preference.
+_DIRECTIONS = ((1, 1), (1, -1), (-1, 1), (-1, -1), (1, 0), (-1, 0), (0, 1), (0, -1))
+
+
+def _best_place(ext: Any, dpi: float, frame: NDArray[np.float64], hard: list[Any],
+                marks: NDArray[np.float64], soft: NDArray[np.float64]
+                ) -> tuple[tuple[float, float], str, str, NDArray[np.float64]]:
+    """The least-cost place of a label whose box at offset 0 is ``ext`` (display px).
+
+    Returns the offset (points), the horizontal and vertical alignment and the label's
+    display box ``(x0, y0, x1, y1)``; costs as in :func:`place_labels`.
+    """
+    w, h = ext.width, ext.height
+    x0, y0 = ext.x0, ext.y0                        # the box's corner at offset 0
+    best: tuple[float, Any, str, str, NDArray[np.float64]] | None = None
+    for r in LABEL_RADII:
+        for dx, dy in _DIRECTIONS:
+            ha = "left" if dx > 0 else "right" if dx < 0 else "center"
+            va = "bottom" if dy > 0 else "top" if dy < 0 else "center"
+            off = (r * dx / np.hypot(dx, dy), r * dy / np.hypot(dx, dy))
+            bx = x0 + off[0] * dpi / 72.0 - _SHIFT[ha] * w
+            by = y0 + off[1] * dpi / 72.0 - _SHIFT[va] * h
+            box = np.array([bx, by, bx + w, by + h])
+            cost = (100.0 * float(sum(_overlap(box, b).sum() for b in hard))
+                    + 10.0 * float(_overlap(box, marks).sum())
+                    + float(_overlap(box, soft).sum()) + 0.5 * r)
+            inside = (box[0] >= frame[0] and box[1] >= frame[1] and box[2] <= frame[2]
+                      and box[3] <= frame[3])
+            cost += 0.0 if inside else 1e12
+            if best is None or cost < best[0]:
+                best = (cost, off, ha, va, box)
+    assert best is not None
+    return best[1], best[2], best[3], best[4]

@@ -30,6 +30,7 @@ from ._geometry import (
     cube_limits,
     robot_geometry,
     slot_label,
+    union_bounds,
 )
 from ._labels import _renderer, place_labels
 
@@ -267,13 +268,9 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
 
     Parameters
     ----------
-    q : array-like, shape (3,), optional
-        Actuators, m (default :data:`athenakin.robot.REFERENCE_Q`).
-    T_b_e : array-like, shape (4, 4), optional
-        RCM frame (default :func:`athenakin.default_rcm_frame`).
-    design : Design, optional
-    slot : int, keyword-only
-        FK slot 0..15.
+    q, T_b_e, design, slot
+        As in :func:`~athenakin.plot.robot_geometry` (defaults: the reference ``q``, the
+        default RCM frame and design, slot 0).
     geometry : RobotGeometry, keyword-only, optional
         Draw this instead of computing it from ``q``, ``T_b_e``, ``design``, ``slot``.
     ax : mpl_toolkits.mplot3d.Axes3D, keyword-only, optional
@@ -287,8 +284,8 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     legend_extra : list of matplotlib artists, keyword-only, optional
         More legend handles (e.g. what the caller drew before).
     options : PlotOptions, keyword-only, optional
-        What is shown (frames, labels, circles, legend), the frame length, the camera,
-        the axis box and the size of the branch cues (default ``PlotOptions()``).
+        What is shown and how (every field: :class:`PlotOptions`); default
+        ``PlotOptions()``.
 
     Returns
     -------
@@ -301,15 +298,41 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     """
     import matplotlib.pyplot as plt
 
+    opts = PlotOptions() if options is None else options
+    _check_plot_robot(opts, geometry, ax, legend_extra)
+    g = geometry if geometry is not None else robot_geometry(q, T_b_e, design, slot=slot)
+    if ax is None:
+        fig = plt.figure(figsize=(7.0, 6.6))
+        ax = fig.add_subplot(projection="3d")
+        fig.subplots_adjust(left=0.02, right=0.93, bottom=0.04, top=0.93)
+    _draw(ax, g, show_frames=opts.show_frames, show_circles=opts.show_circles,
+          frame_length=opts.frame_length, joint_scale=opts.joint_scale)
+    if bodies is not None and bodies is not False:       # solids (issue 20): plot/_solids.py
+        from ._solids import draw_bodies
+
+        draw_bodies(ax, g.q, g.T_b_e, g.design, slot=g.slot,
+                    bodies=None if bodies is True else bodies)
+    lo, hi = (cube_limits(*g.bounds()) if opts.limits is None else
+              (np.asarray(opts.limits[0], float), np.asarray(opts.limits[1], float)))
+    _style(ax, lo, hi, opts.view)
+    if title is None:
+        qmm = ", ".join(f"{MM * v:.0f}" for v in g.q)
+        title = f"q = ({qmm}) mm\n{slot_label(g)}"
+    ax.set_title(title, fontsize=9)
+    boxes = [_legend_box(ax, g, opts, legend_extra)] if opts.show_legend else []
+    if opts.show_labels:
+        drawn = _drawn_lines(g, show_frames=opts.show_frames, show_circles=opts.show_circles,
+                             frame_length=opts.frame_length, joint_scale=opts.joint_scale)
+        place_labels(ax, _labels(g, show_frames=opts.show_frames), lines=drawn, boxes=boxes)
+    return ax
+
+
+def _check_plot_robot(opts: object, geometry: object, ax: object, legend_extra: object) -> None:
+    """The arguments of :func:`plot_robot` that it does not pass on, else a named error."""
     from .._validation import check_axes, check_instance
     from ._geometry import RobotGeometry
 
-    opts = PlotOptions() if options is None else options
     check_instance(opts, "options", PlotOptions)
-    show_frames, show_labels = opts.show_frames, opts.show_labels
-    show_circles, show_legend = opts.show_circles, opts.show_legend
-    frame_length, joint_scale, view, limits = (opts.frame_length, opts.joint_scale, opts.view,
-                                               opts.limits)
     if geometry is not None:
         check_instance(geometry, "geometry", RobotGeometry)
     check_axes(ax, "ax")
@@ -317,40 +340,19 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
             callable(getattr(a, "get_label", None)) for a in legend_extra)):
         raise TypeError(f"legend_extra: expected a list of matplotlib artists or None, got "
                         f"{type(legend_extra).__name__}")
-    g = geometry if geometry is not None else robot_geometry(q, T_b_e, design, slot=slot)
-    if ax is None:
-        fig = plt.figure(figsize=(7.0, 6.6))
-        ax = fig.add_subplot(projection="3d")
-        fig.subplots_adjust(left=0.02, right=0.93, bottom=0.04, top=0.93)
-    _draw(ax, g, show_frames=show_frames, show_circles=show_circles,
-          frame_length=frame_length, joint_scale=joint_scale)
-    if bodies is not None and bodies is not False:       # solids (issue 20): plot/_solids.py
-        from ._solids import draw_bodies
 
-        draw_bodies(ax, g.q, g.T_b_e, g.design, slot=g.slot,
-                    bodies=None if bodies is True else bodies)
-    lo, hi = (cube_limits(*g.bounds()) if limits is None else
-              (np.asarray(limits[0], float), np.asarray(limits[1], float)))
-    _style(ax, lo, hi, view)
-    if title is None:
-        qmm = ", ".join(f"{MM * v:.0f}" for v in g.q)
-        title = f"q = ({qmm}) mm\n{slot_label(g)}"
-    ax.set_title(title, fontsize=9)
-    boxes = []
-    if show_legend:
-        other = g.intersections[1 if g.mode > 0 else 0]
-        leg = ax.legend(handles=legend_handles(show_frames=show_frames,
-                                               show_circles=show_circles,
-                                               show_other_mode=bool(np.all(np.isfinite(other))))
-                        + list(legend_extra or []),
-                        loc="upper left", fontsize=6.5, framealpha=0.9, borderaxespad=0.2)
-        ax.apply_aspect()
-        boxes.append(np.asarray(leg.get_window_extent(_renderer(ax.figure)).extents))
-    if show_labels:
-        drawn = _drawn_lines(g, show_frames=show_frames, show_circles=show_circles,
-                             frame_length=frame_length, joint_scale=joint_scale)
-        place_labels(ax, _labels(g, show_frames=show_frames), lines=drawn, boxes=boxes)
-    return ax
+
+def _legend_box(ax: Axes, g: RobotGeometry, opts: PlotOptions,
+                legend_extra: list[Any] | None) -> NDArray[np.float64]:
+    """Draw the legend of the colours (and ``legend_extra``); its display box (px)."""
+    other = g.intersections[1 if g.mode > 0 else 0]
+    leg = ax.legend(handles=legend_handles(show_frames=opts.show_frames,
+                                           show_circles=opts.show_circles,
+                                           show_other_mode=bool(np.all(np.isfinite(other))))
+                    + list(legend_extra or []),
+                    loc="upper left", fontsize=6.5, framealpha=0.9, borderaxespad=0.2)
+    ax.apply_aspect()
+    return np.asarray(leg.get_window_extent(_renderer(ax.figure)).extents)
 
 
 def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
@@ -394,15 +396,8 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
     q = check_array(REFERENCE_Q if q is None else q, "q", (3,))
     T = resolve_rcm_frame(T_b_e, design)
     sol = forward_kinematics(q, T, design, errors="flag")
-    geoms: dict[int, RobotGeometry] = {}
-    for k in map(int, np.flatnonzero(sol.valid)):
-        geoms[k] = robot_geometry(q, T, design, slot=k)
-    pad = 0.01
-    if geoms:
-        los, his = zip(*(g.bounds() for g in geoms.values()), strict=True)
-        lo, hi = np.min(los, axis=0) - pad, np.max(his, axis=0) + pad
-    else:
-        lo, hi = -np.ones(3), np.ones(3)
+    geoms = {k: robot_geometry(q, T, design, slot=k) for k in map(int, np.flatnonzero(sol.valid))}
+    lo, hi = _common_box(list(geoms.values()))
     panel = PlotOptions(show_frames=show_frames, show_labels=False, show_legend=False,
                         limits=(lo, hi), view=view, frame_length=0.08, joint_scale=2.0)
     if fig is None:
@@ -410,18 +405,7 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
     for k in range(16):
         ax = fig.add_subplot(4, 4, k + 1, projection="3d")
         if k in geoms:
-            g = geoms[k]
-            plot_robot(geometry=g, ax=ax, title="", options=panel)
-            ax.set_proj_type("ortho")           # one scale everywhere: the scale bar holds
-            ax.set_box_aspect(tuple(hi - lo), zoom=1.45)
-            ax.set_axis_off()                   # no panes: the robot fills the panel
-            _scale_bar(ax, lo, hi, view, SCALE_BAR)
-            # the title sits above the drawing, on a white band that lines may pass behind
-            heading = ax.set_title(_panel_title(g), fontsize=GRID_TITLE_SIZE, y=1.02,
-                                   va="bottom", linespacing=1.15,
-                                   bbox={"facecolor": "white", "edgecolor": "none",
-                                         "alpha": 0.92, "pad": 1.5})
-            heading.set_zorder(1000)
+            _solution_panel(ax, geoms[k], panel)
         else:
             ax.set_axis_off()
             ax.text2D(0.5, 0.5, f"slot {k}\nno solution:\n{Reason(int(sol.reason[k])).name}",
@@ -438,6 +422,32 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
              ha="center", fontsize=11)
     fig.subplots_adjust(left=0.0, right=1.0, bottom=0.09, top=0.925, wspace=0.0, hspace=0.22)
     return fig
+
+
+def _common_box(geoms: list[RobotGeometry], pad: float = 0.01
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Axis box ``(lo, hi)`` (m) tight around every geometry plus ``pad`` (none: a 2 m cube)."""
+    if not geoms:
+        return -np.ones(3), np.ones(3)
+    lo, hi = union_bounds(geoms)
+    return lo - pad, hi + pad
+
+
+def _solution_panel(ax: Axes, g: RobotGeometry, panel: PlotOptions) -> None:
+    """One panel of :func:`plot_fk_solutions`: orthographic, no panes, a scale bar, a title."""
+    assert panel.limits is not None
+    lo, hi = np.asarray(panel.limits[0], float), np.asarray(panel.limits[1], float)
+    plot_robot(geometry=g, ax=ax, title="", options=panel)
+    ax.set_proj_type("ortho")           # one scale everywhere: the scale bar holds
+    ax.set_box_aspect(tuple(hi - lo), zoom=1.45)
+    ax.set_axis_off()                   # no panes: the robot fills the panel
+    _scale_bar(ax, lo, hi, panel.view, SCALE_BAR)
+    # the title sits above the drawing, on a white band that lines may pass behind
+    heading = ax.set_title(_panel_title(g), fontsize=GRID_TITLE_SIZE, y=1.02,
+                           va="bottom", linespacing=1.15,
+                           bbox={"facecolor": "white", "edgecolor": "none",
+                                 "alpha": 0.92, "pad": 1.5})
+    heading.set_zorder(1000)
 
 
 #: Length of the scale bar of each panel of :func:`plot_fk_solutions`, m.
@@ -507,11 +517,12 @@ def save_view(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | N
     Returns
     -------
     Path
+        ``path``, written as a PNG, SVG, PDF or HTML file.
 
     Raises
     ------
     ValueError
-        Unknown suffix.
+        A suffix other than ``.png``, ``.svg``, ``.pdf`` or ``.html``.
     """
     import matplotlib.pyplot as plt
 

@@ -140,17 +140,10 @@ def draw_bodies(ax: Any, q: ArrayLike, T_b_e: ArrayLike, design: Design | None =
     from ..collision._bodies import resolve_bodies
     from ..errors import KinematicsError
 
-    check_axes(ax, "ax")
-    if getattr(ax, "name", "") != "3d":
-        raise TypeError(f"ax: expected a 3-D matplotlib Axes (projection='3d'), got "
-                        f"{type(ax).__name__}")
-    for name, flag in (("show_closest", show_closest), ("show_clearance", show_clearance)):
-        if not isinstance(flag, (bool, np.bool_)):
-            raise TypeError(f"{name}: expected a bool, got {type(flag).__name__}")
+    _check_solids_args(ax, alpha=alpha, show_closest=show_closest,
+                       show_clearance=show_clearance)
     design = resolve_design(design)
     bodies = resolve_bodies(bodies, design)
-    if isinstance(alpha, bool) or not isinstance(alpha, (int, float)) or not 0 < alpha <= 1:
-        raise InvalidInputError(f"alpha: expected an opacity in (0, 1], got {alpha!r}")
     T_b_e = check_frame(T_b_e, "T_b_e")
     q = check_array(q, "q", (3,))
     if q.shape != (3,):
@@ -182,3 +175,17 @@ def draw_bodies(ax: Any, q: ArrayLike, T_b_e: ArrayLike, design: Design | None =
         ax.text2D(0.98, 0.02, f"clearance {d * 1e3:.1f} mm\n{pair[0]} - {pair[1]}",
                   transform=ax.transAxes, ha="right", va="bottom", fontsize=7, color=hot)
     return c
+
+
+def _check_solids_args(ax: Any, *, alpha: object, show_closest: object,
+                       show_clearance: object) -> None:
+    """The drawing arguments of :func:`draw_bodies`, else a named error."""
+    check_axes(ax, "ax")
+    if getattr(ax, "name", "") != "3d":
+        raise TypeError(f"ax: expected a 3-D matplotlib Axes (projection='3d'), got "
+                        f"{type(ax).__name__}")
+    for name, flag in (("show_closest", show_closest), ("show_clearance", show_clearance)):
+        if not isinstance(flag, (bool, np.bool_)):
+            raise TypeError(f"{name}: expected a bool, got {type(flag).__name__}")
+    if isinstance(alpha, bool) or not isinstance(alpha, (int, float)) or not 0 < alpha <= 1:
+        raise InvalidInputError(f"alpha: expected an opacity in (0, 1], got {alpha!r}")

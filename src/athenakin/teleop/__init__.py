@@ -20,7 +20,13 @@ m/s^2, N. docs/teleop.md has the measurements.
 
 from ._arm import OPERATING_STATES, ArmBackend, JointState, MujocoBackend, ServoGains, SimulatedArm
 from ._core import Teleop, TeleopCommand
-from ._filter import TREMOR_FILTERS, TREMOR_NOTCH, TremorFilter, filter_response
+from ._filter import (
+    TREMOR_FILTERS,
+    TREMOR_NOTCH,
+    TREMOR_NOTCH_LOWPASS,
+    TremorFilter,
+    filter_response,
+)
 from ._options import TeleopOptions, TeleopStatus
 from ._session import (
     CRTK_TOPICS,
@@ -47,6 +53,7 @@ __all__ = [
     "ServoGains",
     "SimulatedArm",
     "TREMOR_FILTERS",
+    "TREMOR_NOTCH_LOWPASS",
     "TREMOR_NOTCH",
     "Teleop",
     "TeleopCommand",

@@ -37,15 +37,28 @@ from numpy.typing import ArrayLike
 from .._validation import check_array, check_frame, check_scalar
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, Reason
-from ._filter import MIN_FILTER_RATE, TremorFilter, check_rate
+from ._filter import TremorFilter, check_rate
 from ._fixtures import TipFixtures
 from ._options import TeleopOptions, TeleopStatus, _three
 
 __all__ = ["Teleop", "TeleopCommand"]
 
 _V3 = tuple[float, float, float]
-_B = {f.name: int(f) for f in TeleopStatus if f}
-_STATUS_NONE = TeleopStatus.NONE
+# the status bits as plain ints (the loop combines them; :func:`_status` makes the flag)
+_CLUTCHED = int(TeleopStatus.CLUTCHED)
+_STROKE = int(TeleopStatus.STROKE)
+_DEPTH = int(TeleopStatus.DEPTH)
+_SINGULAR = int(TeleopStatus.SINGULAR)
+_FIXTURE = int(TeleopStatus.FIXTURE)
+_CLEARANCE = int(TeleopStatus.CLEARANCE)
+_VELOCITY = int(TeleopStatus.VELOCITY)
+_ACCELERATION = int(TeleopStatus.ACCELERATION)
+_WATCHDOG = int(TeleopStatus.WATCHDOG)
+_ESTOP = int(TeleopStatus.ESTOP)
+_INVALID = int(TeleopStatus.INVALID)
+_JUMP = int(TeleopStatus.JUMP)
+_HOLD = int(TeleopStatus.HOLD)
+_FAULT = int(TeleopStatus.FAULT)
 #: Relative slack below the limits that the limiter aims at (rounding of the IK).
 LIMIT_SLACK = 1e-6
 #: Longest step probed for the direction of the joint motion, m.
@@ -122,7 +135,8 @@ class _IK:
             b = self.buf
             b[0], b[1], b[2] = x, y, z
             q, r = self.ctl.q_from_tool_tip(b)
-            return float(q[0]), float(q[1]), float(q[2]), int(r)
+            q0, q1, q2 = q.tolist()          # Python floats in one call
+            return q0, q1, q2, int(r)
         from ..robot import q_from_tool_tip
 
         q, res = q_from_tool_tip(self.T, (x, y, z), self.design, errors="flag")
@@ -190,37 +204,32 @@ class Teleop:
         if not isinstance(opts, TeleopOptions):
             raise TypeError(f"options: expected TeleopOptions, got {type(opts).__name__}")
         self.options = opts
+        self._max_jump, self._watchdog = opts.max_master_jump, opts.watchdog   # read per cycle
         self.design, self.T_b_e = design, np.array(T)
         self.T_b_e.setflags(write=False)
         self.rate = check_rate(rate)
-        if opts.filter != "none" and self.rate < MIN_FILTER_RATE:
-            raise InvalidInputError(f"rate: the tremor filter needs rate >= {MIN_FILTER_RATE} Hz,"
-                                    f" got {self.rate}")
+        self._filter = TremorFilter(opts.filter, self.rate)    # its own least rate
         self.dt = 1.0 / self.rate
         self.v_max, self.a_max = _three(v_max, "v_max"), _three(a_max, "a_max")
+        k = 1.0 - LIMIT_SLACK                 # the limits that the limiter aims at
+        self._v_aim = tuple(v * k for v in self.v_max)
+        self._a_aim = tuple(a * k for a in self.a_max)
         self._scale = check_scalar(scale, "scale", positive=True)
         self.stopping_distance = opts.stopping_distance(self.v_max, self.a_max)
-        if opts.stroke_margin < self.stopping_distance:
-            raise InvalidInputError(f"stroke_margin: {opts.stroke_margin} m is below the "
-                                    f"stopping distance {self.stopping_distance:.4g} m of v_max, "
-                                    f"a_max; raise it or a_max")
-        L = design.tool_length
-        self.depth = opts.depth if opts.depth is not None else (0.01, L - 0.03)
-        if not self.depth[1] < L:
-            raise InvalidInputError(f"depth: the largest depth must be below the tool length "
-                                    f"{L} m, got {self.depth[1]}")
+        self.depth = _check_margins(opts, design, self.stopping_distance)
         self.margins = opts.margins if opts.margins is not None else Margins()
         self._lo = tuple(float(v) + opts.stroke_margin for v in design.stroke_min)
         self._hi = tuple(float(v) - opts.stroke_margin for v in design.stroke_max)
         self._hard_lo = tuple(float(v) for v in design.stroke_min)
         self._hard_hi = tuple(float(v) for v in design.stroke_max)
+        self._link_max = min(design.l1, design.l3)      # the h margin's far side, m
         compiled = resolve_backend(opts.backend)
         self._backend = "numba" if compiled else "numpy"
         self._ik = _IK(self.T_b_e, design, compiled)
         self._R = tuple(tuple(float(v) for v in row) for row in opts.registration)
         self._Tr = tuple(tuple(float(v) for v in row) for row in T[:3, :4])
-        self._filter = TremorFilter(opts.filter, self.rate)
         self._fixtures = TipFixtures(environment)
+        self._has_fixtures = len(self._fixtures) > 0
         check = (bodies is not None or environment is not None) if opts.check_clearance is None \
             else opts.check_clearance
         self._clear_floor = opts.clearance_margin + opts.clearance_buffer if check else -math.inf
@@ -231,7 +240,20 @@ class Teleop:
                                 bodies=bodies if check else None,
                                 environment=environment if check else None,
                                 clearance_margin=opts.clearance_margin if check else None)
-        pose = self._tracker.pose
+        self._check_start(self._tracker.pose, check)
+        self._masses, self._gravity = _feedforward_model(opts, design)
+        # the feed-forward of each FK slot the robot takes: the dynamics' loop object
+        # (checked once, the compiled kernel on preallocated buffers, never raises)
+        self._ff_loops: dict[int, Any] = {}
+        self.fault: BaseException | None = None
+        self._reset_state(self._tracker.pose)
+
+    def _check_start(self, pose: Any, check: bool) -> None:
+        """``q0``'s tracked pose may start teleoperation (else a named error).
+
+        The instrument inserted through the RCM, ``q0`` within the stroke, its tip outside
+        every forbidden region, and (``check``) the bodies' clearance above the margin.
+        """
         if pose.p_sign != 1:
             raise InvalidInputError(f"slot: slot {pose.slot} has the instrument behind the RCM "
                                     f"(p < 0); teleoperation needs p > 0")
@@ -242,28 +264,11 @@ class Teleop:
         if d < 0.0:
             raise InvalidInputError(f"q0: the tool tip is inside the forbidden region "
                                     f"{self._fixtures.names[i]!r} ({-d:.4g} m deep)")
-        if check and not pose.clearance >= opts.clearance_margin:
+        margin = self.options.clearance_margin
+        if check and not pose.clearance >= margin:
             a, b = pose.closest_pair
             raise InvalidInputError(f"q0: clearance {pose.clearance:.4g} m between {a!r} and "
-                                    f"{b!r} is below clearance_margin {opts.clearance_margin} m")
-        self._masses = None
-        if opts.feedforward:
-            from ..dynamics import MassModel
-
-            self._masses = opts.masses if opts.masses is not None else MassModel.reference(design)
-            if not isinstance(self._masses, MassModel):
-                raise TypeError(f"masses: expected athenakin.dynamics.MassModel, got "
-                                f"{type(self._masses).__name__}")
-        if opts.feedforward:
-            from ..dynamics import STANDARD_GRAVITY
-
-            self._gravity = np.array(STANDARD_GRAVITY if opts.gravity is None else opts.gravity,
-                                     dtype=float)
-        # the feed-forward of each FK slot the robot takes: the dynamics' loop object
-        # (checked once, the compiled kernel on preallocated buffers, never raises)
-        self._ff_loops: dict[int, Any] = {}
-        self.fault: BaseException | None = None
-        self._reset_state(pose)
+                                    f"{b!r} is below clearance_margin {margin} m")
 
     # ------------------------------------------------------------------------------
     def _reset_state(self, pose: Any) -> None:
@@ -360,13 +365,13 @@ class Teleop:
         if lo <= r <= hi:
             return g, 0
         if not r > 0.0:
-            return self._tip, _B["DEPTH"]
+            return self._tip, _DEPTH
         k = (lo if r < lo else hi) / r
-        return (g[0] * k, g[1] * k, g[2] * k), _B["DEPTH"]
+        return (g[0] * k, g[1] * k, g[2] * k), _DEPTH
 
     def _fixture(self, g: _V3) -> tuple[_V3, int]:
         fx = self._fixtures
-        if not len(fx):
+        if not self._has_fixtures:
             return g, 0
         m = self.options.fixture_margin
         x = self._to_base(g)
@@ -375,11 +380,11 @@ class Teleop:
             d, n, _i = fx.nearest(x)
             if d >= m:
                 break
-            flags = _B["FIXTURE"]
+            flags = _FIXTURE
             k = m - d + 1e-9
             x = (x[0] + k * n[0], x[1] + k * n[1], x[2] + k * n[2])
         else:
-            return self._tip, _B["FIXTURE"]
+            return self._tip, _FIXTURE
         if flags:
             g, f2 = self._depth(self._to_e(x))
             if f2:                      # the depth and the fixture disagree: no step
@@ -393,14 +398,14 @@ class Teleop:
         for i in range(3):
             lo, hi = self._lo[i], self._hi[i]
             if not self._hard_lo[i] <= q[i] <= self._hard_hi[i]:
-                flags |= _B["STROKE"]
+                flags |= _STROKE
             elif (q[i] < lo and q[i] < qc[i]) or (q[i] > hi and q[i] > qc[i]):
-                flags |= _B["STROKE"]
-        if len(self._fixtures):
+                flags |= _STROKE
+        if self._has_fixtures:
             d, _, _ = self._fixtures.nearest(self._to_base(tip))
             dc, _, _ = self._fixtures.nearest(self._to_base(self._tip))
             if d < 0.0 or (d < self.options.fixture_margin and d < dc):
-                flags |= _B["FIXTURE"]
+                flags |= _FIXTURE
         return flags
 
     def _soft(self, pose: Any) -> int:
@@ -408,14 +413,14 @@ class Teleop:
         cur = self._pose
         flags = 0
         mg = self.margins
-        g = self.design
-        link_max = min(g.l1, g.l3)
-        for a, b, m in ((pose.half_chord, cur.half_chord, mg.half_chord), (pose.h, cur.h, mg.h),
-                        (link_max - pose.h, link_max - cur.h, mg.link),
-                        (pose.sin_u2, cur.sin_u2, mg.sin_u2), (pose.sin_u4, cur.sin_u4, mg.sin_u4),
-                        (abs(pose.p), abs(cur.p), mg.p)):
-            if a < m and a < b:
-                flags |= _B["SINGULAR"]
+        link_max = self._link_max
+        if ((pose.half_chord < mg.half_chord and pose.half_chord < cur.half_chord)
+                or (pose.h < mg.h and pose.h < cur.h)
+                or (link_max - pose.h < mg.link and link_max - pose.h < link_max - cur.h)
+                or (pose.sin_u2 < mg.sin_u2 and pose.sin_u2 < cur.sin_u2)
+                or (pose.sin_u4 < mg.sin_u4 and pose.sin_u4 < cur.sin_u4)
+                or (abs(pose.p) < mg.p and abs(pose.p) < abs(cur.p))):
+            flags |= _SINGULAR
         if self._clear_floor > -math.inf:
             # keep room to brake: the distance to stop from this step's speed, times a bound
             # on how much faster than the joints a body point moves (NaN clearance: reject)
@@ -423,7 +428,7 @@ class Teleop:
             c = pose.clearance
             if not (c >= self._clear_floor + room
                     or (c >= cur.clearance and c >= self.options.clearance_margin + room)):
-                flags |= _B["CLEARANCE"]
+                flags |= _CLEARANCE
         return flags
 
     def _stopping(self, q: _V3) -> float:
@@ -450,16 +455,16 @@ class Teleop:
         """Pose and rejection flags of the step to ``tip`` (0: accept; the tracker is there)."""
         x, y, z, r = self._ik(tip[0], tip[1], tip[2])
         if r != 0:
-            return None, _B["STROKE"] if r in _STROKE_REASONS else _B["SINGULAR"]
+            return None, _STROKE if r in _STROKE_REASONS else _SINGULAR
         f = self._soft_q((x, y, z), tip)
         if f:
             return None, f
         pose = self._probe((x, y, z))
         te = pose.tip_e
-        if (not pose.valid or pose.flags & _BRANCH_FLAGS
+        if (not pose.valid or int(pose.flags) & _BRANCH_FLAGS        # int: IntFlag's & is slow
                 or abs(te[0] - tip[0]) + abs(te[1] - tip[1]) + abs(te[2] - tip[2]) > BRANCH_TOL):
             self._revert()
-            return None, _B["SINGULAR"]
+            return None, _SINGULAR
         f = self._soft(pose)
         if f:
             self._revert()
@@ -505,7 +510,7 @@ class Teleop:
                 self._tracker.reset(self._q, slot=self._slot)
             except Exception:  # pragma: no cover - the command was valid a cycle ago
                 pass
-            return self._brake(_B["FAULT"] | _B["HOLD"], self._t)
+            return self._brake(_FAULT | _HOLD, self._t)
 
     def _sample(self, t: float, m: object) -> tuple[float, _V3 | None, int]:
         """The cycle's time and the registered master position (None: no valid sample)."""
@@ -515,7 +520,7 @@ class Teleop:
         except (TypeError, ValueError, OverflowError):
             tt = math.nan
         if not (math.isfinite(tt) and tt >= self._t):
-            flags |= _B["INVALID"]
+            flags |= _INVALID
             tt = self._t + self.dt if math.isfinite(self._t) else 0.0
             if m is not None:
                 return tt, None, flags
@@ -526,9 +531,9 @@ class Teleop:
             if len(m) != 3:  # type: ignore[arg-type]
                 raise ValueError
         except (TypeError, ValueError, LookupError, OverflowError):
-            return tt, None, flags | _B["INVALID"]
+            return tt, None, flags | _INVALID
         if not (abs(x) <= MAX_MASTER_M and abs(y) <= MAX_MASTER_M and abs(z) <= MAX_MASTER_M):
-            return tt, None, flags | _B["INVALID"]          # NaN, inf, or beyond any master
+            return tt, None, flags | _INVALID          # NaN, inf, or beyond any master
         R = self._R
         p = (R[0][0] * x + R[0][1] * y + R[0][2] * z, R[1][0] * x + R[1][1] * y + R[1][2] * z,
              R[2][0] * x + R[2][1] * y + R[2][2] * z)
@@ -540,10 +545,10 @@ class Teleop:
         closed = clutch is True or (clutch is not False and bool(clutch))
         if p is not None:
             last = self._last_p
-            if last is not None and math.dist(p, last) > self.options.max_master_jump:
-                flags |= _B["JUMP"]
+            if last is not None and math.dist(p, last) > self._max_jump:
+                flags |= _JUMP
                 self._engaged = False
-            if last is None or flags & _B["JUMP"]:
+            if last is None or flags & _JUMP:
                 self._filter.reset(*p)
                 self._step_p = (0.0, 0.0, 0.0)
                 self._dt_p = 0.0
@@ -554,8 +559,8 @@ class Teleop:
             self._t_sample = tt
             self._hold = False
             self._y = self._filter(*self._master_now(tt))
-        elif tt - self._t_sample >= self.options.watchdog:
-            flags |= _B["WATCHDOG"]
+        elif tt - self._t_sample >= self._watchdog:
+            flags |= _WATCHDOG
             self._hold = True
             self._engaged = False
         elif self._last_p is not None:
@@ -563,14 +568,14 @@ class Teleop:
             # cycle on the master interpolated between its samples (_master_now)
             self._y = self._filter(*self._master_now(tt))
         if self._estop:
-            flags |= _B["ESTOP"]
+            flags |= _ESTOP
             self._engaged = False
-        if self._hold and not flags & _B["WATCHDOG"]:
-            flags |= _B["WATCHDOG"]
-        if flags & (_B["ESTOP"] | _B["WATCHDOG"]):
-            return self._brake(flags | _B["HOLD"], tt)
+        if self._hold and not flags & _WATCHDOG:
+            flags |= _WATCHDOG
+        if flags & (_ESTOP | _WATCHDOG):
+            return self._brake(flags | _HOLD, tt)
         if not closed:
-            flags |= _B["CLUTCHED"]
+            flags |= _CLUTCHED
             self._engaged = False
         elif p is not None and not self._engaged:
             y, s, c = self._y, self._scale, self._tip
@@ -586,7 +591,7 @@ class Teleop:
         flags |= f
         g, f = self._fixture(g)
         flags |= f
-        if len(self._fixtures):
+        if self._has_fixtures:
             g, f = self._slide(g)
             flags |= f
         return self._advance(g, flags, tt)
@@ -624,7 +629,7 @@ class Teleop:
             return g, 0
         g2 = (g[0] - k * ne[0], g[1] - k * ne[1], g[2] - k * ne[2])
         g2, f = self._depth(g2)
-        return g2, _B["FIXTURE"] | f
+        return g2, _FIXTURE | f
 
     def _advance(self, g: _V3, flags: int, tt: float) -> TeleopCommand:
         """The longest safe step from the current tip toward ``g``, or a brake."""
@@ -639,15 +644,15 @@ class Teleop:
             h = min(ell, PROBE_M)
             x1, x2, x3, r = self._ik(c[0] + h * u[0], c[1] + h * u[1], c[2] + h * u[2])
             if r != 0:
-                return self._brake(flags | (_B["STROKE"] if r in _STROKE_REASONS
-                                            else _B["SINGULAR"]), tt)
+                return self._brake(flags | (_STROKE if r in _STROKE_REASONS
+                                            else _SINGULAR), tt)
             J = ((x1 - q[0]) / h, (x2 - q[1]) / h, (x3 - q[2]) / h)
         gp = self._goal
         vg = max(0.0, (g[0] - gp[0]) * u[0] + (g[1] - gp[1]) * u[1] + (g[2] - gp[2]) * u[2])
         self._goal = g
         lo, hi, bind = self._bounds(J, ell, vg)
         if lo > hi:
-            return self._brake(flags | _B["ACCELERATION"], tt)
+            return self._brake(flags | _ACCELERATION, tt)
         if hi < ell:
             flags |= bind
         if hi <= 0.0:                          # no step: stop here (|v_i| <= a_max_i dt)
@@ -669,7 +674,7 @@ class Teleop:
                     secants += 1
                     s = hi2
                     continue
-                f = bind or _B["VELOCITY"]
+                f = bind or _VELOCITY
             reject |= f
             s = lo + 0.5 * (s - lo)
         return self._brake(flags | reject, tt)
@@ -685,26 +690,26 @@ class Teleop:
         v = self._qd
         lo, hi = 0.0, ell
         bind = 0
-        k = 1.0 - LIMIT_SLACK
+        v_aim, a_aim = self._v_aim, self._a_aim
         for i in range(3):
             Ji = J[i]
-            vm, am = self.v_max[i] * k, self.a_max[i] * k
+            vm, am = v_aim[i], a_aim[i]
             if abs(Ji) * ell > 1e-15:
                 aJ = abs(Ji)
                 sv = vm * dt / aJ
                 if sv < hi:
-                    hi, bind = sv, _B["VELOCITY"]
+                    hi, bind = sv, _VELOCITY
                 # approach: the joint can still stop at the (moving) target at a_max
                 adt = am * dt
                 w = adt * (math.sqrt(0.25 + 2.0 * aJ * ell / (adt * dt)) - 0.5)
                 sa = vg + w * dt / aJ
                 if sa < hi:
-                    hi, bind = sa, _B["ACCELERATION"]
+                    hi, bind = sa, _ACCELERATION
                 s1 = (v[i] - adt) * dt / Ji
                 s2 = (v[i] + adt) * dt / Ji
                 a, b = (s1, s2) if s1 <= s2 else (s2, s1)
                 if b < hi:
-                    hi, bind = b, _B["ACCELERATION"]
+                    hi, bind = b, _ACCELERATION
                 if a > lo:
                     lo = a
             elif abs(v[i]) > am * dt:
@@ -731,12 +736,12 @@ class Teleop:
 
     def _brake(self, flags: int, tt: float) -> TeleopCommand:
         """Decelerate along the current velocity at ``a_max`` (rest: hold)."""
-        flags |= _B["HOLD"]
+        flags |= _HOLD
         v = self._qd
         f = 1.0
         for i in range(3):
             if v[i] != 0.0:
-                f = min(f, self.a_max[i] * (1.0 - LIMIT_SLACK) * self.dt / abs(v[i]))
+                f = min(f, self._a_aim[i] * self.dt / abs(v[i]))
         f = max(0.0, 1.0 - f) if v != (0.0, 0.0, 0.0) else 0.0
         q0 = self._q
         if f > 0.0:
@@ -745,21 +750,23 @@ class Teleop:
             pose = self._probe(q)
             ok = pose.valid and all(lo <= x <= hi for lo, x, hi in
                                     zip(self._hard_lo, q, self._hard_hi, strict=True))
-            if ok and len(self._fixtures):
+            if ok and self._has_fixtures:
                 ok = self._fixtures.nearest(self._to_base(pose.tip_e))[0] >= 0.0
             if ok and self._clear_floor > -math.inf:
                 ok = pose.clearance >= self.options.clearance_margin
             if ok:
                 return self._accept(pose, tuple(pose.tip_e), flags, tt)
             self._revert()                     # a hard limit: stop now (flagged)
-            flags |= _B["ACCELERATION"]
+            flags |= _ACCELERATION
         return self._stay(flags, tt)
 
     def _command(self, tt: float, flags: int) -> TeleopCommand:
         forces = _NAN3
         if self._masses is not None:
             forces = self._forces()
-        st = TeleopStatus(flags) if flags else _STATUS_NONE
+        st = _STATUSES.get(flags)
+        if st is None:
+            st = _status(flags)
         return TeleopCommand(tt, self._q, self._qd, self._qdd, forces, self._tip, self._target,
                              st, self._slot, self._pose.clearance)
 
@@ -776,11 +783,54 @@ class Teleop:
                 self.T_b_e, self.design, masses=self._masses, gravity=self._gravity,
                 slot=self._slot, backend=self._backend)
         f = loop(self._q, self._qd, self._qdd)  # NaN on a singular set: no feed-forward
-        self._ff = (float(f[0]), float(f[1]), float(f[2]))
+        f0, f1, f2 = f.tolist()
+        self._ff = (f0, f1, f2)
         return self._ff
 
 
 _NAN3 = (math.nan, math.nan, math.nan)
+#: The TeleopStatus of each combination of bits met so far (at most 2^14): building an
+#: IntFlag from an int costs about a microsecond, a dict look-up a few tens of ns.
+_STATUSES: dict[int, TeleopStatus] = {0: TeleopStatus.NONE}
+
+
+def _status(flags: int) -> TeleopStatus:
+    st = _STATUSES[flags] = TeleopStatus(flags)
+    return st
+
+
+def _check_margins(opts: TeleopOptions, design: Design, stopping: float) -> tuple[float, float]:
+    """The insertion depth range ``(min, max)`` (m), checked against the tool length.
+
+    Also checks the stroke margin against the stopping distance ``stopping`` (m).
+    """
+    if opts.stroke_margin < stopping:
+        raise InvalidInputError(f"stroke_margin: {opts.stroke_margin} m is below the "
+                                f"stopping distance {stopping:.4g} m of v_max, "
+                                f"a_max; raise it or a_max")
+    L = design.tool_length
+    depth = opts.depth if opts.depth is not None else (0.01, L - 0.03)
+    if not depth[1] < L:
+        raise InvalidInputError(f"depth: the largest depth must be below the tool length "
+                                f"{L} m, got {depth[1]}")
+    return depth
+
+
+def _feedforward_model(opts: TeleopOptions, design: Design) -> tuple[Any, Any]:
+    """Mass model and gravity (base frame, m/s^2) of the feed-forward.
+
+    ``(None, None)`` with ``feedforward=False``.
+    """
+    if not opts.feedforward:
+        return None, None
+    from ..dynamics import STANDARD_GRAVITY, MassModel
+
+    masses = opts.masses if opts.masses is not None else MassModel.reference(design)
+    if not isinstance(masses, MassModel):
+        raise TypeError(f"masses: expected athenakin.dynamics.MassModel, got "
+                        f"{type(masses).__name__}")
+    gravity = np.array(STANDARD_GRAVITY if opts.gravity is None else opts.gravity, dtype=float)
+    return masses, gravity
 
 
 def _branch_flags() -> int:

@@ -17,7 +17,20 @@ search (scipy ``differential_evolution``) minimising the largest gain subject to
 >= 21 dB over 8-12 Hz and a delay <= 7.5 ms at 0.05 and 0.5 Hz. Digital, at
 1 kHz (bilinear transform), measured by ``tests/test_teleop.py``: >= 21 dB at
 8-12 Hz, 7.5 ms phase delay at 0.5 Hz, largest gain +1.2 dB at 3.5 Hz, gain
-within 3 % of 1 below 1 Hz. ``"none"`` passes the position through.
+within 3 % of 1 below 1 Hz.
+
+A notch passes what lies above the tremor band (sensor noise, a handle's vibration;
+``"notch8-12"`` keeps +1.1 dB there). Attenuation above the band costs delay too, the
+more the lower it starts (``(2 / pi) * 1.38 / (2 pi 15 Hz) = 9.3 ms`` for 12 dB from
+15 Hz up), so a roll-off needs more gain between the bands to stay under 10 ms:
+:data:`TREMOR_NOTCH_LOWPASS` (``"notch8-12-lp15"``) is seven biquads found by
+``scripts/design_tremor_filter.py --design`` (scipy ``SLSQP``, minimising the largest
+gain subject to >= 21.6 dB over 8-12 Hz, >= 12.1 dB from 15 Hz and >= 20.1 dB from 30 Hz
+up, phase and group delay in [0, 8.5] ms and gain within 2.5 % of 1 from 0.01 to 1 Hz,
+every pole damped at least 0.15). Digital at 1 kHz (the script's table): >= 21.6 dB at
+8-12 Hz, >= 12.1 dB above 15 Hz, >= 20.1 dB above 30 Hz, phase delay 7.6-8.4 ms and
+group delay 0-8.4 ms below 1 Hz, largest gain +2.7 dB at 5.9 Hz (the price of the
+roll-off; ``"notch8-12"`` stays the default). ``"none"`` passes the position through.
 
 Each biquad runs in transposed direct form II on plain floats, three axes, no
 allocation; :meth:`TremorFilter.reset` sets the state to the steady state of a
@@ -31,7 +44,8 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["TREMOR_FILTERS", "TREMOR_NOTCH", "TremorFilter", "filter_response"]
+__all__ = ["TREMOR_FILTERS", "TREMOR_NOTCH", "TREMOR_NOTCH_LOWPASS", "TremorFilter",
+           "filter_response"]
 
 #: The analog prototype of ``"notch8-12"``: biquads ``(f_zero Hz, zeta_zero, f_pole Hz,
 #: zeta_pole)``, each ``(s^2 + 2 zz wz s + wz^2) / (s^2 + 2 zp wp s + wp^2) * wp^2 / wz^2``.
@@ -42,9 +56,22 @@ TREMOR_NOTCH: tuple[tuple[float, float, float, float], ...] = (
     (5.8326, 1.2633, 5.6408, 0.9820),
 )
 
+#: The analog prototype of ``"notch8-12-lp15"``, biquads as in :data:`TREMOR_NOTCH`: the
+#: tremor band and a roll-off above it (>= 12 dB from 15 Hz, >= 20 dB from 30 Hz).
+TREMOR_NOTCH_LOWPASS: tuple[tuple[float, float, float, float], ...] = (
+    (8.1504, 0.0125, 1.4925, 0.15),
+    (9.3622, 0.0773, 7.5142, 0.15),
+    (11.6395, 0.0522, 7.5502, 0.1587),
+    (1.4502, 0.1513, 2.1388, 0.6811),
+    (1.9487, 0.7668, 11.9494, 0.15),
+    (30.3844, 0.1087, 27.4978, 0.15),
+    (62.7047, 0.9387, 25.2695, 2.0),
+)
+
 #: Filters by name: the analog biquads of each (empty: no filtering).
 TREMOR_FILTERS: dict[str, tuple[tuple[float, float, float, float], ...]] = {
     "notch8-12": TREMOR_NOTCH,
+    "notch8-12-lp15": TREMOR_NOTCH_LOWPASS,
     "none": (),
 }
 
@@ -162,7 +189,8 @@ class TremorFilter:
     Parameters
     ----------
     name : str
-        A key of :data:`TREMOR_FILTERS` (``"notch8-12"`` or ``"none"``).
+        A key of :data:`TREMOR_FILTERS` (``"notch8-12"``, ``"notch8-12-lp15"`` or
+        ``"none"``).
     rate : float
         Sample rate, Hz (>= :data:`MIN_FILTER_RATE` unless ``"none"``).
     """
@@ -171,35 +199,36 @@ class TremorFilter:
         self.name = _check_name(name)
         self.rate = _check_filter_rate(self.name, rate)
         self._c = _digital(name, rate)
-        self._s = [[0.0, 0.0] for _ in range(3 * len(self._c))]   # two states per biquad
+        # two states per biquad and axis, flat: axis-major, then biquad (s1, s2)
+        self._s = [0.0] * (6 * len(self._c))
 
     def reset(self, x: float, y: float, z: float) -> None:
         """Set the state to the steady state of the constant input ``(x, y, z)``."""
-        nb = len(self._c)
-        for axis, v in enumerate((x, y, z)):
-            for k, (_b0, b1, b2, a1, a2) in enumerate(self._c):
-                st = self._s[axis * nb + k]
+        s = self._s
+        i = 0
+        for v in (x, y, z):
+            for _b0, b1, b2, a1, a2 in self._c:
                 # unit DC gain: output v for input v; s2 = b2 v - a2 v, s1 = s2 + b1 v - a1 v
-                st[1] = (b2 - a2) * v
-                st[0] = st[1] + (b1 - a1) * v
+                s[i + 1] = (b2 - a2) * v
+                s[i] = s[i + 1] + (b1 - a1) * v
+                i += 2
 
     def __call__(self, x: float, y: float, z: float) -> tuple[float, float, float]:
         """Filter one sample (m); returns the filtered sample (m)."""
-        nb = len(self._c)
-        if nb == 0:
-            return x, y, z
-        out = [x, y, z]
-        s = self._s
         c = self._c
-        for axis in range(3):
-            v = out[axis]
-            base = axis * nb
-            for k in range(nb):
-                b0, b1, b2, a1, a2 = c[k]
-                st = s[base + k]
-                w = b0 * v + st[0]
-                st[0] = b1 * v - a1 * w + st[1]
-                st[1] = b2 * v - a2 * w
-                v = w
-            out[axis] = v
-        return out[0], out[1], out[2]
+        if not c:
+            return x, y, z
+        s, n = self._s, 2 * len(c)
+        return _cascade(c, s, 0, x), _cascade(c, s, n, y), _cascade(c, s, 2 * n, z)
+
+
+def _cascade(c: tuple[tuple[float, float, float, float, float], ...], s: list[float], i: int,
+             v: float) -> float:
+    """One axis through the biquads ``c``, states ``s[i:i + 2 len(c)]`` (updated); the output."""
+    for b0, b1, b2, a1, a2 in c:
+        w = b0 * v + s[i]
+        s[i] = b1 * v - a1 * w + s[i + 1]
+        s[i + 1] = b2 * v - a2 * w
+        v = w
+        i += 2
+    return v

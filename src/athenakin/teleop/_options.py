@@ -103,7 +103,8 @@ class TeleopOptions:
         (``tip_e = offset + scale * R_e_m @ p_m``). Default the identity.
     filter : str
         Tremor filter, a key of :data:`~athenakin.teleop.TREMOR_FILTERS`:
-        ``"notch8-12"`` (default) or ``"none"``.
+        ``"notch8-12"`` (default), ``"notch8-12-lp15"`` (the same band, and a roll-off
+        above 15 Hz) or ``"none"``.
     watchdog : float
         Seconds without a valid master sample after which the robot holds (0.03).
     max_master_jump : float

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import itertools
 import math
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -155,43 +156,72 @@ def run_session(tele: Any, arm: Any, master: Iterable[tuple[float, Any, bool]], 
     sim = arm is not None and hasattr(arm.backend, "tip_b")
     if max_cycles is not None:
         max_cycles = check_count(max_cycles, "max_cycles", minimum=0)
+    for t, pos, clutch in _master_items(master, max_cycles):
+        cmd = tele.step(t, pos, clutch)
+        if arm is not None:
+            mq, mqd, mtip, ce = _servo(arm, cmd, sim)
+        else:
+            mq, mqd, ce = cmd.q, cmd.qd, math.nan
+            mtip = R @ np.asarray(cmd.tip) + c
+        rows.append((cmd.t, _master_row(pos), bool(clutch), cmd.target, cmd.tip, cmd.q, cmd.qd,
+                     cmd.qdd, cmd.forces, tuple(mq), tuple(mqd), tuple(mtip), int(cmd.status),
+                     ce))
+    return _session_log(rows, R, c)
+
+
+def _master_items(master: object, max_cycles: int | None
+                  ) -> Iterator[tuple[float, Any, bool]]:
+    """The ``(t, position, clutch)`` items of ``master`` (at most ``max_cycles``), checked."""
     try:
-        items = iter(master)
+        items = iter(master)  # type: ignore[call-overload]
     except TypeError:
         raise TypeError(f"master: expected an iterable of (t, position, clutch), got "
                         f"{type(master).__name__}") from None
-    for k, item in enumerate(items):
-        if max_cycles is not None and k >= max_cycles:
-            break
+    return _unpacked(items if max_cycles is None else itertools.islice(items, max_cycles))
+
+
+def _unpacked(items: Iterator[Any]) -> Iterator[tuple[float, Any, bool]]:
+    for item in items:
         try:
             t, pos, clutch = item
         except (TypeError, ValueError):
             raise TypeError(f"master: expected items (t, position, clutch), got {item!r:.80}"
                             ) from None
-        cmd = tele.step(t, pos, clutch)
-        if arm is not None:
-            effort = cmd.forces if all(math.isfinite(f) for f in cmd.forces) else None
-            arm.servo_jp(cmd.q, velocity=cmd.qd, effort=effort)
-            arm.step(1)
-            js = arm.measured_js()
-            mq: Any = js.position
-            mqd: Any = js.velocity
-            if sim:     # the MuJoCo backend's own read-outs (not in the ArmBackend protocol)
-                backend: Any = arm.backend
-                mtip, ce = backend.tip_b(), backend.closure_error()
-            else:
-                mtip, ce = arm.measured_cp()[:3, 3], math.nan
-        else:
-            mq, mqd, ce = cmd.q, cmd.qd, math.nan
-            mtip = R @ np.asarray(cmd.tip) + c
-        try:
-            m = tuple(float(v) for v in pos) if pos is not None else (math.nan,) * 3
-            if len(m) != 3:
-                m = (math.nan,) * 3
-        except (TypeError, ValueError):
+        yield t, pos, clutch
+
+
+def _servo(arm: Any, cmd: Any, sim: bool) -> tuple[Any, Any, Any, float]:
+    """Send ``cmd`` to ``arm`` and step it one cycle.
+
+    Returns the measured ``q``, ``qd``, tip (base frame) and closure error (NaN unless the
+    MuJoCo backend reads it out).
+    """
+    effort = cmd.forces if all(math.isfinite(f) for f in cmd.forces) else None
+    arm.servo_jp(cmd.q, velocity=cmd.qd, effort=effort)
+    arm.step(1)
+    js = arm.measured_js()
+    if sim:     # the MuJoCo backend's own read-outs (not in the ArmBackend protocol)
+        backend: Any = arm.backend
+        return js.position, js.velocity, backend.tip_b(), backend.closure_error()
+    return js.position, js.velocity, arm.measured_cp()[:3, 3], math.nan
+
+
+def _master_row(pos: object) -> tuple[float, ...]:
+    """The master's sample as logged: three floats, NaN where it was none or malformed."""
+    if pos is None:
+        return (math.nan,) * 3
+    try:
+        m = tuple(float(v) for v in pos)  # type: ignore[attr-defined]
+        if len(m) != 3:
             m = (math.nan,) * 3
-        rows.append((cmd.t, m, bool(clutch), cmd.target, cmd.tip, cmd.q, cmd.qd, cmd.qdd,
-                     cmd.forces, tuple(mq), tuple(mqd), tuple(mtip), int(cmd.status), ce))
+    except (TypeError, ValueError):
+        m = (math.nan,) * 3
+    return m
+
+
+def _session_log(rows: list[tuple], R: NDArray[np.float64], c: NDArray[np.float64]
+                 ) -> SessionLog:
+    """The rows of :func:`run_session` as arrays; ``R``, ``c``: the RCM frame in the base."""
     n = len(rows)
 
     def col(i: int, w: int | None = 3) -> NDArray[Any]:
