@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..teleop._filter import TREMOR_FILTERS
 from ._common import add_design_option, add_setup_options, check_finite, fmt, load_design, load_rcm
 from ._output import add_force_option, outputs
 
@@ -35,8 +36,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--clutch-button", type=int, default=0, help="Joy button of the clutch (0)")
     p.add_argument("--scale", type=float, default=0.2, help="motion scale (0.2)")
     p.add_argument("--rate", type=float, default=1000.0, help="cycle rate, Hz (1000)")
-    p.add_argument("--filter", default="notch8-12", choices=("notch8-12", "none"),
-                   help="tremor filter (notch8-12)")
+    p.add_argument("--filter", default="notch8-12", choices=tuple(TREMOR_FILTERS),
+                   help="tremor filter (default notch8-12; notch8-12-lp15 adds a roll-off "
+                        "above 15 Hz; none)")
     p.add_argument("--q0", nargs=3, type=float, metavar=("Q1", "Q2", "Q3"),
                    default=[-0.1, 0.1, 0.45], help="where the robot stands, m (-0.1 0.1 0.45)")
     p.add_argument("--no-arm", action="store_true",
