@@ -32,7 +32,7 @@ from .._validation import broadcast_batch, check_array, check_tolerance
 from ..chain import ups_solutions
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
-from ._jacobians import (
+from ..robot._jacobians import (
     _parallel_inverse_jacobian,
     _parallel_jacobian,
     _rcm,
@@ -41,26 +41,6 @@ from ._jacobians import (
     passive_jacobian,
     serial_jacobian,
 )
-from ._loci import (
-    MEASURE_OF,
-    near_singular_configurations,
-    singular_sets_within_strokes,
-    singularity_loci,
-)
-
-__all__ = [
-    "CONDITIONS",
-    "DEFAULT_TOL",
-    "Condition",
-    "SingularityReport",
-    "singularities",
-    "singularity_loci",
-    "sigma_min",
-    "condition_number",
-    "singular_sets_within_strokes",
-    "near_singular_configurations",
-    "MEASURE_OF",
-]
 
 #: Default tolerance of every condition (metres or dimensionless): ``near = value <= tol``.
 DEFAULT_TOL = 1e-6

@@ -1,6 +1,6 @@
 """Compiled analytic Jacobians of the parallel module and the whole robot (private).
 
-The arithmetic mirrors :mod:`athenakin.analysis._jacobians` operation by
+The arithmetic mirrors :mod:`athenakin.robot._jacobians` operation by
 operation (same formulas, same order of the floating-point operations,
 including the multiplications by the zeros and ones of constant matrices, so
 that inf and NaN propagate into the same entries), item by item instead of

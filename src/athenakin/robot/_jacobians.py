@@ -32,20 +32,6 @@ from ..errors import InvalidInputError
 from ..parallel import TANGENT_TOL
 from ._setup import resolve_rcm_frame
 
-__all__ = [
-    "Frame",
-    "parallel_jacobian",
-    "parallel_inverse_jacobian",
-    "parallel_twist_jacobian",
-    "parallel_state",
-    "serial_jacobian",
-    "passive_jacobian",
-    "instrument_jacobian",
-    "instrument_inverse_jacobian",
-    "tool_tip_jacobian",
-    "tool_tip_inverse_jacobian",
-]
-
 #: Frames a velocity can be expressed in: the base frame or the RCM frame E.
 Frame = Literal["base", "rcm"]
 _FRAMES = ("base", "rcm")
@@ -187,36 +173,11 @@ def _parallel_jacobian(g: dict[str, NDArray[np.float64]]) -> NDArray[np.float64]
 
 def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1
                       ) -> NDArray[np.float64]:
-    """Jacobian of the parallel module, ``d O_s / d q``, in the base frame (analytic).
+    """The numpy reference of :func:`athenakin.analysis.parallel_jacobian` (documented there).
 
-    Parameters
-    ----------
-    q : array-like, shape (..., 3)
-        Actuators ``(q1, q2, q3)``, m.
-    design : Design, optional
-        Defaults to :meth:`~athenakin.Design.default`.
-    mode : {1, -1} or array-like of them
-        Assembly mode (slot 0 / 1 of :func:`~athenakin.parallel.parallel_forward_kinematics`).
-
-    Returns
-    -------
-    ndarray, shape (..., 3, 3)
-        Rows: x, y, z of ``O_s`` (base frame); columns: ``q1, q2, q3``.
-        Dimensionless (m/m). NaN where the module is not assembled; non-finite
-        at the forward singularities (``w = 0``, ``|h| = l3``), rank 2 at ``h = 0``.
-
-    Notes
-    -----
-    Stroke limits and the A/B order are not checked (local geometry).
-    See the module docstring and ``docs/singularities.md`` for the derivation
-    (paper Eq. 7-10).
-
-    Examples
-    --------
-    >>> import athenakin as ak
-    >>> J = ak.analysis.parallel_jacobian([-0.10, 0.10, 0.45], ak.Design.default(), mode=1)
-    >>> J.shape
-    (3, 3)
+    ``d O_s / d q`` (..., 3, 3) in the base frame. Stroke limits and the A/B order are
+    not checked (local geometry). See the module docstring and ``docs/singularities.md``
+    for the derivation (paper Eq. 7-10).
     """
     _, g = _state(q, design, mode)
     return _parallel_jacobian(g)
