@@ -25,6 +25,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._mechanism_formulas import parallel_state_formula
 from .._validation import broadcast_batch, check_array
 from ..chain._ups import rotation_u_pair
 from ..design import Design, resolve_design
@@ -99,24 +100,10 @@ def parallel_state(q: ArrayLike, design: Design | None = None, mode: ArrayLike =
         raise InvalidInputError(f"mode: expected +1/-1 broadcastable to q's batch shape "
                                 f"{q.shape[:-1]}, got shape {m.shape}")
     q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2]
-    h = 0.5 * (q1 - q2)
     l1, l2, l3, l4, l5 = design.lengths
     with np.errstate(invalid="ignore", divide="ignore"):
-        r1 = np.sqrt(l1 * l1 - h * h)
-        r1 = np.where(r1 > 0, r1, np.nan)
-        s3 = np.sqrt(l3 * l3 - h * h)
-        m_y = s3 + l2
-        d2 = m_y * m_y + l5 * l5
-        d = np.sqrt(d2)
-        H = d2 + r1 * r1 - q3 * q3
-        k = (r1 + q3 - d) * (r1 + q3 + d) * (d - r1 + q3) * (d + r1 - q3)
-        a = np.sqrt(np.abs(k)) / (2 * d)
-        # rounding makes k slightly negative at tangency: within TANGENT_TOL it is tangent
-        a = np.where(k >= 0, a, np.where(a <= TANGENT_TOL, 0.0, np.nan))
-        by, bz = H * m_y / (2 * d2), H * l5 / (2 * d2)
-        y = by - m * a * l5 / d
-        z = bz + m * a * m_y / d
-        ey, ez = y / r1, z / r1
+        h, r1, s3, m_y, d, a, y, z, ey, ez = parallel_state_formula(
+            q1, q2, q3, m, l1, l2, l3, l5, TANGENT_TOL, np.where)
     m = np.broadcast_to(m, h.shape)
     O_s = np.stack([0.5 * (q1 + q2), (r1 + l4) * ey, (r1 + l4) * ez], axis=-1)
     return {"h": h, "x_M": 0.5 * (q1 + q2), "q3": q3, "r1": r1, "s3": s3, "m_y": m_y, "d": d,
