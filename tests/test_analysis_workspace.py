@@ -150,7 +150,7 @@ def test_summary(pw, ic, tw):
 def test_progress_bar_and_chunking(capsys, monkeypatch):
     import sys
 
-    import athenakin.analysis._workspace as W
+    import athenakin.analysis._workspace_grid as W  # where the chunks are cut
 
     monkeypatch.setattr(W, "CHUNK", 1000)
     point_workspace(design=DESIGN, resolution=15, progress=True)

@@ -38,11 +38,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from ._backend import _STATE as _BACKEND
 from ._backend import (
-    BACKENDS,
     Backend,
     numba_available,
     resolve_backend,
-    user_cache_dir,
 )
 from ._validation import OPTION_AUTO, is_option
 from .chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
@@ -55,26 +53,6 @@ from .robot._common import ErrorPolicy
 from .robot._fk import FKMethod, FKSolution
 from .robot._ik import IK_SINGULAR_TOL, InstrumentIK, PassiveJoints
 from .robot._jacobians import Frame
-
-__all__ = [
-    "Backend",
-    "BACKENDS",
-    "numba_available",
-    "resolve_backend",
-    "user_cache_dir",
-    "warmup",
-    "forward_kinematics",
-    "inverse_kinematics",
-    "q_from_instrument",
-    "q_from_tool_tip",
-    "parallel_jacobian",
-    "parallel_inverse_jacobian",
-    "parallel_twist_jacobian",
-    "instrument_jacobian",
-    "instrument_inverse_jacobian",
-    "tool_tip_jacobian",
-    "tool_tip_inverse_jacobian",
-]
 
 #: CPU seconds (of the whole process) a first call may spend before the one-line notice is
 #: printed. CPU time, not wall time: loading cached kernels costs well under a CPU second
@@ -453,8 +431,9 @@ def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLik
     q : array-like, shape (..., 3)
         Actuators ``(q1, q2, q3)``, m.
     design : Design, optional
+        Defaults to :meth:`~athenakin.Design.default`.
     mode : {1, -1} or array-like of them
-        Assembly mode.
+        Assembly mode (slot 0 / 1 of :func:`~athenakin.parallel.parallel_forward_kinematics`).
     backend : {"auto", "numpy", "numba"}, keyword-only
         As in :func:`athenakin.forward_kinematics` (same result to 1e-12, same
         NaN / inf entries, same errors).
@@ -463,6 +442,9 @@ def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLik
     -------
     ndarray, shape (..., 3, 3)
         Rows: x, y, z of ``O_s`` (base frame); columns: ``q1, q2, q3``.
+        Dimensionless (m/m). NaN where the module is not assembled; non-finite
+        at the forward singularities (``w = 0``, ``|h| = l3``), rank 2 at ``h = 0``.
+        Stroke limits and the A/B order are not checked (local geometry).
 
     See Also
     --------

@@ -391,6 +391,9 @@ def _pick(arr: NDArray[np.float64], names: tuple[str, ...], name: object, what: 
     return arr[(..., i) + (slice(None),) * tail]
 
 
+#: Index of each point of :data:`POINT_NAMES` in :attr:`MechanismState.xyz`.
+_POINT_INDEX = {name: i for i, name in enumerate(POINT_NAMES)}
+
 _SEGMENT_INDEX = np.array([[POINT_NAMES.index(a), POINT_NAMES.index(b)]
                            for a, b in BODY_SEGMENTS.values()])
 
@@ -471,44 +474,78 @@ def state_from_fk(sol: Any, q: NDArray[np.float64], T: NDArray[np.float64], desi
              else np.take(T_mode, SLOT_MODE_INDEX, axis=-3))
     p = sol.p[..., sel]
     u5 = sol.u[..., sel, :5]
-    u = u5[..., :3]
     batch = valid.shape
     # slot-independent points, broadcast to the batch (with a slot axis for "all")
     qq = np.broadcast_to(q if k is not None else q[..., None, :], batch + (3,))
     T_e = np.broadcast_to(T if k is not None else T[..., None, :, :], batch + (4, 4))
+    xyz = np.zeros(batch + (len(POINT_NAMES), 3))
+    _module_points(xyz, qq, design, geometry)
+    _instrument_points(xyz, T_b_s, T_e, p, u5[..., :3], design, geometry)
+    xyz[~valid] = np.nan
+    if not frames:
+        empty = np.empty(batch + (0,))
+        return MechanismState(xyz=xyz, frames=empty, joints=empty, valid=valid, reason=reason)
     l1, l2, l3, l4, l5 = design.lengths
+    O_s = T_b_s[..., :3, 3]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        jv = tree_joint_formula(qq[..., 0], qq[..., 1], qq[..., 2], p, u5[..., 0], u5[..., 1],
+                                u5[..., 2], u5[..., 3], u5[..., 4], O_s[..., 1], O_s[..., 2],
+                                l1 * l1, l2, l3 * l3, l4, l5)
+    joints = np.stack([np.broadcast_to(v, batch) for v in jv], axis=-1).astype(float)
+    joints[~valid] = np.nan
+    fr = _tree_frames(joints, np.asarray(T_e, dtype=float), design)
+    fr[~valid] = np.nan
+    return MechanismState(xyz=xyz, frames=fr, joints=joints, valid=valid, reason=reason)
+
+
+def _put(xyz: NDArray[np.float64], name: str, x: ArrayLike, y: ArrayLike = 0.0,
+         z: ArrayLike = 0.0) -> None:
+    """Write the point ``name`` of ``xyz`` (..., n_points, 3) from its coordinates."""
+    i = _POINT_INDEX[name]
+    xyz[..., i, 0] = x
+    xyz[..., i, 1] = y
+    xyz[..., i, 2] = z
+
+
+def _module_points(xyz: NDArray[np.float64], qq: NDArray[np.float64], design: Design,
+                   geometry: BodyGeometry) -> None:
+    """The points of the parallel module and the rail (in the plane of the actuators)."""
+    _, l2, l3, _, l5 = design.lengths
     q1, q2 = qq[..., 0], qq[..., 1]
     h = 0.5 * (q1 - q2)
     x_M = 0.5 * (q1 + q2)
     with np.errstate(invalid="ignore"):
         y_D = np.sqrt(l3 * l3 - h * h)
-    xyz = np.zeros(batch + (len(POINT_NAMES), 3))
-    at = {name: i for i, name in enumerate(POINT_NAMES)}
-
-    def put(name: str, x: ArrayLike, y: ArrayLike = 0.0, z: ArrayLike = 0.0) -> None:
-        i = at[name]
-        xyz[..., i, 0] = x
-        xyz[..., i, 1] = y
-        xyz[..., i, 2] = z
-
-    def put3(name: str, v: NDArray[np.float64]) -> None:
-        xyz[..., at[name], :] = v
-
     half = 0.5 * geometry.carriage_length
-    put("A", q1)
-    put("B", q2)
-    put("M", x_M)
-    put("D", x_M, y_D)
-    put("C_foot", x_M, y_D + l2)
-    put("C", x_M, y_D + l2, l5)
-    put("A_lo", q1 - half)
-    put("A_hi", q1 + half)
-    put("B_lo", q2 - half)
-    put("B_hi", q2 + half)
+    _put(xyz, "A", q1)
+    _put(xyz, "B", q2)
+    _put(xyz, "M", x_M)
+    _put(xyz, "D", x_M, y_D)
+    _put(xyz, "C_foot", x_M, y_D + l2)
+    _put(xyz, "C", x_M, y_D + l2, l5)
+    _put(xyz, "A_lo", q1 - half)
+    _put(xyz, "A_hi", q1 + half)
+    _put(xyz, "B_lo", q2 - half)
+    _put(xyz, "B_hi", q2 + half)
+    lo, hi = rail_extent(design, geometry)
+    rm = geometry.rail_margin
+    _put(xyz, "rail_lo", np.minimum(np.minimum(q1, q2) - rm, lo))
+    _put(xyz, "rail_hi", np.maximum(np.maximum(q1, q2) + rm, hi))
+
+
+def _instrument_points(xyz: NDArray[np.float64], T_b_s: NDArray[np.float64],
+                       T_e: NDArray[np.float64], p: NDArray[np.float64],
+                       u: NDArray[np.float64], design: Design,
+                       geometry: BodyGeometry) -> None:
+    """The points of the serial chain: ``O_s``, ``O_i``, the tip, the RCM and the spheres.
+
+    ``u`` (..., 3): ``u1, u2, u3`` of the slot; ``p`` (...): its insertion.
+    """
+    at = _POINT_INDEX
     R_s = T_b_s[..., :3, :3]
     O_s = T_b_s[..., :3, 3]
-    put3("O_s", O_s)
-    put3("O_i", O_s - l4 * R_s[..., :, 2])
+    xyz[..., at["O_s"], :] = O_s
+    xyz[..., at["O_i"], :] = O_s - design.l4 * R_s[..., :, 2]
     c, s = np.cos(u), np.sin(u)
     ca, sa, cb, sb, c3, s3 = c[..., 0], s[..., 0], c[..., 1], s[..., 1], c[..., 2], s[..., 2]
 
@@ -524,9 +561,9 @@ def state_from_fk(sol: Any, q: NDArray[np.float64], T: NDArray[np.float64], desi
     d = rot(ca * sb, sa * sb, -cb)
     a4 = rot(ca * cb * s3 - sa * c3, sa * cb * s3 + ca * c3, sb * s3)
     L = design.tool_length
-    put3("tip", O_s + L * d)
+    xyz[..., at["tip"], :] = O_s + L * d
     RCM = T_e[..., :3, 3]
-    put3("RCM", RCM)
+    xyz[..., at["RCM"], :] = RCM
     side = np.sign(p)[..., None]                         # O_s is on the side -p d of the RCM
     side = np.where(side == 0, 1.0, side)
     rs = geometry.sphere_radius
@@ -535,29 +572,12 @@ def state_from_fk(sol: Any, q: NDArray[np.float64], T: NDArray[np.float64], desi
     # holds the instrument at its nearest point, so the instrument and sphere_link_2 touch
     t = p[..., None] - side * rs
     on = (t >= 0.0) & (t <= L)
-    put3("S_3", np.where(on, RCM + rs * (-side * d), O_s + np.clip(t, 0.0, L) * d))
+    xyz[..., at["S_3"], :] = np.where(on, RCM + rs * (-side * d), O_s + np.clip(t, 0.0, L) * d)
     # S_4 on the u4 axis as the chain orients it, S_5 on +z_e: u4 is perpendicular to the
     # instrument, and at the home pose so is u5, so a side of O_s would flip them with
     # the rounding of a zero dot product.
-    put3("S_4", RCM + rs * a4)
-    put3("S_5", RCM + rs * T_e[..., :3, 2])
-    lo, hi = rail_extent(design, geometry)
-    rm = geometry.rail_margin
-    put("rail_lo", np.minimum(np.minimum(q1, q2) - rm, lo))
-    put("rail_hi", np.maximum(np.maximum(q1, q2) + rm, hi))
-    xyz[~valid] = np.nan
-    if not frames:
-        empty = np.empty(batch + (0,))
-        return MechanismState(xyz=xyz, frames=empty, joints=empty, valid=valid, reason=reason)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        jv = tree_joint_formula(qq[..., 0], qq[..., 1], qq[..., 2], p, u5[..., 0], u5[..., 1],
-                                u5[..., 2], u5[..., 3], u5[..., 4], O_s[..., 1], O_s[..., 2],
-                                l1 * l1, l2, l3 * l3, l4, l5)
-    joints = np.stack([np.broadcast_to(v, batch) for v in jv], axis=-1).astype(float)
-    joints[~valid] = np.nan
-    fr = _tree_frames(joints, np.asarray(T_e, dtype=float), design)
-    fr[~valid] = np.nan
-    return MechanismState(xyz=xyz, frames=fr, joints=joints, valid=valid, reason=reason)
+    xyz[..., at["S_4"], :] = RCM + rs * a4
+    xyz[..., at["S_5"], :] = RCM + rs * T_e[..., :3, 2]
 
 
 def mechanism_state(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,

@@ -1,8 +1,13 @@
 """Jacobians, the complete singularity set, workspace and assembly-mode maps of ATHENA.
 
-* :mod:`._jacobians` - analytic Jacobians: the parallel module ``d O_s / d q`` and its
-  inverse, the serial UPS chain, the passive joints, and the whole robot in controller
-  variables (instrument direction angles + insertion, tool-tip velocity).
+* the analytic Jacobians: the parallel module ``d O_s / d q`` and its inverse, the serial
+  UPS chain, the passive joints, and the whole robot in controller variables (instrument
+  direction angles + insertion, tool-tip velocity). Those of the parallel module and the
+  whole robot are the backend dispatch of :mod:`athenakin._dispatch` (``backend="auto"``:
+  the compiled kernels of :mod:`athenakin.fast` where numba imports, the numpy reference
+  otherwise); the numpy reference, with the derivations, is
+  :mod:`athenakin.robot._jacobians` (below the compiled layer, so that the kernels can use
+  it as their oracle).
 * :mod:`._singularities` - every singularity condition with its closed-form test and
   distance measure (:func:`singularities`), the loci in actuator space.
 * :mod:`._workspace` - grids: actuator plane, ``O_s`` workspace with assembly-mode
@@ -12,20 +17,17 @@
 Derivations and the findings for the default design: ``docs/singularities.md``.
 """
 
-from ._cone import InstrumentCone, instrument_cone
-from ._jacobians import (
-    Frame,
+from .._dispatch import (
     instrument_inverse_jacobian,
     instrument_jacobian,
     parallel_inverse_jacobian,
     parallel_jacobian,
-    parallel_state,
     parallel_twist_jacobian,
-    passive_jacobian,
-    serial_jacobian,
     tool_tip_inverse_jacobian,
     tool_tip_jacobian,
 )
+from ..robot._jacobians import Frame, parallel_state, passive_jacobian, serial_jacobian
+from ._cone import InstrumentCone, instrument_cone
 from ._loci import (
     MEASURE_OF,
     near_singular_configurations,

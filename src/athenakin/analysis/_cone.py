@@ -12,16 +12,8 @@ from .._validation import check_array
 from ..design import Design
 from ..errors import InvalidInputError
 from ..robot import direction_from_angles, q_from_instrument
-from ._jacobians import _parallel_jacobian, _state, _tip_matrices
-from ._workspace_grid import (
-    _clearance,
-    _cond,
-    _free,
-    _map_chunks,
-    _map_setup,
-    _quiet,
-    _resolution,
-)
+from ..robot._jacobians import _parallel_jacobian, _state, _tip_matrices
+from . import _workspace_grid as _grid
 
 
 # --------------------------------------------------------------------------------------
@@ -139,8 +131,8 @@ def instrument_cone(T_b_e: ArrayLike | None = None, design: Design | None = None
     -------
     InstrumentCone
     """
-    design, check, T = _map_setup(T_b_e, design, bodies, environment, clearance_margin)
-    na, npol, npp = _resolution(resolution, 3)
+    design, check, T = _grid._map_setup(T_b_e, design, bodies, environment, clearance_margin)
+    na, npol, npp = _grid._resolution(resolution, 3)
     allowed = _modes_arg(modes)
     L = design.tool_length
     pr = _interval(p_range, "p_range") or (0.01 * L, L)
@@ -157,23 +149,23 @@ def instrument_cone(T_b_e: ArrayLike | None = None, design: Design | None = None
         m = np.where(ok, res.mode, 0)
         _, g = _state(np.nan_to_num(q), design, np.where(m == 0, 1, m))
         N, _, _ = _tip_matrices(g, T, L)
-        _, cond = _cond(N @ _parallel_jacobian(g))
+        _, cond = _grid._cond(N @ _parallel_jacobian(g))
         out = {"m": m.astype(np.int8), "r": ok, "c": np.where(ok, cond, np.nan)}
         if check is not None:
-            out["cl"] = _clearance(check, q, T, design, m, x[:, 2] < 0)
+            out["cl"] = _grid._clearance(check, q, T, design, m, x[:, 2] < 0)
         return out
 
-    r = _map_chunks(fn, pts, progress, "instrument cone")
+    r = _grid._map_chunks(fn, pts, progress, "instrument cone")
     sh = (na, npol, npp)
     reach = r["r"].reshape(sh)
     pm = np.where(reach, p, np.nan)
-    with np.errstate(invalid="ignore"), _quiet():
+    with np.errstate(invalid="ignore"), _grid._quiet():
         p_min, p_max = np.nanmin(pm, axis=-1), np.nanmax(pm, axis=-1)
     starts = reach & ~np.concatenate([np.zeros(sh[:-1] + (1,), bool), reach[..., :-1]], axis=-1)
     cl = free = blocked = None
     if check is not None:
         cl = r["cl"].reshape(sh)
-        free = _free(reach, cl, check.margin)
+        free = _grid._free(reach, cl, check.margin)
         blocked = np.asarray(reach.any(axis=-1) & ~free.any(axis=-1), dtype=bool)
     return InstrumentCone(azimuth=az, polar=pol, p=p, T_b_e=T, mode=r["m"].reshape(sh),
                           reachable=reach, p_min=p_min, p_max=p_max,

@@ -8,9 +8,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import check_array, check_count, check_scalar
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
-from ._jacobians import (
-    _rcm,
-)
+from ..robot._jacobians import _rcm
 
 #: Most samples of a singular-set curve (``n`` of :func:`singularity_loci`, ...).
 MAX_SAMPLES = 10_000_000

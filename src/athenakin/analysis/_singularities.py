@@ -32,7 +32,7 @@ from .._validation import broadcast_batch, check_array, check_tolerance
 from ..chain import ups_solutions
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
-from ._jacobians import (
+from ..robot._jacobians import (
     _parallel_inverse_jacobian,
     _parallel_jacobian,
     _rcm,
@@ -41,26 +41,6 @@ from ._jacobians import (
     passive_jacobian,
     serial_jacobian,
 )
-from ._loci import (
-    MEASURE_OF,
-    near_singular_configurations,
-    singular_sets_within_strokes,
-    singularity_loci,
-)
-
-__all__ = [
-    "CONDITIONS",
-    "DEFAULT_TOL",
-    "Condition",
-    "SingularityReport",
-    "singularities",
-    "singularity_loci",
-    "sigma_min",
-    "condition_number",
-    "singular_sets_within_strokes",
-    "near_singular_configurations",
-    "MEASURE_OF",
-]
 
 #: Default tolerance of every condition (metres or dimensionless): ``near = value <= tol``.
 DEFAULT_TOL = 1e-6
@@ -357,7 +337,31 @@ def singularities(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
         batch = broadcast_batch(q=q.shape[:-1], T_b_e=T.shape[:-2])
         q, T = np.broadcast_to(q, batch + (3,)), np.broadcast_to(T, batch + (4, 4))
     _, g = _state(q, design, mode)
-    h, r1, d, q3 = g["h"], g["r1"], g["d"], g["q3"]
+    vals = _parallel_conditions(q, g, design)
+    assembled = np.isfinite(g["a"]) & np.isfinite(g["r1"]) & np.isfinite(g["d"]) & np.all(
+        np.isfinite(q), axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        det = g["mode"] * (g["r1"] + design.l4) * g["h"] * g["q3"] / (
+            2 * g["r1"] * g["a"] * g["d"])
+    measures: dict[str, NDArray[np.float64]] = {"half_chord": g["a"], "parallel_det": det}
+    Jp = _parallel_jacobian(g) if jacobians or T_b_e is not None else None
+    if jacobians:
+        assert Jp is not None
+        measures.update(_parallel_measures(g, Jp, assembled, design))
+    if T is not None:
+        vals.update(_instrument_conditions(g, T, design))
+        if jacobians:
+            measures.update(_instrument_measures(q, g, T, design, Jp))
+    batch = np.broadcast_shapes(*(np.shape(v) for v in vals.values()))
+    return SingularityReport(conditions=_conditions(vals, tols, batch), measures=measures,
+                             mode=np.broadcast_to(g["mode"], batch).astype(np.int64),
+                             assembled=np.broadcast_to(assembled, batch))
+
+
+def _parallel_conditions(q: NDArray[np.float64], g: dict[str, NDArray[np.float64]],
+                         design: Design) -> dict[str, NDArray[np.float64]]:
+    """The closed-form values of the parallel module's conditions and the stroke limit."""
+    h, q3 = g["h"], g["q3"]
     l1, l3 = design.l1, design.l3
     with np.errstate(invalid="ignore", over="ignore"):
         r1v = np.sqrt(np.maximum(l1 * l1 - h * h, 0.0))
@@ -366,36 +370,33 @@ def singularities(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
         tangent = np.minimum(np.abs(q3 - np.abs(dv - r1v)), np.abs(q3 - (dv + r1v)))
         lo, hi = design.stroke_min, design.stroke_max
         stroke = np.min(np.minimum(q - lo, hi - q), axis=-1)
-    vals: dict[str, NDArray[np.float64]] = {
-        "circles_tangent": tangent, "d_on_rail": l3 - np.abs(h), "k1_degenerate": l1 - np.abs(h),
-        "ab_coincide": np.abs(h), "k2_degenerate": np.abs(q3), "stroke_limit": stroke}
-    assembled = np.isfinite(g["a"]) & np.isfinite(r1) & np.isfinite(d) & np.all(
-        np.isfinite(q), axis=-1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        det = g["mode"] * (r1 + design.l4) * h * q3 / (2 * r1 * g["a"] * d)
-    measures: dict[str, NDArray[np.float64]] = {"half_chord": g["a"], "parallel_det": det}
-    Jp = _parallel_jacobian(g) if jacobians or T_b_e is not None else None
-    if jacobians:
-        assert Jp is not None
-        s, si = _svd(Jp), _svd(_parallel_inverse_jacobian(g))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            # each from the matrix that is finite: J at h = 0, J^-1 at w = 0
-            smin = np.where(np.isfinite(s[..., -1]), s[..., -1], 1.0 / si[..., 0])
-            smax = np.where(np.isnan(s[..., 0]), 1.0 / si[..., -1], s[..., 0])
-            # |h| = l3 exactly: J and J^-1 both blow up (an infinite shear, finite det)
-            rail = assembled & (np.abs(h) == l3)
-            smin = np.where(rail, 0.0, smin)
-            smax = np.where(rail, np.inf, smax)
-            measures["parallel_sigma_min"] = smin
-            measures["parallel_condition"] = np.where(smin > 0, smax / smin, np.inf) * np.where(
-                np.isnan(smax), np.nan, 1.0)
-            measures["parallel_inverse_sigma_min"] = 1.0 / smax
-    if T is not None:
-        vals.update(_instrument_conditions(g, T, design))
-        if jacobians:
-            measures.update(_instrument_measures(q, g, T, design, Jp))
+    return {"circles_tangent": tangent, "d_on_rail": l3 - np.abs(h),
+            "k1_degenerate": l1 - np.abs(h), "ab_coincide": np.abs(h),
+            "k2_degenerate": np.abs(q3), "stroke_limit": stroke}
 
-    batch = np.broadcast_shapes(*(np.shape(v) for v in vals.values()))
+
+def _parallel_measures(g: dict[str, NDArray[np.float64]], Jp: NDArray[np.float64],
+                       assembled: NDArray[np.bool_],
+                       design: Design) -> dict[str, NDArray[np.float64]]:
+    """Smallest singular value and condition of the parallel module's Jacobian ``Jp``."""
+    s, si = _svd(Jp), _svd(_parallel_inverse_jacobian(g))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # each from the matrix that is finite: J at h = 0, J^-1 at w = 0
+        smin = np.where(np.isfinite(s[..., -1]), s[..., -1], 1.0 / si[..., 0])
+        smax = np.where(np.isnan(s[..., 0]), 1.0 / si[..., -1], s[..., 0])
+        # |h| = l3 exactly: J and J^-1 both blow up (an infinite shear, finite det)
+        rail = assembled & (np.abs(g["h"]) == design.l3)
+        smin = np.where(rail, 0.0, smin)
+        smax = np.where(rail, np.inf, smax)
+        return {"parallel_sigma_min": smin,
+                "parallel_condition": np.where(smin > 0, smax / smin, np.inf) * np.where(
+                    np.isnan(smax), np.nan, 1.0),
+                "parallel_inverse_sigma_min": 1.0 / smax}
+
+
+def _conditions(vals: dict[str, NDArray[np.float64]], tols: dict[str, float],
+                batch: tuple[int, ...]) -> dict[str, Condition]:
+    """The :class:`Condition` of each evaluated value, in :data:`CONDITIONS` order."""
     conds = {}
     for k, spec in CONDITIONS.items():
         if k not in vals:
@@ -405,9 +406,7 @@ def singularities(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
             near = v <= tols[k]
         conds[k] = Condition(name=k, kind=spec.kind, meaning=spec.meaning, test=spec.test,
                              unit=spec.unit, value=v, tol=tols[k], near=near)
-    return SingularityReport(conditions=conds, measures=measures,
-                             mode=np.broadcast_to(g["mode"], batch).astype(np.int64),
-                             assembled=np.broadcast_to(assembled, batch))
+    return conds
 
 
 def _instrument_frame(g: dict[str, NDArray[np.float64]], T: NDArray[np.float64]

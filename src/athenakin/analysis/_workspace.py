@@ -44,11 +44,10 @@ from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..parallel import parallel_ik_from_position
 from ..robot import q_from_tool_tip
-from ._cone import InstrumentCone, _box, _interval, _modes_arg, instrument_cone
-from ._jacobians import _parallel_jacobian, _state, _tip_matrices
+from ..robot._jacobians import _parallel_jacobian, _state, _tip_matrices
+from ._cone import InstrumentCone, _box, _interval, _modes_arg
 from ._singularities import _svd
 from ._workspace_grid import (
-    CHUNK,
     _clearance,
     _cond,
     _free,
@@ -59,21 +58,6 @@ from ._workspace_grid import (
     _unlimited,
     _within,
 )
-
-__all__ = [
-    "ActuatorMap",
-    "PointWorkspace",
-    "InstrumentCone",
-    "ToolTipWorkspace",
-    "actuator_map",
-    "point_workspace",
-    "instrument_cone",
-    "tool_tip_workspace",
-    "save_npz",
-    "load_npz",
-    "CHUNK",
-    "workspace_summary",
-]
 
 
 # --------------------------------------------------------------------------------------

@@ -15,8 +15,9 @@ from numpy.typing import NDArray
 
 from .._figstyle import tidy_3d_axes
 from ..design import Design, resolve_design
-from ._singularities import singularity_loci
-from ._workspace import ActuatorMap, InstrumentCone, PointWorkspace, ToolTipWorkspace
+from ._cone import InstrumentCone
+from ._loci import singularity_loci
+from ._workspace import ActuatorMap, PointWorkspace, ToolTipWorkspace
 
 __all__ = [
     "plot_singularity_loci",
@@ -477,7 +478,7 @@ def plot_instrument_cone(ic: InstrumentCone, *, ax: Any = None, frame: str = "ba
         ax.plot([lo, hi], [0, 0], [0, 0], color="k", lw=2.5)
         pts.append(np.array([[lo, 0, 0], [hi, 0, 0]]))
     if reference_q is not None:
-        from ._jacobians import parallel_state
+        from ..robot._jacobians import parallel_state
 
         O_b = parallel_state(reference_q, None, 1)["O_s"]
         O_f = O_b if frame == "base" else (O_b - c) @ Rb
@@ -633,7 +634,8 @@ def figure_measure_scaling(design: Design | None = None, *, n: int = 45) -> Any:
     1/2 (the forward singularities ``w = 0`` and ``|h| = l3``) confirm the power law
     each measure follows down to rounding.
     """
-    from ._singularities import MEASURE_OF, near_singular_configurations, singularities
+    from ._loci import MEASURE_OF, near_singular_configurations
+    from ._singularities import singularities
 
     plt = _plt()
     design = resolve_design(design)

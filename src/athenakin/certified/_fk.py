@@ -218,6 +218,41 @@ def certified_forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design 
     design = resolve_design(design)
     input_tol = _check_tol(input_tol)
     prec, max_prec = _check_prec(prec, max_prec)
+    qb, Tb, batch = _items(q, T_b_e)
+    n = qb.shape[0]
+    status = np.empty((n, 16), np.int8)
+    reason = np.empty((n, 16), np.int8)
+    lo = np.full((n, 16, _N_FIELDS), np.nan)
+    hi = np.full((n, 16, _N_FIELDS), np.nan)
+    used = np.empty(n, np.int64)
+    old = flint.ctx.prec
+    try:
+        for i in range(n):
+            status[i], reason[i], lo[i], hi[i], used[i] = _certify_item(
+                flint, qb[i], Tb[i], design, input_tol, prec, max_prec)
+    finally:
+        flint.ctx.prec = old
+    complete = np.all((status == CertStatus.CERTIFIED) | (status == CertStatus.ABSENT), axis=-1)
+
+    def shape(a: NDArray[Any], tail: tuple[int, ...] = ()) -> NDArray[Any]:
+        return a.reshape(batch + (16,) + tail)
+
+    return CertifiedFK(
+        certified=shape(status == CertStatus.CERTIFIED), status=shape(status),
+        reason=shape(reason), p_lo=shape(lo[..., 0]), p_hi=shape(hi[..., 0]),
+        u_lo=shape(lo[..., _ANGLE_COLS], (5,)), u_hi=shape(hi[..., _ANGLE_COLS], (5,)),
+        O_s_lo=shape(lo[..., 6:9], (3,)), O_s_hi=shape(hi[..., 6:9], (3,)),
+        tip_lo=shape(lo[..., 9:12], (3,)), tip_hi=shape(hi[..., 9:12], (3,)),
+        complete=complete.reshape(batch), prec=used.reshape(batch), input_tol=input_tol)
+
+
+def _items(q: ArrayLike, T_b_e: ArrayLike
+           ) -> tuple[NDArray[np.float64], NDArray[np.float64], tuple[int, ...]]:
+    """The items to certify: ``q`` (n, 3), ``T_b_e`` (n, 4, 4) and their batch shape.
+
+    NaN and inf are allowed in a batch (flagged per item), not in a single item; a batch
+    of more than :data:`MAX_CERTIFIED_ITEMS` items is refused before any work.
+    """
     qa = check_array(q, "q", (3,), allow_nonfinite=True)
     T = check_transform(T_b_e, "T_b_e", allow_nonfinite=True)
     try:
@@ -234,34 +269,8 @@ def certified_forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design 
             f"q, T_b_e: a batch of {n_items:,} items, more than the {MAX_CERTIFIED_ITEMS:,} "
             f"certified per call (about 0.3 ms each in interval arithmetic); certify the "
             f"items that matter, or split the batch")
-    qb = np.broadcast_to(qa, batch + (3,)).reshape(-1, 3)
-    Tb = np.broadcast_to(T, batch + (4, 4)).reshape(-1, 4, 4)
-    n = qb.shape[0]
-    status = np.empty((n, 16), np.int8)
-    reason = np.empty((n, 16), np.int8)
-    lo = np.full((n, 16, _N_FIELDS), np.nan)
-    hi = np.full((n, 16, _N_FIELDS), np.nan)
-    used = np.empty(n, np.int64)
-    old = flint.ctx.prec
-    try:
-        for i in range(n):
-            status[i], reason[i], lo[i], hi[i], used[i] = _certify_item(
-                flint, qb[i], Tb[i], design, input_tol, prec, max_prec)
-    finally:
-        flint.ctx.prec = old
-    certified = status == CertStatus.CERTIFIED
-    complete = np.all((status == CertStatus.CERTIFIED) | (status == CertStatus.ABSENT), axis=-1)
-
-    def shape(a: NDArray[Any], tail: tuple[int, ...] = ()) -> NDArray[Any]:
-        return a.reshape(batch + (16,) + tail)
-
-    return CertifiedFK(
-        certified=shape(certified), status=shape(status), reason=shape(reason),
-        p_lo=shape(lo[..., 0]), p_hi=shape(hi[..., 0]),
-        u_lo=shape(lo[..., _ANGLE_COLS], (5,)), u_hi=shape(hi[..., _ANGLE_COLS], (5,)),
-        O_s_lo=shape(lo[..., 6:9], (3,)), O_s_hi=shape(hi[..., 6:9], (3,)),
-        tip_lo=shape(lo[..., 9:12], (3,)), tip_hi=shape(hi[..., 9:12], (3,)),
-        complete=complete.reshape(batch), prec=used.reshape(batch), input_tol=input_tol)
+    return (np.broadcast_to(qa, batch + (3,)).reshape(-1, 3),
+            np.broadcast_to(T, batch + (4, 4)).reshape(-1, 4, 4), batch)
 
 
 def _check_tol(input_tol: object) -> float:
@@ -370,49 +379,60 @@ def _solve(arb: Any, qf: NDArray[np.float64], Tf: NDArray[np.float64], design: D
         # O_s is known even where the serial chain is undecided: it separates the modes
         mid[slots, 6:9], rad[slots, 6:9] = np.transpose([_mid_rad(c) for c in O_s])
         v = [t_e[i] - O_s[i] for i in range(3)]
-        n2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
-        if sign(n2) == 0:
-            reason[slots] = Reason.SERIAL_P_ZERO
+        why, n, angles = _serial_balls(pi, v, cy, cz, x_e, z_e)
+        if why:
+            reason[slots] = why
             continue
-        n = n2.sqrt()
-        # R_b_s^T w = (w0, cz w1 - cy w2, cy w1 + cz w2)
-        chat = [v[0] / n, (cz * v[1] - cy * v[2]) / n, (cy * v[1] + cz * v[2]) / n]
-        col0 = [x_e[0], cz * x_e[1] - cy * x_e[2], cy * x_e[1] + cz * x_e[2]]
-        col2 = [z_e[0], cz * z_e[1] - cy * z_e[2], cy * z_e[1] + cz * z_e[2]]
-        rho2 = chat[0] * chat[0] + chat[1] * chat[1]
-        if sign(rho2) == 0:
-            reason[slots] = Reason.UJOINT_SINGULAR
-            continue
-        rho = rho2.sqrt()
-        a1, b1 = chat[0] / rho, chat[1] / rho
-        X0 = (-a1 * chat[2], -b1 * chat[2], rho)
-        P0 = X0[0] * col0[0] + X0[1] * col0[1] + X0[2] * col0[2]
-        P2 = X0[0] * col2[0] + X0[1] * col2[1] + X0[2] * col2[2]
-        Q0 = b1 * col0[0] - a1 * col0[1]
-        Q2 = b1 * col2[0] - a1 * col2[1]
-        S0 = chat[0] * col0[0] + chat[1] * col0[1] + chat[2] * col0[2]
-        S2 = chat[0] * col2[0] + chat[1] * col2[1] + chat[2] * col2[2]
-        rho4sq = P2 * P2 + Q2 * Q2
-        if sign(rho4sq) == 0:
-            reason[slots] = Reason.WRIST_SINGULAR
-            continue
-        rho4 = rho4sq.sqrt()
-        Y = (Q2 * P0 - P2 * Q0) / rho4
-        X = rho4 * S0 - S2 * (P2 * P0 + Q2 * Q0) / rho4
-        alpha = angle(chat[1], chat[0], pi)
-        beta = angle(rho, -chat[2], pi)
-        delta = angle(Q2, P2, pi)
-        zeta = angle(rho4, -S2, pi)
-        gamma = angle(Y, X, pi)
-        if alpha is None or beta is None:
-            reason[slots] = Reason.UJOINT_SINGULAR
-            continue
-        if delta is None or zeta is None or gamma is None:
-            reason[slots] = Reason.WRIST_SINGULAR
-            continue
-        _store_eight(mid, rad, status, m, pi, (alpha, beta, delta, zeta, gamma),
-                     _mid_rad(n), [(L / n) * v[i] for i in range(3)], O_s)
+        _store_eight(mid, rad, status, m, pi, angles, _mid_rad(n),
+                     [(L / n) * v[i] for i in range(3)], O_s)
     return status, reason, mid, rad
+
+
+def _serial_balls(pi: Any, v: list[Any], cy: Any, cz: Any, x_e: list[Any], z_e: list[Any]
+                  ) -> tuple[int, Any, tuple[Any, ...]]:
+    """The serial chain of one assembly mode in balls: ``(reason, n, five base angles)``.
+
+    ``v = t_e - O_s`` (base frame), ``(0, cy, cz)`` the axis ``z_i`` (``R_b_s = Rx(theta)``),
+    ``x_e``, ``z_e`` the RCM axes. ``reason`` is 0 where ``n = |v| > 0``, ``|sin u2| > 0``
+    and ``|sin u4| > 0`` are proven and the base angles ``alpha, beta, delta, zeta, gamma``
+    are enclosed; else the singular set that could not be excluded (``n``, angles: None).
+    """
+    n2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+    if sign(n2) == 0:
+        return int(Reason.SERIAL_P_ZERO), None, ()
+    n = n2.sqrt()
+    # R_b_s^T w = (w0, cz w1 - cy w2, cy w1 + cz w2)
+    chat = [v[0] / n, (cz * v[1] - cy * v[2]) / n, (cy * v[1] + cz * v[2]) / n]
+    col0 = [x_e[0], cz * x_e[1] - cy * x_e[2], cy * x_e[1] + cz * x_e[2]]
+    col2 = [z_e[0], cz * z_e[1] - cy * z_e[2], cy * z_e[1] + cz * z_e[2]]
+    rho2 = chat[0] * chat[0] + chat[1] * chat[1]
+    if sign(rho2) == 0:
+        return int(Reason.UJOINT_SINGULAR), None, ()
+    rho = rho2.sqrt()
+    a1, b1 = chat[0] / rho, chat[1] / rho
+    X0 = (-a1 * chat[2], -b1 * chat[2], rho)
+    P0 = X0[0] * col0[0] + X0[1] * col0[1] + X0[2] * col0[2]
+    P2 = X0[0] * col2[0] + X0[1] * col2[1] + X0[2] * col2[2]
+    Q0 = b1 * col0[0] - a1 * col0[1]
+    Q2 = b1 * col2[0] - a1 * col2[1]
+    S0 = chat[0] * col0[0] + chat[1] * col0[1] + chat[2] * col0[2]
+    S2 = chat[0] * col2[0] + chat[1] * col2[1] + chat[2] * col2[2]
+    rho4sq = P2 * P2 + Q2 * Q2
+    if sign(rho4sq) == 0:
+        return int(Reason.WRIST_SINGULAR), None, ()
+    rho4 = rho4sq.sqrt()
+    Y = (Q2 * P0 - P2 * Q0) / rho4
+    X = rho4 * S0 - S2 * (P2 * P0 + Q2 * Q0) / rho4
+    alpha = angle(chat[1], chat[0], pi)
+    beta = angle(rho, -chat[2], pi)
+    delta = angle(Q2, P2, pi)
+    zeta = angle(rho4, -S2, pi)
+    gamma = angle(Y, X, pi)
+    if alpha is None or beta is None:
+        return int(Reason.UJOINT_SINGULAR), None, ()
+    if delta is None or zeta is None or gamma is None:
+        return int(Reason.WRIST_SINGULAR), None, ()
+    return 0, n, (alpha, beta, delta, zeta, gamma)
 
 
 def _module_balls(arb: Any, q1: Any, q2: Any, q3: Any, l1: Any, l2: Any, l3: Any,

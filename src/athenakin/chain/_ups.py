@@ -285,6 +285,68 @@ def _slot_reasons(base_reason: NDArray[np.int_], deg_u: NDArray[np.bool_],
                     reason).astype(np.int8)
 
 
+def _pose_checks(c: NDArray[np.float64], finite: NDArray[np.bool_], scale: ArrayLike | None,
+                 degenerate_tol: float, p_zero_tol: float
+                 ) -> tuple[NDArray[np.int_], NDArray[np.float64], NDArray[np.float64],
+                            NDArray[np.float64]]:
+    """What decides validity before any angle, from the translation ``c`` (..., 3) of T_s_e.
+
+    Returns the reason of the pose (..., ``NONFINITE_INPUT``, ``SERIAL_P_ZERO`` or 0),
+    ``|p|`` (1 where it is zero), the scale of its rounding and the degeneracy tolerance
+    of ``|sin u2|``, ``|sin u4|`` (...). ``|p|`` is computed with the very operations,
+    in the same order, as the compiled kernel (fast/_fk_kernels.py, _serial_stage), so
+    both backends classify every input alike, even one that sits on a threshold to the
+    last bit (issue 23).
+    """
+    c0, c1, c2 = c[..., 0], c[..., 1], c[..., 2]
+    with np.errstate(over="ignore"):
+        n = np.sqrt((c0 * c0 + c1 * c1) + c2 * c2)     # inf beyond 1e154 m: no solution
+    base_reason = np.where(finite, 0, Reason.NONFINITE_INPUT)
+    base_reason = np.where((base_reason == 0) & (n <= p_zero_tol), Reason.SERIAL_P_ZERO,
+                           base_reason)
+    nn = np.where(n > p_zero_tol, n, 1.0)
+    sc = n if scale is None else _check_scale(scale, n.shape)
+    with np.errstate(invalid="ignore", over="ignore"):
+        dtol = np.maximum(degenerate_tol, DEGENERATE_ULPS * _EPS * sc / nn)   # (...)
+    return base_reason, nn, sc, dtol
+
+
+def _ujoint_angles(z3: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+    """``u1, u2`` and their cosines and sines (..., 2, 2) from the instrument axis ``z3``.
+
+    ``z3`` (..., 2, 3): the unit direction for each sign of ``p``; the last axis of the
+    result is the U-joint branch ``sigma = +-1``. ``u1`` from the direction, ``u2`` from
+    its projection onto the plane ``u1`` fixes.
+    """
+    sig = _PLUS_MINUS
+    u1 = np.arctan2(sig * z3[..., 1, None], sig * z3[..., 0, None])
+    c1, s1 = np.cos(u1), np.sin(u1)
+    u2 = np.arctan2(c1 * z3[..., 0, None] + s1 * z3[..., 1, None],
+                    np.broadcast_to(-z3[..., 2, None], u1.shape))
+    return u1, u2, c1, s1, np.cos(u2), np.sin(u2)
+
+
+def _wrist_angles(W: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+    """``u3, u4, u5`` and the cosines and sines ``c3, s3, c4, s4, c5, s5`` (..., 2, 2, 2).
+
+    ``W = R(u1, u2)^T R_s_e`` (..., 2, 2, 3, 3), the rotation left to the wrist; the last
+    axis of the result is the wrist branch ``tau = +-1``. ``u3`` from its third column,
+    ``u4`` from the projection onto the plane ``u3`` fixes, ``u5`` from the remaining
+    matrix; ``c5, s5`` are the cosine and sine of the reported ``u5`` to 1 ulp.
+    """
+    tau = _PLUS_MINUS
+    u3 = np.arctan2(tau * W[..., 1, 2, None], tau * W[..., 0, 2, None])
+    c3, s3 = np.cos(u3), np.sin(u3)
+    u4 = np.arctan2(c3 * W[..., 0, 2, None] + s3 * W[..., 1, 2, None],
+                    np.broadcast_to(-W[..., 2, 2, None], u3.shape))
+    c4, s4 = np.cos(u4), np.sin(u4)
+    W00, W10, W20 = W[..., 0, 0, None], W[..., 1, 0, None], W[..., 2, 0, None]
+    y5 = s3 * W00 - c3 * W10
+    x5 = c3 * c4 * W00 + s3 * c4 * W10 + s4 * W20
+    n5 = np.hypot(x5, y5)
+    return u3, u4, np.arctan2(y5, x5), c3, s3, c4, s4, x5 / n5, y5 / n5
+
+
 def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
                   p_zero_tol: float = P_ZERO_TOL, closure_tol: float = CLOSURE_TOL,
                   scale: ArrayLike | None = None, _checked: bool = False) -> UPSSolution:
@@ -324,51 +386,20 @@ def ups_solutions(T_s_e: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
     finite = np.all(np.isfinite(T), axis=(-2, -1))
     T = np.where(finite[..., None, None], T, np.eye(4))
     c = T[..., :3, 3]
-    # The quantities that decide validity (|p|, |sin u2|, |sin u4|) are computed with the
-    # very operations, in the same order, as the compiled kernel (fast/_fk_kernels.py,
-    # _serial_stage), so both backends classify every input alike, even one that sits on
-    # a threshold to the last bit (issue 23).
-    c0, c1_, c2_ = c[..., 0], c[..., 1], c[..., 2]
-    with np.errstate(over="ignore"):
-        n = np.sqrt((c0 * c0 + c1_ * c1_) + c2_ * c2_)   # inf beyond 1e154 m: no solution
-    base_reason = np.where(finite, 0, Reason.NONFINITE_INPUT)
-    base_reason = np.where((base_reason == 0) & (n <= p_zero_tol), Reason.SERIAL_P_ZERO,
-                           base_reason)
-    nn = np.where(n > p_zero_tol, n, 1.0)
-    sc = n if scale is None else _check_scale(scale, n.shape)
-    with np.errstate(invalid="ignore", over="ignore"):
-        dtol = np.maximum(degenerate_tol, DEGENERATE_ULPS * _EPS * sc / nn)   # (...)
+    base_reason, nn, sc, dtol = _pose_checks(c, finite, scale, degenerate_tol, p_zero_tol)
     p = nn[..., None] * _PLUS_MINUS                     # (..., 2)
     z3 = c[..., None, :] / p[..., None]                 # (..., 2, 3)
-    rho_k, rho4_k = _sines_as_kernel(T, c0 / nn, c1_ / nn, c2_ / nn)
+    rho_k, rho4_k = _sines_as_kernel(T, c[..., 0] / nn, c[..., 1] / nn, c[..., 2] / nn)
     rho = np.broadcast_to(rho_k[..., None], p.shape)    # (..., 2): the same for both signs
     # Each angle pair is solved sequentially so that closure holds to rounding even
     # where the first angle is ill-conditioned (near sin u2 = 0 or sin u4 = 0): the
     # first angle from the direction, the second from the projection onto the
     # plane it fixes, the last rotation from the remaining matrix.
-    sig = tau = _PLUS_MINUS
-    u1 = np.arctan2(sig * z3[..., 1, None], sig * z3[..., 0, None])   # (..., 2, 2)
-    c1, s1 = np.cos(u1), np.sin(u1)
-    u2 = np.arctan2(c1 * z3[..., 0, None] + s1 * z3[..., 1, None],
-                    np.broadcast_to(-z3[..., 2, None], u1.shape))
-    c2, s2 = np.cos(u2), np.sin(u2)
+    u1, u2, c1, s1, c2, s2 = _ujoint_angles(z3)         # (..., 2, 2)
     uj_deg = np.broadcast_to((rho <= dtol[..., None])[..., None], u1.shape)
-    R1 = rotation_u_pair(c1, s1, c2, s2)                # (..., 2, 2, 3, 3)
-    Rse = T[..., None, None, :3, :3]
-    W = np.swapaxes(R1, -1, -2) @ Rse
-    rho4 = np.hypot(W[..., 0, 2], W[..., 1, 2])         # |sin u4|
-    u3 = np.arctan2(tau * W[..., 1, 2, None], tau * W[..., 0, 2, None])  # (..., 2, 2, 2)
-    c3, s3 = np.cos(u3), np.sin(u3)
-    u4 = np.arctan2(c3 * W[..., 0, 2, None] + s3 * W[..., 1, 2, None],
-                    np.broadcast_to(-W[..., 2, 2, None], u3.shape))
-    c4, s4 = np.cos(u4), np.sin(u4)
-    W00, W10, W20 = W[..., 0, 0, None], W[..., 1, 0, None], W[..., 2, 0, None]
-    y5 = s3 * W00 - c3 * W10
-    x5 = c3 * c4 * W00 + s3 * c4 * W10 + s4 * W20
-    u5 = np.arctan2(y5, x5)
-    n5 = np.hypot(x5, y5)
-    c5, s5 = x5 / n5, y5 / n5      # = cos, sin of the reported u5 to 1 ulp
-    del rho4                        # per-slot |sin u4| rounds differently: decide once
+    W = np.swapaxes(rotation_u_pair(c1, s1, c2, s2), -1, -2) @ T[..., None, None, :3, :3]
+    u3, u4, u5, c3, s3, c4, s4, c5, s5 = _wrist_angles(W)   # (..., 2, 2, 2)
+    # |sin u4| is decided once per pose (rho4_k): per slot it would round differently
     wr_deg = np.broadcast_to((rho4_k <= dtol)[..., None, None, None], u3.shape)
 
     full = u3.shape  # (..., 2, 2, 2)

@@ -78,24 +78,11 @@ from ._lean import (
     _new,
     design_params,
     lean_fk,
-    lean_ik,
-    lean_line,
 )
+from ._lean import lean_ik as lean_ik  # re-exported: _dispatch calls the lean paths here
+from ._lean import lean_line as lean_line
 from ._threads import parallel_guard
 
-__all__ = [
-    "design_params",
-    "lean_fk",
-    "lean_ik",
-    "lean_line",
-    "forward_kinematics",
-    "inverse_kinematics",
-    "q_from_instrument",
-    "q_from_tool_tip",
-    "parallel_forward_kinematics",
-    "parallel_ik_from_position",
-    "parallel_inverse_kinematics",
-]
 
 class _Delegate(Exception):
     """Internal: hand the call to the reference implementation."""

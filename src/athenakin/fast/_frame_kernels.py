@@ -74,6 +74,44 @@ def quaternion_xyzw_into(R, out):
             R[i, 2, 0], R[i, 2, 1], R[i, 2, 2])
 
 
+@njit(error_model="numpy", cache=True, nogil=True, inline="always")
+def _parent_times_origin(T, pa, origin, li):
+    """The 12 entries (rows of ``[R | t]``) of ``T[pa] @ origin[li]``; the root: ``origin[li]``.
+
+    ``T`` (L, 12): the poses of the links done so far (rows ``r00 r01 r02 t0 r10 ... t2``).
+    """
+    o00, o01, o02, o03 = origin[li, 0, 0], origin[li, 0, 1], origin[li, 0, 2], origin[li, 0, 3]
+    o10, o11, o12, o13 = origin[li, 1, 0], origin[li, 1, 1], origin[li, 1, 2], origin[li, 1, 3]
+    o20, o21, o22, o23 = origin[li, 2, 0], origin[li, 2, 1], origin[li, 2, 2], origin[li, 2, 3]
+    if pa < 0:
+        return o00, o01, o02, o03, o10, o11, o12, o13, o20, o21, o22, o23
+    p00, p01, p02, p03 = T[pa, 0], T[pa, 1], T[pa, 2], T[pa, 3]
+    p10, p11, p12, p13 = T[pa, 4], T[pa, 5], T[pa, 6], T[pa, 7]
+    p20, p21, p22, p23 = T[pa, 8], T[pa, 9], T[pa, 10], T[pa, 11]
+    return (p00 * o00 + p01 * o10 + p02 * o20,
+            p00 * o01 + p01 * o11 + p02 * o21,
+            p00 * o02 + p01 * o12 + p02 * o22,
+            p00 * o03 + p01 * o13 + p02 * o23 + p03,
+            p10 * o00 + p11 * o10 + p12 * o20,
+            p10 * o01 + p11 * o11 + p12 * o21,
+            p10 * o02 + p11 * o12 + p12 * o22,
+            p10 * o03 + p11 * o13 + p12 * o23 + p13,
+            p20 * o00 + p21 * o10 + p22 * o20,
+            p20 * o01 + p21 * o11 + p22 * o21,
+            p20 * o02 + p21 * o12 + p22 * o22,
+            p20 * o03 + p21 * o13 + p22 * o23 + p23)
+
+
+@njit(error_model="numpy", cache=True, nogil=True, inline="always")
+def _rodrigues(x, y, z, v):
+    """The 9 entries (row by row) of the rotation by ``v`` about the unit axis ``(x, y, z)``."""
+    co, si = math.cos(v), math.sin(v)
+    C = 1.0 - co
+    return (co + x * x * C, x * y * C - z * si, x * z * C + y * si,
+            y * x * C + z * si, co + y * y * C, y * z * C - x * si,
+            z * x * C - y * si, z * y * C + x * si, co + z * z * C)
+
+
 @njit(error_model="numpy", cache=True, nogil=True, boundscheck=False)
 def urdf_frames_into(values, parent, origin, kind, axis, column, wanted, out):
     """Translation and quaternion of links of a URDF tree for each reading.
@@ -101,34 +139,8 @@ def urdf_frames_into(values, parent, origin, kind, axis, column, wanted, out):
     T = np.empty((L, 12))           # rows of each link's pose: r00 r01 r02 t0 r10 ... t2
     for i in range(values.shape[0]):
         for li in range(L):
-            pa = parent[li]
-            # A = T[parent] @ origin (the root is the identity): 12 scalars
-            o00, o01, o02, o03 = origin[li, 0, 0], origin[li, 0, 1], origin[li, 0, 2], \
-                origin[li, 0, 3]
-            o10, o11, o12, o13 = origin[li, 1, 0], origin[li, 1, 1], origin[li, 1, 2], \
-                origin[li, 1, 3]
-            o20, o21, o22, o23 = origin[li, 2, 0], origin[li, 2, 1], origin[li, 2, 2], \
-                origin[li, 2, 3]
-            if pa < 0:
-                a00, a01, a02, a03 = o00, o01, o02, o03
-                a10, a11, a12, a13 = o10, o11, o12, o13
-                a20, a21, a22, a23 = o20, o21, o22, o23
-            else:
-                p00, p01, p02, p03 = T[pa, 0], T[pa, 1], T[pa, 2], T[pa, 3]
-                p10, p11, p12, p13 = T[pa, 4], T[pa, 5], T[pa, 6], T[pa, 7]
-                p20, p21, p22, p23 = T[pa, 8], T[pa, 9], T[pa, 10], T[pa, 11]
-                a00 = p00 * o00 + p01 * o10 + p02 * o20
-                a01 = p00 * o01 + p01 * o11 + p02 * o21
-                a02 = p00 * o02 + p01 * o12 + p02 * o22
-                a03 = p00 * o03 + p01 * o13 + p02 * o23 + p03
-                a10 = p10 * o00 + p11 * o10 + p12 * o20
-                a11 = p10 * o01 + p11 * o11 + p12 * o21
-                a12 = p10 * o02 + p11 * o12 + p12 * o22
-                a13 = p10 * o03 + p11 * o13 + p12 * o23 + p13
-                a20 = p20 * o00 + p21 * o10 + p22 * o20
-                a21 = p20 * o01 + p21 * o11 + p22 * o21
-                a22 = p20 * o02 + p21 * o12 + p22 * o22
-                a23 = p20 * o03 + p21 * o13 + p22 * o23 + p23
+            (a00, a01, a02, a03, a10, a11, a12, a13,
+             a20, a21, a22, a23) = _parent_times_origin(T, parent[li], origin, li)
             kd = kind[li]
             if kd == 1:                 # prismatic: translate by v * axis (joint frame)
                 v = values[i, column[li]]
@@ -138,18 +150,8 @@ def urdf_frames_into(values, parent, origin, kind, axis, column, wanted, out):
                 a23 = a20 * x + a21 * y + a22 * z + a23
             elif kd == 2:               # hinge: rotate by v about axis (Rodrigues)
                 v = values[i, column[li]]
-                x, y, z = axis[li, 0], axis[li, 1], axis[li, 2]
-                co, si = math.cos(v), math.sin(v)
-                C = 1.0 - co
-                m00 = co + x * x * C
-                m01 = x * y * C - z * si
-                m02 = x * z * C + y * si
-                m10 = y * x * C + z * si
-                m11 = co + y * y * C
-                m12 = y * z * C - x * si
-                m20 = z * x * C - y * si
-                m21 = z * y * C + x * si
-                m22 = co + z * z * C
+                m00, m01, m02, m10, m11, m12, m20, m21, m22 = _rodrigues(
+                    axis[li, 0], axis[li, 1], axis[li, 2], v)
                 a00, a01, a02 = (a00 * m00 + a01 * m10 + a02 * m20,
                                  a00 * m01 + a01 * m11 + a02 * m21,
                                  a00 * m02 + a01 * m12 + a02 * m22)

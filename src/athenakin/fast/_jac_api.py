@@ -27,16 +27,6 @@ from ..robot._setup import default_rcm_frame
 from . import _jac_kernels as _jk
 from ._api import _arr, _batch, _Delegate, _flat, design_params
 
-__all__ = [
-    "parallel_jacobian",
-    "parallel_inverse_jacobian",
-    "parallel_twist_jacobian",
-    "instrument_jacobian",
-    "instrument_inverse_jacobian",
-    "tool_tip_jacobian",
-    "tool_tip_inverse_jacobian",
-]
-
 _MODE_1 = (np.ones(1), ())
 _MODE_M1 = (-np.ones(1), ())
 _FRAMES: dict[int, tuple[Design | None, NDArray[np.float64]]] = {}

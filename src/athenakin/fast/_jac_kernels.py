@@ -1,6 +1,6 @@
 """Compiled analytic Jacobians of the parallel module and the whole robot (private).
 
-The arithmetic mirrors :mod:`athenakin.analysis._jacobians` operation by
+The arithmetic mirrors :mod:`athenakin.robot._jacobians` operation by
 operation (same formulas, same order of the floating-point operations,
 including the multiplications by the zeros and ones of constant matrices, so
 that inf and NaN propagate into the same entries), item by item instead of
@@ -23,8 +23,8 @@ slower), a last pass scatters the results. The rigidity test of the frames runs
 in the same chunks, vectorised too.
 """
 
-# numba's cache does not follow the kernels this module inlines from _fk_kernels and
-# _scalar: a change there must change this file too (revision 2, issue 23).
+# numba's cache does not follow the kernels this module inlines from _fk_kernels, _scalar
+# and _mechanism_formulas: a change there must change this file too (revision 3).
 
 from __future__ import annotations
 
@@ -33,6 +33,7 @@ import math
 import numpy as np
 
 from .._backend import njit
+from .._mechanism_formulas import parallel_state_formula
 from ._fk_kernels import FLAG_NONRIGID, FLAG_T_NONFINITE
 from ._scalar import atan2, finite_sum, hypot, sincos
 
@@ -60,24 +61,20 @@ _INLINE = dict(error_model="numpy", cache=True, nogil=True, inline="always")
 
 # --- the parallel module (parallel_state, _dphi_dq, _parallel_jacobian, _inverse) --------
 @njit(**_INLINE)
+def _select(c, a, b):
+    """``np.where`` of one item (numba's makes arrays of scalars)."""
+    return a if c else b
+
+
+#: The one formula of the module's state (numpy evaluates the same source).
+_parallel_state = njit(**_INLINE)(parallel_state_formula)
+
+
+@njit(**_INLINE)
 def _module(q1, q2, q3, m, P, ttol):
     """``parallel_state`` of one item: ``h, x_M, r1, s3, m_y, y, z, ey, ez, D``."""
-    l1, l2, l3, l5 = P[0], P[1], P[2], P[4]
-    h = 0.5 * (q1 - q2)
-    r1 = math.sqrt(l1 * l1 - h * h)
-    r1 = r1 if r1 > 0 else math.nan
-    s3 = math.sqrt(l3 * l3 - h * h)
-    m_y = s3 + l2
-    d2 = m_y * m_y + l5 * l5
-    d = math.sqrt(d2)
-    H = d2 + r1 * r1 - q3 * q3
-    k = (r1 + q3 - d) * (r1 + q3 + d) * (d - r1 + q3) * (d + r1 - q3)
-    a = math.sqrt(abs(k)) / (2 * d)
-    a = a if k >= 0 else (0.0 if a <= ttol else math.nan)
-    by, bz = H * m_y / (2 * d2), H * l5 / (2 * d2)
-    y = by - m * a * l5 / d
-    z = bz + m * a * m_y / d
-    ey, ez = y / r1, z / r1
+    h, r1, s3, m_y, d, a, y, z, ey, ez = _parallel_state(q1, q2, q3, m, P[0], P[1], P[2],
+                                                          P[4], ttol, _select)
     return h, 0.5 * (q1 + q2), r1, s3, m_y, y, z, ey, ez, -m * a * d
 
 

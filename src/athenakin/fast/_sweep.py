@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import time
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -73,6 +75,66 @@ def _chunk_source(q: QSource, n: int | None) -> tuple[Callable[[int, int], Array
     return (lambda a, b: arr[a:b]), total
 
 
+def _check_reduce(reduce: object) -> None:
+    if reduce is not None and not callable(reduce):
+        raise TypeError(f"reduce: expected a callable reduce(start, q_chunk, sol) or None, "
+                        f"got {type(reduce).__name__}")
+
+
+def _check_chunk_size(chunk_size: object) -> None:
+    if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) \
+            or chunk_size < 1:
+        raise InvalidInputError(f"chunk_size: expected a positive integer, got {chunk_size!r}")
+
+
+def _same_size(buf: FKSolution | None, n: int) -> FKSolution | None:
+    """``buf`` if it holds ``n`` poses (reused by the next chunk), else None (a new one)."""
+    return buf if buf is not None and buf.item_reason.shape == (n,) else None
+
+
+#: The histograms of a sweep, filled chunk by chunk: poses per number of valid slots (17,),
+#: per item reason (16,), per assembly mode with valid slots (2,).
+_Histograms = tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]
+
+
+def _progress_bar(total: int, progress: bool) -> Any:
+    """A ``tqdm`` bar over ``total`` poses, or a context of None without ``progress``."""
+    if not progress:
+        return contextlib.nullcontext(None)
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, unit="pose", unit_scale=True, desc="sweep_fk", disable=None)
+
+
+def _read_chunk(source: Callable[[int, int], ArrayLike], start: int,
+                stop: int) -> NDArray[np.float64]:
+    """Poses ``start:stop`` of the source as a contiguous (stop - start, 3) float array."""
+    qc = np.ascontiguousarray(source(start, stop), dtype=np.float64)
+    if qc.shape != (stop - start, 3):
+        raise InvalidInputError(f"q({start}, {stop}): expected shape "
+                                f"({stop - start}, 3), got {qc.shape}")
+    return qc
+
+
+def _count_chunk(qc: NDArray[np.float64], T: NDArray[np.float64], P: NDArray[np.float64],
+                 tol: NDArray[np.float64], hist: _Histograms, parallel: bool) -> None:
+    """Add one chunk to the histograms in the compiled kernel (no per-pose output)."""
+    if not qc.flags.writeable:
+        qc = qc.copy()
+    T1 = np.ascontiguousarray(T, dtype=np.float64).reshape(1, 4, 4)
+    count = _fk.fk_counts_parallel if parallel else _fk.fk_counts
+    with parallel_guard(parallel):
+        count(qc, T1, P, tol, *hist)
+
+
+def _tally(sol: FKSolution, hist: _Histograms) -> None:
+    """Add one chunk's :class:`FKSolution` to the histograms (as the counting kernel does)."""
+    counts, reasons, slots = hist
+    counts += np.bincount(sol.valid.sum(axis=-1), minlength=17)
+    reasons += np.bincount(sol.item_reason, minlength=16)[:16]
+    slots += sol.valid[:, [0, 8]].sum(axis=0)
+
+
 def sweep_fk(q: QSource, T_b_e: ArrayLike, design: Design | None = None, *,
              n: int | None = None, chunk_size: int = DEFAULT_CHUNK_SIZE,
              reduce: Callable[[int, NDArray[np.float64], FKSolution], None] | None = None,
@@ -124,59 +186,30 @@ def sweep_fk(q: QSource, T_b_e: ArrayLike, design: Design | None = None, *,
     10000
     """
     P = design_params(design)
-    if reduce is not None and not callable(reduce):
-        raise TypeError(f"reduce: expected a callable reduce(start, q_chunk, sol) or None, "
-                        f"got {type(reduce).__name__}")
+    _check_reduce(reduce)
     T = check_frame(T_b_e, "T_b_e")
-    if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) \
-            or chunk_size < 1:
-        raise InvalidInputError(f"chunk_size: expected a positive integer, got {chunk_size!r}")
+    _check_chunk_size(chunk_size)
     source, total = _chunk_source(q, n)
-    T1 = np.ascontiguousarray(T, dtype=np.float64).reshape(1, 4, 4)
-    tol = np.array([check_tolerance(tangent_tol, "tangent_tol"),
-                    check_tolerance(degenerate_tol, "degenerate_tol"),
-                    check_tolerance(p_zero_tol, "p_zero_tol"),
-                    check_tolerance(closure_tol, "closure_tol")])
-    counts = np.zeros(17, np.int64)
-    reasons = np.zeros(16, np.int64)
-    slots = np.zeros(2, np.int64)
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=total, unit="pose", unit_scale=True, desc="sweep_fk",
-                   disable=None)
+    tols = {"tangent_tol": tangent_tol, "degenerate_tol": degenerate_tol,
+            "p_zero_tol": p_zero_tol, "closure_tol": closure_tol}
+    tol = np.array([check_tolerance(v, k) for k, v in tols.items()])
+    hist = (np.zeros(17, np.int64), np.zeros(16, np.int64), np.zeros(2, np.int64))
     buf: FKSolution | None = None
-    count = _fk.fk_counts_parallel if parallel else _fk.fk_counts
     t0 = time.perf_counter()
-    try:
+    with _progress_bar(total, progress) as bar:
         for start in range(0, total, chunk_size):
             stop = min(start + chunk_size, total)
-            qc = np.ascontiguousarray(source(start, stop), dtype=np.float64)
-            if qc.shape != (stop - start, 3):
-                raise InvalidInputError(f"q({start}, {stop}): expected shape "
-                                        f"({stop - start}, 3), got {qc.shape}")
+            qc = _read_chunk(source, start, stop)
             if reduce is None:
-                if not qc.flags.writeable:
-                    qc = qc.copy()
-                with parallel_guard(parallel):
-                    count(qc, T1, P, tol, counts, reasons, slots)
-            else:
-                if buf is None or buf.item_reason.shape != (stop - start,):
-                    buf = None
-                buf = forward_kinematics(qc, T, design, errors="flag", tangent_tol=tangent_tol,
-                                         degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
-                                         closure_tol=closure_tol, parallel=parallel, out=buf)
-                ns = buf.valid.sum(axis=-1)
-                counts += np.bincount(ns, minlength=17)
-                reasons += np.bincount(buf.item_reason, minlength=16)[:16]
-                slots += buf.valid[:, [0, 8]].sum(axis=0)
+                _count_chunk(qc, T, P, tol, hist, parallel)
+            else:   # the last, shorter chunk gets its own buffer
+                buf = forward_kinematics(qc, T, design, errors="flag", parallel=parallel,
+                                         out=_same_size(buf, stop - start), **tols)
+                _tally(buf, hist)
                 reduce(start, qc, buf)
             if bar is not None:
                 bar.update(stop - start)
-    finally:
-        if bar is not None:
-            bar.close()
     seconds = time.perf_counter() - t0
+    counts, reasons, slots = hist
     return SweepSummary(n=total, n_solutions=counts, item_reason=reasons[:len(Reason)],
                         mode_valid=slots, seconds=seconds)

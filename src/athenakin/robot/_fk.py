@@ -20,16 +20,8 @@ from .._validation import (
     check_options,
     check_transform,
 )
-from ..chain._ups import (
-    CLOSURE_TOL,
-    DEGENERATE_TOL,
-    P_ZERO_TOL,
-    SERIAL_P_SIGN,
-    SERIAL_UJOINT,
-    SERIAL_WRIST,
-    rotation_u_pair,
-    ups_solutions,
-)
+from ..chain import _ups
+from ..chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
 from ..design import Design
 from ..errors import Reason
 from ..parallel._module import MODES, TANGENT_TOL, ParallelSolution, parallel_forward_kinematics
@@ -51,9 +43,9 @@ __all__ = ["FKSolution", "forward_kinematics", "SLOT_MODE", "SLOT_MODE_INDEX", "
 #: Labels of the 16 slots ``k = 8 m + 4 r + 2 b + w``: assembly mode, sign of p,
 #: sign of sin u2 (U-joint branch), sign of sin u4 (spherical-joint branch).
 SLOT_MODE = np.repeat(MODES, 8)
-SLOT_P_SIGN = np.tile(SERIAL_P_SIGN, 2)
-SLOT_UJOINT = np.tile(SERIAL_UJOINT, 2)
-SLOT_WRIST = np.tile(SERIAL_WRIST, 2)
+SLOT_P_SIGN = np.tile(_ups.SERIAL_P_SIGN, 2)
+SLOT_UJOINT = np.tile(_ups.SERIAL_UJOINT, 2)
+SLOT_WRIST = np.tile(_ups.SERIAL_WRIST, 2)
 
 
 def slot_index(mode: int, p_sign: int, ujoint: int, wrist: int) -> int:
@@ -230,7 +222,7 @@ def _tip_frames(T_b_s_mode: NDArray[np.float64], u: NDArray[np.float64], L: floa
     O_s = np.take(T_b_s_mode[..., :3, 3], SLOT_MODE_INDEX, axis=-2)        # (..., 16, 3)
     c1, s1 = np.cos(u[..., 0]), np.sin(u[..., 0])
     c2, s2 = np.cos(u[..., 1]), np.sin(u[..., 1])
-    R_s_3 = rotation_u_pair(c1, s1, c2, s2)
+    R_s_3 = _ups.rotation_u_pair(c1, s1, c2, s2)
     R = R_b_s @ R_s_3
     out = np.zeros(R.shape[:-2] + (4, 4))
     out[..., :3, :3] = R
@@ -397,7 +389,7 @@ def _serial_closed_form(par: ParallelSolution, T: NDArray[np.float64], *, degene
                      np.nan)
     scale = (np.abs(T[..., None, :3, 3]).max(axis=-1)
              + np.abs(par.T_b_s[..., :3, 3]).max(axis=-1))   # rounding of t_s_e (issue 13)
-    ser = ups_solutions(T_s_e, degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
+    ser = _ups.ups_solutions(T_s_e, degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
                         closure_tol=closure_tol, scale=scale, _checked=True)
     return ser.p, ser.u, ser.reason, ser.residual
 

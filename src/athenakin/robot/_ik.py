@@ -135,12 +135,7 @@ def check_ik_fields(fields: str | tuple[str, ...] | list[str] | None
                     ) -> tuple[str, ...] | None:
     """Validate ``fields`` of :func:`inverse_kinematics`: None (all) or names in :data:`IK_FIELDS`.
 
-    Raises
-    ------
-    TypeError
-        ``fields`` is not None, a name or a list / tuple of names.
-    ValueError
-        A name that is not in :data:`IK_FIELDS`.
+    The errors of :func:`athenakin.robot._fk.check_fields`, for the names of :data:`IK_FIELDS`.
     """
     return check_names(fields, "fields", IK_FIELDS)
 

@@ -25,26 +25,13 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._mechanism_formulas import parallel_state_formula
 from .._validation import broadcast_batch, check_array
 from ..chain._ups import rotation_u_pair
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..parallel import TANGENT_TOL
 from ._setup import resolve_rcm_frame
-
-__all__ = [
-    "Frame",
-    "parallel_jacobian",
-    "parallel_inverse_jacobian",
-    "parallel_twist_jacobian",
-    "parallel_state",
-    "serial_jacobian",
-    "passive_jacobian",
-    "instrument_jacobian",
-    "instrument_inverse_jacobian",
-    "tool_tip_jacobian",
-    "tool_tip_inverse_jacobian",
-]
 
 #: Frames a velocity can be expressed in: the base frame or the RCM frame E.
 Frame = Literal["base", "rcm"]
@@ -113,24 +100,10 @@ def parallel_state(q: ArrayLike, design: Design | None = None, mode: ArrayLike =
         raise InvalidInputError(f"mode: expected +1/-1 broadcastable to q's batch shape "
                                 f"{q.shape[:-1]}, got shape {m.shape}")
     q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2]
-    h = 0.5 * (q1 - q2)
     l1, l2, l3, l4, l5 = design.lengths
     with np.errstate(invalid="ignore", divide="ignore"):
-        r1 = np.sqrt(l1 * l1 - h * h)
-        r1 = np.where(r1 > 0, r1, np.nan)
-        s3 = np.sqrt(l3 * l3 - h * h)
-        m_y = s3 + l2
-        d2 = m_y * m_y + l5 * l5
-        d = np.sqrt(d2)
-        H = d2 + r1 * r1 - q3 * q3
-        k = (r1 + q3 - d) * (r1 + q3 + d) * (d - r1 + q3) * (d + r1 - q3)
-        a = np.sqrt(np.abs(k)) / (2 * d)
-        # rounding makes k slightly negative at tangency: within TANGENT_TOL it is tangent
-        a = np.where(k >= 0, a, np.where(a <= TANGENT_TOL, 0.0, np.nan))
-        by, bz = H * m_y / (2 * d2), H * l5 / (2 * d2)
-        y = by - m * a * l5 / d
-        z = bz + m * a * m_y / d
-        ey, ez = y / r1, z / r1
+        h, r1, s3, m_y, d, a, y, z, ey, ez = parallel_state_formula(
+            q1, q2, q3, m, l1, l2, l3, l5, TANGENT_TOL, np.where)
     m = np.broadcast_to(m, h.shape)
     O_s = np.stack([0.5 * (q1 + q2), (r1 + l4) * ey, (r1 + l4) * ez], axis=-1)
     return {"h": h, "x_M": 0.5 * (q1 + q2), "q3": q3, "r1": r1, "s3": s3, "m_y": m_y, "d": d,
@@ -187,36 +160,11 @@ def _parallel_jacobian(g: dict[str, NDArray[np.float64]]) -> NDArray[np.float64]
 
 def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1
                       ) -> NDArray[np.float64]:
-    """Jacobian of the parallel module, ``d O_s / d q``, in the base frame (analytic).
+    """The numpy reference of :func:`athenakin.analysis.parallel_jacobian` (documented there).
 
-    Parameters
-    ----------
-    q : array-like, shape (..., 3)
-        Actuators ``(q1, q2, q3)``, m.
-    design : Design, optional
-        Defaults to :meth:`~athenakin.Design.default`.
-    mode : {1, -1} or array-like of them
-        Assembly mode (slot 0 / 1 of :func:`~athenakin.parallel.parallel_forward_kinematics`).
-
-    Returns
-    -------
-    ndarray, shape (..., 3, 3)
-        Rows: x, y, z of ``O_s`` (base frame); columns: ``q1, q2, q3``.
-        Dimensionless (m/m). NaN where the module is not assembled; non-finite
-        at the forward singularities (``w = 0``, ``|h| = l3``), rank 2 at ``h = 0``.
-
-    Notes
-    -----
-    Stroke limits and the A/B order are not checked (local geometry).
-    See the module docstring and ``docs/singularities.md`` for the derivation
-    (paper Eq. 7-10).
-
-    Examples
-    --------
-    >>> import athenakin as ak
-    >>> J = ak.analysis.parallel_jacobian([-0.10, 0.10, 0.45], ak.Design.default(), mode=1)
-    >>> J.shape
-    (3, 3)
+    ``d O_s / d q`` (..., 3, 3) in the base frame. Stroke limits and the A/B order are
+    not checked (local geometry). See the module docstring and ``docs/singularities.md``
+    for the derivation (paper Eq. 7-10).
     """
     _, g = _state(q, design, mode)
     return _parallel_jacobian(g)

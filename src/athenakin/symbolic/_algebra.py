@@ -18,7 +18,7 @@ the same vectors as :func:`athenakin.study.study_M_from_half_tangent` and
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import sympy as sp
 
@@ -51,68 +51,99 @@ def _show(v: object) -> str:
 MAX_DEGREE = 12
 
 
-def checked_symbolic(**kinds: str):  # type: ignore[no-untyped-def]  # noqa: C901
+def _check_expr(name: str, v: object) -> None:
+    _expr(v, name)
+
+
+def _check_exprs(name: str, v: object, count: int | None = None) -> None:
+    if isinstance(v, (str, bytes, Mapping)) or not isinstance(v, (Sequence, sp.MatrixBase)):
+        raise TypeError(f"{name}: expected a sequence of sympy expressions, got "
+                        f"{type(v).__name__}")
+    items = list(v)
+    if count is not None and len(items) != count:
+        raise ValueError(f"{name}: expected {count} entries (a Study vector), got {len(items)}")
+    for i, x in enumerate(items):
+        _expr(x, f"{name}[{i}]")
+
+
+def _check_vectors8(name: str, v: object) -> None:
+    if isinstance(v, (str, bytes)) or not isinstance(v, Sequence) or not v:
+        raise TypeError(f"{name}: expected a non-empty sequence of Study vectors, got "
+                        f"{type(v).__name__}")
+    for i, x in enumerate(v):
+        _check_exprs(f"{name}[{i}]", x, 8)
+
+
+def _check_symbols(name: str, v: object) -> None:
+    if isinstance(v, Sequence) and not isinstance(v, (str, bytes)) and len(v) == 0:
+        raise ValueError(f"{name}: expected at least one sympy Symbol, got none")
+    if isinstance(v, (str, bytes)) or not isinstance(v, Sequence) \
+            or not all(isinstance(x, sp.Symbol) for x in v):
+        raise TypeError(f"{name}: expected a non-empty sequence of sympy Symbols, got {v!r}")
+
+
+def _check_matrix(name: str, v: object) -> None:
+    if not isinstance(v, sp.MatrixBase):
+        raise TypeError(f"{name}: expected a sympy Matrix, got {type(v).__name__}")
+
+
+def _check_mapping(name: str, v: object) -> None:
+    if not isinstance(v, Mapping) or not all(isinstance(k, sp.Symbol) for k in v):
+        raise TypeError(f"{name}: expected a mapping sympy Symbol -> expression, got "
+                        f"{type(v).__name__}")
+    for k, x in v.items():
+        _expr(x, f"{name}[{k}]")
+
+
+def _check_small_int(name: str, v: object, stop: int, what: str) -> None:
+    """``v`` an int (not a bool) in ``0..stop - 1``, or a ValueError naming ``what``."""
+    if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v < stop:
+        raise ValueError(f"{name}: expected {what} in 0..{stop - 1}, got {_show(v)}")
+
+
+def _check_indices3(name: str, v: object) -> None:
+    if isinstance(v, (str, bytes)) or not isinstance(v, Sequence) or len(v) != 3 \
+            or not all(isinstance(i, int) and not isinstance(i, bool) and 0 <= i < 4
+                       for i in v):
+        raise ValueError(f"{name}: expected 3 indices in 0..3, got {v!r}")
+
+
+def _check_count(name: str, v: object) -> None:
+    if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+        raise TypeError(f"{name}: expected a non-negative int, got {v!r}")
+
+
+#: The argument kinds of :func:`checked_symbolic`: kind -> ``check(name, value)``.
+_CHECKS: dict[str, Callable[[str, object], None]] = {
+    "expr": _check_expr,
+    "exprs": _check_exprs,
+    "exprs8": lambda name, v: _check_exprs(name, v, 8),
+    "vectors8": _check_vectors8,
+    "symbols": _check_symbols,
+    "symbols_or_none": lambda name, v: None if v is None else _check_symbols(name, v),
+    "matrix": _check_matrix,
+    "mapping": _check_mapping,
+    "degree": lambda name, v: _check_small_int(name, v, MAX_DEGREE + 1, "a degree"),
+    "index4": lambda name, v: _check_small_int(name, v, 4, "an index"),
+    "indices3": _check_indices3,
+    "int": _check_count,
+}
+
+
+def checked_symbolic(**kinds: str):  # type: ignore[no-untyped-def]
     """Check arguments of a computer-algebra function by kind, naming each.
 
     Kinds: ``"expr"`` (one expression), ``"exprs"`` (a sequence of them), ``"exprs8"``
     (exactly 8), ``"symbols"`` (a non-empty sequence of sympy Symbols), ``"matrix"``
-    (a sympy Matrix), ``"mapping"`` (Symbol -> expression), ``"int"`` (a non-negative int).
+    (a sympy Matrix), ``"mapping"`` (Symbol -> expression), ``"int"`` (a non-negative int);
+    the others of :data:`_CHECKS`.
     """
     import functools
     import inspect
-    from collections.abc import Mapping
 
     def check(kind: str, name: str, v: object) -> None:
-        if kind == "expr":
-            _expr(v, name)
-        elif kind in ("exprs", "exprs8"):
-            if isinstance(v, (str, bytes, Mapping)) or not isinstance(v, (Sequence, sp.MatrixBase)):
-                raise TypeError(f"{name}: expected a sequence of sympy expressions, got "
-                                f"{type(v).__name__}")
-            items = list(v)
-            if kind == "exprs8" and len(items) != 8:
-                raise ValueError(f"{name}: expected 8 entries (a Study vector), got {len(items)}")
-            for i, x in enumerate(items):
-                _expr(x, f"{name}[{i}]")
-        elif kind == "vectors8":
-            if isinstance(v, (str, bytes)) or not isinstance(v, Sequence) or not v:
-                raise TypeError(f"{name}: expected a non-empty sequence of Study vectors, got "
-                                f"{type(v).__name__}")
-            for i, x in enumerate(v):
-                check("exprs8", f"{name}[{i}]", x)
-        elif kind == "symbols":
-            if isinstance(v, Sequence) and not isinstance(v, (str, bytes)) and len(v) == 0:
-                raise ValueError(f"{name}: expected at least one sympy Symbol, got none")
-            if isinstance(v, (str, bytes)) or not isinstance(v, Sequence) \
-                    or not all(isinstance(x, sp.Symbol) for x in v):
-                raise TypeError(f"{name}: expected a non-empty sequence of sympy Symbols, got "
-                                f"{v!r}")
-        elif kind == "symbols_or_none":
-            if v is not None:
-                check("symbols", name, v)
-        elif kind == "matrix":
-            if not isinstance(v, sp.MatrixBase):
-                raise TypeError(f"{name}: expected a sympy Matrix, got {type(v).__name__}")
-        elif kind == "mapping":
-            if not isinstance(v, Mapping) or not all(isinstance(k, sp.Symbol) for k in v):
-                raise TypeError(f"{name}: expected a mapping sympy Symbol -> expression, got "
-                                f"{type(v).__name__}")
-            for k, x in v.items():
-                _expr(x, f"{name}[{k}]")
-        elif kind == "degree":
-            if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= MAX_DEGREE:
-                raise ValueError(f"{name}: expected a degree in 0..{MAX_DEGREE}, got {_show(v)}")
-        elif kind == "index4":
-            if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v < 4:
-                raise ValueError(f"{name}: expected an index in 0..3, got {_show(v)}")
-        elif kind == "indices3":
-            if isinstance(v, (str, bytes)) or not isinstance(v, Sequence) or len(v) != 3 \
-                    or not all(isinstance(i, int) and not isinstance(i, bool) and 0 <= i < 4
-                               for i in v):
-                raise ValueError(f"{name}: expected 3 indices in 0..3, got {v!r}")
-        elif kind == "int":
-            if isinstance(v, bool) or not isinstance(v, int) or v < 0:
-                raise TypeError(f"{name}: expected a non-negative int, got {v!r}")
+        if kind in _CHECKS:
+            _CHECKS[kind](name, v)
 
     def wrap(f):  # type: ignore[no-untyped-def]
         sig = inspect.signature(f)
