@@ -56,7 +56,7 @@ def test_methods_are_the_functions(method, call):
 
 
 def test_ik_round_trip_through_the_robot():
-    robot = ak.Robot(D, T)
+    robot = ak.Robot(T, D)
     sol = robot.forward_kinematics(Q)
     tip_e = (sol.tip[:, 0] - T[:3, 3]) @ T[:3, :3]
     q, res = robot.q_from_tool_tip(tip_e)
@@ -94,6 +94,11 @@ def test_bad_parts_are_named(kw, err, match):
     args = {"design": D, "T_b_e": T, **kw}
     with pytest.raises(err, match=match):
         ak.Robot(**args)
+
+
+def test_old_argument_order_is_refused_by_name():
+    with pytest.raises(InvalidInputError, match="T_b_e comes before design"):
+        ak.Robot(D, T)
 
 
 def test_robot_is_frozen_and_replace_checks_again():

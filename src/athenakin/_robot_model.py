@@ -36,10 +36,11 @@ class Robot:
 
     Attributes
     ----------
-    design : Design
-        The geometry and strokes (:class:`athenakin.Design`).
     T_b_e : ndarray, shape (4, 4)
         Pose of the RCM frame ``e`` in the base frame ``b`` (m); a read-only copy.
+    design : Design
+        The geometry and strokes (:class:`athenakin.Design`). The order of every function:
+        ``Robot(T_b_e, design)``; the old order is refused by name.
     bodies : athenakin.collision.Bodies or None
         The links as capsules for :meth:`clearance` and the exports (``None``: the
         defaults of :func:`athenakin.collision.clearance`).
@@ -61,15 +62,15 @@ class Robot:
     True
     """
 
-    design: Design
     T_b_e: NDArray[np.float64]
+    design: Design
     bodies: Any = None
     environment: Any = None
     masses: Any = None
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "design", resolve_design(self.design))
         T = np.array(check_frame(self.T_b_e, "T_b_e"), dtype=float)
+        object.__setattr__(self, "design", resolve_design(self.design))
         T.setflags(write=False)
         object.__setattr__(self, "T_b_e", T)
         if self.bodies is not None:
@@ -110,7 +111,7 @@ class Robot:
         from .robot import default_rcm_frame
 
         design = resolve_design(design)
-        return cls(design, default_rcm_frame(design), **parts)
+        return cls(default_rcm_frame(design), design, **parts)
 
     def replace(self, **changes: Any) -> Robot:
         """A copy with some fields changed (``dataclasses.replace``), checked again.
