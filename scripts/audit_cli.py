@@ -1158,7 +1158,14 @@ def app_cases(fx: Fixtures) -> list[Case]:
                                     ("--rcm-file nan", "--rcm-file", "r.json",
                                      fx.variants("rcm", False)["nan_value"]),
                                     ("--trajectory nan row", "--trajectory", "t.csv",
-                                     fx.variants("traj", False)["nan_row"])):
+                                     fx.variants("traj", False)["nan_row"]),
+                                    ("--environment binary", "--environment", "e.toml",
+                                     bytes(range(256))),
+                                    ("--environment missing", "--environment", "nope.toml", None),
+                                    ("--environment bad obstacle", "--environment", "e.toml",
+                                     b'[[environment.obstacle]]\nkind = "cone"\n'),
+                                    ("--bodies binary", "--bodies", "b.toml", bytes(range(256))),
+                                    ("--bodies missing", "--bodies", "nope.toml", None)):
         files = {name: content} if content is not None else {}
         c.append(Case("app", lab, ["app", opt, name, "--port", "0"], files, tuple(files),
                       mention=(name, opt)))

@@ -3,6 +3,7 @@ the viser binding in process (bad inputs keep it running). The browser: test_app
 
 import dataclasses
 import importlib.util
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -427,6 +428,9 @@ def test_cli_registers_app():
     assert "app" in COMMANDS
     args = build_parser().parse_args(["app", "--port", "0"])
     assert args.host == "127.0.0.1" and args.port == 0
+    assert args.environment is None and args.bodies is None
+    args = build_parser().parse_args(["app", "--environment", "a.toml", "--bodies", "b.toml"])
+    assert args.environment == Path("a.toml") and args.bodies == Path("b.toml")
 
 
 @pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
@@ -464,6 +468,30 @@ def test_cli_without_viser_names_the_extra(monkeypatch, capsys):
     monkeypatch.setitem(sys.modules, "viser", None)          # import viser fails
     assert main(["app", "--port", "0"]) == 1
     assert "pip install 'athenakin[app]'" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+@pytest.mark.parametrize("option,name,content,want", [
+    ("--environment", "nope.toml", None, "FileNotFoundError: [Errno 2] No such file"),
+    ("--bodies", "nope.toml", None, "FileNotFoundError: [Errno 2] No such file"),
+    ("--environment", "bin.toml", bytes(range(256)), "environment file is not UTF-8 text"),
+    ("--environment", "bad.toml", b'[[environment.obstacle]]\nkind = "cone"\n',
+     "environment.obstacle[0].kind: expected one of"),
+    ("--bodies", "bad.toml", b"[bodies]\nradius = {link1 = 0.01}\n", "unknown body 'link1'"),
+])
+def test_cli_refuses_a_bad_bodies_or_environment_file_in_one_line(tmp_path, capsys, option,
+                                                                   name, content, want):
+    """A bad collision file stops the start (the design, RCM frame and trajectory fall back
+    with a warning instead): one line naming the file, exit 1, nothing served."""
+    from athenakin.cli import main
+
+    if content is not None:
+        (tmp_path / name).write_bytes(content)
+    code = main(["app", "--port", "0", "--backend", "numpy", option, str(tmp_path / name)])
+    out, err = capsys.readouterr()
+    assert code == 1 and "serving" not in out, out
+    assert err.count("\n") == 1 and err.startswith("athenakin app: error: "), err
+    assert name in err and want in err, err
 
 
 @pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
@@ -568,11 +596,17 @@ def test_cli_reports_bad_inputs_at_startup_and_serves(tmp_path):
     import subprocess
     import sys
 
+    from athenakin.collision import Bodies, Environment
+
     bad = _csv(tmp_path, "[design]\nl1 = 0.3\nl2 = 0.1\nl3 = 0.25\nl4 = 0.15\nl5 = 5.0\n",
                "far.toml")
-    proc = subprocess.Popen(
+    env = _csv(tmp_path, Environment().halfspace([0, 0, -1.0], [0, 0, 1.0]).to_toml(), "e.toml")
+    bodies = _csv(tmp_path, Bodies.default().with_radius({"instrument": 0.003}).to_toml(),
+                  "b.toml")
+    proc = subprocess.Popen(             # good collision files: served with the fallbacks
         [sys.executable, "-m", "athenakin.cli", "app", "--port", "0", "--backend", "numpy",
-         "--design", str(bad), "--trajectory", str(tmp_path / "none.csv")],
+         "--design", str(bad), "--trajectory", str(tmp_path / "none.csv"),
+         "--environment", str(env), "--bodies", str(bodies)],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
         lines = []

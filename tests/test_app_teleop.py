@@ -308,3 +308,62 @@ def test_the_tab_in_process_starts_at_the_tip_and_stops_without_a_page():
         assert "blob" in tab.readout.content
     finally:
         app.stop()
+
+
+def test_an_app_started_with_environment_and_bodies_files_uses_them(tmp_path, monkeypatch):
+    """``AthenaApp(environment=FILE, bodies=FILE)`` (``athenakin app --environment ...``):
+    the file's obstacles are in the clearance read-out and are the Teleop tab's fixtures,
+    the file's radii are the bodies checked; in-process, no browser."""
+    pytest.importorskip("viser")
+    from athenakin.app import AthenaApp
+    from athenakin.collision import Bodies
+
+    setup = app_setup(None, None, backend="numpy")
+    tip = setup.T_b_e[:3, :3] @ start_teleop(setup, setup.q_home)[0].tip + setup.T_b_e[:3, 3]
+    u = (tip - setup.T_b_e[:3, 3]) / np.linalg.norm(tip - setup.T_b_e[:3, 3])
+    env = (Environment().sphere(tip + 0.011 * u, 0.002, name="vessel")   # 9 mm past the tip
+           .halfspace(tip - [0.0, 0.0, 0.2], [0.0, 0.0, 1.0], name="floor"))
+    env_file, bodies_file = tmp_path / "anatomy.toml", tmp_path / "bodies.toml"
+    env_file.write_text(env.to_toml())
+    bodies_file.write_text(Bodies.default().with_radius({"instrument": 0.003}).to_toml())
+    app = AthenaApp(port=0, backend="numpy", environment=str(env_file), bodies=bodies_file)
+    try:
+        assert app.bodies.environment == Environment.from_toml(env_file)   # the one place
+        assert app.bodies.bodies.radius["instrument"] == 0.003
+        np.testing.assert_allclose(app.view.readouts.tip_b, tip, rtol=0, atol=1e-12)
+        bv = app.bodies.view                  # sphere 11 mm out, radii 2 + 3 mm: 6 mm clear
+        assert bv.pair == ("instrument", "vessel") and not bv.colliding
+        assert bv.clearance == pytest.approx(0.006, abs=1e-9)
+        assert "instrument &ndash; vessel" in app.bodies.readout.content
+        tab = app.teleop
+        monkeypatch.setattr(app.server, "get_clients", lambda: {0: object()})  # a page open
+        tab.start()
+        try:
+            assert tab.running, tab.readout.content
+            fixtures = {n: h for n, h in tab._nodes.items() if n.startswith("fixture_")}
+            assert sorted(fixtures) == ["fixture_floor", "fixture_vessel"]
+            r = np.linalg.norm(np.asarray(fixtures["fixture_vessel"].vertices)
+                               - (tip + 0.011 * u), axis=-1)
+            np.testing.assert_allclose(r, 0.002, rtol=0, atol=1e-6)     # float32 vertices
+        finally:
+            tab.stop()
+        assert not any(n.startswith("fixture_") for n in tab._nodes)
+    finally:
+        app.stop()
+
+
+def test_app_collision_models_are_checked_before_the_server_starts(tmp_path, capsys):
+    pytest.importorskip("viser")
+    from athenakin.app import AthenaApp, launch
+
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[[environment.obstacle]]\nkind = "sphere"\nradius = -1\n')
+    with pytest.raises(FileNotFoundError, match="nope.toml"):
+        launch(port=0, backend="numpy", environment=tmp_path / "nope.toml")
+    with pytest.raises(ak.errors.InvalidInputError, match="bad.toml"):
+        launch(port=0, backend="numpy", environment=bad)
+    assert "ATHENA at" not in capsys.readouterr().out         # never served
+    with pytest.raises(TypeError, match="environment: expected Environment, a TOML file"):
+        AthenaApp(port=0, backend="numpy", environment={"sphere": 1})
+    with pytest.raises(TypeError, match="bodies: expected Bodies"):
+        AthenaApp(port=0, backend="numpy", bodies=3)

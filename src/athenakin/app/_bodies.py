@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import html
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -24,7 +25,7 @@ from ..plot._solids import BODY_COLORS, CLOSEST_COLOR, COLLIDING_COLOR, capsule_
 from ._scene import Solid, rgb
 
 __all__ = ["BodyMesh", "BodiesView", "bodies_view", "capsule_mesh", "clearance_html",
-           "collision_note", "BodiesLayer", "BODY_OPACITY"]
+           "collision_note", "check_collision_models", "BodiesLayer", "BODY_OPACITY"]
 
 #: Opacity of the solids in the app (the sticks stay visible through them).
 BODY_OPACITY = 0.45
@@ -180,6 +181,56 @@ def collision_note(bv: BodiesView) -> str:
         return ""
     return (f"colliding: {bv.pair[0]} and {bv.pair[1]} overlap by "
             f"{-bv.clearance * 1e3:.1f} mm")
+
+
+def check_collision_models(bodies: object, environment: object,
+                           design: Any) -> tuple[Any, Any]:
+    """The app's bodies and obstacles: given, read from TOML files, or None.
+
+    Checked when the app starts, before its server does: a bad file is an error of the
+    caller, not a message in the page (the design and the RCM frame fall back instead,
+    since the page can change them; nothing in the page changes these).
+
+    Parameters
+    ----------
+    bodies : athenakin.collision.Bodies, str, Path or None
+        The capsules, or a TOML file with a ``[bodies]`` table
+        (:meth:`Bodies.from_toml <athenakin.collision.Bodies.from_toml>`; a file without
+        one gives the default capsules). None: the default capsules of the design drawn.
+    environment : athenakin.collision.Environment, str, Path or None
+        The obstacles, or a TOML file of ``[[environment.obstacle]]`` tables
+        (:meth:`Environment.from_toml <athenakin.collision.Environment.from_toml>`).
+    design : Design
+        The design the app starts with (the default radii of a ``[bodies]`` table with
+        ``scale_with_design = true`` follow it).
+
+    Returns
+    -------
+    bodies : Bodies or None
+    environment : Environment or None
+
+    Raises
+    ------
+    OSError
+        A file that cannot be read (the exception names it).
+    InvalidInputError
+        Not TOML, or a bad table; the message starts with the file name.
+    TypeError
+        Neither the model, a path nor None.
+    """
+    from ..collision import Bodies, Environment
+
+    out = []
+    for value, name, cls, read in (
+            (bodies, "bodies", Bodies, lambda f: Bodies.from_toml(f, design=design)),
+            (environment, "environment", Environment, Environment.from_toml)):
+        if isinstance(value, (str, Path)):
+            value = read(value)
+        elif value is not None and not isinstance(value, cls):
+            raise TypeError(f"{name}: expected {cls.__name__}, a TOML file or None, got "
+                            f"{type(value).__name__}")
+        out.append(value)
+    return out[0], out[1]
 
 
 class BodiesLayer:

@@ -114,6 +114,16 @@ class AthenaApp:
         (default :meth:`~athenakin.dynamics.MassModel.reference`; app/_forces.py).
     f_max : float or array-like, shape (3,), keyword-only, optional
         Actuator force limits shown and checked, N.
+    bodies : athenakin.collision.Bodies, str or Path, keyword-only, optional
+        The capsules drawn and checked (clearance read-out, the IK's collision stop, the
+        Teleop tab's guard), or a TOML file with a ``[bodies]`` table. Default: the
+        default capsules of the design drawn.
+    environment : athenakin.collision.Environment, str or Path, keyword-only, optional
+        The obstacles: in the clearance read-out and the IK's collision stop, and the
+        Teleop tab's virtual fixtures; or a TOML file of ``[[environment.obstacle]]``
+        tables. Both are kept in :attr:`bodies` (``app.bodies.bodies``,
+        ``app.bodies.environment``). A file that cannot be read or a bad table raises
+        before the server starts (:func:`~athenakin.app._bodies.check_collision_models`).
 
     Attributes
     ----------
@@ -121,6 +131,9 @@ class AthenaApp:
         ``http://HOST:PORT/``.
     errors : list of str
         Start-up problems shown in the page (bad design, frame or trajectory).
+    bodies : BodiesLayer
+        The solids and the clearance read-out; its ``bodies`` and ``environment`` are the
+        app's one copy of the collision models (set them to change the models live).
     """
 
     def __init__(self, T_b_e: ArrayLike | str | Path | None = None,
@@ -128,7 +141,8 @@ class AthenaApp:
                  port: int = DEFAULT_PORT, trajectory: str | Path | None = None,
                  backend: str = "auto", verbose: bool = False,
                  solids: Callable[[AppView], tuple[Solid, ...]] | None = None,
-                 masses: Any = None, f_max: Any = None) -> None:  # forces: app/_forces.py
+                 masses: Any = None, f_max: Any = None,  # forces: app/_forces.py
+                 bodies: Any = None, environment: Any = None) -> None:
         viser = _import_viser()
         self._solids_of = solids
         # actuator forces (issue 21): app/_forces.py; bad options raise before the server starts
@@ -143,6 +157,10 @@ class AthenaApp:
         self._backend = backend
         self.errors: list[str] = []
         self.setup = self._make_setup(T_b_e, design)
+        # the collision models (bad files raise before the server starts): app/_bodies.py
+        from ._bodies import BodiesLayer, check_collision_models
+
+        bodies, environment = check_collision_models(bodies, environment, self.setup.design)
         self._verbose = verbose
         if verbose:
             self.server = viser.ViserServer(host=host, port=port, verbose=verbose)
@@ -167,9 +185,7 @@ class AthenaApp:
         self._build_gui()
         self._send_page_script()
         # bodies as solids, closest pair, clearance (issue 20): app/_bodies.py
-        from ._bodies import BodiesLayer
-
-        self.bodies = BodiesLayer(self.server)
+        self.bodies = BodiesLayer(self.server, bodies=bodies, environment=environment)
         self.forces = ForcesLayer(self.server, masses=masses, f_max=f_max,  # issue 21 forces
                                   tip_handle=self._handle)
         if trajectory is not None:
@@ -803,13 +819,15 @@ def _escape(text: str) -> str:
 def launch(T_b_e: ArrayLike | str | Path | None = None, design: Design | str | Path | None = None,
            *, host: str = "127.0.0.1", port: int = DEFAULT_PORT,
            trajectory: str | Path | None = None, backend: str = "auto",
-           masses: Any = None, f_max: Any = None) -> AthenaApp:  # forces: app/_forces.py
+           masses: Any = None, f_max: Any = None,  # forces: app/_forces.py
+           bodies: Any = None, environment: Any = None) -> AthenaApp:
     """Start the app in the background (e.g. from a notebook) and print its address.
 
     Parameters
     ----------
-    T_b_e, design, host, port, trajectory, backend, masses, f_max
-        As in :class:`AthenaApp`.
+    T_b_e, design, host, port, trajectory, backend, masses, f_max, bodies, environment
+        As in :class:`AthenaApp` (``environment="anatomy.toml"``: the obstacles of a file,
+        drawn as the Teleop tab's virtual fixtures).
 
     Returns
     -------
@@ -817,7 +835,8 @@ def launch(T_b_e: ArrayLike | str | Path | None = None, design: Design | str | P
         Call :meth:`AthenaApp.stop` to end it.
     """
     app = AthenaApp(T_b_e, design, host=host, port=port, trajectory=trajectory,
-                    backend=backend, masses=masses, f_max=f_max)
+                    backend=backend, masses=masses, f_max=f_max, bodies=bodies,
+                    environment=environment)
     for e in app.errors:
         print(f"athenakin app: {e}", file=sys.stderr)
     print(f"athenakin app: ATHENA at {app.url}")

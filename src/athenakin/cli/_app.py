@@ -9,6 +9,7 @@ import threading
 from pathlib import Path
 from typing import Any
 
+from ._collision import add_bodies_options
 from ._common import add_design_option, add_setup_options, force_limits
 
 #: Interface the app binds unless told otherwise (this machine only).
@@ -26,7 +27,10 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                     "assembly mode, the distances to the singular sets and the Jacobians' "
                     "conditioning, playback of a trajectory CSV from 'athenakin plan', and the "
                     "actuator forces f1, f2, f3 that hold the robot against gravity and a "
-                    "tip force dragged at the tool tip (--masses, --f-max). "
+                    "tip force dragged at the tool tip (--masses, --f-max). The bodies and "
+                    "the obstacles (--bodies, --environment) are checked in the clearance "
+                    "read-out and the IK, and the obstacles are the Teleop tab's virtual "
+                    "fixtures; a bad --bodies or --environment file stops the start. "
                     "Prints the URL; Ctrl-C stops it. A design, RCM frame or trajectory that "
                     "cannot be used is reported at start-up and in the page, and the app runs "
                     "on the reference set-up instead.")
@@ -51,6 +55,10 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--f-max", type=float, nargs="+", default=None, metavar="N",
                    help="actuator force limits in N, one for all or one per actuator: shown "
                         "with the forces, which turn red beyond them")
+    # the collision models (the Teleop tab's virtual fixtures): app/_bodies.py
+    add_bodies_options(p.add_argument_group("collisions (clearance read-out, the IK's "
+                                            "collision stop, the Teleop tab's fixtures)"),
+                       bodies_default="the default capsules of the design shown")
     p.set_defaults(func=run)
 
 
@@ -114,7 +122,8 @@ def run(args: argparse.Namespace) -> int:
                   "a minute)", flush=True)
         app = _server.AthenaApp(rcm, args.design, host=args.host, port=args.port,
                                 trajectory=args.trajectory, backend=args.backend,
-                                masses=masses, f_max=f_max)
+                                masses=masses, f_max=f_max, bodies=args.bodies,
+                                environment=args.environment)
         for e in app.errors:
             print(f"athenakin app: warning: {e}", file=sys.stderr)
         if args.foxglove is not None:

@@ -1,4 +1,7 @@
-"""Collision options of ``track`` and ``plan``: bodies, environment, clearance margin.
+"""Collision options of ``track``, ``plan``, ``workspace``: bodies, environment, clearance margin.
+
+``app`` takes ``--bodies`` and ``--environment`` (:func:`add_bodies_options`), ``synthesize``
+``--environment`` (:func:`add_environment_option`, :func:`load_environment`).
 
 :mod:`athenakin.collision` is imported only when one of them is given.
 """
@@ -17,15 +20,43 @@ def add_collision_options(p: argparse.ArgumentParser, *, what: str,
                           default_margin: str = "0.005") -> None:
     """Add the three options; any of them turns the clearance check on."""
     g = p.add_argument_group("collisions (any of these turns the clearance check on)")
-    g.add_argument("--bodies", type=Path, metavar="FILE",
-                   help="TOML file with a [bodies] table (radii in m, excluded pairs); "
-                        "default: the --design file's [bodies] table, else the default "
-                        "capsules")
-    g.add_argument("--environment", type=Path, metavar="FILE",
-                   help="obstacles: a TOML file of [[environment.obstacle]] tables")
+    add_bodies_options(g, bodies_default="the --design file's [bodies] table, else the "
+                                         "default capsules")
     g.add_argument("--clearance-margin", type=float, default=None, metavar="M",
                    help=f"least clearance between the bodies and to the obstacles, m; {what} "
                         f"(default {default_margin} when the check is on)")
+
+
+def add_bodies_options(g: Any, *, bodies_default: str) -> None:
+    """``--bodies FILE`` and ``--environment FILE`` in the argument group ``g``.
+
+    Read by :func:`collision_options`, or passed as paths to
+    :class:`athenakin.app.AthenaApp`: the same TOML readers, the same errors.
+    """
+    g.add_argument("--bodies", type=Path, metavar="FILE",
+                   help=f"TOML file with a [bodies] table (radii in m, excluded pairs); "
+                        f"default: {bodies_default}")
+    add_environment_option(g)
+
+
+def add_environment_option(g: Any) -> None:
+    """``--environment FILE``: the obstacles, read by :func:`load_environment`."""
+    g.add_argument("--environment", type=Path, default=None, metavar="FILE",
+                   help="obstacles: a TOML file of [[environment.obstacle]] tables")
+
+
+def load_environment(path: Path | None) -> Any:
+    """The :class:`~athenakin.collision.Environment` of ``--environment FILE`` (None: none).
+
+    A file that cannot be read or holds a bad obstacle raises the named error of
+    :meth:`Environment.from_toml <athenakin.collision.Environment.from_toml>` (it names
+    the file); the CLI prints it on one line and exits 1.
+    """
+    if path is None:
+        return None
+    from ..collision import Environment
+
+    return Environment.from_toml(path)
 
 
 def collision_options(args: argparse.Namespace, design: Design) -> dict[str, Any]:
@@ -37,10 +68,10 @@ def collision_options(args: argparse.Namespace, design: Design) -> dict[str, Any
         return {}
     if margin is not None and not (math.isfinite(margin) and 0.0 <= margin <= 1.0):
         raise ValueError(f"--clearance-margin: expected a distance from 0 to 1 m, got {margin:g}")
-    from ..collision import Bodies, Environment
+    from ..collision import Bodies
 
     source = bodies_path if bodies_path is not None else getattr(args, "design", None)
     bodies = (Bodies.from_toml(source, design=design) if source is not None
               else Bodies.default(design))
-    env = None if env_path is None else Environment.from_toml(env_path)
+    env = load_environment(env_path)
     return {"bodies": bodies, "environment": env, "clearance_margin": margin}

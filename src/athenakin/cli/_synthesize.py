@@ -8,6 +8,7 @@ import os
 from pathlib import Path
 from typing import Any
 
+from ._collision import add_environment_option, load_environment
 from ._common import add_json_option, check_count, check_finite, dump_json, fmt, table
 from ._output import Outputs
 
@@ -62,8 +63,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     g.add_argument("--bodies", default=None, metavar="default|scaled|FILE",
                    help="the default capsules for every design, those scaled with l1, or the "
                         "[bodies] table of a TOML file (radii in m)")
-    g.add_argument("--environment", type=Path, default=None, metavar="FILE",
-                   help="obstacles: a TOML file of [[environment.obstacle]] tables")
+    add_environment_option(g)
     g.add_argument("--clearance-margin", type=float, default=None, metavar="M",
                    help="a sample is collision-free with at least this clearance, m (0)")
     g.add_argument("--collision-samples", type=int, default=None, metavar="N",
@@ -138,9 +138,7 @@ def _collision_options(args: argparse.Namespace) -> dict[str, Any]:
 
             out["bodies"] = Bodies.from_toml(args.bodies)
     if args.environment is not None:
-        from ..collision import Environment
-
-        out["environment"] = Environment.from_toml(args.environment)
+        out["environment"] = load_environment(args.environment)
     if args.clearance_margin is not None:
         out["clearance_margin"] = args.clearance_margin
     if args.collision_samples is not None:
