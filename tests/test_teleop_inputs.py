@@ -79,3 +79,16 @@ def test_session_file_is_written_atomically(tmp_path):
 
 def test_the_pass_through_filter_takes_any_rate():
     assert TremorFilter("none", 1e-308)(1.0, 2.0, 3.0) == (1.0, 2.0, 3.0)
+
+
+def test_a_huge_max_cycles_is_refused_by_name():
+    """Fuzz campaign of round 5 (second session): ``max_cycles=1e308`` reached
+    ``itertools.islice`` as a 308-digit int (a raw ValueError); every count is now bounded by
+    ``sys.maxsize`` in the one count check."""
+    from athenakin.errors import InvalidInputError
+    from athenakin.teleop import Teleop, run_session
+
+    d = ak.Design.default()
+    tele = Teleop(ak.default_rcm_frame(d), d, q0=(-0.1, 0.1, 0.45))
+    with pytest.raises(InvalidInputError, match=r"^max_cycles: expected an integer >= 0 and <="):
+        run_session(tele, None, [(0.0, (0.0, 0.0, 0.0), True)], max_cycles=1e308)

@@ -11,6 +11,7 @@ import dataclasses
 import math
 import numbers
 import os
+import sys
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any, Literal
@@ -378,7 +379,8 @@ def check_count(x: object, name: str, *, minimum: int = 1, maximum: int | None =
     """Coerce a count (number of samples, points, iterations): an integer in range.
 
     An integral float (``801.0``) is accepted; NaN, inf, fractions, bools and huge
-    values are refused by name before anything is allocated.
+    values are refused by name before anything is allocated. Without ``maximum``, the
+    bound is ``sys.maxsize`` (what ``range`` and ``itertools.islice`` take).
 
     Raises
     ------
@@ -396,6 +398,8 @@ def check_count(x: object, name: str, *, minimum: int = 1, maximum: int | None =
         if not (math.isfinite(fx) and fx.is_integer()):
             raise InvalidInputError(f"{name}: expected an integer, got {fx}")
         v = int(fx)
+    if maximum is None and v > sys.maxsize:
+        maximum = sys.maxsize
     if v < minimum or (maximum is not None and v > maximum):
         hi = "" if maximum is None else f" and <= {maximum:,}"
         shown = (f"{v}" if abs(v) < 10**15
