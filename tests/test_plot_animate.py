@@ -164,8 +164,18 @@ def test_animate_keeps_a_ctrl_c_lost_inside_a_callback(tmp_path, capsys, monkeyp
     from athenakin.cli import main
     from athenakin.plot import _animate
 
-    if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
-        pytest.skip("needs Python's default SIGINT handler (pytest's is the default)")
+    # a CLI process has Python's default handler; a test run started in the background of a
+    # shell (CI's lane B) inherits SIGINT ignored: install the default for this test
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        _animate_with_a_lost_ctrl_c(tmp_path, capsys, monkeypatch, main, _animate)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _animate_with_a_lost_ctrl_c(tmp_path, capsys, monkeypatch, main, _animate):
+    import signal
+
     real, drawn = _animate.draw_motion_frame, []
 
     def draw(ax, geoms, k, **kw):
