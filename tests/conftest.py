@@ -83,6 +83,54 @@ def numba_warm_up() -> None:
         dynamics.mass_matrix(q, T)
 
 
+#: Seconds of the heaviest test files beyond their share of the mean (CI's 25 slowest, quiet
+#: machine): the weights that :func:`pytest_collection_modifyitems` balances the shards with.
+SHARD_EXTRA_S = {
+    "test_readme_blocks.py": 130.0, "test_app_browser.py": 75.0, "test_fast_bench.py": 27.0,
+    "test_docs_figures.py": 25.0, "test_backend_policy.py": 24.0, "test_synthesis_cluster.py": 25.0,
+    "test_app_forces.py": 13.0, "test_plot_html.py": 13.0, "test_sim_mujoco.py": 12.0,
+    "test_docs_examples.py": 20.0, "test_ros_round5.py": 9.0, "test_collision_api.py": 7.0,
+    "test_plot_animate.py": 8.0,
+}
+#: Mean seconds of one test (609 CPU-s over about 2,400 tests).
+SHARD_MEAN_S = 0.25
+
+
+def _shard(spec: str) -> tuple[int, int]:
+    m = re.fullmatch(r"\s*(\d+)\s*/\s*(\d+)\s*", spec)
+    if not m or not 1 <= int(m.group(1)) <= int(m.group(2)):
+        raise pytest.UsageError(f"ATHENAKIN_TEST_SHARD: expected K/N with 1 <= K <= N, got "
+                                f"{spec!r}")
+    return int(m.group(1)), int(m.group(2))
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """``ATHENAKIN_TEST_SHARD=K/N``: keep the K-th of N shards of the test files.
+
+    CI runs the suite in two shards, one per lane, so that the two cores share it. Whole
+    files go to a shard (module fixtures are made once), heaviest first to the lightest
+    shard (:data:`SHARD_EXTRA_S`, :data:`SHARD_MEAN_S`): the same split on every machine.
+    """
+    spec = os.environ.get("ATHENAKIN_TEST_SHARD", "")
+    if not spec:
+        return
+    k, n = _shard(spec)
+    files: dict[str, int] = {}
+    for item in items:
+        files[item.path.name] = files.get(item.path.name, 0) + 1
+    weight = {f: SHARD_MEAN_S * c + SHARD_EXTRA_S.get(f, 0.0) for f, c in files.items()}
+    load, shard_of = [0.0] * n, {}
+    for f in sorted(weight, key=lambda f: (-weight[f], f)):
+        j = min(range(n), key=lambda i: (load[i], i))
+        shard_of[f] = j + 1
+        load[j] += weight[f]
+    keep = [it for it in items if shard_of[it.path.name] == k]
+    drop = [it for it in items if shard_of[it.path.name] != k]
+    if drop:
+        config.hook.pytest_deselected(items=drop)
+        items[:] = keep
+
+
 #: (reason pattern, condition that makes the skip legitimate, why). The first match decides.
 ALLOWED_SKIPS: list[tuple[str, Callable[[re.Match[str]], bool], str]] = [
     (r"numba not (available|installed)", lambda m: _numba_missing(),
