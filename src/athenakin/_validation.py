@@ -219,7 +219,7 @@ def check_argument_order(x: object, name: str, *, given_for: Literal["frame", "d
                                 f"{got}; {ARGUMENT_ORDER}")
     if given_for == "design" and _looks_like_frame(x):
         raise InvalidInputError(f"{name}: expected athenakin.Design, got an array of shape "
-                                f"{np.shape(x)}; {ARGUMENT_ORDER}")
+                                f"{np.asarray(x).shape}; {ARGUMENT_ORDER}")
 
 
 def check_frame(T: ArrayLike, name: str) -> NDArray[np.float64]:

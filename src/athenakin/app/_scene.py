@@ -115,8 +115,8 @@ class Solid:
     """
 
     name: str
-    vertices: NDArray[np.float64]
-    faces: NDArray[np.int64]
+    vertices: NDArray[np.floating]
+    faces: NDArray[np.integer]
     color: tuple[int, int, int]
     opacity: float = 1.0
 
@@ -141,10 +141,10 @@ class Scene:
 
     def bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Axis-aligned box ``(lo, hi)`` (each shape (3,)) around every line, point and solid."""
-        pts = [ls.segments.reshape(-1, 3) for ls in self.lines]
+        pts: list[NDArray[np.floating]] = [ls.segments.reshape(-1, 3) for ls in self.lines]
         pts += [ps.points for ps in self.points]
         pts += [so.vertices for so in self.solids]
-        allp = np.concatenate(pts)
+        allp = np.concatenate(pts).astype(np.float64, copy=False)
         allp = allp[np.all(np.isfinite(allp), axis=-1)]
         return allp.min(axis=0), allp.max(axis=0)
 

@@ -190,7 +190,7 @@ def sweep_fk(q: QSource, T_b_e: ArrayLike, design: Design | None = None, *,
     T = check_frame(T_b_e, "T_b_e")
     _check_chunk_size(chunk_size)
     source, total = _chunk_source(q, n)
-    tols = {"tangent_tol": tangent_tol, "degenerate_tol": degenerate_tol,
+    tols: dict[str, Any] = {"tangent_tol": tangent_tol, "degenerate_tol": degenerate_tol,
             "p_zero_tol": p_zero_tol, "closure_tol": closure_tol}
     tol = np.array([check_tolerance(v, k) for k, v in tols.items()])
     hist = (np.zeros(17, np.int64), np.zeros(16, np.int64), np.zeros(2, np.int64))

@@ -296,7 +296,7 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
     return frames
 
 
-def _check_frame_size(size: object) -> tuple[int, int]:
+def _check_frame_size(size: ArrayLike) -> tuple[int, int]:
     """``(width, height)`` of a frame, integers in 16..:data:`MAX_FRAME_PIXELS` px."""
     from ..errors import InvalidInputError
 

@@ -399,7 +399,7 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
     geoms = {k: robot_geometry(q, T, design, slot=k) for k in map(int, np.flatnonzero(sol.valid))}
     lo, hi = _common_box(list(geoms.values()))
     panel = PlotOptions(show_frames=show_frames, show_labels=False, show_legend=False,
-                        limits=(lo, hi), view=view, frame_length=0.08, joint_scale=2.0)
+                        limits=(_xyz(lo), _xyz(hi)), view=view, frame_length=0.08, joint_scale=2.0)
     if fig is None:
         fig = plt.figure(figsize=(16, 17))
     for k in range(16):
@@ -422,6 +422,11 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
              ha="center", fontsize=11)
     fig.subplots_adjust(left=0.0, right=1.0, bottom=0.09, top=0.925, wspace=0.0, hspace=0.22)
     return fig
+
+
+def _xyz(v: NDArray[np.float64]) -> tuple[float, float, float]:
+    """A point as the tuple of floats that :class:`PlotOptions` ``limits`` holds."""
+    return float(v[0]), float(v[1]), float(v[2])
 
 
 def _common_box(geoms: list[RobotGeometry], pad: float = 0.01
