@@ -74,10 +74,12 @@ install -c "$work/stage1.txt" -e ".[analysis,symbolic,fast]" \
     pytest hypothesis
 "$venv/bin/uv" pip freeze --python "$venv/bin/python" | grep -iE "^(numpy|scipy|sympy|numba|tomli.w|tqdm)=="
 echo "== stage 1: core, analysis, symbolic, fast at their lower bounds"
-"$venv/bin/python" -m pytest -q -p no:cacheprovider tests/test_study.py tests/test_chain.py \
-    tests/test_parallel.py tests/test_robot.py tests/test_design.py tests/test_io_unified.py \
-    tests/test_analysis_jacobians.py tests/test_analysis_singularities.py \
-    tests/test_symbolic_errata.py tests/test_fast_exactness.py "$@"
+# (what reaches each lower bound: numpy through the study, robot and singularity code, scipy
+# through the singularities, sympy through the errata, numba through the kernels' exactness;
+# the other core tests run on the newest versions in the suite and the matrix)
+"$venv/bin/python" -m pytest -q -p no:cacheprovider tests/test_study.py tests/test_robot.py \
+    tests/test_analysis_singularities.py tests/test_symbolic_errata.py \
+    tests/test_fast_exactness.py "$@"
 install -c "$work/stage2.txt" -e ".[analysis,symbolic,fast,motion]"
 "$venv/bin/uv" pip freeze --python "$venv/bin/python" | grep -iE "^(scipy|ruckig)=="
 echo "== stage 2: motion at its lower bounds"
@@ -86,12 +88,12 @@ echo "== stage 2: motion at its lower bounds"
 install -c "$work/stage3.txt" \
     -e ".[analysis,symbolic,fast,motion,certified,calibration,synthesis,plot,sim,app]"
 "$venv/bin/uv" pip freeze --python "$venv/bin/python" | grep -iE "^(python-flint|matplotlib|dask|distributed|pandas|pyarrow|pymoo|plotly|imageio|imageio-ffmpeg|mujoco|yourdfpy|viser)=="
-# (the worker-kill, resume and many-configurations tests exercise our code, not the lower
-# bounds: the main suite runs them)
+# (the cluster, worker-kill, resume and many-configurations tests exercise our code more than
+# the lower bounds: the main suite runs them)
 echo "== stage 3: the extras certified, calibration, synthesis, plot, sim, app at their lower bounds"
 "$venv/bin/python" -m pytest -q -p no:cacheprovider tests/test_certified.py \
-    tests/test_calibration.py tests/test_synthesis.py tests/test_synthesis_cluster.py \
-    tests/test_plot_mpl.py tests/test_plot_geometry.py tests/test_plot_animate.py \
+    tests/test_calibration.py tests/test_synthesis.py \
+    tests/test_plot_mpl.py tests/test_plot_animate.py \
     tests/test_sim_mujoco.py tests/test_sim_urdf.py tests/test_app.py \
     -k "not killed_worker and not interrupted_study_resumes and not many_configurations" "$@"
 echo "== lower bounds: $((SECONDS - start)) s"
