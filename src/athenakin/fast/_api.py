@@ -577,9 +577,7 @@ def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> P
 
     Parameters
     ----------
-    O_s : array-like, shape (..., 3)
-        Position of the serial base frame, base coordinates, m.
-    design : Design, optional
+    O_s, design : as in :func:`athenakin.parallel.parallel_ik_from_position`
 
     Returns
     -------
