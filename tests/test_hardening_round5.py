@@ -255,13 +255,14 @@ def test_capsule_witnesses_lie_on_the_surfaces_of_near_crossing_capsules(gap):
     p1, q1, p2, q2 = _crossing_pairs(4000, gap, seed=35)
     r1, r2 = 0.01, 0.004
     dist, wit = C.capsule_capsule(p1, q1, r1, p2, q2, r2)
-    assert_allclose(dist, gap - r1 - r2, rtol=0, atol=1e-15)
+    # Lumelsky's form above sin^2 = NEARLY_PARALLEL: 2.1e-15 m at most (measured)
+    assert_allclose(dist, gap - r1 - r2, rtol=0, atol=5e-15)
     on1 = C.point_segment(wit[:, 0], p1, q1)[0]
     on2 = C.point_segment(wit[:, 1], p2, q2)[0]
     assert_allclose(on1, r1, rtol=0, atol=1e-15)
     assert_allclose(on2, r2, rtol=0, atol=1e-15)
     d, c1, c2 = C.segment_segment(p1, q1, p2, q2)
-    assert_allclose(d, gap, rtol=0, atol=1e-15)
+    assert_allclose(d, gap, rtol=0, atol=5e-15)
     assert_allclose(np.linalg.norm(c2 - c1, axis=-1), d, rtol=0, atol=1e-16)
 
 
@@ -450,7 +451,7 @@ def test_compiled_capsule_pairs_match_on_near_crossing_segments(gap):
     radii = np.array([0.01, 0.004])
     ij = np.array([[0, 1]], dtype=np.intp)
     dist, wit = capsule_pairs(solids, radii, ij)
-    assert_allclose(dist[:, 0], gap - 0.014, rtol=0, atol=1e-15)
+    assert_allclose(dist[:, 0], gap - 0.014, rtol=0, atol=5e-15)
     assert_allclose(capsule_distances(solids, radii, ij), dist, rtol=0, atol=0)
     assert_allclose(C.point_segment(wit[:, 0, 0], p1, q1)[0], 0.01, rtol=0, atol=1e-15)
     assert_allclose(C.point_segment(wit[:, 0, 1], p2, q2)[0], 0.004, rtol=0, atol=1e-15)
@@ -503,3 +504,26 @@ def test_mechanical_energy_is_a_result_object_that_flags_a_bad_row():
     assert_allclose(e.kinetic[1], one.kinetic, rtol=0, atol=0)
     M = D.mass_matrix(Q, T, DES)
     assert_allclose(one.kinetic, qd @ M @ qd / 2, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("gap", [0.0, 3.5e-12])
+def test_nearly_parallel_crossing_segments_take_the_cross_product_form(gap):
+    """1.5: below sin^2 = NEARLY_PARALLEL the interior point comes from cross products,
+    paired with the nearest point: 2e-16 m where Lumelsky's form was 1e-6 m off."""
+    from athenakin.collision._distance import NEARLY_PARALLEL
+
+    p1, q1, p2, q2 = _crossing_pairs(4000, gap, seed=38)
+    d1, d2 = q1 - p1, q2 - p2
+    cross = np.linalg.norm(np.cross(d1, d2), axis=-1)
+    sin2 = (cross / (np.linalg.norm(d1, axis=-1) * np.linalg.norm(d2, axis=-1))) ** 2
+    near = sin2 <= NEARLY_PARALLEL
+    assert near.sum() > 1000
+    d, _, _ = C.segment_segment(p1[near], q1[near], p2[near], q2[near])
+    assert_allclose(d, gap, rtol=0, atol=1e-15)
+    if _backend.numba_available():
+        from athenakin.collision._kernels import capsule_distances
+
+        solids = np.ascontiguousarray(np.stack([np.stack([p1, q1], 1),
+                                                np.stack([p2, q2], 1)], 1))[near]
+        dk = capsule_distances(solids, np.zeros(2), np.array([[0, 1]], dtype=np.intp))
+        assert_allclose(dk[:, 0], gap, rtol=0, atol=1e-15)

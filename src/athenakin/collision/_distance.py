@@ -7,20 +7,30 @@ arbitrarily small move, so they add nothing to it).
 
 Segment to segment (:func:`segment_segment`): the minimum of a convex quadratic over
 the unit square ``(s, t)`` lies either at its interior critical point or on an edge,
-where it is the distance of an end point to the other segment. The interior point
-has ``s = ((p2 - p1) x d2) . n / |n|^2`` with ``n = d1 x d2`` (Lumelsky's
-``(b f - c e) / (a e - b^2)`` in cross products: ``a e - b^2`` cancels to a relative
-error ``eps / sin^2`` of the angle between the segments, ``|n|^2`` to ``eps / sin``),
-paired with the point of the second segment nearest ``p1 + s d1``: for nearly
-parallel segments a second, independently rounded ``t`` would add the difference of
-the two errors along the common axis to the distance (1e-6 m at 1e-7 rad; now
-1e-16 m, issue 30). The reference takes the smallest of these five candidates, each
-a true pair of points on the segments, so it is exact for parallel (``n = 0``: the
-interior candidate is dropped), degenerate (zero length: the end-point candidates
-remain) and touching or crossing segments (distance 0), with no tolerance that
-decides a branch. The compiled kernel (:mod:`athenakin.collision._kernels`)
-takes the same candidates and witnesses (comparing squared distances, with fused
-multiply-adds) and agrees with this reference to 1e-13 m (tested); where the closest
+where it is the distance of an end point to the other segment. The reference takes
+the smallest of these five candidates, each a true pair of points on the segments, so
+it is exact for parallel (the interior candidate is dropped), degenerate (zero length:
+the end-point candidates remain) and touching or crossing segments (distance 0).
+
+The interior point takes one of two forms, by the angle ``theta`` between the segments:
+
+- Lumelsky's ``s = (b f - c e) / (a e - b^2)``, ``t = (a f - b c) / (a e - b^2)``
+  where ``sin^2 theta > NEARLY_PARALLEL`` (0.05): ``a e - b^2`` cancels to a relative
+  error ``eps / sin^2``, at most ``20 eps`` there; the distance of two crossing
+  segments (the worst case: there it is not stationary) is off by 2.1e-15 m at most
+  over 160,000 crossing pairs at every angle, coordinates up to 1 m (tested to 5e-15 m);
+- below (nearly parallel segments), ``s = ((p2 - p1) x d2) . n / |n|^2`` with
+  ``n = d1 x d2`` (the same numerator and denominator in cross products, whose
+  relative error is ``eps / sin``), paired with the point of the second segment nearest
+  ``p1 + s d1``: a second, independently rounded ``t`` would add the difference of the
+  two errors along the common axis to the distance (1e-6 m at 1e-7 rad; 2e-16 m so,
+  issue 30). Taken for the rows that need it only (4.3 % of the pairs of the default
+  bodies in the benchmark): the cross products cost 20 % of the compiled kernel's time
+  when taken for every pair.
+
+The compiled kernel (:mod:`athenakin.collision._kernels`) takes the same candidates
+and forms, and the same witnesses, comparing squared distances, with fused
+multiply-adds; it agrees with this reference to 1e-13 m (tested). Where the closest
 points are not unique (overlapping parallel segments) the two may return different,
 equally close, pairs of them.
 """
@@ -46,6 +56,16 @@ MAX_COORDINATE = 1e6
 #: Relative size below which ``c2 - c1`` is rounding noise (:func:`separation_normal`).
 NOISE = 1e-12
 
+#: ``sin^2`` of the angle between two segments at or below which the interior candidate
+#: is taken in cross products (nearly parallel segments; see the module docstring).
+NEARLY_PARALLEL = 0.05
+
+#: Distance of the segments (m) above which the witness points are ``c1 + r1 n`` and
+#: ``c2 - r2 n`` with ``n`` along ``c2 - c1`` directly: there the direction is known to
+#: 1e-13 rad, far above the rounding of any coordinates within :data:`MAX_COORDINATE`.
+#: At or below, each witness is built from its own segment (:func:`_capsule_capsule`).
+WITNESS_DIRECT = 1e-6
+
 
 def _dot(x: F, y: F) -> F:
     return np.einsum("...i,...i->...", x, y)
@@ -62,10 +82,31 @@ def _point_segment(x: F, a: F, b: F) -> tuple[F, F]:
     return np.linalg.norm(x - c, axis=-1), c
 
 
+def _interior_nearly_parallel(p1: F, q1: F, p2: F, q2: F) -> tuple[F, F, F, F]:
+    """Interior candidate of nearly parallel segments, float arrays (k, 3).
+
+    ``s`` from cross products, paired with the point of the second segment nearest
+    ``p1 + s d1`` (module docstring). Returns ``(ok, dist, c1, c2)``; ``ok`` is false
+    for parallel segments (no interior candidate).
+    """
+    d1 = q1 - p1
+    d2 = q2 - p2
+    nrm = np.cross(d1, d2)
+    nn = _dot(nrm, nrm)
+    ok = nn > 0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        s = np.clip(_dot(np.cross(p2 - p1, d2), nrm) / np.where(ok, nn, 1.0), 0.0, 1.0)
+    c1 = p1 + s[..., None] * d1
+    dist, c2 = _point_segment(c1, p2, q2)
+    return ok, dist, c1, c2
+
+
 def _segment_segment(p1: F, q1: F, p2: F, q2: F) -> tuple[F, F, F]:
     """Unchecked :func:`segment_segment` (float arrays (..., 3), broadcast together)."""
     p1, q1, p2, q2 = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64)
                                             for v in (p1, q1, p2, q2)))
+    shape = p1.shape[:-1]
+    p1, q1, p2, q2 = (v.reshape(-1, 3) for v in (p1, q1, p2, q2))
     d1 = q1 - p1
     d2 = q2 - p2
     # candidates 1-4: an end point against the other segment
@@ -82,24 +123,32 @@ def _segment_segment(p1: F, q1: F, p2: F, q2: F) -> tuple[F, F, F]:
         else:
             c1 = np.where(better[..., None], x, c1)
             c2 = np.where(better[..., None], cc, c2)
-    # candidate 5: the interior critical point, where the segments are not parallel.
-    # s from cross products (|d1 x d2|^2 instead of a e - b^2, which cancels to a
-    # relative error eps / sin^2 of the angle), and the point of the second segment
-    # nearest p1 + s d1 (not p2 + t d2 with a second rounded t: for nearly parallel
-    # segments, two independent errors along the common axis would add their difference
-    # to the distance, 1e-6 m at 1e-7 rad)
-    nrm = np.cross(d1, d2)
-    denom = _dot(nrm, nrm)
+    # candidate 5: the interior critical point, where the segments are not parallel;
+    # Lumelsky's form, and cross products where they are nearly parallel
+    r = p1 - p2
+    a = _dot(d1, d1)
+    e = _dot(d2, d2)
+    b = _dot(d1, d2)
+    c = _dot(d1, r)
+    f = _dot(d2, r)
+    denom = a * e - b * b
     ok = denom > 0
     with np.errstate(invalid="ignore", divide="ignore"):
-        s = np.clip(_dot(np.cross(p2 - p1, d2), nrm) / np.where(ok, denom, 1.0), 0.0, 1.0)
+        safe = np.where(ok, denom, 1.0)
+        s = np.clip((b * f - c * e) / safe, 0.0, 1.0)
+        t = np.clip((a * f - b * c) / safe, 0.0, 1.0)
     i1 = p1 + s[..., None] * d1
-    di, i2 = _point_segment(i1, p2, q2)
+    i2 = p2 + t[..., None] * d2
+    di = np.linalg.norm(i1 - i2, axis=-1)
+    near = ~(denom > NEARLY_PARALLEL * a * e)
+    if near.any():
+        ok[near], di[near], i1[near], i2[near] = _interior_nearly_parallel(
+            p1[near], q1[near], p2[near], q2[near])
     better = ok & (di < best)
     best = np.where(better, di, best)
     c1 = np.where(better[..., None], i1, c1)
     c2 = np.where(better[..., None], i2, c2)
-    return best, c1, c2
+    return best.reshape(shape), c1.reshape(shape + (3,)), c2.reshape(shape + (3,))
 
 
 def separation_normal(c1: F, c2: F, d1: F, d2: F) -> F:
@@ -156,27 +205,47 @@ def _across(n: F, x: F, d: F) -> F:
     return out  # type: ignore[no-any-return]
 
 
-def _capsule_capsule(p1: F, q1: F, r1: F | float, p2: F, q2: F,
-                    r2: F | float) -> tuple[F, F]:
-    """Unchecked :func:`capsule_capsule` (what :func:`~athenakin.collision.clearance` calls)."""
-    dist, c1, c2 = _segment_segment(p1, q1, p2, q2)
-    d1 = np.broadcast_to(q1 - p1, c1.shape)
-    d2 = np.broadcast_to(q2 - p2, c2.shape)
-    # Each witness starts from the point of its own segment nearest the other closest
-    # point (b1 nearest c2, b2 nearest c1) and goes along b1 -> c2 (c1 -> b2): every
-    # point of that ray has b1 as its nearest point of segment 1, so the witness lies at
-    # exactly r1 from segment 1, on the surface. Taking c1 + r1 n with n along c2 - c1
-    # instead puts it off the surface where c1 and c2 carry rounding along the axes that
-    # is not small against |c2 - c1| (segments crossing at 3.5e-12 m: 4.2e-5 m from the
-    # axis instead of r1 = 0.01 m). Where b1 and c2 coincide (crossing, touching) the
-    # direction is separation_normal's fallback, d1 x d2, the same for both witnesses.
+def _witnesses_near(p1: F, q1: F, r1: F, p2: F, q2: F, r2: F, c1: F, c2: F) -> F:
+    """Witness points (k, 2, 3) of capsules whose segments are at most WITNESS_DIRECT apart.
+
+    Each witness starts from the point of its own segment nearest the other closest
+    point (``b1`` nearest ``c2``, ``b2`` nearest ``c1``) and goes along ``b1 -> c2``
+    (``c1 -> b2``): every point of that ray has ``b1`` as its nearest point of segment 1,
+    so the witness lies at exactly ``r1`` from segment 1, on the surface. Taking
+    ``c1 + r1 n`` with ``n`` along ``c2 - c1`` instead puts it off the surface where
+    ``c1`` and ``c2`` carry rounding along the axes that is not small against
+    ``|c2 - c1|`` (segments crossing at 3.5e-12 m: 4.2e-5 m from the axis instead of
+    ``r1 = 0.01`` m). Where ``b1`` and ``c2`` coincide (crossing, touching) the direction
+    is :func:`separation_normal`'s fallback, ``d1 x d2``, the same for both witnesses.
+    """
+    d1 = q1 - p1
+    d2 = q2 - p2
     _, b1 = _point_segment(c2, p1, q1)
     _, b2 = _point_segment(c1, p2, q2)
     n1 = _across(separation_normal(b1, c2, d1, d2), c2 - p1, d1)
     n2 = _across(separation_normal(c1, b2, d1, d2), c1 - p2, d2)
-    r1a = np.asarray(r1, dtype=np.float64)
-    r2a = np.asarray(r2, dtype=np.float64)
-    w = np.stack([b1 + r1a[..., None] * n1, b2 - r2a[..., None] * n2], axis=-2)
+    return np.stack([b1 + r1[..., None] * n1, b2 - r2[..., None] * n2], axis=-2)
+
+
+def _capsule_capsule(p1: F, q1: F, r1: F | float, p2: F, q2: F,
+                    r2: F | float) -> tuple[F, F]:
+    """Unchecked :func:`capsule_capsule` (what :func:`~athenakin.collision.clearance` calls)."""
+    dist, c1, c2 = _segment_segment(p1, q1, p2, q2)
+    shape = dist.shape
+    r1a = np.broadcast_to(np.asarray(r1, dtype=np.float64), shape)
+    r2a = np.broadcast_to(np.asarray(r2, dtype=np.float64), shape)
+    # apart (above WITNESS_DIRECT): c1 + r1 n and c2 - r2 n with n along c2 - c1
+    far = dist > WITNESS_DIRECT
+    with np.errstate(invalid="ignore", divide="ignore"):
+        n = (c2 - c1) / np.where(far, dist, 1.0)[..., None]
+    w = np.stack([c1 + r1a[..., None] * n, c2 - r2a[..., None] * n], axis=-2)
+    near = ~far
+    if near.any():
+        ends = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64)
+                                     for v in (p1, q1, p2, q2, c1)))
+        p1n, q1n, p2n, q2n = (v[near] for v in ends[:4])
+        w[near] = _witnesses_near(p1n, q1n, r1a[near], p2n, q2n, r2a[near], c1[near],
+                                  c2[near])
     return dist - r1a - r2a, w
 
 
