@@ -82,7 +82,8 @@ def _point_segment(x: F, a: F, b: F) -> tuple[F, F]:
     return np.linalg.norm(x - c, axis=-1), c
 
 
-def _interior_nearly_parallel(p1: F, q1: F, p2: F, q2: F) -> tuple[F, F, F, F]:
+def _interior_nearly_parallel(p1: F, q1: F, p2: F, q2: F
+                              ) -> tuple[NDArray[np.bool_], F, F, F]:
     """Interior candidate of nearly parallel segments, float arrays (k, 3).
 
     ``s`` from cross products, paired with the point of the second segment nearest
