@@ -140,5 +140,5 @@ def test_inverse_dynamics_equals_pinocchio(engine, slot):
         ref = _pinocchio_forces(engine, q, qd, qdd, slot)
         ours = inverse_dynamics(q, qd, qdd, T, D, masses=M, slot=slot)
         # measured 1e-10 N: the export nudges massless and boundary inertias by 1e-12
-        # kg m^2 and 1e-9 relative (sim._mjcf.TINY_INERTIA)
+        # kg m^2 and 1e-9 relative (sim._mjcf_masses.TINY_INERTIA)
         assert_allclose(ours, ref, rtol=0, atol=1e-8 * max(1.0, np.abs(ref).max()))

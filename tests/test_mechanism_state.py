@@ -258,7 +258,7 @@ def test_bad_input_is_named():
 
 def test_one_body_table_names_every_link():
     from athenakin.sim._layout import COLLISION_BODY
-    from athenakin.sim._mjcf import MASS_BODY_IN_MJCF
+    from athenakin.sim._mjcf_masses import MASS_BODY_IN_MJCF
 
     assert BODIES == tuple(b.name for b in BODY_TABLE)
     for b in BODY_TABLE:

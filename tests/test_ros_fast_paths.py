@@ -22,7 +22,7 @@ from _ros_recordings import NAMES, _js, _ros2_store, positions, q_stream, stamps
 import athenakin as ak  # noqa: E402
 from athenakin import _backend  # noqa: E402
 from athenakin.errors import InvalidInputError  # noqa: E402
-from athenakin.ros import _mcap, _mcap_stream, _write  # noqa: E402
+from athenakin.ros import _encoder, _mcap, _mcap_stream, _write  # noqa: E402
 from athenakin.ros._frames import (  # noqa: E402
     MOVING_LINKS,
     TOOL_TIP_FRAME,
@@ -63,7 +63,7 @@ def _numpy_writer(monkeypatch):
     """The numpy writer, given the compiled joint values (libm and numpy's SIMD atan2 may
     differ in the last bit): the encoders compared on the same numbers."""
     monkeypatch.setattr(_write, "_compiled", lambda: False)
-    monkeypatch.setattr(_write, "joint_values", _kernel_joint_values)
+    monkeypatch.setattr(_encoder, "joint_values", _kernel_joint_values)
 
 
 def _both_writers(tmp_path, monkeypatch, name, st, q, **kw):

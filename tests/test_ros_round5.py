@@ -40,7 +40,8 @@ from athenakin.ros import (  # noqa: E402
     RecordingError,
     RecordingWarning,
     ServeError,
-    _read,
+    _mcap_stream,
+    _sources,
     read_joint_states,
     track_recording,
 )
@@ -284,8 +285,8 @@ def test_rosbag2_mcap_folder_takes_the_fast_path(tmp_path, monkeypatch):
     pos, st = positions(q_stream(n)), stamps(n)
     bag = write_rosbag2(tmp_path / "bag", pos, st, storage="mcap")
     calls = []
-    real = _read._mcap_messages
-    monkeypatch.setattr(_read, "_mcap_messages",
+    real = _sources._mcap_messages
+    monkeypatch.setattr(_sources, "_mcap_messages",
                         lambda *a, **k: (calls.append(a[0]), real(*a, **k))[1])
     from rosbags.rosbag2 import Reader
 
@@ -305,14 +306,14 @@ def test_tracked_mcap_joint_states_read_back_in_runs(tmp_path, monkeypatch):
     out = tmp_path / "t.mcap"
     ak.ros.track_to_mcap(stamps(n), q, out, T, D)
     runs = []
-    real = _read._McapStream._runs
+    real = _mcap_stream._McapStream._runs
 
     def spy(self, *a):
         items = list(real(self, *a))
         runs.extend(len(t) for _, t, _ in items)
         yield from items
 
-    monkeypatch.setattr(_read._McapStream, "_runs", spy)
+    monkeypatch.setattr(_mcap_stream._McapStream, "_runs", spy)
     joints = tuple(list(ak.sim.JOINTS)[:3])
     js = read_joint_states(out, topic="/athena/joint_states", joints=joints)
     assert len(js) == n

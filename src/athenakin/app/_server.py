@@ -8,15 +8,15 @@ need a 3-D widget and their own state plumbing; MeshCat has no GUI controls.
 
 Everything the page shows comes from the pure functions of :mod:`athenakin.app`
 (:func:`~athenakin.app.forward_view`, :func:`~athenakin.app.inverse_step`, ...): this
-module only turns them into scene nodes and GUI values, under one lock.
+module only turns them into scene nodes and GUI values, under one lock. It holds the
+app's state and what changes it; the drawing and the GUI values are its base class
+:class:`~athenakin.app._page._Page`.
 """
 
 from __future__ import annotations
 
 import contextlib
-import functools
 import io
-import json
 import math
 import sys
 import threading
@@ -33,8 +33,7 @@ from ..design import Design
 from ..errors import KinematicsError
 from ..robot._setup import read_rcm_json
 from ._bodies import collision_note
-from ._ghosts import ghost_scene
-from ._inverse import angles_from_tip, inverse_step, tip_from_angles
+from ._inverse import inverse_step, tip_from_angles
 from ._model import (
     AppSetup,
     AppView,
@@ -42,33 +41,22 @@ from ._model import (
     app_setup,
     forward_view,
 )
+from ._page import _ALL, _Page, _Read
 from ._playback import Playback, load_playback, playback_q
-from ._scene import Scene, Solid, robot_scene, with_solids
+from ._scene import Solid
 from ._sync import Echo
-from ._text import ERROR_COLOR, message_html, view_html
+from ._text import message_html, view_html
 
 __all__ = ["AthenaApp", "launch", "rcm_reach", "DEFAULT_PORT"]
 
 #: Port the app asks for when none is given (viser takes the next free one if busy).
 DEFAULT_PORT = 8080
-_ALL = "all valid slots (others ghosted)"
-#: A label is sent again when its point moved by more than this, m.
-LABEL_TOL_M = 1e-7
 #: Size of the tip handle's arrows (viser transform controls), m, and their line width, px.
 HANDLE_SCALE = 0.15
 HANDLE_LINE_WIDTH = 4.0
 #: Radius of the tip grip: a sphere at the tool tip that drags the tip in the view plane, m.
 GRIP_RADIUS = 0.018
 GRIP_COLOR = (255, 190, 40)
-#: Style added to the page: the control panel's vertical scroll bar always visible.
-_PANEL_CSS = (".mantine-ScrollArea-root:has([data-ro='banner']) > "
-              ".mantine-ScrollArea-scrollbar[data-orientation='vertical']"
-              "{display:flex !important;opacity:1 !important;width:10px !important}"
-              ".mantine-ScrollArea-root:has([data-ro='banner']) .mantine-ScrollArea-thumb"
-              "{background-color:rgba(0,0,0,0.35) !important}")
-#: Keys of viser's camera (``event.code``): ignored while a control of the panel has focus.
-CAMERA_KEYS = ("ArrowLeft", "ArrowRight", "ArrowUp", "ArrowDown", "KeyW", "KeyA", "KeyS",
-               "KeyD", "KeyQ", "KeyE")
 
 
 def _import_viser() -> Any:
@@ -85,7 +73,7 @@ def _error_text(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
 
 
-class AthenaApp:
+class AthenaApp(_Page):
     """The live app: a viser server drawing ATHENA, driven by sliders and a tip handle.
 
     Parameters
@@ -234,37 +222,6 @@ class AthenaApp:
             return base
 
     @property
-    def title(self) -> str:
-        """The page's title: the robot, the design and the app."""
-        name = self.setup.design.name or "unnamed design"
-        return f"ATHENA - {name} - athenakin"
-
-    def _send_page_script(self) -> None:
-        """Set the page title, keep camera keys off the controls, show the scroll bar.
-
-        viser's camera moves on the arrow keys (and W A S D Q E) wherever the focus is,
-        except in text fields: a focused slider would move and rotate the view at once.
-        A listener on ``document.body`` (reached after the control's own handler, before
-        viser's on ``document``) stops those keys when the focus is on an element other
-        than the page or the 3-D canvas.
-        """
-        from viser import _messages
-
-        script = (
-            f"document.title = {json.dumps(self.title)};"
-            "if (!window.__athenakinKeys) { window.__athenakinKeys = true;"
-            f" const keys = new Set({json.dumps(list(CAMERA_KEYS))});"
-            " document.body.addEventListener('keydown', (e) => { const t = e.target;"
-            " if (keys.has(e.code) && t instanceof Element && t !== document.body"
-            " && t.tagName !== 'CANVAS') { e.stopPropagation(); } });"
-            # the panel's scroll bar always shown: the read-outs continue below the window
-            " const st = document.createElement('style');"
-            f" st.textContent = {json.dumps(_PANEL_CSS)}; document.head.appendChild(st); }}")
-        # viser's own channel for client scripts (as its plotly element); kept for new pages
-        self.server.gui._websock_interface.queue_message(
-            _messages.RunJavascriptMessage(source=script))
-
-    @property
     def tip_handle(self) -> Any:
         """The draggable tool-tip handle (viser's transform controls), e.g. to hide it."""
         return self._handle
@@ -346,21 +303,6 @@ class AthenaApp:
         self._grip.on_drag("left")(self._on_grip)
         self.server.scene.add_grid("/ground", width=1.2, height=1.2, cell_size=0.05,
                                    section_size=0.25, position=(0.0, 0.25, 0.0))
-
-    def _banner_html(self) -> str:
-        if not self.errors:
-            d = self.setup.design
-            return (f"<div data-ro='banner'><b>ATHENA</b> {d.name or ''} "
-                    f"(backend {self.setup.backend})</div>")
-        items = "".join(f"<li>{_escape(e)}</li>" for e in self.errors)
-        return (f"<div data-ro='banner' data-level='error' style='color:{ERROR_COLOR}'>"
-                f"<b>Problems</b><ul style='margin:0;padding-left:1.2em'>{items}</ul></div>")
-
-    def _slot_options(self, view: AppView | None) -> list[str]:
-        if view is None:
-            return [_ALL] + [f"slot {k}" for k in range(16)]
-        return [_ALL] + [s.label if s.valid else f"{s.label} - invalid: "
-                         f"{s.why.split(':')[0]}" for s in view.slots]
 
     # ------------------------------------------------------------------ callbacks
     # viser runs the browser's updates on a thread pool, several at once after quick key
@@ -502,155 +444,6 @@ class AthenaApp:
     def _set_status(self, text: str, level: str) -> None:
         self._status.content = message_html(text, level)
 
-    def _sync_gui(self, view: AppView, *, sync_ik: bool, read: _Read = ()) -> None:
-        """Show ``view`` in the GUI's inputs.
-
-        ``read``: the inputs that this update came from, with the values it read.
-        """
-        with self._echo():
-            for i, sl in enumerate(self._q_sliders):
-                _write(sl, float(np.clip(round(view.q[i] * 1e3, 3), sl.min, sl.max)), read)
-            opts = self._slot_options(view)
-            if tuple(opts) != tuple(self._slot_dd.options):
-                self._slot_dd.options = opts
-            want = opts[0] if self.slot == "all" else opts[1 + int(self.slot)]
-            if self._slot_dd.value != want:
-                self._slot_dd.value = want
-            if view.readouts is not None:
-                self._set_depth_range(view.readouts.p)
-            if sync_ik and view.readouts is not None:
-                az, pol, depth = angles_from_tip(view.readouts.tip_e)
-                _write(self._az, float(np.clip(round(math.degrees(az), 2), -180, 180)), read)
-                _write(self._pol, float(np.clip(round(math.degrees(pol), 2), 0, 180)), read)
-                _write(self._depth, float(np.clip(round(depth * 1e3, 2), self._depth.min,
-                                                  self._depth.max)), read)
-            if not self._dragging:
-                self._place_handle()
-
-    def _set_depth_range(self, p: float) -> None:
-        """Make the depth slider span the drawn slot's branch of ``p``.
-
-        The slider is the tip's distance from the RCM, ``|L - p|``: below ``L`` for the
-        inserted tool (``0 < p < L``), beyond ``L`` for ``p < 0`` (``O_s`` beyond the
-        RCM), from 0 for ``p > L`` (the tip behind the RCM).
-        """
-        L, far = self.setup.design.tool_length * 1e3, self._far * 1e3
-        if 0 < p * 1e3 < L:
-            lo, hi = 1.0, L - 1.0
-        elif p <= 0:
-            lo, hi = L + 1.0, L + far
-        else:
-            lo, hi = 1.0, max(far - L, 2.0)
-        if (self._depth.min, self._depth.max) != (lo, hi):
-            if self._depth.min < hi:        # keep min < max at every step
-                self._depth.max, self._depth.min = hi, lo
-            else:
-                self._depth.min, self._depth.max = lo, hi
-            self._depth.value = float(np.clip(self._depth.value, lo, hi))
-
-    def _place_handle(self) -> None:
-        if self.view is not None and self.view.readouts is not None:
-            with self._echo():
-                tip = tuple(float(x) for x in self.view.readouts.tip_b)
-                self._handle.position = tip
-                if self._grab is None:
-                    self._grip.position = tip
-
-    def _draw(self, view: AppView) -> None:
-        """Send the scene of ``view`` (inside the caller's atomic block).
-
-        One line-segments node per line width (solid and ghosted apart), one point cloud
-        per point set, the labels that moved.
-        """
-        assert view.geometry is not None
-        solid = robot_scene(view.geometry)
-        if self._solids_of is not None:
-            solid = with_solids(solid, tuple(self._solids_of(view)))
-        ghosts = (ghost_scene(view.ghosts, view.geometry) if view.ghosts is not None
-                  else Scene((), (), ()))
-        scene = self.server.scene
-        handles = {}
-        groups = {**_by_width(solid, "w"), **_by_width(ghosts, "ghost_w")}
-        for name, (pts, layout, width) in groups.items():
-            h = self._line_handles.pop(name, None)
-            if h is None:
-                h = scene.add_line_segments(f"/robot/{name}", points=pts,
-                                            colors=_layout_colors(layout), thickness=width,
-                                            thickness_units="screen")
-            elif self._line_layouts.get(name) == layout:
-                h.points = pts                          # the colours are those sent before
-            else:
-                h.points, h.colors = pts, _layout_colors(layout)
-            self._line_layouts[name] = layout
-            handles[name] = h
-        for name, h in self._line_handles.items():      # parts not drawn any more
-            h.remove()
-            self._line_layouts.pop(name, None)
-        self._line_handles = handles
-        for ps in solid.points:
-            pts = ps.points.astype(np.float32)
-            h = self._point_handles.get(ps.name)
-            if h is not None and len(h.points) == len(pts):
-                h.points = pts
-            else:
-                if h is not None:
-                    h.remove()
-                self._point_handles[ps.name] = scene.add_point_cloud(
-                    f"/robot/{ps.name}", points=pts, colors=ps.colors, point_size=ps.size,
-                    point_shape="circle", precision="float32")
-        for name in set(self._point_handles) - {ps.name for ps in solid.points}:
-            self._point_handles.pop(name).remove()
-        self._draw_solids(solid.solids + ghosts.solids)
-        texts = tuple(lab.text for lab in solid.labels)
-        pos = np.array([lab.position for lab in solid.labels]).reshape(-1, 3)
-        if texts != self._label_texts or len(self._label_handles) != len(texts):
-            moved = np.ones(len(texts), dtype=bool)
-        else:                                           # one comparison for all labels
-            moved = np.any(np.abs(pos - self._label_pos) > LABEL_TOL_M, axis=-1)
-        for text, p, m in zip(texts, pos, moved.tolist(), strict=True):
-            h = self._label_handles.get(text)
-            if h is None:
-                self._label_handles[text] = scene.add_label(f"/labels/{text}", text,
-                                                            position=tuple(p.tolist()))
-            elif m:
-                h.position = p
-        self._label_texts, self._label_pos = texts, pos
-        self.bodies.update(view.geometry)    # bodies as solids (issue 20): app/_bodies.py
-        self.forces.update(view.geometry)    # actuator forces (issue 21): app/_forces.py
-
-    def _draw_solids(self, solids: tuple[Solid, ...]) -> None:
-        """One mesh node per solid: new vertices where the mesh keeps its faces."""
-        scene, handles = self.server.scene, {}
-        for so in solids:
-            verts = np.asarray(so.vertices, dtype=np.float32)
-            faces = np.asarray(so.faces, dtype=np.uint32)
-            key = (*faces.shape, hash(faces.tobytes()), *so.color, hash(so.opacity))
-            old = self._solid_handles.pop(so.name, None)
-            if old is not None and old[1] == key:
-                old[0].vertices = verts
-                handles[so.name] = old
-                continue
-            if old is not None:
-                old[0].remove()
-            h = scene.add_mesh_simple(f"/robot/solids/{so.name}", verts, faces,
-                                      color=so.color, opacity=so.opacity,
-                                      flat_shading=True)
-            handles[so.name] = (h, key)
-        for h, _ in self._solid_handles.values():      # bodies not drawn any more
-            h.remove()
-        self._solid_handles = handles
-
-    def _frame_camera(self) -> None:
-        if self.view is None or self.view.geometry is None:
-            return
-        lo, hi = self.view.geometry.bounds()
-        centre = 0.5 * (lo + hi)
-        span = float(np.max(hi - lo))
-        cam = self.server.initial_camera
-        cam.look_at = tuple(float(x) for x in centre)
-        cam.position = tuple(float(x) for x in centre + span * np.array([0.8, -0.95, 0.55]))
-        cam.up = (0.0, 0.0, 1.0)
-
     # ------------------------------------------------------------------ playback, set-up
     def _load_trajectory(self, path: str) -> None:
         try:
@@ -730,63 +523,6 @@ class AthenaApp:
         self.stop()
 
 
-@functools.lru_cache(maxsize=64)
-def _vertex_color(rgb: tuple[int, int, int]) -> NDArray[np.uint8]:
-    """An sRGB colour (0..255) as a per-vertex colour that shows as given.
-
-    three.js reads vertex colours as linear and converts them to sRGB on output.
-    """
-    c = np.asarray(rgb, dtype=float) / 255.0
-    lin = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-    return np.round(255.0 * lin).astype(np.uint8)
-
-
-#: A node's colour layout: ``(colour, number of segments)`` of each part, in order.
-_Layout = tuple[tuple[tuple[int, int, int], int], ...]
-
-
-def _by_width(scene: Scene, prefix: str) -> dict[str, tuple[NDArray[np.float32], _Layout, float]]:
-    """The scene's line sets merged per line width: ``name -> (points, layout, width)``.
-
-    One scene node per width instead of one per part: fewer messages per update. The
-    colours follow from the layout (:func:`_layout_colors`), and only a changed layout
-    needs them sent again.
-    """
-    groups: dict[float, list[Any]] = {}
-    for ls in scene.lines:
-        groups.setdefault(ls.width, []).append(ls)
-    out = {}
-    for w, sets in groups.items():
-        pts = np.concatenate([ls.segments for ls in sets]).astype(np.float32)
-        layout = tuple((ls.color, len(ls.segments)) for ls in sets)
-        out[f"{prefix}{w:g}"] = (pts, layout, w)
-    return out
-
-
-def _layout_colors(layout: _Layout) -> NDArray[np.uint8]:
-    """Per-vertex colours (n, 2, 3) of a node's layout."""
-    return np.concatenate([np.broadcast_to(_vertex_color(c), (n, 2, 3)) for c, n in layout])
-
-
-#: The GUI inputs an update read, with the values it read: ``((handle, value), ...)``.
-_Read = tuple[tuple[Any, float], ...]
-
-
-def _write(handle: Any, value: float, read: _Read) -> None:
-    """Show ``value`` in a GUI input, unless the browser moved it on since it was read.
-
-    viser stores a value from the browser before the callback that reads it runs. If the
-    input no longer holds what this update read, a newer value is waiting for its own
-    callback: writing this update's value back would undo it (and the browser's slider
-    would jump back, so that the next key press starts from the old value).
-    """
-    for h, v in read:
-        if h is handle and handle.value != v:
-            return
-    if abs(handle.value - value) > 1e-9:
-        handle.value = value
-
-
 def _inverse_slot(slot: int, mode: int) -> int:
     """The slot with the IK's mode and the branches (sign of ``p``, U, S) of ``slot``."""
     from ..robot import SLOT_P_SIGN, SLOT_UJOINT, SLOT_WRIST, slot_index
@@ -808,12 +544,6 @@ def rcm_reach(setup: AppSetup) -> float:
     dist = np.linalg.norm(O_s - setup.T_b_e[:3, 3], axis=-1)
     far = float(np.nanmax(dist)) if np.any(np.isfinite(dist)) else 1.0
     return math.ceil(far * 100.0) / 100.0
-
-
-def _escape(text: str) -> str:
-    import html
-
-    return html.escape(text)
 
 
 def launch(T_b_e: ArrayLike | str | Path | None = None, design: Design | str | Path | None = None,

@@ -31,9 +31,6 @@ from ._api import (
     design_params,
     forward_kinematics,
     inverse_kinematics,
-    parallel_forward_kinematics,
-    parallel_ik_from_position,
-    parallel_inverse_kinematics,
     q_from_instrument,
     q_from_tool_tip,
 )
@@ -46,6 +43,11 @@ from ._jac_api import (
     parallel_twist_jacobian,
     tool_tip_inverse_jacobian,
     tool_tip_jacobian,
+)
+from ._parallel_api import (
+    parallel_forward_kinematics,
+    parallel_ik_from_position,
+    parallel_inverse_kinematics,
 )
 from ._sweep import DEFAULT_CHUNK_SIZE, SweepSummary, sweep_fk
 

@@ -31,9 +31,10 @@ from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..robot import forward_kinematics
 from ..robot._setup import resolve_rcm_frame
+from ._encoder import RosEncoder, TrackedBatch, check_uint
 from ._errors import ServeError, ros_extra_missing
 from ._relay import SubprotocolRelay, bind_socket
-from ._write import _MSG_TYPES, TOPICS, RosEncoder, TrackedBatch, check_uint, msgdef
+from ._write import _MSG_TYPES, TOPICS, msgdef
 
 __all__ = ["FoxgloveStream", "DEFAULT_PORT", "serve_app"]
 

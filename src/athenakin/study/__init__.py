@@ -11,6 +11,12 @@ from ._interop import (
     quaternion_xyzw_from_wxyz,
     scipy_rotation_from_quaternion,
 )
+from ._joints import (
+    study_G,
+    study_G_from_half_tangent,
+    study_M,
+    study_M_from_half_tangent,
+)
 from ._study import (
     STUDY_QUADRIC_TOL,
     check_study,
@@ -26,10 +32,6 @@ from ._study import (
     rotation_from_quaternion,
     study_equal,
     study_from_transform,
-    study_G,
-    study_G_from_half_tangent,
-    study_M,
-    study_M_from_half_tangent,
     study_normalize,
     study_quadric_residual,
     transform_from_study,

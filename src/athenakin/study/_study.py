@@ -1,10 +1,13 @@
-"""Study parameters and dual quaternions (paper Eq. 1-4, 6).
+"""Study parameters and dual quaternions (paper Eq. 1-4).
 
 A Study vector is ``X = (x0, x1, x2, x3, y0, y1, y2, y3)``, read as the dual
 quaternion ``x + eps*y`` with Hamilton products and ``x0`` the scalar part. It
 is a point of P^7: ``X`` and ``lambda*X`` (``lambda != 0``) are the same
 displacement. A displacement is on the Study quadric
 ``x0*y0 + x1*y1 + x2*y2 + x3*y3 = 0`` with ``x != 0``.
+
+The Study vectors of the joint transforms ``M_i`` and ``G_i`` (Eq. 6) are in
+:mod:`athenakin.study._joints`.
 
 With the paper's Eq. 3-4 the translation is ``t = -2 * y * conj(x) / |x|^2``,
 i.e. ``y = -t * x / 2`` (``t`` as a pure quaternion). This sign differs from
@@ -37,10 +40,6 @@ __all__ = [
     "paper_matrix_from_study",
     "rotation_from_quaternion",
     "quaternion_from_rotation",
-    "study_M",
-    "study_M_from_half_tangent",
-    "study_G",
-    "study_G_from_half_tangent",
 ]
 
 #: Relative tolerance of the Study-quadric test: ``|x . y| <= tol * |x| * |X|``.
@@ -518,95 +517,3 @@ def paper_matrix_from_study(X: ArrayLike, *, tol: float = STUDY_QUADRIC_TOL
     T[..., 1:, 0] = t
     T[..., 1:, 1:] = R
     return T
-
-
-def study_M(u: ArrayLike) -> NDArray[np.float64]:
-    """Study vector of ``M_i`` (Eq. 6), the rotation about z by ``u``.
-
-    Parameters
-    ----------
-    u : array-like, shape (...)
-        Angle in radians.
-
-    Returns
-    -------
-    ndarray, shape (..., 8)
-        ``(cos(u/2), 0, 0, sin(u/2), 0, 0, 0, 0)``.
-    """
-    u = check_array(u, "u", ())
-    X = np.zeros(u.shape + (8,))
-    X[..., 0] = np.cos(u / 2)
-    X[..., 3] = np.sin(u / 2)
-    return X
-
-
-def study_M_from_half_tangent(v: ArrayLike) -> NDArray[np.float64]:
-    """Study vector of ``M_i`` in the half-tangent ``v = tan(u/2)``: ``(1, 0, 0, v, 0, 0, 0, 0)``.
-
-    The half turn ``u = pi`` (``v`` infinite) has no finite representative here;
-    use :func:`study_M`.
-
-    Parameters
-    ----------
-    v : array-like, shape (...)
-
-    Returns
-    -------
-    ndarray, shape (..., 8)
-    """
-    v = check_array(v, "v", ())
-    X = np.zeros(v.shape + (8,))
-    X[..., 0] = 1.0
-    X[..., 3] = v
-    return X
-
-
-def study_G(a: ArrayLike, d: ArrayLike, alpha: ArrayLike) -> NDArray[np.float64]:
-    """Study vector of ``G_i`` (Eq. 6): translate by ``(a, 0, d)``, rotate about x by ``alpha``.
-
-    Parameters
-    ----------
-    a, d : array-like, shape (...)
-        Offsets along x and z, metres.
-    alpha : array-like, shape (...)
-        Twist angle, radians.
-
-    Returns
-    -------
-    ndarray, shape (..., 8)
-        ``(c, s, 0, 0, a*s/2, -a*c/2, -d*s/2, -d*c/2)`` with ``c, s = cos, sin(alpha/2)``.
-    """
-    a = check_array(a, "a", ())
-    d = check_array(d, "d", ())
-    alpha = check_array(alpha, "alpha", ())
-    return _G(a, d, np.cos(alpha / 2), np.sin(alpha / 2))
-
-
-def study_G_from_half_tangent(a: ArrayLike, d: ArrayLike, al: ArrayLike) -> NDArray[np.float64]:
-    """Study vector of ``G_i`` in the half-tangent ``al = tan(alpha/2)`` (times 1/cos(alpha/2)).
-
-    Parameters
-    ----------
-    a, d : array-like, shape (...)
-        Offsets along x and z, metres.
-    al : array-like, shape (...)
-        ``tan(alpha / 2)``.
-
-    Returns
-    -------
-    ndarray, shape (..., 8)
-        ``(1, al, 0, 0, a*al/2, -a/2, -d*al/2, -d/2)``.
-    """
-    a = check_array(a, "a", ())
-    d = check_array(d, "d", ())
-    al = check_array(al, "al", ())
-    return _G(a, d, np.ones_like(al), al)
-
-
-def _G(a: NDArray[np.float64], d: NDArray[np.float64], c: NDArray[np.float64],
-       s: NDArray[np.float64]) -> NDArray[np.float64]:
-    a, d, c, s = np.broadcast_arrays(a, d, c, s)
-    z = np.zeros_like(c)
-    return np.stack([c, s, z, z, a * s / 2, -a * c / 2, -d * s / 2, -d * c / 2], axis=-1)
-
-
