@@ -154,28 +154,24 @@ def main(argv: list[str] | None = None) -> int:
         except BrokenPipeError:     # the reader stopped (| head): its choice, not a failure
             _silence_stdout()
             return 0
-        except KeyboardInterrupt:   # Ctrl-C: outputs are discarded (Outputs), no traceback
+        except (KeyboardInterrupt, Exception) as exc:
             if debug:
                 raise
-            print(f"{name}: interrupted{_resume_hint(args)}", file=sys.stderr)
-            return 130
-        except ModuleNotFoundError as exc:
-            if debug:
-                raise
-            print(f"{name}: error: {missing_extra_message(exc, args.command)}",
-                  file=sys.stderr)
-            return 1
-        except _INPUT_ERRORS as exc:
-            if debug:
-                raise
-            print(f"{name}: error: {_one_line(exc)}", file=sys.stderr)
-            return 1
-        except Exception as exc:
-            if debug:
-                raise
-            print(f"{name}: internal error: {_one_line(exc)} (a bug: rerun with --debug for "
-                  f"the traceback and report it)", file=sys.stderr)
-            return 70
+            message, code = _failure(exc, args)
+            print(f"{name}: {message}", file=sys.stderr)
+            return code
+
+
+def _failure(exc: BaseException, args: argparse.Namespace) -> tuple[str, int]:
+    """The message and exit code of a command that failed (:func:`main`'s policy)."""
+    if isinstance(exc, KeyboardInterrupt):   # Ctrl-C: outputs are discarded (Outputs)
+        return f"interrupted{_resume_hint(args)}", 130
+    if isinstance(exc, ModuleNotFoundError):
+        return f"error: {missing_extra_message(exc, args.command)}", 1
+    if isinstance(exc, _INPUT_ERRORS):
+        return f"error: {_one_line(exc)}", 1
+    return (f"internal error: {_one_line(exc)} (a bug: rerun with --debug for the traceback "
+            f"and report it)", 70)
 
 
 def missing_extra_message(exc: ModuleNotFoundError, command: str | None = None) -> str:

@@ -8,14 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from .._interrupt import remembered_interrupt
-from ._common import (
-    add_design_option,
-    add_setup_options,
-    check_count,
-    check_finite,
-    load_design,
-    load_rcm,
-)
+from ._common import add_robot_options, check_count, check_finite, load_robot
 from ._output import add_force_option, outputs
 from ._view import add_slot_option
 
@@ -63,8 +56,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_force_option(p)
     add_slot_option(p)
-    add_design_option(p)
-    add_setup_options(p)
+    add_robot_options(p)
     p.set_defaults(func=run)
 
 
@@ -110,8 +102,7 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--from and --to go together")
     with outputs(args) as outs:
         outs.add(out)
-        design = load_design(args)
-        T = load_rcm(args, design)
+        design, T = load_robot(args)
         fps = DEFAULT_FPS if args.fps is None else float(args.fps)
         note = ""
         if args.q_file is not None:

@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from ._collision import add_bodies_options
-from ._common import add_design_option, add_setup_options, force_limits
+from ._common import add_robot_options, force_limits
 
 #: Interface the app binds unless told otherwise (this machine only).
 DEFAULT_HOST = "127.0.0.1"
@@ -34,8 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                     "Prints the URL; Ctrl-C stops it. A design, RCM frame or trajectory that "
                     "cannot be used is reported at start-up and in the page, and the app runs "
                     "on the reference set-up instead.")
-    add_design_option(p)
-    add_setup_options(p)
+    add_robot_options(p)
     p.add_argument("--trajectory", metavar="CSV", type=Path,
                    help="trajectory CSV to play back (columns q1_m, q2_m, q3_m, optional t_s)")
     p.add_argument("--host", default=DEFAULT_HOST,

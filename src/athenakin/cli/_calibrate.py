@@ -8,15 +8,7 @@ import tempfile
 import warnings
 from pathlib import Path
 
-from ._common import (
-    add_design_option,
-    add_setup_options,
-    check_count,
-    check_finite,
-    load_design,
-    load_rcm,
-    table,
-)
+from ._common import add_robot_options, check_count, check_finite, load_robot, table
 from ._output import Outputs, add_force_option, outputs
 
 
@@ -63,8 +55,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                    help="--plan: random candidate poses (default 2000)")
     p.add_argument("--seed", type=int, default=0, help="--plan: random seed (default 0)")
     add_force_option(p)
-    add_design_option(p)
-    add_setup_options(p)
+    add_robot_options(p)
     p.set_defaults(func=run)
 
 
@@ -108,8 +99,7 @@ def _run(args: argparse.Namespace, out: Path, outs: Outputs) -> int:
     from .. import calibration as cal
 
     rep = _report_path(args, out, outs)
-    design = load_design(args)
-    T = load_rcm(args, design)
+    design, T = load_robot(args)
     if args.plan is not None:
         if args.measurements is not None:
             raise ValueError("--plan: give no measurement file (it writes the poses to -o)")

@@ -34,6 +34,15 @@ def add_setup_options(p: argparse.ArgumentParser) -> None:
                    help='JSON file {"T_b_e": 4x4 nested list} (ecosystem layout [[R, t], [0, 1]])')
 
 
+def add_robot_options(p: argparse.ArgumentParser) -> None:
+    """The robot a command works on: ``--design FILE`` and the RCM frame's options.
+
+    See :func:`add_design_option`, :func:`add_setup_options`; :func:`load_robot` reads them.
+    """
+    add_design_option(p)
+    add_setup_options(p)
+
+
 def add_json_option(p: argparse.ArgumentParser) -> None:
     """``--json``."""
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
@@ -57,6 +66,12 @@ def load_rcm(args: argparse.Namespace, design: Design) -> NDArray[np.float64]:
     if getattr(args, "rcm_file", None):
         return read_rcm_json(args.rcm_file)
     return default_rcm_frame(design)
+
+
+def load_robot(args: argparse.Namespace) -> tuple[Design, NDArray[np.float64]]:
+    """The design and the RCM frame ``T_b_e`` (4, 4) of :func:`add_robot_options`."""
+    design = load_design(args)
+    return design, load_rcm(args, design)
 
 
 #: Resolution bounds of raster figures (dots per inch): a 10 x 8 inch figure at the

@@ -8,15 +8,7 @@ import numpy as np
 
 from .._dispatch import forward_kinematics, inverse_kinematics
 from ..robot import REFERENCE_Q
-from ._common import (
-    add_design_option,
-    add_json_option,
-    dump_json,
-    fmt,
-    load_design,
-    load_rcm,
-    table,
-)
+from ._common import add_design_option, add_json_option, dump_json, fmt, load_robot, table
 from ._fk import FK_HEADERS, fk_json, fk_rows
 
 
@@ -32,8 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``demo``."""
-    design = load_design(args)
-    T = load_rcm(args, design)
+    design, T = load_robot(args)
     q = REFERENCE_Q
     sol = forward_kinematics(q, T, design)
     ok = np.flatnonzero(sol.valid)

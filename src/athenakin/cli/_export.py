@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..design import Design
-from ._common import add_design_option, add_setup_options, check_count, load_design, load_rcm
+from ._common import add_robot_options, check_count, load_robot
 from ._output import add_force_option, outputs
 from ._view import add_q_argument, add_slot_option, q_from_args
 
@@ -40,8 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                         "and compare with the forward kinematics")
     p.add_argument("--seed", type=int, default=0, help="seed of the --check samples (0)")
     add_force_option(p)
-    add_design_option(p)
-    add_setup_options(p)
+    add_robot_options(p)
     p.set_defaults(func=run)
 
 
@@ -68,8 +67,7 @@ def run(args: argparse.Namespace) -> int:
     check_count(args.check, "--check", 0, MAX_CHECK, "configurations")
     with outputs(args) as outs:
         outs.add(out)
-        design = load_design(args)
-        T = load_rcm(args, design)
+        design, T = load_robot(args)
         q = q_from_args(args)
         if fmt == "mjcf":
             outs.write(out, mjcf_from_design(T, design, q=q, slot=args.slot,

@@ -12,13 +12,11 @@ from ..design import Design
 from ..errors import KinematicsError, Reason
 from ..robot import FKSolution
 from ._common import (
-    add_design_option,
     add_json_option,
-    add_setup_options,
+    add_robot_options,
     dump_json,
     fmt,
-    load_design,
-    load_rcm,
+    load_robot,
     mm_hint,
     table,
     with_hint,
@@ -32,8 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                        description="All (up to) 16 configurations for actuator values q (m).")
     p.add_argument("q", nargs=3, type=float, metavar="Q",
                    help="actuators q1 q2 q3, m (negative values are fine: -0.1)")
-    add_design_option(p)
-    add_setup_options(p)
+    add_robot_options(p)
     add_json_option(p)
     p.add_argument("--certify", action="store_true",
                    help="prove the solutions: rigorous enclosures of p and u1..u5 per slot and "
@@ -117,8 +114,7 @@ def certified_json(cert: CertifiedFK) -> dict:  # type: ignore[type-arg]
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``fk``."""
-    design = load_design(args)
-    T = load_rcm(args, design)
+    design, T = load_robot(args)
     if args.certify:
         return _run_certified(args, design, T)
     # the public function: the CLI shows what the library gives; one pose in a fresh process

@@ -11,13 +11,11 @@ from ..design import Design
 from ..errors import KinematicsError
 from ..robot import direction_from_angles
 from ._common import (
-    add_design_option,
     add_json_option,
-    add_setup_options,
+    add_robot_options,
     dump_json,
     fmt,
-    load_design,
-    load_rcm,
+    load_robot,
     mm_hint,
     with_hint,
 )
@@ -39,8 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     g.add_argument("--tip", nargs=3, type=float, metavar=("X", "Y", "Z"),
                    help="tool-tip point in frame E, m")
     p.add_argument("--p", type=float, help="distance O_s -> RCM, m (with --direction)")
-    add_design_option(p)
-    add_setup_options(p)
+    add_robot_options(p)
     add_json_option(p)
     p.set_defaults(func=run)
 
@@ -51,8 +48,7 @@ def run(args: argparse.Namespace) -> int:
         given = "--tip" if args.tip is not None else "--u345"
         raise ValueError(f"--p goes with --direction only; {given} sets the insertion itself "
                          f"(drop --p)")
-    design = load_design(args)
-    T = load_rcm(args, design)
+    design, T = load_robot(args)
     try:
         out = _solve(args, design, T)
     except KinematicsError as exc:

@@ -9,13 +9,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ._collision import add_collision_options, collision_options
-from ._common import (
-    add_design_option,
-    add_setup_options,
-    force_limits,
-    load_design,
-    load_rcm,
-)
+from ._common import add_robot_options, force_limits, load_robot
 from ._output import add_force_option, outputs
 
 if TYPE_CHECKING:
@@ -74,8 +68,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                    help="figure prefix (default: OUT without its extension)")
     g.add_argument("--no-plots", action="store_true", help="write no figures")
     add_force_option(p)
-    add_design_option(p)
-    add_setup_options(p)
+    add_robot_options(p)
     p.set_defaults(func=run)
 
 
@@ -134,8 +127,7 @@ def run(args: argparse.Namespace) -> int:
             prefix = args.plots if args.plots is not None else out.with_suffix("")
             figures = {k: outs.add(path, option="--plots")
                        for k, path in plot_paths(prefix).items()}
-        design = load_design(args)
-        T = load_rcm(args, design)
+        design, T = load_robot(args)
         spec = read_path_csv(args.path)
         n = len(spec.tips_e if spec.tips_e is not None else spec.azimuth)  # type: ignore[arg-type]
         if n > MAX_WAYPOINTS:

@@ -9,9 +9,8 @@ from typing import Any
 import numpy as np
 
 from ._common import (
-    add_design_option,
     add_json_option,
-    add_setup_options,
+    add_robot_options,
     check_count,
     check_dpi,
     check_finite,
@@ -45,8 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--resolution", type=int, default=241,
                    help="samples per axis of the (h, q3) map (default 241)")
     add_output_options(p, "athenakin-singularities")
-    add_design_option(p)
-    add_setup_options(p)
+    add_robot_options(p)
     add_json_option(p)
     p.set_defaults(func=run)
 

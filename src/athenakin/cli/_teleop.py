@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..teleop._filter import TREMOR_FILTERS
-from ._common import add_design_option, add_setup_options, check_finite, fmt, load_design, load_rcm
+from ._common import add_robot_options, check_finite, fmt, load_robot
 from ._output import add_force_option, outputs
 
 
@@ -44,8 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--no-arm", action="store_true",
                    help="commands only, no MuJoCo arm (the measured topics echo the commands)")
     add_force_option(p)
-    add_design_option(p)
-    add_setup_options(p)
+    add_robot_options(p)
     p.set_defaults(func=run)
 
 
@@ -73,8 +72,7 @@ def run(args: argparse.Namespace) -> int:
     with outputs(args) as outs:
         if out is not None:
             outs.add(out)
-        design = load_design(args)
-        T = load_rcm(args, design)
+        design, T = load_robot(args)
         q0 = np.array(args.q0, dtype=float)
         tele = Teleop(T, design, q0=q0, scale=args.scale, rate=args.rate,
                       options=TeleopOptions(filter=args.filter))

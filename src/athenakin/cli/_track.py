@@ -16,16 +16,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ._collision import add_collision_options, collision_options
-from ._common import (
-    add_design_option,
-    add_setup_options,
-    check_count,
-    check_finite,
-    fmt,
-    load_design,
-    load_rcm,
-    mm_hint,
-)
+from ._common import add_robot_options, check_count, check_finite, fmt, load_robot, mm_hint
 from ._output import Outputs, add_force_option, outputs
 
 if TYPE_CHECKING:
@@ -79,8 +70,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     add_collision_options(p, what="closer samples are flagged NEAR_COLLISION, overlapping "
                                    "ones COLLISION")
     add_force_option(p)
-    add_design_option(p)
-    add_setup_options(p)
+    add_robot_options(p)
     p.set_defaults(func=run)
 
 
@@ -162,8 +152,7 @@ def _track_recording(args: argparse.Namespace, outs: Outputs) -> int:
     from ..motion import TrackFlag
     from ..ros._track import empty_topic_error
     out = args.output
-    design = load_design(args)
-    T = load_rcm(args, design)
+    design, T = load_robot(args)
     opts = _tracker_options(args, design)
     if out is None or Path(out).suffix.lower() != ".mcap":
         with _recording_warnings(ros.RecordingWarning):
@@ -325,8 +314,7 @@ def _track(args: argparse.Namespace, outs: Outputs, *, q: np.ndarray | None = No
     from ..motion import track
     from ..motion._io import read_q_stream_csv
 
-    design = load_design(args)
-    T = load_rcm(args, design)
+    design, T = load_robot(args)
     if q is None:
         q, t = read_q_stream_csv(args.path)
     if t is not None:

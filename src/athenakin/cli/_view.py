@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..design import Design
-from ._common import add_design_option, add_setup_options, check_dpi, load_design, load_rcm
+from ._common import add_robot_options, check_dpi, load_robot
 from ._output import add_force_option, outputs
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -71,8 +71,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                         "(one solution, static formats): the default capsules, or the "
                         "[bodies] table of FILE (the --design file's when it has one)")
     add_force_option(p)
-    add_design_option(p)
-    add_setup_options(p)
+    add_robot_options(p)
     p.set_defaults(func=run)
 
 
@@ -88,8 +87,7 @@ def run(args: argparse.Namespace) -> int:
                          ".pdf), not with --all or .html")
     with outputs(args) as outs:
         outs.add(out)
-        design = load_design(args)
-        T = load_rcm(args, design)
+        design, T = load_robot(args)
         q = q_from_args(args)
         _render(args, outs.temp(out), q, T, design)
         outs.commit()

@@ -10,14 +10,12 @@ import numpy as np
 
 from ._collision import add_collision_options, collision_options
 from ._common import (
-    add_design_option,
     add_json_option,
-    add_setup_options,
+    add_robot_options,
     check_count,
     check_dpi,
     dump_json,
-    load_design,
-    load_rcm,
+    load_robot,
     table,
 )
 from ._output import Outputs, add_force_option, outputs
@@ -91,8 +89,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     add_collision_options(p, what="the maps gain a collision-free layer, the cone the "
                                   "directions a collision blocks", default_margin="0")
     add_output_options(p, "athenakin-workspace")
-    add_design_option(p)
-    add_setup_options(p)
+    add_robot_options(p)
     add_json_option(p)
     p.set_defaults(func=run)
 
@@ -120,8 +117,7 @@ def run(args: argparse.Namespace) -> int:
         declare_outputs(args, outs, ["o_s_workspace", "instrument_cone", "tool_tip",
                                      "actuator_map"],
                         ["workspace", "conditioning", "instrument_cone", "tool_tip"])
-        design = load_design(args)
-        T = load_rcm(args, design)
+        design, T = load_robot(args)
         prog = True if args.progress else None
         modes = tuple(args.modes)
         coll = collision_options(args, design)
