@@ -815,3 +815,22 @@ def test_a_browser_update_is_not_dropped_while_another_thread_writes_the_gui(mon
         assert app.q[0] == pytest.approx(-0.099, abs=1e-12) and sl.value == -99.0
     finally:
         app.stop()
+
+
+def test_page_scripts_need_viser_s_script_channel_and_say_so():
+    """The one private viser channel (``app._script``): a server without it is a named
+    ImportError naming viser, not an AttributeError from inside the app."""
+    from types import SimpleNamespace
+
+    from athenakin.app._script import run_page_script
+
+    sent = []
+    ok = SimpleNamespace(gui=SimpleNamespace(_websock_interface=SimpleNamespace(
+        queue_message=sent.append)))
+    if importlib.util.find_spec("viser") is None:
+        pytest.skip("viser not installed")
+    run_page_script(ok, "document.title = 'x';")
+    assert [m.source for m in sent] == ["document.title = 'x';"]
+    with pytest.raises(ImportError, match=r"RunJavascriptMessage channel") as info:
+        run_page_script(SimpleNamespace(gui=SimpleNamespace()), "1;")
+    assert info.value.name == "viser"

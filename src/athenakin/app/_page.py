@@ -23,6 +23,7 @@ from ._ghosts import ghost_scene
 from ._inverse import angles_from_tip
 from ._model import AppSetup, AppView
 from ._scene import Scene, Solid, robot_scene, with_solids
+from ._script import run_page_script
 from ._sync import Echo
 from ._text import ERROR_COLOR
 
@@ -93,8 +94,6 @@ class _Page:
         viser's on ``document``) stops those keys when the focus is on an element other
         than the page or the 3-D canvas.
         """
-        from viser import _messages
-
         script = (
             f"document.title = {json.dumps(self.title)};"
             "if (!window.__athenakinKeys) { window.__athenakinKeys = true;"
@@ -105,9 +104,7 @@ class _Page:
             # the panel's scroll bar always shown: the read-outs continue below the window
             " const st = document.createElement('style');"
             f" st.textContent = {json.dumps(_PANEL_CSS)}; document.head.appendChild(st); }}")
-        # viser's own channel for client scripts (as its plotly element); kept for new pages
-        self.server.gui._websock_interface.queue_message(
-            _messages.RunJavascriptMessage(source=script))
+        run_page_script(self.server, script)
 
     def _banner_html(self) -> str:
         if not self.errors:

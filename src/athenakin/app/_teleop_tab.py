@@ -34,6 +34,7 @@ import numpy as np
 
 from .._validation import check_array
 from ..errors import InvalidInputError, KinematicsError
+from ._script import run_page_script
 from ._teleop import (
     SCALE_RANGE,
     TELEOP_RATE,
@@ -111,10 +112,7 @@ class TeleopTab:
         self._tip_visible = True
         self.error: BaseException | None = None   # what stopped the loop, if not a user
         self._build()
-        from viser import _messages  # the app's channel for page scripts
-
-        self.server.gui._websock_interface.queue_message(
-            _messages.RunJavascriptMessage(source=_clutch_key_script()))
+        run_page_script(self.server, _clutch_key_script())
 
     def _build(self) -> None:
         gui = self.server.gui
