@@ -26,7 +26,10 @@ one, and classifies each call:
     an input array changed by the call;
 ``backend``
     the numpy and numba backends disagree (a different error type, different reason
-    codes, or values differing beyond 1e-9 relative where both say valid);
+    codes, or values differing beyond 1e-9 relative where both say valid: relative to the
+    larger of the value and the coordinate scale of the inputs, the largest translation of
+    a 4x4 frame among them, as the IK check below; an RCM 1e8 m away puts 1e8 m long
+    segments in the clearance, whose points carry 1e8 eps = 2e-8 m of rounding);
 ``no_generator``
     a public function the audit has no base arguments for (:data:`OVERRIDES`,
     :data:`BY_NAME`): it cannot be audited, so the audit fails (:data:`SKIPPED` names
@@ -838,8 +841,20 @@ def _flatten(value: Any, prefix: str = "") -> dict[str, np.ndarray]:
     return out
 
 
-def compare(a: Outcome, b: Outcome) -> str:
-    """'' when the two backends agree, else what differs."""
+def coordinate_scale(args: tuple, kwargs: dict) -> float:
+    """The largest finite translation (m) of a 4x4 frame among the arguments, at least 1."""
+    scale = 1.0
+    for v in (*args, *kwargs.values()):
+        if isinstance(v, np.ndarray) and v.dtype.kind == "f" and v.shape[-2:] == (4, 4):
+            t = np.abs(v[..., :3, 3])
+            t = t[np.isfinite(t)]
+            if t.size:
+                scale = max(scale, float(t.max()))
+    return scale
+
+
+def compare(a: Outcome, b: Outcome, scale: float = 1.0) -> str:
+    """'' when the two backends agree, else what differs (``scale``: :func:`coordinate_scale`)."""
     if a.kind != b.kind:
         return f"{a.kind} vs {b.kind} ({_short(a)} / {_short(b)})"
     if a.kind == "exc":
@@ -877,7 +892,7 @@ def compare(a: Outcome, b: Outcome) -> str:
             continue          # rounding-level quantities: each backend its own digits
         if np.any(mask):
             d = np.abs(x - y)[mask]
-            s = np.maximum(1.0, np.maximum(np.abs(x), np.abs(y)))[mask]
+            s = np.maximum(scale, np.maximum(np.abs(x), np.abs(y)))[mask]
             if np.any(d > RTOL * s):
                 return f"{k}: differs by {float((d / s).max()):.3g} relative"
     return ""
@@ -1075,7 +1090,7 @@ def fuzz_function(audit: Audit, key: str, f: Any, files: dict[str, Path], quick:
             for b in ("numpy", "numba"):
                 outs[b] = invoke(f, a, {**k, "backend": b}, audit.timeout)
                 audit.classify(key, f"{label} [{b}]", outs[b], names)
-            diff = compare(outs["numpy"], outs["numba"])
+            diff = compare(outs["numpy"], outs["numba"], coordinate_scale(a, k))
             if diff:
                 audit.record(key, label, "backend", diff)
             return
@@ -1083,7 +1098,7 @@ def fuzz_function(audit: Audit, key: str, f: Any, files: dict[str, Path], quick:
         audit.classify(key, label, out, names)
         if twin is not None and numba_ok and set(k) <= twin_params:
             ref = invoke(twin, a, k, audit.timeout)
-            diff = compare(ref, out)
+            diff = compare(ref, out, coordinate_scale(a, k))
             if diff:
                 audit.record(key, label + " [vs reference]", "backend", diff)
 
