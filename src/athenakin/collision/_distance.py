@@ -141,7 +141,7 @@ def _segment_segment(p1: F, q1: F, p2: F, q2: F) -> tuple[F, F, F]:
     i1 = p1 + s[..., None] * d1
     i2 = p2 + t[..., None] * d2
     di = np.linalg.norm(i1 - i2, axis=-1)
-    near = ~(denom > NEARLY_PARALLEL * a * e)
+    near = denom <= NEARLY_PARALLEL * a * e           # NaN rows stay NaN without a detour
     if near.any():
         ok[near], di[near], i1[near], i2[near] = _interior_nearly_parallel(
             p1[near], q1[near], p2[near], q2[near])
@@ -236,7 +236,7 @@ def _capsule_capsule(p1: F, q1: F, r1: F | float, p2: F, q2: F,
     r1a = np.broadcast_to(np.asarray(r1, dtype=np.float64), shape)
     r2a = np.broadcast_to(np.asarray(r2, dtype=np.float64), shape)
     # apart (above WITNESS_DIRECT): c1 + r1 n and c2 - r2 n with n along c2 - c1
-    far = dist > WITNESS_DIRECT
+    far = ~(dist <= WITNESS_DIRECT)                   # NaN rows: NaN witnesses, no detour
     with np.errstate(invalid="ignore", divide="ignore"):
         n = (c2 - c1) / np.where(far, dist, 1.0)[..., None]
     w = np.stack([c1 + r1a[..., None] * n, c2 - r2a[..., None] * n], axis=-2)

@@ -154,8 +154,9 @@ def _seg_seg(p10, p11, p12, q10, q11, q12, p20, p21, p22, q20, q21, q22):
     dist = g0 * g0 + g1 * g1 + g2 * g2
     best4, sb4, tb4 = best, sb, tb
     best, sb, tb = _nearer((denom > 0.0) and (dist < best), dist, s, t, best, sb, tb)
-    if not denom > NEARLY_PARALLEL * a * e:
-        # a branch that the compiler keeps out of the straight path (4.3 % of the pairs)
+    if denom <= NEARLY_PARALLEL * a * e:
+        # a branch that the compiler keeps out of the straight path (4.3 % of the pairs;
+        # NaN rows, an invalid configuration's, stay on the straight path)
         dist, s, t, ok = _interior_nearly_parallel(p10, p11, p12, d10, d11, d12,
                                                    p20, p21, p22, d20, d21, d22, inv_e)
         best, sb, tb = _nearer(ok and (dist < best4), dist, s, t, best4, sb4, tb4)
@@ -336,7 +337,7 @@ def capsule_pairs_into(solids, radii, ij, dist, wit):
             r1 = radii[i]
             r2 = radii[j]
             dist[m, k] = d - r1 - r2
-            if d > WITNESS_DIRECT:
+            if not d <= WITNESS_DIRECT:        # NaN rows too: NaN witnesses, no detour
                 # fast path, as _normal's: y - x is normal to both axes to rounding (the
                 # closest points), far above the noise; the same points as _witnesses to
                 # 1e-13 m
