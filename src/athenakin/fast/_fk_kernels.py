@@ -216,26 +216,32 @@ def _closure_residual(A1, B1, c2, s2, A3, B3, c4, s4, c5, s5, nn, e00, e01, e02,
 
 
 @njit(**_INLINE)
+def _store_second_angle(Sm, row, ii, rho_b, z):
+    """``atan2(+-rho_b, -+z)``, the four sign patterns of a pair's second angle, into ``Sm``.
+
+    Rows ``row .. row + 3``: ``(rho_b, -z), (rho_b, z), (-rho_b, -z), (-rho_b, z)``
+    (index ``2 b + r`` of the branch label and the sign of ``p``).
+    """
+    a = atan_q1(abs(rho_b), abs(z))
+    Sm[(row) * CHUNK + ii] = atan2_from_q1(a, rho_b, -z)
+    Sm[(row + 1) * CHUNK + ii] = atan2_from_q1(a, rho_b, z)
+    Sm[(row + 2) * CHUNK + ii] = atan2_from_q1(a, -rho_b, -z)
+    Sm[(row + 3) * CHUNK + ii] = atan2_from_q1(a, -rho_b, z)
+
+
+@njit(**_INLINE)
 def _store_angles(Sm, ii, A1, B1, rho2, zz, A3, B3, rho4b, W22, y5, x5):
     """The 16 distinct angles of a mode (first-quadrant atan, then sign patterns) into ``Sm``."""
     a1 = atan_q1(abs(B1), abs(A1))
     Sm[(_V1) * CHUNK + ii] = atan2_from_q1(a1, B1, A1)
     Sm[(_V1 + 1) * CHUNK + ii] = atan2_from_q1(a1, -B1, -A1)
-    a2 = atan_q1(abs(rho2), abs(zz))
-    Sm[(_V2) * CHUNK + ii] = atan2_from_q1(a2, rho2, -zz)
-    Sm[(_V2 + 1) * CHUNK + ii] = atan2_from_q1(a2, rho2, zz)
-    Sm[(_V2 + 2) * CHUNK + ii] = atan2_from_q1(a2, -rho2, -zz)
-    Sm[(_V2 + 3) * CHUNK + ii] = atan2_from_q1(a2, -rho2, zz)
+    _store_second_angle(Sm, _V2, ii, rho2, zz)          # u2
     a3 = atan_q1(abs(B3), abs(A3))
     Sm[(_V3) * CHUNK + ii] = atan2_from_q1(a3, B3, A3)
     Sm[(_V3 + 1) * CHUNK + ii] = atan2_from_q1(a3, -B3, A3)
     Sm[(_V3 + 2) * CHUNK + ii] = atan2_from_q1(a3, -B3, -A3)
     Sm[(_V3 + 3) * CHUNK + ii] = atan2_from_q1(a3, B3, -A3)
-    a4 = atan_q1(abs(rho4b), abs(W22))
-    Sm[(_V4) * CHUNK + ii] = atan2_from_q1(a4, rho4b, -W22)
-    Sm[(_V4 + 1) * CHUNK + ii] = atan2_from_q1(a4, rho4b, W22)
-    Sm[(_V4 + 2) * CHUNK + ii] = atan2_from_q1(a4, -rho4b, -W22)
-    Sm[(_V4 + 3) * CHUNK + ii] = atan2_from_q1(a4, -rho4b, W22)
+    _store_second_angle(Sm, _V4, ii, rho4b, W22)        # u4
     a5 = atan_q1(abs(y5), abs(x5))
     Sm[(_V5) * CHUNK + ii] = atan2_from_q1(a5, y5, x5)
     Sm[(_V5 + 1) * CHUNK + ii] = atan2_from_q1(a5, -y5, -x5)
