@@ -15,17 +15,9 @@ import numpy as np
 from .._backend import njit
 from ._formulas import line_conditions_formula
 
-_INLINE = dict(cache=True, nogil=True, error_model="numpy", inline="always")
-
-
-@njit(**_INLINE)
-def _select(c, a, b):  # type: ignore[no-untyped-def]
-    """``np.where`` of one sample (numba's makes arrays of scalars)."""
-    return a if c else b
-
-
 #: The one formula of the line's conditions (numpy evaluates the same source).
-_line_conditions = njit(**_INLINE)(line_conditions_formula)
+_line_conditions = njit(cache=True, nogil=True, error_model="numpy",
+                        inline="always")(line_conditions_formula)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -142,12 +134,12 @@ def reduce_samples(idx, q, mode, R, rcm, d_e, depth, J_tip, J_par, lengths, L, l
             q_lo[i] = min(q_lo[i], q[j, i])
             q_hi[i] = max(q_hi[i], q[j, i])
         v[5] = st
-        v6, v7, v8, v9, v10, v11 = _line_conditions(d_e[k, 0], d_e[k, 1], d_e[k, 2],
-                                                    L - depth[k], R, rcm, L, _select)
-        v[6] = v6
-        v[7] = v7
+        p, sxy, v8, ds0, v10, v11 = _line_conditions(d_e[k, 0], d_e[k, 1], d_e[k, 2],
+                                                     L - depth[k], R, rcm, L)
+        v[6] = p
+        v[7] = sxy
         v[8] = v8
-        v[9] = v9
+        v[9] = abs(ds0) / sxy if sxy > 0.0 else 0.0
         v[10] = v10
         v[11] = v11
         for c in range(12):

@@ -105,8 +105,10 @@ def _condition_values(idx: NDArray[np.int64], q: Arr, R: Arr, rcm: Arr, d_e: Arr
     v[4] = np.abs(q3)
     v[5] = np.min(np.minimum(q - lo, hi - q), axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
-        v[6:] = line_conditions_formula(d_e[idx, 0], d_e[idx, 1], d_e[idx, 2], L - depth[idx],
-                                        R, rcm, L, np.where)
+        v[6], v[7], v[8], ds0, v[10], v[11] = line_conditions_formula(
+            d_e[idx, 0], d_e[idx, 1], d_e[idx, 2], L - depth[idx], R, rcm, L)
+        sxy = v[7]
+        v[9] = np.where(sxy > 0.0, np.abs(ds0) / np.where(sxy > 0.0, sxy, 1.0), 0.0)
     return v
 
 
