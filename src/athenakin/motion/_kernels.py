@@ -235,6 +235,15 @@ def _same_labels(a, b):
     return a[0] == b[0] and a[1] == b[1] and a[2] == b[2] and a[3] == b[3]
 
 
+@njit(inline="always", **_OPTS)
+def _write(i, c, step, flags, valid, out_c, out_step, out_flags, out_valid):
+    """Reading ``i``'s outputs: its candidate row ``c``, step, flags and validity."""
+    out_c[i, :] = c
+    out_step[i] = step
+    out_flags[i] = flags
+    out_valid[i] = valid
+
+
 @njit(**_OPTS)
 def track_stream(q, g, prev, lost, out_c, out_step, out_flags, out_valid, out_fast):
     """Track the readings ``q`` (n, 3) from the state ``prev`` (NCAND), ``lost[0]``.
@@ -273,12 +282,9 @@ def track_stream(q, g, prev, lost, out_c, out_step, out_flags, out_valid, out_fa
         ok = finite and _parallel(g, q1, q2, q3, par)
         out_fast[i] = False
         if not ok:
-            flags |= F_LOST
             lost[0] = 1
-            out_c[i, :] = prev
-            out_step[i] = math.inf
-            out_flags[i] = flags
-            out_valid[i] = False
+            _write(i, prev, math.inf, flags | F_LOST, False, out_c, out_step, out_flags,
+                   out_valid)
             continue
         was_lost = lost[0] != 0
         if was_lost:
@@ -290,10 +296,7 @@ def track_stream(q, g, prev, lost, out_c, out_step, out_flags, out_valid, out_fa
             if (step <= 1.0 and c[16] >= hc and c[17] >= hw and c[18] >= s2m and c[19] >= s4m
                     and abs(c[4]) >= pp and link - c[17] >= lk):
                 prev[:] = c
-                out_c[i, :] = c
-                out_step[i] = step
-                out_flags[i] = flags
-                out_valid[i] = True
+                _write(i, c, step, flags, True, out_c, out_step, out_flags, out_valid)
                 out_fast[i] = True
                 continue
         m = 0
@@ -305,12 +308,9 @@ def track_stream(q, g, prev, lost, out_c, out_step, out_flags, out_valid, out_fa
                             steps[m] = _step(g, cands[m], prev)
                             m += 1
         if m == 0:
-            flags |= F_LOST
             lost[0] = 1
-            out_c[i, :] = prev
-            out_step[i] = math.inf
-            out_flags[i] = flags
-            out_valid[i] = False
+            _write(i, prev, math.inf, flags | F_LOST, False, out_c, out_step, out_flags,
+                   out_valid)
             continue
         k = -1
         for j in range(m):
@@ -337,7 +337,4 @@ def track_stream(q, g, prev, lost, out_c, out_step, out_flags, out_valid, out_fa
         flags |= _near(g, cands[k])
         prev[:] = cands[k]
         lost[0] = 0
-        out_c[i, :] = prev
-        out_step[i] = step
-        out_flags[i] = flags
-        out_valid[i] = True
+        _write(i, prev, step, flags, True, out_c, out_step, out_flags, out_valid)
