@@ -37,7 +37,7 @@ from ..errors import Reason
 from ._module_form import module_closed_form
 from ._scalar import atan2_from_q1, atan_q1, finite_sum, hypot, nanmax2, parallel_residual
 
-__all__ = ["CHUNK", "scratch", "fk_chunk", "gather", "gather_pose", "fk_full", "fk_full_parallel",
+__all__ = ["CHUNK", "scratch", "fk_chunk", "gather", "gather_items", "fk_full", "fk_full_parallel",
            "fk_counts", "rigid_flags", "FLAG_NONRIGID", "FLAG_Q_NONFINITE", "FLAG_T_NONFINITE",
            "FLAG_NO_SOLUTION"]
 
@@ -108,30 +108,36 @@ def _fin16(T, j):
 
 
 @njit(**_INLINE)
-def gather_pose(T, it, row, ii, G):
-    """Copy ``T[it]`` (4 x 4, row-major) into rows ``row..row+15`` of column ``ii`` of ``G``.
+def gather_items(T, V, c0, n, G, row_T, row_V, row_fin, v_finite):
+    """Copy items c0..c0+n-1 into ``G`` columns: a pose and a 3-vector per item.
 
-    Returns its :func:`._scalar.finite_sum` (0.0: every entry finite).
+    ``T[i]`` (4 x 4, row-major) goes to rows ``row_T .. row_T + 15``, ``V[i]`` to rows
+    ``row_V .. row_V + 2`` (``T`` or ``V`` may have a single row: broadcast); row
+    ``row_fin`` is 1.0 where ``T[i]`` (and ``V[i]`` when ``v_finite``) is finite, else 0.0.
+    Inlined, so that the rows are constants of the caller (LLVM vectorises the loop).
     """
-    s = 0.0
-    for r in range(4):
-        for c in range(4):
-            v = T[it, r, c]
-            G[(row + 4 * r + c) * CHUNK + ii] = v
-            s += finite_sum(v)
-    return s
+    for ii in range(n):
+        i = c0 + ii
+        it = i if T.shape[0] > 1 else 0
+        iv = i if V.shape[0] > 1 else 0
+        s = 0.0
+        for r in range(4):
+            for c in range(4):
+                x = T[it, r, c]
+                G[(row_T + 4 * r + c) * CHUNK + ii] = x
+                s += finite_sum(x)
+        for c in range(3):
+            x = V[iv, c]
+            G[(row_V + c) * CHUNK + ii] = x
+            if v_finite:
+                s += finite_sum(x)
+        G[row_fin * CHUNK + ii] = 1.0 if s == 0.0 else 0.0
 
 
 @njit(**_OPTS)
 def gather(q, T, c0, n, G):
     """Copy poses c0..c0+n-1 (q or T may have a single row: broadcast) into ``G`` columns."""
-    for ii in range(n):
-        i = c0 + ii
-        iq = i if q.shape[0] > 1 else 0
-        it = i if T.shape[0] > 1 else 0
-        for c in range(3):
-            G[(_GQ + c) * CHUNK + ii] = q[iq, c]
-        G[(_GFIN) * CHUNK + ii] = 1.0 if gather_pose(T, it, _GT, ii, G) == 0.0 else 0.0
+    gather_items(T, q, c0, n, G, _GT, _GQ, _GFIN, False)    # q's finiteness: _input_flags
 
 
 @njit(**_OPTS)

@@ -23,7 +23,7 @@ from .._backend import njit, prange
 from ..chain._ups import P_ZERO_TOL
 from ..errors import Reason
 from ..robot._ik import IK_Q_ERROR_MAX
-from ._fk_kernels import CHUNK, FLAG_T_NONFINITE, gather_pose, rigid_flags
+from ._fk_kernels import CHUNK, FLAG_T_NONFINITE, gather_items, rigid_flags
 from ._parallel_kernels import (
     _CT,
     _DO,
@@ -235,16 +235,8 @@ _NGP = 20   # gathered: T (16), u345 (3), finite (1)
 
 @njit(**_OPTS)
 def _paper_gather(T, U, c0, n, G):
-    for ii in range(n):
-        i = c0 + ii
-        it = i if T.shape[0] > 1 else 0
-        iu = i if U.shape[0] > 1 else 0
-        s = gather_pose(T, it, 0, ii, G)
-        for c in range(3):
-            v = U[iu, c]
-            G[(16 + c) * CHUNK + ii] = v
-            s += finite_sum(v)
-        G[19 * CHUNK + ii] = 1.0 if s == 0.0 else 0.0
+    """T (rows 0-15), u345 (16-18) and their finiteness (19) of items c0..c0+n-1 into ``G``."""
+    gather_items(T, U, c0, n, G, 0, 16, 19, True)
 
 
 @njit(**_INLINE)
