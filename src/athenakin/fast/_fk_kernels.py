@@ -37,8 +37,8 @@ from ..errors import Reason
 from ._module_form import module_closed_form
 from ._scalar import atan2_from_q1, atan_q1, finite_sum, hypot, nanmax2, parallel_residual
 
-__all__ = ["CHUNK", "scratch", "fk_chunk", "gather", "fk_full", "fk_full_parallel", "fk_counts",
-           "rigid_flags", "FLAG_NONRIGID", "FLAG_Q_NONFINITE", "FLAG_T_NONFINITE",
+__all__ = ["CHUNK", "scratch", "fk_chunk", "gather", "gather_items", "fk_full", "fk_full_parallel",
+           "fk_counts", "rigid_flags", "FLAG_NONRIGID", "FLAG_Q_NONFINITE", "FLAG_T_NONFINITE",
            "FLAG_NO_SOLUTION"]
 
 #: Poses per chunk of the two-pass loop (the scratch holds 74 doubles per pose).
@@ -107,19 +107,37 @@ def _fin16(T, j):
     return s == 0.0
 
 
+@njit(**_INLINE)
+def gather_items(T, V, c0, n, G, row_T, row_V, row_fin, v_finite):
+    """Copy items c0..c0+n-1 into ``G`` columns: a pose and a 3-vector per item.
+
+    ``T[i]`` (4 x 4, row-major) goes to rows ``row_T .. row_T + 15``, ``V[i]`` to rows
+    ``row_V .. row_V + 2`` (``T`` or ``V`` may have a single row: broadcast); row
+    ``row_fin`` is 1.0 where ``T[i]`` (and ``V[i]`` when ``v_finite``) is finite, else 0.0.
+    Inlined, so that the rows are constants of the caller (LLVM vectorises the loop).
+    """
+    for ii in range(n):
+        i = c0 + ii
+        it = i if T.shape[0] > 1 else 0
+        iv = i if V.shape[0] > 1 else 0
+        s = 0.0
+        for r in range(4):
+            for c in range(4):
+                x = T[it, r, c]
+                G[(row_T + 4 * r + c) * CHUNK + ii] = x
+                s += finite_sum(x)
+        for c in range(3):
+            x = V[iv, c]
+            G[(row_V + c) * CHUNK + ii] = x
+            if v_finite:
+                s += finite_sum(x)
+        G[row_fin * CHUNK + ii] = 1.0 if s == 0.0 else 0.0
+
+
 @njit(**_OPTS)
 def gather(q, T, c0, n, G):
     """Copy poses c0..c0+n-1 (q or T may have a single row: broadcast) into ``G`` columns."""
-    for ii in range(n):
-        i = c0 + ii
-        iq = i if q.shape[0] > 1 else 0
-        it = i if T.shape[0] > 1 else 0
-        for c in range(3):
-            G[(_GQ + c) * CHUNK + ii] = q[iq, c]
-        for r in range(4):
-            for c in range(4):
-                G[(_GT + 4 * r + c) * CHUNK + ii] = T[it, r, c]
-        G[(_GFIN) * CHUNK + ii] = 1.0 if _fin16(T, it) else 0.0
+    gather_items(T, q, c0, n, G, _GT, _GQ, _GFIN, False)    # q's finiteness: _input_flags
 
 
 @njit(**_OPTS)
@@ -204,29 +222,54 @@ def _closure_residual(A1, B1, c2, s2, A3, B3, c4, s4, c5, s5, nn, e00, e01, e02,
 
 
 @njit(**_INLINE)
+def _store_second_angle(Sm, row, ii, rho_b, z):
+    """``atan2(+-rho_b, -+z)``, the four sign patterns of a pair's second angle, into ``Sm``.
+
+    Rows ``row .. row + 3``: ``(rho_b, -z), (rho_b, z), (-rho_b, -z), (-rho_b, z)``
+    (index ``2 b + r`` of the branch label and the sign of ``p``).
+    """
+    a = atan_q1(abs(rho_b), abs(z))
+    Sm[(row) * CHUNK + ii] = atan2_from_q1(a, rho_b, -z)
+    Sm[(row + 1) * CHUNK + ii] = atan2_from_q1(a, rho_b, z)
+    Sm[(row + 2) * CHUNK + ii] = atan2_from_q1(a, -rho_b, -z)
+    Sm[(row + 3) * CHUNK + ii] = atan2_from_q1(a, -rho_b, z)
+
+
+@njit(**_INLINE)
 def _store_angles(Sm, ii, A1, B1, rho2, zz, A3, B3, rho4b, W22, y5, x5):
     """The 16 distinct angles of a mode (first-quadrant atan, then sign patterns) into ``Sm``."""
     a1 = atan_q1(abs(B1), abs(A1))
     Sm[(_V1) * CHUNK + ii] = atan2_from_q1(a1, B1, A1)
     Sm[(_V1 + 1) * CHUNK + ii] = atan2_from_q1(a1, -B1, -A1)
-    a2 = atan_q1(abs(rho2), abs(zz))
-    Sm[(_V2) * CHUNK + ii] = atan2_from_q1(a2, rho2, -zz)
-    Sm[(_V2 + 1) * CHUNK + ii] = atan2_from_q1(a2, rho2, zz)
-    Sm[(_V2 + 2) * CHUNK + ii] = atan2_from_q1(a2, -rho2, -zz)
-    Sm[(_V2 + 3) * CHUNK + ii] = atan2_from_q1(a2, -rho2, zz)
+    _store_second_angle(Sm, _V2, ii, rho2, zz)          # u2
     a3 = atan_q1(abs(B3), abs(A3))
     Sm[(_V3) * CHUNK + ii] = atan2_from_q1(a3, B3, A3)
     Sm[(_V3 + 1) * CHUNK + ii] = atan2_from_q1(a3, -B3, A3)
     Sm[(_V3 + 2) * CHUNK + ii] = atan2_from_q1(a3, -B3, -A3)
     Sm[(_V3 + 3) * CHUNK + ii] = atan2_from_q1(a3, B3, -A3)
-    a4 = atan_q1(abs(rho4b), abs(W22))
-    Sm[(_V4) * CHUNK + ii] = atan2_from_q1(a4, rho4b, -W22)
-    Sm[(_V4 + 1) * CHUNK + ii] = atan2_from_q1(a4, rho4b, W22)
-    Sm[(_V4 + 2) * CHUNK + ii] = atan2_from_q1(a4, -rho4b, -W22)
-    Sm[(_V4 + 3) * CHUNK + ii] = atan2_from_q1(a4, -rho4b, W22)
+    _store_second_angle(Sm, _V4, ii, rho4b, W22)        # u4
     a5 = atan_q1(abs(y5), abs(x5))
     Sm[(_V5) * CHUNK + ii] = atan2_from_q1(a5, y5, x5)
     Sm[(_V5 + 1) * CHUNK + ii] = atan2_from_q1(a5, -y5, -x5)
+
+
+@njit(**_INLINE)
+def _angle_pair(x, y, z):
+    """Cosines and sines of an angle pair of ``R(a, b)`` from the axis ``(x, y, z)``.
+
+    As the reference, sequentially: ``a`` from the direction of ``(x, y)``, ``b`` from
+    the projection on the plane ``a`` fixes; the cosine and sine of an angle are its
+    normalised pair. Returns ``rho = |(x, y)|`` (the singularity measure), ``cos a``,
+    ``sin a`` (``x``, ``y`` where ``rho = 0``), the projection ``rho_b``, ``cos b``,
+    ``sin b``.
+    """
+    rho = hypot(x, y)
+    r = rho if rho > 0.0 else 1.0
+    ca = x / r
+    sa = y / r
+    rho_b = ca * x + sa * y
+    n = hypot(rho_b, z)
+    return rho, ca, sa, rho_b, -z / n, rho_b / n
 
 
 @njit(**_OPTS)
@@ -254,16 +297,7 @@ def _serial_stage(G, P, tol, SH, Sm, n):
         zx = e03 / nn
         zy = e13 / nn
         zz = e23 / nn
-        rho = hypot(zx, zy)
-        rr = rho if rho > 0.0 else 1.0
-        # each angle pair sequentially, as the reference: u1 from the direction, u2 from
-        # the projection on the plane u1 fixes; cos/sin of an angle = its normalised pair
-        A1 = zx / rr
-        B1 = zy / rr
-        rho2 = A1 * zx + B1 * zy
-        n2 = hypot(rho2, zz)
-        c2 = -zz / n2
-        s2 = rho2 / n2
+        rho, A1, B1, rho2, c2, s2 = _angle_pair(zx, zy, zz)      # u1, u2
         x0, x1, x2 = A1 * c2, B1 * c2, s2
         z0, z1, z2 = A1 * s2, B1 * s2, -c2
         # W = R1^T R_s_e (rows: the columns x, y, z of R1)
@@ -273,14 +307,7 @@ def _serial_stage(G, P, tol, SH, Sm, n):
         W12 = B1 * e02 - A1 * e12
         W20 = (z0 * e00 + z1 * e10) + z2 * e20
         W22 = (z0 * e02 + z1 * e12) + z2 * e22
-        rho4 = hypot(W02, W12)
-        r4 = rho4 if rho4 > 0.0 else 1.0
-        A3 = W02 / r4
-        B3 = W12 / r4
-        rho4b = A3 * W02 + B3 * W12
-        n4 = hypot(rho4b, W22)
-        c4 = -W22 / n4
-        s4 = rho4b / n4
+        rho4, A3, B3, rho4b, c4, s4 = _angle_pair(W02, W12, W22)  # u3, u4
         # u5 from what u3, u4 leave of W: closes the chain even where u3 is ill-conditioned
         y5 = B3 * W00 - A3 * W10
         x5 = (A3 * c4 * W00 + B3 * c4 * W10) + s4 * W20

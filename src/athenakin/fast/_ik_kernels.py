@@ -23,7 +23,7 @@ from .._backend import njit, prange
 from ..chain._ups import P_ZERO_TOL
 from ..errors import Reason
 from ..robot._ik import IK_Q_ERROR_MAX
-from ._fk_kernels import CHUNK, FLAG_T_NONFINITE, rigid_flags
+from ._fk_kernels import CHUNK, FLAG_T_NONFINITE, gather_items, rigid_flags
 from ._parallel_kernels import (
     _CT,
     _DO,
@@ -235,21 +235,8 @@ _NGP = 20   # gathered: T (16), u345 (3), finite (1)
 
 @njit(**_OPTS)
 def _paper_gather(T, U, c0, n, G):
-    for ii in range(n):
-        i = c0 + ii
-        it = i if T.shape[0] > 1 else 0
-        iu = i if U.shape[0] > 1 else 0
-        s = 0.0
-        for r in range(4):
-            for c in range(4):
-                v = T[it, r, c]
-                G[(4 * r + c) * CHUNK + ii] = v
-                s += finite_sum(v)
-        for c in range(3):
-            v = U[iu, c]
-            G[(16 + c) * CHUNK + ii] = v
-            s += finite_sum(v)
-        G[19 * CHUNK + ii] = 1.0 if s == 0.0 else 0.0
+    """T (rows 0-15), u345 (16-18) and their finiteness (19) of items c0..c0+n-1 into ``G``."""
+    gather_items(T, U, c0, n, G, 0, 16, 19, True)
 
 
 @njit(**_INLINE)
@@ -444,15 +431,26 @@ def _store_T_b_s(K, ii, mask, Tbs, i):
     Tbs[i, 3, 3] = one
 
 
+@njit(**_OPTS, inline="always")
+def _store_q(K, ii, q, i):
+    """Write ``q`` of chunk column ``ii`` into ``q[i]`` (NaN where it has no solution).
+
+    Returns the column's reason code and its NaN mask (0.0, or NaN where the reason is
+    not 0), which the other fields of the column are stored with.
+    """
+    r = K[_REASON * CHUNK + ii]
+    mask = 0.0 if r == 0.0 else math.nan
+    q[i, 0] = K[_Q1 * CHUNK + ii] + mask
+    q[i, 1] = K[_Q2 * CHUNK + ii] + mask
+    q[i, 2] = K[_Q3 * CHUNK + ii] + mask
+    return r, mask
+
+
 @njit(**_OPTS)
 def _paper_store(K, c0, n, q, p, u, mode, Tbs, res, valid, reason, qe):
     for ii in range(n):
         i = c0 + ii
-        r = K[_REASON * CHUNK + ii]
-        mask = 0.0 if r == 0.0 else math.nan
-        q[i, 0] = K[_Q1 * CHUNK + ii] + mask
-        q[i, 1] = K[_Q2 * CHUNK + ii] + mask
-        q[i, 2] = K[_Q3 * CHUNK + ii] + mask
+        r, mask = _store_q(K, ii, q, i)
         p[i] = K[_P * CHUNK + ii] + mask
         for c in range(5):
             u[i, c] = K[(_U1 + c) * CHUNK + ii] + mask

@@ -6,12 +6,10 @@ only the store differs: ``want`` (a bit mask of ``WANT_*``) selects the arrays o
 that needs ``q`` and ``valid`` writes 25 bytes per pose instead of 218.
 """
 
-# numba's cache does not follow the kernels this module inlines from _fk_kernels and
-# _scalar: a change there must change this file too (revision 2, issue 23).
+# numba's cache does not follow the kernels this module inlines from _fk_kernels, _ik_kernels and
+# _scalar: a change there must change this file too (revision 3).
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 
@@ -21,10 +19,6 @@ from ._ik_kernels import (
     _MODE,
     _NGP2,
     _P,
-    _Q1,
-    _Q2,
-    _Q3,
-    _REASON,
     _RES,
     _U1,
     NK,
@@ -33,6 +27,7 @@ from ._ik_kernels import (
     _paper_stage1,
     _paper_stage2,
     _pik_stage,
+    _store_q,
     _store_T_b_s,
 )
 
@@ -51,11 +46,7 @@ def _store_select(K, c0, n, want, q, p, u, mode, Tbs, res, valid, reason):
     """:func:`._ik_kernels._paper_store` writing only the fields in ``want``."""
     for ii in range(n):
         i = c0 + ii
-        r = K[_REASON * CHUNK + ii]
-        mask = 0.0 if r == 0.0 else math.nan
-        q[i, 0] = K[_Q1 * CHUNK + ii] + mask
-        q[i, 1] = K[_Q2 * CHUNK + ii] + mask
-        q[i, 2] = K[_Q3 * CHUNK + ii] + mask
+        r, mask = _store_q(K, ii, q, i)
         if want & WANT_P:
             p[i] = K[_P * CHUNK + ii] + mask
         if want & WANT_U:

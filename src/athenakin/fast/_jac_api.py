@@ -14,6 +14,7 @@ built) is handed to the reference function, which raises the very same exception
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -91,11 +92,16 @@ def _params(design: Design | None) -> NDArray[np.float64]:
         raise _Delegate from None
 
 
-def _parallel(q: object, design: Design | None, mode: object, kind: int) -> NDArray[np.float64]:
-    P = _params(design)
-    qa = _arr(q, (3,))
-    bq = qa.shape[:-1]
-    mf, bm = _modes(mode, bq)
+def _parallel(kind: int, ref: Callable[..., NDArray[np.float64]], q: object,
+              design: Design | None, mode: object) -> NDArray[np.float64]:
+    """The parallel-module Jacobian ``kind`` compiled, else (``_Delegate``) its reference."""
+    try:
+        P = _params(design)
+        qa = _arr(q, (3,))
+        bq = qa.shape[:-1]
+        mf, bm = _modes(mode, bq)
+    except _Delegate:
+        return ref(q, design, mode)
     N = math.prod(bq)
     rows = 6 if kind == _jk.PAR_TWIST else 3
     out = np.empty((N, rows, 3))
@@ -104,31 +110,35 @@ def _parallel(q: object, design: Design | None, mode: object, kind: int) -> NDAr
     return out.reshape(bq + (rows, 3))
 
 
-def _robot(q: object, T_b_e: object, design: Design | None, mode: object, frame: object,
-           kind: int) -> NDArray[np.float64]:
-    if is_option(frame, "rcm"):
-        rcm = True
-    elif is_option(frame, "base"):
-        rcm = False
-    else:
-        raise _Delegate
-    P = _params(design)
-    qa = _arr(q, (3,))
-    bq = qa.shape[:-1]
-    mf, bm = _modes(mode, bq)
-    if T_b_e is None:
-        Ta, bT, check = _default_frame(design), (), False
-    else:
-        Ta = _arr(T_b_e, (4, 4))
-        bT, check = Ta.shape[:-2], True
-    batch = bq if bq == bT else _batch(q=bq, T_b_e=bT)
+def _robot(kind: int, ref: Callable[..., NDArray[np.float64]], q: object, T_b_e: object,
+           design: Design | None, mode: object, frame: object) -> NDArray[np.float64]:
+    """The whole-robot Jacobian ``kind`` compiled, else (``_Delegate``) its reference."""
+    try:
+        if is_option(frame, "rcm"):
+            rcm = True
+        elif is_option(frame, "base"):
+            rcm = False
+        else:
+            raise _Delegate
+        P = _params(design)
+        qa = _arr(q, (3,))
+        bq = qa.shape[:-1]
+        mf, bm = _modes(mode, bq)
+        if T_b_e is None:
+            Ta, bT, check = _default_frame(design), (), False
+        else:
+            Ta = _arr(T_b_e, (4, 4))
+            bT, check = Ta.shape[:-2], True
+        batch = bq if bq == bT else _batch(q=bq, T_b_e=bT)
+    except _Delegate:
+        return ref(q, T_b_e, design, mode=mode, frame=frame)
     N = math.prod(batch)
     out = np.empty((N, 3, 3))
     flags = _jk.robot_kernel(_flat(qa, bq, batch, N, (3,)), _mode_rows(mf, bm, batch, N),
                              _flat(Ta, bT, batch, N, (4, 4)), P, TANGENT_TOL, kind, rcm, check,
                              ROTATION_TOL, out)
-    if flags:
-        raise _Delegate     # non-finite (the reference raises) or maybe non-rigid (it decides)
+    if flags:   # non-finite (the reference raises) or maybe non-rigid (it decides)
+        return ref(q, T_b_e, design, mode=mode, frame=frame)
     return out.reshape(batch + (3, 3))
 
 
@@ -159,10 +169,7 @@ def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLik
     >>> J.shape
     (3, 3)
     """
-    try:
-        return _parallel(q, design, mode, _jk.PAR_JAC)
-    except _Delegate:
-        return _ref.parallel_jacobian(q, design, mode)
+    return _parallel(_jk.PAR_JAC, _ref.parallel_jacobian, q, design, mode)
 
 
 def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1
@@ -178,10 +185,7 @@ def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None, mode: 
     ndarray, shape (..., 3, 3)
         Rows ``q1, q2, q3``; columns x, y, z of ``O_s`` (base frame); m/m.
     """
-    try:
-        return _parallel(q, design, mode, _jk.PAR_INV)
-    except _Delegate:
-        return _ref.parallel_inverse_jacobian(q, design, mode)
+    return _parallel(_jk.PAR_INV, _ref.parallel_inverse_jacobian, q, design, mode)
 
 
 def parallel_twist_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1
@@ -198,10 +202,7 @@ def parallel_twist_jacobian(q: ArrayLike, design: Design | None = None, mode: Ar
         Rows 0-2: velocity of ``O_s`` (m/m), rows 3-5: angular velocity of the
         module (rad/m), base frame; columns ``q1, q2, q3``.
     """
-    try:
-        return _parallel(q, design, mode, _jk.PAR_TWIST)
-    except _Delegate:
-        return _ref.parallel_twist_jacobian(q, design, mode)
+    return _parallel(_jk.PAR_TWIST, _ref.parallel_twist_jacobian, q, design, mode)
 
 
 # --- whole robot in controller variables ----------------------------------------------------
@@ -236,10 +237,7 @@ def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
     >>> bool(np.allclose(J, ak.analysis.instrument_jacobian(q, mode=1), atol=1e-12))
     True
     """
-    try:
-        return _robot(q, T_b_e, design, mode, frame, _jk.INSTR_JAC)
-    except _Delegate:
-        return _ref.instrument_jacobian(q, T_b_e, design, mode=mode, frame=frame)
+    return _robot(_jk.INSTR_JAC, _ref.instrument_jacobian, q, T_b_e, design, mode, frame)
 
 
 def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
@@ -256,10 +254,7 @@ def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
     ndarray, shape (..., 3, 3)
         Rows ``q1, q2, q3``; columns ``azimuth``, ``polar`` (m/rad), ``p`` (m/m).
     """
-    try:
-        return _robot(q, T_b_e, design, mode, frame, _jk.INSTR_INV)
-    except _Delegate:
-        return _ref.instrument_inverse_jacobian(q, T_b_e, design, mode=mode, frame=frame)
+    return _robot(_jk.INSTR_INV, _ref.instrument_inverse_jacobian, q, T_b_e, design, mode, frame)
 
 
 def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
@@ -278,10 +273,7 @@ def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
     ndarray, shape (..., 3, 3)
         Rows: x, y, z of the tip velocity in ``frame``; columns ``q1, q2, q3``; m/m.
     """
-    try:
-        return _robot(q, T_b_e, design, mode, frame, _jk.TIP_JAC)
-    except _Delegate:
-        return _ref.tool_tip_jacobian(q, T_b_e, design, mode=mode, frame=frame)
+    return _robot(_jk.TIP_JAC, _ref.tool_tip_jacobian, q, T_b_e, design, mode, frame)
 
 
 def tool_tip_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
@@ -298,7 +290,4 @@ def tool_tip_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
     ndarray, shape (..., 3, 3)
         Rows ``q1, q2, q3``; columns: x, y, z of the tip velocity in ``frame``; m/m.
     """
-    try:
-        return _robot(q, T_b_e, design, mode, frame, _jk.TIP_INV)
-    except _Delegate:
-        return _ref.tool_tip_inverse_jacobian(q, T_b_e, design, mode=mode, frame=frame)
+    return _robot(_jk.TIP_INV, _ref.tool_tip_inverse_jacobian, q, T_b_e, design, mode, frame)

@@ -85,6 +85,23 @@ def _parallel(g, q1, q2, q3, par):
     return True
 
 
+@njit(inline="always", **_OPTS)
+def _angle_pair(x, y, z, sign, degen, has_hint, hint):
+    """Cosines and sines of an angle pair of ``R(a, b)`` from its axis ``(x, y, z)``.
+
+    ``sign`` is the branch label (``b`` or ``w``). Where ``|(x, y)| <= degen`` (the two
+    joint axes aligned) ``a`` is the previous value ``hint``, the continuous choice, or,
+    without a hint, there is no candidate. Returns ``ok, rho = |(x, y)|, cos a, sin a,
+    cos b, sin b``.
+    """
+    rho = math.hypot(x, y)
+    if rho > degen:
+        return True, rho, sign * x / rho, sign * y / rho, -z, sign * rho
+    if not has_hint:
+        return False, rho, 0.0, 0.0, 0.0, 0.0
+    return True, rho, math.cos(hint), math.sin(hint), -z, 0.0
+
+
 @njit(**_OPTS)
 def _candidate(g, q1, q2, q3, par, mode, r, b, w, hint, has_hint, out):
     """``_candidate`` of the tracker into ``out`` (NCAND); False where it returns None."""
@@ -116,19 +133,9 @@ def _candidate(g, q1, q2, q3, par, mode, r, b, w, hint, has_hint, out):
     zx = cx / p
     zy = cys / p
     zz = czs / p
-    rho = math.hypot(zx, zy)
-    if rho > degen:
-        c1 = b * zx / rho
-        s1 = b * zy / rho
-        c2 = -zz
-        s2 = b * rho
-    elif not has_hint:
+    ok, rho, c1, s1, c2, s2 = _angle_pair(zx, zy, zz, b, degen, has_hint, hint[0])   # u1, u2
+    if not ok:
         return False
-    else:
-        c1 = math.cos(hint[0])
-        s1 = math.sin(hint[0])
-        c2 = -zz
-        s2 = 0.0
     ex0, ex1, ex2 = g[9], g[10], g[11]
     ez0, ez1, ez2 = g[12], g[13], g[14]
     Ex0 = ex0
@@ -149,19 +156,9 @@ def _candidate(g, q1, q2, q3, par, mode, r, b, w, hint, has_hint, out):
     W02 = x10 * Ez0 + x11 * Ez1 + x12 * Ez2
     W12 = s1 * Ez0 - c1 * Ez1
     W22 = z10 * Ez0 + z11 * Ez1 + z12 * Ez2
-    rho4 = math.hypot(W02, W12)
-    if rho4 > degen:
-        c3 = w * W02 / rho4
-        s3 = w * W12 / rho4
-        c4 = -W22
-        s4 = w * rho4
-    elif not has_hint:
+    ok, rho4, c3, s3, c4, s4 = _angle_pair(W02, W12, W22, w, degen, has_hint, hint[2])  # u3, u4
+    if not ok:
         return False
-    else:
-        c3 = math.cos(hint[2])
-        s3 = math.sin(hint[2])
-        c4 = -W22
-        s4 = 0.0
     u1 = math.atan2(s1, c1)
     u2 = math.atan2(s2, c2)
     u3 = math.atan2(s3, c3)
@@ -238,6 +235,15 @@ def _same_labels(a, b):
     return a[0] == b[0] and a[1] == b[1] and a[2] == b[2] and a[3] == b[3]
 
 
+@njit(inline="always", **_OPTS)
+def _write(i, c, step, flags, valid, out_c, out_step, out_flags, out_valid):
+    """Reading ``i``'s outputs: its candidate row ``c``, step, flags and validity."""
+    out_c[i, :] = c
+    out_step[i] = step
+    out_flags[i] = flags
+    out_valid[i] = valid
+
+
 @njit(**_OPTS)
 def track_stream(q, g, prev, lost, out_c, out_step, out_flags, out_valid, out_fast):
     """Track the readings ``q`` (n, 3) from the state ``prev`` (NCAND), ``lost[0]``.
@@ -276,12 +282,9 @@ def track_stream(q, g, prev, lost, out_c, out_step, out_flags, out_valid, out_fa
         ok = finite and _parallel(g, q1, q2, q3, par)
         out_fast[i] = False
         if not ok:
-            flags |= F_LOST
             lost[0] = 1
-            out_c[i, :] = prev
-            out_step[i] = math.inf
-            out_flags[i] = flags
-            out_valid[i] = False
+            _write(i, prev, math.inf, flags | F_LOST, False, out_c, out_step, out_flags,
+                   out_valid)
             continue
         was_lost = lost[0] != 0
         if was_lost:
@@ -293,10 +296,7 @@ def track_stream(q, g, prev, lost, out_c, out_step, out_flags, out_valid, out_fa
             if (step <= 1.0 and c[16] >= hc and c[17] >= hw and c[18] >= s2m and c[19] >= s4m
                     and abs(c[4]) >= pp and link - c[17] >= lk):
                 prev[:] = c
-                out_c[i, :] = c
-                out_step[i] = step
-                out_flags[i] = flags
-                out_valid[i] = True
+                _write(i, c, step, flags, True, out_c, out_step, out_flags, out_valid)
                 out_fast[i] = True
                 continue
         m = 0
@@ -308,12 +308,9 @@ def track_stream(q, g, prev, lost, out_c, out_step, out_flags, out_valid, out_fa
                             steps[m] = _step(g, cands[m], prev)
                             m += 1
         if m == 0:
-            flags |= F_LOST
             lost[0] = 1
-            out_c[i, :] = prev
-            out_step[i] = math.inf
-            out_flags[i] = flags
-            out_valid[i] = False
+            _write(i, prev, math.inf, flags | F_LOST, False, out_c, out_step, out_flags,
+                   out_valid)
             continue
         k = -1
         for j in range(m):
@@ -340,7 +337,4 @@ def track_stream(q, g, prev, lost, out_c, out_step, out_flags, out_valid, out_fa
         flags |= _near(g, cands[k])
         prev[:] = cands[k]
         lost[0] = 0
-        out_c[i, :] = prev
-        out_step[i] = step
-        out_flags[i] = flags
-        out_valid[i] = True
+        _write(i, prev, step, flags, True, out_c, out_step, out_flags, out_valid)

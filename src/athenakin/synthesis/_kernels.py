@@ -13,6 +13,11 @@ import math
 import numpy as np
 
 from .._backend import njit
+from ._formulas import line_conditions_formula
+
+#: The one formula of the line's conditions (numpy evaluates the same source).
+_line_conditions = njit(cache=True, nogil=True, error_model="numpy",
+                        inline="always")(line_conditions_formula)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -129,26 +134,14 @@ def reduce_samples(idx, q, mode, R, rcm, d_e, depth, J_tip, J_par, lengths, L, l
             q_lo[i] = min(q_lo[i], q[j, i])
             q_hi[i] = max(q_hi[i], q[j, i])
         v[5] = st
-        # O_s = rcm - (L - depth) d_b; the instrument line in the frame of O_s,
-        # R_b_s = Rx(theta) with z_s radial from M (docs/singularities.md)
-        de0, de1, de2 = d_e[k, 0], d_e[k, 1], d_e[k, 2]
-        pp = L - depth[k]
-        rbx = pp * (R[0, 0] * de0 + R[0, 1] * de1 + R[0, 2] * de2)
-        rby = pp * (R[1, 0] * de0 + R[1, 1] * de1 + R[1, 2] * de2)
-        rbz = pp * (R[2, 0] * de0 + R[2, 1] * de1 + R[2, 2] * de2)
-        oy, oz = rcm[1] - rby, rcm[2] - rbz
-        rr = math.sqrt(oy * oy + oz * oz)
-        ey, ez = oy / rr, oz / rr
-        rs0, rs1, rs2 = rbx, ez * rby - ey * rbz, ey * rby + ez * rbz
-        p = math.sqrt(rs0 * rs0 + rs1 * rs1 + rs2 * rs2)
-        ds0, ds1 = rs0 / p, rs1 / p
-        sxy = math.sqrt(ds0 * ds0 + ds1 * ds1)
+        p, sxy, v8, ds0, v10, v11 = _line_conditions(d_e[k, 0], d_e[k, 1], d_e[k, 2],
+                                                     L - depth[k], R, rcm, L)
         v[6] = p
         v[7] = sxy
-        v[8] = math.sqrt(de0 * de0 + de1 * de1)
+        v[8] = v8
         v[9] = abs(ds0) / sxy if sxy > 0.0 else 0.0
-        v[10] = abs(ds1)
-        v[11] = abs(p - L)
+        v[10] = v10
+        v[11] = v11
         for c in range(12):
             if v[c] < margin[c]:
                 margin[c] = v[c]

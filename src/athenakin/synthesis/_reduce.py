@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._backend import numba_available
+from ._formulas import line_conditions_formula
 
 __all__ = ["CONDITION_ORDER", "reduce_samples", "reduce_samples_numpy"]
 
@@ -103,27 +104,11 @@ def _condition_values(idx: NDArray[np.int64], q: Arr, R: Arr, rcm: Arr, d_e: Arr
     v[3] = ah
     v[4] = np.abs(q3)
     v[5] = np.min(np.minimum(q - lo, hi - q), axis=1)
-    # O_s = rcm - (L - depth) d_b; the instrument line in the frame of O_s,
-    # R_b_s = Rx(theta) with z_s radial from M (docs/singularities.md)
-    de0, de1, de2 = d_e[idx, 0], d_e[idx, 1], d_e[idx, 2]
-    pp = L - depth[idx]
-    rbx = pp * (R[0, 0] * de0 + R[0, 1] * de1 + R[0, 2] * de2)
-    rby = pp * (R[1, 0] * de0 + R[1, 1] * de1 + R[1, 2] * de2)
-    rbz = pp * (R[2, 0] * de0 + R[2, 1] * de1 + R[2, 2] * de2)
-    oy, oz = rcm[1] - rby, rcm[2] - rbz
-    rr = np.sqrt(oy * oy + oz * oz)
-    ey, ez = oy / rr, oz / rr
-    rs0, rs1, rs2 = rbx, ez * rby - ey * rbz, ey * rby + ez * rbz
-    p = np.sqrt(rs0 * rs0 + rs1 * rs1 + rs2 * rs2)
-    ds0, ds1 = rs0 / p, rs1 / p
-    sxy = np.sqrt(ds0 * ds0 + ds1 * ds1)
-    v[6] = p
-    v[7] = sxy
-    v[8] = np.sqrt(de0 * de0 + de1 * de1)
     with np.errstate(invalid="ignore", divide="ignore"):
+        v[6], v[7], v[8], ds0, v[10], v[11] = line_conditions_formula(
+            d_e[idx, 0], d_e[idx, 1], d_e[idx, 2], L - depth[idx], R, rcm, L)
+        sxy = v[7]
         v[9] = np.where(sxy > 0.0, np.abs(ds0) / np.where(sxy > 0.0, sxy, 1.0), 0.0)
-    v[10] = np.abs(ds1)
-    v[11] = np.abs(p - L)
     return v
 
 
