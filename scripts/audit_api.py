@@ -28,7 +28,7 @@ one, and classifies each call:
     the numpy and numba backends disagree (a different error type, different reason
     codes, or values differing beyond 1e-9 relative where both say valid: relative to the
     larger of the value and the coordinate scale of the inputs, the largest translation of
-    a 4x4 frame among them, as the IK check below; an RCM 1e8 m away puts 1e8 m long
+    a 4x4 frame among them, also the IK check's scale; an RCM 1e8 m away puts 1e8 m long
     segments in the clearance, whose points carry 1e8 eps = 2e-8 m of rounding);
 ``no_generator``
     a public function the audit has no base arguments for (:data:`OVERRIDES`,
@@ -853,7 +853,7 @@ def coordinate_scale(args: tuple, kwargs: dict) -> float:
     return scale
 
 
-def compare(a: Outcome, b: Outcome, scale: float = 1.0) -> str:
+def compare(a: Outcome, b: Outcome, scale: float) -> str:
     """'' when the two backends agree, else what differs (``scale``: :func:`coordinate_scale`)."""
     if a.kind != b.kind:
         return f"{a.kind} vs {b.kind} ({_short(a)} / {_short(b)})"
@@ -1541,7 +1541,7 @@ def _fk_round_trip(audit: Audit, label: str, q: np.ndarray, design: Any) -> None
         outs[b] = invoke(ak.forward_kinematics, (q, T0, design),
                          dict(errors="flag", backend=b), audit.timeout)
         audit.classify(key, f"{label} [{b}]", outs[b], names)
-    diff = compare(outs["numpy"], outs["numba"])
+    diff = compare(outs["numpy"], outs["numba"], coordinate_scale((T0,), {}))
     if diff:
         audit.record(key, label, "backend", diff)
     sol = outs["numpy"].value
@@ -1623,11 +1623,11 @@ def _instrument_edges(audit: Audit) -> None:
                     else:
                         O_s = back.T_b_s[..., :3, 3][back.valid]
                         err = np.linalg.norm(O_s - want_Os, axis=-1).min()
-                        scale = max(1.0, float(np.abs(T[:3, 3]).max()))
+                        scale = coordinate_scale((T,), {})
                         if err > 1e-6 * scale + 10 * float(ik.q_error):
                             audit.record(key, f"{label} [{b}]", "wrong_valid",
                                          f"FK(q) puts O_s {err:.3g} m from the requested one")
-        diff = compare(outs["numpy"], outs["numba"])
+        diff = compare(outs["numpy"], outs["numba"], coordinate_scale((T,), {}))
         if diff:
             audit.record(key, label, "backend", diff)
 
