@@ -242,9 +242,8 @@ def _capsule_capsule(p1: F, q1: F, r1: F | float, p2: F, q2: F,
     w = np.stack([c1 + r1a[..., None] * n, c2 - r2a[..., None] * n], axis=-2)
     near = ~far
     if near.any():
-        ends = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64)
-                                     for v in (p1, q1, p2, q2, c1)))
-        p1n, q1n, p2n, q2n = (v[near] for v in ends[:4])
+        p1n, q1n, p2n, q2n = (np.broadcast_to(np.asarray(v, dtype=np.float64), c1.shape)[near]
+                              for v in (p1, q1, p2, q2))
         w[near] = _witnesses_near(p1n, q1n, r1a[near], p2n, q2n, r2a[near], c1[near],
                                   c2[near])
     return dist - r1a - r2a, w
