@@ -155,7 +155,7 @@ def _seg_seg(p10, p11, p12, q10, q11, q12, p20, p21, p22, q20, q21, q22):
     best4, sb4, tb4 = best, sb, tb
     best, sb, tb = _nearer((denom > 0.0) and (dist < best), dist, s, t, best, sb, tb)
     if denom <= NEARLY_PARALLEL * a * e:
-        # a branch that the compiler keeps out of the straight path (4.3 % of the pairs;
+        # a rare branch, its work an out-of-line call (4.3 % of the benchmark's pairs;
         # NaN rows, an invalid configuration's, stay on the straight path)
         dist, s, t, ok = _interior_nearly_parallel(p10, p11, p12, d10, d11, d12,
                                                    p20, p21, p22, d20, d21, d22, inv_e)
