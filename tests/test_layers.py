@@ -21,7 +21,7 @@ DOCS = Path(__file__).resolve().parents[1] / "docs" / "architecture.md"
 #: Layer -> the units in it, bottom first (docs/architecture.md draws the same table).
 LAYERS: dict[str, tuple[str, ...]] = {
     "foundation": ("errors", "_validation", "_compat", "_input", "_toml", "_csv", "_output",
-                   "_serialize", "_transforms", "_figstyle", "_interrupt", "_backend",
+                   "_serialize", "_transforms", "_figstyle", "_interrupt", "_backend", "_typing",
                    "design"),
     "maths core": ("study", "chain", "parallel", "testing", "_mechanism_formulas"),
     "numpy reference": ("robot", "symbolic"),

@@ -34,7 +34,7 @@ from types import ModuleType
 from typing import Any, TypeVar
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from ._backend import _STATE as _BACKEND
 from ._backend import (
@@ -42,6 +42,7 @@ from ._backend import (
     numba_available,
     resolve_backend,
 )
+from ._typing import FloatArray
 from ._validation import OPTION_AUTO, is_option
 from .chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
 from .design import Design
@@ -250,7 +251,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
 def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None = None, *,
                        errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
                        closure_tol: float = CLOSURE_TOL, fields: tuple[str, ...] | None = None,
-                       backend: Backend = "auto") -> tuple[NDArray[np.float64], PassiveJoints]:
+                       backend: Backend = "auto") -> tuple[FloatArray, PassiveJoints]:
     """Actuator values for a given RCM frame and spherical-joint angles (paper Section 4).
 
     Parameters
@@ -317,7 +318,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
 
 def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
                       design: Design | None = None, *, errors: ErrorPolicy = "auto",
-                      backend: Backend = "auto") -> tuple[NDArray[np.float64], InstrumentIK]:
+                      backend: Backend = "auto") -> tuple[FloatArray, InstrumentIK]:
     """Actuator values for an instrument direction about the RCM and an insertion ``p``.
 
     ``O_s = RCM - p * d`` with ``d`` the instrument direction; the parallel
@@ -357,7 +358,7 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
 
 def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = None, *,
                     errors: ErrorPolicy = "auto", backend: Backend = "auto"
-                    ) -> tuple[NDArray[np.float64], InstrumentIK]:
+                    ) -> tuple[FloatArray, InstrumentIK]:
     """Actuator values that put the tool tip at a point, the instrument through the RCM.
 
     The tip is at ``O_s + L d`` (``L = design.tool_length``) and the instrument
@@ -390,12 +391,12 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
 
 
 def _line(T_b_e: ArrayLike, v: ArrayLike, p: ArrayLike | None, design: Design | None,
-          errors: ErrorPolicy, backend: Backend) -> tuple[NDArray[np.float64], InstrumentIK]:
+          errors: ErrorPolicy, backend: Backend) -> tuple[FloatArray, InstrumentIK]:
     """The controller forms on the chosen backend, after the lean single call.
 
     :func:`q_from_instrument` where ``p`` is given, :func:`q_from_tool_tip` where None.
     """
-    def call(mod: Any) -> tuple[NDArray[np.float64], InstrumentIK]:
+    def call(mod: Any) -> tuple[FloatArray, InstrumentIK]:
         if p is None:
             return mod.q_from_tool_tip(  # type: ignore[no-any-return]
                 T_b_e, v, design, errors=errors)
@@ -413,7 +414,7 @@ def _line(T_b_e: ArrayLike, v: ArrayLike, p: ArrayLike | None, design: Design | 
 
 # --- Jacobians -------------------------------------------------------------------------------
 def _jacobian(name: str, backend: str, args: tuple[Any, ...], kw: dict[str, Any]
-              ) -> NDArray[np.float64]:
+              ) -> FloatArray:
     if resolve_backend(backend):
         fn = getattr(_jac(), name)
         if name in _WARM:
@@ -423,7 +424,7 @@ def _jacobian(name: str, backend: str, args: tuple[Any, ...], kw: dict[str, Any]
 
 
 def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1, *,
-                      backend: Backend = "auto") -> NDArray[np.float64]:
+                      backend: Backend = "auto") -> FloatArray:
     """Jacobian of the parallel module, ``d O_s / d q``, in the base frame (analytic).
 
     Parameters
@@ -461,7 +462,7 @@ def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLik
 
 
 def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1,
-                              *, backend: Backend = "auto") -> NDArray[np.float64]:
+                              *, backend: Backend = "auto") -> FloatArray:
     """Inverse Jacobian of the parallel module, ``d q / d O_s``, shape (..., 3, 3).
 
     The numpy reference is :func:`athenakin.robot._jacobians.parallel_inverse_jacobian`
@@ -480,7 +481,7 @@ def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None, mode: 
 
 
 def parallel_twist_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1,
-                            *, backend: Backend = "auto") -> NDArray[np.float64]:
+                            *, backend: Backend = "auto") -> FloatArray:
     """Twist ``(v, omega)`` of the frame ``O_s`` per actuator velocity, shape (..., 6, 3).
 
     The numpy reference is :func:`athenakin.robot._jacobians.parallel_twist_jacobian`.
@@ -501,7 +502,7 @@ def parallel_twist_jacobian(q: ArrayLike, design: Design | None = None, mode: Ar
 
 def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                         design: Design | None = None, *, mode: ArrayLike = 1,
-                        frame: Frame = "rcm", backend: Backend = "auto") -> NDArray[np.float64]:
+                        frame: Frame = "rcm", backend: Backend = "auto") -> FloatArray:
     """Instrument direction angles and insertion per actuator velocity, shape (..., 3, 3).
 
     Parameters
@@ -534,7 +535,7 @@ def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
 def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                                 design: Design | None = None, *, mode: ArrayLike = 1,
                                 frame: Frame = "rcm", backend: Backend = "auto"
-                                ) -> NDArray[np.float64]:
+                                ) -> FloatArray:
     """Inverse of :func:`instrument_jacobian`: actuator rates per ``(azimuth, polar, p)`` rate.
 
     Parameters
@@ -552,7 +553,7 @@ def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
 
 def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                       design: Design | None = None, *, mode: ArrayLike = 1,
-                      frame: Frame = "base", backend: Backend = "auto") -> NDArray[np.float64]:
+                      frame: Frame = "base", backend: Backend = "auto") -> FloatArray:
     """Tool-tip velocity per actuator velocity, shape (..., 3, 3).
 
     The numpy reference is :func:`athenakin.robot._jacobians.tool_tip_jacobian`
@@ -576,7 +577,7 @@ def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
 def tool_tip_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                               design: Design | None = None, *, mode: ArrayLike = 1,
                               frame: Frame = "base", backend: Backend = "auto"
-                              ) -> NDArray[np.float64]:
+                              ) -> FloatArray:
     """Inverse of :func:`tool_tip_jacobian`: actuator rates per tool-tip velocity.
 
     Parameters

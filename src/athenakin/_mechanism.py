@@ -48,10 +48,11 @@ import math
 from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from ._dispatch import forward_kinematics
 from ._mechanism_formulas import FORMULA_JOINTS, tree_joint_formula
+from ._typing import BoolArray, FloatArray, Int8Array
 from ._validation import check_array, check_scalar, check_slot
 from .design import Design, resolve_design
 from .errors import InvalidInputError
@@ -205,14 +206,14 @@ assert tuple(JOINTS) == FORMULA_JOINTS      # the order of tree_joint_formula's 
 LINKS: tuple[str, ...] = tuple(j.child for j in TREE.values()) + ("tool_tip", "rcm_setup")
 
 
-def _rot_x(a: float) -> NDArray[np.float64]:
+def _rot_x(a: float) -> FloatArray:
     """``Rx(a)`` with the exact entries of the quarter turns used by :data:`TREE`."""
     c, s = {0.0: (1.0, 0.0), 0.5 * math.pi: (0.0, 1.0), math.pi: (-1.0, 0.0)}.get(
         a, (math.cos(a), math.sin(a)))
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
-def tree_origins(design: Design) -> dict[str, NDArray[np.float64]]:
+def tree_origins(design: Design) -> dict[str, FloatArray]:
     """Origin (4x4, in the parent link's frame) of every joint of :data:`TREE`.
 
     Parameters
@@ -317,11 +318,11 @@ class MechanismPoints:
         :class:`~athenakin.errors.Reason` of the slot (0 where valid).
     """
 
-    xyz: NDArray[np.float64]
-    valid: NDArray[np.bool_]
-    reason: NDArray[np.int8]
+    xyz: FloatArray
+    valid: BoolArray
+    reason: Int8Array
 
-    def __getitem__(self, name: str) -> NDArray[np.float64]:
+    def __getitem__(self, name: str) -> FloatArray:
         """The point ``name`` (one of :data:`POINT_NAMES`), shape (..., 3)."""
         try:
             return self.xyz[..., POINT_NAMES.index(name), :]
@@ -355,21 +356,21 @@ class MechanismState:
     With ``slot="all"`` the batch shape ``...`` ends with an axis of 16 slots.
     """
 
-    xyz: NDArray[np.float64]
-    frames: NDArray[np.float64]
-    joints: NDArray[np.float64]
-    valid: NDArray[np.bool_]
-    reason: NDArray[np.int8]
+    xyz: FloatArray
+    frames: FloatArray
+    joints: FloatArray
+    valid: BoolArray
+    reason: Int8Array
 
-    def __getitem__(self, name: str) -> NDArray[np.float64]:
+    def __getitem__(self, name: str) -> FloatArray:
         """The point ``name`` (one of :data:`POINT_NAMES`), shape (..., 3)."""
         return _pick(self.xyz, POINT_NAMES, name, "name")
 
-    def frame(self, link: str) -> NDArray[np.float64]:
+    def frame(self, link: str) -> FloatArray:
         """The pose of ``link`` (one of :data:`LINKS`), shape (..., 4, 4)."""
         return _pick(self.frames, LINKS, link, "link", tail=2)
 
-    def joint(self, name: str) -> NDArray[np.float64]:
+    def joint(self, name: str) -> FloatArray:
         """The value of joint ``name`` (one of :data:`JOINTS`), shape (...)."""
         return _pick(self.joints, tuple(JOINTS), name, "name", tail=0)
 
@@ -378,13 +379,13 @@ class MechanismState:
         """The points as :class:`MechanismPoints`."""
         return MechanismPoints(xyz=self.xyz, valid=self.valid, reason=self.reason)
 
-    def segments(self) -> NDArray[np.float64]:
+    def segments(self) -> FloatArray:
         """End points of every body of :data:`BODIES`, shape (..., n_bodies, 2, 3), m."""
         return self.xyz[..., _SEGMENT_INDEX, :]
 
 
-def _pick(arr: NDArray[np.float64], names: tuple[str, ...], name: object, what: str,
-          tail: int = 1) -> NDArray[np.float64]:
+def _pick(arr: FloatArray, names: tuple[str, ...], name: object, what: str,
+          tail: int = 1) -> FloatArray:
     if not isinstance(name, str) or name not in names:
         raise InvalidInputError(f"{what}: expected one of {names}, got {name!r}")
     i = names.index(name)
@@ -405,7 +406,7 @@ def _check_slot(slot: object) -> int | None:
 
 
 def _motion(kind: str, axis: tuple[float, float, float],
-            v: NDArray[np.float64]) -> NDArray[np.float64]:
+            v: FloatArray) -> FloatArray:
     """Transforms (..., 4, 4) of a joint along / about a coordinate axis moved by ``v``."""
     M = np.zeros(v.shape + (4, 4))
     M[..., 3, 3] = 1.0
@@ -424,8 +425,8 @@ def _motion(kind: str, axis: tuple[float, float, float],
     return M
 
 
-def _tree_frames(joints: NDArray[np.float64], T_e: NDArray[np.float64],
-                 design: Design) -> NDArray[np.float64]:
+def _tree_frames(joints: FloatArray, T_e: FloatArray,
+                 design: Design) -> FloatArray:
     """Frames of :data:`LINKS` from the joint values (the exports' tree, parent first)."""
     batch = joints.shape[:-1]
     origins = tree_origins(design)
@@ -456,7 +457,7 @@ def _state(q: ArrayLike, T_b_e: ArrayLike, design: Design | None, slot: object,
     return state_from_fk(sol, q, T, design, k, geometry, frames=frames)
 
 
-def state_from_fk(sol: Any, q: NDArray[np.float64], T: NDArray[np.float64], design: Design,
+def state_from_fk(sol: Any, q: FloatArray, T: FloatArray, design: Design,
                   k: int | None, geometry: BodyGeometry, *, frames: bool = True
                   ) -> MechanismState:
     """:func:`mechanism_state` from a forward-kinematics solution already at hand.
@@ -498,7 +499,7 @@ def state_from_fk(sol: Any, q: NDArray[np.float64], T: NDArray[np.float64], desi
     return MechanismState(xyz=xyz, frames=fr, joints=joints, valid=valid, reason=reason)
 
 
-def _put(xyz: NDArray[np.float64], name: str, x: ArrayLike, y: ArrayLike = 0.0,
+def _put(xyz: FloatArray, name: str, x: ArrayLike, y: ArrayLike = 0.0,
          z: ArrayLike = 0.0) -> None:
     """Write the point ``name`` of ``xyz`` (..., n_points, 3) from its coordinates."""
     i = _POINT_INDEX[name]
@@ -507,7 +508,7 @@ def _put(xyz: NDArray[np.float64], name: str, x: ArrayLike, y: ArrayLike = 0.0,
     xyz[..., i, 2] = z
 
 
-def _module_points(xyz: NDArray[np.float64], qq: NDArray[np.float64], design: Design,
+def _module_points(xyz: FloatArray, qq: FloatArray, design: Design,
                    geometry: BodyGeometry) -> None:
     """The points of the parallel module and the rail (in the plane of the actuators)."""
     _, l2, l3, _, l5 = design.lengths
@@ -533,9 +534,9 @@ def _module_points(xyz: NDArray[np.float64], qq: NDArray[np.float64], design: De
     _put(xyz, "rail_hi", np.maximum(np.maximum(q1, q2) + rm, hi))
 
 
-def _instrument_points(xyz: NDArray[np.float64], T_b_s: NDArray[np.float64],
-                       T_e: NDArray[np.float64], p: NDArray[np.float64],
-                       u: NDArray[np.float64], design: Design,
+def _instrument_points(xyz: FloatArray, T_b_s: FloatArray,
+                       T_e: FloatArray, p: FloatArray,
+                       u: FloatArray, design: Design,
                        geometry: BodyGeometry) -> None:
     """The points of the serial chain: ``O_s``, ``O_i``, the tip, the RCM and the spheres.
 
@@ -549,8 +550,8 @@ def _instrument_points(xyz: NDArray[np.float64], T_b_s: NDArray[np.float64],
     c, s = np.cos(u), np.sin(u)
     ca, sa, cb, sb, c3, s3 = c[..., 0], s[..., 0], c[..., 1], s[..., 1], c[..., 2], s[..., 2]
 
-    def rot(x: NDArray[np.float64], y: NDArray[np.float64],
-            z: NDArray[np.float64]) -> NDArray[np.float64]:
+    def rot(x: FloatArray, y: FloatArray,
+            z: FloatArray) -> FloatArray:
         """R_s (x, y, z) for vectors given by components."""
         return (R_s[..., :, 0] * x[..., None] + R_s[..., :, 1] * y[..., None]
                 + R_s[..., :, 2] * z[..., None])
@@ -643,7 +644,7 @@ def mechanism_points(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = Non
     return _state(q, T_b_e, design, slot, geometry, frames=False).points
 
 
-def body_segments(points: MechanismPoints) -> NDArray[np.float64]:
+def body_segments(points: MechanismPoints) -> FloatArray:
     """End points of every body of :data:`BODIES`, shape (..., n_bodies, 2, 3), m.
 
     Parameters
@@ -657,7 +658,7 @@ def body_segments(points: MechanismPoints) -> NDArray[np.float64]:
 
 
 def link_segments(state: MechanismState, design: Design | None = None,
-                  geometry: BodyGeometry | None = None) -> NDArray[np.float64]:
+                  geometry: BodyGeometry | None = None) -> FloatArray:
     """Every body's segment in the frame of the link that carries it (its capsule's axis).
 
     What the exports attach to :attr:`Body.link`: ``frame(link) @ a`` is the segment's start

@@ -21,9 +21,10 @@ import dataclasses
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from ._dispatch import forward_kinematics, inverse_kinematics, q_from_instrument, q_from_tool_tip
+from ._typing import FloatArray
 from ._validation import check_frame
 from .design import Design, resolve_design
 
@@ -62,7 +63,7 @@ class Robot:
     True
     """
 
-    T_b_e: NDArray[np.float64]
+    T_b_e: FloatArray
     design: Design
     bodies: Any = None
     environment: Any = None

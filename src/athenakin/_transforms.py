@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
+
+from ._typing import FloatArray
 
 
-def invert_transform(T: NDArray[np.float64]) -> NDArray[np.float64]:
+def invert_transform(T: FloatArray) -> FloatArray:
     """Inverse of rigid transforms ``[[R, t], [0, 1]]`` of shape (..., 4, 4)."""
     R = T[..., :3, :3]
     Rt = np.swapaxes(R, -1, -2)
@@ -17,8 +18,8 @@ def invert_transform(T: NDArray[np.float64]) -> NDArray[np.float64]:
     return out
 
 
-def transform_from_rotation_translation(R: NDArray[np.float64], t: NDArray[np.float64]
-                                        ) -> NDArray[np.float64]:
+def transform_from_rotation_translation(R: FloatArray, t: FloatArray
+                                        ) -> FloatArray:
     """Assemble ``[[R, t], [0, 1]]`` from (..., 3, 3) and (..., 3), broadcasting."""
     shape = np.broadcast_shapes(R.shape[:-2], t.shape[:-1])
     T = np.zeros(shape + (4, 4))
@@ -28,7 +29,7 @@ def transform_from_rotation_translation(R: NDArray[np.float64], t: NDArray[np.fl
     return T
 
 
-def rot_x(a: NDArray[np.float64]) -> NDArray[np.float64]:
+def rot_x(a: FloatArray) -> FloatArray:
     """Rotation about x by ``a`` (..., 3, 3)."""
     a = np.asarray(a, float)
     c, s = np.cos(a), np.sin(a)
@@ -36,7 +37,7 @@ def rot_x(a: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.stack([o, z, z, z, c, -s, z, s, c], axis=-1).reshape(c.shape + (3, 3))
 
 
-def rot_y(a: NDArray[np.float64]) -> NDArray[np.float64]:
+def rot_y(a: FloatArray) -> FloatArray:
     """Rotation about y by ``a`` (..., 3, 3)."""
     a = np.asarray(a, float)
     c, s = np.cos(a), np.sin(a)
@@ -44,7 +45,7 @@ def rot_y(a: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.stack([c, z, s, z, o, z, -s, z, c], axis=-1).reshape(c.shape + (3, 3))
 
 
-def rot_z(a: NDArray[np.float64]) -> NDArray[np.float64]:
+def rot_z(a: FloatArray) -> FloatArray:
     """Rotation about z by ``a`` (..., 3, 3)."""
     a = np.asarray(a, float)
     c, s = np.cos(a), np.sin(a)
@@ -52,7 +53,7 @@ def rot_z(a: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.stack([c, -s, z, s, c, z, z, z, o], axis=-1).reshape(c.shape + (3, 3))
 
 
-def wrap_angle(a: NDArray[np.float64]) -> NDArray[np.float64]:
+def wrap_angle(a: FloatArray) -> FloatArray:
     """Angles mapped to ``(-pi, pi]`` (values already in that range are returned unchanged)."""
     a = np.asarray(a, float)
     inside = (a > -np.pi) & (a <= np.pi)

@@ -17,8 +17,9 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from ._typing import FloatArray
 from .errors import InvalidInputError
 
 #: Tolerance on ``|R^T R - I|`` and ``|det R - 1|`` for a matrix to count as a rotation.
@@ -31,7 +32,7 @@ def check_array(
     tail: tuple[int, ...],
     *,
     allow_nonfinite: bool = False,
-) -> NDArray[np.float64]:
+) -> FloatArray:
     """Coerce ``x`` to a float64 array whose trailing axes are ``tail``.
 
     Parameters
@@ -138,7 +139,7 @@ def check_scalar(x: object, name: str, *, positive: bool = False,
 
 
 def check_transform(T: ArrayLike, name: str, *, allow_nonfinite: bool = False,
-                    tol: float = ROTATION_TOL) -> NDArray[np.float64]:
+                    tol: float = ROTATION_TOL) -> FloatArray:
     """Check a homogeneous rigid transform ``[[R, t], [0, 0, 0, 1]]`` of shape (..., 4, 4).
 
     Raises
@@ -222,7 +223,7 @@ def check_argument_order(x: object, name: str, *, given_for: Literal["frame", "d
                                 f"{np.asarray(x).shape}; {ARGUMENT_ORDER}")
 
 
-def check_frame(T: ArrayLike, name: str) -> NDArray[np.float64]:
+def check_frame(T: ArrayLike, name: str) -> FloatArray:
     """:func:`check_transform` of exactly one transform, shape (4, 4).
 
     Raises

@@ -14,10 +14,10 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import NDArray
 
 from ._output import naming_path
 from ._toml import read_toml
+from ._typing import FloatArray
 from ._validation import check_argument_order, check_scalar, check_text, real_number
 from .errors import InvalidInputError
 
@@ -138,7 +138,7 @@ class Design:
 
     # --- derived values ---------------------------------------------------------------
     @property
-    def stroke_min(self) -> NDArray[np.float64]:
+    def stroke_min(self) -> FloatArray:
         """Lower stroke limits as an array of shape (3,) (``-inf`` where unlimited).
 
         ``q3`` is a length (the radius of ``k2``): its lower limit is never below 0,
@@ -150,7 +150,7 @@ class Design:
         return lo
 
     @property
-    def stroke_max(self) -> NDArray[np.float64]:
+    def stroke_max(self) -> FloatArray:
         """Upper stroke limits as an array of shape (3,) (``+inf`` where unlimited)."""
         return np.full(3, np.inf) if self.q_max is None else np.asarray(self.q_max, float)
 
@@ -160,7 +160,7 @@ class Design:
         return -1.0 if self.ab_order == "q1<q2" else 1.0
 
     @property
-    def lengths(self) -> NDArray[np.float64]:
+    def lengths(self) -> FloatArray:
         """``(l1, l2, l3, l4, l5)`` as an array of shape (5,)."""
         return np.array([self.l1, self.l2, self.l3, self.l4, self.l5])
 

@@ -11,6 +11,7 @@ import dataclasses
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._typing import FloatArray, IntArray
 from ._validation import check_array, check_count, check_rng, check_scalar, check_tolerance
 from .chain import ups_transform
 from .design import Design, resolve_design
@@ -113,8 +114,8 @@ def assert_angles_equal(a1: ArrayLike, a2: ArrayLike, *, atol: float = 1e-12) ->
         raise AssertionError(f"angles differ by {worst:.3e} rad > {atol:g} at {idx}")
 
 
-def _broadcast(a: NDArray[np.float64], b: NDArray[np.float64], na: str, nb: str,
-               tail: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _broadcast(a: FloatArray, b: FloatArray, na: str, nb: str,
+               tail: int) -> tuple[FloatArray, FloatArray]:
     """``np.broadcast_arrays(a, b)`` with an error naming both arguments."""
     try:
         x, y = np.broadcast_arrays(a, b)
@@ -141,13 +142,13 @@ class RandomConfigurations:
         The forward-kinematics slot that must hold this configuration.
     """
 
-    q: NDArray[np.float64]
-    mode: NDArray[np.int64]
-    p: NDArray[np.float64]
-    u: NDArray[np.float64]
-    T_b_s: NDArray[np.float64]
-    T_b_e: NDArray[np.float64]
-    slot: NDArray[np.int64]
+    q: FloatArray
+    mode: IntArray
+    p: FloatArray
+    u: FloatArray
+    T_b_s: FloatArray
+    T_b_e: FloatArray
+    slot: IntArray
 
 
 def random_configurations(n: int, design: Design | None = None, *,
@@ -232,7 +233,7 @@ def _check_p_range(p_range: ArrayLike) -> tuple[float, float]:
 
 
 def _draw_round(gen: np.random.Generator, N: int, most: int, design: Design,
-                strokes: tuple[NDArray[np.float64], NDArray[np.float64]],
+                strokes: tuple[FloatArray, FloatArray],
                 p_range: tuple[float, float], margin: float, length_margin: float
                 ) -> dict[str, NDArray[np.generic]]:
     """One round of ``N`` candidates; the first ``most`` kept, by key ``q, m, p, u, Ts``."""

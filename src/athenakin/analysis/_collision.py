@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._typing import BoolArray, FloatArray, IntArray
 from .._validation import check_scalar
 from ..design import Design
 from ..errors import InvalidInputError
@@ -89,10 +90,10 @@ def check_clearance_margin(clearance_margin: object) -> float:
     return margin
 
 
-def labelled_clearance(q: NDArray[np.float64], T_b_e: NDArray[np.float64], design: Design,
-                       mode: NDArray[np.int64], p_negative: NDArray[np.bool_], *,
-                       bodies: Any, environment: Any, wrist: NDArray[np.int64] | None = None
-                       ) -> tuple[NDArray[np.float64], NDArray[np.str_]]:
+def labelled_clearance(q: FloatArray, T_b_e: FloatArray, design: Design,
+                       mode: IntArray, p_negative: BoolArray, *,
+                       bodies: Any, environment: Any, wrist: IntArray | None = None
+                       ) -> tuple[FloatArray, NDArray[np.str_]]:
     """Least clearance of each configuration and the pair that has it.
 
     Parameters

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._typing import BoolArray, FloatArray, Int8Array, IntArray
 from .._validation import check_array
 from ..design import Design
 from ..errors import InvalidInputError
@@ -52,19 +53,19 @@ class InstrumentCone:
         no reachable insertion along them is collision-free.
     """
 
-    azimuth: NDArray[np.float64]
-    polar: NDArray[np.float64]
-    p: NDArray[np.float64]
-    T_b_e: NDArray[np.float64]
-    mode: NDArray[np.int8]
-    reachable: NDArray[np.bool_]
-    p_min: NDArray[np.float64]
-    p_max: NDArray[np.float64]
-    n_intervals: NDArray[np.int64]
-    condition: NDArray[np.float64]
-    clearance: NDArray[np.float64] | None = None
-    collision_free: NDArray[np.bool_] | None = None
-    blocked: NDArray[np.bool_] | None = None
+    azimuth: FloatArray
+    polar: FloatArray
+    p: FloatArray
+    T_b_e: FloatArray
+    mode: Int8Array
+    reachable: BoolArray
+    p_min: FloatArray
+    p_max: FloatArray
+    n_intervals: IntArray
+    condition: FloatArray
+    clearance: FloatArray | None = None
+    collision_free: BoolArray | None = None
+    blocked: BoolArray | None = None
 
 
 def _interval(x: object, name: str) -> tuple[float, float] | None:
@@ -142,7 +143,7 @@ def instrument_cone(T_b_e: ArrayLike | None = None, design: Design | None = None
     A, B, Pp = np.meshgrid(az, pol, p, indexing="ij")
     pts = np.stack([A.ravel(), B.ravel(), Pp.ravel()], axis=-1)
 
-    def fn(x: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
+    def fn(x: FloatArray) -> dict[str, NDArray[Any]]:
         d_e = direction_from_angles(x[:, 0], x[:, 1])
         q, res = q_from_instrument(T, d_e, x[:, 2], design, errors="flag")
         ok = res.valid & np.isin(res.mode, allowed)

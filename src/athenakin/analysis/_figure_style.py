@@ -9,7 +9,8 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+
+from .._typing import BoolArray, FloatArray
 
 MM = 1e3
 #: Colours of assembly mode +1, mode -1, and of positions outside the stroke limits.
@@ -22,8 +23,8 @@ TWO_INTERVALS_COLOR = "#00bcd4"
 COLLISION_COLOR = "#e7298a"
 
 
-def _collision_overlay(ax: Any, U: NDArray[np.float64], V: NDArray[np.float64],
-                       blocked: NDArray[np.bool_], label: str) -> Any:
+def _collision_overlay(ax: Any, U: FloatArray, V: FloatArray,
+                       blocked: BoolArray, label: str) -> Any:
     """Hatch and outline ``blocked`` (shape (len(U), len(V))); returns the legend patch."""
     import matplotlib as mpl
     from matplotlib.patches import Patch
@@ -57,5 +58,5 @@ def _ax(ax: Any, projection: str | None = None) -> Any:
     return fig.add_subplot(projection=projection)
 
 
-def _slice_index(axis: NDArray[np.float64], value: float) -> int:
+def _slice_index(axis: FloatArray, value: float) -> int:
     return int(np.argmin(np.abs(axis - value)))

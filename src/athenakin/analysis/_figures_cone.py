@@ -12,9 +12,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from .._figstyle import tidy_3d_axes
+from .._typing import BoolArray, FloatArray, IntArray
 from ._cone import InstrumentCone
 from ._figure_style import (
     COLLISION_COLOR,
@@ -100,8 +100,8 @@ def plot_cone_chart(ic: InstrumentCone, *, quantity: str = "range", ax: Any = No
     return ax
 
 
-def wrapped_azimuth(azimuth_deg: NDArray[np.float64], occupied: NDArray[np.bool_]
-                    ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+def wrapped_azimuth(azimuth_deg: FloatArray, occupied: BoolArray
+                    ) -> tuple[FloatArray, IntArray]:
     """Azimuths shifted by whole turns so that the occupied ones form one run.
 
     Parameters

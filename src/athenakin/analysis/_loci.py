@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import FloatArray
 from .._validation import check_array, check_count, check_scalar
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
@@ -16,7 +17,7 @@ MAX_SAMPLES = 10_000_000
 
 def singularity_loci(design: Design | None = None, *, n: int = 801,
                      h_range: tuple[float, float] | None = None
-                     ) -> dict[str, NDArray[np.float64]]:
+                     ) -> dict[str, FloatArray]:
     """Closed-form singularity loci of the parallel module in the actuator plane ``(h, q3)``.
 
     The module is invariant under ``x_M = (q1 + q2) / 2`` (a translation along
@@ -140,7 +141,7 @@ MEASURE_OF = {
 
 def near_singular_configurations(name: str, distances: ArrayLike, design: Design | None = None,
                                  *, h: float | None = None
-                                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+                                 ) -> tuple[FloatArray, FloatArray]:
     """Configurations at given distances from one singular set (for tests and figures).
 
     Parallel sets are approached at ``x_M = 0`` along ``q3`` (``circles_tangent``,

@@ -25,9 +25,10 @@ import dataclasses
 from collections.abc import Mapping
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._transforms import invert_transform
+from .._typing import BoolArray, FloatArray, IntArray
 from .._validation import broadcast_batch, check_array, check_tolerance
 from ..chain import ups_solutions
 from ..design import Design, resolve_design
@@ -149,9 +150,9 @@ class Condition:
     meaning: str
     test: str
     unit: str
-    value: NDArray[np.float64]
+    value: FloatArray
     tol: float
-    near: NDArray[np.bool_]
+    near: BoolArray
 
 
 @dataclasses.dataclass(frozen=True)
@@ -180,12 +181,12 @@ class SingularityReport:
     """
 
     conditions: dict[str, Condition]
-    measures: dict[str, NDArray[np.float64]]
-    mode: NDArray[np.int64]
-    assembled: NDArray[np.bool_]
+    measures: dict[str, FloatArray]
+    mode: IntArray
+    assembled: BoolArray
 
     @property
-    def near_any(self) -> NDArray[np.bool_]:
+    def near_any(self) -> BoolArray:
         """True where at least one condition is near, shape (...)."""
         return np.any(np.stack([c.near for c in self.conditions.values()]), axis=0)
 
@@ -198,7 +199,7 @@ class SingularityReport:
         return {k: float(np.asarray(c.value)[index]) for k, c in self.conditions.items()}
 
 
-def sigma_min(J: ArrayLike) -> NDArray[np.float64]:
+def sigma_min(J: ArrayLike) -> FloatArray:
     """Smallest singular value of a batch of matrices (..., m, n); NaN where not finite.
 
     Parameters
@@ -214,7 +215,7 @@ def sigma_min(J: ArrayLike) -> NDArray[np.float64]:
     return _svd(J)[..., -1]
 
 
-def condition_number(J: ArrayLike) -> NDArray[np.float64]:
+def condition_number(J: ArrayLike) -> FloatArray:
     """2-norm condition number ``sigma_max / sigma_min`` (..., m, n); inf where singular.
 
     Parameters
@@ -234,7 +235,7 @@ def condition_number(J: ArrayLike) -> NDArray[np.float64]:
             np.isfinite(s[..., 0]), 1.0, np.nan)
 
 
-def _check_matrix(J: ArrayLike) -> NDArray[np.float64]:
+def _check_matrix(J: ArrayLike) -> FloatArray:
     """``J`` as a float array of matrices (..., m, n), m, n >= 1 (NaN / inf kept)."""
     if isinstance(J, (str, bytes)) or J is None:
         raise TypeError(f"J: expected a real array of shape (..., m, n), got {type(J).__name__}")
@@ -250,7 +251,7 @@ def _check_matrix(J: ArrayLike) -> NDArray[np.float64]:
     return a.astype(np.float64, copy=False)
 
 
-def _svd(J: ArrayLike) -> NDArray[np.float64]:
+def _svd(J: ArrayLike) -> FloatArray:
     """Singular values (..., k), descending, NaN where J is not finite.
 
     An infinite entry (and no NaN) gives ``sigma_max = inf``, the limit at a
@@ -343,7 +344,7 @@ def singularities(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
     with np.errstate(divide="ignore", invalid="ignore"):
         det = g["mode"] * (g["r1"] + design.l4) * g["h"] * g["q3"] / (
             2 * g["r1"] * g["a"] * g["d"])
-    measures: dict[str, NDArray[np.float64]] = {"half_chord": g["a"], "parallel_det": det}
+    measures: dict[str, FloatArray] = {"half_chord": g["a"], "parallel_det": det}
     Jp = _parallel_jacobian(g) if jacobians or T_b_e is not None else None
     if jacobians:
         assert Jp is not None
@@ -358,8 +359,8 @@ def singularities(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
                              assembled=np.broadcast_to(assembled, batch))
 
 
-def _parallel_conditions(q: NDArray[np.float64], g: dict[str, NDArray[np.float64]],
-                         design: Design) -> dict[str, NDArray[np.float64]]:
+def _parallel_conditions(q: FloatArray, g: dict[str, FloatArray],
+                         design: Design) -> dict[str, FloatArray]:
     """The closed-form values of the parallel module's conditions and the stroke limit."""
     h, q3 = g["h"], g["q3"]
     l1, l3 = design.l1, design.l3
@@ -375,9 +376,9 @@ def _parallel_conditions(q: NDArray[np.float64], g: dict[str, NDArray[np.float64
             "k2_degenerate": np.abs(q3), "stroke_limit": stroke}
 
 
-def _parallel_measures(g: dict[str, NDArray[np.float64]], Jp: NDArray[np.float64],
-                       assembled: NDArray[np.bool_],
-                       design: Design) -> dict[str, NDArray[np.float64]]:
+def _parallel_measures(g: dict[str, FloatArray], Jp: FloatArray,
+                       assembled: BoolArray,
+                       design: Design) -> dict[str, FloatArray]:
     """Smallest singular value and condition of the parallel module's Jacobian ``Jp``."""
     s, si = _svd(Jp), _svd(_parallel_inverse_jacobian(g))
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -394,7 +395,7 @@ def _parallel_measures(g: dict[str, NDArray[np.float64]], Jp: NDArray[np.float64
                 "parallel_inverse_sigma_min": 1.0 / smax}
 
 
-def _conditions(vals: dict[str, NDArray[np.float64]], tols: dict[str, float],
+def _conditions(vals: dict[str, FloatArray], tols: dict[str, float],
                 batch: tuple[int, ...]) -> dict[str, Condition]:
     """The :class:`Condition` of each evaluated value, in :data:`CONDITIONS` order."""
     conds = {}
@@ -409,8 +410,8 @@ def _conditions(vals: dict[str, NDArray[np.float64]], tols: dict[str, float],
     return conds
 
 
-def _instrument_frame(g: dict[str, NDArray[np.float64]], T: NDArray[np.float64]
-                      ) -> tuple[NDArray[np.float64], ...]:
+def _instrument_frame(g: dict[str, FloatArray], T: FloatArray
+                      ) -> tuple[FloatArray, ...]:
     """Instrument vector c - O_s in the base, s and E frames; R_b_s."""
     ey, ez = g["ey"], g["ez"]
     zero, one = np.zeros_like(ey), np.ones_like(ey)
@@ -423,8 +424,8 @@ def _instrument_frame(g: dict[str, NDArray[np.float64]], T: NDArray[np.float64]
     return r_b, r_s, r_e, R_b_s
 
 
-def _instrument_conditions(g: dict[str, NDArray[np.float64]], T: NDArray[np.float64],
-                           design: Design) -> dict[str, NDArray[np.float64]]:
+def _instrument_conditions(g: dict[str, FloatArray], T: FloatArray,
+                           design: Design) -> dict[str, FloatArray]:
     _, r_s, r_e, _ = _instrument_frame(g, T)
     p = np.linalg.norm(r_s, axis=-1)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -438,9 +439,9 @@ def _instrument_conditions(g: dict[str, NDArray[np.float64]], T: NDArray[np.floa
             "tip_at_rcm": np.abs(p - design.tool_length)}
 
 
-def _instrument_measures(q: NDArray[np.float64], g: dict[str, NDArray[np.float64]],
-                         T: NDArray[np.float64], design: Design,
-                         Jp: NDArray[np.float64] | None) -> dict[str, NDArray[np.float64]]:
+def _instrument_measures(q: FloatArray, g: dict[str, FloatArray],
+                         T: FloatArray, design: Design,
+                         Jp: FloatArray | None) -> dict[str, FloatArray]:
     assert Jp is not None
     L = design.tool_length
     _, _, _, R_b_s = _instrument_frame(g, T)

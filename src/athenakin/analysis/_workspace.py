@@ -39,6 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._output import check_output_path, naming_path
+from .._typing import BoolArray, FloatArray, Int8Array, IntArray
 from .._validation import check_path
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
@@ -87,16 +88,16 @@ class ActuatorMap:
         Range of ``h`` and of ``q3`` that the stroke limits allow.
     """
 
-    h: NDArray[np.float64]
-    q3: NDArray[np.float64]
-    modes: NDArray[np.int64]
-    assembled: NDArray[np.bool_]
-    half_chord: NDArray[np.float64]
-    sigma_min: NDArray[np.float64]
-    condition: NDArray[np.float64]
-    inverse_sigma_min: NDArray[np.float64]
-    h_stroke: NDArray[np.float64]
-    q3_stroke: NDArray[np.float64]
+    h: FloatArray
+    q3: FloatArray
+    modes: IntArray
+    assembled: BoolArray
+    half_chord: FloatArray
+    sigma_min: FloatArray
+    condition: FloatArray
+    inverse_sigma_min: FloatArray
+    h_stroke: FloatArray
+    q3_stroke: FloatArray
 
 
 def actuator_map(design: Design | None = None, *, resolution: int | tuple[int, int] = 201,
@@ -130,7 +131,7 @@ def actuator_map(design: Design | None = None, *, resolution: int | tuple[int, i
     H, Q3 = np.meshgrid(h, q3, indexing="ij")
     pts = np.stack([H.ravel(), -H.ravel(), Q3.ravel()], axis=-1)  # q1 = h, q2 = -h
 
-    def fn(qq: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
+    def fn(qq: FloatArray) -> dict[str, NDArray[Any]]:
         out: dict[str, list[NDArray[Any]]] = {"s": [], "c": [], "i": []}
         a = None
         for m in (1, -1):
@@ -186,17 +187,17 @@ class PointWorkspace:
         Reachable with a clearance of at least the margin; None without the check.
     """
 
-    x: NDArray[np.float64]
-    y: NDArray[np.float64]
-    z: NDArray[np.float64]
-    mode: NDArray[np.int8]
-    reachable: NDArray[np.bool_]
-    q: NDArray[np.float64]
-    mode_margin: NDArray[np.float64]
-    sigma_min: NDArray[np.float64]
-    condition: NDArray[np.float64]
-    clearance: NDArray[np.float64] | None = None
-    collision_free: NDArray[np.bool_] | None = None
+    x: FloatArray
+    y: FloatArray
+    z: FloatArray
+    mode: Int8Array
+    reachable: BoolArray
+    q: FloatArray
+    mode_margin: FloatArray
+    sigma_min: FloatArray
+    condition: FloatArray
+    clearance: FloatArray | None = None
+    collision_free: BoolArray | None = None
 
 
 def _default_bounds(design: Design) -> tuple[tuple[float, float], ...]:
@@ -254,7 +255,7 @@ def point_workspace(T_b_e: ArrayLike | None = None, design: Design | None = None
     P = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     free = _unlimited(design)
 
-    def fn(pp: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
+    def fn(pp: FloatArray) -> dict[str, NDArray[Any]]:
         ik = parallel_ik_from_position(pp, free)
         m = np.where(ik.valid, ik.mode, 0)
         q = np.where(ik.valid[..., None], ik.q, np.nan)
@@ -308,17 +309,17 @@ class ToolTipWorkspace:
         Reachable with a clearance of at least the margin.
     """
 
-    x: NDArray[np.float64]
-    y: NDArray[np.float64]
-    z: NDArray[np.float64]
-    T_b_e: NDArray[np.float64]
-    mode: NDArray[np.int8]
-    reachable: NDArray[np.bool_]
-    q: NDArray[np.float64]
-    sigma_min: NDArray[np.float64]
-    condition: NDArray[np.float64]
-    clearance: NDArray[np.float64] | None = None
-    collision_free: NDArray[np.bool_] | None = None
+    x: FloatArray
+    y: FloatArray
+    z: FloatArray
+    T_b_e: FloatArray
+    mode: Int8Array
+    reachable: BoolArray
+    q: FloatArray
+    sigma_min: FloatArray
+    condition: FloatArray
+    clearance: FloatArray | None = None
+    collision_free: BoolArray | None = None
 
 
 def tool_tip_workspace(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
@@ -354,7 +355,7 @@ def tool_tip_workspace(T_b_e: ArrayLike | None = None, design: Design | None = N
     axes = [np.linspace(lo, hi, k) for (lo, hi), k in zip(b, n, strict=True)]
     P = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
 
-    def fn(tip: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
+    def fn(tip: FloatArray) -> dict[str, NDArray[Any]]:
         q, res = q_from_tool_tip(T, tip, design, errors="flag")
         ok = res.valid & np.isin(res.mode, allowed)
         m = np.where(ok, res.mode, 0)
@@ -471,7 +472,7 @@ def load_npz(path: str | Path) -> tuple[object, dict[str, Any]]:
     return cls(**kw), meta
 
 
-def _voxel_volume(*axes: NDArray[np.float64]) -> float:
+def _voxel_volume(*axes: FloatArray) -> float:
     return float(np.prod([ax[1] - ax[0] for ax in axes]))
 
 

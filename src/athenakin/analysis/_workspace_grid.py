@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._typing import BoolArray, FloatArray
 from .._validation import check_frame
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
@@ -68,8 +69,8 @@ def _chunks(n: int, progress: bool | None, desc: str) -> Iterator[slice]:
         yield slice(s, min(s + CHUNK, n))
 
 
-def _map_chunks(fn: Callable[[NDArray[np.float64]], dict[str, NDArray[Any]]],
-                pts: NDArray[np.float64], progress: bool | None, desc: str
+def _map_chunks(fn: Callable[[FloatArray], dict[str, NDArray[Any]]],
+                pts: FloatArray, progress: bool | None, desc: str
                 ) -> dict[str, NDArray[Any]]:
     """Apply ``fn`` to chunks of the rows of ``pts`` (n, k) and concatenate."""
     parts: dict[str, list[NDArray[Any]]] = {}
@@ -79,7 +80,7 @@ def _map_chunks(fn: Callable[[NDArray[np.float64]], dict[str, NDArray[Any]]],
     return {k: np.concatenate(v) for k, v in parts.items()}
 
 
-def _cond(J: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _cond(J: FloatArray) -> tuple[FloatArray, FloatArray]:
     s = _svd(J)
     with np.errstate(divide="ignore", invalid="ignore"):
         c = np.where(s[..., -1] > 0, s[..., 0] / s[..., -1], np.inf)
@@ -104,7 +105,7 @@ def _collision_check(design: Design, bodies: object, environment: object,
 
 
 def _map_setup(T_b_e: ArrayLike | None, design: Design | None, bodies: object, environment: object,
-               clearance_margin: object) -> tuple[Design, _Check | None, NDArray[np.float64]]:
+               clearance_margin: object) -> tuple[Design, _Check | None, FloatArray]:
     """The design, the collision check and the RCM frame (shape (4, 4)) of a workspace map."""
     design = resolve_design(design)
     check = _collision_check(design, bodies, environment, clearance_margin)
@@ -112,8 +113,8 @@ def _map_setup(T_b_e: ArrayLike | None, design: Design | None, bodies: object, e
     return design, check, T
 
 
-def _clearance(check: _Check, q: NDArray[np.float64], T: NDArray[np.float64], design: Design,
-               mode: NDArray[Any], p_negative: NDArray[np.bool_]) -> NDArray[np.float64]:
+def _clearance(check: _Check, q: FloatArray, T: FloatArray, design: Design,
+               mode: NDArray[Any], p_negative: BoolArray) -> FloatArray:
     """Least clearance of each reachable point (``mode != 0``), NaN elsewhere."""
     from ._collision import labelled_clearance
 
@@ -123,8 +124,8 @@ def _clearance(check: _Check, q: NDArray[np.float64], T: NDArray[np.float64], de
     return dist
 
 
-def _free(reachable: NDArray[np.bool_], clearance: NDArray[np.float64], margin: float
-          ) -> NDArray[np.bool_]:
+def _free(reachable: BoolArray, clearance: FloatArray, margin: float
+          ) -> BoolArray:
     with np.errstate(invalid="ignore"):
         return reachable & (clearance >= margin)
 
@@ -133,7 +134,7 @@ def _unlimited(design: Design) -> Design:
     return dataclasses.replace(design, q_min=None, q_max=None)
 
 
-def _within(q: NDArray[np.float64], design: Design) -> NDArray[np.bool_]:
+def _within(q: FloatArray, design: Design) -> BoolArray:
     with np.errstate(invalid="ignore"):
         return np.all((q >= design.stroke_min) & (q <= design.stroke_max), axis=-1)
 

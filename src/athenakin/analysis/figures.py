@@ -13,9 +13,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from .._figstyle import tidy_3d_axes
+from .._typing import FloatArray
 from ..design import Design, resolve_design
 from ._cone import InstrumentCone
 from ._figure_style import COLLISION_COLOR as COLLISION_COLOR
@@ -106,7 +106,7 @@ def plot_singularity_loci(design: Design | None = None, *, am: ActuatorMap | Non
     return ax
 
 
-def _rect(hs: NDArray[np.float64], qs: NDArray[np.float64], ax: Any) -> Any:
+def _rect(hs: FloatArray, qs: FloatArray, ax: Any) -> Any:
     from matplotlib.patches import Rectangle
 
     return Rectangle((hs[0], qs[0]), hs[1] - hs[0], qs[1] - qs[0], fill=False, ls="--",
@@ -158,7 +158,7 @@ def plot_actuator_space_3d(design: Design | None = None, *, n: int = 41, ax: Any
     return ax
 
 
-def _box(ax: Any, lo: NDArray[np.float64], hi: NDArray[np.float64]) -> None:
+def _box(ax: Any, lo: FloatArray, hi: FloatArray) -> None:
     import itertools
 
     for a, b in itertools.combinations(itertools.product(*zip(lo, hi, strict=True)), 2):

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._typing import FloatArray
 from ..plot._geometry import RobotGeometry
 from ..plot._solids import BODY_COLORS, CLOSEST_COLOR, COLLIDING_COLOR, capsule_surface
 from ._scene import Solid, rgb
@@ -73,7 +74,7 @@ class BodiesView:
     meshes: tuple[BodyMesh, ...]
     clearance: float
     pair: tuple[str, str]
-    witness: NDArray[np.float64]
+    witness: FloatArray
     colliding: bool
 
 
@@ -148,7 +149,7 @@ def bodies_view(g: RobotGeometry, *, bodies: Any = None, environment: Any = None
                       witness=witness, colliding=colliding)
 
 
-def _closest(c: Any) -> tuple[tuple[str, str], NDArray[np.float64]]:
+def _closest(c: Any) -> tuple[tuple[str, str], FloatArray]:
     """The pair of a :class:`~athenakin.collision.Clearance` with the least clearance.
 
     Returns
@@ -319,8 +320,8 @@ class BodiesLayer:
         return BodiesView(meshes=(), clearance=float(c.min_distance), pair=pair,
                           witness=witness, colliding=bool(c.colliding))
 
-    def clearance_along(self, T_b_e: NDArray[np.float64], design: Any,
-                        slot: int) -> Callable[[NDArray[np.float64]], NDArray[np.float64]]:
+    def clearance_along(self, T_b_e: FloatArray, design: Any,
+                        slot: int) -> Callable[[FloatArray], FloatArray]:
         """``clearance(q)``: least clearance of configurations ``q`` (k, 3) in ``slot``.
 
         The least signed distance between the bodies and to the obstacles, m, shape (k,);
@@ -330,7 +331,7 @@ class BodiesLayer:
 
         bodies = self.bodies if self.bodies is not None else Bodies.default(design)
 
-        def along(q: NDArray[np.float64]) -> NDArray[np.float64]:
+        def along(q: FloatArray) -> FloatArray:
             c = clearance(q, T_b_e, design, slot=slot, bodies=bodies,
                           environment=self.environment)
             return np.asarray(c.min_distance, dtype=float)

@@ -26,8 +26,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import BoolArray, FloatArray
 from .._validation import check_array
 from ..errors import InvalidInputError, KinematicsError
 from ..plot._geometry import RobotGeometry
@@ -84,15 +85,15 @@ class ForcesView:
         ``|f_i| > f_max_i`` (all False without limits).
     """
 
-    q: NDArray[np.float64]
+    q: FloatArray
     slot: int
-    forces: NDArray[np.float64]
-    gravity_forces: NDArray[np.float64]
-    tip_force: NDArray[np.float64]
-    rcm_force: NDArray[np.float64]
-    rcm_moment: NDArray[np.float64]
-    f_max: NDArray[np.float64] | None
-    over: NDArray[np.bool_]
+    forces: FloatArray
+    gravity_forces: FloatArray
+    tip_force: FloatArray
+    rcm_force: FloatArray
+    rcm_moment: FloatArray
+    f_max: FloatArray | None
+    over: BoolArray
 
     @property
     def exceeded(self) -> bool:
@@ -101,7 +102,7 @@ class ForcesView:
 
 
 # ---------------------------------------------------------------------- boundary checks
-def check_f_max(f_max: ArrayLike | None) -> NDArray[np.float64] | None:
+def check_f_max(f_max: ArrayLike | None) -> FloatArray | None:
     """Actuator force limits as shape (3,), N, or None.
 
     Parameters
@@ -169,7 +170,7 @@ def check_masses(masses: object) -> Any:
         raise InvalidInputError(f"masses: {exc}") from None
 
 
-def check_tip_force(tip_force: ArrayLike | None) -> NDArray[np.float64]:
+def check_tip_force(tip_force: ArrayLike | None) -> FloatArray:
     """A tip force as shape (3,), N (None: zero); at most :data:`MAX_TIP_FORCE_N` long.
 
     Raises
@@ -192,7 +193,7 @@ def check_tip_force(tip_force: ArrayLike | None) -> NDArray[np.float64]:
 
 # ---------------------------------------------------------------------- the handle
 def tip_force_from_handle(handle_b: ArrayLike, tip_b: ArrayLike, *,
-                          scale: float = FORCE_SCALE_M_PER_N) -> NDArray[np.float64]:
+                          scale: float = FORCE_SCALE_M_PER_N) -> FloatArray:
     """The tip force that a handle at ``handle_b`` sets: ``(handle_b - tip_b) / scale``.
 
     Parameters
@@ -218,7 +219,7 @@ def tip_force_from_handle(handle_b: ArrayLike, tip_b: ArrayLike, *,
 
 
 def handle_from_tip_force(tip_force: ArrayLike, tip_b: ArrayLike, *,
-                          scale: float = FORCE_SCALE_M_PER_N) -> NDArray[np.float64]:
+                          scale: float = FORCE_SCALE_M_PER_N) -> FloatArray:
     """Where the handle of ``tip_force`` sits: the head of its arrow, ``tip_b + scale f``.
 
     Inverse of :func:`tip_force_from_handle` (within :data:`MAX_TIP_FORCE_N`).
@@ -518,7 +519,7 @@ class ForcesLayer:
             self._arrow.remove()
             self._arrow = None
 
-    def _draw_arrow(self, tip_b: NDArray[np.float64], f: NDArray[np.float64]) -> None:
+    def _draw_arrow(self, tip_b: FloatArray, f: FloatArray) -> None:
         if not np.any(f):
             self._remove_arrow()
             return

@@ -14,9 +14,10 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._transforms import rot_x, rot_z
+from .._typing import FloatArray, IntArray
 from .._validation import check_array, check_count, check_frame, check_scalar
 from ..chain._ups import rotation_u_pair
 from ..design import Design
@@ -77,16 +78,16 @@ class SlotGhosts:
     Properties: :attr:`O_s` (k, 3), the centre of each ghost's U-joint.
     """
 
-    q: NDArray[np.float64]
-    slot: NDArray[np.int64]
-    mode: NDArray[np.int64]
-    p: NDArray[np.float64]
-    tip: NDArray[np.float64]
-    ujoint_axes: NDArray[np.float64]
-    wrist_axes: NDArray[np.float64]
-    rcm: NDArray[np.float64]
-    O_i_mode: NDArray[np.float64]
-    O_s_mode: NDArray[np.float64]
+    q: FloatArray
+    slot: IntArray
+    mode: IntArray
+    p: FloatArray
+    tip: FloatArray
+    ujoint_axes: FloatArray
+    wrist_axes: FloatArray
+    rcm: FloatArray
+    O_i_mode: FloatArray
+    O_s_mode: FloatArray
     tool_length: float
 
     def __len__(self) -> int:
@@ -94,7 +95,7 @@ class SlotGhosts:
         return int(self.slot.shape[0])
 
     @property
-    def O_s(self) -> NDArray[np.float64]:
+    def O_s(self) -> FloatArray:
         """Centre of the U-joint of each ghost, shape (k, 3) (from :attr:`O_s_mode`)."""
         return self.O_s_mode[(1 - self.mode) // 2]
 
@@ -167,7 +168,7 @@ def slot_ghosts(fk: FKSolution, q: ArrayLike, T_b_e: ArrayLike, design: Design,
         tool_length=float(design.tool_length))
 
 
-def _extreme_scale(v: NDArray[np.float64]) -> NDArray[np.float64]:
+def _extreme_scale(v: FloatArray) -> FloatArray:
     """``max |v_i|`` where the norm of ``v`` would overflow or underflow, else 1 (exact)."""
     m = np.abs(v).max(axis=-1, keepdims=True)
     return np.where((m > 1e150) | (m < 1e-150), m, 1.0)
@@ -177,8 +178,8 @@ def _extreme_scale(v: NDArray[np.float64]) -> NDArray[np.float64]:
 MAX_ARC_SAMPLES = 10_000
 
 
-def arcs_points(centre: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64],
-                radius: float, n: int = ARC_SAMPLES) -> NDArray[np.float64]:
+def arcs_points(centre: FloatArray, a: FloatArray, b: FloatArray,
+                radius: float, n: int = ARC_SAMPLES) -> FloatArray:
     """Great-circle arcs about ``centre`` from directions ``a`` to ``b``, batched.
 
     :func:`athenakin.plot.arc_points` over leading axes: ``a``, ``b`` of shape (..., 3)
@@ -225,12 +226,12 @@ def arcs_points(centre: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[
     return centre + radius * (np.cos(t) * a[..., None, :] + np.sin(t) * e[..., None, :])
 
 
-def _polylines(pts: NDArray[np.float64]) -> NDArray[np.float64]:
+def _polylines(pts: FloatArray) -> FloatArray:
     """Polylines (..., n, 3) as segments (..., n - 1, 2, 3)."""
     return np.stack([pts[..., :-1, :], pts[..., 1:, :]], axis=-2)
 
 
-def _pair(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+def _pair(a: FloatArray, b: FloatArray) -> FloatArray:
     """Segments from ``a`` to ``b`` (each (..., 3)) as (..., 2, 3)."""
     return np.stack(np.broadcast_arrays(a, b), axis=-2)
 

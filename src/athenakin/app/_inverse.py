@@ -7,16 +7,17 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._dispatch import q_from_instrument, q_from_tool_tip
+from .._typing import BoolArray, FloatArray
 from .._validation import check_array, check_count, check_instance, check_scalar
 from ..errors import InvalidInputError, Reason
 from ..robot import InstrumentIK
 from ._model import INVERSE_STEPS, AppSetup
 
 
-def tip_from_angles(azimuth: float, polar: float, depth: float) -> NDArray[np.float64]:
+def tip_from_angles(azimuth: float, polar: float, depth: float) -> FloatArray:
     """Tool tip in frame E from the instrument's angles about the RCM and the depth.
 
     Parameters
@@ -98,8 +99,8 @@ class InverseStep:
         :func:`inverse_step`).
     """
 
-    q: NDArray[np.float64]
-    tip_e: NDArray[np.float64]
+    q: FloatArray
+    tip_e: FloatArray
     mode: int
     reached: bool
     reason: int
@@ -114,7 +115,7 @@ MAX_INVERSE_STEPS = 10_000
 def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from: ArrayLike,
                  mode_from: int = 1, *, n: int = INVERSE_STEPS,
                  p_from: float | None = None,
-                 clearance: Callable[[NDArray[np.float64]], ArrayLike] | None = None
+                 clearance: Callable[[FloatArray], ArrayLike] | None = None
                  ) -> InverseStep:
     """Move the tool tip from where it is towards a target; the actuators follow, never jump.
 
@@ -191,8 +192,8 @@ def inverse_step(setup: AppSetup, tip_from: ArrayLike, tip_to: ArrayLike, q_from
     return _stop_before(k, (q0, a), (q, tips), mode_from, r, why)
 
 
-def _solve_on_branch(setup: AppSetup, tips: NDArray[np.float64], branch: int
-                     ) -> tuple[NDArray[np.float64], InstrumentIK, NDArray[np.bool_]]:
+def _solve_on_branch(setup: AppSetup, tips: FloatArray, branch: int
+                     ) -> tuple[FloatArray, InstrumentIK, BoolArray]:
     """Actuators of the tips (frame E, shape (n, 3)) on one branch of ``p``.
 
     Returns
@@ -220,7 +221,7 @@ def _solve_on_branch(setup: AppSetup, tips: NDArray[np.float64], branch: int
     return q, res, side
 
 
-def _why_stopped(res: InstrumentIK, side: NDArray[np.bool_], k: int, branch: int, L: float,
+def _why_stopped(res: InstrumentIK, side: BoolArray, k: int, branch: int, L: float,
                  mode_from: int) -> tuple[int, str]:
     """The :class:`~athenakin.errors.Reason` code and the words for the failed sample ``k``."""
     r = int(res.reason[k]) if side[k] else int(
@@ -238,8 +239,8 @@ def _why_stopped(res: InstrumentIK, side: NDArray[np.bool_], k: int, branch: int
     return r, why
 
 
-def _stop_before(k: int, start: tuple[NDArray[np.float64], NDArray[np.float64]],
-                 samples: tuple[NDArray[np.float64], NDArray[np.float64]], mode: int,
+def _stop_before(k: int, start: tuple[FloatArray, FloatArray],
+                 samples: tuple[FloatArray, FloatArray], mode: int,
                  reason: int, why: str, *, collision: bool = False) -> InverseStep:
     """The step that ends on the sample before ``k``; at ``k = 0`` the actuators are held.
 
@@ -256,9 +257,9 @@ def _stop_before(k: int, start: tuple[NDArray[np.float64], NDArray[np.float64]],
                        message=message)
 
 
-def _collisions(clearance: Callable[[NDArray[np.float64]], ArrayLike],
-                q0: NDArray[np.float64], q: NDArray[np.float64],
-                ok: NDArray[np.bool_]) -> NDArray[np.bool_]:
+def _collisions(clearance: Callable[[FloatArray], ArrayLike],
+                q0: FloatArray, q: FloatArray,
+                ok: BoolArray) -> BoolArray:
     """Samples that ``clearance`` puts in a collision deeper than at ``q0``, shape (n,).
 
     Only samples solved (``ok``) count.

@@ -14,10 +14,11 @@ import math
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._backend import resolve_backend
 from .._dispatch import forward_kinematics
+from .._typing import BoolArray, FloatArray
 from .._validation import check_array, check_instance, check_slot
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, OutOfWorkspaceError, Reason
@@ -87,14 +88,14 @@ class AppSetup:
     """
 
     design: Design
-    T_b_e: NDArray[np.float64]
-    q_lo: NDArray[np.float64]
-    q_hi: NDArray[np.float64]
-    q_home: NDArray[np.float64]
+    T_b_e: FloatArray
+    q_lo: FloatArray
+    q_hi: FloatArray
+    q_home: FloatArray
     backend: Literal["numba", "numpy"]
 
 
-def actuator_grid(q_lo: NDArray[np.float64], q_hi: NDArray[np.float64]) -> NDArray[np.float64]:
+def actuator_grid(q_lo: FloatArray, q_hi: FloatArray) -> FloatArray:
     """:data:`SEARCH_GRID` points per actuator over the box ``q_lo..q_hi`` (m), shape (n, 3).
 
     The app's one grid of the actuator ranges (:func:`app_setup`'s start search, the depth
@@ -277,13 +278,13 @@ class Readouts:
         Not below :data:`WARN_CONDITION` (or not finite).
     """
 
-    q: NDArray[np.float64]
+    q: FloatArray
     slot: int
     mode: int
     p: float
-    u: NDArray[np.float64]
-    tip_b: NDArray[np.float64]
-    tip_e: NDArray[np.float64]
+    u: FloatArray
+    tip_b: FloatArray
+    tip_e: FloatArray
     distances: tuple[Distance, ...]
     conditioning: dict[str, float]
     conditioning_warn: dict[str, bool]
@@ -363,7 +364,7 @@ class AppView:
     level : {"ok", "warn", "error"}
     """
 
-    q: NDArray[np.float64]
+    q: FloatArray
     slots: tuple[SlotStatus, ...]
     requested: Slot
     geometry: RobotGeometry | None
@@ -377,7 +378,7 @@ def _check_slot(slot: object) -> Slot:
     return check_slot(slot, allow_all=True)  # type: ignore[no-any-return]
 
 
-def _nearest_valid(k: int, valid: NDArray[np.bool_]) -> int:
+def _nearest_valid(k: int, valid: BoolArray) -> int:
     """The valid slot that shares the most labels with slot ``k`` (the lowest on a tie)."""
     labels = np.stack([SLOT_MODE, SLOT_P_SIGN, SLOT_UJOINT, SLOT_WRIST], axis=-1)
     same = np.sum(labels == labels[k], axis=-1) + 0.5 * (np.arange(16) == k)

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._typing import FloatArray
 from ._ghosts import ghost_scene
 from ._inverse import angles_from_tip
 from ._model import AppSetup, AppView
@@ -62,7 +63,7 @@ class _Page:
     _solids_of: Callable[[AppView], tuple[Solid, ...]] | None
     _echo: Echo
     _dragging: bool
-    _grab: tuple[NDArray[np.float64], NDArray[np.float64]] | None
+    _grab: tuple[FloatArray, FloatArray] | None
     _handle: Any
     _grip: Any
     _q_sliders: list[Any]
@@ -77,7 +78,7 @@ class _Page:
     _label_handles: dict[str, Any]
     _line_layouts: dict[str, _Layout]
     _label_texts: tuple[str, ...]
-    _label_pos: NDArray[np.float64]
+    _label_pos: FloatArray
 
     @property
     def title(self) -> str:

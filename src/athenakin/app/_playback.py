@@ -6,8 +6,8 @@ import dataclasses
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._typing import FloatArray
 from .._validation import check_instance, check_scalar
 
 
@@ -24,8 +24,8 @@ class Playback:
     source : str
     """
 
-    t: NDArray[np.float64]
-    q: NDArray[np.float64]
+    t: FloatArray
+    q: FloatArray
     source: str
 
     @property
@@ -79,7 +79,7 @@ def load_playback(path: str | Path) -> Playback:
     return Playback(t=np.asarray(t, dtype=float), q=q, source=str(path))
 
 
-def playback_q(pb: Playback, t: float) -> tuple[NDArray[np.float64], int]:
+def playback_q(pb: Playback, t: float) -> tuple[FloatArray, int]:
     """Actuators at time ``t`` of a playback: the last sample at or before ``t``.
 
     Parameters

@@ -16,6 +16,7 @@ import dataclasses
 import numpy as np
 from numpy.typing import NDArray
 
+from .._typing import FloatArray
 from .._validation import check_instance
 from ..plot._geometry import RobotGeometry, check_length
 from ..plot._mpl import ARC_RADIUS, COLORS, FRAME_LENGTH, arc_points
@@ -63,7 +64,7 @@ class LineSet:
     """
 
     name: str
-    segments: NDArray[np.float64]
+    segments: FloatArray
     color: tuple[int, int, int]
     width: float
 
@@ -83,7 +84,7 @@ class PointSet:
     """
 
     name: str
-    points: NDArray[np.float64]
+    points: FloatArray
     colors: NDArray[np.uint8]
     size: float
 
@@ -93,7 +94,7 @@ class Label:
     """A text label at a point (base frame, m)."""
 
     text: str
-    position: NDArray[np.float64]
+    position: FloatArray
 
 
 @dataclasses.dataclass(frozen=True)
@@ -139,7 +140,7 @@ class Scene:
     labels: tuple[Label, ...]
     solids: tuple[Solid, ...] = ()
 
-    def bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def bounds(self) -> tuple[FloatArray, FloatArray]:
         """Axis-aligned box ``(lo, hi)`` (each shape (3,)) around every line, point and solid."""
         pts: list[NDArray[np.floating]] = [ls.segments.reshape(-1, 3) for ls in self.lines]
         pts += [ps.points for ps in self.points]
@@ -149,12 +150,12 @@ class Scene:
         return allp.min(axis=0), allp.max(axis=0)
 
 
-def _polyline_segments(pts: NDArray[np.float64]) -> NDArray[np.float64]:
+def _polyline_segments(pts: FloatArray) -> FloatArray:
     """A polyline (n, 3) as n - 1 segments (n - 1, 2, 3)."""
     return np.stack([pts[:-1], pts[1:]], axis=1)
 
 
-def _seg(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+def _seg(a: FloatArray, b: FloatArray) -> FloatArray:
     return np.array([[a, b]])
 
 
@@ -194,7 +195,7 @@ def robot_scene(g: RobotGeometry, *, frames: bool = True, labels: bool = True,
     P, seg = g.points, g.segments()
     c = {k: rgb(v) for k, v in COLORS.items()}
 
-    def part(name: str, segments: NDArray[np.float64]) -> LineSet:
+    def part(name: str, segments: FloatArray) -> LineSet:
         color, width = PART_STYLE[name]
         return LineSet(name, segments, rgb(color), width)
 

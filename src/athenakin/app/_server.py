@@ -26,8 +26,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import FloatArray
 from .._validation import check_argument_order
 from ..design import Design
 from ..errors import KinematicsError
@@ -162,7 +163,7 @@ class AthenaApp(_Page):
         self.view: AppView | None = None
         self.playback: Playback | None = None
         self._dragging = False
-        self._grab: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+        self._grab: tuple[FloatArray, FloatArray] | None = None
         self._solid_handles: dict[str, tuple[Any, tuple[int, ...]]] = {}
         self._line_handles: dict[str, Any] = {}
         self._point_handles: dict[str, Any] = {}
@@ -386,7 +387,7 @@ class AthenaApp(_Page):
         """Move the actuators (m) as the sliders would; returns the new view."""
         return self._apply_q(np.asarray(q, dtype=float), sync_ik=True)
 
-    def _move_tip(self, tip_e: NDArray[np.float64], *, snap_angles: bool,
+    def _move_tip(self, tip_e: FloatArray, *, snap_angles: bool,
                   read: _Read = ()) -> None:
         with self._lock:
             v = self.view
@@ -409,7 +410,7 @@ class AthenaApp(_Page):
             self._apply_q(step.q, sync_ik=not snap_angles or not step.reached,
                           extra=("; ".join(notes), level) if notes else None, read=read)
 
-    def _apply_q(self, q: NDArray[np.float64], *, sync_ik: bool,
+    def _apply_q(self, q: FloatArray, *, sync_ik: bool,
                  extra: tuple[str, str] | None = None, read: _Read = ()) -> AppView:
         # One atomic block: the scene, the sliders and the read-outs of this q reach the
         # page together, and the event loop is woken once, not once per message.

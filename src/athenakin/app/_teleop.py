@@ -25,8 +25,9 @@ import math
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import FloatArray, IntArray
 from .._validation import check_instance, check_scalar
 from ._model import AppSetup
 from ._scene import LineSet, PointSet, Scene, Solid, rgb
@@ -110,11 +111,11 @@ class TeleopFrame:
     """
 
     t: float
-    q: NDArray[np.float64]
+    q: FloatArray
     slot: int
-    tip_b: NDArray[np.float64]
-    target_b: NDArray[np.float64]
-    handle_b: NDArray[np.float64]
+    tip_b: FloatArray
+    target_b: FloatArray
+    handle_b: FloatArray
     status: Any
     flags: tuple[str, ...]
     scale: float
@@ -289,7 +290,7 @@ def fixture_solids(environment: Any) -> tuple[Solid, ...]:
     return tuple(out)
 
 
-def _obstacle_mesh(o: Any) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+def _obstacle_mesh(o: Any) -> tuple[FloatArray, IntArray]:
     """Vertices (n, 3) in the base frame and faces (m, 3) of one obstacle."""
     from ._bodies import capsule_mesh
 

@@ -13,8 +13,9 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import FloatArray, IntArray
 from .._validation import check_array, check_count, check_instance, check_rng, check_scalar
 from ..errors import InvalidInputError
 from ..robot import direction_from_angles, q_from_instrument
@@ -38,10 +39,10 @@ class TipError:
         ``sqrt(trace(covariance))``: RMS distance of the tip from its prediction, m.
     """
 
-    covariance: NDArray[np.float64]
-    from_parameters: NDArray[np.float64]
-    from_encoders: NDArray[np.float64]
-    rms: NDArray[np.float64]
+    covariance: FloatArray
+    from_parameters: FloatArray
+    from_encoders: FloatArray
+    rms: FloatArray
 
 
 @dataclasses.dataclass(frozen=True)
@@ -64,21 +65,21 @@ class TipErrorMap:
         m.
     """
 
-    azimuth: NDArray[np.float64]
-    polar: NDArray[np.float64]
+    azimuth: FloatArray
+    polar: FloatArray
     depth: float
-    rms: NDArray[np.float64]
-    q: NDArray[np.float64]
+    rms: FloatArray
+    q: FloatArray
     encoder_resolution: float
 
 
-def _theta(result: CalibrationResult) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+def _theta(result: CalibrationResult) -> tuple[FloatArray, IntArray]:
     theta = np.array([result.parameters[n] for n in PARAMETERS])
     free = np.array([PARAMETERS.index(n) for n in result.names], dtype=np.int64)
     return theta, free
 
 
-def _readings(q: ArrayLike) -> NDArray[np.float64]:
+def _readings(q: ArrayLike) -> FloatArray:
     qa = check_array(q, "q", (3,))
     if qa.ndim != 2:
         raise InvalidInputError(f"q: expected shape (N, 3), got shape {qa.shape}")
@@ -121,7 +122,7 @@ def tip_error(result: CalibrationResult, q: ArrayLike, *, encoder_resolution: fl
 
 def tip_error_monte_carlo(result: CalibrationResult, q: ArrayLike, *,
                           encoder_resolution: float = 0.0, n_samples: int = 2000,
-                          mode: int = 1, rng: Seed = None) -> NDArray[np.float64]:
+                          mode: int = 1, rng: Seed = None) -> FloatArray:
     """Covariance (N, 3, 3) of the tip by sampling parameters and encoder errors.
 
     Parameters are drawn from ``N(estimates, covariance)``, encoder errors uniformly in

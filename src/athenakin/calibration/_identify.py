@@ -17,8 +17,8 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._typing import FloatArray, IntArray
 from .._validation import check_array, check_tolerance
 from ..errors import InvalidInputError
 from ._errors import NotIdentifiableError
@@ -89,11 +89,11 @@ class IdentifiabilityReport:
     """
 
     names: tuple[str, ...]
-    singular_values: NDArray[np.float64]
-    relative: NDArray[np.float64]
+    singular_values: FloatArray
+    relative: FloatArray
     condition: float
-    column_norms: NDArray[np.float64]
-    null_vectors: NDArray[np.float64]
+    column_norms: FloatArray
+    null_vectors: FloatArray
     combinations: tuple[str, ...]
     identifiable: bool
     weak: bool
@@ -109,7 +109,7 @@ class IdentifiabilityReport:
         return "\n".join(lines)
 
 
-def _rref(A: NDArray[np.float64], tol: float = 1e-9) -> NDArray[np.float64]:
+def _rref(A: FloatArray, tol: float = 1e-9) -> FloatArray:
     """Reduced row-echelon form with partial pivoting (rows span the same space)."""
     A = A.copy()
     rows, cols = A.shape
@@ -129,7 +129,7 @@ def _rref(A: NDArray[np.float64], tol: float = 1e-9) -> NDArray[np.float64]:
     return A[:r]
 
 
-def _describe(v: NDArray[np.float64], names: tuple[str, ...]) -> str:
+def _describe(v: FloatArray, names: tuple[str, ...]) -> str:
     """``"+1 q1_offset +1 q2_offset -1 reg_tx"`` (entries below 1e-6 of the largest dropped)."""
     keep = np.abs(v) > 1e-6 * np.max(np.abs(v))
     parts = [f"{x:+.4g} {names[i]}" + ("" if PARAMETER_UNITS[names[i]] == "m" else " [rad]")
@@ -142,7 +142,7 @@ def _describe(v: NDArray[np.float64], names: tuple[str, ...]) -> str:
     return f"{text}" + (f": {meaning}" if meaning else "")
 
 
-def analyse_jacobian(J: NDArray[np.float64], names: tuple[str, ...], *,
+def analyse_jacobian(J: FloatArray, names: tuple[str, ...], *,
                      tol: float = IDENTIFIABILITY_TOL) -> IdentifiabilityReport:
     """Identifiability of ``names`` from an identification Jacobian ``J`` (m, n).
 
@@ -206,7 +206,7 @@ def raise_if_not_identifiable(report: IdentifiabilityReport, n_poses: int) -> No
         combinations=report.combinations, singular_values=tuple(report.singular_values))
 
 
-def _logdet_gain(Jc: NDArray[np.float64], Minv: NDArray[np.float64]) -> NDArray[np.float64]:
+def _logdet_gain(Jc: FloatArray, Minv: FloatArray) -> FloatArray:
     """``log det(I + J_c M^-1 J_c^T)`` per candidate (K, r, n): the gain of adding it."""
     S = Jc @ Minv @ np.swapaxes(Jc, -1, -2)
     S = S + np.eye(S.shape[-1])
@@ -214,8 +214,8 @@ def _logdet_gain(Jc: NDArray[np.float64], Minv: NDArray[np.float64]) -> NDArray[
     return np.where(sign > 0, ld, -np.inf)
 
 
-def d_optimal_subset(Jc: NDArray[np.float64], n: int, *, max_rounds: int = 5
-                     ) -> tuple[NDArray[np.int64], float]:
+def d_optimal_subset(Jc: FloatArray, n: int, *, max_rounds: int = 5
+                     ) -> tuple[IntArray, float]:
     """Indices of ``n`` candidates maximising ``log det(sum J_i^T J_i)``.
 
     Parameters

@@ -16,9 +16,9 @@ import math
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
 
 from .._csv import Q_COLUMNS, TIP_COLUMNS, read_table
+from .._typing import FloatArray, IntArray
 from .._validation import check_array, check_choice, check_instance
 from ..errors import InvalidInputError
 from ._errors import MeasurementFileError
@@ -57,11 +57,11 @@ class Measurements:
         Assembly mode of each row (+1 / -1) when the file has a ``mode`` column.
     """
 
-    q: NDArray[np.float64]
-    tips: NDArray[np.float64] | None
-    axes: NDArray[np.float64] | None
-    lines: NDArray[np.int64]
-    mode: NDArray[np.int64] | None = None
+    q: FloatArray
+    tips: FloatArray | None
+    axes: FloatArray | None
+    lines: IntArray
+    mode: IntArray | None = None
 
 
 def _cell(text: str, path: str | Path, line: int, col: str) -> float:
@@ -134,7 +134,7 @@ def read_measurements_csv(path: str | Path, *, require_tips: bool = True) -> Mea
                         lines=np.array([ln for ln, _ in rows], dtype=np.int64), mode=mode)
 
 
-def _fmt_rows(a: NDArray[np.float64]) -> list[str]:
+def _fmt_rows(a: FloatArray) -> list[str]:
     return [",".join(repr(float(x)) for x in row) for row in a]
 
 
@@ -146,8 +146,8 @@ def _comment(comment: object) -> str:
                       max_length=100_000)
 
 
-def measurements_csv_text(q: NDArray[np.float64], tips: NDArray[np.float64],
-                          axes: NDArray[np.float64] | None = None, *, frame: str = "base",
+def measurements_csv_text(q: FloatArray, tips: FloatArray,
+                          axes: FloatArray | None = None, *, frame: str = "base",
                           comment: str = "") -> str:
     """CSV text of a measurement set that :func:`read_measurements_csv` reads back.
 
@@ -189,7 +189,7 @@ def measurements_csv_text(q: NDArray[np.float64], tips: NDArray[np.float64],
     return "\n".join(lines) + "\n"
 
 
-def plan_csv_text(q: NDArray[np.float64], *, comment: str = "") -> str:
+def plan_csv_text(q: FloatArray, *, comment: str = "") -> str:
     """CSV text of a measurement plan: ``pose, q1_m, q2_m, q3_m`` (readings to command).
 
     Parameters

@@ -5,8 +5,9 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import BoolArray, FloatArray, Int8Array
 from .._validation import (
     check_array,
     check_frame,
@@ -37,8 +38,8 @@ class MeasurementCheck:
     usable : ndarray of bool, shape (N,)
     """
 
-    reason: NDArray[np.int8]
-    usable: NDArray[np.bool_]
+    reason: Int8Array
+    usable: BoolArray
 
     def describe(self, limit: int = 5) -> str:
         """``"row 3: input holds NaN or inf; row 7: ..."`` for the first ``limit`` bad rows."""
@@ -51,7 +52,7 @@ class MeasurementCheck:
 # --------------------------------------------------------------------------------------
 # input checks
 # --------------------------------------------------------------------------------------
-def _rows(x: ArrayLike, name: str, n: int | None = None) -> NDArray[np.float64]:
+def _rows(x: ArrayLike, name: str, n: int | None = None) -> FloatArray:
     a = check_array(x, name, (3,), allow_nonfinite=True)
     if a.ndim != 2:
         raise InvalidInputError(f"{name}: expected shape (N, 3), got shape {a.shape}")
@@ -61,7 +62,7 @@ def _rows(x: ArrayLike, name: str, n: int | None = None) -> NDArray[np.float64]:
     return a
 
 
-def _mode_array(mode: object, n: int) -> NDArray[np.float64]:
+def _mode_array(mode: object, n: int) -> FloatArray:
     try:
         m = np.asarray(mode)
     except (ValueError, TypeError):         # ragged lists and the like

@@ -32,8 +32,8 @@ import dataclasses
 from typing import Literal
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._typing import FloatArray
 from .._validation import check_choice
 from ..design import Design
 from ..parallel._module import circle_terms
@@ -133,9 +133,9 @@ def resolve_parameters(params: object, frame: str) -> tuple[str, ...]:
     return tuple(n for n in PARAMETERS if n in set(names))
 
 
-def parameter_vector(design: Design, rcm: NDArray[np.float64], *,
-                     q_offset: NDArray[np.float64] | None = None,
-                     registration: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+def parameter_vector(design: Design, rcm: FloatArray, *,
+                     q_offset: FloatArray | None = None,
+                     registration: FloatArray | None = None) -> FloatArray:
     """The full parameter vector (18,) in :data:`PARAMETERS` order.
 
     ``registration`` holds ``(rx, ry, rz, tx, ty, tz)``: the rotation vector relative to
@@ -161,14 +161,14 @@ def calibrated_name(name: str) -> str:
     return f"{name}, calibrated" if name else "calibrated design"
 
 
-def design_from_parameters(theta: NDArray[np.float64], design: Design) -> Design:
+def design_from_parameters(theta: FloatArray, design: Design) -> Design:
     """``design`` with ``l1..l5`` and ``tool_length`` taken from a full parameter vector."""
     return dataclasses.replace(design, l1=float(theta[0]), l2=float(theta[1]),
                                l3=float(theta[2]), l4=float(theta[3]), l5=float(theta[4]),
                                tool_length=float(theta[5]))
 
 
-def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:
+def _skew(v: FloatArray) -> FloatArray:
     """Cross-product matrices ``[v]_x``, shape (..., 3, 3)."""
     S = np.zeros(v.shape[:-1] + (3, 3))
     S[..., 0, 1], S[..., 0, 2] = -v[..., 2], v[..., 1]
@@ -177,14 +177,14 @@ def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:
     return S
 
 
-def rotation_from_vector(omega: NDArray[np.float64]) -> NDArray[np.float64]:
+def rotation_from_vector(omega: FloatArray) -> FloatArray:
     """Rotation matrix ``exp([omega]_x)`` of a rotation vector (3,), rad (scipy's Rotation)."""
     from scipy.spatial.transform import Rotation
 
     return np.asarray(Rotation.from_rotvec(np.asarray(omega, dtype=float)).as_matrix())
 
 
-def _left_jacobian(omega: NDArray[np.float64]) -> NDArray[np.float64]:
+def _left_jacobian(omega: FloatArray) -> FloatArray:
     """Left Jacobian ``J_l`` of SO(3): ``exp(omega + d) = exp(J_l d) exp(omega)`` to first order."""
     th = float(np.linalg.norm(omega))
     K = _skew(np.asarray(omega, dtype=float))
@@ -194,7 +194,7 @@ def _left_jacobian(omega: NDArray[np.float64]) -> NDArray[np.float64]:
             + (th - np.sin(th)) / th ** 3 * K @ K)
 
 
-def _rotate(R: NDArray[np.float64], J: NDArray[np.float64]) -> NDArray[np.float64]:
+def _rotate(R: FloatArray, J: FloatArray) -> FloatArray:
     """``R @ J`` for J of shape (n, 3, k) as one 2-D product (a batched 3x3 matmul is slow)."""
     n, _, k = J.shape
     return (np.swapaxes(J, 1, 2).reshape(-1, 3) @ R.T).reshape(n, k, 3).swapaxes(1, 2).copy()
@@ -222,19 +222,19 @@ class Prediction:
         ``d tip / d q`` (readings) in the measurement frame.
     """
 
-    tip: NDArray[np.float64]
-    axis: NDArray[np.float64]
-    tip_base: NDArray[np.float64]
-    O_s: NDArray[np.float64]
-    det: NDArray[np.float64]
-    rho: NDArray[np.float64]
-    J_tip: NDArray[np.float64] | None = None
-    J_axis: NDArray[np.float64] | None = None
-    J_q: NDArray[np.float64] | None = None
+    tip: FloatArray
+    axis: FloatArray
+    tip_base: FloatArray
+    O_s: FloatArray
+    det: FloatArray
+    rho: FloatArray
+    J_tip: FloatArray | None = None
+    J_axis: FloatArray | None = None
+    J_q: FloatArray | None = None
 
 
-def predict(theta: NDArray[np.float64], q: NDArray[np.float64], mode: NDArray[np.float64], *,
-            R0: NDArray[np.float64] | None = None, jacobian: bool = False) -> Prediction:
+def predict(theta: FloatArray, q: FloatArray, mode: FloatArray, *,
+            R0: FloatArray | None = None, jacobian: bool = False) -> Prediction:
     """Tool tip and instrument axis for readings ``q`` (N, 3) under parameters ``theta`` (18,).
 
     ``mode`` (N,) holds the assembly mode (+1 / -1) of each pose. ``R0`` (3, 3) is the
@@ -272,10 +272,10 @@ def predict(theta: NDArray[np.float64], q: NDArray[np.float64], mode: NDArray[np
                       J_tip=J_tip, J_axis=J_axis, J_q=J_q)
 
 
-def _dOs_dz(lengths: NDArray[np.float64], h: NDArray[np.float64], q3: NDArray[np.float64],
-            r1: NDArray[np.float64], s3: NDArray[np.float64], m_y: NDArray[np.float64],
-            Py: NDArray[np.float64], Pz: NDArray[np.float64], det: NDArray[np.float64],
-            kk: NDArray[np.float64]) -> NDArray[np.float64]:
+def _dOs_dz(lengths: FloatArray, h: FloatArray, q3: FloatArray,
+            r1: FloatArray, s3: FloatArray, m_y: FloatArray,
+            Py: FloatArray, Pz: FloatArray, det: FloatArray,
+            kk: FloatArray) -> FloatArray:
     """``d O_s / d z``, shape (n, 3, 8), ``z = (q1, q2, q3, l1..l5)`` (true ``q``).
 
     Implicit differentiation of the two circle equations (module docstring), then the
@@ -316,11 +316,11 @@ def _dOs_dz(lengths: NDArray[np.float64], h: NDArray[np.float64], q3: NDArray[np
     return dOs_dz
 
 
-def _parameter_jacobians(dOs_dz: NDArray[np.float64], u: NDArray[np.float64],
-                         rho: NDArray[np.float64], L: float, theta: NDArray[np.float64],
-                         R: NDArray[np.float64] | None, tip_b: NDArray[np.float64],
-                         axis: NDArray[np.float64]
-                         ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+def _parameter_jacobians(dOs_dz: FloatArray, u: FloatArray,
+                         rho: FloatArray, L: float, theta: FloatArray,
+                         R: FloatArray | None, tip_b: FloatArray,
+                         axis: FloatArray
+                         ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """``J_tip``, ``J_axis`` (n, 3, 18) and ``J_q`` (n, 3, 3) from ``d O_s / d z``.
 
     ``dt = (I - L G) dO_s + L G dc + u dL`` with ``G = (I - u u^T) / rho``; with a

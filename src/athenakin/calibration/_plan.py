@@ -6,8 +6,9 @@ import dataclasses
 from collections.abc import Iterable
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import FloatArray
 from .._validation import check_array, check_count, check_frame
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
@@ -45,7 +46,7 @@ class PosePlan:
         Candidates the plan was chosen from.
     """
 
-    q: NDArray[np.float64]
+    q: FloatArray
     names: tuple[str, ...]
     logdet: float
     identifiability: IdentifiabilityReport

@@ -8,8 +8,9 @@ from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import BoolArray, FloatArray, IntArray
 from .._validation import (
     check_array,
     check_choice,
@@ -120,24 +121,24 @@ class CalibrationResult:
 
     design: Design
     names: tuple[str, ...]
-    estimates: NDArray[np.float64]
-    nominal: NDArray[np.float64]
-    std: NDArray[np.float64]
-    covariance: NDArray[np.float64]
+    estimates: FloatArray
+    nominal: FloatArray
+    std: FloatArray
+    covariance: FloatArray
     parameters: dict[str, float]
-    q_offset: NDArray[np.float64]
-    rcm: NDArray[np.float64]
-    T_b_e: NDArray[np.float64]
-    T_t_b: NDArray[np.float64] | None
+    q_offset: FloatArray
+    rcm: FloatArray
+    T_b_e: FloatArray
+    T_t_b: FloatArray | None
     frame: str
-    mode: NDArray[np.int64]
-    residuals_before: NDArray[np.float64]
-    residuals_after: NDArray[np.float64]
+    mode: IntArray
+    residuals_before: FloatArray
+    residuals_after: FloatArray
     rms_before: float
     rms_after: float
     sigma: float
-    outliers: NDArray[np.bool_]
-    excluded: NDArray[np.bool_]
+    outliers: BoolArray
+    excluded: BoolArray
     check: MeasurementCheck
     identifiability: IdentifiabilityReport
     success: bool
@@ -145,7 +146,7 @@ class CalibrationResult:
     nfev: int
 
     @property
-    def correlation(self) -> NDArray[np.float64]:
+    def correlation(self) -> FloatArray:
         """Correlation matrix of the estimates, shape (n, n)."""
         s = np.where(self.std > 0, self.std, 1.0)
         return self.covariance / np.outer(s, s)
@@ -162,13 +163,13 @@ class CalibrationResult:
 # --------------------------------------------------------------------------------------
 @dataclasses.dataclass(frozen=True)
 class _Problem:
-    q: NDArray[np.float64]
-    tips: NDArray[np.float64]
-    axes: NDArray[np.float64] | None
-    mode: NDArray[np.float64]
-    R0: NDArray[np.float64] | None
-    theta0: NDArray[np.float64]
-    free: NDArray[np.int64]
+    q: FloatArray
+    tips: FloatArray
+    axes: FloatArray | None
+    mode: FloatArray
+    R0: FloatArray | None
+    theta0: FloatArray
+    free: IntArray
     axis_weight: float
 
     @property
@@ -176,26 +177,26 @@ class _Problem:
         """Residual components per pose: the tip (3), and the weighted axis error (6)."""
         return 3 if self.axes is None else 6
 
-    def full(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
+    def full(self, x: FloatArray) -> FloatArray:
         th = self.theta0.copy()
         th[self.free] = x
         return th
 
-    def evaluate(self, theta: NDArray[np.float64], jacobian: bool
-                 ) -> tuple[Prediction, NDArray[np.float64]]:
+    def evaluate(self, theta: FloatArray, jacobian: bool
+                 ) -> tuple[Prediction, FloatArray]:
         pr = predict(theta, self.q, self.mode, R0=self.R0, jacobian=jacobian)
         r = pr.tip - self.tips
         if self.axes is not None:
             r = np.concatenate([r, self.axis_weight * (pr.axis - self.axes)], axis=1)
         return pr, r
 
-    def residual(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
+    def residual(self, x: FloatArray) -> FloatArray:
         return self.evaluate(self.full(x), False)[1].ravel()
 
-    def jacobian(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
+    def jacobian(self, x: FloatArray) -> FloatArray:
         return self.jac_full(self.full(x))[:, self.free]
 
-    def jac_full(self, theta: NDArray[np.float64]) -> NDArray[np.float64]:
+    def jac_full(self, theta: FloatArray) -> FloatArray:
         pr = predict(theta, self.q, self.mode, R0=self.R0, jacobian=True)
         assert pr.J_tip is not None and pr.J_axis is not None
         J = pr.J_tip
@@ -204,8 +205,8 @@ class _Problem:
         return J.reshape(-1, J.shape[-1])
 
 
-def _kabsch(p: NDArray[np.float64], m: NDArray[np.float64]
-            ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _kabsch(p: FloatArray, m: FloatArray
+            ) -> tuple[FloatArray, FloatArray]:
     """Rotation R and translation t minimising ``sum |R p + t - m|^2`` (Kabsch / Horn)."""
     pc, mc = p.mean(axis=0), m.mean(axis=0)
     U, _, Vt = np.linalg.svd((p - pc).T @ (m - mc))
@@ -219,7 +220,7 @@ def _setup(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | Non
            mode: object, q_offset: ArrayLike | None, registration: ArrayLike | None,
            axis_weight: float, bad_rows: str, max_bad_fraction: float
            ) -> tuple[Design, _Problem, tuple[str, ...], MeasurementCheck,
-                      NDArray[np.float64], NDArray[np.float64]]:
+                      FloatArray, FloatArray]:
     """Validate, drop bad rows, build the problem (shared by calibrate and identifiability)."""
     design = resolve_design(design)
     names = resolve_parameters(params, frame)
@@ -271,8 +272,8 @@ def _setup(q: ArrayLike, tips: ArrayLike, T_b_e: ArrayLike, design: Design | Non
     return design, prob, names, chk, m, T
 
 
-def _nearest_mode(q: NDArray[np.float64], tips: NDArray[np.float64], design: Design,
-                  T: NDArray[np.float64], off: NDArray[np.float64]) -> NDArray[np.float64]:
+def _nearest_mode(q: FloatArray, tips: FloatArray, design: Design,
+                  T: FloatArray, off: FloatArray) -> FloatArray:
     """Per row, the assembly mode whose nominal tip is nearer the measured one (+1 on ties)."""
     theta = parameter_vector(design, T[:3, 3], q_offset=off)
     qs = np.nan_to_num(q)
@@ -428,7 +429,7 @@ def _least_squares() -> Any:
 
 
 def _fit(least_squares: Any, prob: _Problem, report: IdentifiabilityReport,
-         opts: CalibrationOptions) -> tuple[Any, NDArray[np.bool_]]:
+         opts: CalibrationOptions) -> tuple[Any, BoolArray]:
     """The solver's stages; the solution and the rows kept in the final fit.
 
     A linear least-squares fit; with a robust loss, a robust fit from it (scale
@@ -461,8 +462,8 @@ def _fit(least_squares: Any, prob: _Problem, report: IdentifiabilityReport,
     return sol, use
 
 
-def _physical_residuals(prob: _Problem, theta: NDArray[np.float64], sol: Any
-                        ) -> NDArray[np.float64]:
+def _physical_residuals(prob: _Problem, theta: FloatArray, sol: Any
+                        ) -> FloatArray:
     """Residuals at the solution; refuse a non-positive length or a pose it cannot assemble."""
     _, r_after = prob.evaluate(theta, False)
     if np.any(theta[:6] <= 0) or not np.all(np.isfinite(r_after)):
@@ -473,9 +474,9 @@ def _physical_residuals(prob: _Problem, theta: NDArray[np.float64], sol: Any
     return r_after
 
 
-def _covariance(prob: _Problem, theta: NDArray[np.float64], r_after: NDArray[np.float64],
-                use: NDArray[np.bool_], opts: CalibrationOptions
-                ) -> tuple[NDArray[np.float64], float, NDArray[np.bool_]]:
+def _covariance(prob: _Problem, theta: FloatArray, r_after: FloatArray,
+                use: BoolArray, opts: CalibrationOptions
+                ) -> tuple[FloatArray, float, BoolArray]:
     """Covariance ``sigma^2 (J^T J)^+`` over the rows used, ``sigma``, and the outlier rows.
 
     ``sigma`` is the one given, else ``sqrt(SSR / (m - n))``; outliers are the rows left
@@ -527,26 +528,26 @@ def _check_problem(prob: _Problem, names: tuple[str, ...], opts: CalibrationOpti
     return report
 
 
-def _robust_sigma(r: NDArray[np.float64]) -> float:
+def _robust_sigma(r: FloatArray) -> float:
     """Standard deviation of one component from the median absolute deviation (tips only)."""
     return float(1.4826 * np.median(np.abs(r[:, :3])))
 
 
-def _result(design: Design, names: tuple[str, ...], prob: _Problem, theta: NDArray[np.float64],
-            cov: NDArray[np.float64], chk: MeasurementCheck, m_all: NDArray[np.float64],
-            T: NDArray[np.float64], r_after: NDArray[np.float64], use: NDArray[np.bool_],
-            outl: NDArray[np.bool_], s_hat: float, report: IdentifiabilityReport, sol: object
+def _result(design: Design, names: tuple[str, ...], prob: _Problem, theta: FloatArray,
+            cov: FloatArray, chk: MeasurementCheck, m_all: FloatArray,
+            T: FloatArray, r_after: FloatArray, use: BoolArray,
+            outl: BoolArray, s_hat: float, report: IdentifiabilityReport, sol: object
             ) -> CalibrationResult:
     """The result: residuals before (nominal) and after, spread back over every row."""
     n_all, rows_per = chk.usable.shape[0], prob.rows_per
     _, r_before = prob.evaluate(prob.theta0, False)
 
-    def spread(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    def spread(a: FloatArray) -> FloatArray:
         out = np.full((n_all, rows_per), np.nan)
         out[chk.usable] = -a     # measured minus predicted
         return out
 
-    def spread_b(a: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    def spread_b(a: BoolArray) -> BoolArray:
         out = np.zeros(n_all, bool)
         out[chk.usable] = a
         return out

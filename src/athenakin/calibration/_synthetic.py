@@ -24,9 +24,10 @@ from collections.abc import Mapping
 from typing import ClassVar
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._toml import TomlOptions
+from .._typing import BoolArray, FloatArray
 from .._validation import (
     check_array,
     check_choice,
@@ -75,13 +76,13 @@ class SyntheticData:
     frame : {"base", "tracker"}
     """
 
-    q: NDArray[np.float64]
-    tips: NDArray[np.float64]
-    axes: NDArray[np.float64] | None
+    q: FloatArray
+    tips: FloatArray
+    axes: FloatArray | None
     true_design: Design
     true_parameters: dict[str, float]
-    T_t_b: NDArray[np.float64] | None
-    outliers: NDArray[np.bool_]
+    T_t_b: FloatArray | None
+    outliers: BoolArray
     frame: str
 
 
@@ -176,7 +177,7 @@ _ROUND = 1 << 20
 
 
 def random_poses(n: int, T_b_e: ArrayLike, design: Design | None = None, *, mode: int = 1,
-                 margin: float = 5e-3, rng: Seed = None) -> NDArray[np.float64]:
+                 margin: float = 5e-3, rng: Seed = None) -> FloatArray:
     """``n`` random readings (N, 3) within the strokes that the nominal robot reaches.
 
     Uniform in the stroke box, kept where the module assembles in ``mode`` with a
@@ -301,8 +302,8 @@ def synthetic_measurements(T_b_e: ArrayLike, design: Design | None = None, *,
                          frame=frame)
 
 
-def _true_parameters(design: Design, T: NDArray[np.float64], o: SyntheticOptions,
-                     gen: np.random.Generator) -> NDArray[np.float64]:
+def _true_parameters(design: Design, T: FloatArray, o: SyntheticOptions,
+                     gen: np.random.Generator) -> FloatArray:
     """The true robot: the nominal parameters perturbed, then the values ``o.true`` set."""
     theta = parameter_vector(design, T[:3, 3])
     theta[:6] += o.perturbation * gen.standard_normal(6)
@@ -313,8 +314,8 @@ def _true_parameters(design: Design, T: NDArray[np.float64], o: SyntheticOptions
     return theta
 
 
-def _poses_reached(n: int, T: NDArray[np.float64], design: Design, theta: NDArray[np.float64],
-                   mode: int, gen: np.random.Generator) -> NDArray[np.float64]:
+def _poses_reached(n: int, T: FloatArray, design: Design, theta: FloatArray,
+                   mode: int, gen: np.random.Generator) -> FloatArray:
     """``n`` random poses that both the nominal and the true robot reach."""
     qa = random_poses(n + max(4, n // 2), T, design, mode=mode, rng=gen)
     with np.errstate(invalid="ignore"):
@@ -326,9 +327,9 @@ def _poses_reached(n: int, T: NDArray[np.float64], design: Design, theta: NDArra
     return qa[ok][:n]
 
 
-def _measure(theta: NDArray[np.float64], qa: NDArray[np.float64], mode: int, axes: bool,
+def _measure(theta: FloatArray, qa: FloatArray, mode: int, axes: bool,
              o: SyntheticOptions, gen: np.random.Generator
-             ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None, NDArray[np.bool_]]:
+             ) -> tuple[FloatArray, FloatArray | None, BoolArray]:
     """Measured tips (and axes) in the base frame, and which rows are outliers.
 
     The true robot at the readings plus the encoder quantum, tracker (axis) noise, then
@@ -357,10 +358,10 @@ def _measure(theta: NDArray[np.float64], qa: NDArray[np.float64], mode: int, axe
     return tips, ax, outl
 
 
-def _in_tracker_frame(tips: NDArray[np.float64], ax: NDArray[np.float64] | None,
+def _in_tracker_frame(tips: FloatArray, ax: FloatArray | None,
                       T_t_b: ArrayLike | None, gen: np.random.Generator
-                      ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None,
-                                 NDArray[np.float64]]:
+                      ) -> tuple[FloatArray, FloatArray | None,
+                                 FloatArray]:
     """Tips and axes in the tracker frame of ``T_t_b`` (default: a random registration)."""
     if T_t_b is None:
         Ttb = np.eye(4)

@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._typing import BoolArray, FloatArray, Int8Array, IntArray
 from .._validation import check_array, check_transform
 from ..chain import SERIAL_P_SIGN, SERIAL_UJOINT, SERIAL_WRIST
 from ..design import Design, resolve_design
@@ -115,27 +116,27 @@ class CertifiedFK:
         Relative radius of the input ball the certificate covers.
     """
 
-    certified: NDArray[np.bool_]
-    status: NDArray[np.int8]
-    reason: NDArray[np.int8]
-    p_lo: NDArray[np.float64]
-    p_hi: NDArray[np.float64]
-    u_lo: NDArray[np.float64]
-    u_hi: NDArray[np.float64]
-    O_s_lo: NDArray[np.float64]
-    O_s_hi: NDArray[np.float64]
-    tip_lo: NDArray[np.float64]
-    tip_hi: NDArray[np.float64]
-    complete: NDArray[np.bool_]
-    prec: NDArray[np.int64]
+    certified: BoolArray
+    status: Int8Array
+    reason: Int8Array
+    p_lo: FloatArray
+    p_hi: FloatArray
+    u_lo: FloatArray
+    u_hi: FloatArray
+    O_s_lo: FloatArray
+    O_s_hi: FloatArray
+    tip_lo: FloatArray
+    tip_hi: FloatArray
+    complete: BoolArray
+    prec: IntArray
     input_tol: float
 
     @property
-    def n_certified(self) -> NDArray[np.int64]:
+    def n_certified(self) -> IntArray:
         """Number of certified slots per item, shape (...)."""
         return np.sum(self.certified, axis=-1)
 
-    def contains(self, p: ArrayLike, u: ArrayLike) -> NDArray[np.bool_]:
+    def contains(self, p: ArrayLike, u: ArrayLike) -> BoolArray:
         """Which slots' boxes contain the given solutions (angles modulo 2 pi).
 
         Parameters
@@ -247,7 +248,7 @@ def certified_forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design 
 
 
 def _items(q: ArrayLike, T_b_e: ArrayLike
-           ) -> tuple[NDArray[np.float64], NDArray[np.float64], tuple[int, ...]]:
+           ) -> tuple[FloatArray, FloatArray, tuple[int, ...]]:
     """The items to certify: ``q`` (n, 3), ``T_b_e`` (n, 4, 4) and their batch shape.
 
     NaN and inf are allowed in a batch (flagged per item), not in a single item; a batch
@@ -298,10 +299,10 @@ def _check_prec(prec: object, max_prec: object) -> tuple[int, int]:
 
 
 # --------------------------------------------------------------------------- one item
-def _certify_item(flint: Any, q: NDArray[np.float64], T: NDArray[np.float64], design: Design,
+def _certify_item(flint: Any, q: FloatArray, T: FloatArray, design: Design,
                   rel: float, prec: int, max_prec: int
-                  ) -> tuple[NDArray[np.int8], NDArray[np.int8], NDArray[np.float64],
-                             NDArray[np.float64], int]:
+                  ) -> tuple[Int8Array, Int8Array, FloatArray,
+                             FloatArray, int]:
     status = np.full(16, CertStatus.ABSENT, np.int8)
     reason = np.zeros(16, np.int8)
     lo = np.full((16, _N_FIELDS), np.nan)
@@ -329,7 +330,7 @@ def _certify_item(flint: Any, q: NDArray[np.float64], T: NDArray[np.float64], de
     return status, reason, lo, hi, prec
 
 
-def _actuator_reason(q: NDArray[np.float64], design: Design) -> int:
+def _actuator_reason(q: FloatArray, design: Design) -> int:
     """Stroke limits and A/B order: exact comparisons of the given floats."""
     if np.any((q < design.stroke_min) | (q > design.stroke_max)):
         return int(Reason.STROKE_LIMIT)
@@ -338,9 +339,9 @@ def _actuator_reason(q: NDArray[np.float64], design: Design) -> int:
     return 0
 
 
-def _solve(arb: Any, qf: NDArray[np.float64], Tf: NDArray[np.float64], design: Design,
-           rel: float) -> tuple[NDArray[np.int8], NDArray[np.int8], NDArray[np.float64],
-                                NDArray[np.float64]]:
+def _solve(arb: Any, qf: FloatArray, Tf: FloatArray, design: Design,
+           rel: float) -> tuple[Int8Array, Int8Array, FloatArray,
+                                FloatArray]:
     """Ball evaluation of the closed form at the current precision.
 
     Returns status and reason per slot and the midpoints and radii (16, 12) of the
@@ -469,7 +470,7 @@ def _module_balls(arb: Any, q1: Any, q2: Any, q3: Any, l1: Any, l2: Any, l3: Any
     return 0, False, (r1, a, by, bz, ey, ez, x_M)
 
 
-def _rcm_axes(B: Callable[[float], Any], Tf: NDArray[np.float64]
+def _rcm_axes(B: Callable[[float], Any], Tf: FloatArray
               ) -> tuple[list[Any], list[Any], list[Any]]:
     """RCM frame in balls: translation and Gram-Schmidt rotation (columns ``x_e``, ``z_e``)."""
     t_e = [B(Tf[i, 3]) for i in range(3)]
@@ -484,7 +485,7 @@ def _rcm_axes(B: Callable[[float], Any], Tf: NDArray[np.float64]
     return t_e, x_e, z_e
 
 
-def _store_eight(mid: NDArray[np.float64], rad: NDArray[np.float64], status: NDArray[np.int8],
+def _store_eight(mid: FloatArray, rad: FloatArray, status: Int8Array,
                  m: int, pi: Any, base: tuple[Any, ...], n_mr: tuple[float, float],
                  step: list[Any], O_s: list[Any]) -> None:
     """The eight serial solutions of mode ``m`` from the base angles, into its rows.
@@ -528,8 +529,8 @@ def _mid_rad(x: Any) -> tuple[float, float]:
     return float(x.mid()), float(x.rad())
 
 
-def _float_boxes(mid: NDArray[np.float64], rad: NDArray[np.float64]
-                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _float_boxes(mid: FloatArray, rad: FloatArray
+                 ) -> tuple[FloatArray, FloatArray]:
     """Float intervals that contain the balls ``[mid +- rad]`` (rounded outward).
 
     ``mid`` and ``rad`` are the balls' midpoints and radii rounded to nearest, so each
@@ -547,7 +548,7 @@ def _float_boxes(mid: NDArray[np.float64], rad: NDArray[np.float64]
     return lo, hi
 
 
-def _separate(status: NDArray[np.int8], lo: NDArray[np.float64], hi: NDArray[np.float64]
+def _separate(status: Int8Array, lo: FloatArray, hi: FloatArray
               ) -> None:
     """Mark certified slots whose box meets another known solution's box (in place).
 

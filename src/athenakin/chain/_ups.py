@@ -26,6 +26,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._typing import BoolArray, FloatArray, Int8Array
 from .._validation import broadcast_batch, check_array, check_tolerance, check_transform
 from ..errors import InvalidInputError, Reason
 from ..study import dq_multiply, study_G, study_M
@@ -90,15 +91,15 @@ class UPSSolution:
         Closure residual of each solution (NaN where invalid).
     """
 
-    valid: NDArray[np.bool_]
-    reason: NDArray[np.int8]
-    p: NDArray[np.float64]
-    u: NDArray[np.float64]
-    residual: NDArray[np.float64]
+    valid: BoolArray
+    reason: Int8Array
+    p: FloatArray
+    u: FloatArray
+    residual: FloatArray
 
 
 def rotation_u_pair(ca: ArrayLike, sa: ArrayLike, cb: ArrayLike, sb: ArrayLike
-                    ) -> NDArray[np.float64]:
+                    ) -> FloatArray:
     """``R(a, b) = Rz(a) Rx(pi/2) Rz(b) Rx(pi/2)`` from cosines and sines.
 
     Parameters
@@ -122,12 +123,12 @@ def rotation_u_pair(ca: ArrayLike, sa: ArrayLike, cb: ArrayLike, sb: ArrayLike
                      sb, z, -cb], axis=-1).reshape(ca.shape + (3, 3))
 
 
-def _rz(c: NDArray[np.float64], s: NDArray[np.float64]) -> NDArray[np.float64]:
+def _rz(c: FloatArray, s: FloatArray) -> FloatArray:
     z, o = np.zeros_like(c), np.ones_like(c)
     return np.stack([c, -s, z, s, c, z, z, z, o], axis=-1).reshape(c.shape + (3, 3))
 
 
-def ups_transform(p: ArrayLike, u: ArrayLike) -> NDArray[np.float64]:
+def ups_transform(p: ArrayLike, u: ArrayLike) -> FloatArray:
     """Forward map of the serial chain, ``T_s_e(p, u1..u5)`` (Eq. 11 without ``B``).
 
     Parameters
@@ -147,15 +148,15 @@ def ups_transform(p: ArrayLike, u: ArrayLike) -> NDArray[np.float64]:
     return _ups_transform(np.broadcast_to(p, batch), np.broadcast_to(u, batch + (5,)))
 
 
-def _ups_transform(p: NDArray[np.float64], u: NDArray[np.float64]) -> NDArray[np.float64]:
+def _ups_transform(p: FloatArray, u: FloatArray) -> FloatArray:
     c, s = np.cos(u), np.sin(u)
     return _chain_from_cs(p, *(c[..., i] for i in range(5)), *(s[..., i] for i in range(5)))
 
 
-def _chain_from_cs(p: NDArray[np.float64], c1: NDArray[np.float64], c2: NDArray[np.float64],
-                   c3: NDArray[np.float64], c4: NDArray[np.float64], c5: NDArray[np.float64],
-                   s1: NDArray[np.float64], s2: NDArray[np.float64], s3: NDArray[np.float64],
-                   s4: NDArray[np.float64], s5: NDArray[np.float64]) -> NDArray[np.float64]:
+def _chain_from_cs(p: FloatArray, c1: FloatArray, c2: FloatArray,
+                   c3: FloatArray, c4: FloatArray, c5: FloatArray,
+                   s1: FloatArray, s2: FloatArray, s3: FloatArray,
+                   s4: FloatArray, s5: FloatArray) -> FloatArray:
     """``T_s_e`` from ``p`` and the cosines/sines of ``u1..u5``.
 
     Element-wise products: numpy's matmul on stacks of 3x3 matrices is slow.
@@ -176,7 +177,7 @@ def _chain_from_cs(p: NDArray[np.float64], c1: NDArray[np.float64], c2: NDArray[
     return T
 
 
-def ups_study(p: ArrayLike, u: ArrayLike) -> NDArray[np.float64]:
+def ups_study(p: ArrayLike, u: ArrayLike) -> FloatArray:
     """Study vector of the serial chain as the product ``M1 G1 M2 G2 ... M5 G5`` (Eq. 11, 12).
 
     This is the paper's formulation; it is independent of :func:`ups_transform`
@@ -206,8 +207,8 @@ def ups_study(p: ArrayLike, u: ArrayLike) -> NDArray[np.float64]:
     return X
 
 
-def closure_residual(T: NDArray[np.float64], T_target: NDArray[np.float64]
-                     ) -> NDArray[np.float64]:
+def closure_residual(T: FloatArray, T_target: FloatArray
+                     ) -> FloatArray:
     """Closure residual ``max(max|R - R*|, max|t - t*| / 1 m)`` of two transforms (..., 4, 4).
 
     Parameters
@@ -232,7 +233,7 @@ _PLUS_MINUS = np.array([1.0, -1.0])
 _PLUS_MINUS.flags.writeable = False
 
 
-def _check_scale(scale: ArrayLike, batch: tuple[int, ...]) -> NDArray[np.float64]:
+def _check_scale(scale: ArrayLike, batch: tuple[int, ...]) -> FloatArray:
     """``scale`` of :func:`ups_solutions`: an array that broadcasts to the batch."""
     sc = check_array(scale, "scale", (), allow_nonfinite=True)
     if broadcast_batch(T_s_e=batch, scale=sc.shape) != batch:
@@ -241,8 +242,8 @@ def _check_scale(scale: ArrayLike, batch: tuple[int, ...]) -> NDArray[np.float64
     return sc
 
 
-def _sines_as_kernel(T: NDArray[np.float64], zx: NDArray[np.float64], zy: NDArray[np.float64],
-                     zz: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _sines_as_kernel(T: FloatArray, zx: FloatArray, zy: FloatArray,
+                     zz: FloatArray) -> tuple[FloatArray, FloatArray]:
     """``|sin u2|`` and ``|sin u4|`` of the slot p > 0, in the compiled kernel's operations.
 
     ``(zx, zy, zz)`` is the unit instrument direction (the kernel's names); the
@@ -263,9 +264,9 @@ def _sines_as_kernel(T: NDArray[np.float64], zx: NDArray[np.float64], zy: NDArra
     return rho_k, rho4_k
 
 
-def _slot_reasons(base_reason: NDArray[np.int_], deg_u: NDArray[np.bool_],
-                  deg_w: NDArray[np.bool_], res: NDArray[np.float64], pp: NDArray[np.float64],
-                  ctol: NDArray[np.float64]) -> NDArray[np.int8]:
+def _slot_reasons(base_reason: NDArray[np.int_], deg_u: BoolArray,
+                  deg_w: BoolArray, res: FloatArray, pp: FloatArray,
+                  ctol: FloatArray) -> Int8Array:
     """Reason code of each of the 8 slots (..., 8): the first failed check wins.
 
     ``deg_u``, ``deg_w`` (..., 2, 2, 2): the U-joint and wrist degeneracies; ``ctol``
@@ -285,10 +286,10 @@ def _slot_reasons(base_reason: NDArray[np.int_], deg_u: NDArray[np.bool_],
                     reason).astype(np.int8)
 
 
-def _pose_checks(c: NDArray[np.float64], finite: NDArray[np.bool_], scale: ArrayLike | None,
+def _pose_checks(c: FloatArray, finite: BoolArray, scale: ArrayLike | None,
                  degenerate_tol: float, p_zero_tol: float
-                 ) -> tuple[NDArray[np.int_], NDArray[np.float64], NDArray[np.float64],
-                            NDArray[np.float64]]:
+                 ) -> tuple[NDArray[np.int_], FloatArray, FloatArray,
+                            FloatArray]:
     """What decides validity before any angle, from the translation ``c`` (..., 3) of T_s_e.
 
     Returns the reason of the pose (..., ``NONFINITE_INPUT``, ``SERIAL_P_ZERO`` or 0),
@@ -311,7 +312,7 @@ def _pose_checks(c: NDArray[np.float64], finite: NDArray[np.bool_], scale: Array
     return base_reason, nn, sc, dtol
 
 
-def _ujoint_angles(z3: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+def _ujoint_angles(z3: FloatArray) -> tuple[FloatArray, ...]:
     """``u1, u2`` and their cosines and sines (..., 2, 2) from the instrument axis ``z3``.
 
     ``z3`` (..., 2, 3): the unit direction for each sign of ``p``; the last axis of the
@@ -326,7 +327,7 @@ def _ujoint_angles(z3: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
     return u1, u2, c1, s1, np.cos(u2), np.sin(u2)
 
 
-def _wrist_angles(W: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+def _wrist_angles(W: FloatArray) -> tuple[FloatArray, ...]:
     """``u3, u4, u5`` and the cosines and sines ``c3, s3, c4, s4, c5, s5`` (..., 2, 2, 2).
 
     ``W = R(u1, u2)^T R_s_e`` (..., 2, 2, 3, 3), the rotation left to the wrist; the last

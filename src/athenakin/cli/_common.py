@@ -7,10 +7,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from .._serialize import json_text, to_jsonable  # noqa: F401  (re-exported)
 from .._transforms import rot_x, rot_y, rot_z, transform_from_rotation_translation
+from .._typing import FloatArray
 from ..design import Design
 from ..errors import InvalidInputError
 from ..robot import default_rcm_frame
@@ -55,7 +55,7 @@ def load_design(args: argparse.Namespace) -> Design:
     return Design.from_toml(args.design)   # deep nesting: a named error of the one TOML reader
 
 
-def load_rcm(args: argparse.Namespace, design: Design) -> NDArray[np.float64]:
+def load_rcm(args: argparse.Namespace, design: Design) -> FloatArray:
     """The RCM frame from ``--rcm`` / ``--rcm-file`` or the reference set-up."""
     if getattr(args, "rcm", None):
         check_finite(args.rcm, "--rcm")
@@ -68,7 +68,7 @@ def load_rcm(args: argparse.Namespace, design: Design) -> NDArray[np.float64]:
     return default_rcm_frame(design)
 
 
-def load_robot(args: argparse.Namespace) -> tuple[Design, NDArray[np.float64]]:
+def load_robot(args: argparse.Namespace) -> tuple[Design, FloatArray]:
     """The design and the RCM frame ``T_b_e`` (4, 4) of :func:`add_robot_options`."""
     design = load_design(args)
     return design, load_rcm(args, design)

@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 
 from .._mechanism import BODIES, BodyGeometry, adjacent_pairs
 from .._toml import read_toml
+from .._typing import FloatArray
 from .._validation import check_keys, real_number
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
@@ -170,7 +171,7 @@ class Bodies:
         return types.MappingProxyType(dict(zip(BODIES, self.radii, strict=True)))
 
     @property
-    def radius_array(self) -> NDArray[np.float64]:
+    def radius_array(self) -> FloatArray:
         """The radii as an array of shape (n_bodies,), table order, m."""
         return np.array(self.radii, dtype=np.float64)
 

@@ -10,6 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._backend import numba_available, resolve_backend
 from .._mechanism import BODIES, body_segments, mechanism_points
+from .._typing import BoolArray, FloatArray, Int8Array
 from .._validation import check_scalar
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
@@ -59,14 +60,14 @@ class Clearance:
     """
 
     pairs: tuple[tuple[str, str], ...]
-    distances: NDArray[np.float64]
-    witness_points: NDArray[np.float64]
-    valid: NDArray[np.bool_]
-    reason: NDArray[np.int8]
-    min_distance: NDArray[np.float64]
+    distances: FloatArray
+    witness_points: FloatArray
+    valid: BoolArray
+    reason: Int8Array
+    min_distance: FloatArray
     closest_pair: NDArray[np.intp]
-    colliding: NDArray[np.bool_]
-    near: NDArray[np.bool_]
+    colliding: BoolArray
+    near: BoolArray
     margin: float = 0.0
 
     def pair_index(self, a: str, b: str) -> int:
@@ -77,7 +78,7 @@ class Clearance:
         raise InvalidInputError(f"pair: ({a!r}, {b!r}) is not a checked pair; checked are "
                                 f"{self.pairs}")
 
-    def distance(self, a: str, b: str) -> NDArray[np.float64]:
+    def distance(self, a: str, b: str) -> FloatArray:
         """The distances of one pair, shape (...), m."""
         return self.distances[..., self.pair_index(a, b)]
 
@@ -119,8 +120,8 @@ def _pair_tables(bodies: Bodies, environment: Environment) -> tuple[
     return tuple(names), bodies.pair_index, obs
 
 
-def capsule_distances(solids: NDArray[np.float64], radii: NDArray[np.float64],
-                      ij: NDArray[np.intp]) -> NDArray[np.float64]:
+def capsule_distances(solids: FloatArray, radii: FloatArray,
+                      ij: NDArray[np.intp]) -> FloatArray:
     """Signed distances of capsule pairs over a batch (the kernel where the backend says so).
 
     Parameters
@@ -206,11 +207,11 @@ def _columns(bb: NDArray[np.intp], obs: list[tuple[Obstacle, NDArray[np.intp]]])
     return _Columns(prim_seg, prim_rad, cap_pairs, cap_cols, half_rows, coal_rows)
 
 
-def segment_clearance(segments: NDArray[np.float64], valid: NDArray[np.bool_],
+def segment_clearance(segments: FloatArray, valid: BoolArray,
                       bodies: Bodies, environment: Environment, *, compiled: bool,
                       witness: bool = True) -> tuple[tuple[tuple[str, str], ...],
-                                                     NDArray[np.float64],
-                                                     NDArray[np.float64] | None]:
+                                                     FloatArray,
+                                                     FloatArray | None]:
     """Distances and witness points from body segments (the core of :func:`clearance`).
 
     Parameters
@@ -263,9 +264,9 @@ def segment_clearance(segments: NDArray[np.float64], valid: NDArray[np.bool_],
     return names, dist, wit
 
 
-def _capsule_columns(solids: NDArray[np.float64], radii: NDArray[np.float64],
-                     ij: NDArray[np.intp], cap_cols: list[int], dist: NDArray[np.float64],
-                     wit: NDArray[np.float64] | None, compiled: bool) -> None:
+def _capsule_columns(solids: FloatArray, radii: FloatArray,
+                     ij: NDArray[np.intp], cap_cols: list[int], dist: FloatArray,
+                     wit: FloatArray | None, compiled: bool) -> None:
     """Fill the capsule-capsule columns ``cap_cols`` of ``dist`` (and ``wit``) in place."""
     n = solids.shape[0]
     c0, c1 = cap_cols[0], cap_cols[-1] + 1
@@ -304,9 +305,9 @@ def _capsule_columns(solids: NDArray[np.float64], radii: NDArray[np.float64],
             wit[rows, cap_cols] = w
 
 
-def _coal_columns(seg: NDArray[np.float64], rad: NDArray[np.float64], valid: NDArray[np.bool_],
+def _coal_columns(seg: FloatArray, rad: FloatArray, valid: BoolArray,
                   coal_rows: list[tuple[int, Obstacle, NDArray[np.intp]]],
-                  dist: NDArray[np.float64], wit: NDArray[np.float64] | None) -> None:
+                  dist: FloatArray, wit: FloatArray | None) -> None:
     """Fill the columns of the coal obstacles (boxes, meshes) in place, valid rows only."""
     from ._coal import capsule_obstacle_distances, coal_shape
     iv = np.flatnonzero(valid)
@@ -395,9 +396,9 @@ def clearance(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
                    pts.valid, pts.reason, m)
 
 
-def _result(names: tuple[tuple[str, str], ...], dist: NDArray[np.float64],
-            wit: NDArray[np.float64], valid: NDArray[np.bool_],
-            reason: NDArray[np.int8],
+def _result(names: tuple[tuple[str, str], ...], dist: FloatArray,
+            wit: FloatArray, valid: BoolArray,
+            reason: Int8Array,
             margin: float) -> Clearance:
     batch = valid.shape
     if len(names):

@@ -9,8 +9,8 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._typing import FloatArray
 from ._environment import Obstacle
 from ._mesh import winding_numbers
 
@@ -45,12 +45,12 @@ def coal_shape(obstacle: Obstacle) -> Any:
     raise ValueError(f"coal_shape: no coal shape for a {obstacle.kind}")  # pragma: no cover
 
 
-def _transform(R: NDArray[np.float64], t: NDArray[np.float64]) -> Any:
+def _transform(R: FloatArray, t: FloatArray) -> Any:
     coal = import_coal()
     return coal.Transform3s(np.ascontiguousarray(R), np.ascontiguousarray(t))
 
 
-def capsule_transform(a: NDArray[np.float64], b: NDArray[np.float64]) -> tuple[float, Any]:
+def capsule_transform(a: FloatArray, b: FloatArray) -> tuple[float, Any]:
     """Length and pose of coal's capsule frame (axis ``z``, centred) for the segment a-b."""
     d = b - a
     L = float(np.linalg.norm(d))
@@ -62,10 +62,10 @@ def capsule_transform(a: NDArray[np.float64], b: NDArray[np.float64]) -> tuple[f
     return L, _transform(np.stack([x, y, z], axis=1), 0.5 * (a + b))
 
 
-def capsule_obstacle_distances(seg: NDArray[np.float64], radius: float,
+def capsule_obstacle_distances(seg: FloatArray, radius: float,
                                obstacle: Obstacle,
-                               shape: Any | None = None) -> tuple[NDArray[np.float64],
-                                                                  NDArray[np.float64]]:
+                               shape: Any | None = None) -> tuple[FloatArray,
+                                                                  FloatArray]:
     """Signed distances of capsules to a box or mesh obstacle, one coal call each.
 
     Parameters
@@ -109,8 +109,8 @@ def capsule_obstacle_distances(seg: NDArray[np.float64], radius: float,
     return dist, wit
 
 
-def _inside_closed_mesh(seg: NDArray[np.float64], radius: float, obstacle: Obstacle,
-                        dist: NDArray[np.float64], wit: NDArray[np.float64]) -> None:
+def _inside_closed_mesh(seg: FloatArray, radius: float, obstacle: Obstacle,
+                        dist: FloatArray, wit: FloatArray) -> None:
     """Make the distance of capsules wholly inside a closed mesh negative, in place.
 
     A capsule clear of the triangles (``d > 0``) lies wholly on one side of them: its

@@ -38,15 +38,15 @@ equally close, pairs of them.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import BoolArray, FloatArray
 from .._validation import check_array
 from ..errors import InvalidInputError
 
 __all__ = ["point_segment", "segment_segment", "capsule_capsule", "capsule_halfspace",
            "separation_normal"]
 
-F = NDArray[np.float64]
 
 #: Largest coordinate or radius (m) the public distance functions accept: their squared
 #: distances stay far from overflow. The clearance of the robot calls the unchecked
@@ -67,11 +67,11 @@ NEARLY_PARALLEL = 0.05
 WITNESS_DIRECT = 1e-6
 
 
-def _dot(x: F, y: F) -> F:
+def _dot(x: FloatArray, y: FloatArray) -> FloatArray:
     return np.einsum("...i,...i->...", x, y)
 
 
-def _point_segment(x: F, a: F, b: F) -> tuple[F, F]:
+def _point_segment(x: FloatArray, a: FloatArray, b: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Unchecked :func:`point_segment` (float arrays (..., 3), broadcast together)."""
     d = b - a
     dd = _dot(d, d)
@@ -82,8 +82,8 @@ def _point_segment(x: F, a: F, b: F) -> tuple[F, F]:
     return np.linalg.norm(x - c, axis=-1), c
 
 
-def _interior_nearly_parallel(p1: F, q1: F, p2: F, q2: F
-                              ) -> tuple[NDArray[np.bool_], F, F, F]:
+def _interior_nearly_parallel(p1: FloatArray, q1: FloatArray, p2: FloatArray, q2: FloatArray
+                              ) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray]:
     """Interior candidate of nearly parallel segments, float arrays (k, 3).
 
     ``s`` from cross products, paired with the point of the second segment nearest
@@ -102,7 +102,8 @@ def _interior_nearly_parallel(p1: F, q1: F, p2: F, q2: F
     return ok, dist, c1, c2
 
 
-def _segment_segment(p1: F, q1: F, p2: F, q2: F) -> tuple[F, F, F]:
+def _segment_segment(p1: FloatArray, q1: FloatArray, p2: FloatArray, q2: FloatArray
+                     ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Unchecked :func:`segment_segment` (float arrays (..., 3), broadcast together)."""
     p1, q1, p2, q2 = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64)
                                             for v in (p1, q1, p2, q2)))
@@ -152,7 +153,7 @@ def _segment_segment(p1: F, q1: F, p2: F, q2: F) -> tuple[F, F, F]:
     return best.reshape(shape), c1.reshape(shape + (3,)), c2.reshape(shape + (3,))
 
 
-def separation_normal(c1: F, c2: F, d1: F, d2: F) -> F:
+def separation_normal(c1: FloatArray, c2: FloatArray, d1: FloatArray, d2: FloatArray) -> FloatArray:
     """Unit vector from ``c1`` towards ``c2``; where they coincide, one normal to both segments.
 
     "Coincide" is ``|c2 - c1| <= NOISE (|c1| + |d1| + |d2|)``, the rounding noise of
@@ -186,7 +187,7 @@ def separation_normal(c1: F, c2: F, d1: F, d2: F) -> F:
     return out  # type: ignore[no-any-return]
 
 
-def _across(n: F, x: F, d: F) -> F:
+def _across(n: FloatArray, x: FloatArray, d: FloatArray) -> FloatArray:
     """``n`` without its component along ``d`` where ``x`` projects inside the segment.
 
     ``x`` is the point relative to the segment's start, ``d`` its direction. Inside
@@ -206,7 +207,9 @@ def _across(n: F, x: F, d: F) -> F:
     return out  # type: ignore[no-any-return]
 
 
-def _witnesses_near(p1: F, q1: F, r1: F, p2: F, q2: F, r2: F, c1: F, c2: F) -> F:
+def _witnesses_near(p1: FloatArray, q1: FloatArray, r1: FloatArray, p2: FloatArray,
+                    q2: FloatArray, r2: FloatArray, c1: FloatArray, c2: FloatArray
+                    ) -> FloatArray:
     """Witness points (k, 2, 3) of capsules whose segments are at most WITNESS_DIRECT apart.
 
     Each witness starts from the point of its own segment nearest the other closest
@@ -228,8 +231,8 @@ def _witnesses_near(p1: F, q1: F, r1: F, p2: F, q2: F, r2: F, c1: F, c2: F) -> F
     return np.stack([b1 + r1[..., None] * n1, b2 - r2[..., None] * n2], axis=-2)
 
 
-def _capsule_capsule(p1: F, q1: F, r1: F | float, p2: F, q2: F,
-                    r2: F | float) -> tuple[F, F]:
+def _capsule_capsule(p1: FloatArray, q1: FloatArray, r1: FloatArray | float, p2: FloatArray,
+                     q2: FloatArray, r2: FloatArray | float) -> tuple[FloatArray, FloatArray]:
     """Unchecked :func:`capsule_capsule` (what :func:`~athenakin.collision.clearance` calls)."""
     dist, c1, c2 = _segment_segment(p1, q1, p2, q2)
     shape = dist.shape
@@ -249,7 +252,8 @@ def _capsule_capsule(p1: F, q1: F, r1: F | float, p2: F, q2: F,
     return dist - r1a - r2a, w
 
 
-def _capsule_halfspace(p: F, q: F, r: F | float, point: F, normal: F) -> tuple[F, F]:
+def _capsule_halfspace(p: FloatArray, q: FloatArray, r: FloatArray | float, point: FloatArray,
+                       normal: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Unchecked :func:`capsule_halfspace` with a unit ``normal``."""
     hp = _dot(p - point, normal)
     hq = _dot(q - point, normal)
@@ -264,7 +268,7 @@ def _capsule_halfspace(p: F, q: F, r: F | float, point: F, normal: F) -> tuple[F
 
 # --------------------------------------------------------------------------------------
 # public, checked entries (the clearance of the robot uses the private ones above)
-def _points(**named: ArrayLike) -> list[F]:
+def _points(**named: ArrayLike) -> list[FloatArray]:
     """Each argument as a finite float array of shape (..., 3), within MAX_COORDINATE."""
     out = []
     for name, v in named.items():
@@ -282,7 +286,7 @@ def _points(**named: ArrayLike) -> list[F]:
     return out
 
 
-def _radius(r: ArrayLike, name: str) -> F:
+def _radius(r: ArrayLike, name: str) -> FloatArray:
     a = check_array(r, name, ())
     if a.size and (np.min(a) < 0 or np.max(a) > MAX_COORDINATE):
         raise InvalidInputError(f"{name}: expected radii in [0, {MAX_COORDINATE:g}] m, got "
@@ -290,7 +294,8 @@ def _radius(r: ArrayLike, name: str) -> F:
     return a
 
 
-def _batch(points: list[F], radii: list[F], names: str) -> tuple[list[F], list[F]]:
+def _batch(points: list[FloatArray], radii: list[FloatArray], names: str
+           ) -> tuple[list[FloatArray], list[FloatArray]]:
     """Points broadcast to (batch, 3) and radii to (batch), the batch of all of them."""
     try:
         batch = np.broadcast_shapes(*(p.shape[:-1] for p in points), *(r.shape for r in radii))
@@ -302,7 +307,7 @@ def _batch(points: list[F], radii: list[F], names: str) -> tuple[list[F], list[F
             [np.broadcast_to(r, batch) for r in radii])
 
 
-def point_segment(x: ArrayLike, a: ArrayLike, b: ArrayLike) -> tuple[F, F]:
+def point_segment(x: ArrayLike, a: ArrayLike, b: ArrayLike) -> tuple[FloatArray, FloatArray]:
     """Closest point of the segment ``a``-``b`` to ``x`` and its distance.
 
     Parameters
@@ -327,7 +332,7 @@ def point_segment(x: ArrayLike, a: ArrayLike, b: ArrayLike) -> tuple[F, F]:
 
 
 def segment_segment(p1: ArrayLike, q1: ArrayLike, p2: ArrayLike, q2: ArrayLike
-                    ) -> tuple[F, F, F]:
+                    ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Distance of the segments ``p1``-``q1`` and ``p2``-``q2``, and their closest points.
 
     Parameters
@@ -353,7 +358,7 @@ def segment_segment(p1: ArrayLike, q1: ArrayLike, p2: ArrayLike, q2: ArrayLike
 
 
 def capsule_capsule(p1: ArrayLike, q1: ArrayLike, r1: ArrayLike, p2: ArrayLike, q2: ArrayLike,
-                    r2: ArrayLike) -> tuple[F, F]:
+                    r2: ArrayLike) -> tuple[FloatArray, FloatArray]:
     """Signed distance of two capsules and their witness points.
 
     Parameters
@@ -383,7 +388,7 @@ def capsule_capsule(p1: ArrayLike, q1: ArrayLike, r1: ArrayLike, p2: ArrayLike, 
 
 
 def capsule_halfspace(p: ArrayLike, q: ArrayLike, r: ArrayLike, point: ArrayLike,
-                      normal: ArrayLike) -> tuple[F, F]:
+                      normal: ArrayLike) -> tuple[FloatArray, FloatArray]:
     """Signed distance of a capsule to the solid ``{x : normal . (x - point) <= 0}``.
 
     Parameters

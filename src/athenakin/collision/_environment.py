@@ -26,11 +26,12 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._mechanism import BODIES
 from .._output import naming_path
 from .._toml import read_toml
+from .._typing import FloatArray, IntArray
 from .._validation import check_array, check_keys, check_path, check_scalar, check_transform
 from ..errors import InvalidInputError
 from ._mesh import MAX_MESH_FACES, _check_triangles, _load_mesh, closed_surface, winding_numbers
@@ -139,14 +140,14 @@ class Obstacle:
     radius: float = 0.0
     a: tuple[float, float, float] = (0.0, 0.0, 0.0)
     b: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    T_b_o: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.eye(4))
+    T_b_o: FloatArray = dataclasses.field(default_factory=lambda: np.eye(4))
     half_extents: tuple[float, float, float] = (0.0, 0.0, 0.0)
     path: str = ""
     scale: float = 1.0
     convex: bool = False
-    vertices: NDArray[np.float64] = dataclasses.field(
+    vertices: FloatArray = dataclasses.field(
         default_factory=lambda: np.zeros((0, 3)))
-    faces: NDArray[np.int64] = dataclasses.field(
+    faces: IntArray = dataclasses.field(
         default_factory=lambda: np.zeros((0, 3), dtype=np.int64))
     closed: bool = dataclasses.field(init=False, default=False, compare=False)
 
@@ -227,7 +228,7 @@ class Obstacle:
         return t
 
 
-def _pose(T_or_center: ArrayLike, name: str) -> NDArray[np.float64]:
+def _pose(T_or_center: ArrayLike, name: str) -> FloatArray:
     # check_array first: a ragged list, a str, an object is a named TypeError
     arr = check_array(T_or_center, name, (), allow_nonfinite=True)
     if arr.shape == (4, 4):

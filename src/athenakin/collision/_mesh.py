@@ -5,16 +5,16 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._typing import FloatArray, IntArray
 from ..errors import InvalidInputError
 
 #: Most triangles of one mesh obstacle (checked after loading, before building the BVH).
 MAX_MESH_FACES = 2_000_000
 
 
-def _load_mesh(path: Path, scale: float, name: str) -> tuple[NDArray[np.float64],
-                                                             NDArray[np.int64]]:
+def _load_mesh(path: Path, scale: float, name: str) -> tuple[FloatArray,
+                                                             IntArray]:
     try:
         import trimesh
     except ImportError:  # pragma: no cover - the extra is installed in CI
@@ -37,7 +37,7 @@ def _load_mesh(path: Path, scale: float, name: str) -> tuple[NDArray[np.float64]
 
 
 def _check_triangles(vertices: object, faces: object, what: str, *, name: str | None = None
-                     ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+                     ) -> tuple[FloatArray, IntArray]:
     """Vertices (n, 3), finite, and faces (m, 3), 0 < m <= MAX_MESH_FACES, indexing them.
 
     ``name`` (the parameter) starts the messages when given, else ``vertices`` /
@@ -68,7 +68,7 @@ def _check_triangles(vertices: object, faces: object, what: str, *, name: str | 
     return V, F
 
 
-def closed_surface(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> bool:
+def closed_surface(vertices: FloatArray, faces: IntArray) -> bool:
     """Whether triangles close a solid: each directed edge once, its reverse once.
 
     That is a watertight, consistently oriented surface (trimesh's ``is_watertight``
@@ -98,8 +98,8 @@ def closed_surface(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> b
 _WINDING_BLOCK = 1 << 18
 
 
-def winding_numbers(points: NDArray[np.float64], vertices: NDArray[np.float64],
-                    faces: NDArray[np.int64]) -> NDArray[np.float64]:
+def winding_numbers(points: FloatArray, vertices: FloatArray,
+                    faces: IntArray) -> FloatArray:
     """Generalized winding numbers of points about a triangle surface.
 
     ``w(x) = sum Omega_f(x) / (4 pi)`` over the triangles, ``Omega_f`` the signed solid

@@ -14,10 +14,11 @@ from collections.abc import Callable
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._backend import resolve_backend
 from .._dispatch import forward_kinematics
+from .._typing import BoolArray, FloatArray, Int8Array
 from .._validation import broadcast_batch, check_array, check_choice, check_slot
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, OutOfWorkspaceError, Reason, SingularConfigurationError
@@ -36,7 +37,6 @@ __all__ = ["Statics", "statics", "actuator_forces", "inverse_dynamics", "mass_ma
            "forward_dynamics", "mechanical_energy", "MechanicalEnergy", "STANDARD_GRAVITY",
            "MAX_BATCH", "CHUNK"]
 
-Arr = NDArray[np.float64]
 #: Default gravity, base frame, m/s^2.
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)
 #: States evaluated together on the numpy path: the jets take about 35 KiB per state,
@@ -64,13 +64,13 @@ def _check_masses(masses: object, design: Design) -> MassModel:
 @dataclasses.dataclass(frozen=True)
 class _Prepared:
     shape: tuple[int, ...]
-    arrays: dict[str, Arr]
-    T: Arr
+    arrays: dict[str, FloatArray]
+    T: FloatArray
     design: Design
     masses: MassModel
     slot: int
-    valid: NDArray[np.bool_]
-    reason: NDArray[np.int8]
+    valid: BoolArray
+    reason: Int8Array
 
 
 def _chunks(n: int) -> list[slice]:
@@ -78,13 +78,13 @@ def _chunks(n: int) -> list[slice]:
     return [slice(i, min(i + CHUNK, n)) for i in range(0, n, CHUNK)]
 
 
-def _chunked(n: int, part: Callable[[slice], tuple[Arr, ...]]) -> tuple[Arr, ...]:
+def _chunked(n: int, part: Callable[[slice], tuple[FloatArray, ...]]) -> tuple[FloatArray, ...]:
     """``part`` over every chunk of ``n`` states, the pieces joined along axis 0.
 
     ``part(sl)`` returns arrays with leading axis ``sl.stop - sl.start``; the joined
     results are allocated once, so the memory of the temporaries is that of one chunk.
     """
-    out: list[Arr] | None = None
+    out: list[FloatArray] | None = None
     for sl in _chunks(n):
         pieces = part(sl)
         if out is None:
@@ -139,7 +139,7 @@ def _prepare(arrays: dict[str, ArrayLike | None], T_b_e: ArrayLike | None, desig
     return _Prepared(batch, flat, Tf, d, m, k, valid, reason)
 
 
-def _singular(prep: _Prepared, errors: object, *results: Arr) -> _Prepared:
+def _singular(prep: _Prepared, errors: object, *results: FloatArray) -> _Prepared:
     """Flag items whose results are not finite though the slot is valid.
 
     That happens only on a singular set where a body's speed is unbounded for a finite
@@ -163,7 +163,7 @@ def _singular(prep: _Prepared, errors: object, *results: Arr) -> _Prepared:
     return dataclasses.replace(prep, valid=prep.valid & finite, reason=reason)
 
 
-def _finish(x: Arr, prep: _Prepared, tail: tuple[int, ...]) -> Arr:
+def _finish(x: FloatArray, prep: _Prepared, tail: tuple[int, ...]) -> FloatArray:
     x = np.where(prep.valid.reshape((-1,) + (1,) * len(tail)), x, np.nan)
     return x.reshape(prep.shape + tail)
 
@@ -190,15 +190,15 @@ class Statics:
         :class:`~athenakin.errors.Reason` of invalid items.
     """
 
-    forces: Arr
-    rcm_force: Arr
-    rcm_moment: Arr
-    tip_jacobian: Arr
-    valid: NDArray[np.bool_]
-    reason: NDArray[np.int8]
+    forces: FloatArray
+    rcm_force: FloatArray
+    rcm_moment: FloatArray
+    tip_jacobian: FloatArray
+    valid: BoolArray
+    reason: Int8Array
 
 
-def _gravity_tip(prep: _Prepared) -> tuple[Arr, Arr]:
+def _gravity_tip(prep: _Prepared) -> tuple[FloatArray, FloatArray]:
     return prep.arrays["gravity"], prep.arrays["tip_force"]
 
 
@@ -243,7 +243,7 @@ def statics(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None 
                     tip_force=tip_force)
     g, f = _gravity_tip(prep)
 
-    def part(sl: slice) -> tuple[Arr, Arr]:
+    def part(sl: slice) -> tuple[FloatArray, FloatArray]:
         qf = prep.arrays["q"][sl]
         z = np.zeros_like(qf)
         ev = evaluate(qf, z, z, prep.T[sl], prep.design, prep.masses, prep.slot,
@@ -266,7 +266,7 @@ def statics(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None 
 def actuator_forces(q: ArrayLike, T_b_e: ArrayLike | None = None,
                     design: Design | None = None, *, masses: MassModel | None = None,
                     gravity: ArrayLike = STANDARD_GRAVITY, tip_force: ArrayLike | None = None,
-                    slot: int = 0, errors: Literal["auto", "raise", "flag"] = "auto") -> Arr:
+                    slot: int = 0, errors: Literal["auto", "raise", "flag"] = "auto") -> FloatArray:
     """Actuator forces (N) that hold the robot still: :attr:`statics(...).forces <Statics>`.
 
     Parameters
@@ -294,7 +294,7 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
                      masses: MassModel | None = None, gravity: ArrayLike = STANDARD_GRAVITY,
                      tip_force: ArrayLike | None = None, slot: int = 0,
                      errors: Literal["auto", "raise", "flag"] = "auto",
-                     backend: Literal["auto", "numpy", "numba"] = "auto") -> Arr:
+                     backend: Literal["auto", "numpy", "numba"] = "auto") -> FloatArray:
     """Actuator forces (N) that give the motion ``(q, qd, qdd)`` of the closed chain.
 
     ``tau = M(q) qdd + c(q, qd) + g(q) - J_tip^T f_tip`` by virtual power on the
@@ -333,7 +333,7 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
         prep = _singular(prep, errors, Q)
         return _finish(Q, prep, (3,))
 
-    def part(sl: slice) -> tuple[Arr]:
+    def part(sl: slice) -> tuple[FloatArray]:
         ev = evaluate(a["q"][sl], a["qd"][sl], a["qdd"][sl], prep.T[sl], prep.design,
                       prep.masses, prep.slot)
         F, Nm = body_loads(ev, prep.masses, a["gravity"][sl])
@@ -344,7 +344,7 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
     return _finish(Q[:, 1:N_Q_DIRECTIONS], prep, (3,))
 
 
-def _kernel_array(x: Arr) -> Arr:
+def _kernel_array(x: FloatArray) -> FloatArray:
     """``x`` as a C-contiguous, writable float64 array (a copy only where needed).
 
     Numba compiles one specialization per array type, read-only arrays included: with
@@ -353,7 +353,7 @@ def _kernel_array(x: Arr) -> Arr:
     return np.require(x, np.float64, ("C", "W"))
 
 
-def _compact(x: Arr) -> Arr:
+def _compact(x: FloatArray) -> FloatArray:
     """A broadcast (stride-0) batch as one row, else contiguous: the kernel broadcasts."""
     if x.shape[0] > 1 and x.strides[0] == 0:
         return _kernel_array(x[:1])
@@ -374,7 +374,7 @@ def _kernel(*, required: bool) -> Callable[..., None] | None:
 
 def mass_matrix(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None = None,
                 *, masses: MassModel | None = None, slot: int = 0,
-                errors: Literal["auto", "raise", "flag"] = "auto") -> Arr:
+                errors: Literal["auto", "raise", "flag"] = "auto") -> FloatArray:
     """Mass matrix of the closed chain in actuator coordinates, shape (..., 3, 3), kg.
 
     ``E_kin = qd^T M(q) qd / 2``; symmetric, positive definite wherever the moving
@@ -393,7 +393,7 @@ def mass_matrix(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | N
     """
     prep = _prepare({"q": q}, T_b_e, design, masses, slot, errors)
 
-    def part(sl: slice) -> tuple[Arr]:
+    def part(sl: slice) -> tuple[FloatArray]:
         qf = prep.arrays["q"][sl]
         z = np.zeros_like(qf)
         ev = evaluate(qf, z, z, prep.T[sl], prep.design, prep.masses, prep.slot)
@@ -408,7 +408,7 @@ def forward_dynamics(q: ArrayLike, qd: ArrayLike, forces: ArrayLike,
                      T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                      masses: MassModel | None = None, gravity: ArrayLike = STANDARD_GRAVITY,
                      tip_force: ArrayLike | None = None, slot: int = 0,
-                     errors: Literal["auto", "raise", "flag"] = "auto") -> Arr:
+                     errors: Literal["auto", "raise", "flag"] = "auto") -> FloatArray:
     """Actuator accelerations (m/s^2) under the actuator ``forces`` (N): ``M^-1 (tau - h)``.
 
     Parameters
@@ -432,7 +432,7 @@ def forward_dynamics(q: ArrayLike, qd: ArrayLike, forces: ArrayLike,
                     gravity=gravity, tip_force=tip_force, forces=forces)
     a = prep.arrays
 
-    def part(sl: slice) -> tuple[Arr, Arr]:
+    def part(sl: slice) -> tuple[FloatArray, FloatArray]:
         z = np.zeros_like(a["q"][sl])
         ev = evaluate(a["q"][sl], a["qd"][sl], z, prep.T[sl], prep.design, prep.masses,
                       prep.slot)
@@ -469,13 +469,13 @@ class MechanicalEnergy:
         :class:`~athenakin.errors.Reason` of invalid items.
     """
 
-    kinetic: Arr
-    potential: Arr
-    valid: NDArray[np.bool_]
-    reason: NDArray[np.int8]
+    kinetic: FloatArray
+    potential: FloatArray
+    valid: BoolArray
+    reason: Int8Array
 
     @property
-    def total(self) -> Arr:
+    def total(self) -> FloatArray:
         """``kinetic + potential``, J, shape (...)."""
         return self.kinetic + self.potential
 
@@ -506,7 +506,7 @@ def mechanical_energy(q: ArrayLike, qd: ArrayLike, T_b_e: ArrayLike | None = Non
                     gravity=gravity)
     a = prep.arrays
 
-    def part(sl: slice) -> tuple[Arr, Arr]:
+    def part(sl: slice) -> tuple[FloatArray, FloatArray]:
         z = np.zeros_like(a["q"][sl])
         ev = evaluate(a["q"][sl], a["qd"][sl], z, prep.T[sl], prep.design, prep.masses,
                       prep.slot)

@@ -21,8 +21,9 @@ import dataclasses
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import BoolArray, FloatArray
 from .._validation import broadcast_batch, check_array
 from ..design import Design
 from ..errors import InvalidInputError
@@ -31,8 +32,6 @@ from ._model import MassModel
 
 __all__ = ["ForceCapability", "force_capability", "max_tip_force", "jacobian_invertible",
            "SINGULAR_DET", "MAX_FORCE_LIMIT"]
-
-Arr = NDArray[np.float64]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,13 +57,13 @@ class ForceCapability:
     valid : ndarray of bool, shape (...)
     """
 
-    A: Arr
-    b: Arr
-    vertices: Arr
-    min_force: Arr
-    weakest_direction: Arr
-    gravity_forces: Arr
-    valid: NDArray[np.bool_]
+    A: FloatArray
+    b: FloatArray
+    vertices: FloatArray
+    min_force: FloatArray
+    weakest_direction: FloatArray
+    gravity_forces: FloatArray
+    valid: BoolArray
 
 
 #: Largest actuator force limit accepted (``f_max``, ``-f_min``), N: far above any actuator of
@@ -77,7 +76,7 @@ MAX_FORCE_LIMIT = 1e9
 SINGULAR_DET = 1e-12
 
 
-def jacobian_invertible(J: Arr) -> NDArray[np.bool_]:
+def jacobian_invertible(J: FloatArray) -> BoolArray:
     """Whether each tip Jacobian ``J`` (shape (..., 3, 3)) is invertible beyond rounding.
 
     The one test of the force functions: where it fails, the polytope's vertices
@@ -91,7 +90,7 @@ def jacobian_invertible(J: Arr) -> NDArray[np.bool_]:
     return finite & (np.abs(det) > SINGULAR_DET * np.maximum(scale, 1e-300))
 
 
-def _limit(x: ArrayLike, name: str) -> Arr:
+def _limit(x: ArrayLike, name: str) -> FloatArray:
     """One force limit: a real scalar or shape (3,), finite, |x| <= MAX_FORCE_LIMIT."""
     if isinstance(x, bool):
         raise TypeError(f"{name}: expected a real number or 3 numbers (N), got bool")
@@ -110,7 +109,7 @@ def _limit(x: ArrayLike, name: str) -> Arr:
     return np.array(a, dtype=float)
 
 
-def _limits(f_max: ArrayLike, f_min: ArrayLike | None) -> tuple[Arr, Arr]:
+def _limits(f_max: ArrayLike, f_min: ArrayLike | None) -> tuple[FloatArray, FloatArray]:
     hi = _limit(f_max, "f_max")
     lo = -hi if f_min is None else _limit(f_min, "f_min")
     if np.any(hi < lo):
@@ -153,7 +152,7 @@ def force_capability(q: ArrayLike, T_b_e: ArrayLike | None = None,
     J_all = st.tip_jacobian.reshape(n, 3, 3)
     tg_all = st.forces.reshape(n, 3)
 
-    def part(sl: slice) -> tuple[Arr, ...]:
+    def part(sl: slice) -> tuple[FloatArray, ...]:
         # per state, in chunks: the temporaries (broadcast solves) of one chunk only
         J, tg = J_all[sl], tg_all[sl]
         Jt = np.swapaxes(J, -1, -2)                     # rows: columns of J
@@ -187,7 +186,7 @@ def max_tip_force(q: ArrayLike, direction: ArrayLike, T_b_e: ArrayLike | None = 
                   design: Design | None = None, *, f_max: ArrayLike,
                   f_min: ArrayLike | None = None, masses: MassModel | None = None,
                   gravity: ArrayLike = STANDARD_GRAVITY, slot: int = 0,
-                  errors: Literal["auto", "raise", "flag"] = "auto") -> Arr:
+                  errors: Literal["auto", "raise", "flag"] = "auto") -> FloatArray:
     """Largest tip force (N) the robot resists along ``direction`` within the limits.
 
     Parameters

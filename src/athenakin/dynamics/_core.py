@@ -22,35 +22,34 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._typing import FloatArray
 from ..design import Design
 from ._kinematics import J2, Mat, body_jets
 from ._model import MASS_BODIES, MassModel
 
 __all__ = ["Evaluation", "evaluate", "N_Q_DIRECTIONS"]
 
-Arr = NDArray[np.float64]
 #: Directions of the jets: 0 the motion (qd, qdd), 1..3 unit q1, q2, q3, then optional
 #: 3 translations and 3 rotations of the RCM frame (q held).
 N_Q_DIRECTIONS = 4
 
 
-def _skew_sq(w: Arr) -> Arr:
+def _skew_sq(w: FloatArray) -> FloatArray:
     """``[w]^2`` for w of shape (..., 3)."""
     return np.einsum("...i,...j->...ij", w, w) - np.einsum("...i,...i->...", w, w)[
         ..., None, None] * np.eye(3)
 
 
-def _skew(w: Arr) -> Arr:
+def _skew(w: FloatArray) -> FloatArray:
     z = np.zeros(w.shape[:-1])
     return np.stack([np.stack([z, -w[..., 2], w[..., 1]], -1),
                      np.stack([w[..., 2], z, -w[..., 0]], -1),
                      np.stack([-w[..., 1], w[..., 0], z], -1)], -2)
 
 
-def _vec(v: list, shape: tuple[int, ...]) -> tuple[Arr, Arr, Arr]:
-    c = [[], [], []]  # type: list[list[Arr]]
+def _vec(v: list, shape: tuple[int, ...]) -> tuple[FloatArray, FloatArray, FloatArray]:
+    c = [[], [], []]  # type: list[list[FloatArray]]
     for e in v:
         if isinstance(e, J2):
             parts = (e.c0, e.c1, e.c2)
@@ -61,12 +60,12 @@ def _vec(v: list, shape: tuple[int, ...]) -> tuple[Arr, Arr, Arr]:
     return tuple(np.stack(ck, axis=-1) for ck in c)  # type: ignore[return-value]
 
 
-def _mat(m: Mat, shape: tuple[int, ...]) -> tuple[Arr, Arr, Arr]:
+def _mat(m: Mat, shape: tuple[int, ...]) -> tuple[FloatArray, FloatArray, FloatArray]:
     rows = [_vec(r, shape) for r in m]
     return tuple(np.stack([r[k] for r in rows], axis=-2) for k in range(3))  # type: ignore
 
 
-def _vee(A: Arr) -> Arr:
+def _vee(A: FloatArray) -> FloatArray:
     return 0.5 * np.stack([A[..., 2, 1] - A[..., 1, 2], A[..., 0, 2] - A[..., 2, 0],
                            A[..., 1, 0] - A[..., 0, 1]], axis=-1)
 
@@ -95,23 +94,23 @@ class Evaluation:
         Distances to the singular sets (half-chord of k1, k2 in m; sines; insertion p, m).
     """
 
-    v: Arr
-    w: Arr
-    a: Arr
-    alpha: Arr
-    p: Arr
-    I_w: Arr
-    v_tip: Arr
-    tip: Arr
-    a_tip: Arr
-    hc: Arr
-    sin_u2: Arr
-    sin_u4: Arr
-    p_ins: Arr
+    v: FloatArray
+    w: FloatArray
+    a: FloatArray
+    alpha: FloatArray
+    p: FloatArray
+    I_w: FloatArray
+    v_tip: FloatArray
+    tip: FloatArray
+    a_tip: FloatArray
+    hc: FloatArray
+    sin_u2: FloatArray
+    sin_u4: FloatArray
+    p_ins: FloatArray
 
 
-def evaluate(q: Arr, qd: Arr, qdd: Arr, T_b_e: Arr, design: Design, masses: MassModel,
-             slot: int, *, rcm_directions: bool = False) -> Evaluation:
+def evaluate(q: FloatArray, qd: FloatArray, qdd: FloatArray, T_b_e: FloatArray, design: Design,
+             masses: MassModel, slot: int, *, rcm_directions: bool = False) -> Evaluation:
     """Jets of every moving body for flat batches.
 
     Parameters
@@ -193,7 +192,8 @@ def _evaluate(qj: list[J2], rcm: list[J2], R_e: Mat, design: Design, masses: Mas
                       p_ins=bj.p[:, 0])
 
 
-def body_loads(ev: Evaluation, masses: MassModel, gravity: Arr) -> tuple[Arr, Arr]:
+def body_loads(ev: Evaluation, masses: MassModel, gravity: FloatArray
+               ) -> tuple[FloatArray, FloatArray]:
     """Inertial minus gravity force ``m (a - g)`` and moment ``I alpha + w x I w``.
 
     Returns
@@ -208,7 +208,8 @@ def body_loads(ev: Evaluation, masses: MassModel, gravity: Arr) -> tuple[Arr, Ar
     return F, Nm
 
 
-def generalized_forces(ev: Evaluation, F: Arr, Nm: Arr, f_tip: Arr) -> Arr:
+def generalized_forces(ev: Evaluation, F: FloatArray, Nm: FloatArray, f_tip: FloatArray
+                       ) -> FloatArray:
     """``Q_j = sum_b v_bj . F_b + w_bj . N_b - v_tip_j . f_tip`` for every direction j.
 
     Returns
@@ -219,7 +220,7 @@ def generalized_forces(ev: Evaluation, F: Arr, Nm: Arr, f_tip: Arr) -> Arr:
             - np.einsum("ndi,ni->nd", ev.v_tip, f_tip))
 
 
-def mass_matrix_from(ev: Evaluation, masses: MassModel) -> Arr:
+def mass_matrix_from(ev: Evaluation, masses: MassModel) -> FloatArray:
     """``M_ij = sum_b m v_bi . v_bj + w_bi . I_b w_bj`` over the q directions 1..3."""
     v = ev.v[:, 1:N_Q_DIRECTIONS]
     w = ev.w[:, 1:N_Q_DIRECTIONS]
@@ -228,7 +229,8 @@ def mass_matrix_from(ev: Evaluation, masses: MassModel) -> Arr:
     return Mv + Mw
 
 
-def energies(ev: Evaluation, masses: MassModel, gravity: Arr) -> tuple[Arr, Arr]:
+def energies(ev: Evaluation, masses: MassModel, gravity: FloatArray
+             ) -> tuple[FloatArray, FloatArray]:
     """Kinetic and potential energy (J) along direction 0, shape (N,) each."""
     v0, w0 = ev.v[:, 0], ev.w[:, 0]
     kin = 0.5 * (np.einsum("b,nbk,nbk->n", masses.mass, v0, v0)

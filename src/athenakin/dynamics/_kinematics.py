@@ -15,13 +15,11 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._typing import FloatArray
 from ..design import Design
 
 __all__ = ["J2", "BodyJets", "body_jets", "slot_signs"]
-
-Arr = NDArray[np.float64]
 
 
 class J2:
@@ -29,7 +27,7 @@ class J2:
 
     __slots__ = ("c0", "c1", "c2")
 
-    def __init__(self, c0: Arr, c1: Arr, c2: Arr) -> None:
+    def __init__(self, c0: FloatArray, c1: FloatArray, c2: FloatArray) -> None:
         self.c0, self.c1, self.c2 = c0, c1, c2
 
     def __add__(self, o: J2 | float) -> J2:
@@ -158,10 +156,10 @@ class BodyJets:
     origin: dict[str, Vec]
     rotation: dict[str, Mat]
     tip: Vec
-    hc: Arr
-    sin_u2: Arr
-    sin_u4: Arr
-    p: Arr
+    hc: FloatArray
+    sin_u2: FloatArray
+    sin_u4: FloatArray
+    p: FloatArray
 
 
 def body_jets(q: list[J2], rcm: list[J2], R_e: Mat, design: Design, slot: int) -> BodyJets:

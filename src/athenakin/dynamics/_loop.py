@@ -16,9 +16,10 @@ last command then).
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._backend import resolve_backend
+from .._typing import FloatArray
 from .._validation import check_array, check_choice, check_slot
 from ..design import Design, resolve_design
 from ..robot._setup import resolve_rcm_frame
@@ -97,7 +98,7 @@ class InverseDynamicsLoop:
         """Whether the compiled kernel runs (else the numpy reference)."""
         return self._kernel is not None
 
-    def __call__(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> NDArray[np.float64]:
+    def __call__(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> FloatArray:
         """Actuator forces ``(f1, f2, f3)`` (N) of one state, positive along increasing ``q``.
 
         Parameters

@@ -27,8 +27,9 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import FloatArray, IntArray
 from .._validation import check_array, check_scalar
 from ..design import Design
 from ..errors import InvalidInputError
@@ -50,7 +51,7 @@ STUDY_F_MAX = 50.0
 _PAIRS = ((0, 1), (0, 2), (1, 2))
 
 
-def _check_slots(slot: object, n: int) -> NDArray[np.int64]:
+def _check_slots(slot: object, n: int) -> IntArray:
     """``slot``: one FK slot (0..15) or one per configuration, shape (n,)."""
     try:
         arr = np.asarray(slot)
@@ -98,9 +99,9 @@ class ForceMetrics:
     n_peak: int
 
 
-def _peak_bound(sel: NDArray[np.float64], J: NDArray[np.float64], tg: NDArray[np.float64],
-                T_b_e: NDArray[np.float64], design: Design, m: MassModel, k: int,
-                v: float, a: float) -> NDArray[np.float64]:
+def _peak_bound(sel: FloatArray, J: FloatArray, tg: FloatArray,
+                T_b_e: FloatArray, design: Design, m: MassModel, k: int,
+                v: float, a: float) -> FloatArray:
     """Per configuration and actuator, the force bound of the module docstring, N."""
     Jinv = np.linalg.inv(J)
     Mq = mass_matrix(sel, T_b_e, design, masses=m, slot=k, errors="flag")
@@ -109,7 +110,7 @@ def _peak_bound(sel: NDArray[np.float64], J: NDArray[np.float64], tg: NDArray[np
     g0 = np.zeros(3)
     Tn = np.broadcast_to(np.asarray(T_b_e, float), (sel.shape[0], 4, 4))
 
-    def quad(u: NDArray[np.float64]) -> NDArray[np.float64]:
+    def quad(u: FloatArray) -> FloatArray:
         # tip velocity u, tip acceleration 0: qd = J^-1 u, qdd = -J^-1 (J' qd)
         qd = np.einsum("nij,j->ni", Jinv, u)
         a0 = evaluate(sel, qd, z, Tn, design, m, k).a_tip

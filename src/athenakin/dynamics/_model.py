@@ -49,10 +49,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from .._mechanism import BODIES, BodyGeometry, rail_extent
 from .._toml import read_toml
+from .._typing import FloatArray
 from .._validation import check_array, check_keys, check_scalar
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
@@ -99,7 +99,7 @@ def actuator_part_length(design: Design | None = None) -> float:
 
 
 def body_segment_in_frame(name: str, design: Design | None = None,
-                          geometry: BodyGeometry | None = None) -> NDArray[np.float64]:
+                          geometry: BodyGeometry | None = None) -> FloatArray:
     """End points of a body's segment in its own frame (table of the module), m.
 
     Parameters
@@ -148,7 +148,7 @@ def body_segment_in_frame(name: str, design: Design | None = None,
     return np.array(table[name], dtype=float)
 
 
-def _frame_along(u: NDArray[np.float64]) -> NDArray[np.float64]:
+def _frame_along(u: FloatArray) -> FloatArray:
     """A rotation whose z axis is the unit vector ``u``."""
     z = u / np.linalg.norm(u)
     t = np.array([1.0, 0, 0]) if abs(z[0]) < 0.9 else np.array([0, 1.0, 0])
@@ -157,7 +157,7 @@ def _frame_along(u: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.stack([x, np.cross(z, x), z], axis=-1)
 
 
-def _rod(mass: float, seg: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _rod(mass: float, seg: FloatArray) -> tuple[FloatArray, FloatArray]:
     c = 0.5 * (seg[0] + seg[1])
     u = seg[1] - seg[0]
     L2 = float(u @ u)
@@ -165,8 +165,8 @@ def _rod(mass: float, seg: NDArray[np.float64]) -> tuple[NDArray[np.float64], ND
     return c, inertia
 
 
-def _capsule(density: float, radius: float, seg: NDArray[np.float64]
-             ) -> tuple[float, NDArray[np.float64], NDArray[np.float64]]:
+def _capsule(density: float, radius: float, seg: FloatArray
+             ) -> tuple[float, FloatArray, FloatArray]:
     """Mass, centre and inertia (about the centre) of a solid capsule about a segment."""
     u = seg[1] - seg[0]
     L = float(np.linalg.norm(u))
@@ -189,7 +189,7 @@ def _check_name(name: object, what: str) -> str:
     return name
 
 
-def _massless_tables() -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+def _massless_tables() -> tuple[FloatArray, FloatArray, FloatArray]:
     """``mass`` (n,), ``com`` (n, 3), ``inertia`` (n, 3, 3) of :data:`MASS_BODIES`, all zero."""
     n = len(MASS_BODIES)
     return np.zeros(n), np.zeros((n, 3)), np.zeros((n, 3, 3))
@@ -221,9 +221,9 @@ class MassModel:
         names the body).
     """
 
-    mass: NDArray[np.float64]
-    com: NDArray[np.float64]
-    inertia: NDArray[np.float64]
+    mass: FloatArray
+    com: FloatArray
+    inertia: FloatArray
 
     def __post_init__(self) -> None:
         n = len(MASS_BODIES)
@@ -404,7 +404,7 @@ class MassModel:
         return cls.slender_rods(REFERENCE_MASSES, design)
 
     # ---- access and export --------------------------------------------------------
-    def body(self, name: str) -> tuple[float, NDArray[np.float64], NDArray[np.float64]]:
+    def body(self, name: str) -> tuple[float, FloatArray, FloatArray]:
         """``(mass, com, inertia)`` of one body."""
         i = MASS_BODIES.index(_check_name(name, "name"))
         return float(self.mass[i]), self.com[i].copy(), self.inertia[i].copy()
@@ -451,7 +451,7 @@ REFERENCE_MASSES: dict[str, float] = {
 }
 
 
-def _array_entry(x: object, name: str, tail: tuple[int, ...]) -> NDArray[np.float64]:
+def _array_entry(x: object, name: str, tail: tuple[int, ...]) -> FloatArray:
     if isinstance(x, (str, bytes, Mapping)):
         raise InvalidInputError(f"{name}: expected numbers of shape {tail}, got {x!r}")
     try:
@@ -463,7 +463,7 @@ def _array_entry(x: object, name: str, tail: tuple[int, ...]) -> NDArray[np.floa
     return arr
 
 
-def _check_body(name: str, m: float, inertia: NDArray[np.float64]) -> None:
+def _check_body(name: str, m: float, inertia: FloatArray) -> None:
     if not 0 <= m <= MAX_MASS:
         raise InvalidInputError(f"mass of {name!r}: expected a mass in [0, {MAX_MASS:g}] kg, "
                                 f"got {m}")

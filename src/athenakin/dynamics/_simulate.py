@@ -6,8 +6,9 @@ import dataclasses
 from collections.abc import Callable
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import FloatArray
 from .._validation import check_array, check_scalar, check_slot
 from ..design import Design, resolve_design
 from ..errors import (
@@ -23,7 +24,6 @@ from ._model import MassModel
 __all__ = ["Simulation", "simulate", "SimulationStoppedError", "MAX_STEPS",
            "SINGULARITY_MARGINS"]
 
-Arr = NDArray[np.float64]
 #: Largest number of integration steps of one call: 100 s of motion at the default 1 ms
 #: step. Each step costs four forward-dynamics solves (about 1 ms of Python with the
 #: compiled kernel, 10-20 ms on the numpy path) and stores 13 floats (104 bytes): at
@@ -68,14 +68,14 @@ class Simulation:
         Actuator forces applied, N.
     """
 
-    t: Arr
-    q: Arr
-    qd: Arr
-    qdd: Arr
-    forces: Arr
+    t: FloatArray
+    q: FloatArray
+    qd: FloatArray
+    qdd: FloatArray
+    forces: FloatArray
 
 
-def _single(x: ArrayLike, name: str) -> Arr:
+def _single(x: ArrayLike, name: str) -> FloatArray:
     """One vector of 3 (gravity, tip force): a batch is refused, named."""
     a = check_array(x, name, (3,))
     if a.shape != (3,):
@@ -84,7 +84,7 @@ def _single(x: ArrayLike, name: str) -> Arr:
     return a
 
 
-def _distances(q: Arr, T: Arr, design: Design, slot: int) -> dict[str, float]:
+def _distances(q: FloatArray, T: FloatArray, design: Design, slot: int) -> dict[str, float]:
     """Distances to the singular sets: the closed forms of ``body_jets`` on plain floats."""
     from ._kinematics import J2, body_jets
 
@@ -98,8 +98,9 @@ def _distances(q: Arr, T: Arr, design: Design, slot: int) -> dict[str, float]:
             "sin_u4": abs(float(bj.sin_u4)), "p": abs(float(bj.p))}
 
 
-def _fast_forward(design: Design, T: Arr, masses: MassModel, slot: int, g: Arr,
-                  f_tip: Arr | None) -> Callable[[Arr, Arr, Arr], Arr] | None:
+def _fast_forward(design: Design, T: FloatArray, masses: MassModel, slot: int, g: FloatArray,
+                  f_tip: FloatArray | None
+                  ) -> Callable[[FloatArray, FloatArray, FloatArray], FloatArray] | None:
     """``qdd(q, qd, tau)`` from four rows of the compiled inverse dynamics, or None.
 
     Row 0 gives ``h = tau(q, qd, 0)``, rows 1-3 (``qd = 0``, no gravity, ``qdd = e_j``)
@@ -122,7 +123,7 @@ def _fast_forward(design: Design, T: Arr, masses: MassModel, slot: int, g: Arr,
     qdd_in[1:] = np.eye(3)
     out = np.empty((4, 3))
 
-    def qdd(qq: Arr, vv: Arr, tau: Arr) -> Arr:
+    def qdd(qq: FloatArray, vv: FloatArray, tau: FloatArray) -> FloatArray:
         qs = _kernel_array(np.broadcast_to(qq, (4, 3)))
         vs = np.zeros((4, 3))
         vs[0] = vv
@@ -153,13 +154,13 @@ def _steps(duration: object, dt: object) -> tuple[float, float, int]:
     return T_dur, h, n
 
 
-def _force_function(forces: ArrayLike | Callable[[float, Arr, Arr], ArrayLike]
-                    ) -> Callable[[float, Arr, Arr], Arr]:
+def _force_function(forces: ArrayLike | Callable[[float, FloatArray, FloatArray], ArrayLike]
+                    ) -> Callable[[float, FloatArray, FloatArray], FloatArray]:
     """The actuator forces (N) as a checked function of ``(t, q, qd)``."""
     if callable(forces):
         force_fn = forces
 
-        def tau_of(t: float, qq: Arr, vv: Arr) -> Arr:
+        def tau_of(t: float, qq: FloatArray, vv: FloatArray) -> FloatArray:
             out = check_array(force_fn(t, qq, vv), "forces(t, q, qd)", (3,))
             if out.shape != (3,):
                 raise InvalidInputError(f"forces(t, q, qd): expected shape (3,), got {out.shape}")
@@ -169,13 +170,13 @@ def _force_function(forces: ArrayLike | Callable[[float, Arr, Arr], ArrayLike]
         if f_const.shape != (3,):
             raise InvalidInputError(f"forces: expected shape (3,), got {f_const.shape}")
 
-        def tau_of(t: float, qq: Arr, vv: Arr) -> Arr:
+        def tau_of(t: float, qq: FloatArray, vv: FloatArray) -> FloatArray:
             return f_const
     return tau_of
 
 
 def simulate(q0: ArrayLike, qd0: ArrayLike,
-             forces: ArrayLike | Callable[[float, Arr, Arr], ArrayLike],
+             forces: ArrayLike | Callable[[float, FloatArray, FloatArray], ArrayLike],
              T_b_e: ArrayLike | None = None, design: Design | None = None, *,
              duration: float, dt: float = 1e-3, masses: MassModel | None = None,
              gravity: ArrayLike = STANDARD_GRAVITY, tip_force: ArrayLike | None = None,
@@ -250,7 +251,7 @@ class _States:
     Row ``i`` is complete once the acceleration of state ``i`` is known: rows ``< nacc``.
     """
 
-    def __init__(self, n: int, q0: Arr, qd0: Arr) -> None:
+    def __init__(self, n: int, q0: FloatArray, qd0: FloatArray) -> None:
         self.t = np.empty(n + 1)
         self.q = np.empty((n + 1, 3))
         self.qd = np.empty((n + 1, 3))
@@ -267,11 +268,12 @@ class _States:
         return SimulationStoppedError(msg, t, part, cause)
 
 
-def _accelerations(d: Design, T: Arr, m: MassModel, k: int, g: Arr, f_tip: Arr | None,
-                   tau_of: Callable[[float, Arr, Arr], Arr],
-                   fast: Callable[[Arr, Arr, Arr], Arr] | None,
+def _accelerations(d: Design, T: FloatArray, m: MassModel, k: int, g: FloatArray,
+                   f_tip: FloatArray | None,
+                   tau_of: Callable[[float, FloatArray, FloatArray], FloatArray],
+                   fast: Callable[[FloatArray, FloatArray, FloatArray], FloatArray] | None,
                    stop: Callable[[str, type[Exception], float], SimulationStoppedError]
-                   ) -> Callable[[float, Arr, Arr], tuple[Arr, Arr]]:
+                   ) -> Callable[[float, FloatArray, FloatArray], tuple[FloatArray, FloatArray]]:
     """``acc(t, q, qd) -> (qdd, tau)``, checked at every stage.
 
     It raises ``stop(...)`` at a stroke limit, within :data:`SINGULARITY_MARGINS` of a
@@ -279,7 +281,7 @@ def _accelerations(d: Design, T: Arr, m: MassModel, k: int, g: Arr, f_tip: Arr |
     """
     lo, hi = d.stroke_min, d.stroke_max
 
-    def acc(t: float, qq: Arr, vv: Arr) -> tuple[Arr, Arr]:
+    def acc(t: float, qq: FloatArray, vv: FloatArray) -> tuple[FloatArray, FloatArray]:
         if np.any(qq < lo) or np.any(qq > hi):
             i = int(np.argmax((qq < lo) | (qq > hi)))
             raise stop(f"simulate: q{i + 1} = {qq[i]:.6g} m left its stroke "
@@ -304,8 +306,9 @@ def _accelerations(d: Design, T: Arr, m: MassModel, k: int, g: Arr, f_tip: Arr |
     return acc
 
 
-def _rk4_step(acc: Callable[[float, Arr, Arr], tuple[Arr, Arr]], t: float, q: Arr, v: Arr,
-              a1: Arr, hh: float) -> tuple[Arr, Arr]:
+def _rk4_step(acc: Callable[[float, FloatArray, FloatArray], tuple[FloatArray, FloatArray]],
+              t: float, q: FloatArray, v: FloatArray, a1: FloatArray, hh: float
+              ) -> tuple[FloatArray, FloatArray]:
     """One classical Runge-Kutta step of length ``hh`` from ``(q, v)``, ``a1 = qdd(t, q, v)``."""
     k1q, k1v = v, a1
     k2q, k2v = v + 0.5 * hh * k1v, acc(t + 0.5 * hh, q + 0.5 * hh * k1q, v + 0.5 * hh * k1v)[0]

@@ -32,6 +32,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._typing import FloatArray
 from .._validation import (
     OPTION_CLOSED,
     ROTATION_TOL,
@@ -80,7 +81,7 @@ class _Delegate(Exception):
     """Internal: hand the call to the reference implementation."""
 
 
-def _arr(x: object, tail: tuple[int, ...]) -> NDArray[np.float64]:
+def _arr(x: object, tail: tuple[int, ...]) -> FloatArray:
     """float64, C-contiguous, writable array with trailing shape ``tail``, else _Delegate."""
     if type(x) is not np.ndarray or x.dtype is not _F8:
         try:
@@ -98,8 +99,8 @@ def _arr(x: object, tail: tuple[int, ...]) -> NDArray[np.float64]:
     return x
 
 
-def _flat(a: NDArray[np.float64], bx: tuple[int, ...], batch: tuple[int, ...], N: int,
-          tail: tuple[int, ...]) -> NDArray[np.float64]:
+def _flat(a: FloatArray, bx: tuple[int, ...], batch: tuple[int, ...], N: int,
+          tail: tuple[int, ...]) -> FloatArray:
     """``a`` (bx + tail) as (n, *tail) with n = N, or n = 1 when it broadcasts as a single item."""
     if bx == batch:
         return a.reshape((N,) + tail)
@@ -267,8 +268,8 @@ _object_new = object.__new__
 _object_setattr = object.__setattr__
 
 
-def _fk_one(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.float64],
-            tol: NDArray[np.float64]) -> tuple[int, FKSolution]:
+def _fk_one(qa: FloatArray, Ta: FloatArray, P: FloatArray,
+            tol: FloatArray) -> tuple[int, FKSolution]:
     """One pose into the result's own arrays: ``(flags, result)`` (flags as the kernels')."""
     reason = _empty(16, _I8)
     valid = _empty(16, _BOOL)
@@ -287,8 +288,8 @@ def _fk_one(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.floa
     return flags, obj
 
 
-def _fk_single(qa: NDArray[np.float64], Ta: NDArray[np.float64], P: NDArray[np.float64],
-               tol: NDArray[np.float64], raise_now: bool, reference: Callable[[], FKSolution]
+def _fk_single(qa: FloatArray, Ta: FloatArray, P: FloatArray,
+               tol: FloatArray, raise_now: bool, reference: Callable[[], FKSolution]
                ) -> FKSolution:
     """One pose through the single-pose kernel (about half the call overhead)."""
     flags, sol = _fk_one(qa, Ta, P, tol)
@@ -305,9 +306,9 @@ _SINGULAR_TOL_MAX = TOLERANCE_MAXIMA["singular_tol"]
 _CLOSURE_TOL_MAX = TOLERANCE_MAXIMA["closure_tol"]
 
 
-def _ik_single(Ta: NDArray[np.float64], Ua: NDArray[np.float64], P: NDArray[np.float64],
+def _ik_single(Ta: FloatArray, Ua: FloatArray, P: FloatArray,
                stol: float, ctol: float, raise_now: bool
-               ) -> tuple[NDArray[np.float64], PassiveJoints] | None:
+               ) -> tuple[FloatArray, PassiveJoints] | None:
     """One paper-form item through the single-item kernel; None: the reference decides."""
     fbuf = np.empty(_one.ONE_F)
     ibuf = np.empty(3, np.int64)
@@ -328,7 +329,7 @@ def _ik_single(Ta: NDArray[np.float64], Ua: NDArray[np.float64], P: NDArray[np.f
 def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None = None, *,
                        errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
                        closure_tol: float = CLOSURE_TOL, fields: tuple[str, ...] | None = None,
-                       parallel: bool = False) -> tuple[NDArray[np.float64], PassiveJoints]:
+                       parallel: bool = False) -> tuple[FloatArray, PassiveJoints]:
     """See :func:`athenakin.inverse_kinematics` (compiled; ``parallel=`` threads).
 
     Parameters
@@ -343,7 +344,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
     q, passive : ndarray (..., 3), PassiveJoints
         As :func:`athenakin.inverse_kinematics` (``q`` in m).
     """
-    def reference() -> tuple[NDArray[np.float64], PassiveJoints]:
+    def reference() -> tuple[FloatArray, PassiveJoints]:
         return _ref_ik.inverse_kinematics(T_b_e, u345, design, errors=errors,
                                           singular_tol=singular_tol, closure_tol=closure_tol,
                                           fields=fields)
@@ -427,7 +428,7 @@ def _ik_want(names: tuple[str, ...]) -> int:
 
 # --- whole robot: controller forms -------------------------------------------------------
 def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors: str,
-          kind: int, parallel: bool) -> tuple[NDArray[np.float64], InstrumentIK]:
+          kind: int, parallel: bool) -> tuple[FloatArray, InstrumentIK]:
     if not (type(errors) is str and errors in _POLICY_SET):
         check_options(errors)
     P = design_params(design)
@@ -475,7 +476,7 @@ def _line(T_b_e: object, V: object, p_in: object, design: Design | None, errors:
 
 def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
                       design: Design | None = None, *, errors: ErrorPolicy = "auto",
-                      parallel: bool = False) -> tuple[NDArray[np.float64], InstrumentIK]:
+                      parallel: bool = False) -> tuple[FloatArray, InstrumentIK]:
     """Actuators for a direction and insertion: compiled :func:`~athenakin.q_from_instrument`.
 
     Same results and errors as the reference.
@@ -501,7 +502,7 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
 
 def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = None, *,
                     errors: ErrorPolicy = "auto", parallel: bool = False
-                    ) -> tuple[NDArray[np.float64], InstrumentIK]:
+                    ) -> tuple[FloatArray, InstrumentIK]:
     """Actuators that put the tool tip at a point: compiled :func:`athenakin.q_from_tool_tip`.
 
     Same results and errors as the reference.

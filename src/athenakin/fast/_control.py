@@ -5,8 +5,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import FloatArray, Int8Array
 from .._validation import check_array, check_frame
 from ..chain._ups import CLOSURE_TOL
 from ..design import Design
@@ -21,7 +22,7 @@ __all__ = ["ControlLoop"]
 _F8 = np.dtype(np.float64)
 
 
-def _vec3(x: ArrayLike, name: str) -> NDArray[np.float64]:
+def _vec3(x: ArrayLike, name: str) -> FloatArray:
     """``x`` as a float64 C-contiguous writable array of shape (3,) (copied if needed)."""
     if type(x) is np.ndarray and x.dtype is _F8 and x.shape == (3,):
         f = x.flags
@@ -96,12 +97,12 @@ class ControlLoop:
         self._inf = float("inf")
 
     @property
-    def T_b_e(self) -> NDArray[np.float64]:
+    def T_b_e(self) -> FloatArray:
         """The RCM frame (a copy), shape (4, 4)."""
         return self._T.copy()
 
-    def fk(self, q: ArrayLike) -> tuple[NDArray[np.int8], NDArray[np.float64],
-                                        NDArray[np.float64]]:
+    def fk(self, q: ArrayLike) -> tuple[Int8Array, FloatArray,
+                                        FloatArray]:
         """The 16 forward-kinematics slots of actuator values ``q``.
 
         Parameters
@@ -121,7 +122,7 @@ class ControlLoop:
                    self._ibuf)
         return self._reason, self._p, self._u
 
-    def ik(self, u345: ArrayLike) -> tuple[NDArray[np.float64], int]:
+    def ik(self, u345: ArrayLike) -> tuple[FloatArray, int]:
         """Paper-form IK: actuators for the spherical-joint angles ``u3, u4, u5``.
 
         Parameters
@@ -148,7 +149,7 @@ class ControlLoop:
         return self._kq, int(self._kibuf[2])
 
     def q_from_instrument(self, direction_e: ArrayLike, p: float
-                          ) -> tuple[NDArray[np.float64], int]:
+                          ) -> tuple[FloatArray, int]:
         """Actuators for an instrument direction in E and an insertion ``p`` (m).
 
         Returns ``(q (3,), reason)`` as :func:`athenakin.q_from_instrument`; a
@@ -159,7 +160,7 @@ class ControlLoop:
         r = _one.ik_line_one(self._T, d, _real(p, "p"), self._P, 0, self._q)
         return self._q, r
 
-    def q_from_tool_tip(self, tip_e: ArrayLike) -> tuple[NDArray[np.float64], int]:
+    def q_from_tool_tip(self, tip_e: ArrayLike) -> tuple[FloatArray, int]:
         """Actuators that put the tool tip at ``tip_e`` (frame E, m).
 
         Returns ``(q (3,), reason)`` as :func:`athenakin.q_from_tool_tip`; a

@@ -17,8 +17,9 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import FloatArray
 from .._validation import ROTATION_TOL, is_option
 from ..design import Design
 from ..parallel import TANGENT_TOL
@@ -30,11 +31,11 @@ from ._api import _arr, _batch, _Delegate, _flat, design_params
 
 _MODE_1 = (np.ones(1), ())
 _MODE_M1 = (-np.ones(1), ())
-_FRAMES: dict[int, tuple[Design | None, NDArray[np.float64]]] = {}
+_FRAMES: dict[int, tuple[Design | None, FloatArray]] = {}
 _MAX_CACHE = 64
 
 
-def _modes(mode: object, bq: tuple[int, ...]) -> tuple[NDArray[np.float64], tuple[int, ...]]:
+def _modes(mode: object, bq: tuple[int, ...]) -> tuple[FloatArray, tuple[int, ...]]:
     """Mode as a flat float64 array (1 or prod(bq) rows) and its shape, else _Delegate."""
     if type(mode) is int:
         if mode == 1:
@@ -61,8 +62,8 @@ def _modes(mode: object, bq: tuple[int, ...]) -> tuple[NDArray[np.float64], tupl
     return mf, bm
 
 
-def _mode_rows(mf: NDArray[np.float64], bm: tuple[int, ...], batch: tuple[int, ...], N: int
-               ) -> NDArray[np.float64]:
+def _mode_rows(mf: FloatArray, bm: tuple[int, ...], batch: tuple[int, ...], N: int
+               ) -> FloatArray:
     if bm == batch:
         return mf.reshape(N)
     if math.prod(bm) == 1:
@@ -70,7 +71,7 @@ def _mode_rows(mf: NDArray[np.float64], bm: tuple[int, ...], batch: tuple[int, .
     return np.ascontiguousarray(np.broadcast_to(mf, batch)).reshape(N)
 
 
-def _default_frame(design: Design | None) -> NDArray[np.float64]:
+def _default_frame(design: Design | None) -> FloatArray:
     """The reference set-up of a design as (1, 4, 4) (cached per design object; never exposed)."""
     hit = _FRAMES.get(id(design))
     if hit is not None and hit[0] is design:
@@ -85,15 +86,15 @@ def _default_frame(design: Design | None) -> NDArray[np.float64]:
     return T
 
 
-def _params(design: Design | None) -> NDArray[np.float64]:
+def _params(design: Design | None) -> FloatArray:
     try:
         return design_params(design)
     except TypeError:
         raise _Delegate from None
 
 
-def _parallel(kind: int, ref: Callable[..., NDArray[np.float64]], q: object,
-              design: Design | None, mode: object) -> NDArray[np.float64]:
+def _parallel(kind: int, ref: Callable[..., FloatArray], q: object,
+              design: Design | None, mode: object) -> FloatArray:
     """The parallel-module Jacobian ``kind`` compiled, else (``_Delegate``) its reference."""
     try:
         P = _params(design)
@@ -110,8 +111,8 @@ def _parallel(kind: int, ref: Callable[..., NDArray[np.float64]], q: object,
     return out.reshape(bq + (rows, 3))
 
 
-def _robot(kind: int, ref: Callable[..., NDArray[np.float64]], q: object, T_b_e: object,
-           design: Design | None, mode: object, frame: object) -> NDArray[np.float64]:
+def _robot(kind: int, ref: Callable[..., FloatArray], q: object, T_b_e: object,
+           design: Design | None, mode: object, frame: object) -> FloatArray:
     """The whole-robot Jacobian ``kind`` compiled, else (``_Delegate``) its reference."""
     try:
         if is_option(frame, "rcm"):
@@ -144,7 +145,7 @@ def _robot(kind: int, ref: Callable[..., NDArray[np.float64]], q: object, T_b_e:
 
 # --- the parallel module ------------------------------------------------------------------
 def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1
-                      ) -> NDArray[np.float64]:
+                      ) -> FloatArray:
     """Compiled :func:`~athenakin.analysis.parallel_jacobian`.
 
     Same result (NaN / inf entries) and errors as the reference.
@@ -173,7 +174,7 @@ def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLik
 
 
 def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1
-                              ) -> NDArray[np.float64]:
+                              ) -> FloatArray:
     """Compiled :func:`~athenakin.analysis.parallel_inverse_jacobian`.
 
     Parameters
@@ -189,7 +190,7 @@ def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None, mode: 
 
 
 def parallel_twist_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1
-                            ) -> NDArray[np.float64]:
+                            ) -> FloatArray:
     """Compiled :func:`~athenakin.analysis.parallel_twist_jacobian`.
 
     Parameters
@@ -208,7 +209,7 @@ def parallel_twist_jacobian(q: ArrayLike, design: Design | None = None, mode: Ar
 # --- whole robot in controller variables ----------------------------------------------------
 def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                         design: Design | None = None, *, mode: ArrayLike = 1,
-                        frame: Frame = "rcm") -> NDArray[np.float64]:
+                        frame: Frame = "rcm") -> FloatArray:
     """Compiled :func:`~athenakin.analysis.instrument_jacobian`.
 
     Same result and errors as the reference.
@@ -242,7 +243,7 @@ def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
 
 def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                                 design: Design | None = None, *, mode: ArrayLike = 1,
-                                frame: Frame = "rcm") -> NDArray[np.float64]:
+                                frame: Frame = "rcm") -> FloatArray:
     """Compiled :func:`~athenakin.analysis.instrument_inverse_jacobian`.
 
     Parameters
@@ -259,7 +260,7 @@ def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
 
 def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                       design: Design | None = None, *, mode: ArrayLike = 1,
-                      frame: Frame = "base") -> NDArray[np.float64]:
+                      frame: Frame = "base") -> FloatArray:
     """Compiled :func:`~athenakin.analysis.tool_tip_jacobian`.
 
     Parameters
@@ -278,7 +279,7 @@ def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
 
 def tool_tip_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                               design: Design | None = None, *, mode: ArrayLike = 1,
-                              frame: Frame = "base") -> NDArray[np.float64]:
+                              frame: Frame = "base") -> FloatArray:
     """Compiled :func:`~athenakin.analysis.tool_tip_inverse_jacobian`.
 
     Parameters

@@ -15,8 +15,8 @@ from collections.abc import Callable
 from typing import Any, TypeGuard, TypeVar
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._typing import FloatArray, IntArray
 from .._validation import (
     ERROR_POLICIES,
     OPTION_AUTO,
@@ -41,8 +41,8 @@ _F8 = np.dtype(np.float64)
 _FK_TOL_DEFAULT = np.array([TANGENT_TOL, DEGENERATE_TOL, P_ZERO_TOL, CLOSURE_TOL])
 #: id(design) -> (design, parameter vector P (13,), P with the default FK tolerances and
 #: ROTATION_TOL (18,: the lean FK kernel's one option array), tool length as a float).
-_PARAMS: dict[int, tuple[Design | None, NDArray[np.float64], NDArray[np.float64], float]] = {}
-_DEFAULT: list[NDArray[np.float64]] = []
+_PARAMS: dict[int, tuple[Design | None, FloatArray, FloatArray, float]] = {}
+_DEFAULT: list[FloatArray] = []
 _MAX_CACHE = 64
 _PLAIN = {c for c in (FKSolution, PassiveJoints, InstrumentIK)
           if dataclasses.is_dataclass(c) and not hasattr(c, "__post_init__")
@@ -67,7 +67,7 @@ def _new(cls: type[_R], **fields: Any) -> _R:
     return cls(**fields)
 
 
-def design_params(design: Design | None) -> NDArray[np.float64]:
+def design_params(design: Design | None) -> FloatArray:
     """The design as the kernels' parameter vector (cached per design object).
 
     Parameters
@@ -103,7 +103,7 @@ def design_params(design: Design | None) -> NDArray[np.float64]:
     return P
 
 
-def _make_params(d: Design) -> NDArray[np.float64]:
+def _make_params(d: Design) -> FloatArray:
     return np.array([d.l1, d.l2, d.l3, d.l4, d.l5, *d.stroke_min, *d.stroke_max, d.h_sign,
                      d.tool_length])
 
@@ -165,11 +165,11 @@ _IK_P, _IK_U, _IK_T, _IK_RES, _IK_QE = _one.ONE_P, _one.ONE_U, _one.ONE_T, _one.
 
 #: The entry of :data:`_PARAMS` of the last lean call (a design is mostly the same from one
 #: call to the next: one identity test instead of a table look-up).
-_LAST: tuple[Any, NDArray[np.float64], NDArray[np.float64], float] = (
+_LAST: tuple[Any, FloatArray, FloatArray, float] = (
     object(), np.empty(0), np.empty(0), 0.0)
 
 
-def _lean_entry(design: Design | None) -> tuple[Any, NDArray[np.float64], NDArray[np.float64],
+def _lean_entry(design: Design | None) -> tuple[Any, FloatArray, FloatArray,
                                                 float]:
     """The :data:`_PARAMS` entry of ``design`` (made if need be), kept as :data:`_LAST`."""
     global _LAST
@@ -181,7 +181,7 @@ def _lean_entry(design: Design | None) -> tuple[Any, NDArray[np.float64], NDArra
     return hit
 
 
-def _lean_vector(x: object) -> NDArray[np.float64] | None:
+def _lean_vector(x: object) -> FloatArray | None:
     """A vector of 3 as the single-item kernels take it, or None (the general path decides).
 
     A float64 array of shape (3,) that is C-contiguous, aligned and writable as it
@@ -202,7 +202,7 @@ def _lean_vector(x: object) -> NDArray[np.float64] | None:
     return None
 
 
-def _lean_frame(T: object) -> TypeGuard[NDArray[np.float64]]:
+def _lean_frame(T: object) -> TypeGuard[FloatArray]:
     """``T`` is a float64 array (4, 4), C-contiguous, aligned and writable (the kernels' frame).
 
     False for anything else, which the general path converts or names (lists
@@ -255,7 +255,7 @@ def lean_fk(q: object, T_b_e: object, design: Design | None, method: object = OP
         if t[0] is None or t[1] is None or t[2] is None or t[3] is None:
             return None
         tol = np.array(t)
-    qa: NDArray[np.float64] | None
+    qa: FloatArray | None
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == (3,) and q.flags.carray:
         qa = q                          # _lean_vector's first test, inline (0.1 us less)
     else:
@@ -296,7 +296,7 @@ def lean_fk(q: object, T_b_e: object, design: Design | None, method: object = OP
 
 def lean_ik(T_b_e: object, u345: object, design: Design | None, errors: object = OPTION_AUTO,
             singular_tol: object = IK_SINGULAR_TOL, closure_tol: object = CLOSURE_TOL,
-            fields: object = None) -> tuple[NDArray[np.float64], PassiveJoints] | None:
+            fields: object = None) -> tuple[FloatArray, PassiveJoints] | None:
     """The single-item paper-form IK of a plain call, or None (as :func:`lean_fk`)."""
     if fields is not None or not (errors is OPTION_AUTO or is_raising_policy(errors)):
         return None
@@ -307,7 +307,7 @@ def lean_ik(T_b_e: object, u345: object, design: Design | None, errors: object =
         if st is None or ct is None:
             return None
         stol, ctol = st, ct
-    Ua: NDArray[np.float64] | None
+    Ua: FloatArray | None
     if type(u345) is _ndarray and u345.dtype is _F8 and u345.shape == (3,) \
             and u345.flags.carray:      # _lean_vector's first test, inline (0.1 us less)
         Ua = u345
@@ -341,7 +341,7 @@ def lean_ik(T_b_e: object, u345: object, design: Design | None, errors: object =
 
 
 def lean_line(T_b_e: object, v: object, p: object, design: Design | None,
-              errors: object = OPTION_AUTO) -> tuple[NDArray[np.float64], InstrumentIK] | None:
+              errors: object = OPTION_AUTO) -> tuple[FloatArray, InstrumentIK] | None:
     """The single-item controller-form IK of a plain call, or None (as :func:`lean_fk`).
 
     ``p`` None: :func:`q_from_tool_tip` (``v`` the tip); a float: :func:`q_from_instrument`
@@ -363,8 +363,8 @@ def lean_line(T_b_e: object, v: object, p: object, design: Design | None,
                            (hit if hit[0] is design else _lean_entry(design))[1])
 
 
-def _line_result(fbuf: NDArray[np.float64], ibuf: NDArray[np.int64]
-                 ) -> tuple[NDArray[np.float64], InstrumentIK]:
+def _line_result(fbuf: FloatArray, ibuf: IntArray
+                 ) -> tuple[FloatArray, InstrumentIK]:
     """``(q, InstrumentIK)`` of one controller-form item from the packed kernel buffers."""
     return fbuf[_one.LINE_Q:_one.LINE_P], _new(
         InstrumentIK, p=fbuf[_one.LINE_P],
@@ -373,8 +373,8 @@ def _line_result(fbuf: NDArray[np.float64], ibuf: NDArray[np.int64]
         reason=ibuf[2:3].astype(np.int8).reshape(()), q_error=fbuf[_one.LINE_QE])
 
 
-def _line_one_plain(Ta: NDArray[np.float64], Va: NDArray[np.float64], p: float, kind: int,
-                    P: NDArray[np.float64]) -> tuple[NDArray[np.float64], InstrumentIK] | None:
+def _line_one_plain(Ta: FloatArray, Va: FloatArray, p: float, kind: int,
+                    P: FloatArray) -> tuple[FloatArray, InstrumentIK] | None:
     """One controller-form item (``kind`` 0: direction and ``p``, 1: tool tip), lean path.
 
     None when an input flag is set or the item has no solution (the general path

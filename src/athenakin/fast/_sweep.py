@@ -9,8 +9,9 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import FloatArray, IntArray
 from .._validation import check_array, check_count, check_frame, check_tolerance
 from ..chain._ups import CLOSURE_TOL, DEGENERATE_TOL, P_ZERO_TOL
 from ..design import Design
@@ -49,9 +50,9 @@ class SweepSummary:
     """
 
     n: int
-    n_solutions: NDArray[np.int64]
-    item_reason: NDArray[np.int64]
-    mode_valid: NDArray[np.int64]
+    n_solutions: IntArray
+    item_reason: IntArray
+    mode_valid: IntArray
     seconds: float
 
     @property
@@ -94,7 +95,7 @@ def _same_size(buf: FKSolution | None, n: int) -> FKSolution | None:
 
 #: The histograms of a sweep, filled chunk by chunk: poses per number of valid slots (17,),
 #: per item reason (16,), per assembly mode with valid slots (2,).
-_Histograms = tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]
+_Histograms = tuple[IntArray, IntArray, IntArray]
 
 
 def _progress_bar(total: int, progress: bool) -> Any:
@@ -107,7 +108,7 @@ def _progress_bar(total: int, progress: bool) -> Any:
 
 
 def _read_chunk(source: Callable[[int, int], ArrayLike], start: int,
-                stop: int) -> NDArray[np.float64]:
+                stop: int) -> FloatArray:
     """Poses ``start:stop`` of the source as a contiguous (stop - start, 3) float array."""
     qc = np.ascontiguousarray(source(start, stop), dtype=np.float64)
     if qc.shape != (stop - start, 3):
@@ -116,8 +117,8 @@ def _read_chunk(source: Callable[[int, int], ArrayLike], start: int,
     return qc
 
 
-def _count_chunk(qc: NDArray[np.float64], T: NDArray[np.float64], P: NDArray[np.float64],
-                 tol: NDArray[np.float64], hist: _Histograms, parallel: bool) -> None:
+def _count_chunk(qc: FloatArray, T: FloatArray, P: FloatArray,
+                 tol: FloatArray, hist: _Histograms, parallel: bool) -> None:
     """Add one chunk to the histograms in the compiled kernel (no per-pose output)."""
     if not qc.flags.writeable:
         qc = qc.copy()
@@ -137,7 +138,7 @@ def _tally(sol: FKSolution, hist: _Histograms) -> None:
 
 def sweep_fk(q: QSource, T_b_e: ArrayLike, design: Design | None = None, *,
              n: int | None = None, chunk_size: int = DEFAULT_CHUNK_SIZE,
-             reduce: Callable[[int, NDArray[np.float64], FKSolution], None] | None = None,
+             reduce: Callable[[int, FloatArray, FKSolution], None] | None = None,
              progress: bool = True, parallel: bool = False,
              tangent_tol: float = TANGENT_TOL, degenerate_tol: float = DEGENERATE_TOL,
              p_zero_tol: float = P_ZERO_TOL, closure_tol: float = CLOSURE_TOL

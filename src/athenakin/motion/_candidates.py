@@ -9,6 +9,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from .._typing import BoolArray, FloatArray, IntArray
 from ..chain import DEGENERATE_TOL, P_ZERO_TOL
 from ..design import Design
 from ..parallel import TANGENT_TOL
@@ -100,7 +101,7 @@ _B = {f.name: int(f) for f in TrackFlag if f}
 class _Geometry:
     """Design constants and the RCM frame as Python floats (for the scalar fast path)."""
 
-    def __init__(self, T: NDArray[np.float64], design: Design) -> None:
+    def __init__(self, T: FloatArray, design: Design) -> None:
         self.l1, self.l2, self.l3 = design.l1, design.l2, design.l3
         self.l4, self.l5 = design.l4, design.l5
         self.L = design.tool_length
@@ -236,26 +237,26 @@ class TrackLog:
         Its two names ("" when NaN).
     """
 
-    q: NDArray[np.float64]
-    valid: NDArray[np.bool_]
-    slot: NDArray[np.int64]
-    mode: NDArray[np.int64]
-    p_sign: NDArray[np.int64]
-    ujoint: NDArray[np.int64]
-    wrist: NDArray[np.int64]
-    p: NDArray[np.float64]
-    u: NDArray[np.float64]
-    O_s: NDArray[np.float64]
-    direction_b: NDArray[np.float64]
-    tip_b: NDArray[np.float64]
-    tip_e: NDArray[np.float64]
-    half_chord: NDArray[np.float64]
-    h: NDArray[np.float64]
-    sin_u2: NDArray[np.float64]
-    sin_u4: NDArray[np.float64]
-    step: NDArray[np.float64]
-    flags: NDArray[np.int64]
-    clearance: NDArray[np.float64] | None
+    q: FloatArray
+    valid: BoolArray
+    slot: IntArray
+    mode: IntArray
+    p_sign: IntArray
+    ujoint: IntArray
+    wrist: IntArray
+    p: FloatArray
+    u: FloatArray
+    O_s: FloatArray
+    direction_b: FloatArray
+    tip_b: FloatArray
+    tip_e: FloatArray
+    half_chord: FloatArray
+    h: FloatArray
+    sin_u2: FloatArray
+    sin_u4: FloatArray
+    step: FloatArray
+    flags: IntArray
+    clearance: FloatArray | None
     closest_pair: NDArray[np.str_] | None
 
     def events(self) -> list[tuple[int, TrackFlag]]:

@@ -5,8 +5,8 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._typing import BoolArray, FloatArray
 from .._validation import check_instance, check_transform
 from ..design import Design
 from ..errors import InvalidInputError, Reason
@@ -23,7 +23,7 @@ _KINEMATIC = ("velocity", "acceleration", "jerk", "tip_speed")
 
 
 def _check_clearance(c: dict[str, Any], bad: dict | None,  # type: ignore[type-arg]
-                     check: ClearanceCheck, T: NDArray[np.float64], design: Design
+                     check: ClearanceCheck, T: FloatArray, design: Design
                      ) -> dict | None:  # type: ignore[type-arg]
     """Add the clearance of the samples ``c``; the first violation, geometric ones first.
 
@@ -98,7 +98,7 @@ def _check_sample_arguments(samples: object, T_b_e: object, design: object, limi
         raise InvalidInputError(f"mode0: expected +1, -1 or None, got {mode0!r}")
 
 
-def check_samples(samples: dict[str, Any], T_b_e: NDArray[np.float64],
+def check_samples(samples: dict[str, Any], T_b_e: FloatArray,
                   design: Design, limits: Limits, margins: Margins, *,
                   mode0: int | None = None) -> dict | None:  # type: ignore[type-arg]
     """First sample that breaks a limit, or None.
@@ -135,11 +135,11 @@ def check_samples(samples: dict[str, Any], T_b_e: NDArray[np.float64],
 
 
 #: One check of :func:`check_samples`: name, bad (n,) or (n, 3) per actuator, value, bound.
-_Check = tuple[str, NDArray[np.bool_], NDArray[np.float64], object]
+_Check = tuple[str, BoolArray, FloatArray, object]
 
 
-def _geometric_checks(samples: dict[str, Any], T_b_e: NDArray[np.float64], design: Design,
-                      margins: Margins, mode0: int | None, ok: NDArray[np.bool_]
+def _geometric_checks(samples: dict[str, Any], T_b_e: FloatArray, design: Design,
+                      margins: Margins, mode0: int | None, ok: BoolArray
                       ) -> list[_Check]:
     """Workspace, stroke, assembly mode and singularity margins; stores the measures."""
     q = samples["q"]
@@ -167,7 +167,7 @@ def _geometric_checks(samples: dict[str, Any], T_b_e: NDArray[np.float64], desig
     return checks
 
 
-def _kinematic_checks(samples: dict[str, Any], limits: Limits, ok: NDArray[np.bool_]
+def _kinematic_checks(samples: dict[str, Any], limits: Limits, ok: BoolArray
                       ) -> list[_Check]:
     """Velocity, acceleration, jerk and tip speed, to the relative tolerance LIMIT_RTOL."""
     checks: list[_Check] = []

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._typing import FloatArray, IntArray
 from ..design import Design
 
 __all__ = ["DEFAULT_CLEARANCE_MARGIN", "ClearanceCheck", "clearance_check", "sample_clearance",
@@ -63,10 +64,10 @@ def clearance_check(design: Design, bodies: object, environment: object,
     return ClearanceCheck(bodies=bodies, environment=environment, margin=float(margin))
 
 
-def sample_clearance(check: ClearanceCheck, q: NDArray[np.float64], T_b_e: NDArray[np.float64],
-                     design: Design, mode: NDArray[np.int64], p_sign: NDArray[np.int64],
-                     wrist: NDArray[np.int64] | None = None
-                     ) -> tuple[NDArray[np.float64], NDArray[np.str_]]:
+def sample_clearance(check: ClearanceCheck, q: FloatArray, T_b_e: FloatArray,
+                     design: Design, mode: IntArray, p_sign: IntArray,
+                     wrist: IntArray | None = None
+                     ) -> tuple[FloatArray, NDArray[np.str_]]:
     """Least clearance of each sample and the pair that has it.
 
     Parameters
@@ -109,7 +110,7 @@ class PoseClearance:
     stage of :func:`~athenakin.collision.clearance` (``segment_clearance``).
     """
 
-    def __init__(self, design: Design, T_b_e: NDArray[np.float64], bodies: Any,
+    def __init__(self, design: Design, T_b_e: FloatArray, bodies: Any,
                  environment: Any = None) -> None:
         from .._mechanism import BODY_SEGMENTS, POINT_NAMES, rail_extent
 
@@ -132,7 +133,7 @@ class PoseClearance:
 
     def points(self, q: tuple[float, float, float], p: float,
                u: tuple[float, float, float, float, float], O_s: tuple[float, float, float],
-               d: tuple[float, float, float]) -> NDArray[np.float64]:
+               d: tuple[float, float, float]) -> FloatArray:
         """The 19 named points, shape (19, 3), base frame (m), of one tracked pose."""
         q1, q2, _ = q
         h = 0.5 * (q1 - q2)

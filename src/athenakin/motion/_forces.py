@@ -22,8 +22,9 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import FloatArray
 from .._validation import check_array
 from ..errors import InvalidInputError
 from ._errors import SafetyViolationError
@@ -51,7 +52,7 @@ def _slot(traj: object) -> int:
 
 
 def trajectory_forces(traj: object, masses: object, *, gravity: ArrayLike = (0.0, 0.0, -9.81)
-                      ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+                      ) -> tuple[FloatArray, FloatArray]:
     """Actuator forces along a trajectory and their static part (N), each (N, 3).
 
     The configuration is the FK slot of the trajectory's assembly mode with ``p > 0``
@@ -71,7 +72,7 @@ def trajectory_forces(traj: object, masses: object, *, gravity: ArrayLike = (0.0
     return tau, tau_g
 
 
-def _check_f_max(f_max: ArrayLike) -> NDArray[np.float64]:
+def _check_f_max(f_max: ArrayLike) -> FloatArray:
     a = check_array(f_max, "f_max", ())         # a str, a ragged list: named TypeError
     out = np.broadcast_to(a, (3,)) if a.ndim == 0 else a
     if out.shape != (3,) or np.any(out <= 0):
@@ -80,7 +81,7 @@ def _check_f_max(f_max: ArrayLike) -> NDArray[np.float64]:
     return out
 
 
-def _first_violation(traj: object, tau: NDArray[np.float64], f_max: NDArray[np.float64],
+def _first_violation(traj: object, tau: FloatArray, f_max: FloatArray,
                      what: str) -> ForceLimitError:
     over = np.abs(tau) > f_max
     i, j = np.argwhere(over)[0]

@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from .._csv import Q_COLUMNS, TIP_COLUMNS, read_table
 from .._output import write_text_atomic
 from .._serialize import json_text
+from .._typing import FloatArray
 from .._validation import check_instance, check_path
 from ._errors import PathFileError
 from ._plan import Trajectory
@@ -60,11 +61,11 @@ class PathSpec:
     """
 
     kind: str
-    tips_e: NDArray[np.float64] | None = None
-    azimuth: NDArray[np.float64] | None = None
-    polar: NDArray[np.float64] | None = None
-    depth: NDArray[np.float64] | None = None
-    times: NDArray[np.float64] | None = None
+    tips_e: FloatArray | None = None
+    azimuth: FloatArray | None = None
+    polar: FloatArray | None = None
+    depth: FloatArray | None = None
+    times: FloatArray | None = None
 
 
 def _read_table(path: str | Path, *, header_row: bool = True
@@ -74,7 +75,7 @@ def _read_table(path: str | Path, *, header_row: bool = True
 
 
 def _numbers(path: str | Path, header: list[str], rows: list[tuple[int, list[str]]],
-             columns: list[str], *, allow_nonfinite: bool = False) -> NDArray[np.float64]:
+             columns: list[str], *, allow_nonfinite: bool = False) -> FloatArray:
     idx = [header.index(c) for c in columns]
     out = np.empty((len(rows), len(columns)))
     for r, (lineno, cells) in enumerate(rows):
@@ -154,7 +155,7 @@ def read_path_csv(path: str | Path) -> PathSpec:
                     depth=data[:, 2], times=times)
 
 
-def read_q_stream_csv(path: str | Path) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
+def read_q_stream_csv(path: str | Path) -> tuple[FloatArray, FloatArray | None]:
     """Read recorded actuator readings.
 
     Parameters
@@ -248,7 +249,7 @@ def trajectory_csv_text(traj: Trajectory) -> str:
 CLEARANCE_COLUMNS = ["clearance_m", "closest_a", "closest_b"]
 
 
-def _clearance_cells(clearance: NDArray[np.float64] | None, pair: NDArray[np.str_] | None,
+def _clearance_cells(clearance: FloatArray | None, pair: NDArray[np.str_] | None,
                      n: int) -> list[str]:
     """``",clearance,a,b"`` per row ("" per row when not checked)."""
     if clearance is None or pair is None:
@@ -293,7 +294,7 @@ TRACK_COLUMNS = ["index", "t_s", "q1_m", "q2_m", "q3_m", "valid", "mode", "slot"
                  "tip_z_m", "half_chord_m", "sin_u2", "sin_u4", "step", "flags", "flag_names"]
 
 
-def track_csv_text(log: TrackLog, t: NDArray[np.float64] | None = None) -> str:
+def track_csv_text(log: TrackLog, t: FloatArray | None = None) -> str:
     """A :class:`TrackLog` as CSV text (columns :data:`TRACK_COLUMNS`; tip in frame E).
 
     When collisions were checked (some clearance is not NaN) the columns

@@ -11,13 +11,13 @@ to rounding error, also next to a singularity where finite differences fail.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._typing import FloatArray
 from ..design import Design
 
 __all__ = ["Jet", "jet_sqrt", "jet_sin_cos", "q_jet"]
 
-Number = float | NDArray[np.float64]
+Number = float | FloatArray
 
 
 class Jet:
@@ -25,7 +25,7 @@ class Jet:
 
     __slots__ = ("c",)
 
-    def __init__(self, c: list[NDArray[np.float64]]) -> None:
+    def __init__(self, c: list[FloatArray]) -> None:
         self.c = c
 
     @staticmethod
@@ -37,7 +37,7 @@ class Jet:
         z = np.zeros_like(x)
         return Jet([x, z, z, z])
 
-    def derivatives(self) -> tuple[NDArray[np.float64], ...]:
+    def derivatives(self) -> tuple[FloatArray, ...]:
         """``(f, f', f'', f''')``."""
         c = self.c
         return c[0], c[1], 2.0 * c[2], 6.0 * c[3]
@@ -95,14 +95,14 @@ def jet_sqrt(a: Jet) -> Jet:
     return Jet([s0, s1, s2, s3])
 
 
-def jet_sin_cos(x0: NDArray[np.float64], w: float) -> tuple[Jet, Jet]:
+def jet_sin_cos(x0: FloatArray, w: float) -> tuple[Jet, Jet]:
     """Jets of ``sin(w (x0 + t))`` and ``cos(w (x0 + t))``."""
     s, c = np.sin(w * x0), np.cos(w * x0)
     return (Jet([s, w * c, -w * w * s / 2, -w ** 3 * c / 6]),
             Jet([c, -w * s, -w * w * c / 2, w ** 3 * s / 6]))
 
 
-def q_jet(tip_e: list[Jet], T_b_e: NDArray[np.float64], design: Design) -> list[Jet]:
+def q_jet(tip_e: list[Jet], T_b_e: FloatArray, design: Design) -> list[Jet]:
     """Jets of ``(q1, q2, q3)`` from jets of the tool tip in frame E (controller-form IK).
 
     The formulas of :func:`athenakin.q_from_tool_tip` and

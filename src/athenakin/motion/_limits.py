@@ -5,8 +5,9 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import FloatArray
 from .._validation import check_array, check_scalar
 from ._path import (
     Segment,
@@ -34,16 +35,16 @@ class Limits:
         Tool-tip speed limit (m/s).
     """
 
-    v_max: NDArray[np.float64]
-    a_max: NDArray[np.float64]
-    j_max: NDArray[np.float64] | None = None
+    v_max: FloatArray
+    a_max: FloatArray
+    j_max: FloatArray | None = None
     tip_speed: float | None = None
 
     @classmethod
     def build(cls, v_max: ArrayLike, a_max: ArrayLike, j_max: ArrayLike | None,
               tip_speed: float | None) -> Limits:
         """Validate scalars or (3,) arrays of positive limits."""
-        def vec(x: ArrayLike, name: str) -> NDArray[np.float64]:
+        def vec(x: ArrayLike, name: str) -> FloatArray:
             a = check_array(x, name, ())
             if a.ndim not in (0, 1) or (a.ndim == 1 and a.shape != (3,)):
                 raise ValueError(f"{name}: expected a number or 3 numbers (q1, q2, q3), "
@@ -62,7 +63,7 @@ class Limits:
 @dataclasses.dataclass
 class _SegmentPlan:
     seg: Segment
-    K: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
+    K: tuple[FloatArray, FloatArray, FloatArray]
     tip_factor: float
     tighten: float = 1.0        # extra factor (< 1) on all limits after a failed check
     profile: LamProfile | None = None

@@ -28,8 +28,8 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._typing import FloatArray, Int8Array, IntArray
 from ..design import Design
 from ..robot import q_from_tool_tip
 from ._jet import Jet, jet_sin_cos, q_jet
@@ -54,23 +54,23 @@ class Segment:
     """
 
     kind: str
-    start: NDArray[np.float64]
-    end: NDArray[np.float64]
+    start: FloatArray
+    end: FloatArray
     scale: float
     lam_of_s: object | None = dataclasses.field(default=None, repr=False)
 
-    def lam(self, s: NDArray[np.float64], nu: int = 0) -> NDArray[np.float64]:
+    def lam(self, s: FloatArray, nu: int = 0) -> FloatArray:
         """``lam(s)`` or its derivative of order ``nu`` (identity without reparametrisation)."""
         s = np.asarray(s, float)
         if self.lam_of_s is None:
             return s if nu == 0 else np.full(s.shape, 1.0 if nu == 1 else 0.0)
         return self.lam_of_s(s, nu)  # type: ignore[operator]
 
-    def tips(self, s: NDArray[np.float64]) -> NDArray[np.float64]:
+    def tips(self, s: FloatArray) -> FloatArray:
         """Tool tip (frame E, m) at path parameters ``s`` of shape (...) -> (..., 3)."""
         return self.tips_lam(self.lam(s))
 
-    def tips_jet(self, lam: NDArray[np.float64]) -> list[Jet]:
+    def tips_jet(self, lam: FloatArray) -> list[Jet]:
         """Jets (Taylor coefficients in ``lam``, order 3) of the tip coordinates at ``lam`` (n,)."""
         lam = np.asarray(lam, float)
         if self.kind == "line":
@@ -88,7 +88,7 @@ class Segment:
         so = np.sin(omega)
         return [(sa * float(d0[i]) + sb * float(d1[i])) * rad / so for i in range(3)]
 
-    def tips_lam(self, lam: NDArray[np.float64]) -> NDArray[np.float64]:
+    def tips_lam(self, lam: FloatArray) -> FloatArray:
         """Tool tip (frame E, m) at geometric parameters ``lam`` of shape (...) -> (..., 3)."""
         lam = np.asarray(lam, float)[..., None]
         if self.kind == "line":
@@ -104,13 +104,13 @@ class Segment:
         return d * (r0 + lam * (r1 - r0))
 
 
-def line_segment(a: NDArray[np.float64], b: NDArray[np.float64]) -> Segment:
+def line_segment(a: FloatArray, b: FloatArray) -> Segment:
     """Straight tip segment from ``a`` to ``b`` (frame E, m)."""
     a, b = np.asarray(a, float), np.asarray(b, float)
     return Segment("line", a, b, float(np.linalg.norm(b - a)))
 
 
-def arc_segment(a: NDArray[np.float64], b: NDArray[np.float64]) -> Segment:
+def arc_segment(a: FloatArray, b: FloatArray) -> Segment:
     """Great-circle direction + linear depth segment between tips ``a`` and ``b`` (frame E)."""
     a, b = np.asarray(a, float), np.asarray(b, float)
     r0, r1 = float(np.linalg.norm(a)), float(np.linalg.norm(b))
@@ -118,8 +118,8 @@ def arc_segment(a: NDArray[np.float64], b: NDArray[np.float64]) -> Segment:
     return Segment("arc", a, b, max(r0, r1) * omega + abs(r1 - r0))
 
 
-def q_on_tips(tips_e: NDArray[np.float64], T_b_e: NDArray[np.float64], design: Design
-              ) -> tuple[NDArray[np.float64], NDArray[np.int8], NDArray[np.int64]]:
+def q_on_tips(tips_e: FloatArray, T_b_e: FloatArray, design: Design
+              ) -> tuple[FloatArray, Int8Array, IntArray]:
     """Inverse kinematics of tool tips, stroke limits not applied.
 
     Returns
@@ -136,8 +136,8 @@ def q_on_tips(tips_e: NDArray[np.float64], T_b_e: NDArray[np.float64], design: D
     return q, res.reason, res.mode
 
 
-def _q_lam_derivatives(seg: Segment, lam: NDArray[np.float64], T_b_e: NDArray[np.float64],
-                       design: Design) -> tuple[NDArray[np.float64], ...]:
+def _q_lam_derivatives(seg: Segment, lam: FloatArray, T_b_e: FloatArray,
+                       design: Design) -> tuple[FloatArray, ...]:
     """``q`` (exact IK) and its derivatives in ``lam`` (Taylor arithmetic), each (n, 3)."""
     q0, reason, _ = q_on_tips(seg.tips_lam(lam), T_b_e, design)
     if seg.scale == 0.0:
@@ -152,8 +152,8 @@ def _q_lam_derivatives(seg: Segment, lam: NDArray[np.float64], T_b_e: NDArray[np
     return q0, d[0], d[1], d[2]
 
 
-def q_derivatives(seg: Segment, s: NDArray[np.float64], T_b_e: NDArray[np.float64],
-                  design: Design) -> tuple[NDArray[np.float64], ...]:
+def q_derivatives(seg: Segment, s: FloatArray, T_b_e: FloatArray,
+                  design: Design) -> tuple[FloatArray, ...]:
     """``q`` and its first three derivatives with respect to the path parameter ``s``.
 
     Parameters
@@ -179,7 +179,7 @@ def q_derivatives(seg: Segment, s: NDArray[np.float64], T_b_e: NDArray[np.float6
             d3 * l1 ** 3 + 3 * d2 * l1 * l2 + d1 * l3)
 
 
-def reparametrised(seg: Segment, T_b_e: NDArray[np.float64], design: Design, *,
+def reparametrised(seg: Segment, T_b_e: FloatArray, design: Design, *,
                    n: int = REPARAM_GRID) -> Segment:
     """The segment with ``s`` proportional to the arc length of ``q(lam)`` (module docstring).
 
@@ -204,7 +204,7 @@ def reparametrised(seg: Segment, T_b_e: NDArray[np.float64], design: Design, *,
     return dataclasses.replace(seg, lam_of_s=spl)
 
 
-def tip_speed_factor(seg: Segment, lam: NDArray[np.float64]) -> NDArray[np.float64]:
+def tip_speed_factor(seg: Segment, lam: FloatArray) -> FloatArray:
     """``|d tip / d lam|`` (m) at ``lam``, shape (n,), from central differences."""
     if seg.scale == 0.0:
         return np.zeros(np.shape(lam))

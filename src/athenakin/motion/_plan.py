@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._typing import BoolArray, FloatArray, IntArray
 from .._validation import check_array, check_frame
 from ..design import Design, resolve_design
 from ..robot import direction_from_angles
@@ -119,27 +120,27 @@ class Trajectory:
         planned with ``masses=`` (:mod:`athenakin.motion._forces`), else None.
     """
 
-    t: NDArray[np.float64]
-    q: NDArray[np.float64]
-    qd: NDArray[np.float64]
-    qdd: NDArray[np.float64]
-    qddd: NDArray[np.float64] | None
-    tip_e: NDArray[np.float64]
-    segment: NDArray[np.int64]
-    mode: NDArray[np.int64]
+    t: FloatArray
+    q: FloatArray
+    qd: FloatArray
+    qdd: FloatArray
+    qddd: FloatArray | None
+    tip_e: FloatArray
+    segment: IntArray
+    mode: IntArray
     measures: SingularityMeasures
-    waypoints_e: NDArray[np.float64]
-    waypoint_times: NDArray[np.float64]
-    stretched: NDArray[np.bool_]
+    waypoints_e: FloatArray
+    waypoint_times: FloatArray
+    stretched: BoolArray
     rate: float
     limits: Limits
     margins: Margins
-    T_b_e: NDArray[np.float64]
+    T_b_e: FloatArray
     design: Design
-    clearance: NDArray[np.float64] | None = None
+    clearance: FloatArray | None = None
     closest_pair: NDArray[np.str_] | None = None
     clearance_margin: float | None = None
-    forces: NDArray[np.float64] | None = None
+    forces: FloatArray | None = None
 
     @property
     def duration(self) -> float:
@@ -147,17 +148,17 @@ class Trajectory:
         return float(self.t[-1] - self.t[0])
 
     @property
-    def depth(self) -> NDArray[np.float64]:
+    def depth(self) -> FloatArray:
         """Depth of the tip beyond the RCM, ``|tip_e|``, m, shape (N,)."""
         return np.linalg.norm(self.tip_e, axis=-1)
 
     @property
-    def direction_e(self) -> NDArray[np.float64]:
+    def direction_e(self) -> FloatArray:
         """Unit instrument direction in frame E (O_s through the RCM to the tip), (N, 3)."""
         return self.tip_e / self.depth[:, None]
 
     @property
-    def p(self) -> NDArray[np.float64]:
+    def p(self) -> FloatArray:
         """Distance from ``O_s`` to the RCM (the passive prismatic joint), m, shape (N,)."""
         return self.design.tool_length - self.depth
 
@@ -296,7 +297,7 @@ def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_
     return _planned(segs, tips, T_b_e, design, times, bodies, environment, masses, options)
 
 
-def _planned(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, design: Design,
+def _planned(segs: list[Segment], tips: FloatArray, T_b_e: ArrayLike, design: Design,
              times: ArrayLike | None, bodies: object, environment: object, masses: object,
              options: PlanOptions | None) -> Trajectory:
     """:func:`_plan` with the options' limits, and with the forces when ``masses`` is given."""
@@ -313,7 +314,7 @@ def _planned(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, d
                    fixed_times=o.timing == "fixed")
 
 
-def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, design: Design, *,
+def _plan(segs: list[Segment], tips: FloatArray, T_b_e: ArrayLike, design: Design, *,
           rate: float, v_max: ArrayLike, a_max: ArrayLike, j_max: ArrayLike | None,
           tip_speed: float | None, times: ArrayLike | None, timing: Timing, margins: Margins,
           max_duration: float, max_samples: int, bodies: object, environment: object,
@@ -365,9 +366,9 @@ def _plan(segs: list[Segment], tips: NDArray[np.float64], T_b_e: ArrayLike, desi
 
 
 def _requested(times: ArrayLike | None, K: int, timing: str, rate: float, max_duration: float,
-               max_samples: int) -> tuple[NDArray[np.float64] | None, float]:
+               max_samples: int) -> tuple[FloatArray | None, float]:
     """The requested duration of each segment (None: as fast as the limits allow), the start."""
-    req: NDArray[np.float64] | None = None
+    req: FloatArray | None = None
     t0 = 0.0
     if times is not None:
         tt = check_array(times, "times", ())
@@ -383,7 +384,7 @@ def _requested(times: ArrayLike | None, K: int, timing: str, rate: float, max_du
     return req, t0
 
 
-def _sample_checked(plans: list[_SegmentPlan], T: NDArray[np.float64], design: Design,
+def _sample_checked(plans: list[_SegmentPlan], T: FloatArray, design: Design,
                     rate: float, t0: float, limits: Limits, margins: Margins,
                     check: ClearanceCheck | None = None
                     ) -> tuple[dict[str, Any], dict | None]:  # type: ignore[type-arg]
@@ -434,8 +435,8 @@ def _concat(chunks: list[dict[str, Any]]) -> dict[str, Any]:
     return out
 
 
-def _sample(plans: list[_SegmentPlan], T: NDArray[np.float64], design: Design, rate: float,
-            t0: float, limits: Limits, index: NDArray[np.int64]) -> dict[str, Any]:
+def _sample(plans: list[_SegmentPlan], T: FloatArray, design: Design, rate: float,
+            t0: float, limits: Limits, index: IntArray) -> dict[str, Any]:
     """The samples of global indices ``index`` (n,) of the trajectory."""
     durations = np.array([sp.profile.duration for sp in plans])  # type: ignore[union-attr]
     ends = np.cumsum(durations)
@@ -470,8 +471,8 @@ def _sample(plans: list[_SegmentPlan], T: NDArray[np.float64], design: Design, r
             "segment": k, "reason": reason, "mode": mode, "tip_speed": tipf * lam[1]}
 
 
-def _trajectory(samples: dict, plans: list[_SegmentPlan], tips: NDArray[np.float64],  # type: ignore[type-arg]
-                limits: Limits, margins: Margins, T: NDArray[np.float64], design: Design,
+def _trajectory(samples: dict, plans: list[_SegmentPlan], tips: FloatArray,  # type: ignore[type-arg]
+                limits: Limits, margins: Margins, T: FloatArray, design: Design,
                 rate: float, t0: float, check: ClearanceCheck | None = None) -> Trajectory:
     durations = np.array([sp.profile.duration for sp in plans])  # type: ignore[union-attr]
     wt = t0 + np.concatenate([[0.0], np.cumsum(durations)])

@@ -23,8 +23,8 @@ import dataclasses
 import math
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._typing import FloatArray, IntArray
 from .._validation import broadcast_batch, check_array, check_transform
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
@@ -112,16 +112,16 @@ class SingularityMeasures:
         Condition number of ``d tip / d q`` (>= 1; inf where singular).
     """
 
-    half_chord: NDArray[np.float64]
-    h: NDArray[np.float64]
-    link: NDArray[np.float64]
-    sin_u2: NDArray[np.float64]
-    sin_u4: NDArray[np.float64]
-    p: NDArray[np.float64]
-    depth: NDArray[np.float64]
-    cond: NDArray[np.float64]
+    half_chord: FloatArray
+    h: FloatArray
+    link: FloatArray
+    sin_u2: FloatArray
+    sin_u4: FloatArray
+    p: FloatArray
+    depth: FloatArray
+    cond: FloatArray
 
-    def ratio(self, margins: Margins) -> dict[str, NDArray[np.float64]]:
+    def ratio(self, margins: Margins) -> dict[str, FloatArray]:
         """Each measure over its margin (``margin / cond`` for ``cond``): >= 1 is safe.
 
         Measures whose margin is switched off are left out.
@@ -138,9 +138,9 @@ class SingularityMeasures:
         return out
 
 
-def singularity_measures(q: NDArray[np.float64], tip_e: NDArray[np.float64],
-                         T_b_e: NDArray[np.float64], design: Design, *,
-                         mode: NDArray[np.int64] | int = 1) -> SingularityMeasures:
+def singularity_measures(q: FloatArray, tip_e: FloatArray,
+                         T_b_e: FloatArray, design: Design, *,
+                         mode: IntArray | int = 1) -> SingularityMeasures:
     """Distances to the singularities for actuator values and the tool tip they hold.
 
     The values come from :func:`athenakin.analysis.singularities` (closed-form

@@ -6,8 +6,8 @@ import math
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._typing import FloatArray
 from ..design import Design
 from ..errors import Reason
 from ._errors import (
@@ -38,8 +38,8 @@ BOUND_GRID = 129
 BOUND_SAFETY = 1.05
 
 
-def _segment_bounds(seg: Segment, T: NDArray[np.float64], design: Design
-                    ) -> tuple[tuple[NDArray[np.float64], ...], float, dict[str, Any]]:
+def _segment_bounds(seg: Segment, T: FloatArray, design: Design
+                    ) -> tuple[tuple[FloatArray, ...], float, dict[str, Any]]:
     lam = np.linspace(0.0, 1.0, BOUND_GRID)
     q0, d1, d2, d3 = q_derivatives(seg, lam, T, design)
     with np.errstate(invalid="ignore"):
@@ -52,7 +52,7 @@ def _segment_bounds(seg: Segment, T: NDArray[np.float64], design: Design
     return K, tf, grid  # type: ignore[return-value]
 
 
-def _mm_hint(tip: NDArray[np.float64], design: Design) -> str:
+def _mm_hint(tip: FloatArray, design: Design) -> str:
     r = float(np.linalg.norm(tip))
     if r > 4.0 * max(design.tool_length, float(np.max(design.lengths))):
         return (f"; |tip_e| = {r:.6g} m is far beyond the robot's reach: lengths are in "
@@ -60,7 +60,7 @@ def _mm_hint(tip: NDArray[np.float64], design: Design) -> str:
     return ""
 
 
-def _check_waypoints(tips: NDArray[np.float64], T: NDArray[np.float64], design: Design) -> None:
+def _check_waypoints(tips: FloatArray, T: FloatArray, design: Design) -> None:
     """Each waypoint inside the workspace and the strokes, one assembly mode (before timing)."""
     q, reason, mode = q_on_tips(tips, T, design)
     for k in range(tips.shape[0]):
@@ -80,7 +80,7 @@ def _check_waypoints(tips: NDArray[np.float64], T: NDArray[np.float64], design: 
                 value=float(mode[k]), bound=float(mode[0]))
 
 
-def _check_stroke(q: NDArray[np.float64], what: str, design: Design, *,
+def _check_stroke(q: FloatArray, what: str, design: Design, *,
                   waypoint: int | None = None, segment: int | None = None) -> None:
     lo, hi = design.stroke_min, design.stroke_max
     for i in range(3):

@@ -14,7 +14,8 @@ import dataclasses
 import math
 
 import numpy as np
-from numpy.typing import NDArray
+
+from .._typing import FloatArray
 
 __all__ = ["ParameterLimits", "parameter_limits", "LamProfile", "lam_profile", "TimeLawError"]
 
@@ -38,9 +39,9 @@ class ParameterLimits:
     j: float
 
 
-def parameter_limits(K1: NDArray[np.float64], K2: NDArray[np.float64], K3: NDArray[np.float64],
-                     *, v_max: NDArray[np.float64], a_max: NDArray[np.float64],
-                     j_max: NDArray[np.float64] | None, tip_factor: float,
+def parameter_limits(K1: FloatArray, K2: FloatArray, K3: FloatArray,
+                     *, v_max: FloatArray, a_max: FloatArray,
+                     j_max: FloatArray | None, tip_factor: float,
                      tip_speed: float | None) -> ParameterLimits:
     """Limits of ``lam`` that keep every actuator within ``v_max``, ``a_max``, ``j_max``.
 
@@ -117,7 +118,7 @@ class LamProfile:
     scale: float
     _traj: object | None = dataclasses.field(repr=False, default=None)
 
-    def evaluate(self, tau: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+    def evaluate(self, tau: FloatArray) -> tuple[FloatArray, ...]:
         """``lam`` and its first three time derivatives at local times ``tau`` (n,).
 
         Returns

@@ -40,8 +40,9 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import BoolArray, FloatArray, IntArray
 from .._validation import check_array, check_frame, check_scalar, check_slot
 from ..chain import DEGENERATE_TOL, P_ZERO_TOL
 from ..design import Design, resolve_design
@@ -420,7 +421,7 @@ def track(q_stream: ArrayLike, T_b_e: ArrayLike, design: Design | None = None,
     return TrackLog(**{k: cols[k] for k in _LOG_FIELDS})
 
 
-def _track_checked(qs: NDArray[np.float64], T_b_e: ArrayLike, design: Design | None,
+def _track_checked(qs: FloatArray, T_b_e: ArrayLike, design: Design | None,
                    coll: dict[str, object], options: dict[str, object]) -> dict[str, Any]:
     """:func:`track` with the collision check: the stream first, then all clearances at once.
 
@@ -455,7 +456,7 @@ def _track_checked(qs: NDArray[np.float64], T_b_e: ArrayLike, design: Design | N
     return cols
 
 
-def _kernel_geometry(tr: Tracker) -> NDArray[np.float64]:
+def _kernel_geometry(tr: Tracker) -> FloatArray:
     """The geometry vector of :func:`athenakin.motion._kernels.track_stream`."""
     g = tr._g
     return np.array([g.l1, g.l2, g.l3, g.l4, g.l5, g.h_sign, *g.c, *g.ex, *g.ez, *g.lo, *g.hi,
@@ -463,7 +464,7 @@ def _kernel_geometry(tr: Tracker) -> NDArray[np.float64]:
                      P_ZERO_TOL, DEGENERATE_TOL], dtype=float)
 
 
-def track_batch(tr: Tracker, q: NDArray[np.float64]) -> dict[str, Any]:
+def track_batch(tr: Tracker, q: FloatArray) -> dict[str, Any]:
     """:meth:`Tracker.update` of every reading of ``q`` (n, 3), as columns; advances ``tr``.
 
     The compiled loop of :mod:`athenakin.motion._kernels` (the poses and steps of
@@ -519,9 +520,9 @@ def track_batch(tr: Tracker, q: NDArray[np.float64]) -> dict[str, Any]:
     return cols
 
 
-def _kernel_columns(tr: Tracker, q: NDArray[np.float64], c: NDArray[np.float64],
-                    step: NDArray[np.float64], flags: NDArray[np.int64],
-                    valid: NDArray[np.bool_]) -> dict[str, Any]:
+def _kernel_columns(tr: Tracker, q: FloatArray, c: FloatArray,
+                    step: FloatArray, flags: IntArray,
+                    valid: BoolArray) -> dict[str, Any]:
     """The columns of :func:`track_batch` from the kernel's candidate rows ``c`` (n, NCAND)."""
     n = len(q)
     g = tr._g
@@ -547,7 +548,7 @@ def _kernel_columns(tr: Tracker, q: NDArray[np.float64], c: NDArray[np.float64],
         "clearance": np.full(n, math.nan), "closest_pair": np.full((n, 2), "")}
 
 
-def _raise_on(tr: Tracker, cols: dict[str, Any], fast: NDArray[np.bool_]) -> None:
+def _raise_on(tr: Tracker, cols: dict[str, Any], fast: BoolArray) -> None:
     """:class:`TrackingError` at the first row whose flags carry a bit of ``raise_on``."""
     hit = np.flatnonzero(cols["flags"] & tr._raise_bits)
     if hit.size:

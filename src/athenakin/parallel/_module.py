@@ -17,9 +17,10 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._transforms import wrap_angle
+from .._typing import BoolArray, FloatArray, Int8Array, IntArray
 from .._validation import check_array, check_tolerance, check_transform
 from ..design import Design, resolve_design
 from ..errors import Reason
@@ -81,19 +82,19 @@ class ParallelSolution:
         :func:`~athenakin.forward_kinematics` adds it to every slot's ``residual``.
     """
 
-    valid: NDArray[np.bool_]
-    reason: NDArray[np.int8]
-    mode: NDArray[np.int64]
-    O_i: NDArray[np.float64]
-    O_s: NDArray[np.float64]
-    T_b_i: NDArray[np.float64]
-    T_b_s: NDArray[np.float64]
-    theta: NDArray[np.float64]
-    r1: NDArray[np.float64]
-    m_y: NDArray[np.float64]
-    w: NDArray[np.float64]
-    half_chord: NDArray[np.float64]
-    residual: NDArray[np.float64]
+    valid: BoolArray
+    reason: Int8Array
+    mode: IntArray
+    O_i: FloatArray
+    O_s: FloatArray
+    T_b_i: FloatArray
+    T_b_s: FloatArray
+    theta: FloatArray
+    r1: FloatArray
+    m_y: FloatArray
+    w: FloatArray
+    half_chord: FloatArray
+    residual: FloatArray
 
 
 @dataclasses.dataclass(frozen=True)
@@ -117,15 +118,15 @@ class ParallelIK:
         this grows to about ``1e-7`` m on the reference design.
     """
 
-    q: NDArray[np.float64]
-    mode: NDArray[np.int64]
-    theta: NDArray[np.float64]
-    valid: NDArray[np.bool_]
-    reason: NDArray[np.int8]
-    q_error: NDArray[np.float64]
+    q: FloatArray
+    mode: IntArray
+    theta: FloatArray
+    valid: BoolArray
+    reason: Int8Array
+    q_error: FloatArray
 
 
-def _actuator_checks(q: NDArray[np.float64], design: Design) -> NDArray[np.int8]:
+def _actuator_checks(q: FloatArray, design: Design) -> Int8Array:
     """Reason code per item for non-finite values, stroke limits and A/B order."""
     reason = np.zeros(q.shape[:-1], dtype=np.int8)
     finite = np.all(np.isfinite(q), axis=-1)
@@ -139,8 +140,8 @@ def _actuator_checks(q: NDArray[np.float64], design: Design) -> NDArray[np.int8]
     return reason.astype(np.int8)
 
 
-def circle_terms(r1: NDArray[np.float64], m_y: NDArray[np.float64], l5: float,
-                 q3: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+def circle_terms(r1: FloatArray, m_y: FloatArray, l5: float,
+                 q3: FloatArray) -> tuple[FloatArray, ...]:
     """The terms of Eq. 8 that meet the circles ``k1`` (radius ``r1`` about ``M``) and ``k2``.
 
     ``k2`` has radius ``q3`` about ``C = M + (m_y, l5)`` in the plane ``x = x_M``.
@@ -167,7 +168,7 @@ def circle_terms(r1: NDArray[np.float64], m_y: NDArray[np.float64], l5: float,
     return d2, d, H, k
 
 
-def circle_geometry(q: ArrayLike, design: Design) -> dict[str, NDArray[np.float64]]:
+def circle_geometry(q: ArrayLike, design: Design) -> dict[str, FloatArray]:
     """The quantities of Eq. 7-8 for a batch of ``q``.
 
     Parameters
@@ -196,9 +197,9 @@ def circle_geometry(q: ArrayLike, design: Design) -> dict[str, NDArray[np.float6
             "k": k, "w": m_y * m_y * k, "half_chord": half}
 
 
-def _frames(x_M: NDArray[np.float64], y: NDArray[np.float64], z: NDArray[np.float64],
-            r1: NDArray[np.float64], l4: float
-            ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _frames(x_M: FloatArray, y: FloatArray, z: FloatArray,
+            r1: FloatArray, l4: float
+            ) -> tuple[FloatArray, FloatArray]:
     """T_b_i and T_b_s from O_i = (x_M, y, z) on k1 of radius r1."""
     cy, cz = y / r1, z / r1  # z_i = (0, cy, cz)
     T = np.zeros(np.shape(y) + (4, 4))
@@ -222,9 +223,9 @@ def _frames(x_M: NDArray[np.float64], y: NDArray[np.float64], z: NDArray[np.floa
 K_ROUND = 4.0 * 2.220446049250313e-16
 
 
-def parallel_residual(r1: NDArray[np.float64], q3: NDArray[np.float64], d: NDArray[np.float64],
-                      k: NDArray[np.float64], l1: float, l4: float,
-                      tangent: NDArray[np.bool_]) -> NDArray[np.float64]:
+def parallel_residual(r1: FloatArray, q3: FloatArray, d: FloatArray,
+                      k: FloatArray, l1: float, l4: float,
+                      tangent: BoolArray) -> FloatArray:
     """Bound on the position error of ``O_s`` caused by the rounding of ``k`` (m).
 
     ``k = 4 d^2 a^2`` (Eq. 8, ``a`` the half-chord) is a product of four factors; near
@@ -359,8 +360,8 @@ def parallel_ik_from_position(O_s: ArrayLike, design: Design | None = None) -> P
 IK_ROUNDING_ULPS = 64.0
 
 
-def position_ik(O_s: NDArray[np.float64], design: Design,
-                dO: NDArray[np.float64] | float = 0.0) -> ParallelIK:
+def position_ik(O_s: FloatArray, design: Design,
+                dO: FloatArray | float = 0.0) -> ParallelIK:
     """:func:`parallel_ik_from_position` on a checked array (private; shared with the robot IK).
 
     ``dO`` is a bound (m) on the error of ``O_s`` already present in the input
@@ -419,8 +420,8 @@ def position_ik(O_s: NDArray[np.float64], design: Design,
 _EPS = float(np.finfo(float).eps)
 
 
-def _q_error(r1: NDArray[np.float64], h_abs: NDArray[np.float64], dr: NDArray[np.float64],
-             design: Design) -> NDArray[np.float64]:
+def _q_error(r1: FloatArray, h_abs: FloatArray, dr: FloatArray,
+             design: Design) -> FloatArray:
     """Bound on the error of ``q`` for an error ``dr`` of ``r1`` (and of ``O_s``).
 
     ``|h(r1 + dr) - h(r1)| <= 2 r1 dr / (sqrt(h^2 + 2 r1 dr) + h)`` (``h = sqrt(l1^2 -
@@ -437,15 +438,15 @@ def _q_error(r1: NDArray[np.float64], h_abs: NDArray[np.float64], dr: NDArray[np
     return 2.0 * dr + dh + dmy
 
 
-def _h_error(r1: NDArray[np.float64], h_abs: NDArray[np.float64], dr: NDArray[np.float64]
-             ) -> NDArray[np.float64]:
+def _h_error(r1: FloatArray, h_abs: FloatArray, dr: FloatArray
+             ) -> FloatArray:
     """Bound on the error of ``|h| = sqrt(l1^2 - r1^2)`` for an error ``dr`` of ``r1``."""
     r1p = np.maximum(r1, 0.0)
     return 2.0 * r1p * dr / (np.sqrt(h_abs * h_abs + 2.0 * r1p * dr) + h_abs) + dr
 
 
 def position_ik_error(O_s: ArrayLike, design: Design | None = None,
-                      dO: ArrayLike = 0.0) -> NDArray[np.float64]:
+                      dO: ArrayLike = 0.0) -> FloatArray:
     """Bound (m) on the error of :func:`parallel_ik_from_position`'s ``q`` at ``O_s``.
 
     Parameters
@@ -509,7 +510,7 @@ def parallel_inverse_kinematics(T_b_s: ArrayLike, design: Design | None = None, 
     return module_orientation_check(parallel_ik_from_position(T[..., :3, 3], design), T, tol)
 
 
-def module_orientation_check(res: ParallelIK, T: NDArray[np.float64], tol: float) -> ParallelIK:
+def module_orientation_check(res: ParallelIK, T: FloatArray, tol: float) -> ParallelIK:
     """Invalidate the items of a position IK whose pose ``T`` is not ``Rx(theta)`` (private).
 
     Shared by the reference and the compiled :func:`parallel_inverse_kinematics`.

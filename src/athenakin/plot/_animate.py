@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._typing import FloatArray
 from .._validation import check_array, check_scalar
 from ..design import Design, resolve_design
 from ..errors import KinematicsError
@@ -37,7 +38,7 @@ MAX_FRAME_PIXELS = 8192
 def instrument_cone_path(n: int = 48, T_b_e: ArrayLike | None = None,
                          design: Design | None = None, *, axis_e: ArrayLike = (1.0, 0.0, 0.0),
                          cone_angle: float = 0.1, p: ArrayLike | None = None,
-                         turns: float = 1.0, lead: int = 0) -> NDArray[np.float64]:
+                         turns: float = 1.0, lead: int = 0) -> FloatArray:
     """Actuator values that sweep the instrument around a cone about the RCM.
 
     The instrument direction (frame E) turns ``turns`` times around ``axis_e`` at
@@ -127,7 +128,7 @@ def _check_cone(n: object, lead: object, cone_angle: object, turns: object
 
 
 def _cone_directions(axis_e: ArrayLike, n: int, lead: int, cone_angle: float,
-                     turns: float) -> NDArray[np.float64]:
+                     turns: float) -> FloatArray:
     """Unit instrument directions (n, 3) in frame E of :func:`instrument_cone_path`.
 
     ``turns`` turns at the half-angle ``cone_angle`` about ``axis_e`` over ``n - 2 lead``
@@ -157,7 +158,7 @@ def _cone_directions(axis_e: ArrayLike, n: int, lead: int, cone_angle: float,
                                                                   + np.sin(t)[:, None] * e2))
 
 
-def _geometries(qs: NDArray[np.float64], T: NDArray[np.float64], design: Design,
+def _geometries(qs: FloatArray, T: FloatArray, design: Design,
                 slot: int) -> list[RobotGeometry]:
     out = []
     for k, q in enumerate(qs):
@@ -175,7 +176,7 @@ TRACE_LINES = 24
 
 
 def draw_motion_frame(ax: Any, geoms: list[RobotGeometry], k: int, *,
-                      limits: tuple[NDArray[np.float64], NDArray[np.float64]],
+                      limits: tuple[FloatArray, FloatArray],
                       view: tuple[float, float] = VIEW, trace: bool = True,
                       **kwargs: Any) -> Any:
     """Draw frame ``k`` of a motion: the robot, and (``trace``) the whole motion faintly.

@@ -15,9 +15,10 @@ import dataclasses
 from collections.abc import Iterable
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._mechanism import BodyGeometry, MechanismState, state_from_fk
+from .._typing import FloatArray
 from .._validation import check_array, check_count, check_instance, check_scalar, check_slot
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, Reason, error_for_reason
@@ -108,28 +109,28 @@ class RobotGeometry:
         (batch shape ``()``), from which the points and frames here are taken.
     """
 
-    q: NDArray[np.float64]
+    q: FloatArray
     slot: int
     mode: int
     p_sign: int
     ujoint: int
     wrist: int
     p: float
-    u: NDArray[np.float64]
-    points: dict[str, NDArray[np.float64]]
-    frames: dict[str, NDArray[np.float64]]
-    wrist_axes: NDArray[np.float64]
-    ujoint_axes: NDArray[np.float64]
-    k1: NDArray[np.float64]
-    k2: NDArray[np.float64]
-    k2_arc: NDArray[np.float64]
-    intersections: NDArray[np.float64]
-    rail: NDArray[np.float64]
+    u: FloatArray
+    points: dict[str, FloatArray]
+    frames: dict[str, FloatArray]
+    wrist_axes: FloatArray
+    ujoint_axes: FloatArray
+    k1: FloatArray
+    k2: FloatArray
+    k2_arc: FloatArray
+    intersections: FloatArray
+    rail: FloatArray
     design: Design
-    T_b_e: NDArray[np.float64]
+    T_b_e: FloatArray
     state: MechanismState | None = None
 
-    def segments(self) -> dict[str, tuple[NDArray[np.float64], NDArray[np.float64]]]:
+    def segments(self) -> dict[str, tuple[FloatArray, FloatArray]]:
         """The bars of the mechanism as named segments ``(start, end)``.
 
         ``link_a1``, ``link_b1`` (length ``l1``, A/B to ``O_i``), ``link_a3``,
@@ -147,7 +148,7 @@ class RobotGeometry:
             "instrument": (P["O_s"], P["tip"]),
         }
 
-    def bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def bounds(self) -> tuple[FloatArray, FloatArray]:
         """Axis-aligned box ``(lo, hi)`` (each shape (3,)) around every drawn part.
 
         The full circle ``k2`` is left out (views draw :attr:`k2_arc`).
@@ -186,8 +187,8 @@ def check_length(x: object, name: str, *, maximum: float = 10.0) -> float:
     return v
 
 
-def circle_points(centre: NDArray[np.float64], radius: float, n: int = N_CIRCLE
-                  ) -> NDArray[np.float64]:
+def circle_points(centre: FloatArray, radius: float, n: int = N_CIRCLE
+                  ) -> FloatArray:
     """Points of a circle in the plane ``x = centre[0]``, shape (n, 3).
 
     Parameters
@@ -219,8 +220,8 @@ def circle_points(centre: NDArray[np.float64], radius: float, n: int = N_CIRCLE
                      centre[2] + radius * np.sin(t)], axis=-1)
 
 
-def _k2_arc(C: NDArray[np.float64], radius: float, M: NDArray[np.float64],
-            ends: NDArray[np.float64], n: int = N_CIRCLE) -> NDArray[np.float64]:
+def _k2_arc(C: FloatArray, radius: float, M: FloatArray,
+            ends: FloatArray, n: int = N_CIRCLE) -> FloatArray:
     """Arc of the circle (centre C, plane x = C[0]) between two points, on M's side."""
     ang = np.arctan2(ends[:, 2] - C[2], ends[:, 1] - C[1])
     ang = ang[np.isfinite(ang)]
@@ -311,7 +312,7 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
         design=design, T_b_e=T.copy(), state=st)
 
 
-def _solved_slot(q: NDArray[np.float64], T: NDArray[np.float64], design: Design, slot: int,
+def _solved_slot(q: FloatArray, T: FloatArray, design: Design, slot: int,
                  fk: FKSolution | None) -> FKSolution:
     """The forward kinematics of one ``q`` (``fk``, or solved here) with ``slot`` valid.
 
@@ -352,8 +353,8 @@ def slot_label(g: RobotGeometry) -> str:
             f"U{'+' if g.ujoint > 0 else '-'}, S{'+' if g.wrist > 0 else '-'}")
 
 
-def arc_points(centre: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64],
-               radius: float, n: int = 16) -> NDArray[np.float64]:
+def arc_points(centre: FloatArray, a: FloatArray, b: FloatArray,
+               radius: float, n: int = 16) -> FloatArray:
     """Great-circle arc of ``radius`` about ``centre`` from direction a to direction b, (n, 3).
 
     Parameters
@@ -412,7 +413,7 @@ def arc_points(centre: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[n
 
 
 def union_bounds(geoms: Iterable[RobotGeometry]
-                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+                 ) -> tuple[FloatArray, FloatArray]:
     """Axis-aligned box ``(lo, hi)`` (m) around every geometry's :meth:`~RobotGeometry.bounds`.
 
     ``geoms`` holds at least one geometry.
@@ -422,7 +423,7 @@ def union_bounds(geoms: Iterable[RobotGeometry]
 
 
 def cube_around(geoms: Iterable[RobotGeometry], pad: float = 0.05
-                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+                ) -> tuple[FloatArray, FloatArray]:
     """The axis box ``(lo, hi)`` (m) of a view of several solutions or frames.
 
     A cube around all of them (:func:`union_bounds`) with a margin ``pad`` (m).
@@ -430,8 +431,8 @@ def cube_around(geoms: Iterable[RobotGeometry], pad: float = 0.05
     return cube_limits(*union_bounds(geoms), pad)
 
 
-def cube_limits(lo: NDArray[np.float64], hi: NDArray[np.float64], pad: float = 0.05
-                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def cube_limits(lo: FloatArray, hi: FloatArray, pad: float = 0.05
+                ) -> tuple[FloatArray, FloatArray]:
     """A cube ``(lo, hi)`` around the box ``lo``, ``hi`` (m) with a margin ``pad`` (m)."""
     c = 0.5 * (lo + hi)
     half = 0.5 * float(np.max(hi - lo)) + pad

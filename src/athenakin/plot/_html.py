@@ -17,8 +17,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import FloatArray
 from .._validation import check_array
 from ..design import Design, resolve_design
 from ..robot import forward_kinematics
@@ -53,7 +54,7 @@ _TEXT_POSITIONS = {"top right": (1, 1), "top left": (-1, 1), "bottom right": (1,
 _CHAR_PX, _LINE_PX = 7.0, 14.0
 
 
-def _polyline(segments: list[NDArray[np.float64]]) -> tuple[list[Any], ...]:
+def _polyline(segments: list[FloatArray]) -> tuple[list[Any], ...]:
     """x, y, z lists (mm) of several polylines (m) separated by None (one plotly trace)."""
     xs: list[Any] = []
     ys: list[Any] = []
@@ -66,9 +67,9 @@ def _polyline(segments: list[NDArray[np.float64]]) -> tuple[list[Any], ...]:
     return xs, ys, zs
 
 
-def screen_points(pts: NDArray[np.float64], lo: NDArray[np.float64], hi: NDArray[np.float64],
+def screen_points(pts: FloatArray, lo: FloatArray, hi: FloatArray,
                   *, eye: dict[str, float] = CAMERA_EYE, size: float = 600.0
-                  ) -> NDArray[np.float64]:
+                  ) -> FloatArray:
     """Approximate page position (px, y up) of points in a cubic scene seen from ``eye``.
 
     An orthographic view along ``eye`` of the scene box ``lo``..``hi`` (m) scaled to
@@ -84,8 +85,8 @@ def screen_points(pts: NDArray[np.float64], lo: NDArray[np.float64], hi: NDArray
     return size * np.column_stack([u @ right, u @ up])
 
 
-def label_boxes(xy: NDArray[np.float64], texts: list[str], positions: list[str],
-                marker_px: float = 6.0) -> NDArray[np.float64]:
+def label_boxes(xy: FloatArray, texts: list[str], positions: list[str],
+                marker_px: float = 6.0) -> FloatArray:
     """Estimated page boxes ``(x0, y0, x1, y1)`` (px) of labels at plotly text positions."""
     out = []
     for (x, y), t, pos in zip(xy, texts, positions, strict=True):
@@ -97,13 +98,13 @@ def label_boxes(xy: NDArray[np.float64], texts: list[str], positions: list[str],
     return np.array(out).reshape(-1, 4)
 
 
-def _overlap(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
+def _overlap(a: FloatArray, b: FloatArray) -> float:
     w = min(a[2], b[2]) - max(a[0], b[0])
     h = min(a[3], b[3]) - max(a[1], b[1])
     return max(w, 0.0) * max(h, 0.0)
 
 
-def text_positions(xy: NDArray[np.float64], texts: list[str]) -> list[str]:
+def text_positions(xy: FloatArray, texts: list[str]) -> list[str]:
     """A plotly text position per label such that the estimated labels do not overlap.
 
     Greedy, in order: each label takes the first of the 8 positions whose box
@@ -112,10 +113,10 @@ def text_positions(xy: NDArray[np.float64], texts: list[str]) -> list[str]:
     """
     half = 5.0
     points = [np.r_[p - half, p + half] for p in xy]
-    placed: list[NDArray[np.float64]] = []
+    placed: list[FloatArray] = []
     out = []
     for i, (p, t) in enumerate(zip(xy, texts, strict=True)):
-        best: tuple[float, str, NDArray[np.float64]] | None = None
+        best: tuple[float, str, FloatArray] | None = None
         for pos in _TEXT_POSITIONS:
             box = label_boxes(p[None], [t], [pos])[0]
             cost = (sum(_overlap(box, b) for b in placed)
@@ -143,7 +144,7 @@ POINT_LABELS = (("A", "A", "carriage A (q1)"), ("B", "B", "carriage B (q2)"),
 
 
 def _traces(g: RobotGeometry, *, show_frames: bool, frame_length: float,
-            box: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+            box: tuple[FloatArray, FloatArray] | None = None
             ) -> list[dict[str, Any]]:
     """Scatter3d trace specs (plotly dicts, coordinates in mm) of one solution."""
     P = g.points
@@ -199,7 +200,7 @@ def _traces(g: RobotGeometry, *, show_frames: bool, frame_length: float,
 
 
 def _point_trace(g: RobotGeometry, *, show_frames: bool,
-                 box: tuple[NDArray[np.float64], NDArray[np.float64]] | None) -> dict[str, Any]:
+                 box: tuple[FloatArray, FloatArray] | None) -> dict[str, Any]:
     """The labelled points of one solution (one label where points coincide on screen)."""
     P = g.points
     keys, labels, names = (list(t) for t in zip(*POINT_LABELS, strict=True))
@@ -311,7 +312,7 @@ def robot_figure(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     return fig
 
 
-def _solution_geometries(q: NDArray[np.float64], T: NDArray[np.float64], design: Design,
+def _solution_geometries(q: FloatArray, T: FloatArray, design: Design,
                          first: RobotGeometry, *, every: bool) -> dict[int, RobotGeometry]:
     """Geometry of each solution shown, by slot: every valid one (``every``) or ``first``."""
     if not every:
@@ -323,7 +324,7 @@ def _solution_geometries(q: NDArray[np.float64], T: NDArray[np.float64], design:
 
 def _add_solution_traces(fig: Any, geoms: dict[int, RobotGeometry], shown: int, *,
                          all_solutions: bool, show_frames: bool, frame_length: float,
-                         box: tuple[NDArray[np.float64], NDArray[np.float64]]) -> list[int]:
+                         box: tuple[FloatArray, FloatArray]) -> list[int]:
     """Add the traces of every solution to ``fig``; returns the slot of each trace.
 
     ``all_solutions``: all visible, one legend group (and entry) per slot, text labels on
@@ -350,7 +351,7 @@ def _add_solution_traces(fig: Any, geoms: dict[int, RobotGeometry], shown: int, 
     return owner
 
 
-def _scene(lo: NDArray[np.float64], hi: NDArray[np.float64]) -> dict[str, Any]:
+def _scene(lo: FloatArray, hi: FloatArray) -> dict[str, Any]:
     """The plotly scene: the axis box ``(lo, hi)`` (m, a cube), axes in mm."""
     axis = {"showbackground": True, "backgroundcolor": "#f4f4f6", "gridcolor": "#cccccc"}
     return {**{f"{c}axis": {**axis, "title": f"{c}_b [mm]", "range": [MM * lo[i], MM * hi[i]]}

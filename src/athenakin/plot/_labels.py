@@ -5,7 +5,8 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
+
+from .._typing import FloatArray
 
 if TYPE_CHECKING:  # pragma: no cover
     from mpl_toolkits.mplot3d.axes3d import Axes3D as Axes
@@ -41,7 +42,7 @@ def _renderer(fig: Any) -> Any:
     return fig._get_renderer()                        # pragma: no cover
 
 
-def _project(ax: Axes, pts: NDArray[np.float64]) -> NDArray[np.float64]:
+def _project(ax: Axes, pts: FloatArray) -> FloatArray:
     """Display coordinates (px) of 3-D points, shape (n, 2), with the axes' current view."""
     from mpl_toolkits.mplot3d import proj3d
 
@@ -50,7 +51,7 @@ def _project(ax: Axes, pts: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.asarray(ax.transData.transform(np.column_stack([x, y])))
 
 
-def _overlap(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+def _overlap(a: FloatArray, b: FloatArray) -> FloatArray:
     """Overlap areas of box ``a`` (x0, y0, x1, y1) with each of the boxes ``b``, shape (n,)."""
     b = np.asarray(b, dtype=float).reshape(-1, 4)
     w = np.minimum(a[2], b[:, 2]) - np.maximum(a[0], b[:, 0])
@@ -58,7 +59,7 @@ def _overlap(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float
     return np.asarray(np.maximum(w, 0.0) * np.maximum(h, 0.0))
 
 
-def _sample(poly: NDArray[np.float64], step: float) -> NDArray[np.float64]:
+def _sample(poly: FloatArray, step: float) -> FloatArray:
     """Points along a polyline (n, 2) no farther apart than ``step``."""
     out = [poly[:1]]
     for a, b in zip(poly[:-1], poly[1:], strict=True):
@@ -67,9 +68,9 @@ def _sample(poly: NDArray[np.float64], step: float) -> NDArray[np.float64]:
     return np.concatenate(out)
 
 
-def place_labels(ax: Axes, items: list[tuple[str, NDArray[np.float64], str]], *,
-                 lines: list[NDArray[np.float64]] | None = None,
-                 boxes: list[NDArray[np.float64]] | None = None,
+def place_labels(ax: Axes, items: list[tuple[str, FloatArray, str]], *,
+                 lines: list[FloatArray] | None = None,
+                 boxes: list[FloatArray] | None = None,
                  fontsize: float = LABEL_SIZE) -> list[Any]:
     """Label 3-D points so that no two labels overlap and every label lies in the axes.
 
@@ -132,15 +133,15 @@ def place_labels(ax: Axes, items: list[tuple[str, NDArray[np.float64], str]], *,
     return out
 
 
-def _merge_labels(items: list[tuple[str, NDArray[np.float64], str]],
-                  anchors: NDArray[np.float64], merge_px: float
-                  ) -> list[tuple[str, NDArray[np.float64], NDArray[np.float64], str]]:
+def _merge_labels(items: list[tuple[str, FloatArray, str]],
+                  anchors: FloatArray, merge_px: float
+                  ) -> list[tuple[str, FloatArray, FloatArray, str]]:
     """``(text, point, pixel, colour)`` per label, where close points share one label.
 
     Points closer than ``merge_px`` on the screen share one label, but for
     :data:`KEEP_APART` and :data:`LEFT_OUT_NEAR_APART`.
     """
-    merged: list[tuple[str, NDArray[np.float64], NDArray[np.float64], str]] = []
+    merged: list[tuple[str, FloatArray, FloatArray, str]] = []
     for (text, p, color), xy in zip(items, anchors, strict=True):
         for k, (t0, p0, xy0, c0) in enumerate(merged):
             if np.hypot(*(xy - xy0)) >= merge_px:
@@ -157,8 +158,8 @@ def _merge_labels(items: list[tuple[str, NDArray[np.float64], str]],
     return merged
 
 
-def _line_boxes(ax: Axes, lines: list[NDArray[np.float64]] | None,
-                scale: float) -> NDArray[np.float64]:
+def _line_boxes(ax: Axes, lines: list[FloatArray] | None,
+                scale: float) -> FloatArray:
     """Small display boxes (n, 4) (px) along the drawn ``lines``: what labels should avoid."""
     if not lines:
         return np.zeros((0, 4))
@@ -172,9 +173,9 @@ def _line_boxes(ax: Axes, lines: list[NDArray[np.float64]] | None,
 _DIRECTIONS = ((1, 1), (1, -1), (-1, 1), (-1, -1), (1, 0), (-1, 0), (0, 1), (0, -1))
 
 
-def _best_place(ext: Any, dpi: float, frame: NDArray[np.float64], hard: list[Any],
-                marks: NDArray[np.float64], soft: NDArray[np.float64]
-                ) -> tuple[tuple[float, float], str, str, NDArray[np.float64]]:
+def _best_place(ext: Any, dpi: float, frame: FloatArray, hard: list[Any],
+                marks: FloatArray, soft: FloatArray
+                ) -> tuple[tuple[float, float], str, str, FloatArray]:
     """The least-cost place of a label whose box at offset 0 is ``ext`` (display px).
 
     Returns the offset (points), the horizontal and vertical alignment and the label's
@@ -182,7 +183,7 @@ def _best_place(ext: Any, dpi: float, frame: NDArray[np.float64], hard: list[Any
     """
     w, h = ext.width, ext.height
     x0, y0 = ext.x0, ext.y0                        # the box's corner at offset 0
-    best: tuple[float, Any, str, str, NDArray[np.float64]] | None = None
+    best: tuple[float, Any, str, str, FloatArray] | None = None
     for r in LABEL_RADII:
         for dx, dy in _DIRECTIONS:
             ha = "left" if dx > 0 else "right" if dx < 0 else "center"

@@ -11,9 +11,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._toml import TomlOptions
+from .._typing import FloatArray
 from .._validation import check_array
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, Reason
@@ -47,7 +48,7 @@ def _point(ax: Axes, p: ArrayLike, **kw: Any) -> None:
     ax.scatter([p[0]], [p[1]], [p[2]], **kw)
 
 
-def _points(ax: Axes, pts: NDArray[np.float64], **kw: Any) -> None:
+def _points(ax: Axes, pts: FloatArray, **kw: Any) -> None:
     ax.scatter(pts[:, 0], pts[:, 1], pts[:, 2], **kw)
 
 
@@ -56,7 +57,7 @@ def _line(ax: Axes, a: ArrayLike, b: ArrayLike, **kw: Any) -> None:
     ax.plot([a[0], b[0]], [a[1], b[1]], [a[2], b[2]], **kw)
 
 
-def _triad(ax: Axes, T: NDArray[np.float64], length: float) -> None:
+def _triad(ax: Axes, T: FloatArray, length: float) -> None:
     o = T[:3, 3]
     for i, c in enumerate("xyz"):
         _line(ax, o, o + length * T[:3, i], color=COLORS[c], lw=1.6, solid_capstyle="round")
@@ -91,7 +92,7 @@ def legend_handles(*, show_frames: bool = True, show_circles: bool = True,
     return h
 
 
-def _labels(g: RobotGeometry, *, show_frames: bool) -> list[tuple[str, NDArray[np.float64], str]]:
+def _labels(g: RobotGeometry, *, show_frames: bool) -> list[tuple[str, FloatArray, str]]:
     P = g.points
     dark = "#111111"
     items = [("RCM" if not show_frames else "$O_e$ (RCM)", P["RCM"], COLORS["sphere"]),
@@ -150,7 +151,7 @@ def _draw(ax: Axes, g: RobotGeometry, *, show_frames: bool, show_circles: bool,
 
 
 def _drawn_lines(g: RobotGeometry, *, show_frames: bool, show_circles: bool,
-                 frame_length: float, joint_scale: float = 1.0) -> list[NDArray[np.float64]]:
+                 frame_length: float, joint_scale: float = 1.0) -> list[FloatArray]:
     """Every polyline the view draws (m), which labels keep clear of."""
     c, r = g.points["RCM"], ARC_RADIUS * joint_scale
     out = [np.stack(ab) for ab in g.segments().values()] + [g.rail]
@@ -178,7 +179,7 @@ def _mm_axes(ax: Axes) -> None:
         axis.set_label_text(f"{name}$_b$ [mm]", fontsize=8)
 
 
-def _style(ax: Axes, lo: NDArray[np.float64], hi: NDArray[np.float64],
+def _style(ax: Axes, lo: FloatArray, hi: FloatArray,
            view: tuple[float, float], zoom: float = 0.95, cube: bool = True) -> None:
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
@@ -343,7 +344,7 @@ def _check_plot_robot(opts: object, geometry: object, ax: object, legend_extra: 
 
 
 def _legend_box(ax: Axes, g: RobotGeometry, opts: PlotOptions,
-                legend_extra: list[Any] | None) -> NDArray[np.float64]:
+                legend_extra: list[Any] | None) -> FloatArray:
     """Draw the legend of the colours (and ``legend_extra``); its display box (px)."""
     other = g.intersections[1 if g.mode > 0 else 0]
     leg = ax.legend(handles=legend_handles(show_frames=opts.show_frames,
@@ -424,13 +425,13 @@ def plot_fk_solutions(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None
     return fig
 
 
-def _xyz(v: NDArray[np.float64]) -> tuple[float, float, float]:
+def _xyz(v: FloatArray) -> tuple[float, float, float]:
     """A point as the tuple of floats that :class:`PlotOptions` ``limits`` holds."""
     return float(v[0]), float(v[1]), float(v[2])
 
 
 def _common_box(geoms: list[RobotGeometry], pad: float = 0.01
-                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+                ) -> tuple[FloatArray, FloatArray]:
     """Axis box ``(lo, hi)`` (m) tight around every geometry plus ``pad`` (none: a 2 m cube)."""
     if not geoms:
         return -np.ones(3), np.ones(3)
@@ -461,7 +462,7 @@ SCALE_BAR = 0.1
 GRID_TITLE_SIZE = 14.0
 
 
-def _scale_bar(ax: Axes, lo: NDArray[np.float64], hi: NDArray[np.float64],
+def _scale_bar(ax: Axes, lo: FloatArray, hi: FloatArray,
                view: tuple[float, float], length: float) -> None:
     """A bar of ``length`` m parallel to the screen, at the lower left of the axis box.
 

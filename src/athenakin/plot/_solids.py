@@ -12,8 +12,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import FloatArray
 from .._validation import check_array, check_axes, check_frame, check_scalar
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
@@ -42,8 +43,8 @@ MAX_DRAWN_LENGTH = 1e3
 
 
 def capsule_surface(a: ArrayLike, b: ArrayLike, radius: float, *, n_around: int = 16,
-                    n_cap: int = 5) -> tuple[NDArray[np.float64], NDArray[np.float64],
-                                             NDArray[np.float64]]:
+                    n_cap: int = 5) -> tuple[FloatArray, FloatArray,
+                                             FloatArray]:
     """Surface grid of the capsule of segment ``a -> b`` and ``radius`` (for ``plot_surface``).
 
     Parameters

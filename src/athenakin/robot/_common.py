@@ -6,8 +6,8 @@ from collections.abc import Callable, Container, Mapping
 from typing import Any, Literal, TypeVar
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._typing import BoolArray, FloatArray, Int8Array
 from .._validation import check_choice, is_option
 from ..design import Design, resolve_design
 from ..errors import Reason, error_for_reason
@@ -45,9 +45,9 @@ def resolve_policy(errors: str, batch_shape: tuple[int, ...]) -> bool:
     return errors == "raise" or (errors == "auto" and batch_shape == ())
 
 
-def raise_first_failure(item_reason: NDArray[np.int8], describe: str,
-                        values: dict[str, NDArray[np.float64]], *, design: Design | None = None,
-                        q_of: Callable[[tuple[int, ...]], NDArray[np.float64]] | None = None,
+def raise_first_failure(item_reason: Int8Array, describe: str,
+                        values: dict[str, FloatArray], *, design: Design | None = None,
+                        q_of: Callable[[tuple[int, ...]], FloatArray] | None = None,
                         detail_of: Callable[[tuple[int, ...]], str] | None = None
                         ) -> None:
     """Raise the exception of the first item whose reason is non-zero.
@@ -88,7 +88,7 @@ def raise_first_failure(item_reason: NDArray[np.int8], describe: str,
     raise error_for_reason(code, f"{describe} failed for {where}" + ", ".join(parts))
 
 
-def stroke_detail(q: NDArray[np.float64], design: Design) -> str:
+def stroke_detail(q: FloatArray, design: Design) -> str:
     """Name the actuators of ``q`` (3,) outside the strokes: ``q2 = 0.31 m > q_max = 0.3 m``."""
     lo, hi = design.stroke_min, design.stroke_max
     out = []
@@ -100,8 +100,8 @@ def stroke_detail(q: NDArray[np.float64], design: Design) -> str:
     return "; ".join(out)
 
 
-def item_reason_from_slots(valid: NDArray[np.bool_], reason: NDArray[np.int8]
-                           ) -> NDArray[np.int8]:
+def item_reason_from_slots(valid: BoolArray, reason: Int8Array
+                           ) -> Int8Array:
     """Per-item reason: 0 if any slot is valid, else the most specific slot reason.
 
     The most specific is the first non-OK slot code in slot order, preferring

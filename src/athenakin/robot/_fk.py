@@ -10,8 +10,9 @@ from collections.abc import Callable
 from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import BoolArray, FloatArray, Int8Array, IntArray
 from .._validation import (
     broadcast_batch,
     check_array,
@@ -130,13 +131,13 @@ class FKSolution:
     :attr:`wrist` (..., 16), :attr:`n_solutions` (...).
     """
 
-    valid: NDArray[np.bool_]
-    reason: NDArray[np.int8]
-    p: NDArray[np.float64]
-    u: NDArray[np.float64]
-    T_b_s_mode: NDArray[np.float64]
-    residual: NDArray[np.float64]
-    item_reason: NDArray[np.int8]
+    valid: BoolArray
+    reason: Int8Array
+    p: FloatArray
+    u: FloatArray
+    T_b_s_mode: FloatArray
+    residual: FloatArray
+    item_reason: Int8Array
     tool_length: float
 
     def __getattr__(self, name: str) -> Any:
@@ -153,35 +154,35 @@ class FKSolution:
         return f"FKSolution(batch {np.shape(self.item_reason)}; {', '.join(have)})"
 
     @property
-    def n_solutions(self) -> NDArray[np.int64]:
+    def n_solutions(self) -> IntArray:
         """Number of valid slots per item, shape (...)."""
         return np.sum(self.valid, axis=-1)
 
-    def _labels(self, a: NDArray[np.int64]) -> NDArray[np.int64]:
+    def _labels(self, a: IntArray) -> IntArray:
         return np.broadcast_to(a, np.shape(self.item_reason) + (16,))
 
     @property
-    def mode(self) -> NDArray[np.int64]:
+    def mode(self) -> IntArray:
         """Assembly mode of each slot (+1 / -1), shape (..., 16) (read-only view)."""
         return self._labels(SLOT_MODE)
 
     @property
-    def p_sign(self) -> NDArray[np.int64]:
+    def p_sign(self) -> IntArray:
         """Sign of the root ``p`` of each slot (+1 / -1), shape (..., 16)."""
         return self._labels(SLOT_P_SIGN)
 
     @property
-    def ujoint(self) -> NDArray[np.int64]:
+    def ujoint(self) -> IntArray:
         """U-joint branch (sign of ``sin u2``) of each slot, shape (..., 16)."""
         return self._labels(SLOT_UJOINT)
 
     @property
-    def wrist(self) -> NDArray[np.int64]:
+    def wrist(self) -> IntArray:
         """Spherical-joint branch (sign of ``sin u4``) of each slot, shape (..., 16)."""
         return self._labels(SLOT_WRIST)
 
     @functools.cached_property
-    def T_b_s(self) -> NDArray[np.float64]:
+    def T_b_s(self) -> FloatArray:
         """Pose of ``O_s`` of each slot's assembly mode, shape (..., 16, 4, 4).
 
         Expanded from :attr:`T_b_s_mode` on first access (then cached): slot ``k``
@@ -190,7 +191,7 @@ class FKSolution:
         return np.take(self.T_b_s_mode, SLOT_MODE_INDEX, axis=-3)
 
     @functools.cached_property
-    def T_b_tip(self) -> NDArray[np.float64]:
+    def T_b_tip(self) -> FloatArray:
         """Instrument frame at the tool tip of each slot, base frame, shape (..., 16, 4, 4).
 
         Rotation ``R_b_s R(u1, u2)`` (the instrument link, whose z-axis ``z3`` is the
@@ -200,7 +201,7 @@ class FKSolution:
         return _tip_frames(self.T_b_s_mode, self.u, self.tool_length)
 
     @functools.cached_property
-    def tip(self) -> NDArray[np.float64]:
+    def tip(self) -> FloatArray:
         """Tool tip of each slot, base frame, m, shape (..., 16, 3).
 
         ``O_s + tool_length * z3`` with ``z3 = R_b_s R(u1, u2) e_z`` the instrument
@@ -215,8 +216,8 @@ _ARRAY_FIELDS = ("valid", "reason", "p", "u", "T_b_s_mode", "residual", "item_re
 _FIELD_ATTRS.update({v: v for v in _FIELD_ATTRS.values()})
 
 
-def _tip_frames(T_b_s_mode: NDArray[np.float64], u: NDArray[np.float64], L: float
-                ) -> NDArray[np.float64]:
+def _tip_frames(T_b_s_mode: FloatArray, u: FloatArray, L: float
+                ) -> FloatArray:
     """``T_b_tip`` (..., 16, 4, 4) from the per-mode ``T_b_s`` and the slots' ``u``."""
     R_b_s = np.take(T_b_s_mode[..., :3, :3], SLOT_MODE_INDEX, axis=-3)     # (..., 16, 3, 3)
     O_s = np.take(T_b_s_mode[..., :3, 3], SLOT_MODE_INDEX, axis=-2)        # (..., 16, 3)
@@ -312,7 +313,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
 FK_BLOCK = 8192
 
 
-def _fk_block(q: NDArray[np.float64], T: NDArray[np.float64], design: Design, method: str,
+def _fk_block(q: FloatArray, T: FloatArray, design: Design, method: str,
               tols: dict[str, float], batch: tuple[int, ...], raise_now: bool,
               names: tuple[str, ...] | None) -> FKSolution:
     """Forward kinematics of one block of (already checked and broadcast) poses."""
@@ -325,8 +326,8 @@ def _fk_block(q: NDArray[np.float64], T: NDArray[np.float64], design: Design, me
                      closure_tol=tols["closure_tol"])
 
 
-SerialStep = Callable[..., tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int8],
-                                 NDArray[np.float64]]]
+SerialStep = Callable[..., tuple[FloatArray, FloatArray, Int8Array,
+                                 FloatArray]]
 
 #: The serial step of each FK method other than ``"closed"``, registered from above by the
 #: package that implements it (:mod:`athenakin.symbolic` registers ``"algebraic"``, imported
@@ -363,7 +364,7 @@ def _serial_step(method: str) -> SerialStep:
 
 
 def _prepare(q: ArrayLike, T_b_e: ArrayLike, design: Design | None, errors: str
-             ) -> tuple[Design, NDArray[np.float64], NDArray[np.float64], tuple[int, ...], bool]:
+             ) -> tuple[Design, FloatArray, FloatArray, tuple[int, ...], bool]:
     """Validate and broadcast the inputs of a forward-kinematics call."""
     design = resolve_design(design)
     qa = check_array(q, "q", (3,), allow_nonfinite=True)
@@ -378,10 +379,10 @@ def _prepare(q: ArrayLike, T_b_e: ArrayLike, design: Design | None, errors: str
     return design, qa, T, batch, raise_now
 
 
-def _serial_closed_form(par: ParallelSolution, T: NDArray[np.float64], *, degenerate_tol: float,
+def _serial_closed_form(par: ParallelSolution, T: FloatArray, *, degenerate_tol: float,
                         p_zero_tol: float, closure_tol: float
-                        ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int8],
-                                   NDArray[np.float64]]:
+                        ) -> tuple[FloatArray, FloatArray, Int8Array,
+                                   FloatArray]:
     """The serial step: 8 solutions per assembly mode, shape (..., 2, 8)."""
     Ts = np.where(par.valid[..., None, None], par.T_b_s, np.eye(4))   # (..., 2, 4, 4)
     T_s_e = _s_e_as_kernel(Ts, T[..., None, :, :])
@@ -394,7 +395,7 @@ def _serial_closed_form(par: ParallelSolution, T: NDArray[np.float64], *, degene
     return ser.p, ser.u, ser.reason, ser.residual
 
 
-def _s_e_as_kernel(Ts: NDArray[np.float64], T: NDArray[np.float64]) -> NDArray[np.float64]:
+def _s_e_as_kernel(Ts: FloatArray, T: FloatArray) -> FloatArray:
     """``T_b_s^-1 @ T_b_e`` with the compiled kernel's operations, in its order.
 
     ``T_b_s = [[1, 0, 0, xm], [0, cz, cy, ys], [0, -cy, cz, zs], [0, 0, 0, 1]]`` (the
@@ -417,8 +418,8 @@ def _s_e_as_kernel(Ts: NDArray[np.float64], T: NDArray[np.float64]) -> NDArray[n
     return out
 
 
-def _assemble(par: ParallelSolution, p: NDArray[np.float64], u: NDArray[np.float64],
-              sreason: NDArray[np.int8], residual: NDArray[np.float64], q: NDArray[np.float64],
+def _assemble(par: ParallelSolution, p: FloatArray, u: FloatArray,
+              sreason: Int8Array, residual: FloatArray, q: FloatArray,
               batch: tuple[int, ...], raise_now: bool, design: Design,
               fields: tuple[str, ...] | None = None, *,
               closure_tol: float = CLOSURE_TOL) -> FKSolution:

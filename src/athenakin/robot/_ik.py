@@ -21,9 +21,10 @@ import dataclasses
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._transforms import transform_from_rotation_translation, wrap_angle
+from .._typing import BoolArray, FloatArray, Int8Array, IntArray
 from .._validation import broadcast_batch, check_array, check_names, check_options, check_transform
 from ..chain._ups import (
     CLOSURE_TOL,
@@ -107,26 +108,26 @@ class PassiveJoints:
     another one raises an ``AttributeError`` that says so.
     """
 
-    p: NDArray[np.float64]
-    u: NDArray[np.float64]
-    mode: NDArray[np.int64]
-    T_b_s: NDArray[np.float64]
-    residual: NDArray[np.float64]
-    valid: NDArray[np.bool_]
-    reason: NDArray[np.int8]
-    q_error: NDArray[np.float64]
+    p: FloatArray
+    u: FloatArray
+    mode: IntArray
+    T_b_s: FloatArray
+    residual: FloatArray
+    valid: BoolArray
+    reason: Int8Array
+    q_error: FloatArray
 
     def __getattr__(self, name: str) -> Any:
         # only reached for a field that a fields=(...) call left out
         raise missing_field(self, name, IK_FIELDS, _IK_ATTRS, "inverse_kinematics")
 
     @property
-    def u1(self) -> NDArray[np.float64]:
+    def u1(self) -> FloatArray:
         """U-joint angle ``u1``, shape (...)."""
         return self.u[..., 0]
 
     @property
-    def u2(self) -> NDArray[np.float64]:
+    def u2(self) -> FloatArray:
         """U-joint angle ``u2``, shape (...)."""
         return self.u[..., 1]
 
@@ -168,13 +169,13 @@ class InstrumentIK:
         (largest, about 1e-7 m, at ``q1 = q2``); NaN where invalid.
     """
 
-    p: NDArray[np.float64]
-    direction_b: NDArray[np.float64]
-    O_s: NDArray[np.float64]
-    mode: NDArray[np.int64]
-    valid: NDArray[np.bool_]
-    reason: NDArray[np.int8]
-    q_error: NDArray[np.float64]
+    p: FloatArray
+    direction_b: FloatArray
+    O_s: FloatArray
+    mode: IntArray
+    valid: BoolArray
+    reason: Int8Array
+    q_error: FloatArray
 
 
 
@@ -182,7 +183,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
                        errors: ErrorPolicy = "auto", singular_tol: float = IK_SINGULAR_TOL,
                        closure_tol: float = CLOSURE_TOL, fields: tuple[str, ...] | None = None,
                        backend: ReferenceBackend = "numpy"
-                       ) -> tuple[NDArray[np.float64], PassiveJoints]:
+                       ) -> tuple[FloatArray, PassiveJoints]:
     """The numpy reference of :func:`athenakin.inverse_kinematics` (the compiled kernels' oracle).
 
     Parameters
@@ -262,7 +263,7 @@ def inverse_kinematics(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None 
 
 def check_ik_arguments(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None, errors: str,
                        singular_tol: object, closure_tol: object
-                       ) -> tuple[Design, NDArray[np.float64], NDArray[np.float64],
+                       ) -> tuple[Design, FloatArray, FloatArray,
                                   tuple[int, ...], bool, float, float]:
     """The one validation path of the paper-form IK, for every backend (private).
 
@@ -277,8 +278,8 @@ def check_ik_arguments(T_b_e: ArrayLike, u345: ArrayLike, design: Design | None,
     return design, T, u345, batch, raise_now, stol, ctol
 
 
-def paper_o_error(c: NDArray[np.float64], p: NDArray[np.float64], ny: NDArray[np.float64],
-                  den: NDArray[np.float64]) -> NDArray[np.float64]:
+def paper_o_error(c: FloatArray, p: FloatArray, ny: FloatArray,
+                  den: FloatArray) -> FloatArray:
     """Bound (m) on the error of ``O_s = c - p z_w`` in the paper-form IK (private).
 
     ``n = y_w / |y_w|`` carries a relative error ``eps / ny`` and ``p = (c . n) / den``
@@ -296,20 +297,20 @@ def paper_o_error(c: NDArray[np.float64], p: NDArray[np.float64], ny: NDArray[np
 _EPS = float(np.finfo(float).eps)
 
 
-def _detail(code: int, O_s: NDArray[np.float64], design: Design) -> str:
+def _detail(code: int, O_s: FloatArray, design: Design) -> str:
     """Extra words for a failure at ``O_s``: which way the link test failed."""
     if code == Reason.LINK_TOO_SHORT and np.all(np.isfinite(O_s)):
         return link_detail(O_s, design)
     return ""
 
 
-def _unlimited_q(O_s: NDArray[np.float64], design: Design) -> NDArray[np.float64]:
+def _unlimited_q(O_s: FloatArray, design: Design) -> FloatArray:
     """Actuator values for ``O_s`` ignoring the stroke limits (to name a violated limit)."""
     free = dataclasses.replace(design, q_min=None, q_max=None)
     return parallel_ik_from_position(O_s, free).q
 
 
-def direction_from_angles(azimuth: ArrayLike, polar: ArrayLike) -> NDArray[np.float64]:
+def direction_from_angles(azimuth: ArrayLike, polar: ArrayLike) -> FloatArray:
     """Unit instrument direction in the RCM frame E from two angles about the RCM.
 
     Spherical coordinates about ``z_e`` (the axis of the last spherical joint,
@@ -331,8 +332,8 @@ def direction_from_angles(azimuth: ArrayLike, polar: ArrayLike) -> NDArray[np.fl
     return np.stack([np.sin(b) * np.cos(a), np.sin(b) * np.sin(a), np.cos(b)], axis=-1)
 
 
-def angles_from_direction(direction_e: ArrayLike) -> tuple[NDArray[np.float64],
-                                                           NDArray[np.float64]]:
+def angles_from_direction(direction_e: ArrayLike) -> tuple[FloatArray,
+                                                           FloatArray]:
     """Inverse of :func:`direction_from_angles`: ``(azimuth, polar)`` of a direction.
 
     Parameters
@@ -353,7 +354,7 @@ def angles_from_direction(direction_e: ArrayLike) -> tuple[NDArray[np.float64],
     return az, np.arctan2(np.hypot(d[..., 0], d[..., 1]), d[..., 2])
 
 
-def _unit(d: NDArray[np.float64], name: str) -> NDArray[np.float64]:
+def _unit(d: FloatArray, name: str) -> FloatArray:
     """``d / |d|`` scaled by the largest component first (no underflow or overflow).
 
     Non-finite items give NaN; a zero vector raises.
@@ -371,7 +372,7 @@ def _unit(d: NDArray[np.float64], name: str) -> NDArray[np.float64]:
 def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
                       design: Design | None = None, *, errors: ErrorPolicy = "auto",
                       backend: ReferenceBackend = "numpy"
-                      ) -> tuple[NDArray[np.float64], InstrumentIK]:
+                      ) -> tuple[FloatArray, InstrumentIK]:
     """The numpy reference of :func:`athenakin.q_from_instrument` (the compiled kernels' oracle).
 
     Parameters
@@ -405,7 +406,7 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
 
 def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = None, *,
                     errors: ErrorPolicy = "auto", backend: ReferenceBackend = "numpy"
-                    ) -> tuple[NDArray[np.float64], InstrumentIK]:
+                    ) -> tuple[FloatArray, InstrumentIK]:
     """The numpy reference of :func:`athenakin.q_from_tool_tip` (the compiled kernels' oracle).
 
     Parameters
@@ -442,9 +443,9 @@ def q_from_tool_tip(T_b_e: ArrayLike, tip_e: ArrayLike, design: Design | None = 
     return _q_from_line(T, d_e, L - s, design, errors, pre)
 
 
-def _q_from_line(T: NDArray[np.float64], d_e: NDArray[np.float64], p: NDArray[np.float64],
-                 design: Design, errors: str, pre: NDArray[np.int8]
-                 ) -> tuple[NDArray[np.float64], InstrumentIK]:
+def _q_from_line(T: FloatArray, d_e: FloatArray, p: FloatArray,
+                 design: Design, errors: str, pre: Int8Array
+                 ) -> tuple[FloatArray, InstrumentIK]:
     batch = broadcast_batch(T_b_e=T.shape[:-2], direction=d_e.shape[:-1], p=p.shape,
                             check=pre.shape)
     raise_now = resolve_policy(errors, batch)

@@ -23,9 +23,10 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._mechanism_formulas import parallel_state_formula
+from .._typing import FloatArray
 from .._validation import broadcast_batch, check_array
 from ..chain._ups import rotation_u_pair
 from ..design import Design, resolve_design
@@ -41,7 +42,7 @@ _FRAMES = ("base", "rcm")
 # --------------------------------------------------------------------------------------
 # argument handling
 # --------------------------------------------------------------------------------------
-def _mode(mode: ArrayLike) -> NDArray[np.float64]:
+def _mode(mode: ArrayLike) -> FloatArray:
     try:
         m = np.asarray(mode)
     except (ValueError, TypeError):         # ragged lists and the like
@@ -58,7 +59,7 @@ def _frame(frame: str) -> str:
     return frame
 
 
-def _rcm(T_b_e: ArrayLike | None, design: Design) -> NDArray[np.float64]:
+def _rcm(T_b_e: ArrayLike | None, design: Design) -> FloatArray:
     return resolve_rcm_frame(T_b_e, design, single=False)
 
 
@@ -66,7 +67,7 @@ def _rcm(T_b_e: ArrayLike | None, design: Design) -> NDArray[np.float64]:
 # parallel module
 # --------------------------------------------------------------------------------------
 def parallel_state(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1
-                   ) -> dict[str, NDArray[np.float64]]:
+                   ) -> dict[str, FloatArray]:
     """Geometry of the parallel module used by the Jacobians (no stroke / A-B checks).
 
     Parameters
@@ -110,7 +111,7 @@ def parallel_state(q: ArrayLike, design: Design | None = None, mode: ArrayLike =
             "a": a, "y": y, "z": z, "ey": ey, "ez": ez, "D": -m * a * d, "mode": m, "O_s": O_s}
 
 
-def _dphi_dq(g: dict[str, NDArray[np.float64]]) -> NDArray[np.float64]:
+def _dphi_dq(g: dict[str, FloatArray]) -> FloatArray:
     """``d phi / d q`` (..., 3); ``phi - pi/2`` is the angle of ``R_b_s = Rx(theta)``."""
     h, r1, s3, m_y, q3 = g["h"], g["r1"], g["s3"], g["m_y"], g["q3"]
     ey, ez, D = g["ey"], g["ez"], g["D"]
@@ -126,7 +127,7 @@ def _dphi_dq(g: dict[str, NDArray[np.float64]]) -> NDArray[np.float64]:
 
 
 def _state_rcm(q: ArrayLike, T_b_e: ArrayLike | None, design: Design | None, mode: ArrayLike
-               ) -> tuple[Design, dict[str, NDArray[np.float64]], NDArray[np.float64]]:
+               ) -> tuple[Design, dict[str, FloatArray], FloatArray]:
     """:func:`_state` and the RCM frame, ``q`` broadcast with ``T_b_e`` (named error if not)."""
     design = resolve_design(design)
     qa = check_array(q, "q", (3,), allow_nonfinite=True)
@@ -137,7 +138,7 @@ def _state_rcm(q: ArrayLike, T_b_e: ArrayLike | None, design: Design | None, mod
 
 
 def _state(q: ArrayLike, design: Design | None, mode: ArrayLike
-           ) -> tuple[Design, dict[str, NDArray[np.float64]]]:
+           ) -> tuple[Design, dict[str, FloatArray]]:
     design = resolve_design(design)
     g = parallel_state(q, design, mode)
     g["l4"] = np.asarray(design.l4)
@@ -145,7 +146,7 @@ def _state(q: ArrayLike, design: Design | None, mode: ArrayLike
     return design, g
 
 
-def _parallel_jacobian(g: dict[str, NDArray[np.float64]]) -> NDArray[np.float64]:
+def _parallel_jacobian(g: dict[str, FloatArray]) -> FloatArray:
     h, r1, ey, ez = g["h"], g["r1"], g["ey"], g["ez"]
     rho = r1 + g["l4"]
     dphi = _dphi_dq(g)
@@ -159,7 +160,7 @@ def _parallel_jacobian(g: dict[str, NDArray[np.float64]]) -> NDArray[np.float64]
 
 
 def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLike = 1
-                      ) -> NDArray[np.float64]:
+                      ) -> FloatArray:
     """The numpy reference of :func:`athenakin.analysis.parallel_jacobian` (documented there).
 
     ``d O_s / d q`` (..., 3, 3) in the base frame. Stroke limits and the A/B order are
@@ -170,7 +171,7 @@ def parallel_jacobian(q: ArrayLike, design: Design | None = None, mode: ArrayLik
     return _parallel_jacobian(g)
 
 
-def _parallel_inverse_jacobian(g: dict[str, NDArray[np.float64]]) -> NDArray[np.float64]:
+def _parallel_inverse_jacobian(g: dict[str, FloatArray]) -> FloatArray:
     h, r1, s3, m_y, q3 = g["h"], g["r1"], g["s3"], g["m_y"], g["q3"]
     ey, ez = g["ey"], g["ez"]
     rho = r1 + g["l4"]
@@ -193,7 +194,7 @@ def _parallel_inverse_jacobian(g: dict[str, NDArray[np.float64]]) -> NDArray[np.
 
 def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None,
                               mode: ArrayLike = 1
-                              ) -> NDArray[np.float64]:
+                              ) -> FloatArray:
     """Inverse Jacobian of the parallel module, ``d q / d O_s``, base frame (analytic).
 
     Derived from the module's inverse kinematics (paper Section 4), not by
@@ -218,7 +219,7 @@ def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None,
 
 def parallel_twist_jacobian(q: ArrayLike, design: Design | None = None,
                             mode: ArrayLike = 1
-                            ) -> NDArray[np.float64]:
+                            ) -> FloatArray:
     """Twist of the frame ``O_s`` per actuator rate, ``(v, omega)``, base frame.
 
     Parameters
@@ -244,7 +245,7 @@ def parallel_twist_jacobian(q: ArrayLike, design: Design | None = None,
 # serial chain
 # --------------------------------------------------------------------------------------
 def serial_jacobian(p: ArrayLike, u: ArrayLike, *, frame: Literal["s", "e"] = "s"
-                    ) -> NDArray[np.float64]:
+                    ) -> FloatArray:
     """Jacobian of the UPS chain: twist of E relative to ``O_s`` per joint rate.
 
     ``T_s_e = Rz(u1) Rx(pi/2) Rz(u2) Rx(pi/2) Tz(p) Rz(u3) Rx(pi/2) Rz(u4) Rx(pi/2) Rz(u5)``
@@ -309,7 +310,7 @@ def serial_jacobian(p: ArrayLike, u: ArrayLike, *, frame: Literal["s", "e"] = "s
 
 
 def passive_jacobian(q: ArrayLike, p: ArrayLike, u: ArrayLike, design: Design | None = None, *,
-                     mode: ArrayLike = 1) -> NDArray[np.float64]:
+                     mode: ArrayLike = 1) -> FloatArray:
     """Rates of the passive joints per actuator rate, the RCM frame E held fixed.
 
     Closure ``T_b_s(q) T_s_e(p, u) = T_b_e`` differentiated: the twist of E is
@@ -372,8 +373,8 @@ def passive_jacobian(q: ArrayLike, p: ArrayLike, u: ArrayLike, design: Design | 
 # --------------------------------------------------------------------------------------
 # whole robot in controller variables
 # --------------------------------------------------------------------------------------
-def _instrument(g: dict[str, NDArray[np.float64]], T: NDArray[np.float64], frame: str
-                ) -> tuple[NDArray[np.float64], ...]:
+def _instrument(g: dict[str, FloatArray], T: FloatArray, frame: str
+                ) -> tuple[FloatArray, ...]:
     """Direction (base), insertion p > 0, rotation R_b_f of the frame, direction in f."""
     c = T[..., :3, 3]
     r = c - g["O_s"]
@@ -388,7 +389,7 @@ def _instrument(g: dict[str, NDArray[np.float64]], T: NDArray[np.float64], frame
 def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                         design: Design | None = None, *, mode: ArrayLike = 1,
                         frame: Frame = "rcm"
-                        ) -> NDArray[np.float64]:
+                        ) -> FloatArray:
     """Jacobian from actuator rates to instrument direction angles and insertion.
 
     The instrument is the line from ``O_s`` through the RCM ``c``; ``p = |c - O_s|``
@@ -437,7 +438,7 @@ def instrument_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
 def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                                 design: Design | None = None, *, mode: ArrayLike = 1,
                                 frame: Frame = "rcm"
-                                ) -> NDArray[np.float64]:
+                                ) -> FloatArray:
     """Actuator rates per rate of ``(azimuth, polar, p)`` (inverse of :func:`instrument_jacobian`).
 
     ``dq = J_par^-1 K d(azimuth, polar, p)`` with
@@ -469,8 +470,8 @@ def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
     return _parallel_inverse_jacobian(g) @ K
 
 
-def _tip_matrices(g: dict[str, NDArray[np.float64]], T: NDArray[np.float64], L: float
-                  ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+def _tip_matrices(g: dict[str, FloatArray], T: FloatArray, L: float
+                  ) -> tuple[FloatArray, FloatArray, FloatArray]:
     d_b, p, R_f, _ = _instrument(g, T, "base")
     ddT = d_b[..., :, None] * d_b[..., None, :]
     P = np.eye(3) - ddT
@@ -483,7 +484,7 @@ def _tip_matrices(g: dict[str, NDArray[np.float64]], T: NDArray[np.float64], L: 
 def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                       design: Design | None = None, *, mode: ArrayLike = 1,
                       frame: Frame = "base"
-                      ) -> NDArray[np.float64]:
+                      ) -> FloatArray:
     """Jacobian from actuator rates to the tool-tip velocity.
 
     The tip is ``t = O_s + L d`` (``L = design.tool_length``, ``d`` the unit
@@ -517,7 +518,7 @@ def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
 def tool_tip_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                               design: Design | None = None, *, mode: ArrayLike = 1,
                               frame: Frame = "base"
-                              ) -> NDArray[np.float64]:
+                              ) -> FloatArray:
     """Actuator rates per tool-tip velocity (inverse of :func:`tool_tip_jacobian`).
 
     ``dq = J_par^-1 N^-1 R_f dt_f`` with ``N^-1 = d d^T + p / (p - L) (I - d d^T)``.

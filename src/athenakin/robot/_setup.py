@@ -6,10 +6,11 @@ import json
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._input import MAX_CONFIG_BYTES, read_bytes
 from .._transforms import transform_from_rotation_translation
+from .._typing import FloatArray
 from .._validation import check_transform
 from ..design import LENGTH_RANGE, Design, resolve_design
 from ..errors import InvalidInputError
@@ -25,7 +26,7 @@ REFERENCE_DIRECTION_B = np.array([0.3, -0.3, -1.0])
 REFERENCE_P = 0.20
 
 
-def default_rcm_frame(design: Design | None = None) -> NDArray[np.float64]:
+def default_rcm_frame(design: Design | None = None) -> FloatArray:
     """RCM frame ``T_b_e`` of the reference set-up for a design.
 
     The surgeon's set-up is an input, never part of the design; this one is a
@@ -56,7 +57,7 @@ def default_rcm_frame(design: Design | None = None) -> NDArray[np.float64]:
     return reference_rcm_frame(par.O_s[0])
 
 
-def reference_rcm_frame(O_s: NDArray[np.float64]) -> NDArray[np.float64]:
+def reference_rcm_frame(O_s: FloatArray) -> FloatArray:
     """The reference set-up's RCM frame for the instrument's U-joint at ``O_s``.
 
     The recipe of :func:`default_rcm_frame` at any ``O_s`` (base frame, m, shape (3,)):
@@ -76,7 +77,7 @@ def reference_rcm_frame(O_s: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def resolve_rcm_frame(T_b_e: ArrayLike | None, design: Design, *, single: bool = True
-                      ) -> NDArray[np.float64]:
+                      ) -> FloatArray:
     """``T_b_e`` checked as a rigid transform, or :func:`default_rcm_frame` for None.
 
     With ``single`` (views, exports, simulation) the shape must be exactly (4, 4).
@@ -94,7 +95,7 @@ def resolve_rcm_frame(T_b_e: ArrayLike | None, design: Design, *, single: bool =
     return T
 
 
-def check_rcm_position(T: NDArray[np.float64], option: str) -> NDArray[np.float64]:
+def check_rcm_position(T: FloatArray, option: str) -> FloatArray:
     """``T`` if its origin is within :data:`~athenakin.design.LENGTH_RANGE` of the base.
 
     An RCM kilometres away is a unit mistake (mm for m) or a typo; far beyond the
@@ -109,7 +110,7 @@ def check_rcm_position(T: NDArray[np.float64], option: str) -> NDArray[np.float6
     return T
 
 
-def read_rcm_json(path: str | Path, *, option: str = "--rcm-file") -> NDArray[np.float64]:
+def read_rcm_json(path: str | Path, *, option: str = "--rcm-file") -> FloatArray:
     """The RCM frame from a JSON file ``{"T_b_e": 4x4 nested list}``: the one reader.
 
     ``athenakin ... --rcm-file`` and the app's set-up read the file through it.

@@ -24,6 +24,8 @@ import struct
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._typing import IntArray
+
 __all__ = ["CdrBuilder", "Template", "ENCAPSULATION"]
 
 #: CDR little-endian encapsulation header.
@@ -185,7 +187,7 @@ def _runs(t: Template) -> tuple[tuple[tuple[str, int, str], ...], ...]:
     return tuple(tuple(r) for r in runs)
 
 
-def split_stamps(stamps_ns: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+def split_stamps(stamps_ns: IntArray) -> tuple[IntArray, IntArray]:
     """``builtin_interfaces/Time`` fields ``(sec, nanosec)`` of stamps in ns (floor division)."""
     s = np.asarray(stamps_ns, dtype=np.int64)
     return s // 1_000_000_000, s % 1_000_000_000

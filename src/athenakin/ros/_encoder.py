@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._typing import BoolArray, FloatArray, IntArray
 from ..design import Design
 from ..errors import InvalidInputError
 from ..sim import JOINTS
@@ -68,21 +69,21 @@ class TrackedBatch:
     clearance_flags : ndarray of int, shape (N,) or None
     """
 
-    stamps_ns: NDArray[np.int64]
-    q: NDArray[np.float64]
-    valid: NDArray[np.bool_]
-    p: NDArray[np.float64]
-    u: NDArray[np.float64]
-    O_s: NDArray[np.float64]
-    mode: NDArray[np.int64]
-    slot: NDArray[np.int64]
-    flags: NDArray[np.int64]
-    step: NDArray[np.float64]
-    half_chord: NDArray[np.float64]
-    sin_u2: NDArray[np.float64]
-    sin_u4: NDArray[np.float64]
-    clearance_m: NDArray[np.float64] | None = None
-    clearance_flags: NDArray[np.int64] | None = None
+    stamps_ns: IntArray
+    q: FloatArray
+    valid: BoolArray
+    p: FloatArray
+    u: FloatArray
+    O_s: FloatArray
+    mode: IntArray
+    slot: IntArray
+    flags: IntArray
+    step: FloatArray
+    half_chord: FloatArray
+    sin_u2: FloatArray
+    sin_u4: FloatArray
+    clearance_m: FloatArray | None = None
+    clearance_flags: IntArray | None = None
 
 
 def check_uint(x: object, name: str, bound: int) -> int:
@@ -137,8 +138,8 @@ class RosEncoder:
             _put_pose(vals, j.origin[None], f"t{k}", f"r{k}")
         return _tf_template(pairs).encode(1, vals).tobytes()
 
-    def pose_values(self, stamps_ns: NDArray[np.int64], q: NDArray[np.float64],
-                    p: NDArray[np.float64], u: NDArray[np.float64], O_s: NDArray[np.float64]
+    def pose_values(self, stamps_ns: IntArray, q: FloatArray,
+                    p: FloatArray, u: FloatArray, O_s: FloatArray
                     ) -> dict[str, dict[str, Any]]:
         """The numbers of the ``tool_tip``, ``tf`` and ``joint_states`` messages of N poses."""
         jv = joint_values(self.model, q, p, u, O_s)
@@ -154,8 +155,8 @@ class RosEncoder:
         js["stamp.sec"], js["stamp.nanosec"] = sec, nsec
         return {"tool_tip": tip, "tf": tf, "joint_states": js}
 
-    def frames(self, jv: dict[str, NDArray[np.float64]], *,
-               out: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+    def frames(self, jv: dict[str, FloatArray], *,
+               out: FloatArray | None = None) -> FloatArray:
         """Translation and quaternion of every ``/tf`` child (:data:`TF_FRAMES`), (N, K, 7).
 
         ``out``: where to write (a view, e.g. columns of the writer's words).
@@ -166,8 +167,8 @@ class RosEncoder:
         out[:, -1] = self.rcm_frame
         return out
 
-    def poses(self, stamps_ns: NDArray[np.int64], q: NDArray[np.float64],
-              p: NDArray[np.float64], u: NDArray[np.float64], O_s: NDArray[np.float64]
+    def poses(self, stamps_ns: IntArray, q: FloatArray,
+              p: FloatArray, u: FloatArray, O_s: FloatArray
               ) -> dict[str, NDArray[np.uint8]]:
         """Messages ``tool_tip``, ``tf``, ``joint_states`` of N poses, each (N, size) bytes."""
         vals = self.pose_values(stamps_ns, q, p, u, O_s)
@@ -200,8 +201,8 @@ class RosEncoder:
 
 
 
-def _trajectory_bytes(stamp_ns: int, t_s: NDArray[np.float64], q: NDArray[np.float64],
-                      qd: NDArray[np.float64] | None, qdd: NDArray[np.float64] | None,
+def _trajectory_bytes(stamp_ns: int, t_s: FloatArray, q: FloatArray,
+                      qd: FloatArray | None, qdd: FloatArray | None,
                       joint_names: tuple[str, ...]) -> bytes:
     """CDR of a JointTrajectory: header, joint names, then one point per sample."""
     n = len(t_s)

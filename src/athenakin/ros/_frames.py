@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from .._mechanism import tree_joint_formula
 from .._transforms import rot_x, rot_y, rot_z
+from .._typing import FloatArray
 from ..design import Design
 from ..sim import JOINTS, urdf_from_design, urdf_joint_zero
 
@@ -44,8 +45,8 @@ class _Joint:
     kind: str               # "prismatic", "continuous", "revolute", "fixed"
     parent: str
     child: str
-    origin: NDArray[np.float64]   # (4, 4)
-    axis: NDArray[np.float64]     # (3,)
+    origin: FloatArray   # (4, 4)
+    axis: FloatArray     # (3,)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -68,7 +69,7 @@ class UrdfModel:
     joints: tuple[_Joint, ...]
     zero: dict[str, float]
     design: Design
-    T_b_e: NDArray[np.float64]
+    T_b_e: FloatArray
 
     @property
     def links(self) -> tuple[str, ...]:
@@ -76,7 +77,7 @@ class UrdfModel:
         return tuple(j.child for j in self.joints)
 
 
-def _origin(el: ET.Element | None) -> NDArray[np.float64]:
+def _origin(el: ET.Element | None) -> FloatArray:
     T = np.eye(4)
     if el is None:
         return T
@@ -87,7 +88,7 @@ def _origin(el: ET.Element | None) -> NDArray[np.float64]:
     return T
 
 
-def urdf_model(design: Design, T_b_e: NDArray[np.float64]) -> UrdfModel:
+def urdf_model(design: Design, T_b_e: FloatArray) -> UrdfModel:
     """Parse :func:`athenakin.sim.urdf_from_design` of ``design`` and ``T_b_e``.
 
     The parse of the last few set-ups is kept (the arguments are values: a frozen
@@ -126,8 +127,8 @@ def _urdf_model(design: Design, T_bytes: bytes) -> UrdfModel:
                      design=design, T_b_e=np.array(T_b_e, dtype=float))
 
 
-def joint_values(model: UrdfModel, q: NDArray[np.float64], p: NDArray[np.float64],
-                 u: NDArray[np.float64], O_s: NDArray[np.float64]) -> dict[str, NDArray]:
+def joint_values(model: UrdfModel, q: FloatArray, p: FloatArray,
+                 u: FloatArray, O_s: FloatArray) -> dict[str, NDArray]:
     """Every joint of :data:`~athenakin.sim.JOINTS` relative to the URDF zero, per reading.
 
     Parameters
@@ -162,7 +163,7 @@ def joint_values(model: UrdfModel, q: NDArray[np.float64], p: NDArray[np.float64
     return out
 
 
-def _motion(j: _Joint, v: NDArray[np.float64]) -> NDArray[np.float64]:
+def _motion(j: _Joint, v: FloatArray) -> FloatArray:
     """Transforms (N, 4, 4) of joint ``j`` moved by ``v`` (N,)."""
     n = len(v)
     M = np.zeros((n, 4, 4))
@@ -187,8 +188,8 @@ def _motion(j: _Joint, v: NDArray[np.float64]) -> NDArray[np.float64]:
     return M
 
 
-def link_poses(model: UrdfModel, values: dict[str, NDArray[np.float64]],
-               links: tuple[str, ...] | None = None) -> dict[str, NDArray[np.float64]]:
+def link_poses(model: UrdfModel, values: dict[str, FloatArray],
+               links: tuple[str, ...] | None = None) -> dict[str, FloatArray]:
     """Pose ``T_base_link`` of every link for joint values (the URDF's forward kinematics).
 
     Parameters
@@ -205,7 +206,7 @@ def link_poses(model: UrdfModel, values: dict[str, NDArray[np.float64]],
     dict of str -> ndarray, shape (N, 4, 4)
     """
     n = len(next(iter(values.values())))
-    poses: dict[str, NDArray[np.float64]] = {BASE_FRAME: np.broadcast_to(np.eye(4), (n, 4, 4))}
+    poses: dict[str, FloatArray] = {BASE_FRAME: np.broadcast_to(np.eye(4), (n, 4, 4))}
     need: set[str] | None = None
     if links is not None:
         parent = {j.child: j.parent for j in model.joints}
@@ -225,9 +226,9 @@ def link_poses(model: UrdfModel, values: dict[str, NDArray[np.float64]],
     return poses if links is None else {k: poses[k] for k in links}
 
 
-def link_frames(model: UrdfModel, values: dict[str, NDArray[np.float64]],
-                links: tuple[str, ...], *, out: NDArray[np.float64] | None = None
-                ) -> NDArray[np.float64]:
+def link_frames(model: UrdfModel, values: dict[str, FloatArray],
+                links: tuple[str, ...], *, out: FloatArray | None = None
+                ) -> FloatArray:
     """Translation and quaternion of links, per reading: what ``/tf`` carries.
 
     :func:`link_poses` then :func:`quaternion_xyzw` of each link, compiled in one pass
@@ -313,7 +314,7 @@ def _frames_plan(model: UrdfModel, links: tuple[str, ...]) -> tuple[Any, ...]:
             np.array([index[name] for name in links], np.int64))
 
 
-def quaternion_xyzw(R: NDArray[np.float64]) -> NDArray[np.float64]:
+def quaternion_xyzw(R: FloatArray) -> FloatArray:
     """Unit quaternions ``(x, y, z, w)`` (ROS order, ``w >= 0``) of rotations (N, 3, 3).
 
     Shepperd's method: the largest of the four squared components picks the formula,
@@ -331,7 +332,7 @@ def quaternion_xyzw(R: NDArray[np.float64]) -> NDArray[np.float64]:
     return _quaternion_xyzw_numpy(R)
 
 
-def _quaternion_xyzw_numpy(R: NDArray[np.float64]) -> NDArray[np.float64]:
+def _quaternion_xyzw_numpy(R: FloatArray) -> FloatArray:
     """:func:`quaternion_xyzw` in numpy (the reference of the compiled kernel)."""
     m00, m11, m22 = R[:, 0, 0], R[:, 1, 1], R[:, 2, 2]
     tr = m00 + m11 + m22

@@ -19,6 +19,7 @@ from typing import IO, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._typing import IntArray
 from ._errors import ros_extra_missing
 
 __all__ = ["McapFile", "MESSAGE_HEADER", "COMPRESSIONS", "ZSTD_LEVEL", "check_compression",
@@ -224,7 +225,7 @@ class McapFile:
         return out
 
     def chunk(self, records: bytes | NDArray[np.uint8],
-              index: dict[int, tuple[NDArray[np.int64], NDArray[np.int64]]]) -> None:
+              index: dict[int, tuple[IntArray, IntArray]]) -> None:
         """Write one chunk of Message records and its MessageIndex records.
 
         Parameters

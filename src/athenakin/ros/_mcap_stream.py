@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._typing import IntArray
 from ._errors import RecordingError
 
 #: Largest uncompressed MCAP chunk read, bytes.
@@ -240,8 +241,8 @@ class _McapStream:
                 self._raw_definition(op, raw[o:o + length])
             o += length
 
-    def _runs(self, cid: NDArray[np.int64], t: NDArray[np.int64], data: NDArray[np.uint8],
-              off: NDArray[np.int64], size: NDArray[np.int64]
+    def _runs(self, cid: IntArray, t: IntArray, data: NDArray[np.uint8],
+              off: IntArray, size: IntArray
               ) -> Iterator[tuple[int, Any, Any]]:
         """The messages of the topic among those of a chunk, as runs of one channel.
 
@@ -290,8 +291,8 @@ _MSG = struct.Struct("<HIQQ")
 class _Bulk:
     """Messages of one channel in a chunk, message ``i`` at ``data[offsets[i]:][:sizes[i]]``."""
 
-    def __init__(self, data: NDArray[np.uint8], offsets: NDArray[np.int64],
-                 sizes: NDArray[np.int64]) -> None:
+    def __init__(self, data: NDArray[np.uint8], offsets: IntArray,
+                 sizes: IntArray) -> None:
         self.data, self.offsets, self.sizes = data, offsets, sizes
 
     def __len__(self) -> int:
@@ -364,7 +365,7 @@ def _same_layout(cdr: _CdrJointState, b: _Bulk, j: int
     return (e, rows) if e > j else (j, None)
 
 
-def _rows(data: NDArray[np.uint8], offsets: NDArray[np.int64], size: int) -> NDArray[np.uint8]:
+def _rows(data: NDArray[np.uint8], offsets: IntArray, size: int) -> NDArray[np.uint8]:
     """``data[offsets[i]:offsets[i] + size]`` as rows (n, size).
 
     Records of one size one after the other (a single topic) are evenly spaced: a

@@ -5,9 +5,7 @@ from __future__ import annotations
 import functools
 from typing import Any
 
-import numpy as np
-from numpy.typing import NDArray
-
+from .._typing import FloatArray, IntArray
 from ._cdr import CdrBuilder, Template, split_stamps
 from ._errors import ros_extra_missing
 from ._frames import (
@@ -118,7 +116,7 @@ def _string_message(text: str) -> bytes:
     return bytes(b.buf)
 
 
-def _stamp_fields(values: dict[str, Any], stamps_ns: NDArray[np.int64], names: list[str]
+def _stamp_fields(values: dict[str, Any], stamps_ns: IntArray, names: list[str]
                   ) -> None:
     sec, nsec = split_stamps(stamps_ns)
     for n in names:
@@ -126,7 +124,7 @@ def _stamp_fields(values: dict[str, Any], stamps_ns: NDArray[np.int64], names: l
         values[f"{n}.nanosec"] = nsec
 
 
-def _put_frame(values: dict[str, Any], f: NDArray[np.float64], tname: str, rname: str
+def _put_frame(values: dict[str, Any], f: FloatArray, tname: str, rname: str
                ) -> None:
     """The numbers of a translation and a quaternion from ``f`` (N, 7) (:func:`link_frames`)."""
     for i, c in enumerate("xyz"):
@@ -135,7 +133,7 @@ def _put_frame(values: dict[str, Any], f: NDArray[np.float64], tname: str, rname
         values[f"{rname}.{c}"] = f[:, 3 + i]
 
 
-def _put_pose(values: dict[str, Any], T: NDArray[np.float64], tname: str, rname: str) -> None:
+def _put_pose(values: dict[str, Any], T: FloatArray, tname: str, rname: str) -> None:
     for i, c in enumerate("xyz"):
         values[f"{tname}.{c}"] = T[:, i, 3]
     quat = quaternion_xyzw(T[:, :3, :3])

@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._typing import BoolArray, FloatArray, IntArray
 from .._validation import check_path
 from ..errors import InvalidInputError
 from ._errors import RecordingError
@@ -79,11 +80,11 @@ class JointStates:
         The format: ``"rosbag2/sqlite3"``, ``"rosbag2/mcap"``, ``"mcap"`` or ``"rosbag1"``.
     """
 
-    stamps_ns: NDArray[np.int64]
-    q: NDArray[np.float64]
-    qd: NDArray[np.float64] | None
-    log_time_ns: NDArray[np.int64]
-    header_stamped: NDArray[np.bool_]
+    stamps_ns: IntArray
+    q: FloatArray
+    qd: FloatArray | None
+    log_time_ns: IntArray
+    header_stamped: BoolArray
     topic: str
     joints: tuple[str, str, str]
     source: str
@@ -92,7 +93,7 @@ class JointStates:
         return int(self.stamps_ns.shape[0])
 
     @property
-    def finite(self) -> NDArray[np.bool_]:
+    def finite(self) -> BoolArray:
         """True where all three positions are finite, shape (N,)."""
         return np.asarray(np.isfinite(self.q).all(axis=-1))
 
@@ -259,7 +260,7 @@ class _Chunks:
         self.index += 1
         return k + 1 == self.chunk
 
-    def bulk(self, t_log: NDArray[np.int64], b: _Bulk, enc: str) -> Iterator[JointStates]:
+    def bulk(self, t_log: IntArray, b: _Bulk, enc: str) -> Iterator[JointStates]:
         """Messages of one channel: those of the decoder's layout at once, others one by one."""
         j, m = 0, len(b)
         while j < m:
@@ -272,7 +273,7 @@ class _Chunks:
             yield from self.many(t_log[j:e], rows)
             j = e
 
-    def many(self, t_log: NDArray[np.int64], rows: NDArray[np.uint8]) -> Iterator[JointStates]:
+    def many(self, t_log: IntArray, rows: NDArray[np.uint8]) -> Iterator[JointStates]:
         """Messages of the layout of the decoder (rows of their bytes), vectorised."""
         t = (rows[:, 4:8].copy().view("<i4")[:, 0].astype(np.int64) * 1_000_000_000
              + rows[:, 8:12].copy().view("<u4")[:, 0])
@@ -302,7 +303,7 @@ class _Chunks:
             raise self.backwards(int(t[n]), int(prev[n]))
 
     def _values(self, rows: NDArray[np.uint8]
-                ) -> tuple[NDArray[np.float64], NDArray[np.float64], bool]:
+                ) -> tuple[FloatArray, FloatArray, bool]:
         """``q``, ``qd`` (NaN where absent) of rows of the decoder's layout; True with ``qd``."""
         cdr, s = self.cdr, self.s
         i0, i1, i2 = self.actuators(cdr._names)

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._typing import FloatArray, IntArray
 from ..sim import JOINTS
 from ._cdr import Template
 from ._frames import (
@@ -38,12 +39,12 @@ class _RecordPlan:
     status_tpl: NDArray[np.uint8]
     pose_tpl: NDArray[np.uint8]
     record_at: tuple[int, ...]
-    s_off: NDArray[np.int64]
-    s_size: NDArray[np.int64]
-    s_col: NDArray[np.int64]
-    p_off: NDArray[np.int64]
-    p_size: NDArray[np.int64]
-    p_col: NDArray[np.int64]
+    s_off: IntArray
+    s_size: IntArray
+    s_col: IntArray
+    p_off: IntArray
+    p_size: IntArray
+    p_col: IntArray
     status_float: tuple[str, ...]
     status_int: tuple[str, ...]
     n_frames: int
@@ -113,8 +114,8 @@ class _RecordPlan:
         return 7 * self.n_frames + len(JOINTS) + len(self.status_float) + 5 \
             + len(self.status_int)
 
-    def words(self, buf: NDArray[np.uint64], stamps: NDArray[np.int64],
-              seq_status: NDArray[np.int64], seq_pose: NDArray[np.int64],
+    def words(self, buf: NDArray[np.uint64], stamps: IntArray,
+              seq_status: IntArray, seq_pose: IntArray,
               status: dict[str, Any]) -> NDArray[np.uint64]:
         """The numbers of ``m`` readings as 8-byte words (m, C), in the plan's columns.
 
@@ -141,7 +142,7 @@ class _RecordPlan:
         return words
 
     def pose_columns(self, words: NDArray[np.uint64]
-                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+                     ) -> tuple[FloatArray, FloatArray]:
         """Views of ``words`` as the ``/tf`` frames (m, K, 7) and the joints (m, J), float64."""
         m = words.shape[0]
         nf = 7 * self.n_frames

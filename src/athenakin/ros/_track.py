@@ -13,6 +13,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._output import check_output_path
 from .._toml import TomlOptions
+from .._typing import FloatArray, IntArray
 from .._validation import check_array, check_instance, check_path
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, KinematicsError
@@ -152,7 +153,7 @@ def empty_topic_error(path: str | Path, topic: str) -> RecordingError:
                           f"(choose the topic with topic=... / --topic)")
 
 
-def tracked_batch(stamps_ns: NDArray[np.int64], log: TrackLog | dict[str, Any]) -> TrackedBatch:
+def tracked_batch(stamps_ns: IntArray, log: TrackLog | dict[str, Any]) -> TrackedBatch:
     """The fields the MCAP writer needs of a :class:`~athenakin.motion.TrackLog` (or a dict)."""
     g = (lambda k: log[k]) if isinstance(log, dict) else (lambda k: getattr(log, k))
     return TrackedBatch(stamps_ns=np.asarray(stamps_ns, np.int64), q=g("q"),
@@ -186,14 +187,14 @@ class _Stream:
     state carried from chunk to chunk.
     """
 
-    def __init__(self, T_b_e: NDArray[np.float64], design: Design,
+    def __init__(self, T_b_e: FloatArray, design: Design,
                  options: dict[str, Any]) -> None:
         self.T, self.design, self.options = T_b_e, design, options
         self.tracker: Tracker | None = None
         self.first: tuple[int, int] = (-1, 0)
         self.seen = 0
 
-    def run(self, q: NDArray[np.float64]) -> dict[str, Any]:
+    def run(self, q: FloatArray) -> dict[str, Any]:
         i = 0
         if self.tracker is None:
             i, self.tracker = first_tracker(q, self.T, self.design, self.options,
@@ -215,7 +216,7 @@ class _Stream:
         return track_batch(self.tracker, q)
 
 
-def first_tracker(q: NDArray[np.float64], T_b_e: NDArray[np.float64], design: Design,
+def first_tracker(q: FloatArray, T_b_e: FloatArray, design: Design,
                   options: dict[str, Any], *, first: int = 0) -> tuple[int, Tracker | None]:
     """The tracker started at the first reading of ``q`` that assembles.
 
@@ -265,7 +266,7 @@ def first_tracker(q: NDArray[np.float64], T_b_e: NDArray[np.float64], design: De
     return -1, None
 
 
-def _columns(rows: list[Any], q: NDArray[np.float64]) -> dict[str, Any]:
+def _columns(rows: list[Any], q: FloatArray) -> dict[str, Any]:
     n = len(rows)
     out: dict[str, Any] = {
         "q": q, "valid": np.zeros(n, bool), "slot": np.zeros(n, np.int64),
@@ -285,8 +286,8 @@ def _columns(rows: list[Any], q: NDArray[np.float64]) -> dict[str, Any]:
     return out
 
 
-def _stream(chunks: Iterable[tuple[NDArray[np.int64], NDArray[np.float64]]],
-            out: McapOutput, T: NDArray[np.float64], design: Design,
+def _stream(chunks: Iterable[tuple[IntArray, FloatArray]],
+            out: McapOutput, T: FloatArray, design: Design,
             options: dict[str, Any], max_events: int,
             progress: Callable[[int], None] | None) -> TrackingSummary:
     st = _Stream(T, design, options)
@@ -458,7 +459,7 @@ def track_to_mcap(stamps_ns: ArrayLike, q: ArrayLike, out: str | Path,
     o = _track_options(options)
     size = o.chunk_size
 
-    def chunks() -> Iterator[tuple[NDArray[np.int64], NDArray[np.float64]]]:
+    def chunks() -> Iterator[tuple[IntArray, FloatArray]]:
         for k in range(0, len(qa), size):
             yield s[k:k + size], qa[k:k + size]
 

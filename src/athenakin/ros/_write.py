@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._output import AtomicFile, check_output_path, naming_path
+from .._typing import BoolArray, FloatArray, IntArray
 from .._validation import check_argument_order, check_path
 from ..design import Design
 from ..robot._setup import resolve_rcm_frame
@@ -258,7 +259,7 @@ class McapOutput:
             self._write_chunk(rec, index, keys, v, m)
 
     def _write_chunk(self, data: Any, index: dict[int, Any], keys: tuple[str, ...],
-                     v: NDArray[np.bool_], m: int) -> None:
+                     v: BoolArray, m: int) -> None:
         """Write one chunk of ``m`` readings (``v``: the valid ones) and count its messages.
 
         ``/athena/status`` has a message for every reading, the other topics of ``keys``
@@ -279,8 +280,8 @@ class McapOutput:
             self._plan = _RecordPlan.of(self.encoder.templates, keys, cids)
         return self._plan
 
-    def _write_tracked_compiled(self, b: TrackedBatch, stamps: NDArray[np.int64],
-                                valid: NDArray[np.bool_], keys: tuple[str, ...],
+    def _write_tracked_compiled(self, b: TrackedBatch, stamps: IntArray,
+                                valid: BoolArray, keys: tuple[str, ...],
                                 cids: list[int], per: int) -> None:
         """:meth:`write_tracked` with the records of each chunk filled by a compiled kernel.
 
@@ -335,9 +336,9 @@ class McapOutput:
                     index[cids[j]] = (st[v], starts[v] + rs + plan.record_at[j])
             self._write_chunk(self._buf[:size], index, keys, v, m)
 
-    def write_trajectory_message(self, stamp_ns: int, t_s: NDArray[np.float64],
-                                 q: NDArray[np.float64], qd: NDArray[np.float64] | None,
-                                 qdd: NDArray[np.float64] | None,
+    def write_trajectory_message(self, stamp_ns: int, t_s: FloatArray,
+                                 q: FloatArray, qd: FloatArray | None,
+                                 qdd: FloatArray | None,
                                  joint_names: tuple[str, ...] = ("q1", "q2", "q3")) -> None:
         """One ``trajectory_msgs/msg/JointTrajectory`` with every sample as a point."""
         self._add("trajectory", int(stamp_ns), _trajectory_bytes(stamp_ns, t_s, q, qd, qdd,

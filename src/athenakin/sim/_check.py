@@ -15,9 +15,10 @@ import dataclasses
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._transforms import wrap_angle
+from .._typing import BoolArray, FloatArray, IntArray
 from .._validation import (
     check_array,
     check_count,
@@ -92,17 +93,17 @@ class MujocoCheck:
         Simulated seconds of hold until the motion died out (see :func:`settle`).
     """
 
-    q: NDArray[np.float64]
-    q_reached: NDArray[np.float64]
-    slot: NDArray[np.int64]
-    nearest_slot: NDArray[np.int64]
-    tip_error: NDArray[np.float64]
-    axis_error: NDArray[np.float64]
-    pose_error: NDArray[np.float64]
-    joint_error: NDArray[np.float64]
-    constraint_residual: NDArray[np.float64]
-    speed: NDArray[np.float64]
-    hold_time: NDArray[np.float64]
+    q: FloatArray
+    q_reached: FloatArray
+    slot: IntArray
+    nearest_slot: IntArray
+    tip_error: FloatArray
+    axis_error: FloatArray
+    pose_error: FloatArray
+    joint_error: FloatArray
+    constraint_residual: FloatArray
+    speed: FloatArray
+    hold_time: FloatArray
 
     def summary(self) -> str:
         """One paragraph with the worst errors."""
@@ -283,7 +284,7 @@ def check_fk_with_mujoco(q: ArrayLike, T_b_e: ArrayLike | None = None,
     return MujocoCheck(q=qs, **{k: np.asarray([r[k] for r in rows]) for k in fields})
 
 
-def _qpos_layout(model: Any) -> tuple[NDArray[np.int64], NDArray[np.bool_], NDArray[np.int64]]:
+def _qpos_layout(model: Any) -> tuple[IntArray, BoolArray, IntArray]:
     """Where the joints of the tree are in MuJoCo's ``qpos``.
 
     Returns
@@ -301,9 +302,9 @@ def _qpos_layout(model: Any) -> tuple[NDArray[np.int64], NDArray[np.bool_], NDAr
     return adr, hinge, act_adr
 
 
-def _compare_settled(model: Any, data: Any, layout: tuple[NDArray[np.int64], NDArray[np.bool_],
-                                                          NDArray[np.int64]],
-                     T: NDArray[np.float64], design: Design) -> dict[str, Any]:
+def _compare_settled(model: Any, data: Any, layout: tuple[IntArray, BoolArray,
+                                                          IntArray],
+                     T: FloatArray, design: Design) -> dict[str, Any]:
     """One settled MuJoCo state against the FK at the actuator values it reached.
 
     Returns
@@ -354,7 +355,7 @@ def sample_reachable_q(n: int, T_b_e: ArrayLike | None = None, design: Design | 
                        *, slot: int = 0, home_q: ArrayLike | None = None,
                        radius: float = 0.12, n_path: int = 24,
                        rng: int | np.random.Generator | None = None,
-                       max_tries: int = 200) -> NDArray[np.float64]:
+                       max_tries: int = 200) -> FloatArray:
     """Random actuator targets reachable from ``home_q`` in ``slot`` along a straight line.
 
     A candidate ``q = home_q + delta`` (``delta`` uniform in a cube of half-size
@@ -404,7 +405,7 @@ def sample_reachable_q(n: int, T_b_e: ArrayLike | None = None, design: Design | 
     max_tries = check_count(max_tries, "max_tries", minimum=1)
     rng = check_rng(rng)
     t = np.linspace(0.0, 1.0, n_path)
-    found: list[NDArray[np.float64]] = []
+    found: list[FloatArray] = []
     for _ in range(max_tries):
         cand = home + rng.uniform(-radius, radius, (n, 3))
         path = home + t[None, :, None] * (cand - home)[:, None, :]         # (n, n_path, 3)

@@ -40,7 +40,7 @@ import functools
 import math
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._mechanism import (
     BODY_TABLE,
@@ -50,6 +50,7 @@ from .._mechanism import (
     link_segments,
     state_from_fk,
 )
+from .._typing import FloatArray
 from .._validation import check_array, check_slot
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, Reason, error_for_reason
@@ -147,8 +148,8 @@ class MechanismJointValues:
     urdf: dict[str, float]
     zero: dict[str, float]
     state: MechanismState
-    q: NDArray[np.float64]
-    T_b_e: NDArray[np.float64]
+    q: FloatArray
+    T_b_e: FloatArray
     design: Design
     slot: int
 
@@ -373,7 +374,7 @@ COLLISION_BODY: dict[str, str] = {b.name: b.link for b in BODY_TABLE}
 
 
 def collision_segments(state: MechanismState, design: Design, geometry: BodyGeometry
-                       ) -> dict[str, tuple[NDArray[np.float64], NDArray[np.float64]]]:
+                       ) -> dict[str, tuple[FloatArray, FloatArray]]:
     """End points of every body's capsule in the frame of the link that carries it.
 
     Parameters

@@ -16,7 +16,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._mechanism import (
     BODIES,
@@ -26,6 +26,7 @@ from .._mechanism import (
     tree_origins,
 )
 from .._output import check_output_path, write_text_atomic
+from .._typing import FloatArray
 from .._validation import check_text
 from ..collision._bodies import Bodies, resolve_bodies
 from ..collision._environment import Environment
@@ -119,7 +120,7 @@ def _joint(body: ET.Element, name: str, axis: ArrayLike, *, damping: float = PAS
 _ROLL_QUAT = {0.0: None, 0.5 * math.pi: _RX90, math.pi: _RX180}
 
 
-def _tree_body(parent: ET.Element, joint: str, origins: dict[str, NDArray[np.float64]],
+def _tree_body(parent: ET.Element, joint: str, origins: dict[str, FloatArray],
                **kwargs: object) -> ET.Element:
     """The child body of a joint of :data:`athenakin._mechanism.TREE`, with the joint."""
     j = TREE[joint]
@@ -128,7 +129,7 @@ def _tree_body(parent: ET.Element, joint: str, origins: dict[str, NDArray[np.flo
     return el
 
 
-def _carriage(world: ET.Element, joint: str, origins: dict[str, NDArray[np.float64]],
+def _carriage(world: ET.Element, joint: str, origins: dict[str, FloatArray],
               half: float, rng: tuple[float, float]) -> ET.Element:
     """A carriage on the rail (``half`` of its length along x), driven by ``joint``."""
     el = _tree_body(world, joint, origins, damping=1.0, rng=rng)
@@ -225,7 +226,7 @@ def _obstacle_geoms(root: ET.Element, environment: Environment,
 
 
 def _collision_geoms(root: ET.Element, bodies: Bodies, segs: dict[str, tuple[
-        NDArray[np.float64], NDArray[np.float64]]],
+        FloatArray, FloatArray]],
         bits: dict[tuple[str, ...], int] | None = None) -> None:
     """Capsules of ``bodies`` as collision geoms, and the excluded pairs as <exclude>."""
     by_name = {"base": root.find("worldbody")}
@@ -420,8 +421,8 @@ def _add_options(root: ET.Element, *, gravity: bool) -> None:
     ET.SubElement(visual, "scale", {"framelength": "0.08", "framewidth": "0.004"})
 
 
-def _add_carriage_a(wb: ET.Element, origins: dict[str, NDArray[np.float64]], d: Design,
-                    half: float, lo: NDArray[np.float64], hi: NDArray[np.float64],
+def _add_carriage_a(wb: ET.Element, origins: dict[str, FloatArray], d: Design,
+                    half: float, lo: FloatArray, hi: FloatArray,
                     values: dict[str, float]) -> None:
     """Add carriage A's subtree: the U-joint to the platform, the serial chain, the bar to D."""
     # --- carriage A: U-joint to the platform, bar to D --------------------------------
@@ -467,8 +468,8 @@ def _add_carriage_a(wb: ET.Element, origins: dict[str, NDArray[np.float64]], d: 
     _site(rod, "k2_rod_tip")
 
 
-def _add_carriage_b(wb: ET.Element, origins: dict[str, NDArray[np.float64]], d: Design,
-                    half: float, lo: NDArray[np.float64], hi: NDArray[np.float64]) -> None:
+def _add_carriage_b(wb: ET.Element, origins: dict[str, FloatArray], d: Design,
+                    half: float, lo: FloatArray, hi: FloatArray) -> None:
     """Add carriage B's subtree: the bars to O_i and to D."""
     # --- carriage B: bar to O_i, bar to D -------------------------------------------
     cb = _carriage(wb, "q2", origins, half, (lo[1], hi[1]))
@@ -495,7 +496,7 @@ def _add_equalities(root: ET.Element) -> None:
                                         "polycoef": "0 -1 0 0 0"})
 
 
-def _add_actuators(root: ET.Element, lo: NDArray[np.float64], hi: NDArray[np.float64]) -> None:
+def _add_actuators(root: ET.Element, lo: FloatArray, hi: FloatArray) -> None:
     """Add the position actuators of q1, q2, q3 (control ranges where the strokes are finite)."""
     act = ET.SubElement(root, "actuator")
     for i, name in enumerate(ACTUATED):

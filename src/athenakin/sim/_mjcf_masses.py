@@ -11,9 +11,9 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 
 import numpy as np
-from numpy.typing import NDArray
 
 from .._mechanism import MASS_PART_LINK
+from .._typing import FloatArray
 from ._layout import ACTUATED, MechanismJointValues
 from ._layout import xml_float as _f
 from ._layout import xml_floats as _vec
@@ -33,8 +33,8 @@ FIXED_LINK_MASS = 0.01
 TINY_INERTIA = 1e-12
 
 
-def _inertial_of(masses: object, names: list[str]) -> tuple[float, NDArray[np.float64],
-                                                            NDArray[np.float64]]:
+def _inertial_of(masses: object, names: list[str]) -> tuple[float, FloatArray,
+                                                            FloatArray]:
     """Combined mass, centre and inertia (about the centre) of bodies sharing a frame."""
     total, first = 0.0, np.zeros(3)
     parts = []

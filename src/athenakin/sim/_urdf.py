@@ -21,11 +21,12 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._mechanism import BODIES, TREE, BodyGeometry, MechanismState, tree_origins
 from .._output import check_output_path, write_text_atomic
 from .._transforms import rot_x, rot_y, rot_z
+from .._typing import FloatArray
 from .._validation import check_array, check_text
 from ..collision._bodies import Bodies, resolve_bodies
 from ..design import Design, resolve_design
@@ -58,7 +59,7 @@ MIMIC = {"platform_y": ("a_ujoint_y", -1.0), "carrier_z": ("a_base_z", -1.0)}
 _FREE_SLIDE = 2.0
 
 
-def _rpy_from_matrix(R: NDArray[np.float64]) -> NDArray[np.float64]:
+def _rpy_from_matrix(R: FloatArray) -> FloatArray:
     """URDF roll-pitch-yaw (``R = Rz(y) Ry(p) Rx(r)``) of a rotation matrix.
 
     scipy's ``Rotation.as_euler("xyz")`` computes the same angles but warns at pitch
@@ -108,20 +109,20 @@ def _cylinder(link: ET.Element, a: ArrayLike, b: ArrayLike, radius: float,
     ET.SubElement(vis, "material", {"name": material})
 
 
-def _matrix_from_rpy(rpy: tuple[float, ...]) -> NDArray[np.float64]:
+def _matrix_from_rpy(rpy: tuple[float, ...]) -> FloatArray:
     """URDF roll-pitch-yaw to a rotation matrix, ``Rz(y) Ry(p) Rx(r)``."""
     r, p, y = (np.asarray(float(v)) for v in rpy)
     return rot_z(y) @ rot_y(p) @ rot_x(r)
 
 
-def _rotation_about(axis: tuple[float, ...], angle: float) -> NDArray[np.float64]:
+def _rotation_about(axis: tuple[float, ...], angle: float) -> FloatArray:
     """Rotation about a coordinate axis (the joint axes here are x, y or z)."""
     rots = {(1, 0, 0): rot_x, (0, 1, 0): rot_y, (0, 0, 1): rot_z}
     a = (int(axis[0]), int(axis[1]), int(axis[2]))
     return rots[a](np.asarray(float(angle)))
 
 
-def _collision(link: ET.Element, name: str, a: NDArray[np.float64], b: NDArray[np.float64],
+def _collision(link: ET.Element, name: str, a: FloatArray, b: FloatArray,
                radius: float) -> None:
     """A capsule as URDF collision elements: a cylinder from a to b and a sphere at each end."""
     radius = max(radius, 1e-6)
@@ -219,7 +220,7 @@ def urdf_from_design(T_b_e: ArrayLike | None = None, design: Design | None = Non
     return "\n".join(lines) + "\n" + ET.tostring(robot, encoding="unicode") + "\n"
 
 
-def _add_links(robot: ET.Element, d: Design, rail: NDArray[np.float64], half: float) -> None:
+def _add_links(robot: ET.Element, d: Design, rail: FloatArray, half: float) -> None:
     """Add the materials and every link of the tree with its inertia and drawn cylinder."""
     for name, rgba in (("parallel", "0.2 0.4 0.8 1"), ("serial", "0.8 0.2 0.2 1"),
                        ("actuator", "0.95 0.6 0.1 1"), ("joint", "0.55 0.55 0.55 1"),
@@ -300,7 +301,7 @@ def _add_joints(robot: ET.Element, d: Design, zero: dict[str, float]) -> None:
             ET.SubElement(j, "mimic", {"joint": master, "multiplier": _f(mult), "offset": "0"})
 
 
-def _add_fixed_frames(robot: ET.Element, T: NDArray[np.float64], d: Design) -> None:
+def _add_fixed_frames(robot: ET.Element, T: FloatArray, d: Design) -> None:
     """Add the fixed links: the RCM frame of the set-up, the tool tip, the closure frames."""
     # rcm_setup: fixed at T_b_e (the base of the spherical five-bar, set by S1, S2)
     ET.SubElement(robot, "link", {"name": "rcm_setup"})

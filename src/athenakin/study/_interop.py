@@ -12,8 +12,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import FloatArray
 from .._validation import check_array
 from ..errors import InvalidInputError
 
@@ -25,7 +26,7 @@ __all__ = [
 ]
 
 
-def quaternion_xyzw_from_wxyz(q_wxyz: ArrayLike) -> NDArray[np.float64]:
+def quaternion_xyzw_from_wxyz(q_wxyz: ArrayLike) -> FloatArray:
     """Scalar-last quaternion (scipy, ROS, Pinocchio) from athenakin's scalar-first one.
 
     Parameters
@@ -56,7 +57,7 @@ def quaternion_xyzw_from_wxyz(q_wxyz: ArrayLike) -> NDArray[np.float64]:
     return np.concatenate([q[..., 1:], q[..., :1]], axis=-1)
 
 
-def quaternion_wxyz_from_xyzw(q_xyzw: ArrayLike) -> NDArray[np.float64]:
+def quaternion_wxyz_from_xyzw(q_xyzw: ArrayLike) -> FloatArray:
     """Athenakin's scalar-first quaternion from a scalar-last one (scipy, ROS, Pinocchio).
 
     Parameters
@@ -134,7 +135,7 @@ def scipy_rotation_from_quaternion(x: ArrayLike) -> Any:
     return Rotation.from_quat(q if q.ndim == 1 else q.reshape(-1, 4))
 
 
-def quaternion_from_scipy_rotation(rotation: Any) -> NDArray[np.float64]:
+def quaternion_from_scipy_rotation(rotation: Any) -> FloatArray:
     """Athenakin quaternions ``(x0, x1, x2, x3)`` of a ``scipy.spatial.transform.Rotation``.
 
     Parameters

@@ -10,14 +10,15 @@ and rotates about x by the twist ``alpha``. Each is given in the angle
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import FloatArray
 from .._validation import check_array
 
 __all__ = ["study_M", "study_M_from_half_tangent", "study_G", "study_G_from_half_tangent"]
 
 
-def study_M(u: ArrayLike) -> NDArray[np.float64]:
+def study_M(u: ArrayLike) -> FloatArray:
     """Study vector of ``M_i`` (Eq. 6), the rotation about z by ``u``.
 
     Parameters
@@ -37,7 +38,7 @@ def study_M(u: ArrayLike) -> NDArray[np.float64]:
     return X
 
 
-def study_M_from_half_tangent(v: ArrayLike) -> NDArray[np.float64]:
+def study_M_from_half_tangent(v: ArrayLike) -> FloatArray:
     """Study vector of ``M_i`` in the half-tangent ``v = tan(u/2)``: ``(1, 0, 0, v, 0, 0, 0, 0)``.
 
     The half turn ``u = pi`` (``v`` infinite) has no finite representative here;
@@ -58,7 +59,7 @@ def study_M_from_half_tangent(v: ArrayLike) -> NDArray[np.float64]:
     return X
 
 
-def study_G(a: ArrayLike, d: ArrayLike, alpha: ArrayLike) -> NDArray[np.float64]:
+def study_G(a: ArrayLike, d: ArrayLike, alpha: ArrayLike) -> FloatArray:
     """Study vector of ``G_i`` (Eq. 6): translate by ``(a, 0, d)``, rotate about x by ``alpha``.
 
     Parameters
@@ -79,7 +80,7 @@ def study_G(a: ArrayLike, d: ArrayLike, alpha: ArrayLike) -> NDArray[np.float64]
     return _G(a, d, np.cos(alpha / 2), np.sin(alpha / 2))
 
 
-def study_G_from_half_tangent(a: ArrayLike, d: ArrayLike, al: ArrayLike) -> NDArray[np.float64]:
+def study_G_from_half_tangent(a: ArrayLike, d: ArrayLike, al: ArrayLike) -> FloatArray:
     """Study vector of ``G_i`` in the half-tangent ``al = tan(alpha/2)`` (times 1/cos(alpha/2)).
 
     Parameters
@@ -100,8 +101,8 @@ def study_G_from_half_tangent(a: ArrayLike, d: ArrayLike, al: ArrayLike) -> NDAr
     return _G(a, d, np.ones_like(al), al)
 
 
-def _G(a: NDArray[np.float64], d: NDArray[np.float64], c: NDArray[np.float64],
-       s: NDArray[np.float64]) -> NDArray[np.float64]:
+def _G(a: FloatArray, d: FloatArray, c: FloatArray,
+       s: FloatArray) -> FloatArray:
     a, d, c, s = np.broadcast_arrays(a, d, c, s)
     z = np.zeros_like(c)
     return np.stack([c, s, z, z, a * s / 2, -a * c / 2, -d * s / 2, -d * c / 2], axis=-1)

@@ -17,8 +17,9 @@ the ``y = t * x / 2`` convention of pytransform3d and most robotics code.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import BoolArray, FloatArray
 from .._validation import broadcast_batch, check_array, check_tolerance, check_transform
 from ..errors import InvalidInputError, NotOnStudyQuadricError
 
@@ -46,7 +47,7 @@ __all__ = [
 STUDY_QUADRIC_TOL = 1e-10
 
 
-def quaternion_multiply(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
+def quaternion_multiply(a: ArrayLike, b: ArrayLike) -> FloatArray:
     """Hamilton product of quaternions.
 
     Parameters
@@ -65,7 +66,7 @@ def quaternion_multiply(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
     return _qmul(a, b)
 
 
-def _qmul(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+def _qmul(a: FloatArray, b: FloatArray) -> FloatArray:
     """Hamilton product of checked (..., 4) arrays (NaN propagates)."""
     a0, a1, a2, a3 = np.moveaxis(a, -1, 0)
     b0, b1, b2, b3 = np.moveaxis(b, -1, 0)
@@ -84,12 +85,12 @@ _SIGNS_DUAL_CONJ = np.array([1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0])
 _SIGNS_FULL_CONJ = np.array([1.0, -1.0, -1.0, -1.0, -1.0, 1.0, 1.0, 1.0])
 
 
-def _qconj(q: NDArray[np.float64]) -> NDArray[np.float64]:
+def _qconj(q: FloatArray) -> FloatArray:
     """Quaternion conjugate of checked (..., 4) arrays."""
     return q * _SIGNS_QUATERNION_CONJ[:4]
 
 
-def dq_multiply(X1: ArrayLike, X2: ArrayLike) -> NDArray[np.float64]:
+def dq_multiply(X1: ArrayLike, X2: ArrayLike) -> FloatArray:
     """Dual-quaternion product ``X1 * X2``; composes displacements (``T(X1 X2) = T(X1) T(X2)``).
 
     Parameters
@@ -112,7 +113,7 @@ def dq_multiply(X1: ArrayLike, X2: ArrayLike) -> NDArray[np.float64]:
     return np.concatenate([x, y], axis=-1)
 
 
-def dq_conj_quaternion(X: ArrayLike) -> NDArray[np.float64]:
+def dq_conj_quaternion(X: ArrayLike) -> FloatArray:
     """Quaternion conjugate of both parts, ``conj(x) + eps*conj(y)``.
 
     For a Study vector this is the inverse displacement up to the factor ``|x|^2``.
@@ -130,7 +131,7 @@ def dq_conj_quaternion(X: ArrayLike) -> NDArray[np.float64]:
     return check_array(X, "X", (8,)) * _SIGNS_QUATERNION_CONJ
 
 
-def dq_conj_dual(X: ArrayLike) -> NDArray[np.float64]:
+def dq_conj_dual(X: ArrayLike) -> FloatArray:
     """Dual conjugate ``x - eps*y``.
 
     Parameters
@@ -146,7 +147,7 @@ def dq_conj_dual(X: ArrayLike) -> NDArray[np.float64]:
     return check_array(X, "X", (8,)) * _SIGNS_DUAL_CONJ
 
 
-def dq_conj_full(X: ArrayLike) -> NDArray[np.float64]:
+def dq_conj_full(X: ArrayLike) -> FloatArray:
     """Combined (quaternion and dual) conjugate ``conj(x) - eps*conj(y)``.
 
     Parameters
@@ -162,7 +163,7 @@ def dq_conj_full(X: ArrayLike) -> NDArray[np.float64]:
     return check_array(X, "X", (8,)) * _SIGNS_FULL_CONJ
 
 
-def dq_inverse(X: ArrayLike) -> NDArray[np.float64]:
+def dq_inverse(X: ArrayLike) -> FloatArray:
     """Inverse dual quaternion, ``x^-1 - eps * x^-1 y x^-1``.
 
     Parameters
@@ -191,7 +192,7 @@ def dq_inverse(X: ArrayLike) -> NDArray[np.float64]:
     return np.concatenate([xi, yi], axis=-1)
 
 
-def study_quadric_residual(X: ArrayLike) -> NDArray[np.float64]:
+def study_quadric_residual(X: ArrayLike) -> FloatArray:
     """Value of the Study quadric ``x0*y0 + x1*y1 + x2*y2 + x3*y3``.
 
     Parameters
@@ -208,7 +209,7 @@ def study_quadric_residual(X: ArrayLike) -> NDArray[np.float64]:
     return np.sum(X[..., :4] * X[..., 4:], axis=-1)
 
 
-def is_on_study_quadric(X: ArrayLike, *, tol: float = STUDY_QUADRIC_TOL) -> NDArray[np.bool_]:
+def is_on_study_quadric(X: ArrayLike, *, tol: float = STUDY_QUADRIC_TOL) -> BoolArray:
     """Whether ``X`` is a valid Study vector (quadric holds and ``x != 0``).
 
     The test is scale invariant: ``|x . y| <= tol * |x| * |X|``.
@@ -232,7 +233,7 @@ def is_on_study_quadric(X: ArrayLike, *, tol: float = STUDY_QUADRIC_TOL) -> NDAr
 
 
 def check_study(X: ArrayLike, name: str = "X", *,
-                tol: float = STUDY_QUADRIC_TOL) -> NDArray[np.float64]:
+                tol: float = STUDY_QUADRIC_TOL) -> FloatArray:
     """Validate Study vectors and return them as a float array.
 
     Parameters
@@ -270,7 +271,7 @@ def check_study(X: ArrayLike, name: str = "X", *,
     return X
 
 
-def study_normalize(X: ArrayLike) -> NDArray[np.float64]:
+def study_normalize(X: ArrayLike) -> FloatArray:
     """Canonical representative of a Study vector: ``|x| = 1`` and first non-zero ``x_i > 0``.
 
     Parameters
@@ -301,7 +302,7 @@ def study_normalize(X: ArrayLike) -> NDArray[np.float64]:
     return X / (n * s)
 
 
-def study_equal(X1: ArrayLike, X2: ArrayLike, *, atol: float = 1e-12) -> NDArray[np.bool_]:
+def study_equal(X1: ArrayLike, X2: ArrayLike, *, atol: float = 1e-12) -> BoolArray:
     """Projective equality ``X1 ~ lambda * X2`` of 8-vectors.
 
     Both are scaled to unit Euclidean norm; they are equal when they agree up
@@ -326,7 +327,7 @@ def study_equal(X1: ArrayLike, X2: ArrayLike, *, atol: float = 1e-12) -> NDArray
     return d <= atol
 
 
-def rotation_from_quaternion(x: ArrayLike) -> NDArray[np.float64]:
+def rotation_from_quaternion(x: ArrayLike) -> FloatArray:
     """Rotation matrix of a (not necessarily unit) quaternion, the block of Eq. 3.
 
     Parameters
@@ -352,7 +353,7 @@ def rotation_from_quaternion(x: ArrayLike) -> NDArray[np.float64]:
     return _rotation_from_quaternion(x)
 
 
-def _scaled(X: NDArray[np.float64], part: slice) -> NDArray[np.float64]:
+def _scaled(X: FloatArray, part: slice) -> FloatArray:
     """``X`` divided by the largest magnitude of ``X[..., part]`` (where non-zero).
 
     A homogeneous (projective) argument keeps its meaning; the products of
@@ -362,7 +363,7 @@ def _scaled(X: NDArray[np.float64], part: slice) -> NDArray[np.float64]:
     return X / np.where(m > 0.0, m, 1.0)
 
 
-def _rotation_from_quaternion(x: NDArray[np.float64]) -> NDArray[np.float64]:
+def _rotation_from_quaternion(x: FloatArray) -> FloatArray:
     x = _scaled(x, slice(None))
     x0, x1, x2, x3 = np.moveaxis(x, -1, 0)
     D = x0 * x0 + x1 * x1 + x2 * x2 + x3 * x3
@@ -374,7 +375,7 @@ def _rotation_from_quaternion(x: NDArray[np.float64]) -> NDArray[np.float64]:
     return R / D[..., None, None]
 
 
-def quaternion_from_rotation(R: ArrayLike) -> NDArray[np.float64]:
+def quaternion_from_rotation(R: ArrayLike) -> FloatArray:
     """Unit quaternion of a rotation matrix (Shepperd's method, stable for all angles).
 
     Parameters
@@ -395,7 +396,7 @@ def quaternion_from_rotation(R: ArrayLike) -> NDArray[np.float64]:
     return _quaternion_from_rotation(check_array(R, "R", (3, 3)))
 
 
-def _quaternion_from_rotation(R: NDArray[np.float64]) -> NDArray[np.float64]:
+def _quaternion_from_rotation(R: FloatArray) -> FloatArray:
     tr = R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2]
     cand = np.stack([
         np.stack([1 + tr, R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0],
@@ -413,7 +414,7 @@ def _quaternion_from_rotation(R: NDArray[np.float64]) -> NDArray[np.float64]:
     return q / np.linalg.norm(q, axis=-1, keepdims=True)
 
 
-def study_from_transform(T: ArrayLike) -> NDArray[np.float64]:
+def study_from_transform(T: ArrayLike) -> FloatArray:
     """Study vector of a displacement (inverse of Eq. 3-4).
 
     Parameters
@@ -439,7 +440,7 @@ def study_from_transform(T: ArrayLike) -> NDArray[np.float64]:
     return study_normalize(np.concatenate([x, y], axis=-1))
 
 
-def _eq3_parts(X: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _eq3_parts(X: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Rotation block and translation ``(p, q, r) / Delta`` of Eq. 3-4, literally.
 
     ``X`` is first scaled so that ``max |x_i| = 1`` (the same displacement).
@@ -464,7 +465,7 @@ def _eq3_parts(X: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.
     return _rotation_from_quaternion(X[..., :4]), t
 
 
-def transform_from_study(X: ArrayLike, *, tol: float = STUDY_QUADRIC_TOL) -> NDArray[np.float64]:
+def transform_from_study(X: ArrayLike, *, tol: float = STUDY_QUADRIC_TOL) -> FloatArray:
     """Displacement of a Study vector, exactly as Eq. 3-4 define it.
 
     Parameters
@@ -496,7 +497,7 @@ def transform_from_study(X: ArrayLike, *, tol: float = STUDY_QUADRIC_TOL) -> NDA
 
 
 def paper_matrix_from_study(X: ArrayLike, *, tol: float = STUDY_QUADRIC_TOL
-                            ) -> NDArray[np.float64]:
+                            ) -> FloatArray:
     """The 4x4 matrix of Eq. 3 in the paper's layout (homogenising coordinate first).
 
     Parameters

@@ -28,8 +28,9 @@ reason codes of :func:`athenakin.forward_kinematics` (slot ``k = 8m + 4r + 2b + 
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import BoolArray, FloatArray, Int8Array
 from .._validation import check_array, check_tolerance
 from ..chain import DEGENERATE_TOL, P_ZERO_TOL, closure_residual, ups_transform
 from ..errors import Reason
@@ -79,7 +80,7 @@ def _numeric():  # type: ignore[no-untyped-def]
     return gen
 
 
-def _dual(K: NDArray[np.float64]) -> NDArray[np.float64]:
+def _dual(K: FloatArray) -> FloatArray:
     """Dual of skew 4x4 matrices: ``K K~ = -Pf(K) I`` (``Pf = k01 k23 - k02 k13 + k03 k12``)."""
     k01, k02, k03 = K[..., 0, 1], K[..., 0, 2], K[..., 0, 3]
     k12, k13, k23 = K[..., 1, 2], K[..., 1, 3], K[..., 2, 3]
@@ -88,7 +89,7 @@ def _dual(K: NDArray[np.float64]) -> NDArray[np.float64]:
                      k13, -k03, z, k01, -k12, k02, -k01, z], axis=-1).reshape(K.shape)
 
 
-def _pencil(K: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _pencil(K: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Orthonormal basis ``(n1, n2)`` of the null space of rank-2 skew matrices (..., 4, 4).
 
     At a root of the Pfaffian (the quadratic in ``p``) ``K K~ = 0``: the columns of the
@@ -106,8 +107,8 @@ def _pencil(K: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.flo
     return n1, b / np.linalg.norm(b, axis=-1, keepdims=True)
 
 
-def _hroots(A: NDArray[np.float64], B: NDArray[np.float64], C: NDArray[np.float64]
-            ) -> NDArray[np.float64]:
+def _hroots(A: FloatArray, B: FloatArray, C: FloatArray
+            ) -> FloatArray:
     """Both roots ``(a : b)`` of ``A a^2 + B a b + C b^2 = 0``, shape (..., 2, 2).
 
     Stable form: ``q = -(B + sign(B) sqrt(B^2 - 4AC)) / 2``, roots ``(q : A)``, ``(C : q)``;
@@ -119,7 +120,7 @@ def _hroots(A: NDArray[np.float64], B: NDArray[np.float64], C: NDArray[np.float6
     return np.stack([np.stack([q, A], axis=-1), np.stack([C, q], axis=-1)], axis=-2)
 
 
-def _segre_inverse(r: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _segre_inverse(r: FloatArray) -> tuple[FloatArray, FloatArray]:
     """``(s_a, t_a)``, ``(s_b, t_b)`` from ``r ~ (-s_a s_b, t_a t_b, s_a t_b, t_a s_b)``.
 
     Of the two representatives of each pair (see
@@ -133,7 +134,7 @@ def _segre_inverse(r: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray
     return np.where(ua[..., None], a1, a2), np.where(ub[..., None], b1, b2)
 
 
-def _angle(st: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _angle(st: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Angle ``2 atan2(s, t)`` in (-pi, pi] and its sine, from homogeneous ``(s, t)``."""
     s, t = st[..., 0], st[..., 1]
     u = 2.0 * np.arctan2(s, t)
@@ -143,8 +144,8 @@ def _angle(st: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.flo
     return u, sin
 
 
-def _order(first_negative: NDArray[np.bool_], a: NDArray[np.float64], axis: int
-           ) -> NDArray[np.float64]:
+def _order(first_negative: BoolArray, a: FloatArray, axis: int
+           ) -> FloatArray:
     """Swap the two entries along ``axis`` where ``first_negative`` (broadcast) holds."""
     flipped = np.flip(a, axis=axis)
     return np.where(first_negative, flipped, a)
@@ -152,8 +153,8 @@ def _order(first_negative: NDArray[np.bool_], a: NDArray[np.float64], axis: int
 
 def serial_solutions_algebraic(f: ArrayLike, *, degenerate_tol: float = DEGENERATE_TOL,
                                p_zero_tol: float = P_ZERO_TOL
-                               ) -> tuple[NDArray[np.float64], NDArray[np.float64],
-                                          NDArray[np.int8]]:
+                               ) -> tuple[FloatArray, FloatArray,
+                                          Int8Array]:
     """The 8 serial solutions for the Study vector ``f`` of ``T_s_e`` (steps 2-5 of the module).
 
     Parameters
@@ -183,9 +184,9 @@ def serial_solutions_algebraic(f: ArrayLike, *, degenerate_tol: float = DEGENERA
                        degenerate_tol, p_zero_tol)
 
 
-def _serial(gen, f: NDArray[np.float64], degenerate_tol: float,  # type: ignore[no-untyped-def]
-            p_zero_tol: float) -> tuple[NDArray[np.float64], NDArray[np.float64],
-                                        NDArray[np.int8]]:
+def _serial(gen, f: FloatArray, degenerate_tol: float,  # type: ignore[no-untyped-def]
+            p_zero_tol: float) -> tuple[FloatArray, FloatArray,
+                                        Int8Array]:
     """Body of :func:`serial_solutions_algebraic` (``f`` normalised, warnings silenced)."""
     batch = f.shape[:-1]
     # 2. quadratic in p
@@ -243,10 +244,10 @@ def _serial(gen, f: NDArray[np.float64], degenerate_tol: float,  # type: ignore[
     return pp, u, reason.astype(np.int8)
 
 
-def serial_step_algebraic(par: ParallelSolution, T: NDArray[np.float64], *,
+def serial_step_algebraic(par: ParallelSolution, T: FloatArray, *,
                           degenerate_tol: float, p_zero_tol: float, closure_tol: float
-                          ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int8],
-                                     NDArray[np.float64]]:
+                          ) -> tuple[FloatArray, FloatArray, Int8Array,
+                                     FloatArray]:
     """The serial step of the forward kinematics, the paper's way (shape (..., 2, 8)).
 
     Plugged into :func:`athenakin.forward_kinematics` by ``method="algebraic"``.

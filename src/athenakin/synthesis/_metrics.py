@@ -9,9 +9,9 @@ from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
-from numpy.typing import NDArray
 
 from .._toml import TomlOptions
+from .._typing import FloatArray, Int8Array, IntArray
 from .._validation import check_count, check_instance, check_scalar
 from ..design import Design
 from ..errors import InvalidInputError
@@ -197,9 +197,9 @@ def collision_spec(bodies: object = None, environment: object = None,
                          samples=int(n))
 
 
-def _collision_metrics(spec: CollisionSpec, design: Design, T: NDArray[np.float64],
-                       q: NDArray[np.float64], mode: NDArray[np.int64],
-                       depth: NDArray[np.float64]) -> dict[str, float]:
+def _collision_metrics(spec: CollisionSpec, design: Design, T: FloatArray,
+                       q: FloatArray, mode: IntArray,
+                       depth: FloatArray) -> dict[str, float]:
     """``collision_free_coverage`` and ``min_clearance`` over the first ``spec.samples``."""
     from ..analysis._collision import labelled_clearance
 
@@ -307,8 +307,8 @@ def _assembles(design: Design) -> bool:
 
 
 def reachability(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: int = 0,
-                 backend: str = "auto") -> tuple[TaskSamples, NDArray[np.float64],
-                                                  NDArray[np.int64], NDArray[np.int8]]:
+                 backend: str = "auto") -> tuple[TaskSamples, FloatArray,
+                                                  IntArray, Int8Array]:
     """Which task samples a design reaches, and in which assembly mode.
 
     Parameters
@@ -420,10 +420,10 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
     return {k: float(out[k]) for k in METRIC_COLUMNS}
 
 
-def _reached_metrics(design: Design, T: NDArray[np.float64], q: NDArray[np.float64],
-                     mode: NDArray[np.int64], J_tip: NDArray[np.float64],
-                     J_par: NDArray[np.float64], arg_margin: NDArray[np.int64],
-                     arg_cond: NDArray[np.int64]) -> dict[str, float]:
+def _reached_metrics(design: Design, T: FloatArray, q: FloatArray,
+                     mode: IntArray, J_tip: FloatArray,
+                     J_par: FloatArray, arg_margin: IntArray,
+                     arg_cond: IntArray) -> dict[str, float]:
     """Margins and condition numbers at the worst samples the reduction picked.
 
     The reduction only selects the samples; the reported values are those of
@@ -444,7 +444,7 @@ def _reached_metrics(design: Design, T: NDArray[np.float64], q: NDArray[np.float
     return out
 
 
-def _force_columns(q: NDArray[np.float64], mode: NDArray[np.int64], T: NDArray[np.float64],
+def _force_columns(q: FloatArray, mode: IntArray, T: FloatArray,
                    design: Design) -> dict[str, float]:
     """``peak_actuator_force`` and ``min_tip_force_capability`` on FORCE_SAMPLES samples."""
     from ..dynamics import force_metrics

@@ -18,14 +18,13 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from .._backend import numba_available
+from .._typing import FloatArray, IntArray
 from ._formulas import line_conditions_formula
 
 __all__ = ["CONDITION_ORDER", "reduce_samples", "reduce_samples_numpy"]
 
-Arr = NDArray[np.float64]
 
 #: Singularity conditions in the order of the reduction's ``margin`` output.
 CONDITION_ORDER = ("circles_tangent", "d_on_rail", "k1_degenerate", "ab_coincide",
@@ -33,7 +32,7 @@ CONDITION_ORDER = ("circles_tangent", "d_on_rail", "k1_degenerate", "ab_coincide
                    "ik_sin_u1_sin_u2", "tip_at_rcm")
 
 
-def _cond3(J: Arr) -> Arr:
+def _cond3(J: FloatArray) -> FloatArray:
     """2-norm condition numbers of 3 x 3 matrices (..., 3, 3) from the eigenvalues of J^T J."""
     A = np.einsum("...ki,...kj->...ij", J, J)
     a11, a22, a33 = A[..., 0, 0], A[..., 1, 1], A[..., 2, 2]
@@ -56,7 +55,7 @@ def _cond3(J: Arr) -> Arr:
     return np.where(finite, out, np.inf)  # type: ignore[no-any-return]
 
 
-def _kappa_f2(J: Arr) -> Arr:
+def _kappa_f2(J: FloatArray) -> FloatArray:
     """Squared Frobenius condition numbers ``|J|_F^2 |adj J|_F^2 / det(J)^2``, (..., 3, 3).
 
     ``kappa_2 <= kappa_F <= 3 kappa_2`` (3 x 3), so the sample of the largest ``kappa_2``
@@ -78,7 +77,7 @@ def _kappa_f2(J: Arr) -> Arr:
     return np.where(np.isfinite(num) & (det != 0.0), out, np.inf)  # type: ignore[no-any-return]
 
 
-def _first_min(v: Arr) -> tuple[float, int]:
+def _first_min(v: FloatArray) -> tuple[float, int]:
     """The least value below ``inf`` of ``v`` and its first index, else ``(inf, -1)``."""
     w = np.where(np.isnan(v), np.inf, v)
     if not w.size:
@@ -87,8 +86,9 @@ def _first_min(v: Arr) -> tuple[float, int]:
     return (float(w[k]), k) if w[k] < np.inf else (np.inf, -1)
 
 
-def _condition_values(idx: NDArray[np.int64], q: Arr, R: Arr, rcm: Arr, d_e: Arr, depth: Arr,
-                      lengths: Arr, L: float, lo: Arr, hi: Arr) -> Arr:
+def _condition_values(idx: IntArray, q: FloatArray, R: FloatArray, rcm: FloatArray,
+                      d_e: FloatArray, depth: FloatArray, lengths: FloatArray, L: float,
+                      lo: FloatArray, hi: FloatArray) -> FloatArray:
     """The value of each condition of :data:`CONDITION_ORDER` per reached sample, (12, n)."""
     l1, l2, l3, l5 = lengths[0], lengths[1], lengths[2], lengths[4]
     q1, q2, q3 = q[:, 0], q[:, 1], q[:, 2]
@@ -112,7 +112,7 @@ def _condition_values(idx: NDArray[np.int64], q: Arr, R: Arr, rcm: Arr, d_e: Arr
     return v
 
 
-def _largest_conditions(J_tip: Arr, J_par: Arr) -> tuple[Arr, NDArray[np.int64]]:
+def _largest_conditions(J_tip: FloatArray, J_par: FloatArray) -> tuple[FloatArray, IntArray]:
     """Largest 2-norm condition number of each Jacobian stack (tip, parallel) and its row."""
     cond = np.full(2, -np.inf)
     arg_cond = np.full(2, -1, np.int64)
@@ -130,7 +130,7 @@ def _largest_conditions(J_tip: Arr, J_par: Arr) -> tuple[Arr, NDArray[np.int64]]
     return cond, arg_cond
 
 
-def _tip_errors(J_tip: Arr, resolution: float) -> Arr:
+def _tip_errors(J_tip: FloatArray, resolution: float) -> FloatArray:
     """Max and sum over the samples of the worst-case tip error of an encoder box, m."""
     # worst case |J dq| over the box |dq_i| <= resolution: a vertex (convexity)
     worst = np.zeros(J_tip.shape[0])
@@ -143,9 +143,10 @@ def _tip_errors(J_tip: Arr, resolution: float) -> Arr:
     return tip
 
 
-def reduce_samples_numpy(idx: NDArray[np.int64], q: Arr, mode: NDArray[np.int64], R: Arr,
-                         rcm: Arr, d_e: Arr, depth: Arr, J_tip: Arr, J_par: Arr, lengths: Arr,
-                         L: float, lo: Arr, hi: Arr, resolution: float) -> tuple[Any, ...]:
+def reduce_samples_numpy(idx: IntArray, q: FloatArray, mode: IntArray, R: FloatArray,
+                         rcm: FloatArray, d_e: FloatArray, depth: FloatArray, J_tip: FloatArray,
+                         J_par: FloatArray, lengths: FloatArray, L: float, lo: FloatArray,
+                         hi: FloatArray, resolution: float) -> tuple[Any, ...]:
     """Reduce one design's reachable samples ``idx`` (rows of ``J_tip``, ``J_par``), numpy.
 
     Parameters
@@ -200,9 +201,10 @@ def reduce_samples_numpy(idx: NDArray[np.int64], q: Arr, mode: NDArray[np.int64]
     return counts, margin, arg_margin, cond, arg_cond, q.min(axis=0), q.max(axis=0), tip
 
 
-def reduce_samples(idx: NDArray[np.int64], q: Arr, mode: NDArray[np.int64], R: Arr, rcm: Arr,
-                   d_e: Arr, depth: Arr, J_tip: Arr, J_par: Arr, lengths: Arr, L: float,
-                   lo: Arr, hi: Arr, resolution: float) -> tuple[Any, ...]:
+def reduce_samples(idx: IntArray, q: FloatArray, mode: IntArray, R: FloatArray, rcm: FloatArray,
+                   d_e: FloatArray, depth: FloatArray, J_tip: FloatArray, J_par: FloatArray,
+                   lengths: FloatArray, L: float,
+                   lo: FloatArray, hi: FloatArray, resolution: float) -> tuple[Any, ...]:
     """:func:`reduce_samples_numpy`, compiled where :mod:`athenakin._backend` says so.
 
     Parameters and Returns as :func:`reduce_samples_numpy`.

@@ -9,9 +9,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from .._toml import read_toml
+from .._typing import BoolArray, FloatArray
 from .._validation import (
     check_array,
     check_count,
@@ -185,13 +185,13 @@ def random_designs(n: int, bounds: Mapping[str, Any], *, seed: int = 0,
     return [_row(x, base, f"random {i}") for i, x in enumerate(X)]
 
 
-def _row(x: NDArray[np.float64], base: Design, name: str) -> dict[str, Any]:
+def _row(x: FloatArray, base: Design, name: str) -> dict[str, Any]:
     row: dict[str, Any] = {k: float(v) for k, v in zip(SEARCH_VARIABLES, x, strict=True)}
     row.update(tool_length=base.tool_length, ab_order=base.ab_order, name=name)
     return row
 
 
-def _objective_matrix(df: Any, objectives: Mapping[str, str]) -> NDArray[np.float64]:
+def _objective_matrix(df: Any, objectives: Mapping[str, str]) -> FloatArray:
     """Objectives as minimisation (max -> negated); NaN where not defined."""
     cols = []
     for k, sense in objectives.items():
@@ -244,7 +244,7 @@ def check_constraints(constraints: object) -> dict[str, tuple[str, float]]:
 
 
 def _constraint_matrix(df: Any, constraints: Mapping[str, tuple[str, float]]
-                       ) -> NDArray[np.float64]:
+                       ) -> FloatArray:
     """``G <= 0`` where a constraint holds (pymoo's sense), +1 where its metric is NaN."""
     cols = []
     for k, (op, bound) in constraints.items():
@@ -254,7 +254,7 @@ def _constraint_matrix(df: Any, constraints: Mapping[str, tuple[str, float]]
     return np.stack(cols, axis=-1) if cols else np.zeros((len(df), 0))
 
 
-def pareto_mask(F: NDArray[np.float64]) -> NDArray[np.bool_]:
+def pareto_mask(F: FloatArray) -> BoolArray:
     """Non-dominated rows of an objective matrix ``(n, k)`` to minimise (NaN rows excluded).
 
     Parameters
@@ -336,7 +336,7 @@ def _check_objectives(objectives: object) -> dict[str, str]:
     return obj
 
 
-def _gains(F_use: NDArray[np.float64], f_ref: NDArray[np.float64], dom: NDArray[np.bool_],
+def _gains(F_use: FloatArray, f_ref: FloatArray, dom: BoolArray,
            front: Any, ref_row: Any, obj: dict[str, str]
            ) -> tuple[dict[str, float], dict[str, dict[str, float]]]:
     """The best gain of each objective over the reference, and each objective's best design."""
@@ -485,7 +485,7 @@ def _nsga2_problem(run: Callable[[list[dict[str, Any]], int], Any], ref: Design,
                              n_ieq_constr=1 + len(cons), xl=lo, xu=hi)
             self.generation = 0
 
-        def _evaluate(self, X: NDArray[np.float64], out: dict[str, Any], *a: Any,
+        def _evaluate(self, X: FloatArray, out: dict[str, Any], *a: Any,
                       **kw: Any) -> None:
             rows = [_row(x, ref, f"nsga2 g{self.generation} #{i}") for i, x in enumerate(X)]
             df = run(rows, self.generation)

@@ -9,10 +9,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._toml import read_toml
 from .._transforms import transform_from_rotation_translation
+from .._typing import FloatArray
 from .._validation import check_count, check_keys, check_rng, check_scalar
 from ..design import LENGTH_RANGE
 from ..errors import InvalidInputError
@@ -32,7 +33,7 @@ UNIT_TOL = 1e-9
 _KEYS = ("rcm", "axis", "half_angle", "half_angle_deg", "depth", "name")
 
 
-def _vec3(v: object, name: str) -> NDArray[np.float64]:
+def _vec3(v: object, name: str) -> FloatArray:
     if isinstance(v, (str, bytes)):
         raise TypeError(f"{name}: expected 3 numbers, got {type(v).__name__}")
     try:
@@ -85,8 +86,8 @@ class Task:
     (0.05, 0.15)
     """
 
-    rcm: NDArray[np.float64]
-    axis: NDArray[np.float64]
+    rcm: FloatArray
+    axis: FloatArray
     half_angle: float
     depth: tuple[float, float]
     name: str = ""
@@ -135,7 +136,7 @@ class Task:
         return hash((tuple(self.rcm), tuple(self.axis), self.half_angle, self.depth, self.name))
 
     @property
-    def T_b_e(self) -> NDArray[np.float64]:
+    def T_b_e(self) -> FloatArray:
         """RCM frame of the task, shape (4, 4): see :func:`rcm_frame_from_axis`."""
         return rcm_frame_from_axis(self.rcm, self.axis)
 
@@ -223,7 +224,7 @@ class Task:
             raise TaskFileError(f"{path}: {exc}") from None
 
 
-def rcm_frame_from_axis(rcm: ArrayLike, axis: ArrayLike) -> NDArray[np.float64]:
+def rcm_frame_from_axis(rcm: ArrayLike, axis: ArrayLike) -> FloatArray:
     """RCM frame ``T_b_e`` of a task, built as :func:`athenakin.default_rcm_frame` builds its own.
 
     ``x_e`` is the central instrument direction ``axis``, ``z_e`` the rail axis
@@ -279,10 +280,10 @@ class TaskSamples:
         (rad, in ``[0, 2 pi)``, 0 towards ``y_e``).
     """
 
-    direction_e: NDArray[np.float64]
-    depth: NDArray[np.float64]
-    theta: NDArray[np.float64]
-    phi: NDArray[np.float64]
+    direction_e: FloatArray
+    depth: FloatArray
+    theta: FloatArray
+    phi: FloatArray
 
 
 def sample_task(task: Task, n: int, *, seed: int = 0) -> TaskSamples:

@@ -22,8 +22,9 @@ import dataclasses
 from typing import Any, Literal, Protocol, runtime_checkable
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import FloatArray
 from .._validation import check_array, check_choice, check_count, check_frame, check_scalar
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, KinematicsError
@@ -48,9 +49,9 @@ class ArmBackend(Protocol):
     ``1 / rate``; a real driver waits for its clock).
     """
 
-    def read_encoders(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
+    def read_encoders(self) -> tuple[FloatArray, FloatArray]: ...
 
-    def write(self, forces: NDArray[np.float64], positions: NDArray[np.float64]) -> None: ...
+    def write(self, forces: FloatArray, positions: FloatArray) -> None: ...
 
 
 @dataclasses.dataclass(frozen=True)
@@ -70,9 +71,9 @@ class JointState:
     """
 
     t: float
-    position: NDArray[np.float64]
-    velocity: NDArray[np.float64]
-    effort: NDArray[np.float64]
+    position: FloatArray
+    velocity: FloatArray
+    effort: FloatArray
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -115,7 +116,7 @@ class MujocoBackend:
     gravity : bool
     """
 
-    def __init__(self, T_b_e: NDArray[np.float64], design: Design, q0: NDArray[np.float64],
+    def __init__(self, T_b_e: FloatArray, design: Design, q0: FloatArray,
                  slot: int, masses: Any, rate: float, *, substeps: int = 10,
                  gravity: bool = True) -> None:
         try:
@@ -151,12 +152,12 @@ class MujocoBackend:
         self._pairs = [(m.site(c.a).id, m.site(c.b).id) for c in LOOP_CLOSURES
                        if c.kind in ("point", "pose")]
 
-    def read_encoders(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def read_encoders(self) -> tuple[FloatArray, FloatArray]:
         """Actuator positions (m) and velocities (m/s) of the simulation, shape (3,) each."""
         d = self.data
         return d.qpos[self._qadr].copy(), d.qvel[self._vadr].copy()
 
-    def write(self, forces: NDArray[np.float64], positions: NDArray[np.float64]) -> None:
+    def write(self, forces: FloatArray, positions: FloatArray) -> None:
         """Apply ``forces`` (N) to the motors for one cycle (``positions`` unused)."""
         self.data.ctrl[:] = forces
         for _ in range(self.substeps):
@@ -168,7 +169,7 @@ class MujocoBackend:
         """Simulated time, s."""
         return float(self.data.time)
 
-    def tip_b(self) -> NDArray[np.float64]:
+    def tip_b(self) -> FloatArray:
         """MuJoCo's tool tip (site ``tool_tip``), base frame, m, shape (3,)."""
         return self.data.site_xpos[self._tip].copy()
 
@@ -257,7 +258,7 @@ class SimulatedArm:
         self._sp_qd = np.zeros(3)
         self._sp_qdd = np.zeros(3)
         self._sp_effort = np.zeros(3)   # the feed-forward of the setpoint, N
-        self._user_effort: NDArray[np.float64] | None = None
+        self._user_effort: FloatArray | None = None
         self._force = np.zeros(3)
         self._move: Any = None
         self._move_t0 = 0.0
@@ -317,7 +318,7 @@ class SimulatedArm:
         """The servo's setpoint: positions (m), velocities (m/s), feed-forward forces (N)."""
         return JointState(self.t, self._sp_q.copy(), self._sp_qd.copy(), self._sp_effort.copy())
 
-    def measured_cp(self) -> NDArray[np.float64]:
+    def measured_cp(self) -> FloatArray:
         """The tool-tip frame in the base frame, ``T_b_tip`` (4, 4), SI, from the encoders.
 
         Forward kinematics of the measured actuators on the tracked slot
@@ -331,7 +332,7 @@ class SimulatedArm:
         sol = forward_kinematics(np.array(pose.q), self.T_b_e, self.design, errors="flag")
         return sol.T_b_tip[pose.slot].copy()
 
-    def setpoint_cp(self) -> NDArray[np.float64]:
+    def setpoint_cp(self) -> FloatArray:
         """The setpoint's tool-tip frame in the base frame, (4, 4)."""
         from .. import forward_kinematics
 
@@ -401,7 +402,7 @@ class SimulatedArm:
         """Move the tool tip to a position (exact IK, then :meth:`move_jp`)."""
         self.move_jp(self._ik(tip, frame))
 
-    def _ik(self, tip: ArrayLike, frame: str) -> NDArray[np.float64]:
+    def _ik(self, tip: ArrayLike, frame: str) -> FloatArray:
         from .. import q_from_tool_tip
 
         check_choice(frame, "frame", ("base", "rcm"))
@@ -416,8 +417,8 @@ class SimulatedArm:
         return np.asarray(q, dtype=float)
 
     # --- the servo loop -------------------------------------------------------------
-    def _set(self, q: NDArray[np.float64], qd: NDArray[np.float64], qdd: NDArray[np.float64],
-             effort: NDArray[np.float64] | None) -> None:
+    def _set(self, q: FloatArray, qd: FloatArray, qdd: FloatArray,
+             effort: FloatArray | None) -> None:
         self._sp_q, self._sp_qd, self._sp_qdd = (np.array(q, dtype=float),
                                                  np.array(qd, dtype=float),
                                                  np.array(qdd, dtype=float))

@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._output import atomic_write
+from .._typing import BoolArray, FloatArray, IntArray
 from .._validation import check_count, check_path
 from ..errors import InvalidInputError
 from ._filter import check_rate
@@ -93,27 +94,27 @@ class SessionLog:
         Largest loop-closure error of the simulation, m (NaN for other backends).
     """
 
-    t: NDArray[np.float64]
-    master: NDArray[np.float64]
-    clutch: NDArray[np.bool_]
-    target: NDArray[np.float64]
-    tip: NDArray[np.float64]
-    tip_b: NDArray[np.float64]
-    measured_tip_b: NDArray[np.float64]
-    q: NDArray[np.float64]
-    qd: NDArray[np.float64]
-    qdd: NDArray[np.float64]
-    forces: NDArray[np.float64]
-    measured_q: NDArray[np.float64]
-    measured_qd: NDArray[np.float64]
-    status: NDArray[np.int64]
-    closure_error: NDArray[np.float64]
+    t: FloatArray
+    master: FloatArray
+    clutch: BoolArray
+    target: FloatArray
+    tip: FloatArray
+    tip_b: FloatArray
+    measured_tip_b: FloatArray
+    q: FloatArray
+    qd: FloatArray
+    qdd: FloatArray
+    forces: FloatArray
+    measured_q: FloatArray
+    measured_qd: FloatArray
+    status: IntArray
+    closure_error: FloatArray
 
     def __len__(self) -> int:
         return int(self.t.shape[0])
 
     @property
-    def tip_error(self) -> NDArray[np.float64]:
+    def tip_error(self) -> FloatArray:
         """``|measured_tip_b - tip_b|`` per cycle, m, shape (N,)."""
         return np.linalg.norm(self.measured_tip_b - self.tip_b, axis=-1)
 
@@ -219,7 +220,7 @@ def _master_row(pos: object) -> tuple[float, ...]:
     return m
 
 
-def _session_log(rows: list[tuple], R: NDArray[np.float64], c: NDArray[np.float64]
+def _session_log(rows: list[tuple], R: FloatArray, c: FloatArray
                  ) -> SessionLog:
     """The rows of :func:`run_session` as arrays; ``R``, ``c``: the RCM frame in the base."""
     n = len(rows)
@@ -396,14 +397,14 @@ def _header(ns: int, frame: str) -> dict[str, Any]:
             "frame_id": frame}
 
 
-def _pose(ns: int, p: NDArray[np.float64]) -> dict[str, Any]:
+def _pose(ns: int, p: FloatArray) -> dict[str, Any]:
     return {"header": _header(ns, "base"),
             "pose": {"position": {"x": float(p[0]), "y": float(p[1]), "z": float(p[2])},
                      "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}}
 
 
-def _js(ns: int, q: NDArray[np.float64], qd: NDArray[np.float64],
-        f: NDArray[np.float64]) -> dict[str, Any]:
+def _js(ns: int, q: FloatArray, qd: FloatArray,
+        f: FloatArray) -> dict[str, Any]:
     return {"header": _header(ns, ""), "name": ["q1", "q2", "q3"],
             "position": [float(v) for v in q], "velocity": [float(v) for v in qd],
             "effort": [0.0 if not math.isfinite(v) else float(v) for v in f]}
