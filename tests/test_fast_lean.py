@@ -265,27 +265,25 @@ def test_ik_bad_input_same_error_as_reference(api, label, args, kw):
         np.testing.assert_array_equal(got[1].reason, ref[1].reason)
 
 
-def test_entry_points(api):
-    """After the first call the lean kernels are bound once (to their compiled functions
-    where numba's internals allow, else the dispatcher), and give the dispatcher's bits;
-    types the guard would never pass get the dispatcher itself."""
+def test_lean_kernels_are_the_dispatchers(api):
+    """The lean paths call numba's dispatchers (public API), with the dispatcher's bits."""
     from athenakin.fast import _fk_sized
     from athenakin.fast import _ik_single as _ik_kernels  # the single-item IK kernels
-    from athenakin.fast import _lean as api  # the lean kernels' entry points live there
+    from athenakin.fast import _lean as api  # the lean kernels' bindings live there
 
-    assert api._fk_one_lean.__name__ == "fk_one_lean"          # no longer the first-call shim
-    assert api._ik_paper_lean.__name__ == "ik_paper_lean"
+    assert api._fk_one_lean is _fk_sized.fk_one_lean
+    assert api._ik_paper_lean is _ik_kernels.ik_paper_lean
     q = np.array([-0.1, 0.1, 0.45])
     PT = api._PARAMS[id(D)][2]
-    outs = [[np.full(16, -1, np.int8), np.zeros(16, np.bool_), np.full(16, 7.0),
-             np.full((16, 5), 7.0), np.full((2, 4, 4), 7.0), np.full(16, 7.0)] for _ in range(2)]
+    outs = [list(api.fk_one_outputs()) for _ in range(2)]
+    for o in outs:
+        for a in o:
+            a.fill(7)
     flags = [k(q, T0, PT, *o) for k, o in zip((api._fk_one_lean, _fk_sized.fk_one_lean), outs,
                                               strict=True)]
     assert flags[0] == flags[1] == 0
     for x, y in zip(*outs, strict=True):
         np.testing.assert_array_equal(x, y, strict=True)
-    assert api._entry_point(_fk_sized.fk_one_lean, ("not", "arrays")) is _fk_sized.fk_one_lean
-    assert api._entry_point(_ik_kernels.ik_paper_lean, ()) is _ik_kernels.ik_paper_lean
 
 
 def test_design_switching(api):

@@ -45,7 +45,7 @@ BACKENDS = ("auto", "numpy", "numba")
 ENV_VAR = "ATHENAKIN_BACKEND"
 
 #: The names of numba that kernel modules take from here (``from .._backend import njit``).
-NUMBA_NAMES = ("njit", "prange", "typeof", "threading_layer")
+NUMBA_NAMES = ("njit", "prange", "threading_layer")
 
 _STATE: dict[str, Any] = {}     # "numba": bool, the answer of numba_available()
 

@@ -70,6 +70,7 @@ from ._lean import (
     _line_result,
     _new,
     design_params,
+    fk_one_outputs,
     lean_fk,
 )
 from ._lean import lean_ik as lean_ik  # re-exported: _dispatch calls the lean paths here
@@ -263,7 +264,6 @@ def _want(names: tuple[str, ...]) -> int:
 
 _empty = np.empty
 _I8 = np.int8
-_BOOL = np.bool_
 _object_new = object.__new__
 _object_setattr = object.__setattr__
 
@@ -271,12 +271,7 @@ _object_setattr = object.__setattr__
 def _fk_one(qa: FloatArray, Ta: FloatArray, P: FloatArray,
             tol: FloatArray) -> tuple[int, FKSolution]:
     """One pose into the result's own arrays: ``(flags, result)`` (flags as the kernels')."""
-    reason = _empty(16, _I8)
-    valid = _empty(16, _BOOL)
-    p = _empty(16)
-    u = _empty((16, 5))
-    Tbs = _empty((2, 4, 4))
-    res = _empty(16)
+    reason, valid, p, u, Tbs, res = fk_one_outputs()
     item = _empty(1, _I8)
     flags = _fz.fk_one_arrays(qa, Ta, P, tol, ROTATION_TOL, reason, valid, p, u, Tbs, res, item)
     obj = _object_new(FKSolution)
@@ -489,10 +484,8 @@ def q_from_instrument(T_b_e: ArrayLike, direction_e: ArrayLike, p: ArrayLike,
 
     Returns
     -------
-    q : ndarray, shape (..., 3)
-        ``(q1, q2, q3)``, m; NaN where ``result.valid`` is False.
-    result : InstrumentIK
-        As :func:`athenakin.q_from_instrument`.
+    q, result : ndarray (..., 3), InstrumentIK
+        As :func:`athenakin.q_from_instrument`: actuators (m) and the line's details.
     """
     try:
         return _line(T_b_e, direction_e, p, design, errors, 0, parallel)

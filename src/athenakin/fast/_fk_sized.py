@@ -81,13 +81,9 @@ def _store_mode_select(Sm, ii, i, k0, m, xm, pres, want, reason, valid, p, u, Tb
 def fk_select(q, T, P, tol, rot_tol, want, reason, valid, p, u, Tbs, res, item):
     """The fields ``want`` of ``N = len(item)`` poses (``T_b_s`` per mode: (N, 2, 4, 4)).
 
-    Parameters as :func:`._fk_kernels.fk_full`; arrays of fields not in ``want``
-    are not touched (they may have 0 rows). ``item`` is always written.
-
-    Returns
-    -------
-    int
-        FLAG_* bits about the input.
+    Parameters and the returned FLAG_* bits as :func:`._fk_kernels.fk_full`; arrays of
+    fields not in ``want`` are not touched (they may have 0 rows). ``item`` is always
+    written.
     """
     N = item.shape[0]
     G, SH, S0, S1 = scratch()

@@ -265,14 +265,12 @@ def tool_tip_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
 
     Parameters
     ----------
-    q, T_b_e, design, mode : as in :func:`instrument_jacobian`
-    frame : {"base", "rcm"}, keyword-only
-        Frame the tip velocity is expressed in (default ``"base"``).
+    q, T_b_e, design, mode, frame : as in :func:`~athenakin.analysis.tool_tip_jacobian`
 
     Returns
     -------
     ndarray, shape (..., 3, 3)
-        Rows: x, y, z of the tip velocity in ``frame``; columns ``q1, q2, q3``; m/m.
+        As :func:`~athenakin.analysis.tool_tip_jacobian`.
     """
     return _robot(_jk.TIP_JAC, _ref.tool_tip_jacobian, q, T_b_e, design, mode, frame)
 

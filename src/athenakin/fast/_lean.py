@@ -11,12 +11,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable
-from typing import Any, TypeGuard, TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
 
-from .._typing import FloatArray, IntArray
+from .._typing import BoolArray, FloatArray, Int8Array, IntArray
 from .._validation import (
     ERROR_POLICIES,
     OPTION_AUTO,
@@ -117,45 +116,28 @@ _I8 = np.int8
 _BOOL = np.bool_
 
 
+def fk_one_outputs() -> tuple[Int8Array, BoolArray, FloatArray, FloatArray, FloatArray,
+                              FloatArray]:
+    """One pose's FK result arrays, for the kernel to fill (no views to make afterwards).
+
+    Returns
+    -------
+    reason : ndarray of int8, shape (16,)
+    valid : ndarray of bool, shape (16,)
+    p : ndarray, shape (16,)
+    u : ndarray, shape (16, 5)
+    T_b_s_mode : ndarray, shape (2, 4, 4)
+    residual : ndarray, shape (16,)
+    """
+    return (_empty(16, _I8), _empty(16, _BOOL), _empty(16), _empty((16, 5)),
+            _empty((2, 4, 4)), _empty(16))
+
+
 # --- the lean single call: one guard for every entry point --------------------------------
 _ndarray = np.ndarray
 _PARAMS_get = _PARAMS.get
-
-
-def _entry_point(kernel: Any, args: tuple[Any, ...]) -> Callable[..., int]:
-    """``kernel``'s compiled function for exactly the types of ``args``, else ``kernel``.
-
-    Numba's dispatcher types every argument at each call (about 20 ns an array);
-    the lean paths' guard already admits only the exact types the kernels were
-    compiled for (float64 arrays of fixed shapes, C-contiguous, aligned, writable,
-    the buffers they allocate themselves), so they may call the compiled
-    function directly: the same machine code, about 0.15 us less. Falls back to
-    the dispatcher when numba's internals do not have that shape.
-    """
-    try:
-        from .._backend import typeof
-
-        entry = kernel.overloads[tuple(typeof(a) for a in args)].entry_point
-    except Exception:     # another numba version's internals: the dispatcher
-        return kernel     # type: ignore[no-any-return]
-    return entry if callable(entry) else kernel  # type: ignore[no-any-return]
-
-
-def _direct(name: str, kernel: Any) -> Callable[..., int]:
-    """The first call of a lean kernel, then :func:`_entry_point` under the module name ``name``.
-
-    The first call goes through numba's dispatcher (which compiles or loads the
-    kernel); the later ones call the compiled function that it chose.
-    """
-    def first(*args: Any) -> int:
-        flags: int = kernel(*args)
-        globals()[name] = _entry_point(kernel, args)
-        return flags
-    return first
-
-
-_fk_one_lean = _direct("_fk_one_lean", _fz.fk_one_lean)
-_ik_paper_lean = _direct("_ik_paper_lean", _one.ik_paper_lean)
+_fk_one_lean = _fz.fk_one_lean
+_ik_paper_lean = _one.ik_paper_lean
 _I64 = np.int64
 _TRUE = np.True_
 #: ``item_reason`` / ``reason`` of a lean result (always 0 there), copied for each result.
@@ -202,14 +184,20 @@ def _lean_vector(x: object) -> FloatArray | None:
     return None
 
 
-def _lean_frame(T: object) -> TypeGuard[FloatArray]:
-    """``T`` is a float64 array (4, 4), C-contiguous, aligned and writable (the kernels' frame).
+def _lean_inputs(v: object, T: object) -> FloatArray | None:
+    """``v`` as the single-item kernels take it (:func:`_lean_vector`) where ``T`` qualifies.
 
-    False for anything else, which the general path converts or names (lists
-    included: a frame is rarely a list in a loop).
+    ``T`` must be a float64 array (4, 4), C-contiguous, aligned and writable (the
+    kernels' frame); anything else, lists included (a frame is rarely a list in a
+    loop), is None: the general path converts it or names what is wrong.
     """
-    return (type(T) is _ndarray and T.dtype is _F8  # type: ignore[union-attr]
-            and T.shape == (4, 4) and T.flags.carray)  # type: ignore[union-attr]
+    if not (type(T) is _ndarray and T.dtype is _F8  # type: ignore[union-attr]
+            and T.shape == (4, 4) and T.flags.carray):  # type: ignore[union-attr]
+        return None
+    if type(v) is _ndarray and v.dtype is _F8 and v.shape == (3,) \
+            and v.flags.carray:  # type: ignore[union-attr]
+        return v  # type: ignore[return-value]
+    return _lean_vector(v)
 
 
 def _lean_tol(x: object, name: str) -> float | None:
@@ -255,27 +243,14 @@ def lean_fk(q: object, T_b_e: object, design: Design | None, method: object = OP
         if t[0] is None or t[1] is None or t[2] is None or t[3] is None:
             return None
         tol = np.array(t)
-    qa: FloatArray | None
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == (3,) and q.flags.carray:
-        qa = q                          # _lean_vector's first test, inline (0.1 us less)
-    else:
-        qa = _lean_vector(q)
-        if qa is None:
-            return None
-    if not (type(T_b_e) is _ndarray and T_b_e.dtype is _F8 and T_b_e.shape == (4, 4)
-            and T_b_e.flags.carray):    # _lean_frame, inline
+    qa = _lean_inputs(q, T_b_e)
+    if qa is None:
         return None
     hit = _LAST     # read once: another thread may set _LAST between two reads
     if hit[0] is not design:
         hit = _lean_entry(design)
     PT = hit[2] if tol is _FK_TOL_DEFAULT else np.concatenate((hit[1], tol, [ROTATION_TOL]))
-    # the result's own arrays, filled by the kernel (no views to make afterwards)
-    reason = _empty(16, _I8)
-    valid = _empty(16, _BOOL)
-    p = _empty(16)
-    u = _empty((16, 5))
-    Tbs = _empty((2, 4, 4))
-    res = _empty(16)
+    reason, valid, p, u, Tbs, res = fk_one_outputs()
     if _fk_one_lean(qa, T_b_e, PT, reason, valid, p, u, Tbs, res):
         return None     # an input flag, or no valid slot
     obj = _object_new(FKSolution)
@@ -307,16 +282,8 @@ def lean_ik(T_b_e: object, u345: object, design: Design | None, errors: object =
         if st is None or ct is None:
             return None
         stol, ctol = st, ct
-    Ua: FloatArray | None
-    if type(u345) is _ndarray and u345.dtype is _F8 and u345.shape == (3,) \
-            and u345.flags.carray:      # _lean_vector's first test, inline (0.1 us less)
-        Ua = u345
-    else:
-        Ua = _lean_vector(u345)
-        if Ua is None:
-            return None
-    if not (type(T_b_e) is _ndarray and T_b_e.dtype is _F8 and T_b_e.shape == (4, 4)
-            and T_b_e.flags.carray):    # _lean_frame, inline
+    Ua = _lean_inputs(u345, T_b_e)
+    if Ua is None:
         return None
     hit = _LAST     # read once (threads)
     P = (hit if hit[0] is design else _lean_entry(design))[1]
@@ -355,11 +322,11 @@ def lean_line(T_b_e: object, v: object, p: object, design: Design | None,
         kind, pf = 0, float(p)   # type: ignore[arg-type]
     else:
         return None
-    Va = _lean_vector(v)
-    if Va is None or not _lean_frame(T_b_e):
+    Va = _lean_inputs(v, T_b_e)
+    if Va is None:
         return None
     hit = _LAST     # read once (threads)
-    return _line_one_plain(T_b_e, Va, pf, kind,
+    return _line_one_plain(T_b_e, Va, pf, kind,  # type: ignore[arg-type]
                            (hit if hit[0] is design else _lean_entry(design))[1])
 
 
