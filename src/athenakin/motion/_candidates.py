@@ -18,6 +18,28 @@ from ._flags import TrackFlag
 _TWO_PI = 2.0 * math.pi
 
 
+def angle_pair(x: float, y: float, z: float, sign: float, degen: float, has_hint: bool,
+               hint: float) -> tuple[bool, float, float, float, float, float]:
+    """Cosines and sines of an angle pair of ``R(a, b)`` from its axis ``(x, y, z)``.
+
+    ``sign`` is the branch label (``b`` or ``w``). Where ``|(x, y)| <= degen`` (the two
+    joint axes aligned) ``a`` is the previous value ``hint``, the continuous choice, or,
+    without a hint, there is no candidate. Plain Python over :mod:`math`: the Python
+    tracker calls it, and :mod:`athenakin.motion._kernels` compiles this same function.
+
+    Returns
+    -------
+    ok, rho, cos_a, sin_a, cos_b, sin_b : bool and floats
+        ``ok`` False: no candidate; ``rho = |(x, y)|``.
+    """
+    rho = math.hypot(x, y)
+    if rho > degen:
+        return True, rho, sign * x / rho, sign * y / rho, -z, sign * rho
+    if not has_hint:
+        return False, rho, 0.0, 0.0, 0.0, 0.0
+    return True, rho, math.cos(hint), math.sin(hint), -z, 0.0
+
+
 class TrackedPose(NamedTuple):
     """The tracked configuration of one sample (an immutable named tuple of plain floats).
 
@@ -163,15 +185,11 @@ def _candidate(g: _Geometry, q1: float, q2: float, q3: float, par: tuple, mode: 
         return None
     p = r * n
     zx, zy, zz = cx / p, cys / p, czs / p
-    rho = math.hypot(zx, zy)
-    if rho > DEGENERATE_TOL:
-        c1, s1 = b * zx / rho, b * zy / rho
-        c2, s2 = -zz, b * rho
-    elif hint is None:
+    has_hint = hint is not None
+    ok, rho, c1, s1, c2, s2 = angle_pair(zx, zy, zz, b, DEGENERATE_TOL, has_hint,
+                                         0.0 if hint is None else hint[0])  # u1, u2
+    if not ok:
         return None
-    else:                                # U-joint axes aligned: keep u1
-        c1, s1 = math.cos(hint[0]), math.sin(hint[0])
-        c2, s2 = -zz, 0.0
     # R_s_e columns x and z: R_b_s^T e
     ex, ez = g.ex, g.ez
     Ex = (ex[0], cz * ex[1] - cy * ex[2], cy * ex[1] + cz * ex[2])
@@ -185,15 +203,10 @@ def _candidate(g: _Geometry, q1: float, q2: float, q3: float, par: tuple, mode: 
     W02 = x1[0] * Ez[0] + x1[1] * Ez[1] + x1[2] * Ez[2]
     W12 = s1 * Ez[0] - c1 * Ez[1]
     W22 = z1[0] * Ez[0] + z1[1] * Ez[1] + z1[2] * Ez[2]
-    rho4 = math.hypot(W02, W12)
-    if rho4 > DEGENERATE_TOL:
-        c3, s3 = w * W02 / rho4, w * W12 / rho4
-        c4, s4 = -W22, w * rho4
-    elif hint is None:
+    ok, rho4, c3, s3, c4, s4 = angle_pair(W02, W12, W22, w, DEGENERATE_TOL, has_hint,
+                                          0.0 if hint is None else hint[2])  # u3, u4
+    if not ok:
         return None
-    else:                                # spherical-joint axes aligned: keep u3
-        c3, s3 = math.cos(hint[2]), math.sin(hint[2])
-        c4, s4 = -W22, 0.0
     u1 = math.atan2(s1, c1)
     u2 = math.atan2(s2, c2)
     u3 = math.atan2(s3, c3)

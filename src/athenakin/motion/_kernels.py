@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from .._backend import njit
+from ._candidates import angle_pair
 from ._flags import TrackFlag
 
 __all__ = ["NCAND", "NGEO", "track_stream", "F_LOST", "F_REACQUIRED"]
@@ -85,21 +86,8 @@ def _parallel(g, q1, q2, q3, par):
     return True
 
 
-@njit(inline="always", **_OPTS)
-def _angle_pair(x, y, z, sign, degen, has_hint, hint):
-    """Cosines and sines of an angle pair of ``R(a, b)`` from its axis ``(x, y, z)``.
-
-    ``sign`` is the branch label (``b`` or ``w``). Where ``|(x, y)| <= degen`` (the two
-    joint axes aligned) ``a`` is the previous value ``hint``, the continuous choice, or,
-    without a hint, there is no candidate. Returns ``ok, rho = |(x, y)|, cos a, sin a,
-    cos b, sin b``.
-    """
-    rho = math.hypot(x, y)
-    if rho > degen:
-        return True, rho, sign * x / rho, sign * y / rho, -z, sign * rho
-    if not has_hint:
-        return False, rho, 0.0, 0.0, 0.0, 0.0
-    return True, rho, math.cos(hint), math.sin(hint), -z, 0.0
+#: :func:`athenakin.motion._candidates.angle_pair`, the Python tracker's own, compiled.
+_angle_pair = njit(inline="always", **_OPTS)(angle_pair)
 
 
 @njit(**_OPTS)
