@@ -40,6 +40,45 @@ def angle_pair(x: float, y: float, z: float, sign: float, degen: float, has_hint
     return True, rho, math.cos(hint), math.sin(hint), -z, 0.0
 
 
+def wrist_matrix(c1: float, s1: float, c2: float, s2: float, cy: float, cz: float,
+                 ex: tuple[float, ...], ez: tuple[float, ...]
+                 ) -> tuple[float, float, float, float, float, float]:
+    """Entries of ``W = R(u1, u2)^T R_s_e`` that the wrist's angles need.
+
+    From the U-joint's cosines and sines ``c1, s1, c2, s2``, the module's tilt ``cy, cz``
+    (``R_b_s``) and the RCM frame's x and z axes ``ex``, ``ez`` (base frame). Plain
+    Python over floats, compiled by :mod:`athenakin.motion._kernels` as it stands.
+
+    Returns
+    -------
+    W00, W10, W20, W02, W12, W22 : float
+    """
+    # R_s_e columns x and z: R_b_s^T e
+    Ex0, Ex1, Ex2 = ex[0], cz * ex[1] - cy * ex[2], cy * ex[1] + cz * ex[2]
+    Ez0, Ez1, Ez2 = ez[0], cz * ez[1] - cy * ez[2], cy * ez[1] + cz * ez[2]
+    # rows x1 and z1 of R(u1, u2)^T
+    x10, x11, x12 = c1 * c2, s1 * c2, s2
+    z10, z11, z12 = c1 * s2, s1 * s2, c2 * -1.0
+    return (x10 * Ex0 + x11 * Ex1 + x12 * Ex2, s1 * Ex0 - c1 * Ex1,
+            z10 * Ex0 + z11 * Ex1 + z12 * Ex2, x10 * Ez0 + x11 * Ez1 + x12 * Ez2,
+            s1 * Ez0 - c1 * Ez1, z10 * Ez0 + z11 * Ez1 + z12 * Ez2)
+
+
+def serial_angles(c1: float, s1: float, c2: float, s2: float, c3: float, s3: float, c4: float,
+                  s4: float, W00: float, W10: float, W20: float
+                  ) -> tuple[float, float, float, float, float]:
+    """``u1..u5`` (rad) from the two angle pairs and the entries of :func:`wrist_matrix`.
+
+    Plain Python over :mod:`math`, compiled by :mod:`athenakin.motion._kernels`.
+
+    Returns
+    -------
+    u1, u2, u3, u4, u5 : float
+    """
+    return (math.atan2(s1, c1), math.atan2(s2, c2), math.atan2(s3, c3), math.atan2(s4, c4),
+            math.atan2(s3 * W00 - c3 * W10, c3 * c4 * W00 + s3 * c4 * W10 + s4 * W20))
+
+
 class TrackedPose(NamedTuple):
     """The tracked configuration of one sample (an immutable named tuple of plain floats).
 
@@ -190,28 +229,12 @@ def _candidate(g: _Geometry, q1: float, q2: float, q3: float, par: tuple, mode: 
                                          0.0 if hint is None else hint[0])  # u1, u2
     if not ok:
         return None
-    # R_s_e columns x and z: R_b_s^T e
-    ex, ez = g.ex, g.ez
-    Ex = (ex[0], cz * ex[1] - cy * ex[2], cy * ex[1] + cz * ex[2])
-    Ez = (ez[0], cz * ez[1] - cy * ez[2], cy * ez[1] + cz * ez[2])
-    # W = R(u1, u2)^T R_s_e; rows x1, y1, z1 of R(u1, u2)^T
-    x1 = (c1 * c2, s1 * c2, s2)
-    z1 = (c1 * s2, s1 * s2, c2 * -1.0)
-    W00 = x1[0] * Ex[0] + x1[1] * Ex[1] + x1[2] * Ex[2]
-    W10 = s1 * Ex[0] - c1 * Ex[1]
-    W20 = z1[0] * Ex[0] + z1[1] * Ex[1] + z1[2] * Ex[2]
-    W02 = x1[0] * Ez[0] + x1[1] * Ez[1] + x1[2] * Ez[2]
-    W12 = s1 * Ez[0] - c1 * Ez[1]
-    W22 = z1[0] * Ez[0] + z1[1] * Ez[1] + z1[2] * Ez[2]
+    W00, W10, W20, W02, W12, W22 = wrist_matrix(c1, s1, c2, s2, cy, cz, g.ex, g.ez)
     ok, rho4, c3, s3, c4, s4 = angle_pair(W02, W12, W22, w, DEGENERATE_TOL, has_hint,
                                           0.0 if hint is None else hint[2])  # u3, u4
     if not ok:
         return None
-    u1 = math.atan2(s1, c1)
-    u2 = math.atan2(s2, c2)
-    u3 = math.atan2(s3, c3)
-    u4 = math.atan2(s4, c4)
-    u5 = math.atan2(s3 * W00 - c3 * W10, c3 * c4 * W00 + s3 * c4 * W10 + s4 * W20)
+    u1, u2, u3, u4, u5 = serial_angles(c1, s1, c2, s2, c3, s3, c4, s4, W00, W10, W20)
     if not math.isfinite(Ox + Oy + Oz + p + u1 + u2 + u3 + u4 + u5 + bx + by + bz):
         return None                      # overflow (readings near 1e308): no valid pose
     # instrument axis in the base frame: (c - O_s) / p

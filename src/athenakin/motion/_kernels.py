@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from .._backend import njit
-from ._candidates import angle_pair
+from ._candidates import angle_pair, serial_angles, wrist_matrix
 from ._flags import TrackFlag
 
 __all__ = ["NCAND", "NGEO", "track_stream", "F_LOST", "F_REACQUIRED"]
@@ -86,8 +86,10 @@ def _parallel(g, q1, q2, q3, par):
     return True
 
 
-#: :func:`athenakin.motion._candidates.angle_pair`, the Python tracker's own, compiled.
+# the Python tracker's own steps (athenakin.motion._candidates), compiled
 _angle_pair = njit(inline="always", **_OPTS)(angle_pair)
+_wrist_matrix = njit(inline="always", **_OPTS)(wrist_matrix)
+_serial_angles = njit(inline="always", **_OPTS)(serial_angles)
 
 
 @njit(**_OPTS)
@@ -124,56 +126,18 @@ def _candidate(g, q1, q2, q3, par, mode, r, b, w, hint, has_hint, out):
     ok, rho, c1, s1, c2, s2 = _angle_pair(zx, zy, zz, b, degen, has_hint, hint[0])   # u1, u2
     if not ok:
         return False
-    ex0, ex1, ex2 = g[9], g[10], g[11]
-    ez0, ez1, ez2 = g[12], g[13], g[14]
-    Ex0 = ex0
-    Ex1 = cz * ex1 - cy * ex2
-    Ex2 = cy * ex1 + cz * ex2
-    Ez0 = ez0
-    Ez1 = cz * ez1 - cy * ez2
-    Ez2 = cy * ez1 + cz * ez2
-    x10 = c1 * c2
-    x11 = s1 * c2
-    x12 = s2
-    z10 = c1 * s2
-    z11 = s1 * s2
-    z12 = c2 * -1.0
-    W00 = x10 * Ex0 + x11 * Ex1 + x12 * Ex2
-    W10 = s1 * Ex0 - c1 * Ex1
-    W20 = z10 * Ex0 + z11 * Ex1 + z12 * Ex2
-    W02 = x10 * Ez0 + x11 * Ez1 + x12 * Ez2
-    W12 = s1 * Ez0 - c1 * Ez1
-    W22 = z10 * Ez0 + z11 * Ez1 + z12 * Ez2
+    W00, W10, W20, W02, W12, W22 = _wrist_matrix(c1, s1, c2, s2, cy, cz,
+                                                 (g[9], g[10], g[11]), (g[12], g[13], g[14]))
     ok, rho4, c3, s3, c4, s4 = _angle_pair(W02, W12, W22, w, degen, has_hint, hint[2])  # u3, u4
     if not ok:
         return False
-    u1 = math.atan2(s1, c1)
-    u2 = math.atan2(s2, c2)
-    u3 = math.atan2(s3, c3)
-    u4 = math.atan2(s4, c4)
-    u5 = math.atan2(s3 * W00 - c3 * W10, c3 * c4 * W00 + s3 * c4 * W10 + s4 * W20)
+    u1, u2, u3, u4, u5 = _serial_angles(c1, s1, c2, s2, c3, s3, c4, s4, W00, W10, W20)
     if not math.isfinite(Ox + Oy + Oz + p + u1 + u2 + u3 + u4 + u5 + bx + by + bz):
         return False
-    out[0] = mode
-    out[1] = r
-    out[2] = b
-    out[3] = w
-    out[4] = p
-    out[5] = u1
-    out[6] = u2
-    out[7] = u3
-    out[8] = u4
-    out[9] = u5
-    out[10] = Ox
-    out[11] = Oy
-    out[12] = Oz
-    out[13] = bx / p
-    out[14] = by / p
-    out[15] = bz / p
-    out[16] = a
-    out[17] = abs(h)
-    out[18] = rho
-    out[19] = rho4
+    row = (mode, r, b, w, p, u1, u2, u3, u4, u5, Ox, Oy, Oz, bx / p, by / p, bz / p, a,
+           abs(h), rho, rho4)
+    for k in range(NCAND):
+        out[k] = row[k]
     return True
 
 
