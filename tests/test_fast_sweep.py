@@ -119,3 +119,41 @@ def test_sweep_tolerances_named():
     with pytest.raises(InvalidInputError, match="closure_tol"):
         fast.sweep_fk(np.zeros((2, 3)), ak.default_rcm_frame(), closure_tol=10**400,
                       progress=False)
+
+
+def test_reason_histogram_counts_the_item_reason():
+    """fk_counts' reason histogram counts ``FKSolution.item_reason``, from the one formula.
+
+    Mode +1 that only failed its closure near tangency (``CIRCLES_TANGENT``) and mode -1
+    that failed otherwise: the item's reason is mode -1's code, the first that is not
+    ``CIRCLES_TANGENT`` (``robot._common.item_reason_from_slots``). The histogram used to
+    count mode +1's code there.
+    """
+    from athenakin.errors import Reason
+    from athenakin.fast import _fk_kernels as k
+
+    _, _, S0, S1 = k.scratch()
+    cases = [(Reason.CIRCLES_TANGENT, Reason.UJOINT_SINGULAR, Reason.UJOINT_SINGULAR),
+             (Reason.CIRCLES_TANGENT, Reason.CIRCLES_TANGENT, Reason.CIRCLES_TANGENT),
+             (Reason.STROKE_LIMIT, Reason.STROKE_LIMIT, Reason.STROKE_LIMIT),
+             (Reason.WRIST_SINGULAR, Reason.CIRCLES_TANGENT, Reason.WRIST_SINGULAR),
+             (Reason.OK, Reason.SERIAL_P_ZERO, Reason.OK)]
+    for ii, (r0, r1, _) in enumerate(cases):
+        S0[k._R * k.CHUNK + ii] = float(r0)
+        S1[k._R * k.CHUNK + ii] = float(r1)
+    counts = np.zeros(17, np.int64)
+    reasons = np.zeros(len(Reason), np.int64)
+    slots = np.zeros(2, np.int64)
+    k._count_chunk(S0, S1, len(cases), counts, reasons, slots)
+    expected = np.zeros(len(Reason), np.int64)
+    for ii, (_, _, item) in enumerate(cases):
+        expected[int(item)] += 1
+        assert k.item_reason(S0, S1, ii) == float(item)
+    np.testing.assert_array_equal(reasons, expected)
+    # the reference formula on the same slots
+    valid = np.array([[r0 == 0] * 8 + [r1 == 0] * 8 for r0, r1, _ in cases])
+    reason = np.array([[int(r0)] * 8 + [int(r1)] * 8 for r0, r1, _ in cases], np.int8)
+    from athenakin.robot._common import item_reason_from_slots
+
+    np.testing.assert_array_equal(item_reason_from_slots(valid, reason),
+                                  [int(c[2]) for c in cases])

@@ -38,8 +38,8 @@ from ._module_form import module_closed_form
 from ._scalar import atan2_from_q1, atan_q1, finite_sum, hypot, nanmax2, parallel_residual
 
 __all__ = ["CHUNK", "scratch", "fk_chunk", "gather", "gather_items", "fk_full", "fk_full_parallel",
-           "fk_counts", "rigid_flags", "FLAG_NONRIGID", "FLAG_Q_NONFINITE", "FLAG_T_NONFINITE",
-           "FLAG_NO_SOLUTION"]
+           "fk_counts", "item_reason", "rigid_flags", "FLAG_NONRIGID", "FLAG_Q_NONFINITE",
+           "FLAG_T_NONFINITE", "FLAG_NO_SOLUTION"]
 
 #: Poses per chunk of the two-pass loop (the scratch holds 74 doubles per pose).
 CHUNK = 64
@@ -464,13 +464,15 @@ def _store_mode(Sm, ii, i, k0, xm, pres, reason, valid, p, u, Tbs, res):
         _store_T_b_s_mode(Sm, ii, xm, pmask, Tbs, i, kb + j)
 
 
-@njit(**_OPTS)
-def _item_reason(R0, R1):
-    """Per-item reason (robot._common.item_reason_from_slots) from the two modes' codes.
+@njit(**_OPTS, inline="always")
+def item_reason(S0, S1, ii):
+    """Per-item reason (robot._common.item_reason_from_slots) of scratch column ``ii``.
 
-    0 if a mode has valid slots, else the first code in slot order that is not
-    CIRCLES_TANGENT, else CIRCLES_TANGENT.
+    From the two modes' codes: 0 if a mode has valid slots, else the first code in slot
+    order that is not CIRCLES_TANGENT, else CIRCLES_TANGENT.
     """
+    R0 = S0[_R * CHUNK + ii]
+    R1 = S1[_R * CHUNK + ii]
     if (R0 == 0.0) | (R1 == 0.0):
         return 0.0
     if R0 != _TANGENT:
@@ -485,9 +487,7 @@ def _store_full(SH, S0, S1, n, c0, reason, valid, p, u, Tbs, res, item):
         i = c0 + ii
         xm = SH[_XM * CHUNK + ii]
         pres = SH[_PRES * CHUNK + ii]
-        R0 = S0[_R * CHUNK + ii]
-        R1 = S1[_R * CHUNK + ii]
-        item[i] = np.int8(_item_reason(R0, R1))
+        item[i] = np.int8(item_reason(S0, S1, ii))
         _store_mode(S0, ii, i, 0, xm, pres, reason, valid, p, u, Tbs, res)
         _store_mode(S1, ii, i, 8, xm, pres, reason, valid, p, u, Tbs, res)
 
@@ -543,8 +543,7 @@ def _count_chunk(S0, S1, n, counts, reasons, slots):
         R1 = S1[_R * CHUNK + ii]
         ns = 8 * ((R0 == 0.0) + (R1 == 0.0))
         counts[ns] += 1
-        it = 0 if (R0 == 0.0) | (R1 == 0.0) else int(R0)
-        reasons[it] += 1
+        reasons[int(item_reason(S0, S1, ii))] += 1
         slots[0] += R0 == 0.0
         slots[1] += R1 == 0.0
 

@@ -32,10 +32,10 @@ from ._fk_kernels import (
     FLAG_NO_SOLUTION,
     _chunk_full,
     _input_flags,
-    _item_reason,
     _store_T_b_s_mode,
     _store_u_mode,
     fk_chunk,
+    item_reason,
     scratch,
 )
 from ._scalar import nanmax2
@@ -94,9 +94,7 @@ def fk_select(q, T, P, tol, rot_tol, want, reason, valid, p, u, Tbs, res, item):
             i = c0 + ii
             xm = SH[_XM * CHUNK + ii]
             pres = SH[_PRES * CHUNK + ii]
-            R0 = S0[_R * CHUNK + ii]
-            R1 = S1[_R * CHUNK + ii]
-            item[i] = np.int8(_item_reason(R0, R1))
+            item[i] = np.int8(item_reason(S0, S1, ii))
             _store_mode_select(S0, ii, i, 0, 0, xm, pres, want, reason, valid, p, u, Tbs, res)
             _store_mode_select(S1, ii, i, 8, 1, xm, pres, want, reason, valid, p, u, Tbs, res)
     return _input_flags(q, T, rot_tol)
