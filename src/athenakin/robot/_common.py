@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Container, Mapping
-from typing import Any, Literal, TypeVar
+from typing import Any, ClassVar, Literal, TypeVar
 
 import numpy as np
 
@@ -21,7 +21,7 @@ ReferenceBackend = Literal["numpy"]
 
 __all__ = ["ErrorPolicy", "ReferenceBackend", "check_reference_backend", "resolve_design",
            "resolve_policy", "raise_first_failure", "item_reason_from_slots",
-           "partial_result", "missing_field"]
+           "partial_result", "missing_field", "PartialFields"]
 
 _R = TypeVar("_R")
 
@@ -166,3 +166,21 @@ def missing_field(obj: object, name: str, fields: tuple[str, ...], attrs: Mappin
             f"{cls}.{name} was not computed: this result was asked for with fields={have}; "
             f"call {call}(..., fields=None) (all) or add {name!r}")
     return AttributeError(f"'{cls}' object has no attribute {name!r}")
+
+
+class PartialFields:
+    """Mixin of the results a ``fields=(...)`` call may build with fields left out.
+
+    Reading a left-out field raises the :class:`AttributeError` of
+    :func:`missing_field`, naming the fields computed. A subclass (a frozen dataclass:
+    :class:`~athenakin.FKSolution`, :class:`~athenakin.PassiveJoints`) sets
+    ``_FIELDS_OF = (fields, attrs, call)``, the arguments of :func:`missing_field`.
+    """
+
+    __slots__ = ()
+    _FIELDS_OF: ClassVar[tuple[tuple[str, ...], Mapping[str, str], str]]
+
+    def __getattr__(self, name: str) -> Any:
+        # only reached for a field that a fields=(...) call left out
+        fields, attrs, call = type(self)._FIELDS_OF
+        raise missing_field(self, name, fields, attrs, call)

@@ -28,10 +28,10 @@ from ..errors import Reason
 from ..parallel._module import MODES, TANGENT_TOL, ParallelSolution, parallel_forward_kinematics
 from ._common import (
     ErrorPolicy,
+    PartialFields,
     ReferenceBackend,
     check_reference_backend,
     item_reason_from_slots,
-    missing_field,
     partial_result,
     raise_first_failure,
     resolve_design,
@@ -83,10 +83,13 @@ SLOT_MODE_INDEX = np.repeat(np.arange(2), 8)
 #: The arrays an :class:`FKSolution` can hold, for ``forward_kinematics(..., fields=...)``
 #: (``"T_b_s"`` is stored per mode, :attr:`FKSolution.T_b_s_mode`).
 FK_FIELDS = ("valid", "reason", "p", "u", "T_b_s", "residual")
+#: Field or attribute name -> the attribute that holds it (:func:`missing_field`).
+_FIELD_ATTRS = {f: ("T_b_s_mode" if f == "T_b_s" else f) for f in FK_FIELDS}
+_FIELD_ATTRS.update({v: v for v in _FIELD_ATTRS.values()})
 
 
 @dataclasses.dataclass(frozen=True, repr=False)
-class FKSolution:
+class FKSolution(PartialFields):
     """The 16 forward-kinematics slots of a batch (leading shape ``...``).
 
     Slot ``k = 8 m + 4 r + 2 b + w`` (see :data:`SLOT_MODE` and friends) holds
@@ -139,10 +142,7 @@ class FKSolution:
     residual: FloatArray
     item_reason: Int8Array
     tool_length: float
-
-    def __getattr__(self, name: str) -> Any:
-        # only reached for a field that a fields=(...) call left out
-        raise missing_field(self, name, FK_FIELDS, _FIELD_ATTRS, "forward_kinematics")
+    _FIELDS_OF = (FK_FIELDS, _FIELD_ATTRS, "forward_kinematics")
 
     def __repr__(self) -> str:
         have = []
@@ -211,9 +211,7 @@ class FKSolution:
         return self.T_b_tip[..., :3, 3]
 
 
-_FIELD_ATTRS = {f: ("T_b_s_mode" if f == "T_b_s" else f) for f in FK_FIELDS}
 _ARRAY_FIELDS = ("valid", "reason", "p", "u", "T_b_s_mode", "residual", "item_reason")
-_FIELD_ATTRS.update({v: v for v in _FIELD_ATTRS.values()})
 
 
 def _tip_frames(T_b_s_mode: FloatArray, u: FloatArray, L: float

@@ -38,9 +38,9 @@ from ..errors import Reason
 from ..parallel._module import IK_ROUNDING_ULPS, link_detail, parallel_ik_from_position, position_ik
 from ._common import (
     ErrorPolicy,
+    PartialFields,
     ReferenceBackend,
     check_reference_backend,
-    missing_field,
     partial_result,
     raise_first_failure,
     resolve_design,
@@ -80,7 +80,7 @@ _IK_ATTRS = {f: f for f in IK_FIELDS}
 
 
 @dataclasses.dataclass(frozen=True)
-class PassiveJoints:
+class PassiveJoints(PartialFields):
     """Passive joints and frames from :func:`inverse_kinematics` (leading shape ``...``).
 
     Attributes
@@ -116,10 +116,7 @@ class PassiveJoints:
     valid: BoolArray
     reason: Int8Array
     q_error: FloatArray
-
-    def __getattr__(self, name: str) -> Any:
-        # only reached for a field that a fields=(...) call left out
-        raise missing_field(self, name, IK_FIELDS, _IK_ATTRS, "inverse_kinematics")
+    _FIELDS_OF = (IK_FIELDS, _IK_ATTRS, "inverse_kinematics")
 
     @property
     def u1(self) -> FloatArray:
