@@ -408,27 +408,27 @@ def _paper_stage2(G, K, ctol, n):
 
 
 @njit(**_OPTS, inline="always")
+def _store_row(Tbs, i, r, a, b, c, d):
+    """``Tbs[i, r] = (a, b, c, d)``."""
+    Tbs[i, r, 0] = a
+    Tbs[i, r, 1] = b
+    Tbs[i, r, 2] = c
+    Tbs[i, r, 3] = d
+
+
+@njit(**_OPTS, inline="always")
 def _store_T_b_s(K, ii, mask, Tbs, i):
-    """Write the pose of ``O_s`` of chunk column ``ii`` into ``Tbs[i]`` (NaN when ``mask`` is)."""
+    """Write the pose of ``O_s`` of chunk column ``ii`` into ``Tbs[i]`` (NaN when ``mask`` is).
+
+    ``[[1, 0, 0, x], [0, ct, -st, y], [0, st, ct, z], [0, 0, 0, 1]]`` (Eq. 10).
+    """
     ct = K[_CT * CHUNK + ii] + mask
     st = K[_ST * CHUNK + ii] + mask
     one, zero = 1.0 + mask, mask
-    Tbs[i, 0, 0] = one
-    Tbs[i, 0, 1] = zero
-    Tbs[i, 0, 2] = zero
-    Tbs[i, 0, 3] = K[_OX * CHUNK + ii] + mask
-    Tbs[i, 1, 0] = zero
-    Tbs[i, 1, 1] = ct
-    Tbs[i, 1, 2] = -st
-    Tbs[i, 1, 3] = K[_OY * CHUNK + ii] + mask
-    Tbs[i, 2, 0] = zero
-    Tbs[i, 2, 1] = st
-    Tbs[i, 2, 2] = ct
-    Tbs[i, 2, 3] = K[_OZ * CHUNK + ii] + mask
-    Tbs[i, 3, 0] = zero
-    Tbs[i, 3, 1] = zero
-    Tbs[i, 3, 2] = zero
-    Tbs[i, 3, 3] = one
+    _store_row(Tbs, i, 0, one, zero, zero, K[_OX * CHUNK + ii] + mask)
+    _store_row(Tbs, i, 1, zero, ct, -st, K[_OY * CHUNK + ii] + mask)
+    _store_row(Tbs, i, 2, zero, st, ct, K[_OZ * CHUNK + ii] + mask)
+    _store_row(Tbs, i, 3, zero, zero, zero, one)
 
 
 @njit(**_OPTS, inline="always")
