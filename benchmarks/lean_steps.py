@@ -29,18 +29,17 @@ from athenakin.fast import _api
 
 #: (label, first source line not run) of each cut, in order.
 FK_STEPS = [("entry (a call with 10 arguments)", "if fields is not None or not (method"),
-            ("option checks", "qa: NDArray"),
-            ("q check", "if not (type(T_b_e) is _ndarray"),
-            ("T_b_e check", "hit = _LAST     # read once"),
-            ("design look-up", "# the result's own arrays"),
+            ("option checks", "qa = _lean_inputs("),
+            ("q and T_b_e checks", "hit = _LAST     # read once"),
+            ("design look-up", "= fk_one_outputs()"),
             ("6 result arrays", "if _fk_one_lean("),
-            ("kernel (compiled entry point)", "obj = _object_new(FKSolution)")]
+            ("kernel (numba's dispatcher)", "obj = _object_new(FKSolution)")]
 IK_STEPS = [("entry (a call with 7 arguments)", "if fields is not None or not (errors"),
-            ("option checks", "Ua: NDArray"),
+            ("option checks", "Ua = _lean_inputs("),
             ("u345 and T_b_e checks", "hit = _LAST     # read once"),
             ("design look-up", "fbuf = _empty(_one.ONE_F)"),
             ("3 result buffers", "if _ik_paper_lean("),
-            ("kernel (compiled entry point)", "obj = _object_new(PassiveJoints)")]
+            ("kernel (numba's dispatcher)", "obj = _object_new(PassiveJoints)")]
 
 
 def cuts(fn, steps):
@@ -76,7 +75,7 @@ def main() -> None:
     q = np.array(ak.robot.REFERENCE_Q)
     u = np.array(ak.forward_kinematics(q, T, d).u[0, 2:])
     ctl = fast.ControlLoop(T, d)
-    for _ in range(2):             # compile / load, then bind the kernels' entry points
+    for _ in range(2):             # compile / load the kernels
         ak.forward_kinematics(q, T, d)
         ak.inverse_kinematics(T, u, d)
     fk = [(lab, lambda f=f: f(q, T, d)) for lab, f in cuts(_api.lean_fk, FK_STEPS)]
