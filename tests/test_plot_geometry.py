@@ -148,3 +148,32 @@ def test_tangent_circles_leave_mode_minus_one_empty():
     assert not sol.valid[8]
     with pytest.raises(ak.KinematicsError):
         robot_geometry(q, slot=8)
+
+
+def test_intersections_equal_the_parallel_modules_forward_kinematics():
+    """``intersections`` (from the FK's per-mode ``T_b_s``) are ``parallel_forward_kinematics``'s
+    ``O_i`` of both modes, NaN where a mode does not assemble (merged at tangency too)."""
+    from athenakin.parallel import parallel_forward_kinematics
+
+    d = ak.Design.default()
+    T = ak.default_rcm_frame(d)
+    rng = np.random.default_rng(11)
+    q = rng.uniform([-0.35, -0.15, 0.15], [0.15, 0.35, 0.75], (400, 3))
+    par = parallel_forward_kinematics(q, d)
+    # near tangency: q3 at the circles' largest distance, where mode -1 merges into +1
+    h = 0.5 * (q[:8, 0] - q[:8, 1])
+    m_y = np.sqrt(d.l3 ** 2 - h * h) + d.l2
+    q_t = q[:8].copy()
+    q_t[:, 2] = np.hypot(m_y, d.l5) + np.sqrt(d.l1 ** 2 - h * h)
+    checked = 0
+    for qq in np.concatenate([q, q_t]):
+        sol = ak.forward_kinematics(qq, T, d, errors="flag")
+        ks = np.flatnonzero(sol.valid)
+        if ks.size == 0:
+            continue
+        g = robot_geometry(qq, T, d, slot=int(ks[0]), fk=sol)
+        ref = parallel_forward_kinematics(qq, d).O_i
+        np.testing.assert_array_equal(np.isnan(g.intersections), np.isnan(ref))
+        np.testing.assert_allclose(g.intersections, ref, rtol=0, atol=1e-15)
+        checked += 1
+    assert checked > 100 and par.O_i.shape == (400, 2, 3)

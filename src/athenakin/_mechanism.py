@@ -44,6 +44,7 @@ so ``instrument`` and ``sphere_link_2`` touch in every configuration.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from typing import Any, Literal
 
@@ -204,6 +205,7 @@ assert tuple(JOINTS) == FORMULA_JOINTS      # the order of tree_joint_formula's 
 #: :data:`JOINTS`, then ``tool_tip`` (the instrument frame moved to the tip) and
 #: ``rcm_setup`` (the RCM frame ``T_b_e``).
 LINKS: tuple[str, ...] = tuple(j.child for j in TREE.values()) + ("tool_tip", "rcm_setup")
+_LINK_INDEX = {link: k for k, link in enumerate(LINKS)}
 
 
 def _rot_x(a: float) -> FloatArray:
@@ -230,6 +232,14 @@ def tree_origins(design: Design) -> dict[str, FloatArray]:
         T[:3, :3] = _rot_x(j.roll)
         T[:3, 3] = [float(getattr(design, v)) if isinstance(v, str) else v for v in j.xyz]
         out[name] = T
+    return out
+
+
+@functools.lru_cache(maxsize=64)
+def _origin_stack(design: Design) -> FloatArray:
+    """:func:`tree_origins` as one read-only array (n_joints, 4, 4) in :data:`TREE` order."""
+    out = np.stack(list(tree_origins(design).values()))
+    out.flags.writeable = False
     return out
 
 
@@ -405,23 +415,32 @@ def _check_slot(slot: object) -> int | None:
     return None if k == "all" else int(k)
 
 
-def _motion(kind: str, axis: tuple[float, float, float],
-            v: FloatArray) -> FloatArray:
-    """Transforms (..., 4, 4) of a joint along / about a coordinate axis moved by ``v``."""
+#: Per joint of :data:`TREE`: slides (bool), the axis ``k`` and the two axes ``i, j``
+#: that turn about it (a hinge's ``Rz``-like block ``[[c, -s], [s, c]]`` in ``i, j``).
+_SLIDE = np.array([j.kind == "slide" for j in TREE.values()])
+_AXIS_K = np.array([j.axis.index(1.0) for j in TREE.values()])
+_AXIS_I, _AXIS_J = (_AXIS_K + 1) % 3, (_AXIS_K + 2) % 3
+_SLIDES, _HINGES = np.flatnonzero(_SLIDE), np.flatnonzero(~_SLIDE)
+
+
+def _motions(v: FloatArray) -> FloatArray:
+    """Transforms (..., n_joints, 4, 4) of the joints of :data:`TREE` moved by ``v`` (..., n).
+
+    A slide translates along its axis by ``v``; a hinge turns about it by ``v`` rad.
+    """
     M = np.zeros(v.shape + (4, 4))
     M[..., 3, 3] = 1.0
-    k = axis.index(1.0)
-    if kind == "slide":
-        M[..., 0, 0] = M[..., 1, 1] = M[..., 2, 2] = 1.0
-        M[..., k, 3] = v
-        return M
-    c, s = np.cos(v), np.sin(v)
-    i, j = (k + 1) % 3, (k + 2) % 3
-    M[..., k, k] = 1.0
-    M[..., i, i] = c
-    M[..., j, j] = c
-    M[..., i, j] = -s
-    M[..., j, i] = s
+    s_, h = _SLIDES, _HINGES
+    for a in range(3):
+        M[..., s_, a, a] = 1.0
+    M[..., s_, _AXIS_K[s_], 3] = v[..., s_]
+    c, s = np.cos(v[..., h]), np.sin(v[..., h])
+    k, i, j = _AXIS_K[h], _AXIS_I[h], _AXIS_J[h]
+    M[..., h, k, k] = 1.0
+    M[..., h, i, i] = c
+    M[..., h, j, j] = c
+    M[..., h, i, j] = -s
+    M[..., h, j, i] = s
     return M
 
 
@@ -429,13 +448,16 @@ def _tree_frames(joints: FloatArray, T_e: FloatArray,
                  design: Design) -> FloatArray:
     """Frames of :data:`LINKS` from the joint values (the exports' tree, parent first)."""
     batch = joints.shape[:-1]
-    origins = tree_origins(design)
-    index = {link: k for k, link in enumerate(LINKS)}
+    # each joint's transform in its parent link: origin, then the joint's motion
+    local = np.matmul(_origin_stack(design), _motions(joints))
+    index = _LINK_INDEX
     out = np.empty(batch + (len(LINKS), 4, 4))
-    for k, (name, j) in enumerate(TREE.items()):
-        A = (origins[name] if j.parent == "base"
-             else np.matmul(out[..., index[j.parent], :, :], origins[name]))
-        out[..., k, :, :] = np.matmul(A, _motion(j.kind, j.axis, joints[..., k]))
+    for k, j in enumerate(TREE.values()):
+        if j.parent == "base":
+            out[..., k, :, :] = local[..., k, :, :]
+        else:
+            np.matmul(out[..., index[j.parent], :, :], local[..., k, :, :],
+                      out=out[..., k, :, :])
     tip = np.eye(4)
     tip[2, 3] = design.tool_length
     out[..., index["tool_tip"], :, :] = np.matmul(out[..., index["instrument"], :, :], tip)
@@ -492,7 +514,9 @@ def state_from_fk(sol: Any, q: FloatArray, T: FloatArray, design: Design,
         jv = tree_joint_formula(qq[..., 0], qq[..., 1], qq[..., 2], p, u5[..., 0], u5[..., 1],
                                 u5[..., 2], u5[..., 3], u5[..., 4], O_s[..., 1], O_s[..., 2],
                                 l1 * l1, l2, l3 * l3, l4, l5)
-    joints = np.stack([np.broadcast_to(v, batch) for v in jv], axis=-1).astype(float)
+    joints = np.empty(batch + (len(jv),))
+    for i, v in enumerate(jv):
+        joints[..., i] = v
     joints[~valid] = np.nan
     fr = _tree_frames(joints, np.asarray(T_e, dtype=float), design)
     fr[~valid] = np.nan

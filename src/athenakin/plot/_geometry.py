@@ -22,7 +22,6 @@ from .._typing import FloatArray
 from .._validation import check_array, check_count, check_instance, check_scalar, check_slot
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, Reason, error_for_reason
-from ..parallel import parallel_forward_kinematics
 from ..robot import FKSolution, forward_kinematics
 from ..robot._setup import resolve_rcm_frame
 
@@ -298,8 +297,9 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     # the axes of the spherical joint (u3, u4, u5) through the RCM and of the U-joint at O_s
     wrist_axes = np.stack([F["guide"][:3, 2], F["sph_4"][:3, 2], F["sph_5"][:3, 2]])
     ujoint_axes = np.stack([F["platform"][:3, 2], F["instrument"][:3, 1]])
-    par = parallel_forward_kinematics(q, design)
-    intersections = par.O_i.copy()
+    # k1 ∩ k2: O_i of both assembly modes, from the poses of O_s the FK holds per mode
+    T_mode = sol.T_b_s_mode
+    intersections = T_mode[:, :3, 3] - design.l4 * T_mode[:, :3, 2]
     r1 = np.sqrt(l1 * l1 - h * h)
     frames = {"b": np.eye(4), "i": F["platform"].copy(), "s": T_b_s.copy(),
               "instrument": F["instrument"].copy(), "e": T.copy()}
