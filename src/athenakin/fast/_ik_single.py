@@ -69,9 +69,12 @@ def ik_paper_one(T, U, P, stol, ctol, rot_tol, fbuf, ibuf):
 
 
 @njit(**_OPTS)
-def ik_paper_lean(T, U, P, stol, ctol, rot_tol, fbuf, Tbs, mode):
+def ik_paper_lean(T, U, PT, fbuf, Tbs, mode):
     """:func:`ik_paper_one` for the lean single call, into the result's own arrays.
 
+    ``PT`` (16,): the design's parameter vector (13), ``singular_tol``, ``closure_tol``
+    and the rigidity tolerance, as one array (each argument costs the dispatch about
+    50 ns, as :func:`._fk_sized.fk_one_lean`'s).
     ``fbuf`` (27,) as :func:`ik_paper_one`'s (its ``T_b_s`` part unused here),
     ``Tbs`` (4, 4) and ``mode`` (0-d int64) receive ``T_b_s`` and the mode (no
     views to make in Python); the same stages as :func:`ik_paper_one`. Returns the
@@ -81,9 +84,9 @@ def ik_paper_lean(T, U, P, stol, ctol, rot_tol, fbuf, Tbs, mode):
     """
     T2 = T.reshape((1, 4, 4))
     U2 = U.reshape((1, 3))
-    reason = _paper_item(T2, U2, P, stol, ctol, fbuf, mode.reshape((1,)),
+    reason = _paper_item(T2, U2, PT[:13], PT[13], PT[14], fbuf, mode.reshape((1,)),
                          Tbs.reshape((1, 4, 4)))[1]
-    return _paper_flags(T2, U2, rot_tol) | (FLAG_NO_SOLUTION if reason != 0 else 0)
+    return _paper_flags(T2, U2, PT[15]) | (FLAG_NO_SOLUTION if reason != 0 else 0)
 
 
 @njit(**_OPTS)

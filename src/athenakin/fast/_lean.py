@@ -38,9 +38,13 @@ __all__ = ["design_params", "lean_fk", "lean_ik", "lean_line"]
 
 _F8 = np.dtype(np.float64)
 _FK_TOL_DEFAULT = np.array([TANGENT_TOL, DEGENERATE_TOL, P_ZERO_TOL, CLOSURE_TOL])
+#: The paper-form IK's default tolerances and the rigidity tolerance, as its lean kernel takes
+#: them after the parameter vector.
+_IK_TOL_DEFAULT = np.array([IK_SINGULAR_TOL, CLOSURE_TOL, ROTATION_TOL])
 #: id(design) -> (design, parameter vector P (13,), P with the default FK tolerances and
-#: ROTATION_TOL (18,: the lean FK kernel's one option array), tool length as a float).
-_PARAMS: dict[int, tuple[Design | None, FloatArray, FloatArray, float]] = {}
+#: ROTATION_TOL (18,: the lean FK kernel's one option array), tool length as a float, P
+#: with the default IK tolerances (16,: the lean IK kernel's)).
+_PARAMS: dict[int, tuple[Design | None, FloatArray, FloatArray, float, FloatArray]] = {}
 _DEFAULT: list[FloatArray] = []
 _MAX_CACHE = 64
 _PLAIN = {c for c in (FKSolution, PassiveJoints, InstrumentIK)
@@ -98,7 +102,7 @@ def design_params(design: Design | None) -> FloatArray:
         _PARAMS.clear()
     # None too: the lean paths look the design up once, in this table
     _PARAMS[id(design)] = (design, P, np.concatenate((P, _FK_TOL_DEFAULT, [ROTATION_TOL])),
-                           P.item(12))
+                           P.item(12), np.concatenate((P, _IK_TOL_DEFAULT)))
     return P
 
 
@@ -147,12 +151,12 @@ _IK_P, _IK_U, _IK_T, _IK_RES, _IK_QE = _one.ONE_P, _one.ONE_U, _one.ONE_T, _one.
 
 #: The entry of :data:`_PARAMS` of the last lean call (a design is mostly the same from one
 #: call to the next: one identity test instead of a table look-up).
-_LAST: tuple[Any, FloatArray, FloatArray, float] = (
-    object(), np.empty(0), np.empty(0), 0.0)
+_LAST: tuple[Any, FloatArray, FloatArray, float, FloatArray] = (
+    object(), np.empty(0), np.empty(0), 0.0, np.empty(0))
 
 
-def _lean_entry(design: Design | None) -> tuple[Any, FloatArray, FloatArray,
-                                                float]:
+def _lean_entry(design: Design | None) -> tuple[Any, FloatArray, FloatArray, float,
+                                                FloatArray]:
     """The :data:`_PARAMS` entry of ``design`` (made if need be), kept as :data:`_LAST`."""
     global _LAST
     hit = _PARAMS_get(id(design))
@@ -275,22 +279,23 @@ def lean_ik(T_b_e: object, u345: object, design: Design | None, errors: object =
     """The single-item paper-form IK of a plain call, or None (as :func:`lean_fk`)."""
     if fields is not None or not (errors is OPTION_AUTO or is_raising_policy(errors)):
         return None
-    if singular_tol is IK_SINGULAR_TOL and closure_tol is CLOSURE_TOL:
-        stol, ctol = IK_SINGULAR_TOL, CLOSURE_TOL
-    else:
+    tol: tuple[float, float] | None = None    # None: the defaults
+    if not (singular_tol is IK_SINGULAR_TOL and closure_tol is CLOSURE_TOL):
         st, ct = _lean_tol(singular_tol, "singular_tol"), _lean_tol(closure_tol, "closure_tol")
         if st is None or ct is None:
             return None
-        stol, ctol = st, ct
+        tol = (st, ct)
     Ua = _lean_inputs(u345, T_b_e)
     if Ua is None:
         return None
     hit = _LAST     # read once (threads)
-    P = (hit if hit[0] is design else _lean_entry(design))[1]
+    if hit[0] is not design:
+        hit = _lean_entry(design)
+    PT = hit[4] if tol is None else np.concatenate((hit[1], [*tol, ROTATION_TOL]))
     fbuf = _empty(_one.ONE_F)
     Tbs = _empty((4, 4))
     mode = _empty((), _I64)
-    if _ik_paper_lean(T_b_e, Ua, P, stol, ctol, ROTATION_TOL, fbuf, Tbs, mode):
+    if _ik_paper_lean(T_b_e, Ua, PT, fbuf, Tbs, mode):
         return None     # an input flag, |u| beyond the exact range, or no solution
     obj = _object_new(PassiveJoints)
     # the instance __dict__ the frozen dataclass's __init__ would leave; a valid item
