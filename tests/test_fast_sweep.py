@@ -148,7 +148,7 @@ def test_reason_histogram_counts_the_item_reason():
     expected = np.zeros(len(Reason), np.int64)
     for ii, (_, _, item) in enumerate(cases):
         expected[int(item)] += 1
-        assert k.item_reason(S0, S1, ii) == float(item)
+        assert k.item_reason(float(cases[ii][0]), float(cases[ii][1])) == float(item)
     np.testing.assert_array_equal(reasons, expected)
     # the reference formula on the same slots
     valid = np.array([[r0 == 0] * 8 + [r1 == 0] * 8 for r0, r1, _ in cases])

@@ -464,15 +464,13 @@ def _store_mode(Sm, ii, i, k0, xm, pres, reason, valid, p, u, Tbs, res):
         _store_T_b_s_mode(Sm, ii, xm, pmask, Tbs, i, kb + j)
 
 
-@njit(**_OPTS, inline="always")
-def item_reason(S0, S1, ii):
-    """Per-item reason (robot._common.item_reason_from_slots) of scratch column ``ii``.
+@njit(**_OPTS)
+def item_reason(R0, R1):
+    """Per-item reason (robot._common.item_reason_from_slots) from the two modes' codes.
 
-    From the two modes' codes: 0 if a mode has valid slots, else the first code in slot
-    order that is not CIRCLES_TANGENT, else CIRCLES_TANGENT.
+    0 if a mode has valid slots, else the first code in slot order that is not
+    CIRCLES_TANGENT, else CIRCLES_TANGENT.
     """
-    R0 = S0[_R * CHUNK + ii]
-    R1 = S1[_R * CHUNK + ii]
     if (R0 == 0.0) | (R1 == 0.0):
         return 0.0
     if R0 != _TANGENT:
@@ -487,7 +485,7 @@ def _store_full(SH, S0, S1, n, c0, reason, valid, p, u, Tbs, res, item):
         i = c0 + ii
         xm = SH[_XM * CHUNK + ii]
         pres = SH[_PRES * CHUNK + ii]
-        item[i] = np.int8(item_reason(S0, S1, ii))
+        item[i] = np.int8(item_reason(S0[_R * CHUNK + ii], S1[_R * CHUNK + ii]))
         _store_mode(S0, ii, i, 0, xm, pres, reason, valid, p, u, Tbs, res)
         _store_mode(S1, ii, i, 8, xm, pres, reason, valid, p, u, Tbs, res)
 
@@ -543,7 +541,7 @@ def _count_chunk(S0, S1, n, counts, reasons, slots):
         R1 = S1[_R * CHUNK + ii]
         ns = 8 * ((R0 == 0.0) + (R1 == 0.0))
         counts[ns] += 1
-        reasons[int(item_reason(S0, S1, ii))] += 1
+        reasons[int(item_reason(R0, R1))] += 1
         slots[0] += R0 == 0.0
         slots[1] += R1 == 0.0
 

@@ -94,7 +94,7 @@ def fk_select(q, T, P, tol, rot_tol, want, reason, valid, p, u, Tbs, res, item):
             i = c0 + ii
             xm = SH[_XM * CHUNK + ii]
             pres = SH[_PRES * CHUNK + ii]
-            item[i] = np.int8(item_reason(S0, S1, ii))
+            item[i] = np.int8(item_reason(S0[_R * CHUNK + ii], S1[_R * CHUNK + ii]))
             _store_mode_select(S0, ii, i, 0, 0, xm, pres, want, reason, valid, p, u, Tbs, res)
             _store_mode_select(S1, ii, i, 8, 1, xm, pres, want, reason, valid, p, u, Tbs, res)
     return _input_flags(q, T, rot_tol)
