@@ -1,7 +1,7 @@
 """The lean single calls (athenakin.fast._api.lean_fk / lean_ik): the general path's results.
 
-The lean path calls packed-option kernels (``fk_one_lean``, ``ik_paper_lean``) at
-their compiled entry point and builds the result objects itself. These tests hold it
+The lean path calls packed-option kernels (``fk_one_lean``, ``ik_paper_lean``) through
+numba's dispatcher and builds the result objects itself. These tests hold it
 to the general compiled path bit for bit (same arrays, dtypes, shapes, field names
 and result types), to the numpy reference to 1e-12 with the same reason codes, and
 to the same named errors with the same messages for bad input, over seeded random

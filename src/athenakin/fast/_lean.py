@@ -137,7 +137,7 @@ def fk_one_outputs() -> tuple[Int8Array, BoolArray, FloatArray, FloatArray, Floa
             _empty((2, 4, 4)), _empty(16))
 
 
-# --- the lean single call: one guard for every entry point --------------------------------
+# --- the lean single call: one guard for every public single call -----------------------
 _ndarray = np.ndarray
 _PARAMS_get = _PARAMS.get
 _fk_one_lean = _fz.fk_one_lean
