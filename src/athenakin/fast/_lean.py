@@ -112,7 +112,6 @@ def _make_params(d: Design) -> FloatArray:
 
 
 _object_new = object.__new__
-_object_setattr = object.__setattr__
 
 
 _empty = np.empty
