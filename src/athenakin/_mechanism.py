@@ -64,7 +64,7 @@ __all__ = ["BODIES", "BODY_SEGMENTS", "BODY_JOINTS", "BODY_TABLE", "Body", "Body
            "MechanismPoints", "MechanismState", "mechanism_points", "mechanism_state",
            "body_segments", "adjacent_pairs", "POINT_NAMES", "JOINTS", "TREE", "TreeJoint",
            "LINKS", "MASS_PART_LINK", "rail_extent", "tree_joint_formula", "tree_origins",
-           "link_segments"]
+           "link_segments", "O_i_from_T_b_s"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -523,6 +523,23 @@ def state_from_fk(sol: Any, q: FloatArray, T: FloatArray, design: Design,
     return MechanismState(xyz=xyz, frames=fr, joints=joints, valid=valid, reason=reason)
 
 
+def O_i_from_T_b_s(T_b_s: FloatArray, design: Design) -> FloatArray:
+    """``O_i``, the end of the ``l4`` offset, from the pose of ``O_s`` (Eq. 9-10).
+
+    Parameters
+    ----------
+    T_b_s : ndarray, shape (..., 4, 4)
+        Pose of ``O_s`` in the base frame (NaN where it does not assemble).
+    design : Design
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``O_s - l4 z_s``, base frame, m.
+    """
+    return T_b_s[..., :3, 3] - design.l4 * T_b_s[..., :3, 2]  # type: ignore[no-any-return]
+
+
 def _put(xyz: FloatArray, name: str, x: ArrayLike, y: ArrayLike = 0.0,
          z: ArrayLike = 0.0) -> None:
     """Write the point ``name`` of ``xyz`` (..., n_points, 3) from its coordinates."""
@@ -570,7 +587,7 @@ def _instrument_points(xyz: FloatArray, T_b_s: FloatArray,
     R_s = T_b_s[..., :3, :3]
     O_s = T_b_s[..., :3, 3]
     xyz[..., at["O_s"], :] = O_s
-    xyz[..., at["O_i"], :] = O_s - design.l4 * R_s[..., :, 2]
+    xyz[..., at["O_i"], :] = O_i_from_T_b_s(T_b_s, design)
     c, s = np.cos(u), np.sin(u)
     ca, sa, cb, sb, c3, s3 = c[..., 0], s[..., 0], c[..., 1], s[..., 1], c[..., 2], s[..., 2]
 

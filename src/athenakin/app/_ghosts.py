@@ -16,6 +16,7 @@ import dataclasses
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._mechanism import O_i_from_T_b_s
 from .._transforms import rot_x, rot_z
 from .._typing import FloatArray, IntArray
 from .._validation import check_array, check_count, check_frame, check_scalar
@@ -158,13 +159,12 @@ def slot_ghosts(fk: FKSolution, q: ArrayLike, T_b_e: ArrayLike, design: Design,
     qa = check_array(q, "q", (3,))
     if qa.shape != (3,):
         raise InvalidInputError(f"q: expected shape (3,), got shape {qa.shape}")
-    l4 = design.lengths[3]
     O_s_mode = fk.T_b_s_mode[:, :3, 3]
     return SlotGhosts(
         q=qa.copy(), slot=k, mode=mode, p=fk.p[k].copy(),
         tip=O_s + design.tool_length * R_b_3[:, :, 2], ujoint_axes=ujoint_axes,
         wrist_axes=wrist_axes, rcm=T[:3, 3].copy(),
-        O_i_mode=O_s_mode - l4 * fk.T_b_s_mode[:, :3, 2], O_s_mode=O_s_mode.copy(),
+        O_i_mode=O_i_from_T_b_s(fk.T_b_s_mode, design), O_s_mode=O_s_mode.copy(),
         tool_length=float(design.tool_length))
 
 

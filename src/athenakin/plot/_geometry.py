@@ -17,7 +17,7 @@ from collections.abc import Iterable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._mechanism import BodyGeometry, MechanismState, state_from_fk
+from .._mechanism import BodyGeometry, MechanismState, O_i_from_T_b_s, state_from_fk
 from .._typing import FloatArray
 from .._validation import check_array, check_count, check_instance, check_scalar, check_slot
 from ..design import Design, resolve_design
@@ -298,8 +298,7 @@ def robot_geometry(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
     wrist_axes = np.stack([F["guide"][:3, 2], F["sph_4"][:3, 2], F["sph_5"][:3, 2]])
     ujoint_axes = np.stack([F["platform"][:3, 2], F["instrument"][:3, 1]])
     # k1 ∩ k2: O_i of both assembly modes, from the poses of O_s the FK holds per mode
-    T_mode = sol.T_b_s_mode
-    intersections = T_mode[:, :3, 3] - design.l4 * T_mode[:, :3, 2]
+    intersections = O_i_from_T_b_s(sol.T_b_s_mode, design)
     r1 = np.sqrt(l1 * l1 - h * h)
     frames = {"b": np.eye(4), "i": F["platform"].copy(), "s": T_b_s.copy(),
               "instrument": F["instrument"].copy(), "e": T.copy()}
