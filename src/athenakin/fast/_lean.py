@@ -166,19 +166,12 @@ def _lean_entry(design: Design | None) -> tuple[Any, FloatArray, FloatArray, flo
     return hit
 
 
-def _lean_vector(x: object) -> FloatArray | None:
-    """A vector of 3 as the single-item kernels take it, or None (the general path decides).
+def _lean_sequence(x: object) -> FloatArray | None:
+    """A list or tuple of three Python floats / ints / numpy float64 as a float64 array (3,).
 
-    A float64 array of shape (3,) that is C-contiguous, aligned and writable as it
-    is; a list or tuple of three Python floats / ints / numpy float64 converted
-    (``[q1, q2, q3]``). Anything else (other dtypes, shapes, bools, strings,
-    read-only or strided arrays) is None: the general path converts it or names
-    what is wrong.
+    ``[q1, q2, q3]`` in a loop; anything else (other lengths or element types, bools,
+    strings) is None: the general path converts it or names what is wrong.
     """
-    if type(x) is _ndarray:
-        if x.dtype is _F8 and x.shape == (3,) and x.flags.carray:
-            return x
-        return None
     if (type(x) is list or type(x) is tuple) and len(x) == 3:
         for v in x:
             if type(v) is not float and type(v) is not int and type(v) is not np.float64:
@@ -188,19 +181,22 @@ def _lean_vector(x: object) -> FloatArray | None:
 
 
 def _lean_inputs(v: object, T: object) -> FloatArray | None:
-    """``v`` as the single-item kernels take it (:func:`_lean_vector`) where ``T`` qualifies.
+    """The vector of 3 ``v`` as the single-item kernels take it, where ``T`` qualifies; or None.
 
     ``T`` must be a float64 array (4, 4), C-contiguous, aligned and writable (the
-    kernels' frame); anything else, lists included (a frame is rarely a list in a
-    loop), is None: the general path converts it or names what is wrong.
+    kernels' frame); ``v`` a float64 array (3,) of the same kind, taken as it is, or
+    a list or tuple of three numbers (:func:`_lean_sequence`). Anything else (other
+    dtypes or shapes, read-only or strided arrays, a frame as a list: rare in a loop)
+    is None: the general path converts it or names what is wrong.
     """
     if not (type(T) is _ndarray and T.dtype is _F8  # type: ignore[union-attr]
             and T.shape == (4, 4) and T.flags.carray):  # type: ignore[union-attr]
         return None
-    if type(v) is _ndarray and v.dtype is _F8 and v.shape == (3,) \
-            and v.flags.carray:  # type: ignore[union-attr]
-        return v  # type: ignore[return-value]
-    return _lean_vector(v)
+    if type(v) is _ndarray:
+        if v.dtype is _F8 and v.shape == (3,) and v.flags.carray:  # type: ignore[union-attr]
+            return v  # type: ignore[return-value]
+        return None
+    return _lean_sequence(v)
 
 
 def _lean_tol(x: object, name: str) -> float | None:
