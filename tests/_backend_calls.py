@@ -84,7 +84,8 @@ def compute(tmp: Path) -> dict[str, np.ndarray]:
     # synthesis
     task = ak.synthesis.Task.from_toml(ak.synthesis.example_task_path())
     row = ak.synthesis.evaluate_design(d, task, samples=3000)
-    out["synthesis.evaluate_design"] = np.array([row[k] for k in ak.synthesis.METRIC_COLUMNS])
+    for k in ak.synthesis.METRIC_COLUMNS:          # one array per column: one unit each
+        out[f"synthesis.evaluate_design.{k}"] = np.asarray(row[k], dtype=float)
     # collision
     c = ak.collision.clearance(q, T, d)
     out["collision.distances"] = c.distances

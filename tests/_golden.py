@@ -4,7 +4,8 @@
 touches (FK/IK/Jacobians, singularities, clearance, dynamics, force capability,
 calibration, a design-study row, the exports and an MCAP file) and returns a flat
 ``{name: value}`` dict; ``tests/test_golden.py`` compares it with the values stored in
-``tests/data/golden/`` (arrays to 1e-12, texts and bytes exactly).
+``tests/data/golden/`` (:func:`mismatches`: arrays to 1e-12 of their scale, XML texts
+as parsed documents, other texts exactly).
 ``python scripts/golden.py --write`` regenerates the stored values (only ever at a
 commit whose results are known to be right: the baseline was 6c198b4).
 
@@ -43,7 +44,7 @@ def _fields(prefix: str, obj: Any, out: dict[str, Any]) -> None:
 
 
 def compute() -> dict[str, Any]:
-    """The golden values: arrays (compared to 1e-12), str and bytes (compared exactly)."""
+    """The golden values: arrays and texts, compared by :func:`mismatches`."""
     import athenakin as ak
     from athenakin import analysis, collision, dynamics, sim
 
@@ -183,27 +184,35 @@ def load(folder: Path = GOLDEN_DIR) -> dict[str, Any]:
     return values
 
 
-#: Arrays agree to this (absolute and relative): the rebuild must not change a result
-#: beyond the rounding of a reordered sum.
-TOL = 1e-12
+#: The texts that are XML documents (URDF, MJCF, the URDF on ``/robot_description``):
+#: compared as parsed trees, their numbers to ``athenakin.testing.TEXT_RTOL`` of each
+#: attribute's scale (a float's last printed digits depend on the CPU); every other text
+#: (frame names, joint names, the status words) exactly.
+XML_TEXTS = ("urdf", "mjcf", "mcap.robot_description.text")
 
 
 def mismatches(values: dict[str, Any], stored: dict[str, Any]) -> list[str]:
-    """One line per golden value that is missing, new or different."""
+    """One line per golden value that is missing, new or different.
+
+    Arrays agree to ``IMPLEMENTATION_RTOL`` of each entry's magnitude with a floor of one
+    unit (the arrays mix quantities: an MCAP topic's stamps in s and ns beside its
+    positions in m), integer arrays exactly; texts as :data:`XML_TEXTS` says.
+    """
+    from athenakin.testing import scaled_differences, xml_differences
+
     bad = [f"missing: {k}" for k in sorted(set(stored) - set(values))]
     bad += [f"new (not stored): {k}" for k in sorted(set(values) - set(stored))]
     for k in sorted(set(values) & set(stored)):
         a, b = values[k], stored[k]
         if isinstance(b, np.ndarray):
             a = np.asarray(a)
-            if a.shape != b.shape:
-                bad.append(f"{k}: shape {a.shape} != stored {b.shape}")
-            elif a.dtype.kind in "biu" or b.dtype.kind in "biu":
-                if not np.array_equal(a, b):
-                    bad.append(f"{k}: {int(np.sum(a != b))} entries differ")
-            elif not np.allclose(a, b, rtol=TOL, atol=TOL, equal_nan=True):
-                err = np.nanmax(np.abs(np.where(np.isnan(a) & np.isnan(b), 0.0, a - b)))
-                bad.append(f"{k}: max |diff| {err:.3g}")
+            scale = np.maximum(1.0, np.abs(np.nan_to_num(b.astype(float), nan=0.0,
+                                                         posinf=0.0, neginf=0.0)))
+            why = scaled_differences(a, b, scale=scale if a.shape == b.shape else None)
+            if why:
+                bad.append(f"{k}: {why}")
+        elif k in XML_TEXTS:
+            bad += [f"{k}: {line}" for line in xml_differences(a, b)]
         elif a != b:
             bad.append(f"{k}: text differs")
     return bad

@@ -5,7 +5,8 @@
   compiled path (tests/_backend_calls.py: the kinematics' public faces and Jacobians,
   dynamics, synthesis, collision, the tracker and its clearance, ``/tf`` frames, MCAP written
   and read back). numba must never be imported there, and the results must equal those of
-  the compiled kernels here to 1e-12.
+  the compiled kernels here to 1e-12 of each quantity's scale
+  (``athenakin.testing.assert_allclose_scaled``).
 * :mod:`athenakin._backend` is the one module that reads ``ATHENAKIN_BACKEND`` or imports
   numba (the source is searched); no module uses numba's or llvmlite's private API.
 """
@@ -23,6 +24,7 @@ import pytest
 
 import athenakin
 from athenakin import _backend
+from athenakin.testing import assert_allclose_scaled
 
 HERE = Path(__file__).resolve().parent
 SRC = Path(athenakin.__file__).resolve().parent
@@ -109,8 +111,11 @@ def test_numpy_paths_equal_the_compiled_kernels(without_numba, tmp_path):
     for k, want in compiled.items():
         got = without_numba[k]
         assert got.shape == want.shape, k
-        # log times, stamps, sequence numbers and flags are integers held as floats: exact
-        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12, equal_nan=True, err_msg=k)
+        # an MCAP topic's numbers mix integers held as floats (log times, stamps, sequence
+        # numbers: exact, which a scale of one unit keeps) with positions of order 0.1 m;
+        # every other array is one quantity, compared to its own scale
+        scale = 1.0 if k.startswith("mcap.") else None
+        assert_allclose_scaled(got, want, scale=scale, err_msg=k)
 
 
 @pytest.mark.parametrize("value", ["numpy", "NumPy ", "auto", "", "numba"])
@@ -185,4 +190,4 @@ def test_design_reduction_numpy_reference_equals_the_kernel():
         a = (args[0][sub], args[1][sub], args[2][sub], *args[3:7], args[7][sub], args[8][sub],
              *args[9:])
         for x, y in zip(_reduce.reduce_samples_numpy(*a), kernel(*a), strict=True):
-            np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-12)
+            assert_allclose_scaled(x, y)

@@ -7,6 +7,8 @@ explicit tolerances, and raise ``AssertionError`` with the worst entry.
 from __future__ import annotations
 
 import dataclasses
+import re
+import xml.etree.ElementTree as ET
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -20,8 +22,21 @@ from .parallel import parallel_forward_kinematics
 from .study import study_normalize
 
 __all__ = ["assert_study_equal", "assert_dq_equal", "assert_transform_equal",
-           "assert_angles_equal", "RandomConfigurations", "random_configurations",
-           "MAX_CONFIGURATIONS"]
+           "assert_angles_equal", "assert_allclose_scaled", "assert_xml_equal",
+           "scaled_differences", "xml_differences", "IMPLEMENTATION_RTOL", "TEXT_RTOL",
+           "RandomConfigurations", "random_configurations", "MAX_CONFIGURATIONS"]
+
+#: Two implementations of one quantity (the numpy reference and a compiled kernel, this
+#: checkout and its golden copy) agree to this fraction of the quantity's scale. A sum
+#: reordered by another compiler or another CPU's SIMD kernels changes a result of order
+#: ``s`` by a few ``eps * s`` (eps = 2.2e-16); 1e-12 leaves room for a few thousand such
+#: roundings and still catches any change of formula.
+IMPLEMENTATION_RTOL = 1e-12
+
+#: Numbers printed in an exported text (URDF, MJCF, ``/robot_description``) agree to
+#: this fraction of their attribute's scale: ``repr`` prints the shortest string that
+#: round-trips, so a last-bit difference of the value changes the last digits.
+TEXT_RTOL = 1e-14
 
 #: Most configurations :func:`random_configurations` draws in one call (checked
 #: before anything is allocated; candidates are drawn in rounds of at most
@@ -112,6 +127,212 @@ def assert_angles_equal(a1: ArrayLike, a2: ArrayLike, *, atol: float = 1e-12) ->
     if not worst <= atol:
         idx = np.unravel_index(int(np.argmax(d)), d.shape) if d.ndim else ()
         raise AssertionError(f"angles differ by {worst:.3e} rad > {atol:g} at {idx}")
+
+
+def scaled_differences(actual: ArrayLike, desired: ArrayLike, *,
+                       rtol: float = IMPLEMENTATION_RTOL,
+                       scale: ArrayLike | None = None) -> str:
+    """Say how two arrays differ beyond ``rtol`` of their scale ('' when they agree).
+
+    The test behind :func:`assert_allclose_scaled`: entries agree when
+    ``|actual - desired| <= rtol * scale``, NaN where the other is NaN, an infinity where
+    the other is the same infinity; integer and boolean arrays agree only exactly.
+
+    Parameters
+    ----------
+    actual, desired : array-like
+        The two results; their shapes must be equal (no broadcasting: a shape change is
+        a difference).
+    rtol : float, keyword-only
+        Largest difference as a fraction of the scale.
+    scale : float or array-like, optional, keyword-only
+        The quantity's scale, broadcast against the arrays (a per-column scale, say). By
+        default the largest finite magnitude of either array (1 where both are all zero,
+        non-finite or empty), so that entries near zero are held to the scale of the
+        quantity, not to their own magnitude.
+
+    Returns
+    -------
+    str
+        An empty string, or one line naming the shape change, the NaN/infinity pattern or
+        the worst entry (its index, both values, the difference and the allowed one).
+
+    Raises
+    ------
+    TypeError
+        ``rtol`` is not a real number.
+    InvalidInputError
+        ``rtol`` is negative or NaN, or ``scale`` is negative or not finite.
+    """
+    rtol = check_tolerance(rtol, "rtol")
+    a, b = np.asarray(actual), np.asarray(desired)
+    if a.shape != b.shape:
+        return f"shape {a.shape} != {b.shape}"
+    if a.dtype.kind in "biu" and b.dtype.kind in "biu":
+        n = int(np.sum(a != b))
+        return f"{n} of {a.size} integer entries differ" if n else ""
+    a, b = a.astype(float), b.astype(float)
+    nan_a, nan_b = np.isnan(a), np.isnan(b)
+    if not np.array_equal(nan_a, nan_b):
+        return f"NaN pattern differs at {int(np.sum(nan_a != nan_b))} of {a.size} entries"
+    inf = np.isinf(a) | np.isinf(b)
+    if np.any(a[inf] != b[inf]):
+        return f"infinities differ at {int(np.sum(a[inf] != b[inf]))} entries"
+    finite = np.isfinite(a) & np.isfinite(b)
+    if scale is None:
+        mags = np.concatenate([np.abs(a[finite]), np.abs(b[finite])])
+        top = float(mags.max()) if mags.size else 0.0
+        s = np.asarray(top if top > 0.0 else 1.0)
+    else:
+        s = np.asarray(scale, dtype=float)
+        if not (np.all(np.isfinite(s)) and np.all(s >= 0.0)):
+            raise InvalidInputError(f"scale: expected finite, non-negative values, got {s}")
+    allowed = np.broadcast_to(rtol * s, a.shape)
+    err = np.where(finite, np.abs(a - b), 0.0)
+    over = err > allowed
+    if not np.any(over):
+        return ""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(over, err / allowed, 0.0)     # an allowed 0: inf where over
+    k = int(np.argmax(ratio))
+    idx = tuple(int(i) for i in np.unravel_index(k, a.shape))
+    return (f"{int(np.sum(over))} of {a.size} entries differ beyond rtol {rtol:g} of the "
+            f"scale; worst at {idx}: {float(a[idx])!r} vs {float(b[idx])!r} "
+            f"(|diff| {err[idx]:.3g} > "
+            f"{allowed[idx]:.3g})")
+
+
+def assert_allclose_scaled(actual: ArrayLike, desired: ArrayLike, *,
+                           rtol: float = IMPLEMENTATION_RTOL,
+                           scale: ArrayLike | None = None, err_msg: str = "") -> None:
+    """Assert that two arrays agree to ``rtol`` of the quantity's scale.
+
+    The comparison for two implementations of one quantity, or a result and its golden
+    copy: relative to the scale of the quantity (its largest magnitude, or ``scale``),
+    never absolute, so that a correct pair passes on any CPU whatever the units (a force
+    of 1e3 N and a length of 1e-3 m alike). See :func:`scaled_differences`.
+
+    Parameters
+    ----------
+    actual, desired : array-like
+        The two results, of equal shapes.
+    rtol : float, keyword-only
+        Largest difference as a fraction of the scale (:data:`IMPLEMENTATION_RTOL`).
+    scale : float or array-like, optional, keyword-only
+        The quantity's scale (default: the largest finite magnitude of either array).
+    err_msg : str, keyword-only
+        Put before the failure's description.
+
+    Raises
+    ------
+    AssertionError
+        The arrays differ (shape, NaN or infinity pattern, or an entry beyond the
+        tolerance); the message says where and by how much.
+    """
+    why = scaled_differences(actual, desired, rtol=rtol, scale=scale)
+    if why:
+        raise AssertionError(f"{err_msg}: {why}" if err_msg else why)
+
+
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:inf|nan)",
+                     re.IGNORECASE)
+
+
+def _numbers_of(text: str) -> tuple[str, list[float]] | None:
+    """``(template, numbers)`` of a text made of numbers and separators, else None."""
+    tokens = text.split()
+    if not tokens or not all(_NUMBER.fullmatch(t) for t in tokens):
+        return None
+    return " ".join("#" for _ in tokens), [float(t) for t in tokens]
+
+
+def _element_differences(a: ET.Element, b: ET.Element, path: str, rtol: float,
+                         out: list[str]) -> None:
+    """Append the differences of two elements and their subtrees to ``out``."""
+    if a.tag != b.tag:
+        out.append(f"{path}: tag <{a.tag}> != <{b.tag}>")
+        return
+    fields_a = dict(a.attrib, **{"(text)": (a.text or "").strip()})
+    fields_b = dict(b.attrib, **{"(text)": (b.text or "").strip()})
+    if set(fields_a) != set(fields_b):
+        out.append(f"{path}: attributes {sorted(fields_a)} != {sorted(fields_b)}")
+        return
+    for key in sorted(fields_a):
+        va, vb = fields_a[key], fields_b[key]
+        na, nb = _numbers_of(va), _numbers_of(vb)
+        if na is not None and nb is not None and na[0] == nb[0]:
+            why = scaled_differences(np.array(na[1]), np.array(nb[1]), rtol=rtol)
+            if why:
+                out.append(f"{path}@{key}: {va!r} vs {vb!r} ({why})")
+        elif va != vb:
+            out.append(f"{path}@{key}: {va!r} != {vb!r}")
+    ca, cb = list(a), list(b)
+    if len(ca) != len(cb):
+        out.append(f"{path}: {len(ca)} children != {len(cb)}")
+        return
+    for i, (x, y) in enumerate(zip(ca, cb, strict=True)):
+        _element_differences(x, y, f"{path}/{x.tag}[{i}]", rtol, out)
+
+
+def xml_differences(actual: str, desired: str, *, rtol: float = TEXT_RTOL) -> list[str]:
+    """The differences of two XML documents (URDF, MJCF), compared as parsed trees.
+
+    Tags, attribute names, child order and every non-numeric text must be equal; an
+    attribute or text made of numbers (``xyz="0.1 0 0.3"``) agrees when each number is
+    within ``rtol`` of the attribute's scale (its largest magnitude,
+    :func:`scaled_differences`), so that the last printed digits of a float, which
+    depend on the CPU's rounding of the computation behind it, do not count.
+
+    Parameters
+    ----------
+    actual, desired : str
+        The two documents.
+    rtol : float, keyword-only
+        Largest difference of a number as a fraction of its attribute's scale
+        (:data:`TEXT_RTOL`).
+
+    Returns
+    -------
+    list of str
+        One line per difference (path, attribute, both values), empty when they agree.
+
+    Raises
+    ------
+    TypeError
+        ``actual`` or ``desired`` is not a str.
+    xml.etree.ElementTree.ParseError
+        A document is not well-formed XML.
+    """
+    for name, v in (("actual", actual), ("desired", desired)):
+        if not isinstance(v, str):
+            raise TypeError(f"{name}: expected an XML document as str, got "
+                            f"{type(v).__name__}")
+    rtol = check_tolerance(rtol, "rtol")
+    ra, rb = ET.fromstring(actual), ET.fromstring(desired)
+    out: list[str] = []
+    _element_differences(ra, rb, ra.tag, rtol, out)
+    return out
+
+
+def assert_xml_equal(actual: str, desired: str, *, rtol: float = TEXT_RTOL) -> None:
+    """Assert that two XML documents agree as parsed trees (:func:`xml_differences`).
+
+    Parameters
+    ----------
+    actual, desired : str
+        The two documents (URDF, MJCF, ``/robot_description``).
+    rtol : float, keyword-only
+        Largest difference of a number as a fraction of its attribute's scale.
+
+    Raises
+    ------
+    AssertionError
+        The documents differ; the message lists the first differences.
+    """
+    bad = xml_differences(actual, desired, rtol=rtol)
+    if bad:
+        more = f"\n(+{len(bad) - 10} more)" if len(bad) > 10 else ""
+        raise AssertionError("XML documents differ:\n" + "\n".join(bad[:10]) + more)
 
 
 def _broadcast(a: FloatArray, b: FloatArray, na: str, nb: str,
