@@ -188,7 +188,8 @@ def scaled_differences(actual: ArrayLike, desired: ArrayLike, *,
         if not (np.all(np.isfinite(s)) and np.all(s >= 0.0)):
             raise InvalidInputError(f"scale: expected finite, non-negative values, got {s}")
     allowed = np.broadcast_to(rtol * s, a.shape)
-    err = np.where(finite, np.abs(a - b), 0.0)
+    err = np.zeros(a.shape)
+    err[finite] = np.abs(a[finite] - b[finite])
     over = err > allowed
     if not np.any(over):
         return ""
