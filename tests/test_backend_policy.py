@@ -78,8 +78,12 @@ def test_every_subpackage_runs_without_numba(without_numba):
     names = {k.partition(".")[0] for k in without_numba if k != "__loaded__"}
     assert {"fk", "ik", "jac", "dynamics", "synthesis", "collision", "motion", "ros",
             "mcap"} <= names
+    # every result computed something; the design-study row is one array per column, and
+    # a column may be NaN by definition (no body pair checked): the row counts as a whole
+    row = [v for k, v in without_numba.items() if k.startswith("synthesis.evaluate_design.")]
+    assert row and np.isfinite(np.concatenate([np.ravel(v) for v in row])).any()
     for k, v in without_numba.items():
-        if k != "__loaded__":
+        if k != "__loaded__" and not k.startswith("synthesis.evaluate_design."):
             assert v.size and np.isfinite(v).any(), k
 
 
