@@ -205,3 +205,22 @@ class TeleopOptions:
         """Largest joint travel while braking from ``v_max`` at ``a_max``, m."""
         t = max(v / a for v, a in zip(v_max, a_max, strict=True))   # joints stop together
         return max(0.5 * v * t for v in v_max) if math.isfinite(t) else math.inf
+
+
+# the status bits as plain ints (the loop combines them; IntFlag arithmetic is slow)
+_CLUTCHED = int(TeleopStatus.CLUTCHED)
+_STROKE = int(TeleopStatus.STROKE)
+_DEPTH = int(TeleopStatus.DEPTH)
+_SINGULAR = int(TeleopStatus.SINGULAR)
+_FIXTURE = int(TeleopStatus.FIXTURE)
+_CLEARANCE = int(TeleopStatus.CLEARANCE)
+_VELOCITY = int(TeleopStatus.VELOCITY)
+_ACCELERATION = int(TeleopStatus.ACCELERATION)
+_WATCHDOG = int(TeleopStatus.WATCHDOG)
+_ESTOP = int(TeleopStatus.ESTOP)
+_INVALID = int(TeleopStatus.INVALID)
+_JUMP = int(TeleopStatus.JUMP)
+_HOLD = int(TeleopStatus.HOLD)
+_FAULT = int(TeleopStatus.FAULT)
+#: The bits that say why a step toward the target was shortened or refused.
+_LIMIT_BITS = _STROKE | _SINGULAR | _FIXTURE | _CLEARANCE | _VELOCITY | _ACCELERATION
