@@ -98,6 +98,7 @@ class _Brake:
         _has_fixtures: bool
         _clear_floor: float
         _fixtures: Any
+        _tip_fix: tuple[float, _V3, int]
         _backend: str
         options: Any
         design: Any
@@ -120,6 +121,8 @@ class _Brake:
             self._guard.commit()
         self._q, self._qd, self._qdd = q, qd, qdd
         self._tip, self._pose, self._slot = tip, pose, pose.slot
+        if self._has_fixtures:
+            self._tip_fix = self._fixtures.nearest(self._to_base(tip))
         return self._command(tt, flags)
 
     def _stay(self, flags: int, tt: float) -> TeleopCommand:
@@ -147,7 +150,7 @@ class _Brake:
                                     zip(self._hard_lo, q, self._hard_hi, strict=True))
             if ok and self._has_fixtures:
                 d = self._fixtures.nearest(self._to_base(pose.tip_e))[0]
-                ok = d >= 0.0 or d >= self._fixtures.nearest(self._to_base(self._tip))[0]
+                ok = d >= 0.0 or d >= self._tip_fix[0]
             if ok and self._guard is not None:
                 c = self._guard.evaluate(pose)
                 ok = c >= self.options.clearance_margin or c >= self._guard.clearance

@@ -108,16 +108,20 @@ class TipFixtures:
         p = (R[0][0] * v[0] + R[1][0] * v[1] + R[2][0] * v[2],
              R[0][1] * v[0] + R[1][1] * v[1] + R[2][1] * v[2],
              R[0][2] * v[0] + R[1][2] * v[1] + R[2][2] * v[2])
-        q = (abs(p[0]) - h[0], abs(p[1]) - h[1], abs(p[2]) - h[2])
-        nl: tuple[float, ...]
-        if q[0] > 0.0 or q[1] > 0.0 or q[2] > 0.0:      # outside: distance to the surface
-            e = tuple(math.copysign(max(qi, 0.0), pi) for qi, pi in zip(q, p, strict=True))
-            d = math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
-            nl = (e[0] / d, e[1] / d, e[2] / d)
-        else:                                          # inside: the nearest face
-            k = 0 if q[0] >= q[1] and q[0] >= q[2] else (1 if q[1] >= q[2] else 2)
-            d = q[k]
-            nl = tuple(math.copysign(1.0, p[k]) if j == k else 0.0 for j in range(3))
+        q0, q1, q2 = abs(p[0]) - h[0], abs(p[1]) - h[1], abs(p[2]) - h[2]
+        nl: tuple[float, float, float]
+        if q0 > 0.0 or q1 > 0.0 or q2 > 0.0:           # outside: distance to the surface
+            e0 = math.copysign(q0, p[0]) if q0 > 0.0 else 0.0
+            e1 = math.copysign(q1, p[1]) if q1 > 0.0 else 0.0
+            e2 = math.copysign(q2, p[2]) if q2 > 0.0 else 0.0
+            d = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+            nl = (e0 / d, e1 / d, e2 / d)
+        elif q0 >= q1 and q0 >= q2:                    # inside: the nearest face
+            d, nl = q0, (math.copysign(1.0, p[0]), 0.0, 0.0)
+        elif q1 >= q2:
+            d, nl = q1, (0.0, math.copysign(1.0, p[1]), 0.0)
+        else:
+            d, nl = q2, (0.0, 0.0, math.copysign(1.0, p[2]))
         n = (R[0][0] * nl[0] + R[0][1] * nl[1] + R[0][2] * nl[2],
              R[1][0] * nl[0] + R[1][1] * nl[1] + R[1][2] * nl[2],
              R[2][0] * nl[0] + R[2][1] * nl[1] + R[2][2] * nl[2])

@@ -137,6 +137,7 @@ class _Limiter:
         _has_fixtures: bool
         _clear_floor: float
         _fixtures: Any
+        _tip_fix: tuple[float, _V3, int]
         margins: Any
         options: Any
         rate: float
@@ -224,12 +225,12 @@ class _Limiter:
             return pose, 0, s
         room = CLEARANCE_GAIN * self._stopping(qn)
         floor = self._clear_floor + room
-        lam = guard.fraction(pose, floor, CLEARANCE_SLACK_M)
+        lam = guard.fraction(pose, floor, CLEARANCE_SLACK_M)     # places pose's segments
         if lam < 1.0:
             return None, _CLEARANCE, s * lam * SHORTEN
         if guard.evaluations >= STEP_EVALUATIONS:
             return None, _CLEARANCE, lo - 1.0
-        d = guard.evaluate(pose)
+        d = guard.evaluate(pose, placed=True)
         c0 = guard.clearance
         margin = self.options.clearance_margin
         if d >= floor or (d >= c0 and d >= margin + room):
@@ -305,10 +306,8 @@ class _Limiter:
                 flags |= _STROKE
         if self._has_fixtures:
             d, _, _ = self._fixtures.nearest(self._to_base(tip))
-            if d < self.options.fixture_margin:
-                dc, _, _ = self._fixtures.nearest(self._to_base(self._tip))
-                if d < dc:
-                    flags |= _FIXTURE
+            if d < self.options.fixture_margin and d < self._tip_fix[0]:
+                flags |= _FIXTURE
         return flags
 
     def _singular(self, pose: Any) -> float:

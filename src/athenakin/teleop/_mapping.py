@@ -85,6 +85,7 @@ class _Mapping:
         depth: tuple[float, float]
         options: Any
         _fixtures: Any
+        _tip_fix: tuple[float, _V3, int]
 
     def _sample(self, t: object, m: object) -> tuple[float, _V3 | None, int]:
         """The cycle's time and the registered master position (None: no valid sample)."""
@@ -179,7 +180,7 @@ class _Mapping:
     def _slide(self, g: _V3) -> tuple[_V3, int]:
         """Near a forbidden region, drop the step's component into it (the tip slides)."""
         c = self._tip
-        d, n, _ = self._fixtures.nearest(self._to_base(c))
+        d, n, _ = self._tip_fix
         if not d < self.options.fixture_margin + SLIDE_BAND_M:
             return g, 0
         T = self._Tr                          # n in E: R^T n
