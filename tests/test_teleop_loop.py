@@ -245,6 +245,7 @@ def test_a_tip_inside_a_fixture_moves_outward():
     env = Environment().sphere(center, 0.008, name="organ")
     tele._fixtures = TipFixtures(env)                      # a fixture that appeared
     tele._has_fixtures = True
+    tele._tip_fix = tele._fixtures.nearest(tuple(tip_b))
     out = (tip_b - center) / np.linalg.norm(tip_b - center)
     out_e = T[:3, :3].T @ out
     d0 = tele._fixtures.nearest(tuple(tip_b))[0]
