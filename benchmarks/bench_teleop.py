@@ -9,12 +9,13 @@ Run from the repository root (each prints the machine's load beside its numbers)
 
 ``latency``: the whole chain per cycle (mapping, filter, IK, safety, feed-forward) on a
 smooth master, p50 / p99 / max, with and without the feed-forward, and where the time
-goes (each stage timed alone over the same states). ``guard``: every guard on, each case beside the plain chain in the same run (round robin,
-blocks of cycles, so that the machine's load falls on every case alike): ``Bodies.default``
-and three obstacles (a halfspace, a sphere, a box) while the robot moves freely; the tip
-pressed against a fixture; a body (the carrier) held at the clearance margin; p50 / p99 /
-max, p99 over the plain chain's, the share of guarded cycles and the most clearance
-evaluations of a cycle (bound ``CLEARANCE_EVALUATIONS``). ``hostile``: streams of jumps, NaN,
+goes (each stage timed alone over the same states). ``guard``: every guard on, each case
+beside the plain chain in the same run (round robin, blocks of cycles, so that the
+machine's load falls on every case alike): ``Bodies.default`` and three obstacles (a
+halfspace, a sphere, a box) while the robot moves freely; the tip pressed against a
+fixture; a body (the carrier) held at the clearance margin; p50 / p99 / max, p99 over the
+plain chain's, the share of guarded cycles and the most clearance evaluations of a cycle
+(bound ``CLEARANCE_EVALUATIONS``). ``hostile``: streams of jumps, NaN,
 dropouts, far targets, clutch chatter into fixtures and the singular set; counts every
 stroke, velocity, acceleration, fixture, clearance and NaN violation (all must be 0).
 ``session``: 20 s of master motion at 1 kHz with gravity through the chain and the MuJoCo
@@ -84,8 +85,8 @@ def latency(cycles: int) -> None:
     cmds = [tele.step(k / RATE, master(k)) for k in range(5000)]
     from athenakin.dynamics import InverseDynamicsLoop, MassModel, inverse_dynamics
     from athenakin.motion import Tracker
-    from athenakin.teleop._limiter import _IK
     from athenakin.teleop._filter import TremorFilter
+    from athenakin.teleop._limiter import _IK
 
     filt = TremorFilter("notch8-12", RATE)
     filt.reset(0.0, 0.0, 0.0)

@@ -126,7 +126,7 @@ def test_robot_and_frame_forms_give_the_same_commands():
 def test_tracker_candidate_is_pure_and_commit_takes_it():
     tr, ref = Tracker(T, D, q0=Q0), Tracker(T, D, q0=Q0)
     q = np.array(Q0)
-    for k in range(50):
+    for _ in range(50):
         q = q + np.array([1e-4, -5e-5, 2e-4])
         before = tr.pose
         c1 = tr.candidate(q + 1e-3)                # a try that is not taken
@@ -201,7 +201,7 @@ def test_watchdog_counts_cycles_whatever_the_clock(frozen):
         tele.step(k / RATE, _moving(k))
     t_last = 99 / RATE
     trips = []
-    for k in range(100, 1100):
+    for _ in range(1000):
         # the caller's clock stands still: the last stamp again, with no sample or the
         # latched topic's last message
         c = tele.step(t_last, None if frozen == "none" else _moving(99))

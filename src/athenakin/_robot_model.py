@@ -139,7 +139,7 @@ class Robot:
         -------
         Robot
         """
-        return Robot(self.T_b_e if T_b_e is None else T_b_e,
+        return Robot(self.T_b_e if T_b_e is None else T_b_e,  # type: ignore[arg-type]
                      self.design if design is None else design,
                      bodies=self.bodies if bodies is _KEEP else bodies,
                      environment=self.environment if environment is _KEEP else environment,

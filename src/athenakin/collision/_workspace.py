@@ -159,7 +159,7 @@ class ClearanceWorkspace:
                 a, b = (o.center, o.center) if o.kind == "sphere" else (o.a, o.b)
                 r = o.radius
             else:                                 # box / mesh: a bounding sphere first
-                a, r = _bounding_sphere(o)
+                a, r = _bounding_sphere(o)  # type: ignore[assignment]
                 b = a
             s = nb + len(fixed)
             fixed.append((a, b))

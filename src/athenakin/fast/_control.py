@@ -196,7 +196,7 @@ class ControlLoop:
         if mode != 1 and mode != -1:
             raise ValueError(f"mode: expected 1 or -1, got {mode!r}")
         try:
-            q1, q2, q3 = float(q[0]), float(q[1]), float(q[2])  # type: ignore[index]
+            q1, q2, q3 = float(q[0]), float(q[1]), float(q[2])  # type: ignore[index,arg-type]
         except (TypeError, ValueError, LookupError, OverflowError):
             raise ValueError(f"q: expected 3 numbers (q1, q2, q3) in m, got {q!r}") from None
         _jk.robot_one(q1, q2, q3, float(mode), self._jG, self._P, TANGENT_TOL, _jk.TIP_INV,

@@ -45,7 +45,7 @@ from ..errors import InvalidInputError
 from ._brake import TeleopCommand, _Brake
 from ._filter import TremorFilter, check_rate
 from ._fixtures import TipFixtures
-from ._limiter import LIMIT_SLACK, _IK, _Limiter
+from ._limiter import _IK, LIMIT_SLACK, _Limiter
 from ._mapping import _Mapping, clutch_state
 from ._options import (
     _CLUTCHED,
