@@ -33,6 +33,8 @@ NOFF = TeleopOptions(feedforward=False)
 LIMIT_RTOL = 1e-9
 #: Agreement of the workspace's distances with collision.clearance, m.
 DIST_TOL = 1e-12
+#: Agreement of the numpy and the compiled guard's commands over a guarded stream, m.
+BACKEND_TOL = 1e-6
 S = TeleopStatus
 _LIMITS = (S.STROKE | S.DEPTH | S.SINGULAR | S.FIXTURE | S.CLEARANCE | S.VELOCITY
            | S.ACCELERATION | S.HOLD | S.CLUTCHED | S.WATCHDOG | S.ESTOP)
@@ -325,3 +327,42 @@ def test_the_tremor_filter_is_refused_below_its_band_rate(name):
     TremorFilter(name, least)
     Teleop(T, D, q0=Q0, rate=100.0, options=TeleopOptions(filter="none", feedforward=False,
                                                           stroke_margin=0.005))
+
+
+def test_the_numpy_guard_equals_its_kernels():
+    """The guard's numpy paths (segments, workspace, first-order limit) and its kernels, on
+    the poses of a guarded stream (the commands themselves diverge by rounding where the
+    robot chatters between braking and a limited step: a discontinuous map)."""
+    pytest.importorskip("numba")
+    from athenakin.teleop._guard import BodyGuard
+
+    env = _environment()
+    B = Bodies.default(D)
+    tele = Teleop(ak.Robot(T, D, bodies=B, environment=env), q0=Q0, scale=1.0, options=NOFF)
+    floor = tele._clear_floor
+    gn = BodyGuard(D, T, B, env, backend="numpy", floor=floor)
+    gc = BodyGuard(D, T, B, env, backend="numba", floor=floor)
+    down = T[:3, :3].T @ np.array([0.0, 0.0, -0.001])
+    poses, seen = [tele._pose], S.NONE
+    for k in range(700):
+        c = tele.step(k / RATE, tuple(down * k))
+        poses.append(tele._pose)
+        seen |= c.status
+    assert seen & S.CLEARANCE
+    gn.start(poses[0])
+    gc.start(poses[0])
+    n_limited = 0
+    for k, (prev, pose) in enumerate(zip(poses, poses[1:], strict=False)):
+        if k % 10 == 0:            # a step 30 times as long from the committed pose
+            far = Tracker(T, D, q0=prev.q, slot=prev.slot).candidate(
+                np.add(prev.q, 30.0 * np.subtract(pose.q, prev.q)))
+            if far.valid:
+                fn, fc = gn.fraction(far, floor, 1e-6), gc.fraction(far, floor, 1e-6)
+                assert abs(fn - fc) <= 1e-9
+                n_limited += fc < 1.0
+        np.testing.assert_allclose(gn.segments(pose), gc.segments(pose), rtol=0, atol=DIST_TOL)
+        dn, dc = gn.evaluate(pose), gc.evaluate(pose)
+        assert abs(dn - dc) <= DIST_TOL
+        gn.commit()
+        gc.commit()
+    assert n_limited > 0

@@ -24,67 +24,18 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .._backend import njit, resolve_backend
+from .._backend import resolve_backend
 from .._mechanism import BODIES
 from .._typing import FloatArray
 from ._bodies import Bodies
 from ._environment import Environment
-from ._kernels import capsule_pairs_into
 
 __all__ = ["ClearanceWorkspace"]
-
-_OPTS: dict[str, Any] = dict(error_model="numpy", cache=True, nogil=True)
-
-
-@njit(**_OPTS)
-def _evaluate_into(solids, radii, ij, hb, hp, hn, proxy, below, dist, wit):  # pragma: no cover
-    """Every column of one item: the capsule pairs, then the halfspaces (see the class).
-
-    Returns the column of the least distance (-1 with none; NaN distances are never
-    least) and whether a box or mesh column (``proxy``: their bounding spheres) is below
-    ``below`` (its exact distance is then wanted).
-    """
-    capsule_pairs_into(solids, radii, ij, dist.reshape(1, -1)[:, :ij.shape[0]],
-                       wit.reshape(1, -1, 2, 3)[:, :ij.shape[0]])
-    _halfspace_into(solids[0], radii, hb, hp, hn, dist, wit, ij.shape[0])
-    k = -1
-    best = math.inf
-    for c in range(dist.shape[0]):
-        if dist[c] < best:
-            best = dist[c]
-            k = c
-    need = False
-    for c in proxy:
-        if dist[c] < below:
-            need = True
-    return k, need
-
-
-@njit(**_OPTS)
-def _halfspace_into(seg, rad, body, point, normal, dist, wit, c0):  # pragma: no cover - numba
-    """Capsule-halfspace rows ``c0..`` of ``dist`` / ``wit`` (the reference's formula)."""
-    for k in range(body.shape[0]):
-        i = body[k]
-        n0, n1, n2 = normal[k, 0], normal[k, 1], normal[k, 2]
-        hp = ((seg[i, 0, 0] - point[k, 0]) * n0 + (seg[i, 0, 1] - point[k, 1]) * n1
-              + (seg[i, 0, 2] - point[k, 2]) * n2)
-        hq = ((seg[i, 1, 0] - point[k, 0]) * n0 + (seg[i, 1, 1] - point[k, 1]) * n1
-              + (seg[i, 1, 2] - point[k, 2]) * n2)
-        e = 1 if hq < hp else 0
-        h = hq if hq < hp else hp
-        r = rad[i]
-        c = c0 + k
-        dist[c] = h - r
-        for j in range(3):
-            nj = normal[k, j]
-            wit[c, 0, j] = seg[i, e, j] - r * nj
-            wit[c, 1, j] = seg[i, e, j] - h * nj
-
 
 def _halfspace_numpy(seg: FloatArray, rad: FloatArray, body: NDArray[np.intp],
                      point: FloatArray, normal: FloatArray, dist: FloatArray,
                      wit: FloatArray, c0: int) -> None:
-    """:func:`_halfspace_into` in numpy (the reference of :func:`._distance._capsule_halfspace`)."""
+    """Halfspace columns in numpy (``_distance._capsule_halfspace``), the kernel's reference."""
     from ._distance import _capsule_halfspace
 
     for k in range(len(body)):
@@ -230,14 +181,14 @@ class ClearanceWorkspace:
             self._seg[...] = segments
         dist = self.distances
         if self.compiled:
-            k, need = _evaluate_into(self._solids, self._radii, self._ij, self._hb, self._hp,
+            from ._kernels import workspace_into
+
+            k, need = workspace_into(self._solids, self._radii, self._ij, self._hb, self._hp,
                                      self._hn, self._coal_cols, self.exact_below, dist,
-                                     self.witness_points)
+                                     self.witness_points, self.exact)
             if need:
                 self._narrow_phase()
                 k = _argmin(dist)
-            elif self._coal:
-                self.exact[self._coal_cols] = False
         else:
             self._evaluate_numpy()
             k = _argmin(dist)

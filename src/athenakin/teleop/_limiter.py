@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import Reason
+from ._guard import EXACT_BAND_M
 from ._options import (
     _ACCELERATION,
     _CLEARANCE,
@@ -225,7 +226,10 @@ class _Limiter:
             return pose, 0, s
         room = CLEARANCE_GAIN * self._stopping(qn)
         floor = self._clear_floor + room
-        lam = guard.fraction(pose, floor, CLEARANCE_SLACK_M)     # places pose's segments
+        # the first-order limit (it places the pose's segments); far above the floor no
+        # pair can bind within a cycle's travel, and the exact check below decides anyway
+        lam = guard.fraction(pose, floor, CLEARANCE_SLACK_M,
+                             far=guard.clearance > floor + EXACT_BAND_M)
         if lam < 1.0:
             return None, _CLEARANCE, s * lam * SHORTEN
         if guard.evaluations >= STEP_EVALUATIONS:
