@@ -366,3 +366,41 @@ def test_the_numpy_guard_equals_its_kernels():
         gn.commit()
         gc.commit()
     assert n_limited > 0
+
+
+def test_tip_fixtures_are_pinned_to_collision_and_coal():
+    """Each fixture shape's signed distance of a point: a zero-length capsule's, in collision."""
+    from athenakin.collision import capsule_capsule, capsule_halfspace
+
+    env = _environment().capsule([0.3, -0.1, 0.0], [0.3, 0.1, 0.05], 0.01, name="rod")
+    fx = TipFixtures(env)
+    rng = np.random.default_rng(11)
+    tb = _tip_b((0.25, 0.0, 0.0))
+    worst = 0.0
+    for x in tb + rng.normal(scale=0.05, size=(200, 3)):
+        for s, o in zip(fx.shapes, env.obstacles, strict=True):
+            d, _ = fx._one(s, tuple(x))
+            if o.kind == "halfspace":
+                ref = float(capsule_halfspace(x, x, 0.0, o.point, o.normal)[0])
+            elif o.kind == "sphere":
+                ref = float(capsule_capsule(x, x, 0.0, o.center, o.center, o.radius)[0])
+            elif o.kind == "capsule":
+                ref = float(capsule_capsule(x, x, 0.0, o.a, o.b, o.radius)[0])
+            else:
+                pytest.importorskip("coal")
+                from athenakin.collision._coal import capsule_obstacle_distances
+
+                ref = float(capsule_obstacle_distances(np.array([[x, x]]), 0.0, o)[0][0])
+            worst = max(worst, abs(d - ref))
+    assert worst <= 1e-9
+
+
+def test_the_fixture_kernel_is_the_scalar_reference():
+    pytest.importorskip("numba")
+    env = _environment().capsule([0.3, -0.1, 0.0], [0.3, 0.1, 0.05], 0.01, name="rod")
+    ref, fast = TipFixtures(env), TipFixtures(env, compiled=True)
+    rng = np.random.default_rng(12)
+    for x in _tip_b((0.25, 0.0, 0.0)) + rng.normal(scale=0.05, size=(300, 3)):
+        d0, n0, i0 = ref.nearest(tuple(x))
+        d1, n1, i1 = fast.nearest(tuple(x))
+        assert i0 == i1 and abs(d0 - d1) <= 1e-15 and np.allclose(n0, n1, rtol=0, atol=1e-15)

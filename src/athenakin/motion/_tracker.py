@@ -14,6 +14,11 @@ jump thresholds". The candidate with the previous labels (mode, sign of ``p``,
 branches) is kept while it is within the thresholds; otherwise the nearest
 candidate is taken and the label change is flagged.
 
+A pure step. :meth:`Tracker.candidate` returns the pose that :meth:`Tracker.update`
+would return without changing the tracker; :meth:`Tracker.commit` takes it
+(``update = commit(candidate)``, then ``raise_on``): a controller tries candidates and
+commits the one it commands, with no probe to revert.
+
 Cost. Away from the singularities only the candidate with the previous labels is
 computed, in closed form with scalar arithmetic (no numpy in the loop): a few
 microseconds per sample. Near a singularity (any measure below its margin), after

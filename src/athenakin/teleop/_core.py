@@ -187,7 +187,7 @@ class Teleop(_Mapping, _Limiter, _Brake):
         self._ik = _IK(T, design, compiled)
         self._R = tuple(tuple(float(v) for v in row) for row in opts.registration)
         self._Tr = tuple(tuple(float(v) for v in row) for row in T[:3, :4])
-        self._fixtures = TipFixtures(environment)
+        self._fixtures = TipFixtures(environment, compiled=compiled)
         self._has_fixtures = len(self._fixtures) > 0
         check = (bodies is not None or environment is not None) if opts.check_clearance is None \
             else opts.check_clearance

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 __all__ = ["TipFixtures"]
 
 _Vec = tuple[float, float, float]
@@ -39,9 +41,13 @@ class TipFixtures:
     Parameters
     ----------
     environment : athenakin.collision.Environment or None
+    compiled : bool, keyword-only
+        :meth:`nearest` through the compiled kernel
+        (:func:`athenakin.teleop._kernels.fixture_nearest`, the same formulas) instead of
+        the scalar Python below, its reference (default False).
     """
 
-    def __init__(self, environment: object) -> None:
+    def __init__(self, environment: object, *, compiled: bool = False) -> None:
         if environment is not None:
             from ..collision import Environment
 
@@ -72,6 +78,12 @@ class TipFixtures:
             names.append(o.name)
         self.shapes = tuple(shapes)
         self.names = tuple(names)
+        self._kernel = None
+        if compiled and shapes:
+            from ._kernels import fixture_nearest
+
+            self._kernel = fixture_nearest
+            self._table = _table(self.shapes)
 
     def __len__(self) -> int:
         return len(self.shapes)
@@ -81,6 +93,9 @@ class TipFixtures:
 
         ``(inf, (0, 0, 1), -1)`` without fixtures.
         """
+        if self._kernel is not None:
+            d, n0, n1, n2, i = self._kernel(x[0], x[1], x[2], self._table)
+            return d, (n0, n1, n2), i
         best, nb, ib = math.inf, (0.0, 0.0, 1.0), -1
         for i, s in enumerate(self.shapes):
             d, n = self._one(s, x)
@@ -126,3 +141,21 @@ class TipFixtures:
              R[1][0] * nl[0] + R[1][1] * nl[1] + R[1][2] * nl[2],
              R[2][0] * nl[0] + R[2][1] * nl[1] + R[2][2] * nl[2])
         return d, n
+
+
+def _table(shapes: tuple) -> np.ndarray:
+    """The shapes as rows of floats for the kernel: kind, then its parameters (16 columns)."""
+    rows = np.zeros((len(shapes), 17))
+    for k, s in enumerate(shapes):
+        kind = s[0]
+        flat: list[float] = [float(kind)]
+        if kind == 0:
+            flat += [*s[1], *s[2]]
+        elif kind == 1:
+            flat += [*s[1], s[2]]
+        elif kind == 2:
+            flat += [*s[1], *s[2], s[3], s[4]]
+        else:
+            flat += [*s[1], *(v for row in s[2] for v in row), *s[3]]
+        rows[k, :len(flat)] = flat
+    return rows

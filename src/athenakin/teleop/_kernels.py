@@ -1,9 +1,10 @@
 """Compiled kernels of the teleoperation guard (numba; imported on the compiled branch only).
 
-Their numpy references: :meth:`athenakin.teleop._guard.BodyGuard.fraction` (the
-first-order step limit from the witness points) and
-:meth:`athenakin.motion._clearance.PoseClearance.points` (the body points of a tracked
-pose), to 1e-12 (tests/test_teleop_loop.py).
+Their references: :meth:`athenakin.teleop._fixtures.TipFixtures.nearest` (a point's
+signed distance to the tip fixtures, scalar Python),
+:meth:`athenakin.teleop._guard.BodyGuard.fraction` (the first-order step limit from the
+witness points) and :meth:`athenakin.motion._clearance.PoseClearance.points` (the body
+points of a tracked pose), to 1e-12 (tests/test_teleop_loop.py).
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import math
 
 from .._backend import njit
 
-__all__ = ["place_segments", "step_fraction"]
+__all__ = ["place_segments", "step_fraction", "fixture_nearest"]
 
 
 @njit(error_model="numpy", cache=True, nogil=True)
@@ -110,3 +111,64 @@ def place_segments(q1, q2, p, u0, u1, u2, ox, oy, oz, d0, d1, d2, G, index, pts,
             seg[b, e, 0] = pts[k, 0]
             seg[b, e, 1] = pts[k, 1]
             seg[b, e, 2] = pts[k, 2]
+
+
+@njit(error_model="numpy", cache=True, nogil=True)
+def _radial(v0, v1, v2, r):  # pragma: no cover - numba
+    n = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+    if n > 0.0:
+        return n - r, v0 / n, v1 / n, v2 / n
+    return -r, 0.0, 0.0, 1.0
+
+
+@njit(error_model="numpy", cache=True, nogil=True)
+def fixture_nearest(x0, x1, x2, S):  # pragma: no cover - numba
+    """Least signed distance of a point to the fixtures ``S`` (rows of ``_fixtures._table``).
+
+    Returns ``(d, n0, n1, n2, index)``: the distance (m, negative inside), the outward unit
+    normal and the row (``inf``, ``(0, 0, 1)``, -1 without rows).
+    """
+    best, b0, b1, b2, ib = math.inf, 0.0, 0.0, 1.0, -1
+    for k in range(S.shape[0]):
+        kind = S[k, 0]
+        if kind == 0.0:                                 # halfspace: n . (x - p)
+            n0, n1, n2 = S[k, 4], S[k, 5], S[k, 6]
+            d = n0 * (x0 - S[k, 1]) + n1 * (x1 - S[k, 2]) + n2 * (x2 - S[k, 3])
+        elif kind == 1.0:                               # sphere
+            d, n0, n1, n2 = _radial(x0 - S[k, 1], x1 - S[k, 2], x2 - S[k, 3], S[k, 4])
+        elif kind == 2.0:                               # capsule
+            a0, a1, a2, e0, e1, e2 = S[k, 1], S[k, 2], S[k, 3], S[k, 4], S[k, 5], S[k, 6]
+            abab = S[k, 7]
+            t = 0.0
+            if abab > 0.0:
+                t = min(1.0, max(0.0, ((x0 - a0) * e0 + (x1 - a1) * e1 + (x2 - a2) * e2)
+                                 / abab))
+            d, n0, n1, n2 = _radial(x0 - (a0 + t * e0), x1 - (a1 + t * e1),
+                                    x2 - (a2 + t * e2), S[k, 8])
+        else:                                           # box: local p = R^T (x - c)
+            v0, v1, v2 = x0 - S[k, 1], x1 - S[k, 2], x2 - S[k, 3]
+            R00, R01, R02 = S[k, 4], S[k, 5], S[k, 6]
+            R10, R11, R12 = S[k, 7], S[k, 8], S[k, 9]
+            R20, R21, R22 = S[k, 10], S[k, 11], S[k, 12]
+            p0 = R00 * v0 + R10 * v1 + R20 * v2
+            p1 = R01 * v0 + R11 * v1 + R21 * v2
+            p2 = R02 * v0 + R12 * v1 + R22 * v2
+            q0, q1, q2 = abs(p0) - S[k, 13], abs(p1) - S[k, 14], abs(p2) - S[k, 15]
+            if q0 > 0.0 or q1 > 0.0 or q2 > 0.0:
+                e0 = math.copysign(q0, p0) if q0 > 0.0 else 0.0
+                e1 = math.copysign(q1, p1) if q1 > 0.0 else 0.0
+                e2 = math.copysign(q2, p2) if q2 > 0.0 else 0.0
+                d = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+                l0, l1, l2 = e0 / d, e1 / d, e2 / d
+            elif q0 >= q1 and q0 >= q2:
+                d, l0, l1, l2 = q0, math.copysign(1.0, p0), 0.0, 0.0
+            elif q1 >= q2:
+                d, l0, l1, l2 = q1, 0.0, math.copysign(1.0, p1), 0.0
+            else:
+                d, l0, l1, l2 = q2, 0.0, 0.0, math.copysign(1.0, p2)
+            n0 = R00 * l0 + R01 * l1 + R02 * l2
+            n1 = R10 * l0 + R11 * l1 + R12 * l2
+            n2 = R20 * l0 + R21 * l1 + R22 * l2
+        if d < best:
+            best, b0, b1, b2, ib = d, n0, n1, n2, k
+    return best, b0, b1, b2, ib
