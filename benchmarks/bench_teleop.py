@@ -359,7 +359,7 @@ def main() -> None:
     b.add_argument("--cycles", type=int, default=1_000_000)
     b.add_argument("--seed", type=int, default=0)
     b.add_argument("--clearance", action="store_true",
-                   help="also check the bodies' clearance (about 0.5-1 ms per cycle)")
+                   help="also check the bodies' clearance (tens of microseconds per cycle)")
     c = sub.add_parser("session")
     c.add_argument("--seconds", type=float, default=20.0)
     c.add_argument("--figure", default=None)
