@@ -59,11 +59,14 @@ from ._options import (
     _three,
 )
 
-__all__ = ["Teleop", "TeleopCommand", "MAX_SCALE", "LINK_LIMIT_TOL"]
+__all__ = ["Teleop", "TeleopCommand", "MAX_SCALE", "LINK_LIMIT_TOL", "CYCLE_ROUNDING"]
 
 _V3 = tuple[float, float, float]
 #: Largest motion scale, tip metres per master metre (a surgical master scales down).
 MAX_SCALE = 10.0
+#: Slack on ``watchdog * rate`` before it is rounded up to whole cycles (0.03 s at 1 kHz
+#: is 30 cycles, not 31).
+CYCLE_ROUNDING = 1e-9
 #: Least distance of ``q0``'s ``|h|`` from the link limit ``min(l1, l3)`` (the singular
 #: set where the feed-forward and the Jacobian are not defined), m.
 LINK_LIMIT_TOL = 1e-9
@@ -168,7 +171,7 @@ class Teleop(_Mapping, _Limiter, _Brake):
         self._filter = TremorFilter(opts.filter, self.rate)    # its band's least rate
         self.dt = 1.0 / self.rate
         #: Consecutive cycles without a new master sample that trip the watchdog.
-        self.watchdog_cycles = max(1, math.ceil(opts.watchdog * self.rate - 1e-9))
+        self.watchdog_cycles = max(1, math.ceil(opts.watchdog * self.rate - CYCLE_ROUNDING))
         self.v_max, self.a_max = _three(v_max, "v_max"), _three(a_max, "a_max")
         k = 1.0 - LIMIT_SLACK                 # the limits that the limiter aims at
         self._v_aim = tuple(v * k for v in self.v_max)
