@@ -99,6 +99,7 @@ class _Brake:
         _clear_floor: float
         _fixtures: Any
         _tip_fix: tuple[float, _V3, int]
+        _try_fix: tuple[_V3, tuple[float, _V3, int]]
         _backend: str
         options: Any
         design: Any
@@ -122,7 +123,9 @@ class _Brake:
         self._q, self._qd, self._qdd = q, qd, qdd
         self._tip, self._pose, self._slot = tip, pose, pose.slot
         if self._has_fixtures:
-            self._tip_fix = self._fixtures.nearest(self._to_base(tip))
+            tried = self._try_fix
+            self._tip_fix = (tried[1] if tried[0] is tip
+                             else self._fixtures.nearest(self._to_base(tip)))
         return self._command(tt, flags)
 
     def _stay(self, flags: int, tt: float) -> TeleopCommand:

@@ -260,6 +260,7 @@ class Teleop(_Mapping, _Limiter, _Brake):
         self._q, self._qd, self._qdd = tuple(pose.q), z, z
         self._tip = tuple(pose.tip_e)
         self._tip_fix = self._fixtures.nearest(self._to_base(self._tip))
+        self._try_fix = (self._tip, self._tip_fix)   # the last tried tip's distance
         self._pose = pose
         self._slot = pose.slot
         self._target = self._tip

@@ -139,6 +139,7 @@ class _Limiter:
         _clear_floor: float
         _fixtures: Any
         _tip_fix: tuple[float, _V3, int]
+        _try_fix: tuple[_V3, tuple[float, _V3, int]]
         margins: Any
         options: Any
         rate: float
@@ -309,7 +310,9 @@ class _Limiter:
             elif (q[i] < lo and q[i] < qc[i]) or (q[i] > hi and q[i] > qc[i]):
                 flags |= _STROKE
         if self._has_fixtures:
-            d, _, _ = self._fixtures.nearest(self._to_base(tip))
+            fix = self._fixtures.nearest(self._to_base(tip))
+            self._try_fix = (tip, fix)               # the command's, if this step passes
+            d = fix[0]
             if d < self.options.fixture_margin and d < self._tip_fix[0]:
                 flags |= _FIXTURE
         return flags
