@@ -3,12 +3,19 @@
 Run from the repository root (each prints the machine's load beside its numbers)::
 
     python benchmarks/bench_teleop.py latency [--cycles 1000000]
+    python benchmarks/bench_teleop.py guard [--cycles 100000]
     python benchmarks/bench_teleop.py hostile [--cycles 1000000] [--seed 0]
     python benchmarks/bench_teleop.py session [--seconds 20] [--figure FILE.png]
 
 ``latency``: the whole chain per cycle (mapping, filter, IK, safety, feed-forward) on a
 smooth master, p50 / p99 / max, with and without the feed-forward, and where the time
-goes (each stage timed alone over the same states). ``hostile``: streams of jumps, NaN,
+goes (each stage timed alone over the same states). ``guard``: every guard on, each case
+beside the plain chain in the same run (round robin, blocks of cycles, so that the
+machine's load falls on every case alike): ``Bodies.default`` and three obstacles (a
+halfspace, a sphere, a box) while the robot moves freely; the tip pressed against a
+fixture; a body (the carrier) held at the clearance margin; p50 / p99 / max, p99 over the
+plain chain's, the share of guarded cycles and the most clearance evaluations of a cycle
+(bound ``CLEARANCE_EVALUATIONS``). ``hostile``: streams of jumps, NaN,
 dropouts, far targets, clutch chatter into fixtures and the singular set; counts every
 stroke, velocity, acceleration, fixture, clearance and NaN violation (all must be 0).
 ``session``: 20 s of master motion at 1 kHz with gravity through the chain and the MuJoCo
@@ -78,8 +85,8 @@ def latency(cycles: int) -> None:
     cmds = [tele.step(k / RATE, master(k)) for k in range(5000)]
     from athenakin.dynamics import InverseDynamicsLoop, MassModel, inverse_dynamics
     from athenakin.motion import Tracker
-    from athenakin.teleop._core import _IK
     from athenakin.teleop._filter import TremorFilter
+    from athenakin.teleop._limiter import _IK
 
     filt = TremorFilter("notch8-12", RATE)
     filt.reset(0.0, 0.0, 0.0)
@@ -89,7 +96,8 @@ def latency(cycles: int) -> None:
     ff = InverseDynamicsLoop(T, D, masses=masses, slot=0)
     stages = {
         "filter (3 axes)": lambda c, k: filt(*master(k)),
-        "IK q_from_tool_tip (x2 per cycle)": lambda c, k: ik(*c.tip),
+        "IK q_from_tool_tip (x1 per cycle)": lambda c, k: ik(*c.tip),
+        "tool-tip inverse Jacobian (x1)": lambda c, k: ik.along(c.q, 1, (1.0, 0.0, 0.0)),
         "tracker update (x1)": lambda c, k: tr.update(c.q),
         "feed-forward (InverseDynamicsLoop)": lambda c, k: ff(c.q, c.qd, c.qdd),
         "inverse_dynamics (public, for scale)": lambda c, k: inverse_dynamics(
@@ -110,6 +118,110 @@ def _env() -> Environment:
     tb = T[:3, :3] @ np.array([0.25, 0.0, 0.0]) + T[:3, 3]
     return (Environment().sphere(tb + np.array([0.0, 0.0, -0.03]), 0.01, name="vessel")
             .halfspace(tb + np.array([0.0, 0.0, -0.06]), [0.0, 0.0, 1.0], name="floor"))
+
+
+def _three_obstacles() -> Environment:
+    """A halfspace 6 cm below the tip, a sphere 5 cm beside it, a box 6 cm on the other side."""
+    tb = T[:3, :3] @ np.array([0.25, 0.0, 0.0]) + T[:3, 3]
+    box = np.eye(4)
+    box[:3, 3] = tb + np.array([0.0, 0.07, 0.0])
+    return (Environment().halfspace(tb + np.array([0.0, 0.0, -0.06]), [0.0, 0.0, 1.0],
+                                    name="floor")
+            .sphere(tb + np.array([0.0, -0.06, -0.02]), 0.012, name="vessel")
+            .box(box, [0.015, 0.01, 0.015], name="retractor"))
+
+
+def _guard_cases() -> dict[str, tuple[Teleop, object]]:
+    """The four cases of ``guard``: (Teleop, master(k) -> sample) by name."""
+    from athenakin._mechanism import POINT_NAMES, mechanism_points
+
+    R, c0 = T[:3, :3], T[:3, 3]
+    tip_b = R @ np.array([0.25, 0.0, 0.0]) + c0
+    B = Bodies.default(D)
+    opts = TeleopOptions()
+    cases: dict[str, tuple[Teleop, object]] = {}
+    cases["plain chain"] = (Teleop(ak.Robot(T, D), q0=Q0, options=opts), master)
+    cases["bodies + 3 obstacles, moving freely"] = (
+        Teleop(ak.Robot(T, D, bodies=B, environment=_three_obstacles()), q0=Q0, options=opts),
+        master)
+    # the tip pressed against an organ (a sphere of 2 cm, its surface 9 mm below the tip;
+    # the master 10 cm into it): the target projected out of the fixture and slid along
+    # it, the instrument's capsule held at the clearance margin
+    floor = Environment().sphere(tip_b - np.array([0.0, 0.0, 0.029]), 0.02, name="tissue")
+    down = R.T @ np.array([0.0, 0.0, -0.1])
+
+    def press(k: int) -> tuple[float, float, float]:
+        m = master(k)
+        return (m[0] + down[0], m[1] + down[1], m[2] + down[2])
+
+    cases["tip pressed against a fixture"] = (
+        Teleop(ak.Robot(T, D, bodies=B, environment=floor), q0=Q0, options=opts), press)
+    # a sphere at the clearance floor of the carrier, in the way of the tip's +y motion
+    pts0 = mechanism_points(np.array(Q0), T, D).xyz
+    q1, _ = ak.q_from_tool_tip(T, np.array([0.25, 0.01, 0.0]), D)
+    pts1 = mechanism_points(q1, T, D).xyz
+    i, j = POINT_NAMES.index("C"), POINT_NAMES.index("D")
+    mid0, mid1 = 0.5 * (pts0[i] + pts0[j]), 0.5 * (pts1[i] + pts1[j])
+    way = (mid1 - mid0) / np.linalg.norm(mid1 - mid0)
+    r = 0.01
+    gap = opts.clearance_margin + opts.clearance_buffer + 0.0005
+    organ = Environment().sphere(mid0 + way * (B.radius["carrier"] + r + gap), r, name="organ")
+    push = np.array([0.0, 0.1, 0.0])
+
+    def toward(k: int) -> tuple[float, float, float]:
+        m = master(k)
+        return (m[0] + push[0], m[1] + push[1], m[2] + push[2])
+
+    cases["carrier held at the clearance margin"] = (
+        Teleop(ak.Robot(T, D, bodies=B, environment=organ), q0=Q0, options=opts), toward)
+    return cases
+
+
+def guard(cycles: int, block: int = 10_000) -> None:
+    """The guard's cost, each case beside the plain chain (see the module docstring)."""
+    from athenakin.teleop._limiter import CLEARANCE_EVALUATIONS
+
+    print(f"guard over {cycles} cycles per case ({_load()} at the start)")
+    clock = time.perf_counter
+    warm = _guard_cases()
+    for tele, src in warm.values():                   # compile, caches
+        for k in range(2000):
+            tele.step(k / RATE, src(k))    # type: ignore[operator]
+    cases = _guard_cases()
+    dts = {name: np.empty(cycles) for name in cases}
+    cpu = {name: np.empty(cycles) for name in cases}
+    tclock = time.thread_time
+    guarded = dict.fromkeys(cases, 0)
+    evals = dict.fromkeys(cases, 0)
+    bits = int(TeleopStatus.CLEARANCE | TeleopStatus.FIXTURE)
+    loads = []
+    for k0 in range(0, cycles, block):
+        for name, (tele, src) in cases.items():
+            dt, dc = dts[name], cpu[name]
+            for k in range(k0, min(k0 + block, cycles)):
+                m = src(k)                 # type: ignore[operator]
+                c0 = tclock()
+                t0 = clock()
+                cmd = tele.step(k / RATE, m)
+                t1 = clock()
+                dc[k] = tclock() - c0
+                dt[k] = t1 - t0
+                guarded[name] += int(cmd.status) & bits != 0
+                evals[name] = max(evals[name], tele.clearance_evaluations)
+        loads.append(os.getloadavg()[0])
+    p99_plain = np.percentile(dts["plain chain"], 99)
+    c99_plain = np.percentile(cpu["plain chain"], 99)
+    for name, dt in dts.items():
+        dc = cpu[name] * 1e6
+        print(f"  {name:38s} wall {_percentiles(dt)}  p99/plain "
+              f"{np.percentile(dt, 99) / p99_plain:4.2f}")
+        print(f"  {'':38s} cpu  p50 {np.percentile(dc, 50):7.1f} us  p99 "
+              f"{np.percentile(dc, 99):7.1f} us  p99/plain "
+              f"{np.percentile(cpu[name], 99) / c99_plain:4.2f}; guarded "
+              f"{guarded[name] / cycles:6.1%}, clearance evaluations <= {evals[name]} a cycle "
+              f"(K = {CLEARANCE_EVALUATIONS})")
+    print(f"  load during the run: {min(loads):.2f}-{max(loads):.2f} (1-min average, "
+          f"{os.cpu_count()} cores)")
 
 
 def hostile(cycles: int, seed: int, *, with_clearance: bool) -> dict[str, int]:
@@ -241,17 +353,21 @@ def main() -> None:
     sub = p.add_subparsers(dest="what", required=True)
     a = sub.add_parser("latency")
     a.add_argument("--cycles", type=int, default=1_000_000)
+    g = sub.add_parser("guard")
+    g.add_argument("--cycles", type=int, default=100_000)
     b = sub.add_parser("hostile")
     b.add_argument("--cycles", type=int, default=1_000_000)
     b.add_argument("--seed", type=int, default=0)
     b.add_argument("--clearance", action="store_true",
-                   help="also check the bodies' clearance (about 0.5-1 ms per cycle)")
+                   help="also check the bodies' clearance (tens of microseconds per cycle)")
     c = sub.add_parser("session")
     c.add_argument("--seconds", type=float, default=20.0)
     c.add_argument("--figure", default=None)
     args = p.parse_args()
     if args.what == "latency":
         latency(args.cycles)
+    elif args.what == "guard":
+        guard(args.cycles)
     elif args.what == "hostile":
         bad = hostile(args.cycles, args.seed, with_clearance=args.clearance)
         raise SystemExit(1 if any(bad.values()) else 0)

@@ -231,6 +231,7 @@ def test_fixtures_are_drawn_and_keep_the_tip_out(setup):
     np.testing.assert_allclose(blk.max(0) - blk.min(0), [0.02, 0.04, 0.06], rtol=0, atol=1e-12)
     assert fixture_solids(None) == ()
     tele, m = _start(setup, environment=env, options=TeleopOptions(feedforward=False,
+                                                                   filter="none",
                                                                    backend="numpy",
                                                                    check_clearance=False))
     cmd, t = _run(tele, m, 0.0, 3)

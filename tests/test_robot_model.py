@@ -107,3 +107,39 @@ def test_robot_is_frozen_and_replace_checks_again():
         robot.design = D  # type: ignore[misc]
     with pytest.raises(InvalidInputError, match="T_b_e"):
         robot.replace(T_b_e=np.zeros((4, 4)))
+
+
+@pytest.mark.parametrize("method, function", [
+    ("forward_kinematics", "athenakin._dispatch.forward_kinematics"),
+    ("inverse_kinematics", "athenakin._dispatch.inverse_kinematics"),
+    ("q_from_tool_tip", "athenakin._dispatch.q_from_tool_tip"),
+    ("q_from_instrument", "athenakin._dispatch.q_from_instrument"),
+    ("tool_tip_jacobian", "athenakin.analysis.tool_tip_jacobian"),
+    ("singularities", "athenakin.analysis.singularities"),
+    ("clearance", "athenakin.collision.clearance"),
+    ("statics", "athenakin.dynamics.statics"),
+    ("inverse_dynamics", "athenakin.dynamics.inverse_dynamics"),
+    ("forward_dynamics", "athenakin.dynamics.forward_dynamics"),
+    ("mass_matrix", "athenakin.dynamics.mass_matrix"),
+    ("force_capability", "athenakin.dynamics.force_capability"),
+    ("mjcf", "athenakin.sim.mjcf_from_design"),
+    ("urdf", "athenakin.sim.urdf_from_design"),
+])
+def test_methods_have_their_functions_signatures(method, function):
+    """Explicit keyword-only options, named and defaulted as the function's (no **options)."""
+    import importlib
+    import inspect
+
+    mod, name = function.rsplit(".", 1)
+    fn = getattr(importlib.import_module(mod), name)
+    want = {k: p.default for k, p in inspect.signature(fn).parameters.items()
+            if p.kind is inspect.Parameter.KEYWORD_ONLY}
+    got = inspect.signature(getattr(ak.Robot, method)).parameters
+    assert not any(p.kind is inspect.Parameter.VAR_KEYWORD for p in got.values())
+    kw = {k: p.default for k, p in got.items() if p.kind is inspect.Parameter.KEYWORD_ONLY}
+    assert set(kw) == set(want), (set(kw) ^ set(want))
+    for k, v in want.items():
+        if k in ("bodies", "environment", "masses"):
+            assert kw[k] is None           # None: the robot's own part
+        else:
+            assert kw[k] == v or (kw[k] is v), k

@@ -3,22 +3,25 @@
 A thin model object over the functional core: it bundles the arguments that every call
 of athenakin repeats (``T_b_e, design`` and, where they apply, ``bodies``, ``environment``
 and ``masses``) and its methods are one-line calls of the public functions, never a
-second implementation. The functional forms stay the reference; a method's options are
-those of its function, passed through unchanged (keyword-only)::
+second implementation. The functional forms stay the reference; a method's signature is
+its function's (the same keyword-only options and defaults, tested), less the arguments
+the Robot holds; a part given to a method (``bodies=``, ``masses=``, ...) wins over the
+Robot's own::
 
     robot = ak.Robot.default()
     sol = robot.forward_kinematics(q)            # ak.forward_kinematics(q, T_b_e, design)
     cl = robot.clearance(q, slot="all")          # ak.collision.clearance(q, T_b_e, design, ...)
     tau = robot.inverse_dynamics(q, qd, qdd)     # ak.dynamics.inverse_dynamics(..., masses=...)
 
-A ``Robot`` is frozen and holds no cache: Pinocchio's ``Data`` has no counterpart here,
-each call returns its own frozen result.
+A ``Robot`` is frozen and holds no cache (Pinocchio's ``Model``): the systems take it
+(``athenakin.teleop.Teleop(robot, q0=...)``) and build from it, once, the per-call data
+they own (the IK and dynamics loops, the clearance pair tables and buffers).
 """
 
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -29,6 +32,8 @@ from ._validation import check_frame
 from .design import Design, resolve_design
 
 __all__ = ["Robot"]
+
+_KEEP: Any = object()     # replace(): the field as it is
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -94,15 +99,18 @@ class Robot:
                                 f"{type(self.masses).__name__}")
 
     @classmethod
-    def default(cls, design: Design | None = None, **parts: Any) -> Robot:
+    def default(cls, design: Design | None = None, *, bodies: Any = None,
+                environment: Any = None, masses: Any = None) -> Robot:
         """The robot of ``design`` (default: the reference) at its reference set-up.
 
         Parameters
         ----------
         design : Design, optional
             Default :meth:`athenakin.Design.default`.
-        **parts
-            ``bodies``, ``environment``, ``masses`` as for the class.
+        bodies : athenakin.collision.Bodies, optional, keyword-only
+        environment : athenakin.collision.Environment, optional, keyword-only
+        masses : athenakin.dynamics.MassModel, optional, keyword-only
+            As for the class.
 
         Returns
         -------
@@ -112,113 +120,363 @@ class Robot:
         from .robot import default_rcm_frame
 
         design = resolve_design(design)
-        return cls(default_rcm_frame(design), design, **parts)
+        return cls(default_rcm_frame(design), design, bodies=bodies, environment=environment,
+                   masses=masses)
 
-    def replace(self, **changes: Any) -> Robot:
-        """A copy with some fields changed (``dataclasses.replace``), checked again.
+    def replace(self, *, T_b_e: ArrayLike | None = None, design: Design | None = None,
+                bodies: Any = _KEEP, environment: Any = _KEEP, masses: Any = _KEEP) -> Robot:
+        """A copy with some fields changed, checked again.
 
         Parameters
         ----------
-        **changes
-            New values of ``design``, ``T_b_e``, ``bodies``, ``environment``, ``masses``.
+        T_b_e : array-like, shape (4, 4), optional, keyword-only
+        design : Design, optional, keyword-only
+            New set-up or design (default: this robot's).
+        bodies, environment, masses : optional, keyword-only
+            New parts; ``None`` removes one (default: this robot's).
 
         Returns
         -------
         Robot
         """
-        return dataclasses.replace(self, **changes)
+        return Robot(self.T_b_e if T_b_e is None else T_b_e,  # type: ignore[arg-type]
+                     self.design if design is None else design,
+                     bodies=self.bodies if bodies is _KEEP else bodies,
+                     environment=self.environment if environment is _KEEP else environment,
+                     masses=self.masses if masses is _KEEP else masses)
 
     # --- kinematics (athenakin) -------------------------------------------------------------
-    def forward_kinematics(self, q: ArrayLike, **options: Any) -> Any:
-        """:func:`athenakin.forward_kinematics` of this robot: ``q`` (..., 3) in m."""
-        return forward_kinematics(q, self.T_b_e, self.design, **options)
+    def forward_kinematics(self, q: ArrayLike, *, method: str = "closed", errors: str = "auto",
+                           tangent_tol: float = 1e-07, degenerate_tol: float = 1e-12,
+                           p_zero_tol: float = 1e-12, closure_tol: float = 1e-09,
+                           fields: tuple[str, ...] | None = None,
+                           backend: str = "auto") -> Any:
+        """:func:`athenakin.forward_kinematics` of this robot.
 
-    def inverse_kinematics(self, u345: ArrayLike, **options: Any) -> Any:
-        """:func:`athenakin.inverse_kinematics`: spherical-joint angles (..., 3), rad."""
-        return inverse_kinematics(self.T_b_e, u345, self.design, **options)
+        Parameters
+        ----------
+        q : array-like, shape (..., 3)
+            Actuators, m.
+        method, errors, tangent_tol, degenerate_tol, p_zero_tol, closure_tol, fields, backend
+            As for :func:`athenakin.forward_kinematics` (keyword-only).
 
-    def q_from_tool_tip(self, tip_e: ArrayLike, **options: Any) -> Any:
-        """:func:`athenakin.q_from_tool_tip`: the tool tip (..., 3) in the RCM frame, m."""
-        return q_from_tool_tip(self.T_b_e, tip_e, self.design, **options)
+        Returns
+        -------
+        FKSolution
+        """
+        return forward_kinematics(q, self.T_b_e, self.design, method=method,  # type: ignore[arg-type]
+                                  errors=errors, tangent_tol=tangent_tol,  # type: ignore[arg-type]
+                                  degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
+                                  closure_tol=closure_tol, fields=fields,
+                                  backend=backend)  # type: ignore[arg-type]
 
-    def q_from_instrument(self, direction_e: ArrayLike, p: ArrayLike, **options: Any) -> Any:
-        """:func:`athenakin.q_from_instrument`: direction (..., 3) in ``e`` and ``p`` (...), m."""
-        return q_from_instrument(self.T_b_e, direction_e, p, self.design, **options)
+    def inverse_kinematics(self, u345: ArrayLike, *, errors: str = "auto",
+                           singular_tol: float = 1e-12, closure_tol: float = 1e-09,
+                           fields: tuple[str, ...] | None = None,
+                           backend: str = "auto") -> Any:
+        """:func:`athenakin.inverse_kinematics` of this robot.
+
+        Parameters
+        ----------
+        u345 : array-like, shape (..., 3)
+            Spherical-joint angles, rad.
+        errors, singular_tol, closure_tol, fields, backend
+            As for :func:`athenakin.inverse_kinematics` (keyword-only).
+
+        Returns
+        -------
+        q : ndarray, shape (..., 3)
+        passive : PassiveJoints
+        """
+        return inverse_kinematics(self.T_b_e, u345, self.design,
+                                  errors=errors,  # type: ignore[arg-type]
+                                  singular_tol=singular_tol, closure_tol=closure_tol,
+                                  fields=fields, backend=backend)  # type: ignore[arg-type]
+
+    def q_from_tool_tip(self, tip_e: ArrayLike, *, errors: str = "auto",
+                        backend: str = "auto") -> Any:
+        """:func:`athenakin.q_from_tool_tip` of this robot.
+
+        Parameters
+        ----------
+        tip_e : array-like, shape (..., 3)
+            The tool tip in the RCM frame E, m.
+        errors, backend
+            As for :func:`athenakin.q_from_tool_tip` (keyword-only).
+
+        Returns
+        -------
+        q : ndarray, shape (..., 3)
+        result : InstrumentIK
+        """
+        return q_from_tool_tip(self.T_b_e, tip_e, self.design,
+                               errors=errors, backend=backend)  # type: ignore[arg-type]
+
+    def q_from_instrument(self, direction_e: ArrayLike, p: ArrayLike, *, errors: str = "auto",
+                          backend: str = "auto") -> Any:
+        """:func:`athenakin.q_from_instrument` of this robot.
+
+        Parameters
+        ----------
+        direction_e : array-like, shape (..., 3)
+            Instrument direction in E.
+        p : array-like, shape (...)
+            Insertion beyond the RCM, m.
+        errors, backend
+            As for :func:`athenakin.q_from_instrument` (keyword-only).
+
+        Returns
+        -------
+        q : ndarray, shape (..., 3)
+        result : InstrumentIK
+        """
+        return q_from_instrument(self.T_b_e, direction_e, p, self.design,
+                                 errors=errors, backend=backend)  # type: ignore[arg-type]
 
     # --- analysis ------------------------------------------------------------------------------
-    def tool_tip_jacobian(self, q: ArrayLike, **options: Any) -> Any:
-        """:func:`athenakin.analysis.tool_tip_jacobian`, shape (..., 3, 3)."""
+    def tool_tip_jacobian(self, q: ArrayLike, *, mode: ArrayLike = 1, frame: str = "base",
+                          backend: str = "auto") -> Any:
+        """:func:`athenakin.analysis.tool_tip_jacobian` of this robot.
+
+        Parameters
+        ----------
+        q : array-like, shape (..., 3)
+            Actuators, m.
+        mode, frame, backend
+            As for :func:`athenakin.analysis.tool_tip_jacobian` (keyword-only).
+
+        Returns
+        -------
+        ndarray, shape (..., 3, 3)
+        """
         from .analysis import tool_tip_jacobian
 
-        return tool_tip_jacobian(q, self.T_b_e, self.design, **options)
+        return tool_tip_jacobian(q, self.T_b_e, self.design, mode=mode,
+                                 frame=frame, backend=backend)  # type: ignore[arg-type]
 
-    def singularities(self, q: ArrayLike, **options: Any) -> Any:
-        """:func:`athenakin.analysis.singularities`."""
+    def singularities(self, q: ArrayLike, *, mode: ArrayLike = 1,
+                      tol: Any = None, jacobians: bool = True) -> Any:
+        """:func:`athenakin.analysis.singularities` of this robot.
+
+        Parameters
+        ----------
+        q : array-like, shape (..., 3)
+            Actuators, m.
+        mode, tol, jacobians
+            As for :func:`athenakin.analysis.singularities` (keyword-only).
+
+        Returns
+        -------
+        SingularityReport
+        """
         from .analysis import singularities
 
-        return singularities(q, self.T_b_e, self.design, **options)
+        return singularities(q, self.T_b_e, self.design, mode=mode, tol=tol,
+                             jacobians=jacobians)
 
     # --- bodies (athenakin.collision) ----------------------------------------------------------
-    def clearance(self, q: ArrayLike, **options: Any) -> Any:
-        """:func:`athenakin.collision.clearance` with this robot's bodies and environment."""
+    def clearance(self, q: ArrayLike, *, slot: int | Literal["all"] = 0, bodies: Any = None,
+                  environment: Any = None, margin: float = 0.0, witness: bool = True,
+                  backend: str = "auto") -> Any:
+        """:func:`athenakin.collision.clearance` with this robot's bodies and environment.
+
+        Parameters
+        ----------
+        q : array-like, shape (..., 3)
+            Actuators, m.
+        slot, margin, witness, backend
+            As for :func:`athenakin.collision.clearance` (keyword-only).
+        bodies, environment : optional, keyword-only
+            Default this robot's.
+
+        Returns
+        -------
+        Clearance
+        """
         from .collision import clearance
 
-        return clearance(q, self.T_b_e, self.design, **self._parts(options, "bodies",
-                                                                    "environment"))
+        return clearance(q, self.T_b_e, self.design, slot=slot,
+                         bodies=self._part("bodies", bodies),
+                         environment=self._part("environment", environment), margin=margin,
+                         witness=witness, backend=backend)  # type: ignore[arg-type]
 
     # --- dynamics (athenakin.dynamics) ---------------------------------------------------------
-    def statics(self, q: ArrayLike, **options: Any) -> Any:
-        """:func:`athenakin.dynamics.statics` with this robot's masses."""
+    def statics(self, q: ArrayLike, *, masses: Any = None,
+                gravity: ArrayLike = (0.0, 0.0, -9.81), tip_force: ArrayLike | None = None,
+                slot: int = 0, errors: str = "auto", rcm_load: bool = True) -> Any:
+        """:func:`athenakin.dynamics.statics` with this robot's masses.
+
+        Parameters
+        ----------
+        q : array-like, shape (..., 3)
+            Actuators, m.
+        masses : MassModel, optional, keyword-only
+            Default this robot's.
+        gravity, tip_force, slot, errors, rcm_load
+            As for :func:`athenakin.dynamics.statics` (keyword-only).
+
+        Returns
+        -------
+        Statics
+        """
         from .dynamics import statics
 
-        return statics(q, self.T_b_e, self.design, **self._parts(options, "masses"))
+        return statics(q, self.T_b_e, self.design, masses=self._part("masses", masses),
+                       gravity=gravity, tip_force=tip_force, slot=slot,
+                       errors=errors, rcm_load=rcm_load)  # type: ignore[arg-type]
 
-    def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
-                         **options: Any) -> Any:
-        """:func:`athenakin.dynamics.inverse_dynamics`: actuator forces (..., 3), N."""
+    def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, *,
+                         masses: Any = None, gravity: ArrayLike = (0.0, 0.0, -9.81),
+                         tip_force: ArrayLike | None = None, slot: int = 0,
+                         errors: str = "auto", backend: str = "auto") -> Any:
+        """:func:`athenakin.dynamics.inverse_dynamics` with this robot's masses.
+
+        Parameters
+        ----------
+        q, qd, qdd : array-like, shape (..., 3)
+            Actuator positions (m), velocities (m/s), accelerations (m/s^2).
+        masses : MassModel, optional, keyword-only
+            Default this robot's.
+        gravity, tip_force, slot, errors, backend
+            As for :func:`athenakin.dynamics.inverse_dynamics` (keyword-only).
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            Actuator forces, N.
+        """
         from .dynamics import inverse_dynamics
 
         return inverse_dynamics(q, qd, qdd, self.T_b_e, self.design,
-                                **self._parts(options, "masses"))
+                                masses=self._part("masses", masses), gravity=gravity,
+                                tip_force=tip_force, slot=slot,
+                                errors=errors, backend=backend)  # type: ignore[arg-type]
 
-    def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, forces: ArrayLike,
-                         **options: Any) -> Any:
-        """:func:`athenakin.dynamics.forward_dynamics`: accelerations (..., 3), m/s^2."""
+    def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, forces: ArrayLike, *,
+                         masses: Any = None, gravity: ArrayLike = (0.0, 0.0, -9.81),
+                         tip_force: ArrayLike | None = None, slot: int = 0,
+                         errors: str = "auto") -> Any:
+        """:func:`athenakin.dynamics.forward_dynamics` with this robot's masses.
+
+        Parameters
+        ----------
+        q, qd : array-like, shape (..., 3)
+            Actuator positions (m) and velocities (m/s).
+        forces : array-like, shape (..., 3)
+            Actuator forces, N.
+        masses : MassModel, optional, keyword-only
+            Default this robot's.
+        gravity, tip_force, slot, errors
+            As for :func:`athenakin.dynamics.forward_dynamics` (keyword-only).
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            Accelerations, m/s^2.
+        """
         from .dynamics import forward_dynamics
 
         return forward_dynamics(q, qd, forces, self.T_b_e, self.design,
-                                **self._parts(options, "masses"))
+                                masses=self._part("masses", masses), gravity=gravity,
+                                tip_force=tip_force, slot=slot,
+                                errors=errors)  # type: ignore[arg-type]
 
-    def mass_matrix(self, q: ArrayLike, **options: Any) -> Any:
-        """:func:`athenakin.dynamics.mass_matrix`, shape (..., 3, 3), kg."""
+    def mass_matrix(self, q: ArrayLike, *, masses: Any = None, slot: int = 0,
+                    errors: str = "auto") -> Any:
+        """:func:`athenakin.dynamics.mass_matrix` with this robot's masses.
+
+        Parameters
+        ----------
+        q : array-like, shape (..., 3)
+            Actuators, m.
+        masses : MassModel, optional, keyword-only
+            Default this robot's.
+        slot, errors
+            As for :func:`athenakin.dynamics.mass_matrix` (keyword-only).
+
+        Returns
+        -------
+        ndarray, shape (..., 3, 3)
+            kg.
+        """
         from .dynamics import mass_matrix
 
-        return mass_matrix(q, self.T_b_e, self.design, **self._parts(options, "masses"))
+        return mass_matrix(q, self.T_b_e, self.design, masses=self._part("masses", masses),
+                           slot=slot, errors=errors)  # type: ignore[arg-type]
 
-    def force_capability(self, q: ArrayLike, **options: Any) -> Any:
-        """:func:`athenakin.dynamics.force_capability` (``f_max=`` required)."""
+    def force_capability(self, q: ArrayLike, *, f_max: ArrayLike,
+                         f_min: ArrayLike | None = None, masses: Any = None,
+                         gravity: ArrayLike = (0.0, 0.0, -9.81), slot: int = 0,
+                         errors: str = "auto") -> Any:
+        """:func:`athenakin.dynamics.force_capability` with this robot's masses.
+
+        Parameters
+        ----------
+        q : array-like, shape (..., 3)
+            Actuators, m.
+        f_max : array-like, keyword-only
+            Actuator force bounds, N (required).
+        f_min, gravity, slot, errors
+            As for :func:`athenakin.dynamics.force_capability` (keyword-only).
+        masses : MassModel, optional, keyword-only
+            Default this robot's.
+
+        Returns
+        -------
+        ForceCapability
+        """
         from .dynamics import force_capability
 
-        return force_capability(q, self.T_b_e, self.design, **self._parts(options, "masses"))
+        return force_capability(q, self.T_b_e, self.design, f_max=f_max, f_min=f_min,
+                                masses=self._part("masses", masses), gravity=gravity,
+                                slot=slot, errors=errors)  # type: ignore[arg-type]
 
     # --- exports (athenakin.sim) ---------------------------------------------------------------
-    def mjcf(self, **options: Any) -> str:
-        """:func:`athenakin.sim.mjcf_from_design`: the MJCF text, with bodies and masses."""
+    def mjcf(self, *, q: ArrayLike | None = None, slot: int = 0, gravity: bool = True,
+             model_name: str = "athena", bodies: Any = None, collision: bool | None = None,
+             environment: Any = None, masses: Any = None) -> str:
+        """:func:`athenakin.sim.mjcf_from_design`: the MJCF text, with bodies and masses.
+
+        Parameters
+        ----------
+        q, slot, gravity, model_name, collision
+            As for :func:`athenakin.sim.mjcf_from_design` (keyword-only).
+        bodies, environment, masses : optional, keyword-only
+            Default this robot's.
+
+        Returns
+        -------
+        str
+        """
         from .sim import mjcf_from_design
 
-        return mjcf_from_design(self.T_b_e, self.design,
-                                **self._parts(options, "bodies", "environment", "masses"))
+        return mjcf_from_design(self.T_b_e, self.design, q=q, slot=slot, gravity=gravity,
+                                model_name=model_name, bodies=self._part("bodies", bodies),
+                                collision=collision,
+                                environment=self._part("environment", environment),
+                                masses=self._part("masses", masses))
 
-    def urdf(self, **options: Any) -> str:
-        """:func:`athenakin.sim.urdf_from_design`: the URDF text, with the bodies."""
+    def urdf(self, *, robot_name: str = "athena", q_zero: ArrayLike | None = None,
+             zero_slot: int = 0, bodies: Any = None, collision: bool = True) -> str:
+        """:func:`athenakin.sim.urdf_from_design`: the URDF text, with the bodies.
+
+        Parameters
+        ----------
+        robot_name, q_zero, zero_slot, collision
+            As for :func:`athenakin.sim.urdf_from_design` (keyword-only).
+        bodies : optional, keyword-only
+            Default this robot's.
+
+        Returns
+        -------
+        str
+        """
         from .sim import urdf_from_design
 
-        return urdf_from_design(self.T_b_e, self.design, **self._parts(options, "bodies"))
+        return urdf_from_design(self.T_b_e, self.design, robot_name=robot_name, q_zero=q_zero,
+                                zero_slot=zero_slot, bodies=self._part("bodies", bodies),
+                                collision=collision)
 
-    def _parts(self, options: dict[str, Any], *names: str) -> dict[str, Any]:
-        """``options`` with this robot's parts filled in where the caller gave none."""
-        for name in names:
-            value = getattr(self, name)
-            if value is not None and name not in options:
-                options[name] = value
-        return options
+    def _part(self, name: str, value: Any) -> Any:
+        """``value``, or this robot's part ``name`` where the caller gave none."""
+        return getattr(self, name) if value is None else value

@@ -10,6 +10,7 @@ model does not fix. Where the bodies are comes from the configuration, in
 from __future__ import annotations
 
 import dataclasses
+import functools
 import types
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -172,28 +173,31 @@ class Bodies:
 
     @property
     def radius_array(self) -> FloatArray:
-        """The radii as an array of shape (n_bodies,), table order, m."""
+        """The radii as an array of shape (n_bodies,), table order, m (a new array)."""
         return np.array(self.radii, dtype=np.float64)
 
-    @property
+    # The pair tables depend only on this frozen value: each is computed once per
+    # instance (functools.cached_property stores it in the instance's __dict__, which a
+    # frozen dataclass keeps; equal values build equal tables).
+    @functools.cached_property
     def excluded_pairs(self) -> tuple[tuple[str, str], ...]:
         """Pairs never checked: the adjacent pairs (shared joint) and :attr:`excluded`."""
-        order = {b: i for i, b in enumerate(BODIES)}
-        s = set(adjacent_pairs()) | set(self.excluded)
-        return tuple(sorted(s, key=lambda ab: (order[ab[0]], order[ab[1]])))
+        return _excluded_pairs(self.excluded)
 
-    @property
+    @functools.cached_property
     def pairs(self) -> tuple[tuple[str, str], ...]:
         """Body-body pairs checked by :func:`~athenakin.collision.clearance`, table order."""
         ex = set(self.excluded_pairs)
         return tuple((a, b) for i, a in enumerate(BODIES) for b in BODIES[i + 1:]
                      if (a, b) not in ex)
 
-    @property
+    @functools.cached_property
     def pair_index(self) -> NDArray[np.intp]:
-        """Indices into ``BODIES`` of :attr:`pairs`, shape (n_pairs, 2)."""
+        """Indices into ``BODIES`` of :attr:`pairs`, shape (n_pairs, 2), read-only."""
         idx = [(BODIES.index(a), BODIES.index(b)) for a, b in self.pairs]
-        return np.array(idx, dtype=np.intp).reshape(-1, 2)
+        out = np.array(idx, dtype=np.intp).reshape(-1, 2)
+        out.setflags(write=False)
+        return out
 
     # --- constructors -----------------------------------------------------------------
     @classmethod
@@ -345,6 +349,14 @@ class Bodies:
             return cls.from_mapping(table, design=design)
         except (InvalidInputError, TypeError) as exc:
             raise InvalidInputError(f"{path}: {exc}") from None
+
+
+@functools.lru_cache(maxsize=64)
+def _excluded_pairs(excluded: tuple[tuple[str, str], ...]) -> tuple[tuple[str, str], ...]:
+    """The adjacent pairs and ``excluded``, unique, in table order (keyed on the frozen value)."""
+    order = {b: i for i, b in enumerate(BODIES)}
+    s = set(adjacent_pairs()) | set(excluded)
+    return tuple(sorted(s, key=lambda ab: (order[ab[0]], order[ab[1]])))
 
 
 def resolve_bodies(bodies: object, design: Design) -> Bodies:

@@ -23,7 +23,7 @@ from .._backend import njit
 from ._distance import NEARLY_PARALLEL, NOISE, WITNESS_DIRECT
 
 __all__ = ["capsule_pairs", "capsule_pairs_into", "capsule_distances", "capsule_distances_into",
-           "segment_distance"]
+           "segment_distance", "workspace_into"]
 
 #: ``contract``: fused multiply-adds (about 15 % faster, measured). No other fast-math flag:
 #: NaN rows must stay NaN, and the results stay within 1e-13 m of the numpy reference
@@ -371,3 +371,53 @@ def capsule_distances_into(solids, radii, ij, dist):
                          solids[m, j, 0, 0], solids[m, j, 0, 1], solids[m, j, 0, 2],
                          solids[m, j, 1, 0], solids[m, j, 1, 1], solids[m, j, 1, 2])[0]
             dist[m, k] = d - radii[i] - radii[j]
+
+
+# --- the per-pose workspace (athenakin.collision._workspace) ----------------------------
+@njit(**_OPTS)
+def workspace_into(solids, radii, ij, hb, hp, hn, proxy, below, dist, wit,
+                   exact):  # pragma: no cover - numba
+    """Every column of one item of :class:`athenakin.collision._workspace.ClearanceWorkspace`.
+
+    The capsule pairs (:func:`capsule_pairs_into`), then the halfspaces.
+
+    Returns the column of the least distance (-1 with none; NaN distances are never
+    least) and whether a box or mesh column (``proxy``: their bounding spheres) is below
+    ``below`` (its exact distance is then wanted).
+    """
+    capsule_pairs_into(solids, radii, ij, dist.reshape(1, -1)[:, :ij.shape[0]],
+                       wit.reshape(1, -1, 2, 3)[:, :ij.shape[0]])
+    _halfspace_rows(solids[0], radii, hb, hp, hn, dist, wit, ij.shape[0])
+    k = -1
+    best = math.inf
+    for c in range(dist.shape[0]):
+        if dist[c] < best:
+            best = dist[c]
+            k = c
+    need = False
+    for c in proxy:
+        exact[c] = False                 # a bounding sphere's distance, until coal's
+        if dist[c] < below:
+            need = True
+    return k, need
+
+
+@njit(**_OPTS)
+def _halfspace_rows(seg, rad, body, point, normal, dist, wit, c0):  # pragma: no cover - numba
+    """Capsule-halfspace rows ``c0..`` of ``dist`` / ``wit`` (the reference's formula)."""
+    for k in range(body.shape[0]):
+        i = body[k]
+        n0, n1, n2 = normal[k, 0], normal[k, 1], normal[k, 2]
+        hp = ((seg[i, 0, 0] - point[k, 0]) * n0 + (seg[i, 0, 1] - point[k, 1]) * n1
+              + (seg[i, 0, 2] - point[k, 2]) * n2)
+        hq = ((seg[i, 1, 0] - point[k, 0]) * n0 + (seg[i, 1, 1] - point[k, 1]) * n1
+              + (seg[i, 1, 2] - point[k, 2]) * n2)
+        e = 1 if hq < hp else 0
+        h = hq if hq < hp else hp
+        r = rad[i]
+        c = c0 + k
+        dist[c] = h - r
+        for j in range(3):
+            nj = normal[k, j]
+            wit[c, 0, j] = seg[i, e, j] - r * nj
+            wit[c, 1, j] = seg[i, e, j] - h * nj

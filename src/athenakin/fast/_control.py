@@ -11,10 +11,12 @@ from .._typing import FloatArray, Int8Array
 from .._validation import check_array, check_frame
 from ..chain._ups import CLOSURE_TOL
 from ..design import Design
+from ..parallel import TANGENT_TOL
 from ..robot._ik import IK_SINGULAR_TOL
 from . import _fk_kernels as _fk
 from . import _ik_kernels as _ik
 from . import _ik_single as _one
+from . import _jac_kernels as _jk
 from ._lean import _FK_TOL_DEFAULT, design_params
 
 __all__ = ["ControlLoop"]
@@ -95,6 +97,8 @@ class ControlLoop:
         self._q = np.empty(3)
         self._tol = _FK_TOL_DEFAULT
         self._inf = float("inf")
+        self._jG = _jk.frame_rows(self._T)
+        self._jout = np.empty((3, 3))
 
     @property
     def T_b_e(self) -> FloatArray:
@@ -168,3 +172,33 @@ class ControlLoop:
         """
         r = _one.ik_line_one(self._T, _vec3(tip_e, "tip_e"), 0.0, self._P, 1, self._q)
         return self._q, r
+
+    def tool_tip_inverse_jacobian(self, q: ArrayLike, mode: int = 1) -> FloatArray:
+        """The closed-form ``d q / d tip_e`` at actuator values ``q``, shape (3, 3).
+
+        :func:`athenakin.analysis.tool_tip_inverse_jacobian` with ``frame="rcm"`` (the
+        same values, from the same compiled kernel) for one pose: rows ``q1, q2, q3``,
+        columns the tip's ``x, y, z`` in the RCM frame E (m/m). A view of an internal
+        buffer that the next call overwrites.
+
+        Parameters
+        ----------
+        q : ndarray, shape (3,)
+            ``(q1, q2, q3)``, m.
+        mode : {1, -1}
+            Assembly mode of the parallel module.
+
+        Returns
+        -------
+        ndarray, shape (3, 3)
+            NaN or inf entries on the singular set (never raises for a pose).
+        """
+        if mode != 1 and mode != -1:
+            raise ValueError(f"mode: expected 1 or -1, got {mode!r}")
+        try:
+            q1, q2, q3 = float(q[0]), float(q[1]), float(q[2])  # type: ignore[index,arg-type]
+        except (TypeError, ValueError, LookupError, OverflowError):
+            raise ValueError(f"q: expected 3 numbers (q1, q2, q3) in m, got {q!r}") from None
+        _jk.robot_one(q1, q2, q3, float(mode), self._jG, self._P, TANGENT_TOL, _jk.TIP_INV,
+                      True, self._jout)
+        return self._jout

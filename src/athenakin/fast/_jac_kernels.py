@@ -38,7 +38,8 @@ from ._fk_kernels import FLAG_NONRIGID, FLAG_T_NONFINITE
 from ._scalar import atan2, finite_sum, hypot, sincos
 
 __all__ = ["PAR_JAC", "PAR_INV", "PAR_TWIST", "INSTR_JAC", "INSTR_INV", "TIP_JAC", "TIP_INV",
-           "parallel_kernel", "robot_kernel", "FLAG_NONRIGID", "FLAG_T_NONFINITE"]
+           "parallel_kernel", "robot_kernel", "robot_one", "frame_rows", "NG", "CHUNK",
+           "FLAG_NONRIGID", "FLAG_T_NONFINITE"]
 
 #: Kinds of :func:`parallel_kernel`: ``d O_s / d q``, ``d q / d O_s``, the (6, 3) twist Jacobian.
 PAR_JAC, PAR_INV, PAR_TWIST = 0, 1, 2
@@ -410,3 +411,30 @@ def robot_kernel(q, m, T, P, ttol, kind, rcm, check, rot_tol, out):
                 _put(S, ii, _robot_item(G, ii, P, ttol, TIP_INV, rcm))
         _scatter(S, c0, nn, 3, out)
     return 0
+
+
+def frame_rows(T: np.ndarray) -> np.ndarray:
+    """The scratch of :func:`robot_one` with the RCM frame ``T`` (4, 4) in its rows."""
+    G = np.zeros(NG * CHUNK)
+    for r in range(3):
+        for c in range(3):
+            G[(_GR + 3 * r + c) * CHUNK] = T[r, c]
+        G[(_GT + r) * CHUNK] = T[r, 3]
+    for c in range(4):
+        G[(_GL + c) * CHUNK] = T[3, c]
+    return G
+
+
+@njit(**_OPTS)
+def robot_one(q1, q2, q3, m, G, P, ttol, kind, rcm, out):
+    """One item of :func:`robot_kernel` into ``out`` (3, 3), the frame already in ``G``.
+
+    ``G`` is :func:`frame_rows` of the RCM frame (checked by the caller); no allocation.
+    """
+    G[_GQ * CHUNK] = q1
+    G[(_GQ + 1) * CHUNK] = q2
+    G[(_GQ + 2) * CHUNK] = q3
+    G[_GM * CHUNK] = m
+    J = _robot_item(G, 0, P, ttol, kind, rcm)
+    for k in range(9):
+        out[k // 3, k % 3] = J[k]

@@ -14,6 +14,11 @@ jump thresholds". The candidate with the previous labels (mode, sign of ``p``,
 branches) is kept while it is within the thresholds; otherwise the nearest
 candidate is taken and the label change is flagged.
 
+A pure step. :meth:`Tracker.candidate` returns the pose that :meth:`Tracker.update`
+would return without changing the tracker; :meth:`Tracker.commit` takes it
+(``update = commit(candidate)``, then ``raise_on``): a controller tries candidates and
+commits the one it commands, with no probe to revert.
+
 Cost. Away from the singularities only the candidate with the previous labels is
 computed, in closed form with scalar arithmetic (no numpy in the loop): a few
 microseconds per sample. Near a singularity (any measure below its margin), after
@@ -241,16 +246,9 @@ class Tracker:
         return pose._replace(clearance=d, closest_pair=(str(pair[0, 0]), str(pair[0, 1])),
                              flags=TrackFlag(flags) if flags else _FLAG_NONE)
 
-    def _finish(self, pose: TrackedPose, flags: int, what: str) -> TrackedPose:
-        """Check collisions (when asked), store the pose, raise on ``raise_on`` flags."""
-        if self._check is not None:
-            pose = self._collide(pose)
-            flags = int(pose.flags)
-        self.pose = pose
-        if flags & self._raise_bits:
-            raise TrackingError(f"sample {self._index}{what}: {TrackFlag(flags)!r}"
-                                + _clearance_text(pose), pose)
-        return pose
+    def _finish(self, pose: TrackedPose) -> TrackedPose:
+        """``pose`` with its collision check (when asked); nothing is stored."""
+        return self._collide(pose) if self._check is not None else pose
 
     # ------------------------------------------------------------------------------
     def _near(self, c: tuple) -> int:
@@ -280,7 +278,7 @@ class Tracker:
         return max(dO / self.jump_m, du / self.jump_rad)
 
     def _pose(self, q: tuple[float, float, float], c: tuple, step: float, flags: int,
-              valid: bool = True) -> TrackedPose:
+              valid: bool = True, sample: int | None = None) -> TrackedPose:
         g = self._g
         o, dz = c[6], c[7]
         L = g.L
@@ -291,13 +289,14 @@ class Tracker:
               R[0][1] * v[0] + R[1][1] * v[1] + R[2][1] * v[2],
               R[0][2] * v[0] + R[1][2] * v[1] + R[2][2] * v[2])
         mode, r, b, w = c[0], c[1], c[2], c[3]
-        return TrackedPose(self._index, q, valid, _slot(mode, r, b, w), mode, r, b, w, c[4],
+        n = self._index if sample is None else sample
+        return TrackedPose(n, q, valid, _slot(mode, r, b, w), mode, r, b, w, c[4],
                            c[5], o, dz, tb, te, c[8], c[9], c[10], c[11], step,
                            TrackFlag(flags) if flags else _FLAG_NONE)
 
     # ------------------------------------------------------------------------------
     def update(self, q: ArrayLike | Sequence[float]) -> TrackedPose:
-        """Process one reading and return the tracked pose.
+        """Process one reading and return the tracked pose: :meth:`commit` of :meth:`candidate`.
 
         Parameters
         ----------
@@ -311,9 +310,90 @@ class Tracker:
 
         Raises
         ------
+        InvalidInputError
+            ``q`` is not three numbers.
         TrackingError
-            When the pose carries a flag of ``raise_on``.
+            When the pose carries a flag of ``raise_on`` (the pose is committed first).
         """
+        pose, what = self._evaluate(q)
+        self.commit(pose)
+        flags = int(pose.flags)
+        if flags & self._raise_bits:
+            if not pose.valid:
+                raise TrackingError(f"sample {pose.sample} (q = {list(pose.q)} m): no forward-"
+                                    f"kinematics solution: {TrackFlag(flags)!r}", pose)
+            where = f" (q = {list(pose.q)} m)" if what else ""
+            raise TrackingError(f"sample {pose.sample}{where}: {TrackFlag(flags)!r}"
+                                + _clearance_text(pose), pose)
+        return pose
+
+    def candidate(self, q: ArrayLike | Sequence[float]) -> TrackedPose:
+        """The pose that :meth:`update` would return for ``q``, without changing the tracker.
+
+        A pure step: the tracker's state (its last pose, labels, sample count) is left
+        as it is; :meth:`commit` takes the candidate. A controller tries candidates
+        (several ``q`` toward a target) and commits the one it commands; ``raise_on``
+        does not apply here (it applies in :meth:`update`).
+
+        Parameters
+        ----------
+        q : array-like, shape (3,)
+            Actuator reading ``(q1, q2, q3)``, m.
+
+        Returns
+        -------
+        TrackedPose
+            With its clearance when the tracker checks collisions.
+
+        Raises
+        ------
+        InvalidInputError
+            ``q`` is not three numbers.
+        """
+        return self._evaluate(q)[0]
+
+    def commit(self, candidate: TrackedPose) -> TrackedPose:
+        """Advance the tracker to ``candidate`` (a :meth:`candidate` of its current state).
+
+        Parameters
+        ----------
+        candidate : TrackedPose
+            Returned by :meth:`candidate` since the last :meth:`commit`, :meth:`update`
+            or :meth:`reset`.
+
+        Returns
+        -------
+        TrackedPose
+            ``candidate``, now also :attr:`pose`.
+
+        Raises
+        ------
+        TypeError
+            ``candidate`` is not a :class:`TrackedPose`.
+        InvalidInputError
+            ``candidate`` was not computed from the tracker's current state (its sample
+            number is not the next one).
+        """
+        if not isinstance(candidate, TrackedPose):
+            raise TypeError(f"candidate: expected a TrackedPose from Tracker.candidate, got "
+                            f"{type(candidate).__name__}")
+        if candidate.sample != self._index + 1:
+            raise InvalidInputError(f"candidate: sample {candidate.sample} is not a candidate "
+                                    f"of the tracker's current state (next sample "
+                                    f"{self._index + 1}); call candidate() again")
+        self._index = candidate.sample
+        if candidate.valid:
+            c = candidate
+            self._prev = (c.mode, c.p_sign, c.ujoint, c.wrist, c.p, c.u, c.O_s, c.direction_b,
+                          c.half_chord, c.h, c.sin_u2, c.sin_u4)
+            self._lost = False
+        else:
+            self._lost = True
+        self.pose = candidate
+        return candidate
+
+    def _evaluate(self, q: ArrayLike | Sequence[float]) -> tuple[TrackedPose, bool]:
+        """The candidate pose of ``q`` and whether it took the slow path (state unchanged)."""
         try:
             q1, q2, q3 = float(q[0]), float(q[1]), float(q[2])  # type: ignore[index,arg-type]
             if len(q) != 3:  # type: ignore[arg-type]
@@ -321,7 +401,7 @@ class Tracker:
         except (TypeError, ValueError, LookupError, OverflowError):
             raise InvalidInputError(f"q: expected 3 numbers (q1, q2, q3) in m, got {q!r}") \
                 from None
-        self._index += 1
+        n = self._index + 1
         g = self._g
         qt = (q1, q2, q3)
         flags = 0
@@ -332,7 +412,7 @@ class Tracker:
         par = _parallel(g, q1, q2, q3) if finite else None
         prev = self._prev
         if par is None:
-            return self._lose(qt, flags)
+            return self._lose(qt, flags, n), True
         if self._lost:
             flags |= _B["REACQUIRED"]
         # fast path: the candidate with the previous labels, far from every singularity
@@ -342,8 +422,7 @@ class Tracker:
             step = self._step(c)
             if (step <= 1.0 and c[8] >= hc and c[9] >= hw and c[10] >= s2 and c[11] >= s4
                     and abs(c[4]) >= pp and min(g.l1, g.l3) - c[9] >= lk):
-                self._prev = c
-                return self._finish(self._pose(qt, c, step, flags), flags, "")
+                return self._finish(self._pose(qt, c, step, flags, sample=n)), False
         # slow path: all candidates
         cands = []
         for mode in (1, -1):
@@ -354,7 +433,7 @@ class Tracker:
                         if cc is not None:
                             cands.append((self._step(cc), cc))
         if not cands:
-            return self._lose(qt, flags)
+            return self._lose(qt, flags, n), True
         same = [sc for sc in cands if sc[1][:4] == prev[:4]]
         if same and same[0][0] <= 1.0:
             step, c = same[0]
@@ -369,19 +448,10 @@ class Tracker:
         if c[1:4] != prev[1:4]:
             flags |= _B["BRANCH_SWITCH"]
         flags |= self._near(c)
-        self._prev = c
-        self._lost = False
-        return self._finish(self._pose(qt, c, step, flags), flags, f" (q = {list(qt)} m)")
+        return self._finish(self._pose(qt, c, step, flags, sample=n)), True
 
-    def _lose(self, qt: tuple[float, float, float], flags: int) -> TrackedPose:
-        flags |= _B["LOST"]
-        self._lost = True
-        pose = self._pose(qt, self._prev, math.inf, flags, valid=False)
-        self.pose = pose
-        if flags & self._raise_bits:
-            raise TrackingError(f"sample {self._index} (q = {list(qt)} m): no forward-"
-                                f"kinematics solution: {TrackFlag(flags)!r}", pose)
-        return pose
+    def _lose(self, qt: tuple[float, float, float], flags: int, n: int) -> TrackedPose:
+        return self._pose(qt, self._prev, math.inf, flags | _B["LOST"], valid=False, sample=n)
 
 
 def track(q_stream: ArrayLike, T_b_e: ArrayLike, design: Design | None = None,

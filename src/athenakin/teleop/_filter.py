@@ -77,8 +77,17 @@ TREMOR_FILTERS: dict[str, tuple[tuple[float, float, float, float], ...]] = {
 
 #: Frequency at which the bilinear transform is pre-warped (the tremor band's centre), Hz.
 PREWARP_HZ = 10.0
-#: Least rate for a filter with a stop band at 12 Hz (Nyquist well above it), Hz.
+#: Least rate for a filter with a stop band at 12 Hz (Nyquist well above it), Hz: the
+#: least that :func:`filter_response` takes.
 MIN_FILTER_RATE = 100.0
+#: Least rate (Hz) at which each filter keeps its band, >= 20 dB over 8-12 Hz (the
+#: bilinear transform warps the band as the rate falls: ``"notch8-12"`` 20.9 dB at
+#: 150 Hz, 19.6 dB at 100 Hz; ``"notch8-12-lp15"`` 20.4 dB at 200 Hz, 19.5 dB at 150 Hz;
+#: tests/test_teleop_loop.py): :class:`TremorFilter`, and so the teleoperation loop,
+#: refuses a lower rate.
+BAND_RATES: dict[str, float] = {"notch8-12": 150.0, "notch8-12-lp15": 200.0, "none": 0.0}
+#: Least attenuation over the tremor band that :data:`BAND_RATES` keeps, dB.
+BAND_DB = 20.0
 #: Highest cycle rate (Hz) of the teleoperation loop and the simulated arm: 100 kHz, far
 #: above any servo (the dVRK's arms run at 1.5 kHz); a higher one is a typing error (its
 #: cycle of under 10 µs would make every difference quotient rounding noise).
@@ -122,6 +131,19 @@ def _check_filter_rate(name: str, rate: object) -> float:
 
         raise InvalidInputError(f"rate: the tremor filter {name!r} needs rate >= "
                                 f"{MIN_FILTER_RATE:g} Hz, got {r:g}")
+    return r
+
+
+def _check_band_rate(name: str, rate: object) -> float:
+    """The rate of a running filter ``name``: at least :data:`BAND_RATES` ``[name]``."""
+    r = _check_filter_rate(name, rate)
+    least = BAND_RATES[name]
+    if r < least:
+        from ..errors import InvalidInputError
+
+        raise InvalidInputError(f"rate: the tremor filter {name!r} keeps >= {BAND_DB:g} dB "
+                                f"over 8-12 Hz only at rate >= {least:g} Hz, got {r:g}; raise "
+                                f"the rate or choose filter='none'")
     return r
 
 
@@ -192,12 +214,18 @@ class TremorFilter:
         A key of :data:`TREMOR_FILTERS` (``"notch8-12"``, ``"notch8-12-lp15"`` or
         ``"none"``).
     rate : float
-        Sample rate, Hz (>= :data:`MIN_FILTER_RATE` unless ``"none"``).
+        Sample rate, Hz, at least :data:`BAND_RATES` ``[name]`` (the rate at which the
+        filter keeps >= 20 dB over 8-12 Hz; any rate for ``"none"``).
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown ``name``; a ``rate`` below the filter's band rate.
     """
 
     def __init__(self, name: str, rate: float) -> None:
         self.name = _check_name(name)
-        self.rate = _check_filter_rate(self.name, rate)
+        self.rate = _check_band_rate(self.name, rate)
         self._c = _digital(name, rate)
         # two states per biquad and axis, flat: axis-major, then biquad (s1, s2)
         self._s = [0.0] * (6 * len(self._c))

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 __all__ = ["TipFixtures"]
 
 _Vec = tuple[float, float, float]
@@ -39,9 +41,13 @@ class TipFixtures:
     Parameters
     ----------
     environment : athenakin.collision.Environment or None
+    compiled : bool, keyword-only
+        :meth:`nearest` through the compiled kernel
+        (:func:`athenakin.teleop._kernels.fixture_nearest`, the same formulas) instead of
+        the scalar Python below, its reference (default False).
     """
 
-    def __init__(self, environment: object) -> None:
+    def __init__(self, environment: object, *, compiled: bool = False) -> None:
         if environment is not None:
             from ..collision import Environment
 
@@ -72,6 +78,12 @@ class TipFixtures:
             names.append(o.name)
         self.shapes = tuple(shapes)
         self.names = tuple(names)
+        self._kernel = None
+        if compiled and shapes:
+            from ._kernels import fixture_nearest
+
+            self._kernel = fixture_nearest
+            self._table = _table(self.shapes)
 
     def __len__(self) -> int:
         return len(self.shapes)
@@ -81,6 +93,9 @@ class TipFixtures:
 
         ``(inf, (0, 0, 1), -1)`` without fixtures.
         """
+        if self._kernel is not None:
+            d, n0, n1, n2, i = self._kernel(x[0], x[1], x[2], self._table)
+            return d, (n0, n1, n2), i
         best, nb, ib = math.inf, (0.0, 0.0, 1.0), -1
         for i, s in enumerate(self.shapes):
             d, n = self._one(s, x)
@@ -108,17 +123,39 @@ class TipFixtures:
         p = (R[0][0] * v[0] + R[1][0] * v[1] + R[2][0] * v[2],
              R[0][1] * v[0] + R[1][1] * v[1] + R[2][1] * v[2],
              R[0][2] * v[0] + R[1][2] * v[1] + R[2][2] * v[2])
-        q = (abs(p[0]) - h[0], abs(p[1]) - h[1], abs(p[2]) - h[2])
-        nl: tuple[float, ...]
-        if q[0] > 0.0 or q[1] > 0.0 or q[2] > 0.0:      # outside: distance to the surface
-            e = tuple(math.copysign(max(qi, 0.0), pi) for qi, pi in zip(q, p, strict=True))
-            d = math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
-            nl = (e[0] / d, e[1] / d, e[2] / d)
-        else:                                          # inside: the nearest face
-            k = 0 if q[0] >= q[1] and q[0] >= q[2] else (1 if q[1] >= q[2] else 2)
-            d = q[k]
-            nl = tuple(math.copysign(1.0, p[k]) if j == k else 0.0 for j in range(3))
+        q0, q1, q2 = abs(p[0]) - h[0], abs(p[1]) - h[1], abs(p[2]) - h[2]
+        nl: tuple[float, float, float]
+        if q0 > 0.0 or q1 > 0.0 or q2 > 0.0:           # outside: distance to the surface
+            e0 = math.copysign(q0, p[0]) if q0 > 0.0 else 0.0
+            e1 = math.copysign(q1, p[1]) if q1 > 0.0 else 0.0
+            e2 = math.copysign(q2, p[2]) if q2 > 0.0 else 0.0
+            d = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+            nl = (e0 / d, e1 / d, e2 / d)
+        elif q0 >= q1 and q0 >= q2:                    # inside: the nearest face
+            d, nl = q0, (math.copysign(1.0, p[0]), 0.0, 0.0)
+        elif q1 >= q2:
+            d, nl = q1, (0.0, math.copysign(1.0, p[1]), 0.0)
+        else:
+            d, nl = q2, (0.0, 0.0, math.copysign(1.0, p[2]))
         n = (R[0][0] * nl[0] + R[0][1] * nl[1] + R[0][2] * nl[2],
              R[1][0] * nl[0] + R[1][1] * nl[1] + R[1][2] * nl[2],
              R[2][0] * nl[0] + R[2][1] * nl[1] + R[2][2] * nl[2])
         return d, n
+
+
+def _table(shapes: tuple) -> np.ndarray:
+    """The shapes as rows of floats for the kernel: kind, then its parameters (16 columns)."""
+    rows = np.zeros((len(shapes), 17))
+    for k, s in enumerate(shapes):
+        kind = s[0]
+        flat: list[float] = [float(kind)]
+        if kind == 0:
+            flat += [*s[1], *s[2]]
+        elif kind == 1:
+            flat += [*s[1], s[2]]
+        elif kind == 2:
+            flat += [*s[1], *s[2], s[3], s[4]]
+        else:
+            flat += [*s[1], *(v for row in s[2] for v in row), *s[3]]
+        rows[k, :len(flat)] = flat
+    return rows

@@ -49,14 +49,18 @@ class TeleopStatus(enum.IntFlag):
         The step was shortened to keep ``|qdd_i| <= a_max_i``, or no step along the tip's
         direction could: the robot brakes along its velocity at ``a_max``.
     WATCHDOG
-        No valid master sample for ``watchdog`` s: the robot holds (brakes to rest) until
-        the master returns; it re-engages like a clutch (no tip jump).
+        No new valid master sample for ``watchdog`` s, counted in cycles
+        (:attr:`Teleop.watchdog_cycles` = ``ceil(watchdog * rate)`` consecutive cycles,
+        whatever ``t`` says; a sample stamped no later than the previous sample is no new
+        sample): the robot holds (brakes to rest) until the master returns; it re-engages
+        like a clutch (no tip jump).
     ESTOP
         The e-stop is latched (:meth:`Teleop.estop`): the robot brakes to rest and holds
         until :meth:`Teleop.release`.
     INVALID
-        The master sample was not three finite numbers, or ``t`` not a finite time
-        after the previous one: the sample is ignored (no sample this cycle).
+        The master sample was not three finite real numbers (strings and bytes are not),
+        the clutch not a boolean, or ``t`` not finite or before the previous cycle's: the
+        sample is ignored (no sample this cycle; a malformed clutch is open).
     JUMP
         The master moved more than ``max_master_jump`` since its previous sample: the
         sample re-engages the clutch (the tip does not follow the jump).
@@ -106,7 +110,8 @@ class TeleopOptions:
         ``"notch8-12"`` (default), ``"notch8-12-lp15"`` (the same band, and a roll-off
         above 15 Hz) or ``"none"``.
     watchdog : float
-        Seconds without a valid master sample after which the robot holds (0.03).
+        Seconds without a new valid master sample after which the robot holds (0.03),
+        counted in cycles of ``1 / rate`` (``WATCHDOG``).
     max_master_jump : float
         Master displacement between consecutive samples (master frame, m) above which
         the sample re-engages the clutch instead of moving the tip (0.02).
@@ -205,3 +210,22 @@ class TeleopOptions:
         """Largest joint travel while braking from ``v_max`` at ``a_max``, m."""
         t = max(v / a for v, a in zip(v_max, a_max, strict=True))   # joints stop together
         return max(0.5 * v * t for v in v_max) if math.isfinite(t) else math.inf
+
+
+# the status bits as plain ints (the loop combines them; IntFlag arithmetic is slow)
+_CLUTCHED = int(TeleopStatus.CLUTCHED)
+_STROKE = int(TeleopStatus.STROKE)
+_DEPTH = int(TeleopStatus.DEPTH)
+_SINGULAR = int(TeleopStatus.SINGULAR)
+_FIXTURE = int(TeleopStatus.FIXTURE)
+_CLEARANCE = int(TeleopStatus.CLEARANCE)
+_VELOCITY = int(TeleopStatus.VELOCITY)
+_ACCELERATION = int(TeleopStatus.ACCELERATION)
+_WATCHDOG = int(TeleopStatus.WATCHDOG)
+_ESTOP = int(TeleopStatus.ESTOP)
+_INVALID = int(TeleopStatus.INVALID)
+_JUMP = int(TeleopStatus.JUMP)
+_HOLD = int(TeleopStatus.HOLD)
+_FAULT = int(TeleopStatus.FAULT)
+#: The bits that say why a step toward the target was shortened or refused.
+_LIMIT_BITS = _STROKE | _SINGULAR | _FIXTURE | _CLEARANCE | _VELOCITY | _ACCELERATION

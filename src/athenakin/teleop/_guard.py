@@ -1,0 +1,173 @@
+"""The bodies' clearance for the teleoperation limiter (private).
+
+One :class:`~athenakin.collision._workspace.ClearanceWorkspace` per pose kept (the
+committed pose and the trial one, swapped on a commit: no copy), the body segments
+placed from a tracked pose by the tracker's formula
+(:meth:`athenakin.motion._clearance.PoseClearance.points`, pinned to
+:func:`athenakin._mechanism.mechanism_points`), and the first-order change of every
+pair's distance along a step from the witness points of the committed pose.
+
+The gradient. For a pair of solids ``a, b`` at signed distance ``d`` with witness points
+``w_a, w_b`` (``w_b - w_a = d n``, ``n`` the unit normal from ``a`` to ``b``, for either
+sign of ``d``), a step that moves the material points under the witnesses by ``dw_a``,
+``dw_b`` changes ``d`` by ``n . (dw_b - dw_a)`` to first order. A witness point's
+displacement is interpolated along its body's segment from the two end points'
+displacements (a rigid body's points move affinely along its axis to first order).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from .._typing import FloatArray
+
+__all__ = ["BodyGuard", "EXACT_BAND_M", "NORMAL_TOL_M"]
+
+#: Band above the guard's floor within which every distance is exact (coal for boxes and
+#: meshes), m; farther, a bounding-sphere lower bound may stand in.
+EXACT_BAND_M = 0.02
+#: Pairs closer than this to contact (|d|, m) have no reliable normal from their
+#: witnesses: their step limit is the exact check alone.
+NORMAL_TOL_M = 1e-9
+
+
+class BodyGuard:
+    """Clearance of a tracked pose's bodies and the step fraction that keeps it.
+
+    Parameters
+    ----------
+    design, T_b_e
+        The robot.
+    bodies : Bodies
+    environment : Environment or None
+    backend : {"auto", "numpy", "numba"}
+        The capsule kernel's backend.
+    floor : float
+        Least clearance the guard keeps (m), the exact band's base.
+    """
+
+    def __init__(self, design: Any, T_b_e: FloatArray, bodies: Any, environment: Any, *,
+                 backend: str, floor: float) -> None:
+        from ..collision._workspace import ClearanceWorkspace
+        from ..motion._clearance import PoseClearance
+
+        self._pc = PoseClearance(design, T_b_e, bodies)
+        below = floor + EXACT_BAND_M
+        self._cur = ClearanceWorkspace(bodies, environment, backend=backend, exact_below=below)
+        self._try = ClearanceWorkspace(bodies, environment, backend=backend, exact_below=below)
+        self.pairs = self._cur.pairs
+        self._body = self._cur.body
+        self.evaluations = 0             # clearance evaluations of the current cycle
+        self.clearance = math.nan        # the committed pose's least clearance, m
+        self.closest = -1
+        self._seg = np.empty_like(self._cur.segments)
+        self._compiled = self._cur.compiled
+        if self._compiled:
+            from . import _kernels
+
+            self._kernels = _kernels
+        pc = self._pc
+        self._G = np.array([pc.l1, pc.l2, pc.l3, pc.l4, pc.l5, pc.L, pc.rm, pc.half, pc.rs,
+                            pc.lo, pc.hi, *pc.rcm, *pc.ze], dtype=np.float64)
+        self._index = np.ascontiguousarray(pc.index, dtype=np.intp)
+        self._pts = np.empty((19, 3))
+
+    def segments(self, pose: Any) -> FloatArray:
+        """The body segments of a tracked pose into the trial buffer, shape (n_bodies, 2, 3)."""
+        seg = self._try.segments
+        if self._compiled:
+            q, u, o, d = pose.q, pose.u, pose.O_s, pose.direction_b
+            self._kernels.place_segments(q[0], q[1], pose.p, u[0], u[1], u[2], o[0], o[1],
+                                         o[2], d[0], d[1], d[2], self._G, self._index,
+                                         self._pts, seg)
+            return seg
+        pts = self._pc.points(pose.q, pose.p, pose.u, pose.O_s, pose.direction_b)
+        np.take(pts, self._index, axis=0, out=seg)
+        return seg
+
+    def evaluate(self, pose: Any, *, placed: bool = False) -> float:
+        """Least clearance of ``pose`` (m; the trial buffer), one evaluation counted.
+
+        ``placed``: :meth:`fraction` has just placed this pose's segments.
+        """
+        if not placed:
+            self.segments(pose)
+        self.evaluations += 1
+        d, k = self._try.evaluate()
+        self._try_result = (d, k)
+        return d
+
+    def commit(self) -> None:
+        """The last evaluated pose becomes the committed one (the buffers swap)."""
+        self._cur, self._try = self._try, self._cur
+        self.clearance, self.closest = self._try_result
+
+    def start(self, pose: Any) -> float:
+        """Evaluate and commit ``pose`` (the start or a reset); its least clearance, m."""
+        self.evaluate(pose)
+        self.commit()
+        return self.clearance
+
+    def trial_pair(self) -> tuple[str, str]:
+        """The names of the last evaluated pose's closest pair (``("", "")`` with none)."""
+        k = self._try_result[1]
+        return self.pairs[k] if k >= 0 else ("", "")
+
+    def closest_pair(self) -> tuple[str, str]:
+        """The names of the committed pose's closest pair (``("", "")`` with none)."""
+        return self.pairs[self.closest] if self.closest >= 0 else ("", "")
+
+    def fraction(self, pose: Any, floor: float, slack: float, *, far: bool = False) -> float:
+        """The fraction of the step to ``pose`` that keeps every pair above ``floor`` (m).
+
+        First order, from the committed pose's witness points and the segments of
+        ``pose`` (placed here, not evaluated). A pair already below ``floor`` may not
+        come closer; one above may come down to ``floor + slack``. Pairs that no step
+        of this length can bring to ``floor`` (farther than twice the largest end-point
+        displacement) are not looked at. Returns a fraction in [0, 1]; 1 without a look
+        with ``far`` (the caller knows every pair far from ``floor``).
+        """
+        seg1 = self.segments(pose)
+        if far:
+            return 1.0
+        cur = self._cur
+        seg0 = cur.segments
+        if self._compiled:
+            return float(self._kernels.step_fraction(seg0, seg1, cur.distances, cur.witness_points,
+                                          self._body, floor, slack, NORMAL_TOL_M))
+        disp = np.subtract(seg1, seg0, out=self._seg)
+        reach = 2.0 * float(np.sqrt(np.einsum("ijk,ijk->ij", disp, disp).max()))
+        d0 = cur.distances
+        near = np.flatnonzero(d0 < floor + slack + reach)
+        if not len(near):
+            return 1.0
+        k = near
+        d = d0[k]
+        w = cur.witness_points[k]
+        body = self._body[k]
+        wa, wb = w[:, 0], w[:, 1]
+        dwa = _witness_motion(seg0, disp, body[:, 0], wa)
+        dwb = _witness_motion(seg0, disp, np.maximum(body[:, 1], 0), wb)
+        dwb[body[:, 1] < 0] = 0.0                   # an obstacle does not move
+        ok = np.abs(d) > NORMAL_TOL_M
+        with np.errstate(invalid="ignore", divide="ignore"):
+            n = (wb - wa) / np.where(ok, d, 1.0)[:, None]
+            rate = np.einsum("ij,ij->i", n, dwb - dwa)
+            room = np.where(d > floor, d - floor - slack, 0.0)
+            lam = np.where((rate < 0.0) & ok, np.maximum(room, 0.0) / -rate, 1.0)
+        out = float(lam.min())
+        return min(1.0, out) if out == out else 0.0
+
+
+def _witness_motion(seg0: FloatArray, disp: FloatArray, i: Any, w: FloatArray) -> FloatArray:
+    """Displacement of the material point under witness ``w`` of body ``i`` (rows), m."""
+    a = seg0[i, 0]
+    ab = seg0[i, 1] - a
+    L2 = np.einsum("ij,ij->i", ab, ab)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.where(L2 > 0.0, np.einsum("ij,ij->i", w - a, ab) / np.where(L2 > 0, L2, 1.0), 0.0)
+    t = np.clip(t, 0.0, 1.0)[:, None]
+    return disp[i, 0] * (1.0 - t) + disp[i, 1] * t

@@ -1,0 +1,174 @@
+"""Compiled kernels of the teleoperation guard (numba; imported on the compiled branch only).
+
+Their references: :meth:`athenakin.teleop._fixtures.TipFixtures.nearest` (a point's
+signed distance to the tip fixtures, scalar Python),
+:meth:`athenakin.teleop._guard.BodyGuard.fraction` (the first-order step limit from the
+witness points) and :meth:`athenakin.motion._clearance.PoseClearance.points` (the body
+points of a tracked pose), to 1e-12 (tests/test_teleop_loop.py).
+"""
+
+from __future__ import annotations
+
+import math
+
+from .._backend import njit
+
+__all__ = ["place_segments", "step_fraction", "fixture_nearest"]
+
+
+@njit(error_model="numpy", cache=True, nogil=True)
+def step_fraction(seg0, seg1, dist, wit, body, floor, slack, tol):  # pragma: no cover
+    """:meth:`athenakin.teleop._guard.BodyGuard.fraction` compiled: the same formula."""
+    nb = seg0.shape[0]
+    reach = 0.0
+    for i in range(nb):
+        for e in range(2):
+            d2 = 0.0
+            for j in range(3):
+                v = seg1[i, e, j] - seg0[i, e, j]
+                d2 += v * v
+            reach = max(reach, d2)
+    reach = 2.0 * math.sqrt(reach)
+    lam = 1.0
+    for k in range(dist.shape[0]):
+        d = dist[k]
+        if not d < floor + slack + reach:
+            continue
+        if not abs(d) > tol:
+            continue
+        rate = 0.0
+        for side in range(2):
+            i = body[k, side]
+            if i < 0:
+                continue
+            L2 = 0.0
+            t = 0.0
+            for j in range(3):
+                ab = seg0[i, 1, j] - seg0[i, 0, j]
+                L2 += ab * ab
+                t += (wit[k, side, j] - seg0[i, 0, j]) * ab
+            t = min(1.0, max(0.0, t / L2)) if L2 > 0.0 else 0.0
+            sign = 1.0 if side == 1 else -1.0
+            for j in range(3):
+                dw = ((seg1[i, 0, j] - seg0[i, 0, j]) * (1.0 - t)
+                      + (seg1[i, 1, j] - seg0[i, 1, j]) * t)
+                rate += sign * (wit[k, 1, j] - wit[k, 0, j]) / d * dw
+        if rate < 0.0:
+            room = d - floor - slack if d > floor else 0.0
+            lam = min(lam, max(room, 0.0) / -rate)
+        elif rate != rate:
+            lam = 0.0
+    return lam
+
+
+@njit(error_model="numpy", cache=True, nogil=True)
+def place_segments(q1, q2, p, u0, u1, u2, ox, oy, oz, d0, d1, d2, G, index, pts,
+                  seg):  # pragma: no cover - numba
+    """:meth:`athenakin.motion._clearance.PoseClearance.points` compiled, gathered to ``seg``.
+
+    ``G``: ``l1, l2, l3, l4, l5, L, rail margin, half carriage, sphere radius, rail lo,
+    rail hi, rcm (3), z_e (3)``; ``index`` (n_bodies, 2) the points of each body segment.
+    """
+    l1, l2, l3, l4, l5, L = G[0], G[1], G[2], G[3], G[4], G[5]
+    rm, half, rs, lo, hi = G[6], G[7], G[8], G[9], G[10]
+    rc0, rc1, rc2, ze0, ze1, ze2 = G[11], G[12], G[13], G[14], G[15], G[16]
+    h = 0.5 * (q1 - q2)
+    xm = 0.5 * (q1 + q2)
+    yd = math.sqrt(l3 * l3 - h * h)
+    r1 = math.sqrt(l1 * l1 - h * h)
+    cy, cz = oy / (r1 + l4), oz / (r1 + l4)
+    c1, s1, c2, s2 = math.cos(u0), math.sin(u0), math.cos(u1), math.sin(u1)
+    c3, s3 = math.cos(u2), math.sin(u2)
+    v0 = s3 * c1 * c2 - c3 * s1
+    v1 = s3 * s1 * c2 + c3 * c1
+    v2 = s3 * s2
+    a40, a41, a42 = v0, cz * v1 + cy * v2, -cy * v1 + cz * v2
+    side = -1.0 if p < 0 else 1.0
+    t = p - side * rs
+    if 0.0 <= t <= L:
+        s30, s31, s32 = rc0 - side * rs * d0, rc1 - side * rs * d1, rc2 - side * rs * d2
+    else:
+        t = min(max(t, 0.0), L)
+        s30, s31, s32 = ox + t * d0, oy + t * d1, oz + t * d2
+    rows = (
+        (q1, 0.0, 0.0), (q2, 0.0, 0.0), (xm, 0.0, 0.0), (xm, yd, 0.0),
+        (xm, yd + l2, 0.0), (xm, yd + l2, l5), (ox, oy - l4 * cy, oz - l4 * cz),
+        (ox, oy, oz), (rc0, rc1, rc2), (ox + L * d0, oy + L * d1, oz + L * d2),
+        (min(min(q1, q2) - rm, lo), 0.0, 0.0), (max(max(q1, q2) + rm, hi), 0.0, 0.0),
+        (q1 - half, 0.0, 0.0), (q1 + half, 0.0, 0.0),
+        (q2 - half, 0.0, 0.0), (q2 + half, 0.0, 0.0),
+        (s30, s31, s32),
+        (rc0 + rs * a40, rc1 + rs * a41, rc2 + rs * a42),
+        (rc0 + rs * ze0, rc1 + rs * ze1, rc2 + rs * ze2))
+    for i in range(19):
+        r = rows[i]
+        pts[i, 0] = r[0]
+        pts[i, 1] = r[1]
+        pts[i, 2] = r[2]
+    for b in range(index.shape[0]):
+        for e in range(2):
+            k = index[b, e]
+            seg[b, e, 0] = pts[k, 0]
+            seg[b, e, 1] = pts[k, 1]
+            seg[b, e, 2] = pts[k, 2]
+
+
+@njit(error_model="numpy", cache=True, nogil=True)
+def _radial(v0, v1, v2, r):  # pragma: no cover - numba
+    n = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+    if n > 0.0:
+        return n - r, v0 / n, v1 / n, v2 / n
+    return -r, 0.0, 0.0, 1.0
+
+
+@njit(error_model="numpy", cache=True, nogil=True)
+def fixture_nearest(x0, x1, x2, S):  # pragma: no cover - numba
+    """Least signed distance of a point to the fixtures ``S`` (rows of ``_fixtures._table``).
+
+    Returns ``(d, n0, n1, n2, index)``: the distance (m, negative inside), the outward unit
+    normal and the row (``inf``, ``(0, 0, 1)``, -1 without rows).
+    """
+    best, b0, b1, b2, ib = math.inf, 0.0, 0.0, 1.0, -1
+    for k in range(S.shape[0]):
+        kind = S[k, 0]
+        if kind == 0.0:                                 # halfspace: n . (x - p)
+            n0, n1, n2 = S[k, 4], S[k, 5], S[k, 6]
+            d = n0 * (x0 - S[k, 1]) + n1 * (x1 - S[k, 2]) + n2 * (x2 - S[k, 3])
+        elif kind == 1.0:                               # sphere
+            d, n0, n1, n2 = _radial(x0 - S[k, 1], x1 - S[k, 2], x2 - S[k, 3], S[k, 4])
+        elif kind == 2.0:                               # capsule
+            a0, a1, a2, e0, e1, e2 = S[k, 1], S[k, 2], S[k, 3], S[k, 4], S[k, 5], S[k, 6]
+            abab = S[k, 7]
+            t = 0.0
+            if abab > 0.0:
+                t = min(1.0, max(0.0, ((x0 - a0) * e0 + (x1 - a1) * e1 + (x2 - a2) * e2)
+                                 / abab))
+            d, n0, n1, n2 = _radial(x0 - (a0 + t * e0), x1 - (a1 + t * e1),
+                                    x2 - (a2 + t * e2), S[k, 8])
+        else:                                           # box: local p = R^T (x - c)
+            v0, v1, v2 = x0 - S[k, 1], x1 - S[k, 2], x2 - S[k, 3]
+            R00, R01, R02 = S[k, 4], S[k, 5], S[k, 6]
+            R10, R11, R12 = S[k, 7], S[k, 8], S[k, 9]
+            R20, R21, R22 = S[k, 10], S[k, 11], S[k, 12]
+            p0 = R00 * v0 + R10 * v1 + R20 * v2
+            p1 = R01 * v0 + R11 * v1 + R21 * v2
+            p2 = R02 * v0 + R12 * v1 + R22 * v2
+            q0, q1, q2 = abs(p0) - S[k, 13], abs(p1) - S[k, 14], abs(p2) - S[k, 15]
+            if q0 > 0.0 or q1 > 0.0 or q2 > 0.0:
+                e0 = math.copysign(q0, p0) if q0 > 0.0 else 0.0
+                e1 = math.copysign(q1, p1) if q1 > 0.0 else 0.0
+                e2 = math.copysign(q2, p2) if q2 > 0.0 else 0.0
+                d = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+                l0, l1, l2 = e0 / d, e1 / d, e2 / d
+            elif q0 >= q1 and q0 >= q2:
+                d, l0, l1, l2 = q0, math.copysign(1.0, p0), 0.0, 0.0
+            elif q1 >= q2:
+                d, l0, l1, l2 = q1, 0.0, math.copysign(1.0, p1), 0.0
+            else:
+                d, l0, l1, l2 = q2, 0.0, 0.0, math.copysign(1.0, p2)
+            n0 = R00 * l0 + R01 * l1 + R02 * l2
+            n1 = R10 * l0 + R11 * l1 + R12 * l2
+            n2 = R20 * l0 + R21 * l1 + R22 * l2
+        if d < best:
+            best, b0, b1, b2, ib = d, n0, n1, n2, k
+    return best, b0, b1, b2, ib
