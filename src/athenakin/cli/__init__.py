@@ -74,7 +74,7 @@ def extra_of(module: str | None, command: str | None = None) -> str:
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
 COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
             "animate", "export", "derive", "design", "calibrate", "synthesize", "teleop", "app",
-            "warmup"]
+            "warmup", "ros2"]
 
 
 class _Parser(argparse.ArgumentParser):
