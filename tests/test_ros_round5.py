@@ -203,7 +203,9 @@ def test_core_only_install_runs_every_command_to_a_named_message(tmp_path):
 def test_extras_table_matches_pyproject():
     aliases = {"pin": "pinocchio", "python-flint": "flint", "mcap-ros2-support": "mcap_ros2",
                "foxglove-sdk": "foxglove", "imageio-ffmpeg": "imageio_ffmpeg",
-               "pytest-benchmark": "pytest_benchmark"}
+               "pytest-benchmark": "pytest_benchmark", "catkin-pkg": "catkin_pkg"}
+    aliases.update({n: n[4:].replace("-", "_") for r in (ROOT / "pyproject.toml").read_text()
+                    .split('"') if (n := r.split(">")[0]).startswith("ros-")})
     extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"][
         "optional-dependencies"]
     for name, reqs in extras.items():
