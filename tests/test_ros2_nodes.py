@@ -112,7 +112,7 @@ class Client:
 
     def listen(self, key, typ, topic, qos=RELIABLE):
         self.got.setdefault(key, [])
-        self.node.create_subscription(typ, topic, self.got[key].append, qos)
+        return self.node.create_subscription(typ, topic, self.got[key].append, qos)
 
     def until(self, cond, what, timeout=DEADLINE, procs=()):
         end = time.monotonic() + timeout
@@ -187,13 +187,14 @@ def test_servo_a_trajectory_and_read_it_back(nodes):
 
 def test_a_refused_command_is_answered_and_not_executed(nodes):
     arm, _, c = nodes
-    c.listen("status", StringStamped, "/athena/status")
+    status = c.listen("status", StringStamped, "/athena/status")
     c.listen("sp", JointState, "/athena/setpoint_js")
     servo = c.node.create_publisher(JointState, "/athena/servo_jp", RELIABLE)
     move = c.node.create_publisher(JointState, "/athena/move_jp", RELIABLE)
     cp = c.node.create_publisher(PoseStamped, "/athena/servo_cp", RELIABLE)
     c.until(lambda: c.got["sp"] and servo.get_subscription_count() > 0
-            and move.get_subscription_count() > 0 and cp.get_subscription_count() > 0,
+            and move.get_subscription_count() > 0 and cp.get_subscription_count() > 0
+            and status.get_publisher_count() > 0,
             "setpoint_js and the command subscribers", procs=[arm])
     before = np.array(c.got["sp"][-1].position)
     servo.publish(JointState(position=[float("nan"), 0.1, 0.45]))
@@ -303,3 +304,56 @@ def test_teleop_follows_the_master_and_the_watchdog_holds(nodes):
     n = len(c.got["tstatus"])
     c.until(lambda: len(c.got["tstatus"]) > n + 5, "more teleop status", procs=[teleop])
     assert _values(c.got["tstatus"][-1])["estop"] == "True"
+
+
+def test_the_arm_node_survives_a_hostile_burst(nodes):
+    arm, _, c = nodes
+    status = c.listen("fuzz_status", StringStamped, "/athena/status")
+    c.listen("fuzz_js", JointState, "/athena/measured_js")
+    servo = c.node.create_publisher(JointState, "/athena/servo_jp", RELIABLE)
+    state = c.node.create_publisher(StringStamped, "/athena/state_command", RELIABLE)
+    c.until(lambda: c.got["fuzz_js"] and servo.get_subscription_count() > 0
+            and state.get_subscription_count() > 0 and status.get_publisher_count() > 0,
+            "measured_js, the subscribers and the status publisher", procs=[arm])
+    # the arm's reader has matched this writer once a probe is answered (DDS matches each
+    # side on its own: a writer that sees the reader may still be unseen by it)
+    probe = JointState(position=[float("nan")] * 3)
+    c.until(lambda: servo.publish(probe) or c.got["fuzz_status"], "the probe's refusal",
+            procs=[arm])
+    del c.got["fuzz_status"][:]
+    q = np.array(c.got["fuzz_js"][-1].position)
+    rng = np.random.default_rng(38)
+    bad = 0
+    for k in range(60):        # one burst, no wait between the messages (within QoS depths)
+        m = JointState(position=[float(v) for v in q + rng.uniform(-1e-4, 1e-4, 3)])
+        kind = k % 6
+        if kind == 1:
+            m.position = [float("nan"), 0.0, float("inf")]
+        elif kind == 2:
+            m.position = m.position[:2]
+        elif kind == 3:
+            m.name = ["q1", "q2", "elbow"]
+        elif kind == 4:                    # a stamp before the previous command's
+            m.header.stamp.sec = 1
+        elif kind == 5:
+            m.velocity = [0.0]
+        m.header.stamp.sec = m.header.stamp.sec or 10 + k
+        bad += kind != 0
+        servo.publish(m)
+    state.publish(_command("fly"))
+
+    def answered():
+        return [t for m in c.got["fuzz_status"] if "[nan, nan, nan]" not in (t := _text(m))]
+
+    c.until(lambda: sum(t.startswith("refused servo_jp:") for t in answered()) >= bad
+            and any(t.startswith("refused state_command:") for t in answered()),
+            "every refusal of the burst", procs=[arm])
+    texts = answered()
+    assert texts and all(t.startswith("refused ") for t in texts), texts[:5]
+    fields = ("position", "name", "stamp", "velocity", "state_command")
+    assert all(any(f in t for f in fields) for t in texts), texts[:5]
+    assert sum(t.startswith("refused servo_jp:") for t in texts) == bad, texts
+    n = len(c.got["fuzz_js"])
+    c.until(lambda: len(c.got["fuzz_js"]) > n + 5, "measured_js after the burst", procs=[arm])
+    assert all(math.isfinite(v) for v in c.got["fuzz_js"][-1].position)
+    assert np.abs(np.array(c.got["fuzz_js"][-1].position) - q).max() < 1e-3
