@@ -89,10 +89,12 @@ def run_arm(args: argparse.Namespace) -> int:
           f"{node.arm.operating_state}, CRTK types: {kind}", flush=True)
     try:
         node.spin(duration)
+    except KeyboardInterrupt:     # Ctrl-C: the node's normal end
+        pass
     finally:
         node.close()
-    print(f"ros2 arm: {node.cycles} cycles, {node.late_cycles} late, "
-          f"{len(node.refusals)} refused commands", flush=True)
+        print(f"ros2 arm: {node.cycles} cycles, {node.late_cycles} late, {node.commands} "
+              f"commands, {len(node.refusals)} refused", flush=True)
     return 0
 
 
@@ -118,9 +120,11 @@ def run_teleop(args: argparse.Namespace) -> int:
           flush=True)
     try:
         node.spin(duration)
+    except KeyboardInterrupt:     # Ctrl-C: the node's normal end
+        pass
     finally:
         node.close()
-    print(f"ros2 teleop: {node.cycles} cycles, {node.late_cycles} late", flush=True)
+        print(f"ros2 teleop: {node.cycles} cycles, {node.late_cycles} late", flush=True)
     return 0
 
 

@@ -177,6 +177,8 @@ class ArmNode:
         self.refusals: list[tuple[str, str]] = []
         #: Servo cycles run, cycles that started late by more than one period.
         self.cycles, self.late_cycles = 0, 0
+        #: Command messages received (accepted or refused).
+        self.commands = 0
         #: The last error of the servo thread (None: none).
         self.error: str | None = None
         self._pubs = self._publishers()
@@ -241,6 +243,7 @@ class ArmNode:
     def _command(self, name: str, msg: Any, call: Callable[[], None], *,
                  stamped: bool = True, needs_enabled: bool = True) -> None:
         """Run ``call`` on the arm, or answer why not: the one path of every command."""
+        self.commands += 1
         try:
             if stamped:
                 ns = stamp_ns(msg.header)
