@@ -119,7 +119,8 @@ def over_graph(rate: float, seconds: float, domain: int) -> dict[str, object]:
         time.sleep(0.05)
     if not seen:
         proc.kill()
-        raise RuntimeError(f"the arm node did not start: {proc.stdout.read() if proc.stdout else ''}")
+        log = proc.stdout.read() if proc.stdout else ""
+        raise RuntimeError(f"the arm node did not start: {log}")
     time.sleep(1.0)        # the arm's reader matches this writer (each side on its own)
     cpu0, load = _cpu_s(proc.pid), _load()
     n = int(seconds * rate)

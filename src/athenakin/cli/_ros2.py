@@ -56,6 +56,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     t.add_argument("--q0", nargs=3, type=float, metavar=("Q1", "Q2", "Q3"),
                    help="where the robot stands, m (default: the arm's first measured_js)")
     t.add_argument("--use-sim-time", action="store_true", help="stamp from /clock")
+    t.add_argument("--with-arm", action="store_true",
+                   help="run an arm node (enabled) in this process too")
     t.add_argument("--duration", type=float, help="stop after this many seconds")
     add_robot_options(t)
     t.set_defaults(func=run_teleop)
@@ -111,20 +113,34 @@ def run_teleop(args: argparse.Namespace) -> int:
         check_finite(args.q0, "--q0")
     options = TeleopOptions() if args.watchdog is None else TeleopOptions(watchdog=args.watchdog)
     design, T = load_robot(args)
-    node = TeleopNode(T, design, q0=args.q0, rate=args.rate, scale=args.scale, options=options,
-                      arm_namespace=args.namespace, pose_topic=pose,
-                      clutch_topic=None if clutch.lower() == "none" else clutch,
-                      clutch_button=args.clutch_button, master_frame=args.master_frame,
-                      status_every=args.status_every, use_sim_time=args.use_sim_time)
-    print(f"ros2 teleop: {pose} + {clutch} -> {node.namespace}/servo_jp at {args.rate:g} Hz",
-          flush=True)
+    context = arm = None
+    if args.with_arm:
+        from ..ros2 import ArmNode, RosContext
+
+        context = RosContext()
+        arm = ArmNode(T_b_e=T, design=design, q0=args.q0, namespace=args.namespace,
+                      enable=True, use_sim_time=args.use_sim_time, context=context).start()
     try:
-        node.spin(duration)
-    except KeyboardInterrupt:     # Ctrl-C: the node's normal end
-        pass
+        node = TeleopNode(T, design, q0=args.q0, rate=args.rate, scale=args.scale,
+                          options=options, arm_namespace=args.namespace, pose_topic=pose,
+                          clutch_topic=None if clutch.lower() == "none" else clutch,
+                          clutch_button=args.clutch_button, master_frame=args.master_frame,
+                          status_every=args.status_every, use_sim_time=args.use_sim_time,
+                          context=context)
+        print(f"ros2 teleop: {pose} + {clutch} -> {node.namespace}/servo_jp at "
+              f"{args.rate:g} Hz" + (" (arm node in this process)" if arm else ""), flush=True)
+        try:
+            node.spin(duration)
+        except KeyboardInterrupt:     # Ctrl-C: the node's normal end
+            pass
+        finally:
+            node.close()
+            print(f"ros2 teleop: {node.cycles} cycles, {node.late_cycles} late", flush=True)
     finally:
-        node.close()
-        print(f"ros2 teleop: {node.cycles} cycles, {node.late_cycles} late", flush=True)
+        if arm is not None:
+            arm.close()
+        if context is not None:
+            context.close()
     return 0
 
 
