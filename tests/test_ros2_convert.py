@@ -91,3 +91,40 @@ def test_crtk_types_carry_the_text_and_state():
     assert (msg.state if c.native else msg.data) == "ENABLED"
     stand_in = crtk_types(native=False)
     assert not stand_in.native and stand_in.text(stand_in.string("pause")) == "pause"
+
+
+def test_use_sim_time_stamps_from_clock(monkeypatch):
+    """With ``use_sim_time`` the arm node's stamps are ``/clock``'s (one process, loopback)."""
+    import os
+    import time
+
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from rosgraph_msgs.msg import Clock
+
+    from athenakin.ros2 import ArmNode, RosContext
+
+    monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    domain = 1 + (os.getpid() + 50) % 100
+    node = ArmNode(enable=True, use_sim_time=True,
+                   context=RosContext(domain_id=domain), publish_rate=100.0)
+    node.start()
+    client_ctx = RosContext(domain_id=domain)
+    try:
+        c = rclpy.create_node("clock_source", context=client_ctx.context)
+        ex = SingleThreadedExecutor(context=client_ctx.context)
+        ex.add_node(c)
+        got: list = []
+        c.create_subscription(JointState, "/athena/measured_js", got.append, 10)
+        clock = c.create_publisher(Clock, "/clock", 10)
+        msg = Clock()
+        msg.clock.sec = 4242
+        end = time.monotonic() + 120
+        while time.monotonic() < end and not any(m.header.stamp.sec == 4242 for m in got):
+            clock.publish(msg)
+            ex.spin_once(timeout_sec=0.02)
+        assert any(m.header.stamp.sec == 4242 for m in got)
+    finally:
+        node.close()
+        node.context.close()
+        client_ctx.close()
