@@ -137,12 +137,14 @@ def nodes():
     arm = _start(["arm", "--enable", "--publish-rate", "100"])
     teleop = _start(["teleop", "--namespace", "/tele", "--q0", *map(str, Q0),
                      "--rate", str(RATE), "--status-every", "1"])
+    e2e = _start(["teleop", "--with-arm", "--namespace", "/e2e", "--pose-topic",
+                  "/e2e_master/pose", "--clutch-topic", "none", "--rate", "500"])
     client = Client()
     try:
-        yield arm, teleop, client
+        yield arm, teleop, client, e2e
     finally:
         client.close()
-        out = _stop(arm) + _stop(teleop)
+        out = _stop(arm) + _stop(teleop) + _stop(e2e)
         assert "Traceback" not in out, out
 
 
@@ -153,7 +155,7 @@ def _tip(msg):
 
 # --------------------------------------------------------------------------- the arm node
 def test_servo_a_trajectory_and_read_it_back(nodes):
-    arm, _, c = nodes
+    arm, _, c, _ = nodes
     c.listen("js", JointState, "/athena/measured_js")
     c.listen("cp", PoseStamped, "/athena/measured_cp")
     c.listen("state", OperatingState, "/athena/operating_state", LATCHED)
@@ -186,7 +188,7 @@ def test_servo_a_trajectory_and_read_it_back(nodes):
 
 
 def test_a_refused_command_is_answered_and_not_executed(nodes):
-    arm, _, c = nodes
+    arm, _, c, _ = nodes
     status = c.listen("status", StringStamped, "/athena/status")
     c.listen("sp", JointState, "/athena/setpoint_js")
     servo = c.node.create_publisher(JointState, "/athena/servo_jp", RELIABLE)
@@ -230,7 +232,7 @@ def _same_xml(a, b, path="robot"):
 
 
 def test_robot_description_and_every_urdf_joint(nodes):
-    arm, _, c = nodes
+    arm, _, c, _ = nodes
     c.listen("urdf", String, "/robot_description", LATCHED)
     c.listen("joints", JointState, "/joint_states")
     c.until(lambda: c.got["urdf"] and c.got["joints"], "/robot_description and /joint_states",
@@ -258,7 +260,7 @@ def _values(arr):
 
 
 def test_teleop_follows_the_master_and_the_watchdog_holds(nodes):
-    _, teleop, c = nodes
+    _, teleop, c, _ = nodes
     c.listen("servo", JointState, "/tele/servo_jp")
     c.listen("tstatus", DiagnosticArray, "/tele/teleop/status")
     pose = c.node.create_publisher(PoseStamped, "/master/pose", RELIABLE)
@@ -307,7 +309,7 @@ def test_teleop_follows_the_master_and_the_watchdog_holds(nodes):
 
 
 def test_the_arm_node_survives_a_hostile_burst(nodes):
-    arm, _, c = nodes
+    arm, _, c, _ = nodes
     status = c.listen("fuzz_status", StringStamped, "/athena/status")
     c.listen("fuzz_js", JointState, "/athena/measured_js")
     servo = c.node.create_publisher(JointState, "/athena/servo_jp", RELIABLE)
@@ -357,3 +359,30 @@ def test_the_arm_node_survives_a_hostile_burst(nodes):
     c.until(lambda: len(c.got["fuzz_js"]) > n + 5, "measured_js after the burst", procs=[arm])
     assert all(math.isfinite(v) for v in c.got["fuzz_js"][-1].position)
     assert np.abs(np.array(c.got["fuzz_js"][-1].position) - q).max() < 1e-3
+
+
+def test_the_teleop_node_drives_the_arm_node_over_the_graph(nodes):
+    _, _, c, e2e = nodes
+    c.listen("e2e_js", JointState, "/e2e/measured_js")
+    c.listen("e2e_servo", JointState, "/e2e/servo_jp")
+    pose = c.node.create_publisher(PoseStamped, "/e2e_master/pose", RELIABLE)
+    c.until(lambda: c.got["e2e_js"] and c.got["e2e_servo"] and pose.get_subscription_count() > 0,
+            "the arm's measured_js and the teleop's servo_jp", procs=[e2e])
+    start = np.array(c.got["e2e_js"][-1].position)
+    for k in range(120):          # the master 12 mm along x, then still (samples go on)
+        m = PoseStamped()
+        m.pose.position.x = 1e-4 * min(k, 100)
+        pose.publish(m)
+        n = len(c.got["e2e_servo"])
+        c.until(lambda n=n: len(c.got["e2e_servo"]) > n, "the next servo_jp", procs=[e2e])
+
+    def settled():
+        m = PoseStamped()
+        m.pose.position.x = 1e-2
+        pose.publish(m)             # the master held still: no watchdog
+        cmd = np.array(c.got["e2e_servo"][-1].position)
+        return np.abs(np.array(c.got["e2e_js"][-1].position) - cmd).max() < 1e-4
+
+    c.until(settled, "the arm at the teleop's command", procs=[e2e])
+    moved = np.abs(np.array(c.got["e2e_js"][-1].position) - start).max()
+    assert moved > 5e-4             # 12 mm of master at scale 0.2: a few mm of actuator travel
