@@ -2,16 +2,17 @@
 
 Run from the repository root (the extra ``ros2``; discovery stays on the loopback)::
 
-    python benchmarks/bench_ros2.py [--rate 1000] [--seconds 5]
+    python benchmarks/bench_ros2.py [--rate 1000] [--publish-rate RATE] [--seconds 5]
 
-Starts ``athenakin ros2 arm`` in its own process with its state published every servo
-cycle (``--publish-rate`` = ``--rate``), and from this process sends one ``servo_jp`` per
-cycle (reliable QoS), each a distinct setpoint. The latency of a command is the time
-from its ``publish()`` to the arrival of the first ``measured_js`` whose ``setpoint_js``
-(same stamp) carries it: the command crossed the graph, waited for the next servo
+Starts ``athenakin ros2 arm`` in its own process, servoing at ``--rate`` with its state
+published at ``--publish-rate`` (default: every servo cycle), and from this process sends
+one ``servo_jp`` per published state (reliable QoS), each a distinct setpoint. The
+latency of a command is the time from its ``publish()`` to the arrival of the first
+``measured_js`` whose ``setpoint_js`` (same stamp) carries it: the command crossed the graph, waited for the next servo
 cycle, was stepped and published, and crossed back. Lost: commands the arm node never
-received (its own count at exit); superseded: received but replaced by a later one
-before a servo cycle took it (two in one period). CPU: the arm process's user + system
+received (its own count at exit); replaced: received, but a later one was the setpoint
+by the time a state message was published (two in one publishing period: CRTK's servo
+keeps the latest). CPU: the arm process's user + system
 time per servo cycle. Beside it, the same loop in one process (``servo_jp``, ``step``,
 ``measured_js`` of :class:`athenakin.teleop.SimulatedArm`, no graph), per cycle.
 The machine's load is printed beside every figure.
@@ -72,7 +73,8 @@ def in_process(rate: float, cycles: int) -> np.ndarray:
     return dt
 
 
-def over_graph(rate: float, seconds: float, domain: int) -> dict[str, object]:
+def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
+               ) -> dict[str, object]:
     """Run the arm node in its own process and time ``seconds`` of commands through it."""
     import rclpy
     from rclpy.context import Context
@@ -84,7 +86,7 @@ def over_graph(rate: float, seconds: float, domain: int) -> dict[str, object]:
                PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     proc = subprocess.Popen([sys.executable, "-m", "athenakin", "ros2", "arm", "--enable",
-                             "--rate", str(rate), "--publish-rate", str(rate)],
+                             "--rate", str(rate), "--publish-rate", str(publish_rate)],
                             env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     ctx = Context()
     rclpy.init(context=ctx, domain_id=domain)
@@ -123,8 +125,8 @@ def over_graph(rate: float, seconds: float, domain: int) -> dict[str, object]:
         raise RuntimeError(f"the arm node did not start: {log}")
     time.sleep(1.0)        # the arm's reader matches this writer (each side on its own)
     cpu0, load = _cpu_s(proc.pid), _load()
-    n = int(seconds * rate)
-    period = 1.0 / rate
+    n = int(seconds * publish_rate)
+    period = 1.0 / publish_rate
     t_next = time.perf_counter()
     q = list(Q0)
     for k in range(1, n + 1):
@@ -160,18 +162,20 @@ def over_graph(rate: float, seconds: float, domain: int) -> dict[str, object]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--rate", type=float, default=1000.0, help="servo and command rate, Hz")
+    ap.add_argument("--publish-rate", type=float, help="state and command rate, Hz (--rate)")
     ap.add_argument("--seconds", type=float, default=5.0, help="commands for this long, s")
     args = ap.parse_args()
     domain = 1 + os.getpid() % 100
     base = in_process(args.rate, int(args.seconds * args.rate))
     print(f"in one process, servo_jp -> step -> measured_js: {_pct(base)} ({_load()})")
-    r = over_graph(args.rate, args.seconds, domain)
+    publish = args.rate if args.publish_rate is None else args.publish_rate
+    r = over_graph(args.rate, publish, args.seconds, domain)
     lat = r["latency"]
     assert isinstance(lat, np.ndarray)
     lost = r["sent"] - r["received"] if r["received"] >= 0 else "unknown"
-    print(f"over the graph at {args.rate:g} Hz, {r['sent']} servo_jp (reliable): {_pct(lat)} "
-          f"({r['load']})")
-    print(f"  lost {lost} of {r['sent']}; superseded before a servo cycle "
+    print(f"over the graph, servo at {args.rate:g} Hz, state and commands at {publish:g} Hz, "
+          f"{r['sent']} servo_jp (reliable): {_pct(lat)} ({r['load']})")
+    print(f"  lost {lost} of {r['sent']}; replaced before a state message showed them "
           f"{r['received'] - r['reflected']}; arm cycles {r['cycles']}, late {r['late']}")
     print(f"  arm node CPU {r['cpu_per_cycle'] * 1e6:.1f} us per cycle "
           f"({r['cpu_per_cycle'] * args.rate * 100:.0f} % of one core at {args.rate:g} Hz)")
