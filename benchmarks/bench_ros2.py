@@ -9,10 +9,10 @@ published at ``--publish-rate`` (default: every servo cycle), and from this proc
 one ``servo_jp`` per published state (reliable QoS), each a distinct setpoint. The
 latency of a command is the time from its ``publish()`` to the arrival of the first
 ``measured_js`` whose ``setpoint_js`` (same stamp) carries it: the command crossed the
-graph, waited for the next servo cycle, was stepped and published, and crossed back. Lost: commands the arm node never
-received (its own count at exit); replaced: received, but a later one was the setpoint
-by the time a state message was published (two in one publishing period: CRTK's servo
-keeps the latest). CPU: the arm process's user + system
+graph, waited for the next servo cycle, was stepped and published, and crossed back.
+Lost: commands the arm node never received (its own count at exit); replaced: received,
+but a later one was the setpoint by the time a state message was published (two in one
+publishing period: CRTK's servo keeps the latest). CPU: the arm process's user + system
 time per servo cycle. Beside it, the same loop in one process (``servo_jp``, ``step``,
 ``measured_js`` of :class:`athenakin.teleop.SimulatedArm`, no graph), per cycle.
 The machine's load is printed beside every figure.
