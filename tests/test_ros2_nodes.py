@@ -298,6 +298,21 @@ def test_teleop_follows_the_master_and_the_watchdog_holds(nodes):
     # held: the commands come to rest
     c.until(lambda: np.abs(np.array(c.got["servo"][-1].velocity)).max() == 0.0,
             "the held command at rest", procs=[teleop])
+    # the master back, 4 cm away: it re-engages without a jump of the commanded tip
+    held = len(c.got["tstatus"])
+
+    def back():
+        m = PoseStamped()
+        m.pose.position.x = 0.05
+        pose.publish(m)
+        return any(_values(a)["watchdog"] == "False" for a in c.got["tstatus"][held:])
+
+    c.until(back, "the master's return", procs=[teleop])
+    st = [_values(a) for a in c.got["tstatus"]]
+    i = next(k for k in range(held, len(st)) if st[k]["watchdog"] == "False")
+    before, after = (np.array(st[k]["tip_b"].split(), float) for k in (i - 1, i))
+    assert int(st[i]["cycle"]) == int(st[i - 1]["cycle"]) + 1
+    np.testing.assert_allclose(after, before, rtol=0, atol=1e-12 * max(1.0, np.abs(before).max()))
     # an e-stop latches ESTOP, also when the master comes back
     estop.publish(Bool(data=True))
     c.until(lambda: _values(c.got["tstatus"][-1])["estop"] == "True", "ESTOP", procs=[teleop])
