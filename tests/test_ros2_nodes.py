@@ -136,15 +136,18 @@ def nodes():
     """The arm node and the teleop node (in their own processes), and the test's client."""
     arm = _start(["arm", "--enable", "--publish-rate", "100"])
     teleop = _start(["teleop", "--namespace", "/tele", "--q0", *map(str, Q0),
-                     "--rate", str(RATE), "--status-every", "1"])
+                     "--rate", str(RATE), "--status-every", "1", "--filter", "none"])
     e2e = _start(["teleop", "--with-arm", "--namespace", "/e2e", "--pose-topic",
                   "/e2e_master/pose", "--clutch-topic", "none", "--rate", "500"])
+    replay = _start(["teleop", "--clock", "master", "--namespace", "/replay", "--pose-topic",
+                     "/replay_master/pose", "--clutch-topic", "none", "--q0", *map(str, Q0),
+                     "--rate", "1000"])
     client = Client()
     try:
-        yield arm, teleop, client, e2e
+        yield arm, teleop, client, e2e, replay
     finally:
         client.close()
-        out = _stop(arm) + _stop(teleop) + _stop(e2e)
+        out = _stop(arm) + _stop(teleop) + _stop(e2e) + _stop(replay)
         assert "Traceback" not in out, out
 
 
@@ -155,7 +158,7 @@ def _tip(msg):
 
 # --------------------------------------------------------------------------- the arm node
 def test_servo_a_trajectory_and_read_it_back(nodes):
-    arm, _, c, _ = nodes
+    arm, _, c, _, _ = nodes
     c.listen("js", JointState, "/athena/measured_js")
     c.listen("cp", PoseStamped, "/athena/measured_cp")
     c.listen("state", OperatingState, "/athena/operating_state", LATCHED)
@@ -188,7 +191,7 @@ def test_servo_a_trajectory_and_read_it_back(nodes):
 
 
 def test_a_refused_command_is_answered_and_not_executed(nodes):
-    arm, _, c, _ = nodes
+    arm, _, c, _, _ = nodes
     status = c.listen("status", StringStamped, "/athena/status")
     c.listen("sp", JointState, "/athena/setpoint_js")
     servo = c.node.create_publisher(JointState, "/athena/servo_jp", RELIABLE)
@@ -232,7 +235,7 @@ def _same_xml(a, b, path="robot"):
 
 
 def test_robot_description_and_every_urdf_joint(nodes):
-    arm, _, c, _ = nodes
+    arm, _, c, _, _ = nodes
     c.listen("urdf", String, "/robot_description", LATCHED)
     c.listen("joints", JointState, "/joint_states")
     c.until(lambda: c.got["urdf"] and c.got["joints"], "/robot_description and /joint_states",
@@ -260,7 +263,7 @@ def _values(arr):
 
 
 def test_teleop_follows_the_master_and_the_watchdog_holds(nodes):
-    _, teleop, c, _ = nodes
+    _, teleop, c, _, _ = nodes
     c.listen("servo", JointState, "/tele/servo_jp")
     c.listen("tstatus", DiagnosticArray, "/tele/teleop/status")
     pose = c.node.create_publisher(PoseStamped, "/master/pose", RELIABLE)
@@ -324,7 +327,7 @@ def test_teleop_follows_the_master_and_the_watchdog_holds(nodes):
 
 
 def test_the_arm_node_survives_a_hostile_burst(nodes):
-    arm, _, c, _ = nodes
+    arm, _, c, _, _ = nodes
     status = c.listen("fuzz_status", StringStamped, "/athena/status")
     c.listen("fuzz_js", JointState, "/athena/measured_js")
     servo = c.node.create_publisher(JointState, "/athena/servo_jp", RELIABLE)
@@ -377,7 +380,7 @@ def test_the_arm_node_survives_a_hostile_burst(nodes):
 
 
 def test_the_teleop_node_drives_the_arm_node_over_the_graph(nodes):
-    _, _, c, e2e = nodes
+    _, _, c, e2e, _ = nodes
     c.listen("e2e_js", JointState, "/e2e/measured_js")
     c.listen("e2e_servo", JointState, "/e2e/servo_jp")
     pose = c.node.create_publisher(PoseStamped, "/e2e_master/pose", RELIABLE)
@@ -401,3 +404,42 @@ def test_the_teleop_node_drives_the_arm_node_over_the_graph(nodes):
     c.until(settled, "the arm at the teleop's command", procs=[e2e])
     moved = np.abs(np.array(c.got["e2e_js"][-1].position) - start).max()
     assert moved > 5e-4             # 12 mm of master at scale 0.2: a few mm of actuator travel
+
+
+def test_a_replayed_master_gives_the_commands_of_run_session(nodes):
+    from athenakin.teleop import Teleop, run_session
+
+    _, _, c, _, replay = nodes
+    c.listen("replay", JointState, "/replay/servo_jp")
+    pose = c.node.create_publisher(PoseStamped, "/replay_master/pose", RELIABLE)
+    c.until(lambda: pose.get_subscription_count() > 0, "the replay node's master subscriber",
+            procs=[replay])
+    ns = [1000 * 10**9 + k * 10**6 for k in range(300)]         # 1 kHz stamps, ns
+    pts = [(0.02 * math.sin(math.pi * k / 1000), 0.01 * math.sin(0.6 * math.pi * k / 1000),
+            0.005 * (1 - math.cos(0.4 * math.pi * k / 1000))) for k in range(300)]
+    d = ak.Design.default()
+    log = run_session(Teleop(ak.default_rcm_frame(d), d, q0=Q0, rate=1000.0), None,
+                      [(t * 1e-9, p, True) for t, p in zip(ns, pts, strict=True)])
+
+    def send(k):
+        m = PoseStamped()
+        m.header.stamp.sec, m.header.stamp.nanosec = divmod(ns[k], 10**9)
+        m.pose.position.x, m.pose.position.y, m.pose.position.z = pts[k]
+        pose.publish(m)
+
+    # the node's reader has matched this writer once the first sample is answered (the
+    # node runs no cycle on a repeated stamp)
+    c.until(lambda: send(0) or c.got["replay"], "the answer to the first sample",
+            procs=[replay])
+    c.got["replay"][:] = c.got["replay"][:1]
+    for k in range(1, 300):
+        send(k)
+        c.until(lambda k=k: any(m.header.stamp.nanosec == ns[k] % 10**9 and
+                                m.header.stamp.sec == ns[k] // 10**9
+                                for m in c.got["replay"][-3:]), "the sample's command",
+                procs=[replay])
+    got = {(m.header.stamp.sec, m.header.stamp.nanosec): np.array(m.position)
+           for m in c.got["replay"]}
+    q = np.array([got[divmod(t, 10**9)] for t in ns])
+    np.testing.assert_allclose(q, log.q, rtol=0, atol=1e-12)
+    assert np.ptp(log.q, axis=0).max() > 1e-4          # the commands moved

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from ..teleop._filter import TREMOR_FILTERS
 from ._common import add_robot_options, check_finite, load_robot
 
 
@@ -56,6 +57,11 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     t.add_argument("--q0", nargs=3, type=float, metavar=("Q1", "Q2", "Q3"),
                    help="where the robot stands, m (default: the arm's first measured_js)")
     t.add_argument("--use-sim-time", action="store_true", help="stamp from /clock")
+    t.add_argument("--filter", default="notch8-12", choices=tuple(TREMOR_FILTERS),
+                   help="tremor filter (notch8-12)")
+    t.add_argument("--clock", choices=("ros", "master"), default="ros",
+                   help="ros: cycles at --rate on the ROS clock (the watchdog counts silent "
+                        "cycles); master: one cycle per master message at its stamp (replays)")
     t.add_argument("--with-arm", action="store_true",
                    help="run an arm node (enabled) in this process too")
     t.add_argument("--duration", type=float, help="stop after this many seconds")
@@ -111,7 +117,8 @@ def run_teleop(args: argparse.Namespace) -> int:
     clutch = args.clutch_topic or preset["clutch"]
     if args.q0 is not None:
         check_finite(args.q0, "--q0")
-    options = TeleopOptions() if args.watchdog is None else TeleopOptions(watchdog=args.watchdog)
+    options = TeleopOptions(filter=args.filter) if args.watchdog is None else \
+        TeleopOptions(filter=args.filter, watchdog=args.watchdog)
     design, T = load_robot(args)
     context = arm = None
     if args.with_arm:
@@ -126,7 +133,7 @@ def run_teleop(args: argparse.Namespace) -> int:
                           clutch_topic=None if clutch.lower() == "none" else clutch,
                           clutch_button=args.clutch_button, master_frame=args.master_frame,
                           status_every=args.status_every, use_sim_time=args.use_sim_time,
-                          context=context)
+                          clock=args.clock, context=context)
         print(f"ros2 teleop: {pose} + {clutch} -> {node.namespace}/servo_jp at "
               f"{args.rate:g} Hz" + (" (arm node in this process)" if arm else ""), flush=True)
         try:

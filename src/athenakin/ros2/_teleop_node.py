@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 from .._validation import check_scalar
 from ..design import Design, resolve_design
 from ._arm_node import _create_node, _qos, check_namespace
-from ._convert import ACTUATORS, joint_state, master_position
+from ._convert import ACTUATORS, joint_state, master_position, stamp_ns
 from ._runtime import RosContext, require_rclpy
 
 __all__ = ["TeleopNode", "TELEOP_TOPICS", "MASTER_PRESETS", "DVRK_PRESET", "STATUS_KEYS"]
@@ -73,6 +73,13 @@ class TeleopNode:
     wait_for_arm : float, keyword-only
         Longest wait for the arm's first ``measured_js`` when ``q0`` is None, s (30).
     use_sim_time : bool, keyword-only
+    clock : {"ros", "master"}, keyword-only
+        ``"ros"`` (default): the loop runs at ``rate`` on the ROS clock, each cycle with
+        the sample received since the previous one (None when none came: the watchdog
+        counts it). ``"master"``: one cycle per master message at its header stamp, as
+        :func:`athenakin.teleop.run_session` runs a recording (a message whose stamp is
+        not after the previous one's runs no cycle); the watchdog then sees only the
+        stamps' own gaps, so this is for replays, never for a live master.
     context : RosContext, optional, keyword-only
     node_name : str, keyword-only
 
@@ -91,13 +98,14 @@ class TeleopNode:
                  clutch_topic: str | None = TELEOP_TOPICS["clutch"], clutch_button: int = 0,
                  master_frame: str | None = None, status_every: int = 10,
                  wait_for_arm: float = 30.0, use_sim_time: bool = False,
+                 clock: str = "ros",
                  context: RosContext | None = None, node_name: str = "athena_teleop") -> None:
         require_rclpy()
         from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.parameter import Parameter
 
-        from .._validation import check_count
+        from .._validation import check_choice, check_count
         from ..robot._setup import resolve_rcm_frame
 
         self.design = resolve_design(design)
@@ -107,6 +115,8 @@ class TeleopNode:
         self.clutch_button = check_count(clutch_button, "clutch_button", minimum=0)
         self.status_every = check_count(status_every, "status_every", minimum=1)
         self.master_frame = master_frame
+        self.clock = check_choice(clock, "clock", ("ros", "master"))
+        self._last_ns = -1
         self._own_context = context is None
         self.context = RosContext() if context is None else context
         self.node = _create_node(node_name, self.namespace, self.context, use_sim_time,
@@ -181,6 +191,15 @@ class TeleopNode:
                              f"{self.master_frame!r}")
             return
         p = master_position(msg)
+        if self.clock == "master":     # one cycle on this sample, at its own stamp
+            ns = stamp_ns(msg.header)
+            if ns <= self._last_ns:     # a repeated or older message is no new cycle
+                self._refused = (f"master pose: stamp {ns} ns is not after the previous "
+                                 f"one's ({self._last_ns} ns)")
+                return
+            self._last_ns = ns
+            self._cycle(ns * 1e-9, p, msg.header.stamp)
+            return
         with self._lock:
             self._sample = p          # None (not finite): the core flags INVALID
             self._seq += 1
@@ -221,10 +240,16 @@ class TeleopNode:
             fresh = self._seq != self._used
             self._used = self._seq
             sample = self._sample if fresh else None
+        return self._cycle(t, sample, None, fresh=fresh)
+
+    def _cycle(self, t: float, sample: Any, stamp: Any, *, fresh: bool = True) -> Any:
+        """Run the core on one sample (or None) at ``t`` s; publish ``servo_jp`` and status."""
+        with self._lock:
             if fresh:
                 self._t_sample = t
             cmd = self.teleop.step(t, sample, self._clutch)
-        stamp = self.node.get_clock().now().to_msg()
+        if stamp is None:
+            stamp = self.node.get_clock().now().to_msg()
         effort = cmd.forces if all(math.isfinite(f) for f in cmd.forces) else ()
         self._pubs["servo_jp"].publish(joint_state(ACTUATORS, cmd.q, cmd.qd, effort,
                                                    stamp=stamp))
@@ -293,10 +318,11 @@ class TeleopNode:
     def start(self) -> TeleopNode:
         """Start the teleop loop and the executor's threads (idempotent); returns ``self``."""
         if not self._threads:
-            self._threads = [threading.Thread(target=self._loop, name="athena-teleop",
-                                              daemon=True),
-                             threading.Thread(target=self._spin_loop, name="teleop-executor",
+            self._threads = [threading.Thread(target=self._spin_loop, name="teleop-executor",
                                               daemon=True)]
+            if self.clock == "ros":
+                self._threads.append(threading.Thread(target=self._loop, name="athena-teleop",
+                                                      daemon=True))
             for th in self._threads:
                 th.start()
         return self
