@@ -316,6 +316,16 @@ def test_teleop_follows_the_master_and_the_watchdog_holds(nodes):
     before, after = (np.array(st[k]["tip_b"].split(), float) for k in (i - 1, i))
     assert int(st[i]["cycle"]) == int(st[i - 1]["cycle"]) + 1
     np.testing.assert_allclose(after, before, rtol=0, atol=1e-12 * max(1.0, np.abs(before).max()))
+    # a NaN master sample is INVALID, a Joy without the clutch button is refused by name
+    seen = len(c.got["tstatus"])
+    m = PoseStamped()
+    m.pose.position.y = float("nan")
+    pose.publish(m)
+    joy.publish(Joy(buttons=[]))
+    c.until(lambda: any("INVALID" in _values(a)["names"] for a in c.got["tstatus"][seen:])
+            and any("button 0" in _values(a)["refused"] for a in c.got["tstatus"][seen:]),
+            "INVALID and the refused clutch", procs=[teleop])
+    assert teleop.poll() is None
     # an e-stop latches ESTOP, also when the master comes back
     estop.publish(Bool(data=True))
     c.until(lambda: _values(c.got["tstatus"][-1])["estop"] == "True", "ESTOP", procs=[teleop])

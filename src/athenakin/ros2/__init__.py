@@ -19,14 +19,13 @@ installation). Topics, QoS, the executor design and the watchdog: docs/ros2.md.
 
 from ._arm_node import ARM_TOPICS, STATE_COMMANDS, ArmNode
 from ._build import CRTK_MSGS_DIR, build_crtk_msgs
-from ._runtime import LOCALHOST_ENV, CrtkTypes, RosContext, crtk_types
+from ._runtime import CrtkTypes, RosContext, crtk_types
 from ._teleop_node import DVRK_PRESET, MASTER_PRESETS, TELEOP_TOPICS, TeleopNode
 
 __all__ = [
     "ARM_TOPICS",
     "CRTK_MSGS_DIR",
     "DVRK_PRESET",
-    "LOCALHOST_ENV",
     "MASTER_PRESETS",
     "STATE_COMMANDS",
     "TELEOP_TOPICS",

@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike
 from .._typing import FloatArray
 from .._validation import check_scalar
 from ..design import Design, resolve_design
-from ..ros._frames import BASE_FRAME, RCM_FRAME, TOOL_TIP_FRAME, joint_values, urdf_model
+from ..ros._frames import BASE_FRAME, RCM_FRAME, joint_values, urdf_model
 from ._convert import (
     ACTUATORS,
     actuator_command,
@@ -460,6 +460,3 @@ def _create_node(name: str, namespace: str, context: RosContext, use_sim_time: b
     return Node(name, namespace=namespace, context=context.context,
                 parameter_overrides=[Parameter("use_sim_time", value=use_sim_time)])
 
-
-#: Frame names the node writes (CRTK poses are the tip in the base frame).
-FRAMES = (BASE_FRAME, RCM_FRAME, TOOL_TIP_FRAME)

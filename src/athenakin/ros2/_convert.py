@@ -9,7 +9,6 @@ rotation-to-quaternion of the ros package.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -176,10 +175,11 @@ def tip_command(msg: Any, frames: dict[str, str]) -> tuple[FloatArray, str]:
     return _finite([p.x, p.y, p.z], "position"), frames[fid]
 
 
-def master_position(msg: Any) -> tuple[float, float, float] | None:
-    """The handle position of a master ``PoseStamped`` (m), None when it is not finite."""
+def master_position(msg: Any) -> tuple[float, float, float]:
+    """The handle position of a master ``PoseStamped`` (m), as it is (NaN included).
+
+    The teleoperation core checks the sample itself (a non-finite one is flagged
+    ``INVALID`` and ignored).
+    """
     p = msg.pose.position
-    x, y, z = float(p.x), float(p.y), float(p.z)
-    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
-        return None
-    return x, y, z
+    return float(p.x), float(p.y), float(p.z)

@@ -9,15 +9,10 @@ here needs a ROS installation. :func:`crtk_types` gives CRTK's own
 from __future__ import annotations
 
 import dataclasses
-import os
 import threading
 from typing import Any
 
-__all__ = ["require_rclpy", "ros2_extra_missing", "CrtkTypes", "crtk_types", "RosContext",
-           "LOCALHOST_ENV"]
-
-#: The environment that keeps discovery on this machine (tests, benchmarks, a first run).
-LOCALHOST_ENV = {"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+__all__ = ["require_rclpy", "ros2_extra_missing", "CrtkTypes", "crtk_types", "RosContext"]
 
 
 def ros2_extra_missing(exc: ModuleNotFoundError) -> ModuleNotFoundError:
@@ -156,7 +151,3 @@ class RosContext:
         if self.context.ok():
             self.context.try_shutdown()
 
-
-def discovery_range() -> str:
-    """``ROS_AUTOMATIC_DISCOVERY_RANGE`` of this process (``"SUBNET"`` when unset)."""
-    return os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "SUBNET") or "SUBNET"

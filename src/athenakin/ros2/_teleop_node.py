@@ -201,7 +201,7 @@ class TeleopNode:
             self._cycle(ns * 1e-9, p, msg.header.stamp)
             return
         with self._lock:
-            self._sample = p          # None (not finite): the core flags INVALID
+            self._sample = p          # a non-finite one: the core flags INVALID
             self._seq += 1
 
     def _on_joy(self, msg: Any) -> None:
