@@ -102,7 +102,7 @@ def run_arm(args: argparse.Namespace) -> int:
     finally:
         node.close()
         print(f"ros2 arm: {node.cycles} cycles, {node.late_cycles} late, {node.commands} "
-              f"commands, {len(node.refusals)} refused", flush=True)
+              f"commands, {node.refused} refused", flush=True)
     return 0
 
 

@@ -177,8 +177,8 @@ class ArmNode:
         self.refusals: list[tuple[str, str]] = []
         #: Servo cycles run, cycles that started late by more than one period.
         self.cycles, self.late_cycles = 0, 0
-        #: Command messages received (accepted or refused).
-        self.commands = 0
+        #: Command messages received (accepted or refused), and refused.
+        self.commands = self.refused = 0
         #: The last error of the servo thread (None: none).
         self.error: str | None = None
         self._pubs = self._publishers()
@@ -235,6 +235,7 @@ class ArmNode:
     # --- commands -------------------------------------------------------------------
     def refuse(self, command: str, reason: str) -> None:
         """Answer a refused ``command`` on ``status`` (``"refused <command>: <reason>"``)."""
+        self.refused += 1
         self.refusals.append((command, reason))
         del self.refusals[:-1000]
         self._pubs["status"].publish(self.crtk.string(f"refused {command}: {reason}",
