@@ -30,7 +30,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
     "mechanism": ("_mechanism",),
     "areas": ("analysis", "calibration", "certified", "collision", "dynamics", "motion",
               "synthesis"),
-    "systems": ("teleop", "sim", "ros", "_robot_model"),
+    "systems": ("teleop", "sim", "ros", "_robot_model", "ros2"),
     "views": ("plot", "app"),
     "command line": ("cli", "__main__"),
 }

@@ -179,7 +179,8 @@ def _command_lines(tmp: Path) -> list[list[str]]:
             ["singularities", "--resolution", "5"], ["view", "-o", "v.png"],
             ["animate", "-o", "a.gif"], ["export", "-o", "m.xml"], ["derive"], ["design"],
             ["calibrate", "--plan", "3", "-o", "c.toml"],
-            ["synthesize", "--designs", "2", "-o", "syn"], ["app"], ["warmup"]]
+            ["synthesize", "--designs", "2", "-o", "syn"], ["app"], ["warmup"],
+            ["ros2", "arm", "--duration", "1"]]
 
 
 def test_core_only_install_runs_every_command_to_a_named_message(tmp_path):
@@ -187,7 +188,7 @@ def test_core_only_install_runs_every_command_to_a_named_message(tmp_path):
     lines = _command_lines(tmp_path)
     assert {a[0] for a in lines} >= set(COMMANDS) - {"teleop"}
     wanted = {"plan": "motion", "synthesize": "synthesis", "track": "ros", "view": "plot",
-              "derive": "symbolic", "app": "app"}
+              "derive": "symbolic", "app": "app", "ros2": "ros2"}
     for argv in lines:
         r = _core_only(argv, tmp_path)
         assert r.returncode in (0, 1), (argv, r.returncode, r.stderr[-2000:])
@@ -203,7 +204,9 @@ def test_core_only_install_runs_every_command_to_a_named_message(tmp_path):
 def test_extras_table_matches_pyproject():
     aliases = {"pin": "pinocchio", "python-flint": "flint", "mcap-ros2-support": "mcap_ros2",
                "foxglove-sdk": "foxglove", "imageio-ffmpeg": "imageio_ffmpeg",
-               "pytest-benchmark": "pytest_benchmark"}
+               "pytest-benchmark": "pytest_benchmark", "catkin-pkg": "catkin_pkg"}
+    aliases.update({n: n[4:].replace("-", "_") for r in (ROOT / "pyproject.toml").read_text()
+                    .split('"') if (n := r.split(">")[0]).startswith("ros-")})
     extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"][
         "optional-dependencies"]
     for name, reqs in extras.items():

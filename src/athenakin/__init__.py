@@ -18,7 +18,8 @@ Subpackages, by layer (bottom first; docs/architecture.md, enforced by tests/tes
   dynamics), :mod:`athenakin.motion` (paths, trajectories, tracking),
   :mod:`athenakin.synthesis` (design studies);
 * systems: :mod:`athenakin.teleop` (teleoperation), :mod:`athenakin.sim` (MuJoCo/URDF),
-  :mod:`athenakin.ros` (ROS 2 recordings, MCAP, Foxglove);
+  :mod:`athenakin.ros` (ROS 2 recordings, MCAP, Foxglove), :mod:`athenakin.ros2` (the CRTK
+  arm node and the teleop node on a live ROS 2 graph);
 * views: :mod:`athenakin.plot` (figures), :mod:`athenakin.app` (the live app);
 * command line: :mod:`athenakin.cli`.
 
@@ -62,7 +63,7 @@ __version__ = "0.1.0"
 #: Subpackages imported on first attribute access (optional heavy dependencies).
 _LAZY_SUBPACKAGES = ("analysis", "symbolic", "plot", "sim", "motion", "fast", "certified",
                      "calibration", "app", "collision", "ros", "dynamics", "synthesis",
-                     "testing", "teleop")
+                     "testing", "teleop", "ros2")
 #: Public functions of lazily imported subpackages, reachable as ``ak.<name>``.
 _LAZY_FUNCTIONS = {"certified_forward_kinematics": "certified", "Robot": "_robot_model"}
 

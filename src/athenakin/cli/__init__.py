@@ -38,13 +38,18 @@ EXTRAS = {
     "dynamics": ("scipy",),
     "ros": ("rosbags", "mcap", "mcap_ros2", "foxglove", "isal", "websockets", "zstandard",
             "lz4", "tqdm"),
+    "ros2": ("rclpy", "rmw_fastrtps_cpp", "std_msgs", "sensor_msgs", "geometry_msgs",
+             "builtin_interfaces", "rosgraph_msgs", "diagnostic_msgs", "mujoco", "ruckig"),
+    "ros2-msgs": ("ament_cmake", "ament_cmake_ros", "ament_cmake_ros_core",
+                  "ament_cmake_include_directories", "ament_package",
+                  "rosidl_default_generators", "rosidl_core_generators", "catkin_pkg"),
 }
 #: The extra of each command's own optional packages: a package of several extras is
 #: named by the command's (``plan`` needs scipy of [motion], not of [analysis]).
 COMMAND_EXTRAS = {"plan": "motion", "track": "ros", "synthesize": "synthesis",
                   "calibrate": "calibration", "view": "plot", "animate": "plot",
                   "export": "sim", "derive": "symbolic", "app": "app",
-                  "workspace": "analysis", "singularities": "analysis"}
+                  "workspace": "analysis", "singularities": "analysis", "ros2": "ros2"}
 
 
 def extra_of(module: str | None, command: str | None = None) -> str:
@@ -74,7 +79,7 @@ def extra_of(module: str | None, command: str | None = None) -> str:
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
 COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
             "animate", "export", "derive", "design", "calibrate", "synthesize", "teleop", "app",
-            "warmup"]
+            "warmup", "ros2"]
 
 
 class _Parser(argparse.ArgumentParser):

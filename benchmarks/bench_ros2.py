@@ -1,0 +1,187 @@
+"""The arm node over a ROS 2 graph: ``servo_jp`` in -> ``measured_js`` out, beside one process.
+
+Run from the repository root (the extra ``ros2``; discovery stays on the loopback)::
+
+    python benchmarks/bench_ros2.py [--rate 1000] [--publish-rate RATE] [--seconds 5]
+
+Starts ``athenakin ros2 arm`` in its own process, servoing at ``--rate`` with its state
+published at ``--publish-rate`` (default: every servo cycle), and from this process sends
+one ``servo_jp`` per published state (reliable QoS), each a distinct setpoint. The
+latency of a command is the time from its ``publish()`` to the arrival of the first
+``measured_js`` whose ``setpoint_js`` (same stamp) carries it: the command crossed the
+graph, waited for the next servo cycle, was stepped and published, and crossed back.
+Lost: commands the arm node never received (its own count at exit); replaced: received,
+but a later one was the setpoint by the time a state message was published (two in one
+publishing period: CRTK's servo keeps the latest). CPU: the arm process's user + system
+time per servo cycle. Beside it, the same loop in one process (``servo_jp``, ``step``,
+``measured_js`` of :class:`athenakin.teleop.SimulatedArm`, no graph), per cycle.
+The machine's load is printed beside every figure.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+Q0 = (-0.1, 0.1, 0.45)
+STEP = 1e-7          # m between two commands' q3 (the commands are told apart by it)
+
+
+def _load() -> str:
+    return "load " + " ".join(open("/proc/loadavg").read().split()[:3]) + \
+        f" on {os.cpu_count()} cores"
+
+
+def _cpu_s(pid: int) -> float:
+    fields = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _pct(x: np.ndarray) -> str:
+    us = x * 1e6
+    return (f"p50 {np.percentile(us, 50):8.1f} us  p99 {np.percentile(us, 99):8.1f} us  "
+            f"max {us.max():9.1f} us")
+
+
+def in_process(rate: float, cycles: int) -> np.ndarray:
+    """Per-cycle time of servo_jp -> step -> measured_js in one process, s."""
+    import athenakin as ak
+    from athenakin.teleop import SimulatedArm
+
+    d = ak.Design.default()
+    arm = SimulatedArm(ak.default_rcm_frame(d), d, q0=Q0, rate=rate)
+    arm.enable()
+    q = np.array(Q0)
+    dt = np.empty(cycles)
+    for k in range(cycles):
+        t0 = time.perf_counter()
+        q[2] = Q0[2] + STEP * (k % 1000)
+        arm.servo_jp(q)
+        arm.step(1)
+        arm.measured_js()
+        dt[k] = time.perf_counter() - t0
+    return dt
+
+
+def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
+               ) -> dict[str, object]:
+    """Run the arm node in its own process and time ``seconds`` of commands through it."""
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from sensor_msgs.msg import JointState
+
+    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", ROS_DOMAIN_ID=str(domain),
+               PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    proc = subprocess.Popen([sys.executable, "-m", "athenakin", "ros2", "arm", "--enable",
+                             "--rate", str(rate), "--publish-rate", str(publish_rate)],
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=domain)
+    node = rclpy.create_node("bench_client", context=ctx)
+    ex = SingleThreadedExecutor(context=ctx)
+    ex.add_node(node)
+    qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+    sent: dict[int, float] = {}
+    seen: dict[tuple[int, int], float] = {}     # stamp of a measured_js -> arrival time
+    sp_of: dict[tuple[int, int], int] = {}      # stamp of a setpoint_js -> the command index
+    lock = threading.Lock()
+
+    def on_js(m: JointState) -> None:
+        t = time.perf_counter()
+        with lock:
+            seen[(m.header.stamp.sec, m.header.stamp.nanosec)] = t
+
+    def on_sp(m: JointState) -> None:
+        k = round((m.position[2] - Q0[2]) / STEP)
+        with lock:
+            sp_of[(m.header.stamp.sec, m.header.stamp.nanosec)] = k
+
+    node.create_subscription(JointState, "/athena/measured_js", on_js, qos)
+    node.create_subscription(JointState, "/athena/setpoint_js", on_sp, qos)
+    pub = node.create_publisher(JointState, "/athena/servo_jp", qos)
+    stop = threading.Event()
+    spinner = threading.Thread(target=lambda: [ex.spin_once(timeout_sec=0.05)
+                                               for _ in iter(stop.is_set, True)], daemon=True)
+    spinner.start()
+    end = time.monotonic() + 180
+    while (pub.get_subscription_count() == 0 or not seen) and time.monotonic() < end:
+        time.sleep(0.05)
+    if not seen:
+        proc.kill()
+        log = proc.stdout.read() if proc.stdout else ""
+        raise RuntimeError(f"the arm node did not start: {log}")
+    time.sleep(1.0)        # the arm's reader matches this writer (each side on its own)
+    cpu0, load = _cpu_s(proc.pid), _load()
+    n = int(seconds * publish_rate)
+    period = 1.0 / publish_rate
+    t_next = time.perf_counter()
+    q = list(Q0)
+    for k in range(1, n + 1):
+        q[2] = Q0[2] + STEP * k
+        msg = JointState(name=["q1", "q2", "q3"], position=[float(v) for v in q])
+        sent[k] = time.perf_counter()
+        pub.publish(msg)
+        t_next += period
+        wait = t_next - time.perf_counter()
+        if wait > 0:
+            time.sleep(wait)
+    time.sleep(1.0)
+    cpu = _cpu_s(proc.pid) - cpu0
+    proc.send_signal(signal.SIGINT)
+    out = proc.communicate(timeout=30)[0]
+    stop.set()
+    spinner.join(timeout=5)
+    node.destroy_node()
+    ctx.try_shutdown()
+    m = re.search(r"(\d+) cycles, (\d+) late, (\d+) commands", out)
+    cycles, late, received = (int(g) for g in m.groups()) if m else (0, 0, -1)
+    first: dict[int, float] = {}
+    with lock:
+        for stamp, k in sp_of.items():
+            if k in sent and stamp in seen:
+                first[k] = min(first.get(k, np.inf), seen[stamp] - sent[k])
+    lat = np.array([first[k] for k in sorted(first)])
+    return {"latency": lat, "sent": n, "received": received, "reflected": len(first),
+            "cycles": cycles, "late": late, "cpu_per_cycle": cpu / max(1, cycles), "load": load,
+            "wall": cycles / rate}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--rate", type=float, default=1000.0, help="servo and command rate, Hz")
+    ap.add_argument("--publish-rate", type=float, help="state and command rate, Hz (--rate)")
+    ap.add_argument("--seconds", type=float, default=5.0, help="commands for this long, s")
+    args = ap.parse_args()
+    domain = 1 + os.getpid() % 100
+    base = in_process(args.rate, int(args.seconds * args.rate))
+    print(f"in one process, servo_jp -> step -> measured_js: {_pct(base)} ({_load()})")
+    publish = args.rate if args.publish_rate is None else args.publish_rate
+    r = over_graph(args.rate, publish, args.seconds, domain)
+    lat = r["latency"]
+    assert isinstance(lat, np.ndarray)
+    lost = r["sent"] - r["received"] if r["received"] >= 0 else "unknown"
+    print(f"over the graph, servo at {args.rate:g} Hz, state and commands at {publish:g} Hz, "
+          f"{r['sent']} servo_jp (reliable): {_pct(lat)} ({r['load']})")
+    print(f"  lost {lost} of {r['sent']}; replaced before a state message showed them "
+          f"{r['received'] - r['reflected']}; arm cycles {r['cycles']}, late {r['late']}")
+    print(f"  arm node CPU {r['cpu_per_cycle'] * 1e6:.1f} us per cycle "
+          f"({r['cpu_per_cycle'] * args.rate * 100:.0f} % of one core at {args.rate:g} Hz)")
+    print(f"  p50 graph / p50 one process: "
+          f"{np.percentile(lat, 50) / np.percentile(base, 50):.1f}x ({_load()})")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,160 @@
+"""``athenakin ros2``: the arm node, the teleop node, and the CRTK messages' build step."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..teleop._filter import TREMOR_FILTERS
+from ._common import add_robot_options, check_finite, load_robot
+
+
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``ros2`` subcommand and its own subcommands ``arm``, ``teleop``, ``build-msgs``."""
+    p = sub.add_parser(
+        "ros2", help="ATHENA live on a ROS 2 graph: the CRTK arm node, the teleop node",
+        description="Run ATHENA's nodes on a ROS 2 graph with the real rclpy and Fast DDS "
+                    "(extra 'ros2', no ROS installation). Keep discovery on this machine with "
+                    "ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST. docs/ros2.md.")
+    own = p.add_subparsers(dest="ros2_command", metavar="NODE")
+    own.required = True
+    a = own.add_parser("arm", help="serve the simulated arm under CRTK names",
+                       description="The MuJoCo arm under CRTK's topics in a namespace: "
+                                   "measured_js, setpoint_js, measured_cp, setpoint_cp, "
+                                   "measured_cv, operating_state, status; commands servo_jp, "
+                                   "servo_cp, move_jp, move_cp, state_command, hold; "
+                                   "/joint_states and /robot_description.")
+    a.add_argument("--namespace", default="/athena", help="CRTK namespace (/athena)")
+    a.add_argument("--rate", type=float, default=1000.0, help="servo rate, Hz (1000)")
+    a.add_argument("--publish-rate", type=float, default=100.0,
+                   help="state messages per second, Hz (100)")
+    a.add_argument("--q0", nargs=3, type=float, metavar=("Q1", "Q2", "Q3"),
+                   default=[-0.1, 0.1, 0.45], help="where the robot stands, m (-0.1 0.1 0.45)")
+    a.add_argument("--enable", action="store_true", help="enable the arm at start")
+    a.add_argument("--use-sim-time", action="store_true", help="stamp from /clock")
+    a.add_argument("--duration", type=float, help="stop after this many seconds")
+    add_robot_options(a)
+    a.set_defaults(func=run_arm)
+    t = own.add_parser("teleop", help="drive the arm node from a master's topics",
+                       description="A master's geometry_msgs/PoseStamped (m) and "
+                                   "sensor_msgs/Joy clutch (a held button decouples) through "
+                                   "athenakin.teleop.Teleop to the arm node's servo_jp, with "
+                                   "the status on <namespace>/teleop/status and an e-stop "
+                                   "on <namespace>/teleop/estop.")
+    t.add_argument("--namespace", default="/athena", help="the arm node's namespace (/athena)")
+    t.add_argument("--preset", choices=("default", "dvrk-mtmr"), default="default",
+                   help="master topics: default /master/pose + /master/joy; dvrk-mtmr "
+                        "/MTMR/measured_cp + /footpedals/clutch")
+    t.add_argument("--pose-topic", help="the master's PoseStamped topic (overrides --preset)")
+    t.add_argument("--clutch-topic",
+                   help="the clutch's Joy topic (overrides --preset); 'none': always engaged")
+    t.add_argument("--clutch-button", type=int, default=0, help="Joy button of the clutch (0)")
+    t.add_argument("--master-frame", help="frame_id the master's poses must carry")
+    t.add_argument("--rate", type=float, default=1000.0, help="teleop rate, Hz (1000)")
+    t.add_argument("--scale", type=float, default=0.2, help="motion scale (0.2)")
+    t.add_argument("--watchdog", type=float, help="watchdog, s (TeleopOptions' 0.03)")
+    t.add_argument("--status-every", type=int, default=10,
+                   help="publish the status every N cycles and on every change (10)")
+    t.add_argument("--q0", nargs=3, type=float, metavar=("Q1", "Q2", "Q3"),
+                   help="where the robot stands, m (default: the arm's first measured_js)")
+    t.add_argument("--use-sim-time", action="store_true", help="stamp from /clock")
+    t.add_argument("--filter", default="notch8-12", choices=tuple(TREMOR_FILTERS),
+                   help="tremor filter (notch8-12)")
+    t.add_argument("--clock", choices=("ros", "master"), default="ros",
+                   help="ros: cycles at --rate on the ROS clock (the watchdog counts silent "
+                        "cycles); master: one cycle per master message at its stamp (replays)")
+    t.add_argument("--with-arm", action="store_true",
+                   help="run an arm node (enabled) in this process too")
+    t.add_argument("--duration", type=float, help="stop after this many seconds")
+    add_robot_options(t)
+    t.set_defaults(func=run_teleop)
+    b = own.add_parser("build-msgs", help="build CRTK's crtk_msgs with the rosidl wheels",
+                       description="Build and install crtk_msgs (OperatingState, "
+                                   "StringStamped) into this Python's prefix: needs the extra "
+                                   "'ros2-msgs', CMake and a C compiler (about 30 s).")
+    b.add_argument("--prefix", help="install prefix (default: this Python's)")
+    b.add_argument("--verbose", action="store_true", help="show CMake's output")
+    b.set_defaults(func=run_build)
+
+
+def _duration(args: argparse.Namespace) -> float | None:
+    if args.duration is not None:
+        check_finite(args.duration, "--duration", positive=True)
+    return args.duration
+
+
+def run_arm(args: argparse.Namespace) -> int:
+    """Execute ``ros2 arm``."""
+    from ..ros2 import ArmNode
+
+    check_finite(args.q0, "--q0")
+    duration = _duration(args)
+    design, T = load_robot(args)
+    node = ArmNode(T_b_e=T, design=design, q0=args.q0, rate=args.rate,
+                   namespace=args.namespace, publish_rate=args.publish_rate,
+                   enable=args.enable, use_sim_time=args.use_sim_time)
+    kind = "crtk_msgs" if node.crtk.native else "std_msgs stand-ins"
+    print(f"ros2 arm: {node.namespace} at {args.rate:g} Hz, state at {node.publish_rate:g} Hz, "
+          f"{node.arm.operating_state}, CRTK types: {kind}", flush=True)
+    try:
+        node.spin(duration)
+    except KeyboardInterrupt:     # Ctrl-C: the node's normal end
+        pass
+    finally:
+        node.close()
+        print(f"ros2 arm: {node.cycles} cycles, {node.late_cycles} late, {node.commands} "
+              f"commands, {node.refused} refused", flush=True)
+    return 0
+
+
+def run_teleop(args: argparse.Namespace) -> int:
+    """Execute ``ros2 teleop``."""
+    from ..ros2 import MASTER_PRESETS, TeleopNode
+    from ..teleop import TeleopOptions
+
+    duration = _duration(args)
+    preset = MASTER_PRESETS[args.preset]
+    pose = args.pose_topic or preset["pose"]
+    clutch = args.clutch_topic or preset["clutch"]
+    if args.q0 is not None:
+        check_finite(args.q0, "--q0")
+    options = TeleopOptions(filter=args.filter) if args.watchdog is None else \
+        TeleopOptions(filter=args.filter, watchdog=args.watchdog)
+    design, T = load_robot(args)
+    context = arm = None
+    if args.with_arm:
+        from ..ros2 import ArmNode, RosContext
+
+        context = RosContext()
+        arm = ArmNode(T_b_e=T, design=design, q0=args.q0, namespace=args.namespace,
+                      enable=True, use_sim_time=args.use_sim_time, context=context).start()
+    try:
+        node = TeleopNode(T, design, q0=args.q0, rate=args.rate, scale=args.scale,
+                          options=options, arm_namespace=args.namespace, pose_topic=pose,
+                          clutch_topic=None if clutch.lower() == "none" else clutch,
+                          clutch_button=args.clutch_button, master_frame=args.master_frame,
+                          status_every=args.status_every, use_sim_time=args.use_sim_time,
+                          clock=args.clock, context=context)
+        print(f"ros2 teleop: {pose} + {clutch} -> {node.namespace}/servo_jp at "
+              f"{args.rate:g} Hz" + (" (arm node in this process)" if arm else ""), flush=True)
+        try:
+            node.spin(duration)
+        except KeyboardInterrupt:     # Ctrl-C: the node's normal end
+            pass
+        finally:
+            node.close()
+            print(f"ros2 teleop: {node.cycles} cycles, {node.late_cycles} late", flush=True)
+    finally:
+        if arm is not None:
+            arm.close()
+        if context is not None:
+            context.close()
+    return 0
+
+
+def run_build(args: argparse.Namespace) -> int:
+    """Execute ``ros2 build-msgs``."""
+    from ..ros2 import build_crtk_msgs
+
+    path = build_crtk_msgs(prefix=args.prefix, verbose=args.verbose)
+    print(f"ros2 build-msgs: installed crtk_msgs in {path}")
+    return 0

@@ -1,0 +1,463 @@
+"""The arm on a ROS 2 graph: CRTK topics over :class:`athenakin.teleop.SimulatedArm` (private).
+
+:class:`ArmNode` is a thin adapter. Its subscriptions convert a message
+(:mod:`._convert`) and call the arm's own CRTK method (``servo_jp``, ``move_cp``,
+``enable``, ...) under one lock; whatever the arm refuses (an exception: a bad
+shape, a NaN, a stroke, an unreachable tip, a state that takes no command) is
+answered on ``status`` and never executed. A dedicated servo thread steps the arm
+at its rate and publishes its state every ``rate / publish_rate`` cycles; the ROS
+executor runs the subscriptions on its own thread, so a burst of commands never
+delays a servo cycle by more than the lock's hold (one method call).
+
+Topics (relative names are under ``namespace``): docs/ros2.md has the table.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .._typing import FloatArray
+from .._validation import check_scalar
+from ..design import Design, resolve_design
+from ..ros._frames import BASE_FRAME, RCM_FRAME, joint_values, urdf_model
+from ._convert import (
+    ACTUATORS,
+    actuator_command,
+    joint_state,
+    pose_stamped,
+    stamp_ns,
+    tip_command,
+    twist_stamped,
+)
+from ._runtime import RosContext, crtk_types, require_rclpy
+
+__all__ = ["ArmNode", "ARM_TOPICS", "STATE_COMMANDS", "check_namespace"]
+
+#: Topics of :class:`ArmNode`: key -> name (relative: under the namespace).
+ARM_TOPICS = {
+    "measured_js": "measured_js", "setpoint_js": "setpoint_js", "measured_cp": "measured_cp",
+    "setpoint_cp": "setpoint_cp", "measured_cv": "measured_cv",
+    "operating_state": "operating_state", "status": "status",
+    "servo_jp": "servo_jp", "servo_cp": "servo_cp", "move_jp": "move_jp", "move_cp": "move_cp",
+    "state_command": "state_command", "hold": "hold",
+    "joint_states": "joint_states", "joint_commands": "joint_commands",
+    "urdf_joint_states": "/joint_states", "robot_description": "/robot_description",
+}
+#: The ``state_command`` strings (CRTK's names) and the arm's method each calls.
+STATE_COMMANDS = {"enable": "enable", "disable": "disable", "pause": "pause",
+                  "resume": "resume", "home": "home", "unhome": "unhome"}
+#: Most servo cycles the thread catches up at once after a stall (then it skips ahead).
+MAX_CATCH_UP = 10
+
+
+def check_namespace(namespace: str) -> str:
+    """A ROS namespace: ``/`` then names of letters, digits and ``_`` separated by ``/``."""
+    import re
+
+    if not isinstance(namespace, str):
+        raise TypeError(f"namespace: expected a str, got {type(namespace).__name__}")
+    ns = namespace if namespace.startswith("/") else "/" + namespace
+    ns = ns.rstrip("/") or "/"
+    if ns != "/" and not re.fullmatch(r"(/[A-Za-z_][A-Za-z0-9_]*)+", ns):
+        raise ValueError(f"namespace: expected names of letters, digits and '_' separated by "
+                         f"'/' (e.g. /athena), got {namespace!r}")
+    return ns
+
+
+def _qos(depth: int, *, latched: bool = False) -> Any:
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+    return QoSProfile(depth=depth, history=HistoryPolicy.KEEP_LAST,
+                      reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL if latched
+                      else DurabilityPolicy.VOLATILE)
+
+
+def _rotation_rate(R0: FloatArray, R1: FloatArray, dt: float) -> FloatArray:
+    """Angular velocity (base frame, rad/s) that turns ``R0`` into ``R1`` in ``dt`` s."""
+    Rr = R0.T @ R1
+    c = min(1.0, max(-1.0, (np.trace(Rr) - 1.0) / 2.0))
+    angle = math.acos(c)
+    w = np.array([Rr[2, 1] - Rr[1, 2], Rr[0, 2] - Rr[2, 0], Rr[1, 0] - Rr[0, 1]])
+    s = math.sin(angle)
+    w = w * (0.5 if s < 1e-9 else angle / (2.0 * s))
+    return np.asarray(R0 @ w / dt, dtype=float)
+
+
+class ArmNode:
+    """ATHENA's arm on a ROS 2 graph under CRTK's names (rclpy, any RMW; Fast DDS by default).
+
+    Parameters
+    ----------
+    arm : athenakin.teleop.SimulatedArm, optional
+        The arm to serve (any backend); default a MuJoCo :class:`SimulatedArm` of
+        ``T_b_e``, ``design``, ``q0`` and ``rate``.
+    T_b_e : array-like, shape (4, 4), optional, keyword-only
+        RCM frame in the base frame (default :func:`athenakin.default_rcm_frame`); taken
+        from ``arm`` when given.
+    design : Design, optional, keyword-only
+    q0 : array-like, shape (3,), optional, keyword-only
+        Start of the default arm, m.
+    rate : float, keyword-only
+        Servo cycles per second of the default arm, Hz (1000).
+    namespace : str, keyword-only
+        Namespace of the CRTK topics (``/athena``).
+    publish_rate : float, keyword-only
+        State messages per second, Hz (100; at most the servo rate, of which it is
+        rounded to a whole divisor).
+    enable : bool, keyword-only
+        Send ``enable`` to the arm at start (a lab's client usually does, on
+        ``state_command``).
+    use_sim_time : bool, keyword-only
+        Stamp from ``/clock`` (ROS's ``use_sim_time``) instead of the system clock.
+    context : RosContext, optional, keyword-only
+        The rclpy context to join (default: its own, closed with the node).
+    node_name : str, keyword-only
+
+    Raises
+    ------
+    ModuleNotFoundError
+        rclpy is not installed (the message names the extra ``ros2``).
+    ValueError, TypeError
+        A bad argument, named.
+
+    Examples
+    --------
+    ::
+
+        node = ArmNode(enable=True)      # /athena/measured_js, ... on the graph
+        node.start()
+        node.spin()                      # until Ctrl-C
+    """
+
+    def __init__(self, arm: Any = None, *, T_b_e: ArrayLike | None = None,
+                 design: Design | None = None, q0: ArrayLike | None = None,
+                 rate: float = 1000.0, namespace: str = "/athena", publish_rate: float = 100.0,
+                 enable: bool = False, use_sim_time: bool = False,
+                 context: RosContext | None = None, node_name: str = "athena_arm") -> None:
+        require_rclpy()
+        from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.parameter import Parameter
+
+        from ..robot._setup import resolve_rcm_frame
+        from ..teleop import SimulatedArm
+
+        self.namespace = check_namespace(namespace)
+        if arm is None:
+            design = resolve_design(design)
+            arm = SimulatedArm(resolve_rcm_frame(T_b_e, design), design, q0=q0, rate=rate)
+        elif not isinstance(arm, SimulatedArm):
+            raise TypeError(f"arm: expected an athenakin.teleop.SimulatedArm, got "
+                            f"{type(arm).__name__}")
+        self.arm = arm
+        self.design, self.T_b_e = arm.design, np.array(arm.T_b_e, dtype=float)
+        publish_rate = check_scalar(publish_rate, "publish_rate", positive=True)
+        self.decimation = max(1, round(arm.rate / publish_rate))
+        self.publish_rate = arm.rate / self.decimation
+        self.crtk = crtk_types()
+        self._urdf = urdf_model(self.design, self.T_b_e)
+        self._own_context = context is None
+        self.context = RosContext() if context is None else context
+        self.node = _create_node(node_name, self.namespace, self.context, use_sim_time,
+                                 Parameter)
+        self._lock = threading.RLock()
+        self._stop = threading.Event()
+        self._last_stamp: dict[str, int] = {}
+        self._last_state: tuple[str, bool] | None = None
+        self._prev_R: FloatArray | None = None
+        #: Refusals so far: (command, reason) pairs, oldest first (the last 1000).
+        self.refusals: list[tuple[str, str]] = []
+        #: Servo cycles run, cycles that started late by more than one period.
+        self.cycles, self.late_cycles = 0, 0
+        #: Command messages received (accepted or refused), and refused.
+        self.commands = self.refused = 0
+        #: The last error of the servo thread (None: none).
+        self.error: str | None = None
+        self._pubs = self._publishers()
+        group = MutuallyExclusiveCallbackGroup()
+        self._subscriptions(group)
+        self._executor = SingleThreadedExecutor(context=self.context.context)
+        self._executor.add_node(self.node)
+        self._threads: list[threading.Thread] = []
+        from std_msgs.msg import String
+
+        self._pubs["robot_description"].publish(String(data=self._urdf.text))
+        if enable:
+            with self._lock:
+                self.arm.enable()
+        self._publish_state(force=True)
+
+    # --- set-up ---------------------------------------------------------------------
+    def _publishers(self) -> dict[str, Any]:
+        from geometry_msgs.msg import PoseStamped, TwistStamped
+        from sensor_msgs.msg import JointState
+        from std_msgs.msg import String
+
+        n, t = self.node, ARM_TOPICS
+        kinds = {"measured_js": JointState, "setpoint_js": JointState,
+                 "measured_cp": PoseStamped, "setpoint_cp": PoseStamped,
+                 "measured_cv": TwistStamped, "joint_states": JointState,
+                 "urdf_joint_states": JointState}
+        pubs = {k: n.create_publisher(typ, t[k], _qos(10)) for k, typ in kinds.items()}
+        pubs["operating_state"] = n.create_publisher(self.crtk.operating_state,
+                                                     t["operating_state"], _qos(1, latched=True))
+        pubs["status"] = n.create_publisher(self.crtk.string_stamped, t["status"], _qos(100))
+        pubs["robot_description"] = n.create_publisher(String, t["robot_description"],
+                                                       _qos(1, latched=True))
+        return pubs
+
+    def _subscriptions(self, group: Any) -> None:
+        from geometry_msgs.msg import PoseStamped
+        from sensor_msgs.msg import JointState
+        from std_msgs.msg import Empty
+
+        n, t = self.node, ARM_TOPICS
+        table: list[tuple[str, Any, Callable[[Any], None]]] = [
+            ("servo_jp", JointState, self._on_servo_jp),
+            ("joint_commands", JointState, self._on_servo_jp_pair),
+            ("move_jp", JointState, self._on_move_jp),
+            ("servo_cp", PoseStamped, self._on_servo_cp),
+            ("move_cp", PoseStamped, self._on_move_cp),
+            ("state_command", self.crtk.string_stamped, self._on_state_command),
+            ("hold", Empty, self._on_hold),
+        ]
+        self._subs = [n.create_subscription(typ, t[key], cb, _qos(100), callback_group=group)
+                      for key, typ, cb in table]
+
+    # --- commands -------------------------------------------------------------------
+    def refuse(self, command: str, reason: str) -> None:
+        """Answer a refused ``command`` on ``status`` (``"refused <command>: <reason>"``)."""
+        self.refused += 1
+        self.refusals.append((command, reason))
+        del self.refusals[:-1000]
+        self._pubs["status"].publish(self.crtk.string(f"refused {command}: {reason}",
+                                                      self._now()))
+
+    def _command(self, name: str, msg: Any, call: Callable[[], None], *,
+                 stamped: bool = True, needs_enabled: bool = True) -> None:
+        """Run ``call`` on the arm, or answer why not: the one path of every command."""
+        self.commands += 1
+        try:
+            if stamped:
+                ns = stamp_ns(msg.header)
+                last = self._last_stamp.get(name, 0)
+                if ns and ns < last:
+                    raise ValueError(f"stamp: {ns} ns is older than the previous {name}'s "
+                                     f"({last} ns)")
+            with self._lock:
+                state = self.arm.operating_state
+                if needs_enabled and state != "ENABLED":
+                    raise ValueError(f"the arm is {state}, not ENABLED (send 'enable' or "
+                                     f"'resume' on state_command)")
+                call()
+            if stamped and ns:
+                self._last_stamp[name] = ns
+        except Exception as exc:    # the arm's refusal, whatever its kind: never executed
+            self.refuse(name, f"{type(exc).__name__}: {exc}")
+        self._publish_state()
+
+    def _on_servo_jp(self, msg: Any, name: str = "servo_jp") -> None:
+        def call() -> None:
+            q, v, e = actuator_command(msg)
+            self.arm.servo_jp(q, velocity=v, effort=e)
+        self._command(name, msg, call)
+
+    def _on_servo_jp_pair(self, msg: Any) -> None:
+        self._on_servo_jp(msg, "joint_commands")
+
+    def _on_move_jp(self, msg: Any) -> None:
+        def call() -> None:
+            q, v, _ = actuator_command(msg)
+            self.arm.move_jp(q, goal_velocity=v)
+        self._command("move_jp", msg, call)
+
+    def _tip(self, msg: Any) -> tuple[FloatArray, str]:
+        return tip_command(msg, {"": "base", BASE_FRAME: "base", RCM_FRAME: "rcm"})
+
+    def _on_servo_cp(self, msg: Any) -> None:
+        def call() -> None:
+            tip, frame = self._tip(msg)
+            self.arm.servo_cp(tip, frame=frame)
+        self._command("servo_cp", msg, call)
+
+    def _on_move_cp(self, msg: Any) -> None:
+        def call() -> None:
+            tip, frame = self._tip(msg)
+            self.arm.move_cp(tip, frame=frame)
+        self._command("move_cp", msg, call)
+
+    def _on_hold(self, msg: Any) -> None:
+        self._command("hold", msg, self.arm.hold, stamped=False, needs_enabled=False)
+
+    def _on_state_command(self, msg: Any) -> None:
+        text = self.crtk.text(msg).strip()
+
+        def call() -> None:
+            method = STATE_COMMANDS.get(text.lower())
+            if method is None:
+                raise ValueError(f"state_command: expected one of {sorted(STATE_COMMANDS)}, "
+                                 f"got {text!r:.40}")
+            fn = getattr(self.arm, method, None)
+            if fn is None and method == "resume":
+                fn = self.arm.enable         # an arm whose enable also resumes
+            if fn is None:
+                raise ValueError(f"state_command: this arm has no {method!r}")
+            fn()
+        self._command("state_command", msg, call, stamped=self.crtk.native, needs_enabled=False)
+
+    # --- state ----------------------------------------------------------------------
+    def _now(self) -> Any:
+        return self.node.get_clock().now().to_msg()
+
+    def _publish_state(self, *, force: bool = False) -> None:
+        with self._lock:
+            state = (self.arm.operating_state, bool(self.arm.is_busy))
+            fault = getattr(self.arm, "fault", None)
+        if not force and state == self._last_state:
+            return
+        self._last_state = state
+        homed = bool(getattr(self.arm, "is_homed", True))
+        self._pubs["operating_state"].publish(self.crtk.state(
+            state[0], is_homed=homed, is_busy=state[1], stamp=self._now()))
+        if state[0] == "FAULT" and fault:
+            self._pubs["status"].publish(self.crtk.string(f"fault: {fault}", self._now()))
+
+    def _snapshot(self) -> tuple[Any, ...]:
+        arm = self.arm
+        return (arm.measured_js(), arm.setpoint_js(), arm.measured_cp(), arm.setpoint_cp())
+
+    def publish_once(self) -> None:
+        """Publish the arm's state now (every state topic once); the servo thread's step."""
+        from .. import forward_kinematics
+        from ..analysis import tool_tip_jacobian
+
+        with self._lock:
+            js, sp, cp, scp = self._snapshot()
+        stamp = self._now()
+        p = self._pubs
+        p["measured_js"].publish(joint_state(ACTUATORS, js.position, js.velocity, js.effort,
+                                             stamp=stamp))
+        p["joint_states"].publish(joint_state(ACTUATORS, js.position, js.velocity, js.effort,
+                                              stamp=stamp))
+        p["setpoint_js"].publish(joint_state(ACTUATORS, sp.position, sp.velocity, sp.effort,
+                                             stamp=stamp))
+        p["measured_cp"].publish(pose_stamped(cp, BASE_FRAME, stamp=stamp))
+        p["setpoint_cp"].publish(pose_stamped(scp, BASE_FRAME, stamp=stamp))
+        q = np.asarray(js.position, dtype=float)
+        sol = forward_kinematics(q, self.T_b_e, self.design, errors="flag")
+        valid = np.flatnonzero(sol.valid)
+        if valid.size and np.all(np.isfinite(cp)):
+            # the solution the arm's tracker follows: the valid slot at its measured tip
+            err = np.linalg.norm(sol.T_b_tip[valid, :3, 3] - cp[:3, 3], axis=-1)
+            k = int(valid[int(np.argmin(err))])
+            J = tool_tip_jacobian(q, self.T_b_e, self.design, mode=int(sol.mode[k]))
+            lin = J @ np.asarray(js.velocity, dtype=float)
+            R = np.asarray(cp[:3, :3], dtype=float)
+            ang = np.zeros(3) if self._prev_R is None else \
+                _rotation_rate(self._prev_R, R, 1.0 / self.publish_rate)
+            self._prev_R = R
+            p["measured_cv"].publish(twist_stamped(lin, ang, BASE_FRAME, stamp=stamp))
+            jv = joint_values(self._urdf, q[None], sol.p[k][None], sol.u[k][None],
+                              sol.T_b_s[k, :3, 3][None])
+            p["urdf_joint_states"].publish(joint_state(
+                list(jv), [float(v[0]) for v in jv.values()], stamp=stamp))
+        self._publish_state()
+
+    # --- running --------------------------------------------------------------------
+    def _servo_loop(self) -> None:
+        period = 1.0 / self.arm.rate
+        deadline = time.perf_counter()
+        k = 0
+        while not self._stop.is_set():
+            try:
+                with self._lock:
+                    self.arm.step(1)
+            except Exception as exc:     # the arm itself failed: stop serving, say why
+                self.error = f"servo step: {type(exc).__name__}: {exc}"
+                self._pubs["status"].publish(self.crtk.string(f"fault: {self.error}",
+                                                              self._now()))
+                return
+            self.cycles += 1
+            k += 1
+            if k % self.decimation == 0:
+                try:
+                    self.publish_once()
+                except Exception as exc:   # a state the messages cannot carry: say so, go on
+                    self.error = f"publish: {type(exc).__name__}: {exc}"
+                    self._pubs["status"].publish(self.crtk.string(f"error: {self.error}",
+                                                                  self._now()))
+            deadline += period
+            now = time.perf_counter()
+            if now - deadline > period:
+                self.late_cycles += 1
+                if now - deadline > MAX_CATCH_UP * period:
+                    deadline = now          # a stall: skip ahead rather than race
+            wait = deadline - time.perf_counter()
+            if wait > 0:
+                self._stop.wait(wait)
+
+    def _spin_loop(self) -> None:
+        while not self._stop.is_set() and self.context.ok:
+            try:
+                self._executor.spin_once(timeout_sec=0.05)
+            except Exception:    # the context shut down under the executor
+                if not self.context.ok or self._stop.is_set():
+                    return
+                raise
+
+    def start(self) -> ArmNode:
+        """Start the servo thread and the executor's thread (idempotent); returns ``self``."""
+        if not self._threads:
+            self._threads = [threading.Thread(target=self._servo_loop, name="athena-servo",
+                                              daemon=True),
+                             threading.Thread(target=self._spin_loop, name="athena-executor",
+                                              daemon=True)]
+            for th in self._threads:
+                th.start()
+        return self
+
+    def spin(self, timeout: float | None = None) -> None:
+        """Run until Ctrl-C, the context's shutdown, or ``timeout`` s."""
+        self.start()
+        end = math.inf if timeout is None else time.monotonic() + float(timeout)
+        while self.context.ok and not self._stop.is_set() and time.monotonic() < end:
+            time.sleep(min(0.1, max(0.0, end - time.monotonic())))
+
+    def close(self) -> None:
+        """Stop the threads, destroy the node, shut down its own context (idempotent)."""
+        self._stop.set()
+        for th in self._threads:
+            th.join(timeout=5.0)
+        self._threads = []
+        try:
+            self._executor.remove_node(self.node)
+            self.node.destroy_node()
+        except Exception:  # pragma: no cover - already destroyed
+            pass
+        if self._own_context:
+            self.context.close()
+
+    def __enter__(self) -> ArmNode:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _create_node(name: str, namespace: str, context: RosContext, use_sim_time: bool,
+                 Parameter: Any) -> Any:
+    from rclpy.node import Node
+
+    if not isinstance(use_sim_time, bool):
+        raise TypeError(f"use_sim_time: expected a bool, got {type(use_sim_time).__name__}")
+    return Node(name, namespace=namespace, context=context.context,
+                parameter_overrides=[Parameter("use_sim_time", value=use_sim_time)])
+

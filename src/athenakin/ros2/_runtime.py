@@ -1,0 +1,153 @@
+"""The ROS 2 client (rclpy) and the CRTK message types, imported on demand (private).
+
+rclpy and the interface packages come from the wheels of the ``ros2`` extra; nothing
+here needs a ROS installation. :func:`crtk_types` gives CRTK's own
+``crtk_msgs/msg/OperatingState`` and ``StringStamped`` where the package is built
+(:func:`athenakin.ros2.build_crtk_msgs`), else their ``std_msgs`` stand-ins.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import threading
+from typing import Any
+
+__all__ = ["require_rclpy", "ros2_extra_missing", "CrtkTypes", "crtk_types", "RosContext"]
+
+
+def ros2_extra_missing(exc: ModuleNotFoundError) -> ModuleNotFoundError:
+    """The error to raise when a package of the ``ros2`` extra is not installed."""
+    name = (exc.name or "").split(".")[0] or None
+    return ModuleNotFoundError(f"athenakin.ros2 needs the package {name!r} (the ROS 2 client "
+                               f"wheels): install the extra with  pip install 'athenakin[ros2]'",
+                               name=name)
+
+
+def require_rclpy() -> Any:
+    """``rclpy``, or a ``ModuleNotFoundError`` that names the ``ros2`` extra."""
+    try:
+        import rclpy
+        import rclpy.executors  # noqa: F401
+    except ModuleNotFoundError as exc:
+        raise ros2_extra_missing(exc) from None
+    return rclpy
+
+
+@dataclasses.dataclass(frozen=True)
+class CrtkTypes:
+    """The message types of CRTK's ``operating_state`` and ``state_command`` topics.
+
+    Attributes
+    ----------
+    operating_state : type
+        ``crtk_msgs/msg/OperatingState`` (header, ``state``, ``is_homed``, ``is_busy``),
+        or ``std_msgs/msg/String`` holding the state name.
+    string_stamped : type
+        ``crtk_msgs/msg/StringStamped`` (header, ``string``), or ``std_msgs/msg/String``.
+    native : bool
+        True: CRTK's own types (``crtk_msgs`` is built and importable).
+    """
+
+    operating_state: type
+    string_stamped: type
+    native: bool
+
+    def string(self, text: str, stamp: Any = None, frame_id: str = "") -> Any:
+        """A ``string_stamped`` message holding ``text`` (stamped where the type has a header)."""
+        if self.native:
+            msg = self.string_stamped(string=text)
+            if stamp is not None:
+                msg.header.stamp = stamp
+            msg.header.frame_id = frame_id
+            return msg
+        return self.string_stamped(data=text)
+
+    def text(self, msg: Any) -> str:
+        """The text of a ``string_stamped`` message."""
+        return str(msg.string if self.native else msg.data)
+
+    def state(self, state: str, *, is_homed: bool, is_busy: bool, stamp: Any = None) -> Any:
+        """An ``operating_state`` message."""
+        if self.native:
+            msg = self.operating_state(state=state, is_homed=is_homed, is_busy=is_busy)
+            if stamp is not None:
+                msg.header.stamp = stamp
+            return msg
+        return self.operating_state(data=state)
+
+
+def crtk_types(*, native: bool | None = None) -> CrtkTypes:
+    """CRTK's message types: ``crtk_msgs`` where importable, else the ``std_msgs`` stand-ins.
+
+    Parameters
+    ----------
+    native : bool, optional, keyword-only
+        True: require ``crtk_msgs`` (``ModuleNotFoundError`` naming the set-up step when it
+        is not built); False: the stand-ins; None (default): ``crtk_msgs`` where importable.
+
+    Returns
+    -------
+    CrtkTypes
+    """
+    require_rclpy()
+    from std_msgs.msg import String
+
+    if native is not False:
+        try:
+            from crtk_msgs.msg import OperatingState, StringStamped
+        except ModuleNotFoundError:
+            if native:
+                raise ModuleNotFoundError(
+                    "crtk_msgs is not built: run  athenakin ros2 build-msgs  (the rosidl "
+                    "generator wheels of the extra 'ros2-msgs', cmake and a C compiler)",
+                    name="crtk_msgs") from None
+        else:
+            return CrtkTypes(OperatingState, StringStamped, True)
+    return CrtkTypes(String, String, False)
+
+
+class RosContext:
+    """One rclpy context, initialised on construction and shut down by :meth:`close`.
+
+    A node of this package runs in its own context, so that a test, a benchmark or an
+    application may hold several (an arm and a teleop node in one process) and close
+    each without touching rclpy's global one.
+
+    Parameters
+    ----------
+    args : list of str, optional
+        ROS arguments (``["--ros-args", ...]``).
+    domain_id : int, optional
+        ``ROS_DOMAIN_ID`` of this context (default: the environment's).
+    """
+
+    def __init__(self, args: list[str] | None = None, *, domain_id: int | None = None) -> None:
+        rclpy = require_rclpy()
+        from rclpy.context import Context
+
+        self.context = Context()
+        kw: dict[str, Any] = {}
+        if domain_id is not None:
+            if isinstance(domain_id, bool) or not isinstance(domain_id, int) \
+                    or not 0 <= domain_id <= 232:
+                raise ValueError(f"domain_id: expected an integer from 0 to 232, got "
+                                 f"{domain_id!r}")
+            kw["domain_id"] = domain_id
+        rclpy.init(args=args, context=self.context, **kw)
+        self._lock = threading.Lock()
+        self._closed = False
+
+    @property
+    def ok(self) -> bool:
+        """The context is initialised and not shut down."""
+        return bool(self.context.ok())
+
+    def close(self) -> None:
+        """Shut the context down (idempotent)."""
+        with self._lock:
+            if self._closed:
+                return
+            self._closed = True
+        if self.context.ok():
+            self.context.try_shutdown()
+

@@ -1,0 +1,455 @@
+"""The ROS 2 nodes against real nodes: rclpy and Fast DDS, each node in its own process.
+
+The arm node and the teleop node are started through the CLI (``athenakin ros2 arm``,
+``athenakin ros2 teleop``) in subprocesses; the test talks to them with a plain rclpy
+node of its own that shares no code with ``athenakin.ros2`` (its own QoS, its own
+message handling). Discovery stays on this machine: every process runs with
+``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` and a ``ROS_DOMAIN_ID`` of this test run
+(from the pid, 1 to 100). Waits follow readiness (a condition polled while spinning,
+with a generous deadline), never a fixed sleep.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("rclpy", reason="the extra 'ros2' (the ROS 2 client wheels: ros-rclpy, "
+                                    "ros-rmw-fastrtps-cpp) is not installed for this Python")
+pytest.importorskip("mujoco", reason="the arm node serves the MuJoCo arm (extra 'sim')")
+
+import rclpy  # noqa: E402
+from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
+from geometry_msgs.msg import PoseStamped  # noqa: E402
+from rclpy.context import Context  # noqa: E402
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
+from sensor_msgs.msg import JointState, Joy  # noqa: E402
+from std_msgs.msg import Bool, String  # noqa: E402
+
+import athenakin as ak  # noqa: E402
+from athenakin.sim import urdf_from_design  # noqa: E402
+
+try:                                   # CRTK's own types where crtk_msgs is built
+    from crtk_msgs.msg import OperatingState, StringStamped  # noqa: E402
+
+    def _text(msg):
+        return msg.string
+
+    def _state(msg):
+        return msg.state
+
+    def _command(text):
+        return StringStamped(string=text)
+except ImportError:                     # the nodes' std_msgs stand-ins
+    OperatingState = StringStamped = String
+
+    def _text(msg):
+        return msg.data
+
+    def _state(msg):
+        return msg.data
+
+    def _command(text):
+        return String(data=text)
+
+ROOT = Path(__file__).resolve().parents[1]
+DEADLINE = 120.0          # s: the longest wait for a node to start (numba cache, load)
+Q0 = (-0.1, 0.1, 0.45)
+RATE = 200.0              # the teleop node's rate in these tests, Hz
+WATCHDOG = 0.03           # TeleopOptions' default, s
+RELIABLE = QoSProfile(depth=200, reliability=ReliabilityPolicy.RELIABLE)
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+def _env():
+    env = dict(os.environ)
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    env["ROS_DOMAIN_ID"] = str(1 + os.getpid() % 100)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), env.get("PYTHONPATH", "")])
+    return env
+
+
+def _start(args):
+    return subprocess.Popen([sys.executable, "-m", "athenakin", "ros2", *args], env=_env(),
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+
+
+def _stop(proc):
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+    return proc.stdout.read() if proc.stdout else ""
+
+
+class Client:
+    """A plain rclpy node of the test: subscriptions that keep every message."""
+
+    def __init__(self):
+        env = _env()
+        assert env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
+        os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=int(env["ROS_DOMAIN_ID"]))
+        self.node = rclpy.create_node("test_client", context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.got: dict[str, list] = {}
+
+    def listen(self, key, typ, topic, qos=RELIABLE):
+        self.got.setdefault(key, [])
+        return self.node.create_subscription(typ, topic, self.got[key].append, qos)
+
+    def until(self, cond, what, timeout=DEADLINE, procs=()):
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            if cond():
+                return
+            for p in procs:
+                if p.poll() is not None:
+                    pytest.fail(f"the node exited ({p.returncode}) while waiting for {what}: "
+                                f"{p.stdout.read() if p.stdout else ''}")
+            self.executor.spin_once(timeout_sec=0.02)
+        pytest.fail(f"no {what} within {timeout} s")
+
+    def close(self):
+        self.node.destroy_node()
+        self.context.try_shutdown()
+
+
+@pytest.fixture(scope="module")
+def nodes():
+    """The arm node and the teleop node (in their own processes), and the test's client."""
+    arm = _start(["arm", "--enable", "--publish-rate", "100"])
+    teleop = _start(["teleop", "--namespace", "/tele", "--q0", *map(str, Q0),
+                     "--rate", str(RATE), "--status-every", "1", "--filter", "none"])
+    e2e = _start(["teleop", "--with-arm", "--namespace", "/e2e", "--pose-topic",
+                  "/e2e_master/pose", "--clutch-topic", "none", "--rate", "500"])
+    replay = _start(["teleop", "--clock", "master", "--namespace", "/replay", "--pose-topic",
+                     "/replay_master/pose", "--clutch-topic", "none", "--q0", *map(str, Q0),
+                     "--rate", "1000"])
+    client = Client()
+    try:
+        yield arm, teleop, client, e2e, replay
+    finally:
+        client.close()
+        out = _stop(arm) + _stop(teleop) + _stop(e2e) + _stop(replay)
+        assert "Traceback" not in out, out
+
+
+def _tip(msg):
+    p = msg.pose.position
+    return np.array([p.x, p.y, p.z])
+
+
+# --------------------------------------------------------------------------- the arm node
+def test_servo_a_trajectory_and_read_it_back(nodes):
+    arm, _, c, _, _ = nodes
+    c.listen("js", JointState, "/athena/measured_js")
+    c.listen("cp", PoseStamped, "/athena/measured_cp")
+    c.listen("state", OperatingState, "/athena/operating_state", LATCHED)
+    servo = c.node.create_publisher(JointState, "/athena/servo_jp", RELIABLE)
+    c.until(lambda: c.got["js"] and c.got["state"] and servo.get_subscription_count() > 0,
+            "measured_js, operating_state and a servo_jp subscriber", procs=[arm])
+    assert _state(c.got["state"][-1]) == "ENABLED"
+    T, d = ak.default_rcm_frame(ak.Design.default()), ak.Design.default()
+    q0 = np.array(Q0)
+    path = [q0 + 0.004 * np.array([math.sin(s), 1 - math.cos(s), 0.5 * math.sin(2 * s)])
+            for s in np.linspace(0.0, math.pi, 40)]
+    for q in path:                      # 40 setpoints, each after the arm's next state
+        n = len(c.got["js"])
+        servo.publish(JointState(name=["q1", "q2", "q3"], position=[float(v) for v in q]))
+        c.until(lambda n=n: len(c.got["js"]) > n, "the next measured_js", procs=[arm])
+    goal = path[-1]
+    c.until(lambda: np.abs(np.array(c.got["js"][-1].position) - goal).max() < 2e-5,
+            "the arm at the trajectory's end", procs=[arm])
+    # every measured_cp is the reference FK of the measured_js of the same stamp
+    by_stamp = {(m.header.stamp.sec, m.header.stamp.nanosec): m for m in c.got["js"]}
+    pairs = [(by_stamp[k], cp) for cp in c.got["cp"]
+             if (k := (cp.header.stamp.sec, cp.header.stamp.nanosec)) in by_stamp]
+    assert len(pairs) >= 40
+    for js, cp in pairs:
+        assert cp.header.frame_id == "base"
+        sol = ak.forward_kinematics(np.array(js.position), T, d)
+        ref = sol.T_b_tip[0, :3, 3]          # the arm's slot: q0's FK slot 0
+        scale = max(1.0, float(np.linalg.norm(ref)))
+        np.testing.assert_allclose(_tip(cp), ref, rtol=0, atol=1e-9 * scale)
+
+
+def test_a_refused_command_is_answered_and_not_executed(nodes):
+    arm, _, c, _, _ = nodes
+    status = c.listen("status", StringStamped, "/athena/status")
+    c.listen("sp", JointState, "/athena/setpoint_js")
+    servo = c.node.create_publisher(JointState, "/athena/servo_jp", RELIABLE)
+    move = c.node.create_publisher(JointState, "/athena/move_jp", RELIABLE)
+    cp = c.node.create_publisher(PoseStamped, "/athena/servo_cp", RELIABLE)
+    c.until(lambda: c.got["sp"] and servo.get_subscription_count() > 0
+            and move.get_subscription_count() > 0 and cp.get_subscription_count() > 0
+            and status.get_publisher_count() > 0,
+            "setpoint_js and the command subscribers", procs=[arm])
+    before = np.array(c.got["sp"][-1].position)
+    servo.publish(JointState(position=[float("nan"), 0.1, 0.45]))
+    move.publish(JointState(position=[-0.1, 0.1, 5.0]))             # far beyond the stroke
+    wrong = PoseStamped()
+    wrong.header.frame_id = "world"
+    cp.publish(wrong)
+    c.until(lambda: len(c.got["status"]) >= 3, "three refusals on status", procs=[arm])
+    texts = [_text(m) for m in c.got["status"]]
+    assert any(t.startswith("refused servo_jp:") and "position" in t for t in texts), texts
+    assert any(t.startswith("refused move_jp:") and "stroke" in t for t in texts), texts
+    assert any(t.startswith("refused servo_cp:") and "frame_id" in t for t in texts), texts
+    n = len(c.got["sp"])
+    c.until(lambda: len(c.got["sp"]) > n + 5, "more setpoint_js", procs=[arm])
+    np.testing.assert_allclose(np.array(c.got["sp"][-1].position), before, rtol=0, atol=1e-12)
+    assert arm.poll() is None
+
+
+def _same_xml(a, b, path="robot"):
+    assert a.tag == b.tag, path
+    assert set(a.attrib) == set(b.attrib), path
+    for k, va in a.attrib.items():
+        vb = b.attrib[k]
+        try:
+            fa, fb = np.array(va.split(), float), np.array(vb.split(), float)
+        except ValueError:
+            assert va == vb, (path, k)
+        else:
+            np.testing.assert_allclose(fa, fb, rtol=1e-12, atol=1e-12, err_msg=f"{path}@{k}")
+    assert len(a) == len(b), path
+    for ca, cb in zip(a, b, strict=True):
+        _same_xml(ca, cb, f"{path}/{ca.tag}[{ca.get('name', '')}]")
+
+
+def test_robot_description_and_every_urdf_joint(nodes):
+    arm, _, c, _, _ = nodes
+    c.listen("urdf", String, "/robot_description", LATCHED)
+    c.listen("joints", JointState, "/joint_states")
+    c.until(lambda: c.got["urdf"] and c.got["joints"], "/robot_description and /joint_states",
+            procs=[arm])
+    d = ak.Design.default()
+    ref = ET.fromstring(urdf_from_design(ak.default_rcm_frame(d), d))
+    got = ET.fromstring(c.got["urdf"][0].data)
+    _same_xml(got, ref)
+    moving = {j.get("name"): j for j in ref.iter("joint") if j.get("type") != "fixed"}
+    msg = c.got["joints"][-1]
+    assert set(msg.name) == set(moving) and len(msg.position) == len(msg.name)
+    value = dict(zip(msg.name, msg.position, strict=True))
+    assert all(math.isfinite(v) for v in value.values())
+    for name, j in moving.items():        # the <mimic> joints agree with their masters
+        m = j.find("mimic")
+        if m is not None:
+            want = float(m.get("multiplier", "1")) * value[m.get("joint")] + \
+                float(m.get("offset", "0"))
+            assert abs(value[name] - want) <= 1e-12 * max(1.0, abs(want)), name
+
+
+# ------------------------------------------------------------------------ the teleop node
+def _values(arr):
+    return {kv.key: kv.value for kv in arr.status[0].values}
+
+
+def test_teleop_follows_the_master_and_the_watchdog_holds(nodes):
+    _, teleop, c, _, _ = nodes
+    c.listen("servo", JointState, "/tele/servo_jp")
+    c.listen("tstatus", DiagnosticArray, "/tele/teleop/status")
+    pose = c.node.create_publisher(PoseStamped, "/master/pose", RELIABLE)
+    joy = c.node.create_publisher(Joy, "/master/joy", RELIABLE)
+    estop = c.node.create_publisher(Bool, "/tele/teleop/estop", RELIABLE)
+    c.until(lambda: c.got["servo"] and pose.get_subscription_count() > 0
+            and joy.get_subscription_count() > 0 and estop.get_subscription_count() > 0,
+            "servo_jp from the teleop node and its master subscribers", procs=[teleop])
+    joy.publish(Joy(buttons=[0]))                  # clutch closed: the tip follows
+    for k in range(60):                            # the master moves 6 mm, one sample a cycle
+        m = PoseStamped()
+        m.pose.position.x = 1e-4 * k
+        pose.publish(m)
+        n = len(c.got["tstatus"])
+        c.until(lambda n=n: len(c.got["tstatus"]) > n, "the next teleop status",
+                procs=[teleop])
+    c.until(lambda: _values(c.got["tstatus"][-1])["watchdog"] == "True", "the watchdog",
+            procs=[teleop])
+    st = [_values(a) for a in c.got["tstatus"]]
+    cycles = [int(v["cycle"]) for v in st]
+    first = next(i for i, v in enumerate(st) if v["watchdog"] == "True"
+                 and i > 0 and st[i - 1]["watchdog"] == "False")
+    # the first cycle past the watchdog's time without a sample holds, the one before did not
+    assert cycles[first - 1] == cycles[first] - 1
+    assert float(st[first]["sample_age_s"]) > WATCHDOG >= float(st[first - 1]["sample_age_s"])
+    assert "HOLD" in st[first]["names"]
+    # while the master ran, the tip followed it (no watchdog, moving commands)
+    following = [v for v in st[:first] if v["watchdog"] == "False"]
+    assert following and all(v["estop"] == "False" for v in following)
+    servo = c.got["servo"]
+    assert all(len(m.position) == 3 and len(m.velocity) == 3 and len(m.effort) == 3
+               for m in servo)
+    moved = np.ptp(np.array([m.position for m in servo]), axis=0).max()
+    assert moved > 1e-5
+    # held: the commands come to rest
+    c.until(lambda: np.abs(np.array(c.got["servo"][-1].velocity)).max() == 0.0,
+            "the held command at rest", procs=[teleop])
+    # the master back, 4 cm away: it re-engages without a jump of the commanded tip
+    held = len(c.got["tstatus"])
+
+    def back():
+        m = PoseStamped()
+        m.pose.position.x = 0.05
+        pose.publish(m)
+        return any(_values(a)["watchdog"] == "False" for a in c.got["tstatus"][held:])
+
+    c.until(back, "the master's return", procs=[teleop])
+    st = [_values(a) for a in c.got["tstatus"]]
+    i = next(k for k in range(held, len(st)) if st[k]["watchdog"] == "False")
+    before, after = (np.array(st[k]["tip_b"].split(), float) for k in (i - 1, i))
+    assert int(st[i]["cycle"]) == int(st[i - 1]["cycle"]) + 1
+    np.testing.assert_allclose(after, before, rtol=0, atol=1e-12 * max(1.0, np.abs(before).max()))
+    # a NaN master sample is INVALID, a Joy without the clutch button is refused by name
+    seen = len(c.got["tstatus"])
+    m = PoseStamped()
+    m.pose.position.y = float("nan")
+    pose.publish(m)
+    joy.publish(Joy(buttons=[]))
+    c.until(lambda: any("INVALID" in _values(a)["names"] for a in c.got["tstatus"][seen:])
+            and any("button 0" in _values(a)["refused"] for a in c.got["tstatus"][seen:]),
+            "INVALID and the refused clutch", procs=[teleop])
+    assert teleop.poll() is None
+    # an e-stop latches ESTOP, also when the master comes back
+    estop.publish(Bool(data=True))
+    c.until(lambda: _values(c.got["tstatus"][-1])["estop"] == "True", "ESTOP", procs=[teleop])
+    m = PoseStamped()
+    pose.publish(m)
+    n = len(c.got["tstatus"])
+    c.until(lambda: len(c.got["tstatus"]) > n + 5, "more teleop status", procs=[teleop])
+    assert _values(c.got["tstatus"][-1])["estop"] == "True"
+
+
+def test_the_arm_node_survives_a_hostile_burst(nodes):
+    arm, _, c, _, _ = nodes
+    status = c.listen("fuzz_status", StringStamped, "/athena/status")
+    c.listen("fuzz_js", JointState, "/athena/measured_js")
+    servo = c.node.create_publisher(JointState, "/athena/servo_jp", RELIABLE)
+    state = c.node.create_publisher(StringStamped, "/athena/state_command", RELIABLE)
+    c.until(lambda: c.got["fuzz_js"] and servo.get_subscription_count() > 0
+            and state.get_subscription_count() > 0 and status.get_publisher_count() > 0,
+            "measured_js, the subscribers and the status publisher", procs=[arm])
+    # the arm's reader has matched this writer once a probe is answered (DDS matches each
+    # side on its own: a writer that sees the reader may still be unseen by it)
+    probe = JointState(position=[float("nan")] * 3)
+    c.until(lambda: servo.publish(probe) or c.got["fuzz_status"], "the probe's refusal",
+            procs=[arm])
+    del c.got["fuzz_status"][:]
+    q = np.array(c.got["fuzz_js"][-1].position)
+    rng = np.random.default_rng(38)
+    bad = 0
+    for k in range(60):        # one burst, no wait between the messages (within QoS depths)
+        m = JointState(position=[float(v) for v in q + rng.uniform(-1e-4, 1e-4, 3)])
+        kind = k % 6
+        if kind == 1:
+            m.position = [float("nan"), 0.0, float("inf")]
+        elif kind == 2:
+            m.position = m.position[:2]
+        elif kind == 3:
+            m.name = ["q1", "q2", "elbow"]
+        elif kind == 4:                    # a stamp before the previous command's
+            m.header.stamp.sec = 1
+        elif kind == 5:
+            m.velocity = [0.0]
+        m.header.stamp.sec = m.header.stamp.sec or 10 + k
+        bad += kind != 0
+        servo.publish(m)
+    state.publish(_command("fly"))
+
+    def answered():
+        return [t for m in c.got["fuzz_status"] if "[nan, nan, nan]" not in (t := _text(m))]
+
+    c.until(lambda: sum(t.startswith("refused servo_jp:") for t in answered()) >= bad
+            and any(t.startswith("refused state_command:") for t in answered()),
+            "every refusal of the burst", procs=[arm])
+    texts = answered()
+    assert texts and all(t.startswith("refused ") for t in texts), texts[:5]
+    fields = ("position", "name", "stamp", "velocity", "state_command")
+    assert all(any(f in t for f in fields) for t in texts), texts[:5]
+    assert sum(t.startswith("refused servo_jp:") for t in texts) == bad, texts
+    n = len(c.got["fuzz_js"])
+    c.until(lambda: len(c.got["fuzz_js"]) > n + 5, "measured_js after the burst", procs=[arm])
+    assert all(math.isfinite(v) for v in c.got["fuzz_js"][-1].position)
+    assert np.abs(np.array(c.got["fuzz_js"][-1].position) - q).max() < 1e-3
+
+
+def test_the_teleop_node_drives_the_arm_node_over_the_graph(nodes):
+    _, _, c, e2e, _ = nodes
+    c.listen("e2e_js", JointState, "/e2e/measured_js")
+    c.listen("e2e_servo", JointState, "/e2e/servo_jp")
+    pose = c.node.create_publisher(PoseStamped, "/e2e_master/pose", RELIABLE)
+    c.until(lambda: c.got["e2e_js"] and c.got["e2e_servo"] and pose.get_subscription_count() > 0,
+            "the arm's measured_js and the teleop's servo_jp", procs=[e2e])
+    start = np.array(c.got["e2e_js"][-1].position)
+    for k in range(120):          # the master 12 mm along x, then still (samples go on)
+        m = PoseStamped()
+        m.pose.position.x = 1e-4 * min(k, 100)
+        pose.publish(m)
+        n = len(c.got["e2e_servo"])
+        c.until(lambda n=n: len(c.got["e2e_servo"]) > n, "the next servo_jp", procs=[e2e])
+
+    def settled():
+        m = PoseStamped()
+        m.pose.position.x = 1e-2
+        pose.publish(m)             # the master held still: no watchdog
+        cmd = np.array(c.got["e2e_servo"][-1].position)
+        return np.abs(np.array(c.got["e2e_js"][-1].position) - cmd).max() < 1e-4
+
+    c.until(settled, "the arm at the teleop's command", procs=[e2e])
+    moved = np.abs(np.array(c.got["e2e_js"][-1].position) - start).max()
+    assert moved > 5e-4             # 12 mm of master at scale 0.2: a few mm of actuator travel
+
+
+def test_a_replayed_master_gives_the_commands_of_run_session(nodes):
+    from athenakin.teleop import Teleop, run_session
+
+    _, _, c, _, replay = nodes
+    c.listen("replay", JointState, "/replay/servo_jp")
+    pose = c.node.create_publisher(PoseStamped, "/replay_master/pose", RELIABLE)
+    c.until(lambda: pose.get_subscription_count() > 0, "the replay node's master subscriber",
+            procs=[replay])
+    ns = [1000 * 10**9 + k * 10**6 for k in range(300)]         # 1 kHz stamps, ns
+    pts = [(0.02 * math.sin(math.pi * k / 1000), 0.01 * math.sin(0.6 * math.pi * k / 1000),
+            0.005 * (1 - math.cos(0.4 * math.pi * k / 1000))) for k in range(300)]
+    d = ak.Design.default()
+    log = run_session(Teleop(ak.default_rcm_frame(d), d, q0=Q0, rate=1000.0), None,
+                      [(t * 1e-9, p, True) for t, p in zip(ns, pts, strict=True)])
+
+    def send(k):
+        m = PoseStamped()
+        m.header.stamp.sec, m.header.stamp.nanosec = divmod(ns[k], 10**9)
+        m.pose.position.x, m.pose.position.y, m.pose.position.z = pts[k]
+        pose.publish(m)
+
+    # the node's reader has matched this writer once the first sample is answered (the
+    # node runs no cycle on a repeated stamp)
+    c.until(lambda: send(0) or c.got["replay"], "the answer to the first sample",
+            procs=[replay])
+    c.got["replay"][:] = c.got["replay"][:1]
+    for k in range(1, 300):
+        send(k)
+        c.until(lambda k=k: any(m.header.stamp.nanosec == ns[k] % 10**9 and
+                                m.header.stamp.sec == ns[k] // 10**9
+                                for m in c.got["replay"][-3:]), "the sample's command",
+                procs=[replay])
+    got = {(m.header.stamp.sec, m.header.stamp.nanosec): np.array(m.position)
+           for m in c.got["replay"]}
+    q = np.array([got[divmod(t, 10**9)] for t in ns])
+    np.testing.assert_allclose(q, log.q, rtol=0, atol=1e-12)
+    assert np.ptp(log.q, axis=0).max() > 1e-4          # the commands moved
