@@ -165,3 +165,20 @@ def test_every_public_subpackage_is_an_attribute_of_the_package():
             "    assert getattr(ak, s).__name__ == 'athenakin.' + s, s\n")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr[-2000:]
+
+
+def test_dir_lists_the_lazy_names_without_importing_them():
+    """``dir(ak)`` shows every lazy subpackage and ``Robot``, and listing imports none of them."""
+    import subprocess
+    import sys
+
+    code = ("import sys, athenakin as ak\n"
+            "names = dir(ak)\n"
+            "lazy = set(ak._LAZY_SUBPACKAGES) | set(ak._LAZY_FUNCTIONS)\n"
+            "assert lazy <= set(names), sorted(lazy - set(names))\n"
+            "assert set(ak.__all__) <= set(names), sorted(set(ak.__all__) - set(names))\n"
+            "assert names == sorted(names)\n"
+            "assert 'athenakin.dynamics' not in sys.modules\n"
+            "assert 'athenakin.teleop' not in sys.modules\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
