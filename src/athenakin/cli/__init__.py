@@ -20,12 +20,12 @@ from ..errors import KinematicsError
 
 __all__ = ["main", "entry_point", "COMMANDS", "EXTRAS", "COMMAND_EXTRAS", "extra_of"]
 
-#: The extras of pyproject.toml and the modules each installs, in pyproject's order
-#: (tests/test_ros_round5.py checks this table against pyproject.toml).
+#: The extras of pyproject.toml and the modules each installs (with those of the extras it
+#: references, ``athenakin[progress]``), in pyproject's order (tests/test_ros_round5.py
+#: checks this table against pyproject.toml).
 EXTRAS = {
     "symbolic": ("sympy",),
     "plot": ("matplotlib", "plotly", "imageio", "imageio_ffmpeg", "tqdm"),
-    "fast": ("numba", "tqdm"),
     "progress": ("tqdm",),
     "analysis": ("scipy", "tqdm"),
     "sim": ("mujoco", "yourdfpy", "tqdm"),
@@ -38,13 +38,15 @@ EXTRAS = {
     "dynamics": ("scipy",),
     "ros": ("rosbags", "mcap", "mcap_ros2", "foxglove", "isal", "websockets", "zstandard",
             "lz4", "tqdm"),
+    "teleop": ("mujoco", "yourdfpy", "tqdm", "rosbags", "mcap", "mcap_ros2", "foxglove", "isal",
+               "websockets", "zstandard", "lz4", "ruckig", "scipy"),
 }
 #: The extra of each command's own optional packages: a package of several extras is
 #: named by the command's (``plan`` needs scipy of [motion], not of [analysis]).
 COMMAND_EXTRAS = {"plan": "motion", "track": "ros", "synthesize": "synthesis",
                   "calibrate": "calibration", "view": "plot", "animate": "plot",
                   "export": "sim", "derive": "symbolic", "app": "app",
-                  "workspace": "analysis", "singularities": "analysis"}
+                  "workspace": "analysis", "singularities": "analysis", "teleop": "teleop"}
 
 
 def extra_of(module: str | None, command: str | None = None) -> str:
