@@ -57,7 +57,7 @@ from .robot._jacobians import Frame
 
 #: CPU seconds (of the whole process) a first call may spend before the one-line notice is
 #: printed. CPU time, not wall time: loading cached kernels costs well under a CPU second
-#: however busy the machine is (quiet when cached, issue 30), compiling costs tens.
+#: however busy the machine is (so a cached load stays quiet), compiling costs tens.
 NOTICE_AFTER_S = 3.0
 #: How often the watcher of a first call reads the process's CPU time, s.
 NOTICE_POLL_S = 0.1

@@ -7,7 +7,7 @@ written with tomli-w like every other writer of the package, read with :func:`re
 Every TOML reader of athenakin goes through :func:`read_toml`, so that a file that is
 not UTF-8, not TOML, or nested too deeply for the parser's recursion is one named
 error that says which file and what is wrong, never a raw ``UnicodeDecodeError`` or
-``RecursionError`` (issue 13, found by the fuzz target ``scripts/fuzz_readers.py``).
+``RecursionError`` (the fuzz target ``scripts/fuzz_readers.py`` tries such files).
 """
 
 from __future__ import annotations

@@ -33,7 +33,7 @@ _OTHER_TABLES = ("bodies", "environment")
 
 #: Range (m) of every length of a design (``l1..l5``, ``tool_length``) and of the finite
 #: stroke limits: from a micrometre to a kilometre. Outside it the kinematics would square
-#: lengths into overflow or lose every digit to rounding (issue 13); a robot of that size is
+#: lengths into overflow or lose every digit to rounding; a robot of that size is
 #: a typing error (mm for m), reported as such.
 LENGTH_RANGE = (1e-6, 1e3)
 #: A length or finite stroke limit above this (m) is accepted with a :class:`UnitWarning`:

@@ -1,4 +1,4 @@
-"""The robot's bodies as solids in the live app, the closest pair coloured (issue 20).
+"""The robot's bodies as solids in the live app, the closest pair coloured.
 
 The pure part (numpy only, testable without a browser): :func:`bodies_view` turns
 the drawn solution (:class:`~athenakin.plot.RobotGeometry`) into one triangle mesh

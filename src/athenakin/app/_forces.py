@@ -1,4 +1,4 @@
-"""The actuator forces in the live app: gravity plus a tip force the user drags (issue 21).
+"""The actuator forces in the live app: gravity plus a tip force the user drags.
 
 The pure part (numpy only, testable without a browser): :func:`forces_view` computes,
 for the drawn solution (:class:`~athenakin.plot.RobotGeometry`), the actuator forces

@@ -235,8 +235,8 @@ class _Page:
             elif m:
                 h.position = p
         self._label_texts, self._label_pos = texts, pos
-        self.bodies.update(view.geometry)    # bodies as solids (issue 20): app/_bodies.py
-        self.forces.update(view.geometry)    # actuator forces (issue 21): app/_forces.py
+        self.bodies.update(view.geometry)    # bodies as solids: app/_bodies.py
+        self.forces.update(view.geometry)    # actuator forces: app/_forces.py
 
     def _draw_solids(self, solids: tuple[Solid, ...]) -> None:
         """One mesh node per solid: new vertices where the mesh keeps its faces."""

@@ -134,7 +134,7 @@ class AthenaApp(_Page):
                  bodies: Any = None, environment: Any = None) -> None:
         viser = _import_viser()
         self._solids_of = solids
-        # actuator forces (issue 21): app/_forces.py; bad options raise before the server starts
+        # actuator forces: app/_forces.py; bad options raise before the server starts
         from ._forces import ForcesLayer, check_f_max, check_masses
 
         masses, f_max = check_masses(masses), check_f_max(f_max)
@@ -173,9 +173,9 @@ class AthenaApp(_Page):
         self._label_pos = np.zeros((0, 3))
         self._build_gui()
         self._send_page_script()
-        # bodies as solids, closest pair, clearance (issue 20): app/_bodies.py
+        # bodies as solids, closest pair, clearance: app/_bodies.py
         self.bodies = BodiesLayer(self.server, bodies=bodies, environment=environment)
-        self.forces = ForcesLayer(self.server, masses=masses, f_max=f_max,  # issue 21 forces
+        self.forces = ForcesLayer(self.server, masses=masses, f_max=f_max,  # actuator forces
                                   tip_handle=self._handle)
         if trajectory is not None:
             self._load_trajectory(str(trajectory))
@@ -280,7 +280,7 @@ class AthenaApp(_Page):
             self._time.on_update(self._on_time)
             self._play = gui.add_button("play", disabled=True)
             self._play.on_click(lambda _: self._start_playing())
-        with tabs.add_tab("Teleop"):     # a virtual master (issue 29): app/_teleop_tab.py
+        with tabs.add_tab("Teleop"):     # a virtual master: app/_teleop_tab.py
             from ._teleop_tab import TeleopTab
 
             self.teleop = TeleopTab(self)
@@ -395,8 +395,8 @@ class AthenaApp(_Page):
                 self._set_status("the tip cannot be moved: no valid configuration", "error")
                 return
             r = v.readouts
-            # the motion stops before the bodies collide (issue 30: it drove the carriages
-            # 50 mm into each other and said "ok")
+            # the motion stops before the bodies collide (a move that ignored them could
+            # drive the carriages into each other)
             clear = self.bodies.clearance_along(self.setup.T_b_e, self.setup.design,
                                                 _inverse_slot(r.slot, r.mode))
             step = inverse_step(self.setup, r.tip_e, tip_e, r.q, r.mode, p_from=r.p,

@@ -1,4 +1,4 @@
-"""Statics, force capability and dynamics of ATHENA's closed chain (issue 21).
+"""Statics, force capability and dynamics of ATHENA's closed chain.
 
 * :mod:`._model` - :class:`MassModel`: mass, centre of mass and inertia of every body
   (the names of :data:`athenakin._mechanism.BODIES` plus ``slider_d``,
