@@ -184,3 +184,11 @@ def test_dir_lists_the_lazy_names_without_importing_them():
             "assert 'athenakin.teleop' not in sys.modules\n")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr[-2000:]
+
+
+def test_no_issue_numbers_in_src():
+    """Comments say what the code does; issue numbers belong in the CHANGELOG."""
+    bad = [f"{p.relative_to(ROOT)}:{i}" for p in (ROOT / "src").rglob("*.py")
+           for i, line in enumerate(p.read_text().splitlines(), 1)
+           if re.search(r"\bissues? \d+", line)]
+    assert bad == []
