@@ -119,7 +119,7 @@ class TomlOptions:
             field's own check; a wrong type read from a file is bad input too).
         """
         if not isinstance(data, Mapping):
-            raise TypeError(f"{cls.TOML_TABLE}: expected a table (mapping), got "
+            raise TypeError(f"data: expected the [{cls.TOML_TABLE}] table (a mapping), got "
                             f"{type(data).__name__}")
         names = [f.name for f in dataclasses.fields(cls)]  # type: ignore[arg-type]
         unknown = sorted(set(data) - set(names))

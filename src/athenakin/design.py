@@ -200,7 +200,7 @@ class Design:
             (a scalar where ``q_min``/``q_max`` want 3 numbers, a string length, ...).
         """
         if not isinstance(data, Mapping):
-            raise TypeError(f"design data: expected a mapping, got {type(data).__name__}")
+            raise TypeError(f"data: expected a design table (mapping), got {type(data).__name__}")
         fields = {f.name for f in dataclasses.fields(cls)}
         unknown = set(data) - fields
         if unknown:
