@@ -434,6 +434,12 @@ def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None, mode: 
                               *, backend: Backend = "auto") -> FloatArray:
     """Inverse Jacobian of the parallel module, ``d q / d O_s``, shape (..., 3, 3).
 
+    Near a singular set the entries grow as the condition number of the forward
+    Jacobian (``q2 - q1 = 1e-7`` m: about 6e6 m/m) while staying finite: flag such
+    configurations with :func:`athenakin.analysis.condition_number` of the forward
+    Jacobian against ``athenakin.motion.Margins().cond`` (100, the margin the tracker
+    and teleop hold; :data:`athenakin.dynamics.COND_MARGIN` for the force figures).
+
     The numpy reference is :func:`athenakin.robot._jacobians.parallel_inverse_jacobian`
     (finite at the forward singularity ``w = 0``, infinite at ``h = 0``).
 
@@ -507,6 +513,12 @@ def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                                 ) -> FloatArray:
     """Inverse of :func:`instrument_jacobian`: actuator rates per ``(azimuth, polar, p)`` rate.
 
+    Near a singular set the entries grow as the condition number of the forward
+    Jacobian (``q2 - q1 = 1e-7`` m: about 6e6 m/m) while staying finite: flag such
+    configurations with :func:`athenakin.analysis.condition_number` of the forward
+    Jacobian against ``athenakin.motion.Margins().cond`` (100, the margin the tracker
+    and teleop hold; :data:`athenakin.dynamics.COND_MARGIN` for the force figures).
+
     Parameters
     ----------
     q, T_b_e, design, mode, frame, backend : as in :func:`instrument_jacobian`
@@ -548,6 +560,12 @@ def tool_tip_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                               frame: Frame = "base", backend: Backend = "auto"
                               ) -> FloatArray:
     """Inverse of :func:`tool_tip_jacobian`: actuator rates per tool-tip velocity.
+
+    Near a singular set the entries grow as the condition number of the forward
+    Jacobian (``q2 - q1 = 1e-7`` m: about 6e6 m/m) while staying finite: flag such
+    configurations with :func:`athenakin.analysis.condition_number` of the forward
+    Jacobian against ``athenakin.motion.Margins().cond`` (100, the margin the tracker
+    and teleop hold; :data:`athenakin.dynamics.COND_MARGIN` for the force figures).
 
     Parameters
     ----------
