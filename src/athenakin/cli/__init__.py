@@ -19,7 +19,8 @@ from typing import NoReturn
 
 from ..errors import KinematicsError
 
-__all__ = ["main", "entry_point", "COMMANDS", "EXTRAS", "COMMAND_EXTRAS", "extra_of"]
+__all__ = ["main", "entry_point", "COMMANDS", "EXTRAS", "COMMAND_EXTRAS", "extra_of", "PIP_NAMES",
+           "MissingExtraError", "check_extras"]
 
 #: The extras of pyproject.toml and the modules each installs (with those of the extras it
 #: references, ``athenakin[progress]``), in pyproject's order (tests/test_ros_round5.py
