@@ -227,7 +227,7 @@ def _announce_compiles(numba: ModuleType) -> Any:
     """
     import threading
 
-    from numba.core import event
+    import numba.core.event as event  # numba's documented Event API ("numba:compile")
 
     announced: set[str] = set()
     local = threading.local()
