@@ -7,7 +7,6 @@ a cell fails the build.
 """
 
 import logging
-import re
 import shutil
 import sys
 from pathlib import Path
