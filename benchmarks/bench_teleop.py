@@ -319,22 +319,24 @@ def _figure(log, log_pd, path: str) -> None:
     import matplotlib.pyplot as plt
 
     t = log.t
-    fig, ax = plt.subplots(4, 1, figsize=(9, 10), sharex=True,
+    fig, ax = plt.subplots(4, 1, figsize=(10.5, 10), sharex=True,
                            gridspec_kw={"height_ratios": [2, 2, 2, 1.3]})
     for i, c in enumerate("xyz"):
         ax[0].plot(t, log.master[:, i] * 1e3, lw=0.8, label=f"master {c}")
     ax[0].set_ylabel("master [mm]\n(master frame)")
-    ax[0].legend(loc="upper right", ncol=3, fontsize=8)
+    beside = {"loc": "upper left", "bbox_to_anchor": (1.01, 1.0), "fontsize": 8,
+              "frameon": False}                 # legends beside the data, never over it
+    ax[0].legend(**beside)
     for i, c in enumerate("xyz"):
         ax[1].plot(t, (log.tip_b[:, i] - log.tip_b[0, i]) * 1e3, lw=1.2, label=f"command {c}")
         ax[1].plot(t, (log.measured_tip_b[:, i] - log.tip_b[0, i]) * 1e3, "k:", lw=0.8)
     ax[1].plot([], [], "k:", label="MuJoCo tip")
     ax[1].set_ylabel("tip - start [mm]\n(base frame)")
-    ax[1].legend(loc="upper right", ncol=4, fontsize=8)
+    ax[1].legend(**beside)
     ax[2].semilogy(t, np.maximum(log.tip_error, 1e-9) * 1e3, lw=0.8, label="PD + feed-forward")
     ax[2].semilogy(t, np.maximum(log_pd.tip_error, 1e-9) * 1e3, lw=0.8, label="PD only")
     ax[2].set_ylabel("|MuJoCo tip -\ncommand| [mm]")
-    ax[2].legend(loc="upper right", fontsize=8)
+    ax[2].legend(**beside)
     names = [f for f in TeleopStatus if f]
     for j, f in enumerate(names):
         on = (log.status & int(f)) != 0

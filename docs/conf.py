@@ -7,7 +7,6 @@ a cell fails the build.
 """
 
 import logging
-import re
 import shutil
 import sys
 from pathlib import Path
@@ -61,15 +60,11 @@ def public_modules() -> list[str]:
             + sorted(n for n in found if n not in API_ORDER))
 
 
-#: A reference to the project's own issue tracker ("(issue 20)"): not for a page title.
-_ISSUE_REF = re.compile(r"\s*\(issues? \d+(?:(?:,| and) \d+)*\)")
-
-
 def _title(module: str) -> str:
     import importlib
 
     doc = (importlib.import_module(module).__doc__ or "").strip()
-    first = _ISSUE_REF.sub("", doc.splitlines()[0]).rstrip(".") if doc else module
+    first = doc.splitlines()[0].rstrip(".") if doc else module
     return f"``{module}``: {first}"
 
 

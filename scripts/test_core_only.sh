@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Run every CLI command on a core-only install (issue 30, 3.1): no extra, so every optional
+# Run every CLI command on a core-only install: no extra, so every optional
 # package (scipy, matplotlib, rosbags, mcap, zstandard, ...) is missing. Each command must end
 # with exit 0, or exit 1 and one line "athenakin CMD: error: ..." that names what is missing
 # (the extra to install) or what was wrong; never an internal error (exit 70) or a traceback.
@@ -80,6 +80,8 @@ run synthesize --designs 2 -o syn
 run app
 run warmup --help     # the compile itself: the same numba as the main venv's (CLI audit)
 run teleop --master r.mcap -o s.mcap
+run teleop --no-arm --master r.mcap -o s.mcap   # the recording's extra [ros], before any work
+run fk -0.1 0.1 0.45 --certify                  # the pip name python-flint
 # a command added later must be listed above
 "$py" - <<'CHECK'
 from athenakin.cli import COMMANDS

@@ -2,7 +2,7 @@
 # Test athenakin at the declared lower bounds of its dependencies (CI step).
 #
 # A separate venv (.venv-min) with the main Python gets every runtime dependency and the
-# extras analysis, symbolic, motion and fast pinned to the lower bound pyproject.toml declares
+# extras analysis, symbolic, motion and the core numba pinned to the lower bound pyproject.toml declares
 # (a constraints file: pip's equivalent of a lowest-direct resolution), then runs the tests
 # of those features. Two stages, because the motion extra needs a newer scipy than analysis:
 #   1. numpy, tomli-w, sympy, scipy (analysis's bound), numba, tqdm at their minimum;
@@ -70,23 +70,23 @@ start=$SECONDS
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
 "$venv/bin/python" -m pip install --quiet "uv>=0.9"   # the installer (see scripts/test.sh)
 install() { "$venv/bin/uv" pip install --python "$venv/bin/python" --quiet "$@"; }
-install -c "$work/stage1.txt" -e ".[analysis,symbolic,fast]" \
+install -c "$work/stage1.txt" -e ".[analysis,symbolic]" \
     pytest hypothesis
 "$venv/bin/uv" pip freeze --python "$venv/bin/python" | grep -iE "^(numpy|scipy|sympy|numba|tomli.w|tqdm)=="
-echo "== stage 1: core, analysis, symbolic, fast at their lower bounds"
+echo "== stage 1: core (numba), analysis, symbolic at their lower bounds"
 # (what reaches each lower bound: numpy through the study, robot and singularity code, scipy
 # through the singularities, sympy through the errata, numba through the kernels' exactness;
 # the other core tests run on the newest versions in the suite and the matrix)
 "$venv/bin/python" -m pytest -q -p no:cacheprovider tests/test_study.py tests/test_robot.py \
     tests/test_analysis_singularities.py tests/test_symbolic_errata.py \
     tests/test_fast_exactness.py "$@"
-install -c "$work/stage2.txt" -e ".[analysis,symbolic,fast,motion]"
+install -c "$work/stage2.txt" -e ".[analysis,symbolic,motion]"
 "$venv/bin/uv" pip freeze --python "$venv/bin/python" | grep -iE "^(scipy|ruckig)=="
 echo "== stage 2: motion at its lower bounds"
 "$venv/bin/python" -m pytest -q -p no:cacheprovider tests/test_motion_tracker.py \
     tests/test_motion_plan.py -k "not time_optimal" "$@"
 install -c "$work/stage3.txt" \
-    -e ".[analysis,symbolic,fast,motion,certified,calibration,synthesis,plot,sim,app]"
+    -e ".[analysis,symbolic,motion,certified,calibration,synthesis,plot,sim,app]"
 "$venv/bin/uv" pip freeze --python "$venv/bin/python" | grep -iE "^(python-flint|matplotlib|dask|distributed|pandas|pyarrow|pymoo|plotly|imageio|imageio-ffmpeg|mujoco|yourdfpy|viser)=="
 # (the cluster, worker-kill, resume and many-configurations tests exercise our code more than
 # the lower bounds: the main suite runs them)

@@ -646,7 +646,7 @@ def test_a_p_below_zero_slot_keeps_its_branch_across_tabs_in_process():
     app = AthenaApp(port=0, backend="numpy", solids=solids)
     try:
         assert app.title == "ATHENA - athenakin reference design - athenakin"
-        mesh, _ = app._solid_handles["tip_box"]
+        mesh = app.page.solid_handle("tip_box")
         np.testing.assert_allclose(mesh.vertices[0], app.view.readouts.tip_b, atol=1e-6)
         app._slot_dd.value = app._slot_dd.options[1 + 15]
         app._on_slot(None)
@@ -667,7 +667,7 @@ def test_a_p_below_zero_slot_keeps_its_branch_across_tabs_in_process():
         a2, p2, d2 = angles_from_tip(r2.tip_e)
         assert np.degrees(a2) == pytest.approx(app._az.value, abs=1e-6)
         assert d2 * 1e3 == pytest.approx(app._depth.value, abs=1e-6)
-        mesh, _ = app._solid_handles["tip_box"]                      # the solid followed
+        mesh = app.page.solid_handle("tip_box")                      # the solid followed
         np.testing.assert_allclose(mesh.vertices[0], r2.tip_b, atol=1e-6)
         # the tip grip: a drag in the view plane moves the tip by the pointer's motion
         tip0 = r2.tip_b.copy()

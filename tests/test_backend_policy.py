@@ -154,7 +154,8 @@ def test_backend_is_the_one_module_that_decides():
 
 
 def test_no_private_numba_or_llvmlite_api():
-    private = re.compile(r"numba\.core|numba\.extending|llvmlite|\bintrinsic\b|cgutils"
+    # numba.core.event is numba's documented Event API (the compile notice of _backend.py)
+    private = re.compile(r"numba\.core(?!\.event\b)|numba\.extending|llvmlite|\bintrinsic\b|cgutils"
                          r"|\.overloads\b|\.entry_point\b")
     offenders = [str(p.relative_to(SRC)) for p in _sources()
                  if private.search(re.sub(r'""".*?"""', "", p.read_text(encoding="utf-8"),

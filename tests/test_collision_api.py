@@ -66,7 +66,7 @@ def test_with_radius_and_with_excluded():
     ({"link_a": float("inf")}, InvalidInputError), ({"wing": 0.01}, InvalidInputError),
     ({"link_a": "thick"}, TypeError)])
 def test_bad_radii_are_named(bad, err):
-    with pytest.raises(err, match=r"^(radii\[|with_radius)"):
+    with pytest.raises(err, match=r"^radii(\[|: )"):
         Bodies.default().with_radius(bad)
 
 

@@ -7,9 +7,10 @@ Both paths are tested: ``backend="auto"`` with numba (compiled) and without it
 
 from __future__ import annotations
 
+import os
 import pathlib
+import subprocess
 import sys
-import threading
 
 import numpy as np
 import pytest
@@ -178,35 +179,35 @@ def test_numba_cache_falls_back_to_the_user_cache_dir(monkeypatch, tmp_path):
     assert _backend.os.environ["NUMBA_CACHE_DIR"] == _backend.user_cache_dir()
 
 
-def test_a_long_first_call_says_so_on_stderr(monkeypatch, capsys):
-    monkeypatch.setattr(_dispatch, "NOTICE_AFTER_S", 0.0)
-    monkeypatch.setitem(_dispatch._STATE, "noticed", False)
-    monkeypatch.setattr(_dispatch, "_WARM", set())
-    done = threading.Event()
-
-    def compiling():
-        for _ in range(1000):           # until the notice is out (at most ~10 s)
-            if _dispatch._STATE["noticed"]:
-                break
-            done.wait(0.01)
-        return 42
-
-    assert _dispatch._first("probe", compiling) == 42
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "compiling the numba kernels" in err
-    assert "probe" in _dispatch._WARM
-
-
-def test_a_slow_but_idle_first_call_stays_quiet(monkeypatch, capsys):
-    """Quiet when cached (issue 30): loading cached kernels on a busy machine takes wall
-    time but little CPU time; the notice counts the process's CPU seconds, not the wall."""
-    monkeypatch.setattr(_dispatch, "NOTICE_AFTER_S", 0.5)
-    monkeypatch.setattr(_dispatch, "NOTICE_POLL_S", 0.01)
-    monkeypatch.setitem(_dispatch._STATE, "noticed", False)
-    monkeypatch.setattr(_dispatch, "_WARM", set())
-    assert _dispatch._first("idle", lambda: threading.Event().wait(1.0)) is False
-    assert "compiling the numba kernels" not in capsys.readouterr().err
-    assert not _dispatch._STATE["noticed"]
+@needs_numba
+def test_an_uncached_compile_is_announced_once_per_area_and_a_cached_one_is_quiet(tmp_path):
+    """One line on stderr before a kernel compiles (not in the cache), none on a cached load."""
+    src = ("from athenakin._backend import njit\n"
+           "@njit(cache=True)\n"
+           "def inner(x):\n    return x + 1.0\n"
+           "@njit(cache=True)\n"
+           "def outer(x):\n    return inner(x) * 2.0\n"
+           "@njit(cache=True)\n"
+           "def other(x):\n    return x - 1.0\n")
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "probe_kernels.py").write_text(src)
+    run = (f"import sys; sys.path.insert(0, {str(pkg)!r})\n"
+           "import athenakin._backend as b\n"
+           "b.ANNOUNCED_PREFIX = 'probe_'\n"
+           "import probe_kernels as k\n"
+           "print(k.outer(1.0), k.other(1.0))\n")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    env.pop("ATHENAKIN_BACKEND", None)
+    first = subprocess.run([sys.executable, "-c", run], capture_output=True, text=True,
+                           env=env, timeout=600)
+    assert first.returncode == 0, first.stderr[-2000:]
+    assert first.stdout.split() == ["4.0", "0.0"]
+    lines = [ln for ln in first.stderr.splitlines() if ln.startswith(_backend.COMPILE_NOTICE)]
+    assert len(lines) == 1 and "of probe_kernels" in lines[0], first.stderr
+    again = subprocess.run([sys.executable, "-c", run], capture_output=True, text=True,
+                           env=env, timeout=600)
+    assert again.returncode == 0 and _backend.COMPILE_NOTICE not in again.stderr, again.stderr
 
 
 @needs_numba

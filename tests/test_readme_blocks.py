@@ -118,17 +118,34 @@ def test_blocks_are_found() -> None:
         assert b.skip_reason is None or len(b.skip_reason) > 5, (b.page, b.line)
 
 
+#: An output path: a command's -o / --out / --write, a Python call's out= / path=.
+_OUTPUT = re.compile(r"(?:(?:^|\s)(?:-o|--out|--write)\s+|\bout=[\"'])([^\s\"']+)")
+
+
+def _shown_commands(path: Path) -> list[tuple[int, str]]:
+    """The ``$ athenakin ...`` lines of a page's plain blocks (a transcript: not run)."""
+    return [(i, line[2:]) for i, line in enumerate(path.read_text().splitlines(), 1)
+            if line.startswith("$ athenakin ")]
+
+
 def test_output_names_are_distinct() -> None:
-    """No two commands write the same -o / --out / --write path (they would clash)."""
-    seen: dict[str, str] = {}
-    for b in BLOCKS:
-        if b.lang != "bash" or b.skip_reason:
-            continue
-        for m in re.finditer(r"(?:-o|--out|--write)\s+(\S+)", b.code):
-            where = f"{b.page}:{b.line}"
-            assert m.group(1) not in seen, f"{m.group(1)} written at {seen.get(m.group(1))} " \
-                                            f"and {where}"
-            seen[m.group(1)] = where
+    """No two commands or calls of the pages write the same path (a reader running them in
+    order would resume or overwrite the first): -o / --out / --write and out=, in the run
+    blocks, and the commands shown as transcripts (``$ athenakin ...``)."""
+    seen: dict[str, tuple[str, str]] = {}
+    found = [(f"{b.page}:{b.line}", b.code) for b in BLOCKS if not b.skip_reason]
+    found += [(f"{p.relative_to(ROOT)}:{i}", line) for p in pages()
+              for i, line in _shown_commands(p)]
+    for where, code in found:
+        for m in _OUTPUT.finditer(code):
+            # the command line that writes it: the same command shown twice writes the same
+            # file with the same content (a transcript of a block above), not a clash
+            start = code.rfind("\n", 0, m.start()) + 1
+            end = code.find("\n", m.end())
+            line = code[start:end if end >= 0 else None].strip()
+            first = seen.setdefault(m.group(1), (where, line))
+            assert first[1] == line, f"{m.group(1)} written at {first[0]} and {where}"
+    assert "study.parquet" in seen and "reference_study.parquet" in seen
 
 
 @pytest.mark.slow

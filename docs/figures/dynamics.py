@@ -74,6 +74,37 @@ def forces_in_cone(q, res):
     return f, cap_min, weak
 
 
+def polytope_section(ax, cap, d_b) -> None:
+    """The force polytope of ``cap`` cut through zero tip force, in a plane (N).
+
+    The plane holds the weakest direction ``w`` and the instrument direction ``d_b``
+    (orthogonalised); its boundary along each of 720 directions is
+    :func:`athenakin.dynamics.max_tip_force` there, on equal axes.
+    """
+    w = cap.weakest_direction
+    e2 = d_b - (d_b @ w) * w
+    e2 /= np.linalg.norm(e2)
+    th = np.linspace(0.0, 2.0 * np.pi, 721)
+    dirs = np.cos(th)[:, None] * w + np.sin(th)[:, None] * e2
+    r = dy.max_tip_force(ak.robot.REFERENCE_Q, dirs, T, D, masses=M, f_max=F_MAX)
+    x, y = r * np.cos(th), r * np.sin(th)
+    ax.fill(x, y, color="C0", alpha=0.25, lw=0)
+    ax.plot(x, y, color="C0", lw=1.2, label=f"boundary: a limit |f_i| = {F_MAX:g} N reached")
+    ax.plot([0.0, cap.min_force], [0.0, 0.0], color="C3", lw=3.0,
+            label=f"weakest direction: {cap.min_force:.1f} N resisted")
+    ax.scatter([0.0], [0.0], color="k", s=14, zorder=3, label="zero tip force")
+    ax.axhline(0.0, color="0.7", lw=0.6)
+    ax.axvline(0.0, color="0.7", lw=0.6)
+    ax.set_aspect("equal")
+    ax.set_xlabel("tip force along the weakest direction (N)")
+    ax.set_ylabel("along the instrument, orthogonal to it (N)")
+    q_mm = ", ".join(f"{1e3 * v:.0f}" for v in ak.robot.REFERENCE_Q)
+    ax.set_title(f"tip forces resisted at q = ({q_mm}) mm, |f_i| <= {F_MAX:g} N:\n"
+                 "the force polytope cut in the plane of its weakest direction",
+                 fontsize=9)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, frameon=False)
+
+
 def main() -> None:
     """Write the four figures and print the numbers."""
     print(f"mass model: MassModel.reference(), {M.total_mass:.2f} kg moving")
@@ -160,7 +191,7 @@ def main() -> None:
           f"deg, along {np.round(weak[ia, ip], 3).tolist()} (base)")
     wz = np.abs(weak[..., 2][okc])
     print(f"  weakest direction's |z_b| component: median {np.median(wz):.2f}")
-    fig = plt.figure(figsize=(11, 4.2))
+    fig = plt.figure(figsize=(12, 4.8))
     ax = fig.add_subplot(1, 2, 1)
     m = ax.pcolormesh(az_w, np.degrees(pol), np.maximum(cap_w, 0).T,
                       shading="auto", cmap="magma")
@@ -170,22 +201,7 @@ def main() -> None:
     ax.set_title(f"tip force resisted in every direction (N), |f_i| <= {F_MAX:g} N",
                  fontsize=9)
     fig.colorbar(m, ax=ax)
-    ax3 = fig.add_subplot(1, 2, 2, projection="3d")
-    V = cap.vertices
-    edges = [(a, b) for a in range(8) for b in range(a + 1, 8) if bin(a ^ b).count("1") == 1]
-    for a, b in edges:
-        ax3.plot(*np.stack([V[a], V[b]]).T, color="C0")
-    # the weakest direction as a line through the polytope (an arrow min_force long is a
-    # few pixels beside vertices hundreds of newtons out), its boundary point marked
-    reach = np.max(np.abs(V))
-    ax3.plot(*np.stack([-reach * w, reach * w]).T, color="C3", lw=1.2, ls="--")
-    ax3.plot(*np.stack([np.zeros(3), cap.min_force * w]).T, color="C3", lw=3.0)
-    ax3.scatter(*(cap.min_force * w), color="C3", s=25, depthshade=False)
-    ax3.set_xlabel("f_x (N)")
-    ax3.set_ylabel("f_y (N)")
-    ax3.set_zlabel("f_z (N)")
-    ax3.set_title(f"polytope at REFERENCE_Q; red: weakest direction (dashed), "
-                  f"{cap.min_force:.1f} N resisted along it (solid)", fontsize=9)
+    polytope_section(fig.add_subplot(1, 2, 2), cap, d_b)
     fig.tight_layout()
     fig.savefig(OUT / "dynamics_capability.png", dpi=80)
     plt.close(fig)
@@ -206,15 +222,23 @@ def main() -> None:
     for i in range(3):
         print(f"  f{i + 1}: {tau[:, i].min():+.2f} .. {tau[:, i].max():+.2f} N; inertial part "
               f"at most {np.abs(dyn[:, i]).max():.3f} N")
-    fig, ax = plt.subplots(figsize=(8, 3.4))
+    fig, (ax, axd) = plt.subplots(2, 1, figsize=(9, 5.2), sharex=True,
+                                  gridspec_kw={"height_ratios": [3, 2]})
     for i in range(3):
-        ax.plot(traj.t, tau[:, i], color=f"C{i}", label=f"f{i + 1}")
-        ax.plot(traj.t, tg[:, i], color=f"C{i}", ls="--", lw=0.8)
-    ax.set_xlabel("t (s)")
+        ax.plot(traj.t, tau[:, i], color=f"C{i}", lw=1.4, label=f"f{i + 1}")
+        ax.plot(traj.t, tg[:, i], color=f"C{i}", ls="--", lw=0.9,
+                label=f"f{i + 1}, gravity alone")
+        axd.plot(traj.t, dyn[:, i], color=f"C{i}", lw=1.2, label=f"f{i + 1}")
     ax.set_ylabel("actuator force (N)")
-    ax.set_title("Example motion (tip_square.csv): inverse dynamics (solid), gravity alone "
-                 "(dashed)", fontsize=9)
-    ax.legend()
+    ax.set_title("Example motion (tip_square.csv, 4 corners): inverse dynamics (solid) and "
+                 "gravity alone (dashed)", fontsize=9)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+    axd.axhline(0.0, color="0.6", lw=0.6)
+    axd.set_xlabel("t (s)")
+    axd.set_ylabel("inertial part (N)")
+    axd.set_title("inverse dynamics minus gravity: the tip stops and starts at each corner; "
+                  "jerk-limited, its acceleration is triangular", fontsize=9)
+    axd.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     fig.tight_layout()
     fig.savefig(OUT / "dynamics_motion.png", dpi=80)
     plt.close(fig)

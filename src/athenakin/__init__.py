@@ -80,6 +80,12 @@ def __getattr__(name: str) -> object:
         return getattr(importlib.import_module(f"athenakin.{_LAZY_FUNCTIONS[name]}"), name)
     raise AttributeError(f"module 'athenakin' has no attribute {name!r}")
 
+
+def __dir__() -> list[str]:
+    """List the eager names and the lazy ones, so that ``dir(ak)`` and completion show both."""
+    return sorted({*globals(), *_LAZY_SUBPACKAGES, *_LAZY_FUNCTIONS})
+
+
 __all__ = [
     "__version__",
     "chain",

@@ -205,7 +205,56 @@ def numba_module() -> ModuleType:
                           "compiled kernel was imported without asking athenakin._backend")
     import numba
 
+    if "announcer" not in _STATE:
+        _STATE["announcer"] = _announce_compiles(numba)
     return numba
+
+
+#: The start of every compile notice (a filter of the tests and scripts matches it).
+COMPILE_NOTICE = "athenakin: compiling the numba kernels"
+#: The modules whose kernels are announced (those of this package).
+ANNOUNCED_PREFIX = "athenakin."
+
+
+def _announce_compiles(numba: ModuleType) -> Any:
+    """Print one line on stderr before the first uncached compile of each kernel area.
+
+    numba broadcasts ``"numba:compile"`` (its documented event API, ``numba.core.event``)
+    only where a kernel is not in its cache, before the compile: the notice is then
+    exact, one line per area (``athenakin.dynamics``, ``athenakin.fast``, ...) and per
+    process, and nothing is printed where the kernels load from the cache. A kernel
+    compiled inside another's compile (a callee) belongs to the outer notice.
+    """
+    import threading
+
+    import numba.core.event as event  # numba's documented Event API ("numba:compile")
+
+    announced: set[str] = set()
+    local = threading.local()
+
+    class _Announcer(event.Listener):  # type: ignore[misc]
+        def on_start(self, ev: Any) -> None:
+            depth = getattr(local, "depth", 0)
+            local.depth = depth + 1
+            func = getattr(ev.data.get("dispatcher"), "py_func", None)
+            module = getattr(func, "__module__", "") or ""
+            if depth or not module.startswith(ANNOUNCED_PREFIX):
+                return
+            area = ".".join(part for part in module.split(".")[:2] if not part.startswith("_"))
+            if area in announced:
+                return
+            announced.add(area)
+            where = os.environ.get("NUMBA_CACHE_DIR") or "the package's __pycache__"
+            print(f"{COMPILE_NOTICE} of {area} (first use, not in the cache: up to tens of "
+                  f"seconds; later runs load them from {where}) ...", file=sys.stderr,
+                  flush=True)
+
+        def on_end(self, ev: Any) -> None:
+            local.depth = max(getattr(local, "depth", 1) - 1, 0)
+
+    listener = _Announcer()
+    event.register("numba:compile", listener)
+    return listener
 
 
 def __getattr__(name: str) -> Any:

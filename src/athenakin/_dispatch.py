@@ -18,17 +18,13 @@ decides, for this module as for every compiled path. Both return the same values
 
 The compiled kernels are cached on disk (numba ``cache=True``) next to their
 sources, or under the user cache directory (``~/.cache/athenakin/numba``) when the
-package directory is not writable. When the first call of a process takes long
-(compiling them the first time, about a minute; loading numba and the cache
-later, about a second), one line on stderr says so.
+package directory is not writable. A kernel that is not in the cache is announced
+by one line on stderr before it compiles (the first time, about a minute); loading
+numba and the cache later (about a second) prints nothing.
 """
 
 from __future__ import annotations
 
-import os
-import sys
-import threading
-import time
 from collections.abc import Callable
 from types import ModuleType
 from typing import Any, TypeVar
@@ -55,15 +51,8 @@ from .robot._fk import FKMethod, FKSolution
 from .robot._ik import IK_SINGULAR_TOL, InstrumentIK, PassiveJoints
 from .robot._jacobians import Frame
 
-#: CPU seconds (of the whole process) a first call may spend before the one-line notice is
-#: printed. CPU time, not wall time: loading cached kernels costs well under a CPU second
-#: however busy the machine is (quiet when cached, issue 30), compiling costs tens.
-NOTICE_AFTER_S = 3.0
-#: How often the watcher of a first call reads the process's CPU time, s.
-NOTICE_POLL_S = 0.1
-
 _F8 = np.dtype(np.float64)
-_STATE: dict[str, Any] = {}     # "api": fast._api, "jac": fast._jac_api, "noticed": bool
+_STATE: dict[str, Any] = {}     # "api": fast._api, "jac": fast._jac_api
 _WARM: set[str] = set()         # entry points whose first compiled call has returned
 _R = TypeVar("_R")
 
@@ -90,36 +79,16 @@ def _jac() -> ModuleType:
     return _STATE["jac"]  # type: ignore[no-any-return]
 
 
-def _notice() -> None:
-    if not _STATE.get("noticed"):
-        _STATE["noticed"] = True
-        where = os.environ.get("NUMBA_CACHE_DIR") or "the package's __pycache__"
-        print("athenakin: compiling the numba kernels on first use, or loading them from the "
-              f"cache ({where}) ...", file=sys.stderr, flush=True)
-
-
 def _first(name: str, call: Callable[[], _R]) -> _R:
-    """The first compiled call of an entry point: a notice on stderr if it compiles long.
+    """The first compiled call of an entry point: ``call()``, then ``name`` marked warm.
 
-    A watcher thread prints :func:`_notice` once the process has spent
-    :data:`NOTICE_AFTER_S` CPU seconds since the call began (compiling), never when the
-    kernels load from numba's cache, whatever the wall time on a loaded machine.
+    A kernel that is not in numba's cache is announced on stderr before it compiles,
+    one line per kernel area (:func:`athenakin._backend.numba_module` registers the
+    notice), so a long first call is never silent and a cached one never speaks.
     """
-    done = threading.Event()
-    start = time.process_time()
-
-    def watch() -> None:
-        while not done.wait(NOTICE_POLL_S):
-            if time.process_time() - start >= NOTICE_AFTER_S:
-                _notice()
-                return
-
-    watcher = threading.Thread(target=watch, name="athenakin-compile-notice", daemon=True)
-    watcher.start()
     try:
         return call()
     finally:
-        done.set()
         _WARM.add(name)
 
 
@@ -465,6 +434,12 @@ def parallel_inverse_jacobian(q: ArrayLike, design: Design | None = None, mode: 
                               *, backend: Backend = "auto") -> FloatArray:
     """Inverse Jacobian of the parallel module, ``d q / d O_s``, shape (..., 3, 3).
 
+    Near a singular set the entries grow as the condition number of the forward
+    Jacobian (``q2 - q1 = 1e-7`` m: about 6e6 m/m) while staying finite: flag such
+    configurations with :func:`athenakin.analysis.condition_number` of the forward
+    Jacobian against ``athenakin.motion.Margins().cond`` (100, the margin the tracker
+    and teleop hold; :data:`athenakin.dynamics.COND_MARGIN` for the force figures).
+
     The numpy reference is :func:`athenakin.robot._jacobians.parallel_inverse_jacobian`
     (finite at the forward singularity ``w = 0``, infinite at ``h = 0``).
 
@@ -538,6 +513,12 @@ def instrument_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                                 ) -> FloatArray:
     """Inverse of :func:`instrument_jacobian`: actuator rates per ``(azimuth, polar, p)`` rate.
 
+    Near a singular set the entries grow as the condition number of the forward
+    Jacobian (``q2 - q1 = 1e-7`` m: about 6e6 m/m) while staying finite: flag such
+    configurations with :func:`athenakin.analysis.condition_number` of the forward
+    Jacobian against ``athenakin.motion.Margins().cond`` (100, the margin the tracker
+    and teleop hold; :data:`athenakin.dynamics.COND_MARGIN` for the force figures).
+
     Parameters
     ----------
     q, T_b_e, design, mode, frame, backend : as in :func:`instrument_jacobian`
@@ -579,6 +560,12 @@ def tool_tip_inverse_jacobian(q: ArrayLike, T_b_e: ArrayLike | None = None,
                               frame: Frame = "base", backend: Backend = "auto"
                               ) -> FloatArray:
     """Inverse of :func:`tool_tip_jacobian`: actuator rates per tool-tip velocity.
+
+    Near a singular set the entries grow as the condition number of the forward
+    Jacobian (``q2 - q1 = 1e-7`` m: about 6e6 m/m) while staying finite: flag such
+    configurations with :func:`athenakin.analysis.condition_number` of the forward
+    Jacobian against ``athenakin.motion.Margins().cond`` (100, the margin the tracker
+    and teleop hold; :data:`athenakin.dynamics.COND_MARGIN` for the force figures).
 
     Parameters
     ----------

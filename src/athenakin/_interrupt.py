@@ -11,7 +11,7 @@ raised where it cannot propagate. Python runs the SIGINT handler in whatever Pyt
 the main thread is executing; inside a ``__del__``, a weakref callback or a finalizer
 (matplotlib's callback registry creates and drops such objects with every artist) the
 ``KeyboardInterrupt`` is printed as "Exception ignored" and lost, and ``athenakin
-animate`` ran to the end and exited 0 (issue 30, 1 run in 11). Within
+animate`` would run to the end and exit 0 (about 1 run in 11). Within
 :func:`remembered_interrupt` the handler also records the signal, and a long loop calls
 :func:`check_interrupt` at each step to raise it again.
 """

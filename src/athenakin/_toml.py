@@ -7,7 +7,7 @@ written with tomli-w like every other writer of the package, read with :func:`re
 Every TOML reader of athenakin goes through :func:`read_toml`, so that a file that is
 not UTF-8, not TOML, or nested too deeply for the parser's recursion is one named
 error that says which file and what is wrong, never a raw ``UnicodeDecodeError`` or
-``RecursionError`` (issue 13, found by the fuzz target ``scripts/fuzz_readers.py``).
+``RecursionError`` (the fuzz target ``scripts/fuzz_readers.py`` tries such files).
 """
 
 from __future__ import annotations
@@ -119,7 +119,7 @@ class TomlOptions:
             field's own check; a wrong type read from a file is bad input too).
         """
         if not isinstance(data, Mapping):
-            raise TypeError(f"{cls.TOML_TABLE}: expected a table (mapping), got "
+            raise TypeError(f"data: expected the [{cls.TOML_TABLE}] table (a mapping), got "
                             f"{type(data).__name__}")
         names = [f.name for f in dataclasses.fields(cls)]  # type: ignore[arg-type]
         unknown = sorted(set(data) - set(names))

@@ -169,7 +169,7 @@ def check_transform(T: ArrayLike, name: str, *, allow_nonfinite: bool = False,
 
 
 #: What a call that gives the design before the RCM frame is told: every public function
-#: takes ``(q..., T_b_e, design, *, options)`` (issue 28, item 3).
+#: takes ``(q..., T_b_e, design, *, options)``.
 ARGUMENT_ORDER = "T_b_e comes before design: f(T_b_e, design)"
 
 

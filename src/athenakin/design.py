@@ -33,7 +33,7 @@ _OTHER_TABLES = ("bodies", "environment")
 
 #: Range (m) of every length of a design (``l1..l5``, ``tool_length``) and of the finite
 #: stroke limits: from a micrometre to a kilometre. Outside it the kinematics would square
-#: lengths into overflow or lose every digit to rounding (issue 13); a robot of that size is
+#: lengths into overflow or lose every digit to rounding; a robot of that size is
 #: a typing error (mm for m), reported as such.
 LENGTH_RANGE = (1e-6, 1e3)
 #: A length or finite stroke limit above this (m) is accepted with a :class:`UnitWarning`:
@@ -200,7 +200,7 @@ class Design:
             (a scalar where ``q_min``/``q_max`` want 3 numbers, a string length, ...).
         """
         if not isinstance(data, Mapping):
-            raise TypeError(f"design data: expected a mapping, got {type(data).__name__}")
+            raise TypeError(f"data: expected a design table (mapping), got {type(data).__name__}")
         fields = {f.name for f in dataclasses.fields(cls)}
         unknown = set(data) - fields
         if unknown:

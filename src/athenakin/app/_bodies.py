@@ -1,12 +1,12 @@
-"""The robot's bodies as solids in the live app, the closest pair coloured (issue 20).
+"""The robot's bodies as solids in the live app, the closest pair coloured.
 
 The pure part (numpy only, testable without a browser): :func:`bodies_view` turns
 the drawn solution (:class:`~athenakin.plot.RobotGeometry`) into one triangle mesh
 per capsule of :class:`athenakin.collision.Bodies` and the least clearance with its
 pair and witness points; :func:`capsule_mesh` triangulates one capsule;
 :func:`clearance_html` is the read-out. :class:`BodiesLayer` sends them to a viser
-scene (a checkbox shows or hides the solids); the app's ``_draw`` calls
-:meth:`BodiesLayer.update` after drawing the sticks.
+scene (a checkbox shows or hides the solids); the app calls
+:meth:`BodiesLayer.update` after its page writer drew the sticks.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The actuator forces in the live app: gravity plus a tip force the user drags (issue 21).
+"""The actuator forces in the live app: gravity plus a tip force the user drags.
 
 The pure part (numpy only, testable without a browser): :func:`forces_view` computes,
 for the drawn solution (:class:`~athenakin.plot.RobotGeometry`), the actuator forces
@@ -9,7 +9,7 @@ handle's position to the tip force and back (:data:`FORCE_SCALE_M_PER_N`);
 :func:`check_f_max`, :func:`check_masses`, :func:`check_tip_force` are the boundary
 checks of the options; :func:`forces_html` is the read-out (one bar per actuator,
 coloured by the share of its limit). :class:`ForcesLayer` sends them to a viser scene;
-the app's ``_draw`` calls :meth:`ForcesLayer.update` after drawing the robot.
+the app calls :meth:`ForcesLayer.update` after its page writer drew the robot.
 
 Conventions (docs/conventions.md, "Forces"): actuator forces are positive along
 increasing ``q1, q2, q3`` (N); the tip force is the force the environment applies to

@@ -1,10 +1,12 @@
-"""What the app's page shows (private): the scene nodes, the GUI inputs' values, the banner.
+"""What the app's page shows (private): the scene nodes, the page script, the banner.
 
-:class:`_Page` is the half of :class:`athenakin.app._server.AthenaApp` that only writes
-to the page: it sends the scene of an :class:`~athenakin.app.AppView` (one line-segments
-node per line width, point clouds, solids, labels), shows a view in the GUI's inputs
-without undoing newer input from the browser (:func:`_write`), frames the camera and
-sets the page's title, script and banner. The state and what changes it (callbacks,
+:class:`PageWriter` is a part that :class:`athenakin.app._server.AthenaApp` owns: it
+holds the handles of the scene nodes it sent and sends the scene of an
+:class:`~athenakin.app.AppView` (one line-segments node per line width, point clouds,
+solids, labels), frames the camera and sends the page script. :func:`page_title`,
+:func:`banner_html` and :func:`slot_options` are what the page's title, banner and slot
+list say; :func:`write_value` shows a value in a GUI input without undoing newer input
+from the browser. The app's state and what changes it (callbacks, the GUI inputs,
 actions, set-up, playback) are :mod:`athenakin.app._server`'s.
 """
 
@@ -12,7 +14,6 @@ from __future__ import annotations
 
 import functools
 import json
-import math
 from collections.abc import Callable
 from typing import Any
 
@@ -21,11 +22,9 @@ from numpy.typing import NDArray
 
 from .._typing import FloatArray
 from ._ghosts import ghost_scene
-from ._inverse import angles_from_tip
 from ._model import AppSetup, AppView
 from ._scene import Scene, Solid, robot_scene, with_solids
 from ._script import run_page_script
-from ._sync import Echo
 from ._text import ERROR_COLOR
 
 _ALL = "all valid slots (others ghosted)"
@@ -46,47 +45,30 @@ _Layout = tuple[tuple[tuple[int, int, int], int], ...]
 _Read = tuple[tuple[Any, float], ...]
 
 
-class _Page:
-    """Drawing and GUI values of :class:`~athenakin.app._server.AthenaApp` (its base class).
+class PageWriter:
+    """The scene nodes of the app's page: what it sent, and how to send a view's scene.
 
-    It holds no state of its own: the attributes below are the app's, set in its
-    ``__init__`` and ``_build_gui``.
+    Parameters
+    ----------
+    server : viser.ViserServer
+        The server whose scene and page this part writes.
+    solids_of : callable, optional
+        ``solids_of(view) -> tuple[Solid, ...]``: solids added to the robot's scene.
     """
 
-    server: Any
-    setup: AppSetup
-    errors: list[str]
-    view: AppView | None
-    slot: int | str
-    bodies: Any
-    forces: Any
-    _solids_of: Callable[[AppView], tuple[Solid, ...]] | None
-    _echo: Echo
-    _dragging: bool
-    _grab: tuple[FloatArray, FloatArray] | None
-    _handle: Any
-    _grip: Any
-    _q_sliders: list[Any]
-    _slot_dd: Any
-    _az: Any
-    _pol: Any
-    _depth: Any
-    _far: float
-    _solid_handles: dict[str, tuple[Any, tuple[int, ...]]]
-    _line_handles: dict[str, Any]
-    _point_handles: dict[str, Any]
-    _label_handles: dict[str, Any]
-    _line_layouts: dict[str, _Layout]
-    _label_texts: tuple[str, ...]
-    _label_pos: FloatArray
+    def __init__(self, server: Any, *,
+                 solids_of: Callable[[AppView], tuple[Solid, ...]] | None = None) -> None:
+        self.server = server
+        self._solids_of = solids_of
+        self._solid_handles: dict[str, tuple[Any, tuple[int, ...]]] = {}
+        self._line_handles: dict[str, Any] = {}
+        self._point_handles: dict[str, Any] = {}
+        self._label_handles: dict[str, Any] = {}
+        self._line_layouts: dict[str, _Layout] = {}
+        self._label_texts: tuple[str, ...] = ()
+        self._label_pos: FloatArray = np.zeros((0, 3))
 
-    @property
-    def title(self) -> str:
-        """The page's title: the robot, the design and the app."""
-        name = self.setup.design.name or "unnamed design"
-        return f"ATHENA - {name} - athenakin"
-
-    def _send_page_script(self) -> None:
+    def send_script(self, title: str) -> None:
         """Set the page title, keep camera keys off the controls, show the scroll bar.
 
         viser's camera moves on the arrow keys (and W A S D Q E) wherever the focus is,
@@ -94,9 +76,14 @@ class _Page:
         A listener on ``document.body`` (reached after the control's own handler, before
         viser's on ``document``) stops those keys when the focus is on an element other
         than the page or the 3-D canvas.
+
+        Parameters
+        ----------
+        title : str
+            The page's title (:func:`page_title`).
         """
         script = (
-            f"document.title = {json.dumps(self.title)};"
+            f"document.title = {json.dumps(title)};"
             "if (!window.__athenakinKeys) { window.__athenakinKeys = true;"
             f" const keys = new Set({json.dumps(list(CAMERA_KEYS))});"
             " document.body.addEventListener('keydown', (e) => { const t = e.target;"
@@ -107,80 +94,16 @@ class _Page:
             f" st.textContent = {json.dumps(_PANEL_CSS)}; document.head.appendChild(st); }}")
         run_page_script(self.server, script)
 
-    def _banner_html(self) -> str:
-        if not self.errors:
-            d = self.setup.design
-            return (f"<div data-ro='banner'><b>ATHENA</b> {d.name or ''} "
-                    f"(backend {self.setup.backend})</div>")
-        items = "".join(f"<li>{_escape(e)}</li>" for e in self.errors)
-        return (f"<div data-ro='banner' data-level='error' style='color:{ERROR_COLOR}'>"
-                f"<b>Problems</b><ul style='margin:0;padding-left:1.2em'>{items}</ul></div>")
-
-    def _slot_options(self, view: AppView | None) -> list[str]:
-        if view is None:
-            return [_ALL] + [f"slot {k}" for k in range(16)]
-        return [_ALL] + [s.label if s.valid else f"{s.label} - invalid: "
-                         f"{s.why.split(':')[0]}" for s in view.slots]
-
-    def _sync_gui(self, view: AppView, *, sync_ik: bool, read: _Read = ()) -> None:
-        """Show ``view`` in the GUI's inputs.
-
-        ``read``: the inputs that this update came from, with the values it read.
-        """
-        with self._echo():
-            for i, sl in enumerate(self._q_sliders):
-                _write(sl, float(np.clip(round(view.q[i] * 1e3, 3), sl.min, sl.max)), read)
-            opts = self._slot_options(view)
-            if tuple(opts) != tuple(self._slot_dd.options):
-                self._slot_dd.options = opts
-            want = opts[0] if self.slot == "all" else opts[1 + int(self.slot)]
-            if self._slot_dd.value != want:
-                self._slot_dd.value = want
-            if view.readouts is not None:
-                self._set_depth_range(view.readouts.p)
-            if sync_ik and view.readouts is not None:
-                az, pol, depth = angles_from_tip(view.readouts.tip_e)
-                _write(self._az, float(np.clip(round(math.degrees(az), 2), -180, 180)), read)
-                _write(self._pol, float(np.clip(round(math.degrees(pol), 2), 0, 180)), read)
-                _write(self._depth, float(np.clip(round(depth * 1e3, 2), self._depth.min,
-                                                  self._depth.max)), read)
-            if not self._dragging:
-                self._place_handle()
-
-    def _set_depth_range(self, p: float) -> None:
-        """Make the depth slider span the drawn slot's branch of ``p``.
-
-        The slider is the tip's distance from the RCM, ``|L - p|``: below ``L`` for the
-        inserted tool (``0 < p < L``), beyond ``L`` for ``p < 0`` (``O_s`` beyond the
-        RCM), from 0 for ``p > L`` (the tip behind the RCM).
-        """
-        L, far = self.setup.design.tool_length * 1e3, self._far * 1e3
-        if 0 < p * 1e3 < L:
-            lo, hi = 1.0, L - 1.0
-        elif p <= 0:
-            lo, hi = L + 1.0, L + far
-        else:
-            lo, hi = 1.0, max(far - L, 2.0)
-        if (self._depth.min, self._depth.max) != (lo, hi):
-            if self._depth.min < hi:        # keep min < max at every step
-                self._depth.max, self._depth.min = hi, lo
-            else:
-                self._depth.min, self._depth.max = lo, hi
-            self._depth.value = float(np.clip(self._depth.value, lo, hi))
-
-    def _place_handle(self) -> None:
-        if self.view is not None and self.view.readouts is not None:
-            with self._echo():
-                tip = tuple(float(x) for x in self.view.readouts.tip_b)
-                self._handle.position = tip
-                if self._grab is None:
-                    self._grip.position = tip
-
-    def _draw(self, view: AppView) -> None:
+    def draw(self, view: AppView) -> None:
         """Send the scene of ``view`` (inside the caller's atomic block).
 
         One line-segments node per line width (solid and ghosted apart), one point cloud
         per point set, the labels that moved.
+
+        Parameters
+        ----------
+        view : AppView
+            A view with its geometry (``view.geometry`` is not None).
         """
         assert view.geometry is not None
         solid = robot_scene(view.geometry)
@@ -235,8 +158,10 @@ class _Page:
             elif m:
                 h.position = p
         self._label_texts, self._label_pos = texts, pos
-        self.bodies.update(view.geometry)    # bodies as solids (issue 20): app/_bodies.py
-        self.forces.update(view.geometry)    # actuator forces (issue 21): app/_forces.py
+
+    def solid_handle(self, name: str) -> Any:
+        """The mesh node of the solid ``name`` as last sent (``KeyError`` if none)."""
+        return self._solid_handles[name][0]
 
     def _draw_solids(self, solids: tuple[Solid, ...]) -> None:
         """One mesh node per solid: new vertices where the mesh keeps its faces."""
@@ -260,16 +185,48 @@ class _Page:
             h.remove()
         self._solid_handles = handles
 
-    def _frame_camera(self) -> None:
-        if self.view is None or self.view.geometry is None:
+    def frame_camera(self, view: AppView | None) -> None:
+        """Point the initial camera at the robot of ``view`` (nothing without geometry).
+
+        Parameters
+        ----------
+        view : AppView or None
+            The view whose geometry's bounds the camera frames.
+        """
+        if view is None or view.geometry is None:
             return
-        lo, hi = self.view.geometry.bounds()
+        lo, hi = view.geometry.bounds()
         centre = 0.5 * (lo + hi)
         span = float(np.max(hi - lo))
         cam = self.server.initial_camera
         cam.look_at = tuple(float(x) for x in centre)
         cam.position = tuple(float(x) for x in centre + span * np.array([0.8, -0.95, 0.55]))
         cam.up = (0.0, 0.0, 1.0)
+
+
+def page_title(setup: AppSetup) -> str:
+    """The page's title: the robot, the design and the app."""
+    name = setup.design.name or "unnamed design"
+    return f"ATHENA - {name} - athenakin"
+
+
+def banner_html(setup: AppSetup, errors: list[str]) -> str:
+    """The banner at the top of the panel: the design and backend, or the problems."""
+    if not errors:
+        d = setup.design
+        return (f"<div data-ro='banner'><b>ATHENA</b> {d.name or ''} "
+                f"(backend {setup.backend})</div>")
+    items = "".join(f"<li>{_escape(e)}</li>" for e in errors)
+    return (f"<div data-ro='banner' data-level='error' style='color:{ERROR_COLOR}'>"
+            f"<b>Problems</b><ul style='margin:0;padding-left:1.2em'>{items}</ul></div>")
+
+
+def slot_options(view: AppView | None) -> list[str]:
+    """The FK slot dropdown's entries: all slots, then each slot (why it is invalid)."""
+    if view is None:
+        return [_ALL] + [f"slot {k}" for k in range(16)]
+    return [_ALL] + [s.label if s.valid else f"{s.label} - invalid: "
+                     f"{s.why.split(':')[0]}" for s in view.slots]
 
 
 @functools.lru_cache(maxsize=64)
@@ -306,7 +263,7 @@ def _layout_colors(layout: _Layout) -> NDArray[np.uint8]:
     return np.concatenate([np.broadcast_to(_vertex_color(c), (n, 2, 3)) for c, n in layout])
 
 
-def _write(handle: Any, value: float, read: _Read) -> None:
+def write_value(handle: Any, value: float, read: _Read) -> None:
     """Show ``value`` in a GUI input, unless the browser moved it on since it was read.
 
     viser stores a value from the browser before the callback that reads it runs. If the

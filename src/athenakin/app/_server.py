@@ -9,8 +9,8 @@ need a 3-D widget and their own state plumbing; MeshCat has no GUI controls.
 Everything the page shows comes from the pure functions of :mod:`athenakin.app`
 (:func:`~athenakin.app.forward_view`, :func:`~athenakin.app.inverse_step`, ...): this
 module only turns them into scene nodes and GUI values, under one lock. It holds the
-app's state and what changes it; the drawing and the GUI values are its base class
-:class:`~athenakin.app._page._Page`.
+app's state, its GUI inputs and what changes them; the scene nodes are written by the
+part it owns, :class:`~athenakin.app._page.PageWriter` (``app.page``).
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ from ..design import Design
 from ..errors import KinematicsError
 from ..robot._setup import read_rcm_json
 from ._bodies import collision_note
-from ._inverse import inverse_step, tip_from_angles
+from ._inverse import angles_from_tip, inverse_step, tip_from_angles
 from ._model import (
     AppSetup,
     AppView,
@@ -42,7 +42,7 @@ from ._model import (
     app_setup,
     forward_view,
 )
-from ._page import _ALL, _Page, _Read
+from ._page import _ALL, PageWriter, _Read, banner_html, page_title, slot_options, write_value
 from ._playback import Playback, load_playback, playback_q
 from ._scene import Solid
 from ._sync import Echo
@@ -74,7 +74,7 @@ def _error_text(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
 
 
-class AthenaApp(_Page):
+class AthenaApp:
     """The live app: a viser server drawing ATHENA, driven by sliders and a tip handle.
 
     Parameters
@@ -133,8 +133,7 @@ class AthenaApp(_Page):
                  masses: Any = None, f_max: Any = None,  # forces: app/_forces.py
                  bodies: Any = None, environment: Any = None) -> None:
         viser = _import_viser()
-        self._solids_of = solids
-        # actuator forces (issue 21): app/_forces.py; bad options raise before the server starts
+        # actuator forces: app/_forces.py; bad options raise before the server starts
         from ._forces import ForcesLayer, check_f_max, check_masses
 
         masses, f_max = check_masses(masses), check_f_max(f_max)
@@ -164,23 +163,17 @@ class AthenaApp(_Page):
         self.playback: Playback | None = None
         self._dragging = False
         self._grab: tuple[FloatArray, FloatArray] | None = None
-        self._solid_handles: dict[str, tuple[Any, tuple[int, ...]]] = {}
-        self._line_handles: dict[str, Any] = {}
-        self._point_handles: dict[str, Any] = {}
-        self._label_handles: dict[str, Any] = {}
-        self._line_layouts: dict[str, tuple[tuple[tuple[int, int, int], int], ...]] = {}
-        self._label_texts: tuple[str, ...] = ()
-        self._label_pos = np.zeros((0, 3))
+        self.page = PageWriter(self.server, solids_of=solids)   # the scene nodes it sent
         self._build_gui()
-        self._send_page_script()
-        # bodies as solids, closest pair, clearance (issue 20): app/_bodies.py
+        self.page.send_script(self.title)
+        # bodies as solids, closest pair, clearance: app/_bodies.py
         self.bodies = BodiesLayer(self.server, bodies=bodies, environment=environment)
-        self.forces = ForcesLayer(self.server, masses=masses, f_max=f_max,  # issue 21 forces
+        self.forces = ForcesLayer(self.server, masses=masses, f_max=f_max,  # actuator forces
                                   tip_handle=self._handle)
         if trajectory is not None:
             self._load_trajectory(str(trajectory))
         self._apply_q(self.q, sync_ik=True)
-        self._frame_camera()
+        self.page.frame_camera(self.view)
 
     # ------------------------------------------------------------------ set-up
     def _make_setup(self, T_b_e: ArrayLike | str | Path | None,
@@ -238,7 +231,7 @@ class AthenaApp(_Page):
         gui, s = self.server.gui, self.setup
         self.server.scene.set_up_direction("+z")
         gui.configure_theme(control_width="large", show_logo=False)
-        self._banner = gui.add_html(self._banner_html())
+        self._banner = gui.add_html(banner_html(self.setup, self.errors))
         tabs = gui.add_tab_group()
         with tabs.add_tab("Forward"):
             self._q_sliders = []
@@ -249,8 +242,8 @@ class AthenaApp(_Page):
                                     hint=f"actuator q{i + 1}, stroke {lo:.0f}..{hi:.0f} mm")
                 sl.on_update(self._on_q)
                 self._q_sliders.append(sl)
-            self._slot_dd = gui.add_dropdown("FK slot", options=self._slot_options(None),
-                                             initial_value=self._slot_options(None)[1])
+            self._slot_dd = gui.add_dropdown("FK slot", options=slot_options(None),
+                                             initial_value=slot_options(None)[1])
             self._slot_dd.on_update(self._on_slot)
         with tabs.add_tab("Inverse"):
             L = s.design.tool_length * 1e3
@@ -280,7 +273,7 @@ class AthenaApp(_Page):
             self._time.on_update(self._on_time)
             self._play = gui.add_button("play", disabled=True)
             self._play.on_click(lambda _: self._start_playing())
-        with tabs.add_tab("Teleop"):     # a virtual master (issue 29): app/_teleop_tab.py
+        with tabs.add_tab("Teleop"):     # a virtual master: app/_teleop_tab.py
             from ._teleop_tab import TeleopTab
 
             self.teleop = TeleopTab(self)
@@ -395,8 +388,8 @@ class AthenaApp(_Page):
                 self._set_status("the tip cannot be moved: no valid configuration", "error")
                 return
             r = v.readouts
-            # the motion stops before the bodies collide (issue 30: it drove the carriages
-            # 50 mm into each other and said "ok")
+            # the motion stops before the bodies collide (a move that ignored them could
+            # drive the carriages into each other)
             clear = self.bodies.clearance_along(self.setup.T_b_e, self.setup.design,
                                                 _inverse_slot(r.slot, r.mode))
             step = inverse_step(self.setup, r.tip_e, tip_e, r.q, r.mode, p_from=r.p,
@@ -424,7 +417,9 @@ class AthenaApp(_Page):
             self.q = view.q
             if view.geometry is not None:
                 self.view = view
-                self._draw(view)
+                self.page.draw(view)
+                self.bodies.update(view.geometry)    # bodies as solids: app/_bodies.py
+                self.forces.update(view.geometry)    # actuator forces: app/_forces.py
             self._sync_gui(view, sync_ik=sync_ik, read=read)
             msg, level = view.message, str(view.level)
             if extra is not None:
@@ -442,6 +437,68 @@ class AthenaApp(_Page):
             self.last_update_s = time.perf_counter() - t0
             return view
 
+    @property
+    def title(self) -> str:
+        """The page's title: the robot, the design and the app."""
+        return page_title(self.setup)
+
+    def _sync_gui(self, view: AppView, *, sync_ik: bool, read: _Read = ()) -> None:
+        """Show ``view`` in the GUI's inputs.
+
+        ``read``: the inputs that this update came from, with the values it read.
+        """
+        with self._echo():
+            for i, sl in enumerate(self._q_sliders):
+                write_value(sl, float(np.clip(round(view.q[i] * 1e3, 3), sl.min, sl.max)),
+                            read)
+            opts = slot_options(view)
+            if tuple(opts) != tuple(self._slot_dd.options):
+                self._slot_dd.options = opts
+            want = opts[0] if self.slot == "all" else opts[1 + int(self.slot)]
+            if self._slot_dd.value != want:
+                self._slot_dd.value = want
+            if view.readouts is not None:
+                self._set_depth_range(view.readouts.p)
+            if sync_ik and view.readouts is not None:
+                az, pol, depth = angles_from_tip(view.readouts.tip_e)
+                write_value(self._az, float(np.clip(round(math.degrees(az), 2), -180, 180)),
+                            read)
+                write_value(self._pol, float(np.clip(round(math.degrees(pol), 2), 0, 180)),
+                            read)
+                write_value(self._depth, float(np.clip(round(depth * 1e3, 2), self._depth.min,
+                                                       self._depth.max)), read)
+            if not self._dragging:
+                self._place_handle()
+
+    def _set_depth_range(self, p: float) -> None:
+        """Make the depth slider span the drawn slot's branch of ``p``.
+
+        The slider is the tip's distance from the RCM, ``|L - p|``: below ``L`` for the
+        inserted tool (``0 < p < L``), beyond ``L`` for ``p < 0`` (``O_s`` beyond the
+        RCM), from 0 for ``p > L`` (the tip behind the RCM).
+        """
+        L, far = self.setup.design.tool_length * 1e3, self._far * 1e3
+        if 0 < p * 1e3 < L:
+            lo, hi = 1.0, L - 1.0
+        elif p <= 0:
+            lo, hi = L + 1.0, L + far
+        else:
+            lo, hi = 1.0, max(far - L, 2.0)
+        if (self._depth.min, self._depth.max) != (lo, hi):
+            if self._depth.min < hi:        # keep min < max at every step
+                self._depth.max, self._depth.min = hi, lo
+            else:
+                self._depth.min, self._depth.max = lo, hi
+            self._depth.value = float(np.clip(self._depth.value, lo, hi))
+
+    def _place_handle(self) -> None:
+        if self.view is not None and self.view.readouts is not None:
+            with self._echo():
+                tip = tuple(float(x) for x in self.view.readouts.tip_b)
+                self._handle.position = tip
+                if self._grab is None:
+                    self._grip.position = tip
+
     def _set_status(self, text: str, level: str) -> None:
         self._status.content = message_html(text, level)
 
@@ -452,7 +509,7 @@ class AthenaApp(_Page):
         except (OSError, ValueError, KinematicsError) as exc:
             self._set_status(f"trajectory not loaded: {_error_text(exc)}", "error")
             self.errors.append(f"trajectory: {_error_text(exc)}")
-            self._banner.content = self._banner_html()
+            self._banner.content = banner_html(self.setup, self.errors)
             return
         with self._lock:
             self.playback = pb
@@ -500,8 +557,8 @@ class AthenaApp(_Page):
             self.setup = setup
             self._far = rcm_reach(setup)
             self.errors = []
-            self._banner.content = self._banner_html()
-            self._send_page_script()
+            self._banner.content = banner_html(self.setup, self.errors)
+            self.page.send_script(self.title)
             with self._echo():
                 for i, sl in enumerate(self._q_sliders):
                     sl.min, sl.max = float(setup.q_lo[i] * 1e3), float(setup.q_hi[i] * 1e3)

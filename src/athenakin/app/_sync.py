@@ -5,7 +5,7 @@ thread*, when Python assigns ``handle.value``; and *on its thread pool* when the
 sends a new value. The app ignores the first kind (its own echo) and must never drop the
 second. A flag on the app object did both at once: while one pool thread wrote the
 sliders back, the callback of the next key press, on another pool thread, saw the flag
-and returned, and that key press was lost (issue 30, a busy machine). The flag is
+and returned, and that key press was lost (on a busy machine). The flag is
 therefore per thread.
 """
 

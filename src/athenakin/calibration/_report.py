@@ -69,8 +69,10 @@ def plot_residuals(result: CalibrationResult, *, ax: Any = None) -> Any:
     ax.set_yscale("log")
     ax.set_xlabel("measurement row")
     ax.set_ylabel(f"|tip residual| ({MICRO_M})")
-    ax.set_title("Residuals before and after calibration")
-    ax.legend(fontsize=8)
+    ax.set_title("Residuals before and after calibration", pad=24)
+    # above the axes, in one row: the points fill the whole plot
+    ax.legend(fontsize=8, loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=3,
+              frameon=False, borderaxespad=0.2)
     return ax
 
 

@@ -63,7 +63,7 @@ DEGENERATE_ULPS = 64.0
 _EPS = float(np.finfo(float).eps)
 #: Rounding of a closure check, in ulps of the chain's scale: the translation of a pose
 #: ``scale`` metres from the origin is known only to about ``eps * scale``, so a closure
-#: residual of that size is rounding, not a failure (a far RCM, 1e8 m, issue 13). The
+#: residual of that size is rounding, not a failure (a far RCM, 1e8 m). The
 #: closure test is ``residual <= closure_tol + CLOSURE_ULPS * eps * scale``.
 CLOSURE_ULPS = 16.0
 
@@ -247,8 +247,8 @@ def _sines_as_kernel(T: FloatArray, zx: FloatArray, zy: FloatArray,
     """``|sin u2|`` and ``|sin u4|`` of the slot p > 0, in the compiled kernel's operations.
 
     ``(zx, zy, zz)`` is the unit instrument direction (the kernel's names); the
-    kernel is ``fast/_fk_kernels.py``, ``_serial_stage`` (issue 23: both backends
-    classify an input on a threshold alike, to the last bit).
+    kernel is ``fast/_fk_kernels.py``, ``_serial_stage`` (so both backends classify
+    an input on a threshold alike, to the last bit).
     """
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         rho_k = np.sqrt(zx * zx + zy * zy)              # |sin u2| (kernel: hypot)
@@ -297,7 +297,7 @@ def _pose_checks(c: FloatArray, finite: BoolArray, scale: ArrayLike | None,
     of ``|sin u2|``, ``|sin u4|`` (...). ``|p|`` is computed with the very operations,
     in the same order, as the compiled kernel (fast/_fk_kernels.py, _serial_stage), so
     both backends classify every input alike, even one that sits on a threshold to the
-    last bit (issue 23).
+    last bit.
     """
     c0, c1, c2 = c[..., 0], c[..., 1], c[..., 2]
     with np.errstate(over="ignore"):

@@ -14,18 +14,20 @@ import os
 import signal
 import sys
 import warnings
+from collections.abc import Callable
 from typing import NoReturn
 
 from ..errors import KinematicsError
 
-__all__ = ["main", "entry_point", "COMMANDS", "EXTRAS", "COMMAND_EXTRAS", "extra_of"]
+__all__ = ["main", "entry_point", "COMMANDS", "EXTRAS", "COMMAND_EXTRAS", "extra_of", "PIP_NAMES",
+           "MissingExtraError", "check_extras"]
 
-#: The extras of pyproject.toml and the modules each installs, in pyproject's order
-#: (tests/test_ros_round5.py checks this table against pyproject.toml).
+#: The extras of pyproject.toml and the modules each installs (with those of the extras it
+#: references, ``athenakin[progress]``), in pyproject's order (tests/test_ros_round5.py
+#: checks this table against pyproject.toml).
 EXTRAS = {
     "symbolic": ("sympy",),
     "plot": ("matplotlib", "plotly", "imageio", "imageio_ffmpeg", "tqdm"),
-    "fast": ("numba", "tqdm"),
     "progress": ("tqdm",),
     "analysis": ("scipy", "tqdm"),
     "sim": ("mujoco", "yourdfpy", "tqdm"),
@@ -38,6 +40,8 @@ EXTRAS = {
     "dynamics": ("scipy",),
     "ros": ("rosbags", "mcap", "mcap_ros2", "foxglove", "isal", "websockets", "zstandard",
             "lz4", "tqdm"),
+    "teleop": ("mujoco", "yourdfpy", "tqdm", "rosbags", "mcap", "mcap_ros2", "foxglove", "isal",
+               "websockets", "zstandard", "lz4", "ruckig", "scipy"),
     "ros2": ("rclpy", "rmw_fastrtps_cpp", "std_msgs", "sensor_msgs", "geometry_msgs",
              "builtin_interfaces", "rosgraph_msgs", "diagnostic_msgs", "mujoco", "ruckig"),
     "ros2-msgs": ("ament_cmake", "ament_cmake_ros", "ament_cmake_ros_core",
@@ -49,7 +53,8 @@ EXTRAS = {
 COMMAND_EXTRAS = {"plan": "motion", "track": "ros", "synthesize": "synthesis",
                   "calibrate": "calibration", "view": "plot", "animate": "plot",
                   "export": "sim", "derive": "symbolic", "app": "app",
-                  "workspace": "analysis", "singularities": "analysis", "ros2": "ros2"}
+                  "workspace": "analysis", "singularities": "analysis", "ros2": "ros2",
+                  "teleop": "teleop"}
 
 
 def extra_of(module: str | None, command: str | None = None) -> str:
@@ -75,6 +80,87 @@ def extra_of(module: str | None, command: str | None = None) -> str:
     if own is not None and top in EXTRAS[own]:
         return own
     return next((e for e, mods in EXTRAS.items() if top in mods), "all")
+
+#: The pip names of the optional modules whose import name differs (``import flint``
+#: comes with ``pip install python-flint``).
+PIP_NAMES = {"flint": "python-flint", "mcap_ros2": "mcap-ros2-support",
+             "foxglove": "foxglove-sdk", "imageio_ffmpeg": "imageio-ffmpeg",
+             "pinocchio": "pin"}
+
+
+def _figures_wanted(args: argparse.Namespace) -> bool:
+    return not (getattr(args, "no_files", False) or getattr(args, "no_figures", False))
+
+
+def _recording_modules(path: object) -> tuple[str, ...]:
+    """The modules that read a recording: a rosbag2 folder, else an MCAP file."""
+    from pathlib import Path
+
+    if path is not None and Path(str(path)).is_dir():
+        return ("rosbags",)
+    return ("mcap", "mcap_ros2")
+
+
+#: The optional modules (with the extra that installs them) each command needs for its
+#: arguments, checked before any work starts: ``(module, extra)`` pairs.
+_NEEDS: dict[str, Callable[[argparse.Namespace], list[tuple[str, str]]]] = {
+    "fk": lambda a: [("flint", "certified")] if getattr(a, "certify", False) else [],
+    "workspace": lambda a: [("matplotlib", "plot")] if _figures_wanted(a) else [],
+    "singularities": lambda a: [("matplotlib", "plot")] if _figures_wanted(a) else [],
+    "teleop": lambda a: _teleop_needs(a),
+}
+
+
+def _teleop_needs(args: argparse.Namespace) -> list[tuple[str, str]]:
+    """The recording's reader, the MCAP writer, the simulated arm (not with ``--no-arm``).
+
+    Without the arm the ``[ros]`` extra is enough; with it, ``[teleop]`` installs all.
+    """
+    no_arm = bool(getattr(args, "no_arm", False))
+    extra = "ros" if no_arm else "teleop"
+    mods = list(_recording_modules(getattr(args, "path", None)))
+    if getattr(args, "output", None) is not None:
+        mods += ["mcap", "mcap_ros2"]
+    if not no_arm:
+        mods.append("mujoco")
+    return [(m, extra) for m in dict.fromkeys(mods)]
+
+
+class MissingExtraError(ModuleNotFoundError):
+    """An optional module a command needs is missing; ``extra`` installs it."""
+
+    def __init__(self, module: str, extra: str) -> None:
+        super().__init__(f"No module named {module!r}", name=module)
+        self.extra = extra
+
+
+def check_extras(args: argparse.Namespace) -> None:
+    """Raise :class:`MissingExtraError` for the first optional module the command lacks.
+
+    Called before the command runs, so that a missing extra is named before any work
+    (a long computation, an output file) starts.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments (``args.command`` names the command).
+
+    Raises
+    ------
+    MissingExtraError
+        A module of :data:`_NEEDS` for these arguments cannot be imported.
+    """
+    import importlib.util
+
+    needs = _NEEDS.get(args.command)
+    for module, extra in needs(args) if needs is not None else ():
+        try:
+            found = importlib.util.find_spec(module) is not None
+        except (ImportError, ValueError):   # a module set to None in sys.modules
+            found = False
+        if not found:
+            raise MissingExtraError(module, extra)
+
 
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
 COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
@@ -155,6 +241,7 @@ def main(argv: list[str] | None = None) -> int:
             # singularity) are flagged in the results; they are not messages for the user
             warnings.simplefilter("ignore", RuntimeWarning)
         try:
+            check_extras(args)
             return int(args.func(args) or 0)
         except BrokenPipeError:     # the reader stopped (| head): its choice, not a failure
             _silence_stdout()
@@ -190,8 +277,9 @@ def missing_extra_message(exc: ModuleNotFoundError, command: str | None = None) 
     if not module:
         return f"this command needs an optional package ({_one_line(exc)})"
     top = module.split(".")[0]
-    return (f"this command needs the optional package {top!r}: pip install "
-            f"'athenakin[{extra_of(top, command)}]'")
+    extra = getattr(exc, "extra", None) or extra_of(top, command)
+    return (f"this command needs the optional package {PIP_NAMES.get(top, top)!r}: "
+            f"pip install 'athenakin[{extra}]'")
 
 
 def _resume_hint(args: argparse.Namespace) -> str:

@@ -136,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
             q = instrument_cone_path(n, T, design, cone_angle=cone, p=args.p, lead=n // 6)
             what = (f"instrument cone of half-angle {np.degrees(cone):.1f} deg about the RCM"
                     + (", starting and ending on the cone axis x_e" if n // 6 else ""))
-        # a Ctrl-C that matplotlib's callbacks swallow is raised again (issue 30)
+        # a Ctrl-C that matplotlib's callbacks swallow is raised again
         with remembered_interrupt():
             animate(outs.temp(out), q, T, design, slot=args.slot, fps=fps, orbit=args.orbit,
                     progress=not args.no_progress)

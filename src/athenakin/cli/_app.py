@@ -47,7 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--foxglove", nargs="?", type=int, const=8765, default=None, metavar="PORT",
                    help="also serve the live robot to Foxglove over its WebSocket protocol on "
                         "--host (port 8765; extra 'ros'; topics: docs/ros.md)")
-    # actuator forces (issue 21): app/_forces.py
+    # actuator forces: app/_forces.py
     p.add_argument("--masses", type=Path, default=None, metavar="FILE",
                    help="TOML file with a [masses] table (e.g. the design file) for the "
                         "actuator-force read-out (default: the reference mass model)")
@@ -65,7 +65,7 @@ def check_host(host: str) -> str:
     """``host`` if this machine can listen on it, else ``ValueError`` naming it.
 
     Checked before the server starts: the web server binds in a thread of its own,
-    and an address it cannot bind (``999.1.1.1``, another machine's) used to leave
+    and an address it cannot bind (``999.1.1.1``, another machine's) would leave
     it waiting for ever, deaf to Ctrl-C.
     """
     import socket
@@ -100,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
     if args.foxglove is not None and not 0 <= args.foxglove <= 65535:
         raise ValueError(f"--foxglove: expected a port 0..65535, got {args.foxglove}")
     check_host(args.host)
-    masses, f_max = _force_options(args)    # actuator forces (issue 21): app/_forces.py
+    masses, f_max = _force_options(args)    # actuator forces: app/_forces.py
     rcm: Any = args.rcm_file
     if args.rcm:
         from ..design import Design

@@ -102,7 +102,7 @@ def _render(args: argparse.Namespace, out: Path, q: np.ndarray | None, T: np.nda
 
     kw: dict = {"show_frames": not args.no_frames}  # type: ignore[type-arg]
     if out.suffix.lower() != ".html":
-        if args.bodies is not None:       # the bodies as solids (issue 20): plot/_solids.py
+        if args.bodies is not None:       # the bodies as solids: plot/_solids.py
             from ..collision import Bodies
 
             src = args.bodies if args.bodies != "default" else getattr(args, "design", None)

@@ -1,4 +1,4 @@
-"""Bodies and collisions: ATHENA's links as capsules, obstacles, and clearance (issue 20).
+"""Bodies and collisions: ATHENA's links as capsules, obstacles, and clearance.
 
 - :class:`Bodies`: one capsule (segment + radius) per body of the one table of body
   names (:data:`BODIES`, docs/conventions.md "Bodies"), the pairs never checked

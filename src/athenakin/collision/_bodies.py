@@ -258,7 +258,7 @@ class Bodies:
         change.update(by_name)
         new = dict(zip(BODIES, self.radii, strict=True))
         for name, r in change.items():
-            _check_body(name, "with_radius")
+            _check_body(name, "by_name" if isinstance(name, str) and name in by_name else "radii")
             new[name] = _check_radius(name, r)
         return dataclasses.replace(self, radii=tuple(new[b] for b in BODIES))
 
@@ -308,7 +308,7 @@ class Bodies:
             An unknown key or body name, a bad radius or pair.
         """
         if not isinstance(data, Mapping):
-            raise TypeError(f"bodies: expected a table, got {type(data).__name__}")
+            raise TypeError(f"data: expected the [bodies] table, got {type(data).__name__}")
         check_keys(data, "bodies", ("exclude", "geometry", "radius", "scale_with_design"))
         geo_data = data.get("geometry", None)
         geo = None

@@ -23,8 +23,8 @@ The interior point takes one of two forms, by the angle ``theta`` between the se
   ``n = d1 x d2`` (the same numerator and denominator in cross products, whose
   relative error is ``eps / sin``), paired with the point of the second segment nearest
   ``p1 + s d1``: a second, independently rounded ``t`` would add the difference of the
-  two errors along the common axis to the distance (1e-6 m at 1e-7 rad; 2e-16 m this way,
-  issue 30). Taken for the rows that need it only (4.3 % of the pairs of the default
+  two errors along the common axis to the distance (1e-6 m at 1e-7 rad; 2e-16 m this
+  way). Taken for the rows that need it only (4.3 % of the pairs of the default
   bodies in the benchmark): the cross products cost 20 % of the compiled kernel's time
   when taken for every pair.
 

@@ -446,7 +446,7 @@ class Environment:
         file's folder) when given.
         """
         if not isinstance(data, Mapping):
-            raise TypeError(f"environment: expected a table, got {type(data).__name__}")
+            raise TypeError(f"data: expected the environment table, got {type(data).__name__}")
         check_keys(data, "environment", ("obstacle",))
         items = data.get("obstacle", [])
         if not isinstance(items, list):

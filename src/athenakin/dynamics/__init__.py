@@ -1,4 +1,4 @@
-"""Statics, force capability and dynamics of ATHENA's closed chain (issue 21).
+"""Statics, force capability and dynamics of ATHENA's closed chain.
 
 * :mod:`._model` - :class:`MassModel`: mass, centre of mass and inertia of every body
   (the names of :data:`athenakin._mechanism.BODIES` plus ``slider_d``,
@@ -29,7 +29,13 @@ from ._api import (
     mechanical_energy,
     statics,
 )
-from ._capability import ForceCapability, force_capability, max_tip_force
+from ._capability import (
+    COND_MARGIN,
+    ForceCapability,
+    force_capability,
+    max_tip_force,
+    tip_condition_number,
+)
 from ._loop import InverseDynamicsLoop
 from ._metrics import (
     STUDY_F_MAX,
@@ -57,7 +63,8 @@ __all__ = [
     "Statics", "statics", "actuator_forces", "inverse_dynamics", "mass_matrix",
     "forward_dynamics", "mechanical_energy", "MechanicalEnergy", "STANDARD_GRAVITY",
     "MAX_BATCH", "CHUNK",
-    "ForceCapability", "force_capability", "max_tip_force",
+    "ForceCapability", "force_capability", "max_tip_force", "tip_condition_number",
+    "COND_MARGIN",
     "ForceMetrics", "force_metrics", "STUDY_TIP_SPEED", "STUDY_TIP_ACCELERATION", "STUDY_F_MAX",
     "Simulation", "simulate", "SimulationStoppedError", "SINGULARITY_MARGINS",
 ]

@@ -24,14 +24,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._typing import BoolArray, FloatArray
-from .._validation import broadcast_batch, check_array
+from .._validation import broadcast_batch, check_array, real_number
 from ..design import Design
 from ..errors import InvalidInputError
 from ._api import STANDARD_GRAVITY, _chunked, statics
 from ._model import MassModel
 
 __all__ = ["ForceCapability", "force_capability", "max_tip_force", "jacobian_invertible",
-           "SINGULAR_DET", "MAX_FORCE_LIMIT"]
+           "tip_condition_number", "SINGULAR_DET", "MAX_FORCE_LIMIT", "COND_MARGIN"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -55,6 +55,12 @@ class ForceCapability:
     gravity_forces : ndarray, shape (..., 3)
         ``tau_g``, the actuator forces that hold the weight alone, N.
     valid : ndarray of bool, shape (...)
+    cond : ndarray, shape (...)
+        Condition number of the tip Jacobian ``J = d tip / d q`` (2-norm, >= 1; inf where
+        ``J`` is singular to rounding, NaN where the configuration is not valid).
+    near_singular : ndarray of bool, shape (...)
+        ``cond > cond_max`` (:data:`COND_MARGIN` by default): the polytope's vertices grow
+        as ``cond`` and stop being a usable figure; valid configurations keep ``valid``.
     """
 
     A: FloatArray
@@ -64,6 +70,8 @@ class ForceCapability:
     weakest_direction: FloatArray
     gravity_forces: FloatArray
     valid: BoolArray
+    cond: FloatArray
+    near_singular: BoolArray
 
 
 #: Largest actuator force limit accepted (``f_max``, ``-f_min``), N: far above any actuator of
@@ -74,6 +82,43 @@ MAX_FORCE_LIMIT = 1e9
 #: Relative determinant below which ``J = d tip / d q`` counts as singular to rounding:
 #: ``|det J| <= SINGULAR_DET max|J_ij|^3`` (``q1 = q2`` makes two columns of ``J`` equal).
 SINGULAR_DET = 1e-12
+
+
+#: Largest condition number of the tip Jacobian ``J = d tip / d q`` at which a force
+#: figure counts as off the singular sets: the default of
+#: :attr:`athenakin.motion.Margins.cond`, the margin the tracker and teleop hold
+#: (docs/motion.md). Beyond it the forces that move the tip grow as ``cond^3`` (reference
+#: design, q3 = 0.45 m: 1e4 N at cond 130, 1e19 N at cond 1.3e7, q2 - q1 = 1e-7 m), so
+#: they are flagged (``near_singular``) and left out of :func:`force_metrics`'s peak.
+COND_MARGIN = 100.0
+
+
+def tip_condition_number(J: FloatArray) -> FloatArray:
+    """The 2-norm condition number of each tip Jacobian ``J`` (shape (..., 3, 3)).
+
+    Parameters
+    ----------
+    J : ndarray, shape (..., 3, 3)
+        ``d tip / d q``, m/m.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        ``sigma_max / sigma_min`` (>= 1); inf where :func:`jacobian_invertible` fails.
+    """
+    ok = jacobian_invertible(J)
+    Jf = np.where(ok[..., None, None], J, np.eye(3))
+    s = np.linalg.svd(Jf, compute_uv=False)
+    return np.where(ok, s[..., 0] / s[..., -1], np.inf)  # type: ignore[no-any-return]
+
+
+def check_cond_max(cond_max: object) -> float:
+    """``cond_max``: a condition number >= 1 (``inf`` switches the flag off)."""
+    v = real_number(cond_max, "cond_max")
+    if not v >= 1.0:                         # also refuses NaN
+        raise InvalidInputError(f"cond_max: expected a condition number >= 1 (or inf), got "
+                                f"{v}")
+    return v
 
 
 def jacobian_invertible(J: FloatArray) -> BoolArray:
@@ -122,7 +167,8 @@ def force_capability(q: ArrayLike, T_b_e: ArrayLike | None = None,
                      design: Design | None = None, *, f_max: ArrayLike,
                      f_min: ArrayLike | None = None, masses: MassModel | None = None,
                      gravity: ArrayLike = STANDARD_GRAVITY, slot: int = 0,
-                     errors: Literal["auto", "raise", "flag"] = "auto") -> ForceCapability:
+                     errors: Literal["auto", "raise", "flag"] = "auto",
+                     cond_max: float = COND_MARGIN) -> ForceCapability:
     """Tip forces the robot can resist at rest within actuator force limits.
 
     Parameters
@@ -137,11 +183,16 @@ def force_capability(q: ArrayLike, T_b_e: ArrayLike | None = None,
     f_min : float or array-like, shape (3,), keyword-only, optional
         Lower limits, N (default ``-f_max``); at most :data:`MAX_FORCE_LIMIT` in
         magnitude.
+    cond_max : float, keyword-only
+        Condition number of ``J`` beyond which a configuration is ``near_singular``
+        (default :data:`COND_MARGIN`, the tracker's and teleop's margin), >= 1; ``inf``
+        flags none.
 
     Returns
     -------
     ForceCapability
     """
+    cond_max = check_cond_max(cond_max)
     lo, hi = _limits(f_max, f_min)
     st = statics(q, T_b_e, design, masses=masses, gravity=gravity, slot=slot, errors=errors,
                  rcm_load=False)
@@ -171,15 +222,17 @@ def force_capability(q: ArrayLike, T_b_e: ArrayLike | None = None,
         Jt_safe = np.where(ok[..., None, None], Jt, np.eye(3))
         verts = np.linalg.solve(Jt_safe[..., None, :, :], rhs[..., None])[..., 0]
         verts = np.where(ok[..., None, None], verts, np.nan)
-        return A, b, verts, min_force, weakest
+        return A, b, verts, min_force, weakest, tip_condition_number(J)
 
-    A, b, verts, min_force, weakest = _chunked(n, part)
+    A, b, verts, min_force, weakest, cond = _chunked(n, part)
     valid = st.valid
     min_force = np.where(valid, min_force.reshape(batch), np.nan)
+    cond = np.where(valid, cond.reshape(batch), np.nan)
     return ForceCapability(A=A.reshape(batch + (6, 3)), b=b.reshape(batch + (6,)),
                            vertices=verts.reshape(batch + (8, 3)), min_force=min_force,
                            weakest_direction=weakest.reshape(batch + (3,)),
-                           gravity_forces=st.forces, valid=valid)
+                           gravity_forces=st.forces, valid=valid, cond=cond,
+                           near_singular=valid & ~(cond <= cond_max))
 
 
 def max_tip_force(q: ArrayLike, direction: ArrayLike, T_b_e: ArrayLike | None = None,

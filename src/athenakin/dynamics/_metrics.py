@@ -15,8 +15,11 @@ is an upper bound of the force of any tip motion within ``v`` and ``a`` from tha
 configuration.
 
 Configurations where ``J`` is singular (:func:`jacobian_invertible`; ``q1 = q2`` among
-them) have no finite bound (the force to accelerate the tip there is unbounded): they
-are left out of the peak and counted.
+them) have no finite bound (the force to accelerate the tip there is unbounded), and
+near them the bound is finite but grows as ``cond(J)^3`` (1e19 N at ``q2 - q1 = 1e-7``
+m): configurations whose ``cond(J)`` exceeds ``cond_max`` (:data:`COND_MARGIN`, the
+margin of the tracker and teleop, by default) are left out of the peak and counted
+(``n_near_singular``), as the singular ones are.
 
 ``min_tip_force_capability``: the smallest, over the set, of the tip force the robot
 resists in every direction within ``|tau_i| <= f_max`` (:func:`force_capability`).
@@ -35,7 +38,12 @@ from ..design import Design
 from ..errors import InvalidInputError
 from ..robot._setup import resolve_rcm_frame
 from ._api import _check_masses, _chunks, inverse_dynamics, mass_matrix
-from ._capability import force_capability, jacobian_invertible
+from ._capability import (
+    COND_MARGIN,
+    check_cond_max,
+    force_capability,
+    jacobian_invertible,
+)
 from ._core import evaluate
 from ._model import MassModel
 
@@ -88,8 +96,12 @@ class ForceMetrics:
         Those the forward-kinematics slot holds, off the singular sets of the dynamics
         (the set of ``min_tip_force_capability``).
     n_peak : int
-        Those of ``n_valid`` whose tip Jacobian is invertible (the set of
-        ``peak_actuator_force``); ``n_valid - n_peak`` were left out as singular.
+        Those of ``n_valid`` whose tip Jacobian is invertible with a condition number
+        within ``cond_max`` (the set of ``peak_actuator_force``); ``n_valid - n_peak``
+        were left out as singular or near singular.
+    n_near_singular : int
+        Those of ``n_valid`` left out of the peak because ``cond(J) > cond_max``
+        (``J`` invertible, the force bound finite but absurd near the singular set).
     """
 
     peak_actuator_force: float
@@ -97,6 +109,7 @@ class ForceMetrics:
     n_configurations: int
     n_valid: int
     n_peak: int
+    n_near_singular: int = 0
 
 
 def _peak_bound(sel: FloatArray, J: FloatArray, tg: FloatArray,
@@ -134,7 +147,7 @@ def _peak_bound(sel: FloatArray, J: FloatArray, tg: FloatArray,
 def force_metrics(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: ArrayLike,
                   masses: MassModel | None = None, tip_speed: float = STUDY_TIP_SPEED,
                   tip_acceleration: float = STUDY_TIP_ACCELERATION,
-                  f_max: float = STUDY_F_MAX) -> ForceMetrics:
+                  f_max: float = STUDY_F_MAX, cond_max: float = COND_MARGIN) -> ForceMetrics:
     """Peak actuator force and least tip-force capability over configurations, N.
 
     Parameters
@@ -149,6 +162,10 @@ def force_metrics(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: Array
         Default :meth:`MassModel.reference` of ``design``.
     tip_speed, tip_acceleration, f_max : float, keyword-only
         m/s, m/s^2, N.
+    cond_max : float, keyword-only
+        Largest condition number of the tip Jacobian of a configuration of the peak
+        (default :data:`COND_MARGIN`, that of :class:`athenakin.motion.Margins`), >= 1;
+        ``inf`` keeps every invertible one.
 
     Returns
     -------
@@ -157,7 +174,7 @@ def force_metrics(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: Array
         tell an empty set (``n_configurations == 0``) from a set with no valid
         configuration (``n_valid == 0``). Configurations the slot does not hold or on
         a singular set of the dynamics are left out of both; those with a singular tip
-        Jacobian are left out of the peak. Works in chunks of
+        Jacobian or one conditioned beyond ``cond_max`` are left out of the peak. Works in chunks of
         :data:`athenakin.dynamics.CHUNK` configurations (bounded memory).
     """
     qa = check_array(q, "q", (3,)).reshape(-1, 3)
@@ -168,22 +185,24 @@ def force_metrics(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: Array
     v = check_scalar(tip_speed, "tip_speed", nonnegative=True)
     a = check_scalar(tip_acceleration, "tip_acceleration", nonnegative=True)
     check_scalar(f_max, "f_max", positive=True)
+    cond_max = check_cond_max(cond_max)
     m = _check_masses(masses, design)
     peak, cap_min = -np.inf, np.inf
-    n_valid = n_peak = 0
+    n_valid = n_peak = n_near = 0
     for k in np.unique(slots):
         sel_k = qa[slots == k]
         for sl in _chunks(sel_k.shape[0]):
             sel = sel_k[sl]
             cap = force_capability(sel, T_b_e, design, masses=m, f_max=f_max, slot=int(k),
-                                   errors="flag")
+                                   errors="flag", cond_max=cond_max)
             ok = cap.valid
             n_valid += int(np.count_nonzero(ok))
             cm = cap.min_force[ok]
             if np.any(np.isfinite(cm)):
                 cap_min = min(cap_min, float(np.nanmin(cm)))
             J = np.swapaxes(cap.A[:, :3], -1, -2)       # A[:3] = J^T, so this is J
-            use = ok & jacobian_invertible(J)
+            use = ok & jacobian_invertible(J) & ~cap.near_singular
+            n_near += int(np.count_nonzero(ok & cap.near_singular & np.isfinite(cap.cond)))
             n_peak += int(np.count_nonzero(use))
             if not np.any(use):
                 continue
@@ -195,4 +214,5 @@ def force_metrics(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: Array
     return ForceMetrics(peak_actuator_force=peak if np.isfinite(peak) else float("nan"),
                         min_tip_force_capability=cap_min if np.isfinite(cap_min)
                         else float("nan"),
-                        n_configurations=int(qa.shape[0]), n_valid=n_valid, n_peak=n_peak)
+                        n_configurations=int(qa.shape[0]), n_valid=n_valid, n_peak=n_peak,
+                        n_near_singular=n_near)

@@ -79,9 +79,8 @@ def actuator_part_length(design: Design | None = None) -> float:
     """Length of each rigid part (cylinder, rod) of the q3 actuator, m.
 
     Half the shortest stroke of q3, or 0.1 m when the stroke of q3 is unlimited below.
-    (This was once the MJCF export's drawn housing; the exports now draw the actuator
-    telescoping, :func:`athenakin.sim.actuator_drawn_lengths`, and the mass model keeps
-    this length.)
+    The mass model's rigid parts have this length; the exports draw the actuator
+    telescoping (:func:`athenakin.sim.actuator_drawn_lengths`).
 
     Parameters
     ----------

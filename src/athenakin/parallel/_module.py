@@ -383,7 +383,7 @@ def position_ik(O_s: FloatArray, design: Design,
         r1 = np.where((r1 > l1) & (r1 - l1 <= dr), l1, r1)
         h_abs = np.sqrt((l1 - r1) * (l1 + r1))
         # within rounding of |h| = l3 (links l3 stretched along the rail): on it, not out
-        # of the workspace (a pose the FK produced there, issue 13 audit)
+        # of the workspace (the FK produces such poses)
         h_abs = np.where((h_abs > l3) & (h_abs - l3 <= _h_error(r1, h_abs, dr)), l3, h_abs)
         bad_link = (r1 > l1) | (h_abs > l3)
         reason = np.where((reason == 0) & bad_link, np.int8(Reason.LINK_TOO_SHORT), reason)

@@ -308,7 +308,7 @@ def plot_robot(q: ArrayLike | None = None, T_b_e: ArrayLike | None = None,
         fig.subplots_adjust(left=0.02, right=0.93, bottom=0.04, top=0.93)
     _draw(ax, g, show_frames=opts.show_frames, show_circles=opts.show_circles,
           frame_length=opts.frame_length, joint_scale=opts.joint_scale)
-    if bodies is not None and bodies is not False:       # solids (issue 20): plot/_solids.py
+    if bodies is not None and bodies is not False:       # solids: plot/_solids.py
         from ._solids import draw_bodies
 
         draw_bodies(ax, g.q, g.T_b_e, g.design, slot=g.slot,

@@ -1,4 +1,4 @@
-"""The robot's bodies as solids in matplotlib: capsules as shaded tubes (issue 20).
+"""The robot's bodies as solids in matplotlib: capsules as shaded tubes.
 
 :func:`draw_bodies` draws every capsule of :class:`athenakin.collision.Bodies` in one
 forward-kinematics slot on a 3-D axes (a tube with hemispherical caps, shaded by

@@ -106,7 +106,7 @@ def item_reason_from_slots(valid: BoolArray, reason: Int8Array
 
     The most specific is the first non-OK slot code in slot order, preferring
     codes that are not ``CIRCLES_TANGENT`` (which only says a slot was merged);
-    ``CIRCLES_TANGENT`` where it is the only one (both modes near tangency, issue 23).
+    ``CIRCLES_TANGENT`` where it is the only one (both modes near tangency).
     """
     anyvalid = np.any(valid, axis=-1)
     r = np.where(reason == Reason.CIRCLES_TANGENT, 0, reason)

@@ -99,8 +99,8 @@ class FKSolution(PartialFields):
     says why.
 
     Values that depend only on the assembly mode are stored once per mode
-    (:attr:`T_b_s_mode`); the per-slot :attr:`T_b_s` of earlier versions is a
-    property that expands them on first access. A result computed with
+    (:attr:`T_b_s_mode`); the per-slot :attr:`T_b_s` is a property that
+    expands them on first access. A result computed with
     ``fields=(...)`` holds only those arrays (and ``item_reason``); reading
     another one raises an ``AttributeError`` that says so.
 
@@ -288,7 +288,7 @@ def forward_kinematics(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = N
     if n <= FK_BLOCK:
         return _fk_block(q, T, design, method, tols, batch, raise_now, names)
     # blocks of FK_BLOCK poses: the intermediates of the numpy reference (about 10 kB a
-    # pose) stay bounded; the result is the same, pose for pose (issue 23)
+    # pose) stay bounded; the result is the same, pose for pose
     qf, Tf = q.reshape(n, 3), T.reshape(n, 4, 4)
     parts = [_fk_block(qf[i:i + FK_BLOCK], Tf[i:i + FK_BLOCK], design, method, tols,
                        (min(FK_BLOCK, n - i),), False, names) for i in range(0, n, FK_BLOCK)]
@@ -387,7 +387,7 @@ def _serial_closed_form(par: ParallelSolution, T: FloatArray, *, degenerate_tol:
     T_s_e = np.where(np.all(np.isfinite(T), axis=(-2, -1))[..., None, None, None], T_s_e,
                      np.nan)
     scale = (np.abs(T[..., None, :3, 3]).max(axis=-1)
-             + np.abs(par.T_b_s[..., :3, 3]).max(axis=-1))   # rounding of t_s_e (issue 13)
+             + np.abs(par.T_b_s[..., :3, 3]).max(axis=-1))   # rounding of t_s_e
     ser = _ups.ups_solutions(T_s_e, degenerate_tol=degenerate_tol, p_zero_tol=p_zero_tol,
                         closure_tol=closure_tol, scale=scale, _checked=True)
     return ser.p, ser.u, ser.reason, ser.residual
@@ -400,7 +400,7 @@ def _s_e_as_kernel(Ts: FloatArray, T: FloatArray) -> FloatArray:
     parallel module's frame, :func:`athenakin.parallel.parallel_forward_kinematics`);
     the entries of ``T_s_e`` then decide validity (``|p|``, ``|sin u2|``, ``|sin u4|``)
     bit for bit as ``fast/_fk_kernels.py:_serial_stage`` does, so both backends agree
-    at every threshold (issue 23). Shapes broadcast: ``Ts`` (..., 4, 4), ``T`` (..., 4, 4).
+    at every threshold. Shapes broadcast: ``Ts`` (..., 4, 4), ``T`` (..., 4, 4).
     """
     xm, cz, cy = Ts[..., 0, 3], Ts[..., 1, 1], Ts[..., 1, 2]
     ys, zs = Ts[..., 1, 3], Ts[..., 2, 3]
@@ -426,10 +426,10 @@ def _assemble(par: ParallelSolution, p: FloatArray, u: FloatArray,
     A slot whose ``O_s`` is not known within ``closure_tol`` (the parallel module's
     residual: a merged mode near tangency, or a distinct one so close to it that the
     rounding of ``k`` moves it further) is ``CIRCLES_TANGENT``: valid means a residual
-    within ``closure_tol`` (issue 23), as in the compiled kernel.
+    within ``closure_tol``, as in the compiled kernel.
     """
     preason = np.broadcast_to(par.reason[..., None], sreason.shape)
-    residual = np.maximum(residual, par.residual[..., None])   # merged modes (issue 13)
+    residual = np.maximum(residual, par.residual[..., None])   # merged modes
     reason = np.where(preason != 0, preason, sreason)
     reason = np.where((reason == 0) & (par.residual[..., None] > closure_tol),
                       np.int8(Reason.CIRCLES_TANGENT), reason)

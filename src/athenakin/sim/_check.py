@@ -261,6 +261,8 @@ def check_fk_with_mujoco(q: ArrayLike, T_b_e: ArrayLike | None = None,
         raise InvalidInputError(f"perturb: expected at most {LENGTH_RANGE[1]:g} (m or rad), "
                                 f"got {perturb:g}")
     rng = check_rng(rng)
+    if home_q is not None:
+        home_q = check_array(home_q, "home_q", (3,)).reshape(3)
     model = load_model(T, design, q=home_q, slot=start_slot, gravity=gravity)
     data = mujoco.MjData(model)
     layout = _qpos_layout(model)

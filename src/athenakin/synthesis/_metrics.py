@@ -120,7 +120,7 @@ class CollisionSpec(TomlOptions):
     def from_mapping(cls, data: Mapping[str, Any]) -> CollisionSpec:
         """Read a ``collision`` table (:meth:`to_mapping`); unknown keys are refused by name."""
         if not isinstance(data, Mapping):
-            raise TypeError(f"collision: expected a table (mapping), got {type(data).__name__}")
+            raise TypeError(f"data: expected the [collision] table, got {type(data).__name__}")
         from ..collision import Bodies, Environment
 
         kw = dict(data)

@@ -1,4 +1,4 @@
-"""Teleoperation of ATHENA: a master drives the tool tip through a safety layer (issue 29).
+"""Teleoperation of ATHENA: a master drives the tool tip through a safety layer.
 
 * :class:`Teleop` (the core): master samples ``(t, position, clutch)`` -> actuator
   commands :class:`TeleopCommand` (``q, qd, qdd``, feed-forward forces, the commanded
