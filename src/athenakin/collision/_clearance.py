@@ -8,7 +8,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._backend import numba_available, resolve_backend
+from .._backend import Backend, resolve_backend
 from .._mechanism import BODIES, body_segments, mechanism_points
 from .._typing import BoolArray, FloatArray, Int8Array
 from .._validation import check_scalar
@@ -121,8 +121,8 @@ def _pair_tables(bodies: Bodies, environment: Environment) -> tuple[
 
 
 def capsule_distances(solids: FloatArray, radii: FloatArray,
-                      ij: NDArray[np.intp]) -> FloatArray:
-    """Signed distances of capsule pairs over a batch (the kernel where the backend says so).
+                      ij: NDArray[np.intp], *, backend: Backend = "auto") -> FloatArray:
+    """Signed distances of capsule pairs over a batch (the kernel where ``backend`` says so).
 
     Parameters
     ----------
@@ -132,6 +132,8 @@ def capsule_distances(solids: FloatArray, radii: FloatArray,
         Radii, m.
     ij : ndarray of intp, shape (n_pairs, 2)
         The capsules of each pair.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The numba kernel or the numpy reference (:func:`athenakin._backend.resolve_backend`).
 
     Returns
     -------
@@ -140,7 +142,7 @@ def capsule_distances(solids: FloatArray, radii: FloatArray,
         :func:`athenakin.collision._kernels.capsule_distances` and the numpy reference
         :func:`athenakin.collision._distance._capsule_capsule` agree to 1e-13 m (tested).
     """
-    if numba_available():
+    if resolve_backend(backend):
         from ._kernels import capsule_distances as kernel
 
         return kernel(np.ascontiguousarray(solids, dtype=np.float64),  # type: ignore[no-any-return]
@@ -352,8 +354,9 @@ def clearance(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
         item: 16 slots x 53 pairs x 100,000 configurations are 4 GB) and about a third
         of the time: for planners and design studies that need only the distances.
     backend : {"auto", "numpy", "numba"}, keyword-only
-        The capsule pairs through the compiled kernel (``"auto"`` where numba imports)
-        or the numpy reference; the same values to 1e-12 m.
+        The forward kinematics that places the bodies and the capsule pairs through the
+        compiled kernels (``"auto"`` where numba imports) or the numpy reference; the
+        same values to 1e-12 m.
 
     Returns
     -------
@@ -383,7 +386,8 @@ def clearance(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
     if not isinstance(witness, bool):
         raise TypeError(f"witness: expected a bool, got {type(witness).__name__}")
     compiled = resolve_backend(backend)
-    pts = mechanism_points(q, T_b_e, design, slot=slot, geometry=bodies.geometry)
+    pts = mechanism_points(q, T_b_e, design, slot=slot, geometry=bodies.geometry,
+                           backend=backend)
     segs = body_segments(pts)
     batch = pts.valid.shape
     flat = segs.reshape((-1,) + segs.shape[-3:])

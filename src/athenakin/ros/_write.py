@@ -76,13 +76,6 @@ _LATCHED_QOS = ("- history: 3\n  depth: 0\n  reliability: 1\n  durability: 1\n"
 
 
 # ---------------------------------------------------------------------------- the file
-def _compiled() -> bool:
-    """Whether :meth:`McapOutput.write_tracked` fills its records with the compiled kernel."""
-    from .._backend import numba_available
-
-    return numba_available()
-
-
 class McapOutput:
     """An MCAP file of ATHENA's ROS 2 topics, written atomically.
 
@@ -102,6 +95,9 @@ class McapOutput:
     target : str or Path, keyword-only, optional
         Write this file instead of a temporary one and do no rename (the caller
         renames it: the CLI's own output manager).
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The records, frames and quaternions filled by the compiled kernels or the numpy
+        reference (:mod:`athenakin._backend`); the same bytes.
 
     Examples
     --------
@@ -113,7 +109,7 @@ class McapOutput:
 
     def __init__(self, path: str | Path, T_b_e: ArrayLike, design: Design, *,
                  compression: str = "zstd", compression_level: int | None = None,
-                 target: str | Path | None = None) -> None:
+                 target: str | Path | None = None, backend: str = "auto") -> None:
         compression, compression_level = check_compression(compression, compression_level)
         self._closed = True                    # nothing to close until the file is open
         self.path = check_output_path(path)    # a folder, FIFO or device: named error
@@ -129,7 +125,7 @@ class McapOutput:
             target = check_path(target, "target")
         compressor_module(compression)         # a missing extra: named, before any file
         msgdef(_MSG_TYPES["tool_tip"])         # rosbags (the schemas): likewise
-        self.encoder = RosEncoder(T_b_e, design)
+        self.encoder = RosEncoder(T_b_e, design, backend=backend)
         self.model = self.encoder.model
         self._atomic: AtomicFile | None = None
         if target is None:
@@ -214,7 +210,7 @@ class McapOutput:
         rs = int(cols[1])
         per = max(1, _CHUNK_BYTES // row)
         valid = np.asarray(b.valid, bool)
-        if _compiled():
+        if self.encoder.backend == "numba":
             self._write_tracked_compiled(b, stamps, valid, keys, cids, per)
             return
         for a in range(0, n, per):

@@ -239,7 +239,8 @@ class Teleop:
         self._tracker = Tracker(self.T_b_e, design, q0=q, slot=slot, margins=self.margins,
                                 bodies=bodies if check else None,
                                 environment=environment if check else None,
-                                clearance_margin=opts.clearance_margin if check else None)
+                                clearance_margin=opts.clearance_margin if check else None,
+                                backend=self._backend)
         self._check_start(self._tracker.pose, check)
         self._masses, self._gravity = _feedforward_model(opts, design)
         # the feed-forward of each FK slot the robot takes: the dynamics' loop object
