@@ -60,7 +60,7 @@ CALLS = {
     "motion": ("motion.track.p", "motion.update.clearance"),
     "ros": ("ros.frames.xyz", "ros.read.q", "mcap./tf"),
     "synthesis": ("synthesis.evaluate_design",),
-    "teleop": ("teleop.q", "teleop.forces"),
+    "teleop": ("teleop.q",),
 }
 
 #: The test files of each subpackage that CI runs again under ``ATHENAKIN_BACKEND=numpy``.

@@ -145,9 +145,9 @@ class Tracker:
         Clearance (m) below which a sample is ``NEAR_COLLISION`` (turns the check on);
         default 5 mm when the check is on.
     backend : {"auto", "numpy", "numba"}, keyword-only
-        The forward kinematics of :meth:`reset`, the compiled stream of :func:`track_batch`
-        and the clearance check on the numba kernels or the numpy reference
-        (:mod:`athenakin._backend`); the same poses and flags.
+        The compiled stream of :func:`track_batch` and the clearance check on the numba
+        kernels or the numpy reference (:mod:`athenakin._backend`); the same poses and
+        flags.
 
     Raises
     ------
@@ -206,8 +206,7 @@ class Tracker:
         q = check_array(q0, "q0", (3,))
         if q.shape != (3,):
             raise InvalidInputError(f"q0: expected shape (3,), got {q.shape}")
-        sol = forward_kinematics(q, self.T_b_e, self.design, errors="raise",
-                                 backend=self.backend)  # type: ignore[arg-type]
+        sol = forward_kinematics(q, self.T_b_e, self.design, errors="raise")
         if slot is None:
             order = sorted(range(16), key=lambda k: (sol.mode[k] != 1, sol.p_sign[k] != 1,
                                                      sol.ujoint[k] != 1, sol.wrist[k] != 1))

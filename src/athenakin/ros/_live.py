@@ -64,8 +64,8 @@ class FoxgloveStream:
     name : str, keyword-only
         Server name shown by Foxglove.
     backend : {"auto", "numpy", "numba"}, keyword-only
-        The forward kinematics, frames and quaternions on the compiled kernels or the
-        numpy reference (:mod:`athenakin._backend`).
+        The frames and quaternions on the compiled kernels or the numpy reference
+        (:mod:`athenakin._backend`).
 
     Examples
     --------
@@ -199,8 +199,7 @@ class FoxgloveStream:
             check_uint(stamp_ns, "stamp_ns", 2**63)
         stamp = time.time_ns() if stamp_ns is None else int(stamp_ns)
         self._flush_resend(stamp)
-        sol = forward_kinematics(qa, self.T_b_e, self.design, errors="flag",
-                                 backend=self.backend)  # type: ignore[arg-type]
+        sol = forward_kinematics(qa, self.T_b_e, self.design, errors="flag")
         valid = np.flatnonzero(sol.valid)
         if slot is not None:
             slot = check_slot(slot)

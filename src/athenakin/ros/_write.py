@@ -190,6 +190,10 @@ class McapOutput:
         self._add("robot_description", int(stamp_ns), self.encoder.robot_description())
         self._add("tf_static", int(stamp_ns), self.encoder.tf_static(int(stamp_ns)))
 
+    def _compiled_records(self) -> bool:
+        """Whether :meth:`write_tracked` fills its records with the compiled kernel."""
+        return self.encoder.backend == "numba"
+
     def write_tracked(self, b: TrackedBatch) -> None:
         """Write a batch of tracked readings: status for each, poses for the valid ones.
 
@@ -210,7 +214,7 @@ class McapOutput:
         rs = int(cols[1])
         per = max(1, _CHUNK_BYTES // row)
         valid = np.asarray(b.valid, bool)
-        if self.encoder.backend == "numba":
+        if self._compiled_records():
             self._write_tracked_compiled(b, stamps, valid, keys, cids, per)
             return
         for a in range(0, n, per):
