@@ -99,7 +99,7 @@ def _distances(q: FloatArray, T: FloatArray, design: Design, slot: int) -> dict[
 
 
 def _fast_forward(design: Design, T: FloatArray, masses: MassModel, slot: int, g: FloatArray,
-                  f_tip: FloatArray | None, backend: str
+                  f_tip: FloatArray | None, backend: str = "auto"
                   ) -> Callable[[FloatArray, FloatArray, FloatArray], FloatArray] | None:
     """``qdd(q, qd, tau)`` from four rows of the compiled inverse dynamics, or None.
 
