@@ -384,7 +384,18 @@ class AthenaApp(_Page):
 
     # ------------------------------------------------------------------ actions
     def set_q(self, q: ArrayLike) -> AppView:
-        """Move the actuators (m) as the sliders would; returns the new view."""
+        """Move the actuators (m) as the sliders would; returns the new view.
+
+        Parameters
+        ----------
+        q : array-like, shape (3,)
+            Actuators, m.
+
+        Returns
+        -------
+        AppView
+            The view of the new configuration (the IK fields synchronised).
+        """
         return self._apply_q(np.asarray(q, dtype=float), sync_ik=True)
 
     def _move_tip(self, tip_e: FloatArray, *, snap_angles: bool,

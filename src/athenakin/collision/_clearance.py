@@ -71,7 +71,24 @@ class Clearance:
     margin: float = 0.0
 
     def pair_index(self, a: str, b: str) -> int:
-        """Index of the pair ``(a, b)`` (either order) in :attr:`pairs`."""
+        """Index of the pair ``(a, b)`` (either order) in :attr:`pairs`.
+
+        Parameters
+        ----------
+        a, b : str
+            Names of two bodies, or of a body and an obstacle (:data:`athenakin.collision.BODIES`,
+            :attr:`Obstacle.name`).
+
+        Returns
+        -------
+        int
+            Column of the pair in :attr:`distances` and :attr:`witness_points`.
+
+        Raises
+        ------
+        InvalidInputError
+            ``(a, b)`` is not a checked pair (the message lists those that are).
+        """
         for k, p in enumerate(self.pairs):
             if p == (a, b) or p == (b, a):
                 return k
@@ -79,11 +96,34 @@ class Clearance:
                                 f"{self.pairs}")
 
     def distance(self, a: str, b: str) -> FloatArray:
-        """The distances of one pair, shape (...), m."""
+        """The distances of one pair, shape (...), m.
+
+        Parameters
+        ----------
+        a, b : str
+            As :meth:`pair_index`.
+
+        Returns
+        -------
+        ndarray, shape (...)
+            Signed distance, m (negative: penetration depth); NaN where the slot is invalid.
+
+        Raises
+        ------
+        InvalidInputError
+            ``(a, b)`` is not a checked pair.
+        """
         return self.distances[..., self.pair_index(a, b)]
 
     def closest_names(self) -> NDArray[np.object_]:
-        """``pairs[closest_pair]`` as an object array of (str, str) (None where -1), shape (...)."""
+        """``pairs[closest_pair]`` as an object array of (str, str) (None where -1), shape (...).
+
+        Returns
+        -------
+        ndarray of object, shape (...)
+            The ``(name, name)`` of the least distance of each item, None where no pair is
+            checked or the slot is invalid.
+        """
         out = np.empty(self.closest_pair.shape, dtype=object)
         for idx in np.ndindex(out.shape):
             k = int(self.closest_pair[idx])

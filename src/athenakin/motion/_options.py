@@ -118,14 +118,35 @@ class PlanOptions(TomlOptions):
             put(self, "f_max", _as_given(self.f_max, _check_f_max(self.f_max)))
 
     def to_mapping(self) -> dict[str, Any]:
-        """A TOML table; the margins as a ``margins`` sub-table."""
+        """A TOML table; the margins as a ``margins`` sub-table.
+
+        Returns
+        -------
+        dict of str -> TOML value
+            The fields that are not None; ``margins`` as a table of :class:`Margins`' fields.
+        """
         out = super().to_mapping()
         out["margins"] = dataclasses.asdict(self.margins)
         return out
 
     @classmethod
     def from_mapping(cls, data: Mapping[str, Any]) -> PlanOptions:
-        """Read a ``plan`` table (:meth:`to_mapping`); unknown keys are refused by name."""
+        """Read a ``plan`` table (:meth:`to_mapping`); unknown keys are refused by name.
+
+        Parameters
+        ----------
+        data : mapping
+            Field names to values; ``margins`` a table of :class:`Margins`' fields.
+
+        Returns
+        -------
+        PlanOptions
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown key (of the table or of ``margins``) or a bad value (named).
+        """
         if isinstance(data, Mapping) and isinstance(data.get("margins"), Mapping):
             table = data["margins"]
             names = [f.name for f in dataclasses.fields(Margins)]

@@ -94,7 +94,18 @@ class Margins:
             raise ValueError(f"Margins.cond: a condition number is >= 1, got {self.cond}")
 
     def is_upper(self, name: str) -> bool:
-        """True when the margin of ``name`` is an upper bound (only ``cond``)."""
+        """True when the margin of ``name`` is an upper bound (only ``cond``).
+
+        Parameters
+        ----------
+        name : str
+            A measure of :data:`MEASURE_NAMES`.
+
+        Returns
+        -------
+        bool
+            True for ``cond`` (safe below its margin), False for the distances (safe above).
+        """
         return name == "cond"
 
 
@@ -125,6 +136,15 @@ class SingularityMeasures:
         """Each measure over its margin (``margin / cond`` for ``cond``): >= 1 is safe.
 
         Measures whose margin is switched off are left out.
+
+        Parameters
+        ----------
+        margins : Margins
+
+        Returns
+        -------
+        dict of str -> ndarray, shape (...)
+            Per measure of :data:`MEASURE_NAMES` whose margin is on: the dimensionless ratio.
         """
         out = {}
         for name in MEASURE_NAMES:

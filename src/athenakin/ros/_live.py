@@ -234,7 +234,15 @@ class FoxgloveStream:
                 self._channels[key].log(msgs[key][0].tobytes(), log_time=stamp)
 
     def set_setup(self, design: Design | None, T_b_e: ArrayLike | None) -> None:
-        """Change the design and RCM frame; the URDF and fixed frames are sent again."""
+        """Change the design and RCM frame; the URDF and fixed frames are sent again.
+
+        Parameters
+        ----------
+        design : Design or None
+            Default :meth:`Design.default`.
+        T_b_e : array-like, shape (4, 4), or None
+            RCM frame in the base frame, m (default :func:`athenakin.default_rcm_frame`).
+        """
         design = resolve_design(design)
         T = resolve_rcm_frame(T_b_e, design)
         encoder = RosEncoder(T, design, backend=self.backend)

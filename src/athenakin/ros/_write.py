@@ -181,7 +181,15 @@ class McapOutput:
     def write_static(self, stamp_ns: int) -> None:
         """``/robot_description`` (the URDF) and ``/tf_static`` (fixed frames), once.
 
-        ``stamp_ns``: int, ns, 0 to 2**63 - 1.
+        Parameters
+        ----------
+        stamp_ns : int
+            Their stamp and log time, ns, 0 to 2**63 - 1 (later calls write nothing).
+
+        Raises
+        ------
+        InvalidInputError
+            ``stamp_ns`` out of range or not an integer.
         """
         check_uint(stamp_ns, "stamp_ns", 2**63)
         if self._static_done:
@@ -200,6 +208,12 @@ class McapOutput:
         Each chunk of the file is one byte array of ``rows x (status, tool tip, tf,
         joint states)`` Message records built in place; the rows of readings without
         a pose keep only their status record.
+
+        Parameters
+        ----------
+        b : TrackedBatch
+            The readings (stamps ns, poses in m and rad in the base frame, flags), in order;
+            the first batch also writes :meth:`write_static` at its first stamp.
         """
         n = len(b.stamps_ns)
         if n == 0:
@@ -340,13 +354,32 @@ class McapOutput:
                                  q: FloatArray, qd: FloatArray | None,
                                  qdd: FloatArray | None,
                                  joint_names: tuple[str, ...] = ("q1", "q2", "q3")) -> None:
-        """One ``trajectory_msgs/msg/JointTrajectory`` with every sample as a point."""
+        """One ``trajectory_msgs/msg/JointTrajectory`` with every sample as a point.
+
+        Parameters
+        ----------
+        stamp_ns : int
+            Stamp of the message, ns.
+        t_s : ndarray, shape (N,)
+            Time of each sample, s (``time_from_start`` is ``t_s - t_s[0]``).
+        q : ndarray, shape (N, 3)
+            Positions, m.
+        qd, qdd : ndarray, shape (N, 3), or None
+            Velocities (m/s) and accelerations (m/s^2); None leaves them empty.
+        joint_names : tuple of str
+            The joints of the points (default ``q1, q2, q3``).
+        """
         self._add("trajectory", int(stamp_ns), _trajectory_bytes(stamp_ns, t_s, q, qd, qdd,
                                                                   joint_names))
 
     # ------------------------------------------------------------------ finish
     def close(self) -> Path:
         """Finish the file and move it into place; returns its path.
+
+        Returns
+        -------
+        Path
+            :attr:`path` (also when the file was closed already).
 
         Raises
         ------

@@ -107,7 +107,13 @@ class CollisionSpec(TomlOptions):
             self.samples, "samples", minimum=1, maximum=MAX_COLLISION_SAMPLES))
 
     def to_mapping(self) -> dict[str, Any]:
-        """A TOML table: ``bodies`` a name or a table, ``environment`` a table (if any)."""
+        """A TOML table: ``bodies`` a name or a table, ``environment`` a table (if any).
+
+        Returns
+        -------
+        dict of str -> TOML value
+            ``bodies``, ``environment`` (if any), ``margin`` (m) and ``samples``.
+        """
         out: dict[str, Any] = {"bodies": self.bodies if isinstance(self.bodies, str)
                                else self.bodies.to_toml_table()}
         if self.environment is not None:
@@ -118,7 +124,25 @@ class CollisionSpec(TomlOptions):
 
     @classmethod
     def from_mapping(cls, data: Mapping[str, Any]) -> CollisionSpec:
-        """Read a ``collision`` table (:meth:`to_mapping`); unknown keys are refused by name."""
+        """Read a ``collision`` table (:meth:`to_mapping`); unknown keys are refused by name.
+
+        Parameters
+        ----------
+        data : mapping
+            ``bodies`` (``"default"``, ``"scaled"`` or a ``[bodies]`` table), ``environment``
+            (a table), ``margin`` (m), ``samples``.
+
+        Returns
+        -------
+        CollisionSpec
+
+        Raises
+        ------
+        TypeError
+            ``data`` is not a table.
+        InvalidInputError
+            An unknown key or a bad value (named).
+        """
         if not isinstance(data, Mapping):
             raise TypeError(f"collision: expected a table (mapping), got {type(data).__name__}")
         from ..collision import Bodies, Environment
@@ -134,7 +158,18 @@ class CollisionSpec(TomlOptions):
         return super().from_mapping(kw)
 
     def bodies_for(self, design: Design) -> Any:
-        """The bodies of ``design``."""
+        """The bodies of ``design``.
+
+        Parameters
+        ----------
+        design : Design
+
+        Returns
+        -------
+        athenakin.collision.Bodies
+            The table given, else :meth:`Bodies.default <athenakin.collision.Bodies.default>`
+            of ``design`` (radii scaled with it for ``"scaled"``).
+        """
         from ..collision import Bodies
 
         if isinstance(self.bodies, str):
@@ -142,7 +177,13 @@ class CollisionSpec(TomlOptions):
         return self.bodies
 
     def fingerprint(self) -> dict[str, Any]:
-        """A JSON-able description (the identity of a study that checks collisions)."""
+        """A JSON-able description (the identity of a study that checks collisions).
+
+        Returns
+        -------
+        dict of str -> JSON value
+            ``bodies``, ``environment`` (None without one), ``margin`` (m), ``samples``.
+        """
         b = self.bodies if isinstance(self.bodies, str) else self.bodies.to_toml_table()
         e = None if self.environment is None else self.environment.to_toml_table()
         return {"bodies": b, "environment": e, "margin": self.margin, "samples": self.samples}
