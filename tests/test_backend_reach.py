@@ -5,7 +5,7 @@
   (``tests/_backend_calls.py``) with ``backend="numpy"`` passed to each, under a profile
   hook that records every frame of a kernel module. No kernel module may run (not even
   its import), and numba is never imported: nothing compiled can have been entered.
-  A control in the same process takes ``backend="numba"`` for one call and must be seen.
+  A control in the same process then imports one kernel module, and the hook must see it.
 * The kernel modules found in ``src`` equal :data:`KERNEL_MODULES`, every subpackage that
   holds one has a declared call in ``tests/_backend_calls.py``
   (:data:`CALLS`), and the numpy-backend subset of CI (``.ci/run``'s
@@ -99,12 +99,11 @@ threading.setprofile(None)
 report = {"keys": sorted(res), "frames": seen,
           "numba": sorted(m for m in sys.modules if m.split(".")[0] in ("numba", "llvmlite")),
           "kernels": sorted(m for m in sys.modules if m in set(json.loads(sys.argv[2])))}
-# the control: the same hook sees a kernel module once a call takes the compiled kernels
+# the control: the same hook sees a kernel module run (its import: nothing is compiled)
 seen = {}
 sys.setprofile(hook)
-import athenakin as ak
+import athenakin.ros._kernels
 
-ak.forward_kinematics([-0.1, 0.1, 0.45], ak.default_rcm_frame(), backend="numba")
 sys.setprofile(None)
 report["control"] = seen
 print(json.dumps(report))
@@ -148,8 +147,8 @@ def test_numpy_backend_enters_no_compiled_function(probe):
 
 
 def test_the_hook_sees_a_kernel(probe):
-    """The control: ``backend="numba"`` on one call runs a kernel module the hook records."""
-    assert any("fast" in f for f in probe["control"]), probe["control"]
+    """The control: a kernel module that runs is recorded by the hook."""
+    assert any(f.endswith("_kernels.py") for f in probe["control"]), probe["control"]
 
 
 def test_every_declared_call_ran(probe):
