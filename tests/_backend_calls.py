@@ -105,6 +105,13 @@ def compute(tmp: Path, backend: str | None = None) -> dict[str, np.ndarray]:
     poses = [tr.update(r) for r in stream[1:40].tolist()]
     out["motion.update.clearance"] = np.array([p.clearance for p in poses])
     out["motion.update.p"] = np.array([p.p for p in poses])
+    # motion: the planner with its margins, clearance check and forces
+    traj = ak.motion.plan([[0.25, 0.0, 0.0], [0.26, -0.01, 0.01]], T, d,
+                          masses=ak.dynamics.MassModel.reference(d),
+                          options=ak.motion.PlanOptions(rate=200.0, clearance_margin=0.001,
+                                                        **kw))
+    out["motion.plan.q"] = traj.q
+    out["motion.plan.forces"] = traj.forces
     # ros: /tf frames, MCAP written and read back
     model = urdf_model(d, T)
     jv = joint_values(model, q, sol.p[:, 0], sol.u[:, 0], sol.T_b_s[:, 0, :3, 3])

@@ -57,7 +57,7 @@ CALLS = {
     "collision": ("collision.distances",),
     "dynamics": ("dynamics.inverse_dynamics", "dynamics.simulate.q", "dynamics.statics"),
     "fast": ("fk.p", "ik.q", "tool_tip.q", "instrument.q", "jac.parallel", "jac.tool_tip"),
-    "motion": ("motion.track.p", "motion.update.clearance"),
+    "motion": ("motion.track.p", "motion.update.clearance", "motion.plan.q"),
     "ros": ("ros.frames.xyz", "ros.read.q", "mcap./tf"),
     "synthesis": ("synthesis.evaluate_design",),
     "teleop": ("teleop.q",),

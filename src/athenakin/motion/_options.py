@@ -74,6 +74,9 @@ class PlanOptions(TomlOptions):
     f_max : float or tuple of 3 float or None
         Actuator force limits, N (needs ``masses``): the trajectory is slowed down
         uniformly until ``|forces| <= f_max`` (:mod:`athenakin.motion._forces`).
+    backend : {"auto", "numpy", "numba"}
+        The Jacobians, the clearance check and the forces on the compiled kernels or the
+        numpy reference (:mod:`athenakin._backend`; default ``"auto"``).
 
     Examples
     --------
@@ -96,6 +99,7 @@ class PlanOptions(TomlOptions):
     max_samples: int = MAX_SAMPLES
     clearance_margin: float | None = None
     f_max: LimitValue | None = None
+    backend: str = "auto"
 
     def __post_init__(self) -> None:
         put = object.__setattr__
@@ -107,6 +111,7 @@ class PlanOptions(TomlOptions):
             put(self, name, _as_given(getattr(self, name), getattr(lim, name)))
         put(self, "tip_speed", lim.tip_speed)
         check_choice(self.timing, "timing", ("stretch", "fixed"))
+        check_choice(self.backend, "backend", ("auto", "numpy", "numba"))
         if not isinstance(self.margins, Margins):
             raise TypeError(f"margins: expected athenakin.motion.Margins, got "
                             f"{type(self.margins).__name__}")
