@@ -174,9 +174,10 @@ class AthenaApp(_Page):
         self._build_gui()
         self._send_page_script()
         # bodies as solids, closest pair, clearance (issue 20): app/_bodies.py
-        self.bodies = BodiesLayer(self.server, bodies=bodies, environment=environment)
+        self.bodies = BodiesLayer(self.server, bodies=bodies, environment=environment,
+                                  backend=self.setup.backend)
         self.forces = ForcesLayer(self.server, masses=masses, f_max=f_max,  # issue 21 forces
-                                  tip_handle=self._handle)
+                                  tip_handle=self._handle, backend=self.setup.backend)
         if trajectory is not None:
             self._load_trajectory(str(trajectory))
         self._apply_q(self.q, sync_ik=True)
