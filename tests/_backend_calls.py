@@ -124,6 +124,16 @@ def compute(tmp: Path, backend: str | None = None) -> dict[str, np.ndarray]:
     out.update(_mcap_numbers(path))
     back = ak.ros.read_joint_states(path, topic="/athena/joint_states", **kw)
     out["ros.read.q"] = back.q
+    # app: the view of a configuration, its bodies' clearance and its statics
+    from athenakin.app._bodies import bodies_view
+    from athenakin.app._forces import forces_view
+
+    setup = ak.app.app_setup(T, d, **kw)
+    view = ak.app.forward_view(setup, q0)
+    out["app.view.tip"] = np.asarray(view.geometry.points["tip"], dtype=float)
+    out["app.bodies.clearance"] = np.array(
+        [bodies_view(view.geometry, backend=setup.backend).clearance])
+    out["app.forces"] = np.asarray(forces_view(view.geometry, backend=setup.backend).forces)
     # teleop: a few cycles of the controller with its clearance check and feed-forward
     from athenakin.teleop import Teleop, TeleopOptions
 

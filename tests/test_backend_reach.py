@@ -51,9 +51,10 @@ KERNEL_MODULES = (
 
 #: Per subpackage with a compiled path: the results of ``tests/_backend_calls.py`` that
 #: its public calls give (``fast``: the kinematics' public faces in athenakin and
-#: athenakin.analysis; ``teleop``: no kernel of its own, it takes the backend of its
-#: options down to the tracker, the IK and the feed-forward).
+#: athenakin.analysis; ``app`` and ``teleop``: no kernel of their own, they take their
+#: backend down to the kinematics, the clearance, the tracker and the dynamics).
 CALLS = {
+    "app": ("app.view.tip", "app.bodies.clearance", "app.forces"),
     "collision": ("collision.distances",),
     "dynamics": ("dynamics.inverse_dynamics", "dynamics.simulate.q", "dynamics.statics"),
     "fast": ("fk.p", "ik.q", "tool_tip.q", "instrument.q", "jac.parallel", "jac.tool_tip"),
@@ -65,6 +66,7 @@ CALLS = {
 
 #: The test files of each subpackage that CI runs again under ``ATHENAKIN_BACKEND=numpy``.
 NUMPY_SUITES = {
+    "app": "tests/test_app.py",
     "collision": "tests/test_collision_api.py",
     "dynamics": "tests/test_dynamics.py",
     "fast": "tests/test_golden.py",
