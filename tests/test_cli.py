@@ -2,6 +2,7 @@
 
 import importlib
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -189,7 +190,65 @@ def test_readme_demo_with_the_example_design_runs(capsys, monkeypatch):
     """The README's `athenakin demo --design my_robot.toml`, run where the file is."""
     monkeypatch.chdir(Path(__file__).resolve().parent.parent / "examples")
     code, out, _ = run(capsys, "demo", "--design", "my_robot.toml")
-    assert code == 0 and "16" in out
+    assert code == 0
+    _check_demo_numbers(out, ak.Design.from_toml("my_robot.toml"))
     assert "reference design" not in out and "from my_robot.toml" in out   # says whose
     code, out, _ = run(capsys, "demo")
     assert out.startswith("athenakin demo: ATHENA reference design and set-up")
+    assert code == 0
+    _check_demo_numbers(out, ak.Design.default())
+
+
+def _table_rows(lines: list[str], header: str) -> list[list[str]]:
+    """The cells of the rows of the table whose header line starts with ``header``."""
+    i = next(k for k, line in enumerate(lines) if line.startswith(header))
+    rows = []
+    for line in lines[i + 2:]:                  # after the header and its rule
+        if not line.strip():
+            break
+        rows.append(line.split())
+    return rows
+
+
+def _check_demo_numbers(out: str, design: ak.Design) -> None:
+    """Every number the demo prints against the library's own result, each at the
+    precision printed relative to its quantity's scale."""
+    lines = out.splitlines()
+    T = ak.default_rcm_frame(design)
+    q_ref = np.array(ak.robot.REFERENCE_Q)
+    head = re.search(r"l1\.\.l5 = \[(.*)\] m, tool length (\S+) m", out)
+    assert head, out[:400]
+    np.testing.assert_allclose([float(v) for v in head.group(1).split(",")], design.lengths,
+                               rtol=1e-12)
+    assert float(head.group(2)) == pytest.approx(design.tool_length, rel=1e-12)
+    i = next(k for k, line in enumerate(lines) if line.startswith("RCM frame T_b_e ="))
+    printed_T = np.array([[float(v) for v in line.strip(" []").split()]
+                          for line in lines[i + 1:i + 5]])
+    # six decimals printed: half a unit of the last digit, relative to the frame's scale
+    np.testing.assert_allclose(printed_T, T, rtol=0, atol=1e-6 * np.abs(T).max())
+    sol = ak.forward_kinematics(q_ref, T, design)
+    n = re.search(r"forward kinematics of q = \[(.*)\] m: (\d+) solutions", out)
+    assert n and int(n.group(2)) == int(sol.n_solutions)
+    np.testing.assert_allclose([float(v) for v in n.group(1).split(",")], q_ref, rtol=1e-12)
+    fk = _table_rows(lines, "slot  mode  p+-")
+    assert [int(r[0]) for r in fk] == list(range(16))
+    labels = np.array([[int(v) for v in r[1:5]] for r in fk])
+    np.testing.assert_array_equal(labels, np.stack([sol.mode, sol.p_sign, sol.ujoint,
+                                                    sol.wrist], axis=-1))
+    assert [r[5] == "ok" for r in fk] == sol.valid.tolist()
+    num = np.array([[float(v) for v in r[6:]] for r in fk])
+    p, u_deg, residual, tip = num[:, 0], num[:, 1:6], num[:, 6], num[:, 7:10]
+    for got, want in ((p, sol.p), (u_deg, np.degrees(sol.u)), (tip, sol.tip)):
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-5 * np.abs(want).max())
+    np.testing.assert_allclose(residual, sol.residual, rtol=0.06, atol=1e-300)  # 2 digits
+    ik = _table_rows(lines, "slot  mode     q1 [m]")
+    assert [int(r[0]) for r in ik] == np.flatnonzero(sol.valid).tolist()
+    q_back, pas = ak.inverse_kinematics(T, sol.u[sol.valid, 2:], design, errors="flag")
+    assert [int(r[1]) for r in ik] == pas.mode.tolist()
+    np.testing.assert_allclose(np.array([[float(v) for v in r[2:5]] for r in ik]), q_back,
+                               rtol=0, atol=1e-6 * np.abs(q_ref).max())
+    err = np.array([float(r[5]) for r in ik])         # two digits printed
+    np.testing.assert_allclose(err, np.abs(q_back - q_ref).max(axis=-1), rtol=0.06,
+                               atol=1e-300)
+    worst = re.search(r"every solution's IK recovers q to (\S+) m", out)
+    assert worst and float(worst.group(1)) == pytest.approx(err.max(), rel=0.06)

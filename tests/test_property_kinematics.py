@@ -16,7 +16,9 @@ the whole file runs in well under a minute on two cores.
 
 from __future__ import annotations
 
+import inspect
 import math
+import re
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -94,15 +96,61 @@ def frames(draw: st.DrawFn) -> np.ndarray:
     return draw(rigid())
 
 
+#: A good value of each required argument that the tests pass wrong (an option's good
+#: value is its default): :func:`named_call` puts it in place of the argument an error
+#: names, and the error must go.
+GOOD: dict[str, Any] = {
+    "q": np.array([-0.1, 0.1, 0.45]), "T_b_e": T0, "T": T0, "T_s_e": T0,
+    "u345": np.array([0.3, 1.0, 0.4]), "direction_e": np.array([0.0, 0.0, 1.0]), "p": 0.2,
+    "tip_e": np.array([0.0, 0.0, 0.1]), "u": np.zeros(5),
+    "X": np.array([1.0, 0, 0, 0, 0, 0, 0, 0]), "X1": np.array([1.0, 0, 0, 0, 0, 0, 0, 0]),
+    "X2": np.array([1.0, 0, 0, 0, 0, 0, 0, 0]),
+}
+
+
+def names_token(message: str, name: str) -> bool:
+    """Whether ``message`` holds ``name`` as a whole token (not inside another word)."""
+    return re.search(rf"(?<![\w]){re.escape(name)}(?![\w])", message) is not None
+
+
+def _culprit(f: Callable[..., Any], args: tuple[Any, ...], kw: dict[str, Any], name: str
+             ) -> bool:
+    """Whether the argument ``name`` of the call is wrong: with a good value in its place,
+    the call no longer raises an error that names it."""
+    sig = inspect.signature(f)
+    bound = sig.bind(*args, **kw)
+    default = sig.parameters[name].default
+    assert name in GOOD or default is not inspect.Parameter.empty, f"no good value of {name}"
+    bound.arguments[name] = GOOD[name] if name in GOOD else default
+    try:
+        f(*bound.args, **bound.kwargs)
+    except (TypeError, ValueError) as exc:
+        return not names_token(str(exc), name)
+    except Exception:       # noqa: BLE001 - any other outcome: the error named went away
+        return True
+    return True
+
+
 def named_call(names: Sequence[str], f: Callable[..., Any], *args: Any, **kw: Any) -> Any:
-    """``f(*args, **kw)``, or None after a named error; anything else fails the test."""
+    """``f(*args, **kw)``, or None after a named error; anything else fails the test.
+
+    A TypeError or ValueError is named when its message holds, as a whole token, one of
+    ``names`` that is a parameter the test passed, and that argument is the wrong one:
+    the same call with a good value there (:data:`GOOD`, else the parameter's default)
+    raises no error naming it.
+    """
     try:
         return f(*args, **kw)
     except KinematicsError:
         return None
     except (TypeError, ValueError) as exc:
         msg = str(exc)
-        assert any(n in msg for n in names), f"{type(exc).__name__} names no argument: {msg}"
+        passed = inspect.signature(f).bind(*args, **kw).arguments
+        named = [n for n in names if n in passed and names_token(msg, n)]
+        assert named, f"{type(exc).__name__} names no argument passed (of {list(names)}): {msg}"
+        assert any(_culprit(f, args, kw, n) for n in named), (
+            f"{type(exc).__name__} names {named}, but the error stays with a good value "
+            f"there: {msg}")
         return None
 
 
@@ -164,7 +212,7 @@ def test_fk_bad_arguments_named(q, T, kw):
     for backend in BACKENDS:
         kw2 = {"backend": backend, **kw}
         named_call(["q", "T_b_e", "tangent_tol", "closure_tol", "errors", "method", "backend",
-                    "design", "batch shapes"], ak.forward_kinematics, q, T, design, **kw2)
+                    "design"], ak.forward_kinematics, q, T, design, **kw2)
 
 
 # --- robot: inverse kinematics (paper form) from FK ------------------------------------------
@@ -454,3 +502,23 @@ def test_hostile_options_named(fn, args, options):
     for name in options:
         for v in OPTION_VALUES:
             named_call([name], fn, *a, **{name: v})
+
+
+# --- the oracle itself -----------------------------------------------------------------------
+def test_named_call_matches_whole_tokens_of_the_wrong_argument():
+    """An error must name the argument that is wrong, as a token: ``p`` inside ``expected``
+    is no name, and an error naming a good argument is no name either."""
+    def f(q, p=0.2):
+        if not np.all(np.isfinite(q)):
+            raise ValueError(msg)
+        return q
+
+    msg = "q: expected finite values"
+    assert named_call(["q"], f, [math.nan, 0.0, 0.0]) is None
+    msg = "expected finite values"                           # holds a "p", names nothing
+    with pytest.raises(AssertionError, match="names no argument"):
+        named_call(["p"], f, [math.nan, 0.0, 0.0], p=0.3)
+    msg = "p: expected finite values"                        # names p, but q is the wrong one
+    with pytest.raises(AssertionError, match="stays with a good value"):
+        named_call(["p"], f, [math.nan, 0.0, 0.0], p=0.3)
+    assert not names_token("tip_e: expected", "p") and names_token("(p) bad", "p")

@@ -62,7 +62,7 @@ def _kernel_joint_values(model, q, p, u, O_s):
 def _numpy_writer(monkeypatch):
     """The numpy writer, given the compiled joint values (libm and numpy's SIMD atan2 may
     differ in the last bit): the encoders compared on the same numbers."""
-    monkeypatch.setattr(_write, "_compiled", lambda: False)
+    monkeypatch.setattr(_write.McapOutput, "_compiled_records", lambda self: False)
     monkeypatch.setattr(_encoder, "joint_values", _kernel_joint_values)
 
 

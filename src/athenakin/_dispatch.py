@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike
 from ._backend import _STATE as _BACKEND
 from ._backend import (
     Backend,
-    numba_available,
+    numba_available,  # noqa: F401 - re-exported: the tests and the CLI ask it here
     resolve_backend,
 )
 from ._typing import FloatArray
@@ -92,19 +92,22 @@ def _first(name: str, call: Callable[[], _R]) -> _R:
         _WARM.add(name)
 
 
-def warmup(design: Design | None = None) -> int:
+def warmup(design: Design | None = None, *, backend: Backend = "auto") -> int:
     """Run every compiled entry point once, single pose and batch: compiles or loads the kernels.
 
     Parameters
     ----------
     design : Design, optional
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        Nothing to warm where it resolves to the numpy reference
+        (:func:`athenakin._backend.resolve_backend`).
 
     Returns
     -------
     int
-        Number of entry points run (0 where numba is not available).
+        Number of entry points run (0 on the numpy reference).
     """
-    if not numba_available():
+    if not resolve_backend(backend):
         return 0
     from .robot._setup import REFERENCE_Q, default_rcm_frame
 

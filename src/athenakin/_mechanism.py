@@ -51,6 +51,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ._backend import Backend
 from ._dispatch import forward_kinematics
 from ._mechanism_formulas import FORMULA_JOINTS, tree_joint_formula
 from ._typing import BoolArray, FloatArray, Int8Array
@@ -466,7 +467,8 @@ def _tree_frames(joints: FloatArray, T_e: FloatArray,
 
 
 def _state(q: ArrayLike, T_b_e: ArrayLike, design: Design | None, slot: object,
-           geometry: BodyGeometry | None, *, frames: bool) -> MechanismState:
+           geometry: BodyGeometry | None, *, frames: bool,
+           backend: Backend = "auto") -> MechanismState:
     design = resolve_design(design)
     k = _check_slot(slot)
     geometry = BodyGeometry() if geometry is None else geometry
@@ -475,7 +477,7 @@ def _state(q: ArrayLike, T_b_e: ArrayLike, design: Design | None, slot: object,
     q = check_array(q, "q", (3,), allow_nonfinite=True)
     T = resolve_rcm_frame(T_b_e, design, single=False)
     sol = forward_kinematics(q, T, design, errors="flag",
-                             fields=("valid", "reason", "p", "u", "T_b_s"))
+                             fields=("valid", "reason", "p", "u", "T_b_s"), backend=backend)
     return state_from_fk(sol, q, T, design, k, geometry, frames=frames)
 
 
@@ -624,7 +626,8 @@ def _instrument_points(xyz: FloatArray, T_b_s: FloatArray,
 
 def mechanism_state(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
                     slot: int | Literal["all"] = 0,
-                    geometry: BodyGeometry | None = None) -> MechanismState:
+                    geometry: BodyGeometry | None = None,
+                    backend: Backend = "auto") -> MechanismState:
     """The points, the link frames and the tree's joint values of the mechanism (batched).
 
     Parameters
@@ -640,6 +643,8 @@ def mechanism_state(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None
         trailing batch axis of 16 slots.
     geometry : BodyGeometry, keyword-only, optional
         Carriage length, spherical-mechanism radius and rail margin.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The backend of the forward kinematics (:func:`athenakin.forward_kinematics`).
 
     Returns
     -------
@@ -663,26 +668,27 @@ def mechanism_state(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None
     >>> bool(abs(st.frame("platform")[:3, 3] - st["O_i"]).max() < 1e-14)
     True
     """
-    return _state(q, T_b_e, design, slot, geometry, frames=True)
+    return _state(q, T_b_e, design, slot, geometry, frames=True, backend=backend)
 
 
 def mechanism_points(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
                      slot: int | Literal["all"] = 0,
-                     geometry: BodyGeometry | None = None) -> MechanismPoints:
+                     geometry: BodyGeometry | None = None,
+                     backend: Backend = "auto") -> MechanismPoints:
     """Every named point of the mechanism in one FK slot, or in all 16.
 
     The points of :func:`mechanism_state`, without its frames and joint values.
 
     Parameters
     ----------
-    q, T_b_e, design, slot, geometry
+    q, T_b_e, design, slot, geometry, backend
         As for :func:`mechanism_state`.
 
     Returns
     -------
     MechanismPoints
     """
-    return _state(q, T_b_e, design, slot, geometry, frames=False).points
+    return _state(q, T_b_e, design, slot, geometry, frames=False, backend=backend).points
 
 
 def body_segments(points: MechanismPoints) -> FloatArray:

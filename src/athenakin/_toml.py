@@ -97,7 +97,13 @@ class TomlOptions:
     TOML_TABLE: ClassVar[str]
 
     def to_mapping(self) -> dict[str, Any]:
-        """The fields as a dict of TOML values (None left out, tuples as lists)."""
+        """The fields as a dict of TOML values (None left out, tuples as lists).
+
+        Returns
+        -------
+        dict of str -> TOML value
+            One entry per field that is not None, in field order.
+        """
         out: dict[str, Any] = {}
         for f in dataclasses.fields(self):  # type: ignore[arg-type]
             v = getattr(self, f.name)
@@ -109,6 +115,16 @@ class TomlOptions:
     @classmethod
     def from_mapping(cls: type[_T], data: Mapping[str, Any]) -> _T:
         """Build from a mapping of field names (e.g. a parsed TOML table).
+
+        Parameters
+        ----------
+        data : mapping of str -> value
+            Field names to values (TOML lists become tuples); missing fields take their
+            defaults.
+
+        Returns
+        -------
+        instance of the class
 
         Raises
         ------
@@ -133,7 +149,13 @@ class TomlOptions:
             raise InvalidInputError(f"{cls.TOML_TABLE}.{exc}") from None
 
     def to_toml(self) -> str:
-        """TOML text, one ``[TOML_TABLE]`` table, that :meth:`from_toml` reads back equal."""
+        """TOML text, one ``[TOML_TABLE]`` table, that :meth:`from_toml` reads back equal.
+
+        Returns
+        -------
+        str
+            UTF-8 TOML text.
+        """
         import tomli_w
 
         return tomli_w.dumps({self.TOML_TABLE: self.to_mapping()})
@@ -143,6 +165,15 @@ class TomlOptions:
         """Read the ``[TOML_TABLE]`` table of a TOML file (defaults when it has none).
 
         Other tables of the file (``[design]``, ``[task]``, ...) are left to their readers.
+
+        Parameters
+        ----------
+        path : str or Path
+            A TOML file.
+
+        Returns
+        -------
+        instance of the class
 
         Raises
         ------

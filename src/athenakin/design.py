@@ -182,6 +182,10 @@ class Design:
         meet; keeping ``q3`` within (0.2546, 0.5781) m avoids them). See
         docs/singularities.md for the map of these sets. The tool length (0.45 m) is
         that of a standard laparoscopic instrument shaft.
+
+        Returns
+        -------
+        Design
         """
         return cls(l1=0.30, l2=0.10, l3=0.25, l4=0.15, l5=0.40,
                    q_min=(-0.30, -0.10, 0.20), q_max=(0.10, 0.30, 0.70),
@@ -192,6 +196,16 @@ class Design:
         """Build a design from a mapping (e.g. a parsed TOML table).
 
         Keys are the field names; unknown keys are rejected by name.
+
+        Parameters
+        ----------
+        data : mapping of str -> value
+            ``l1`` .. ``l5`` (m, required), and any other field of :class:`Design`
+            (``q_min`` / ``q_max`` as 3 numbers, m).
+
+        Returns
+        -------
+        Design
 
         Raises
         ------
@@ -243,6 +257,15 @@ class Design:
         A ``[bodies]`` or ``[environment]`` table in the same file belongs to
         :mod:`athenakin.collision` (``Bodies.from_toml``, ``Environment.from_toml``) and
         is skipped here.
+
+        Parameters
+        ----------
+        path : str or Path
+            A TOML file.
+
+        Returns
+        -------
+        Design
 
         Raises
         ------

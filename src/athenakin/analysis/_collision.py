@@ -92,8 +92,8 @@ def check_clearance_margin(clearance_margin: object) -> float:
 
 def labelled_clearance(q: FloatArray, T_b_e: FloatArray, design: Design,
                        mode: IntArray, p_negative: BoolArray, *,
-                       bodies: Any, environment: Any, wrist: IntArray | None = None
-                       ) -> tuple[FloatArray, NDArray[np.str_]]:
+                       bodies: Any, environment: Any, wrist: IntArray | None = None,
+                       backend: str = "auto") -> tuple[FloatArray, NDArray[np.str_]]:
     """Least clearance of each configuration and the pair that has it.
 
     Parameters
@@ -110,6 +110,8 @@ def labelled_clearance(q: FloatArray, T_b_e: FloatArray, design: Design,
     environment : athenakin.collision.Environment or None
     wrist : ndarray of int, shape (n,), optional
         Spherical-joint branch (+1: ``sin u4 > 0``, -1); default +1.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The backend of :func:`athenakin.collision.clearance`.
 
     Returns
     -------
@@ -136,7 +138,8 @@ def labelled_clearance(q: FloatArray, T_b_e: FloatArray, design: Design,
             if todo.size == 0:
                 break
             res = clearance(q[todo], T_b_e, design, slot=slot, bodies=bodies,
-                            environment=environment, witness=False)
+                            environment=environment, witness=False,
+                            backend=backend)  # type: ignore[arg-type]
             ok = np.asarray(res.valid, dtype=bool).reshape(-1)
             dist[todo[ok]] = np.asarray(res.min_distance, dtype=float).reshape(-1)[ok]
             cp = np.asarray(res.closest_pair).reshape(-1).astype(np.int64)[ok]

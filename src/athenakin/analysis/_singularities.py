@@ -191,11 +191,34 @@ class SingularityReport:
         return np.any(np.stack([c.near for c in self.conditions.values()]), axis=0)
 
     def near_names(self, index: tuple[int, ...] | int = ()) -> list[str]:
-        """Names of the conditions that are near at one item of the batch."""
+        """Names of the conditions that are near at one item of the batch.
+
+        Parameters
+        ----------
+        index : int or tuple of int
+            The item of the batch (default ``()``: an unbatched report).
+
+        Returns
+        -------
+        list of str
+            Names of :attr:`conditions` whose ``near`` is set there, in their order.
+        """
         return [k for k, c in self.conditions.items() if bool(np.asarray(c.near)[index])]
 
     def values(self, index: tuple[int, ...] | int = ()) -> dict[str, float]:
-        """``{name: value}`` at one item of the batch."""
+        """``{name: value}`` at one item of the batch.
+
+        Parameters
+        ----------
+        index : int or tuple of int
+            The item of the batch (default ``()``: an unbatched report).
+
+        Returns
+        -------
+        dict of str -> float
+            Each condition's distance measure there (m for lengths, dimensionless for sines;
+            docs/singularities.md).
+        """
         return {k: float(np.asarray(c.value)[index]) for k, c in self.conditions.items()}
 
 

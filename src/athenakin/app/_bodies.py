@@ -102,7 +102,8 @@ def capsule_mesh(a: ArrayLike, b: ArrayLike, radius: float, *, n_around: int = N
 
 
 def bodies_view(g: RobotGeometry, *, bodies: Any = None, environment: Any = None,
-                n_around: int = N_AROUND, n_cap: int = N_CAP) -> BodiesView:
+                n_around: int = N_AROUND, n_cap: int = N_CAP,
+                backend: str = "auto") -> BodiesView:
     """The bodies of the drawn solution ``g`` as meshes, and their least clearance.
 
     Parameters
@@ -115,6 +116,8 @@ def bodies_view(g: RobotGeometry, *, bodies: Any = None, environment: Any = None
         Obstacles in the clearance (not drawn).
     n_around, n_cap : int, keyword-only
         Mesh resolution (points around each capsule, rings on each cap).
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The backend of the placement and the clearance (:func:`athenakin.collision.clearance`).
 
     Returns
     -------
@@ -130,9 +133,11 @@ def bodies_view(g: RobotGeometry, *, bodies: Any = None, environment: Any = None
     elif not isinstance(bodies, Bodies):
         raise TypeError(f"bodies: expected athenakin.collision.Bodies or None, got "
                         f"{type(bodies).__name__}")
-    pts = mechanism_points(g.q, g.T_b_e, g.design, slot=g.slot, geometry=bodies.geometry)
+    pts = mechanism_points(g.q, g.T_b_e, g.design, slot=g.slot, geometry=bodies.geometry,
+                           backend=backend)  # type: ignore[arg-type]
     seg = body_segments(pts)
-    c = clearance(g.q, g.T_b_e, g.design, slot=g.slot, bodies=bodies, environment=environment)
+    c = clearance(g.q, g.T_b_e, g.design, slot=g.slot, bodies=bodies, environment=environment,
+                  backend=backend)  # type: ignore[arg-type]
     pair, witness = _closest(c)
     colliding = bool(c.colliding)
     hot = rgb(COLLIDING_COLOR if colliding else CLOSEST_COLOR)
@@ -244,11 +249,14 @@ class BodiesLayer:
         As in :func:`bodies_view`.
     visible : bool, keyword-only
         Initial state of the "solid bodies" checkbox.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The backend of every clearance the layer computes.
     """
 
     def __init__(self, server: Any, *, bodies: Any = None, environment: Any = None,
-                 visible: bool = True) -> None:
+                 visible: bool = True, backend: str = "auto") -> None:
         self.server = server
+        self.backend = backend
         self.bodies = bodies
         self.environment = environment
         self.view: BodiesView | None = None
@@ -275,7 +283,8 @@ class BodiesLayer:
             self.readout.content = ""
             self.view = None
             return None
-        bv = bodies_view(g, bodies=self.bodies, environment=self.environment)
+        bv = bodies_view(g, bodies=self.bodies, environment=self.environment,
+                         backend=self.backend)
         seen = set()
         for m in bv.meshes:
             h = self._meshes.get(m.name)
@@ -333,7 +342,8 @@ class BodiesLayer:
 
         def along(q: FloatArray) -> FloatArray:
             c = clearance(q, T_b_e, design, slot=slot, bodies=bodies,
-                          environment=self.environment)
+                          environment=self.environment,
+                          backend=self.backend)  # type: ignore[arg-type]
             return np.asarray(c.min_distance, dtype=float)
 
         return along

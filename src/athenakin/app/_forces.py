@@ -230,7 +230,7 @@ def handle_from_tip_force(tip_force: ArrayLike, tip_b: ArrayLike, *,
 
 # ---------------------------------------------------------------------- the numbers
 def forces_view(g: RobotGeometry, *, masses: Any = None, tip_force: ArrayLike | None = None,
-                f_max: ArrayLike | None = None) -> ForcesView:
+                f_max: ArrayLike | None = None, backend: str = "auto") -> ForcesView:
     """The actuator forces holding the drawn solution ``g`` still, and the RCM load.
 
     Parameters
@@ -243,6 +243,8 @@ def forces_view(g: RobotGeometry, *, masses: Any = None, tip_force: ArrayLike | 
         Force on the tool tip, base frame, N (default zero).
     f_max : float or array-like, shape (3,), keyword-only, optional
         Actuator force limits, N.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The backend of :func:`athenakin.dynamics.statics`.
 
     Returns
     -------
@@ -260,7 +262,8 @@ def forces_view(g: RobotGeometry, *, masses: Any = None, tip_force: ArrayLike | 
     m = check_masses(masses)
     f_tip = check_tip_force(tip_force)
     lim = check_f_max(f_max)
-    st = statics(g.q, g.T_b_e, g.design, masses=m, tip_force=f_tip, slot=int(g.slot))
+    st = statics(g.q, g.T_b_e, g.design, masses=m, tip_force=f_tip, slot=int(g.slot),
+                 backend=backend)  # type: ignore[arg-type]
     forces = np.asarray(st.forces, dtype=float)
     gravity_forces = forces + np.asarray(st.tip_jacobian).T @ f_tip
     over = (np.abs(forces) > lim) if lim is not None else np.zeros(3, dtype=bool)
@@ -358,10 +361,13 @@ class ForcesLayer:
         The app's tip-move handle, hidden while the tip-force handle is shown.
     visible : bool, keyword-only
         Initial state of the "actuator forces" checkbox.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The backend of the statics.
     """
 
     def __init__(self, server: Any, *, masses: Any = None, f_max: ArrayLike | None = None,
-                 tip_handle: Any = None, visible: bool = True) -> None:
+                 tip_handle: Any = None, visible: bool = True, backend: str = "auto") -> None:
+        self.backend = backend
         self.masses = check_masses(masses)
         self.f_max = check_f_max(f_max)
         self.server = server
@@ -484,7 +490,7 @@ class ForcesLayer:
         else:
             try:
                 fv = forces_view(g, masses=self._masses_of(g.design), tip_force=self.tip_force,
-                                 f_max=self.f_max)
+                                 f_max=self.f_max, backend=self.backend)
             except (ValueError, TypeError, KinematicsError) as exc:
                 self.message = f"{type(exc).__name__}: {exc}"
                 self.readout.content = _message(self.message)

@@ -141,7 +141,13 @@ class Scene:
     solids: tuple[Solid, ...] = ()
 
     def bounds(self) -> tuple[FloatArray, FloatArray]:
-        """Axis-aligned box ``(lo, hi)`` (each shape (3,)) around every line, point and solid."""
+        """Axis-aligned box ``(lo, hi)`` (each shape (3,)) around every line, point and solid.
+
+        Returns
+        -------
+        lo, hi : ndarray, shape (3,)
+            Least and greatest coordinates of the finite points, base frame, m.
+        """
         pts: list[NDArray[np.floating]] = [ls.segments.reshape(-1, 3) for ls in self.lines]
         pts += [ps.points for ps in self.points]
         pts += [so.vertices for so in self.solids]

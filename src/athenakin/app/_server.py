@@ -167,9 +167,10 @@ class AthenaApp:
         self._build_gui()
         self.page.send_script(self.title)
         # bodies as solids, closest pair, clearance: app/_bodies.py
-        self.bodies = BodiesLayer(self.server, bodies=bodies, environment=environment)
+        self.bodies = BodiesLayer(self.server, bodies=bodies, environment=environment,
+                                  backend=self.setup.backend)
         self.forces = ForcesLayer(self.server, masses=masses, f_max=f_max,  # actuator forces
-                                  tip_handle=self._handle)
+                                  tip_handle=self._handle, backend=self.setup.backend)
         if trajectory is not None:
             self._load_trajectory(str(trajectory))
         self._apply_q(self.q, sync_ik=True)
@@ -377,7 +378,18 @@ class AthenaApp:
 
     # ------------------------------------------------------------------ actions
     def set_q(self, q: ArrayLike) -> AppView:
-        """Move the actuators (m) as the sliders would; returns the new view."""
+        """Move the actuators (m) as the sliders would; returns the new view.
+
+        Parameters
+        ----------
+        q : array-like, shape (3,)
+            Actuators, m.
+
+        Returns
+        -------
+        AppView
+            The view of the new configuration (the IK fields synchronised).
+        """
         return self._apply_q(np.asarray(q, dtype=float), sync_ik=True)
 
     def _move_tip(self, tip_e: FloatArray, *, snap_angles: bool,

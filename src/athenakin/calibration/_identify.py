@@ -100,7 +100,13 @@ class IdentifiabilityReport:
     n_rows: int
 
     def summary(self) -> str:
-        """A few lines: condition, smallest singular values, inseparable combinations."""
+        """A few lines: condition, smallest singular values, inseparable combinations.
+
+        Returns
+        -------
+        str
+            Lines joined by newlines (no trailing one).
+        """
         lines = [f"{len(self.names)} parameters, {self.n_rows} equations, condition "
                  f"{self.condition:.3g} (scaled columns)"]
         if self.combinations:

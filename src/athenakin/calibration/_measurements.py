@@ -42,7 +42,18 @@ class MeasurementCheck:
     usable: BoolArray
 
     def describe(self, limit: int = 5) -> str:
-        """``"row 3: input holds NaN or inf; row 7: ..."`` for the first ``limit`` bad rows."""
+        """``"row 3: input holds NaN or inf; row 7: ..."`` for the first ``limit`` bad rows.
+
+        Parameters
+        ----------
+        limit : int
+            Most rows listed (default 5); the others are counted.
+
+        Returns
+        -------
+        str
+            Empty when every row is usable.
+        """
         bad = np.flatnonzero(~self.usable)
         parts = [f"row {i}: {Reason(int(self.reason[i])).description}" for i in bad[:limit]]
         more = f" (and {len(bad) - limit} more)" if len(bad) > limit else ""

@@ -152,7 +152,14 @@ class CalibrationResult:
         return self.covariance / np.outer(s, s)
 
     def table(self) -> list[tuple[str, float, float, float]]:
-        """Rows ``(name, nominal, estimate, std)`` of the estimated parameters."""
+        """Rows ``(name, nominal, estimate, std)`` of the estimated parameters.
+
+        Returns
+        -------
+        list of (str, float, float, float)
+            One row per parameter of :attr:`names`, in the units of each parameter (m for
+            lengths and offsets, rad for angles; docs/calibration.md).
+        """
         return [(n, float(a), float(b), float(c))
                 for n, a, b, c in zip(self.names, self.nominal, self.estimates, self.std,
                                       strict=True)]

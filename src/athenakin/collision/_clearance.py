@@ -8,7 +8,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._backend import numba_available, resolve_backend
+from .._backend import Backend, resolve_backend
 from .._mechanism import BODIES, body_segments, mechanism_points
 from .._typing import BoolArray, FloatArray, Int8Array
 from .._validation import check_scalar
@@ -71,7 +71,24 @@ class Clearance:
     margin: float = 0.0
 
     def pair_index(self, a: str, b: str) -> int:
-        """Index of the pair ``(a, b)`` (either order) in :attr:`pairs`."""
+        """Index of the pair ``(a, b)`` (either order) in :attr:`pairs`.
+
+        Parameters
+        ----------
+        a, b : str
+            Names of two bodies, or of a body and an obstacle (:data:`athenakin.collision.BODIES`,
+            :attr:`Obstacle.name`).
+
+        Returns
+        -------
+        int
+            Column of the pair in :attr:`distances` and :attr:`witness_points`.
+
+        Raises
+        ------
+        InvalidInputError
+            ``(a, b)`` is not a checked pair (the message lists those that are).
+        """
         for k, p in enumerate(self.pairs):
             if p == (a, b) or p == (b, a):
                 return k
@@ -79,11 +96,34 @@ class Clearance:
                                 f"{self.pairs}")
 
     def distance(self, a: str, b: str) -> FloatArray:
-        """The distances of one pair, shape (...), m."""
+        """The distances of one pair, shape (...), m.
+
+        Parameters
+        ----------
+        a, b : str
+            As :meth:`pair_index`.
+
+        Returns
+        -------
+        ndarray, shape (...)
+            Signed distance, m (negative: penetration depth); NaN where the slot is invalid.
+
+        Raises
+        ------
+        InvalidInputError
+            ``(a, b)`` is not a checked pair.
+        """
         return self.distances[..., self.pair_index(a, b)]
 
     def closest_names(self) -> NDArray[np.object_]:
-        """``pairs[closest_pair]`` as an object array of (str, str) (None where -1), shape (...)."""
+        """``pairs[closest_pair]`` as an object array of (str, str) (None where -1), shape (...).
+
+        Returns
+        -------
+        ndarray of object, shape (...)
+            The ``(name, name)`` of the least distance of each item, None where no pair is
+            checked or the slot is invalid.
+        """
         out = np.empty(self.closest_pair.shape, dtype=object)
         for idx in np.ndindex(out.shape):
             k = int(self.closest_pair[idx])
@@ -121,8 +161,8 @@ def _pair_tables(bodies: Bodies, environment: Environment) -> tuple[
 
 
 def capsule_distances(solids: FloatArray, radii: FloatArray,
-                      ij: NDArray[np.intp]) -> FloatArray:
-    """Signed distances of capsule pairs over a batch (the kernel where the backend says so).
+                      ij: NDArray[np.intp], *, backend: Backend = "auto") -> FloatArray:
+    """Signed distances of capsule pairs over a batch (the kernel where ``backend`` says so).
 
     Parameters
     ----------
@@ -132,6 +172,8 @@ def capsule_distances(solids: FloatArray, radii: FloatArray,
         Radii, m.
     ij : ndarray of intp, shape (n_pairs, 2)
         The capsules of each pair.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The numba kernel or the numpy reference (:func:`athenakin._backend.resolve_backend`).
 
     Returns
     -------
@@ -140,7 +182,7 @@ def capsule_distances(solids: FloatArray, radii: FloatArray,
         :func:`athenakin.collision._kernels.capsule_distances` and the numpy reference
         :func:`athenakin.collision._distance._capsule_capsule` agree to 1e-13 m (tested).
     """
-    if numba_available():
+    if resolve_backend(backend):
         from ._kernels import capsule_distances as kernel
 
         return kernel(np.ascontiguousarray(solids, dtype=np.float64),  # type: ignore[no-any-return]
@@ -352,8 +394,9 @@ def clearance(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
         item: 16 slots x 53 pairs x 100,000 configurations are 4 GB) and about a third
         of the time: for planners and design studies that need only the distances.
     backend : {"auto", "numpy", "numba"}, keyword-only
-        The capsule pairs through the compiled kernel (``"auto"`` where numba imports)
-        or the numpy reference; the same values to 1e-12 m.
+        The forward kinematics that places the bodies and the capsule pairs through the
+        compiled kernels (``"auto"`` where numba imports) or the numpy reference; the
+        same values to 1e-12 m.
 
     Returns
     -------
@@ -383,7 +426,8 @@ def clearance(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
     if not isinstance(witness, bool):
         raise TypeError(f"witness: expected a bool, got {type(witness).__name__}")
     compiled = resolve_backend(backend)
-    pts = mechanism_points(q, T_b_e, design, slot=slot, geometry=bodies.geometry)
+    pts = mechanism_points(q, T_b_e, design, slot=slot, geometry=bodies.geometry,
+                           backend=backend)
     segs = body_segments(pts)
     batch = pts.valid.shape
     flat = segs.reshape((-1,) + segs.shape[-3:])

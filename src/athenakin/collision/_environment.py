@@ -210,7 +210,13 @@ class Obstacle:
         return self.kind in ("halfspace", "sphere", "capsule")
 
     def to_toml_table(self) -> dict[str, Any]:
-        """The obstacle as a TOML table (``kind``, ``name``, shape keys, ``allow``)."""
+        """The obstacle as a TOML table (``kind``, ``name``, shape keys, ``allow``).
+
+        Returns
+        -------
+        dict of str -> TOML value
+            Points in m in the base frame; a mesh's file path as given, with its pose and scale.
+        """
         t: dict[str, Any] = {"kind": self.kind, "name": self.name}
         if self.kind == "halfspace":
             t.update(point=list(self.point), normal=list(self.normal))
@@ -326,6 +332,11 @@ class Environment:
         allow : list of str, keyword-only
             Bodies that may cross it.
 
+        Returns
+        -------
+        Environment
+            A new environment with the obstacle last (this one is unchanged).
+
         Raises
         ------
         InvalidInputError
@@ -343,13 +354,58 @@ class Environment:
 
     def sphere(self, center: ArrayLike, radius: float, *, name: str | None = None,
                allow: Iterable[str] = ()) -> Environment:
-        """Add a ball of ``radius`` (m, >= 0) about ``center`` (3,) (m)."""
+        """Add a ball of ``radius`` (m, >= 0) about ``center`` (3,) (m).
+
+        Parameters
+        ----------
+        center : array-like, shape (3,)
+            Centre, base frame, m.
+        radius : float
+            m, >= 0.
+        name : str, keyword-only, optional
+            Default ``"sphere_<k>"``.
+        allow : list of str, keyword-only
+            Bodies that may cross it.
+
+        Returns
+        -------
+        Environment
+            A new environment with the obstacle last (this one is unchanged).
+
+        Raises
+        ------
+        InvalidInputError
+            A non-finite centre, a negative radius, an unknown body in ``allow``, a name used
+            twice.
+        """
         return self._add("sphere", name, allow, center=_vec3(center, "center"),
                          radius=_length(radius, "radius"))
 
     def capsule(self, a: ArrayLike, b: ArrayLike, radius: float, *, name: str | None = None,
                 allow: Iterable[str] = ()) -> Environment:
-        """Add every point within ``radius`` (m, >= 0) of the segment ``a``-``b`` (m)."""
+        """Add every point within ``radius`` (m, >= 0) of the segment ``a``-``b`` (m).
+
+        Parameters
+        ----------
+        a, b : array-like, shape (3,)
+            Ends of the segment, base frame, m.
+        radius : float
+            m, >= 0.
+        name : str, keyword-only, optional
+            Default ``"capsule_<k>"``.
+        allow : list of str, keyword-only
+            Bodies that may cross it.
+
+        Returns
+        -------
+        Environment
+            A new environment with the obstacle last (this one is unchanged).
+
+        Raises
+        ------
+        InvalidInputError
+            A non-finite end, a negative radius, an unknown body in ``allow``, a name used twice.
+        """
         return self._add("capsule", name, allow, a=_vec3(a, "a"), b=_vec3(b, "b"),
                          radius=_length(radius, "radius"))
 
@@ -363,6 +419,21 @@ class Environment:
             Pose of the box frame in the base frame, or only its centre (axes = base axes).
         half_extents : array-like, shape (3,)
             Half sizes along the box axes, m (> 0).
+        name : str, keyword-only, optional
+            Default ``"box_<k>"``.
+        allow : list of str, keyword-only
+            Bodies that may cross it.
+
+        Returns
+        -------
+        Environment
+            A new environment with the obstacle last (this one is unchanged).
+
+        Raises
+        ------
+        InvalidInputError
+            A bad pose, a half size that is not positive, an unknown body in ``allow``, a
+            name used twice.
         """
         T = _pose(T_b_box, "T_b_box")
         h = _vec3(half_extents, "half_extents")
@@ -394,6 +465,13 @@ class Environment:
             :class:`OpenMeshWarning`.
         name : str, keyword-only, optional
             Default the file's stem.
+        allow : list of str, keyword-only
+            Bodies that may cross it.
+
+        Returns
+        -------
+        Environment
+            A new environment with the obstacle last (this one is unchanged).
 
         Raises
         ------
@@ -420,17 +498,48 @@ class Environment:
 
     # --- TOML ---------------------------------------------------------------------------
     def to_toml_table(self) -> dict[str, Any]:
-        """``{"obstacle": [table, ...]}``, the ``[[environment.obstacle]]`` array."""
+        """``{"obstacle": [table, ...]}``, the ``[[environment.obstacle]]`` array.
+
+        Returns
+        -------
+        dict of str -> list of dict
+            One table per obstacle, in order (:meth:`Obstacle.to_toml_table`).
+        """
         return {"obstacle": [o.to_toml_table() for o in self.obstacles]}
 
     def to_toml(self) -> str:
-        """TOML text with ``[[environment.obstacle]]`` tables that :meth:`from_toml` reads."""
+        """TOML text with ``[[environment.obstacle]]`` tables that :meth:`from_toml` reads.
+
+        Returns
+        -------
+        str
+        """
         import tomli_w
 
         return tomli_w.dumps({"environment": self.to_toml_table()})
 
     def write_toml(self, path: str | Path, *, overwrite: bool = False) -> Path:
-        """Write :meth:`to_toml` to ``path`` (refuses to replace a file unless ``overwrite``)."""
+        """Write :meth:`to_toml` to ``path`` (refuses to replace a file unless ``overwrite``).
+
+        Parameters
+        ----------
+        path : str or Path
+            The file to write.
+        overwrite : bool, keyword-only
+            Replace an existing file (default False: refuse).
+
+        Returns
+        -------
+        Path
+            ``path``.
+
+        Raises
+        ------
+        FileExistsError
+            ``path`` exists and ``overwrite`` is False.
+        OSError
+            The file cannot be written (named).
+        """
         p = check_path(path, "path")
         text = self.to_toml()
         with naming_path(p), open(p, "w" if overwrite else "x", encoding="utf-8") as fh:
@@ -444,6 +553,26 @@ class Environment:
 
         Mesh paths that are relative are taken relative to ``base_dir`` (the TOML
         file's folder) when given.
+
+        Parameters
+        ----------
+        data : mapping
+            The table: ``obstacle``, a list of tables with ``kind`` (``halfspace``,
+            ``sphere``, ``capsule``, ``box``, ``mesh``), ``name``, the shape's keys (m,
+            base frame) and ``allow``.
+        base_dir : str or Path, keyword-only, optional
+            Folder of relative mesh paths.
+
+        Returns
+        -------
+        Environment
+
+        Raises
+        ------
+        TypeError
+            ``data`` is not a table.
+        InvalidInputError
+            An unknown key or kind, or a bad obstacle (named by its position).
         """
         if not isinstance(data, Mapping):
             raise TypeError(f"data: expected the environment table, got {type(data).__name__}")
@@ -495,6 +624,15 @@ class Environment:
     @classmethod
     def from_toml(cls, path: str | Path) -> Environment:
         """Read the ``[[environment.obstacle]]`` tables of a TOML file (empty if none).
+
+        Parameters
+        ----------
+        path : str or Path
+            A TOML file; relative mesh paths are taken from its folder.
+
+        Returns
+        -------
+        Environment
 
         Raises
         ------

@@ -103,9 +103,10 @@ def _raises(errors: object, batch: tuple[int, ...]) -> bool:
 
 
 def _prepare(arrays: dict[str, ArrayLike | None], T_b_e: ArrayLike | None, design: object,
-             masses: object, slot: object, errors: object, **vec3: ArrayLike | None
-             ) -> _Prepared:
+             masses: object, slot: object, errors: object, *, backend: str = "auto",
+             **vec3: ArrayLike | None) -> _Prepared:
     check_choice(errors, "errors", ("auto", "raise", "flag"))
+    check_choice(backend, "backend", ("auto", "numpy", "numba"))
     k = check_slot(slot)
     d = resolve_design(design)
     m = _check_masses(masses, d)
@@ -125,7 +126,8 @@ def _prepare(arrays: dict[str, ArrayLike | None], T_b_e: ArrayLike | None, desig
     reason = np.empty(n, dtype=np.int8)
     for sl in _chunks(n):
         sol = forward_kinematics(flat["q"][sl], Tf[sl], d, errors="flag",
-                                 fields=("valid", "reason"))
+                                 fields=("valid", "reason"),
+                                 backend=backend)  # type: ignore[arg-type]
         valid[sl] = np.asarray(sol.valid[..., k]).reshape(-1)
         reason[sl] = np.asarray(sol.reason[..., k]).reshape(-1)
     if _raises(errors, batch) and not valid.all():
@@ -205,7 +207,8 @@ def _gravity_tip(prep: _Prepared) -> tuple[FloatArray, FloatArray]:
 def statics(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None = None, *,
             masses: MassModel | None = None, gravity: ArrayLike = STANDARD_GRAVITY,
             tip_force: ArrayLike | None = None, slot: int = 0,
-            errors: Literal["auto", "raise", "flag"] = "auto", rcm_load: bool = True) -> Statics:
+            errors: Literal["auto", "raise", "flag"] = "auto", rcm_load: bool = True,
+            backend: Literal["auto", "numpy", "numba"] = "auto") -> Statics:
     """Actuator forces holding ATHENA still against gravity and a tip force; RCM load.
 
     Parameters
@@ -232,6 +235,9 @@ def statics(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None 
     rcm_load : bool, keyword-only
         Compute the load on the RCM mount (6 more jet directions); with False,
         ``rcm_force`` and ``rcm_moment`` are NaN.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The backend of the forward kinematics that checks each state's slot
+        (:func:`athenakin.forward_kinematics`); the forces are the same.
 
     Returns
     -------
@@ -240,7 +246,7 @@ def statics(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None 
     if not isinstance(rcm_load, (bool, np.bool_)):
         raise TypeError(f"rcm_load: expected True or False, got {rcm_load!r:.80}")
     prep = _prepare({"q": q}, T_b_e, design, masses, slot, errors, gravity=gravity,
-                    tip_force=tip_force)
+                    tip_force=tip_force, backend=backend)
     g, f = _gravity_tip(prep)
 
     def part(sl: slice) -> tuple[FloatArray, FloatArray]:
@@ -266,12 +272,13 @@ def statics(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None 
 def actuator_forces(q: ArrayLike, T_b_e: ArrayLike | None = None,
                     design: Design | None = None, *, masses: MassModel | None = None,
                     gravity: ArrayLike = STANDARD_GRAVITY, tip_force: ArrayLike | None = None,
-                    slot: int = 0, errors: Literal["auto", "raise", "flag"] = "auto") -> FloatArray:
+                    slot: int = 0, errors: Literal["auto", "raise", "flag"] = "auto",
+                    backend: Literal["auto", "numpy", "numba"] = "auto") -> FloatArray:
     """Actuator forces (N) that hold the robot still: :attr:`statics(...).forces <Statics>`.
 
     Parameters
     ----------
-    q, T_b_e, design, masses, gravity, tip_force, slot, errors : as in :func:`statics`
+    q, T_b_e, design, masses, gravity, tip_force, slot, errors, backend : as in :func:`statics`
 
     Returns
     -------
@@ -286,7 +293,7 @@ def actuator_forces(q: ArrayLike, T_b_e: ArrayLike | None = None,
     (3,)
     """
     return statics(q, T_b_e, design, masses=masses, gravity=gravity, tip_force=tip_force,
-                   slot=slot, errors=errors).forces
+                   slot=slot, errors=errors, backend=backend).forces
 
 
 def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
@@ -309,7 +316,8 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
         As :func:`statics`.
     backend : {"auto", "numpy", "numba"}, keyword-only
         ``"numba"``: the compiled kernel (extra ``fast``; the same formulas per state,
-        equal to the numpy path to rounding); ``"auto"``: numba where it imports.
+        equal to the numpy path to rounding); ``"auto"``: numba where it imports. The
+        forward kinematics that checks each state's slot runs on the same backend.
 
     Returns
     -------
@@ -318,9 +326,9 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
     """
     check_choice(backend, "backend", ("auto", "numpy", "numba"))
     prep = _prepare({"q": q, "qd": qd, "qdd": qdd}, T_b_e, design, masses, slot, errors,
-                    gravity=gravity, tip_force=tip_force)
+                    gravity=gravity, tip_force=tip_force, backend=backend)
     a = prep.arrays
-    kernel = None if backend == "numpy" else _kernel(required=backend == "numba")
+    kernel = _kernel(backend)
     if kernel is not None:
         from ._kinematics import slot_signs
 
@@ -360,12 +368,12 @@ def _compact(x: FloatArray) -> FloatArray:
     return _kernel_array(x)
 
 
-def _kernel(*, required: bool) -> Callable[..., None] | None:
-    """The compiled inverse-dynamics kernel where :mod:`athenakin._backend` says so, else None.
+def _kernel(backend: str) -> Callable[..., None] | None:
+    """The compiled inverse-dynamics kernel where ``backend`` resolves to numba, else None.
 
-    ``required``: ``backend="numba"`` (ImportError where numba is off), else ``"auto"``.
+    ``backend="numba"`` raises ImportError where numba is off (:func:`resolve_backend`).
     """
-    if not resolve_backend("numba" if required else "auto"):
+    if not resolve_backend(backend):
         return None
     from ._kernels import inverse_dynamics_kernel
 
@@ -374,7 +382,8 @@ def _kernel(*, required: bool) -> Callable[..., None] | None:
 
 def mass_matrix(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | None = None,
                 *, masses: MassModel | None = None, slot: int = 0,
-                errors: Literal["auto", "raise", "flag"] = "auto") -> FloatArray:
+                errors: Literal["auto", "raise", "flag"] = "auto",
+                backend: Literal["auto", "numpy", "numba"] = "auto") -> FloatArray:
     """Mass matrix of the closed chain in actuator coordinates, shape (..., 3, 3), kg.
 
     ``E_kin = qd^T M(q) qd / 2``; symmetric, positive definite wherever the moving
@@ -384,14 +393,14 @@ def mass_matrix(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design | N
     ----------
     q : array-like, shape (..., 3)
         Actuators, m.
-    T_b_e, design, masses, slot, errors : as in :func:`statics`
+    T_b_e, design, masses, slot, errors, backend : as in :func:`statics`
 
     Returns
     -------
     ndarray, shape (..., 3, 3)
         kg; rows and columns ``q1, q2, q3``.
     """
-    prep = _prepare({"q": q}, T_b_e, design, masses, slot, errors)
+    prep = _prepare({"q": q}, T_b_e, design, masses, slot, errors, backend=backend)
 
     def part(sl: slice) -> tuple[FloatArray]:
         qf = prep.arrays["q"][sl]
@@ -408,7 +417,8 @@ def forward_dynamics(q: ArrayLike, qd: ArrayLike, forces: ArrayLike,
                      T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                      masses: MassModel | None = None, gravity: ArrayLike = STANDARD_GRAVITY,
                      tip_force: ArrayLike | None = None, slot: int = 0,
-                     errors: Literal["auto", "raise", "flag"] = "auto") -> FloatArray:
+                     errors: Literal["auto", "raise", "flag"] = "auto",
+                     backend: Literal["auto", "numpy", "numba"] = "auto") -> FloatArray:
     """Actuator accelerations (m/s^2) under the actuator ``forces`` (N): ``M^-1 (tau - h)``.
 
     Parameters
@@ -416,7 +426,7 @@ def forward_dynamics(q: ArrayLike, qd: ArrayLike, forces: ArrayLike,
     q, qd : array-like, shape (..., 3)
     forces : array-like, shape (..., 3)
         Actuator forces, N, positive along increasing ``q``.
-    T_b_e, design, masses, gravity, tip_force, slot, errors
+    T_b_e, design, masses, gravity, tip_force, slot, errors, backend
         As :func:`statics`.
 
     Returns
@@ -429,7 +439,7 @@ def forward_dynamics(q: ArrayLike, qd: ArrayLike, forces: ArrayLike,
         The mass matrix is singular (a massless model).
     """
     prep = _prepare({"q": q, "qd": qd}, T_b_e, design, masses, slot, errors,
-                    gravity=gravity, tip_force=tip_force, forces=forces)
+                    gravity=gravity, tip_force=tip_force, forces=forces, backend=backend)
     a = prep.arrays
 
     def part(sl: slice) -> tuple[FloatArray, FloatArray]:
@@ -483,7 +493,8 @@ class MechanicalEnergy:
 def mechanical_energy(q: ArrayLike, qd: ArrayLike, T_b_e: ArrayLike | None = None,
                       design: Design | None = None, *, masses: MassModel | None = None,
                       gravity: ArrayLike = STANDARD_GRAVITY, slot: int = 0,
-                      errors: Literal["auto", "raise", "flag"] = "auto") -> MechanicalEnergy:
+                      errors: Literal["auto", "raise", "flag"] = "auto",
+                      backend: Literal["auto", "numpy", "numba"] = "auto") -> MechanicalEnergy:
     """Kinetic and potential energy of the moving bodies.
 
     Two quantities, so a result object (the package's rule: a function returns one
@@ -494,7 +505,7 @@ def mechanical_energy(q: ArrayLike, qd: ArrayLike, T_b_e: ArrayLike | None = Non
     ----------
     q, qd : array-like, shape (..., 3)
         Actuator positions (m) and velocities (m/s).
-    T_b_e, design, masses, gravity, slot, errors
+    T_b_e, design, masses, gravity, slot, errors, backend
         As :func:`statics`.
 
     Returns
@@ -503,7 +514,7 @@ def mechanical_energy(q: ArrayLike, qd: ArrayLike, T_b_e: ArrayLike | None = Non
         ``kinetic`` and ``potential`` (J, shape (...)), ``total``, ``valid``, ``reason``.
     """
     prep = _prepare({"q": q, "qd": qd}, T_b_e, design, masses, slot, errors,
-                    gravity=gravity)
+                    gravity=gravity, backend=backend)
     a = prep.arrays
 
     def part(sl: slice) -> tuple[FloatArray, FloatArray]:

@@ -168,14 +168,15 @@ def force_capability(q: ArrayLike, T_b_e: ArrayLike | None = None,
                      f_min: ArrayLike | None = None, masses: MassModel | None = None,
                      gravity: ArrayLike = STANDARD_GRAVITY, slot: int = 0,
                      errors: Literal["auto", "raise", "flag"] = "auto",
-                     cond_max: float = COND_MARGIN) -> ForceCapability:
+                     cond_max: float = COND_MARGIN,
+                     backend: Literal["auto", "numpy", "numba"] = "auto") -> ForceCapability:
     """Tip forces the robot can resist at rest within actuator force limits.
 
     Parameters
     ----------
     q : array-like, shape (..., 3)
         Actuators, m.
-    T_b_e, design, masses, gravity, slot, errors
+    T_b_e, design, masses, gravity, slot, errors, backend
         As :func:`athenakin.dynamics.statics`.
     f_max : float or array-like, shape (3,), keyword-only
         Upper actuator force limits, N, one per actuator (the same for every item
@@ -195,7 +196,7 @@ def force_capability(q: ArrayLike, T_b_e: ArrayLike | None = None,
     cond_max = check_cond_max(cond_max)
     lo, hi = _limits(f_max, f_min)
     st = statics(q, T_b_e, design, masses=masses, gravity=gravity, slot=slot, errors=errors,
-                 rcm_load=False)
+                 rcm_load=False, backend=backend)
     batch = st.valid.shape
     n = int(np.prod(batch)) if batch else 1
     corners = np.array([[hi[i] if (c >> i) & 1 else lo[i] for i in range(3)]

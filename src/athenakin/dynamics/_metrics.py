@@ -114,10 +114,11 @@ class ForceMetrics:
 
 def _peak_bound(sel: FloatArray, J: FloatArray, tg: FloatArray,
                 T_b_e: FloatArray, design: Design, m: MassModel, k: int,
-                v: float, a: float) -> FloatArray:
+                v: float, a: float, backend: str = "auto") -> FloatArray:
     """Per configuration and actuator, the force bound of the module docstring, N."""
     Jinv = np.linalg.inv(J)
-    Mq = mass_matrix(sel, T_b_e, design, masses=m, slot=k, errors="flag")
+    Mq = mass_matrix(sel, T_b_e, design, masses=m, slot=k, errors="flag",
+                     backend=backend)  # type: ignore[arg-type]
     MJ = Mq @ Jinv                                      # tau_i per unit tip acceleration
     z = np.zeros_like(sel)
     g0 = np.zeros(3)
@@ -129,7 +130,7 @@ def _peak_bound(sel: FloatArray, J: FloatArray, tg: FloatArray,
         a0 = evaluate(sel, qd, z, Tn, design, m, k).a_tip
         qdd = -np.einsum("nij,nj->ni", Jinv, a0)
         return inverse_dynamics(sel, qd, qdd, T_b_e, design, masses=m, gravity=g0, slot=k,
-                                errors="flag")
+                                errors="flag", backend=backend)  # type: ignore[arg-type]
 
     E = np.eye(3)
     diag = [quad(E[j]) for j in range(3)]
@@ -147,7 +148,8 @@ def _peak_bound(sel: FloatArray, J: FloatArray, tg: FloatArray,
 def force_metrics(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: ArrayLike,
                   masses: MassModel | None = None, tip_speed: float = STUDY_TIP_SPEED,
                   tip_acceleration: float = STUDY_TIP_ACCELERATION,
-                  f_max: float = STUDY_F_MAX, cond_max: float = COND_MARGIN) -> ForceMetrics:
+                  f_max: float = STUDY_F_MAX, cond_max: float = COND_MARGIN,
+                  backend: str = "auto") -> ForceMetrics:
     """Peak actuator force and least tip-force capability over configurations, N.
 
     Parameters
@@ -166,6 +168,9 @@ def force_metrics(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: Array
         Largest condition number of the tip Jacobian of a configuration of the peak
         (default :data:`COND_MARGIN`, that of :class:`athenakin.motion.Margins`), >= 1;
         ``inf`` keeps every invertible one.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The forward kinematics and inverse dynamics on the compiled kernels or the numpy
+        reference (:mod:`athenakin._backend`).
 
     Returns
     -------
@@ -194,7 +199,8 @@ def force_metrics(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: Array
         for sl in _chunks(sel_k.shape[0]):
             sel = sel_k[sl]
             cap = force_capability(sel, T_b_e, design, masses=m, f_max=f_max, slot=int(k),
-                                   errors="flag", cond_max=cond_max)
+                                   errors="flag", cond_max=cond_max,
+                                   backend=backend)  # type: ignore[arg-type]
             ok = cap.valid
             n_valid += int(np.count_nonzero(ok))
             cm = cap.min_force[ok]
@@ -207,7 +213,7 @@ def force_metrics(q: ArrayLike, T_b_e: ArrayLike, design: Design, *, slot: Array
             if not np.any(use):
                 continue
             bound = _peak_bound(sel[use], J[use], cap.gravity_forces[use], T_b_e, design, m,
-                                int(k), v, a)
+                                int(k), v, a, backend)
             finite = np.all(np.isfinite(bound), axis=-1)
             if np.any(finite):
                 peak = max(peak, float(bound[finite].max()))

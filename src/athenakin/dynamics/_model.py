@@ -243,7 +243,13 @@ class MassModel:
     # ---- constructors -------------------------------------------------------------
     @classmethod
     def zeros(cls) -> MassModel:
-        """Every body massless."""
+        """Every body massless.
+
+        Returns
+        -------
+        MassModel
+            Zero mass, centre of mass and inertia for every body of :data:`MASS_BODIES`.
+        """
         return cls(*_massless_tables())
 
     @classmethod
@@ -253,6 +259,16 @@ class MassModel:
         Bodies not named are massless; ``com`` defaults to the origin of the body frame
         and ``inertia`` to zero (a point mass). This is the ``[masses]`` table of a
         design TOML file (:meth:`from_toml`).
+
+        Parameters
+        ----------
+        data : mapping of str -> mapping
+            Per body of :data:`MASS_BODIES`: ``mass`` (kg), ``com`` (3, m, in the body's
+            frame), ``inertia`` (3 x 3, kg m^2, about the centre of mass, body frame).
+
+        Returns
+        -------
+        MassModel
 
         Raises
         ------
@@ -282,6 +298,15 @@ class MassModel:
     @classmethod
     def from_toml(cls, path: str | Path) -> MassModel:
         """Read the ``[masses]`` table of a TOML file (e.g. a design file).
+
+        Parameters
+        ----------
+        path : str or Path
+            A TOML file with a ``[masses]`` table (:meth:`from_mapping`).
+
+        Returns
+        -------
+        MassModel
 
         Raises
         ------
@@ -399,12 +424,42 @@ class MassModel:
 
         All are slender rods (:meth:`slender_rods`) except the two point masses; the
         rail is fixed (massless here). 4.54 kg moving in all.
+
+        Parameters
+        ----------
+        design : Design, optional
+            The lengths of the rods (default :meth:`Design.default`); the masses stay those
+            above.
+
+        Returns
+        -------
+        MassModel
         """
         return cls.slender_rods(REFERENCE_MASSES, design)
 
     # ---- access and export --------------------------------------------------------
     def body(self, name: str) -> tuple[float, FloatArray, FloatArray]:
-        """``(mass, com, inertia)`` of one body."""
+        """``(mass, com, inertia)`` of one body.
+
+        Parameters
+        ----------
+        name : str
+            A body of :data:`MASS_BODIES`.
+
+        Returns
+        -------
+        mass : float
+            kg.
+        com : ndarray, shape (3,)
+            Centre of mass in the body's frame, m (a copy).
+        inertia : ndarray, shape (3, 3)
+            About the centre of mass, body frame, kg m^2 (a copy).
+
+        Raises
+        ------
+        InvalidInputError
+            ``name`` is not a body of :data:`MASS_BODIES`.
+        """
         i = MASS_BODIES.index(_check_name(name, "name"))
         return float(self.mass[i]), self.com[i].copy(), self.inertia[i].copy()
 
@@ -414,7 +469,13 @@ class MassModel:
         return float(sum(self.mass[MASS_BODIES.index(b)] for b in MOVING_BODIES))
 
     def to_mapping(self) -> dict[str, dict[str, Any]]:
-        """``{body: {"mass", "com", "inertia"}}`` for the bodies with a mass (or inertia)."""
+        """``{body: {"mass", "com", "inertia"}}`` for the bodies with a mass (or inertia).
+
+        Returns
+        -------
+        dict of str -> dict
+            As :meth:`from_mapping` takes it (kg, m, kg m^2); massless bodies left out.
+        """
         out: dict[str, dict[str, Any]] = {}
         for i, name in enumerate(MASS_BODIES):
             if self.mass[i] == 0 and not np.any(self.inertia[i]):
@@ -427,6 +488,10 @@ class MassModel:
         """A ``[masses]`` table that :meth:`from_toml` reads back to an equal model.
 
         Append it to a design file: :meth:`Design.from_toml` reads ``[design]`` only.
+
+        Returns
+        -------
+        str
         """
         import tomli_w
 

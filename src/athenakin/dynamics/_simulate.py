@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._typing import FloatArray
-from .._validation import check_array, check_scalar, check_slot
+from .._validation import check_array, check_choice, check_scalar, check_slot
 from ..design import Design, resolve_design
 from ..errors import (
     InvalidInputError,
@@ -99,7 +99,7 @@ def _distances(q: FloatArray, T: FloatArray, design: Design, slot: int) -> dict[
 
 
 def _fast_forward(design: Design, T: FloatArray, masses: MassModel, slot: int, g: FloatArray,
-                  f_tip: FloatArray | None
+                  f_tip: FloatArray | None, backend: str = "auto"
                   ) -> Callable[[FloatArray, FloatArray, FloatArray], FloatArray] | None:
     """``qdd(q, qd, tau)`` from four rows of the compiled inverse dynamics, or None.
 
@@ -109,7 +109,7 @@ def _fast_forward(design: Design, T: FloatArray, masses: MassModel, slot: int, g
     from ._api import _kernel, _kernel_array
     from ._kinematics import slot_signs
 
-    kernel = _kernel(required=False)
+    kernel = _kernel(backend)
     if kernel is None:
         return None
     signs = np.array(slot_signs(slot))
@@ -180,11 +180,11 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
              T_b_e: ArrayLike | None = None, design: Design | None = None, *,
              duration: float, dt: float = 1e-3, masses: MassModel | None = None,
              gravity: ArrayLike = STANDARD_GRAVITY, tip_force: ArrayLike | None = None,
-             slot: int = 0) -> Simulation:
+             slot: int = 0, backend: str = "auto") -> Simulation:
     """Integrate the closed chain's equations of motion with fixed-step RK4.
 
     Each stage solves the forward dynamics (exact to rounding: the compiled inverse
-    dynamics where numba imports, else :func:`forward_dynamics`); the local error of
+    dynamics on the numba backend, else :func:`forward_dynamics`); the local error of
     the scheme is ``O(dt^5)``, so halving ``dt`` divides the global error by about 16.
 
     Parameters
@@ -200,6 +200,9 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
     dt : float, keyword-only
         Step, s (default 1 ms); ``duration / dt`` at most :data:`MAX_STEPS`
         (a finer step for a long motion is refused before any work is done).
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The compiled inverse dynamics or the numpy :func:`forward_dynamics`
+        (:mod:`athenakin._backend`).
 
     Returns
     -------
@@ -217,6 +220,7 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
         :data:`SINGULARITY_MARGINS` of a singular set (``cause``
         SingularConfigurationError); ``partial`` holds the states before.
     """
+    check_choice(backend, "backend", ("auto", "numpy", "numba"))
     d = resolve_design(design)
     k = check_slot(slot)
     m = _check_masses(masses, d)
@@ -229,9 +233,9 @@ def simulate(q0: ArrayLike, qd0: ArrayLike,
     g = _single(gravity, "gravity")
     f_tip = None if tip_force is None else _single(tip_force, "tip_force")
     tau_of = _force_function(forces)
-    fast = _fast_forward(d, T, m, k, g, f_tip)
+    fast = _fast_forward(d, T, m, k, g, f_tip, backend)
     states = _States(n, q, v)
-    acc = _accelerations(d, T, m, k, g, f_tip, tau_of, fast, states.stop)
+    acc = _accelerations(d, T, m, k, g, f_tip, tau_of, fast, states.stop, backend)
     t = 0.0
     for step in range(n):
         a1, tau = acc(t, q, v)
@@ -272,7 +276,8 @@ def _accelerations(d: Design, T: FloatArray, m: MassModel, k: int, g: FloatArray
                    f_tip: FloatArray | None,
                    tau_of: Callable[[float, FloatArray, FloatArray], FloatArray],
                    fast: Callable[[FloatArray, FloatArray, FloatArray], FloatArray] | None,
-                   stop: Callable[[str, type[Exception], float], SimulationStoppedError]
+                   stop: Callable[[str, type[Exception], float], SimulationStoppedError],
+                   backend: str = "auto"
                    ) -> Callable[[float, FloatArray, FloatArray], tuple[FloatArray, FloatArray]]:
     """``acc(t, q, qd) -> (qdd, tau)``, checked at every stage.
 
@@ -297,7 +302,7 @@ def _accelerations(d: Design, T: FloatArray, m: MassModel, k: int, g: FloatArray
             a = fast(qq, vv, tau)
         else:
             a = forward_dynamics(qq, vv, tau, T, d, masses=m, gravity=g, tip_force=f_tip,
-                                 slot=k, errors="flag")
+                                 slot=k, errors="flag", backend=backend)  # type: ignore[arg-type]
         if not np.all(np.isfinite(a)):
             raise stop(f"simulate: slot {k} holds no configuration at t = {t:.6g} s "
                        f"(q = {qq.tolist()} m)", OutOfWorkspaceError, t)

@@ -156,9 +156,21 @@ class ControlLoop:
                           ) -> tuple[FloatArray, int]:
         """Actuators for an instrument direction in E and an insertion ``p`` (m).
 
-        Returns ``(q (3,), reason)`` as :func:`athenakin.q_from_instrument`; a
-        zero or non-finite direction gives ``NONFINITE_INPUT`` here instead of
-        raising.
+        A zero or non-finite direction gives ``NONFINITE_INPUT`` here instead of raising.
+
+        Parameters
+        ----------
+        direction_e : array-like, shape (3,)
+            Instrument direction in the RCM frame E (normalised here).
+        p : float
+            Insertion, m: signed distance from ``O_s`` to the RCM along the instrument.
+
+        Returns
+        -------
+        q : ndarray, shape (3,)
+            Actuators, m (the loop's own buffer, overwritten by the next call).
+        reason : int
+            :class:`~athenakin.errors.Reason` (0: valid), as :func:`athenakin.q_from_instrument`.
         """
         d = _vec3(direction_e, "direction_e")
         r = _one.ik_line_one(self._T, d, _real(p, "p"), self._P, 0, self._q)
@@ -167,8 +179,19 @@ class ControlLoop:
     def q_from_tool_tip(self, tip_e: ArrayLike) -> tuple[FloatArray, int]:
         """Actuators that put the tool tip at ``tip_e`` (frame E, m).
 
-        Returns ``(q (3,), reason)`` as :func:`athenakin.q_from_tool_tip`; a
-        non-finite tip gives ``NONFINITE_INPUT`` here instead of raising.
+        A non-finite tip gives ``NONFINITE_INPUT`` here instead of raising.
+
+        Parameters
+        ----------
+        tip_e : array-like, shape (3,)
+            Tool tip in the RCM frame E, m.
+
+        Returns
+        -------
+        q : ndarray, shape (3,)
+            Actuators, m (the loop's own buffer, overwritten by the next call).
+        reason : int
+            :class:`~athenakin.errors.Reason` (0: valid), as :func:`athenakin.q_from_tool_tip`.
         """
         r = _one.ik_line_one(self._T, _vec3(tip_e, "tip_e"), 0.0, self._P, 1, self._q)
         return self._q, r

@@ -296,7 +296,13 @@ class TrackLog:
     closest_pair: NDArray[np.str_] | None
 
     def events(self) -> list[tuple[int, TrackFlag]]:
-        """``(sample, flags)`` of every flagged sample."""
+        """``(sample, flags)`` of every flagged sample.
+
+        Returns
+        -------
+        list of (int, TrackFlag)
+            Row of the sample in the log (0: the initial configuration) and its flags, in order.
+        """
         return [(int(i), TrackFlag(int(self.flags[i]))) for i in np.flatnonzero(self.flags)]
 
 

@@ -100,7 +100,8 @@ def _check_sample_arguments(samples: object, T_b_e: object, design: object, limi
 
 def check_samples(samples: dict[str, Any], T_b_e: FloatArray,
                   design: Design, limits: Limits, margins: Margins, *,
-                  mode0: int | None = None) -> dict | None:  # type: ignore[type-arg]
+                  mode0: int | None = None,
+                  backend: str = "auto") -> dict | None:  # type: ignore[type-arg]
     """First sample that breaks a limit, or None.
 
     Parameters
@@ -115,6 +116,8 @@ def check_samples(samples: dict[str, Any], T_b_e: FloatArray,
     margins : Margins
     mode0 : int, optional, keyword-only
         Assembly mode the samples must keep (default: that of the first sample).
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The backend of the Jacobians of :func:`singularity_measures`.
 
     Returns
     -------
@@ -129,7 +132,7 @@ def check_samples(samples: dict[str, Any], T_b_e: FloatArray,
     """
     _check_sample_arguments(samples, T_b_e, design, limits, margins, mode0)
     ok = samples["reason"] == 0
-    geometric = _geometric_checks(samples, T_b_e, design, margins, mode0, ok)
+    geometric = _geometric_checks(samples, T_b_e, design, margins, mode0, ok, backend)
     return _first_violation((geometric, _kinematic_checks(samples, limits, ok)),
                             samples["q"].shape[0])
 
@@ -139,8 +142,8 @@ _Check = tuple[str, BoolArray, FloatArray, object]
 
 
 def _geometric_checks(samples: dict[str, Any], T_b_e: FloatArray, design: Design,
-                      margins: Margins, mode0: int | None, ok: BoolArray
-                      ) -> list[_Check]:
+                      margins: Margins, mode0: int | None, ok: BoolArray,
+                      backend: str = "auto") -> list[_Check]:
     """Workspace, stroke, assembly mode and singularity margins; stores the measures."""
     q = samples["q"]
     reason = samples["reason"]
@@ -156,7 +159,7 @@ def _geometric_checks(samples: dict[str, Any], T_b_e: FloatArray, design: Design
     # samples outside the workspace (mode 0, q NaN) are reported by the workspace check;
     # measure them as mode +1 at q = 0 only to keep the arrays whole
     meas = singularity_measures(np.where(np.isfinite(q), q, 0.0), samples["tip_e"], T_b_e,
-                                design, mode=np.where(ok, mode, 1))
+                                design, mode=np.where(ok, mode, 1), backend=backend)
     samples["measures"] = meas
     for name in MEASURE_NAMES:
         m = getattr(margins, name)

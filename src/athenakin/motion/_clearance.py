@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -31,20 +31,36 @@ DEFAULT_CLEARANCE_MARGIN = 0.005
 
 @dataclasses.dataclass(frozen=True)
 class ClearanceCheck:
-    """What to check: the robot's bodies, the obstacles and the margin (m)."""
+    """What to check: the robot's bodies, the obstacles, the margin (m) and the backend."""
 
     bodies: Any
     environment: Any
     margin: float
+    backend: str = "auto"
 
 
 def clearance_check(design: Design, bodies: object, environment: object,
-                    clearance_margin: object) -> ClearanceCheck | None:
+                    clearance_margin: object, *, backend: str = "auto"
+                    ) -> ClearanceCheck | None:
     """The check the caller asks for, or None when it asks for none.
 
     Any of ``bodies``, ``environment`` or ``clearance_margin`` turns the check on;
     missing bodies are :meth:`athenakin.collision.Bodies.default` of ``design``,
     a missing margin is :data:`DEFAULT_CLEARANCE_MARGIN`.
+
+    Parameters
+    ----------
+    design : Design
+    bodies : athenakin.collision.Bodies or None
+    environment : athenakin.collision.Environment or None
+    clearance_margin : float or None
+        m.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The backend of every clearance the check computes.
+
+    Returns
+    -------
+    ClearanceCheck or None
 
     Raises
     ------
@@ -61,7 +77,8 @@ def clearance_check(design: Design, bodies: object, environment: object,
     if opts is None:
         return None
     bodies, environment, margin = opts
-    return ClearanceCheck(bodies=bodies, environment=environment, margin=float(margin))
+    return ClearanceCheck(bodies=bodies, environment=environment, margin=float(margin),
+                          backend=backend)
 
 
 def sample_clearance(check: ClearanceCheck, q: FloatArray, T_b_e: FloatArray,
@@ -95,7 +112,8 @@ def sample_clearance(check: ClearanceCheck, q: FloatArray, T_b_e: FloatArray,
     from ..analysis._collision import labelled_clearance
 
     return labelled_clearance(q, T_b_e, design, np.asarray(mode), np.asarray(p_sign) == -1,
-                              bodies=check.bodies, environment=check.environment, wrist=wrist)
+                              bodies=check.bodies, environment=check.environment, wrist=wrist,
+                              backend=check.backend)
 
 
 class PoseClearance:
@@ -107,12 +125,17 @@ class PoseClearance:
     :data:`athenakin._mechanism.POINT_NAMES` from it with the formulas of
     :func:`athenakin._mechanism.mechanism_points` (the tests check the two agree to
     1e-12 m) and calls the compiled capsule kernel once; with obstacles, the segment
-    stage of :func:`~athenakin.collision.clearance` (``segment_clearance``).
+    stage of :func:`~athenakin.collision.clearance` (``segment_clearance``), on the
+    backend ``backend`` (``"auto" | "numpy" | "numba"``).
     """
 
     def __init__(self, design: Design, T_b_e: FloatArray, bodies: Any,
-                 environment: Any = None) -> None:
+                 environment: Any = None, *, backend: str = "auto") -> None:
+        from .._backend import resolve_backend
         from .._mechanism import BODY_SEGMENTS, POINT_NAMES, rail_extent
+
+        self.compiled = resolve_backend(backend)
+        self.backend: Literal["numba", "numpy"] = "numba" if self.compiled else "numpy"
 
         self.l1, self.l3, self.l2, self.l4, self.l5 = (design.l1, design.l3, design.l2,
                                                        design.l4, design.l5)
@@ -178,18 +201,17 @@ class PoseClearance:
         """Least clearance (m; ``inf`` with no pair) and its pair for one tracked pose."""
         seg = self.points(q, p, u, O_s, d)[self.index]
         if self.environment is not None:
-            from .._backend import resolve_backend
             from ..collision._clearance import segment_clearance
 
             pairs, dd, _ = segment_clearance(seg[None], np.ones(1, dtype=bool), self.bodies,
-                                             self.environment,
-                                             compiled=resolve_backend("auto"), witness=False)
+                                             self.environment, compiled=self.compiled,
+                                             witness=False)
             dist = dd[0]
         else:
             from ..collision._clearance import capsule_distances
 
             pairs = self.pairs
-            dist = capsule_distances(seg[None], self.radii, self.ij)[0]
+            dist = capsule_distances(seg[None], self.radii, self.ij, backend=self.backend)[0]
         if not len(pairs):
             return math.inf, ("", "")
         k = int(np.argmin(dist))

@@ -51,8 +51,8 @@ def _slot(traj: object) -> int:
     return 0 if int(mode[0]) == 1 else 8
 
 
-def trajectory_forces(traj: object, masses: object, *, gravity: ArrayLike = (0.0, 0.0, -9.81)
-                      ) -> tuple[FloatArray, FloatArray]:
+def trajectory_forces(traj: object, masses: object, *, gravity: ArrayLike = (0.0, 0.0, -9.81),
+                      backend: str = "auto") -> tuple[FloatArray, FloatArray]:
     """Actuator forces along a trajectory and their static part (N), each (N, 3).
 
     The configuration is the FK slot of the trajectory's assembly mode with ``p > 0``
@@ -66,9 +66,9 @@ def trajectory_forces(traj: object, masses: object, *, gravity: ArrayLike = (0.0
     # errors="raise": a sample off the slot is an error of the plan, never a NaN force
     # that no limit would catch
     tau = inverse_dynamics(t.q, t.qd, t.qdd, t.T_b_e, t.design, masses=m, gravity=gravity,
-                           slot=slot, errors="raise")
+                           slot=slot, errors="raise", backend=backend)  # type: ignore[arg-type]
     tau_g = actuator_forces(t.q, t.T_b_e, t.design, masses=m, gravity=gravity, slot=slot,
-                            errors="raise")
+                            errors="raise", backend=backend)  # type: ignore[arg-type]
     return tau, tau_g
 
 
@@ -94,7 +94,7 @@ def _first_violation(traj: object, tau: FloatArray, f_max: FloatArray,
 
 
 def force_limited(traj: object, replan: Callable[[float], object], *, masses: object,
-                  f_max: ArrayLike | None, fixed_times: bool) -> object:
+                  f_max: ArrayLike | None, fixed_times: bool, backend: str = "auto") -> object:
     """Attach the actuator forces to a trajectory; slow it down until they are within limits.
 
     Parameters
@@ -108,6 +108,8 @@ def force_limited(traj: object, replan: Callable[[float], object], *, masses: ob
         Actuator force limits, N (symmetric); None: only attach the forces.
     fixed_times : bool
         The waypoint times are fixed (no time scaling allowed).
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The backend of the dynamics.
 
     Returns
     -------
@@ -120,7 +122,7 @@ def force_limited(traj: object, replan: Callable[[float], object], *, masses: ob
         The weight alone exceeds ``f_max`` somewhere, the times are fixed, or
         :data:`MAX_FORCE_REPLANS` replans did not suffice.
     """
-    tau, tau_g = trajectory_forces(traj, masses)
+    tau, tau_g = trajectory_forces(traj, masses, backend=backend)
     if f_max is None:
         return dataclasses.replace(traj, forces=tau)  # type: ignore[type-var]
     fm = _check_f_max(f_max)
@@ -135,7 +137,7 @@ def force_limited(traj: object, replan: Callable[[float], object], *, masses: ob
     k = float(np.sqrt(max(1.0, float(np.max(need))))) * (1 + 1e-9)
     for _ in range(MAX_FORCE_REPLANS):
         t2 = replan(k)
-        tau, _tg = trajectory_forces(t2, masses)
+        tau, _tg = trajectory_forces(t2, masses, backend=backend)
         if np.all(np.abs(tau) <= fm):
             return dataclasses.replace(t2, forces=tau)  # type: ignore[type-var]
         k *= 1.02
@@ -144,7 +146,7 @@ def force_limited(traj: object, replan: Callable[[float], object], *, masses: ob
 
 def planned(run: Callable[..., object], *, v_max: ArrayLike, a_max: ArrayLike,
             j_max: ArrayLike | None, tip_speed: float | None, masses: object,
-            f_max: ArrayLike | None, fixed_times: bool) -> object:
+            f_max: ArrayLike | None, fixed_times: bool, backend: str = "auto") -> object:
     """``run(v_max=, a_max=, j_max=, tip_speed=)``, with forces when ``masses`` is given.
 
     The glue of :func:`athenakin.motion.plan` (``masses=``, ``f_max=``): plans once with
@@ -168,4 +170,5 @@ def planned(run: Callable[..., object], *, v_max: ArrayLike, a_max: ArrayLike,
                    j_max=None if j_max is None else np.asarray(j_max, float) / k ** 3,
                    tip_speed=None if tip_speed is None else tip_speed / k)
 
-    return force_limited(traj, scaled, masses=masses, f_max=f_max, fixed_times=fixed_times)
+    return force_limited(traj, scaled, masses=masses, f_max=f_max, fixed_times=fixed_times,
+                         backend=backend)

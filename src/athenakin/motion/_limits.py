@@ -43,7 +43,26 @@ class Limits:
     @classmethod
     def build(cls, v_max: ArrayLike, a_max: ArrayLike, j_max: ArrayLike | None,
               tip_speed: float | None) -> Limits:
-        """Validate scalars or (3,) arrays of positive limits."""
+        """Validate scalars or (3,) arrays of positive limits.
+
+        Parameters
+        ----------
+        v_max, a_max : float or array-like, shape (3,)
+            Actuator velocity (m/s) and acceleration (m/s^2) limits, one for all or per actuator.
+        j_max : float or array-like, shape (3,), or None
+            Jerk limits, m/s^3 (None: none).
+        tip_speed : float or None
+            Tool-tip speed limit, m/s (None: none).
+
+        Returns
+        -------
+        Limits
+
+        Raises
+        ------
+        ValueError
+            A limit that is not positive, or not one number or three (named).
+        """
         def vec(x: ArrayLike, name: str) -> FloatArray:
             a = check_array(x, name, ())
             if a.ndim not in (0, 1) or (a.ndim == 1 and a.shape != (3,)):

@@ -74,6 +74,9 @@ class PlanOptions(TomlOptions):
     f_max : float or tuple of 3 float or None
         Actuator force limits, N (needs ``masses``): the trajectory is slowed down
         uniformly until ``|forces| <= f_max`` (:mod:`athenakin.motion._forces`).
+    backend : {"auto", "numpy", "numba"}
+        The Jacobians, the clearance check and the forces on the compiled kernels or the
+        numpy reference (:mod:`athenakin._backend`; default ``"auto"``).
 
     Examples
     --------
@@ -96,6 +99,7 @@ class PlanOptions(TomlOptions):
     max_samples: int = MAX_SAMPLES
     clearance_margin: float | None = None
     f_max: LimitValue | None = None
+    backend: str = "auto"
 
     def __post_init__(self) -> None:
         put = object.__setattr__
@@ -107,6 +111,7 @@ class PlanOptions(TomlOptions):
             put(self, name, _as_given(getattr(self, name), getattr(lim, name)))
         put(self, "tip_speed", lim.tip_speed)
         check_choice(self.timing, "timing", ("stretch", "fixed"))
+        check_choice(self.backend, "backend", ("auto", "numpy", "numba"))
         if not isinstance(self.margins, Margins):
             raise TypeError(f"margins: expected athenakin.motion.Margins, got "
                             f"{type(self.margins).__name__}")
@@ -118,14 +123,35 @@ class PlanOptions(TomlOptions):
             put(self, "f_max", _as_given(self.f_max, _check_f_max(self.f_max)))
 
     def to_mapping(self) -> dict[str, Any]:
-        """A TOML table; the margins as a ``margins`` sub-table."""
+        """A TOML table; the margins as a ``margins`` sub-table.
+
+        Returns
+        -------
+        dict of str -> TOML value
+            The fields that are not None; ``margins`` as a table of :class:`Margins`' fields.
+        """
         out = super().to_mapping()
         out["margins"] = dataclasses.asdict(self.margins)
         return out
 
     @classmethod
     def from_mapping(cls, data: Mapping[str, Any]) -> PlanOptions:
-        """Read a ``plan`` table (:meth:`to_mapping`); unknown keys are refused by name."""
+        """Read a ``plan`` table (:meth:`to_mapping`); unknown keys are refused by name.
+
+        Parameters
+        ----------
+        data : mapping
+            Field names to values; ``margins`` a table of :class:`Margins`' fields.
+
+        Returns
+        -------
+        PlanOptions
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown key (of the table or of ``margins``) or a bad value (named).
+        """
         if isinstance(data, Mapping) and isinstance(data.get("margins"), Mapping):
             table = data["margins"]
             names = [f.name for f in dataclasses.fields(Margins)]

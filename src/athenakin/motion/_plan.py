@@ -307,22 +307,23 @@ def _planned(segs: list[Segment], tips: FloatArray, T_b_e: ArrayLike, design: De
         return _plan(segs, tips, T_b_e, design, rate=o.rate, times=times, timing=o.timing,
                      margins=o.margins, max_duration=o.max_duration,
                      max_samples=o.max_samples, bodies=bodies, environment=environment,
-                     clearance_margin=o.clearance_margin, **limits)  # type: ignore[arg-type]
+                     clearance_margin=o.clearance_margin, backend=o.backend,
+                     **limits)  # type: ignore[arg-type]
 
     return planned(run, v_max=o.v_max, a_max=o.a_max, j_max=o.j_max,  # type: ignore[return-value]
                    tip_speed=o.tip_speed, masses=masses, f_max=o.f_max,
-                   fixed_times=o.timing == "fixed")
+                   fixed_times=o.timing == "fixed", backend=o.backend)
 
 
 def _plan(segs: list[Segment], tips: FloatArray, T_b_e: ArrayLike, design: Design, *,
           rate: float, v_max: ArrayLike, a_max: ArrayLike, j_max: ArrayLike | None,
           tip_speed: float | None, times: ArrayLike | None, timing: Timing, margins: Margins,
           max_duration: float, max_samples: int, bodies: object, environment: object,
-          clearance_margin: float | None) -> Trajectory:
+          clearance_margin: float | None, backend: str = "auto") -> Trajectory:
     """Plan the segments with checked settings (those of a :class:`PlanOptions`)."""
     T = check_frame(T_b_e, "T_b_e")
     limits = Limits.build(v_max, a_max, j_max, tip_speed)
-    check = clearance_check(design, bodies, environment, clearance_margin)
+    check = clearance_check(design, bodies, environment, clearance_margin, backend=backend)
     K = tips.shape[0]
     if K > MAX_WAYPOINTS:
         raise ValueError(f"waypoints: expected at most {MAX_WAYPOINTS}, got {K} (plan the path "
@@ -346,7 +347,8 @@ def _plan(segs: list[Segment], tips: FloatArray, T_b_e: ArrayLike, design: Desig
         durations = [sp.profile.duration for sp in plans]  # type: ignore[union-attr]
         longest = int(np.argmax(durations))
         _check_budget(float(np.sum(durations)), rate, max_duration, max_samples, longest)
-        samples, bad = _sample_checked(plans, T, design, rate, t0, limits, margins, check)
+        samples, bad = _sample_checked(plans, T, design, rate, t0, limits, margins, check,
+                                       backend=backend)
         if bad is not None and bad["limit"] == "clearance":
             raise _collision(bad, samples, check)  # type: ignore[arg-type]
         if bad is None:
@@ -386,7 +388,7 @@ def _requested(times: ArrayLike | None, K: int, timing: str, rate: float, max_du
 
 def _sample_checked(plans: list[_SegmentPlan], T: FloatArray, design: Design,
                     rate: float, t0: float, limits: Limits, margins: Margins,
-                    check: ClearanceCheck | None = None
+                    check: ClearanceCheck | None = None, *, backend: str = "auto"
                     ) -> tuple[dict[str, Any], dict | None]:  # type: ignore[type-arg]
     """Sample and check in chunks of :data:`CHECK_CHUNK`; stop at the first violation.
 
@@ -409,7 +411,7 @@ def _sample_checked(plans: list[_SegmentPlan], T: FloatArray, design: Design,
         if mode0 is None:
             ok = np.flatnonzero(c["reason"] == 0)
             mode0 = int(c["mode"][ok[0]]) if ok.size else 1
-        bad = check_samples(c, T, design, limits, margins, mode0=mode0)
+        bad = check_samples(c, T, design, limits, margins, mode0=mode0, backend=backend)
         if check is not None:
             bad = _check_clearance(c, bad, check, T, design)
         chunks.append(c)

@@ -94,7 +94,18 @@ class Margins:
             raise ValueError(f"Margins.cond: a condition number is >= 1, got {self.cond}")
 
     def is_upper(self, name: str) -> bool:
-        """True when the margin of ``name`` is an upper bound (only ``cond``)."""
+        """True when the margin of ``name`` is an upper bound (only ``cond``).
+
+        Parameters
+        ----------
+        name : str
+            A measure of :data:`MEASURE_NAMES`.
+
+        Returns
+        -------
+        bool
+            True for ``cond`` (safe below its margin), False for the distances (safe above).
+        """
         return name == "cond"
 
 
@@ -125,6 +136,15 @@ class SingularityMeasures:
         """Each measure over its margin (``margin / cond`` for ``cond``): >= 1 is safe.
 
         Measures whose margin is switched off are left out.
+
+        Parameters
+        ----------
+        margins : Margins
+
+        Returns
+        -------
+        dict of str -> ndarray, shape (...)
+            Per measure of :data:`MEASURE_NAMES` whose margin is on: the dimensionless ratio.
         """
         out = {}
         for name in MEASURE_NAMES:
@@ -140,7 +160,8 @@ class SingularityMeasures:
 
 def singularity_measures(q: FloatArray, tip_e: FloatArray,
                          T_b_e: FloatArray, design: Design, *,
-                         mode: IntArray | int = 1) -> SingularityMeasures:
+                         mode: IntArray | int = 1,
+                         backend: str = "auto") -> SingularityMeasures:
     """Distances to the singularities for actuator values and the tool tip they hold.
 
     The values come from :func:`athenakin.analysis.singularities` (closed-form
@@ -161,6 +182,8 @@ def singularity_measures(q: FloatArray, tip_e: FloatArray,
     design : Design
     mode : int or ndarray of int, shape (...)
         Assembly mode of each sample (+1 / -1).
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The backend of :func:`athenakin.analysis.tool_tip_jacobian`.
 
     Returns
     -------
@@ -186,7 +209,8 @@ def singularity_measures(q: FloatArray, tip_e: FloatArray,
     with np.errstate(invalid="ignore", divide="ignore"):
         rep = singularities(q, T_b_e, free, mode=mode, jacobians=False)
         c = rep.conditions
-        cond = condition_number(tool_tip_jacobian(q, T_b_e, free, mode=mode))
+        cond = condition_number(tool_tip_jacobian(q, T_b_e, free, mode=mode,
+                                                  backend=backend))  # type: ignore[arg-type]
     return SingularityMeasures(
         half_chord=rep.measures["half_chord"], h=c["ab_coincide"].value,
         link=np.minimum(c["d_on_rail"].value, c["k1_degenerate"].value),

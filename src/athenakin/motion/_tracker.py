@@ -149,6 +149,10 @@ class Tracker:
     clearance_margin : float, optional, keyword-only
         Clearance (m) below which a sample is ``NEAR_COLLISION`` (turns the check on);
         default 5 mm when the check is on.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The compiled stream of :func:`track_batch` and the clearance check on the numba
+        kernels or the numpy reference (:mod:`athenakin._backend`); the same poses and
+        flags.
 
     Raises
     ------
@@ -172,7 +176,10 @@ class Tracker:
                  slot: int | None = None, jump_m: float = JUMP_M, jump_rad: float = JUMP_RAD,
                  margins: Margins | None = None,
                  raise_on: TrackFlag = TrackFlag.NONE, bodies: object = None,
-                 environment: object = None, clearance_margin: float | None = None) -> None:
+                 environment: object = None, clearance_margin: float | None = None,
+                 backend: str = "auto") -> None:
+        from .._backend import resolve_backend
+
         design = resolve_design(design)
         T = check_frame(T_b_e, "T_b_e")
         margins = Margins() if margins is None else margins
@@ -187,9 +194,11 @@ class Tracker:
         self.raise_on = _track_flag(raise_on, "raise_on")
         self._raise_bits = int(self.raise_on)
         self._g = _Geometry(T, design)
-        self._check = clearance_check(design, bodies, environment, clearance_margin)
+        self.backend = "numba" if resolve_backend(backend) else "numpy"
+        self._check = clearance_check(design, bodies, environment, clearance_margin,
+                                      backend=self.backend)
         self._pose_clearance = (None if self._check is None else PoseClearance(
-            design, T, self._check.bodies, self._check.environment))
+            design, T, self._check.bodies, self._check.environment, backend=self.backend))
         # fast-path thresholds: a candidate far from every singularity, and far enough
         # from the mode boundary that the other mode cannot be within the jump threshold
         self._watch = (max(margins.half_chord, self.jump_m), margins.h, margins.link,
@@ -470,7 +479,8 @@ def track(q_stream: ArrayLike, T_b_e: ArrayLike, design: Design | None = None,
     design : Design, optional
     **options
         Keyword options of :class:`Tracker` (``slot``, ``jump_m``, ``jump_rad``,
-        ``margins``, ``raise_on``, ``bodies``, ``environment``, ``clearance_margin``).
+        ``margins``, ``raise_on``, ``bodies``, ``environment``, ``clearance_margin``,
+        ``backend``).
 
     Returns
     -------
@@ -503,7 +513,7 @@ def _track_checked(qs: FloatArray, T_b_e: ArrayLike, design: Design | None,
     raise_bits = int(_track_flag(options.pop("raise_on", TrackFlag.NONE), "raise_on"))
     tr = Tracker(T_b_e, design, q0=qs[0], **options)  # type: ignore[arg-type]
     check = clearance_check(tr.design, coll.get("bodies"), coll.get("environment"),
-                            coll.get("clearance_margin"))
+                            coll.get("clearance_margin"), backend=tr.backend)
     assert check is not None
     cols = _join(_pose_columns([tr.pose]), track_batch(tr, qs[1:]))
     idx = np.flatnonzero(cols["valid"])
@@ -538,8 +548,9 @@ def track_batch(tr: Tracker, q: FloatArray) -> dict[str, Any]:
     """:meth:`Tracker.update` of every reading of ``q`` (n, 3), as columns; advances ``tr``.
 
     The compiled loop of :mod:`athenakin.motion._kernels` (the poses and steps of
-    :meth:`Tracker.update` to 1e-12, the same flags, tested) where numba runs, else
-    :meth:`Tracker.update` itself. The collision check of a tracker that has one is
+    :meth:`Tracker.update` to 1e-12, the same flags, tested) where the tracker's
+    backend (:attr:`Tracker.backend`) is numba, else :meth:`Tracker.update` itself.
+    The collision check of a tracker that has one is
     :meth:`Tracker.update`'s too (the same scalar placement and kernel per valid
     reading). ``raise_on`` raises :class:`TrackingError` at the first reading that
     carries one of its bits, with the message and the pose of :meth:`Tracker.update`
@@ -550,11 +561,9 @@ def track_batch(tr: Tracker, q: FloatArray) -> dict[str, Any]:
     dict of str -> ndarray
         The fields of :class:`TrackLog` and ``sample``, one row per reading.
     """
-    from .._backend import numba_available
-
     q = np.ascontiguousarray(q, dtype=float).reshape(-1, 3)
     n = len(q)
-    if not numba_available():
+    if tr.backend != "numba":
         poses = [tr.update(row) for row in q.tolist()]
         return _pose_columns(poses) if poses else _empty_columns()
     from ._kernels import NCAND, track_stream

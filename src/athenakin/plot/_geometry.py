@@ -137,6 +137,11 @@ class RobotGeometry:
         by ``(0, l2, 0)`` then ``(0, 0, l5)``), ``actuator_q3`` (C to ``O_i``,
         length ``q3``), ``offset_l4`` (``O_i`` to ``O_s``) and ``instrument``
         (``O_s`` to the tool tip).
+
+        Returns
+        -------
+        dict of str -> (ndarray, ndarray)
+            Start and end, each shape (3,), base frame, m.
         """
         P = self.points
         return {
@@ -151,6 +156,11 @@ class RobotGeometry:
         """Axis-aligned box ``(lo, hi)`` (each shape (3,)) around every drawn part.
 
         The full circle ``k2`` is left out (views draw :attr:`k2_arc`).
+
+        Returns
+        -------
+        lo, hi : ndarray, shape (3,)
+            Base frame, m.
         """
         pts = np.concatenate([np.stack(list(self.points.values())), self.k1, self.k2_arc,
                               self.rail])

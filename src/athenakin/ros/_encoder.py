@@ -103,9 +103,15 @@ class RosEncoder:
     T_b_e : ndarray, shape (4, 4)
         The RCM frame in the base frame (m).
     design : Design
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The frames and quaternions on the compiled kernels or the numpy reference.
     """
 
-    def __init__(self, T_b_e: ArrayLike, design: Design) -> None:
+    def __init__(self, T_b_e: ArrayLike, design: Design, *, backend: str = "auto") -> None:
+        from .._backend import resolve_backend
+
+        #: ``"numba"`` or ``"numpy"``: the caller's backend, resolved once.
+        self.backend = "numba" if resolve_backend(backend) else "numpy"
         self.model: UrdfModel = urdf_model(design, np.asarray(T_b_e, dtype=float))
         self.tf_pairs = tuple((BASE_FRAME, c) for c in TF_FRAMES)
         self.templates = {"tool_tip": _pose_template(), "tf": _tf_template(self.tf_pairs),
@@ -113,7 +119,8 @@ class RosEncoder:
                           "status": _status_template()}
         rcm = self.model.T_b_e[None]
         #: ``/tf``'s ``rcm`` frame: translation and quaternion of ``T_b_e`` (fixed).
-        self.rcm_frame = np.concatenate([rcm[0, :3, 3], quaternion_xyzw(rcm[:, :3, :3])[0]])
+        self.rcm_frame = np.concatenate([rcm[0, :3, 3], quaternion_xyzw(rcm[:, :3, :3],
+                                                                          backend=self.backend)[0]])
         self._kernel_plan: tuple[Any, ...] | None = None
 
     @property
@@ -135,7 +142,7 @@ class RosEncoder:
         vals: dict[str, Any] = {}
         _stamp_fields(vals, np.array([int(stamp_ns)]), [f"stamp{k}" for k in range(len(pairs))])
         for k, j in enumerate(fixed):
-            _put_pose(vals, j.origin[None], f"t{k}", f"r{k}")
+            _put_pose(vals, j.origin[None], f"t{k}", f"r{k}", backend=self.backend)
         return _tf_template(pairs).encode(1, vals).tobytes()
 
     def pose_values(self, stamps_ns: IntArray, q: FloatArray,
@@ -163,7 +170,7 @@ class RosEncoder:
         """
         if out is None:
             out = np.empty((len(next(iter(jv.values()))), len(TF_FRAMES), 7))
-        link_frames(self.model, jv, TF_FRAMES[:-1], out=out[:, :-1])
+        link_frames(self.model, jv, TF_FRAMES[:-1], out=out[:, :-1], backend=self.backend)
         out[:, -1] = self.rcm_frame
         return out
 

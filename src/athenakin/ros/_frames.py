@@ -227,12 +227,12 @@ def link_poses(model: UrdfModel, values: dict[str, FloatArray],
 
 
 def link_frames(model: UrdfModel, values: dict[str, FloatArray],
-                links: tuple[str, ...], *, out: FloatArray | None = None
-                ) -> FloatArray:
+                links: tuple[str, ...], *, out: FloatArray | None = None,
+                backend: str = "auto") -> FloatArray:
     """Translation and quaternion of links, per reading: what ``/tf`` carries.
 
     :func:`link_poses` then :func:`quaternion_xyzw` of each link, compiled in one pass
-    where numba runs (equal to rounding, tested), else exactly those two.
+    on the numba backend (equal to rounding, tested), else exactly those two.
 
     Parameters
     ----------
@@ -243,22 +243,24 @@ def link_frames(model: UrdfModel, values: dict[str, FloatArray],
         The links wanted.
     out : ndarray, shape (N, len(links), 7), keyword-only, optional
         Where to write (may be a strided view).
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The compiled pass or the numpy reference (:mod:`athenakin._backend`).
 
     Returns
     -------
     ndarray, shape (N, len(links), 7)
         ``tx, ty, tz`` (m, base frame) and ``qx, qy, qz, qw`` (``w >= 0``) of each link.
     """
-    from .._backend import numba_available
+    from .._backend import resolve_backend
 
     n = len(next(iter(values.values())))
     if out is None:
         out = np.empty((n, len(links), 7))
-    if not numba_available():
+    if not resolve_backend(backend):
         poses = link_poses(model, values, links=links)
         for k, name in enumerate(links):
             out[:, k, :3] = poses[name][:, :3, 3]
-            out[:, k, 3:] = quaternion_xyzw(poses[name][:, :3, :3])
+            out[:, k, 3:] = quaternion_xyzw(poses[name][:, :3, :3], backend="numpy")
         return out
     from ..fast._frame_kernels import urdf_frames_into
 
@@ -314,16 +316,28 @@ def _frames_plan(model: UrdfModel, links: tuple[str, ...]) -> tuple[Any, ...]:
             np.array([index[name] for name in links], np.int64))
 
 
-def quaternion_xyzw(R: FloatArray) -> FloatArray:
+def quaternion_xyzw(R: FloatArray, *, backend: str = "auto") -> FloatArray:
     """Unit quaternions ``(x, y, z, w)`` (ROS order, ``w >= 0``) of rotations (N, 3, 3).
 
     Shepperd's method: the largest of the four squared components picks the formula,
-    so no division by a small number. Compiled where numba runs (the same numbers, bit
-    for bit: :mod:`athenakin.fast._frame_kernels`).
-    """
-    from .._backend import numba_available
+    so no division by a small number. Compiled on the numba backend (the same numbers,
+    bit for bit: :mod:`athenakin.fast._frame_kernels`).
 
-    if numba_available() and R.ndim == 3 and len(R):
+    Parameters
+    ----------
+    R : ndarray, shape (N, 3, 3)
+        Rotation matrices.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The compiled kernel or the numpy reference (:mod:`athenakin._backend`).
+
+    Returns
+    -------
+    ndarray, shape (N, 4)
+        ``(x, y, z, w)``, ``w >= 0``.
+    """
+    from .._backend import resolve_backend
+
+    if resolve_backend(backend) and R.ndim == 3 and len(R):
         from ..fast._frame_kernels import quaternion_xyzw_into
 
         res = np.empty((len(R), 4))

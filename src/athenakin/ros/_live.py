@@ -63,6 +63,9 @@ class FoxgloveStream:
         HTTP 400. A port in use raises :class:`ServeError` (an ``OSError``) naming the address.
     name : str, keyword-only
         Server name shown by Foxglove.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The frames and quaternions on the compiled kernels or the numpy reference
+        (:mod:`athenakin._backend`).
 
     Examples
     --------
@@ -76,7 +79,9 @@ class FoxgloveStream:
 
     def __init__(self, T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                  host: str = "127.0.0.1", port: int = DEFAULT_PORT,
-                 name: str = "athenakin") -> None:
+                 name: str = "athenakin", backend: str = "auto") -> None:
+        from .._backend import resolve_backend
+
         try:
             import foxglove
             import websockets.asyncio.server  # noqa: F401
@@ -96,7 +101,8 @@ class FoxgloveStream:
                                     ) from None
         self.design = resolve_design(design)
         self.T_b_e = resolve_rcm_frame(T_b_e, self.design)
-        self.encoder = RosEncoder(self.T_b_e, self.design)
+        self.backend = "numba" if resolve_backend(backend) else "numpy"
+        self.encoder = RosEncoder(self.T_b_e, self.design, backend=self.backend)
         self._lock = threading.RLock()
         self._context = foxglove.Context()
         self._channels: dict[str, Any] = {}
@@ -228,10 +234,18 @@ class FoxgloveStream:
                 self._channels[key].log(msgs[key][0].tobytes(), log_time=stamp)
 
     def set_setup(self, design: Design | None, T_b_e: ArrayLike | None) -> None:
-        """Change the design and RCM frame; the URDF and fixed frames are sent again."""
+        """Change the design and RCM frame; the URDF and fixed frames are sent again.
+
+        Parameters
+        ----------
+        design : Design or None
+            Default :meth:`Design.default`.
+        T_b_e : array-like, shape (4, 4), or None
+            RCM frame in the base frame, m (default :func:`athenakin.default_rcm_frame`).
+        """
         design = resolve_design(design)
         T = resolve_rcm_frame(T_b_e, design)
-        encoder = RosEncoder(T, design)
+        encoder = RosEncoder(T, design, backend=self.backend)
         with self._lock:
             self.design, self.T_b_e, self.encoder = design, T, encoder
             self._last = None

@@ -123,8 +123,12 @@ class _McapStream:
     library's reader costs about 20 us per message in Python (a record object each).
     """
 
-    def __init__(self, fh: Any, size: int, summary: Any = None, topic: str | None = None
-                 ) -> None:
+    def __init__(self, fh: Any, size: int, summary: Any = None, topic: str | None = None,
+                 *, backend: str = "auto") -> None:
+        from .._backend import resolve_backend
+
+        #: The chunks decoded at once by the compiled scan (the caller's backend).
+        self.compiled = resolve_backend(backend)
         self.fh = fh
         self.size = size
         self.summary = summary
@@ -218,7 +222,7 @@ class _McapStream:
                     f"{self.fh.name}: corrupt MCAP file: the chunk at byte {at} fails its "
                     f"CRC check (stored {chunk.uncompressed_crc:#010x}, computed "
                     f"{crc:#010x})")
-        bulk = _scan(raw)
+        bulk = _scan(raw) if self.compiled else None
         if bulk is not None:
             for item in bulk:
                 if len(item) == 2:                 # (-opcode, body): a definition
@@ -308,12 +312,11 @@ def _scan(raw: bytes) -> list[Any] | None:
 
     Items in record order: ``(channel ids, log times, data, offsets, sizes)`` of the
     Messages between two definitions, ``(-opcode, body)`` for a Schema or Channel
-    record. None (the record-by-record path) without numba, or when
-    :func:`athenakin.ros._kernels.scan_records` finds anything unusual.
+    record. None (the record-by-record path) when
+    :func:`athenakin.ros._kernels.scan_records` finds anything unusual. The compiled
+    scan: the caller has resolved its backend to numba (:class:`_McapStream`).
     """
-    from .._backend import numba_available
-
-    if not numba_available() or not raw:
+    if not raw:
         return None
     from ._kernels import scan_records
 

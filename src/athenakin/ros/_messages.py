@@ -133,9 +133,10 @@ def _put_frame(values: dict[str, Any], f: FloatArray, tname: str, rname: str
         values[f"{rname}.{c}"] = f[:, 3 + i]
 
 
-def _put_pose(values: dict[str, Any], T: FloatArray, tname: str, rname: str) -> None:
+def _put_pose(values: dict[str, Any], T: FloatArray, tname: str, rname: str, *,
+              backend: str = "auto") -> None:
     for i, c in enumerate("xyz"):
         values[f"{tname}.{c}"] = T[:, i, 3]
-    quat = quaternion_xyzw(T[:, :3, :3])
+    quat = quaternion_xyzw(T[:, :3, :3], backend=backend)
     for i, c in enumerate("xyzw"):
         values[f"{rname}.{c}"] = quat[:, i]

@@ -141,7 +141,8 @@ def _check_options(topic: object, joints: object, scale: object) -> tuple[str, t
 
 def iter_joint_states(path: str | Path, *, topic: str = "/joint_states",
                       joints: tuple[str, str, str] | list[str] = ("q1", "q2", "q3"),
-                      scale: float = 1.0, chunk_size: int = CHUNK) -> Iterator[JointStates]:
+                      scale: float = 1.0, chunk_size: int = CHUNK,
+                      backend: str = "auto") -> Iterator[JointStates]:
     """Read the actuator readings of a recording in chunks (bounded memory).
 
     Every chunk but the last holds ``chunk_size`` readings; an empty topic yields
@@ -154,6 +155,8 @@ def iter_joint_states(path: str | Path, *, topic: str = "/joint_states",
     path, topic, joints, scale : as in :func:`read_joint_states`
     chunk_size : int, keyword-only
         Readings per chunk, 1 to 10 000 000.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        MCAP chunks decoded by the compiled scan or record by record (the same readings).
 
     Yields
     ------
@@ -164,11 +167,14 @@ def iter_joint_states(path: str | Path, *, topic: str = "/joint_states",
             or not 1 <= chunk_size <= MAX_CHUNK:
         raise InvalidInputError(f"chunk_size: expected an integer from 1 to {MAX_CHUNK}, got "
                                 f"{chunk_size!r}")
+    from .._backend import resolve_backend
+
+    chosen = "numba" if resolve_backend(backend) else "numpy"
     p = check_path(path)
     kind = recording_format(p)
     # the arguments and the file's format are checked here, at the call; the messages as
     # the chunks are read
-    return _iterate(p, kind, _source(p, kind), topic, names, s, int(chunk_size))
+    return _iterate(p, kind, _source(p, kind), topic, names, s, int(chunk_size), chosen)
 
 
 class _Chunks:
@@ -328,11 +334,11 @@ _NAN3 = (math.nan, math.nan, math.nan)
 
 
 def _iterate(p: Path, kind: str, source: str, topic: str, names: tuple[str, ...], s: float,
-             chunk: int) -> Iterator[JointStates]:
+             chunk: int, backend: str) -> Iterator[JointStates]:
     """The chunks of the topic's readings; a damaged file is a :class:`RecordingError`."""
     c = _Chunks(p, source, topic, names, s, chunk)
     try:
-        for t_log, raw, enc in _raw_messages(p, kind, topic):
+        for t_log, raw, enc in _raw_messages(p, kind, topic, backend=backend):
             if isinstance(raw, _Bulk):
                 yield from c.bulk(t_log, raw, enc)
             elif c.one(t_log, raw, enc):
@@ -349,7 +355,8 @@ def _iterate(p: Path, kind: str, source: str, topic: str, names: tuple[str, ...]
 
 def read_joint_states(path: str | Path, *, topic: str = "/joint_states",
                       joints: tuple[str, str, str] | list[str] = ("q1", "q2", "q3"),
-                      scale: float = 1.0, max_readings: int = MAX_READINGS) -> JointStates:
+                      scale: float = 1.0, max_readings: int = MAX_READINGS,
+                      backend: str = "auto") -> JointStates:
     """Read the actuator readings of a ROS recording of ``sensor_msgs/JointState``.
 
     Parameters
@@ -368,6 +375,8 @@ def read_joint_states(path: str | Path, *, topic: str = "/joint_states",
     max_readings : int, keyword-only
         Refuse recordings of more readings (default :data:`MAX_READINGS`); read
         longer ones with :func:`iter_joint_states`.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        MCAP chunks decoded by the compiled scan or record by record (the same readings).
 
     Returns
     -------
@@ -400,7 +409,8 @@ def read_joint_states(path: str | Path, *, topic: str = "/joint_states",
     parts: list[JointStates] = []
     n = 0
     for part in iter_joint_states(path, topic=topic, joints=joints, scale=scale,
-                                  chunk_size=min(CHUNK, int(max_readings) + 1)):
+                                  chunk_size=min(CHUNK, int(max_readings) + 1),
+                                  backend=backend):
         n += len(part)
         if n > max_readings:
             raise RecordingError(f"{path}: more than {max_readings} readings on {topic!r} "

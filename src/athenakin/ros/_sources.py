@@ -86,10 +86,11 @@ def _source(p: Path, kind: str) -> str:
 
 
 # ---------------------------------------------------------------------------- sources
-def _raw_messages(path: Path, kind: str, topic: str) -> Iterator[tuple[Any, Any, str]]:
+def _raw_messages(path: Path, kind: str, topic: str, *,
+                  backend: str = "auto") -> Iterator[tuple[Any, Any, str]]:
     """``(log_time_ns, raw, encoding)`` of ``topic``, after checking topic and type."""
     if kind == "mcap":
-        yield from _mcap_messages(path, topic)
+        yield from _mcap_messages(path, topic, backend=backend)
         return
     try:
         from rosbags.rosbag1 import Reader as Reader1
@@ -113,7 +114,7 @@ def _raw_messages(path: Path, kind: str, topic: str) -> Iterator[tuple[Any, Any,
                 yield int(t), raw, enc
             return
     for f in files:        # MCAP storage: each file through the MCAP fast path, in order
-        yield from _mcap_messages(f, topic, in_bag=True)
+        yield from _mcap_messages(f, topic, in_bag=True, backend=backend)
 
 
 def _mcap_storage(path: Path, reader: Any) -> list[Path] | None:
@@ -153,13 +154,14 @@ def _check_type(path: Path, topic: str, msgtype: str) -> None:
                              f"sensor_msgs/msg/JointState")
 
 
-def _mcap_messages(path: Path, topic: str, *, in_bag: bool = False
-                   ) -> Iterator[tuple[Any, Any, str]]:
+def _mcap_messages(path: Path, topic: str, *, in_bag: bool = False,
+                   backend: str = "auto") -> Iterator[tuple[Any, Any, str]]:
     """Messages of ``topic`` in file order (the summary, when present, checks the topic).
 
     ``(log time, data, encoding)``, or for a run of messages read at once
     ``(log times, _Bulk, encoding)``. ``in_bag``: a storage file of a rosbag2 folder
     (the folder's metadata checked the topic; a file may hold none of its messages).
+    ``backend``: the chunks decoded by the compiled scan or record by record.
     """
     try:
         from mcap.reader import make_reader
@@ -177,7 +179,8 @@ def _mcap_messages(path: Path, topic: str, *, in_bag: bool = False
                 _missing_topic(path, topic, {k: (s.name if s else "?") for k, s in
                                              chans.items()})
         fh.seek(0)
-        stream = _McapStream(fh, os.fstat(fh.fileno()).st_size, summary, topic)
+        stream = _McapStream(fh, os.fstat(fh.fileno()).st_size, summary, topic,
+                             backend=backend)
         wanted: dict[int, str] = {}
         for cid, log_time, data in stream.messages():
             enc = wanted.get(cid)

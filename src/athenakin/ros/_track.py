@@ -11,10 +11,11 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._backend import BACKENDS
 from .._output import check_output_path
 from .._toml import TomlOptions
 from .._typing import FloatArray, IntArray
-from .._validation import check_array, check_instance, check_path
+from .._validation import check_array, check_choice, check_instance, check_path
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, KinematicsError
 from ..motion import Tracker, TrackFlag, TrackLog, track
@@ -62,6 +63,9 @@ class TrackOptions(TomlOptions):
         Chunk compression of the output (:class:`McapOutput`).
     compression_level : int or None
         Its level (zstd -7..22, lz4 0..16; None: zstd -3, lz4 0).
+    backend : {"auto", "numpy", "numba"}
+        The reading, tracking and writing on the compiled kernels or the numpy reference
+        (:mod:`athenakin._backend`; default ``"auto"``); the same summary and file.
 
     Examples
     --------
@@ -77,6 +81,7 @@ class TrackOptions(TomlOptions):
     max_events: int = 20
     compression: str = "zstd"
     compression_level: int | None = None
+    backend: str = "auto"
 
     def __post_init__(self) -> None:
         n = self.chunk_size
@@ -90,6 +95,7 @@ class TrackOptions(TomlOptions):
         check_compression(self.compression, self.compression_level)
         if self.compression_level is not None:
             object.__setattr__(self, "compression_level", int(self.compression_level))
+        check_choice(self.backend, "backend", BACKENDS)
 
 
 def _track_options(options: object) -> TrackOptions:
@@ -247,14 +253,15 @@ def first_tracker(q: FloatArray, T_b_e: FloatArray, design: Design,
     """
     from .._dispatch import forward_kinematics
 
+    backend = options.get("backend", "auto")
     finite = np.flatnonzero(np.isfinite(q).all(axis=1))
     a, size = 0, 16          # the first reading usually assembles: a small batch first
     while a < len(finite):   # a batch FK (the backend's) skips the readings without a pose
         rows = finite[a:a + size]
         a, size = a + size, 4096
         with np.errstate(all="ignore"):
-            ok = forward_kinematics(q[rows], T_b_e, design, errors="flag",
-                                    fields=("valid",)).valid.any(axis=1)
+            ok = forward_kinematics(q[rows], T_b_e, design, errors="flag", fields=("valid",),
+                                    backend=backend).valid.any(axis=1)
         for i in rows[ok].tolist():
             try:
                 return i, Tracker(T_b_e, design, q0=q[i].tolist(), **options)
@@ -410,11 +417,12 @@ def track_recording(recording: str | Path, out: str | Path, T_b_e: ArrayLike | N
     T = resolve_rcm_frame(T_b_e, design)
     opts = _options(tracker_options)
     o = _track_options(options)
+    opts["backend"] = o.backend
     chunks = ((js.stamps_ns, js.q) for js in
               iter_joint_states(recording, topic=topic, joints=joints, scale=scale,
-                                chunk_size=o.chunk_size))
+                                chunk_size=o.chunk_size, backend=o.backend))
     with McapOutput(out, T, design, target=target, compression=o.compression,
-                    compression_level=o.compression_level) as w:
+                    compression_level=o.compression_level, backend=o.backend) as w:
         summary = _stream(chunks, w, T, design, opts, o.max_events, progress)
         if summary.n == 0:
             raise empty_topic_error(recording, topic)
@@ -457,6 +465,7 @@ def track_to_mcap(stamps_ns: ArrayLike, q: ArrayLike, out: str | Path,
                                 f"{s[dec[0] + 1]} ns after {s[dec[0]]} ns")
     opts = _options(tracker_options)
     o = _track_options(options)
+    opts["backend"] = o.backend
     size = o.chunk_size
 
     def chunks() -> Iterator[tuple[IntArray, FloatArray]]:
@@ -464,13 +473,13 @@ def track_to_mcap(stamps_ns: ArrayLike, q: ArrayLike, out: str | Path,
             yield s[k:k + size], qa[k:k + size]
 
     with McapOutput(out, T, design, target=target, compression=o.compression,
-                    compression_level=o.compression_level) as w:
+                    compression_level=o.compression_level, backend=o.backend) as w:
         return _stream(chunks(), w, T, design, opts, o.max_events, None)
 
 
 def write_trajectory(path: str | Path, traj: Trajectory, *, start_ns: int = 0,
                      target: str | Path | None = None, compression: str = "zstd",
-                     compression_level: int | None = None) -> Path:
+                     compression_level: int | None = None, backend: str = "auto") -> Path:
     """Write a planned trajectory as MCAP: the plan and what the robot will show.
 
     Topics: ``/athena/trajectory`` (one ``trajectory_msgs/msg/JointTrajectory``,
@@ -490,7 +499,7 @@ def write_trajectory(path: str | Path, traj: Trajectory, *, start_ns: int = 0,
         Stamp of the first sample, ns since the epoch (default 0).
     target : str or Path, keyword-only, optional
         Write there and do not rename (for a caller that renames).
-    compression, compression_level : keyword-only
+    compression, compression_level, backend : keyword-only
         As :class:`TrackOptions`.
 
     Returns
@@ -504,9 +513,9 @@ def write_trajectory(path: str | Path, traj: Trajectory, *, start_ns: int = 0,
                                 f"{start_ns!r}")
     t = np.asarray(traj.t, dtype=float)
     stamps = int(start_ns) + np.rint((t - t[0]) * 1e9).astype(np.int64)
-    log = track(traj.q, traj.T_b_e, traj.design)
+    log = track(traj.q, traj.T_b_e, traj.design, backend=backend)
     with McapOutput(path, traj.T_b_e, traj.design, target=target, compression=compression,
-                    compression_level=compression_level) as w:
+                    compression_level=compression_level, backend=backend) as w:
         w.write_static(int(stamps[0]))
         w.write_trajectory_message(int(stamps[0]), t, traj.q, traj.qd, traj.qdd)
         for k in range(0, len(t), CHUNK):
@@ -519,7 +528,7 @@ def write_trajectory(path: str | Path, traj: Trajectory, *, start_ns: int = 0,
 def write_track_log(path: str | Path, stamps_ns: ArrayLike, log: TrackLog,
                     T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                     target: str | Path | None = None, compression: str = "zstd",
-                    compression_level: int | None = None) -> Path:
+                    compression_level: int | None = None, backend: str = "auto") -> Path:
     """Write an already tracked stream (a :class:`~athenakin.motion.TrackLog`) as MCAP.
 
     Parameters
@@ -533,7 +542,7 @@ def write_track_log(path: str | Path, stamps_ns: ArrayLike, log: TrackLog,
     T_b_e, design
         The set-up the log was tracked with.
     target : str or Path, keyword-only, optional
-    compression, compression_level : keyword-only
+    compression, compression_level, backend : keyword-only
         As :class:`TrackOptions`.
 
     Returns
@@ -548,7 +557,7 @@ def write_track_log(path: str | Path, stamps_ns: ArrayLike, log: TrackLog,
         raise InvalidInputError(f"stamps_ns: expected {len(log.q)} integers (ns), got "
                                 f"{s.dtype} of shape {s.shape}")
     with McapOutput(path, T, design, target=target, compression=compression,
-                    compression_level=compression_level) as w:
+                    compression_level=compression_level, backend=backend) as w:
         for k in range(0, len(s), CHUNK):
             sl = slice(k, k + CHUNK)
             cols = {f: getattr(log, f)[sl] for f in _FIELDS}

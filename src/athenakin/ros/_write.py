@@ -76,13 +76,6 @@ _LATCHED_QOS = ("- history: 3\n  depth: 0\n  reliability: 1\n  durability: 1\n"
 
 
 # ---------------------------------------------------------------------------- the file
-def _compiled() -> bool:
-    """Whether :meth:`McapOutput.write_tracked` fills its records with the compiled kernel."""
-    from .._backend import numba_available
-
-    return numba_available()
-
-
 class McapOutput:
     """An MCAP file of ATHENA's ROS 2 topics, written atomically.
 
@@ -102,6 +95,9 @@ class McapOutput:
     target : str or Path, keyword-only, optional
         Write this file instead of a temporary one and do no rename (the caller
         renames it: the CLI's own output manager).
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The records, frames and quaternions filled by the compiled kernels or the numpy
+        reference (:mod:`athenakin._backend`); the same bytes.
 
     Examples
     --------
@@ -113,7 +109,7 @@ class McapOutput:
 
     def __init__(self, path: str | Path, T_b_e: ArrayLike, design: Design, *,
                  compression: str = "zstd", compression_level: int | None = None,
-                 target: str | Path | None = None) -> None:
+                 target: str | Path | None = None, backend: str = "auto") -> None:
         compression, compression_level = check_compression(compression, compression_level)
         self._closed = True                    # nothing to close until the file is open
         self.path = check_output_path(path)    # a folder, FIFO or device: named error
@@ -129,7 +125,7 @@ class McapOutput:
             target = check_path(target, "target")
         compressor_module(compression)         # a missing extra: named, before any file
         msgdef(_MSG_TYPES["tool_tip"])         # rosbags (the schemas): likewise
-        self.encoder = RosEncoder(T_b_e, design)
+        self.encoder = RosEncoder(T_b_e, design, backend=backend)
         self.model = self.encoder.model
         self._atomic: AtomicFile | None = None
         if target is None:
@@ -185,7 +181,15 @@ class McapOutput:
     def write_static(self, stamp_ns: int) -> None:
         """``/robot_description`` (the URDF) and ``/tf_static`` (fixed frames), once.
 
-        ``stamp_ns``: int, ns, 0 to 2**63 - 1.
+        Parameters
+        ----------
+        stamp_ns : int
+            Their stamp and log time, ns, 0 to 2**63 - 1 (later calls write nothing).
+
+        Raises
+        ------
+        InvalidInputError
+            ``stamp_ns`` out of range or not an integer.
         """
         check_uint(stamp_ns, "stamp_ns", 2**63)
         if self._static_done:
@@ -194,12 +198,22 @@ class McapOutput:
         self._add("robot_description", int(stamp_ns), self.encoder.robot_description())
         self._add("tf_static", int(stamp_ns), self.encoder.tf_static(int(stamp_ns)))
 
+    def _compiled_records(self) -> bool:
+        """Whether :meth:`write_tracked` fills its records with the compiled kernel."""
+        return self.encoder.backend == "numba"
+
     def write_tracked(self, b: TrackedBatch) -> None:
         """Write a batch of tracked readings: status for each, poses for the valid ones.
 
         Each chunk of the file is one byte array of ``rows x (status, tool tip, tf,
         joint states)`` Message records built in place; the rows of readings without
         a pose keep only their status record.
+
+        Parameters
+        ----------
+        b : TrackedBatch
+            The readings (stamps ns, poses in m and rad in the base frame, flags), in order;
+            the first batch also writes :meth:`write_static` at its first stamp.
         """
         n = len(b.stamps_ns)
         if n == 0:
@@ -214,7 +228,7 @@ class McapOutput:
         rs = int(cols[1])
         per = max(1, _CHUNK_BYTES // row)
         valid = np.asarray(b.valid, bool)
-        if _compiled():
+        if self._compiled_records():
             self._write_tracked_compiled(b, stamps, valid, keys, cids, per)
             return
         for a in range(0, n, per):
@@ -340,13 +354,32 @@ class McapOutput:
                                  q: FloatArray, qd: FloatArray | None,
                                  qdd: FloatArray | None,
                                  joint_names: tuple[str, ...] = ("q1", "q2", "q3")) -> None:
-        """One ``trajectory_msgs/msg/JointTrajectory`` with every sample as a point."""
+        """One ``trajectory_msgs/msg/JointTrajectory`` with every sample as a point.
+
+        Parameters
+        ----------
+        stamp_ns : int
+            Stamp of the message, ns.
+        t_s : ndarray, shape (N,)
+            Time of each sample, s (``time_from_start`` is ``t_s - t_s[0]``).
+        q : ndarray, shape (N, 3)
+            Positions, m.
+        qd, qdd : ndarray, shape (N, 3), or None
+            Velocities (m/s) and accelerations (m/s^2); None leaves them empty.
+        joint_names : tuple of str
+            The joints of the points (default ``q1, q2, q3``).
+        """
         self._add("trajectory", int(stamp_ns), _trajectory_bytes(stamp_ns, t_s, q, qd, qdd,
                                                                   joint_names))
 
     # ------------------------------------------------------------------ finish
     def close(self) -> Path:
         """Finish the file and move it into place; returns its path.
+
+        Returns
+        -------
+        Path
+            :attr:`path` (also when the file was closed already).
 
         Raises
         ------

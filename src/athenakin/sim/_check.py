@@ -106,7 +106,12 @@ class MujocoCheck:
     hold_time: FloatArray
 
     def summary(self) -> str:
-        """One paragraph with the worst errors."""
+        """One paragraph with the worst errors.
+
+        Returns
+        -------
+        str
+        """
         n = len(self.q)
         same = int(np.sum(self.slot == self.nearest_slot))
         return (f"{n} configurations: MuJoCo's state is nearest to its own labelled FK slot in "

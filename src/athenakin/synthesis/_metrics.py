@@ -107,7 +107,13 @@ class CollisionSpec(TomlOptions):
             self.samples, "samples", minimum=1, maximum=MAX_COLLISION_SAMPLES))
 
     def to_mapping(self) -> dict[str, Any]:
-        """A TOML table: ``bodies`` a name or a table, ``environment`` a table (if any)."""
+        """A TOML table: ``bodies`` a name or a table, ``environment`` a table (if any).
+
+        Returns
+        -------
+        dict of str -> TOML value
+            ``bodies``, ``environment`` (if any), ``margin`` (m) and ``samples``.
+        """
         out: dict[str, Any] = {"bodies": self.bodies if isinstance(self.bodies, str)
                                else self.bodies.to_toml_table()}
         if self.environment is not None:
@@ -118,7 +124,25 @@ class CollisionSpec(TomlOptions):
 
     @classmethod
     def from_mapping(cls, data: Mapping[str, Any]) -> CollisionSpec:
-        """Read a ``collision`` table (:meth:`to_mapping`); unknown keys are refused by name."""
+        """Read a ``collision`` table (:meth:`to_mapping`); unknown keys are refused by name.
+
+        Parameters
+        ----------
+        data : mapping
+            ``bodies`` (``"default"``, ``"scaled"`` or a ``[bodies]`` table), ``environment``
+            (a table), ``margin`` (m), ``samples``.
+
+        Returns
+        -------
+        CollisionSpec
+
+        Raises
+        ------
+        TypeError
+            ``data`` is not a table.
+        InvalidInputError
+            An unknown key or a bad value (named).
+        """
         if not isinstance(data, Mapping):
             raise TypeError(f"data: expected the [collision] table, got {type(data).__name__}")
         from ..collision import Bodies, Environment
@@ -134,7 +158,18 @@ class CollisionSpec(TomlOptions):
         return super().from_mapping(kw)
 
     def bodies_for(self, design: Design) -> Any:
-        """The bodies of ``design``."""
+        """The bodies of ``design``.
+
+        Parameters
+        ----------
+        design : Design
+
+        Returns
+        -------
+        athenakin.collision.Bodies
+            The table given, else :meth:`Bodies.default <athenakin.collision.Bodies.default>`
+            of ``design`` (radii scaled with it for ``"scaled"``).
+        """
         from ..collision import Bodies
 
         if isinstance(self.bodies, str):
@@ -142,7 +177,13 @@ class CollisionSpec(TomlOptions):
         return self.bodies
 
     def fingerprint(self) -> dict[str, Any]:
-        """A JSON-able description (the identity of a study that checks collisions)."""
+        """A JSON-able description (the identity of a study that checks collisions).
+
+        Returns
+        -------
+        dict of str -> JSON value
+            ``bodies``, ``environment`` (None without one), ``margin`` (m), ``samples``.
+        """
         b = self.bodies if isinstance(self.bodies, str) else self.bodies.to_toml_table()
         e = None if self.environment is None else self.environment.to_toml_table()
         return {"bodies": b, "environment": e, "margin": self.margin, "samples": self.samples}
@@ -199,7 +240,7 @@ def collision_spec(bodies: object = None, environment: object = None,
 
 def _collision_metrics(spec: CollisionSpec, design: Design, T: FloatArray,
                        q: FloatArray, mode: IntArray,
-                       depth: FloatArray) -> dict[str, float]:
+                       depth: FloatArray, backend: str) -> dict[str, float]:
     """``collision_free_coverage`` and ``min_clearance`` over the first ``spec.samples``."""
     from ..analysis._collision import labelled_clearance
 
@@ -208,7 +249,8 @@ def _collision_metrics(spec: CollisionSpec, design: Design, T: FloatArray,
     reached = mode != 0
     dist, _ = labelled_clearance(np.where(reached[:, None], q, 0.0), T, design, mode,
                                  design.tool_length - depth < 0,
-                                 bodies=spec.bodies_for(design), environment=spec.environment)
+                                 bodies=spec.bodies_for(design), environment=spec.environment,
+                                 backend=backend)
     with np.errstate(invalid="ignore"):
         free = reached & (dist >= spec.margin)
     seen = ~np.isnan(dist)
@@ -345,7 +387,8 @@ def reachability(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLES, 
 
 def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLES, seed: int = 0,
                     encoder_resolution: float = DEFAULT_ENCODER_RESOLUTION,
-                    collision: CollisionSpec | None = None) -> dict[str, float]:
+                    collision: CollisionSpec | None = None,
+                    backend: str = "auto") -> dict[str, float]:
     """Every metric of one design over the task samples (docs/synthesis.md).
 
     Parameters
@@ -364,6 +407,9 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
         fraction of them reached with a clearance of at least ``collision.margin``,
         ``min_clearance`` the least clearance (m) over those reached. Without it
         both are NaN.
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The inverse kinematics, Jacobians, reduction and clearance on the compiled kernels
+        or the numpy reference (:mod:`athenakin._backend`); the same metrics to rounding.
 
     Returns
     -------
@@ -375,18 +421,19 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
     from ..analysis import parallel_jacobian, tool_tip_jacobian
 
     encoder_resolution = check_scalar(encoder_resolution, "encoder_resolution", nonnegative=True)
-    s, q, mode, _ = reachability(design, task, samples=samples, seed=seed)
+    s, q, mode, _ = reachability(design, task, samples=samples, seed=seed, backend=backend)
     T = task.T_b_e
     n = s.depth.shape[0]
     valid = mode != 0
     idx = np.flatnonzero(valid)
     qv, mv = q[idx], mode[idx]
-    J_tip = tool_tip_jacobian(qv, T, design, mode=mv)
-    J_par = parallel_jacobian(qv, design, mode=mv)
+    J_tip = tool_tip_jacobian(qv, T, design, mode=mv, backend=backend)  # type: ignore[arg-type]
+    J_par = parallel_jacobian(qv, design, mode=mv, backend=backend)  # type: ignore[arg-type]
     lo, hi = design.stroke_min, design.stroke_max
     counts, margin, arg_margin, cond, arg_cond, q_lo, q_hi, tip = reduce_samples(
         idx, qv, mv, np.ascontiguousarray(T[:3, :3]), T[:3, 3].copy(), s.direction_e, s.depth,
-        J_tip, J_par, design.lengths, design.tool_length, lo, hi, float(encoder_resolution))
+        J_tip, J_par, design.lengths, design.tool_length, lo, hi, float(encoder_resolution),
+        backend=backend)
     out: dict[str, float] = {}
     n_plus, n_minus = int(counts[1]), int(counts[2])
     out["coverage"] = counts[0] / n
@@ -408,12 +455,12 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
             out[f"stroke_use_q{i + 1}"] = float(use[i])
         out["tip_error_max"] = float(tip[0])
         out["tip_error_mean"] = float(tip[1] / counts[0])
-        out.update(_force_columns(qv, mv, T, design))
+        out.update(_force_columns(qv, mv, T, design, backend))
     if collision is None:
         out.update(dict.fromkeys(COLLISION_COLUMNS, nan))
     else:
         check_instance(collision, "collision", CollisionSpec)
-        out.update(_collision_metrics(collision, design, T, q, mode, s.depth))
+        out.update(_collision_metrics(collision, design, T, q, mode, s.depth, backend))
     stroke = float(np.sum(hi - lo))
     out["size"] = float(2 * design.l1 + 2 * design.l3 + design.l2 + design.l4 + design.l5
                         + stroke)
@@ -445,13 +492,13 @@ def _reached_metrics(design: Design, T: FloatArray, q: FloatArray,
 
 
 def _force_columns(q: FloatArray, mode: IntArray, T: FloatArray,
-                   design: Design) -> dict[str, float]:
+                   design: Design, backend: str) -> dict[str, float]:
     """``peak_actuator_force`` and ``min_tip_force_capability`` on FORCE_SAMPLES samples."""
     from ..dynamics import force_metrics
 
     pick = np.unique(np.linspace(0, q.shape[0] - 1, min(FORCE_SAMPLES, q.shape[0])).astype(int))
     slot = np.where(mode[pick] == 1, 0, 8)
-    fm = force_metrics(q[pick], T, design, slot=slot)
+    fm = force_metrics(q[pick], T, design, slot=slot, backend=backend)
     return {"peak_actuator_force": fm.peak_actuator_force,
             "min_tip_force_capability": fm.min_tip_force_capability}
 

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from .._backend import numba_available
+from .._backend import resolve_backend
 from .._typing import FloatArray, IntArray
 from ._formulas import line_conditions_formula
 
@@ -204,12 +204,14 @@ def reduce_samples_numpy(idx: IntArray, q: FloatArray, mode: IntArray, R: FloatA
 def reduce_samples(idx: IntArray, q: FloatArray, mode: IntArray, R: FloatArray, rcm: FloatArray,
                    d_e: FloatArray, depth: FloatArray, J_tip: FloatArray, J_par: FloatArray,
                    lengths: FloatArray, L: float,
-                   lo: FloatArray, hi: FloatArray, resolution: float) -> tuple[Any, ...]:
-    """:func:`reduce_samples_numpy`, compiled where :mod:`athenakin._backend` says so.
+                   lo: FloatArray, hi: FloatArray, resolution: float, *,
+                   backend: str = "auto") -> tuple[Any, ...]:
+    """:func:`reduce_samples_numpy`, compiled where ``backend`` resolves to numba.
 
-    Parameters and Returns as :func:`reduce_samples_numpy`.
+    Parameters and Returns as :func:`reduce_samples_numpy`; ``backend``
+    (``"auto" | "numpy" | "numba"``, keyword-only) as :func:`athenakin._backend.resolve_backend`.
     """
-    if numba_available():
+    if resolve_backend(backend):
         from ._kernels import reduce_samples as kernel
 
         return kernel(idx, q, mode, R, rcm, d_e, depth, J_tip, J_par,  # type: ignore[no-any-return]

@@ -115,7 +115,13 @@ class StudyOptions(TomlOptions):
             check_instance(self.collision, "collision", CollisionSpec)
 
     def to_mapping(self) -> dict[str, Any]:
-        """A TOML table; the collision check as a ``collision`` sub-table."""
+        """A TOML table; the collision check as a ``collision`` sub-table.
+
+        Returns
+        -------
+        dict of str -> TOML value
+            The fields that are not None.
+        """
         out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
                if f.name != "collision" and getattr(self, f.name) is not None}
         if self.collision is not None:
@@ -124,7 +130,22 @@ class StudyOptions(TomlOptions):
 
     @classmethod
     def from_mapping(cls, data: Mapping[str, Any]) -> StudyOptions:
-        """Read a ``study`` table (:meth:`to_mapping`); unknown keys are refused by name."""
+        """Read a ``study`` table (:meth:`to_mapping`); unknown keys are refused by name.
+
+        Parameters
+        ----------
+        data : mapping
+            Field names to values; ``collision`` as :meth:`CollisionSpec.from_mapping` reads it.
+
+        Returns
+        -------
+        StudyOptions
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown key or a bad value (named).
+        """
         if isinstance(data, Mapping) and isinstance(data.get("collision"), Mapping):
             data = dict(data, collision=CollisionSpec.from_mapping(data["collision"]))
         return super().from_mapping(data)

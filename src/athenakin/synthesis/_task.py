@@ -146,12 +146,24 @@ class Task:
         return 2.0 * math.pi * (1.0 - math.cos(self.half_angle))
 
     def to_mapping(self) -> dict[str, Any]:
-        """Plain-Python fields (lists, floats): what :meth:`from_mapping` reads back."""
+        """Plain-Python fields (lists, floats): what :meth:`from_mapping` reads back.
+
+        Returns
+        -------
+        dict of str -> value
+            ``rcm`` (m, base frame), ``axis`` (unit, base frame), ``half_angle`` (rad),
+            ``depth`` (m beyond the RCM), ``name``.
+        """
         return {"rcm": self.rcm.tolist(), "axis": self.axis.tolist(),
                 "half_angle": self.half_angle, "depth": list(self.depth), "name": self.name}
 
     def to_toml(self) -> str:
-        """TOML text (a ``[task]`` table) that :meth:`from_toml` reads back to an equal task."""
+        """TOML text (a ``[task]`` table) that :meth:`from_toml` reads back to an equal task.
+
+        Returns
+        -------
+        str
+        """
         import tomli_w
 
         table = self.to_mapping()
@@ -166,6 +178,15 @@ class Task:
         Keys: ``rcm``, ``axis``, ``depth``, exactly one of ``half_angle`` (rad) or
         ``half_angle_deg`` (deg), and optionally ``name``. ``axis`` may be any
         non-zero vector here; it is normalised (a file is written by hand).
+
+        Parameters
+        ----------
+        data : mapping
+            The keys above.
+
+        Returns
+        -------
+        Task
 
         Raises
         ------
@@ -206,6 +227,15 @@ class Task:
             axis = [0.0, 0.0, -1.0]       # unit, from the robot through the RCM
             half_angle_deg = 25.0         # or half_angle (rad)
             depth = [0.05, 0.15]          # m beyond the RCM
+
+        Parameters
+        ----------
+        path : str or Path
+            A TOML file.
+
+        Returns
+        -------
+        Task
 
         Raises
         ------

@@ -204,7 +204,8 @@ class Teleop(_Mapping, _Limiter, _Brake):
                                     else Bodies.default(design), environment,
                                     backend=self._backend, floor=self._clear_floor)
         q = self._check_q0(q0)
-        self._tracker = Tracker(T, design, q0=q, slot=slot, margins=self.margins)
+        self._tracker = Tracker(T, design, q0=q, slot=slot, margins=self.margins,
+                                backend=self._backend)
         self._masses, self._gravity = _feedforward_model(opts, design, self.robot.masses)
         # the feed-forward of each FK slot the robot takes: the dynamics' loop object
         # (checked once, the compiled kernel on preallocated buffers, never raises)
