@@ -157,6 +157,8 @@ class Patient:
     table : PatientMesh or None
         The operating table.
     name : str
+    inner_forbidden : tuple of str
+        The forbidden structures wholly inside the skin (set from the meshes).
 
     Raises
     ------
@@ -171,6 +173,7 @@ class Patient:
     forbidden: tuple[PatientMesh, ...] = ()
     table: PatientMesh | None = None
     name: str = ""
+    inner_forbidden: tuple[str, ...] = dataclasses.field(init=False, default=())
 
     def __post_init__(self) -> None:
         for field, role in (("skin", "skin"), ("target", "target"), ("table", "table")):
@@ -206,6 +209,8 @@ class Patient:
             raise InvalidInputError(f"name: mesh names used twice: {dup}")
         if not isinstance(self.name, str):
             raise TypeError(f"name: expected str, got {type(self.name).__name__}")
+        object.__setattr__(self, "inner_forbidden", tuple(
+            m.name for m in forb if np.all(self.skin.inside(m.vertices))))
 
     @property
     def meshes(self) -> tuple[PatientMesh, ...]:
@@ -544,7 +549,7 @@ def phantom(*, size: float = 1.0, target_size: float = 1.0, resolution: int = 24
     aorta = _tube(np.stack([xa, np.full(k, 0.012), np.full(k, 0.070)], -1) * s,
                   np.full(k, 0.012 * s), np.full(k, 0.012 * s), (0, 0, 1), m // 2)
     tv = np.linspace(0.0, 1.0, k)
-    cv = np.stack([-0.02 + 0.11 * tv, -0.005 - 0.05 * tv, 0.094 + 0.012 * tv], -1)
+    cv = np.stack([-0.02 + 0.11 * tv, -0.005 - 0.05 * tv, 0.080 + 0.012 * tv], -1)
     vein = _tube(cv * s, np.full(k, 0.007 * s), np.full(k, 0.007 * s), (0, 0, 1), m // 2)
     table = _box((0.0, 0.0, -0.03 * s), (0.95 * s, 0.275 * s, 0.03 * s))
     return Patient(
