@@ -42,6 +42,7 @@ EXTRAS = {
 #: The extra of each command's own optional packages: a package of several extras is
 #: named by the command's (``plan`` needs scipy of [motion], not of [analysis]).
 COMMAND_EXTRAS = {"plan": "motion", "track": "ros", "synthesize": "synthesis",
+                  "setup": "synthesis",
                   "calibrate": "calibration", "view": "plot", "animate": "plot",
                   "export": "sim", "derive": "symbolic", "app": "app",
                   "workspace": "analysis", "singularities": "analysis"}
@@ -73,8 +74,8 @@ def extra_of(module: str | None, command: str | None = None) -> str:
 
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
 COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
-            "animate", "export", "derive", "design", "calibrate", "synthesize", "teleop", "app",
-            "warmup"]
+            "animate", "export", "derive", "design", "calibrate", "synthesize", "setup", "teleop",
+            "app", "warmup"]
 
 
 class _Parser(argparse.ArgumentParser):
