@@ -181,11 +181,6 @@ class Setup:
         import tomli_w
 
         d = resolve_design(design)
-        row = row_from_design(d)
-        des = {f"l{i + 1}": row[f"l{i + 1}"] for i in range(5)}
-        des.update(q_min=[row[f"q{i}_min"] for i in (1, 2, 3)],
-                   q_max=[row[f"q{i}_max"] for i in (1, 2, 3)],
-                   ab_order=d.ab_order, tool_length=d.tool_length)
         table: dict[str, Any] = {
             "T_b_e": self.T_b_e.tolist(), "T_p_b": self.T_p_b.tolist(),
             "port": self.port.tolist(), "axis": self.axis.tolist(),
@@ -198,7 +193,7 @@ class Setup:
         text = ("# An ATHENA set-up planned by athenakin (`athenakin setup plan`).\n"
                 "# T_p_b: the robot's base in the patient's frame (the frame of the mesh files);\n"
                 "# T_b_e: the RCM frame in the base frame, read by --rcm-file; 4x4, row-major.\n"
-                + tomli_w.dumps({"setup": table, "design": des}))
+                + tomli_w.dumps({"setup": table}) + "\n" + d.to_toml())
         p = check_path(path, "path")
         write_text_atomic(p, text)
         return p
