@@ -428,12 +428,12 @@ def write_patient(patient: Patient, folder: str | Path, *, overwrite: bool = Fal
     for m in patient.meshes:
         f = out / f"{m.name}.stl"
         data = trimesh.Trimesh(m.vertices, m.faces, process=False).export(file_type="stl")
-        files.append((f, data))
+        files.append((f, data if isinstance(data, bytes) else str(data).encode()))
         entries.append({"role": m.role, "name": m.name, "path": f.name})
     if patient.target_points is not None:
         f = out / "target_points.ply"
         data = trimesh.PointCloud(patient.target_points).export(file_type="ply")
-        files.append((f, data))
+        files.append((f, data if isinstance(data, bytes) else str(data).encode()))
         entries.append({"role": "target", "name": "target", "path": f.name, "points": True})
     toml = out / "patient.toml"
     table: dict[str, Any] = {"scale": 1.0, "mesh": entries}

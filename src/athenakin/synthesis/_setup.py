@@ -32,15 +32,20 @@ from .._typing import FloatArray
 from .._validation import check_array, check_count, check_instance, check_path, check_scalar
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError
-from ._metrics import DEFAULT_ENCODER_RESOLUTION, _LENGTH_CONDITIONS, row_from_design, \
-    sample_metrics
+from ._metrics import (
+    _LENGTH_CONDITIONS,
+    DEFAULT_ENCODER_RESOLUTION,
+    row_from_design,
+    sample_metrics,
+)
 from ._patient import Patient, PatientMesh, ray_down, segment_crossings
 from ._reduce import CONDITION_ORDER, _condition_values
 from ._task import rcm_frame_from_axis
 
 __all__ = ["SETUP_VARIABLES", "SETUP_COLUMNS", "SetupOptions", "Setup", "SetupPlan",
            "setup_from_decision", "evaluate_setup", "plan_setup", "read_setup",
-           "default_setup_bounds", "reference_decision", "SETUP_OBJECTIVES"]
+           "default_setup_bounds", "reference_decision", "SETUP_OBJECTIVES",
+           "covered_samples"]
 
 #: Decision variables of a set-up, in order (m, except ``yaw`` in rad).
 SETUP_VARIABLES = ("port_x", "port_y", "yaw", "roll", "rcm_x", "rcm_y", "rcm_z")
@@ -202,6 +207,10 @@ class Setup:
 def read_setup(path: str | Path) -> tuple[Setup, Design, dict[str, float]]:
     """Read a set-up file written by :meth:`Setup.write`.
 
+    Parameters
+    ----------
+    path : str or Path
+
     Returns
     -------
     setup : Setup
@@ -241,6 +250,13 @@ def reference_decision(patient: Patient, design: Design | None = None, *, yaw: f
     the nominal axis, ``depth`` from the port to the target's centre: the robot reaches
     the centre in its reference configuration.
 
+    Parameters
+    ----------
+    patient : Patient
+    design : Design, optional
+    yaw, roll : float, keyword-only
+        The base's turn about ``z_p`` and roll about its rail ``x_b``, rad.
+
     Returns
     -------
     ndarray, shape (7,)
@@ -272,6 +288,15 @@ def default_setup_bounds(patient: Patient, design: Design | None = None, *,
 
     The port within ``port_spread`` of the point above the target's centre, any yaw,
     a roll within ``max_roll`` (rad), the RCM within ``rcm_spread`` of the guess (m).
+
+    Parameters
+    ----------
+    patient : Patient
+    design : Design, optional
+    port_spread, rcm_spread : float, keyword-only
+        Half widths of the port's and the RCM's bounds, m.
+    max_roll : float, keyword-only
+        Largest roll of the base, rad.
 
     Returns
     -------
@@ -414,6 +439,46 @@ def evaluate_setup(patient: Patient, setup: Setup | None, design: Design | None 
         largest condition numbers over the covered samples, the insertion depths used
         (m), the stroke use and the worst tip error (m).
     """
+    cols, _ = _evaluate(patient, setup, design, samples=samples, seed=seed, options=options,
+                        collision_samples=collision_samples, points=points)
+    return cols
+
+
+def covered_samples(patient: Patient, setup: Setup, design: Design | None = None, *,
+                    points: ArrayLike, options: SetupOptions | None = None
+                    ) -> tuple[Any, Any, Any]:
+    """Which target points a set-up covers, and the configuration that covers each.
+
+    Every test of :func:`evaluate_setup`, every clearance checked.
+
+    Parameters
+    ----------
+    patient : Patient
+    setup : Setup
+    design : Design, optional
+    points : array-like, shape (n, 3), keyword-only
+        Target points, patient frame, m.
+    options : SetupOptions, optional, keyword-only
+
+    Returns
+    -------
+    covered : ndarray of bool, shape (n,)
+    q : ndarray, shape (n, 3)
+        Actuator values of the IK (NaN where not reached), m.
+    mode : ndarray of int, shape (n,)
+        Assembly mode (+1 / -1), 0 where not reached.
+    """
+    check_instance(setup, "setup", Setup)
+    _, (covered, q, mode) = _evaluate(patient, setup, design, points=points, options=options,
+                                      collision_samples=None)
+    return covered, q, mode
+
+
+def _evaluate(patient: Patient, setup: Setup | None, design: Design | None = None, *,
+              samples: int | None = None, seed: int = 0, options: SetupOptions | None = None,
+              collision_samples: int | None = None,
+              points: ArrayLike | None = None) -> tuple[dict[str, float], Any]:
+    """The columns of :func:`evaluate_setup` and ``(covered, q, mode)`` per sample."""
     from .._dispatch import q_from_tool_tip
     from .._mechanism import body_segments, mechanism_points
     from ..analysis._collision import labelled_clearance
@@ -428,7 +493,7 @@ def evaluate_setup(patient: Patient, setup: Setup | None, design: Design | None 
     if setup is None:
         out.update(coverage=0.0, coverage_reach=0.0, coverage_access=0.0,
                    coverage_nonsingular=0.0)
-        return out
+        return out, None
     check_instance(setup, "setup", Setup)
     if points is None:
         n = opts.samples if samples is None else check_count(samples, "samples")
@@ -493,7 +558,7 @@ def evaluate_setup(patient: Patient, setup: Setup | None, design: Design | None 
         out["coverage"] = cand.size / n * share
     if not np.any(covered):
         out["coverage"] = 0.0 if not cand.size or share == 0.0 else out["coverage"]
-        return out
+        return out, (covered, q, mode)
     out["min_clearance"] = float(np.min(dist[covered]))
     m = sample_metrics(design, setup.T_b_e, d_e, depth, q, np.where(covered, mode, 0),
                        opts.encoder_resolution, forces=False)
@@ -503,7 +568,7 @@ def evaluate_setup(patient: Patient, setup: Setup | None, design: Design | None 
         out[c] = float(m[c])
     out["depth_min"] = float(np.min(depth[covered]))
     out["depth_max"] = float(np.max(depth[covered]))
-    return out
+    return out, (covered, q, mode)
 
 
 def _setup_chunk(rows: list[dict[str, Any]], start: int, patient: Patient,
