@@ -61,12 +61,17 @@ def certify(patient, setup, design, opts, k: int, seed: int) -> dict[str, float]
     t0 = time.perf_counter()
     cert = certified_forward_kinematics(q[idx], setup.T_b_e, design)
     tip_b = (P[idx] - setup.T_p_b[:3, 3]) @ setup.T_p_b[:3, :3]   # the targets, base frame
-    ok = cert.certified & np.all((cert.tip_lo <= tip_b[:, None] + 1e-9)
-                                 & (tip_b[:, None] - 1e-9 <= cert.tip_hi), axis=-1)
-    proven = np.any(ok, axis=-1)
-    width = np.where(ok, np.max(cert.tip_hi - cert.tip_lo, axis=-1), np.nan)
+    t = tip_b[:, None]
+    gap = np.linalg.norm(np.maximum(np.maximum(cert.tip_lo - t, t - cert.tip_hi), 0.0), axis=-1)
+    # the IK's own slot: the assembly mode of the covered configuration, any branch
+    slot_mode = np.where(np.arange(16) < 8, 1, -1)
+    mine = cert.certified & (slot_mode[None] == mode[idx, None])
+    gap = np.where(mine, gap, np.inf).min(axis=-1)
+    proven = gap <= 1e-9
+    width = np.max(np.where(mine[..., None], cert.tip_hi - cert.tip_lo, 0.0))
     return {"certified_checked": int(idx.size), "certified_proven": int(np.sum(proven)),
-            "certified_tip_box_max_m": float(np.nanmax(width)),
+            "certified_target_gap_max_m": float(np.max(gap)),
+            "certified_tip_box_max_m": float(width),
             "certified_seconds": time.perf_counter() - t0}
 
 
@@ -90,6 +95,12 @@ def figures(patient, plan, design, opts) -> None:
     for m in patient.meshes:
         c, a = colours[m.role]
         V = m.vertices
+        if m.role == "table":           # its top, within the plotted region
+            lo, hi = m.bounds
+            x0, x1 = max(lo[0], -0.5), min(hi[0], 0.5)
+            X, Y = np.meshgrid([x0, x1], [lo[1], hi[1]])
+            ax.plot_surface(X, Y, np.full_like(X, hi[2]), color=c, alpha=a, linewidth=0)
+            continue
         ax.plot_trisurf(V[:, 0], V[:, 1], V[:, 2], triangles=m.faces, color=c, alpha=a,
                         linewidth=0)
     ax.scatter(*setup.port, color="k", s=40, label="port")
@@ -107,14 +118,17 @@ def figures(patient, plan, design, opts) -> None:
     ax.set_xlabel("x (cranial), m")
     ax.set_ylabel("y (left), m")
     ax.set_zlabel("z (anterior), m")
-    ax.set_box_aspect((1.0, 1.0, 0.7))
+    ax.set_xlim(-0.5, 0.5)
+    ax.set_ylim(-0.5, 0.5)
+    ax.set_zlim(-0.05, 0.8)
+    ax.set_box_aspect((1.0, 1.0, 0.85))
     ax.view_init(elev=24, azim=-58)
     ax.set_title(f"set-up for the phantom: coverage {100 * plan.figures['coverage']:.1f} %, "
                  f"robot at three covered targets")
     fig.tight_layout()
     fig.savefig(FIG / "setup_scene.png", dpi=110)
     plt.close(fig)
-    fig, axs = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, axs = plt.subplots(1, 2, figsize=(11, 3.6))
     for ax, (a, b), lab in zip(axs, ((1, 0), (1, 2)), (("y (left), m", "x (cranial), m"),
                                                          ("y (left), m", "z (anterior), m")),
                                strict=True):
@@ -123,10 +137,10 @@ def figures(patient, plan, design, opts) -> None:
         ax.set_xlabel(lab[0])
         ax.set_ylabel(lab[1])
         ax.set_aspect("equal")
-    axs[0].legend(loc="upper right", fontsize=8)
+    fig.legend(*axs[0].get_legend_handles_labels(), loc="lower center", ncol=2, fontsize=8)
     fig.suptitle(f"coverage map of the pancreas (3000 samples, {100 * cov.mean():.1f} % "
                  f"covered): top view, front view")
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.06, 1, 1))
     fig.savefig(FIG / "setup_coverage.png", dpi=110)
     plt.close(fig)
 
@@ -168,10 +182,12 @@ def write_numbers(numbers: dict[str, object]) -> None:
         f"{f['stroke_use_q3']:.2f} |",
     ]
     if "certified_checked" in numbers:
-        lines.append(f"| certified covered samples (a solution exists, tip box contains the "
-                     f"target) | {numbers['certified_proven']} of "
-                     f"{numbers['certified_checked']} (boxes at most "
-                     f"{numbers['certified_tip_box_max_m']:.1e} m) |")
+        lines.append(f"| certified covered samples (a solution of the IK's assembly mode "
+                     f"exists, its tip box within 1 nm of the target) | "
+                     f"{numbers['certified_proven']} of {numbers['certified_checked']} (tip "
+                     f"boxes at most {numbers['certified_tip_box_max_m']:.1e} m wide, target "
+                     f"at most {numbers['certified_target_gap_max_m']:.1e} m from its box; "
+                     f"{numbers['certified_seconds']:.0f} s) |")
     lines.append(f"| port (patient frame) | {', '.join(f'{1000 * v:.1f}' for v in numbers['port'])} "
                  f"mm |")
     block = "\n".join(lines)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, ClassVar
@@ -598,7 +599,8 @@ class SetupPlan:
     ----------
     table : pandas.DataFrame
         Every set-up evaluated (``generation``, :data:`SETUP_VARIABLES`,
-        :data:`SETUP_COLUMNS`), on ``options.samples`` target samples.
+        :data:`SETUP_COLUMNS`), on ``options.samples`` target samples; ``seconds``: when
+        its generation was done, from the start of the search.
     front : pandas.DataFrame
         The Pareto front of the objectives among the set-ups that keep the constraints,
         ranked: by coverage, then by the least clearance.
@@ -692,6 +694,7 @@ def plan_setup(patient: Patient, *, design: Design | None = None,
     hi = np.array([b[k][1] for k in SETUP_VARIABLES])
     kind, handle, owned = open_scheduler(scheduler)
     drow = row_from_design(design)
+    t_start = time.perf_counter()
     tables: list[Any] = []
     obj = dict(SETUP_OBJECTIVES)
 
@@ -707,6 +710,7 @@ def plan_setup(patient: Patient, *, design: Design | None = None,
         df = pd.concat([done[i] for i in range(len(chunks))], ignore_index=True)
         df["setup"] = start + np.arange(len(df))
         df.insert(1, "generation", generation)
+        df["seconds"] = time.perf_counter() - t_start
         tables.append(df)
         if progress:
             best = df["coverage"].max()
