@@ -111,7 +111,7 @@ def figures(patient, plan, design, opts) -> None:
         pts = mechanism_points(q[i], setup.T_b_e, design, slot=0 if mode[i] == 1 else 8,
                                geometry=bodies.geometry)
         segs = body_segments(pts) @ setup.T_p_b[:3, :3].T + setup.T_p_b[:3, 3]
-        for k, b in enumerate(BODIES):
+        for k in range(len(BODIES)):
             ax.plot(*segs[k].T, color=f"C{j}", lw=max(1.0, 300 * bodies.radius_array[k]),
                     alpha=0.8)
         ax.scatter(*P[i], color=f"C{j}", s=25)
@@ -160,6 +160,7 @@ def cohort(n: int, opts) -> list[dict[str, float]]:
 
 
 def write_numbers(numbers: dict[str, object]) -> None:
+    """The numbers as JSON, and as tables between the markers of docs/setup.md."""
     (FIG / "setup_numbers.json").write_text(json.dumps(numbers, indent=1) + "\n")
     doc = ROOT / "docs" / "setup.md"
     f = numbers["figures"]
@@ -188,8 +189,8 @@ def write_numbers(numbers: dict[str, object]) -> None:
                      f"boxes at most {numbers['certified_tip_box_max_m']:.1e} m wide, target "
                      f"at most {numbers['certified_target_gap_max_m']:.1e} m from its box; "
                      f"{numbers['certified_seconds']:.0f} s) |")
-    lines.append(f"| port (patient frame) | {', '.join(f'{1000 * v:.1f}' for v in numbers['port'])} "
-                 f"mm |")
+    port = ", ".join(f"{1000 * v:.1f}" for v in numbers["port"])  # type: ignore[attr-defined]
+    lines.append(f"| port (patient frame) | {port} mm |")
     block = "\n".join(lines)
     text = doc.read_text()
     text = re.sub(r"(<!-- setup-numbers -->\n).*?(\n<!-- /setup-numbers -->)",
@@ -207,6 +208,7 @@ def write_numbers(numbers: dict[str, object]) -> None:
 
 
 def main() -> None:
+    """Plan, re-measure, certify, draw, write."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--samples", type=int, default=100_000)
     ap.add_argument("--certify", type=int, default=200)
