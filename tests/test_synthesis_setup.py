@@ -277,3 +277,18 @@ def test_the_setup_commands(tmp_path, capsys):
     assert "16 solutions" in capsys.readouterr().out
     assert main(["setup", "plan", str(tmp_path / "p" / "patient.toml"), "-o", str(out)]) == 1
     assert "exists" in capsys.readouterr().err
+
+
+def test_capsule_frames_at_once_equal_one_by_one():
+    from athenakin.collision._coal import _capsule_frames, capsule_transform
+
+    rng = np.random.default_rng(8)
+    seg = rng.normal(size=(20, 2, 3))
+    seg[3, 1] = seg[3, 0]                      # a ball (zero length)
+    seg[5, 1] = seg[5, 0] + [0.0, 0.0, 0.3]    # along z
+    L, R, c = _capsule_frames(seg)
+    for i in range(len(seg)):
+        Li, Ti = capsule_transform(seg[i, 0], seg[i, 1])
+        assert L[i] == pytest.approx(Li, rel=1e-15, abs=1e-15)
+        np.testing.assert_allclose(R[i], Ti.getRotation(), rtol=0, atol=1e-14)
+        np.testing.assert_allclose(c[i], Ti.getTranslation(), rtol=0, atol=1e-15)
