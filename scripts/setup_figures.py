@@ -12,7 +12,8 @@ Run from the repository root (minutes on a 2-core machine; the load is printed):
    (:func:`athenakin.certified.certified_forward_kinematics`);
 4. draws the patient, the port, the robot at three covered targets and the coverage map
    (``docs/figures/setup_scene.png``, ``docs/figures/setup_coverage.png``);
-5. with ``--cohort N``, plans N phantoms of sizes 0.85..1.15 as one Dask study;
+5. with ``--cohort N``, plans N phantoms of sizes 0.85..1.15 as one Dask study
+   (:func:`athenakin.synthesis.plan_cohort`, resumable in ``--cohort-out``);
 6. writes the numbers to ``docs/figures/setup_numbers.json`` and between the markers of
    docs/setup.md.
 """
@@ -29,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from athenakin.design import Design
-from athenakin.synthesis import covered_samples, phantom, plan_setup
+from athenakin.synthesis import SetupOptions, covered_samples, phantom, plan_setup
 
 ROOT = Path(__file__).resolve().parents[1]
 FIG = ROOT / "docs" / "figures"
@@ -145,18 +146,21 @@ def figures(patient, plan, design, opts) -> None:
     plt.close(fig)
 
 
-def cohort(n: int, opts) -> list[dict[str, float]]:
-    """N phantoms of varied size, each planned; the set-ups' figures."""
-    out = []
-    for k, s in enumerate(np.linspace(0.85, 1.15, n)):
-        p = phantom(size=float(s), name=f"phantom {s:.3f}")
-        t0 = time.perf_counter()
-        plan = plan_setup(p, options=opts, seed=k)
-        out.append({"size": float(s), "seconds": time.perf_counter() - t0,
-                    **{c: plan.figures[c] for c in ("coverage", "min_clearance",
-                                                    "margin_min", "collisions")}})
-        print(out[-1], _load(), flush=True)
-    return out
+def cohort(n: int, opts, out: Path) -> list[dict[str, float]]:
+    """N phantoms of varied size planned as one study (``plan_cohort``, resumable in ``out``)."""
+    from athenakin.synthesis import plan_cohort
+
+    sizes = np.linspace(0.85, 1.15, n)
+    patients = {f"phantom-{s:.3f}": phantom(size=float(s), name=f"phantom {s:.3f}")
+                for s in sizes}
+    t0 = time.perf_counter()
+    df = plan_cohort(patients, options=opts, out=out)
+    dt = time.perf_counter() - t0
+    print(f"cohort of {n} planned in {dt:.0f} s ({_load()})", flush=True)
+    return [{"size": float(s), "seconds": dt / n,
+             **{c: float(r[c]) for c in ("coverage", "min_clearance", "margin_min",
+                                          "collisions")}}
+            for s, (_, r) in zip(sizes, df.iterrows(), strict=True)]
 
 
 def write_numbers(numbers: dict[str, object]) -> None:
@@ -214,7 +218,16 @@ def main() -> None:
     ap.add_argument("--certify", type=int, default=200)
     ap.add_argument("--cohort", type=int, default=0)
     ap.add_argument("--no-figures", action="store_true")
+    ap.add_argument("--cohort-only", action="store_true",
+                    help="plan the cohort only; the other numbers from setup_numbers.json")
+    ap.add_argument("--cohort-out", type=Path, default=ROOT / "setup_cohort",
+                    help="folder of the cohort's set-ups (resumable)")
     args = ap.parse_args()
+    if args.cohort_only:
+        numbers = json.loads((FIG / "setup_numbers.json").read_text())
+        numbers["cohort"] = cohort(args.cohort, SetupOptions(), args.cohort_out)
+        write_numbers(numbers)
+        return
     design = Design.default()
     patient = phantom()
     print("planning,", _load(), flush=True)
@@ -240,7 +253,7 @@ def main() -> None:
     if not args.no_figures:
         figures(patient, plan, design, opts)
     if args.cohort:
-        numbers["cohort"] = cohort(args.cohort, opts)
+        numbers["cohort"] = cohort(args.cohort, opts, args.cohort_out)
     write_numbers(numbers)
     print("wrote docs/figures/setup_*.png, setup_numbers.json, docs/setup.md", flush=True)
 

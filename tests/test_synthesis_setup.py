@@ -292,3 +292,30 @@ def test_capsule_frames_at_once_equal_one_by_one():
         assert L[i] == pytest.approx(Li, rel=1e-15, abs=1e-15)
         np.testing.assert_allclose(R[i], Ti.getRotation(), rtol=0, atol=1e-14)
         np.testing.assert_allclose(c[i], Ti.getTranslation(), rtol=0, atol=1e-15)
+
+
+def test_a_cohort_is_one_resumable_study(tmp_path, monkeypatch):
+    pytest.importorskip("pymoo")
+    from athenakin.synthesis import plan_cohort
+    from athenakin.synthesis import _cohort
+
+    cohort = {"small": phantom(size=0.95, resolution=12), "large": phantom(size=1.05,
+                                                                           resolution=12)}
+    df = plan_cohort(cohort, population=4, generations=1, options=_FAST, out=tmp_path,
+                     scheduler="synchronous")
+    assert list(df["patient"]) == ["small", "large"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["large.json", "large.toml",
+                                                          "small.json", "small.toml"]
+    assert np.all(df["coverage"].between(0.0, 1.0))
+    read_setup(df["setup_file"][0])
+
+    def boom(*a, **k):
+        raise AssertionError("planned again")
+
+    monkeypatch.setattr(_cohort, "plan_setup", boom)
+    again = plan_cohort(cohort, population=4, generations=1, options=_FAST, out=tmp_path,
+                        scheduler="synchronous")
+    assert again["coverage"].tolist() == df["coverage"].tolist()
+    with pytest.raises(AssertionError, match="planned again"):   # another search: planned
+        plan_cohort(cohort, population=4, generations=1, seed=3, options=_FAST, out=tmp_path,
+                    scheduler="synchronous")

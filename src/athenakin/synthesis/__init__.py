@@ -16,6 +16,7 @@
   role read from ``patient.toml``) and the parametric :func:`phantom`;
 * :mod:`._setup` - :func:`plan_setup`: the port and the robot's base for a patient
   (NSGA-II on Dask), :func:`evaluate_setup` and the set-up file (:class:`Setup`);
+* :mod:`._cohort` - :func:`plan_cohort`: a cohort of patients as one resumable study;
 * :mod:`.figures` - Pareto front, parameter coordinates, coverage maps (matplotlib).
 
 Needs the ``synthesis`` extra (``pip install 'athenakin[synthesis]'``) for
@@ -23,6 +24,7 @@ Needs the ``synthesis`` extra (``pip install 'athenakin[synthesis]'``) for
 Definitions and the scale-out arithmetic: ``docs/synthesis.md``.
 """
 
+from ._cohort import plan_cohort
 from ._errors import SchedulerUnreachableError, StudyMismatchError, SynthesisError, TaskFileError
 from ._metrics import (
     COLLISION_COLUMNS,
@@ -103,6 +105,7 @@ __all__ = [
     "default_setup_bounds",
     "evaluate_setup",
     "plan_setup",
+    "plan_cohort",
     "read_setup",
     "reference_decision",
     "setup_from_decision",
