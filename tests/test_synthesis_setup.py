@@ -296,8 +296,7 @@ def test_capsule_frames_at_once_equal_one_by_one():
 
 def test_a_cohort_is_one_resumable_study(tmp_path, monkeypatch):
     pytest.importorskip("pymoo")
-    from athenakin.synthesis import plan_cohort
-    from athenakin.synthesis import _cohort
+    from athenakin.synthesis import _cohort, plan_cohort
 
     cohort = {"small": phantom(size=0.95, resolution=12), "large": phantom(size=1.05,
                                                                            resolution=12)}
