@@ -135,10 +135,11 @@ def plan_cohort(patients: Mapping[str, Patient], *, design: Design | None = None
                                                           seed + i, opts):
                     done[i] = [rec["row"]]
     todo = [i for i in range(len(items)) if i not in done]
+    chunks: list[list[Any]] = [[it] for it in items]
     kind, handle, owned = open_scheduler(scheduler)
     try:
         if todo:
-            _run_chunks(kind, handle, [[it] for it in items], todo, 1,
+            _run_chunks(kind, handle, chunks, todo, 1,
                         (drow, population, generations, seed, opts,
                          None if folder is None else str(folder)),
                         lambda i, rows: done.__setitem__(i, rows), 0, fn=_cohort_chunk)
