@@ -4,15 +4,15 @@ The decision (:data:`SETUP_VARIABLES`), in the patient's frame ``p`` (``z_p`` up
 
 - the port: the point of the skin met first by the vertical line at ``(port_x, port_y)``;
   the instrument's nominal axis runs from the port to the target's centre;
-- the robot's base: it stands level (``z_b = z_p``; its roll and pitch are not set-up
-  freedoms), turned by ``yaw`` about the vertical, with the RCM at ``(rcm_x, rcm_y, rcm_z)``
-  in its own frame (which places the base: ``T_p_b`` follows from the port).
+- the robot's base: turned by ``yaw`` about the vertical and rolled by ``roll`` about its
+  rail (``R_p_b = Rz(yaw) Rx(roll)``: the rail stays horizontal), with the RCM at
+  ``(rcm_x, rcm_y, rcm_z)`` in its own frame (which places the base).
 
 Then ``T_b_e = rcm_frame_from_axis(rcm_b, axis_b)`` (the task's convention) and
 ``T_p_b = T_p_e T_b_e^-1`` with ``T_p_e`` the RCM frame at the port. What the set-up moves:
-the port on the skin (2), the base's position (3) and its yaw (1); what it cannot: the
-base's tilt, the RCM off the skin, the instrument's nominal axis off the target's centre.
-"""
+the port on the skin (2), the base's position (3), its yaw and roll (2); what it cannot: the
+rail's pitch, the RCM off the skin, the instrument's nominal axis off the target's centre,
+the RCM frame's turn about that axis (fixed by the rail, as for a task)."""
 
 from __future__ import annotations
 
@@ -643,8 +643,8 @@ def plan_setup(patient: Patient, *, design: Design | None = None,
     Each generation's candidates are evaluated as chunks on the scheduler (as
     :func:`~athenakin.synthesis.optimize` does); the objectives are the coverage, the
     least clearance and the least singularity margin (:data:`SETUP_OBJECTIVES`); a set-up
-    that covers nothing is infeasible. The first generation holds the reference guess
-    (the port above the target's centre, :func:`default_setup_bounds`' centre).
+    that covers nothing is infeasible. The first generation holds up to eight reference
+    guesses (:func:`reference_decision` at four yaws and two rolls, clipped to the bounds).
 
     Parameters
     ----------
