@@ -12,7 +12,8 @@ Then ``T_b_e = rcm_frame_from_axis(rcm_b, axis_b)`` (the task's convention) and
 ``T_p_b = T_p_e T_b_e^-1`` with ``T_p_e`` the RCM frame at the port. What the set-up moves:
 the port on the skin (2), the base's position (3), its yaw and roll (2); what it cannot: the
 rail's pitch, the RCM off the skin, the instrument's nominal axis off the target's centre,
-the RCM frame's turn about that axis (fixed by the rail, as for a task)."""
+the RCM frame's turn about that axis (fixed by the rail, as for a task).
+"""
 
 from __future__ import annotations
 
