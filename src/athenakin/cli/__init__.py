@@ -51,6 +51,7 @@ EXTRAS = {
 #: The extra of each command's own optional packages: a package of several extras is
 #: named by the command's (``plan`` needs scipy of [motion], not of [analysis]).
 COMMAND_EXTRAS = {"plan": "motion", "track": "ros", "synthesize": "synthesis",
+                  "setup": "synthesis",
                   "calibrate": "calibration", "view": "plot", "animate": "plot",
                   "export": "sim", "derive": "symbolic", "app": "app",
                   "workspace": "analysis", "singularities": "analysis", "ros2": "ros2",
@@ -164,8 +165,8 @@ def check_extras(args: argparse.Namespace) -> None:
 
 #: Subcommand modules, in the order ``athenakin --help`` lists them.
 COMMANDS = ["fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view",
-            "animate", "export", "derive", "design", "calibrate", "synthesize", "teleop", "app",
-            "warmup", "ros2"]
+            "animate", "export", "derive", "design", "calibrate", "synthesize", "setup", "teleop",
+            "app", "warmup", "ros2"]
 
 
 class _Parser(argparse.ArgumentParser):

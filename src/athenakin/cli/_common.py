@@ -14,7 +14,7 @@ from .._typing import FloatArray
 from ..design import Design
 from ..errors import InvalidInputError
 from ..robot import default_rcm_frame
-from ..robot._setup import check_rcm_position, read_rcm_json  # noqa: F401  (re-exported)
+from ..robot._setup import check_rcm_position, read_rcm_file, read_rcm_json  # noqa: F401
 
 
 def add_design_option(p: argparse.ArgumentParser) -> None:
@@ -30,8 +30,9 @@ def add_setup_options(p: argparse.ArgumentParser) -> None:
                    help="RCM frame E in the base frame: position (m) and fixed-axis x-y-z "
                         "angles (deg), R = Rz(yaw) Ry(pitch) Rx(roll) "
                         "(default: the reference set-up, default_rcm_frame)")
-    g.add_argument("--rcm-file", metavar="FILE", type=Path,
-                   help='JSON file {"T_b_e": 4x4 nested list} (ecosystem layout [[R, t], [0, 1]])')
+    g.add_argument("--rcm-file", "--rcm-frame", metavar="FILE", type=Path, dest="rcm_file",
+                   help='JSON file {"T_b_e": 4x4 nested list} (ecosystem layout [[R, t], [0, 1]]), '
+                        'or a set-up file setup.toml of `athenakin setup plan`')
 
 
 def add_robot_options(p: argparse.ArgumentParser) -> None:
@@ -64,7 +65,7 @@ def load_rcm(args: argparse.Namespace, design: Design) -> FloatArray:
         return check_rcm_position(transform_from_rotation_translation(R, np.array([x, y, z])),
                                   "--rcm")
     if getattr(args, "rcm_file", None):
-        return read_rcm_json(args.rcm_file)
+        return read_rcm_file(args.rcm_file)
     return default_rcm_frame(design)
 
 

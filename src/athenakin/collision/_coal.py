@@ -62,6 +62,25 @@ def capsule_transform(a: FloatArray, b: FloatArray) -> tuple[float, Any]:
     return L, _transform(np.stack([x, y, z], axis=1), 0.5 * (a + b))
 
 
+def _capsule_frames(seg: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """:func:`capsule_transform` of every segment at once: lengths, rotations, centres.
+
+    Rows with a NaN give NaN (the caller skips them).
+    """
+    a, b = seg[:, 0], seg[:, 1]
+    d = b - a
+    L = np.linalg.norm(d, axis=-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        z = np.where((L > 0)[:, None], d / np.where(L > 0, L, 1.0)[:, None],
+                     np.array([0.0, 0.0, 1.0]))
+    ax = np.eye(3)[np.argmin(np.abs(np.nan_to_num(z, nan=0.0)), axis=-1)]
+    x = np.cross(ax, z)
+    x /= np.linalg.norm(x, axis=-1, keepdims=True)
+    y = np.cross(z, x)
+    R = np.ascontiguousarray(np.stack([x, y, z], axis=-1))
+    return L, R, np.ascontiguousarray(0.5 * (a + b))
+
+
 def capsule_obstacle_distances(seg: FloatArray, radius: float,
                                obstacle: Obstacle,
                                shape: Any | None = None) -> tuple[FloatArray,
@@ -93,12 +112,10 @@ def capsule_obstacle_distances(seg: FloatArray, radius: float,
     wit = np.full((n, 2, 3), np.nan)
     req = coal.DistanceRequest()
     req.enable_signed_distance = True
-    for i in range(n):
-        a, b = seg[i, 0], seg[i, 1]
-        if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
-            continue
-        L, T_c = capsule_transform(a, b)
-        cap = coal.Capsule(radius, L) if L > 0 else coal.Sphere(radius)
+    L, R, centre = _capsule_frames(seg)
+    for i in np.flatnonzero(np.all(np.isfinite(seg), axis=(1, 2))):
+        T_c = coal.Transform3s(R[i], centre[i])
+        cap = coal.Capsule(radius, L[i]) if L[i] > 0 else coal.Sphere(radius)
         res = coal.DistanceResult()
         d = coal.distance(cap, T_c, shape, T_o, req, res)
         dist[i] = d

@@ -110,6 +110,54 @@ def check_rcm_position(T: FloatArray, option: str) -> FloatArray:
     return T
 
 
+def read_rcm_file(path: str | Path, *, option: str = "--rcm-file") -> FloatArray:
+    """The RCM frame from a JSON file ``{"T_b_e": ...}`` or a set-up TOML file.
+
+    A file whose name ends in ``.toml`` is a set-up file (``athenakin setup plan``): its
+    ``[setup]`` table (or the top level) holds ``T_b_e``, a 4x4 row-major array; any
+    other file is read by :func:`read_rcm_json`.
+
+    Parameters
+    ----------
+    path : str or Path
+    option : str, keyword-only
+        What the file is, first in every message.
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+
+    Raises
+    ------
+    ValueError
+        No ``T_b_e``, not a 4x4 rigid transform of finite numbers, the RCM too far
+        (the message names the file).
+    OSError
+        The file cannot be read.
+    """
+    if Path(path).suffix.lower() != ".toml":
+        return read_rcm_json(path, option=option)
+    from .._toml import read_toml
+
+    where = f"{option} {path}"
+    data = read_toml(path, what="set-up file")
+    table = data.get("setup", data)
+    if not isinstance(table, dict) or "T_b_e" not in table:
+        raise InvalidInputError(f"{where}: expected a [setup] table with key 'T_b_e' (a set-up "
+                                f"file of `athenakin setup plan`)")
+    try:
+        T = np.asarray(table["T_b_e"], dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise InvalidInputError(f"{where}: T_b_e: expected a 4x4 array of numbers") from None
+    if T.shape != (4, 4):
+        raise InvalidInputError(f"{where}: T_b_e: expected shape (4, 4), got {T.shape}")
+    try:
+        return check_rcm_position(check_transform(T, "T_b_e"), f"{where}: T_b_e")
+    except InvalidInputError as exc:
+        msg = str(exc)
+        raise InvalidInputError(msg if msg.startswith(option) else f"{where}: {msg}") from None
+
+
 def read_rcm_json(path: str | Path, *, option: str = "--rcm-file") -> FloatArray:
     """The RCM frame from a JSON file ``{"T_b_e": 4x4 nested list}``: the one reader.
 

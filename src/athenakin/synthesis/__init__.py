@@ -12,6 +12,11 @@
   :class:`StudyOptions` (with the collision check :class:`CollisionSpec`);
 * :mod:`._search` - :func:`optimize`: NSGA-II (pymoo) over ``l1..l5`` and the
   strokes, the Pareto front and the reference design on it;
+* :mod:`._patient` - the patient of a set-up plan (:class:`Patient`: closed surfaces by
+  role read from ``patient.toml``) and the parametric :func:`phantom`;
+* :mod:`._setup` - :func:`plan_setup`: the port and the robot's base for a patient
+  (NSGA-II on Dask), :func:`evaluate_setup` and the set-up file (:class:`Setup`);
+* :mod:`._cohort` - :func:`plan_cohort`: a cohort of patients as one resumable study;
 * :mod:`.figures` - Pareto front, parameter coordinates, coverage maps (matplotlib).
 
 Needs the ``synthesis`` extra (``pip install 'athenakin[synthesis]'``) for
@@ -19,6 +24,7 @@ Needs the ``synthesis`` extra (``pip install 'athenakin[synthesis]'``) for
 Definitions and the scale-out arithmetic: ``docs/synthesis.md``.
 """
 
+from ._cohort import plan_cohort
 from ._errors import SchedulerUnreachableError, StudyMismatchError, SynthesisError, TaskFileError
 from ._metrics import (
     COLLISION_COLUMNS,
@@ -34,6 +40,15 @@ from ._metrics import (
     reachability,
     row_from_design,
 )
+from ._patient import (
+    ROLES,
+    OpenSurfaceError,
+    Patient,
+    PatientFileError,
+    PatientMesh,
+    phantom,
+    write_patient,
+)
 from ._scheduler import LOCAL_SCHEDULERS
 from ._search import (
     DEFAULT_OBJECTIVES,
@@ -47,6 +62,21 @@ from ._search import (
     pareto_mask,
     random_designs,
 )
+from ._setup import (
+    SETUP_COLUMNS,
+    SETUP_OBJECTIVES,
+    SETUP_VARIABLES,
+    Setup,
+    SetupOptions,
+    SetupPlan,
+    covered_samples,
+    default_setup_bounds,
+    evaluate_setup,
+    plan_setup,
+    read_setup,
+    reference_decision,
+    setup_from_decision,
+)
 from ._study import CHUNK_SIZE, StudyOptions, design_rows, evaluate, read_study
 from ._task import (
     MAX_TASK_SAMPLES,
@@ -58,6 +88,27 @@ from ._task import (
 )
 
 __all__ = [
+    "ROLES",
+    "OpenSurfaceError",
+    "Patient",
+    "PatientFileError",
+    "PatientMesh",
+    "phantom",
+    "write_patient",
+    "SETUP_COLUMNS",
+    "SETUP_OBJECTIVES",
+    "SETUP_VARIABLES",
+    "Setup",
+    "SetupOptions",
+    "SetupPlan",
+    "covered_samples",
+    "default_setup_bounds",
+    "evaluate_setup",
+    "plan_setup",
+    "plan_cohort",
+    "read_setup",
+    "reference_decision",
+    "setup_from_decision",
     "CollisionSpec",
     "StudyOptions",
     "collision_spec",

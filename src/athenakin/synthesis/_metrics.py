@@ -22,7 +22,8 @@ from ._task import Task, TaskSamples, sample_task
 __all__ = ["METRIC_COLUMNS", "PARAMETER_COLUMNS", "DEFAULT_SAMPLES",
            "DEFAULT_ENCODER_RESOLUTION", "ASSEMBLY_GRID", "evaluate_design", "design_from_row",
            "row_from_design", "reachability", "CollisionSpec", "collision_spec",
-           "COLLISION_COLUMNS", "DEFAULT_COLLISION_SAMPLES", "MAX_COLLISION_SAMPLES"]
+           "COLLISION_COLUMNS", "DEFAULT_COLLISION_SAMPLES", "MAX_COLLISION_SAMPLES",
+           "sample_metrics", "REACHED_COLUMNS"]
 
 #: Task samples per design unless told otherwise.
 DEFAULT_SAMPLES = 100_000
@@ -418,44 +419,17 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
         reachable samples are NaN exactly where ``coverage == 0`` (``min_clearance``
         also where no checked sample is reached).
     """
-    from ..analysis import parallel_jacobian, tool_tip_jacobian
-
     encoder_resolution = check_scalar(encoder_resolution, "encoder_resolution", nonnegative=True)
     s, q, mode, _ = reachability(design, task, samples=samples, seed=seed, backend=backend)
     T = task.T_b_e
     n = s.depth.shape[0]
-    valid = mode != 0
-    idx = np.flatnonzero(valid)
-    qv, mv = q[idx], mode[idx]
-    J_tip = tool_tip_jacobian(qv, T, design, mode=mv, backend=backend)  # type: ignore[arg-type]
-    J_par = parallel_jacobian(qv, design, mode=mv, backend=backend)  # type: ignore[arg-type]
-    lo, hi = design.stroke_min, design.stroke_max
-    counts, margin, arg_margin, cond, arg_cond, q_lo, q_hi, tip = reduce_samples(
-        idx, qv, mv, np.ascontiguousarray(T[:3, :3]), T[:3, 3].copy(), s.direction_e, s.depth,
-        J_tip, J_par, design.lengths, design.tool_length, lo, hi, float(encoder_resolution),
-        backend=backend)
-    out: dict[str, float] = {}
-    n_plus, n_minus = int(counts[1]), int(counts[2])
-    out["coverage"] = counts[0] / n
+    out = sample_metrics(design, T, s.direction_e, s.depth, q, mode, float(encoder_resolution),
+                         backend=backend)
+    n_plus, n_minus = int(np.count_nonzero(mode > 0)), int(np.count_nonzero(mode < 0))
     out["coverage_mode"] = max(n_plus, n_minus) / n
     out["mode"] = 1.0 if n_plus >= n_minus else -1.0
-    out["coverage_plus"] = n_plus / n
-    out["coverage_minus"] = n_minus / n
     nan = math.nan
-    if counts[0] == 0:
-        out.update({f"margin_{c}": nan for c in _CONDITIONS})
-        out.update(margin_min=nan, cond_tip_max=nan, cond_parallel_max=nan, stroke_use_q1=nan,
-                   stroke_use_q2=nan, stroke_use_q3=nan, tip_error_max=nan, tip_error_mean=nan,
-                   peak_actuator_force=nan, min_tip_force_capability=nan)
-    else:
-        out.update(_reached_metrics(design, T, qv, mv, J_tip, J_par, arg_margin, arg_cond))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            use = (q_hi - q_lo) / (hi - lo)
-        for i in range(3):
-            out[f"stroke_use_q{i + 1}"] = float(use[i])
-        out["tip_error_max"] = float(tip[0])
-        out["tip_error_mean"] = float(tip[1] / counts[0])
-        out.update(_force_columns(qv, mv, T, design, backend))
+    lo, hi = design.stroke_min, design.stroke_max
     if collision is None:
         out.update(dict.fromkeys(COLLISION_COLUMNS, nan))
     else:
@@ -465,6 +439,83 @@ def evaluate_design(design: Design, task: Task, *, samples: int = DEFAULT_SAMPLE
     out["size"] = float(2 * design.l1 + 2 * design.l3 + design.l2 + design.l4 + design.l5
                         + stroke)
     return {k: float(out[k]) for k in METRIC_COLUMNS}
+
+
+#: Metric columns of :func:`sample_metrics` taken over the reached samples.
+REACHED_COLUMNS = (tuple(f"margin_{c}" for c in _CONDITIONS)
+                   + ("margin_min", "cond_tip_max", "cond_parallel_max", "stroke_use_q1",
+                      "stroke_use_q2", "stroke_use_q3", "tip_error_max", "tip_error_mean",
+                      "peak_actuator_force", "min_tip_force_capability"))
+
+
+def sample_metrics(design: Design, T: FloatArray, d_e: FloatArray, depth: FloatArray,
+                   q: FloatArray, mode: IntArray, encoder_resolution: float, *,
+                   forces: bool = True, backend: str = "auto") -> dict[str, float]:
+    """Coverage and the metrics over the reached samples of any set of tip samples.
+
+    The core of :func:`evaluate_design`, for samples of a task's cone or of a patient's
+    target (:func:`athenakin.synthesis.evaluate_setup`).
+
+    Parameters
+    ----------
+    design : Design
+    T : ndarray, shape (4, 4)
+        RCM frame in the base frame.
+    d_e : ndarray, shape (n, 3)
+        Unit instrument directions, frame E.
+    depth : ndarray, shape (n,)
+        Tip depths beyond the RCM, m.
+    q : ndarray, shape (n, 3)
+        Actuator values (NaN where not reached), m.
+    mode : ndarray of int, shape (n,)
+        Assembly mode, 0 where the sample does not count.
+    encoder_resolution : float
+        m.
+    forces : bool, keyword-only
+        Compute ``peak_actuator_force`` and ``min_tip_force_capability`` (else NaN).
+    backend : {"auto", "numpy", "numba"}, keyword-only
+        The Jacobians, the reduction and the forces on the compiled kernels or the numpy
+        reference (:mod:`athenakin._backend`).
+
+    Returns
+    -------
+    dict of str -> float
+        ``coverage``, ``coverage_plus``, ``coverage_minus`` (fractions of ``n``) and
+        :data:`REACHED_COLUMNS` (NaN where nothing is reached).
+    """
+    from ..analysis import parallel_jacobian, tool_tip_jacobian
+
+    n = depth.shape[0]
+    idx = np.flatnonzero(mode != 0)
+    qv, mv = q[idx], mode[idx]
+    out: dict[str, float] = {}
+    nan = math.nan
+    if idx.size == 0:
+        out.update(coverage=0.0, coverage_plus=0.0, coverage_minus=0.0)
+        out.update(dict.fromkeys(REACHED_COLUMNS, nan))
+        return out
+    J_tip = tool_tip_jacobian(qv, T, design, mode=mv, backend=backend)  # type: ignore[arg-type]
+    J_par = parallel_jacobian(qv, design, mode=mv, backend=backend)  # type: ignore[arg-type]
+    lo, hi = design.stroke_min, design.stroke_max
+    counts, margin, arg_margin, cond, arg_cond, q_lo, q_hi, tip = reduce_samples(
+        idx, qv, mv, np.ascontiguousarray(T[:3, :3]), T[:3, 3].copy(), d_e, depth,
+        J_tip, J_par, design.lengths, design.tool_length, lo, hi, float(encoder_resolution),
+        backend=backend)
+    out["coverage"] = counts[0] / n
+    out["coverage_plus"] = int(counts[1]) / n
+    out["coverage_minus"] = int(counts[2]) / n
+    out.update(_reached_metrics(design, T, qv, mv, J_tip, J_par, arg_margin, arg_cond))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        use = (q_hi - q_lo) / (hi - lo)
+    for i in range(3):
+        out[f"stroke_use_q{i + 1}"] = float(use[i])
+    out["tip_error_max"] = float(tip[0])
+    out["tip_error_mean"] = float(tip[1] / counts[0])
+    if forces:
+        out.update(_force_columns(qv, mv, T, design, backend))
+    else:
+        out.update(peak_actuator_force=nan, min_tip_force_capability=nan)
+    return out
 
 
 def _reached_metrics(design: Design, T: FloatArray, q: FloatArray,

@@ -441,14 +441,19 @@ def _open_study(out: Path, rows: list[dict[str, Any]], task: Task, samples: int,
 
 def _run_chunks(kind: str, handle: Any, chunks: Sequence[list[dict[str, Any]]], todo: list[int],
                 size: int, args: tuple[Any, ...], finished: Callable[[int, Any], None],
-                retries: int) -> None:
-    """Compute the chunks ``todo`` on the scheduler of ``kind`` (local, executor, distributed)."""
+                retries: int, fn: Callable[..., Any] | None = None) -> None:
+    """Compute the chunks ``todo`` on the scheduler of ``kind`` (local, executor, distributed).
+
+    Each chunk is ``fn(chunk, start, *args)`` (default :func:`_chunk_frame`, a design
+    study's; the set-up planner passes its own).
+    """
+    f = _chunk_frame if fn is None else fn
     if kind == "local":
-        _run_local(handle, chunks, todo, size, args, finished)
+        _run_local(handle, chunks, todo, size, args, finished, f)
     elif kind == "executor":
-        _run_executor(handle, chunks, todo, size, args, finished)
+        _run_executor(handle, chunks, todo, size, args, finished, f)
     else:
-        _run_distributed(handle, chunks, todo, size, args, finished, retries)
+        _run_distributed(handle, chunks, todo, size, args, finished, retries, f)
 
 
 def _bar(total: int, initial: int, show: bool) -> Any:
@@ -463,14 +468,15 @@ def _bar(total: int, initial: int, show: bool) -> Any:
 
 
 def _run_local(name: str, chunks: Sequence[list[dict[str, Any]]], todo: list[int], size: int,
-               args: tuple[Any, ...], finished: Callable[[int, Any], None]) -> None:
+               args: tuple[Any, ...], finished: Callable[[int, Any], None],
+               fn: Callable[..., Any] = _chunk_frame) -> None:
     """Dask's local scheduler; each chunk is handed over (and written) as it finishes."""
     import dask
     from dask.callbacks import Callback
 
     tasks = {}
     for i in todo:
-        d = dask.delayed(_chunk_frame, pure=True)(chunks[i], i * size, *args)
+        d = dask.delayed(fn, pure=True)(chunks[i], i * size, *args)
         tasks[d.key] = (i, d)
 
     class _Done(Callback):  # type: ignore[misc]
@@ -484,14 +490,15 @@ def _run_local(name: str, chunks: Sequence[list[dict[str, Any]]], todo: list[int
 
 def _run_executor(executor: concurrent.futures.Executor, chunks: Sequence[list[dict[str, Any]]],
                   todo: list[int], size: int, args: tuple[Any, ...],
-                  finished: Callable[[int, Any], None]) -> None:
+                  finished: Callable[[int, Any], None],
+                  fn: Callable[..., Any] = _chunk_frame) -> None:
     """Run the chunks on any ``concurrent.futures.Executor``, collected as they complete.
 
     A process or thread pool, Ray's, submitit's or a SLURM pool. A chunk that raises
     cancels the chunks not yet started and raises here (the executor's own retry policy,
     if it has one, applies before that).
     """
-    futures = {executor.submit(_chunk_frame, chunks[i], i * size, *args): i for i in todo}
+    futures = {executor.submit(fn, chunks[i], i * size, *args): i for i in todo}
     try:
         for fut in concurrent.futures.as_completed(futures):
             finished(futures[fut], fut.result())
@@ -502,11 +509,11 @@ def _run_executor(executor: concurrent.futures.Executor, chunks: Sequence[list[d
 
 def _run_distributed(client: Any, chunks: Sequence[list[dict[str, Any]]], todo: list[int],
                      size: int, args: tuple[Any, ...], finished: Callable[[int, Any], None],
-                     retries: int) -> None:
+                     retries: int, fn: Callable[..., Any] = _chunk_frame) -> None:
     """A ``distributed`` cluster; results are collected (and written) as they complete."""
     from distributed import as_completed
 
-    futures = {client.submit(_chunk_frame, chunks[i], i * size, *args, pure=True,
+    futures = {client.submit(fn, chunks[i], i * size, *args, pure=True,
                              retries=retries): i for i in todo}
     for fut, df in as_completed(list(futures), with_results=True, loop=client.loop):
         finished(futures[fut], df)

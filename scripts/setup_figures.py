@@ -1,0 +1,262 @@
+"""The figures and numbers of docs/setup.md: a set-up planned for the phantom, re-measured.
+
+Run from the repository root (minutes on a 2-core machine; the load is printed)::
+
+    python scripts/setup_figures.py [--samples 100000] [--certify 200] [--cohort 0]
+
+1. plans a set-up for the shipped phantom (``plan_setup``, the defaults) and times it;
+2. re-measures its coverage on ``--samples`` fresh target samples, every test and every
+   clearance checked (in chunks of 10 000, bounded memory);
+3. certifies, for ``--certify`` covered samples, that an assembled solution exists whose
+   tool tip provably lies within a few nanometres of the target point
+   (:func:`athenakin.certified.certified_forward_kinematics`);
+4. draws the patient, the port, the robot at three covered targets and the coverage map
+   (``docs/figures/setup_scene.png``, ``docs/figures/setup_coverage.png``);
+5. with ``--cohort N``, plans N phantoms of sizes 0.85..1.15 as one Dask study
+   (:func:`athenakin.synthesis.plan_cohort`, resumable in ``--cohort-out``);
+6. writes the numbers to ``docs/figures/setup_numbers.json`` and between the markers of
+   docs/setup.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import time
+from pathlib import Path
+
+import numpy as np
+
+from athenakin.design import Design
+from athenakin.synthesis import SetupOptions, covered_samples, phantom, plan_setup
+
+ROOT = Path(__file__).resolve().parents[1]
+FIG = ROOT / "docs" / "figures"
+
+
+def _load() -> str:
+    a, b, c = os.getloadavg()
+    return f"load {a:.2f} / {b:.2f} / {c:.2f} on {os.cpu_count()} cores"
+
+
+def remeasure(patient, setup, design, opts, n: int, seed: int) -> tuple[float, int, float]:
+    """Coverage on ``n`` fresh samples (chunks of 10 000), and the time it took."""
+    t0 = time.perf_counter()
+    P = patient.target_samples(n, seed=seed)
+    covered = 0
+    for i in range(0, n, 10_000):
+        c, _, _ = covered_samples(patient, setup, design, points=P[i:i + 10_000], options=opts)
+        covered += int(np.count_nonzero(c))
+    return covered / n, covered, time.perf_counter() - t0
+
+
+def certify(patient, setup, design, opts, k: int, seed: int) -> dict[str, float]:
+    """Certified FK at ``k`` covered samples: an assembled solution, its tip boxed."""
+    from athenakin.certified import certified_forward_kinematics
+
+    P = patient.target_samples(4 * k, seed=seed)
+    cov, q, mode = covered_samples(patient, setup, design, points=P, options=opts)
+    idx = np.flatnonzero(cov)[:k]
+    t0 = time.perf_counter()
+    cert = certified_forward_kinematics(q[idx], setup.T_b_e, design)
+    tip_b = (P[idx] - setup.T_p_b[:3, 3]) @ setup.T_p_b[:3, :3]   # the targets, base frame
+    t = tip_b[:, None]
+    gap = np.linalg.norm(np.maximum(np.maximum(cert.tip_lo - t, t - cert.tip_hi), 0.0), axis=-1)
+    # the IK's own slot: the assembly mode of the covered configuration, any branch
+    slot_mode = np.where(np.arange(16) < 8, 1, -1)
+    mine = cert.certified & (slot_mode[None] == mode[idx, None])
+    gap = np.where(mine, gap, np.inf).min(axis=-1)
+    proven = gap <= 1e-9
+    width = np.max(np.where(mine[..., None], cert.tip_hi - cert.tip_lo, 0.0))
+    return {"certified_checked": int(idx.size), "certified_proven": int(np.sum(proven)),
+            "certified_target_gap_max_m": float(np.max(gap)),
+            "certified_tip_box_max_m": float(width),
+            "certified_seconds": time.perf_counter() - t0}
+
+
+def figures(patient, plan, design, opts) -> None:
+    """The scene (patient, port, robot at three targets) and the coverage map."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from athenakin._mechanism import BODIES, body_segments, mechanism_points
+    from athenakin.collision import Bodies
+
+    setup = plan.chosen
+    P = patient.target_samples(3000, seed=11)
+    cov, q, mode = covered_samples(patient, setup, design, points=P, options=opts)
+    fig = plt.figure(figsize=(10, 7))
+    ax = fig.add_subplot(projection="3d")
+    colours = {"skin": ("#d9a383", 0.12), "target": ("#e08a00", 0.9),
+               "forbidden": ("#b0203a", 0.8), "table": ("#7f8790", 0.25)}
+    for m in patient.meshes:
+        c, a = colours[m.role]
+        V = m.vertices
+        if m.role == "table":           # its top, within the plotted region
+            lo, hi = m.bounds
+            x0, x1 = max(lo[0], -0.5), min(hi[0], 0.5)
+            X, Y = np.meshgrid([x0, x1], [lo[1], hi[1]])
+            ax.plot_surface(X, Y, np.full_like(X, hi[2]), color=c, alpha=a, linewidth=0)
+            continue
+        ax.plot_trisurf(V[:, 0], V[:, 1], V[:, 2], triangles=m.faces, color=c, alpha=a,
+                        linewidth=0)
+    ax.scatter(*setup.port, color="k", s=40, label="port")
+    bodies = Bodies.default(design)
+    picks = np.flatnonzero(cov)
+    picks = picks[np.linspace(0, picks.size - 1, 3).astype(int)]
+    for j, i in enumerate(picks):
+        pts = mechanism_points(q[i], setup.T_b_e, design, slot=0 if mode[i] == 1 else 8,
+                               geometry=bodies.geometry)
+        segs = body_segments(pts) @ setup.T_p_b[:3, :3].T + setup.T_p_b[:3, 3]
+        for k in range(len(BODIES)):
+            ax.plot(*segs[k].T, color=f"C{j}", lw=max(1.0, 300 * bodies.radius_array[k]),
+                    alpha=0.8)
+        ax.scatter(*P[i], color=f"C{j}", s=25)
+    ax.set_xlabel("x (cranial), m")
+    ax.set_ylabel("y (left), m")
+    ax.set_zlabel("z (anterior), m")
+    ax.set_xlim(-0.5, 0.5)
+    ax.set_ylim(-0.5, 0.5)
+    ax.set_zlim(-0.05, 0.8)
+    ax.set_box_aspect((1.0, 1.0, 0.85))
+    ax.view_init(elev=24, azim=-58)
+    ax.set_title(f"set-up for the phantom: coverage {100 * plan.figures['coverage']:.1f} %, "
+                 f"robot at three covered targets")
+    fig.tight_layout()
+    fig.savefig(FIG / "setup_scene.png", dpi=110)
+    plt.close(fig)
+    fig, axs = plt.subplots(1, 2, figsize=(11, 3.6))
+    for ax, (a, b), lab in zip(axs, ((1, 0), (1, 2)), (("y (left), m", "x (cranial), m"),
+                                                         ("y (left), m", "z (anterior), m")),
+                               strict=True):
+        ax.scatter(P[cov, a], P[cov, b], s=3, color="#2a9d8f", label="covered")
+        ax.scatter(P[~cov, a], P[~cov, b], s=6, color="#c1121f", label="not covered")
+        ax.set_xlabel(lab[0])
+        ax.set_ylabel(lab[1])
+        ax.set_aspect("equal")
+    fig.legend(*axs[0].get_legend_handles_labels(), loc="lower center", ncol=2, fontsize=8)
+    fig.suptitle(f"coverage map of the pancreas (3000 samples, {100 * cov.mean():.1f} % "
+                 f"covered): top view, front view")
+    fig.tight_layout(rect=(0, 0.06, 1, 1))
+    fig.savefig(FIG / "setup_coverage.png", dpi=110)
+    plt.close(fig)
+
+
+def cohort(n: int, opts, out: Path) -> list[dict[str, float]]:
+    """N phantoms of varied size planned as one study (``plan_cohort``, resumable in ``out``)."""
+    from athenakin.synthesis import plan_cohort
+
+    sizes = np.linspace(0.85, 1.15, n)
+    patients = {f"phantom-{s:.3f}": phantom(size=float(s), name=f"phantom {s:.3f}")
+                for s in sizes}
+    t0 = time.perf_counter()
+    df = plan_cohort(patients, options=opts, out=out)
+    dt = time.perf_counter() - t0
+    print(f"cohort of {n} planned in {dt:.0f} s ({_load()})", flush=True)
+    return [{"size": float(s), "seconds": dt / n,
+             **{c: float(r[c]) for c in ("coverage", "min_clearance", "margin_min",
+                                          "collisions")}}
+            for s, (_, r) in zip(sizes, df.iterrows(), strict=True)]
+
+
+def write_numbers(numbers: dict[str, object]) -> None:
+    """The numbers as JSON, and as tables between the markers of docs/setup.md."""
+    (FIG / "setup_numbers.json").write_text(json.dumps(numbers, indent=1) + "\n")
+    doc = ROOT / "docs" / "setup.md"
+    f = numbers["figures"]
+    assert isinstance(f, dict)
+    lines = [
+        "| figure | value |", "| --- | --- |",
+        f"| planning time (NSGA-II, {numbers['population']} x {numbers['generations']}, "
+        f"Dask threads) | {numbers['plan_seconds']:.0f} s ({numbers['plan_load']}) |",
+        f"| coverage, planner ({numbers['final_samples']} samples) | "
+        f"{100 * f['coverage']:.2f} % |",
+        f"| coverage, re-measured ({numbers['remeasure_samples']} fresh samples) | "
+        f"{100 * numbers['remeasured_coverage']:.2f} % ({numbers['remeasure_seconds']:.0f} s) |",
+        f"| least clearance of the bodies (patient, table, each other) | "
+        f"{1000 * f['min_clearance']:.1f} mm |",
+        f"| least singularity margin (length conditions) | {1000 * f['margin_min']:.1f} mm |",
+        f"| colliding configurations among the reached samples | {int(f['collisions'])} |",
+        f"| largest condition number (tip Jacobian) | {f['cond_tip_max']:.1f} |",
+        f"| insertion depth used | {1000 * f['depth_min']:.0f} to {1000 * f['depth_max']:.0f} mm |",
+        f"| stroke use q1 / q2 / q3 | {f['stroke_use_q1']:.2f} / {f['stroke_use_q2']:.2f} / "
+        f"{f['stroke_use_q3']:.2f} |",
+    ]
+    if "certified_checked" in numbers:
+        lines.append(f"| certified covered samples (a solution of the IK's assembly mode "
+                     f"exists, its tip box within 1 nm of the target) | "
+                     f"{numbers['certified_proven']} of {numbers['certified_checked']} (tip "
+                     f"boxes at most {numbers['certified_tip_box_max_m']:.1e} m wide, target "
+                     f"at most {numbers['certified_target_gap_max_m']:.1e} m from its box; "
+                     f"{numbers['certified_seconds']:.0f} s) |")
+    port = ", ".join(f"{1000 * v:.1f}" for v in numbers["port"])  # type: ignore[attr-defined]
+    lines.append(f"| port (patient frame) | {port} mm |")
+    block = "\n".join(lines)
+    text = doc.read_text()
+    text = re.sub(r"(<!-- setup-numbers -->\n).*?(\n<!-- /setup-numbers -->)",
+                  lambda m: m.group(1) + block + m.group(2), text, flags=re.S)
+    if numbers.get("cohort"):
+        rows = ["| size | coverage | least clearance | least margin | collisions | time |",
+                "| --- | --- | --- | --- | --- | --- |"]
+        for r in numbers["cohort"]:  # type: ignore[attr-defined]
+            rows.append(f"| {r['size']:.3f} | {100 * r['coverage']:.1f} % | "
+                        f"{1000 * r['min_clearance']:.1f} mm | {1000 * r['margin_min']:.1f} mm "
+                        f"| {int(r['collisions'])} | {r['seconds']:.0f} s |")
+        text = re.sub(r"(<!-- setup-cohort -->\n).*?(\n<!-- /setup-cohort -->)",
+                      lambda m: m.group(1) + "\n".join(rows) + m.group(2), text, flags=re.S)
+    doc.write_text(text)
+
+
+def main() -> None:
+    """Plan, re-measure, certify, draw, write."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--samples", type=int, default=100_000)
+    ap.add_argument("--certify", type=int, default=200)
+    ap.add_argument("--cohort", type=int, default=0)
+    ap.add_argument("--no-figures", action="store_true")
+    ap.add_argument("--cohort-only", action="store_true",
+                    help="plan the cohort only; the other numbers from setup_numbers.json")
+    ap.add_argument("--cohort-out", type=Path, default=ROOT / "setup_cohort",
+                    help="folder of the cohort's set-ups (resumable)")
+    args = ap.parse_args()
+    if args.cohort_only:
+        numbers = json.loads((FIG / "setup_numbers.json").read_text())
+        numbers["cohort"] = cohort(args.cohort, SetupOptions(), args.cohort_out)
+        write_numbers(numbers)
+        return
+    design = Design.default()
+    patient = phantom()
+    print("planning,", _load(), flush=True)
+    t0 = time.perf_counter()
+    plan = plan_setup(patient, design=design)
+    dt = time.perf_counter() - t0
+    load = _load()
+    print(f"planned in {dt:.1f} s ({load}): {plan.figures}", flush=True)
+    plan.write(FIG / "setup_phantom.toml", patient="phantom()")
+    opts = plan.options
+    numbers: dict[str, object] = {
+        "plan_seconds": dt, "plan_load": load, "population": 16, "generations": 8,
+        "final_samples": opts.final_samples, "figures": plan.figures,
+        "port": plan.chosen.port.tolist(), "decision": plan.chosen.decision.tolist()}
+    cov, n_cov, dtm = remeasure(patient, plan.chosen, design, opts, args.samples, seed=12345)
+    numbers.update(remeasure_samples=args.samples, remeasured_coverage=cov,
+                   remeasure_seconds=dtm, remeasure_load=_load())
+    print(f"re-measured on {args.samples} fresh samples: {cov:.4f} ({dtm:.0f} s, {_load()})",
+          flush=True)
+    if args.certify:
+        numbers.update(certify(patient, plan.chosen, design, opts, args.certify, seed=777))
+        print({k: numbers[k] for k in numbers if str(k).startswith("certified")}, flush=True)
+    if not args.no_figures:
+        figures(patient, plan, design, opts)
+    if args.cohort:
+        numbers["cohort"] = cohort(args.cohort, opts, args.cohort_out)
+    write_numbers(numbers)
+    print("wrote docs/figures/setup_*.png, setup_numbers.json, docs/setup.md", flush=True)
+
+
+if __name__ == "__main__":
+    main()
