@@ -202,26 +202,19 @@ def method_problems(name, func, kind):
 #: ``Tracker``, the teleop classes), documented there: once merged, each documented one
 #: must leave this set (:func:`test_pending_methods_are_still_pending`).
 PENDING_METHODS: set[str] = {
-    "athenakin.Robot.clearance", "athenakin.Robot.force_capability",
-    "athenakin.Robot.forward_dynamics", "athenakin.Robot.forward_kinematics",
-    "athenakin.Robot.inverse_dynamics", "athenakin.Robot.inverse_kinematics",
-    "athenakin.Robot.mass_matrix", "athenakin.Robot.mjcf", "athenakin.Robot.q_from_instrument",
-    "athenakin.Robot.q_from_tool_tip", "athenakin.Robot.singularities",
-    "athenakin.Robot.statics", "athenakin.Robot.tool_tip_jacobian", "athenakin.Robot.urdf",
     "athenakin.collision.Bodies.from_mapping", "athenakin.collision.Bodies.from_toml",
     "athenakin.collision.Bodies.to_toml", "athenakin.collision.Bodies.to_toml_table",
     "athenakin.collision.Bodies.with_excluded", "athenakin.collision.Bodies.with_geometry",
     "athenakin.collision.Bodies.with_radius", "athenakin.motion.Tracker.reset",
     "athenakin.teleop.ArmBackend.read_encoders", "athenakin.teleop.ArmBackend.write",
-    "athenakin.teleop.MujocoBackend.closure_error",
-    "athenakin.teleop.MujocoBackend.read_encoders", "athenakin.teleop.MujocoBackend.tip_b",
-    "athenakin.teleop.MujocoBackend.write", "athenakin.teleop.SessionLog.counts",
-    "athenakin.teleop.SimulatedArm.measured_cp", "athenakin.teleop.SimulatedArm.measured_js",
-    "athenakin.teleop.SimulatedArm.move_cp", "athenakin.teleop.SimulatedArm.move_jp",
-    "athenakin.teleop.SimulatedArm.servo_jp", "athenakin.teleop.SimulatedArm.setpoint_cp",
-    "athenakin.teleop.SimulatedArm.setpoint_js", "athenakin.teleop.SimulatedArm.step",
-    "athenakin.teleop.Teleop.reset", "athenakin.teleop.Teleop.set_scale",
-    "athenakin.teleop.TeleopOptions.stopping_distance", "athenakin.teleop.TremorFilter.reset",
+    "athenakin.teleop.MujocoBackend.closure_error", "athenakin.teleop.MujocoBackend.read_encoders",
+    "athenakin.teleop.MujocoBackend.tip_b", "athenakin.teleop.MujocoBackend.write",
+    "athenakin.teleop.SessionLog.counts", "athenakin.teleop.SimulatedArm.measured_cp",
+    "athenakin.teleop.SimulatedArm.measured_js", "athenakin.teleop.SimulatedArm.move_cp",
+    "athenakin.teleop.SimulatedArm.move_jp", "athenakin.teleop.SimulatedArm.servo_jp",
+    "athenakin.teleop.SimulatedArm.setpoint_cp", "athenakin.teleop.SimulatedArm.setpoint_js",
+    "athenakin.teleop.SimulatedArm.step", "athenakin.teleop.TeleopOptions.stopping_distance",
+    "athenakin.teleop.TremorFilter.reset",
 }
 
 METHODS = _public_methods()

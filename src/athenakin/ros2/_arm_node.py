@@ -234,7 +234,15 @@ class ArmNode:
 
     # --- commands -------------------------------------------------------------------
     def refuse(self, command: str, reason: str) -> None:
-        """Answer a refused ``command`` on ``status`` (``"refused <command>: <reason>"``)."""
+        """Answer a refused ``command`` on ``status`` (``"refused <command>: <reason>"``).
+
+        Parameters
+        ----------
+        command : str
+            The command's topic name (``servo_jp``, ...).
+        reason : str
+            Why it was refused (the error's class and message).
+        """
         self.refused += 1
         self.refusals.append((command, reason))
         del self.refusals[:-1000]
@@ -414,7 +422,13 @@ class ArmNode:
                 raise
 
     def start(self) -> ArmNode:
-        """Start the servo thread and the executor's thread (idempotent); returns ``self``."""
+        """Start the servo thread and the executor's thread (idempotent).
+
+        Returns
+        -------
+        ArmNode
+            ``self``, started.
+        """
         if not self._threads:
             self._threads = [threading.Thread(target=self._servo_loop, name="athena-servo",
                                               daemon=True),
@@ -425,7 +439,13 @@ class ArmNode:
         return self
 
     def spin(self, timeout: float | None = None) -> None:
-        """Run until Ctrl-C, the context's shutdown, or ``timeout`` s."""
+        """Run until Ctrl-C, the context's shutdown, or ``timeout`` s.
+
+        Parameters
+        ----------
+        timeout : float, optional
+            Seconds to run at most (default: until shutdown).
+        """
         self.start()
         end = math.inf if timeout is None else time.monotonic() + float(timeout)
         while self.context.ok and not self._stop.is_set() and time.monotonic() < end:

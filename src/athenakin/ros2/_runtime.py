@@ -53,7 +53,22 @@ class CrtkTypes:
     native: bool
 
     def string(self, text: str, stamp: Any = None, frame_id: str = "") -> Any:
-        """A ``string_stamped`` message holding ``text`` (stamped where the type has a header)."""
+        """A ``string_stamped`` message holding ``text`` (stamped where the type has a header).
+
+        Parameters
+        ----------
+        text : str
+            The message's text.
+        stamp : builtin_interfaces.msg.Time, optional
+            The header's stamp (native CRTK type only).
+        frame_id : str
+            The header's frame (native CRTK type only).
+
+        Returns
+        -------
+        crtk_msgs.msg.StringStamped or std_msgs.msg.String
+            The message.
+        """
         if self.native:
             msg = self.string_stamped(string=text)
             if stamp is not None:
@@ -63,11 +78,37 @@ class CrtkTypes:
         return self.string_stamped(data=text)
 
     def text(self, msg: Any) -> str:
-        """The text of a ``string_stamped`` message."""
+        """The text of a ``string_stamped`` message.
+
+        Parameters
+        ----------
+        msg : crtk_msgs.msg.StringStamped or std_msgs.msg.String
+            A message of this set's ``string_stamped`` type.
+
+        Returns
+        -------
+        str
+            Its text.
+        """
         return str(msg.string if self.native else msg.data)
 
     def state(self, state: str, *, is_homed: bool, is_busy: bool, stamp: Any = None) -> Any:
-        """An ``operating_state`` message."""
+        """An ``operating_state`` message.
+
+        Parameters
+        ----------
+        state : str
+            CRTK's state name (``DISABLED``, ``ENABLED``, ``PAUSED``, ``FAULT``).
+        is_homed, is_busy : bool, keyword-only
+            CRTK's flags (carried by the native type only).
+        stamp : builtin_interfaces.msg.Time, optional, keyword-only
+            The header's stamp (native type only).
+
+        Returns
+        -------
+        crtk_msgs.msg.OperatingState or std_msgs.msg.String
+            The message (the stand-in carries the state name).
+        """
         if self.native:
             msg = self.operating_state(state=state, is_homed=is_homed, is_busy=is_busy)
             if stamp is not None:

@@ -316,7 +316,13 @@ class TeleopNode:
                 raise
 
     def start(self) -> TeleopNode:
-        """Start the teleop loop and the executor's threads (idempotent); returns ``self``."""
+        """Start the teleop loop and the executor's threads (idempotent).
+
+        Returns
+        -------
+        TeleopNode
+            ``self``, started.
+        """
         if not self._threads:
             self._threads = [threading.Thread(target=self._spin_loop, name="teleop-executor",
                                               daemon=True)]
@@ -328,7 +334,13 @@ class TeleopNode:
         return self
 
     def spin(self, timeout: float | None = None) -> None:
-        """Run until Ctrl-C, the context's shutdown, or ``timeout`` s."""
+        """Run until Ctrl-C, the context's shutdown, or ``timeout`` s.
+
+        Parameters
+        ----------
+        timeout : float, optional
+            Seconds to run at most (default: until shutdown).
+        """
         self.start()
         end = math.inf if timeout is None else time.monotonic() + float(timeout)
         while self.context.ok and not self._stop.is_set() and time.monotonic() < end:

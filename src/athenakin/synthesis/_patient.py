@@ -224,7 +224,23 @@ class Patient:
         return tuple(out)
 
     def mesh(self, name: str) -> PatientMesh:
-        """The surface called ``name``."""
+        """The surface called ``name``.
+
+        Parameters
+        ----------
+        name : str
+            A mesh's name (``patient.toml``'s ``name``, default the file's stem).
+
+        Returns
+        -------
+        PatientMesh
+            That surface, in the patient's frame, m.
+
+        Raises
+        ------
+        InvalidInputError
+            The patient has no mesh of that name (the message lists them).
+        """
         for m in self.meshes:
             if m.name == name:
                 return m
@@ -303,6 +319,16 @@ class Patient:
 
         Exactly one ``skin`` and one ``target``; any number of ``forbidden``; at most one
         ``table``.
+
+        Parameters
+        ----------
+        path : str or Path
+            The ``patient.toml``; mesh paths in it are relative to its folder.
+
+        Returns
+        -------
+        Patient
+            The patient, its meshes in m in the patient's frame.
 
         Raises
         ------

@@ -624,7 +624,20 @@ class SetupPlan:
     options: SetupOptions
 
     def write(self, path: str | Path, *, patient: str = "") -> Path:
-        """Write the chosen set-up (:meth:`Setup.write`) with the design and the figures."""
+        """Write the chosen set-up (:meth:`Setup.write`) with the design and the figures.
+
+        Parameters
+        ----------
+        path : str or Path
+            The ``setup.toml`` to write (atomically).
+        patient : str, keyword-only
+            The patient's name, recorded in the file.
+
+        Returns
+        -------
+        Path
+            The file written.
+        """
         return self.chosen.write(path, design=self.design, figures=self.figures,
                                  patient=patient)
 
