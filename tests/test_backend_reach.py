@@ -47,6 +47,7 @@ KERNEL_MODULES = (
     "athenakin.motion._kernels",
     "athenakin.ros._kernels",
     "athenakin.synthesis._kernels",
+    "athenakin.teleop._kernels",
 )
 
 #: Per subpackage with a compiled path: the results of ``tests/_backend_calls.py`` that
@@ -60,7 +61,7 @@ CALLS = {
     "fast": ("fk.p", "ik.q", "tool_tip.q", "instrument.q", "jac.parallel", "jac.tool_tip"),
     "motion": ("motion.track.p", "motion.update.clearance", "motion.plan.q"),
     "ros": ("ros.frames.xyz", "ros.read.q", "mcap./tf"),
-    "synthesis": ("synthesis.evaluate_design",),
+    "synthesis": ("synthesis.evaluate_design.coverage",),
     "teleop": ("teleop.q",),
 }
 

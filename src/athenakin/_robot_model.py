@@ -303,7 +303,8 @@ class Robot:
     # --- dynamics (athenakin.dynamics) ---------------------------------------------------------
     def statics(self, q: ArrayLike, *, masses: Any = None,
                 gravity: ArrayLike = (0.0, 0.0, -9.81), tip_force: ArrayLike | None = None,
-                slot: int = 0, errors: str = "auto", rcm_load: bool = True) -> Any:
+                slot: int = 0, errors: str = "auto", rcm_load: bool = True,
+                backend: str = "auto") -> Any:
         """:func:`athenakin.dynamics.statics` with this robot's masses.
 
         Parameters
@@ -312,7 +313,7 @@ class Robot:
             Actuators, m.
         masses : MassModel, optional, keyword-only
             Default this robot's.
-        gravity, tip_force, slot, errors, rcm_load
+        gravity, tip_force, slot, errors, rcm_load, backend
             As for :func:`athenakin.dynamics.statics` (keyword-only).
 
         Returns
@@ -323,7 +324,8 @@ class Robot:
 
         return statics(q, self.T_b_e, self.design, masses=self._part("masses", masses),
                        gravity=gravity, tip_force=tip_force, slot=slot,
-                       errors=errors, rcm_load=rcm_load)  # type: ignore[arg-type]
+                       errors=errors, rcm_load=rcm_load,
+                       backend=backend)  # type: ignore[arg-type]
 
     def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, *,
                          masses: Any = None, gravity: ArrayLike = (0.0, 0.0, -9.81),
@@ -355,7 +357,7 @@ class Robot:
     def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, forces: ArrayLike, *,
                          masses: Any = None, gravity: ArrayLike = (0.0, 0.0, -9.81),
                          tip_force: ArrayLike | None = None, slot: int = 0,
-                         errors: str = "auto") -> Any:
+                         errors: str = "auto", backend: str = "auto") -> Any:
         """:func:`athenakin.dynamics.forward_dynamics` with this robot's masses.
 
         Parameters
@@ -366,7 +368,7 @@ class Robot:
             Actuator forces, N.
         masses : MassModel, optional, keyword-only
             Default this robot's.
-        gravity, tip_force, slot, errors
+        gravity, tip_force, slot, errors, backend
             As for :func:`athenakin.dynamics.forward_dynamics` (keyword-only).
 
         Returns
@@ -379,10 +381,10 @@ class Robot:
         return forward_dynamics(q, qd, forces, self.T_b_e, self.design,
                                 masses=self._part("masses", masses), gravity=gravity,
                                 tip_force=tip_force, slot=slot,
-                                errors=errors)  # type: ignore[arg-type]
+                                errors=errors, backend=backend)  # type: ignore[arg-type]
 
     def mass_matrix(self, q: ArrayLike, *, masses: Any = None, slot: int = 0,
-                    errors: str = "auto") -> Any:
+                    errors: str = "auto", backend: str = "auto") -> Any:
         """:func:`athenakin.dynamics.mass_matrix` with this robot's masses.
 
         Parameters
@@ -391,7 +393,7 @@ class Robot:
             Actuators, m.
         masses : MassModel, optional, keyword-only
             Default this robot's.
-        slot, errors
+        slot, errors, backend
             As for :func:`athenakin.dynamics.mass_matrix` (keyword-only).
 
         Returns
@@ -402,12 +404,13 @@ class Robot:
         from .dynamics import mass_matrix
 
         return mass_matrix(q, self.T_b_e, self.design, masses=self._part("masses", masses),
-                           slot=slot, errors=errors)  # type: ignore[arg-type]
+                           slot=slot, errors=errors, backend=backend)  # type: ignore[arg-type]
 
     def force_capability(self, q: ArrayLike, *, f_max: ArrayLike,
                          f_min: ArrayLike | None = None, masses: Any = None,
                          gravity: ArrayLike = (0.0, 0.0, -9.81), slot: int = 0,
-                         errors: str = "auto") -> Any:
+                         errors: str = "auto", cond_max: float = 100.0,
+                         backend: str = "auto") -> Any:
         """:func:`athenakin.dynamics.force_capability` with this robot's masses.
 
         Parameters
@@ -416,8 +419,9 @@ class Robot:
             Actuators, m.
         f_max : array-like, keyword-only
             Actuator force bounds, N (required).
-        f_min, gravity, slot, errors
-            As for :func:`athenakin.dynamics.force_capability` (keyword-only).
+        f_min, gravity, slot, errors, cond_max, backend
+            As for :func:`athenakin.dynamics.force_capability` (keyword-only;
+            ``cond_max`` defaults to :data:`athenakin.dynamics.COND_MARGIN`).
         masses : MassModel, optional, keyword-only
             Default this robot's.
 
@@ -429,7 +433,8 @@ class Robot:
 
         return force_capability(q, self.T_b_e, self.design, f_max=f_max, f_min=f_min,
                                 masses=self._part("masses", masses), gravity=gravity,
-                                slot=slot, errors=errors)  # type: ignore[arg-type]
+                                slot=slot, errors=errors, cond_max=cond_max,
+                                backend=backend)  # type: ignore[arg-type]
 
     # --- exports (athenakin.sim) ---------------------------------------------------------------
     def mjcf(self, *, q: ArrayLike | None = None, slot: int = 0, gravity: bool = True,

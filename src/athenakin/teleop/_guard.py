@@ -54,7 +54,7 @@ class BodyGuard:
         from ..collision._workspace import ClearanceWorkspace
         from ..motion._clearance import PoseClearance
 
-        self._pc = PoseClearance(design, T_b_e, bodies)
+        self._pc = PoseClearance(design, T_b_e, bodies, backend=backend)
         below = floor + EXACT_BAND_M
         self._cur = ClearanceWorkspace(bodies, environment, backend=backend, exact_below=below)
         self._try = ClearanceWorkspace(bodies, environment, backend=backend, exact_below=below)

@@ -110,7 +110,7 @@ class _IK:
             from ..analysis import tool_tip_inverse_jacobian
 
             J = tool_tip_inverse_jacobian(np.array(q), self.T, self.design, mode=mode,
-                                          frame="rcm").tolist()
+                                          frame="rcm", backend="numpy").tolist()
         return (J[0][0] * u[0] + J[0][1] * u[1] + J[0][2] * u[2],
                 J[1][0] * u[0] + J[1][1] * u[1] + J[1][2] * u[2],
                 J[2][0] * u[0] + J[2][1] * u[1] + J[2][2] * u[2])
