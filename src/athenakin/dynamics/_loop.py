@@ -27,8 +27,8 @@ from numpy.typing import ArrayLike
 from .._backend import resolve_backend
 from .._typing import FloatArray
 from .._validation import check_array, check_choice, check_slot
-from ..errors import InvalidInputError
 from ..design import Design, resolve_design
+from ..errors import InvalidInputError
 from ..robot._setup import resolve_rcm_frame
 from ._api import STANDARD_GRAVITY, _check_masses
 from ._core import N_Q_DIRECTIONS, body_loads, evaluate, generalized_forces
