@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._output import atomic_write
-from .._typing import BoolArray, FloatArray, IntArray
+from .._typing import BoolArray, FloatArray, Int8Array, IntArray
 from .._validation import check_count, check_path, check_scalar
 from ..errors import InvalidInputError
 from ._filter import check_rate
@@ -140,7 +140,7 @@ class SessionLog:
     closure_error: FloatArray
     clearance: FloatArray
     effort: FloatArray
-    arm_state: IntArray
+    arm_state: Int8Array
     slot: IntArray
     tip_quat_b: FloatArray
     measured_quat_b: FloatArray

@@ -22,7 +22,6 @@ from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ..parallel import parallel_forward_kinematics
 from ..study import study_normalize
-
 from ._teleop import TeleopViolations, assert_teleop_commands, teleop_violations
 
 __all__ = ["assert_study_equal", "assert_dq_equal", "assert_transform_equal",

@@ -94,7 +94,7 @@ class TeleopViolations:
 def _columns(commands: Any) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, IntArray]:
     """``q, qd, qdd, tip`` (N, 3) and ``slot`` (N,) of a SessionLog or of commands."""
     if all(hasattr(commands, k) for k in ("q", "qd", "qdd", "tip", "slot")) and \
-            isinstance(getattr(commands, "q"), np.ndarray):
+            isinstance(commands.q, np.ndarray):
         cols = [np.asarray(getattr(commands, k), dtype=float) for k in ("q", "qd", "qdd",
                                                                          "tip")]
         slot = np.asarray(commands.slot, dtype=np.int64)
@@ -261,7 +261,7 @@ def _tip_check(q: FloatArray, tip: FloatArray, slot: IntArray, T: FloatArray, de
 
 
 def _coal_shape(o: Any) -> tuple[Any, Any] | None:
-    """coal's geometry and pose of a primitive obstacle (None for a mesh)."""
+    """The coal geometry and pose of a primitive obstacle (None for a mesh)."""
     import coal
 
     eye = np.eye(3)
