@@ -61,3 +61,36 @@ def test_bad_set_up_is_named_once(kw, err, match):
 def test_batch_of_frames_is_refused():
     with pytest.raises((ValueError, InvalidInputError), match="T_b_e"):
         dynamics.InverseDynamicsLoop(np.stack([T, T]), D)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("bad, name", [
+    ((np.zeros((3, 1)), "qd"), "qd"),          # a column: numpy's broadcast error before
+    ((0.0, "qd"), "qd"),                       # a scalar: broadcast silently before
+    ((np.zeros((1, 3)), "qdd"), "qdd"),
+    ((["a", "b", "c"], "q"), "q"),
+])
+def test_a_wrong_shape_or_type_is_a_named_error(backend, bad, name):
+    loop = dynamics.InverseDynamicsLoop(T, D, backend=backend)
+    args = {"q": [-0.1, 0.1, 0.45], "qd": np.zeros(3), "qdd": np.zeros(3)}
+    args[bad[1]] = bad[0]
+    with pytest.raises(InvalidInputError, match=rf"\b{name}\b"):
+        loop(args["q"], args["qd"], args["qdd"])
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_nan_exactly_where_inverse_dynamics_flags(backend):
+    """The singular set |h| = l3 and states off the slot: NaN in both, the same elsewhere."""
+    h = D.l3                                   # |q1 - q2| / 2 = l3: the carriage on the rail
+    qs = np.array([[-h, h, 0.45], [-h + 1e-9, h - 1e-9, 0.45], [-0.1, 0.1, 0.45],
+                   [-0.1, 0.1, 5.0], [0.5, -0.5, 0.45]])
+    qd = np.tile([0.01, -0.02, 0.03], (len(qs), 1))
+    qdd = np.tile([0.1, 0.2, -0.3], (len(qs), 1))
+    loop = dynamics.InverseDynamicsLoop(T, D, backend=backend)
+    want = dynamics.inverse_dynamics(qs, qd, qdd, T, D, errors="flag", backend=backend)
+    got = np.array([loop(a, b, c).copy() for a, b, c in zip(qs, qd, qdd, strict=True)])
+    np.testing.assert_array_equal(np.isnan(got), np.isnan(want))
+    ok = ~np.isnan(want)
+    np.testing.assert_allclose(got[ok], want[ok], rtol=1e-12, atol=0)
+    assert np.isnan(want).any()
+    assert np.isnan(loop([-0.1, 0.1, np.inf], qd[0], qdd[0])).all()   # the function refuses it

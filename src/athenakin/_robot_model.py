@@ -324,8 +324,8 @@ class Robot:
 
         return statics(q, self.T_b_e, self.design, masses=self._part("masses", masses),
                        gravity=gravity, tip_force=tip_force, slot=slot,
-                       errors=errors, rcm_load=rcm_load,
-                       backend=backend)  # type: ignore[arg-type]
+                       rcm_load=rcm_load, backend=backend,  # type: ignore[arg-type]
+                       errors=errors)  # type: ignore[arg-type]
 
     def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, *,
                          masses: Any = None, gravity: ArrayLike = (0.0, 0.0, -9.81),
@@ -433,8 +433,8 @@ class Robot:
 
         return force_capability(q, self.T_b_e, self.design, f_max=f_max, f_min=f_min,
                                 masses=self._part("masses", masses), gravity=gravity,
-                                slot=slot, errors=errors, cond_max=cond_max,
-                                backend=backend)  # type: ignore[arg-type]
+                                slot=slot, cond_max=cond_max, backend=backend,  # type: ignore[arg-type]
+                                errors=errors)  # type: ignore[arg-type]
 
     # --- exports (athenakin.sim) ---------------------------------------------------------------
     def mjcf(self, *, q: ArrayLike | None = None, slot: int = 0, gravity: bool = True,

@@ -7,13 +7,19 @@ itself (from the exact IK, on one FK slot) needs only the kernel. :class:`Invers
 checks the design, the RCM frame, the mass model, gravity and the slot once, keeps the
 kernel's inputs in preallocated buffers, and returns the forces of one state per call:
 the same numbers as :func:`~athenakin.dynamics.inverse_dynamics` (the same kernel on the
-same inputs; the numpy reference where the backend policy says numpy). It never raises
-for a state: one that does not assemble in the slot, or lies on a singular set of the
-dynamics, gives NaN forces, which the caller flags (``athenakin.teleop`` holds its
-last command then).
+same inputs; the numpy reference where the backend policy says numpy), and the same
+flags: a state that the forward kinematics does not assemble in the slot (the test of
+``inverse_dynamics``, here :class:`athenakin.fast.ControlLoop`'s one-pose FK, or the numpy
+FK where the backend is numpy) or whose forces are not finite (a singular set of the
+dynamics) gives NaN forces, which the caller flags (``athenakin.teleop`` holds its last
+command then). An argument of the wrong shape or type raises a named error; a value
+(NaN, a state off the workspace) never does.
 """
 
 from __future__ import annotations
+
+import math
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -22,6 +28,7 @@ from .._backend import resolve_backend
 from .._typing import FloatArray
 from .._validation import check_array, check_choice, check_slot
 from ..design import Design, resolve_design
+from ..errors import InvalidInputError
 from ..robot._setup import resolve_rcm_frame
 from ._api import STANDARD_GRAVITY, _check_masses
 from ._core import N_Q_DIRECTIONS, body_loads, evaluate, generalized_forces
@@ -76,10 +83,13 @@ class InverseDynamicsLoop:
             raise ValueError(f"gravity: expected shape (3,), got {g.shape}")
         self.gravity = np.array(g, dtype=np.float64)
         self._kernel = None
+        self._fk: Any = None
         if resolve_backend(backend):
+            from ..fast import ControlLoop
             from ._kernels import inverse_dynamics_kernel
 
             self._kernel = inverse_dynamics_kernel
+            self._fk = ControlLoop(self.T_b_e, self.design)   # the assembly test, one pose
         # the kernel's inputs, in the types of every call (one compiled specialization)
         self._T = np.ascontiguousarray(self.T_b_e[None])
         # as inverse_dynamics passes them (the same array types: no second compile)
@@ -104,19 +114,36 @@ class InverseDynamicsLoop:
         Parameters
         ----------
         q, qd, qdd : array-like, shape (3,)
-            Actuator positions (m), velocities (m/s), accelerations (m/s^2) of a state
-            that assembles in :attr:`slot` (not checked: NaN forces where it does not).
+            Actuator positions (m), velocities (m/s), accelerations (m/s^2); NaN and inf
+            are values (NaN forces), not errors.
 
         Returns
         -------
         ndarray, shape (3,)
             A view of an internal buffer that the next call overwrites (copy it to keep
-            it). NaN where the state does not assemble or is singular for the dynamics.
+            it). NaN exactly where :func:`~athenakin.dynamics.inverse_dynamics` with
+            ``errors="flag"`` gives NaN: the state does not assemble in :attr:`slot`, or
+            its forces are not finite (a singular set of the dynamics).
+
+        Raises
+        ------
+        InvalidInputError
+            ``q``, ``qd`` or ``qdd`` not of shape (3,) (a (3, 1) column, a scalar), or not
+            numbers.
         """
         x = self._x
-        x[0, 0] = q
-        x[1, 0] = qd
-        x[2, 0] = qdd
+        for i, (v, name) in enumerate(((q, "q"), (qd, "qd"), (qdd, "qdd"))):
+            if np.shape(v) != (3,):
+                raise InvalidInputError(f"{name}: expected shape (3,), got {np.shape(v)}")
+            try:
+                x[i, 0] = v
+            except (TypeError, ValueError):
+                raise InvalidInputError(f"{name}: expected three numbers, got {v!r:.80}"
+                                        ) from None
+        out = self._out
+        if not self._assembles(x[0, 0]):
+            out[:] = np.nan
+            return out[0]
         if self._kernel is not None:
             self._kernel(x[0], x[1], x[2], self._T, self._lengths, self._L, self._signs,
                          self._mass, self._com, self._inertia, self._grav, self._ftip,
@@ -124,5 +151,19 @@ class InverseDynamicsLoop:
         else:
             ev = evaluate(x[0], x[1], x[2], self._T, self.design, self.masses, self.slot)
             F, Nm = body_loads(ev, self.masses, self._grav)
-            self._out[:] = generalized_forces(ev, F, Nm, self._ftip)[:, 1:N_Q_DIRECTIONS]
-        return self._out[0]
+            out[:] = generalized_forces(ev, F, Nm, self._ftip)[:, 1:N_Q_DIRECTIONS]
+        if not (math.isfinite(out[0, 0]) and math.isfinite(out[0, 1])
+                and math.isfinite(out[0, 2])):
+            out[:] = np.nan              # inverse_dynamics' flag of a singular state
+        return out[0]
+
+    def _assembles(self, q: FloatArray) -> bool:
+        """Whether the forward kinematics holds ``q`` in :attr:`slot` (inverse_dynamics' test)."""
+        if self._fk is not None:
+            reason, _, _ = self._fk.fk(q)
+            return bool(reason[self.slot] == 0)
+        from .._dispatch import forward_kinematics
+
+        sol = forward_kinematics(q, self.T_b_e, self.design, errors="flag", backend="numpy",
+                                 fields=("valid",))
+        return bool(sol.valid[self.slot])

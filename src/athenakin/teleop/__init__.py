@@ -29,9 +29,13 @@ from ._filter import (
 )
 from ._options import TeleopOptions, TeleopStatus
 from ._session import (
+    CLUTCH_TYPE,
     CRTK_TOPICS,
+    MAX_GAP_S,
+    POSE_TYPE,
     TELEOP_STATUS_MSGDEF,
     TELEOP_STATUS_TYPE,
+    MasterRecording,
     SessionLog,
     read_master,
     run_session,
@@ -39,7 +43,11 @@ from ._session import (
 )
 
 __all__ = [
+    "CLUTCH_TYPE",
     "CRTK_TOPICS",
+    "MAX_GAP_S",
+    "POSE_TYPE",
+    "MasterRecording",
     "TELEOP_STATUS_MSGDEF",
     "TELEOP_STATUS_TYPE",
     "SessionLog",

@@ -2,6 +2,10 @@
 
 They compare Study vectors projectively (``X ~ lambda X``) and transforms with
 explicit tolerances, and raise ``AssertionError`` with the worst entry.
+:func:`assert_teleop_commands` and :func:`teleop_violations` check a teleoperation
+session (a lab's own, or :func:`athenakin.teleop.run_session`'s) against oracles the
+core does not share: the strokes and limits, the reference FK, coal's distances to the
+fixtures and capsule distances between the bodies rebuilt from the FK.
 """
 
 from __future__ import annotations
@@ -13,18 +17,20 @@ import xml.etree.ElementTree as ET
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._typing import FloatArray, IntArray
-from ._validation import check_array, check_count, check_rng, check_scalar, check_tolerance
-from .chain import ups_transform
-from .design import Design, resolve_design
-from .errors import InvalidInputError
-from .parallel import parallel_forward_kinematics
-from .study import study_normalize
+from .._typing import FloatArray, IntArray
+from .._validation import check_array, check_count, check_rng, check_scalar, check_tolerance
+from ..chain import ups_transform
+from ..design import Design, resolve_design
+from ..errors import InvalidInputError
+from ..parallel import parallel_forward_kinematics
+from ..study import study_normalize
+from ._teleop import TeleopViolations, assert_teleop_commands, teleop_violations
 
 __all__ = ["assert_study_equal", "assert_dq_equal", "assert_transform_equal",
            "assert_angles_equal", "assert_allclose_scaled", "assert_xml_equal",
            "scaled_differences", "xml_differences", "IMPLEMENTATION_RTOL", "TEXT_RTOL",
-           "RandomConfigurations", "random_configurations", "MAX_CONFIGURATIONS"]
+           "RandomConfigurations", "random_configurations", "MAX_CONFIGURATIONS",
+           "assert_teleop_commands", "teleop_violations", "TeleopViolations"]
 
 #: Two implementations of one quantity (the numpy reference and a compiled kernel, this
 #: checkout and its golden copy) agree to this fraction of the quantity's scale. A sum

@@ -1,0 +1,355 @@
+"""SimulatedArm refuses what the core refuses: servo checks, force bound, faults, CRTK states.
+
+Each test is a regression of a finding: a servo setpoint beyond the strokes or with the
+carriages reversed reached the backend, 1 MN of effort was applied, fixed gains went
+unstable with other mass models and rates while the arm stayed ENABLED, a driver's bad
+reading crashed ``step``, ``DISABLED`` kept writing forces, the arm started ENABLED.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+import athenakin as ak
+from athenakin.errors import InvalidInputError, KinematicsError
+
+pytest.importorskip("mujoco")
+
+from athenakin.dynamics import MassModel  # noqa: E402
+from athenakin.dynamics._model import MASS_BODIES  # noqa: E402
+from athenakin.teleop import ServoGains, SimulatedArm  # noqa: E402
+from athenakin.teleop._arm import (  # noqa: E402
+    CLOSURE_TOL,
+    MAX_FORCE,
+    MAX_STEPS,
+    READING_MARGIN,
+)
+
+D = ak.Design.default()
+T = ak.default_rcm_frame(D)
+Q0 = np.array([-0.1, 0.1, 0.45])
+GOAL = Q0 + np.array([0.01, -0.01, 0.02])
+#: A goal one cycle of the ideal driver reaches at a plausible speed (1-2 m/s).
+NEAR = Q0 + np.array([0.001, -0.001, 0.002])
+
+
+class _Driver:
+    """A lab's driver: an ideal position actuator that records every write."""
+
+    def __init__(self, q, *, reading=None):
+        self.q, self.qd = np.array(q, float), np.zeros(3)
+        self.forces, self.positions = [], []
+        self.reading = reading
+
+    def read_encoders(self):
+        if self.reading is not None:
+            return self.reading
+        return self.q.copy(), self.qd.copy()
+
+    def write(self, forces, positions):
+        self.forces.append(np.array(forces, float))
+        self.positions.append(np.array(positions, float))
+        if np.all(np.isfinite(positions)):
+            self.qd = (positions - self.q) * 1000.0
+            self.q = np.array(positions, float)
+        else:
+            self.qd = np.zeros(3)
+
+
+class _HomingDriver(_Driver):
+    def __init__(self, q):
+        super().__init__(q)
+        self.homed = 0
+
+    def home(self):
+        self.homed += 1
+
+
+def _enabled(**kw):
+    arm = SimulatedArm(T, D, q0=Q0, **kw)
+    arm.enable()
+    return arm
+
+
+# --- servo_jp / servo_cp: hold and flag ---------------------------------------------------
+@pytest.mark.parametrize("q, velocity, effort, words", [
+    ([-0.1, 0.1, 0.9], None, None, "stroke"),                  # q3 11 cm past its stroke
+    ([0.1, -0.1, 0.45], None, None, "wrong order"),            # the carriages reversed
+    ([np.nan, 0.1, 0.45], None, None, "finite"),
+    (Q0, [np.inf, 0.0, 0.0], None, "velocity"),
+    (Q0, None, [1e6, 0.0, 0.0], "max_force"),                  # 1 MN
+    (Q0, None, [np.nan, 0.0, 0.0], "max_force"),
+])
+def test_servo_jp_holds_and_flags_what_the_core_refuses(q, velocity, effort, words):
+    drv = _Driver(Q0)
+    arm = SimulatedArm(T, D, q0=Q0, backend=drv)
+    arm.enable()
+    arm.servo_jp(NEAR, velocity=[0.01, 0.0, 0.0])
+    arm.step(1)
+    arm.servo_jp(q, velocity=velocity, effort=effort)
+    assert arm.refusal is not None and words in arm.refusal
+    sp = arm.setpoint_js()
+    np.testing.assert_array_equal(sp.position, NEAR)            # held where it was, at rest
+    np.testing.assert_array_equal(sp.velocity, 0.0)
+    arm.step(3)
+    assert np.all(np.abs(np.array(drv.forces)) <= MAX_FORCE)
+    assert np.all(np.isfinite(drv.positions[-1]))
+    for p in drv.positions:
+        assert np.all(p >= D.stroke_min) and np.all(p <= D.stroke_max)
+    arm.servo_jp(Q0)
+    assert arm.refusal is None                                  # an accepted command clears it
+
+
+def test_servo_jp_refuses_a_setpoint_that_does_not_assemble():
+    arm = _enabled(backend=_Driver(Q0))
+    far = np.array([-0.29338895, 0.2253081, 0.65637779])   # within the strokes, off slot 0
+    assert np.isnan(ak.dynamics.inverse_dynamics(far, np.zeros(3), np.zeros(3), T, D,
+                                                 errors="flag")).all()
+    arm.servo_jp(far)
+    assert "does not assemble" in arm.refusal
+
+
+def test_servo_cp_flags_a_tip_out_of_reach_and_raises_for_a_bad_shape():
+    arm = _enabled(backend=_Driver(Q0))
+    arm.servo_cp([5.0, 0.0, 0.0], frame="rcm")
+    assert "out of reach" in arm.refusal
+    with pytest.raises(InvalidInputError, match=r"\btip\b"):
+        arm.servo_cp([0.1, 0.2])
+    with pytest.raises(InvalidInputError, match=r"\bq\b"):
+        arm.servo_jp([0.1, 0.2])
+
+
+def test_the_servo_force_saturates_at_max_force():
+    arm = _enabled(max_force=20.0)
+    arm.servo_jp(Q0 + np.array([0.05, 0.0, 0.0]))       # 5 cm step: Kp e ~ 1.7 kN unbounded
+    arm.step(1)
+    assert arm.saturated
+    js, sp = arm.measured_js(), arm.setpoint_js()
+    assert np.abs(js.effort).max() == pytest.approx(20.0, rel=1e-12)
+    np.testing.assert_array_equal(sp.effort, js.effort)          # the applied effort, CRTK
+    arm.step(2000)
+    assert arm.operating_state == "ENABLED" and not arm.saturated
+    np.testing.assert_allclose(arm.measured_js().position, Q0 + [0.05, 0, 0], atol=1e-5)
+
+
+# --- stability for every mass model and rate the constructor accepts ---------------------
+_RODS = {b: 0.1 for b in MASS_BODIES if b != "rail"}
+
+
+@pytest.mark.parametrize("masses, rate", [
+    (None, 1000.0), (None, 250.0), (None, 100.0), (None, 4000.0),
+    ("rods", 1000.0), ("rods", 250.0),
+])
+def test_the_servo_is_stable_for_accepted_masses_and_rates(masses, rate):
+    mm = MassModel.slender_rods(_RODS, D) if masses == "rods" else None
+    arm = _enabled(masses=mm, rate=rate)
+    arm.servo_jp(GOAL)
+    closure = 0.0
+    for _ in range(int(rate)):                          # one second
+        arm.step(1)
+        closure = max(closure, arm.backend.closure_error())
+        assert arm.operating_state == "ENABLED", arm.fault
+    assert closure <= CLOSURE_TOL
+    np.testing.assert_allclose(arm.measured_js().position, GOAL, atol=1e-5)
+
+
+@pytest.mark.parametrize("kw, words", [
+    ({"masses": MassModel.zeros()}, "mass matrix"),
+    ({"masses": MassModel.slender_rods({"carriage_a": 0.3, "carriage_b": 0.3,
+                                        "actuator": 0.2, "platform": 0.05}, D)}, "'q3'"),
+    ({"rate": 250.0, "gains": ServoGains(kp=4e4, kd=800.0)}, "unstable"),
+    ({"rate": 5.0}, "10 Hz"),
+    ({"q0": [-0.1, 0.1, 0.9]}, "stroke"),
+    ({"q0": [0.1, -0.1, 0.45]}, "order"),
+])
+def test_what_cannot_be_servoed_stably_is_refused_by_name(kw, words):
+    with pytest.raises(InvalidInputError, match=words):
+        SimulatedArm(T, D, **{"q0": Q0, **kw})
+
+
+# --- faults within one cycle, never a silent reset ---------------------------------------
+def test_a_mujoco_instability_faults_the_arm_in_that_cycle():
+    arm = _enabled()
+    arm.step(5)
+    arm.backend.data.qvel[:] = 1e30                     # MuJoCo warns and resets its state
+    arm.step(1)
+    assert arm.operating_state == "FAULT"
+    assert "unstable" in arm.fault
+    arm.step(3)                                         # FAULT writes no force
+    np.testing.assert_array_equal(arm.measured_js().effort, 0.0)
+    np.testing.assert_array_equal(arm.backend.data.ctrl, 0.0)
+
+
+def test_a_loop_closure_error_faults_the_arm_in_that_cycle():
+    import mujoco
+
+    arm = _enabled()
+    arm.step(5)
+    d, m = arm.backend.data, arm.backend.model
+    j = m.joint("k2_x").id                               # a passive hinge: opens a loop
+    d.qpos[m.jnt_qposadr[j]] += 0.05
+    arm.step(1)
+    assert arm.operating_state == "FAULT" and "loop-closure" in arm.fault
+    mujoco.mj_resetDataKeyframe(m, d, 0)                 # a sound state again: enable clears
+    mujoco.mj_forward(m, d)
+    arm.enable()
+    assert arm.operating_state == "ENABLED" and arm.fault is None
+
+
+@pytest.mark.parametrize("reading, words", [
+    ((np.zeros(2), np.zeros(3)), "shape"),
+    ((np.zeros((3, 1)), np.zeros(3)), "shape"),
+    ((np.array([np.nan, 0.1, 0.45]), np.zeros(3)), "non-finite"),
+    ((Q0 + [0, 0, 0.5], np.zeros(3)), "beyond the strokes"),
+    ((Q0, np.array([0.0, 0.0, 50.0])), "speed"),
+    ((Q0,), "unreadable"),
+    (None, "unreadable"),
+])
+def test_a_drivers_bad_reading_faults_with_a_named_reason(reading, words):
+    drv = _Driver(Q0)
+    arm = SimulatedArm(T, D, q0=Q0, backend=drv)
+    arm.enable()
+    arm.step(2)
+    drv.reading = reading if reading is not None else 42
+    arm.step(1)                                           # never raises
+    assert arm.operating_state == "FAULT" and words in arm.fault, arm.fault
+    np.testing.assert_array_equal(arm.measured_js().position, Q0)   # the last sound reading
+    arm.step(1)
+    np.testing.assert_array_equal(drv.forces[-1], 0.0)
+    assert np.isnan(drv.positions[-1]).all()
+    arm.enable()                                          # still bad: stays in FAULT
+    assert arm.operating_state == "FAULT"
+    drv.reading = None
+    arm.enable()
+    assert arm.operating_state == "ENABLED"
+
+
+def test_a_bad_reading_at_start_is_a_named_error():
+    with pytest.raises(InvalidInputError, match="backend: encoders"):
+        SimulatedArm(T, D, q0=Q0, backend=_Driver(Q0, reading=(np.zeros(4), np.zeros(3))))
+
+
+def test_reading_margin_is_the_stated_tolerance():
+    drv = _Driver(Q0)
+    arm = SimulatedArm(T, D, q0=Q0, backend=drv)
+    arm.enable()
+    hi = np.asarray(D.stroke_max)
+    drv.reading = (np.array([Q0[0], Q0[1], hi[2] + 0.5 * READING_MARGIN]), np.zeros(3))
+    arm.step(1)
+    assert arm.operating_state == "ENABLED"
+    drv.reading = (np.array([Q0[0], Q0[1], hi[2] + 2 * READING_MARGIN]), np.zeros(3))
+    arm.step(1)
+    assert arm.operating_state == "FAULT"
+
+
+# --- CRTK operating states ---------------------------------------------------------------
+def test_crtk_operating_states():
+    drv = _Driver(Q0)
+    arm = SimulatedArm(T, D, q0=Q0, backend=drv)
+    assert arm.operating_state == "DISABLED"
+    arm.step(3)                                           # DISABLED writes no force
+    assert all(np.all(f == 0) for f in drv.forces)
+    assert all(np.isnan(p).all() for p in drv.positions)
+    arm.servo_jp(NEAR)
+    assert "DISABLED" in arm.refusal
+    arm.enable()
+    assert arm.operating_state == "ENABLED"
+    arm.pause()
+    assert arm.operating_state == "PAUSED"
+    arm.enable()                                          # CRTK: resume leaves PAUSED
+    assert arm.operating_state == "PAUSED"
+    arm.servo_jp(NEAR)
+    assert "PAUSED" in arm.refusal
+    arm.resume()
+    assert arm.operating_state == "ENABLED"
+    arm.servo_jp(NEAR)
+    assert arm.refusal is None
+    arm.disable()
+    assert arm.operating_state == "DISABLED"
+    n = len(drv.forces)
+    arm.step(2)
+    assert all(np.all(f == 0) for f in drv.forces[n:])
+
+
+def test_homing_state():
+    assert SimulatedArm(T, D, q0=Q0).is_homed             # MuJoCo: absolute encoders
+    drv = _HomingDriver(Q0)
+    arm = SimulatedArm(T, D, q0=Q0, backend=drv)
+    assert not arm.is_homed
+    arm.home()
+    assert "DISABLED" in arm.refusal and drv.homed == 0
+    arm.enable()
+    arm.servo_jp(NEAR)
+    assert "not homed" in arm.refusal
+    arm.home()
+    assert arm.is_homed and drv.homed == 1
+    arm.servo_jp(NEAR)
+    assert arm.refusal is None
+    arm.unhome()
+    arm.servo_jp(Q0)
+    assert "not homed" in arm.refusal
+
+
+# --- queries, bounds, errors named -------------------------------------------------------
+def test_measured_cp_has_no_side_effect():
+    arm = _enabled()
+    arm.servo_jp(GOAL)
+    arm.step(50)
+    before = {k: (v.copy() if isinstance(v, np.ndarray) else v)
+              for k, v in vars(arm).items() if not k.startswith("backend")}
+    a, b = arm.measured_cp(), arm.measured_cp()
+    np.testing.assert_array_equal(a, b)
+    after = vars(arm)
+    for k, v in before.items():
+        if isinstance(v, np.ndarray):
+            np.testing.assert_array_equal(after[k], v)
+    sol = ak.forward_kinematics(arm.measured_js().position, T, D)
+    np.testing.assert_allclose(a, sol.T_b_tip[arm.slot], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(a[:3, 3], arm.backend.tip_b(), atol=1e-6)
+
+
+@pytest.mark.parametrize("n", [MAX_STEPS + 1, -1, 1.5, True, "3"])
+def test_step_is_bounded(n):
+    arm = SimulatedArm(T, D, q0=Q0, backend=_Driver(Q0))
+    with pytest.raises((InvalidInputError, TypeError), match=r"\bn\b"):
+        arm.step(n)
+
+
+def test_ruckig_errors_are_named(monkeypatch):
+    import ruckig
+
+    arm = _enabled(backend=_Driver(Q0))
+
+    class _Broken:
+        def __init__(self, *a):
+            pass
+
+        def calculate(self, *a):
+            raise RuntimeError("pybind11: bad input")
+
+    monkeypatch.setattr(ruckig, "Ruckig", _Broken)
+    with pytest.raises(KinematicsError, match="move_jp: Ruckig failed"):
+        arm.move_jp(GOAL)
+    monkeypatch.undo()
+    with pytest.raises(InvalidInputError, match="stroke"):
+        arm.move_jp([-0.1, 0.1, 0.9])
+    with pytest.raises(InvalidInputError, match="goal_velocity"):
+        arm.move_jp(GOAL, goal_velocity=[math.nan, 0, 0])
+
+
+def test_the_model_form():
+    robot = ak.Robot.default(masses=MassModel.reference(D))
+    arm = SimulatedArm(robot, q0=Q0, backend=_Driver(Q0))
+    assert arm.masses is robot.masses and arm.design is robot.design
+    with pytest.raises(TypeError, match="design"):
+        SimulatedArm(robot, D, q0=Q0)
+
+
+def test_one_feed_forward_path():
+    """The setpoint's feed-forward is the dynamics loop's, equal to inverse_dynamics."""
+    arm = _enabled(backend=_Driver(Q0))
+    arm.servo_jp(GOAL, velocity=[0.01, -0.02, 0.0])
+    want = ak.dynamics.inverse_dynamics(GOAL, [0.01, -0.02, 0.0],
+                                        np.array([0.01, -0.02, 0.0]) * arm.rate, T, D)
+    np.testing.assert_allclose(arm.feedforward_effort, want, rtol=1e-12, atol=1e-12)
