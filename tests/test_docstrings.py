@@ -206,15 +206,7 @@ PENDING_METHODS: set[str] = {
     "athenakin.collision.Bodies.to_toml", "athenakin.collision.Bodies.to_toml_table",
     "athenakin.collision.Bodies.with_excluded", "athenakin.collision.Bodies.with_geometry",
     "athenakin.collision.Bodies.with_radius", "athenakin.motion.Tracker.reset",
-    "athenakin.teleop.ArmBackend.read_encoders", "athenakin.teleop.ArmBackend.write",
-    "athenakin.teleop.MujocoBackend.closure_error", "athenakin.teleop.MujocoBackend.read_encoders",
-    "athenakin.teleop.MujocoBackend.tip_b", "athenakin.teleop.MujocoBackend.write",
-    "athenakin.teleop.SessionLog.counts", "athenakin.teleop.SimulatedArm.measured_cp",
-    "athenakin.teleop.SimulatedArm.measured_js", "athenakin.teleop.SimulatedArm.move_cp",
-    "athenakin.teleop.SimulatedArm.move_jp", "athenakin.teleop.SimulatedArm.servo_jp",
-    "athenakin.teleop.SimulatedArm.setpoint_cp", "athenakin.teleop.SimulatedArm.setpoint_js",
-    "athenakin.teleop.SimulatedArm.step", "athenakin.teleop.TeleopOptions.stopping_distance",
-    "athenakin.teleop.TremorFilter.reset",
+    "athenakin.teleop.TeleopOptions.stopping_distance", "athenakin.teleop.TremorFilter.reset",
 }
 
 METHODS = _public_methods()
