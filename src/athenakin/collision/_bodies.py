@@ -244,8 +244,22 @@ class Bodies:
                     **by_name: float) -> Bodies:
         """A copy with some radii changed: ``with_radius(link_a=0.01)`` or ``with_radius({...})``.
 
+        Parameters
+        ----------
+        radii : mapping of str to float, optional, positional-only
+            Body name -> capsule radius, m.
+        **by_name : float
+            Body name -> capsule radius, m (after ``radii``).
+
+        Returns
+        -------
+        Bodies
+            The copy.
+
         Raises
         ------
+        TypeError
+            ``radii`` is not a mapping.
         InvalidInputError
             An unknown body name, or a negative, NaN or too large radius.
         """
@@ -265,6 +279,21 @@ class Bodies:
     def with_excluded(self, *items: object) -> Bodies:
         """A copy that also excludes the pairs ``(a, b)`` (or every pair of a body ``name``).
 
+        Parameters
+        ----------
+        *items : tuple of (str, str) or str
+            Pairs of body names, or a body name for all its pairs.
+
+        Returns
+        -------
+        Bodies
+            The copy.
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown body name or a malformed pair.
+
         Examples
         --------
         >>> b = Bodies.default().with_excluded(("rail", "carrier"), "sphere_link_1")
@@ -275,7 +304,18 @@ class Bodies:
                                    + _normalise_excluded(items, "with_excluded"))
 
     def with_geometry(self, geometry: BodyGeometry) -> Bodies:
-        """A copy with another :class:`BodyGeometry`."""
+        """A copy with another :class:`BodyGeometry`.
+
+        Parameters
+        ----------
+        geometry : BodyGeometry
+            Carriage length, sphere radius and rail margin, m.
+
+        Returns
+        -------
+        Bodies
+            The copy.
+        """
         return dataclasses.replace(self, geometry=geometry)
 
     # --- TOML ---------------------------------------------------------------------------
@@ -283,13 +323,24 @@ class Bodies:
         """The ``[bodies]`` table: ``radius`` (name -> m), ``exclude`` (pairs), ``geometry``.
 
         :meth:`from_mapping` reads it back to an equal object.
+
+        Returns
+        -------
+        dict
+            ``{"radius": {name: m}, "exclude": [[a, b], ...], "geometry": {...}}``.
         """
         return {"radius": dict(zip(BODIES, self.radii, strict=True)),
                 "exclude": [list(p) for p in self.excluded],
                 "geometry": dataclasses.asdict(self.geometry)}
 
     def to_toml(self) -> str:
-        """TOML text with a ``[bodies]`` table (append it to a design file)."""
+        """TOML text with a ``[bodies]`` table (append it to a design file).
+
+        Returns
+        -------
+        str
+            The TOML text (:meth:`to_toml_table` under ``[bodies]``).
+        """
         import tomli_w
 
         return tomli_w.dumps({"bodies": self.to_toml_table()})
@@ -302,8 +353,22 @@ class Bodies:
         body names), ``geometry`` (``carriage_length``, ``sphere_radius``,
         ``rail_margin``), ``scale_with_design`` (bool, applied to the defaults only).
 
+        Parameters
+        ----------
+        data : mapping
+            The ``[bodies]`` table.
+        design : Design, optional, keyword-only
+            The design whose default radii apply (default the reference design).
+
+        Returns
+        -------
+        Bodies
+            The bodies the table describes.
+
         Raises
         ------
+        TypeError
+            ``data`` is not a mapping.
         InvalidInputError
             An unknown key or body name, a bad radius or pair.
         """
@@ -335,6 +400,18 @@ class Bodies:
     @classmethod
     def from_toml(cls, path: str | Path, *, design: Design | None = None) -> Bodies:
         """The ``[bodies]`` table of a design (or any) TOML file; defaults if it has none.
+
+        Parameters
+        ----------
+        path : str or Path
+            The TOML file.
+        design : Design, optional, keyword-only
+            The design whose default radii apply (default the reference design).
+
+        Returns
+        -------
+        Bodies
+            The bodies of the file's ``[bodies]`` table.
 
         Raises
         ------

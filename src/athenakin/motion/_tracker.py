@@ -207,7 +207,28 @@ class Tracker:
 
     # ------------------------------------------------------------------------------
     def reset(self, q0: ArrayLike, *, slot: int | None = None) -> TrackedPose:
-        """Restart the stream at a known configuration (see the class parameters)."""
+        """Restart the stream at a known configuration (see the class parameters).
+
+        Parameters
+        ----------
+        q0 : array-like, shape (3,)
+            Actuators, m, at which the stream restarts.
+        slot : int, optional, keyword-only
+            FK solution slot 0-15 to track (default: the first assembled slot in the
+            order mode +1, p > 0, U-joint +1, wrist +1).
+
+        Returns
+        -------
+        TrackedPose
+            The tracked pose at ``q0``.
+
+        Raises
+        ------
+        InvalidInputError
+            ``q0`` is not a finite (3,) vector, or ``slot`` is not assembled there.
+        KinematicsError
+            The forward kinematics at ``q0`` fails (``errors="raise"``).
+        """
         q = check_array(q0, "q0", (3,))
         if q.shape != (3,):
             raise InvalidInputError(f"q0: expected shape (3,), got {q.shape}")

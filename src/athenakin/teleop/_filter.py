@@ -231,7 +231,13 @@ class TremorFilter:
         self._s = [0.0] * (6 * len(self._c))
 
     def reset(self, x: float, y: float, z: float) -> None:
-        """Set the state to the steady state of the constant input ``(x, y, z)``."""
+        """Set the state to the steady state of the constant input ``(x, y, z)``.
+
+        Parameters
+        ----------
+        x, y, z : float
+            The constant input (master position, m) whose steady state the filter takes.
+        """
         s = self._s
         i = 0
         for v in (x, y, z):

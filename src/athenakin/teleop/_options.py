@@ -207,7 +207,20 @@ class TeleopOptions:
         check_choice(self.backend, "backend", ("auto", "numpy", "numba"))
 
     def stopping_distance(self, v_max: tuple[float, ...], a_max: tuple[float, ...]) -> float:
-        """Largest joint travel while braking from ``v_max`` at ``a_max``, m."""
+        """Largest joint travel while braking from ``v_max`` at ``a_max``, m.
+
+        Parameters
+        ----------
+        v_max : tuple of float
+            Joint speed bounds, m/s, one per actuator.
+        a_max : tuple of float
+            Joint acceleration bounds, m/s^2, one per actuator (same length).
+
+        Returns
+        -------
+        float
+            The travel, m (``inf`` where an acceleration bound is 0).
+        """
         t = max(v / a for v, a in zip(v_max, a_max, strict=True))   # joints stop together
         return max(0.5 * v * t for v in v_max) if math.isfinite(t) else math.inf
 
