@@ -9,7 +9,9 @@ here needs a ROS installation. :func:`crtk_types` gives CRTK's own
 from __future__ import annotations
 
 import dataclasses
+import math
 import threading
+import time
 from typing import Any
 
 __all__ = ["require_rclpy", "ros2_extra_missing", "CrtkTypes", "crtk_types", "RosContext"]
@@ -192,3 +194,51 @@ class RosContext:
         if self.context.ok():
             self.context.try_shutdown()
 
+
+
+def run_until(stop: threading.Event, context: RosContext, timeout: float | None) -> None:
+    """Block until ``stop`` is set, ``context`` shuts down (Ctrl-C), or ``timeout`` s pass.
+
+    Parameters
+    ----------
+    stop : threading.Event
+        The node's stop event.
+    context : RosContext
+        The node's ROS context.
+    timeout : float, optional
+        Seconds to block at most (default: until shutdown).
+    """
+    end = math.inf if timeout is None else time.monotonic() + float(timeout)
+    while context.ok and not stop.is_set() and time.monotonic() < end:
+        time.sleep(min(0.1, max(0.0, end - time.monotonic())))
+
+
+def stop_node(stop: threading.Event, threads: list[threading.Thread], executor: Any,
+              node: Any, own_context: RosContext | None) -> None:
+    """Stop a node's threads, remove and destroy the node, close a context it owns.
+
+    Idempotent: a node already destroyed is passed over.
+
+    Parameters
+    ----------
+    stop : threading.Event
+        Set, so that the node's loops end.
+    threads : list of threading.Thread
+        The node's loop and executor threads (joined, 5 s each at most).
+    executor : rclpy.executors.Executor
+        The executor the node was added to.
+    node : rclpy.node.Node
+        The node.
+    own_context : RosContext or None
+        The context to close (only one the node created itself).
+    """
+    stop.set()
+    for th in threads:
+        th.join(timeout=5.0)
+    try:
+        executor.remove_node(node)
+        node.destroy_node()
+    except Exception:  # pragma: no cover - already destroyed
+        pass
+    if own_context is not None:
+        own_context.close()

@@ -23,7 +23,7 @@ from .._validation import check_scalar
 from ..design import Design, resolve_design
 from ._arm_node import _create_node, _qos, check_namespace
 from ._convert import ACTUATORS, joint_state, master_position, stamp_ns
-from ._runtime import RosContext, require_rclpy
+from ._runtime import RosContext, require_rclpy, run_until, stop_node
 
 __all__ = ["TeleopNode", "TELEOP_TOPICS", "MASTER_PRESETS", "DVRK_PRESET", "STATUS_KEYS"]
 
@@ -342,23 +342,13 @@ class TeleopNode:
             Seconds to run at most (default: until shutdown).
         """
         self.start()
-        end = math.inf if timeout is None else time.monotonic() + float(timeout)
-        while self.context.ok and not self._stop.is_set() and time.monotonic() < end:
-            time.sleep(min(0.1, max(0.0, end - time.monotonic())))
+        run_until(self._stop, self.context, timeout)
 
     def close(self) -> None:
         """Stop the threads, destroy the node, shut down its own context (idempotent)."""
-        self._stop.set()
-        for th in self._threads:
-            th.join(timeout=5.0)
+        stop_node(self._stop, self._threads, self._executor, self.node,
+                  self.context if self._own_context else None)
         self._threads = []
-        try:
-            self._executor.remove_node(self.node)
-            self.node.destroy_node()
-        except Exception:  # pragma: no cover - already destroyed
-            pass
-        if self._own_context:
-            self.context.close()
 
     def __enter__(self) -> TeleopNode:
         return self.start()
