@@ -180,7 +180,7 @@ def _command_lines(tmp: Path) -> list[list[str]]:
             ["animate", "-o", "a.gif"], ["export", "-o", "m.xml"], ["derive"], ["design"],
             ["calibrate", "--plan", "3", "-o", "c.toml"],
             ["synthesize", "--designs", "2", "-o", "syn"], ["app"], ["warmup"],
-            ["ros2", "arm", "--duration", "1"]]
+            ["ros2", "arm", "--duration", "1"], ["setup", "phantom", "--write", "ph"]]
 
 
 def test_core_only_install_runs_every_command_to_a_named_message(tmp_path):
@@ -188,7 +188,7 @@ def test_core_only_install_runs_every_command_to_a_named_message(tmp_path):
     lines = _command_lines(tmp_path)
     assert {a[0] for a in lines} >= set(COMMANDS) - {"teleop"}
     wanted = {"plan": "motion", "synthesize": "synthesis", "track": "ros", "view": "plot",
-              "derive": "symbolic", "app": "app", "ros2": "ros2"}
+              "derive": "symbolic", "app": "app", "ros2": "ros2", "setup": "collision"}
     for argv in lines:
         r = _core_only(argv, tmp_path)
         assert r.returncode in (0, 1), (argv, r.returncode, r.stderr[-2000:])
