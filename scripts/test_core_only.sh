@@ -82,12 +82,14 @@ run warmup --help     # the compile itself: the same numba as the main venv's (C
 run teleop --master r.mcap -o s.mcap
 run teleop --no-arm --master r.mcap -o s.mcap   # the recording's extra [ros], before any work
 run fk -0.1 0.1 0.45 --certify                  # the pip name python-flint
+run ros2 arm --duration 1                       # the [ros2] extra named
+run setup phantom --write ph                    # trimesh of [collision] named
 # a command added later must be listed above
 "$py" - <<'CHECK'
 from athenakin.cli import COMMANDS
 listed = {"fk", "ik", "demo", "plan", "track", "workspace", "singularities", "view", "animate",
           "export", "derive", "design", "calibrate", "synthesize", "app", "warmup",
-          "teleop"}
+          "teleop", "ros2", "setup"}
 missing = sorted(set(COMMANDS) - listed)
 if missing:
     raise SystemExit(f"scripts/test_core_only.sh: add a run line for {missing}")
