@@ -586,10 +586,35 @@ def _wait_teleop(page, state):
         " return e && e.textContent.trim() === w; }", arg=state, timeout=UPDATE_TIMEOUT_MS)
 
 
+#: How long the clutch is held under load, s.
+HOLD_S = 3.0
+
+
+def _clutch_stays_open(app, page, seconds):
+    """Two busy processes load the machine while the clutch is held ``seconds``: every
+    cycle the server runs meanwhile is CLUTCHED (a held clutch never re-engages)."""
+    burn = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(2)]
+    seen, t0 = [], time.monotonic()
+    try:
+        while time.monotonic() - t0 < seconds:
+            frame = app.teleop.frame
+            seen.append(None if frame is None else ("CLUTCHED" in frame.flags, frame.t))
+            page.wait_for_timeout(50)
+    finally:
+        for b in burn:
+            b.kill()
+            b.wait()
+    cycles = {t: clutched for clutched, t in (x for x in seen if x is not None)}
+    assert len(cycles) >= 2, f"the loop ran no cycles while held: {seen}"
+    assert all(cycles.values()), f"re-engaged while held: {sorted(cycles.items())}"
+
+
 def test_teleop_tab_handle_field_drives_the_robot_and_the_held_key_clutches(local):
     """The Teleop tab in Chromium: start, step the handle's x field up 10 mm with the
     keyboard, the robot follows 0.2 x 10 mm (read-outs and the commanded tip); the key C
-    held opens the clutch, released closes it; pausing the master trips the watchdog."""
+    held opens the clutch, released closes it, and so does the hold button held with the
+    mouse, each held for seconds while two busy processes load the machine; pausing the
+    master trips the watchdog."""
     app, page, errors = local
     r0 = _wait_settled(page, app)
     _tab(page, "Teleop")
@@ -625,7 +650,15 @@ def test_teleop_tab_handle_field_drives_the_robot_and_the_held_key_clutches(loca
     page.evaluate("() => document.activeElement.blur()")   # focus off the field
     page.keyboard.down("c")                                # the held key opens the clutch
     _wait_teleop(page, "clutched")
+    _clutch_stays_open(app, page, HOLD_S)
     page.keyboard.up("c")
+    _wait_teleop(page, "following")
+    button = page.get_by_role("button", name="hold to clutch (or hold C)")
+    button.hover()
+    page.mouse.down()                                      # the held button, with the mouse
+    _wait_teleop(page, "clutched")
+    _clutch_stays_open(app, page, HOLD_S)
+    page.mouse.up()
     _wait_teleop(page, "following")
     page.get_by_text("pause master").click()
     _wait_teleop(page, "WATCHDOG")

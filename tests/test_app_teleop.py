@@ -17,19 +17,21 @@ import pytest
 import athenakin as ak
 from athenakin.app import app_setup
 from athenakin.app._teleop import (
-    CLUTCH_HOLD_S,
     MAX_CYCLES,
     SHOWN_FLAGS,
     TELEOP_RATE,
     Master,
+    TeleopFrame,
     clutch_closed,
     fixture_solids,
     hold_clutch,
+    release_clutch,
     start_teleop,
     teleop_cycles,
     teleop_frame,
     teleop_html,
     teleop_scene,
+    teleop_state,
 )
 from athenakin.collision import Environment
 from athenakin.teleop import TeleopOptions, TeleopStatus
@@ -59,7 +61,7 @@ def _run(tele, master, t, n):
 
 
 def _moved(master, d):
-    return Master(tuple(np.add(master.handle_b, d)), master.clutched, master.held_until,
+    return Master(tuple(np.add(master.handle_b, d)), master.clutched, master.held,
                   master.paused)
 
 
@@ -84,7 +86,7 @@ def test_reclutch_moves_no_tip_and_the_clutch_lets_the_handle_move_freely(setup)
     tele, m = _start(setup)
     cmd, t = _run(tele, m, 0.0, 5)
     open_ = Master(m.handle_b, clutched=True)
-    assert not clutch_closed(open_, t)
+    assert not clutch_closed(open_)
     cmd, t = _run(tele, open_, t, 5)
     tip0 = cmd.tip
     far = Master(tuple(np.add(m.handle_b, [0.05, 0.0, 0.0])), clutched=True)
@@ -99,16 +101,58 @@ def test_reclutch_moves_no_tip_and_the_clutch_lets_the_handle_move_freely(setup)
     np.testing.assert_allclose(cmd.tip, tip0, rtol=0, atol=JUMP_TOL)
 
 
-def test_a_held_clutch_opens_until_its_hold_messages_stop(setup):
+def test_a_held_clutch_stays_open_until_its_release_however_late_the_cycles_run(setup):
+    """Held from the first hold message to the release: no time-out re-engages it, even
+    when the loop runs its cycles seconds after the last hold message (a loaded server)."""
     tele, m = _start(setup)
-    held = hold_clutch(m, 1.0)
-    assert held.held_until == 1.0 + CLUTCH_HOLD_S and not held.clutched
-    assert not clutch_closed(held, 1.0) and not clutch_closed(held, 1.0 + 0.9 * CLUTCH_HOLD_S)
-    assert clutch_closed(held, 1.0 + CLUTCH_HOLD_S)
-    cmd, t = teleop_cycles(tele, held, 1.0 - 5 * DT, 1.0 + 2 * DT)
+    held = hold_clutch(m)
+    assert held.held and not held.clutched and not clutch_closed(held)
+    cmd, t = teleop_cycles(tele, held, 1.0 - 5 * DT, 1.0)
     assert cmd.status & TeleopStatus.CLUTCHED
-    cmd, t = teleop_cycles(tele, held, t, 1.0 + CLUTCH_HOLD_S + 2 * DT)
+    tip0 = cmd.tip
+    far = _moved(held, [0.03, 0.0, 0.0])              # the handle moves while held
+    cmd, t = _run(tele, far, t, 500)                  # 5 s of cycles, no new hold message
+    assert cmd.status & TeleopStatus.CLUTCHED and cmd.tip == tip0
+    assert teleop_state(teleop_frame(tele, far, cmd))[0] == "clutched"
+    released = release_clutch(far)
+    assert not released.held and clutch_closed(released)
+    cmd, t = _run(tele, released, t, 1)               # re-engage: no jump
     assert not cmd.status & TeleopStatus.CLUTCHED
+    assert np.max(np.abs(np.subtract(cmd.tip, tip0))) <= JUMP_TOL
+    toggled = release_clutch(Master(m.handle_b, clutched=True, held=True))
+    assert toggled.clutched and not clutch_closed(toggled)   # the toggle is kept
+
+
+def _frame_with(flags, *, following=True):
+    st = TeleopStatus(0)
+    for n in flags:
+        st |= TeleopStatus[n]
+    z = np.zeros(3)
+    return TeleopFrame(t=0.0, q=z, slot=0, tip_b=z, target_b=z, handle_b=z, status=st,
+                       flags=tuple(n for n in SHOWN_FLAGS if n in flags), scale=0.2,
+                       following=following, watchdog="WATCHDOG" in flags,
+                       estop="ESTOP" in flags)
+
+
+@pytest.mark.parametrize(("flags", "following", "word"), [
+    ((), True, "following"),
+    (("VELOCITY",), True, "limited by VELOCITY"),
+    (("CLEARANCE", "HOLD"), True, "held by CLEARANCE"),
+    (("FIXTURE", "CLEARANCE", "HOLD"), True, "held by FIXTURE CLEARANCE"),
+    (("HOLD",), True, "held"),
+    (("CLUTCHED", "HOLD"), False, "clutched"),
+    ((), False, "paused"),
+    (("WATCHDOG", "HOLD"), False, "WATCHDOG"),
+    (("ESTOP", "WATCHDOG", "HOLD"), False, "E-STOP"),
+    (("FAULT", "HOLD"), True, "FAULT"),
+])
+def test_the_state_word_says_what_the_robot_does(flags, following, word):
+    """A guard holding the robot never reads "following" (CLEARANCE and HOLD lit)."""
+    f = _frame_with(flags, following=following)
+    assert teleop_state(f)[0] == word
+    assert 'data-ro="teleop_state"' in teleop_html(f) and f">{word}</span>" in teleop_html(f)
+    if word != "following":
+        assert teleop_state(f)[1] != teleop_state(_frame_with(()))[1]
 
 
 def test_a_scale_change_while_following_or_clutched_moves_no_tip(setup):

@@ -33,23 +33,26 @@ from ._model import AppSetup
 from ._scene import LineSet, PointSet, Scene, Solid, rgb
 from ._text import ERROR_COLOR, WARN_COLOR
 
-__all__ = ["TELEOP_RATE", "SCALE_RANGE", "CLUTCH_HOLD_S", "MAX_CYCLES", "SHOWN_FLAGS",
-           "Master", "TeleopFrame", "start_teleop", "hold_clutch", "clutch_closed",
+__all__ = ["TELEOP_RATE", "SCALE_RANGE", "MAX_CYCLES", "SHOWN_FLAGS", "GUARD_FLAGS",
+           "Master", "TeleopFrame", "start_teleop", "hold_clutch", "release_clutch",
+           "clutch_closed", "teleop_state",
            "teleop_cycles", "teleop_frame", "teleop_scene", "fixture_solids", "teleop_html"]
 
 #: Cycles per second of the app's teleoperation loop, Hz (the tremor filter needs >= 100).
 TELEOP_RATE = 100.0
 #: Range of the scale slider (tip metres per master metre); the default is Teleop's, 0.2.
 SCALE_RANGE = (0.05, 1.0)
-#: A held clutch (key or button) counts as released this long after its last hold
-#: message, s (viser repeats a held button's message at 20 Hz).
-CLUTCH_HOLD_S = 0.3
 #: Most cycles one tick of the loop runs: a loop late by more drops the backlog (the
 #: robot moves slower in wall time, never faster than ``v_max`` per cycle).
 MAX_CYCLES = 10
 #: The flags shown, in the safety layer's order (the issue's ten, then the four extra).
 SHOWN_FLAGS = ("CLUTCHED", "STROKE", "DEPTH", "SINGULAR", "FIXTURE", "CLEARANCE", "VELOCITY",
                "ACCELERATION", "WATCHDOG", "ESTOP", "INVALID", "JUMP", "HOLD", "FAULT")
+#: The flags of a guard that shortened or refused the step toward the master's target.
+GUARD_FLAGS = ("STROKE", "DEPTH", "SINGULAR", "FIXTURE", "CLEARANCE", "VELOCITY",
+               "ACCELERATION", "JUMP", "INVALID")
+#: Colour of the state word while the tip follows the master.
+FOLLOWING_COLOR = "#1b7e3c"
 #: Colours of the commanded tip, the target and the fixtures; the fixtures' opacity.
 TIP_COLOR = "#1b9e77"
 TARGET_COLOR = "#7570b3"
@@ -72,15 +75,16 @@ class Master:
     clutched : bool
         The clutch button is on: the master moves freely, the tip holds (dVRK's
         "clutched"; ``clutch=False`` of :meth:`Teleop.step`).
-    held_until : float
-        App time (s) until which a held clutch (key or hold button) keeps it open.
+    held : bool
+        A held clutch (the hold button or its key) is down: open from the first hold
+        message until the button's release, however late the messages arrive.
     paused : bool
         No master samples (``step(t, None)``): the watchdog holds the robot.
     """
 
     handle_b: tuple[float, float, float]
     clutched: bool = False
-    held_until: float = -math.inf
+    held: bool = False
     paused: bool = False
 
 
@@ -178,15 +182,52 @@ def _to_base(setup: AppSetup, p_e: Any) -> tuple[float, float, float]:
     return float(x[0]), float(x[1]), float(x[2])
 
 
-def hold_clutch(master: Master, t: float) -> Master:
-    """``master`` with the clutch held open until ``t + CLUTCH_HOLD_S`` (a hold message)."""
+def hold_clutch(master: Master) -> Master:
+    """``master`` with the held clutch down (a hold message of the button or its key).
+
+    Parameters
+    ----------
+    master : Master
+
+    Returns
+    -------
+    Master
+        ``master`` with ``held=True``: the clutch stays open until :func:`release_clutch`.
+    """
     check_instance(master, "master", Master)
-    return dataclasses.replace(master, held_until=check_scalar(t, "t") + CLUTCH_HOLD_S)
+    return dataclasses.replace(master, held=True)
 
 
-def clutch_closed(master: Master, t: float) -> bool:
-    """Whether the tip follows at app time ``t``: neither toggled nor held open."""
-    return not (master.clutched or t < master.held_until)
+def release_clutch(master: Master) -> Master:
+    """``master`` with the held clutch up (the hold button's release, the key's key-up).
+
+    Parameters
+    ----------
+    master : Master
+
+    Returns
+    -------
+    Master
+        ``master`` with ``held=False`` (the toggle :attr:`Master.clutched` is kept).
+    """
+    check_instance(master, "master", Master)
+    return dataclasses.replace(master, held=False)
+
+
+def clutch_closed(master: Master) -> bool:
+    """Whether the tip follows the master: the clutch neither toggled nor held open.
+
+    Parameters
+    ----------
+    master : Master
+
+    Returns
+    -------
+    bool
+        ``not (master.clutched or master.held)``.
+    """
+    check_instance(master, "master", Master)
+    return not (master.clutched or master.held)
 
 
 def teleop_cycles(tele: Any, master: Master, t_last: float, t_now: float
@@ -214,10 +255,10 @@ def teleop_cycles(tele: Any, master: Master, t_last: float, t_now: float
     if n > MAX_CYCLES:
         t_last, n = t_now - MAX_CYCLES * dt, MAX_CYCLES
     sample = None if master.paused else master.handle_b
-    cmd = None
+    closed, cmd = clutch_closed(master), None
     for k in range(1, n + 1):
         t = t_last + k * dt
-        cmd = tele.step(t, sample, clutch=clutch_closed(master, t))
+        cmd = tele.step(t, sample, clutch=closed)
     return cmd, t_last + max(n, 0) * dt
 
 
@@ -319,12 +360,52 @@ def _obstacle_mesh(o: Any) -> tuple[FloatArray, IntArray]:
     return verts @ T[:3, :3].T + T[:3, 3], faces
 
 
+def teleop_state(frame: TeleopFrame) -> tuple[str, str]:
+    """The state word of ``frame`` and its colour: what the robot does this cycle.
+
+    In order: ``E-STOP``, ``WATCHDOG``, ``FAULT`` (red; the robot brakes and holds);
+    ``clutched`` (the master moves freely, the tip holds); ``paused`` (no master
+    samples); ``held by NAME ...`` (a guard of :data:`GUARD_FLAGS` refused the step: the
+    tip holds, ``HOLD`` is set); ``limited by NAME ...`` (a guard shortened the step: the
+    tip follows more slowly or stops short); ``following`` (green: the tip follows the
+    master, scaled).
+
+    Parameters
+    ----------
+    frame : TeleopFrame
+
+    Returns
+    -------
+    state : str
+    color : str
+        CSS colour.
+    """
+    check_instance(frame, "frame", TeleopFrame)
+    flags = frame.flags
+    guards = " ".join(n for n in GUARD_FLAGS if n in flags)
+    if frame.estop:
+        return "E-STOP", ERROR_COLOR
+    if frame.watchdog:
+        return "WATCHDOG", ERROR_COLOR
+    if "FAULT" in flags:
+        return "FAULT", ERROR_COLOR
+    if "CLUTCHED" in flags:
+        return "clutched", WARN_COLOR
+    if not frame.following:
+        return "paused", WARN_COLOR
+    if "HOLD" in flags:
+        return (f"held by {guards}" if guards else "held"), WARN_COLOR
+    if guards:
+        return f"limited by {guards}", WARN_COLOR
+    return "following", FOLLOWING_COLOR
+
+
 def teleop_html(frame: TeleopFrame | None, *, note: str = "") -> str:
     """The Teleop tab's read-out: the state, the flags by name, the scale, the tip.
 
     Every flag of :data:`SHOWN_FLAGS` is a cell ``data-flag="NAME"`` with ``data-on="1"``
-    when set; ``data-ro="teleop_state"`` is ``following``, ``clutched``, ``paused``,
-    ``WATCHDOG``, ``E-STOP`` or ``off``; ``data-ro="teleop_flags"`` lists the set flags.
+    when set; ``data-ro="teleop_state"`` is :func:`teleop_state`'s word, or ``off``;
+    ``data-ro="teleop_flags"`` lists the set flags.
 
     Parameters
     ----------
@@ -337,14 +418,7 @@ def teleop_html(frame: TeleopFrame | None, *, note: str = "") -> str:
     if frame is None:
         return top + '<div><b>teleop</b> <span data-ro="teleop_state">off</span></div>'
     check_instance(frame, "frame", TeleopFrame)
-    if frame.estop:
-        state, color = "E-STOP", ERROR_COLOR
-    elif frame.watchdog:
-        state, color = "WATCHDOG", ERROR_COLOR
-    elif "CLUTCHED" in frame.flags:
-        state, color = "clutched", WARN_COLOR
-    else:
-        state, color = ("following", "#1b7e3c") if frame.following else ("paused", WARN_COLOR)
+    state, color = teleop_state(frame)
     cells = []
     for name in SHOWN_FLAGS:
         on = name in frame.flags

@@ -9,9 +9,15 @@ and shows the flags every cycle they change. Controls:
 * **start / stop teleop**; the master handle (transform controls, translation only)
   appears at the tool tip, and its numeric field ``handle [mm]`` (base frame) moves it too;
 * **clutch**: a button that toggles, and a held clutch: the button *hold to clutch*, or
-  the key **C** held while the Teleop tab is shown. viser (1.1.1) reports no key events
-  to Python (its hotkeys fire once, on the press), so a page script turns the held key
-  into a held press of that button, whose hold messages viser repeats at 20 Hz;
+  the key **C** held while the Teleop tab is shown. The first hold message opens it and
+  the button's release (its click) closes it, so a loaded server that handles the
+  repeated hold messages late never re-engages while the button is still held; the
+  messages are handled in their order of arrival (coroutine callbacks on viser's event
+  loop, not its thread pool). viser (1.1.1) reports no key events to Python (its
+  hotkeys fire once, on the press), so a page script turns the held key into a held
+  press of that button and its release into the button's release. A press that ends
+  without a click (a cancelled touch) leaves the clutch open, the safe side: the tip
+  holds until the button is pressed and released again;
 * **scale** (0.05..1.0), changed at any time without a tip jump (``Teleop.set_scale``);
 * **pause master**: no samples, the watchdog holds the robot after 30 ms;
 * **E-STOP** and **release**.
@@ -42,6 +48,7 @@ from ._teleop import (
     TeleopFrame,
     fixture_solids,
     hold_clutch,
+    release_clutch,
     start_teleop,
     teleop_cycles,
     teleop_frame,
@@ -64,13 +71,16 @@ _HANDLE_SCALE = 0.12
 
 
 def _clutch_key_script() -> str:
-    """Page script: the held key C presses the visible hold button, its release lets go."""
+    """Page script: the held key C presses the visible hold button; its key-up releases it.
+
+    The release also clicks the button: the click is the release the server acts on.
+    """
     return (
         "if (!window.__athenakinClutch) { window.__athenakinClutch = true; let held = null;"
         f" const label = {json.dumps(HOLD_LABEL)}, code = {json.dumps(CLUTCH_KEY)};"
         " const opts = {bubbles: true, button: 0, pointerId: 1, isPrimary: true};"
         " const up = () => { if (held) { held.dispatchEvent(new PointerEvent('pointerup', opts));"
-        " held = null; } };"
+        " held.click(); held = null; } };"
         " document.addEventListener('keydown', (e) => { const t = e.target;"
         " if (e.code !== code || e.repeat || held || t instanceof HTMLInputElement"
         " || t instanceof HTMLTextAreaElement) return;"
@@ -123,7 +133,8 @@ class TeleopTab:
         self.clutch_btn.on_click(lambda _: self._toggle_clutch())
         self.hold_btn = gui.add_button(HOLD_LABEL, disabled=True,
                                        hint="the master moves freely while held; the tip holds")
-        self.hold_btn.on_hold(lambda _: self._update_master(hold=True), callback_hz=20.0)
+        self.hold_btn.on_hold(self._on_hold, callback_hz=20.0)
+        self.hold_btn.on_click(self._on_hold_released)
         self.scale = gui.add_slider("scale", min=SCALE_RANGE[0], max=SCALE_RANGE[1], step=0.01,
                                     initial_value=0.2, hint="tip motion per master motion")
         self.scale.on_update(lambda _: self._set_scale())
@@ -152,12 +163,23 @@ class TeleopTab:
     def _now(self) -> float:
         return time.perf_counter() - self._t0
 
-    def _update_master(self, *, hold: bool = False, **changes: Any) -> None:
+    async def _on_hold(self, _: Any) -> None:
+        """A hold message of the hold button (coroutine: handled in arrival order)."""
+        with self._lock:
+            if self.master is not None and not self.master.held:
+                self.master = hold_clutch(self.master)
+
+    async def _on_hold_released(self, _: Any) -> None:
+        """The hold button's click: its release (coroutine: after its hold messages)."""
+        with self._lock:
+            if self.master is not None and self.master.held:
+                self.master = release_clutch(self.master)
+
+    def _update_master(self, **changes: Any) -> None:
         with self._lock:
             if self.master is None:
                 return
-            m = dataclasses.replace(self.master, **changes)
-            self.master = hold_clutch(m, self._now()) if hold else m
+            self.master = dataclasses.replace(self.master, **changes)
         if "clutched" in changes:
             self.clutch_btn.label = ("clutch: OPEN, tip holds (click to close)"
                                      if changes["clutched"] else "clutch: closed (click to open)")
