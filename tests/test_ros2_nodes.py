@@ -293,6 +293,9 @@ def test_teleop_follows_the_master_and_the_watchdog_holds(nodes):
     assert all(v["watchdog"] == "True" for v in st[first:]
                if float(v["sample_age_s"]) > WATCHDOG)
     assert "HOLD" in st[first]["names"]
+    # the bodies are checked by default: every cycle reports their least clearance
+    clear = [float(v["clearance_m"]) for v in st]
+    assert all(math.isfinite(x) and x > 0 for x in clear), clear[:5]
     # while the master ran, the tip followed it (no watchdog, moving commands)
     following = [v for v in st[:first] if v["watchdog"] == "False"]
     assert following and all(v["estop"] == "False" for v in following)
@@ -420,6 +423,7 @@ def test_the_teleop_node_drives_the_arm_node_over_the_graph(nodes):
 
 
 def test_a_replayed_master_gives_the_commands_of_run_session(nodes):
+    from athenakin.collision import Bodies
     from athenakin.teleop import Teleop, run_session
 
     _, _, c, _, replay = nodes
@@ -431,10 +435,10 @@ def test_a_replayed_master_gives_the_commands_of_run_session(nodes):
     pts = [(0.02 * math.sin(math.pi * k / 1000), 0.01 * math.sin(0.6 * math.pi * k / 1000),
             0.005 * (1 - math.cos(0.4 * math.pi * k / 1000))) for k in range(300)]
     d = ak.Design.default()
-    # the teleop node runs without the bodies' check (as the session here, explicitly)
-    log = run_session(Teleop(ak.default_rcm_frame(d), d, q0=Q0, rate=1000.0), None,
-                      [(t * 1e-9, p, True) for t, p in zip(ns, pts, strict=True)],
-                      check_bodies=False)
+    # the teleop node checks the default bodies, as the session here does
+    log = run_session(Teleop(ak.default_rcm_frame(d), d, q0=Q0, rate=1000.0,
+                             bodies=Bodies.default(d)), None,
+                      [(t * 1e-9, p, True) for t, p in zip(ns, pts, strict=True)])
 
     def send(k):
         m = PoseStamped()
@@ -458,3 +462,21 @@ def test_a_replayed_master_gives_the_commands_of_run_session(nodes):
     q = np.array([got[divmod(t, 10**9)] for t in ns])
     np.testing.assert_allclose(q, log.q, rtol=0, atol=1e-12)
     assert np.ptp(log.q, axis=0).max() > 1e-4          # the commands moved
+
+
+def test_the_teleop_node_refuses_to_run_without_the_bodies_unless_told(capsys):
+    """Safe by default: the node's core checks the bodies; turning that off takes the
+    explicit opt-out, and contradictory options are refused by name before any node."""
+    from athenakin.cli import main
+    from athenakin.errors import InvalidInputError
+    from athenakin.ros2 import TeleopNode
+    from athenakin.teleop import TeleopOptions
+
+    with pytest.raises(InvalidInputError, match="check_bodies=False"):
+        TeleopNode(q0=Q0, options=TeleopOptions(check_clearance=False))
+    with pytest.raises(TypeError, match="check_bodies"):
+        TeleopNode(q0=Q0, check_bodies=1)
+    env = Path(__file__).parent / "data" / "no_such_bodies.toml"
+    assert main(["ros2", "teleop", "--q0", *map(str, Q0), "--no-bodies", "--bodies",
+                 str(env), "--duration", "0.1"]) == 1
+    assert "--no-bodies" in capsys.readouterr().err

@@ -1,7 +1,9 @@
 """Collision options of ``track``, ``plan``, ``workspace``: bodies, environment, clearance margin.
 
 ``app`` takes ``--bodies`` and ``--environment`` (:func:`add_bodies_options`), ``synthesize``
-``--environment`` (:func:`add_environment_option`, :func:`load_environment`).
+``--environment`` (:func:`add_environment_option`, :func:`load_environment`); the teleop
+sessions (``teleop``, ``ros2 teleop``) keep the bodies apart by default
+(:func:`add_session_collision_options`, :func:`session_collision`).
 
 :mod:`athenakin.collision` is imported only when one of them is given.
 """
@@ -75,3 +77,48 @@ def collision_options(args: argparse.Namespace, design: Design) -> dict[str, Any
               else Bodies.default(design))
     env = load_environment(env_path)
     return {"bodies": bodies, "environment": env, "clearance_margin": margin}
+
+
+def add_session_collision_options(p: argparse.ArgumentParser) -> None:
+    """The collision options of a teleop session, with ``--no-bodies`` (the opt-out)."""
+    add_collision_options(p, what="kept by the safety layer")
+    p.add_argument("--no-bodies", action="store_true",
+                   help="check no clearance of the bodies (explicit opt-out; with "
+                        "--environment its obstacles stay fixtures for the tip)")
+
+
+def session_collision(args: argparse.Namespace, design: Design) -> dict[str, Any]:
+    """``bodies``, ``environment`` and the options of a teleop session's clearance check.
+
+    The bodies default to the ``--design`` file's ``[bodies]`` table, else the default
+    capsules: every session keeps them apart unless ``--no-bodies``.
+
+    Returns
+    -------
+    dict
+        ``bodies`` and ``environment`` (for :class:`~athenakin.teleop.Teleop`), and
+        ``options``: the :class:`~athenakin.teleop.TeleopOptions` fields they set
+        (``clearance_margin``; ``check_clearance=False`` with ``--no-bodies``).
+
+    Raises
+    ------
+    ValueError
+        ``--no-bodies`` with ``--bodies FILE``; a bad ``--clearance-margin``.
+    """
+    if args.no_bodies and args.bodies is not None:
+        raise ValueError("--no-bodies: contradicts --bodies FILE; give one of the two")
+    opts = collision_options(args, design)
+    if not opts:
+        from ..collision import Bodies
+
+        source = getattr(args, "design", None)
+        bodies = (Bodies.from_toml(source, design=design) if source is not None
+                  else Bodies.default(design))
+        opts = {"bodies": bodies, "environment": None, "clearance_margin": None}
+    options: dict[str, Any] = {}
+    if opts["clearance_margin"] is not None:
+        options["clearance_margin"] = opts["clearance_margin"]
+    if args.no_bodies:
+        opts["bodies"] = None
+        options["check_clearance"] = False
+    return {"bodies": opts["bodies"], "environment": opts["environment"], "options": options}

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ..teleop._filter import TREMOR_FILTERS
+from ._collision import add_session_collision_options, session_collision
 from ._common import add_robot_options, check_finite, load_robot
 
 
@@ -64,6 +65,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                         "cycles); master: one cycle per master message at its stamp (replays)")
     t.add_argument("--with-arm", action="store_true",
                    help="run an arm node (enabled) in this process too")
+    add_session_collision_options(t)
     t.add_argument("--duration", type=float, help="stop after this many seconds")
     add_robot_options(t)
     t.set_defaults(func=run_teleop)
@@ -117,9 +119,10 @@ def run_teleop(args: argparse.Namespace) -> int:
     clutch = args.clutch_topic or preset["clutch"]
     if args.q0 is not None:
         check_finite(args.q0, "--q0")
-    options = TeleopOptions(filter=args.filter) if args.watchdog is None else \
-        TeleopOptions(filter=args.filter, watchdog=args.watchdog)
     design, T = load_robot(args)
+    col = session_collision(args, design)
+    options = TeleopOptions(filter=args.filter, **col["options"],
+                            **({} if args.watchdog is None else {"watchdog": args.watchdog}))
     context = arm = None
     if args.with_arm:
         from ..ros2 import ArmNode, RosContext
@@ -129,13 +132,17 @@ def run_teleop(args: argparse.Namespace) -> int:
                       enable=True, use_sim_time=args.use_sim_time, context=context).start()
     try:
         node = TeleopNode(T, design, q0=args.q0, rate=args.rate, scale=args.scale,
-                          options=options, arm_namespace=args.namespace, pose_topic=pose,
+                          options=options, bodies=col["bodies"],
+                          environment=col["environment"], check_bodies=not args.no_bodies,
+                          arm_namespace=args.namespace, pose_topic=pose,
                           clutch_topic=None if clutch.lower() == "none" else clutch,
                           clutch_button=args.clutch_button, master_frame=args.master_frame,
                           status_every=args.status_every, use_sim_time=args.use_sim_time,
                           clock=args.clock, context=context)
         print(f"ros2 teleop: {pose} + {clutch} -> {node.namespace}/servo_jp at "
-              f"{args.rate:g} Hz" + (" (arm node in this process)" if arm else ""), flush=True)
+              f"{args.rate:g} Hz, bodies "
+              + ("checked" if node.teleop.checks_clearance else "not checked (--no-bodies)")
+              + (" (arm node in this process)" if arm else ""), flush=True)
         try:
             node.spin(duration)
         except KeyboardInterrupt:     # Ctrl-C: the node's normal end

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..teleop._filter import TREMOR_FILTERS
-from ._collision import add_collision_options, collision_options
+from ._collision import add_session_collision_options, session_collision
 from ._common import add_robot_options, check_finite, fmt, load_robot
 from ._output import add_force_option, outputs
 
@@ -58,10 +58,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--max-gap", type=float, default=None, metavar="S",
                    help="longest gap between two poses of the recording, s (default 10); a "
                         "longer one is an error")
-    add_collision_options(p, what="kept by the safety layer")
-    p.add_argument("--no-bodies", action="store_true",
-                   help="check no clearance of the bodies (explicit opt-out; with "
-                        "--environment its obstacles stay fixtures for the tip)")
+    add_session_collision_options(p)
     add_force_option(p)
     add_robot_options(p)
     p.set_defaults(func=run)
@@ -92,24 +89,18 @@ def run(args: argparse.Namespace) -> int:
     if args.clutch_button < 0:
         raise ValueError(f"--clutch-button: expected a button index >= 0, got "
                          f"{args.clutch_button}")
-    if args.no_bodies and args.bodies is not None:
-        raise ValueError("--no-bodies: contradicts --bodies FILE; give one of the two")
     clutch_topic = None if args.clutch_topic.lower() == "none" else args.clutch_topic
     with outputs(args) as outs:
         if out is not None:
             outs.add(out)
         design, T = load_robot(args)
-        bodies, environment, margin = _collision(args, design)
-        opts: dict = {"filter": args.filter}
+        col = session_collision(args, design)
+        opts: dict = {"filter": args.filter, **col["options"]}
         if args.registration is not None:
             opts["registration"] = np.array(args.registration, dtype=float).reshape(3, 3)
-        if margin is not None:
-            opts["clearance_margin"] = margin
-        if args.no_bodies:
-            opts["check_clearance"] = False
         q0 = np.array(args.q0, dtype=float)
-        tele = Teleop(T, design, q0=q0, scale=args.scale, rate=args.rate, bodies=bodies,
-                      environment=environment, options=TeleopOptions(**opts))
+        tele = Teleop(T, design, q0=q0, scale=args.scale, rate=args.rate, bodies=col["bodies"],
+                      environment=col["environment"], options=TeleopOptions(**opts))
         arm = None if args.no_arm else SimulatedArm(T, design, q0=q0, rate=args.rate)
         if arm is not None:
             arm.enable()
@@ -139,25 +130,6 @@ def run(args: argparse.Namespace) -> int:
             print(f"wrote {out} ({', '.join(f'{k}: {v}' for k, v in counts.items() if v)} "
                   f"messages)")
     return 0
-
-
-def _collision(args: argparse.Namespace, design: object) -> tuple[object, object, object]:
-    """``bodies``, ``environment``, ``clearance_margin`` of the options.
-
-    The bodies default to the ``--design`` file's ``[bodies]`` table, else the default
-    capsules: every session keeps them apart unless ``--no-bodies``.
-    """
-    opts = collision_options(args, design)  # type: ignore[arg-type]
-    if not opts:
-        from ..collision import Bodies
-
-        source = getattr(args, "design", None)
-        bodies = (Bodies.from_toml(source, design=design) if source is not None  # type: ignore[arg-type]
-                  else Bodies.default(design))  # type: ignore[arg-type]
-        opts = {"bodies": bodies, "environment": None, "clearance_margin": None}
-    if args.no_bodies:
-        opts["bodies"] = None
-    return opts["bodies"], opts["environment"], opts["clearance_margin"]
 
 
 def _mm_hint(master: np.ndarray) -> str:

@@ -38,7 +38,7 @@ MASTER_PRESETS = {"default": {"pose": TELEOP_TOPICS["pose"], "clutch": TELEOP_TO
                   "dvrk-mtmr": DVRK_PRESET}
 #: The keys of the status message's values, in order.
 STATUS_KEYS = ("t", "cycle", "flags", "names", "clutched", "limited", "hold", "watchdog",
-               "estop", "sample_age_s", "tip_b", "refused")
+               "estop", "sample_age_s", "tip_b", "clearance_m", "refused")
 
 
 class TeleopNode:
@@ -58,6 +58,16 @@ class TeleopNode:
         Motion scale (0.2).
     options : TeleopOptions, optional, keyword-only
         The core's options (watchdog, filter, registration, ...).
+    bodies : athenakin.collision.Bodies, optional, keyword-only
+        The robot's bodies the core keeps apart, and from ``environment``; default
+        ``Bodies.default(design)`` (every session checks them unless ``check_bodies``
+        is False).
+    environment : athenakin.collision.Environment, optional, keyword-only
+        Obstacles: virtual fixtures for the tip, and kept clear of the bodies.
+    check_bodies : bool, keyword-only
+        True (default): the core checks the bodies' clearance (``bodies`` or the
+        default capsules); a core built without (``TeleopOptions(check_clearance=
+        False)``) is refused. False: the explicit opt-out, ``bodies`` as given.
     arm_namespace : str, keyword-only
         The arm node's namespace (``/athena``).
     pose_topic, clutch_topic : str, keyword-only
@@ -87,13 +97,17 @@ class TeleopNode:
     ------
     TimeoutError
         No ``measured_js`` from the arm within ``wait_for_arm`` s (``q0`` None).
+    InvalidInputError
+        ``check_bodies`` True and ``options`` turn the clearance check off; the core's
+        own refusals (a ``q0`` off the strokes, in a fixture, with the bodies too close).
     ModuleNotFoundError
         rclpy is not installed (the extra ``ros2``).
     """
 
     def __init__(self, T_b_e: ArrayLike | None = None, design: Design | None = None, *,
                  q0: ArrayLike | None = None, rate: float = 1000.0, scale: float = 0.2,
-                 options: Any = None, arm_namespace: str = "/athena",
+                 options: Any = None, bodies: Any = None, environment: Any = None,
+                 check_bodies: bool = True, arm_namespace: str = "/athena",
                  pose_topic: str = TELEOP_TOPICS["pose"],
                  clutch_topic: str | None = TELEOP_TOPICS["clutch"], clutch_button: int = 0,
                  master_frame: str | None = None, status_every: int = 10,
@@ -110,6 +124,7 @@ class TeleopNode:
 
         self.design = resolve_design(design)
         self.T_b_e = resolve_rcm_frame(T_b_e, self.design)
+        bodies = _session_bodies(self.design, bodies, options, check_bodies)
         self.namespace = check_namespace(arm_namespace)
         self.rate = check_scalar(rate, "rate", positive=True)
         self.clutch_button = check_count(clutch_button, "clutch_button", minimum=0)
@@ -135,16 +150,21 @@ class TeleopNode:
         self._executor.add_node(self.node)
         self._pubs, self._subs = self._topics(pose_topic, clutch_topic,
                                               MutuallyExclusiveCallbackGroup())
-        if q0 is None:
-            q0 = self._wait_for_arm(check_scalar(wait_for_arm, "wait_for_arm", positive=True))
+        self._threads: list[threading.Thread] = []
         from ..teleop import Teleop
 
-        self.teleop = Teleop(self.T_b_e, self.design, q0=q0, scale=scale, rate=self.rate,
-                             options=options)
+        try:
+            if q0 is None:
+                q0 = self._wait_for_arm(check_scalar(wait_for_arm, "wait_for_arm",
+                                                     positive=True))
+            self.teleop = Teleop(self.T_b_e, self.design, q0=q0, scale=scale, rate=self.rate,
+                                 options=options, bodies=bodies, environment=environment)
+        except BaseException:           # no arm, or the core refused q0: no node left behind
+            self.close()
+            raise
         with self._lock:
             if self._estop:             # latched while the node waited for the arm
                 self.teleop.estop()
-        self._threads: list[threading.Thread] = []
 
     def _topics(self, pose_topic: str, clutch_topic: str | None, group: Any
                 ) -> tuple[dict[str, Any], list[Any]]:
@@ -279,7 +299,8 @@ class TeleopNode:
                   "watchdog": str(bool(s & TeleopStatus.WATCHDOG)),
                   "estop": str(bool(s & TeleopStatus.ESTOP)),
                   "sample_age_s": repr(t - self._t_sample),
-                  "tip_b": " ".join(repr(float(v)) for v in tip_b), "refused": refused}
+                  "tip_b": " ".join(repr(float(v)) for v in tip_b),
+                  "clearance_m": repr(float(cmd.clearance)), "refused": refused}
         error = s & (TeleopStatus.WATCHDOG | TeleopStatus.ESTOP | TeleopStatus.FAULT)
         st = DiagnosticStatus(level=DiagnosticStatus.ERROR if error else
                               DiagnosticStatus.WARN if (limited or refused) else
@@ -355,3 +376,26 @@ class TeleopNode:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _session_bodies(design: Design, bodies: Any, options: Any, check_bodies: bool) -> Any:
+    """The bodies the node's core checks: ``bodies``, by default the default capsules.
+
+    Raises
+    ------
+    TypeError
+        ``check_bodies`` not a bool.
+    InvalidInputError
+        ``check_bodies`` with ``options.check_clearance`` False.
+    """
+    from ..collision import Bodies
+    from ..errors import InvalidInputError
+
+    if not isinstance(check_bodies, bool):
+        raise TypeError(f"check_bodies: expected a bool, got {type(check_bodies).__name__}")
+    if not check_bodies:
+        return bodies
+    if getattr(options, "check_clearance", None) is False:
+        raise InvalidInputError("options: check_clearance=False turns off the bodies' "
+                                "clearance check; pass check_bodies=False to run without it")
+    return Bodies.default(design) if bodies is None else bodies

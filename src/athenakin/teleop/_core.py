@@ -311,6 +311,16 @@ class Teleop(_Mapping, _Limiter, _Brake):
         return self._backend
 
     @property
+    def checks_clearance(self) -> bool:
+        """Whether every step keeps the robot's bodies apart, and from the environment.
+
+        True when ``bodies`` or ``environment`` was given or
+        ``TeleopOptions(check_clearance=True)``; False only where the caller opted out
+        (``check_clearance=False``, or neither given).
+        """
+        return self._guard is not None
+
+    @property
     def clearance_evaluations(self) -> int:
         """Exact clearance evaluations of the last cycle (at most ``CLEARANCE_EVALUATIONS``)."""
         return 0 if self._guard is None else self._guard.evaluations

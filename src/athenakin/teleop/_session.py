@@ -220,7 +220,7 @@ def run_session(tele: Any, arm: Any, master: Iterable[tuple[float, Any, bool]], 
     if max_cycles is not None:
         max_cycles = check_count(max_cycles, "max_cycles", minimum=0)
     items = _master_items(master, max_cycles)
-    if check_bodies and not _checks_bodies(tele):
+    if check_bodies and not tele.checks_clearance:
         raise InvalidInputError("tele: checks no clearance of the robot's bodies; build it "
                                 "with bodies=athenakin.collision.Bodies.default(design) (or "
                                 "an environment), or pass check_bodies=False to run without")
@@ -246,14 +246,6 @@ def run_session(tele: Any, arm: Any, master: Iterable[tuple[float, Any, bool]], 
                      int(cmd.slot)))
     start = getattr(master, "start_ns", None)
     return _session_log(rows, tele, None if start is None else int(start))
-
-
-def _checks_bodies(tele: Any) -> bool:
-    """Whether ``tele`` keeps the robot's bodies apart (its clearance check is on)."""
-    flag = getattr(tele, "checks_clearance", None)
-    if isinstance(flag, bool):
-        return flag
-    return math.isfinite(getattr(tele, "_clear_floor", -math.inf))
 
 
 def _master_items(master: object, max_cycles: int | None
