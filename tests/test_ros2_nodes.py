@@ -207,8 +207,14 @@ def test_a_refused_command_is_answered_and_not_executed(nodes):
     wrong = PoseStamped()
     wrong.header.frame_id = "world"
     cp.publish(wrong)
-    c.until(lambda: len(c.got["status"]) >= 3, "three refusals on status", procs=[arm])
+    # finite commands the arm holds and flags (its refusal), answered as refusals too
+    servo.publish(JointState(position=[-0.1, 0.1, 0.9]))           # q3 past its stroke
+    servo.publish(JointState(position=list(before), effort=[1e6, 0.0, 0.0]))   # 1 MN
+    c.until(lambda: len(c.got["status"]) >= 5, "five refusals on status", procs=[arm])
     texts = [_text(m) for m in c.got["status"]]
+    assert any(t.startswith("refused servo_jp: held:") and "stroke" in t for t in texts), texts
+    assert any(t.startswith("refused servo_jp: held:") and "max_force" in t
+               for t in texts), texts
     assert any(t.startswith("refused servo_jp:") and "position" in t for t in texts), texts
     assert any(t.startswith("refused move_jp:") and "stroke" in t for t in texts), texts
     assert any(t.startswith("refused servo_cp:") and "frame_id" in t for t in texts), texts

@@ -3,8 +3,9 @@
 :class:`ArmNode` is a thin adapter. Its subscriptions convert a message
 (:mod:`._convert`) and call the arm's own CRTK method (``servo_jp``, ``move_cp``,
 ``enable``, ...) under one lock; whatever the arm refuses (an exception: a bad
-shape, a NaN, a stroke, an unreachable tip, a state that takes no command) is
-answered on ``status`` and never executed. A dedicated servo thread steps the arm
+shape, a NaN, a state that takes no command; or a command the arm holds and flags in
+its ``refusal``: a stroke, an unreachable tip, an effort out of bounds) is answered on
+``status`` and never executed. A dedicated servo thread steps the arm
 at its rate and publishes its state every ``rate / publish_rate`` cycles; the ROS
 executor runs the subscriptions on its own thread, so a burst of commands never
 delays a servo cycle by more than the lock's hold (one method call).
@@ -250,8 +251,14 @@ class ArmNode:
                                                       self._now()))
 
     def _command(self, name: str, msg: Any, call: Callable[[], None], *,
-                 stamped: bool = True, needs_enabled: bool = True) -> None:
-        """Run ``call`` on the arm, or answer why not: the one path of every command."""
+                 stamped: bool = True, needs_enabled: bool = True,
+                 held_refusal: bool = True) -> None:
+        """Run ``call`` on the arm, or answer why not: the one path of every command.
+
+        An exception of ``call`` is a refusal; so is, with ``held_refusal``, a command the
+        arm held and flagged (its ``refusal`` set after the call, as
+        :class:`~athenakin.teleop.SimulatedArm`'s commands do): answered ``held: <why>``.
+        """
         self.commands += 1
         try:
             if stamped:
@@ -266,7 +273,10 @@ class ArmNode:
                     raise ValueError(f"the arm is {state}, not ENABLED (send 'enable' or "
                                      f"'resume' on state_command)")
                 call()
-            if stamped and ns:
+                held = getattr(self.arm, "refusal", None) if held_refusal else None
+            if held is not None:
+                self.refuse(name, f"held: {held}")
+            elif stamped and ns:
                 self._last_stamp[name] = ns
         except Exception as exc:    # the arm's refusal, whatever its kind: never executed
             self.refuse(name, f"{type(exc).__name__}: {exc}")
@@ -303,7 +313,8 @@ class ArmNode:
         self._command("move_cp", msg, call)
 
     def _on_hold(self, msg: Any) -> None:
-        self._command("hold", msg, self.arm.hold, stamped=False, needs_enabled=False)
+        self._command("hold", msg, self.arm.hold, stamped=False, needs_enabled=False,
+                      held_refusal=False)
 
     def _on_state_command(self, msg: Any) -> None:
         text = self.crtk.text(msg).strip()
@@ -319,7 +330,8 @@ class ArmNode:
             if fn is None:
                 raise ValueError(f"state_command: this arm has no {method!r}")
             fn()
-        self._command("state_command", msg, call, stamped=self.crtk.native, needs_enabled=False)
+        self._command("state_command", msg, call, stamped=self.crtk.native, needs_enabled=False,
+                      held_refusal=text.lower() == "home")
 
     # --- state ----------------------------------------------------------------------
     def _now(self) -> Any:
