@@ -4,7 +4,8 @@ Run from the repository root (each prints the machine's load beside its numbers)
 
     python benchmarks/bench_teleop.py latency [--cycles 1000000]
     python benchmarks/bench_teleop.py guard [--cycles 100000]
-    python benchmarks/bench_teleop.py hostile [--cycles 1000000] [--seed 0]
+    python benchmarks/bench_teleop.py hostile [--cycles 1000000] [--seed 0] [--clearance]
+        [--oracle]
     python benchmarks/bench_teleop.py session [--seconds 20] [--figure FILE.png]
 
 ``latency``: the whole chain per cycle (mapping, filter, IK, safety, feed-forward) on a
@@ -224,9 +225,26 @@ def guard(cycles: int, block: int = 10_000) -> None:
           f"{os.cpu_count()} cores)")
 
 
-def hostile(cycles: int, seed: int, *, with_clearance: bool) -> dict[str, int]:
-    env = _env()
+def _four_fixtures() -> Environment:
+    """:func:`_env`'s sphere and halfspace, a capsule and a box: every fixture shape."""
+    tb = T[:3, :3] @ np.array([0.25, 0.0, 0.0]) + T[:3, 3]
+    box = np.eye(4)
+    box[:3, 3] = tb + np.array([0.0, 0.07, -0.02])
+    return (_env().capsule(tb + np.array([-0.03, -0.05, -0.03]),
+                           tb + np.array([0.03, -0.05, -0.03]), 0.006, name="duct")
+            .box(box, [0.015, 0.01, 0.015], name="retractor"))
+
+
+#: Cycles per block of the independent oracle (``hostile --oracle``).
+ORACLE_BLOCK = 20_000
+
+
+def hostile(cycles: int, seed: int, *, with_clearance: bool,
+            oracle: bool = False) -> dict[str, int]:
+    env = _four_fixtures() if oracle else _env()
     fx = TipFixtures(env)
+    block: list = []
+    found = {}
     opts = TeleopOptions(feedforward=False, check_clearance=with_clearance)
     tele = Teleop(T, D, q0=Q0, options=opts, environment=env,
                   bodies=Bodies.default(D) if with_clearance else None)
@@ -276,12 +294,40 @@ def hostile(cycles: int, seed: int, *, with_clearance: bool) -> dict[str, int]:
         if with_clearance and not cmd.clearance >= opts.clearance_margin:
             bad["clearance"] += 1
         bad["fault"] += int(bool(cmd.status & TeleopStatus.FAULT))
+        if oracle:
+            block.append(cmd)
+            if len(block) > ORACLE_BLOCK or k == cycles - 1:
+                found = _oracle(block, tele, env, with_clearance, found)
+                block = block[-1:]            # the backward differences across blocks
     el = time.perf_counter() - t0
     print(f"hostile streams: {cycles} cycles, seed {seed}, clearance "
           f"{'on' if with_clearance else 'off'}, {el:.1f} s ({_load()})")
     print(f"  flags seen: {TeleopStatus(flags)!r}")
     print(f"  violations: {bad}")
+    if oracle:
+        print(f"  independent oracle (athenakin.testing.teleop_violations: reference FK tips, "
+              f"coal distances to the {len(env)} fixtures, clearance from rebuilt points): "
+              f"{found}")
+        bad.update({f"oracle_{k}": v for k, v in found.items() if not k.startswith("least")})
     return bad
+
+
+def _oracle(block: list, tele: Teleop, env: Environment, with_clearance: bool,
+            found: dict) -> dict:
+    """Add the violations ``athenakin.testing`` finds in ``block`` to ``found``."""
+    from athenakin.testing import teleop_violations
+
+    robot = ak.Robot(T, D, bodies=Bodies.default(D) if with_clearance else None,
+                     environment=env)
+    v = teleop_violations(block, robot, rate=RATE, v_max=tele.v_max, a_max=tele.a_max,
+                          bodies=None if with_clearance else False,
+                          clearance_margin=tele.options.clearance_margin
+                          if with_clearance else 0.0)
+    out = {k: found.get(k, 0) + v.counts[k] for k in v.counts}
+    for k, x in (("least_clearance_m", v.least_clearance),
+                 ("least_fixture_distance_m", v.least_fixture_distance)):
+        out[k] = min(found.get(k, math.inf), x) if math.isfinite(x) else found.get(k, x)
+    return out
 
 
 def session(seconds: float, figure: str | None) -> None:
@@ -363,6 +409,9 @@ def main() -> None:
     b.add_argument("--seed", type=int, default=0)
     b.add_argument("--clearance", action="store_true",
                    help="also check the bodies' clearance (tens of microseconds per cycle)")
+    b.add_argument("--oracle", action="store_true",
+                   help="every fixture shape (halfspace, sphere, capsule, box), and every "
+                        "block of cycles checked again by athenakin.testing.teleop_violations")
     c = sub.add_parser("session")
     c.add_argument("--seconds", type=float, default=20.0)
     c.add_argument("--figure", default=None)
@@ -372,7 +421,8 @@ def main() -> None:
     elif args.what == "guard":
         guard(args.cycles)
     elif args.what == "hostile":
-        bad = hostile(args.cycles, args.seed, with_clearance=args.clearance)
+        bad = hostile(args.cycles, args.seed, with_clearance=args.clearance,
+                      oracle=args.oracle)
         raise SystemExit(1 if any(bad.values()) else 0)
     else:
         session(args.seconds, args.figure)
