@@ -29,8 +29,8 @@ LAYERS: dict[str, tuple[str, ...]] = {
     "dispatch": ("_dispatch",),
     "mechanism": ("_mechanism",),
     "areas": ("analysis", "calibration", "certified", "collision", "dynamics", "motion",
-              "synthesis"),
-    "systems": ("teleop", "sim", "ros", "_robot_model", "testing", "ros2"),
+              "synthesis", "sim", "_robot_model"),
+    "systems": ("teleop", "ros", "testing", "ros2"),
     "views": ("plot", "app"),
     "command line": ("cli", "__main__"),
 }

@@ -14,7 +14,7 @@ import athenakin as ak
 from athenakin import _backend
 from athenakin.collision import Bodies
 from athenakin.motion import Tracker, TrackFlag, TrackingError, track
-from athenakin.motion import _tracker as M
+from athenakin.motion import _stream as M
 
 needs_numba = pytest.mark.skipif(not _backend.numba_available(), reason="numba not available here")
 SEED = 22_2026

@@ -16,15 +16,17 @@ Subpackages, by layer (bottom first; docs/architecture.md, enforced by tests/tes
   :mod:`athenakin.calibration`, :mod:`athenakin.certified` (certified FK),
   :mod:`athenakin.collision` (bodies, clearance), :mod:`athenakin.dynamics` (statics,
   dynamics), :mod:`athenakin.motion` (paths, trajectories, tracking),
-  :mod:`athenakin.synthesis` (design studies);
-* systems: :mod:`athenakin.teleop` (teleoperation), :mod:`athenakin.sim` (MuJoCo/URDF),
+  :mod:`athenakin.synthesis` (design studies), :mod:`athenakin.sim` (MuJoCo/URDF),
+  :class:`athenakin.Robot` (the model);
+* systems: :mod:`athenakin.teleop` (teleoperation),
   :mod:`athenakin.ros` (ROS 2 recordings, MCAP, Foxglove), :mod:`athenakin.ros2` (the CRTK
   arm node and the teleop node on a live ROS 2 graph);
 * views: :mod:`athenakin.plot` (figures), :mod:`athenakin.app` (the live app);
 * command line: :mod:`athenakin.cli`.
 
 :class:`athenakin.Robot` bundles a design, its RCM frame, bodies and masses; its methods
-are one-line calls of the functions above. Everything but the maths core and ``robot`` is
+are one-line calls of the functions above, and the tracker, the planner and the systems
+take it as their model. Everything but the maths core and ``robot`` is
 imported on first use (``ak.dynamics``, ``ak.Robot``).
 """
 

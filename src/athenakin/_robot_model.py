@@ -14,8 +14,11 @@ Robot's own::
     tau = robot.inverse_dynamics(q, qd, qdd)     # ak.dynamics.inverse_dynamics(..., masses=...)
 
 A ``Robot`` is frozen and holds no cache (Pinocchio's ``Model``): the systems take it
-(``athenakin.teleop.Teleop(robot, q0=...)``) and build from it, once, the per-call data
-they own (the IK and dynamics loops, the clearance pair tables and buffers).
+(``athenakin.teleop.Teleop(robot, q0=...)``, ``athenakin.motion.Tracker(robot, q0=...)``,
+``athenakin.motion.plan(tips_e, robot)``) and build from it, once, the per-call data they
+own (the IK and dynamics loops, the clearance pair tables and buffers). Each of them also
+takes the functional form ``(T_b_e, design, bodies=, environment=, ...)``, which
+:func:`resolve_robot` turns into the Robot.
 """
 
 from __future__ import annotations
@@ -28,10 +31,10 @@ from numpy.typing import ArrayLike
 
 from ._dispatch import forward_kinematics, inverse_kinematics, q_from_instrument, q_from_tool_tip
 from ._typing import FloatArray
-from ._validation import check_frame
+from ._validation import _looks_like_design, check_frame
 from .design import Design, resolve_design
 
-__all__ = ["Robot"]
+__all__ = ["Robot", "resolve_robot"]
 
 _KEEP: Any = object()     # replace(): the field as it is
 
@@ -485,3 +488,52 @@ class Robot:
     def _part(self, name: str, value: Any) -> Any:
         """``value``, or this robot's part ``name`` where the caller gave none."""
         return getattr(self, name) if value is None else value
+
+
+def resolve_robot(robot: Any, design: Any = None, *, bodies: Any = None,
+                  environment: Any = None, masses: Any = None) -> Robot:
+    """The :class:`Robot` of a model argument: a Robot, or ``T_b_e`` and a design.
+
+    The one conversion of the systems that take a Robot (``Teleop``, ``Tracker``,
+    ``plan``): a Robot is taken as it is, with the parts given beside it filled in
+    where it has none; the functional form ``(T_b_e, design, bodies=, ...)`` builds one.
+
+    Parameters
+    ----------
+    robot : Robot or array-like, shape (4, 4)
+        The model, or the RCM frame E in the base frame ``T_b_e`` (m).
+    design : Design or str or os.PathLike, optional
+        With ``T_b_e`` only (default :meth:`Design.default`); a Robot holds its own.
+    bodies : athenakin.collision.Bodies, optional, keyword-only
+    environment : athenakin.collision.Environment, optional, keyword-only
+    masses : athenakin.dynamics.MassModel, optional, keyword-only
+        Parts of the model; beside a Robot, only those it lacks.
+
+    Returns
+    -------
+    Robot
+        ``robot`` itself when it is a Robot and no part is given beside it.
+
+    Raises
+    ------
+    TypeError
+        A design beside a Robot; a part given beside a Robot that has its own; ``robot``
+        neither a Robot nor an array-like (named ``robot``); a part of the wrong type.
+    InvalidInputError
+        ``T_b_e`` not a rigid transform of shape (4, 4), or a design in its place
+        (:data:`athenakin._validation.ARGUMENT_ORDER`).
+    """
+    parts = {"bodies": bodies, "environment": environment, "masses": masses}
+    if isinstance(robot, Robot):
+        if design is not None:
+            raise TypeError("design: give the design in the Robot, not beside it")
+        for name, v in parts.items():
+            if v is not None and getattr(robot, name) is not None:
+                raise TypeError(f"{name}: the Robot has its own {name}; give one, not both")
+        given = {k: v for k, v in parts.items() if v is not None}
+        return robot.replace(**given) if given else robot
+    if not (isinstance(robot, (np.ndarray, list, tuple)) or hasattr(robot, "__array__")
+            or _looks_like_design(robot)):          # a design here: the argument order
+        raise TypeError(f"robot: expected an athenakin.Robot or its RCM frame T_b_e "
+                        f"(array-like, shape (4, 4)), got {type(robot).__name__}")
+    return Robot(robot, design, **parts)

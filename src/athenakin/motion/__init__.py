@@ -36,7 +36,8 @@ from ._options import PlanOptions
 from ._plan import Trajectory, plan, plan_directions
 from ._plot import plot_actuators, plot_singularity_distance, plot_tip_path, save_plots
 from ._safety import MEASURE_NAMES, Margins, SingularityMeasures, singularity_measures
-from ._tracker import JUMP_M, JUMP_RAD, TrackedPose, Tracker, TrackFlag, TrackLog, track
+from ._stream import track
+from ._tracker import JUMP_M, JUMP_RAD, TrackedPose, Tracker, TrackFlag, TrackLog
 
 __all__ = [
     "CollisionError",

@@ -32,7 +32,7 @@ _OPTS: dict[str, Any] = dict(error_model="numpy", cache=True, nogil=True)
 
 #: Doubles per candidate row.
 NCAND = 20
-#: Doubles of the geometry vector (see :func:`athenakin.motion._tracker._kernel_geometry`).
+#: Doubles of the geometry vector (see :func:`athenakin.motion._stream._kernel_geometry`).
 NGEO = 33
 
 # TrackFlag bits, as plain ints (compile-time constants of the kernel)
@@ -205,7 +205,7 @@ def track_stream(q, g, prev, lost, out_c, out_step, out_flags, out_valid, out_fa
     q : ndarray, shape (n, 3)
         Readings, m (non-finite: ``LOST``).
     g : ndarray, shape (NGEO,)
-        Design, set-up and thresholds (:func:`athenakin.motion._tracker._kernel_geometry`).
+        Design, set-up and thresholds (:func:`athenakin.motion._stream._kernel_geometry`).
     prev : ndarray, shape (NCAND,)
         The previous candidate; updated in place to the last valid one.
     lost : ndarray of int64, shape (1,)

@@ -34,9 +34,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._robot_model import Robot, resolve_robot
 from .._typing import BoolArray, FloatArray, IntArray
 from .._validation import check_array, check_frame
-from ..design import Design, resolve_design
+from ..design import Design
 from ..robot import direction_from_angles
 from ._check import _check_clearance, _collision, _timing_error, _violation, check_samples
 from ._clearance import ClearanceCheck, clearance_check
@@ -164,7 +165,7 @@ class Trajectory:
 
 
 # --------------------------------------------------------------------------------------
-def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
+def plan(tips_e: ArrayLike, robot: Robot | ArrayLike, design: Design | None = None, *,
          times: ArrayLike | None = None, bodies: object = None, environment: object = None,
          masses: object = None, options: PlanOptions | None = None) -> Trajectory:
     """Plan an actuator trajectory that moves the tool tip along straight segments.
@@ -175,24 +176,30 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
         Tool-tip waypoints in the RCM frame E (m), K >= 2, visited in order along
         straight segments; the tip stops at each waypoint. Repeating a waypoint
         makes a dwell (with ``times``).
-    T_b_e : array-like, shape (4, 4)
-        RCM frame (the surgeon's set-up).
+    robot : athenakin.Robot or array-like, shape (4, 4)
+        The robot (its design, RCM frame, and the bodies, obstacles and masses of the
+        checks), or its RCM frame E in the base frame ``T_b_e`` (m, the surgeon's
+        set-up); then ``design``, ``bodies``, ``environment`` and ``masses`` build the
+        Robot (:func:`athenakin._robot_model.resolve_robot`).
     design : Design, optional
-        Defaults to :meth:`Design.default`; ``design.tool_length`` is ``L`` in
-        ``tip = O_s + L d``.
+        With ``T_b_e`` only; default :meth:`Design.default`. ``design.tool_length`` is
+        ``L`` in ``tip = O_s + L d``.
     times : array-like, shape (K,), optional, keyword-only
         Requested arrival time at each waypoint (s, non-decreasing). Without it
         every segment takes the shortest time the limits allow.
     bodies : athenakin.collision.Bodies, optional, keyword-only
         Check that every sample keeps these bodies ``clearance_margin`` apart (and
-        from the obstacles). Default: no collision check, unless ``environment`` or
-        ``options.clearance_margin`` is given, then :meth:`Bodies.default(design)
-        <athenakin.collision.Bodies.default>`.
+        from the obstacles). Default the Robot's; with none, no collision check
+        unless ``environment`` or ``options.clearance_margin`` is given, then
+        :meth:`Bodies.default(design) <athenakin.collision.Bodies.default>`.
     environment : athenakin.collision.Environment, optional, keyword-only
-        Obstacles every sample's bodies must keep clear of (turns the check on).
+        Obstacles every sample's bodies must keep clear of (turns the check on);
+        default the Robot's.
     masses : athenakin.dynamics.MassModel, optional, keyword-only
         Attach the actuator forces (:attr:`Trajectory.forces`, N) computed by
-        :func:`athenakin.dynamics.inverse_dynamics` (and hold ``options.f_max``).
+        :func:`athenakin.dynamics.inverse_dynamics` (and hold ``options.f_max``);
+        default the Robot's. Beside a Robot, each of ``bodies``, ``environment`` and
+        ``masses`` only where the Robot has none.
     options : PlanOptions, optional, keyword-only
         Sample rate, kinematic and force limits, timing policy, singularity and
         clearance margins, duration and sample bounds (default ``PlanOptions()``).
@@ -222,30 +229,38 @@ def plan(tips_e: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,
         (A :class:`SafetyViolationError`.) The first sample whose clearance is below
         the margin: its time, index and the pair of bodies in the message.
     TypeError, ValueError
-        Malformed arguments (named in the message).
+        Malformed arguments (named in the message); ``robot`` neither a Robot nor a
+        frame, a design or a part given beside a Robot that has its own.
 
     Examples
     --------
     >>> import numpy as np, athenakin as ak
-    >>> d = ak.Design.default()
-    >>> T = ak.default_rcm_frame(d)
+    >>> robot = ak.Robot.default()
     >>> tips = [[0.25, 0.0, 0.0], [0.27, -0.02, 0.0], [0.27, -0.02, 0.02]]
     >>> opts = ak.motion.PlanOptions(rate=1000.0, v_max=0.05, a_max=0.5)
-    >>> traj = ak.motion.plan(tips, T, d, options=opts)
+    >>> traj = ak.motion.plan(tips, robot, options=opts)
     >>> bool(np.all(np.abs(traj.qd) <= 0.05 * (1 + 1e-6)))
     True
+
+    The functional form ``(T_b_e, design)`` builds the same Robot:
+
+    >>> same = ak.motion.plan(tips, robot.T_b_e, robot.design, options=opts)
+    >>> bool(np.array_equal(same.q, traj.q))
+    True
     """
-    design = resolve_design(design)
+    model = resolve_robot(robot, design, bodies=bodies, environment=environment,
+                          masses=masses)
     tips = check_array(tips_e, "tips_e", (3,))
     if tips.ndim != 2 or tips.shape[0] < 2:
         raise ValueError(f"tips_e: expected shape (K, 3) with K >= 2 waypoints, "
                          f"got shape {tips.shape}")
     segs = [line_segment(tips[k], tips[k + 1]) for k in range(tips.shape[0] - 1)]
-    return _planned(segs, tips, T_b_e, design, times, bodies, environment, masses, options)
+    return _planned(segs, tips, model, times, options)
 
 
-def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_e: ArrayLike,
-                    design: Design | None = None, *, times: ArrayLike | None = None,
+def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike,
+                    robot: Robot | ArrayLike, design: Design | None = None, *,
+                    times: ArrayLike | None = None,
                     bodies: object = None, environment: object = None, masses: object = None,
                     options: PlanOptions | None = None) -> Trajectory:
     """Plan a trajectory through instrument-direction + insertion waypoints.
@@ -261,8 +276,10 @@ def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_
         0 or pi is the spherical joint's singularity ``sin u4 = 0``).
     depth : array-like, shape (K,)
         Insertion: depth of the tool tip beyond the RCM, m (``p = L - depth``).
-    T_b_e : array-like, shape (4, 4)
+    robot : athenakin.Robot or array-like, shape (4, 4)
+        The robot, or its RCM frame ``T_b_e`` (m), as for :func:`plan`.
     design : Design, optional
+        With ``T_b_e`` only, as for :func:`plan`.
     times, bodies, environment, masses, options : keyword-only
         As :func:`plan`.
 
@@ -278,7 +295,8 @@ def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_
     TypeError, ValueError
         As :func:`plan`; also ``ValueError`` for a segment between opposite directions.
     """
-    design = resolve_design(design)
+    model = resolve_robot(robot, design, bodies=bodies, environment=environment,
+                          masses=masses)
     az = check_array(azimuth, "azimuth", ())
     po = check_array(polar, "polar", ())
     dp = check_array(depth, "depth", ())
@@ -294,24 +312,23 @@ def plan_directions(azimuth: ArrayLike, polar: ArrayLike, depth: ArrayLike, T_b_
                          "circle between them is undefined")
     tips = dirs * dp[:, None]
     segs = [arc_segment(tips[k], tips[k + 1]) for k in range(tips.shape[0] - 1)]
-    return _planned(segs, tips, T_b_e, design, times, bodies, environment, masses, options)
+    return _planned(segs, tips, model, times, options)
 
 
-def _planned(segs: list[Segment], tips: FloatArray, T_b_e: ArrayLike, design: Design,
-             times: ArrayLike | None, bodies: object, environment: object, masses: object,
+def _planned(segs: list[Segment], tips: FloatArray, robot: Robot, times: ArrayLike | None,
              options: PlanOptions | None) -> Trajectory:
-    """:func:`_plan` with the options' limits, and with the forces when ``masses`` is given."""
+    """:func:`_plan` with the options' limits, and with the forces when the Robot has masses."""
     o = plan_options(options)
 
     def run(**limits: object) -> Trajectory:
-        return _plan(segs, tips, T_b_e, design, rate=o.rate, times=times, timing=o.timing,
-                     margins=o.margins, max_duration=o.max_duration,
-                     max_samples=o.max_samples, bodies=bodies, environment=environment,
-                     clearance_margin=o.clearance_margin, backend=o.backend,
-                     **limits)  # type: ignore[arg-type]
+        return _plan(segs, tips, robot.T_b_e, robot.design, rate=o.rate, times=times,
+                     timing=o.timing, margins=o.margins, max_duration=o.max_duration,
+                     max_samples=o.max_samples, bodies=robot.bodies,
+                     environment=robot.environment, clearance_margin=o.clearance_margin,
+                     backend=o.backend, **limits)  # type: ignore[arg-type]
 
     return planned(run, v_max=o.v_max, a_max=o.a_max, j_max=o.j_max,  # type: ignore[return-value]
-                   tip_speed=o.tip_speed, masses=masses, f_max=o.f_max,
+                   tip_speed=o.tip_speed, masses=robot.masses, f_max=o.f_max,
                    fixed_times=o.timing == "fixed", backend=o.backend)
 
 

@@ -23,8 +23,9 @@ Cost. Away from the singularities only the candidate with the previous labels is
 computed, in closed form with scalar arithmetic (no numpy in the loop): a few
 microseconds per sample. Near a singularity (any measure below its margin), after
 a large step, or when that candidate is not valid, all 16 are computed.
-:func:`track` (a recorded stream) runs the same algorithm compiled, reading after
-reading in one loop (:mod:`athenakin.motion._kernels`, :func:`track_batch`): the
+:func:`~athenakin.motion.track` (a recorded stream, :mod:`athenakin.motion._stream`)
+runs the same algorithm compiled, reading after reading in one loop
+(:mod:`athenakin.motion._kernels`, :func:`~athenakin.motion._stream.track_batch`): the
 same poses and steps to 1e-12 and the same flags, about a microsecond per reading.
 
 Collisions. Asked for with ``bodies=``, ``environment=`` or ``clearance_margin=``
@@ -34,51 +35,41 @@ the flags ``COLLISION`` (clearance < 0: overlap) and ``NEAR_COLLISION`` (clearan
 below the margin, collisions included). The check is off by default.
 :meth:`Tracker.update` places the bodies from the tracked pose in scalar arithmetic
 and calls the compiled capsule kernel once (tens of microseconds per sample, several
-times the tracker's own work; about a millisecond with obstacles); :func:`track` checks a
-recorded stream in one batch of :func:`athenakin.collision.clearance`.
+times the tracker's own work; about a millisecond with obstacles);
+:func:`~athenakin.motion.track` checks a recorded stream in one batch of
+:func:`athenakin.collision.clearance`.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._typing import BoolArray, FloatArray, IntArray
-from .._validation import check_array, check_frame, check_scalar, check_slot
-from ..chain import DEGENERATE_TOL, P_ZERO_TOL
-from ..design import Design, resolve_design
+from .._robot_model import Robot, resolve_robot
+from .._validation import check_array, check_scalar, check_slot
+from ..design import Design
 from ..errors import InvalidInputError
-from ..parallel import TANGENT_TOL
 from ..robot import forward_kinematics
 from ._candidates import (
     _B,
     _FLAG_NONE,
-    _LOG_FIELDS,
     TrackedPose,
     TrackLog,
     _adiff,
-    _cand_row,
-    _cand_tuple,
     _candidate,
     _clearance_text,
-    _empty_columns,
     _Geometry,
-    _join,
-    _pairs,
     _parallel,
-    _pose_columns,
-    pose_at,
 )
-from ._clearance import PoseClearance, clearance_check, sample_clearance
+from ._clearance import PoseClearance, clearance_check
 from ._errors import TrackingError
 from ._flags import TrackFlag
 from ._safety import Margins
 
-__all__ = ["TrackFlag", "TrackedPose", "Tracker", "TrackLog", "track", "JUMP_M", "JUMP_RAD"]
+__all__ = ["TrackFlag", "TrackedPose", "Tracker", "TrackLog", "JUMP_M", "JUMP_RAD"]
 
 #: Default jump threshold on ``O_s`` between consecutive samples, m.
 JUMP_M = 0.005
@@ -120,10 +111,14 @@ class Tracker:
 
     Parameters
     ----------
-    T_b_e : array-like, shape (4, 4)
-        RCM frame (the set-up).
+    robot : athenakin.Robot or array-like, shape (4, 4)
+        The model (its design, RCM frame, and the bodies and obstacles checked), or its
+        RCM frame E in the base frame ``T_b_e`` (m); then ``design``, ``bodies`` and
+        ``environment`` build the Robot (:func:`athenakin._robot_model.resolve_robot`).
+        Everything that depends on the model alone (the geometry of the scalar fast
+        path, the clearance pair tables) is built here, once.
     design : Design, optional
-        Defaults to :meth:`Design.default`.
+        With ``T_b_e`` only; default :meth:`Design.default`.
     q0 : array-like, shape (3,), keyword-only
         The first reading (m), whose configuration must be known.
     slot : int, optional, keyword-only
@@ -142,51 +137,62 @@ class Tracker:
     bodies : athenakin.collision.Bodies, optional, keyword-only
         Check the clearance of these bodies at every valid sample (flags
         ``COLLISION``, ``NEAR_COLLISION``; fields ``clearance``, ``closest_pair``).
-        Default: no check, unless ``environment`` or ``clearance_margin`` is given,
-        then :meth:`Bodies.default(design) <athenakin.collision.Bodies.default>`.
+        Default the Robot's; with none, no check unless ``environment`` or
+        ``clearance_margin`` is given, then :meth:`Bodies.default(design)
+        <athenakin.collision.Bodies.default>`. Beside a Robot only if it has none.
     environment : athenakin.collision.Environment, optional, keyword-only
-        Obstacles checked against the bodies (turns the check on).
+        Obstacles checked against the bodies (turns the check on); default the
+        Robot's. Beside a Robot only if it has none.
     clearance_margin : float, optional, keyword-only
         Clearance (m) below which a sample is ``NEAR_COLLISION`` (turns the check on);
         default 5 mm when the check is on.
     backend : {"auto", "numpy", "numba"}, keyword-only
-        The compiled stream of :func:`track_batch` and the clearance check on the numba
-        kernels or the numpy reference (:mod:`athenakin._backend`); the same poses and
-        flags.
+        The compiled stream of :func:`~athenakin.motion._stream.track_batch` and the
+        clearance check on the numba kernels or the numpy reference
+        (:mod:`athenakin._backend`); the same poses and flags.
 
     Raises
     ------
     KinematicsError
         ``q0`` has no valid configuration, or ``slot`` is not valid for it.
     TypeError, InvalidInputError
-        A malformed option (named); ``bodies`` or ``environment`` of the wrong type,
-        a negative or NaN ``clearance_margin``.
+        A malformed option (named); ``robot`` neither a Robot nor a frame, a design or
+        a part (``bodies``, ``environment``) beside a Robot that has its own;
+        ``bodies`` or ``environment`` of the wrong type, a negative or NaN
+        ``clearance_margin``.
 
     Examples
     --------
     >>> import athenakin as ak
-    >>> d = ak.Design.default()
-    >>> tr = ak.motion.Tracker(ak.default_rcm_frame(d), d, q0=[-0.10, 0.10, 0.45])
+    >>> robot = ak.Robot.default()
+    >>> tr = ak.motion.Tracker(robot, q0=[-0.10, 0.10, 0.45])
     >>> pose = tr.update([-0.1001, 0.1001, 0.4499])
     >>> pose.mode, pose.flags == ak.motion.TrackFlag.NONE
     (1, True)
+
+    The functional form builds the same Robot:
+
+    >>> same = ak.motion.Tracker(robot.T_b_e, robot.design, q0=[-0.10, 0.10, 0.45])
+    >>> same.update([-0.1001, 0.1001, 0.4499]) == pose
+    True
     """
 
-    def __init__(self, T_b_e: ArrayLike, design: Design | None = None, *, q0: ArrayLike,
-                 slot: int | None = None, jump_m: float = JUMP_M, jump_rad: float = JUMP_RAD,
-                 margins: Margins | None = None,
+    def __init__(self, robot: Robot | ArrayLike, design: Design | None = None, *,
+                 q0: ArrayLike, slot: int | None = None, jump_m: float = JUMP_M,
+                 jump_rad: float = JUMP_RAD, margins: Margins | None = None,
                  raise_on: TrackFlag = TrackFlag.NONE, bodies: object = None,
                  environment: object = None, clearance_margin: float | None = None,
                  backend: str = "auto") -> None:
         from .._backend import resolve_backend
 
-        design = resolve_design(design)
-        T = check_frame(T_b_e, "T_b_e")
+        #: The model (:class:`athenakin.Robot`); read here only.
+        self.robot = resolve_robot(robot, design, bodies=bodies, environment=environment)
+        T, design = self.robot.T_b_e, self.robot.design
         margins = Margins() if margins is None else margins
         if not isinstance(margins, Margins):
             raise TypeError(f"margins: expected athenakin.motion.Margins, got "
                             f"{type(margins).__name__}")
-        self.T_b_e = T.copy()
+        self.T_b_e = T                   # the Robot's read-only copy
         self.design = design
         self.jump_m = check_scalar(jump_m, "jump_m", positive=True)
         self.jump_rad = check_scalar(jump_rad, "jump_rad", positive=True)
@@ -195,8 +201,8 @@ class Tracker:
         self._raise_bits = int(self.raise_on)
         self._g = _Geometry(T, design)
         self.backend = "numba" if resolve_backend(backend) else "numpy"
-        self._check = clearance_check(design, bodies, environment, clearance_margin,
-                                      backend=self.backend)
+        self._check = clearance_check(design, self.robot.bodies, self.robot.environment,
+                                      clearance_margin, backend=self.backend)
         self._pose_clearance = (None if self._check is None else PoseClearance(
             design, T, self._check.bodies, self._check.environment, backend=self.backend))
         # fast-path thresholds: a candidate far from every singularity, and far enough
@@ -482,198 +488,3 @@ class Tracker:
 
     def _lose(self, qt: tuple[float, float, float], flags: int, n: int) -> TrackedPose:
         return self._pose(qt, self._prev, math.inf, flags | _B["LOST"], valid=False, sample=n)
-
-
-def track(q_stream: ArrayLike, T_b_e: ArrayLike, design: Design | None = None,
-          **options: object) -> TrackLog:
-    """Run a :class:`Tracker` over a recorded stream; the first reading is ``q0``.
-
-    The readings after the first go through :func:`track_batch`: the compiled tracker
-    where numba runs (:meth:`Tracker.update`'s poses to 1e-12, its flags, tested), else
-    :meth:`Tracker.update` itself.
-
-    Parameters
-    ----------
-    q_stream : array-like, shape (N, 3)
-        Readings, m, N >= 1.
-    T_b_e : array-like, shape (4, 4)
-    design : Design, optional
-    **options
-        Keyword options of :class:`Tracker` (``slot``, ``jump_m``, ``jump_rad``,
-        ``margins``, ``raise_on``, ``bodies``, ``environment``, ``clearance_margin``,
-        ``backend``).
-
-    Returns
-    -------
-    TrackLog
-        Row 0 is the initial configuration (flags: its ``NEAR_*`` bits).
-    """
-    qs = check_array(q_stream, "q_stream", (3,), allow_nonfinite=True)
-    if qs.ndim != 2 or qs.shape[0] < 1:
-        raise InvalidInputError(f"q_stream: expected shape (N, 3) with N >= 1, got {qs.shape}")
-    coll: dict[str, object] = {k: options.pop(k) for k in
-                               ("bodies", "environment", "clearance_margin") if k in options}
-    if any(v is not None for v in coll.values()):
-        cols = _track_checked(qs, T_b_e, design, coll, options)
-    else:
-        tr = Tracker(T_b_e, design, q0=qs[0], **options)  # type: ignore[arg-type]
-        cols = _join(_pose_columns([tr.pose]), track_batch(tr, qs[1:]))
-        cols["clearance"] = cols["closest_pair"] = None   # not checked: no value, not NaN
-    return TrackLog(**{k: cols[k] for k in _LOG_FIELDS})
-
-
-def _track_checked(qs: FloatArray, T_b_e: ArrayLike, design: Design | None,
-                   coll: dict[str, object], options: dict[str, object]) -> dict[str, Any]:
-    """:func:`track` with the collision check: the stream first, then all clearances at once.
-
-    The same poses and flags as a :class:`Tracker` checking every sample (the check
-    does not steer the tracking), in one batch of :func:`athenakin.collision.clearance`
-    calls instead of one call per sample; ``raise_on`` raises at the first sample
-    whose flags, collisions included, carry one of its bits.
-    """
-    raise_bits = int(_track_flag(options.pop("raise_on", TrackFlag.NONE), "raise_on"))
-    tr = Tracker(T_b_e, design, q0=qs[0], **options)  # type: ignore[arg-type]
-    check = clearance_check(tr.design, coll.get("bodies"), coll.get("environment"),
-                            coll.get("clearance_margin"), backend=tr.backend)
-    assert check is not None
-    cols = _join(_pose_columns([tr.pose]), track_batch(tr, qs[1:]))
-    idx = np.flatnonzero(cols["valid"])
-    dist, pair = sample_clearance(check, cols["q"][idx].reshape(-1, 3), tr.T_b_e, tr.design,
-                                  cols["mode"][idx], cols["p_sign"][idx], cols["wrist"][idx])
-    dist = np.asarray(dist, dtype=float)
-    cols["clearance"][idx] = dist
-    cols["closest_pair"] = _pairs(len(qs), idx, pair)
-    near = np.zeros(len(qs), bool)
-    near[idx] = dist < check.margin
-    coll_bits = np.zeros(len(qs), np.int64)
-    coll_bits[idx] = np.where(dist < 0.0, _B["COLLISION"], 0)
-    cols["flags"] = cols["flags"] | np.where(near, _B["NEAR_COLLISION"] | coll_bits, 0)
-    hit = np.flatnonzero(cols["flags"][1:] & raise_bits)
-    if hit.size:
-        ps = pose_at(cols, int(hit[0]) + 1)
-        what = "" if ps.valid else " no forward-kinematics solution:"
-        raise TrackingError(f"sample {ps.sample} (q = {list(ps.q)} m):{what} "
-                            f"{ps.flags!r}" + _clearance_text(ps), ps)
-    return cols
-
-
-def _kernel_geometry(tr: Tracker) -> FloatArray:
-    """The geometry vector of :func:`athenakin.motion._kernels.track_stream`."""
-    g = tr._g
-    return np.array([g.l1, g.l2, g.l3, g.l4, g.l5, g.h_sign, *g.c, *g.ex, *g.ez, *g.lo, *g.hi,
-                     tr.jump_m, tr.jump_rad, *tr._watch, tr.margins.half_chord, TANGENT_TOL,
-                     P_ZERO_TOL, DEGENERATE_TOL], dtype=float)
-
-
-def track_batch(tr: Tracker, q: FloatArray) -> dict[str, Any]:
-    """:meth:`Tracker.update` of every reading of ``q`` (n, 3), as columns; advances ``tr``.
-
-    The compiled loop of :mod:`athenakin.motion._kernels` (the poses and steps of
-    :meth:`Tracker.update` to 1e-12, the same flags, tested) where the tracker's
-    backend (:attr:`Tracker.backend`) is numba, else :meth:`Tracker.update` itself.
-    The collision check of a tracker that has one is
-    :meth:`Tracker.update`'s too (the same scalar placement and kernel per valid
-    reading). ``raise_on`` raises :class:`TrackingError` at the first reading that
-    carries one of its bits, with the message and the pose of :meth:`Tracker.update`
-    (the tracker is then past the stream, not at that reading).
-
-    Returns
-    -------
-    dict of str -> ndarray
-        The fields of :class:`TrackLog` and ``sample``, one row per reading.
-    """
-    q = np.ascontiguousarray(q, dtype=float).reshape(-1, 3)
-    n = len(q)
-    if tr.backend != "numba":
-        poses = [tr.update(row) for row in q.tolist()]
-        return _pose_columns(poses) if poses else _empty_columns()
-    from ._kernels import NCAND, track_stream
-
-    prev = np.array(_cand_row(tr._prev), dtype=float)
-    lost = np.array([1 if tr._lost else 0], dtype=np.int64)
-    c = np.empty((n, NCAND))
-    step = np.empty(n)
-    flags = np.empty(n, np.int64)
-    valid = np.empty(n, bool)
-    fast = np.empty(n, bool)
-    if n:
-        from .._dispatch import _WARM, _first
-
-        geo = _kernel_geometry(tr)
-
-        def run() -> None:
-            track_stream(q, geo, prev, lost, c, step, flags, valid, fast)
-
-        if "track_stream" in _WARM:
-            run()
-        else:                          # the first call may compile: a notice on stderr
-            _first("track_stream", run)
-    cols = _kernel_columns(tr, q, c, step, flags, valid)
-    if tr._check is not None and n:
-        _collide_rows(tr, cols)
-    tr._index += n
-    tr._prev = _cand_tuple(prev.tolist())
-    tr._lost = bool(lost[0])
-    if n:
-        tr.pose = pose_at(cols, n - 1)
-    _raise_on(tr, cols, fast)
-    return cols
-
-
-def _kernel_columns(tr: Tracker, q: FloatArray, c: FloatArray,
-                    step: FloatArray, flags: IntArray,
-                    valid: BoolArray) -> dict[str, Any]:
-    """The columns of :func:`track_batch` from the kernel's candidate rows ``c`` (n, NCAND)."""
-    n = len(q)
-    g = tr._g
-    mode = c[:, 0].astype(np.int64)
-    r, b, w = (c[:, k].astype(np.int64) for k in (1, 2, 3))
-    o, dz = c[:, 10:13], c[:, 13:16]
-    L = g.L
-    tb = np.empty((n, 3))
-    for k in range(3):
-        tb[:, k] = o[:, k] + L * dz[:, k]
-    v = [tb[:, k] - g.c[k] for k in range(3)]
-    R = g.R
-    te = np.empty((n, 3))
-    for k in range(3):
-        te[:, k] = R[0][k] * v[0] + R[1][k] * v[1] + R[2][k] * v[2]
-    return {
-        "sample": tr._index + 1 + np.arange(n), "q": q.copy(), "valid": valid,
-        "slot": 8 * (mode == -1) + 4 * (r == -1) + 2 * (b == -1) + (w == -1),
-        "mode": mode, "p_sign": r, "ujoint": b, "wrist": w, "p": c[:, 4].copy(),
-        "u": c[:, 5:10].copy(), "O_s": o.copy(), "direction_b": dz.copy(), "tip_b": tb,
-        "tip_e": te, "half_chord": c[:, 16].copy(), "h": c[:, 17].copy(),
-        "sin_u2": c[:, 18].copy(), "sin_u4": c[:, 19].copy(), "step": step, "flags": flags,
-        "clearance": np.full(n, math.nan), "closest_pair": np.full((n, 2), "")}
-
-
-def _raise_on(tr: Tracker, cols: dict[str, Any], fast: BoolArray) -> None:
-    """:class:`TrackingError` at the first row whose flags carry a bit of ``raise_on``."""
-    hit = np.flatnonzero(cols["flags"] & tr._raise_bits)
-    if hit.size:
-        i = int(hit[0])
-        ps = pose_at(cols, i)
-        qt = list(ps.q)
-        if not ps.valid:
-            raise TrackingError(f"sample {ps.sample} (q = {qt} m): no forward-"
-                                f"kinematics solution: {ps.flags!r}", ps)
-        what = "" if fast[i] else f" (q = {qt} m)"
-        raise TrackingError(f"sample {ps.sample}{what}: {ps.flags!r}" + _clearance_text(ps), ps)
-
-
-def _collide_rows(tr: Tracker, cols: dict[str, Any]) -> None:
-    """:meth:`Tracker._collide` of every valid row (the same call per row)."""
-    check, pc = tr._check, tr._pose_clearance
-    assert check is not None and pc is not None
-    pairs: list[tuple[str, str]] = [("", "")] * len(cols["q"])
-    q, p, u, o, dz = (cols[k].tolist() for k in ("q", "p", "u", "O_s", "direction_b"))
-    flags = cols["flags"]
-    for i in np.flatnonzero(cols["valid"]).tolist():
-        d, names = pc(tuple(q[i]), p[i], tuple(u[i]), tuple(o[i]), tuple(dz[i]))
-        pair = np.array([names])
-        cols["clearance"][i] = d
-        pairs[i] = (str(pair[0, 0]), str(pair[0, 1]))
-        if d < check.margin:
-            flags[i] |= _B["NEAR_COLLISION"] | (_B["COLLISION"] if d < 0.0 else 0)
-    cols["closest_pair"] = np.array(pairs).reshape(-1, 2)

@@ -20,7 +20,7 @@ from ..design import Design, resolve_design
 from ..errors import InvalidInputError, KinematicsError
 from ..motion import Tracker, TrackFlag, TrackLog, track
 from ..motion._plan import Trajectory
-from ..motion._tracker import track_batch
+from ..motion._stream import track_batch
 from ..robot._setup import resolve_rcm_frame
 from ._errors import RecordingError
 from ._mcap import check_compression
@@ -188,7 +188,7 @@ class _Stream:
     """A :class:`~athenakin.motion.Tracker` over chunks.
 
     It starts at the first reading that assembles (readings before it are ``LOST``);
-    each chunk is tracked at once by :func:`athenakin.motion._tracker.track_batch`
+    each chunk is tracked at once by :func:`athenakin.motion._stream.track_batch`
     (compiled; bit for bit :meth:`~athenakin.motion.Tracker.update`), the tracker's
     state carried from chunk to chunk.
     """

@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._robot_model import resolve_robot
 from .._validation import check_array, check_scalar
 from ..errors import InvalidInputError
 from ._brake import TeleopCommand, _Brake
@@ -78,22 +79,6 @@ def _check_scale(scale: object) -> float:
         raise InvalidInputError(f"scale: expected a motion scale in (0, {MAX_SCALE:g}] tip m "
                                 f"per master m, got {s:g}")
     return s
-
-
-def _robot_of(robot: Any, design: Any, bodies: Any, environment: Any) -> Any:
-    """The :class:`athenakin.Robot` of the arguments (a Robot, or ``T_b_e`` and a design)."""
-    from .._robot_model import Robot
-
-    if isinstance(robot, Robot):
-        if design is not None:
-            raise TypeError("design: give the design in the Robot, not beside it")
-        for name, v in (("bodies", bodies), ("environment", environment)):
-            if v is not None and getattr(robot, name) is not None:
-                raise TypeError(f"{name}: the Robot has its own {name}; give one, not both")
-        return robot.replace(bodies=robot.bodies if bodies is None else bodies,
-                             environment=(robot.environment if environment is None
-                                          else environment))
-    return Robot(robot, design, bodies=bodies, environment=environment)
 
 
 class Teleop(_Mapping, _Limiter, _Brake):
@@ -161,7 +146,7 @@ class Teleop(_Mapping, _Limiter, _Brake):
         opts = TeleopOptions() if options is None else options
         if not isinstance(opts, TeleopOptions):
             raise TypeError(f"options: expected TeleopOptions, got {type(opts).__name__}")
-        self.robot = _robot_of(robot, design, bodies, environment)
+        self.robot = resolve_robot(robot, design, bodies=bodies, environment=environment)
         design, T = self.robot.design, self.robot.T_b_e
         bodies, environment = self.robot.bodies, self.robot.environment
         self.options = opts
