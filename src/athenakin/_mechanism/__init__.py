@@ -44,7 +44,9 @@ Where that ``S_3`` would lie off the instrument's segment (``O_s`` nearer the RC
 so ``instrument`` and ``sphere_link_2`` touch in every configuration.
 """
 
-from .._mechanism_formulas import tree_joint_formula
+# the tree's joint-value formula lives in _mechanism_formulas (numpy only, which fast
+# compiles; its 16 scalar arguments are a kernel's); re-exported here by name
+from .._mechanism_formulas import tree_joint_formula as tree_joint_formula
 from ._bodies import (
     BODIES,
     BODY_JOINTS,
@@ -72,5 +74,5 @@ from ._tree import JOINTS, LINKS, TREE, TreeJoint, tree_origins
 __all__ = ["BODIES", "BODY_SEGMENTS", "BODY_JOINTS", "BODY_TABLE", "Body", "BodyGeometry",
            "MechanismPoints", "MechanismState", "mechanism_points", "mechanism_state",
            "body_segments", "adjacent_pairs", "POINT_NAMES", "JOINTS", "TREE", "TreeJoint",
-           "LINKS", "MASS_PART_LINK", "rail_extent", "tree_joint_formula", "tree_origins",
+           "LINKS", "MASS_PART_LINK", "rail_extent", "tree_origins",
            "link_segments", "O_i_from_T_b_s", "state_from_fk"]
