@@ -36,6 +36,7 @@ KERNEL_MODULES = (
     "athenakin.dynamics._kernels",
     "athenakin.fast._fk_kernels",
     "athenakin.fast._fk_sized",
+    "athenakin.fast._fk_stages",
     "athenakin.fast._frame_kernels",
     "athenakin.fast._ik_kernels",
     "athenakin.fast._ik_single",

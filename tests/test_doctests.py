@@ -9,7 +9,7 @@ MODULES = ["athenakin.robot._fk", "athenakin.robot._ik", "athenakin.study._study
            "athenakin.chain._ups", "athenakin.parallel._module", "athenakin.design",
            "athenakin.study._interop", "athenakin.sim._layout", "athenakin._serialize",
            "athenakin.collision._bodies", "athenakin.collision._clearance",
-           "athenakin.dynamics._api", "athenakin._robot_model", "athenakin._mechanism",
+           "athenakin.dynamics._api", "athenakin._robot_model", "athenakin._mechanism._placement",
            "athenakin.dynamics._loop"]
 
 

@@ -332,7 +332,8 @@ def test_every_compiled_kernel_releases_the_gil():
 
     from numba.core.registry import CPUDispatcher
 
-    names = ("_fk_kernels", "_fk_sized", "_ik_kernels", "_ik_sized", "_jac_kernels", "_scalar")
+    names = ("_fk_kernels", "_fk_sized", "_fk_stages", "_ik_kernels", "_ik_sized", "_jac_kernels",
+             "_scalar")
     seen = 0
     for name in names:
         mod = importlib.import_module(f"athenakin.fast.{name}")

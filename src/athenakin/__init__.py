@@ -12,6 +12,8 @@ Subpackages, by layer (bottom first; docs/architecture.md, enforced by tests/tes
 * numpy reference: :mod:`athenakin.robot` (whole-robot FK, IK, set-up),
   :mod:`athenakin.symbolic` (the paper's derivation in sympy, the algebraic FK);
 * compiled kernels: :mod:`athenakin.fast` (numba kinematics kernels);
+* mechanism: :mod:`athenakin._mechanism` (private: the one table of the bodies, points
+  and links, and where they are for given actuator values);
 * areas: :mod:`athenakin.analysis` (Jacobians, singularities, workspace),
   :mod:`athenakin.calibration`, :mod:`athenakin.certified` (certified FK),
   :mod:`athenakin.collision` (bodies, clearance), :mod:`athenakin.dynamics` (statics,

@@ -24,6 +24,7 @@ takes the functional form ``(T_b_e, design, bodies=, environment=, ...)``, which
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from typing import Any, Literal
 
 import numpy as np
@@ -37,6 +38,19 @@ from .design import Design, resolve_design
 __all__ = ["Robot", "resolve_robot"]
 
 _KEEP: Any = object()     # replace(): the field as it is
+
+
+def _part_class(name: str) -> tuple[type, str]:
+    """The class of a Robot's part ``name`` (imported on first use) and its public name."""
+    if name == "masses":
+        from .dynamics import MassModel
+
+        return MassModel, "athenakin.dynamics.MassModel"
+    from .collision import Bodies, Environment
+
+    if name == "bodies":
+        return Bodies, "athenakin.collision.Bodies"
+    return Environment, "athenakin.collision.Environment"
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -82,24 +96,13 @@ class Robot:
         object.__setattr__(self, "design", resolve_design(self.design))
         T.setflags(write=False)
         object.__setattr__(self, "T_b_e", T)
-        if self.bodies is not None:
-            from .collision import Bodies
-
-            if not isinstance(self.bodies, Bodies):
-                raise TypeError(f"bodies: expected athenakin.collision.Bodies or None, got "
-                                f"{type(self.bodies).__name__}")
-        if self.environment is not None:
-            from .collision import Environment
-
-            if not isinstance(self.environment, Environment):
-                raise TypeError(f"environment: expected athenakin.collision.Environment or "
-                                f"None, got {type(self.environment).__name__}")
-        if self.masses is not None:
-            from .dynamics import MassModel
-
-            if not isinstance(self.masses, MassModel):
-                raise TypeError(f"masses: expected athenakin.dynamics.MassModel or None, got "
-                                f"{type(self.masses).__name__}")
+        for name in ("bodies", "environment", "masses"):
+            value = getattr(self, name)
+            if value is not None:
+                cls, public = _part_class(name)
+                if not isinstance(value, cls):
+                    raise TypeError(f"{name}: expected {public} or None, got "
+                                    f"{type(value).__name__}")
 
     @classmethod
     def default(cls, design: Design | None = None, *, bodies: Any = None,
@@ -325,10 +328,9 @@ class Robot:
         """
         from .dynamics import statics
 
-        return statics(q, self.T_b_e, self.design, masses=self._part("masses", masses),
-                       gravity=gravity, tip_force=tip_force, slot=slot,
-                       rcm_load=rcm_load, backend=backend,  # type: ignore[arg-type]
-                       errors=errors)  # type: ignore[arg-type]
+        return self._with_masses(statics, q, masses=masses, gravity=gravity,
+                                 tip_force=tip_force, slot=slot, rcm_load=rcm_load,
+                                 backend=backend, errors=errors)
 
     def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, *,
                          masses: Any = None, gravity: ArrayLike = (0.0, 0.0, -9.81),
@@ -352,10 +354,8 @@ class Robot:
         """
         from .dynamics import inverse_dynamics
 
-        return inverse_dynamics(q, qd, qdd, self.T_b_e, self.design,
-                                masses=self._part("masses", masses), gravity=gravity,
-                                tip_force=tip_force, slot=slot,
-                                errors=errors, backend=backend)  # type: ignore[arg-type]
+        return self._with_masses(inverse_dynamics, q, qd, qdd, masses=masses, gravity=gravity,
+                                 tip_force=tip_force, slot=slot, errors=errors, backend=backend)
 
     def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, forces: ArrayLike, *,
                          masses: Any = None, gravity: ArrayLike = (0.0, 0.0, -9.81),
@@ -381,10 +381,9 @@ class Robot:
         """
         from .dynamics import forward_dynamics
 
-        return forward_dynamics(q, qd, forces, self.T_b_e, self.design,
-                                masses=self._part("masses", masses), gravity=gravity,
-                                tip_force=tip_force, slot=slot,
-                                errors=errors, backend=backend)  # type: ignore[arg-type]
+        return self._with_masses(forward_dynamics, q, qd, forces, masses=masses,
+                                 gravity=gravity, tip_force=tip_force, slot=slot,
+                                 errors=errors, backend=backend)
 
     def mass_matrix(self, q: ArrayLike, *, masses: Any = None, slot: int = 0,
                     errors: str = "auto", backend: str = "auto") -> Any:
@@ -406,8 +405,8 @@ class Robot:
         """
         from .dynamics import mass_matrix
 
-        return mass_matrix(q, self.T_b_e, self.design, masses=self._part("masses", masses),
-                           slot=slot, errors=errors, backend=backend)  # type: ignore[arg-type]
+        return self._with_masses(mass_matrix, q, masses=masses, slot=slot, errors=errors,
+                                 backend=backend)
 
     def force_capability(self, q: ArrayLike, *, f_max: ArrayLike,
                          f_min: ArrayLike | None = None, masses: Any = None,
@@ -434,10 +433,9 @@ class Robot:
         """
         from .dynamics import force_capability
 
-        return force_capability(q, self.T_b_e, self.design, f_max=f_max, f_min=f_min,
-                                masses=self._part("masses", masses), gravity=gravity,
-                                slot=slot, cond_max=cond_max, backend=backend,  # type: ignore[arg-type]
-                                errors=errors)  # type: ignore[arg-type]
+        return self._with_masses(force_capability, q, masses=masses, f_max=f_max, f_min=f_min,
+                                 gravity=gravity, slot=slot, cond_max=cond_max,
+                                 backend=backend, errors=errors)
 
     # --- exports (athenakin.sim) ---------------------------------------------------------------
     def mjcf(self, *, q: ArrayLike | None = None, slot: int = 0, gravity: bool = True,
@@ -489,6 +487,14 @@ class Robot:
         """``value``, or this robot's part ``name`` where the caller gave none."""
         return getattr(self, name) if value is None else value
 
+    def _with_masses(self, function: Callable[..., Any], *state: ArrayLike, masses: Any,
+                     **options: Any) -> Any:
+        """A dynamics function of this robot: ``function(*state, T_b_e, design, masses=...)``.
+
+        ``masses`` is this robot's where the caller gave none; ``options`` go as given.
+        """
+        return function(*state, self.T_b_e, self.design, masses=self._part("masses", masses),
+                        **options)
 
 def resolve_robot(robot: Any, design: Any = None, *, bodies: Any = None,
                   environment: Any = None, masses: Any = None) -> Robot:

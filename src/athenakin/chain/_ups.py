@@ -247,7 +247,7 @@ def _sines_as_kernel(T: FloatArray, zx: FloatArray, zy: FloatArray,
     """``|sin u2|`` and ``|sin u4|`` of the slot p > 0, in the compiled kernel's operations.
 
     ``(zx, zy, zz)`` is the unit instrument direction (the kernel's names); the
-    kernel is ``fast/_fk_kernels.py``, ``_serial_stage`` (so both backends classify
+    kernel is ``fast/_fk_stages.py``, ``_serial_stage`` (so both backends classify
     an input on a threshold alike, to the last bit).
     """
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
@@ -295,7 +295,7 @@ def _pose_checks(c: FloatArray, finite: BoolArray, scale: ArrayLike | None,
     Returns the reason of the pose (..., ``NONFINITE_INPUT``, ``SERIAL_P_ZERO`` or 0),
     ``|p|`` (1 where it is zero), the scale of its rounding and the degeneracy tolerance
     of ``|sin u2|``, ``|sin u4|`` (...). ``|p|`` is computed with the very operations,
-    in the same order, as the compiled kernel (fast/_fk_kernels.py, _serial_stage), so
+    in the same order, as the compiled kernel (fast/_fk_stages.py, _serial_stage), so
     both backends classify every input alike, even one that sits on a threshold to the
     last bit.
     """

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
+from typing import Any
 
 from ..teleop._filter import TREMOR_FILTERS
 from ._collision import add_session_collision_options, session_collision
@@ -18,30 +20,28 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                     "ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST. docs/ros2.md.")
     own = p.add_subparsers(dest="ros2_command", metavar="NODE")
     own.required = True
-    a = own.add_parser("arm", help="serve the simulated arm under CRTK names",
-                       description="The MuJoCo arm under CRTK's topics in a namespace: "
-                                   "measured_js, setpoint_js, measured_cp, setpoint_cp, "
-                                   "measured_cv, operating_state, status; commands servo_jp, "
-                                   "servo_cp, move_jp, move_cp, state_command, hold; "
-                                   "/joint_states and /robot_description.")
-    a.add_argument("--namespace", default="/athena", help="CRTK namespace (/athena)")
-    a.add_argument("--rate", type=float, default=1000.0, help="servo rate, Hz (1000)")
+    a = _node_parser(own, "arm", help="serve the simulated arm under CRTK names",
+                     description="The MuJoCo arm under CRTK's topics in a namespace: "
+                                 "measured_js, setpoint_js, measured_cp, setpoint_cp, "
+                                 "measured_cv, operating_state, status; commands servo_jp, "
+                                 "servo_cp, move_jp, move_cp, state_command, hold; "
+                                 "/joint_states and /robot_description.",
+                     namespace_help="CRTK namespace (/athena)",
+                     rate_help="servo rate, Hz (1000)")
     a.add_argument("--publish-rate", type=float, default=100.0,
                    help="state messages per second, Hz (100)")
     a.add_argument("--q0", nargs=3, type=float, metavar=("Q1", "Q2", "Q3"),
                    default=[-0.1, 0.1, 0.45], help="where the robot stands, m (-0.1 0.1 0.45)")
     a.add_argument("--enable", action="store_true", help="enable the arm at start")
-    a.add_argument("--use-sim-time", action="store_true", help="stamp from /clock")
-    a.add_argument("--duration", type=float, help="stop after this many seconds")
-    add_robot_options(a)
-    a.set_defaults(func=run_arm)
-    t = own.add_parser("teleop", help="drive the arm node from a master's topics",
-                       description="A master's geometry_msgs/PoseStamped (m) and "
-                                   "sensor_msgs/Joy clutch (a held button decouples) through "
-                                   "athenakin.teleop.Teleop to the arm node's servo_jp, with "
-                                   "the status on <namespace>/teleop/status and an e-stop "
-                                   "on <namespace>/teleop/estop.")
-    t.add_argument("--namespace", default="/athena", help="the arm node's namespace (/athena)")
+    _add_run_options(a, run_arm)
+    t = _node_parser(own, "teleop", help="drive the arm node from a master's topics",
+                     description="A master's geometry_msgs/PoseStamped (m) and "
+                                 "sensor_msgs/Joy clutch (a held button decouples) through "
+                                 "athenakin.teleop.Teleop to the arm node's servo_jp, with "
+                                 "the status on <namespace>/teleop/status and an e-stop "
+                                 "on <namespace>/teleop/estop.",
+                     namespace_help="the arm node's namespace (/athena)",
+                     rate_help="teleop rate, Hz (1000)")
     t.add_argument("--preset", choices=("default", "dvrk-mtmr"), default="default",
                    help="master topics: default /master/pose + /master/joy; dvrk-mtmr "
                         "/MTMR/measured_cp + /footpedals/clutch")
@@ -50,14 +50,12 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                    help="the clutch's Joy topic (overrides --preset); 'none': always engaged")
     t.add_argument("--clutch-button", type=int, default=0, help="Joy button of the clutch (0)")
     t.add_argument("--master-frame", help="frame_id the master's poses must carry")
-    t.add_argument("--rate", type=float, default=1000.0, help="teleop rate, Hz (1000)")
     t.add_argument("--scale", type=float, default=0.2, help="motion scale (0.2)")
     t.add_argument("--watchdog", type=float, help="watchdog, s (TeleopOptions' 0.03)")
     t.add_argument("--status-every", type=int, default=10,
                    help="publish the status every N cycles and on every change (10)")
     t.add_argument("--q0", nargs=3, type=float, metavar=("Q1", "Q2", "Q3"),
                    help="where the robot stands, m (default: the arm's first measured_js)")
-    t.add_argument("--use-sim-time", action="store_true", help="stamp from /clock")
     t.add_argument("--filter", default="notch8-12", choices=tuple(TREMOR_FILTERS),
                    help="tremor filter (notch8-12)")
     t.add_argument("--clock", choices=("ros", "master"), default="ros",
@@ -66,9 +64,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     t.add_argument("--with-arm", action="store_true",
                    help="run an arm node (enabled) in this process too")
     add_session_collision_options(t)
-    t.add_argument("--duration", type=float, help="stop after this many seconds")
-    add_robot_options(t)
-    t.set_defaults(func=run_teleop)
+    _add_run_options(t, run_teleop)
     b = own.add_parser("build-msgs", help="build CRTK's crtk_msgs with the rosidl wheels",
                        description="Build and install crtk_msgs (OperatingState, "
                                    "StringStamped) into this Python's prefix: needs the extra "
@@ -76,6 +72,36 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     b.add_argument("--prefix", help="install prefix (default: this Python's)")
     b.add_argument("--verbose", action="store_true", help="show CMake's output")
     b.set_defaults(func=run_build)
+
+
+def _node_parser(own: argparse._SubParsersAction, name: str, *, help: str,  # type: ignore[type-arg]
+                 description: str, namespace_help: str,
+                 rate_help: str) -> argparse.ArgumentParser:
+    """A node's subcommand with the options every node takes first: --namespace, --rate."""
+    p = own.add_parser(name, help=help, description=description)
+    p.add_argument("--namespace", default="/athena", help=namespace_help)
+    p.add_argument("--rate", type=float, default=1000.0, help=rate_help)
+    return p
+
+
+def _add_run_options(p: argparse.ArgumentParser, run: Callable[[argparse.Namespace], int]
+                     ) -> None:
+    """The options every node takes last (--use-sim-time, --duration, the robot's), its run."""
+    p.add_argument("--use-sim-time", action="store_true", help="stamp from /clock")
+    p.add_argument("--duration", type=float, help="stop after this many seconds")
+    add_robot_options(p)
+    p.set_defaults(func=run)
+
+
+def _spin_and_close(node: Any, duration: float | None, summary: Callable[[], str]) -> None:
+    """Spin ``node`` for ``duration`` s (None: until Ctrl-C), close it, print ``summary()``."""
+    try:
+        node.spin(duration)
+    except KeyboardInterrupt:     # Ctrl-C: the node's normal end
+        pass
+    finally:
+        node.close()
+        print(summary(), flush=True)
 
 
 def _duration(args: argparse.Namespace) -> float | None:
@@ -97,14 +123,8 @@ def run_arm(args: argparse.Namespace) -> int:
     kind = "crtk_msgs" if node.crtk.native else "std_msgs stand-ins"
     print(f"ros2 arm: {node.namespace} at {args.rate:g} Hz, state at {node.publish_rate:g} Hz, "
           f"{node.arm.operating_state}, CRTK types: {kind}", flush=True)
-    try:
-        node.spin(duration)
-    except KeyboardInterrupt:     # Ctrl-C: the node's normal end
-        pass
-    finally:
-        node.close()
-        print(f"ros2 arm: {node.cycles} cycles, {node.late_cycles} late, {node.commands} "
-              f"commands, {node.refused} refused", flush=True)
+    _spin_and_close(node, duration, lambda: f"ros2 arm: {node.cycles} cycles, "
+                    f"{node.late_cycles} late, {node.commands} commands, {node.refused} refused")
     return 0
 
 
@@ -143,13 +163,8 @@ def run_teleop(args: argparse.Namespace) -> int:
               f"{args.rate:g} Hz, bodies "
               + ("checked" if node.teleop.checks_clearance else "not checked (--no-bodies)")
               + (" (arm node in this process)" if arm else ""), flush=True)
-        try:
-            node.spin(duration)
-        except KeyboardInterrupt:     # Ctrl-C: the node's normal end
-            pass
-        finally:
-            node.close()
-            print(f"ros2 teleop: {node.cycles} cycles, {node.late_cycles} late", flush=True)
+        _spin_and_close(node, duration, lambda: f"ros2 teleop: {node.cycles} cycles, "
+                        f"{node.late_cycles} late")
     finally:
         if arm is not None:
             arm.close()

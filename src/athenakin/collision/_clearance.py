@@ -16,7 +16,8 @@ from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ._bodies import Bodies, resolve_bodies
 from ._distance import _capsule_capsule, _capsule_halfspace
-from ._environment import Environment, Obstacle
+from ._environment import Environment
+from ._obstacle import Obstacle
 
 __all__ = ["Clearance", "clearance", "segment_clearance", "capsule_distances", "MAX_MARGIN"]
 

@@ -11,8 +11,8 @@ from typing import Any
 import numpy as np
 
 from .._typing import FloatArray
-from ._environment import Obstacle
 from ._mesh import winding_numbers
+from ._obstacle import Obstacle
 
 __all__ = ["import_coal", "coal_shape", "capsule_transform", "capsule_obstacle_distances"]
 

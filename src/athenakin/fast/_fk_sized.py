@@ -1,6 +1,6 @@
 """Compiled FK sized to the information (private): ``T_b_s`` once per mode, chosen fields only.
 
-The arithmetic is that of :mod:`._fk_kernels` (the same scratch stages, hence the
+The arithmetic is that of :mod:`._fk_stages` (the same scratch stages, hence the
 same values bit for bit); only the stores differ:
 
 * ``T_b_s`` is written once per assembly mode, ``(N, 2, 4, 4)`` instead of
@@ -11,8 +11,8 @@ same values bit for bit); only the stores differ:
   pose instead of 1185. The arrays of the fields not asked for may have 0 rows.
 """
 
-# numba's cache does not follow the kernels this module inlines from _fk_kernels and
-# _scalar: a change there must change this file too (revision 3).
+# numba's cache does not follow the kernels this module inlines from _fk_stages,
+# _fk_kernels and _scalar: a change there must change this file too (revision 3).
 
 from __future__ import annotations
 
@@ -22,22 +22,14 @@ import numpy as np
 
 from .._backend import njit
 from ._fk_kernels import (
-    _NN,
-    _PR,
-    _PRES,
-    _R,
-    _RES,
-    _XM,
-    CHUNK,
     FLAG_NO_SOLUTION,
     _chunk_full,
     _input_flags,
     _store_T_b_s_mode,
     _store_u_mode,
-    fk_chunk,
     item_reason,
-    scratch,
 )
+from ._fk_stages import _NN, _PR, _PRES, _R, _RES, _XM, CHUNK, fk_chunk, scratch
 from ._scalar import nanmax2
 
 __all__ = ["WANT_VALID", "WANT_REASON", "WANT_P", "WANT_U", "WANT_T", "WANT_RES", "WANT_ALL",

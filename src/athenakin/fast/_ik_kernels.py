@@ -2,7 +2,7 @@
 
 Mirrors of :func:`athenakin.inverse_kinematics`, :func:`athenakin.q_from_instrument`,
 :func:`athenakin.q_from_tool_tip` (same formulas,
-same reason codes, same NaN policy). As in :mod:`._fk_kernels` the pose loop
+same reason codes, same NaN policy). As in :mod:`._fk_stages` the pose loop
 runs in chunks: a gather pass copies the inputs into a flat structure-of-arrays
 scratch, a vectorised pass computes, a last pass writes the caller's arrays.
 
@@ -23,7 +23,8 @@ from .._backend import njit, prange
 from ..chain._ups import P_ZERO_TOL
 from ..errors import Reason
 from ..robot._ik import IK_Q_ERROR_MAX
-from ._fk_kernels import CHUNK, FLAG_T_NONFINITE, gather_items, rigid_flags
+from ._fk_kernels import FLAG_T_NONFINITE, rigid_flags
+from ._fk_stages import CHUNK, gather_items
 from ._parallel_kernels import (
     _CT,
     _DO,

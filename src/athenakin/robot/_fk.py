@@ -399,7 +399,7 @@ def _s_e_as_kernel(Ts: FloatArray, T: FloatArray) -> FloatArray:
     ``T_b_s = [[1, 0, 0, xm], [0, cz, cy, ys], [0, -cy, cz, zs], [0, 0, 0, 1]]`` (the
     parallel module's frame, :func:`athenakin.parallel.parallel_forward_kinematics`);
     the entries of ``T_s_e`` then decide validity (``|p|``, ``|sin u2|``, ``|sin u4|``)
-    bit for bit as ``fast/_fk_kernels.py:_serial_stage`` does, so both backends agree
+    bit for bit as ``fast/_fk_stages.py:_serial_stage`` does, so both backends agree
     at every threshold. Shapes broadcast: ``Ts`` (..., 4, 4), ``T`` (..., 4, 4).
     """
     xm, cz, cy = Ts[..., 0, 3], Ts[..., 1, 1], Ts[..., 1, 2]

@@ -145,17 +145,8 @@ def read_rcm_file(path: str | Path, *, option: str = "--rcm-file") -> FloatArray
     if not isinstance(table, dict) or "T_b_e" not in table:
         raise InvalidInputError(f"{where}: expected a [setup] table with key 'T_b_e' (a set-up "
                                 f"file of `athenakin setup plan`)")
-    try:
-        T = np.asarray(table["T_b_e"], dtype=float)
-    except (TypeError, ValueError, OverflowError):
-        raise InvalidInputError(f"{where}: T_b_e: expected a 4x4 array of numbers") from None
-    if T.shape != (4, 4):
-        raise InvalidInputError(f"{where}: T_b_e: expected shape (4, 4), got {T.shape}")
-    try:
-        return check_rcm_position(check_transform(T, "T_b_e"), f"{where}: T_b_e")
-    except InvalidInputError as exc:
-        msg = str(exc)
-        raise InvalidInputError(msg if msg.startswith(option) else f"{where}: {msg}") from None
+    return _rcm_from_value(table["T_b_e"], where, option, expected="array",
+                           error=InvalidInputError)
 
 
 def read_rcm_json(path: str | Path, *, option: str = "--rcm-file") -> FloatArray:
@@ -197,12 +188,23 @@ def read_rcm_json(path: str | Path, *, option: str = "--rcm-file") -> FloatArray
                          f"({' '.join(str(exc).split())[:120]})") from None
     if not isinstance(data, dict) or "T_b_e" not in data:
         raise ValueError(f"{where}: expected a JSON object with key 'T_b_e'")
+    return _rcm_from_value(data["T_b_e"], where, option, expected="nested list",
+                           error=ValueError)
+
+
+def _rcm_from_value(value: object, where: str, option: str, *, expected: str,
+                    error: type[ValueError]) -> FloatArray:
+    """The ``T_b_e`` value of an RCM file as a rigid transform whose RCM passes the check.
+
+    ``where`` (the option and the file) starts every message; ``expected`` names the
+    file format's 4x4 form, ``error`` the class of the errors of form and shape.
+    """
     try:
-        T = np.asarray(data["T_b_e"], dtype=float)
+        T = np.asarray(value, dtype=float)
     except (TypeError, ValueError, OverflowError, RecursionError):
-        raise ValueError(f"{where}: T_b_e: expected a 4x4 nested list of numbers") from None
+        raise error(f"{where}: T_b_e: expected a 4x4 {expected} of numbers") from None
     if T.shape != (4, 4):
-        raise ValueError(f"{where}: T_b_e: expected shape (4, 4), got {T.shape}")
+        raise error(f"{where}: T_b_e: expected shape (4, 4), got {T.shape}")
     try:
         return check_rcm_position(check_transform(T, "T_b_e"), f"{where}: T_b_e")
     except InvalidInputError as exc:

@@ -1,317 +1,32 @@
-"""The one model of ATHENA's mechanism: its bodies, the exports' tree, and where it all is.
+"""Where the mechanism is: its points, link frames and tree joints for actuator values.
 
-Collision (``athenakin.collision``), dynamics (``athenakin.dynamics``), the exports
-(``athenakin.sim``), the app, the views and the ROS frames all name the parts of the
-robot with the names of :data:`BODIES` and the links of :data:`LINKS`; this module is
-the only place that defines them, and :func:`mechanism_state` the one place that places
-them (points, link frames, the tree's joint values; batched).
-
-Every body (:data:`BODY_TABLE`) is a segment between two named points of the mechanism
-(docs/conventions.md, "The mechanism"), carried by one link of the exported tree (URDF
-link, MJCF body, ``/tf`` frame), made of one or more parts of the mass model:
-
-==================  ==================  ============  ======================================
-body                from -> to          link          what it is
-==================  ==================  ============  ======================================
-``rail``            rail_lo -> rail_hi  ``base``      the base rail (x axis) over the strokes
-``carriage_a``      A_lo -> A_hi        carriage_a    the carriage of q1, centred on A
-``carriage_b``      B_lo -> B_hi        carriage_b    the carriage of q2, centred on B
-``link_a``          A -> O_i            link_a1       bar of length ``l1``
-``link_b``          B -> O_i            link_b1       bar of length ``l1``
-``link_ad``         A -> D              link_a3       bar of length ``l3``
-``link_bd``         B -> D              link_b3       bar of length ``l3``
-``carrier``         D -> C              carrier       carrier of q3 (``C = D + (0, l2, l5)``)
-``actuator``        C -> O_i            k2_arm        the q3 actuator (variable length ``q3``)
-``platform``        O_i -> O_s          platform      the offset ``l4`` along ``z_i``
-``instrument``      O_s -> tip          instrument    the instrument, length ``tool_length``
-``sphere_link_1``   S_5 -> S_4          sph_4         spherical mechanism: fixed ``u5`` axis
-``sphere_link_2``   S_4 -> S_3          sph_3         ... ``u4`` axis to the instrument guide
-==================  ==================  ============  ======================================
-
-The spherical joint at the RCM (the passive spherical five-bar of the paper's Fig. 3,
-whose dimensions the paper does not give) is modelled by its kinematic equivalent,
-two links whose ends lie on the joint axes at ``sphere_radius`` from the RCM: ``S_3``
-on the instrument axis (the guide) on the side of ``O_s`` (outside the patient), ``S_4``
-on the axis of ``u4`` in the direction the chain gives it (``R_3 Rz(u3) Rx(pi/2) e_z``)
-and ``S_5`` on the fixed axis ``u5`` at ``+z_e``. The ``u4`` axis is perpendicular to the
-instrument, and so is ``u5`` at the home pose: a "side of ``O_s``" would flip ``S_4``
-and ``S_5`` with the rounding of a zero, so their sides are fixed by the chain instead.
-Where that ``S_3`` would lie off the instrument's segment (``O_s`` nearer the RCM than
-``sphere_radius``), it is the segment's nearest point: the guide holds the instrument,
-so ``instrument`` and ``sphere_link_2`` touch in every configuration.
+:func:`mechanism_state` (and :func:`mechanism_points`, :func:`state_from_fk`) is the one
+place that places the mechanism, batched over configurations and FK slots; the views,
+the collision bodies, the exports' keyframes, ``/tf`` and the tracker's clearance read it.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import functools
-import math
 from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._backend import Backend
-from ._dispatch import forward_kinematics
-from ._mechanism_formulas import FORMULA_JOINTS, tree_joint_formula
-from ._typing import BoolArray, FloatArray, Int8Array
-from ._validation import check_array, check_scalar, check_slot
-from .design import Design, resolve_design
-from .errors import InvalidInputError
-from .robot._fk import SLOT_MODE_INDEX
-from .robot._setup import resolve_rcm_frame
+from .._backend import Backend
+from .._dispatch import forward_kinematics
+from .._mechanism_formulas import tree_joint_formula
+from .._typing import BoolArray, FloatArray, Int8Array
+from .._validation import check_array, check_slot
+from ..design import Design, resolve_design
+from ..errors import InvalidInputError
+from ..robot._fk import SLOT_MODE_INDEX
+from ..robot._setup import resolve_rcm_frame
+from ._bodies import BODIES, BODY_SEGMENTS, POINT_NAMES, BodyGeometry, rail_extent
+from ._tree import _O, JOINTS, LINKS, _tree_frames
 
-__all__ = ["BODIES", "BODY_SEGMENTS", "BODY_JOINTS", "BODY_TABLE", "Body", "BodyGeometry",
-           "MechanismPoints", "MechanismState", "mechanism_points", "mechanism_state",
-           "body_segments", "adjacent_pairs", "POINT_NAMES", "JOINTS", "TREE", "TreeJoint",
-           "LINKS", "MASS_PART_LINK", "rail_extent", "tree_joint_formula", "tree_origins",
-           "link_segments", "O_i_from_T_b_s"]
-
-
-@dataclasses.dataclass(frozen=True)
-class Body:
-    """One body of the mechanism: where it is, which exported link carries it, its parts.
-
-    Attributes
-    ----------
-    name : str
-        athenakin's name of the body (collision, mass model, views).
-    start, end : str
-        Its segment's end points (names of :data:`POINT_NAMES`): the axis of its
-        collision capsule and of its drawing.
-    link : str
-        The link of the exported tree (URDF link, MJCF body, ``/tf`` frame; ``base`` is
-        the URDF's root and MJCF's world body) that carries the body: its collision
-        capsule is the segment in that link's frame at the export's configuration.
-    mass_parts : tuple of (str, str)
-        The parts of the mass model (:data:`athenakin.dynamics.MASS_BODIES`) that make up
-        the body, each with the link whose frame is its body frame.
-    drawing : str
-        Colour group of the views and exports (``rail``, ``parallel``, ``actuator``,
-        ``serial``, ``sphere``).
-    """
-
-    name: str
-    start: str
-    end: str
-    link: str
-    mass_parts: tuple[tuple[str, str], ...]
-    drawing: str
-
-
-#: The one table of ATHENA's bodies; its order is the order of every per-body axis in
-#: athenakin (collision pairs, masses, exports). ``actuator`` (C -> O_i) is carried by
-#: ``k2_arm``, the housing at C whose frame (origin C, ``z`` towards ``O_i``) is the
-#: actuator's body frame in the mass model and the dynamics; the rod (mass part
-#: ``actuator_rod``) rides on ``k2_rod``.
-BODY_TABLE: tuple[Body, ...] = (
-    Body("rail", "rail_lo", "rail_hi", "base", (("rail", "base"),), "rail"),
-    Body("carriage_a", "A_lo", "A_hi", "carriage_a", (("carriage_a", "carriage_a"),), "rail"),
-    Body("carriage_b", "B_lo", "B_hi", "carriage_b", (("carriage_b", "carriage_b"),), "rail"),
-    Body("link_a", "A", "O_i", "link_a1", (("link_a", "link_a1"),), "parallel"),
-    Body("link_b", "B", "O_i", "link_b1", (("link_b", "link_b1"),), "parallel"),
-    Body("link_ad", "A", "D", "link_a3", (("link_ad", "link_a3"),), "parallel"),
-    Body("link_bd", "B", "D", "link_b3", (("link_bd", "link_b3"),), "parallel"),
-    Body("carrier", "D", "C", "carrier", (("carrier", "carrier"), ("slider_d", "carrier")),
-         "parallel"),
-    Body("actuator", "C", "O_i", "k2_arm", (("actuator", "k2_arm"), ("actuator_rod", "k2_rod")),
-         "actuator"),
-    Body("platform", "O_i", "O_s", "platform", (("platform", "platform"),), "parallel"),
-    Body("instrument", "O_s", "tip", "instrument", (("instrument", "instrument"),), "serial"),
-    Body("sphere_link_1", "S_5", "S_4", "sph_4", (("sphere_link_1", "sph_4"),), "sphere"),
-    Body("sphere_link_2", "S_4", "S_3", "sph_3", (("sphere_link_2", "sph_3"), ("guide", "guide")),
-         "sphere"),
-)
-#: Body name -> (start point, end point), from :data:`BODY_TABLE`.
-BODY_SEGMENTS: dict[str, tuple[str, str]] = {b.name: (b.start, b.end) for b in BODY_TABLE}
-#: Body names in table order.
-BODIES: tuple[str, ...] = tuple(BODY_SEGMENTS)
-#: Part of the mass model -> the exported link whose frame is its body frame.
-MASS_PART_LINK: dict[str, str] = {part: link for b in BODY_TABLE for part, link in b.mass_parts}
-
-#: Joint -> the bodies it connects. Two bodies that share a joint touch by construction
-#: and are never paired in a clearance check (:func:`adjacent_pairs`). ``S_3`` is on the
-#: instrument's segment in every configuration (:func:`mechanism_points`).
-BODY_JOINTS: dict[str, tuple[str, ...]] = {
-    "A": ("rail", "carriage_a", "link_a", "link_ad"),
-    "B": ("rail", "carriage_b", "link_b", "link_bd"),
-    "D": ("link_ad", "link_bd", "carrier"),
-    "C": ("carrier", "actuator"),
-    "O_i": ("link_a", "link_b", "actuator", "platform"),
-    "O_s": ("platform", "instrument"),
-    "S_3": ("instrument", "sphere_link_2"),
-    "S_4": ("sphere_link_1", "sphere_link_2"),
-}
-
-#: Names of the points of :class:`MechanismPoints`, in the order of its ``xyz`` axis.
-POINT_NAMES: tuple[str, ...] = (
-    "A", "B", "M", "D", "C_foot", "C", "O_i", "O_s", "RCM", "tip",
-    "rail_lo", "rail_hi", "A_lo", "A_hi", "B_lo", "B_hi", "S_3", "S_4", "S_5")
-
-
-@dataclasses.dataclass(frozen=True)
-class TreeJoint:
-    """One joint of the exports' spanning tree (MJCF and URDF alike).
-
-    Attributes
-    ----------
-    kind : {"slide", "hinge"}
-    parent, child : str
-        Links (MJCF bodies).
-    xyz : tuple of 3 (float or str)
-        Origin of the joint frame in the parent's frame; a string names a length of the
-        design (``"l1"``), resolved by :func:`tree_origins`.
-    roll : float
-        Rotation of the joint frame about the parent's ``x`` axis (0, pi/2 or pi), rad.
-    axis : tuple of 3 float
-        Joint axis in the joint frame.
-    """
-
-    kind: str
-    parent: str
-    child: str
-    xyz: tuple[float | str, float | str, float | str]
-    roll: float
-    axis: tuple[float, float, float]
-
-
-_X, _Y, _Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
-_O = (0.0, 0.0, 0.0)
-#: The spanning tree of the exports, joint name -> :class:`TreeJoint`, in MJCF order
-#: (parents before children); docs in :mod:`athenakin.sim._layout`.
-TREE: dict[str, TreeJoint] = {
-    "q1": TreeJoint("slide", "base", "carriage_a", _O, 0.0, _X),
-    "a_ujoint_x": TreeJoint("hinge", "carriage_a", "a_cross", _O, 0.0, _X),
-    "a_ujoint_y": TreeJoint("hinge", "a_cross", "link_a1", _O, 0.0, _Y),
-    "platform_y": TreeJoint("hinge", "link_a1", "platform", (0.0, 0.0, "l1"), 0.0, _Y),
-    "u1": TreeJoint("hinge", "platform", "ujoint_cross", (0.0, 0.0, "l4"), 0.0, _Z),
-    "u2": TreeJoint("hinge", "ujoint_cross", "instrument", _O, math.pi, _Y),
-    "p": TreeJoint("slide", "instrument", "guide", _O, 0.0, _Z),
-    "u3": TreeJoint("hinge", "guide", "sph_3", _O, 0.0, _Z),
-    "u4": TreeJoint("hinge", "sph_3", "sph_4", _O, 0.5 * math.pi, _Z),
-    "u5": TreeJoint("hinge", "sph_4", "sph_5", _O, 0.5 * math.pi, _Z),
-    "a_base_z": TreeJoint("hinge", "carriage_a", "link_a3", _O, 0.0, _Z),
-    "carrier_z": TreeJoint("hinge", "link_a3", "carrier", ("l3", 0.0, 0.0), 0.0, _Z),
-    "k2_x": TreeJoint("hinge", "carrier", "k2_arm", (0.0, "l2", "l5"), 0.0, _X),
-    "q3": TreeJoint("slide", "k2_arm", "k2_rod", _O, 0.0, _Z),
-    "q2": TreeJoint("slide", "base", "carriage_b", _O, 0.0, _X),
-    "b_ujoint_x": TreeJoint("hinge", "carriage_b", "b_cross", _O, 0.0, _X),
-    "b_ujoint_y": TreeJoint("hinge", "b_cross", "link_b1", _O, 0.0, _Y),
-    "b_base_z": TreeJoint("hinge", "carriage_b", "link_b3", _O, 0.0, _Z),
-}
-#: Joints of the spanning tree in MJCF order: name -> (kind, parent link, child link).
-JOINTS: dict[str, tuple[str, str, str]] = {n: (j.kind, j.parent, j.child) for n, j in TREE.items()}
-assert tuple(JOINTS) == FORMULA_JOINTS      # the order of tree_joint_formula's values
-#: Links of :class:`MechanismState`'s ``frames``: the tree's moving links in the order of
-#: :data:`JOINTS`, then ``tool_tip`` (the instrument frame moved to the tip) and
-#: ``rcm_setup`` (the RCM frame ``T_b_e``).
-LINKS: tuple[str, ...] = tuple(j.child for j in TREE.values()) + ("tool_tip", "rcm_setup")
-_LINK_INDEX = {link: k for k, link in enumerate(LINKS)}
-
-
-def _rot_x(a: float) -> FloatArray:
-    """``Rx(a)`` with the exact entries of the quarter turns used by :data:`TREE`."""
-    c, s = {0.0: (1.0, 0.0), 0.5 * math.pi: (0.0, 1.0), math.pi: (-1.0, 0.0)}.get(
-        a, (math.cos(a), math.sin(a)))
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-
-
-def tree_origins(design: Design) -> dict[str, FloatArray]:
-    """Origin (4x4, in the parent link's frame) of every joint of :data:`TREE`.
-
-    Parameters
-    ----------
-    design : Design
-
-    Returns
-    -------
-    dict of str -> ndarray, shape (4, 4)
-    """
-    out = {}
-    for name, j in TREE.items():
-        T = np.eye(4)
-        T[:3, :3] = _rot_x(j.roll)
-        T[:3, 3] = [float(getattr(design, v)) if isinstance(v, str) else v for v in j.xyz]
-        out[name] = T
-    return out
-
-
-@functools.lru_cache(maxsize=64)
-def _origin_stack(design: Design) -> FloatArray:
-    """:func:`tree_origins` as one read-only array (n_joints, 4, 4) in :data:`TREE` order."""
-    out = np.stack(list(tree_origins(design).values()))
-    out.flags.writeable = False
-    return out
-
-
-def rail_extent(design: Design, geometry: BodyGeometry | None = None) -> tuple[float, float]:
-    """The rail's ``x`` extent, without the carriages: the finite strokes of q1, q2 +- margin.
-
-    One policy for the rail (the mass model's fixed rail; :func:`mechanism_points` extends
-    it to cover the carriages): the finite stroke limits of q1 and q2 widened by
-    ``geometry.rail_margin``; an infinite limit is left out, and where both lower (upper)
-    limits are infinite the rail starts (ends) at the base origin ``x = 0``.
-
-    Parameters
-    ----------
-    design : Design
-    geometry : BodyGeometry, optional
-
-    Returns
-    -------
-    lo, hi : float
-        m, in the base frame.
-    """
-    g = BodyGeometry() if geometry is None else geometry
-    smin, smax = design.stroke_min[:2], design.stroke_max[:2]
-    lo = float(smin[np.isfinite(smin)].min()) if np.isfinite(smin).any() else 0.0
-    hi = float(smax[np.isfinite(smax)].max()) if np.isfinite(smax).any() else 0.0
-    return lo - g.rail_margin, hi + g.rail_margin
-
-
-def adjacent_pairs() -> tuple[tuple[str, str], ...]:
-    """Pairs of bodies that share a joint (:data:`BODY_JOINTS`), in table order.
-
-    Returns
-    -------
-    tuple of (str, str)
-        Each pair ``(a, b)`` with ``a`` before ``b`` in :data:`BODIES`.
-    """
-    order = {b: i for i, b in enumerate(BODIES)}
-    pairs = set()
-    for members in BODY_JOINTS.values():
-        for a in members:
-            for b in members:
-                if order[a] < order[b]:
-                    pairs.add((a, b))
-    return tuple(sorted(pairs, key=lambda ab: (order[ab[0]], order[ab[1]])))
-
-
-@dataclasses.dataclass(frozen=True)
-class BodyGeometry:
-    """Dimensions of the parts that the kinematic model does not fix (m).
-
-    Attributes
-    ----------
-    carriage_length : float
-        Length of each carriage along the rail, centred on A (B). Default 0.06 m.
-    sphere_radius : float
-        Distance from the RCM of the spherical mechanism's link ends ``S_3, S_4, S_5``.
-        Default 0.10 m.
-    rail_margin : float
-        How far the rail extends beyond the strokes of A and B. Default 0.05 m.
-    """
-
-    carriage_length: float = 0.06
-    sphere_radius: float = 0.10
-    rail_margin: float = 0.05
-
-    def __post_init__(self) -> None:
-        for name in ("carriage_length", "sphere_radius", "rail_margin"):
-            v = check_scalar(getattr(self, name), name)
-            if not (0.0 <= v <= 1e3):
-                raise InvalidInputError(f"{name}: expected a length in [0, 1000] m, got {v!r}")
-            object.__setattr__(self, name, float(v))
+__all__ = ["MechanismPoints", "MechanismState", "mechanism_state", "mechanism_points",
+           "state_from_fk", "body_segments", "link_segments", "O_i_from_T_b_s"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -414,56 +129,6 @@ def _check_slot(slot: object) -> int | None:
     """:func:`~athenakin._validation.check_slot` with ``"all"`` as None (every slot)."""
     k = check_slot(slot, allow_all=True)
     return None if k == "all" else int(k)
-
-
-#: Per joint of :data:`TREE`: slides (bool), the axis ``k`` and the two axes ``i, j``
-#: that turn about it (a hinge's ``Rz``-like block ``[[c, -s], [s, c]]`` in ``i, j``).
-_SLIDE = np.array([j.kind == "slide" for j in TREE.values()])
-_AXIS_K = np.array([j.axis.index(1.0) for j in TREE.values()])
-_AXIS_I, _AXIS_J = (_AXIS_K + 1) % 3, (_AXIS_K + 2) % 3
-_SLIDES, _HINGES = np.flatnonzero(_SLIDE), np.flatnonzero(~_SLIDE)
-
-
-def _motions(v: FloatArray) -> FloatArray:
-    """Transforms (..., n_joints, 4, 4) of the joints of :data:`TREE` moved by ``v`` (..., n).
-
-    A slide translates along its axis by ``v``; a hinge turns about it by ``v`` rad.
-    """
-    M = np.zeros(v.shape + (4, 4))
-    M[..., 3, 3] = 1.0
-    s_, h = _SLIDES, _HINGES
-    for a in range(3):
-        M[..., s_, a, a] = 1.0
-    M[..., s_, _AXIS_K[s_], 3] = v[..., s_]
-    c, s = np.cos(v[..., h]), np.sin(v[..., h])
-    k, i, j = _AXIS_K[h], _AXIS_I[h], _AXIS_J[h]
-    M[..., h, k, k] = 1.0
-    M[..., h, i, i] = c
-    M[..., h, j, j] = c
-    M[..., h, i, j] = -s
-    M[..., h, j, i] = s
-    return M
-
-
-def _tree_frames(joints: FloatArray, T_e: FloatArray,
-                 design: Design) -> FloatArray:
-    """Frames of :data:`LINKS` from the joint values (the exports' tree, parent first)."""
-    batch = joints.shape[:-1]
-    # each joint's transform in its parent link: origin, then the joint's motion
-    local = np.matmul(_origin_stack(design), _motions(joints))
-    index = _LINK_INDEX
-    out = np.empty(batch + (len(LINKS), 4, 4))
-    for k, j in enumerate(TREE.values()):
-        if j.parent == "base":
-            out[..., k, :, :] = local[..., k, :, :]
-        else:
-            np.matmul(out[..., index[j.parent], :, :], local[..., k, :, :],
-                      out=out[..., k, :, :])
-    tip = np.eye(4)
-    tip[2, 3] = design.tool_length
-    out[..., index["tool_tip"], :, :] = np.matmul(out[..., index["instrument"], :, :], tip)
-    out[..., index["rcm_setup"], :, :] = T_e
-    return out
 
 
 def _state(q: ArrayLike, T_b_e: ArrayLike, design: Design | None, slot: object,
