@@ -35,9 +35,11 @@ SETUP_HTML_DIV_ID = "athenakin-setup"
 #: Most robots drawn at covered targets (one menu entry each).
 MAX_VIEW_TARGETS = 12
 #: Colour and opacity of each part of the patient (the coverage map's colours are those
-#: of ``docs/figures/setup_coverage.png``).
+#: of ``docs/figures/setup_coverage.png``; ``target``: a target not coloured by coverage,
+#: as the app draws it).
 SETUP_VIEW_COLORS: dict[str, tuple[str, float]] = {
     "skin": ("#d9a383", 0.15), "covered": ("#2a9d8f", 0.95), "not covered": ("#c1121f", 0.95),
+    "target": ("#e08a00", 0.9),
     "forbidden": ("#6a4c93", 0.8), "table": ("#7f8790", 0.3), "port": ("#111111", 1.0),
     "axis": ("#111111", 1.0)}
 #: Length of the nominal axis drawn outside the skin, beyond the port, m.

@@ -16,6 +16,8 @@
   role read from ``patient.toml``) and the parametric :func:`phantom`;
 * :mod:`._setup` - :func:`plan_setup`: the port and the robot's base for a patient
   (NSGA-II on Dask), :func:`evaluate_setup` and the set-up file (:class:`Setup`);
+* :mod:`._patient_environment` - the patient's surfaces as the bodies' obstacles, one set
+  of rules for the coverage check and for :func:`setup_environment` (the app, teleop);
 * :mod:`._cohort` - :func:`plan_cohort`: a cohort of patients as one resumable study;
 * :mod:`.figures` - Pareto front, parameter coordinates, coverage maps (matplotlib).
 
@@ -75,6 +77,7 @@ from ._setup import (
     plan_setup,
     read_setup,
     reference_decision,
+    setup_environment,
     setup_from_decision,
 )
 from ._study import CHUNK_SIZE, StudyOptions, design_rows, evaluate, read_study
@@ -108,6 +111,7 @@ __all__ = [
     "plan_cohort",
     "read_setup",
     "reference_decision",
+    "setup_environment",
     "setup_from_decision",
     "CollisionSpec",
     "StudyOptions",

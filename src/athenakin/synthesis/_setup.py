@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike
 
 from .._output import write_text_atomic
 from .._toml import TomlOptions, read_toml
-from .._transforms import invert_transform, rot_x, rot_z, transform_from_rotation_translation
+from .._transforms import rot_x, rot_z, transform_from_rotation_translation
 from .._typing import FloatArray
 from .._validation import check_array, check_count, check_instance, check_path, check_scalar
 from ..design import Design, resolve_design
@@ -40,14 +40,15 @@ from ._metrics import (
     row_from_design,
     sample_metrics,
 )
-from ._patient import Patient, PatientMesh, ray_down, segment_crossings
+from ._patient import Patient, ray_down, segment_crossings
+from ._patient_environment import patient_environment
 from ._reduce import CONDITION_ORDER, _condition_values
 from ._task import rcm_frame_from_axis
 
 __all__ = ["SETUP_VARIABLES", "SETUP_COLUMNS", "SetupOptions", "Setup", "SetupPlan",
            "setup_from_decision", "evaluate_setup", "plan_setup", "read_setup",
            "default_setup_bounds", "reference_decision", "SETUP_OBJECTIVES",
-           "covered_samples"]
+           "covered_samples", "setup_environment"]
 
 #: Decision variables of a set-up, in order (m, except ``yaw`` in rad).
 SETUP_VARIABLES = ("port_x", "port_y", "yaw", "roll", "rcm_x", "rcm_y", "rcm_z")
@@ -346,54 +347,32 @@ def setup_from_decision(patient: Patient, decision: ArrayLike) -> Setup | None:
     return Setup(T_p_b=T_p_b, T_b_e=T_b_e, port=port, axis=axis_p, decision=x.copy())
 
 
-def _environment(patient: Patient, setup: Setup, segs_p: FloatArray | None,
-                 radii: FloatArray, cull: float, skin_bodies: tuple[str, ...]) -> Any:
-    """The patient's surfaces as obstacles in the base frame; far bodies not paired.
+def setup_environment(patient: Patient, setup: Setup, *,
+                      options: SetupOptions | None = None) -> Any:
+    """The patient's surfaces as obstacles of the robot's bodies, in the base frame.
 
-    ``segs_p`` (m, n_bodies, 2, 3): the checked configurations' body segments in the
-    patient frame. The skin allows the instrument (it enters at the port; the wall test
-    checks the rest of its line); a forbidden structure inside the skin pairs with the
-    instrument only (any other body reaching it crosses the skin, which pairs with it).
+    The obstacles :func:`evaluate_setup` checks every covered sample against (without
+    its culling of far bodies): the skin (the bodies of ``options.skin_bodies`` may touch
+    it), each forbidden structure (one inside the skin pairs with the instrument only)
+    and the table, each a mesh placed by ``T_b_p = T_p_b^-1``; the target is none.
+
+    Parameters
+    ----------
+    patient : Patient
+    setup : Setup
+    options : SetupOptions, optional, keyword-only
+        Its ``skin_bodies`` (default ``SetupOptions()``).
+
+    Returns
+    -------
+    athenakin.collision.Environment
+        For :func:`athenakin.collision.clearance`, the app (``environment=``), teleop.
     """
-    from .._mechanism import BODIES
-    from ..collision import Environment
-    from ..collision._environment import Obstacle
-
-    T_b_p = invert_transform(setup.T_p_b)
-    obs = []
-    inner = ("instrument",)
-    for m in patient.meshes:
-        if m.role == "target":
-            continue
-        if m.role == "skin":
-            allow = set(skin_bodies)
-        elif m.role == "forbidden" and m.name in patient.inner_forbidden:
-            allow = set(BODIES) - set(inner)
-        else:
-            allow = set()
-        if segs_p is not None:
-            allow |= _far_bodies(m, segs_p, radii, cull)
-        if set(BODIES) <= allow:
-            continue
-        obs.append(Obstacle(kind="mesh", name=m.name, vertices=m.vertices, faces=m.faces,
-                            T_b_o=T_b_p, allow=tuple(b for b in BODIES if b in allow)))
-    return Environment(tuple(obs))
-
-
-def _far_bodies(mesh: PatientMesh, segs_p: FloatArray, radii: FloatArray,
-                cull: float) -> set[str]:
-    """Bodies whose capsules stay farther than ``cull`` from the mesh's bounding box."""
-    from .._mechanism import BODIES
-
-    lo, hi = mesh.bounds
-    smin = np.nanmin(segs_p, axis=-2)
-    smax = np.nanmax(segs_p, axis=-2)
-    gap = np.maximum(np.maximum(lo - smax, smin - hi), 0.0)
-    lower = np.linalg.norm(gap, axis=-1) - radii          # (m, n_bodies)
-    far = np.all(lower > cull, axis=0)
-    # the spherical mechanism's links depend on a branch the segments here do not fix
-    return {b for b, f in zip(BODIES, far, strict=True)
-            if f and not b.startswith("sphere_link")}
+    check_instance(patient, "patient", Patient)
+    check_instance(setup, "setup", Setup)
+    opts = SetupOptions() if options is None else options
+    check_instance(opts, "options", SetupOptions)
+    return patient_environment(patient, setup.T_p_b, None, skin_bodies=opts.skin_bodies)
 
 
 def evaluate_setup(patient: Patient, setup: Setup | None, design: Design | None = None, *,
@@ -540,8 +519,8 @@ def _evaluate(patient: Patient, setup: Setup | None, design: Design | None = Non
                                geometry=bodies.geometry)
         segs = body_segments(pts)[np.arange(check.size), slots]
         segs_p = segs @ setup.T_p_b[:3, :3].T + setup.T_p_b[:3, 3]
-        env = _environment(patient, setup, segs_p, bodies.radius_array, opts.cull_distance,
-                           opts.skin_bodies)
+        env = patient_environment(patient, setup.T_p_b, segs_p, radii=bodies.radius_array,
+                                  cull=opts.cull_distance, skin_bodies=opts.skin_bodies)
         dd, _ = labelled_clearance(q[check], setup.T_b_e, design, mode[check],
                                    np.zeros(check.size, dtype=bool), bodies=bodies,
                                    environment=env)
