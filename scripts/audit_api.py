@@ -191,7 +191,15 @@ def _view() -> Any:
     return ak.app.forward_view(SETUP(), Q0, slot="all")
 
 
+def _planned() -> Any:
+    """A coarse phantom and a set-up that covers part of its target (the set-up view's)."""
+    patient = ak.synthesis.phantom(resolution=8)
+    x = ak.synthesis.reference_decision(patient, D, yaw=np.radians(270), roll=0.4)
+    return patient, ak.synthesis.setup_from_decision(patient, x)
+
+
 SETUP, FK1, GEOM, VIEW = _lazy(_setup), _lazy(_fk1), _lazy(_geom), _lazy(_view)
+PLANNED = _lazy(_planned)
 
 
 def _sym() -> dict[str, Any]:
@@ -415,6 +423,10 @@ OVERRIDES: dict[str, Callable[[dict[str, Path]], tuple[tuple, dict]]] = {
     "plot.slot_label": lambda f: ((GEOM(),), {}),
     "plot.write_html": lambda f: ((f["tmp"] / "v.html", Q0, T0, D),
                                   dict(include_plotlyjs=False)),
+    "plot.setup_figure": lambda f: ((*PLANNED(), D), dict(targets=1)),
+    "plot.target_coverage": lambda f: ((*PLANNED(), D), {}),
+    "plot.write_setup_html": lambda f: ((f["tmp"] / "s.html", *PLANNED(), D),
+                                        dict(include_plotlyjs=False, targets=1)),
     "app.app_setup": lambda f: ((T0, D), dict(backend="numpy")),
     "app.forward_view": lambda f: ((SETUP(), Q0), {}),
     "app.ghost_scene": lambda f: ((VIEW().ghosts, GEOM()), {}),

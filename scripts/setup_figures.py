@@ -3,6 +3,7 @@
 Run from the repository root (minutes on a 2-core machine; the load is printed)::
 
     python scripts/setup_figures.py [--samples 100000] [--certify 200] [--cohort 0]
+    python scripts/setup_figures.py --view-only     # step 5 only, from the last plan
 
 1. plans a set-up for the shipped phantom (``plan_setup``, the defaults) and times it;
 2. re-measures its coverage on ``--samples`` fresh target samples, every test and every
@@ -12,20 +13,30 @@ Run from the repository root (minutes on a 2-core machine; the load is printed):
    (:func:`athenakin.certified.certified_forward_kinematics`);
 4. draws the patient, the port, the robot at three covered targets and the coverage map
    (``docs/figures/setup_scene.png``, ``docs/figures/setup_coverage.png``);
-5. with ``--cohort N``, plans N phantoms of sizes 0.85..1.15 as one Dask study
+5. writes the set-up's HTML view (:func:`athenakin.plot.write_setup_html`, the page of
+   ``athenakin setup view``) and a screenshot of it in headless Chromium
+   (``docs/figures/setup_view.png``), and a screenshot of the live app on the set-up with
+   its patient (``athenakin app --setup ... --patient ...``, ``docs/figures/setup_app.png``),
+   both from ``docs/figures/setup_phantom.toml``;
+6. with ``--cohort N``, plans N phantoms of sizes 0.85..1.15 as one Dask study
    (:func:`athenakin.synthesis.plan_cohort`, resumable in ``--cohort-out``);
-6. writes the numbers to ``docs/figures/setup_numbers.json`` and between the markers of
+7. writes the numbers to ``docs/figures/setup_numbers.json`` and between the markers of
    docs/setup.md.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import re
+import shutil
+import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -146,6 +157,76 @@ def figures(patient, plan, design, opts) -> None:
     plt.close(fig)
 
 
+@contextlib.contextmanager
+def _chromium_page(width: int, height: int) -> Iterator[Any]:
+    """A page of Debian's headless chromium (Playwright drives it, never downloading one)."""
+    from playwright.sync_api import sync_playwright
+
+    chromium = shutil.which("chromium") or "/usr/bin/chromium"
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=chromium, args=[
+            "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run"])
+        try:
+            yield browser.new_page(viewport={"width": width, "height": height})
+        finally:
+            browser.close()
+
+
+def view(html: Path | None = None) -> Path:
+    """The HTML view of the planned set-up and its screenshot, ``docs/figures/setup_view.png``.
+
+    The page goes to ``html`` (default: a temporary file, removed); chromium renders it
+    offline.
+    """
+    from athenakin.plot import target_coverage, write_setup_html
+    from athenakin.plot._setup_view import SETUP_HTML_DIV_ID
+    from athenakin.synthesis import evaluate_setup, read_setup
+
+    setup, design, _ = read_setup(FIG / "setup_phantom.toml")
+    P, cov, _, _ = target_coverage(phantom(), setup, design)
+    print(f"view: {cov.sum()} of {cov.size} target faces covered ({100 * cov.mean():.1f} %)",
+          flush=True)
+    if np.any(~cov):                  # where the others are, and which test they fail
+        m, miss = 1e3 * P[~cov], evaluate_setup(phantom(), setup, design, points=P[~cov])
+        print(f"  not covered: x_p {m[:, 0].min():.0f} to {m[:, 0].max():.0f} mm, y_p "
+              f"{m[:, 1].min():.0f} to {m[:, 1].max():.0f} mm; reached "
+              f"{100 * miss['coverage_reach']:.0f} %, non-singular "
+              f"{100 * miss['coverage_nonsingular']:.0f} %", flush=True)
+    with tempfile.TemporaryDirectory() as tmp, _chromium_page(1200, 820) as page:
+        page_path = write_setup_html(html or Path(tmp) / "setup.html", phantom(), setup, design)
+        page.goto(page_path.resolve().as_uri())
+        page.wait_for_function(
+            f"() => {{ const d = document.getElementById('{SETUP_HTML_DIV_ID}'); "
+            "return d && d._fullLayout && d.querySelector('canvas'); }", timeout=60000)
+        page.wait_for_timeout(1500)
+        page.screenshot(path=str(FIG / "setup_view.png"))
+    return FIG / "setup_view.png"
+
+
+def app_view() -> Path:
+    """A screenshot of the live app on the planned set-up with the phantom, ``setup_app.png``."""
+    from athenakin.app import AthenaApp
+    from athenakin.synthesis import write_patient
+
+    with tempfile.TemporaryDirectory() as tmp:
+        patient = write_patient(phantom(), tmp)
+        app = AthenaApp(port=0, planned=FIG / "setup_phantom.toml", patient=patient)
+        try:
+            with _chromium_page(1400, 860) as page:
+                page.goto(app.url)
+                page.wait_for_selector("[data-ro=q1]", timeout=60000)
+                page.wait_for_timeout(2500)
+                close = page.locator(".mantine-Notification-closeButton")
+                for i in range(close.count()):        # the software-WebGL notice
+                    close.nth(i).click()
+                page.get_by_role("tab", name="Set-up").click()
+                page.wait_for_timeout(1500)
+                page.screenshot(path=str(FIG / "setup_app.png"))
+        finally:
+            app.stop()
+    return FIG / "setup_app.png"
+
+
 def cohort(n: int, opts, out: Path) -> list[dict[str, float]]:
     """N phantoms of varied size planned as one study (``plan_cohort``, resumable in ``out``)."""
     from athenakin.synthesis import plan_cohort
@@ -222,7 +303,14 @@ def main() -> None:
                     help="plan the cohort only; the other numbers from setup_numbers.json")
     ap.add_argument("--cohort-out", type=Path, default=ROOT / "setup_cohort",
                     help="folder of the cohort's set-ups (resumable)")
+    ap.add_argument("--view-only", action="store_true",
+                    help="the HTML view and its screenshot only, from setup_phantom.toml")
+    ap.add_argument("--html", type=Path, default=None,
+                    help="also keep the HTML view there (default: not kept)")
     args = ap.parse_args()
+    if args.view_only:
+        print(f"wrote {view(args.html)}, {app_view()}", flush=True)
+        return
     if args.cohort_only:
         numbers = json.loads((FIG / "setup_numbers.json").read_text())
         numbers["cohort"] = cohort(args.cohort, SetupOptions(), args.cohort_out)
@@ -252,6 +340,8 @@ def main() -> None:
         print({k: numbers[k] for k in numbers if str(k).startswith("certified")}, flush=True)
     if not args.no_figures:
         figures(patient, plan, design, opts)
+        view(args.html)
+        app_view()
     if args.cohort:
         numbers["cohort"] = cohort(args.cohort, opts, args.cohort_out)
     write_numbers(numbers)

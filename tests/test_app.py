@@ -570,7 +570,7 @@ def test_launch_playback_and_setup_tab_in_process(tmp_path, capsys):
         assert f"ATHENA at {app.url}" in capsys.readouterr().out
         assert app.url.startswith("http://127.0.0.1:")
         np.testing.assert_allclose(app.q, [-0.1, 0.1, 0.45])
-        app._start_playing()                                    # the play button
+        app.playback_tab.play()                                 # the play button
         t0 = time.monotonic()
         while time.monotonic() - t0 < 10 and not np.allclose(app.q, [-0.12, 0.08, 0.47]):
             time.sleep(0.05)
@@ -578,12 +578,12 @@ def test_launch_playback_and_setup_tab_in_process(tmp_path, capsys):
         # the set-up tab: another design is applied, a bad one refused
         other = dataclasses.replace(D, q_min=(-0.25, -0.05, 0.25), name="narrow")
         (tmp_path / "narrow.toml").write_text(other.to_toml())
-        app._design_path.value = str(tmp_path / "narrow.toml")
-        app._change_setup()
+        app.setup_tab.design_path.value = str(tmp_path / "narrow.toml")
+        app.setup_tab.apply()
         assert app.setup.design == other
         assert [sl.min for sl in app._q_sliders] == pytest.approx([-250.0, -50.0, 250.0])
-        app._design_path.value = str(tmp_path / "missing.toml")
-        app._change_setup()
+        app.setup_tab.design_path.value = str(tmp_path / "missing.toml")
+        app.setup_tab.apply()
         assert app.setup.design == other
         assert "set-up not changed" in app._status.content
     finally:

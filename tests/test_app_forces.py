@@ -274,8 +274,8 @@ def test_app_default_masses_follow_a_new_design(tmp_path):
                                    rtol=0, atol=ATOL_SAME_N)
         d2 = dataclasses.replace(ak.Design.default(), l4=0.17)
         (tmp_path / "d2.toml").write_text(d2.to_toml())
-        app._design_path.value = str(tmp_path / "d2.toml")
-        app._change_setup()
+        app.setup_tab.design_path.value = str(tmp_path / "d2.toml")
+        app.setup_tab.apply()
         g2 = app.view.geometry
         assert g2.design.l4 == pytest.approx(0.17, abs=0)
         want = ak.dynamics.actuator_forces(g2.q, g2.T_b_e, g2.design, slot=g2.slot)

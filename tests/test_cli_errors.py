@@ -341,13 +341,11 @@ def test_track_prints_missing_and_huge_times_readably(task, capsys):
 def test_app_warning_about_a_bad_rcm_file_names_the_file(bad):
     # `athenakin app --rcm-file nan.json` served the reference set-up with a warning that
     # said "RCM frame: ..." without naming the file
-    from types import SimpleNamespace
+    from athenakin.app._setup_tab import load_setup
 
-    from athenakin.app._server import AthenaApp
-
-    fake = SimpleNamespace(errors=[], _backend="numpy")
-    AthenaApp._make_setup(fake, bad / "nan.json", None)   # type: ignore[arg-type]
-    assert len(fake.errors) == 1 and "nan.json" in fake.errors[0], fake.errors
+    errors: list[str] = []
+    load_setup(bad / "nan.json", None, backend="numpy", errors=errors)
+    assert len(errors) == 1 and "nan.json" in errors[0], errors
 
 
 def test_ctrl_c_is_one_line_exit_130_and_leaves_no_file(tmp_path, monkeypatch, capsys):

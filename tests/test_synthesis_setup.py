@@ -25,7 +25,8 @@ from athenakin.synthesis import (  # noqa: E402
     setup_from_decision,
     write_patient,
 )
-from athenakin.synthesis._patient import _box, _tube, segment_crossings  # noqa: E402
+from athenakin.synthesis._patient import segment_crossings  # noqa: E402
+from athenakin.synthesis._phantom import _box, _tube  # noqa: E402
 
 
 @pytest.fixture(scope="module")

@@ -45,6 +45,7 @@ __all__ = [
     "Readouts",
     "AppView",
     "app_setup",
+    "rcm_reach",
     "slot_statuses",
     "forward_view",
     "readouts",
@@ -159,6 +160,29 @@ def app_setup(T_b_e: ArrayLike | None = None, design: Design | None = None, *,
          else resolve_rcm_frame(T_b_e, design))
     return AppSetup(design=design, T_b_e=T, q_lo=lo, q_hi=hi, q_home=home.copy(),
                     backend=chosen)
+
+
+def rcm_reach(setup: AppSetup) -> float:
+    """Largest ``|p|`` (m): the farthest ``O_s`` from the RCM, for the depth slider's range.
+
+    Over the grid of the actuator ranges (:func:`~athenakin.app._model.actuator_grid`,
+    both modes), rounded up to 10 mm.
+
+    Parameters
+    ----------
+    setup : AppSetup
+        Its design, actuator ranges and RCM frame.
+
+    Returns
+    -------
+    float
+        m; 1.0 where the parallel module assembles nowhere on the grid.
+    """
+    grid = actuator_grid(setup.q_lo, setup.q_hi)
+    O_s = np.asarray(parallel_forward_kinematics(grid, setup.design).O_s)
+    dist = np.linalg.norm(O_s - setup.T_b_e[:3, 3], axis=-1)
+    far = float(np.nanmax(dist)) if np.any(np.isfinite(dist)) else 1.0
+    return math.ceil(far * 100.0) / 100.0
 
 
 @dataclasses.dataclass(frozen=True)

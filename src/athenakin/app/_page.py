@@ -7,7 +7,7 @@ solids, labels), frames the camera and sends the page script. :func:`page_title`
 :func:`banner_html` and :func:`slot_options` are what the page's title, banner and slot
 list say; :func:`write_value` shows a value in a GUI input without undoing newer input
 from the browser. The app's state and what changes it (callbacks, the GUI inputs,
-actions, set-up, playback) are :mod:`athenakin.app._server`'s.
+actions) are :mod:`athenakin.app._server`'s, and its tabs' (set-up, playback, teleop).
 """
 
 from __future__ import annotations

@@ -10,7 +10,9 @@ Everything the page shows comes from the pure functions of :mod:`athenakin.app`
 (:func:`~athenakin.app.forward_view`, :func:`~athenakin.app.inverse_step`, ...): this
 module only turns them into scene nodes and GUI values, under one lock. It holds the
 app's state, its GUI inputs and what changes them; the scene nodes are written by the
-part it owns, :class:`~athenakin.app._page.PageWriter` (``app.page``).
+part it owns, :class:`~athenakin.app._page.PageWriter` (``app.page``). The Playback,
+Teleop and Set-up tabs are parts of their own (``app.playback_tab``, ``app.teleop``,
+``app.setup_tab``: app/_playback_tab.py, _teleop_tab.py, _setup_tab.py).
 """
 
 from __future__ import annotations
@@ -31,20 +33,27 @@ from numpy.typing import ArrayLike
 from .._typing import FloatArray
 from .._validation import check_argument_order
 from ..design import Design
-from ..errors import KinematicsError
-from ..robot._setup import read_rcm_json
+from ..errors import InvalidInputError, KinematicsError
 from ._bodies import collision_note
 from ._inverse import angles_from_tip, inverse_step, tip_from_angles
 from ._model import (
     AppSetup,
     AppView,
-    actuator_grid,
-    app_setup,
     forward_view,
+    rcm_reach,
 )
 from ._page import _ALL, PageWriter, _Read, banner_html, page_title, slot_options, write_value
-from ._playback import Playback, load_playback, playback_q
+from ._playback_tab import PlaybackTab
 from ._scene import Solid
+from ._setup_tab import (
+    PlannedSetup,
+    SetupTab,
+    _error_text,
+    check_planned,
+    load_setup,
+    planned_environment,
+    planned_start,
+)
 from ._sync import Echo
 from ._text import message_html, view_html
 
@@ -70,18 +79,15 @@ def _import_viser() -> Any:
     return viser
 
 
-def _error_text(exc: BaseException) -> str:
-    return f"{type(exc).__name__}: {exc}"
-
-
 class AthenaApp:
     """The live app: a viser server drawing ATHENA, driven by sliders and a tip handle.
 
     Parameters
     ----------
     T_b_e : array-like, shape (4, 4), str or Path, optional
-        RCM frame, or a JSON file ``{"T_b_e": ...}``. A frame that is not rigid is
-        reported in the page (and in :attr:`errors`); the reference set-up is used instead.
+        RCM frame, a JSON file ``{"T_b_e": ...}`` or a set-up TOML file. A frame that is
+        not rigid is reported in the page (and in :attr:`errors`); the reference set-up is
+        used instead.
     design : Design, str or Path, optional
         The design, or a TOML file to load it from. A file that cannot be read, or a
         design that cannot assemble, leaves the app running on the reference design
@@ -113,6 +119,17 @@ class AthenaApp:
         tables. Both are kept in :attr:`bodies` (``app.bodies.bodies``,
         ``app.bodies.environment``). A file that cannot be read or a bad table raises
         before the server starts (:func:`~athenakin.app._bodies.check_collision_models`).
+    planned : athenakin.synthesis.Setup, str or Path, keyword-only, optional
+        A planned set-up or its file (``athenakin setup plan``): its ``T_b_e`` is the RCM
+        frame (give no ``T_b_e``) and its ``[design]`` the design unless ``design`` is
+        given (app/_setup_tab.py).
+    patient : athenakin.synthesis.Patient, str or Path, keyword-only, optional
+        The patient of ``planned`` (or its ``patient.toml``): its meshes drawn where
+        ``T_p_b`` places them, with the port and the nominal axis; its surfaces join the
+        obstacles as the planner checks them
+        (:func:`~athenakin.synthesis.setup_environment`); the app starts with the tool tip
+        at the target's centre where the IK reaches it. Both are read and checked before
+        the server starts.
 
     Attributes
     ----------
@@ -131,7 +148,8 @@ class AthenaApp:
                  backend: str = "auto", verbose: bool = False,
                  solids: Callable[[AppView], tuple[Solid, ...]] | None = None,
                  masses: Any = None, f_max: Any = None,  # forces: app/_forces.py
-                 bodies: Any = None, environment: Any = None) -> None:
+                 bodies: Any = None, environment: Any = None, planned: Any = None,
+                 patient: Any = None) -> None:
         viser = _import_viser()
         # actuator forces: app/_forces.py; bad options raise before the server starts
         from ._forces import ForcesLayer, check_f_max, check_masses
@@ -140,15 +158,23 @@ class AthenaApp:
         # a call in the old order (design, T_b_e) is a mistake to raise, not a page message
         check_argument_order(T_b_e, "T_b_e", given_for="frame")
         check_argument_order(design, "design", given_for="design")
+        # a planned set-up and its patient (bad files raise before the start): _setup_tab.py
+        plan = check_planned(planned, patient)
+        if plan is not None:
+            if T_b_e is not None:
+                raise InvalidInputError("T_b_e: expected none with planned= (the planned "
+                                        "set-up holds the RCM frame)")
+            T_b_e, design = plan.setup.T_b_e, plan.design if design is None else design
         self._lock = threading.RLock()
         self._echo = Echo()      # this thread is writing GUI values (app/_sync.py)
         self._backend = backend
         self.errors: list[str] = []
-        self.setup = self._make_setup(T_b_e, design)
+        self.setup = load_setup(T_b_e, design, backend=backend, errors=self.errors)
         # the collision models (bad files raise before the server starts): app/_bodies.py
         from ._bodies import BodiesLayer, check_collision_models
 
         bodies, environment = check_collision_models(bodies, environment, self.setup.design)
+        environment = planned_environment(environment, plan)
         self._verbose = verbose
         if verbose:
             self.server = viser.ViserServer(host=host, port=port, verbose=verbose)
@@ -159,12 +185,14 @@ class AthenaApp:
         self.port = int(self.server.get_port())
         self.q = self.setup.q_home.copy()
         self.slot: int | str = 0
+        start = planned_start(self.setup, plan)      # the tip at the target's centre
+        if start is not None:
+            self.q, self.slot = start
         self.view: AppView | None = None
-        self.playback: Playback | None = None
         self._dragging = False
         self._grab: tuple[FloatArray, FloatArray] | None = None
         self.page = PageWriter(self.server, solids_of=solids)   # the scene nodes it sent
-        self._build_gui()
+        self._build_gui(plan)
         self.page.send_script(self.title)
         # bodies as solids, closest pair, clearance: app/_bodies.py
         self.bodies = BodiesLayer(self.server, bodies=bodies, environment=environment,
@@ -172,49 +200,9 @@ class AthenaApp:
         self.forces = ForcesLayer(self.server, masses=masses, f_max=f_max,  # actuator forces
                                   tip_handle=self._handle, backend=self.setup.backend)
         if trajectory is not None:
-            self._load_trajectory(str(trajectory))
+            self.playback_tab.load(str(trajectory))
         self._apply_q(self.q, sync_ik=True)
         self.page.frame_camera(self.view)
-
-    # ------------------------------------------------------------------ set-up
-    def _make_setup(self, T_b_e: ArrayLike | str | Path | None,
-                    design: Design | str | Path | None) -> AppSetup:
-        d: Design | None = None
-        if isinstance(design, (str, Path)):
-            try:
-                d = Design.from_toml(design)
-            except (OSError, ValueError, TypeError, KinematicsError) as exc:
-                self.errors.append(f"design file {design}: {_error_text(exc)}; "
-                                   f"showing the reference design instead")
-        elif design is not None:
-            d = design
-        T: ArrayLike | None = None
-        if isinstance(T_b_e, (str, Path)):
-            try:
-                T = read_rcm_json(T_b_e, option="RCM file")
-            except OSError as exc:
-                self.errors.append(f"RCM file {T_b_e}: cannot read it ({exc}); using the "
-                                   f"reference set-up")
-            except ValueError as exc:               # names the file
-                self.errors.append(f"{exc}; using the reference set-up")
-        else:
-            T = T_b_e
-        try:
-            base = app_setup(None, d, backend=self._backend)  # type: ignore[arg-type]
-        except (ValueError, TypeError, KinematicsError) as exc:
-            self.errors.append(f"design: {_error_text(exc)}; showing the reference design "
-                               f"instead")
-            d = None
-            base = app_setup(None, None, backend=self._backend)  # type: ignore[arg-type]
-        if T is None:
-            return base
-        try:
-            return app_setup(T, d, backend=self._backend)  # type: ignore[arg-type]
-        except (ValueError, TypeError, KinematicsError) as exc:
-            where = f"RCM file {T_b_e}" if isinstance(T_b_e, (str, Path)) else "RCM frame"
-            self.errors.append(f"{where}: {_error_text(exc)}; using the reference set-up "
-                               f"instead")
-            return base
 
     @property
     def tip_handle(self) -> Any:
@@ -228,7 +216,7 @@ class AthenaApp:
         return f"http://{host}:{self.port}/"
 
     # ------------------------------------------------------------------ GUI
-    def _build_gui(self) -> None:
+    def _build_gui(self, plan: PlannedSetup | None) -> None:
         gui, s = self.server.gui, self.setup
         self.server.scene.set_up_direction("+z")
         gui.configure_theme(control_width="large", show_logo=False)
@@ -264,26 +252,14 @@ class AthenaApp:
                 hint="drag the yellow ball at the tool tip (in the view plane) or an arrow "
                      "(along one axis)")
             self._handle_cb.on_update(self._on_handle_visible)
-        with tabs.add_tab("Playback"):
-            self._traj_path = gui.add_text("trajectory CSV", initial_value="",
-                                           hint="written by 'athenakin plan'")
-            self._traj_load = gui.add_button("load trajectory")
-            self._traj_load.on_click(lambda _: self._load_trajectory(self._traj_path.value))
-            self._time = gui.add_slider("time [s]", min=0.0, max=1.0, step=0.001,
-                                        initial_value=0.0, disabled=True)
-            self._time.on_update(self._on_time)
-            self._play = gui.add_button("play", disabled=True)
-            self._play.on_click(lambda _: self._start_playing())
+        with tabs.add_tab("Playback"):   # a trajectory CSV: app/_playback_tab.py
+            self.playback_tab = PlaybackTab(self)
         with tabs.add_tab("Teleop"):     # a virtual master: app/_teleop_tab.py
             from ._teleop_tab import TeleopTab
 
             self.teleop = TeleopTab(self)
-        with tabs.add_tab("Set-up"):
-            self._design_path = gui.add_text("design TOML", initial_value="")
-            self._rcm_path = gui.add_text("RCM frame JSON", initial_value="",
-                                          hint='{"T_b_e": 4x4 nested list}')
-            self._apply_setup = gui.add_button("apply set-up")
-            self._apply_setup.on_click(lambda _: self._change_setup())
+        with tabs.add_tab("Set-up"):     # another set-up, the planned one's patient
+            self.setup_tab = SetupTab(self, plan=plan)
         self._status = gui.add_html(message_html("", "ok"))
         self._readouts = gui.add_html("")
         with gui.add_folder("Slots (16 FK solutions)", expand_by_default=False):
@@ -368,13 +344,6 @@ class AthenaApp:
 
     def _on_handle_visible(self, _: object) -> None:
         self._handle.visible = self._grip.visible = bool(self._handle_cb.value)
-
-    def _on_time(self, _: object) -> None:
-        with self._lock:
-            if self._echo or self.playback is None:
-                return
-            q, _k = playback_q(self.playback, self.playback.t[0] + self._time.value)
-            self._apply_q(q, sync_ik=True)
 
     # ------------------------------------------------------------------ actions
     def set_q(self, q: ArrayLike) -> AppView:
@@ -514,57 +483,21 @@ class AthenaApp:
     def _set_status(self, text: str, level: str) -> None:
         self._status.content = message_html(text, level)
 
-    # ------------------------------------------------------------------ playback, set-up
-    def _load_trajectory(self, path: str) -> None:
-        try:
-            pb = load_playback(path.strip())
-        except (OSError, ValueError, KinematicsError) as exc:
-            self._set_status(f"trajectory not loaded: {_error_text(exc)}", "error")
-            self.errors.append(f"trajectory: {_error_text(exc)}")
-            self._banner.content = banner_html(self.setup, self.errors)
-            return
-        with self._lock:
-            self.playback = pb
-            with self._echo():
-                self._traj_path.value = path
-                self._time.max = max(pb.duration, 1e-3)
-                self._time.step = float(np.min(np.diff(pb.t))) if len(pb.t) > 1 else 1e-3
-                self._time.value = 0.0
-                self._time.disabled = False
-                self._play.disabled = False
-        self._apply_q(pb.q[0], sync_ik=True,
-                      extra=(f"trajectory {Path(pb.source).name}: {len(pb.t)} samples, "
-                             f"{pb.duration:.3f} s", "ok"))
+    # ------------------------------------------------------------------ set-up
+    def use_setup(self, setup: AppSetup) -> AppView:
+        """Run on another set-up (design, RCM frame), from its start configuration.
 
-    def _start_playing(self) -> None:
-        pb = self.playback
-        if pb is None:
-            return
+        Parameters
+        ----------
+        setup : AppSetup
+            From :func:`~athenakin.app.app_setup` (the Set-up tab's
+            :func:`~athenakin.app._setup_tab.load_setup`).
 
-        def run() -> None:
-            t_end = pb.duration
-            start = time.perf_counter() - float(self._time.value)
-            if self._time.value >= t_end:
-                start = time.perf_counter()
-            while self.playback is pb:
-                t = min(time.perf_counter() - start, t_end)
-                self._time.value = float(t)                 # calls _on_time
-                if t >= t_end:
-                    break
-                time.sleep(1 / 30)
-
-        threading.Thread(target=run, daemon=True, name="athenakin-playback").start()
-
-    def _change_setup(self) -> None:
-        design = self._design_path.value.strip() or None
-        rcm = self._rcm_path.value.strip() or None
-        before = len(self.errors)
-        setup = self._make_setup(rcm, design)
-        problems = self.errors[before:]
-        del self.errors[before:]
-        if problems:
-            self._set_status("set-up not changed: " + " | ".join(problems), "error")
-            return
+        Returns
+        -------
+        AppView
+            The view of its start configuration.
+        """
         with self._lock:
             self.setup = setup
             self._far = rcm_reach(setup)
@@ -574,12 +507,12 @@ class AthenaApp:
             with self._echo():
                 for i, sl in enumerate(self._q_sliders):
                     sl.min, sl.max = float(setup.q_lo[i] * 1e3), float(setup.q_hi[i] * 1e3)
-            self._apply_q(setup.q_home, sync_ik=True)
+            return self._apply_q(setup.q_home, sync_ik=True)
 
     # ------------------------------------------------------------------ life cycle
     def stop(self) -> None:
         """Stop the server (the page disconnects)."""
-        self.playback = None
+        self.playback_tab.stop()
         if self._verbose:
             self.server.stop()
         else:  # viser's stop (which joins its thread) prints a line: keep stdout clean
@@ -601,26 +534,12 @@ def _inverse_slot(slot: int, mode: int) -> int:
                       int(SLOT_WRIST[slot]))
 
 
-def rcm_reach(setup: AppSetup) -> float:
-    """Largest ``|p|`` (m): the farthest ``O_s`` from the RCM, for the depth slider's range.
-
-    Over the grid of the actuator ranges (:func:`~athenakin.app._model.actuator_grid`,
-    both modes), rounded up to 10 mm.
-    """
-    from ..parallel import parallel_forward_kinematics
-
-    grid = actuator_grid(setup.q_lo, setup.q_hi)
-    O_s = np.asarray(parallel_forward_kinematics(grid, setup.design).O_s)
-    dist = np.linalg.norm(O_s - setup.T_b_e[:3, 3], axis=-1)
-    far = float(np.nanmax(dist)) if np.any(np.isfinite(dist)) else 1.0
-    return math.ceil(far * 100.0) / 100.0
-
-
 def launch(T_b_e: ArrayLike | str | Path | None = None, design: Design | str | Path | None = None,
            *, host: str = "127.0.0.1", port: int = DEFAULT_PORT,
            trajectory: str | Path | None = None, backend: str = "auto",
            masses: Any = None, f_max: Any = None,  # forces: app/_forces.py
-           bodies: Any = None, environment: Any = None) -> AthenaApp:
+           bodies: Any = None, environment: Any = None, planned: Any = None,
+           patient: Any = None) -> AthenaApp:
     """Start the app in the background (e.g. from a notebook) and print its address.
 
     Parameters
@@ -628,6 +547,8 @@ def launch(T_b_e: ArrayLike | str | Path | None = None, design: Design | str | P
     T_b_e, design, host, port, trajectory, backend, masses, f_max, bodies, environment
         As in :class:`AthenaApp` (``environment="anatomy.toml"``: the obstacles of a file,
         drawn as the Teleop tab's virtual fixtures).
+    planned, patient
+        As in :class:`AthenaApp` (``planned="setup.toml", patient="patient.toml"``).
 
     Returns
     -------
@@ -636,7 +557,7 @@ def launch(T_b_e: ArrayLike | str | Path | None = None, design: Design | str | P
     """
     app = AthenaApp(T_b_e, design, host=host, port=port, trajectory=trajectory,
                     backend=backend, masses=masses, f_max=f_max, bodies=bodies,
-                    environment=environment)
+                    environment=environment, planned=planned, patient=patient)
     for e in app.errors:
         print(f"athenakin app: {e}", file=sys.stderr)
     print(f"athenakin app: ATHENA at {app.url}")

@@ -31,6 +31,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                     "the obstacles (--bodies, --environment) are checked in the clearance "
                     "read-out and the IK, and the obstacles are the Teleop tab's virtual "
                     "fixtures; a bad --bodies or --environment file stops the start. "
+                    "--setup and --patient start on a planned set-up with its patient "
+                    "(athenakin setup plan); a bad file stops the start. "
                     "Prints the URL; Ctrl-C stops it. A design, RCM frame or trajectory that "
                     "cannot be used is reported at start-up and in the page, and the app runs "
                     "on the reference set-up instead.")
@@ -58,6 +60,14 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     add_bodies_options(p.add_argument_group("collisions (clearance read-out, the IK's "
                                             "collision stop, the Teleop tab's fixtures)"),
                        bodies_default="the default capsules of the design shown")
+    g = p.add_argument_group("a planned set-up (athenakin setup plan)")
+    g.add_argument("--setup", type=Path, default=None, metavar="SETUP.toml",
+                   help="start on a planned set-up: its T_b_e (no --rcm/--rcm-file) and its "
+                        "design (unless --design)")
+    g.add_argument("--patient", type=Path, default=None, metavar="PATIENT.toml",
+                   help="the patient of --setup: its meshes drawn where T_p_b places them, "
+                        "the port and the nominal axis; its surfaces join the obstacles; the "
+                        "tool tip starts at the target's centre")
     p.set_defaults(func=run)
 
 
@@ -100,6 +110,9 @@ def run(args: argparse.Namespace) -> int:
     if args.foxglove is not None and not 0 <= args.foxglove <= 65535:
         raise ValueError(f"--foxglove: expected a port 0..65535, got {args.foxglove}")
     check_host(args.host)
+    if args.setup is not None and (args.rcm or args.rcm_file):
+        raise ValueError("--setup: the planned set-up holds the RCM frame; drop --rcm / "
+                         "--rcm-file")
     masses, f_max = _force_options(args)    # actuator forces: app/_forces.py
     rcm: Any = args.rcm_file
     if args.rcm:
@@ -122,7 +135,8 @@ def run(args: argparse.Namespace) -> int:
         app = _server.AthenaApp(rcm, args.design, host=args.host, port=args.port,
                                 trajectory=args.trajectory, backend=args.backend,
                                 masses=masses, f_max=f_max, bodies=args.bodies,
-                                environment=args.environment)
+                                environment=args.environment, planned=args.setup,
+                                patient=args.patient)
         for e in app.errors:
             print(f"athenakin app: warning: {e}", file=sys.stderr)
         if args.foxglove is not None:

@@ -1,4 +1,4 @@
-"""``athenakin setup``: the patient's phantom as files, and a set-up plan for a patient file."""
+"""``athenakin setup``: the phantom as files, a set-up plan for a patient file, its HTML view."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import os
 from pathlib import Path
 
 from ._common import check_count, dump_json, fmt, load_design, table
+from ._output import Outputs, add_force_option
 
 _SHOWN = ("coverage", "min_clearance", "margin_min", "cond_tip_max", "depth_min", "depth_max")
 
@@ -53,6 +54,28 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     pl.add_argument("--force", action="store_true", help="replace the set-up file")
     pl.add_argument("--json", action="store_true", help="print the figures as JSON")
     pl.set_defaults(func=run_plan)
+    vw = cmds.add_parser("view", help="draw a planned set-up as an interactive HTML page",
+                         description="Write a self-contained HTML page (plotly) of a set-up "
+                                     "in the patient's frame: the skin, the forbidden "
+                                     "structures and the table, the target coloured face by "
+                                     "face by coverage (every test of the planner, every "
+                                     "clearance), the port and the instrument's nominal "
+                                     "axis, and the robot at a few covered targets with a "
+                                     "menu between them.")
+    vw.add_argument("patient", metavar="PATIENT.toml", type=Path, help="patient file")
+    vw.add_argument("setup", metavar="SETUP.toml", type=Path,
+                    help="set-up file of 'setup plan' (its design is the robot drawn)")
+    vw.add_argument("-o", "--output", type=Path, required=True, metavar="FILE.html",
+                    help="the page written (.html)")
+    vw.add_argument("--targets", type=int, default=3,
+                    help="covered targets at which the robot is drawn (3)")
+    vw.add_argument("--cdn", action="store_true",
+                    help="link plotly.js from its CDN (a small page that needs the network) "
+                         "instead of embedding it")
+    vw.add_argument("--options", type=Path, default=None, metavar="FILE.toml",
+                    help="the [setup_options] table of a TOML file (the tests of coverage)")
+    add_force_option(vw)
+    vw.set_defaults(func=run_view)
 
 
 def run_phantom(args: argparse.Namespace) -> int:
@@ -95,4 +118,25 @@ def run_plan(args: argparse.Namespace) -> int:
     print(f"port (patient frame, m): {fmt(plan.chosen.port[0], 4)} "
           f"{fmt(plan.chosen.port[1], 4)} {fmt(plan.chosen.port[2], 4)}")
     print(f"wrote {path} in {os.times().elapsed - t0:.0f} s; use it with --rcm-frame {path}")
+    return 0
+
+
+def run_view(args: argparse.Namespace) -> int:
+    """Write the HTML view of a set-up."""
+    from ..plot import write_setup_html
+    from ..synthesis import Patient, SetupOptions, read_setup
+
+    if args.output.suffix.lower() != ".html":
+        raise ValueError(f"-o: expected a file ending in .html, got {str(args.output)!r}")
+    check_count(args.targets, "--targets", 1, 12)
+    inputs = [args.patient, args.setup] + ([args.options] if args.options else [])
+    with Outputs(force=args.force, inputs=inputs) as outs:
+        out = outs.add(args.output)
+        patient = Patient.from_toml(args.patient)
+        setup, design, _ = read_setup(args.setup)
+        opts = SetupOptions.from_toml(args.options) if args.options else SetupOptions()
+        write_setup_html(outs.temp(out), patient, setup, design, targets=args.targets,
+                         options=opts, include_plotlyjs="cdn" if args.cdn else True)
+        outs.commit()
+    print(f"wrote {out}")
     return 0

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -13,23 +14,52 @@ from ..errors import InvalidInputError
 MAX_MESH_FACES = 2_000_000
 
 
-def _load_mesh(path: Path, scale: float, name: str) -> tuple[FloatArray,
-                                                             IntArray]:
+def load_geometry(path: Path, name: str, *, force_mesh: bool = True) -> Any:
+    """A mesh (or point-cloud) file loaded by trimesh, unprocessed: the one file reader.
+
+    Parameters
+    ----------
+    path : Path
+        An STL, OBJ or PLY file.
+    name : str
+        The parameter or entry that named the file, first in every message.
+    force_mesh : bool, keyword-only
+        Load a triangle mesh (trimesh's ``force="mesh"``); False: whatever the file holds
+        (a PLY of vertices only is a point cloud).
+
+    Returns
+    -------
+    trimesh.Trimesh or trimesh.PointCloud
+
+    Raises
+    ------
+    InvalidInputError
+        Another suffix, a missing file, a file trimesh cannot load (named).
+    ImportError
+        trimesh is missing (the message names the extra).
+    """
     try:
         import trimesh
     except ImportError:  # pragma: no cover - the extra is installed in CI
-        raise ImportError("Environment.mesh needs trimesh: pip install 'athenakin[collision]'") \
-            from None
+        raise ImportError("reading mesh files needs trimesh: pip install "
+                          "'athenakin[collision]'") from None
     if path.suffix.lower() not in (".stl", ".obj", ".ply"):
         raise InvalidInputError(f"{name}: expected an STL, OBJ or PLY file, got "
                                 f"{path.suffix or 'no extension'} ({str(path)!r})")
     if not path.is_file():
         raise InvalidInputError(f"{name}: mesh file {str(path)!r} does not exist")
     try:
-        mesh = trimesh.load(str(path), force="mesh", process=False)
+        return trimesh.load(str(path), process=False, **({"force": "mesh"} if force_mesh
+                                                         else {}))
     except Exception as exc:  # trimesh raises many kinds on a bad file
         raise InvalidInputError(f"{name}: mesh file {str(path)!r} does not load "
                                 f"({type(exc).__name__}: {exc})") from None
+
+
+def _load_mesh(path: Path, scale: float, name: str) -> tuple[FloatArray,
+                                                             IntArray]:
+    """Vertices (n, 3) scaled to m and faces (m, 3) of a mesh file, checked."""
+    mesh = load_geometry(path, name)
     V, F = _check_triangles(getattr(mesh, "vertices", np.zeros((0, 3))),
                             getattr(mesh, "faces", np.zeros((0, 3))),
                             f"mesh file {str(path)!r}", name=name)

@@ -54,13 +54,23 @@ _TEXT_POSITIONS = {"top right": (1, 1), "top left": (-1, 1), "bottom right": (1,
 _CHAR_PX, _LINE_PX = 7.0, 14.0
 
 
-def _polyline(segments: list[FloatArray]) -> tuple[list[Any], ...]:
-    """x, y, z lists (mm) of several polylines (m) separated by None (one plotly trace)."""
+def _place(pts: ArrayLike, T_w_b: FloatArray | None) -> FloatArray:
+    """Points (..., 3) of the base frame in the frame ``w`` of ``T_w_b`` (None: unchanged), m."""
+    P = np.asarray(pts, dtype=float)
+    return P if T_w_b is None else P @ T_w_b[:3, :3].T + T_w_b[:3, 3]
+
+
+def _polyline(segments: list[FloatArray], T_w_b: FloatArray | None = None
+              ) -> tuple[list[Any], ...]:
+    """x, y, z lists (mm) of several polylines (m) separated by None (one plotly trace).
+
+    ``T_w_b`` (optional) places the base-frame points in another frame first.
+    """
     xs: list[Any] = []
     ys: list[Any] = []
     zs: list[Any] = []
     for pts in segments:
-        arr = np.asarray(pts) * MM
+        arr = _place(pts, T_w_b) * MM
         xs += arr[:, 0].tolist() + [None]
         ys += arr[:, 1].tolist() + [None]
         zs += arr[:, 2].tolist() + [None]
@@ -131,9 +141,11 @@ def text_positions(xy: FloatArray, texts: list[str]) -> list[str]:
     return out
 
 
-def _hover(name: str) -> str:
-    return (f"<b>{name}</b><br>x<sub>b</sub> = %{{x:.1f}} mm<br>y<sub>b</sub> = %{{y:.1f}} mm"
-            "<br>z<sub>b</sub> = %{z:.1f} mm<extra></extra>")
+def _hover(name: str, frame: str = "b") -> str:
+    """Hover template of a trace: its name and the point's coordinates in ``frame``, mm."""
+    f = frame
+    return (f"<b>{name}</b><br>x<sub>{f}</sub> = %{{x:.1f}} mm<br>y<sub>{f}</sub> = "
+            f"%{{y:.1f}} mm<br>z<sub>{f}</sub> = %{{z:.1f}} mm<extra></extra>")
 
 
 #: Labelled points of the view: key in :attr:`RobotGeometry.points`, text, name in the hover.
@@ -144,18 +156,22 @@ POINT_LABELS = (("A", "A", "carriage A (q1)"), ("B", "B", "carriage B (q2)"),
 
 
 def _traces(g: RobotGeometry, *, show_frames: bool, frame_length: float,
-            box: tuple[FloatArray, FloatArray] | None = None
-            ) -> list[dict[str, Any]]:
-    """Scatter3d trace specs (plotly dicts, coordinates in mm) of one solution."""
+            box: tuple[FloatArray, FloatArray] | None = None,
+            T_w_b: FloatArray | None = None, frame: str = "b") -> list[dict[str, Any]]:
+    """Scatter3d trace specs (plotly dicts, coordinates in mm) of one solution.
+
+    ``T_w_b`` (shape (4, 4), optional) draws the robot in the frame ``w`` in which its
+    base frame has that pose (``box`` is then in ``w``); ``frame`` names it in the hovers.
+    """
     P = g.points
     seg = g.segments()
 
     def lines(name: str, segs: list[Any], color: str, width: float, dash: str = "solid"
               ) -> dict[str, Any]:
-        x, y, z = _polyline(segs)
+        x, y, z = _polyline(segs, T_w_b)
         return {"type": "scatter3d", "mode": "lines", "name": name, "x": x, "y": y, "z": z,
                 "line": {"color": color, "width": width, "dash": dash},
-                "hovertemplate": _hover(name)}
+                "hovertemplate": _hover(name, frame)}
 
     out = [
         lines("base rail (x_b)", [g.rail], COLORS["rail"], 9),
@@ -180,14 +196,14 @@ def _traces(g: RobotGeometry, *, show_frames: bool, frame_length: float,
     sph = [np.stack([c - 0.4 * ARC_RADIUS * a, c + 0.4 * ARC_RADIUS * a]) for a in ax_]
     sph += [arc_points(c, ax_[k], ax_[k + 1], ARC_RADIUS) for k in range(2)]
     out.append(lines("spherical joint at the RCM (u3, u4, u5)", sph, COLORS["sphere"], 5))
-    out.append(_point_trace(g, show_frames=show_frames, box=box))
+    out.append(_point_trace(g, show_frames=show_frames, box=box, T_w_b=T_w_b, frame=frame))
     other = g.intersections[1 if g.mode > 0 else 0]
     if np.all(np.isfinite(other)):
-        x, y, z = (other * MM).tolist()
+        x, y, z = (_place(other, T_w_b) * MM).tolist()
         out.append({"type": "scatter3d", "mode": "markers",
                     "name": "O_i of the other assembly mode", "x": [x], "y": [y], "z": [z],
                     "marker": {"size": 5, "color": COLORS["joint"], "symbol": "circle-open"},
-                    "hovertemplate": _hover("O_i of the other assembly mode")})
+                    "hovertemplate": _hover("O_i of the other assembly mode", frame)})
     if show_frames:
         frames = [("O_b", g.frames["b"], 1.5), ("O_i", g.frames["i"], 1.0),
                   ("O_s", g.frames["s"], 1.0), ("O_e (RCM)", g.frames["e"], 1.0)]
@@ -198,10 +214,14 @@ def _traces(g: RobotGeometry, *, show_frames: bool, frame_length: float,
     return out
 
 
-
 def _point_trace(g: RobotGeometry, *, show_frames: bool,
-                 box: tuple[FloatArray, FloatArray] | None) -> dict[str, Any]:
-    """The labelled points of one solution (one label where points coincide on screen)."""
+                 box: tuple[FloatArray, FloatArray] | None,
+                 T_w_b: FloatArray | None = None, frame: str = "b") -> dict[str, Any]:
+    """The labelled points of one solution (one label where points coincide on screen).
+
+    ``T_w_b``, ``frame``: as in :func:`_traces` (pass ``box``, in the frame drawn, with
+    ``T_w_b``: the labels' sides are chosen on the screen of that box).
+    """
     P = g.points
     keys, labels, names = (list(t) for t in zip(*POINT_LABELS, strict=True))
     pts = np.stack([P[k] for k in keys])
@@ -210,6 +230,7 @@ def _point_trace(g: RobotGeometry, *, show_frames: bool,
         labels.append("O_b")
         names.append("O_b, origin of the base frame")
         pts = np.vstack([pts, np.zeros(3)])
+    pts = _place(pts, T_w_b)
     lo, hi = box if box is not None else g.bounds()
     xy = screen_points(pts, lo, hi)
     # points drawn at one place share one label (M and O_b in the reference configuration)
@@ -224,8 +245,9 @@ def _point_trace(g: RobotGeometry, *, show_frames: bool,
     positions = ["top center"] * len(text)
     for i, pos in zip(shown, text_positions(xy[shown], [text[i] for i in shown]), strict=True):
         positions[i] = pos
-    hover = [f"<b>{n}</b><br>x<sub>b</sub> = {p[0] * MM:.1f} mm<br>y<sub>b</sub> = "
-             f"{p[1] * MM:.1f} mm<br>z<sub>b</sub> = {p[2] * MM:.1f} mm"
+    f = frame
+    hover = [f"<b>{n}</b><br>x<sub>{f}</sub> = {p[0] * MM:.1f} mm<br>y<sub>{f}</sub> = "
+             f"{p[1] * MM:.1f} mm<br>z<sub>{f}</sub> = {p[2] * MM:.1f} mm"
              for n, p in zip(names, pts, strict=True)]
     palette = {"A": COLORS["rail"], "B": COLORS["rail"], "RCM": COLORS["sphere"],
                "tip": COLORS["serial"], "O_b": "#222222"}
@@ -395,13 +417,37 @@ def write_html(path: str | Path, q: ArrayLike | None = None, T_b_e: ArrayLike | 
     -------
     Path
     """
-    import html
-
-    from .._output import check_output_path, write_text_atomic
+    from .._output import check_output_path
 
     path = check_output_path(path)
     fig = robot_figure(q, T_b_e, design, slot=slot, **kwargs)
-    text = fig.to_html(include_plotlyjs=include_plotlyjs, full_html=True, div_id=HTML_DIV_ID,
+    return write_figure_page(path, fig, include_plotlyjs=include_plotlyjs)
+
+
+def write_figure_page(path: Path, fig: Any, *, include_plotlyjs: bool | str = True,
+                      div_id: str = HTML_DIV_ID) -> Path:
+    """Write a plotly figure as an HTML page, atomically; its ``<title>`` the figure's.
+
+    Parameters
+    ----------
+    path : Path
+        A checked output path (:func:`athenakin._output.check_output_path`).
+    fig : plotly.graph_objects.Figure
+    include_plotlyjs : bool or str, keyword-only
+        ``True`` embeds plotly.js (offline); ``"cdn"`` links it.
+    div_id : str, keyword-only
+        ``id`` of the plot's ``<div>``.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    import html
+
+    from .._output import write_text_atomic
+
+    text = fig.to_html(include_plotlyjs=include_plotlyjs, full_html=True, div_id=div_id,
                        config={"displaylogo": False, "responsive": True})
     page_title = html.escape(fig.layout.title.text or "ATHENA")
     text = text.replace("<head>", f"<head>\n<title>{page_title}</title>", 1)

@@ -14,8 +14,12 @@
   strokes, the Pareto front and the reference design on it;
 * :mod:`._patient` - the patient of a set-up plan (:class:`Patient`: closed surfaces by
   role read from ``patient.toml``) and the parametric :func:`phantom`;
-* :mod:`._setup` - :func:`plan_setup`: the port and the robot's base for a patient
-  (NSGA-II on Dask), :func:`evaluate_setup` and the set-up file (:class:`Setup`);
+* :mod:`._phantom` - the parametric :func:`phantom` (abdomen, pancreas, vessels, table);
+* :mod:`._setup` - the decision of a set-up (:class:`Setup`: the port and the robot's
+  base), :func:`evaluate_setup` and the set-up file;
+* :mod:`._setup_plan` - :func:`plan_setup`: the set-up for a patient (NSGA-II on Dask);
+* :mod:`._patient_environment` - the patient's surfaces as the bodies' obstacles, one set
+  of rules for the coverage check and for :func:`setup_environment` (the app, teleop);
 * :mod:`._cohort` - :func:`plan_cohort`: a cohort of patients as one resumable study;
 * :mod:`.figures` - Pareto front, parameter coordinates, coverage maps (matplotlib).
 
@@ -46,9 +50,9 @@ from ._patient import (
     Patient,
     PatientFileError,
     PatientMesh,
-    phantom,
     write_patient,
 )
+from ._phantom import phantom
 from ._scheduler import LOCAL_SCHEDULERS
 from ._search import (
     DEFAULT_OBJECTIVES,
@@ -64,19 +68,18 @@ from ._search import (
 )
 from ._setup import (
     SETUP_COLUMNS,
-    SETUP_OBJECTIVES,
     SETUP_VARIABLES,
     Setup,
     SetupOptions,
-    SetupPlan,
     covered_samples,
     default_setup_bounds,
     evaluate_setup,
-    plan_setup,
     read_setup,
     reference_decision,
+    setup_environment,
     setup_from_decision,
 )
+from ._setup_plan import SETUP_OBJECTIVES, SetupPlan, plan_setup
 from ._study import CHUNK_SIZE, StudyOptions, design_rows, evaluate, read_study
 from ._task import (
     MAX_TASK_SAMPLES,
@@ -108,6 +111,7 @@ __all__ = [
     "plan_cohort",
     "read_setup",
     "reference_decision",
+    "setup_environment",
     "setup_from_decision",
     "CollisionSpec",
     "StudyOptions",

@@ -11,12 +11,13 @@ from typing import Any
 import numpy as np
 
 from .._output import write_text_atomic
-from .._validation import check_count, check_instance, check_path
-from ..design import Design, resolve_design
+from .._validation import check_instance, check_path
+from ..design import Design
 from ..errors import InvalidInputError
 from ._metrics import design_from_row, row_from_design
 from ._patient import Patient
-from ._setup import SETUP_VARIABLES, SetupOptions, plan_setup
+from ._setup import SETUP_VARIABLES, SetupOptions
+from ._setup_plan import plan_setup, search_arguments
 
 __all__ = ["plan_cohort"]
 
@@ -115,12 +116,8 @@ def plan_cohort(patients: Mapping[str, Patient], *, design: Design | None = None
             raise InvalidInputError(f"patients: expected names made of letters, digits, "
                                     f"'-', '_', '.', got {k!r}")
         check_instance(p, f"patients[{k!r}]", Patient)
-    design = resolve_design(design)
-    opts = SetupOptions() if options is None else options
-    check_instance(opts, "options", SetupOptions)
-    population = check_count(population, "population", minimum=2, maximum=10_000)
-    generations = check_count(generations, "generations", minimum=1, maximum=10_000)
-    seed = check_count(seed, "seed", minimum=0)
+    design, opts, population, generations, seed = search_arguments(
+        design, options, population, generations, seed)
     drow = row_from_design(design)
     items = list(patients.items())
     folder = None if out is None else check_path(out, "out")
