@@ -67,6 +67,7 @@ DEADLINE = 120.0          # s: the longest wait for a node to start (numba cache
 Q0 = (-0.1, 0.1, 0.45)
 RATE = 200.0              # the teleop node's rate in these tests, Hz
 WATCHDOG = 0.03           # TeleopOptions' default, s
+A_MAX = 2.0               # TeleopOptions' default a_max, m/s^2
 RELIABLE = QoSProfile(depth=200, reliability=ReliabilityPolicy.RELIABLE)
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -149,6 +150,12 @@ def nodes():
         client.close()
         out = _stop(arm) + _stop(teleop) + _stop(e2e) + _stop(replay)
         assert "Traceback" not in out, out
+
+
+def _servo_at(msgs, stamp):
+    """The servo_jp message of ``msgs`` stamped ``stamp`` (None: not received yet)."""
+    return next((m for m in reversed(msgs) if m.header.stamp.sec == stamp.sec
+                 and m.header.stamp.nanosec == stamp.nanosec), None)
 
 
 def _tip(msg):
@@ -323,11 +330,28 @@ def test_teleop_follows_the_master_and_the_watchdog_holds(nodes):
         return any(_values(a)["watchdog"] == "False" for a in c.got["tstatus"][held:])
 
     c.until(back, "the master's return", procs=[teleop])
-    st = [_values(a) for a in c.got["tstatus"]]
+    arrays = list(c.got["tstatus"])
+    st = [_values(a) for a in arrays]
     i = next(k for k in range(held, len(st)) if st[k]["watchdog"] == "False")
     before, after = (np.array(st[k]["tip_b"].split(), float) for k in (i - 1, i))
     assert int(st[i]["cycle"]) == int(st[i - 1]["cycle"]) + 1
-    np.testing.assert_allclose(after, before, rtol=0, atol=1e-12 * max(1.0, np.abs(before).max()))
+    # the servo_jp of the last held cycle (the same stamp as its status)
+    c.until(lambda: _servo_at(c.got["servo"], arrays[i - 1].header.stamp) is not None,
+            "the servo_jp of the last held cycle", procs=[teleop])
+    held_cmd = _servo_at(c.got["servo"], arrays[i - 1].header.stamp)
+    if not np.any(np.array(held_cmd.velocity)):
+        # from rest: the commanded tip does not move in the re-engaging cycle
+        np.testing.assert_allclose(after, before, rtol=0,
+                                   atol=1e-12 * max(1.0, np.abs(before).max()))
+    else:
+        # a master sample delayed past the watchdog (a loaded machine) re-engaged while the
+        # robot still braked: the command goes on from its velocity, within one cycle's
+        # acceleration limit (no jump), never toward the master's new position at once
+        engaged = _servo_at(c.got["servo"], arrays[i].header.stamp)
+        assert engaged is not None
+        dq = np.abs(np.array(engaged.position) - np.array(held_cmd.position))
+        dt = 1.0 / RATE
+        assert np.all(dq <= np.abs(np.array(held_cmd.velocity)) * dt + A_MAX * dt * dt + 1e-12)
     # a NaN master sample is INVALID, a Joy without the clutch button is refused by name
     seen = len(c.got["tstatus"])
     m = PoseStamped()
