@@ -2,7 +2,7 @@
 
 Run from the repository root (the machine's load is printed beside every figure)::
 
-    python benchmarks/bench_setup.py [--population 16] [--generations 8] [--seed 0]
+    python benchmarks/bench_setup.py [--population 16] [--generations 8] [--polish 3] [--seed 0]
 
 The target (docs/setup.md): a set-up covering >= 95 % of the pancreas with every margin
 >= 5 mm (singularity length conditions, clearance of the bodies) and 0 colliding
@@ -40,6 +40,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--population", type=int, default=16)
     ap.add_argument("--generations", type=int, default=8)
+    ap.add_argument("--polish", type=int, default=3)
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
     patient, design, opts = phantom(), Design.default(), SetupOptions()
@@ -56,7 +57,8 @@ def main() -> None:
           f"clearance checks) {base:.3f} s ({_load()})", flush=True)
     t0 = time.perf_counter()
     plan = plan_setup(patient, design=design, population=args.population,
-                      generations=args.generations, seed=args.seed, options=opts)
+                      generations=args.generations, polish=args.polish, seed=args.seed,
+                      options=opts)
     total = time.perf_counter() - t0
     f = plan.figures
     ok = (f["coverage"] >= 0.95 and f["margin_min"] >= 0.005 and f["min_clearance"] >= 0.005

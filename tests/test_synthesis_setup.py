@@ -12,6 +12,7 @@ pytest.importorskip("trimesh")
 pytest.importorskip("coal")
 
 from athenakin.design import Design  # noqa: E402
+from athenakin.errors import InvalidInputError  # noqa: E402
 from athenakin.synthesis import (  # noqa: E402
     OpenSurfaceError,
     Patient,
@@ -247,7 +248,7 @@ def test_a_small_plan(patient, tmp_path):
     pytest.importorskip("pymoo")
     from athenakin.synthesis import SETUP_VARIABLES, plan_setup
 
-    plan = plan_setup(patient, population=4, generations=2, options=_FAST,
+    plan = plan_setup(patient, population=4, generations=2, polish=0, options=_FAST,
                       scheduler="synchronous")
     assert len(plan.table) == 8
     assert list(plan.table["generation"]) == [0] * 4 + [1] * 4
@@ -259,6 +260,33 @@ def test_a_small_plan(patient, tmp_path):
                                           samples=_FAST.final_samples, seed=1)
     f = plan.write(tmp_path / "s.toml")
     np.testing.assert_array_equal(read_setup(f)[0].T_b_e, plan.chosen.T_b_e)
+
+
+def test_the_compass_polish_never_ranks_lower_and_steps_one_variable(patient):
+    """Polish rounds start from the best set-up NSGA-II found and move only to one that
+    ranks higher (coverage, then least clearance): the chosen set-up ranks at least as
+    high as without them, and each round's 14 set-ups differ from a common centre in one
+    variable each."""
+    pytest.importorskip("pymoo")
+    from athenakin.synthesis import SETUP_VARIABLES, plan_setup
+
+    kw = dict(population=4, generations=2, options=_FAST, scheduler="synchronous")
+    plain = plan_setup(patient, polish=0, **kw)
+    polished = plan_setup(patient, polish=2, **kw)
+    names = list(SETUP_VARIABLES)
+    t = polished.table
+    assert len(t) == 8 + 2 * 14 and list(t["generation"][8:]) == [2] * 14 + [3] * 14
+    np.testing.assert_array_equal(t[names][:8].to_numpy(float),
+                                  plain.table[names].to_numpy(float))
+    rank = [(r["coverage"], r["min_clearance"]) for r in (plain.front.iloc[0],
+                                                          polished.front.iloc[0])]
+    assert rank[1] >= rank[0]
+    for g in (2, 3):
+        X = t[t["generation"] == g][names].to_numpy(float)
+        centre = np.median(X, axis=0)
+        assert np.all(np.count_nonzero(X != centre, axis=1) <= 1)
+    with pytest.raises(InvalidInputError, match="polish"):
+        plan_setup(patient, polish=-1, **kw)
 
 
 def test_the_setup_commands(tmp_path, capsys):

@@ -44,6 +44,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                     help="design TOML file (default: the reference design)")
     pl.add_argument("--population", type=int, default=16, help="NSGA-II population (16)")
     pl.add_argument("--generations", type=int, default=8, help="NSGA-II generations (8)")
+    pl.add_argument("--polish", type=int, default=3,
+                    help="rounds of compass search after NSGA-II, 14 set-ups each (3)")
     pl.add_argument("--seed", type=int, default=0, help="seed of samples and search")
     pl.add_argument("--scheduler", default=None, metavar="ADDRESS",
                     help="Dask scheduler: tcp://host:port, or threads|processes|synchronous "
@@ -100,7 +102,8 @@ def run_plan(args: argparse.Namespace) -> int:
     opts = SetupOptions.from_toml(args.options) if args.options else SetupOptions()
     t0 = os.times().elapsed
     plan = plan_setup(patient, design=design, population=args.population,
-                      generations=args.generations, seed=args.seed, scheduler=args.scheduler,
+                      generations=args.generations, polish=args.polish, seed=args.seed,
+                      scheduler=args.scheduler,
                       options=opts, progress=not args.json)
     path = plan.write(args.out, patient=str(args.patient))
     if args.json:

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from .._output import write_text_atomic
-from .._validation import check_instance, check_path
+from .._validation import check_count, check_instance, check_path
 from ..design import Design
 from ..errors import InvalidInputError
 from ._metrics import design_from_row, row_from_design
@@ -25,10 +25,10 @@ _FORMAT = "athenakin-setup-cohort-1"
 
 
 def _fingerprint(patient: Patient, design_row: dict[str, Any], population: int,
-                 generations: int, seed: int, opts: SetupOptions) -> str:
+                 generations: int, polish: int, seed: int, opts: SetupOptions) -> str:
     h = hashlib.sha256()
     h.update(json.dumps({"format": _FORMAT, "design": design_row, "population": population,
-                         "generations": generations, "seed": seed,
+                         "generations": generations, "polish": polish, "seed": seed,
                          "options": opts.to_mapping()}, sort_keys=True, default=str).encode())
     for m in patient.meshes:
         h.update(m.name.encode() + m.role.encode())
@@ -40,14 +40,15 @@ def _fingerprint(patient: Patient, design_row: dict[str, Any], population: int,
 
 
 def _cohort_chunk(items: list[tuple[str, Patient]], start: int, design_row: dict[str, Any],
-                  population: int, generations: int, seed: int, opts: SetupOptions,
-                  out: str | None) -> list[dict[str, Any]]:
+                  population: int, generations: int, polish: int, seed: int,
+                  opts: SetupOptions, out: str | None) -> list[dict[str, Any]]:
     """Plan each patient of a chunk (runs on a worker); one row per patient."""
     design = design_from_row(design_row)
     rows = []
     for j, (key, patient) in enumerate(items):
         plan = plan_setup(patient, design=design, population=population,
-                          generations=generations, seed=seed + start + j, options=opts,
+                          generations=generations, polish=polish, seed=seed + start + j,
+                          options=opts,
                           scheduler="synchronous")
         row: dict[str, Any] = {"patient": key, **plan.figures,
                                **dict(zip(SETUP_VARIABLES, plan.chosen.decision.tolist(),
@@ -56,8 +57,8 @@ def _cohort_chunk(items: list[tuple[str, Patient]], start: int, design_row: dict
         if out is not None:
             folder = Path(out)
             row["setup_file"] = str(plan.write(folder / f"{key}.toml", patient=key))
-            fp = _fingerprint(patient, design_row, population, generations, seed + start + j,
-                              opts)
+            fp = _fingerprint(patient, design_row, population, generations, polish,
+                              seed + start + j, opts)
             write_text_atomic(folder / f"{key}.json",
                               json.dumps({"fingerprint": fp, "row": row}, default=float))
         rows.append(row)
@@ -65,7 +66,7 @@ def _cohort_chunk(items: list[tuple[str, Patient]], start: int, design_row: dict
 
 
 def plan_cohort(patients: Mapping[str, Patient], *, design: Design | None = None,
-                population: int = 16, generations: int = 8, seed: int = 0,
+                population: int = 16, generations: int = 8, polish: int = 3, seed: int = 0,
                 scheduler: Any = None, out: str | Path | None = None,
                 options: SetupOptions | None = None) -> Any:
     """Plan a set-up for every patient of a cohort, one scheduler task per patient.
@@ -81,7 +82,7 @@ def plan_cohort(patients: Mapping[str, Patient], *, design: Design | None = None
     patients : mapping of str -> Patient
         Names (file stems: letters, digits, ``-``, ``_``, ``.``) and patients.
     design : Design, optional, keyword-only
-    population, generations, seed : int, keyword-only
+    population, generations, polish, seed : int, keyword-only
         As for :func:`plan_setup`.
     scheduler : None, str, distributed.Client or concurrent.futures.Executor, keyword-only
         As for :func:`~athenakin.synthesis.evaluate` (default Dask's local threads; a
@@ -118,6 +119,7 @@ def plan_cohort(patients: Mapping[str, Patient], *, design: Design | None = None
         check_instance(p, f"patients[{k!r}]", Patient)
     design, opts, population, generations, seed = search_arguments(
         design, options, population, generations, seed)
+    polish = check_count(polish, "polish", minimum=0, maximum=1000)
     drow = row_from_design(design)
     items = list(patients.items())
     folder = None if out is None else check_path(out, "out")
@@ -129,7 +131,7 @@ def plan_cohort(patients: Mapping[str, Patient], *, design: Design | None = None
             if f.exists():
                 rec = json.loads(f.read_text())
                 if rec.get("fingerprint") == _fingerprint(p, drow, population, generations,
-                                                          seed + i, opts):
+                                                          polish, seed + i, opts):
                     done[i] = [rec["row"]]
     todo = [i for i in range(len(items)) if i not in done]
     chunks: list[list[Any]] = [[it] for it in items]
@@ -137,7 +139,7 @@ def plan_cohort(patients: Mapping[str, Patient], *, design: Design | None = None
     try:
         if todo:
             _run_chunks(kind, handle, chunks, todo, 1,
-                        (drow, population, generations, seed, opts,
+                        (drow, population, generations, polish, seed, opts,
                          None if folder is None else str(folder)),
                         lambda i, rows: done.__setitem__(i, rows), 0, fn=_cohort_chunk)
     finally:

@@ -112,7 +112,7 @@ SETUP_OBJECTIVES: dict[str, str] = {"coverage": "max", "min_clearance": "max",
 
 def plan_setup(patient: Patient, *, design: Design | None = None,
                bounds: Mapping[str, tuple[float, float]] | None = None,
-               population: int = 16, generations: int = 8, seed: int = 0,
+               population: int = 16, generations: int = 8, polish: int = 3, seed: int = 0,
                scheduler: Any = None, options: SetupOptions | None = None,
                progress: bool = False) -> SetupPlan:
     """Plan the port and the robot's base for a patient: NSGA-II over the set-up, on Dask.
@@ -122,6 +122,10 @@ def plan_setup(patient: Patient, *, design: Design | None = None,
     least clearance and the least singularity margin (:data:`SETUP_OBJECTIVES`); a set-up
     that covers nothing is infeasible. The first generation holds up to eight reference
     guesses (:func:`reference_decision` at four yaws and two rolls, clipped to the bounds).
+    Then ``polish`` rounds of a compass search from the best set-up found (by coverage,
+    then least clearance): each round evaluates, as one batch on the scheduler, the
+    ``2 x 7`` set-ups one step away along each variable (first steps an eighth of each
+    bound's width), moves to the best that ranks higher, or halves the steps.
 
     Parameters
     ----------
@@ -132,6 +136,8 @@ def plan_setup(patient: Patient, *, design: Design | None = None,
         For every name of :data:`SETUP_VARIABLES` (default :func:`default_setup_bounds`).
     population, generations : int, keyword-only
         NSGA-II population size and number of generations.
+    polish : int, keyword-only
+        Rounds of the compass search after NSGA-II (0: none); each costs 14 set-ups.
     seed : int, keyword-only
         Seeds the target samples and NSGA-II.
     scheduler : None, str, distributed.Client or concurrent.futures.Executor, keyword-only
@@ -161,6 +167,7 @@ def plan_setup(patient: Patient, *, design: Design | None = None,
     check_instance(patient, "patient", Patient)
     design, opts, population, generations, seed = search_arguments(
         design, options, population, generations, seed)
+    polish = check_count(polish, "polish", minimum=0, maximum=1000)
     b = _check_setup_bounds(default_setup_bounds(patient, design) if bounds is None
                             else bounds)
     lo = np.array([b[k][0] for k in SETUP_VARIABLES])
@@ -212,8 +219,12 @@ def plan_setup(patient: Patient, *, design: Design | None = None,
             out["G"] = np.where(ok, -1.0, 1.0)[:, None]
 
     try:
-        minimize(_Problem(), NSGA2(pop_size=int(population)), ("n_gen", int(generations)),
+        problem = _Problem()
+        minimize(problem, NSGA2(pop_size=int(population)), ("n_gen", int(generations)),
                  seed=int(seed), verbose=False)
+        if polish:
+            _compass(run, pd.concat(tables, ignore_index=True), lo, hi, polish,
+                     problem.generation)
     finally:
         if owned:
             handle.close()
@@ -232,6 +243,41 @@ def plan_setup(patient: Patient, *, design: Design | None = None,
                              samples=opts.final_samples, seed=seed + 1)
     return SetupPlan(table=table, front=front, chosen=chosen, figures=figures, design=design,
                      objectives=obj, options=opts)
+
+
+#: First step of the compass search, as a fraction of each bound's width.
+COMPASS_STEP = 1.0 / 8.0
+
+
+def _rank_key(row: Any) -> tuple[float, float]:
+    """The front's ranking of a set-up row: coverage, then least clearance (NaN: last)."""
+    cov, clr = float(row["coverage"]), float(row["min_clearance"])
+    return (cov if cov == cov else -math.inf, clr if clr == clr else -math.inf)
+
+
+def _compass(run: Any, table: Any, lo: FloatArray, hi: FloatArray, rounds: int,
+             generation: int) -> None:
+    """Run ``rounds`` rounds of a compass search from the best row of ``table``.
+
+    See :func:`plan_setup`; ``run(X, generation)`` evaluates a batch and keeps its rows.
+    """
+    names = list(SETUP_VARIABLES)
+    keys = [_rank_key(r) for _, r in table.iterrows()]
+    i = max(range(len(keys)), key=keys.__getitem__)
+    x, key = table.iloc[i][names].to_numpy(dtype=float), keys[i]
+    step = (hi - lo) * COMPASS_STEP
+    for r in range(rounds):
+        X = np.repeat(x[None], 2 * len(names), axis=0)
+        for j in range(len(names)):
+            X[2 * j, j] += step[j]
+            X[2 * j + 1, j] -= step[j]
+        df = run(np.clip(X, lo, hi), generation + r)
+        trial = [_rank_key(row) for _, row in df.iterrows()]
+        k = max(range(len(trial)), key=trial.__getitem__)
+        if trial[k] > key:
+            x, key = df.iloc[k][names].to_numpy(dtype=float), trial[k]
+        else:
+            step = step / 2.0
 
 
 def search_arguments(design: Design | None, options: SetupOptions | None, population: int,
