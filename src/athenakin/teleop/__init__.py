@@ -18,7 +18,8 @@ rotation; tips in E (m) unless a name says ``_b`` (base frame); actuators in m, 
 m/s^2, N. docs/teleop.md has the measurements.
 """
 
-from ._arm import OPERATING_STATES, ArmBackend, JointState, MujocoBackend, ServoGains, SimulatedArm
+from ._arm import OPERATING_STATES, JointState, SimulatedArm
+from ._arm_backend import ArmBackend, MujocoBackend
 from ._core import Teleop, TeleopCommand
 from ._filter import (
     TREMOR_FILTERS,
@@ -28,6 +29,7 @@ from ._filter import (
     filter_response,
 )
 from ._options import TeleopOptions, TeleopStatus
+from ._servo import ServoGains
 from ._session import (
     CLUTCH_TYPE,
     CRTK_TOPICS,
