@@ -28,21 +28,11 @@ from ._filter import (
     TremorFilter,
     filter_response,
 )
+from ._master_recording import CLUTCH_TYPE, MAX_GAP_S, POSE_TYPE, MasterRecording, read_master
 from ._options import TeleopOptions, TeleopStatus
 from ._servo import ServoGains
-from ._session import (
-    CLUTCH_TYPE,
-    CRTK_TOPICS,
-    MAX_GAP_S,
-    POSE_TYPE,
-    TELEOP_STATUS_MSGDEF,
-    TELEOP_STATUS_TYPE,
-    MasterRecording,
-    SessionLog,
-    read_master,
-    run_session,
-    write_session_mcap,
-)
+from ._session import SessionLog, run_session
+from ._session_mcap import CRTK_TOPICS, TELEOP_STATUS_MSGDEF, TELEOP_STATUS_TYPE, write_session_mcap
 
 __all__ = [
     "CLUTCH_TYPE",
