@@ -19,12 +19,10 @@ pytest.importorskip("mujoco")
 from athenakin.dynamics import MassModel  # noqa: E402
 from athenakin.dynamics._model import MASS_BODIES  # noqa: E402
 from athenakin.teleop import ServoGains, SimulatedArm  # noqa: E402
-from athenakin.teleop._arm import (  # noqa: E402
-    CLOSURE_TOL,
-    MAX_FORCE,
-    MAX_STEPS,
-    READING_MARGIN,
-)
+from athenakin.teleop._arm import MAX_STEPS  # noqa: E402
+from athenakin.teleop._arm_backend import CLOSURE_TOL  # noqa: E402
+from athenakin.teleop._arm_checks import READING_MARGIN  # noqa: E402
+from athenakin.teleop._servo import MAX_FORCE  # noqa: E402
 
 D = ak.Design.default()
 T = ak.default_rcm_frame(D)
@@ -344,6 +342,18 @@ def test_the_model_form():
     assert arm.masses is robot.masses and arm.design is robot.design
     with pytest.raises(TypeError, match="design"):
         SimulatedArm(robot, D, q0=Q0)
+
+
+def test_masses_beside_a_robot_follow_resolve_robot():
+    """One policy with Teleop, Tracker and plan: masses beside a Robot fill a gap only."""
+    own = ak.Robot.default(masses=MassModel.reference(D))
+    other = MassModel.slender_rods(_RODS, D)
+    with pytest.raises(TypeError, match="^masses: the Robot has its own masses"):
+        SimulatedArm(own, masses=other, q0=Q0, backend=_Driver(Q0))
+    arm = SimulatedArm(ak.Robot.default(), masses=other, q0=Q0, backend=_Driver(Q0))
+    assert arm.masses is other
+    assert SimulatedArm(ak.Robot.default(), q0=Q0, backend=_Driver(Q0)).masses == \
+        MassModel.reference(D)
 
 
 def test_one_feed_forward_path():

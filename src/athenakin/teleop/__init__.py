@@ -18,7 +18,8 @@ rotation; tips in E (m) unless a name says ``_b`` (base frame); actuators in m, 
 m/s^2, N. docs/teleop.md has the measurements.
 """
 
-from ._arm import OPERATING_STATES, ArmBackend, JointState, MujocoBackend, ServoGains, SimulatedArm
+from ._arm import OPERATING_STATES, JointState, SimulatedArm
+from ._arm_backend import ArmBackend, MujocoBackend
 from ._core import Teleop, TeleopCommand
 from ._filter import (
     TREMOR_FILTERS,
@@ -27,20 +28,11 @@ from ._filter import (
     TremorFilter,
     filter_response,
 )
+from ._master_recording import CLUTCH_TYPE, MAX_GAP_S, POSE_TYPE, MasterRecording, read_master
 from ._options import TeleopOptions, TeleopStatus
-from ._session import (
-    CLUTCH_TYPE,
-    CRTK_TOPICS,
-    MAX_GAP_S,
-    POSE_TYPE,
-    TELEOP_STATUS_MSGDEF,
-    TELEOP_STATUS_TYPE,
-    MasterRecording,
-    SessionLog,
-    read_master,
-    run_session,
-    write_session_mcap,
-)
+from ._servo import ServoGains
+from ._session import SessionLog, run_session
+from ._session_mcap import CRTK_TOPICS, TELEOP_STATUS_MSGDEF, TELEOP_STATUS_TYPE, write_session_mcap
 
 __all__ = [
     "CLUTCH_TYPE",

@@ -1,0 +1,192 @@
+"""What the arm refuses: command vectors, positions, tips, and encoder readings (private).
+
+The checks of :class:`~athenakin.teleop.SimulatedArm`, as functions of the values and the
+model. A command check returns the reason a value is refused (a string naming it), or
+None; the arm decides whether that reason is held and flagged (a servo command) or
+raised (a planned move). A reading check returns the reason the arm faults. An argument
+of the wrong shape is a programming error and raises :class:`InvalidInputError`.
+
+Units: m, m/s; tips in the base frame or the RCM frame E.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .._typing import FloatArray
+from .._validation import check_array, check_choice
+from ..design import Design
+from ..errors import InvalidInputError, Reason
+
+__all__ = ["vector3", "position_refusal", "command_refusal", "q_from_tip", "read_encoders",
+           "READING_MARGIN", "READING_SPEED_MAX"]
+
+#: How far beyond the strokes an encoder reading may lie before the arm faults, m.
+READING_MARGIN = 0.005
+#: Fastest actuator speed a reading may report before the arm faults, m/s.
+READING_SPEED_MAX = 10.0
+
+
+def vector3(x: ArrayLike, name: str, *, allow_nonfinite: bool = False) -> FloatArray:
+    """``x`` as a float array of shape (3,) exactly (no batch); a named error otherwise.
+
+    Parameters
+    ----------
+    x : array-like, shape (3,)
+    name : str
+        Its name in the error.
+    allow_nonfinite : bool, keyword-only
+        Keep NaN / inf (a value a command check refuses) instead of raising.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        A copy, float64.
+
+    Raises
+    ------
+    InvalidInputError, TypeError
+        Not a real array of shape (3,); NaN or inf unless allowed.
+    """
+    a = check_array(x, name, (3,), allow_nonfinite=allow_nonfinite)
+    if a.shape != (3,):
+        raise InvalidInputError(f"{name}: expected shape (3,), got {a.shape}")
+    return np.array(a, dtype=float)
+
+
+def position_refusal(q: FloatArray, design: Design, name: str) -> str | None:
+    """Why ``q`` is no position to command (not finite, strokes, order), or None.
+
+    Parameters
+    ----------
+    q : ndarray, shape (3,)
+        Actuator positions, m.
+    design : Design
+    name : str
+        Its name in the reason.
+
+    Returns
+    -------
+    str or None
+    """
+    from ..parallel._module import _actuator_checks
+
+    code = int(_actuator_checks(q, design))
+    if code == Reason.NONFINITE_INPUT:
+        return f"{name}: expected finite values, got {q.tolist()}"
+    if code == Reason.STROKE_LIMIT:
+        return f"{name}: {q.tolist()} m is outside the stroke limits"
+    if code == Reason.AB_ORDER:
+        return (f"{name}: {q.tolist()} m has the carriages in the wrong order (the "
+                f"design's ab_order is {design.ab_order})")
+    return None
+
+
+def command_refusal(q: FloatArray, velocity: FloatArray, design: Design, *,
+                    velocity_name: str) -> str | None:
+    """Why a command's position and velocity are refused, or None.
+
+    Parameters
+    ----------
+    q : ndarray, shape (3,)
+        Positions, m (named ``q``): :func:`position_refusal`.
+    velocity : ndarray, shape (3,)
+        m/s: finite.
+    design : Design
+    velocity_name : str, keyword-only
+        The velocity's name in the reason.
+
+    Returns
+    -------
+    str or None
+    """
+    why = position_refusal(q, design, "q")
+    if why is None and not np.all(np.isfinite(velocity)):
+        why = f"{velocity_name}: expected finite values, got {velocity.tolist()}"
+    return why
+
+
+def q_from_tip(tip: ArrayLike, frame: str, T_b_e: FloatArray,
+               design: Design) -> tuple[FloatArray, str | None]:
+    """The actuator positions of a tool-tip position (exact IK), or why it is out of reach.
+
+    Parameters
+    ----------
+    tip : array-like, shape (3,) or (4, 4)
+        Tip position (m), or a pose whose translation is taken, in ``frame``.
+    frame : {"base", "rcm"}
+    T_b_e : ndarray, shape (4, 4)
+    design : Design
+
+    Returns
+    -------
+    q : ndarray, shape (3,)
+        m (zeros when out of reach).
+    reason : str or None
+        Why the tip is out of reach (the IK's reason), or None.
+
+    Raises
+    ------
+    InvalidInputError, ValueError
+        A tip of the wrong shape; a ``frame`` not in the list.
+    """
+    from .. import q_from_tool_tip
+
+    check_choice(frame, "frame", ("base", "rcm"))
+    x = np.asarray(tip, dtype=float)
+    if x.shape == (4, 4):
+        x = x[:3, 3]
+    x = check_array(x, "tip", (3,), allow_nonfinite=True)
+    if x.shape != (3,):
+        raise InvalidInputError(f"tip: expected shape (3,) or (4, 4), got {x.shape}")
+    if frame == "base":
+        R, c = T_b_e[:3, :3], T_b_e[:3, 3]
+        x = R.T @ (x - c)
+    q, res = q_from_tool_tip(T_b_e, x, design, errors="flag")
+    if not bool(np.all(res.valid)):
+        return np.zeros(3), (f"tip: {x.tolist()} m (frame E) is out of reach "
+                             f"({Reason(int(res.reason)).name})")
+    return np.asarray(q, dtype=float), None
+
+
+def read_encoders(backend: Any, lo: FloatArray, hi: FloatArray
+                  ) -> tuple[tuple[FloatArray, FloatArray] | None, str | None]:
+    """Read a backend's encoders and check the reading.
+
+    Parameters
+    ----------
+    backend : ArmBackend
+        Its ``read_encoders()`` is called once.
+    lo, hi : ndarray, shape (3,)
+        The strokes, m.
+
+    Returns
+    -------
+    reading : tuple of two ndarray, shape (3,), or None
+        Positions (m) and velocities (m/s), copies; None when the reading is not sound.
+    reason : str or None
+        Why it is not: unreadable, of the wrong shape, not finite, beyond the strokes by
+        more than :data:`READING_MARGIN`, faster than :data:`READING_SPEED_MAX`.
+    """
+    try:
+        reading = backend.read_encoders()
+        q, qd = reading
+        q = np.asarray(q, dtype=float)
+        qd = np.asarray(qd, dtype=float)
+    except (TypeError, ValueError) as exc:
+        return None, (f"encoders: expected (positions, velocities), got an unreadable value "
+                      f"({exc})")
+    if q.shape != (3,) or qd.shape != (3,):
+        return None, (f"encoders: expected positions and velocities of shape (3,), got "
+                      f"{q.shape} and {qd.shape}")
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
+        return None, f"encoders: non-finite reading {q.tolist()} m, {qd.tolist()} m/s"
+    if np.any(q < lo - READING_MARGIN) or np.any(q > hi + READING_MARGIN):
+        return None, (f"encoders: {q.tolist()} m beyond the strokes by more than "
+                      f"{READING_MARGIN:g} m")
+    if np.any(np.abs(qd) > READING_SPEED_MAX):
+        return None, f"encoders: speed {qd.tolist()} m/s above {READING_SPEED_MAX:g} m/s"
+    return (q.copy(), qd.copy()), None
