@@ -3,13 +3,17 @@
 Run from the repository root (the machine's load is printed beside every figure)::
 
     python benchmarks/bench_setup.py [--population 16] [--generations 8] [--polish 3] [--seed 0]
+    python benchmarks/bench_setup.py --compare-polish [0.85 0.9833 1.0167 1.15]
 
 The target (docs/setup.md): a set-up covering >= 95 % of the pancreas with every margin
 >= 5 mm (singularity length conditions, clearance of the bodies) and 0 colliding
 configurations, found within 120 s on a 2-core machine. Printed: the time of the whole
 search, the time at which the first generation holding such a set-up was done, and the
 baseline of the same run, one evaluation of the reference guess on the same samples
-(the ratio: how many evaluations the search cost).
+(the ratio: how many evaluations the search cost). ``--compare-polish``: phantoms of the
+given sizes planned with ``polish=0`` and with ``--polish``, each seeded as the cohort of
+``scripts/setup_figures.py --cohort 10`` seeds its phantom of that size; the chosen
+set-ups' figures side by side.
 """
 
 from __future__ import annotations
@@ -42,7 +46,11 @@ def main() -> None:
     ap.add_argument("--generations", type=int, default=8)
     ap.add_argument("--polish", type=int, default=3)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--compare-polish", type=float, nargs="*", default=None, metavar="SIZE")
     args = ap.parse_args()
+    if args.compare_polish is not None:
+        compare_polish(args.compare_polish or [0.85, 0.98333, 1.01667, 1.15], args)
+        return
     patient, design, opts = phantom(), Design.default(), SetupOptions()
     guess = setup_from_decision(patient, reference_decision(patient, design,
                                                             yaw=np.radians(270), roll=0.4))
@@ -76,6 +84,24 @@ def main() -> None:
           f"least margin {1000 * f['margin_min']:.1f} mm, collisions {int(f['collisions'])}: "
           f"{'meets' if ok else 'misses'} the target; within 120 s: {total <= 120.0} "
           f"({_load()})")
+
+
+def compare_polish(sizes: list[float], args: argparse.Namespace) -> None:
+    """Each phantom size planned without and with the compass polish."""
+    cohort = np.linspace(0.85, 1.15, 10)                 # the docs' cohort and its seeds
+    for size in sizes:
+        seed = int(np.argmin(np.abs(cohort - size)))
+        p = phantom(size=size)
+        for polish in (0, args.polish):
+            t0 = time.perf_counter()
+            plan = plan_setup(p, population=args.population, generations=args.generations,
+                              polish=polish, seed=seed, scheduler="synchronous")
+            f = plan.figures
+            print(f"size {size:.3f} (seed {seed}) polish {polish}: coverage "
+                  f"{100 * f['coverage']:.1f} %, least clearance "
+                  f"{1000 * f['min_clearance']:.1f} mm, least margin "
+                  f"{1000 * f['margin_min']:.1f} mm, {len(plan.table)} set-ups, "
+                  f"{time.perf_counter() - t0:.0f} s ({_load()})", flush=True)
 
 
 if __name__ == "__main__":
