@@ -470,22 +470,27 @@ def _bar(total: int, initial: int, show: bool) -> Any:
 def _run_local(name: str, chunks: Sequence[list[dict[str, Any]]], todo: list[int], size: int,
                args: tuple[Any, ...], finished: Callable[[int, Any], None],
                fn: Callable[..., Any] = _chunk_frame) -> None:
-    """Dask's local scheduler; each chunk is handed over (and written) as it finishes."""
+    """Dask's local scheduler; each chunk is handed over (and written) as it finishes.
+
+    The hand-over is a callback given to this compute alone (the local scheduler's
+    ``callbacks`` tuple ``(start, start_state, pretask, posttask, finish)``), never a
+    global ``dask.callbacks.Callback``: the global set is taken by whichever compute
+    starts first, so two studies planned at once in two threads (a cohort's patients on
+    Dask's threads) would lose each other's hand-overs.
+    """
     import dask
-    from dask.callbacks import Callback
 
     tasks = {}
     for i in todo:
         d = dask.delayed(fn, pure=True)(chunks[i], i * size, *args)
         tasks[d.key] = (i, d)
 
-    class _Done(Callback):  # type: ignore[misc]
-        def _posttask(self, key: Any, result: Any, dsk: Any, state: Any, worker: Any) -> None:
-            if key in tasks:
-                finished(tasks[key][0], result)
+    def posttask(key: Any, result: Any, dsk: Any, state: Any, worker: Any) -> None:
+        if key in tasks:
+            finished(tasks[key][0], result)
 
-    with _Done():
-        dask.compute(*[d for _, d in tasks.values()], scheduler=name)
+    dask.compute(*[d for _, d in tasks.values()], scheduler=name,
+                 callbacks=[(None, None, None, posttask, None)])
 
 
 def _run_executor(executor: concurrent.futures.Executor, chunks: Sequence[list[dict[str, Any]]],
