@@ -49,8 +49,9 @@ def load_geometry(path: Path, name: str, *, force_mesh: bool = True) -> Any:
     if not path.is_file():
         raise InvalidInputError(f"{name}: mesh file {str(path)!r} does not exist")
     try:
-        return trimesh.load(str(path), process=False, **({"force": "mesh"} if force_mesh
-                                                         else {}))
+        if force_mesh:
+            return trimesh.load(str(path), process=False, force="mesh")
+        return trimesh.load(str(path), process=False)
     except Exception as exc:  # trimesh raises many kinds on a bad file
         raise InvalidInputError(f"{name}: mesh file {str(path)!r} does not load "
                                 f"({type(exc).__name__}: {exc})") from None

@@ -173,8 +173,10 @@ class SimulatedArm:
         if not isinstance(feedforward, bool):
             raise TypeError(f"feedforward: expected a bool, got {type(feedforward).__name__}")
         self.feedforward = feedforward
-        self.limits = tuple(check_scalar(x, n, positive=True)
-                            for x, n in ((v_max, "v_max"), (a_max, "a_max"), (j_max, "j_max")))
+        self.limits: tuple[float, float, float] = (
+            check_scalar(v_max, "v_max", positive=True),
+            check_scalar(a_max, "a_max", positive=True),
+            check_scalar(j_max, "j_max", positive=True))
         self.max_force = check_scalar(max_force, "max_force", positive=True)
         self.slot = check_slot(slot)
         self._lo = np.asarray(design.stroke_min, dtype=float)
