@@ -391,8 +391,9 @@ def workspace_into(solids, radii, ij, hb, hp, hn, proxy, below, dist, wit, exact
     segments evaluated are copied to ``at``.
 
     Returns the column of the least distance (-1 with none; NaN distances are never
-    least) and whether a box or mesh column (``proxy``: their bounding spheres) evaluated
-    here is below ``below`` (its exact distance is then wanted).
+    least), whether a box or mesh column (``proxy``: their bounding spheres) evaluated
+    here is below ``below`` (its exact distance is then wanted), and the least distance
+    (``inf`` with none).
     """
     nb = at.shape[0]
     seg = solids[0]
@@ -438,7 +439,7 @@ def workspace_into(solids, radii, ij, hb, hp, hn, proxy, below, dist, wit, exact
         for e in range(2):
             for j in range(3):
                 at[i, e, j] = seg[i, e, j]
-    return k, need
+    return k, need, best
 
 
 @njit(inline="always", **_OPTS)

@@ -159,7 +159,6 @@ class ClearanceWorkspace:
         self._seg = self._solids[0, :nb]
         self._radii = np.array(rad, dtype=np.float64)
         self._ij = np.array(ij, dtype=np.intp).reshape(-1, 2)
-        self._buffers()
         self._hb = np.array([h[0] for h in half], dtype=np.intp)
         self._hp = np.array([h[1] for h in half], dtype=np.float64).reshape(-1, 3)
         self._hn = np.array([h[2] for h in half], dtype=np.float64).reshape(-1, 3)
@@ -177,6 +176,7 @@ class ClearanceWorkspace:
             from ._kernels import workspace_into
 
             self._kernel = workspace_into
+        self._buffers()
 
     def _buffers(self) -> None:
         """Make the buffers of one workspace (its twins share the tables, not these)."""
@@ -187,6 +187,9 @@ class ClearanceWorkspace:
         self._at = np.full((nb, 2, 3), math.nan)   # the segments of the last evaluation
         self._move = np.zeros(nb)
         self._evaluated = False
+        self._since: ClearanceWorkspace | None = None
+        self._args = self._kernel_args(None)
+        self._args_since = self._args
 
     def twin(self) -> ClearanceWorkspace:
         """A workspace of the same tables with its own buffers (a ``since`` for this one).
@@ -240,27 +243,36 @@ class ClearanceWorkspace:
         """
         if segments is not None:
             self._seg[...] = segments
+        if since is not None and since is not self._since:
+            if since._ij is not self._ij or since is self:
+                raise ValueError("since: expected a twin of this workspace (ClearanceWorkspace."
+                                 "twin()) holding an earlier evaluation")
+            self._since = since
+            self._args_since = self._kernel_args(since)
         carry = since is not None and since._evaluated
-        if since is not None and (since._ij is not self._ij or since is self):
-            raise ValueError("since: expected a twin of this workspace (ClearanceWorkspace."
-                             "twin()) holding an earlier evaluation")
-        ref = since if carry else self
         dist = self.distances
         if self._kernel is not None:
-            k, need = self._kernel(self._solids, self._radii, self._ij, self._hb, self._hp,
-                                   self._hn, self._coal_cols, self.exact_below, dist,
-                                   self.witness_points, self.exact, self._at, ref._at,
-                                   ref.distances, self._move, carry)
+            # the kernel's arguments built once per ``since`` (each call checks them all)
+            k, need, d = self._kernel(*(self._args_since if carry else self._args))
             if need:
                 self._narrow_phase()
                 k = _argmin(dist)
+                d = float(dist[k]) if k >= 0 else d
         else:
             self._evaluate_numpy(since if carry else None)
             k = _argmin(dist)
+            d = float(dist[k]) if k >= 0 else math.inf
         self._evaluated = True
         if k < 0:
             return (math.nan if len(dist) and np.isnan(dist).any() else math.inf), -1
-        return float(dist[k]), k
+        return d, k
+
+    def _kernel_args(self, since: ClearanceWorkspace | None) -> tuple:
+        """The compiled kernel's arguments: bounds carried from ``since``, or none."""
+        ref = self if since is None else since
+        return (self._solids, self._radii, self._ij, self._hb, self._hp, self._hn,
+                self._coal_cols, self.exact_below, self.distances, self.witness_points,
+                self.exact, self._at, ref._at, ref.distances, self._move, since is not None)
 
     def _evaluate_numpy(self, since: ClearanceWorkspace | None) -> None:
         """The numpy reference of the compiled :meth:`evaluate` (the same columns)."""

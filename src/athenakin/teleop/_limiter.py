@@ -32,7 +32,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import Reason
-from ._guard import EXACT_BAND_M
 from ._mapping import SLIDE_BAND_M
 from ._options import (
     _ACCELERATION,
@@ -229,10 +228,14 @@ class _Limiter:
             return pose, 0, s
         room = CLEARANCE_GAIN * self._stopping(qn)
         floor = self._clear_floor + room
-        # the first-order limit (it places the pose's segments); far above the floor no
-        # pair can bind within a cycle's travel, and the exact check below decides anyway
-        lam = guard.fraction(pose, floor, CLEARANCE_SLACK_M,
-                             far=guard.clearance > floor + EXACT_BAND_M)
+        # the first-order limit (it places the pose's segments) reads only the pairs within
+        # the step's reach of the floor (twice a body point's largest travel: at most
+        # CLEARANCE_GAIN times the joints'); with none there it is 1, not computed, and the
+        # exact check below decides anyway
+        q0 = self._q
+        dq = max(abs(x - q0[0]), abs(y - q0[1]), abs(z - q0[2]))
+        lam = guard.fraction(pose, floor, CLEARANCE_SLACK_M, far=guard.clearance > floor
+                             + CLEARANCE_SLACK_M + 2.0 * CLEARANCE_GAIN * dq)
         if lam < 1.0:
             return None, _CLEARANCE, s * lam * SHORTEN
         if guard.evaluations >= STEP_EVALUATIONS:
