@@ -3,7 +3,7 @@
 Run from the repository root (each prints the machine's load beside its numbers)::
 
     python benchmarks/bench_teleop.py latency [--cycles 1000000]
-    python benchmarks/bench_teleop.py guard [--cycles 100000]
+    python benchmarks/bench_teleop.py guard [--cycles 100000] [--block 1000]
     python benchmarks/bench_teleop.py hostile [--cycles 1000000] [--seed 0] [--clearance]
         [--oracle]
     python benchmarks/bench_teleop.py session [--seconds 20] [--figure FILE.png]
@@ -178,11 +178,15 @@ def _guard_cases() -> dict[str, tuple[Teleop, object]]:
     return cases
 
 
-def guard(cycles: int, block: int = 10_000) -> None:
-    """The guard's cost, each case beside the plain chain (see the module docstring)."""
+def guard(cycles: int, block: int = 1000) -> None:
+    """The guard's cost, each case beside the plain chain (see the module docstring).
+
+    ``block``: cycles of one case before the next case's (about 50 ms: the machine's load
+    changes over seconds, so short blocks spread it over every case alike).
+    """
     from athenakin.teleop._limiter import CLEARANCE_EVALUATIONS
 
-    print(f"guard over {cycles} cycles per case ({_load()} at the start)")
+    print(f"guard over {cycles} cycles per case, blocks of {block} ({_load()} at the start)")
     clock = time.perf_counter
     warm = _guard_cases()
     for tele, src in warm.values():                   # compile, caches
@@ -404,6 +408,7 @@ def main() -> None:
     a.add_argument("--cycles", type=int, default=1_000_000)
     g = sub.add_parser("guard")
     g.add_argument("--cycles", type=int, default=100_000)
+    g.add_argument("--block", type=int, default=1000, help="cycles per case in each round")
     b = sub.add_parser("hostile")
     b.add_argument("--cycles", type=int, default=1_000_000)
     b.add_argument("--seed", type=int, default=0)
@@ -419,7 +424,7 @@ def main() -> None:
     if args.what == "latency":
         latency(args.cycles)
     elif args.what == "guard":
-        guard(args.cycles)
+        guard(args.cycles, args.block)
     elif args.what == "hostile":
         bad = hostile(args.cycles, args.seed, with_clearance=args.clearance,
                       oracle=args.oracle)

@@ -318,43 +318,47 @@ def capsule_pairs_into(solids, radii, ij, dist, wit):
     P = ij.shape[0]
     for m in range(n):
         for k in range(P):
-            i = ij[k, 0]
-            j = ij[k, 1]
-            p10 = solids[m, i, 0, 0]
-            p11 = solids[m, i, 0, 1]
-            p12 = solids[m, i, 0, 2]
-            q10 = solids[m, i, 1, 0]
-            q11 = solids[m, i, 1, 1]
-            q12 = solids[m, i, 1, 2]
-            p20 = solids[m, j, 0, 0]
-            p21 = solids[m, j, 0, 1]
-            p22 = solids[m, j, 0, 2]
-            q20 = solids[m, j, 1, 0]
-            q21 = solids[m, j, 1, 1]
-            q22 = solids[m, j, 1, 2]
-            d, x0, x1, x2, y0, y1, y2 = _seg_seg(p10, p11, p12, q10, q11, q12,
-                                                 p20, p21, p22, q20, q21, q22)
-            r1 = radii[i]
-            r2 = radii[j]
-            dist[m, k] = d - r1 - r2
-            if not d <= WITNESS_DIRECT:        # NaN rows too: NaN witnesses, no detour
-                # fast path, as _normal's: y - x is normal to both axes to rounding (the
-                # closest points), far above the noise; the same points as _witnesses to
-                # 1e-13 m
-                inv = 1.0 / d
-                n0 = (y0 - x0) * inv
-                n1 = (y1 - x1) * inv
-                n2 = (y2 - x2) * inv
-                wit[m, k, 0, 0] = x0 + r1 * n0
-                wit[m, k, 0, 1] = x1 + r1 * n1
-                wit[m, k, 0, 2] = x2 + r1 * n2
-                wit[m, k, 1, 0] = y0 - r2 * n0
-                wit[m, k, 1, 1] = y1 - r2 * n1
-                wit[m, k, 1, 2] = y2 - r2 * n2
-            else:
-                _witnesses(wit[m, k], p10, p11, p12, q10 - p10, q11 - p11, q12 - p12, r1,
-                           p20, p21, p22, q20 - p20, q21 - p21, q22 - p22, r2,
-                           x0, x1, x2, y0, y1, y2)
+            _capsule_pair(solids, radii, m, ij[k, 0], ij[k, 1], dist, wit, k)
+
+
+@njit(inline="always", **_OPTS)
+def _capsule_pair(solids, radii, m, i, j, dist, wit, k):
+    """Solids ``i``, ``j`` of item ``m``: distance into ``dist[m, k]``, witnesses ``wit[m, k]``."""
+    p10 = solids[m, i, 0, 0]
+    p11 = solids[m, i, 0, 1]
+    p12 = solids[m, i, 0, 2]
+    q10 = solids[m, i, 1, 0]
+    q11 = solids[m, i, 1, 1]
+    q12 = solids[m, i, 1, 2]
+    p20 = solids[m, j, 0, 0]
+    p21 = solids[m, j, 0, 1]
+    p22 = solids[m, j, 0, 2]
+    q20 = solids[m, j, 1, 0]
+    q21 = solids[m, j, 1, 1]
+    q22 = solids[m, j, 1, 2]
+    d, x0, x1, x2, y0, y1, y2 = _seg_seg(p10, p11, p12, q10, q11, q12,
+                                         p20, p21, p22, q20, q21, q22)
+    r1 = radii[i]
+    r2 = radii[j]
+    dist[m, k] = d - r1 - r2
+    if not d <= WITNESS_DIRECT:        # NaN rows too: NaN witnesses, no detour
+        # fast path, as _normal's: y - x is normal to both axes to rounding (the
+        # closest points), far above the noise; the same points as _witnesses to
+        # 1e-13 m
+        inv = 1.0 / d
+        n0 = (y0 - x0) * inv
+        n1 = (y1 - x1) * inv
+        n2 = (y2 - x2) * inv
+        wit[m, k, 0, 0] = x0 + r1 * n0
+        wit[m, k, 0, 1] = x1 + r1 * n1
+        wit[m, k, 0, 2] = x2 + r1 * n2
+        wit[m, k, 1, 0] = y0 - r2 * n0
+        wit[m, k, 1, 1] = y1 - r2 * n1
+        wit[m, k, 1, 2] = y2 - r2 * n2
+    else:
+        _witnesses(wit[m, k], p10, p11, p12, q10 - p10, q11 - p11, q12 - p12, r1,
+                   p20, p21, p22, q20 - p20, q21 - p21, q22 - p22, r2,
+                   x0, x1, x2, y0, y1, y2)
 
 
 @njit(**_OPTS)
@@ -375,19 +379,50 @@ def capsule_distances_into(solids, radii, ij, dist):
 
 # --- the per-pose workspace (athenakin.collision._workspace) ----------------------------
 @njit(**_OPTS)
-def workspace_into(solids, radii, ij, hb, hp, hn, proxy, below, dist, wit,
-                   exact):  # pragma: no cover - numba
+def workspace_into(solids, radii, ij, hb, hp, hn, proxy, below, dist, wit, exact, at,
+                   since_at, since_dist, move, carry):  # pragma: no cover - numba
     """Every column of one item of :class:`athenakin.collision._workspace.ClearanceWorkspace`.
 
-    The capsule pairs (:func:`capsule_pairs_into`), then the halfspaces.
+    The capsule pairs (:func:`_capsule_pair`), then the halfspaces (:func:`_halfspace_row`).
+    With ``carry``, a column whose carried bound ``since_dist[c] - move[i] - move[j]`` is at
+    least ``below`` keeps that bound (``exact[c]`` False, NaN witnesses) instead: ``move[i]``
+    (written here) is the largest displacement of body ``i``'s end points from ``since_at``
+    (the segments of the evaluation ``since_dist`` is of), 0 for a fixed obstacle. The body
+    segments evaluated are copied to ``at``.
 
     Returns the column of the least distance (-1 with none; NaN distances are never
-    least) and whether a box or mesh column (``proxy``: their bounding spheres) is below
-    ``below`` (its exact distance is then wanted).
+    least), whether a box or mesh column (``proxy``: their bounding spheres) evaluated
+    here is below ``below`` (its exact distance is then wanted), and the least distance
+    (``inf`` with none).
     """
-    capsule_pairs_into(solids, radii, ij, dist.reshape(1, -1)[:, :ij.shape[0]],
-                       wit.reshape(1, -1, 2, 3)[:, :ij.shape[0]])
-    _halfspace_rows(solids[0], radii, hb, hp, hn, dist, wit, ij.shape[0])
+    nb = at.shape[0]
+    seg = solids[0]
+    if carry:
+        for i in range(nb):
+            move[i] = _end_point_move(seg, since_at, i)
+    d2 = dist.reshape(1, -1)
+    w2 = wit.reshape(1, -1, 2, 3)
+    nc = ij.shape[0]
+    for c in range(nc):
+        i = ij[c, 0]
+        j = ij[c, 1]
+        if carry:
+            b = since_dist[c] - move[i] - (move[j] if j < nb else 0.0)
+            if b >= below:                   # NaN never: evaluated
+                _carried(dist, wit, exact, c, b)
+                continue
+        _capsule_pair(solids, radii, 0, i, j, d2, w2, c)
+        exact[c] = True
+    for k in range(hb.shape[0]):
+        c = nc + k
+        i = hb[k]
+        if carry:
+            b = since_dist[c] - move[i]
+            if b >= below:
+                _carried(dist, wit, exact, c, b)
+                continue
+        _halfspace_row(seg, radii, i, hp, hn, k, dist, wit, c)
+        exact[c] = True
     k = -1
     best = math.inf
     for c in range(dist.shape[0]):
@@ -396,28 +431,56 @@ def workspace_into(solids, radii, ij, hb, hp, hn, proxy, below, dist, wit,
             k = c
     need = False
     for c in proxy:
-        exact[c] = False                 # a bounding sphere's distance, until coal's
-        if dist[c] < below:
-            need = True
-    return k, need
+        if exact[c]:                     # evaluated here: a bounding sphere's distance,
+            exact[c] = False             # until coal's
+            if dist[c] < below:
+                need = True
+    for i in range(nb):
+        for e in range(2):
+            for j in range(3):
+                at[i, e, j] = seg[i, e, j]
+    return k, need, best
 
 
-@njit(**_OPTS)
-def _halfspace_rows(seg, rad, body, point, normal, dist, wit, c0):  # pragma: no cover - numba
-    """Capsule-halfspace rows ``c0..`` of ``dist`` / ``wit`` (the reference's formula)."""
-    for k in range(body.shape[0]):
-        i = body[k]
-        n0, n1, n2 = normal[k, 0], normal[k, 1], normal[k, 2]
-        hp = ((seg[i, 0, 0] - point[k, 0]) * n0 + (seg[i, 0, 1] - point[k, 1]) * n1
-              + (seg[i, 0, 2] - point[k, 2]) * n2)
-        hq = ((seg[i, 1, 0] - point[k, 0]) * n0 + (seg[i, 1, 1] - point[k, 1]) * n1
-              + (seg[i, 1, 2] - point[k, 2]) * n2)
-        e = 1 if hq < hp else 0
-        h = hq if hq < hp else hp
-        r = rad[i]
-        c = c0 + k
-        dist[c] = h - r
+@njit(inline="always", **_OPTS)
+def _end_point_move(seg, since, i):
+    """Largest displacement of body ``i``'s two end points from ``since`` (NaN stays NaN)."""
+    m = 0.0
+    for e in range(2):
+        d2 = 0.0
         for j in range(3):
-            nj = normal[k, j]
-            wit[c, 0, j] = seg[i, e, j] - r * nj
-            wit[c, 1, j] = seg[i, e, j] - h * nj
+            v = seg[i, e, j] - since[i, e, j]
+            d2 += v * v
+        if not d2 <= m:                  # the larger, or NaN
+            m = d2
+            if d2 != d2:
+                break
+    return math.sqrt(m)
+
+
+@njit(inline="always", **_OPTS)
+def _carried(dist, wit, exact, c, b):
+    """Column ``c`` keeps the lower bound ``b``: not exact, no witness points."""
+    dist[c] = b
+    exact[c] = False
+    for s in range(2):
+        for j in range(3):
+            wit[c, s, j] = math.nan
+
+
+@njit(inline="always", **_OPTS)
+def _halfspace_row(seg, rad, i, point, normal, k, dist, wit, c):  # pragma: no cover - numba
+    """Body ``i`` and halfspace ``k``: column ``c`` of ``dist`` / ``wit`` (the reference's)."""
+    n0, n1, n2 = normal[k, 0], normal[k, 1], normal[k, 2]
+    hp = ((seg[i, 0, 0] - point[k, 0]) * n0 + (seg[i, 0, 1] - point[k, 1]) * n1
+          + (seg[i, 0, 2] - point[k, 2]) * n2)
+    hq = ((seg[i, 1, 0] - point[k, 0]) * n0 + (seg[i, 1, 1] - point[k, 1]) * n1
+          + (seg[i, 1, 2] - point[k, 2]) * n2)
+    e = 1 if hq < hp else 0
+    h = hq if hq < hp else hp
+    r = rad[i]
+    dist[c] = h - r
+    for j in range(3):
+        nj = normal[k, j]
+        wit[c, 0, j] = seg[i, e, j] - r * nj
+        wit[c, 1, j] = seg[i, e, j] - h * nj

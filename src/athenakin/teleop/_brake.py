@@ -47,8 +47,11 @@ class TeleopCommand(NamedTuple):
         The tracked forward-kinematics slot of ``q``.
     clearance : float
         Least clearance of the bodies (m), exact wherever it is within
-        ``clearance_margin + clearance_buffer + EXACT_BAND_M`` (2 cm) of contact; farther
-        from a box or mesh obstacle, a lower bound (its bounding sphere). NaN when not
+        ``clearance_margin + clearance_buffer + EXACT_BAND_M`` (2 cm) of contact (the band
+        wider, ``CLEARANCE_GAIN * stopping_distance + CLEARANCE_SLACK_M``, where that is
+        more); farther, a lower bound: a box or mesh obstacle's bounding sphere, or a
+        pair's distance at an earlier exact evaluation less its two bodies' largest
+        end-point displacements since. Never above the exact clearance. NaN when not
         checked.
     """
 

@@ -46,7 +46,7 @@ from ..errors import InvalidInputError
 from ._brake import TeleopCommand, _Brake
 from ._filter import TremorFilter, check_rate
 from ._fixtures import TipFixtures
-from ._limiter import _IK, LIMIT_SLACK, _Limiter
+from ._limiter import _IK, CLEARANCE_GAIN, CLEARANCE_SLACK_M, LIMIT_SLACK, _Limiter
 from ._mapping import _Mapping, clutch_state
 from ._options import (
     _CLUTCHED,
@@ -185,9 +185,11 @@ class Teleop(_Mapping, _Limiter, _Brake):
             from ..collision import Bodies
             from ._guard import BodyGuard
 
+            # exact up to the highest floor the limiter sets (its braking room at v_max)
+            band = CLEARANCE_GAIN * self.stopping_distance + CLEARANCE_SLACK_M
             self._guard = BodyGuard(design, T, bodies if bodies is not None
                                     else Bodies.default(design), environment,
-                                    backend=self._backend, floor=self._clear_floor)
+                                    backend=self._backend, floor=self._clear_floor, band=band)
         q = self._check_q0(q0)
         self._tracker = Tracker(T, design, q0=q, slot=slot, margins=self.margins,
                                 backend=self._backend)

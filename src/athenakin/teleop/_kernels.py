@@ -17,7 +17,7 @@ __all__ = ["place_segments", "step_fraction", "fixture_nearest"]
 
 
 @njit(error_model="numpy", cache=True, nogil=True)
-def step_fraction(seg0, seg1, dist, wit, body, floor, slack, tol):  # pragma: no cover
+def step_fraction(seg0, seg1, dist, wit, exact, body, floor, slack, tol):  # pragma: no cover
     """:meth:`athenakin.teleop._guard.BodyGuard.fraction` compiled: the same formula."""
     nb = seg0.shape[0]
     reach = 0.0
@@ -41,6 +41,9 @@ def step_fraction(seg0, seg1, dist, wit, body, floor, slack, tol):  # pragma: no
             i = body[k, side]
             if i < 0:
                 continue
+            if not exact[k]:                 # a carried bound: its largest closing
+                rate -= _move(seg0, seg1, i)
+                continue
             L2 = 0.0
             t = 0.0
             for j in range(3):
@@ -59,6 +62,19 @@ def step_fraction(seg0, seg1, dist, wit, body, floor, slack, tol):  # pragma: no
         elif rate != rate:
             lam = 0.0
     return lam
+
+
+@njit(error_model="numpy", cache=True, nogil=True)
+def _move(seg0, seg1, i):  # pragma: no cover - numba
+    """Largest displacement of body ``i``'s end points from ``seg0`` to ``seg1``, m."""
+    m = 0.0
+    for e in range(2):
+        d2 = 0.0
+        for j in range(3):
+            v = seg1[i, e, j] - seg0[i, e, j]
+            d2 += v * v
+        m = max(m, d2)
+    return math.sqrt(m)
 
 
 @njit(error_model="numpy", cache=True, nogil=True)

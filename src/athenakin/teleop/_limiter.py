@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import Reason
-from ._guard import EXACT_BAND_M
+from ._mapping import SLIDE_BAND_M
 from ._options import (
     _ACCELERATION,
     _CLEARANCE,
@@ -151,6 +151,7 @@ class _Limiter:
         def _stay(self, flags: int, tt: float) -> Any: ...
         def _accept(self, pose: Any, tip: _V3, flags: int, tt: float) -> Any: ...
         def _to_base(self, p: _V3) -> _V3: ...
+        def _fixture_bound(self, x: _V3) -> float: ...
 
     def _advance(self, g: _V3, flags: int, tt: float) -> Any:
         """The longest safe step from the current tip toward ``g``, or a brake."""
@@ -227,10 +228,14 @@ class _Limiter:
             return pose, 0, s
         room = CLEARANCE_GAIN * self._stopping(qn)
         floor = self._clear_floor + room
-        # the first-order limit (it places the pose's segments); far above the floor no
-        # pair can bind within a cycle's travel, and the exact check below decides anyway
-        lam = guard.fraction(pose, floor, CLEARANCE_SLACK_M,
-                             far=guard.clearance > floor + EXACT_BAND_M)
+        # the first-order limit (it places the pose's segments) reads only the pairs within
+        # the step's reach of the floor (twice a body point's largest travel: at most
+        # CLEARANCE_GAIN times the joints'); with none there it is 1, not computed, and the
+        # exact check below decides anyway
+        q0 = self._q
+        dq = max(abs(x - q0[0]), abs(y - q0[1]), abs(z - q0[2]))
+        lam = guard.fraction(pose, floor, CLEARANCE_SLACK_M, far=guard.clearance > floor
+                             + CLEARANCE_SLACK_M + 2.0 * CLEARANCE_GAIN * dq)
         if lam < 1.0:
             return None, _CLEARANCE, s * lam * SHORTEN
         if guard.evaluations >= STEP_EVALUATIONS:
@@ -299,7 +304,9 @@ class _Limiter:
     def _soft_q(self, q: _V3, tip: _V3) -> int:
         """Stroke and fixture flags that ``q`` / ``tip`` break *and* worsen (0: acceptable).
 
-        A tip inside a forbidden region may move outward (not deeper).
+        A tip inside a forbidden region may move outward (not deeper). The fixtures'
+        distance of ``tip`` is exact below ``fixture_margin + SLIDE_BAND_M``, a lower bound
+        above (:meth:`~athenakin.teleop._mapping._Mapping._fixture_bound`).
         """
         qc = self._q
         flags = 0
@@ -310,10 +317,16 @@ class _Limiter:
             elif (q[i] < lo and q[i] < qc[i]) or (q[i] > hi and q[i] > qc[i]):
                 flags |= _STROKE
         if self._has_fixtures:
-            fix = self._fixtures.nearest(self._to_base(tip))
+            fm = self.options.fixture_margin
+            b = self._fixture_bound(tip)
+            if b >= fm + SLIDE_BAND_M:                # far: the bound stands in (no flag)
+                tf = self._tip_fix
+                fix = (b, tf[1], tf[2])
+            else:
+                fix = self._fixtures.nearest(self._to_base(tip))
             self._try_fix = (tip, fix)               # the command's, if this step passes
             d = fix[0]
-            if d < self.options.fixture_margin and d < self._tip_fix[0]:
+            if d < fm and d < self._tip_fix[0]:
                 flags |= _FIXTURE
         return flags
 

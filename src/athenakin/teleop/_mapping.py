@@ -4,6 +4,15 @@ A mixin of :class:`athenakin.teleop.Teleop` (its state lives there): the sample'
 checks, the registration ``p_e = R_e_m p_m``, the master interpolated between samples
 for the filter, and the target's projections onto the insertion depth range and out of
 the forbidden regions (tip fixtures), with the sliding along a fixture near it.
+
+The fixtures' distance of a point far from them is not computed: a signed distance is
+1-Lipschitz (each fixture's is, so their least is too), so the committed tip's distance
+less a point's distance from the tip is a lower bound of the point's
+(:meth:`_Mapping._fixture_bound`). Where that bound is at least ``fixture_margin``
+(``+ SLIDE_BAND_M`` for a tip the limiter tries) every decision it feeds is the one the
+exact distance gives: no projection, no flag, no slide. The committed tip's distance
+(``_tip_fix``) is therefore exact below ``fixture_margin + SLIDE_BAND_M`` and a lower bound
+above it, its normal then that of an earlier exact evaluation (read only below).
 """
 
 from __future__ import annotations
@@ -157,9 +166,17 @@ class _Mapping:
         k = (lo if r < lo else hi) / r
         return (g[0] * k, g[1] * k, g[2] * k), _DEPTH
 
+    def _fixture_bound(self, x: _V3) -> float:
+        """A lower bound of the fixtures' distance of ``x`` (frame E), m (module docstring)."""
+        c = self._tip
+        dx, dy, dz = x[0] - c[0], x[1] - c[1], x[2] - c[2]
+        return self._tip_fix[0] - math.sqrt(dx * dx + dy * dy + dz * dz)
+
     def _fixture(self, g: _V3) -> tuple[_V3, int]:
         fx = self._fixtures
         m = self.options.fixture_margin
+        if self._fixture_bound(g) >= m:           # far from every fixture: no projection
+            return g, 0
         x = self._to_base(g)
         flags = 0
         for _ in range(FIXTURE_PUSHES):
