@@ -157,6 +157,16 @@ def message_definition(typename: str) -> str:
     file, installed by rosidl (``<prefix>/share/<pkg>/msg/``) or, for CRTK's, the one
     shipped in :data:`athenakin.ros2.CRTK_MSGS_DIR`.
 
+    Parameters
+    ----------
+    typename : str
+        ``pkg/msg/Type``.
+
+    Returns
+    -------
+    str
+        The definition, then each dependency's after a line of ``=`` and ``MSG: pkg/Type``.
+
     Raises
     ------
     InvalidInputError
@@ -392,7 +402,10 @@ class RecorderNode:
         t = self._table[k]
         src = int(info["source_timestamp"]) or int(info["received_timestamp"]) \
             or time.time_ns()
-        stamp = header_stamp_ns(raw, t.cls) if t.stamped else 0
+        try:
+            stamp = header_stamp_ns(raw, t.cls) if t.stamped else 0
+        except Exception:        # bytes rclpy cannot read back: logged at their source time
+            stamp = 0
         with self._lock:
             if self._finished or self.error is not None:
                 return
