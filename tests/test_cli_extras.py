@@ -77,3 +77,16 @@ def test_the_arm_needs_mujoco_of_the_teleop_extra(monkeypatch):
 def test_pip_names_are_modules_of_the_extras():
     mods = {m for ms in EXTRAS.values() for m in ms}
     assert set(PIP_NAMES) - {"pinocchio"} <= mods
+
+@pytest.mark.parametrize(("compression", "module", "pip"), [
+    ("zstd", "rosbags", "rosbags"), ("zstd", "zstandard", "zstandard"), ("lz4", "lz4", "lz4")])
+def test_ros2_record_names_the_ros_extra(monkeypatch, capsys, tmp_path, compression, module,
+                                         pip):
+    _blocked(monkeypatch, module)
+    out = tmp_path / "s.mcap"
+    code, last = _run(["ros2", "record", "-o", str(out), "--compression", compression,
+                       "--duration", "1"], capsys)
+    assert code == 1
+    assert last == ("athenakin ros2: error: this command needs the optional package "
+                    f"'{pip}': pip install 'athenakin[ros]'")
+    assert list(tmp_path.iterdir()) == []

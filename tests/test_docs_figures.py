@@ -243,7 +243,9 @@ def test_regenerate_quick_writes_every_docs_figure(tmp_path) -> None:
                    "foxglove_teleop.png", "teleop_session.png",
                    # the set-up planner's figures: scripts/setup_figures.py (a planning run)
                    "setup_coverage.png", "setup_scene.png", "setup_view.png",
-                   "setup_app.png"}
+                   "setup_app.png",
+                   # a session recorded from live ROS 2 nodes: scripts/ros2_session_figure.py
+                   "ros2_session.png"}
     written = {p.name for p in tmp_path.glob("*.png")}
     assert shown - screenshots <= written, sorted(shown - screenshots - written)
     assert all((tmp_path / n).stat().st_size > 10_000 for n in written)

@@ -13,10 +13,6 @@ from __future__ import annotations
 
 import math
 import os
-import signal
-import subprocess
-import sys
-import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -27,11 +23,9 @@ pytest.importorskip("rclpy", reason="the extra 'ros2' (the ROS 2 client wheels: 
                                     "ros-rmw-fastrtps-cpp) is not installed for this Python")
 pytest.importorskip("mujoco", reason="the arm node serves the MuJoCo arm (extra 'sim')")
 
-import rclpy  # noqa: E402
+from _ros2_graph import RELIABLE, Client, start, stop  # noqa: E402
 from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
 from geometry_msgs.msg import PoseStamped  # noqa: E402
-from rclpy.context import Context  # noqa: E402
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 from sensor_msgs.msg import JointState, Joy  # noqa: E402
 from std_msgs.msg import Bool, String  # noqa: E402
@@ -62,74 +56,19 @@ except ImportError:                     # the nodes' std_msgs stand-ins
     def _command(text):
         return String(data=text)
 
-ROOT = Path(__file__).resolve().parents[1]
-DEADLINE = 120.0          # s: the longest wait for a node to start (numba cache, load)
 Q0 = (-0.1, 0.1, 0.45)
 RATE = 200.0              # the teleop node's rate in these tests, Hz
 WATCHDOG = 0.03           # TeleopOptions' default, s
 A_MAX = 2.0               # TeleopOptions' default a_max, m/s^2
-RELIABLE = QoSProfile(depth=200, reliability=ReliabilityPolicy.RELIABLE)
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
-def _env():
-    env = dict(os.environ)
-    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    env["ROS_DOMAIN_ID"] = str(1 + os.getpid() % 100)
-    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), env.get("PYTHONPATH", "")])
-    return env
+DOMAIN = 1 + os.getpid() % 100
 
 
 def _start(args):
-    return subprocess.Popen([sys.executable, "-m", "athenakin", "ros2", *args], env=_env(),
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-
-
-def _stop(proc):
-    if proc.poll() is None:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
-    return proc.stdout.read() if proc.stdout else ""
-
-
-class Client:
-    """A plain rclpy node of the test: subscriptions that keep every message."""
-
-    def __init__(self):
-        env = _env()
-        assert env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
-        os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-        self.context = Context()
-        rclpy.init(context=self.context, domain_id=int(env["ROS_DOMAIN_ID"]))
-        self.node = rclpy.create_node("test_client", context=self.context)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
-        self.got: dict[str, list] = {}
-
-    def listen(self, key, typ, topic, qos=RELIABLE):
-        self.got.setdefault(key, [])
-        return self.node.create_subscription(typ, topic, self.got[key].append, qos)
-
-    def until(self, cond, what, timeout=DEADLINE, procs=()):
-        end = time.monotonic() + timeout
-        while time.monotonic() < end:
-            if cond():
-                return
-            for p in procs:
-                if p.poll() is not None:
-                    pytest.fail(f"the node exited ({p.returncode}) while waiting for {what}: "
-                                f"{p.stdout.read() if p.stdout else ''}")
-            self.executor.spin_once(timeout_sec=0.02)
-        pytest.fail(f"no {what} within {timeout} s")
-
-    def close(self):
-        self.node.destroy_node()
-        self.context.try_shutdown()
+    return start(args, DOMAIN)
 
 
 @pytest.fixture(scope="module")
@@ -143,12 +82,12 @@ def nodes():
     replay = _start(["teleop", "--clock", "master", "--namespace", "/replay", "--pose-topic",
                      "/replay_master/pose", "--clutch-topic", "none", "--q0", *map(str, Q0),
                      "--rate", "1000"])
-    client = Client()
+    client = Client(DOMAIN)
     try:
         yield arm, teleop, client, e2e, replay
     finally:
         client.close()
-        out = _stop(arm) + _stop(teleop) + _stop(e2e) + _stop(replay)
+        out = stop(arm) + stop(teleop) + stop(e2e) + stop(replay)
         assert "Traceback" not in out, out
 
 

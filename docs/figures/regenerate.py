@@ -14,7 +14,9 @@ part of the default set; it runs ``examples/_app_screenshots.py``,
 and of docs/teleop.md, a replayed session) runs ``tools/foxglove-shot/shot.py`` and needs,
 besides playwright and Chromium, ``npm ci`` in tools/foxglove-shot (and the ``sim`` extra
 for the session). ``teleop`` (the 20 s session of docs/teleop.md, two runs in MuJoCo:
-minutes) runs ``benchmarks/bench_teleop.py session`` and needs the ``sim`` extra. Every
+minutes) runs ``benchmarks/bench_teleop.py session`` and needs the ``sim`` extra. ``ros2``
+(the session of docs/ros2.md recorded from live nodes) runs
+``scripts/ros2_session_figure.py`` and needs the ``ros2``, ``ros`` and ``sim`` extras. Every
 other figure needs only the ``plot``, ``analysis``, ``calibration``, ``motion`` and
 ``synthesis`` extras.
 With ``--quick`` the grids and sample counts are coarser (the figures look the same, a little
@@ -236,6 +238,14 @@ def teleop(s: Settings) -> list[Path]:
     return [path]
 
 
+def ros2(s: Settings) -> list[Path]:
+    """docs/ros2.md: a session recorded from live ROS 2 nodes (scripts/ros2_session_figure.py)."""
+    path = s.out / "ros2_session.png"
+    subprocess.run([sys.executable, str(ROOT / "scripts/ros2_session_figure.py"), "--out",
+                    str(path)], check=True)
+    return [path]
+
+
 def robot_solids(s: Settings) -> list[Path]:
     """docs/visualization.md: the bodies as capsules, the closest pair coloured (issue 20)."""
     from athenakin.plot import plot_robot
@@ -326,7 +336,7 @@ FIGURES: dict[str, Callable[[Settings], list[Path]]] = {
     "dynamics": dynamics,
 }
 #: Figures written only when named (they need more than the extras).
-OPTIONAL = {"app": app, "foxglove": foxglove, "teleop": teleop,
+OPTIONAL = {"app": app, "foxglove": foxglove, "teleop": teleop, "ros2": ros2,
             "collision_numbers": collision_numbers}
 
 

@@ -109,7 +109,15 @@ _NEEDS: dict[str, Callable[[argparse.Namespace], list[tuple[str, str]]]] = {
     "workspace": lambda a: [("matplotlib", "plot")] if _figures_wanted(a) else [],
     "singularities": lambda a: [("matplotlib", "plot")] if _figures_wanted(a) else [],
     "teleop": lambda a: _teleop_needs(a),
+    "ros2": lambda a: _record_needs(a) if getattr(a, "ros2_command", None) == "record" else [],
 }
+
+
+def _record_needs(args: argparse.Namespace) -> list[tuple[str, str]]:
+    """``ros2 record``: rosbags (the schemas) and the chunks' compressor, of ``[ros]``."""
+    compressor = {"zstd": ["zstandard"], "lz4": ["lz4"]}.get(getattr(args, "compression", ""),
+                                                            [])
+    return [(m, "ros") for m in ("rosbags", *compressor)]
 
 
 def _teleop_needs(args: argparse.Namespace) -> list[tuple[str, str]]:

@@ -1,4 +1,4 @@
-"""``athenakin ros2``: the arm node, the teleop node, and the CRTK messages' build step."""
+"""``athenakin ros2``: the arm node, the teleop node, the recorder, the CRTK messages' build."""
 
 from __future__ import annotations
 
@@ -9,10 +9,11 @@ from typing import Any
 from ..teleop._filter import TREMOR_FILTERS
 from ._collision import add_session_collision_options, session_collision
 from ._common import add_robot_options, check_finite, load_robot
+from ._output import add_force_option, outputs
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    """Add the ``ros2`` subcommand and its own subcommands ``arm``, ``teleop``, ``build-msgs``."""
+    """Add ``ros2`` and its own subcommands ``arm``, ``teleop``, ``record``, ``build-msgs``."""
     p = sub.add_parser(
         "ros2", help="ATHENA live on a ROS 2 graph: the CRTK arm node, the teleop node",
         description="Run ATHENA's nodes on a ROS 2 graph with the real rclpy and Fast DDS "
@@ -65,6 +66,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                    help="run an arm node (enabled) in this process too")
     add_session_collision_options(t)
     _add_run_options(t, run_teleop)
+    _record_parser(own)
     b = own.add_parser("build-msgs", help="build CRTK's crtk_msgs with the rosidl wheels",
                        description="Build and install crtk_msgs (OperatingState, "
                                    "StringStamped) into this Python's prefix: needs the extra "
@@ -72,6 +74,35 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     b.add_argument("--prefix", help="install prefix (default: this Python's)")
     b.add_argument("--verbose", action="store_true", help="show CMake's output")
     b.set_defaults(func=run_build)
+
+
+def _record_parser(own: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """``ros2 record``: the session's topics from the graph into an MCAP file."""
+    r = own.add_parser("record", help="record a session's topics from the graph into an MCAP",
+                       description="Record what the nodes publish (the arm's measured_js, "
+                                   "setpoint_js, measured_cp, setpoint_cp, operating_state, "
+                                   "status; servo_jp; the teleop status; the master's pose "
+                                   "and clutch) as it travelled into an MCAP file that "
+                                   "rosbags, the mcap library and Foxglove read; log times "
+                                   "are the header stamps. Stops at --duration or Ctrl-C, "
+                                   "and the file is complete either way.")
+    r.add_argument("-o", "--output", required=True, metavar="OUT.mcap",
+                   help="the MCAP file to write")
+    r.add_argument("--namespace", default="/athena", help="the arm node's namespace (/athena)")
+    r.add_argument("--preset", choices=("default", "dvrk-mtmr"), default="default",
+                   help="master topics, as ros2 teleop's (default /master/pose + /master/joy)")
+    r.add_argument("--pose-topic", help="the master's PoseStamped topic (overrides --preset)")
+    r.add_argument("--clutch-topic",
+                   help="the clutch's Joy topic (overrides --preset); 'none': not recorded")
+    r.add_argument("--topic", action="append", default=[], metavar="NAME=TYPE",
+                   help="record this topic too, e.g. measured_cv=geometry_msgs/msg/TwistStamped "
+                        "(repeatable; a relative name is under --namespace)")
+    r.add_argument("--compression", choices=("zstd", "lz4", "none"), default="zstd",
+                   help="chunk compression (zstd)")
+    r.add_argument("--use-sim-time", action="store_true", help="the node's clock from /clock")
+    r.add_argument("--duration", type=float, help="stop after this many seconds")
+    add_force_option(r)
+    r.set_defaults(func=run_record)
 
 
 def _node_parser(own: argparse._SubParsersAction, name: str, *, help: str,  # type: ignore[type-arg]
@@ -170,6 +201,74 @@ def run_teleop(args: argparse.Namespace) -> int:
             arm.close()
         if context is not None:
             context.close()
+    return 0
+
+
+def _record_topics(args: argparse.Namespace) -> dict[str, str]:
+    """The topics of ``ros2 record``: the session's, the master's, and each ``--topic``."""
+    from ..ros2 import MASTER_PRESETS, session_topics
+
+    preset = MASTER_PRESETS[args.preset]
+    clutch = args.clutch_topic or preset["clutch"]
+    topics = session_topics(args.namespace, pose_topic=args.pose_topic or preset["pose"],
+                            clutch_topic=None if clutch.lower() == "none" else clutch)
+    for item in args.topic:
+        name, sep, typ = item.partition("=")
+        if not sep or not name or not typ:
+            raise ValueError(f"--topic: expected NAME=pkg/msg/Type (e.g. "
+                             f"measured_cv=geometry_msgs/msg/TwistStamped), got {item!r}")
+        topics[name] = typ
+    return topics
+
+
+def _record_until(node: Any, duration: float | None) -> None:
+    """Record for ``duration`` s (None: until Ctrl-C); say when each topic's first message came."""
+    import time
+
+    end = None if duration is None else time.monotonic() + duration
+    node.start()
+    seen: set[str] = set()
+    while node.recording:
+        left = None if end is None else end - time.monotonic()
+        if left is not None and left <= 0:
+            return
+        node.spin(0.25 if left is None else min(0.25, left))
+        for topic, n in node.counts.items():
+            if n and topic not in seen:
+                seen.add(topic)
+                print(f"ros2 record: recording {topic}", flush=True)
+
+
+def run_record(args: argparse.Namespace) -> int:
+    """Execute ``ros2 record``."""
+    from pathlib import Path
+
+    from ..ros2 import RecorderNode
+
+    out = Path(args.output)
+    if out.suffix.lower() != ".mcap":
+        raise ValueError(f"-o: expected an .mcap file name, got {str(out)!r}")
+    duration = _duration(args)
+    topics = _record_topics(args)
+    with outputs(args) as outs:
+        outs.add(out)
+        node = RecorderNode(out, topics=topics, namespace=args.namespace,
+                            compression=args.compression, use_sim_time=args.use_sim_time,
+                            target=outs.temp(out))
+        print(f"ros2 record: {len(node.topics)} topics -> {out}"
+              + ("" if duration else " (Ctrl-C to stop)"), flush=True)
+        try:
+            _record_until(node, duration)
+        except KeyboardInterrupt:     # Ctrl-C: the recording's normal end, the file complete
+            pass
+        except BaseException:
+            node.discard()
+            raise
+        node.close()
+        outs.commit()
+    counts = node.counts
+    print(f"ros2 record: wrote {out}: {sum(counts.values())} messages ("
+          + ", ".join(f"{k}: {v}" for k, v in counts.items()) + ")", flush=True)
     return 0
 
 

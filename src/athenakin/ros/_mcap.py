@@ -273,6 +273,31 @@ class McapFile:
         self._end = end if self._end is None else max(self._end, end)
         self._n_chunks += 1
 
+    def messages(self, items: list[tuple[int, int, int, int, bytes]]) -> None:
+        """Write one chunk of messages of any sizes, in log-time order.
+
+        Parameters
+        ----------
+        items : list of (channel, sequence, log_time, publish_time, data)
+            Channel ids, sequence numbers, times (ns) and the messages' bytes; sorted
+            here by log time (stably) before they are laid out.
+        """
+        if not items:
+            return
+        items = sorted(items, key=lambda it: it[2])
+        head = struct.Struct("<BQHIQQ")
+        buf = bytearray()
+        index: dict[int, tuple[list[int], list[int]]] = {}
+        for channel, sequence, log_time, publish_time, data in items:
+            times, offsets = index.setdefault(channel, ([], []))
+            times.append(log_time)
+            offsets.append(len(buf))
+            buf += head.pack(_OP["message"], MESSAGE_HEADER - 9 + len(data), channel,
+                             sequence & 0xFFFFFFFF, log_time, publish_time)
+            buf += data
+        self.chunk(bytes(buf), {c: (np.array(t, dtype=np.uint64), np.array(o, dtype=np.uint64))
+                                for c, (t, o) in index.items()})
+
     def single(self, channel: int, sequence: int, log_time: int, data: bytes) -> None:
         """One message in a chunk of its own."""
         rec = self.message_records(channel, np.array([sequence]), np.array([log_time]),

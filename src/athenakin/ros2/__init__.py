@@ -13,26 +13,34 @@ installation). Topics, QoS, the executor design and the watchdog: docs/ros2.md.
 * :class:`TeleopNode` (``athenakin ros2 teleop``): a master's ``PoseStamped`` and
   ``Joy`` clutch through :class:`athenakin.teleop.Teleop` to the arm's ``servo_jp``,
   with its status, watchdog and e-stop.
+* :class:`RecorderNode` (``athenakin ros2 record``): what the nodes publish
+  (:func:`session_topics`), as it travelled, into an MCAP file that rosbags, the mcap
+  library and Foxglove read.
 * :func:`build_crtk_msgs`: CRTK's ``crtk_msgs`` built with the rosidl generator wheels
   (``athenakin ros2 build-msgs``); without it the nodes use ``std_msgs`` stand-ins.
 """
 
 from ._arm_node import ARM_TOPICS, STATE_COMMANDS, ArmNode
 from ._build import CRTK_MSGS_DIR, build_crtk_msgs
+from ._record import CHUNK_BYTES, LATCHED_TOPICS, RecorderNode, session_topics
 from ._runtime import CrtkTypes, RosContext, crtk_types
 from ._teleop_node import DVRK_PRESET, MASTER_PRESETS, TELEOP_TOPICS, TeleopNode
 
 __all__ = [
     "ARM_TOPICS",
+    "CHUNK_BYTES",
     "CRTK_MSGS_DIR",
     "DVRK_PRESET",
+    "LATCHED_TOPICS",
     "MASTER_PRESETS",
     "STATE_COMMANDS",
     "TELEOP_TOPICS",
     "ArmNode",
     "CrtkTypes",
+    "RecorderNode",
     "RosContext",
     "TeleopNode",
     "build_crtk_msgs",
     "crtk_types",
+    "session_topics",
 ]

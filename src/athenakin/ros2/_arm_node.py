@@ -37,7 +37,14 @@ from ._convert import (
     tip_command,
     twist_stamped,
 )
-from ._runtime import RosContext, crtk_types, require_rclpy, run_until, stop_node
+from ._runtime import (
+    RosContext,
+    crtk_types,
+    require_rclpy,
+    run_until,
+    spin_executor,
+    stop_node,
+)
 
 __all__ = ["ArmNode", "ARM_TOPICS", "STATE_COMMANDS", "check_namespace"]
 
@@ -425,13 +432,7 @@ class ArmNode:
                 self._stop.wait(wait)
 
     def _spin_loop(self) -> None:
-        while not self._stop.is_set() and self.context.ok:
-            try:
-                self._executor.spin_once(timeout_sec=0.05)
-            except Exception:    # the context shut down under the executor
-                if not self.context.ok or self._stop.is_set():
-                    return
-                raise
+        spin_executor(self._stop, self._executor, self.context)
 
     def start(self) -> ArmNode:
         """Start the servo thread and the executor's thread (idempotent).

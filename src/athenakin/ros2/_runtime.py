@@ -213,6 +213,30 @@ def run_until(stop: threading.Event, context: RosContext, timeout: float | None)
         time.sleep(min(0.1, max(0.0, end - time.monotonic())))
 
 
+def spin_executor(stop: threading.Event, executor: Any, context: RosContext) -> None:
+    """Run ``executor``'s callbacks until ``stop`` is set or ``context`` shuts down.
+
+    A node's executor thread. An error of the executor after the context shut down (or
+    after ``stop``) ends the loop; any other is raised.
+
+    Parameters
+    ----------
+    stop : threading.Event
+        The node's stop event.
+    executor : rclpy.executors.Executor
+        The executor the node was added to.
+    context : RosContext
+        The node's ROS context.
+    """
+    while not stop.is_set() and context.ok:
+        try:
+            executor.spin_once(timeout_sec=0.05)
+        except Exception:    # the context shut down under the executor
+            if not context.ok or stop.is_set():
+                return
+            raise
+
+
 def stop_node(stop: threading.Event, threads: list[threading.Thread], executor: Any,
               node: Any, own_context: RosContext | None) -> None:
     """Stop a node's threads, remove and destroy the node, close a context it owns.

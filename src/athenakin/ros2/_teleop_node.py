@@ -23,7 +23,7 @@ from .._validation import check_scalar
 from ..design import Design, resolve_design
 from ._arm_node import _create_node, _qos, check_namespace
 from ._convert import ACTUATORS, joint_state, master_position, stamp_ns
-from ._runtime import RosContext, require_rclpy, run_until, stop_node
+from ._runtime import RosContext, require_rclpy, run_until, spin_executor, stop_node
 
 __all__ = ["TeleopNode", "TELEOP_TOPICS", "MASTER_PRESETS", "DVRK_PRESET", "STATUS_KEYS"]
 
@@ -328,13 +328,7 @@ class TeleopNode:
                 self._stop.wait(wait)
 
     def _spin_loop(self) -> None:
-        while not self._stop.is_set() and self.context.ok:
-            try:
-                self._executor.spin_once(timeout_sec=0.05)
-            except Exception:
-                if not self.context.ok or self._stop.is_set():
-                    return
-                raise
+        spin_executor(self._stop, self._executor, self.context)
 
     def start(self) -> TeleopNode:
         """Start the teleop loop and the executor's threads (idempotent).
