@@ -75,7 +75,8 @@ def main() -> None:
     good = t[(t["coverage"] >= 0.95) & (t["margin_min"] >= 0.005)
              & (t["min_clearance"] >= 0.005) & (t["collisions"] == 0)]
     first = float(good["seconds"].min()) if len(good) else float("nan")
-    print(f"search: {args.population} x {args.generations} set-ups in {total:.1f} s "
+    print(f"search: {args.population} x {args.generations} set-ups and {args.polish} polish "
+          f"rounds ({len(t)} set-ups) in {total:.1f} s "
           f"({total / base:.0f} x the baseline; {_load()})")
     print(f"first generation with a set-up >= 95 % covered, margins >= 5 mm, 0 collisions: "
           f"{first:.1f} s ({first / base:.0f} x the baseline)")

@@ -235,10 +235,12 @@ def cohort(n: int, opts, out: Path) -> list[dict[str, float]]:
     patients = {f"phantom-{s:.3f}": phantom(size=float(s), name=f"phantom {s:.3f}")
                 for s in sizes}
     t0 = time.perf_counter()
+    resumed = sum((out / f"{k}.json").exists() for k in patients)
     df = plan_cohort(patients, options=opts, out=out)
     dt = time.perf_counter() - t0
-    print(f"cohort of {n} planned in {dt:.0f} s ({_load()})", flush=True)
-    return [{"size": float(s), "seconds": dt / n,
+    print(f"cohort of {n} planned in {dt:.0f} s ({_load()}), {resumed} resumed", flush=True)
+    return [{"size": float(s), "seconds": dt / n, "total_seconds": dt, "load": _load(),
+             "resumed": resumed,
              **{c: float(r[c]) for c in ("coverage", "min_clearance", "margin_min",
                                           "collisions")}}
             for s, (_, r) in zip(sizes, df.iterrows(), strict=True)]
@@ -253,7 +255,8 @@ def write_numbers(numbers: dict[str, object]) -> None:
     lines = [
         "| figure | value |", "| --- | --- |",
         f"| planning time (NSGA-II, {numbers['population']} x {numbers['generations']}, "
-        f"Dask threads) | {numbers['plan_seconds']:.0f} s ({numbers['plan_load']}) |",
+        f"{numbers.get('polish', 0)} polish rounds, Dask threads) | "
+        f"{numbers['plan_seconds']:.0f} s ({numbers['plan_load']}) |",
         f"| coverage, planner ({numbers['final_samples']} samples) | "
         f"{100 * f['coverage']:.2f} % |",
         f"| coverage, re-measured ({numbers['remeasure_samples']} fresh samples) | "
@@ -287,6 +290,11 @@ def write_numbers(numbers: dict[str, object]) -> None:
             rows.append(f"| {r['size']:.3f} | {100 * r['coverage']:.1f} % | "
                         f"{1000 * r['min_clearance']:.1f} mm | {1000 * r['margin_min']:.1f} mm "
                         f"| {int(r['collisions'])} | {r['seconds']:.0f} s |")
+        last = numbers["cohort"][-1]  # type: ignore[index]
+        rows += ["", f"{len(numbers['cohort'])} phantoms in "  # type: ignore[arg-type]
+                 f"{last.get('total_seconds', float('nan')):.0f} s on Dask's local threads "
+                 f"({last.get('load', 'load not recorded')}; "
+                 f"{last.get('resumed', 0)} read back from the folder, not planned)."]
         text = re.sub(r"(<!-- setup-cohort -->\n).*?(\n<!-- /setup-cohort -->)",
                       lambda m: m.group(1) + "\n".join(rows) + m.group(2), text, flags=re.S)
     doc.write_text(text)
@@ -327,7 +335,7 @@ def main() -> None:
     plan.write(FIG / "setup_phantom.toml", patient="phantom()")
     opts = plan.options
     numbers: dict[str, object] = {
-        "plan_seconds": dt, "plan_load": load, "population": 16, "generations": 8,
+        "plan_seconds": dt, "plan_load": load, "population": 16, "generations": 8, "polish": 3,
         "final_samples": opts.final_samples, "figures": plan.figures,
         "port": plan.chosen.port.tolist(), "decision": plan.chosen.decision.tolist()}
     cov, n_cov, dtm = remeasure(patient, plan.chosen, design, opts, args.samples, seed=12345)
@@ -344,6 +352,10 @@ def main() -> None:
         app_view()
     if args.cohort:
         numbers["cohort"] = cohort(args.cohort, opts, args.cohort_out)
+    elif (FIG / "setup_numbers.json").exists():     # the last cohort's rows stay
+        last = json.loads((FIG / "setup_numbers.json").read_text()).get("cohort")
+        if last:
+            numbers["cohort"] = last
     write_numbers(numbers)
     print("wrote docs/figures/setup_*.png, setup_numbers.json, docs/setup.md", flush=True)
 
