@@ -25,7 +25,6 @@ from athenakin.app._teleop import (
     clutch_closed,
     fixture_solids,
     hold_clutch,
-    release_clutch,
     start_teleop,
     teleop_cycles,
     teleop_frame,
@@ -114,12 +113,12 @@ def test_a_held_clutch_stays_open_until_its_release_however_late_the_cycles_run(
     cmd, t = _run(tele, far, t, 500)                  # 5 s of cycles, no new hold message
     assert cmd.status & TeleopStatus.CLUTCHED and cmd.tip == tip0
     assert teleop_state(teleop_frame(tele, far, cmd))[0] == "clutched"
-    released = release_clutch(far)
+    released = hold_clutch(far, held=False)
     assert not released.held and clutch_closed(released)
     cmd, t = _run(tele, released, t, 1)               # re-engage: no jump
     assert not cmd.status & TeleopStatus.CLUTCHED
     assert np.max(np.abs(np.subtract(cmd.tip, tip0))) <= JUMP_TOL
-    toggled = release_clutch(Master(m.handle_b, clutched=True, held=True))
+    toggled = hold_clutch(Master(m.handle_b, clutched=True, held=True), held=False)
     assert toggled.clutched and not clutch_closed(toggled)   # the toggle is kept
 
 

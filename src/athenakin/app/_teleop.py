@@ -34,8 +34,8 @@ from ._scene import LineSet, PointSet, Scene, Solid, rgb
 from ._text import ERROR_COLOR, WARN_COLOR
 
 __all__ = ["TELEOP_RATE", "SCALE_RANGE", "MAX_CYCLES", "SHOWN_FLAGS", "GUARD_FLAGS",
-           "Master", "TeleopFrame", "start_teleop", "hold_clutch", "release_clutch",
-           "clutch_closed", "teleop_state",
+           "Master", "TeleopFrame", "start_teleop", "hold_clutch", "clutch_closed",
+           "teleop_state",
            "teleop_cycles", "teleop_frame", "teleop_scene", "fixture_solids", "teleop_html"]
 
 #: Cycles per second of the app's teleoperation loop, Hz (the tremor filter needs >= 100).
@@ -182,36 +182,26 @@ def _to_base(setup: AppSetup, p_e: Any) -> tuple[float, float, float]:
     return float(x[0]), float(x[1]), float(x[2])
 
 
-def hold_clutch(master: Master) -> Master:
-    """``master`` with the held clutch down (a hold message of the button or its key).
+def hold_clutch(master: Master, *, held: bool = True) -> Master:
+    """``master`` with the held clutch down (a hold message) or up (``held=False``).
 
     Parameters
     ----------
     master : Master
+    held : bool, keyword-only
+        True: a hold message of the button or its key (the clutch stays open until the
+        release); False: the hold button's release, or the key's key-up.
 
     Returns
     -------
     Master
-        ``master`` with ``held=True``: the clutch stays open until :func:`release_clutch`.
+        ``master`` with :attr:`Master.held` set (the toggle :attr:`Master.clutched` is
+        kept).
     """
     check_instance(master, "master", Master)
-    return dataclasses.replace(master, held=True)
-
-
-def release_clutch(master: Master) -> Master:
-    """``master`` with the held clutch up (the hold button's release, the key's key-up).
-
-    Parameters
-    ----------
-    master : Master
-
-    Returns
-    -------
-    Master
-        ``master`` with ``held=False`` (the toggle :attr:`Master.clutched` is kept).
-    """
-    check_instance(master, "master", Master)
-    return dataclasses.replace(master, held=False)
+    if not isinstance(held, bool):
+        raise TypeError(f"held: expected a bool, got {type(held).__name__}")
+    return dataclasses.replace(master, held=held)
 
 
 def clutch_closed(master: Master) -> bool:

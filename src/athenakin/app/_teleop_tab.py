@@ -48,7 +48,6 @@ from ._teleop import (
     TeleopFrame,
     fixture_solids,
     hold_clutch,
-    release_clutch,
     start_teleop,
     teleop_cycles,
     teleop_frame,
@@ -173,7 +172,7 @@ class TeleopTab:
         """The hold button's click: its release (coroutine: after its hold messages)."""
         with self._lock:
             if self.master is not None and self.master.held:
-                self.master = release_clutch(self.master)
+                self.master = hold_clutch(self.master, held=False)
 
     def _update_master(self, **changes: Any) -> None:
         with self._lock:
