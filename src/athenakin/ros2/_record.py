@@ -117,7 +117,7 @@ def _type_name(cls: type) -> str:
     return f"{cls.__module__.split('.')[0]}/msg/{cls.__name__}"
 
 
-def _message_type(typ: object, topic: str) -> tuple[type, str]:
+def _message_type(typ: object, topic: str) -> tuple[Any, str]:
     """The message class and its ``pkg/msg/Type`` name, from either.
 
     Raises
@@ -228,8 +228,8 @@ def header_stamp_ns(raw: bytes, cls: type) -> int:
     else:
         from rclpy.serialization import deserialize_message
 
-        stamp = deserialize_message(raw, cls).header.stamp
-        sec, nsec = stamp.sec, stamp.nanosec
+        header: Any = deserialize_message(raw, cls).header
+        sec, nsec = header.stamp.sec, header.stamp.nanosec
     return int(sec) * 1_000_000_000 + int(nsec)
 
 
@@ -237,7 +237,7 @@ def header_stamp_ns(raw: bytes, cls: type) -> int:
 class _Topic:
     name: str
     type_name: str
-    cls: type
+    cls: Any                  # the rclpy message class (generated: no static type)
     stamped: bool
     latched: bool
 
@@ -357,7 +357,11 @@ class RecorderNode:
         self._threads: list[threading.Thread] = []
         self._atomic = AtomicFile(self.path, suffix=".mcap") if target is None else None
         with naming_path(self.path):
-            self._fh = self._atomic.fh if self._atomic is not None else open(target, "wb")  # noqa: SIM115
+            if self._atomic is not None:
+                self._fh = self._atomic.fh
+            else:
+                assert target is not None
+                self._fh = open(target, "wb")  # noqa: SIM115
         self._own_context = context is None
         self.context: RosContext | None = None
         try:
