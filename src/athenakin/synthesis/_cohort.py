@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from .._output import write_text_atomic
-from .._validation import check_count, check_instance, check_path
+from .._validation import check_instance, check_path
 from ..design import Design
 from ..errors import InvalidInputError
 from ._metrics import design_from_row, row_from_design
@@ -117,9 +117,8 @@ def plan_cohort(patients: Mapping[str, Patient], *, design: Design | None = None
             raise InvalidInputError(f"patients: expected names made of letters, digits, "
                                     f"'-', '_', '.', got {k!r}")
         check_instance(p, f"patients[{k!r}]", Patient)
-    design, opts, population, generations, seed = search_arguments(
-        design, options, population, generations, seed)
-    polish = check_count(polish, "polish", minimum=0, maximum=1000)
+    design, opts, population, generations, polish, seed = search_arguments(
+        design, options, population, generations, polish, seed)
     drow = row_from_design(design)
     items = list(patients.items())
     folder = None if out is None else check_path(out, "out")

@@ -165,9 +165,8 @@ def plan_setup(patient: Patient, *, design: Design | None = None,
     from ._study import _run_chunks
 
     check_instance(patient, "patient", Patient)
-    design, opts, population, generations, seed = search_arguments(
-        design, options, population, generations, seed)
-    polish = check_count(polish, "polish", minimum=0, maximum=1000)
+    design, opts, population, generations, polish, seed = search_arguments(
+        design, options, population, generations, polish, seed)
     b = _check_setup_bounds(default_setup_bounds(patient, design) if bounds is None
                             else bounds)
     lo = np.array([b[k][0] for k in SETUP_VARIABLES])
@@ -281,8 +280,8 @@ def _compass(run: Any, table: Any, lo: FloatArray, hi: FloatArray, rounds: int,
 
 
 def search_arguments(design: Design | None, options: SetupOptions | None, population: int,
-                     generations: int, seed: int
-                     ) -> tuple[Design, SetupOptions, int, int, int]:
+                     generations: int, polish: int, seed: int
+                     ) -> tuple[Design, SetupOptions, int, int, int, int]:
     """The design, options and counts of a set-up search (:func:`plan_setup`, a cohort's).
 
     Raises a named error for a bad one; ``None`` design and options are the defaults.
@@ -292,8 +291,9 @@ def search_arguments(design: Design | None, options: SetupOptions | None, popula
     check_instance(opts, "options", SetupOptions)
     population = check_count(population, "population", minimum=2, maximum=10_000)
     generations = check_count(generations, "generations", minimum=1, maximum=10_000)
+    polish = check_count(polish, "polish", minimum=0, maximum=1000)
     seed = check_count(seed, "seed", minimum=0)
-    return design, opts, population, generations, seed
+    return design, opts, population, generations, polish, seed
 
 
 def _require_search() -> Any:
