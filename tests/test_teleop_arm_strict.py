@@ -148,7 +148,7 @@ def test_the_servo_is_stable_for_accepted_masses_and_rates(masses, rate):
         arm.step(1)
         closure = max(closure, arm.backend.closure_error())
         assert arm.operating_state == "ENABLED", arm.fault
-    assert closure <= CLOSURE_TOL
+    assert closure <= CLOSURE_TOL / 10                  # the backend's stated accuracy
     np.testing.assert_allclose(arm.measured_js().position, GOAL, atol=1e-5)
 
 

@@ -172,5 +172,7 @@ def pd_force(ff: FloatArray, Kp: FloatArray, Kd: FloatArray, q_sp: FloatArray,
         A component was clipped.
     """
     f = ff + Kp @ (q_sp - q) + Kd @ (qd_sp - qd)
-    saturated = bool(np.any(np.abs(f) > max_force))
-    return np.clip(f, -max_force, max_force), saturated
+    saturated = not np.abs(f).max() <= max_force
+    if saturated:
+        f = np.clip(f, -max_force, max_force)
+    return f, saturated
