@@ -366,3 +366,18 @@ def test_threads_share_the_kernels():
     for (p0, q0), (p1, q1) in zip(serial, threaded, strict=True):
         np.testing.assert_array_equal(p0, p1)
         np.testing.assert_array_equal(q0, q1)
+
+
+def test_control_loop_tip_frame_is_the_fk_solutions_bit_for_bit():
+    """``ControlLoop.tip_frame`` equals ``FKSolution.T_b_tip`` of every slot (NaN pattern too)."""
+    rng = np.random.default_rng(SEED)
+    lo, hi = np.array(DESIGN.stroke_min), np.array(DESIGN.stroke_max)
+    ctl = fast.ControlLoop(T0, DESIGN)
+    qs = np.vstack([lo + (hi - lo) * rng.random((200, 3)),
+                    [[np.nan, 0.1, 0.45], [0.1, -0.1, 0.45], hi + 0.01]])
+    for q in qs:
+        sol = ak.forward_kinematics(q, T0, DESIGN, errors="flag")
+        for k in range(16):
+            reason, T = ctl.tip_frame(q, k)
+            assert reason == int(sol.reason[k])
+            np.testing.assert_array_equal(T, sol.T_b_tip[k])

@@ -12,6 +12,7 @@ from .._validation import check_array, check_frame
 from ..chain._ups import CLOSURE_TOL
 from ..design import Design
 from ..parallel import TANGENT_TOL
+from ..robot._fk import tip_frames
 from ..robot._ik import IK_SINGULAR_TOL
 from . import _fk_kernels as _fk
 from . import _ik_kernels as _ik
@@ -91,6 +92,8 @@ class ControlLoop:
         self._reason = self._ibuf[_fk.ONE_REASON:_fk.ONE_VALID]
         self._p = self._fbuf[_fk.ONE_P:_fk.ONE_U]
         self._u = self._fbuf[_fk.ONE_U:_fk.ONE_T].reshape(16, 5)
+        self._T_b_s = self._fbuf[_fk.ONE_T:_fk.ONE_RES].reshape(16, 4, 4)
+        self._L = self._design.tool_length
         self._kfbuf = np.empty(_one.ONE_F)
         self._kibuf = np.empty(3, np.int64)
         self._kq = self._kfbuf[_one.ONE_Q:_one.ONE_P]
@@ -125,6 +128,31 @@ class ControlLoop:
         _fk.fk_one(_vec3(q, "q"), self._T, self._P, self._tol, self._inf, self._fbuf,
                    self._ibuf)
         return self._reason, self._p, self._u
+
+    def tip_frame(self, q: ArrayLike, slot: int) -> tuple[int, FloatArray]:
+        """The tool-tip frame ``T_b_tip`` of actuator values ``q`` in one slot.
+
+        :attr:`athenakin.FKSolution.T_b_tip` of the slot, from the same kernels as
+        :meth:`fk` and the same formula (``athenakin.robot._fk.tip_frames``).
+
+        Parameters
+        ----------
+        q : ndarray, shape (3,)
+            ``(q1, q2, q3)``, m.
+        slot : int
+            The forward-kinematics slot, 0 to 15.
+
+        Returns
+        -------
+        reason : int
+            :class:`~athenakin.errors.Reason` of the slot (0: valid).
+        T_b_tip : ndarray, shape (4, 4)
+            Base frame, m; a new array, NaN unless ``reason == 0``.
+        """
+        reason, _, u = self.fk(q)
+        k = int(slot)
+        T = self._T_b_s[k]
+        return int(reason[k]), tip_frames(T[:3, :3], T[:3, 3], u[k], self._L)
 
     def ik(self, u345: ArrayLike) -> tuple[FloatArray, int]:
         """Paper-form IK: actuators for the spherical-joint angles ``u3, u4, u5``.

@@ -158,6 +158,7 @@ class SimulatedArm:
                  gains: ServoGains | None = None, feedforward: bool = True,
                  backend: ArmBackend | None = None, v_max: float = 0.1, a_max: float = 1.0,
                  j_max: float = 20.0, max_force: float = MAX_FORCE) -> None:
+        from .._backend import resolve_backend
         from .._validation import check_slot
         from ..dynamics import InverseDynamicsLoop, MassModel
         from ..robot import REFERENCE_Q
@@ -187,6 +188,12 @@ class SimulatedArm:
             raise InvalidInputError(why)
         self._ff_loop = InverseDynamicsLoop(self.T_b_e, design, masses=self.masses,
                                             slot=self.slot)
+        # the tip frames: compiled where the backend policy allows, else the numpy reference
+        self._fk = None
+        if resolve_backend("auto"):
+            from ..fast import ControlLoop
+
+            self._fk = ControlLoop(self.T_b_e, design)
         if np.isnan(self._ff_loop(q, np.zeros(3), np.zeros(3))).any():
             raise InvalidInputError(f"q0: {q.tolist()} m does not assemble in FK slot "
                                     f"{self.slot}")
@@ -372,9 +379,11 @@ class SimulatedArm:
         return self._tip_frame(self._sp_q)
 
     def _tip_frame(self, q: FloatArray) -> FloatArray:
+        if self._fk is not None:                 # the compiled kernels, one slot
+            return self._fk.tip_frame(q, self.slot)[1]
         from .. import forward_kinematics
 
-        sol = forward_kinematics(q, self.T_b_e, self.design, errors="flag")
+        sol = forward_kinematics(q, self.T_b_e, self.design, errors="flag", backend="numpy")
         return np.array(sol.T_b_tip[self.slot], dtype=float)
 
     # --- CRTK commands --------------------------------------------------------------
