@@ -8,7 +8,10 @@ python3 -m venv .venv
 # uv installs what pip's resolver would (same versions), in a quarter of the time; compiled to
 # bytecode at install as pip does (else a dependency's first import warns, e.g. toppra's escapes)
 python -m pip install --quiet "uv>=0.9"
-uv pip install --quiet --compile-bytecode -e ".[all]" --group test
+uv pip install --quiet --compile-bytecode -e ".[all,ros2-msgs]" --group test
+# CRTK's crtk_msgs built from the rosidl generator wheels (CMake and a C compiler of the
+# system, about 20 s): the ROS 2 node tests then speak CRTK's own types
+python -m athenakin ros2 build-msgs
 # headless Chromium (Debian package) for the interactive-view test; never a downloaded browser
 if ! command -v chromium >/dev/null; then
     if [ "$(id -u)" = 0 ]; then SUDO=""; elif command -v sudo >/dev/null; then SUDO="sudo"; else
