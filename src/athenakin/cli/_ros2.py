@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from collections.abc import Callable
 from typing import Any
 
@@ -276,6 +277,10 @@ def run_build(args: argparse.Namespace) -> int:
     """Execute ``ros2 build-msgs``."""
     from ..ros2 import build_crtk_msgs
 
-    path = build_crtk_msgs(prefix=args.prefix, verbose=args.verbose)
+    try:
+        path = build_crtk_msgs(prefix=args.prefix, verbose=args.verbose)
+    except RuntimeError as exc:     # CMake or the compiler failed: the build's, not a bug
+        print(f"athenakin ros2 build-msgs: error: {exc}", file=sys.stderr)
+        return 1
     print(f"ros2 build-msgs: installed crtk_msgs in {path}")
     return 0
