@@ -19,7 +19,11 @@ Run from the repository root (minutes on a 2-core machine; the load is printed):
    its patient (``athenakin app --setup ... --patient ...``, ``docs/figures/setup_app.png``),
    both from ``docs/figures/setup_phantom.toml``;
 6. with ``--cohort N``, plans N phantoms of sizes 0.85..1.15 as one Dask study
-   (:func:`athenakin.synthesis.plan_cohort`, resumable in ``--cohort-out``);
+   (:func:`athenakin.synthesis.plan_cohort`, resumable in ``--cohort-out``), on Dask's
+   local threads or, with ``--cluster local``, a ``distributed.LocalCluster`` of
+   ``--workers`` processes (2) of ``--threads-per-worker`` threads (1)::
+
+       nice -n 19 python scripts/setup_figures.py --cohort-only --cohort 20 --cluster local
 7. writes the numbers to ``docs/figures/setup_numbers.json`` and between the markers of
    docs/setup.md.
 """
@@ -44,6 +48,8 @@ from athenakin.design import Design
 from athenakin.synthesis import SetupOptions, covered_samples, phantom, plan_setup
 
 ROOT = Path(__file__).resolve().parents[1]
+#: The cohort's search by default: plan_setup's defaults.
+_SEARCH = {"population": 16, "generations": 8, "polish": 3}
 FIG = ROOT / "docs" / "figures"
 
 
@@ -227,23 +233,51 @@ def app_view() -> Path:
     return FIG / "setup_app.png"
 
 
-def cohort(n: int, opts, out: Path) -> list[dict[str, float]]:
+@contextlib.contextmanager
+def _scheduler(kind: str, workers: int, threads: int) -> Iterator[tuple[Any, str]]:
+    """The cohort's scheduler and its description: Dask's local threads or a LocalCluster."""
+    if kind == "threads":
+        yield None, "Dask's local threads"
+        return
+    import distributed
+
+    with distributed.LocalCluster(n_workers=workers, threads_per_worker=threads,
+                                  processes=True, host="127.0.0.1", dashboard_address=None,
+                                  silence_logs=50) as lc, \
+            distributed.Client(lc, set_as_default=False) as client:
+        yield client, (f"a distributed.LocalCluster of {workers} worker processes, "
+                       f"{threads} thread{'s' if threads > 1 else ''} each")
+
+
+def cohort(n: int, opts, out: Path, *, scheduler: str = "threads", workers: int = 2,
+           threads: int = 1, search: dict[str, int] | None = None) -> dict[str, Any]:
     """N phantoms of varied size planned as one study (``plan_cohort``, resumable in ``out``)."""
     from athenakin.synthesis import plan_cohort
 
     sizes = np.linspace(0.85, 1.15, n)
     patients = {f"phantom-{s:.3f}": phantom(size=float(s), name=f"phantom {s:.3f}")
                 for s in sizes}
-    t0 = time.perf_counter()
     resumed = sum((out / f"{k}.json").exists() for k in patients)
-    df = plan_cohort(patients, options=opts, out=out)
-    dt = time.perf_counter() - t0
-    print(f"cohort of {n} planned in {dt:.0f} s ({_load()}), {resumed} resumed", flush=True)
-    return [{"size": float(s), "seconds": dt / n, "total_seconds": dt, "load": _load(),
-             "resumed": resumed,
+    search = {**_SEARCH, **(search or {})}
+    with _scheduler(scheduler, workers, threads) as (handle, where):
+        load0 = _load()
+        print(f"cohort of {n} on {where}, {load0}", flush=True)
+        t0 = time.perf_counter()
+        df = plan_cohort(patients, **search, options=opts, out=out, scheduler=handle)
+        dt = time.perf_counter() - t0
+    load1 = _load()
+    cov = df["coverage"].to_numpy()
+    print(f"cohort of {n} planned in {dt:.0f} s on {where} (at the start {load0}, at the "
+          f"end {load1}), {resumed} resumed; >= 95 %: {int(np.sum(cov >= 0.95))}, >= 90 %: "
+          f"{int(np.sum(cov >= 0.90))}", flush=True)
+    rows = [{"size": float(s), "seconds": float(r.get("seconds", float("nan"))),
              **{c: float(r[c]) for c in ("coverage", "min_clearance", "margin_min",
                                           "collisions")}}
             for s, (_, r) in zip(sizes, df.iterrows(), strict=True)]
+    return {"rows": rows, "total_seconds": dt, "where": where, "load_start": load0,
+            "load_end": load1, "resumed": resumed,
+            "search": {**search, "samples": opts.samples,
+                       "final_samples": opts.final_samples}}
 
 
 def write_numbers(numbers: dict[str, object]) -> None:
@@ -284,20 +318,30 @@ def write_numbers(numbers: dict[str, object]) -> None:
     text = re.sub(r"(<!-- setup-numbers -->\n).*?(\n<!-- /setup-numbers -->)",
                   lambda m: m.group(1) + block + m.group(2), text, flags=re.S)
     if numbers.get("cohort"):
-        rows = ["| size | coverage | least clearance | least margin | collisions | time |",
-                "| --- | --- | --- | --- | --- | --- |"]
-        for r in numbers["cohort"]:  # type: ignore[attr-defined]
-            rows.append(f"| {r['size']:.3f} | {100 * r['coverage']:.1f} % | "
-                        f"{1000 * r['min_clearance']:.1f} mm | {1000 * r['margin_min']:.1f} mm "
-                        f"| {int(r['collisions'])} | {r['seconds']:.0f} s |")
-        last = numbers["cohort"][-1]  # type: ignore[index]
-        rows += ["", f"{len(numbers['cohort'])} phantoms in "  # type: ignore[arg-type]
-                 f"{last.get('total_seconds', float('nan')):.0f} s on Dask's local threads "
-                 f"({last.get('load', 'load not recorded')}; "
-                 f"{last.get('resumed', 0)} read back from the folder, not planned)."]
         text = re.sub(r"(<!-- setup-cohort -->\n).*?(\n<!-- /setup-cohort -->)",
-                      lambda m: m.group(1) + "\n".join(rows) + m.group(2), text, flags=re.S)
+                      lambda m: m.group(1) + _cohort_block(numbers["cohort"]) + m.group(2),
+                      text, flags=re.S)
     doc.write_text(text)
+
+
+def _cohort_block(c: Any) -> str:
+    """The cohort's table and its summary line (markdown)."""
+    rows = ["| size | coverage | least clearance | least margin | collisions | time |",
+            "| --- | --- | --- | --- | --- | --- |"]
+    for r in c["rows"]:
+        rows.append(f"| {r['size']:.3f} | {100 * r['coverage']:.1f} % | "
+                    f"{1000 * r['min_clearance']:.1f} mm | {1000 * r['margin_min']:.1f} mm "
+                    f"| {int(r['collisions'])} | {r['seconds']:.0f} s |")
+    cov = np.array([r["coverage"] for r in c["rows"]])
+    n = len(cov)
+    s = c.get("search", _SEARCH)
+    rows += ["", f"{n} phantoms in {c['total_seconds']:.0f} s wall on {c['where']}, search "
+             f"{s['population']} x {s['generations']} and {s['polish']} polish rounds (load at "
+             f"the start {c['load_start'].removeprefix('load ')}, at the end "
+             f"{c['load_end'].removeprefix('load ')}; {c['resumed']} read back from the "
+             f"folder, not planned): {int(np.sum(cov >= 0.95))} of {n} reach 95 %, "
+             f"{int(np.sum(cov >= 0.90))} of {n} reach 90 %."]
+    return "\n".join(rows)
 
 
 def main() -> None:
@@ -311,6 +355,13 @@ def main() -> None:
                     help="plan the cohort only; the other numbers from setup_numbers.json")
     ap.add_argument("--cohort-out", type=Path, default=ROOT / "setup_cohort",
                     help="folder of the cohort's set-ups (resumable)")
+    ap.add_argument("--cluster", choices=("threads", "local"), default="threads",
+                    help="the cohort on Dask's local threads or a distributed.LocalCluster")
+    ap.add_argument("--workers", type=int, default=2, help="LocalCluster worker processes")
+    ap.add_argument("--threads-per-worker", type=int, default=1)
+    for k, v in _SEARCH.items():
+        ap.add_argument(f"--cohort-{k}", type=int, default=v,
+                        help=f"the cohort's search: {k} ({v}, plan_setup's default)")
     ap.add_argument("--view-only", action="store_true",
                     help="the HTML view and its screenshot only, from setup_phantom.toml")
     ap.add_argument("--html", type=Path, default=None,
@@ -321,7 +372,8 @@ def main() -> None:
         return
     if args.cohort_only:
         numbers = json.loads((FIG / "setup_numbers.json").read_text())
-        numbers["cohort"] = cohort(args.cohort, SetupOptions(), args.cohort_out)
+        numbers["cohort"] = cohort(args.cohort, SetupOptions(), args.cohort_out,
+                                   **_cluster_args(args))
         write_numbers(numbers)
         return
     design = Design.default()
@@ -351,13 +403,19 @@ def main() -> None:
         view(args.html)
         app_view()
     if args.cohort:
-        numbers["cohort"] = cohort(args.cohort, opts, args.cohort_out)
+        numbers["cohort"] = cohort(args.cohort, opts, args.cohort_out, **_cluster_args(args))
     elif (FIG / "setup_numbers.json").exists():     # the last cohort's rows stay
         last = json.loads((FIG / "setup_numbers.json").read_text()).get("cohort")
-        if last:
+        if last and "rows" in last:
             numbers["cohort"] = last
     write_numbers(numbers)
     print("wrote docs/figures/setup_*.png, setup_numbers.json, docs/setup.md", flush=True)
+
+
+def _cluster_args(args: argparse.Namespace) -> dict[str, Any]:
+    return {"scheduler": args.cluster, "workers": args.workers,
+            "threads": args.threads_per_worker,
+            "search": {k: getattr(args, f"cohort_{k}") for k in _SEARCH}}
 
 
 if __name__ == "__main__":

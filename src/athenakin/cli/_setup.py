@@ -24,12 +24,15 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                                          "patient.toml",
                          description="Write the shipped phantom (abdominal wall, pancreas, "
                                      "aorta, portal vein, table) as STL files in metres, in "
-                                     "the patient's frame, and DIR/patient.toml naming them.")
+                                     "the patient's frame, and DIR/patient.toml naming them "
+                                     "(with --second-port, its assistant's port too).")
     ph.add_argument("--write", required=True, metavar="DIR", type=Path,
                     help="folder of the files (created if missing)")
     ph.add_argument("--size", type=float, default=1.0, help="scale of the patient (1.0)")
     ph.add_argument("--target-size", type=float, default=1.0,
                     help="scale of the pancreas about its centre (1.0)")
+    ph.add_argument("--second-port", action="store_true",
+                    help="add an assistant's port and its instrument ([[patient.second_port]])")
     ph.add_argument("--force", action="store_true", help="replace files that exist")
     ph.set_defaults(func=run_phantom)
     pl = cmds.add_parser("plan", help="plan the set-up of a patient (NSGA-II on Dask)",
@@ -84,7 +87,8 @@ def run_phantom(args: argparse.Namespace) -> int:
     """Write the phantom."""
     from ..synthesis import phantom, write_patient
 
-    path = write_patient(phantom(size=args.size, target_size=args.target_size), args.write,
+    path = write_patient(phantom(size=args.size, target_size=args.target_size,
+                                 second_port=args.second_port), args.write,
                          overwrite=args.force)
     print(f"wrote {path} and its meshes")
     return 0
@@ -109,7 +113,8 @@ def run_plan(args: argparse.Namespace) -> int:
     if args.json:
         print(dump_json({"setup": str(path), "figures": plan.figures,
                          "T_b_e": plan.chosen.T_b_e, "T_p_b": plan.chosen.T_p_b,
-                         "port": plan.chosen.port}))
+                         "port": plan.chosen.port,
+                         "second_ports": [sp.to_table() for sp in patient.second_ports]}))
         return 0
     rows = [[int(r["setup"])] + [fmt(float(r[c]), 4) for c in _SHOWN]
             for _, r in plan.front.head(args.top).iterrows()]
@@ -120,6 +125,10 @@ def run_plan(args: argparse.Namespace) -> int:
           f"least margin {1000 * f['margin_min']:.1f} mm, collisions {int(f['collisions'])}")
     print(f"port (patient frame, m): {fmt(plan.chosen.port[0], 4)} "
           f"{fmt(plan.chosen.port[1], 4)} {fmt(plan.chosen.port[2], 4)}")
+    for sp in patient.second_ports:
+        print(f"second port {sp.name!r} (patient frame, m): {fmt(sp.port[0], 4)} "
+              f"{fmt(sp.port[1], 4)} {fmt(sp.port[2], 4)}; its instrument is in the "
+              f"least clearance")
     print(f"wrote {path} in {os.times().elapsed - t0:.0f} s; use it with --rcm-frame {path}")
     return 0
 

@@ -41,7 +41,7 @@ SETUP_VIEW_COLORS: dict[str, tuple[str, float]] = {
     "skin": ("#d9a383", 0.15), "covered": ("#2a9d8f", 0.95), "not covered": ("#c1121f", 0.95),
     "target": ("#e08a00", 0.9),
     "forbidden": ("#6a4c93", 0.8), "table": ("#7f8790", 0.3), "port": ("#111111", 1.0),
-    "axis": ("#111111", 1.0)}
+    "axis": ("#111111", 1.0), "second_port": ("#3a86ff", 0.9)}
 #: Length of the nominal axis drawn outside the skin, beyond the port, m.
 AXIS_OUTSIDE = 0.08
 
@@ -133,12 +133,24 @@ def _patient_traces(patient: Patient, covered: BoolArray, points: FloatArray
 
 
 def _port_traces(patient: Patient, setup: Setup) -> list[dict[str, Any]]:
-    """The port (a marker) and the nominal axis from outside the skin to the target's centre."""
+    """The port, the nominal axis to the target's centre, each second port's instrument.
+
+    The port a marker, the axis a dashed line from outside the skin, each second port's
+    instrument its shaft (a line).
+    """
     c = patient.target_centroid
     ends = np.stack([setup.port - AXIS_OUTSIDE * setup.axis, c]) * MM
     port = setup.port * MM
     name_axis = "instrument's nominal axis"
-    return [
+    color, opacity = SETUP_VIEW_COLORS["second_port"]
+    shafts = [
+        {"type": "scatter3d", "mode": "lines", "name": f"second port: {sp.name}",
+         "x": (sp.shaft[:, 0] * MM).tolist(), "y": (sp.shaft[:, 1] * MM).tolist(),
+         "z": (sp.shaft[:, 2] * MM).tolist(), "opacity": opacity,
+         "line": {"color": color, "width": 8}, "hovertemplate": _hover(f"second port: "
+                                                                       f"{sp.name}", "p")}
+        for sp in patient.second_ports]
+    return shafts + [
         {"type": "scatter3d", "mode": "lines", "name": name_axis, "x": ends[:, 0].tolist(),
          "y": ends[:, 1].tolist(), "z": ends[:, 2].tolist(),
          "line": {"color": SETUP_VIEW_COLORS["axis"][0], "width": 3, "dash": "dash"},
@@ -189,7 +201,8 @@ def setup_figure(patient: Patient, setup: Setup, design: Design | None = None, *
     - ``target: covered (K of N)``, ``target: not covered (N - K of N)``: the target's
       faces (or points of a point-cloud target) by coverage, each face's centroid
       checked (:func:`target_coverage`);
-    - ``instrument's nominal axis`` and ``port (RCM)``;
+    - ``instrument's nominal axis`` and ``port (RCM)``; ``second port: NAME``, the shaft
+      of each second port's instrument;
     - the robot at each of up to ``targets`` covered points, spread along the covered
       target's principal axis: the traces of :func:`~athenakin.plot.robot_figure`
       (``instrument``, ``base rail (x_b)``, ...), placed by ``setup.T_p_b``, in legend

@@ -15,6 +15,8 @@
 * :mod:`._patient` - the patient of a set-up plan (:class:`Patient`: closed surfaces by
   role read from ``patient.toml``) and the parametric :func:`phantom`;
 * :mod:`._phantom` - the parametric :func:`phantom` (abdomen, pancreas, vessels, table);
+* :mod:`._second_port` - a second port and its instrument (:class:`SecondPort`), a capsule
+  the robot's bodies keep clear of;
 * :mod:`._setup` - the decision of a set-up (:class:`Setup`: the port and the robot's
   base), :func:`evaluate_setup` and the set-up file;
 * :mod:`._setup_plan` - :func:`plan_setup`: the set-up for a patient (NSGA-II on Dask);
@@ -66,6 +68,13 @@ from ._search import (
     pareto_mask,
     random_designs,
 )
+from ._second_port import (
+    PORT_SKIN_TOLERANCE,
+    PortOffSkinError,
+    SecondPort,
+    SecondPortError,
+    read_second_ports,
+)
 from ._setup import (
     SETUP_COLUMNS,
     SETUP_VARIABLES,
@@ -98,6 +107,11 @@ __all__ = [
     "PatientMesh",
     "phantom",
     "write_patient",
+    "PORT_SKIN_TOLERANCE",
+    "PortOffSkinError",
+    "SecondPort",
+    "SecondPortError",
+    "read_second_ports",
     "SETUP_COLUMNS",
     "SETUP_OBJECTIVES",
     "SETUP_VARIABLES",

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import time
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -36,6 +37,8 @@ def _fingerprint(patient: Patient, design_row: dict[str, Any], population: int,
         h.update(np.ascontiguousarray(m.faces).tobytes())
     if patient.target_points is not None:
         h.update(np.ascontiguousarray(patient.target_points).tobytes())
+    for sp in patient.second_ports:
+        h.update(json.dumps(sp.to_table(), sort_keys=True).encode())
     return h.hexdigest()
 
 
@@ -46,6 +49,7 @@ def _cohort_chunk(items: list[tuple[str, Patient]], start: int, design_row: dict
     design = design_from_row(design_row)
     rows = []
     for j, (key, patient) in enumerate(items):
+        t0 = time.perf_counter()
         plan = plan_setup(patient, design=design, population=population,
                           generations=generations, polish=polish, seed=seed + start + j,
                           options=opts,
@@ -54,6 +58,7 @@ def _cohort_chunk(items: list[tuple[str, Patient]], start: int, design_row: dict
                                **dict(zip(SETUP_VARIABLES, plan.chosen.decision.tolist(),
                                           strict=True))}
         row["port_p"] = plan.chosen.port.tolist()
+        row["seconds"] = time.perf_counter() - t0
         if out is not None:
             folder = Path(out)
             row["setup_file"] = str(plan.write(folder / f"{key}.toml", patient=key))
@@ -96,7 +101,8 @@ def plan_cohort(patients: Mapping[str, Patient], *, design: Design | None = None
     pandas.DataFrame
         One row per patient, in the order given: ``patient``, the chosen set-up's figures
         (:data:`~athenakin.synthesis.SETUP_COLUMNS`), its decision
-        (:data:`~athenakin.synthesis.SETUP_VARIABLES`), ``port_p`` and, with ``out``,
+        (:data:`~athenakin.synthesis.SETUP_VARIABLES`), ``port_p``, ``seconds`` (the
+        wall time of the patient's plan on its worker, s) and, with ``out``,
         ``setup_file``.
 
     Raises

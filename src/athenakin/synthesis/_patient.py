@@ -5,7 +5,9 @@ A :class:`Patient` holds, in the patient's frame ``p`` (the frame of the mesh fi
 - ``skin``: the abdominal wall, a closed surface around the abdomen (a solid);
 - ``target``: the organ to reach, a closed surface (its volume is sampled) or a point cloud;
 - ``forbidden``: structures the instrument must not cross (vessels, organs), closed surfaces;
-- ``table``: the operating table, a closed surface (optional).
+- ``table``: the operating table, a closed surface (optional);
+- ``second_ports``: other ports and their instruments (:class:`SecondPort`), capsules the
+  robot keeps clear of (optional).
 
 Every closed-surface role must close a solid (each edge between two consistently
 oriented triangles, :func:`athenakin.collision._mesh.closed_surface`): inside / outside
@@ -37,6 +39,7 @@ from ..collision._mesh import (
 )
 from ..errors import InvalidInputError
 from ._errors import SynthesisError
+from ._second_port import SecondPort, SecondPortError, check_second_ports, second_ports_from_tables
 
 __all__ = ["ROLES", "PatientMesh", "Patient", "PatientFileError", "OpenSurfaceError",
            "write_patient", "MAX_TARGET_SAMPLES"]
@@ -164,6 +167,8 @@ class Patient:
     table : PatientMesh or None
         The operating table.
     name : str
+    second_ports : tuple of SecondPort
+        Other ports and their instruments, which the robot's bodies keep clear of.
     inner_forbidden : tuple of str
         The forbidden structures wholly inside the skin (set from the meshes).
 
@@ -171,7 +176,9 @@ class Patient:
     ------
     InvalidInputError
         Both or neither of ``target`` / ``target_points``, a mesh in the wrong role, a
-        name used twice, target points outside the skin.
+        name used twice (meshes and second ports), target points outside the skin.
+    PortOffSkinError
+        A second port off the skin or with its tip outside it.
     """
 
     skin: PatientMesh
@@ -180,6 +187,7 @@ class Patient:
     forbidden: tuple[PatientMesh, ...] = ()
     table: PatientMesh | None = None
     name: str = ""
+    second_ports: tuple[SecondPort, ...] = ()
     inner_forbidden: tuple[str, ...] = dataclasses.field(init=False, default=())
 
     def __post_init__(self) -> None:
@@ -210,7 +218,9 @@ class Patient:
             P = P.copy()
             P.flags.writeable = False
             object.__setattr__(self, "target_points", P)
-        names = [m.name for m in self.meshes]
+        ports = check_second_ports(self.skin.vertices, self.skin.faces, self.second_ports)
+        object.__setattr__(self, "second_ports", ports)
+        names = [m.name for m in self.meshes] + [sp.name for sp in ports]
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
             raise InvalidInputError(f"name: mesh names used twice: {dup}")
@@ -324,6 +334,13 @@ class Patient:
             path = "target.ply"
             points = true              # the target as a point cloud (the file's vertices)
 
+            [[patient.second_port]]    # any number (SecondPort), in the file's units
+            name = "assistant"
+            port = [-0.06, -0.10, 0.22]   # a point of the skin
+            tip = [0.0, -0.06, 0.16]      # the point its instrument reaches
+            radius = 0.005                # the shaft's radius
+            outside = 0.2                 # the shaft's length outside the skin
+
         Exactly one ``skin`` and one ``target``; any number of ``forbidden``; at most one
         ``table``.
 
@@ -344,6 +361,8 @@ class Patient:
             unreadable mesh file (the message names the file and the entry).
         OpenSurfaceError
             A closed-surface role whose mesh is not watertight.
+        SecondPortError
+            A bad second port (:class:`PortOffSkinError` for one off the skin).
         """
         p = check_path(path, "path")
         try:
@@ -354,8 +373,8 @@ class Patient:
         table: Any = data.get("patient", data)
         try:
             return _patient_from_mapping(table, p.parent)
-        except OpenSurfaceError as exc:
-            raise OpenSurfaceError(f"{p}: {exc}") from None
+        except (OpenSurfaceError, SecondPortError) as exc:
+            raise type(exc)(f"{p}: {exc}") from None
         except (InvalidInputError, TypeError) as exc:
             raise PatientFileError(f"{p}: {exc}") from None
 
@@ -363,12 +382,14 @@ class Patient:
 def _patient_from_mapping(data: Mapping[str, Any], base: Path) -> Patient:
     if not isinstance(data, Mapping):
         raise PatientFileError(f"patient: expected a table, got {type(data).__name__}")
-    check_keys(data, "patient", ("name", "scale", "mesh"), error=PatientFileError)
+    check_keys(data, "patient", ("name", "scale", "mesh", "second_port"),
+               error=PatientFileError)
     scale = check_scalar(data.get("scale", 1.0), "patient.scale", positive=True)
     items = data.get("mesh", [])
     if not isinstance(items, list) or not items:
         raise PatientFileError("patient.mesh: expected an array of [[patient.mesh]] tables")
-    kw: dict[str, Any] = {"forbidden": []}
+    kw: dict[str, Any] = {"forbidden": [], "second_ports": second_ports_from_tables(
+        data.get("second_port", []), "patient.second_port", scale=scale)}
     for k, t in enumerate(items):
         what = f"patient.mesh[{k}]"
         if not isinstance(t, Mapping):
@@ -456,6 +477,8 @@ def write_patient(patient: Patient, folder: str | Path, *, overwrite: bool = Fal
         entries.append({"role": "target", "name": "target", "path": f.name, "points": True})
     toml = out / "patient.toml"
     table: dict[str, Any] = {"scale": 1.0, "mesh": entries}
+    if patient.second_ports:
+        table["second_port"] = [sp.to_table() for sp in patient.second_ports]
     if patient.name:
         table = {"name": patient.name, **table}
     text = ("# A patient for `athenakin setup plan`: closed surfaces in the patient's frame, m\n"

@@ -4,7 +4,9 @@ One set of rules, for the set-up's coverage check (:func:`~athenakin.synthesis.e
 and for every view of a set-up (:func:`~athenakin.synthesis.setup_environment`: the app,
 teleoperation): the skin allows the bodies that enter at the port; a forbidden structure
 inside the skin pairs with the instrument only (any other body reaching it crosses the
-skin, which pairs with it); the table pairs with every body; the target is no obstacle.
+skin, which pairs with it); the table pairs with every body; the target is no obstacle;
+a second port's instrument (:class:`~athenakin.synthesis.SecondPort`) is a capsule that
+pairs with every body, outside the patient and inside.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import numpy as np
 
 from .._transforms import invert_transform
 from .._typing import FloatArray
-from ._patient import Patient, PatientMesh
+from ._patient import Patient
 
 
 def patient_environment(patient: Patient, T_p_b: FloatArray, segs_p: FloatArray | None, *,
@@ -28,6 +30,7 @@ def patient_environment(patient: Patient, T_p_b: FloatArray, segs_p: FloatArray 
     with their ``radii`` (n_bodies,); a body farther than ``cull`` (m) from a mesh's box
     at every one is not paired with it. ``skin_bodies``: the bodies that may touch the
     skin (the instrument enters at the port; the wall test checks the rest of its line).
+    Each second port's instrument follows the meshes, a capsule obstacle of its shaft.
     """
     from .._mechanism import BODIES
     from ..collision import Environment
@@ -47,20 +50,28 @@ def patient_environment(patient: Patient, T_p_b: FloatArray, segs_p: FloatArray 
             allow = set()
         if segs_p is not None:
             assert radii is not None
-            allow |= _far_bodies(m, segs_p, radii, cull)
+            allow |= _far_bodies(m.bounds, segs_p, radii, cull)
         if set(BODIES) <= allow:
             continue
         obs.append(Obstacle(kind="mesh", name=m.name, vertices=m.vertices, faces=m.faces,
                             T_b_o=T_b_p, allow=tuple(b for b in BODIES if b in allow)))
+    for sp in patient.second_ports:
+        far = set() if segs_p is None else _far_bodies(sp.bounds, segs_p, radii, cull)
+        if set(BODIES) <= far:
+            continue
+        a, b = sp.shaft @ T_b_p[:3, :3].T + T_b_p[:3, 3]
+        obs.append(Obstacle(kind="capsule", name=sp.name, a=a, b=b, radius=sp.radius,
+                            allow=tuple(x for x in BODIES if x in far)))
     return Environment(tuple(obs))
 
 
-def _far_bodies(mesh: PatientMesh, segs_p: FloatArray, radii: FloatArray,
+def _far_bodies(bounds: FloatArray, segs_p: FloatArray, radii: FloatArray | None,
                 cull: float) -> set[str]:
-    """Bodies whose capsules stay farther than ``cull`` from the mesh's bounding box."""
+    """Bodies whose capsules stay farther than ``cull`` from a box ``[lo, hi]`` (2, 3)."""
     from .._mechanism import BODIES
 
-    lo, hi = mesh.bounds
+    assert radii is not None
+    lo, hi = bounds
     smin = np.nanmin(segs_p, axis=-2)
     smax = np.nanmax(segs_p, axis=-2)
     gap = np.maximum(np.maximum(lo - smax, smin - hi), 0.0)

@@ -2,8 +2,8 @@
 
 :func:`phantom` builds an abdominal wall, a pancreas-like target, the aorta, the portal
 vein and a table as closed, outward-oriented tubes and a box
-(:class:`~athenakin.synthesis.Patient`), so that every example and test runs offline; a
-cohort varies its ``size``.
+(:class:`~athenakin.synthesis.Patient`), and optionally an assistant's port, so that every
+example and test runs offline; a cohort varies its ``size``.
 """
 
 from __future__ import annotations
@@ -16,7 +16,8 @@ from numpy.typing import ArrayLike
 from .._typing import FloatArray, IntArray
 from .._validation import check_count, check_scalar
 from ..errors import InvalidInputError
-from ._patient import Patient, PatientMesh, _signed_volumes
+from ._patient import Patient, PatientMesh, _signed_volumes, ray_down
+from ._second_port import SecondPort
 
 __all__ = ["phantom"]
 
@@ -67,7 +68,7 @@ def _box(centre: Sequence[float], half: Sequence[float]) -> tuple[FloatArray, In
 
 
 def phantom(*, size: float = 1.0, target_size: float = 1.0, resolution: int = 24,
-            name: str = "phantom") -> Patient:
+            name: str = "phantom", second_port: bool = False) -> Patient:
     """A parametric abdomen: wall, pancreas-like target, aorta, portal vein, table.
 
     The patient's frame (supine patient): ``x`` cranial, ``y`` to the patient's left,
@@ -76,7 +77,10 @@ def phantom(*, size: float = 1.0, target_size: float = 1.0, resolution: int = 24
     (insufflated), an elliptical wall; a pancreas 0.13 m from head (patient's right)
     to tail, 9 to 22 mm thick, 0.12 m above the table; the aorta (12 mm radius) behind
     it, the portal vein (7 mm) behind its neck rising to the liver; a table 1.9 x 0.55 m,
-    60 mm thick. Every surface is closed and outward-oriented.
+    60 mm thick. Every surface is closed and outward-oriented. With ``second_port``, an
+    assistant's port on the patient's right, caudal of the target (the skin above
+    ``(-0.06, -0.10)`` m), whose instrument (5 mm radius, 0.2 m outside the skin) reaches
+    40 mm above the pancreas's head, as a retractor would.
 
     Parameters
     ----------
@@ -87,6 +91,8 @@ def phantom(*, size: float = 1.0, target_size: float = 1.0, resolution: int = 24
     resolution : int, keyword-only
         Segments around each ring (8 to 96); the number of rings follows.
     name : str, keyword-only
+    second_port : bool, keyword-only
+        Add the assistant's port (:class:`SecondPort` ``"assistant"``).
 
     Returns
     -------
@@ -120,9 +126,16 @@ def phantom(*, size: float = 1.0, target_size: float = 1.0, resolution: int = 24
     cv = np.stack([-0.02 + 0.11 * tv, -0.005 - 0.05 * tv, 0.080 + 0.012 * tv], -1)
     vein = _tube(cv * s, np.full(k, 0.007 * s), np.full(k, 0.007 * s), (0, 0, 1), m // 2)
     table = _box((0.0, 0.0, -0.03 * s), (0.95 * s, 0.275 * s, 0.03 * s))
+    skin_mesh = PatientMesh(name="skin", role="skin", vertices=skin[0], faces=skin[1])
+    ports: tuple[SecondPort, ...] = ()
+    if second_port:
+        port, _ = ray_down(skin_mesh, np.array([[-0.06, -0.10]]) * s)
+        ports = (SecondPort(name="assistant", port=port[0], radius=0.005, outside=0.2,
+                            tip=np.array([cp[0, 0] - 0.01, cp[0, 1] + 0.005,
+                                          cp[0, 2] + 0.04]) * s),)
     return Patient(
-        name=name,
-        skin=PatientMesh(name="skin", role="skin", vertices=skin[0], faces=skin[1]),
+        name=name, second_ports=ports,
+        skin=skin_mesh,
         target=PatientMesh(name="pancreas", role="target", vertices=target[0],
                            faces=target[1]),
         forbidden=(PatientMesh(name="aorta", role="forbidden", vertices=aorta[0],

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -41,6 +41,7 @@ from ._metrics import (
 from ._patient import Patient, ray_down, segment_crossings
 from ._patient_environment import patient_environment
 from ._reduce import CONDITION_ORDER, _condition_values
+from ._second_port import SecondPort
 from ._task import rcm_frame_from_axis
 
 __all__ = ["SETUP_VARIABLES", "SETUP_COLUMNS", "SetupOptions", "Setup",
@@ -167,7 +168,8 @@ class Setup:
         return self.T_p_b @ self.T_b_e  # type: ignore[no-any-return]
 
     def write(self, path: str | Path, *, design: Design | None = None,
-              figures: Mapping[str, float] | None = None, patient: str = "") -> Path:
+              figures: Mapping[str, float] | None = None, patient: str = "",
+              second_ports: Sequence[SecondPort] = ()) -> Path:
         """Write the set-up as TOML: what ``--rcm-file setup.toml`` and ``--design`` read.
 
         Parameters
@@ -179,6 +181,9 @@ class Setup:
             The planner's figures (``[setup.figures]``).
         patient : str, keyword-only
             The patient's name or file.
+        second_ports : sequence of SecondPort, keyword-only
+            The patient's second ports the set-up was planned with
+            (``[[setup.second_port]]``, m; :func:`read_second_ports` reads them).
 
         Returns
         -------
@@ -193,6 +198,10 @@ class Setup:
             "decision": dict(zip(SETUP_VARIABLES, self.decision.tolist(), strict=True))}
         if patient:
             table["patient"] = patient
+        for sp in second_ports:
+            check_instance(sp, "second_ports", SecondPort)
+        if second_ports:
+            table["second_port"] = [sp.to_table() for sp in second_ports]
         if figures:
             table["figures"] = {k: float(v) for k, v in figures.items()
                                 if isinstance(v, (int, float)) and math.isfinite(float(v))}
@@ -352,7 +361,8 @@ def setup_environment(patient: Patient, setup: Setup, *,
     The obstacles :func:`evaluate_setup` checks every covered sample against (without
     its culling of far bodies): the skin (the bodies of ``options.skin_bodies`` may touch
     it), each forbidden structure (one inside the skin pairs with the instrument only)
-    and the table, each a mesh placed by ``T_b_p = T_p_b^-1``; the target is none.
+    and the table, each a mesh placed by ``T_b_p = T_p_b^-1``, then each second port's
+    instrument, a capsule that pairs with every body; the target is none.
 
     Parameters
     ----------
@@ -384,9 +394,9 @@ def evaluate_setup(patient: Patient, setup: Setup | None, design: Design | None 
     puts the tip there through the port, assembled and within the strokes; the
     instrument's line crosses the skin only at the port (within ``port_entry``); every
     length condition of the singular set is at least ``singularity_margin``; and the
-    robot's bodies keep ``clearance_margin`` from each other, the skin, the table and the
-    forbidden structures (the instrument's capsule, port to tip included,
-    :func:`athenakin.collision.clearance`).
+    robot's bodies keep ``clearance_margin`` from each other, the skin, the table, the
+    forbidden structures and every second port's instrument (the instrument's capsule,
+    port to tip included, :func:`athenakin.collision.clearance`).
 
     Parameters
     ----------

@@ -23,6 +23,7 @@ from ..design import Design, resolve_design
 from ..errors import InvalidInputError
 from ._metrics import row_from_design
 from ._patient import Patient
+from ._second_port import SecondPort
 from ._setup import (
     SETUP_VARIABLES,
     Setup,
@@ -76,6 +77,8 @@ class SetupPlan:
     design : Design
     objectives : dict of str -> {"max", "min"}
     options : SetupOptions
+    second_ports : tuple of SecondPort
+        The patient's second ports, which the search kept its bodies clear of.
     """
 
     table: Any
@@ -85,9 +88,10 @@ class SetupPlan:
     design: Design
     objectives: dict[str, str]
     options: SetupOptions
+    second_ports: tuple[SecondPort, ...] = ()
 
     def write(self, path: str | Path, *, patient: str = "") -> Path:
-        """Write the chosen set-up (:meth:`Setup.write`) with the design and the figures.
+        """Write the chosen set-up (:meth:`Setup.write`): design, figures, second ports.
 
         Parameters
         ----------
@@ -102,7 +106,7 @@ class SetupPlan:
             The file written.
         """
         return self.chosen.write(path, design=self.design, figures=self.figures,
-                                 patient=patient)
+                                 patient=patient, second_ports=self.second_ports)
 
 
 #: Objectives of the search and their sense.
@@ -241,7 +245,7 @@ def plan_setup(patient: Patient, *, design: Design | None = None,
     figures = evaluate_setup(patient, chosen, design, options=opts,
                              samples=opts.final_samples, seed=seed + 1)
     return SetupPlan(table=table, front=front, chosen=chosen, figures=figures, design=design,
-                     objectives=obj, options=opts)
+                     objectives=obj, options=opts, second_ports=patient.second_ports)
 
 
 #: First step of the compass search, as a fraction of each bound's width.
