@@ -132,7 +132,7 @@ def _parallel_stage(G, P, tol, SH, S0, S1, n):
     ttol = tol[0]
     for ii in range(n):
         q1, q2, q3 = G[(_GQ) * CHUNK + ii], G[(_GQ + 1) * CHUNK + ii], G[(_GQ + 2) * CHUNK + ii]
-        pr, tangent, xm, q3, r1, _, d, k, half, by, bz, ey, ez = module_closed_form(
+        pr, tangent, xm, _, q3, r1, _, d, k, half, by, bz, ey, ez = module_closed_form(
             q1, q2, q3, P, ttol)
         nan = 0.0 if pr == 0.0 else math.nan
         a = (0.0 if tangent else half) + nan

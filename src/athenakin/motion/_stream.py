@@ -127,7 +127,7 @@ def _kernel_geometry(tr: Tracker) -> FloatArray:
     g = tr._g
     return np.array([g.l1, g.l2, g.l3, g.l4, g.l5, g.h_sign, *g.c, *g.ex, *g.ez, *g.lo, *g.hi,
                      tr.jump_m, tr.jump_rad, *tr._watch, tr.margins.half_chord, TANGENT_TOL,
-                     P_ZERO_TOL, DEGENERATE_TOL], dtype=float)
+                     P_ZERO_TOL, DEGENERATE_TOL, *g.P], dtype=float)
 
 
 def track_batch(tr: Tracker, q: FloatArray) -> dict[str, Any]:
