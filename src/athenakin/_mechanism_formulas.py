@@ -22,8 +22,9 @@ import numpy as np
 
 from .errors import Reason
 
-__all__ = ["FORMULA_JOINTS", "tree_joint_formula", "parallel_state_formula", "module_params",
-           "actuator_reason_formula", "module_closed_form_formula"]
+__all__ = ["FORMULA_JOINTS", "FORMULA_POINTS", "tree_joint_formula", "parallel_state_formula",
+           "module_params", "actuator_reason_formula", "module_closed_form_formula",
+           "mechanism_points_formula"]
 
 # Reason codes (athenakin.errors.Reason) as floats.
 _NONFINITE, _STROKE, _AB_ORDER = (float(Reason.NONFINITE_INPUT), float(Reason.STROKE_LIMIT),
@@ -35,6 +36,11 @@ _LINK, _DISJOINT = float(Reason.LINK_TOO_SHORT), float(Reason.CIRCLES_DISJOINT)
 FORMULA_JOINTS = ("q1", "a_ujoint_x", "a_ujoint_y", "platform_y", "u1", "u2", "p", "u3", "u4",
                   "u5", "a_base_z", "carrier_z", "k2_x", "q3", "q2", "b_ujoint_x",
                   "b_ujoint_y", "b_base_z")
+
+#: The points :func:`mechanism_points_formula` returns, in its order (that of
+#: :data:`athenakin._mechanism.POINT_NAMES`, checked there).
+FORMULA_POINTS = ("A", "B", "M", "D", "C_foot", "C", "O_i", "O_s", "RCM", "tip", "rail_lo",
+                  "rail_hi", "A_lo", "A_hi", "B_lo", "B_hi", "S_3", "S_4", "S_5")
 
 
 def tree_joint_formula(q1, q2, q3, p, u1, u2, u3, u4, u5, oy, oz,  # type: ignore[no-untyped-def]
@@ -208,3 +214,69 @@ def module_closed_form_formula(q1, q2, q3, pr, P, ttol, sqrt):  # type: ignore[n
     dd = (2.0 * d) * d
     return (pr, tangent, 0.5 * (q1 + q2), h, q3, r1, m_y, d, k, half, (H * m_y) / dd,
             (H * l5) / dd, (-l5) / d, m_y / d)
+
+
+def mechanism_points_formula(q1, q2, p, ca, sa, cb, sb, c3, s3,  # type: ignore[no-untyped-def]
+                             ox, oy, oz, cy, cz, rc0, rc1, rc2, ze0, ze1, ze2, G, sqrt,
+                             minimum, maximum, where):
+    """Every named point of the mechanism (base frame, m) from one FK slot's configuration.
+
+    The one formula of the points (:data:`athenakin._mechanism.POINT_NAMES`): numpy
+    evaluates it on arrays (:func:`athenakin._mechanism.mechanism_points`), the tracker's
+    clearance on Python floats (:class:`athenakin.motion._clearance.PoseClearance`) and
+    the teleoperation guard compiled (:mod:`athenakin.teleop._kernels`).
+
+    Parameters
+    ----------
+    q1, q2, p : float or ndarray
+        The carriages (m) and the insertion ``p`` (m) of the slot.
+    ca, sa, cb, sb, c3, s3 : float or ndarray
+        Cosines and sines of ``u1, u2, u3``.
+    ox, oy, oz, cy, cz : float or ndarray
+        ``O_s`` (m) and ``R_b_s = [[1, 0, 0], [0, cz, cy], [0, -cy, cz]]`` (the FK's
+        ``T_b_s``).
+    rc0, rc1, rc2, ze0, ze1, ze2 : float or ndarray
+        The RCM and the z axis of the RCM frame E (base frame).
+    G : sequence of 10 float
+        ``l2, l3, l4, l5, tool length, rail margin, half the carriage length, sphere
+        radius, rail's low end, rail's high end`` (m).
+    sqrt, minimum, maximum, where : callable
+        The square root, the element-wise min and max of two, the select.
+
+    Returns
+    -------
+    tuple of 19 (x, y, z)
+        In the order of :data:`FORMULA_POINTS` (components may be plain numbers).
+    """
+    l2, l3, l4, l5, L, rm, half, rs, lo, hi = (G[0], G[1], G[2], G[3], G[4], G[5], G[6],
+                                               G[7], G[8], G[9])
+    h = 0.5 * (q1 - q2)
+    x_M = 0.5 * (q1 + q2)
+    y_D = sqrt(l3 * l3 - h * h)
+    # R_3 = R_b_s R(u1, u2) (chain._ups.rotation_u_pair): its third column is the instrument
+    # axis d (O_s -> RCM if p > 0), R_3 (sin u3, -cos u3, 0) the axis a4 of u4
+    x, y, z = ca * sb, sa * sb, -cb
+    d0, d1, d2 = x, cz * y + cy * z, cz * z - cy * y
+    x, y, z = ca * cb * s3 - sa * c3, sa * cb * s3 + ca * c3, sb * s3
+    a0, a1, a2 = x, cz * y + cy * z, cz * z - cy * y
+    # S_3: the instrument guide, rs from the RCM towards O_s (O_s + t d, t = p -+ rs); where
+    # that is off the instrument (|p| < rs), the guide holds it at its nearest point
+    side = where(p < 0.0, -1.0, 1.0)                    # O_s is on the side -p d of the RCM
+    t = p - side * rs
+    on = (t >= 0.0) & (t <= L)
+    tc = minimum(maximum(t, 0.0), L)
+    ms = -side
+    s_3 = (where(on, rc0 + rs * (ms * d0), ox + tc * d0),
+           where(on, rc1 + rs * (ms * d1), oy + tc * d1),
+           where(on, rc2 + rs * (ms * d2), oz + tc * d2))
+    # S_4 on the u4 axis as the chain orients it, S_5 on +z_e: u4 is perpendicular to the
+    # instrument, and at the home pose so is u5, so a side of O_s would flip them with the
+    # rounding of a zero dot product
+    return ((q1, 0.0, 0.0), (q2, 0.0, 0.0), (x_M, 0.0, 0.0), (x_M, y_D, 0.0),
+            (x_M, y_D + l2, 0.0), (x_M, y_D + l2, l5), (ox, oy - l4 * cy, oz - l4 * cz),
+            (ox, oy, oz), (rc0, rc1, rc2), (ox + L * d0, oy + L * d1, oz + L * d2),
+            (minimum(minimum(q1, q2) - rm, lo), 0.0, 0.0),
+            (maximum(maximum(q1, q2) + rm, hi), 0.0, 0.0), (q1 - half, 0.0, 0.0),
+            (q1 + half, 0.0, 0.0), (q2 - half, 0.0, 0.0), (q2 + half, 0.0, 0.0), s_3,
+            (rc0 + rs * a0, rc1 + rs * a1, rc2 + rs * a2),
+            (rc0 + rs * ze0, rc1 + rs * ze1, rc2 + rs * ze2))

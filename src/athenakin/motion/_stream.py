@@ -232,10 +232,10 @@ def _collide_rows(tr: Tracker, cols: dict[str, Any]) -> None:
     check, pc = tr._check, tr._pose_clearance
     assert check is not None and pc is not None
     pairs: list[tuple[str, str]] = [("", "")] * len(cols["q"])
-    q, p, u, o, dz = (cols[k].tolist() for k in ("q", "p", "u", "O_s", "direction_b"))
+    q, p, u, o = (cols[k].tolist() for k in ("q", "p", "u", "O_s"))
     flags = cols["flags"]
     for i in np.flatnonzero(cols["valid"]).tolist():
-        d, names = pc(tuple(q[i]), p[i], tuple(u[i]), tuple(o[i]), tuple(dz[i]))
+        d, names = pc(tuple(q[i]), p[i], tuple(u[i]), tuple(o[i]))
         pair = np.array([names])
         cols["clearance"][i] = d
         pairs[i] = (str(pair[0, 0]), str(pair[0, 1]))

@@ -272,7 +272,7 @@ class Tracker:
         check = self._check
         assert check is not None
         assert self._pose_clearance is not None       # the points from the pose, one call
-        d, names = self._pose_clearance(pose.q, pose.p, pose.u, pose.O_s, pose.direction_b)
+        d, names = self._pose_clearance(pose.q, pose.p, pose.u, pose.O_s)
         pair = np.array([names])
         flags = int(pose.flags)
         if d < check.margin:              # False for NaN (no valid slot: nothing to check)
