@@ -2,7 +2,7 @@
 
 Run from the repository root (each prints the machine's load beside its numbers)::
 
-    python benchmarks/bench_teleop.py latency [--cycles 1000000]
+    python benchmarks/bench_teleop.py latency [--cycles 1000000] [--block 1000]
     python benchmarks/bench_teleop.py guard [--cycles 100000] [--block 1000]
     python benchmarks/bench_teleop.py hostile [--cycles 1000000] [--seed 0] [--clearance]
         [--oracle]
@@ -63,24 +63,40 @@ def _percentiles(dt: np.ndarray) -> str:
             f"max {us.max():8.1f} us")
 
 
-def latency(cycles: int) -> None:
-    print(f"latency over {cycles} cycles ({_load()})")
+def latency(cycles: int, block: int = 0) -> None:
+    """The chain with and without the feed-forward, then each stage alone.
+
+    ``block``: 0 runs all the cycles without the feed-forward, then all with it; more
+    runs the two round robin in blocks of ``block`` cycles (the machine's speed changes
+    over seconds: blocks spread it over both alike, as ``guard`` does).
+    """
+    print(f"latency over {cycles} cycles ({_load()})"
+          + (f", round robin in blocks of {block}" if block else ""))
     clock = time.perf_counter
+    teles = {}
     for ff in (False, True):
-        n = cycles
         tele = Teleop(T, D, q0=Q0, options=TeleopOptions(feedforward=ff))
         for k in range(2000):                       # warm up (compile, caches)
             tele.step(k / RATE, master(k))
-        tele = Teleop(T, D, q0=Q0, options=TeleopOptions(feedforward=ff))
-        samples = [master(k) for k in range(n)]
-        dt = np.empty(n)
-        for k in range(n):
+        teles[ff] = Teleop(T, D, q0=Q0, options=TeleopOptions(feedforward=ff))
+    samples = [master(k) for k in range(cycles)]
+    dts = {ff: np.empty(cycles) for ff in teles}
+    step = block if block > 0 else cycles
+    order = [(k0, ff) for k0 in range(0, cycles, step) for ff in teles] if block > 0 else \
+        [(0, False), (0, True)]
+    for k0, ff in order:
+        tele, dt = teles[ff], dts[ff]
+        for k in range(k0, min(k0 + step, cycles)):
             m = samples[k]
             t0 = clock()
             tele.step(k / RATE, m)
             dt[k] = clock() - t0
-        print(f"  feed-forward {'on ' if ff else 'off'} ({n} cycles, backend {tele.backend}): "
-              f"{_percentiles(dt)}")
+    for ff, dt in dts.items():
+        print(f"  feed-forward {'on ' if ff else 'off'} ({cycles} cycles, backend "
+              f"{teles[ff].backend}): {_percentiles(dt)}")
+    d50, d99 = ((np.percentile(dts[True], x) - np.percentile(dts[False], x)) * 1e6
+                for x in (50, 99))
+    print(f"  feed-forward on - off: p50 {d50:+.1f} us, p99 {d99:+.1f} us ({_load()} at the end)")
     # where the time goes: each stage alone, over the states of a run
     tele = Teleop(T, D, q0=Q0, options=TeleopOptions(feedforward=False))
     cmds = [tele.step(k / RATE, master(k)) for k in range(5000)]
@@ -406,6 +422,9 @@ def main() -> None:
     sub = p.add_subparsers(dest="what", required=True)
     a = sub.add_parser("latency")
     a.add_argument("--cycles", type=int, default=1_000_000)
+    a.add_argument("--block", type=int, default=0,
+                   help="run with and without the feed-forward round robin in blocks of "
+                        "this many cycles (0: one after the other)")
     g = sub.add_parser("guard")
     g.add_argument("--cycles", type=int, default=100_000)
     g.add_argument("--block", type=int, default=1000, help="cycles per case in each round")
@@ -422,7 +441,7 @@ def main() -> None:
     c.add_argument("--figure", default=None)
     args = p.parse_args()
     if args.what == "latency":
-        latency(args.cycles)
+        latency(args.cycles, args.block)
     elif args.what == "guard":
         guard(args.cycles, args.block)
     elif args.what == "hostile":

@@ -133,9 +133,9 @@ def test_tracker_places_the_bodies_as_the_mechanism_does() -> None:
                 continue
             pose = tr.pose
             ref = mechanism_points(q, T, D, slot=int(k), geometry=geo.geometry).xyz
-            got = fast.points(pose.q, pose.p, pose.u, pose.O_s, pose.direction_b)
-            assert_allclose(got, ref, rtol=0, atol=1e-12)
-            d, pair = fast(pose.q, pose.p, pose.u, pose.O_s, pose.direction_b)
+            got = fast.points(pose.q, pose.p, pose.u, pose.O_s)
+            assert_allclose(got, ref, rtol=0, atol=1e-14)       # the one formula
+            d, pair = fast(pose.q, pose.p, pose.u, pose.O_s)
             c = clearance(q, T, D, slot=int(k), bodies=geo)
             assert d == pytest.approx(float(c.min_distance), abs=1e-12)
             # the pair: that of the least distance (ties, e.g. link_a and link_b by symmetry,

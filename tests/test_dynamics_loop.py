@@ -94,3 +94,35 @@ def test_nan_exactly_where_inverse_dynamics_flags(backend):
     np.testing.assert_allclose(got[ok], want[ok], rtol=1e-12, atol=0)
     assert np.isnan(want).any()
     assert np.isnan(loop([-0.1, 0.1, np.inf], qd[0], qdd[0])).all()   # the function refuses it
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("slot", [0, 5, 8, 13])
+def test_plain_float_tuples_give_the_array_numbers_bit_for_bit(backend, slot):
+    """A control loop's tuples of floats (the compiled path takes them without a
+    conversion) and arrays, lists, tuples of ints or numpy scalars: the same forces,
+    and inverse_dynamics' flags, on states that assemble and states that do not."""
+    rng = np.random.default_rng(slot + 101)
+    q = np.concatenate([sim.sample_reachable_q(15, T, D, slot=slot, rng=rng),
+                        rng.uniform([-0.3, -0.3, 0.0], [0.3, 0.3, 0.8], (15, 3)),
+                        [[np.nan, 0.1, 0.45], [-D.l3, D.l3, 0.45]]])
+    qd = rng.normal(0, 0.05, q.shape)
+    qdd = rng.normal(0, 0.5, q.shape)
+    loop = dynamics.InverseDynamicsLoop(T, D, slot=slot, backend=backend)
+    want = np.full(q.shape, np.nan)                    # the function refuses a NaN q
+    fin = np.isfinite(q).all(axis=1)
+    want[fin] = dynamics.inverse_dynamics(q[fin], qd[fin], qdd[fin], T, D, slot=slot,
+                                          errors="flag", backend=backend)
+    assert np.isnan(want).any() and not np.isnan(want).all()
+    for a, b, c, w in zip(q, qd, qdd, want, strict=True):
+        forms = [(tuple(a.tolist()), tuple(b.tolist()), tuple(c.tolist())), (a, b, c),
+                 (list(a), list(b), list(c)), (tuple(a), tuple(b), tuple(c))]  # np.float64
+        for args in forms:
+            np.testing.assert_array_equal(loop(*args), w)
+    f = loop((-0.1, 0.1, 0.45), (0, 0, 0), (0.0, 0.0, 0.0))           # ints: numbers
+    np.testing.assert_array_equal(f, loop(np.array([-0.1, 0.1, 0.45]), np.zeros(3),
+                                          np.zeros(3)))
+    with pytest.raises(InvalidInputError, match=r"\bqd\b"):
+        loop((-0.1, 0.1, 0.45), (0.0, 0.0), (0.0, 0.0, 0.0))         # a short tuple
+    with pytest.raises(InvalidInputError, match=r"\bqdd\b"):
+        loop((-0.1, 0.1, 0.45), (0.0, 0.0, 0.0), (0.0, 0.0, "x"))

@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike
 
 from .._backend import Backend
 from .._dispatch import forward_kinematics
-from .._mechanism_formulas import tree_joint_formula
+from .._mechanism_formulas import FORMULA_POINTS, mechanism_points_formula, tree_joint_formula
 from .._typing import BoolArray, FloatArray, Int8Array
 from .._validation import check_array, check_slot
 from ..design import Design, resolve_design
@@ -118,8 +118,7 @@ def _pick(arr: FloatArray, names: tuple[str, ...], name: object, what: str,
     return arr[(..., i) + (slice(None),) * tail]
 
 
-#: Index of each point of :data:`POINT_NAMES` in :attr:`MechanismState.xyz`.
-_POINT_INDEX = {name: i for i, name in enumerate(POINT_NAMES)}
+assert tuple(POINT_NAMES) == FORMULA_POINTS     # the order of mechanism_points_formula's
 
 _SEGMENT_INDEX = np.array([[POINT_NAMES.index(a), POINT_NAMES.index(b)]
                            for a, b in BODY_SEGMENTS.values()])
@@ -169,8 +168,7 @@ def state_from_fk(sol: Any, q: FloatArray, T: FloatArray, design: Design,
     qq = np.broadcast_to(q if k is not None else q[..., None, :], batch + (3,))
     T_e = np.broadcast_to(T if k is not None else T[..., None, :, :], batch + (4, 4))
     xyz = np.zeros(batch + (len(POINT_NAMES), 3))
-    _module_points(xyz, qq, design, geometry)
-    _instrument_points(xyz, T_b_s, T_e, p, u5[..., :3], design, geometry)
+    _points(xyz, qq, T_b_s, T_e, p, u5[..., :3], design, geometry)
     xyz[~valid] = np.nan
     if not frames:
         empty = np.empty(batch + (0,))
@@ -207,86 +205,28 @@ def O_i_from_T_b_s(T_b_s: FloatArray, design: Design) -> FloatArray:
     return T_b_s[..., :3, 3] - design.l4 * T_b_s[..., :3, 2]  # type: ignore[no-any-return]
 
 
-def _put(xyz: FloatArray, name: str, x: ArrayLike, y: ArrayLike = 0.0,
-         z: ArrayLike = 0.0) -> None:
-    """Write the point ``name`` of ``xyz`` (..., n_points, 3) from its coordinates."""
-    i = _POINT_INDEX[name]
-    xyz[..., i, 0] = x
-    xyz[..., i, 1] = y
-    xyz[..., i, 2] = z
+def _points(xyz: FloatArray, qq: FloatArray, T_b_s: FloatArray, T_e: FloatArray,
+            p: FloatArray, u: FloatArray, design: Design, geometry: BodyGeometry) -> None:
+    """Write every point of :data:`POINT_NAMES` into ``xyz`` (..., n_points, 3).
 
-
-def _module_points(xyz: FloatArray, qq: FloatArray, design: Design,
-                   geometry: BodyGeometry) -> None:
-    """The points of the parallel module and the rail (in the plane of the actuators)."""
-    _, l2, l3, _, l5 = design.lengths
-    q1, q2 = qq[..., 0], qq[..., 1]
-    h = 0.5 * (q1 - q2)
-    x_M = 0.5 * (q1 + q2)
-    with np.errstate(invalid="ignore"):
-        y_D = np.sqrt(l3 * l3 - h * h)
-    half = 0.5 * geometry.carriage_length
-    _put(xyz, "A", q1)
-    _put(xyz, "B", q2)
-    _put(xyz, "M", x_M)
-    _put(xyz, "D", x_M, y_D)
-    _put(xyz, "C_foot", x_M, y_D + l2)
-    _put(xyz, "C", x_M, y_D + l2, l5)
-    _put(xyz, "A_lo", q1 - half)
-    _put(xyz, "A_hi", q1 + half)
-    _put(xyz, "B_lo", q2 - half)
-    _put(xyz, "B_hi", q2 + half)
-    lo, hi = rail_extent(design, geometry)
-    rm = geometry.rail_margin
-    _put(xyz, "rail_lo", np.minimum(np.minimum(q1, q2) - rm, lo))
-    _put(xyz, "rail_hi", np.maximum(np.maximum(q1, q2) + rm, hi))
-
-
-def _instrument_points(xyz: FloatArray, T_b_s: FloatArray,
-                       T_e: FloatArray, p: FloatArray,
-                       u: FloatArray, design: Design,
-                       geometry: BodyGeometry) -> None:
-    """The points of the serial chain: ``O_s``, ``O_i``, the tip, the RCM and the spheres.
-
-    ``u`` (..., 3): ``u1, u2, u3`` of the slot; ``p`` (...): its insertion.
+    :func:`athenakin._mechanism_formulas.mechanism_points_formula` on arrays: ``qq``
+    (..., 3) the actuators, ``T_b_s`` the slot's pose of ``O_s``, ``T_e`` the RCM frame,
+    ``p`` (...) the insertion and ``u`` (..., 3) ``u1, u2, u3`` of the slot.
     """
-    at = _POINT_INDEX
-    R_s = T_b_s[..., :3, :3]
-    O_s = T_b_s[..., :3, 3]
-    xyz[..., at["O_s"], :] = O_s
-    xyz[..., at["O_i"], :] = O_i_from_T_b_s(T_b_s, design)
+    _, l2, l3, l4, l5 = design.lengths
+    lo, hi = rail_extent(design, geometry)
+    G = (l2, l3, l4, l5, design.tool_length, geometry.rail_margin,
+         0.5 * geometry.carriage_length, geometry.sphere_radius, lo, hi)
     c, s = np.cos(u), np.sin(u)
-    ca, sa, cb, sb, c3, s3 = c[..., 0], s[..., 0], c[..., 1], s[..., 1], c[..., 2], s[..., 2]
-
-    def rot(x: FloatArray, y: FloatArray,
-            z: FloatArray) -> FloatArray:
-        """R_s (x, y, z) for vectors given by components."""
-        return (R_s[..., :, 0] * x[..., None] + R_s[..., :, 1] * y[..., None]
-                + R_s[..., :, 2] * z[..., None])
-
-    # R_3 = R_s R(u1, u2) (chain._ups.rotation_u_pair, rows (ca cb, sa, ca sb),
-    # (sa cb, -ca, sa sb), (sb, 0, -cb)): its third column is the instrument axis
-    # (O_s -> RCM if p > 0), and R_3 (sin u3, -cos u3, 0) the axis of u4
-    d = rot(ca * sb, sa * sb, -cb)
-    a4 = rot(ca * cb * s3 - sa * c3, sa * cb * s3 + ca * c3, sb * s3)
-    L = design.tool_length
-    xyz[..., at["tip"], :] = O_s + L * d
-    RCM = T_e[..., :3, 3]
-    xyz[..., at["RCM"], :] = RCM
-    side = np.sign(p)[..., None]                         # O_s is on the side -p d of the RCM
-    side = np.where(side == 0, 1.0, side)
-    rs = geometry.sphere_radius
-    # S_3: the instrument guide, rs from the RCM towards O_s (O_s + t d, t = p -+ rs); where
-    # that is off the instrument (|p| < rs: O_s is nearer the RCM than the guide), the guide
-    # holds the instrument at its nearest point, so the instrument and sphere_link_2 touch
-    t = p[..., None] - side * rs
-    on = (t >= 0.0) & (t <= L)
-    xyz[..., at["S_3"], :] = np.where(on, RCM + rs * (-side * d), O_s + np.clip(t, 0.0, L) * d)
-    # S_4 on the u4 axis as the chain orients it, S_5 on +z_e: u4 is perpendicular to the
-    # instrument, and at the home pose so is u5, so a side of O_s would flip them with
-    # the rounding of a zero dot product.
-    xyz[..., at["S_4"], :] = RCM + rs * a4
-    xyz[..., at["S_5"], :] = RCM + rs * T_e[..., :3, 2]
+    with np.errstate(invalid="ignore"):
+        pts = mechanism_points_formula(
+            qq[..., 0], qq[..., 1], p, c[..., 0], s[..., 0], c[..., 1], s[..., 1], c[..., 2],
+            s[..., 2], T_b_s[..., 0, 3], T_b_s[..., 1, 3], T_b_s[..., 2, 3], T_b_s[..., 1, 2],
+            T_b_s[..., 1, 1], T_e[..., 0, 3], T_e[..., 1, 3], T_e[..., 2, 3], T_e[..., 0, 2],
+            T_e[..., 1, 2], T_e[..., 2, 2], G, np.sqrt, np.minimum, np.maximum, np.where)
+    for i, point in enumerate(pts):
+        for j in range(3):
+            xyz[..., i, j] = point[j]
 
 
 def mechanism_state(q: ArrayLike, T_b_e: ArrayLike, design: Design | None = None, *,

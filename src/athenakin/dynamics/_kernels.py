@@ -6,13 +6,21 @@ The same formulas as :func:`._kinematics.body_jets` and the same virtual-power s
 ``q`` (first order: the Jacobian columns) and the Taylor coefficients along the motion
 ``q + qd t + qdd t^2 / 2`` (second order). The numpy path is the reference; the tests
 require both to agree to rounding. Imported only when numba is.
+
+:func:`loop_one` is the one state of :class:`~athenakin.dynamics.InverseDynamicsLoop`:
+the forward kinematics' assembly test of its slot and :func:`inverse_dynamics_kernel`'s
+per-state sum, in one compiled call.
 """
+
+# numba's cache does not follow the kernels loop_one calls from fast._fk_stages: a
+# change there must change this file too (revision 1).
 
 from __future__ import annotations
 
 import numpy as np
 
 from .._backend import njit, prange
+from ..fast._fk_stages import CHUNK, MS, NG, NSH, mode_reason
 from ._model import MASS_BODIES
 
 _OPTS = dict(error_model="numpy", cache=True, nogil=True, fastmath=False)
@@ -344,3 +352,61 @@ def inverse_dynamics_kernel_parallel(q, qd, qdd, T, lengths, L, signs, mass, com
     for i in prange(n):
         _one(q[i], qd[i], qdd[i], T[i % nT], lengths, L, signs, mass, com,
              inertia, grav[i % ng], ftip[i % nf], out[i])
+
+
+
+#: Doubles of :func:`loop_one`'s model vector, in order: ``T_b_e`` (row-major), the FK's
+#: parameters (``fast._lean.design_params``) and tolerances, the lengths ``l1..l5``, the
+#: tool length, the slot's signs, mass, centre of mass and inertia of each body, gravity,
+#: the tip force.
+_NB = len(MASS_BODIES)
+LOOP_MODEL_SIZES = (16, 13, 4, 5, 1, 4, _NB, 3 * _NB, 9 * _NB, 3, 3)
+_O = tuple(sum(LOOP_MODEL_SIZES[:i]) for i in range(len(LOOP_MODEL_SIZES) + 1))
+#: Doubles of :func:`loop_one`'s work vector: the state (q, qd, qdd), the forces, the FK
+#: scratch (``fast._fk_stages.scratch``: G, SH, S0, S1).
+LOOP_FORCES = 9
+LOOP_WORK = 12 + (NG + NSH + 2 * MS) * CHUNK
+_G0 = 12
+_SH0 = _G0 + NG * CHUNK
+_S00 = _SH0 + NSH * CHUNK
+_S10 = _S00 + MS * CHUNK
+
+
+def loop_model(*parts):  # type: ignore[no-untyped-def]
+    """:func:`loop_one`'s model vector from its parts (arrays of :data:`LOOP_MODEL_SIZES`)."""
+    flat = [np.asarray(a, dtype=np.float64).reshape(-1) for a in parts]
+    if tuple(a.size for a in flat) != LOOP_MODEL_SIZES:
+        raise ValueError(f"loop_model: expected parts of sizes {LOOP_MODEL_SIZES}, got "
+                         f"{tuple(a.size for a in flat)}")
+    return np.concatenate(flat)
+
+
+@njit(**_OPTS)
+def loop_one(q1, q2, q3, qd1, qd2, qd3, qdd1, qdd2, qdd3, model, work, m):
+    """Forces of one state into ``work[LOOP_FORCES:LOOP_FORCES + 3]``: NaN where it fails.
+
+    ``q1..qdd3``: the state as nine floats (their cheapest dispatch), copied into
+    ``work``; ``model``: :func:`loop_model`; ``m``: the slot's assembly mode (0: slots
+    0-7, 1: slots 8-15). The assembly test is the FK stages of mode ``m``
+    (:func:`athenakin.fast._fk_stages.mode_reason`), the forces those of
+    :func:`inverse_dynamics_kernel` for one state (the same per-state sum on arrays of the
+    same types); NaN where the reason is not 0 or a force is not finite (inverse_dynamics'
+    flags).
+    """
+    x = work[0:9].reshape((3, 1, 3))
+    out = work[LOOP_FORCES:LOOP_FORCES + 3].reshape((1, 3))
+    x[0, 0, 0], x[0, 0, 1], x[0, 0, 2] = q1, q2, q3
+    x[1, 0, 0], x[1, 0, 1], x[1, 0, 2] = qd1, qd2, qd3
+    x[2, 0, 0], x[2, 0, 1], x[2, 0, 2] = qdd1, qdd2, qdd3
+    T = model[_O[0]:_O[1]].reshape((1, 4, 4))
+    o = out[0]
+    if mode_reason(x[0], T, model[_O[1]:_O[2]], model[_O[2]:_O[3]], work[_G0:_SH0],
+                   work[_SH0:_S00], work[_S00:_S10], work[_S10:LOOP_WORK], m) != 0.0:
+        o[0] = o[1] = o[2] = np.nan
+        return
+    _one(x[0, 0], x[1, 0], x[2, 0], T[0], model[_O[3]:_O[4]], model[_O[4]],
+         model[_O[5]:_O[6]], model[_O[6]:_O[7]], model[_O[7]:_O[8]].reshape((_NB, 3)),
+         model[_O[8]:_O[9]].reshape((_NB, 3, 3)), model[_O[9]:_O[10]],
+         model[_O[10]:_O[11]], o)
+    if not (np.isfinite(o[0]) and np.isfinite(o[1]) and np.isfinite(o[2])):
+        o[0] = o[1] = o[2] = np.nan

@@ -1,19 +1,20 @@
 """Inverse dynamics of one state at a time, for a control loop (teleoperation, a servo).
 
 :func:`~athenakin.dynamics.inverse_dynamics` checks its arguments and the assembly of
-every state (a forward-kinematics call) on each call: about 140 µs for one state, where
-the compiled kernel takes about 2 µs. A control loop that commands states it produced
-itself (from the exact IK, on one FK slot) needs only the kernel. :class:`InverseDynamicsLoop`
-checks the design, the RCM frame, the mass model, gravity and the slot once, keeps the
-kernel's inputs in preallocated buffers, and returns the forces of one state per call:
-the same numbers as :func:`~athenakin.dynamics.inverse_dynamics` (the same kernel on the
-same inputs; the numpy reference where the backend policy says numpy), and the same
-flags: a state that the forward kinematics does not assemble in the slot (the test of
-``inverse_dynamics``, here :class:`athenakin.fast.ControlLoop`'s one-pose FK, or the numpy
-FK where the backend is numpy) or whose forces are not finite (a singular set of the
-dynamics) gives NaN forces, which the caller flags (``athenakin.teleop`` holds its last
-command then). An argument of the wrong shape or type raises a named error; a value
-(NaN, a state off the workspace) never does.
+every state (a forward-kinematics call) on each call: about 140 µs for one state.
+:class:`InverseDynamicsLoop` checks the design, the RCM frame, the mass model, gravity and
+the slot once, keeps the kernels' inputs in preallocated buffers, and returns the forces
+of one state per call: the same numbers as :func:`~athenakin.dynamics.inverse_dynamics`
+(the same kernel on the same inputs; the numpy reference where the backend policy says
+numpy), and the same flags: a state that the forward kinematics does not assemble in the
+slot (the test of ``inverse_dynamics``: the compiled FK stages of the slot's assembly
+mode, :func:`athenakin.fast._fk_stages.mode_reason`, or the numpy FK where the backend is
+numpy) or whose forces are not finite (a singular set of the dynamics) gives NaN forces,
+which the caller flags (``athenakin.teleop`` holds its last command then). The test and
+the forces are one compiled call (:func:`athenakin.dynamics._kernels.loop_one`), and a
+state of three tuples of Python floats (what a control loop holds) goes to it without a
+conversion. An argument of the wrong shape or type raises a named error; a value (NaN, a
+state off the workspace) never does.
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ __all__ = ["InverseDynamicsLoop"]
 
 
 class InverseDynamicsLoop:
-    """Actuator forces of single states for one robot set-up, in about two microseconds.
+    """Actuator forces of single states for one robot set-up, in a few microseconds.
 
     Parameters
     ----------
@@ -82,26 +83,30 @@ class InverseDynamicsLoop:
         if g.shape != (3,):
             raise ValueError(f"gravity: expected shape (3,), got {g.shape}")
         self.gravity = np.array(g, dtype=np.float64)
-        self._kernel = None
-        self._fk: Any = None
-        if resolve_backend(backend):
-            from ..fast import ControlLoop
-            from ._kernels import inverse_dynamics_kernel
-
-            self._kernel = inverse_dynamics_kernel
-            self._fk = ControlLoop(self.T_b_e, self.design)   # the assembly test, one pose
-        # the kernel's inputs, in the types of every call (one compiled specialization)
+        self._kernel: Any = None
+        # the numpy path's inputs, as inverse_dynamics passes them
         self._T = np.ascontiguousarray(self.T_b_e[None])
-        # as inverse_dynamics passes them (the same array types: no second compile)
-        self._lengths = self.design.lengths
-        self._L = float(self.design.tool_length)
-        self._signs = np.array(slot_signs(self.slot))
-        self._mass, self._com, self._inertia = (self.masses.mass, self.masses.com,
-                                                self.masses.inertia)
         self._grav = np.ascontiguousarray(self.gravity[None])
         self._ftip = np.zeros((1, 3))
-        self._x = np.zeros((3, 1, 3))        # q, qd, qdd of the state
-        self._out = np.zeros((1, 3))
+        if resolve_backend(backend):
+            from ..fast._lean import _FK_TOL_DEFAULT, design_params
+            from ..robot._fk import SLOT_MODE_INDEX
+            from ._kernels import LOOP_FORCES, LOOP_WORK, loop_model, loop_one
+
+            self._kernel = loop_one
+            # the state, the forces and the FK scratch in one buffer; the model in another
+            work = np.zeros(LOOP_WORK)
+            self._x = work[:9].reshape(3, 1, 3)
+            self._f = work[LOOP_FORCES:LOOP_FORCES + 3]
+            self._args = (loop_model(self._T, design_params(self.design), _FK_TOL_DEFAULT,
+                                     self.design.lengths, self.design.tool_length,
+                                     slot_signs(self.slot), self.masses.mass, self.masses.com,
+                                     self.masses.inertia, self._grav, self._ftip),
+                          work, int(SLOT_MODE_INDEX[self.slot]))
+        else:
+            self._x = np.zeros((3, 1, 3))        # q, qd, qdd of the state
+            self._f = np.zeros(3)
+        self._flat = self._x.reshape(9)      # a view: the state as nine floats
 
     @property
     def compiled(self) -> bool:
@@ -131,6 +136,15 @@ class InverseDynamicsLoop:
             ``q``, ``qd`` or ``qdd`` not of shape (3,) (a (3, 1) column, a scalar), or not
             numbers.
         """
+        k = self._kernel
+        if (k is not None and type(q) is tuple and type(qd) is tuple and type(qdd) is tuple
+                and len(q) == 3 and len(qd) == 3 and len(qdd) == 3
+                and type(q[0]) is float and type(q[1]) is float and type(q[2]) is float
+                and type(qd[0]) is float and type(qd[1]) is float and type(qd[2]) is float
+                and type(qdd[0]) is float and type(qdd[1]) is float
+                and type(qdd[2]) is float):
+            k(*q, *qd, *qdd, *self._args)    # a control loop's plain floats: no conversion
+            return self._f
         x = self._x
         for i, (v, name) in enumerate(((q, "q"), (qd, "qd"), (qdd, "qdd"))):
             if np.shape(v) != (3,):
@@ -140,28 +154,22 @@ class InverseDynamicsLoop:
             except (TypeError, ValueError):
                 raise InvalidInputError(f"{name}: expected three numbers, got {v!r:.80}"
                                         ) from None
-        out = self._out
+        if k is not None:
+            k(*self._flat.tolist(), *self._args)
+            return self._f
+        out = self._f
         if not self._assembles(x[0, 0]):
             out[:] = np.nan
-            return out[0]
-        if self._kernel is not None:
-            self._kernel(x[0], x[1], x[2], self._T, self._lengths, self._L, self._signs,
-                         self._mass, self._com, self._inertia, self._grav, self._ftip,
-                         self._out)
-        else:
-            ev = evaluate(x[0], x[1], x[2], self._T, self.design, self.masses, self.slot)
-            F, Nm = body_loads(ev, self.masses, self._grav)
-            out[:] = generalized_forces(ev, F, Nm, self._ftip)[:, 1:N_Q_DIRECTIONS]
-        if not (math.isfinite(out[0, 0]) and math.isfinite(out[0, 1])
-                and math.isfinite(out[0, 2])):
+            return out
+        ev = evaluate(x[0], x[1], x[2], self._T, self.design, self.masses, self.slot)
+        F, Nm = body_loads(ev, self.masses, self._grav)
+        out[:] = generalized_forces(ev, F, Nm, self._ftip)[0, 1:N_Q_DIRECTIONS]
+        if not (math.isfinite(out[0]) and math.isfinite(out[1]) and math.isfinite(out[2])):
             out[:] = np.nan              # inverse_dynamics' flag of a singular state
-        return out[0]
+        return out
 
     def _assembles(self, q: FloatArray) -> bool:
-        """Whether the forward kinematics holds ``q`` in :attr:`slot` (inverse_dynamics' test)."""
-        if self._fk is not None:
-            reason, _, _ = self._fk.fk(q)
-            return bool(reason[self.slot] == 0)
+        """Whether the numpy forward kinematics holds ``q`` in :attr:`slot` (inverse_dynamics')."""
         from .._dispatch import forward_kinematics
 
         sol = forward_kinematics(q, self.T_b_e, self.design, errors="flag", backend="numpy",

@@ -8,6 +8,9 @@ histograms, :func:`fk_one` answers one pose in packed buffers. Every entry retur
 ``FLAG_*`` bits of its input (non-finite ``q`` or ``T_b_e``, a ``T_b_e`` to re-check).
 """
 
+# numba's cache does not follow the kernels this module calls from _fk_stages and
+# _module_form: a change there must change this file too (revision 1).
+
 from __future__ import annotations
 
 import math

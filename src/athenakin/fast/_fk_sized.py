@@ -12,7 +12,7 @@ same values bit for bit); only the stores differ:
 """
 
 # numba's cache does not follow the kernels this module inlines from _fk_stages,
-# _fk_kernels and _scalar: a change there must change this file too (revision 3).
+# _fk_kernels and _scalar: a change there must change this file too (revision 4).
 
 from __future__ import annotations
 

@@ -39,7 +39,8 @@ from ..errors import Reason
 from ._module_form import module_closed_form
 from ._scalar import atan2_from_q1, atan_q1, finite_sum, hypot, nanmax2, parallel_residual
 
-__all__ = ["CHUNK", "MS", "NSH", "NG", "scratch", "gather", "gather_items", "fk_chunk"]
+__all__ = ["CHUNK", "MS", "NSH", "NG", "scratch", "gather", "gather_items", "fk_chunk",
+           "mode_reason"]
 
 
 #: Poses per chunk of the two-pass loop (the scratch holds 74 doubles per pose).
@@ -131,7 +132,7 @@ def _parallel_stage(G, P, tol, SH, S0, S1, n):
     ttol = tol[0]
     for ii in range(n):
         q1, q2, q3 = G[(_GQ) * CHUNK + ii], G[(_GQ + 1) * CHUNK + ii], G[(_GQ + 2) * CHUNK + ii]
-        pr, tangent, xm, q3, r1, _, d, k, half, by, bz, ey, ez = module_closed_form(
+        pr, tangent, xm, _, q3, r1, _, d, k, half, by, bz, ey, ez = module_closed_form(
             q1, q2, q3, P, ttol)
         nan = 0.0 if pr == 0.0 else math.nan
         a = (0.0 if tangent else half) + nan
@@ -328,3 +329,18 @@ def fk_chunk(q, T, P, tol, G, SH, S0, S1, c0, n):
     _parallel_stage(G, P, tol, SH, S0, S1, n)
     _serial_stage(G, P, tol, SH, S0, n)
     _serial_stage(G, P, tol, SH, S1, n)
+
+
+@njit(**_OPTS)
+def mode_reason(q, T, P, tol, G, SH, S0, S1, m):
+    """The reason code (float; 0: valid) of one pose's 8 slots of assembly mode ``m``.
+
+    :func:`fk_chunk` of one pose (``q`` (1, 3), ``T`` (1, 4, 4)) with the serial chain of
+    mode ``m`` only (0: slots 0-7, 1: slots 8-15): the same stages on the same values, so
+    the code is the ``reason`` that the entry kernels store in those slots.
+    """
+    gather(q, T, 0, 1, G)
+    _parallel_stage(G, P, tol, SH, S0, S1, 1)
+    Sm = S0 if m == 0 else S1
+    _serial_stage(G, P, tol, SH, Sm, 1)
+    return Sm[_R * CHUNK]

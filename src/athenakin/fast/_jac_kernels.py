@@ -24,7 +24,7 @@ in the same chunks, vectorised too.
 """
 
 # numba's cache does not follow the kernels this module inlines from _fk_kernels, _scalar
-# and _mechanism_formulas: a change there must change this file too (revision 3).
+# and _mechanism_formulas: a change there must change this file too (revision 4).
 
 from __future__ import annotations
 

@@ -15,6 +15,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from .._mechanism_formulas import module_params
 from .._typing import BoolArray, FloatArray, Int8Array, IntArray
 from .._validation import (
     ERROR_POLICIES,
@@ -107,8 +108,7 @@ def design_params(design: Design | None) -> FloatArray:
 
 
 def _make_params(d: Design) -> FloatArray:
-    return np.array([d.l1, d.l2, d.l3, d.l4, d.l5, *d.stroke_min, *d.stroke_max, d.h_sign,
-                     d.tool_length])
+    return np.array(module_params(d))
 
 
 _object_new = object.__new__

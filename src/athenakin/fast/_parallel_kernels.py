@@ -152,7 +152,7 @@ def parallel_fk(q, P, ttol, valid, reason, T_b_i, T_b_s, theta, r1o, myo, wo, ha
     """:func:`athenakin.parallel.parallel_forward_kinematics` for q (N, 3)."""
     l1, l4 = P[0], P[3]
     for i in range(q.shape[0]):
-        pr, tangent, xm, q3, r1, m_y, d, k, half, by, bz, ey, ez = module_closed_form(
+        pr, tangent, xm, _, q3, r1, m_y, d, k, half, by, bz, ey, ez = module_closed_form(
             q[i, 0], q[i, 1], q[i, 2], P, ttol)
         ok = pr == 0.0
         r1o[i] = r1

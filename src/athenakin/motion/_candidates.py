@@ -9,6 +9,11 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from .._mechanism_formulas import (
+    actuator_reason_formula,
+    module_closed_form_formula,
+    module_params,
+)
 from .._typing import BoolArray, FloatArray, IntArray
 from ..chain import DEGENERATE_TOL, P_ZERO_TOL
 from ..design import Design
@@ -173,49 +178,49 @@ class _Geometry:
         self.ex = tuple(float(v) for v in T[:3, 0])
         self.ez = tuple(float(v) for v in T[:3, 2])
         self.R = tuple(tuple(float(v) for v in row) for row in T[:3, :3])
+        #: The closed form's parameter vector (Python floats) of the design without its
+        #: strokes (``q3 >= 0`` only, a length): the tracker follows the mechanism beyond
+        #: them and flags such a reading ``OUT_OF_STROKE`` instead of losing it.
+        self.P = module_params(dataclasses.replace(design, q_min=None, q_max=None))
 
 
-def _parallel(g: _Geometry, q1: float, q2: float, q3: float
-              ) -> tuple[float, float, float, float, float] | None:
-    """Circle geometry: ``(x_M, h, r1, a, ...)``; None when the module cannot assemble."""
-    h = 0.5 * (q1 - q2)
-    hh = h * h
-    if hh >= g.l1 * g.l1 or hh > g.l3 * g.l3 or g.h_sign * h < 0 or q3 < 0.0:
-        return None                      # q3 is a length: negative is no configuration
-    r1 = math.sqrt(g.l1 * g.l1 - hh)
-    m_y = math.sqrt(g.l3 * g.l3 - hh) + g.l2
-    d2 = m_y * m_y + g.l5 * g.l5
-    d = math.sqrt(d2)
-    k = (r1 + q3 - d) * (r1 + q3 + d) * (d - r1 + q3) * (d + r1 - q3)
-    if k < 0.0:
-        a = -math.sqrt(-k) / (2.0 * d)
-        if a < -TANGENT_TOL:
-            return None
-        a = 0.0
-    else:
-        a = math.sqrt(k) / (2.0 * d)
-    return h, r1, m_y, d, a
+def _parallel(g: _Geometry, q1: float, q2: float, q3: float) -> tuple | None:
+    """The module's closed form of a reading; None when the module cannot assemble.
 
-
-def _candidate(g: _Geometry, q1: float, q2: float, q3: float, par: tuple, mode: int,
-               r: int, b: int, w: int, hint: tuple | None) -> tuple | None:
-    """The forward-kinematics solution with the given labels.
-
-    At a serial singularity (``sin u2 = 0`` or ``sin u4 = 0``: a continuum of
-    solutions) the free angle is taken from ``hint`` (the previous ``u1..u5``), the
-    continuous choice; without a hint, or at ``p = 0`` or a merged assembly mode,
-    None.
+    :func:`athenakin._mechanism_formulas.module_closed_form_formula` (the one source that
+    :mod:`athenakin.fast._module_form` compiles) over :attr:`_Geometry.P`: the reference's
+    validity rule (``parallel_forward_kinematics``) on the design without its strokes.
+    ``math.sqrt`` raises (where the compiled one gives NaN) only for ``l1^2 - h^2 < 0`` or
+    ``l3^2 - h^2 < 0``, that is ``|h| > l1`` or ``|h| > l3`` (rounding is monotonic): where
+    the formula's reason is ``LINK_TOO_SHORT``.
     """
-    h, r1, m_y, d, a = par
-    if mode == -1 and a <= TANGENT_TOL:
+    try:
+        par = module_closed_form_formula(q1, q2, q3, actuator_reason_formula(q1, q2, q3, g.P),
+                                         g.P, TANGENT_TOL, math.sqrt)
+    except ValueError:
+        return None
+    return None if par[0] != 0.0 else par
+
+
+def _candidate(g: _Geometry, par: tuple, mode: int, r: int, b: int, w: int,
+               hint: tuple | None) -> tuple | None:
+    """The forward-kinematics solution with the given labels, from :func:`_parallel`'s ``par``.
+
+    ``O_i`` is the reference's intersection of the mode (``a = 0`` where the circles are
+    tangent: the modes merged into mode +1, the FK's ``_fk_stages._parallel_stage``), ``O_s``
+    ``l4`` beyond it along ``z_i`` (the FK's ``_serial_stage``). At a serial singularity
+    (``sin u2 = 0`` or ``sin u4 = 0``: a continuum of solutions) the free angle is taken
+    from ``hint`` (the previous ``u1..u5``), the continuous choice; without a hint, or at
+    ``p = 0`` or a merged assembly mode, None.
+    """
+    _, tangent, x_M, h, _, r1, _, _, _, half, iy, iz, ey, ez = par
+    if mode == -1 and tangent:
         return None                      # merged into mode +1 at tangency
-    H = d * d + r1 * r1 - q3 * q3
-    f = H / (2.0 * d * d)
-    sa = mode * a / d
-    y = f * m_y - sa * g.l5
-    z = f * g.l5 + sa * m_y
+    a = mode * (0.0 if tangent else half)
+    y = iy + a * ey
+    z = iz + a * ez
     cy, cz = y / r1, z / r1
-    Ox, Oy, Oz = 0.5 * (q1 + q2), y + g.l4 * cy, z + g.l4 * cz
+    Ox, Oy, Oz = x_M, y + g.l4 * cy, z + g.l4 * cz
     # RCM seen from O_s in frame s: R_b_s^T (c - O_s), R_b_s = [[1,0,0],[0,cz,cy],[0,-cy,cz]]
     bx, by, bz = g.c[0] - Ox, g.c[1] - Oy, g.c[2] - Oz
     cx, cys, czs = bx, cz * by - cy * bz, cy * by + cz * bz
@@ -239,7 +244,7 @@ def _candidate(g: _Geometry, q1: float, q2: float, q3: float, par: tuple, mode: 
         return None                      # overflow (readings near 1e308): no valid pose
     # instrument axis in the base frame: (c - O_s) / p
     return (mode, r, b, w, p, (u1, u2, u3, u4, u5), (Ox, Oy, Oz), (bx / p, by / p, bz / p),
-            a, abs(h), rho, rho4)
+            half, abs(h), rho, rho4)
 
 
 def _clearance_text(pose: TrackedPose) -> str:

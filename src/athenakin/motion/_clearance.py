@@ -18,6 +18,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from .._mechanism_formulas import mechanism_points_formula
 from .._typing import FloatArray, IntArray
 from ..design import Design
 
@@ -116,17 +117,23 @@ def sample_clearance(check: ClearanceCheck, q: FloatArray, T_b_e: FloatArray,
                               backend=check.backend)
 
 
+def _select(c: bool, a: float, b: float) -> float:
+    """The formula's select on Python floats (``np.where`` of one item)."""
+    return a if c else b
+
+
 class PoseClearance:
     """The least clearance of one tracked pose, in scalar arithmetic and one kernel call.
 
     :func:`athenakin.collision.clearance` places the bodies through the numpy forward
     kinematics of all 16 slots, about a millisecond per call; the tracker already holds
-    its pose (``O_s``, the instrument axis, ``u1..u5``), so this places the 19 points of
-    :data:`athenakin._mechanism.POINT_NAMES` from it with the formulas of
-    :func:`athenakin._mechanism.mechanism_points` (the tests check the two agree to
-    1e-12 m) and calls the compiled capsule kernel once; with obstacles, the segment
-    stage of :func:`~athenakin.collision.clearance` (``segment_clearance``), on the
-    backend ``backend`` (``"auto" | "numpy" | "numba"``).
+    its pose (``O_s``, ``p``, ``u1..u5``), so this places the 19 points of
+    :data:`athenakin._mechanism.POINT_NAMES` from it with the formula of
+    :func:`athenakin._mechanism.mechanism_points`
+    (:func:`athenakin._mechanism_formulas.mechanism_points_formula`, on Python floats; the
+    tests check the two agree to 1e-14 m) and calls the compiled capsule kernel once;
+    with obstacles, the segment stage of :func:`~athenakin.collision.clearance`
+    (``segment_clearance``), on the backend ``backend`` (``"auto" | "numpy" | "numba"``).
     """
 
     def __init__(self, design: Design, T_b_e: FloatArray, bodies: Any,
@@ -146,6 +153,9 @@ class PoseClearance:
                                        geo.sphere_radius)
         self.rcm = tuple(float(v) for v in T_b_e[:3, 3])
         self.ze = tuple(float(v) for v in T_b_e[:3, 2])
+        #: The constants of :func:`~athenakin._mechanism_formulas.mechanism_points_formula`.
+        self.G = (self.l2, self.l3, self.l4, self.l5, self.L, self.rm, self.half, self.rs,
+                  float(self.lo), float(self.hi))
         self.index = np.array([[POINT_NAMES.index(a), POINT_NAMES.index(b)]
                                for a, b in BODY_SEGMENTS.values()])
         self.radii = np.ascontiguousarray(bodies.radius_array)
@@ -155,51 +165,29 @@ class PoseClearance:
         self.environment = environment
 
     def points(self, q: tuple[float, float, float], p: float,
-               u: tuple[float, float, float, float, float], O_s: tuple[float, float, float],
-               d: tuple[float, float, float]) -> FloatArray:
-        """The 19 named points, shape (19, 3), base frame (m), of one tracked pose."""
+               u: tuple[float, float, float, float, float],
+               O_s: tuple[float, float, float]) -> FloatArray:
+        """The 19 named points, shape (19, 3), base frame (m), of one tracked pose.
+
+        :func:`athenakin._mechanism_formulas.mechanism_points_formula` on Python floats,
+        with ``R_b_s`` from ``O_s``: ``z_s = (O_s - M) / (r1 + l4)``.
+        """
         q1, q2, _ = q
         h = 0.5 * (q1 - q2)
-        xm = 0.5 * (q1 + q2)
-        yd = math.sqrt(self.l3 * self.l3 - h * h)
-        r1 = math.sqrt(self.l1 * self.l1 - h * h)
+        r1l4 = math.sqrt(self.l1 * self.l1 - h * h) + self.l4
         ox, oy, oz = O_s
-        cy, cz = oy / (r1 + self.l4), oz / (r1 + self.l4)     # z_i = (0, cy, cz)
-        oi = (ox, oy - self.l4 * cy, oz - self.l4 * cz)
-        L = self.L
-        tip = (ox + L * d[0], oy + L * d[1], oz + L * d[2])
-        c1, s1, c2, s2 = math.cos(u[0]), math.sin(u[0]), math.cos(u[1]), math.sin(u[1])
-        c3, s3 = math.cos(u[2]), math.sin(u[2])
-        # a4 = R_b_s R(u1, u2) (s3, -c3, 0): columns 0 and 1 of R(u1, u2) in frame s
-        v0 = s3 * c1 * c2 - c3 * s1
-        v1 = s3 * s1 * c2 + c3 * c1
-        v2 = s3 * s2
-        a4 = (v0, cz * v1 + cy * v2, -cy * v1 + cz * v2)
-        side = -1.0 if p < 0 else 1.0
-        rc, ze, rs = self.rcm, self.ze, self.rs
-        t = p - side * rs
-        if 0.0 <= t <= L:
-            s_3 = (rc[0] - side * rs * d[0], rc[1] - side * rs * d[1], rc[2] - side * rs * d[2])
-        else:                               # the guide holds the instrument's nearest point
-            t = min(max(t, 0.0), L)
-            s_3 = (ox + t * d[0], oy + t * d[1], oz + t * d[2])
-        half = self.half
-        return np.array([
-            (q1, 0.0, 0.0), (q2, 0.0, 0.0), (xm, 0.0, 0.0), (xm, yd, 0.0),
-            (xm, yd + self.l2, 0.0), (xm, yd + self.l2, self.l5), oi, O_s, rc, tip,
-            (min(min(q1, q2) - self.rm, self.lo), 0.0, 0.0),
-            (max(max(q1, q2) + self.rm, self.hi), 0.0, 0.0),
-            (q1 - half, 0.0, 0.0), (q1 + half, 0.0, 0.0),
-            (q2 - half, 0.0, 0.0), (q2 + half, 0.0, 0.0),
-            s_3,
-            (rc[0] + rs * a4[0], rc[1] + rs * a4[1], rc[2] + rs * a4[2]),
-            (rc[0] + rs * ze[0], rc[1] + rs * ze[1], rc[2] + rs * ze[2])])
+        rc, ze = self.rcm, self.ze
+        cos, sin = math.cos, math.sin
+        return np.array(mechanism_points_formula(
+            q1, q2, p, cos(u[0]), sin(u[0]), cos(u[1]), sin(u[1]), cos(u[2]), sin(u[2]), ox,
+            oy, oz, oy / r1l4, oz / r1l4, rc[0], rc[1], rc[2], ze[0], ze[1], ze[2], self.G,
+            math.sqrt, min, max, _select))
 
     def __call__(self, q: tuple[float, float, float], p: float,
-                 u: tuple[float, float, float, float, float], O_s: tuple[float, float, float],
-                 d: tuple[float, float, float]) -> tuple[float, tuple[str, str]]:
+                 u: tuple[float, float, float, float, float], O_s: tuple[float, float, float]
+                 ) -> tuple[float, tuple[str, str]]:
         """Least clearance (m; ``inf`` with no pair) and its pair for one tracked pose."""
-        seg = self.points(q, p, u, O_s, d)[self.index]
+        seg = self.points(q, p, u, O_s)[self.index]
         if self.environment is not None:
             from ..collision._clearance import segment_clearance
 

@@ -2,8 +2,10 @@
 
 :meth:`athenakin.motion.Tracker.update` applied reading after reading, in one compiled
 loop: the same closed form (``_parallel`` and ``_candidate`` of
-:mod:`athenakin.motion._tracker`, operation by operation), the same fast path (the
-candidate with the previous labels, far from every singularity), the same slow path (all
+:mod:`athenakin.motion._candidates`, operation by operation; the parallel module's is
+:func:`athenakin.fast._module_form.module_closed_form`, the compiled one source that the
+Python tracker evaluates), the same fast path (the candidate with the previous labels,
+far from every singularity), the same slow path (all
 16 candidates, the labels kept while within the jump thresholds, else the nearest, flags
 ``AMBIGUOUS``, ``JUMP``, ``MODE_SWITCH``, ``BRANCH_SWITCH``, ``NEAR_*``) and the same
 ``LOST`` / ``REACQUIRED`` handling. The poses and steps agree with the Python tracker to
@@ -23,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from .._backend import njit
+from ..fast._module_form import module_closed_form
 from ._candidates import angle_pair, serial_angles, wrist_matrix
 from ._flags import TrackFlag
 
@@ -33,7 +36,7 @@ _OPTS: dict[str, Any] = dict(error_model="numpy", cache=True, nogil=True)
 #: Doubles per candidate row.
 NCAND = 20
 #: Doubles of the geometry vector (see :func:`athenakin.motion._stream._kernel_geometry`).
-NGEO = 33
+NGEO = 46
 
 # TrackFlag bits, as plain ints (compile-time constants of the kernel)
 F_LOST = int(TrackFlag.LOST)
@@ -57,32 +60,30 @@ _TWO_PI = 2.0 * math.pi
 # g: 0-4 l1..l5, 5 h_sign, 6-8 c (RCM origin), 9-11 ex, 12-14 ez (RCM axes), 15-17 stroke
 #    min, 18-20 stroke max, 21 jump_m, 22 jump_rad, 23-28 the fast path's thresholds
 #    (half_chord, h, link, sin_u2, sin_u4, p), 29 margins.half_chord, 30 TANGENT_TOL,
-#    31 P_ZERO_TOL, 32 DEGENERATE_TOL
+#    31 P_ZERO_TOL, 32 DEGENERATE_TOL, 33-45 the closed form's parameter vector (_Geometry.P)
+_P0 = 33
+
+
 @njit(**_OPTS)
 def _parallel(g, q1, q2, q3, par):
-    """``_parallel`` of the tracker into ``par`` (h, r1, m_y, d, a); False: no assembly."""
-    l1, l2, l3, l5 = g[0], g[1], g[2], g[4]
-    h = 0.5 * (q1 - q2)
-    hh = h * h
-    if hh >= l1 * l1 or hh > l3 * l3 or g[5] * h < 0 or q3 < 0.0:
+    """``_parallel`` of the tracker (the compiled closed form) into ``par``; False: none.
+
+    ``par``: tangent (1.0 / 0.0), x_M, h, r1, half, and the intersection's ``iy, iz, ey,
+    ez`` (:func:`athenakin.fast._module_form.module_closed_form`).
+    """
+    pr, tangent, xm, h, _, r1, _, _, _, half, iy, iz, ey, ez = module_closed_form(
+        q1, q2, q3, g[_P0:_P0 + 13], g[30])
+    if pr != 0.0:
         return False
-    r1 = math.sqrt(l1 * l1 - hh)
-    m_y = math.sqrt(l3 * l3 - hh) + l2
-    d2 = m_y * m_y + l5 * l5
-    d = math.sqrt(d2)
-    k = (r1 + q3 - d) * (r1 + q3 + d) * (d - r1 + q3) * (d + r1 - q3)
-    if k < 0.0:
-        a = -math.sqrt(-k) / (2.0 * d)
-        if a < -g[30]:
-            return False
-        a = 0.0
-    else:
-        a = math.sqrt(k) / (2.0 * d)
-    par[0] = h
-    par[1] = r1
-    par[2] = m_y
-    par[3] = d
-    par[4] = a
+    par[0] = 1.0 if tangent else 0.0
+    par[1] = xm
+    par[2] = h
+    par[3] = r1
+    par[4] = half
+    par[5] = iy
+    par[6] = iz
+    par[7] = ey
+    par[8] = ez
     return True
 
 
@@ -93,21 +94,20 @@ _serial_angles = njit(inline="always", **_OPTS)(serial_angles)
 
 
 @njit(**_OPTS)
-def _candidate(g, q1, q2, q3, par, mode, r, b, w, hint, has_hint, out):
+def _candidate(g, par, mode, r, b, w, hint, has_hint, out):
     """``_candidate`` of the tracker into ``out`` (NCAND); False where it returns None."""
-    h, r1, m_y, d, a = par[0], par[1], par[2], par[3], par[4]
-    tang, pzero, degen = g[30], g[31], g[32]
-    if mode == -1.0 and a <= tang:
+    tangent = par[0] != 0.0
+    xm, h, r1, half = par[1], par[2], par[3], par[4]
+    pzero, degen = g[31], g[32]
+    if mode == -1.0 and tangent:
         return False
-    l4, l5 = g[3], g[4]
-    H = d * d + r1 * r1 - q3 * q3
-    f = H / (2.0 * d * d)
-    sa = mode * a / d
-    y = f * m_y - sa * l5
-    z = f * l5 + sa * m_y
+    l4 = g[3]
+    a = mode * (0.0 if tangent else half)
+    y = par[5] + a * par[7]
+    z = par[6] + a * par[8]
     cy = y / r1
     cz = z / r1
-    Ox = 0.5 * (q1 + q2)
+    Ox = xm
     Oy = y + l4 * cy
     Oz = z + l4 * cz
     bx = g[6] - Ox
@@ -134,7 +134,7 @@ def _candidate(g, q1, q2, q3, par, mode, r, b, w, hint, has_hint, out):
     u1, u2, u3, u4, u5 = _serial_angles(c1, s1, c2, s2, c3, s3, c4, s4, W00, W10, W20)
     if not math.isfinite(Ox + Oy + Oz + p + u1 + u2 + u3 + u4 + u5 + bx + by + bz):
         return False
-    row = (mode, r, b, w, p, u1, u2, u3, u4, u5, Ox, Oy, Oz, bx / p, by / p, bz / p, a,
+    row = (mode, r, b, w, p, u1, u2, u3, u4, u5, Ox, Oy, Oz, bx / p, by / p, bz / p, half,
            abs(h), rho, rho4)
     for k in range(NCAND):
         out[k] = row[k]
@@ -216,7 +216,7 @@ def track_stream(q, g, prev, lost, out_c, out_step, out_flags, out_valid, out_fa
         Step (``inf`` where ``LOST``), TrackFlag bits, validity, and whether the
         fast path (the previous labels, no flag but ``OUT_OF_STROKE``) decided.
     """
-    par = np.empty(5)
+    par = np.empty(9)
     cands = np.empty((16, NCAND))
     steps = np.empty(16)
     c = np.empty(NCAND)
@@ -242,7 +242,7 @@ def track_stream(q, g, prev, lost, out_c, out_step, out_flags, out_valid, out_fa
         if was_lost:
             flags |= F_REACQUIRED
         hint = prev[5:10]
-        if _candidate(g, q1, q2, q3, par, prev[0], prev[1], prev[2], prev[3], hint, True, c) \
+        if _candidate(g, par, prev[0], prev[1], prev[2], prev[3], hint, True, c) \
                 and not was_lost:
             step = _step(g, c, prev)
             if (step <= 1.0 and c[16] >= hc and c[17] >= hw and c[18] >= s2m and c[19] >= s4m
@@ -256,7 +256,7 @@ def track_stream(q, g, prev, lost, out_c, out_step, out_flags, out_valid, out_fa
             for r in (1.0, -1.0):
                 for b in (1.0, -1.0):
                     for w in (1.0, -1.0):
-                        if _candidate(g, q1, q2, q3, par, mode, r, b, w, hint, True, cands[m]):
+                        if _candidate(g, par, mode, r, b, w, hint, True, cands[m]):
                             steps[m] = _step(g, cands[m], prev)
                             m += 1
         if m == 0:

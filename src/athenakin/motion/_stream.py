@@ -127,7 +127,7 @@ def _kernel_geometry(tr: Tracker) -> FloatArray:
     g = tr._g
     return np.array([g.l1, g.l2, g.l3, g.l4, g.l5, g.h_sign, *g.c, *g.ex, *g.ez, *g.lo, *g.hi,
                      tr.jump_m, tr.jump_rad, *tr._watch, tr.margins.half_chord, TANGENT_TOL,
-                     P_ZERO_TOL, DEGENERATE_TOL], dtype=float)
+                     P_ZERO_TOL, DEGENERATE_TOL, *g.P], dtype=float)
 
 
 def track_batch(tr: Tracker, q: FloatArray) -> dict[str, Any]:
@@ -232,10 +232,10 @@ def _collide_rows(tr: Tracker, cols: dict[str, Any]) -> None:
     check, pc = tr._check, tr._pose_clearance
     assert check is not None and pc is not None
     pairs: list[tuple[str, str]] = [("", "")] * len(cols["q"])
-    q, p, u, o, dz = (cols[k].tolist() for k in ("q", "p", "u", "O_s", "direction_b"))
+    q, p, u, o = (cols[k].tolist() for k in ("q", "p", "u", "O_s"))
     flags = cols["flags"]
     for i in np.flatnonzero(cols["valid"]).tolist():
-        d, names = pc(tuple(q[i]), p[i], tuple(u[i]), tuple(o[i]), tuple(dz[i]))
+        d, names = pc(tuple(q[i]), p[i], tuple(u[i]), tuple(o[i]))
         pair = np.array([names])
         cols["clearance"][i] = d
         pairs[i] = (str(pair[0, 0]), str(pair[0, 1]))

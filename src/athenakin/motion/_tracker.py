@@ -251,7 +251,7 @@ class Tracker:
                   int(sol.wrist[slot]))
         q1, q2, q3 = (float(v) for v in q)
         par = _parallel(self._g, q1, q2, q3)
-        cand = None if par is None else _candidate(self._g, q1, q2, q3, par, *labels, None)
+        cand = None if par is None else _candidate(self._g, par, *labels, None)
         if cand is None:  # pragma: no cover - the core FK said it is valid
             raise InvalidInputError(f"q0 = {q.tolist()}: slot {slot} is degenerate")
         self._index = 0
@@ -272,7 +272,7 @@ class Tracker:
         check = self._check
         assert check is not None
         assert self._pose_clearance is not None       # the points from the pose, one call
-        d, names = self._pose_clearance(pose.q, pose.p, pose.u, pose.O_s, pose.direction_b)
+        d, names = self._pose_clearance(pose.q, pose.p, pose.u, pose.O_s)
         pair = np.array([names])
         flags = int(pose.flags)
         if d < check.margin:              # False for NaN (no valid slot: nothing to check)
@@ -452,7 +452,7 @@ class Tracker:
         if self._lost:
             flags |= _B["REACQUIRED"]
         # fast path: the candidate with the previous labels, far from every singularity
-        c = _candidate(g, q1, q2, q3, par, prev[0], prev[1], prev[2], prev[3], prev[5])
+        c = _candidate(g, par, prev[0], prev[1], prev[2], prev[3], prev[5])
         if c is not None and not self._lost:
             hc, hw, lk, s2, s4, pp = self._watch
             step = self._step(c)
@@ -465,7 +465,7 @@ class Tracker:
             for r in (1, -1):
                 for b in (1, -1):
                     for w in (1, -1):
-                        cc = _candidate(g, q1, q2, q3, par, mode, r, b, w, prev[5])
+                        cc = _candidate(g, par, mode, r, b, w, prev[5])
                         if cc is not None:
                             cands.append((self._step(cc), cc))
         if not cands:

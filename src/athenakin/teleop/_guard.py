@@ -2,8 +2,10 @@
 
 One :class:`~athenakin.collision._workspace.ClearanceWorkspace` per pose kept (the
 committed pose and the trial one, swapped on a commit: no copy), the body segments
-placed from a tracked pose by the tracker's formula
-(:meth:`athenakin.motion._clearance.PoseClearance.points`, pinned to
+placed from a tracked pose by the one formula of the mechanism's points
+(:func:`athenakin._mechanism_formulas.mechanism_points_formula`: compiled in
+:mod:`athenakin.teleop._kernels`, on Python floats in
+:meth:`athenakin.motion._clearance.PoseClearance.points`, on arrays in
 :func:`athenakin._mechanism.mechanism_points`), and the first-order change of every
 pair's distance along a step from the witness points of the committed pose.
 
@@ -104,8 +106,7 @@ class BodyGuard:
 
             self._kernels = _kernels
         pc = self._pc
-        self._G = np.array([pc.l1, pc.l2, pc.l3, pc.l4, pc.l5, pc.L, pc.rm, pc.half, pc.rs,
-                            pc.lo, pc.hi, *pc.rcm, *pc.ze], dtype=np.float64)
+        self._G = np.array([pc.l1, *pc.G, *pc.rcm, *pc.ze], dtype=np.float64)
         self._index = np.ascontiguousarray(pc.index, dtype=np.intp)
         self._pts = np.empty((19, 3))
 
@@ -113,12 +114,11 @@ class BodyGuard:
         """The body segments of a tracked pose into the trial buffer, shape (n_bodies, 2, 3)."""
         seg = self._try.segments
         if self._compiled:
-            q, u, o, d = pose.q, pose.u, pose.O_s, pose.direction_b
+            q, u, o = pose.q, pose.u, pose.O_s
             self._kernels.place_segments(q[0], q[1], pose.p, u[0], u[1], u[2], o[0], o[1],
-                                         o[2], d[0], d[1], d[2], self._G, self._index,
-                                         self._pts, seg)
+                                         o[2], self._G, self._index, self._pts, seg)
             return seg
-        pts = self._pc.points(pose.q, pose.p, pose.u, pose.O_s, pose.direction_b)
+        pts = self._pc.points(pose.q, pose.p, pose.u, pose.O_s)
         np.take(pts, self._index, axis=0, out=seg)
         return seg
 

@@ -4,7 +4,8 @@ Their references: :meth:`athenakin.teleop._fixtures.TipFixtures.nearest` (a poin
 signed distance to the tip fixtures, scalar Python),
 :meth:`athenakin.teleop._guard.BodyGuard.fraction` (the first-order step limit from the
 witness points) and :meth:`athenakin.motion._clearance.PoseClearance.points` (the body
-points of a tracked pose), to 1e-12 (tests/test_teleop_loop.py).
+points of a tracked pose: the same formula compiled, equal bit for bit), to 1e-12
+(tests/test_teleop_loop.py).
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from __future__ import annotations
 import math
 
 from .._backend import njit
+from .._mechanism_formulas import mechanism_points_formula
 
 __all__ = ["place_segments", "step_fraction", "fixture_nearest"]
 
@@ -77,45 +79,46 @@ def _move(seg0, seg1, i):  # pragma: no cover - numba
     return math.sqrt(m)
 
 
+_INLINE = dict(error_model="numpy", cache=True, nogil=True, inline="always")
+#: The one formula of the mechanism's points, compiled (the tracker's clearance and numpy
+#: evaluate the same source).
+_points_formula = njit(**_INLINE)(mechanism_points_formula)
+
+
+@njit(**_INLINE)
+def _select(c, a, b):  # pragma: no cover - numba
+    return a if c else b
+
+
+@njit(**_INLINE)
+def _min(a, b):  # pragma: no cover - numba
+    return min(a, b)
+
+
+@njit(**_INLINE)
+def _max(a, b):  # pragma: no cover - numba
+    return max(a, b)
+
+
+@njit(**_INLINE)
+def _sqrt(x):  # pragma: no cover - numba
+    return math.sqrt(x)
+
+
 @njit(error_model="numpy", cache=True, nogil=True)
-def place_segments(q1, q2, p, u0, u1, u2, ox, oy, oz, d0, d1, d2, G, index, pts,
-                  seg):  # pragma: no cover - numba
+def place_segments(q1, q2, p, u0, u1, u2, ox, oy, oz, G, index, pts,
+                   seg):  # pragma: no cover - numba
     """:meth:`athenakin.motion._clearance.PoseClearance.points` compiled, gathered to ``seg``.
 
-    ``G``: ``l1, l2, l3, l4, l5, L, rail margin, half carriage, sphere radius, rail lo,
-    rail hi, rcm (3), z_e (3)``; ``index`` (n_bodies, 2) the points of each body segment.
+    ``G``: ``l1``, the formula's constants (:attr:`PoseClearance.G`), the RCM (3) and
+    ``z_e`` (3); ``index`` (n_bodies, 2) the points of each body segment.
     """
-    l1, l2, l3, l4, l5, L = G[0], G[1], G[2], G[3], G[4], G[5]
-    rm, half, rs, lo, hi = G[6], G[7], G[8], G[9], G[10]
-    rc0, rc1, rc2, ze0, ze1, ze2 = G[11], G[12], G[13], G[14], G[15], G[16]
     h = 0.5 * (q1 - q2)
-    xm = 0.5 * (q1 + q2)
-    yd = math.sqrt(l3 * l3 - h * h)
-    r1 = math.sqrt(l1 * l1 - h * h)
-    cy, cz = oy / (r1 + l4), oz / (r1 + l4)
-    c1, s1, c2, s2 = math.cos(u0), math.sin(u0), math.cos(u1), math.sin(u1)
-    c3, s3 = math.cos(u2), math.sin(u2)
-    v0 = s3 * c1 * c2 - c3 * s1
-    v1 = s3 * s1 * c2 + c3 * c1
-    v2 = s3 * s2
-    a40, a41, a42 = v0, cz * v1 + cy * v2, -cy * v1 + cz * v2
-    side = -1.0 if p < 0 else 1.0
-    t = p - side * rs
-    if 0.0 <= t <= L:
-        s30, s31, s32 = rc0 - side * rs * d0, rc1 - side * rs * d1, rc2 - side * rs * d2
-    else:
-        t = min(max(t, 0.0), L)
-        s30, s31, s32 = ox + t * d0, oy + t * d1, oz + t * d2
-    rows = (
-        (q1, 0.0, 0.0), (q2, 0.0, 0.0), (xm, 0.0, 0.0), (xm, yd, 0.0),
-        (xm, yd + l2, 0.0), (xm, yd + l2, l5), (ox, oy - l4 * cy, oz - l4 * cz),
-        (ox, oy, oz), (rc0, rc1, rc2), (ox + L * d0, oy + L * d1, oz + L * d2),
-        (min(min(q1, q2) - rm, lo), 0.0, 0.0), (max(max(q1, q2) + rm, hi), 0.0, 0.0),
-        (q1 - half, 0.0, 0.0), (q1 + half, 0.0, 0.0),
-        (q2 - half, 0.0, 0.0), (q2 + half, 0.0, 0.0),
-        (s30, s31, s32),
-        (rc0 + rs * a40, rc1 + rs * a41, rc2 + rs * a42),
-        (rc0 + rs * ze0, rc1 + rs * ze1, rc2 + rs * ze2))
+    r1l4 = math.sqrt(G[0] * G[0] - h * h) + G[3]
+    rows = _points_formula(q1, q2, p, math.cos(u0), math.sin(u0), math.cos(u1), math.sin(u1),
+                           math.cos(u2), math.sin(u2), ox, oy, oz, oy / r1l4, oz / r1l4,
+                           G[11], G[12], G[13], G[14], G[15], G[16], G[1:11], _sqrt, _min,
+                           _max, _select)
     for i in range(19):
         r = rows[i]
         pts[i, 0] = r[0]
