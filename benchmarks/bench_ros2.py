@@ -14,7 +14,8 @@ Lost: commands the arm node never received (its own count at exit); replaced: re
 but a later one was the setpoint by the time a state message was published (two in one
 publishing period: CRTK's servo keeps the latest). CPU: the arm process's user + system
 time over the commands' window, as a share of one core and per servo cycle run in it
-(the cycles counted from the state messages that arrived then). Beside it, the same
+(the cycles counted from the state messages that arrived then), and so for the
+2 s before the first command (the arm node alone: its states read, no command). Beside it, the same
 loop in one process (``servo_jp``, ``step``, ``measured_js`` of
 :class:`athenakin.teleop.SimulatedArm`, no graph), per cycle.
 The machine's load is printed beside every figure.
@@ -44,6 +45,7 @@ from _ros2_procs import start, stop  # noqa: E402
 
 Q0 = (-0.1, 0.1, 0.45)
 STEP = 1e-7          # m between two commands' q3 (the commands are told apart by it)
+IDLE_S = 2.0         # s of the arm node alone (its states published, no command) first
 
 
 def _load() -> str:
@@ -147,7 +149,12 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
         done.set()
         raise RuntimeError(f"the arm node did not publish at its pace within 180 s "
                            f"({len(seen)} measured_js): {stop(proc)}")
-    time.sleep(1.0)        # the arm's reader matches this writer (each side on its own)
+    # the arm node alone (no commands yet) for IDLE_S, while its reader matches this writer
+    idle_cpu0, idle_w0 = _cpu_s(proc.pid), time.perf_counter()
+    time.sleep(IDLE_S)
+    idle_cpu, idle_wall = _cpu_s(proc.pid) - idle_cpu0, time.perf_counter() - idle_w0
+    with lock:
+        idle_states = sum(idle_w0 <= t for t in seen.values())
     cpu0, w0, load = _cpu_s(proc.pid), time.perf_counter(), _load()
     n = int(seconds * publish_rate)
     period = 1.0 / publish_rate
@@ -183,7 +190,8 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
     return {"latency": lat, "sent": n, "received": received, "reflected": len(first),
             "refused": refused, "refusals": refusals[:1], "states": states,
             "cycles": cycles, "late": late, "cpu": cpu, "wall": wall,
-            "window_cycles": window * round(rate / publish_rate), "load": load, "log": out}
+            "window_cycles": window * round(rate / publish_rate), "load": load, "log": out,
+            "idle": (idle_cpu, idle_wall, idle_states * round(rate / publish_rate))}
 
 
 def _no_sample(r: dict[str, object]) -> str:
@@ -216,6 +224,10 @@ def main() -> None:
     replaced = r["received"] - max(0, r["refused"]) - r["reflected"]
     print(f"  lost {lost} of {r['sent']}; refused {r['refused']}; replaced before a state "
           f"message showed them {replaced}; arm cycles {r['cycles']}, late {r['late']}")
+    cpu, wall, run = r["idle"]  # type: ignore[misc]
+    print(f"  arm node alone (its states read here, no command): {100 * cpu / wall:.0f} % of "
+          f"one core over {wall:.1f} s ({1e6 * cpu / max(1, run):.0f} us per servo cycle run; "
+          f"{run} cycles run of {round(wall * args.rate)} due)")
     run, due = r["window_cycles"], round(r["wall"] * args.rate)
     print(f"  arm node CPU {100 * r['cpu'] / r['wall']:.0f} % of one core over the "
           f"{r['wall']:.1f} s of commands ({1e6 * r['cpu'] / max(1, run):.0f} us per servo "

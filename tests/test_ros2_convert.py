@@ -137,8 +137,10 @@ def test_state_messages_carry_the_reference_kinematics(compiled):
     reference's numbers: the tip frames of the slot (position and orientation), the tip
     Jacobian times the measured velocity, the URDF joint values; nothing where the
     measured position does not assemble in the slot."""
-    if compiled:
-        pytest.importorskip("numba")
+    from athenakin._backend import numba_available
+
+    if compiled and not numba_available():
+        pytest.skip("the compiled kernels do not run here (numba missing or ATHENAKIN_BACKEND)")
     from builtin_interfaces.msg import Time
 
     from athenakin.analysis import tool_tip_jacobian
