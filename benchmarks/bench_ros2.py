@@ -13,9 +13,18 @@ graph, waited for the next servo cycle, was stepped and published, and crossed b
 Lost: commands the arm node never received (its own count at exit); replaced: received,
 but a later one was the setpoint by the time a state message was published (two in one
 publishing period: CRTK's servo keeps the latest). CPU: the arm process's user + system
-time per servo cycle. Beside it, the same loop in one process (``servo_jp``, ``step``,
-``measured_js`` of :class:`athenakin.teleop.SimulatedArm`, no graph), per cycle.
+time over the commands' window, as a share of one core and per servo cycle run in it
+(the cycles counted from the state messages that arrived then), and so for the
+2 s before the first command (the arm node alone: its states read, no command). Beside it, the same
+loop in one process (``servo_jp``, ``step``, ``measured_js`` of
+:class:`athenakin.teleop.SimulatedArm`, no graph), per cycle.
 The machine's load is printed beside every figure.
+
+The commands start once the arm node publishes at its pace (a hundred states after its
+first, not its first alone: a node still loading its kernels would take none of them),
+in ``ROS_DOMAIN_ID`` where it is set (else one of this run's, from the pid). Where no
+command shows on a ``setpoint_js`` the run says so by name, with what the arm node
+answered (its counts, its first refusal on ``status``).
 """
 
 from __future__ import annotations
@@ -23,8 +32,6 @@ from __future__ import annotations
 import argparse
 import os
 import re
-import signal
-import subprocess
 import sys
 import threading
 import time
@@ -33,8 +40,12 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+from _ros2_procs import start, stop  # noqa: E402
+
 Q0 = (-0.1, 0.1, 0.45)
 STEP = 1e-7          # m between two commands' q3 (the commands are told apart by it)
+IDLE_S = 2.0         # s of the arm node alone (its states published, no command) first
 
 
 def _load() -> str:
@@ -48,6 +59,8 @@ def _cpu_s(pid: int) -> float:
 
 
 def _pct(x: np.ndarray) -> str:
+    if not len(x):
+        return "no latency sample"
     us = x * 1e6
     return (f"p50 {np.percentile(us, 50):8.1f} us  p99 {np.percentile(us, 99):8.1f} us  "
             f"max {us.max():9.1f} us")
@@ -82,12 +95,20 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import JointState
 
-    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", ROS_DOMAIN_ID=str(domain),
-               PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
+    try:                               # CRTK's own status type where crtk_msgs is built
+        from crtk_msgs.msg import StringStamped as Status
+
+        def text(m: object) -> str:
+            return str(m.string)  # type: ignore[attr-defined]
+    except ImportError:                # the node's std_msgs stand-in
+        from std_msgs.msg import String as Status
+
+        def text(m: object) -> str:
+            return str(m.data)  # type: ignore[attr-defined]
+
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    proc = subprocess.Popen([sys.executable, "-m", "athenakin", "ros2", "arm", "--enable",
-                             "--rate", str(rate), "--publish-rate", str(publish_rate)],
-                            env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    proc = start(["arm", "--enable", "--rate", str(rate), "--publish-rate", str(publish_rate)],
+                 domain)
     ctx = Context()
     rclpy.init(context=ctx, domain_id=domain)
     node = rclpy.create_node("bench_client", context=ctx)
@@ -97,6 +118,7 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
     sent: dict[int, float] = {}
     seen: dict[tuple[int, int], float] = {}     # stamp of a measured_js -> arrival time
     sp_of: dict[tuple[int, int], int] = {}      # stamp of a setpoint_js -> the command index
+    refusals: list[str] = []                    # the arm node's status texts
     lock = threading.Lock()
 
     def on_js(m: JointState) -> None:
@@ -111,23 +133,32 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
 
     node.create_subscription(JointState, "/athena/measured_js", on_js, qos)
     node.create_subscription(JointState, "/athena/setpoint_js", on_sp, qos)
+    node.create_subscription(Status, "/athena/status", lambda m: refusals.append(text(m)), qos)
     pub = node.create_publisher(JointState, "/athena/servo_jp", qos)
-    stop = threading.Event()
+    done = threading.Event()
     spinner = threading.Thread(target=lambda: [ex.spin_once(timeout_sec=0.05)
-                                               for _ in iter(stop.is_set, True)], daemon=True)
+                                               for _ in iter(done.is_set, True)], daemon=True)
     spinner.start()
     end = time.monotonic() + 180
-    while (pub.get_subscription_count() == 0 or not seen) and time.monotonic() < end:
+    # the arm node at its pace: a hundred states after its first (not the first alone)
+    while (pub.get_subscription_count() == 0 or len(seen) < 100) and time.monotonic() < end:
+        if proc.poll() is not None:
+            break
         time.sleep(0.05)
-    if not seen:
-        proc.kill()
-        log = proc.stdout.read() if proc.stdout else ""
-        raise RuntimeError(f"the arm node did not start: {log}")
-    time.sleep(1.0)        # the arm's reader matches this writer (each side on its own)
-    cpu0, load = _cpu_s(proc.pid), _load()
+    if len(seen) < 100:
+        done.set()
+        raise RuntimeError(f"the arm node did not publish at its pace within 180 s "
+                           f"({len(seen)} measured_js): {stop(proc)}")
+    # the arm node alone (no commands yet) for IDLE_S, while its reader matches this writer
+    idle_cpu0, idle_w0 = _cpu_s(proc.pid), time.perf_counter()
+    time.sleep(IDLE_S)
+    idle_cpu, idle_wall = _cpu_s(proc.pid) - idle_cpu0, time.perf_counter() - idle_w0
+    with lock:
+        idle_states = sum(idle_w0 <= t for t in seen.values())
+    cpu0, w0, load = _cpu_s(proc.pid), time.perf_counter(), _load()
     n = int(seconds * publish_rate)
     period = 1.0 / publish_rate
-    t_next = time.perf_counter()
+    t_next = t_start = time.perf_counter()
     q = list(Q0)
     for k in range(1, n + 1):
         q[2] = Q0[2] + STEP * k
@@ -139,15 +170,17 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
         if wait > 0:
             time.sleep(wait)
     time.sleep(1.0)
-    cpu = _cpu_s(proc.pid) - cpu0
-    proc.send_signal(signal.SIGINT)
-    out = proc.communicate(timeout=30)[0]
-    stop.set()
+    cpu, wall = _cpu_s(proc.pid) - cpu0, time.perf_counter() - w0
+    with lock:
+        states = sum(t >= t_start for t in seen.values())
+        window = sum(t >= w0 for t in seen.values())       # states published in the window
+    out = stop(proc, timeout=30.0)
+    done.set()
     spinner.join(timeout=5)
     node.destroy_node()
     ctx.try_shutdown()
-    m = re.search(r"(\d+) cycles, (\d+) late, (\d+) commands", out)
-    cycles, late, received = (int(g) for g in m.groups()) if m else (0, 0, -1)
+    m = re.search(r"(\d+) cycles, (\d+) late, (\d+) commands, (\d+) refused", out)
+    cycles, late, received, refused = (int(g) for g in m.groups()) if m else (0, 0, -1, -1)
     first: dict[int, float] = {}
     with lock:
         for stamp, k in sp_of.items():
@@ -155,8 +188,19 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
                 first[k] = min(first.get(k, np.inf), seen[stamp] - sent[k])
     lat = np.array([first[k] for k in sorted(first)])
     return {"latency": lat, "sent": n, "received": received, "reflected": len(first),
-            "cycles": cycles, "late": late, "cpu_per_cycle": cpu / max(1, cycles), "load": load,
-            "wall": cycles / rate}
+            "refused": refused, "refusals": refusals[:1], "states": states,
+            "cycles": cycles, "late": late, "cpu": cpu, "wall": wall,
+            "window_cycles": window * round(rate / publish_rate), "load": load, "log": out,
+            "idle": (idle_cpu, idle_wall, idle_states * round(rate / publish_rate))}
+
+
+def _no_sample(r: dict[str, object]) -> str:
+    """Why the run has no latency sample, by name: what the arm node received and answered."""
+    first = r["refusals"][0] if r["refusals"] else "none"  # type: ignore[index]
+    return (f"  no latency sample: none of the {r['sent']} servo_jp showed on a setpoint_js "
+            f"(the arm node received {r['received']}, refused {r['refused']}, first status "
+            f"{first!r}; {r['states']} measured_js arrived from the first command on; the end "
+            f"of its log: {str(r['log']).strip()[-300:]!r})")
 
 
 def main() -> None:
@@ -165,7 +209,7 @@ def main() -> None:
     ap.add_argument("--publish-rate", type=float, help="state and command rate, Hz (--rate)")
     ap.add_argument("--seconds", type=float, default=5.0, help="commands for this long, s")
     args = ap.parse_args()
-    domain = 1 + os.getpid() % 100
+    domain = int(os.environ.get("ROS_DOMAIN_ID") or 1 + os.getpid() % 100)
     base = in_process(args.rate, int(args.seconds * args.rate))
     print(f"in one process, servo_jp -> step -> measured_js: {_pct(base)} ({_load()})")
     publish = args.rate if args.publish_rate is None else args.publish_rate
@@ -175,12 +219,22 @@ def main() -> None:
     lost = r["sent"] - r["received"] if r["received"] >= 0 else "unknown"
     print(f"over the graph, servo at {args.rate:g} Hz, state and commands at {publish:g} Hz, "
           f"{r['sent']} servo_jp (reliable): {_pct(lat)} ({r['load']})")
-    print(f"  lost {lost} of {r['sent']}; replaced before a state message showed them "
-          f"{r['received'] - r['reflected']}; arm cycles {r['cycles']}, late {r['late']}")
-    print(f"  arm node CPU {r['cpu_per_cycle'] * 1e6:.1f} us per cycle "
-          f"({r['cpu_per_cycle'] * args.rate * 100:.0f} % of one core at {args.rate:g} Hz)")
-    print(f"  p50 graph / p50 one process: "
-          f"{np.percentile(lat, 50) / np.percentile(base, 50):.1f}x ({_load()})")
+    if not len(lat):
+        print(_no_sample(r))
+    replaced = r["received"] - max(0, r["refused"]) - r["reflected"]
+    print(f"  lost {lost} of {r['sent']}; refused {r['refused']}; replaced before a state "
+          f"message showed them {replaced}; arm cycles {r['cycles']}, late {r['late']}")
+    cpu, wall, run = r["idle"]  # type: ignore[misc]
+    print(f"  arm node alone (its states read here, no command): {100 * cpu / wall:.0f} % of "
+          f"one core over {wall:.1f} s ({1e6 * cpu / max(1, run):.0f} us per servo cycle run; "
+          f"{run} cycles run of {round(wall * args.rate)} due)")
+    run, due = r["window_cycles"], round(r["wall"] * args.rate)
+    print(f"  arm node CPU {100 * r['cpu'] / r['wall']:.0f} % of one core over the "
+          f"{r['wall']:.1f} s of commands ({1e6 * r['cpu'] / max(1, run):.0f} us per servo "
+          f"cycle run; {run} cycles run of {due} due at {args.rate:g} Hz)")
+    if len(lat):
+        print(f"  p50 graph / p50 one process: "
+              f"{np.percentile(lat, 50) / np.percentile(base, 50):.1f}x ({_load()})")
 
 
 if __name__ == "__main__":

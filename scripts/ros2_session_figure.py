@@ -31,7 +31,6 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import signal
 import subprocess
 import sys
 import tempfile
@@ -41,6 +40,9 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))      # the node processes' helpers, as golden.py does
+from _ros2_procs import start, stop  # noqa: E402
+
 DEADLINE = 180.0         # s: the longest wait for a node (numba's first compile, a loaded machine)
 MASTER_RATE = 100.0      # master poses per second, Hz
 JOY_EVERY = 10           # a Joy every this many poses (10 Hz)
@@ -56,27 +58,6 @@ TIMELINE = ((0.0, 1.0, "still"), (1.0, 5.0, "move"), (5.0, 6.5, "clutch"), (6.5,
 def _load() -> str:
     a, b, c = os.getloadavg()
     return f"load {a:.1f} / {b:.1f} / {c:.1f} on {os.cpu_count()} cores"
-
-
-def _env(domain: int) -> dict[str, str]:
-    return dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", ROS_DOMAIN_ID=str(domain),
-                PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
-
-
-def _start(args: list[str], domain: int) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "athenakin", "ros2", *args], env=_env(domain),
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-
-
-def _stop(proc: subprocess.Popen) -> str:
-    if proc.poll() is None:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
-    return proc.stdout.read() if proc.stdout else ""
 
 
 def master_at(s: float) -> tuple[tuple[float, float, float] | None, bool]:
@@ -195,8 +176,8 @@ def record(mcap: Path, rate: float) -> dict[str, int]:
 
     domain = 1 + os.getpid() % 100
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    procs = [_start(["arm", "--enable", "--publish-rate", "100"], domain),
-             _start(["teleop", "--rate", str(rate), "--status-every", "1",
+    procs = [start(["arm", "--enable", "--publish-rate", "100"], domain),
+             start(["teleop", "--rate", str(rate), "--status-every", "1",
                      "--watchdog", str(WATCHDOG)], domain)]
     ctx = RosContext(domain_id=domain)
     master = rec = None
@@ -218,7 +199,7 @@ def record(mcap: Path, rate: float) -> dict[str, int]:
             time.sleep(1.0 / MASTER_RATE)
             if time.monotonic() > end or any(p.poll() is not None for p in procs):
                 raise SystemExit("the teleop node did not follow the master: "
-                                 + "".join(_stop(p) for p in procs))
+                                 + "".join(stop(p, timeout=30.0) for p in procs))
         t0 = time.perf_counter()
         n = round(TIMELINE[-1][1] * MASTER_RATE)
         for k in range(n):                        # the master's own clock paces this loop
@@ -237,7 +218,7 @@ def record(mcap: Path, rate: float) -> dict[str, int]:
         if rec is not None:
             rec.close()
         ctx.close()
-        out = "".join(_stop(p) for p in procs)
+        out = "".join(stop(p, timeout=30.0) for p in procs)
     print(out.strip())
     return rec.counts
 

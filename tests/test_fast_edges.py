@@ -314,6 +314,37 @@ def test_near_singular_band_matches_reference(which):
         akt.assert_angles_equal(got.u[..., k][got.valid], ref.u[..., k][ref.valid], atol=1e-12)
 
 
+def test_control_loop_slot_frames_and_tip_jacobian_are_the_reference():
+    """``fk_slot``: the slot's reason, p, u, T_b_s and T_b_tip of the reference FK (NaN where
+    the slot is invalid); ``tool_tip_jacobian``: the analysis one in the base frame."""
+    from athenakin.analysis import tool_tip_jacobian
+
+    rc = akt.random_configurations(40, DESIGN, rng=SEED + 8)
+    for i in range(0, 40, 4):
+        T = rc.T_b_e[i]
+        ctl = fast.ControlLoop(T, DESIGN)
+        for q in (rc.q[i], rc.q[i] + np.array([0.0, 0.0, 5.0])):     # in reach, beyond it
+            ref = ak.robot.forward_kinematics(q, T, DESIGN, errors="flag")
+            for k in range(16):
+                reason, p, u, T_b_s, tip = ctl.fk_slot(q, k)
+                assert reason == ref.reason[k]
+                if reason:
+                    assert np.isnan(tip[:3]).all() and np.isnan(p) and np.isnan(u).all()
+                    continue
+                np.testing.assert_allclose(p, ref.p[k], atol=1e-12, rtol=0)
+                np.testing.assert_allclose(T_b_s, ref.T_b_s[k], atol=1e-12, rtol=0)
+                akt.assert_allclose_scaled(tip, ref.T_b_tip[k], rtol=1e-14)
+        for mode in (1, -1):
+            want = tool_tip_jacobian(rc.q[i], T, DESIGN, mode=mode, backend="numpy")
+            got = ctl.tool_tip_jacobian(rc.q[i], mode)
+            np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+    with pytest.raises(ValueError, match="mode"):
+        ctl.tool_tip_jacobian(rc.q[0], 0)
+    for bad in (16, -1, 1.0, True):
+        with pytest.raises(ak.InvalidInputError, match="slot"):
+            ctl.fk_slot(rc.q[0], bad)
+
+
 def test_control_loop_insertion_named():
     """Audit of issue 13: p = 10**400 was OverflowError, p = "x" an unnamed ValueError."""
     loop = ak.fast.ControlLoop(ak.default_rcm_frame())
@@ -366,18 +397,3 @@ def test_threads_share_the_kernels():
     for (p0, q0), (p1, q1) in zip(serial, threaded, strict=True):
         np.testing.assert_array_equal(p0, p1)
         np.testing.assert_array_equal(q0, q1)
-
-
-def test_control_loop_tip_frame_is_the_fk_solutions_bit_for_bit():
-    """``ControlLoop.tip_frame`` equals ``FKSolution.T_b_tip`` of every slot (NaN pattern too)."""
-    rng = np.random.default_rng(SEED)
-    lo, hi = np.array(DESIGN.stroke_min), np.array(DESIGN.stroke_max)
-    ctl = fast.ControlLoop(T0, DESIGN)
-    qs = np.vstack([lo + (hi - lo) * rng.random((200, 3)),
-                    [[np.nan, 0.1, 0.45], [0.1, -0.1, 0.45], hi + 0.01]])
-    for q in qs:
-        sol = ak.forward_kinematics(q, T0, DESIGN, errors="flag")
-        for k in range(16):
-            reason, T = ctl.tip_frame(q, k)
-            assert reason == int(sol.reason[k])
-            np.testing.assert_array_equal(T, sol.T_b_tip[k])

@@ -13,7 +13,8 @@ from sensor_msgs.msg import JointState  # noqa: E402
 import athenakin as ak  # noqa: E402
 from athenakin.errors import InvalidInputError  # noqa: E402
 from athenakin.ros2 import crtk_types  # noqa: E402
-from athenakin.ros2._arm_node import _rotation_rate, check_namespace  # noqa: E402
+from athenakin.ros2._arm_node import check_namespace  # noqa: E402
+from athenakin.ros2._arm_state import rotation_rate  # noqa: E402
 from athenakin.ros2._convert import actuator_command, pose_stamped, tip_command  # noqa: E402
 
 
@@ -67,9 +68,9 @@ def test_pose_stamped_carries_the_rotation():
 def test_rotation_rate_of_a_known_turn():
     a, dt = 0.01, 0.002
     R1 = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
-    np.testing.assert_allclose(_rotation_rate(np.eye(3), R1, dt), [0, 0, a / dt], rtol=1e-12,
+    np.testing.assert_allclose(rotation_rate(np.eye(3), R1, dt), [0, 0, a / dt], rtol=1e-12,
                                atol=1e-9)
-    np.testing.assert_array_equal(_rotation_rate(np.eye(3), np.eye(3), dt), [0, 0, 0])
+    np.testing.assert_array_equal(rotation_rate(np.eye(3), np.eye(3), dt), [0, 0, 0])
 
 
 @pytest.mark.parametrize("ns, want", [("/athena", "/athena"), ("athena/", "/athena"),
@@ -128,3 +129,97 @@ def test_use_sim_time_stamps_from_clock(monkeypatch):
         node.close()
         node.context.close()
         client_ctx.close()
+
+
+@pytest.mark.parametrize("compiled", [True, False], ids=["compiled", "numpy"])
+def test_state_messages_carry_the_reference_kinematics(compiled):
+    """The arm node's state messages, filled in place from one FK per state, hold the
+    reference's numbers: the tip frames of the slot (position and orientation), the tip
+    Jacobian times the measured velocity, the URDF joint values; nothing where the
+    measured position does not assemble in the slot."""
+    from athenakin._backend import numba_available
+
+    if compiled and not numba_available():
+        pytest.skip("the compiled kernels do not run here (numba missing or ATHENAKIN_BACKEND)")
+    from builtin_interfaces.msg import Time
+
+    from athenakin.analysis import tool_tip_jacobian
+    from athenakin.ros._frames import joint_values, quaternion_xyzw, urdf_model
+    from athenakin.ros2._arm_state import StateMessages
+    from athenakin.teleop import JointState as ArmState
+    from athenakin.testing import assert_allclose_scaled
+
+    d = ak.Design.default()
+    T = ak.default_rcm_frame(d)
+    urdf = urdf_model(d, T)
+    m = StateMessages(T, d, 0, urdf, dt=1e-3, compiled=compiled)
+    rng = np.random.default_rng(38)
+    q0 = np.array([-0.1, 0.1, 0.45])
+    sq = q0.copy()
+    for k in range(40):
+        q = q0 + rng.normal(scale=0.01, size=3)
+        if k % 10 == 9:
+            q[2] = 2.0                     # beyond the stroke: does not assemble
+        if k % 3:                          # else the setpoint stays (its pose is kept)
+            sq = q0 + rng.normal(scale=0.01, size=3)
+        qd, f = rng.normal(scale=0.05, size=3), rng.normal(size=3)
+        ok = m.fill(ArmState(0.0, q, qd, f), ArmState(0.0, sq, 0 * qd, f), Time(sec=7, nanosec=k))
+        assert m.measured_cp.header.stamp.nanosec == k == m.urdf_joint_states.header.stamp.nanosec
+        np.testing.assert_array_equal(m.measured_js.position, q)
+        np.testing.assert_array_equal(m.measured_js.velocity, qd)
+        np.testing.assert_array_equal(m.setpoint_js.position, sq)
+        for msg, x in ((m.measured_cp, q), (m.setpoint_cp, sq)):
+            sol = ak.robot.forward_kinematics(x, T, d, errors="flag")
+            ref = sol.T_b_tip[0]
+            p, o = msg.pose.position, msg.pose.orientation
+            got = np.array([p.x, p.y, p.z, o.x, o.y, o.z, o.w])
+            want = np.concatenate([ref[:3, 3], quaternion_xyzw(ref[None, :3, :3],
+                                                               backend="numpy")[0]])
+            if not sol.valid[0]:
+                assert np.isnan(got).all()
+                continue
+            assert_allclose_scaled(got[:3], want[:3], rtol=1e-14)
+            assert_allclose_scaled(got[3:], want[3:], rtol=1e-14)
+        sol = ak.robot.forward_kinematics(q, T, d, errors="flag")
+        assert ok == bool(sol.valid[0])
+        if not ok:
+            continue
+        lin = m.measured_cv.twist.linear
+        J = tool_tip_jacobian(q, T, d, mode=1, backend="numpy")
+        assert_allclose_scaled([lin.x, lin.y, lin.z], J @ qd, rtol=1e-12)
+        jv = joint_values(urdf, q[None], sol.p[:1], sol.u[:1], sol.T_b_s[0, :3, 3][None])
+        assert list(m.urdf_joint_states.name) == list(jv)
+        assert_allclose_scaled(m.urdf_joint_states.position, [v[0] for v in jv.values()],
+                               rtol=1e-13, scale=np.pi)
+
+
+def test_a_motion_command_outside_enabled_is_the_arms_own_refusal(monkeypatch):
+    """The node adds no state check of its own: outside ``ENABLED`` the arm holds a motion
+    command and names why, the node answers that on ``status``, and nothing moves; once
+    enabled (a ``state_command``) the same command is taken."""
+    import os
+
+    pytest.importorskip("mujoco", reason="the arm node serves the MuJoCo arm (extra 'sim')")
+    from std_msgs.msg import String
+
+    from athenakin.ros2 import ArmNode, RosContext
+
+    monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    node = ArmNode(context=RosContext(domain_id=1 + (os.getpid() + 30) % 100))
+    try:
+        before = node.arm.setpoint_js().position
+        goal = [-0.1, 0.1, 0.451]
+        node._on_servo_jp(JointState(position=goal))
+        node._on_move_jp(JointState(position=goal))
+        assert node.refusals == [("servo_jp", "held: servo_jp: the arm is DISABLED"),
+                                 ("move_jp", "held: move_jp: the arm is DISABLED")]
+        np.testing.assert_array_equal(node.arm.setpoint_js().position, before)
+        state = node.crtk.string_stamped
+        node._on_state_command(state(string="enable") if node.crtk.native
+                               else String(data="enable"))
+        node._on_servo_jp(JointState(position=goal))
+        assert len(node.refusals) == 2 and node.arm.operating_state == "ENABLED"
+        np.testing.assert_array_equal(node.arm.setpoint_js().position, goal)
+    finally:
+        node.close()
+        node.context.close()

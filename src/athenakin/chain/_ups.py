@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -45,6 +46,7 @@ __all__ = [
     "ups_study",
     "ups_solutions",
     "rotation_u_pair",
+    "u_pair_entries",
     "closure_residual",
 ]
 
@@ -118,9 +120,31 @@ def rotation_u_pair(ca: ArrayLike, sa: ArrayLike, cb: ArrayLike, sb: ArrayLike
         raise InvalidInputError(f"ca, sa, cb, sb: expected broadcastable shapes, got "
                                 f"{[a.shape for a in args]}") from None
     z = np.zeros_like(ca)
-    return np.stack([ca * cb, sa, ca * sb,
-                     sa * cb, -ca, sa * sb,
-                     sb, z, -cb], axis=-1).reshape(ca.shape + (3, 3))
+    return np.stack(u_pair_entries(ca, sa, cb, sb, z), axis=-1).reshape(ca.shape + (3, 3))
+
+
+def u_pair_entries(ca: Any, sa: Any, cb: Any, sb: Any, zero: Any) -> tuple[Any, ...]:
+    """The nine entries of :func:`rotation_u_pair`, row by row, of unchecked operands.
+
+    The one expression of ``R(a, b)``: :func:`rotation_u_pair` stacks it over arrays,
+    a single-pose caller (:meth:`athenakin.fast.ControlLoop.fk_slot`) fills a (3, 3)
+    buffer from it without the checks and the stacking.
+
+    Parameters
+    ----------
+    ca, sa, cb, sb : float or ndarray
+        Cosines and sines of ``a`` and ``b``.
+    zero : float or ndarray
+        The zero entry, of the operands' kind.
+
+    Returns
+    -------
+    tuple of 9
+        ``R[0, 0], R[0, 1], ..., R[2, 2]``.
+    """
+    return (ca * cb, sa, ca * sb,
+            sa * cb, -ca, sa * sb,
+            sb, zero, -cb)
 
 
 def _rz(c: FloatArray, s: FloatArray) -> FloatArray:

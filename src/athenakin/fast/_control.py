@@ -8,11 +8,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._typing import FloatArray, Int8Array
-from .._validation import check_array, check_frame
-from ..chain._ups import CLOSURE_TOL
+from .._validation import check_array, check_frame, check_slot
+from ..chain._ups import CLOSURE_TOL, u_pair_entries
 from ..design import Design
 from ..parallel import TANGENT_TOL
-from ..robot._fk import tip_frames
 from ..robot._ik import IK_SINGULAR_TOL
 from . import _fk_kernels as _fk
 from . import _ik_kernels as _ik
@@ -92,8 +91,6 @@ class ControlLoop:
         self._reason = self._ibuf[_fk.ONE_REASON:_fk.ONE_VALID]
         self._p = self._fbuf[_fk.ONE_P:_fk.ONE_U]
         self._u = self._fbuf[_fk.ONE_U:_fk.ONE_T].reshape(16, 5)
-        self._T_b_s = self._fbuf[_fk.ONE_T:_fk.ONE_RES].reshape(16, 4, 4)
-        self._L = self._design.tool_length
         self._kfbuf = np.empty(_one.ONE_F)
         self._kibuf = np.empty(3, np.int64)
         self._kq = self._kfbuf[_one.ONE_Q:_one.ONE_P]
@@ -102,6 +99,13 @@ class ControlLoop:
         self._inf = float("inf")
         self._jG = _jk.frame_rows(self._T)
         self._jout = np.empty((3, 3))
+        self._jtip = np.empty((3, 3))
+        self._T_b_s = self._fbuf[_fk.ONE_T:_fk.ONE_RES].reshape(16, 4, 4)
+        self._tip = np.zeros((4, 4))
+        self._R_s_3_flat, self._R = np.empty(9), np.empty((3, 3))
+        self._R_s_3 = self._R_s_3_flat.reshape(3, 3)
+        self._tip[3, 3] = 1.0
+        self._L = float(self._design.tool_length)
 
     @property
     def T_b_e(self) -> FloatArray:
@@ -129,30 +133,47 @@ class ControlLoop:
                    self._ibuf)
         return self._reason, self._p, self._u
 
-    def tip_frame(self, q: ArrayLike, slot: int) -> tuple[int, FloatArray]:
-        """The tool-tip frame ``T_b_tip`` of actuator values ``q`` in one slot.
+    def fk_slot(self, q: ArrayLike, slot: int) -> tuple[int, float, FloatArray, FloatArray,
+                                                        FloatArray]:
+        """One slot of the forward kinematics of ``q``: its pose frames and joints.
 
-        :attr:`athenakin.FKSolution.T_b_tip` of the slot, from the same kernels as
-        :meth:`fk` and the same formula (``athenakin.robot._fk.tip_frames``).
+        :meth:`fk`, then the slot's :attr:`~athenakin.FKSolution.T_b_tip` by the
+        reference's expressions (rotation ``R_b_s R(u1, u2)``, the entries of
+        :func:`athenakin.chain._ups.rotation_u_pair`; origin ``O_s + tool_length z3``), for
+        that slot only: the same numbers, bit for bit (tested).
 
         Parameters
         ----------
         q : ndarray, shape (3,)
             ``(q1, q2, q3)``, m.
         slot : int
-            The forward-kinematics slot, 0 to 15.
+            FK slot, 0 to 15 (another value: an ``InvalidInputError`` naming it).
 
         Returns
         -------
         reason : int
-            :class:`~athenakin.errors.Reason` of the slot (0: valid).
+            The slot's reason (0: valid), as :attr:`FKSolution.reason`.
+        p : float
+            Insertion of the slot, m (NaN where invalid).
+        u : ndarray, shape (5,)
+            ``u1..u5`` of the slot, rad (NaN where invalid).
+        T_b_s : ndarray, shape (4, 4)
+            Pose of ``O_s`` of the slot's assembly mode, base frame.
         T_b_tip : ndarray, shape (4, 4)
-            Base frame, m; a new array, NaN unless ``reason == 0``.
+            Instrument frame at the tool tip, base frame (NaN rows where invalid).
+
+        The arrays are views of internal buffers that the next call overwrites.
         """
-        reason, _, u = self.fk(q)
-        k = int(slot)
-        T = self._T_b_s[k]
-        return int(reason[k]), tip_frames(T[:3, :3], T[:3, 3], u[k], self._L)
+        k = slot if type(slot) is int and 0 <= slot < 16 else check_slot(slot)
+        reason, p, u = self.fk(q)
+        uk, Ts, out = u[k], self._T_b_s[k], self._tip
+        a, b = uk[0], uk[1]
+        self._R_s_3_flat[:] = u_pair_entries(math.cos(a), math.sin(a), math.cos(b), math.sin(b),
+                                             0.0)
+        R = np.matmul(Ts[:3, :3], self._R_s_3, out=self._R)
+        out[:3, :3] = R
+        np.add(Ts[:3, 3], self._L * R[:, 2], out=out[:3, 3])
+        return int(reason[k]), float(p[k]), uk, Ts, out
 
     def ik(self, u345: ArrayLike) -> tuple[FloatArray, int]:
         """Paper-form IK: actuators for the spherical-joint angles ``u3, u4, u5``.
@@ -224,6 +245,26 @@ class ControlLoop:
         r = _one.ik_line_one(self._T, _vec3(tip_e, "tip_e"), 0.0, self._P, 1, self._q)
         return self._q, r
 
+    def tool_tip_jacobian(self, q: ArrayLike, mode: int = 1) -> FloatArray:
+        """The closed-form ``d tip_b / d q`` at actuator values ``q``, shape (3, 3).
+
+        :func:`athenakin.analysis.tool_tip_jacobian` with ``frame="base"`` (the same
+        values, from the same compiled kernel) for one pose: rows the tip's ``x, y, z``
+        in the base frame, columns ``q1, q2, q3`` (m/m); NaN or inf entries on the
+        singular set (never raises for a pose). A view of an internal buffer that the
+        next call overwrites.
+
+        Parameters
+        ----------
+        q, mode
+            As in :meth:`tool_tip_inverse_jacobian`.
+
+        Returns
+        -------
+        ndarray, shape (3, 3)
+        """
+        return self._jacobian(q, mode, _jk.TIP_JAC, False, self._jtip)
+
     def tool_tip_inverse_jacobian(self, q: ArrayLike, mode: int = 1) -> FloatArray:
         """The closed-form ``d q / d tip_e`` at actuator values ``q``, shape (3, 3).
 
@@ -244,12 +285,16 @@ class ControlLoop:
         ndarray, shape (3, 3)
             NaN or inf entries on the singular set (never raises for a pose).
         """
+        return self._jacobian(q, mode, _jk.TIP_INV, True, self._jout)
+
+    def _jacobian(self, q: ArrayLike, mode: int, kind: int, rcm: bool, out: FloatArray
+                  ) -> FloatArray:
+        """The one-pose Jacobian ``kind`` of the compiled kernel into ``out``."""
         if mode != 1 and mode != -1:
             raise ValueError(f"mode: expected 1 or -1, got {mode!r}")
         try:
             q1, q2, q3 = float(q[0]), float(q[1]), float(q[2])  # type: ignore[index,arg-type]
         except (TypeError, ValueError, LookupError, OverflowError):
             raise ValueError(f"q: expected 3 numbers (q1, q2, q3) in m, got {q!r}") from None
-        _jk.robot_one(q1, q2, q3, float(mode), self._jG, self._P, TANGENT_TOL, _jk.TIP_INV,
-                      True, self._jout)
-        return self._jout
+        _jk.robot_one(q1, q2, q3, float(mode), self._jG, self._P, TANGENT_TOL, kind, rcm, out)
+        return out

@@ -219,31 +219,6 @@ def _tip_frames(T_b_s_mode: FloatArray, u: FloatArray, L: float
     """``T_b_tip`` (..., 16, 4, 4) from the per-mode ``T_b_s`` and the slots' ``u``."""
     R_b_s = np.take(T_b_s_mode[..., :3, :3], SLOT_MODE_INDEX, axis=-3)     # (..., 16, 3, 3)
     O_s = np.take(T_b_s_mode[..., :3, 3], SLOT_MODE_INDEX, axis=-2)        # (..., 16, 3)
-    return tip_frames(R_b_s, O_s, u, L)
-
-
-def tip_frames(R_b_s: FloatArray, O_s: FloatArray, u: FloatArray, L: float) -> FloatArray:
-    """The instrument frame at the tool tip, base frame: ``T_b_tip`` of :class:`FKSolution`.
-
-    Rotation ``R_b_s R(u1, u2)`` (its z-axis the instrument axis ``z3``), origin
-    ``O_s + L z3``.
-
-    Parameters
-    ----------
-    R_b_s : ndarray, shape (..., 3, 3)
-        Orientation of the parallel module's platform frame S.
-    O_s : ndarray, shape (..., 3)
-        Its origin, m.
-    u : ndarray, shape (..., 5)
-        The serial chain's joint values ``u1..u5``, radians (only ``u1, u2`` are used).
-    L : float
-        ``design.tool_length``, m.
-
-    Returns
-    -------
-    ndarray, shape (..., 4, 4)
-        NaN where the inputs are.
-    """
     c1, s1 = np.cos(u[..., 0]), np.sin(u[..., 0])
     c2, s2 = np.cos(u[..., 1]), np.sin(u[..., 1])
     R_s_3 = _ups.rotation_u_pair(c1, s1, c2, s2)

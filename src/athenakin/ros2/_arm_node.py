@@ -3,9 +3,9 @@
 :class:`ArmNode` is a thin adapter. Its subscriptions convert a message
 (:mod:`._convert`) and call the arm's own CRTK method (``servo_jp``, ``move_cp``,
 ``enable``, ...) under one lock; whatever the arm refuses (an exception: a bad
-shape, a NaN, a state that takes no command; or a command the arm holds and flags in
-its ``refusal``: a stroke, an unreachable tip, an effort out of bounds) is answered on
-``status`` and never executed. A dedicated servo thread steps the arm
+shape, a NaN, a goal it cannot profile; or a command the arm holds and flags in its
+``refusal``: a stroke, an unreachable tip, an effort out of bounds, a state that takes
+no command) is answered on ``status`` and never executed. A dedicated servo thread steps the arm
 at its rate and publishes its state every ``rate / publish_rate`` cycles; the ROS
 executor runs the subscriptions on its own thread, so a burst of commands never
 delays a servo cycle by more than the lock's hold (one method call).
@@ -15,7 +15,6 @@ Topics (relative names are under ``namespace``): docs/ros2.md has the table.
 
 from __future__ import annotations
 
-import math
 import threading
 import time
 from collections.abc import Callable
@@ -27,16 +26,9 @@ from numpy.typing import ArrayLike
 from .._typing import FloatArray
 from .._validation import check_scalar
 from ..design import Design, resolve_design
-from ..ros._frames import BASE_FRAME, RCM_FRAME, joint_values, urdf_model
-from ._convert import (
-    ACTUATORS,
-    actuator_command,
-    joint_state,
-    pose_stamped,
-    stamp_ns,
-    tip_command,
-    twist_stamped,
-)
+from ..ros._frames import BASE_FRAME, RCM_FRAME, urdf_model
+from ._arm_state import StateMessages
+from ._convert import actuator_command, stamp_ns, tip_command
 from ._runtime import (
     RosContext,
     crtk_types,
@@ -86,17 +78,6 @@ def _qos(depth: int, *, latched: bool = False) -> Any:
                       reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL if latched
                       else DurabilityPolicy.VOLATILE)
-
-
-def _rotation_rate(R0: FloatArray, R1: FloatArray, dt: float) -> FloatArray:
-    """Angular velocity (base frame, rad/s) that turns ``R0`` into ``R1`` in ``dt`` s."""
-    Rr = R0.T @ R1
-    c = min(1.0, max(-1.0, (np.trace(Rr) - 1.0) / 2.0))
-    angle = math.acos(c)
-    w = np.array([Rr[2, 1] - Rr[1, 2], Rr[0, 2] - Rr[2, 0], Rr[1, 0] - Rr[0, 1]])
-    s = math.sin(angle)
-    w = w * (0.5 if s < 1e-9 else angle / (2.0 * s))
-    return np.asarray(R0 @ w / dt, dtype=float)
 
 
 class ArmNode:
@@ -180,7 +161,6 @@ class ArmNode:
         self._stop = threading.Event()
         self._last_stamp: dict[str, int] = {}
         self._last_state: tuple[str, bool] | None = None
-        self._prev_R: FloatArray | None = None
         #: Refusals so far: (command, reason) pairs, oldest first (the last 1000).
         self.refusals: list[tuple[str, str]] = []
         #: Servo cycles run, cycles that started late by more than one period.
@@ -189,6 +169,11 @@ class ArmNode:
         self.commands = self.refused = 0
         #: The last error of the servo thread (None: none).
         self.error: str | None = None
+        from .._backend import resolve_backend
+
+        self._state = StateMessages(self.T_b_e, self.design, int(arm.slot), self._urdf,
+                                    dt=1.0 / self.publish_rate, compiled=resolve_backend("auto"))
+        self._publishing = threading.Lock()     # the state messages are refilled in place
         self._pubs = self._publishers()
         group = MutuallyExclusiveCallbackGroup()
         self._subscriptions(group)
@@ -201,6 +186,11 @@ class ArmNode:
         if enable:
             with self._lock:
                 self.arm.enable()
+        # one state computed before any is published: the kernels of the state messages
+        # are compiled (or loaded from numba's cache) now, not after the first measured_js
+        with self._lock:
+            js, sp = self.arm.measured_js(), self.arm.setpoint_js()
+        self._state.warm_up(js, sp, self._now())
         self._publish_state(force=True)
 
     # --- set-up ---------------------------------------------------------------------
@@ -258,13 +248,14 @@ class ArmNode:
                                                       self._now()))
 
     def _command(self, name: str, msg: Any, call: Callable[[], None], *,
-                 stamped: bool = True, needs_enabled: bool = True,
-                 held_refusal: bool = True) -> None:
+                 stamped: bool = True, held_refusal: bool = True) -> None:
         """Run ``call`` on the arm, or answer why not: the one path of every command.
 
         An exception of ``call`` is a refusal; so is, with ``held_refusal``, a command the
         arm held and flagged (its ``refusal`` set after the call, as
         :class:`~athenakin.teleop.SimulatedArm`'s commands do): answered ``held: <why>``.
+        The arm's own checks decide (its state included: a motion command outside
+        ``ENABLED`` is held and flagged by the arm).
         """
         self.commands += 1
         try:
@@ -275,10 +266,6 @@ class ArmNode:
                     raise ValueError(f"stamp: {ns} ns is older than the previous {name}'s "
                                      f"({last} ns)")
             with self._lock:
-                state = self.arm.operating_state
-                if needs_enabled and state != "ENABLED":
-                    raise ValueError(f"the arm is {state}, not ENABLED (send 'enable' or "
-                                     f"'resume' on state_command)")
                 call()
                 held = getattr(self.arm, "refusal", None) if held_refusal else None
             if held is not None:
@@ -320,8 +307,7 @@ class ArmNode:
         self._command("move_cp", msg, call)
 
     def _on_hold(self, msg: Any) -> None:
-        self._command("hold", msg, self.arm.hold, stamped=False, needs_enabled=False,
-                      held_refusal=False)
+        self._command("hold", msg, self.arm.hold, stamped=False, held_refusal=False)
 
     def _on_state_command(self, msg: Any) -> None:
         text = self.crtk.text(msg).strip()
@@ -337,7 +323,7 @@ class ArmNode:
             if fn is None:
                 raise ValueError(f"state_command: this arm has no {method!r}")
             fn()
-        self._command("state_command", msg, call, stamped=self.crtk.native, needs_enabled=False,
+        self._command("state_command", msg, call, stamped=self.crtk.native,
                       held_refusal=text.lower() == "home")
 
     # --- state ----------------------------------------------------------------------
@@ -357,45 +343,27 @@ class ArmNode:
         if state[0] == "FAULT" and fault:
             self._pubs["status"].publish(self.crtk.string(f"fault: {fault}", self._now()))
 
-    def _snapshot(self) -> tuple[Any, ...]:
-        arm = self.arm
-        return (arm.measured_js(), arm.setpoint_js(), arm.measured_cp(), arm.setpoint_cp())
-
     def publish_once(self) -> None:
-        """Publish the arm's state now (every state topic once); the servo thread's step."""
-        from .. import forward_kinematics
-        from ..analysis import tool_tip_jacobian
+        """Publish the arm's state now (every state topic once); the servo thread's step.
 
+        One forward kinematics of the measured position and one of the setpoint (kept
+        while it does not move) fill the messages in place (:mod:`._arm_state`); all
+        carry one stamp.
+        """
         with self._lock:
-            js, sp, cp, scp = self._snapshot()
+            js, sp = self.arm.measured_js(), self.arm.setpoint_js()
         stamp = self._now()
-        p = self._pubs
-        p["measured_js"].publish(joint_state(ACTUATORS, js.position, js.velocity, js.effort,
-                                             stamp=stamp))
-        p["joint_states"].publish(joint_state(ACTUATORS, js.position, js.velocity, js.effort,
-                                              stamp=stamp))
-        p["setpoint_js"].publish(joint_state(ACTUATORS, sp.position, sp.velocity, sp.effort,
-                                             stamp=stamp))
-        p["measured_cp"].publish(pose_stamped(cp, BASE_FRAME, stamp=stamp))
-        p["setpoint_cp"].publish(pose_stamped(scp, BASE_FRAME, stamp=stamp))
-        q = np.asarray(js.position, dtype=float)
-        sol = forward_kinematics(q, self.T_b_e, self.design, errors="flag")
-        valid = np.flatnonzero(sol.valid)
-        if valid.size and np.all(np.isfinite(cp)):
-            # the solution the arm's tracker follows: the valid slot at its measured tip
-            err = np.linalg.norm(sol.T_b_tip[valid, :3, 3] - cp[:3, 3], axis=-1)
-            k = int(valid[int(np.argmin(err))])
-            J = tool_tip_jacobian(q, self.T_b_e, self.design, mode=int(sol.mode[k]))
-            lin = J @ np.asarray(js.velocity, dtype=float)
-            R = np.asarray(cp[:3, :3], dtype=float)
-            ang = np.zeros(3) if self._prev_R is None else \
-                _rotation_rate(self._prev_R, R, 1.0 / self.publish_rate)
-            self._prev_R = R
-            p["measured_cv"].publish(twist_stamped(lin, ang, BASE_FRAME, stamp=stamp))
-            jv = joint_values(self._urdf, q[None], sol.p[k][None], sol.u[k][None],
-                              sol.T_b_s[k, :3, 3][None])
-            p["urdf_joint_states"].publish(joint_state(
-                list(jv), [float(v[0]) for v in jv.values()], stamp=stamp))
+        p, m = self._pubs, self._state
+        with self._publishing:
+            assembled = m.fill(js, sp, stamp)
+            p["measured_js"].publish(m.measured_js)
+            p["joint_states"].publish(m.measured_js)
+            p["setpoint_js"].publish(m.setpoint_js)
+            p["measured_cp"].publish(m.measured_cp)
+            p["setpoint_cp"].publish(m.setpoint_cp)
+            if assembled:
+                p["measured_cv"].publish(m.measured_cv)
+                p["urdf_joint_states"].publish(m.urdf_joint_states)
         self._publish_state()
 
     # --- running --------------------------------------------------------------------

@@ -380,7 +380,7 @@ class SimulatedArm:
 
     def _tip_frame(self, q: FloatArray) -> FloatArray:
         if self._fk is not None:                 # the compiled kernels, one slot
-            return self._fk.tip_frame(q, self.slot)[1]
+            return self._fk.fk_slot(q, self.slot)[4].copy()
         from .. import forward_kinematics
 
         sol = forward_kinematics(q, self.T_b_e, self.design, errors="flag", backend="numpy")
