@@ -164,7 +164,7 @@ class ControlLoop:
 
         The arrays are views of internal buffers that the next call overwrites.
         """
-        k = slot if type(slot) is int and 0 <= slot < 16 else check_slot(slot)
+        k = check_slot(slot)
         reason, p, u = self.fk(q)
         uk, Ts, out = u[k], self._T_b_s[k], self._tip
         a, b = uk[0], uk[1]
