@@ -354,7 +354,6 @@ def inverse_dynamics_kernel_parallel(q, qd, qdd, T, lengths, L, signs, mass, com
              inertia, grav[i % ng], ftip[i % nf], out[i])
 
 
-
 #: Doubles of :func:`loop_one`'s model vector, in order: ``T_b_e`` (row-major), the FK's
 #: parameters (``fast._lean.design_params``) and tolerances, the lengths ``l1..l5``, the
 #: tool length, the slot's signs, mass, centre of mass and inertia of each body, gravity,

@@ -70,6 +70,26 @@ def _cohort_chunk(items: list[tuple[str, Patient]], start: int, design_row: dict
     return rows
 
 
+def _planned_rows(folder: Path, items: list[tuple[str, Patient]], design_row: dict[str, Any],
+                  population: int, generations: int, polish: int, seed: int,
+                  opts: SetupOptions) -> dict[int, list[dict[str, Any]]]:
+    """The rows of the patients ``folder`` already holds, planned as this call would plan them.
+
+    Creates ``folder`` if missing; a patient's ``<name>.json`` counts only where its
+    fingerprint (meshes, design, search, seed and options) is this call's.
+    """
+    folder.mkdir(parents=True, exist_ok=True)
+    done: dict[int, list[dict[str, Any]]] = {}
+    for i, (k, p) in enumerate(items):
+        f = folder / f"{k}.json"
+        if f.exists():
+            rec = json.loads(f.read_text())
+            if rec.get("fingerprint") == _fingerprint(p, design_row, population, generations,
+                                                      polish, seed + i, opts):
+                done[i] = [rec["row"]]
+    return done
+
+
 def plan_cohort(patients: Mapping[str, Patient], *, design: Design | None = None,
                 population: int = 16, generations: int = 8, polish: int = 3, seed: int = 0,
                 scheduler: Any = None, out: str | Path | None = None,
@@ -128,16 +148,8 @@ def plan_cohort(patients: Mapping[str, Patient], *, design: Design | None = None
     drow = row_from_design(design)
     items = list(patients.items())
     folder = None if out is None else check_path(out, "out")
-    done: dict[int, list[dict[str, Any]]] = {}
-    if folder is not None:
-        folder.mkdir(parents=True, exist_ok=True)
-        for i, (k, p) in enumerate(items):
-            f = folder / f"{k}.json"
-            if f.exists():
-                rec = json.loads(f.read_text())
-                if rec.get("fingerprint") == _fingerprint(p, drow, population, generations,
-                                                          polish, seed + i, opts):
-                    done[i] = [rec["row"]]
+    done = {} if folder is None else _planned_rows(folder, items, drow, population,
+                                                   generations, polish, seed, opts)
     todo = [i for i in range(len(items)) if i not in done]
     chunks: list[list[Any]] = [[it] for it in items]
     kind, handle, owned = open_scheduler(scheduler)
