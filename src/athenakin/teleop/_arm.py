@@ -45,7 +45,14 @@ from .._validation import check_count, check_scalar
 from ..design import Design
 from ..errors import InvalidInputError
 from ._arm_backend import ArmBackend, MujocoBackend
-from ._arm_checks import command_refusal, position_refusal, q_from_tip, read_encoders, vector3
+from ._arm_checks import (
+    TipFrames,
+    command_refusal,
+    position_refusal,
+    q_from_tip,
+    read_encoders,
+    vector3,
+)
 from ._filter import check_rate
 from ._move_profile import move_profile, profile_at
 from ._servo import MAX_FORCE, ServoGains, pd_force, servo_gains
@@ -158,7 +165,6 @@ class SimulatedArm:
                  gains: ServoGains | None = None, feedforward: bool = True,
                  backend: ArmBackend | None = None, v_max: float = 0.1, a_max: float = 1.0,
                  j_max: float = 20.0, max_force: float = MAX_FORCE) -> None:
-        from .._backend import resolve_backend
         from .._validation import check_slot
         from ..dynamics import InverseDynamicsLoop, MassModel
         from ..robot import REFERENCE_Q
@@ -188,12 +194,7 @@ class SimulatedArm:
             raise InvalidInputError(why)
         self._ff_loop = InverseDynamicsLoop(self.T_b_e, design, masses=self.masses,
                                             slot=self.slot)
-        # the tip frames: compiled where the backend policy allows, else the numpy reference
-        self._fk = None
-        if resolve_backend("auto"):
-            from ..fast import ControlLoop
-
-            self._fk = ControlLoop(self.T_b_e, design)
+        self._tip_frame = TipFrames(self.T_b_e, design, self.slot)
         if np.isnan(self._ff_loop(q, np.zeros(3), np.zeros(3))).any():
             raise InvalidInputError(f"q0: {q.tolist()} m does not assemble in FK slot "
                                     f"{self.slot}")
@@ -377,14 +378,6 @@ class SimulatedArm:
         ndarray, shape (4, 4)
         """
         return self._tip_frame(self._sp_q)
-
-    def _tip_frame(self, q: FloatArray) -> FloatArray:
-        if self._fk is not None:                 # the compiled kernels, one slot
-            return self._fk.fk_slot(q, self.slot)[4].copy()
-        from .. import forward_kinematics
-
-        sol = forward_kinematics(q, self.T_b_e, self.design, errors="flag", backend="numpy")
-        return np.array(sol.T_b_tip[self.slot], dtype=float)
 
     # --- CRTK commands --------------------------------------------------------------
     def servo_jp(self, q: ArrayLike, velocity: ArrayLike | None = None,

@@ -21,7 +21,8 @@ from .._validation import check_array, check_choice
 from ..design import Design
 from ..errors import InvalidInputError, Reason
 
-__all__ = ["vector3", "position_refusal", "command_refusal", "q_from_tip", "read_encoders",
+__all__ = ["vector3", "position_refusal", "command_refusal", "q_from_tip", "TipFrames",
+           "read_encoders",
            "READING_MARGIN", "READING_SPEED_MAX"]
 
 #: How far beyond the strokes an encoder reading may lie before the arm faults, m.
@@ -150,6 +151,52 @@ def q_from_tip(tip: ArrayLike, frame: str, T_b_e: FloatArray,
         return np.zeros(3), (f"tip: {x.tolist()} m (frame E) is out of reach "
                              f"({Reason(int(res.reason)).name})")
     return np.asarray(q, dtype=float), None
+
+
+class TipFrames:
+    """The tool-tip frame ``T_b_tip`` of actuator positions on one FK slot.
+
+    The compiled kernels (:meth:`athenakin.fast.ControlLoop.fk_slot`) where the backend
+    policy allows (equal bit for bit to :attr:`athenakin.FKSolution.T_b_tip` of the same
+    kernels, ``tests/test_fast_edges.py``), else the numpy reference
+    :func:`athenakin.forward_kinematics`.
+
+    Parameters
+    ----------
+    T_b_e : ndarray, shape (4, 4)
+    design : Design
+    slot : int
+        Checked by the caller.
+    """
+
+    def __init__(self, T_b_e: FloatArray, design: Design, slot: int) -> None:
+        from .._backend import resolve_backend
+
+        self.T_b_e, self.design, self.slot = T_b_e, design, slot
+        self._loop: Any = None
+        if resolve_backend("auto"):
+            from ..fast import ControlLoop
+
+            self._loop = ControlLoop(T_b_e, design)
+
+    def __call__(self, q: FloatArray) -> FloatArray:
+        """``T_b_tip`` of ``q`` (m), shape (4, 4), a new array; NaN where ``q`` does not assemble.
+
+        Parameters
+        ----------
+        q : ndarray, shape (3,)
+            Actuator positions, m.
+
+        Returns
+        -------
+        ndarray, shape (4, 4)
+        """
+        if self._loop is not None:
+            return self._loop.fk_slot(q, self.slot)[4].copy()
+        from .. import forward_kinematics
+
+        sol = forward_kinematics(q, self.T_b_e, self.design, errors="flag", backend="numpy")
+        return np.array(sol.T_b_tip[self.slot], dtype=float)
 
 
 def read_encoders(backend: Any, lo: FloatArray, hi: FloatArray
