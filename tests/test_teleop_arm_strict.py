@@ -99,6 +99,27 @@ def test_servo_jp_holds_and_flags_what_the_core_refuses(q, velocity, effort, wor
     assert arm.refusal is None                                  # an accepted command clears it
 
 
+def test_position_refusal_agrees_with_the_modules_actuator_checks():
+    """The servo's check of one triple gives the reason the module's numpy checks give."""
+    from athenakin.parallel._module import _actuator_checks
+    from athenakin.teleop._arm_checks import position_refusal
+
+    rng = np.random.default_rng(37)
+    span = D.stroke_max - D.stroke_min
+    q = D.stroke_min - 0.1 * span + 1.2 * span * rng.random((400, 3))
+    edges = np.array([D.stroke_min, D.stroke_max, [np.nan, 0.1, 0.45], [-0.1, np.inf, 0.45],
+                      [-0.1, 0.1, -np.inf], [0.1, 0.1, 0.45], [0.1, -0.1, 0.45],
+                      [np.nan, np.nan, 9.0]])
+    words = {0: None, 1: "finite", 2: "stroke", 3: "wrong order"}
+    for x in np.concatenate([q, edges]):
+        code = int(_actuator_checks(x, D))
+        reason = position_refusal(x, D, "q")
+        if words.get(code) is None:
+            assert reason is None, (x, code, reason)
+        else:
+            assert reason is not None and words[code] in reason, (x, code, reason)
+
+
 def test_servo_jp_refuses_a_setpoint_that_does_not_assemble():
     arm = _enabled(backend=_Driver(Q0))
     far = np.array([-0.29338895, 0.2253081, 0.65637779])   # within the strokes, off slot 0

@@ -31,6 +31,7 @@ from ._arm_state import StateMessages
 from ._convert import actuator_command, stamp_ns, tip_command
 from ._runtime import (
     RosContext,
+    control_executor,
     crtk_types,
     require_rclpy,
     run_until,
@@ -133,7 +134,6 @@ class ArmNode:
                  context: RosContext | None = None, node_name: str = "athena_arm") -> None:
         require_rclpy()
         from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
-        from rclpy.executors import SingleThreadedExecutor
         from rclpy.parameter import Parameter
 
         from ..robot._setup import resolve_rcm_frame
@@ -177,7 +177,7 @@ class ArmNode:
         self._pubs = self._publishers()
         group = MutuallyExclusiveCallbackGroup()
         self._subscriptions(group)
-        self._executor = SingleThreadedExecutor(context=self.context.context)
+        self._executor = control_executor(self.context)
         self._executor.add_node(self.node)
         self._threads: list[threading.Thread] = []
         from std_msgs.msg import String

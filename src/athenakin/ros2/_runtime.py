@@ -14,7 +14,8 @@ import threading
 import time
 from typing import Any
 
-__all__ = ["require_rclpy", "ros2_extra_missing", "CrtkTypes", "crtk_types", "RosContext"]
+__all__ = ["require_rclpy", "ros2_extra_missing", "CrtkTypes", "crtk_types", "RosContext",
+           "control_executor"]
 
 
 def ros2_extra_missing(exc: ModuleNotFoundError) -> ModuleNotFoundError:
@@ -213,6 +214,35 @@ def run_until(stop: threading.Event, context: RosContext, timeout: float | None)
         time.sleep(min(0.1, max(0.0, end - time.monotonic())))
 
 
+def control_executor(context: RosContext) -> Any:
+    """The executor of a node whose control loop runs in its own thread.
+
+    rclpy's events executor (``rclpy.experimental.EventsExecutor``): the middleware's
+    events are queued in C++ and each one runs its callback, where rclpy's
+    ``SingleThreadedExecutor`` rebuilds and waits on a wait set of every entity in
+    Python for each callback it runs. With commands at 1 kHz that Python work (about
+    100 us a callback) and the servo thread share one GIL, and the single-threaded
+    executor fell behind the graph (reliable commands lost from a full queue); the
+    events executor takes every one (benchmarks/bench_ros2.py, docs/ros2.md "How
+    fast"). It runs callbacks one at a time in the thread that spins it (callback
+    groups are not needed) and passes a raw subscription no message info, so a node that
+    reads the info (the recorder) keeps the single-threaded executor.
+
+    Parameters
+    ----------
+    context : RosContext
+        The node's ROS context.
+
+    Returns
+    -------
+    rclpy.executors.Executor
+        An events executor on ``context``.
+    """
+    from rclpy.experimental import EventsExecutor
+
+    return EventsExecutor(context=context.context)
+
+
 def spin_executor(stop: threading.Event, executor: Any, context: RosContext) -> None:
     """Run ``executor``'s callbacks until ``stop`` is set or ``context`` shuts down.
 
@@ -261,6 +291,7 @@ def stop_node(stop: threading.Event, threads: list[threading.Thread], executor: 
         th.join(timeout=5.0)
     try:
         executor.remove_node(node)
+        executor.shutdown()
         node.destroy_node()
     except Exception:  # pragma: no cover - already destroyed
         pass

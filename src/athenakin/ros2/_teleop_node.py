@@ -23,7 +23,14 @@ from .._validation import check_scalar
 from ..design import Design, resolve_design
 from ._arm_node import _create_node, _qos, check_namespace
 from ._convert import ACTUATORS, joint_state, master_position, stamp_ns
-from ._runtime import RosContext, require_rclpy, run_until, spin_executor, stop_node
+from ._runtime import (
+    RosContext,
+    control_executor,
+    require_rclpy,
+    run_until,
+    spin_executor,
+    stop_node,
+)
 
 __all__ = ["TeleopNode", "TELEOP_TOPICS", "MASTER_PRESETS", "DVRK_PRESET", "STATUS_KEYS"]
 
@@ -116,7 +123,6 @@ class TeleopNode:
                  context: RosContext | None = None, node_name: str = "athena_teleop") -> None:
         require_rclpy()
         from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
-        from rclpy.executors import SingleThreadedExecutor
         from rclpy.parameter import Parameter
 
         from .._validation import check_choice, check_count
@@ -146,7 +152,7 @@ class TeleopNode:
         self._estop = False
         self.cycles = self.late_cycles = 0
         self._last_flags = -1
-        self._executor = SingleThreadedExecutor(context=self.context.context)
+        self._executor = control_executor(self.context)
         self._executor.add_node(self.node)
         self._pubs, self._subs = self._topics(pose_topic, clutch_topic,
                                               MutuallyExclusiveCallbackGroup())

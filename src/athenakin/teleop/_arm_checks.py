@@ -73,9 +73,11 @@ def position_refusal(q: FloatArray, design: Design, name: str) -> str | None:
     -------
     str or None
     """
-    from ..parallel._module import _actuator_checks
+    from .._mechanism_formulas import actuator_reason_formula, module_params
 
-    code = int(_actuator_checks(q, design))
+    # the parallel module's actuator checks of one triple, on Python floats
+    code = int(actuator_reason_formula(float(q[0]), float(q[1]), float(q[2]),
+                                       module_params(design)))
     if code == Reason.NONFINITE_INPUT:
         return f"{name}: expected finite values, got {q.tolist()}"
     if code == Reason.STROKE_LIMIT:
