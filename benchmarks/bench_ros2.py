@@ -10,6 +10,10 @@ one ``servo_jp`` per published state (reliable QoS), each a distinct setpoint. T
 latency of a command is the time from its ``publish()`` to the arrival of the first
 ``measured_js`` whose ``setpoint_js`` (same stamp) carries it: the command crossed the
 graph, waited for the next servo cycle, was stepped and published, and crossed back.
+It is split at the state's stamp (the arm node's ROS clock, the system clock here, as
+this process's): send -> stamp holds the way in, the wait for the servo cycle (uniform
+over one servo period for a command sent at any time) and the step; stamp -> arrival
+the state's publishing and the way back.
 Lost: commands the arm node never received (its own count at exit); replaced: received,
 but a later one was the setpoint by the time a state message was published (two in one
 publishing period: CRTK's servo keeps the latest). CPU: the arm process's user + system
@@ -91,7 +95,7 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
     """Run the arm node in its own process and time ``seconds`` of commands through it."""
     import rclpy
     from rclpy.context import Context
-    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.experimental import EventsExecutor
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import JointState
 
@@ -112,17 +116,17 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
     ctx = Context()
     rclpy.init(context=ctx, domain_id=domain)
     node = rclpy.create_node("bench_client", context=ctx)
-    ex = SingleThreadedExecutor(context=ctx)
+    ex = EventsExecutor(context=ctx)        # as the nodes' (ros2._runtime.control_executor)
     ex.add_node(node)
     qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
     sent: dict[int, float] = {}
-    seen: dict[tuple[int, int], float] = {}     # stamp of a measured_js -> arrival time
+    seen: dict[tuple[int, int], float] = {}     # stamp of a measured_js -> arrival time, s
     sp_of: dict[tuple[int, int], int] = {}      # stamp of a setpoint_js -> the command index
     refusals: list[str] = []                    # the arm node's status texts
     lock = threading.Lock()
 
     def on_js(m: JointState) -> None:
-        t = time.perf_counter()
+        t = time.time()
         with lock:
             seen[(m.header.stamp.sec, m.header.stamp.nanosec)] = t
 
@@ -150,27 +154,27 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
         raise RuntimeError(f"the arm node did not publish at its pace within 180 s "
                            f"({len(seen)} measured_js): {stop(proc)}")
     # the arm node alone (no commands yet) for IDLE_S, while its reader matches this writer
-    idle_cpu0, idle_w0 = _cpu_s(proc.pid), time.perf_counter()
+    idle_cpu0, idle_w0 = _cpu_s(proc.pid), time.time()
     time.sleep(IDLE_S)
-    idle_cpu, idle_wall = _cpu_s(proc.pid) - idle_cpu0, time.perf_counter() - idle_w0
+    idle_cpu, idle_wall = _cpu_s(proc.pid) - idle_cpu0, time.time() - idle_w0
     with lock:
         idle_states = sum(idle_w0 <= t for t in seen.values())
-    cpu0, w0, load = _cpu_s(proc.pid), time.perf_counter(), _load()
+    cpu0, w0, load = _cpu_s(proc.pid), time.time(), _load()
     n = int(seconds * publish_rate)
     period = 1.0 / publish_rate
-    t_next = t_start = time.perf_counter()
+    t_next = t_start = time.time()
     q = list(Q0)
     for k in range(1, n + 1):
         q[2] = Q0[2] + STEP * k
         msg = JointState(name=["q1", "q2", "q3"], position=[float(v) for v in q])
-        sent[k] = time.perf_counter()
+        sent[k] = time.time()
         pub.publish(msg)
         t_next += period
-        wait = t_next - time.perf_counter()
+        wait = t_next - time.time()
         if wait > 0:
             time.sleep(wait)
     time.sleep(1.0)
-    cpu, wall = _cpu_s(proc.pid) - cpu0, time.perf_counter() - w0
+    cpu, wall = _cpu_s(proc.pid) - cpu0, time.time() - w0
     with lock:
         states = sum(t >= t_start for t in seen.values())
         window = sum(t >= w0 for t in seen.values())       # states published in the window
@@ -181,13 +185,17 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
     ctx.try_shutdown()
     m = re.search(r"(\d+) cycles, (\d+) late, (\d+) commands, (\d+) refused", out)
     cycles, late, received, refused = (int(g) for g in m.groups()) if m else (0, 0, -1, -1)
-    first: dict[int, float] = {}
+    first: dict[int, tuple[int, int]] = {}      # command -> stamp of its first state
     with lock:
         for stamp, k in sp_of.items():
-            if k in sent and stamp in seen:
-                first[k] = min(first.get(k, np.inf), seen[stamp] - sent[k])
-    lat = np.array([first[k] for k in sorted(first)])
-    return {"latency": lat, "sent": n, "received": received, "reflected": len(first),
+            if k in sent and stamp in seen and (k not in first or stamp < first[k]):
+                first[k] = stamp
+        order = sorted(first)
+        lat = np.array([seen[first[k]] - sent[k] for k in order])
+        stamp_s = np.array([first[k][0] + 1e-9 * first[k][1] for k in order])
+        back = np.array([seen[first[k]] for k in order]) - stamp_s
+    return {"latency": lat, "in": lat - back, "back": back, "sent": n, "received": received,
+            "reflected": len(first),
             "refused": refused, "refusals": refusals[:1], "states": states,
             "cycles": cycles, "late": late, "cpu": cpu, "wall": wall,
             "window_cycles": window * round(rate / publish_rate), "load": load, "log": out,
@@ -221,6 +229,11 @@ def main() -> None:
           f"{r['sent']} servo_jp (reliable): {_pct(lat)} ({r['load']})")
     if not len(lat):
         print(_no_sample(r))
+    else:
+        print(f"  of which send -> stamp of that state (the graph in, the wait for the next "
+              f"servo cycle, the step): {_pct(r['in'])}")
+        print(f"  and stamp -> arrival here (the state's publishing, the graph back): "
+              f"{_pct(r['back'])}")
     replaced = r["received"] - max(0, r["refused"]) - r["reflected"]
     print(f"  lost {lost} of {r['sent']}; refused {r['refused']}; replaced before a state "
           f"message showed them {replaced}; arm cycles {r['cycles']}, late {r['late']}")
