@@ -209,6 +209,30 @@ def test_robot_description_and_every_urdf_joint(nodes):
             assert abs(value[name] - want) <= 1e-12 * max(1.0, abs(want)), name
 
 
+def test_the_arm_node_stamps_from_clock_with_use_sim_time(nodes):
+    """``--use-sim-time``: the state's stamps follow ``/clock`` (the events executor takes it)."""
+    from builtin_interfaces.msg import Time
+    from rosgraph_msgs.msg import Clock
+
+    _, _, c, _, _ = nodes
+    sim = _start(["arm", "--use-sim-time", "--namespace", "/simtime", "--publish-rate", "100"])
+    try:
+        clock = c.node.create_publisher(Clock, "/clock", RELIABLE)
+        c.listen("simtime", JointState, "/simtime/measured_js")
+        for sec in (1000, 2000):           # a simulator's clock, far from the system's
+            def stamped(sec=sec):
+                clock.publish(Clock(clock=Time(sec=sec, nanosec=250_000_000)))
+                got = c.got["simtime"]
+                return bool(got) and got[-1].header.stamp.sec == sec
+            c.until(stamped, f"a measured_js stamped {sec} s from /clock", procs=[sim])
+            last = c.got["simtime"][-1].header.stamp
+            assert (last.sec, last.nanosec) == (sec, 250_000_000)
+        assert all(m.header.stamp.sec in (0, 1000, 2000) for m in c.got["simtime"])
+    finally:
+        out = stop(sim)
+    assert "Traceback" not in out, out
+
+
 # ------------------------------------------------------------------------ the teleop node
 def _values(arr):
     return {kv.key: kv.value for kv in arr.status[0].values}
