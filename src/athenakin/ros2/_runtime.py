@@ -220,15 +220,14 @@ def control_executor(context: RosContext) -> Any:
     rclpy's events executor (``rclpy.experimental.EventsExecutor``): the middleware's
     events are queued in C++ and each one runs its callback, where rclpy's
     ``SingleThreadedExecutor`` rebuilds and waits on a wait set of every entity in
-    Python for each callback it runs: a plain subscriber of 1 kHz ``JointState`` took
-    380 us of CPU per message with it and 175 us with this one (docs/ros2.md, "The
-    executor design"). With commands at 1 kHz that Python work and the servo thread
-    share one GIL, and the single-threaded executor fell behind the graph (fewer than
-    half the servo cycles run, reliable commands lost from a full queue); the events
-    executor keeps up (benchmarks/bench_ros2.py, docs/ros2.md "How fast"). It runs
-    callbacks one at a time in the thread that spins it and passes a raw subscription
-    no message info, so a node that reads the info (the recorder) keeps the
-    single-threaded executor.
+    Python for each callback it runs: a plain subscriber takes less than half the CPU
+    per message with this one (benchmarks/bench_ros2_executors.py). With commands at
+    1 kHz that Python work and the servo thread share one GIL, and the single-threaded
+    executor fell behind the graph (fewer than half the servo cycles run, reliable
+    commands lost from a full queue); the events executor keeps up
+    (benchmarks/bench_ros2.py, docs/ros2.md "How fast"). It runs callbacks one at a
+    time in the thread that spins it and passes a raw subscription no message info, so
+    a node that reads the info (the recorder) keeps the single-threaded executor.
 
     Parameters
     ----------
