@@ -45,16 +45,12 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
+from _machine import load_text  # noqa: E402
 from _ros2_procs import start, stop  # noqa: E402
 
 Q0 = (-0.1, 0.1, 0.45)
 STEP = 1e-7          # m between two commands' q3 (the commands are told apart by it)
 IDLE_S = 2.0         # s of the arm node alone (its states published, no command) first
-
-
-def _load() -> str:
-    return "load " + " ".join(open("/proc/loadavg").read().split()[:3]) + \
-        f" on {os.cpu_count()} cores"
 
 
 def _cpu_s(pid: int) -> float:
@@ -159,7 +155,7 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
     idle_cpu, idle_wall = _cpu_s(proc.pid) - idle_cpu0, time.time() - idle_w0
     with lock:
         idle_states = sum(idle_w0 <= t for t in seen.values())
-    cpu0, w0, load = _cpu_s(proc.pid), time.time(), _load()
+    cpu0, w0, load = _cpu_s(proc.pid), time.time(), load_text()
     n = int(seconds * publish_rate)
     period = 1.0 / publish_rate
     t_next = t_start = time.time()
@@ -219,7 +215,7 @@ def main() -> None:
     args = ap.parse_args()
     domain = int(os.environ.get("ROS_DOMAIN_ID") or 1 + os.getpid() % 100)
     base = in_process(args.rate, int(args.seconds * args.rate))
-    print(f"in one process, servo_jp -> step -> measured_js: {_pct(base)} ({_load()})")
+    print(f"in one process, servo_jp -> step -> measured_js: {_pct(base)} ({load_text()})")
     publish = args.rate if args.publish_rate is None else args.publish_rate
     r = over_graph(args.rate, publish, args.seconds, domain)
     lat = r["latency"]
@@ -247,7 +243,7 @@ def main() -> None:
           f"cycle run; {run} cycles run of {due} due at {args.rate:g} Hz)")
     if len(lat):
         print(f"  p50 graph / p50 one process: "
-              f"{np.percentile(lat, 50) / np.percentile(base, 50):.1f}x ({_load()})")
+              f"{np.percentile(lat, 50) / np.percentile(base, 50):.1f}x ({load_text()})")
 
 
 if __name__ == "__main__":

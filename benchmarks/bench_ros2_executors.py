@@ -24,12 +24,9 @@ import sys
 import threading
 import time
 
+from _machine import load_text
+
 WARM_UP = 100        # messages taken before the window opens (the reader matched, caches warm)
-
-
-def _load() -> str:
-    return "load " + " ".join(open("/proc/loadavg").read().split()[:3]) + \
-        f" on {os.cpu_count()} cores"
 
 
 def _context(domain: int):  # type: ignore[no-untyped-def]
@@ -124,7 +121,7 @@ def main() -> None:
         publish(domain, args.rate, args.seconds)
         return
     print(f"one subscriber, JointState at {args.rate:g} Hz from another process, "
-          f"{args.seconds:g} s each ({_load()})")
+          f"{args.seconds:g} s each ({load_text()})")
     base = None
     for kind, name in (("single", "SingleThreadedExecutor (baseline)"),
                        ("events", "EventsExecutor (the nodes')")):
@@ -132,7 +129,7 @@ def main() -> None:
         per = cpu / max(1, n)
         base = per if base is None else base
         print(f"  {name:36s} {n:6d} messages  {1e6 * per:7.1f} us CPU per message  "
-              f"{100 * cpu / wall:5.1f} % of one core  x base {per / base:.2f}  ({_load()})")
+              f"{100 * cpu / wall:5.1f} % of one core  x base {per / base:.2f}  ({load_text()})")
 
 
 if __name__ == "__main__":

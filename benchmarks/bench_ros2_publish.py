@@ -30,6 +30,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
+from _machine import load_text  # noqa: E402
 from _ros2_procs import node_env  # noqa: E402
 
 Q0 = (-0.1, 0.1, 0.45)
@@ -37,11 +38,6 @@ TOPICS = {"measured_js": "sensor_msgs/JointState", "joint_states": "sensor_msgs/
           "setpoint_js": "sensor_msgs/JointState", "measured_cp": "geometry_msgs/PoseStamped",
           "setpoint_cp": "geometry_msgs/PoseStamped",
           "measured_cv": "geometry_msgs/TwistStamped", "/joint_states": "sensor_msgs/JointState"}
-
-
-def _load() -> str:
-    return "load " + " ".join(open("/proc/loadavg").read().split()[:3]) + \
-        f" on {os.cpu_count()} cores"
 
 
 def subscriber(domain: int) -> None:
@@ -192,7 +188,7 @@ def measure(calls: int, domain: int) -> None:
         node.close()
         ctx.close()
         reader.communicate(b"", timeout=30)
-    load = _load()
+    load = load_text()
     for i, name in enumerate(("baseline (former)", "publish_once (now)")):
         print(f"{name:20s} wall {_pct(wall[i])}  CPU {_pct(cpu[i])}  ({load})")
     print(f"  now / former, p50 wall: {np.median(wall[1]) / np.median(wall[0]):.3f}  "

@@ -33,6 +33,7 @@ import os
 import time
 
 import numpy as np
+from _machine import load_text
 
 import athenakin as ak
 from athenakin.collision import Bodies, Environment
@@ -43,11 +44,6 @@ D = ak.Design.default()
 T = ak.default_rcm_frame(D)
 Q0 = (-0.1, 0.1, 0.45)
 RATE = 1000.0
-
-
-def _load() -> str:
-    return "load " + " ".join(open("/proc/loadavg").read().split()[:3]) + \
-        f" on {os.cpu_count()} cores"
 
 
 def master(k: int) -> tuple[float, float, float]:
@@ -70,7 +66,7 @@ def latency(cycles: int, block: int = 0) -> None:
     runs the two round robin in blocks of ``block`` cycles (the machine's speed changes
     over seconds: blocks spread it over both alike, as ``guard`` does).
     """
-    print(f"latency over {cycles} cycles ({_load()})"
+    print(f"latency over {cycles} cycles ({load_text()})"
           + (f", round robin in blocks of {block}" if block else ""))
     clock = time.perf_counter
     teles = {}
@@ -96,7 +92,8 @@ def latency(cycles: int, block: int = 0) -> None:
               f"{teles[ff].backend}): {_percentiles(dt)}")
     d50, d99 = ((np.percentile(dts[True], x) - np.percentile(dts[False], x)) * 1e6
                 for x in (50, 99))
-    print(f"  feed-forward on - off: p50 {d50:+.1f} us, p99 {d99:+.1f} us ({_load()} at the end)")
+    print(f"  feed-forward on - off: p50 {d50:+.1f} us, p99 {d99:+.1f} us "
+          f"({load_text()} at the end)")
     # where the time goes: each stage alone, over the states of a run
     tele = Teleop(T, D, q0=Q0, options=TeleopOptions(feedforward=False))
     cmds = [tele.step(k / RATE, master(k)) for k in range(5000)]
@@ -202,7 +199,7 @@ def guard(cycles: int, block: int = 1000) -> None:
     """
     from athenakin.teleop._limiter import CLEARANCE_EVALUATIONS
 
-    print(f"guard over {cycles} cycles per case, blocks of {block} ({_load()} at the start)")
+    print(f"guard over {cycles} cycles per case, blocks of {block} ({load_text()} at the start)")
     clock = time.perf_counter
     warm = _guard_cases()
     for tele, src in warm.values():                   # compile, caches
@@ -321,7 +318,7 @@ def hostile(cycles: int, seed: int, *, with_clearance: bool,
                 block = block[-1:]            # the backward differences across blocks
     el = time.perf_counter() - t0
     print(f"hostile streams: {cycles} cycles, seed {seed}, clearance "
-          f"{'on' if with_clearance else 'off'}, {el:.1f} s ({_load()})")
+          f"{'on' if with_clearance else 'off'}, {el:.1f} s ({load_text()})")
     print(f"  flags seen: {TeleopStatus(flags)!r}")
     print(f"  violations: {bad}")
     if oracle:
@@ -373,7 +370,7 @@ def session(seconds: float, figure: str | None) -> None:
               f"{'PD + feed-forward' if ff else 'PD only'}: tip error "
               f"{np.sqrt(np.mean(err ** 2)) * 1e3:.4f} mm RMS, {err.max() * 1e3:.4f} mm max; "
               f"loop closure {np.nanmax(log.closure_error):.2e} m max; "
-              f"{time.perf_counter() - t0:.1f} s ({_load()})")
+              f"{time.perf_counter() - t0:.1f} s ({load_text()})")
     if figure:
         _figure(logs[True], logs[False], figure)
         print(f"wrote {figure}")
