@@ -181,21 +181,33 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
     ctx.try_shutdown()
     m = re.search(r"(\d+) cycles, (\d+) late, (\d+) commands, (\d+) refused", out)
     cycles, late, received, refused = (int(g) for g in m.groups()) if m else (0, 0, -1, -1)
-    first: dict[int, tuple[int, int]] = {}      # command -> stamp of its first state
     with lock:
-        for stamp, k in sp_of.items():
-            if k in sent and stamp in seen and (k not in first or stamp < first[k]):
-                first[k] = stamp
-        order = sorted(first)
-        lat = np.array([seen[first[k]] - sent[k] for k in order])
-        stamp_s = np.array([first[k][0] + 1e-9 * first[k][1] for k in order])
-        back = np.array([seen[first[k]] for k in order]) - stamp_s
+        lat, back = _latencies(sent, seen, sp_of)
     return {"latency": lat, "in": lat - back, "back": back, "sent": n, "received": received,
-            "reflected": len(first),
+            "reflected": len(lat),
             "refused": refused, "refusals": refusals[:1], "states": states,
             "cycles": cycles, "late": late, "cpu": cpu, "wall": wall,
             "window_cycles": window * round(rate / publish_rate), "load": load, "log": out,
             "idle": (idle_cpu, idle_wall, idle_states * round(rate / publish_rate))}
+
+
+def _latencies(sent: dict[int, float], seen: dict[tuple[int, int], float],
+               sp_of: dict[tuple[int, int], int]) -> tuple[np.ndarray, np.ndarray]:
+    """Each shown command's latency and its stamp -> arrival part, s (commands in order).
+
+    ``sent``: command -> send time; ``seen``: stamp of a ``measured_js`` -> its arrival;
+    ``sp_of``: stamp of a ``setpoint_js`` -> the command it carries. A command's state is
+    the first (earliest stamp) that carries it and arrived.
+    """
+    first: dict[int, tuple[int, int]] = {}
+    for stamp, k in sp_of.items():
+        if k in sent and stamp in seen and (k not in first or stamp < first[k]):
+            first[k] = stamp
+    order = sorted(first)
+    arrival = np.array([seen[first[k]] for k in order])
+    lat = arrival - np.array([sent[k] for k in order])
+    back = arrival - np.array([first[k][0] + 1e-9 * first[k][1] for k in order])
+    return lat, back
 
 
 def _no_sample(r: dict[str, object]) -> str:
