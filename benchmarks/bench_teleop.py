@@ -188,9 +188,13 @@ def repeat_minimum(samples: list, repeats: int = 3) -> None:
             runs[r, k] = clock() - t0
     least = runs.min(axis=0)
     each = ", ".join(f"p99 {1e6 * np.percentile(x, 99):.1f} us" for x in runs)
+    # the slowest 1 % of cycles of each run: the same cycles where the work makes them slow
+    slow = [set(np.flatnonzero(x > np.percentile(x, 99)).tolist()) for x in runs]
+    common = ", ".join(str(len(slow[r] & slow[r + 1])) for r in range(repeats - 1))
     print(f"  the chain's own work (feed-forward on), each cycle's least over {repeats} runs "
           f"of the same {len(samples)} samples: {_percentiles(least)} (the runs: {each}; "
-          f"{load_text()})")
+          f"of the {len(slow[0])} slowest cycles of a run, {common} are among the next "
+          f"run's; {load_text()})")
 
 
 def _env() -> Environment:
