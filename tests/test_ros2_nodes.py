@@ -457,6 +457,99 @@ def test_a_replayed_master_gives_the_commands_of_run_session(nodes):
     assert np.ptp(log.q, axis=0).max() > 1e-4          # the commands moved
 
 
+def test_the_teleop_node_survives_a_hostile_master(nodes):
+    """Bursts of wrong frame ids, repeated and older stamps, NaN and inf samples and a Joy
+    without the clutch button: each refused by name or flagged INVALID, a cycle for every
+    accepted sample and none for a refused one, every command finite, no crash."""
+    c = nodes[2]
+    fuzz = _start(["teleop", "--clock", "master", "--namespace", "/fuzz", "--pose-topic",
+                   "/fuzz_master/pose", "--clutch-topic", "/fuzz_master/joy",
+                   "--master-frame", "master", "--q0", *map(str, Q0), "--status-every", "1",
+                   "--filter", "none"])
+    try:
+        c.listen("fuzz_servo", JointState, "/fuzz/servo_jp")
+        c.listen("fuzz_tstatus", DiagnosticArray, "/fuzz/teleop/status")
+        pose = c.node.create_publisher(PoseStamped, "/fuzz_master/pose", RELIABLE)
+        joy = c.node.create_publisher(Joy, "/fuzz_master/joy", RELIABLE)
+        base = 2000 * 10**9                              # ns; 1 ms apart
+
+        def msg(j, *, frame="master", xyz=(0.0, 0.0, 0.0)):
+            m = PoseStamped()
+            m.header.frame_id = frame
+            m.header.stamp.sec, m.header.stamp.nanosec = divmod(base + j * 10**6, 10**9)
+            m.pose.position.x, m.pose.position.y, m.pose.position.z = xyz
+            return m
+
+        def commanded(j):
+            sec, nsec = divmod(base + j * 10**6, 10**9)
+            return any(m.header.stamp.sec == sec and m.header.stamp.nanosec == nsec
+                       for m in c.got["fuzz_servo"])
+
+        # the readers on both sides have matched once a sample's command and status came
+        # back (a fresh stamp each try: the node runs no cycle on a repeated one)
+        probes: list[int] = []
+
+        def probe():
+            probes.append(len(probes))
+            pose.publish(msg(probes[-1]))
+
+        c.until(lambda: (pose.get_subscription_count() > 0 and joy.get_subscription_count() > 0
+                         and c.got["fuzz_servo"] and c.got["fuzz_tstatus"]) or probe(),
+                "the command and the status of a first sample", procs=[fuzz])
+        j = first = len(probes) + 10
+        accepted = set()
+        for r in range(3):                    # three bursts of ten, no wait inside a burst
+            burst = [msg(j + 1, frame="world"),                     # refused: frame_id
+                     msg(j + 1, xyz=(1e-4 * r, 0.0, 0.0)),
+                     msg(j + 1),                                    # refused: repeated
+                     msg(j + 2),
+                     msg(j - 3),                                    # refused: older
+                     msg(j + 3),
+                     msg(j + 4, xyz=(float("nan"), 0.0, 0.0)),      # INVALID
+                     msg(j + 5, xyz=(0.0, 0.0, float("inf"))),      # INVALID
+                     msg(j + 6)]
+            joy.publish(Joy(buttons=[]))                            # refused: no button 0
+            for m in burst:
+                pose.publish(m)
+            accepted |= {j + 1, j + 2, j + 3, j + 4, j + 5, j + 6}
+            j += 6
+            c.until(lambda j=j: commanded(j), "the burst's last command", procs=[fuzz])
+        # nine refusals before one cycle (within the reader's depth of 10): the status
+        # carries the first eight and counts the ninth
+        for _ in range(9):
+            pose.publish(msg(j + 1, frame="world"))
+        pose.publish(msg(j + 1))
+        accepted.add(j + 1)
+        j += 1
+        end = divmod(base + j * 10**6, 10**9)
+        c.until(lambda: any((a.header.stamp.sec, a.header.stamp.nanosec) == end
+                            for a in c.got["fuzz_tstatus"]), "the last sample's status",
+                procs=[fuzz])
+        assert fuzz.poll() is None
+        start = divmod(base + first * 10**6, 10**9)
+        bursts = [m for m in c.got["fuzz_servo"]
+                  if (m.header.stamp.sec, m.header.stamp.nanosec) > start]
+        stamps = {(m.header.stamp.sec, m.header.stamp.nanosec) for m in bursts}
+        assert stamps == {divmod(base + k * 10**6, 10**9) for k in accepted}
+        assert all(len(m.position) == 3 and all(math.isfinite(v) for v in m.position)
+                   for m in c.got["fuzz_servo"])
+        st = [_values(a) for a in c.got["fuzz_tstatus"]
+              if (a.header.stamp.sec, a.header.stamp.nanosec) > start]
+        refused = " ".join(v["refused"] for v in st)
+        assert "frame_id 'world'" in refused and "expected 'master'" in refused, refused
+        assert "is not after the previous" in refused, refused
+        assert "button 0" in refused, refused
+        assert sum("INVALID" in v["names"] for v in st) == 6, [v["names"] for v in st]
+        many = next(a for a in c.got["fuzz_tstatus"]
+                    if (a.header.stamp.sec, a.header.stamp.nanosec) == end)
+        texts = _values(many)["refused"].split("; ")
+        assert texts[-1] == "and 1 more" and len(texts) == 9, texts
+        assert all("frame_id 'world'" in t for t in texts[:8]), texts
+    finally:
+        out = stop(fuzz)
+    assert "Traceback" not in out, out
+
+
 def test_the_teleop_node_refuses_to_run_without_the_bodies_unless_told(capsys):
     """Safe by default: the node's core checks the bodies; turning that off takes the
     explicit opt-out, and contradictory options are refused by name before any node."""

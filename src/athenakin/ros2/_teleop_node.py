@@ -43,6 +43,8 @@ DVRK_PRESET = {"pose": "/MTMR/measured_cp", "clutch": "/footpedals/clutch"}
 #: Named master topic sets (``--preset``).
 MASTER_PRESETS = {"default": {"pose": TELEOP_TOPICS["pose"], "clutch": TELEOP_TOPICS["clutch"]},
                   "dvrk-mtmr": DVRK_PRESET}
+#: Refusals (texts) one status message carries at most; those beyond are counted.
+MAX_REFUSALS = 8
 #: The keys of the status message's values, in order.
 STATUS_KEYS = ("t", "cycle", "flags", "names", "clutched", "limited", "hold", "watchdog",
                "estop", "sample_age_s", "tip_b", "clearance_m", "refused")
@@ -148,7 +150,8 @@ class TeleopNode:
         self._seq = self._used = 0
         self._t_sample = -math.inf
         self._clutch = True
-        self._refused = ""
+        self._refusals: list[str] = []      # since the last status (MAX_REFUSALS kept)
+        self._refusal_count = 0
         self._estop = False
         self.cycles = self.late_cycles = 0
         self._last_flags = -1
@@ -213,15 +216,15 @@ class TeleopNode:
     # --- callbacks: keep the latest sample ------------------------------------------
     def _on_pose(self, msg: Any) -> None:
         if self.master_frame is not None and msg.header.frame_id != self.master_frame:
-            self._refused = (f"master pose: frame_id {msg.header.frame_id!r:.40}, expected "
-                             f"{self.master_frame!r}")
+            self._refuse(f"master pose: frame_id {msg.header.frame_id!r:.40}, expected "
+                         f"{self.master_frame!r}")
             return
         p = master_position(msg)
         if self.clock == "master":     # one cycle on this sample, at its own stamp
             ns = stamp_ns(msg.header)
             if ns <= self._last_ns:     # a repeated or older message is no new cycle
-                self._refused = (f"master pose: stamp {ns} ns is not after the previous "
-                                 f"one's ({self._last_ns} ns)")
+                self._refuse(f"master pose: stamp {ns} ns is not after the previous "
+                             f"one's ({self._last_ns} ns)")
                 return
             self._last_ns = ns
             self._cycle(ns * 1e-9, p, msg.header.stamp)
@@ -232,8 +235,8 @@ class TeleopNode:
 
     def _on_joy(self, msg: Any) -> None:
         if len(msg.buttons) <= self.clutch_button:
-            self._refused = (f"clutch: the Joy has {len(msg.buttons)} buttons, no button "
-                             f"{self.clutch_button}")
+            self._refuse(f"clutch: the Joy has {len(msg.buttons)} buttons, no button "
+                         f"{self.clutch_button}")
             return
         with self._lock:
             self._clutch = not bool(msg.buttons[self.clutch_button])   # held: decoupled
@@ -252,6 +255,13 @@ class TeleopNode:
             tele = getattr(self, "teleop", None)
             if tele is not None:
                 tele.release()
+
+    def _refuse(self, text: str) -> None:
+        """Keep a refusal for the next status (the first :data:`MAX_REFUSALS`, then a count)."""
+        with self._lock:
+            if len(self._refusals) < MAX_REFUSALS:
+                self._refusals.append(text)
+            self._refusal_count += 1
 
     # --- the loop -------------------------------------------------------------------
     def step_once(self) -> Any:
@@ -281,7 +291,8 @@ class TeleopNode:
                                                    stamp=stamp))
         flags = int(cmd.status)
         self.cycles += 1
-        if flags != self._last_flags or self.cycles % self.status_every == 0 or self._refused:
+        if flags != self._last_flags or self.cycles % self.status_every == 0 \
+                or self._refusal_count:
             self._publish_status(cmd, t, stamp)
             self._last_flags = flags
         return cmd
@@ -298,7 +309,10 @@ class TeleopNode:
                             | TeleopStatus.VELOCITY | TeleopStatus.ACCELERATION))
         R, c = self.T_b_e[:3, :3], self.T_b_e[:3, 3]
         tip_b = R @ np.asarray(cmd.tip) + c
-        refused, self._refused = self._refused, ""
+        with self._lock:
+            kept, n = self._refusals, self._refusal_count
+            self._refusals, self._refusal_count = [], 0
+        refused = "; ".join(kept) + (f"; and {n - len(kept)} more" if n > len(kept) else "")
         values = {"t": repr(t), "cycle": str(self.cycles), "flags": str(int(s)),
                   "names": names, "clutched": str(bool(s & TeleopStatus.CLUTCHED)),
                   "limited": str(limited), "hold": str(bool(s & TeleopStatus.HOLD)),
