@@ -53,12 +53,14 @@ STEP = 1e-7          # m between two commands' q3 (the commands are told apart b
 IDLE_S = 2.0         # s of the arm node alone (its states published, no command) first
 
 
-def _cpu_s(pid: int) -> float:
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time of process ``pid`` so far, s (``/proc/PID/stat``)."""
     fields = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def _pct(x: np.ndarray) -> str:
+def percentile_text(x: np.ndarray) -> str:
+    """``x`` (latencies, s) as p50, p99 and max in us, or that there is no sample."""
     if not len(x):
         return "no latency sample"
     us = x * 1e6
@@ -150,12 +152,12 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
         raise RuntimeError(f"the arm node did not publish at its pace within 180 s "
                            f"({len(seen)} measured_js): {stop(proc)}")
     # the arm node alone (no commands yet) for IDLE_S, while its reader matches this writer
-    idle_cpu0, idle_w0 = _cpu_s(proc.pid), time.time()
+    idle_cpu0, idle_w0 = cpu_seconds(proc.pid), time.time()
     time.sleep(IDLE_S)
-    idle_cpu, idle_wall = _cpu_s(proc.pid) - idle_cpu0, time.time() - idle_w0
+    idle_cpu, idle_wall = cpu_seconds(proc.pid) - idle_cpu0, time.time() - idle_w0
     with lock:
         idle_states = sum(idle_w0 <= t for t in seen.values())
-    cpu0, w0, load = _cpu_s(proc.pid), time.time(), load_text()
+    cpu0, w0, load = cpu_seconds(proc.pid), time.time(), load_text()
     n = int(seconds * publish_rate)
     period = 1.0 / publish_rate
     t_next = t_start = time.time()
@@ -170,7 +172,7 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
         if wait > 0:
             time.sleep(wait)
     time.sleep(1.0)
-    cpu, wall = _cpu_s(proc.pid) - cpu0, time.time() - w0
+    cpu, wall = cpu_seconds(proc.pid) - cpu0, time.time() - w0
     with lock:
         states = sum(t >= t_start for t in seen.values())
         window = sum(t >= w0 for t in seen.values())       # states published in the window
@@ -227,21 +229,22 @@ def main() -> None:
     args = ap.parse_args()
     domain = int(os.environ.get("ROS_DOMAIN_ID") or 1 + os.getpid() % 100)
     base = in_process(args.rate, int(args.seconds * args.rate))
-    print(f"in one process, servo_jp -> step -> measured_js: {_pct(base)} ({load_text()})")
+    print(f"in one process, servo_jp -> step -> measured_js: {percentile_text(base)} "
+          f"({load_text()})")
     publish = args.rate if args.publish_rate is None else args.publish_rate
     r = over_graph(args.rate, publish, args.seconds, domain)
     lat = r["latency"]
     assert isinstance(lat, np.ndarray)
     lost = r["sent"] - r["received"] if r["received"] >= 0 else "unknown"
     print(f"over the graph, servo at {args.rate:g} Hz, state and commands at {publish:g} Hz, "
-          f"{r['sent']} servo_jp (reliable): {_pct(lat)} ({r['load']})")
+          f"{r['sent']} servo_jp (reliable): {percentile_text(lat)} ({r['load']})")
     if not len(lat):
         print(_no_sample(r))
     else:
         print(f"  of which send -> stamp of that state (the graph in, the wait for the next "
-              f"servo cycle, the step): {_pct(r['in'])}")
+              f"servo cycle, the step): {percentile_text(r['in'])}")
         print(f"  and stamp -> arrival here (the state's publishing, the graph back): "
-              f"{_pct(r['back'])}")
+              f"{percentile_text(r['back'])}")
     replaced = r["received"] - max(0, r["refused"]) - r["reflected"]
     print(f"  lost {lost} of {r['sent']}; refused {r['refused']}; replaced before a state "
           f"message showed them {replaced}; arm cycles {r['cycles']}, late {r['late']}")

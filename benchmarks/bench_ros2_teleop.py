@@ -42,7 +42,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 from _machine import load_text  # noqa: E402
 from _ros2_procs import start, stop  # noqa: E402
-from bench_ros2 import _cpu_s, _pct  # noqa: E402
+from bench_ros2 import cpu_seconds, percentile_text  # noqa: E402
 
 Q0 = (-0.1, 0.1, 0.45)
 JUMP = 5e-4          # m of the master's x per step (0.1 mm of the tip at the scale 0.2)
@@ -154,7 +154,7 @@ def over_graph(rate: float, seconds: float, jump_every: float, domain: int
     for _ in range(int(0.5 * rate)):               # half a second still, engaged
         pose.publish(msg)
         time.sleep(period)
-    cpu0 = {p.pid: _cpu_s(p.pid) for p in (arm, tele)}
+    cpu0 = {p.pid: cpu_seconds(p.pid) for p in (arm, tele)}
     w0, load = time.time(), load_text()
     n = int(seconds * rate)
     steps: list[float] = []                        # send time of each step's first sample
@@ -173,7 +173,7 @@ def over_graph(rate: float, seconds: float, jump_every: float, domain: int
         if wait > 0:
             time.sleep(wait)
     w1 = time.time()
-    cpu = {pid: _cpu_s(pid) - c for pid, c in cpu0.items()}
+    cpu = {pid: cpu_seconds(pid) - c for pid, c in cpu0.items()}
     time.sleep(0.5)
     with lock:
         cmd, st = list(cmds), list(status)
@@ -226,9 +226,9 @@ def main() -> None:
     args = ap.parse_args()
     domain = int(os.environ.get("ROS_DOMAIN_ID") or 1 + os.getpid() % 100)
     base, base_steps = in_process(args.rate, int(args.seconds * args.rate), args.jump_every)
-    print(f"in one process, Teleop.step with the default bodies, every cycle: {_pct(base)} "
-          f"({load_text()})")
-    print(f"  the cycles that took a step's first sample: {_pct(base_steps)}")
+    print(f"in one process, Teleop.step with the default bodies, every cycle: "
+          f"{percentile_text(base)} ({load_text()})")
+    print(f"  the cycles that took a step's first sample: {percentile_text(base_steps)}")
     # a loop of this rate in one process: a sample waits for the next cycle (uniform over
     # one period, half of it at p50), then the step
     floor = 0.5 / args.rate + np.percentile(base_steps, 50)
@@ -236,15 +236,15 @@ def main() -> None:
     lat = r["latency"]
     assert isinstance(lat, np.ndarray)
     print(f"over the graph, teleop at {args.rate:g} Hz, master at {args.rate:g} Hz (reliable), "
-          f"{len(lat)} of {r['steps']} master steps shown on servo_jp: {_pct(lat)} "
+          f"{len(lat)} of {r['steps']} master steps shown on servo_jp: {percentile_text(lat)} "
           f"({r['load']})")
     if not len(lat):
         print(f"  no latency sample; the end of the nodes' logs: {str(r['log']).strip()[-600:]!r}")
         return
     print(f"  of which send -> stamp of that command (the graph in, the wait for the next "
-          f"teleop cycle, the step): {_pct(r['in'])}")
+          f"teleop cycle, the step): {percentile_text(r['in'])}")
     print(f"  and stamp -> arrival here (the command's publishing, the graph back): "
-          f"{_pct(r['back'])}")
+          f"{percentile_text(r['back'])}")
     wall, run = r["wall"], r["cycles_run"]
     print(f"  teleop node CPU {100 * r['cpu_teleop'] / wall:.0f} % of one core over the "
           f"{wall:.1f} s of master samples ({1e6 * r['cpu_teleop'] / max(1, run):.0f} us per "
