@@ -32,7 +32,8 @@ from ._runtime import (
     stop_node,
 )
 
-__all__ = ["TeleopNode", "TELEOP_TOPICS", "MASTER_PRESETS", "DVRK_PRESET", "STATUS_KEYS"]
+__all__ = ["TeleopNode", "TELEOP_TOPICS", "MASTER_PRESETS", "DVRK_PRESET", "STATUS_KEYS",
+           "MAX_REFUSALS"]
 
 #: Default topics of :class:`TeleopNode` (the arm's under ``arm_namespace``).
 TELEOP_TOPICS = {"pose": "/master/pose", "clutch": "/master/joy", "servo_jp": "servo_jp",
@@ -88,7 +89,10 @@ class TeleopNode:
     master_frame : str, optional, keyword-only
         The ``frame_id`` the master's poses must carry (default: any).
     status_every : int, keyword-only
-        Publish the status every this many cycles (10), and on every change of flags.
+        Publish the status every this many cycles (10), on every change of flags and
+        at the first cycle after a refused message (its ``refused`` value: every
+        refusal since the previous status, ``"; "``-separated, the first
+        :data:`MAX_REFUSALS`, then ``"and N more"``).
     wait_for_arm : float, keyword-only
         Longest wait for the arm's first ``measured_js`` when ``q0`` is None, s (30).
     use_sim_time : bool, keyword-only
