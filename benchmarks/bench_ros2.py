@@ -88,13 +88,48 @@ def in_process(rate: float, cycles: int) -> np.ndarray:
     return dt
 
 
+class GraphClient:
+    """A benchmark's own rclpy node on the loopback, in ``domain``, reliable QoS of depth 1000.
+
+    Its subscriptions and publishers are made on :attr:`node` with :attr:`qos`; then
+    :meth:`spin` runs the events executor (as the nodes' own,
+    ``ros2._runtime.control_executor``) in a thread until :meth:`close`.
+    """
+
+    def __init__(self, domain: int, name: str) -> None:
+        import rclpy
+        from rclpy.context import Context
+        from rclpy.experimental import EventsExecutor
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+        os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=domain)
+        self.node = rclpy.create_node(name, context=self.context)
+        self._executor = EventsExecutor(context=self.context)
+        self._executor.add_node(self.node)
+        self.qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+        self._done = threading.Event()
+        self._spinner = threading.Thread(
+            target=lambda: [self._executor.spin_once(timeout_sec=0.05)
+                            for _ in iter(self._done.is_set, True)], daemon=True)
+
+    def spin(self) -> None:
+        """Start spinning the node in its thread."""
+        self._spinner.start()
+
+    def close(self) -> None:
+        """Stop the spinning thread, destroy the node, shut its context down."""
+        self._done.set()
+        if self._spinner.is_alive():
+            self._spinner.join(timeout=5)
+        self.node.destroy_node()
+        self.context.try_shutdown()
+
+
 def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
                ) -> dict[str, object]:
     """Run the arm node in its own process and time ``seconds`` of commands through it."""
-    import rclpy
-    from rclpy.context import Context
-    from rclpy.experimental import EventsExecutor
-    from rclpy.qos import QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import JointState
 
     try:                               # CRTK's own status type where crtk_msgs is built
@@ -108,15 +143,10 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
         def text(m: object) -> str:
             return str(m.data)  # type: ignore[attr-defined]
 
-    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     proc = start(["arm", "--enable", "--rate", str(rate), "--publish-rate", str(publish_rate)],
                  domain)
-    ctx = Context()
-    rclpy.init(context=ctx, domain_id=domain)
-    node = rclpy.create_node("bench_client", context=ctx)
-    ex = EventsExecutor(context=ctx)        # as the nodes' (ros2._runtime.control_executor)
-    ex.add_node(node)
-    qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+    client = GraphClient(domain, "bench_client")
+    node, qos = client.node, client.qos
     sent: dict[int, float] = {}
     seen: dict[tuple[int, int], float] = {}     # stamp of a measured_js -> arrival time, s
     sp_of: dict[tuple[int, int], int] = {}      # stamp of a setpoint_js -> the command index
@@ -137,10 +167,7 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
     node.create_subscription(JointState, "/athena/setpoint_js", on_sp, qos)
     node.create_subscription(Status, "/athena/status", lambda m: refusals.append(text(m)), qos)
     pub = node.create_publisher(JointState, "/athena/servo_jp", qos)
-    done = threading.Event()
-    spinner = threading.Thread(target=lambda: [ex.spin_once(timeout_sec=0.05)
-                                               for _ in iter(done.is_set, True)], daemon=True)
-    spinner.start()
+    client.spin()
     end = time.monotonic() + 180
     # the arm node at its pace: a hundred states after its first (not the first alone)
     while (pub.get_subscription_count() == 0 or len(seen) < 100) and time.monotonic() < end:
@@ -148,7 +175,7 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
             break
         time.sleep(0.05)
     if len(seen) < 100:
-        done.set()
+        client.close()
         raise RuntimeError(f"the arm node did not publish at its pace within 180 s "
                            f"({len(seen)} measured_js): {stop(proc)}")
     # the arm node alone (no commands yet) for IDLE_S, while its reader matches this writer
@@ -177,10 +204,7 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
         states = sum(t >= t_start for t in seen.values())
         window = sum(t >= w0 for t in seen.values())       # states published in the window
     out = stop(proc, timeout=30.0)
-    done.set()
-    spinner.join(timeout=5)
-    node.destroy_node()
-    ctx.try_shutdown()
+    client.close()
     m = re.search(r"(\d+) cycles, (\d+) late, (\d+) commands, (\d+) refused", out)
     cycles, late, received, refused = (int(g) for g in m.groups()) if m else (0, 0, -1, -1)
     with lock:

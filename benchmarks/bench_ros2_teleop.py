@@ -42,7 +42,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 from _machine import load_text  # noqa: E402
 from _ros2_procs import start, stop  # noqa: E402
-from bench_ros2 import cpu_seconds, percentile_text  # noqa: E402
+from bench_ros2 import GraphClient, cpu_seconds, percentile_text  # noqa: E402
 
 Q0 = (-0.1, 0.1, 0.45)
 JUMP = 5e-4          # m of the master's x per step (0.1 mm of the tip at the scale 0.2)
@@ -86,23 +86,14 @@ def in_process(rate: float, cycles: int, jump_every: float) -> tuple[np.ndarray,
 def over_graph(rate: float, seconds: float, jump_every: float, domain: int
                ) -> dict[str, object]:
     """Run the arm and teleop nodes in their own processes; master them for ``seconds``."""
-    import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import PoseStamped
-    from rclpy.context import Context
-    from rclpy.experimental import EventsExecutor
-    from rclpy.qos import QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import JointState, Joy
 
-    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     arm = start(["arm", "--enable"], domain)
     tele = start(["teleop", "--rate", str(rate), "--filter", "none"], domain)
-    ctx = Context()
-    rclpy.init(context=ctx, domain_id=domain)
-    node = rclpy.create_node("bench_master", context=ctx)
-    ex = EventsExecutor(context=ctx)        # as the nodes' (ros2._runtime.control_executor)
-    ex.add_node(node)
-    qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+    client = GraphClient(domain, "bench_master")
+    node, qos = client.node, client.qos
     cmds: list[tuple[float, float, tuple[float, ...]]] = []   # (stamp, arrival, q), s, m
     status: list[tuple[float, dict[str, str]]] = []           # (arrival, values)
     lock = threading.Lock()
@@ -122,17 +113,11 @@ def over_graph(rate: float, seconds: float, jump_every: float, domain: int
     node.create_subscription(DiagnosticArray, "/athena/teleop/status", on_status, qos)
     pose = node.create_publisher(PoseStamped, "/master/pose", qos)
     joy = node.create_publisher(Joy, "/master/joy", qos)
-    done = threading.Event()
-    spinner = threading.Thread(target=lambda: [ex.spin_once(timeout_sec=0.05)
-                                               for _ in iter(done.is_set, True)], daemon=True)
-    spinner.start()
+    client.spin()
 
     def close() -> str:
         out = stop(tele, timeout=30.0) + stop(arm, timeout=30.0)
-        done.set()
-        spinner.join(timeout=5)
-        node.destroy_node()
-        ctx.try_shutdown()
+        client.close()
         return out
 
     # the teleop node at its pace (a thousand commands after its first) and both master
