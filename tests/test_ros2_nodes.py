@@ -471,19 +471,21 @@ def test_the_teleop_node_survives_a_hostile_master(nodes):
         c.listen("fuzz_tstatus", DiagnosticArray, "/fuzz/teleop/status")
         pose = c.node.create_publisher(PoseStamped, "/fuzz_master/pose", RELIABLE)
         joy = c.node.create_publisher(Joy, "/fuzz_master/joy", RELIABLE)
-        base = 2000 * 10**9                              # ns; 1 ms apart
+        def stamp(j):                                    # (sec, nanosec) of sample j, 1 ms apart
+            return divmod(2000 * 10**9 + j * 10**6, 10**9)
+
+        def stamp_of(m):
+            return (m.header.stamp.sec, m.header.stamp.nanosec)
 
         def msg(j, *, frame="master", xyz=(0.0, 0.0, 0.0)):
             m = PoseStamped()
             m.header.frame_id = frame
-            m.header.stamp.sec, m.header.stamp.nanosec = divmod(base + j * 10**6, 10**9)
+            m.header.stamp.sec, m.header.stamp.nanosec = stamp(j)
             m.pose.position.x, m.pose.position.y, m.pose.position.z = xyz
             return m
 
         def commanded(j):
-            sec, nsec = divmod(base + j * 10**6, 10**9)
-            return any(m.header.stamp.sec == sec and m.header.stamp.nanosec == nsec
-                       for m in c.got["fuzz_servo"])
+            return any(stamp_of(m) == stamp(j) for m in c.got["fuzz_servo"])
 
         # the readers on both sides have matched once a sample's command and status came
         # back (a fresh stamp each try: the node runs no cycle on a repeated one)
@@ -521,27 +523,22 @@ def test_the_teleop_node_survives_a_hostile_master(nodes):
         pose.publish(msg(j + 1))
         accepted.add(j + 1)
         j += 1
-        end = divmod(base + j * 10**6, 10**9)
-        c.until(lambda: any((a.header.stamp.sec, a.header.stamp.nanosec) == end
-                            for a in c.got["fuzz_tstatus"]), "the last sample's status",
-                procs=[fuzz])
+        end = stamp(j)
+        c.until(lambda: any(stamp_of(a) == end for a in c.got["fuzz_tstatus"]),
+                "the last sample's status", procs=[fuzz])
         assert fuzz.poll() is None
-        start = divmod(base + first * 10**6, 10**9)
-        bursts = [m for m in c.got["fuzz_servo"]
-                  if (m.header.stamp.sec, m.header.stamp.nanosec) > start]
-        stamps = {(m.header.stamp.sec, m.header.stamp.nanosec) for m in bursts}
-        assert stamps == {divmod(base + k * 10**6, 10**9) for k in accepted}
+        start = stamp(first)
+        stamps = {stamp_of(m) for m in c.got["fuzz_servo"] if stamp_of(m) > start}
+        assert stamps == {stamp(k) for k in accepted}
         assert all(len(m.position) == 3 and all(math.isfinite(v) for v in m.position)
                    for m in c.got["fuzz_servo"])
-        st = [_values(a) for a in c.got["fuzz_tstatus"]
-              if (a.header.stamp.sec, a.header.stamp.nanosec) > start]
+        st = [_values(a) for a in c.got["fuzz_tstatus"] if stamp_of(a) > start]
         refused = " ".join(v["refused"] for v in st)
         assert "frame_id 'world'" in refused and "expected 'master'" in refused, refused
         assert "is not after the previous" in refused, refused
         assert "button 0" in refused, refused
         assert sum("INVALID" in v["names"] for v in st) == 6, [v["names"] for v in st]
-        many = next(a for a in c.got["fuzz_tstatus"]
-                    if (a.header.stamp.sec, a.header.stamp.nanosec) == end)
+        many = next(a for a in c.got["fuzz_tstatus"] if stamp_of(a) == end)
         texts = _values(many)["refused"].split("; ")
         assert texts[-1] == "and 1 more" and len(texts) == 9, texts
         assert all("frame_id 'world'" in t for t in texts[:8]), texts
