@@ -3,6 +3,7 @@
 Run from the repository root (the extra ``ros2``; discovery stays on the loopback)::
 
     python benchmarks/bench_ros2.py [--rate 1000] [--publish-rate RATE] [--seconds 5]
+                                    [--sync clock|command|both] [--pin]
 
 Starts ``athenakin ros2 arm`` in its own process, servoing at ``--rate`` with its state
 published at ``--publish-rate`` (default: every servo cycle), and from this process sends
@@ -127,9 +128,13 @@ class GraphClient:
         self.context.try_shutdown()
 
 
-def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
-               ) -> dict[str, object]:
-    """Run the arm node in its own process and time ``seconds`` of commands through it."""
+def over_graph(rate: float, publish_rate: float, seconds: float, domain: int, *,
+               sync: str = "clock", pin: bool = False) -> dict[str, object]:
+    """Run the arm node in its own process and time ``seconds`` of commands through it.
+
+    ``sync``: the arm node's ``--sync``; ``pin``: the arm node on CPU 1, this process on
+    CPU 0.
+    """
     from sensor_msgs.msg import JointState
 
     try:                               # CRTK's own status type where crtk_msgs is built
@@ -143,8 +148,8 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
         def text(m: object) -> str:
             return str(m.data)  # type: ignore[attr-defined]
 
-    proc = start(["arm", "--enable", "--rate", str(rate), "--publish-rate", str(publish_rate)],
-                 domain)
+    proc = start(["arm", "--enable", "--rate", str(rate), "--publish-rate", str(publish_rate),
+                  "--sync", sync], domain, cpus={1} if pin else None)
     client = GraphClient(domain, "bench_client")
     node, qos = client.node, client.qos
     sent: dict[int, float] = {}
@@ -205,14 +210,16 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int
         window = sum(t >= w0 for t in seen.values())       # states published in the window
     out = stop(proc, timeout=30.0)
     client.close()
-    m = re.search(r"(\d+) cycles, (\d+) late, (\d+) commands, (\d+) refused", out)
-    cycles, late, received, refused = (int(g) for g in m.groups()) if m else (0, 0, -1, -1)
+    m = re.search(r"(\d+) cycles, (\d+) late, (\d+) on a command, (\d+) commands, "
+                  r"(\d+) refused", out)
+    cycles, late, synced, received, refused = ((int(g) for g in m.groups()) if m
+                                               else (0, 0, 0, -1, -1))
     with lock:
         lat, back = _latencies(sent, seen, sp_of)
     return {"latency": lat, "in": lat - back, "back": back, "sent": n, "received": received,
             "reflected": len(lat),
             "refused": refused, "refusals": refusals[:1], "states": states,
-            "cycles": cycles, "late": late, "cpu": cpu, "wall": wall,
+            "cycles": cycles, "late": late, "synced": synced, "cpu": cpu, "wall": wall,
             "window_cycles": window * round(rate / publish_rate), "load": load, "log": out,
             "idle": (idle_cpu, idle_wall, idle_states * round(rate / publish_rate))}
 
@@ -245,44 +252,71 @@ def _no_sample(r: dict[str, object]) -> str:
             f"of its log: {str(r['log']).strip()[-300:]!r})")
 
 
+def report(r: dict[str, object], rate: float, publish: float, base: np.ndarray) -> None:
+    """Print one run of :func:`over_graph`: latency, its split, losses, cycles, CPU."""
+    lat = r["latency"]
+    assert isinstance(lat, np.ndarray)
+    lost = r["sent"] - r["received"] if r["received"] >= 0 else "unknown"
+    print(f"over the graph, servo at {rate:g} Hz (--sync {r['sync']}), state and commands "
+          f"at {publish:g} Hz, {r['sent']} servo_jp (reliable): {percentile_text(lat)} "
+          f"({r['load']})")
+    if not len(lat):
+        print(_no_sample(r))
+    else:
+        wait = ("the wait for the next servo cycle" if r["sync"] == "clock" else
+                "the cycle started on its arrival")
+        print(f"  of which send -> stamp of that state (the graph in, {wait}, the step): "
+              f"{percentile_text(r['in'])}")
+        print(f"  and stamp -> arrival here (the state's publishing, the graph back): "
+              f"{percentile_text(r['back'])}")
+    replaced = r["received"] - max(0, r["refused"]) - r["reflected"]
+    print(f"  lost {lost} of {r['sent']}; refused {r['refused']}; replaced before a state "
+          f"message showed them {replaced}; arm cycles {r['cycles']}, late {r['late']}, "
+          f"started on a command {r['synced']}")
+    cpu, wall, run = r["idle"]  # type: ignore[misc]
+    print(f"  arm node alone (its states read here, no command): {100 * cpu / wall:.0f} % of "
+          f"one core over {wall:.1f} s ({1e6 * cpu / max(1, run):.0f} us per servo cycle run; "
+          f"{run} cycles run of {round(wall * rate)} due)")
+    run, due = r["window_cycles"], round(r["wall"] * rate)
+    print(f"  arm node CPU {100 * r['cpu'] / r['wall']:.0f} % of one core over the "
+          f"{r['wall']:.1f} s of commands ({1e6 * r['cpu'] / max(1, run):.0f} us per servo "
+          f"cycle run; {run} cycles run of {due} due at {rate:g} Hz)")
+    if len(lat):
+        print(f"  p50 graph / p50 one process: "
+              f"{np.percentile(lat, 50) / np.percentile(base, 50):.1f}x ({load_text()})")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--rate", type=float, default=1000.0, help="servo and command rate, Hz")
     ap.add_argument("--publish-rate", type=float, help="state and command rate, Hz (--rate)")
     ap.add_argument("--seconds", type=float, default=5.0, help="commands for this long, s")
+    ap.add_argument("--sync", choices=("clock", "command", "both"), default="both",
+                    help="the arm node's --sync (both: one run of each, compared)")
+    ap.add_argument("--pin", action="store_true",
+                    help="the arm node on CPU 1, this process on CPU 0")
     args = ap.parse_args()
     domain = int(os.environ.get("ROS_DOMAIN_ID") or 1 + os.getpid() % 100)
+    if args.pin:
+        if len(os.sched_getaffinity(0)) < 2 or not {0, 1} <= os.sched_getaffinity(0):
+            ap.error("--pin needs CPUs 0 and 1")
+        os.sched_setaffinity(0, {0})
+    where = "pinned: the arm node on CPU 1, this process on CPU 0" if args.pin else "not pinned"
     base = in_process(args.rate, int(args.seconds * args.rate))
     print(f"in one process, servo_jp -> step -> measured_js: {percentile_text(base)} "
-          f"({load_text()})")
+          f"({load_text()}; {where})")
     publish = args.rate if args.publish_rate is None else args.publish_rate
-    r = over_graph(args.rate, publish, args.seconds, domain)
-    lat = r["latency"]
-    assert isinstance(lat, np.ndarray)
-    lost = r["sent"] - r["received"] if r["received"] >= 0 else "unknown"
-    print(f"over the graph, servo at {args.rate:g} Hz, state and commands at {publish:g} Hz, "
-          f"{r['sent']} servo_jp (reliable): {percentile_text(lat)} ({r['load']})")
-    if not len(lat):
-        print(_no_sample(r))
-    else:
-        print(f"  of which send -> stamp of that state (the graph in, the wait for the next "
-              f"servo cycle, the step): {percentile_text(r['in'])}")
-        print(f"  and stamp -> arrival here (the state's publishing, the graph back): "
-              f"{percentile_text(r['back'])}")
-    replaced = r["received"] - max(0, r["refused"]) - r["reflected"]
-    print(f"  lost {lost} of {r['sent']}; refused {r['refused']}; replaced before a state "
-          f"message showed them {replaced}; arm cycles {r['cycles']}, late {r['late']}")
-    cpu, wall, run = r["idle"]  # type: ignore[misc]
-    print(f"  arm node alone (its states read here, no command): {100 * cpu / wall:.0f} % of "
-          f"one core over {wall:.1f} s ({1e6 * cpu / max(1, run):.0f} us per servo cycle run; "
-          f"{run} cycles run of {round(wall * args.rate)} due)")
-    run, due = r["window_cycles"], round(r["wall"] * args.rate)
-    print(f"  arm node CPU {100 * r['cpu'] / r['wall']:.0f} % of one core over the "
-          f"{r['wall']:.1f} s of commands ({1e6 * r['cpu'] / max(1, run):.0f} us per servo "
-          f"cycle run; {run} cycles run of {due} due at {args.rate:g} Hz)")
-    if len(lat):
-        print(f"  p50 graph / p50 one process: "
-              f"{np.percentile(lat, 50) / np.percentile(base, 50):.1f}x ({load_text()})")
+    runs = {}
+    for sync in (("clock", "command") if args.sync == "both" else (args.sync,)):
+        r = runs[sync] = over_graph(args.rate, publish, args.seconds, domain, sync=sync,
+                                    pin=args.pin)
+        r["sync"] = sync
+        report(r, args.rate, publish, base)
+    if len(runs) == 2 and all(len(r["latency"]) for r in runs.values()):  # type: ignore[arg-type]
+        a, b = (runs[k]["latency"] for k in ("command", "clock"))
+        print(f"--sync command / --sync clock: p50 "
+              f"{np.percentile(a, 50) / np.percentile(b, 50):.2f}x, p99 "
+              f"{np.percentile(a, 99) / np.percentile(b, 99):.2f}x ({load_text()}; {where})")
 
 
 if __name__ == "__main__":

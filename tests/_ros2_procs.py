@@ -28,11 +28,18 @@ def node_env(domain: int) -> dict[str, str]:
     return env
 
 
-def start(args: list[str], domain: int) -> subprocess.Popen:
-    """``athenakin ros2 ARGS`` in its own process (stdout and stderr in one pipe)."""
+def start(args: list[str], domain: int, cpus: set[int] | None = None) -> subprocess.Popen:
+    """``athenakin ros2 ARGS`` in its own process (stdout and stderr in one pipe).
+
+    ``cpus``: the CPUs the process (each of its threads) may run on (default: any).
+    """
+    def pin() -> None:
+        if cpus is not None:
+            os.sched_setaffinity(0, cpus)
+
     return subprocess.Popen([sys.executable, "-m", "athenakin", "ros2", *args],
                             env=node_env(domain), stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True)
+                            stderr=subprocess.STDOUT, text=True, preexec_fn=pin)
 
 
 def stop(proc: subprocess.Popen, timeout: float = 20.0) -> str:

@@ -233,6 +233,37 @@ def test_the_arm_node_stamps_from_clock_with_use_sim_time(nodes):
     assert "Traceback" not in out, out
 
 
+def test_the_arm_node_steps_on_each_servo_command_with_sync_command(nodes):
+    """``--sync command``: each servo_jp starts a servo cycle, and the state shows it."""
+    import re
+
+    _, _, c, _, _ = nodes
+    sync = _start(["arm", "--enable", "--sync", "command", "--namespace", "/sync",
+                   "--publish-rate", "1000"])
+    n = 30
+    try:
+        c.listen("sync_sp", JointState, "/sync/setpoint_js")
+        servo = c.node.create_publisher(JointState, "/sync/servo_jp", RELIABLE)
+        c.until(lambda: c.got["sync_sp"] and servo.get_subscription_count() > 0,
+                "the /sync arm's setpoint_js and its servo_jp subscriber", procs=[sync])
+        for k in range(1, n + 1):          # each after the previous one showed
+            q = [Q0[0], Q0[1], Q0[2] + 1e-5 * k]
+            servo.publish(JointState(name=["q1", "q2", "q3"], position=q))
+            c.until(lambda q=q: np.allclose(c.got["sync_sp"][-1].position, q, rtol=0,
+                                            atol=1e-12),
+                    f"servo_jp {k} on /sync/setpoint_js", procs=[sync])
+    finally:
+        out = stop(sync)
+    assert "Traceback" not in out, out
+    m = re.search(r"(\d+) cycles, (\d+) late, (\d+) on a command, (\d+) commands, "
+                  r"(\d+) refused", out)
+    assert m, out
+    cycles, _, synced, commands, refused = map(int, m.groups())
+    assert (commands, refused) == (n, 0)
+    # one cycle per command (two that came within one cycle's window would share one)
+    assert n // 2 <= synced <= n <= cycles
+
+
 # ------------------------------------------------------------------------ the teleop node
 def _values(arr):
     return {kv.key: kv.value for kv in arr.status[0].values}

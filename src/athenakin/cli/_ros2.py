@@ -34,6 +34,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                    help="state messages per second, Hz (100)")
     a.add_argument("--q0", nargs=3, type=float, metavar=("Q1", "Q2", "Q3"),
                    default=[-0.1, 0.1, 0.45], help="where the robot stands, m (-0.1 0.1 0.45)")
+    a.add_argument("--sync", choices=("clock", "command"), default="clock",
+                   help="start a servo cycle on the node's clock (default), or also on each "
+                        "servo command's arrival: no wait for the next cycle")
     a.add_argument("--enable", action="store_true", help="enable the arm at start")
     _add_run_options(a, run_arm)
     t = _node_parser(own, "teleop", help="drive the arm node from a master's topics",
@@ -151,12 +154,13 @@ def run_arm(args: argparse.Namespace) -> int:
     design, T = load_robot(args)
     node = ArmNode(T_b_e=T, design=design, q0=args.q0, rate=args.rate,
                    namespace=args.namespace, publish_rate=args.publish_rate,
-                   enable=args.enable, use_sim_time=args.use_sim_time)
+                   sync=args.sync, enable=args.enable, use_sim_time=args.use_sim_time)
     kind = "crtk_msgs" if node.crtk.native else "std_msgs stand-ins"
-    print(f"ros2 arm: {node.namespace} at {args.rate:g} Hz, state at {node.publish_rate:g} Hz, "
+    print(f"ros2 arm: {node.namespace} at {args.rate:g} Hz ({node.sync}), state at {node.publish_rate:g} Hz, "
           f"{node.arm.operating_state}, CRTK types: {kind}", flush=True)
     _spin_and_close(node, duration, lambda: f"ros2 arm: {node.cycles} cycles, "
-                    f"{node.late_cycles} late, {node.commands} commands, {node.refused} refused")
+                    f"{node.late_cycles} late, {node.synced_cycles} on a command, {node.commands} "
+                    f"commands, {node.refused} refused")
     return 0
 
 

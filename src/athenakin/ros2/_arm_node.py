@@ -5,10 +5,11 @@
 ``enable``, ...) under one lock; whatever the arm refuses (an exception: a bad
 shape, a NaN, a goal it cannot profile; or a command the arm holds and flags in its
 ``refusal``: a stroke, an unreachable tip, an effort out of bounds, a state that takes
-no command) is answered on ``status`` and never executed. A dedicated servo thread steps the arm
-at its rate and publishes its state every ``rate / publish_rate`` cycles; the ROS
-executor runs the subscriptions on its own thread, so a burst of commands never
-delays a servo cycle by more than the lock's hold (one method call).
+no command) is answered on ``status`` and never executed. A dedicated servo thread
+steps the arm at its rate (or on each servo command's arrival, ``sync="command"``) and
+publishes its state every ``rate / publish_rate`` cycles; the ROS executor runs the
+subscriptions on its own thread, so a burst of commands never delays a servo cycle by
+more than the lock's hold (one method call).
 
 Topics (relative names are under ``namespace``): docs/ros2.md has the table.
 """
@@ -16,7 +17,6 @@ Topics (relative names are under ``namespace``): docs/ros2.md has the table.
 from __future__ import annotations
 
 import threading
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -30,6 +30,7 @@ from ..ros._frames import BASE_FRAME, RCM_FRAME, urdf_model
 from ._arm_state import StateMessages
 from ._convert import actuator_command, stamp_ns, tip_command
 from ._runtime import (
+    CyclePacer,
     RosContext,
     control_executor,
     crtk_types,
@@ -54,8 +55,6 @@ ARM_TOPICS = {
 #: The ``state_command`` strings (CRTK's names) and the arm's method each calls.
 STATE_COMMANDS = {"enable": "enable", "disable": "disable", "pause": "pause",
                   "resume": "resume", "home": "home", "unhome": "unhome"}
-#: Most servo cycles the thread catches up at once after a stall (then it skips ahead).
-MAX_CATCH_UP = 10
 
 
 def check_namespace(namespace: str) -> str:
@@ -102,6 +101,14 @@ class ArmNode:
     publish_rate : float, keyword-only
         State messages per second, Hz (100; at most the servo rate, of which it is
         rounded to a whole divisor).
+    sync : {"clock", "command"}, keyword-only
+        When a servo cycle starts (:class:`~athenakin.ros2._runtime.CyclePacer`):
+        ``"clock"`` (default) on the node's own grid of ``1 / rate`` s, so that a
+        command waits up to one period for the next cycle; ``"command"`` also on a
+        servo command's arrival (``servo_jp``, ``servo_cp``, ``joint_commands``), no
+        sooner than 0.75 period after the previous cycle, the grid restarting from it:
+        the servo then follows its client's rate and a command waits for no grid. The
+        simulated arm advances ``1 / rate`` s of its own time per cycle either way.
     enable : bool, keyword-only
         Send ``enable`` to the arm at start (a lab's client usually does, on
         ``state_command``).
@@ -130,7 +137,7 @@ class ArmNode:
     def __init__(self, arm: Any = None, *, T_b_e: ArrayLike | None = None,
                  design: Design | None = None, q0: ArrayLike | None = None,
                  rate: float = 1000.0, namespace: str = "/athena", publish_rate: float = 100.0,
-                 enable: bool = False, use_sim_time: bool = False,
+                 sync: str = "clock", enable: bool = False, use_sim_time: bool = False,
                  context: RosContext | None = None, node_name: str = "athena_arm") -> None:
         require_rclpy()
         from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
@@ -163,8 +170,10 @@ class ArmNode:
         self._last_state: tuple[str, bool] | None = None
         #: Refusals so far: (command, reason) pairs, oldest first (the last 1000).
         self.refusals: list[tuple[str, str]] = []
-        #: Servo cycles run, cycles that started late by more than one period.
-        self.cycles, self.late_cycles = 0, 0
+        #: Servo cycles run.
+        self.cycles = 0
+        self._pacer = CyclePacer(arm.rate, sync=sync, stop=self._stop)
+        self.sync = self._pacer.sync
         #: Command messages received (accepted or refused), and refused.
         self.commands = self.refused = 0
         #: The last error of the servo thread (None: none).
@@ -281,6 +290,7 @@ class ArmNode:
             q, v, e = actuator_command(msg)
             self.arm.servo_jp(q, velocity=v, effort=e)
         self._command(name, msg, call)
+        self._pacer.arrived()
 
     def _on_servo_jp_pair(self, msg: Any) -> None:
         self._on_servo_jp(msg, "joint_commands")
@@ -299,6 +309,7 @@ class ArmNode:
             tip, frame = self._tip(msg)
             self.arm.servo_cp(tip, frame=frame)
         self._command("servo_cp", msg, call)
+        self._pacer.arrived()
 
     def _on_move_cp(self, msg: Any) -> None:
         def call() -> None:
@@ -327,6 +338,26 @@ class ArmNode:
                       held_refusal=text.lower() == "home")
 
     # --- state ----------------------------------------------------------------------
+    @property
+    def late_cycles(self) -> int:
+        """Servo cycles that started more than one period after their time.
+
+        Returns
+        -------
+        int
+        """
+        return self._pacer.late_cycles
+
+    @property
+    def synced_cycles(self) -> int:
+        """Servo cycles started by a command's arrival (``sync="command"``; else 0).
+
+        Returns
+        -------
+        int
+        """
+        return self._pacer.synced_cycles
+
     def _now(self) -> Any:
         return self.node.get_clock().now().to_msg()
 
@@ -368,9 +399,8 @@ class ArmNode:
 
     # --- running --------------------------------------------------------------------
     def _servo_loop(self) -> None:
-        period = 1.0 / self.arm.rate
-        deadline = time.perf_counter()
         k = 0
+        self._pacer.begin()
         while not self._stop.is_set():
             try:
                 with self._lock:
@@ -389,15 +419,7 @@ class ArmNode:
                     self.error = f"publish: {type(exc).__name__}: {exc}"
                     self._pubs["status"].publish(self.crtk.string(f"error: {self.error}",
                                                                   self._now()))
-            deadline += period
-            now = time.perf_counter()
-            if now - deadline > period:
-                self.late_cycles += 1
-                if now - deadline > MAX_CATCH_UP * period:
-                    deadline = now          # a stall: skip ahead rather than race
-            wait = deadline - time.perf_counter()
-            if wait > 0:
-                self._stop.wait(wait)
+            self._pacer.wait()
 
     def _spin_loop(self) -> None:
         spin_executor(self._stop, self._executor, self.context)

@@ -15,7 +15,15 @@ import time
 from typing import Any
 
 __all__ = ["require_rclpy", "ros2_extra_missing", "CrtkTypes", "crtk_types", "RosContext",
-           "control_executor"]
+           "control_executor", "CyclePacer", "SYNC_MODES", "SYNC_WINDOW", "MAX_CATCH_UP",
+           "sync_window"]
+
+#: When a node's control loop starts a cycle: on its own clock, or on a command's arrival.
+SYNC_MODES = ("clock", "command")
+#: Fraction of a period by which a cycle synchronised to commands starts early or late.
+SYNC_WINDOW = 0.25
+#: Most cycles a loop catches up at once after a stall (then it skips ahead).
+MAX_CATCH_UP = 10
 
 
 def ros2_extra_missing(exc: ModuleNotFoundError) -> ModuleNotFoundError:
@@ -195,6 +203,131 @@ class RosContext:
         if self.context.ok():
             self.context.try_shutdown()
 
+
+
+def sync_window(previous: float, grid: float, synced: bool, period: float
+                ) -> tuple[float, float]:
+    """When the cycle after ``previous`` may start, synchronised to commands.
+
+    Parameters
+    ----------
+    previous : float
+        Start of the previous cycle, s (any monotonic clock).
+    grid : float
+        The next cycle's time on the loop's own grid, s.
+    synced : bool
+        Whether the previous cycle started on a command.
+    period : float
+        The loop's period, s.
+
+    Returns
+    -------
+    earliest, latest : float
+        A command's arrival starts the cycle, but not before ``earliest`` (``previous +
+        (1 - SYNC_WINDOW) period``: a burst never runs the loop faster than that); with no
+        arrival the cycle starts at ``latest``: ``previous + (1 + SYNC_WINDOW) period``
+        after a cycle started on a command (a command a little late is waited for), else
+        ``grid``.
+    """
+    earliest = previous + (1.0 - SYNC_WINDOW) * period
+    latest = previous + (1.0 + SYNC_WINDOW) * period if synced else grid
+    return earliest, max(earliest, latest)
+
+
+class CyclePacer:
+    """When a node's control loop runs its next cycle: on a fixed grid, or on a command.
+
+    ``sync="clock"``: cycle k starts at ``t0 + k / rate`` (``time.perf_counter``). A cycle
+    that starts more than one period after its time is counted in :attr:`late_cycles`;
+    after a stall of more than :data:`MAX_CATCH_UP` periods the grid skips ahead to now
+    rather than racing to catch up.
+
+    ``sync="command"``: as ``"clock"``, but a call of :meth:`arrived` (a servo command, a
+    master sample: from any thread) starts the next cycle at once, within the window of
+    :func:`sync_window`, and the grid restarts from that cycle. A command then waits for
+    no grid (at a 1 kHz servo, up to a millisecond otherwise); the cycles run at the
+    commands' rate, the loop's own between them.
+
+    Parameters
+    ----------
+    rate : float
+        Cycles per second, Hz (positive, finite).
+    sync : {"clock", "command"}, keyword-only
+    stop : threading.Event, keyword-only
+        The node's stop event: :meth:`wait` returns at once when it is set.
+
+    Examples
+    --------
+    ::
+
+        pacer = CyclePacer(1000.0, sync="command", stop=stop)
+        pacer.begin()
+        while not stop.is_set():
+            step()
+            pacer.wait()          # a subscription calls pacer.arrived()
+    """
+
+    def __init__(self, rate: float, *, sync: str = "clock", stop: threading.Event) -> None:
+        from .._validation import check_scalar
+
+        rate = check_scalar(rate, "rate", positive=True)
+        if sync not in SYNC_MODES:
+            raise ValueError(f"sync: expected one of {SYNC_MODES}, got {sync!r:.40}")
+        self.period, self.sync, self._stop = 1.0 / rate, sync, stop
+        self._arrival = threading.Event()
+        self._start = self._grid = time.perf_counter()
+        self._synced = False
+        #: Cycles that started more than one period after their time.
+        self.late_cycles = 0
+        #: Cycles started by a command's arrival (``sync="command"``).
+        self.synced_cycles = 0
+
+    @property
+    def started(self) -> float:
+        """When the current cycle started (:meth:`begin`, or :meth:`wait`'s return), s.
+
+        Returns
+        -------
+        float
+            ``time.perf_counter()`` at the start.
+        """
+        return self._start
+
+    def begin(self) -> None:
+        """Start the grid now: the time of the loop's first cycle."""
+        self._start = self._grid = time.perf_counter()
+        self._synced = False
+        self._arrival.clear()
+
+    def arrived(self) -> None:
+        """A command arrived: with ``sync="command"`` the next cycle starts now (thread-safe)."""
+        if self.sync == "command":
+            self._arrival.set()
+
+    def wait(self) -> None:
+        """Block until the next cycle is due (or the stop event is set), and mark its start."""
+        self._grid += self.period
+        now = time.perf_counter()
+        if now - self._grid > self.period:
+            self.late_cycles += 1
+            if now - self._grid > MAX_CATCH_UP * self.period:
+                self._grid = now
+        if self.sync == "command":
+            earliest, latest = sync_window(self._start, self._grid, self._synced, self.period)
+            self._synced = self._arrival.wait(max(0.0, latest - now))
+            if self._synced:
+                self._arrival.clear()
+                self.synced_cycles += 1
+                now = time.perf_counter()
+                if now < earliest:
+                    self._stop.wait(earliest - now)
+                self._start = self._grid = time.perf_counter()
+                return
+            self._grid = max(self._grid, latest)
+        wait = self._grid - time.perf_counter()
+        if wait > 0:
+            self._stop.wait(wait)
+        self._start = time.perf_counter()
 
 
 def run_until(stop: threading.Event, context: RosContext, timeout: float | None) -> None:

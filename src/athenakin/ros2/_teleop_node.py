@@ -24,6 +24,7 @@ from ..design import Design, resolve_design
 from ._arm_node import _create_node, _qos, check_namespace
 from ._convert import ACTUATORS, joint_state, master_position, stamp_ns
 from ._runtime import (
+    CyclePacer,
     RosContext,
     control_executor,
     require_rclpy,
@@ -157,7 +158,9 @@ class TeleopNode:
         self._refusals: list[str] = []      # since the last status (MAX_REFUSALS kept)
         self._refusal_count = 0
         self._estop = False
-        self.cycles = self.late_cycles = 0
+        self.cycles = 0
+        # the loop on its own clock: the core's limits are per cycle of 1 / rate s
+        self._pacer = CyclePacer(self.rate, sync="clock", stop=self._stop)
         self._last_flags = -1
         self._executor = control_executor(self.context)
         self._executor.add_node(self.node)
@@ -268,6 +271,16 @@ class TeleopNode:
             self._refusal_count += 1
 
     # --- the loop -------------------------------------------------------------------
+    @property
+    def late_cycles(self) -> int:
+        """Teleop cycles that started more than one period after their time.
+
+        Returns
+        -------
+        int
+        """
+        return self._pacer.late_cycles
+
     def step_once(self) -> Any:
         """One teleop cycle now: the latest sample through the core, ``servo_jp`` out.
 
@@ -337,19 +350,10 @@ class TeleopNode:
         self._pubs["status"].publish(arr)
 
     def _loop(self) -> None:
-        period = 1.0 / self.rate
-        deadline = time.perf_counter()
+        self._pacer.begin()
         while not self._stop.is_set() and self.context.ok:
             self.step_once()
-            deadline += period
-            now = time.perf_counter()
-            if now - deadline > period:
-                self.late_cycles += 1
-                if now - deadline > 10 * period:
-                    deadline = now
-            wait = deadline - time.perf_counter()
-            if wait > 0:
-                self._stop.wait(wait)
+            self._pacer.wait()
 
     def _spin_loop(self) -> None:
         spin_executor(self._stop, self._executor, self.context)
