@@ -25,6 +25,12 @@ loop in one process (``servo_jp``, ``step``, ``measured_js`` of
 :class:`athenakin.teleop.SimulatedArm`, no graph), per cycle.
 The machine's load is printed beside every figure.
 
+``--sync`` is the arm node's (``clock``: cycles on its own grid; ``command``: a servo
+command's arrival starts one); ``both`` (the default) runs one of each and prints the
+ratios of their latencies. ``--pin`` runs the arm node on CPU 1 and this process on CPU 0.
+This process's garbage collector is frozen (``gc.freeze``) while it times, so that a
+collection of its own does not show as the graph's latency.
+
 The commands start once the arm node publishes at its pace (a hundred states after its
 first, not its first alone: a node still loading its kernels would take none of them),
 in ``ROS_DOMAIN_ID`` where it is set (else one of this run's, from the pid). Where no
@@ -35,6 +41,7 @@ answered (its counts, its first refusal on ``status``).
 from __future__ import annotations
 
 import argparse
+import gc
 import os
 import re
 import sys
@@ -189,6 +196,8 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int, *,
     idle_cpu, idle_wall = cpu_seconds(proc.pid) - idle_cpu0, time.time() - idle_w0
     with lock:
         idle_states = sum(idle_w0 <= t for t in seen.values())
+    gc.collect()              # this client's own garbage collections stay out of the timing
+    gc.freeze()
     cpu0, w0, load = cpu_seconds(proc.pid), time.time(), load_text()
     n = int(seconds * publish_rate)
     period = 1.0 / publish_rate
@@ -205,6 +214,7 @@ def over_graph(rate: float, publish_rate: float, seconds: float, domain: int, *,
             time.sleep(wait)
     time.sleep(1.0)
     cpu, wall = cpu_seconds(proc.pid) - cpu0, time.time() - w0
+    gc.unfreeze()
     with lock:
         states = sum(t >= t_start for t in seen.values())
         window = sum(t >= w0 for t in seen.values())       # states published in the window
