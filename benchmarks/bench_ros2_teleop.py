@@ -23,12 +23,14 @@ window), its cycles run of those due and late (its own count at exit), the ``ser
 that arrived of the cycles run, the watchdog trips in the window (the master never
 paused: 0 expected), and the arm node's CPU beside it. Beside the graph, the same
 master stream through :class:`athenakin.teleop.Teleop` in one process with the same
-bodies (per cycle). The machine's load is printed beside every figure.
+bodies (per cycle). The machine's load is printed beside every figure. This process's
+garbage collector is frozen while it times (as in ``bench_ros2.py``).
 """
 
 from __future__ import annotations
 
 import argparse
+import gc
 import os
 import re
 import sys
@@ -139,6 +141,8 @@ def over_graph(rate: float, seconds: float, jump_every: float, domain: int
     for _ in range(int(0.5 * rate)):               # half a second still, engaged
         pose.publish(msg)
         time.sleep(period)
+    gc.collect()              # this master's own garbage collections stay out of the timing
+    gc.freeze()
     cpu0 = {p.pid: cpu_seconds(p.pid) for p in (arm, tele)}
     w0, load = time.time(), load_text()
     n = int(seconds * rate)
@@ -160,6 +164,7 @@ def over_graph(rate: float, seconds: float, jump_every: float, domain: int
     w1 = time.time()
     cpu = {pid: cpu_seconds(pid) - c for pid, c in cpu0.items()}
     time.sleep(0.5)
+    gc.unfreeze()
     with lock:
         cmd, st = list(cmds), list(status)
     out = close()
