@@ -156,8 +156,9 @@ def run_arm(args: argparse.Namespace) -> int:
                    namespace=args.namespace, publish_rate=args.publish_rate,
                    sync=args.sync, enable=args.enable, use_sim_time=args.use_sim_time)
     kind = "crtk_msgs" if node.crtk.native else "std_msgs stand-ins"
-    print(f"ros2 arm: {node.namespace} at {args.rate:g} Hz ({node.sync}), state at {node.publish_rate:g} Hz, "
-          f"{node.arm.operating_state}, CRTK types: {kind}", flush=True)
+    print(f"ros2 arm: {node.namespace} at {args.rate:g} Hz (--sync {node.sync}), state at "
+          f"{node.publish_rate:g} Hz, {node.arm.operating_state}, CRTK types: {kind}",
+          flush=True)
     _spin_and_close(node, duration, lambda: f"ros2 arm: {node.cycles} cycles, "
                     f"{node.late_cycles} late, {node.synced_cycles} on a command, {node.commands} "
                     f"commands, {node.refused} refused")

@@ -268,12 +268,11 @@ class CyclePacer:
     """
 
     def __init__(self, rate: float, *, sync: str = "clock", stop: threading.Event) -> None:
-        from .._validation import check_scalar
+        from .._validation import check_choice, check_scalar
 
         rate = check_scalar(rate, "rate", positive=True)
-        if sync not in SYNC_MODES:
-            raise ValueError(f"sync: expected one of {SYNC_MODES}, got {sync!r:.40}")
-        self.period, self.sync, self._stop = 1.0 / rate, sync, stop
+        self.sync = check_choice(sync, "sync", SYNC_MODES)
+        self.period, self._stop = 1.0 / rate, stop
         self._arrival = threading.Event()
         self._start = self._grid = time.perf_counter()
         self._synced = False
