@@ -13,7 +13,14 @@ import time
 
 import pytest
 
-from athenakin.ros2._runtime import MAX_CATCH_UP, SYNC_WINDOW, CyclePacer, sync_window
+from athenakin.ros2._runtime import (
+    MAX_CATCH_UP,
+    RATE_SLACK,
+    SYNC_CREDIT,
+    SYNC_WINDOW,
+    CyclePacer,
+    sync_window,
+)
 
 PERIOD = 0.004       # s: 250 Hz, long beside the timer's resolution
 
@@ -59,6 +66,29 @@ def test_a_burst_of_arrivals_starts_one_cycle_per_window():
     pacer.wait()
     pacer.wait()                                # the burst was taken by the first cycle
     assert pacer.synced_cycles == 1
+
+
+def test_commands_faster_than_the_rate_never_run_the_loop_faster():
+    stop = threading.Event()
+    pacer = CyclePacer(1.0 / PERIOD, sync="command", stop=stop)
+    pacer.begin()
+    begun, n = pacer.started, 40
+    for _ in range(n):          # a command always waiting: a client faster than the loop
+        pacer.arrived()
+        pacer.wait()
+    assert pacer.synced_cycles == n
+    # the k-th cycle after a start s: no sooner than s + ((k - 1)(1 - slack) - credit) T,
+    # where the window alone would let it start at s + 0.75 k T
+    bound = ((n - 1) * (1 - RATE_SLACK) - SYNC_CREDIT) * PERIOD
+    assert bound > (1 - SYNC_WINDOW) * n * PERIOD
+    assert pacer.started - begun >= bound - 1e-6
+
+
+@pytest.mark.parametrize("floor", [0.0, 0.003, 0.0045])
+def test_the_floor_holds_back_the_window(floor):
+    early, late = sync_window(0.0, 0.004, True, PERIOD, floor)
+    assert early == max((1 - SYNC_WINDOW) * PERIOD, floor)
+    assert late >= early
 
 
 def test_an_arrival_from_another_thread_starts_the_cycle():

@@ -16,7 +16,7 @@ from typing import Any
 
 __all__ = ["require_rclpy", "ros2_extra_missing", "CrtkTypes", "crtk_types", "RosContext",
            "control_executor", "CyclePacer", "SYNC_MODES", "SYNC_WINDOW", "MAX_CATCH_UP",
-           "sync_window"]
+           "RATE_SLACK", "SYNC_CREDIT", "sync_window"]
 
 #: When a node's control loop starts a cycle: on its own clock, or on a command's arrival.
 SYNC_MODES = ("clock", "command")
@@ -24,6 +24,10 @@ SYNC_MODES = ("clock", "command")
 SYNC_WINDOW = 0.25
 #: Most cycles a loop catches up at once after a stall (then it skips ahead).
 MAX_CATCH_UP = 10
+#: Synchronised to commands, a loop runs at most this fraction faster than its rate...
+RATE_SLACK = 0.02
+#: ...after a burst of at most this many periods ahead of its starts' schedule.
+SYNC_CREDIT = 2.0
 
 
 def ros2_extra_missing(exc: ModuleNotFoundError) -> ModuleNotFoundError:
@@ -205,8 +209,8 @@ class RosContext:
 
 
 
-def sync_window(previous: float, grid: float, synced: bool, period: float
-                ) -> tuple[float, float]:
+def sync_window(previous: float, grid: float, synced: bool, period: float,
+                floor: float = -math.inf) -> tuple[float, float]:
     """When the cycle after ``previous`` may start, synchronised to commands.
 
     Parameters
@@ -219,17 +223,22 @@ def sync_window(previous: float, grid: float, synced: bool, period: float
         Whether the previous cycle started on a command.
     period : float
         The loop's period, s.
+    floor : float
+        No cycle before it: the loop's rate limit (:class:`CyclePacer` advances it by
+        ``(1 - RATE_SLACK) period`` a cycle, never more than ``SYNC_CREDIT`` periods
+        behind the latest start, so that commands faster than the loop do not run it
+        faster than its rate).
 
     Returns
     -------
     earliest, latest : float
-        A command's arrival starts the cycle, but not before ``earliest`` (``previous +
-        (1 - SYNC_WINDOW) period``: a burst never runs the loop faster than that); with no
-        arrival the cycle starts at ``latest``: ``previous + (1 + SYNC_WINDOW) period``
-        after a cycle started on a command (a command a little late is waited for), else
-        ``grid``.
+        A command's arrival starts the cycle, but not before ``earliest``, the later of
+        ``previous + (1 - SYNC_WINDOW) period`` (a cycle never follows the previous one
+        sooner) and ``floor``; with no arrival the cycle starts at ``latest``: ``previous
+        + (1 + SYNC_WINDOW) period`` after a cycle started on a command (a command a
+        little late is waited for), else ``grid``.
     """
-    earliest = previous + (1.0 - SYNC_WINDOW) * period
+    earliest = max(previous + (1.0 - SYNC_WINDOW) * period, floor)
     latest = previous + (1.0 + SYNC_WINDOW) * period if synced else grid
     return earliest, max(earliest, latest)
 
@@ -246,7 +255,9 @@ class CyclePacer:
     master sample: from any thread) starts the next cycle at once, within the window of
     :func:`sync_window`, and the grid restarts from that cycle. A command then waits for
     no grid (at a 1 kHz servo, up to a millisecond otherwise); the cycles run at the
-    commands' rate, the loop's own between them.
+    commands' rate, the loop's own between them, and commands faster than the loop run it
+    at most :data:`RATE_SLACK` faster than ``rate``: the k-th cycle after any cycle's start
+    ``s`` starts no sooner than ``s + ((k - 1) (1 - RATE_SLACK) - SYNC_CREDIT) / rate``.
 
     Parameters
     ----------
@@ -275,6 +286,7 @@ class CyclePacer:
         self.period, self._stop = 1.0 / rate, stop
         self._arrival = threading.Event()
         self._start = self._grid = time.perf_counter()
+        self._floor = -math.inf
         self._synced = False
         #: Cycles that started more than one period after their time.
         self.late_cycles = 0
@@ -294,7 +306,9 @@ class CyclePacer:
 
     def begin(self) -> None:
         """Start the grid now: the time of the loop's first cycle."""
-        self._start = self._grid = time.perf_counter()
+        self._floor = -math.inf
+        self._mark(time.perf_counter())
+        self._grid = self._start
         self._synced = False
         self._arrival.clear()
 
@@ -312,7 +326,8 @@ class CyclePacer:
             if now - self._grid > MAX_CATCH_UP * self.period:
                 self._grid = now
         if self.sync == "command":
-            earliest, latest = sync_window(self._start, self._grid, self._synced, self.period)
+            earliest, latest = sync_window(self._start, self._grid, self._synced, self.period,
+                                           self._floor)
             self._synced = self._arrival.wait(max(0.0, latest - now))
             if self._synced:
                 self._arrival.clear()
@@ -320,13 +335,20 @@ class CyclePacer:
                 now = time.perf_counter()
                 if now < earliest:
                     self._stop.wait(earliest - now)
-                self._start = self._grid = time.perf_counter()
+                self._mark(time.perf_counter())
+                self._grid = self._start
                 return
             self._grid = max(self._grid, latest)
         wait = self._grid - time.perf_counter()
         if wait > 0:
             self._stop.wait(wait)
-        self._start = time.perf_counter()
+        self._mark(time.perf_counter())
+
+    def _mark(self, start: float) -> None:
+        """A cycle starts at ``start``: the next one's floor (the rate limit) moves on."""
+        self._floor = max(self._floor + (1.0 - RATE_SLACK) * self.period,
+                          start - SYNC_CREDIT * self.period)
+        self._start = start
 
 
 def run_until(stop: threading.Event, context: RosContext, timeout: float | None) -> None:
