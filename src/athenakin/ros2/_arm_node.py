@@ -107,8 +107,9 @@ class ArmNode:
         command waits up to one period for the next cycle; ``"command"`` also on a
         servo command's arrival (``servo_jp``, ``servo_cp``, ``joint_commands``), no
         sooner than 0.75 period after the previous cycle, the grid restarting from it:
-        the servo then follows its client's rate and a command waits for no grid. The
-        simulated arm advances ``1 / rate`` s of its own time per cycle either way.
+        the servo then follows its client's rate (at most 1.02 times its own) and a
+        command waits for no grid. The simulated arm advances ``1 / rate`` s of its own
+        time per cycle either way.
     enable : bool, keyword-only
         Send ``enable`` to the arm at start (a lab's client usually does, on
         ``state_command``).
