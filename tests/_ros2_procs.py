@@ -34,12 +34,12 @@ def start(args: list[str], domain: int, cpus: set[int] | None = None) -> subproc
     ``cpus``: the CPUs the process (each of its threads) may run on (default: any).
     """
     def pin() -> None:
-        if cpus is not None:
-            os.sched_setaffinity(0, cpus)
+        os.sched_setaffinity(0, cpus or set())
 
     return subprocess.Popen([sys.executable, "-m", "athenakin", "ros2", *args],
                             env=node_env(domain), stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True, preexec_fn=pin)
+                            stderr=subprocess.STDOUT, text=True,
+                            preexec_fn=None if cpus is None else pin)
 
 
 def stop(proc: subprocess.Popen, timeout: float = 20.0) -> str:
