@@ -3,6 +3,7 @@
 Run from the repository root (the extra ``ros2``; discovery stays on the loopback)::
 
     python benchmarks/bench_ros2_teleop.py [--rate 1000] [--seconds 10] [--jump-every 0.05]
+                                           [--arm-sync clock|command] [--arm-publish-rate 100]
 
 Starts ``athenakin ros2 arm --enable`` and ``athenakin ros2 teleop`` (every guard on: the
 default bodies checked, the watchdog, the limits; the tremor filter off, so that a
@@ -25,6 +26,12 @@ paused: 0 expected), and the arm node's CPU beside it. Beside the graph, the sam
 master stream through :class:`athenakin.teleop.Teleop` in one process with the same
 bodies (per cycle). The machine's load is printed beside every figure. This process's
 garbage collector is frozen while it times (as in ``bench_ros2.py``).
+
+And on to the arm: each step from the same ``publish()`` to the arrival of the first
+``setpoint_js`` of the arm node that carries the moved command (the teleop node's
+command crossed the graph again and the arm took it), with the arm node's ``--sync``
+(``--arm-sync``) and its state published at ``--arm-publish-rate`` (100 Hz by default, as
+``athenakin ros2 arm``'s; at 1000 Hz the state shows every servo cycle).
 """
 
 from __future__ import annotations
@@ -85,18 +92,23 @@ def in_process(rate: float, cycles: int, jump_every: float) -> tuple[np.ndarray,
     return dt, dt[first]
 
 
-def over_graph(rate: float, seconds: float, jump_every: float, domain: int
-               ) -> dict[str, object]:
-    """Run the arm and teleop nodes in their own processes; master them for ``seconds``."""
+def over_graph(rate: float, seconds: float, jump_every: float, domain: int, *,
+               arm_sync: str = "clock", arm_publish_rate: float = 100.0) -> dict[str, object]:
+    """Run the arm and teleop nodes in their own processes; master them for ``seconds``.
+
+    ``arm_sync`` and ``arm_publish_rate``: the arm node's ``--sync`` and ``--publish-rate``.
+    """
     from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import PoseStamped
     from sensor_msgs.msg import JointState, Joy
 
-    arm = start(["arm", "--enable"], domain)
+    arm = start(["arm", "--enable", "--sync", arm_sync, "--publish-rate",
+                 str(arm_publish_rate)], domain)
     tele = start(["teleop", "--rate", str(rate), "--filter", "none"], domain)
     client = GraphClient(domain, "bench_master")
     node, qos = client.node, client.qos
     cmds: list[tuple[float, float, tuple[float, ...]]] = []   # (stamp, arrival, q), s, m
+    sps: list[tuple[float, float, tuple[float, ...]]] = []    # the arm's setpoint_js, alike
     status: list[tuple[float, dict[str, str]]] = []           # (arrival, values)
     lock = threading.Lock()
 
@@ -106,6 +118,12 @@ def over_graph(rate: float, seconds: float, jump_every: float, domain: int
             cmds.append((m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec, t,
                          tuple(m.position)))
 
+    def on_setpoint(m: JointState) -> None:
+        t = time.time()
+        with lock:
+            sps.append((m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec, t,
+                        tuple(m.position)))
+
     def on_status(m: DiagnosticArray) -> None:
         t = time.time()
         with lock:
@@ -113,6 +131,7 @@ def over_graph(rate: float, seconds: float, jump_every: float, domain: int
 
     node.create_subscription(JointState, "/athena/servo_jp", on_servo, qos)
     node.create_subscription(DiagnosticArray, "/athena/teleop/status", on_status, qos)
+    node.create_subscription(JointState, "/athena/setpoint_js", on_setpoint, qos)
     pose = node.create_publisher(PoseStamped, "/master/pose", qos)
     joy = node.create_publisher(Joy, "/master/joy", qos)
     client.spin()
@@ -166,7 +185,7 @@ def over_graph(rate: float, seconds: float, jump_every: float, domain: int
     time.sleep(0.5)
     gc.unfreeze()
     with lock:
-        cmd, st = list(cmds), list(status)
+        cmd, st, sp = list(cmds), list(status), list(sps)
     out = close()
     m = re.search(r"ros2 teleop: (\d+) cycles, (\d+) late", out)
     window = [v for t, v in st if w0 <= t <= w1]
@@ -174,6 +193,7 @@ def over_graph(rate: float, seconds: float, jump_every: float, domain: int
     span = (float(window[-1]["t"]) - float(window[0]["t"])) if len(window) > 1 else 0.0
     lat, back = _step_latencies(steps, cmd)
     return {"latency": lat, "in": lat - back, "back": back, "steps": len(steps),
+            "to_arm": _step_latencies(steps, sp)[0],
             "sent": n, "wall": w1 - w0, "load": load,
             "cpu_teleop": cpu[tele.pid], "cpu_arm": cpu[arm.pid],
             "cycles_run": cycles_run, "cycles_due": round(span * rate),
@@ -213,6 +233,10 @@ def main() -> None:
     ap.add_argument("--rate", type=float, default=1000.0, help="teleop and master rate, Hz")
     ap.add_argument("--seconds", type=float, default=10.0, help="master samples for this long")
     ap.add_argument("--jump-every", type=float, default=0.05, help="s between master steps")
+    ap.add_argument("--arm-sync", choices=("clock", "command"), default="clock",
+                    help="the arm node's --sync")
+    ap.add_argument("--arm-publish-rate", type=float, default=100.0,
+                    help="the arm node's --publish-rate, Hz (its setpoint_js shows the step)")
     args = ap.parse_args()
     domain = int(os.environ.get("ROS_DOMAIN_ID") or 1 + os.getpid() % 100)
     base, base_steps = in_process(args.rate, int(args.seconds * args.rate), args.jump_every)
@@ -222,7 +246,8 @@ def main() -> None:
     # a loop of this rate in one process: a sample waits for the next cycle (uniform over
     # one period, half of it at p50), then the step
     floor = 0.5 / args.rate + np.percentile(base_steps, 50)
-    r = over_graph(args.rate, args.seconds, args.jump_every, domain)
+    r = over_graph(args.rate, args.seconds, args.jump_every, domain, arm_sync=args.arm_sync,
+                   arm_publish_rate=args.arm_publish_rate)
     lat = r["latency"]
     assert isinstance(lat, np.ndarray)
     print(f"over the graph, teleop at {args.rate:g} Hz, master at {args.rate:g} Hz (reliable), "
@@ -242,6 +267,11 @@ def main() -> None:
           f"servo_jp arrived; watchdog in {r['watchdog']} status messages; "
           f"{r['late']} late of {r['cycles']} cycles in the whole run)")
     print(f"  arm node CPU beside it {100 * r['cpu_arm'] / wall:.0f} % of one core")
+    to_arm = r["to_arm"]
+    assert isinstance(to_arm, np.ndarray)
+    print(f"  and on to the arm (--sync {args.arm_sync}, state at {args.arm_publish_rate:g} "
+          f"Hz): {len(to_arm)} of {r['steps']} master steps shown on its setpoint_js, from the "
+          f"master's publish() to the arrival here: {percentile_text(to_arm)}")
     print(f"  p50 graph / p50 of the same loop in one process (half a period's wait, the "
           f"step: {1e6 * floor:.0f} us): {np.percentile(lat, 50) / floor:.1f}x ({load_text()})")
 
