@@ -174,6 +174,7 @@ class ArmNode:
         #: Servo cycles run.
         self.cycles = 0
         self._pacer = CyclePacer(arm.rate, sync=sync, stop=self._stop)
+        #: When a servo cycle starts: ``"clock"`` or ``"command"`` (the ``sync`` argument).
         self.sync = self._pacer.sync
         #: Command messages received (accepted or refused), and refused.
         self.commands = self.refused = 0
