@@ -43,6 +43,7 @@ import re
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -112,26 +113,23 @@ def over_graph(rate: float, seconds: float, jump_every: float, domain: int, *,
     status: list[tuple[float, dict[str, str]]] = []           # (arrival, values)
     lock = threading.Lock()
 
-    def on_servo(m: JointState) -> None:
-        t = time.time()
-        with lock:
-            cmds.append((m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec, t,
-                         tuple(m.position)))
-
-    def on_setpoint(m: JointState) -> None:
-        t = time.time()
-        with lock:
-            sps.append((m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec, t,
-                        tuple(m.position)))
+    def keep(into: list[tuple[float, float, tuple[float, ...]]]) -> Callable[[JointState], None]:
+        """A callback keeping each JointState's (stamp, arrival, positions) in ``into``."""
+        def on_js(m: JointState) -> None:
+            t = time.time()
+            with lock:
+                into.append((m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec, t,
+                             tuple(m.position)))
+        return on_js
 
     def on_status(m: DiagnosticArray) -> None:
         t = time.time()
         with lock:
             status.append((t, {kv.key: kv.value for kv in m.status[0].values}))
 
-    node.create_subscription(JointState, "/athena/servo_jp", on_servo, qos)
+    node.create_subscription(JointState, "/athena/servo_jp", keep(cmds), qos)
     node.create_subscription(DiagnosticArray, "/athena/teleop/status", on_status, qos)
-    node.create_subscription(JointState, "/athena/setpoint_js", on_setpoint, qos)
+    node.create_subscription(JointState, "/athena/setpoint_js", keep(sps), qos)
     pose = node.create_publisher(PoseStamped, "/master/pose", qos)
     joy = node.create_publisher(Joy, "/master/joy", qos)
     client.spin()

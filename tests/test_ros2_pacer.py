@@ -17,6 +17,7 @@ from athenakin.ros2._runtime import (
     MAX_CATCH_UP,
     RATE_SLACK,
     SYNC_CREDIT,
+    SYNC_MODES,
     SYNC_WINDOW,
     CyclePacer,
     sync_window,
@@ -134,3 +135,17 @@ def test_the_stop_event_ends_a_wait():
 def test_a_bad_rate_or_sync_is_refused_by_name(rate, sync, error):
     with pytest.raises((ValueError, TypeError), match=error):
         CyclePacer(rate, sync=sync, stop=threading.Event())
+
+
+def test_the_cli_offers_the_pacer_modes():
+    import argparse
+
+    from athenakin.cli._ros2 import register
+
+    root = argparse.ArgumentParser()
+    register(root.add_subparsers())
+    assert root.parse_args(["ros2", "arm"]).sync == SYNC_MODES[0]
+    for mode in SYNC_MODES:
+        assert root.parse_args(["ros2", "arm", "--sync", mode]).sync == mode
+    with pytest.raises(SystemExit):
+        root.parse_args(["ros2", "arm", "--sync", "commands"])
