@@ -24,7 +24,7 @@ in the same chunks, vectorised too.
 """
 
 # numba's cache does not follow the kernels this module inlines from _fk_kernels, _scalar
-# and _mechanism_formulas: a change there must change this file too (revision 4).
+# and _mechanism_formulas: a change there must change this file too (revision 5).
 
 from __future__ import annotations
 
@@ -91,10 +91,8 @@ def _dphi(h, r1, s3, m_y, q3, ey, ez, D, l5):
 
 
 @njit(**_INLINE)
-def _pjac(q1, q2, q3, m, P, ttol):
-    """``d O_s / d q`` (row-major 9-tuple) and ``d phi / d q`` of one item."""
-    l4, l5 = P[3], P[4]
-    h, _, r1, s3, m_y, _, _, ey, ez, D = _module(q1, q2, q3, m, P, ttol)
+def _pjac_of(h, r1, s3, m_y, ey, ez, D, q3, l4, l5):
+    """``d O_s / d q`` (row-major 9-tuple) and ``d phi / d q`` from the module's state."""
     f0, f1, f2 = _dphi(h, r1, s3, m_y, q3, ey, ez, D, l5)
     rho = r1 + l4
     g = -h / r1
@@ -104,6 +102,13 @@ def _pjac(q1, q2, q3, m, P, ttol):
          a0 * ey - re * f0, a1 * ey - re * f1, a2 * ey - re * f2,
          a0 * ez + ry * f0, a1 * ez + ry * f1, a2 * ez + ry * f2)
     return J, (f0, f1, f2)
+
+
+@njit(**_INLINE)
+def _pjac(q1, q2, q3, m, P, ttol):
+    """``d O_s / d q`` (row-major 9-tuple) and ``d phi / d q`` of one item."""
+    h, _, r1, s3, m_y, _, _, ey, ez, D = _module(q1, q2, q3, m, P, ttol)
+    return _pjac_of(h, r1, s3, m_y, ey, ez, D, q3, P[3], P[4])
 
 
 @njit(**_INLINE)
@@ -327,38 +332,69 @@ def parallel_kernel(q, m, P, ttol, kind, out):
 
 
 @njit(**_INLINE)
-def _robot_item(G, ii, P, ttol, kind, rcm):
-    """One item of :func:`robot_kernel` from the gathered rows (straight-line code)."""
+def _frame(G, ii):
+    """The gathered RCM frame of an item: ``R`` (row-major 9-tuple) and its translation."""
+    R = (G[(_GR) * CHUNK + ii], G[(_GR + 1) * CHUNK + ii], G[(_GR + 2) * CHUNK + ii],
+         G[(_GR + 3) * CHUNK + ii], G[(_GR + 4) * CHUNK + ii], G[(_GR + 5) * CHUNK + ii],
+         G[(_GR + 6) * CHUNK + ii], G[(_GR + 7) * CHUNK + ii], G[(_GR + 8) * CHUNK + ii])
+    return R, (G[(_GT) * CHUNK + ii], G[(_GT + 1) * CHUNK + ii], G[(_GT + 2) * CHUNK + ii])
+
+
+@njit(**_INLINE)
+def _pick(a, b, first):
+    """``a`` where ``first``, else ``b`` (9-tuples, entry by entry, no branch)."""
+    return (a[0] if first else b[0], a[1] if first else b[1], a[2] if first else b[2],
+            a[3] if first else b[3], a[4] if first else b[4], a[5] if first else b[5],
+            a[6] if first else b[6], a[7] if first else b[7], a[8] if first else b[8])
+
+
+# One function per kind: each inlined copy in a kernel's item loop carries only its own
+# kind's arithmetic (numba's inlining copies the callee's IR at every call site).
+@njit(**_INLINE)
+def _instrument_jac_item(G, ii, P, ttol, rcm):
+    """``INSTR_JAC`` of one item (straight-line code)."""
     q1, q2, q3, m = _q(G, ii)
-    l4, l5 = P[3], P[4]
+    h, xm, r1, s3, m_y, _, _, ey, ez, D = _module(q1, q2, q3, m, P, ttol)
+    Rt, c = _frame(G, ii)
+    # R_f: the frame's rotation, or the identity (multiplied as the reference does)
+    R = _pick(Rt, _EYE, rcm)
+    d, p, df = _line(R, c, xm, r1, ey, ez, P[3])
+    Jp, _ = _pjac_of(h, r1, s3, m_y, ey, ez, D, q3, P[3], P[4])
+    return _instrument_jac(d, p, R, df, Jp)
+
+
+@njit(**_INLINE)
+def _instrument_inv_item(G, ii, P, ttol, rcm):
+    """``INSTR_INV`` of one item (straight-line code)."""
+    q1, q2, q3, m = _q(G, ii)
     h, xm, r1, s3, m_y, y, z, ey, ez, _ = _module(q1, q2, q3, m, P, ttol)
-    if kind == INSTR_JAC or kind == TIP_JAC:
-        Jp, _ = _pjac(q1, q2, q3, m, P, ttol)
-    else:
-        Jp = _pinv(h, r1, s3, m_y, y, z, ey, ez, q3, l4, l5)
-    Rt = (G[(_GR) * CHUNK + ii], G[(_GR + 1) * CHUNK + ii], G[(_GR + 2) * CHUNK + ii],
-          G[(_GR + 3) * CHUNK + ii], G[(_GR + 4) * CHUNK + ii], G[(_GR + 5) * CHUNK + ii],
-          G[(_GR + 6) * CHUNK + ii], G[(_GR + 7) * CHUNK + ii], G[(_GR + 8) * CHUNK + ii])
-    c = (G[(_GT) * CHUNK + ii], G[(_GT + 1) * CHUNK + ii], G[(_GT + 2) * CHUNK + ii])
-    if kind == INSTR_JAC or kind == INSTR_INV:
-        # R_f: the frame's rotation, or the identity (multiplied as the reference does)
-        R = (Rt[0] if rcm else 1.0, Rt[1] if rcm else 0.0, Rt[2] if rcm else 0.0,
-             Rt[3] if rcm else 0.0, Rt[4] if rcm else 1.0, Rt[5] if rcm else 0.0,
-             Rt[6] if rcm else 0.0, Rt[7] if rcm else 0.0, Rt[8] if rcm else 1.0)
-        d, p, df = _line(R, c, xm, r1, ey, ez, l4)
-        if kind == INSTR_JAC:
-            return _instrument_jac(d, p, R, df, Jp)
-        return _instrument_inv(d, p, R, df, Jp)
-    d, p, _ = _line(_EYE, c, xm, r1, ey, ez, l4)
-    if kind == TIP_JAC:
-        J = _mm(_tip(d, p, P[12], False), Jp)
-        Jr = _mm(_tr(Rt), J)
-    else:
-        J = _mm(Jp, _tip(d, p, P[12], True))
-        Jr = _mm(J, Rt)
-    return (Jr[0] if rcm else J[0], Jr[1] if rcm else J[1], Jr[2] if rcm else J[2],
-            Jr[3] if rcm else J[3], Jr[4] if rcm else J[4], Jr[5] if rcm else J[5],
-            Jr[6] if rcm else J[6], Jr[7] if rcm else J[7], Jr[8] if rcm else J[8])
+    Rt, c = _frame(G, ii)
+    R = _pick(Rt, _EYE, rcm)
+    d, p, df = _line(R, c, xm, r1, ey, ez, P[3])
+    return _instrument_inv(d, p, R, df, _pinv(h, r1, s3, m_y, y, z, ey, ez, q3, P[3], P[4]))
+
+
+@njit(**_INLINE)
+def _tip_jac_item(G, ii, P, ttol, rcm):
+    """``TIP_JAC`` of one item (straight-line code): ``R^T N J_par`` or ``N J_par``."""
+    q1, q2, q3, m = _q(G, ii)
+    h, xm, r1, s3, m_y, _, _, ey, ez, D = _module(q1, q2, q3, m, P, ttol)
+    Rt, c = _frame(G, ii)
+    d, p, _ = _line(_EYE, c, xm, r1, ey, ez, P[3])
+    Jp, _ = _pjac_of(h, r1, s3, m_y, ey, ez, D, q3, P[3], P[4])
+    J = _mm(_tip(d, p, P[12], False), Jp)
+    return _pick(_mm(_tr(Rt), J), J, rcm)
+
+
+@njit(**_INLINE)
+def _tip_inv_item(G, ii, P, ttol, rcm):
+    """``TIP_INV`` of one item (straight-line code): ``J_par^-1 N^-1 R`` or without ``R``."""
+    q1, q2, q3, m = _q(G, ii)
+    h, xm, r1, s3, m_y, y, z, ey, ez, _ = _module(q1, q2, q3, m, P, ttol)
+    Rt, c = _frame(G, ii)
+    d, p, _ = _line(_EYE, c, xm, r1, ey, ez, P[3])
+    J = _mm(_pinv(h, r1, s3, m_y, y, z, ey, ez, q3, P[3], P[4]), _tip(d, p, P[12], True))
+    return _pick(_mm(J, Rt), J, rcm)
 
 
 @njit(**_OPTS)
@@ -399,16 +435,16 @@ def robot_kernel(q, m, T, P, ttol, kind, rcm, check, rot_tol, out):
                     FLAG_NONRIGID if n_nonrigid else 0)
         if kind == INSTR_JAC:
             for ii in range(nn):
-                _put(S, ii, _robot_item(G, ii, P, ttol, INSTR_JAC, rcm))
+                _put(S, ii, _instrument_jac_item(G, ii, P, ttol, rcm))
         elif kind == INSTR_INV:
             for ii in range(nn):
-                _put(S, ii, _robot_item(G, ii, P, ttol, INSTR_INV, rcm))
+                _put(S, ii, _instrument_inv_item(G, ii, P, ttol, rcm))
         elif kind == TIP_JAC:
             for ii in range(nn):
-                _put(S, ii, _robot_item(G, ii, P, ttol, TIP_JAC, rcm))
+                _put(S, ii, _tip_jac_item(G, ii, P, ttol, rcm))
         else:
             for ii in range(nn):
-                _put(S, ii, _robot_item(G, ii, P, ttol, TIP_INV, rcm))
+                _put(S, ii, _tip_inv_item(G, ii, P, ttol, rcm))
         _scatter(S, c0, nn, 3, out)
     return 0
 
@@ -435,6 +471,13 @@ def robot_one(q1, q2, q3, m, G, P, ttol, kind, rcm, out):
     G[(_GQ + 1) * CHUNK] = q2
     G[(_GQ + 2) * CHUNK] = q3
     G[_GM * CHUNK] = m
-    J = _robot_item(G, 0, P, ttol, kind, rcm)
+    if kind == INSTR_JAC:
+        J = _instrument_jac_item(G, 0, P, ttol, rcm)
+    elif kind == INSTR_INV:
+        J = _instrument_inv_item(G, 0, P, ttol, rcm)
+    elif kind == TIP_JAC:
+        J = _tip_jac_item(G, 0, P, ttol, rcm)
+    else:
+        J = _tip_inv_item(G, 0, P, ttol, rcm)
     for k in range(9):
         out[k // 3, k % 3] = J[k]
