@@ -263,7 +263,7 @@ class ControlLoop:
         -------
         ndarray, shape (3, 3)
         """
-        return self._jacobian(q, mode, _jk.TIP_JAC, False, self._jtip)
+        return self._jacobian(q, mode, False, False, self._jtip)
 
     def tool_tip_inverse_jacobian(self, q: ArrayLike, mode: int = 1) -> FloatArray:
         """The closed-form ``d q / d tip_e`` at actuator values ``q``, shape (3, 3).
@@ -285,16 +285,16 @@ class ControlLoop:
         ndarray, shape (3, 3)
             NaN or inf entries on the singular set (never raises for a pose).
         """
-        return self._jacobian(q, mode, _jk.TIP_INV, True, self._jout)
+        return self._jacobian(q, mode, True, True, self._jout)
 
-    def _jacobian(self, q: ArrayLike, mode: int, kind: int, rcm: bool, out: FloatArray
+    def _jacobian(self, q: ArrayLike, mode: int, inverse: bool, rcm: bool, out: FloatArray
                   ) -> FloatArray:
-        """The one-pose Jacobian ``kind`` of the compiled kernel into ``out``."""
+        """The one-pose tool-tip Jacobian (``inverse``: its inverse) of the kernel into ``out``."""
         if mode != 1 and mode != -1:
             raise ValueError(f"mode: expected 1 or -1, got {mode!r}")
         try:
             q1, q2, q3 = float(q[0]), float(q[1]), float(q[2])  # type: ignore[index,arg-type]
         except (TypeError, ValueError, LookupError, OverflowError):
             raise ValueError(f"q: expected 3 numbers (q1, q2, q3) in m, got {q!r}") from None
-        _jk.robot_one(q1, q2, q3, float(mode), self._jG, self._P, TANGENT_TOL, kind, rcm, out)
+        _jk.tip_one(q1, q2, q3, float(mode), self._jG, self._P, TANGENT_TOL, inverse, rcm, out)
         return out

@@ -38,7 +38,7 @@ from ._fk_kernels import FLAG_NONRIGID, FLAG_T_NONFINITE
 from ._scalar import atan2, finite_sum, hypot, sincos
 
 __all__ = ["PAR_JAC", "PAR_INV", "PAR_TWIST", "INSTR_JAC", "INSTR_INV", "TIP_JAC", "TIP_INV",
-           "parallel_kernel", "robot_kernel", "robot_one", "frame_rows", "NG", "CHUNK",
+           "parallel_kernel", "robot_kernel", "tip_one", "frame_rows", "NG", "CHUNK",
            "FLAG_NONRIGID", "FLAG_T_NONFINITE"]
 
 #: Kinds of :func:`parallel_kernel`: ``d O_s / d q``, ``d q / d O_s``, the (6, 3) twist Jacobian.
@@ -450,7 +450,7 @@ def robot_kernel(q, m, T, P, ttol, kind, rcm, check, rot_tol, out):
 
 
 def frame_rows(T: np.ndarray) -> np.ndarray:
-    """The scratch of :func:`robot_one` with the RCM frame ``T`` (4, 4) in its rows."""
+    """The scratch of :func:`tip_one` with the RCM frame ``T`` (4, 4) in its rows."""
     G = np.zeros(NG * CHUNK)
     for r in range(3):
         for c in range(3):
@@ -462,22 +462,20 @@ def frame_rows(T: np.ndarray) -> np.ndarray:
 
 
 @njit(**_OPTS)
-def robot_one(q1, q2, q3, m, G, P, ttol, kind, rcm, out):
-    """One item of :func:`robot_kernel` into ``out`` (3, 3), the frame already in ``G``.
+def tip_one(q1, q2, q3, m, G, P, ttol, inverse, rcm, out):
+    """One item of :func:`robot_kernel`'s ``TIP_JAC`` or (``inverse``) ``TIP_INV`` into ``out``.
 
-    ``G`` is :func:`frame_rows` of the RCM frame (checked by the caller); no allocation.
+    ``out`` is (3, 3); ``G`` is :func:`frame_rows` of the RCM frame (checked by the caller);
+    no allocation. The tool-tip kinds alone: those of the control loop
+    (:class:`athenakin.fast.ControlLoop`).
     """
     G[_GQ * CHUNK] = q1
     G[(_GQ + 1) * CHUNK] = q2
     G[(_GQ + 2) * CHUNK] = q3
     G[_GM * CHUNK] = m
-    if kind == INSTR_JAC:
-        J = _instrument_jac_item(G, 0, P, ttol, rcm)
-    elif kind == INSTR_INV:
-        J = _instrument_inv_item(G, 0, P, ttol, rcm)
-    elif kind == TIP_JAC:
-        J = _tip_jac_item(G, 0, P, ttol, rcm)
-    else:
+    if inverse:
         J = _tip_inv_item(G, 0, P, ttol, rcm)
+    else:
+        J = _tip_jac_item(G, 0, P, ttol, rcm)
     for k in range(9):
         out[k // 3, k % 3] = J[k]
