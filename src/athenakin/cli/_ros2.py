@@ -74,8 +74,12 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     b = own.add_parser("build-msgs", help="build CRTK's crtk_msgs with the rosidl wheels",
                        description="Build and install crtk_msgs (OperatingState, "
                                    "StringStamped) into this Python's prefix: needs the extra "
-                                   "'ros2-msgs', CMake and a C compiler (about 30 s).")
+                                   "'ros2-msgs', CMake and a C compiler (about 30 s). "
+                                   "Nothing to do where the installed one was built from "
+                                   "the same sources and generators (--force rebuilds).")
     b.add_argument("--prefix", help="install prefix (default: this Python's)")
+    b.add_argument("--force", action="store_true",
+                   help="build even where the installed crtk_msgs is up to date")
     b.add_argument("--verbose", action="store_true", help="show CMake's output")
     b.set_defaults(func=run_build)
 
@@ -280,8 +284,12 @@ def run_record(args: argparse.Namespace) -> int:
 
 def run_build(args: argparse.Namespace) -> int:
     """Execute ``ros2 build-msgs``."""
-    from ..ros2 import build_crtk_msgs
+    from ..ros2 import build_crtk_msgs, crtk_msgs_current
 
+    if not args.force and crtk_msgs_current(args.prefix):
+        print("ros2 build-msgs: the installed crtk_msgs is up to date (built from these "
+              "sources and generators; --force rebuilds)")
+        return 0
     try:
         path = build_crtk_msgs(prefix=args.prefix, verbose=args.verbose)
     except RuntimeError as exc:     # CMake or the compiler failed: the build's, not a bug

@@ -18,10 +18,11 @@ installation). Topics, QoS, the executor design and the watchdog: docs/ros2.md.
   library and Foxglove read.
 * :func:`build_crtk_msgs`: CRTK's ``crtk_msgs`` built with the rosidl generator wheels
   (``athenakin ros2 build-msgs``); without it the nodes use ``std_msgs`` stand-ins.
+  :func:`crtk_msgs_current` tells whether the installed one is up to date.
 """
 
 from ._arm_node import ARM_TOPICS, STATE_COMMANDS, ArmNode
-from ._build import CRTK_MSGS_DIR, build_crtk_msgs
+from ._build import CRTK_MSGS_DIR, build_crtk_msgs, crtk_msgs_current
 from ._record import CHUNK_BYTES, LATCHED_TOPICS, RecorderNode, session_topics
 from ._runtime import CrtkTypes, RosContext, crtk_types
 from ._teleop_node import DVRK_PRESET, MASTER_PRESETS, TELEOP_TOPICS, TeleopNode
@@ -41,6 +42,7 @@ __all__ = [
     "RosContext",
     "TeleopNode",
     "build_crtk_msgs",
+    "crtk_msgs_current",
     "crtk_types",
     "session_topics",
 ]

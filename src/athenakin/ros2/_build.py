@@ -5,11 +5,15 @@ No wheel of ``crtk_msgs`` exists; its two messages the nodes use
 in ``crtk_msgs/`` beside this file, an ament package that :func:`build_crtk_msgs`
 configures with CMake, compiles and installs into this Python's prefix (the
 wheels' own prefix: ``lib/``, ``share/``, ``site-packages``), where rclpy finds
-it like any interface package of the wheels.
+it like any interface package of the wheels. The build records what it was made from
+(:func:`build_key`) in the installed package; :func:`crtk_msgs_current` compares, so that
+``athenakin ros2 build-msgs`` run again on an unchanged environment does nothing.
 """
 
 from __future__ import annotations
 
+import hashlib
+import importlib.metadata
 import os
 import shutil
 import subprocess
@@ -17,12 +21,76 @@ import sys
 import tempfile
 from pathlib import Path
 
-__all__ = ["build_crtk_msgs", "CRTK_MSGS_DIR", "BUILD_TOOLS"]
+__all__ = ["build_crtk_msgs", "crtk_msgs_current", "build_key", "installed_path",
+           "CRTK_MSGS_DIR", "BUILD_TOOLS", "STAMP_NAME"]
 
 #: The ament package of CRTK's messages shipped with athenakin.
 CRTK_MSGS_DIR = Path(__file__).resolve().parent / "crtk_msgs"
 #: Programs the build runs (a C and C++ compiler are found by CMake).
 BUILD_TOOLS = ("cmake",)
+#: The file, in the installed Python package's folder, holding the :func:`build_key` of
+#: the build that installed it.
+STAMP_NAME = ".athenakin-build"
+
+
+def build_key(source: str | os.PathLike[str] = CRTK_MSGS_DIR) -> str:
+    """What a build of ``crtk_msgs`` is made from, as one SHA-256 (hex).
+
+    The package's files (names and contents), this Python's version and executable, and
+    the name and version of every installed distribution named ``ros-*`` (the rosidl
+    generators, ament and the interfaces that the messages use).
+
+    Parameters
+    ----------
+    source : path, optional
+        The ament package (default :data:`CRTK_MSGS_DIR`).
+
+    Returns
+    -------
+    str
+        64 hex digits.
+    """
+    root = Path(source)
+    h = hashlib.sha256()
+    for path in sorted(p for p in root.rglob("*")
+                       if p.is_file() and "__pycache__" not in p.relative_to(root).parts):
+        h.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    h.update(f"{sys.version}\0{sys.executable}\0".encode())
+    ros = sorted({f"{d.metadata['Name']}=={d.version}" for d in importlib.metadata.distributions()
+                  if (d.metadata["Name"] or "").lower().startswith("ros-")})
+    h.update("\n".join(ros).encode())
+    return h.hexdigest()
+
+
+def installed_path(prefix: str | os.PathLike[str] | None = None) -> Path:
+    """The folder of the Python package ``crtk_msgs`` under ``prefix`` (default ``sys.prefix``)."""
+    root = Path(sys.prefix if prefix is None else prefix).resolve()
+    py = f"python{sys.version_info.major}.{sys.version_info.minor}"
+    return root / "lib" / py / "site-packages" / "crtk_msgs"
+
+
+def crtk_msgs_current(prefix: str | os.PathLike[str] | None = None) -> bool:
+    """Whether ``crtk_msgs`` under ``prefix`` is built from what is here now.
+
+    True where :func:`build_crtk_msgs` installed it and recorded today's :func:`build_key`.
+
+    Parameters
+    ----------
+    prefix : path, optional
+        Install prefix (default ``sys.prefix``).
+
+    Returns
+    -------
+    bool
+        False where it is not installed, was installed otherwise, or from other sources
+        or other generator versions.
+    """
+    path = installed_path(prefix)
+    try:
+        recorded = (path / STAMP_NAME).read_text(encoding="ascii").strip()
+    except (OSError, UnicodeDecodeError):
+        return False
+    return (path / "__init__.py").is_file() and recorded == build_key()
 
 
 def build_crtk_msgs(*, prefix: str | os.PathLike[str] | None = None,
@@ -48,7 +116,8 @@ def build_crtk_msgs(*, prefix: str | os.PathLike[str] | None = None,
     Returns
     -------
     Path
-        The installed Python package's folder (``.../site-packages/crtk_msgs``).
+        The installed Python package's folder (``.../site-packages/crtk_msgs``), with
+        the build's :func:`build_key` in its :data:`STAMP_NAME`.
 
     Raises
     ------
@@ -60,6 +129,7 @@ def build_crtk_msgs(*, prefix: str | os.PathLike[str] | None = None,
     if isinstance(jobs, bool) or not isinstance(jobs, int) or not 1 <= jobs <= 64:
         raise ValueError(f"jobs: expected an integer from 1 to 64, got {jobs!r}")
     root = Path(sys.prefix if prefix is None else prefix).resolve()
+    key = build_key()
     cmake = shutil.which("cmake")
     if cmake is None:
         raise FileNotFoundError("cmake: not found on PATH (install CMake >= 3.16, e.g. "
@@ -101,5 +171,6 @@ def build_crtk_msgs(*, prefix: str | os.PathLike[str] | None = None,
     finally:
         if tmp is not None:
             tmp.cleanup()
-    py = f"python{sys.version_info.major}.{sys.version_info.minor}"
-    return root / "lib" / py / "site-packages" / "crtk_msgs"
+    path = installed_path(root)
+    (path / STAMP_NAME).write_text(key + "\n", encoding="ascii")
+    return path
