@@ -333,11 +333,14 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
         from ._kinematics import slot_signs
 
         Q = np.empty((a["q"].shape[0], 3))
+        # the mass model's arrays are read-only: as kernel arrays, the per-state sum gets
+        # the types that InverseDynamicsLoop gives it (one compiled copy)
+        m = prep.masses
         kernel(_kernel_array(a["q"]), _kernel_array(a["qd"]),
                _kernel_array(a["qdd"]), _compact(prep.T),
                prep.design.lengths, float(prep.design.tool_length),
-               np.array(slot_signs(prep.slot)), prep.masses.mass, prep.masses.com,
-               prep.masses.inertia, _compact(a["gravity"]), _compact(a["tip_force"]), Q)
+               np.array(slot_signs(prep.slot)), _kernel_array(m.mass), _kernel_array(m.com),
+               _kernel_array(m.inertia), _compact(a["gravity"]), _compact(a["tip_force"]), Q)
         prep = _singular(prep, errors, Q)
         return _finish(Q, prep, (3,))
 
