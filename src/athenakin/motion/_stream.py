@@ -147,7 +147,8 @@ def track_batch(tr: Tracker, q: FloatArray) -> dict[str, Any]:
     dict of str -> ndarray
         The fields of :class:`TrackLog` and ``sample``, one row per reading.
     """
-    q = np.ascontiguousarray(q, dtype=float).reshape(-1, 3)
+    # C-contiguous and writable (a read-only input copied): the kernel's one specialization
+    q = np.require(q, float, ("C", "W")).reshape(-1, 3)
     n = len(q)
     if tr.backend != "numba":
         poses = [tr.update(row) for row in q.tolist()]
