@@ -122,13 +122,14 @@ def _fast_forward(design: Design, T: FloatArray, masses: MassModel, slot: int, g
     qdd_in = np.zeros((4, 3))
     qdd_in[1:] = np.eye(3)
     out = np.empty((4, 3))
+    mass, com, inertia = (_kernel_array(x) for x in (masses.mass, masses.com, masses.inertia))
 
     def qdd(qq: FloatArray, vv: FloatArray, tau: FloatArray) -> FloatArray:
         qs = _kernel_array(np.broadcast_to(qq, (4, 3)))
         vs = np.zeros((4, 3))
         vs[0] = vv
         kernel(qs, vs, qdd_in, Tc, design.lengths, float(design.tool_length), signs,
-               masses.mass, masses.com, masses.inertia, grav, ftip, out)
+               mass, com, inertia, grav, ftip, out)
         if not np.all(np.isfinite(out)):
             return np.full(3, np.nan)
         M = out[1:].T
