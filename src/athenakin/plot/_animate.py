@@ -288,6 +288,8 @@ def render_frames(q: ArrayLike, T_b_e: ArrayLike | None = None, design: Design |
     for k in _progress(range(n), progress, desc="rendering", unit="frame"):
         check_interrupt()    # a Ctrl-C lost inside matplotlib's callbacks (_interrupt.py)
         ax.cla()
+        # the box is fixed (limits): no autoscale after each of the frame's ~60 lines
+        ax.set_autoscale_on(False)
         frac = k / max(n - 1, 1)
         draw_motion_frame(ax, geoms, k, limits=(lo, hi),
                           view=(view[0], view[1] + orbit * frac), trace=trace, **kwargs)
