@@ -24,7 +24,7 @@ in the same chunks, vectorised too.
 """
 
 # numba's cache does not follow the kernels this module inlines from _fk_kernels, _scalar
-# and _mechanism_formulas: a change there must change this file too (revision 5).
+# and _mechanism_formulas: a change there must change this file too (revision 6).
 
 from __future__ import annotations
 
@@ -348,17 +348,30 @@ def _pick(a, b, first):
             a[6] if first else b[6], a[7] if first else b[7], a[8] if first else b[8])
 
 
+@njit(**_INLINE)
+def _item_line(G, ii, P, ttol, rotate):
+    """An item's module state, RCM frame and instrument line: what the four kinds share.
+
+    Returns ``q3``; the module's state (:func:`_module`: ``h, x_M, r1, s3, m_y, y, z, ey,
+    ez, D``); the frame's rotation ``Rt`` (row-major 9-tuple); ``R``, which is ``Rt`` where
+    ``rotate``, else the identity (multiplied as the reference does); and the line ``d, p,
+    d_f`` of :func:`_line` in ``R``.
+    """
+    q1, q2, q3, m = _q(G, ii)
+    st = _module(q1, q2, q3, m, P, ttol)
+    Rt, c = _frame(G, ii)
+    R = _pick(Rt, _EYE, rotate)
+    d, p, df = _line(R, c, st[1], st[2], st[7], st[8], P[3])
+    return q3, st, Rt, R, d, p, df
+
+
 # One function per kind: each inlined copy in a kernel's item loop carries only its own
 # kind's arithmetic (numba's inlining copies the callee's IR at every call site).
 @njit(**_INLINE)
 def _instrument_jac_item(G, ii, P, ttol, rcm):
     """``INSTR_JAC`` of one item (straight-line code)."""
-    q1, q2, q3, m = _q(G, ii)
-    h, xm, r1, s3, m_y, _, _, ey, ez, D = _module(q1, q2, q3, m, P, ttol)
-    Rt, c = _frame(G, ii)
-    # R_f: the frame's rotation, or the identity (multiplied as the reference does)
-    R = _pick(Rt, _EYE, rcm)
-    d, p, df = _line(R, c, xm, r1, ey, ez, P[3])
+    q3, st, _, R, d, p, df = _item_line(G, ii, P, ttol, rcm)
+    h, _, r1, s3, m_y, _, _, ey, ez, D = st
     Jp, _ = _pjac_of(h, r1, s3, m_y, ey, ez, D, q3, P[3], P[4])
     return _instrument_jac(d, p, R, df, Jp)
 
@@ -366,21 +379,16 @@ def _instrument_jac_item(G, ii, P, ttol, rcm):
 @njit(**_INLINE)
 def _instrument_inv_item(G, ii, P, ttol, rcm):
     """``INSTR_INV`` of one item (straight-line code)."""
-    q1, q2, q3, m = _q(G, ii)
-    h, xm, r1, s3, m_y, y, z, ey, ez, _ = _module(q1, q2, q3, m, P, ttol)
-    Rt, c = _frame(G, ii)
-    R = _pick(Rt, _EYE, rcm)
-    d, p, df = _line(R, c, xm, r1, ey, ez, P[3])
+    q3, st, _, R, d, p, df = _item_line(G, ii, P, ttol, rcm)
+    h, _, r1, s3, m_y, y, z, ey, ez, _ = st
     return _instrument_inv(d, p, R, df, _pinv(h, r1, s3, m_y, y, z, ey, ez, q3, P[3], P[4]))
 
 
 @njit(**_INLINE)
 def _tip_jac_item(G, ii, P, ttol, rcm):
     """``TIP_JAC`` of one item (straight-line code): ``R^T N J_par`` or ``N J_par``."""
-    q1, q2, q3, m = _q(G, ii)
-    h, xm, r1, s3, m_y, _, _, ey, ez, D = _module(q1, q2, q3, m, P, ttol)
-    Rt, c = _frame(G, ii)
-    d, p, _ = _line(_EYE, c, xm, r1, ey, ez, P[3])
+    q3, st, Rt, _, d, p, _ = _item_line(G, ii, P, ttol, False)
+    h, _, r1, s3, m_y, _, _, ey, ez, D = st
     Jp, _ = _pjac_of(h, r1, s3, m_y, ey, ez, D, q3, P[3], P[4])
     J = _mm(_tip(d, p, P[12], False), Jp)
     return _pick(_mm(_tr(Rt), J), J, rcm)
@@ -389,10 +397,8 @@ def _tip_jac_item(G, ii, P, ttol, rcm):
 @njit(**_INLINE)
 def _tip_inv_item(G, ii, P, ttol, rcm):
     """``TIP_INV`` of one item (straight-line code): ``J_par^-1 N^-1 R`` or without ``R``."""
-    q1, q2, q3, m = _q(G, ii)
-    h, xm, r1, s3, m_y, y, z, ey, ez, _ = _module(q1, q2, q3, m, P, ttol)
-    Rt, c = _frame(G, ii)
-    d, p, _ = _line(_EYE, c, xm, r1, ey, ez, P[3])
+    q3, st, Rt, _, d, p, _ = _item_line(G, ii, P, ttol, False)
+    h, _, r1, s3, m_y, y, z, ey, ez, _ = st
     J = _mm(_pinv(h, r1, s3, m_y, y, z, ey, ez, q3, P[3], P[4]), _tip(d, p, P[12], True))
     return _pick(_mm(J, Rt), J, rcm)
 
