@@ -93,6 +93,15 @@ def crtk_msgs_current(prefix: str | os.PathLike[str] | None = None) -> bool:
     return (path / "__init__.py").is_file() and recorded == build_key()
 
 
+def _build_env() -> dict[str, str]:
+    """The environment of the build: this Python's tools first, its prefix for ament and CMake."""
+    env = dict(os.environ)
+    env["PATH"] = os.pathsep.join([str(Path(sys.executable).parent), env.get("PATH", "")])
+    for var in ("AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH"):
+        env[var] = os.pathsep.join(p for p in (sys.prefix, env.get(var, "")) if p)
+    return env
+
+
 def build_crtk_msgs(*, prefix: str | os.PathLike[str] | None = None,
                     build_dir: str | os.PathLike[str] | None = None, jobs: int = 2,
                     verbose: bool = False) -> Path:
@@ -139,12 +148,7 @@ def build_crtk_msgs(*, prefix: str | os.PathLike[str] | None = None,
         if not (share / pkg).is_dir():
             raise FileNotFoundError(f"{pkg}: not installed in {sys.prefix} (install the extra "
                                     f"with  pip install 'athenakin[ros2,ros2-msgs]')")
-    env = dict(os.environ)
-    env["PATH"] = os.pathsep.join([str(Path(sys.executable).parent), env.get("PATH", "")])
-    env["AMENT_PREFIX_PATH"] = os.pathsep.join(
-        p for p in (sys.prefix, env.get("AMENT_PREFIX_PATH", "")) if p)
-    env["CMAKE_PREFIX_PATH"] = os.pathsep.join(
-        p for p in (sys.prefix, env.get("CMAKE_PREFIX_PATH", "")) if p)
+    env = _build_env()
     tmp = None
     if build_dir is None:
         tmp = tempfile.TemporaryDirectory(prefix="crtk_msgs_build_")
