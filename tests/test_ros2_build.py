@@ -92,3 +92,12 @@ def test_the_cli_builds_where_not_up_to_date(tmp_path, extra):
                        timeout=300, check=False)
     assert r.returncode == 1, (r.stdout, r.stderr)
     assert "cmake: not found on PATH" in r.stderr
+
+
+@pytest.mark.parametrize("bad", [3, None, b"/tmp"])
+def test_a_prefix_or_source_that_is_no_path_is_named(bad):
+    if bad is not None:
+        with pytest.raises(TypeError, match=r"\bprefix\b"):
+            crtk_msgs_current(bad)
+    with pytest.raises(TypeError, match=r"\bsource\b"):
+        build_key(bad)

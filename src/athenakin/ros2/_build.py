@@ -21,6 +21,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from .._validation import check_path
+
 __all__ = ["build_crtk_msgs", "crtk_msgs_current", "build_key", "installed_path",
            "CRTK_MSGS_DIR", "BUILD_TOOLS", "STAMP_NAME"]
 
@@ -49,8 +51,13 @@ def build_key(source: str | os.PathLike[str] = CRTK_MSGS_DIR) -> str:
     -------
     str
         64 hex digits.
+
+    Raises
+    ------
+    TypeError
+        ``source`` is not a path (str or ``os.PathLike``).
     """
-    root = Path(source)
+    root = check_path(source, "source")
     h = hashlib.sha256()
     for path in sorted(p for p in root.rglob("*")
                        if p.is_file() and "__pycache__" not in p.relative_to(root).parts):
@@ -62,9 +69,20 @@ def build_key(source: str | os.PathLike[str] = CRTK_MSGS_DIR) -> str:
     return h.hexdigest()
 
 
+def _prefix(prefix: object) -> Path:
+    """The install prefix: ``prefix`` checked (a path), or ``sys.prefix``; resolved."""
+    return (Path(sys.prefix) if prefix is None else check_path(prefix, "prefix")).resolve()
+
+
 def installed_path(prefix: str | os.PathLike[str] | None = None) -> Path:
-    """The folder of the Python package ``crtk_msgs`` under ``prefix`` (default ``sys.prefix``)."""
-    root = Path(sys.prefix if prefix is None else prefix).resolve()
+    """The folder of the Python package ``crtk_msgs`` under ``prefix`` (default ``sys.prefix``).
+
+    Raises
+    ------
+    TypeError
+        ``prefix`` is not a path (str or ``os.PathLike``).
+    """
+    root = _prefix(prefix)
     py = f"python{sys.version_info.major}.{sys.version_info.minor}"
     return root / "lib" / py / "site-packages" / "crtk_msgs"
 
@@ -84,6 +102,11 @@ def crtk_msgs_current(prefix: str | os.PathLike[str] | None = None) -> bool:
     bool
         False where it is not installed, was installed otherwise, or from other sources
         or other generator versions.
+
+    Raises
+    ------
+    TypeError
+        ``prefix`` is not a path (str or ``os.PathLike``).
     """
     path = installed_path(prefix)
     try:
@@ -130,6 +153,8 @@ def build_crtk_msgs(*, prefix: str | os.PathLike[str] | None = None,
 
     Raises
     ------
+    TypeError
+        ``prefix`` is not a path (str or ``os.PathLike``).
     FileNotFoundError
         CMake, or a package of the extra ``ros2-msgs``, is missing (named).
     RuntimeError
@@ -137,7 +162,7 @@ def build_crtk_msgs(*, prefix: str | os.PathLike[str] | None = None,
     """
     if isinstance(jobs, bool) or not isinstance(jobs, int) or not 1 <= jobs <= 64:
         raise ValueError(f"jobs: expected an integer from 1 to 64, got {jobs!r}")
-    root = Path(sys.prefix if prefix is None else prefix).resolve()
+    root = _prefix(prefix)
     key = build_key()
     cmake = shutil.which("cmake")
     if cmake is None:
