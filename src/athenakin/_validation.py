@@ -525,6 +525,15 @@ def check_path(x: object, name: str = "path") -> Path:
     return p
 
 
+def kernel_array(x: np.ndarray) -> np.ndarray:
+    """``x`` as a C-contiguous, writable float64 array (a copy only where needed).
+
+    Numba compiles one specialization per array type, read-only arrays included: every
+    array a compiled kernel takes through this has the same type (one compile).
+    """
+    return np.require(x, np.float64, ("C", "W"))
+
+
 #: Values of the ``errors=`` keyword of the batch functions.
 ERROR_POLICIES = ("auto", "raise", "flag")
 

@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 from .._backend import resolve_backend
 from .._dispatch import forward_kinematics
 from .._typing import BoolArray, FloatArray, Int8Array
-from .._validation import broadcast_batch, check_array, check_choice, check_slot
+from .._validation import broadcast_batch, check_array, check_choice, check_slot, kernel_array
 from ..design import Design, resolve_design
 from ..errors import InvalidInputError, OutOfWorkspaceError, Reason, SingularConfigurationError
 from ..robot._setup import resolve_rcm_frame
@@ -336,11 +336,11 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
         # the mass model's arrays are read-only: as kernel arrays, the per-state sum gets
         # the types that InverseDynamicsLoop gives it (one compiled copy)
         m = prep.masses
-        kernel(_kernel_array(a["q"]), _kernel_array(a["qd"]),
-               _kernel_array(a["qdd"]), _compact(prep.T),
+        kernel(kernel_array(a["q"]), kernel_array(a["qd"]),
+               kernel_array(a["qdd"]), _compact(prep.T),
                prep.design.lengths, float(prep.design.tool_length),
-               np.array(slot_signs(prep.slot)), _kernel_array(m.mass), _kernel_array(m.com),
-               _kernel_array(m.inertia), _compact(a["gravity"]), _compact(a["tip_force"]), Q)
+               np.array(slot_signs(prep.slot)), kernel_array(m.mass), kernel_array(m.com),
+               kernel_array(m.inertia), _compact(a["gravity"]), _compact(a["tip_force"]), Q)
         prep = _singular(prep, errors, Q)
         return _finish(Q, prep, (3,))
 
@@ -355,20 +355,11 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
     return _finish(Q[:, 1:N_Q_DIRECTIONS], prep, (3,))
 
 
-def _kernel_array(x: FloatArray) -> FloatArray:
-    """``x`` as a C-contiguous, writable float64 array (a copy only where needed).
-
-    Numba compiles one specialization per array type, read-only arrays included: with
-    this, every call of the kernel has the same types (one compile).
-    """
-    return np.require(x, np.float64, ("C", "W"))
-
-
 def _compact(x: FloatArray) -> FloatArray:
     """A broadcast (stride-0) batch as one row, else contiguous: the kernel broadcasts."""
     if x.shape[0] > 1 and x.strides[0] == 0:
-        return _kernel_array(x[:1])
-    return _kernel_array(x)
+        return kernel_array(x[:1])
+    return kernel_array(x)
 
 
 def _kernel(backend: str) -> Callable[..., None] | None:

@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._typing import FloatArray
-from .._validation import check_array, check_choice, check_scalar, check_slot
+from .._validation import check_array, check_choice, check_scalar, check_slot, kernel_array
 from ..design import Design, resolve_design
 from ..errors import (
     InvalidInputError,
@@ -106,7 +106,7 @@ def _fast_forward(design: Design, T: FloatArray, masses: MassModel, slot: int, g
     Row 0 gives ``h = tau(q, qd, 0)``, rows 1-3 (``qd = 0``, no gravity, ``qdd = e_j``)
     the columns of ``M``; then ``qdd = M^-1 (tau - h)``.
     """
-    from ._api import _kernel, _kernel_array
+    from ._api import _kernel
     from ._kinematics import slot_signs
 
     kernel = _kernel(backend)
@@ -118,14 +118,14 @@ def _fast_forward(design: Design, T: FloatArray, masses: MassModel, slot: int, g
     ftip = np.zeros((4, 3))
     if f_tip is not None:
         ftip[0] = f_tip
-    Tc = _kernel_array(T[None])
+    Tc = kernel_array(T[None])
     qdd_in = np.zeros((4, 3))
     qdd_in[1:] = np.eye(3)
     out = np.empty((4, 3))
-    mass, com, inertia = (_kernel_array(x) for x in (masses.mass, masses.com, masses.inertia))
+    mass, com, inertia = (kernel_array(x) for x in (masses.mass, masses.com, masses.inertia))
 
     def qdd(qq: FloatArray, vv: FloatArray, tau: FloatArray) -> FloatArray:
-        qs = _kernel_array(np.broadcast_to(qq, (4, 3)))
+        qs = kernel_array(np.broadcast_to(qq, (4, 3)))
         vs = np.zeros((4, 3))
         vs[0] = vv
         kernel(qs, vs, qdd_in, Tc, design.lengths, float(design.tool_length), signs,

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike
 
 from .._robot_model import Robot, resolve_robot
 from .._typing import BoolArray, FloatArray, IntArray
-from .._validation import check_array
+from .._validation import check_array, kernel_array
 from ..chain import DEGENERATE_TOL, P_ZERO_TOL
 from ..design import Design
 from ..errors import InvalidInputError
@@ -147,8 +147,7 @@ def track_batch(tr: Tracker, q: FloatArray) -> dict[str, Any]:
     dict of str -> ndarray
         The fields of :class:`TrackLog` and ``sample``, one row per reading.
     """
-    # C-contiguous and writable (a read-only input copied): the kernel's one specialization
-    q = np.require(q, float, ("C", "W")).reshape(-1, 3)
+    q = kernel_array(q).reshape(-1, 3)     # a read-only stream copied: one specialization
     n = len(q)
     if tr.backend != "numba":
         poses = [tr.update(row) for row in q.tolist()]
