@@ -1,9 +1,11 @@
 """The app's pure layer (set-up, forward view, inverse step, playback, scene, read-outs) and
 the viser binding in process (bad inputs keep it running). The browser: test_app_browser.py."""
 
+import asyncio
 import dataclasses
 import importlib.util
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -633,7 +635,6 @@ def test_a_p_below_zero_slot_keeps_its_branch_across_tabs_in_process():
     """The issue's state bug: pick slot 15 (mode -1, p < 0) in the Forward tab, then step
     the azimuth in the Inverse tab: the sliders agree with the read-outs, and the IK stays
     on slot 15; the title names the design; solids are drawn and updated."""
-    from types import SimpleNamespace
 
     from athenakin.app import AthenaApp, Solid
 
@@ -671,15 +672,49 @@ def test_a_p_below_zero_slot_keeps_its_branch_across_tabs_in_process():
         np.testing.assert_allclose(mesh.vertices[0], r2.tip_b, atol=1e-6)
         # the tip grip: a drag in the view plane moves the tip by the pointer's motion
         tip0 = r2.tip_b.copy()
-        ev = SimpleNamespace(phase="start", start_position=tuple(tip0),
-                             end_position=tuple(tip0))
-        app._on_grip(ev)
-        for ph in ("update", "end"):
-            app._on_grip(SimpleNamespace(phase=ph, start_position=tuple(tip0),
-                                         end_position=tuple(tip0 + [0.0, 0.0, 0.004])))
+        _drag_grip(app, tip0, [tip0, tip0 + [0.0, 0.0, 0.004], tip0 + [0.0, 0.0, 0.004]])
         np.testing.assert_allclose(app.view.readouts.tip_b, tip0 + [0, 0, 0.004], atol=1e-9)
         assert app.view.readouts.slot == 15
         np.testing.assert_allclose(app._grip.position, app.view.readouts.tip_b, atol=1e-6)
+    finally:
+        app.stop()
+
+
+def _drag_grip(app, grab, pointer):
+    """One drag of the tip grip as viser delivers it: ``start`` at ``pointer[0]``, the
+    updates, ``end`` at ``pointer[-1]``, in order on one event loop and without waiting
+    for the moves; returns once the grip's worker has applied them."""
+    phases = ["start"] + ["update"] * (len(pointer) - 2) + ["end"]
+
+    async def send():
+        for phase, p in zip(phases, pointer, strict=True):
+            await app._on_grip(SimpleNamespace(phase=phase, start_position=tuple(grab),
+                                               end_position=tuple(p)))
+
+    asyncio.run(send())
+    app._grip_worker.submit(lambda: None).result()       # one worker: the moves are done
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_a_burst_of_grip_events_moves_the_tip_by_the_pointer_once():
+    """A drag whose events reach the server faster than the IK runs (a loaded machine):
+    the tip ends at the grab's tip plus the pointer's travel, not twice it (a late update
+    handled after the end started a second grab from the moved tip), and the grip is
+    placed on the tip."""
+    from athenakin.app import AthenaApp
+
+    app = AthenaApp(port=0, backend="numpy")
+    try:
+        tip0 = app.view.readouts.tip_b.copy()
+        travel = np.array([0.0, 0.006, -0.004])
+        pointer = [tip0 + s * travel for s in np.linspace(0.0, 1.0, 25)]
+        _drag_grip(app, tip0, pointer)
+        np.testing.assert_allclose(app.view.readouts.tip_b, tip0 + travel, rtol=0,
+                                   atol=1e-9)
+        np.testing.assert_allclose(app._grip.position, tip0 + travel, rtol=0, atol=1e-6)
+        assert not app._dragging and app._grab is None
+        _drag_grip(app, tip0 + travel, [tip0 + travel, tip0])       # and back: a new grab
+        np.testing.assert_allclose(app.view.readouts.tip_b, tip0, rtol=0, atol=1e-9)
     finally:
         app.stop()
 

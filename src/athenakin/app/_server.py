@@ -23,7 +23,9 @@ import math
 import sys
 import threading
 import time
+import traceback
 from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -190,7 +192,10 @@ class AthenaApp:
             self.q, self.slot = start
         self.view: AppView | None = None
         self._dragging = False
-        self._grab: tuple[FloatArray, FloatArray] | None = None
+        self._grab: tuple[FloatArray, FloatArray] | None = None     # the grip's gesture
+        self._grip_lock = threading.Lock()
+        self._grip_worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="grip")
+        self._grip_target: tuple[FloatArray, bool] | None = None    # newest, and if the end
         self.page = PageWriter(self.server, solids_of=solids)   # the scene nodes it sent
         self._build_gui(plan)
         self.page.send_script(self.title)
@@ -321,26 +326,45 @@ class AthenaApp:
         if phase == "end":
             self._place_handle()
 
-    def _on_grip(self, event: Any) -> None:
-        """A drag of the tip grip: the tip follows the pointer in the view plane."""
-        phase = event.phase
-        with self._lock:
-            v = self.view
-            if v is None or v.readouts is None:
-                return
-            if phase == "start" or self._grab is None:
-                self._dragging = True
-                self._grab = (np.asarray(event.start_position, dtype=float),
-                              v.readouts.tip_b.copy())
-            grab, tip0 = self._grab
-            if phase == "end":
-                self._dragging = False
-                self._grab = None
+    async def _on_grip(self, event: Any) -> None:
+        """A drag of the tip grip: the tip follows the pointer in the view plane.
+
+        An ``async`` callback runs on viser's event loop, in the order the page sent the
+        events (viser's note on stateful drags): the gesture's grab is never read before
+        its start nor after its end. The IK and the scene run on a worker thread
+        (:meth:`_apply_grip`, one thread: the moves run in the events' order), which takes
+        the newest target, so a slow IK drops the stale ones and the last one applied is
+        the end's.
+        """
+        v = self.view
+        if v is None or v.readouts is None:
+            return
+        if event.phase == "start" or self._grab is None:
+            self._dragging = True
+            self._grab = (np.asarray(event.start_position, dtype=float),
+                          v.readouts.tip_b.copy())
+        grab, tip0 = self._grab
         target_b = tip0 + (np.asarray(event.end_position, dtype=float) - grab)
-        T = self.setup.T_b_e
-        self._move_tip(T[:3, :3].T @ (target_b - T[:3, 3]), snap_angles=False)
-        if phase == "end":
-            self._place_handle()
+        last = event.phase == "end"
+        if last:
+            self._grab = None
+        with self._grip_lock:
+            self._grip_target = (target_b, last)
+        self._grip_worker.submit(self._apply_grip).add_done_callback(_print_error)
+
+    def _apply_grip(self) -> None:
+        """Move the tip to the grip's newest target (none: a later worker took it)."""
+        with self._lock:
+            with self._grip_lock:
+                pending, self._grip_target = self._grip_target, None
+            if pending is None:
+                return
+            target_b, last = pending
+            T = self.setup.T_b_e
+            self._move_tip(T[:3, :3].T @ (target_b - T[:3, 3]), snap_angles=False)
+            if last:
+                self._dragging = False
+                self._place_handle()
 
     def _on_handle_visible(self, _: object) -> None:
         self._handle.visible = self._grip.visible = bool(self._handle_cb.value)
@@ -513,6 +537,7 @@ class AthenaApp:
     def stop(self) -> None:
         """Stop the server (the page disconnects)."""
         self.playback_tab.stop()
+        self._grip_worker.shutdown(wait=True)
         if self._verbose:
             self.server.stop()
         else:  # viser's stop (which joins its thread) prints a line: keep stdout clean
@@ -562,3 +587,10 @@ def launch(T_b_e: ArrayLike | str | Path | None = None, design: Design | str | P
         print(f"athenakin app: {e}", file=sys.stderr)
     print(f"athenakin app: ATHENA at {app.url}")
     return app
+
+
+def _print_error(done: Future[None]) -> None:
+    """Print the traceback of a worker's exception (a future keeps it silent)."""
+    exc = done.exception()
+    if exc is not None:
+        traceback.print_exception(type(exc), exc, exc.__traceback__, file=sys.stderr)
