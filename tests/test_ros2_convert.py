@@ -136,7 +136,8 @@ def test_state_messages_carry_the_reference_kinematics(compiled):
     """The arm node's state messages, filled in place from one FK per state, hold the
     reference's numbers: the tip frames of the slot (position and orientation), the tip
     Jacobian times the measured velocity, the URDF joint values; nothing where the
-    measured position does not assemble in the slot."""
+    measured position does not assemble in the slot. Filled in two parts (the joint
+    states, then the poses), the first touches no pose."""
     from athenakin._backend import numba_available
 
     if compiled and not numba_available():
@@ -163,7 +164,19 @@ def test_state_messages_carry_the_reference_kinematics(compiled):
         if k % 3:                          # else the setpoint stays (its pose is kept)
             sq = q0 + rng.normal(scale=0.01, size=3)
         qd, f = rng.normal(scale=0.05, size=3), rng.normal(size=3)
-        ok = m.fill(ArmState(0.0, q, qd, f), ArmState(0.0, sq, 0 * qd, f), Time(sec=7, nanosec=k))
+        js, sp, stamp = ArmState(0.0, q, qd, f), ArmState(0.0, sq, 0 * qd, f), Time(sec=7,
+                                                                                  nanosec=k)
+        if k % 2:
+            ok = m.fill(js, sp, stamp)
+        else:               # the joint states first (published before any kinematics) ...
+            before = [_numbers(msg) for msg in (m.measured_cp, m.setpoint_cp, m.measured_cv,
+                                                m.urdf_joint_states)]
+            m.fill_joints(js, sp, stamp)
+            np.testing.assert_array_equal(m.measured_js.position, q)
+            for b, msg in zip(before, (m.measured_cp, m.setpoint_cp, m.measured_cv,
+                                       m.urdf_joint_states), strict=True):
+                np.testing.assert_array_equal(_numbers(msg), b)     # ... no pose touched
+            ok = m.fill_poses(js, sp)
         assert m.measured_cp.header.stamp.nanosec == k == m.urdf_joint_states.header.stamp.nanosec
         np.testing.assert_array_equal(m.measured_js.position, q)
         np.testing.assert_array_equal(m.measured_js.velocity, qd)
@@ -223,3 +236,14 @@ def test_a_motion_command_outside_enabled_is_the_arms_own_refusal(monkeypatch):
     finally:
         node.close()
         node.context.close()
+
+
+def _numbers(msg):
+    """The float fields of a pose, twist or joint-state message (NaN kept), in one array."""
+    if hasattr(msg, "pose"):
+        p, o = msg.pose.position, msg.pose.orientation
+        return np.array([p.x, p.y, p.z, o.x, o.y, o.z, o.w])
+    if hasattr(msg, "twist"):
+        a, b = msg.twist.linear, msg.twist.angular
+        return np.array([a.x, a.y, a.z, b.x, b.y, b.z])
+    return np.array(msg.position, dtype=float)

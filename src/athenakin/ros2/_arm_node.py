@@ -379,19 +379,21 @@ class ArmNode:
     def publish_once(self) -> None:
         """Publish the arm's state now (every state topic once); the servo thread's step.
 
-        One forward kinematics of the measured position and one of the setpoint (kept
-        while it does not move) fill the messages in place (:mod:`._arm_state`); all
-        carry one stamp.
+        The joint states go first, before any kinematics; then one forward kinematics of
+        the measured position and one of the setpoint (kept while it does not move) fill
+        the poses (:mod:`._arm_state`). The messages are filled in place and all carry
+        one stamp.
         """
         with self._lock:
             js, sp = self.arm.measured_js(), self.arm.setpoint_js()
         stamp = self._now()
         p, m = self._pubs, self._state
         with self._publishing:
-            assembled = m.fill(js, sp, stamp)
+            m.fill_joints(js, sp, stamp)
             p["measured_js"].publish(m.measured_js)
             p["joint_states"].publish(m.measured_js)
             p["setpoint_js"].publish(m.setpoint_js)
+            assembled = m.fill_poses(js, sp)
             p["measured_cp"].publish(m.measured_cp)
             p["setpoint_cp"].publish(m.setpoint_cp)
             if assembled:

@@ -4,7 +4,9 @@
 publishing cycle: the numbers go into the messages' own ``array('d')`` fields through
 numpy views, every header takes the cycle's one stamp, and nothing is built again but
 the floats of the poses. ``measured_js`` and the ``joint_states`` of
-topic_based_ros2_control are one message (the same contents on two topics).
+topic_based_ros2_control are one message (the same contents on two topics). The joint
+states need no kinematics (:meth:`StateMessages.fill_joints`): the node publishes them
+before it fills the poses (:meth:`StateMessages.fill_poses`).
 
 The kinematics of a cycle is one forward kinematics of the measured position on the
 arm's slot (its tip frame on ``measured_cp``, its joints on ``/joint_states``, its tip
@@ -175,7 +177,7 @@ class StateMessages:
         self._prev_R = None          # the first published state has no rotation before it
 
     def fill(self, js: Any, sp: Any, stamp: Any) -> bool:
-        """Write one cycle's state into the messages.
+        """Write one cycle's state into the messages: :meth:`fill_joints`, :meth:`fill_poses`.
 
         Parameters
         ----------
@@ -188,8 +190,20 @@ class StateMessages:
         Returns
         -------
         bool
-            True where the measured position assembles in the slot: ``measured_cv`` and
-            ``urdf_joint_states`` hold this cycle (else they are not to be published).
+            As :meth:`fill_poses`.
+        """
+        self.fill_joints(js, sp, stamp)
+        return self.fill_poses(js, sp)
+
+    def fill_joints(self, js: Any, sp: Any, stamp: Any) -> None:
+        """Write the actuators' messages (``measured_js``, ``setpoint_js``) and every stamp.
+
+        No kinematics: the joint states can be published before :meth:`fill_poses` runs.
+
+        Parameters
+        ----------
+        js, sp, stamp
+            As in :meth:`fill`.
         """
         for view, values in zip(self._js, (js.position, js.velocity, js.effort, sp.position,
                                            sp.velocity, sp.effort), strict=True):
@@ -197,6 +211,21 @@ class StateMessages:
         for m in (self.measured_js, self.setpoint_js, self.urdf_joint_states,
                   self.measured_cp, self.setpoint_cp, self.measured_cv):
             m.header.stamp = stamp
+
+    def fill_poses(self, js: Any, sp: Any) -> bool:
+        """Write the kinematic messages: the tip poses, its twist and the URDF joints.
+
+        Parameters
+        ----------
+        js, sp
+            As in :meth:`fill` (the stamps are :meth:`fill_joints`'s).
+
+        Returns
+        -------
+        bool
+            True where the measured position assembles in the slot: ``measured_cv`` and
+            ``urdf_joint_states`` hold this cycle (else they are not to be published).
+        """
         q = np.asarray(js.position, dtype=float)
         valid, tip, J = self._kin.measured(q, self._joints)
         sq = np.asarray(sp.position, dtype=float)
