@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -51,6 +53,14 @@ def test_tip_command_frames():
     m.header.frame_id = "world"
     with pytest.raises(InvalidInputError, match=r"\bframe_id\b"):
         tip_command(m, frames)
+    m.header.frame_id = "base"
+    m.pose.orientation.x, m.pose.orientation.w = 0.6, 0.8           # any unit quaternion
+    assert tip_command(m, frames)[0].tolist() == [0.1, 0.2, 0.3]
+    for xyzw in ((0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 2.0), (math.nan, 0.0, 0.0, 1.0)):
+        o = m.pose.orientation
+        o.x, o.y, o.z, o.w = xyzw                 # an unfilled, a scaled, a NaN orientation
+        with pytest.raises(InvalidInputError, match=r"orientation: expected a unit quaternion"):
+            tip_command(m, frames)
 
 
 def test_pose_stamped_carries_the_rotation():

@@ -594,3 +594,21 @@ def test_the_teleop_node_refuses_to_run_without_the_bodies_unless_told(capsys):
     assert main(["ros2", "teleop", "--q0", *map(str, Q0), "--no-bodies", "--bodies",
                  str(env), "--duration", "0.1"]) == 1
     assert "--no-bodies" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("option, topic", [("--pose-topic", "bad topic"),
+                                           ("--clutch-topic", "/bad topic"),
+                                           ("--pose-topic", "")])
+def test_a_topic_name_ros_refuses_is_a_named_error(capsys, option, topic):
+    """A topic name with a space (or empty) is the user's error, exit 1 with the option and
+    rclpy's reason, not "a bug" (exit 70), and no node is started."""
+    from athenakin.cli import main
+    from athenakin.ros2 import TeleopNode
+
+    what = option.removeprefix("--").replace("-", "_")
+    with pytest.raises(ValueError, match=rf"{what}: expected a ROS topic name"):
+        TeleopNode(q0=Q0, **{what: topic})
+    assert main(["ros2", "teleop", "--q0", *map(str, Q0), option, topic,
+                 "--duration", "0.1"]) == 1
+    err = capsys.readouterr().err
+    assert f"{what}: expected a ROS topic name" in err and "a bug" not in err

@@ -76,6 +76,8 @@ def _enabled(**kw):
     ([0.1, -0.1, 0.45], None, None, "wrong order"),            # the carriages reversed
     ([np.nan, 0.1, 0.45], None, None, "finite"),
     (Q0, [np.inf, 0.0, 0.0], None, "velocity"),
+    (Q0, [5.0, 0.0, 0.0], None, "v_max 0.1 m/s"),              # 50x the arm's v_max
+    (Q0, [0.0, -1e308, 0.0], None, "v_max 0.1 m/s"),           # not "does not assemble"
     (Q0, None, [1e6, 0.0, 0.0], "max_force"),                  # 1 MN
     (Q0, None, [np.nan, 0.0, 0.0], "max_force"),
 ])
@@ -355,6 +357,37 @@ def test_ruckig_errors_are_named(monkeypatch):
         arm.move_jp([-0.1, 0.1, 0.9])
     with pytest.raises(InvalidInputError, match="goal_velocity"):
         arm.move_jp(GOAL, goal_velocity=[math.nan, 0, 0])
+    with pytest.raises(InvalidInputError, match="goal_velocity.*v_max"):
+        arm.move_jp(GOAL, goal_velocity=[0.2, 0, 0])
+
+
+def test_a_servo_velocity_at_v_max_is_taken_and_beyond_it_refused():
+    """The arm's ``v_max`` bounds a servo command's velocity feed-forward (a limiter's
+    velocity of exactly ``v_max`` passes to its rounding); a teleop session at the
+    default limits is never refused for it."""
+    from athenakin.teleop._arm_checks import VELOCITY_SLACK
+
+    arm = _enabled(backend=_Driver(Q0))
+    v_max = arm.limits[0]
+    arm.servo_jp(Q0, velocity=[v_max * (1 + 0.5 * VELOCITY_SLACK), -v_max, 0.0])
+    assert arm.refusal is None
+    arm.servo_jp(Q0, velocity=[v_max * (1 + 2 * VELOCITY_SLACK), 0.0, 0.0])
+    assert arm.refusal is not None and "exceeds the arm's v_max" in arm.refusal
+    arm2 = _enabled(backend=_Driver(Q0), v_max=0.5)
+    arm2.servo_jp(Q0, velocity=[0.4, 0.0, 0.0])
+    assert arm2.refusal is None
+    # a master far ahead: the core limits every |qd_i| to its v_max (0.1 m/s, the arm's)
+    from athenakin.teleop import Teleop
+
+    tele = Teleop(T, D, q0=Q0, rate=arm.rate)
+    arm3 = _enabled(backend=_Driver(Q0))
+    fastest = 0.0
+    for k in range(200):
+        cmd = tele.step(k * arm.dt, [0.05 * math.sin(0.05 * k), 0.03, 0.0])
+        arm3.servo_jp(cmd.q, velocity=cmd.qd)
+        assert arm3.refusal is None, arm3.refusal
+        fastest = max(fastest, float(np.max(np.abs(cmd.qd))))
+    assert fastest == pytest.approx(v_max, rel=1e-4)          # the limit was reached
 
 
 def test_the_model_form():
@@ -384,3 +417,17 @@ def test_one_feed_forward_path():
     want = ak.dynamics.inverse_dynamics(GOAL, [0.01, -0.02, 0.0],
                                         np.array([0.01, -0.02, 0.0]) * arm.rate, T, D)
     np.testing.assert_allclose(arm.feedforward_effort, want, rtol=1e-12, atol=1e-12)
+
+
+def test_the_constructor_compiles_the_ik_of_servo_cp(monkeypatch):
+    """The first ``servo_cp`` of an arm made on a cold numba cache compiled the tool-tip IK
+    inside the command (4.6 s on this machine, the servo loop held meanwhile): the
+    constructor runs it once, so that the first command's cycle compiles nothing."""
+    from athenakin import _dispatch
+    from athenakin._backend import numba_available
+
+    if not numba_available():
+        pytest.skip("the compiled kernels do not run here (numba missing or ATHENAKIN_BACKEND)")
+    monkeypatch.setattr(_dispatch, "_WARM", set())   # as in a new process
+    SimulatedArm(T, D, q0=Q0, backend=_Driver(Q0))
+    assert "line" in _dispatch._WARM                  # q_from_tool_tip's first compiled call

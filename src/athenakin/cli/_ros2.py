@@ -176,8 +176,8 @@ def run_teleop(args: argparse.Namespace) -> int:
 
     duration = _duration(args)
     preset = MASTER_PRESETS[args.preset]
-    pose = args.pose_topic or preset["pose"]
-    clutch = args.clutch_topic or preset["clutch"]
+    pose = preset["pose"] if args.pose_topic is None else args.pose_topic
+    clutch = preset["clutch"] if args.clutch_topic is None else args.clutch_topic
     if args.q0 is not None:
         check_finite(args.q0, "--q0")
     design, T = load_robot(args)
@@ -219,8 +219,10 @@ def _record_topics(args: argparse.Namespace) -> dict[str, str]:
     from ..ros2 import MASTER_PRESETS, session_topics
 
     preset = MASTER_PRESETS[args.preset]
-    clutch = args.clutch_topic or preset["clutch"]
-    topics = session_topics(args.namespace, pose_topic=args.pose_topic or preset["pose"],
+    clutch = preset["clutch"] if args.clutch_topic is None else args.clutch_topic
+    topics = session_topics(args.namespace,
+                            pose_topic=preset["pose"] if args.pose_topic is None
+                            else args.pose_topic,
                             clutch_topic=None if clutch.lower() == "none" else clutch)
     for item in args.topic:
         name, sep, typ = item.partition("=")

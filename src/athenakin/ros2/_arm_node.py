@@ -71,6 +71,39 @@ def check_namespace(namespace: str) -> str:
     return ns
 
 
+def check_topic(name: str, what: str) -> str:
+    """A ROS topic name (absolute, relative or private), as rclpy's validator reads it.
+
+    Parameters
+    ----------
+    name : str
+    what : str
+        The parameter's name in the error.
+
+    Returns
+    -------
+    str
+        ``name``.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Not a str; not a topic name (rclpy's reason, on one line).
+    """
+    from rclpy.exceptions import InvalidTopicNameException
+    from rclpy.validate_topic_name import validate_topic_name
+
+    if not isinstance(name, str):
+        raise TypeError(f"{what}: expected a str, got {type(name).__name__}")
+    try:
+        validate_topic_name(name)
+    except InvalidTopicNameException as exc:
+        reason = str(exc).splitlines()[0].removeprefix("Invalid topic name: ").rstrip(":")
+        raise ValueError(f"{what}: expected a ROS topic name (e.g. /master/pose), got "
+                         f"{name!r}: {reason}") from None
+    return name
+
+
 def _qos(depth: int, *, latched: bool = False) -> Any:
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 

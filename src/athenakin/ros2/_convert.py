@@ -9,6 +9,7 @@ rotation-to-quaternion of the ros package.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -23,6 +24,8 @@ __all__ = ["ACTUATORS", "joint_state", "pose_stamped", "twist_stamped", "actuato
 
 #: Names of the three actuators in ``measured_js``, ``setpoint_js``, ``servo_jp``.
 ACTUATORS = ("q1", "q2", "q3")
+#: How far a command pose's quaternion norm may lie from 1 (tf2's test of a malformed one).
+QUATERNION_NORM_TOL = 1e-3
 
 
 def time_msg(ns: int) -> Any:
@@ -152,7 +155,8 @@ def tip_command(msg: Any, frames: dict[str, str]) -> tuple[FloatArray, str]:
     ----------
     msg : geometry_msgs.msg.PoseStamped
         The tip position in ``header.frame_id`` (m); the orientation is not used (the
-        instrument's direction follows from the RCM).
+        instrument's direction follows from the RCM) but must be a unit quaternion
+        (to :data:`QUATERNION_NORM_TOL`): an all-zero pose is a message never filled in.
     frames : dict of str -> str
         Accepted ``frame_id`` -> the arm's frame name (``"base"`` or ``"rcm"``); the
         empty ``frame_id`` is the base frame.
@@ -165,12 +169,19 @@ def tip_command(msg: Any, frames: dict[str, str]) -> tuple[FloatArray, str]:
     Raises
     ------
     InvalidInputError
-        An unknown ``frame_id`` or a non-finite position.
+        An unknown ``frame_id``, a non-finite position, an orientation that is no unit
+        quaternion.
     """
     fid = str(msg.header.frame_id)
     if fid not in frames:
         raise InvalidInputError(f"frame_id: expected one of {sorted(k for k in frames if k)} "
                                 f"(or empty: the base frame), got {fid!r}")
+    o = msg.pose.orientation
+    xyzw = [o.x, o.y, o.z, o.w]
+    norm = math.sqrt(math.fsum(v * v for v in xyzw))
+    if not abs(norm - 1.0) <= QUATERNION_NORM_TOL:       # NaN fails too
+        raise InvalidInputError(f"orientation: expected a unit quaternion (x, y, z, w), got "
+                                f"{xyzw} (norm {norm:g}; identity: w = 1)")
     p = msg.pose.position
     return _finite([p.x, p.y, p.z], "position"), frames[fid]
 

@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike
 
 from .._validation import check_scalar
 from ..design import Design, resolve_design
-from ._arm_node import _create_node, _qos, check_namespace
+from ._arm_node import _create_node, _qos, check_namespace, check_topic
 from ._convert import ACTUATORS, joint_state, master_position, stamp_ns
 from ._runtime import (
     CyclePacer,
@@ -114,6 +114,8 @@ class TeleopNode:
     InvalidInputError
         ``check_bodies`` True and ``options`` turn the clearance check off; the core's
         own refusals (a ``q0`` off the strokes, in a fixture, with the bodies too close).
+    ValueError
+        A namespace or a topic name that ROS does not accept, named.
     ModuleNotFoundError
         rclpy is not installed (the extra ``ros2``).
     """
@@ -139,6 +141,9 @@ class TeleopNode:
         self.T_b_e = resolve_rcm_frame(T_b_e, self.design)
         bodies = _session_bodies(self.design, bodies, options, check_bodies)
         self.namespace = check_namespace(arm_namespace)
+        check_topic(pose_topic, "pose_topic")
+        if clutch_topic is not None:
+            check_topic(clutch_topic, "clutch_topic")
         self.rate = check_scalar(rate, "rate", positive=True)
         self.clutch_button = check_count(clutch_button, "clutch_button", minimum=0)
         self.status_every = check_count(status_every, "status_every", minimum=1)

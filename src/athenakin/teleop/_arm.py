@@ -120,7 +120,9 @@ class SimulatedArm:
     backend : ArmBackend, optional, keyword-only
         A robot driver; default a :class:`MujocoBackend` of the exported MJCF.
     v_max, a_max, j_max : float, keyword-only
-        Limits of ``move_jp`` / ``move_cp`` (Ruckig): m/s, m/s^2, m/s^3.
+        Limits of ``move_jp`` / ``move_cp`` (Ruckig): m/s, m/s^2, m/s^3. ``v_max`` also
+        bounds a servo command's velocity and a move's goal velocity (beyond it the
+        command is refused, as one outside the strokes).
     max_force : float, keyword-only
         Saturation of the servo's force per actuator, and the largest effort a servo
         command may carry, N (:data:`~athenakin.teleop._servo.MAX_FORCE`).
@@ -198,6 +200,9 @@ class SimulatedArm:
         if np.isnan(self._ff_loop(q, np.zeros(3), np.zeros(3))).any():
             raise InvalidInputError(f"q0: {q.tolist()} m does not assemble in FK slot "
                                     f"{self.slot}")
+        # the IK of servo_cp and move_cp compiled (or loaded from numba's cache) now, not
+        # in the cycle of the first such command
+        q_from_tip(self._tip_frame(q), "base", self.T_b_e, design)
         self.gains = gains
         self.kp, self.kd = servo_gains(q, self.T_b_e, design, self.masses, self.slot,
                                        self.rate, gains)
@@ -396,7 +401,7 @@ class SimulatedArm:
             Actuator positions, m: within the strokes, in the carriages' order, assembled
             in :attr:`slot`.
         velocity : array-like, shape (3,), optional
-            m/s (default rest).
+            m/s, each within ``v_max`` (default rest).
         effort : array-like, shape (3,), optional
             Feed-forward forces, N, each within ``max_force``.
 
@@ -410,7 +415,8 @@ class SimulatedArm:
         e = None if effort is None else self._vector(effort, "effort")
         if not self._accepting("servo_jp"):
             return
-        why = command_refusal(qa, v, self.design, velocity_name="velocity")
+        why = command_refusal(qa, v, self.design, velocity_name="velocity",
+                              v_max=self.limits[0])
         if why is None and e is not None and not np.all(np.abs(e) <= self.max_force):
             why = f"effort: {e.tolist()} N exceeds max_force {self.max_force:g} N"
         if why is None:
@@ -457,13 +463,14 @@ class SimulatedArm:
         q : array-like, shape (3,)
             Goal, m: within the strokes, in the carriages' order, assembled in :attr:`slot`.
         goal_velocity : array-like, shape (3,), optional
-            Velocity at arrival, m/s (default rest).
+            Velocity at arrival, m/s, each within ``v_max`` (default rest).
 
         Raises
         ------
         InvalidInputError
             A goal of the wrong shape, not finite, outside the strokes or the carriages'
-            order, or off the slot's workspace.
+            order, or off the slot's workspace; a goal velocity not finite or beyond
+            ``v_max``.
         KinematicsError
             Ruckig finds no profile, or fails (its error named).
         ModuleNotFoundError
@@ -472,7 +479,8 @@ class SimulatedArm:
         qa = self._vector(q, "q")
         gv = self._zero if goal_velocity is None else self._vector(goal_velocity,
                                                                     "goal_velocity")
-        why = command_refusal(qa, gv, self.design, velocity_name="goal_velocity")
+        why = command_refusal(qa, gv, self.design, velocity_name="goal_velocity",
+                              v_max=self.limits[0])
         if why is None and np.isnan(self._ff_loop(qa, gv, self._zero)).any():
             why = f"q: {qa.tolist()} m does not assemble in FK slot {self.slot}"
         if why is not None:

@@ -23,7 +23,10 @@ from ..errors import InvalidInputError, Reason
 
 __all__ = ["vector3", "position_refusal", "command_refusal", "q_from_tip", "TipFrames",
            "read_encoders",
-           "READING_MARGIN", "READING_SPEED_MAX"]
+           "READING_MARGIN", "READING_SPEED_MAX", "VELOCITY_SLACK"]
+
+#: Relative slack of a command's velocity over ``v_max`` (a limiter's rounding), 1.
+VELOCITY_SLACK = 1e-9
 
 #: How far beyond the strokes an encoder reading may lie before the arm faults, m.
 READING_MARGIN = 0.005
@@ -89,7 +92,7 @@ def position_refusal(q: FloatArray, design: Design, name: str) -> str | None:
 
 
 def command_refusal(q: FloatArray, velocity: FloatArray, design: Design, *,
-                    velocity_name: str) -> str | None:
+                    velocity_name: str, v_max: float) -> str | None:
     """Why a command's position and velocity are refused, or None.
 
     Parameters
@@ -97,10 +100,13 @@ def command_refusal(q: FloatArray, velocity: FloatArray, design: Design, *,
     q : ndarray, shape (3,)
         Positions, m (named ``q``): :func:`position_refusal`.
     velocity : ndarray, shape (3,)
-        m/s: finite.
+        m/s: finite, each ``|v_i| <= v_max`` (to a relative :data:`VELOCITY_SLACK`, the
+        rounding of a velocity limited to exactly ``v_max``).
     design : Design
     velocity_name : str, keyword-only
         The velocity's name in the reason.
+    v_max : float, keyword-only
+        The arm's velocity limit, m/s.
 
     Returns
     -------
@@ -109,6 +115,9 @@ def command_refusal(q: FloatArray, velocity: FloatArray, design: Design, *,
     why = position_refusal(q, design, "q")
     if why is None and not np.all(np.isfinite(velocity)):
         why = f"{velocity_name}: expected finite values, got {velocity.tolist()}"
+    if why is None and not np.all(np.abs(velocity) <= v_max * (1.0 + VELOCITY_SLACK)):
+        why = (f"{velocity_name}: {velocity.tolist()} m/s exceeds the arm's v_max "
+               f"{v_max:g} m/s")
     return why
 
 
