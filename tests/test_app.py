@@ -869,3 +869,16 @@ def test_page_scripts_need_viser_s_script_channel_and_say_so():
     with pytest.raises(ImportError, match=r"RunJavascriptMessage channel") as info:
         run_page_script(SimpleNamespace(gui=SimpleNamespace()), "1;")
     assert info.value.name == "viser"
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_a_grip_event_after_stop_is_ignored():
+    """A drag event that reaches a stopped app moves nothing and raises nothing."""
+    from athenakin.app import AthenaApp
+
+    app = AthenaApp(port=0, backend="numpy")
+    tip0 = app.view.readouts.tip_b.copy()
+    app.stop()
+    asyncio.run(app._on_grip(SimpleNamespace(phase="start", start_position=tuple(tip0),
+                                             end_position=tuple(tip0 + 0.01))))
+    np.testing.assert_array_equal(app.view.readouts.tip_b, tip0)

@@ -350,7 +350,10 @@ class AthenaApp:
             self._grab = None
         with self._grip_lock:
             self._grip_target = (target_b, last)
-        self._grip_worker.submit(self._apply_grip).add_done_callback(_print_error)
+        try:
+            self._grip_worker.submit(self._apply_grip).add_done_callback(_print_error)
+        except RuntimeError:         # the app is stopping: its worker takes no more moves
+            return
 
     def _apply_grip(self) -> None:
         """Move the tip to the grip's newest target (none: a later worker took it)."""
