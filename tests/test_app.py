@@ -498,8 +498,6 @@ def test_cli_refuses_a_bad_bodies_or_environment_file_in_one_line(tmp_path, caps
 
 @pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
 def test_app_tip_handle_and_slot_menu_in_process():
-    from types import SimpleNamespace
-
     from athenakin.app import AthenaApp
 
     app = AthenaApp(port=0, backend="numpy")
@@ -508,15 +506,15 @@ def test_app_tip_handle_and_slot_menu_in_process():
         T = app.setup.T_b_e
         target_e = r.tip_e + np.array([0.0, 0.01, 0.01])
         app._handle.position = tuple(T[:3, :3] @ target_e + T[:3, 3])   # a drag ...
-        app._on_handle(SimpleNamespace(phase="update"))
-        app._on_handle(SimpleNamespace(phase="end"))                      # ... and release
+        _handle_event(app, "update")
+        _handle_event(app, "end")                      # ... and release
         q_ref, _ = ak.q_from_tool_tip(T, target_e, D)
         np.testing.assert_allclose(app.q, q_ref, rtol=0, atol=1e-12)
         np.testing.assert_allclose(app._handle.position, app.view.readouts.tip_b, atol=1e-6)
         assert [sl.value for sl in app._q_sliders] == pytest.approx(q_ref * 1e3, abs=1e-3)
         far = T[:3, :3] @ (r.tip_e * 5.0) + T[:3, 3]                    # beyond the tool
         app._handle.position = tuple(far)
-        app._on_handle(SimpleNamespace(phase="end"))
+        _handle_event(app, "end")
         # the straight path out crosses an overlap of the bodies before the workspace
         # boundary (issue 30): it stops there (pure: the inverse_step tests)
         assert "stopped before a collision" in app._status.content
@@ -536,20 +534,24 @@ def test_app_tip_handle_and_slot_menu_in_process():
 
 @pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
 def test_tip_handle_snaps_back_when_a_drag_ends_before_its_last_update():
-    """viser runs the handle's callbacks on a thread pool: the end of a drag can be handled
-    before its last update. The handle must still snap to the tip reached, and follow the
-    sliders afterwards."""
-    from types import SimpleNamespace
+    """A synchronous callback runs on viser's thread pool, where a drag's end could be
+    handled before its start or its last update (a drag left on for ever, a doubled
+    travel): the drags' callbacks are coroutines, which viser awaits on its event loop in
+    the page's order. Should an update still come after the end, the handle snaps to the
+    tip reached and follows the sliders afterwards."""
+    import inspect
 
     from athenakin.app import AthenaApp
 
     app = AthenaApp(port=0, backend="numpy")
     try:
+        for callback in (app._on_handle, app._on_grip, app.forces._on_handle):
+            assert inspect.iscoroutinefunction(callback)
         T, r = app.setup.T_b_e, app.view.readouts
-        app._on_handle(SimpleNamespace(phase="start"))
+        _handle_event(app, "start")
         app.tip_handle.position = tuple(T[:3, :3] @ (r.tip_e * 5.0) + T[:3, 3])  # too far
-        app._on_handle(SimpleNamespace(phase="end"))            # the end first ...
-        app._on_handle(SimpleNamespace(phase="update"))         # ... then the last update
+        _handle_event(app, "end")            # the end first ...
+        _handle_event(app, "update")         # ... then the last update
         tip = app.view.readouts.tip_b
         assert np.linalg.norm(tip - r.tip_b) > 1e-3             # it moved, to the boundary
         np.testing.assert_allclose(app.tip_handle.position, tip, rtol=0, atol=1e-6)
@@ -680,6 +682,12 @@ def test_a_p_below_zero_slot_keeps_its_branch_across_tabs_in_process():
         app.stop()
 
 
+def _handle_event(app, phase):
+    """One event of a tip-handle drag as viser delivers it (on an event loop), its move done."""
+    asyncio.run(app._on_handle(SimpleNamespace(phase=phase)))
+    app._moves.drain()
+
+
 def _drag_grip(app, grab, pointer):
     """One drag of the tip grip as viser delivers it: ``start`` at ``pointer[0]``, the
     updates, ``end`` at ``pointer[-1]``, in order on one event loop and without waiting
@@ -692,7 +700,7 @@ def _drag_grip(app, grab, pointer):
                                                end_position=tuple(p)))
 
     asyncio.run(send())
-    app._grip_worker.submit(lambda: None).result()       # one worker: the moves are done
+    app._moves.drain()                                   # one worker: the moves are done
 
 
 @pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")

@@ -6,6 +6,7 @@ handle's drag against the force it sets, the read-out's limits, bad options as n
 errors, and (slow) the read-out in headless Chromium.
 """
 
+import asyncio
 import shutil
 import socket
 import subprocess
@@ -43,6 +44,13 @@ Q_SAMPLES = ([-0.10, 0.10, 0.45], [-0.12, 0.07, 0.47], [-0.08, 0.13, 0.43])
 @pytest.fixture(scope="module")
 def setup():
     return app_setup(backend="numpy")
+
+
+def _handle_event(layer, phase):
+    """One event of a force-handle drag as viser delivers it (on an event loop), its move
+    done."""
+    asyncio.run(layer._on_handle(SimpleNamespace(phase=phase)))
+    layer._moves.drain()
 
 
 def _geometry(setup, q, slot):
@@ -206,10 +214,10 @@ def test_app_layer_shows_the_forces_of_the_drawn_slot_and_follows_a_drag(app, tm
     assert layer.handle.visible and not app.tip_handle.visible
     tip = app.view.geometry.points["tip"]
     np.testing.assert_allclose(layer.handle.position, tip, rtol=0, atol=1e-6)
-    layer._on_handle(SimpleNamespace(phase="start"))
+    _handle_event(layer, "start")
     layer.handle.position = tuple(tip + [0.0, 0.0, -0.02])
-    layer._on_handle(SimpleNamespace(phase="update"))
-    layer._on_handle(SimpleNamespace(phase="end"))
+    _handle_event(layer, "update")
+    _handle_event(layer, "end")
     want_tip = np.array([0.0, 0.0, -0.02 / FORCE_SCALE_M_PER_N])
     np.testing.assert_allclose(layer.tip_force, want_tip, rtol=0, atol=1e-4)
     np.testing.assert_allclose(layer.force_input.value, want_tip, rtol=0, atol=1e-3)
@@ -248,10 +256,10 @@ def test_force_handle_dragged_too_far_sets_the_largest_force_and_snaps_to_it(app
     layer.drag_checkbox.value = True
     layer._show_handle()
     tip = app.view.geometry.points["tip"]
-    layer._on_handle(SimpleNamespace(phase="start"))
+    _handle_event(layer, "start")
     layer.handle.position = tuple(tip + [10.0, 0.0, 0.0])               # 2000 N: too far
-    layer._on_handle(SimpleNamespace(phase="end"))                       # the end first ...
-    layer._on_handle(SimpleNamespace(phase="update"))                    # ... then the update
+    _handle_event(layer, "end")                       # the end first ...
+    _handle_event(layer, "update")                    # ... then the update
     np.testing.assert_allclose(layer.tip_force, [MAX_TIP_FORCE_N, 0.0, 0.0], rtol=0, atol=1e-9)
     np.testing.assert_allclose(layer.handle.position,
                                tip + [FORCE_SCALE_M_PER_N * MAX_TIP_FORCE_N, 0.0, 0.0],

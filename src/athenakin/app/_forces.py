@@ -33,7 +33,7 @@ from .._validation import check_array
 from ..errors import InvalidInputError, KinematicsError
 from ..plot._geometry import RobotGeometry
 from ._scene import rgb
-from ._sync import Echo
+from ._sync import Echo, OrderedWorker
 from ._text import ERROR_COLOR, WARN_COLOR
 
 __all__ = ["ForcesView", "forces_view", "forces_html", "tip_force_from_handle",
@@ -380,6 +380,7 @@ class ForcesLayer:
         self._lock = threading.RLock()
         self._echo = Echo()   # this thread writes the GUI's values (app/_sync.py)
         self._dragging = False
+        self._moves = OrderedWorker("athena-forces")   # the handle's moves (app/_sync.py)
         self._arrow: Any = None
         self._last_key: tuple[object, ...] | None = None
         self._reference: tuple[Any, Any] | None = None
@@ -437,21 +438,28 @@ class ForcesLayer:
                 return
             self.set_tip_force(np.asarray(self.force_input.value, dtype=float))
 
-    def _on_handle(self, event: Any) -> None:
-        # viser runs these on a thread pool: only a start or an end says whether a drag
-        # is on, and every update reads the handle's latest position (as the tip handle).
+    async def _on_handle(self, event: Any) -> None:
+        """A drag of the force handle: on viser's event loop, in order (app/_sync.py)."""
         phase = getattr(event, "phase", "update")
         if phase in ("start", "end"):
-            with self._lock:
-                self._dragging = phase == "start"
+            self._dragging = phase == "start"
+        self._moves.submit(self._apply_handle, phase == "end")
+
+    def _apply_handle(self, last: bool) -> None:
+        """Set the tip force of the handle's latest position (snapped to it at the end).
+
+        The handle snaps to the force set, cut at MAX_TIP_FORCE_N.
+        """
         g = self._geometry
         if g is None:
             return
         f = tip_force_from_handle(np.asarray(self.handle.position, dtype=float),
                                   g.points["tip"])
-        # snap the handle to the force set (cut at MAX_TIP_FORCE_N) once no drag is on, also
-        # when the end of a drag is handled before its last update
-        self.set_tip_force(f, place_handle=phase == "end" or not self._dragging)
+        self.set_tip_force(f, place_handle=last or not self._dragging)
+
+    def stop(self) -> None:
+        """Let the force handle's pending moves run; none after (the app is stopping)."""
+        self._moves.stop()
 
     def _show_handle(self) -> None:
         with self._lock:

@@ -23,9 +23,7 @@ import math
 import sys
 import threading
 import time
-import traceback
 from collections.abc import Callable
-from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -56,7 +54,7 @@ from ._setup_tab import (
     planned_environment,
     planned_start,
 )
-from ._sync import Echo
+from ._sync import Echo, OrderedWorker
 from ._text import message_html, view_html
 
 __all__ = ["AthenaApp", "launch", "rcm_reach", "DEFAULT_PORT"]
@@ -194,7 +192,7 @@ class AthenaApp:
         self._dragging = False
         self._grab: tuple[FloatArray, FloatArray] | None = None     # the grip's gesture
         self._grip_lock = threading.Lock()
-        self._grip_worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="grip")
+        self._moves = OrderedWorker("athena-moves")   # the drags' moves (app/_sync.py)
         self._grip_target: tuple[FloatArray, bool] | None = None    # newest, and if the end
         self.page = PageWriter(self.server, solids_of=solids)   # the scene nodes it sent
         self._build_gui(plan)
@@ -310,31 +308,33 @@ class AthenaApp:
             tip = tip_from_angles(math.radians(az), math.radians(pol), depth * 1e-3)
             self._move_tip(tip, snap_angles=True, read=read)
 
-    def _on_handle(self, event: Any) -> None:
-        # Only the browser fires the handle's events (setting its position here fires
-        # none), so there is no echo to ignore.
+    async def _on_handle(self, event: Any) -> None:
+        """A drag of the tip handle: on viser's event loop, in order (app/_sync.py).
+
+        Only the browser fires the handle's events (setting its position here fires
+        none), so there is no echo to ignore. The move (:meth:`_apply_handle`) reads the
+        handle's latest position.
+        """
         phase = getattr(event, "phase", "update")
-        # viser runs these callbacks on a thread pool, so the end of a drag may be handled
-        # before its last update: only a start or an end says whether a drag is on. Every
-        # update reads the handle's latest position, so their order does not matter.
         if phase in ("start", "end"):
-            with self._lock:
-                self._dragging = phase == "start"
+            self._dragging = phase == "start"
+        self._moves.submit(self._apply_handle, phase == "end")
+
+    def _apply_handle(self, last: bool) -> None:
+        """Move the tip to the handle's latest position; snap the handle there at the end."""
         T = self.setup.T_b_e
         tip_b = np.asarray(self._handle.position, dtype=float)
         self._move_tip(T[:3, :3].T @ (tip_b - T[:3, 3]), snap_angles=False)
-        if phase == "end":
+        if last:
             self._place_handle()
 
     async def _on_grip(self, event: Any) -> None:
         """A drag of the tip grip: the tip follows the pointer in the view plane.
 
-        An ``async`` callback runs on viser's event loop, in the order the page sent the
-        events (viser's note on stateful drags): the gesture's grab is never read before
-        its start nor after its end. The IK and the scene run on a worker thread
-        (:meth:`_apply_grip`, one thread: the moves run in the events' order), which takes
-        the newest target, so a slow IK drops the stale ones and the last one applied is
-        the end's.
+        On viser's event loop, in order (app/_sync.py): the gesture's grab is never read
+        before its start nor after its end. The move (:meth:`_apply_grip`) takes the
+        newest target, so a slow IK drops the stale ones and the last one applied is the
+        end's.
         """
         v = self.view
         if v is None or v.readouts is None:
@@ -350,13 +350,10 @@ class AthenaApp:
             self._grab = None
         with self._grip_lock:
             self._grip_target = (target_b, last)
-        try:
-            self._grip_worker.submit(self._apply_grip).add_done_callback(_print_error)
-        except RuntimeError:         # the app is stopping: its worker takes no more moves
-            return
+        self._moves.submit(self._apply_grip)
 
     def _apply_grip(self) -> None:
-        """Move the tip to the grip's newest target (none: a later worker took it)."""
+        """Move the tip to the grip's newest target (none: an earlier move took it)."""
         with self._lock:
             with self._grip_lock:
                 pending, self._grip_target = self._grip_target, None
@@ -540,7 +537,8 @@ class AthenaApp:
     def stop(self) -> None:
         """Stop the server (the page disconnects)."""
         self.playback_tab.stop()
-        self._grip_worker.shutdown(wait=True)
+        self._moves.stop()
+        self.forces.stop()
         if self._verbose:
             self.server.stop()
         else:  # viser's stop (which joins its thread) prints a line: keep stdout clean
@@ -590,10 +588,3 @@ def launch(T_b_e: ArrayLike | str | Path | None = None, design: Design | str | P
         print(f"athenakin app: {e}", file=sys.stderr)
     print(f"athenakin app: ATHENA at {app.url}")
     return app
-
-
-def _print_error(done: Future[None]) -> None:
-    """Print the traceback of a worker's exception (a future keeps it silent)."""
-    exc = done.exception()
-    if exc is not None:
-        traceback.print_exception(type(exc), exc, exc.__traceback__, file=sys.stderr)

@@ -7,15 +7,27 @@ second. A flag on the app object did both at once: while one pool thread wrote t
 sliders back, the callback of the next key press, on another pool thread, saw the flag
 and returned, and that key press was lost (on a busy machine). The flag is
 therefore per thread.
+
+The drags (the tip handle, the tip grip, the force handle) have a gesture's state: a
+start, updates and an end. On the thread pool those may be handled in any order (an end
+before its start left a drag on for ever). Their callbacks are ``async``: viser awaits
+them on its event loop in the order the page sent the events (its own advice for
+stateful drags), where they keep the gesture's state; each hands its move (the IK, the
+scene) to an :class:`OrderedWorker`, one thread, so that the event loop never waits for
+a move and the moves run in the events' order.
 """
 
 from __future__ import annotations
 
 import contextlib
+import sys
 import threading
-from collections.abc import Iterator
+import traceback
+from collections.abc import Callable, Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
+from typing import Any
 
-__all__ = ["Echo"]
+__all__ = ["Echo", "OrderedWorker"]
 
 
 class Echo:
@@ -35,3 +47,45 @@ class Echo:
             yield
         finally:
             self._local.on = prev
+
+
+class OrderedWorker:
+    """One thread that runs the moves of the drags, in the order they are submitted.
+
+    Parameters
+    ----------
+    name : str
+        The thread's name prefix.
+    """
+
+    def __init__(self, name: str) -> None:
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix=name)
+
+    def submit(self, fn: Callable[..., Any], *args: Any) -> None:
+        """Run ``fn(*args)`` after the moves submitted before it; none once stopped.
+
+        An exception of ``fn`` is printed with its traceback on stderr (a future would
+        keep it silent).
+        """
+        try:
+            done = self._pool.submit(fn, *args)
+        except RuntimeError:          # stopped: the app takes no more moves
+            return
+        done.add_done_callback(_print_error)
+
+    def drain(self) -> None:
+        """Block until every move submitted so far has run (nothing to wait for once stopped)."""
+        try:
+            self._pool.submit(lambda: None).result()
+        except RuntimeError:
+            return
+
+    def stop(self) -> None:
+        """Let the moves submitted run, then end the thread; later ones are dropped."""
+        self._pool.shutdown(wait=True)
+
+
+def _print_error(done: Future[Any]) -> None:
+    exc = done.exception()
+    if exc is not None:
+        traceback.print_exception(type(exc), exc, exc.__traceback__, file=sys.stderr)
