@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import functools
 import os
+import signal
+import subprocess
 import time
 
 import numpy as np
@@ -70,3 +72,31 @@ def load_factor() -> float:
 def limit(nominal_s: float) -> float:
     """The hang guard, in s, for a wait that takes ``nominal_s`` on a quiet machine."""
     return HEADROOM * nominal_s * max(slowness(), load_factor())
+
+
+#: The environment entry that makes a Python subprocess dump every thread's stack on SIGABRT.
+FAULTHANDLER_ENV = {"PYTHONFAULTHANDLER": "1"}
+
+
+def wait_after_signal(proc: subprocess.Popen, sig: int, nominal_s: float) -> int:
+    """Send ``sig`` to ``proc`` and wait for it to exit, at most :func:`limit` of ``nominal_s``.
+
+    A process that does not exit by then is sent SIGABRT (started with
+    :data:`FAULTHANDLER_ENV`, it prints every thread's stack) and the wait raises
+    ``AssertionError`` with the end of its output: a hang is shown where it hangs.
+    Returns the exit status.
+    """
+    proc.send_signal(sig)
+    budget = limit(nominal_s)
+    try:
+        return proc.wait(timeout=budget)
+    except subprocess.TimeoutExpired:
+        proc.send_signal(signal.SIGABRT)
+        try:
+            out, _ = proc.communicate(timeout=limit(10.0))
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            out, _ = proc.communicate()
+        raise AssertionError(f"the process did not exit within {budget:.0f} s of signal "
+                             f"{sig}; its last output (thread stacks on SIGABRT):\n"
+                             f"{(out or '')[-8000:]}") from None

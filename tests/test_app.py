@@ -4,9 +4,11 @@ the viser binding in process (bad inputs keep it running). The browser: test_app
 import asyncio
 import dataclasses
 import importlib.util
+import os
 from pathlib import Path
 from types import SimpleNamespace
 
+import _budget
 import numpy as np
 import pytest
 
@@ -611,7 +613,8 @@ def test_cli_reports_bad_inputs_at_startup_and_serves(tmp_path):
         [sys.executable, "-m", "athenakin.cli", "app", "--port", "0", "--backend", "numpy",
          "--design", str(bad), "--trajectory", str(tmp_path / "none.csv"),
          "--environment", str(env), "--bodies", str(bodies)],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        env={**os.environ, **_budget.FAULTHANDLER_ENV})
     try:
         lines = []
         for line in proc.stdout:
@@ -622,8 +625,7 @@ def test_cli_reports_bad_inputs_at_startup_and_serves(tmp_path):
         assert "warning: design: OutOfWorkspaceError" in text and "assembles nowhere" in text
         assert "warning: trajectory: PathFileError" in text and "none.csv" in text
         assert "serving ATHENA at http://127.0.0.1:" in text
-        proc.send_signal(signal.SIGINT)
-        assert proc.wait(timeout=20) == 0
+        assert _budget.wait_after_signal(proc, signal.SIGINT, 10.0) == 0
         assert "athenakin app: stopped" in proc.stdout.read()
     finally:
         if proc.poll() is None:

@@ -17,6 +17,7 @@ let keys go to the tab shown before); a limit reached is a failure, never a pass
 """
 
 import math
+import os
 import shutil
 import signal
 import socket
@@ -25,6 +26,7 @@ import sys
 import time
 from pathlib import Path
 
+import _budget
 import numpy as np
 import pytest
 
@@ -94,7 +96,8 @@ def app(tmp_path_factory, browser):
     proc = subprocess.Popen(
         [sys.executable, "-m", "athenakin.cli", "app", "--host", "127.0.0.1", "--port",
          str(port), "--backend", "numpy", "--trajectory", str(d / "traj.csv")],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        env={**os.environ, **_budget.FAULTHANDLER_ENV})
     url, t0, lines = None, time.monotonic(), []
     while time.monotonic() - t0 < START_TIMEOUT_S:
         line = proc.stdout.readline()
@@ -676,8 +679,7 @@ def test_no_page_errors(app):
 
 def test_sigint_stops_the_server(app):
     proc = app["proc"]
-    proc.send_signal(signal.SIGINT)
-    assert proc.wait(timeout=20) == 0
+    assert _budget.wait_after_signal(proc, signal.SIGINT, 10.0) == 0
     out = proc.stdout.read()
     assert "athenakin app: stopped" in out and "Traceback" not in out
     with socket.socket() as s, pytest.raises(OSError):
