@@ -439,23 +439,29 @@ class ForcesLayer:
             self.set_tip_force(np.asarray(self.force_input.value, dtype=float))
 
     async def _on_handle(self, event: Any) -> None:
-        """A drag of the force handle: on viser's event loop, in order (app/_sync.py)."""
-        phase = getattr(event, "phase", "update")
-        if phase in ("start", "end"):
-            self._dragging = phase == "start"
-        self._moves.submit(self._apply_handle, phase == "end")
+        """A drag of the force handle: on viser's event loop, in order (app/_sync.py).
 
-    def _apply_handle(self, last: bool) -> None:
-        """Set the tip force of the handle's latest position (snapped to it at the end).
-
-        The handle snaps to the force set, cut at MAX_TIP_FORCE_N.
+        The handle's position is read here, at its event; the drag is over once the
+        end's move has run.
         """
-        g = self._geometry
-        if g is None:
-            return
-        f = tip_force_from_handle(np.asarray(self.handle.position, dtype=float),
-                                  g.points["tip"])
-        self.set_tip_force(f, place_handle=last or not self._dragging)
+        phase = getattr(event, "phase", "update")
+        if phase == "start":
+            self._dragging = True
+        at = np.array(self.handle.position, dtype=float)
+        self._moves.submit(self._apply_handle, at, phase == "end")
+
+    def _apply_handle(self, at: FloatArray, last: bool) -> None:
+        """Set the tip force of a handle at ``at`` (base frame, m).
+
+        At the end the handle snaps to the force set (cut at MAX_TIP_FORCE_N).
+        """
+        with self._lock:
+            g = self._geometry
+            if g is not None:
+                self.set_tip_force(tip_force_from_handle(at, g.points["tip"]),
+                                   place_handle=last)
+            if last:
+                self._dragging = False
 
     def stop(self) -> None:
         """Let the force handle's pending moves run; none after (the app is stopping)."""

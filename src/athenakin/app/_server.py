@@ -312,21 +312,24 @@ class AthenaApp:
         """A drag of the tip handle: on viser's event loop, in order (app/_sync.py).
 
         Only the browser fires the handle's events (setting its position here fires
-        none), so there is no echo to ignore. The move (:meth:`_apply_handle`) reads the
-        handle's latest position.
+        none), so there is no echo to ignore. The handle's position is read here, at its
+        event (the move may run later, after the app has placed the handle elsewhere);
+        the drag is over once the end's move has run.
         """
         phase = getattr(event, "phase", "update")
-        if phase in ("start", "end"):
-            self._dragging = phase == "start"
-        self._moves.submit(self._apply_handle, phase == "end")
+        if phase == "start":
+            self._dragging = True
+        tip_b = np.array(self._handle.position, dtype=float)
+        self._moves.submit(self._apply_handle, tip_b, phase == "end")
 
-    def _apply_handle(self, last: bool) -> None:
-        """Move the tip to the handle's latest position; snap the handle there at the end."""
+    def _apply_handle(self, tip_b: FloatArray, last: bool) -> None:
+        """Move the tip to ``tip_b`` (base frame, m); at the end, snap the handle there."""
         T = self.setup.T_b_e
-        tip_b = np.asarray(self._handle.position, dtype=float)
-        self._move_tip(T[:3, :3].T @ (tip_b - T[:3, 3]), snap_angles=False)
-        if last:
-            self._place_handle()
+        with self._lock:
+            self._move_tip(T[:3, :3].T @ (tip_b - T[:3, 3]), snap_angles=False)
+            if last:
+                self._dragging = False
+                self._place_handle()
 
     async def _on_grip(self, event: Any) -> None:
         """A drag of the tip grip: the tip follows the pointer in the view plane.
