@@ -892,3 +892,35 @@ def test_a_grip_event_after_stop_is_ignored():
     asyncio.run(app._on_grip(SimpleNamespace(phase="start", start_position=tuple(tip0),
                                              end_position=tuple(tip0 + 0.01))))
     np.testing.assert_array_equal(app.view.readouts.tip_b, tip0)
+
+
+@pytest.mark.skipif(not HAS_VISER, reason="needs the 'app' extra (viser)")
+def test_a_handle_drag_ends_where_its_end_put_the_handle():
+    """The end of a drag reaches the event loop while an update's move still runs: the tip
+    ends where the end put the handle (a move that read the handle's live position took the
+    position that the update's move had just placed the handle at)."""
+    from athenakin.app import AthenaApp
+
+    app = AthenaApp(port=0, backend="numpy")
+    try:
+        T, r = app.setup.T_b_e, app.view.readouts
+        at = [r.tip_e + [0.0, 0.002, 0.002], r.tip_e + [0.0, 0.004, 0.004]]   # update, end
+        move_tip, calls = app._move_tip, []
+
+        def slow_move(tip_e, **kw):
+            calls.append(tip_e)
+            if len(calls) == 2:              # the update's move: the end arrives meanwhile
+                app._handle.position = tuple(T[:3, :3] @ at[1] + T[:3, 3])
+                asyncio.run(app._on_handle(SimpleNamespace(phase="end")))
+            move_tip(tip_e, **kw)
+
+        app._move_tip = slow_move
+        _handle_event(app, "start")
+        app._handle.position = tuple(T[:3, :3] @ at[0] + T[:3, 3])
+        _handle_event(app, "update")
+        app._moves.drain()                   # the end's move, submitted during the update's
+        np.testing.assert_allclose(app.view.readouts.tip_e, at[1], rtol=0, atol=1e-9)
+        np.testing.assert_allclose(app._handle.position, app.view.readouts.tip_b, atol=1e-9)
+        assert not app._dragging and len(calls) == 3
+    finally:
+        app.stop()
