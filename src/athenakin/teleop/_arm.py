@@ -9,20 +9,20 @@ forces (:mod:`~athenakin.teleop._arm_backend`: :class:`MujocoBackend` by default
 robot through :class:`ArmBackend`'s two methods).
 
 The arm refuses what the teleoperation core refuses (:mod:`~athenakin.teleop._arm_checks`).
-A servo command (``servo_jp``, ``servo_cp``) outside the strokes, with the carriages'
-order reversed, off the FK slot's workspace, not finite, or with an effort above
-``max_force`` is *held and flagged*: the setpoint stays where the last accepted command
-put it (at rest) and :attr:`SimulatedArm.refusal` names the reason; it never raises for a
-value, as a real-time loop must not. A planned move (``move_jp``, ``move_cp``, a Ruckig
-profile: :mod:`~athenakin.teleop._move_profile`) outside the strokes raises a named
-error, as a planning call may. The servo's force is saturated at ``max_force`` per
-actuator. A reading of the encoders of the wrong shape, not finite, beyond the strokes
-by more than :data:`~athenakin.teleop._arm_checks.READING_MARGIN` or faster than
+A servo command (``servo_jp``, ``servo_cp``) outside the strokes, with the carriages' order
+reversed, off the FK slot's workspace, not finite, with a velocity above ``v_max`` or an
+effort above ``max_force`` is *held and flagged*: the setpoint stays where the last accepted
+command put it (at rest) and :attr:`SimulatedArm.refusal` names the reason; it never raises
+for a value, as a real-time loop must not. A planned move (``move_jp``, ``move_cp``, a
+Ruckig profile: :mod:`~athenakin.teleop._move_profile`) outside the strokes raises a named
+error, as a planning call may. The servo's force is saturated at ``max_force`` per actuator.
+A reading of the encoders of the wrong shape, not finite, beyond the strokes by more than
+:data:`~athenakin.teleop._arm_checks.READING_MARGIN` or faster than
 :data:`~athenakin.teleop._arm_checks.READING_SPEED_MAX`, and a fault of the backend
 (MuJoCo's instability, a loop-closure error above
-:data:`~athenakin.teleop._arm_backend.CLOSURE_TOL`) put the arm in ``FAULT`` in the
-cycle they occur, with :attr:`SimulatedArm.fault` naming the reason; ``FAULT`` and
-``DISABLED`` write no force.
+:data:`~athenakin.teleop._arm_backend.CLOSURE_TOL`) put the arm in ``FAULT`` in the cycle
+they occur, with :attr:`SimulatedArm.fault` naming the reason; ``FAULT`` and ``DISABLED``
+write no force.
 
 Frames and units: joints in m, m/s, N; Cartesian poses are the tool-tip frame in the
 base frame (``T_b_tip``, SI); :meth:`SimulatedArm.servo_cp` and
@@ -120,9 +120,8 @@ class SimulatedArm:
     backend : ArmBackend, optional, keyword-only
         A robot driver; default a :class:`MujocoBackend` of the exported MJCF.
     v_max, a_max, j_max : float, keyword-only
-        Limits of ``move_jp`` / ``move_cp`` (Ruckig): m/s, m/s^2, m/s^3. ``v_max`` also
-        bounds a servo command's velocity and a move's goal velocity (beyond it the
-        command is refused, as one outside the strokes).
+        Limits of ``move_jp`` / ``move_cp`` (Ruckig): m/s, m/s^2, m/s^3; ``v_max`` also
+        bounds a servo command's velocity and a move's goal velocity (beyond: refused).
     max_force : float, keyword-only
         Saturation of the servo's force per actuator, and the largest effort a servo
         command may carry, N (:data:`~athenakin.teleop._servo.MAX_FORCE`).
@@ -200,8 +199,7 @@ class SimulatedArm:
         if np.isnan(self._ff_loop(q, np.zeros(3), np.zeros(3))).any():
             raise InvalidInputError(f"q0: {q.tolist()} m does not assemble in FK slot "
                                     f"{self.slot}")
-        # the IK of servo_cp and move_cp compiled (or loaded from numba's cache) now, not
-        # in the cycle of the first such command
+        # servo_cp's IK compiled (or loaded from numba's cache) now, not in a command's cycle
         q_from_tip(self._tip_frame(q), "base", self.T_b_e, design)
         self.gains = gains
         self.kp, self.kd = servo_gains(q, self.T_b_e, design, self.masses, self.slot,
@@ -416,9 +414,7 @@ class SimulatedArm:
         if not self._accepting("servo_jp"):
             return
         why = command_refusal(qa, v, self.design, velocity_name="velocity",
-                              v_max=self.limits[0])
-        if why is None and e is not None and not np.all(np.abs(e) <= self.max_force):
-            why = f"effort: {e.tolist()} N exceeds max_force {self.max_force:g} N"
+                              v_max=self.limits[0], effort=e, max_force=self.max_force)
         if why is None:
             acc = (v - self._sp_qd) * self.rate if velocity is not None else self._zero
             why = self._set(qa, v, acc, e)

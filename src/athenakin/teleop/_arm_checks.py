@@ -11,6 +11,7 @@ Units: m, m/s; tips in the base frame or the RCM frame E.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -92,8 +93,9 @@ def position_refusal(q: FloatArray, design: Design, name: str) -> str | None:
 
 
 def command_refusal(q: FloatArray, velocity: FloatArray, design: Design, *,
-                    velocity_name: str, v_max: float) -> str | None:
-    """Why a command's position and velocity are refused, or None.
+                    velocity_name: str, v_max: float, effort: FloatArray | None = None,
+                    max_force: float = math.inf) -> str | None:
+    """Why a command's position, velocity and effort are refused, or None.
 
     Parameters
     ----------
@@ -107,6 +109,10 @@ def command_refusal(q: FloatArray, velocity: FloatArray, design: Design, *,
         The velocity's name in the reason.
     v_max : float, keyword-only
         The arm's velocity limit, m/s.
+    effort : ndarray, shape (3,), optional, keyword-only
+        Feed-forward forces, N: each ``|f_i| <= max_force`` (NaN refused).
+    max_force : float, keyword-only
+        The arm's force limit, N.
 
     Returns
     -------
@@ -118,6 +124,8 @@ def command_refusal(q: FloatArray, velocity: FloatArray, design: Design, *,
     if why is None and not np.all(np.abs(velocity) <= v_max * (1.0 + VELOCITY_SLACK)):
         why = (f"{velocity_name}: {velocity.tolist()} m/s exceeds the arm's v_max "
                f"{v_max:g} m/s")
+    if why is None and effort is not None and not np.all(np.abs(effort) <= max_force):
+        why = f"effort: {effort.tolist()} N exceeds max_force {max_force:g} N"
     return why
 
 
