@@ -191,9 +191,7 @@ class AthenaApp:
         self.view: AppView | None = None
         self._dragging = False
         self._grab: tuple[FloatArray, FloatArray] | None = None     # the grip's gesture
-        self._grip_lock = threading.Lock()
         self._moves = OrderedWorker("athena-moves")   # the drags' moves (app/_sync.py)
-        self._grip_target: tuple[FloatArray, bool] | None = None    # newest, and if the end
         self.page = PageWriter(self.server, solids_of=solids)   # the scene nodes it sent
         self._build_gui(plan)
         self.page.send_script(self.title)
@@ -312,20 +310,23 @@ class AthenaApp:
         """A drag of the tip handle: on viser's event loop, in order (app/_sync.py).
 
         Only the browser fires the handle's events (setting its position here fires
-        none), so there is no echo to ignore. The handle's position is read here, at its
-        event (the move may run later, after the app has placed the handle elsewhere);
-        the drag is over once the end's move has run.
+        none), so there is no echo to ignore. The move is :meth:`_drag_move`; the
+        handle's position is read here, at its event (the move may run later, after the
+        app has placed the handle elsewhere); the drag is over once the end's move has run.
         """
         phase = getattr(event, "phase", "update")
         if phase == "start":
             self._dragging = True
         tip_b = np.array(self._handle.position, dtype=float)
-        self._moves.submit(self._apply_handle, tip_b, phase == "end")
+        self._moves.submit(self._drag_move, tip_b, phase == "end")
 
-    def _apply_handle(self, tip_b: FloatArray, last: bool) -> None:
-        """Move the tip to ``tip_b`` (base frame, m); at the end, snap the handle there."""
-        T = self.setup.T_b_e
+    def _drag_move(self, tip_b: FloatArray, last: bool) -> None:
+        """Move the tip to ``tip_b`` (base frame, m): a move of the handle's or the grip's drag.
+
+        At the end the drag is over, and the handle and the grip are placed on the tip.
+        """
         with self._lock:
+            T = self.setup.T_b_e
             self._move_tip(T[:3, :3].T @ (tip_b - T[:3, 3]), snap_angles=False)
             if last:
                 self._dragging = False
@@ -335,7 +336,7 @@ class AthenaApp:
         """A drag of the tip grip: the tip follows the pointer in the view plane.
 
         On viser's event loop, in order (app/_sync.py): the gesture's grab is never read
-        before its start nor after its end. The move (:meth:`_apply_grip`) takes the
+        before its start nor after its end. The move (:meth:`_drag_move`) takes the
         newest target, so a slow IK drops the stale ones and the last one applied is the
         end's.
         """
@@ -351,23 +352,7 @@ class AthenaApp:
         last = event.phase == "end"
         if last:
             self._grab = None
-        with self._grip_lock:
-            self._grip_target = (target_b, last)
-        self._moves.submit(self._apply_grip)
-
-    def _apply_grip(self) -> None:
-        """Move the tip to the grip's newest target (none: an earlier move took it)."""
-        with self._lock:
-            with self._grip_lock:
-                pending, self._grip_target = self._grip_target, None
-            if pending is None:
-                return
-            target_b, last = pending
-            T = self.setup.T_b_e
-            self._move_tip(T[:3, :3].T @ (target_b - T[:3, 3]), snap_angles=False)
-            if last:
-                self._dragging = False
-                self._place_handle()
+        self._moves.submit(self._drag_move, target_b, last, newest="grip")
 
     def _on_handle_visible(self, _: object) -> None:
         self._handle.visible = self._grip.visible = bool(self._handle_cb.value)

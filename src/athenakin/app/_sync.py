@@ -20,6 +20,7 @@ a move and the moves run in the events' order.
 from __future__ import annotations
 
 import contextlib
+import functools
 import sys
 import threading
 import traceback
@@ -60,18 +61,37 @@ class OrderedWorker:
 
     def __init__(self, name: str) -> None:
         self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix=name)
+        self._lock = threading.Lock()
+        self._newest: dict[str, tuple[Callable[..., Any], tuple[Any, ...]]] = {}
 
-    def submit(self, fn: Callable[..., Any], *args: Any) -> None:
+    def submit(self, fn: Callable[..., Any], *args: Any, newest: str | None = None) -> None:
         """Run ``fn(*args)`` after the moves submitted before it; none once stopped.
 
+        With ``newest`` (a key), a move of that key still waiting is replaced by this
+        one: a slow move leaves no backlog of stale ones, and the last submitted runs.
         An exception of ``fn`` is printed with its traceback on stderr (a future would
         keep it silent).
         """
+        job: Callable[[], Any]
+        if newest is None:
+            job = functools.partial(fn, *args)
+        else:
+            with self._lock:
+                waiting = newest in self._newest
+                self._newest[newest] = (fn, args)
+            if waiting:
+                return
+            job = functools.partial(self._run_newest, newest)
         try:
-            done = self._pool.submit(fn, *args)
+            done = self._pool.submit(job)
         except RuntimeError:          # stopped: the app takes no more moves
             return
         done.add_done_callback(_print_error)
+
+    def _run_newest(self, key: str) -> None:
+        with self._lock:
+            fn, args = self._newest.pop(key)
+        fn(*args)
 
     def drain(self) -> None:
         """Block until every move submitted so far has run (nothing to wait for once stopped)."""
