@@ -154,6 +154,54 @@ def test_the_servo_force_saturates_at_max_force():
     np.testing.assert_allclose(arm.measured_js().position, Q0 + [0.05, 0, 0], atol=1e-5)
 
 
+@pytest.mark.parametrize("jump", [[0.0, 0.0, 0.12], [-0.12, 0.0, 0.0], [0.03, -0.05, 0.1]])
+def test_a_far_servo_setpoint_is_approached_at_v_max_not_faster(jump):
+    """A servo jump of 12 cm: the plain PD law drove the carriages at 3.5 m/s (35 v_max)
+    and the loop closure opened past CLOSURE_TOL (FAULT); the velocity-bounded law
+    approaches at v_max, the loop stays closed to a tenth of CLOSURE_TOL, the arm arrives."""
+    arm = _enabled()
+    goal = Q0 + np.array(jump)
+    arm.servo_jp(goal)
+    assert arm.refusal is None
+    v_max = arm.limits[0]
+    n = int(1.5 * np.abs(jump).max() / v_max * arm.rate) + 500
+    peak = closure = 0.0
+    for _ in range(n):
+        arm.step(1)
+        peak = max(peak, float(np.abs(arm.measured_js().velocity).max()))
+        closure = max(closure, arm.backend.closure_error())
+        assert arm.operating_state == "ENABLED", arm.fault
+    assert 0.9 * v_max < peak <= 1.05 * v_max         # at v_max; the overshoot of the lag
+    assert closure < 0.1 * CLOSURE_TOL
+    np.testing.assert_allclose(arm.measured_js().position, goal, atol=1e-5)
+
+
+def test_the_velocity_bound_leaves_a_near_setpoint_to_the_plain_pd_law():
+    """Below v_max the bounded law is the PD law bit for bit; above it the approach
+    velocity is scaled to v_max with its direction kept."""
+    from athenakin.teleop._servo import approach_gain, pd_force
+
+    rng = np.random.default_rng(7)
+    arm = _enabled()
+    L = approach_gain(arm.kp, arm.kd)
+    np.testing.assert_allclose(arm.kd @ L, arm.kp, rtol=1e-12, atol=1e-9 * np.abs(arm.kp).max())
+    for _ in range(50):
+        ff, q, qd = rng.normal(size=3), Q0 + 1e-4 * rng.normal(size=3), 0.01 * rng.normal(size=3)
+        sp, spd = Q0 + 1e-4 * rng.normal(size=3), 0.01 * rng.normal(size=3)
+        plain = pd_force(ff, arm.kp, arm.kd, sp, spd, q, qd, math.inf)
+        bounded = pd_force(ff, arm.kp, arm.kd, sp, spd, q, qd, math.inf, L=L, v_max=0.1)
+        np.testing.assert_array_equal(bounded[0], plain[0])
+        far = Q0 + 0.1 * rng.normal(size=3)
+        f, _ = pd_force(ff, arm.kp, arm.kd, far, spd, q, qd, math.inf, L=L, v_max=0.1)
+        v_cmd = np.linalg.solve(arm.kd, f - ff) + qd      # the velocity the law servoes to
+        v_des = spd + L @ (far - q)
+        np.testing.assert_allclose(np.abs(v_cmd).max(), 0.1, rtol=1e-9)
+        np.testing.assert_allclose(v_cmd / np.linalg.norm(v_cmd),
+                                   v_des / np.linalg.norm(v_des), atol=1e-9)
+    zero = approach_gain(arm.kp, np.zeros((3, 3)))     # kd = 0: no approach velocity
+    assert not zero.any()
+
+
 # --- stability for every mass model and rate the constructor accepts ---------------------
 _RODS = {b: 0.1 for b in MASS_BODIES if b != "rail"}
 

@@ -15,7 +15,8 @@ effort above ``max_force`` is *held and flagged*: the setpoint stays where the l
 command put it (at rest) and :attr:`SimulatedArm.refusal` names the reason; it never raises
 for a value, as a real-time loop must not. A planned move (``move_jp``, ``move_cp``, a
 Ruckig profile: :mod:`~athenakin.teleop._move_profile`) outside the strokes raises a named
-error, as a planning call may. The servo's force is saturated at ``max_force`` per actuator.
+error, as a planning call may. The servo approaches a far setpoint at ``v_max``, never
+faster, and its force is saturated at ``max_force`` per actuator.
 A reading of the encoders of the wrong shape, not finite, beyond the strokes by more than
 :data:`~athenakin.teleop._arm_checks.READING_MARGIN` or faster than
 :data:`~athenakin.teleop._arm_checks.READING_SPEED_MAX`, and a fault of the backend
@@ -55,7 +56,7 @@ from ._arm_checks import (
 )
 from ._filter import check_rate
 from ._move_profile import move_profile, profile_at
-from ._servo import MAX_FORCE, ServoGains, pd_force, servo_gains
+from ._servo import MAX_FORCE, ServoGains, approach_gain, pd_force, servo_gains
 
 __all__ = ["JointState", "SimulatedArm", "OPERATING_STATES", "MAX_STEPS"]
 
@@ -204,6 +205,7 @@ class SimulatedArm:
         self.gains = gains
         self.kp, self.kd = servo_gains(q, self.T_b_e, design, self.masses, self.slot,
                                        self.rate, gains)
+        self._approach = approach_gain(self.kp, self.kd)
         if backend is None:
             backend = MujocoBackend(self.T_b_e, design, q, self.slot, self.masses, self.rate)
         elif not isinstance(backend, ArmBackend):
@@ -526,15 +528,9 @@ class SimulatedArm:
         ff = self._ff_loop(q, qd, qdd)
         if np.isnan(ff).any():
             return f"q: {np.asarray(q).tolist()} m does not assemble in FK slot {self.slot}"
-        self._sp_q, self._sp_qd, self._sp_qdd = (np.array(q, dtype=float),
-                                                 np.array(qd, dtype=float),
-                                                 np.array(qdd, dtype=float))
-        if effort is not None:
-            self._ff = np.array(effort, dtype=float)
-        elif self.feedforward:
-            self._ff = np.array(ff, dtype=float)
-        else:
-            self._ff = np.zeros(3)
+        self._sp_q, self._sp_qd, self._sp_qdd = (np.array(x, dtype=float) for x in (q, qd, qdd))
+        chosen = effort if effort is not None else ff if self.feedforward else self._zero
+        self._ff = np.array(chosen, dtype=float)
         return None
 
     def _read(self) -> str | None:
@@ -554,7 +550,8 @@ class SimulatedArm:
         """Advance ``n`` servo cycles of ``1 / rate`` s (servo, write, read, check).
 
         In ``ENABLED`` and ``PAUSED`` the servo writes ``ff + Kp (q_sp - q) + Kd (qd_sp -
-        qd)``, each component saturated at ``max_force`` (:attr:`saturated` says so); in
+        qd)``, its approach velocity bounded by ``v_max`` and each component saturated at
+        ``max_force`` (:func:`~athenakin.teleop._servo.pd_force`; :attr:`saturated`); in
         ``DISABLED`` and ``FAULT`` it writes zero forces and NaN positions. After the
         write the encoders are read and checked, and the backend asked for a fault: a
         bad reading or a fault puts the arm in ``FAULT`` in that cycle.
@@ -578,7 +575,8 @@ class SimulatedArm:
                 self._advance_move()
             if self._state in ("ENABLED", "PAUSED"):
                 f, self.saturated = pd_force(self._ff, self.kp, self.kd, self._sp_q,
-                                             self._sp_qd, self._q_meas, self._qd_meas, lim)
+                                             self._sp_qd, self._q_meas, self._qd_meas, lim,
+                                             L=self._approach, v_max=self.limits[0])
                 positions = self._sp_q
             else:
                 f, positions, self.saturated = self._zero.copy(), self._nan, False

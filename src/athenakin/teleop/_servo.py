@@ -1,10 +1,11 @@
 """The arm's servo: PD gains from the masses, the sampled loop's stability, the force law (private).
 
 :class:`~athenakin.teleop.SimulatedArm` servoes its three actuators with
-``f = ff + Kp (q_sp - q) + Kd (qd_sp - qd)``, each component saturated at ``max_force``
-(:func:`pd_force`). Without explicit :class:`ServoGains` the gains follow from the mass
-matrix at ``q0`` and the rate (:func:`servo_gains`: ``Kp = omega^2 M``,
-``Kd = 2 zeta omega M``, ``omega = min(BANDWIDTH, BANDWIDTH_PER_RATE rate)``); either way
+``f = ff + Kp (q_sp - q) + Kd (qd_sp - qd)``, its approach velocity bounded by ``v_max``
+and each component saturated at ``max_force`` (:func:`pd_force`). Without explicit
+:class:`ServoGains` the gains follow from the mass matrix at ``q0`` and the rate
+(:func:`servo_gains`: ``Kp = omega^2 M``, ``Kd = 2 zeta omega M``,
+``omega = min(BANDWIDTH, BANDWIDTH_PER_RATE rate)``); either way
 the sampled loop (force held over each cycle) must have a spectral radius below
 :data:`STABILITY_RADIUS`.
 
@@ -24,7 +25,7 @@ from .._validation import check_scalar
 from ..design import Design
 from ..errors import InvalidInputError
 
-__all__ = ["ServoGains", "servo_gains", "pd_force", "MAX_FORCE", "BANDWIDTH",
+__all__ = ["ServoGains", "servo_gains", "approach_gain", "pd_force", "MAX_FORCE", "BANDWIDTH",
            "BANDWIDTH_PER_RATE", "DAMPING_RATIO", "STABILITY_RADIUS", "MIN_MODAL_MASS"]
 
 #: Default bound of the servo's force per actuator (saturation, and the largest effort
@@ -146,10 +147,42 @@ def _spectral_radius(Kp: FloatArray, Kd: FloatArray, M: FloatArray, dt: float) -
     return float(np.max(np.abs(np.linalg.eigvals(phi))))
 
 
+def approach_gain(Kp: FloatArray, Kd: FloatArray) -> FloatArray:
+    """``L = Kd^-1 Kp``, 1/s: the velocity with which the PD law approaches its setpoint.
+
+    The PD force is ``Kd (qd_sp + L (q_sp - q) - qd)`` (:func:`pd_force`); where ``Kd`` is
+    singular (explicit ``kd = 0``) there is no approach velocity to bound and ``L`` is
+    zero, which leaves :func:`pd_force` the plain PD law.
+
+    Parameters
+    ----------
+    Kp, Kd : ndarray, shape (3, 3)
+        N/m, N s/m.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        1/s, read-only.
+    """
+    L = np.zeros((3, 3))
+    if np.linalg.matrix_rank(Kd) == 3:
+        L[:] = np.linalg.solve(Kd, Kp)
+    L.setflags(write=False)
+    return L
+
+
 def pd_force(ff: FloatArray, Kp: FloatArray, Kd: FloatArray, q_sp: FloatArray,
              qd_sp: FloatArray, q: FloatArray, qd: FloatArray,
-             max_force: float) -> tuple[FloatArray, bool]:
-    """One cycle's servo force ``ff + Kp (q_sp - q) + Kd (qd_sp - qd)``, saturated.
+             max_force: float, *, L: FloatArray | None = None,
+             v_max: float = math.inf) -> tuple[FloatArray, bool]:
+    """One cycle's servo force ``ff + Kp (q_sp - q) + Kd (qd_sp - qd)``, bounded, saturated.
+
+    The PD terms are ``Kd (v_des - qd)`` with the approach velocity
+    ``v_des = qd_sp + L (q_sp - q)`` (``L = Kd^-1 Kp``, :func:`approach_gain`); where a
+    component of ``v_des`` exceeds ``v_max``, ``v_des`` is scaled down to it, direction kept
+    (the velocity saturation of Khatib's operational-space control): a far setpoint is
+    approached at ``v_max``, never faster, and a near one gets the plain PD law. Then each
+    force component is saturated at ``max_force``.
 
     Parameters
     ----------
@@ -163,15 +196,25 @@ def pd_force(ff: FloatArray, Kp: FloatArray, Kd: FloatArray, q_sp: FloatArray,
         Measured, m and m/s.
     max_force : float
         Saturation per actuator, N.
+    L : ndarray, shape (3, 3), optional, keyword-only
+        ``Kd^-1 Kp``, 1/s (default none: the plain PD law, no velocity bound).
+    v_max : float, keyword-only
+        Bound of each component of the approach velocity, m/s (default none).
 
     Returns
     -------
     force : ndarray, shape (3,)
         N, each component within ``max_force``.
     saturated : bool
-        A component was clipped.
+        A component was clipped (the force, not the approach velocity).
     """
-    f = ff + Kp @ (q_sp - q) + Kd @ (qd_sp - qd)
+    e = q_sp - q
+    f = ff + Kp @ e + Kd @ (qd_sp - qd)
+    if L is not None:
+        v_des = qd_sp + L @ e
+        peak = np.abs(v_des).max()
+        if peak > v_max:
+            f = ff + Kd @ (v_des * (v_max / peak) - qd)
     saturated = not np.abs(f).max() <= max_force
     if saturated:
         f = np.clip(f, -max_force, max_force)
