@@ -23,7 +23,7 @@ pytest.importorskip("rclpy", reason="the extra 'ros2' (the ROS 2 client wheels: 
                                     "ros-rmw-fastrtps-cpp) is not installed for this Python")
 pytest.importorskip("mujoco", reason="the arm node serves the MuJoCo arm (extra 'sim')")
 
-from _ros2_graph import RELIABLE, Client, start, stop  # noqa: E402
+from _ros2_graph import DEADLINE, RELIABLE, Client, start, stop  # noqa: E402
 from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
 from geometry_msgs.msg import PoseStamped  # noqa: E402
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
@@ -612,3 +612,15 @@ def test_a_topic_name_ros_refuses_is_a_named_error(capsys, option, topic):
                  "--duration", "0.1"]) == 1
     err = capsys.readouterr().err
     assert f"{what}: expected a ROS topic name" in err and "a bug" not in err
+
+
+def test_the_teleop_node_waits_for_the_arm_no_longer_than_its_duration():
+    """Without --q0 the node waits for the arm's first measured_js: at most --wait-for-arm
+    s and never past --duration; with no arm on the graph it ends with the named wait, exit 1."""
+    proc = _start(["teleop", "--namespace", "/nobody_here", "--duration", "0.5"])
+    try:
+        rc = proc.wait(timeout=DEADLINE)
+    finally:
+        out = stop(proc)
+    assert rc == 1, out
+    assert "no /nobody_here/measured_js within 0.5 s" in out and "Traceback" not in out, out

@@ -66,6 +66,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     t.add_argument("--clock", choices=("ros", "master"), default="ros",
                    help="ros: cycles at --rate on the ROS clock (the watchdog counts silent "
                         "cycles); master: one cycle per master message at its stamp (replays)")
+    t.add_argument("--wait-for-arm", type=float, default=30.0,
+                   help="without --q0: wait this long for the arm's first measured_js, s "
+                        "(30; never longer than --duration)")
     t.add_argument("--with-arm", action="store_true",
                    help="run an arm node (enabled) in this process too")
     add_session_collision_options(t)
@@ -180,6 +183,8 @@ def run_teleop(args: argparse.Namespace) -> int:
     clutch = preset["clutch"] if args.clutch_topic is None else args.clutch_topic
     if args.q0 is not None:
         check_finite(args.q0, "--q0")
+    check_finite(args.wait_for_arm, "--wait-for-arm", positive=True)
+    wait = args.wait_for_arm if duration is None else min(args.wait_for_arm, duration)
     design, T = load_robot(args)
     col = session_collision(args, design)
     options = TeleopOptions(filter=args.filter, **col["options"],
@@ -199,7 +204,7 @@ def run_teleop(args: argparse.Namespace) -> int:
                           clutch_topic=None if clutch.lower() == "none" else clutch,
                           clutch_button=args.clutch_button, master_frame=args.master_frame,
                           status_every=args.status_every, use_sim_time=args.use_sim_time,
-                          clock=args.clock, context=context)
+                          clock=args.clock, wait_for_arm=wait, context=context)
         print(f"ros2 teleop: {pose} + {clutch} -> {node.namespace}/servo_jp at "
               f"{args.rate:g} Hz, bodies "
               + ("checked" if node.teleop.checks_clearance else "not checked (--no-bodies)")
