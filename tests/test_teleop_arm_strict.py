@@ -176,6 +176,27 @@ def test_a_far_servo_setpoint_is_approached_at_v_max_not_faster(jump):
     np.testing.assert_allclose(arm.measured_js().position, goal, atol=1e-5)
 
 
+@pytest.mark.parametrize("axis, end, sign", [(2, "stroke_max", 1.0), (0, "stroke_min", -1.0)])
+def test_the_full_force_into_a_stroke_end_stays_within_the_reading_margin(axis, end, sign):
+    """MuJoCo's default (soft) joint limit let max_force push a carriage 5 mm past its
+    stroke end: FAULT, and no enable() could clear it (the brakes held it there). The
+    backend's stroke ends are as stiff as its loop closures: under max_force for 3 s the
+    carriage stays within a tenth of READING_MARGIN, the arm ENABLED."""
+    arm = _enabled()
+    q = Q0.copy()
+    q[axis] = getattr(D, end)[axis]
+    effort = np.zeros(3)
+    effort[axis] = sign * arm.max_force
+    arm.servo_jp(q, effort=effort)
+    assert arm.refusal is None
+    past = 0.0
+    for _ in range(3000):
+        arm.step(1)
+        assert arm.operating_state == "ENABLED", arm.fault
+        past = max(past, sign * (arm.measured_js().position[axis] - q[axis]))
+    assert past < 0.1 * READING_MARGIN
+
+
 def test_the_velocity_bound_leaves_a_near_setpoint_to_the_plain_pd_law():
     """Below v_max the bounded law is the PD law bit for bit; above it the approach
     velocity is scaled to v_max with its direction kept."""
