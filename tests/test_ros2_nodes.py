@@ -598,7 +598,9 @@ def test_the_teleop_node_refuses_to_run_without_the_bodies_unless_told(capsys):
 
 @pytest.mark.parametrize("option, topic", [("--pose-topic", "bad topic"),
                                            ("--clutch-topic", "/bad topic"),
-                                           ("--pose-topic", "")])
+                                           ("--pose-topic", ""),
+                                           ("--pose-topic", "/master//pose"),
+                                           ("--clutch-topic", "master/joy/")])
 def test_a_topic_name_ros_refuses_is_a_named_error(capsys, option, topic):
     """A topic name with a space (or empty) is the user's error, exit 1 with the option and
     rclpy's reason, not "a bug" (exit 70), and no node is started."""

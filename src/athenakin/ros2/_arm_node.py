@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike
 from .._typing import FloatArray
 from .._validation import check_scalar
 from ..design import Design, resolve_design
+from ..errors import InvalidInputError
 from ..ros._frames import BASE_FRAME, RCM_FRAME, urdf_model
 from ._arm_state import StateMessages
 from ._convert import actuator_command, stamp_ns, tip_command
@@ -58,50 +59,80 @@ STATE_COMMANDS = {"enable": "enable", "disable": "disable", "pause": "pause",
 
 
 def check_namespace(namespace: str) -> str:
-    """A ROS namespace: ``/`` then names of letters, digits and ``_`` separated by ``/``."""
-    import re
+    """A ROS namespace by rclpy's rules, with its leading ``/`` and without a trailing one.
+
+    Raises
+    ------
+    TypeError
+        Not a str.
+    InvalidInputError
+        Not a namespace (rclpy's reason, on one line).
+    """
+    from rclpy.exceptions import InvalidNamespaceException
+    from rclpy.validate_namespace import validate_namespace
 
     if not isinstance(namespace, str):
         raise TypeError(f"namespace: expected a str, got {type(namespace).__name__}")
     ns = namespace if namespace.startswith("/") else "/" + namespace
     ns = ns.rstrip("/") or "/"
-    if ns != "/" and not re.fullmatch(r"(/[A-Za-z_][A-Za-z0-9_]*)+", ns):
-        raise ValueError(f"namespace: expected names of letters, digits and '_' separated by "
-                         f"'/' (e.g. /athena), got {namespace!r}")
+    try:
+        validate_namespace(ns)
+    except InvalidNamespaceException as exc:
+        reason = str(exc).splitlines()[0].removeprefix("Invalid namespace: ").rstrip(":")
+        raise InvalidInputError(f"namespace: expected names of letters, digits and '_' "
+                                f"separated by '/' (e.g. /athena), got {namespace!r}: "
+                                f"{reason}") from None
     return ns
 
 
-def check_topic(name: str, what: str) -> str:
-    """A ROS topic name (absolute, relative or private), as rclpy's validator reads it.
+def resolve_topic(name: object, what: str, *, namespace: str = "/",
+                  node: str = "node") -> str:
+    """The full name of a ROS topic (absolute, relative or private), by rclpy's rules.
+
+    rclpy's validator, its expansion (a relative name under ``namespace``, ``~`` under
+    ``namespace/node``) and its check of the full name: what ``create_subscription``
+    would refuse is refused here, before any node exists, with the parameter's name.
 
     Parameters
     ----------
     name : str
+        Checked: a str.
     what : str
         The parameter's name in the error.
+    namespace : str, keyword-only
+        The node's namespace (checked, :func:`check_namespace`).
+    node : str, keyword-only
+        The node's name (for ``~``).
 
     Returns
     -------
     str
-        ``name``.
+        The full topic name, e.g. ``/athena/measured_js``.
 
     Raises
     ------
-    TypeError, ValueError
-        Not a str; not a topic name (rclpy's reason, on one line).
+    TypeError
+        ``name`` not a str.
+    InvalidInputError
+        Not a topic name (rclpy's reason, on one line).
     """
     from rclpy.exceptions import InvalidTopicNameException
+    from rclpy.expand_topic_name import expand_topic_name
+    from rclpy.validate_full_topic_name import validate_full_topic_name
     from rclpy.validate_topic_name import validate_topic_name
 
     if not isinstance(name, str):
         raise TypeError(f"{what}: expected a str, got {type(name).__name__}")
+    ns = check_namespace(namespace)
     try:
         validate_topic_name(name)
-    except InvalidTopicNameException as exc:
+        full = expand_topic_name(name, node, ns)
+        validate_full_topic_name(full)
+    except (InvalidTopicNameException, ValueError) as exc:
         reason = str(exc).splitlines()[0].removeprefix("Invalid topic name: ").rstrip(":")
-        raise ValueError(f"{what}: expected a ROS topic name (e.g. /master/pose), got "
-                         f"{name!r}: {reason}") from None
-    return name
+        raise InvalidInputError(f"{what}: expected a ROS topic name (e.g. /master/pose), "
+                                f"got {name!r}: {reason}") from None
+    return str(full)
 
 
 def _qos(depth: int, *, latched: bool = False) -> Any:

@@ -35,7 +35,7 @@ from .._validation import check_count
 from ..errors import InvalidInputError
 from ..ros._mcap import MESSAGE_HEADER, McapFile, check_compression, compressor_module
 from ..ros._write import _LATCHED_QOS
-from ._arm_node import ARM_TOPICS, _create_node, _qos, check_namespace
+from ._arm_node import ARM_TOPICS, _create_node, _qos, check_namespace, resolve_topic
 from ._runtime import RosContext, crtk_types, require_rclpy, run_until, spin_executor, stop_node
 from ._teleop_node import TELEOP_TOPICS
 
@@ -50,7 +50,6 @@ LATCHED_TOPICS = (ARM_TOPICS["operating_state"], ARM_TOPICS["robot_description"]
 #: ``pkg/msg/Type``: the name of a ROS 2 message type.
 _TYPE_NAME = re.compile(r"([A-Za-z][A-Za-z0-9_]*)/msg/([A-Za-z][A-Za-z0-9_]*)")
 #: A topic name: absolute (``/a/b``) or relative to the namespace (``a/b``).
-_TOPIC_NAME = re.compile(r"/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*")
 _STAMP = {True: struct.Struct("<iI"), False: struct.Struct(">iI")}
 
 
@@ -100,16 +99,16 @@ def session_topics(namespace: str = "/athena", *, pose_topic: str = TELEOP_TOPIC
 
 
 def _resolve(name: object, namespace: str, what: str) -> str:
-    """The absolute name of a topic (a relative one under ``namespace``)."""
-    if not isinstance(name, str):
-        raise TypeError(f"{what}: expected a topic name (str), got {type(name).__name__}")
-    if not _TOPIC_NAME.fullmatch(name) or "__" in name:
-        raise InvalidInputError(f"{what}: expected a topic name of letters, digits and '_' "
-                                f"separated by '/' (e.g. /athena/measured_js or "
-                                f"measured_js), got {name!r:.80}")
-    if name.startswith("/"):
-        return name
-    return ("" if namespace == "/" else namespace) + "/" + name
+    """The absolute name of a topic (a relative one under ``namespace``), rclpy's rules.
+
+    A private name (``~``) or a substitution (``{node}``) would name the recorder's own
+    topics, not the session's: refused.
+    """
+    if isinstance(name, str) and (name.startswith("~") or "{" in name):
+        raise InvalidInputError(f"{what}: {name!r} would name the recorder's own topic; "
+                                f"expected an absolute or relative name (e.g. "
+                                f"/athena/measured_js or measured_js)")
+    return resolve_topic(name, what, namespace=namespace)
 
 
 def _type_name(cls: type) -> str:

@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike
 
 from .._validation import check_scalar
 from ..design import Design, resolve_design
-from ._arm_node import _create_node, _qos, check_namespace, check_topic
+from ._arm_node import _create_node, _qos, check_namespace, resolve_topic
 from ._convert import ACTUATORS, joint_state, master_position, stamp_ns
 from ._runtime import (
     CyclePacer,
@@ -141,9 +141,10 @@ class TeleopNode:
         self.T_b_e = resolve_rcm_frame(T_b_e, self.design)
         bodies = _session_bodies(self.design, bodies, options, check_bodies)
         self.namespace = check_namespace(arm_namespace)
-        check_topic(pose_topic, "pose_topic")
+        resolve_topic(pose_topic, "pose_topic", namespace=self.namespace, node=node_name)
         if clutch_topic is not None:
-            check_topic(clutch_topic, "clutch_topic")
+            resolve_topic(clutch_topic, "clutch_topic", namespace=self.namespace,
+                          node=node_name)
         self.rate = check_scalar(rate, "rate", positive=True)
         self.clutch_button = check_count(clutch_button, "clutch_button", minimum=0)
         self.status_every = check_count(status_every, "status_every", minimum=1)
