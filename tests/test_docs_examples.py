@@ -1,6 +1,5 @@
-"""The code in the README, docs/conventions.md and examples/ runs."""
+"""The examples run (the README's and the docs pages' blocks: tests/test_readme_blocks.py)."""
 
-import re
 import runpy
 import sys
 from pathlib import Path
@@ -8,22 +7,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-DOCS = [ROOT / "README.md", ROOT / "docs" / "conventions.md", ROOT / "docs" / "ros.md",
-        ROOT / "docs" / "certified.md", ROOT / "docs" / "dynamics.md"]
 EXAMPLES = sorted(p for p in (ROOT / "examples").rglob("*.py") if not p.name.startswith("_"))
-
-
-def python_blocks(path):
-    return re.findall(r"```python\n(.*?)```", path.read_text(), flags=re.S)
-
-
-@pytest.mark.parametrize("path", DOCS, ids=lambda p: p.name)
-def test_python_blocks_in_docs_run(path):
-    blocks = python_blocks(path)
-    assert blocks, f"{path} has no python block"
-    ns = {}                        # one page's blocks run in order, as a reader runs them
-    for code in blocks:
-        exec(compile(code, str(path), "exec"), ns)
 
 
 @pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: str(p.relative_to(ROOT)))
