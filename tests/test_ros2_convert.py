@@ -257,3 +257,50 @@ def _numbers(msg):
         a, b = msg.twist.linear, msg.twist.angular
         return np.array([a.x, a.y, a.z, b.x, b.y, b.z])
     return np.array(msg.position, dtype=float)
+
+
+def test_a_state_topic_without_a_reader_is_neither_filled_nor_published(monkeypatch):
+    """publish_once sends each state topic that has a subscription matched; with no reader
+    of the poses (their twist, the URDF joints) it runs no kinematics, and the next twist
+    after such cycles has no rotation before it (zero angular rate, as the first one)."""
+    import os
+    import time
+
+    import rclpy
+    from geometry_msgs.msg import TwistStamped
+
+    pytest.importorskip("mujoco", reason="the arm node serves the MuJoCo arm (extra 'sim')")
+    from athenakin.ros2 import ArmNode, RosContext
+
+    monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    domain = 1 + (os.getpid() + 70) % 100
+    node = ArmNode(enable=True, context=RosContext(domain_id=domain))
+    client_ctx = RosContext(domain_id=domain)
+    calls = []
+    fill_poses = node._state.fill_poses
+    monkeypatch.setattr(node._state, "fill_poses",
+                        lambda *a: calls.append(1) or fill_poses(*a))
+    try:
+        c = rclpy.create_node("reader", context=client_ctx.context)
+
+        def matched(name):
+            end = time.monotonic() + 120
+            while node._pubs[name].get_subscription_count() == 0:
+                assert time.monotonic() < end, f"no reader of {name} matched"
+                time.sleep(0.01)
+
+        c.create_subscription(JointState, "/athena/measured_js", lambda m: None, 10)
+        matched("measured_js")
+        node._state._prev_R = np.eye(3)              # as after a cycle with its kinematics
+        node.publish_once()
+        assert calls == [] and node._state._prev_R is None
+        c.create_subscription(TwistStamped, "/athena/measured_cv", lambda m: None, 10)
+        matched("measured_cv")
+        node.publish_once()
+        assert calls == [1]
+        assert node._state.measured_cv.twist.angular.x == 0.0      # no rotation before it
+        assert node._state._prev_R is not None
+    finally:
+        node.close()
+        node.context.close()
+        client_ctx.close()

@@ -58,6 +58,12 @@ STATE_COMMANDS = {"enable": "enable", "disable": "disable", "pause": "pause",
                   "resume": "resume", "home": "home", "unhome": "unhome"}
 
 
+#: The state publishers (keys of the node's publishers) of the joint messages, which
+#: :meth:`ArmNode.publish_once` sends first, and of the kinematic ones after them.
+_JOINT_TOPICS = ("measured_js", "joint_states", "setpoint_js")
+_POSE_TOPICS = ("measured_cp", "setpoint_cp", "measured_cv", "urdf_joint_states")
+
+
 def check_namespace(namespace: str) -> str:
     """A ROS namespace by rclpy's rules, with its leading ``/`` and without a trailing one.
 
@@ -441,28 +447,34 @@ class ArmNode:
             self._pubs["status"].publish(self.crtk.string(f"fault: {fault}", self._now()))
 
     def publish_once(self) -> None:
-        """Publish the arm's state now (every state topic once); the servo thread's step.
+        """Publish the arm's state now (each state topic that has a reader); the servo's step.
 
         The joint states go first, before any kinematics; then one forward kinematics of
         the measured position and one of the setpoint (kept while it does not move) fill
         the poses (:mod:`._arm_state`). The messages are filled in place and all carry
-        one stamp.
+        one stamp. A topic with no subscription matched (``get_subscription_count()``) is
+        neither filled nor published: with no reader of the poses, their twist and the
+        URDF joints, the kinematics is skipped, and the next ``measured_cv`` has no
+        rotation before it (angular rate zero, as the first one after start).
         """
         with self._lock:
             js, sp = self.arm.measured_js(), self.arm.setpoint_js()
         stamp = self._now()
         p, m = self._pubs, self._state
+        wanted = {name for name in (*_JOINT_TOPICS, *_POSE_TOPICS)
+                  if p[name].get_subscription_count() > 0}
         with self._publishing:
             m.fill_joints(js, sp, stamp)
-            p["measured_js"].publish(m.measured_js)
-            p["joint_states"].publish(m.measured_js)
-            p["setpoint_js"].publish(m.setpoint_js)
-            assembled = m.fill_poses(js, sp)
-            p["measured_cp"].publish(m.measured_cp)
-            p["setpoint_cp"].publish(m.setpoint_cp)
-            if assembled:
-                p["measured_cv"].publish(m.measured_cv)
-                p["urdf_joint_states"].publish(m.urdf_joint_states)
+            for name in _JOINT_TOPICS:
+                if name in wanted:
+                    p[name].publish(m.setpoint_js if name == "setpoint_js" else m.measured_js)
+            if wanted.isdisjoint(_POSE_TOPICS):
+                m.forget_rotation()
+            else:
+                assembled = m.fill_poses(js, sp)
+                for name in _POSE_TOPICS:     # the poses always; twist, URDF joints assembled
+                    if name in wanted and (assembled or name.endswith("_cp")):
+                        p[name].publish(getattr(m, name))
         self._publish_state()
 
     # --- running --------------------------------------------------------------------

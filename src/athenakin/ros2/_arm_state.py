@@ -174,7 +174,15 @@ class StateMessages:
             As in :meth:`fill`.
         """
         self.fill(js, sp, stamp)
-        self._prev_R = None          # the first published state has no rotation before it
+        self.forget_rotation()       # the first published state has no rotation before it
+
+    def forget_rotation(self) -> None:
+        """No rotation before the next :meth:`fill_poses` (a cycle without its kinematics).
+
+        The next ``measured_cv`` then has an angular rate of zero, as the first one after
+        start: a rate from two rotations more than a cycle apart would be a wrong one.
+        """
+        self._prev_R = None
 
     def fill(self, js: Any, sp: Any, stamp: Any) -> bool:
         """Write one cycle's state into the messages: :meth:`fill_joints`, :meth:`fill_poses`.
