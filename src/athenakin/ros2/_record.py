@@ -49,7 +49,6 @@ CHUNK_BYTES = 2**20
 LATCHED_TOPICS = (ARM_TOPICS["operating_state"], ARM_TOPICS["robot_description"])
 #: ``pkg/msg/Type``: the name of a ROS 2 message type.
 _TYPE_NAME = re.compile(r"([A-Za-z][A-Za-z0-9_]*)/msg/([A-Za-z][A-Za-z0-9_]*)")
-#: A topic name: absolute (``/a/b``) or relative to the namespace (``a/b``).
 _STAMP = {True: struct.Struct("<iI"), False: struct.Struct(">iI")}
 
 

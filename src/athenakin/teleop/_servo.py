@@ -147,12 +147,12 @@ def _spectral_radius(Kp: FloatArray, Kd: FloatArray, M: FloatArray, dt: float) -
     return float(np.max(np.abs(np.linalg.eigvals(phi))))
 
 
-def approach_gain(Kp: FloatArray, Kd: FloatArray) -> FloatArray:
+def approach_gain(Kp: FloatArray, Kd: FloatArray) -> FloatArray | None:
     """``L = Kd^-1 Kp``, 1/s: the velocity with which the PD law approaches its setpoint.
 
     The PD force is ``Kd (qd_sp + L (q_sp - q) - qd)`` (:func:`pd_force`); where ``Kd`` is
-    singular (explicit ``kd = 0``) there is no approach velocity to bound and ``L`` is
-    zero, which leaves :func:`pd_force` the plain PD law.
+    singular (explicit ``kd = 0``) there is no approach velocity to bound: None, which
+    leaves :func:`pd_force` the plain PD law.
 
     Parameters
     ----------
@@ -161,14 +161,14 @@ def approach_gain(Kp: FloatArray, Kd: FloatArray) -> FloatArray:
 
     Returns
     -------
-    ndarray, shape (3, 3)
+    ndarray, shape (3, 3), or None
         1/s, read-only.
     """
-    L = np.zeros((3, 3))
-    if np.linalg.matrix_rank(Kd) == 3:
-        L[:] = np.linalg.solve(Kd, Kp)
+    if np.linalg.matrix_rank(Kd) < 3:
+        return None
+    L = np.linalg.solve(Kd, Kp)
     L.setflags(write=False)
-    return L
+    return np.asarray(L, dtype=float)
 
 
 def pd_force(ff: FloatArray, Kp: FloatArray, Kd: FloatArray, q_sp: FloatArray,
