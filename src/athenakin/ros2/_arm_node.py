@@ -7,7 +7,8 @@ shape, a NaN, a goal it cannot profile; or a command the arm holds and flags in 
 ``refusal``: a stroke, an unreachable tip, an effort out of bounds, a state that takes
 no command) is answered on ``status`` and never executed. A dedicated servo thread
 steps the arm at its rate (or on each servo command's arrival, ``sync="command"``) and
-publishes its state every ``rate / publish_rate`` cycles; the ROS executor runs the
+publishes its state every ``rate / publish_rate`` cycles (each topic that has a reader:
+:meth:`ArmNode.publish_once`); the ROS executor runs the
 subscriptions on its own thread, so a burst of commands never delays a servo cycle by
 more than the lock's hold (one method call).
 
