@@ -197,6 +197,101 @@ def test_the_full_force_into_a_stroke_end_stays_within_the_reading_margin(axis, 
     assert past < 0.1 * READING_MARGIN
 
 
+#: A setpoint near the internal tangency of the module (w = 0, q3 in [0.2315, 0.2546] m),
+#: beside one of a seeded random stream: its inverse dynamics at rest is 132 N on q3 (the
+#: mass matrix grows without bound towards the tangency; 0.1 mm lower it does not assemble).
+NEAR_TANGENCY = [-0.27836, 0.04771, 0.2421]
+
+
+def test_a_setpoint_the_actuators_cannot_follow_is_held_and_flagged():
+    """Accepted before: a setpoint of the seeded stream there had a feed-forward of -730 N,
+    clipped to max_force, that threw the carriages at 2.4 m/s into the tangency. The arm
+    refuses a setpoint whose inverse dynamics exceeds max_force, and a velocity jumped to in
+    one cycle (an acceleration beyond the actuators); it takes the same velocity reached
+    over 0.2 s."""
+    arm = _enabled()
+    arm.servo_jp(NEAR_TANGENCY)
+    assert arm.refusal is not None and "beyond max_force" in arm.refusal
+    np.testing.assert_array_equal(arm.setpoint_js().position, Q0)
+    arm.servo_jp(NEAR, velocity=[0.08, 0.0, 0.0])          # from rest within one cycle
+    assert arm.refusal is not None and "beyond max_force" in arm.refusal
+    arm.step(200)
+    arm.servo_jp(NEAR, velocity=[0.08, 0.0, 0.0])
+    assert arm.refusal is None
+    arm.step(400)
+    assert arm.operating_state == "ENABLED"
+
+
+def test_a_servo_commands_acceleration_lasts_the_span_it_was_differenced_over():
+    """A client slower than the servo: the acceleration is the velocity's change over the
+    time since the setpoint was set, applied for as long; before, it was differenced over
+    one cycle and held until the next command (10x too large at 100 Hz, and for ever)."""
+    from athenakin.dynamics import InverseDynamicsLoop
+
+    arm = _enabled(backend=_Driver(Q0))
+    loop = InverseDynamicsLoop(T, D, masses=arm.masses)
+    arm.step(10)
+    v = np.array([0.02, -0.01, 0.03])
+    arm.servo_jp(NEAR, velocity=v)
+    with_acc = loop(NEAR, v, v / (10 * arm.dt)).copy()
+    without = loop(NEAR, v, np.zeros(3)).copy()
+    for k in range(15):
+        np.testing.assert_allclose(arm.feedforward_effort, with_acc if k < 10 else without,
+                                   rtol=1e-12, atol=1e-12 * np.abs(with_acc).max())
+        arm.step(1)
+    arm.servo_jp(NEAR, velocity=v)                          # no change of velocity: qdd 0
+    np.testing.assert_allclose(arm.feedforward_effort, without, rtol=1e-12, atol=1e-12)
+
+
+def test_random_far_servo_commands_never_fault_the_arm():
+    """A seeded stream of setpoints anywhere in the strokes, some with a velocity, each held
+    50-400 cycles: before, the arm faulted at the first (a loop-closure error), then threw
+    the carriages into the tangency at 2-4 m/s; now every accepted one keeps it ENABLED with
+    the loop closed to a tenth of CLOSURE_TOL."""
+    rng = np.random.default_rng(3)
+    lo, hi = np.asarray(D.stroke_min), np.asarray(D.stroke_max)
+    arm = _enabled()
+    accepted = closure = 0.0
+    for _ in range(60):
+        q = lo + (hi - lo) * rng.random(3)
+        v = rng.uniform(-0.1, 0.1, 3) * (rng.random() < 0.5)
+        arm.servo_jp(q, velocity=v)
+        if arm.refusal is not None:
+            continue
+        accepted += 1
+        for _ in range(int(rng.integers(50, 400))):
+            arm.step(1)
+            assert arm.operating_state == "ENABLED", arm.fault
+            closure = max(closure, arm.backend.closure_error())
+    assert accepted >= 30 and closure < 0.1 * CLOSURE_TOL
+
+
+def test_a_saturated_servo_force_keeps_the_pd_direction():
+    """Clipping each component of a coupled PD force alone turns it (the acceleration
+    M^-1 f can point away from the setpoint); the saturated force is ff + s pd, s in [0, 1],
+    its largest component at max_force."""
+    from athenakin.teleop._servo import approach_gain, pd_force
+
+    rng = np.random.default_rng(11)
+    arm = _enabled(backend=_Driver(Q0))
+    L = approach_gain(arm.kp, arm.kd)
+    for _ in range(50):
+        ff = rng.uniform(-20, 20, 3)
+        q_sp, q = Q0 + 0.05 * rng.normal(size=3), Q0 + 0.05 * rng.normal(size=3)
+        qd = rng.normal(size=3)
+        plain, _ = pd_force(ff, arm.kp, arm.kd, q_sp, np.zeros(3), q, qd, math.inf,
+                            L=L, v_max=0.1)
+        f, saturated = pd_force(ff, arm.kp, arm.kd, q_sp, np.zeros(3), q, qd, 50.0,
+                                L=L, v_max=0.1)
+        assert np.abs(f).max() <= 50.0
+        if saturated:
+            pd, part = plain - ff, f - ff
+            s = np.dot(part, pd) / np.dot(pd, pd)
+            assert 0.0 <= s <= 1.0
+            np.testing.assert_allclose(part, s * pd, atol=1e-9 * np.abs(pd).max())
+            assert np.abs(f).max() == pytest.approx(50.0, rel=1e-12)
+
+
 def test_the_velocity_bound_leaves_a_near_setpoint_to_the_plain_pd_law():
     """Below v_max the bounded law is the PD law bit for bit; above it the approach
     velocity is scaled to v_max with its direction kept."""
@@ -437,12 +532,14 @@ def test_a_servo_velocity_at_v_max_is_taken_and_beyond_it_refused():
     from athenakin.teleop._arm_checks import VELOCITY_SLACK
 
     arm = _enabled(backend=_Driver(Q0))
+    arm.step(200)               # held 0.2 s: v_max from rest is 0.5 m/s^2, not 100 in a cycle
     v_max = arm.limits[0]
     arm.servo_jp(Q0, velocity=[v_max * (1 + 0.5 * VELOCITY_SLACK), -v_max, 0.0])
     assert arm.refusal is None
     arm.servo_jp(Q0, velocity=[v_max * (1 + 2 * VELOCITY_SLACK), 0.0, 0.0])
     assert arm.refusal is not None and "exceeds the arm's v_max" in arm.refusal
     arm2 = _enabled(backend=_Driver(Q0), v_max=0.5)
+    arm2.step(200)
     arm2.servo_jp(Q0, velocity=[0.4, 0.0, 0.0])
     assert arm2.refusal is None
     # a master far ahead: the core limits every |qd_i| to its v_max (0.1 m/s, the arm's)

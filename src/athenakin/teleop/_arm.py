@@ -10,13 +10,13 @@ robot through :class:`ArmBackend`'s two methods).
 
 The arm refuses what the teleoperation core refuses (:mod:`~athenakin.teleop._arm_checks`).
 A servo command (``servo_jp``, ``servo_cp``) outside the strokes, with the carriages' order
-reversed, off the FK slot's workspace, not finite, with a velocity above ``v_max`` or an
-effort above ``max_force`` is *held and flagged*: the setpoint stays where the last accepted
-command put it (at rest) and :attr:`SimulatedArm.refusal` names the reason; it never raises
-for a value, as a real-time loop must not. A planned move (``move_jp``, ``move_cp``, a
-Ruckig profile: :mod:`~athenakin.teleop._move_profile`) outside the strokes raises a named
-error, as a planning call may. The servo approaches a far setpoint at ``v_max``, never
-faster, and its force is saturated at ``max_force`` per actuator.
+reversed, off the FK slot's workspace, not finite, with a velocity above ``v_max``, an
+effort or an inverse dynamics above ``max_force`` is *held and flagged*: the setpoint stays
+where the last accepted command put it (at rest) and :attr:`SimulatedArm.refusal` names the
+reason; it never raises for a value, as a real-time loop must not. A planned move
+(``move_jp``, ``move_cp``, a Ruckig profile: :mod:`~athenakin.teleop._move_profile`)
+outside the strokes raises a named error, as a planning call may. The servo approaches a
+far setpoint at ``v_max`` and its force is saturated at ``max_force`` per actuator.
 A reading of the encoders of the wrong shape, not finite, beyond the strokes by more than
 :data:`~athenakin.teleop._arm_checks.READING_MARGIN` or faster than
 :data:`~athenakin.teleop._arm_checks.READING_SPEED_MAX`, and a fault of the backend
@@ -34,7 +34,6 @@ RCM, so a pose's rotation is not used.
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any, Literal
 
 import numpy as np
@@ -54,39 +53,15 @@ from ._arm_checks import (
     read_encoders,
     vector3,
 )
+from ._crtk import OPERATING_STATES, JointState
 from ._filter import check_rate
 from ._move_profile import move_profile, profile_at
 from ._servo import MAX_FORCE, ServoGains, approach_gain, pd_force, servo_gains
 
 __all__ = ["JointState", "SimulatedArm", "OPERATING_STATES", "MAX_STEPS"]
 
-#: CRTK operating states.
-OPERATING_STATES = ("DISABLED", "ENABLED", "PAUSED", "FAULT")
 #: Most servo cycles one :meth:`SimulatedArm.step` call runs.
 MAX_STEPS = 1_000_000
-
-
-@dataclasses.dataclass(frozen=True)
-class JointState:
-    """CRTK's joint state (``sensor_msgs/JointState``) of the three actuators.
-
-    Attributes
-    ----------
-    t : float
-        Time, s (the arm's clock).
-    position : ndarray, shape (3,)
-        m.
-    velocity : ndarray, shape (3,)
-        m/s.
-    effort : ndarray, shape (3,)
-        N, positive along increasing ``q``: the force the servo applied in the last
-        cycle (zero in ``DISABLED`` and ``FAULT``).
-    """
-
-    t: float
-    position: FloatArray
-    velocity: FloatArray
-    effort: FloatArray
 
 
 class SimulatedArm:
@@ -214,6 +189,9 @@ class SimulatedArm:
         self._backend_fault = getattr(backend, "fault", None)
         self._backend_home = getattr(backend, "home", None)
         self.t = 0.0
+        self._t_set = 0.0                # the arm's time when the setpoint was last set, s
+        self._acc_end: float | None = None   # when a servo command's acceleration ends, s
+        self._ff_given = False           # the feed-forward is a command's effort
         self._zero = np.zeros(3)
         self._nan = np.full(3, np.nan)
         self._sp_q = q.copy()
@@ -321,7 +299,7 @@ class SimulatedArm:
         self._set_hold()
 
     def _set_hold(self) -> None:
-        self._set(self._q_meas, self._zero, self._zero, None)
+        self._set(self._q_meas, self._zero, self._zero, None, hold=True)
 
     def _to_fault(self, why: str) -> None:
         self._state, self.fault = "FAULT", why
@@ -417,12 +395,16 @@ class SimulatedArm:
             return
         why = command_refusal(qa, v, self.design, velocity_name="velocity",
                               v_max=self.limits[0], effort=e, max_force=self.max_force)
+        # the acceleration: differenced over the time since the setpoint was set (one cycle
+        # at least) and applied for as long (then the feed-forward of qdd = 0)
+        span = max(self.t - self._t_set, self.dt)
         if why is None:
-            acc = (v - self._sp_qd) * self.rate if velocity is not None else self._zero
+            acc = (v - self._sp_qd) / span if velocity is not None else self._zero
             why = self._set(qa, v, acc, e)
         if why is not None:
             self._refuse(why)
             return
+        self._acc_end = self.t + span - 0.5 * self.dt if velocity is not None else None
         self._move = None
         self.refusal = None
 
@@ -519,19 +501,35 @@ class SimulatedArm:
         self.refusal = why
         self._move = None
         if np.any(self._sp_qd != 0.0) or np.any(self._sp_qdd != 0.0):
-            self._set(self._sp_q, self._zero, self._zero, None)
+            self._set(self._sp_q, self._zero, self._zero, None, hold=True)
 
     # --- the servo loop -------------------------------------------------------------
     def _set(self, q: FloatArray, qd: FloatArray, qdd: FloatArray,
-             effort: FloatArray | None) -> str | None:
-        """Take the setpoint and its feed-forward; the reason it is refused, or None."""
+             effort: FloatArray | None, *, hold: bool = False) -> str | None:
+        """Take the setpoint and its feed-forward; the reason it is refused, or None.
+
+        A command's setpoint whose inverse dynamics exceeds ``max_force`` is refused (the
+        actuators cannot follow it: near a singular set of the dynamics, or an acceleration
+        beyond them); a hold (``hold``: at rest, the safe action) is always taken.
+        """
         ff = self._ff_loop(q, qd, qdd)
         if np.isnan(ff).any():
             return f"q: {np.asarray(q).tolist()} m does not assemble in FK slot {self.slot}"
+        if not hold and not np.all(np.abs(ff) <= self.max_force):
+            return (f"q: following this setpoint takes {np.round(ff, 1).tolist()} N "
+                    f"(inverse dynamics), beyond max_force {self.max_force:g} N")
         self._sp_q, self._sp_qd, self._sp_qdd = (np.array(x, dtype=float) for x in (q, qd, qdd))
+        self._t_set, self._acc_end, self._ff_given = self.t, None, effort is not None
         chosen = effort if effort is not None else ff if self.feedforward else self._zero
         self._ff = np.array(chosen, dtype=float)
         return None
+
+    def _end_acceleration(self) -> None:
+        """The servo command's acceleration has been applied for its span: qdd = 0 now."""
+        self._acc_end = None
+        self._sp_qdd = self._zero.copy()
+        if self.feedforward and not self._ff_given:
+            self._ff = np.array(self._ff_loop(self._sp_q, self._sp_qd, self._zero), dtype=float)
 
     def _read(self) -> str | None:
         """Read the encoders; keep a sound reading, else the reason it is not."""
@@ -583,6 +581,8 @@ class SimulatedArm:
             self._force = f
             self.backend.write(f, positions)
             self.t += self.dt
+            if self._acc_end is not None and self.t >= self._acc_end:
+                self._end_acceleration()
             why = self._check_backend()
             if why is not None and self._state != "FAULT":
                 self._to_fault(why)

@@ -181,8 +181,11 @@ def pd_force(ff: FloatArray, Kp: FloatArray, Kd: FloatArray, q_sp: FloatArray,
     ``v_des = qd_sp + L (q_sp - q)`` (``L = Kd^-1 Kp``, :func:`approach_gain`); where a
     component of ``v_des`` exceeds ``v_max``, ``v_des`` is scaled down to it, direction kept
     (the velocity saturation of Khatib's operational-space control): a far setpoint is
-    approached at ``v_max``, never faster, and a near one gets the plain PD law. Then each
-    force component is saturated at ``max_force``.
+    approached at ``v_max``, never faster, and a near one gets the plain PD law. Where a
+    component of ``ff + pd`` exceeds ``max_force`` the PD force ``pd`` is scaled down, its
+    direction kept, until every component is within it (then clipped, for a feed-forward
+    beyond it): clipping each component alone turns the force of a coupled mass matrix
+    into one that can accelerate the carriages away from the setpoint.
 
     Parameters
     ----------
@@ -206,16 +209,22 @@ def pd_force(ff: FloatArray, Kp: FloatArray, Kd: FloatArray, q_sp: FloatArray,
     force : ndarray, shape (3,)
         N, each component within ``max_force``.
     saturated : bool
-        A component was clipped (the force, not the approach velocity).
+        The force was scaled (the force, not the approach velocity).
     """
     e = q_sp - q
-    f = ff + Kp @ e + Kd @ (qd_sp - qd)
+    pd = Kp @ e + Kd @ (qd_sp - qd)
     if L is not None:
         v_des = qd_sp + L @ e
         peak = np.abs(v_des).max()
         if peak > v_max:
-            f = ff + Kd @ (v_des * (v_max / peak) - qd)
+            pd = Kd @ (v_des * (v_max / peak) - qd)
+    f = ff + pd
     saturated = not np.abs(f).max() <= max_force
     if saturated:
-        f = np.clip(f, -max_force, max_force)
+        # the largest s in [0, 1] with |ff + s pd| <= max_force in every component: the PD
+        # force keeps its direction, so M^-1 f still points where the servo accelerates
+        with np.errstate(divide="ignore", invalid="ignore"):
+            room = np.where(pd > 0, (max_force - ff) / pd, (-max_force - ff) / pd)
+        s = float(np.clip(np.min(np.where(pd != 0, room, np.inf)), 0.0, 1.0))
+        f = np.clip(ff + s * pd, -max_force, max_force)
     return f, saturated
