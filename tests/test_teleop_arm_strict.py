@@ -222,6 +222,21 @@ def test_a_setpoint_the_actuators_cannot_follow_is_held_and_flagged():
     assert arm.operating_state == "ENABLED"
 
 
+def test_a_move_into_what_the_actuators_cannot_follow_stops_and_holds():
+    """A planned move towards the tangency stops where its profile's inverse dynamics
+    passes max_force, held and flagged, the arm ENABLED."""
+    arm = _enabled()
+    arm.move_jp(NEAR_TANGENCY)
+    for _ in range(5000):
+        arm.step(1)
+        assert arm.operating_state == "ENABLED", arm.fault
+        if not arm.is_busy:
+            break
+    assert arm.refusal is not None and "cannot be followed" in arm.refusal
+    assert "beyond max_force" in arm.refusal
+    np.testing.assert_array_equal(arm.setpoint_js().velocity, np.zeros(3))
+
+
 def test_a_servo_commands_acceleration_lasts_the_span_it_was_differenced_over():
     """A client slower than the servo: the acceleration is the velocity's change over the
     time since the setpoint was set, applied for as long; before, it was differenced over

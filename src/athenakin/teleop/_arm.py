@@ -591,7 +591,7 @@ class SimulatedArm:
         p, v, a, done = profile_at(self._move, self.t + self.dt - self._move_t0)
         why = self._set(p, v, a, None)
         if why is not None:
-            self.refusal = f"move_jp: the profile leaves the workspace ({why})"
+            self.refusal = f"move_jp: stopped, the profile cannot be followed ({why})"
             self._move = None
             self._set_hold()
         elif done:
