@@ -309,7 +309,7 @@ def test_a_saturated_servo_force_keeps_the_pd_direction():
 
 def test_the_velocity_bound_leaves_a_near_setpoint_to_the_plain_pd_law():
     """Below v_max the bounded law is the PD law bit for bit; above it the approach
-    velocity is scaled to v_max with its direction kept."""
+    velocity (on top of the setpoint's own) is scaled to v_max with its direction kept."""
     from athenakin.teleop._servo import approach_gain, pd_force
 
     rng = np.random.default_rng(7)
@@ -325,11 +325,11 @@ def test_the_velocity_bound_leaves_a_near_setpoint_to_the_plain_pd_law():
         np.testing.assert_array_equal(bounded[0], plain[0])
         far = Q0 + 0.1 * rng.normal(size=3)
         f, _ = pd_force(ff, arm.kp, arm.kd, far, spd, q, qd, math.inf, L=L, v_max=0.1)
-        v_cmd = np.linalg.solve(arm.kd, f - ff) + qd      # the velocity the law servoes to
-        v_des = spd + L @ (far - q)
+        v_cmd = np.linalg.solve(arm.kd, f - ff) + qd - spd   # the approach it servoes to
+        v_corr = L @ (far - q)
         np.testing.assert_allclose(np.abs(v_cmd).max(), 0.1, rtol=1e-9)
         np.testing.assert_allclose(v_cmd / np.linalg.norm(v_cmd),
-                                   v_des / np.linalg.norm(v_des), atol=1e-9)
+                                   v_corr / np.linalg.norm(v_corr), atol=1e-9)
     assert approach_gain(arm.kp, np.zeros((3, 3))) is None    # kd = 0: no approach velocity
 
 

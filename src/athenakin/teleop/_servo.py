@@ -177,11 +177,12 @@ def pd_force(ff: FloatArray, Kp: FloatArray, Kd: FloatArray, q_sp: FloatArray,
              v_max: float = math.inf) -> tuple[FloatArray, bool]:
     """One cycle's servo force ``ff + Kp (q_sp - q) + Kd (qd_sp - qd)``, bounded, saturated.
 
-    The PD terms are ``Kd (v_des - qd)`` with the approach velocity
-    ``v_des = qd_sp + L (q_sp - q)`` (``L = Kd^-1 Kp``, :func:`approach_gain`); where a
-    component of ``v_des`` exceeds ``v_max``, ``v_des`` is scaled down to it, direction kept
-    (the velocity saturation of Khatib's operational-space control): a far setpoint is
-    approached at ``v_max``, never faster, and a near one gets the plain PD law. Where a
+    The PD terms are ``Kd (qd_sp + v_corr - qd)`` with the approach velocity
+    ``v_corr = L (q_sp - q)`` (``L = Kd^-1 Kp``, :func:`approach_gain`); where a component of
+    ``v_corr`` exceeds ``v_max``, ``v_corr`` is scaled down to it, direction kept (the
+    velocity saturation of Khatib's operational-space control): a far setpoint is
+    approached at ``v_max`` on top of the setpoint's own velocity, and a near one gets the
+    plain PD law (a tracking lag is caught up as the PD law does). Where a
     component of ``ff + pd`` exceeds ``max_force`` the PD force ``pd`` is scaled down, its
     direction kept, until every component is within it (then clipped, for a feed-forward
     beyond it): clipping each component alone turns the force of a coupled mass matrix
@@ -202,7 +203,7 @@ def pd_force(ff: FloatArray, Kp: FloatArray, Kd: FloatArray, q_sp: FloatArray,
     L : ndarray, shape (3, 3), optional, keyword-only
         ``Kd^-1 Kp``, 1/s (default none: the plain PD law, no velocity bound).
     v_max : float, keyword-only
-        Bound of each component of the approach velocity, m/s (default none).
+        Bound of each component of the approach velocity ``v_corr``, m/s (default none).
 
     Returns
     -------
@@ -214,10 +215,10 @@ def pd_force(ff: FloatArray, Kp: FloatArray, Kd: FloatArray, q_sp: FloatArray,
     e = q_sp - q
     pd = Kp @ e + Kd @ (qd_sp - qd)
     if L is not None:
-        v_des = qd_sp + L @ e
-        peak = np.abs(v_des).max()
+        v_corr = L @ e
+        peak = np.abs(v_corr).max()
         if peak > v_max:
-            pd = Kd @ (v_des * (v_max / peak) - qd)
+            pd = Kd @ (qd_sp + v_corr * (v_max / peak) - qd)
     f = ff + pd
     saturated = not np.abs(f).max() <= max_force
     if saturated:
