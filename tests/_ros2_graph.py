@@ -24,7 +24,9 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 __all__ = ["DEADLINE", "RELIABLE", "node_env", "start", "stop", "Client"]
 
 DEADLINE = 120.0          # s: the longest wait for a node to start (numba cache, load)
-RELIABLE = QoSProfile(depth=200, reliability=ReliabilityPolicy.RELIABLE)
+#: The client's QoS: reliable, a deep queue so that a reader slowed by a loaded machine
+#: keeps every message it is sent (the nodes' own queues are theirs).
+RELIABLE = QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE)
 
 
 class Client:
