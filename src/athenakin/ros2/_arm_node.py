@@ -59,10 +59,15 @@ STATE_COMMANDS = {"enable": "enable", "disable": "disable", "pause": "pause",
                   "resume": "resume", "home": "home", "unhome": "unhome"}
 
 
-#: The state publishers (keys of the node's publishers) of the joint messages, which
-#: :meth:`ArmNode.publish_once` sends first, and of the kinematic ones after them.
-_JOINT_TOPICS = ("measured_js", "joint_states", "setpoint_js")
-_POSE_TOPICS = ("measured_cp", "setpoint_cp", "measured_cv", "urdf_joint_states")
+#: The joint-state publishers (keys of the node's publishers), which
+#: :meth:`ArmNode.publish_once` sends first, and the message of
+#: :class:`._arm_state.StateMessages` each sends.
+_JOINT_TOPICS = {"measured_js": "measured_js", "joint_states": "measured_js",
+                 "setpoint_js": "setpoint_js"}
+#: The kinematic publishers (each sends the message of its own name), and whether it is
+#: sent only where the measured position assembles in the slot.
+_POSE_TOPICS = {"measured_cp": False, "setpoint_cp": False, "measured_cv": True,
+                "urdf_joint_states": True}
 
 
 def check_namespace(namespace: str) -> str:
@@ -85,10 +90,9 @@ def check_namespace(namespace: str) -> str:
     try:
         validate_namespace(ns)
     except InvalidNamespaceException as exc:
-        reason = str(exc).splitlines()[0].removeprefix("Invalid namespace: ").rstrip(":")
         raise InvalidInputError(f"namespace: expected names of letters, digits and '_' "
                                 f"separated by '/' (e.g. /athena), got {namespace!r}: "
-                                f"{reason}") from None
+                                f"{_rclpy_reason(exc, 'Invalid namespace: ')}") from None
     return ns
 
 
@@ -136,10 +140,15 @@ def resolve_topic(name: object, what: str, *, namespace: str = "/",
         full = expand_topic_name(name, node, ns)
         validate_full_topic_name(full)
     except (InvalidTopicNameException, ValueError) as exc:
-        reason = str(exc).splitlines()[0].removeprefix("Invalid topic name: ").rstrip(":")
         raise InvalidInputError(f"{what}: expected a ROS topic name (e.g. /master/pose), "
-                                f"got {name!r}: {reason}") from None
+                                f"got {name!r}: {_rclpy_reason(exc, 'Invalid topic name: ')}"
+                                ) from None
     return str(full)
+
+
+def _rclpy_reason(exc: Exception, prefix: str) -> str:
+    """The first line of an rclpy validator's message, without its ``prefix``."""
+    return str(exc).splitlines()[0].removeprefix(prefix).rstrip(":")
 
 
 def _qos(depth: int, *, latched: bool = False) -> Any:
@@ -466,15 +475,15 @@ class ArmNode:
                   if p[name].get_subscription_count() > 0}
         with self._publishing:
             m.fill_joints(js, sp, stamp)
-            for name in _JOINT_TOPICS:
+            for name, message in _JOINT_TOPICS.items():
                 if name in wanted:
-                    p[name].publish(m.setpoint_js if name == "setpoint_js" else m.measured_js)
+                    p[name].publish(getattr(m, message))
             if wanted.isdisjoint(_POSE_TOPICS):
                 m.forget_rotation()
             else:
                 assembled = m.fill_poses(js, sp)
-                for name in _POSE_TOPICS:     # the poses always; twist, URDF joints assembled
-                    if name in wanted and (assembled or name.endswith("_cp")):
+                for name, needs_assembly in _POSE_TOPICS.items():
+                    if name in wanted and (assembled or not needs_assembly):
                         p[name].publish(getattr(m, name))
         self._publish_state()
 

@@ -548,8 +548,9 @@ class SimulatedArm:
         """Advance ``n`` servo cycles of ``1 / rate`` s (servo, write, read, check).
 
         In ``ENABLED`` and ``PAUSED`` the servo writes ``ff + Kp (q_sp - q) + Kd (qd_sp -
-        qd)``, its approach velocity bounded by ``v_max`` and each component saturated at
-        ``max_force`` (:func:`~athenakin.teleop._servo.pd_force`; :attr:`saturated`); in
+        qd)``, its approach velocity bounded by ``v_max`` and the PD force scaled until each
+        component is within ``max_force`` (:func:`~athenakin.teleop._servo.pd_force`;
+        :attr:`saturated`); in
         ``DISABLED`` and ``FAULT`` it writes zero forces and NaN positions. After the
         write the encoders are read and checked, and the backend asked for a fault: a
         bad reading or a fault puts the arm in ``FAULT`` in that cycle.

@@ -2,7 +2,8 @@
 
 :class:`~athenakin.teleop.SimulatedArm` servoes its three actuators with
 ``f = ff + Kp (q_sp - q) + Kd (qd_sp - qd)``, its approach velocity bounded by ``v_max``
-and each component saturated at ``max_force`` (:func:`pd_force`). Without explicit
+and the PD force scaled, its direction kept, until each component is within ``max_force``
+(:func:`pd_force`). Without explicit
 :class:`ServoGains` the gains follow from the mass matrix at ``q0`` and the rate
 (:func:`servo_gains`: ``Kp = omega^2 M``, ``Kd = 2 zeta omega M``,
 ``omega = min(BANDWIDTH, BANDWIDTH_PER_RATE rate)``); either way
